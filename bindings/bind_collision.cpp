@@ -1,0 +1,66 @@
+#include <mgn/collision/collision_model.hpp>
+#include <pybind11/stl.h>
+
+#include "exceptions.hpp"
+#include "numpy_conv.hpp"
+
+namespace py = pybind11;
+using namespace mgn::py_conv;
+
+namespace mgn::py_bind {
+
+void bind_collision(py::module_& m) {
+  py::class_<CollisionModel, std::shared_ptr<CollisionModel>>(m, "CollisionModel",
+                                                              "Immutable FCL BVH (OBBRSS) of a mesh.")
+      .def(py::init([](const Mesh& mesh) {
+             py::gil_scoped_release release;
+             return std::make_shared<CollisionModel>(mesh);
+           }),
+           py::arg("mesh"))
+      .def_property_readonly("num_triangles", &CollisionModel::num_triangles)
+      .def_property_readonly("num_vertices", &CollisionModel::num_vertices);
+
+  m.def(
+      "collide",
+      [](const CollisionModel& a, const py::handle& X_WA, const CollisionModel& b, const py::handle& X_WB,
+         int num_threads) {
+        const auto xa = to_poses(X_WA, "X_WA");
+        const auto xb = to_poses(X_WB, "X_WB");
+        CollisionRequest req;
+        req.num_threads = num_threads;
+        std::vector<std::uint8_t> hit;
+        {
+          py::gil_scoped_release release;
+          hit = collide(a, xa, b, xb, req);
+        }
+        return to_bool_numpy(std::move(hit));
+      },
+      py::arg("a"), py::arg("X_WA"), py::arg("b"), py::arg("X_WB"), py::arg("num_threads") = 0);
+
+  m.def(
+      "distance",
+      [](const CollisionModel& a, const py::handle& X_WA, const CollisionModel& b, const py::handle& X_WB,
+         double rel_err, double abs_err, int num_threads) {
+        const auto xa = to_poses(X_WA, "X_WA");
+        const auto xb = to_poses(X_WB, "X_WB");
+        DistanceRequest req;
+        req.rel_err = rel_err;
+        req.abs_err = abs_err;
+        req.num_threads = num_threads;
+        DistanceResult r;
+        {
+          py::gil_scoped_release release;
+          r = distance(a, xa, b, xb, req);
+        }
+        py::dict out;
+        out["distance"] = to_numpy(std::move(r.distance));
+        out["points_a"] = to_numpy(std::move(r.points_a));
+        out["points_b"] = to_numpy(std::move(r.points_b));
+        out["collide"] = to_bool_numpy(std::move(r.collide));
+        return out;
+      },
+      py::arg("a"), py::arg("X_WA"), py::arg("b"), py::arg("X_WB"), py::arg("rel_err") = 0.0,
+      py::arg("abs_err") = 0.0, py::arg("num_threads") = 0);
+}
+
+}  // namespace mgn::py_bind

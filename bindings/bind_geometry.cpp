@@ -1,0 +1,187 @@
+#include <mgn/geometry/mass_properties.hpp>
+#include <mgn/geometry/mesh.hpp>
+#include <mgn/geometry/mesh_io.hpp>
+#include <mgn/geometry/primitives.hpp>
+#include <mgn/geometry/sampling.hpp>
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include "exceptions.hpp"
+#include "numpy_conv.hpp"
+
+namespace py = pybind11;
+using namespace mgn::py_conv;
+
+namespace mgn::py_bind {
+
+namespace {
+
+/// Read-only numpy view of a mesh array, kept alive by the Python Mesh object.
+template <typename M>
+py::array view_of(const M& mat, py::handle owner) {
+  using Scalar = typename M::Scalar;
+  py::array_t<Scalar> arr({static_cast<py::ssize_t>(mat.rows()), static_cast<py::ssize_t>(mat.cols())},
+                          mat.data(), owner);
+  arr.attr("setflags")(py::arg("write") = false);
+  return arr;
+}
+
+}  // namespace
+
+void bind_geometry(py::module_& m) {
+  py::class_<Material>(m, "Material", "Surface appearance of a mesh (colours linear RGBA in [0,1]).")
+      .def(py::init<>())
+      .def_readwrite("name", &Material::name)
+      .def_readwrite("base_color", &Material::base_color, "RGBA in [0,1]")
+      .def_readwrite("specular", &Material::specular, "RGB in [0,1]")
+      .def_readwrite("shininess", &Material::shininess, "Phong exponent")
+      .def_readwrite("opacity", &Material::opacity, "1 opaque .. 0 invisible")
+      .def_readwrite("texture_path", &Material::texture_path, "absolute path of the diffuse texture or ''")
+      .def_property(
+          "texture_data",
+          [](const Material& mat) {
+            return py::bytes(reinterpret_cast<const char*>(mat.texture_data.data()), mat.texture_data.size());
+          },
+          [](Material& mat, const py::bytes& b) {
+            const std::string s = b;
+            mat.texture_data.assign(s.begin(), s.end());
+          },
+          "compressed bytes of an embedded texture, or b''")
+      .def("__repr__", [](const Material& mat) {
+        return "Material(name='" + mat.name + "', opacity=" + std::to_string(mat.opacity) +
+               (mat.texture_path.empty() ? "" : ", texture='" + mat.texture_path + "'") + ")";
+      });
+
+  py::class_<MeshReport>(m, "MeshReport", "Validation report of a mesh (topology after welding by position).")
+      .def_readonly("num_vertices", &MeshReport::num_vertices)
+      .def_readonly("num_faces", &MeshReport::num_faces)
+      .def_readonly("num_boundary_edges", &MeshReport::num_boundary_edges)
+      .def_readonly("num_nonmanifold_edges", &MeshReport::num_nonmanifold_edges)
+      .def_readonly("num_misoriented_edges", &MeshReport::num_misoriented_edges)
+      .def_readonly("num_components", &MeshReport::num_components)
+      .def_readonly("is_watertight", &MeshReport::is_watertight)
+      .def_readonly("is_winding_consistent", &MeshReport::is_winding_consistent)
+      .def_readonly("is_outward", &MeshReport::is_outward)
+      .def_readonly("signed_volume", &MeshReport::signed_volume, "m^3")
+      .def_readonly("area", &MeshReport::area, "m^2")
+      .def("__repr__", [](const MeshReport& r) {
+        return "MeshReport(faces=" + std::to_string(r.num_faces) + ", watertight=" + (r.is_watertight ? "True" : "False") +
+               ", winding_consistent=" + (r.is_winding_consistent ? "True" : "False") +
+               ", outward=" + (r.is_outward ? "True" : "False") + ", boundary_edges=" + std::to_string(r.num_boundary_edges) + ")";
+      });
+
+  py::class_<MassProperties>(m, "MassProperties", "Mass properties in the mesh frame (SI units).")
+      .def_readonly("volume", &MassProperties::volume, "m^3")
+      .def_readonly("mass", &MassProperties::mass, "kg")
+      .def_readonly("center_of_mass", &MassProperties::center_of_mass, "(3,) m, mesh frame")
+      .def_readonly("inertia", &MassProperties::inertia, "(3,3) kg m^2 about the centre of mass")
+      .def_readonly("is_exact", &MassProperties::is_exact, "False when the open-mesh shell fallback was used");
+
+  py::class_<Mesh>(m, "Mesh", "Indexed triangle mesh in metres (see mgn.Mesh).")
+      .def(py::init([](const py::handle& vertices, const py::handle& faces, const py::object& uvs,
+                       std::vector<Material> materials, std::vector<std::int32_t> face_materials, std::string name) {
+             Points3f v = to_rows<float, 3>(vertices, "vertices");
+             Faces f = to_rows<std::int32_t, 3>(faces, "faces");
+             Points2f uv;
+             if (!uvs.is_none()) uv = to_rows<float, 2>(uvs, "uvs");
+             return Mesh(std::move(v), std::move(f), std::move(uv), std::move(materials), std::move(face_materials),
+                         std::move(name));
+           }),
+           py::arg("vertices"), py::arg("faces"), py::arg("uvs") = py::none(),
+           py::arg("materials") = std::vector<Material>{}, py::arg("face_materials") = std::vector<std::int32_t>{},
+           py::arg("name") = "")
+      .def_property_readonly("vertices", [](py::object self) { return view_of(self.cast<const Mesh&>().vertices(), self); })
+      .def_property_readonly("faces", [](py::object self) { return view_of(self.cast<const Mesh&>().faces(), self); })
+      .def_property_readonly("uvs", [](py::object self) -> py::object {
+        const Mesh& mesh = self.cast<const Mesh&>();
+        if (mesh.uvs().rows() == 0) return py::none();
+        return view_of(mesh.uvs(), self);
+      })
+      .def_property_readonly("materials", &Mesh::materials)
+      .def_property_readonly("face_materials", [](const Mesh& mesh) { return mesh.face_materials(); })
+      .def_property("name", &Mesh::name, &Mesh::set_name)
+      .def_property_readonly("num_vertices", &Mesh::num_vertices)
+      .def_property_readonly("num_faces", &Mesh::num_faces)
+      .def("face_normals", [](const Mesh& mesh) { return to_numpy(mesh.face_normals()); })
+      .def("face_areas", [](const Mesh& mesh) { return to_numpy(Eigen::VectorXd(mesh.face_areas())); })
+      .def_property_readonly("area", &Mesh::area)
+      .def_property_readonly("bounds", [](const Mesh& mesh) {
+        Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> b = mesh.bounds();
+        return to_numpy(std::move(b));
+      })
+      .def("validate", &Mesh::validate, py::call_guard<py::gil_scoped_release>())
+      .def("transformed", [](const Mesh& mesh, const py::handle& X) { return mesh.transformed(to_pose(X, "X")); },
+           py::arg("X"))
+      .def("scaled", &Mesh::scaled, py::arg("factor"))
+      .def("flipped", &Mesh::flipped)
+      .def_static("merge", &Mesh::merge, py::arg("meshes"), py::arg("name") = "")
+      .def("__repr__", [](const Mesh& mesh) {
+        return "Mesh(name='" + mesh.name() + "', vertices=" + std::to_string(mesh.num_vertices()) +
+               ", faces=" + std::to_string(mesh.num_faces()) + ")";
+      });
+
+  m.def(
+      "load_mesh",
+      [](const std::string& path, double scale, bool merge, bool drop_degenerate) {
+        LoadOptions o;
+        o.scale = scale;
+        o.merge = merge;
+        o.drop_degenerate = drop_degenerate;
+        py::gil_scoped_release release;
+        return load_mesh(path, o);
+      },
+      py::arg("path"), py::arg("scale") = 1.0, py::arg("merge") = true, py::arg("drop_degenerate") = true);
+
+  m.def(
+      "compute_mass_properties",
+      [](const Mesh& mesh, double density, const std::string& open_mesh, double shell_thickness) {
+        MassOptions o;
+        o.density = density;
+        o.shell_thickness = shell_thickness;
+        if (open_mesh == "shell") {
+          o.open_mesh = OpenMeshPolicy::Shell;
+        } else if (open_mesh == "error") {
+          o.open_mesh = OpenMeshPolicy::Error;
+        } else {
+          throw_error<InvalidArgument>("compute_mass_properties: open_mesh must be 'shell' or 'error', got '",
+                                       open_mesh, "'");
+        }
+        py::gil_scoped_release release;
+        return compute_mass_properties(mesh, o);
+      },
+      py::arg("mesh"), py::arg("density") = 1000.0, py::arg("open_mesh") = "shell",
+      py::arg("shell_thickness") = 0.002);
+
+  m.def(
+      "sample_surface",
+      [](const Mesh& mesh, std::int64_t count, const std::string& method, std::uint64_t seed, int oversampling) {
+        SampleOptions o;
+        if (method == "random") {
+          o.method = SampleMethod::Random;
+        } else if (method == "even") {
+          o.method = SampleMethod::Even;
+        } else {
+          throw_error<InvalidArgument>("sample_surface: method must be 'random' or 'even', got '", method, "'");
+        }
+        o.seed = seed;
+        o.oversampling = oversampling;
+        SurfaceSamples s;
+        {
+          py::gil_scoped_release release;
+          s = sample_surface(mesh, count, o);
+        }
+        py::dict out;
+        out["points"] = to_numpy(std::move(s.points));
+        out["normals"] = to_numpy(std::move(s.normals));
+        out["face_ids"] = to_numpy(std::move(s.face_ids));
+        return out;
+      },
+      py::arg("mesh"), py::arg("count"), py::arg("method") = "random", py::arg("seed") = 0,
+      py::arg("oversampling") = 6);
+
+  m.def("make_box", [](const Vec3d& extents) { return make_box(extents); }, py::arg("extents"));
+  m.def("make_sphere", &make_sphere, py::arg("radius"), py::arg("segments") = 64, py::arg("rings") = 32);
+  m.def("make_cylinder", &make_cylinder, py::arg("radius"), py::arg("height"), py::arg("segments") = 64);
+}
+
+}  // namespace mgn::py_bind

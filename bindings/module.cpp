@@ -1,0 +1,13 @@
+// mgn._core: registration only. Each C++ module is bound in its own bind_<module>.cpp.
+#include <pybind11/pybind11.h>
+
+#include "exceptions.hpp"
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "mgn compiled core (private): use the typed API of the `mgn` package instead.";
+  mgn::py_bind::register_exceptions(m);
+  mgn::py_bind::bind_core(m);
+  mgn::py_bind::bind_geometry(m);
+  mgn::py_bind::bind_raytrace(m);
+  mgn::py_bind::bind_collision(m);
+}

@@ -1,0 +1,16 @@
+#pragma once
+/// @file mgn.hpp  Convenience header: the whole public C++ API of mgn.
+
+#include <mgn/collision/collision_model.hpp>
+#include <mgn/core/build_info.hpp>
+#include <mgn/core/error.hpp>
+#include <mgn/core/parallel.hpp>
+#include <mgn/core/rng.hpp>
+#include <mgn/core/types.hpp>
+#include <mgn/geometry/mass_properties.hpp>
+#include <mgn/geometry/mesh.hpp>
+#include <mgn/geometry/mesh_io.hpp>
+#include <mgn/geometry/primitives.hpp>
+#include <mgn/geometry/sampling.hpp>
+#include <mgn/raytrace/ray_scene.hpp>
+#include <mgn/version.hpp>

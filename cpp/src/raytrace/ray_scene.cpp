@@ -1,0 +1,432 @@
+#include <mgn/core/error.hpp>
+#include <mgn/raytrace/ray_scene.hpp>
+
+#include <embree3/rtcore.h>
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+
+namespace mgn {
+
+namespace {
+
+/// Embree wants flush-to-zero and denormals-are-zero in tracing threads. The mode is saved and
+/// restored so a call made on the Python thread leaves its floating-point state unchanged.
+class FtzDazGuard {
+ public:
+  FtzDazGuard() : saved_(_mm_getcsr()) {
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+  }
+  ~FtzDazGuard() { _mm_setcsr(saved_); }
+
+ private:
+  unsigned int saved_;
+};
+
+std::mutex g_device_mutex;
+std::string g_last_error;
+
+const char* error_name(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown error";
+  }
+}
+
+void device_error(void*, RTCError code, const char* message) {
+  std::lock_guard<std::mutex> lock(g_device_mutex);
+  g_last_error = std::string(error_name(code)) + ": " + (message ? message : "");
+}
+
+/// One process-wide Embree device (thread-safe per Embree's contract).
+RTCDevice shared_device() {
+  static RTCDevice device = [] {
+    RTCDevice d = rtcNewDevice(nullptr);
+    if (d == nullptr) throw_error<BackendError>("RayScene: Embree could not create a device");
+    rtcSetDeviceErrorFunction(d, device_error, nullptr);
+    return d;
+  }();
+  return device;
+}
+
+struct HitRecord {
+  float t;
+  float u, v;
+  unsigned geom;
+  unsigned prim;
+};
+
+struct AllHitsContext {
+  RTCIntersectContext base;  // must be first: Embree passes a pointer to it
+  std::vector<HitRecord>* hits;
+};
+
+void collect_all_hits(const RTCFilterFunctionNArguments* args) {
+  auto* ctx = reinterpret_cast<AllHitsContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    HitRecord h;
+    h.t = RTCRayN_tfar(args->ray, args->N, i);
+    h.u = RTCHitN_u(args->hit, args->N, i);
+    h.v = RTCHitN_v(args->hit, args->N, i);
+    h.geom = RTCHitN_geomID(args->hit, args->N, i);
+    h.prim = RTCHitN_primID(args->hit, args->N, i);
+    ctx->hits->push_back(h);
+    args->valid[i] = 0;  // reject the hit so traversal continues
+  }
+}
+
+void check_rays(const char* fn, const Points3f& origins, const Points3f& directions,
+                const CastOptions& options) {
+  if (origins.rows() != directions.rows()) {
+    throw_error<InvalidArgument>(fn, ": origins has ", origins.rows(), " rows but directions has ",
+                                 directions.rows(), "; expected the same number of rays");
+  }
+  if (!(options.tnear >= 0.0f) || std::isnan(options.tfar) || options.tnear > options.tfar) {
+    throw_error<InvalidArgument>(fn, ": expected 0 <= tnear <= tfar, got tnear=", options.tnear,
+                                 " tfar=", options.tfar);
+  }
+  for (Eigen::Index i = 0; i < origins.rows(); ++i) {
+    if (!origins.row(i).allFinite() || !directions.row(i).allFinite()) {
+      throw_error<InvalidArgument>(fn, ": ray ", i, " has a non-finite origin or direction; expected finite values");
+    }
+    if (directions.row(i).squaredNorm() == 0.0f) {
+      throw_error<InvalidArgument>(fn, ": ray ", i, " has a zero direction; expected a non-zero vector");
+    }
+  }
+}
+
+}  // namespace
+
+struct RayScene::Impl {
+  RTCScene scene = nullptr;
+  std::vector<std::int32_t> instance_ids;  // by Embree geomID
+  std::vector<Points3f> world_normals;     // per geometry, per face
+  std::int64_t triangles = 0;
+  Eigen::Matrix<double, 2, 3, Eigen::RowMajor> bounds;
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+  }
+
+  void fill_hit(Eigen::Index i, const Points3f& origins, const Points3f& directions, float t,
+                unsigned geom, unsigned prim, float u, float v, RayHits& out) const {
+    out.distance[i] = t;
+    out.points.row(i) = origins.row(i) + t * directions.row(i);
+    out.normals.row(i) = world_normals[geom].row(prim);
+    out.instance_ids[i] = instance_ids[geom];
+    out.face_ids[i] = static_cast<std::int32_t>(prim);
+    out.barycentric.row(i) << u, v;
+  }
+};
+
+RayScene::RayScene(const std::vector<RayGeometry>& geometries) : impl_(std::make_unique<Impl>()) {
+  const char* fn = "RayScene";
+  if (geometries.empty()) throw_error<InvalidArgument>(fn, ": no geometry given; expected at least one mesh");
+  FtzDazGuard guard;
+  RTCDevice device = shared_device();
+  impl_->scene = rtcNewScene(device);
+  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+  impl_->bounds.row(0).setConstant(std::numeric_limits<double>::infinity());
+  impl_->bounds.row(1).setConstant(-std::numeric_limits<double>::infinity());
+  for (std::size_t g = 0; g < geometries.size(); ++g) {
+    const RayGeometry& item = geometries[g];
+    if (item.mesh == nullptr) throw_error<InvalidArgument>(fn, ": geometry ", g, " has no mesh");
+    require_non_empty(*item.mesh, std::string(fn) + ": geometry " + std::to_string(g));
+    if (!item.X_WO.matrix().allFinite()) {
+      throw_error<InvalidArgument>(fn, ": geometry ", g, " has a non-finite pose; expected a finite 4x4 transform");
+    }
+    if (item.instance_id < 0) {
+      throw_error<InvalidArgument>(fn, ": geometry ", g, " has instance id ", item.instance_id, "; expected >= 0");
+    }
+    const Mesh world = item.mesh->transformed(item.X_WO);
+    const auto nv = world.num_vertices();
+    const auto nf = world.num_faces();
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), static_cast<size_t>(nv)));
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), static_cast<size_t>(nf)));
+    if (vb == nullptr || ib == nullptr) {
+      rtcReleaseGeometry(geom);
+      throw_error<BackendError>(fn, ": Embree could not allocate buffers for geometry ", g, ": ", g_last_error);
+    }
+    std::copy(world.vertices().data(), world.vertices().data() + 3 * nv, vb);
+    for (Eigen::Index i = 0; i < 3 * nf; ++i) ib[i] = static_cast<unsigned>(world.faces().data()[i]);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(impl_->scene, geom, static_cast<unsigned>(g));
+    rtcReleaseGeometry(geom);
+    impl_->instance_ids.push_back(item.instance_id);
+    impl_->world_normals.push_back(world.face_normals());
+    impl_->triangles += nf;
+    const auto b = world.bounds();
+    impl_->bounds.row(0) = impl_->bounds.row(0).cwiseMin(b.row(0));
+    impl_->bounds.row(1) = impl_->bounds.row(1).cwiseMax(b.row(1));
+  }
+  rtcCommitScene(impl_->scene);
+  if (rtcGetDeviceError(device) != RTC_ERROR_NONE) {
+    throw_error<BackendError>(fn, ": Embree failed to build the scene: ", g_last_error);
+  }
+}
+
+RayScene::~RayScene() = default;
+RayScene::RayScene(RayScene&&) noexcept = default;
+RayScene& RayScene::operator=(RayScene&&) noexcept = default;
+
+std::size_t RayScene::num_geometries() const { return impl_->instance_ids.size(); }
+std::int64_t RayScene::num_triangles() const { return impl_->triangles; }
+Eigen::Matrix<double, 2, 3, Eigen::RowMajor> RayScene::bounds() const { return impl_->bounds; }
+
+RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
+                            const CastOptions& options) const {
+  check_rays("RayScene::intersect", origins, directions, options);
+  const Eigen::Index n = origins.rows();
+  RayHits out;
+  out.distance.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::infinity());
+  out.points = Points3f::Zero(n, 3);
+  out.normals = Points3f::Zero(n, 3);
+  out.instance_ids.assign(static_cast<std::size_t>(n), -1);
+  out.face_ids.assign(static_cast<std::size_t>(n), -1);
+  out.barycentric = Points2f::Zero(n, 2);
+  const Impl& impl = *impl_;
+
+  auto body = [&](std::size_t begin, std::size_t end) {
+    FtzDazGuard guard;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    if (options.coherent) {
+      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      alignas(64) RTCRayHit16 rh;
+      alignas(64) int valid[16];
+      for (std::size_t s = begin; s < end; s += 16) {
+        const std::size_t m = std::min<std::size_t>(16, end - s);
+        for (std::size_t k = 0; k < 16; ++k) {
+          const std::size_t i = s + std::min(k, m - 1);  // pad with a copy of the last ray
+          valid[k] = k < m ? -1 : 0;
+          rh.ray.org_x[k] = origins(i, 0);
+          rh.ray.org_y[k] = origins(i, 1);
+          rh.ray.org_z[k] = origins(i, 2);
+          rh.ray.dir_x[k] = directions(i, 0);
+          rh.ray.dir_y[k] = directions(i, 1);
+          rh.ray.dir_z[k] = directions(i, 2);
+          rh.ray.tnear[k] = options.tnear;
+          rh.ray.tfar[k] = options.tfar;
+          rh.ray.time[k] = 0.0f;
+          rh.ray.mask[k] = 0xFFFFFFFFu;
+          rh.ray.id[k] = static_cast<unsigned>(k);
+          rh.ray.flags[k] = 0;
+          rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, impl.scene, &ctx, &rh);
+        for (std::size_t k = 0; k < m; ++k) {
+          if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+          impl.fill_hit(static_cast<Eigen::Index>(s + k), origins, directions, rh.ray.tfar[k],
+                        rh.hit.geomID[k], rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], out);
+        }
+      }
+    } else {
+      RTCRayHit rh;
+      for (std::size_t i = begin; i < end; ++i) {
+        rh.ray.org_x = origins(i, 0);
+        rh.ray.org_y = origins(i, 1);
+        rh.ray.org_z = origins(i, 2);
+        rh.ray.dir_x = directions(i, 0);
+        rh.ray.dir_y = directions(i, 1);
+        rh.ray.dir_z = directions(i, 2);
+        rh.ray.tnear = options.tnear;
+        rh.ray.tfar = options.tfar;
+        rh.ray.time = 0.0f;
+        rh.ray.mask = 0xFFFFFFFFu;
+        rh.ray.id = 0;
+        rh.ray.flags = 0;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(impl.scene, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        impl.fill_hit(static_cast<Eigen::Index>(i), origins, directions, rh.ray.tfar, rh.hit.geomID,
+                      rh.hit.primID, rh.hit.u, rh.hit.v, out);
+      }
+    }
+  };
+  parallel_for(static_cast<std::size_t>(n), options.num_threads, 4096, body);
+  return out;
+}
+
+std::vector<std::uint8_t> RayScene::occluded(const Points3f& origins, const Points3f& directions,
+                                             const CastOptions& options) const {
+  check_rays("RayScene::occluded", origins, directions, options);
+  const Eigen::Index n = origins.rows();
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(n), 0);
+  const Impl& impl = *impl_;
+  auto body = [&](std::size_t begin, std::size_t end) {
+    FtzDazGuard guard;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    if (options.coherent) {
+      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      alignas(64) RTCRay16 r;
+      alignas(64) int valid[16];
+      for (std::size_t s = begin; s < end; s += 16) {
+        const std::size_t m = std::min<std::size_t>(16, end - s);
+        for (std::size_t k = 0; k < 16; ++k) {
+          const std::size_t i = s + std::min(k, m - 1);
+          valid[k] = k < m ? -1 : 0;
+          r.org_x[k] = origins(i, 0);
+          r.org_y[k] = origins(i, 1);
+          r.org_z[k] = origins(i, 2);
+          r.dir_x[k] = directions(i, 0);
+          r.dir_y[k] = directions(i, 1);
+          r.dir_z[k] = directions(i, 2);
+          r.tnear[k] = options.tnear;
+          r.tfar[k] = options.tfar;
+          r.time[k] = 0.0f;
+          r.mask[k] = 0xFFFFFFFFu;
+          r.id[k] = static_cast<unsigned>(k);
+          r.flags[k] = 0;
+        }
+        rtcOccluded16(valid, impl.scene, &ctx, &r);
+        for (std::size_t k = 0; k < m; ++k) out[s + k] = r.tfar[k] == -std::numeric_limits<float>::infinity();
+      }
+    } else {
+      RTCRay r;
+      for (std::size_t i = begin; i < end; ++i) {
+        r.org_x = origins(i, 0);
+        r.org_y = origins(i, 1);
+        r.org_z = origins(i, 2);
+        r.dir_x = directions(i, 0);
+        r.dir_y = directions(i, 1);
+        r.dir_z = directions(i, 2);
+        r.tnear = options.tnear;
+        r.tfar = options.tfar;
+        r.time = 0.0f;
+        r.mask = 0xFFFFFFFFu;
+        r.id = 0;
+        r.flags = 0;
+        rtcOccluded1(impl.scene, &ctx, &r);
+        out[i] = r.tfar == -std::numeric_limits<float>::infinity();
+      }
+    }
+  };
+  parallel_for(static_cast<std::size_t>(n), options.num_threads, 4096, body);
+  return out;
+}
+
+RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& directions,
+                                   int max_hits_per_ray, const CastOptions& options) const {
+  check_rays("RayScene::intersect_all", origins, directions, options);
+  if (max_hits_per_ray <= 0) {
+    throw_error<InvalidArgument>("RayScene::intersect_all: max_hits_per_ray must be > 0, got ", max_hits_per_ray);
+  }
+  const Eigen::Index n = origins.rows();
+  std::vector<std::vector<HitRecord>> per_ray(static_cast<std::size_t>(n));
+  const Impl& impl = *impl_;
+  auto body = [&](std::size_t begin, std::size_t end) {
+    FtzDazGuard guard;
+    std::vector<HitRecord> hits;
+    for (std::size_t i = begin; i < end; ++i) {
+      hits.clear();
+      AllHitsContext ctx;
+      rtcInitIntersectContext(&ctx.base);
+      ctx.base.filter = collect_all_hits;
+      ctx.hits = &hits;
+      RTCRayHit rh;
+      rh.ray.org_x = origins(i, 0);
+      rh.ray.org_y = origins(i, 1);
+      rh.ray.org_z = origins(i, 2);
+      rh.ray.dir_x = directions(i, 0);
+      rh.ray.dir_y = directions(i, 1);
+      rh.ray.dir_z = directions(i, 2);
+      rh.ray.tnear = options.tnear;
+      rh.ray.tfar = options.tfar;
+      rh.ray.time = 0.0f;
+      rh.ray.mask = 0xFFFFFFFFu;
+      rh.ray.id = 0;
+      rh.ray.flags = 0;
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(impl.scene, &ctx.base, &rh);
+      std::sort(hits.begin(), hits.end(), [](const HitRecord& a, const HitRecord& b) {
+        return a.t < b.t || (a.t == b.t && (a.geom < b.geom || (a.geom == b.geom && a.prim < b.prim)));
+      });
+      // A ray through a shared edge or vertex hits every adjacent face at (almost) the same t,
+      // and a primitive may be reported from several BVH leaves: keep one hit per surface crossing.
+      auto& kept = per_ray[i];
+      for (const HitRecord& h : hits) {
+        bool duplicate = false;
+        for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
+          if (h.t - it->t > 1e-5f * (1.0f + std::abs(h.t))) break;
+          if (it->geom == h.geom) {
+            duplicate = true;
+            break;
+          }
+        }
+        if (!duplicate) kept.push_back(h);
+        if (static_cast<int>(kept.size()) >= max_hits_per_ray) break;
+      }
+    }
+  };
+  parallel_for(static_cast<std::size_t>(n), options.num_threads, 1024, body);
+
+  RayAllHits out;
+  out.offsets.resize(static_cast<std::size_t>(n) + 1, 0);
+  for (Eigen::Index i = 0; i < n; ++i) out.offsets[i + 1] = out.offsets[i] + static_cast<std::int64_t>(per_ray[i].size());
+  const auto total = static_cast<Eigen::Index>(out.offsets.back());
+  out.distance.resize(static_cast<std::size_t>(total));
+  out.points.resize(total, 3);
+  out.normals.resize(total, 3);
+  out.instance_ids.resize(static_cast<std::size_t>(total));
+  out.face_ids.resize(static_cast<std::size_t>(total));
+  out.ray_ids.resize(static_cast<std::size_t>(total));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::Index k = static_cast<Eigen::Index>(out.offsets[i]);
+    for (const HitRecord& h : per_ray[i]) {
+      out.distance[k] = h.t;
+      out.points.row(k) = origins.row(i) + h.t * directions.row(i);
+      out.normals.row(k) = impl.world_normals[h.geom].row(h.prim);
+      out.instance_ids[k] = impl.instance_ids[h.geom];
+      out.face_ids[k] = static_cast<std::int32_t>(h.prim);
+      out.ray_ids[k] = static_cast<std::int32_t>(i);
+      ++k;
+    }
+  }
+  return out;
+}
+
+void camera_rays(const Mat3d& K, int width, int height, const Pose& X_WC, Points3f& origins,
+                 Points3f& directions) {
+  if (width <= 0 || height <= 0) {
+    throw_error<InvalidArgument>("camera_rays: image size must be positive, got ", width, "x", height);
+  }
+  const double fx = K(0, 0), fy = K(1, 1), cx = K(0, 2), cy = K(1, 2);
+  if (!(fx > 0) || !(fy > 0) || !std::isfinite(cx) || !std::isfinite(cy)) {
+    throw_error<InvalidArgument>("camera_rays: expected fx, fy > 0 and finite cx, cy, got fx=", fx, " fy=", fy,
+                                 " cx=", cx, " cy=", cy);
+  }
+  if (!X_WC.matrix().allFinite()) throw_error<InvalidArgument>("camera_rays: X_WC has non-finite entries");
+  const Eigen::Index n = static_cast<Eigen::Index>(width) * height;
+  origins.resize(n, 3);
+  directions.resize(n, 3);
+  const Mat3d R = X_WC.linear();
+  const Eigen::RowVector3f o = X_WC.translation().cast<float>().transpose();
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const Eigen::Index i = static_cast<Eigen::Index>(v) * width + u;
+      const Vec3d d_C((u + 0.5 - cx) / fx, (v + 0.5 - cy) / fy, 1.0);
+      origins.row(i) = o;
+      directions.row(i) = (R * d_C.normalized()).cast<float>().transpose();
+    }
+  }
+}
+
+}  // namespace mgn
