@@ -1,0 +1,158 @@
+// Tests of mgn/raytrace against analytic shapes.
+#include <gtest/gtest.h>
+#include <mgn/core/error.hpp>
+#include <mgn/core/rng.hpp>
+#include <mgn/geometry/primitives.hpp>
+#include <mgn/raytrace/ray_scene.hpp>
+
+#include <cmath>
+
+namespace {
+
+mgn::Points3f rows(std::initializer_list<mgn::Vec3f> list) {
+  mgn::Points3f p(static_cast<Eigen::Index>(list.size()), 3);
+  Eigen::Index i = 0;
+  for (const auto& v : list) p.row(i++) = v.transpose();
+  return p;
+}
+
+/// Random rays from a sphere of radius 0.3 towards random points in the 0.2 cube.
+void random_rays(int n, std::uint64_t seed, mgn::Points3f& o, mgn::Points3f& d) {
+  mgn::Rng rng(seed, 0);
+  o.resize(n, 3);
+  d.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    mgn::Vec3d a(rng.normal(), rng.normal(), rng.normal());
+    a = 0.3 * a.normalized();
+    const mgn::Vec3d t(rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1));
+    o.row(i) = a.cast<float>().transpose();
+    d.row(i) = (t - a).normalized().cast<float>().transpose();
+  }
+}
+
+}  // namespace
+
+TEST(RayScene, BoxHitsMatchAnalyticDistancesNormalsAndIds) {
+  const mgn::Mesh box = mgn::make_box({0.2, 0.2, 0.2});
+  mgn::Pose X = mgn::Pose::Identity();
+  X.translation() << 0.0, 0.0, 0.1;  // box on the floor: top at z = 0.2
+  mgn::RayScene scene({mgn::RayGeometry{&box, X, 5}});
+  const auto o = rows({{0.05f, 0.02f, 1.0f}, {1.0f, 0.0f, 0.1f}, {0.5f, 0.5f, 1.0f}});
+  const auto d = rows({{0, 0, -1}, {-1, 0, 0}, {0, 0, -1}});
+  const auto h = scene.intersect(o, d);
+  EXPECT_NEAR(h.distance[0], 0.8f, 1e-6f);
+  EXPECT_NEAR(h.normals(0, 2), 1.0f, 1e-6f);
+  EXPECT_EQ(h.instance_ids[0], 5);
+  EXPECT_NEAR(h.distance[1], 0.9f, 1e-6f);
+  EXPECT_NEAR(h.normals(1, 0), 1.0f, 1e-6f);
+  EXPECT_TRUE(std::isinf(h.distance[2]));
+  EXPECT_EQ(h.instance_ids[2], -1);
+  EXPECT_EQ(h.face_ids[2], -1);
+  // tfar shorter than the hit: miss; tnear past the entry: the exit (bottom) face is hit.
+  mgn::CastOptions near_far;
+  near_far.tfar = 0.5f;
+  EXPECT_EQ(scene.intersect(o, d, near_far).instance_ids[0], -1);
+  mgn::CastOptions skip;
+  skip.tnear = 0.85f;
+  EXPECT_NEAR(scene.intersect(o, d, skip).distance[0], 1.0f, 1e-6f);
+  const auto occ = scene.occluded(o, d);
+  EXPECT_EQ(occ[0], 1);
+  EXPECT_EQ(occ[2], 0);
+}
+
+TEST(RayScene, SphereDistancesAndAllHits) {
+  const double r = 0.1;
+  const mgn::Mesh sphere = mgn::make_sphere(r, 256, 128);
+  mgn::RayScene scene({mgn::RayGeometry{&sphere, mgn::Pose::Identity(), 0}});
+  mgn::Points3f o, d;
+  random_rays(2000, 7, o, d);
+  const auto h = scene.intersect(o, d);
+  const auto all = scene.intersect_all(o, d);
+  int hits = 0;
+  for (int i = 0; i < o.rows(); ++i) {
+    // Analytic ray-sphere intersection.
+    const mgn::Vec3d oo = o.row(i).transpose().cast<double>(), dd = d.row(i).transpose().cast<double>();
+    const double b = oo.dot(dd), c = oo.squaredNorm() - r * r, disc = b * b - c;
+    const auto count = all.offsets[i + 1] - all.offsets[i];
+    if (disc > 1e-3 * r * r) {  // clearly hits the true sphere (the mesh is inscribed)
+      ++hits;
+      EXPECT_EQ(count, 2) << i;  // in and out, edge crossings reported once
+      if (disc > 0.05 * r * r) {  // away from grazing, the tessellation error is tiny
+        EXPECT_NEAR(h.distance[i], -b - std::sqrt(disc), 1e-4) << i;
+        EXPECT_NEAR(all.distance[all.offsets[i] + 1], -b + std::sqrt(disc), 1e-4) << i;
+      }
+    } else if (disc < -1e-4 * r * r) {
+      EXPECT_EQ(h.instance_ids[i], -1);
+      EXPECT_EQ(count, 0);
+    }
+  }
+  EXPECT_GT(hits, 100);
+}
+
+TEST(RayScene, EdgeAndVertexRaysAreCountedOnce) {
+  const mgn::Mesh box = mgn::make_box({0.2, 0.2, 0.2});
+  mgn::RayScene scene({mgn::RayGeometry{&box, mgn::Pose::Identity(), 0}});
+  // Along the diagonal of the top and bottom faces (the shared edge of their two triangles),
+  // and straight through two opposite vertices' neighbourhood along z at a face-diagonal point.
+  const auto o = rows({{0.0f, 0.0f, 1.0f}, {0.05f, 0.05f, 1.0f}, {-0.05f, 0.05f, 1.0f}});
+  const auto d = rows({{0, 0, -1}, {0, 0, -1}, {0, 0, -1}});
+  const auto all = scene.intersect_all(o, d);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(all.offsets[i + 1] - all.offsets[i], 2) << "ray " << i;
+}
+
+TEST(RayScene, ThreadsAndPacketsGiveIdenticalResults) {
+  const mgn::Mesh sphere = mgn::make_sphere(0.08, 64, 32);
+  const mgn::Mesh box = mgn::make_box({0.1, 0.05, 0.12});
+  mgn::Pose X = mgn::Pose::Identity();
+  X.translation() << 0.05, 0.0, 0.02;
+  X.rotate(Eigen::AngleAxisd(0.4, mgn::Vec3d(1, 1, 0).normalized()));
+  mgn::RayScene scene({mgn::RayGeometry{&sphere, mgn::Pose::Identity(), 0}, mgn::RayGeometry{&box, X, 1}});
+  mgn::Points3f o, d;
+  random_rays(20011, 11, o, d);  // not a multiple of 16: exercises the packet tail
+  mgn::CastOptions one, two, packets;
+  one.num_threads = 1;
+  two.num_threads = 2;
+  packets.num_threads = 2;
+  packets.coherent = true;
+  const auto a = scene.intersect(o, d, one), b = scene.intersect(o, d, two), c = scene.intersect(o, d, packets);
+  EXPECT_EQ(a.distance, b.distance);
+  EXPECT_EQ(a.face_ids, b.face_ids);
+  EXPECT_EQ(a.instance_ids, c.instance_ids);
+  EXPECT_EQ(a.face_ids, c.face_ids);
+  for (std::size_t i = 0; i < a.distance.size(); ++i) {
+    if (a.instance_ids[i] >= 0) EXPECT_NEAR(a.distance[i], c.distance[i], 1e-6f);
+  }
+  EXPECT_EQ(scene.occluded(o, d, one), scene.occluded(o, d, packets));
+  const auto all1 = scene.intersect_all(o, d, 64, one), all2 = scene.intersect_all(o, d, 64, two);
+  EXPECT_EQ(all1.offsets, all2.offsets);
+  EXPECT_EQ(all1.distance, all2.distance);
+}
+
+TEST(RayScene, RejectsBadInput) {
+  const mgn::Mesh box = mgn::make_box({0.1, 0.1, 0.1});
+  EXPECT_THROW(mgn::RayScene({}), mgn::InvalidArgument);
+  mgn::Pose nan_pose = mgn::Pose::Identity();
+  nan_pose.translation().x() = std::nan("");
+  EXPECT_THROW(mgn::RayScene({mgn::RayGeometry{&box, nan_pose, 0}}), mgn::InvalidArgument);
+  mgn::RayScene scene({mgn::RayGeometry{&box, mgn::Pose::Identity(), 0}});
+  EXPECT_THROW(scene.intersect(rows({{0, 0, 1}}), rows({{0, 0, 0}})), mgn::InvalidArgument);
+  EXPECT_THROW(scene.intersect(rows({{0, 0, 1}, {0, 0, 1}}), rows({{0, 0, -1}})), mgn::InvalidArgument);
+  EXPECT_THROW(scene.intersect_all(rows({{0, 0, 1}}), rows({{0, 0, -1}}), 0), mgn::InvalidArgument);
+}
+
+TEST(CameraRays, CentrePixelLooksAlongTheOpticalAxis) {
+  mgn::Mat3d K;
+  K << 100, 0, 2, 0, 100, 1.5, 0, 0, 1;  // 4x3 image, principal point at the centre
+  mgn::Pose X_WC = mgn::Pose::Identity();
+  X_WC.translation() << 0, 0, 1;
+  X_WC.linear() = Eigen::AngleAxisd(M_PI, mgn::Vec3d::UnitX()).toRotationMatrix();  // looking down -z
+  mgn::Points3f o, d;
+  mgn::camera_rays(K, 4, 3, X_WC, o, d);
+  ASSERT_EQ(o.rows(), 12);
+  // Pixel (u=1, v=1) centre is at (1.5, 1.5): x offset -0.5 px, y on axis.
+  const Eigen::RowVector3f dir = d.row(1 * 4 + 1);
+  EXPECT_NEAR(dir.norm(), 1.0f, 1e-6f);
+  EXPECT_NEAR(dir.z(), -1.0f, 1e-4f);
+  EXPECT_NEAR(dir.x(), -0.005f, 1e-4f);
+  EXPECT_NEAR(dir.y(), 0.0f, 1e-6f);
+}
