@@ -4,7 +4,8 @@
 set -euo pipefail
 
 packages=(
-  cmake ninja-build pkg-config g++
+  cmake ninja-build pkg-config g++ git
+  python3 python3-dev python3-venv python3-pip
   libeigen3-dev
   libembree-dev
   libfcl-dev

@@ -74,7 +74,8 @@ def write_dae(m: trimesh.Trimesh) -> None:
         <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
       </accessor></technique_common></source>
     <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
-    <triangles material="m0" count="{len(m.faces)}"><input semantic="VERTEX" source="#v" offset="0"/>
+    <triangles material="m0" count="{len(m.faces)}">
+      <input semantic="VERTEX" source="#v" offset="0"/>
       <p>{idx}</p></triangles>
   </mesh></geometry></library_geometries>
   <library_visual_scenes><visual_scene id="s"><node id="n">
@@ -100,10 +101,11 @@ def main() -> None:
     # Bad inputs.
     (HERE / "not_a_mesh.obj").write_text("this is a text file, not a mesh\n" * 20)
     (HERE / "empty.stl").write_text("solid empty\nendsolid empty\n")
-    (HERE / "nan_vertex.obj").write_text("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    (HERE / "nan_vertex.obj").write_text(
+        "v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+    )
     (HERE / "zero_area.obj").write_text(
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 2 0 0\n"
-        "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 2 5\n"
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 2 0 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 2 5\n"
     )
 
 

@@ -1,0 +1,167 @@
+"""The ``mgn`` command line. Errors print one line and exit non-zero; ``--debug`` shows tracebacks.
+
+Subcommands::
+
+    mgn objects list [--json]          the built-in objects (id, name, size, tags)
+    mgn objects export DIR [--only N]  write them in the MetaGraspNet model folder layout
+    mgn info MESH [--scale S]          validation and mass properties of a mesh file
+    mgn demo [--out DIR]               export + ray-cast/collision smoke + a picture
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from mgn import __version__
+from mgn.errors import MgnError
+
+
+def _cmd_objects_list(args: argparse.Namespace) -> int:
+    from mgn.geometry import mass_properties
+    from mgn.io.model_folder import object_mesh
+    from mgn.objects import builtin_objects
+
+    rows = []
+    for spec in builtin_objects():
+        size = np.ptp(np.asarray(spec.vertices), axis=0) * 1000
+        mass = mass_properties(object_mesh(spec), spec.density).mass
+        rows.append(
+            {
+                "id": spec.category_id,
+                "name": spec.name,
+                "size_mm": [round(float(s), 1) for s in size],
+                "mass_g": round(mass * 1000, 1),
+                "faces": int(len(spec.faces)),
+                "tags": sorted(spec.tags),
+                "description": spec.description,
+            }
+        )
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    print(f"{'id':>3}  {'name':<24}{'size (mm)':<22}{'mass (g)':>9}  tags")
+    for r in rows:
+        size = "x".join(f"{s:.0f}" for s in r["size_mm"])
+        print(f"{r['id']:>3}  {r['name']:<24}{size:<22}{r['mass_g']:>9.1f}  {', '.join(r['tags'])}")
+    print(f"{len(rows)} objects; plus the tote, the default gripper and the default suction cup")
+    return 0
+
+
+def _cmd_objects_export(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from mgn.hardware import default_cup, default_gripper
+    from mgn.io.atomic import atomic_write_text
+    from mgn.io.model_folder import write_model_folder
+    from mgn.objects import builtin_objects, default_tote, get_object
+
+    specs = [get_object(n) for n in args.only] if args.only else list(builtin_objects())
+    for spec in tqdm(specs, desc="exporting objects", unit="obj", disable=args.quiet):
+        write_model_folder(spec, args.dir, overwrite=True)
+    from pathlib import Path
+
+    root = Path(args.dir)
+    default_gripper().to_yaml(root / "gripper.yaml")
+    default_cup().to_yaml(root / "suction_cup.yaml")
+    tote = default_tote()
+    atomic_write_text(
+        root / "tote.json", json.dumps({k: getattr(tote, k) for k in tote.__dataclass_fields__})
+    )
+    print(f"wrote {len(specs)} object folders to {root / 'models'} (+ gripper, cup, tote)")
+    return 0
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    from mgn.geometry import load_mesh, mass_properties
+
+    mesh = load_mesh(args.mesh, scale=args.scale)
+    r = mesh.validate()
+    p = mass_properties(mesh, args.density)
+    info = {
+        "path": args.mesh,
+        "num_vertices": r.num_vertices,
+        "num_faces": r.num_faces,
+        "bounds_m": mesh.bounds.tolist(),
+        "is_watertight": r.is_watertight,
+        "is_winding_consistent": r.is_winding_consistent,
+        "is_outward": r.is_outward,
+        "num_boundary_edges": r.num_boundary_edges,
+        "volume_m3": p.volume,
+        "mass_kg": p.mass,
+        "center_of_mass_m": np.asarray(p.center_of_mass).tolist(),
+        "inertia_kg_m2": np.asarray(p.inertia).tolist(),
+        "mass_properties_exact": p.is_exact,
+    }
+    print(json.dumps(info, indent=2))
+    return 0
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from mgn.demo import run_demo
+
+    result = run_demo(args.out, num_threads=args.num_threads)
+    failed = (result.num_objects - result.reloaded_ok) + result.collision_errors
+    if failed:
+        print(f"mgn demo: {failed} check(s) FAILED (see {result.out_dir / 'smoke.json'})")
+        return 1
+    print("mgn demo: all checks passed")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mgn",
+        description="Synthesise bin-picking datasets with ambidextrous grasp labels.",
+    )
+    parser.add_argument("--version", action="version", version=f"mgn {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show full tracebacks on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    objects = sub.add_parser("objects", help="the built-in object library")
+    osub = objects.add_subparsers(dest="objects_command", metavar="ACTION", required=True)
+    p = osub.add_parser("list", help="list the built-in objects")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.set_defaults(func=_cmd_objects_list)
+    p = osub.add_parser("export", help="write the objects as MetaGraspNet model folders")
+    p.add_argument("dir", help="output root; objects go to DIR/models/<id>/")
+    p.add_argument("--only", nargs="+", metavar="NAME", help="export only these objects")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_objects_export)
+
+    p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
+    p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
+    p.add_argument("--scale", type=float, default=1.0, help="coordinate scale (0.001 for mm)")
+    p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
+    p.set_defaults(func=_cmd_info)
+
+    p = sub.add_parser("demo", help="export the built-in objects and run a smoke check")
+    p.add_argument("--out", default="demo_out", help="output folder (default: demo_out)")
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    p.set_defaults(func=_cmd_demo)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``mgn`` command. Returns the process exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except (MgnError, OSError, ValueError, KeyError) as e:
+        if args.debug:
+            raise
+        message = e.args[0] if isinstance(e, KeyError) and e.args else e
+        print(f"mgn: error: {message}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("mgn: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,13 @@
+"""Writers and readers of mgn's file formats. Every file is written atomically."""
+
+from mgn.io.atomic import atomic_dir, atomic_write_bytes, atomic_write_text
+from mgn.io.model_folder import ModelFolder, read_model_folder, write_model_folder
+
+__all__ = [
+    "ModelFolder",
+    "atomic_dir",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "read_model_folder",
+    "write_model_folder",
+]

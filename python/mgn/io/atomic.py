@@ -1,0 +1,82 @@
+"""Atomic writes: nothing is ever left half-written.
+
+Files are written to a temporary name in the same directory and renamed into place; folders are
+built under a temporary name and renamed when complete. A full disk is reported as such.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+from mgn.errors import IoError
+
+
+def _io_error(path: str | os.PathLike[str], e: OSError) -> IoError:
+    if e.errno == errno.ENOSPC:
+        return IoError(f"disk full while writing '{os.fspath(path)}': free some space and retry")
+    return IoError(f"cannot write '{os.fspath(path)}': {e.strerror or e}")
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file in the same folder and a rename."""
+    target = Path(path)
+    tmp = None
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+        tmp = None
+    except OSError as e:
+        raise _io_error(target, e) from e
+    finally:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write UTF-8 ``text`` to ``path`` atomically."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+@contextlib.contextmanager
+def atomic_dir(path: str | os.PathLike[str], *, overwrite: bool = False) -> Iterator[Path]:
+    """Build a folder under a temporary name; rename it to ``path`` when the block succeeds.
+
+    If the block raises, the temporary folder is removed and ``path`` is untouched. With
+    ``overwrite`` an existing ``path`` is replaced (the old one is removed only after the new one
+    is complete); without it an existing ``path`` is an error.
+    """
+    target = Path(path)
+    if target.exists() and not overwrite:
+        raise IoError(f"'{target}' already exists; pass overwrite=True to replace it")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    except OSError as e:
+        raise _io_error(target, e) from e
+    try:
+        yield tmp
+        old = None
+        if target.exists():
+            old = target.with_name(f".{target.name}.old-{os.getpid()}")
+            os.replace(target, old)
+        os.replace(tmp, target)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except OSError as e:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise _io_error(target, e) from e
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Creates the virtual environment .venv (if missing) and installs mgn into it with the test
+# extras. Builds the C++ extension (scikit-build-core); takes about a minute on 2 cores.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PYTHON="${PYTHON:-python3}"
+if [ ! -x .venv/bin/python ]; then
+  "$PYTHON" -m venv .venv
+fi
+. .venv/bin/activate
+python -m pip install --quiet --upgrade pip
+python -m pip install --quiet ".[test]"
+python -c "import mgn; print('mgn', mgn.__version__, 'installed in .venv')"
