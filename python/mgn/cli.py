@@ -21,13 +21,22 @@ from mgn import __version__
 from mgn.errors import MgnError
 
 
+def _catalogue(extra_yaml: Sequence[str] | None) -> list:
+    """Built-in objects followed by the user objects of each ``--add`` YAML file."""
+    from mgn.objects import builtin_objects, load_objects_yaml
+
+    specs = list(builtin_objects())
+    for path in extra_yaml or ():
+        specs.extend(load_objects_yaml(path))
+    return specs
+
+
 def _cmd_objects_list(args: argparse.Namespace) -> int:
     from mgn.geometry import mass_properties
     from mgn.io.model_folder import object_mesh
-    from mgn.objects import builtin_objects
 
     rows = []
-    for spec in builtin_objects():
+    for spec in _catalogue(args.add):
         size = np.ptp(np.asarray(spec.vertices), axis=0) * 1000
         mass = mass_properties(object_mesh(spec), spec.density).mass
         rows.append(
@@ -56,11 +65,16 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from mgn.hardware import default_cup, default_gripper
-    from mgn.io.atomic import atomic_write_text
-    from mgn.io.model_folder import write_model_folder
-    from mgn.objects import builtin_objects, default_tote, get_object
+    from mgn.io.model_folder import write_model_folder, write_tote
+    from mgn.objects import default_tote
 
-    specs = [get_object(n) for n in args.only] if args.only else list(builtin_objects())
+    specs = _catalogue(args.add)
+    if args.only:
+        by_key = {s.name: s for s in specs} | {str(s.category_id): s for s in specs}
+        missing = [n for n in args.only if n not in by_key]
+        if missing:
+            raise KeyError(f"unknown object(s) {missing}; known: {sorted(s.name for s in specs)}")
+        specs = [by_key[n] for n in args.only]
     for spec in tqdm(specs, desc="exporting objects", unit="obj", disable=args.quiet):
         write_model_folder(spec, args.dir, overwrite=True)
     from pathlib import Path
@@ -68,11 +82,8 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
     root = Path(args.dir)
     default_gripper().to_yaml(root / "gripper.yaml")
     default_cup().to_yaml(root / "suction_cup.yaml")
-    tote = default_tote()
-    atomic_write_text(
-        root / "tote.json", json.dumps({k: getattr(tote, k) for k in tote.__dataclass_fields__})
-    )
-    print(f"wrote {len(specs)} object folders to {root / 'models'} (+ gripper, cup, tote)")
+    write_tote(default_tote(), root)
+    print(f"wrote {len(specs)} object folders to {root / 'models'} (+ tote, gripper, cup)")
     return 0
 
 
@@ -124,12 +135,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     objects = sub.add_parser("objects", help="the built-in object library")
     osub = objects.add_subparsers(dest="objects_command", metavar="ACTION", required=True)
+    add_help = "also include the user objects described in this YAML file (repeatable)"
     p = osub.add_parser("list", help="list the built-in objects")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--add", action="append", metavar="YAML", help=add_help)
     p.set_defaults(func=_cmd_objects_list)
     p = osub.add_parser("export", help="write the objects as MetaGraspNet model folders")
     p.add_argument("dir", help="output root; objects go to DIR/models/<id>/")
-    p.add_argument("--only", nargs="+", metavar="NAME", help="export only these objects")
+    p.add_argument("--only", nargs="+", metavar="NAME", help="export only these (names or ids)")
+    p.add_argument("--add", action="append", metavar="YAML", help=add_help)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_objects_export)
 

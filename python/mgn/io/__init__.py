@@ -1,7 +1,7 @@
 """Writers and readers of mgn's file formats. Every file is written atomically."""
 
 from mgn.io.atomic import atomic_dir, atomic_write_bytes, atomic_write_text
-from mgn.io.model_folder import ModelFolder, read_model_folder, write_model_folder
+from mgn.io.model_folder import ModelFolder, read_model_folder, write_model_folder, write_tote
 
 __all__ = [
     "ModelFolder",
@@ -10,4 +10,5 @@ __all__ = [
     "atomic_write_text",
     "read_model_folder",
     "write_model_folder",
+    "write_tote",
 ]

@@ -13,6 +13,7 @@ Every HDF5 dataset is float32, as in the original files.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import os
@@ -27,7 +28,7 @@ import numpy.typing as npt
 from mgn import _core
 from mgn.geometry import Mesh, load_mesh, mass_properties, sample_surface
 from mgn.io.atomic import atomic_dir
-from mgn.objects import ObjectSpec
+from mgn.objects import MaterialSpec, ObjectSpec, ToteSpec, make_tote
 
 M_TO_CM = 100.0
 #: Number of centre-of-mass keypoints per object (MetaGraspNet).
@@ -69,24 +70,33 @@ def com_keypoints(mesh: Mesh, density: float, *, seed: int) -> npt.NDArray[np.fl
     return np.column_stack([score, pts])
 
 
-def _obj_text(spec: ObjectSpec, has_texture: bool) -> str:
+def obj_text(
+    vertices: npt.ArrayLike,
+    faces: npt.ArrayLike,
+    uvs: npt.ArrayLike | None,
+    *,
+    header: str,
+    mtllib: str = "textured.mtl",
+) -> str:
+    """Wavefront OBJ text (metres) using material ``material_0`` of ``mtllib``."""
     out = io.StringIO()
-    out.write(f"# {spec.name}: {spec.description}\n# units: metres, object frame (z up)\n")
-    out.write("mtllib textured.mtl\n")
-    np.savetxt(out, np.asarray(spec.vertices, np.float64), fmt="v %.7f %.7f %.7f")
-    if has_texture:
-        np.savetxt(out, np.asarray(spec.uvs, np.float64), fmt="vt %.6f %.6f")
+    for line in header.splitlines():
+        out.write(f"# {line}\n")
+    out.write(f"mtllib {mtllib}\n")
+    np.savetxt(out, np.asarray(vertices, np.float64), fmt="v %.7f %.7f %.7f")
+    if uvs is not None:
+        np.savetxt(out, np.asarray(uvs, np.float64), fmt="vt %.6f %.6f")
     out.write("usemtl material_0\n")
-    f = np.asarray(spec.faces, np.int64) + 1
-    if has_texture:
+    f = np.asarray(faces, np.int64) + 1
+    if uvs is not None:
         np.savetxt(out, np.repeat(f, 2, axis=1), fmt="f %d/%d %d/%d %d/%d")
     else:
         np.savetxt(out, f, fmt="f %d %d %d")
     return out.getvalue()
 
 
-def _mtl_text(spec: ObjectSpec, has_texture: bool) -> str:
-    m = spec.material
+def mtl_text(m: MaterialSpec, has_texture: bool) -> str:
+    """MTL text of material ``material_0`` (linear colours; ``texture.png`` when textured)."""
     lines = [
         "newmtl material_0",
         "Kd {:.6f} {:.6f} {:.6f}".format(*m.base_color[:3]),
@@ -184,8 +194,10 @@ def write_model_folder(
         "mgn_version": _core.__version__,
     }
     with atomic_dir(target, overwrite=overwrite) as tmp:
-        (tmp / "textured.obj").write_text(_obj_text(spec, has_texture))
-        (tmp / "textured.mtl").write_text(_mtl_text(spec, has_texture))
+        header = f"{spec.name}: {spec.description}\nunits: metres, object frame (z up)"
+        uvs = spec.uvs if has_texture else None
+        (tmp / "textured.obj").write_text(obj_text(spec.vertices, spec.faces, uvs, header=header))
+        (tmp / "textured.mtl").write_text(mtl_text(spec.material, has_texture))
         if has_texture:
             Image.fromarray(np.asarray(spec.material.texture, np.uint8)).save(tmp / "texture.png")
         (tmp / "textured.urdf").write_text(
@@ -232,3 +244,21 @@ def read_model_folder(path: str | os.PathLike[str]) -> ModelFolder:
     byhand[:, 1:] /= M_TO_CM
     com[:, 1:] /= M_TO_CM
     return ModelFolder(folder, mesh, byhand, com, meta)
+
+
+def write_tote(spec: ToteSpec, root: str | os.PathLike[str]) -> Path:
+    """Write the tote as ``<root>/tote/`` (``tote.obj`` + ``.mtl`` in metres, ``tote.json``).
+
+    Tote frame: origin at the centre of the inner floor surface, z up.
+    """
+    vertices, faces = make_tote(spec)
+    params = {f.name: getattr(spec, f.name) for f in dataclasses.fields(spec)}
+    material = MaterialSpec(name="tote", base_color=tuple(spec.color))
+    with atomic_dir(Path(root) / "tote", overwrite=True) as tmp:
+        header = "tote: origin at the centre of the inner floor, z up; metres"
+        (tmp / "tote.obj").write_text(
+            obj_text(vertices, faces, None, header=header, mtllib="tote.mtl")
+        )
+        (tmp / "tote.mtl").write_text(mtl_text(material, False))
+        (tmp / "tote.json").write_text(json.dumps(params, indent=2))
+    return Path(root) / "tote"

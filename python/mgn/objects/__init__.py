@@ -5,6 +5,7 @@
   frame at the bounding-box centre, z up).
 - :class:`ToteSpec`, :func:`make_tote`, :func:`default_tote`: the bin the objects fall into
   (tote frame at the centre of the inner floor, z up).
+- :func:`load_objects_yaml`: user objects from mesh files plus a small YAML file.
 """
 
 from .library import (
@@ -17,6 +18,7 @@ from .library import (
     object_names,
 )
 from .tote import ToteSpec, default_tote, make_tote, tote_volume
+from .user import load_objects_yaml
 
 __all__ = [
     "ALLOWED_TAGS",
@@ -27,6 +29,7 @@ __all__ = [
     "builtin_objects",
     "default_tote",
     "get_object",
+    "load_objects_yaml",
     "make_tote",
     "object_names",
     "tote_volume",
