@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Regenerates python/mgn/_core.pyi (the committed type stubs of the compiled core) from the
+# installed extension. Run after changing a binding; tests/python/test_stubs.py checks coverage.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+python -m pip install --quiet pybind11-stubgen
+out=$(mktemp -d)
+pybind11-stubgen mgn._core -o "$out" --numpy-array-wrap-with-annotated
+cp "$out/mgn/_core.pyi" python/mgn/_core.pyi
+ruff check --fix --quiet python/mgn/_core.pyi >/dev/null 2>&1 || true
+ruff format python/mgn/_core.pyi >/dev/null 2>&1 || true
+echo "updated python/mgn/_core.pyi"
