@@ -9,6 +9,8 @@
 #include <cmath>
 #include <mutex>
 
+#include "raytrace/detail/parallel_rays.hpp"
+
 namespace mgn {
 
 namespace {
@@ -430,3 +432,94 @@ void camera_rays(const Mat3d& K, int width, int height, const Pose& X_WC, Points
 }
 
 }  // namespace mgn
+
+// ---------------------------------------------------------------------------------------------
+// Private fast paths for bundles of parallel rays (see detail/parallel_rays.hpp).
+
+namespace mgn::detail {
+
+namespace {
+
+template <typename Packet>
+void fill_packet(Packet& r, int* valid, const ParallelRays& rays, int start) {
+  const int m = std::min(16, rays.count - start);
+  for (int k = 0; k < 16; ++k) {
+    const Eigen::Vector2d& off = rays.offsets[start + std::min(k, m - 1)];
+    const Vec3d o = rays.base + rays.scale * (off.x() * rays.u + off.y() * rays.v);
+    valid[k] = k < m ? -1 : 0;
+    r.org_x[k] = static_cast<float>(o.x());
+    r.org_y[k] = static_cast<float>(o.y());
+    r.org_z[k] = static_cast<float>(o.z());
+    r.dir_x[k] = static_cast<float>(rays.dir.x());
+    r.dir_y[k] = static_cast<float>(rays.dir.y());
+    r.dir_z[k] = static_cast<float>(rays.dir.z());
+    r.tnear[k] = 0.0f;
+    r.tfar[k] = rays.tfar;
+    r.time[k] = 0.0f;
+    r.mask[k] = 0xFFFFFFFFu;
+    r.id[k] = static_cast<unsigned>(k);
+    r.flags[k] = 0;
+  }
+}
+
+}  // namespace
+
+void parallel_first_hits(const RayScene& scene, const ParallelRays& rays, float* t, Vec3f* normal) {
+  FtzDazGuard guard;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) RTCRayHit16 rh;
+  alignas(64) int valid[16];
+  const auto& impl = scene.impl();
+  for (int s = 0; s < rays.count; s += 16) {
+    fill_packet(rh.ray, valid, rays, s);
+    for (int k = 0; k < 16; ++k) {
+      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, impl.scene, &ctx, &rh);
+    const int m = std::min(16, rays.count - s);
+    for (int k = 0; k < m; ++k) {
+      if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+        t[s + k] = std::numeric_limits<float>::infinity();
+        normal[s + k].setZero();
+      } else {
+        t[s + k] = rh.ray.tfar[k];
+        normal[s + k] = impl.world_normals[rh.hit.geomID[k]].row(rh.hit.primID[k]).transpose();
+      }
+    }
+  }
+}
+
+namespace {
+/// Casts occlusion packets; returns early as soon as `stop(occluded)` is true for any ray.
+template <typename Stop>
+bool parallel_occlusion_until(const RayScene& scene, const ParallelRays& rays, Stop stop) {
+  FtzDazGuard guard;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) RTCRay16 r;
+  alignas(64) int valid[16];
+  for (int s = 0; s < rays.count; s += 16) {
+    fill_packet(r, valid, rays, s);
+    rtcOccluded16(valid, scene.impl().scene, &ctx, &r);
+    const int m = std::min(16, rays.count - s);
+    for (int k = 0; k < m; ++k) {
+      if (stop(r.tfar[k] == -std::numeric_limits<float>::infinity())) return true;
+    }
+  }
+  return false;
+}
+}  // namespace
+
+bool parallel_all_hit(const RayScene& scene, const ParallelRays& rays) {
+  return !parallel_occlusion_until(scene, rays, [](bool occluded) { return !occluded; });
+}
+
+bool parallel_any_hit(const RayScene& scene, const ParallelRays& rays) {
+  return parallel_occlusion_until(scene, rays, [](bool occluded) { return occluded; });
+}
+
+}  // namespace mgn::detail

@@ -83,8 +83,11 @@ class RayScene {
   RayAllHits intersect_all(const Points3f& origins, const Points3f& directions,
                            int max_hits_per_ray = 64, const CastOptions& options = {}) const;
 
- private:
+  /// Internal state (defined in the implementation; used by mgn's private fast paths).
   struct Impl;
+  const Impl& impl() const { return *impl_; }
+
+ private:
   std::unique_ptr<Impl> impl_;
 };
 
