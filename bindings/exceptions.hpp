@@ -9,4 +9,6 @@ void bind_core(pybind11::module_& m);
 void bind_geometry(pybind11::module_& m);
 void bind_raytrace(pybind11::module_& m);
 void bind_collision(pybind11::module_& m);
+void bind_grasp(pybind11::module_& m);
+void bind_calibration(pybind11::module_& m);
 }  // namespace mgn::py_bind

@@ -10,4 +10,6 @@ PYBIND11_MODULE(_core, m) {
   mgn::py_bind::bind_geometry(m);
   mgn::py_bind::bind_raytrace(m);
   mgn::py_bind::bind_collision(m);
+  mgn::py_bind::bind_grasp(m);
+  mgn::py_bind::bind_calibration(m);
 }

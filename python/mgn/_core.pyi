@@ -13,6 +13,7 @@ import numpy.typing
 __all__: list[str] = [
     "BackendError",
     "CollisionModel",
+    "Cup",
     "InvalidArgumentError",
     "IoError",
     "MassProperties",
@@ -21,9 +22,13 @@ __all__: list[str] = [
     "MeshReport",
     "MgnError",
     "RayScene",
+    "SEAL_FAILURE_NAMES",
+    "SealModel",
     "UnsupportedError",
     "build_info",
+    "calibrate_cup",
     "camera_rays",
+    "classification_metrics",
     "collide",
     "compute_mass_properties",
     "distance",
@@ -31,8 +36,10 @@ __all__: list[str] = [
     "make_box",
     "make_cylinder",
     "make_sphere",
+    "predict_experiments",
     "resolve_num_threads",
     "sample_surface",
+    "suction_wrench_scores",
 ]
 
 class MgnError(Exception):
@@ -276,9 +283,115 @@ class CollisionModel:
     @property
     def num_vertices(self) -> int: ...
 
+class Cup:
+    """
+    Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).
+    """
+
+    name: str
+    def __init__(self) -> None: ...
+    def compression_stiffness(self) -> float: ...
+    def pressure_force(self) -> float: ...
+    def validate(self) -> None: ...
+    @property
+    def approach_height(self) -> float: ...
+    @approach_height.setter
+    def approach_height(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def body_height(self) -> float: ...
+    @body_height.setter
+    def body_height(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def c1(self) -> float: ...
+    @c1.setter
+    def c1(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def c2(self) -> float: ...
+    @c2.setter
+    def c2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def compensable_height(self) -> float: ...
+    @compensable_height.setter
+    def compensable_height(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def hole_rays(self) -> int: ...
+    @hole_rays.setter
+    def hole_rays(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def num_points(self) -> int: ...
+    @num_points.setter
+    def num_points(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def outer_radius(self) -> float: ...
+    @outer_radius.setter
+    def outer_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def pressure_difference(self) -> float: ...
+    @pressure_difference.setter
+    def pressure_difference(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def radius(self) -> float: ...
+    @radius.setter
+    def radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def youngs_modulus(self) -> float: ...
+    @youngs_modulus.setter
+    def youngs_modulus(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
+class SealModel:
+    """
+    Immutable seal model of one object for one cup.
+    """
+    def __init__(self, mesh: Mesh, cup: Cup, model: str = "spring") -> None: ...
+    def evaluate(
+        self,
+        points: typing.Any,
+        normals: typing.Any,
+        num_trials: typing.SupportsInt | typing.SupportsIndex = 10,
+        angle_sigma: typing.SupportsFloat | typing.SupportsIndex = 0.1,
+        position_sigma: typing.SupportsFloat | typing.SupportsIndex = -1.0,
+        perturb: bool = True,
+        on_surface_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.001,
+        seed: typing.SupportsInt | typing.SupportsIndex = 0,
+        num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+    ) -> dict: ...
+    def trial(
+        self,
+        point: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
+        normal: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
+    ) -> dict: ...
+    def with_cup(self, cup: Cup) -> SealModel: ...
+    @property
+    def cup(self) -> Cup: ...
+    @property
+    def model(self) -> str: ...
+
 def build_info() -> list[tuple[str, str]]:
     """
     (library, version) pairs for mgn and every library the core was built against.
+    """
+
+def calibrate_cup(
+    surfaces: collections.abc.Sequence[Mesh],
+    surface_index: typing.Any,
+    points: typing.Any,
+    normals: typing.Any,
+    sealed: typing.Any,
+    cup: typing.Any,
+    c1_min: typing.SupportsFloat | typing.SupportsIndex = 0.001,
+    c1_max: typing.SupportsFloat | typing.SupportsIndex = 1.0,
+    c2_min: typing.SupportsFloat | typing.SupportsIndex = 0.001,
+    c2_max: typing.SupportsFloat | typing.SupportsIndex = 1.0,
+    global_evaluations: typing.SupportsInt | typing.SupportsIndex = 200,
+    local_evaluations: typing.SupportsInt | typing.SupportsIndex = 100,
+    xtol_rel: typing.SupportsFloat | typing.SupportsIndex = 0.0001,
+    ftol_abs: typing.SupportsFloat | typing.SupportsIndex = 1e-09,
+    holdout_fraction: typing.SupportsFloat | typing.SupportsIndex = 0.3,
+    seed: typing.SupportsInt | typing.SupportsIndex = 0,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+) -> dict:
+    """
+    Fit c1, c2 of the cup to measured outcomes (see mgn.suction.calibrate).
     """
 
 def camera_rays(
@@ -287,6 +400,13 @@ def camera_rays(
     height: typing.SupportsInt | typing.SupportsIndex,
     X_WC: typing.Any,
 ) -> tuple[numpy.ndarray, numpy.ndarray]: ...
+def classification_metrics(
+    predicted: collections.abc.Sequence[bool], measured: collections.abc.Sequence[bool]
+) -> dict:
+    """
+    Confusion counts and PPV, NPV, sensitivity, specificity, accuracy (NaN for a zero denominator).
+    """
+
 def collide(
     a: CollisionModel,
     X_WA: typing.Any,
@@ -328,6 +448,18 @@ def make_sphere(
     segments: typing.SupportsInt | typing.SupportsIndex = 64,
     rings: typing.SupportsInt | typing.SupportsIndex = 32,
 ) -> Mesh: ...
+def predict_experiments(
+    surfaces: collections.abc.Sequence[Mesh],
+    surface_index: typing.Any,
+    points: typing.Any,
+    normals: typing.Any,
+    cup: typing.Any,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+) -> numpy.ndarray:
+    """
+    Nominal spring-model seal prediction (bool per experiment) for a cup.
+    """
+
 def resolve_num_threads(requested: typing.SupportsInt | typing.SupportsIndex) -> int:
     """
     Thread count used for `requested` (0 = all hardware threads).
@@ -340,5 +472,25 @@ def sample_surface(
     seed: typing.SupportsInt | typing.SupportsIndex = 0,
     oversampling: typing.SupportsInt | typing.SupportsIndex = 6,
 ) -> dict: ...
+def suction_wrench_scores(
+    contacts: typing.Any,
+    approach: typing.Any,
+    mass: typing.SupportsFloat | typing.SupportsIndex,
+    com: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
+    gravity_direction: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
+    cup_radius: typing.SupportsFloat | typing.SupportsIndex,
+    k: typing.SupportsFloat | typing.SupportsIndex = 15.6,
+    gravity: typing.SupportsFloat | typing.SupportsIndex = 9.81,
+) -> numpy.ndarray: ...
 
+SEAL_FAILURE_NAMES: tuple = (
+    "none",
+    "miss",
+    "obstruction",
+    "hill",
+    "hole",
+    "force",
+    "strain",
+    "rough",
+)
 __version__: str = "0.1.0"

@@ -153,6 +153,7 @@ class SuctionCup(_YamlDataclass):
         c2: fitted ring-spring constant (calibrated).
         outer_radius: outer radius of the cup body for collision checks, m.
         body_height: height of the cup body (bellows) for collision checks, m.
+        hole_rays: rays of the hole check spread over the contact disc (MetaGraspNet: 1000).
     """
 
     name: str = "bellows_14mm"
@@ -166,8 +167,13 @@ class SuctionCup(_YamlDataclass):
     c2: float = 0.06241
     outer_radius: float = 0.010
     body_height: float = 0.030
+    hole_rays: int = 1000
 
     def __post_init__(self) -> None:
+        if not isinstance(self.hole_rays, int) or self.hole_rays < 1:
+            raise InvalidArgumentError(
+                f"SuctionCup.hole_rays: expected an integer >= 1, got {self.hole_rays!r}"
+            )
         self._check_positive(
             "radius",
             "youngs_modulus",
@@ -179,9 +185,9 @@ class SuctionCup(_YamlDataclass):
             "outer_radius",
             "body_height",
         )
-        if not isinstance(self.num_points, int) or self.num_points < 8:
+        if not isinstance(self.num_points, int) or self.num_points < 6:
             raise InvalidArgumentError(
-                f"SuctionCup.num_points: expected an integer >= 8, got {self.num_points!r}"
+                f"SuctionCup.num_points: expected an integer >= 6, got {self.num_points!r}"
             )
         if self.outer_radius < self.radius:
             raise InvalidArgumentError(

@@ -3,6 +3,7 @@
 #include <mgn/core/error.hpp>
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/grasp/seal_model.hpp>
+#include <mgn/grasp/wrench.hpp>
 
 #include <cmath>
 
@@ -182,4 +183,21 @@ TEST(SpringSeal, BadInputIsRejectedWithAClearError) {
   } catch (const mgn::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("not on the mesh"), std::string::npos);
   }
+}
+
+TEST(SuctionWrench, ScoresFollowTheBendingTorque) {
+  // Unit mass, CoM 5 cm to the side of a contact on top: torque 0.4905 N m about a horizontal axis.
+  mgn::Points3f c(3, 3), a(3, 3);
+  c << 0, 0, 0.1, 0.05, 0, 0.1, 0, 0, 0.1;
+  a << 0, 0, -1, 0, 0, -1, 1, 0, 0;  // from above (twice), and from the side
+  const mgn::Vec3d com(0.05, 0, 0.1), g(0, 0, -1);
+  const double r = 0.01, tau_max = 15.6 * r * M_PI * std::sqrt(2.0);
+  const auto s = mgn::suction_wrench_scores(c, a, 1.0, com, g, r);
+  EXPECT_NEAR(s[0], 1.0 - 9.81 * 0.05 / tau_max, 1e-6);
+  EXPECT_FLOAT_EQ(s[1], 1.0f);  // directly above the CoM: no torque
+  // From the side the same torque is about the approach axis's normal plane: still bending.
+  EXPECT_NEAR(s[2], s[0], 1e-6);
+  // Heavier objects score lower; the score saturates at 0.
+  EXPECT_FLOAT_EQ(mgn::suction_wrench_scores(c, a, 100.0, com, g, r)[0], 0.0f);
+  EXPECT_THROW(mgn::suction_wrench_scores(c, a, -1.0, com, g, r), mgn::InvalidArgument);
 }

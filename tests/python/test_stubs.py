@@ -11,7 +11,9 @@ STUB = Path(mgn.__file__).with_name("_core.pyi")
 
 def test_stub_declares_every_public_name_and_method():
     tree = ast.parse(STUB.read_text())
-    declared = {n.name for n in tree.body if isinstance(n, (ast.ClassDef, ast.FunctionDef))}
+    declared = {n.name for n in tree.body if isinstance(n, (ast.ClassDef, ast.FunctionDef))} | {
+        n.target.id for n in tree.body if isinstance(n, ast.AnnAssign)
+    }
     public = {n for n in dir(_core) if not n.startswith("_")}
     assert public - declared == set(), "run scripts/gen-stubs.sh"
     for cls in (n for n in tree.body if isinstance(n, ast.ClassDef)):

@@ -12,5 +12,8 @@
 #include <mgn/geometry/mesh_io.hpp>
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/geometry/sampling.hpp>
+#include <mgn/grasp/cup.hpp>
+#include <mgn/grasp/seal_model.hpp>
+#include <mgn/grasp/wrench.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
 #include <mgn/version.hpp>
