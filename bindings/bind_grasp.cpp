@@ -68,7 +68,7 @@ void bind_grasp(py::module_& m) {
           "evaluate",
           [](const SealModel& s, const py::handle& points, const py::handle& normals, int num_trials,
              double angle_sigma, double position_sigma, bool perturb, double on_surface_tolerance,
-             std::uint64_t seed, int num_threads) {
+             std::uint64_t seed, std::uint64_t first_index, int num_threads) {
             const Points3f p = to_rows<float, 3>(points, "points");
             const Points3f n = to_rows<float, 3>(normals, "normals");
             SealOptions o;
@@ -78,6 +78,7 @@ void bind_grasp(py::module_& m) {
             o.perturb = perturb;
             o.on_surface_tolerance = on_surface_tolerance;
             o.seed = seed;
+            o.first_index = first_index;
             o.num_threads = num_threads;
             SealResult r;
             {
@@ -96,7 +97,7 @@ void bind_grasp(py::module_& m) {
           },
           py::arg("points"), py::arg("normals"), py::arg("num_trials") = 10, py::arg("angle_sigma") = 0.1,
           py::arg("position_sigma") = -1.0, py::arg("perturb") = true, py::arg("on_surface_tolerance") = 1e-3,
-          py::arg("seed") = 0, py::arg("num_threads") = 0)
+          py::arg("seed") = 0, py::arg("first_index") = 0, py::arg("num_threads") = 0)
       .def(
           "trial",
           [](const SealModel& s, const Vec3d& point, const Vec3d& normal) {

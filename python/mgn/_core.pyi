@@ -353,6 +353,7 @@ class SealModel:
         perturb: bool = True,
         on_surface_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.001,
         seed: typing.SupportsInt | typing.SupportsIndex = 0,
+        first_index: typing.SupportsInt | typing.SupportsIndex = 0,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
     ) -> dict: ...
     def trial(

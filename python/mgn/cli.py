@@ -5,6 +5,7 @@ Subcommands::
     mgn objects list [--json]          the built-in objects (id, name, size, tags)
     mgn objects export DIR [--only N]  write them in the MetaGraspNet model folder layout
     mgn info MESH [--scale S]          validation and mass properties of a mesh file
+    mgn suction label ROOT             suction labels of exported objects (textured.obj.hdf5)
     mgn demo [--out DIR]               export + ray-cast/collision smoke + a picture
 """
 
@@ -124,6 +125,53 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_suction_label(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mgn.geometry import load_mesh, mass_properties
+    from mgn.hardware import SuctionCup
+    from mgn.io.model_folder import read_model_folder
+    from mgn.suction import label_object, write_suction_labels
+
+    root = Path(args.root)
+    folders = sorted(p for p in (root / "models").glob("[0-9][0-9][0-9]") if p.is_dir())
+    if args.objects:
+        wanted = set(args.objects)
+        folders = [
+            f
+            for f in folders
+            if f.name in wanted
+            or str(int(f.name)) in wanted
+            or read_model_folder(f).metadata.get("name") in wanted
+        ]
+    if not folders:
+        raise ValueError(f"no object folders to label under '{root / 'models'}'")
+    cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
+    for folder in folders:
+        mf = read_model_folder(folder)
+        mesh = load_mesh(folder / "textured.obj")
+        density = float(mf.metadata.get("density_kg_m3", args.density))
+        props = mass_properties(mesh, density)
+        labels = label_object(
+            mesh,
+            mass=props.mass,
+            com=props.center_of_mass,
+            cup=cup,
+            model=args.model,
+            num_points=args.num_points,
+            seed=args.seed,
+            num_threads=args.num_threads,
+            progress=not args.quiet,
+        )
+        write_suction_labels(folder / "textured.obj.hdf5", labels)
+        good = int((labels.score >= 0.5).sum())
+        print(
+            f"{folder.name} {mf.metadata.get('name', '')}: {len(labels.score)} suction labels "
+            f"({good} with score >= 0.5, {labels.num_colliding} colliding dropped)"
+        )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mgn",
@@ -146,6 +194,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--add", action="append", metavar="YAML", help=add_help)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_objects_export)
+
+    suction = sub.add_parser("suction", help="suction grasp labels")
+    ssub = suction.add_subparsers(dest="suction_command", metavar="ACTION", required=True)
+    p = ssub.add_parser(
+        "label", help="label the objects of an export root (writes grasps/suctioncup/*)"
+    )
+    p.add_argument("root", help="folder with models/<id>/ (from `mgn objects export`)")
+    p.add_argument("--objects", nargs="+", metavar="NAME", help="only these (names or ids)")
+    p.add_argument("--cup", metavar="YAML", help="suction cup YAML (default: MetaGraspNet cup)")
+    p.add_argument("--model", choices=["spring", "strain", "smoothness"], default="spring")
+    p.add_argument("--num-points", type=int, default=5000, help="candidates per object")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--density", type=float, default=500.0, help="kg/m^3 if not in metadata")
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=_cmd_suction_label)
 
     p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")

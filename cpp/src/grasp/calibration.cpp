@@ -193,14 +193,19 @@ struct Search {
   int best_correct = 0;
   double best_dist2 = 0.0;
   std::array<double, 2> best_x{};
+  std::array<double, 2> best_c{};          // (c1, c2) of best_x, exactly as evaluated
   std::exception_ptr error;
   std::vector<std::uint8_t> pred;  // scratch, indexed by experiment
 
-  double evaluate(const double* x) {
+  double evaluate(const double* x) { return evaluate(x, std::exp(x[0]), std::exp(x[1])); }
+
+  /// Evaluates the point x = (ln c1, ln c2); c1, c2 are passed too so that the initial
+  /// constants are evaluated (and reported) exactly, without a log/exp round trip.
+  double evaluate(const double* x, double c1, double c2) {
     ++evaluations;
     Cup c = cup;
-    c.c1 = std::exp(x[0]);
-    c.c2 = std::exp(x[1]);
+    c.c1 = c1;
+    c.c2 = c2;
     predictor->predict(c, varying, pred, nullptr);
     int correct = fixed_correct;
     for (std::size_t j : varying) correct += (pred[j] != 0) == (*experiments)[j].sealed;
@@ -212,6 +217,7 @@ struct Search {
       best_correct = correct;
       best_dist2 = dist2;
       best_x = {x[0], x[1]};
+      best_c = {c1, c2};
     }
     return static_cast<double>(n_train - correct) / n_train + weight * dist2;
   }
@@ -343,8 +349,11 @@ CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
   search.weight = 0.5 / (search.n_train * d2_max);
 
   // The initial constants (clamped into the box) are the first evaluation.
-  std::vector<double> start = {std::clamp(search.x0[0], lb[0], ub[0]), std::clamp(search.x0[1], lb[1], ub[1])};
-  search.evaluate(start.data());
+  const double c1_start = std::clamp(initial.c1, options.c1_min, options.c1_max);
+  const double c2_start = std::clamp(initial.c2, options.c2_min, options.c2_max);
+  const std::vector<double> start = {std::clamp(std::log(c1_start), lb[0], ub[0]),
+                                     std::clamp(std::log(c2_start), lb[1], ub[1])};
+  search.evaluate(start.data(), c1_start, c2_start);
   run_search(fn, nlopt::GN_DIRECT_L, "GN_DIRECT_L", options.global_evaluations, lb, ub, options, search, start);
   if (options.local_evaluations > 0) {
     // BOBYQA on a piecewise-constant objective often cannot improve the accuracy; it then walks
@@ -354,8 +363,8 @@ CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
   }
 
   out.cup = initial;
-  out.cup.c1 = std::exp(search.best_x[0]);
-  out.cup.c2 = std::exp(search.best_x[1]);
+  out.cup.c1 = search.best_c[0];
+  out.cup.c2 = search.best_c[1];
   out.evaluations = search.evaluations;
 
   // Final predictions of every experiment with the fitted constants.

@@ -296,7 +296,7 @@ SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals, 
 
   parallel_for(static_cast<std::size_t>(n_cand), options.num_threads, 8, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      Rng rng(options.seed, i);
+      Rng rng(options.seed, options.first_index + i);
       const Vec3d c0 = points.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
       const Vec3d n0 = unit.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
       int sealed = 0;

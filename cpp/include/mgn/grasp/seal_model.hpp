@@ -70,6 +70,9 @@ struct SealOptions {
   /// Candidates must lie on the mesh: a ray along the normal within +-tolerance must hit it, m.
   double on_surface_tolerance = 1e-3;
   std::uint64_t seed = 0;
+  /// Index of the first candidate in the whole job: candidate i uses stream (seed, first_index
+  /// + i), so a job evaluated in chunks gives the same scores as in one call.
+  std::uint64_t first_index = 0;
   int num_threads = 0;           ///< 0 = all hardware threads
 };
 
