@@ -6,6 +6,8 @@ Subcommands::
     mgn objects export DIR [--only N]  write them in the MetaGraspNet model folder layout
     mgn info MESH [--scale S]          validation and mass properties of a mesh file
     mgn suction label ROOT             suction labels of exported objects (textured.obj.hdf5)
+    mgn suction board OUT              calibration board STL + poses to try + results template
+    mgn suction calibrate RESULTS.csv  fit the cup constants c1, c2 (NLopt) and report metrics
     mgn demo [--out DIR]               export + ray-cast/collision smoke + a picture
 """
 
@@ -172,6 +174,29 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_suction_board(args: argparse.Namespace) -> int:
+    from mgn.suction import write_calibration_board
+
+    paths = write_calibration_board(args.out, overwrite=args.overwrite)
+    print(f"calibration board: {paths['stl']} (mm); poses to try: {paths['poses']}")
+    print(f"fill in {paths['results_template']}, then run: mgn suction calibrate FILLED.csv")
+    return 0
+
+
+def _cmd_suction_calibrate(args: argparse.Namespace) -> int:
+    from mgn.hardware import SuctionCup
+    from mgn.suction import calibrate_from_csv
+
+    cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
+    report = calibrate_from_csv(
+        args.results, board_dir=args.board, cup=cup, seed=args.seed, num_threads=args.num_threads
+    )
+    print(report.format_report())
+    report.cup.to_yaml(args.out)
+    print(f"fitted cup written to {args.out}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mgn",
@@ -210,6 +235,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=_cmd_suction_label)
+    p = ssub.add_parser("board", help="write the calibration board (STL) and the poses to try")
+    p.add_argument("out", help="output folder")
+    p.add_argument("--overwrite", action="store_true", help="replace existing files")
+    p.set_defaults(func=_cmd_suction_board)
+    p = ssub.add_parser("calibrate", help="fit the cup constants c1, c2 to measured outcomes")
+    p.add_argument("results", help="the filled-in results CSV (pose_id, sealed, ...)")
+    p.add_argument("--board", help="folder with poses.csv (default: the CSV's folder)")
+    p.add_argument("--cup", metavar="YAML", help="initial cup (default: MetaGraspNet cup)")
+    p.add_argument("--out", default="fitted_cup.yaml", help="fitted cup YAML")
+    p.add_argument("--seed", type=int, default=0, help="held-out split seed")
+    p.add_argument("--num-threads", type=int, default=0)
+    p.set_defaults(func=_cmd_suction_calibrate)
 
     p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")

@@ -116,3 +116,27 @@ def test_cli_writes_suction_labels_in_the_metagraspnet_layout(tmp_path):
         assert h5["grasps/paralleljaw/pregrasp_transform"].shape == (0, 10)
         assert h5["metadata"].attrs["suction_model"] == "spring"
         assert "keypts/com" in h5  # the rest of the file is kept
+
+
+def test_cli_board_then_calibrate_recovers_the_model(tmp_path):
+    import csv
+
+    from mgn.suction import make_calibration_board
+
+    assert main(["suction", "board", str(tmp_path)]) == 0
+    with (tmp_path / "poses.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    v, f, _ = make_calibration_board()
+    pts = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows], np.float32)
+    nrm = np.array([[float(r[k]) for k in ("nx", "ny", "nz")] for r in rows], np.float32)
+    truth = SealModel(mgn.Mesh(v.astype(np.float32), f)).evaluate(pts, nrm, perturb=False)
+    with (tmp_path / "filled.csv").open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["pose_id", "sealed", "tear_off_force_N"])
+        for r, s in zip(rows, truth.score, strict=True):
+            w.writerow([r["pose_id"], int(s > 0.5), ""])
+    out = tmp_path / "fitted.yaml"
+    assert main(["suction", "calibrate", str(tmp_path / "filled.csv"), "--out", str(out)]) == 0
+    fitted = SuctionCup.from_yaml(out)
+    again = SealModel(mgn.Mesh(v.astype(np.float32), f), fitted).evaluate(pts, nrm, perturb=False)
+    assert ((again.score > 0.5) == (truth.score > 0.5)).mean() >= 0.95
