@@ -6,6 +6,7 @@ surface normals and the cup approaches along ``-normal``. Scores are in [0, 1].
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -25,23 +26,10 @@ FAILURE_REASONS: tuple[str, ...] = tuple(_core.SEAL_FAILURE_NAMES)
 
 
 def core_cup(cup: SuctionCup) -> _core.Cup:
-    """The C++ cup for a :class:`~mgn.hardware.SuctionCup` (same fields, SI units)."""
+    """The C++ cup for a :class:`~mgn.hardware.SuctionCup` (same field names, SI units)."""
     c = _core.Cup()
-    for name in (
-        "name",
-        "radius",
-        "num_points",
-        "youngs_modulus",
-        "pressure_difference",
-        "compensable_height",
-        "approach_height",
-        "c1",
-        "c2",
-        "outer_radius",
-        "body_height",
-        "hole_rays",
-    ):
-        setattr(c, name, getattr(cup, name))
+    for f in dataclasses.fields(cup):
+        setattr(c, f.name, getattr(cup, f.name))
     c.validate()
     return c
 
