@@ -153,8 +153,8 @@ void bind_calibration(py::module_& m) {
       "calibrate_cup",
       [](const std::vector<const Mesh*>& surfaces, const py::handle& surface_index, const py::handle& points,
          const py::handle& normals, const py::handle& sealed, const py::handle& cup, double c1_min, double c1_max,
-         double c2_min, double c2_max, int global_evaluations, int local_evaluations, double xtol_rel,
-         double ftol_abs, double holdout_fraction, std::uint64_t seed, int num_threads) {
+         double c2_min, double c2_max, int global_evaluations, int local_evaluations, double xtol_rel, double ftol_abs,
+         double holdout_fraction, std::uint64_t seed, int num_threads) {
         const auto experiments = to_experiments(surface_index, points, normals, &sealed);
         const Cup initial = cup_from_python(cup);
         CalibrationOptions o;

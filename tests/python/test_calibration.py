@@ -137,9 +137,10 @@ def test_write_calibration_board_files(board, board_dir, tmp_path):
 
 
 def test_recovers_known_cup_constants_from_noisy_simulated_outcomes(board):
-    """Simulate outcomes with known constants plus 5 % label noise; the fit from the defaults
-    must predict like the true model. c1 and c2 are only weakly identifiable (whole regions of
-    the plane predict the same outcomes), so predictions are tested, not the values."""
+    """Simulate outcomes with known constants (two attempts per pose) plus 5 % label noise; the
+    fit from the defaults must predict like the true model. c1 and c2 are only weakly
+    identifiable (whole regions of the plane predict the same outcomes), so predictions are
+    tested, not the values."""
     mesh, pts, nrm = board["mesh"], board["points"], board["normals"]
     default = SuctionCup()
     true = SuctionCup(c1=4 * default.c1, c2=0.25 * default.c2)
@@ -147,12 +148,22 @@ def test_recovers_known_cup_constants_from_noisy_simulated_outcomes(board):
     y_default = predict_seals(mesh, pts, nrm, default)
     # The board discriminates: the default constants disagree with the truth on > 5 % of poses.
     assert np.mean(y_default != y_true) > 0.05
-    flip = np.random.default_rng(20240607).random(len(y_true)) < 0.05
-    measured = y_true ^ flip
+    attempts = 2
+    y_sim = np.tile(y_true, attempts)
+    flip = np.random.default_rng(20240607).random(len(y_sim)) < 0.05
+    measured = y_sim ^ flip
 
-    report = calibrate(mesh, pts, nrm, measured, default, seed=0, features=board["names"])
+    report = calibrate(
+        mesh,
+        np.tile(pts, (attempts, 1)),
+        np.tile(nrm, (attempts, 1)),
+        measured,
+        default,
+        seed=0,
+        features=board["names"] * attempts,
+    )
     fitted = predict_seals(mesh, pts, nrm, report.cup)
-    np.testing.assert_array_equal(fitted, report.predicted)
+    np.testing.assert_array_equal(np.tile(fitted, attempts), report.predicted)
     agreement = float(np.mean(fitted == y_true))
     print(
         f"\ntrue c1={true.c1:.5g} c2={true.c2:.5g}; fitted c1={report.cup.c1:.5g} "
@@ -165,7 +176,7 @@ def test_recovers_known_cup_constants_from_noisy_simulated_outcomes(board):
     assert report.objective == pytest.approx(report.train["accuracy"])
     # The fit is at least as good on the training split as the true constants.
     tr = report.train_indices
-    assert report.train["accuracy"] >= np.mean(y_true[tr] == measured[tr]) - 1e-12
+    assert report.train["accuracy"] >= np.mean(y_sim[tr] == measured[tr]) - 1e-12
     # Every other cup field is kept.
     assert report.cup.radius == default.radius and report.cup.num_points == default.num_points
     text = report.format_report()
@@ -279,15 +290,16 @@ def test_calibrate_from_csv_round_trip(board, board_dir, tmp_path):
     rows.append([3, int(y[3]), ""])  # a repeated attempt
     rows.append([4, "", ""])  # not tried: skipped
     results = _write_results(tmp_path / "results.csv", rows)
-    report = calibrate_from_csv(results, board_dir)
+    budget = {"global_evaluations": 30, "local_evaluations": 10}
+    report = calibrate_from_csv(results, board_dir, **budget)
     assert len(report.measured) == len(board["ids"]) + 1
     assert report.train["accuracy"] == 1.0 and report.test["accuracy"] == 1.0
     assert report.pose_ids is not None and report.pose_ids[-1] == 3
     assert "accuracy" in report.format_report()
     # Without board_dir: the results' own folder if it holds the board, else the built-in board.
     inside = _write_results(board_dir / "results.csv", rows)
-    assert calibrate_from_csv(inside).test == report.test
-    assert calibrate_from_csv(results).test == report.test
+    assert calibrate_from_csv(inside, **budget).test == report.test
+    assert calibrate_from_csv(results, **budget).test == report.test
 
 
 def test_read_results_csv_forces_and_blanks(tmp_path):

@@ -67,8 +67,8 @@ void check_experiments(const char* fn, const std::vector<const Mesh*>& surfaces,
       throw_error<InvalidArgument>(fn, ": surfaces[", e.surface, "] (used by experiments[", j, "]) is null");
     }
     if (!e.point.allFinite()) {
-      throw_error<InvalidArgument>(fn, ": experiments[", j, "].point: expected finite coordinates, got (",
-                                   e.point.x(), ", ", e.point.y(), ", ", e.point.z(), ")");
+      throw_error<InvalidArgument>(fn, ": experiments[", j, "].point: expected finite coordinates, got (", e.point.x(),
+                                   ", ", e.point.y(), ", ", e.point.z(), ")");
     }
     if (!e.normal.allFinite() || !(e.normal.norm() > 0.0)) {
       throw_error<InvalidArgument>(fn, ": experiments[", j, "].normal: expected a finite non-zero vector, got (",
@@ -182,18 +182,18 @@ void split(const std::vector<CalibrationExperiment>& experiments, double fractio
 struct Search {
   const Predictor* predictor = nullptr;
   const std::vector<CalibrationExperiment>* experiments = nullptr;
-  Cup cup;                                 // template; c1, c2 replaced per evaluation
-  std::vector<std::size_t> varying;        // training experiments whose prediction depends on c1, c2
-  int fixed_correct = 0;                   // training experiments predicted "no seal" for any c1, c2
+  Cup cup;                           // template; c1, c2 replaced per evaluation
+  std::vector<std::size_t> varying;  // training experiments whose prediction depends on c1, c2
+  int fixed_correct = 0;             // training experiments predicted "no seal" for any c1, c2
   int n_train = 0;
-  std::array<double, 2> x0{};              // (ln c1, ln c2) of the initial cup
-  double weight = 0.0;                     // tie-break penalty weight
+  std::array<double, 2> x0{};  // (ln c1, ln c2) of the initial cup
+  double weight = 0.0;         // tie-break penalty weight
   int evaluations = 0;
   bool has_best = false;
   int best_correct = 0;
   double best_dist2 = 0.0;
   std::array<double, 2> best_x{};
-  std::array<double, 2> best_c{};          // (c1, c2) of best_x, exactly as evaluated
+  std::array<double, 2> best_c{};  // (c1, c2) of best_x, exactly as evaluated
   std::exception_ptr error;
   std::vector<std::uint8_t> pred;  // scratch, indexed by experiment
 
@@ -284,8 +284,8 @@ ClassificationMetrics classification_metrics(const std::vector<std::uint8_t>& pr
 }
 
 std::vector<std::uint8_t> predict_experiments(const std::vector<const Mesh*>& surfaces,
-                                              const std::vector<CalibrationExperiment>& experiments,
-                                              const Cup& cup, int num_threads) {
+                                              const std::vector<CalibrationExperiment>& experiments, const Cup& cup,
+                                              int num_threads) {
   const char* fn = "predict_experiments";
   check_experiments(fn, surfaces, experiments);
   if (num_threads < 0) throw_error<InvalidArgument>(fn, ": num_threads must be >= 0 (0 = all), got ", num_threads);

@@ -8,7 +8,8 @@ so that measured outcomes can be fed to the calibration of the seal model (c1, c
 Frame (object frame of the board, metres): the origin is the plate's bottom-left-front corner,
 x runs along the 300 mm edge, y along the 200 mm edge, z up; the plate occupies
 [0, 0.3] x [0, 0.2] x [0, 0.015], so its top face is at z = 0.015 m. A pose is a contact point on
-the surface and the unit outward surface normal there; the cup approaches along -normal.
+the surface and the unit outward surface normal there; the cup approaches along -normal. (The
+tilt poses are the exception: their "normal" is the reversed, tilted approach axis.)
 
 Layout (rows along y, features left to right along x; every pose's ring, up to 9 mm radius,
 stays clear of the neighbouring features):
@@ -17,15 +18,24 @@ stays clear of the neighbouring features):
 row   y (mm)   features (graded parameter)
 ====  =======  ========================================================================
 A     19       steps 1, 2, 4, 6, 8, 10, 12 mm high; poses across the left edge
-B     51       ridges (width x height) and grooves (width x depth); poses across them
-C     83       convex cylinders R 40 .. 5 mm (axis along y); crest and flank poses; flats
-D     115      concave cylinders R 40 .. 5 mm; trough and flank poses; flats
-E     147      domes R 40 .. 5 mm; apex, flank and foot poses; outer edge (x = 300 mm)
-F     179      through-holes 2 .. 12 mm; poses beside the rim; flats; 90° corner
+B     51       ridges (width x height) and grooves (width x depth) 1..8 mm; poses across
+C     83       convex cylinders R 40, 25, 20, 15, 12, 10, 8, 7, 5 mm (axis along y); crest
+               and flank poses
+D     115      concave cylinders, the same radii; trough and flank poses
+E     147      domes R 40, 25, 15, 10, 7, 5 mm; apex, flank and foot poses; outer edge
+               (poses 1..11 mm inside x = 300 mm)
+F     179      through-holes 2 .. 12 mm, poses beside the rim; approach tilt 2..40 deg on the
+               flat plate (two spots: about y, about x); 90° corner at (300, 200) mm
 ====  =======  ========================================================================
 
-Two more controls sit on the plate's right side face (normal +x, the cup approaches
-horizontally).
+Flat controls sit at the free right end of rows B..F, and two more on the plate's right side
+face (normal +x, the cup approaches horizontally).
+
+Why tilt poses: with the spring model (MODELS.md §1) the force balance on curved surfaces
+depends mostly on c2 (ring springs), while a tilted approach on a plane depends only on c1
+(compression springs: the ring points sit at different heights along the approach axis); steps,
+ridges, grooves and holes mostly test the geometric checks. Together they make both constants
+identifiable.
 """
 
 from __future__ import annotations
@@ -543,8 +553,9 @@ Board frame
 Origin at the plate's bottom-left-front corner (the corner at minimum x and y, on the build
 plate); x along the {sx:g} mm edge, y along the {sy:g} mm edge, z up. The plate's top face is at
 z = {top:g} m. Features by row (y of the row centre): A 19 mm steps, B 51 mm ridges and grooves,
-C 83 mm convex cylinders, D 115 mm concave cylinders, E 147 mm domes, F 179 mm through-holes;
-the outer edge is x = {sx:g} mm (row E) and the 90-degree corner is (x, y) = ({sx:g}, {sy:g}) mm.
+C 83 mm convex cylinders, D 115 mm concave cylinders, E 147 mm domes, F 179 mm through-holes
+and the two approach-tilt spots; the outer edge is x = {sx:g} mm (row E) and the 90-degree
+corner is (x, y) = ({sx:g}, {sy:g}) mm. Two poses are on the right side face (x = {sx:g} mm).
 
 poses.csv
 ---------
@@ -553,7 +564,8 @@ feature      feature name, e.g. step_04mm, ridge_w2_h2mm, dome_r10mm, hole_d06mm
 parameter_m  the feature's graded parameter in metres (step height, ridge/groove width,
              cylinder/dome radius, hole diameter; 0 for the controls)
 x_m y_m z_m  contact point on the board surface, metres
-nx ny nz     unit outward surface normal; the cup approaches along -normal
+nx ny nz     unit outward surface normal; the cup approaches along -normal (tilt_* poses:
+             the reversed approach axis, tilted from the plate normal by the stated angle)
 offset_m     signed position relative to the feature's reference line, metres
 description  the same in words
 

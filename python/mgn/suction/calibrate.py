@@ -498,6 +498,8 @@ def calibrate_from_csv(
     seed: int = 0,
     *,
     holdout_fraction: float = 0.3,
+    global_evaluations: int = 200,
+    local_evaluations: int = 100,
     num_threads: int = 0,
 ) -> CalibrationReport:
     """Fit c1, c2 to the outcomes measured on the calibration board.
@@ -511,6 +513,8 @@ def calibrate_from_csv(
         cup: the starting cup (default: :class:`SuctionCup` defaults).
         seed: seed of the held-out split.
         holdout_fraction: share of each outcome class held out, [0, 0.9].
+        global_evaluations: budget of the global search (GN_DIRECT_L).
+        local_evaluations: budget of the local polish (LN_BOBYQA).
         num_threads: 0 = all hardware threads.
 
     Raises:
@@ -540,6 +544,8 @@ def calibrate_from_csv(
         results.sealed,
         cup,
         holdout_fraction=holdout_fraction,
+        global_evaluations=global_evaluations,
+        local_evaluations=local_evaluations,
         seed=seed,
         num_threads=num_threads,
         pose_ids=results.pose_ids.tolist(),

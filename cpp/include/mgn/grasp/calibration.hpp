@@ -34,25 +34,25 @@ namespace mgn {
 
 /// One measured attempt.
 struct CalibrationExperiment {
-  std::size_t surface = 0;       ///< index into the surfaces given to calibrate_cup()
-  Vec3d point = Vec3d::Zero();   ///< contact point on that surface mesh, m (surface frame)
-  Vec3d normal = Vec3d::UnitZ(); ///< outward normal there (the cup approaches along -normal); normalised on use
-  bool sealed = false;           ///< measured outcome
+  std::size_t surface = 0;        ///< index into the surfaces given to calibrate_cup()
+  Vec3d point = Vec3d::Zero();    ///< contact point on that surface mesh, m (surface frame)
+  Vec3d normal = Vec3d::UnitZ();  ///< outward normal there (the cup approaches along -normal); normalised on use
+  bool sealed = false;            ///< measured outcome
 };
 
 /// Options of calibrate_cup().
 struct CalibrationOptions {
   double c1_min = 1e-3, c1_max = 1.0;  ///< search box of c1 (0 < min < max)
   double c2_min = 1e-3, c2_max = 1.0;  ///< search box of c2 (0 < min < max)
-  int global_evaluations = 200;  ///< GN_DIRECT_L budget (>= 1)
-  int local_evaluations = 100;   ///< LN_BOBYQA budget (>= 0; 0 skips the local polish)
-  double xtol_rel = 1e-4;        ///< relative step tolerance of both searches (> 0)
-  double ftol_abs = 1e-9;        ///< absolute objective tolerance of both searches (> 0)
+  int global_evaluations = 200;        ///< GN_DIRECT_L budget (>= 1)
+  int local_evaluations = 100;         ///< LN_BOBYQA budget (>= 0; 0 skips the local polish)
+  double xtol_rel = 1e-4;              ///< relative step tolerance of both searches (> 0)
+  double ftol_abs = 1e-9;              ///< absolute objective tolerance of both searches (> 0)
   /// Fraction of the experiments held out for the reported test metrics, in [0, 0.9]. The split
   /// is stratified: round(fraction * count) of the sealed and of the failed experiments each.
   double holdout_fraction = 0.3;
-  std::uint64_t seed = 0;        ///< shuffling of the split (random stream (seed, 0) and (seed, 1))
-  int num_threads = 0;           ///< seal evaluation threads, 0 = all hardware threads
+  std::uint64_t seed = 0;  ///< shuffling of the split (random stream (seed, 0) and (seed, 1))
+  int num_threads = 0;     ///< seal evaluation threads, 0 = all hardware threads
 };
 
 /// Confusion counts and rates of a binary prediction ("positive" = sealed). A rate whose
@@ -68,12 +68,14 @@ struct ClassificationMetrics {
 
 /// Outcome of calibrate_cup().
 struct CalibrationResult {
-  Cup cup;                  ///< the initial cup with the fitted c1, c2
-  double objective = 0.0;   ///< training accuracy of the fitted cup (the maximised quantity)
-  int evaluations = 0;      ///< objective evaluations (initial point + global + local)
+  Cup cup;                 ///< the initial cup with the fitted c1, c2
+  double objective = 0.0;  ///< training accuracy of the fitted cup (the maximised quantity)
+  int evaluations = 0;     ///< objective evaluations (initial point + global + local)
   ClassificationMetrics train, test;
-  std::vector<std::size_t> train_indices, test_indices;  ///< experiment indices, ascending
-  std::vector<std::uint8_t> predicted;  ///< fitted cup's nominal prediction per experiment (1 = seal)
+  /// Experiment indices of the training and the held-out split, ascending.
+  std::vector<std::size_t> train_indices, test_indices;
+  /// The fitted cup's nominal prediction of every experiment (1 = seal).
+  std::vector<std::uint8_t> predicted;
 };
 
 /// Fits c1 and c2 of `initial` (every other cup field is kept) to the experiments; see the file
@@ -91,8 +93,8 @@ CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
 /// experiment for `cup` (1 = seal); the `sealed` fields are ignored. Same validation as
 /// calibrate_cup().
 std::vector<std::uint8_t> predict_experiments(const std::vector<const Mesh*>& surfaces,
-                                              const std::vector<CalibrationExperiment>& experiments,
-                                              const Cup& cup, int num_threads = 0);
+                                              const std::vector<CalibrationExperiment>& experiments, const Cup& cup,
+                                              int num_threads = 0);
 
 /// Metrics of `predicted` against `measured` (non-zero = sealed). Throws InvalidArgument if the
 /// lengths differ. Empty inputs give zero counts and NaN rates.
