@@ -1,6 +1,6 @@
 // Cup calibration (mgn/grasp/calibration.hpp): calibrate_cup, predict_experiments,
 // classification_metrics. Experiments cross the boundary as parallel arrays; cups as
-// mgn._core.Cup (when bound), a dict of Cup fields, or any object with to_dict() (SuctionCup).
+// mgn._core.Cup (bound in bind_grasp.cpp; mgn.suction.core_cup converts a SuctionCup).
 #include <mgn/grasp/calibration.hpp>
 #include <pybind11/stl.h>
 
@@ -15,77 +15,6 @@ using namespace mgn::py_conv;
 namespace mgn::py_bind {
 
 namespace {
-
-constexpr const char* kCupFields =
-    "name, radius, num_points, youngs_modulus, pressure_difference, compensable_height, approach_height, c1, c2, "
-    "outer_radius, body_height, hole_rays";
-
-template <typename T>
-T cup_field(const py::handle& value, const std::string& key, const char* expected) {
-  try {
-    return value.cast<T>();
-  } catch (const py::cast_error&) {
-    throw_error<InvalidArgument>("cup.", key, ": expected ", expected, ", got ",
-                                 std::string(py::str(py::type::of(value).attr("__name__"))));
-  }
-}
-
-Cup cup_from_python(const py::handle& obj) {
-  if (py::isinstance<Cup>(obj)) return obj.cast<Cup>();
-  py::object fields;
-  if (py::isinstance<py::dict>(obj)) {
-    fields = py::reinterpret_borrow<py::object>(obj);
-  } else if (py::hasattr(obj, "to_dict")) {
-    fields = obj.attr("to_dict")();
-  }
-  if (!py::isinstance<py::dict>(fields)) {
-    throw_error<InvalidArgument>("cup: expected a Cup, a SuctionCup or a dict of cup fields, got ",
-                                 std::string(py::str(py::type::of(obj).attr("__name__"))));
-  }
-  Cup c;
-  for (const auto& item : fields.cast<py::dict>()) {
-    const std::string key = py::str(item.first);
-    const py::handle v = item.second;
-    if (key == "name") {
-      c.name = cup_field<std::string>(v, key, "a string");
-    } else if (key == "num_points") {
-      c.num_points = cup_field<int>(v, key, "an integer");
-    } else if (key == "hole_rays") {
-      c.hole_rays = cup_field<int>(v, key, "an integer");
-    } else {
-      double* target = key == "radius"                ? &c.radius
-                       : key == "youngs_modulus"      ? &c.youngs_modulus
-                       : key == "pressure_difference" ? &c.pressure_difference
-                       : key == "compensable_height"  ? &c.compensable_height
-                       : key == "approach_height"     ? &c.approach_height
-                       : key == "c1"                  ? &c.c1
-                       : key == "c2"                  ? &c.c2
-                       : key == "outer_radius"        ? &c.outer_radius
-                       : key == "body_height"         ? &c.body_height
-                                                      : nullptr;
-      if (!target) throw_error<InvalidArgument>("cup: unknown field '", key, "'; valid fields are ", kCupFields);
-      *target = cup_field<double>(v, key, "a number");
-    }
-  }
-  return c;
-}
-
-py::dict cup_to_dict(const Cup& c) {
-  py::dict d;
-  d["name"] = c.name;
-  d["radius"] = c.radius;
-  d["num_points"] = c.num_points;
-  d["youngs_modulus"] = c.youngs_modulus;
-  d["pressure_difference"] = c.pressure_difference;
-  d["compensable_height"] = c.compensable_height;
-  d["approach_height"] = c.approach_height;
-  d["c1"] = c.c1;
-  d["c2"] = c.c2;
-  d["outer_radius"] = c.outer_radius;
-  d["body_height"] = c.body_height;
-  d["hole_rays"] = c.hole_rays;
-  return d;
-}
 
 /// (N,) integer array; names `arg` in errors.
 std::vector<std::int64_t> to_int_vector(const py::handle& obj, const char* arg, Eigen::Index n) {
@@ -152,11 +81,10 @@ void bind_calibration(py::module_& m) {
   m.def(
       "calibrate_cup",
       [](const std::vector<const Mesh*>& surfaces, const py::handle& surface_index, const py::handle& points,
-         const py::handle& normals, const py::handle& sealed, const py::handle& cup, double c1_min, double c1_max,
+         const py::handle& normals, const py::handle& sealed, const Cup& initial, double c1_min, double c1_max,
          double c2_min, double c2_max, int global_evaluations, int local_evaluations, double xtol_rel, double ftol_abs,
          double holdout_fraction, std::uint64_t seed, int num_threads) {
         const auto experiments = to_experiments(surface_index, points, normals, &sealed);
-        const Cup initial = cup_from_python(cup);
         CalibrationOptions o;
         o.c1_min = c1_min;
         o.c1_max = c1_max;
@@ -175,7 +103,7 @@ void bind_calibration(py::module_& m) {
           r = calibrate_cup(surfaces, experiments, initial, o);
         }
         py::dict out;
-        out["cup"] = cup_to_dict(r.cup);
+        out["cup"] = r.cup;
         out["objective"] = r.objective;
         out["evaluations"] = r.evaluations;
         out["train"] = metrics_to_dict(r.train);
@@ -196,9 +124,8 @@ void bind_calibration(py::module_& m) {
   m.def(
       "predict_experiments",
       [](const std::vector<const Mesh*>& surfaces, const py::handle& surface_index, const py::handle& points,
-         const py::handle& normals, const py::handle& cup, int num_threads) {
+         const py::handle& normals, const Cup& c, int num_threads) {
         const auto experiments = to_experiments(surface_index, points, normals, nullptr);
-        const Cup c = cup_from_python(cup);
         std::vector<std::uint8_t> pred;
         {
           py::gil_scoped_release release;

@@ -378,7 +378,7 @@ def calibrate_cup(
     points: typing.Any,
     normals: typing.Any,
     sealed: typing.Any,
-    cup: typing.Any,
+    cup: Cup,
     c1_min: typing.SupportsFloat | typing.SupportsIndex = 0.001,
     c1_max: typing.SupportsFloat | typing.SupportsIndex = 1.0,
     c2_min: typing.SupportsFloat | typing.SupportsIndex = 0.001,
@@ -454,7 +454,7 @@ def predict_experiments(
     surface_index: typing.Any,
     points: typing.Any,
     normals: typing.Any,
-    cup: typing.Any,
+    cup: Cup,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> numpy.ndarray:
     """

@@ -60,6 +60,38 @@ RTCDevice shared_device() {
   return device;
 }
 
+/// One ray (origin o, direction d, both 3 floats) into an Embree single ray.
+void set_ray(RTCRay& r, const float* o, const float* d, float tnear, float tfar) {
+  r.org_x = o[0];
+  r.org_y = o[1];
+  r.org_z = o[2];
+  r.dir_x = d[0];
+  r.dir_y = d[1];
+  r.dir_z = d[2];
+  r.tnear = tnear;
+  r.tfar = tfar;
+  r.time = 0.0f;
+  r.mask = 0xFFFFFFFFu;
+  r.id = 0;
+  r.flags = 0;
+}
+
+/// One ray into lane k of an Embree packet of 16 (RTCRay16).
+void set_lane(RTCRay16& r, int k, const float* o, const float* d, float tnear, float tfar) {
+  r.org_x[k] = o[0];
+  r.org_y[k] = o[1];
+  r.org_z[k] = o[2];
+  r.dir_x[k] = d[0];
+  r.dir_y[k] = d[1];
+  r.dir_z[k] = d[2];
+  r.tnear[k] = tnear;
+  r.tfar[k] = tfar;
+  r.time[k] = 0.0f;
+  r.mask[k] = 0xFFFFFFFFu;
+  r.id[k] = static_cast<unsigned>(k);
+  r.flags[k] = 0;
+}
+
 struct HitRecord {
   float t;
   float u, v;
@@ -215,18 +247,7 @@ RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
         for (std::size_t k = 0; k < 16; ++k) {
           const std::size_t i = s + std::min(k, m - 1);  // pad with a copy of the last ray
           valid[k] = k < m ? -1 : 0;
-          rh.ray.org_x[k] = origins(i, 0);
-          rh.ray.org_y[k] = origins(i, 1);
-          rh.ray.org_z[k] = origins(i, 2);
-          rh.ray.dir_x[k] = directions(i, 0);
-          rh.ray.dir_y[k] = directions(i, 1);
-          rh.ray.dir_z[k] = directions(i, 2);
-          rh.ray.tnear[k] = options.tnear;
-          rh.ray.tfar[k] = options.tfar;
-          rh.ray.time[k] = 0.0f;
-          rh.ray.mask[k] = 0xFFFFFFFFu;
-          rh.ray.id[k] = static_cast<unsigned>(k);
-          rh.ray.flags[k] = 0;
+          set_lane(rh.ray, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
           rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
           rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -240,18 +261,7 @@ RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
     } else {
       RTCRayHit rh;
       for (std::size_t i = begin; i < end; ++i) {
-        rh.ray.org_x = origins(i, 0);
-        rh.ray.org_y = origins(i, 1);
-        rh.ray.org_z = origins(i, 2);
-        rh.ray.dir_x = directions(i, 0);
-        rh.ray.dir_y = directions(i, 1);
-        rh.ray.dir_z = directions(i, 2);
-        rh.ray.tnear = options.tnear;
-        rh.ray.tfar = options.tfar;
-        rh.ray.time = 0.0f;
-        rh.ray.mask = 0xFFFFFFFFu;
-        rh.ray.id = 0;
-        rh.ray.flags = 0;
+        set_ray(rh.ray, &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(impl.scene, &ctx, &rh);
@@ -284,18 +294,7 @@ std::vector<std::uint8_t> RayScene::occluded(const Points3f& origins, const Poin
         for (std::size_t k = 0; k < 16; ++k) {
           const std::size_t i = s + std::min(k, m - 1);
           valid[k] = k < m ? -1 : 0;
-          r.org_x[k] = origins(i, 0);
-          r.org_y[k] = origins(i, 1);
-          r.org_z[k] = origins(i, 2);
-          r.dir_x[k] = directions(i, 0);
-          r.dir_y[k] = directions(i, 1);
-          r.dir_z[k] = directions(i, 2);
-          r.tnear[k] = options.tnear;
-          r.tfar[k] = options.tfar;
-          r.time[k] = 0.0f;
-          r.mask[k] = 0xFFFFFFFFu;
-          r.id[k] = static_cast<unsigned>(k);
-          r.flags[k] = 0;
+          set_lane(r, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
         }
         rtcOccluded16(valid, impl.scene, &ctx, &r);
         for (std::size_t k = 0; k < m; ++k) out[s + k] = r.tfar[k] == -std::numeric_limits<float>::infinity();
@@ -303,18 +302,7 @@ std::vector<std::uint8_t> RayScene::occluded(const Points3f& origins, const Poin
     } else {
       RTCRay r;
       for (std::size_t i = begin; i < end; ++i) {
-        r.org_x = origins(i, 0);
-        r.org_y = origins(i, 1);
-        r.org_z = origins(i, 2);
-        r.dir_x = directions(i, 0);
-        r.dir_y = directions(i, 1);
-        r.dir_z = directions(i, 2);
-        r.tnear = options.tnear;
-        r.tfar = options.tfar;
-        r.time = 0.0f;
-        r.mask = 0xFFFFFFFFu;
-        r.id = 0;
-        r.flags = 0;
+        set_ray(r, &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
         rtcOccluded1(impl.scene, &ctx, &r);
         out[i] = r.tfar == -std::numeric_limits<float>::infinity();
       }
@@ -343,18 +331,7 @@ RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& dire
       ctx.base.filter = collect_all_hits;
       ctx.hits = &hits;
       RTCRayHit rh;
-      rh.ray.org_x = origins(i, 0);
-      rh.ray.org_y = origins(i, 1);
-      rh.ray.org_z = origins(i, 2);
-      rh.ray.dir_x = directions(i, 0);
-      rh.ray.dir_y = directions(i, 1);
-      rh.ray.dir_z = directions(i, 2);
-      rh.ray.tnear = options.tnear;
-      rh.ray.tfar = options.tfar;
-      rh.ray.time = 0.0f;
-      rh.ray.mask = 0xFFFFFFFFu;
-      rh.ray.id = 0;
-      rh.ray.flags = 0;
+      set_ray(rh.ray, &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(impl.scene, &ctx.base, &rh);
@@ -440,25 +417,14 @@ namespace mgn::detail {
 
 namespace {
 
-template <typename Packet>
-void fill_packet(Packet& r, int* valid, const ParallelRays& rays, int start) {
+void fill_packet(RTCRay16& r, int* valid, const ParallelRays& rays, int start) {
   const int m = std::min(16, rays.count - start);
+  const Eigen::Vector3f d = rays.dir.cast<float>();
   for (int k = 0; k < 16; ++k) {
     const Eigen::Vector2d& off = rays.offsets[start + std::min(k, m - 1)];
-    const Vec3d o = rays.base + rays.scale * (off.x() * rays.u + off.y() * rays.v);
+    const Eigen::Vector3f o = (rays.base + rays.scale * (off.x() * rays.u + off.y() * rays.v)).cast<float>();
     valid[k] = k < m ? -1 : 0;
-    r.org_x[k] = static_cast<float>(o.x());
-    r.org_y[k] = static_cast<float>(o.y());
-    r.org_z[k] = static_cast<float>(o.z());
-    r.dir_x[k] = static_cast<float>(rays.dir.x());
-    r.dir_y[k] = static_cast<float>(rays.dir.y());
-    r.dir_z[k] = static_cast<float>(rays.dir.z());
-    r.tnear[k] = 0.0f;
-    r.tfar[k] = rays.tfar;
-    r.time[k] = 0.0f;
-    r.mask[k] = 0xFFFFFFFFu;
-    r.id[k] = static_cast<unsigned>(k);
-    r.flags[k] = 0;
+    set_lane(r, k, o.data(), d.data(), 0.0f, rays.tfar);
   }
 }
 

@@ -29,6 +29,7 @@ from mgn import _core
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.geometry import Mesh, load_mesh
 from mgn.hardware import SuctionCup
+from mgn.suction.seal import core_cup
 
 __all__ = [
     "BoardPoses",
@@ -147,12 +148,12 @@ def _kind_of(feature: str) -> str:
     return "_".join(words) or feature
 
 
-def _cup_dict(cup: SuctionCup) -> dict[str, object]:
+def _core_cup(cup: SuctionCup) -> _core.Cup:
     if not isinstance(cup, SuctionCup):
         raise InvalidArgumentError(
             f"cup: expected a mgn.hardware.SuctionCup, got {type(cup).__name__}"
         )
-    return cup.to_dict()
+    return core_cup(cup)
 
 
 def _metrics(d: dict[str, float]) -> dict[str, float]:
@@ -209,7 +210,7 @@ def predict_seals(
         (N,) bool, True where the model predicts a seal.
     """
     meshes, idx, pts, nrm = _experiment_arrays(surfaces, surface_index, points, normals)
-    c = _cup_dict(cup if cup is not None else SuctionCup())
+    c = _core_cup(cup if cup is not None else SuctionCup())
     return _core.predict_experiments(meshes, idx, pts, nrm, c, int(num_threads))
 
 
@@ -266,7 +267,7 @@ def calibrate(
         pts,
         nrm,
         y.astype(np.int64),
-        _cup_dict(initial),
+        _core_cup(initial),
         c1_min=float(c1_range[0]),
         c1_max=float(c1_range[1]),
         c2_min=float(c2_range[0]),
@@ -277,10 +278,10 @@ def calibrate(
         seed=int(seed),
         num_threads=int(num_threads),
     )
-    fitted = dataclasses.replace(initial, c1=float(out["cup"]["c1"]), c2=float(out["cup"]["c2"]))
+    fitted = dataclasses.replace(initial, c1=float(out["cup"].c1), c2=float(out["cup"].c2))
     train_idx = np.asarray(out["train_indices"], dtype=np.int64)
     test_idx = np.asarray(out["test_indices"], dtype=np.int64)
-    before = _core.predict_experiments(meshes, idx, pts, nrm, _cup_dict(initial), int(num_threads))
+    before = _core.predict_experiments(meshes, idx, pts, nrm, _core_cup(initial), int(num_threads))
     return CalibrationReport(
         cup=fitted,
         initial_cup=initial,
