@@ -1,8 +1,8 @@
 // Cup calibration (mgn/grasp/calibration.hpp): calibrate_cup, predict_experiments,
 // classification_metrics. Experiments cross the boundary as parallel arrays; cups as
 // mgn._core.Cup (bound in bind_grasp.cpp; mgn.suction.core_cup converts a SuctionCup).
-#include <mgn/grasp/calibration.hpp>
 #include <pybind11/stl.h>
+#include <mgn/grasp/calibration.hpp>
 
 #include <string>
 
@@ -25,18 +25,22 @@ std::vector<std::int64_t> to_int_vector(const py::handle& obj, const char* arg, 
     throw_error<InvalidArgument>(arg, ": expected an integer array of shape (", n, ",)");
   }
   if (a.ndim() != 1 || a.shape(0) != n) {
-    throw_error<InvalidArgument>(arg, ": expected shape (", n, ",) (one entry per experiment), got ", a.ndim(),
-                                 "-D array of ", a.size(), " entries");
+    throw_error<InvalidArgument>(arg, ": expected shape (", n,
+                                 ",) (one entry per experiment), got ", a.ndim(), "-D array of ",
+                                 a.size(), " entries");
   }
   return {a.data(), a.data() + a.size()};
 }
 
-std::vector<CalibrationExperiment> to_experiments(const py::handle& surface_index, const py::handle& points,
-                                                  const py::handle& normals, const py::handle* sealed) {
+std::vector<CalibrationExperiment> to_experiments(const py::handle& surface_index,
+                                                  const py::handle& points,
+                                                  const py::handle& normals,
+                                                  const py::handle* sealed) {
   const Points3d p = to_rows<double, 3>(points, "points");
   const Points3d n = to_rows<double, 3>(normals, "normals");
   if (n.rows() != p.rows()) {
-    throw_error<InvalidArgument>("normals: expected shape (", p.rows(), ", 3) like points, got (", n.rows(), ", 3)");
+    throw_error<InvalidArgument>("normals: expected shape (", p.rows(), ", 3) like points, got (",
+                                 n.rows(), ", 3)");
   }
   const std::vector<std::int64_t> s = to_int_vector(surface_index, "surface_index", p.rows());
   std::vector<std::int64_t> y;
@@ -48,7 +52,8 @@ std::vector<CalibrationExperiment> to_experiments(const py::handle& surface_inde
     out[i].point = p.row(static_cast<Eigen::Index>(i)).transpose();
     out[i].normal = n.row(static_cast<Eigen::Index>(i)).transpose();
     if (sealed) {
-      if (y[i] != 0 && y[i] != 1) throw_error<InvalidArgument>("sealed[", i, "]: expected 0 or 1, got ", y[i]);
+      if (y[i] != 0 && y[i] != 1)
+        throw_error<InvalidArgument>("sealed[", i, "]: expected 0 or 1, got ", y[i]);
       out[i].sealed = y[i] == 1;
     }
   }
@@ -80,9 +85,10 @@ void bind_calibration(py::module_& m) {
   const CalibrationOptions defaults;
   m.def(
       "calibrate_cup",
-      [](const std::vector<const Mesh*>& surfaces, const py::handle& surface_index, const py::handle& points,
-         const py::handle& normals, const py::handle& sealed, const Cup& initial, double c1_min, double c1_max,
-         double c2_min, double c2_max, int global_evaluations, int local_evaluations, double xtol_rel, double ftol_abs,
+      [](const std::vector<const Mesh*>& surfaces, const py::handle& surface_index,
+         const py::handle& points, const py::handle& normals, const py::handle& sealed,
+         const Cup& initial, double c1_min, double c1_max, double c2_min, double c2_max,
+         int global_evaluations, int local_evaluations, double xtol_rel, double ftol_abs,
          double holdout_fraction, std::uint64_t seed, int num_threads) {
         const auto experiments = to_experiments(surface_index, points, normals, &sealed);
         CalibrationOptions o;
@@ -113,18 +119,21 @@ void bind_calibration(py::module_& m) {
         out["predicted"] = to_bool_numpy(std::move(r.predicted));
         return out;
       },
-      "Fit c1, c2 of the cup to measured outcomes (see mgn.suction.calibrate).", py::arg("surfaces"),
-      py::arg("surface_index"), py::arg("points"), py::arg("normals"), py::arg("sealed"), py::arg("cup"),
-      py::arg("c1_min") = defaults.c1_min, py::arg("c1_max") = defaults.c1_max, py::arg("c2_min") = defaults.c2_min,
-      py::arg("c2_max") = defaults.c2_max, py::arg("global_evaluations") = defaults.global_evaluations,
-      py::arg("local_evaluations") = defaults.local_evaluations, py::arg("xtol_rel") = defaults.xtol_rel,
-      py::arg("ftol_abs") = defaults.ftol_abs, py::arg("holdout_fraction") = defaults.holdout_fraction,
-      py::arg("seed") = defaults.seed, py::arg("num_threads") = defaults.num_threads);
+      "Fit c1, c2 of the cup to measured outcomes (see mgn.suction.calibrate).",
+      py::arg("surfaces"), py::arg("surface_index"), py::arg("points"), py::arg("normals"),
+      py::arg("sealed"), py::arg("cup"), py::arg("c1_min") = defaults.c1_min,
+      py::arg("c1_max") = defaults.c1_max, py::arg("c2_min") = defaults.c2_min,
+      py::arg("c2_max") = defaults.c2_max,
+      py::arg("global_evaluations") = defaults.global_evaluations,
+      py::arg("local_evaluations") = defaults.local_evaluations,
+      py::arg("xtol_rel") = defaults.xtol_rel, py::arg("ftol_abs") = defaults.ftol_abs,
+      py::arg("holdout_fraction") = defaults.holdout_fraction, py::arg("seed") = defaults.seed,
+      py::arg("num_threads") = defaults.num_threads);
 
   m.def(
       "predict_experiments",
-      [](const std::vector<const Mesh*>& surfaces, const py::handle& surface_index, const py::handle& points,
-         const py::handle& normals, const Cup& c, int num_threads) {
+      [](const std::vector<const Mesh*>& surfaces, const py::handle& surface_index,
+         const py::handle& points, const py::handle& normals, const Cup& c, int num_threads) {
         const auto experiments = to_experiments(surface_index, points, normals, nullptr);
         std::vector<std::uint8_t> pred;
         {
@@ -134,7 +143,8 @@ void bind_calibration(py::module_& m) {
         return to_bool_numpy(std::move(pred));
       },
       "Nominal spring-model seal prediction (bool per experiment) for a cup.", py::arg("surfaces"),
-      py::arg("surface_index"), py::arg("points"), py::arg("normals"), py::arg("cup"), py::arg("num_threads") = 0);
+      py::arg("surface_index"), py::arg("points"), py::arg("normals"), py::arg("cup"),
+      py::arg("num_threads") = 0);
 
   m.def(
       "classification_metrics",
@@ -143,7 +153,8 @@ void bind_calibration(py::module_& m) {
         const std::vector<std::uint8_t> y(measured.begin(), measured.end());
         return metrics_to_dict(classification_metrics(p, y));
       },
-      "Confusion counts and PPV, NPV, sensitivity, specificity, accuracy (NaN for a zero denominator).",
+      "Confusion counts and PPV, NPV, sensitivity, specificity, accuracy (NaN for a zero "
+      "denominator).",
       py::arg("predicted"), py::arg("measured"));
 }
 

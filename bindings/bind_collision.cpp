@@ -1,5 +1,5 @@
-#include <mgn/collision/collision_model.hpp>
 #include <pybind11/stl.h>
+#include <mgn/collision/collision_model.hpp>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -10,8 +10,8 @@ using namespace mgn::py_conv;
 namespace mgn::py_bind {
 
 void bind_collision(py::module_& m) {
-  py::class_<CollisionModel, std::shared_ptr<CollisionModel>>(m, "CollisionModel",
-                                                              "Immutable FCL BVH (OBBRSS) of a mesh.")
+  py::class_<CollisionModel, std::shared_ptr<CollisionModel>>(
+      m, "CollisionModel", "Immutable FCL BVH (OBBRSS) of a mesh.")
       .def(py::init([](const Mesh& mesh) {
              py::gil_scoped_release release;
              return std::make_shared<CollisionModel>(mesh);
@@ -22,8 +22,8 @@ void bind_collision(py::module_& m) {
 
   m.def(
       "collide",
-      [](const CollisionModel& a, const py::handle& X_WA, const CollisionModel& b, const py::handle& X_WB,
-         int num_threads) {
+      [](const CollisionModel& a, const py::handle& X_WA, const CollisionModel& b,
+         const py::handle& X_WB, int num_threads) {
         const auto xa = to_poses(X_WA, "X_WA");
         const auto xb = to_poses(X_WB, "X_WB");
         CollisionRequest req;
@@ -39,8 +39,8 @@ void bind_collision(py::module_& m) {
 
   m.def(
       "distance",
-      [](const CollisionModel& a, const py::handle& X_WA, const CollisionModel& b, const py::handle& X_WB,
-         double rel_err, double abs_err, int num_threads) {
+      [](const CollisionModel& a, const py::handle& X_WA, const CollisionModel& b,
+         const py::handle& X_WB, double rel_err, double abs_err, int num_threads) {
         const auto xa = to_poses(X_WA, "X_WA");
         const auto xb = to_poses(X_WB, "X_WB");
         DistanceRequest req;

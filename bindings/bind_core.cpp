@@ -1,6 +1,6 @@
+#include <pybind11/stl.h>
 #include <mgn/core/build_info.hpp>
 #include <mgn/core/parallel.hpp>
-#include <pybind11/stl.h>
 
 #include "exceptions.hpp"
 

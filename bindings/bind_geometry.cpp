@@ -1,10 +1,10 @@
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
 #include <mgn/geometry/mass_properties.hpp>
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/geometry/mesh_io.hpp>
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/geometry/sampling.hpp>
-#include <pybind11/eigen.h>
-#include <pybind11/stl.h>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -20,8 +20,9 @@ namespace {
 template <typename M>
 py::array view_of(const M& mat, py::handle owner) {
   using Scalar = typename M::Scalar;
-  py::array_t<Scalar> arr({static_cast<py::ssize_t>(mat.rows()), static_cast<py::ssize_t>(mat.cols())},
-                          mat.data(), owner);
+  py::array_t<Scalar> arr(
+      {static_cast<py::ssize_t>(mat.rows()), static_cast<py::ssize_t>(mat.cols())}, mat.data(),
+      owner);
   arr.attr("setflags")(py::arg("write") = false);
   return arr;
 }
@@ -29,18 +30,21 @@ py::array view_of(const M& mat, py::handle owner) {
 }  // namespace
 
 void bind_geometry(py::module_& m) {
-  py::class_<Material>(m, "Material", "Surface appearance of a mesh (colours linear RGBA in [0,1]).")
+  py::class_<Material>(m, "Material",
+                       "Surface appearance of a mesh (colours linear RGBA in [0,1]).")
       .def(py::init<>())
       .def_readwrite("name", &Material::name)
       .def_readwrite("base_color", &Material::base_color, "RGBA in [0,1]")
       .def_readwrite("specular", &Material::specular, "RGB in [0,1]")
       .def_readwrite("shininess", &Material::shininess, "Phong exponent")
       .def_readwrite("opacity", &Material::opacity, "1 opaque .. 0 invisible")
-      .def_readwrite("texture_path", &Material::texture_path, "absolute path of the diffuse texture or ''")
+      .def_readwrite("texture_path", &Material::texture_path,
+                     "absolute path of the diffuse texture or ''")
       .def_property(
           "texture_data",
           [](const Material& mat) {
-            return py::bytes(reinterpret_cast<const char*>(mat.texture_data.data()), mat.texture_data.size());
+            return py::bytes(reinterpret_cast<const char*>(mat.texture_data.data()),
+                             mat.texture_data.size());
           },
           [](Material& mat, const py::bytes& b) {
             const std::string s = b;
@@ -52,7 +56,8 @@ void bind_geometry(py::module_& m) {
                (mat.texture_path.empty() ? "" : ", texture='" + mat.texture_path + "'") + ")";
       });
 
-  py::class_<MeshReport>(m, "MeshReport", "Validation report of a mesh (topology after welding by position).")
+  py::class_<MeshReport>(m, "MeshReport",
+                         "Validation report of a mesh (topology after welding by position).")
       .def_readonly("num_vertices", &MeshReport::num_vertices)
       .def_readonly("num_faces", &MeshReport::num_faces)
       .def_readonly("num_boundary_edges", &MeshReport::num_boundary_edges)
@@ -65,9 +70,11 @@ void bind_geometry(py::module_& m) {
       .def_readonly("signed_volume", &MeshReport::signed_volume, "m^3")
       .def_readonly("area", &MeshReport::area, "m^2")
       .def("__repr__", [](const MeshReport& r) {
-        return "MeshReport(faces=" + std::to_string(r.num_faces) + ", watertight=" + (r.is_watertight ? "True" : "False") +
+        return "MeshReport(faces=" + std::to_string(r.num_faces) +
+               ", watertight=" + (r.is_watertight ? "True" : "False") +
                ", winding_consistent=" + (r.is_winding_consistent ? "True" : "False") +
-               ", outward=" + (r.is_outward ? "True" : "False") + ", boundary_edges=" + std::to_string(r.num_boundary_edges) + ")";
+               ", outward=" + (r.is_outward ? "True" : "False") +
+               ", boundary_edges=" + std::to_string(r.num_boundary_edges) + ")";
       });
 
   py::class_<MassProperties>(m, "MassProperties", "Mass properties in the mesh frame (SI units).")
@@ -75,43 +82,55 @@ void bind_geometry(py::module_& m) {
       .def_readonly("mass", &MassProperties::mass, "kg")
       .def_readonly("center_of_mass", &MassProperties::center_of_mass, "(3,) m, mesh frame")
       .def_readonly("inertia", &MassProperties::inertia, "(3,3) kg m^2 about the centre of mass")
-      .def_readonly("is_exact", &MassProperties::is_exact, "False when the open-mesh shell fallback was used");
+      .def_readonly("is_exact", &MassProperties::is_exact,
+                    "False when the open-mesh shell fallback was used");
 
   py::class_<Mesh>(m, "Mesh", "Indexed triangle mesh in metres (see mgn.Mesh).")
       .def(py::init([](const py::handle& vertices, const py::handle& faces, const py::object& uvs,
-                       std::vector<Material> materials, std::vector<std::int32_t> face_materials, std::string name) {
+                       std::vector<Material> materials, std::vector<std::int32_t> face_materials,
+                       std::string name) {
              Points3f v = to_rows<float, 3>(vertices, "vertices");
              Faces f = to_rows<std::int32_t, 3>(faces, "faces");
              Points2f uv;
              if (!uvs.is_none()) uv = to_rows<float, 2>(uvs, "uvs");
-             return Mesh(std::move(v), std::move(f), std::move(uv), std::move(materials), std::move(face_materials),
-                         std::move(name));
+             return Mesh(std::move(v), std::move(f), std::move(uv), std::move(materials),
+                         std::move(face_materials), std::move(name));
            }),
            py::arg("vertices"), py::arg("faces"), py::arg("uvs") = py::none(),
-           py::arg("materials") = std::vector<Material>{}, py::arg("face_materials") = std::vector<std::int32_t>{},
-           py::arg("name") = "")
-      .def_property_readonly("vertices", [](py::object self) { return view_of(self.cast<const Mesh&>().vertices(), self); })
-      .def_property_readonly("faces", [](py::object self) { return view_of(self.cast<const Mesh&>().faces(), self); })
-      .def_property_readonly("uvs", [](py::object self) -> py::object {
-        const Mesh& mesh = self.cast<const Mesh&>();
-        if (mesh.uvs().rows() == 0) return py::none();
-        return view_of(mesh.uvs(), self);
-      })
+           py::arg("materials") = std::vector<Material>{},
+           py::arg("face_materials") = std::vector<std::int32_t>{}, py::arg("name") = "")
+      .def_property_readonly(
+          "vertices",
+          [](py::object self) { return view_of(self.cast<const Mesh&>().vertices(), self); })
+      .def_property_readonly(
+          "faces", [](py::object self) { return view_of(self.cast<const Mesh&>().faces(), self); })
+      .def_property_readonly("uvs",
+                             [](py::object self) -> py::object {
+                               const Mesh& mesh = self.cast<const Mesh&>();
+                               if (mesh.uvs().rows() == 0) return py::none();
+                               return view_of(mesh.uvs(), self);
+                             })
       .def_property_readonly("materials", &Mesh::materials)
-      .def_property_readonly("face_materials", [](const Mesh& mesh) { return mesh.face_materials(); })
+      .def_property_readonly("face_materials",
+                             [](const Mesh& mesh) { return mesh.face_materials(); })
       .def_property("name", &Mesh::name, &Mesh::set_name)
       .def_property_readonly("num_vertices", &Mesh::num_vertices)
       .def_property_readonly("num_faces", &Mesh::num_faces)
       .def("face_normals", [](const Mesh& mesh) { return to_numpy(mesh.face_normals()); })
-      .def("face_areas", [](const Mesh& mesh) { return to_numpy(Eigen::VectorXd(mesh.face_areas())); })
+      .def("face_areas",
+           [](const Mesh& mesh) { return to_numpy(Eigen::VectorXd(mesh.face_areas())); })
       .def_property_readonly("area", &Mesh::area)
-      .def_property_readonly("bounds", [](const Mesh& mesh) {
-        Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> b = mesh.bounds();
-        return to_numpy(std::move(b));
-      })
+      .def_property_readonly("bounds",
+                             [](const Mesh& mesh) {
+                               Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> b =
+                                   mesh.bounds();
+                               return to_numpy(std::move(b));
+                             })
       .def("validate", &Mesh::validate, py::call_guard<py::gil_scoped_release>())
-      .def("transformed", [](const Mesh& mesh, const py::handle& X) { return mesh.transformed(to_pose(X, "X")); },
-           py::arg("X"))
+      .def(
+          "transformed",
+          [](const Mesh& mesh, const py::handle& X) { return mesh.transformed(to_pose(X, "X")); },
+          py::arg("X"))
       .def("scaled", &Mesh::scaled, py::arg("factor"))
       .def("flipped", &Mesh::flipped)
       .def_static("merge", &Mesh::merge, py::arg("meshes"), py::arg("name") = "")
@@ -130,7 +149,8 @@ void bind_geometry(py::module_& m) {
         py::gil_scoped_release release;
         return load_mesh(path, o);
       },
-      py::arg("path"), py::arg("scale") = 1.0, py::arg("merge") = true, py::arg("drop_degenerate") = true);
+      py::arg("path"), py::arg("scale") = 1.0, py::arg("merge") = true,
+      py::arg("drop_degenerate") = true);
 
   m.def(
       "compute_mass_properties",
@@ -143,8 +163,9 @@ void bind_geometry(py::module_& m) {
         } else if (open_mesh == "error") {
           o.open_mesh = OpenMeshPolicy::Error;
         } else {
-          throw_error<InvalidArgument>("compute_mass_properties: open_mesh must be 'shell' or 'error', got '",
-                                       open_mesh, "'");
+          throw_error<InvalidArgument>(
+              "compute_mass_properties: open_mesh must be 'shell' or 'error', got '", open_mesh,
+              "'");
         }
         py::gil_scoped_release release;
         return compute_mass_properties(mesh, o);
@@ -154,14 +175,16 @@ void bind_geometry(py::module_& m) {
 
   m.def(
       "sample_surface",
-      [](const Mesh& mesh, std::int64_t count, const std::string& method, std::uint64_t seed, int oversampling) {
+      [](const Mesh& mesh, std::int64_t count, const std::string& method, std::uint64_t seed,
+         int oversampling) {
         SampleOptions o;
         if (method == "random") {
           o.method = SampleMethod::Random;
         } else if (method == "even") {
           o.method = SampleMethod::Even;
         } else {
-          throw_error<InvalidArgument>("sample_surface: method must be 'random' or 'even', got '", method, "'");
+          throw_error<InvalidArgument>("sample_surface: method must be 'random' or 'even', got '",
+                                       method, "'");
         }
         o.seed = seed;
         o.oversampling = oversampling;
@@ -180,8 +203,10 @@ void bind_geometry(py::module_& m) {
       py::arg("oversampling") = 6);
 
   m.def("make_box", [](const Vec3d& extents) { return make_box(extents); }, py::arg("extents"));
-  m.def("make_sphere", &make_sphere, py::arg("radius"), py::arg("segments") = 64, py::arg("rings") = 32);
-  m.def("make_cylinder", &make_cylinder, py::arg("radius"), py::arg("height"), py::arg("segments") = 64);
+  m.def("make_sphere", &make_sphere, py::arg("radius"), py::arg("segments") = 64,
+        py::arg("rings") = 32);
+  m.def("make_cylinder", &make_cylinder, py::arg("radius"), py::arg("height"),
+        py::arg("segments") = 64);
 }
 
 }  // namespace mgn::py_bind

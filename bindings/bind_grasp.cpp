@@ -1,8 +1,8 @@
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
 #include <mgn/grasp/cup.hpp>
 #include <mgn/grasp/seal_model.hpp>
 #include <mgn/grasp/wrench.hpp>
-#include <pybind11/eigen.h>
-#include <pybind11/stl.h>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -18,14 +18,18 @@ SealModelKind parse_kind(const std::string& name) {
   if (name == "spring") return SealModelKind::Spring;
   if (name == "strain") return SealModelKind::Strain;
   if (name == "smoothness") return SealModelKind::Smoothness;
-  throw_error<InvalidArgument>("SealModel: model must be 'spring', 'strain' or 'smoothness', got '", name, "'");
+  throw_error<InvalidArgument>("SealModel: model must be 'spring', 'strain' or 'smoothness', got '",
+                               name, "'");
 }
 
 const char* kind_name(SealModelKind k) {
   switch (k) {
-    case SealModelKind::Spring: return "spring";
-    case SealModelKind::Strain: return "strain";
-    case SealModelKind::Smoothness: return "smoothness";
+    case SealModelKind::Spring:
+      return "spring";
+    case SealModelKind::Strain:
+      return "strain";
+    case SealModelKind::Smoothness:
+      return "smoothness";
   }
   return "unknown";
 }
@@ -33,7 +37,8 @@ const char* kind_name(SealModelKind k) {
 }  // namespace
 
 void bind_grasp(py::module_& m) {
-  py::class_<Cup>(m, "Cup", "Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).")
+  py::class_<Cup>(m, "Cup",
+                  "Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).")
       .def(py::init<>())
       .def_readwrite("name", &Cup::name)
       .def_readwrite("radius", &Cup::radius)
@@ -52,10 +57,12 @@ void bind_grasp(py::module_& m) {
       .def("compression_stiffness", &Cup::compression_stiffness);
 
   py::list names;
-  for (int f = 0; f <= static_cast<int>(SealFailure::Rough); ++f) names.append(failure_name(static_cast<SealFailure>(f)));
+  for (int f = 0; f <= static_cast<int>(SealFailure::Rough); ++f)
+    names.append(failure_name(static_cast<SealFailure>(f)));
   m.attr("SEAL_FAILURE_NAMES") = py::tuple(names);
 
-  py::class_<SealModel, std::shared_ptr<SealModel>>(m, "SealModel", "Immutable seal model of one object for one cup.")
+  py::class_<SealModel, std::shared_ptr<SealModel>>(
+      m, "SealModel", "Immutable seal model of one object for one cup.")
       .def(py::init([](const Mesh& mesh, const Cup& cup, const std::string& model) {
              const SealModelKind kind = parse_kind(model);
              py::gil_scoped_release release;
@@ -66,9 +73,10 @@ void bind_grasp(py::module_& m) {
       .def_property_readonly("cup", &SealModel::cup)
       .def(
           "evaluate",
-          [](const SealModel& s, const py::handle& points, const py::handle& normals, int num_trials,
-             double angle_sigma, double position_sigma, bool perturb, double on_surface_tolerance,
-             std::uint64_t seed, std::uint64_t first_index, int num_threads) {
+          [](const SealModel& s, const py::handle& points, const py::handle& normals,
+             int num_trials, double angle_sigma, double position_sigma, bool perturb,
+             double on_surface_tolerance, std::uint64_t seed, std::uint64_t first_index,
+             int num_threads) {
             const Points3f p = to_rows<float, 3>(points, "points");
             const Points3f n = to_rows<float, 3>(normals, "normals");
             SealOptions o;
@@ -91,13 +99,15 @@ void bind_grasp(py::module_& m) {
             out["score"] = to_numpy(std::move(r.score));
             out["quality"] = to_numpy(std::move(r.quality));
             out["reason"] = to_numpy(std::move(r.reason));
-            out["trial_sealed"] = to_bool_numpy(std::move(r.trial_sealed)).attr("reshape")(count, T);
+            out["trial_sealed"] =
+                to_bool_numpy(std::move(r.trial_sealed)).attr("reshape")(count, T);
             out["trial_reason"] = to_numpy(std::move(r.trial_reason)).attr("reshape")(count, T);
             return out;
           },
-          py::arg("points"), py::arg("normals"), py::arg("num_trials") = 10, py::arg("angle_sigma") = 0.1,
-          py::arg("position_sigma") = -1.0, py::arg("perturb") = true, py::arg("on_surface_tolerance") = 1e-3,
-          py::arg("seed") = 0, py::arg("first_index") = 0, py::arg("num_threads") = 0)
+          py::arg("points"), py::arg("normals"), py::arg("num_trials") = 10,
+          py::arg("angle_sigma") = 0.1, py::arg("position_sigma") = -1.0, py::arg("perturb") = true,
+          py::arg("on_surface_tolerance") = 1e-3, py::arg("seed") = 0, py::arg("first_index") = 0,
+          py::arg("num_threads") = 0)
       .def(
           "trial",
           [](const SealModel& s, const Vec3d& point, const Vec3d& normal) {
@@ -117,8 +127,12 @@ void bind_grasp(py::module_& m) {
             return out;
           },
           py::arg("point"), py::arg("normal"))
-      .def("with_cup", [](const SealModel& s, const Cup& cup) { return std::const_pointer_cast<SealModel>(s.with_cup(cup)); },
-           py::arg("cup"));
+      .def(
+          "with_cup",
+          [](const SealModel& s, const Cup& cup) {
+            return std::const_pointer_cast<SealModel>(s.with_cup(cup));
+          },
+          py::arg("cup"));
 
   m.def(
       "suction_wrench_scores",
@@ -131,8 +145,9 @@ void bind_grasp(py::module_& m) {
         o.gravity = gravity;
         return to_numpy(suction_wrench_scores(c, a, mass, com, gravity_direction, cup_radius, o));
       },
-      py::arg("contacts"), py::arg("approach"), py::arg("mass"), py::arg("com"), py::arg("gravity_direction"),
-      py::arg("cup_radius"), py::arg("k") = 15.6, py::arg("gravity") = 9.81);
+      py::arg("contacts"), py::arg("approach"), py::arg("mass"), py::arg("com"),
+      py::arg("gravity_direction"), py::arg("cup_radius"), py::arg("k") = 15.6,
+      py::arg("gravity") = 9.81);
 }
 
 }  // namespace mgn::py_bind

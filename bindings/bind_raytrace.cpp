@@ -1,6 +1,6 @@
-#include <mgn/raytrace/ray_scene.hpp>
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
+#include <mgn/raytrace/ray_scene.hpp>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -31,15 +31,16 @@ void bind_raytrace(py::module_& m) {
              if (!poses.is_none()) {
                X = to_poses(poses, "poses");
                if (X.size() != meshes.size()) {
-                 throw_error<InvalidArgument>("RayScene: got ", meshes.size(), " meshes and ", X.size(),
-                                              " poses; expected one pose per mesh");
+                 throw_error<InvalidArgument>("RayScene: got ", meshes.size(), " meshes and ",
+                                              X.size(), " poses; expected one pose per mesh");
                }
              }
              std::vector<std::int32_t> ids;
              if (!instance_ids.is_none()) {
                ids = instance_ids.cast<std::vector<std::int32_t>>();
                if (ids.size() != meshes.size()) {
-                 throw_error<InvalidArgument>("RayScene: got ", meshes.size(), " meshes and ", ids.size(),
+                 throw_error<InvalidArgument>("RayScene: got ", meshes.size(), " meshes and ",
+                                              ids.size(),
                                               " instance ids; expected one id per mesh");
                }
              }
@@ -55,14 +56,16 @@ void bind_raytrace(py::module_& m) {
            py::arg("meshes"), py::arg("poses") = py::none(), py::arg("instance_ids") = py::none())
       .def_property_readonly("num_geometries", &RayScene::num_geometries)
       .def_property_readonly("num_triangles", &RayScene::num_triangles)
-      .def_property_readonly("bounds", [](const RayScene& s) {
-        Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> b = s.bounds();
-        return to_numpy(std::move(b));
-      })
+      .def_property_readonly("bounds",
+                             [](const RayScene& s) {
+                               Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> b =
+                                   s.bounds();
+                               return to_numpy(std::move(b));
+                             })
       .def(
           "intersect",
-          [](const RayScene& s, const py::handle& origins, const py::handle& directions, float tnear, float tfar,
-             bool coherent, int num_threads) {
+          [](const RayScene& s, const py::handle& origins, const py::handle& directions,
+             float tnear, float tfar, bool coherent, int num_threads) {
             const Points3f o = to_rows<float, 3>(origins, "origins");
             const Points3f d = to_rows<float, 3>(directions, "directions");
             RayHits h;
@@ -84,8 +87,8 @@ void bind_raytrace(py::module_& m) {
           py::arg("num_threads") = 0)
       .def(
           "occluded",
-          [](const RayScene& s, const py::handle& origins, const py::handle& directions, float tnear, float tfar,
-             bool coherent, int num_threads) {
+          [](const RayScene& s, const py::handle& origins, const py::handle& directions,
+             float tnear, float tfar, bool coherent, int num_threads) {
             const Points3f o = to_rows<float, 3>(origins, "origins");
             const Points3f d = to_rows<float, 3>(directions, "directions");
             std::vector<std::uint8_t> hit;
@@ -100,8 +103,8 @@ void bind_raytrace(py::module_& m) {
           py::arg("num_threads") = 0)
       .def(
           "intersect_all",
-          [](const RayScene& s, const py::handle& origins, const py::handle& directions, int max_hits, float tnear,
-             float tfar, int num_threads) {
+          [](const RayScene& s, const py::handle& origins, const py::handle& directions,
+             int max_hits, float tnear, float tfar, int num_threads) {
             const Points3f o = to_rows<float, 3>(origins, "origins");
             const Points3f d = to_rows<float, 3>(directions, "directions");
             RayAllHits h;
@@ -119,8 +122,9 @@ void bind_raytrace(py::module_& m) {
             out["ray_ids"] = to_numpy(std::move(h.ray_ids));
             return out;
           },
-          py::arg("origins"), py::arg("directions"), py::arg("max_hits_per_ray") = 64, py::arg("tnear") = 0.0f,
-          py::arg("tfar") = std::numeric_limits<float>::infinity(), py::arg("num_threads") = 0);
+          py::arg("origins"), py::arg("directions"), py::arg("max_hits_per_ray") = 64,
+          py::arg("tnear") = 0.0f, py::arg("tfar") = std::numeric_limits<float>::infinity(),
+          py::arg("num_threads") = 0);
 
   m.def(
       "camera_rays",

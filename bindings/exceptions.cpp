@@ -27,17 +27,21 @@ PyObject* make_type(py::module_& m, const char* name, const char* doc, PyObject*
 }  // namespace
 
 void register_exceptions(py::module_& m) {
-  g_base = PyErr_NewExceptionWithDoc("mgn._core.MgnError", "Base class of every error raised by mgn.",
-                                     PyExc_Exception, nullptr);
+  g_base = PyErr_NewExceptionWithDoc(
+      "mgn._core.MgnError", "Base class of every error raised by mgn.", PyExc_Exception, nullptr);
   if (g_base == nullptr) throw py::error_already_set();
   m.attr("MgnError") = py::handle(g_base);
   g_invalid = make_type(m, "InvalidArgumentError",
-                        "An argument has a wrong value, shape or range (also a ValueError).", PyExc_ValueError);
-  g_io = make_type(m, "IoError", "A file could not be read or written (also an OSError).", PyExc_OSError);
-  g_unsupported = make_type(m, "UnsupportedError",
-                            "A valid request that this build or format does not support (also a ValueError).",
-                            PyExc_ValueError);
-  g_backend = make_type(m, "BackendError", "A third-party backend reported a failure (also a RuntimeError).",
+                        "An argument has a wrong value, shape or range (also a ValueError).",
+                        PyExc_ValueError);
+  g_io = make_type(m, "IoError", "A file could not be read or written (also an OSError).",
+                   PyExc_OSError);
+  g_unsupported =
+      make_type(m, "UnsupportedError",
+                "A valid request that this build or format does not support (also a ValueError).",
+                PyExc_ValueError);
+  g_backend = make_type(m, "BackendError",
+                        "A third-party backend reported a failure (also a RuntimeError).",
                         PyExc_RuntimeError);
 
   py::register_exception_translator([](std::exception_ptr p) {

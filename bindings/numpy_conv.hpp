@@ -2,10 +2,10 @@
 // numpy <-> Eigen conversions shared by the bind_*.cpp files. Inputs are validated here (shape,
 // finiteness of poses) so that errors name the Python argument; outputs are moved into numpy
 // arrays without copies (a capsule owns the buffer).
-#include <mgn/core/error.hpp>
-#include <mgn/core/types.hpp>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <mgn/core/error.hpp>
+#include <mgn/core/types.hpp>
 
 #include <string>
 #include <vector>
@@ -19,7 +19,8 @@ using CArray = py::array_t<T, py::array::c_style | py::array::forcecast>;
 
 /// (N,cols) array -> row-major Eigen matrix (copy). Names `arg` in errors.
 template <typename Scalar, int Cols>
-Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor> to_rows(const py::handle& obj, const char* arg) {
+Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor> to_rows(const py::handle& obj,
+                                                                     const char* arg) {
   CArray<Scalar> a;
   try {
     a = py::cast<CArray<Scalar>>(obj);
@@ -28,9 +29,11 @@ Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor> to_rows(const py::h
   }
   if (a.ndim() != 2 || a.shape(1) != Cols) {
     std::string shape = "(";
-    for (py::ssize_t i = 0; i < a.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(a.shape(i));
+    for (py::ssize_t i = 0; i < a.ndim(); ++i)
+      shape += (i ? ", " : "") + std::to_string(a.shape(i));
     shape += a.ndim() == 1 ? ",)" : ")";
-    throw_error<InvalidArgument>(arg, ": expected an array of shape (N, ", Cols, "), got shape ", shape);
+    throw_error<InvalidArgument>(arg, ": expected an array of shape (N, ", Cols, "), got shape ",
+                                 shape);
   }
   using M = Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor>;
   return Eigen::Map<const M>(a.data(), a.shape(0), Cols);
@@ -46,8 +49,9 @@ py::array to_numpy(Derived&& m) {
   if (M::ColsAtCompileTime == 1) {
     return py::array_t<Scalar>({static_cast<py::ssize_t>(heap->rows())}, heap->data(), owner);
   }
-  return py::array_t<Scalar>({static_cast<py::ssize_t>(heap->rows()), static_cast<py::ssize_t>(heap->cols())},
-                             heap->data(), owner);
+  return py::array_t<Scalar>(
+      {static_cast<py::ssize_t>(heap->rows()), static_cast<py::ssize_t>(heap->cols())},
+      heap->data(), owner);
 }
 
 /// Moves a std::vector into a 1-D numpy array (no copy). uint8 "bool" vectors become bool arrays.

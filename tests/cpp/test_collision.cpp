@@ -41,7 +41,8 @@ TEST(Collision, TwoSpheresMatchAnalyticDistance) {
   const mgn::CollisionModel a(mgn::make_sphere(r1, 256, 128));
   const mgn::CollisionModel b(mgn::make_sphere(r2, 256, 128));
   std::vector<mgn::Pose> xb;
-  for (double s : {0.03, 0.07, 0.09, 0.12, 0.2}) xb.push_back(at(s / std::sqrt(3.0), s / std::sqrt(3.0), s / std::sqrt(3.0)));
+  for (double s : {0.03, 0.07, 0.09, 0.12, 0.2})
+    xb.push_back(at(s / std::sqrt(3.0), s / std::sqrt(3.0), s / std::sqrt(3.0)));
   const auto d = mgn::distance(a, {mgn::Pose::Identity()}, b, xb);
   for (std::size_t i = 0; i < xb.size(); ++i) {
     const double centre = xb[i].translation().norm();
@@ -61,7 +62,8 @@ TEST(Collision, BatchesBroadcastAndAreThreadIndependent) {
   const mgn::CollisionModel b(mgn::make_box({0.05, 0.08, 0.02}));
   std::vector<mgn::Pose> xs;
   for (int i = 0; i < 500; ++i) {
-    mgn::Pose X = at(0.12 * std::sin(0.37 * i), 0.1 * std::cos(0.23 * i), 0.05 * std::sin(0.11 * i));
+    mgn::Pose X =
+        at(0.12 * std::sin(0.37 * i), 0.1 * std::cos(0.23 * i), 0.05 * std::sin(0.11 * i));
     X.rotate(Eigen::AngleAxisd(0.1 * i, mgn::Vec3d(1, 2, 3).normalized()));
     xs.push_back(X);
   }
@@ -78,7 +80,8 @@ TEST(Collision, BatchesBroadcastAndAreThreadIndependent) {
   }
   EXPECT_GT(n_hit, 10);
   EXPECT_LT(n_hit, 490);
-  EXPECT_THROW(mgn::collide(a, std::vector<mgn::Pose>(2), b, std::vector<mgn::Pose>(3)), mgn::InvalidArgument);
+  EXPECT_THROW(mgn::collide(a, std::vector<mgn::Pose>(2), b, std::vector<mgn::Pose>(3)),
+               mgn::InvalidArgument);
   mgn::Pose bad = mgn::Pose::Identity();
   bad.translation().y() = std::nan("");
   EXPECT_THROW(mgn::collide(a, mgn::Pose::Identity(), b, bad), mgn::InvalidArgument);

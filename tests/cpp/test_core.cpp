@@ -54,9 +54,10 @@ TEST(Parallel, CoversEveryIndexOnceForAnyThreadCount) {
 }
 
 TEST(Parallel, RethrowsWorkerErrorsAndRejectsNegativeThreads) {
-  EXPECT_THROW(mgn::parallel_for(100, 2, 1, [](std::size_t b, std::size_t) {
-                 if (b > 0) throw mgn::InvalidArgument("boom");
-               }),
+  EXPECT_THROW(mgn::parallel_for(100, 2, 1,
+                                 [](std::size_t b, std::size_t) {
+                                   if (b > 0) throw mgn::InvalidArgument("boom");
+                                 }),
                mgn::InvalidArgument);
   EXPECT_THROW(mgn::resolve_num_threads(-1), mgn::InvalidArgument);
   EXPECT_GE(mgn::resolve_num_threads(0), 1);

@@ -38,7 +38,8 @@ TEST(Mesh, ConstructorRejectsBadArrays) {
 }
 
 TEST(Mesh, ValidatePrimitivesAndBrokenMeshes) {
-  for (const auto& m : {mgn::make_box({0.1, 0.2, 0.3}), mgn::make_sphere(0.05, 32, 16), mgn::make_cylinder(0.02, 0.1, 24)}) {
+  for (const auto& m : {mgn::make_box({0.1, 0.2, 0.3}), mgn::make_sphere(0.05, 32, 16),
+                        mgn::make_cylinder(0.02, 0.1, 24)}) {
     const auto r = m.validate();
     EXPECT_TRUE(r.is_watertight) << m.name();
     EXPECT_TRUE(r.is_outward) << m.name();
@@ -153,7 +154,7 @@ TEST(MassProperties, OpenMeshFallbackAndBadDensity) {
   const auto p = mgn::compute_mass_properties(open, o);
   EXPECT_FALSE(p.is_exact);
   EXPECT_NEAR(p.mass, 5.0 * 1.0 * 0.001 * 1000, 1e-9);  // five unit faces
-  EXPECT_NEAR(p.center_of_mass.x(), -0.1, 1e-9);         // (4 faces at x=0, one at -0.5) / 5
+  EXPECT_NEAR(p.center_of_mass.x(), -0.1, 1e-9);        // (4 faces at x=0, one at -0.5) / 5
   EXPECT_NEAR(p.center_of_mass.z(), 0.0, 1e-9);
   o.density = -1;
   EXPECT_THROW(mgn::compute_mass_properties(box, o), mgn::InvalidArgument);
@@ -186,7 +187,8 @@ TEST(Sampling, EvenSamplingIsMoreEvenThanRandom) {
     const auto s = mgn::sample_surface(box, 400, o);
     float best = 1e9f;
     for (int i = 0; i < 400; ++i)
-      for (int j = i + 1; j < 400; ++j) best = std::min(best, (s.points.row(i) - s.points.row(j)).norm());
+      for (int j = i + 1; j < 400; ++j)
+        best = std::min(best, (s.points.row(i) - s.points.row(j)).norm());
     return best;
   };
   EXPECT_GT(min_spacing(mgn::SampleMethod::Even), 3.0f * min_spacing(mgn::SampleMethod::Random));

@@ -71,12 +71,13 @@ TEST(RayScene, SphereDistancesAndAllHits) {
   int hits = 0;
   for (int i = 0; i < o.rows(); ++i) {
     // Analytic ray-sphere intersection.
-    const mgn::Vec3d oo = o.row(i).transpose().cast<double>(), dd = d.row(i).transpose().cast<double>();
+    const mgn::Vec3d oo = o.row(i).transpose().cast<double>(),
+                     dd = d.row(i).transpose().cast<double>();
     const double b = oo.dot(dd), c = oo.squaredNorm() - r * r, disc = b * b - c;
     const auto count = all.offsets[i + 1] - all.offsets[i];
     if (disc > 1e-3 * r * r) {  // clearly hits the true sphere (the mesh is inscribed)
       ++hits;
-      EXPECT_EQ(count, 2) << i;  // in and out, edge crossings reported once
+      EXPECT_EQ(count, 2) << i;   // in and out, edge crossings reported once
       if (disc > 0.05 * r * r) {  // away from grazing, the tessellation error is tiny
         EXPECT_NEAR(h.distance[i], -b - std::sqrt(disc), 1e-4) << i;
         EXPECT_NEAR(all.distance[all.offsets[i] + 1], -b + std::sqrt(disc), 1e-4) << i;
@@ -106,7 +107,8 @@ TEST(RayScene, ThreadsAndPacketsGiveIdenticalResults) {
   mgn::Pose X = mgn::Pose::Identity();
   X.translation() << 0.05, 0.0, 0.02;
   X.rotate(Eigen::AngleAxisd(0.4, mgn::Vec3d(1, 1, 0).normalized()));
-  mgn::RayScene scene({mgn::RayGeometry{&sphere, mgn::Pose::Identity(), 0}, mgn::RayGeometry{&box, X, 1}});
+  mgn::RayScene scene(
+      {mgn::RayGeometry{&sphere, mgn::Pose::Identity(), 0}, mgn::RayGeometry{&box, X, 1}});
   mgn::Points3f o, d;
   random_rays(20011, 11, o, d);  // not a multiple of 16: exercises the packet tail
   mgn::CastOptions one, two, packets;
@@ -114,7 +116,8 @@ TEST(RayScene, ThreadsAndPacketsGiveIdenticalResults) {
   two.num_threads = 2;
   packets.num_threads = 2;
   packets.coherent = true;
-  const auto a = scene.intersect(o, d, one), b = scene.intersect(o, d, two), c = scene.intersect(o, d, packets);
+  const auto a = scene.intersect(o, d, one), b = scene.intersect(o, d, two),
+             c = scene.intersect(o, d, packets);
   EXPECT_EQ(a.distance, b.distance);
   EXPECT_EQ(a.face_ids, b.face_ids);
   EXPECT_EQ(a.instance_ids, c.instance_ids);
@@ -136,7 +139,8 @@ TEST(RayScene, RejectsBadInput) {
   EXPECT_THROW(mgn::RayScene({mgn::RayGeometry{&box, nan_pose, 0}}), mgn::InvalidArgument);
   mgn::RayScene scene({mgn::RayGeometry{&box, mgn::Pose::Identity(), 0}});
   EXPECT_THROW(scene.intersect(rows({{0, 0, 1}}), rows({{0, 0, 0}})), mgn::InvalidArgument);
-  EXPECT_THROW(scene.intersect(rows({{0, 0, 1}, {0, 0, 1}}), rows({{0, 0, -1}})), mgn::InvalidArgument);
+  EXPECT_THROW(scene.intersect(rows({{0, 0, 1}, {0, 0, 1}}), rows({{0, 0, -1}})),
+               mgn::InvalidArgument);
   EXPECT_THROW(scene.intersect_all(rows({{0, 0, 1}}), rows({{0, 0, -1}}), 0), mgn::InvalidArgument);
 }
 
@@ -145,7 +149,8 @@ TEST(CameraRays, CentrePixelLooksAlongTheOpticalAxis) {
   K << 100, 0, 2, 0, 100, 1.5, 0, 0, 1;  // 4x3 image, principal point at the centre
   mgn::Pose X_WC = mgn::Pose::Identity();
   X_WC.translation() << 0, 0, 1;
-  X_WC.linear() = Eigen::AngleAxisd(M_PI, mgn::Vec3d::UnitX()).toRotationMatrix();  // looking down -z
+  X_WC.linear() =
+      Eigen::AngleAxisd(M_PI, mgn::Vec3d::UnitX()).toRotationMatrix();  // looking down -z
   mgn::Points3f o, d;
   mgn::camera_rays(K, 4, 3, X_WC, o, d);
   ASSERT_EQ(o.rows(), 12);

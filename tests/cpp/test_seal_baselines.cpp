@@ -69,7 +69,8 @@ const Vec3d kUp = Vec3d::UnitZ();
 TEST(SealBaselines, LargeFlatBoxTopSealsInBothModels) {
   // 200 x 200 x 50 mm box, top face at z = 25 mm.
   Fixture f(mgn::make_box({0.2, 0.2, 0.05}));
-  for (const Vec3d& c : {Vec3d(0.0, 0.0, 0.025), Vec3d(0.03, -0.05, 0.025), Vec3d(-0.08, 0.08, 0.025)}) {
+  for (const Vec3d& c :
+       {Vec3d(0.0, 0.0, 0.025), Vec3d(0.03, -0.05, 0.025), Vec3d(-0.08, 0.08, 0.025)}) {
     float qs = -1.0f, qm = -1.0f;
     EXPECT_EQ(f.strain(c, kUp, &qs), SealFailure::None);
     EXPECT_EQ(qs, 1.0f);
@@ -179,9 +180,9 @@ TEST(SealBaselines, ThroughHoleFailsWithHole) {
   // 100 x 100 x 5 mm plate (top at z = 0) with a square through hole of half-width 0.5 r, built
   // from four boxes; the ring (radius r > 0.5 r sqrt 2) lies on material, the disc does not.
   const double h = 0.5 * r, e = 0.05, t = 0.005;
-  const mgn::Mesh plate =
-      mgn::Mesh::merge({box_between({-e, -e, -t}, {-h, e, 0.0}), box_between({h, -e, -t}, {e, e, 0.0}),
-                        box_between({-h, -e, -t}, {h, -h, 0.0}), box_between({-h, h, -t}, {h, e, 0.0})});
+  const mgn::Mesh plate = mgn::Mesh::merge(
+      {box_between({-e, -e, -t}, {-h, e, 0.0}), box_between({h, -e, -t}, {e, e, 0.0}),
+       box_between({-h, -e, -t}, {h, -h, 0.0}), box_between({-h, h, -t}, {h, e, 0.0})});
   Fixture f(plate);
   float qs = -1.0f, qm = -1.0f;
   EXPECT_EQ(f.strain(Vec3d::Zero(), kUp, &qs), SealFailure::Hole);

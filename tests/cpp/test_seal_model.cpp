@@ -18,11 +18,13 @@ mgn::Mesh placed(const mgn::Mesh& m, double x, double y, double z) {
 /// A 20 x 20 cm block whose top face is the plane z = 0.
 mgn::Mesh plane() { return placed(mgn::make_box({0.2, 0.2, 0.05}), 0, 0, -0.025); }
 
-mgn::SealFailure nominal(const mgn::Mesh& mesh, const mgn::Vec3d& c, const mgn::Vec3d& n, const mgn::Cup& cup = {}) {
+mgn::SealFailure nominal(const mgn::Mesh& mesh, const mgn::Vec3d& c, const mgn::Vec3d& n,
+                         const mgn::Cup& cup = {}) {
   return mgn::SealModel(mesh, cup).trial(c, n).failure;
 }
 
-float robust_score(const mgn::Mesh& mesh, const mgn::Vec3d& c, const mgn::Vec3d& n, std::uint64_t seed = 0) {
+float robust_score(const mgn::Mesh& mesh, const mgn::Vec3d& c, const mgn::Vec3d& n,
+                   std::uint64_t seed = 0) {
   mgn::SealModel model(mesh, mgn::Cup{});
   mgn::Points3f p(1, 3), nn(1, 3);
   p.row(0) = c.cast<float>().transpose();
@@ -55,8 +57,9 @@ TEST(SpringSeal, SpheresSealWhenLargeAndMissWhenSmallerThanTheCup) {
   const mgn::Mesh tiny = mgn::make_sphere(small, 64, 32);
   EXPECT_EQ(nominal(tiny, {0, 0, small}, kUp), mgn::SealFailure::Miss);
   // Elastic forces still sum to the pressure force on a curved surface.
-  const mgn::SealTrial t = mgn::SealModel(mgn::make_sphere(4 * cup.radius, 256, 128), cup)
-                               .trial({0, 0, 4 * cup.radius}, mgn::Vec3d(0.1, 0.0, 1.0).normalized());
+  const mgn::SealTrial t =
+      mgn::SealModel(mgn::make_sphere(4 * cup.radius, 256, 128), cup)
+          .trial({0, 0, 4 * cup.radius}, mgn::Vec3d(0.1, 0.0, 1.0).normalized());
   if (t.elastic_force.size() > 0) EXPECT_NEAR(t.total_elastic_force, cup.pressure_force(), 1e-9);
 }
 
@@ -66,7 +69,8 @@ TEST(SpringSeal, CylinderSealsAlongItsSideOnlyAboveARadiusThreshold) {
   auto score = [&](double R) {
     return robust_score(mgn::make_cylinder(R, 0.2, 512), {R, 0, 0}, mgn::Vec3d::UnitX());
   };
-  EXPECT_EQ(nominal(mgn::make_cylinder(0.93 * cup.radius, 0.2, 512), {0.93 * cup.radius, 0, 0}, mgn::Vec3d::UnitX()),
+  EXPECT_EQ(nominal(mgn::make_cylinder(0.93 * cup.radius, 0.2, 512), {0.93 * cup.radius, 0, 0},
+                    mgn::Vec3d::UnitX()),
             mgn::SealFailure::Miss);
   float previous = 0.0f;
   for (double R : {0.0072, 0.008, 0.009, 0.010, 0.0125, 0.015, 0.02, 0.03, 0.05, 0.1}) {
@@ -100,10 +104,12 @@ TEST(SpringSeal, StepHigherThanTheCompensableHeightFails) {
   const mgn::Cup cup;
   for (double step : {0.010, 0.015}) {
     const mgn::Mesh base = plane();
-    const mgn::Mesh block = placed(mgn::make_box({0.1, 0.2, step}), 0.05, 0, step / 2);  // x in [0, 0.1]
+    const mgn::Mesh block =
+        placed(mgn::make_box({0.1, 0.2, step}), 0.05, 0, step / 2);  // x in [0, 0.1]
     const mgn::Mesh m = mgn::Mesh::merge({base, block});
     const mgn::SealFailure f = nominal(m, {-0.001, 0.0, 0.0}, kUp, cup);
-    EXPECT_TRUE(f == mgn::SealFailure::Hill || f == mgn::SealFailure::Force) << mgn::failure_name(f);
+    EXPECT_TRUE(f == mgn::SealFailure::Hill || f == mgn::SealFailure::Force)
+        << mgn::failure_name(f);
   }
   // A smooth slope is no step: a plane tilted by 10 degrees seals at any point of its face.
   mgn::Pose X = mgn::Pose::Identity();
@@ -120,7 +126,8 @@ TEST(SpringSeal, HoleInsideTheRingFailsByHole) {
   const double W = 0.1;
   const mgn::Mesh left = placed(mgn::make_box({W - hole, 2 * W, t}), -(W + hole) / 2, 0, -t / 2);
   const mgn::Mesh right = placed(mgn::make_box({W - hole, 2 * W, t}), (W + hole) / 2, 0, -t / 2);
-  const mgn::Mesh front = placed(mgn::make_box({2 * hole, W - hole, t}), 0, -(W + hole) / 2, -t / 2);
+  const mgn::Mesh front =
+      placed(mgn::make_box({2 * hole, W - hole, t}), 0, -(W + hole) / 2, -t / 2);
   const mgn::Mesh back = placed(mgn::make_box({2 * hole, W - hole, t}), 0, (W + hole) / 2, -t / 2);
   const mgn::Mesh plate = mgn::Mesh::merge({left, right, front, back});
   EXPECT_EQ(nominal(plate, {0.0, 0.0, 0.0}, kUp, cup), mgn::SealFailure::Hole);
@@ -131,7 +138,8 @@ TEST(SpringSeal, RoofAboveTheCupFailsByObstruction) {
   const mgn::Mesh roof = placed(mgn::make_box({0.05, 0.05, 0.005}), 0, 0, 0.05);
   const mgn::Mesh m = mgn::Mesh::merge({plane(), roof});
   EXPECT_EQ(nominal(m, {0.0, 0.0, 0.0}, kUp), mgn::SealFailure::Obstruction);
-  const mgn::Mesh low_roof = mgn::Mesh::merge({plane(), placed(mgn::make_box({0.05, 0.05, 0.005}), 0, 0, 0.02)});
+  const mgn::Mesh low_roof =
+      mgn::Mesh::merge({plane(), placed(mgn::make_box({0.05, 0.05, 0.005}), 0, 0, 0.02)});
   EXPECT_EQ(nominal(low_roof, {0.0, 0.0, 0.0}, kUp), mgn::SealFailure::Obstruction);
   EXPECT_EQ(nominal(m, {0.07, 0.07, 0.0}, kUp), mgn::SealFailure::None);  // away from the roof
 }

@@ -20,7 +20,8 @@ const char* kUsage =
     "  info MESH [--scale S] [--density D]\n"
     "      Load MESH (OBJ, STL, PLY, GLB/GLTF, DAE) and print its validation report and mass\n"
     "      properties as JSON. S multiplies coordinates (0.001 for millimetres; default 1),\n"
-    "      D is the density in kg/m^3 (default 1000). Units in the output: m, m^2, m^3, kg, kg m^2.\n"
+    "      D is the density in kg/m^3 (default 1000). Units in the output: m, m^2, m^3, kg, kg "
+    "m^2.\n"
     "  version\n"
     "      Print the versions of mgn and of the libraries it was built with, as JSON.\n";
 
@@ -29,13 +30,22 @@ std::string json_string(const std::string& s) {
   os << '"';
   for (unsigned char c : s) {
     switch (c) {
-      case '"': os << "\\\""; break;
-      case '\\': os << "\\\\"; break;
-      case '\n': os << "\\n"; break;
-      case '\t': os << "\\t"; break;
+      case '"':
+        os << "\\\"";
+        break;
+      case '\\':
+        os << "\\\\";
+        break;
+      case '\n':
+        os << "\\n";
+        break;
+      case '\t':
+        os << "\\t";
+        break;
       default:
         if (c < 0x20) {
-          os << "\\u" << std::hex << std::setw(4) << std::setfill('0') << static_cast<int>(c) << std::dec;
+          os << "\\u" << std::hex << std::setw(4) << std::setfill('0') << static_cast<int>(c)
+             << std::dec;
         } else {
           os << c;
         }
@@ -94,7 +104,8 @@ int cmd_info(const std::vector<std::string>& args) {
     } else if (path.empty()) {
       path = a;
     } else {
-      throw mgn::InvalidArgument("mgn-cli info: expected one MESH, got '" + path + "' and '" + a + "'");
+      throw mgn::InvalidArgument("mgn-cli info: expected one MESH, got '" + path + "' and '" + a +
+                                 "'");
     }
   }
   if (path.empty()) throw mgn::InvalidArgument("mgn-cli info: missing MESH argument");
@@ -121,9 +132,10 @@ int cmd_info(const std::vector<std::string>& args) {
             << ", \"signed_volume\": " << json_number(r.signed_volume) << "},\n"
             << "  \"mass_properties\": {\"density\": " << json_number(mass.density)
             << ", \"volume\": " << json_number(m.volume) << ", \"mass\": " << json_number(m.mass)
-            << ", \"center_of_mass\": " << json_vec(m.center_of_mass)
-            << ", \"inertia\": [" << json_vec(m.inertia.row(0)) << ", " << json_vec(m.inertia.row(1)) << ", "
-            << json_vec(m.inertia.row(2)) << "], \"is_exact\": " << (m.is_exact ? "true" : "false") << "}\n"
+            << ", \"center_of_mass\": " << json_vec(m.center_of_mass) << ", \"inertia\": ["
+            << json_vec(m.inertia.row(0)) << ", " << json_vec(m.inertia.row(1)) << ", "
+            << json_vec(m.inertia.row(2)) << "], \"is_exact\": " << (m.is_exact ? "true" : "false")
+            << "}\n"
             << "}\n";
   return 0;
 }

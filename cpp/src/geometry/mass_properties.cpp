@@ -29,7 +29,8 @@ Moments solid_moments(const Mesh& mesh, const Vec3d& ref) {
     const Vec3d s = a + b + c;
     m.measure += vol;
     m.first += vol * s / 4.0;
-    m.second += vol / 20.0 * (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
+    m.second += vol / 20.0 *
+                (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
   }
   if (m.measure < 0.0) {  // wound inward: every integral flips sign
     m.measure = -m.measure;
@@ -52,7 +53,8 @@ Moments shell_moments(const Mesh& mesh, const Vec3d& ref) {
     const Vec3d s = a + b + c;
     m.measure += area;
     m.first += area * s / 3.0;
-    m.second += area / 12.0 * (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
+    m.second += area / 12.0 *
+                (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
   }
   return m;
 }
@@ -62,16 +64,17 @@ Moments shell_moments(const Mesh& mesh, const Vec3d& ref) {
 MassProperties compute_mass_properties(const Mesh& mesh, const MassOptions& options) {
   const char* fn = "compute_mass_properties";
   if (!(options.density > 0.0) || !std::isfinite(options.density)) {
-    throw_error<InvalidArgument>(fn, ": density must be finite and > 0 kg/m^3, got ", options.density);
+    throw_error<InvalidArgument>(fn, ": density must be finite and > 0 kg/m^3, got ",
+                                 options.density);
   }
   require_non_empty(mesh, fn);
   const MeshReport report = mesh.validate();
   const bool closed = report.is_watertight && report.is_winding_consistent;
   if (!closed && options.open_mesh == OpenMeshPolicy::Error) {
-    throw_error<InvalidArgument>(fn, ": mesh '", mesh.name(), "' is not closed (",
-                                 report.num_boundary_edges, " boundary, ", report.num_nonmanifold_edges,
-                                 " non-manifold, ", report.num_misoriented_edges,
-                                 " misoriented edges); expected a watertight mesh");
+    throw_error<InvalidArgument>(
+        fn, ": mesh '", mesh.name(), "' is not closed (", report.num_boundary_edges, " boundary, ",
+        report.num_nonmanifold_edges, " non-manifold, ", report.num_misoriented_edges,
+        " misoriented edges); expected a watertight mesh");
   }
   if (!closed && (!(options.shell_thickness > 0.0) || !std::isfinite(options.shell_thickness))) {
     throw_error<InvalidArgument>(fn, ": shell_thickness must be finite and > 0 m, got ",
@@ -83,7 +86,8 @@ MassProperties compute_mass_properties(const Mesh& mesh, const MassOptions& opti
   Moments m = closed ? solid_moments(mesh, ref) : shell_moments(mesh, ref);
   const double scale = closed ? options.density : options.density * options.shell_thickness;
   if (!(m.measure > 0.0)) {
-    throw_error<InvalidArgument>(fn, ": mesh '", mesh.name(), "' encloses zero volume; expected a solid");
+    throw_error<InvalidArgument>(fn, ": mesh '", mesh.name(),
+                                 "' encloses zero volume; expected a solid");
   }
   MassProperties out;
   out.is_exact = closed;
@@ -94,7 +98,8 @@ MassProperties compute_mass_properties(const Mesh& mesh, const MassOptions& opti
   // Inertia about ref, then shifted to the centre of mass (parallel axis theorem).
   const Mat3d C = scale * m.second;
   const Mat3d I_ref = C.trace() * Mat3d::Identity() - C;
-  out.inertia = I_ref - out.mass * (com_rel.squaredNorm() * Mat3d::Identity() - com_rel * com_rel.transpose());
+  out.inertia = I_ref - out.mass * (com_rel.squaredNorm() * Mat3d::Identity() -
+                                    com_rel * com_rel.transpose());
   out.inertia = 0.5 * (out.inertia + out.inertia.transpose());
   return out;
 }

@@ -89,8 +89,9 @@ Mesh::Mesh(Points3f vertices, Faces faces, Points2f uvs, std::vector<Material> m
   }
   const auto degenerate = find_degenerate_faces(vertices_, faces_);
   if (!degenerate.empty()) {
-    throw_error<InvalidArgument>(who, ": ", degenerate.size(), " face(s) have zero area (first: face ",
-                                 degenerate.front(), "); expected non-degenerate triangles");
+    throw_error<InvalidArgument>(who, ": ", degenerate.size(),
+                                 " face(s) have zero area (first: face ", degenerate.front(),
+                                 "); expected non-degenerate triangles");
   }
   if (uvs_.rows() != 0 && uvs_.rows() != nv) {
     throw_error<InvalidArgument>(who, ": uvs has ", uvs_.rows(), " rows; expected 0 or ", nv,
@@ -128,7 +129,8 @@ Eigen::VectorXd Mesh::face_areas() const {
   Eigen::VectorXd areas(faces_.rows());
   for (std::int64_t f = 0; f < faces_.rows(); ++f) {
     const Vec3d a = row(vertices_, faces_(f, 0));
-    areas[f] = 0.5 * (row(vertices_, faces_(f, 1)) - a).cross(row(vertices_, faces_(f, 2)) - a).norm();
+    areas[f] =
+        0.5 * (row(vertices_, faces_(f, 1)) - a).cross(row(vertices_, faces_(f, 2)) - a).norm();
   }
   return areas;
 }
@@ -217,8 +219,9 @@ MeshReport Mesh::validate() const {
 
 Mesh Mesh::transformed(const Pose& X) const {
   if (!X.matrix().allFinite()) {
-    throw_error<InvalidArgument>("Mesh::transformed: the pose has non-finite entries; expected a "
-                                 "finite 4x4 rigid transform");
+    throw_error<InvalidArgument>(
+        "Mesh::transformed: the pose has non-finite entries; expected a "
+        "finite 4x4 rigid transform");
   }
   Points3f v(vertices_.rows(), 3);
   for (std::int64_t i = 0; i < vertices_.rows(); ++i) {

@@ -1,15 +1,15 @@
 #include <mgn/core/error.hpp>
 #include <mgn/geometry/mesh_io.hpp>
 
-#include <assimp/Importer.hpp>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include <cmath>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 
 namespace mgn {
 
@@ -60,9 +60,9 @@ Mesh clean_part(Points3f v, Faces f, Points2f uv, std::vector<Material> mats, bo
   const auto bad = find_degenerate_faces(v, f);
   if (!bad.empty()) {
     if (!drop) {
-      throw_error<InvalidArgument>("load_mesh('", path, "'): ", bad.size(),
-                                   " face(s) have zero area (first: face ", bad.front(),
-                                   "); expected non-degenerate triangles (or drop_degenerate=true)");
+      throw_error<InvalidArgument>(
+          "load_mesh('", path, "'): ", bad.size(), " face(s) have zero area (first: face ",
+          bad.front(), "); expected non-degenerate triangles (or drop_degenerate=true)");
     }
     Faces kept(f.rows() - static_cast<Eigen::Index>(bad.size()), 3);
     Eigen::Index k = 0;
@@ -99,16 +99,18 @@ Mesh load_mesh(const std::string& path, const LoadOptions& options) {
   Assimp::Importer importer;
   // Points and lines are dropped; the rest is triangulated. Vertices are joined only where every
   // attribute matches, so texture seams stay split (validation welds by position).
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                          aiProcess_SortByPType | aiProcess_ValidateDataStructure;
   const aiScene* scene = importer.ReadFile(path, flags);
   if (scene == nullptr) {
-    throw_error<IoError>("load_mesh: cannot read '", path, "' as a mesh: ", importer.GetErrorString());
+    throw_error<IoError>("load_mesh: cannot read '", path,
+                         "' as a mesh: ", importer.GetErrorString());
   }
   if (!scene->HasMeshes() || scene->mRootNode == nullptr) {
-    throw_error<InvalidArgument>("load_mesh('", path,
-                                 "'): the file holds no triangle mesh; expected at least one triangle");
+    throw_error<InvalidArgument>(
+        "load_mesh('", path, "'): the file holds no triangle mesh; expected at least one triangle");
   }
 
   const fs::path dir = fs::path(path).parent_path();
@@ -125,7 +127,7 @@ Mesh load_mesh(const std::string& path, const LoadOptions& options) {
   };
   std::vector<Raw> raws;
   std::function<void(const aiNode*, const aiMatrix4x4&)> visit = [&](const aiNode* node,
-                                                                    const aiMatrix4x4& parent) {
+                                                                     const aiMatrix4x4& parent) {
     const aiMatrix4x4 X = parent * node->mTransformation;
     for (unsigned i = 0; i < node->mNumMeshes; ++i) {
       const aiMesh* m = scene->mMeshes[node->mMeshes[i]];
@@ -134,8 +136,8 @@ Mesh load_mesh(const std::string& path, const LoadOptions& options) {
       r.v.resize(m->mNumVertices, 3);
       for (unsigned k = 0; k < m->mNumVertices; ++k) {
         const aiVector3D p = X * m->mVertices[k];
-        r.v.row(k) << static_cast<float>(p.x * options.scale), static_cast<float>(p.y * options.scale),
-            static_cast<float>(p.z * options.scale);
+        r.v.row(k) << static_cast<float>(p.x * options.scale),
+            static_cast<float>(p.y * options.scale), static_cast<float>(p.z * options.scale);
         if (!r.v.row(k).allFinite()) {
           throw_error<InvalidArgument>("load_mesh('", path, "'): vertex ", k, " of sub-mesh '",
                                        m->mName.C_Str(),
@@ -146,7 +148,8 @@ Mesh load_mesh(const std::string& path, const LoadOptions& options) {
       Eigen::Index nf = 0;
       for (unsigned k = 0; k < m->mNumFaces; ++k) {
         if (m->mFaces[k].mNumIndices != 3) continue;
-        for (int j = 0; j < 3; ++j) r.f(nf, j) = static_cast<std::int32_t>(m->mFaces[k].mIndices[j]);
+        for (int j = 0; j < 3; ++j)
+          r.f(nf, j) = static_cast<std::int32_t>(m->mFaces[k].mIndices[j]);
         ++nf;
       }
       r.f.conservativeResize(nf, 3);

@@ -7,7 +7,8 @@ namespace mgn {
 
 namespace {
 void require_positive(const char* fn, const char* what, double v) {
-  if (!(v > 0.0) || !std::isfinite(v)) throw_error<InvalidArgument>(fn, ": ", what, " must be finite and > 0, got ", v);
+  if (!(v > 0.0) || !std::isfinite(v))
+    throw_error<InvalidArgument>(fn, ": ", what, " must be finite and > 0, got ", v);
 }
 }  // namespace
 
@@ -16,8 +17,8 @@ Mesh make_box(const Vec3d& extents) {
   const Vec3d h = 0.5 * extents;
   Points3f v(8, 3);
   for (int i = 0; i < 8; ++i) {
-    v.row(i) << static_cast<float>((i & 1) ? h.x() : -h.x()), static_cast<float>((i & 2) ? h.y() : -h.y()),
-        static_cast<float>((i & 4) ? h.z() : -h.z());
+    v.row(i) << static_cast<float>((i & 1) ? h.x() : -h.x()),
+        static_cast<float>((i & 2) ? h.y() : -h.y()), static_cast<float>((i & 4) ? h.z() : -h.z());
   }
   Faces f(12, 3);
   f << 0, 2, 1, 1, 2, 3,  // -z
@@ -32,8 +33,8 @@ Mesh make_box(const Vec3d& extents) {
 Mesh make_sphere(double radius, int segments, int rings) {
   require_positive("make_sphere", "radius", radius);
   if (segments < 3 || rings < 2) {
-    throw_error<InvalidArgument>("make_sphere: expected segments >= 3 and rings >= 2, got ", segments,
-                                 " and ", rings);
+    throw_error<InvalidArgument>("make_sphere: expected segments >= 3 and rings >= 2, got ",
+                                 segments, " and ", rings);
   }
   // Poles are single vertices; ring r (1..rings-1) at polar angle pi*r/rings.
   const int n_ring_vertices = (rings - 1) * segments;
@@ -67,12 +68,14 @@ Mesh make_sphere(double radius, int segments, int rings) {
 Mesh make_cylinder(double radius, double height, int segments) {
   require_positive("make_cylinder", "radius", radius);
   require_positive("make_cylinder", "height", height);
-  if (segments < 3) throw_error<InvalidArgument>("make_cylinder: expected segments >= 3, got ", segments);
+  if (segments < 3)
+    throw_error<InvalidArgument>("make_cylinder: expected segments >= 3, got ", segments);
   Points3f v(2 * segments + 2, 3);
   const float hz = static_cast<float>(0.5 * height);
   for (int s = 0; s < segments; ++s) {
     const double phi = 2.0 * M_PI * s / segments;
-    const float x = static_cast<float>(radius * std::cos(phi)), y = static_cast<float>(radius * std::sin(phi));
+    const float x = static_cast<float>(radius * std::cos(phi)),
+                y = static_cast<float>(radius * std::sin(phi));
     v.row(s) << x, y, -hz;
     v.row(segments + s) << x, y, hz;
   }

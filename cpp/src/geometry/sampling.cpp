@@ -64,7 +64,8 @@ SurfaceSamples sample_surface(const Mesh& mesh, std::int64_t count, const Sample
   out.normals.resize(count, 3);
   out.face_ids.resize(static_cast<std::size_t>(count));
   if (count == 0) return out;
-  std::vector<float> min_d2(static_cast<std::size_t>(pool_size), std::numeric_limits<float>::infinity());
+  std::vector<float> min_d2(static_cast<std::size_t>(pool_size),
+                            std::numeric_limits<float>::infinity());
   std::int64_t pick = 0;
   for (std::int64_t i = 0; i < count; ++i) {
     out.points.row(i) = pool.points.row(pick);

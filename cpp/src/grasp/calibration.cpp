@@ -25,9 +25,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void check_box(const char* fn, const char* name, double lo, double hi) {
   if (!(lo > 0.0) || !std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi)) {
-    throw_error<InvalidArgument>(fn, ": options.", name, "_min and options.", name, "_max must satisfy 0 < ", name,
-                                 "_min < ", name, "_max (finite), got ", name, "_min = ", lo, ", ", name,
-                                 "_max = ", hi);
+    throw_error<InvalidArgument>(
+        fn, ": options.", name, "_min and options.", name, "_max must satisfy 0 < ", name,
+        "_min < ", name, "_max (finite), got ", name, "_min = ", lo, ", ", name, "_max = ", hi);
   }
 }
 
@@ -35,10 +35,12 @@ void check_options(const char* fn, const CalibrationOptions& o) {
   check_box(fn, "c1", o.c1_min, o.c1_max);
   check_box(fn, "c2", o.c2_min, o.c2_max);
   if (o.global_evaluations < 1) {
-    throw_error<InvalidArgument>(fn, ": options.global_evaluations must be >= 1, got ", o.global_evaluations);
+    throw_error<InvalidArgument>(fn, ": options.global_evaluations must be >= 1, got ",
+                                 o.global_evaluations);
   }
   if (o.local_evaluations < 0) {
-    throw_error<InvalidArgument>(fn, ": options.local_evaluations must be >= 0, got ", o.local_evaluations);
+    throw_error<InvalidArgument>(fn, ": options.local_evaluations must be >= 0, got ",
+                                 o.local_evaluations);
   }
   if (!(o.xtol_rel > 0.0) || !std::isfinite(o.xtol_rel)) {
     throw_error<InvalidArgument>(fn, ": options.xtol_rel must be finite and > 0, got ", o.xtol_rel);
@@ -47,31 +49,38 @@ void check_options(const char* fn, const CalibrationOptions& o) {
     throw_error<InvalidArgument>(fn, ": options.ftol_abs must be finite and > 0, got ", o.ftol_abs);
   }
   if (!(o.holdout_fraction >= 0.0 && o.holdout_fraction <= 0.9)) {
-    throw_error<InvalidArgument>(fn, ": options.holdout_fraction must be in [0, 0.9], got ", o.holdout_fraction);
+    throw_error<InvalidArgument>(fn, ": options.holdout_fraction must be in [0, 0.9], got ",
+                                 o.holdout_fraction);
   }
   if (o.num_threads < 0) {
-    throw_error<InvalidArgument>(fn, ": options.num_threads must be >= 0 (0 = all), got ", o.num_threads);
+    throw_error<InvalidArgument>(fn, ": options.num_threads must be >= 0 (0 = all), got ",
+                                 o.num_threads);
   }
 }
 
 void check_experiments(const char* fn, const std::vector<const Mesh*>& surfaces,
                        const std::vector<CalibrationExperiment>& experiments) {
-  if (experiments.empty()) throw_error<InvalidArgument>(fn, ": experiments: expected at least one, got none");
+  if (experiments.empty())
+    throw_error<InvalidArgument>(fn, ": experiments: expected at least one, got none");
   for (std::size_t j = 0; j < experiments.size(); ++j) {
     const CalibrationExperiment& e = experiments[j];
     if (e.surface >= surfaces.size()) {
-      throw_error<InvalidArgument>(fn, ": experiments[", j, "].surface = ", e.surface, " is out of range (expected < ",
-                                   surfaces.size(), ", the number of surfaces)");
+      throw_error<InvalidArgument>(fn, ": experiments[", j, "].surface = ", e.surface,
+                                   " is out of range (expected < ", surfaces.size(),
+                                   ", the number of surfaces)");
     }
     if (surfaces[e.surface] == nullptr) {
-      throw_error<InvalidArgument>(fn, ": surfaces[", e.surface, "] (used by experiments[", j, "]) is null");
+      throw_error<InvalidArgument>(fn, ": surfaces[", e.surface, "] (used by experiments[", j,
+                                   "]) is null");
     }
     if (!e.point.allFinite()) {
-      throw_error<InvalidArgument>(fn, ": experiments[", j, "].point: expected finite coordinates, got (", e.point.x(),
-                                   ", ", e.point.y(), ", ", e.point.z(), ")");
+      throw_error<InvalidArgument>(fn, ": experiments[", j,
+                                   "].point: expected finite coordinates, got (", e.point.x(), ", ",
+                                   e.point.y(), ", ", e.point.z(), ")");
     }
     if (!e.normal.allFinite() || !(e.normal.norm() > 0.0)) {
-      throw_error<InvalidArgument>(fn, ": experiments[", j, "].normal: expected a finite non-zero vector, got (",
+      throw_error<InvalidArgument>(fn, ": experiments[", j,
+                                   "].normal: expected a finite non-zero vector, got (",
                                    e.normal.x(), ", ", e.normal.y(), ", ", e.normal.z(), ")");
     }
   }
@@ -88,7 +97,8 @@ class Predictor {
     for (const CalibrationExperiment& e : experiments) {
       if (models_[e.surface]) continue;
       try {
-        models_[e.surface] = std::make_unique<SealModel>(*surfaces[e.surface], cup, SealModelKind::Spring);
+        models_[e.surface] =
+            std::make_unique<SealModel>(*surfaces[e.surface], cup, SealModelKind::Spring);
       } catch (const InvalidArgument& err) {
         throw_error<InvalidArgument>(fn, ": surfaces[", e.surface, "]: ", err.what());
       }
@@ -96,8 +106,8 @@ class Predictor {
   }
 
   /// Writes pred[j] (1 = seal) and, if given, reason[j] (SealFailure) for every j in `subset`.
-  void predict(const Cup& cup, const std::vector<std::size_t>& subset, std::vector<std::uint8_t>& pred,
-               std::vector<std::uint8_t>* reason) const {
+  void predict(const Cup& cup, const std::vector<std::size_t>& subset,
+               std::vector<std::uint8_t>& pred, std::vector<std::uint8_t>* reason) const {
     SealOptions opt;
     opt.perturb = false;
     opt.num_trials = 1;
@@ -135,15 +145,16 @@ class Predictor {
  private:
   /// After a batch was rejected: evaluates the candidates one by one and rethrows the first
   /// error with the experiment it belongs to.
-  void name_bad_experiment(const SealModel& model, const std::vector<std::size_t>& rows, const Points3f& points,
-                           const Points3f& normals, const SealOptions& opt) const {
+  void name_bad_experiment(const SealModel& model, const std::vector<std::size_t>& rows,
+                           const Points3f& points, const Points3f& normals,
+                           const SealOptions& opt) const {
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const auto k = static_cast<Eigen::Index>(i);
       try {
         model.evaluate(points.row(k), normals.row(k), opt);
       } catch (const InvalidArgument& err) {
-        throw_error<InvalidArgument>(fn_, ": experiments[", rows[i], "] (surface ", experiments_[rows[i]].surface,
-                                     "): ", err.what());
+        throw_error<InvalidArgument>(fn_, ": experiments[", rows[i], "] (surface ",
+                                     experiments_[rows[i]].surface, "): ", err.what());
       }
     }
   }
@@ -155,8 +166,8 @@ class Predictor {
 };
 
 /// Stratified shuffled split: round(fraction * count) of each measured class go to the test set.
-void split(const std::vector<CalibrationExperiment>& experiments, double fraction, std::uint64_t seed,
-           std::vector<std::size_t>& train, std::vector<std::size_t>& test) {
+void split(const std::vector<CalibrationExperiment>& experiments, double fraction,
+           std::uint64_t seed, std::vector<std::size_t>& train, std::vector<std::size_t>& test) {
   train.clear();
   test.clear();
   for (int cls = 0; cls < 2; ++cls) {
@@ -165,8 +176,10 @@ void split(const std::vector<CalibrationExperiment>& experiments, double fractio
       if (static_cast<int>(experiments[j].sealed) == cls) idx.push_back(j);
     }
     Rng rng(seed, static_cast<std::uint64_t>(cls));
-    for (std::size_t i = idx.size(); i > 1; --i) std::swap(idx[i - 1], idx[rng.below(i)]);  // Fisher-Yates
-    const auto n_test = static_cast<std::size_t>(std::floor(fraction * static_cast<double>(idx.size()) + 0.5));
+    for (std::size_t i = idx.size(); i > 1; --i)
+      std::swap(idx[i - 1], idx[rng.below(i)]);  // Fisher-Yates
+    const auto n_test =
+        static_cast<std::size_t>(std::floor(fraction * static_cast<double>(idx.size()) + 0.5));
     test.insert(test.end(), idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(n_test));
     train.insert(train.end(), idx.begin() + static_cast<std::ptrdiff_t>(n_test), idx.end());
   }
@@ -236,8 +249,8 @@ double objective(unsigned n, const double* x, double* grad, void* data) {
 
 /// Runs one NLopt search from x (in place). A roundoff-limited stop keeps the best point found.
 void run_search(const char* fn, nlopt::algorithm algorithm, const char* name, int max_evaluations,
-                const std::vector<double>& lb, const std::vector<double>& ub, const CalibrationOptions& options,
-                Search& search, std::vector<double> x) {
+                const std::vector<double>& lb, const std::vector<double>& ub,
+                const CalibrationOptions& options, Search& search, std::vector<double> x) {
   try {
     nlopt::opt opt(algorithm, 2);
     opt.set_lower_bounds(lb);
@@ -246,7 +259,8 @@ void run_search(const char* fn, nlopt::algorithm algorithm, const char* name, in
     opt.set_xtol_rel(options.xtol_rel);
     opt.set_ftol_abs(options.ftol_abs);
     opt.set_maxeval(max_evaluations);
-    if (algorithm == nlopt::LN_BOBYQA) opt.set_initial_step({0.1 * (ub[0] - lb[0]), 0.1 * (ub[1] - lb[1])});
+    if (algorithm == nlopt::LN_BOBYQA)
+      opt.set_initial_step({0.1 * (ub[0] - lb[0]), 0.1 * (ub[1] - lb[1])});
     double f = 0.0;
     opt.optimize(x, f);
   } catch (const nlopt::roundoff_limited&) {
@@ -264,7 +278,8 @@ ClassificationMetrics classification_metrics(const std::vector<std::uint8_t>& pr
                                              const std::vector<std::uint8_t>& measured) {
   if (predicted.size() != measured.size()) {
     throw_error<InvalidArgument>("classification_metrics: predicted has ", predicted.size(),
-                                 " entries but measured has ", measured.size(), "; expected equal lengths");
+                                 " entries but measured has ", measured.size(),
+                                 "; expected equal lengths");
   }
   ClassificationMetrics m;
   for (std::size_t i = 0; i < predicted.size(); ++i) {
@@ -274,7 +289,9 @@ ClassificationMetrics classification_metrics(const std::vector<std::uint8_t>& pr
     m.tn += !p && !y;
     m.fn += !p && y;
   }
-  const auto rate = [](int num, int den) { return den > 0 ? static_cast<double>(num) / den : kNaN; };
+  const auto rate = [](int num, int den) {
+    return den > 0 ? static_cast<double>(num) / den : kNaN;
+  };
   m.ppv = rate(m.tp, m.tp + m.fp);
   m.npv = rate(m.tn, m.tn + m.fn);
   m.sensitivity = rate(m.tp, m.tp + m.fn);
@@ -284,11 +301,12 @@ ClassificationMetrics classification_metrics(const std::vector<std::uint8_t>& pr
 }
 
 std::vector<std::uint8_t> predict_experiments(const std::vector<const Mesh*>& surfaces,
-                                              const std::vector<CalibrationExperiment>& experiments, const Cup& cup,
-                                              int num_threads) {
+                                              const std::vector<CalibrationExperiment>& experiments,
+                                              const Cup& cup, int num_threads) {
   const char* fn = "predict_experiments";
   check_experiments(fn, surfaces, experiments);
-  if (num_threads < 0) throw_error<InvalidArgument>(fn, ": num_threads must be >= 0 (0 = all), got ", num_threads);
+  if (num_threads < 0)
+    throw_error<InvalidArgument>(fn, ": num_threads must be >= 0 (0 = all), got ", num_threads);
   cup.validate();
   const Predictor predictor(fn, surfaces, experiments, cup, num_threads);
   std::vector<std::size_t> all(experiments.size());
@@ -299,8 +317,8 @@ std::vector<std::uint8_t> predict_experiments(const std::vector<const Mesh*>& su
 }
 
 CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
-                                const std::vector<CalibrationExperiment>& experiments, const Cup& initial,
-                                const CalibrationOptions& options) {
+                                const std::vector<CalibrationExperiment>& experiments,
+                                const Cup& initial, const CalibrationOptions& options) {
   const char* fn = "calibrate_cup";
   check_options(fn, options);
   check_experiments(fn, surfaces, experiments);
@@ -343,7 +361,8 @@ CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
   double d2_max = 0.0;
   for (double cx : {lb[0], ub[0]}) {
     for (double cy : {lb[1], ub[1]}) {
-      d2_max = std::max(d2_max, (cx - search.x0[0]) * (cx - search.x0[0]) + (cy - search.x0[1]) * (cy - search.x0[1]));
+      d2_max = std::max(d2_max, (cx - search.x0[0]) * (cx - search.x0[0]) +
+                                    (cy - search.x0[1]) * (cy - search.x0[1]));
     }
   }
   search.weight = 0.5 / (search.n_train * d2_max);
@@ -354,12 +373,14 @@ CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
   const std::vector<double> start = {std::clamp(std::log(c1_start), lb[0], ub[0]),
                                      std::clamp(std::log(c2_start), lb[1], ub[1])};
   search.evaluate(start.data(), c1_start, c2_start);
-  run_search(fn, nlopt::GN_DIRECT_L, "GN_DIRECT_L", options.global_evaluations, lb, ub, options, search, start);
+  run_search(fn, nlopt::GN_DIRECT_L, "GN_DIRECT_L", options.global_evaluations, lb, ub, options,
+             search, start);
   if (options.local_evaluations > 0) {
     // BOBYQA on a piecewise-constant objective often cannot improve the accuracy; it then walks
     // the plateau towards the initial constants (the tie-break penalty), which is what we want.
     const std::vector<double> from = {search.best_x[0], search.best_x[1]};
-    run_search(fn, nlopt::LN_BOBYQA, "LN_BOBYQA", options.local_evaluations, lb, ub, options, search, from);
+    run_search(fn, nlopt::LN_BOBYQA, "LN_BOBYQA", options.local_evaluations, lb, ub, options,
+               search, from);
   }
 
   out.cup = initial;

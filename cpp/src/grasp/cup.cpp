@@ -24,12 +24,14 @@ void Cup::validate() const {
   require_positive("outer_radius", outer_radius);
   require_positive("body_height", body_height);
   if (num_points < 6) {
-    throw_error<InvalidArgument>("Cup.num_points: expected >= 6 mass points (neighbour, second-neighbour and ",
-                                 "opposite springs must be distinct), got ", num_points);
+    throw_error<InvalidArgument>(
+        "Cup.num_points: expected >= 6 mass points (neighbour, second-neighbour and ",
+        "opposite springs must be distinct), got ", num_points);
   }
   if (hole_rays < 1) throw_error<InvalidArgument>("Cup.hole_rays: expected >= 1, got ", hole_rays);
   if (outer_radius < radius) {
-    throw_error<InvalidArgument>("Cup.outer_radius (", outer_radius, ") must be >= Cup.radius (", radius, ")");
+    throw_error<InvalidArgument>("Cup.outer_radius (", outer_radius, ") must be >= Cup.radius (",
+                                 radius, ")");
   }
 }
 

@@ -6,11 +6,12 @@
 // (N = 15) and whose apex sits at height H; perimeter (i, i+1), flexion (i, i+2) and cone (i, apex)
 // springs; the perimeter is projected onto the surface along the approach axis and the seal holds
 // when every spring stays within ±10 % of its rest length.
-// Smoothness model — follows the seal score of SuctionNet-1Billion (Cao et al., "SuctionNet-1Billion:
-// A Large-Scale Benchmark for Suction Grasping", RA-L 2021): 72 angular bins of surface points in a
-// 1 mm band around the contact ring; per bin a vertex at its ideal planar ring position with the
-// bin's height; deform = min over ring edges of (ideal length / real length); fit = exp(−1e5 · mean
-// squared deviation of the heights from their mean); score = deform × fit.
+// Smoothness model — follows the seal score of SuctionNet-1Billion (Cao et al.,
+// "SuctionNet-1Billion: A Large-Scale Benchmark for Suction Grasping", RA-L 2021): 72 angular bins
+// of surface points in a 1 mm band around the contact ring; per bin a vertex at its ideal planar
+// ring position with the bin's height; deform = min over ring edges of (ideal length / real
+// length); fit = exp(−1e5 · mean squared deviation of the heights from their mean); score = deform
+// × fit.
 //
 // mgn's own choices (not taken from either publication):
 //   - r = cup.radius and H = cup.body_height of the mgn Cup (Dex-Net's reference values are 15 mm
@@ -48,18 +49,18 @@ constexpr double kStrainLimit = 0.10;      // allowed relative length change of 
 constexpr int kSmoothBins = 72;            // SuctionNet angular bins
 constexpr int kSmoothAnglesPerBin = 3;     // sample angles per bin (mgn)
 constexpr double kBandHalfWidth = 0.0005;  // half of the 1 mm band, m
-constexpr double kFitGain = 1e5;           // SuctionNet fit: exp(-1e5 * mean squared deviation), m^-2
+constexpr double kFitGain = 1e5;  // SuctionNet fit: exp(-1e5 * mean squared deviation), m^-2
 
 /// Validates a trial's inputs; returns the unit normal. Throws InvalidArgument for impossible ones.
 Vec3d checked_normal(const char* fn, const SealContext& ctx, const Vec3d& c, const Vec3d& n) {
   if (!c.allFinite()) {
-    throw_error<InvalidArgument>(fn, ": contact point must be finite, got (", c.x(), ", ", c.y(), ", ", c.z(),
-                                 ")");
+    throw_error<InvalidArgument>(fn, ": contact point must be finite, got (", c.x(), ", ", c.y(),
+                                 ", ", c.z(), ")");
   }
   const double len = n.norm();
   if (!n.allFinite() || !(len > 0.0)) {
-    throw_error<InvalidArgument>(fn, ": normal must be finite and non-zero, got (", n.x(), ", ", n.y(), ", ",
-                                 n.z(), ")");
+    throw_error<InvalidArgument>(fn, ": normal must be finite and non-zero, got (", n.x(), ", ",
+                                 n.y(), ", ", n.z(), ")");
   }
   const Cup& cup = ctx.cup;
   if (!(cup.radius > 0.0) || !std::isfinite(cup.radius)) {
@@ -82,7 +83,8 @@ CastOptions trial_cast_options() {
 /// Origins of rays from in-plane offsets (x, y) (m, in the (u, v) frame) at the approach height
 /// above the plane of c, and the common direction -n.
 void plane_rays(const Vec3d& c, const Vec3d& n, const Vec3d& u, const Vec3d& v, double height,
-                const std::vector<Eigen::Vector2d>& offsets, Points3f& origins, Points3f& directions) {
+                const std::vector<Eigen::Vector2d>& offsets, Points3f& origins,
+                Points3f& directions) {
   const auto m = static_cast<Eigen::Index>(offsets.size());
   origins.resize(m, 3);
   directions.resize(m, 3);
@@ -97,7 +99,8 @@ void plane_rays(const Vec3d& c, const Vec3d& n, const Vec3d& u, const Vec3d& v, 
 
 /// The hole check: rays over the disc of radius r (ctx.disc_pattern scaled by r) cast along -n
 /// from the approach height must all hit the object. An empty pattern checks nothing.
-bool disc_has_hole(const SealContext& ctx, const Vec3d& c, const Vec3d& n, const Vec3d& u, const Vec3d& v) {
+bool disc_has_hole(const SealContext& ctx, const Vec3d& c, const Vec3d& n, const Vec3d& u,
+                   const Vec3d& v) {
   if (ctx.disc_pattern.empty()) return false;
   std::vector<Eigen::Vector2d> disc(ctx.disc_pattern.size());
   for (std::size_t i = 0; i < disc.size(); ++i) disc[i] = ctx.cup.radius * ctx.disc_pattern[i];
@@ -109,13 +112,14 @@ bool disc_has_hole(const SealContext& ctx, const Vec3d& c, const Vec3d& n, const
 
 }  // namespace
 
-SealFailure strain_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n_in, float* quality) {
+SealFailure strain_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n_in,
+                         float* quality) {
   const char* fn = "strain_trial";
   const Vec3d n = checked_normal(fn, ctx, c, n_in);
   const double H = ctx.cup.body_height;
   if (!(H > 0.0) || !std::isfinite(H)) {
-    throw_error<InvalidArgument>(fn, ": cup body_height (pyramid height H) must be finite and > 0 m, got ",
-                                 H);
+    throw_error<InvalidArgument>(
+        fn, ": cup body_height (pyramid height H) must be finite and > 0 m, got ", H);
   }
   if (quality) *quality = 0.0f;
   const int N = kStrainVertices;
@@ -156,7 +160,9 @@ SealFailure strain_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n_
   const double rest_perimeter = 2.0 * r * std::sin(M_PI / N);
   const double rest_flexion = 2.0 * r * std::sin(2.0 * M_PI / N);
   const double rest_cone = std::sqrt(r * r + H * H);
-  auto strained = [](double length, double rest) { return std::abs(length / rest - 1.0) > kStrainLimit; };
+  auto strained = [](double length, double rest) {
+    return std::abs(length / rest - 1.0) > kStrainLimit;
+  };
   for (int k = 0; k < N; ++k) {
     const Vec3d& p = x[static_cast<std::size_t>(k)];
     if (strained((x[static_cast<std::size_t>((k + 1) % N)] - p).norm(), rest_perimeter) ||
@@ -169,7 +175,8 @@ SealFailure strain_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n_
   return SealFailure::None;
 }
 
-SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n_in, float* quality) {
+SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n_in,
+                             float* quality) {
   const char* fn = "smoothness_trial";
   const Vec3d n = checked_normal(fn, ctx, c, n_in);
   if (quality) *quality = 0.0f;
@@ -187,7 +194,8 @@ SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d
   for (int b = 0; b < kSmoothBins; ++b) {
     for (int j = 0; j < kSmoothAnglesPerBin; ++j) {
       const double phi = (b + (j + 0.5) / kSmoothAnglesPerBin) * bin_angle;
-      for (double rad : radii) band[idx++] = Eigen::Vector2d(rad * std::cos(phi), rad * std::sin(phi));
+      for (double rad : radii)
+        band[idx++] = Eigen::Vector2d(rad * std::cos(phi), rad * std::sin(phi));
     }
   }
   Points3f o, d;
@@ -216,8 +224,8 @@ SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d
   double deform = 1.0;
   double mean = 0.0;
   for (int b = 0; b < kSmoothBins; ++b) {
-    const double dh =
-        height[static_cast<std::size_t>((b + 1) % kSmoothBins)] - height[static_cast<std::size_t>(b)];
+    const double dh = height[static_cast<std::size_t>((b + 1) % kSmoothBins)] -
+                      height[static_cast<std::size_t>(b)];
     deform = std::min(deform, ideal / std::sqrt(ideal * ideal + dh * dh));
     mean += height[static_cast<std::size_t>(b)];
   }

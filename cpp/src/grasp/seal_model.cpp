@@ -17,14 +17,22 @@ namespace mgn {
 
 const char* failure_name(SealFailure f) {
   switch (f) {
-    case SealFailure::None: return "none";
-    case SealFailure::Miss: return "miss";
-    case SealFailure::Obstruction: return "obstruction";
-    case SealFailure::Hill: return "hill";
-    case SealFailure::Hole: return "hole";
-    case SealFailure::Force: return "force";
-    case SealFailure::Strain: return "strain";
-    case SealFailure::Rough: return "rough";
+    case SealFailure::None:
+      return "none";
+    case SealFailure::Miss:
+      return "miss";
+    case SealFailure::Obstruction:
+      return "obstruction";
+    case SealFailure::Hill:
+      return "hill";
+    case SealFailure::Hole:
+      return "hole";
+    case SealFailure::Force:
+      return "force";
+    case SealFailure::Strain:
+      return "strain";
+    case SealFailure::Rough:
+      return "rough";
   }
   return "unknown";
 }
@@ -50,7 +58,8 @@ std::vector<Eigen::Vector2d> unit_ring(int num_points) {
   return ring;
 }
 
-SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, SealTrial* detail) {
+SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
+                         SealTrial* detail) {
   const Cup& cup = ctx.cup;
   const int N = cup.num_points;
   const double r = cup.radius;
@@ -98,7 +107,8 @@ SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
 
   // 3c. Hole: every ray over the disc (and the centre ray) must hit the object.
   if (!centre_hit) return SealFailure::Hole;
-  ParallelRays disc{lift_base, u, v, -n, ctx.disc_pattern.data(), static_cast<int>(ctx.disc_pattern.size()), r};
+  ParallelRays disc{
+      lift_base, u, v, -n, ctx.disc_pattern.data(), static_cast<int>(ctx.disc_pattern.size()), r};
   if (!parallel_all_hit(ctx.scene, disc)) return SealFailure::Hole;
 
   // 4. Compression springs: global equilibrium sum_k k_c (delta - d_k) = F_p.
@@ -122,7 +132,8 @@ SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
       const Eigen::RowVector3d chord = x.row(l) - x.row(k);
       const double len = chord.norm();
       if (len <= 0.0) continue;
-      const Eigen::RowVector3d f = k_spring * (len - rest) / len * chord;  // pulls k towards l when stretched
+      const Eigen::RowVector3d f =
+          k_spring * (len - rest) / len * chord;  // pulls k towards l when stretched
       F.row(k) += f;
       F.row(l) -= f;
     }
@@ -180,33 +191,38 @@ std::vector<Eigen::Vector2d> disc_pattern(int n) {
     const auto qy = static_cast<std::uint32_t>((p.y() + 1.0) * 32767.0);
     keyed[i] = {morton2(qx, qy), p};
   }
-  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(keyed.begin(), keyed.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Eigen::Vector2d> pts(keyed.size());
   for (std::size_t i = 0; i < keyed.size(); ++i) pts[i] = keyed[i].second;
   return pts;
 }
 
-SealFailure run_trial(SealModelKind kind, const detail::SealContext& ctx, const Vec3d& c, const Vec3d& n,
-                      float& quality) {
+SealFailure run_trial(SealModelKind kind, const detail::SealContext& ctx, const Vec3d& c,
+                      const Vec3d& n, float& quality) {
   switch (kind) {
     case SealModelKind::Spring: {
       const SealFailure f = detail::spring_trial(ctx, c, n, nullptr);
       quality = f == SealFailure::None ? 1.0f : 0.0f;
       return f;
     }
-    case SealModelKind::Strain: return detail::strain_trial(ctx, c, n, &quality);
-    case SealModelKind::Smoothness: return detail::smoothness_trial(ctx, c, n, &quality);
+    case SealModelKind::Strain:
+      return detail::strain_trial(ctx, c, n, &quality);
+    case SealModelKind::Smoothness:
+      return detail::smoothness_trial(ctx, c, n, &quality);
   }
   throw_error<InvalidArgument>("SealModel: unknown model kind ", static_cast<int>(kind));
 }
 
 }  // namespace
 
-SealModel::SealModel(const Mesh& mesh, const Cup& cup, SealModelKind kind) : cup_(cup), kind_(kind) {
+SealModel::SealModel(const Mesh& mesh, const Cup& cup, SealModelKind kind)
+    : cup_(cup), kind_(kind) {
   require_non_empty(mesh, "SealModel");
   cup.validate();
   auto impl = std::make_shared<Impl>();
-  impl->scene = std::make_unique<RayScene>(std::vector<RayGeometry>{RayGeometry{&mesh, Pose::Identity(), 0}});
+  impl->scene =
+      std::make_unique<RayScene>(std::vector<RayGeometry>{RayGeometry{&mesh, Pose::Identity(), 0}});
   impl->vertices = mesh.vertices();
   impl_ = std::move(impl);
 }
@@ -224,7 +240,8 @@ std::shared_ptr<const SealModel> SealModel::with_cup(const Cup& cup) const {
 
 SealTrial SealModel::trial(const Vec3d& point, const Vec3d& normal) const {
   if (!point.allFinite() || !normal.allFinite() || normal.norm() == 0.0) {
-    throw_error<InvalidArgument>("SealModel::trial: expected a finite point and a finite non-zero normal");
+    throw_error<InvalidArgument>(
+        "SealModel::trial: expected a finite point and a finite non-zero normal");
   }
   const auto pattern = disc_pattern(cup_.hole_rays);
   const auto ring = detail::unit_ring(cup_.num_points);
@@ -237,28 +254,34 @@ SealTrial SealModel::trial(const Vec3d& point, const Vec3d& normal) const {
   return out;
 }
 
-SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals, const SealOptions& options) const {
+SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals,
+                               const SealOptions& options) const {
   const char* fn = "SealModel::evaluate";
   if (points.rows() != normals.rows()) {
-    throw_error<InvalidArgument>(fn, ": points has ", points.rows(), " rows but normals has ", normals.rows(),
-                                 "; expected one normal per point");
+    throw_error<InvalidArgument>(fn, ": points has ", points.rows(), " rows but normals has ",
+                                 normals.rows(), "; expected one normal per point");
   }
-  if (options.num_trials < 1) throw_error<InvalidArgument>(fn, ": num_trials must be >= 1, got ", options.num_trials);
+  if (options.num_trials < 1)
+    throw_error<InvalidArgument>(fn, ": num_trials must be >= 1, got ", options.num_trials);
   if (!(options.angle_sigma >= 0.0) || !std::isfinite(options.angle_sigma)) {
-    throw_error<InvalidArgument>(fn, ": angle_sigma must be finite and >= 0 rad, got ", options.angle_sigma);
+    throw_error<InvalidArgument>(fn, ": angle_sigma must be finite and >= 0 rad, got ",
+                                 options.angle_sigma);
   }
   if (!std::isfinite(options.position_sigma)) {
-    throw_error<InvalidArgument>(fn, ": position_sigma must be finite, got ", options.position_sigma);
+    throw_error<InvalidArgument>(fn, ": position_sigma must be finite, got ",
+                                 options.position_sigma);
   }
   if (!(options.on_surface_tolerance > 0.0)) {
-    throw_error<InvalidArgument>(fn, ": on_surface_tolerance must be > 0 m, got ", options.on_surface_tolerance);
+    throw_error<InvalidArgument>(fn, ": on_surface_tolerance must be > 0 m, got ",
+                                 options.on_surface_tolerance);
   }
   const Eigen::Index n_cand = points.rows();
   Points3f unit(n_cand, 3);
   for (Eigen::Index i = 0; i < n_cand; ++i) {
     const float len = normals.row(i).norm();
     if (!points.row(i).allFinite() || !normals.row(i).allFinite() || !(len > 0.0f)) {
-      throw_error<InvalidArgument>(fn, ": candidate ", i, " has a non-finite point or a zero/non-finite normal (",
+      throw_error<InvalidArgument>(fn, ": candidate ", i,
+                                   " has a non-finite point or a zero/non-finite normal (",
                                    normals(i, 0), ", ", normals(i, 1), ", ", normals(i, 2), ")");
     }
     unit.row(i) = normals.row(i) / len;
@@ -274,15 +297,17 @@ SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals, 
     const auto down = impl_->scene->occluded(o, d, opt);
     for (Eigen::Index i = 0; i < n_cand; ++i) {
       if (!down[i]) {
-        throw_error<InvalidArgument>(fn, ": candidate ", i, " at (", points(i, 0), ", ", points(i, 1), ", ",
-                                     points(i, 2), ") is not on the mesh surface (no surface within ",
+        throw_error<InvalidArgument>(fn, ": candidate ", i, " at (", points(i, 0), ", ",
+                                     points(i, 1), ", ", points(i, 2),
+                                     ") is not on the mesh surface (no surface within ",
                                      options.on_surface_tolerance, " m along its normal)");
       }
     }
   }
 
   const int T = options.perturb ? options.num_trials : 1;
-  const double pos_sigma = options.position_sigma < 0.0 ? cup_.radius / 4.0 : options.position_sigma;
+  const double pos_sigma =
+      options.position_sigma < 0.0 ? cup_.radius / 4.0 : options.position_sigma;
   SealResult out;
   out.num_trials = T;
   out.score.assign(static_cast<std::size_t>(n_cand), 0.0f);
@@ -294,48 +319,52 @@ SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals, 
   const auto ring = detail::unit_ring(cup_.num_points);
   const detail::SealContext ctx{*impl_->scene, cup_, pattern, &ring};
 
-  parallel_for(static_cast<std::size_t>(n_cand), options.num_threads, 8, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      Rng rng(options.seed, options.first_index + i);
-      const Vec3d c0 = points.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
-      const Vec3d n0 = unit.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
-      int sealed = 0;
-      double quality_sum = 0.0;
-      std::array<int, 8> counts{};
-      for (int t = 0; t < T; ++t) {
-        Vec3d c = c0, n = n0;
-        if (options.perturb) {
-          const double ax = rng.normal(0.0, options.angle_sigma);
-          const double ay = rng.normal(0.0, options.angle_sigma);
-          const double az = rng.normal(0.0, options.angle_sigma);
-          const Mat3d R = (Eigen::AngleAxisd(az, Vec3d::UnitZ()) * Eigen::AngleAxisd(ay, Vec3d::UnitY()) *
-                           Eigen::AngleAxisd(ax, Vec3d::UnitX()))
-                              .toRotationMatrix();
-          n = (R * n0).normalized();
-          c = c0 + Vec3d(rng.normal(0.0, pos_sigma), rng.normal(0.0, pos_sigma), rng.normal(0.0, pos_sigma));
+  parallel_for(
+      static_cast<std::size_t>(n_cand), options.num_threads, 8,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          Rng rng(options.seed, options.first_index + i);
+          const Vec3d c0 = points.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
+          const Vec3d n0 = unit.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
+          int sealed = 0;
+          double quality_sum = 0.0;
+          std::array<int, 8> counts{};
+          for (int t = 0; t < T; ++t) {
+            Vec3d c = c0, n = n0;
+            if (options.perturb) {
+              const double ax = rng.normal(0.0, options.angle_sigma);
+              const double ay = rng.normal(0.0, options.angle_sigma);
+              const double az = rng.normal(0.0, options.angle_sigma);
+              const Mat3d R =
+                  (Eigen::AngleAxisd(az, Vec3d::UnitZ()) * Eigen::AngleAxisd(ay, Vec3d::UnitY()) *
+                   Eigen::AngleAxisd(ax, Vec3d::UnitX()))
+                      .toRotationMatrix();
+              n = (R * n0).normalized();
+              c = c0 + Vec3d(rng.normal(0.0, pos_sigma), rng.normal(0.0, pos_sigma),
+                             rng.normal(0.0, pos_sigma));
+            }
+            float q = 0.0f;
+            const SealFailure f = run_trial(kind_, ctx, c, n, q);
+            const std::size_t slot = i * T + static_cast<std::size_t>(t);
+            out.trial_sealed[slot] = f == SealFailure::None;
+            out.trial_reason[slot] = static_cast<std::uint8_t>(f);
+            sealed += f == SealFailure::None;
+            quality_sum += q;
+            ++counts[static_cast<std::size_t>(f)];
+          }
+          out.score[i] = static_cast<float>(sealed) / T;
+          out.quality[i] = static_cast<float>(quality_sum / T);
+          // Most frequent failure among the failed trials; ties go to the earlier check.
+          int best = 0, best_count = 0;
+          for (int f = 1; f < static_cast<int>(counts.size()); ++f) {
+            if (counts[f] > best_count) {
+              best = f;
+              best_count = counts[f];
+            }
+          }
+          out.reason[i] = static_cast<std::uint8_t>(best);
         }
-        float q = 0.0f;
-        const SealFailure f = run_trial(kind_, ctx, c, n, q);
-        const std::size_t slot = i * T + static_cast<std::size_t>(t);
-        out.trial_sealed[slot] = f == SealFailure::None;
-        out.trial_reason[slot] = static_cast<std::uint8_t>(f);
-        sealed += f == SealFailure::None;
-        quality_sum += q;
-        ++counts[static_cast<std::size_t>(f)];
-      }
-      out.score[i] = static_cast<float>(sealed) / T;
-      out.quality[i] = static_cast<float>(quality_sum / T);
-      // Most frequent failure among the failed trials; ties go to the earlier check.
-      int best = 0, best_count = 0;
-      for (int f = 1; f < static_cast<int>(counts.size()); ++f) {
-        if (counts[f] > best_count) {
-          best = f;
-          best_count = counts[f];
-        }
-      }
-      out.reason[i] = static_cast<std::uint8_t>(best);
-    }
-  });
+      });
   return out;
 }
 

@@ -5,15 +5,17 @@
 
 namespace mgn {
 
-std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3f& approach, double mass,
-                                         const Vec3d& com, const Vec3d& gravity_direction, double cup_radius,
+std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3f& approach,
+                                         double mass, const Vec3d& com,
+                                         const Vec3d& gravity_direction, double cup_radius,
                                          const SuctionWrenchOptions& options) {
   const char* fn = "suction_wrench_scores";
   if (contacts.rows() != approach.rows()) {
     throw_error<InvalidArgument>(fn, ": ", contacts.rows(), " contacts but ", approach.rows(),
                                  " approach directions; expected one per contact");
   }
-  if (!(mass > 0.0) || !std::isfinite(mass)) throw_error<InvalidArgument>(fn, ": mass must be > 0 kg, got ", mass);
+  if (!(mass > 0.0) || !std::isfinite(mass))
+    throw_error<InvalidArgument>(fn, ": mass must be > 0 kg, got ", mass);
   if (!(cup_radius > 0.0) || !std::isfinite(cup_radius)) {
     throw_error<InvalidArgument>(fn, ": cup_radius must be > 0 m, got ", cup_radius);
   }
@@ -23,7 +25,8 @@ std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3
     throw_error<InvalidArgument>(fn, ": gravity_direction must be a finite non-zero vector");
   }
   if (!(options.k > 0.0) || !(options.gravity >= 0.0)) {
-    throw_error<InvalidArgument>(fn, ": expected k > 0 and gravity >= 0, got k=", options.k, " gravity=", options.gravity);
+    throw_error<InvalidArgument>(fn, ": expected k > 0 and gravity >= 0, got k=", options.k,
+                                 " gravity=", options.gravity);
   }
   const Vec3d weight = mass * options.gravity * gravity_direction / g_norm;  // N
   const double tau_max = options.k * cup_radius * M_PI * std::sqrt(2.0);
@@ -32,7 +35,8 @@ std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3
     const Vec3d c = contacts.row(i).transpose().cast<double>();
     Vec3d z = approach.row(i).transpose().cast<double>();
     if (!c.allFinite() || !z.allFinite() || z.norm() == 0.0) {
-      throw_error<InvalidArgument>(fn, ": contact ", i, " has a non-finite point or a zero approach direction");
+      throw_error<InvalidArgument>(fn, ": contact ", i,
+                                   " has a non-finite point or a zero approach direction");
     }
     z.normalize();
     const Vec3d tau = (com - c).cross(weight);

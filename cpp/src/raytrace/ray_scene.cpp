@@ -34,13 +34,20 @@ std::string g_last_error;
 
 const char* error_name(RTCError code) {
   switch (code) {
-    case RTC_ERROR_NONE: return "no error";
-    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-    case RTC_ERROR_CANCELLED: return "cancelled";
-    default: return "unknown error";
+    case RTC_ERROR_NONE:
+      return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown error";
   }
 }
 
@@ -131,10 +138,12 @@ void check_rays(const char* fn, const Points3f& origins, const Points3f& directi
   }
   for (Eigen::Index i = 0; i < origins.rows(); ++i) {
     if (!origins.row(i).allFinite() || !directions.row(i).allFinite()) {
-      throw_error<InvalidArgument>(fn, ": ray ", i, " has a non-finite origin or direction; expected finite values");
+      throw_error<InvalidArgument>(fn, ": ray ", i,
+                                   " has a non-finite origin or direction; expected finite values");
     }
     if (directions.row(i).squaredNorm() == 0.0f) {
-      throw_error<InvalidArgument>(fn, ": ray ", i, " has a zero direction; expected a non-zero vector");
+      throw_error<InvalidArgument>(fn, ": ray ", i,
+                                   " has a zero direction; expected a non-zero vector");
     }
   }
 }
@@ -165,7 +174,8 @@ struct RayScene::Impl {
 
 RayScene::RayScene(const std::vector<RayGeometry>& geometries) : impl_(std::make_unique<Impl>()) {
   const char* fn = "RayScene";
-  if (geometries.empty()) throw_error<InvalidArgument>(fn, ": no geometry given; expected at least one mesh");
+  if (geometries.empty())
+    throw_error<InvalidArgument>(fn, ": no geometry given; expected at least one mesh");
   FtzDazGuard guard;
   RTCDevice device = shared_device();
   impl_->scene = rtcNewScene(device);
@@ -178,25 +188,31 @@ RayScene::RayScene(const std::vector<RayGeometry>& geometries) : impl_(std::make
     if (item.mesh == nullptr) throw_error<InvalidArgument>(fn, ": geometry ", g, " has no mesh");
     require_non_empty(*item.mesh, std::string(fn) + ": geometry " + std::to_string(g));
     if (!item.X_WO.matrix().allFinite()) {
-      throw_error<InvalidArgument>(fn, ": geometry ", g, " has a non-finite pose; expected a finite 4x4 transform");
+      throw_error<InvalidArgument>(fn, ": geometry ", g,
+                                   " has a non-finite pose; expected a finite 4x4 transform");
     }
     if (item.instance_id < 0) {
-      throw_error<InvalidArgument>(fn, ": geometry ", g, " has instance id ", item.instance_id, "; expected >= 0");
+      throw_error<InvalidArgument>(fn, ": geometry ", g, " has instance id ", item.instance_id,
+                                   "; expected >= 0");
     }
     const Mesh world = item.mesh->transformed(item.X_WO);
     const auto nv = world.num_vertices();
     const auto nf = world.num_faces();
     RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), static_cast<size_t>(nv)));
-    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(unsigned), static_cast<size_t>(nf)));
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                           RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                           static_cast<size_t>(nv)));
+    auto* ib = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(unsigned), static_cast<size_t>(nf)));
     if (vb == nullptr || ib == nullptr) {
       rtcReleaseGeometry(geom);
-      throw_error<BackendError>(fn, ": Embree could not allocate buffers for geometry ", g, ": ", g_last_error);
+      throw_error<BackendError>(fn, ": Embree could not allocate buffers for geometry ", g, ": ",
+                                g_last_error);
     }
     std::copy(world.vertices().data(), world.vertices().data() + 3 * nv, vb);
-    for (Eigen::Index i = 0; i < 3 * nf; ++i) ib[i] = static_cast<unsigned>(world.faces().data()[i]);
+    for (Eigen::Index i = 0; i < 3 * nf; ++i)
+      ib[i] = static_cast<unsigned>(world.faces().data()[i]);
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(impl_->scene, geom, static_cast<unsigned>(g));
     rtcReleaseGeometry(geom);
@@ -247,7 +263,8 @@ RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
         for (std::size_t k = 0; k < 16; ++k) {
           const std::size_t i = s + std::min(k, m - 1);  // pad with a copy of the last ray
           valid[k] = k < m ? -1 : 0;
-          set_lane(rh.ray, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
+          set_lane(rh.ray, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear,
+                   options.tfar);
           rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
           rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -294,10 +311,12 @@ std::vector<std::uint8_t> RayScene::occluded(const Points3f& origins, const Poin
         for (std::size_t k = 0; k < 16; ++k) {
           const std::size_t i = s + std::min(k, m - 1);
           valid[k] = k < m ? -1 : 0;
-          set_lane(r, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
+          set_lane(r, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear,
+                   options.tfar);
         }
         rtcOccluded16(valid, impl.scene, &ctx, &r);
-        for (std::size_t k = 0; k < m; ++k) out[s + k] = r.tfar[k] == -std::numeric_limits<float>::infinity();
+        for (std::size_t k = 0; k < m; ++k)
+          out[s + k] = r.tfar[k] == -std::numeric_limits<float>::infinity();
       }
     } else {
       RTCRay r;
@@ -316,7 +335,8 @@ RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& dire
                                    int max_hits_per_ray, const CastOptions& options) const {
   check_rays("RayScene::intersect_all", origins, directions, options);
   if (max_hits_per_ray <= 0) {
-    throw_error<InvalidArgument>("RayScene::intersect_all: max_hits_per_ray must be > 0, got ", max_hits_per_ray);
+    throw_error<InvalidArgument>("RayScene::intersect_all: max_hits_per_ray must be > 0, got ",
+                                 max_hits_per_ray);
   }
   const Eigen::Index n = origins.rows();
   std::vector<std::vector<HitRecord>> per_ray(static_cast<std::size_t>(n));
@@ -336,7 +356,8 @@ RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& dire
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(impl.scene, &ctx.base, &rh);
       std::sort(hits.begin(), hits.end(), [](const HitRecord& a, const HitRecord& b) {
-        return a.t < b.t || (a.t == b.t && (a.geom < b.geom || (a.geom == b.geom && a.prim < b.prim)));
+        return a.t < b.t ||
+               (a.t == b.t && (a.geom < b.geom || (a.geom == b.geom && a.prim < b.prim)));
       });
       // A ray through a shared edge or vertex hits every adjacent face at (almost) the same t,
       // and a primitive may be reported from several BVH leaves: keep one hit per surface crossing.
@@ -359,7 +380,8 @@ RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& dire
 
   RayAllHits out;
   out.offsets.resize(static_cast<std::size_t>(n) + 1, 0);
-  for (Eigen::Index i = 0; i < n; ++i) out.offsets[i + 1] = out.offsets[i] + static_cast<std::int64_t>(per_ray[i].size());
+  for (Eigen::Index i = 0; i < n; ++i)
+    out.offsets[i + 1] = out.offsets[i] + static_cast<std::int64_t>(per_ray[i].size());
   const auto total = static_cast<Eigen::Index>(out.offsets.back());
   out.distance.resize(static_cast<std::size_t>(total));
   out.points.resize(total, 3);
@@ -385,14 +407,16 @@ RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& dire
 void camera_rays(const Mat3d& K, int width, int height, const Pose& X_WC, Points3f& origins,
                  Points3f& directions) {
   if (width <= 0 || height <= 0) {
-    throw_error<InvalidArgument>("camera_rays: image size must be positive, got ", width, "x", height);
+    throw_error<InvalidArgument>("camera_rays: image size must be positive, got ", width, "x",
+                                 height);
   }
   const double fx = K(0, 0), fy = K(1, 1), cx = K(0, 2), cy = K(1, 2);
   if (!(fx > 0) || !(fy > 0) || !std::isfinite(cx) || !std::isfinite(cy)) {
-    throw_error<InvalidArgument>("camera_rays: expected fx, fy > 0 and finite cx, cy, got fx=", fx, " fy=", fy,
-                                 " cx=", cx, " cy=", cy);
+    throw_error<InvalidArgument>("camera_rays: expected fx, fy > 0 and finite cx, cy, got fx=", fx,
+                                 " fy=", fy, " cx=", cx, " cy=", cy);
   }
-  if (!X_WC.matrix().allFinite()) throw_error<InvalidArgument>("camera_rays: X_WC has non-finite entries");
+  if (!X_WC.matrix().allFinite())
+    throw_error<InvalidArgument>("camera_rays: X_WC has non-finite entries");
   const Eigen::Index n = static_cast<Eigen::Index>(width) * height;
   origins.resize(n, 3);
   directions.resize(n, 3);
@@ -422,7 +446,8 @@ void fill_packet(RTCRay16& r, int* valid, const ParallelRays& rays, int start) {
   const Eigen::Vector3f d = rays.dir.cast<float>();
   for (int k = 0; k < 16; ++k) {
     const Eigen::Vector2d& off = rays.offsets[start + std::min(k, m - 1)];
-    const Eigen::Vector3f o = (rays.base + rays.scale * (off.x() * rays.u + off.y() * rays.v)).cast<float>();
+    const Eigen::Vector3f o =
+        (rays.base + rays.scale * (off.x() * rays.u + off.y() * rays.v)).cast<float>();
     valid[k] = k < m ? -1 : 0;
     set_lane(r, k, o.data(), d.data(), 0.0f, rays.tfar);
   }

@@ -36,22 +36,22 @@ class CollisionModel {
 
 /// Options of a collision query.
 struct CollisionRequest {
-  int num_threads = 0;        ///< batch only; 0 = all hardware threads
+  int num_threads = 0;  ///< batch only; 0 = all hardware threads
 };
 
 /// Options of a distance query.
 struct DistanceRequest {
-  double rel_err = 0.0;       ///< relative error tolerance of the BVH traversal
-  double abs_err = 0.0;       ///< absolute error tolerance, m
-  int num_threads = 0;        ///< batch only; 0 = all hardware threads
+  double rel_err = 0.0;  ///< relative error tolerance of the BVH traversal
+  double abs_err = 0.0;  ///< absolute error tolerance, m
+  int num_threads = 0;   ///< batch only; 0 = all hardware threads
 };
 
 /// Per-pair distance results. Colliding pairs report distance 0 and the points of one contact.
 struct DistanceResult {
-  std::vector<double> distance;      ///< (N) m, >= 0
-  Points3d points_a;                 ///< (N,3) closest point on A, world frame
-  Points3d points_b;                 ///< (N,3) closest point on B, world frame
-  std::vector<std::uint8_t> collide; ///< (N) 1 if the pair intersects
+  std::vector<double> distance;       ///< (N) m, >= 0
+  Points3d points_a;                  ///< (N,3) closest point on A, world frame
+  Points3d points_b;                  ///< (N,3) closest point on B, world frame
+  std::vector<std::uint8_t> collide;  ///< (N) 1 if the pair intersects
 };
 
 /// Whether A at X_WA and B at X_WB intersect (surfaces; a mesh fully inside another closed mesh

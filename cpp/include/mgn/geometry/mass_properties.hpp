@@ -12,15 +12,15 @@ enum class OpenMeshPolicy {
 };
 
 struct MassOptions {
-  double density = 1000.0;         ///< kg/m^3, > 0
+  double density = 1000.0;  ///< kg/m^3, > 0
   OpenMeshPolicy open_mesh = OpenMeshPolicy::Shell;
   double shell_thickness = 0.002;  ///< m, used by OpenMeshPolicy::Shell, > 0
 };
 
 /// Mass properties in the mesh frame O.
 struct MassProperties {
-  double volume = 0.0;  ///< m^3 (enclosed volume; for a shell: area * thickness)
-  double mass = 0.0;    ///< kg
+  double volume = 0.0;                   ///< m^3 (enclosed volume; for a shell: area * thickness)
+  double mass = 0.0;                     ///< kg
   Vec3d center_of_mass = Vec3d::Zero();  ///< p_OCm, m
   /// Inertia tensor about the centre of mass, axes of frame O, kg m^2.
   Mat3d inertia = Mat3d::Zero();

@@ -33,10 +33,10 @@ struct Material {
 struct MeshReport {
   std::int64_t num_vertices = 0;
   std::int64_t num_faces = 0;
-  std::int64_t num_boundary_edges = 0;      ///< edges used by exactly one face
-  std::int64_t num_nonmanifold_edges = 0;   ///< edges used by more than two faces
-  std::int64_t num_misoriented_edges = 0;   ///< interior edges traversed twice the same way
-  std::int64_t num_components = 0;          ///< connected components (by welded vertices)
+  std::int64_t num_boundary_edges = 0;     ///< edges used by exactly one face
+  std::int64_t num_nonmanifold_edges = 0;  ///< edges used by more than two faces
+  std::int64_t num_misoriented_edges = 0;  ///< interior edges traversed twice the same way
+  std::int64_t num_components = 0;         ///< connected components (by welded vertices)
   bool is_watertight = false;  ///< closed 2-manifold: every edge shared by exactly two faces
   bool is_winding_consistent = false;  ///< neighbouring faces agree on orientation
   bool is_outward = false;             ///< watertight, consistent and positive signed volume

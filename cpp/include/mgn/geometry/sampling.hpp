@@ -22,13 +22,14 @@ struct SampleOptions {
 
 /// Samples on the surface, in the mesh frame.
 struct SurfaceSamples {
-  Points3f points;                  ///< (n,3) m
-  Points3f normals;                 ///< (n,3) unit outward face normals
+  Points3f points;                     ///< (n,3) m
+  Points3f normals;                    ///< (n,3) unit outward face normals
   std::vector<std::int32_t> face_ids;  ///< (n) index of the face each point lies on
 };
 
 /// Draws `count` points. Deterministic for (mesh, count, options). Throws InvalidArgument for an
 /// empty mesh or a negative count.
-SurfaceSamples sample_surface(const Mesh& mesh, std::int64_t count, const SampleOptions& options = {});
+SurfaceSamples sample_surface(const Mesh& mesh, std::int64_t count,
+                              const SampleOptions& options = {});
 
 }  // namespace mgn

@@ -1,5 +1,6 @@
 #pragma once
-/// @file calibration.hpp  Fit the cup constants c1, c2 of the spring seal model to measured outcomes.
+/// @file calibration.hpp  Fit the cup constants c1, c2 of the spring seal model to measured
+/// outcomes.
 ///
 /// An experiment is one measured suction attempt: a cup pose on a surface (typically the printed
 /// calibration board) and whether it sealed. calibrate_cup() searches (c1, c2) so that the
@@ -36,7 +37,8 @@ namespace mgn {
 struct CalibrationExperiment {
   std::size_t surface = 0;        ///< index into the surfaces given to calibrate_cup()
   Vec3d point = Vec3d::Zero();    ///< contact point on that surface mesh, m (surface frame)
-  Vec3d normal = Vec3d::UnitZ();  ///< outward normal there (the cup approaches along -normal); normalised on use
+  Vec3d normal = Vec3d::UnitZ();  ///< outward normal there (the cup approaches along -normal);
+                                  ///< normalised on use
   bool sealed = false;            ///< measured outcome
 };
 
@@ -86,15 +88,15 @@ struct CalibrationResult {
 /// BackendError if NLopt fails (a roundoff-limited stop is not a failure: the best point found
 /// so far is kept).
 CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
-                                const std::vector<CalibrationExperiment>& experiments, const Cup& initial,
-                                const CalibrationOptions& options = {});
+                                const std::vector<CalibrationExperiment>& experiments,
+                                const Cup& initial, const CalibrationOptions& options = {});
 
 /// Nominal spring-model prediction (one deterministic trial, no perturbation) of every
 /// experiment for `cup` (1 = seal); the `sealed` fields are ignored. Same validation as
 /// calibrate_cup().
 std::vector<std::uint8_t> predict_experiments(const std::vector<const Mesh*>& surfaces,
-                                              const std::vector<CalibrationExperiment>& experiments, const Cup& cup,
-                                              int num_threads = 0);
+                                              const std::vector<CalibrationExperiment>& experiments,
+                                              const Cup& cup, int num_threads = 0);
 
 /// Metrics of `predicted` against `measured` (non-zero = sealed). Throws InvalidArgument if the
 /// lengths differ. Empty inputs give zero counts and NaN rates.

@@ -8,17 +8,17 @@ namespace mgn {
 /// A suction cup as seen by the seal models. Lengths in metres.
 struct Cup {
   std::string name = "bellows_14mm";
-  double radius = 0.007;               ///< contact-ring radius r, m
-  int num_points = 128;                ///< mass points N on the ring (>= 6)
-  double youngs_modulus = 0.02;        ///< E as in the paper; stiffness uses E * 1e6
-  double pressure_difference = 0.7;    ///< vacuum pressure difference, bar (1 bar = 1e5 Pa)
-  double compensable_height = 0.007;   ///< h: largest centre-above-ring height (hill check), m
-  double approach_height = 0.030;      ///< start height of the projection rays above c, m
-  double c1 = 0.03768;                 ///< fitted compression-spring constant
-  double c2 = 0.06241;                 ///< fitted ring-spring constant
-  double outer_radius = 0.010;         ///< cup body radius for collision checks, m
-  double body_height = 0.030;          ///< cup body (bellows) height for collision checks, m
-  int hole_rays = 1000;                ///< rays of the hole check spread over the disc (>= 1)
+  double radius = 0.007;              ///< contact-ring radius r, m
+  int num_points = 128;               ///< mass points N on the ring (>= 6)
+  double youngs_modulus = 0.02;       ///< E as in the paper; stiffness uses E * 1e6
+  double pressure_difference = 0.7;   ///< vacuum pressure difference, bar (1 bar = 1e5 Pa)
+  double compensable_height = 0.007;  ///< h: largest centre-above-ring height (hill check), m
+  double approach_height = 0.030;     ///< start height of the projection rays above c, m
+  double c1 = 0.03768;                ///< fitted compression-spring constant
+  double c2 = 0.06241;                ///< fitted ring-spring constant
+  double outer_radius = 0.010;        ///< cup body radius for collision checks, m
+  double body_height = 0.030;         ///< cup body (bellows) height for collision checks, m
+  int hole_rays = 1000;               ///< rays of the hole check spread over the disc (>= 1)
 
   /// Throws InvalidArgument naming the first field that is not finite/positive/in range.
   void validate() const;

@@ -18,13 +18,16 @@
 ///
 /// | item | reference | mgn | why |
 /// |---|---|---|---|
-/// | units | lengths in cm, spring rest lengths in cm | SI throughout | one consistent unit system |
-/// | ring springs | forces paired with neighbouring indices in an ad-hoc order | each unordered pair once, equal and opposite forces on both ends | Newton's third law; symmetric rings give zero net force |
-/// | projected points | float hit points | rebuilt in double from ray origin and distance | a plane gives exactly zero stretch |
-/// | lip reach | not checked | a mass point whose compression k_c (delta - d_k) is negative fails ("force") | the lip cannot touch there |
-/// | roof below the cup | seals on the roof | the centre ray stopped more than h above c fails ("obstruction") | the cup cannot reach c |
-/// | centre ray misses, ring hits | "miss" | "hole" | the contact disc is open |
-/// | hole check | 1000 random points | 1000-point Vogel spiral, Z-ordered | deterministic, denser near the centre, coherent packets |
+/// | units | lengths in cm, spring rest lengths in cm | SI throughout | one consistent unit system
+/// | | ring springs | forces paired with neighbouring indices in an ad-hoc order | each unordered
+/// pair once, equal and opposite forces on both ends | Newton's third law; symmetric rings give
+/// zero net force | | projected points | float hit points | rebuilt in double from ray origin and
+/// distance | a plane gives exactly zero stretch | | lip reach | not checked | a mass point whose
+/// compression k_c (delta - d_k) is negative fails ("force") | the lip cannot touch there | | roof
+/// below the cup | seals on the roof | the centre ray stopped more than h above c fails
+/// ("obstruction") | the cup cannot reach c | | centre ray misses, ring hits | "miss" | "hole" |
+/// the contact disc is open | | hole check | 1000 random points | 1000-point Vogel spiral,
+/// Z-ordered | deterministic, denser near the centre, coherent packets |
 ///
 /// Behaviour pinned by tests (tests/cpp/test_seal_model.cpp): with consistent SI units the ring
 /// tension on a convex surface presses the lip onto it, so convex shapes are limited by geometry
@@ -73,7 +76,7 @@ struct SealOptions {
   /// Index of the first candidate in the whole job: candidate i uses stream (seed, first_index
   /// + i), so a job evaluated in chunks gives the same scores as in one call.
   std::uint64_t first_index = 0;
-  int num_threads = 0;           ///< 0 = all hardware threads
+  int num_threads = 0;  ///< 0 = all hardware threads
 };
 
 /// Per-candidate results of evaluate().
@@ -81,7 +84,8 @@ struct SealResult {
   std::vector<float> score;                ///< (N) fraction of sealed trials in [0, 1]
   std::vector<std::uint8_t> trial_sealed;  ///< (N * T) 1 if trial t of candidate i sealed
   std::vector<std::uint8_t> trial_reason;  ///< (N * T) SealFailure of each trial
-  std::vector<std::uint8_t> reason;        ///< (N) most frequent failure of the failed trials, None if all sealed
+  std::vector<std::uint8_t>
+      reason;  ///< (N) most frequent failure of the failed trials, None if all sealed
   /// Mean per-trial quality in [0, 1]: the smoothness model's continuous deform x fit; for the
   /// other models a trial's quality is 1 if sealed else 0 (so quality == score).
   std::vector<float> quality;
@@ -91,11 +95,11 @@ struct SealResult {
 /// Detailed outcome of one deterministic trial (for tests, plots and debugging).
 struct SealTrial {
   SealFailure failure = SealFailure::None;
-  Points3f ring_points;      ///< (N,3) projected ring points x_k (object frame), if projected
-  Points3f ring_normals;     ///< (N,3) surface normals m_k at x_k
-  Vec3d center = Vec3d::Zero();  ///< projected centre x_c
+  Points3f ring_points;           ///< (N,3) projected ring points x_k (object frame), if projected
+  Points3f ring_normals;          ///< (N,3) surface normals m_k at x_k
+  Vec3d center = Vec3d::Zero();   ///< projected centre x_c
   Eigen::VectorXd elastic_force;  ///< (N) k_c (delta - d_k), N (spring model)
-  Points3d ring_force;       ///< (N,3) summed ring-spring force F_k, N (spring model)
+  Points3d ring_force;            ///< (N,3) summed ring-spring force F_k, N (spring model)
   double total_elastic_force = 0.0;  ///< sum of elastic_force, N (equals the pressure force)
 };
 
@@ -115,7 +119,8 @@ class SealModel {
   /// Scores N candidates: points (N,3) on the surface and unit outward normals (N,3), object
   /// frame. Throws InvalidArgument for mismatched shapes, non-finite values, zero normals, or
   /// invalid options. Candidates whose ring misses the mesh simply fail ("miss").
-  SealResult evaluate(const Points3f& points, const Points3f& normals, const SealOptions& options = {}) const;
+  SealResult evaluate(const Points3f& points, const Points3f& normals,
+                      const SealOptions& options = {}) const;
 
   /// One deterministic trial at (c, n) with every intermediate quantity (spring model details
   /// are filled only for SealModelKind::Spring).

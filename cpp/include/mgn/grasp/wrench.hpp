@@ -27,8 +27,9 @@ struct SuctionWrenchOptions {
 /// @param gravity_direction  unit direction of gravity in that frame (e.g. -z of the world)
 /// @param cup_radius  m (> 0)
 /// Throws InvalidArgument for mismatched shapes, non-finite input, non-positive mass/radius.
-std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3f& approach, double mass,
-                                         const Vec3d& com, const Vec3d& gravity_direction, double cup_radius,
+std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3f& approach,
+                                         double mass, const Vec3d& com,
+                                         const Vec3d& gravity_direction, double cup_radius,
                                          const SuctionWrenchOptions& options = {});
 
 }  // namespace mgn

@@ -18,9 +18,9 @@ namespace mgn {
 
 /// One mesh placed in the scene.
 struct RayGeometry {
-  const Mesh* mesh = nullptr;      ///< copied at build time; need not outlive the scene
-  Pose X_WO = Pose::Identity();    ///< pose of the mesh in the world
-  std::int32_t instance_id = 0;    ///< reported for hits on this mesh (>= 0)
+  const Mesh* mesh = nullptr;    ///< copied at build time; need not outlive the scene
+  Pose X_WO = Pose::Identity();  ///< pose of the mesh in the world
+  std::int32_t instance_id = 0;  ///< reported for hits on this mesh (>= 0)
 };
 
 /// Options of a batch cast.
@@ -46,10 +46,10 @@ struct RayHits {
 /// All hits along each ray, sorted by distance, in CSR layout: the hits of ray i are the entries
 /// offsets[i] .. offsets[i+1]-1. A ray crossing a shared edge or vertex is reported once.
 struct RayAllHits {
-  std::vector<std::int64_t> offsets;  ///< (N+1)
-  std::vector<float> distance;        ///< (H)
-  Points3f points;                    ///< (H,3)
-  Points3f normals;                   ///< (H,3)
+  std::vector<std::int64_t> offsets;       ///< (N+1)
+  std::vector<float> distance;             ///< (H)
+  Points3f points;                         ///< (H,3)
+  Points3f normals;                        ///< (H,3)
   std::vector<std::int32_t> instance_ids;  ///< (H)
   std::vector<std::int32_t> face_ids;      ///< (H)
   std::vector<std::int32_t> ray_ids;       ///< (H) which ray each hit belongs to

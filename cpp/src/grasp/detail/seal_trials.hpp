@@ -32,7 +32,8 @@ SealFailure strain_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
 
 /// SuctionNet style smoothness model (MODELS.md §2). `quality` gets deform x fit in [0, 1];
 /// the trial seals when quality >= smoothness_threshold.
-SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, float* quality);
+SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
+                             float* quality);
 
 /// Quality at or above which the smoothness model counts a trial as sealed.
 constexpr float smoothness_threshold = 0.5f;

@@ -12,7 +12,7 @@ struct ParallelRays {
   Vec3d dir;                       ///< common direction (unit)
   const Eigen::Vector2d* offsets;  ///< (count) offsets (x_i, y_i) in metres
   int count;
-  double scale = 1.0;              ///< offsets are multiplied by this
+  double scale = 1.0;  ///< offsets are multiplied by this
   float tfar = std::numeric_limits<float>::infinity();
 };
 
