@@ -13,6 +13,7 @@
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/geometry/sampling.hpp>
 #include <mgn/grasp/cup.hpp>
+#include <mgn/grasp/gripper.hpp>
 #include <mgn/grasp/seal_model.hpp>
 #include <mgn/grasp/wrench.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
