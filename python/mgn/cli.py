@@ -197,6 +197,71 @@ def _cmd_suction_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _mesh_or_builtin(arg: str, scale: float):
+    """A mesh file, or the name/id of a built-in object."""
+    import os
+
+    from mgn.geometry import load_mesh
+
+    if os.path.exists(arg):
+        return load_mesh(arg, scale=scale)
+    from mgn.io.model_folder import object_mesh
+    from mgn.objects import get_object, object_names
+
+    try:
+        return object_mesh(get_object(arg))
+    except KeyError:
+        raise FileNotFoundError(
+            f"'{arg}' is neither a mesh file nor a built-in object ({', '.join(object_names())})"
+        ) from None
+
+
+def _cmd_suction_compare(args: argparse.Namespace) -> int:
+    import json
+
+    from mgn.hardware import SuctionCup
+    from mgn.io.atomic import atomic_write_bytes, atomic_write_text
+    from mgn.suction.compare import compare_models, comparison_picture
+
+    mesh = _mesh_or_builtin(args.mesh, args.scale)
+    cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
+    comp = compare_models(
+        mesh, cup=cup, num_points=args.num_points, seed=args.seed, num_threads=args.num_threads
+    )
+    print(comp.format_table())
+    if args.png:
+        import io
+
+        from PIL import Image
+
+        buf = io.BytesIO()
+        Image.fromarray(comparison_picture(mesh, comp)).save(buf, format="PNG")
+        atomic_write_bytes(args.png, buf.getvalue())
+        print(f"picture: {args.png}")
+    if args.json:
+        doc = {
+            "points_m": comp.points.tolist(),
+            "normals": comp.normals.tolist(),
+            "scores": {m: s.tolist() for m, s in comp.scores.items()},
+            "pairs": [
+                {
+                    "a": p.a,
+                    "b": p.b,
+                    "agreement": p.agreement,
+                    "a_low_b_seal": p.low_vs_seal,
+                    "a_high_b_no_seal": p.high_vs_no_seal,
+                }
+                for p in comp.pairs
+            ],
+            "seal_threshold": comp.seal_threshold,
+            "cup": cup.to_dict(),
+            "seed": args.seed,
+        }
+        atomic_write_text(args.json, json.dumps(doc))
+        print(f"scores: {args.json}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mgn",
@@ -247,6 +312,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="held-out split seed")
     p.add_argument("--num-threads", type=int, default=0)
     p.set_defaults(func=_cmd_suction_calibrate)
+    p = ssub.add_parser(
+        "compare", help="score the same points with the three seal models; table and picture"
+    )
+    p.add_argument("mesh", help="mesh file, or the name/id of a built-in object")
+    p.add_argument("--scale", type=float, default=1.0, help="coordinate scale (0.001 for mm)")
+    p.add_argument("--cup", metavar="YAML", help="suction cup YAML (default: MetaGraspNet cup)")
+    p.add_argument("--num-points", type=int, default=1000, help="candidates (default 1000)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--png", metavar="FILE", help="write the per-model picture (PNG)")
+    p.add_argument("--json", metavar="FILE", help="write points and scores (JSON)")
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    p.set_defaults(func=_cmd_suction_compare)
 
     p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
