@@ -119,6 +119,25 @@ TEST(SpringSeal, StepHigherThanTheCompensableHeightFails) {
   EXPECT_EQ(nominal(tilted, X * mgn::Vec3d(0.03, 0.01, 0.0), n, cup), mgn::SealFailure::None);
 }
 
+TEST(SpringSeal, RingStiffnessUsesMetaGraspNetsCentimetreConvention) {
+  const mgn::Cup cup;
+  // A 1 cm spring: k = E 1e6 pi c2 / (N * 1).
+  EXPECT_NEAR(cup.ring_stiffness(0.01), 0.02e6 * M_PI * 0.06241 / 128, 1e-9);
+  EXPECT_NEAR(cup.ring_stiffness(0.005), 2.0 * cup.ring_stiffness(0.01), 1e-9);
+}
+
+TEST(SpringSeal, LowRidgeUnderTheLipSealsAndHighStepFailsByForce) {
+  // A ridge 2 mm wide across the whole ring: the bellows lip bends over a 0.2 mm ridge (as a real
+  // 14 mm bellows cup does) but not over a 3 mm one (below the compensable height of 7 mm, so it
+  // is the force balance that decides).
+  const mgn::Cup cup;
+  auto ridge = [](double h) {
+    return mgn::Mesh::merge({plane(), placed(mgn::make_box({0.002, 0.2, h}), 0.0, 0, h / 2)});
+  };
+  EXPECT_EQ(nominal(ridge(0.0002), {0.004, 0.0, 0.0}, kUp, cup), mgn::SealFailure::None);
+  EXPECT_EQ(nominal(ridge(0.003), {0.004, 0.0, 0.0}, kUp, cup), mgn::SealFailure::Force);
+}
+
 TEST(SpringSeal, HoleInsideTheRingFailsByHole) {
   const mgn::Cup cup;
   const double hole = 0.5 * cup.radius, t = 0.01;

@@ -39,4 +39,9 @@ double Cup::pressure_force() const { return pressure_difference * 1e5 * M_PI * r
 
 double Cup::compression_stiffness() const { return youngs_modulus * 1e6 * M_PI * c1 / num_points; }
 
+double Cup::ring_stiffness(double rest_length) const {
+  constexpr double kCentimetre = 0.01;  // m: the length unit c2 was fitted with
+  return youngs_modulus * 1e6 * M_PI * c2 * kCentimetre / (num_points * rest_length);
+}
+
 }  // namespace mgn

@@ -119,12 +119,11 @@ SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
   const Eigen::VectorXd elastic = k_c * (delta - d.array());
 
   // 5. Ring springs between projected points: neighbour, second neighbour and opposite point.
-  const double E = cup.youngs_modulus * 1e6;
   const std::array<int, 3> offsets = {1, 2, N / 2};
   Points3d F = Points3d::Zero(N, 3);
   for (int j : offsets) {
     const double rest = 2.0 * r * std::sin(M_PI * j / N);
-    const double k_spring = E * M_PI * cup.c2 / (N * rest);
+    const double k_spring = cup.ring_stiffness(rest);  // c2 in MetaGraspNet's convention
     // Each unordered pair once: for the opposite springs of an even ring only half the points.
     const int pairs = (2 * j == N) ? N / 2 : N;
     for (int k = 0; k < pairs; ++k) {

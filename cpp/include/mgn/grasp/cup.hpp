@@ -27,6 +27,11 @@ struct Cup {
   double pressure_force() const;
   /// Compression spring stiffness k_c = E * 1e6 * pi * c1 / N, N/m.
   double compression_stiffness() const;
+  /// Ring spring stiffness for a spring of rest length L (m), N/m:
+  /// k = E * 1e6 * pi * c2 / (N * L[cm]) = E * 1e6 * pi * c2 * 0.01 / (N * L[m]).
+  /// MetaGraspNet fitted c2 with rest lengths in centimetres (its forces are otherwise SI); this
+  /// keeps the published c2 — and any c2 fitted against it — meaning the same stiffness.
+  double ring_stiffness(double rest_length) const;
 };
 
 }  // namespace mgn

@@ -14,25 +14,24 @@
 ///   - SealModelKind::Strain     the Dex-Net 3.0 style cone-of-springs strain model
 ///   - SealModelKind::Smoothness the SuctionNet-1Billion style ring smoothness model
 ///
+// clang-format off
 /// Where the spring model differs from the public MetaGraspNet reference, and why:
 ///
 /// | item | reference | mgn | why |
 /// |---|---|---|---|
-/// | units | lengths in cm, spring rest lengths in cm | SI throughout | one consistent unit system
-/// | | ring springs | forces paired with neighbouring indices in an ad-hoc order | each unordered
-/// pair once, equal and opposite forces on both ends | Newton's third law; symmetric rings give
-/// zero net force | | projected points | float hit points | rebuilt in double from ray origin and
-/// distance | a plane gives exactly zero stretch | | lip reach | not checked | a mass point whose
-/// compression k_c (delta - d_k) is negative fails ("force") | the lip cannot touch there | | roof
-/// below the cup | seals on the roof | the centre ray stopped more than h above c fails
-/// ("obstruction") | the cup cannot reach c | | centre ray misses, ring hits | "miss" | "hole" |
-/// the contact disc is open | | hole check | 1000 random points | 1000-point Vogel spiral,
-/// Z-ordered | deterministic, denser near the centre, coherent packets |
+/// | units | cm lengths; forces in N, but the ring-spring stiffness takes its rest length in cm | SI, with Cup::ring_stiffness keeping the cm rest length | the published c2 was fitted that way; read in pure SI the ring is 100x stiffer than the calibrated cup and fails on 0.2 mm ridges |
+/// | ring springs | forces paired with neighbouring indices in an ad-hoc order | each unordered pair once, equal and opposite forces on both ends | Newton's third law; symmetric rings give zero net force |
+/// | projected points | float hit points | rebuilt in double from ray origin and distance | a plane gives exactly zero stretch |
+/// | lip reach | not checked | a mass point whose compression k_c (delta - d_k) is negative fails ("force") | the lip cannot touch there |
+/// | roof below the cup | seals on the roof | the centre ray stopped more than h above c fails ("obstruction") | the cup cannot reach c |
+/// | centre ray misses, ring hits | "miss" | "hole" | the contact disc is open |
+/// | hole check | 1000 random points | 1000-point Vogel spiral, Z-ordered | deterministic, denser near the centre, coherent packets |
+// clang-format on
 ///
-/// Behaviour pinned by tests (tests/cpp/test_seal_model.cpp): with consistent SI units the ring
-/// tension on a convex surface presses the lip onto it, so convex shapes are limited by geometry
-/// and reach (robust scores rise monotonically with the radius of spheres and cylinders; below
-/// the cup radius the ring misses), while sharp steps crossing the lip, edges and corners fail.
+/// Behaviour pinned by tests (tests/cpp/test_seal_model.cpp): the ring tension on a convex surface
+/// presses the lip onto it, so convex shapes are limited by geometry and reach (robust scores rise
+/// monotonically with the radius of spheres and cylinders; below the cup radius the ring misses),
+/// while sharp steps crossing the lip, edges and corners fail.
 
 #include <mgn/core/types.hpp>
 #include <mgn/geometry/mesh.hpp>
