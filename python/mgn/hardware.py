@@ -150,7 +150,8 @@ class SuctionCup(_YamlDataclass):
         compensable_height: largest height difference the lip absorbs (hill check), m.
         approach_height: start height of the projection above the contact, m.
         c1: fitted compression-spring constant (calibrated, see MODELS.md §4).
-        c2: fitted ring-spring constant (calibrated).
+        c2: fitted ring-spring constant (calibrated); MetaGraspNet's convention: ring stiffness
+            k = E·1e6·π·c2 / (N·L) with the rest length L in cm (see Cup::ring_stiffness).
         outer_radius: outer radius of the cup body for collision checks, m.
         body_height: height of the cup body (bellows) for collision checks, m.
         hole_rays: rays of the hole check spread over the contact disc (MetaGraspNet: 1000).
