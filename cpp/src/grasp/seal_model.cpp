@@ -339,8 +339,12 @@ SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals,
                    Eigen::AngleAxisd(ax, Vec3d::UnitX()))
                       .toRotationMatrix();
               n = (R * n0).normalized();
-              c = c0 + Vec3d(rng.normal(0.0, pos_sigma), rng.normal(0.0, pos_sigma),
-                             rng.normal(0.0, pos_sigma));
+              // Named draws: the order of function arguments is unspecified in C++, and the
+              // random stream must not depend on the compiler.
+              const double jx = rng.normal(0.0, pos_sigma);
+              const double jy = rng.normal(0.0, pos_sigma);
+              const double jz = rng.normal(0.0, pos_sigma);
+              c = c0 + Vec3d(jx, jy, jz);
             }
             float q = 0.0f;
             const SealFailure f = run_trial(kind_, ctx, c, n, q);
