@@ -20,7 +20,7 @@ from mgn.render.camera import (
     mgn_rig_from_params,
     mgn_views,
 )
-from mgn.render.renderer import Instance, LightSample, RenderOutput, Renderer
+from mgn.render.renderer import Instance, LightSample, Renderer, RenderOutput
 from mgn.render.sensor import (
     SURFACE_DARK,
     SURFACE_MIRROR,
