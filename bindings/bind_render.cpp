@@ -29,7 +29,7 @@ py::array poses_to_numpy(const std::vector<Pose>& poses) {
 
 /// Moves an (H*W*C) vector into an (H, W[, C]) numpy array without copying.
 template <typename T>
-py::array image(std::vector<T>&& v, int h, int w, int c = 1) {
+py::object image(std::vector<T>&& v, int h, int w, int c = 1) {
   if (v.empty()) return py::none();
   py::array flat = to_numpy(std::move(v));
   if (c == 1) return flat.attr("reshape")(h, w);

@@ -156,7 +156,9 @@ TEST(Renderer, DepthAndIdsAgreeWithEmbree) {
   const auto rig = mgn::mgn_rig(7, {0, 0, 0.05});
   for (int v : {0, 5, 30}) {
     const mgn::CameraView view{K, rig[v]};
-    const mgn::RenderOutput out = r.render(view);
+    mgn::RenderOptions opt;
+    opt.background = mgn::Vec3f(0.5f, 0.0f, 1.0f);  // sRGB (188, 0, 255)
+    const mgn::RenderOutput out = r.render(view, opt);
     ASSERT_EQ(out.depth.size(), 400u * 400u);
     ASSERT_EQ(out.rgb.size(), 400u * 400u * 3);
     mgn::Points3f o, d;
@@ -165,12 +167,19 @@ TEST(Renderer, DepthAndIdsAgreeWithEmbree) {
     co.coherent = true;
     const mgn::RayHits hits = rays.intersect(o, d, co);
     const mgn::Vec3d axis = view.X_WC.linear().col(2);
-    int object_px = 0, depth_ok = 0, id_ok = 0, hit_px = 0;
+    int object_px = 0, depth_ok = 0, id_ok = 0, hit_px = 0, bg_px = 0, bg_ok = 0, shaded_ok = 0;
     for (std::size_t i = 0; i < out.depth.size(); ++i) {
       const bool hit = hits.instance_ids[i] >= 0;
       const int truth_id = hit ? hits.instance_ids[i] : 0;
       id_ok += out.instance_ids[i] == truth_id;
-      if (!hit) continue;
+      const std::uint8_t* px = &out.rgb[3 * i];
+      const bool is_bg = px[0] == 188 && px[1] == 0 && px[2] == 255;
+      if (!hit) {
+        bg_px += 1;
+        bg_ok += is_bg;
+        continue;
+      }
+      shaded_ok += !is_bg;
       ++hit_px;
       if (truth_id == 0) continue;
       ++object_px;
@@ -181,6 +190,10 @@ TEST(Renderer, DepthAndIdsAgreeWithEmbree) {
     EXPECT_GE(depth_ok, 0.99 * object_px) << v;
     EXPECT_GE(id_ok, 0.99 * out.depth.size()) << v;
     EXPECT_GT(hit_px, object_px);  // the floor is seen too
+    // Every surface pixel is shaded (no hole from the depth pre-pass), empty ones keep the
+    // background colour (linear 0.5 stored as sRGB 188).
+    EXPECT_GE(shaded_ok, 0.999 * hit_px) << v;
+    EXPECT_GE(bg_ok, 0.99 * bg_px) << v;
   }
 }
 

@@ -214,7 +214,7 @@ GLuint upload_texture(const Material& mat, const std::string& mesh_name) {
   glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8, img.cols, img.rows, 0, GL_BGR, GL_UNSIGNED_BYTE,
                img.data);
   glGenerateMipmap(GL_TEXTURE_2D);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
@@ -327,7 +327,7 @@ Renderer::Renderer(int max_width, int max_height) : impl_(std::make_unique<Impl>
       glFramebufferRenderbuffer(GL_FRAMEBUFFER, attach, GL_RENDERBUFFER, r);
       return r;
     };
-    I.rb_color = rb(GL_RGBA8, GL_COLOR_ATTACHMENT0);
+    I.rb_color = rb(GL_SRGB8_ALPHA8, GL_COLOR_ATTACHMENT0);
     I.rb_z = rb(GL_R32F, GL_COLOR_ATTACHMENT1);
     I.rb_id = rb(GL_R32I, GL_COLOR_ATTACHMENT2);
     I.rb_depth = rb(GL_DEPTH_COMPONENT32F, GL_DEPTH_ATTACHMENT);
@@ -653,12 +653,10 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
   glViewport(0, 0, K.width, K.height);
   const GLenum all_bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
   glDrawBuffers(3, all_bufs);
-  auto srgb = [](float c) {
-    c = std::clamp(c, 0.0f, 1.0f);
-    return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-  };
-  const GLfloat bg[4] = {srgb(opt.background.x()), srgb(opt.background.y()),
-                         srgb(opt.background.z()), 1.0f};
+  glEnable(GL_FRAMEBUFFER_SRGB);  // linear shader output and clear colour, sRGB storage
+  const GLfloat bg[4] = {std::clamp(opt.background.x(), 0.0f, 1.0f),
+                         std::clamp(opt.background.y(), 0.0f, 1.0f),
+                         std::clamp(opt.background.z(), 0.0f, 1.0f), 1.0f};
   const GLfloat zero_f[4] = {0, 0, 0, 0};
   const GLint zero_i[4] = {0, 0, 0, 0};
   const GLfloat one = 1.0f;
@@ -666,11 +664,11 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
   glClearBufferfv(GL_COLOR, 1, zero_f);
   glClearBufferiv(GL_COLOR, 2, zero_i);
   glClearBufferfv(GL_DEPTH, 0, &one);
-  if (!full) {
-    const GLenum bufs[] = {GL_NONE, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-    glDrawBuffers(3, bufs);
-  }
 
+  // Per-frame uniforms of both programs.
+  glUseProgram(I.prog_simple);
+  glUniformMatrix4fv(I.ls.view, 1, GL_FALSE, view_m.data());
+  glUniformMatrix4fv(I.ls.proj, 1, GL_FALSE, proj.data());
   if (full) {
     glUseProgram(I.prog_full);
     glUniformMatrix4fv(I.lf.view, 1, GL_FALSE, view_m.data());
@@ -691,16 +689,12 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
     glActiveTexture(GL_TEXTURE0);
-  } else {
-    glUseProgram(I.prog_simple);
-    glUniformMatrix4fv(I.ls.view, 1, GL_FALSE, view_m.data());
-    glUniformMatrix4fv(I.ls.proj, 1, GL_FALSE, proj.data());
   }
 
-  auto draw_group = [&](std::size_t i, const DrawGroup& dg) {
+  auto draw_group = [&](std::size_t i, const DrawGroup& dg, bool shade) {
     const Instance& in = I.instances[i];
     const GpuMesh& m = I.meshes[in.mesh_id];
-    if (full) {
+    if (shade) {
       GpuMaterial mat = dg.material >= 0 ? m.materials[dg.material] : GpuMaterial{};
       if (opt.randomize && in.randomize_color) {
         mat.base = random_colors[i];
@@ -716,10 +710,10 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     glDrawElements(GL_TRIANGLES, dg.count, GL_UNSIGNED_INT,
                    reinterpret_cast<void*>(static_cast<std::size_t>(dg.first) * 4));
   };
-  auto bind_instance = [&](std::size_t i) {
+  auto bind_instance = [&](std::size_t i, bool shade) {
     const Instance& in = I.instances[i];
     const Mat4f model = in.X_WO.matrix().cast<float>();
-    if (full) {
+    if (shade) {
       const Mat3f nmat = in.X_WO.linear().cast<float>();  // rigid: normal matrix = rotation
       glUniformMatrix4fv(I.lf.model, 1, GL_FALSE, model.data());
       glUniformMatrix3fv(I.lf.nmat, 1, GL_FALSE, nmat.data());
@@ -730,45 +724,65 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     }
     glBindVertexArray(I.meshes[in.mesh_id].vao);
   };
-
-  // Opaque geometry first (every group when only geometry is produced).
-  std::vector<std::pair<double, std::size_t>> transparent;
-  for (std::size_t i : drawn) {
-    const GpuMesh& m = I.meshes[I.instances[i].mesh_id];
-    bool bound = false, has_transparent = false;
-    for (const DrawGroup& dg : m.groups) {
-      if (full && dg.transparent) {
-        has_transparent = true;
-        continue;
+  // Draws the opaque groups (every group if !full) of the drawn instances with one program.
+  auto draw_opaque = [&](bool shade) {
+    for (std::size_t i : drawn) {
+      const GpuMesh& m = I.meshes[I.instances[i].mesh_id];
+      bool bound = false;
+      for (const DrawGroup& dg : m.groups) {
+        if (full && dg.transparent) continue;
+        if (!bound) bind_instance(i, shade), bound = true;
+        draw_group(i, dg, shade);
       }
-      if (!bound) bind_instance(i), bound = true;
-      draw_group(i, dg);
     }
-    if (has_transparent) {
+  };
+
+  // 1. Geometry pass of the opaque surfaces: z-depth, ids and the depth buffer.
+  const GLenum geo_bufs[] = {GL_NONE, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+  glDrawBuffers(3, geo_bufs);
+  glUseProgram(I.prog_simple);
+  draw_opaque(false);
+  if (full) {
+    // 2. Shading of the visible opaque fragments only (depth pre-pass: no overdraw shading).
+    const GLenum color_bufs[] = {GL_COLOR_ATTACHMENT0, GL_NONE, GL_NONE};
+    glDrawBuffers(3, color_bufs);
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glUseProgram(I.prog_full);
+    draw_opaque(true);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+    // 3. Transparent groups back to front, blended into the colour; their front faces also
+    // write z-depth and ids (depth sensors decide later what they see).
+    std::vector<std::pair<double, std::size_t>> transparent;
+    for (std::size_t i : drawn) {
+      const GpuMesh& m = I.meshes[I.instances[i].mesh_id];
+      if (std::none_of(m.groups.begin(), m.groups.end(),
+                       [](const DrawGroup& g) { return g.transparent; }))
+        continue;
       const Vec3d c_W = I.instances[i].X_WO * (0.5 * (m.lo + m.hi));
       transparent.emplace_back((X_CW * c_W).z(), i);
     }
-  }
-  // Transparent groups back to front, blended into the colour only; their front faces still
-  // write z-depth and ids (depth sensors decide later what they see).
-  if (!transparent.empty()) {
-    std::sort(transparent.begin(), transparent.end(),
-              [](const auto& a, const auto& b) { return a.first > b.first; });
-    glEnablei(GL_BLEND, 0);
-    glDisablei(GL_BLEND, 1);
-    glDisablei(GL_BLEND, 2);
-    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
-    glEnable(GL_CULL_FACE);
-    glFrontFace(GL_CW);  // window y = image row flips the apparent winding
-    glCullFace(GL_BACK);
-    for (const auto& t : transparent) {
-      bind_instance(t.second);
-      const GpuMesh& m = I.meshes[I.instances[t.second].mesh_id];
-      for (const DrawGroup& dg : m.groups)
-        if (dg.transparent) draw_group(t.second, dg);
+    if (!transparent.empty()) {
+      std::sort(transparent.begin(), transparent.end(),
+                [](const auto& a, const auto& b) { return a.first > b.first; });
+      glDrawBuffers(3, all_bufs);
+      glEnablei(GL_BLEND, 0);
+      glDisablei(GL_BLEND, 1);
+      glDisablei(GL_BLEND, 2);
+      glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
+      glEnable(GL_CULL_FACE);
+      glFrontFace(GL_CW);  // window y = image row flips the apparent winding
+      glCullFace(GL_BACK);
+      for (const auto& t : transparent) {
+        bind_instance(t.second, true);
+        const GpuMesh& m = I.meshes[I.instances[t.second].mesh_id];
+        for (const DrawGroup& dg : m.groups)
+          if (dg.transparent) draw_group(t.second, dg, true);
+      }
+      glDisable(GL_CULL_FACE);
+      glDisablei(GL_BLEND, 0);
     }
-    glDisable(GL_CULL_FACE);
-    glDisablei(GL_BLEND, 0);
   }
   glBindVertexArray(0);
 

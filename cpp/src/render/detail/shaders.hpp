@@ -22,6 +22,7 @@ out vec3 v_nw;
 out vec2 v_uv;
 out float v_zc;
 out vec4 v_pl;
+invariant gl_Position;
 void main() {
   vec4 pw = u_model * vec4(a_pos, 1.0);
   vec4 pc = u_view * pw;
@@ -74,19 +75,20 @@ void main() {
   if (u_shadows && ndl > 0.0) {
     vec3 p = v_pl.xyz / v_pl.w * 0.5 + 0.5;
     if (p.z < 1.0 && all(greaterThan(p.xy, vec2(0.0))) && all(lessThan(p.xy, vec2(1.0)))) {
+      // 4 bilinear comparisons (hardware 2x2 PCF each): a 3x3-texel soft edge.
       float s = 0.0;
-      for (int i = -1; i <= 1; ++i)
-        for (int j = -1; j <= 1; ++j)
-          s += texture(u_shadow_map, vec3(p.xy + vec2(i, j) * u_shadow_texel, p.z));
-      vis = s / 9.0;
+      for (int i = 0; i < 4; ++i) {
+        vec2 o = (vec2(i & 1, i >> 1) - 0.5) * u_shadow_texel;
+        s += texture(u_shadow_map, vec3(p.xy + o, p.z));
+      }
+      vis = 0.25 * s;
     }
   }
   vec3 H = normalize(L + V);
   float spec = ndl > 0.0 ? pow(max(dot(n, H), 0.0), u_shininess) : 0.0;
   vec3 c = albedo * u_ambient + vis * u_light_rgb * (albedo * ndl + u_spec * spec);
-  c = clamp(c, 0.0, 1.0);
-  vec3 srgb = mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
-  o_color = vec4(srgb, u_alpha);
+  // Linear colour: the sRGB framebuffer encodes it (and blends in linear space).
+  o_color = vec4(clamp(c, 0.0, 1.0), u_alpha);
   o_z = v_zc;
   o_id = u_id;
 }
@@ -99,8 +101,10 @@ uniform mat4 u_model;
 uniform mat4 u_view;
 uniform mat4 u_proj;
 out float v_zc;
+invariant gl_Position;
 void main() {
-  vec4 pc = u_view * (u_model * vec4(a_pos, 1.0));
+  vec4 pw = u_model * vec4(a_pos, 1.0);
+  vec4 pc = u_view * pw;
   v_zc = pc.z;
   gl_Position = u_proj * pc;
 }
