@@ -157,10 +157,6 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
       for (int u = 0; u < W; ++u) {
         const std::size_t i = v * W + u;
         double zz = z[u];
-        // Draw the random numbers of every pixel, used or not, so that streams stay aligned.
-        const double noise = rng.normal();
-        const double fly_u = rng.uniform();
-        const double fly_t = rng.uniform();
         if (zz <= 0.0 || zz < p.min_range || zz > p.max_range) continue;
         if (!ideal) {
           const std::uint8_t f = flags_of(ids[u]);
@@ -178,12 +174,12 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
               const double zn = depth[static_cast<std::size_t>(vv) * W + uu];
               if (zn > 0.0 && std::abs(zn - zz) > jump) jump = std::abs(zn - zz), other = zn;
             }
-            if (jump > p.edge_threshold && fly_u < p.flying_pixel_probability) {
-              zz = zz + fly_t * (other - zz);
+            if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
+              zz = zz + rng.uniform() * (other - zz);
             }
           }
           const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
-          zz += sigma * noise;
+          if (sigma > 0.0) zz += sigma * rng.normal();
           if (!(zz > 0.0)) continue;
         }
         out.depth[i] = static_cast<float>(zz);

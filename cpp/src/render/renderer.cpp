@@ -24,7 +24,7 @@ namespace mgn {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr int kShadowSize = 2048;
+constexpr int kShadowSize = 1024;
 
 using Mat4f = Eigen::Matrix4f;
 using Mat3f = Eigen::Matrix3f;
