@@ -84,7 +84,7 @@ def _side_mgn(width: int, views: list[int]) -> tuple[Callable[[int], tuple], Any
 def _side_pyrender(width: int, views: list[int]) -> tuple[Callable[[int], tuple], Any]:
     os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
     if not hasattr(np, "infty"):  # pyrender 0.1.45 still uses the alias NumPy 2 removed
-        np.infty = np.inf  # type: ignore[attr-defined]
+        setattr(np, "infty", np.inf)  # noqa: B010
     import pyrender
     import trimesh
     from PIL import Image
