@@ -406,3 +406,16 @@ TEST(DepthSensor, TofFlyingPixelsLieBetweenSurfaces) {
   }
   EXPECT_GT(between, 190);
 }
+
+TEST(Renderer, ColorTemperatureFollowsPlanck) {
+  const mgn::Vec3d white = mgn::color_temperature_rgb(6500.0);
+  EXPECT_NEAR(white.minCoeff(), 1.0, 1e-12);
+  const mgn::Vec3d warm = mgn::color_temperature_rgb(3000.0);
+  const mgn::Vec3d cold = mgn::color_temperature_rgb(10000.0);
+  EXPECT_DOUBLE_EQ(warm.x(), 1.0);  // red dominates a warm light
+  EXPECT_GT(warm.x(), warm.y());
+  EXPECT_GT(warm.y(), warm.z());
+  EXPECT_DOUBLE_EQ(cold.z(), 1.0);  // blue dominates a cold one
+  EXPECT_LT(cold.x(), cold.y());
+  EXPECT_THROW(mgn::color_temperature_rgb(0.0), mgn::InvalidArgument);
+}

@@ -236,3 +236,46 @@ def test_builtin_textures_reach_the_mesh() -> None:
     mesh = object_mesh(get_object("box_cereal"))
     data = mesh.materials[0].texture_data
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_cli_rig_prints_the_37_poses(capsys) -> None:
+    import json
+
+    from mgn.cli import main
+
+    assert main(["render", "rig", "--seed", "5", "--target", "0", "0", "0"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(np.asarray(out["X_WC"]), mgn_rig(5, (0, 0, 0))[0])
+    assert main(["render", "demo", "/nonexistent/x", "--objects", "0"]) == 1
+
+
+def test_texture_orientation_follows_the_obj_uv_convention() -> None:
+    import io
+
+    from PIL import Image
+
+    # Texture quadrants (row 0 = top of the image): red | green over blue | white.
+    tex = np.zeros((8, 8, 3), np.uint8)
+    tex[:4, :4] = (255, 0, 0)
+    tex[:4, 4:] = (0, 255, 0)
+    tex[4:, :4] = (0, 0, 255)
+    tex[4:, 4:] = (255, 255, 255)
+    buf = io.BytesIO()
+    Image.fromarray(tex).save(buf, format="PNG")
+    mat = mgn.Material()
+    mat.base_color = np.ones(4, np.float32)
+    mat.texture_data = buf.getvalue()
+    v = np.array([[-0.1, -0.1, 0], [0.1, -0.1, 0], [0.1, 0.1, 0], [-0.1, 0.1, 0]], np.float32)
+    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)  # v = 1 at the image top
+    quad = mgn.Mesh(v, np.array([[0, 1, 2], [0, 2, 3]], np.int32), uv, [mat], [], "quad")
+    r = Renderer(64, 64)
+    r.set_instances([Instance(r.add_mesh(quad), np.eye(4), 1)])
+    K = Intrinsics(64, 64, 100.0, 100.0, 32.0, 32.0)
+    # Straight down, image up = world +y, image right = world +x.
+    view = CameraView(K, mgn.render.look_at((0, 0, 0.5), (0, 0, 0), (0, 1, 0)))
+    rgb = r.render(view, shadows=False).rgb.astype(int)
+    tl, tr, bl, br = rgb[20, 20], rgb[20, 44], rgb[44, 20], rgb[44, 44]
+    assert tl[0] > 2 * max(tl[1], tl[2])  # red
+    assert tr[1] > 2 * max(tr[0], tr[2])  # green
+    assert bl[2] > 2 * max(bl[0], bl[1])  # blue
+    assert min(br) > 0.8 * max(br)  # white (grey)
