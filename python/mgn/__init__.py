@@ -22,10 +22,16 @@ from mgn.geometry import (
     sample_surface,
 )
 from mgn.raytrace import RayAllHits, RayHits, RayScene, camera_rays
+from mgn.render import CameraView, Intrinsics, Renderer, mgn_rig, render_views
 
 __all__ = [
     "__version__",
     "BackendError",
+    "CameraView",
+    "Intrinsics",
+    "Renderer",
+    "mgn_rig",
+    "render_views",
     "CollisionModel",
     "DistanceResult",
     "InvalidArgumentError",

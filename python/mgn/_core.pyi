@@ -14,6 +14,9 @@ __all__: list[str] = [
     "BackendError",
     "CollisionModel",
     "Cup",
+    "DepthSensorParams",
+    "DepthSensorPreset",
+    "Intrinsics",
     "InvalidArgumentError",
     "IoError",
     "MassProperties",
@@ -22,24 +25,36 @@ __all__: list[str] = [
     "MeshReport",
     "MgnError",
     "RayScene",
+    "Renderer",
     "SEAL_FAILURE_NAMES",
+    "SURFACE_DARK",
+    "SURFACE_MIRROR",
+    "SURFACE_TRANSPARENT",
     "SealModel",
     "UnsupportedError",
+    "apply_depth_sensor",
     "build_info",
     "calibrate_cup",
     "camera_rays",
     "classification_metrics",
     "collide",
+    "color_temperature_rgb",
     "compute_mass_properties",
     "distance",
+    "hemisphere_rig",
     "load_mesh",
+    "look_at",
     "make_box",
     "make_cylinder",
     "make_sphere",
+    "mesh_surface_flags",
+    "mgn_rig",
+    "mgn_rig_from_params",
     "predict_experiments",
     "resolve_num_threads",
     "sample_surface",
     "suction_wrench_scores",
+    "surface_flags",
 ]
 
 class MgnError(Exception):
@@ -367,6 +382,207 @@ class SealModel:
     @property
     def model(self) -> str: ...
 
+class Intrinsics:
+    """
+    Pinhole intrinsics in pixels (OpenCV model).
+    """
+    @staticmethod
+    def mgn_synthetic() -> Intrinsics: ...
+    @staticmethod
+    def zivid_two_like() -> Intrinsics: ...
+    def __init__(
+        self,
+        width: typing.SupportsInt | typing.SupportsIndex,
+        height: typing.SupportsInt | typing.SupportsIndex,
+        fx: typing.SupportsFloat | typing.SupportsIndex,
+        fy: typing.SupportsFloat | typing.SupportsIndex,
+        cx: typing.SupportsFloat | typing.SupportsIndex,
+        cy: typing.SupportsFloat | typing.SupportsIndex,
+    ) -> None: ...
+    def __repr__(self) -> str: ...
+    @property
+    def K(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 3]"]:
+        """
+        (3, 3) intrinsic matrix
+        """
+    @property
+    def cx(self) -> float: ...
+    @property
+    def cy(self) -> float: ...
+    @property
+    def fx(self) -> float: ...
+    @property
+    def fy(self) -> float: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def width(self) -> int: ...
+
+class Renderer:
+    """
+    Off-screen OSMesa renderer (one GL context, reused).
+    """
+    def __init__(
+        self,
+        max_width: typing.SupportsInt | typing.SupportsIndex,
+        max_height: typing.SupportsInt | typing.SupportsIndex,
+    ) -> None: ...
+    def add_mesh(self, mesh: Mesh) -> int: ...
+    def render(
+        self,
+        K: Intrinsics,
+        X_WC: typing.Any,
+        rgb: bool = True,
+        depth: bool = True,
+        instances: bool = True,
+        visible_instances: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [],
+        shadows: bool = True,
+        randomize: bool = False,
+        seed: typing.SupportsInt | typing.SupportsIndex = 0,
+        view_index: typing.SupportsInt | typing.SupportsIndex = 0,
+        light_position: typing.Any = None,
+        light_intensity: typing.SupportsFloat | typing.SupportsIndex = 1.0,
+        light_color_temperature: typing.SupportsFloat | typing.SupportsIndex = 6500.0,
+        light_ambient: typing.SupportsFloat | typing.SupportsIndex = 0.25,
+        background: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"] = ...,
+        check_camera_inside: bool = True,
+    ) -> dict: ...
+    def set_instances(
+        self,
+        mesh_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
+        poses: typing.Any,
+        instance_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
+        randomize_color: collections.abc.Sequence[bool] = [],
+    ) -> None: ...
+    @property
+    def max_height(self) -> int: ...
+    @property
+    def max_width(self) -> int: ...
+    @property
+    def num_instances(self) -> int: ...
+    @property
+    def num_meshes(self) -> int: ...
+
+class DepthSensorPreset:
+    """
+    Members:
+
+      Ideal
+
+      StructuredLight
+
+      ToF
+    """
+
+    Ideal: typing.ClassVar[DepthSensorPreset]
+    StructuredLight: typing.ClassVar[DepthSensorPreset]
+    ToF: typing.ClassVar[DepthSensorPreset]
+    __members__: typing.ClassVar[dict[str, DepthSensorPreset]]
+    @typing.overload
+    def __eq__(self, other: DepthSensorPreset) -> bool: ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool: ...
+    def __getstate__(self) -> int: ...
+    def __hash__(self) -> int: ...
+    def __index__(self) -> int: ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    def __int__(self) -> int: ...
+    @typing.overload
+    def __ne__(self, other: DepthSensorPreset) -> bool: ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool: ...
+    def __repr__(self) -> str: ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    def __str__(self) -> str: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def value(self) -> int: ...
+
+class DepthSensorParams:
+    """
+    Depth sensor model parameters (SI).
+    """
+
+    invalid_dark: bool
+    invalid_mirror: bool
+    invalid_transparent: bool
+    preset: DepthSensorPreset
+    @staticmethod
+    def preset_defaults(preset: DepthSensorPreset) -> DepthSensorParams: ...
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+    @property
+    def baseline(self) -> float:
+        """
+        m, projector along camera +x
+        """
+    @baseline.setter
+    def baseline(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def edge_threshold(self) -> float:
+        """
+        m
+        """
+    @edge_threshold.setter
+    def edge_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def flying_pixel_probability(self) -> float: ...
+    @flying_pixel_probability.setter
+    def flying_pixel_probability(
+        self, arg0: typing.SupportsFloat | typing.SupportsIndex
+    ) -> None: ...
+    @property
+    def max_range(self) -> float:
+        """
+        m
+        """
+    @max_range.setter
+    def max_range(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def min_range(self) -> float:
+        """
+        m
+        """
+    @min_range.setter
+    def min_range(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def shadow_tolerance_px(self) -> float:
+        """
+        px
+        """
+    @shadow_tolerance_px.setter
+    def shadow_tolerance_px(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def sigma_a(self) -> float:
+        """
+        m
+        """
+    @sigma_a.setter
+    def sigma_a(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def sigma_b(self) -> float:
+        """
+        1/m
+        """
+    @sigma_b.setter
+    def sigma_b(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def sigma_z0(self) -> float:
+        """
+        m
+        """
+    @sigma_z0.setter
+    def sigma_z0(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
+def apply_depth_sensor(
+    depth: typing.Any,
+    instance_ids: typing.Any,
+    flags_by_id: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
+    K: Intrinsics,
+    params: DepthSensorParams,
+    seed: typing.SupportsInt | typing.SupportsIndex,
+) -> dict: ...
 def build_info() -> list[tuple[str, str]]:
     """
     (library, version) pairs for mgn and every library the core was built against.
@@ -415,6 +631,9 @@ def collide(
     X_WB: typing.Any,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> numpy.ndarray: ...
+def color_temperature_rgb(
+    kelvin: typing.SupportsFloat | typing.SupportsIndex,
+) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]: ...
 def compute_mass_properties(
     mesh: Mesh,
     density: typing.SupportsFloat | typing.SupportsIndex = 1000.0,
@@ -430,12 +649,19 @@ def distance(
     abs_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict: ...
+def hemisphere_rig(
+    radii: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    tilts: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    azimuths: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    target: typing.Any,
+) -> numpy.ndarray: ...
 def load_mesh(
     path: str,
     scale: typing.SupportsFloat | typing.SupportsIndex = 1.0,
     merge: bool = True,
     drop_degenerate: bool = True,
 ) -> Mesh: ...
+def look_at(eye: typing.Any, target: typing.Any, up: typing.Any) -> numpy.ndarray: ...
 def make_box(
     extents: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
 ) -> Mesh: ...
@@ -449,6 +675,18 @@ def make_sphere(
     segments: typing.SupportsInt | typing.SupportsIndex = 64,
     rings: typing.SupportsInt | typing.SupportsIndex = 32,
 ) -> Mesh: ...
+def mesh_surface_flags(mesh: Mesh) -> int: ...
+def mgn_rig(
+    seed: typing.SupportsInt | typing.SupportsIndex, target: typing.Any
+) -> tuple[numpy.ndarray, dict]: ...
+def mgn_rig_from_params(
+    R_start: typing.SupportsFloat | typing.SupportsIndex,
+    R_end: typing.SupportsFloat | typing.SupportsIndex,
+    theta_start: typing.SupportsFloat | typing.SupportsIndex,
+    theta_end: typing.SupportsFloat | typing.SupportsIndex,
+    phi_end: typing.SupportsFloat | typing.SupportsIndex,
+    target: typing.Any,
+) -> numpy.ndarray: ...
 def predict_experiments(
     surfaces: collections.abc.Sequence[Mesh],
     surface_index: typing.Any,
@@ -483,6 +721,7 @@ def suction_wrench_scores(
     k: typing.SupportsFloat | typing.SupportsIndex = 15.6,
     gravity: typing.SupportsFloat | typing.SupportsIndex = 9.81,
 ) -> numpy.ndarray: ...
+def surface_flags(material: Material) -> int: ...
 
 SEAL_FAILURE_NAMES: tuple = (
     "none",
@@ -494,4 +733,7 @@ SEAL_FAILURE_NAMES: tuple = (
     "strain",
     "rough",
 )
+SURFACE_DARK: int = 2
+SURFACE_MIRROR: int = 4
+SURFACE_TRANSPARENT: int = 1
 __version__: str = "0.1.0"

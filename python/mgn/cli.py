@@ -335,6 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="demo_out", help="output folder (default: demo_out)")
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.set_defaults(func=_cmd_demo)
+    __import__("mgn.render.cli", fromlist=["register"]).register(sub)
     return parser
 
 

@@ -17,4 +17,7 @@
 #include <mgn/grasp/seal_model.hpp>
 #include <mgn/grasp/wrench.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
+#include <mgn/render/camera.hpp>
+#include <mgn/render/depth_sensor.hpp>
+#include <mgn/render/renderer.hpp>
 #include <mgn/version.hpp>

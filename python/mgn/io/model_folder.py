@@ -36,7 +36,8 @@ NUM_COM_KEYPOINTS = 1000
 
 
 def object_mesh(spec: ObjectSpec) -> Mesh:
-    """The :data:`mgn.Mesh` of an object spec (metres, object frame), with its material."""
+    """The :data:`mgn.Mesh` of an object spec (metres, object frame), with its material (its
+    texture, if any, embedded as PNG bytes in ``Material.texture_data``)."""
     mat = _core.Material()
     mat.name = spec.material.name
     mat.base_color = np.asarray(spec.material.base_color, np.float32)
@@ -44,6 +45,13 @@ def object_mesh(spec: ObjectSpec) -> Mesh:
     mat.shininess = float(spec.material.shininess)
     mat.opacity = float(spec.material.opacity)
     uvs = None if spec.uvs is None else np.asarray(spec.uvs, np.float32)
+    if spec.material.texture is not None and uvs is not None:
+        # The texture travels with the mesh as embedded PNG bytes (the renderer decodes them).
+        from PIL import Image
+
+        buf = io.BytesIO()
+        Image.fromarray(np.asarray(spec.material.texture, np.uint8)).save(buf, format="PNG")
+        mat.texture_data = buf.getvalue()
     return Mesh(
         np.asarray(spec.vertices, np.float32),
         np.asarray(spec.faces, np.int32),

@@ -1,0 +1,285 @@
+// Bindings of mgn/render: cameras and rigs, the OSMesa renderer, depth sensor models.
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+#include <mgn/render/camera.hpp>
+#include <mgn/render/depth_sensor.hpp>
+#include <mgn/render/renderer.hpp>
+
+#include <limits>
+
+#include "exceptions.hpp"
+#include "numpy_conv.hpp"
+
+namespace py = pybind11;
+using namespace mgn::py_conv;
+
+namespace mgn::py_bind {
+
+namespace {
+
+py::array poses_to_numpy(const std::vector<Pose>& poses) {
+  py::array_t<double> out({static_cast<py::ssize_t>(poses.size()), py::ssize_t{4}, py::ssize_t{4}});
+  double* o = out.mutable_data();
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> M = poses[i].matrix();
+    std::copy(M.data(), M.data() + 16, o + 16 * i);
+  }
+  return out;
+}
+
+/// Moves an (H*W*C) vector into an (H, W[, C]) numpy array without copying.
+template <typename T>
+py::object image(std::vector<T>&& v, int h, int w, int c = 1) {
+  if (v.empty()) return py::none();
+  py::array flat = to_numpy(std::move(v));
+  if (c == 1) return flat.attr("reshape")(h, w);
+  return flat.attr("reshape")(h, w, c);
+}
+
+Vec3d to_vec3(const py::handle& obj, const char* arg) {
+  const auto rows = to_rows<double, 3>(
+      py::module_::import("numpy").attr("reshape")(obj, py::make_tuple(1, 3)), arg);
+  return rows.row(0).transpose();
+}
+
+py::dict light_dict(const LightSample& l) {
+  py::dict d;
+  d["position_W"] = py::array_t<double>(3, l.position_W.data());
+  d["intensity"] = l.intensity;
+  d["color_temperature"] = l.color_temperature;
+  d["ambient"] = l.ambient;
+  return d;
+}
+
+}  // namespace
+
+void bind_render(py::module_& m) {
+  py::class_<Intrinsics>(m, "Intrinsics", "Pinhole intrinsics in pixels (OpenCV model).")
+      .def(py::init([](int width, int height, double fx, double fy, double cx, double cy) {
+             Intrinsics k{width, height, fx, fy, cx, cy};
+             k.validate("Intrinsics");
+             return k;
+           }),
+           py::arg("width"), py::arg("height"), py::arg("fx"), py::arg("fy"), py::arg("cx"),
+           py::arg("cy"))
+      .def_readonly("width", &Intrinsics::width)
+      .def_readonly("height", &Intrinsics::height)
+      .def_readonly("fx", &Intrinsics::fx)
+      .def_readonly("fy", &Intrinsics::fy)
+      .def_readonly("cx", &Intrinsics::cx)
+      .def_readonly("cy", &Intrinsics::cy)
+      .def_static("mgn_synthetic", &Intrinsics::mgn_synthetic)
+      .def_static("zivid_two_like", &Intrinsics::zivid_two_like)
+      .def_property_readonly("K", &Intrinsics::K, "(3, 3) intrinsic matrix")
+      .def("__repr__", [](const Intrinsics& k) {
+        return "Intrinsics(width=" + std::to_string(k.width) +
+               ", height=" + std::to_string(k.height) + ", fx=" + std::to_string(k.fx) +
+               ", fy=" + std::to_string(k.fy) + ", cx=" + std::to_string(k.cx) +
+               ", cy=" + std::to_string(k.cy) + ")";
+      });
+
+  m.def(
+      "look_at",
+      [](const py::handle& eye, const py::handle& target, const py::handle& up) {
+        return pose_to_numpy(
+            look_at(to_vec3(eye, "eye"), to_vec3(target, "target"), to_vec3(up, "up")));
+      },
+      py::arg("eye"), py::arg("target"), py::arg("up"));
+  m.def(
+      "mgn_rig",
+      [](std::uint64_t seed, const py::handle& target) {
+        MgnRigParams p;
+        const auto poses = mgn_rig(seed, to_vec3(target, "target"), &p);
+        py::dict d;
+        d["R_start"] = p.R_start;
+        d["R_end"] = p.R_end;
+        d["theta_start"] = p.theta_start;
+        d["theta_end"] = p.theta_end;
+        d["phi_end"] = p.phi_end;
+        return py::make_tuple(poses_to_numpy(poses), d);
+      },
+      py::arg("seed"), py::arg("target"));
+  m.def(
+      "mgn_rig_from_params",
+      [](double R_start, double R_end, double theta_start, double theta_end, double phi_end,
+         const py::handle& target) {
+        const MgnRigParams p{R_start, R_end, theta_start, theta_end, phi_end};
+        return poses_to_numpy(mgn_rig_from_params(p, to_vec3(target, "target")));
+      },
+      py::arg("R_start"), py::arg("R_end"), py::arg("theta_start"), py::arg("theta_end"),
+      py::arg("phi_end"), py::arg("target"));
+  m.def(
+      "hemisphere_rig",
+      [](const std::vector<double>& radii, const std::vector<double>& tilts,
+         const std::vector<double>& azimuths, const py::handle& target) {
+        return poses_to_numpy(hemisphere_rig(radii, tilts, azimuths, to_vec3(target, "target")));
+      },
+      py::arg("radii"), py::arg("tilts"), py::arg("azimuths"), py::arg("target"));
+  m.def("color_temperature_rgb", &color_temperature_rgb, py::arg("kelvin"));
+
+  py::class_<Renderer>(m, "Renderer", "Off-screen OSMesa renderer (one GL context, reused).")
+      .def(py::init([](int w, int h) {
+             py::gil_scoped_release release;
+             return std::make_unique<Renderer>(w, h);
+           }),
+           py::arg("max_width"), py::arg("max_height"))
+      .def_property_readonly("max_width", &Renderer::max_width)
+      .def_property_readonly("max_height", &Renderer::max_height)
+      .def_property_readonly("num_meshes", &Renderer::num_meshes)
+      .def(
+          "add_mesh",
+          [](Renderer& r, const Mesh& mesh) {
+            py::gil_scoped_release release;
+            return r.add_mesh(mesh);
+          },
+          py::arg("mesh"))
+      .def(
+          "set_instances",
+          [](Renderer& r, const std::vector<int>& mesh_ids, const py::handle& poses,
+             const std::vector<std::int32_t>& instance_ids,
+             const std::vector<bool>& randomize_color) {
+            std::vector<Pose> X;
+            if (!mesh_ids.empty()) X = to_poses(poses, "poses");
+            if (X.size() != mesh_ids.size() || instance_ids.size() != mesh_ids.size() ||
+                (!randomize_color.empty() && randomize_color.size() != mesh_ids.size())) {
+              throw_error<InvalidArgument>(
+                  "Renderer.set_instances: expected one pose, instance id (and randomize flag) "
+                  "per mesh id, got ",
+                  mesh_ids.size(), " mesh ids, ", X.size(), " poses, ", instance_ids.size(),
+                  " ids, ", randomize_color.size(), " flags");
+            }
+            std::vector<Instance> in(mesh_ids.size());
+            for (std::size_t i = 0; i < in.size(); ++i) {
+              in[i].mesh_id = mesh_ids[i];
+              in[i].X_WO = X[i];
+              in[i].instance_id = instance_ids[i];
+              in[i].randomize_color = !randomize_color.empty() && randomize_color[i];
+            }
+            r.set_instances(std::move(in));
+          },
+          py::arg("mesh_ids"), py::arg("poses"), py::arg("instance_ids"),
+          py::arg("randomize_color") = std::vector<bool>{})
+      .def_property_readonly("num_instances",
+                             [](const Renderer& r) { return r.instances().size(); })
+      .def(
+          "render",
+          [](Renderer& r, const Intrinsics& K, const py::handle& X_WC, bool rgb, bool depth,
+             bool instances, const std::vector<std::int32_t>& visible_instances, bool shadows,
+             bool randomize, std::uint64_t seed, std::uint64_t view_index,
+             const py::object& light_position, double light_intensity,
+             double light_color_temperature, double light_ambient, const Vec3f& background,
+             bool check_camera_inside) {
+            CameraView view;
+            view.K = K;
+            view.X_WC = to_pose(X_WC, "X_WC");
+            RenderOptions o;
+            o.rgb = rgb;
+            o.depth = depth;
+            o.instances = instances;
+            o.visible_instances = visible_instances;
+            o.shadows = shadows;
+            o.randomize = randomize;
+            o.seed = seed;
+            o.view_index = view_index;
+            if (!light_position.is_none())
+              o.light.position_W = to_vec3(light_position, "light_position");
+            o.light.intensity = light_intensity;
+            o.light.color_temperature = light_color_temperature;
+            o.light.ambient = light_ambient;
+            o.background = background;
+            o.check_camera_inside = check_camera_inside;
+            RenderOutput out;
+            {
+              py::gil_scoped_release release;
+              out = r.render(view, o);
+            }
+            py::dict d;
+            const int h = out.height, w = out.width;
+            d["rgb"] = image(std::move(out.rgb), h, w, 3);
+            d["depth"] = image(std::move(out.depth), h, w);
+            d["instance_ids"] = image(std::move(out.instance_ids), h, w);
+            d["light"] = light_dict(out.light);
+            return d;
+          },
+          py::arg("K"), py::arg("X_WC"), py::arg("rgb") = true, py::arg("depth") = true,
+          py::arg("instances") = true, py::arg("visible_instances") = std::vector<std::int32_t>{},
+          py::arg("shadows") = true, py::arg("randomize") = false, py::arg("seed") = 0,
+          py::arg("view_index") = 0, py::arg("light_position") = py::none(),
+          py::arg("light_intensity") = 1.0, py::arg("light_color_temperature") = 6500.0,
+          py::arg("light_ambient") = 0.25, py::arg("background") = Vec3f(0, 0, 0),
+          py::arg("check_camera_inside") = true);
+
+  py::enum_<DepthSensorPreset>(m, "DepthSensorPreset")
+      .value("Ideal", DepthSensorPreset::Ideal)
+      .value("StructuredLight", DepthSensorPreset::StructuredLight)
+      .value("ToF", DepthSensorPreset::ToF);
+
+  py::class_<DepthSensorParams>(m, "DepthSensorParams", "Depth sensor model parameters (SI).")
+      .def(py::init<>())
+      .def_static("preset_defaults", &DepthSensorParams::preset_defaults, py::arg("preset"))
+      .def_readwrite("preset", &DepthSensorParams::preset)
+      .def_readwrite("min_range", &DepthSensorParams::min_range, "m")
+      .def_readwrite("max_range", &DepthSensorParams::max_range, "m")
+      .def_readwrite("sigma_a", &DepthSensorParams::sigma_a, "m")
+      .def_readwrite("sigma_b", &DepthSensorParams::sigma_b, "1/m")
+      .def_readwrite("sigma_z0", &DepthSensorParams::sigma_z0, "m")
+      .def_readwrite("baseline", &DepthSensorParams::baseline, "m, projector along camera +x")
+      .def_readwrite("shadow_tolerance_px", &DepthSensorParams::shadow_tolerance_px, "px")
+      .def_readwrite("edge_threshold", &DepthSensorParams::edge_threshold, "m")
+      .def_readwrite("flying_pixel_probability", &DepthSensorParams::flying_pixel_probability)
+      .def_readwrite("invalid_transparent", &DepthSensorParams::invalid_transparent)
+      .def_readwrite("invalid_dark", &DepthSensorParams::invalid_dark)
+      .def_readwrite("invalid_mirror", &DepthSensorParams::invalid_mirror)
+      .def("validate", &DepthSensorParams::validate);
+
+  m.attr("SURFACE_TRANSPARENT") = static_cast<int>(kSurfaceTransparent);
+  m.attr("SURFACE_DARK") = static_cast<int>(kSurfaceDark);
+  m.attr("SURFACE_MIRROR") = static_cast<int>(kSurfaceMirror);
+  m.def(
+      "surface_flags", [](const Material& mat) { return static_cast<int>(surface_flags(mat)); },
+      py::arg("material"));
+  m.def(
+      "mesh_surface_flags", [](const Mesh& mesh) { return static_cast<int>(surface_flags(mesh)); },
+      py::arg("mesh"));
+  m.def(
+      "apply_depth_sensor",
+      [](const py::handle& depth, const py::handle& instance_ids,
+         const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
+         const DepthSensorParams& params, std::uint64_t seed) {
+        CArray<float> d;
+        CArray<std::int32_t> ids;
+        try {
+          d = py::cast<CArray<float>>(depth);
+          ids = py::cast<CArray<std::int32_t>>(instance_ids);
+        } catch (const py::cast_error&) {
+          throw_error<InvalidArgument>(
+              "apply_depth_sensor: depth and instance_ids must be "
+              "numeric (H, W) arrays");
+        }
+        for (const auto* a : {static_cast<py::array*>(&d), static_cast<py::array*>(&ids)}) {
+          if (a->ndim() != 2 || a->shape(0) != K.height || a->shape(1) != K.width) {
+            throw_error<InvalidArgument>(
+                "apply_depth_sensor: depth and instance_ids must have "
+                "shape (",
+                K.height, ", ", K.width, ") of K");
+          }
+        }
+        std::vector<float> dv(d.data(), d.data() + d.size());
+        std::vector<std::int32_t> iv(ids.data(), ids.data() + ids.size());
+        DepthImage out;
+        {
+          py::gil_scoped_release release;
+          out = apply_depth_sensor(dv, iv, flags_by_id, K, params, seed);
+        }
+        py::dict r;
+        const int h = out.height, w = out.width;
+        r["depth"] = image(std::move(out.depth), h, w);
+        r["depth_ideal"] = image(std::move(out.depth_ideal), h, w);
+        r["valid"] = image(std::move(out.valid), h, w).attr("astype")("bool");
+        return r;
+      },
+      py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
+      py::arg("params"), py::arg("seed"));
+}
+
+}  // namespace mgn::py_bind

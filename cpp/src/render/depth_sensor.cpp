@@ -1,0 +1,193 @@
+#include <mgn/core/error.hpp>
+#include <mgn/core/parallel.hpp>
+#include <mgn/core/rng.hpp>
+#include <mgn/render/depth_sensor.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace mgn {
+
+namespace {
+
+float luminance(const Vec3f& c) { return 0.2126f * c.x() + 0.7152f * c.y() + 0.0722f * c.z(); }
+
+}  // namespace
+
+std::uint8_t surface_flags(const Material& m) {
+  std::uint8_t f = 0;
+  if (m.opacity * m.base_color[3] < 0.5f) f |= kSurfaceTransparent;
+  const bool textured = !m.texture_path.empty() || !m.texture_data.empty();
+  if (!textured && luminance(m.base_color.head<3>()) < 0.03f) f |= kSurfaceDark;
+  if (luminance(m.specular) >= 0.8f && m.shininess >= 200.0f) f |= kSurfaceMirror;
+  return f;
+}
+
+std::uint8_t surface_flags(const Mesh& mesh) {
+  std::uint8_t f = 0;
+  for (const Material& m : mesh.materials()) f |= surface_flags(m);
+  return f;
+}
+
+DepthSensorParams DepthSensorParams::preset_defaults(DepthSensorPreset preset) {
+  DepthSensorParams p;
+  p.preset = preset;
+  switch (preset) {
+    case DepthSensorPreset::Ideal:
+      break;
+    case DepthSensorPreset::StructuredLight:
+      p.min_range = 0.3;
+      p.max_range = 2.0;
+      p.sigma_a = 0.1e-3;
+      p.sigma_b = 0.2e-3;
+      p.sigma_z0 = 0.0;
+      p.baseline = 0.1;
+      p.invalid_transparent = p.invalid_dark = p.invalid_mirror = true;
+      break;
+    case DepthSensorPreset::ToF:
+      p.min_range = 0.5;
+      p.max_range = 4.5;
+      p.sigma_a = 1.2e-3;
+      p.sigma_b = 1.9e-3;
+      p.sigma_z0 = 0.4;
+      p.edge_threshold = 0.02;
+      p.flying_pixel_probability = 0.5;
+      p.invalid_transparent = p.invalid_dark = p.invalid_mirror = true;
+      break;
+  }
+  return p;
+}
+
+void DepthSensorParams::validate() const {
+  const double nonneg[] = {min_range, max_range,           sigma_a,
+                           sigma_b,   shadow_tolerance_px, edge_threshold};
+  const char* names[] = {"min_range", "max_range",           "sigma_a",
+                         "sigma_b",   "shadow_tolerance_px", "edge_threshold"};
+  for (int i = 0; i < 6; ++i) {
+    if (!(std::isfinite(nonneg[i]) && nonneg[i] >= 0.0)) {
+      throw_error<InvalidArgument>("DepthSensorParams: ", names[i],
+                                   " must be finite and >= 0, got ", nonneg[i]);
+    }
+  }
+  if (!std::isfinite(sigma_z0) || !std::isfinite(baseline)) {
+    throw_error<InvalidArgument>("DepthSensorParams: sigma_z0 and baseline must be finite");
+  }
+  if (min_range > max_range) {
+    throw_error<InvalidArgument>("DepthSensorParams: min_range (", min_range,
+                                 ") must be <= max_range (", max_range, ")");
+  }
+  if (!(flying_pixel_probability >= 0.0 && flying_pixel_probability <= 1.0)) {
+    throw_error<InvalidArgument>(
+        "DepthSensorParams: flying_pixel_probability must be in [0, 1], "
+        "got ",
+        flying_pixel_probability);
+  }
+}
+
+DepthImage apply_depth_sensor(const std::vector<float>& depth,
+                              const std::vector<std::int32_t>& instance_ids,
+                              const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
+                              const DepthSensorParams& p, std::uint64_t seed) {
+  K.validate("apply_depth_sensor: K");
+  p.validate();
+  const int W = K.width, H = K.height;
+  const std::size_t n = static_cast<std::size_t>(W) * H;
+  if (depth.size() != n) {
+    throw_error<InvalidArgument>("apply_depth_sensor: depth has ", depth.size(),
+                                 " pixels; expected ", W, "x", H, " = ", n);
+  }
+  if (instance_ids.size() != n) {
+    throw_error<InvalidArgument>("apply_depth_sensor: instance_ids has ", instance_ids.size(),
+                                 " pixels; expected ", n);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(std::isfinite(depth[i]) && depth[i] >= 0.0f)) {
+      throw_error<InvalidArgument>(
+          "apply_depth_sensor: depth must be finite and >= 0 m (0 = "
+          "nothing seen), got ",
+          depth[i], " at pixel ", i);
+    }
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  DepthImage out;
+  out.width = W;
+  out.height = H;
+  out.depth_ideal = depth;
+  out.depth.assign(n, nan);
+  out.valid.assign(n, 0);
+  const bool ideal = p.preset == DepthSensorPreset::Ideal;
+  auto flags_of = [&](std::int32_t id) -> std::uint8_t {
+    return id >= 0 && static_cast<std::size_t>(id) < flags_by_id.size() ? flags_by_id[id] : 0;
+  };
+
+  parallel_for(static_cast<std::size_t>(H), 0, 8, [&](std::size_t v0, std::size_t v1) {
+    std::vector<std::uint8_t> shadow(static_cast<std::size_t>(W));
+    for (std::size_t v = v0; v < v1; ++v) {
+      const float* z = &depth[v * W];
+      const std::int32_t* ids = &instance_ids[v * W];
+      // Projector visibility along the row (rectified: the projector is offset along x, so a
+      // surface point and its occluder lie on the same row). A point at column u maps to the
+      // projector column u_p = u + 0.5 - fx b / z; an occluder of it has the same u_p and lies
+      // towards the projector (u' > u for b > 0). Sweep from the projector side keeping the
+      // extreme u_p seen so far.
+      std::fill(shadow.begin(), shadow.end(), 0);
+      if (!ideal && p.baseline != 0.0) {
+        const double fb = K.fx * p.baseline;
+        const double tol = p.shadow_tolerance_px;
+        if (p.baseline > 0.0) {
+          double min_up = std::numeric_limits<double>::infinity();
+          for (int u = W - 1; u >= 0; --u) {
+            if (z[u] <= 0.0f) continue;
+            const double up = u + 0.5 - fb / z[u];
+            if (up > min_up + tol) shadow[u] = 1;
+            min_up = std::min(min_up, up);
+          }
+        } else {
+          double max_up = -std::numeric_limits<double>::infinity();
+          for (int u = 0; u < W; ++u) {
+            if (z[u] <= 0.0f) continue;
+            const double up = u + 0.5 - fb / z[u];
+            if (up < max_up - tol) shadow[u] = 1;
+            max_up = std::max(max_up, up);
+          }
+        }
+      }
+      Rng rng(seed, v);
+      for (int u = 0; u < W; ++u) {
+        const std::size_t i = v * W + u;
+        double zz = z[u];
+        if (zz <= 0.0 || zz < p.min_range || zz > p.max_range) continue;
+        if (!ideal) {
+          const std::uint8_t f = flags_of(ids[u]);
+          if ((p.invalid_transparent && (f & kSurfaceTransparent)) ||
+              (p.invalid_dark && (f & kSurfaceDark)) || (p.invalid_mirror && (f & kSurfaceMirror)))
+            continue;
+          if (shadow[u]) continue;
+          if (p.flying_pixel_probability > 0.0 && p.edge_threshold > 0.0) {
+            // The 4-neighbour with the largest depth jump (seen surfaces only).
+            double other = 0.0, jump = 0.0;
+            const int du[4] = {-1, 1, 0, 0}, dv[4] = {0, 0, -1, 1};
+            for (int k = 0; k < 4; ++k) {
+              const long uu = u + du[k], vv = static_cast<long>(v) + dv[k];
+              if (uu < 0 || uu >= W || vv < 0 || vv >= H) continue;
+              const double zn = depth[static_cast<std::size_t>(vv) * W + uu];
+              if (zn > 0.0 && std::abs(zn - zz) > jump) jump = std::abs(zn - zz), other = zn;
+            }
+            if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
+              zz = zz + rng.uniform() * (other - zz);
+            }
+          }
+          const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
+          if (sigma > 0.0) zz += sigma * rng.normal();
+          if (!(zz > 0.0)) continue;
+        }
+        out.depth[i] = static_cast<float>(zz);
+        out.valid[i] = 1;
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace mgn

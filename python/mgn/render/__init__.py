@@ -1,0 +1,59 @@
+"""Cameras, OSMesa rendering and depth sensor models.
+
+- :mod:`mgn.render.camera`: :class:`Intrinsics` (MGN synthetic and Zivid-Two-like presets),
+  :class:`CameraView`, the 37-view MetaGraspNet rig (:func:`mgn_rig`), hemisphere rigs,
+  :func:`look_at`.
+- :mod:`mgn.render.renderer`: :class:`Renderer` (RGB, metric z-depth, instance ids; one GL
+  context reused across views).
+- :mod:`mgn.render.sensor`: :func:`apply_depth_sensor` with presets ``ideal``,
+  ``structured-light`` and ``tof``.
+- :mod:`mgn.render.views`: :func:`render_views`, render and write the views of a scene.
+"""
+
+from mgn.render.camera import (
+    CameraView,
+    Intrinsics,
+    MgnRigParams,
+    hemisphere_rig,
+    look_at,
+    mgn_rig,
+    mgn_rig_from_params,
+    mgn_views,
+)
+from mgn.render.renderer import Instance, LightSample, Renderer, RenderOutput
+from mgn.render.sensor import (
+    SURFACE_DARK,
+    SURFACE_MIRROR,
+    SURFACE_TRANSPARENT,
+    DepthImage,
+    apply_depth_sensor,
+    sensor_params,
+    surface_flags,
+)
+from mgn.render.views import ViewImages, depth_picture, render_views, tote_mesh
+
+__all__ = [
+    "SURFACE_DARK",
+    "SURFACE_MIRROR",
+    "SURFACE_TRANSPARENT",
+    "CameraView",
+    "DepthImage",
+    "Instance",
+    "Intrinsics",
+    "LightSample",
+    "MgnRigParams",
+    "RenderOutput",
+    "Renderer",
+    "ViewImages",
+    "apply_depth_sensor",
+    "depth_picture",
+    "hemisphere_rig",
+    "look_at",
+    "mgn_rig",
+    "mgn_rig_from_params",
+    "mgn_views",
+    "render_views",
+    "sensor_params",
+    "surface_flags",
+    "tote_mesh",
+]
