@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from . import bench_collision, bench_raycast, bench_seal
+from . import bench_collision, bench_raycast, bench_render, bench_seal
 from .common import (
     import_mgn,
     load_average,
@@ -19,7 +19,7 @@ from .common import (
 )
 
 HERE = Path(__file__).resolve().parent
-SUITES = {"raycast": bench_raycast, "collision": bench_collision, "seal": bench_seal}
+SUITES = {"raycast": bench_raycast, "collision": bench_collision, "seal": bench_seal, "render": bench_render}
 
 
 def log(msg: str) -> None:
