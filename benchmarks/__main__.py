@@ -19,7 +19,12 @@ from .common import (
 )
 
 HERE = Path(__file__).resolve().parent
-SUITES = {"raycast": bench_raycast, "collision": bench_collision, "seal": bench_seal, "render": bench_render}
+SUITES = {
+    "raycast": bench_raycast,
+    "collision": bench_collision,
+    "seal": bench_seal,
+    "render": bench_render,
+}
 
 
 def log(msg: str) -> None:
