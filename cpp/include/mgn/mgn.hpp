@@ -7,6 +7,7 @@
 #include <mgn/core/parallel.hpp>
 #include <mgn/core/rng.hpp>
 #include <mgn/core/types.hpp>
+#include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/geometry/mass_properties.hpp>
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/geometry/mesh_io.hpp>
@@ -17,4 +18,5 @@
 #include <mgn/grasp/seal_model.hpp>
 #include <mgn/grasp/wrench.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
+#include <mgn/scene/drop.hpp>
 #include <mgn/version.hpp>

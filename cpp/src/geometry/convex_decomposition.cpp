@@ -4,6 +4,7 @@
 #include <HACD/hacdHACD.h>
 #include <LinearMath/btConvexHullComputer.h>
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -175,25 +176,48 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
   for (std::size_t t = 0; t < partition.size(); ++t)
     for (int c = 0; c < 3; ++c)
       cluster_vertices[partition[t]].push_back(F(static_cast<Eigen::Index>(t), c));
-  std::vector<Mesh> parts;
+  std::vector<Points3f> clusters;
   for (auto& [cluster, ids] : cluster_vertices) {
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
     Points3f pts(static_cast<Eigen::Index>(ids.size()), 3);
     for (std::size_t i = 0; i < ids.size(); ++i)
       pts.row(static_cast<Eigen::Index>(i)) = V.row(ids[i]);
-    try {
-      Mesh part = convex_hull_of_points(pts);
-      part.set_name(base + "_" + std::to_string(parts.size()));
-      parts.push_back(std::move(part));
-    } catch (const InvalidArgument&) {
-      // A flat cluster (a planar patch) has no volume; its vertices also belong to the
-      // neighbouring clusters that share its boundary edges, and it is covered by their hulls
-      // only approximately. Thicken it by using the hull of the patch and its centroid pushed
-      // inwards is not possible without a normal, so merge it into the cluster-free whole-hull
-      // test below.
-      continue;
+    clusters.push_back(std::move(pts));
+  }
+  // A flat cluster (a planar patch) spans no volume: its points join the cluster with the
+  // nearest centroid, so that every input vertex still lies in some part.
+  auto is_flat = [](const Points3f& pts) {
+    if (pts.rows() < 4) return true;
+    const Eigen::RowVector3d c = pts.cast<double>().colwise().mean();
+    const Eigen::MatrixXd centred = pts.cast<double>().rowwise() - c;
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred);
+    const auto sv = svd.singularValues();
+    return sv(2) <= 1e-6 * sv(0);
+  };
+  std::vector<bool> flat(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) flat[c] = is_flat(clusters[c]);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (!flat[c]) continue;
+    const Eigen::RowVector3f mc = clusters[c].colwise().mean();
+    long best = -1;
+    double best_d = 1e300;
+    for (std::size_t k = 0; k < clusters.size(); ++k) {
+      if (flat[k]) continue;
+      const double dist = (clusters[k].colwise().mean() - mc).norm();
+      if (dist < best_d) best_d = dist, best = static_cast<long>(k);
     }
+    if (best < 0) continue;
+    Points3f merged(clusters[best].rows() + clusters[c].rows(), 3);
+    merged << clusters[best], clusters[c];
+    clusters[best] = std::move(merged);
+  }
+  std::vector<Mesh> parts;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (flat[c]) continue;
+    Mesh part = convex_hull_of_points(clusters[c]);
+    part.set_name(base + "_" + std::to_string(parts.size()));
+    parts.push_back(std::move(part));
   }
   if (parts.empty()) {
     hull.set_name(base + "_0");
