@@ -36,7 +36,8 @@ void bind_scene(py::module_& m) {
   m.def(
       "convex_decomposition",
       [](const Mesh& mesh, double convex_volume_tolerance, double max_concavity, int min_parts,
-         int max_parts, double compactness_weight, double volume_weight) {
+         int max_parts, double compactness_weight, double volume_weight,
+         bool extra_concavity_points, std::int64_t max_hacd_faces, int grid_resolution) {
         ConvexDecompositionOptions o;
         o.convex_volume_tolerance = convex_volume_tolerance;
         o.max_concavity = max_concavity;
@@ -44,12 +45,16 @@ void bind_scene(py::module_& m) {
         o.max_parts = max_parts;
         o.compactness_weight = compactness_weight;
         o.volume_weight = volume_weight;
+        o.extra_concavity_points = extra_concavity_points;
+        o.max_hacd_faces = max_hacd_faces;
+        o.grid_resolution = grid_resolution;
         py::gil_scoped_release release;
         return convex_decomposition(mesh, o);
       },
-      py::arg("mesh"), py::arg("convex_volume_tolerance") = 0.03, py::arg("max_concavity") = 0.02,
+      py::arg("mesh"), py::arg("convex_volume_tolerance") = 0.10, py::arg("max_concavity") = 0.02,
       py::arg("min_parts") = 1, py::arg("max_parts") = 32, py::arg("compactness_weight") = 0.1,
-      py::arg("volume_weight") = 0.0);
+      py::arg("volume_weight") = 0.0, py::arg("extra_concavity_points") = true,
+      py::arg("max_hacd_faces") = 1500, py::arg("grid_resolution") = 40);
 
   m.def(
       "drop_objects",

@@ -22,6 +22,7 @@ from mgn.geometry import (
     sample_surface,
 )
 from mgn.raytrace import RayAllHits, RayHits, RayScene, camera_rays
+from mgn.scene.convex import convex_decomposition, convex_hull
 
 __all__ = [
     "__version__",
@@ -43,6 +44,8 @@ __all__ = [
     "build_info",
     "camera_rays",
     "collide",
+    "convex_decomposition",
+    "convex_hull",
     "distance",
     "load_mesh",
     "make_box",

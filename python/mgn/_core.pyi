@@ -31,7 +31,10 @@ __all__: list[str] = [
     "classification_metrics",
     "collide",
     "compute_mass_properties",
+    "convex_decomposition",
+    "convex_hull",
     "distance",
+    "drop_objects",
     "load_mesh",
     "make_box",
     "make_cylinder",
@@ -421,6 +424,16 @@ def compute_mass_properties(
     open_mesh: str = "shell",
     shell_thickness: typing.SupportsFloat | typing.SupportsIndex = 0.002,
 ) -> MassProperties: ...
+def convex_decomposition(
+    mesh: Mesh,
+    convex_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.03,
+    max_concavity: typing.SupportsFloat | typing.SupportsIndex = 0.02,
+    min_parts: typing.SupportsInt | typing.SupportsIndex = 1,
+    max_parts: typing.SupportsInt | typing.SupportsIndex = 32,
+    compactness_weight: typing.SupportsFloat | typing.SupportsIndex = 0.1,
+    volume_weight: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+) -> list[Mesh]: ...
+def convex_hull(mesh: Mesh) -> Mesh: ...
 def distance(
     a: CollisionModel,
     X_WA: typing.Any,
@@ -429,6 +442,18 @@ def distance(
     rel_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     abs_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+) -> dict: ...
+def drop_objects(
+    parts: collections.abc.Sequence[collections.abc.Sequence[Mesh]],
+    masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    coms: typing.Any,
+    inertias: typing.Any,
+    frictions: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    restitutions: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    names: collections.abc.Sequence[str],
+    tote: Mesh,
+    tote_box: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    options: dict,
 ) -> dict: ...
 def load_mesh(
     path: str,

@@ -125,3 +125,26 @@ TEST(ConvexDecomposition, BadInputIsRejected) {
   o.max_parts = 2;
   EXPECT_THROW(mgn::convex_decomposition(l_prism(0.05, 0.02), o), mgn::InvalidArgument);
 }
+
+TEST(ConvexDecomposition, GridSimplifiedInputStillCoversEveryVertex) {
+  // Forced through the grid-clustering path (tiny face budget, coarse grid).
+  const mgn::Mesh ring = mgn::make_cylinder(0.05, 0.02, 96);
+  const mgn::Mesh l = l_prism(0.05, 0.02);
+  for (const mgn::Mesh* m : {&l, &ring}) {
+    mgn::ConvexDecompositionOptions o;
+    o.max_hacd_faces = 4;
+    o.grid_resolution = 8;
+    o.convex_volume_tolerance = 0.0;
+    const auto parts = mgn::convex_decomposition(*m, o);
+    ASSERT_GE(parts.size(), 1u);
+    for (Eigen::Index v = 0; v < m->num_vertices(); ++v) {
+      const mgn::Vec3d p = m->vertices().row(v).cast<double>().transpose();
+      double best = 1e300;
+      for (const mgn::Mesh& part : parts) best = std::min(best, outside_distance(part, p));
+      EXPECT_LE(best, 2e-5) << "vertex " << v;
+    }
+  }
+  mgn::ConvexDecompositionOptions bad;
+  bad.grid_resolution = 2;
+  EXPECT_THROW(mgn::convex_decomposition(l_prism(0.05, 0.02), bad), mgn::InvalidArgument);
+}

@@ -57,7 +57,7 @@ def test_decomposition_covers_the_object_and_matches_its_volume(name):
         assert r.is_watertight and r.is_outward
     verts = np.unique(np.asarray(mesh.vertices, np.float64), axis=0)
     inside_some = np.min(np.stack([_outside(p, verts) for p in parts]), axis=0)
-    assert inside_some.max() <= 1e-6
+    assert inside_some.max() <= 2e-5  # hulls merge near-coplanar facets (float32)
 
 
 def test_convex_object_gives_its_single_hull():

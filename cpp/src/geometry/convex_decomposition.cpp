@@ -6,8 +6,11 @@
 
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
+#include <set>
 #include <unordered_map>
 
 namespace mgn {
@@ -110,6 +113,8 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     bad_option("compactness_weight", o.compactness_weight, "finite and >= 0");
   if (!(std::isfinite(o.volume_weight) && o.volume_weight >= 0))
     bad_option("volume_weight", o.volume_weight, "finite and >= 0");
+  if (o.max_hacd_faces < 4) bad_option("max_hacd_faces", o.max_hacd_faces, ">= 4");
+  if (o.grid_resolution < 4) bad_option("grid_resolution", o.grid_resolution, ">= 4");
 
   Mesh hull = convex_hull(mesh);
   const double hull_volume = closed_mesh_volume(hull);
@@ -120,22 +125,66 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     return {hull};
   }
 
-  // HACD needs a connected vertex graph: weld duplicated (texture seam) vertices first.
-  const std::vector<std::int32_t> weld = mesh.weld_map();
-  std::unordered_map<std::int32_t, long> compact;
-  std::vector<HACD::Vec3<HACD::Real>> points;
+  // HACD input: vertices welded by position (texture seams would disconnect the graph) and,
+  // for large meshes, clustered on a grid (HACD's cost grows quickly with the face count).
+  // `members[k]` lists the input vertices behind HACD vertex k, so that part hulls are built from
+  // the input vertices and contain them all.
   const auto& V = mesh.vertices();
-  for (std::size_t v = 0; v < weld.size(); ++v) {
-    if (weld[v] != static_cast<std::int32_t>(v)) continue;
-    compact.emplace(static_cast<std::int32_t>(v), static_cast<long>(points.size()));
-    points.emplace_back(V(v, 0), V(v, 1), V(v, 2));
+  const auto bounds = mesh.bounds();
+  const Vec3d lo = bounds.row(0).transpose();
+  const double diag = (bounds.row(1) - bounds.row(0)).norm();
+  double cell = 0.0;  // 0: exact welding
+  if (mesh.num_faces() > o.max_hacd_faces) cell = diag / o.grid_resolution;
+  std::vector<HACD::Vec3<HACD::Real>> points;
+  std::vector<std::vector<std::int32_t>> members;
+  std::vector<long> vertex_to_point(static_cast<std::size_t>(V.rows()));
+  {
+    std::map<std::array<std::int64_t, 3>, long> by_key;
+    std::vector<Vec3d> sums;
+    for (Eigen::Index v = 0; v < V.rows(); ++v) {
+      const Vec3d p = V.row(v).cast<double>().transpose();
+      std::array<std::int64_t, 3> key;
+      for (int c = 0; c < 3; ++c) {
+        if (cell > 0) {
+          key[c] = static_cast<std::int64_t>(std::floor((p[c] - lo[c]) / cell));
+        } else {
+          float f = V(v, c);
+          std::int32_t bits;
+          std::memcpy(&bits, &f, sizeof bits);
+          key[c] = bits;
+        }
+      }
+      auto [it, fresh] = by_key.emplace(key, static_cast<long>(sums.size()));
+      if (fresh) {
+        sums.push_back(Vec3d::Zero());
+        members.emplace_back();
+      }
+      sums[it->second] += p;
+      members[it->second].push_back(static_cast<std::int32_t>(v));
+      vertex_to_point[v] = it->second;
+    }
+    for (std::size_t k = 0; k < sums.size(); ++k) {
+      const Vec3d c = sums[k] / double(members[k].size());
+      points.emplace_back(c.x(), c.y(), c.z());
+    }
   }
   std::vector<HACD::Vec3<long>> triangles;
-  triangles.reserve(static_cast<std::size_t>(mesh.num_faces()));
-  for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
+  {
+    std::set<std::array<long, 3>> seen;
     const auto& F = mesh.faces();
-    triangles.emplace_back(compact.at(weld[F(f, 0)]), compact.at(weld[F(f, 1)]),
-                           compact.at(weld[F(f, 2)]));
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const long a = vertex_to_point[F(f, 0)], b = vertex_to_point[F(f, 1)],
+                 c = vertex_to_point[F(f, 2)];
+      if (a == b || b == c || a == c) continue;  // collapsed by the grid
+      std::array<long, 3> k{a, b, c};
+      std::sort(k.begin(), k.end());
+      if (!seen.insert(k).second) continue;
+      triangles.emplace_back(a, b, c);
+    }
+  }
+  if (triangles.size() < 4) {
+    hull.set_name(base + "_0");
+    return {hull};
   }
 
   double concavity = o.max_concavity;
@@ -155,9 +204,9 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     // measured in those units.
     hacd.SetScaleFactor(1000.0);
     hacd.SetConcavity(concavity * 2000.0);
-    hacd.SetAddExtraDistPoints(true);
+    hacd.SetAddExtraDistPoints(o.extra_concavity_points);
     hacd.SetAddNeighboursDistPoints(false);
-    hacd.SetAddFacesPoints(true);
+    hacd.SetAddFacesPoints(o.extra_concavity_points);
     hacd.SetConnectDist(30.0);
     if (!hacd.Compute(false, false))
       throw_error<BackendError>("convex_decomposition: HACD failed on mesh '", mesh.name(), "'");
@@ -170,12 +219,13 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     concavity *= 2.0;
   }
 
-  // Exact hull of each cluster's vertices: every input vertex lies in some part.
+  // Hull of each cluster's input vertices: every input vertex lies in some part.
   std::map<long, std::vector<std::int32_t>> cluster_vertices;
-  const auto& F = mesh.faces();
-  for (std::size_t t = 0; t < partition.size(); ++t)
-    for (int c = 0; c < 3; ++c)
-      cluster_vertices[partition[t]].push_back(F(static_cast<Eigen::Index>(t), c));
+  for (std::size_t t = 0; t < partition.size(); ++t) {
+    auto& ids = cluster_vertices[partition[t]];
+    for (long k : {triangles[t].X(), triangles[t].Y(), triangles[t].Z()})
+      ids.insert(ids.end(), members[k].begin(), members[k].end());
+  }
   std::vector<Points3f> clusters;
   for (auto& [cluster, ids] : cluster_vertices) {
     std::sort(ids.begin(), ids.end());

@@ -32,7 +32,7 @@ __all__ = [
 ]
 
 #: Bump when the decomposition algorithm changes, so old cache entries are not reused.
-_CACHE_VERSION = "hacd-1"
+_CACHE_VERSION = "hacd-3"
 
 
 @dataclass(frozen=True)
@@ -47,14 +47,22 @@ class ConvexDecompositionOptions:
         max_parts: at most this many parts (the concavity bound is relaxed until it holds).
         compactness_weight: weight of the compactness term of HACD's merge cost.
         volume_weight: weight of the volume term of HACD's merge cost.
+        extra_concavity_points: HACD samples extra points to measure concavity (better parts,
+            slower).
+        max_hacd_faces, grid_resolution: larger meshes are simplified for HACD by clustering
+            their vertices on a grid of ``grid_resolution`` cells along the bounding-box diagonal
+            (part hulls still contain every original vertex).
     """
 
-    convex_volume_tolerance: float = 0.03
+    convex_volume_tolerance: float = 0.10
     max_concavity: float = 0.02
     min_parts: int = 1
     max_parts: int = 32
     compactness_weight: float = 0.1
     volume_weight: float = 0.0
+    extra_concavity_points: bool = True
+    max_hacd_faces: int = 1500
+    grid_resolution: int = 40
 
 
 def convex_hull(mesh: Mesh) -> Mesh:
@@ -81,6 +89,9 @@ def convex_decomposition(
             int(o.max_parts),
             float(o.compactness_weight),
             float(o.volume_weight),
+            bool(o.extra_concavity_points),
+            int(o.max_hacd_faces),
+            int(o.grid_resolution),
         )
     )
 

@@ -16,8 +16,9 @@ namespace mgn {
 /// convex decomposition, Mamou & Ghorbel 2009) as shipped with Bullet's extras.
 struct ConvexDecompositionOptions {
   /// If the convex hull's volume exceeds the mesh volume by at most this fraction, the mesh is
-  /// taken as convex and its single hull is returned (0.03 = 3 %). >= 0.
-  double convex_volume_tolerance = 0.03;
+  /// taken as convex and its single hull is returned (0.10 = 10 %: a can with a domed bottom
+  /// rests like its hull). >= 0.
+  double convex_volume_tolerance = 0.10;
   /// Maximum concavity allowed in a part, as a fraction of the bounding-box diagonal. > 0.
   double max_concavity = 0.02;
   /// Stop merging when this many parts are left (the decomposition may return more when the
@@ -30,6 +31,14 @@ struct ConvexDecompositionOptions {
   double compactness_weight = 0.1;
   /// Weight of the volume term of HACD's merge cost. >= 0.
   double volume_weight = 0.0;
+  /// Let HACD sample extra points (face centres, distance points) when it measures concavity:
+  /// slightly better parts, much slower on meshes with thousands of faces.
+  bool extra_concavity_points = true;
+  /// Meshes with more faces are simplified for HACD by clustering their vertices on a grid of
+  /// `grid_resolution` cells along the bounding-box diagonal (the part hulls are still built
+  /// from the original vertices, so they contain every one). >= 4 each.
+  std::int64_t max_hacd_faces = 1500;
+  int grid_resolution = 40;
 };
 
 /// Convex hull of the mesh's vertices (Bullet's btConvexHullComputer), as a closed,
