@@ -426,12 +426,15 @@ def compute_mass_properties(
 ) -> MassProperties: ...
 def convex_decomposition(
     mesh: Mesh,
-    convex_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.03,
+    convex_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.1,
     max_concavity: typing.SupportsFloat | typing.SupportsIndex = 0.02,
     min_parts: typing.SupportsInt | typing.SupportsIndex = 1,
     max_parts: typing.SupportsInt | typing.SupportsIndex = 32,
     compactness_weight: typing.SupportsFloat | typing.SupportsIndex = 0.1,
     volume_weight: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+    extra_concavity_points: bool = True,
+    max_hacd_faces: typing.SupportsInt | typing.SupportsIndex = 1500,
+    grid_resolution: typing.SupportsInt | typing.SupportsIndex = 40,
 ) -> list[Mesh]: ...
 def convex_hull(mesh: Mesh) -> Mesh: ...
 def distance(
