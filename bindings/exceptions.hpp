@@ -12,4 +12,5 @@ void bind_collision(pybind11::module_& m);
 void bind_grasp(pybind11::module_& m);
 void bind_calibration(pybind11::module_& m);
 void bind_render(pybind11::module_& m);
+void bind_scene(pybind11::module_& m);
 }  // namespace mgn::py_bind

@@ -38,4 +38,15 @@ if(NOT TARGET mgn_deps::opencv)
   endforeach()
 endif()
 
+# HACD (approximate convex decomposition) ships in libbullet-extras-dev without a .pc file or
+# CMake config: find the library by hand. Its headers live under Bullet's include directory.
+if(NOT TARGET mgn_deps::hacd)
+  find_path(MGN_HACD_INCLUDE_DIR HACD/hacdHACD.h PATH_SUFFIXES bullet REQUIRED)
+  find_library(MGN_HACD_LIBRARY NAMES HACD REQUIRED)
+  add_library(mgn_deps::hacd UNKNOWN IMPORTED GLOBAL)
+  set_target_properties(mgn_deps::hacd PROPERTIES
+    IMPORTED_LOCATION "${MGN_HACD_LIBRARY}"
+    INTERFACE_INCLUDE_DIRECTORIES "${MGN_HACD_INCLUDE_DIR}")
+endif()
+
 find_package(Threads REQUIRED)

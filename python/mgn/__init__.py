@@ -23,6 +23,7 @@ from mgn.geometry import (
 )
 from mgn.raytrace import RayAllHits, RayHits, RayScene, camera_rays
 from mgn.render import CameraView, Intrinsics, Renderer, mgn_rig, render_views
+from mgn.scene.convex import convex_decomposition, convex_hull
 
 __all__ = [
     "__version__",
@@ -49,6 +50,8 @@ __all__ = [
     "build_info",
     "camera_rays",
     "collide",
+    "convex_decomposition",
+    "convex_hull",
     "distance",
     "load_mesh",
     "make_box",

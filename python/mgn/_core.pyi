@@ -40,8 +40,11 @@ __all__: list[str] = [
     "collide",
     "color_temperature_rgb",
     "compute_mass_properties",
+    "convex_decomposition",
+    "convex_hull",
     "distance",
     "hemisphere_rig",
+    "drop_objects",
     "load_mesh",
     "look_at",
     "make_box",
@@ -640,6 +643,19 @@ def compute_mass_properties(
     open_mesh: str = "shell",
     shell_thickness: typing.SupportsFloat | typing.SupportsIndex = 0.002,
 ) -> MassProperties: ...
+def convex_decomposition(
+    mesh: Mesh,
+    convex_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.1,
+    max_concavity: typing.SupportsFloat | typing.SupportsIndex = 0.02,
+    min_parts: typing.SupportsInt | typing.SupportsIndex = 1,
+    max_parts: typing.SupportsInt | typing.SupportsIndex = 32,
+    compactness_weight: typing.SupportsFloat | typing.SupportsIndex = 0.1,
+    volume_weight: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+    extra_concavity_points: bool = True,
+    max_hacd_faces: typing.SupportsInt | typing.SupportsIndex = 1500,
+    grid_resolution: typing.SupportsInt | typing.SupportsIndex = 40,
+) -> list[Mesh]: ...
+def convex_hull(mesh: Mesh) -> Mesh: ...
 def distance(
     a: CollisionModel,
     X_WA: typing.Any,
@@ -655,6 +671,18 @@ def hemisphere_rig(
     azimuths: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
     target: typing.Any,
 ) -> numpy.ndarray: ...
+def drop_objects(
+    parts: collections.abc.Sequence[collections.abc.Sequence[Mesh]],
+    masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    coms: typing.Any,
+    inertias: typing.Any,
+    frictions: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    restitutions: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    names: collections.abc.Sequence[str],
+    tote: Mesh,
+    tote_box: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    options: dict,
+) -> dict: ...
 def load_mesh(
     path: str,
     scale: typing.SupportsFloat | typing.SupportsIndex = 1.0,

@@ -325,6 +325,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.set_defaults(func=_cmd_suction_compare)
 
+    __import__("mgn.scene.cli", fromlist=["register"]).register(sub)
     p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
     p.add_argument("--scale", type=float, default=1.0, help="coordinate scale (0.001 for mm)")

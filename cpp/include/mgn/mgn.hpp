@@ -7,6 +7,7 @@
 #include <mgn/core/parallel.hpp>
 #include <mgn/core/rng.hpp>
 #include <mgn/core/types.hpp>
+#include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/geometry/mass_properties.hpp>
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/geometry/mesh_io.hpp>
@@ -20,4 +21,5 @@
 #include <mgn/render/camera.hpp>
 #include <mgn/render/depth_sensor.hpp>
 #include <mgn/render/renderer.hpp>
+#include <mgn/scene/drop.hpp>
 #include <mgn/version.hpp>

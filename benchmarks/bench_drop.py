@@ -1,0 +1,253 @@
+"""Scene drop: mgn.scene (Bullet in C++) against pybullet running the same drop.
+
+Both sides drop the same 20 built-in objects (the same convex parts from mgn's cached
+decomposition, the same masses and centres of mass, the same friction and restitution), from the
+same release poses (the ones mgn draws for the seed), into the same tote (five static boxes), with
+the same time step, solver iterations and rest thresholds, and stop when every object has been at
+rest for the same time or at 7 s. pybullet is driven as a user writes it: a Python loop of
+`stepSimulation` and `getBaseVelocity`. Differences that remain: pybullet computes the inertia
+from the shapes (mgn uses the exact mesh inertia), and pybullet keeps its own contact settings.
+
+Peak memory of each side is measured in a fresh subprocess (ru_maxrss), minus the same
+process's footprint after the imports.
+
+Run alone: `python -m benchmarks.bench_drop [--quick]`.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .common import PEER_NOT_INSTALLED, Row, measure_alternating
+
+NUM_OBJECTS = 20
+SEED = 2024
+
+
+def load_peer() -> tuple[Any | None, str]:
+    try:
+        import pybullet
+    except ImportError as exc:
+        return None, f"{PEER_NOT_INSTALLED} (pybullet: {exc})"
+    return pybullet, ""
+
+
+def scene_objects() -> list:
+    from mgn.scene import compose_objects
+
+    return compose_objects(count=NUM_OBJECTS, seed=SEED)
+
+
+def mgn_drop(objects: list) -> Any:
+    from mgn.scene import drop_scene
+
+    return drop_scene(objects, seed=SEED)
+
+
+def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
+    """mgn's release poses and, per object, its convex parts and mass properties."""
+    from mgn.geometry import mass_properties
+    from mgn.io.model_folder import object_mesh
+    from mgn.objects import ToteSpec
+    from mgn.scene import DropOptions, cached_convex_decomposition
+    from mgn.scene.drop import _simulate
+
+    out, _ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
+    parts, props = [], []
+    for s in objects:
+        mesh = object_mesh(s)
+        parts.append(cached_convex_decomposition(mesh))
+        props.append(mass_properties(mesh, s.density))
+    return out, parts, props
+
+
+def pybullet_drop(p: Any, objects: list, prepared: tuple) -> dict[str, Any]:
+    """The same drop in pybullet (DIRECT mode); returns the final poses and step count."""
+    from mgn.objects import ToteSpec
+    from mgn.scene import DropOptions
+    from mgn.scene.drop import RESTITUTION
+
+    out, parts, props = prepared
+    o, tote = DropOptions(), ToteSpec()
+    cid = p.connect(p.DIRECT)
+    try:
+        p.setGravity(0, 0, -o.gravity, physicsClientId=cid)
+        p.setPhysicsEngineParameter(
+            fixedTimeStep=o.dt, numSolverIterations=o.solver_iterations, physicsClientId=cid
+        )
+        hx, hy, H = tote.inner_length / 2, tote.inner_width / 2, tote.inner_height
+        T = max(tote.wall_thickness, 0.02)
+        F = max(tote.floor_thickness, 0.02)
+        boxes = [
+            ((-hx - T, -hy - T, -F), (hx + T, hy + T, 0.0)),
+            ((-hx - T, -hy - T, -F), (-hx, hy + T, H)),
+            ((hx, -hy - T, -F), (hx + T, hy + T, H)),
+            ((-hx, -hy - T, -F), (hx, -hy, H)),
+            ((-hx, hy, -F), (hx, hy + T, H)),
+        ]
+        for lo, hi in boxes:
+            lo_, hi_ = np.array(lo), np.array(hi)
+            shape = p.createCollisionShape(
+                p.GEOM_BOX, halfExtents=list((hi_ - lo_) / 2), physicsClientId=cid
+            )
+            b = p.createMultiBody(0, shape, basePosition=list((hi_ + lo_) / 2), physicsClientId=cid)
+            p.changeDynamics(
+                b, -1, lateralFriction=o.tote_friction, restitution=o.tote_restitution,
+                physicsClientId=cid,
+            )  # fmt: skip
+        bodies = []
+        for k, spec in enumerate(objects):
+            com = np.asarray(props[k].center_of_mass)
+            shape = p.createCollisionShapeArray(
+                [p.GEOM_MESH] * len(parts[k]),
+                vertices=[np.asarray(m.vertices, np.float64).tolist() for m in parts[k]],
+                collisionFramePositions=[list(-com)] * len(parts[k]),
+                physicsClientId=cid,
+            )
+            X = out["X_WO_release"][k]
+            q = _quat_xyzw(X[:3, :3])
+            pos = X[:3, :3] @ com + X[:3, 3]  # pybullet's base frame sits at the CoM
+            b = p.createMultiBody(
+                props[k].mass, shape, basePosition=list(pos), baseOrientation=q,
+                physicsClientId=cid,
+            )  # fmt: skip
+            p.changeDynamics(
+                b, -1, lateralFriction=spec.friction, restitution=RESTITUTION,
+                rollingFriction=o.rolling_friction, spinningFriction=o.rolling_friction,
+                angularDamping=o.angular_damping, linearDamping=0.0, physicsClientId=cid,
+            )  # fmt: skip
+            bodies.append(b)
+        rest_steps = int(np.ceil(o.rest_time / o.dt - 1e-9))
+        max_steps = int(np.ceil(o.max_time / o.dt - 1e-9))
+        at_rest = np.zeros(len(bodies), int)
+        active = np.ones(len(bodies), bool)
+        steps = 0
+        while steps < max_steps:
+            p.stepSimulation(physicsClientId=cid)
+            steps += 1
+            for k, b in enumerate(bodies):
+                if not active[k]:
+                    continue
+                pos, _ = p.getBasePositionAndOrientation(b, physicsClientId=cid)
+                if pos[2] < -tote.floor_thickness - 0.02:
+                    active[k] = False
+                    continue
+                v, w = p.getBaseVelocity(b, physicsClientId=cid)
+                rest = np.linalg.norm(v) < o.linear_rest and np.linalg.norm(w) < o.angular_rest
+                at_rest[k] = at_rest[k] + 1 if rest else 0
+            if np.all(at_rest[active] >= rest_steps):
+                break
+        return {"steps": steps, "settled": bool(np.all(at_rest[active] >= rest_steps))}
+    finally:
+        p.disconnect(physicsClientId=cid)
+
+
+def _quat_xyzw(R: np.ndarray) -> list[float]:
+    w = np.sqrt(max(0.0, 1.0 + R[0, 0] + R[1, 1] + R[2, 2])) / 2
+    x = np.copysign(np.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2])
+    y = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0])
+    z = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1])
+    q = np.array([x, y, z, w])
+    return list(q / np.linalg.norm(q))
+
+
+def _peak_rss_mib(side: str) -> tuple[float, float]:
+    """(peak RSS after the imports, peak RSS after one drop) of a fresh process, MiB."""
+    code = (
+        "import json, resource, benchmarks.bench_drop as b\n"
+        f"side = {side!r}\n"
+        "objs = b.scene_objects()\n"
+        "prep = b._prepared(objs) if side == 'peer' else None\n"
+        "p, _ = b.load_peer()\n"
+        "base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+        "b.mgn_drop(objs) if side == 'mgn' else b.pybullet_drop(p, objs, prep)\n"
+        "peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+        "print(json.dumps([base / 1024, peak / 1024]))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
+    )
+    base, peak = json.loads(out.stdout.strip().splitlines()[-1])
+    return base, peak
+
+
+def run(
+    *,
+    quick: bool,
+    repeats: int,
+    mgn: Any | None,
+    mgn_status: str,
+    log: Callable[[str], None],
+) -> list[Row]:
+    p, peer_status = load_peer()
+    row = Row(
+        group="scene drop",
+        case=f"{NUM_OBJECTS} built-in objects into the tote, settle (dt 1/240 s, max 7 s)",
+        n=1,
+        unit="drops/s",
+        peer_name="pybullet stepSimulation loop",
+        mgn_status=mgn_status,
+        peer_status=peer_status,
+    )
+    if mgn is None:
+        return [row]
+    objects = scene_objects()
+    t0 = time.perf_counter()
+    scene = mgn_drop(objects)  # warm-up: fills the decomposition cache
+    log(f"bench_drop: first drop (with decompositions) {time.perf_counter() - t0:.2f} s")
+    cases: dict[str, Callable[[], object]] = {"mgn": lambda: mgn_drop(objects)}
+    peer_result = None
+    if p is not None:
+        prepared = _prepared(objects)
+        peer_result = pybullet_drop(p, objects, prepared)
+        cases["peer"] = lambda: pybullet_drop(p, objects, prepared)
+    timings = measure_alternating(cases, repeats)
+    row.mgn[1] = timings["mgn"]  # one drop runs on one thread (Bullet's discrete world)
+    row.peer = timings.get("peer")
+    st = scene.stats
+    row.notes.append(
+        f"mgn: {st['steps']} steps, {st['simulated_time']:.2f} s simulated, "
+        f"{len(scene)} kept / {len(scene.removed)} removed, median wall "
+        f"{timings['mgn'].median:.2f} s ({st['steps'] / timings['mgn'].median:,.0f} steps/s)"
+    )
+    if peer_result is not None and row.peer is not None:
+        row.notes.append(
+            f"pybullet: {peer_result['steps']} steps, settled={peer_result['settled']}, median "
+            f"wall {row.peer.median:.2f} s "
+            f"({peer_result['steps'] / row.peer.median:,.0f} steps/s)"
+        )
+    for side in ["mgn"] + (["peer"] if p is not None else []):
+        try:
+            base, peak = _peak_rss_mib(side)
+            row.notes.append(
+                f"{side} peak RSS {peak:.0f} MiB ({peak - base:+.0f} MiB for the drop)"
+            )
+        except (subprocess.SubprocessError, ValueError, IndexError) as exc:
+            row.notes.append(f"{side} peak RSS not measured ({type(exc).__name__})")
+    row.agreement = "not compared (chaotic dynamics)"
+    return [row]
+
+
+if __name__ == "__main__":
+    from .common import import_mgn
+
+    mgn_mod, status = import_mgn()
+    rows = run(
+        quick="--quick" in sys.argv,
+        repeats=3,
+        mgn=mgn_mod,
+        mgn_status=status,
+        log=lambda m: print(m, file=sys.stderr),
+    )
+    for r in rows:
+        print(json.dumps(r.to_json(), indent=1))
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak RSS of this process: {rss:.0f} MiB")

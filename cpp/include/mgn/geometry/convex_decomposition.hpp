@@ -1,0 +1,64 @@
+#pragma once
+/// @file convex_decomposition.hpp  Convex hulls and approximate convex decomposition of a mesh.
+///
+/// Units: metres. Frame: every output mesh is in the frame of the input mesh (the object frame
+/// O). Output hulls are closed, outward-wound convex triangle meshes. Used for rigid-body physics
+/// (Bullet compound shapes) where a concave object is represented by a union of convex parts.
+
+#include <mgn/geometry/mesh.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace mgn {
+
+/// Options of convex_decomposition(). The decomposition is HACD (hierarchical approximate
+/// convex decomposition, Mamou & Ghorbel 2009) as shipped with Bullet's extras.
+struct ConvexDecompositionOptions {
+  /// If the convex hull's volume exceeds the mesh volume by at most this fraction, the mesh is
+  /// taken as convex and its single hull is returned (0.10 = 10 %: a can with a domed bottom
+  /// rests like its hull). >= 0.
+  double convex_volume_tolerance = 0.10;
+  /// Maximum concavity allowed in a part, as a fraction of the bounding-box diagonal. > 0.
+  double max_concavity = 0.02;
+  /// Stop merging when this many parts are left (the decomposition may return more when the
+  /// concavity bound forbids merging further; never fewer). >= 1.
+  int min_parts = 1;
+  /// Upper bound on the parts returned: while HACD returns more, max_concavity is doubled and
+  /// the decomposition repeated. >= min_parts.
+  int max_parts = 32;
+  /// Weight of the compactness (perimeter^2 / area) term of HACD's merge cost. >= 0.
+  double compactness_weight = 0.1;
+  /// Weight of the volume term of HACD's merge cost. >= 0.
+  double volume_weight = 0.0;
+  /// Let HACD sample extra points (face centres, distance points) when it measures concavity:
+  /// slightly better parts, much slower on meshes with thousands of faces.
+  bool extra_concavity_points = true;
+  /// Meshes with more faces are simplified for HACD by clustering their vertices on a grid of
+  /// `grid_resolution` cells along the bounding-box diagonal (the part hulls are still built
+  /// from the original vertices, so they contain every one). >= 4 each.
+  std::int64_t max_hacd_faces = 1500;
+  int grid_resolution = 40;
+};
+
+/// Convex hull of the mesh's vertices (Bullet's btConvexHullComputer), as a closed,
+/// outward-wound triangle mesh in the same frame. Planar hull faces are fan-triangulated.
+/// Throws InvalidArgument for an empty mesh or vertices that span no volume (all coplanar).
+Mesh convex_hull(const Mesh& mesh);
+
+/// Convex hull of a point set (N >= 4, finite, not coplanar), same conventions as convex_hull().
+Mesh convex_hull_of_points(const Points3f& points);
+
+/// Approximate convex decomposition: closed convex meshes (object frame) whose union
+/// approximates the object. If the mesh is (nearly) convex (hull volume within
+/// options.convex_volume_tolerance of the mesh volume) the single hull is returned. Every part
+/// is the exact hull of a cluster of the input's faces, so every input vertex lies in (on the
+/// boundary of) at least one part. The result is deterministic. Throws InvalidArgument for an
+/// empty or non-finite mesh or out-of-range options.
+std::vector<Mesh> convex_decomposition(const Mesh& mesh,
+                                       const ConvexDecompositionOptions& options = {});
+
+/// Enclosed volume (m^3) of a closed mesh by the divergence theorem (absolute value).
+double closed_mesh_volume(const Mesh& mesh);
+
+}  // namespace mgn

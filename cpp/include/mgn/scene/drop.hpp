@@ -1,0 +1,136 @@
+#pragma once
+/// @file drop.hpp  Drop objects into the tote and let them settle (Bullet rigid-body physics).
+///
+/// Frames: the world frame W is the tote frame (origin at the centre of the inner floor top,
+/// x along the inner length, y along the inner width, z up; see python/mgn/objects/tote.py).
+/// The object frame O is the frame of each object's mesh. Poses X_WO map object coordinates to
+/// world coordinates. Units: SI (m, kg, s, rad).
+///
+/// Objects are released all at once at random orientations and random positions in the release
+/// window (MetaGraspNet: x +-60 mm, y +-30 mm, z 0.3-0.8 m above the floor). Initial overlaps are
+/// avoided deterministically: objects are placed in order of their drawn height, and an object
+/// whose bounding box would overlap one already placed is lifted just above it. The simulation
+/// runs until every object in the tote has been at rest for DropOptions::rest_time, or until
+/// DropOptions::max_time. Objects that left the tote are removed. The result depends only on the
+/// inputs and DropOptions::seed (object i draws from Rng(seed, i)).
+
+#include <mgn/core/types.hpp>
+#include <mgn/geometry/mesh.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mgn {
+
+/// A dynamic object to drop.
+struct DropObject {
+  /// Closed convex meshes in the object frame O whose union is the collision shape (see
+  /// convex_decomposition()). At least one.
+  std::vector<Mesh> convex_parts;
+  double mass = 0.0;              ///< kg, > 0
+  Vec3d com = Vec3d::Zero();      ///< centre of mass p_OCm, m, object frame
+  Mat3d inertia = Mat3d::Zero();  ///< kg m^2 about the centre of mass, axes of O; symmetric PD
+  double friction = 0.5;          ///< Coulomb coefficient, >= 0
+  double restitution = 0.1;       ///< in [0, 1]
+  std::string name;               ///< used in error messages only
+};
+
+/// The tote's inner cavity (tote frame as above). Walls are named by their outward side:
+/// -x at x = -inner_length/2, +x at x = +inner_length/2, -y, +y likewise; floor at z = 0.
+struct ToteBox {
+  double inner_length = 0.400;     ///< m, along x
+  double inner_width = 0.300;      ///< m, along y
+  double inner_height = 0.150;     ///< m, floor top to rim
+  double wall_thickness = 0.008;   ///< m
+  double floor_thickness = 0.010;  ///< m
+};
+
+/// How the static tote collides.
+enum class ToteCollision {
+  /// Five static boxes (floor and walls) fitted to the ToteBox, thickened outwards (the cavity is
+  /// exact). Robust against tunnelling through thin walls; the default.
+  Boxes,
+  /// The tote mesh as a static BVH triangle mesh (exact outside shape, thin walls).
+  TriangleMesh,
+};
+
+/// Options of drop_objects().
+struct DropOptions {
+  /// Release window in the tote frame, m: x, y, z ranges (min <= max, inside the cavity
+  /// horizontally, z min >= 0). MetaGraspNet: x +-0.06, y +-0.03, z 0.3-0.8.
+  Vec3d window_min = Vec3d(-0.06, -0.03, 0.30);
+  Vec3d window_max = Vec3d(0.06, 0.03, 0.80);
+  double dt = 1.0 / 240.0;          ///< s, fixed time step, in (0, 0.02]
+  int solver_iterations = 20;       ///< Bullet sequential-impulse iterations, >= 1
+  double max_time = 7.0;            ///< s of simulated time at most (MetaGraspNet: 7 s), > dt
+  double linear_rest = 0.01;        ///< m/s: an object is at rest below this speed ...
+  double angular_rest = 0.1;        ///< rad/s: ... and this angular speed ...
+  double rest_time = 0.2;           ///< s: ... held for this long. All > 0.
+  double gravity = 9.81;            ///< m/s^2, > 0, along -z
+  double rolling_friction = 0.002;  ///< Bullet rolling-friction coefficient of the objects, >= 0
+  double angular_damping = 0.05;    ///< fraction of angular velocity lost per second, [0, 1)
+  double tote_friction = 0.5;       ///< Coulomb coefficient of the tote, >= 0
+  double tote_restitution = 0.1;    ///< in [0, 1]
+  /// Bullet collision margin, m (> 0). Convex parts are shrunk by it so the effective surface is
+  /// the part's (with rounded edges).
+  double collision_margin = 0.001;
+  /// An object touches a wall or the floor if a contact point lies within this distance, m (> 0).
+  double contact_distance = 0.002;
+  /// Remove objects that are still moving at max_time (else keep them with settled = false).
+  bool remove_unsettled = false;
+  ToteCollision tote_collision = ToteCollision::Boxes;
+  std::uint64_t seed = 0;
+};
+
+/// Why an object is not kept.
+enum class DropStatus {
+  Kept = 0,        ///< at rest inside the tote
+  LeftTote = 1,    ///< fell out, or rests on/over the rim (not entirely inside the walls)
+  NotSettled = 2,  ///< still moving at max_time (only with remove_unsettled)
+};
+
+/// Tote surfaces, as bit flags of DroppedObject::contacts.
+enum ToteContact : std::uint32_t {
+  ContactWallMinusX = 1u << 0,
+  ContactWallPlusX = 1u << 1,
+  ContactWallMinusY = 1u << 2,
+  ContactWallPlusY = 1u << 3,
+  ContactFloor = 1u << 4,
+};
+
+/// Outcome for one input object (same order as the input).
+struct DroppedObject {
+  Pose X_WO = Pose::Identity();          ///< settled pose (or the pose where it was removed)
+  Pose X_WO_release = Pose::Identity();  ///< release pose
+  DropStatus status = DropStatus::Kept;
+  bool settled = false;        ///< at rest when the simulation stopped
+  std::uint32_t contacts = 0;  ///< ToteContact flags after settling (kept objects)
+  bool kept() const { return status == DropStatus::Kept; }
+};
+
+/// Outcome of drop_objects().
+struct DropResult {
+  std::vector<DroppedObject> objects;
+  std::int64_t steps = 0;       ///< simulation steps taken
+  double simulated_time = 0.0;  ///< s
+  bool settled = false;         ///< every remaining object was at rest before max_time
+  /// Deepest penetration between any two bodies (objects or tote) at the end, from Bullet's
+  /// contact points, m (>= 0).
+  double max_penetration = 0.0;
+};
+
+/// Drops `objects` into the tote and simulates until they settle (see the file comment).
+/// `tote` is the tote's closed triangle mesh in the world frame (python make_tote()); it is used
+/// for collisions with ToteCollision::TriangleMesh and otherwise checked for consistency with
+/// `box`. Throws InvalidArgument naming the input for: no objects, an object without parts,
+/// non-finite or non-positive mass / inertia, an object that cannot lie in the tote (its
+/// second-largest extent exceeds the inner width, or its largest the inner diagonal), an empty
+/// tote mesh, non-positive tote dimensions, or options out of range.
+DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote,
+                        const ToteBox& box, const DropOptions& options = {});
+
+/// Name of a status ("kept", "left_tote", "not_settled").
+const char* to_string(DropStatus status);
+
+}  // namespace mgn

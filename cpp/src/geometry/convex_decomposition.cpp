@@ -1,0 +1,279 @@
+#include <mgn/core/error.hpp>
+#include <mgn/geometry/convex_decomposition.hpp>
+
+#include <HACD/hacdHACD.h>
+#include <LinearMath/btConvexHullComputer.h>
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <set>
+#include <unordered_map>
+
+namespace mgn {
+
+namespace {
+
+void check_finite(const Mesh& mesh, const char* fn) {
+  require_non_empty(mesh, fn);
+  if (!mesh.vertices().allFinite())
+    throw_error<InvalidArgument>(fn, ": mesh '", mesh.name(), "' has non-finite vertices");
+}
+
+}  // namespace
+
+double closed_mesh_volume(const Mesh& mesh) {
+  const auto& V = mesh.vertices();
+  const auto& F = mesh.faces();
+  double six_v = 0.0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Vec3d a = V.row(F(f, 0)).cast<double>().transpose();
+    const Vec3d b = V.row(F(f, 1)).cast<double>().transpose();
+    const Vec3d c = V.row(F(f, 2)).cast<double>().transpose();
+    six_v += a.dot(b.cross(c));
+  }
+  return std::abs(six_v) / 6.0;
+}
+
+Mesh convex_hull_of_points(const Points3f& points) {
+  if (points.rows() < 4)
+    throw_error<InvalidArgument>("convex_hull: expected at least 4 points, got ", points.rows());
+  if (!points.allFinite()) throw_error<InvalidArgument>("convex_hull: points must be finite");
+  Points3d pd = points.cast<double>();
+  btConvexHullComputer hc;
+  hc.compute(pd.data(), static_cast<int>(3 * sizeof(double)), static_cast<int>(pd.rows()), 0.0,
+             0.0);
+  const int nv = hc.vertices.size();
+  const int nf = hc.faces.size();
+  if (nv < 4 || nf < 4)
+    throw_error<InvalidArgument>("convex_hull: the ", points.rows(),
+                                 " points span no volume (coplanar or coincident)");
+  Points3f verts(nv, 3);
+  for (int i = 0; i < nv; ++i) {
+    const btVector3& v = hc.vertices[i];
+    verts.row(i) << static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z());
+  }
+  // Each hull face is a planar polygon, counter-clockwise seen from outside: fan-triangulate.
+  std::vector<Eigen::Vector3i> tris;
+  for (int f = 0; f < nf; ++f) {
+    const btConvexHullComputer::Edge* first = &hc.edges[hc.faces[f]];
+    const int v0 = first->getSourceVertex();
+    const btConvexHullComputer::Edge* e = first->getNextEdgeOfFace();
+    while (e->getTargetVertex() != v0) {
+      tris.emplace_back(v0, e->getSourceVertex(), e->getTargetVertex());
+      e = e->getNextEdgeOfFace();
+    }
+  }
+  // Drop slivers whose float32 area vanishes (a Mesh rejects zero-area faces).
+  Faces faces(static_cast<Eigen::Index>(tris.size()), 3);
+  Eigen::Index k = 0;
+  for (const auto& t : tris) faces.row(k++) = t.transpose();
+  const auto bad = find_degenerate_faces(verts, faces);
+  if (!bad.empty()) {
+    Faces kept(faces.rows() - static_cast<Eigen::Index>(bad.size()), 3);
+    Eigen::Index j = 0;
+    std::size_t b = 0;
+    for (Eigen::Index i = 0; i < faces.rows(); ++i) {
+      if (b < bad.size() && bad[b] == i) {
+        ++b;
+        continue;
+      }
+      kept.row(j++) = faces.row(i);
+    }
+    faces = std::move(kept);
+  }
+  Mesh hull(std::move(verts), std::move(faces));
+  if (hull.validate().signed_volume < 0) hull = hull.flipped();
+  return hull;
+}
+
+Mesh convex_hull(const Mesh& mesh) {
+  check_finite(mesh, "convex_hull");
+  Mesh h = convex_hull_of_points(mesh.vertices());
+  h.set_name(mesh.name().empty() ? std::string("hull") : mesh.name() + "_hull");
+  return h;
+}
+
+std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositionOptions& o) {
+  check_finite(mesh, "convex_decomposition");
+  auto bad_option = [](const char* name, double v, const char* expected) {
+    throw_error<InvalidArgument>("convex_decomposition: options.", name, " must be ", expected,
+                                 ", got ", v);
+  };
+  if (!(std::isfinite(o.convex_volume_tolerance) && o.convex_volume_tolerance >= 0))
+    bad_option("convex_volume_tolerance", o.convex_volume_tolerance, "finite and >= 0");
+  if (!(std::isfinite(o.max_concavity) && o.max_concavity > 0))
+    bad_option("max_concavity", o.max_concavity, "finite and > 0");
+  if (o.min_parts < 1) bad_option("min_parts", o.min_parts, ">= 1");
+  if (o.max_parts < o.min_parts) bad_option("max_parts", o.max_parts, ">= min_parts");
+  if (!(std::isfinite(o.compactness_weight) && o.compactness_weight >= 0))
+    bad_option("compactness_weight", o.compactness_weight, "finite and >= 0");
+  if (!(std::isfinite(o.volume_weight) && o.volume_weight >= 0))
+    bad_option("volume_weight", o.volume_weight, "finite and >= 0");
+  if (o.max_hacd_faces < 4) bad_option("max_hacd_faces", o.max_hacd_faces, ">= 4");
+  if (o.grid_resolution < 4) bad_option("grid_resolution", o.grid_resolution, ">= 4");
+
+  Mesh hull = convex_hull(mesh);
+  const double hull_volume = closed_mesh_volume(hull);
+  const double volume = closed_mesh_volume(mesh);
+  const std::string base = mesh.name().empty() ? std::string("part") : mesh.name();
+  if (hull_volume <= volume * (1.0 + o.convex_volume_tolerance) || o.max_parts == 1) {
+    hull.set_name(base + "_0");
+    return {hull};
+  }
+
+  // HACD input: vertices welded by position (texture seams would disconnect the graph) and,
+  // for large meshes, clustered on a grid (HACD's cost grows quickly with the face count).
+  // `members[k]` lists the input vertices behind HACD vertex k, so that part hulls are built from
+  // the input vertices and contain them all.
+  const auto& V = mesh.vertices();
+  const auto bounds = mesh.bounds();
+  const Vec3d lo = bounds.row(0).transpose();
+  const double diag = (bounds.row(1) - bounds.row(0)).norm();
+  double cell = 0.0;  // 0: exact welding
+  if (mesh.num_faces() > o.max_hacd_faces) cell = diag / o.grid_resolution;
+  std::vector<HACD::Vec3<HACD::Real>> points;
+  std::vector<std::vector<std::int32_t>> members;
+  std::vector<long> vertex_to_point(static_cast<std::size_t>(V.rows()));
+  {
+    std::map<std::array<std::int64_t, 3>, long> by_key;
+    std::vector<Vec3d> sums;
+    for (Eigen::Index v = 0; v < V.rows(); ++v) {
+      const Vec3d p = V.row(v).cast<double>().transpose();
+      std::array<std::int64_t, 3> key;
+      for (int c = 0; c < 3; ++c) {
+        if (cell > 0) {
+          key[c] = static_cast<std::int64_t>(std::floor((p[c] - lo[c]) / cell));
+        } else {
+          float f = V(v, c);
+          std::int32_t bits;
+          std::memcpy(&bits, &f, sizeof bits);
+          key[c] = bits;
+        }
+      }
+      auto [it, fresh] = by_key.emplace(key, static_cast<long>(sums.size()));
+      if (fresh) {
+        sums.push_back(Vec3d::Zero());
+        members.emplace_back();
+      }
+      sums[it->second] += p;
+      members[it->second].push_back(static_cast<std::int32_t>(v));
+      vertex_to_point[v] = it->second;
+    }
+    for (std::size_t k = 0; k < sums.size(); ++k) {
+      const Vec3d c = sums[k] / double(members[k].size());
+      points.emplace_back(c.x(), c.y(), c.z());
+    }
+  }
+  std::vector<HACD::Vec3<long>> triangles;
+  {
+    std::set<std::array<long, 3>> seen;
+    const auto& F = mesh.faces();
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const long a = vertex_to_point[F(f, 0)], b = vertex_to_point[F(f, 1)],
+                 c = vertex_to_point[F(f, 2)];
+      if (a == b || b == c || a == c) continue;  // collapsed by the grid
+      std::array<long, 3> k{a, b, c};
+      std::sort(k.begin(), k.end());
+      if (!seen.insert(k).second) continue;
+      triangles.emplace_back(a, b, c);
+    }
+  }
+  if (triangles.size() < 4) {
+    hull.set_name(base + "_0");
+    return {hull};
+  }
+
+  double concavity = o.max_concavity;
+  std::vector<long> partition;
+  std::size_t num_clusters = 0;
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    HACD::HACD hacd;
+    hacd.SetPoints(points.data());
+    hacd.SetNPoints(points.size());
+    hacd.SetTriangles(triangles.data());
+    hacd.SetNTriangles(triangles.size());
+    hacd.SetCompacityWeight(o.compactness_weight);
+    hacd.SetVolumeWeight(o.volume_weight);
+    hacd.SetNClusters(static_cast<std::size_t>(o.min_parts));
+    hacd.SetNVerticesPerCH(1000);
+    // HACD normalises the mesh so that its bounding-box diagonal is 2 * scale; its concavity is
+    // measured in those units.
+    hacd.SetScaleFactor(1000.0);
+    hacd.SetConcavity(concavity * 2000.0);
+    hacd.SetAddExtraDistPoints(o.extra_concavity_points);
+    hacd.SetAddNeighboursDistPoints(false);
+    hacd.SetAddFacesPoints(o.extra_concavity_points);
+    hacd.SetConnectDist(30.0);
+    if (!hacd.Compute(false, false))
+      throw_error<BackendError>("convex_decomposition: HACD failed on mesh '", mesh.name(), "'");
+    num_clusters = hacd.GetNClusters();
+    const long* part = hacd.GetPartition();
+    if (part == nullptr)
+      throw_error<BackendError>("convex_decomposition: HACD returned no partition");
+    partition.assign(part, part + triangles.size());
+    if (num_clusters <= static_cast<std::size_t>(o.max_parts)) break;
+    concavity *= 2.0;
+  }
+
+  // Hull of each cluster's input vertices: every input vertex lies in some part.
+  std::map<long, std::vector<std::int32_t>> cluster_vertices;
+  for (std::size_t t = 0; t < partition.size(); ++t) {
+    auto& ids = cluster_vertices[partition[t]];
+    for (long k : {triangles[t].X(), triangles[t].Y(), triangles[t].Z()})
+      ids.insert(ids.end(), members[k].begin(), members[k].end());
+  }
+  std::vector<Points3f> clusters;
+  for (auto& [cluster, ids] : cluster_vertices) {
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    Points3f pts(static_cast<Eigen::Index>(ids.size()), 3);
+    for (std::size_t i = 0; i < ids.size(); ++i)
+      pts.row(static_cast<Eigen::Index>(i)) = V.row(ids[i]);
+    clusters.push_back(std::move(pts));
+  }
+  // A flat cluster (a planar patch) spans no volume: its points join the cluster with the
+  // nearest centroid, so that every input vertex still lies in some part.
+  auto is_flat = [](const Points3f& pts) {
+    if (pts.rows() < 4) return true;
+    const Eigen::RowVector3d c = pts.cast<double>().colwise().mean();
+    const Eigen::MatrixXd centred = pts.cast<double>().rowwise() - c;
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred);
+    const auto sv = svd.singularValues();
+    return sv(2) <= 1e-6 * sv(0);
+  };
+  std::vector<bool> flat(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) flat[c] = is_flat(clusters[c]);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (!flat[c]) continue;
+    const Eigen::RowVector3f mc = clusters[c].colwise().mean();
+    long best = -1;
+    double best_d = 1e300;
+    for (std::size_t k = 0; k < clusters.size(); ++k) {
+      if (flat[k]) continue;
+      const double dist = (clusters[k].colwise().mean() - mc).norm();
+      if (dist < best_d) best_d = dist, best = static_cast<long>(k);
+    }
+    if (best < 0) continue;
+    Points3f merged(clusters[best].rows() + clusters[c].rows(), 3);
+    merged << clusters[best], clusters[c];
+    clusters[best] = std::move(merged);
+  }
+  std::vector<Mesh> parts;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (flat[c]) continue;
+    Mesh part = convex_hull_of_points(clusters[c]);
+    part.set_name(base + "_" + std::to_string(parts.size()));
+    parts.push_back(std::move(part));
+  }
+  if (parts.empty()) {
+    hull.set_name(base + "_0");
+    return {hull};
+  }
+  return parts;
+}
+
+}  // namespace mgn

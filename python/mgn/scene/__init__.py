@@ -1,0 +1,86 @@
+"""Scenes: objects dropped into the tote (Bullet), serialisable to JSON.
+
+- :func:`compose_objects`: choose the objects (names, categories x 2-5 copies, or a count).
+- :func:`drop_scene`: drop them and let them settle -> :class:`Scene`.
+- :class:`Scene`: instances with settled poses ``X_WO`` (tote frame) and tote contacts;
+  ``to_json`` / ``from_json``; ``mesh(i)`` gives an instance's mesh back.
+- :func:`convex_decomposition`, :func:`convex_hull`, :func:`cached_convex_decomposition`: the
+  convex parts the physics uses.
+
+Names are imported on first use, so ``import mgn`` stays light.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+_EXPORTS = {
+    "MGN_COPIES": "compose",
+    "compose_objects": "compose",
+    "ConvexDecompositionOptions": "convex",
+    "cache_dir": "convex",
+    "cached_convex_decomposition": "convex",
+    "convex_decomposition": "convex",
+    "convex_hull": "convex",
+    "drop_scene": "drop",
+    "tote_mesh": "drop",
+    "BUILTIN": "scene",
+    "CONTACT_NAMES": "scene",
+    "DropOptions": "scene",
+    "RemovedInstance": "scene",
+    "Scene": "scene",
+    "SceneInstance": "scene",
+    "resolve_object": "scene",
+}
+
+__all__ = [
+    "BUILTIN",
+    "CONTACT_NAMES",
+    "ConvexDecompositionOptions",
+    "DropOptions",
+    "MGN_COPIES",
+    "RemovedInstance",
+    "Scene",
+    "SceneInstance",
+    "cache_dir",
+    "cached_convex_decomposition",
+    "compose_objects",
+    "convex_decomposition",
+    "convex_hull",
+    "drop_scene",
+    "resolve_object",
+    "tote_mesh",
+]
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'mgn.scene' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"mgn.scene.{module}"), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+if TYPE_CHECKING:
+    from mgn.scene.compose import MGN_COPIES, compose_objects
+    from mgn.scene.convex import (
+        ConvexDecompositionOptions,
+        cache_dir,
+        cached_convex_decomposition,
+        convex_decomposition,
+        convex_hull,
+    )
+    from mgn.scene.drop import drop_scene, tote_mesh
+    from mgn.scene.scene import (
+        BUILTIN,
+        CONTACT_NAMES,
+        DropOptions,
+        RemovedInstance,
+        Scene,
+        SceneInstance,
+        resolve_object,
+    )

@@ -1,0 +1,112 @@
+"""``mgn scene ...``: the scene command group.
+
+    mgn scene drop (--objects NAME[,NAME..] | --categories NAME[,NAME..] [--count N] | --count N)
+                   [--seed S] [--out scene.json] [--add YAML] [--copies MIN-MAX] ...
+
+Further actions (e.g. ``render``) register themselves by adding a function to :data:`ACTIONS`;
+each takes the ``scene`` subparsers object and adds its parser with ``set_defaults(func=...)``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+
+__all__ = ["ACTIONS", "register"]
+
+
+def _split(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    return [t.strip() for t in text.split(",") if t.strip()]
+
+
+def _copies(text: str) -> tuple[int, int]:
+    try:
+        lo, _, hi = text.partition("-")
+        return (int(lo), int(hi or lo))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected MIN-MAX (e.g. 2-5), got {text!r}") from None
+
+
+def _cmd_drop(args: argparse.Namespace) -> int:
+    from mgn.errors import InvalidArgumentError
+    from mgn.objects import builtin_objects, load_objects_yaml
+    from mgn.scene.compose import compose_objects
+    from mgn.scene.drop import drop_scene
+    from mgn.scene.scene import DropOptions
+
+    catalogue = list(builtin_objects())
+    sources: dict[str, str] = {}
+    for path in args.add or ():
+        for spec in load_objects_yaml(path):
+            catalogue.append(spec)
+            sources[spec.name] = str(Path(path).resolve())
+    names = _split(args.objects)
+    categories = _split(args.categories)
+    if names is None and categories is None and args.count is None:
+        raise InvalidArgumentError("mgn scene drop: give --objects, --categories or --count")
+    objects = compose_objects(
+        names=names,
+        categories=categories,
+        count=args.count,
+        copies=args.copies,
+        seed=args.seed,
+        catalogue=catalogue,
+    )
+    options = DropOptions(max_time=args.max_time, tote_collision=args.tote_collision)
+    used = {s.name for s in objects}
+    scene = drop_scene(
+        objects,
+        seed=args.seed,
+        options=options,
+        sources={k: v for k, v in sources.items() if k in used},
+    )
+    scene.to_json(args.out)
+    st = scene.stats
+    print(
+        f"dropped {st['num_dropped']} objects (seed {args.seed}): {len(scene)} in the tote, "
+        f"{len(scene.removed)} removed; {'settled' if st['settled'] else 'NOT settled'} after "
+        f"{st['simulated_time']:.2f} s simulated ({st['steps']} steps)"
+    )
+    for inst in scene.instances:
+        z = inst.X_WO[2, 3] * 1000
+        rel = inst.bin_relation
+        touches = ",".join(inst.contacts)
+        print(f"  {inst.instance_id:>3} {inst.name:<22} z={z:6.1f} mm  {rel:<7} {touches}")
+    for r in scene.removed:
+        print(f"  removed {r.name}: {r.reason}")
+    print(f"scene written to {args.out}")
+    return 0
+
+
+def _register_drop(ssub: argparse._SubParsersAction) -> None:
+    p = ssub.add_parser("drop", help="drop objects into the tote and write the settled scene")
+    p.add_argument("--objects", metavar="NAME[,NAME..]", help="these objects (names or ids)")
+    p.add_argument(
+        "--categories",
+        metavar="NAME[,NAME..]",
+        help="these categories, each with --copies copies (MetaGraspNet: 2-5)",
+    )
+    p.add_argument("--count", type=int, help="total number of objects")
+    p.add_argument("--copies", type=_copies, default=(2, 5), metavar="MIN-MAX")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", default="scene.json", help="scene JSON (default: scene.json)")
+    p.add_argument("--add", action="append", metavar="YAML", help="user objects YAML file")
+    p.add_argument("--max-time", type=float, default=7.0, help="simulated seconds at most")
+    p.add_argument("--tote-collision", choices=["boxes", "mesh"], default="boxes")
+    p.set_defaults(func=_cmd_drop)
+
+
+#: Functions adding one action each to the ``scene`` subparsers.
+ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [_register_drop]
+
+
+def register(sub: argparse._SubParsersAction) -> argparse._SubParsersAction:
+    """Add the ``scene`` command group to the top-level subparsers; returns its subparsers."""
+    scene = sub.add_parser("scene", help="compose and drop scenes")
+    ssub = scene.add_subparsers(dest="scene_command", metavar="ACTION", required=True)
+    for add in ACTIONS:
+        add(ssub)
+    return ssub

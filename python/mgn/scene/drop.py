@@ -1,0 +1,169 @@
+"""Drop objects into the tote with Bullet (C++ core) and return the settled :class:`Scene`."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mgn import _core
+from mgn.errors import InvalidArgumentError
+from mgn.geometry import Mesh, mass_properties
+from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, make_tote
+from mgn.scene.convex import ConvexDecompositionOptions, cached_convex_decomposition
+from mgn.scene.scene import (
+    BUILTIN,
+    CONTACT_NAMES,
+    DropOptions,
+    RemovedInstance,
+    Scene,
+    SceneInstance,
+)
+
+__all__ = ["RESTITUTION", "drop_scene", "tote_mesh"]
+
+#: Restitution of the objects (the library carries friction but not restitution).
+RESTITUTION = 0.1
+_STATUS = {0: "kept", 1: "left_tote", 2: "not_settled"}
+
+
+def tote_mesh(spec: ToteSpec) -> Mesh:
+    """The tote's closed triangle mesh in the tote frame (from :func:`mgn.objects.make_tote`)."""
+    v, f = make_tote(spec)
+    return Mesh(np.asarray(v, np.float32), np.asarray(f, np.int32), None, [], [], "tote")
+
+
+def _source_of(spec: ObjectSpec, sources: dict[str, str]) -> str:
+    if spec.name in sources:
+        return sources[spec.name]
+    for b in builtin_objects():
+        if b.name == spec.name:
+            if b == spec:
+                return BUILTIN
+            break
+    raise InvalidArgumentError(
+        f"drop_scene: object '{spec.name}' is not a built-in object; pass "
+        f"sources={{'{spec.name}': 'path/to/objects.yaml'}} so the scene can find it again"
+    )
+
+
+def _simulate(
+    objects: Sequence[ObjectSpec],
+    seed: int,
+    tote: ToteSpec,
+    options: DropOptions,
+    sources: dict[str, str | os.PathLike[str]] | None,
+    decomposition: ConvexDecompositionOptions | None,
+    use_cache: bool,
+) -> tuple[dict[str, Any], dict[str, str]]:
+    """Validates, prepares the per-object physics and runs the C++ drop. Returns the raw result
+    (X_WO, X_WO_release, status, settled, contacts, steps, ...) and each name's source."""
+    if len(objects) == 0:
+        raise InvalidArgumentError("drop_scene: expected at least one object, got none")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InvalidArgumentError(f"drop_scene: seed must be an integer >= 0, got {seed!r}")
+    src = {k: os.fspath(Path(v).resolve()) for k, v in (sources or {}).items()}
+    from mgn.io.model_folder import object_mesh
+
+    per_name: dict[str, tuple] = {}
+    for spec in objects:
+        if not isinstance(spec, ObjectSpec):
+            raise InvalidArgumentError(
+                f"drop_scene: objects must be ObjectSpec, got {type(spec).__name__}"
+            )
+        if spec.name in per_name:
+            continue
+        mesh = object_mesh(spec)
+        props = mass_properties(mesh, spec.density)
+        parts = cached_convex_decomposition(mesh, decomposition, use_cache=use_cache)
+        per_name[spec.name] = (parts, props, _source_of(spec, src))
+
+    parts = [per_name[s.name][0] for s in objects]
+    props = [per_name[s.name][1] for s in objects]
+    opts = options.to_dict()
+    opts["seed"] = int(seed)
+    out = _core.drop_objects(
+        parts,
+        [p.mass for p in props],
+        np.array([np.asarray(p.center_of_mass) for p in props], np.float64),
+        np.array([np.asarray(p.inertia).reshape(9) for p in props], np.float64),
+        [float(s.friction) for s in objects],
+        [RESTITUTION] * len(objects),
+        [s.name for s in objects],
+        tote_mesh(tote),
+        [
+            tote.inner_length,
+            tote.inner_width,
+            tote.inner_height,
+            tote.wall_thickness,
+            tote.floor_thickness,
+        ],
+        opts,
+    )
+    return out, {k: v[2] for k, v in per_name.items()}
+
+
+def drop_scene(
+    objects: Sequence[ObjectSpec],
+    *,
+    seed: int = 0,
+    tote: ToteSpec | None = None,
+    options: DropOptions | None = None,
+    sources: dict[str, str | os.PathLike[str]] | None = None,
+    decomposition: ConvexDecompositionOptions | None = None,
+    use_cache: bool = True,
+) -> Scene:
+    """Drop ``objects`` into the tote, simulate until they settle, return the :class:`Scene`.
+
+    Objects are released together at random orientations in the release window (seeded per
+    object), collide through their cached convex decompositions, and settle; those that left
+    the tote are listed in ``Scene.removed``. Mass, centre of mass and inertia come from each
+    mesh and its density; friction from the spec.
+
+    Args:
+        objects: what to drop (see :func:`mgn.scene.compose_objects`); copies may repeat.
+        seed: the same seed gives the same scene.
+        tote: the tote (default :func:`mgn.objects.default_tote`).
+        options: simulation options (MetaGraspNet defaults).
+        sources: for user objects, name -> the YAML file they were loaded from.
+        decomposition: convex decomposition options.
+        use_cache: read/write the decomposition cache (:func:`mgn.scene.convex.cache_dir`).
+
+    Raises:
+        InvalidArgumentError: no objects, an object larger than the tote, bad options, an
+            unknown object source.
+    """
+    tote = tote or ToteSpec()
+    options = options or DropOptions()
+    out, sources_of = _simulate(objects, seed, tote, options, sources, decomposition, use_cache)
+    instances: list[SceneInstance] = []
+    removed: list[RemovedInstance] = []
+    for k, spec in enumerate(objects):
+        source = sources_of[spec.name]
+        status = _STATUS[int(out["status"][k])]
+        if status != "kept":
+            removed.append(RemovedInstance(spec.name, source, status))
+            continue
+        bits = int(out["contacts"][k])
+        instances.append(
+            SceneInstance(
+                instance_id=len(instances) + 1,
+                name=spec.name,
+                category_id=spec.category_id,
+                source=source,
+                X_WO=out["X_WO"][k],
+                contacts=tuple(c for b, c in enumerate(CONTACT_NAMES) if bits & (1 << b)),
+                settled=bool(out["settled"][k]),
+            )
+        )
+    stats = {
+        "steps": int(out["steps"]),
+        "simulated_time": float(out["simulated_time"]),
+        "settled": bool(out["all_settled"]),
+        "max_penetration": float(out["max_penetration"]),
+        "num_dropped": len(objects),
+    }
+    return Scene(tuple(instances), tote, int(seed), options, tuple(removed), stats)

@@ -1,0 +1,217 @@
+// Tests of mgn/scene/drop: settled objects lie in the tote without interpenetrating, the result
+// is deterministic, tote contacts are named, and bad input is rejected.
+#include <gtest/gtest.h>
+#include <mgn/core/error.hpp>
+#include <mgn/geometry/convex_decomposition.hpp>
+#include <mgn/geometry/mass_properties.hpp>
+#include <mgn/geometry/primitives.hpp>
+#include <mgn/geometry/sampling.hpp>
+#include <mgn/scene/drop.hpp>
+
+#include <cmath>
+
+namespace {
+
+/// The closed tote mesh of python/mgn/objects/tote.py make_tote() for a ToteBox.
+mgn::Mesh tote_mesh(const mgn::ToteBox& b) {
+  const double hx = b.inner_length / 2, hy = b.inner_width / 2;
+  const double ox = hx + b.wall_thickness, oy = hy + b.wall_thickness;
+  const double top = b.inner_height, bottom = -b.floor_thickness;
+  const double c[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  mgn::Points3f v(16, 3);
+  const double rings[4][3] = {{ox, oy, bottom}, {ox, oy, top}, {hx, hy, top}, {hx, hy, 0}};
+  for (int r = 0; r < 4; ++r)
+    for (int i = 0; i < 4; ++i)
+      v.row(4 * r + i) << float(c[i][0] * rings[r][0]), float(c[i][1] * rings[r][1]),
+          float(rings[r][2]);
+  std::vector<Eigen::Vector3i> f = {{0, 2, 1}, {0, 3, 2}};
+  for (int i = 0; i < 4; ++i) {
+    const int j = (i + 1) % 4;
+    f.insert(f.end(), {{i, j, 4 + j},
+                       {i, 4 + j, 4 + i},
+                       {4 + i, 4 + j, 8 + j},
+                       {4 + i, 8 + j, 8 + i},
+                       {8 + i, 8 + j, 12 + j},
+                       {8 + i, 12 + j, 12 + i}});
+  }
+  f.insert(f.end(), {{12, 13, 14}, {12, 14, 15}});
+  mgn::Faces faces(static_cast<Eigen::Index>(f.size()), 3);
+  for (std::size_t k = 0; k < f.size(); ++k) faces.row(static_cast<Eigen::Index>(k)) = f[k];
+  return mgn::Mesh(v, faces);
+}
+
+mgn::DropObject object_of(const mgn::Mesh& mesh, double density, const std::string& name) {
+  const auto mp = mgn::compute_mass_properties(mesh, {density});
+  mgn::DropObject o;
+  o.convex_parts = mgn::convex_decomposition(mesh);
+  o.mass = mp.mass;
+  o.com = mp.center_of_mass;
+  o.inertia = mp.inertia;
+  o.friction = 0.5;
+  o.restitution = 0.1;
+  o.name = name;
+  return o;
+}
+
+std::vector<mgn::Mesh> mixed_meshes() {
+  return {mgn::make_box({0.10, 0.06, 0.04}),   mgn::make_sphere(0.03, 32, 16),
+          mgn::make_cylinder(0.025, 0.10, 32), mgn::make_box({0.05, 0.05, 0.05}),
+          mgn::make_box({0.15, 0.04, 0.02}),   mgn::make_cylinder(0.04, 0.03, 32),
+          mgn::make_sphere(0.025, 32, 16),     mgn::make_box({0.08, 0.08, 0.03})};
+}
+
+/// Deepest point of `a` (sampled surface, world frame) inside the convex mesh `b` (world frame).
+double penetration(const mgn::Mesh& a_world, const mgn::Mesh& b_world) {
+  const auto s = mgn::sample_surface(a_world, 2000, {});
+  const auto n = b_world.face_normals();
+  double deepest = 0.0;
+  for (Eigen::Index k = 0; k < s.points.rows(); ++k) {
+    const mgn::Vec3d p = s.points.row(k).cast<double>().transpose();
+    double depth = 1e300;  // min over faces of the distance inside that face's plane
+    for (Eigen::Index f = 0; f < b_world.num_faces(); ++f) {
+      const mgn::Vec3d q = b_world.vertices().row(b_world.faces()(f, 0)).cast<double>().transpose();
+      depth = std::min(depth, -n.row(f).cast<double>().dot(p - q));
+    }
+    deepest = std::max(deepest, depth);
+  }
+  return deepest;
+}
+
+}  // namespace
+
+TEST(Drop, SettledObjectsLieInTheToteWithoutInterpenetrating) {
+  const mgn::ToteBox box;
+  const mgn::Mesh tote = tote_mesh(box);
+  const auto meshes = mixed_meshes();
+  std::vector<mgn::DropObject> objects;
+  for (std::size_t i = 0; i < meshes.size(); ++i)
+    objects.push_back(object_of(meshes[i], 500, "obj" + std::to_string(i)));
+  mgn::DropOptions o;
+  o.seed = 7;
+  const mgn::DropResult r = mgn::drop_objects(objects, tote, box, o);
+  EXPECT_TRUE(r.settled);
+  EXPECT_LT(r.simulated_time, o.max_time);
+  EXPECT_LT(r.max_penetration, 0.003);
+  std::vector<mgn::Mesh> world;
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const auto& d = r.objects[i];
+    ASSERT_TRUE(d.kept()) << "object " << i << " " << mgn::to_string(d.status);
+    EXPECT_TRUE(d.settled);
+    world.push_back(meshes[i].transformed(d.X_WO));
+    const auto b = world.back().bounds();
+    constexpr double tol = 0.002;
+    EXPECT_GE(b(0, 2), -tol);
+    EXPECT_GE(b(0, 0), -box.inner_length / 2 - tol);
+    EXPECT_LE(b(1, 0), box.inner_length / 2 + tol);
+    EXPECT_GE(b(0, 1), -box.inner_width / 2 - tol);
+    EXPECT_LE(b(1, 1), box.inner_width / 2 + tol);
+    // Released above the floor, at rest below where it was released.
+    EXPECT_LT(d.X_WO.translation().z(), d.X_WO_release.translation().z());
+    // Something holds it up: the floor, or (for a stacked object) not the floor.
+    if (b(0, 2) < 0.002) EXPECT_TRUE(d.contacts & mgn::ContactFloor) << i;
+  }
+  for (std::size_t i = 0; i < world.size(); ++i)
+    for (std::size_t j = 0; j < world.size(); ++j)
+      if (i != j) EXPECT_LT(penetration(world[i], world[j]), 0.003) << i << " in " << j;
+}
+
+TEST(Drop, SameSeedSamePosesOtherSeedOtherPoses) {
+  const mgn::ToteBox box;
+  const mgn::Mesh tote = tote_mesh(box);
+  std::vector<mgn::DropObject> objects;
+  for (const auto& m : mixed_meshes()) objects.push_back(object_of(m, 700, "o"));
+  mgn::DropOptions o;
+  o.seed = 3;
+  o.max_time = 1.0;
+  const auto a = mgn::drop_objects(objects, tote, box, o);
+  const auto b = mgn::drop_objects(objects, tote, box, o);
+  o.seed = 4;
+  const auto c = mgn::drop_objects(objects, tote, box, o);
+  ASSERT_EQ(a.steps, b.steps);
+  double diff_c = 0.0;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    EXPECT_EQ(a.objects[i].X_WO.matrix(), b.objects[i].X_WO.matrix());
+    EXPECT_EQ(a.objects[i].contacts, b.objects[i].contacts);
+    diff_c += (a.objects[i].X_WO_release.matrix() - c.objects[i].X_WO_release.matrix()).norm();
+  }
+  EXPECT_GT(diff_c, 0.1);
+}
+
+TEST(Drop, BallInANarrowChannelTouchesBothSideWallsAndTheFloor) {
+  // Inner width 81 mm, ball diameter 80 mm released on the centre line: it must touch -y, +y and
+  // the floor, and neither x wall 150 mm away.
+  mgn::ToteBox box;
+  box.inner_length = 0.3;
+  box.inner_width = 0.081;
+  for (auto mode : {mgn::ToteCollision::Boxes, mgn::ToteCollision::TriangleMesh}) {
+    mgn::DropOptions o;
+    o.window_min = {0.0, 0.0, 0.2};
+    o.window_max = {0.0, 0.0, 0.2};
+    o.tote_collision = mode;
+    const auto r = mgn::drop_objects({object_of(mgn::make_sphere(0.04, 64, 32), 300, "ball")},
+                                     tote_mesh(box), box, o);
+    ASSERT_TRUE(r.objects[0].kept());
+    EXPECT_EQ(r.objects[0].contacts,
+              mgn::ContactFloor | mgn::ContactWallMinusY | mgn::ContactWallPlusY)
+        << "mode " << int(mode);
+    EXPECT_NEAR(r.objects[0].X_WO.translation().z(), 0.04, 0.002);
+  }
+}
+
+TEST(Drop, ObjectOverTheRimIsRemoved) {
+  // A 160 mm rod dropped off-centre into a shallow 120 mm tray may end inside (along the
+  // diagonal) or over the rim; either way `kept` must agree with "entirely inside the walls".
+  mgn::ToteBox box;
+  box.inner_length = 0.12;
+  box.inner_width = 0.12;
+  box.inner_height = 0.02;
+  mgn::DropOptions o;
+  o.window_min = {0.03, 0.0, 0.3};
+  o.window_max = {0.03, 0.0, 0.3};
+  o.seed = 1;
+  // 160 mm rod: second-largest extent 20 mm fits; largest 160 <= diagonal 170 mm.
+  const auto r = mgn::drop_objects({object_of(mgn::make_box({0.16, 0.02, 0.02}), 500, "rod")},
+                                   tote_mesh(box), box, o);
+  const auto b = mgn::make_box({0.16, 0.02, 0.02}).transformed(r.objects[0].X_WO).bounds();
+  const bool inside = b(0, 0) > -0.064 && b(1, 0) < 0.064 && b(0, 1) > -0.064 && b(1, 1) < 0.064;
+  EXPECT_EQ(r.objects[0].kept(), inside);
+}
+
+TEST(Drop, BadInputIsRejected) {
+  const mgn::ToteBox box;
+  const mgn::Mesh tote = tote_mesh(box);
+  const auto good = object_of(mgn::make_box({0.05, 0.05, 0.05}), 500, "cube");
+  EXPECT_THROW(mgn::drop_objects({}, tote, box, {}), mgn::InvalidArgument);
+  auto bad = good;
+  bad.mass = std::nan("");
+  EXPECT_THROW(mgn::drop_objects({bad}, tote, box, {}), mgn::InvalidArgument);
+  bad = good;
+  bad.convex_parts.clear();
+  EXPECT_THROW(mgn::drop_objects({bad}, tote, box, {}), mgn::InvalidArgument);
+  bad = good;
+  bad.inertia = -bad.inertia;
+  EXPECT_THROW(mgn::drop_objects({bad}, tote, box, {}), mgn::InvalidArgument);
+  // Larger than the tote.
+  const auto huge = object_of(mgn::make_box({0.6, 0.5, 0.05}), 500, "huge");
+  EXPECT_THROW(mgn::drop_objects({huge}, tote, box, {}), mgn::InvalidArgument);
+  mgn::DropOptions o;
+  o.dt = 0;
+  EXPECT_THROW(mgn::drop_objects({good}, tote, box, o), mgn::InvalidArgument);
+  o = {};
+  o.window_min.x() = 0.5;  // min > max and outside the cavity
+  EXPECT_THROW(mgn::drop_objects({good}, tote, box, o), mgn::InvalidArgument);
+  o = {};
+  o.window_max.x() = 0.3;  // beyond the inner wall at 0.2
+  EXPECT_THROW(mgn::drop_objects({good}, tote, box, o), mgn::InvalidArgument);
+  o = {};
+  o.max_time = std::nan("");
+  EXPECT_THROW(mgn::drop_objects({good}, tote, box, o), mgn::InvalidArgument);
+  mgn::ToteBox bad_box;
+  bad_box.inner_height = -1;
+  EXPECT_THROW(mgn::drop_objects({good}, tote, bad_box, {}), mgn::InvalidArgument);
+  EXPECT_THROW(mgn::drop_objects({good}, mgn::Mesh(), box, {}), mgn::InvalidArgument);
+  // A tote mesh that does not match the box.
+  mgn::ToteBox bigger = box;
+  bigger.inner_length = 0.8;
+  EXPECT_THROW(mgn::drop_objects({good}, tote, bigger, {}), mgn::InvalidArgument);
+}

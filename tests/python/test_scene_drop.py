@@ -1,0 +1,236 @@
+"""mgn.scene: convex decomposition (+ cache), drop into the tote, Scene JSON, CLI, bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import mgn
+from mgn.io.model_folder import object_mesh
+from mgn.objects import ToteSpec, get_object
+from mgn.scene import (
+    ConvexDecompositionOptions,
+    DropOptions,
+    Scene,
+    cached_convex_decomposition,
+    compose_objects,
+    convex_decomposition,
+    convex_hull,
+    drop_scene,
+)
+
+TOL = 0.003  # m: allowed interpenetration / overshoot after settling
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _cache(tmp_path_factory):
+    """Decompositions are cached in a folder of this test module, never in the user's home."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MGN_CACHE_DIR", str(tmp_path_factory.mktemp("mgn_cache")))
+        yield
+
+
+def _volume(mesh) -> float:
+    v = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.faces)]
+    return float(abs(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum()) / 6.0)
+
+
+def _outside(part, points: np.ndarray) -> np.ndarray:
+    """Signed distance outside a convex part (<= 0 inside), per point."""
+    n = part.face_normals().astype(np.float64)
+    a = np.asarray(part.vertices, np.float64)[np.asarray(part.faces)[:, 0]]
+    return ((points[:, None, :] - a[None]) * n[None]).sum(-1).max(axis=1)
+
+
+@pytest.mark.parametrize("name", ["mug", "l_bracket", "hex_nut", "clamp"])
+def test_decomposition_covers_the_object_and_matches_its_volume(name):
+    mesh = object_mesh(get_object(name))
+    parts = convex_decomposition(mesh)
+    hull = convex_hull(mesh)
+    assert len(parts) >= 2  # all four are clearly non-convex
+    v_mesh, v_hull = _volume(mesh), _volume(hull)
+    assert v_hull > 1.1 * v_mesh
+    total = sum(_volume(p) for p in parts)
+    assert total >= 0.97 * v_mesh  # the union covers the object ...
+    assert total < v_hull  # ... much more tightly than the single hull
+    for p in parts:
+        r = p.validate()
+        assert r.is_watertight and r.is_outward
+    verts = np.unique(np.asarray(mesh.vertices, np.float64), axis=0)
+    inside_some = np.min(np.stack([_outside(p, verts) for p in parts]), axis=0)
+    assert inside_some.max() <= 2e-5  # hulls merge near-coplanar facets (float32)
+
+
+def test_convex_object_gives_its_single_hull():
+    box = mgn.make_box([0.1, 0.06, 0.04])
+    parts = convex_decomposition(box)
+    assert len(parts) == 1
+    assert _volume(parts[0]) == pytest.approx(0.1 * 0.06 * 0.04, rel=1e-5)
+
+
+def test_cache_is_written_reused_and_survives_corruption(tmp_path, monkeypatch):
+    monkeypatch.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
+    mesh = object_mesh(get_object("l_bracket"))
+    first = cached_convex_decomposition(mesh)
+    files = list((tmp_path / "cache" / "convex").glob("*.npz"))
+    assert len(files) == 1
+    again = cached_convex_decomposition(mesh)
+    assert [p.num_vertices for p in again] == [p.num_vertices for p in first]
+    for a, b in zip(first, again, strict=True):
+        np.testing.assert_array_equal(a.vertices, b.vertices)
+        np.testing.assert_array_equal(a.faces, b.faces)
+    # Other options: another entry.
+    cached_convex_decomposition(mesh, ConvexDecompositionOptions(max_concavity=0.05))
+    assert len(list((tmp_path / "cache" / "convex").glob("*.npz"))) == 2
+    files[0].write_bytes(b"not an npz")
+    healed = cached_convex_decomposition(mesh)
+    assert len(healed) == len(first)
+
+
+def _pairwise_penetration(scene: Scene) -> float:
+    """Deepest point of any instance inside another, from surface samples: inside by ray parity
+    in three directions (mgn.RayScene; one direction alone misclassifies points whose ray grazes
+    an edge), depth = FCL distance from a tiny probe at the point to the other surface."""
+    meshes = [scene.mesh(i) for i in range(len(scene))]
+    models = [mgn.CollisionModel(m) for m in meshes]
+    poses = scene.poses
+    probe = mgn.CollisionModel(mgn.make_box([1e-5, 1e-5, 1e-5]))
+    deepest = 0.0
+    for i in range(len(scene)):
+        for j in range(len(scene)):
+            if i == j or not mgn.collide(models[i], poses[i], models[j], poses[j]):
+                continue
+            s = mgn.sample_surface(meshes[i], 1500, seed=i)
+            p_w = s.points @ poses[i][:3, :3].T + poses[i][:3, 3]
+            rays = mgn.RayScene([meshes[j]], poses=poses[j][None])
+            inside = np.ones(len(p_w), bool)
+            for d in ([0.0, 0.0, 1.0], [0.3, 0.5, 0.81], [-1.0, 0.1, 0.05]):
+                dirs = np.tile(np.float32(d) / np.float32(np.linalg.norm(d)), (len(p_w), 1))
+                hits = rays.intersect_all(p_w.astype(np.float32), dirs)
+                inside &= hits.counts() % 2 == 1  # odd crossings in every direction
+            if not inside.any():
+                continue
+            X = np.repeat(np.eye(4)[None], int(inside.sum()), axis=0)
+            X[:, :3, 3] = p_w[inside]
+            dist = mgn.distance(probe, X, models[j], poses[j]).distance
+            deepest = max(deepest, float(dist.max()))
+    return deepest
+
+
+@pytest.fixture(scope="module")
+def dropped():
+    objects = compose_objects(
+        names=[
+            "clamp",
+            "box_cube",
+            "can_soda",
+            "l_bracket",
+            "tennis_ball",
+            "hex_nut",
+            "sponge",
+            "clamp",
+        ]
+    )
+    return objects, drop_scene(objects, seed=5)
+
+
+def test_settled_objects_lie_inside_the_tote_without_interpenetrating(dropped):
+    objects, scene = dropped
+    assert scene.stats["settled"]
+    assert len(scene) + len(scene.removed) == len(objects)
+    assert len(scene) >= 6
+    tote = scene.tote
+    for i, inst in enumerate(scene.instances):
+        lo, hi = scene.world_mesh(i).bounds
+        assert lo[2] >= -TOL, inst.name
+        assert lo[0] >= -tote.inner_length / 2 - TOL and hi[0] <= tote.inner_length / 2 + TOL
+        assert lo[1] >= -tote.inner_width / 2 - TOL and hi[1] <= tote.inner_width / 2 + TOL
+        if lo[2] < 0.002:
+            assert "floor" in inst.contacts
+        assert inst.bin_relation in ("no_rel", "edge", "corner")
+    assert _pairwise_penetration(scene) < TOL
+
+
+def test_same_seed_same_scene_other_seed_other_scene():
+    objects = compose_objects(names=["box_cube", "can_soda", "pear", "hex_nut"])
+    opts = DropOptions(max_time=1.0)
+    a = drop_scene(objects, seed=11, options=opts)
+    b = drop_scene(objects, seed=11, options=opts)
+    c = drop_scene(objects, seed=12, options=opts)
+    np.testing.assert_array_equal(a.poses, b.poses)
+    assert [i.contacts for i in a.instances] == [i.contacts for i in b.instances]
+    assert a.poses.shape != c.poses.shape or not np.allclose(a.poses, c.poses)
+
+
+def test_json_round_trip_and_meshes_come_back(dropped, tmp_path):
+    _, scene = dropped
+    path = scene.to_json(tmp_path / "scene.json")
+    back = Scene.from_json(path)
+    assert back == scene
+    np.testing.assert_array_equal(back.poses, scene.poses)
+    assert [i.contacts for i in back.instances] == [i.contacts for i in scene.instances]
+    assert back.stats == scene.stats
+    spec = get_object(back.instances[0].name)
+    assert back.mesh(0).num_faces == len(spec.faces)
+    data = json.loads(path.read_text())
+    assert data["schema_version"] == 1 and data["seed"] == 5
+    data["schema_version"] = 99
+    (tmp_path / "bad.json").write_text(json.dumps(data))
+    with pytest.raises(mgn.InvalidArgumentError, match="schema_version"):
+        Scene.from_json(tmp_path / "bad.json")
+    with pytest.raises(mgn.IoError):
+        Scene.from_json(tmp_path / "missing.json")
+
+
+def test_compose_by_categories_and_count_is_seeded():
+    objs = compose_objects(categories=["mug", "pear"], seed=3)
+    names = [o.name for o in objs]
+    assert 2 <= names.count("mug") <= 5 and 2 <= names.count("pear") <= 5
+    assert [o.name for o in compose_objects(categories=["mug", "pear"], seed=3)] == names
+    twelve = compose_objects(count=12, seed=1)
+    assert len(twelve) == 12
+    assert [o.name for o in compose_objects(count=12, seed=1)] == [o.name for o in twelve]
+    assert len(compose_objects(categories=["mug", "pear"], count=7, seed=0)) == 7
+
+
+def test_bad_input_gives_clear_errors():
+    cube = [get_object("box_cube")]
+    with pytest.raises(mgn.InvalidArgumentError, match="at least one object"):
+        drop_scene([])
+    with pytest.raises(mgn.InvalidArgumentError, match="names is empty"):
+        compose_objects(names=[])
+    with pytest.raises(mgn.InvalidArgumentError, match="unknown object"):
+        compose_objects(names=["no_such_thing"])
+    with pytest.raises(mgn.InvalidArgumentError, match="copies"):
+        compose_objects(categories=["mug"], copies=(5, 2))
+    small = ToteSpec(inner_length=0.15, inner_width=0.12, inner_height=0.05)
+    with pytest.raises(mgn.InvalidArgumentError, match="larger than the tote"):
+        drop_scene([get_object("box_cereal")], tote=small)
+    with pytest.raises(mgn.InvalidArgumentError, match="dt"):
+        drop_scene(cube, options=DropOptions(dt=float("nan")))
+    with pytest.raises(mgn.InvalidArgumentError, match="release window"):
+        drop_scene(cube, options=DropOptions(window_max=(0.5, 0.03, 0.8)))
+    with pytest.raises(mgn.InvalidArgumentError, match="window_min must be <="):
+        drop_scene(cube, options=DropOptions(window_min=(0.0, 0.0, 0.9)))
+    with pytest.raises(mgn.InvalidArgumentError, match="max_time"):
+        drop_scene(cube, options=DropOptions(max_time=-1.0))
+    with pytest.raises(mgn.InvalidArgumentError, match="seed"):
+        drop_scene(cube, seed=-1)
+    with pytest.raises(mgn.InvalidArgumentError):
+        convex_decomposition(object_mesh(cube[0]), ConvexDecompositionOptions(max_parts=0))
+
+
+def test_cli_scene_drop(tmp_path, capsys):
+    from mgn.cli import main
+
+    out = tmp_path / "s.json"
+    assert (
+        main(["scene", "drop", "--objects", "box_cube,pear", "--seed", "2", "--out", str(out)]) == 0
+    )
+    assert "scene written to" in capsys.readouterr().out
+    scene = Scene.from_json(out)
+    assert sorted(i.name for i in scene.instances) == ["box_cube", "pear"]
+    assert main(["scene", "drop", "--objects", "nope", "--out", str(out)]) == 1
+    assert "unknown object" in capsys.readouterr().err
