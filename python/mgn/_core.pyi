@@ -43,8 +43,8 @@ __all__: list[str] = [
     "convex_decomposition",
     "convex_hull",
     "distance",
-    "hemisphere_rig",
     "drop_objects",
+    "hemisphere_rig",
     "load_mesh",
     "look_at",
     "make_box",
@@ -665,12 +665,6 @@ def distance(
     abs_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict: ...
-def hemisphere_rig(
-    radii: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
-    tilts: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
-    azimuths: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
-    target: typing.Any,
-) -> numpy.ndarray: ...
 def drop_objects(
     parts: collections.abc.Sequence[collections.abc.Sequence[Mesh]],
     masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
@@ -683,6 +677,12 @@ def drop_objects(
     tote_box: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
     options: dict,
 ) -> dict: ...
+def hemisphere_rig(
+    radii: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    tilts: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    azimuths: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+    target: typing.Any,
+) -> numpy.ndarray: ...
 def load_mesh(
     path: str,
     scale: typing.SupportsFloat | typing.SupportsIndex = 1.0,
