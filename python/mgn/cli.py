@@ -247,6 +247,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="held-out split seed")
     p.add_argument("--num-threads", type=int, default=0)
     p.set_defaults(func=_cmd_suction_calibrate)
+    __import__("mgn.pj.cli").pj.cli.register(sub)  # mgn pj label (python/mgn/pj/cli.py)
 
     p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
