@@ -57,18 +57,15 @@ def test_box_grasps_across_narrow_faces_score_one_and_none_across_the_long_side(
     # No grasp closes along z (the 120 mm side); widths stay below the maximum opening.
     assert np.all(np.abs(v[:, 2]) < np.cos(np.pi / 8))
     assert labels.width.max() < 0.08
-    # Points well inside an x or y face (>= 12 mm from every edge) score 1.0: 5 of 5 probes.
+    # Points on an x face (40 mm across) at least 20 mm from its edges score 1.0 (5 of 5 probes):
+    # a probe tilts by < 0.28 rad and starts up to 5 mm off, so it leaves within ~20 mm.
     samples = mgn.sample_surface(make_box(BOX), 300, method="even", seed=1)
     p = np.asarray(samples.points)
     n = np.asarray(samples.normals)
     half = np.asarray(BOX) / 2
-    side = np.abs(n[:, 2]) < 0.5
-    axis = np.argmax(np.abs(n), axis=1)
-    margin = np.ones(len(p), bool)
-    for k in range(3):
-        margin &= (axis == k) | (np.abs(p[:, k]) < half[k] - 0.012)
-    interior = side & margin
-    assert interior.sum() > 20
+    interior = (np.abs(n[:, 0]) > 0.5) & (np.abs(p[:, 1]) < half[1] - 0.02)
+    interior &= np.abs(p[:, 2]) < half[2] - 0.02
+    assert interior.sum() > 10
     assert np.all(labels.point_score[interior] == 1.0)
     # Points on the z faces (the long side is 120 mm) never score.
     assert np.all(labels.point_score[np.abs(n[:, 2]) > 0.5] == 0.0)
@@ -199,8 +196,9 @@ def test_mesh_gripper_from_yaml_matches_the_box_gripper(tmp_path):
     back = ParallelJawGripper.from_yaml(tmp_path / "hand.yaml")
     assert back.has_meshes and Path(back.palm_mesh) == tmp_path / "palm.stl"
     for a, b in zip(gripper_meshes(g, 0.05), gripper_meshes(back, 0.05), strict=True):
-        va, vb = np.asarray(a.vertices), np.asarray(b.vertices)
-        np.testing.assert_allclose(np.sort(va, axis=0), np.sort(vb, axis=0), atol=1e-6)
+        va = np.unique(np.round(np.asarray(a.vertices, np.float64), 6), axis=0)
+        vb = np.unique(np.round(np.asarray(b.vertices, np.float64), 6), axis=0)  # STL: unwelded
+        np.testing.assert_allclose(va, vb, atol=1e-6)
     box = make_box(BOX)
     s = mgn.sample_surface(box, 40, method="even", seed=0)
     r1 = AntipodalSampler(box, g).sample(s.points, s.normals, seed=1)
