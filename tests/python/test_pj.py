@@ -1,4 +1,4 @@
-"""Parallel-jaw labels (MODELS.md §5): antipodal sampler, collision, wrench score, HDF5 writer, CLI."""
+"""Parallel-jaw labels (MODELS.md §5): sampler, collision, wrench score, HDF5 writer, CLIs."""
 
 import dataclasses
 import math
@@ -152,9 +152,7 @@ def test_wrench_score_matches_a_numpy_soft_finger_model():
     v /= np.linalg.norm(v, axis=1, keepdims=True)
     w = rng.uniform(0.01, 0.07, 50)
     m, com, mu, f, r = 1.5, np.array([0.01, -0.02, 0.005]), 0.4, 20.0, 0.006
-    got = pj_wrench_scores(
-        p1, v, w, mass=m, com=com, friction=mu, grip_force=f, contact_radius=r
-    )
+    got = pj_wrench_scores(p1, v, w, mass=m, com=com, friction=mu, grip_force=f, contact_radius=r)
     F = m * 9.81 * np.array([0, 0, -1.0])
     centre = p1 + 0.5 * w[:, None] * v
     tau = np.cross(com - centre, F)

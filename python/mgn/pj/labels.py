@@ -121,7 +121,9 @@ def label_object(
     from tqdm import tqdm
 
     if not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass > 0):
-        raise InvalidArgumentError(f"label_object: mass must be a finite value > 0 kg, got {mass!r}")
+        raise InvalidArgumentError(
+            f"label_object: mass must be a finite value > 0 kg, got {mass!r}"
+        )
     if not (isinstance(num_points, int) and num_points > 0):
         raise InvalidArgumentError(
             f"label_object: num_points must be an integer > 0, got {num_points!r}"
@@ -141,7 +143,9 @@ def label_object(
     normals = np.asarray(samples.normals, np.float64)
 
     parts = []
-    bar = tqdm(total=len(points), desc=f"pj {mesh.name or 'object'}", unit="pt", disable=not progress)
+    bar = tqdm(
+        total=len(points), desc=f"pj {mesh.name or 'object'}", unit="pt", disable=not progress
+    )
     for start in range(0, len(points), chunk):
         stop = min(start + chunk, len(points))
         # Point k draws from the stream (seed, k) whatever the chunking.
