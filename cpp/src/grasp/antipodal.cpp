@@ -3,6 +3,7 @@
 #include <mgn/core/error.hpp>
 #include <mgn/core/parallel.hpp>
 #include <mgn/core/rng.hpp>
+#include <mgn/geometry/sampling.hpp>
 #include <mgn/grasp/antipodal.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
 
@@ -39,7 +40,136 @@ struct AntipodalSampler::Impl {
   // Gripper parts at opening 0 in the hand frame: palm, left finger, right finger.
   std::array<std::unique_ptr<CollisionModel>, 3> parts;
   std::array<Vec3d, 3> part_vertex;  // one vertex of each part (for the inside test), frame H
+  // Points on the object surface (its vertices and even samples) for the certain-collision
+  // pre-filter of box grippers: a surface point inside a gripper box means a collision.
+  Points3d surface_points;
+  // Bounding spheres of the object's triangles (centres, radii) for the certain-free test: a box
+  // that no sphere touches cannot touch the surface.
+  Points3d tri_centres;
+  std::vector<double> tri_radii;
 };
+
+namespace {
+
+/// Axis-aligned box in the hand frame H: centre and half extents, m.
+struct HandBox {
+  Vec3d centre;
+  Vec3d half;
+};
+
+/// Object surface points near one accepted probe, per gripper box, in the grasp's cylindrical
+/// frame: for the approach a = cos t e1 + sin t e2 a point's hand-frame coordinates are
+/// (x, cos t y0 + sin t y1, cos t z0 + sin t z1 + grasp_depth), with x along the closing axis v,
+/// (z0, z1) its components along e1, e2 and (y0, y1) along e1 x v, e2 x v. The x test does not
+/// depend on the approach, so each box keeps only the points of its x slab whose distance from the
+/// closing axis can put them inside it.
+struct ProbePoints {
+  struct BoxPoints {
+    double y_half = 0, z_lo = 0, z_hi = 0;  // box extent in y and in z relative to the centre
+    std::vector<double> y0, y1, z0, z1;
+    // Triangle spheres that may touch the box: distance of the centre's x to the box's x range
+    // (0 inside), centre components as above and radius.
+    std::vector<double> sx, sy0, sy1, sz0, sz1, sr;
+  };
+  std::array<BoxPoints, 3> lists;  // palm, left finger, right finger at the probe's opening
+
+  ProbePoints(const Points3d& surface, const Points3d& centres, const std::vector<double>& radii,
+              const ParallelJawGripper& g, const ParallelJawGrasp& grasp, const Vec3d& e1,
+              const Vec3d& e2, double opening) {
+    constexpr double kEps = 1e-7;  // boxes shrunk by this: inside means strictly inside
+    const Vec3d& f = g.finger_size;
+    const Vec3d& pb = g.palm_size;
+    const double depth = g.grasp_depth();
+    const std::array<HandBox, 3> boxes = {
+        HandBox{Vec3d(0, 0, g.flange_to_tip - f.z() - 0.5 * pb.z()), 0.5 * pb},
+        HandBox{Vec3d(-0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f},
+        HandBox{Vec3d(0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f}};
+    std::array<double, 3> r2_min{}, r2_max{};
+    for (int k = 0; k < 3; ++k) {
+      const HandBox& b = boxes[k];
+      BoxPoints& l = lists[k];
+      l.y_half = b.half.y() - kEps;
+      l.z_lo = b.centre.z() - b.half.z() + kEps - depth;
+      l.z_hi = b.centre.z() + b.half.z() - kEps - depth;
+      const double z_near = (l.z_lo > 0) ? l.z_lo : (l.z_hi < 0 ? -l.z_hi : 0.0);
+      const double z_far = std::max(std::abs(l.z_lo), std::abs(l.z_hi));
+      r2_min[k] = z_near * z_near;  // the box's nearest and farthest distance from the axis
+      r2_max[k] = z_far * z_far + l.y_half * l.y_half;
+    }
+    const Vec3d c = grasp.p1 + 0.5 * grasp.width * grasp.closing;
+    const Vec3d& v = grasp.closing;
+    const Vec3d w1 = e1.cross(v), w2 = e2.cross(v);
+    for (Eigen::Index i = 0; i < surface.rows(); ++i) {
+      const Vec3d q = surface.row(i).transpose() - c;
+      const double xq = q.dot(v);
+      const double r2 = q.squaredNorm() - xq * xq;
+      for (int k = 0; k < 3; ++k) {
+        const HandBox& b = boxes[k];
+        if (std::abs(xq - b.centre.x()) >= b.half.x() - kEps) continue;
+        if (r2 < r2_min[k] || r2 > r2_max[k]) continue;
+        BoxPoints& l = lists[k];
+        l.y0.push_back(q.dot(w1));
+        l.y1.push_back(q.dot(w2));
+        l.z0.push_back(q.dot(e1));
+        l.z1.push_back(q.dot(e2));
+      }
+    }
+    for (Eigen::Index i = 0; i < centres.rows(); ++i) {
+      const Vec3d q = centres.row(i).transpose() - c;
+      const double r = radii[i];
+      const double xq = q.dot(v);
+      const double rho = std::sqrt(std::max(0.0, q.squaredNorm() - xq * xq));
+      for (int k = 0; k < 3; ++k) {
+        const HandBox& b = boxes[k];
+        const double dx = std::max(0.0, std::abs(xq - b.centre.x()) - b.half.x());
+        if (dx > r) continue;
+        if (rho + r < std::sqrt(r2_min[k]) || rho - r > std::sqrt(r2_max[k])) continue;
+        BoxPoints& l = lists[k];
+        l.sx.push_back(dx);
+        l.sy0.push_back(q.dot(w1));
+        l.sy1.push_back(q.dot(w2));
+        l.sz0.push_back(q.dot(e1));
+        l.sz1.push_back(q.dot(e2));
+        l.sr.push_back(r);
+      }
+    }
+  }
+
+  /// True when no triangle sphere touches a box (with a 1e-6 m margin) for the approach angle t:
+  /// then the gripper surface cannot touch the object surface.
+  bool surely_clear(double t) const {
+    constexpr double kMargin = 1e-6;
+    const double ct = std::cos(t), st = std::sin(t);
+    for (const BoxPoints& l : lists) {
+      const std::size_t n = l.sr.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const double z = ct * l.sz0[i] + st * l.sz1[i];
+        const double y = ct * l.sy0[i] + st * l.sy1[i];
+        const double dz = std::max({0.0, l.z_lo - z, z - l.z_hi});
+        const double dy = std::max(0.0, std::abs(y) - l.y_half);
+        const double rr = l.sr[i] + kMargin;
+        if (l.sx[i] * l.sx[i] + dy * dy + dz * dz <= rr * rr) return false;
+      }
+    }
+    return true;
+  }
+
+  /// Whether an object point lies strictly inside a gripper box for the approach angle t.
+  bool any_inside(double t) const {
+    const double ct = std::cos(t), st = std::sin(t);
+    for (const BoxPoints& l : lists) {
+      const std::size_t n = l.y0.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const double z = ct * l.z0[i] + st * l.z1[i];
+        const double y = ct * l.y0[i] + st * l.y1[i];
+        if (z > l.z_lo && z < l.z_hi && std::abs(y) < l.y_half) return true;
+      }
+    }
+    return false;
+  }
+};
+
+}  // namespace
 
 AntipodalSampler::AntipodalSampler(const Mesh& object, const ParallelJawGripper& gripper)
     : impl_(std::make_unique<Impl>()) {
@@ -62,6 +192,28 @@ AntipodalSampler::AntipodalSampler(const Mesh& object, const ParallelJawGripper&
   for (int k = 0; k < 3; ++k) {
     impl_->parts[k] = std::make_unique<CollisionModel>(*parts[k]);
     impl_->part_vertex[k] = parts[k]->vertices().row(0).transpose().cast<double>();
+  }
+  if (!gripper.has_meshes()) {
+    SampleOptions so;
+    so.method = SampleMethod::Even;
+    const SurfaceSamples samples = sample_surface(object, 2048, so);
+    Points3d& sp = impl_->surface_points;
+    sp.resize(object.num_vertices() + samples.points.rows(), 3);
+    sp.topRows(object.num_vertices()) = object.vertices().cast<double>();
+    sp.bottomRows(samples.points.rows()) = samples.points.cast<double>();
+    const Points3f& V = object.vertices();
+    const Faces& F = object.faces();
+    impl_->tri_centres.resize(F.rows(), 3);
+    impl_->tri_radii.resize(static_cast<std::size_t>(F.rows()));
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const Vec3d a = V.row(F(f, 0)).transpose().cast<double>();
+      const Vec3d b = V.row(F(f, 1)).transpose().cast<double>();
+      const Vec3d cc = V.row(F(f, 2)).transpose().cast<double>();
+      const Vec3d centre = (a + b + cc) / 3.0;
+      impl_->tri_centres.row(f) = centre.transpose();
+      impl_->tri_radii[f] =
+          std::max({(a - centre).norm(), (b - centre).norm(), (cc - centre).norm()}) * (1 + 1e-9);
+    }
   }
 }
 
@@ -92,13 +244,19 @@ bool AntipodalSampler::collides(const Pose& X_OH, double opening) const {
     throw_error<InvalidArgument>("AntipodalSampler::collides: opening must be in [0, ",
                                  m.gripper.max_opening, "] m, got ", opening);
   }
+  // Fingers first: they are the parts nearest to the object.
   const std::array<Pose, 3> X = {X_OH, X_OH * finger_offset(0, opening),
                                  X_OH * finger_offset(1, opening)};
-  // Fingers first: they are the parts nearest to the object.
   for (int k : {1, 2, 0}) {
     if (collide(*m.parts[k], X[k], *m.object, Pose::Identity())) return true;
   }
+  return part_inside_object(m, X_OH, opening);
+}
+
+bool AntipodalSampler::part_inside_object(const Impl& m, const Pose& X_OH, double opening) {
   // No surface contact: a part is either fully outside or fully inside the closed object.
+  const std::array<Pose, 3> X = {X_OH, X_OH * finger_offset(0, opening),
+                                 X_OH * finger_offset(1, opening)};
   Points3f origins(3, 3), directions(3, 3);
   for (int k = 0; k < 3; ++k) {
     origins.row(k) = (X[k] * m.part_vertex[k]).cast<float>().transpose();
@@ -209,6 +367,15 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
             Vec3d e1, e2;
             detail::tangent_frame(grasp.closing, e1, e2);
             const double opening = g.collision_opening(grasp.width);
+            // Box grippers: certain-collision (object point inside a box) and certain-free (no
+            // triangle sphere touches a box) pre-filters; FCL decides the rest.
+            const bool prefilter = o.check_collision && m.surface_points.rows() > 0;
+            const Points3d none;
+            const ProbePoints near = prefilter
+                                         ? ProbePoints(m.surface_points, m.tri_centres, m.tri_radii,
+                                                       g, grasp, e1, e2, opening)
+                                         : ProbePoints(none, none, {}, g, grasp, e1, e2, opening);
+            std::unique_ptr<CollisionModel> hand;  // built when first needed
             int num_kept = 0;
             // All angles are drawn even when the loop stops early, so the stream of the next probe
             // does not depend on collision outcomes.
@@ -217,9 +384,27 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
             for (double t : angles) {
               if (num_kept >= o.approaches_kept) break;
               grasp.approach = (std::cos(t) * e1 + std::sin(t) * e2).normalized();
-              if (o.check_collision && collides(hand_pose(grasp, g), opening)) {
+              if (prefilter && near.any_inside(t)) {
                 ++colliding[i];
                 continue;
+              }
+              if (o.check_collision) {
+                // One FCL query against the whole hand at this probe's opening, unless the
+                // spheres prove the surfaces apart.
+                const Pose X_OH = hand_pose(grasp, g);
+                bool hit = false;
+                if (!(prefilter && near.surely_clear(t))) {
+                  if (!hand) {
+                    const GripperMeshes gm = gripper_meshes(g, opening);
+                    hand = std::make_unique<CollisionModel>(
+                        Mesh::merge({gm.palm, gm.finger_left, gm.finger_right}));
+                  }
+                  hit = collide(*hand, X_OH, *m.object, Pose::Identity());
+                }
+                if (hit || part_inside_object(m, X_OH, opening)) {
+                  ++colliding[i];
+                  continue;
+                }
               }
               kept.push_back({grasp, static_cast<std::int64_t>(i), accepted_probe[j], score});
               ++num_kept;

@@ -15,7 +15,11 @@
 /// (e1, e2 an orthonormal basis of the plane perpendicular to v) are tried in order and the first
 /// `approaches_kept` collision-free ones are kept. Collision: the gripper meshes (palm, fingers at
 /// the opening collision_opening(w)) posed by hand_pose() against the object with FCL, plus a
-/// ray-parity test that catches a gripper part lying entirely inside the object.
+/// ray-parity test that catches a gripper part lying entirely inside the object. For box grippers
+/// two exact pre-filters skip most FCL queries: an object surface point (vertex or one of 2048 even
+/// samples) strictly inside a gripper box is a collision (this also rejects an object entirely
+/// inside a box), and a hand whose boxes touch no bounding sphere of an object triangle cannot
+/// touch the surface. Both are decided per approach in the grasp's cylindrical frame.
 ///
 /// Determinism: point i draws from Rng(seed, first_index + i) only; results are identical for
 /// any thread count and any split of the points into batches.
@@ -85,12 +89,15 @@ class AntipodalSampler {
                          const AntipodalOptions& options = {}) const;
 
   /// Whether the gripper, opened at `opening` (m) and posed at X_OH (hand in the object frame),
-  /// intersects the object (surface contact or a part entirely inside it).
+  /// intersects the object (FCL surface contact of palm or fingers, or a part entirely inside it).
+  /// The reference query of sample() (which adds the pre-filters above and queries FCL with the
+  /// three parts merged into one model per probe).
   bool collides(const Pose& X_OH, double opening) const;
 
   struct Impl;
 
  private:
+  static bool part_inside_object(const Impl& m, const Pose& X_OH, double opening);
   std::unique_ptr<Impl> impl_;
 };
 
