@@ -369,7 +369,8 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
             const double opening = g.collision_opening(grasp.width);
             // Box grippers: certain-collision (object point inside a box) and certain-free (no
             // triangle sphere touches a box) pre-filters; FCL decides the rest.
-            const bool prefilter = o.check_collision && m.surface_points.rows() > 0;
+            const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
+                                   o.approaches_tried > 0 && o.approaches_kept > 0;
             const Points3d none;
             const ProbePoints near = prefilter
                                          ? ProbePoints(m.surface_points, m.tri_centres, m.tri_radii,
