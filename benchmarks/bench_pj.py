@@ -1,4 +1,4 @@
-"""Parallel-jaw labels: mgn's antipodal sampler against a straightforward numpy + trimesh probe test.
+"""Parallel-jaw labels: mgn's antipodal sampler against a numpy + trimesh probe test.
 
 Two rows on one built-in object (the mug: thin walls, a handle, many colliding approaches):
 
