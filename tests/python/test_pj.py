@@ -1,9 +1,11 @@
 """Parallel-jaw labels (MODELS.md §5): sampler, collision, wrench score, HDF5 writer, CLIs."""
 
 import dataclasses
+import json
 import math
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import fcl
@@ -247,7 +249,7 @@ def test_cli_labels_an_object_folder_without_physics(tmp_path, capsys):
 
 
 def test_cpp_cli_reads_the_python_gripper_yaml(tmp_path):
-    exe = shutil.which("mgn-cli") or str(Path(mgn.__file__).parents[4] / "bin" / "mgn-cli")
+    exe = shutil.which("mgn-cli") or str(Path(sys.executable).parent / "mgn-cli")
     assert Path(exe).is_file(), "mgn-cli is installed with the wheel"
     ParallelJawGripper(name="yaml_hand", max_opening=0.05).to_yaml(tmp_path / "g.yaml")
     _trimesh(make_box(BOX)).export(tmp_path / "box.stl")
@@ -257,8 +259,6 @@ def test_cpp_cli_reads_the_python_gripper_yaml(tmp_path):
         [*cmd, "--out", str(out), "--points", "30", "--seed", "2"], capture_output=True, text=True
     )
     assert r.returncode == 0, r.stderr
-    import json
-
     data = json.loads(out.read_text())
     rows = np.asarray(data["pregrasp_transform"])
     assert data["gripper"] == "yaml_hand" and rows.shape[1] == 10 and len(rows) > 0
