@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 
 #include "grasp/detail/seal_trials.hpp"
@@ -300,120 +301,130 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
   std::vector<std::int32_t> accepted_count(static_cast<std::size_t>(n), 0);
   std::vector<std::int64_t> colliding(static_cast<std::size_t>(n), 0);
 
-  parallel_for(
-      static_cast<std::size_t>(n), o.num_threads, 16, [&](std::size_t begin, std::size_t end) {
-        const auto count = static_cast<Eigen::Index>(end - begin);
-        // 1. Probes of the whole chunk, drawn per point from its own stream, cast in one batch.
-        std::vector<Rng> rngs;
-        rngs.reserve(end - begin);
-        Points3f origins(count * P, 3), directions(count * P, 3);
-        Points3d origins_d(count * P, 3), directions_d(count * P, 3);
-        for (std::size_t i = begin; i < end; ++i) {
-          rngs.emplace_back(o.seed, o.first_index + i);
-          Rng& rng = rngs.back();
-          const Vec3d p = points.row(i).transpose();
-          const Vec3d nrm = normals.row(i).transpose().normalized();
-          for (int k = 0; k < P; ++k) {
-            const double ax = rng.uniform(-o.tilt, o.tilt);
-            const double ay = rng.uniform(-o.tilt, o.tilt);
-            const double az = rng.uniform(-o.tilt, o.tilt);
-            Vec3d shift;
-            for (int c = 0; c < 3; ++c) shift[c] = rng.uniform(-o.offset, o.offset);
-            const Vec3d d = (euler_xyz(ax, ay, az) * -nrm).normalized();
-            const Vec3d start = p + shift - o.start_offset * d;
-            const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
-            origins_d.row(r) = start.transpose();
-            directions_d.row(r) = d.transpose();
-          }
-        }
-        origins = origins_d.cast<float>();
-        directions = directions_d.cast<float>();
-        CastOptions cast;
-        cast.num_threads = 1;
-        const RayAllHits hits = m.scene->intersect_all(origins, directions, 2, cast);
+  const auto process = [&](std::size_t begin, std::size_t end) {
+    const auto count = static_cast<Eigen::Index>(end - begin);
+    // 1. Probes of the whole chunk, drawn per point from its own stream, cast in one batch.
+    std::vector<Rng> rngs;
+    rngs.reserve(end - begin);
+    Points3f origins(count * P, 3), directions(count * P, 3);
+    Points3d origins_d(count * P, 3), directions_d(count * P, 3);
+    for (std::size_t i = begin; i < end; ++i) {
+      rngs.emplace_back(o.seed, o.first_index + i);
+      Rng& rng = rngs.back();
+      const Vec3d p = points.row(i).transpose();
+      const Vec3d nrm = normals.row(i).transpose().normalized();
+      for (int k = 0; k < P; ++k) {
+        const double ax = rng.uniform(-o.tilt, o.tilt);
+        const double ay = rng.uniform(-o.tilt, o.tilt);
+        const double az = rng.uniform(-o.tilt, o.tilt);
+        Vec3d shift;
+        for (int c = 0; c < 3; ++c) shift[c] = rng.uniform(-o.offset, o.offset);
+        const Vec3d d = (euler_xyz(ax, ay, az) * -nrm).normalized();
+        const Vec3d start = p + shift - o.start_offset * d;
+        const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
+        origins_d.row(r) = start.transpose();
+        directions_d.row(r) = d.transpose();
+      }
+    }
+    origins = origins_d.cast<float>();
+    directions = directions_d.cast<float>();
+    CastOptions cast;
+    cast.num_threads = 1;
+    const RayAllHits hits = m.scene->intersect_all(origins, directions, 2, cast);
 
-        // 2. Per point: antipodal test of each probe, then approaches and collision.
-        for (std::size_t i = begin; i < end; ++i) {
-          Rng& rng = rngs[i - begin];
-          std::vector<ParallelJawGrasp> accepted;
-          std::vector<int> accepted_probe;
-          for (int k = 0; k < P; ++k) {
-            const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
-            const std::int64_t h0 = hits.offsets[r];
-            if (hits.offsets[r + 1] - h0 < 2) continue;
-            const Vec3d start = origins.row(r).transpose().cast<double>();
-            const Vec3d d = directions.row(r).transpose().cast<double>();
-            const Vec3d q1 = start + static_cast<double>(hits.distance[h0]) * d;
-            const Vec3d q2 = start + static_cast<double>(hits.distance[h0 + 1]) * d;
-            const double w = (q2 - q1).norm();
-            if (!(w > 1e-9) || !(w < g.max_opening)) continue;
-            const Vec3d v = (q2 - q1) / w;
-            const Vec3d n1 = hits.normals.row(h0).transpose().cast<double>().normalized();
-            const Vec3d n2 = hits.normals.row(h0 + 1).transpose().cast<double>().normalized();
-            if (-n1.dot(v) < cos_cone || n2.dot(v) < cos_cone) continue;
-            ParallelJawGrasp grasp;
-            grasp.p1 = q1;
-            grasp.closing = v;
-            grasp.width = w;
-            accepted.push_back(grasp);
-            accepted_probe.push_back(k);
+    // 2. Per point: antipodal test of each probe, then approaches and collision.
+    for (std::size_t i = begin; i < end; ++i) {
+      Rng& rng = rngs[i - begin];
+      std::vector<ParallelJawGrasp> accepted;
+      std::vector<int> accepted_probe;
+      for (int k = 0; k < P; ++k) {
+        const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
+        const std::int64_t h0 = hits.offsets[r];
+        if (hits.offsets[r + 1] - h0 < 2) continue;
+        const Vec3d start = origins.row(r).transpose().cast<double>();
+        const Vec3d d = directions.row(r).transpose().cast<double>();
+        const Vec3d q1 = start + static_cast<double>(hits.distance[h0]) * d;
+        const Vec3d q2 = start + static_cast<double>(hits.distance[h0 + 1]) * d;
+        const double w = (q2 - q1).norm();
+        if (!(w > 1e-9) || !(w < g.max_opening)) continue;
+        const Vec3d v = (q2 - q1) / w;
+        const Vec3d n1 = hits.normals.row(h0).transpose().cast<double>().normalized();
+        const Vec3d n2 = hits.normals.row(h0 + 1).transpose().cast<double>().normalized();
+        if (-n1.dot(v) < cos_cone || n2.dot(v) < cos_cone) continue;
+        ParallelJawGrasp grasp;
+        grasp.p1 = q1;
+        grasp.closing = v;
+        grasp.width = w;
+        accepted.push_back(grasp);
+        accepted_probe.push_back(k);
+      }
+      const float score = static_cast<float>(accepted.size()) / static_cast<float>(P);
+      out.point_score[i] = score;
+      accepted_count[i] = static_cast<std::int32_t>(accepted.size());
+      std::vector<AntipodalGrasp>& kept = per_point[i];
+      for (std::size_t j = 0; j < accepted.size(); ++j) {
+        ParallelJawGrasp grasp = accepted[j];
+        Vec3d e1, e2;
+        detail::tangent_frame(grasp.closing, e1, e2);
+        const double opening = g.collision_opening(grasp.width);
+        // Box grippers: certain-collision (object point inside a box) and certain-free (no
+        // triangle sphere touches a box) pre-filters; FCL decides the rest.
+        const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
+                               o.approaches_tried > 0 && o.approaches_kept > 0;
+        const Points3d none;
+        const ProbePoints near = prefilter ? ProbePoints(m.surface_points, m.tri_centres,
+                                                         m.tri_radii, g, grasp, e1, e2, opening)
+                                           : ProbePoints(none, none, {}, g, grasp, e1, e2, opening);
+        std::unique_ptr<CollisionModel> hand;  // built when first needed
+        int num_kept = 0;
+        // All angles are drawn even when the loop stops early, so the stream of the next probe
+        // does not depend on collision outcomes.
+        std::vector<double> angles(static_cast<std::size_t>(o.approaches_tried));
+        for (double& t : angles) t = rng.uniform(0.0, 2.0 * M_PI);
+        for (double t : angles) {
+          if (num_kept >= o.approaches_kept) break;
+          grasp.approach = (std::cos(t) * e1 + std::sin(t) * e2).normalized();
+          if (prefilter && near.any_inside(t)) {
+            ++colliding[i];
+            continue;
           }
-          const float score = static_cast<float>(accepted.size()) / static_cast<float>(P);
-          out.point_score[i] = score;
-          accepted_count[i] = static_cast<std::int32_t>(accepted.size());
-          std::vector<AntipodalGrasp>& kept = per_point[i];
-          for (std::size_t j = 0; j < accepted.size(); ++j) {
-            ParallelJawGrasp grasp = accepted[j];
-            Vec3d e1, e2;
-            detail::tangent_frame(grasp.closing, e1, e2);
-            const double opening = g.collision_opening(grasp.width);
-            // Box grippers: certain-collision (object point inside a box) and certain-free (no
-            // triangle sphere touches a box) pre-filters; FCL decides the rest.
-            const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
-                                   o.approaches_tried > 0 && o.approaches_kept > 0;
-            const Points3d none;
-            const ProbePoints near = prefilter
-                                         ? ProbePoints(m.surface_points, m.tri_centres, m.tri_radii,
-                                                       g, grasp, e1, e2, opening)
-                                         : ProbePoints(none, none, {}, g, grasp, e1, e2, opening);
-            std::unique_ptr<CollisionModel> hand;  // built when first needed
-            int num_kept = 0;
-            // All angles are drawn even when the loop stops early, so the stream of the next probe
-            // does not depend on collision outcomes.
-            std::vector<double> angles(static_cast<std::size_t>(o.approaches_tried));
-            for (double& t : angles) t = rng.uniform(0.0, 2.0 * M_PI);
-            for (double t : angles) {
-              if (num_kept >= o.approaches_kept) break;
-              grasp.approach = (std::cos(t) * e1 + std::sin(t) * e2).normalized();
-              if (prefilter && near.any_inside(t)) {
-                ++colliding[i];
-                continue;
+          if (o.check_collision) {
+            // One FCL query against the whole hand at this probe's opening, unless the
+            // spheres prove the surfaces apart.
+            const Pose X_OH = hand_pose(grasp, g);
+            bool hit = false;
+            if (!(prefilter && near.surely_clear(t))) {
+              if (!hand) {
+                const GripperMeshes gm = gripper_meshes(g, opening);
+                hand = std::make_unique<CollisionModel>(
+                    Mesh::merge({gm.palm, gm.finger_left, gm.finger_right}));
               }
-              if (o.check_collision) {
-                // One FCL query against the whole hand at this probe's opening, unless the
-                // spheres prove the surfaces apart.
-                const Pose X_OH = hand_pose(grasp, g);
-                bool hit = false;
-                if (!(prefilter && near.surely_clear(t))) {
-                  if (!hand) {
-                    const GripperMeshes gm = gripper_meshes(g, opening);
-                    hand = std::make_unique<CollisionModel>(
-                        Mesh::merge({gm.palm, gm.finger_left, gm.finger_right}));
-                  }
-                  hit = collide(*hand, X_OH, *m.object, Pose::Identity());
-                }
-                if (hit || part_inside_object(m, X_OH, opening)) {
-                  ++colliding[i];
-                  continue;
-                }
-              }
-              kept.push_back({grasp, static_cast<std::int64_t>(i), accepted_probe[j], score});
-              ++num_kept;
+              hit = collide(*hand, X_OH, *m.object, Pose::Identity());
+            }
+            if (hit || part_inside_object(m, X_OH, opening)) {
+              ++colliding[i];
+              continue;
             }
           }
-          out.num_kept[i] = static_cast<std::int32_t>(kept.size());
+          kept.push_back({grasp, static_cast<std::int64_t>(i), accepted_probe[j], score});
+          ++num_kept;
         }
-      });
+      }
+      out.num_kept[i] = static_cast<std::int32_t>(kept.size());
+    }
+  };
+  // Dynamic scheduling over blocks of points (the cost per point varies a lot with the number of
+  // colliding approaches); every point's result depends only on its index.
+  constexpr std::size_t kBlock = 32;
+  const std::size_t num_blocks = (static_cast<std::size_t>(n) + kBlock - 1) / kBlock;
+  const auto workers = std::min<std::size_t>(
+      static_cast<std::size_t>(resolve_num_threads(o.num_threads)), num_blocks);
+  std::atomic<std::size_t> next_block{0};
+  parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
+    for (std::size_t b = next_block++; b < num_blocks; b = next_block++) {
+      process(b * kBlock, std::min(static_cast<std::size_t>(n), (b + 1) * kBlock));
+    }
+  });
 
   std::size_t total = 0;
   for (const auto& v : per_point) total += v.size();
