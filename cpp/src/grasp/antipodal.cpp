@@ -375,7 +375,6 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
         const ProbePoints near = prefilter ? ProbePoints(m.surface_points, m.tri_centres,
                                                          m.tri_radii, g, grasp, e1, e2, opening)
                                            : ProbePoints(none, none, {}, g, grasp, e1, e2, opening);
-        std::unique_ptr<CollisionModel> hand;  // built when first needed
         int num_kept = 0;
         // All angles are drawn even when the loop stops early, so the stream of the next probe
         // does not depend on collision outcomes.
@@ -389,17 +388,15 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
             continue;
           }
           if (o.check_collision) {
-            // One FCL query against the whole hand at this probe's opening, unless the
-            // spheres prove the surfaces apart.
+            // FCL per part (fingers first), unless the spheres prove the surfaces apart; then
+            // the parity test for a part lying entirely inside the object.
             const Pose X_OH = hand_pose(grasp, g);
             bool hit = false;
             if (!(prefilter && near.surely_clear(t))) {
-              if (!hand) {
-                const GripperMeshes gm = gripper_meshes(g, opening);
-                hand = std::make_unique<CollisionModel>(
-                    Mesh::merge({gm.palm, gm.finger_left, gm.finger_right}));
+              for (int k : {1, 2, 0}) {
+                const Pose X = k == 0 ? X_OH : X_OH * finger_offset(k - 1, opening);
+                if ((hit = collide(*m.parts[k], X, *m.object, Pose::Identity()))) break;
               }
-              hit = collide(*hand, X_OH, *m.object, Pose::Identity());
             }
             if (hit || part_inside_object(m, X_OH, opening)) {
               ++colliding[i];

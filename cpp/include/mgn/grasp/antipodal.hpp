@@ -90,8 +90,7 @@ class AntipodalSampler {
 
   /// Whether the gripper, opened at `opening` (m) and posed at X_OH (hand in the object frame),
   /// intersects the object (FCL surface contact of palm or fingers, or a part entirely inside it).
-  /// The reference query of sample() (which adds the pre-filters above and queries FCL with the
-  /// three parts merged into one model per probe).
+  /// The query of sample(), which adds the exact pre-filters above.
   bool collides(const Pose& X_OH, double opening) const;
 
   struct Impl;
