@@ -264,3 +264,15 @@ def test_cpp_cli_reads_the_python_gripper_yaml(tmp_path):
     assert data["gripper"] == "yaml_hand" and rows.shape[1] == 10 and len(rows) > 0
     assert rows[:, 9].max() < 0.05  # the YAML's max_opening was applied: only the 40 mm side
     np.testing.assert_allclose(rows[:, 9].min(), 0.04, atol=1e-3)
+    # The same labels as the Python API (same sampling, sampler and wrench score).
+    mesh = mgn.load_mesh(tmp_path / "box.stl")
+    props = mass_properties(mesh, 1000.0)
+    gripper = ParallelJawGripper.from_yaml(tmp_path / "g.yaml")
+    py = label_object(
+        mesh, mass=props.mass, com=props.center_of_mass, gripper=gripper, num_points=30, seed=2
+    )
+    py_rows = np.concatenate([py.approach, py.closing, py.p1, py.width[:, None]], axis=1)
+    assert rows.shape == py_rows.shape
+    np.testing.assert_allclose(rows, py_rows, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(data["quality_score"], py.quality_score, atol=1e-7)
+    np.testing.assert_allclose(data["score_wrench"], py.score_wrench, atol=1e-6)
