@@ -13,4 +13,5 @@ void bind_grasp(pybind11::module_& m);
 void bind_calibration(pybind11::module_& m);
 void bind_render(pybind11::module_& m);
 void bind_scene(pybind11::module_& m);
+void bind_pj(pybind11::module_& m);
 }  // namespace mgn::py_bind

@@ -11,6 +11,7 @@ import numpy
 import numpy.typing
 
 __all__: list[str] = [
+    "AntipodalSampler",
     "BackendError",
     "CollisionModel",
     "Cup",
@@ -24,6 +25,7 @@ __all__: list[str] = [
     "Mesh",
     "MeshReport",
     "MgnError",
+    "ParallelJawGripper",
     "RayScene",
     "Renderer",
     "SEAL_FAILURE_NAMES",
@@ -45,6 +47,8 @@ __all__: list[str] = [
     "distance",
     "drop_objects",
     "hemisphere_rig",
+    "gripper_meshes",
+    "hand_poses",
     "load_mesh",
     "look_at",
     "make_box",
@@ -53,6 +57,7 @@ __all__: list[str] = [
     "mesh_surface_flags",
     "mgn_rig",
     "mgn_rig_from_params",
+    "pj_wrench_scores",
     "predict_experiments",
     "resolve_num_threads",
     "sample_surface",
@@ -586,6 +591,58 @@ def apply_depth_sensor(
     params: DepthSensorParams,
     seed: typing.SupportsInt | typing.SupportsIndex,
 ) -> dict: ...
+class ParallelJawGripper:
+    Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless palm_mesh, finger_left_mesh and finger_right_mesh are all set (closed, hand frame, fingers at opening 0).
+    finger_left_mesh: Mesh
+    finger_right_mesh: Mesh
+    name: str
+    palm_mesh: Mesh
+    def collision_opening(self, width: typing.SupportsFloat | typing.SupportsIndex) -> float: ...
+    def grasp_depth(self) -> float: ...
+    def has_meshes(self) -> bool: ...
+    def collision_margin(self) -> float: ...
+    @collision_margin.setter
+    def collision_margin(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    def contact_from_tip(self) -> float: ...
+    @contact_from_tip.setter
+    def contact_from_tip(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    def finger_size(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]: ...
+    @finger_size.setter
+    def finger_size(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"]
+    def flange_to_tip(self) -> float: ...
+    @flange_to_tip.setter
+    def flange_to_tip(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    def friction(self) -> float: ...
+    @friction.setter
+    def friction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    def max_opening(self) -> float: ...
+    @max_opening.setter
+    def max_opening(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    def palm_size(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]: ...
+    @palm_size.setter
+    def palm_size(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"]
+class AntipodalSampler:
+    Immutable antipodal grasp sampler of one object for one gripper.
+    def __init__(self, mesh: Mesh, gripper: ParallelJawGripper) -> None: ...
+    def collides(
+        self, X_OH: typing.Any, opening: typing.SupportsFloat | typing.SupportsIndex
+    ) -> bool: ...
+    def sample(
+        points: typing.Any,
+        normals: typing.Any,
+        probes: typing.SupportsInt | typing.SupportsIndex = 5,
+        tilt: typing.SupportsFloat | typing.SupportsIndex = 0.19634954084936207,
+        offset: typing.SupportsFloat | typing.SupportsIndex = 0.005,
+        start_offset: typing.SupportsFloat | typing.SupportsIndex = 0.01,
+        friction_coef: typing.SupportsFloat | typing.SupportsIndex = 0.41421356237309503,
+        approaches_tried: typing.SupportsInt | typing.SupportsIndex = 50,
+        approaches_kept: typing.SupportsInt | typing.SupportsIndex = 20,
+        check_collision: bool = True,
+        first_index: typing.SupportsInt | typing.SupportsIndex = 0,
+        num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+    def gripper(self) -> ParallelJawGripper: ...
 def build_info() -> list[tuple[str, str]]:
     """
     (library, version) pairs for mgn and every library the core was built against.
@@ -683,6 +740,24 @@ def hemisphere_rig(
     azimuths: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
     target: typing.Any,
 ) -> numpy.ndarray: ...
+def gripper_meshes(
+    gripper: ParallelJawGripper, opening: typing.SupportsFloat | typing.SupportsIndex
+) -> tuple[Mesh, Mesh, Mesh]:
+    """
+    (palm, finger_left, finger_right) closed meshes in the hand frame at an opening (m).
+    """
+
+def hand_poses(
+    p1: typing.Any,
+    closing: typing.Any,
+    approach: typing.Any,
+    width: typing.Any,
+    gripper: ParallelJawGripper,
+) -> numpy.typing.NDArray[numpy.float64]:
+    """
+    (N,4,4) hand (flange) poses X_OH of grasps in the object frame.
+    """
+
 def load_mesh(
     path: str,
     scale: typing.SupportsFloat | typing.SupportsIndex = 1.0,
@@ -714,6 +789,17 @@ def mgn_rig_from_params(
     theta_end: typing.SupportsFloat | typing.SupportsIndex,
     phi_end: typing.SupportsFloat | typing.SupportsIndex,
     target: typing.Any,
+def pj_wrench_scores(
+    p1: typing.Any,
+    closing: typing.Any,
+    width: typing.Any,
+    mass: typing.SupportsFloat | typing.SupportsIndex,
+    com: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
+    gravity_direction: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
+    friction: typing.SupportsFloat | typing.SupportsIndex = 0.5,
+    grip_force: typing.SupportsFloat | typing.SupportsIndex = 70.0,
+    contact_radius: typing.SupportsFloat | typing.SupportsIndex = 0.005,
+    gravity: typing.SupportsFloat | typing.SupportsIndex = 9.81,
 ) -> numpy.ndarray: ...
 def predict_experiments(
     surfaces: collections.abc.Sequence[Mesh],

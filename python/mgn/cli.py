@@ -324,6 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="FILE", help="write points and scores (JSON)")
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.set_defaults(func=_cmd_suction_compare)
+    __import__("mgn.pj.cli").pj.cli.register(sub)  # mgn pj label (python/mgn/pj/cli.py)
 
     __import__("mgn.scene.cli", fromlist=["register"]).register(sub)
     p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")

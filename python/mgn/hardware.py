@@ -100,6 +100,12 @@ class ParallelJawGripper(_YamlDataclass):
         finger_size: finger box (thickness along closing x, width along y, length along z), m.
         palm_size: palm box (x, y, z), m, sitting between the flange and the fingers.
         friction: finger pad Coulomb friction coefficient.
+        palm_mesh, finger_left_mesh, finger_right_mesh: a user gripper from mesh files (all three
+            or none): closed meshes in the hand frame (origin at the flange, z = approach,
+            x = closing), the fingers placed at opening 0; at an opening o the left finger moves
+            by -o/2 and the right one by +o/2 along x. Relative paths in a YAML file are read
+            relative to that file. finger_size and palm_size are then ignored.
+        mesh_scale: multiplies the mesh coordinates (0.001 for files in millimetres).
     """
 
     name: str = "franka_like"
@@ -110,11 +116,22 @@ class ParallelJawGripper(_YamlDataclass):
     finger_size: tuple[float, float, float] = (0.010, 0.020, 0.050)
     palm_size: tuple[float, float, float] = (0.060, 0.200, 0.060)
     friction: float = 1.0
+    palm_mesh: str | None = None
+    finger_left_mesh: str | None = None
+    finger_right_mesh: str | None = None
+    mesh_scale: float = 1.0
 
     def __post_init__(self) -> None:
         self._check_positive(
             "max_opening", "flange_to_tip", "contact_from_tip", "friction", "collision_margin"
         )
+        self._check_positive("mesh_scale")
+        meshes = [self.palm_mesh, self.finger_left_mesh, self.finger_right_mesh]
+        if any(m is not None for m in meshes) and not all(isinstance(m, str) for m in meshes):
+            raise InvalidArgumentError(
+                "ParallelJawGripper: palm_mesh, finger_left_mesh and finger_right_mesh must all "
+                f"be mesh file paths or all be None, got {meshes!r}"
+            )
         for name in ("finger_size", "palm_size"):
             v = getattr(self, name)
             if len(v) != 3 or not all(isinstance(x, (int, float)) and x > 0 for x in v):
@@ -126,6 +143,24 @@ class ParallelJawGripper(_YamlDataclass):
                 "ParallelJawGripper: contact_from_tip must be < flange_to_tip, got "
                 f"{self.contact_from_tip} >= {self.flange_to_tip}"
             )
+
+    @classmethod
+    def from_yaml(cls, path: str | os.PathLike[str]) -> ParallelJawGripper:
+        """Read from a YAML file; relative mesh paths are taken relative to the file's folder."""
+        g = super().from_yaml(path)
+        base = os.path.dirname(os.path.abspath(path))
+        fields = ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
+        resolved = {
+            f: os.path.join(base, getattr(g, f))
+            for f in fields
+            if getattr(g, f) is not None and not os.path.isabs(getattr(g, f))
+        }
+        return dataclasses.replace(g, **resolved) if resolved else g
+
+    @property
+    def has_meshes(self) -> bool:
+        """True for a user gripper defined by mesh files."""
+        return self.palm_mesh is not None
 
     @property
     def flange_to_contact(self) -> float:

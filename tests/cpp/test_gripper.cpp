@@ -48,6 +48,28 @@ TEST(Gripper, HandPoseBringsPadCentresOntoTheContacts) {
   EXPECT_NEAR((p2_H - Vec3d(0.02, 0, g.grasp_depth())).norm(), 0.0, 1e-12);
 }
 
+TEST(Gripper, MeshGripperFromTheBoxMeshesMatchesTheParametricOne) {
+  ParallelJawGripper boxes;
+  const GripperMeshes closed = gripper_meshes(boxes, 0.0);
+  ParallelJawGripper meshes = boxes;
+  meshes.palm_mesh = closed.palm;
+  meshes.finger_left_mesh = closed.finger_left;
+  meshes.finger_right_mesh = closed.finger_right;
+  meshes.finger_size = Vec3d(1, 1, 1);  // ignored by a mesh gripper
+  ASSERT_TRUE(meshes.has_meshes());
+  EXPECT_NO_THROW(meshes.validate());
+  for (double opening : {0.0, 0.037, 0.08}) {
+    const GripperMeshes a = gripper_meshes(boxes, opening);
+    const GripperMeshes b = gripper_meshes(meshes, opening);
+    EXPECT_LT((a.finger_left.vertices() - b.finger_left.vertices()).cwiseAbs().maxCoeff(), 1e-7);
+    EXPECT_LT((a.finger_right.vertices() - b.finger_right.vertices()).cwiseAbs().maxCoeff(), 1e-7);
+    EXPECT_LT((a.palm.vertices() - b.palm.vertices()).cwiseAbs().maxCoeff(), 1e-7);
+  }
+  EXPECT_NEAR(finger_offset(0, 0.05).translation().x(), -0.025, 1e-15);
+  EXPECT_NEAR(finger_offset(1, 0.05).translation().x(), 0.025, 1e-15);
+  EXPECT_THROW(finger_offset(2, 0.05), InvalidArgument);
+}
+
 TEST(Gripper, BadInputIsRejected) {
   ParallelJawGripper g;
   EXPECT_THROW(gripper_meshes(g, -0.001), InvalidArgument);

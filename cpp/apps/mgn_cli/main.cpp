@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "cmd_pj.hpp"
+
 namespace {
 
 const char* kUsage =
@@ -145,7 +147,7 @@ int cmd_info(const std::vector<std::string>& args) {
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
-    std::cout << kUsage;
+    std::cout << kUsage << mgn_cli::kPjUsage;
     return args.empty() ? 2 : 0;
   }
   try {
@@ -153,12 +155,13 @@ int main(int argc, char** argv) {
     const std::vector<std::string> rest(args.begin() + 1, args.end());
     for (const auto& a : rest) {
       if (a == "--help" || a == "-h") {
-        std::cout << kUsage;
+        std::cout << kUsage << mgn_cli::kPjUsage;
         return 0;
       }
     }
     if (cmd == "--version" || cmd == "version") return cmd_version();
     if (cmd == "info") return cmd_info(rest);
+    if (cmd == "pj") return mgn_cli::cmd_pj(rest);
     std::cerr << "mgn-cli: unknown command '" << cmd << "' (see mgn-cli --help)\n";
     return 2;
   } catch (const mgn::InvalidArgument& e) {

@@ -13,8 +13,10 @@
 #include <mgn/geometry/mesh_io.hpp>
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/geometry/sampling.hpp>
+#include <mgn/grasp/antipodal.hpp>
 #include <mgn/grasp/cup.hpp>
 #include <mgn/grasp/gripper.hpp>
+#include <mgn/grasp/pj_wrench.hpp>
 #include <mgn/grasp/seal_model.hpp>
 #include <mgn/grasp/wrench.hpp>
 #include <mgn/raytrace/ray_scene.hpp>

@@ -29,6 +29,18 @@ struct ParallelJawGripper {
   Vec3d palm_size = Vec3d(0.060, 0.200, 0.060);
   double friction = 1.0;  ///< finger pad Coulomb friction coefficient
 
+  /// User gripper from meshes (all three set, or none: then the parametric boxes are used).
+  /// Meshes are closed, in the hand frame H, with the fingers at opening 0 (closed): at an opening
+  /// o the left finger moves by -o/2 and the right one by +o/2 along x (finger_offset()). The
+  /// grasp geometry (max_opening, flange_to_tip, contact_from_tip) still comes from the fields
+  /// above; finger_size and palm_size are then ignored.
+  Mesh palm_mesh;
+  Mesh finger_left_mesh;   ///< the p1 side (x < 0)
+  Mesh finger_right_mesh;  ///< x > 0
+
+  /// True when the gripper is defined by the three meshes above.
+  bool has_meshes() const { return !palm_mesh.empty(); }
+
   /// Throws InvalidArgument naming the first field that is not finite/positive/consistent.
   void validate() const;
 
@@ -47,6 +59,11 @@ struct GripperMeshes {
   Mesh finger_right;  ///< at x > 0
 };
 GripperMeshes gripper_meshes(const ParallelJawGripper& gripper, double opening);
+
+/// Translation of a finger along x of H at an opening, relative to its closed placement
+/// (gripper_meshes(g, 0)): -opening/2 for the left finger (side = 0), +opening/2 for the right one
+/// (side = 1). Lets callers build collision models or rigid bodies once and move them.
+Pose finger_offset(int side, double opening);
 
 /// One parallel-jaw grasp in the object frame (MetaGraspNet's [a, v, p1, w]).
 struct ParallelJawGrasp {

@@ -1,0 +1,444 @@
+// Antipodal robust sampling of parallel-jaw grasps (MODELS.md §5).
+#include <mgn/collision/collision_model.hpp>
+#include <mgn/core/error.hpp>
+#include <mgn/core/parallel.hpp>
+#include <mgn/core/rng.hpp>
+#include <mgn/geometry/sampling.hpp>
+#include <mgn/grasp/antipodal.hpp>
+#include <mgn/raytrace/ray_scene.hpp>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+
+#include "grasp/detail/seal_trials.hpp"
+
+namespace mgn {
+
+void AntipodalOptions::validate() const {
+  auto fail = [](const char* field, double value, const char* expected) {
+    throw_error<InvalidArgument>("AntipodalOptions.", field, ": expected ", expected, ", got ",
+                                 value);
+  };
+  if (probes < 1) fail("probes", probes, "an integer >= 1");
+  if (!(tilt >= 0.0) || !(tilt < M_PI / 2)) fail("tilt", tilt, "an angle in [0, pi/2) rad");
+  if (!(offset >= 0.0) || !std::isfinite(offset)) fail("offset", offset, "a finite value >= 0 m");
+  if (!(start_offset > 0.0) || !std::isfinite(start_offset))
+    fail("start_offset", start_offset, "a finite value > 0 m");
+  if (!(friction_coef > 0.0) || !std::isfinite(friction_coef))
+    fail("friction_coef", friction_coef, "a finite value > 0");
+  if (approaches_tried < 0) fail("approaches_tried", approaches_tried, "an integer >= 0");
+  if (approaches_kept < 0) fail("approaches_kept", approaches_kept, "an integer >= 0");
+  if (num_threads < 0) fail("num_threads", num_threads, "0 (all) or a positive thread count");
+}
+
+struct AntipodalSampler::Impl {
+  ParallelJawGripper gripper;
+  std::unique_ptr<RayScene> scene;
+  std::unique_ptr<CollisionModel> object;
+  // Gripper parts at opening 0 in the hand frame: palm, left finger, right finger.
+  std::array<std::unique_ptr<CollisionModel>, 3> parts;
+  std::array<Vec3d, 3> part_vertex;  // one vertex of each part (for the inside test), frame H
+  // Points on the object surface (its vertices and even samples) for the certain-collision
+  // pre-filter of box grippers: a surface point inside a gripper box means a collision.
+  Points3d surface_points;
+  // Bounding spheres of the object's triangles (centres, radii) for the certain-free test: a box
+  // that no sphere touches cannot touch the surface.
+  Points3d tri_centres;
+  std::vector<double> tri_radii;
+};
+
+namespace {
+
+/// Axis-aligned box in the hand frame H: centre and half extents, m.
+struct HandBox {
+  Vec3d centre;
+  Vec3d half;
+};
+
+/// Object surface points near one accepted probe, per gripper box, in the grasp's cylindrical
+/// frame: for the approach a = cos t e1 + sin t e2 a point's hand-frame coordinates are
+/// (x, cos t y0 + sin t y1, cos t z0 + sin t z1 + grasp_depth), with x along the closing axis v,
+/// (z0, z1) its components along e1, e2 and (y0, y1) along e1 x v, e2 x v. The x test does not
+/// depend on the approach, so each box keeps only the points of its x slab whose distance from the
+/// closing axis can put them inside it.
+struct ProbePoints {
+  struct BoxPoints {
+    double y_half = 0, z_lo = 0, z_hi = 0;  // box extent in y and in z relative to the centre
+    std::vector<double> y0, y1, z0, z1;
+    // Triangle spheres that may touch the box: distance of the centre's x to the box's x range
+    // (0 inside), centre components as above and radius.
+    std::vector<double> sx, sy0, sy1, sz0, sz1, sr;
+  };
+  std::array<BoxPoints, 3> lists;  // palm, left finger, right finger at the probe's opening
+
+  ProbePoints(const Points3d& surface, const Points3d& centres, const std::vector<double>& radii,
+              const ParallelJawGripper& g, const ParallelJawGrasp& grasp, const Vec3d& e1,
+              const Vec3d& e2, double opening) {
+    constexpr double kEps = 1e-7;  // boxes shrunk by this: inside means strictly inside
+    const Vec3d& f = g.finger_size;
+    const Vec3d& pb = g.palm_size;
+    const double depth = g.grasp_depth();
+    const std::array<HandBox, 3> boxes = {
+        HandBox{Vec3d(0, 0, g.flange_to_tip - f.z() - 0.5 * pb.z()), 0.5 * pb},
+        HandBox{Vec3d(-0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f},
+        HandBox{Vec3d(0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f}};
+    std::array<double, 3> r2_min{}, r2_max{};
+    for (int k = 0; k < 3; ++k) {
+      const HandBox& b = boxes[k];
+      BoxPoints& l = lists[k];
+      l.y_half = b.half.y() - kEps;
+      l.z_lo = b.centre.z() - b.half.z() + kEps - depth;
+      l.z_hi = b.centre.z() + b.half.z() - kEps - depth;
+      const double z_near = (l.z_lo > 0) ? l.z_lo : (l.z_hi < 0 ? -l.z_hi : 0.0);
+      const double z_far = std::max(std::abs(l.z_lo), std::abs(l.z_hi));
+      r2_min[k] = z_near * z_near;  // the box's nearest and farthest distance from the axis
+      r2_max[k] = z_far * z_far + l.y_half * l.y_half;
+    }
+    const Vec3d c = grasp.p1 + 0.5 * grasp.width * grasp.closing;
+    const Vec3d& v = grasp.closing;
+    const Vec3d w1 = e1.cross(v), w2 = e2.cross(v);
+    for (Eigen::Index i = 0; i < surface.rows(); ++i) {
+      const Vec3d q = surface.row(i).transpose() - c;
+      const double xq = q.dot(v);
+      const double r2 = q.squaredNorm() - xq * xq;
+      for (int k = 0; k < 3; ++k) {
+        const HandBox& b = boxes[k];
+        if (std::abs(xq - b.centre.x()) >= b.half.x() - kEps) continue;
+        if (r2 < r2_min[k] || r2 > r2_max[k]) continue;
+        BoxPoints& l = lists[k];
+        l.y0.push_back(q.dot(w1));
+        l.y1.push_back(q.dot(w2));
+        l.z0.push_back(q.dot(e1));
+        l.z1.push_back(q.dot(e2));
+      }
+    }
+    for (Eigen::Index i = 0; i < centres.rows(); ++i) {
+      const Vec3d q = centres.row(i).transpose() - c;
+      const double r = radii[i];
+      const double xq = q.dot(v);
+      const double rho = std::sqrt(std::max(0.0, q.squaredNorm() - xq * xq));
+      for (int k = 0; k < 3; ++k) {
+        const HandBox& b = boxes[k];
+        const double dx = std::max(0.0, std::abs(xq - b.centre.x()) - b.half.x());
+        if (dx > r) continue;
+        if (rho + r < std::sqrt(r2_min[k]) || rho - r > std::sqrt(r2_max[k])) continue;
+        BoxPoints& l = lists[k];
+        l.sx.push_back(dx);
+        l.sy0.push_back(q.dot(w1));
+        l.sy1.push_back(q.dot(w2));
+        l.sz0.push_back(q.dot(e1));
+        l.sz1.push_back(q.dot(e2));
+        l.sr.push_back(r);
+      }
+    }
+  }
+
+  /// True when no triangle sphere touches a box (with a 1e-6 m margin) for the approach angle t:
+  /// then the gripper surface cannot touch the object surface.
+  bool surely_clear(double t) const {
+    constexpr double kMargin = 1e-6;
+    const double ct = std::cos(t), st = std::sin(t);
+    for (const BoxPoints& l : lists) {
+      const std::size_t n = l.sr.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const double z = ct * l.sz0[i] + st * l.sz1[i];
+        const double y = ct * l.sy0[i] + st * l.sy1[i];
+        const double dz = std::max({0.0, l.z_lo - z, z - l.z_hi});
+        const double dy = std::max(0.0, std::abs(y) - l.y_half);
+        const double rr = l.sr[i] + kMargin;
+        if (l.sx[i] * l.sx[i] + dy * dy + dz * dz <= rr * rr) return false;
+      }
+    }
+    return true;
+  }
+
+  /// Whether an object point lies strictly inside a gripper box for the approach angle t.
+  bool any_inside(double t) const {
+    const double ct = std::cos(t), st = std::sin(t);
+    for (const BoxPoints& l : lists) {
+      const std::size_t n = l.y0.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const double z = ct * l.z0[i] + st * l.z1[i];
+        const double y = ct * l.y0[i] + st * l.y1[i];
+        if (z > l.z_lo && z < l.z_hi && std::abs(y) < l.y_half) return true;
+      }
+    }
+    return false;
+  }
+};
+
+}  // namespace
+
+AntipodalSampler::AntipodalSampler(const Mesh& object, const ParallelJawGripper& gripper)
+    : impl_(std::make_unique<Impl>()) {
+  require_non_empty(object, "AntipodalSampler");
+  const MeshReport report = object.validate();
+  if (!report.is_watertight) {
+    throw_error<InvalidArgument>(
+        "AntipodalSampler: the object mesh '", object.name(), "' has no closed volume (",
+        report.num_boundary_edges, " boundary and ", report.num_nonmanifold_edges,
+        " non-manifold edges); expected a watertight mesh (antipodal probes need an inside)");
+  }
+  gripper.validate();
+  impl_->gripper = gripper;
+  impl_->scene =
+      std::make_unique<RayScene>(std::vector<RayGeometry>{{&object, Pose::Identity(), 0}});
+  impl_->object = std::make_unique<CollisionModel>(object);
+  const GripperMeshes meshes = gripper_meshes(gripper, 0.0);
+  const std::array<const Mesh*, 3> parts = {&meshes.palm, &meshes.finger_left,
+                                            &meshes.finger_right};
+  for (int k = 0; k < 3; ++k) {
+    impl_->parts[k] = std::make_unique<CollisionModel>(*parts[k]);
+    impl_->part_vertex[k] = parts[k]->vertices().row(0).transpose().cast<double>();
+  }
+  if (!gripper.has_meshes()) {
+    SampleOptions so;
+    so.method = SampleMethod::Even;
+    const SurfaceSamples samples = sample_surface(object, 2048, so);
+    Points3d& sp = impl_->surface_points;
+    sp.resize(object.num_vertices() + samples.points.rows(), 3);
+    sp.topRows(object.num_vertices()) = object.vertices().cast<double>();
+    sp.bottomRows(samples.points.rows()) = samples.points.cast<double>();
+    const Points3f& V = object.vertices();
+    const Faces& F = object.faces();
+    impl_->tri_centres.resize(F.rows(), 3);
+    impl_->tri_radii.resize(static_cast<std::size_t>(F.rows()));
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const Vec3d a = V.row(F(f, 0)).transpose().cast<double>();
+      const Vec3d b = V.row(F(f, 1)).transpose().cast<double>();
+      const Vec3d cc = V.row(F(f, 2)).transpose().cast<double>();
+      const Vec3d centre = (a + b + cc) / 3.0;
+      impl_->tri_centres.row(f) = centre.transpose();
+      impl_->tri_radii[f] =
+          std::max({(a - centre).norm(), (b - centre).norm(), (cc - centre).norm()}) * (1 + 1e-9);
+    }
+  }
+}
+
+AntipodalSampler::~AntipodalSampler() = default;
+
+const ParallelJawGripper& AntipodalSampler::gripper() const { return impl_->gripper; }
+
+namespace {
+
+/// Rotation by Euler angles about x, then y, then z (fixed axes): Rz * Ry * Rx.
+Mat3d euler_xyz(double ax, double ay, double az) {
+  return (Eigen::AngleAxisd(az, Vec3d::UnitZ()) * Eigen::AngleAxisd(ay, Vec3d::UnitY()) *
+          Eigen::AngleAxisd(ax, Vec3d::UnitX()))
+      .toRotationMatrix();
+}
+
+// A fixed direction off every axis and diagonal, for the ray-parity inside test.
+const Vec3d kParityDirection = Vec3d(0.5773, 0.6213, 0.5297).normalized();
+
+}  // namespace
+
+bool AntipodalSampler::collides(const Pose& X_OH, double opening) const {
+  const Impl& m = *impl_;
+  if (!X_OH.matrix().allFinite()) {
+    throw_error<InvalidArgument>("AntipodalSampler::collides: X_OH must be finite");
+  }
+  if (!std::isfinite(opening) || opening < 0.0 || opening > m.gripper.max_opening + 1e-12) {
+    throw_error<InvalidArgument>("AntipodalSampler::collides: opening must be in [0, ",
+                                 m.gripper.max_opening, "] m, got ", opening);
+  }
+  // Fingers first: they are the parts nearest to the object.
+  const std::array<Pose, 3> X = {X_OH, X_OH * finger_offset(0, opening),
+                                 X_OH * finger_offset(1, opening)};
+  for (int k : {1, 2, 0}) {
+    if (collide(*m.parts[k], X[k], *m.object, Pose::Identity())) return true;
+  }
+  return part_inside_object(m, X_OH, opening);
+}
+
+bool AntipodalSampler::part_inside_object(const Impl& m, const Pose& X_OH, double opening) {
+  // No surface contact: a part is either fully outside or fully inside the closed object.
+  const std::array<Pose, 3> X = {X_OH, X_OH * finger_offset(0, opening),
+                                 X_OH * finger_offset(1, opening)};
+  Points3f origins(3, 3), directions(3, 3);
+  for (int k = 0; k < 3; ++k) {
+    origins.row(k) = (X[k] * m.part_vertex[k]).cast<float>().transpose();
+    directions.row(k) = kParityDirection.cast<float>().transpose();
+  }
+  CastOptions cast;
+  cast.num_threads = 1;
+  const RayAllHits hits = m.scene->intersect_all(origins, directions, 1024, cast);
+  for (int k = 0; k < 3; ++k) {
+    if ((hits.offsets[k + 1] - hits.offsets[k]) % 2 == 1) return true;
+  }
+  return false;
+}
+
+AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d& normals,
+                                         const AntipodalOptions& o) const {
+  o.validate();
+  const Impl& m = *impl_;
+  const Eigen::Index n = points.rows();
+  if (normals.rows() != n) {
+    throw_error<InvalidArgument>("sample_antipodal_grasps: points has ", n,
+                                 " rows but normals has ", normals.rows(),
+                                 "; expected the same count");
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!points.row(i).allFinite() || !normals.row(i).allFinite() ||
+        !(normals.row(i).norm() > 1e-12)) {
+      throw_error<InvalidArgument>("sample_antipodal_grasps: point/normal ", i,
+                                   " is not finite or the normal is zero; expected finite points "
+                                   "and non-zero normals");
+    }
+  }
+  const ParallelJawGripper& g = m.gripper;
+  const double cos_cone = std::cos(std::atan(o.friction_coef));
+  const int P = o.probes;
+
+  AntipodalResult out;
+  out.point_score.assign(static_cast<std::size_t>(n), 0.0f);
+  out.num_kept.assign(static_cast<std::size_t>(n), 0);
+  std::vector<std::vector<AntipodalGrasp>> per_point(static_cast<std::size_t>(n));
+  std::vector<std::int32_t> accepted_count(static_cast<std::size_t>(n), 0);
+  std::vector<std::int64_t> colliding(static_cast<std::size_t>(n), 0);
+
+  const auto process = [&](std::size_t begin, std::size_t end) {
+    const auto count = static_cast<Eigen::Index>(end - begin);
+    // 1. Probes of the whole chunk, drawn per point from its own stream, cast in one batch.
+    std::vector<Rng> rngs;
+    rngs.reserve(end - begin);
+    Points3f origins(count * P, 3), directions(count * P, 3);
+    Points3d origins_d(count * P, 3), directions_d(count * P, 3);
+    for (std::size_t i = begin; i < end; ++i) {
+      rngs.emplace_back(o.seed, o.first_index + i);
+      Rng& rng = rngs.back();
+      const Vec3d p = points.row(i).transpose();
+      const Vec3d nrm = normals.row(i).transpose().normalized();
+      for (int k = 0; k < P; ++k) {
+        const double ax = rng.uniform(-o.tilt, o.tilt);
+        const double ay = rng.uniform(-o.tilt, o.tilt);
+        const double az = rng.uniform(-o.tilt, o.tilt);
+        Vec3d shift;
+        for (int c = 0; c < 3; ++c) shift[c] = rng.uniform(-o.offset, o.offset);
+        const Vec3d d = (euler_xyz(ax, ay, az) * -nrm).normalized();
+        const Vec3d start = p + shift - o.start_offset * d;
+        const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
+        origins_d.row(r) = start.transpose();
+        directions_d.row(r) = d.transpose();
+      }
+    }
+    origins = origins_d.cast<float>();
+    directions = directions_d.cast<float>();
+    CastOptions cast;
+    cast.num_threads = 1;
+    const RayAllHits hits = m.scene->intersect_all(origins, directions, 2, cast);
+
+    // 2. Per point: antipodal test of each probe, then approaches and collision.
+    for (std::size_t i = begin; i < end; ++i) {
+      Rng& rng = rngs[i - begin];
+      std::vector<ParallelJawGrasp> accepted;
+      std::vector<int> accepted_probe;
+      for (int k = 0; k < P; ++k) {
+        const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
+        const std::int64_t h0 = hits.offsets[r];
+        if (hits.offsets[r + 1] - h0 < 2) continue;
+        const Vec3d start = origins.row(r).transpose().cast<double>();
+        const Vec3d d = directions.row(r).transpose().cast<double>();
+        const Vec3d q1 = start + static_cast<double>(hits.distance[h0]) * d;
+        const Vec3d q2 = start + static_cast<double>(hits.distance[h0 + 1]) * d;
+        const double w = (q2 - q1).norm();
+        if (!(w > 1e-9) || !(w < g.max_opening)) continue;
+        const Vec3d v = (q2 - q1) / w;
+        const Vec3d n1 = hits.normals.row(h0).transpose().cast<double>().normalized();
+        const Vec3d n2 = hits.normals.row(h0 + 1).transpose().cast<double>().normalized();
+        if (-n1.dot(v) < cos_cone || n2.dot(v) < cos_cone) continue;
+        ParallelJawGrasp grasp;
+        grasp.p1 = q1;
+        grasp.closing = v;
+        grasp.width = w;
+        accepted.push_back(grasp);
+        accepted_probe.push_back(k);
+      }
+      const float score = static_cast<float>(accepted.size()) / static_cast<float>(P);
+      out.point_score[i] = score;
+      accepted_count[i] = static_cast<std::int32_t>(accepted.size());
+      std::vector<AntipodalGrasp>& kept = per_point[i];
+      for (std::size_t j = 0; j < accepted.size(); ++j) {
+        ParallelJawGrasp grasp = accepted[j];
+        Vec3d e1, e2;
+        detail::tangent_frame(grasp.closing, e1, e2);
+        const double opening = g.collision_opening(grasp.width);
+        // Box grippers: certain-collision (object point inside a box) and certain-free (no
+        // triangle sphere touches a box) pre-filters; FCL decides the rest.
+        const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
+                               o.approaches_tried > 0 && o.approaches_kept > 0;
+        const Points3d none;
+        const ProbePoints near = prefilter ? ProbePoints(m.surface_points, m.tri_centres,
+                                                         m.tri_radii, g, grasp, e1, e2, opening)
+                                           : ProbePoints(none, none, {}, g, grasp, e1, e2, opening);
+        int num_kept = 0;
+        // All angles are drawn even when the loop stops early, so the stream of the next probe
+        // does not depend on collision outcomes.
+        std::vector<double> angles(static_cast<std::size_t>(o.approaches_tried));
+        for (double& t : angles) t = rng.uniform(0.0, 2.0 * M_PI);
+        for (double t : angles) {
+          if (num_kept >= o.approaches_kept) break;
+          grasp.approach = (std::cos(t) * e1 + std::sin(t) * e2).normalized();
+          if (prefilter && near.any_inside(t)) {
+            ++colliding[i];
+            continue;
+          }
+          if (o.check_collision) {
+            // FCL per part (fingers first), unless the spheres prove the surfaces apart; then
+            // the parity test for a part lying entirely inside the object.
+            const Pose X_OH = hand_pose(grasp, g);
+            bool hit = false;
+            if (!(prefilter && near.surely_clear(t))) {
+              for (int k : {1, 2, 0}) {
+                const Pose X = k == 0 ? X_OH : X_OH * finger_offset(k - 1, opening);
+                if ((hit = collide(*m.parts[k], X, *m.object, Pose::Identity()))) break;
+              }
+            }
+            if (hit || part_inside_object(m, X_OH, opening)) {
+              ++colliding[i];
+              continue;
+            }
+          }
+          kept.push_back({grasp, static_cast<std::int64_t>(i), accepted_probe[j], score});
+          ++num_kept;
+        }
+      }
+      out.num_kept[i] = static_cast<std::int32_t>(kept.size());
+    }
+  };
+  // Dynamic scheduling over blocks of points (the cost per point varies a lot with the number of
+  // colliding approaches); every point's result depends only on its index.
+  constexpr std::size_t kBlock = 32;
+  const std::size_t num_blocks = (static_cast<std::size_t>(n) + kBlock - 1) / kBlock;
+  const auto workers = std::min<std::size_t>(
+      static_cast<std::size_t>(resolve_num_threads(o.num_threads)), num_blocks);
+  std::atomic<std::size_t> next_block{0};
+  parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
+    for (std::size_t b = next_block++; b < num_blocks; b = next_block++) {
+      process(b * kBlock, std::min(static_cast<std::size_t>(n), (b + 1) * kBlock));
+    }
+  });
+
+  std::size_t total = 0;
+  for (const auto& v : per_point) total += v.size();
+  out.grasps.reserve(total);
+  for (std::size_t i = 0; i < per_point.size(); ++i) {
+    out.grasps.insert(out.grasps.end(), per_point[i].begin(), per_point[i].end());
+    out.num_accepted_probes += accepted_count[i];
+    out.num_colliding += colliding[i];
+  }
+  return out;
+}
+
+AntipodalResult sample_antipodal_grasps(const Mesh& object, const Points3d& points,
+                                        const Points3d& normals, const ParallelJawGripper& gripper,
+                                        const AntipodalOptions& options) {
+  options.validate();
+  return AntipodalSampler(object, gripper).sample(points, normals, options);
+}
+
+}  // namespace mgn

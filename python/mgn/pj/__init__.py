@@ -1,0 +1,30 @@
+"""Parallel-jaw grasps: gripper conversion, antipodal sampling, wrench score, object labels.
+
+core_gripper(gripper)                  the C++ gripper for a mgn.hardware.ParallelJawGripper
+AntipodalSampler(mesh, gripper)        antipodal robust sampler (MODELS.md §5)
+pj_wrench_scores(...)                  soft-finger wrench score under gravity
+label_object(mesh, mass=, com=)        object labels; write_pj_labels(hdf5, labels)
+"""
+
+from mgn.pj.labels import PjLabels, label_object, read_pj_labels, write_pj_labels
+from mgn.pj.sampler import (
+    AntipodalResult,
+    AntipodalSampler,
+    core_gripper,
+    gripper_meshes,
+    hand_poses,
+    pj_wrench_scores,
+)
+
+__all__ = [
+    "AntipodalResult",
+    "AntipodalSampler",
+    "PjLabels",
+    "core_gripper",
+    "gripper_meshes",
+    "hand_poses",
+    "label_object",
+    "pj_wrench_scores",
+    "read_pj_labels",
+    "write_pj_labels",
+]

@@ -1,0 +1,118 @@
+"""``mgn pj``: parallel-jaw labels from the command line.
+
+    mgn pj label PATH [PATH ...] [--gripper G.yaml] [--points N] [--seed S] [--no-physics]
+
+PATH is an object folder (``textured.obj`` + ``textured.obj.hdf5``), an export root (its
+``models/NNN`` folders are all labelled) or a mesh file (then ``--out`` names the HDF5 file to
+write and ``--density`` gives the mass).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from mgn.pj.labels import PhysicsScorer
+
+
+def _physics_scorer() -> PhysicsScorer | None:
+    """The physics (shake test) scorer, or None while it is not available."""
+    return None
+
+
+def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path | None]]:
+    """(mesh file, hdf5 file, model folder or None) for each PATH."""
+    targets = []
+    for raw in paths:
+        p = Path(raw)
+        if p.is_dir() and (p / "textured.obj").is_file():
+            targets.append((p / "textured.obj", p / "textured.obj.hdf5", p))
+        elif p.is_dir() and (p / "models").is_dir():
+            folders = sorted(f for f in (p / "models").glob("[0-9][0-9][0-9]") if f.is_dir())
+            if not folders:
+                raise ValueError(f"no object folders under '{p / 'models'}'")
+            targets.extend((f / "textured.obj", f / "textured.obj.hdf5", f) for f in folders)
+        elif p.is_file():
+            if out is None and len(paths) == 1:
+                raise ValueError(f"'{p}' is a mesh file: give --out LABELS.hdf5")
+            if len(paths) != 1:
+                raise ValueError("--out works with a single mesh file")
+            targets.append((p, Path(out), None))  # type: ignore[arg-type]
+        else:
+            raise FileNotFoundError(f"'{p}' is neither an object folder, an export root nor a mesh")
+    return targets
+
+
+def _cmd_label(args: argparse.Namespace) -> int:
+    import h5py
+
+    from mgn.geometry import load_mesh, mass_properties
+    from mgn.hardware import ParallelJawGripper
+    from mgn.io.model_folder import read_model_folder
+    from mgn.pj.labels import label_object, write_pj_labels
+
+    gripper = ParallelJawGripper.from_yaml(args.gripper) if args.gripper else ParallelJawGripper()
+    physics = None
+    if args.physics:
+        physics = _physics_scorer()
+        if physics is None:
+            print("physics score: not yet available (quality_score_simulation left NaN)")
+    for mesh_path, h5_path, folder in _targets(args.paths, args.out):
+        mesh = load_mesh(mesh_path)
+        density = args.density
+        name = mesh_path.stem
+        if folder is not None:
+            meta = read_model_folder(folder).metadata
+            density = float(meta.get("density_kg_m3", density))
+            name = f"{folder.name} {meta.get('name', '')}"
+        props = mass_properties(mesh, density)
+        labels = label_object(
+            mesh,
+            mass=props.mass,
+            com=props.center_of_mass,
+            gripper=gripper,
+            num_points=args.points,
+            seed=args.seed,
+            num_threads=args.num_threads,
+            progress=not args.quiet,
+            physics=physics,
+        )
+        if folder is None and not h5_path.exists():
+            h5_path.parent.mkdir(parents=True, exist_ok=True)
+            with h5py.File(h5_path, "w") as h5:
+                h5.create_group("grasps/paralleljaw")
+        write_pj_labels(h5_path, labels)
+        good = int((labels.point_score >= 1.0).sum())
+        print(
+            f"{name}: {len(labels)} parallel-jaw grasps from {labels.num_points} points "
+            f"({good} points with analytic score 1.0, {labels.num_colliding} colliding "
+            f"approaches dropped) -> {h5_path}"
+        )
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``pj`` command group to the ``mgn`` subparsers."""
+    pj = sub.add_parser("pj", help="parallel-jaw grasp labels")
+    psub = pj.add_subparsers(dest="pj_command", metavar="ACTION", required=True)
+    p = psub.add_parser(
+        "label",
+        help="label objects (writes grasps/paralleljaw/* of textured.obj.hdf5)",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("paths", nargs="+", metavar="PATH", help="object folder, export root or mesh")
+    p.add_argument("--gripper", metavar="YAML", help="gripper YAML (default: MetaGraspNet hand)")
+    p.add_argument("--points", type=int, default=5000, help="contact points per object")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 for a bare mesh file")
+    p.add_argument("--out", metavar="HDF5", help="output file when PATH is a mesh file")
+    p.add_argument(
+        "--physics",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="run the physics (shake) score; --no-physics for the fast analytic path",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_label)

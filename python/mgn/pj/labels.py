@@ -1,0 +1,294 @@
+"""Object-level parallel-jaw labels (``grasps/paralleljaw/*`` of ``textured.obj.hdf5``, FORMAT.md).
+
+Pipeline per object (MODELS.md §5): sample contact points evenly on the surface (MetaGraspNet:
+5000), run the antipodal robust sampler (5 perturbed probes per point, analytic score = accepted
+probes / 5, up to 20 collision-free approaches per accepted probe), compute the soft-finger wrench
+score with gravity along -z of the object frame, and, when a physics scorer is given, the
+simulation score. Everything is in metres here; the writer converts to centimetres.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import h5py
+import numpy as np
+import numpy.typing as npt
+
+from mgn import _core
+from mgn.errors import InvalidArgumentError, IoError
+from mgn.geometry import Mesh, sample_surface
+from mgn.hardware import ParallelJawGripper
+from mgn.pj.sampler import AntipodalSampler, pj_wrench_scores
+
+M_TO_CM = 100.0
+
+
+@dataclass(frozen=True)
+class PjLabels:
+    """Parallel-jaw labels of one object (object frame, metres).
+
+    Attributes:
+        approach: (M, 3) unit approach directions a (into the object).
+        closing: (M, 3) unit closing directions v (from p1 towards the second contact).
+        p1: (M, 3) first contact points.
+        width: (M,) contact widths w, m.
+        quality_score: (M,) analytic score of the source point (accepted probes / probes).
+        score_wrench: (M,) soft-finger wrench score (gravity -z of the object frame).
+        quality_score_simulation: (M,) physics score, NaN where physics was not run.
+        point_index: (M,) index of the source contact point among the sampled points.
+        point_score: (N,) analytic score of every sampled point.
+        num_points: contact points sampled.
+        num_colliding: approaches dropped because the gripper hits the object.
+        metadata: gripper, seeds, sampling grid and counts, as written to the file.
+    """
+
+    approach: npt.NDArray[np.float32]
+    closing: npt.NDArray[np.float32]
+    p1: npt.NDArray[np.float32]
+    width: npt.NDArray[np.float32]
+    quality_score: npt.NDArray[np.float32]
+    score_wrench: npt.NDArray[np.float32]
+    quality_score_simulation: npt.NDArray[np.float32]
+    point_index: npt.NDArray[np.int64]
+    point_score: npt.NDArray[np.float32]
+    num_points: int
+    num_colliding: int
+    metadata: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.width)
+
+    @property
+    def physics_done(self) -> bool:
+        """True when the simulation score was computed for every grasp."""
+        return bool(np.isfinite(self.quality_score_simulation).all())
+
+    def pregrasp_transform(self) -> npt.NDArray[np.float32]:
+        """(M, 10) MetaGraspNet rows [a (3), v (3), p1 (3, cm), w (cm)], float32."""
+        return np.concatenate(
+            [self.approach, self.closing, self.p1 * M_TO_CM, self.width[:, None] * M_TO_CM],
+            axis=1,
+        ).astype(np.float32)
+
+
+#: A physics scorer: (mesh, labels without physics) -> (M,) scores in [0, 1] (e.g. the Bullet
+#: shake test of MODELS.md §5).
+PhysicsScorer = Callable[[Mesh, PjLabels], npt.ArrayLike]
+
+
+def label_object(
+    mesh: Mesh,
+    *,
+    mass: float,
+    com: npt.ArrayLike,
+    gripper: ParallelJawGripper | None = None,
+    num_points: int = 5000,
+    seed: int = 0,
+    num_threads: int = 0,
+    progress: bool = False,
+    chunk: int = 250,
+    physics: PhysicsScorer | None = None,
+    friction: float = 0.5,
+    grip_force: float = 70.0,
+    contact_radius: float = 0.005,
+    sampler_options: dict | None = None,
+) -> PjLabels:
+    """Parallel-jaw labels of one object: see the module docstring. Deterministic for ``seed``.
+
+    Args:
+        mesh: the object, metres, object frame; must be watertight.
+        mass: kg (> 0); com: centre of mass (m, object frame) — for the wrench score.
+        gripper: the gripper (default: MetaGraspNet's Franka-like hand).
+        num_points: contact points sampled evenly on the surface.
+        progress: show a tqdm progress bar.
+        physics: optional scorer filling ``quality_score_simulation``; None leaves it NaN.
+        friction, grip_force, contact_radius: wrench-score constants (see pj_wrench_scores).
+        sampler_options: extra keyword arguments of :meth:`AntipodalSampler.sample`
+            (probes, tilt, offset, friction_coef, approaches_tried, approaches_kept, ...).
+
+    Raises:
+        InvalidArgumentError: non-positive mass or num_points, a mesh with no closed volume, an
+            invalid gripper.
+    """
+    from tqdm import tqdm
+
+    if not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass > 0):
+        raise InvalidArgumentError(
+            f"label_object: mass must be a finite value > 0 kg, got {mass!r}"
+        )
+    if not (isinstance(num_points, int) and num_points > 0):
+        raise InvalidArgumentError(
+            f"label_object: num_points must be an integer > 0, got {num_points!r}"
+        )
+    if chunk < 1:
+        raise InvalidArgumentError(f"label_object: chunk must be >= 1, got {chunk!r}")
+    gripper = gripper if gripper is not None else ParallelJawGripper()
+    opts = dict(sampler_options or {})
+    for reserved in ("seed", "first_index", "num_threads"):
+        if reserved in opts:
+            raise InvalidArgumentError(
+                f"label_object: pass {reserved} as an argument, not in sampler_options"
+            )
+    sampler = AntipodalSampler(mesh, gripper)
+    samples = sample_surface(mesh, num_points, method="even", seed=seed)
+    points = np.asarray(samples.points, np.float64)
+    normals = np.asarray(samples.normals, np.float64)
+
+    parts = []
+    bar = tqdm(
+        total=len(points), desc=f"pj {mesh.name or 'object'}", unit="pt", disable=not progress
+    )
+    for start in range(0, len(points), chunk):
+        stop = min(start + chunk, len(points))
+        # Point k draws from the stream (seed, k) whatever the chunking.
+        parts.append(
+            sampler.sample(
+                points[start:stop],
+                normals[start:stop],
+                seed=seed,
+                first_index=start,
+                num_threads=num_threads,
+                **opts,
+            )
+        )
+        bar.update(stop - start)
+    bar.close()
+
+    def cat(name: str, dtype: type) -> np.ndarray:
+        return np.concatenate([np.asarray(getattr(p, name)) for p in parts]).astype(dtype)
+
+    offsets = np.repeat(
+        [start for start in range(0, len(points), chunk)], [len(p.width) for p in parts]
+    )
+    point_index = cat("point_index", np.int64) + offsets.astype(np.int64)
+    p1, closing, width = cat("p1", np.float64), cat("closing", np.float64), cat("width", np.float64)
+    wrench = pj_wrench_scores(
+        p1,
+        closing,
+        width,
+        mass=mass,
+        com=com,
+        friction=friction,
+        grip_force=grip_force,
+        contact_radius=contact_radius,
+    )
+    metadata = {
+        "pj_gripper": gripper.to_dict(),
+        "pj_seed": int(seed),
+        "pj_num_points": int(num_points),
+        "pj_grid": "even surface sampling (farthest-point from an area-weighted pool)",
+        "pj_sampler": {
+            "probes": 5,
+            "tilt_rad": math.pi / 16,
+            "offset_m": 0.005,
+            "start_offset_m": 0.010,
+            "friction_coef": math.tan(math.pi / 8),
+            "approaches_tried": 50,
+            "approaches_kept": 20,
+        }
+        | {k: v for k, v in opts.items()},
+        "pj_num_accepted_probes": int(sum(p.num_accepted_probes for p in parts)),
+        "pj_num_colliding": int(sum(p.num_colliding for p in parts)),
+        "pj_wrench": {
+            "model": "soft finger, elliptic limit surface, gravity -z of the object frame",
+            "friction": friction,
+            "grip_force_N": grip_force,
+            "contact_radius_m": contact_radius,
+        },
+        "pj_physics": "not run (quality_score_simulation is NaN)",
+        "mgn_version": _core.__version__,
+    }
+    labels = PjLabels(
+        approach=cat("approach", np.float32),
+        closing=closing.astype(np.float32),
+        p1=p1.astype(np.float32),
+        width=width.astype(np.float32),
+        quality_score=cat("score", np.float32),
+        score_wrench=np.asarray(wrench, np.float32),
+        quality_score_simulation=np.full(len(width), np.nan, np.float32),
+        point_index=point_index,
+        point_score=cat("point_score", np.float32),
+        num_points=int(num_points),
+        num_colliding=metadata["pj_num_colliding"],
+        metadata=metadata,
+    )
+    if physics is not None:
+        sim = np.asarray(physics(mesh, labels), np.float32).reshape(-1)
+        if sim.shape != (len(labels),):
+            raise InvalidArgumentError(
+                f"label_object: the physics scorer returned {sim.shape[0]} scores for "
+                f"{len(labels)} grasps"
+            )
+        scorer = getattr(physics, "__name__", type(physics).__name__)
+        labels = replace(
+            labels,
+            quality_score_simulation=sim,
+            metadata=labels.metadata | {"pj_physics": f"run ({scorer})"},
+        )
+    return labels
+
+
+def write_pj_labels(hdf5_path: str | os.PathLike[str], labels: PjLabels) -> None:
+    """Replace ``grasps/paralleljaw/*`` of an object's ``textured.obj.hdf5`` (FORMAT.md).
+
+    Writes ``pregrasp_transform`` (M, 10) [a (3), v (3), p1 (3, cm), w (cm)],
+    ``quality_score`` (M,) (analytic), ``quality_score_simulation`` (M,) (NaN when physics was
+    not run) and the mgn extension ``score_wrench`` (M,), all float32, plus the metadata
+    attributes. Other groups (suction labels, keypoints) are kept. The file is updated on a
+    temporary copy that replaces the original only when complete.
+    """
+    path = Path(hdf5_path)
+    if not path.is_file():
+        raise IoError(f"write_pj_labels: '{path}' does not exist (export the object first)")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        shutil.copyfile(path, tmp)
+        f4 = np.float32
+        with h5py.File(tmp, "a") as h5:
+            if "grasps/paralleljaw" in h5:
+                del h5["grasps/paralleljaw"]
+            g = h5.require_group("grasps").create_group("paralleljaw")
+            g.create_dataset("pregrasp_transform", data=labels.pregrasp_transform().reshape(-1, 10))
+            g.create_dataset("quality_score", data=labels.quality_score.astype(f4))
+            g.create_dataset(
+                "quality_score_simulation", data=labels.quality_score_simulation.astype(f4)
+            )
+            g.create_dataset("score_wrench", data=labels.score_wrench.astype(f4))
+            meta = h5.require_group("metadata")
+            for key, value in labels.metadata.items():
+                meta.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
+        shutil.copymode(path, tmp)
+        os.replace(tmp, path)
+    except OSError as e:
+        raise IoError(f"write_pj_labels: cannot update '{path}': {e}") from e
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def read_pj_labels(hdf5_path: str | os.PathLike[str]) -> dict[str, npt.NDArray[np.float64]]:
+    """The ``grasps/paralleljaw`` datasets of a file in metres: approach, closing, p1 (M, 3),
+    width, quality_score, quality_score_simulation, score_wrench (M,) (absent ones omitted)."""
+    with h5py.File(hdf5_path, "r") as h5:
+        g = h5["grasps/paralleljaw"]
+        pre = np.asarray(g["pregrasp_transform"], np.float64).reshape(-1, 10)
+        out = {
+            "approach": pre[:, 0:3],
+            "closing": pre[:, 3:6],
+            "p1": pre[:, 6:9] / M_TO_CM,
+            "width": pre[:, 9] / M_TO_CM,
+        }
+        for name in ("quality_score", "quality_score_simulation", "score_wrench"):
+            if name in g:
+                out[name] = np.asarray(g[name], np.float64)
+    return out
