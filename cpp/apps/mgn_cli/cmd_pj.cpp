@@ -9,6 +9,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli_util.hpp"
 #include "flat_yaml.hpp"
 
 namespace mgn_cli {
@@ -23,23 +24,6 @@ const char* kPjUsage =
     "      units (m): rows [a (3), v (3), p1 (3), w] with quality_score and score_wrench.\n";
 
 namespace {
-
-std::string escape(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
-}
 
 std::string dir_of(const std::string& path) {
   const std::size_t slash = path.find_last_of('/');
@@ -86,29 +70,6 @@ mgn::ParallelJawGripper read_gripper(const std::string& path) {
   return g;
 }
 
-int to_int(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (end == text.c_str() || *end != '\0') {
-    throw mgn::InvalidArgument("mgn-cli pj: " + flag + " expects an integer, got '" + text + "'");
-  }
-  return static_cast<int>(v);
-}
-
-double to_double(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || *end != '\0') {
-    throw mgn::InvalidArgument("mgn-cli pj: " + flag + " expects a number, got '" + text + "'");
-  }
-  return v;
-}
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 }  // namespace
 
 int cmd_pj(const std::vector<std::string>& args) {
@@ -127,13 +88,13 @@ int cmd_pj(const std::vector<std::string>& args) {
     } else if (a == "--out") {
       out_path = v;
     } else if (a == "--points") {
-      points = to_int(a, v);
+      points = to_int("mgn-cli pj: " + a, v);
     } else if (a == "--seed") {
-      seed = to_int(a, v);
+      seed = to_int("mgn-cli pj: " + a, v);
     } else if (a == "--threads") {
-      threads = to_int(a, v);
+      threads = to_int("mgn-cli pj: " + a, v);
     } else if (a == "--density") {
-      density = to_double(a, v);
+      density = to_double("mgn-cli pj: " + a, v);
     } else {
       throw mgn::InvalidArgument("mgn-cli pj: unknown option '" + a + "'");
     }
@@ -176,7 +137,8 @@ int cmd_pj(const std::vector<std::string>& args) {
 
   std::ostringstream js;
   js << std::setprecision(8);
-  js << "{\n  \"mesh\": " << escape(mesh_path) << ",\n  \"gripper\": " << escape(gripper.name)
+  js << "{\n  \"mesh\": " << json_string(mesh_path)
+     << ",\n  \"gripper\": " << json_string(gripper.name)
      << ",\n  \"units\": \"m\",\n  \"columns\": [\"ax\", \"ay\", \"az\", \"vx\", \"vy\", \"vz\", "
         "\"p1x\", \"p1y\", \"p1z\", \"w\"],\n"
      << "  \"seed\": " << seed << ",\n  \"num_points\": " << points
@@ -194,20 +156,10 @@ int cmd_pj(const std::vector<std::string>& args) {
   for (std::size_t i = 0; i < grasps.size(); ++i) js << (i ? ", " : "") << wrench[i];
   js << "]\n}\n";
 
-  const std::string tmp = out_path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw mgn::IoError("mgn-cli pj: cannot write '" + tmp + "'");
-    out << js.str();
-    if (!out.flush()) throw mgn::IoError("mgn-cli pj: cannot write '" + tmp + "'");
-  }
-  if (std::rename(tmp.c_str(), out_path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw mgn::IoError("mgn-cli pj: cannot rename '" + tmp + "' to '" + out_path + "'");
-  }
+  write_atomically(out_path, js.str(), "mgn-cli pj");
   std::size_t good = 0;
   for (float sc : r.point_score) good += sc >= 1.0f;
-  std::cout << "{\"out\": " << escape(out_path) << ", \"num_grasps\": " << grasps.size()
+  std::cout << "{\"out\": " << json_string(out_path) << ", \"num_grasps\": " << grasps.size()
             << ", \"num_points\": " << points << ", \"points_score_1\": " << good << "}\n";
   return 0;
 }

@@ -11,9 +11,13 @@
 #include <string>
 #include <vector>
 
+#include "cli_util.hpp"
 #include "cmd_pj.hpp"
+#include "cmd_seal.hpp"
 
 namespace {
+
+using mgn_cli::json_string;
 
 const char* kUsage =
     "usage: mgn-cli [--help] [--version] <command> [options]\n"
@@ -26,36 +30,6 @@ const char* kUsage =
     "m^2.\n"
     "  version\n"
     "      Print the versions of mgn and of the libraries it was built with, as JSON.\n";
-
-std::string json_string(const std::string& s) {
-  std::ostringstream os;
-  os << '"';
-  for (unsigned char c : s) {
-    switch (c) {
-      case '"':
-        os << "\\\"";
-        break;
-      case '\\':
-        os << "\\\\";
-        break;
-      case '\n':
-        os << "\\n";
-        break;
-      case '\t':
-        os << "\\t";
-        break;
-      default:
-        if (c < 0x20) {
-          os << "\\u" << std::hex << std::setw(4) << std::setfill('0') << static_cast<int>(c)
-             << std::dec;
-        } else {
-          os << c;
-        }
-    }
-  }
-  os << '"';
-  return os.str();
-}
 
 std::string json_number(double v) {
   if (!std::isfinite(v)) return "null";
@@ -147,7 +121,7 @@ int cmd_info(const std::vector<std::string>& args) {
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
-    std::cout << kUsage << mgn_cli::kPjUsage;
+    std::cout << kUsage << mgn_cli::kPjUsage << mgn_cli::kSealUsage;
     return args.empty() ? 2 : 0;
   }
   try {
@@ -155,13 +129,14 @@ int main(int argc, char** argv) {
     const std::vector<std::string> rest(args.begin() + 1, args.end());
     for (const auto& a : rest) {
       if (a == "--help" || a == "-h") {
-        std::cout << kUsage << mgn_cli::kPjUsage;
+        std::cout << kUsage << mgn_cli::kPjUsage << mgn_cli::kSealUsage;
         return 0;
       }
     }
     if (cmd == "--version" || cmd == "version") return cmd_version();
     if (cmd == "info") return cmd_info(rest);
     if (cmd == "pj") return mgn_cli::cmd_pj(rest);
+    if (cmd == "seal") return mgn_cli::cmd_seal(rest);
     std::cerr << "mgn-cli: unknown command '" << cmd << "' (see mgn-cli --help)\n";
     return 2;
   } catch (const mgn::InvalidArgument& e) {
