@@ -15,6 +15,7 @@
 #include <mgn/grasp/cup.hpp>
 #include <mgn/grasp/gripper.hpp>
 #include <mgn/grasp/seal_model.hpp>
+#include <mgn/grasp/shake_test.hpp>
 #include <mgn/grasp/wrench.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
 #include <mgn/version.hpp>
