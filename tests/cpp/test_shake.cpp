@@ -125,7 +125,8 @@ TEST(Shake, HeavierIsHarderToHold) {
   for (int i = 0; i < 4; ++i) {
     EXPECT_EQ(r.trial_success[i * 4 + 0], 1);
     EXPECT_EQ(r.trial_success[i * 4 + 3], 0);
-    for (int j = 1; j < 4; ++j) EXPECT_LE(r.trial_success[i * 4 + j], r.trial_success[i * 4 + j - 1]);
+    for (int j = 1; j < 4; ++j)
+      EXPECT_LE(r.trial_success[i * 4 + j], r.trial_success[i * 4 + j - 1]);
   }
 }
 
@@ -201,7 +202,8 @@ TEST(Shake, EarlyExitAndSettledClosingChangeFewOutcomes) {
   const ShakeResult a = shake_test(box, ParallelJawGripper{}, grasps, fast);
   const ShakeResult b = shake_test(box, ParallelJawGripper{}, grasps, full);
   int same = 0;
-  for (std::size_t t = 0; t < a.trial_success.size(); ++t) same += a.trial_success[t] == b.trial_success[t];
+  for (std::size_t t = 0; t < a.trial_success.size(); ++t)
+    same += a.trial_success[t] == b.trial_success[t];
   EXPECT_GE(same, 15);  // of 16
   EXPECT_LT(a.total_steps, b.total_steps);
   for (std::int32_t s : b.trial_steps) EXPECT_EQ(s, 1100);

@@ -10,7 +10,6 @@
 #include <mgn/core/rng.hpp>
 #include <mgn/grasp/shake_test.hpp>
 
-#include <BulletCollision/CollisionShapes/btShapeHull.h>
 #include <LinearMath/btConvexHullComputer.h>
 #include <btBulletDynamicsCommon.h>
 
@@ -18,8 +17,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <string>
 
@@ -43,7 +40,9 @@ std::vector<double> linspace(double lo, double hi, int n) {
   return v;
 }
 
-btVector3 bt(const Vec3d& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
+btVector3 bt(const Vec3d& v) {
+  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
+}
 
 btTransform bt(const Pose& X) {
   const Mat3d R = X.linear();
@@ -73,6 +72,7 @@ struct PreparedObject {
   Pose X_OB = Pose::Identity();              // principal frame at the centre of mass
   Vec3d principal_inertia = Vec3d::Zero();   // kg m² at density factor 1
   double mass = 0.0;
+  double bounding_radius = 0.0;  // largest distance of a hull vertex from the centre of mass, m
 };
 
 PreparedObject prepare(const PhysicsObject& object) {
@@ -100,6 +100,7 @@ PreparedObject prepare(const PhysicsObject& object) {
     h.reserve(static_cast<std::size_t>(hull.vertices.size()) * 3);
     for (int i = 0; i < hull.vertices.size(); ++i) {
       for (int k = 0; k < 3; ++k) h.push_back(hull.vertices[i][k]);
+      p.bounding_radius = std::max(p.bounding_radius, double(hull.vertices[i].length()));
     }
     p.hulls.push_back(std::move(h));
   }
@@ -116,9 +117,9 @@ void validate_grasps(const ParallelJawGripper& gripper,
       throw_error<InvalidArgument>("shake_test: grasps[", i, "]: ", e.what());
     }
     if (g.width > gripper.max_opening) {
-      throw_error<InvalidArgument>("shake_test: grasps[", i, "].width = ", g.width,
-                                   " m is wider than the gripper's max_opening = ",
-                                   gripper.max_opening, " m");
+      throw_error<InvalidArgument>(
+          "shake_test: grasps[", i, "].width = ", g.width,
+          " m is wider than the gripper's max_opening = ", gripper.max_opening, " m");
     }
   }
 }
@@ -127,8 +128,8 @@ void validate_grasps(const ParallelJawGripper& gripper,
 struct TrialSetting {
   double friction = 1.0;
   double density_factor = 1.0;
-  double angle = 0.25;       // rotational shake amplitude, rad
-  double axis_angle = 0.0;   // direction of the rotation axis in the hand xy plane, rad
+  double angle = 0.25;      // rotational shake amplitude, rad
+  double axis_angle = 0.0;  // direction of the rotation axis in the hand xy plane, rad
 };
 
 TrialSetting make_setting(double friction, double density, const ShakeOptions& o,
@@ -146,40 +147,6 @@ struct TrialOutcome {
   bool success = false;
   bool ended_early = false;
   int steps = 0;
-};
-
-/// Keeps the two fingers symmetric about the hand axis, like the rack and pinion of a Franka
-/// hand: one velocity row, (v_left + v_right)·x_H = the palm's velocity at the two fingers, plus
-/// a Baumgarte term on the asymmetry. The palm (kinematic) body frame lies on the hand axis.
-class FingerCoupling : public btTypedConstraint {
- public:
-  FingerCoupling(btRigidBody& left, btRigidBody& right, const btRigidBody& palm)
-      : btTypedConstraint(GEAR_CONSTRAINT_TYPE, left, right), palm_(palm) {}
-
-  void getInfo1(btConstraintInfo1* info) override {
-    info->m_numConstraintRows = 1;
-    info->nub = 0;
-  }
-
-  void getInfo2(btConstraintInfo2* info) override {
-    const btTransform& P = palm_.getWorldTransform();
-    const btVector3 x = P.getBasis().getColumn(0);
-    const btVector3 pl = m_rbA.getCenterOfMassPosition() - P.getOrigin();
-    const btVector3 pr = m_rbB.getCenterOfMassPosition() - P.getOrigin();
-    const btScalar asymmetry = x.dot(pl) + x.dot(pr);
-    for (int k = 0; k < 3; ++k) {
-      info->m_J1linearAxis[k] = x[k];
-      info->m_J2linearAxis[k] = x[k];
-    }
-    const btVector3 v = palm_.getVelocityInLocalPoint(pl) + palm_.getVelocityInLocalPoint(pr);
-    info->m_constraintError[0] = x.dot(v) - info->fps * info->erp * asymmetry;
-  }
-
-  void setParam(int, btScalar, int) override {}
-  btScalar getParam(int, int) const override { return 0; }
-
- private:
-  const btRigidBody& palm_;
 };
 
 /// Hand trajectory: X_WH as a function of the phase and the time within it.
@@ -225,8 +192,15 @@ struct StepState {
   Pose X_WO, X_WH;
   double left, right;
   bool touch_left, touch_right;
+  double force_left, force_right;  // normal pad force of the last step, N
 };
 
+/// One trial's Bullet world. The palm and the fingers are kinematic bodies that follow the hand
+/// path; the object is the only dynamic body, so the solver never has to balance a light object
+/// between two heavy pushers. The finger pads are soft (Bullet's implicit contact stiffness and
+/// damping), which makes the squeeze force well defined, and a force controller sets the common
+/// finger offset so that the mean pad force equals the grip force: the fingers move together,
+/// symmetric about the hand axis, like the rack and pinion of a Franka hand.
 class TrialWorld {
  public:
   TrialWorld(const PreparedObject& obj, const ParallelJawGripper& g, const ParallelJawGrasp& grasp,
@@ -237,75 +211,31 @@ class TrialWorld {
         dispatcher_(&config_),
         world_(&dispatcher_, &broadphase_, &solver_, &config_) {
     world_.setGravity(btVector3(0, 0, 0));
-    world_.getSolverInfo().m_numIterations = o.solver_iterations;
+    btContactSolverInfo& info = world_.getSolverInfo();
+    info.m_numIterations = o.solver_iterations;
     // Friction in both tangent directions (Bullet's default is one direction per contact point,
     // which lets a held object creep sideways).
-    world_.getSolverInfo().m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
-    if (std::getenv("SPLIT_T")) world_.getSolverInfo().m_splitImpulsePenetrationThreshold = std::atof(std::getenv("SPLIT_T"));
-    if (std::getenv("ERP2")) world_.getSolverInfo().m_erp2 = std::atof(std::getenv("ERP2"));
+    info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
     X_OB_ = obj.X_OB;
 
-    // Hand: kinematic palm + two fingers on sliders.
     const Vec3d& f = g.finger_size;
     palm_centre_ = Vec3d(0.0, 0.0, g.flange_to_tip - f.z() - 0.5 * g.palm_size.z());
     finger_z_ = g.flange_to_tip - 0.5 * f.z();
     palm_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * g.palm_size)));
     finger_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * f)));
-    palm_shape_->setMargin(btScalar(o.margin));
-    finger_shape_->setMargin(btScalar(o.margin));
-    if (o.polyhedral_contacts) {
-      palm_shape_->initializePolyhedralFeatures();
-      finger_shape_->initializePolyhedralFeatures();
+    for (btBoxShape* b : {palm_shape_.get(), finger_shape_.get()}) {
+      b->setMargin(btScalar(o.margin));
+      if (o.polyhedral_contacts) b->initializePolyhedralFeatures();
     }
 
+    d_ = 0.5 * g.collision_opening(grasp.width);
     const Pose X_WH = path_.initial();
-    palm_motion_ = std::make_unique<btDefaultMotionState>(bt(palm_pose(X_WH)));
-    btRigidBody::btRigidBodyConstructionInfo palm_info(0, palm_motion_.get(), palm_shape_.get());
-    palm_ = std::make_unique<btRigidBody>(palm_info);
-    palm_->setCollisionFlags(palm_->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
-    palm_->setActivationState(DISABLE_DEACTIVATION);
-    palm_->setFriction(1.0);
-    world_.addRigidBody(palm_.get(), kGroupHand, kGroupObject);
-
-    const double d0 = 0.5 * g.collision_opening(grasp.width);
-    btVector3 finger_inertia;
-    finger_shape_->calculateLocalInertia(btScalar(o.finger_mass), finger_inertia);
+    palm_ = make_kinematic(palm_shape_.get(), palm_pose(X_WH), 1.0);
     for (int side = 0; side < 2; ++side) {
-      const double sign = side == 0 ? -1.0 : 1.0;
-      Pose X_HF = Pose::Identity();
-      X_HF.translation() = Vec3d(sign * (d0 + 0.5 * f.x()), 0.0, finger_z_);
-      btRigidBody::btRigidBodyConstructionInfo info(btScalar(o.finger_mass), nullptr,
-                                                    finger_shape_.get(), finger_inertia);
-      info.m_startWorldTransform = bt(X_WH * X_HF);
-      info.m_friction = 1.0;
-      fingers_[side] = std::make_unique<btRigidBody>(info);
-      fingers_[side]->setActivationState(DISABLE_DEACTIVATION);
-      if (std::getenv("NO_ROT")) fingers_[side]->setAngularFactor(0);
-      if (std::getenv("PAD_K")) fingers_[side]->setContactStiffnessAndDamping(std::atof(std::getenv("PAD_K")), std::atof(std::getenv("PAD_C")));
-      world_.addRigidBody(fingers_[side].get(), kGroupHand, kGroupObject);
-
-      // Slider frame: x axis pointing outwards from the hand axis, so the slider position is the
-      // distance d of the finger's inner face from the hand axis.
-      Pose X_PA = Pose::Identity();  // in the palm body frame
-      if (side == 0) X_PA.linear() = Eigen::AngleAxisd(kPi, Vec3d::UnitZ()).toRotationMatrix();
-      X_PA.translation() = Vec3d(sign * 0.5 * f.x(), 0.0, finger_z_) - palm_centre_;
-      Pose X_FB = Pose::Identity();  // in the finger body frame
-      X_FB.linear() = X_PA.linear();
-      auto slider = std::make_unique<btSliderConstraint>(*palm_, *fingers_[side], bt(X_PA),
-                                                         bt(X_FB), true);
-      slider->setLowerLinLimit(0.0);
-      slider->setUpperLinLimit(btScalar(0.5 * g.max_opening));
-      slider->setLowerAngLimit(0.0);
-      slider->setUpperAngLimit(0.0);
-      slider->setPoweredLinMotor(true);
-      slider->setTargetLinMotorVelocity(btScalar(-o.close_speed));
-      slider->setMaxLinMotorForce(btScalar(o.grip_force));
-      world_.addConstraint(slider.get(), true);
-      sliders_[side] = std::move(slider);
+      fingers_[side] = make_kinematic(finger_shape_.get(), finger_pose(X_WH, side, d_), 1.0);
+      fingers_[side]->setContactStiffnessAndDamping(btScalar(o.pad_stiffness),
+                                                    btScalar(o.pad_damping));
     }
-
-    coupling_ = std::make_unique<FingerCoupling>(*fingers_[0], *fingers_[1], *palm_);
-    if (!std::getenv("MGN_NO_COUPLING")) world_.addConstraint(coupling_.get(), true);
 
     // Object: one hull, or a compound of hulls, in its principal frame B.
     for (const auto& h : obj.hulls) {
@@ -322,20 +252,20 @@ class TrialWorld {
       shape = compound_.get();
     }
     const double m = obj.mass * s.density_factor;
-    const Vec3d I = obj.principal_inertia * s.density_factor;
-    btRigidBody::btRigidBodyConstructionInfo info(btScalar(m), nullptr, shape, bt(I));
+    // Inertia floor (see ShakeOptions::inertia_floor): m (floor·R)² about every principal axis.
+    const double rho = o.inertia_floor * obj.bounding_radius;
+    const Vec3d I = (obj.principal_inertia * s.density_factor).cwiseMax(m * rho * rho);
+    btRigidBody::btRigidBodyConstructionInfo ci(btScalar(m), nullptr, shape, bt(I));
     const Pose X_HO = hand_pose(grasp, g).inverse();
-    info.m_startWorldTransform = bt(X_WH * X_HO * obj.X_OB);
-    info.m_friction = btScalar(s.friction);
-    info.m_restitution = 0;
-    object_ = std::make_unique<btRigidBody>(info);
+    ci.m_startWorldTransform = bt(X_WH * X_HO * obj.X_OB);
+    ci.m_friction = btScalar(s.friction);
+    ci.m_restitution = 0;
+    object_ = std::make_unique<btRigidBody>(ci);
     object_->setActivationState(DISABLE_DEACTIVATION);
     world_.addRigidBody(object_.get(), kGroupObject, kGroupHand);
   }
 
   ~TrialWorld() {
-    if (!std::getenv("MGN_NO_COUPLING")) world_.removeConstraint(coupling_.get());
-    for (auto& s : sliders_) world_.removeConstraint(s.get());
     world_.removeRigidBody(object_.get());
     for (auto& f : fingers_) world_.removeRigidBody(f.get());
     world_.removeRigidBody(palm_.get());
@@ -349,22 +279,22 @@ class TrialWorld {
     TrialOutcome out;
     double time = 0.0;
     Pose X_WH = path_.initial();
-    record(state(time, ShakePhase::Close, X_WH));
+    StepState last = state(time, ShakePhase::Close, X_WH);
+    record(last);
 
     // Closing, gravity off.
     int settled = 0;
     for (int k = 0; k < o_.close_steps; ++k) {
-      step(X_WH, X_WH);
+      step(X_WH, X_WH, last);
       time += o_.dt;
       ++out.steps;
-      const StepState st = state(time, ShakePhase::Close, X_WH);
-      record(st);
-      const bool slow = fingers_[0]->getLinearVelocity().length() < 1e-3 &&
-                        fingers_[1]->getLinearVelocity().length() < 1e-3;
-      settled = (st.touch_left && st.touch_right && slow) ? settled + 1 : 0;
+      last = state(time, ShakePhase::Close, X_WH);
+      record(last);
+      const bool at_force = std::abs(0.5 * (last.force_left + last.force_right) - o_.grip_force) <
+                            0.05 * o_.grip_force;
+      settled = (last.touch_left && last.touch_right && at_force) ? settled + 1 : 0;
       if (o_.settle_steps > 0 && settled >= o_.settle_steps) break;
-      if (o_.lost_contact_steps > 0 && !st.touch_left && !st.touch_right &&
-          st.left + st.right < 1e-3) {
+      if (o_.lost_contact_steps > 0 && !last.touch_left && !last.touch_right && d_ <= 0.0) {
         out.ended_early = true;  // closed on nothing
         return out;
       }
@@ -372,13 +302,12 @@ class TrialWorld {
 
     world_.setGravity(btVector3(0, 0, btScalar(-o_.gravity)));
     int lost[2] = {0, 0};
-    StepState last = state(time, ShakePhase::Close, X_WH);
     for (int phase = 1; phase <= 2; ++phase) {
       const int n = phase == 1 ? o_.shake_steps : o_.rotate_steps;
       for (int k = 0; k < n; ++k) {
         const double t = (k + 1) * o_.dt;
         const Pose X_next = phase == 1 ? path_.translate(t) : path_.rotate(t);
-        step(X_WH, X_next);
+        step(X_WH, X_next, last);
         X_WH = X_next;
         time += o_.dt;
         ++out.steps;
@@ -386,8 +315,7 @@ class TrialWorld {
         record(last);
         lost[0] = last.touch_left ? 0 : lost[0] + 1;
         lost[1] = last.touch_right ? 0 : lost[1] + 1;
-        if (o_.lost_contact_steps > 0 &&
-            std::max(lost[0], lost[1]) >= o_.lost_contact_steps) {
+        if (o_.lost_contact_steps > 0 && std::max(lost[0], lost[1]) >= o_.lost_contact_steps) {
           out.ended_early = true;
           return out;
         }
@@ -398,44 +326,71 @@ class TrialWorld {
   }
 
  private:
+  std::unique_ptr<btRigidBody> make_kinematic(btCollisionShape* shape, const Pose& X,
+                                              double friction) {
+    btRigidBody::btRigidBodyConstructionInfo ci(0, nullptr, shape);
+    ci.m_startWorldTransform = bt(X);
+    ci.m_friction = btScalar(friction);
+    auto body = std::make_unique<btRigidBody>(ci);
+    body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+    body->setActivationState(DISABLE_DEACTIVATION);
+    world_.addRigidBody(body.get(), kGroupHand, kGroupObject);
+    return body;
+  }
+
   Pose palm_pose(const Pose& X_WH) const {
     Pose X = X_WH;
     X.translate(palm_centre_);
     return X;
   }
 
-  /// Finger controller: close at close_speed (velocity motor limited to grip_force) until the
-  /// finger first touches the object, then press with exactly grip_force (an external force, so
-  /// that both fingers push equally whatever the order the solver visits them in).
-  void step(const Pose& X_WH, const Pose& X_WH_next) {
-    // Bullet moves a kinematic body to its new pose before the solve and derives its velocity
-    // from the jump, so that bodies constrained to it lag one step behind. Instead the palm stays
-    // at its pose at the start of the step while its velocity (from a virtual previous pose) is
-    // that of the move to the pose at the end of the step.
-    const btTransform now = bt(palm_pose(X_WH));
-    const btTransform next = bt(palm_pose(X_WH_next));
+  /// Finger box centre for an inner-face offset d from the hand axis (side 0: −x, 1: +x).
+  Pose finger_pose(const Pose& X_WH, int side, double d) const {
+    const double sign = side == 0 ? -1.0 : 1.0;
+    Pose X = X_WH;
+    X.translate(Vec3d(sign * (d + 0.5 * g_.finger_size.x()), 0.0, finger_z_));
+    return X;
+  }
+
+  /// Bullet moves a kinematic body to its new pose before the solve and derives its velocity
+  /// from the jump, which makes contacts see the move one step late. Instead each hand body stays
+  /// at its pose at the start of the step, with the velocity of the move to its pose at the end
+  /// (through a virtual previous pose), and jumps there after the step.
+  static void drive(btRigidBody& body, const Pose& now_pose, const Pose& next_pose) {
+    const btTransform now = bt(now_pose);
+    const btTransform next = bt(next_pose);
     btTransform before;
     before.setBasis((now.getBasis() * next.getBasis().transpose()) * now.getBasis());
     before.setOrigin(now.getOrigin() * 2 - next.getOrigin());
-    palm_motion_->setWorldTransform(now);
-    palm_->setInterpolationWorldTransform(before);
-    const Vec3d x_W = X_WH.linear().col(0);
-    for (int side = 0; side < 2; ++side) {
-      if (!pressing_[side]) continue;
-      const double sign = side == 0 ? 1.0 : -1.0;  // inwards: +x for the left finger
-      fingers_[side]->applyCentralForce(bt(Vec3d(sign * o_.grip_force * x_W)));
-    }
-    world_.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
+    body.setWorldTransform(now);
+    body.setInterpolationWorldTransform(before);
   }
 
-  /// Switches a finger that touches the object from the closing motor to the grip force.
-  void update_controller(const StepState& s) {
-    const bool touch[2] = {s.touch_left, s.touch_right};
+  /// Force controller of the common finger offset d: close at close_speed until a finger
+  /// touches, then move by (mean pad force − grip force) / controller stiffness per step,
+  /// limited to close_speed.
+  double next_offset(const StepState& s) const {
+    const double vmax = o_.close_speed * o_.dt;
+    if (!s.touch_left && !s.touch_right) return std::max(0.0, d_ - vmax);
+    const double error = 0.5 * (s.force_left + s.force_right) - o_.grip_force;
+    const double delta = std::clamp(error / (o_.controller_stiffness), -vmax, vmax);
+    return std::clamp(d_ + delta, 0.0, 0.5 * g_.max_opening);
+  }
+
+  void step(const Pose& X_WH, const Pose& X_WH_next, const StepState& s) {
+    const double d_next = next_offset(s);
+    drive(*palm_, palm_pose(X_WH), palm_pose(X_WH_next));
     for (int side = 0; side < 2; ++side) {
-      if (!std::getenv("MGN_MOTOR_ONLY") && touch[side] && !pressing_[side]) {
-        pressing_[side] = true;
-        sliders_[side]->setPoweredLinMotor(false);
-      }
+      drive(*fingers_[side], finger_pose(X_WH, side, d_), finger_pose(X_WH_next, side, d_next));
+    }
+    world_.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
+    d_ = d_next;
+    // The hand bodies jump to their end-of-step poses (velocity unchanged until the next step).
+    palm_->setWorldTransform(bt(palm_pose(X_WH_next)));
+    palm_->setInterpolationWorldTransform(palm_->getWorldTransform());
+    for (int side = 0; side < 2; ++side) {
+      fingers_[side]->setWorldTransform(bt(finger_pose(X_WH_next, side, d_)));
+      fingers_[side]->setInterpolationWorldTransform(fingers_[side]->getWorldTransform());
     }
   }
 
@@ -445,11 +400,9 @@ class TrialWorld {
     s.phase = phase;
     s.X_WH = X_WH;
     s.X_WO = to_pose(object_->getWorldTransform()) * X_OB_.inverse();
-    const Pose X_HW = X_WH.inverse();
-    const double half = 0.5 * g_.finger_size.x();
-    s.left = -(X_HW * to_eigen(fingers_[0]->getWorldTransform().getOrigin())).x() - half;
-    s.right = (X_HW * to_eigen(fingers_[1]->getWorldTransform().getOrigin())).x() - half;
+    s.left = s.right = d_;
     s.touch_left = s.touch_right = false;
+    s.force_left = s.force_right = 0.0;
     const int n = dispatcher_.getNumManifolds();
     for (int i = 0; i < n; ++i) {
       const btPersistentManifold* m = dispatcher_.getManifoldByIndexInternal(i);
@@ -459,34 +412,13 @@ class TrialWorld {
       if (other == nullptr) continue;
       const int side = other == fingers_[0].get() ? 0 : (other == fingers_[1].get() ? 1 : -1);
       if (side < 0) continue;
+      bool& touch = side == 0 ? s.touch_left : s.touch_right;
+      double& force = side == 0 ? s.force_left : s.force_right;
       for (int c = 0; c < m->getNumContacts(); ++c) {
-        if (m->getContactPoint(c).getDistance() < o_.contact_distance) {
-          (side == 0 ? s.touch_left : s.touch_right) = true;
-          break;
-        }
+        const btManifoldPoint& p = m->getContactPoint(c);
+        if (p.getDistance() < o_.contact_distance) touch = true;
+        force += p.getAppliedImpulse() / o_.dt;
       }
-    }
-    update_controller(s);
-    if (std::getenv("MGN_SHAKE_DEBUG")) {
-      double fn[2] = {0, 0};
-      int np[2] = {0, 0};
-      for (int i = 0; i < n; ++i) {
-        const btPersistentManifold* m = dispatcher_.getManifoldByIndexInternal(i);
-        const btCollisionObject* other = m->getBody0() == object_.get() ? m->getBody1() : m->getBody0();
-        const int side = other == fingers_[0].get() ? 0 : (other == fingers_[1].get() ? 1 : -1);
-        if (side < 0) continue;
-        for (int c = 0; c < m->getNumContacts(); ++c) {
-          fn[side] += m->getContactPoint(c).getAppliedImpulse() / o_.dt;
-          ++np[side];
-          const auto& cp = m->getContactPoint(c);
-          if (side == 0 && static_cast<int>(time / o_.dt + 0.5) % 20 == 0)
-            std::printf("   cp n=(%.3f %.3f %.3f) d=%.5f imp=%.4f lat=%.4f %.4f\n", cp.m_normalWorldOnB.x(), cp.m_normalWorldOnB.y(), cp.m_normalWorldOnB.z(), cp.getDistance(), cp.getAppliedImpulse(), cp.m_appliedImpulseLateral1, cp.m_appliedImpulseLateral2);
-        }
-      }
-      const Pose X_HW = X_WH.inverse();
-      const Vec3d fl = X_HW * to_eigen(fingers_[0]->getWorldTransform().getOrigin());
-      if (static_cast<int>(time / o_.dt + 0.5) % 20 == 0)
-        std::printf("t=%.3f FnL=%.2f (%d) FnR=%.2f (%d) fingerL z=%.4f y=%.4f fang=%.4f\n", time, fn[0], np[0], fn[1], np[1], fl.z(), fl.y(), Eigen::AngleAxisd(X_HW.linear() * to_pose(fingers_[0]->getWorldTransform()).linear()).angle());
     }
     return s;
   }
@@ -497,7 +429,7 @@ class TrialWorld {
   Pose X_OB_;
   Vec3d palm_centre_;
   double finger_z_ = 0;
-  bool pressing_[2] = {false, false};
+  double d_ = 0;  // current inner-face offset of both fingers from the hand axis, m
 
   btDefaultCollisionConfiguration config_;
   btCollisionDispatcher dispatcher_;
@@ -508,11 +440,8 @@ class TrialWorld {
   std::unique_ptr<btBoxShape> palm_shape_, finger_shape_;
   std::vector<std::unique_ptr<btConvexHullShape>> hulls_;
   std::unique_ptr<btCompoundShape> compound_;
-  std::unique_ptr<btDefaultMotionState> palm_motion_;
   std::unique_ptr<btRigidBody> palm_, object_;
   std::unique_ptr<btRigidBody> fingers_[2];
-  std::unique_ptr<btSliderConstraint> sliders_[2];
-  std::unique_ptr<FingerCoupling> coupling_;
 };
 
 }  // namespace
@@ -545,8 +474,14 @@ void ShakeOptions::validate() const {
           grip_force);
   require(std::isfinite(close_speed) && close_speed > 0, "close_speed", "a finite speed > 0",
           close_speed);
-  require(std::isfinite(finger_mass) && finger_mass > 0, "finger_mass", "a finite mass > 0",
-          finger_mass);
+  require(std::isfinite(pad_stiffness) && pad_stiffness > 0, "pad_stiffness",
+          "a finite stiffness > 0 (N/m)", pad_stiffness);
+  require(std::isfinite(pad_damping) && pad_damping >= 0, "pad_damping",
+          "a finite damping >= 0 (N s/m)", pad_damping);
+  require(std::isfinite(inertia_floor) && inertia_floor >= 0 && inertia_floor <= 10,
+          "inertia_floor", "a factor in [0, 10]", inertia_floor);
+  require(std::isfinite(controller_stiffness) && controller_stiffness > 0, "controller_stiffness",
+          "a finite stiffness > 0 (N/m)", controller_stiffness);
   require(std::isfinite(contact_distance) && contact_distance > 0, "contact_distance",
           "a finite distance > 0 (m)", contact_distance);
   require(settle_steps >= 0, "settle_steps", "an integer >= 0", settle_steps);
@@ -665,8 +600,7 @@ ShakeTrajectory shake_trajectory(const PhysicsObject& object, const ParallelJawG
                                  density_factor);
   }
   if (record_every < 1) {
-    throw_error<InvalidArgument>("shake_trajectory: record_every must be >= 1, got ",
-                                 record_every);
+    throw_error<InvalidArgument>("shake_trajectory: record_every must be >= 1, got ", record_every);
   }
   const PreparedObject prepared = prepare(object);
   const TrialSetting s = make_setting(friction, density_factor, options, trial_index);

@@ -3,7 +3,9 @@
 /// (MODELS.md §5, "Physics score").
 ///
 /// One trial = one grasp × one (friction, density factor) setting: the object is placed in the
-/// open gripper, gravity off; the fingers close under a force-limited velocity controller; then,
+/// open gripper, gravity off; the fingers close at a set speed until they touch, then a force
+/// controller holds the pad force at grip_force (fingers symmetric about the hand axis, like a
+/// Franka hand; soft pads, see ShakeOptions); then,
 /// with gravity on, the hand translates back and forth along its approach axis and then rotates
 /// back and forth about an axis perpendicular to it through the grasp centre. The trial succeeds
 /// if both fingers still touch the object at the end. The score of a grasp is the success
@@ -14,11 +16,13 @@
 /// hand initially at the origin pointing down: X_WH(0) = rotation of π about x. Units SI.
 ///
 /// Deviations from MetaGraspNet's step counts (defaults; every one can be switched off):
-///  - closing ends once both fingers touch the object and have stopped moving for
-///    `settle_steps` steps, instead of always running `close_steps` (= 400) steps;
+///  - closing ends once both fingers touch the object at the grip force for `settle_steps`
+///    steps, instead of always running `close_steps` (= 400) steps;
 ///  - a trial ends early, as a failure, once the object has lost contact with a finger for
 ///    `lost_contact_steps` consecutive steps or left the hand (it cannot become a success by
 ///    then in all but rare bounces; benchmarks/bench_shake.py measures the agreement).
+///  - small rotational inertia is raised to a floor (ShakeOptions::inertia_floor) for solver
+///    stability; the test measures how little it changes outcomes where both are stable.
 /// The exact shake profiles are mgn's (smooth sinusoids, see ShakeOptions), as MetaGraspNet
 /// does not publish its controller gains.
 
@@ -36,24 +40,24 @@ struct PhysicsObject {
   /// Convex parts in the object frame O (each part is used as the convex hull of its vertices,
   /// e.g. the output of a convex decomposition, or the object itself when it is convex).
   std::vector<Mesh> convex_parts;
-  double mass = 0.0;                ///< kg at density factor 1, > 0
-  Vec3d com = Vec3d::Zero();        ///< centre of mass in O, m
+  double mass = 0.0;                  ///< kg at density factor 1, > 0
+  Vec3d com = Vec3d::Zero();          ///< centre of mass in O, m
   Mat3d inertia = Mat3d::Identity();  ///< about the centre of mass, axes of O, kg m², SPD
 };
 
 /// Parameters of the shake test. Defaults: MetaGraspNet where it publishes a value (grid, ranges,
 /// dt, step counts, 0.5 m/s, 0.2–0.3 rad), otherwise mgn's choice.
 struct ShakeOptions {
-  int grid = 10;                  ///< S: S×S settings per grasp, >= 1
-  double friction_min = 0.5;      ///< Coulomb friction of the finger–object contact, >= 0
-  double friction_max = 2.0;      ///< friction values = linspace(min, max, S)
-  double density_min = 0.25;      ///< density (mass) factor, > 0
-  double density_max = 1.0;       ///< factors = linspace(min, max, S)
-  double dt = 1.0 / 200.0;        ///< simulation step, s
-  int close_steps = 400;          ///< maximum steps of the closing phase (gravity off)
-  int shake_steps = 400;          ///< translational shake steps
-  int rotate_steps = 300;         ///< rotational shake steps
-  double gravity = 9.81;          ///< m/s², along −z of W (on during the shake phases)
+  int grid = 10;              ///< S: S×S settings per grasp, >= 1
+  double friction_min = 0.5;  ///< Coulomb friction of the finger–object contact, >= 0
+  double friction_max = 2.0;  ///< friction values = linspace(min, max, S)
+  double density_min = 0.25;  ///< density (mass) factor, > 0
+  double density_max = 1.0;   ///< factors = linspace(min, max, S)
+  double dt = 1.0 / 200.0;    ///< simulation step, s
+  int close_steps = 400;      ///< maximum steps of the closing phase (gravity off)
+  int shake_steps = 400;      ///< translational shake steps
+  int rotate_steps = 300;     ///< rotational shake steps
+  double gravity = 9.81;      ///< m/s², along −z of W (on during the shake phases)
   /// Translational shake: hand offset s(t) = A sin(2π n t / T) along its approach axis, with n =
   /// shake_cycles, T = shake_steps·dt and A chosen so that the peak speed is shake_speed.
   double shake_speed = 0.5;  ///< m/s
@@ -61,15 +65,27 @@ struct ShakeOptions {
   /// Rotational shake: angle θ(t) = θ_max sin(2π n t / T) about an axis ⟂ approach through the
   /// grasp centre, n = rotate_cycles, T = rotate_steps·dt; θ_max ~ U(angle_min, angle_max) and
   /// the axis direction ~ U(0, 2π) in the hand's xy plane, drawn per trial from Rng(seed, trial).
-  double angle_min = 0.2;  ///< rad
-  double angle_max = 0.3;  ///< rad
-  int rotate_cycles = 1;   ///< >= 1
-  double grip_force = 20.0;     ///< force limit of each finger's closing controller, N, > 0
-  double close_speed = 0.1;     ///< finger closing speed target, m/s, > 0
-  double finger_mass = 0.1;     ///< kg per finger, > 0
+  double angle_min = 0.2;    ///< rad
+  double angle_max = 0.3;    ///< rad
+  int rotate_cycles = 1;     ///< >= 1
+  double grip_force = 20.0;  ///< normal force each finger pad presses with, N, > 0
+  double close_speed = 0.1;  ///< finger speed limit (closing and force control), m/s, > 0
+  /// Finger pads are soft: Bullet's implicit contact stiffness per contact point (N/m) and
+  /// damping (N s/m). They make the squeeze force well defined (a pad sinks ~F/(n·k)).
+  double pad_stiffness = 1e4;
+  double pad_damping = 20.0;
+  /// Force controller: the fingers move by (mean pad force − grip_force)/controller_stiffness
+  /// per step (N/m; larger = gentler), limited to close_speed.
+  double controller_stiffness = 1e5;
+  /// Inertia floor: every principal moment is raised to at least m·(inertia_floor·R)², R = the
+  /// largest distance of a hull vertex from the centre of mass (0 = exact inertia). Bullet's
+  /// sequential-impulse solver spins up small, light objects squeezed by a large grip force
+  /// when their inertia is below m R² (the impulse at a contact turns them more than it moves
+  /// them); friction and gravity torques, which decide the test, do not depend on inertia.
+  double inertia_floor = 1.0;
   double contact_distance = 1e-3;  ///< a finger "touches" if a contact point is closer, m
-  /// Closing ends when both fingers touch and move slower than 1 mm/s for this many steps
-  /// (0 = always run close_steps).
+  /// Closing ends when both fingers touch and the mean pad force has been within 5 % of
+  /// grip_force for this many steps (0 = always run close_steps).
   int settle_steps = 10;
   /// A shake trial ends (as a failure) once a finger has not touched the object for this many
   /// consecutive steps (0 = never end early).
@@ -92,14 +108,14 @@ struct ShakeOptions {
 
 /// Scores of a batch of grasps. Trial t = g·S² + i·S + j uses friction i and density factor j.
 struct ShakeResult {
-  int grid = 0;                              ///< S
-  std::vector<double> score;                 ///< (G) success fraction per grasp, in [0, 1]
-  std::vector<std::uint8_t> trial_success;   ///< (G·S²) 1 if both fingers touch at the end
+  int grid = 0;                                 ///< S
+  std::vector<double> score;                    ///< (G) success fraction per grasp, in [0, 1]
+  std::vector<std::uint8_t> trial_success;      ///< (G·S²) 1 if both fingers touch at the end
   std::vector<std::uint8_t> trial_ended_early;  ///< (G·S²) 1 if a shortcut ended the trial early
-  std::vector<std::int32_t> trial_steps;     ///< (G·S²) simulation steps run
-  std::vector<double> frictions;             ///< (S)
-  std::vector<double> density_factors;       ///< (S)
-  std::int64_t total_steps = 0;              ///< sum of trial_steps
+  std::vector<std::int32_t> trial_steps;        ///< (G·S²) simulation steps run
+  std::vector<double> frictions;                ///< (S)
+  std::vector<double> density_factors;          ///< (S)
+  std::int64_t total_steps = 0;                 ///< sum of trial_steps
 };
 
 /// Phases of a trial (ShakeTrajectory::phase).
@@ -108,10 +124,10 @@ enum class ShakePhase : std::int8_t { Close = 0, Translate = 1, Rotate = 2 };
 /// A recorded trial for visualisation: one entry per recorded step (the initial state, every
 /// `record_every`-th step and the last step).
 struct ShakeTrajectory {
-  std::vector<double> time;             ///< s since the start
-  std::vector<std::int8_t> phase;       ///< ShakePhase
-  std::vector<Pose> X_WO;               ///< object pose in W
-  std::vector<Pose> X_WH;               ///< hand (flange) pose in W
+  std::vector<double> time;        ///< s since the start
+  std::vector<std::int8_t> phase;  ///< ShakePhase
+  std::vector<Pose> X_WO;          ///< object pose in W
+  std::vector<Pose> X_WH;          ///< hand (flange) pose in W
   /// Inner face of the −x finger at x = −finger_left in H, and of the +x finger at
   /// x = +finger_right (the fingers move independently); opening = left + right, m.
   std::vector<double> finger_left;
