@@ -64,6 +64,22 @@ TEST(Shake, LightBoxWithHighFrictionIsHeld) {
   }
 }
 
+TEST(Shake, FinelyTessellatedSphereIsTouchedAndHeld) {
+  // Vertex–face contacts of a fine hull (a regression test for Bullet's length tolerances).
+  const double r = 0.02, m = 0.03;
+  PhysicsObject ball;
+  ball.convex_parts = {make_sphere(r, 32, 16)};
+  ball.mass = m;
+  ball.inertia = Mat3d::Identity() * 0.4 * m * r * r;
+  ShakeOptions o = small_grid(2, 1.0, 2.0);
+  const ShakeResult res = shake_test(ball, ParallelJawGripper{}, {centre_grasp(2 * r)}, o);
+  EXPECT_GE(res.score[0], 0.99);
+  // The fingers stop at the sphere (2 r apart, minus the pad sink), not inside it.
+  const ShakeTrajectory tr =
+      shake_trajectory(ball, ParallelJawGripper{}, centre_grasp(2 * r), 1.0, 1.0, o, 50);
+  EXPECT_NEAR(tr.finger_left.back() + tr.finger_right.back(), 2 * r, 4e-3);
+}
+
 TEST(Shake, HeavySlipperyWideObjectIsDropped) {
   const PhysicsObject heavy = box_object(Vec3d(0.07, 0.06, 0.06), 3.0);
   ShakeOptions o = small_grid(3, 0.05, 0.15);

@@ -44,12 +44,18 @@ btVector3 bt(const Vec3d& v) {
   return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
 }
 
+/// Bullet runs in decimetres: its collision tolerances are absolute and tuned for bodies of
+/// 0.1–10 units; at centimetre-sized objects in metres its GJK misses vertex–face contacts of
+/// finely tessellated hulls. Lengths are multiplied by kLength at the Bullet boundary only (time
+/// and mass unchanged, so forces scale by kLength too; stiffness and damping are unchanged).
+constexpr double kLength = 10.0;
+
 btTransform bt(const Pose& X) {
   const Mat3d R = X.linear();
   btMatrix3x3 B(btScalar(R(0, 0)), btScalar(R(0, 1)), btScalar(R(0, 2)), btScalar(R(1, 0)),
                 btScalar(R(1, 1)), btScalar(R(1, 2)), btScalar(R(2, 0)), btScalar(R(2, 1)),
                 btScalar(R(2, 2)));
-  return btTransform(B, bt(Vec3d(X.translation())));
+  return btTransform(B, bt(Vec3d(kLength * X.translation())));
 }
 
 Vec3d to_eigen(const btVector3& v) { return Vec3d(v.x(), v.y(), v.z()); }
@@ -59,7 +65,7 @@ Pose to_pose(const btTransform& T) {
   const btMatrix3x3& B = T.getBasis();
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) X.linear()(r, c) = B[r][c];
-  X.translation() = to_eigen(T.getOrigin());
+  X.translation() = to_eigen(T.getOrigin()) / kLength;
   // Bullet works in single precision: re-orthonormalise so the pose is a clean rigid transform.
   const Eigen::Quaterniond q(X.linear());
   X.linear() = q.normalized().toRotationMatrix();
@@ -68,7 +74,7 @@ Pose to_pose(const btTransform& T) {
 
 /// The object prepared once per call: hull vertices of every part in the principal frame B.
 struct PreparedObject {
-  std::vector<std::vector<btScalar>> hulls;  // xyz triples, body frame B
+  std::vector<std::vector<btScalar>> hulls;  // xyz triples, body frame B, Bullet units
   Pose X_OB = Pose::Identity();              // principal frame at the centre of mass
   Vec3d principal_inertia = Vec3d::Zero();   // kg m² at density factor 1
   double mass = 0.0;
@@ -91,7 +97,7 @@ PreparedObject prepare(const PhysicsObject& object) {
     const Points3f& V = part.vertices();
     std::vector<double> pts(static_cast<std::size_t>(V.rows()) * 3);
     for (Eigen::Index i = 0; i < V.rows(); ++i) {
-      const Vec3d q = X_BO * V.row(i).transpose().cast<double>();
+      const Vec3d q = kLength * (X_BO * V.row(i).transpose().cast<double>());
       for (int k = 0; k < 3; ++k) pts[3 * i + k] = q[k];
     }
     btConvexHullComputer hull;
@@ -100,7 +106,7 @@ PreparedObject prepare(const PhysicsObject& object) {
     h.reserve(static_cast<std::size_t>(hull.vertices.size()) * 3);
     for (int i = 0; i < hull.vertices.size(); ++i) {
       for (int k = 0; k < 3; ++k) h.push_back(hull.vertices[i][k]);
-      p.bounding_radius = std::max(p.bounding_radius, double(hull.vertices[i].length()));
+      p.bounding_radius = std::max(p.bounding_radius, double(hull.vertices[i].length()) / kLength);
     }
     p.hulls.push_back(std::move(h));
   }
@@ -221,10 +227,10 @@ class TrialWorld {
     const Vec3d& f = g.finger_size;
     palm_centre_ = Vec3d(0.0, 0.0, g.flange_to_tip - f.z() - 0.5 * g.palm_size.z());
     finger_z_ = g.flange_to_tip - 0.5 * f.z();
-    palm_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * g.palm_size)));
-    finger_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * f)));
+    palm_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * kLength * g.palm_size)));
+    finger_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * kLength * f)));
     for (btBoxShape* b : {palm_shape_.get(), finger_shape_.get()}) {
-      b->setMargin(btScalar(o.margin));
+      b->setMargin(btScalar(kLength * o.margin));
       if (o.polyhedral_contacts) b->initializePolyhedralFeatures();
     }
 
@@ -241,7 +247,7 @@ class TrialWorld {
     for (const auto& h : obj.hulls) {
       auto hull = std::make_unique<btConvexHullShape>(h.data(), static_cast<int>(h.size() / 3),
                                                       static_cast<int>(3 * sizeof(btScalar)));
-      hull->setMargin(btScalar(o.margin));
+      hull->setMargin(btScalar(kLength * o.margin));
       if (o.polyhedral_contacts) hull->initializePolyhedralFeatures();
       hulls_.push_back(std::move(hull));
     }
@@ -255,7 +261,8 @@ class TrialWorld {
     // Inertia floor (see ShakeOptions::inertia_floor): m (floor·R)² about every principal axis.
     const double rho = o.inertia_floor * obj.bounding_radius;
     const Vec3d I = (obj.principal_inertia * s.density_factor).cwiseMax(m * rho * rho);
-    btRigidBody::btRigidBodyConstructionInfo ci(btScalar(m), nullptr, shape, bt(I));
+    btRigidBody::btRigidBodyConstructionInfo ci(btScalar(m), nullptr, shape,
+                                                bt(Vec3d(kLength * kLength * I)));
     const Pose X_HO = hand_pose(grasp, g).inverse();
     ci.m_startWorldTransform = bt(X_WH * X_HO * obj.X_OB);
     ci.m_friction = btScalar(s.friction);
@@ -300,7 +307,7 @@ class TrialWorld {
       }
     }
 
-    world_.setGravity(btVector3(0, 0, btScalar(-o_.gravity)));
+    world_.setGravity(btVector3(0, 0, btScalar(-kLength * o_.gravity)));
     int lost[2] = {0, 0};
     for (int phase = 1; phase <= 2; ++phase) {
       const int n = phase == 1 ? o_.shake_steps : o_.rotate_steps;
@@ -416,8 +423,8 @@ class TrialWorld {
       double& force = side == 0 ? s.force_left : s.force_right;
       for (int c = 0; c < m->getNumContacts(); ++c) {
         const btManifoldPoint& p = m->getContactPoint(c);
-        if (p.getDistance() < o_.contact_distance) touch = true;
-        force += p.getAppliedImpulse() / o_.dt;
+        if (p.getDistance() < kLength * o_.contact_distance) touch = true;
+        force += p.getAppliedImpulse() / (o_.dt * kLength);
       }
     }
     return s;
