@@ -11,4 +11,5 @@ void bind_raytrace(pybind11::module_& m);
 void bind_collision(pybind11::module_& m);
 void bind_grasp(pybind11::module_& m);
 void bind_calibration(pybind11::module_& m);
+void bind_shake(pybind11::module_& m);
 }  // namespace mgn::py_bind

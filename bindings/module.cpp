@@ -12,4 +12,5 @@ PYBIND11_MODULE(_core, m) {
   mgn::py_bind::bind_collision(m);
   mgn::py_bind::bind_grasp(m);
   mgn::py_bind::bind_calibration(m);
+  mgn::py_bind::bind_shake(m);
 }
