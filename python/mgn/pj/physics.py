@@ -94,7 +94,9 @@ def _pair(name: str, value: Any) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in value)
     except (TypeError, ValueError) as e:
-        raise InvalidArgumentError(f"ShakeOptions.{name}: expected (min, max), got {value!r}") from e
+        raise InvalidArgumentError(
+            f"ShakeOptions.{name}: expected (min, max), got {value!r}"
+        ) from e
     return lo, hi
 
 

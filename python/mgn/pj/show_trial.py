@@ -109,26 +109,22 @@ def render_frames(
 
     frames = []
     for k in range(len(traj.time)):
+        pieces = [(v, f, _OBJECT, traj.X_WO[k]) for v, f in obj]
+        touch = {"left": traj.contact_left[k], "right": traj.contact_right[k]}
+        for v, f, kind in _hand_parts(g, traj.finger_left[k], traj.finger_right[k]):
+            base = _PALM if kind == "palm" else (_TOUCH if touch[kind] else _LOST)
+            pieces.append((v, f, base, traj.X_WH[k]))
         tris, colours, depth = [], [], []
-
-        def add(v: np.ndarray, f: np.ndarray, base: np.ndarray, X: np.ndarray) -> None:
-            w = _transform(X, v)
-            t = w[f]  # (F, 3, 3)
+        for v, f, base, X in pieces:
+            t = _transform(X, v)[f]  # (F, 3, 3) world-frame triangles
             nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
             nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
             facing = nrm @ R[2] < 0.0  # towards the camera (back faces are hidden)
             shade = 0.35 + 0.65 * np.clip(nrm @ light, 0.0, 1.0)
-            cam = t @ R.T
-            tris.append(cam[facing])
+            cam_t = t @ R.T
+            tris.append(cam_t[facing])
             colours.append(shade[facing, None] * base)
-            depth.append(cam[facing, :, 2].mean(axis=1))
-
-        for v, f in obj:
-            add(v, f, _OBJECT, traj.X_WO[k])
-        touch = {"left": traj.contact_left[k], "right": traj.contact_right[k]}
-        for v, f, kind in _hand_parts(g, traj.finger_left[k], traj.finger_right[k]):
-            base = _PALM if kind == "palm" else (_TOUCH if touch[kind] else _LOST)
-            add(v, f, base, traj.X_WH[k])
+            depth.append(cam_t[facing, :, 2].mean(axis=1))
         cam = np.concatenate(tris)
         col = np.clip(np.concatenate(colours), 0, 255).astype(np.uint8)
         order = np.argsort(-np.concatenate(depth))  # far first
@@ -192,12 +188,15 @@ def write_trial_pictures(
 
 
 def default_grasp(mesh: Mesh, com: npt.ArrayLike) -> npt.NDArray[np.float64]:
-    """A grasp through the centre of mass across the object's narrower horizontal extent,
-    approaching from +z: one row [a, v, p1, w] (m). Contacts from rays through the CoM."""
+    """A grasp across the object's narrower horizontal extent, approaching from +z: one row
+    [a, v, p1, w] (m). The contacts are the ray hits through the centre of mass, raised if
+    needed so that the top of the object stays 35 mm below the grasp line (clear of the palm)."""
     from mgn.raytrace import RayScene
 
-    c = np.asarray(com, dtype=np.float64)
-    ext = np.ptp(np.asarray(mesh.vertices, dtype=np.float64), axis=0)
+    verts = np.asarray(mesh.vertices, dtype=np.float64)
+    c = np.asarray(com, dtype=np.float64).copy()
+    c[2] = max(c[2], float(verts[:, 2].max()) - 0.035)
+    ext = np.ptp(verts, axis=0)
     v = np.array([1.0, 0.0, 0.0]) if ext[0] <= ext[1] else np.array([0.0, 1.0, 0.0])
     far = 2.0 * float(np.linalg.norm(ext)) + 1.0
     scene = RayScene(mesh)
