@@ -112,6 +112,7 @@ void bind_shake(py::module_& m) {
       .def_readwrite("lost_contact_steps", &ShakeOptions::lost_contact_steps)
       .def_readwrite("margin", &ShakeOptions::margin)
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
+      .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
       .def_readwrite("num_threads", &ShakeOptions::num_threads)
       .def_readwrite("seed", &ShakeOptions::seed)

@@ -64,6 +64,17 @@ TEST(Shake, LightBoxWithHighFrictionIsHeld) {
   }
 }
 
+TEST(Shake, VeryLightObjectsSqueezedHardAreStillHeld) {
+  // 2–6 g at 20 N (F / m g up to 1000): the solver iterations are raised for them.
+  for (double m : {0.002, 0.006}) {
+    ShakeOptions o = small_grid(1, 1.0, 1.0);
+    o.density_min = o.density_max = 1.0;
+    const ShakeResult r = shake_test(box_object(Vec3d(0.04, 0.04, 0.04), m), ParallelJawGripper{},
+                                     {centre_grasp(0.04)}, o);
+    EXPECT_EQ(r.trial_success[0], 1) << m << " kg";
+  }
+}
+
 TEST(Shake, FinelyTessellatedSphereIsTouchedAndHeld) {
   // Vertex–face contacts of a fine hull (a regression test for Bullet's length tolerances).
   const double r = 0.02, m = 0.03;

@@ -81,7 +81,29 @@ struct PreparedObject {
   double bounding_radius = 0.0;  // largest distance of a hull vertex from the centre of mass, m
 };
 
-PreparedObject prepare(const PhysicsObject& object) {
+/// Support points of a point set along n well-spread unit directions (a Fibonacci sphere): an
+/// inner approximation of its hull with at most n vertices (deterministic).
+std::vector<Vec3d> spread_support_points(const std::vector<Vec3d>& points, int n) {
+  std::vector<Vec3d> out;
+  std::vector<char> used(points.size(), 0);
+  const double golden = kPi * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / n;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const Vec3d d(r * std::cos(golden * i), r * std::sin(golden * i), z);
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < points.size(); ++k) {
+      if (points[k].dot(d) > points[best].dot(d)) best = k;
+    }
+    if (!used[best]) {
+      used[best] = 1;
+      out.push_back(points[best]);
+    }
+  }
+  return out;
+}
+
+PreparedObject prepare(const PhysicsObject& object, int max_hull_vertices) {
   validate_physics_object(object);
   PreparedObject p;
   p.mass = object.mass;
@@ -102,6 +124,14 @@ PreparedObject prepare(const PhysicsObject& object) {
     }
     btConvexHullComputer hull;
     hull.compute(pts.data(), 3 * sizeof(double), static_cast<int>(V.rows()), 0.0, 0.0);
+    if (hull.vertices.size() > max_hull_vertices) {
+      std::vector<Vec3d> all;
+      for (int i = 0; i < hull.vertices.size(); ++i) all.push_back(to_eigen(hull.vertices[i]));
+      const std::vector<Vec3d> few = spread_support_points(all, max_hull_vertices);
+      std::vector<double> q;
+      for (const Vec3d& v : few) q.insert(q.end(), {v.x(), v.y(), v.z()});
+      hull.compute(q.data(), 3 * sizeof(double), static_cast<int>(few.size()), 0.0, 0.0);
+    }
     std::vector<btScalar> h;
     h.reserve(static_cast<std::size_t>(hull.vertices.size()) * 3);
     for (int i = 0; i < hull.vertices.size(); ++i) {
@@ -218,7 +248,11 @@ class TrialWorld {
         world_(&dispatcher_, &broadphase_, &solver_, &config_) {
     world_.setGravity(btVector3(0, 0, 0));
     btContactSolverInfo& info = world_.getSolverInfo();
-    info.m_numIterations = o.solver_iterations;
+    // Light objects squeezed hard need more sequential-impulse iterations to stay steady.
+    const double trial_mass = obj.mass * s.density_factor;
+    const double load = o.grip_force / (150.0 * trial_mass * std::max(o.gravity, 1.0));
+    const int boost = static_cast<int>(std::clamp(std::ceil(load), 1.0, 8.0));
+    info.m_numIterations = o.solver_iterations * boost;
     // Friction in both tangent directions (Bullet's default is one direction per contact point,
     // which lets a held object creep sideways).
     info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
@@ -495,6 +529,8 @@ void ShakeOptions::validate() const {
   require(lost_contact_steps >= 0, "lost_contact_steps", "an integer >= 0", lost_contact_steps);
   require(std::isfinite(margin) && margin > 0 && margin < 0.01, "margin",
           "a collision margin in (0, 0.01) m", margin);
+  require(max_hull_vertices >= 8 && max_hull_vertices <= 100000, "max_hull_vertices",
+          "an integer in [8, 100000]", max_hull_vertices);
   require(solver_iterations >= 1 && solver_iterations <= 1000, "solver_iterations",
           "an integer in [1, 1000]", solver_iterations);
   require(num_threads >= 0, "num_threads", "an integer >= 0 (0 = all hardware threads)",
@@ -557,7 +593,7 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
   options.validate();
   gripper.validate();
   validate_grasps(gripper, grasps);
-  const PreparedObject prepared = prepare(object);
+  const PreparedObject prepared = prepare(object, options.max_hull_vertices);
 
   ShakeResult r;
   const int S = options.grid;
@@ -609,7 +645,7 @@ ShakeTrajectory shake_trajectory(const PhysicsObject& object, const ParallelJawG
   if (record_every < 1) {
     throw_error<InvalidArgument>("shake_trajectory: record_every must be >= 1, got ", record_every);
   }
-  const PreparedObject prepared = prepare(object);
+  const PreparedObject prepared = prepare(object, options.max_hull_vertices);
   const TrialSetting s = make_setting(friction, density_factor, options, trial_index);
   ShakeTrajectory tr;
   tr.friction = friction;

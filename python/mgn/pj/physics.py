@@ -65,6 +65,7 @@ class ShakeOptions:
     lost_contact_steps: int = 10
     margin: float = 5e-4
     polyhedral_contacts: bool = True
+    max_hull_vertices: int = 64
     solver_iterations: int = 10
     num_threads: int = 0
     seed: int = 0
