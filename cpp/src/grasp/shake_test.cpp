@@ -185,6 +185,15 @@ struct TrialOutcome {
   int steps = 0;
 };
 
+/// Pool sizes for a world of four bodies (Bullet's defaults, 4096 manifolds and algorithms,
+/// cost megabytes of memory to set up per trial).
+btDefaultCollisionConstructionInfo small_world_pools() {
+  btDefaultCollisionConstructionInfo info;
+  info.m_defaultMaxPersistentManifoldPoolSize = 32;
+  info.m_defaultMaxCollisionAlgorithmPoolSize = 32;
+  return info;
+}
+
 /// Hand trajectory: X_WH as a function of the phase and the time within it.
 class HandPath {
  public:
@@ -244,6 +253,7 @@ class TrialWorld {
       : g_(g),
         o_(o),
         path_(g, o, s),
+        config_(small_world_pools()),
         dispatcher_(&config_),
         world_(&dispatcher_, &broadphase_, &solver_, &config_) {
     world_.setGravity(btVector3(0, 0, 0));
