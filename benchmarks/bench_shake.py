@@ -19,7 +19,14 @@ from typing import Any
 
 import numpy as np
 
-from .common import PEER_NOT_INSTALLED, Row, measure_alternating, percent, thread_counts
+from .common import (
+    PEER_NOT_INSTALLED,
+    Row,
+    load_average,
+    measure_alternating,
+    percent,
+    thread_counts,
+)
 
 GRIP_FORCE = 20.0
 DT = 1.0 / 200.0
@@ -312,8 +319,9 @@ def _object_rows(
 
     rows: list[Row] = []
     width = float(np.ptp(np.asarray(mesh.vertices)[:, 0]))
-    # (a) MetaGraspNet's grid: 5 grasps x 10 x 10 settings, mgn only.
-    grasps = grasps_for(width, 5)
+    # (a) MetaGraspNet's grid: 5 grasps (quick: 2) x 10 x 10 settings, mgn only.
+    n_grasps = 2 if quick else 5
+    grasps = grasps_for(width, n_grasps)
     cases = {
         f"mgn/{t}": (
             lambda t=t: shake_scores(
@@ -336,7 +344,7 @@ def _object_rows(
     )
     row = Row(
         group="physics",
-        case=f"{name}, 5 grasps x 10x10 settings (MetaGraspNet grid)",
+        case=f"{name}, {n_grasps} grasps x 10x10 settings (MetaGraspNet grid)",
         n=r.num_trials,
         unit="trials/s",
         peer_name="— (mgn only)",
@@ -345,7 +353,11 @@ def _object_rows(
     )
     steps_rate = r.total_steps / timings[f"mgn/{threads[-1]}"].median
     same = float(np.mean(r.trial_success == full.trial_success))
+    t1 = timings["mgn/1"]
+    per_cpu_s = r.num_trials / float(np.median(t1.cpu))
     row.notes += [
+        f"{per_cpu_s:,.0f} trials per CPU-second with 1 thread (what a free core gives; "
+        f"the machine was shared: load average {load_average()})",
         f"{steps_rate:,.0f} simulated steps/s with {threads[-1]} threads; "
         f"{r.total_steps / r.num_trials:.0f} steps per trial (full sequence: 1,100)",
         f"{percent(r.early_fraction)} of trials ended early; scores {np.round(r.score, 2)}",
