@@ -19,8 +19,9 @@
 ///  - closing ends once both fingers touch the object at the grip force for `settle_steps`
 ///    steps, instead of always running `close_steps` (= 400) steps;
 ///  - a trial ends early, as a failure, once the object has lost contact with a finger for
-///    `lost_contact_steps` consecutive steps or left the hand (it cannot become a success by
-///    then in all but rare bounces; benchmarks/bench_shake.py measures the agreement).
+///    `lost_contact_steps` consecutive steps, or (closing) once the fingers closed on nothing
+///    (it cannot become a success by then in all but rare bounces; tests and
+///    benchmarks/bench_shake.py measure the agreement with the full step counts).
 ///  - small rotational inertia is raised to a floor (ShakeOptions::inertia_floor) for solver
 ///    stability; the test measures how little it changes outcomes where both are stable.
 /// The exact shake profiles are mgn's (smooth sinusoids, see ShakeOptions), as MetaGraspNet
@@ -92,7 +93,8 @@ struct ShakeOptions {
   int lost_contact_steps = 10;
   double margin = 5e-4;  ///< Bullet collision margin of every shape, m, > 0
   /// Bullet's polyhedral clipping (a full contact patch per step) instead of GJK points
-  /// gathered over steps; about 1.8x slower and not needed for steady grips (same test results).
+  /// gathered over steps; about 1.8x slower and not needed for steady grips (the tests pass
+  /// both ways).
   bool polyhedral_contacts = false;
   /// Hulls with more vertices are replaced by the hull of their support points along this many
   /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
