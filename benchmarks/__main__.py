@@ -8,7 +8,15 @@ import sys
 import time
 from pathlib import Path
 
-from . import bench_collision, bench_raycast, bench_render, bench_seal
+from . import (
+    bench_collision,
+    bench_drop,
+    bench_pj,
+    bench_raycast,
+    bench_render,
+    bench_seal,
+    bench_shake,
+)
 from .common import (
     import_mgn,
     load_average,
@@ -23,6 +31,9 @@ SUITES = {
     "raycast": bench_raycast,
     "collision": bench_collision,
     "seal": bench_seal,
+    "pj": bench_pj,
+    "shake": bench_shake,
+    "drop": bench_drop,
     "render": bench_render,
 }
 

@@ -4,9 +4,18 @@ core_gripper(gripper)                  the C++ gripper for a mgn.hardware.Parall
 AntipodalSampler(mesh, gripper)        antipodal robust sampler (MODELS.md §5)
 pj_wrench_scores(...)                  soft-finger wrench score under gravity
 label_object(mesh, mass=, com=)        object labels; write_pj_labels(hdf5, labels)
+shake_scores(...), ShakeScorer         Bullet shake test (physics score), label_object's scorer
 """
 
 from mgn.pj.labels import PjLabels, label_object, read_pj_labels, write_pj_labels
+from mgn.pj.physics import (
+    ShakeOptions,
+    ShakeScorer,
+    ShakeScores,
+    ShakeTrajectory,
+    shake_scores,
+    shake_trajectory,
+)
 from mgn.pj.sampler import (
     AntipodalResult,
     AntipodalSampler,
@@ -20,11 +29,17 @@ __all__ = [
     "AntipodalResult",
     "AntipodalSampler",
     "PjLabels",
+    "ShakeOptions",
+    "ShakeScorer",
+    "ShakeScores",
+    "ShakeTrajectory",
     "core_gripper",
     "gripper_meshes",
     "hand_poses",
     "label_object",
     "pj_wrench_scores",
     "read_pj_labels",
+    "shake_scores",
+    "shake_trajectory",
     "write_pj_labels",
 ]

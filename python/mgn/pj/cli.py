@@ -15,9 +15,16 @@ from pathlib import Path
 from mgn.pj.labels import PhysicsScorer
 
 
-def _physics_scorer() -> PhysicsScorer | None:
-    """The physics (shake test) scorer, or None while it is not available."""
-    return None
+def _physics_scorer(args: argparse.Namespace, gripper) -> PhysicsScorer:
+    """The Bullet shake-test scorer on at most ``--physics-grasps`` grasps per object."""
+    from mgn.pj.physics import ShakeOptions, ShakeScorer
+
+    return ShakeScorer(
+        density=args.density,
+        gripper=gripper,
+        options=ShakeOptions(grid=args.physics_grid, num_threads=args.num_threads),
+        max_grasps=args.physics_grasps,
+    )
 
 
 def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path | None]]:
@@ -52,11 +59,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
     from mgn.pj.labels import label_object, write_pj_labels
 
     gripper = ParallelJawGripper.from_yaml(args.gripper) if args.gripper else ParallelJawGripper()
-    physics = None
-    if args.physics:
-        physics = _physics_scorer()
-        if physics is None:
-            print("physics score: not yet available (quality_score_simulation left NaN)")
+    physics = _physics_scorer(args, gripper) if args.physics else None
     for mesh_path, h5_path, folder in _targets(args.paths, args.out):
         mesh = load_mesh(mesh_path)
         density = args.density
@@ -66,6 +69,8 @@ def _cmd_label(args: argparse.Namespace) -> int:
             density = float(meta.get("density_kg_m3", density))
             name = f"{folder.name} {meta.get('name', '')}"
         props = mass_properties(mesh, density)
+        if physics is not None:
+            physics.density = density
         labels = label_object(
             mesh,
             mass=props.mass,
@@ -114,5 +119,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=True,
         help="run the physics (shake) score; --no-physics for the fast analytic path",
     )
+    p.add_argument(
+        "--physics-grasps",
+        type=int,
+        default=200,
+        help="grasps per object given a physics score (evenly strided; the others keep NaN)",
+    )
+    p.add_argument(
+        "--physics-grid", type=int, default=5, help="S of the S x S friction x density grid"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_label)
+    from mgn.pj.show_trial import register_show_trial
+
+    register_show_trial(psub)

@@ -1,0 +1,169 @@
+#pragma once
+/// @file shake_test.hpp  Physics score of parallel-jaw grasps: the Bullet shake test
+/// (MODELS.md §5, "Physics score").
+///
+/// One trial = one grasp × one (friction, density factor) setting: the object is placed in the
+/// open gripper, gravity off; the fingers close at a set speed until they touch, then a force
+/// controller holds the pad force at grip_force (fingers symmetric about the hand axis, like a
+/// Franka hand; soft pads, see ShakeOptions); then,
+/// with gravity on, the hand translates back and forth along its approach axis and then rotates
+/// back and forth about an axis perpendicular to it through the grasp centre. The trial succeeds
+/// if both fingers still touch the object at the end. The score of a grasp is the success
+/// fraction over the S×S grid of settings.
+///
+/// Frames: O = object (the frame of the convex parts and of the grasps); H = hand (flange) frame
+/// of gripper.hpp (z = approach, x = closing); W = simulation world, z up, gravity −z, with the
+/// hand initially at the origin pointing down: X_WH(0) = rotation of π about x. Units SI.
+///
+/// Deviations from MetaGraspNet's step counts (defaults; every one can be switched off):
+///  - closing ends once both fingers touch the object at the grip force for `settle_steps`
+///    steps, instead of always running `close_steps` (= 400) steps;
+///  - a trial ends early, as a failure, once the object has lost contact with a finger for
+///    `lost_contact_steps` consecutive steps, or (closing) once the fingers closed on nothing
+///    (it cannot become a success by then in all but rare bounces; tests and
+///    benchmarks/bench_shake.py measure the agreement with the full step counts).
+///  - small rotational inertia is raised to a floor (ShakeOptions::inertia_floor) for solver
+///    stability; the test measures how little it changes outcomes where both are stable.
+/// The exact shake profiles are mgn's (smooth sinusoids, see ShakeOptions), as MetaGraspNet
+/// does not publish its controller gains.
+
+#include <mgn/core/types.hpp>
+#include <mgn/geometry/mesh.hpp>
+#include <mgn/grasp/gripper.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace mgn {
+
+/// The object to shake: convex parts and rigid-body properties at density factor 1.
+struct PhysicsObject {
+  /// Convex parts in the object frame O (each part is used as the convex hull of its vertices,
+  /// e.g. the output of a convex decomposition, or the object itself when it is convex).
+  std::vector<Mesh> convex_parts;
+  double mass = 0.0;                  ///< kg at density factor 1, > 0
+  Vec3d com = Vec3d::Zero();          ///< centre of mass in O, m
+  Mat3d inertia = Mat3d::Identity();  ///< about the centre of mass, axes of O, kg m², SPD
+};
+
+/// Parameters of the shake test. Defaults: MetaGraspNet where it publishes a value (grid, ranges,
+/// dt, step counts, 0.5 m/s, 0.2–0.3 rad), otherwise mgn's choice.
+struct ShakeOptions {
+  int grid = 10;              ///< S: S×S settings per grasp, >= 1
+  double friction_min = 0.5;  ///< Coulomb friction of the finger–object contact, >= 0
+  double friction_max = 2.0;  ///< friction values = linspace(min, max, S)
+  double density_min = 0.25;  ///< density (mass) factor, > 0
+  double density_max = 1.0;   ///< factors = linspace(min, max, S)
+  double dt = 1.0 / 200.0;    ///< simulation step, s
+  int close_steps = 400;      ///< maximum steps of the closing phase (gravity off)
+  int shake_steps = 400;      ///< translational shake steps
+  int rotate_steps = 300;     ///< rotational shake steps
+  double gravity = 9.81;      ///< m/s², along −z of W (on during the shake phases)
+  /// Translational shake: hand offset s(t) = A sin(2π n t / T) along its approach axis, with n =
+  /// shake_cycles, T = shake_steps·dt and A chosen so that the peak speed is shake_speed.
+  double shake_speed = 0.5;  ///< m/s
+  int shake_cycles = 2;      ///< full back-and-forth cycles, >= 1
+  /// Rotational shake: angle θ(t) = θ_max sin(2π n t / T) about an axis ⟂ approach through the
+  /// grasp centre, n = rotate_cycles, T = rotate_steps·dt; θ_max ~ U(angle_min, angle_max) and
+  /// the axis direction ~ U(0, 2π) in the hand's xy plane, drawn per trial from Rng(seed, trial).
+  double angle_min = 0.2;    ///< rad
+  double angle_max = 0.3;    ///< rad
+  int rotate_cycles = 1;     ///< >= 1
+  double grip_force = 20.0;  ///< normal force each finger pad presses with, N, > 0
+  double close_speed = 0.1;  ///< finger speed limit (closing and force control), m/s, > 0
+  /// Finger pads are soft: Bullet's implicit contact stiffness per contact point (N/m) and
+  /// damping (N s/m). They make the squeeze force well defined (a pad sinks ~F/(n·k)).
+  double pad_stiffness = 1e4;
+  double pad_damping = 20.0;
+  /// Force controller: the fingers move by (mean pad force − grip_force)/controller_stiffness
+  /// per step (N/m; larger = gentler), limited to close_speed.
+  double controller_stiffness = 1e5;
+  /// Inertia floor: every principal moment is raised to at least m·(inertia_floor·R)², R = the
+  /// largest distance of a hull vertex from the centre of mass (0 = exact inertia). Bullet's
+  /// sequential-impulse solver spins up small, light objects squeezed by a large grip force
+  /// when their inertia is below m R² (the impulse at a contact turns them more than it moves
+  /// them); friction and gravity torques, which decide the test, do not depend on inertia.
+  double inertia_floor = 1.0;
+  double contact_distance = 1e-3;  ///< a finger "touches" if a contact point is closer, m
+  /// Closing ends when both fingers touch and the mean pad force has been within 5 % of
+  /// grip_force for this many steps (0 = always run close_steps).
+  int settle_steps = 10;
+  /// A shake trial ends (as a failure) once a finger has not touched the object for this many
+  /// consecutive steps (0 = never end early).
+  int lost_contact_steps = 10;
+  double margin = 5e-4;  ///< Bullet collision margin of every shape, m, > 0
+  /// Bullet's polyhedral clipping (a full contact patch per step) instead of GJK points
+  /// gathered over steps; about 1.8x slower and not needed for steady grips (the tests pass
+  /// both ways).
+  bool polyhedral_contacts = false;
+  /// Hulls with more vertices are replaced by the hull of their support points along this many
+  /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
+  int max_hull_vertices = 64;
+  /// Bullet sequential-impulse iterations, >= 1; multiplied by ceil(grip_force / (150 m g))
+  /// (at most 8) for light objects, which the solver otherwise lets spin out of the grip.
+  int solver_iterations = 10;
+  int num_threads = 0;     ///< 0 = all hardware threads; results do not depend on it
+  std::uint64_t seed = 0;  ///< seed of the per-trial random streams
+
+  /// Throws InvalidArgument naming the first invalid field.
+  void validate() const;
+  /// The S friction values, linspace(friction_min, friction_max, grid).
+  std::vector<double> frictions() const;
+  /// The S density factors, linspace(density_min, density_max, grid).
+  std::vector<double> density_factors() const;
+};
+
+/// Scores of a batch of grasps. Trial t = g·S² + i·S + j uses friction i and density factor j.
+struct ShakeResult {
+  int grid = 0;                                 ///< S
+  std::vector<double> score;                    ///< (G) success fraction per grasp, in [0, 1]
+  std::vector<std::uint8_t> trial_success;      ///< (G·S²) 1 if both fingers touch at the end
+  std::vector<std::uint8_t> trial_ended_early;  ///< (G·S²) 1 if a shortcut ended the trial early
+  std::vector<std::int32_t> trial_steps;        ///< (G·S²) simulation steps run
+  std::vector<double> frictions;                ///< (S)
+  std::vector<double> density_factors;          ///< (S)
+  std::int64_t total_steps = 0;                 ///< sum of trial_steps
+};
+
+/// Phases of a trial (ShakeTrajectory::phase).
+enum class ShakePhase : std::int8_t { Close = 0, Translate = 1, Rotate = 2 };
+
+/// A recorded trial for visualisation: one entry per recorded step (the initial state, every
+/// `record_every`-th step and the last step).
+struct ShakeTrajectory {
+  std::vector<double> time;        ///< s since the start
+  std::vector<std::int8_t> phase;  ///< ShakePhase
+  std::vector<Pose> X_WO;          ///< object pose in W
+  std::vector<Pose> X_WH;          ///< hand (flange) pose in W
+  /// Inner face of the −x finger at x = −finger_left in H, and of the +x finger at
+  /// x = +finger_right (the fingers move independently); opening = left + right, m.
+  std::vector<double> finger_left;
+  std::vector<double> finger_right;
+  std::vector<std::uint8_t> contact_left;   ///< finger at −x of H touches the object
+  std::vector<std::uint8_t> contact_right;  ///< finger at +x of H touches the object
+  bool success = false;
+  bool ended_early = false;
+  int steps = 0;  ///< simulation steps run
+  double friction = 0.0;
+  double density_factor = 0.0;
+};
+
+/// Validates an object: at least one part, each part with at least 4 vertices not all coplanar,
+/// finite positive mass, finite com, finite symmetric positive-definite inertia.
+/// Throws InvalidArgument naming the field.
+void validate_physics_object(const PhysicsObject& object);
+
+/// Shake test of every grasp over the S×S grid, trials in parallel (deterministic for any
+/// options.num_threads). Throws InvalidArgument on bad input (object, gripper, options, a grasp
+/// that is not a valid frame or is wider than gripper.max_opening), before any simulation.
+ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gripper,
+                       const std::vector<ParallelJawGrasp>& grasps, const ShakeOptions& options);
+
+/// One trial (the same simulation as in shake_test for this setting, with the random stream of
+/// trial index `trial_index`), recorded every `record_every` (>= 1) steps.
+ShakeTrajectory shake_trajectory(const PhysicsObject& object, const ParallelJawGripper& gripper,
+                                 const ParallelJawGrasp& grasp, double friction,
+                                 double density_factor, const ShakeOptions& options,
+                                 int record_every = 5, std::uint64_t trial_index = 0);
+
+}  // namespace mgn

@@ -1,0 +1,693 @@
+// The Bullet shake test of parallel-jaw grasps (see shake_test.hpp).
+//
+// One small btDiscreteDynamicsWorld per trial: a kinematic palm that follows the prescribed hand
+// trajectory, two dynamic finger boxes on slider joints whose force-limited velocity motors close
+// them, and the object as one rigid body (a convex hull, or a compound of convex hulls) in its
+// principal-axes frame. A fresh world per trial keeps every trial independent of the others and
+// of the thread that runs it.
+#include <mgn/core/error.hpp>
+#include <mgn/core/parallel.hpp>
+#include <mgn/core/rng.hpp>
+#include <mgn/grasp/shake_test.hpp>
+
+#include <LinearMath/btConvexHullComputer.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+
+namespace mgn {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kGroupHand = 1 << 6;
+constexpr int kGroupObject = 1 << 7;
+
+void require(bool ok, const char* field, const char* expected, double got) {
+  if (!ok) {
+    throw_error<InvalidArgument>("ShakeOptions.", field, ": expected ", expected, ", got ", got);
+  }
+}
+
+std::vector<double> linspace(double lo, double hi, int n) {
+  std::vector<double> v(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) v[i] = n == 1 ? lo : lo + (hi - lo) * i / (n - 1);
+  return v;
+}
+
+btVector3 bt(const Vec3d& v) {
+  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
+}
+
+/// Bullet runs in decimetres: its collision tolerances are absolute and tuned for bodies of
+/// 0.1–10 units; at centimetre-sized objects in metres its GJK misses vertex–face contacts of
+/// finely tessellated hulls. Lengths are multiplied by kLength at the Bullet boundary only (time
+/// and mass unchanged, so forces scale by kLength too; stiffness and damping are unchanged).
+constexpr double kLength = 10.0;
+
+btTransform bt(const Pose& X) {
+  const Mat3d R = X.linear();
+  btMatrix3x3 B(btScalar(R(0, 0)), btScalar(R(0, 1)), btScalar(R(0, 2)), btScalar(R(1, 0)),
+                btScalar(R(1, 1)), btScalar(R(1, 2)), btScalar(R(2, 0)), btScalar(R(2, 1)),
+                btScalar(R(2, 2)));
+  return btTransform(B, bt(Vec3d(kLength * X.translation())));
+}
+
+Vec3d to_eigen(const btVector3& v) { return Vec3d(v.x(), v.y(), v.z()); }
+
+Pose to_pose(const btTransform& T) {
+  Pose X = Pose::Identity();
+  const btMatrix3x3& B = T.getBasis();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) X.linear()(r, c) = B[r][c];
+  X.translation() = to_eigen(T.getOrigin()) / kLength;
+  // Bullet works in single precision: re-orthonormalise so the pose is a clean rigid transform.
+  const Eigen::Quaterniond q(X.linear());
+  X.linear() = q.normalized().toRotationMatrix();
+  return X;
+}
+
+/// The object prepared once per call: hull vertices of every part in the principal frame B.
+struct PreparedObject {
+  std::vector<std::vector<btScalar>> hulls;  // xyz triples, body frame B, Bullet units
+  Pose X_OB = Pose::Identity();              // principal frame at the centre of mass
+  Vec3d principal_inertia = Vec3d::Zero();   // kg m² at density factor 1
+  double mass = 0.0;
+  double bounding_radius = 0.0;  // largest distance of a hull vertex from the centre of mass, m
+};
+
+/// Support points of a point set along n well-spread unit directions (a Fibonacci sphere): an
+/// inner approximation of its hull with at most n vertices (deterministic).
+std::vector<Vec3d> spread_support_points(const std::vector<Vec3d>& points, int n) {
+  std::vector<Vec3d> out;
+  std::vector<char> used(points.size(), 0);
+  const double golden = kPi * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / n;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const Vec3d d(r * std::cos(golden * i), r * std::sin(golden * i), z);
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < points.size(); ++k) {
+      if (points[k].dot(d) > points[best].dot(d)) best = k;
+    }
+    if (!used[best]) {
+      used[best] = 1;
+      out.push_back(points[best]);
+    }
+  }
+  return out;
+}
+
+PreparedObject prepare(const PhysicsObject& object, int max_hull_vertices) {
+  validate_physics_object(object);
+  PreparedObject p;
+  p.mass = object.mass;
+  const Mat3d I = 0.5 * (object.inertia + object.inertia.transpose());
+  Eigen::SelfAdjointEigenSolver<Mat3d> eig(I);
+  Mat3d R = eig.eigenvectors();
+  if (R.determinant() < 0) R.col(2) = -R.col(2);
+  p.principal_inertia = eig.eigenvalues();
+  p.X_OB.linear() = R;
+  p.X_OB.translation() = object.com;
+  const Pose X_BO = p.X_OB.inverse();
+  for (const Mesh& part : object.convex_parts) {
+    const Points3f& V = part.vertices();
+    std::vector<double> pts(static_cast<std::size_t>(V.rows()) * 3);
+    for (Eigen::Index i = 0; i < V.rows(); ++i) {
+      const Vec3d q = kLength * (X_BO * V.row(i).transpose().cast<double>());
+      for (int k = 0; k < 3; ++k) pts[3 * i + k] = q[k];
+    }
+    btConvexHullComputer hull;
+    hull.compute(pts.data(), 3 * sizeof(double), static_cast<int>(V.rows()), 0.0, 0.0);
+    if (hull.vertices.size() > max_hull_vertices) {
+      std::vector<Vec3d> all;
+      for (int i = 0; i < hull.vertices.size(); ++i) all.push_back(to_eigen(hull.vertices[i]));
+      const std::vector<Vec3d> few = spread_support_points(all, max_hull_vertices);
+      std::vector<double> q;
+      for (const Vec3d& v : few) q.insert(q.end(), {v.x(), v.y(), v.z()});
+      hull.compute(q.data(), 3 * sizeof(double), static_cast<int>(few.size()), 0.0, 0.0);
+    }
+    std::vector<btScalar> h;
+    h.reserve(static_cast<std::size_t>(hull.vertices.size()) * 3);
+    for (int i = 0; i < hull.vertices.size(); ++i) {
+      for (int k = 0; k < 3; ++k) h.push_back(hull.vertices[i][k]);
+      p.bounding_radius = std::max(p.bounding_radius, double(hull.vertices[i].length()) / kLength);
+    }
+    p.hulls.push_back(std::move(h));
+  }
+  return p;
+}
+
+void validate_grasps(const ParallelJawGripper& gripper,
+                     const std::vector<ParallelJawGrasp>& grasps) {
+  for (std::size_t i = 0; i < grasps.size(); ++i) {
+    const ParallelJawGrasp& g = grasps[i];
+    try {
+      (void)hand_pose(g, gripper);
+    } catch (const InvalidArgument& e) {
+      throw_error<InvalidArgument>("shake_test: grasps[", i, "]: ", e.what());
+    }
+    if (g.width > gripper.max_opening) {
+      throw_error<InvalidArgument>(
+          "shake_test: grasps[", i, "].width = ", g.width,
+          " m is wider than the gripper's max_opening = ", gripper.max_opening, " m");
+    }
+  }
+}
+
+/// Per-trial random choices and setting.
+struct TrialSetting {
+  double friction = 1.0;
+  double density_factor = 1.0;
+  double angle = 0.25;      // rotational shake amplitude, rad
+  double axis_angle = 0.0;  // direction of the rotation axis in the hand xy plane, rad
+};
+
+TrialSetting make_setting(double friction, double density, const ShakeOptions& o,
+                          std::uint64_t trial_index) {
+  Rng rng(o.seed, trial_index);
+  TrialSetting s;
+  s.friction = friction;
+  s.density_factor = density;
+  s.angle = rng.uniform(o.angle_min, o.angle_max);
+  s.axis_angle = rng.uniform(0.0, 2.0 * kPi);
+  return s;
+}
+
+struct TrialOutcome {
+  bool success = false;
+  bool ended_early = false;
+  int steps = 0;
+};
+
+/// Pool sizes for a world of four bodies (Bullet's defaults, 4096 manifolds and algorithms,
+/// cost megabytes of memory to set up per trial).
+btDefaultCollisionConstructionInfo small_world_pools() {
+  btDefaultCollisionConstructionInfo info;
+  info.m_defaultMaxPersistentManifoldPoolSize = 32;
+  info.m_defaultMaxCollisionAlgorithmPoolSize = 32;
+  return info;
+}
+
+/// Hand trajectory: X_WH as a function of the phase and the time within it.
+class HandPath {
+ public:
+  HandPath(const ParallelJawGripper& g, const ShakeOptions& o, const TrialSetting& s) : o_(o) {
+    X_WH0_ = Pose::Identity();
+    X_WH0_.linear() = Eigen::AngleAxisd(kPi, Vec3d::UnitX()).toRotationMatrix();
+    const double Ts = o.shake_steps * o.dt;
+    omega_s_ = Ts > 0 ? 2.0 * kPi * o.shake_cycles / Ts : 0.0;
+    amp_s_ = omega_s_ > 0 ? o.shake_speed / omega_s_ : 0.0;
+    const double Tr = o.rotate_steps * o.dt;
+    omega_r_ = Tr > 0 ? 2.0 * kPi * o.rotate_cycles / Tr : 0.0;
+    angle_ = s.angle;
+    axis_ = Vec3d(std::cos(s.axis_angle), std::sin(s.axis_angle), 0.0);
+    centre_ = Vec3d(0.0, 0.0, g.grasp_depth());
+  }
+  const Pose& initial() const { return X_WH0_; }
+  Pose translate(double t) const {
+    Pose X = X_WH0_;
+    X.translate(Vec3d(0.0, 0.0, amp_s_ * std::sin(omega_s_ * t)));
+    return X;
+  }
+  Pose rotate(double t) const {
+    const double theta = angle_ * std::sin(omega_r_ * t);
+    Pose R = Pose::Identity();
+    R.linear() = Eigen::AngleAxisd(theta, axis_).toRotationMatrix();
+    R.translation() = centre_ - R.linear() * centre_;
+    return X_WH0_ * R;
+  }
+
+ private:
+  const ShakeOptions& o_;
+  Pose X_WH0_;
+  double omega_s_ = 0, amp_s_ = 0, omega_r_ = 0, angle_ = 0;
+  Vec3d axis_, centre_;
+};
+
+/// What a trial reports after every step (for recording).
+struct StepState {
+  double time;
+  ShakePhase phase;
+  Pose X_WO, X_WH;
+  double left, right;
+  bool touch_left, touch_right;
+  double force_left, force_right;  // normal pad force of the last step, N
+};
+
+/// One trial's Bullet world. The palm and the fingers are kinematic bodies that follow the hand
+/// path; the object is the only dynamic body, so the solver never has to balance a light object
+/// between two heavy pushers. The finger pads are soft (Bullet's implicit contact stiffness and
+/// damping), which makes the squeeze force well defined, and a force controller sets the common
+/// finger offset so that the mean pad force equals the grip force: the fingers move together,
+/// symmetric about the hand axis, like the rack and pinion of a Franka hand.
+class TrialWorld {
+ public:
+  TrialWorld(const PreparedObject& obj, const ParallelJawGripper& g, const ParallelJawGrasp& grasp,
+             const TrialSetting& s, const ShakeOptions& o)
+      : g_(g),
+        o_(o),
+        path_(g, o, s),
+        config_(small_world_pools()),
+        dispatcher_(&config_),
+        world_(&dispatcher_, &broadphase_, &solver_, &config_) {
+    world_.setGravity(btVector3(0, 0, 0));
+    btContactSolverInfo& info = world_.getSolverInfo();
+    // Light objects squeezed hard need more sequential-impulse iterations to stay steady.
+    const double trial_mass = obj.mass * s.density_factor;
+    const double load = o.grip_force / (150.0 * trial_mass * std::max(o.gravity, 1.0));
+    const int boost = static_cast<int>(std::clamp(std::ceil(load), 1.0, 8.0));
+    info.m_numIterations = o.solver_iterations * boost;
+    // Friction in both tangent directions (Bullet's default is one direction per contact point,
+    // which lets a held object creep sideways).
+    info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
+    X_OB_ = obj.X_OB;
+
+    const Vec3d& f = g.finger_size;
+    palm_centre_ = Vec3d(0.0, 0.0, g.flange_to_tip - f.z() - 0.5 * g.palm_size.z());
+    finger_z_ = g.flange_to_tip - 0.5 * f.z();
+    palm_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * kLength * g.palm_size)));
+    finger_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * kLength * f)));
+    for (btBoxShape* b : {palm_shape_.get(), finger_shape_.get()}) {
+      b->setMargin(btScalar(kLength * o.margin));
+      if (o.polyhedral_contacts) b->initializePolyhedralFeatures();
+    }
+
+    d_ = 0.5 * g.collision_opening(grasp.width);
+    const Pose X_WH = path_.initial();
+    palm_ = make_kinematic(palm_shape_.get(), palm_pose(X_WH), 1.0);
+    for (int side = 0; side < 2; ++side) {
+      fingers_[side] = make_kinematic(finger_shape_.get(), finger_pose(X_WH, side, d_), 1.0);
+      fingers_[side]->setContactStiffnessAndDamping(btScalar(o.pad_stiffness),
+                                                    btScalar(o.pad_damping));
+    }
+
+    // Object: one hull, or a compound of hulls, in its principal frame B.
+    for (const auto& h : obj.hulls) {
+      auto hull = std::make_unique<btConvexHullShape>(h.data(), static_cast<int>(h.size() / 3),
+                                                      static_cast<int>(3 * sizeof(btScalar)));
+      hull->setMargin(btScalar(kLength * o.margin));
+      if (o.polyhedral_contacts) hull->initializePolyhedralFeatures();
+      hulls_.push_back(std::move(hull));
+    }
+    btCollisionShape* shape = hulls_.front().get();
+    if (hulls_.size() > 1) {
+      compound_ = std::make_unique<btCompoundShape>(true, static_cast<int>(hulls_.size()));
+      for (auto& h : hulls_) compound_->addChildShape(btTransform::getIdentity(), h.get());
+      shape = compound_.get();
+    }
+    const double m = obj.mass * s.density_factor;
+    // Inertia floor (see ShakeOptions::inertia_floor): m (floor·R)² about every principal axis.
+    const double rho = o.inertia_floor * obj.bounding_radius;
+    const Vec3d I = (obj.principal_inertia * s.density_factor).cwiseMax(m * rho * rho);
+    btRigidBody::btRigidBodyConstructionInfo ci(btScalar(m), nullptr, shape,
+                                                bt(Vec3d(kLength * kLength * I)));
+    const Pose X_HO = hand_pose(grasp, g).inverse();
+    ci.m_startWorldTransform = bt(X_WH * X_HO * obj.X_OB);
+    ci.m_friction = btScalar(s.friction);
+    ci.m_restitution = 0;
+    object_ = std::make_unique<btRigidBody>(ci);
+    object_->setActivationState(DISABLE_DEACTIVATION);
+    world_.addRigidBody(object_.get(), kGroupObject, kGroupHand);
+  }
+
+  ~TrialWorld() {
+    world_.removeRigidBody(object_.get());
+    for (auto& f : fingers_) world_.removeRigidBody(f.get());
+    world_.removeRigidBody(palm_.get());
+  }
+
+  TrialWorld(const TrialWorld&) = delete;
+  TrialWorld& operator=(const TrialWorld&) = delete;
+
+  template <typename Recorder>
+  TrialOutcome run(Recorder&& record) {
+    TrialOutcome out;
+    double time = 0.0;
+    Pose X_WH = path_.initial();
+    StepState last = state(time, ShakePhase::Close, X_WH);
+    record(last);
+
+    // Closing, gravity off.
+    int settled = 0;
+    for (int k = 0; k < o_.close_steps; ++k) {
+      step(X_WH, X_WH, last);
+      time += o_.dt;
+      ++out.steps;
+      last = state(time, ShakePhase::Close, X_WH);
+      record(last);
+      const bool at_force = std::abs(0.5 * (last.force_left + last.force_right) - o_.grip_force) <
+                            0.05 * o_.grip_force;
+      settled = (last.touch_left && last.touch_right && at_force) ? settled + 1 : 0;
+      if (o_.settle_steps > 0 && settled >= o_.settle_steps) break;
+      if (o_.lost_contact_steps > 0 && !last.touch_left && !last.touch_right && d_ <= 0.0) {
+        out.ended_early = true;  // closed on nothing
+        return out;
+      }
+    }
+
+    world_.setGravity(btVector3(0, 0, btScalar(-kLength * o_.gravity)));
+    int lost[2] = {0, 0};
+    for (int phase = 1; phase <= 2; ++phase) {
+      const int n = phase == 1 ? o_.shake_steps : o_.rotate_steps;
+      for (int k = 0; k < n; ++k) {
+        const double t = (k + 1) * o_.dt;
+        const Pose X_next = phase == 1 ? path_.translate(t) : path_.rotate(t);
+        step(X_WH, X_next, last);
+        X_WH = X_next;
+        time += o_.dt;
+        ++out.steps;
+        last = state(time, phase == 1 ? ShakePhase::Translate : ShakePhase::Rotate, X_WH);
+        record(last);
+        lost[0] = last.touch_left ? 0 : lost[0] + 1;
+        lost[1] = last.touch_right ? 0 : lost[1] + 1;
+        if (o_.lost_contact_steps > 0 && std::max(lost[0], lost[1]) >= o_.lost_contact_steps) {
+          out.ended_early = true;
+          return out;
+        }
+      }
+    }
+    out.success = last.touch_left && last.touch_right;
+    return out;
+  }
+
+ private:
+  std::unique_ptr<btRigidBody> make_kinematic(btCollisionShape* shape, const Pose& X,
+                                              double friction) {
+    btRigidBody::btRigidBodyConstructionInfo ci(0, nullptr, shape);
+    ci.m_startWorldTransform = bt(X);
+    ci.m_friction = btScalar(friction);
+    auto body = std::make_unique<btRigidBody>(ci);
+    body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+    body->setActivationState(DISABLE_DEACTIVATION);
+    world_.addRigidBody(body.get(), kGroupHand, kGroupObject);
+    return body;
+  }
+
+  Pose palm_pose(const Pose& X_WH) const {
+    Pose X = X_WH;
+    X.translate(palm_centre_);
+    return X;
+  }
+
+  /// Finger box centre for an inner-face offset d from the hand axis (side 0: −x, 1: +x).
+  Pose finger_pose(const Pose& X_WH, int side, double d) const {
+    const double sign = side == 0 ? -1.0 : 1.0;
+    Pose X = X_WH;
+    X.translate(Vec3d(sign * (d + 0.5 * g_.finger_size.x()), 0.0, finger_z_));
+    return X;
+  }
+
+  /// Bullet moves a kinematic body to its new pose before the solve and derives its velocity
+  /// from the jump, which makes contacts see the move one step late. Instead each hand body stays
+  /// at its pose at the start of the step, with the velocity of the move to its pose at the end
+  /// (through a virtual previous pose), and jumps there after the step.
+  static void drive(btRigidBody& body, const Pose& now_pose, const Pose& next_pose) {
+    const btTransform now = bt(now_pose);
+    const btTransform next = bt(next_pose);
+    btTransform before;
+    before.setBasis((now.getBasis() * next.getBasis().transpose()) * now.getBasis());
+    before.setOrigin(now.getOrigin() * 2 - next.getOrigin());
+    body.setWorldTransform(now);
+    body.setInterpolationWorldTransform(before);
+  }
+
+  /// Force controller of the common finger offset d: close at close_speed until a finger
+  /// touches, then move by (mean pad force − grip force) / controller stiffness per step,
+  /// limited to close_speed.
+  double next_offset(const StepState& s) const {
+    const double vmax = o_.close_speed * o_.dt;
+    if (!s.touch_left && !s.touch_right) return std::max(0.0, d_ - vmax);
+    const double error = 0.5 * (s.force_left + s.force_right) - o_.grip_force;
+    const double delta = std::clamp(error / (o_.controller_stiffness), -vmax, vmax);
+    return std::clamp(d_ + delta, 0.0, 0.5 * g_.max_opening);
+  }
+
+  void step(const Pose& X_WH, const Pose& X_WH_next, const StepState& s) {
+    const double d_next = next_offset(s);
+    drive(*palm_, palm_pose(X_WH), palm_pose(X_WH_next));
+    for (int side = 0; side < 2; ++side) {
+      drive(*fingers_[side], finger_pose(X_WH, side, d_), finger_pose(X_WH_next, side, d_next));
+    }
+    world_.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
+    d_ = d_next;
+    // The hand bodies jump to their end-of-step poses (velocity unchanged until the next step).
+    palm_->setWorldTransform(bt(palm_pose(X_WH_next)));
+    palm_->setInterpolationWorldTransform(palm_->getWorldTransform());
+    for (int side = 0; side < 2; ++side) {
+      fingers_[side]->setWorldTransform(bt(finger_pose(X_WH_next, side, d_)));
+      fingers_[side]->setInterpolationWorldTransform(fingers_[side]->getWorldTransform());
+    }
+  }
+
+  StepState state(double time, ShakePhase phase, const Pose& X_WH) {
+    StepState s;
+    s.time = time;
+    s.phase = phase;
+    s.X_WH = X_WH;
+    s.X_WO = to_pose(object_->getWorldTransform()) * X_OB_.inverse();
+    s.left = s.right = d_;
+    s.touch_left = s.touch_right = false;
+    s.force_left = s.force_right = 0.0;
+    const int n = dispatcher_.getNumManifolds();
+    for (int i = 0; i < n; ++i) {
+      const btPersistentManifold* m = dispatcher_.getManifoldByIndexInternal(i);
+      const btCollisionObject* a = m->getBody0();
+      const btCollisionObject* b = m->getBody1();
+      const btCollisionObject* other = a == object_.get() ? b : (b == object_.get() ? a : nullptr);
+      if (other == nullptr) continue;
+      const int side = other == fingers_[0].get() ? 0 : (other == fingers_[1].get() ? 1 : -1);
+      if (side < 0) continue;
+      bool& touch = side == 0 ? s.touch_left : s.touch_right;
+      double& force = side == 0 ? s.force_left : s.force_right;
+      for (int c = 0; c < m->getNumContacts(); ++c) {
+        const btManifoldPoint& p = m->getContactPoint(c);
+        if (p.getDistance() < kLength * o_.contact_distance) touch = true;
+        force += p.getAppliedImpulse() / (o_.dt * kLength);
+      }
+    }
+    return s;
+  }
+
+  const ParallelJawGripper& g_;
+  const ShakeOptions& o_;
+  HandPath path_;
+  Pose X_OB_;
+  Vec3d palm_centre_;
+  double finger_z_ = 0;
+  double d_ = 0;  // current inner-face offset of both fingers from the hand axis, m
+
+  btDefaultCollisionConfiguration config_;
+  btCollisionDispatcher dispatcher_;
+  btDbvtBroadphase broadphase_;
+  btSequentialImpulseConstraintSolver solver_;
+  btDiscreteDynamicsWorld world_;
+
+  std::unique_ptr<btBoxShape> palm_shape_, finger_shape_;
+  std::vector<std::unique_ptr<btConvexHullShape>> hulls_;
+  std::unique_ptr<btCompoundShape> compound_;
+  std::unique_ptr<btRigidBody> palm_, object_;
+  std::unique_ptr<btRigidBody> fingers_[2];
+};
+
+}  // namespace
+
+void ShakeOptions::validate() const {
+  require(grid >= 1, "grid", "an integer >= 1", grid);
+  require(std::isfinite(friction_min) && friction_min >= 0, "friction_min", "a finite value >= 0",
+          friction_min);
+  require(std::isfinite(friction_max) && friction_max >= friction_min, "friction_max",
+          "a finite value >= friction_min", friction_max);
+  require(std::isfinite(density_min) && density_min > 0, "density_min", "a finite value > 0",
+          density_min);
+  require(std::isfinite(density_max) && density_max >= density_min, "density_max",
+          "a finite value >= density_min", density_max);
+  require(std::isfinite(dt) && dt > 0 && dt <= 0.1, "dt", "a time step in (0, 0.1] s", dt);
+  require(close_steps >= 1, "close_steps", "an integer >= 1", close_steps);
+  require(shake_steps >= 0, "shake_steps", "an integer >= 0", shake_steps);
+  require(rotate_steps >= 0, "rotate_steps", "an integer >= 0", rotate_steps);
+  require(std::isfinite(gravity) && gravity >= 0, "gravity", "a finite value >= 0 (m/s^2)",
+          gravity);
+  require(std::isfinite(shake_speed) && shake_speed >= 0, "shake_speed", "a finite value >= 0",
+          shake_speed);
+  require(shake_cycles >= 1, "shake_cycles", "an integer >= 1", shake_cycles);
+  require(rotate_cycles >= 1, "rotate_cycles", "an integer >= 1", rotate_cycles);
+  require(std::isfinite(angle_min) && angle_min >= 0 && angle_min <= kPi, "angle_min",
+          "an angle in [0, pi] rad", angle_min);
+  require(std::isfinite(angle_max) && angle_max >= angle_min && angle_max <= kPi, "angle_max",
+          "an angle in [angle_min, pi] rad", angle_max);
+  require(std::isfinite(grip_force) && grip_force > 0, "grip_force", "a finite force > 0 (N)",
+          grip_force);
+  require(std::isfinite(close_speed) && close_speed > 0, "close_speed", "a finite speed > 0",
+          close_speed);
+  require(std::isfinite(pad_stiffness) && pad_stiffness > 0, "pad_stiffness",
+          "a finite stiffness > 0 (N/m)", pad_stiffness);
+  require(std::isfinite(pad_damping) && pad_damping >= 0, "pad_damping",
+          "a finite damping >= 0 (N s/m)", pad_damping);
+  require(std::isfinite(inertia_floor) && inertia_floor >= 0 && inertia_floor <= 10,
+          "inertia_floor", "a factor in [0, 10]", inertia_floor);
+  require(std::isfinite(controller_stiffness) && controller_stiffness > 0, "controller_stiffness",
+          "a finite stiffness > 0 (N/m)", controller_stiffness);
+  require(std::isfinite(contact_distance) && contact_distance > 0, "contact_distance",
+          "a finite distance > 0 (m)", contact_distance);
+  require(settle_steps >= 0, "settle_steps", "an integer >= 0", settle_steps);
+  require(lost_contact_steps >= 0, "lost_contact_steps", "an integer >= 0", lost_contact_steps);
+  require(std::isfinite(margin) && margin > 0 && margin < 0.01, "margin",
+          "a collision margin in (0, 0.01) m", margin);
+  require(max_hull_vertices >= 8 && max_hull_vertices <= 100000, "max_hull_vertices",
+          "an integer in [8, 100000]", max_hull_vertices);
+  require(solver_iterations >= 1 && solver_iterations <= 1000, "solver_iterations",
+          "an integer in [1, 1000]", solver_iterations);
+  require(num_threads >= 0, "num_threads", "an integer >= 0 (0 = all hardware threads)",
+          num_threads);
+}
+
+std::vector<double> ShakeOptions::frictions() const {
+  return linspace(friction_min, friction_max, grid);
+}
+
+std::vector<double> ShakeOptions::density_factors() const {
+  return linspace(density_min, density_max, grid);
+}
+
+void validate_physics_object(const PhysicsObject& object) {
+  if (object.convex_parts.empty()) {
+    throw_error<InvalidArgument>(
+        "PhysicsObject.convex_parts: expected at least one convex part, got none");
+  }
+  for (std::size_t i = 0; i < object.convex_parts.size(); ++i) {
+    const Points3f& V = object.convex_parts[i].vertices();
+    if (V.rows() < 4) {
+      throw_error<InvalidArgument>("PhysicsObject.convex_parts[", i,
+                                   "]: expected at least 4 vertices, got ", V.rows());
+    }
+    const Eigen::MatrixXd P = V.cast<double>();
+    const Eigen::MatrixXd C = P.rowwise() - P.colwise().mean();
+    Eigen::SelfAdjointEigenSolver<Mat3d> eig(C.transpose() * C / double(V.rows()));
+    const Vec3d ev = eig.eigenvalues();
+    if (!(ev[0] > 1e-12 * ev[2]) || !(ev[2] > 0)) {
+      throw_error<InvalidArgument>("PhysicsObject.convex_parts[", i,
+                                   "]: expected a solid part, got points that are (nearly) ",
+                                   ev[2] > 0 ? "coplanar" : "coincident");
+    }
+  }
+  if (!std::isfinite(object.mass) || !(object.mass > 0)) {
+    throw_error<InvalidArgument>("PhysicsObject.mass: expected a finite mass > 0 kg, got ",
+                                 object.mass);
+  }
+  if (!object.com.allFinite()) {
+    throw_error<InvalidArgument>("PhysicsObject.com: expected a finite point (m)");
+  }
+  const Mat3d& I = object.inertia;
+  if (!I.allFinite()) {
+    throw_error<InvalidArgument>("PhysicsObject.inertia: expected finite values (kg m^2)");
+  }
+  if ((I - I.transpose()).cwiseAbs().maxCoeff() > 1e-6 * I.cwiseAbs().maxCoeff()) {
+    throw_error<InvalidArgument>("PhysicsObject.inertia: expected a symmetric matrix");
+  }
+  Eigen::SelfAdjointEigenSolver<Mat3d> eig(I);
+  if (!(eig.eigenvalues()[0] > 0)) {
+    throw_error<InvalidArgument>(
+        "PhysicsObject.inertia: expected a positive-definite matrix, smallest eigenvalue ",
+        eig.eigenvalues()[0]);
+  }
+}
+
+ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gripper,
+                       const std::vector<ParallelJawGrasp>& grasps, const ShakeOptions& options) {
+  options.validate();
+  gripper.validate();
+  validate_grasps(gripper, grasps);
+  const PreparedObject prepared = prepare(object, options.max_hull_vertices);
+
+  ShakeResult r;
+  const int S = options.grid;
+  const std::size_t per_grasp = static_cast<std::size_t>(S) * S;
+  const std::size_t n = grasps.size() * per_grasp;
+  r.grid = S;
+  r.frictions = options.frictions();
+  r.density_factors = options.density_factors();
+  r.trial_success.assign(n, 0);
+  r.trial_ended_early.assign(n, 0);
+  r.trial_steps.assign(n, 0);
+  parallel_for(n, options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) {
+      const std::size_t g = t / per_grasp;
+      const std::size_t i = (t % per_grasp) / S;
+      const std::size_t j = t % S;
+      const TrialSetting s = make_setting(r.frictions[i], r.density_factors[j], options, t);
+      TrialWorld world(prepared, gripper, grasps[g], s, options);
+      const TrialOutcome o = world.run([](const StepState&) {});
+      r.trial_success[t] = o.success;
+      r.trial_ended_early[t] = o.ended_early;
+      r.trial_steps[t] = o.steps;
+    }
+  });
+  r.score.assign(grasps.size(), 0.0);
+  for (std::size_t t = 0; t < n; ++t) {
+    r.score[t / per_grasp] += r.trial_success[t];
+    r.total_steps += r.trial_steps[t];
+  }
+  for (double& s : r.score) s /= static_cast<double>(per_grasp);
+  return r;
+}
+
+ShakeTrajectory shake_trajectory(const PhysicsObject& object, const ParallelJawGripper& gripper,
+                                 const ParallelJawGrasp& grasp, double friction,
+                                 double density_factor, const ShakeOptions& options,
+                                 int record_every, std::uint64_t trial_index) {
+  options.validate();
+  gripper.validate();
+  validate_grasps(gripper, {grasp});
+  if (!std::isfinite(friction) || friction < 0) {
+    throw_error<InvalidArgument>("shake_trajectory: friction must be finite and >= 0, got ",
+                                 friction);
+  }
+  if (!std::isfinite(density_factor) || !(density_factor > 0)) {
+    throw_error<InvalidArgument>("shake_trajectory: density_factor must be finite and > 0, got ",
+                                 density_factor);
+  }
+  if (record_every < 1) {
+    throw_error<InvalidArgument>("shake_trajectory: record_every must be >= 1, got ", record_every);
+  }
+  const PreparedObject prepared = prepare(object, options.max_hull_vertices);
+  const TrialSetting s = make_setting(friction, density_factor, options, trial_index);
+  ShakeTrajectory tr;
+  tr.friction = friction;
+  tr.density_factor = density_factor;
+  int count = 0;
+  StepState last{};
+  bool pending = false;
+  auto push = [&tr](const StepState& st) {
+    tr.time.push_back(st.time);
+    tr.phase.push_back(static_cast<std::int8_t>(st.phase));
+    tr.X_WO.push_back(st.X_WO);
+    tr.X_WH.push_back(st.X_WH);
+    tr.finger_left.push_back(st.left);
+    tr.finger_right.push_back(st.right);
+    tr.contact_left.push_back(st.touch_left);
+    tr.contact_right.push_back(st.touch_right);
+  };
+  TrialWorld world(prepared, gripper, grasp, s, options);
+  const TrialOutcome o = world.run([&](const StepState& st) {
+    if (count++ % record_every == 0) {
+      push(st);
+      pending = false;
+    } else {
+      last = st;
+      pending = true;
+    }
+  });
+  if (pending) push(last);
+  tr.success = o.success;
+  tr.ended_early = o.ended_early;
+  tr.steps = o.steps;
+  return tr;
+}
+
+}  // namespace mgn

@@ -1,0 +1,342 @@
+"""Physics score of parallel-jaw grasps: the Bullet shake test (typed façade, MODELS.md §5).
+
+Per grasp, S×S trials (friction ``linspace(*friction_range, S)`` × density factor
+``linspace(*density_range, S)``): the object sits in the open gripper with gravity off, the
+fingers close and squeeze with ``grip_force``, then the hand shakes along its approach axis and
+rotates about an axis perpendicular to it. A trial succeeds if both fingers still touch the
+object at the end; the score is the success fraction. All in C++ (``mgn._core.shake_test``),
+trials in parallel, identical results for any thread count.
+
+Grasps are (N, 10) rows ``[a (3), v (3), p1 (3), w]`` in metres (MetaGraspNet's order, SI
+units; the file writer converts to cm), or objects with ``approach``, ``closing``, ``p1`` and
+``width`` attributes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+from dataclasses import field as dataclass_field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from mgn import _core
+from mgn.errors import InvalidArgumentError
+from mgn.hardware import ParallelJawGripper, default_gripper
+
+Mesh = _core.Mesh
+
+#: Phase codes of ShakeTrajectory.phase.
+PHASE_NAMES = ("close", "translate", "rotate")
+
+
+@dataclass(frozen=True)
+class ShakeOptions:
+    """Parameters of the shake test (SI units).
+
+    MetaGraspNet values: ``grid`` 10, the two ranges, ``dt`` 1/200 s, 400/400/300 steps, 0.5 m/s
+    and 0.2–0.3 rad. The others are mgn's (see ``cpp/include/mgn/grasp/shake_test.hpp``):
+    ``settle_steps`` and ``lost_contact_steps`` end phases and trials early (0 disables them),
+    ``inertia_floor`` stabilises light objects, the pads are soft (``pad_stiffness`` N/m per
+    contact point, ``pad_damping`` N s/m).
+    """
+
+    grid: int = 10
+    friction_range: tuple[float, float] = (0.5, 2.0)
+    density_range: tuple[float, float] = (0.25, 1.0)
+    dt: float = 1.0 / 200.0
+    close_steps: int = 400
+    shake_steps: int = 400
+    rotate_steps: int = 300
+    gravity: float = 9.81
+    shake_speed: float = 0.5
+    shake_cycles: int = 2
+    angle_range: tuple[float, float] = (0.2, 0.3)
+    rotate_cycles: int = 1
+    grip_force: float = 20.0
+    close_speed: float = 0.1
+    pad_stiffness: float = 1e4
+    pad_damping: float = 20.0
+    controller_stiffness: float = 1e5
+    inertia_floor: float = 1.0
+    contact_distance: float = 1e-3
+    settle_steps: int = 10
+    lost_contact_steps: int = 10
+    margin: float = 5e-4
+    polyhedral_contacts: bool = True
+    max_hull_vertices: int = 64
+    solver_iterations: int = 10
+    num_threads: int = 0
+    seed: int = 0
+
+    def to_core(self) -> _core.ShakeOptions:
+        """The C++ options (validated there; errors name the field)."""
+        o = _core.ShakeOptions()
+        pairs = {"friction_range": "friction", "density_range": "density", "angle_range": "angle"}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in pairs:
+                lo, hi = _pair(f.name, value)
+                setattr(o, pairs[f.name] + "_min", lo)
+                setattr(o, pairs[f.name] + "_max", hi)
+            else:
+                try:
+                    setattr(o, f.name, value)
+                except TypeError as e:
+                    raise InvalidArgumentError(
+                        f"ShakeOptions.{f.name}: expected a number, got {value!r}"
+                    ) from e
+        o.validate()
+        return o
+
+
+def _pair(name: str, value: Any) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError) as e:
+        raise InvalidArgumentError(
+            f"ShakeOptions.{name}: expected (min, max), got {value!r}"
+        ) from e
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class ShakeScores:
+    """Result of :func:`shake_scores` for G grasps and an S×S grid.
+
+    Attributes:
+        score: (G,) success fraction per grasp.
+        trial_success: (G, S, S) bool, [grasp, friction index, density index].
+        trial_ended_early: (G, S, S) bool, trial stopped once the object was lost.
+        trial_steps: (G, S, S) int32 simulation steps run.
+        frictions: (S,) friction coefficients of the grid.
+        density_factors: (S,) density (mass) factors of the grid.
+        total_steps: sum of trial_steps.
+    """
+
+    score: npt.NDArray[np.float64]
+    trial_success: npt.NDArray[np.bool_]
+    trial_ended_early: npt.NDArray[np.bool_]
+    trial_steps: npt.NDArray[np.int32]
+    frictions: npt.NDArray[np.float64]
+    density_factors: npt.NDArray[np.float64]
+    total_steps: int
+
+    @property
+    def num_trials(self) -> int:
+        return int(self.trial_success.size)
+
+    @property
+    def early_fraction(self) -> float:
+        """Share of trials that ended early (0 when there are none)."""
+        return float(self.trial_ended_early.mean()) if self.trial_ended_early.size else 0.0
+
+
+@dataclass(frozen=True)
+class ShakeTrajectory:
+    """One recorded trial (world W: z up, gravity −z; the hand starts at the origin, pointing down).
+
+    Attributes:
+        time: (K,) s.  phase: (K,) int8 index into PHASE_NAMES.
+        X_WO, X_WH: (K, 4, 4) object and hand (flange) poses.
+        finger_left, finger_right: (K,) inner-face offsets of the fingers from the hand axis, m
+            (the −x finger's face is at x = −finger_left in the hand frame).
+        contact_left, contact_right: (K,) bool, the finger touches the object.
+        success, ended_early, steps, friction, density_factor: the trial's outcome and setting.
+    """
+
+    time: npt.NDArray[np.float64]
+    phase: npt.NDArray[np.int8]
+    X_WO: npt.NDArray[np.float64]
+    X_WH: npt.NDArray[np.float64]
+    finger_left: npt.NDArray[np.float64]
+    finger_right: npt.NDArray[np.float64]
+    contact_left: npt.NDArray[np.bool_]
+    contact_right: npt.NDArray[np.bool_]
+    success: bool
+    ended_early: bool
+    steps: int
+    friction: float
+    density_factor: float
+
+
+def _parts(mesh_or_parts: Mesh | Sequence[Mesh]) -> list[Mesh]:
+    if isinstance(mesh_or_parts, Mesh):
+        return [mesh_or_parts]
+    parts = list(mesh_or_parts)
+    if not all(isinstance(p, Mesh) for p in parts):
+        raise InvalidArgumentError("mesh_or_parts: expected a mgn.Mesh or a sequence of them")
+    return parts
+
+
+def grasp_rows(grasps: Any) -> npt.NDArray[np.float64]:
+    """(N, 10) float64 rows [a, v, p1, w] from an array or from objects with grasp attributes."""
+    if isinstance(grasps, np.ndarray) or (
+        isinstance(grasps, Sequence) and grasps and not hasattr(grasps[0], "approach")
+    ):
+        rows = np.asarray(grasps, dtype=np.float64)
+        if rows.ndim == 1 and rows.shape[0] == 10:
+            rows = rows.reshape(1, 10)
+        if rows.ndim != 2 or rows.shape[1] != 10:
+            raise InvalidArgumentError(
+                f"grasps: expected an array of shape (N, 10) [a, v, p1, w], got {rows.shape}"
+            )
+        return np.ascontiguousarray(rows)
+    items = list(grasps)
+    out = np.empty((len(items), 10), dtype=np.float64)
+    for i, g in enumerate(items):
+        try:
+            out[i, 0:3] = g.approach
+            out[i, 3:6] = g.closing
+            out[i, 6:9] = g.p1
+            out[i, 9] = g.width
+        except AttributeError as e:
+            raise InvalidArgumentError(
+                f"grasps[{i}]: expected approach, closing, p1 and width attributes"
+            ) from e
+    return out
+
+
+def _inputs(mass: float, com: npt.ArrayLike, inertia: npt.ArrayLike) -> tuple:
+    c = np.asarray(com, dtype=np.float64)
+    inertia_arr = np.asarray(inertia, dtype=np.float64)
+    if c.shape != (3,):
+        raise InvalidArgumentError(f"com: expected shape (3,), got {c.shape}")
+    if inertia_arr.shape != (3, 3):
+        raise InvalidArgumentError(f"inertia: expected shape (3, 3), got {inertia_arr.shape}")
+    return float(mass), c, inertia_arr
+
+
+def shake_scores(
+    mesh_or_parts: Mesh | Sequence[Mesh],
+    mass: float,
+    com: npt.ArrayLike,
+    inertia: npt.ArrayLike,
+    grasps: Any,
+    gripper: ParallelJawGripper | None = None,
+    options: ShakeOptions | None = None,
+) -> ShakeScores:
+    """Physics scores of parallel-jaw grasps on one object.
+
+    Args:
+        mesh_or_parts: the object (used as its convex hull) or its convex parts, object frame.
+        mass: kg at density factor 1.  com: (3,) centre of mass, m.
+        inertia: (3, 3) inertia about the centre of mass at density factor 1, kg m^2.
+        grasps: (N, 10) rows [a, v, p1, w] (m) or grasp objects (see module docstring).
+        gripper: defaults to the MetaGraspNet gripper.  options: defaults to ShakeOptions().
+    """
+    m, c, inertia_arr = _inputs(mass, com, inertia)
+    rows = grasp_rows(grasps)
+    g = gripper if gripper is not None else default_gripper()
+    o = (options if options is not None else ShakeOptions()).to_core()
+    r = _core.shake_test(_parts(mesh_or_parts), m, c, inertia_arr, rows, g, o)
+    return ShakeScores(
+        score=r["score"],
+        trial_success=r["trial_success"],
+        trial_ended_early=r["trial_ended_early"],
+        trial_steps=r["trial_steps"],
+        frictions=r["frictions"],
+        density_factors=r["density_factors"],
+        total_steps=int(r["total_steps"]),
+    )
+
+
+def shake_trajectory(
+    mesh_or_parts: Mesh | Sequence[Mesh],
+    mass: float,
+    com: npt.ArrayLike,
+    inertia: npt.ArrayLike,
+    grasp: Any,
+    friction: float,
+    density_factor: float,
+    gripper: ParallelJawGripper | None = None,
+    options: ShakeOptions | None = None,
+    *,
+    record_every: int = 5,
+    trial_index: int = 0,
+) -> ShakeTrajectory:
+    """One shake trial recorded every ``record_every`` steps (for :mod:`mgn.pj.show_trial`).
+
+    ``trial_index`` selects the random stream (rotation axis and angle); trial
+    ``g*S*S + i*S + j`` of :func:`shake_scores` is reproduced with ``frictions[i]`` and
+    ``density_factors[j]``.
+    """
+    m, c, inertia_arr = _inputs(mass, com, inertia)
+    row = grasp_rows([grasp] if hasattr(grasp, "approach") else grasp)
+    if row.shape[0] != 1:
+        raise InvalidArgumentError(f"grasp: expected one grasp, got {row.shape[0]}")
+    g = gripper if gripper is not None else default_gripper()
+    o = (options if options is not None else ShakeOptions()).to_core()
+    t = _core.shake_trajectory(
+        _parts(mesh_or_parts),
+        m,
+        c,
+        inertia_arr,
+        row[0],
+        g,
+        float(friction),
+        float(density_factor),
+        o,
+        int(record_every),
+        int(trial_index),
+    )
+    return ShakeTrajectory(**t)
+
+
+@dataclass
+class ShakeScorer:
+    """The physics scorer of :func:`mgn.pj.label_object` (``physics=ShakeScorer(...)``).
+
+    The shake test costs ``grid²`` Bullet trials per grasp, so it runs on an evenly strided subset
+    of at most ``max_grasps`` grasps of an object (``None``: all); the other grasps keep NaN in
+    ``quality_score_simulation``. The object is simulated as its cached convex decomposition
+    (:func:`mgn.scene.convex.cached_convex_decomposition`) with uniform ``density`` (kg/m^3).
+    """
+
+    density: float = 1000.0
+    gripper: ParallelJawGripper | None = None
+    options: ShakeOptions = dataclass_field(default_factory=lambda: ShakeOptions(grid=5))
+    max_grasps: int | None = 200
+
+    @property
+    def __name__(self) -> str:  # recorded in the label metadata
+        o = self.options
+        return f"Bullet shake test, grid {o.grid}x{o.grid}, at most {self.max_grasps} grasps"
+
+    def __call__(self, mesh: Mesh, labels: Any) -> npt.NDArray[np.float32]:
+        from mgn.geometry import mass_properties
+        from mgn.scene.convex import cached_convex_decomposition
+
+        n = len(labels)
+        out = np.full(n, np.nan, np.float32)
+        if n == 0:
+            return out
+        if self.max_grasps is not None and self.max_grasps < 1:
+            raise InvalidArgumentError(
+                f"ShakeScorer.max_grasps: expected >= 1, got {self.max_grasps}"
+            )
+        k = n if self.max_grasps is None else min(n, self.max_grasps)
+        idx = np.unique(np.linspace(0, n - 1, k).round().astype(np.int64))
+        props = mass_properties(mesh, self.density)
+        rows = np.concatenate(
+            [
+                np.asarray(labels.approach, np.float64)[idx],
+                np.asarray(labels.closing, np.float64)[idx],
+                np.asarray(labels.p1, np.float64)[idx],
+                np.asarray(labels.width, np.float64)[idx, None],
+            ],
+            axis=1,
+        )
+        scores = shake_scores(
+            cached_convex_decomposition(mesh),
+            props.mass,
+            props.center_of_mass,
+            props.inertia,
+            rows,
+            self.gripper,
+            self.options,
+        )
+        out[idx] = scores.score
+        return out

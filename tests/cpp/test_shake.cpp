@@ -1,0 +1,318 @@
+// The Bullet shake test of parallel-jaw grasps (MODELS.md §5, physics score).
+#include <gtest/gtest.h>
+#include <mgn/core/error.hpp>
+#include <mgn/geometry/mass_properties.hpp>
+#include <mgn/geometry/primitives.hpp>
+#include <mgn/grasp/shake_test.hpp>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace mgn {
+namespace {
+
+/// A solid box of the given size and mass, centred at the origin of O.
+PhysicsObject box_object(const Vec3d& size, double mass) {
+  PhysicsObject o;
+  o.convex_parts = {make_box(size)};
+  o.mass = mass;
+  o.com = Vec3d::Zero();
+  const double x2 = size.x() * size.x(), y2 = size.y() * size.y(), z2 = size.z() * size.z();
+  o.inertia = (mass / 12.0 * Vec3d(y2 + z2, x2 + z2, x2 + y2)).asDiagonal();
+  return o;
+}
+
+/// Grasp across x through the centre of a box of width w, hand coming from +z.
+ParallelJawGrasp centre_grasp(double w) {
+  ParallelJawGrasp g;
+  g.p1 = Vec3d(-0.5 * w, 0, 0);
+  g.closing = Vec3d::UnitX();
+  g.approach = -Vec3d::UnitZ();
+  g.width = w;
+  return g;
+}
+
+ShakeOptions small_grid(int S, double fmin, double fmax) {
+  ShakeOptions o;
+  o.grid = S;
+  o.friction_min = fmin;
+  o.friction_max = fmax;
+  o.num_threads = 1;
+  return o;
+}
+
+/// A hold-only test: gravity for `steps` steps, no shaking.
+ShakeOptions hold_only(double friction) {
+  ShakeOptions o = small_grid(1, friction, friction);
+  o.density_min = o.density_max = 1.0;
+  o.shake_speed = 0.0;
+  o.shake_steps = 200;
+  o.rotate_steps = 0;
+  return o;
+}
+
+TEST(Shake, LightBoxWithHighFrictionIsHeld) {
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), 0.05);
+  ShakeOptions o = small_grid(3, 1.0, 2.0);
+  const ShakeResult r = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+  ASSERT_EQ(r.score.size(), 1u);
+  ASSERT_EQ(r.trial_success.size(), 9u);
+  EXPECT_GE(r.score[0], 0.99);
+  for (std::size_t t = 0; t < 9; ++t) {
+    EXPECT_FALSE(r.trial_ended_early[t]);
+    EXPECT_GT(r.trial_steps[t], o.shake_steps + o.rotate_steps);
+  }
+}
+
+TEST(Shake, VeryLightObjectsSqueezedHardAreStillHeld) {
+  // 2–6 g at 20 N (F / m g up to 1000): the solver iterations are raised for them.
+  for (double m : {0.002, 0.006}) {
+    ShakeOptions o = small_grid(1, 1.0, 1.0);
+    o.density_min = o.density_max = 1.0;
+    const ShakeResult r = shake_test(box_object(Vec3d(0.04, 0.04, 0.04), m), ParallelJawGripper{},
+                                     {centre_grasp(0.04)}, o);
+    EXPECT_EQ(r.trial_success[0], 1) << m << " kg";
+  }
+}
+
+TEST(Shake, FinelyTessellatedSphereIsTouchedAndHeld) {
+  // Vertex–face contacts of a fine hull (a regression test for Bullet's length tolerances).
+  const double r = 0.02, m = 0.03;
+  PhysicsObject ball;
+  ball.convex_parts = {make_sphere(r, 32, 16)};
+  ball.mass = m;
+  ball.inertia = Mat3d::Identity() * 0.4 * m * r * r;
+  ShakeOptions o = small_grid(2, 1.0, 2.0);
+  const ShakeResult res = shake_test(ball, ParallelJawGripper{}, {centre_grasp(2 * r)}, o);
+  EXPECT_GE(res.score[0], 0.99);
+  // The fingers stop at the sphere (2 r apart, minus the pad sink), not inside it.
+  const ShakeTrajectory tr =
+      shake_trajectory(ball, ParallelJawGripper{}, centre_grasp(2 * r), 1.0, 1.0, o, 50);
+  EXPECT_NEAR(tr.finger_left.back() + tr.finger_right.back(), 2 * r, 4e-3);
+}
+
+TEST(Shake, HeavySlipperyWideObjectIsDropped) {
+  const PhysicsObject heavy = box_object(Vec3d(0.07, 0.06, 0.06), 3.0);
+  ShakeOptions o = small_grid(3, 0.05, 0.15);
+  const ShakeResult r = shake_test(heavy, ParallelJawGripper{}, {centre_grasp(0.07)}, o);
+  EXPECT_LE(r.score[0], 0.01);
+  // Dropped objects end the trial early, well before the full sequence.
+  for (std::size_t t = 0; t < r.trial_steps.size(); ++t) {
+    EXPECT_TRUE(r.trial_ended_early[t]);
+    EXPECT_LT(r.trial_steps[t], o.shake_steps + o.rotate_steps);
+  }
+}
+
+TEST(Shake, StaticHoldFollowsCoulombBoundOfTheGripForce) {
+  // Two fingers pressing with F each hold a weight m g iff 2 mu F >= m g.
+  const double m = 1.0, F = 20.0;
+  const double mu_star = m * 9.81 / (2.0 * F);  // 0.245
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), m);
+  for (double factor : {0.7, 0.85, 1.2, 1.5}) {
+    ShakeOptions o = hold_only(factor * mu_star);
+    o.grip_force = F;
+    const ShakeResult r = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+    EXPECT_EQ(r.trial_success[0] != 0, factor > 1.0) << "friction factor " << factor;
+  }
+}
+
+TEST(Shake, ScoreRisesWithFriction) {
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.8);
+  const ParallelJawGrasp grasp = centre_grasp(0.04);
+  std::vector<int> outcome;
+  for (double mu : {0.05, 0.1, 0.2, 0.4, 0.8, 1.6}) {
+    ShakeOptions o = small_grid(1, mu, mu);
+    o.density_min = o.density_max = 1.0;
+    outcome.push_back(shake_test(box, ParallelJawGripper{}, {grasp}, o).trial_success[0]);
+  }
+  EXPECT_EQ(outcome.front(), 0);
+  EXPECT_EQ(outcome.back(), 1);
+  for (std::size_t i = 1; i < outcome.size(); ++i) EXPECT_GE(outcome[i], outcome[i - 1]) << i;
+  // The same over a grid: the per-friction success counts do not decrease.
+  ShakeOptions o = small_grid(4, 0.1, 1.0);
+  const ShakeResult r = shake_test(box, ParallelJawGripper{}, {grasp}, o);
+  int prev = -1;
+  for (int i = 0; i < 4; ++i) {
+    int held = 0;
+    for (int j = 0; j < 4; ++j) held += r.trial_success[i * 4 + j];
+    EXPECT_GE(held, prev) << "friction " << r.frictions[i];
+    prev = held;
+  }
+}
+
+TEST(Shake, HeavierIsHarderToHold) {
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 4.0);
+  ShakeOptions o = small_grid(4, 0.3, 0.3);
+  o.grid = 4;
+  o.friction_min = o.friction_max = 0.3;
+  o.density_min = 0.05;
+  o.density_max = 1.0;
+  const ShakeResult r = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+  // Same friction for every row: per density factor the outcome may only fall as mass grows.
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(r.trial_success[i * 4 + 0], 1);
+    EXPECT_EQ(r.trial_success[i * 4 + 3], 0);
+    for (int j = 1; j < 4; ++j)
+      EXPECT_LE(r.trial_success[i * 4 + j], r.trial_success[i * 4 + j - 1]);
+  }
+}
+
+TEST(Shake, ThreadsAndSeedGiveIdenticalResults) {
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.8);
+  std::vector<ParallelJawGrasp> grasps = {centre_grasp(0.04), centre_grasp(0.04)};
+  grasps[1].p1 = Vec3d(-0.02, 0.01, 0.015);  // off-centre: torque about the closing axis
+  ShakeOptions o = small_grid(3, 0.2, 1.0);
+  o.seed = 7;
+  o.num_threads = 1;
+  const ShakeResult a = shake_test(box, ParallelJawGripper{}, grasps, o);
+  o.num_threads = 2;
+  const ShakeResult b = shake_test(box, ParallelJawGripper{}, grasps, o);
+  const ShakeResult c = shake_test(box, ParallelJawGripper{}, grasps, o);
+  EXPECT_EQ(a.trial_success, b.trial_success);
+  EXPECT_EQ(a.trial_steps, b.trial_steps);
+  EXPECT_EQ(a.trial_ended_early, b.trial_ended_early);
+  EXPECT_EQ(a.score, b.score);
+  EXPECT_EQ(b.trial_steps, c.trial_steps);
+  EXPECT_EQ(a.total_steps, b.total_steps);
+}
+
+TEST(Shake, TrajectoryMatchesTheBatchTrialAndThePrescribedHandPath) {
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.8);
+  const ParallelJawGripper gripper;
+  const ParallelJawGrasp grasp = centre_grasp(0.04);
+  ShakeOptions o = small_grid(2, 0.3, 1.0);
+  o.seed = 3;
+  const ShakeResult r = shake_test(box, gripper, {grasp}, o);
+  for (std::uint64_t t = 0; t < 4; ++t) {
+    const ShakeTrajectory tr = shake_trajectory(box, gripper, grasp, r.frictions[t / 2],
+                                                r.density_factors[t % 2], o, 1, t);
+    EXPECT_EQ(tr.success, r.trial_success[t] != 0);
+    EXPECT_EQ(tr.steps, r.trial_steps[t]);
+    ASSERT_EQ(tr.time.size(), static_cast<std::size_t>(tr.steps) + 1);
+  }
+  const ShakeTrajectory tr = shake_trajectory(box, gripper, grasp, 1.0, 1.0, o, 7, 0);
+  ASSERT_GE(tr.time.size(), 3u);
+  EXPECT_EQ(tr.time.front(), 0.0);
+  EXPECT_NEAR(tr.time.back(), tr.steps * o.dt, 1e-9);
+  // Initially the hand points down (z_H = −z_W) and the object sits at X_WH0 · X_HO.
+  const Pose X_WO0 = tr.X_WH.front() * hand_pose(grasp, gripper).inverse();
+  EXPECT_LT((tr.X_WO.front().matrix() - X_WO0.matrix()).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_NEAR(tr.X_WH.front().linear().col(2).z(), -1.0, 1e-12);
+  EXPECT_NEAR(tr.finger_left.front() + tr.finger_right.front(), 0.07, 1e-6);  // w + 30 mm
+  // Held: at the end the fingers squeeze the 40 mm box, the object has moved with the hand.
+  EXPECT_TRUE(tr.success);
+  EXPECT_NEAR(tr.finger_left.back() + tr.finger_right.back(), 0.04, 2e-3);
+  const Pose X_HO_end = tr.X_WH.back().inverse() * tr.X_WO.back();
+  EXPECT_LT((X_HO_end.translation() - hand_pose(grasp, gripper).inverse().translation()).norm(),
+            0.01);
+  // The hand moves only along its approach axis in the translational phase, with peak speed
+  // 0.5 m/s: amplitude A = v T / (2 pi n).
+  const double A = o.shake_speed * o.shake_steps * o.dt / (2 * M_PI * o.shake_cycles);
+  double max_offset = 0;
+  for (std::size_t k = 0; k < tr.time.size(); ++k) {
+    if (tr.phase[k] != static_cast<std::int8_t>(ShakePhase::Translate)) continue;
+    const Vec3d d = tr.X_WH[k].translation() - tr.X_WH.front().translation();
+    EXPECT_LT(std::hypot(d.x(), d.y()), 1e-12);
+    max_offset = std::max(max_offset, std::abs(d.z()));
+  }
+  EXPECT_NEAR(max_offset, A, 0.05 * A);
+}
+
+TEST(Shake, EarlyExitAndSettledClosingChangeFewOutcomes) {
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 1.5);
+  std::vector<ParallelJawGrasp> grasps = {centre_grasp(0.04)};
+  ShakeOptions fast = small_grid(4, 0.1, 1.0);
+  fast.num_threads = 2;
+  ShakeOptions full = fast;
+  full.settle_steps = 0;
+  full.lost_contact_steps = 0;
+  const ShakeResult a = shake_test(box, ParallelJawGripper{}, grasps, fast);
+  const ShakeResult b = shake_test(box, ParallelJawGripper{}, grasps, full);
+  int same = 0, held = 0, early = 0;
+  for (std::size_t t = 0; t < a.trial_success.size(); ++t) {
+    same += a.trial_success[t] == b.trial_success[t];
+    held += b.trial_success[t];
+    early += a.trial_ended_early[t];
+  }
+  EXPECT_GE(same, 15);  // of 16
+  EXPECT_GT(held, 0);   // mixed outcomes, and some trials did end early
+  EXPECT_LT(held, 16);
+  EXPECT_GT(early, 0);
+  EXPECT_LT(a.total_steps, b.total_steps);
+  for (std::int32_t s : b.trial_steps) EXPECT_EQ(s, 1100);
+}
+
+TEST(Shake, InertiaFloorChangesFewOutcomesWhereExactInertiaIsStable) {
+  // A heavy box (F / m g ~ 1) is steady with its exact inertia; the floor (x4.5 here) must not
+  // change what friction and gravity decide.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 1.5);
+  ShakeOptions with = small_grid(4, 0.2, 1.0);
+  with.num_threads = 2;
+  ShakeOptions without = with;
+  without.inertia_floor = 0.0;
+  const ShakeResult a = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, with);
+  const ShakeResult b = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, without);
+  int same = 0, held = 0;
+  for (std::size_t t = 0; t < a.trial_success.size(); ++t) {
+    same += a.trial_success[t] == b.trial_success[t];
+    held += a.trial_success[t];
+  }
+  EXPECT_GE(same, 15);  // of 16
+  EXPECT_GT(held, 0);   // mixed outcomes: the comparison means something
+  EXPECT_LT(held, 16);
+}
+
+TEST(Shake, BadInputIsRejectedWithAClearMessage) {
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), 0.05);
+  const ParallelJawGripper g;
+  const ShakeOptions o = small_grid(2, 0.5, 1.0);
+  auto expect_error = [&](const PhysicsObject& obj, const ParallelJawGrasp& grasp,
+                          const ShakeOptions& opt, const std::string& fragment) {
+    try {
+      shake_test(obj, g, {grasp}, opt);
+      ADD_FAILURE() << "no error for " << fragment;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  PhysicsObject bad = box;
+  bad.mass = 0;
+  expect_error(bad, centre_grasp(0.04), o, "mass");
+  bad = box;
+  bad.inertia(1, 1) = NAN;
+  expect_error(bad, centre_grasp(0.04), o, "inertia");
+  bad = box;
+  bad.inertia(0, 0) = -1;
+  expect_error(bad, centre_grasp(0.04), o, "positive-definite");
+  bad = box;
+  bad.convex_parts.clear();
+  expect_error(bad, centre_grasp(0.04), o, "convex_parts");
+  bad = box;
+  Points3f flat(4, 3);
+  flat << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0;
+  Faces ff(2, 3);
+  ff << 0, 1, 2, 1, 3, 2;
+  bad.convex_parts = {Mesh(flat, ff)};
+  expect_error(bad, centre_grasp(0.04), o, "coplanar");
+  expect_error(box, centre_grasp(0.09), o, "max_opening");
+  ParallelJawGrasp skew = centre_grasp(0.04);
+  skew.approach = Vec3d(1, 0, 1).normalized();
+  expect_error(box, skew, o, "grasps[0]");
+  ShakeOptions bo = o;
+  bo.grid = 0;
+  expect_error(box, centre_grasp(0.04), bo, "grid");
+  bo = o;
+  bo.dt = -1;
+  expect_error(box, centre_grasp(0.04), bo, "dt");
+  bo = o;
+  bo.grip_force = NAN;
+  expect_error(box, centre_grasp(0.04), bo, "grip_force");
+  EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, 1.0, o, 0), InvalidArgument);
+  EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, -1.0, o, 1), InvalidArgument);
+  // No grasps: an empty result, not an error.
+  const ShakeResult empty = shake_test(box, g, {}, o);
+  EXPECT_TRUE(empty.score.empty());
+}
+
+}  // namespace
+}  // namespace mgn

@@ -1,0 +1,172 @@
+"""The Bullet shake test through mgn.pj.physics, and its pictures (mgn.pj.show_trial)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import mgn
+from mgn.errors import InvalidArgumentError
+from mgn.hardware import ParallelJawGripper
+from mgn.pj.physics import ShakeOptions, grasp_rows, shake_scores, shake_trajectory
+from mgn.pj.show_trial import register_show_trial, render_frames, write_trial_pictures
+
+
+def box_object(size, mass):
+    """A box mesh with analytic mass properties (centre of mass at the origin)."""
+    x2, y2, z2 = (np.asarray(size, dtype=float) ** 2).tolist()
+    inertia = mass / 12.0 * np.diag([y2 + z2, x2 + z2, x2 + y2])
+    return mgn.make_box(size), mass, np.zeros(3), inertia
+
+
+def centre_grasp(width):
+    """[a, v, p1, w]: from above (+z), closing along x through the centre."""
+    return np.array([0, 0, -1, 1, 0, 0, -width / 2, 0, 0, width], dtype=float)
+
+
+def test_light_box_with_high_friction_is_held():
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.05)
+    opts = ShakeOptions(grid=2, friction_range=(1.0, 2.0), num_threads=2)
+    r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
+    assert r.score.shape == (1,) and r.trial_success.shape == (1, 2, 2)
+    assert r.score[0] == pytest.approx(1.0)
+    assert not r.trial_ended_early.any()
+    assert r.total_steps == int(r.trial_steps.sum())
+    np.testing.assert_allclose(r.frictions, [1.0, 2.0])
+    np.testing.assert_allclose(r.density_factors, [0.25, 1.0])
+
+
+def test_heavy_slippery_wide_object_is_dropped_early():
+    mesh, m, com, inertia = box_object([0.07, 0.06, 0.06], 3.0)
+    opts = ShakeOptions(grid=2, friction_range=(0.05, 0.15), num_threads=2)
+    r = shake_scores(mesh, m, com, inertia, centre_grasp(0.07)[None], options=opts)
+    assert r.score[0] == 0.0
+    assert r.early_fraction == 1.0
+    assert (r.trial_steps < opts.shake_steps + opts.rotate_steps).all()
+
+
+def test_success_rises_with_friction_for_a_fixed_grasp():
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.8)
+    opts = ShakeOptions(grid=4, friction_range=(0.05, 1.2), num_threads=2)
+    r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
+    held_per_friction = r.trial_success[0].sum(axis=1)
+    assert held_per_friction[0] == 0 and held_per_friction[-1] == 4
+    assert (np.diff(held_per_friction) >= 0).all()
+
+
+def test_threads_and_seed_give_identical_results():
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.8)
+    grasps = np.stack([centre_grasp(0.04), centre_grasp(0.04)])
+    grasps[1, 6:9] = [-0.02, 0.01, 0.015]  # off-centre contact line
+    one = ShakeOptions(grid=2, friction_range=(0.2, 1.0), seed=5, num_threads=1)
+    two = ShakeOptions(grid=2, friction_range=(0.2, 1.0), seed=5, num_threads=2)
+    a = shake_scores(mesh, m, com, inertia, grasps, options=one)
+    b = shake_scores(mesh, m, com, inertia, grasps, options=two)
+    np.testing.assert_array_equal(a.trial_success, b.trial_success)
+    np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
+    np.testing.assert_array_equal(a.score, b.score)
+
+
+def test_grasp_objects_and_rows_agree():
+    row = centre_grasp(0.04)
+    obj = SimpleNamespace(approach=row[0:3], closing=row[3:6], p1=row[6:9], width=row[9])
+    np.testing.assert_array_equal(grasp_rows([obj]), row[None])
+    np.testing.assert_array_equal(grasp_rows(row), row[None])
+
+
+def test_trajectory_reproduces_the_batch_trial_and_renders():
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.8)
+    opts = ShakeOptions(grid=2, friction_range=(0.1, 1.5), seed=2, num_threads=2)
+    r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
+    for t in range(4):
+        i, j = divmod(t, 2)
+        tr = shake_trajectory(
+            mesh,
+            m,
+            com,
+            inertia,
+            centre_grasp(0.04),
+            r.frictions[i],
+            r.density_factors[j],
+            options=opts,
+            record_every=25,
+            trial_index=t,
+        )
+        assert tr.success == bool(r.trial_success[0, i, j])
+        assert tr.steps == int(r.trial_steps[0, i, j])
+        assert tr.X_WO.shape == (len(tr.time), 4, 4) and tr.X_WH.shape == tr.X_WO.shape
+        assert tr.time[0] == 0.0 and tr.time[-1] == pytest.approx(tr.steps * opts.dt)
+    # The held trial: frames differ as the hand shakes, and the gripper is drawn in them.
+    frames = render_frames(tr, [mesh], size=64)
+    assert len(frames) == len(tr.time) and frames[0].size == (64, 64)
+    a, b = np.asarray(frames[0]), np.asarray(frames[len(frames) // 2])
+    assert np.abs(a.astype(int) - b.astype(int)).sum() > 0
+
+
+def test_write_trial_pictures(tmp_path):
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.05)
+    tr = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 1.0, 1.0, record_every=60)
+    gif, png = write_trial_pictures(tr, [mesh], tmp_path / "trial", size=48, strip_frames=4)
+    with Image.open(gif) as im:
+        assert im.format == "GIF" and im.n_frames == len(tr.time)
+    with Image.open(png) as im:
+        assert im.size == (4 * 48, 48)
+
+
+def test_show_trial_action(tmp_path, capsys):
+    parser = argparse.ArgumentParser()
+    register_show_trial(parser.add_subparsers(dest="action", required=True))
+    out = tmp_path / "cube"
+    args = parser.parse_args(["show-trial", "box_cube", "--out", str(out), "--every", "80"])
+    assert args.func(args) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["success"] is True
+    assert (tmp_path / "cube.gif").exists() and (tmp_path / "cube_strip.png").exists()
+
+
+@pytest.mark.parametrize(
+    ("change", "fragment"),
+    [
+        ({"mass": 0.0}, "mass"),
+        ({"mass": -1.0}, "mass"),
+        ({"inertia": np.full((3, 3), np.nan)}, "inertia"),
+        ({"inertia": -np.eye(3)}, "positive-definite"),
+        ({"grasps": np.zeros((1, 9))}, "(N, 10)"),
+        ({"grasps": centre_grasp(0.09)[None]}, "max_opening"),
+        ({"options": ShakeOptions(grid=0)}, "grid"),
+        ({"options": ShakeOptions(friction_range=(2.0, 1.0))}, "friction_max"),
+        ({"options": ShakeOptions(grip_force=-1.0)}, "grip_force"),
+        ({"gripper": ParallelJawGripper(max_opening=0.03)}, "max_opening"),
+        ({"gripper": SimpleNamespace(name="x")}, "gripper"),
+        ({"mesh": []}, "convex_parts"),
+    ],
+)
+def test_bad_input_is_rejected_with_a_clear_error(change, fragment):
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.05)
+    kw = {
+        "mesh": mesh,
+        "mass": m,
+        "com": com,
+        "inertia": inertia,
+        "grasps": centre_grasp(0.04)[None],
+        "gripper": None,
+        "options": ShakeOptions(grid=1),
+    }
+    kw.update(change)
+    with pytest.raises(InvalidArgumentError) as e:
+        shake_scores(
+            kw["mesh"],
+            kw["mass"],
+            kw["com"],
+            kw["inertia"],
+            kw["grasps"],
+            kw["gripper"],
+            kw["options"],
+        )
+    assert isinstance(e.value, ValueError)
+    assert fragment in str(e.value)
