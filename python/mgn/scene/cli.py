@@ -99,13 +99,57 @@ def _register_drop(ssub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_drop)
 
 
+def _cmd_render(args: argparse.Namespace) -> int:
+    from mgn.render.views import render_views, tote_mesh
+    from mgn.scene.scene import Scene
+
+    scene = Scene.from_json(args.scene)
+    if len(scene) == 0:
+        raise ValueError(f"'{args.scene}': the scene has no objects to render")
+    meshes: dict[tuple[str, str], object] = {}
+    objects = []
+    for k, inst in enumerate(scene.instances):
+        key = (inst.name, inst.source)
+        if key not in meshes:  # copies of an object share one mesh (uploaded once)
+            meshes[key] = scene.mesh(k)
+        objects.append((meshes[key], inst.X_WO, inst.instance_id))
+    views = render_views(
+        objects,
+        tote_mesh(scene.tote),
+        views=args.view,
+        out_dir=args.out,
+        rig_seed=scene.seed if args.rig_seed is None else args.rig_seed,
+        sensor=args.sensor,
+        randomize=not args.no_randomize,
+        seed=scene.seed,
+    )
+    for v in views:
+        print(f"view {v.index}: {args.out}/{v.index}_rgb.png, _depth.png, _instances.png")
+    return 0
+
+
+def _register_render(ssub: argparse._SubParsersAction) -> None:
+    p = ssub.add_parser("render", help="render views of a dropped scene (RGB, depth, instances)")
+    p.add_argument("scene", help="scene JSON written by `mgn scene drop`")
+    p.add_argument(
+        "--view", type=int, nargs="+", default=[0], help="views of the 37-view rig (default 0)"
+    )
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--rig-seed", type=int, help="camera rig seed (default: the scene seed)")
+    p.add_argument(
+        "--sensor", choices=["ideal", "structured-light", "tof"], default="structured-light"
+    )
+    p.add_argument("--no-randomize", action="store_true", help="fixed light and colours")
+    p.set_defaults(func=_cmd_render)
+
+
 #: Functions adding one action each to the ``scene`` subparsers.
-ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [_register_drop]
+ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [_register_drop, _register_render]
 
 
 def register(sub: argparse._SubParsersAction) -> argparse._SubParsersAction:
     """Add the ``scene`` command group to the top-level subparsers; returns its subparsers."""
-    scene = sub.add_parser("scene", help="compose and drop scenes")
+    scene = sub.add_parser("scene", help="compose, drop and render scenes")
     ssub = scene.add_subparsers(dest="scene_command", metavar="ACTION", required=True)
     for add in ACTIONS:
         add(ssub)
