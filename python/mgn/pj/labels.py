@@ -9,23 +9,20 @@ simulation score. Everything is in metres here; the writer converts to centimetr
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import h5py
 import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import InvalidArgumentError
 from mgn.geometry import Mesh, sample_surface
 from mgn.hardware import ParallelJawGripper
+from mgn.io.grasp_file import replace_grasp_group
 from mgn.pj.sampler import AntipodalSampler, pj_wrench_scores
 
 M_TO_CM = 100.0
@@ -245,35 +242,18 @@ def write_pj_labels(hdf5_path: str | os.PathLike[str], labels: PjLabels) -> None
     attributes. Other groups (suction labels, keypoints) are kept. The file is updated on a
     temporary copy that replaces the original only when complete.
     """
-    path = Path(hdf5_path)
-    if not path.is_file():
-        raise IoError(f"write_pj_labels: '{path}' does not exist (export the object first)")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        shutil.copyfile(path, tmp)
-        f4 = np.float32
-        with h5py.File(tmp, "a") as h5:
-            if "grasps/paralleljaw" in h5:
-                del h5["grasps/paralleljaw"]
-            g = h5.require_group("grasps").create_group("paralleljaw")
-            g.create_dataset("pregrasp_transform", data=labels.pregrasp_transform().reshape(-1, 10))
-            g.create_dataset("quality_score", data=labels.quality_score.astype(f4))
-            g.create_dataset(
-                "quality_score_simulation", data=labels.quality_score_simulation.astype(f4)
-            )
-            g.create_dataset("score_wrench", data=labels.score_wrench.astype(f4))
-            meta = h5.require_group("metadata")
-            for key, value in labels.metadata.items():
-                meta.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
-        shutil.copymode(path, tmp)
-        os.replace(tmp, path)
-    except OSError as e:
-        raise IoError(f"write_pj_labels: cannot update '{path}': {e}") from e
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    replace_grasp_group(
+        hdf5_path,
+        "grasps/paralleljaw",
+        {
+            "pregrasp_transform": labels.pregrasp_transform().reshape(-1, 10),
+            "quality_score": labels.quality_score,
+            "quality_score_simulation": labels.quality_score_simulation,
+            "score_wrench": labels.score_wrench,
+        },
+        labels.metadata,
+        who="write_pj_labels",
+    )
 
 
 def read_pj_labels(hdf5_path: str | os.PathLike[str]) -> dict[str, npt.NDArray[np.float64]]:

@@ -7,22 +7,17 @@ the object (FCL), and compute the suction wrench score with gravity along -z of 
 
 from __future__ import annotations
 
-import json
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 
-import h5py
 import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
 from mgn.collision import CollisionModel, collide
-from mgn.errors import IoError
 from mgn.geometry import Mesh, make_cylinder, sample_surface
 from mgn.hardware import SuctionCup
+from mgn.io.grasp_file import replace_grasp_group
 from mgn.suction.seal import SealModel, SealModelName, suction_wrench_scores
 
 M_TO_CM = 100.0
@@ -163,34 +158,17 @@ def write_suction_labels(hdf5_path: str | os.PathLike[str], labels: SuctionLabel
     ``failure_reason`` (K,), all float32, plus the metadata attributes. The file is updated on a
     temporary copy that replaces the original only when complete.
     """
-    path = Path(hdf5_path)
-    if not path.is_file():
-        raise IoError(f"write_suction_labels: '{path}' does not exist (export the object first)")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        shutil.copyfile(path, tmp)
-        f4 = np.float32
-        with h5py.File(tmp, "a") as h5:
-            if "grasps/suctioncup" in h5:
-                del h5["grasps/suctioncup"]
-            g = h5.require_group("grasps").create_group("suctioncup")
-            pre = np.concatenate([labels.approach, labels.points * M_TO_CM], axis=1).astype(f4)
-            g.create_dataset("pregrasp_transform", data=pre.reshape(-1, 6))
-            g.create_dataset("quality_score", data=labels.score.astype(f4))
-            g.create_dataset("score_wrench", data=labels.wrench.astype(f4))
-            g.create_dataset("failure_reason", data=labels.reason.astype(f4))
-            if "grasps/paralleljaw" not in h5:  # readers open it even without PJ labels
-                pj = h5.require_group("grasps/paralleljaw")
-                pj.create_dataset("pregrasp_transform", data=np.zeros((0, 10), f4))
-                pj.create_dataset("quality_score", data=np.zeros((0,), f4))
-            meta = h5.require_group("metadata")
-            for key, value in labels.metadata.items():
-                meta.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
-        os.replace(tmp, path)
-    except OSError as e:
-        raise IoError(f"write_suction_labels: cannot update '{path}': {e}") from e
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    replace_grasp_group(
+        hdf5_path,
+        "grasps/suctioncup",
+        {
+            "pregrasp_transform": np.concatenate(
+                [labels.approach, labels.points * M_TO_CM], axis=1
+            ).reshape(-1, 6),
+            "quality_score": labels.score,
+            "score_wrench": labels.wrench,
+            "failure_reason": labels.reason,
+        },
+        labels.metadata,
+        who="write_suction_labels",
+    )
