@@ -15,6 +15,7 @@ import numpy.typing as npt
 
 from mgn.geometry import Mesh
 from mgn.raytrace import RayScene, camera_rays
+from mgn.render.camera import look_at
 
 
 @dataclass(frozen=True)
@@ -31,24 +32,6 @@ class Snapshot:
     depth: npt.NDArray[np.float32]
     K: npt.NDArray[np.float64]
     X_WC: npt.NDArray[np.float64]
-
-
-def look_at(
-    eye: npt.ArrayLike, target: npt.ArrayLike, up: Sequence[float] = (0, 0, 1)
-) -> np.ndarray:
-    """Camera pose X_WC (OpenCV: x right, y down, z forward) at ``eye`` looking at ``target``."""
-    eye, target = np.asarray(eye, float), np.asarray(target, float)
-    z = target - eye
-    z /= np.linalg.norm(z)
-    up_v = np.asarray(up, float)
-    if abs(float(np.dot(up_v, z))) > 0.99:
-        up_v = np.array([0.0, 1.0, 0.0])
-    x = np.cross(z, up_v)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    X = np.eye(4)
-    X[:3, 0], X[:3, 1], X[:3, 2], X[:3, 3] = x, y, z, eye
-    return X
 
 
 def snapshot(
