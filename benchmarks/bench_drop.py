@@ -106,10 +106,12 @@ def pybullet_drop(p: Any, objects: list, prepared: tuple) -> dict[str, Any]:
         bodies = []
         for k, spec in enumerate(objects):
             com = np.asarray(props[k].center_of_mass)
+            files = _part_files(spec.name, parts[k])
             shape = p.createCollisionShapeArray(
-                [p.GEOM_MESH] * len(parts[k]),
-                vertices=[np.asarray(m.vertices, np.float64).tolist() for m in parts[k]],
-                collisionFramePositions=[list(-com)] * len(parts[k]),
+                [p.GEOM_MESH] * len(files),
+                fileNames=files,
+                meshScales=[[1.0, 1.0, 1.0]] * len(files),
+                collisionFramePositions=[list(-com)] * len(files),
                 physicsClientId=cid,
             )
             X = out["X_WO_release"][k]
@@ -148,6 +150,28 @@ def pybullet_drop(p: Any, objects: list, prepared: tuple) -> dict[str, Any]:
         return {"steps": steps, "settled": bool(np.all(at_rest[active] >= rest_steps))}
     finally:
         p.disconnect(physicsClientId=cid)
+
+
+_PART_DIR: dict[str, list[str]] = {}
+
+
+def _part_files(name: str, parts: list) -> list[str]:
+    """One OBJ per convex part (pybullet builds a convex hull from each mesh file)."""
+    import tempfile
+    from pathlib import Path
+
+    if name not in _PART_DIR:
+        root = Path(tempfile.mkdtemp(prefix="mgn_bench_drop_"))
+        files = []
+        for i, m in enumerate(parts):
+            path = root / f"{name}_{i}.obj"
+            v, f = np.asarray(m.vertices), np.asarray(m.faces) + 1
+            lines = [f"v {a:.7g} {b:.7g} {c:.7g}" for a, b, c in v]
+            lines += [f"f {a} {b} {c}" for a, b, c in f]
+            path.write_text("\n".join(lines) + "\n")
+            files.append(str(path))
+        _PART_DIR[name] = files
+    return _PART_DIR[name]
 
 
 def _quat_xyzw(R: np.ndarray) -> list[float]:

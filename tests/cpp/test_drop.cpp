@@ -215,3 +215,25 @@ TEST(Drop, BadInputIsRejected) {
   bigger.inner_length = 0.8;
   EXPECT_THROW(mgn::drop_objects({good}, tote, bigger, {}), mgn::InvalidArgument);
 }
+
+TEST(Drop, ObjectsReleasedFromOnePointAreStackedWithoutOverlap) {
+  // Twenty copies drawn at the same point: the release placement must lift each one above the
+  // others (this once looped forever on a floating-point tie) and the release boxes must not
+  // overlap.
+  const mgn::ToteBox box;
+  const mgn::Mesh cube = mgn::make_box({0.05, 0.05, 0.05});
+  std::vector<mgn::DropObject> objects(20, object_of(cube, 500, "cube"));
+  mgn::DropOptions o;
+  o.window_min = {0.01, 0.01, 0.3};
+  o.window_max = {0.01, 0.01, 0.3};
+  o.max_time = 0.3;
+  const auto r = mgn::drop_objects(objects, tote_mesh(box), box, o);
+  std::vector<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> b;
+  for (const auto& d : r.objects) b.push_back(cube.transformed(d.X_WO_release).bounds());
+  for (std::size_t i = 0; i < b.size(); ++i)
+    for (std::size_t j = i + 1; j < b.size(); ++j) {
+      const bool overlap = (b[i].row(0).array() < b[j].row(1).array()).all() &&
+                           (b[j].row(0).array() < b[i].row(1).array()).all();
+      EXPECT_FALSE(overlap) << i << " and " << j;
+    }
+}

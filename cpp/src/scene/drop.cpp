@@ -347,7 +347,7 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
       Aabb c{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};
       for (const Aabb& other : placed)
         if (c.overlaps(other, kGap)) {
-          lift = other.hi.z() + kGap - b.lo.z();
+          lift = other.hi.z() + 2 * kGap - b.lo.z();  // 2x: no float ping-pong at the boundary
           moved = true;
           c = Aabb{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};
         }
