@@ -98,7 +98,8 @@ class ParallelJawGripper(_YamlDataclass):
         collision_margin: extra opening used for collision checks, m (opening = min(w + margin,
             max_opening)).
         finger_size: finger box (thickness along closing x, width along y, length along z), m.
-        palm_size: palm box (x, y, z), m, sitting between the flange and the fingers.
+        palm_size: palm box (x along closing, y, z), m, between the flange and the fingers;
+            Franka-hand-like: long along the closing axis.
         friction: finger pad Coulomb friction coefficient.
         palm_mesh, finger_left_mesh, finger_right_mesh: a user gripper from mesh files (all three
             or none): closed meshes in the hand frame (origin at the flange, z = approach,
@@ -114,7 +115,7 @@ class ParallelJawGripper(_YamlDataclass):
     contact_from_tip: float = 0.008
     collision_margin: float = 0.030
     finger_size: tuple[float, float, float] = (0.010, 0.020, 0.050)
-    palm_size: tuple[float, float, float] = (0.060, 0.200, 0.060)
+    palm_size: tuple[float, float, float] = (0.200, 0.060, 0.060)
     friction: float = 1.0
     palm_mesh: str | None = None
     finger_left_mesh: str | None = None

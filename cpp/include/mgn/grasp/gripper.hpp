@@ -26,7 +26,8 @@ struct ParallelJawGripper {
   /// Finger box: thickness along x (closing), width along y, length along z, m.
   Vec3d finger_size = Vec3d(0.010, 0.020, 0.050);
   /// Palm box (x, y, z), m; it sits directly above the fingers, between them and the flange.
-  Vec3d palm_size = Vec3d(0.060, 0.200, 0.060);
+  /// Franka-hand-like: the housing is long along the closing axis x (about 200 x 60 mm).
+  Vec3d palm_size = Vec3d(0.200, 0.060, 0.060);
   double friction = 1.0;  ///< finger pad Coulomb friction coefficient
 
   /// User gripper from meshes (all three set, or none: then the parametric boxes are used).
