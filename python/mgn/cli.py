@@ -132,11 +132,11 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
 
     from mgn.geometry import load_mesh, mass_properties
     from mgn.hardware import SuctionCup
-    from mgn.io.model_folder import read_model_folder
+    from mgn.io.model_folder import object_folders, read_model_folder
     from mgn.suction import label_object, write_suction_labels
 
     root = Path(args.root)
-    folders = sorted(p for p in (root / "models").glob("[0-9][0-9][0-9]") if p.is_dir())
+    folders = object_folders(root)
     if args.objects:
         wanted = set(args.objects)
         folders = [

@@ -236,6 +236,11 @@ class ModelFolder:
     metadata: dict[str, Any]
 
 
+def object_folders(root: str | os.PathLike[str]) -> list[Path]:
+    """The object folders ``models/NNN`` of an export root, sorted by id (may be empty)."""
+    return sorted(p for p in (Path(root) / "models").glob("[0-9][0-9][0-9]") if p.is_dir())
+
+
 def read_model_folder(path: str | os.PathLike[str]) -> ModelFolder:
     """Read an object folder written by mgn or MetaGraspNet (keypoints converted to metres)."""
     folder = Path(path)

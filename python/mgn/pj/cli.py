@@ -29,13 +29,15 @@ def _physics_scorer(args: argparse.Namespace, gripper) -> PhysicsScorer:
 
 def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path | None]]:
     """(mesh file, hdf5 file, model folder or None) for each PATH."""
+    from mgn.io.model_folder import object_folders
+
     targets = []
     for raw in paths:
         p = Path(raw)
         if p.is_dir() and (p / "textured.obj").is_file():
             targets.append((p / "textured.obj", p / "textured.obj.hdf5", p))
         elif p.is_dir() and (p / "models").is_dir():
-            folders = sorted(f for f in (p / "models").glob("[0-9][0-9][0-9]") if f.is_dir())
+            folders = object_folders(p)
             if not folders:
                 raise ValueError(f"no object folders under '{p / 'models'}'")
             targets.extend((f / "textured.obj", f / "textured.obj.hdf5", f) for f in folders)
