@@ -1,0 +1,306 @@
+"""Read a dataset back: ``mgn.Dataset(DIR)`` (lazy; SI units; also original MetaGraspNet folders).
+
+Layout (FORMAT.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` object folders and
+``DIR/scene<N>/`` scene folders with the files of :mod:`mgn.io.scene_format`. Nothing is read
+before it is asked for, and what is read is kept (a :class:`View` caches its arrays).
+
+Units: the files store centimetres; everything returned here is in metres (the conversion table
+is :data:`mgn.io.scene_format.CM_RULES`), except the ``{v}_order.json`` content, which is
+returned as stored (its ``depth_diff`` in cm).
+
+Example::
+
+    ds = mgn.Dataset("out")
+    for scene in ds.scenes():
+        view = scene.view(0)
+        rgb, depth_m = view.rgb, view.depth
+        pj = view.grasps("paralleljaw")          # non-colliding, camera frame, metres
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import re
+import zipfile
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+import numpy.typing as npt
+
+from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.scene_format import M_TO_CM, from_cm
+from mgn.render.camera import Intrinsics
+
+__all__ = ["Dataset", "SceneFolder", "View"]
+
+_SCENE_RE = re.compile(r"^scene(\d+)$")
+_VIEW_RE = re.compile(r"^(\d+)_rgb\.png$")
+
+
+def _read_json(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise IoError(f"'{path}' does not exist") from None
+    except (OSError, ValueError) as e:
+        raise IoError(f"'{path}' is not readable JSON: {e}") from e
+
+
+def intrinsics_from_params(p: dict[str, Any]) -> Intrinsics:
+    """Intrinsics from a ``{v}_camera_params.json`` (mgn's px keys, or MetaGraspNet's focal
+    length and apertures in mm with the principal point at the image centre)."""
+    if all(k in p for k in ("fx", "fy", "cx", "cy", "width", "height")):
+        return Intrinsics(int(p["width"]), int(p["height"]), float(p["fx"]), float(p["fy"]),
+                          float(p["cx"]), float(p["cy"]))  # fmt: skip
+    try:
+        w = int(p["resolution"]["width"])
+        h = int(p["resolution"]["height"])
+        f = float(p["focal_length"])
+        fx = f * w / float(p["horizontal_aperture"])
+        fy = f * h / float(p["vertical_aperture"])
+    except (KeyError, TypeError, ValueError, ZeroDivisionError) as e:
+        raise IoError(f"camera params lack fx/fy/cx/cy and the MetaGraspNet keys: {e}") from e
+    return Intrinsics(w, h, fx, fy, w / 2.0, h / 2.0)
+
+
+class View:
+    """One view of a scene folder (lazy; arrays are read on first access and kept)."""
+
+    def __init__(self, folder: Path, index: int) -> None:
+        self.folder = folder
+        self.index = index
+
+    def __repr__(self) -> str:
+        return f"View({str(self.folder)!r}, {self.index})"
+
+    def path(self, suffix: str) -> Path:
+        """``folder / f"{index}{suffix}"``, e.g. ``path("_rgb.png")``."""
+        return self.folder / f"{self.index}{suffix}"
+
+    @cached_property
+    def rgb(self) -> npt.NDArray[np.uint8]:
+        """(H, W, 3) uint8."""
+        from PIL import Image
+
+        try:
+            with Image.open(self.path("_rgb.png")) as im:
+                return np.asarray(im.convert("RGB"))
+        except OSError as e:
+            raise IoError(f"'{self.path('_rgb.png')}' is not a readable PNG: {e}") from e
+
+    @cached_property
+    def npz(self) -> dict[str, np.ndarray]:
+        """All arrays of ``{v}.npz`` as stored (depth in cm)."""
+        p = self.path(".npz")
+        try:
+            data = p.read_bytes()
+        except FileNotFoundError:
+            raise IoError(f"'{p}' does not exist") from None
+        except OSError as e:
+            raise IoError(f"'{p}' is not readable: {e}") from e
+        try:
+            with np.load(io.BytesIO(data), allow_pickle=False) as z:
+                return {k: z[k] for k in z.files}
+        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+            raise IoError(f"'{p}' is not a readable npz: {e}") from e
+
+    @property
+    def depth(self) -> npt.NDArray[np.float32]:
+        """(H, W) sensor z-depth, m, NaN invalid."""
+        return (self.npz["depth"] / np.float32(M_TO_CM)).astype(np.float32)
+
+    @property
+    def depth_ideal(self) -> npt.NDArray[np.float32] | None:
+        """(H, W) noise-free z-depth, m (mgn files only; None otherwise)."""
+        d = self.npz.get("depth_ideal")
+        return None if d is None else (d / np.float32(M_TO_CM)).astype(np.float32)
+
+    @property
+    def instances(self) -> npt.NDArray[np.int32]:
+        """(H, W) contiguous instance ids, 0 background."""
+        return self.npz["instances_objects"].astype(np.int32)
+
+    @property
+    def semantic(self) -> npt.NDArray[np.int32]:
+        """(H, W) category ids, 0 background."""
+        return self.npz["instances_semantic"].astype(np.int32)
+
+    @property
+    def occlusion_map(self) -> npt.NDArray[np.float32]:
+        """(H, W) occlusion rate of each visible pixel's object."""
+        return self.npz["occlusion"].astype(np.float32)
+
+    @property
+    def amodal(self) -> npt.NDArray[np.bool_]:
+        """(N, H, W) amodal masks (row i = instance i + 1)."""
+        return self.npz["occlusion_objects"].astype(bool)
+
+    @property
+    def num_instances(self) -> int:
+        """N, the number of instances of the view's scene."""
+        return int(self.npz["occlusion_objects"].shape[0])
+
+    @cached_property
+    def hdf5(self) -> dict[str, np.ndarray]:
+        """Every dataset of ``{v}_scene.hdf5`` by path, lengths converted to metres."""
+        p = self.path("_scene.hdf5")
+        out: dict[str, np.ndarray] = {}
+        try:
+            with h5py.File(p, "r") as h5:
+
+                def visit(name: str, obj: Any) -> None:
+                    if isinstance(obj, h5py.Dataset):
+                        out[name] = from_cm(name, obj[()])
+
+                h5.visititems(visit)
+        except FileNotFoundError:
+            raise IoError(f"'{p}' does not exist") from None
+        except OSError as e:
+            raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
+        return out
+
+    @property
+    def X_WC(self) -> npt.NDArray[np.float64]:
+        """(4, 4) camera pose in the world (tote frame), m."""
+        return self.hdf5["camera/pose_relative_to_world"].reshape(4, 4)
+
+    @property
+    def X_CO(self) -> npt.NDArray[np.float64]:
+        """(N, 4, 4) object poses in the camera frame, m."""
+        return self.hdf5["objects/poses_relative_to_camera"]
+
+    def grasps(self, kind: str, *, colliding: bool = False) -> dict[str, np.ndarray]:
+        """The scene grasps of ``kind`` ("paralleljaw" or "suctioncup"), camera frame, metres:
+        the datasets of ``(non_)colliding_grasps/<kind>/`` by name (empty dict if absent)."""
+        if kind not in ("paralleljaw", "suctioncup"):
+            raise InvalidArgumentError(
+                f"grasps: kind must be paralleljaw or suctioncup, got {kind!r}"
+            )
+        prefix = f"{'colliding' if colliding else 'non_colliding'}_grasps/{kind}/"
+        return {k[len(prefix) :]: v for k, v in self.hdf5.items() if k.startswith(prefix)}
+
+    @cached_property
+    def order(self) -> dict[str, Any]:
+        """``{v}_order.json`` as stored (keys "1".."N"; depth_diff in cm)."""
+        return _read_json(self.path("_order.json"))
+
+    @cached_property
+    def layout(self) -> dict[str, Any] | None:
+        """``{v}_layout.json`` (mgn: bin relations, difficulty), None if absent."""
+        p = self.path("_layout.json")
+        return _read_json(p) if p.exists() else None
+
+    @cached_property
+    def relation_matrix(self) -> npt.NDArray[np.int8]:
+        """(N, N) int8 from ``{v}_order.csv``: M[i][j] = -1 if instance j+1 occludes i+1."""
+        p = self.path("_order.csv")
+        try:
+            text = p.read_text().strip()
+        except OSError as e:
+            raise IoError(f"'{p}' is not readable: {e}") from e
+        if not text:
+            return np.zeros((0, 0), np.int8)
+        try:
+            rows = [[int(float(x)) for x in line.split(",")] for line in text.splitlines()]
+            m = np.array(rows, np.int8)
+        except ValueError as e:
+            raise IoError(f"'{p}' is not an N x N comma-separated matrix: {e}") from e
+        if m.ndim != 2 or m.shape[0] != m.shape[1]:
+            raise IoError(f"'{p}' must be N x N, got {m.shape}")
+        return m
+
+    @cached_property
+    def intrinsics(self) -> Intrinsics:
+        """The camera intrinsics of the view."""
+        return intrinsics_from_params(_read_json(self.path("_camera_params.json")))
+
+
+class SceneFolder:
+    """One ``scene<N>`` folder."""
+
+    def __init__(self, folder: Path, scene_id: int) -> None:
+        self.folder = folder
+        self.scene_id = scene_id
+
+    def __repr__(self) -> str:
+        return f"SceneFolder({str(self.folder)!r})"
+
+    @cached_property
+    def view_ids(self) -> list[int]:
+        """Indices of the views present (by their ``{v}_rgb.png``), ascending."""
+        ids = [int(m.group(1)) for p in self.folder.iterdir() if (m := _VIEW_RE.match(p.name))]
+        return sorted(ids)
+
+    def view(self, v: int) -> View:
+        """View ``v``; IoError if the scene has no such view."""
+        if v not in self.view_ids:
+            raise IoError(f"{self.folder}: no view {v} (views: {self.view_ids})")
+        return View(self.folder, v)
+
+    def views(self) -> list[View]:
+        """All views, ascending."""
+        return [View(self.folder, v) for v in self.view_ids]
+
+    @cached_property
+    def scene_json(self) -> dict[str, Any] | None:
+        """mgn's ``scene.json`` (objects, poses, tote, seed), None for original MGN folders."""
+        p = self.folder / "scene.json"
+        return _read_json(p) if p.exists() else None
+
+    @cached_property
+    def scene_gt(self) -> dict[str, Any] | None:
+        """``scene_gt.json`` (per view: cam_R_m2c, cam_t_m2c in cm, obj_id), None if absent."""
+        p = self.folder / "scene_gt.json"
+        return _read_json(p) if p.exists() else None
+
+
+class Dataset:
+    """A dataset folder written by ``mgn generate`` (or an original MetaGraspNet download)."""
+
+    def __init__(self, root: str | os.PathLike[str]) -> None:
+        self.root = Path(root)
+        if not self.root.is_dir():
+            raise IoError(f"Dataset: '{self.root}' is not a folder")
+
+    def __repr__(self) -> str:
+        return f"Dataset({str(self.root)!r})"
+
+    @cached_property
+    def info(self) -> dict[str, Any] | None:
+        """``dataset.json`` (schema version, config, versions, seed), None if absent."""
+        p = self.root / "dataset.json"
+        return _read_json(p) if p.exists() else None
+
+    @cached_property
+    def scene_ids(self) -> list[int]:
+        """Ids N of the complete ``scene<N>`` folders, ascending."""
+        ids = [
+            int(m.group(1))
+            for p in self.root.iterdir()
+            if p.is_dir() and (m := _SCENE_RE.match(p.name))
+        ]
+        return sorted(ids)
+
+    def scene(self, n: int) -> SceneFolder:
+        """Scene ``n``; IoError if absent."""
+        if n not in self.scene_ids:
+            raise IoError(f"{self.root}: no scene{n} (scenes: {self.scene_ids[:20]}...)")
+        return SceneFolder(self.root / f"scene{n}", n)
+
+    def scenes(self) -> list[SceneFolder]:
+        """All scenes, ascending."""
+        return [SceneFolder(self.root / f"scene{n}", n) for n in self.scene_ids]
+
+    def model_folders(self) -> list[Path]:
+        """The object folders ``models/<id>/``."""
+        from mgn.io.model_folder import object_folders
+
+        return object_folders(self.root)
+
+    def __len__(self) -> int:
+        return len(self.scene_ids)

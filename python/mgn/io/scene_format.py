@@ -1,0 +1,290 @@
+"""The MetaGraspNet scene folder (FORMAT.md): the one writer of a labelled view, and its schema.
+
+A scene folder ``<root>/scene<N>/`` holds, per view ``v``: ``{v}_rgb.png``, ``{v}.npz``,
+``{v}_depth.png``, ``{v}_scene.hdf5``, ``{v}_order.csv``, ``{v}_order.json``,
+``{v}_layout.json`` (mgn: bin relations and the difficulty level) and
+``{v}_camera_params.json``; and once per scene ``scene_gt.json``. Lengths are **centimetres** in
+these files (MetaGraspNet's convention) and SI everywhere else in mgn: :class:`ViewRecord` holds
+metres, the writer converts, and :mod:`mgn.io.dataset` converts back with the same table
+(:data:`CM_RULES`).
+
+Every file is written atomically, and byte-for-byte reproducibly (no timestamps in the zip entries
+of the npz nor in the HDF5 objects), so the same seed gives files with the same checksums.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import zipfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+import numpy.typing as npt
+
+from mgn.io.atomic import atomic_write_bytes, atomic_write_text
+from mgn.render.camera import Intrinsics
+
+__all__ = [
+    "CM_RULES",
+    "HDF5_FLOAT_KEYS",
+    "M_TO_CM",
+    "ViewRecord",
+    "hdf5_bytes",
+    "npz_bytes",
+    "from_cm",
+    "png_bytes",
+    "scene_gt_entries",
+    "to_cm",
+    "view_file_names",
+    "write_scene_gt",
+    "write_view",
+]
+
+M_TO_CM = 100.0
+
+#: How lengths are stored in the scene HDF5 (path suffix -> what is in centimetres):
+#: ``"pose"``: the translation column of (…, 4, 4) matrices; ``"xyz"``: columns 1..3 of (…, 4)
+#: rows [id or score, x, y, z]; ``"all"``: every value.
+CM_RULES: tuple[tuple[str, str], ...] = (
+    ("poses_relative_to_camera", "pose"),
+    ("pose_relative_to_world", "pose"),
+    ("contact_width", "all"),
+    ("keypts_relative_to_camera", "xyz"),
+)
+
+#: Datasets every view's ``{v}_scene.hdf5`` has (empty groups have zero-length datasets).
+HDF5_FLOAT_KEYS: tuple[str, ...] = (
+    "camera/pose_relative_to_world",
+    "objects/poses_relative_to_camera",
+    "objects/categories",
+    "objects/bbox_loose",
+)
+
+
+def _rule(path: str) -> str | None:
+    for suffix, rule in CM_RULES:
+        if path.endswith(suffix):
+            return rule
+    return None
+
+
+def _scale(path: str, a: np.ndarray, factor: float) -> np.ndarray:
+    rule = _rule(path)
+    out = np.array(a, dtype=np.float64)
+    if rule is None or out.size == 0:
+        return out
+    if rule == "pose":
+        out[..., :3, 3] *= factor
+    elif rule == "xyz":
+        out[..., 1:4] *= factor
+    else:
+        out *= factor
+    return out
+
+
+def to_cm(path: str, a: npt.ArrayLike) -> np.ndarray:
+    """The array stored at HDF5 ``path`` converted from metres to the file's centimetres."""
+    return _scale(path, np.asarray(a), M_TO_CM)
+
+
+def from_cm(path: str, a: npt.ArrayLike) -> np.ndarray:
+    """The inverse of :func:`to_cm` (file centimetres -> metres)."""
+    return _scale(path, np.asarray(a), 1.0 / M_TO_CM)
+
+
+@dataclass(frozen=True)
+class ViewRecord:
+    """Everything written for one view (SI units, camera frame OpenCV).
+
+    Attributes:
+        index: view index v.
+        rgb: (H, W, 3) uint8.
+        depth: (H, W) sensor z-depth, m, NaN invalid.
+        depth_ideal: (H, W) noise-free z-depth, m, NaN where nothing is seen.
+        valid_depth: (H, W) bool.
+        instances: (H, W) contiguous instance ids 0..N (0 background).
+        semantic: (H, W) category id of the visible object, 0 background.
+        occlusion_map: (H, W) each visible pixel's object occlusion rate in [0, 1].
+        amodal: (N, H, W) bool amodal masks (row i = instance i + 1).
+        intrinsics: the camera intrinsics.
+        scene_hdf5: ``{v}_scene.hdf5`` datasets by path (FORMAT.md), lengths in metres.
+        order_json: ``{v}_order.json`` content (its lengths already in cm, as FORMAT.md says).
+        order_csv: ``{v}_order.csv`` text.
+        layout_json: ``{v}_layout.json`` content (mgn: bin relations, difficulty).
+        extra_npz: further ``{v}.npz`` arrays under mgn's own keys (e.g. ``com_heatmap``).
+    """
+
+    index: int
+    rgb: npt.NDArray[np.uint8]
+    depth: npt.NDArray[np.float32]
+    depth_ideal: npt.NDArray[np.float32]
+    valid_depth: npt.NDArray[np.bool_]
+    instances: npt.NDArray[np.integer]
+    semantic: npt.NDArray[np.integer]
+    occlusion_map: npt.NDArray[np.float32]
+    amodal: npt.NDArray[np.bool_]
+    intrinsics: Intrinsics
+    scene_hdf5: Mapping[str, np.ndarray]
+    order_json: Mapping[str, Any]
+    order_csv: str
+    layout_json: Mapping[str, Any]
+    extra_npz: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        h, w = self.intrinsics.height, self.intrinsics.width
+        v = self.index
+        for name in ("depth", "depth_ideal", "valid_depth", "instances", "semantic",
+                     "occlusion_map"):  # fmt: skip
+            shape = np.shape(getattr(self, name))
+            if shape != (h, w):
+                raise ValueError(f"ViewRecord {v}: {name} must be ({h}, {w}), got {shape}")
+        if np.shape(self.rgb) != (h, w, 3):
+            raise ValueError(f"ViewRecord {v}: rgb must be ({h}, {w}, 3), got {np.shape(self.rgb)}")
+        amodal = np.shape(self.amodal)
+        if len(amodal) != 3 or amodal[1:] != (h, w):
+            raise ValueError(f"ViewRecord {v}: amodal must be (N, {h}, {w}), got {amodal}")
+        n = amodal[0]
+        top = int(np.max(self.instances, initial=0))
+        if top > n or int(np.min(self.instances, initial=0)) < 0:
+            raise ValueError(f"ViewRecord {v}: instance ids must be in 0..{n}, got max {top}")
+        if n > 255:
+            raise ValueError(f"ViewRecord {v}: at most 255 instances per view, got {n}")
+        for key in HDF5_FLOAT_KEYS:
+            if key not in self.scene_hdf5:
+                raise ValueError(f"ViewRecord {v}: scene_hdf5 lacks '{key}'")
+
+
+def view_file_names(v: int) -> list[str]:
+    """The files of view ``v`` in a scene folder."""
+    return [
+        f"{v}_rgb.png",
+        f"{v}.npz",
+        f"{v}_depth.png",
+        f"{v}_scene.hdf5",
+        f"{v}_order.csv",
+        f"{v}_order.json",
+        f"{v}_layout.json",
+        f"{v}_camera_params.json",
+    ]
+
+
+#: Fixed zip entry time: npz files carry no wall-clock time, so they are reproducible.
+_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+
+
+def npz_bytes(arrays: Mapping[str, np.ndarray], *, compress: bool = True) -> bytes:
+    """A ``.npz`` archive of ``arrays`` (readable by ``numpy.load``) without timestamps."""
+    from numpy.lib import format as npy_format
+
+    buf = io.BytesIO()
+    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+    with zipfile.ZipFile(buf, "w", compression=method) as zf:
+        for name, value in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_TIME)
+            info.compress_type = method
+            info.external_attr = 0o644 << 16
+            member = io.BytesIO()
+            npy_format.write_array(member, np.ascontiguousarray(value), allow_pickle=False)
+            zf.writestr(info, member.getvalue())
+    return buf.getvalue()
+
+
+def hdf5_bytes(datasets: Mapping[str, np.ndarray], attrs: Mapping[str, Any] | None = None) -> bytes:
+    """An HDF5 file holding ``datasets`` (path -> array, written as given) without timestamps;
+    ``attrs`` go on the root group (dicts and lists as JSON)."""
+    buf = io.BytesIO()
+    with h5py.File(buf, "w") as h5:
+        for path, value in datasets.items():
+            h5.create_dataset(path, data=np.asarray(value), track_times=False)
+        for key, value in (attrs or {}).items():
+            h5.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
+    return buf.getvalue()
+
+
+def png_bytes(image: npt.ArrayLike) -> bytes:
+    """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible)."""
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(np.asarray(image)).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def _json(data: Any) -> str:
+    return json.dumps(data, indent=1, sort_keys=False, allow_nan=True) + "\n"
+
+
+def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
+    """Write the files of one view into ``folder`` (created); returns the paths written.
+
+    Units: the npz depth and every HDF5 length are converted to centimetres; ids and categories
+    are stored as float32 as in the original files.
+    """
+    from mgn.render.views import depth_picture
+
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    v = rec.index
+    f4 = np.float32
+    npz = {
+        "depth": (np.asarray(rec.depth, np.float64) * M_TO_CM).astype(f4),
+        "instances_objects": np.asarray(rec.instances).astype(f4),
+        "instances_semantic": np.asarray(rec.semantic).astype(f4),
+        "occlusion": np.asarray(rec.occlusion_map, f4),
+        "occlusion_objects": np.asarray(rec.amodal, bool),
+        "depth_ideal": (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4),
+        "valid_depth": np.asarray(rec.valid_depth, bool),
+    }
+    for key, value in rec.extra_npz.items():
+        if key in npz:
+            raise ValueError(f"write_view: extra npz key '{key}' would replace a FORMAT.md key")
+        npz[key] = np.asarray(value)
+    h5 = {path: to_cm(path, value).astype(f4) for path, value in rec.scene_hdf5.items()}
+    files: dict[str, bytes] = {
+        f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
+        f"{v}.npz": npz_bytes(npz),
+        f"{v}_depth.png": png_bytes(depth_picture(rec.depth)),
+        f"{v}_scene.hdf5": hdf5_bytes(h5),
+        f"{v}_order.csv": rec.order_csv.encode(),
+        f"{v}_order.json": _json(rec.order_json).encode(),
+        f"{v}_layout.json": _json(rec.layout_json).encode(),
+        f"{v}_camera_params.json": _json(rec.intrinsics.camera_params()).encode(),
+    }
+    paths = []
+    for name, data in files.items():
+        atomic_write_bytes(out / name, data)
+        paths.append(out / name)
+    return paths
+
+
+def scene_gt_entries(
+    X_CO: npt.ArrayLike, obj_ids: Sequence[int], seen: Sequence[bool] | None = None
+) -> list[dict[str, Any]]:
+    """``scene_gt.json`` entries of one view: per instance ``cam_R_m2c`` (3x3 row-major),
+    ``cam_t_m2c`` (cm) and ``obj_id``; instances with ``seen`` False are left out."""
+    X = np.asarray(X_CO, np.float64)
+    out = []
+    for i, oid in enumerate(obj_ids):
+        if seen is not None and not seen[i]:
+            continue
+        out.append({
+            "cam_R_m2c": [float(x) for x in X[i, :3, :3].reshape(-1)],
+            "cam_t_m2c": [float(x) for x in X[i, :3, 3] * M_TO_CM],
+            "obj_id": int(oid),
+        })  # fmt: skip
+    return out
+
+
+def write_scene_gt(
+    folder: str | os.PathLike[str], per_view: Mapping[int, list[dict[str, Any]]]
+) -> Path:
+    """Write ``scene_gt.json`` (keys: view indices as strings)."""
+    path = Path(folder) / "scene_gt.json"
+    atomic_write_text(path, _json({str(v): per_view[v] for v in sorted(per_view)}))
+    return path

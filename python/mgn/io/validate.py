@@ -1,0 +1,218 @@
+"""``mgn validate DIR``: check every file of a dataset against the schema of FORMAT.md.
+
+Reports, per file, what is missing or corrupt (unreadable, wrong keys, shapes, dtypes, values out
+of range, inconsistent with the other files of the view, checksum different from the manifest).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mgn.io.dataset import Dataset, SceneFolder, View
+from mgn.io.scene_format import HDF5_FLOAT_KEYS, view_file_names
+
+__all__ = ["Problem", "validate_dataset"]
+
+#: Name of the per-scene manifest (files, sizes, sha256) written when a scene is complete.
+MANIFEST = "manifest.json"
+
+_NPZ_KEYS = {
+    "depth": np.float32,
+    "instances_objects": np.float32,
+    "instances_semantic": np.float32,
+    "occlusion": np.float32,
+}
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One finding: the file (relative to the dataset root) and what is wrong with it."""
+
+    path: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.message}"
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def check_manifest(folder: Path) -> list[tuple[str, str]]:
+    """(file, problem) pairs of a scene folder against its manifest (none if it has none).
+
+    The manifest is JSON with ``files``: a mapping name -> {"size", "sha256"} (or a list of
+    {"name"/"path", "size", "sha256"})."""
+    p = folder / MANIFEST
+    if not p.exists():
+        return []
+    try:
+        data = json.loads(p.read_text())
+        files = data["files"]
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        return [(MANIFEST, f"unreadable manifest: {e}")]
+    if isinstance(files, dict):
+        items = [(name, info) for name, info in files.items()]
+    else:
+        items = [(str(f.get("name", f.get("path"))), f) for f in files]
+    out = []
+    for name, info in items:
+        f = folder / name
+        if not f.exists():
+            out.append((name, "listed in the manifest but missing"))
+            continue
+        if "size" in info and f.stat().st_size != int(info["size"]):
+            out.append((name, f"size {f.stat().st_size} != manifest {info['size']}"))
+        elif "sha256" in info and _sha256(f) != info["sha256"]:
+            out.append((name, "checksum differs from the manifest (file changed or corrupt)"))
+    return out
+
+
+def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
+    v = view.index
+
+    def bad(suffix: str, msg: str) -> None:
+        problems.append((f"{v}{suffix}", msg))
+
+    for name in view_file_names(v):
+        if not (view.folder / name).exists():
+            problems.append((name, "missing"))
+    try:
+        K = view.intrinsics
+        hw = (K.height, K.width)
+    except Exception as e:  # noqa: BLE001 (report any failure as a finding)
+        bad("_camera_params.json", str(e))
+        hw = None
+    try:
+        rgb = view.rgb
+        if hw is not None and rgb.shape != (*hw, 3):
+            bad("_rgb.png", f"shape {rgb.shape}, camera params say {(*hw, 3)}")
+    except Exception as e:  # noqa: BLE001
+        bad("_rgb.png", str(e))
+    n = None
+    try:
+        z = view.npz
+        for key, dtype in _NPZ_KEYS.items():
+            if key not in z:
+                bad(".npz", f"lacks '{key}'")
+            elif z[key].dtype != dtype or (hw is not None and z[key].shape != hw):
+                bad(
+                    ".npz",
+                    f"'{key}' is {z[key].dtype} {z[key].shape}, expected {np.dtype(dtype)} {hw}",
+                )
+        if "occlusion_objects" not in z:
+            bad(".npz", "lacks 'occlusion_objects'")
+        else:
+            am = z["occlusion_objects"]
+            n = am.shape[0]
+            if am.ndim != 3 or (hw is not None and am.shape[1:] != hw):
+                bad(".npz", f"'occlusion_objects' has shape {am.shape}, expected (N, *{hw})")
+            if "instances_objects" in z:
+                ids = z["instances_objects"]
+                if np.any(ids != np.round(ids)) or ids.min(initial=0) < 0 or ids.max(initial=0) > n:
+                    bad(".npz", f"'instances_objects' must hold whole ids 0..{n}")
+                elif am.ndim == 3 and am.shape[1:] == ids.shape:
+                    for i in range(n):
+                        vis = ids == i + 1
+                        if vis.any() and np.any(vis & ~am[i]):
+                            bad(
+                                ".npz",
+                                f"visible mask of instance {i + 1} not inside its amodal mask",
+                            )
+                            break
+        if "occlusion" in z:
+            occ = z["occlusion"]
+            if np.any(~np.isfinite(occ)) or occ.min(initial=0) < 0 or occ.max(initial=0) > 1:
+                bad(".npz", "'occlusion' must lie in [0, 1]")
+    except Exception as e:  # noqa: BLE001
+        bad(".npz", str(e))
+    try:
+        h5 = view.hdf5
+        for key in HDF5_FLOAT_KEYS:
+            if key not in h5:
+                bad("_scene.hdf5", f"lacks '{key}'")
+        if n is not None:
+            expect = {
+                "camera/pose_relative_to_world": (1, 4, 4),
+                "objects/poses_relative_to_camera": (n, 4, 4),
+                "objects/categories": (n,),
+                "objects/bbox_loose": (n, 4),
+            }
+            for key, shape in expect.items():
+                if key in h5 and h5[key].shape != shape:
+                    bad("_scene.hdf5", f"'{key}' has shape {h5[key].shape}, expected {shape}")
+        groups: dict[str, dict[str, Any]] = {}
+        for key, value in h5.items():
+            if "grasps/" in key or key.startswith("keypts/"):
+                g, _, leaf = key.rpartition("/")
+                groups.setdefault(g, {})[leaf] = value
+        for g, leaves in groups.items():
+            lengths = {leaf: len(a) for leaf, a in leaves.items()}
+            if len(set(lengths.values())) > 1 and "occluded_object_id" not in leaves:
+                bad("_scene.hdf5", f"group '{g}' has datasets of different lengths {lengths}")
+            for leaf, a in leaves.items():
+                if leaf.endswith("object_id") and n is not None and len(a):
+                    if a.min() < 0 or a.max() >= n:
+                        bad("_scene.hdf5", f"'{g}/{leaf}' must lie in 0..{n - 1}")
+                if leaf.startswith("score") and len(a):
+                    finite = a[np.isfinite(a)]
+                    if len(finite) and (finite.min() < 0 or finite.max() > 1):
+                        bad("_scene.hdf5", f"'{g}/{leaf}' must lie in [0, 1]")
+    except Exception as e:  # noqa: BLE001
+        bad("_scene.hdf5", str(e))
+    try:
+        m = view.relation_matrix
+        if n is not None and m.shape != (n, n) and m.size:
+            bad("_order.csv", f"shape {m.shape}, expected ({n}, {n})")
+        order = view.order
+        if n is not None:
+            missing = [str(i) for i in range(1, n + 1) if str(i) not in order]
+            if missing:
+                bad("_order.json", f"lacks instances {missing[:10]}")
+        for key, entry in order.items():
+            if not isinstance(entry, dict):
+                continue
+            for p in entry.get("parents", []):
+                pid = int(p["id"])
+                if pid > 0 and m.size and m[int(key) - 1, pid - 1] != -1:
+                    bad("_order.json", f"parent {pid} of {key} is not -1 in {v}_order.csv")
+    except Exception as e:  # noqa: BLE001
+        bad("_order.json", str(e))
+
+
+def _check_scene(scene: SceneFolder, problems: list[Problem], root: Path) -> None:
+    found: list[tuple[str, str]] = []
+    found.extend(check_manifest(scene.folder))
+    if not scene.view_ids:
+        found.append((".", "no views"))
+    for view in scene.views():
+        _check_view(view, found)
+    rel = scene.folder.relative_to(root)
+    problems.extend(Problem(str(rel / name), msg) for name, msg in found)
+
+
+def validate_dataset(root: str | os.PathLike[str]) -> list[Problem]:
+    """Every problem found in the dataset at ``root`` (an empty list: valid)."""
+    ds = Dataset(root)
+    problems: list[Problem] = []
+    try:
+        _ = ds.info
+    except Exception as e:  # noqa: BLE001
+        problems.append(Problem("dataset.json", str(e)))
+    if not ds.scene_ids:
+        problems.append(Problem(".", "no scene<N> folders"))
+    for scene in ds.scenes():
+        _check_scene(scene, problems, ds.root)
+    return problems

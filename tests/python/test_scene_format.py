@@ -1,0 +1,295 @@
+"""The scene-folder writer, the Dataset reader, the COCO export and the validator, on hand-made
+views whose every value is known."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+
+from mgn.io.coco import coco_dict, export_coco, rle
+from mgn.io.dataset import Dataset, intrinsics_from_params
+from mgn.io.scene_format import (
+    ViewRecord,
+    from_cm,
+    hdf5_bytes,
+    npz_bytes,
+    scene_gt_entries,
+    to_cm,
+    write_scene_gt,
+    write_view,
+)
+from mgn.io.validate import validate_dataset
+from mgn.render.camera import Intrinsics
+
+H, W = 40, 60
+
+
+def _pose(t: tuple[float, float, float]) -> np.ndarray:
+    X = np.eye(4)
+    X[:3, 3] = t
+    return X
+
+
+def _record(v: int, shift: int = 0) -> ViewRecord:
+    """Two boxes: instance 2 lies on instance 1 and hides its right part; a third instance is
+    out of view (empty masks)."""
+    K = Intrinsics(W, H, 50.0, 50.0, W / 2, H / 2)
+    amodal = np.zeros((3, H, W), bool)
+    amodal[0, 5:25, 5 + shift : 35 + shift] = True
+    amodal[1, 10:30, 25 + shift : 50 + shift] = True
+    inst = np.zeros((H, W), np.int32)
+    inst[amodal[0]] = 1
+    inst[amodal[1]] = 2
+    occ = np.array([1 - (inst == 1).sum() / amodal[0].sum(), 0.0, 1.0])
+    occ_map = np.zeros((H, W), np.float32)
+    for i in range(2):
+        occ_map[inst == i + 1] = occ[i]
+    sem = np.where(inst > 0, inst + 10, 0)
+    depth = np.full((H, W), 0.7, np.float32)
+    depth[inst == 2] = 0.65
+    depth[0, 0] = np.nan
+    X_CO = np.stack([_pose((0.01, 0.02, 0.7)), _pose((0.02, 0.02, 0.65)), _pose((1, 1, 1))])
+    hand = np.tile(_pose((0.0, 0.0, 0.5)), (2, 1, 1))
+    h5 = {
+        "camera/pose_relative_to_world": _pose((0.0, 0.0, 0.7))[None],
+        "objects/poses_relative_to_camera": X_CO,
+        "objects/categories": np.array([11, 12, 13]),
+        "objects/bbox_loose": np.array([[5 + shift, 5, 30, 20], [25 + shift, 10, 25, 20], [0] * 4]),
+        "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera": hand,
+        "non_colliding_grasps/paralleljaw/contact_width": np.array([0.05, 0.031]),
+        "non_colliding_grasps/paralleljaw/score_analytical": np.array([1.0, 0.5]),
+        "non_colliding_grasps/paralleljaw/object_id": np.array([0, 1]),
+        "keypts/byhand/keypts_relative_to_camera": np.array([[1, 0.01, 0.02, 0.6]]),
+        "keypts/byhand/object_id": np.array([1]),
+    }
+    order = {
+        "1": {"id": 1, "occlusion": occ[0], "layer": 1, "parents": [{"id": 2, "depth_diff": 5.0,
+              "edge_size": 20}], "children": []},
+        "2": {"id": 2, "occlusion": 0.0, "layer": 0, "parents": [{"id": 0, "depth_diff": 0.0,
+              "edge_size": 0.0}], "children": [{"id": 1, "depth_diff": 5.0, "edge_size": 20}]},
+        "3": {"id": 3, "occlusion": 1.0, "layer": 3, "parents": [{"id": 0, "depth_diff": 0.0,
+              "edge_size": 0.0}], "children": []},
+    }  # fmt: skip
+    csv = "0,-1,0\n0,0,0\n0,0,0\n"
+    rgb = np.zeros((H, W, 3), np.uint8)
+    rgb[..., 0] = inst * 100
+    return ViewRecord(
+        index=v,
+        rgb=rgb,
+        depth=depth,
+        depth_ideal=depth,
+        valid_depth=np.isfinite(depth),
+        instances=inst,
+        semantic=sem,
+        occlusion_map=occ_map,
+        amodal=amodal,
+        intrinsics=K,
+        scene_hdf5=h5,
+        order_json=order,
+        order_csv=csv,
+        layout_json={"difficulty": {"level": 2}, "bin_rel": {"1": "no_rel"}},
+        extra_npz={"com_heatmap": np.zeros((H, W), np.float32)},
+    )
+
+
+@pytest.fixture
+def dataset(tmp_path):
+    root = tmp_path / "ds"
+    for s in range(2):
+        folder = root / f"scene{s}"
+        recs = [_record(v, shift=3 * v + s) for v in range(2)]
+        for r in recs:
+            write_view(folder, r)
+        key = "objects/poses_relative_to_camera"
+        seen = [True, True, False]
+        gt = {r.index: scene_gt_entries(r.scene_hdf5[key], [11, 12, 13], seen) for r in recs}
+        write_scene_gt(folder, gt)
+        (folder / "scene.json").write_text(
+            json.dumps(
+                {
+                    "instances": [
+                        {"name": "box_a", "category_id": 11},
+                        {"name": "box_b", "category_id": 12},
+                        {"name": "box_c", "category_id": 13},
+                    ]
+                }
+            )  # fmt: skip
+        )
+    return root
+
+
+def test_cm_rules_round_trip():
+    X = np.tile(_pose((0.1, -0.2, 0.3)), (3, 1, 1))
+    cm = to_cm("a/franka_poses_relative_to_camera", X)
+    assert np.allclose(cm[:, :3, 3], [10, -20, 30]) and np.allclose(cm[:, :3, :3], np.eye(3))
+    kp = np.array([[7.0, 0.01, 0.02, 0.03]])
+    assert np.allclose(to_cm("keypts/com/keypts_relative_to_camera", kp), [[7, 1, 2, 3]])
+    assert np.allclose(to_cm("x/contact_width", [0.05]), [5.0])
+    assert np.allclose(to_cm("x/score_analytical", [0.5]), [0.5])
+    assert np.allclose(from_cm("a/poses_relative_to_camera", cm), X)
+
+
+def test_written_view_reads_back_in_si(dataset):
+    ds = Dataset(dataset)
+    assert ds.scene_ids == [0, 1] and len(ds) == 2
+    scene = ds.scene(1)
+    assert scene.view_ids == [0, 1]
+    rec = _record(1, shift=4)
+    view = scene.view(1)
+    assert np.array_equal(view.rgb, rec.rgb)
+    d = view.depth
+    assert np.isnan(d[0, 0]) and np.allclose(d[1:, :], rec.depth[1:, :], atol=1e-6)
+    # The file itself is in cm.
+    assert np.isclose(np.nanmax(view.npz["depth"]), 70.0)
+    assert np.array_equal(view.instances, rec.instances)
+    assert np.array_equal(view.semantic, rec.semantic)
+    assert np.array_equal(view.amodal, rec.amodal)
+    assert np.allclose(view.X_CO, rec.scene_hdf5["objects/poses_relative_to_camera"], atol=1e-6)
+    assert np.allclose(view.X_WC[:3, 3], [0, 0, 0.7], atol=1e-6)
+    pj = view.grasps("paralleljaw")
+    assert np.allclose(pj["contact_width"], [0.05, 0.031], atol=1e-6)
+    assert np.allclose(pj["franka_poses_relative_to_camera"][:, 2, 3], 0.5, atol=1e-6)
+    assert view.grasps("suctioncup") == {}
+    kp = view.hdf5["keypts/byhand/keypts_relative_to_camera"]
+    assert np.allclose(kp, [[1, 0.01, 0.02, 0.6]], atol=1e-6)
+    assert view.relation_matrix[0, 1] == -1 and view.relation_matrix.sum() == -1
+    assert view.order["1"]["parents"][0]["id"] == 2
+    assert view.layout["difficulty"]["level"] == 2
+    K = view.intrinsics
+    assert (K.width, K.height, K.fx) == (W, H, 50.0)
+    gt = scene.scene_gt
+    assert [e["obj_id"] for e in gt["1"]] == [11, 12]
+    assert np.allclose(gt["1"][1]["cam_t_m2c"], [2, 2, 65])
+    with h5_open(view.path("_scene.hdf5")) as h5:
+        assert all(h5[k].dtype == np.float32 for k in ("objects/categories", "objects/bbox_loose"))
+
+
+def h5_open(path):
+    import h5py
+
+    return h5py.File(path, "r")
+
+
+def test_intrinsics_from_metagraspnet_keys():
+    K = Intrinsics.mgn_synthetic()
+    p = K.camera_params()
+    for k in ("fx", "fy", "cx", "cy", "width", "height"):
+        del p[k]
+    K2 = intrinsics_from_params(p)
+    assert (K2.width, K2.height) == (K.width, K.height)
+    assert np.isclose(K2.fx, K.fx, rtol=1e-9) and np.isclose(K2.cx, K.cx)
+
+
+def test_files_are_reproducible(tmp_path):
+    arrays = {"a": np.arange(6, dtype=np.float32).reshape(2, 3), "b": np.ones(3, bool)}
+    assert npz_bytes(arrays) == npz_bytes(arrays)
+    with np.load(__import__("io").BytesIO(npz_bytes(arrays))) as z:
+        assert np.array_equal(z["a"], arrays["a"]) and z["b"].dtype == bool
+    assert hdf5_bytes({"g/x": np.ones(3)}) == hdf5_bytes({"g/x": np.ones(3)})
+    digests = []
+    for k in range(2):
+        write_view(tmp_path / str(k), _record(0))
+        digests.append(
+            {
+                p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in (tmp_path / str(k)).iterdir()
+            }
+        )
+    assert digests[0] == digests[1] and len(digests[0]) == 8
+
+
+def test_record_checks_shapes():
+    rec = _record(0)
+    with pytest.raises(ValueError, match="depth must be"):
+        ViewRecord(**{**rec.__dict__, "depth": np.zeros((3, 3), np.float32)})
+    with pytest.raises(ValueError, match="instance ids must be in 0..3"):
+        ViewRecord(**{**rec.__dict__, "instances": np.full((H, W), 4)})
+    with pytest.raises(ValueError, match="lacks 'objects/categories'"):
+        h5 = dict(rec.scene_hdf5)
+        del h5["objects/categories"]
+        ViewRecord(**{**rec.__dict__, "scene_hdf5": h5})
+
+
+def test_coco_ground_truth_scores_ap_one(dataset, tmp_path):
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+
+    path = export_coco(dataset, tmp_path / "annotations.json")
+    gt = COCO(str(path))
+    assert len(gt.getImgIds()) == 4
+    assert sorted(c["name"] for c in gt.loadCats(gt.getCatIds())) == ["box_a", "box_b", "box_c"]
+    anns = gt.loadAnns(gt.getAnnIds())
+    assert len(anns) == 8  # 2 visible instances x 4 views; the out-of-view one has none
+    a0 = next(a for a in anns if a["instance_id"] == 1 and a["image_id"] == 0)
+    # Instance 2 covers rows 10..24 x cols 25..34 of instance 1: its box keeps the full width.
+    assert a0["bbox"] == [5.0, 5.0, 30.0, 20.0] and a0["area"] == 600 - 150
+    assert a0["amodal_bbox"] == [5.0, 5.0, 30.0, 20.0]
+    assert np.isclose(a0["occlusion"], 150 / 600) and a0["layer"] == 1
+    assert gt.loadImgs([0])[0]["difficulty"] == 2
+    for iou in ("bbox", "segm"):
+        dets = [{"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"],
+                 "segmentation": a["segmentation"], "score": 1.0} for a in anns]  # fmt: skip
+        ev = COCOeval(gt, gt.loadRes(dets), iou)
+        ev.evaluate()
+        ev.accumulate()
+        ev.summarize()
+        assert np.isclose(ev.stats[0], 1.0)
+    agnostic = coco_dict(Dataset(dataset), class_agnostic=True)
+    assert agnostic["categories"] == [{"id": 1, "name": "object", "supercategory": "object"}]
+    assert {a["category_id"] for a in agnostic["annotations"]} == {1}
+
+
+def test_rle_decodes_to_the_mask():
+    from pycocotools import mask as mask_utils
+
+    m = np.zeros((7, 9), bool)
+    m[2:5, 3:8] = True
+    r = rle(m)
+    back = mask_utils.decode({"size": r["size"], "counts": r["counts"].encode()})
+    assert np.array_equal(back.astype(bool), m)
+
+
+def test_validate_finds_corruption(dataset):
+    assert validate_dataset(dataset) == []
+    # A truncated npz, a missing csv, a visible mask outside its amodal mask.
+    npz = dataset / "scene0" / "1.npz"
+    npz.write_bytes(npz.read_bytes()[:100])
+    (dataset / "scene1" / "0_order.csv").unlink()
+    bad = _record(1, shift=4)
+    amodal = bad.amodal.copy()
+    amodal[1, :, :] = False
+    write_view(dataset / "scene1", ViewRecord(**{**bad.__dict__, "amodal": amodal}))
+    found = [str(p) for p in validate_dataset(dataset)]
+    assert any("scene0/1.npz" in p and "not a readable npz" in p for p in found), found
+    assert any("scene1/0_order.csv: missing" in p for p in found), found
+    assert any("scene1/1.npz" in p and "not inside its amodal mask" in p for p in found), found
+
+
+def test_validate_checks_the_manifest(dataset):
+    folder = dataset / "scene0"
+    files = {p.name: {"size": p.stat().st_size,
+                      "sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
+             for p in folder.iterdir()}  # fmt: skip
+    (folder / "manifest.json").write_text(json.dumps({"files": files}))
+    assert validate_dataset(dataset) == []
+    rgb = folder / "0_rgb.png"
+    data = bytearray(rgb.read_bytes())
+    data[-20] ^= 0xFF
+    rgb.write_bytes(bytes(data))
+    found = [str(p) for p in validate_dataset(dataset)]
+    assert any("scene0/0_rgb.png" in p and "checksum" in p for p in found), found
+
+
+def test_dataset_errors(tmp_path):
+    from mgn.errors import IoError
+
+    with pytest.raises(IoError, match="is not a folder"):
+        Dataset(tmp_path / "nope")
+    (tmp_path / "empty").mkdir()
+    assert Dataset(tmp_path / "empty").scene_ids == []
+    assert [str(p) for p in validate_dataset(tmp_path / "empty")] == [".: no scene<N> folders"]
+    with pytest.raises(IoError, match="no scene3"):
+        Dataset(tmp_path / "empty").scene(3)
