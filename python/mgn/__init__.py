@@ -21,6 +21,7 @@ from mgn.geometry import (
     mass_properties,
     sample_surface,
 )
+from mgn.io.dataset import Dataset
 from mgn.raytrace import RayAllHits, RayHits, RayScene, camera_rays
 from mgn.render import CameraView, Intrinsics, Renderer, mgn_rig, render_views
 from mgn.scene.convex import convex_decomposition, convex_hull
@@ -34,6 +35,7 @@ __all__ = [
     "mgn_rig",
     "render_views",
     "CollisionModel",
+    "Dataset",
     "DistanceResult",
     "InvalidArgumentError",
     "IoError",

@@ -293,3 +293,17 @@ def test_dataset_errors(tmp_path):
     assert [str(p) for p in validate_dataset(tmp_path / "empty")] == [".: no scene<N> folders"]
     with pytest.raises(IoError, match="no scene3"):
         Dataset(tmp_path / "empty").scene(3)
+
+
+def test_validate_and_coco_commands(dataset, tmp_path, capsys):
+    from mgn.cli import main
+
+    assert main(["validate", str(dataset)]) == 0
+    assert "valid" in capsys.readouterr().out
+    out = tmp_path / "coco.json"
+    assert main(["coco", str(dataset), "-o", str(out), "--scenes", "1", "--class-agnostic"]) == 0
+    data = json.loads(out.read_text())
+    assert {im["scene_id"] for im in data["images"]} == {1} and len(data["annotations"]) == 4
+    (dataset / "scene0" / "0_camera_params.json").unlink()
+    assert main(["validate", str(dataset)]) == 1
+    assert "scene0/0_camera_params.json: missing" in capsys.readouterr().out
