@@ -59,6 +59,7 @@ def _record(v: int, shift: int = 0) -> ViewRecord:
         "objects/categories": np.array([11, 12, 13]),
         "objects/bbox_loose": np.array([[5 + shift, 5, 30, 20], [25 + shift, 10, 25, 20], [0] * 4]),
         "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera": hand,
+        "non_colliding_grasps/paralleljaw/contact_poses_relative_to_camera": hand,
         "non_colliding_grasps/paralleljaw/contact_width": np.array([0.05, 0.031]),
         "non_colliding_grasps/paralleljaw/score_analytical": np.array([1.0, 0.5]),
         "non_colliding_grasps/paralleljaw/object_id": np.array([0, 1]),
@@ -307,3 +308,46 @@ def test_validate_and_coco_commands(dataset, tmp_path, capsys):
     (dataset / "scene0" / "0_camera_params.json").unlink()
     assert main(["validate", str(dataset)]) == 1
     assert "scene0/0_camera_params.json: missing" in capsys.readouterr().out
+
+
+def test_show_draws_the_view(dataset, tmp_path):
+    from PIL import Image
+
+    from mgn.cli import main
+    from mgn.overlay import instance_colors, project, render_overlay
+
+    out = tmp_path / "v.png"
+    assert main(["show", str(dataset), "--scene", "0", "--view", "1", "--grasps", "pj",
+                 "--layout", "-o", str(out)]) == 0  # fmt: skip
+    with Image.open(out) as im:
+        assert im.size == (W, H + 20)
+    view = Dataset(dataset).scene(0).view(1)
+    img = render_overlay(view, keypoints=False)
+    # Instance colours are blended over the visible pixels only; the background below the
+    # objects (rows 32.., clear of their id labels too) is unchanged.
+    inst = view.instances
+    assert np.array_equal(img[32:H], view.rgb[32:]) and not inst[32:].any()
+    assert not np.array_equal(img[:H][inst == 2], view.rgb[inst == 2])
+    cols = instance_colors(5)
+    assert len({tuple(c) for c in cols[1:]}) == 5 and tuple(cols[0]) == (0, 0, 0)
+    uv, front = project([[0.0, 0.0, 1.0], [0.1, 0.0, -1.0]], np.array([[50, 0, 30], [0, 50, 20],
+                                                                       [0, 0, 1.0]]))  # fmt: skip
+    assert np.allclose(uv[0], [30, 20]) and list(front) == [True, False]
+    with pytest.raises(ValueError, match="grasps must be"):
+        render_overlay(view, grasps="magnetic")
+
+
+def test_report_is_a_self_contained_page(dataset, tmp_path):
+    from mgn.cli import main
+    from mgn.report import collect_stats
+
+    out = tmp_path / "r.html"
+    assert main(["report", str(dataset), "-o", str(out)]) == 0
+    page = out.read_text()
+    assert page.startswith("<!DOCTYPE html>") and "data:image/png;base64," in page
+    assert "<svg" in page and "http://" not in page.replace("http://www.w3.org/2000/svg", "")
+    stats = collect_stats(Dataset(dataset))
+    assert stats["scenes"] == 2 and stats["views_sampled"] == 4
+    assert stats["visible_per_view"] == [2, 2, 2, 2]
+    assert stats["layers"] == {"0": 4, "1": 4} and stats["difficulty"] == {"2": 4}
+    assert stats["grasp_counts"]["non_colliding"] == {"paralleljaw": 8}

@@ -1,4 +1,4 @@
-"""``mgn validate DIR`` and ``mgn coco DIR -o annotations.json``: check and export a dataset."""
+"""Commands on a written dataset: ``mgn validate``, ``mgn coco``, ``mgn show``, ``mgn report``."""
 
 from __future__ import annotations
 
@@ -34,6 +34,23 @@ def _cmd_coco(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_show(args: argparse.Namespace) -> int:
+    from mgn.overlay import show
+
+    path = show(args.dir, args.scene, args.view, args.out, grasps=args.grasps, layout=args.layout,
+                keypoints=not args.no_keypoints)  # fmt: skip
+    print(f"wrote {path}")
+    return 0
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from mgn.report import write_report
+
+    path = write_report(args.dir, args.out, samples=args.samples, max_views=args.max_views)
+    print(f"wrote {path}")
+    return 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``validate`` and ``coco`` to the ``mgn`` subcommands."""
     p = sub.add_parser("validate", help="check every file of a dataset against FORMAT.md")
@@ -47,3 +64,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scenes", help="comma-separated scene ids (default: all)")
     p.add_argument("--class-agnostic", action="store_true", help="one category 'object'")
     p.set_defaults(func=_cmd_coco)
+
+    p = sub.add_parser("show", help="draw one view's labels on its RGB image (PNG)")
+    p.add_argument("dir", help="dataset folder")
+    p.add_argument("--scene", type=int, required=True, help="scene id N of scene<N>")
+    p.add_argument("--view", type=int, default=0, help="view index (default 0)")
+    p.add_argument("--grasps", choices=["pj", "suction"], help="draw scene grasps of this kind")
+    p.add_argument("--layout", action="store_true", help="draw the relation graph and layers")
+    p.add_argument("--no-keypoints", action="store_true", help="do not draw keypoints")
+    p.add_argument("-o", "--out", required=True, help="output PNG")
+    p.set_defaults(func=_cmd_show)
+
+    p = sub.add_parser("report", help="an HTML page of sample views and label statistics")
+    p.add_argument("dir", help="dataset folder")
+    p.add_argument("-o", "--out", required=True, help="output HTML file")
+    p.add_argument("--samples", type=int, default=6, help="sample views shown (default 6)")
+    p.add_argument("--max-views", type=int, default=400, help="views used for the statistics")
+    p.set_defaults(func=_cmd_report)
