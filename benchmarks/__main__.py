@@ -25,6 +25,7 @@ from .common import (
     markdown_table,
     thread_counts,
 )
+from .limits import limits_markdown, measure_limits, plot_ratios, shares, shares_markdown
 
 HERE = Path(__file__).resolve().parent
 SUITES = {
@@ -74,6 +75,9 @@ def main(argv: list[str] | None = None) -> int:
         rows += SUITES[name].run(
             quick=args.quick, repeats=repeats, mgn=mgn, mgn_status=mgn_status, log=log
         )
+    log("benchmarks: machine limits")
+    limits = measure_limits(mgn, quick=args.quick, repeats=repeats, log=log)
+    stage_shares = shares(rows, limits)
     elapsed = time.perf_counter() - started
     machine["load_average_at_end"] = load_average()
 
@@ -104,6 +108,19 @@ def main(argv: list[str] | None = None) -> int:
             "",
             table,
             "",
+            "## Machine limits",
+            "",
+            "What the stages are bound by, measured in the same run with all usable cores "
+            "(benchmarks/limits.py), and the share of it each bound stage reaches.",
+            "",
+            limits_markdown(limits),
+            "",
+            shares_markdown(stage_shares),
+            "",
+            "## Speed ratios",
+            "",
+            "![mgn / peer speed ratios](ratios.png)",
+            "",
             "## Notes",
             "",
             *notes,
@@ -129,12 +146,17 @@ def main(argv: list[str] | None = None) -> int:
                 "machine": machine,
                 "mgn_threads": threads,
                 "rows": [r.to_json() for r in rows],
+                "limits": limits,
+                "limit_shares": stage_shares,
             },
             indent=2,
         )
         + "\n"
     )
-    log(f"benchmarks: wrote {args.out} and {json_path} in {elapsed:.0f} s")
+    plot_path = args.out.with_name("ratios.png")
+    if not plot_ratios(rows, plot_path):
+        log("benchmarks: no mgn/peer ratio to plot")
+    log(f"benchmarks: wrote {args.out}, {json_path} and {plot_path} in {elapsed:.0f} s")
     failed = [r for r in rows if r.agreement_ok is False]
     if failed:
         log(f"benchmarks: {len(failed)} row(s) where mgn and the peer disagree")

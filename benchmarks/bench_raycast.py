@@ -330,6 +330,7 @@ def run(
                     peer_name=f"RayMeshIntersector.{peer_call}",
                     mgn_status=mgn_status,
                     peer_status=peer_status,
+                    limit_work=("embree_coherent" if coherent else "embree_random", 1.0),
                 )
                 if mgn_scene is not None:
                     row.mgn = {t: timings[f"mgn.{mgn_call}/{t}"] for t in threads}

@@ -394,6 +394,7 @@ def _object_rows(
         unit="rays/s",
         peer_name="—",
         mgn_status=mgn_status,
+        limit_work=("embree_coherent", 1.0),
         agreement=(
             f"{tmax} threads: {percent(seal_rays_s / lim_i)} of the coherent intersect "
             f"limit, {percent(seal_rays_s / lim_o)} of the coherent occluded limit"

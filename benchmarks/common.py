@@ -146,6 +146,9 @@ class Row:
     agreement: str = "—"  # in words, e.g. "hit/miss 99.998 %"
     agreement_ok: bool | None = None  # None when it could not be checked
     notes: list[str] = dataclasses.field(default_factory=list)
+    # The machine limit the row is bound by and one item's work in its unit, e.g.
+    # ("embree_coherent", 1.0) for rays; see benchmarks/limits.py.
+    limit_work: tuple[str, float] | None = None
 
     def ratio(self, threads: int) -> float | None:
         if self.peer is None or threads not in self.mgn:
@@ -167,6 +170,7 @@ class Row:
             "agreement": self.agreement,
             "agreement_ok": self.agreement_ok,
             "notes": self.notes,
+            "limit_work": list(self.limit_work) if self.limit_work else None,
         }
 
 
