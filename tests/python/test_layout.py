@@ -232,9 +232,9 @@ def brute_force(visible, amodal, depth, occ, min_px=10, frac=0.1):
                 parent[b, a] = S[a, b] >= min_px and S[a, b] >= frac * (S[a, b] + S[b, a])
     H, W = visible.shape
     edge = {}
-    for b, a in zip(*np.nonzero(parent)):
+    for b, a in np.argwhere(parent):
         diffs, count = [], 0
-        for r, c in zip(*np.nonzero(visible == b + 1)):
+        for r, c in np.argwhere(visible == b + 1):
             nb = [(r + dr, c + dc) for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1))]
             nb = [(y, x) for y, x in nb if 0 <= y < H and 0 <= x < W and visible[y, x] == a + 1]
             if nb:
@@ -260,7 +260,7 @@ def test_random_stacks_match_brute_force_and_order_respects_parents(seed):
     assert np.array_equal(L.relation == -1, parent)
     got = {
         (int(p), int(c)): (int(e), float(d))
-        for p, c, e, d in zip(L.parent_ids, L.child_ids, L.edge_size, L.depth_diff)
+        for p, c, e, d in zip(L.parent_ids, L.child_ids, L.edge_size, L.depth_diff, strict=True)
     }
     assert got.keys() == edge.keys()
     for k, (count, dd) in edge.items():
@@ -274,7 +274,7 @@ def test_random_stacks_match_brute_force_and_order_respects_parents(seed):
     vis = np.flatnonzero(L.visible) + 1
     assert sorted(L.order.tolist()) == vis.tolist()
     pos = {int(i): k for k, i in enumerate(L.order)}
-    for b, a in zip(*np.nonzero(parent)):
+    for b, a in np.argwhere(parent):
         assert pos[a + 1] < pos[b + 1]
     # The same result with any number of threads.
     L1 = compute_layout(

@@ -89,6 +89,14 @@ if TYPE_CHECKING:
         convex_hull,
     )
     from mgn.scene.drop import drop_scene, tote_mesh
+    from mgn.scene.layout import (
+        BIN_RELATIONS,
+        Layout,
+        OrderGraph,
+        compute_layout,
+        read_order_csv,
+        read_order_json,
+    )
     from mgn.scene.scene import (
         BUILTIN,
         CONTACT_NAMES,
@@ -97,12 +105,4 @@ if TYPE_CHECKING:
         Scene,
         SceneInstance,
         resolve_object,
-    )
-    from mgn.scene.layout import (
-        BIN_RELATIONS,
-        Layout,
-        OrderGraph,
-        compute_layout,
-        read_order_csv,
-        read_order_json,
     )

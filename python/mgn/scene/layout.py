@@ -369,8 +369,7 @@ def compute_layout(
     bins = tuple(bin_relations)
     if len(bins) != n:
         raise InvalidArgumentError(
-            f"compute_layout: bin_relations: expected {n} entries (one per object), got "
-            f"{len(bins)}"
+            f"compute_layout: bin_relations: expected {n} entries (one per object), got {len(bins)}"
         )
     bad = sorted({str(b) for b in bins} - set(BIN_RELATIONS))
     if bad:
