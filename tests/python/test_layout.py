@@ -114,7 +114,7 @@ def test_two_cycle_is_interlock():
     a, b = rect(H, W, 10, 10, 20, 30), rect(H, W, 10, 20, 20, 40)
     visible, amodal, depth, _ = render([a, b], [0.8, 0.8], H, W)
     both = a & b
-    visible[both] = np.where(np.arange(H)[:, None] < 15, 1, 2)[both]
+    visible[both] = np.where(np.arange(H)[:, None] < 15, 1, 2).repeat(W, 1)[both]
     occ = np.array([0.3, 0.2])
     L = compute_layout(visible, amodal, depth, [1, 2], ["edge", "corner"], occlusion=occ)
     assert L.relation.tolist() == [[0, -1], [-1, 0]]
@@ -254,7 +254,14 @@ def test_random_stacks_match_brute_force_and_order_respects_parents(seed):
     shapes, z = stack_layout(seed, n=7, H=H, W=W)
     visible, amodal, depth, occ = render(shapes, z, H, W)
     L = compute_layout(
-        visible, amodal, depth, np.arange(7), ["no_rel"] * 7, occlusion=occ, min_region_px=1
+        visible,
+        amodal,
+        depth,
+        np.arange(7),
+        ["no_rel"] * 7,
+        occlusion=occ,
+        min_region_px=1,
+        min_region_fraction=0,
     )
     parent, edge, regions = brute_force(visible, amodal, depth, occ)
     assert np.array_equal(L.relation == -1, parent)
@@ -285,6 +292,7 @@ def test_random_stacks_match_brute_force_and_order_respects_parents(seed):
         ["no_rel"] * 7,
         occlusion=occ,
         min_region_px=1,
+        min_region_fraction=0,
         num_threads=1,
     )
     assert np.array_equal(L1.relation, L.relation) and np.array_equal(L1.order, L.order)
