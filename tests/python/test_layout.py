@@ -241,11 +241,21 @@ def brute_force(visible, amodal, depth, occ, min_px=10, frac=0.1):
                 count += 1
                 diffs.append(depth[r, c] - np.mean([depth[y, x] for y, x in nb]))
         edge[(a + 1, b + 1)] = (count, float(np.median(diffs)) if diffs else np.nan)
+
+    def next_to_parent(b: int, r: int, c: int) -> bool:
+        for y, x in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+            if 0 <= y < H and 0 <= x < W and visible[y, x] > 0 and parent[b, visible[y, x] - 1]:
+                return True
+        return False
+
+    covered = [
+        sum(next_to_parent(b, r, c) for r, c in np.argwhere(visible == b + 1)) for b in range(n)
+    ]
     regions = [
         ndimage.label(visible == i + 1, structure=np.ones((3, 3)))[1] if vis_px[i] else 0
         for i in range(n)
     ]
-    return parent, edge, regions
+    return parent, edge, regions, covered
 
 
 @pytest.mark.parametrize("seed", range(12))
@@ -263,7 +273,7 @@ def test_random_stacks_match_brute_force_and_order_respects_parents(seed):
         min_region_px=1,
         min_region_fraction=0,
     )
-    parent, edge, regions = brute_force(visible, amodal, depth, occ)
+    parent, edge, regions, covered = brute_force(visible, amodal, depth, occ)
     assert np.array_equal(L.relation == -1, parent)
     got = {
         (int(p), int(c)): (int(e), float(d))
@@ -277,6 +287,7 @@ def test_random_stacks_match_brute_force_and_order_respects_parents(seed):
             assert got[k][1] == pytest.approx(dd, abs=1e-6)
             assert dd == pytest.approx(z[k[1] - 1] - z[k[0] - 1], abs=1e-6)  # child - parent
     assert L.num_regions.tolist() == regions
+    assert L.total_covered_edge.tolist() == covered
     # Order: every visible object once, each after all its parents (z-order stacks are acyclic).
     vis = np.flatnonzero(L.visible) + 1
     assert sorted(L.order.tolist()) == vis.tolist()
