@@ -42,6 +42,7 @@ __all__: list[str] = [
     "classification_metrics",
     "collide",
     "color_temperature_rgb",
+    "compute_layout",
     "compute_mass_properties",
     "convex_decomposition",
     "convex_hull",
@@ -846,6 +847,23 @@ def collide(
 def color_temperature_rgb(
     kelvin: typing.SupportsFloat | typing.SupportsIndex,
 ) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]: ...
+def compute_layout(
+    visible: typing.Any,
+    amodal: typing.Any,
+    depth: typing.Any,
+    categories: typing.Any,
+    occlusion: typing.Any,
+    min_overlap_px: typing.SupportsInt | typing.SupportsIndex = 10,
+    min_overlap_fraction: typing.SupportsFloat | typing.SupportsIndex = 0.1,
+    min_region_px: typing.SupportsInt | typing.SupportsIndex = 10,
+    min_region_fraction: typing.SupportsFloat | typing.SupportsIndex = 0.005,
+    max_occlusion_level1: typing.SupportsFloat | typing.SupportsIndex = 0.05,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+) -> dict:
+    """
+    Layout labels of one view (see mgn/scene/layout.hpp); use mgn.scene.compute_layout.
+    """
+
 def compute_mass_properties(
     mesh: Mesh,
     density: typing.SupportsFloat | typing.SupportsIndex = 1000.0,

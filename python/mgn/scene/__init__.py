@@ -6,6 +6,8 @@
   ``to_json`` / ``from_json``; ``mesh(i)`` gives an instance's mesh back.
 - :func:`convex_decomposition`, :func:`convex_hull`, :func:`cached_convex_decomposition`: the
   convex parts the physics uses.
+- :func:`compute_layout`: layout labels of a view (relations, layers, order, difficulty) ->
+  :class:`Layout`; :func:`read_order_json`, :func:`read_order_csv` read the order files back.
 
 Names are imported on first use, so ``import mgn`` stays light.
 """
@@ -32,6 +34,12 @@ _EXPORTS = {
     "Scene": "scene",
     "SceneInstance": "scene",
     "resolve_object": "scene",
+    "BIN_RELATIONS": "layout",
+    "Layout": "layout",
+    "OrderGraph": "layout",
+    "compute_layout": "layout",
+    "read_order_csv": "layout",
+    "read_order_json": "layout",
 }
 
 __all__ = [
@@ -51,6 +59,12 @@ __all__ = [
     "drop_scene",
     "resolve_object",
     "tote_mesh",
+    "BIN_RELATIONS",
+    "Layout",
+    "OrderGraph",
+    "compute_layout",
+    "read_order_csv",
+    "read_order_json",
 ]
 
 
@@ -75,6 +89,14 @@ if TYPE_CHECKING:
         convex_hull,
     )
     from mgn.scene.drop import drop_scene, tote_mesh
+    from mgn.scene.layout import (
+        BIN_RELATIONS,
+        Layout,
+        OrderGraph,
+        compute_layout,
+        read_order_csv,
+        read_order_json,
+    )
     from mgn.scene.scene import (
         BUILTIN,
         CONTACT_NAMES,

@@ -1,0 +1,388 @@
+#include <mgn/core/error.hpp>
+#include <mgn/core/parallel.hpp>
+#include <mgn/scene/layout.hpp>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <set>
+#include <utility>
+
+namespace mgn {
+
+namespace {
+
+bool valid_depth(float d) { return std::isfinite(d) && d > 0.0f; }
+
+void check_options(const LayoutOptions& o) {
+  if (o.min_overlap_px < 1)
+    throw_error<InvalidArgument>("compute_layout: min_overlap_px must be >= 1, got ",
+                                 o.min_overlap_px);
+  if (!(o.min_overlap_fraction >= 0.0 && o.min_overlap_fraction <= 1.0))
+    throw_error<InvalidArgument>("compute_layout: min_overlap_fraction must be in [0, 1], got ",
+                                 o.min_overlap_fraction);
+  if (o.min_region_px < 1)
+    throw_error<InvalidArgument>("compute_layout: min_region_px must be >= 1, got ",
+                                 o.min_region_px);
+  if (!(o.min_region_fraction >= 0.0 && o.min_region_fraction <= 1.0))
+    throw_error<InvalidArgument>("compute_layout: min_region_fraction must be in [0, 1], got ",
+                                 o.min_region_fraction);
+  if (!(o.max_occlusion_level1 >= 0.0 && o.max_occlusion_level1 <= 1.0))
+    throw_error<InvalidArgument>("compute_layout: max_occlusion_level1 must be in [0, 1], got ",
+                                 o.max_occlusion_level1);
+  resolve_num_threads(o.num_threads);
+}
+
+void check_images(const LayoutImages& im) {
+  if (im.height < 1 || im.width < 1)
+    throw_error<InvalidArgument>("compute_layout: image size must be >= 1 x 1, got ", im.height,
+                                 " x ", im.width);
+  if (im.num_objects < 0)
+    throw_error<InvalidArgument>("compute_layout: num_objects must be >= 0, got ", im.num_objects);
+  if (!im.visible || !im.depth)
+    throw_error<InvalidArgument>("compute_layout: the visible and depth images must be given");
+  if (im.num_objects > 0 && (!im.amodal || !im.categories || !im.occlusion))
+    throw_error<InvalidArgument>(
+        "compute_layout: amodal masks, categories and occlusion must be given for ", im.num_objects,
+        " objects");
+  for (int i = 0; i < im.num_objects; ++i) {
+    const double o = im.occlusion[i];
+    if (!(o >= 0.0 && o <= 1.0))
+      throw_error<InvalidArgument>("compute_layout: occlusion[", i,
+                                   "] must be a rate in [0, 1], got ", o);
+  }
+}
+
+/// Tarjan's strongly connected components of the graph parent -> child over the given nodes.
+/// Returns the component index of every node (-1 for nodes not in `nodes`).
+std::vector<int> strongly_connected(int n, const std::vector<std::vector<int>>& children,
+                                    const std::vector<int>& nodes) {
+  std::vector<int> index(n, -1), low(n, 0), comp(n, -1);
+  std::vector<std::uint8_t> on_stack(n, 0);
+  std::vector<int> stack;
+  int next_index = 0, next_comp = 0;
+  // Iterative DFS: (node, position in its child list).
+  std::vector<std::pair<int, std::size_t>> call;
+  for (int root : nodes) {
+    if (index[root] >= 0) continue;
+    call.emplace_back(root, 0);
+    index[root] = low[root] = next_index++;
+    stack.push_back(root);
+    on_stack[root] = 1;
+    while (!call.empty()) {
+      auto& [v, pos] = call.back();
+      if (pos < children[v].size()) {
+        const int w = children[v][pos++];
+        if (index[w] < 0) {
+          index[w] = low[w] = next_index++;
+          stack.push_back(w);
+          on_stack[w] = 1;
+          call.emplace_back(w, 0);
+        } else if (on_stack[w]) {
+          low[v] = std::min(low[v], index[w]);
+        }
+        continue;
+      }
+      if (low[v] == index[v]) {
+        int w;
+        do {
+          w = stack.back();
+          stack.pop_back();
+          on_stack[w] = 0;
+          comp[w] = next_comp;
+        } while (w != v);
+        ++next_comp;
+      }
+      const int done = v;
+      call.pop_back();
+      if (!call.empty()) {
+        const int parent = call.back().first;
+        low[parent] = std::min(low[parent], low[done]);
+      }
+    }
+  }
+  return comp;
+}
+
+double median(std::vector<float>& v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+  const double hi = v[mid];
+  if (v.size() % 2 == 1) return hi;
+  const double lo = *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid));
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
+  check_options(opt);
+  check_images(im);
+  const int n = im.num_objects;
+  const int H = im.height, W = im.width;
+  const std::size_t npx = static_cast<std::size_t>(H) * static_cast<std::size_t>(W);
+  const std::int32_t* vis = im.visible;
+
+  Layout L;
+  L.num_objects = n;
+  const std::size_t nn = static_cast<std::size_t>(n);
+  L.relation.assign(nn * nn, 0);
+  L.visible_px.assign(nn, 0);
+  L.visible.assign(nn, 0);
+  L.layer.assign(nn, 3);
+  L.num_regions.assign(nn, 0);
+  L.complete.assign(nn, 0);
+  L.total_covered_edge.assign(nn, 0);
+
+  // 1. Visible pixel counts and bounding boxes; id range check.
+  std::vector<int> r0(nn, H), r1(nn, -1), c0(nn, W), c1(nn, -1);
+  for (int r = 0; r < H; ++r) {
+    const std::int32_t* row = vis + static_cast<std::size_t>(r) * W;
+    for (int c = 0; c < W; ++c) {
+      const std::int32_t v = row[c];
+      if (v == 0) continue;
+      if (v < 0 || v > n)
+        throw_error<InvalidArgument>("compute_layout: visible id at pixel (row ", r, ", col ", c,
+                                     ") must be in [0, ", n, "] (0 = none, else instance id), got ",
+                                     v);
+      const std::size_t i = static_cast<std::size_t>(v - 1);
+      ++L.visible_px[i];
+      r0[i] = std::min(r0[i], r);
+      r1[i] = std::max(r1[i], r);
+      c0[i] = std::min(c0[i], c);
+      c1[i] = std::max(c1[i], c);
+    }
+  }
+  for (std::size_t i = 0; i < nn; ++i) L.visible[i] = L.visible_px[i] > 0 ? 1 : 0;
+
+  // 2. Seen-over counts S[a][b] (row-major a * n + b), one amodal mask (column b) per task.
+  std::vector<std::int64_t> S(nn * nn, 0);
+  parallel_for(nn, opt.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::int64_t> col(nn);
+    for (std::size_t b = begin; b < end; ++b) {
+      std::fill(col.begin(), col.end(), 0);
+      const std::uint8_t* m = im.amodal + b * npx;
+      std::size_t p = 0;
+      for (; p < npx; ++p) {
+        // Skip 8 empty mask bytes at a time.
+        if (p % 8 == 0 && p + 8 <= npx) {
+          std::uint64_t word;
+          std::memcpy(&word, m + p, 8);
+          if (word == 0) {
+            p += 7;
+            continue;
+          }
+        }
+        if (!m[p]) continue;
+        const std::int32_t v = vis[p];
+        if (v > 0 && static_cast<std::size_t>(v - 1) != b) ++col[static_cast<std::size_t>(v - 1)];
+      }
+      for (std::size_t a = 0; a < nn; ++a) S[a * nn + b] = col[a];
+    }
+  });
+
+  // 3. Relations between visible objects.
+  std::vector<std::uint8_t> is_parent(nn * nn, 0);  // [child * n + parent]
+  std::vector<std::vector<int>> parents(nn), children(nn);
+  for (std::size_t a = 0; a < nn; ++a) {
+    if (!L.visible[a]) continue;
+    for (std::size_t b = 0; b < nn; ++b) {
+      if (a == b || !L.visible[b]) continue;
+      const std::int64_t ab = S[a * nn + b], ba = S[b * nn + a];
+      if (ab >= opt.min_overlap_px &&
+          static_cast<double>(ab) >= opt.min_overlap_fraction * static_cast<double>(ab + ba)) {
+        is_parent[b * nn + a] = 1;
+        parents[b].push_back(static_cast<int>(a));
+        children[a].push_back(static_cast<int>(b));
+      }
+    }
+  }
+  for (std::size_t i = 0; i < nn; ++i)
+    for (std::size_t j = 0; j < nn; ++j) {
+      if (is_parent[i * nn + j])
+        L.relation[i * nn + j] = -1;
+      else if (is_parent[j * nn + i])
+        L.relation[i * nn + j] = 1;
+    }
+  std::vector<int> rel_index(nn * nn, -1);  // [child * n + parent]
+  for (std::size_t b = 0; b < nn; ++b)
+    for (int a : parents[b]) {
+      LayoutRelation rel;
+      rel.parent = a;
+      rel.child = static_cast<int>(b);
+      rel.seen_px = S[static_cast<std::size_t>(a) * nn + b];
+      rel_index[b * nn + static_cast<std::size_t>(a)] = static_cast<int>(L.relations.size());
+      L.relations.push_back(rel);
+    }
+
+  // 4. Shared boundaries: child pixels 4-adjacent to a parent's visible pixels.
+  if (!L.relations.empty()) {
+    std::vector<std::vector<float>> diffs(L.relations.size());
+    std::vector<std::int64_t> edges(L.relations.size(), 0);
+    const float* depth = im.depth;
+    for (int r = 0; r < H; ++r) {
+      for (int c = 0; c < W; ++c) {
+        const std::size_t p = static_cast<std::size_t>(r) * W + c;
+        const std::int32_t v = vis[p];
+        if (v == 0) continue;
+        const std::size_t b = static_cast<std::size_t>(v - 1);
+        if (parents[b].empty()) continue;
+        int nb_rel[4];
+        float nb_depth[4];
+        int k = 0;
+        auto look = [&](std::size_t q) {
+          const std::int32_t u = vis[q];
+          if (u == 0 || u == v) return;
+          const int ri = rel_index[b * nn + static_cast<std::size_t>(u - 1)];
+          if (ri < 0) return;
+          nb_rel[k] = ri;
+          nb_depth[k] = depth[q];
+          ++k;
+        };
+        if (r > 0) look(p - W);
+        if (r + 1 < H) look(p + W);
+        if (c > 0) look(p - 1);
+        if (c + 1 < W) look(p + 1);
+        if (k == 0) continue;
+        ++L.total_covered_edge[b];
+        const float dp = depth[p];
+        for (int i = 0; i < k; ++i) {
+          if (nb_rel[i] < 0) continue;  // already counted for this pixel
+          const int ri = nb_rel[i];
+          double sum = 0.0;
+          int cnt = 0;
+          for (int j = i; j < k; ++j) {
+            if (nb_rel[j] != ri) continue;
+            if (valid_depth(nb_depth[j])) {
+              sum += nb_depth[j];
+              ++cnt;
+            }
+            if (j > i) nb_rel[j] = -1;
+          }
+          ++edges[static_cast<std::size_t>(ri)];
+          if (cnt > 0 && valid_depth(dp))
+            diffs[static_cast<std::size_t>(ri)].push_back(
+                static_cast<float>(static_cast<double>(dp) - sum / cnt));
+        }
+      }
+    }
+    for (std::size_t k = 0; k < L.relations.size(); ++k) {
+      L.relations[k].edge_size = static_cast<int>(edges[k]);
+      L.relations[k].depth_diff = median(diffs[k]);
+    }
+  }
+
+  // 5. Connected regions of each visible mask (8-connectivity, OpenCV), inside its bounding box.
+  parallel_for(nn, opt.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      if (!L.visible[i]) continue;
+      const cv::Mat ids(H, W, CV_32S, const_cast<std::int32_t*>(vis),
+                        static_cast<std::size_t>(W) * sizeof(std::int32_t));
+      const cv::Rect box(c0[i], r0[i], c1[i] - c0[i] + 1, r1[i] - r0[i] + 1);
+      cv::Mat mask;
+      cv::compare(ids(box), cv::Scalar(static_cast<double>(i + 1)), mask, cv::CMP_EQ);
+      cv::Mat labels, stats, centroids;
+      const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+      const double min_area =
+          std::max(static_cast<double>(opt.min_region_px),
+                   opt.min_region_fraction * static_cast<double>(L.visible_px[i]));
+      int regions = 0;
+      for (int k = 1; k < count; ++k)  // label 0 is the background
+        if (stats.at<int>(k, cv::CC_STAT_AREA) >= min_area) ++regions;
+      L.num_regions[i] = regions;
+      L.complete[i] = regions <= 1 ? 1 : 0;
+    }
+  });
+
+  // 6. Layers.
+  std::vector<int> visible_nodes;
+  for (std::size_t i = 0; i < nn; ++i)
+    if (L.visible[i]) visible_nodes.push_back(static_cast<int>(i));
+  const std::vector<int> comp = strongly_connected(n, children, visible_nodes);
+  std::vector<int> comp_size(nn, 0);
+  for (int v : visible_nodes) ++comp_size[static_cast<std::size_t>(comp[v])];
+  std::vector<std::uint8_t> comp_interlock(nn, 1);
+  for (int v : visible_nodes) {
+    int outside = 0;
+    for (int a : parents[v])
+      if (comp[a] != comp[v]) ++outside;
+    if (outside > 1) comp_interlock[static_cast<std::size_t>(comp[v])] = 0;
+  }
+  for (int v : visible_nodes)
+    if (parents[v].empty()) L.layer[v] = 0;
+  for (int v : visible_nodes) {
+    const auto cv_ = static_cast<std::size_t>(comp[v]);
+    if (parents[v].size() == 1 && L.layer[parents[v][0]] == 0 && comp_size[cv_] == 1)
+      L.layer[v] = 1;
+    else if (comp_size[cv_] >= 2 && comp_interlock[cv_])
+      L.layer[v] = 2;
+  }
+
+  // 7. Picking order (Kahn, smallest id first; cycles broken by the smallest occlusion).
+  {
+    std::vector<int> remaining_parents(nn, 0);
+    std::vector<std::uint8_t> taken(nn, 0);
+    std::priority_queue<int, std::vector<int>, std::greater<int>> ready;
+    for (int v : visible_nodes) {
+      remaining_parents[v] = static_cast<int>(parents[v].size());
+      if (remaining_parents[v] == 0) ready.push(v);
+    }
+    auto take = [&](int v) {
+      taken[v] = 1;
+      L.order.push_back(v + 1);
+      for (int w : children[v])
+        if (!taken[w] && --remaining_parents[w] == 0) ready.push(w);
+    };
+    while (L.order.size() < visible_nodes.size()) {
+      if (!ready.empty()) {
+        const int v = ready.top();
+        ready.pop();
+        if (!taken[v]) take(v);
+        continue;
+      }
+      // Only cycles remain: candidates are objects whose remaining parents share their SCC.
+      int best = -1;
+      for (int v : visible_nodes) {
+        if (taken[v]) continue;
+        bool source = true;
+        for (int a : parents[v])
+          if (!taken[a] && comp[a] != comp[v]) source = false;
+        if (!source) continue;
+        if (best < 0 || im.occlusion[v] < im.occlusion[best]) best = v;
+      }
+      take(best);  // non-empty: the condensation of the remaining graph has a source
+    }
+  }
+
+  // 8. Difficulty.
+  std::set<int> layers_present;
+  std::set<std::int32_t> categories;
+  bool all_complete = true;
+  for (int v : visible_nodes) {
+    layers_present.insert(L.layer[v]);
+    L.max_occlusion = std::max(L.max_occlusion, im.occlusion[v]);
+    if (!L.complete[v]) all_complete = false;
+    if (!categories.insert(im.categories[v]).second) L.classes_unique = false;
+  }
+  L.num_layers = static_cast<int>(layers_present.size());
+  if (L.classes_unique) {
+    if (!all_complete)
+      L.difficulty = 3;
+    else if (L.num_layers <= 2 && L.max_occlusion <= opt.max_occlusion_level1)
+      L.difficulty = 1;
+    else
+      L.difficulty = 2;
+  } else {
+    L.difficulty = all_complete ? 4 : 5;
+  }
+  return L;
+}
+
+}  // namespace mgn
