@@ -11,6 +11,7 @@ from pathlib import Path
 from . import (
     bench_collision,
     bench_drop,
+    bench_layout,
     bench_pj,
     bench_raycast,
     bench_render,
@@ -36,6 +37,7 @@ SUITES = {
     "shake": bench_shake,
     "drop": bench_drop,
     "render": bench_render,
+    "layout": bench_layout,
 }
 
 
