@@ -32,6 +32,13 @@ _EXPORTS = {
     "Scene": "scene",
     "SceneInstance": "scene",
     "resolve_object": "scene",
+    "SceneGraspModel": "scene_grasps",
+    "SceneGrasps": "scene_grasps",
+    "PjGraspSet": "scene_grasps",
+    "SuctionGraspSet": "scene_grasps",
+    "GraspGroups": "scene_grasps",
+    "PlacedGrasps": "scene_grasps",
+    "GraspCollisions": "scene_grasps",
 }
 
 __all__ = [
@@ -51,6 +58,13 @@ __all__ = [
     "drop_scene",
     "resolve_object",
     "tote_mesh",
+    "SceneGraspModel",
+    "SceneGrasps",
+    "PjGraspSet",
+    "SuctionGraspSet",
+    "GraspGroups",
+    "PlacedGrasps",
+    "GraspCollisions",
 ]
 
 
@@ -83,4 +97,13 @@ if TYPE_CHECKING:
         Scene,
         SceneInstance,
         resolve_object,
+    )
+    from mgn.scene.scene_grasps import (
+        GraspCollisions,
+        GraspGroups,
+        PjGraspSet,
+        PlacedGrasps,
+        SceneGraspModel,
+        SceneGrasps,
+        SuctionGraspSet,
     )

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +43,10 @@ from mgn.pj.labels import PjLabels
 from mgn.pj.sampler import core_gripper
 from mgn.suction.labels import CUP_BODY_CLEARANCE, SuctionLabels
 from mgn.suction.seal import core_cup
+
+if TYPE_CHECKING:
+    from mgn.render.camera import CameraView
+    from mgn.scene.scene import Scene
 
 __all__ = [
     "DEFAULT_SHAFT_LENGTH",
@@ -214,7 +219,8 @@ def _wrench_option(labels: Sequence[PjLabels | None], key: str, default: float) 
     values = {
         float(lab.metadata["pj_wrench"][key])
         for lab in labels
-        if lab is not None and isinstance(lab.metadata.get("pj_wrench"), dict)
+        if lab is not None
+        and isinstance(lab.metadata.get("pj_wrench"), dict)
         and key in lab.metadata["pj_wrench"]
     }
     if len(values) > 1:
@@ -250,7 +256,7 @@ class SceneGraspModel:
 
     def __init__(
         self,
-        scene,  # noqa: ANN001 (mgn.scene.Scene; imported lazily)
+        scene: Scene | None,
         pj_labels: Sequence[PjLabels | None],
         suction_labels: Sequence[SuctionLabels | None],
         gripper: ParallelJawGripper | None = None,
@@ -415,16 +421,18 @@ class SceneGraspModel:
             total=len(p),
             colliding=int(p.colliding.sum()),
             at_offset={o: int((hit[:, k] >= 0).sum()) for k, o in enumerate(self.offsets)},
-            by_obstacle={("tote" if i == 0 else int(i)): int(c) for i, c in zip(ids, counts)},
+            by_obstacle={
+                ("tote" if i == 0 else int(i)): int(c) for i, c in zip(ids, counts, strict=True)
+            },
         )
 
-    def visible(self, view, points: npt.ArrayLike) -> npt.NDArray[np.bool_]:  # noqa: ANN001
+    def visible(self, view: CameraView, points: npt.ArrayLike) -> npt.NDArray[np.bool_]:
         """(N,) bool: whether each world point (N, 3) is visible from ``view`` (a
         :class:`~mgn.render.CameraView`)."""
         pts = np.asarray(points, np.float64).reshape(-1, 3)
         return self._core.visible(view.K.to_core(), view.X_WC, pts)
 
-    def view_grasps(self, view, seen: npt.ArrayLike) -> SceneGrasps:  # noqa: ANN001
+    def view_grasps(self, view: CameraView, seen: npt.ArrayLike) -> SceneGrasps:
         """The grasp labels of one view (camera frame, metres).
 
         Args:
