@@ -40,7 +40,8 @@ def _scene(mgn: Any):
         y = -0.07 + 0.14 * (k // 5)
         v = np.asarray(spec.vertices)
         z = -v[:, 2].min() + layer * 0.08 + 1e-4
-        c, s = np.cos(rng.uniform(0, 2 * np.pi)), np.sin(rng.uniform(0, 2 * np.pi))
+        theta = rng.uniform(0, 2 * np.pi)
+        c, s = np.cos(theta), np.sin(theta)
         X = np.eye(4)
         X[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
         X[:3, 3] = (x, y, z)

@@ -407,10 +407,15 @@ std::vector<std::uint8_t> SceneGraspModel::visible(const CameraView& view,
   std::vector<std::uint8_t> out(static_cast<std::size_t>(n), 0);
   const Pose X_CW = view.X_WC.inverse();
   const Vec3d eye = view.X_WC.translation();
-  // Candidates in front of the camera and inside the image; their rays are shortened so that a
-  // hit anywhere in [0, 1] is closer than (distance - tolerance).
+  // Candidates in front of the camera and inside the image, ordered by 16 x 16 pixel tile
+  // (counting sort: linear, deterministic) so that neighbouring rays travel in packets.
+  constexpr int kTile = 16;
+  const int tiles_x = (view.K.width + kTile - 1) / kTile;
+  const int tiles_y = (view.K.height + kTile - 1) / kTile;
   std::vector<Eigen::Index> cand;
+  std::vector<std::int32_t> tile;
   cand.reserve(static_cast<std::size_t>(n));
+  tile.reserve(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
     const Vec3d p = points.row(i).transpose();
     if (!p.allFinite()) {
@@ -422,11 +427,19 @@ std::vector<std::uint8_t> SceneGraspModel::visible(const CameraView& view,
     const double v = view.K.fy * q.y() / q.z() + view.K.cy;
     if (!(u >= 0.0 && u < view.K.width && v >= 0.0 && v < view.K.height)) continue;
     cand.push_back(i);
+    tile.push_back(static_cast<std::int32_t>(static_cast<int>(v) / kTile * tiles_x +
+                                             static_cast<int>(u) / kTile));
   }
-  const auto c = static_cast<Eigen::Index>(cand.size());
+  std::vector<std::int64_t> start(static_cast<std::size_t>(tiles_x) * tiles_y + 1, 0);
+  for (const std::int32_t t : tile) ++start[static_cast<std::size_t>(t) + 1];
+  for (std::size_t t = 1; t < start.size(); ++t) start[t] += start[t - 1];
+  std::vector<Eigen::Index> order(cand.size());
+  for (std::size_t j = 0; j < cand.size(); ++j) order[start[tile[j]]++] = cand[j];
+  // Each ray is shortened so that a hit anywhere in [0, 1] is closer than (distance - tolerance).
+  const auto c = static_cast<Eigen::Index>(order.size());
   Points3f origins(c, 3), directions(c, 3);
   for (Eigen::Index j = 0; j < c; ++j) {
-    const Vec3d d = points.row(cand[j]).transpose() - eye;
+    const Vec3d d = points.row(order[j]).transpose() - eye;
     const double dist = d.norm();
     origins.row(j) = eye.cast<float>().transpose();
     directions.row(j) = (d * ((dist - o.visibility_tolerance) / dist)).cast<float>().transpose();
@@ -434,10 +447,10 @@ std::vector<std::uint8_t> SceneGraspModel::visible(const CameraView& view,
   CastOptions cast;
   cast.tnear = 0.0f;
   cast.tfar = 1.0f;
-  cast.coherent = false;
+  cast.coherent = true;
   cast.num_threads = o.num_threads;
   const std::vector<std::uint8_t> blocked = m.scene->occluded(origins, directions, cast);
-  for (Eigen::Index j = 0; j < c; ++j) out[cand[j]] = blocked[j] ? 0 : 1;
+  for (Eigen::Index j = 0; j < c; ++j) out[order[j]] = blocked[j] ? 0 : 1;
   return out;
 }
 
@@ -451,22 +464,28 @@ ViewGrasps SceneGraspModel::view_grasps(const CameraView& view,
   view.validate("SceneGraspModel::view_grasps view");
   const Pose X_CW = view.X_WC.inverse();
   ViewGrasps out;
-  // Parallel-jaw: p1 and p2 of the grasps of seen objects, in one batch.
+  // Parallel-jaw: the grasps of seen objects with p1 or p2 visible.
   {
     const PlacedGrasps& p = m.pj;
     std::vector<std::int64_t> cand;
     for (std::size_t r = 0; r < p.size(); ++r)
       if (seen[static_cast<std::size_t>(p.object_index[r])])
         cand.push_back(static_cast<std::int64_t>(r));
+    // p1 first; p2 only where p1 is not visible.
     const auto c = static_cast<Eigen::Index>(cand.size());
-    Points3d pts(2 * c, 3);
+    Points3d pts(c, 3);
+    for (Eigen::Index j = 0; j < c; ++j) pts.row(j) = p.contacts.row(cand[j]);
+    std::vector<std::uint8_t> vis = visible(view, pts);
+    std::vector<Eigen::Index> second;
+    for (Eigen::Index j = 0; j < c; ++j)
+      if (!vis[j]) second.push_back(j);
+    Points3d pts2(static_cast<Eigen::Index>(second.size()), 3);
+    for (std::size_t k = 0; k < second.size(); ++k)
+      pts2.row(static_cast<Eigen::Index>(k)) = p.second_contacts.row(cand[second[k]]);
+    const std::vector<std::uint8_t> vis2 = visible(view, pts2);
+    for (std::size_t k = 0; k < second.size(); ++k) vis[second[k]] = vis2[k];
     for (Eigen::Index j = 0; j < c; ++j) {
-      pts.row(2 * j) = p.contacts.row(cand[j]);
-      pts.row(2 * j + 1) = p.second_contacts.row(cand[j]);
-    }
-    const std::vector<std::uint8_t> vis = visible(view, pts);
-    for (Eigen::Index j = 0; j < c; ++j) {
-      if (!vis[2 * j] && !vis[2 * j + 1]) continue;
+      if (!vis[j]) continue;
       const auto r = static_cast<std::size_t>(cand[j]);
       out.pj_index.push_back(cand[j]);
       out.pj_X_C_tool.push_back(X_CW * p.X_W_tool[r]);
