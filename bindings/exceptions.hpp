@@ -16,4 +16,5 @@ void bind_scene(pybind11::module_& m);
 void bind_pj(pybind11::module_& m);
 void bind_shake(pybind11::module_& m);
 void bind_layout(pybind11::module_& m);
+void bind_scene_grasps(pybind11::module_& m);
 }  // namespace mgn::py_bind

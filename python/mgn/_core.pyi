@@ -32,6 +32,7 @@ __all__: list[str] = [
     "SURFACE_DARK",
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
+    "SceneGraspModel",
     "SealModel",
     "ShakeOptions",
     "UnsupportedError",
@@ -787,6 +788,56 @@ class ShakeOptions:
     def solver_iterations(self) -> int: ...
     @solver_iterations.setter
     def solver_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+
+class SceneGraspModel:
+    """
+    Per-scene grasp model: placement, collisions and wrench scores at construction; view_grasps per camera (see mgn/scene/scene_grasps.hpp).
+    """
+    def __init__(
+        self,
+        meshes: collections.abc.Sequence[Mesh],
+        poses: typing.Any,
+        masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+        coms: typing.Any,
+        pj: collections.abc.Sequence[typing.Any],
+        suction: collections.abc.Sequence[typing.Any],
+        tote: Mesh,
+        X_WT: typing.Any,
+        gripper: ParallelJawGripper,
+        cup: Cup,
+        offsets: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+        clearance: typing.SupportsFloat | typing.SupportsIndex,
+        shaft_radius: typing.SupportsFloat | typing.SupportsIndex,
+        shaft_length: typing.SupportsFloat | typing.SupportsIndex,
+        gravity_world: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
+        pj_friction: typing.SupportsFloat | typing.SupportsIndex,
+        grip_force: typing.SupportsFloat | typing.SupportsIndex,
+        contact_radius: typing.SupportsFloat | typing.SupportsIndex,
+        suction_k: typing.SupportsFloat | typing.SupportsIndex,
+        visibility_tolerance: typing.SupportsFloat | typing.SupportsIndex,
+        near_plane: typing.SupportsFloat | typing.SupportsIndex,
+        num_threads: typing.SupportsInt | typing.SupportsIndex,
+    ) -> None: ...
+    def pj(self) -> dict:
+        """
+        Parallel-jaw grasps in the world: dict of arrays.
+        """
+    def suction(self) -> dict:
+        """
+        Suction grasps in the world: dict of arrays.
+        """
+    def view_grasps(self, K: Intrinsics, X_WC: typing.Any, seen: typing.Any) -> dict:
+        """
+        Grasps kept in a view: row indices and camera-frame poses.
+        """
+    def visible(self, K: Intrinsics, X_WC: typing.Any, points: typing.Any) -> numpy.ndarray:
+        """
+        (N,) bool: whether each world point is visible from the camera.
+        """
+    @property
+    def num_objects(self) -> int: ...
+    @property
+    def offsets(self) -> list[float]: ...
 
 def apply_depth_sensor(
     depth: typing.Any,

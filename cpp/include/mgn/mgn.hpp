@@ -26,4 +26,5 @@
 #include <mgn/render/renderer.hpp>
 #include <mgn/scene/drop.hpp>
 #include <mgn/scene/layout.hpp>
+#include <mgn/scene/scene_grasps.hpp>
 #include <mgn/version.hpp>

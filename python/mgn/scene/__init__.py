@@ -40,6 +40,13 @@ _EXPORTS = {
     "compute_layout": "layout",
     "read_order_csv": "layout",
     "read_order_json": "layout",
+    "SceneGraspModel": "scene_grasps",
+    "SceneGrasps": "scene_grasps",
+    "PjGraspSet": "scene_grasps",
+    "SuctionGraspSet": "scene_grasps",
+    "GraspGroups": "scene_grasps",
+    "PlacedGrasps": "scene_grasps",
+    "GraspCollisions": "scene_grasps",
 }
 
 __all__ = [
@@ -65,6 +72,13 @@ __all__ = [
     "compute_layout",
     "read_order_csv",
     "read_order_json",
+    "SceneGraspModel",
+    "SceneGrasps",
+    "PjGraspSet",
+    "SuctionGraspSet",
+    "GraspGroups",
+    "PlacedGrasps",
+    "GraspCollisions",
 ]
 
 
@@ -105,4 +119,13 @@ if TYPE_CHECKING:
         Scene,
         SceneInstance,
         resolve_object,
+    )
+    from mgn.scene.scene_grasps import (
+        GraspCollisions,
+        GraspGroups,
+        PjGraspSet,
+        PlacedGrasps,
+        SceneGraspModel,
+        SceneGrasps,
+        SuctionGraspSet,
     )

@@ -1,0 +1,516 @@
+// Scene grasp labels (MODELS.md §9); the model is documented in scene_grasps.hpp.
+#include <mgn/collision/collision_model.hpp>
+#include <mgn/core/error.hpp>
+#include <mgn/core/parallel.hpp>
+#include <mgn/geometry/primitives.hpp>
+#include <mgn/raytrace/ray_scene.hpp>
+#include <mgn/scene/scene_grasps.hpp>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace mgn {
+
+void SuctionTool::validate() const {
+  auto positive = [](const char* field, double v) {
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      throw_error<InvalidArgument>("SuctionTool.", field, ": expected a finite value > 0 m, got ",
+                                   v);
+    }
+  };
+  positive("clearance", clearance);
+  positive("shaft_radius", shaft_radius);
+  positive("shaft_length", shaft_length);
+}
+
+void SceneGraspOptions::validate() const {
+  if (offsets.empty()) {
+    throw_error<InvalidArgument>("SceneGraspOptions.offsets: expected at least one offset (m)");
+  }
+  for (std::size_t k = 0; k < offsets.size(); ++k) {
+    if (!(offsets[k] >= 0.0) || !std::isfinite(offsets[k])) {
+      throw_error<InvalidArgument>("SceneGraspOptions.offsets[", k,
+                                   "]: expected a finite distance >= 0 m, got ", offsets[k]);
+    }
+  }
+  tool.validate();
+  if (!gravity_world.allFinite() || !(gravity_world.norm() > 1e-12)) {
+    throw_error<InvalidArgument>(
+        "SceneGraspOptions.gravity_world: expected a finite non-zero direction");
+  }
+  if (!(visibility_tolerance >= 0.0) || !std::isfinite(visibility_tolerance)) {
+    throw_error<InvalidArgument>(
+        "SceneGraspOptions.visibility_tolerance: expected a finite value >= 0 m, got ",
+        visibility_tolerance);
+  }
+  if (!(near_plane > visibility_tolerance) || !std::isfinite(near_plane)) {
+    throw_error<InvalidArgument>(
+        "SceneGraspOptions.near_plane: expected a finite value > "
+        "visibility_tolerance (",
+        visibility_tolerance, " m), got ", near_plane);
+  }
+  if (num_threads < 0) {
+    throw_error<InvalidArgument>("SceneGraspOptions.num_threads: expected 0 (all) or > 0, got ",
+                                 num_threads);
+  }
+}
+
+namespace {
+
+using Box = Eigen::AlignedBox3d;
+
+// A fixed direction off every axis and diagonal, for the ray-parity inside tests.
+const Vec3f kParity = Vec3f(0.5773f, 0.6213f, 0.5297f).normalized();
+
+/// A closed mesh with what the tests need: FCL model, a ray scene for parity, its local bounding
+/// box and one of its vertices (all in its own frame).
+struct Solid {
+  std::unique_ptr<CollisionModel> model;
+  std::unique_ptr<RayScene> rays;
+  Box box;
+  Vec3d vertex = Vec3d::Zero();
+
+  explicit Solid(const Mesh& mesh) {
+    model = std::make_unique<CollisionModel>(mesh);
+    rays = std::make_unique<RayScene>(std::vector<RayGeometry>{{&mesh, Pose::Identity(), 0}});
+    const auto b = mesh.bounds();
+    box = Box(b.row(0).transpose(), b.row(1).transpose());
+    vertex = mesh.vertices().row(0).transpose().cast<double>();
+  }
+
+  /// Whether a point (own frame) is inside the closed mesh (odd number of crossings).
+  bool contains(const Vec3d& p) const {
+    if (!box.contains(p)) return false;
+    Points3f o(1, 3), d(1, 3);
+    o.row(0) = p.cast<float>().transpose();
+    d.row(0) = kParity.transpose();
+    CastOptions cast;
+    cast.num_threads = 1;
+    const RayAllHits hits = rays->intersect_all(o, d, 4096, cast);
+    return (hits.offsets[1] - hits.offsets[0]) % 2 == 1;
+  }
+};
+
+/// World bounding box of a local box under X.
+Box world_box(const Box& local, const Pose& X) {
+  const Vec3d c = X * local.center();
+  const Vec3d h = X.linear().cwiseAbs() * (0.5 * local.sizes());
+  return Box(c - h, c + h);
+}
+
+/// Branch-free orthonormal basis with z = n (Duff et al. 2017), n unit.
+Mat3d frame_z_to(const Vec3d& n) {
+  const double sign = std::copysign(1.0, n.z());
+  const double a = -1.0 / (sign + n.z());
+  const double b = n.x() * n.y() * a;
+  Mat3d R;
+  R.col(0) = Vec3d(1.0 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
+  R.col(1) = Vec3d(b, sign + n.y() * n.y() * a, -n.y());
+  R.col(2) = n;
+  return R;
+}
+
+void check_pose(const Pose& X, const char* what, std::size_t index) {
+  const Mat4d& M = X.matrix();
+  const Mat3d R = X.linear();
+  if (!M.allFinite() || (R.transpose() * R - Mat3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
+      R.determinant() < 0.0 ||
+      (M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
+    throw_error<InvalidArgument>("SceneGraspModel: ", what, " ", index,
+                                 " must be a finite rigid transform (orthonormal right-handed "
+                                 "rotation)");
+  }
+}
+
+Pose back_off(const Pose& X, double d) {
+  Pose Y = X;
+  Y.translation() -= d * X.linear().col(2);
+  return Y;
+}
+
+}  // namespace
+
+struct SceneGraspModel::Impl {
+  SceneGraspOptions options;
+  ParallelJawGripper gripper;
+  Cup cup;
+  std::vector<std::unique_ptr<Solid>> obstacles;  // objects 0..N-1, then the tote
+  std::vector<Pose> X_W_obstacle;
+  std::vector<Pose> X_obstacle_W;
+  std::vector<Box> obstacle_box;               // world
+  std::vector<Vec3d> obstacle_vertex;          // world
+  std::array<std::unique_ptr<Solid>, 3> hand;  // palm, left finger, right finger (opening 0)
+  std::array<std::unique_ptr<Solid>, 2> tool;  // cup body, shaft (contact frame)
+  std::unique_ptr<RayScene> scene;             // everything, for visibility
+  PlacedGrasps pj, suction;
+  std::size_t num_objects = 0;
+
+  /// Collision of one part (at X_WP) with obstacle j.
+  bool part_hits(const Solid& part, const Pose& X_WP, std::size_t j) const {
+    const Box pb = world_box(part.box, X_WP);
+    const Box& ob = obstacle_box[j];
+    if (!pb.intersects(ob)) return false;
+    const Solid& obs = *obstacles[j];
+    if (collide(*part.model, X_WP, *obs.model, X_W_obstacle[j])) return true;
+    // No surface contact: a part inside the obstacle or the obstacle inside the part.
+    if (ob.contains(pb) && obs.contains(X_obstacle_W[j] * (X_WP * part.vertex))) return true;
+    if (pb.contains(ob) && part.contains(X_WP.inverse() * obstacle_vertex[j])) return true;
+    return false;
+  }
+
+  /// First obstacle hit by the parts at their poses (-1 none, 0 tote, i + 1 object i).
+  template <std::size_t P>
+  std::int32_t first_hit(const std::array<const Solid*, P>& parts, const std::array<Pose, P>& poses,
+                         std::int64_t skip) const {
+    for (std::size_t j = 0; j < obstacles.size(); ++j) {
+      if (static_cast<std::int64_t>(j) == skip) continue;
+      for (std::size_t k = 0; k < P; ++k) {
+        if (part_hits(*parts[k], poses[k], j)) {
+          return j == num_objects ? 0 : static_cast<std::int32_t>(j + 1);
+        }
+      }
+    }
+    return -1;
+  }
+};
+
+SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, const Mesh& tote,
+                                 const Pose& X_WT, const ParallelJawGripper& gripper,
+                                 const Cup& cup, const SceneGraspOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  options.validate();
+  gripper.validate();
+  cup.validate();
+  if (objects.empty()) {
+    throw_error<InvalidArgument>(
+        "SceneGraspModel: the scene has no objects; expected at least one");
+  }
+  require_non_empty(tote, "SceneGraspModel tote");
+  check_pose(X_WT, "X_WT (tote)", 0);
+  m.options = options;
+  m.gripper = gripper;
+  m.cup = cup;
+  m.num_objects = objects.size();
+  const std::size_t N = objects.size();
+  // Validate every object and grasp before the parallel work.
+  std::size_t num_pj = 0, num_suction = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    const SceneGraspObject& o = objects[i];
+    if (o.mesh == nullptr)
+      throw_error<InvalidArgument>("SceneGraspModel: object ", i, " has no mesh");
+    require_non_empty(*o.mesh, "SceneGraspModel object mesh");
+    check_pose(o.X_WO, "X_WO of object", i);
+    if (!(o.mass > 0.0) || !std::isfinite(o.mass)) {
+      throw_error<InvalidArgument>("SceneGraspModel: object ", i,
+                                   " mass must be a finite value > 0 kg, got ", o.mass);
+    }
+    if (!o.com.allFinite())
+      throw_error<InvalidArgument>("SceneGraspModel: object ", i, " com must be finite");
+    const std::size_t M = o.pj.size();
+    for (std::size_t g = 0; g < M; ++g) {
+      const ParallelJawGrasp& gr = o.pj[g];
+      if (!gr.p1.allFinite() || !std::isfinite(gr.width) || gr.width < 0.0 ||
+          gr.width > gripper.max_opening + 1e-9) {
+        throw_error<InvalidArgument>("SceneGraspModel: object ", i, " parallel-jaw grasp ", g,
+                                     ": p1 must be finite and width in [0, max_opening = ",
+                                     gripper.max_opening, "] m, got width ", gr.width);
+      }
+      try {
+        grasp_rotation(gr);
+      } catch (const InvalidArgument& e) {
+        throw_error<InvalidArgument>("SceneGraspModel: object ", i, " parallel-jaw grasp ", g, ": ",
+                                     e.what());
+      }
+    }
+    auto check_len = [&](const std::vector<float>& v, std::size_t n, const char* name) {
+      if (!v.empty() && v.size() != n) {
+        throw_error<InvalidArgument>("SceneGraspModel: object ", i, " ", name, " has ", v.size(),
+                                     " entries; expected ", n, " (one per grasp) or none");
+      }
+    };
+    check_len(o.pj_score_analytical, M, "pj_score_analytical");
+    check_len(o.pj_score_simulation, M, "pj_score_simulation");
+    const auto K = static_cast<std::size_t>(o.suction_points.rows());
+    if (o.suction_approach.rows() != o.suction_points.rows()) {
+      throw_error<InvalidArgument>("SceneGraspModel: object ", i, " has ", K,
+                                   " suction points but ", o.suction_approach.rows(),
+                                   " approach directions; expected one per point");
+    }
+    for (std::size_t g = 0; g < K; ++g) {
+      const auto r = static_cast<Eigen::Index>(g);
+      if (!o.suction_points.row(r).allFinite() || !o.suction_approach.row(r).allFinite() ||
+          !(o.suction_approach.row(r).norm() > 1e-6f)) {
+        throw_error<InvalidArgument>("SceneGraspModel: object ", i, " suction grasp ", g,
+                                     " has a non-finite point or approach, or a zero approach");
+      }
+    }
+    check_len(o.suction_score_analytical, K, "suction_score_analytical");
+    check_len(o.suction_score_simulation, K, "suction_score_simulation");
+    num_pj += M;
+    num_suction += K;
+  }
+
+  // Obstacles and the visibility scene.
+  std::vector<RayGeometry> geoms;
+  for (std::size_t i = 0; i <= N; ++i) {
+    const Mesh& mesh = i < N ? *objects[i].mesh : tote;
+    const Pose X = i < N ? objects[i].X_WO : X_WT;
+    m.obstacles.push_back(std::make_unique<Solid>(mesh));
+    m.X_W_obstacle.push_back(X);
+    m.X_obstacle_W.push_back(X.inverse());
+    m.obstacle_box.push_back(world_box(m.obstacles.back()->box, X));
+    m.obstacle_vertex.push_back(X * m.obstacles.back()->vertex);
+    geoms.push_back({&mesh, X, static_cast<std::int32_t>(i < N ? i + 1 : 0)});
+  }
+  m.scene = std::make_unique<RayScene>(geoms);
+  {
+    const GripperMeshes gm = gripper_meshes(gripper, 0.0);
+    m.hand[0] = std::make_unique<Solid>(gm.palm);
+    m.hand[1] = std::make_unique<Solid>(gm.finger_left);
+    m.hand[2] = std::make_unique<Solid>(gm.finger_right);
+    const SuctionTool& t = options.tool;
+    const double body = cup.body_height - t.clearance;
+    if (!(body > 0.0)) {
+      throw_error<InvalidArgument>("SceneGraspModel: cup.body_height (", cup.body_height,
+                                   " m) must exceed tool.clearance (", t.clearance, " m)");
+    }
+    // Contact frame: z into the surface, so the tool lies at z < 0.
+    Pose X = Pose::Identity();
+    X.translation() = Vec3d(0, 0, -(t.clearance + 0.5 * body));
+    m.tool[0] = std::make_unique<Solid>(make_cylinder(cup.outer_radius, body, 32).transformed(X));
+    X.translation() = Vec3d(0, 0, -(cup.body_height + 0.5 * t.shaft_length));
+    m.tool[1] =
+        std::make_unique<Solid>(make_cylinder(t.shaft_radius, t.shaft_length, 32).transformed(X));
+  }
+
+  // Placement and wrench scores (serial: cheap).
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Vec3d g_W = options.gravity_world.normalized();
+  const std::size_t K = options.offsets.size();
+  PlacedGrasps& pj = m.pj;
+  PlacedGrasps& su = m.suction;
+  for (PlacedGrasps* p : {&pj, &su}) {
+    const std::size_t n = p == &pj ? num_pj : num_suction;
+    p->X_W_tool.resize(n);
+    p->X_W_contact.resize(n);
+    p->contacts.resize(static_cast<Eigen::Index>(n), 3);
+    p->second_contacts.resize(static_cast<Eigen::Index>(n), 3);
+    p->width.assign(n, 0.0f);
+    p->score_analytical.assign(n, nan);
+    p->score_simulation.assign(n, nan);
+    p->score_wrench.assign(n, nan);
+    p->object_index.assign(n, 0);
+    p->colliding.assign(n, 0);
+    p->hit.assign(n * K, -1);
+  }
+  const double tool_length = cup.body_height + options.tool.shaft_length;
+  std::size_t row_pj = 0, row_su = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    const SceneGraspObject& o = objects[i];
+    const Vec3d g_O = o.X_WO.linear().transpose() * g_W;
+    if (!o.pj.empty()) {
+      const std::vector<float> wrench =
+          pj_wrench_scores(o.pj, o.mass, o.com, g_O, options.pj_wrench);
+      for (std::size_t g = 0; g < o.pj.size(); ++g, ++row_pj) {
+        const ParallelJawGrasp& gr = o.pj[g];
+        const auto r = static_cast<Eigen::Index>(row_pj);
+        pj.X_W_tool[row_pj] = o.X_WO * hand_pose(gr, gripper);
+        Pose X_OG = Pose::Identity();
+        X_OG.linear() = grasp_rotation(gr);
+        X_OG.translation() = gr.p1;
+        pj.X_W_contact[row_pj] = o.X_WO * X_OG;
+        pj.contacts.row(r) = (o.X_WO * gr.p1).transpose();
+        pj.second_contacts.row(r) = (o.X_WO * (gr.p1 + gr.width * gr.closing)).transpose();
+        pj.width[row_pj] = static_cast<float>(gr.width);
+        if (!o.pj_score_analytical.empty()) pj.score_analytical[row_pj] = o.pj_score_analytical[g];
+        if (!o.pj_score_simulation.empty()) pj.score_simulation[row_pj] = o.pj_score_simulation[g];
+        pj.score_wrench[row_pj] = wrench[g];
+        pj.object_index[row_pj] = static_cast<std::int32_t>(i);
+      }
+    }
+    const auto Ks = static_cast<std::size_t>(o.suction_points.rows());
+    if (Ks > 0) {
+      const std::vector<float> wrench =
+          suction_wrench_scores(o.suction_points, o.suction_approach, o.mass, o.com, g_O,
+                                cup.radius, options.suction_wrench);
+      for (std::size_t g = 0; g < Ks; ++g, ++row_su) {
+        const auto s = static_cast<Eigen::Index>(g);
+        const auto r = static_cast<Eigen::Index>(row_su);
+        const Vec3d c_W = o.X_WO * o.suction_points.row(s).transpose().cast<double>();
+        const Vec3d a_W =
+            (o.X_WO.linear() * o.suction_approach.row(s).transpose().cast<double>()).normalized();
+        Pose X_WS = Pose::Identity();
+        X_WS.linear() = frame_z_to(a_W);
+        X_WS.translation() = c_W;
+        su.X_W_contact[row_su] = X_WS;
+        su.X_W_tool[row_su] = back_off(X_WS, tool_length);
+        su.contacts.row(r) = c_W.transpose();
+        su.second_contacts.row(r) = c_W.transpose();
+        if (!o.suction_score_analytical.empty())
+          su.score_analytical[row_su] = o.suction_score_analytical[g];
+        if (!o.suction_score_simulation.empty())
+          su.score_simulation[row_su] = o.suction_score_simulation[g];
+        su.score_wrench[row_su] = wrench[g];
+        su.object_index[row_su] = static_cast<std::int32_t>(i);
+      }
+    }
+  }
+
+  // Collisions (parallel over grasps; each result depends only on its row).
+  const int threads = resolve_num_threads(options.num_threads);
+  const std::array<const Solid*, 3> hand = {m.hand[1].get(), m.hand[2].get(), m.hand[0].get()};
+  parallel_for(num_pj, threads, 64, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t r = begin; r < end; ++r) {
+      const double opening = gripper.collision_opening(pj.width[r]);
+      const auto own = static_cast<std::int64_t>(pj.object_index[r]);
+      for (std::size_t k = 0; k < K; ++k) {
+        const double d = options.offsets[k];
+        const Pose X_WH = back_off(pj.X_W_tool[r], d);
+        const std::array<Pose, 3> poses = {X_WH * finger_offset(0, opening),
+                                           X_WH * finger_offset(1, opening), X_WH};
+        const std::int32_t h = m.first_hit(hand, poses, d == 0.0 ? own : -1);
+        pj.hit[r * K + k] = h;
+        if (h >= 0) pj.colliding[r] = 1;
+      }
+    }
+  });
+  const std::array<const Solid*, 2> tool = {m.tool[0].get(), m.tool[1].get()};
+  parallel_for(num_suction, threads, 64, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t r = begin; r < end; ++r) {
+      for (std::size_t k = 0; k < K; ++k) {
+        const Pose X = back_off(su.X_W_contact[r], options.offsets[k]);
+        const std::int32_t h = m.first_hit(tool, std::array<Pose, 2>{X, X}, -1);
+        su.hit[r * K + k] = h;
+        if (h >= 0) su.colliding[r] = 1;
+      }
+    }
+  });
+}
+
+SceneGraspModel::~SceneGraspModel() = default;
+
+std::size_t SceneGraspModel::num_objects() const { return impl_->num_objects; }
+const SceneGraspOptions& SceneGraspModel::options() const { return impl_->options; }
+const PlacedGrasps& SceneGraspModel::pj() const { return impl_->pj; }
+const PlacedGrasps& SceneGraspModel::suction() const { return impl_->suction; }
+
+std::vector<std::uint8_t> SceneGraspModel::visible(const CameraView& view,
+                                                   const Points3d& points) const {
+  view.validate("SceneGraspModel::visible view");
+  const Impl& m = *impl_;
+  const SceneGraspOptions& o = m.options;
+  const Eigen::Index n = points.rows();
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(n), 0);
+  const Pose X_CW = view.X_WC.inverse();
+  const Vec3d eye = view.X_WC.translation();
+  // Candidates in front of the camera and inside the image, ordered by 16 x 16 pixel tile
+  // (counting sort: linear, deterministic) so that neighbouring rays travel in packets.
+  constexpr int kTile = 16;
+  const int tiles_x = (view.K.width + kTile - 1) / kTile;
+  const int tiles_y = (view.K.height + kTile - 1) / kTile;
+  std::vector<Eigen::Index> cand;
+  std::vector<std::int32_t> tile;
+  cand.reserve(static_cast<std::size_t>(n));
+  tile.reserve(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vec3d p = points.row(i).transpose();
+    if (!p.allFinite()) {
+      throw_error<InvalidArgument>("SceneGraspModel::visible: point ", i, " is not finite");
+    }
+    const Vec3d q = X_CW * p;
+    if (!(q.z() > o.near_plane)) continue;
+    const double u = view.K.fx * q.x() / q.z() + view.K.cx;
+    const double v = view.K.fy * q.y() / q.z() + view.K.cy;
+    if (!(u >= 0.0 && u < view.K.width && v >= 0.0 && v < view.K.height)) continue;
+    cand.push_back(i);
+    tile.push_back(static_cast<std::int32_t>(static_cast<int>(v) / kTile * tiles_x +
+                                             static_cast<int>(u) / kTile));
+  }
+  std::vector<std::int64_t> start(static_cast<std::size_t>(tiles_x) * tiles_y + 1, 0);
+  for (const std::int32_t t : tile) ++start[static_cast<std::size_t>(t) + 1];
+  for (std::size_t t = 1; t < start.size(); ++t) start[t] += start[t - 1];
+  std::vector<Eigen::Index> order(cand.size());
+  for (std::size_t j = 0; j < cand.size(); ++j) order[start[tile[j]]++] = cand[j];
+  // Each ray is shortened so that a hit anywhere in [0, 1] is closer than (distance - tolerance).
+  const auto c = static_cast<Eigen::Index>(order.size());
+  Points3f origins(c, 3), directions(c, 3);
+  for (Eigen::Index j = 0; j < c; ++j) {
+    const Vec3d d = points.row(order[j]).transpose() - eye;
+    const double dist = d.norm();
+    origins.row(j) = eye.cast<float>().transpose();
+    directions.row(j) = (d * ((dist - o.visibility_tolerance) / dist)).cast<float>().transpose();
+  }
+  CastOptions cast;
+  cast.tnear = 0.0f;
+  cast.tfar = 1.0f;
+  cast.coherent = true;
+  cast.num_threads = o.num_threads;
+  const std::vector<std::uint8_t> blocked = m.scene->occluded(origins, directions, cast);
+  for (Eigen::Index j = 0; j < c; ++j) out[order[j]] = blocked[j] ? 0 : 1;
+  return out;
+}
+
+ViewGrasps SceneGraspModel::view_grasps(const CameraView& view,
+                                        const std::vector<std::uint8_t>& seen) const {
+  const Impl& m = *impl_;
+  if (seen.size() != m.num_objects) {
+    throw_error<InvalidArgument>("SceneGraspModel::view_grasps: seen has ", seen.size(),
+                                 " entries; expected one per object (", m.num_objects, ")");
+  }
+  view.validate("SceneGraspModel::view_grasps view");
+  const Pose X_CW = view.X_WC.inverse();
+  ViewGrasps out;
+  // Parallel-jaw: the grasps of seen objects with p1 or p2 visible.
+  {
+    const PlacedGrasps& p = m.pj;
+    std::vector<std::int64_t> cand;
+    for (std::size_t r = 0; r < p.size(); ++r)
+      if (seen[static_cast<std::size_t>(p.object_index[r])])
+        cand.push_back(static_cast<std::int64_t>(r));
+    // p1 first; p2 only where p1 is not visible.
+    const auto c = static_cast<Eigen::Index>(cand.size());
+    Points3d pts(c, 3);
+    for (Eigen::Index j = 0; j < c; ++j) pts.row(j) = p.contacts.row(cand[j]);
+    std::vector<std::uint8_t> vis = visible(view, pts);
+    std::vector<Eigen::Index> second;
+    for (Eigen::Index j = 0; j < c; ++j)
+      if (!vis[j]) second.push_back(j);
+    Points3d pts2(static_cast<Eigen::Index>(second.size()), 3);
+    for (std::size_t k = 0; k < second.size(); ++k)
+      pts2.row(static_cast<Eigen::Index>(k)) = p.second_contacts.row(cand[second[k]]);
+    const std::vector<std::uint8_t> vis2 = visible(view, pts2);
+    for (std::size_t k = 0; k < second.size(); ++k) vis[second[k]] = vis2[k];
+    for (Eigen::Index j = 0; j < c; ++j) {
+      if (!vis[j]) continue;
+      const auto r = static_cast<std::size_t>(cand[j]);
+      out.pj_index.push_back(cand[j]);
+      out.pj_X_C_tool.push_back(X_CW * p.X_W_tool[r]);
+      out.pj_X_C_contact.push_back(X_CW * p.X_W_contact[r]);
+    }
+  }
+  {
+    const PlacedGrasps& p = m.suction;
+    std::vector<std::int64_t> cand;
+    for (std::size_t r = 0; r < p.size(); ++r)
+      if (seen[static_cast<std::size_t>(p.object_index[r])])
+        cand.push_back(static_cast<std::int64_t>(r));
+    const auto c = static_cast<Eigen::Index>(cand.size());
+    Points3d pts(c, 3);
+    for (Eigen::Index j = 0; j < c; ++j) pts.row(j) = p.contacts.row(cand[j]);
+    const std::vector<std::uint8_t> vis = visible(view, pts);
+    for (Eigen::Index j = 0; j < c; ++j) {
+      if (!vis[j]) continue;
+      const auto r = static_cast<std::size_t>(cand[j]);
+      out.suction_index.push_back(cand[j]);
+      out.suction_X_C_tool.push_back(X_CW * p.X_W_tool[r]);
+      out.suction_X_C_contact.push_back(X_CW * p.X_W_contact[r]);
+    }
+  }
+  return out;
+}
+
+}  // namespace mgn
