@@ -338,6 +338,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.set_defaults(func=_cmd_demo)
     __import__("mgn.render.cli", fromlist=["register"]).register(sub)
+    __import__("mgn.pipeline.cli", fromlist=["register"]).register(sub)  # generate, config
     return parser
 
 

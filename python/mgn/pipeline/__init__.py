@@ -1,0 +1,66 @@
+"""The dataset pipeline: ``mgn generate`` (scene tasks on a process pool or Dask), object-label
+cache, scene manifests and the scene writer.
+
+- :func:`generate`: objects, gripper and cup in, a complete dataset out (resumable).
+- :func:`scene_seed`: the seed of scene i of a dataset.
+- :func:`run_scene`: one scene task (drop, write, manifest, rename).
+- :func:`write_scene`: the one function that writes a scene folder.
+- :func:`object_labels`: an object's labels, cached in ``$MGN_CACHE_DIR/labels``.
+- :func:`write_manifest`, :func:`check_manifest`: a scene folder's list of files and checksums.
+
+Names are imported on first use, so ``import mgn`` stays light.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+_EXPORTS = {
+    "GenerateReport": "generate",
+    "SceneResult": "generate",
+    "SceneTask": "generate",
+    "generate": "generate",
+    "run_scene": "generate",
+    "scene_seed": "generate",
+    "check_manifest": "manifest",
+    "write_manifest": "manifest",
+    "ObjectLabels": "object_labels",
+    "label_cache_dir": "object_labels",
+    "object_labels": "object_labels",
+    "write_models": "object_labels",
+    "scene_views": "scene_writer",
+    "write_scene": "scene_writer",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'mgn.pipeline' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"mgn.pipeline.{module}"), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+if TYPE_CHECKING:
+    from mgn.pipeline.generate import (
+        GenerateReport,
+        SceneResult,
+        SceneTask,
+        generate,
+        run_scene,
+        scene_seed,
+    )
+    from mgn.pipeline.manifest import check_manifest, write_manifest
+    from mgn.pipeline.object_labels import (
+        ObjectLabels,
+        label_cache_dir,
+        object_labels,
+        write_models,
+    )
+    from mgn.pipeline.scene_writer import scene_views, write_scene
