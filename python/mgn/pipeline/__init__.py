@@ -17,18 +17,18 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 _EXPORTS = {
-    "GenerateReport": "generate",
-    "SceneResult": "generate",
-    "SceneTask": "generate",
-    "generate": "generate",
-    "run_scene": "generate",
-    "scene_seed": "generate",
+    "GenerateReport": "runner",
+    "SceneResult": "runner",
+    "SceneTask": "runner",
+    "generate": "runner",
+    "run_scene": "runner",
+    "scene_seed": "runner",
     "check_manifest": "manifest",
     "write_manifest": "manifest",
-    "ObjectLabels": "object_labels",
-    "label_cache_dir": "object_labels",
-    "object_labels": "object_labels",
-    "write_models": "object_labels",
+    "ObjectLabels": "label_cache",
+    "label_cache_dir": "label_cache",
+    "object_labels": "label_cache",
+    "write_models": "label_cache",
     "scene_views": "scene_writer",
     "write_scene": "scene_writer",
 }
@@ -48,7 +48,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
-    from mgn.pipeline.generate import (
+    from mgn.pipeline.runner import (
         GenerateReport,
         SceneResult,
         SceneTask,
@@ -57,7 +57,7 @@ if TYPE_CHECKING:
         scene_seed,
     )
     from mgn.pipeline.manifest import check_manifest, write_manifest
-    from mgn.pipeline.object_labels import (
+    from mgn.pipeline.label_cache import (
         ObjectLabels,
         label_cache_dir,
         object_labels,

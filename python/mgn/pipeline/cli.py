@@ -15,7 +15,7 @@ __all__ = ["register"]
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
-    from mgn.pipeline.generate import generate
+    from mgn.pipeline.runner import generate
 
     report = generate(
         args.out,
@@ -59,7 +59,7 @@ def _cmd_config_check(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``generate`` and the ``config`` command group to the ``mgn`` subparsers."""
     p = sub.add_parser(
-        "generate",
+        "runner",
         help="generate a dataset (resumable; local processes or a Dask cluster)",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from mgn.config import CameraConfig, Config
-from mgn.pipeline.object_labels import ObjectLabels
+from mgn.pipeline.label_cache import ObjectLabels
 from mgn.render.camera import CameraView, Intrinsics, hemisphere_rig, mgn_rig
 from mgn.scene.scene import Scene
 

@@ -6,7 +6,7 @@ Steps:
    config, the seed and the scene count; it is updated at the end.
 2. The objects of every scene are chosen up front (:func:`mgn.scene.compose_objects`, seeded by
    the scene seed), so that each distinct object is labelled once
-   (:mod:`mgn.pipeline.object_labels`: cached on disk, missing ones computed as tasks of the
+   (:mod:`mgn.pipeline.label_cache`: cached on disk, missing ones computed as tasks of the
    executor) and ``models/<id>/`` is written.
 3. Every scene is an independent task (:func:`run_scene`): drop the objects
    (:func:`mgn.scene.drop_scene`), then :func:`mgn.pipeline.scene_writer.write_scene` into
@@ -52,14 +52,14 @@ from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.atomic import atomic_write_text
 from mgn.objects import ObjectSpec
 from mgn.pipeline.manifest import check_manifest, write_manifest
-from mgn.pipeline.object_labels import ObjectLabels
+from mgn.pipeline.label_cache import ObjectLabels
 
 __all__ = [
     "DATASET_SCHEMA_VERSION",
     "GenerateReport",
     "SceneResult",
     "SceneTask",
-    "generate",
+    "runner",
     "run_scene",
     "scene_seed",
 ]
@@ -208,7 +208,7 @@ def run_scene(task: SceneTask) -> SceneResult:
 
 
 def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
-    from mgn.pipeline.object_labels import compute_object_labels
+    from mgn.pipeline.label_cache import compute_object_labels
 
     spec, config, num_threads = args
     return compute_object_labels(spec, config, num_threads)
@@ -575,7 +575,7 @@ def generate(
         t0 = time.perf_counter()
         labels: dict[str, ObjectLabels] = {}
         missing = []
-        from mgn.pipeline.object_labels import load_cached_labels, save_cached_labels
+        from mgn.pipeline.label_cache import load_cached_labels, save_cached_labels
 
         for spec in ordered:
             cached = load_cached_labels(spec, cfg) if use_cache else None
@@ -598,7 +598,7 @@ def generate(
                 bar.update(1)
             bar.close()
             report.labels_computed = len(missing)
-        from mgn.pipeline.object_labels import write_models
+        from mgn.pipeline.label_cache import write_models
 
         write_models(out, ordered, labels, cfg)
         report.label_seconds = time.perf_counter() - t0
