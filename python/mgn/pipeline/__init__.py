@@ -33,7 +33,22 @@ _EXPORTS = {
     "write_scene": "scene_writer",
 }
 
-__all__ = sorted(_EXPORTS)
+__all__ = [
+    "GenerateReport",
+    "ObjectLabels",
+    "SceneResult",
+    "SceneTask",
+    "check_manifest",
+    "generate",
+    "label_cache_dir",
+    "object_labels",
+    "run_scene",
+    "scene_seed",
+    "scene_views",
+    "write_manifest",
+    "write_models",
+    "write_scene",
+]
 
 
 def __getattr__(name: str) -> Any:
@@ -48,6 +63,13 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
+    from mgn.pipeline.label_cache import (
+        ObjectLabels,
+        label_cache_dir,
+        object_labels,
+        write_models,
+    )
+    from mgn.pipeline.manifest import check_manifest, write_manifest
     from mgn.pipeline.runner import (
         GenerateReport,
         SceneResult,
@@ -55,12 +77,5 @@ if TYPE_CHECKING:
         generate,
         run_scene,
         scene_seed,
-    )
-    from mgn.pipeline.manifest import check_manifest, write_manifest
-    from mgn.pipeline.label_cache import (
-        ObjectLabels,
-        label_cache_dir,
-        object_labels,
-        write_models,
     )
     from mgn.pipeline.scene_writer import scene_views, write_scene

@@ -1,9 +1,9 @@
 """``mgn generate`` and ``mgn config``::
 
-    mgn generate --scenes N --out DIR [--config cfg.yaml] [--objects NAME ...] [--seed S]
-                 [--workers K] [--resume] [--scheduler tcp://host:8786] [--quiet] [--no-cache]
-    mgn config dump [--out cfg.yaml]     the default configuration (every key, MGN values)
-    mgn config check cfg.yaml            validate a configuration file
+mgn generate --scenes N --out DIR [--config cfg.yaml] [--objects NAME ...] [--seed S]
+             [--workers K] [--resume] [--scheduler tcp://host:8786] [--quiet] [--no-cache]
+mgn config dump [--out cfg.yaml]     the default configuration (every key, MGN values)
+mgn config check cfg.yaml            validate a configuration file
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def _cmd_config_check(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``generate`` and the ``config`` command group to the ``mgn`` subparsers."""
     p = sub.add_parser(
-        "runner",
+        "generate",
         help="generate a dataset (resumable; local processes or a Dask cluster)",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -51,15 +51,15 @@ from mgn.config import Config, ConfigError, load_config
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.atomic import atomic_write_text
 from mgn.objects import ObjectSpec
-from mgn.pipeline.manifest import check_manifest, write_manifest
 from mgn.pipeline.label_cache import ObjectLabels
+from mgn.pipeline.manifest import check_manifest, write_manifest
 
 __all__ = [
     "DATASET_SCHEMA_VERSION",
     "GenerateReport",
     "SceneResult",
     "SceneTask",
-    "runner",
+    "generate",
     "run_scene",
     "scene_seed",
 ]
@@ -194,14 +194,12 @@ def run_scene(task: SceneTask) -> SceneResult:
         full = _disk_full(e)
         if full is not None:
             where = full.filename or tmp
-            msg = f"disk full while writing scene {task.index} ('{where}')"
+            msg = f"disk full while writing scene{task.index} ('{where}')"
         else:
             frame = traceback.extract_tb(e.__traceback__)[-1:]
             at = f" [{Path(frame[0].filename).name}:{frame[0].lineno}]" if frame else ""
             msg = f"{type(e).__name__}: {e}{at}"
-        return SceneResult(
-            task.index, task.seed, False, msg, full is not None, times, 0, 0, worker
-        )
+        return SceneResult(task.index, task.seed, False, msg, full is not None, times, 0, 0, worker)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -388,7 +386,8 @@ class GenerateReport:
         lines = [
             f"dataset {self.out_dir}: {n_ok}/{self.num_scenes} scenes complete "
             f"({len(self.ok)} written now, {len(self.skipped)} already there), "
-            f"{len(self.failed)} failed" + (f", {len(self.not_run)} not run" if self.not_run else "")
+            f"{len(self.failed)} failed"
+            + (f", {len(self.not_run)} not run" if self.not_run else "")
         ]
         lines.append(
             f"  object labels: {self.labels_computed} computed, {self.labels_cached} from the "
@@ -530,7 +529,9 @@ def generate(
                                              categories=None)
         )  # fmt: skip
     if isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
-        raise InvalidArgumentError(f"generate: --scenes must be an integer >= 1, got {num_scenes!r}")
+        raise InvalidArgumentError(
+            f"generate: --scenes must be an integer >= 1, got {num_scenes!r}"
+        )
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InvalidArgumentError(f"generate: --workers must be an integer >= 1, got {workers!r}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
@@ -645,9 +646,7 @@ def generate(
                 executor.cancel()
                 break
         bar.close()
-        report.not_run = sorted(
-            t.index for t in todo if t.index not in report.results
-        )
+        report.not_run = sorted(t.index for t in todo if t.index not in report.results)
     except KeyboardInterrupt:
         executor.cancel()
         _clean_tmp(out)
