@@ -110,7 +110,8 @@ def test_two_workers_give_the_same_bytes(
 def test_dask_local_cluster_gives_the_same_bytes(
     reference: tuple[Path, dict], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    distributed = pytest.importorskip("distributed")
+    import distributed  # the optional 'cluster' extra
+
     # A fresh cache: the object labels are computed on the Dask workers too.
     monkeypatch.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
     out = tmp_path / "ds"
