@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--scenes", type=int, required=True, metavar="N", help="number of scenes")
+    p.add_argument("--scenes", type=int, default=3, metavar="N", help="number of scenes (default 3)")
     p.add_argument("--out", required=True, metavar="DIR", help="dataset folder")
     p.add_argument("--config", metavar="YAML", help="configuration (default: MGN defaults)")
     p.add_argument(
