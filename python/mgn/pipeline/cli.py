@@ -1,6 +1,6 @@
 """``mgn generate`` and ``mgn config``::
 
-mgn generate --scenes N --out DIR [--config cfg.yaml] [--objects NAME ...] [--seed S]
+mgn generate --out DIR [--scenes N] [--config cfg.yaml] [--objects NAME ...] [--seed S]
              [--workers K] [--resume] [--scheduler tcp://host:8786] [--quiet] [--no-cache]
 mgn config dump [--out cfg.yaml]     the default configuration (every key, MGN values)
 mgn config check cfg.yaml            validate a configuration file
@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--scenes", type=int, default=3, metavar="N", help="number of scenes (default 3)")
+    p.add_argument("--scenes", type=int, default=3, metavar="N", help="scenes (default 3)")
     p.add_argument("--out", required=True, metavar="DIR", help="dataset folder")
     p.add_argument("--config", metavar="YAML", help="configuration (default: MGN defaults)")
     p.add_argument(
