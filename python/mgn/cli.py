@@ -339,6 +339,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_demo)
     __import__("mgn.render.cli", fromlist=["register"]).register(sub)
     __import__("mgn.io.cli", fromlist=["register"]).register(sub)
+    __import__("mgn.pipeline.cli", fromlist=["register"]).register(sub)  # generate, config
     return parser
 
 

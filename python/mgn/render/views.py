@@ -235,14 +235,14 @@ def _write_view(folder: Path, res: ViewImages) -> None:
     atomic_write_bytes(folder / f"{v}_rgb.png", _png(res.rgb))
     atomic_write_bytes(folder / f"{v}_depth.png", _png(depth_picture(res.depth)))
     ideal = np.where(res.depth_ideal > 0, res.depth_ideal, np.nan).astype(np.float32)
-    buf = io.BytesIO()
-    np.savez_compressed(
-        buf,
+    from mgn.io.deterministic import npz_bytes  # reproducible bytes (no zip timestamps)
+
+    data = npz_bytes(
         depth=(res.depth * M_TO_CM).astype(np.float32),
         depth_ideal=(ideal * M_TO_CM).astype(np.float32),
         valid_depth=res.valid,
     )
-    atomic_write_bytes(folder / f"{v}_depth.npz", buf.getvalue())
+    atomic_write_bytes(folder / f"{v}_depth.npz", data)
     if res.instance_ids.max(initial=0) > 65535:
         raise ValueError("instance ids above 65535 do not fit the 16-bit instance PNG")
     atomic_write_bytes(folder / f"{v}_instances.png", _png(res.instance_ids.astype(np.uint16)))

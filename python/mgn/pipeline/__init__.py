@@ -1,0 +1,81 @@
+"""The dataset pipeline: ``mgn generate`` (scene tasks on a process pool or Dask), object-label
+cache, scene manifests and the scene writer.
+
+- :func:`generate`: objects, gripper and cup in, a complete dataset out (resumable).
+- :func:`scene_seed`: the seed of scene i of a dataset.
+- :func:`run_scene`: one scene task (drop, write, manifest, rename).
+- :func:`write_scene`: the one function that writes a scene folder.
+- :func:`object_labels`: an object's labels, cached in ``$MGN_CACHE_DIR/labels``.
+- :func:`write_manifest`, :func:`check_manifest`: a scene folder's list of files and checksums.
+
+Names are imported on first use, so ``import mgn`` stays light.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+_EXPORTS = {
+    "GenerateReport": "runner",
+    "SceneResult": "runner",
+    "SceneTask": "runner",
+    "generate": "runner",
+    "run_scene": "runner",
+    "scene_seed": "runner",
+    "check_manifest": "manifest",
+    "write_manifest": "manifest",
+    "ObjectLabels": "label_cache",
+    "label_cache_dir": "label_cache",
+    "object_labels": "label_cache",
+    "write_models": "label_cache",
+    "scene_views": "scene_writer",
+    "write_scene": "scene_writer",
+}
+
+__all__ = [
+    "GenerateReport",
+    "ObjectLabels",
+    "SceneResult",
+    "SceneTask",
+    "check_manifest",
+    "generate",
+    "label_cache_dir",
+    "object_labels",
+    "run_scene",
+    "scene_seed",
+    "scene_views",
+    "write_manifest",
+    "write_models",
+    "write_scene",
+]
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'mgn.pipeline' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"mgn.pipeline.{module}"), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+if TYPE_CHECKING:
+    from mgn.pipeline.label_cache import (
+        ObjectLabels,
+        label_cache_dir,
+        object_labels,
+        write_models,
+    )
+    from mgn.pipeline.manifest import check_manifest, write_manifest
+    from mgn.pipeline.runner import (
+        GenerateReport,
+        SceneResult,
+        SceneTask,
+        generate,
+        run_scene,
+        scene_seed,
+    )
+    from mgn.pipeline.scene_writer import scene_views, write_scene

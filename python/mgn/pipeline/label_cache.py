@@ -1,0 +1,297 @@
+"""Object labels, computed once per object and cached on disk.
+
+Each object's suction and parallel-jaw labels (:func:`mgn.suction.label_object`,
+:func:`mgn.pj.label_object`) depend only on its geometry, its density, the cup or gripper and the
+label parameters, never on a scene. They are computed once and kept in
+``$MGN_CACHE_DIR/labels`` (default ``~/.cache/mgn/labels``, next to the convex-decomposition
+cache of :func:`mgn.scene.convex.cache_dir`), one file per object and label kind:
+
+    labels/suction-<sha256>.npz    labels/pj-<sha256>.npz
+
+The key hashes everything the labels depend on: the mesh (vertex and face bytes), the density,
+the cup (or gripper, including the bytes of its mesh files), the label parameters, the mgn
+version and :data:`CACHE_VERSION`. A changed input therefore never reads a stale entry, and an
+unreadable entry is recomputed. The entries are written atomically and are byte-reproducible.
+
+The dataset's ``models/<3-digit id>/`` folders are then written from these labels with the
+existing writers (:func:`mgn.io.model_folder.write_model_folder`,
+:func:`mgn.suction.write_suction_labels`, :func:`mgn.pj.write_pj_labels`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import json
+import os
+import shutil
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mgn import __version__
+from mgn.config import Config
+from mgn.errors import IoError
+from mgn.io.atomic import atomic_write_bytes
+from mgn.io.deterministic import npz_bytes
+from mgn.objects import ObjectSpec
+from mgn.pj.labels import PjLabels
+from mgn.suction.labels import SuctionLabels
+
+__all__ = [
+    "CACHE_VERSION",
+    "ObjectLabels",
+    "compute_object_labels",
+    "label_cache_dir",
+    "label_keys",
+    "load_cached_labels",
+    "object_labels",
+    "save_cached_labels",
+    "write_models",
+]
+
+#: Bump when the label layout or algorithms change, so old cache entries are not reused.
+CACHE_VERSION = "object-labels-1"
+_SUCTION_FIELDS = [f.name for f in dataclasses.fields(SuctionLabels)]
+_PJ_FIELDS = [f.name for f in dataclasses.fields(PjLabels)]
+
+
+@dataclass(frozen=True)
+class ObjectLabels:
+    """The labels of one object (object frame, metres).
+
+    Attributes:
+        name: object name; category_id: its category id.
+        suction: suction labels, or None when ``labels.suction`` is off.
+        paralleljaw: parallel-jaw labels (with the physics score when ``labels.pj_physics``),
+            or None when ``labels.paralleljaw`` is off.
+    """
+
+    name: str
+    category_id: int
+    suction: SuctionLabels | None
+    paralleljaw: PjLabels | None
+
+
+def label_cache_dir() -> Path:
+    """``$MGN_CACHE_DIR/labels`` or ``~/.cache/mgn/labels``."""
+    from mgn.scene.convex import cache_dir
+
+    return cache_dir().parent / "labels"
+
+
+def _hash_file(h: Any, path: str | None) -> None:
+    if path is None:
+        return
+    try:
+        h.update(Path(path).read_bytes())
+    except OSError:
+        h.update(f"missing:{path}".encode())
+
+
+def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
+    """Cache keys ``{"suction": sha256, "paralleljaw": sha256}`` of the labels of ``spec``
+    under ``config`` (only the kinds switched on)."""
+    base = hashlib.sha256()
+    base.update(f"{CACHE_VERSION}|{__version__}".encode())
+    base.update(np.ascontiguousarray(spec.vertices, np.float64).tobytes())
+    base.update(np.ascontiguousarray(spec.faces, np.int32).tobytes())
+    base.update(repr(float(spec.density)).encode())
+    ol = config.object_labels
+    keys = {}
+    if config.labels.suction:
+        h = base.copy()
+        params = {
+            "cup": config.cup.to_dict(),
+            "points": ol.suction_points,
+            "model": ol.suction_model,
+            "seed": ol.seed,
+        }
+        h.update(json.dumps(params, sort_keys=True).encode())
+        keys["suction"] = h.hexdigest()
+    if config.labels.paralleljaw:
+        h = base.copy()
+        params = {
+            "gripper": config.gripper.to_dict(),
+            "points": ol.pj_points,
+            "seed": ol.seed,
+            "physics": config.labels.pj_physics,
+            "physics_grasps": ol.physics_grasps if config.labels.pj_physics else None,
+            "physics_grid": ol.physics_grid if config.labels.pj_physics else None,
+        }
+        h.update(json.dumps(params, sort_keys=True).encode())
+        for f in ("palm_mesh", "finger_left_mesh", "finger_right_mesh"):
+            _hash_file(h, getattr(config.gripper, f))
+        keys["paralleljaw"] = h.hexdigest()
+    return keys
+
+
+def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0) -> ObjectLabels:
+    """Compute the labels of one object (no cache). Deterministic for the config's seed,
+    whatever ``num_threads`` (0 = all cores)."""
+    from mgn.geometry import mass_properties
+    from mgn.io.model_folder import object_mesh
+
+    mesh = object_mesh(spec)
+    props = mass_properties(mesh, spec.density)
+    ol = config.object_labels
+    suction = None
+    if config.labels.suction:
+        from mgn.suction.labels import label_object as suction_label_object
+
+        suction = suction_label_object(
+            mesh,
+            mass=props.mass,
+            com=props.center_of_mass,
+            cup=config.cup,
+            model=ol.suction_model,  # type: ignore[arg-type]
+            num_points=ol.suction_points,
+            seed=ol.seed,
+            num_threads=num_threads,
+        )
+    pj = None
+    if config.labels.paralleljaw:
+        from mgn.pj.labels import label_object as pj_label_object
+
+        physics = None
+        if config.labels.pj_physics:
+            from mgn.pj.physics import ShakeOptions, ShakeScorer
+
+            physics = ShakeScorer(
+                density=spec.density,
+                gripper=config.gripper,
+                options=ShakeOptions(grid=ol.physics_grid, num_threads=num_threads),
+                max_grasps=ol.physics_grasps,
+            )
+        pj = pj_label_object(
+            mesh,
+            mass=props.mass,
+            com=props.center_of_mass,
+            gripper=config.gripper,
+            num_points=ol.pj_points,
+            seed=ol.seed,
+            num_threads=num_threads,
+            physics=physics,
+        )
+    return ObjectLabels(spec.name, spec.category_id, suction, pj)
+
+
+def _pack(labels: SuctionLabels | PjLabels) -> bytes:
+    arrays: dict[str, Any] = {}
+    scalars: dict[str, Any] = {}
+    for f in dataclasses.fields(labels):
+        value = getattr(labels, f.name)
+        if isinstance(value, np.ndarray):
+            arrays[f.name] = value
+        else:
+            scalars[f.name] = value
+    meta = json.dumps(scalars).encode("utf-8")  # key order kept: the metadata is written as is
+    return npz_bytes(**arrays, _scalars=np.frombuffer(meta, np.uint8))
+
+
+def _unpack(path: Path, cls: type) -> Any | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+        scalars = json.loads(bytes(data.pop("_scalars")).decode("utf-8"))
+        return cls(**data, **scalars)
+    except (OSError, KeyError, ValueError, TypeError):
+        return None  # unreadable, partial or outdated entry: recompute
+
+
+def _entry(kind: str, key: str) -> Path:
+    prefix = "suction" if kind == "suction" else "pj"
+    return label_cache_dir() / f"{prefix}-{key}.npz"
+
+
+def load_cached_labels(spec: ObjectSpec, config: Config) -> ObjectLabels | None:
+    """The cached labels of ``spec`` under ``config``, or None if any kind is missing."""
+    keys = label_keys(spec, config)
+    found: dict[str, Any] = {"suction": None, "paralleljaw": None}
+    for kind, key in keys.items():
+        path = _entry(kind, key)
+        if not path.is_file():
+            return None
+        value = _unpack(path, SuctionLabels if kind == "suction" else PjLabels)
+        if value is None:
+            return None
+        found[kind] = value
+    return ObjectLabels(spec.name, spec.category_id, found["suction"], found["paralleljaw"])
+
+
+def save_cached_labels(spec: ObjectSpec, config: Config, labels: ObjectLabels) -> None:
+    """Store ``labels`` in the cache. An unwritable cache folder is not an error (the cache is
+    an optimisation only)."""
+    keys = label_keys(spec, config)
+    for kind, key in keys.items():
+        value = labels.suction if kind == "suction" else labels.paralleljaw
+        if value is None:
+            continue
+        with contextlib.suppress(OSError):
+            atomic_write_bytes(_entry(kind, key), _pack(value))
+
+
+def object_labels(
+    spec: ObjectSpec, config: Config, *, num_threads: int = 0, use_cache: bool = True
+) -> ObjectLabels:
+    """The labels of ``spec``: from the cache, else computed and stored in the cache."""
+    if use_cache:
+        cached = load_cached_labels(spec, config)
+        if cached is not None:
+            return cached
+    labels = compute_object_labels(spec, config, num_threads)
+    if use_cache:
+        save_cached_labels(spec, config, labels)
+    return labels
+
+
+def write_models(
+    root: str | os.PathLike[str],
+    specs: Sequence[ObjectSpec],
+    labels: Mapping[str, ObjectLabels],
+    config: Config,
+) -> list[Path]:
+    """Write ``<root>/models/<3-digit id>/`` for every spec (with its labels), plus the tote
+    (``<root>/tote/``), ``gripper.yaml`` and ``suction_cup.yaml``. Returns the object folders.
+
+    Each object folder is built completely under ``<root>/.tmp-models-<pid>/`` and then renamed
+    into place (replacing an older one), so an interrupted run never leaves a partial folder.
+    """
+    from mgn.io.model_folder import write_model_folder, write_tote
+    from mgn.pj.labels import write_pj_labels
+    from mgn.suction.labels import write_suction_labels
+
+    out = Path(root)
+    staging = out / f".tmp-models-{os.getpid()}"
+    folders = []
+    try:
+        for spec in specs:
+            tmp = write_model_folder(spec, staging, overwrite=True)
+            lab = labels.get(spec.name)
+            h5 = tmp / "textured.obj.hdf5"
+            if lab is not None and lab.suction is not None:
+                write_suction_labels(h5, lab.suction)
+            if lab is not None and lab.paralleljaw is not None:
+                write_pj_labels(h5, lab.paralleljaw)
+            target = out / "models" / tmp.name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            if target.exists():
+                shutil.rmtree(target)
+            os.replace(tmp, target)
+            folders.append(target)
+        write_tote(config.tote, out)
+        config.gripper.to_yaml(out / "gripper.yaml")
+        config.cup.to_yaml(out / "suction_cup.yaml")
+    except OSError as e:
+        if isinstance(e, IoError):
+            raise
+        from mgn.io.atomic import _io_error
+
+        raise _io_error(out / "models", e) from e
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return folders

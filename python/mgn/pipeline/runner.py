@@ -1,0 +1,669 @@
+"""``mgn generate``: objects, gripper and cup in, a complete dataset out.
+
+Steps:
+
+1. ``dataset.json`` is written (atomically) with the schema version, the mgn version, the full
+   config, the seed and the scene count; it is updated at the end.
+2. The objects of every scene are chosen up front (:func:`mgn.scene.compose_objects`, seeded by
+   the scene seed), so that each distinct object is labelled once
+   (:mod:`mgn.pipeline.label_cache`: cached on disk, missing ones computed as tasks of the
+   executor) and ``models/<id>/`` is written.
+3. Every scene is an independent task (:func:`run_scene`): drop the objects
+   (:func:`mgn.scene.drop_scene`), then :func:`mgn.pipeline.scene_writer.write_scene` into
+   ``DIR/.tmp-scene<N>-<pid>``, then the manifest (:mod:`mgn.pipeline.manifest`), then a rename
+   to ``DIR/scene<N>``. A half-written scene therefore only ever exists under a ``.tmp-`` name.
+
+Scene seeds: scene ``i`` (0-based, folder ``scene<i>``) of a dataset with seed ``S`` uses
+:func:`scene_seed` ``(S, i)`` = ``numpy.random.SeedSequence([S, i]).generate_state(1,
+numpy.uint32)[0] >> 1`` (31 bits): independent of the other scenes, of the executor and of the
+number of workers, so the same seed gives byte-identical files.
+
+Executors: in-process (``workers=1``), a local process pool (``workers=K``, spawned processes),
+or a Dask distributed cluster (``scheduler="tcp://host:8786"``; every worker must see ``DIR``
+at the same path and have mgn installed; see docs/cluster.md).
+
+Failures: a scene that raises is reported with its index, seed and error and does not stop the
+others. A full disk is reported as "disk full" with the path, and stops scheduling new scenes.
+Ctrl-C stops the run, removes the temporary folders and leaves the complete scenes; ``--resume``
+continues (it also removes any ``.tmp-`` folder a killed run left behind, and redoes scenes whose
+manifest is missing or inconsistent).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import errno
+import json
+import os
+import shutil
+import time
+import traceback
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mgn import __version__
+from mgn.config import Config, ConfigError, load_config
+from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.atomic import atomic_write_text
+from mgn.objects import ObjectSpec
+from mgn.pipeline.label_cache import ObjectLabels
+from mgn.pipeline.manifest import check_manifest, write_manifest
+
+__all__ = [
+    "DATASET_SCHEMA_VERSION",
+    "GenerateReport",
+    "SceneResult",
+    "SceneTask",
+    "generate",
+    "run_scene",
+    "scene_seed",
+]
+
+#: ``schema_version`` of ``dataset.json``.
+DATASET_SCHEMA_VERSION = 1
+TMP_PREFIX = ".tmp-"
+SCENE_SEED_RULE = "numpy.random.SeedSequence([seed, i]).generate_state(1, numpy.uint32)[0] >> 1"
+STAGES = ("drop", "write", "finalize")
+
+
+def scene_seed(seed: int, index: int) -> int:
+    """The seed of scene ``index`` of a dataset with seed ``seed`` (see the module doc)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InvalidArgumentError(f"scene_seed: seed must be an integer >= 0, got {seed!r}")
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
+        raise InvalidArgumentError(f"scene_seed: index must be an integer >= 0, got {index!r}")
+    state = np.random.SeedSequence([int(seed), int(index)]).generate_state(1, np.uint32)
+    return int(state[0]) >> 1
+
+
+# ------------------------------------------------------------------------------------- tasks
+
+
+@dataclass(frozen=True)
+class SceneTask:
+    """Everything a worker needs for one scene (picklable).
+
+    Attributes:
+        index: scene number N (folder ``scene<N>``); seed: its seed (:func:`scene_seed`).
+        out_dir: the dataset folder (absolute; shared by every worker).
+        config: the dataset config.
+        objects: (name, source) of the objects to drop, in drop order (source ``"builtin"`` or
+            a user-objects YAML path).
+        labels: name -> the labels of the objects of this scene.
+    """
+
+    index: int
+    seed: int
+    out_dir: str
+    config: Config
+    objects: tuple[tuple[str, str], ...]
+    labels: dict[str, ObjectLabels] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class SceneResult:
+    """The outcome of one scene task.
+
+    Attributes:
+        index, seed: the scene. ok: written completely.
+        error: one-line error when not ok; disk_full: the error was a full disk.
+        times: seconds per stage (drop, write, finalize).
+        num_bytes: size of the scene folder; num_objects: objects in the tote.
+        worker: host and process id that ran it.
+    """
+
+    index: int
+    seed: int
+    ok: bool
+    error: str | None = None
+    disk_full: bool = False
+    times: dict[str, float] = field(default_factory=dict)
+    num_bytes: int = 0
+    num_objects: int = 0
+    worker: str = ""
+
+
+def _disk_full(e: BaseException) -> OSError | None:
+    """The ENOSPC error in the chain of ``e``, if any."""
+    seen = set()
+    cur: BaseException | None = e
+    while cur is not None and id(cur) not in seen:
+        seen.add(id(cur))
+        if isinstance(cur, OSError) and (
+            cur.errno == errno.ENOSPC or str(cur).startswith("disk full")
+        ):
+            return cur
+        cur = cur.__cause__ or cur.__context__
+    return None
+
+
+def _folder_size(folder: Path) -> int:
+    return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
+
+
+def run_scene(task: SceneTask) -> SceneResult:
+    """Drop, write and finalise one scene (see the module doc). Never raises for an ordinary
+    error: the result says what went wrong. The temporary folder is removed on any failure,
+    including KeyboardInterrupt (which is re-raised)."""
+    import socket
+
+    from mgn.pipeline.scene_writer import write_scene
+    from mgn.scene.drop import drop_scene
+    from mgn.scene.scene import BUILTIN, resolve_object
+
+    out = Path(task.out_dir)
+    final = out / f"scene{task.index}"
+    tmp = out / f"{TMP_PREFIX}scene{task.index}-{os.getpid()}"
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    times: dict[str, float] = {}
+    t0 = time.perf_counter()
+    try:
+        specs = [resolve_object(name, source) for name, source in task.objects]
+        sources = {name: source for name, source in task.objects if source != BUILTIN}
+        scene = drop_scene(
+            specs,
+            seed=task.seed,
+            tote=task.config.tote,
+            options=task.config.drop,
+            sources=sources,  # type: ignore[arg-type]
+        )
+        times["drop"] = time.perf_counter() - t0
+        t1 = time.perf_counter()
+        if tmp.exists():
+            shutil.rmtree(tmp)
+        tmp.mkdir(parents=True)
+        write_scene(scene, tmp, task.config, task.labels)
+        times["write"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        write_manifest(tmp, scene=task.index, seed=task.seed)
+        size = _folder_size(tmp)
+        if final.exists():  # an inconsistent leftover the caller decided to redo
+            shutil.rmtree(final)
+        os.rename(tmp, final)
+        times["finalize"] = time.perf_counter() - t2
+        return SceneResult(
+            task.index, task.seed, True, None, False, times, size, len(scene), worker
+        )
+    except Exception as e:  # noqa: BLE001 (reported per scene, the others go on)
+        shutil.rmtree(tmp, ignore_errors=True)
+        full = _disk_full(e)
+        if full is not None:
+            where = full.filename or tmp
+            msg = f"disk full while writing scene{task.index} ('{where}')"
+        else:
+            frame = traceback.extract_tb(e.__traceback__)[-1:]
+            at = f" [{Path(frame[0].filename).name}:{frame[0].lineno}]" if frame else ""
+            msg = f"{type(e).__name__}: {e}{at}"
+        return SceneResult(task.index, task.seed, False, msg, full is not None, times, 0, 0, worker)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
+    from mgn.pipeline.label_cache import compute_object_labels
+
+    spec, config, num_threads = args
+    return compute_object_labels(spec, config, num_threads)
+
+
+# --------------------------------------------------------------------------------- executors
+
+
+class _Executor:
+    """Runs independent tasks; yields (item, result, exception) as they complete."""
+
+    threads_per_task = 0
+
+    def run(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[tuple]:
+        raise NotImplementedError
+
+    def cancel(self) -> None:
+        """Stop scheduling; stop running tasks where possible."""
+
+    def close(self) -> None:
+        pass
+
+
+class _InProcess(_Executor):
+    def __init__(self) -> None:
+        self._stop = False
+
+    def run(self, fn, items):  # noqa: ANN001, ANN201
+        self._stop = False
+        for item in items:
+            if self._stop:
+                return
+            try:
+                yield item, fn(item), None
+            except Exception as e:  # noqa: BLE001
+                yield item, None, e
+
+    def cancel(self) -> None:
+        self._stop = True
+
+
+class _ProcessPool(_Executor):
+    def __init__(self, workers: int) -> None:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        # spawn, not fork: the parent may hold OpenMP/TBB/Embree threads and a GL context.
+        ctx = multiprocessing.get_context("spawn")
+        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+        self.threads_per_task = max(1, cores // workers)
+        self._futures: list = []
+
+    def run(self, fn, items):  # noqa: ANN001, ANN201
+        from concurrent.futures import as_completed
+
+        futures = {self.pool.submit(fn, item): item for item in items}
+        self._futures = list(futures)
+        for fut in as_completed(futures):
+            if fut.cancelled():
+                continue
+            try:
+                yield futures[fut], fut.result(), None
+            except Exception as e:  # noqa: BLE001 (BrokenProcessPool: a worker died)
+                yield futures[fut], None, e
+
+    def cancel(self) -> None:
+        for f in self._futures:
+            f.cancel()
+        procs = list(getattr(self.pool, "_processes", {}).values())
+        self.pool.shutdown(wait=False, cancel_futures=True)
+        for p in procs:  # no worker may still be writing once we clean up
+            with contextlib.suppress(Exception):
+                p.terminate()
+        for p in procs:
+            with contextlib.suppress(Exception):
+                p.join(timeout=10)
+
+    def close(self) -> None:
+        self.pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _Dask(_Executor):
+    threads_per_task = 1
+
+    def __init__(self, scheduler: str) -> None:
+        try:
+            from distributed import Client
+        except ImportError as e:  # pragma: no cover - depends on the install
+            raise InvalidArgumentError(
+                "--scheduler needs Dask distributed: pip install 'mgn[cluster]'"
+            ) from e
+        self.client = Client(scheduler)
+        self._futures: list = []
+
+    def run(self, fn, items):  # noqa: ANN001, ANN201
+        from distributed import as_completed
+
+        futures = {}
+        for item in items:
+            fut = self.client.submit(fn, item, pure=False)
+            futures[fut.key] = (fut, item)
+        self._futures = [f for f, _ in futures.values()]
+        for fut in as_completed(self._futures):
+            item = futures[fut.key][1]
+            if fut.cancelled():
+                continue
+            try:
+                yield item, fut.result(), None
+            except Exception as e:  # noqa: BLE001
+                yield item, None, e
+
+    def cancel(self) -> None:
+        with contextlib.suppress(Exception):
+            self.client.cancel(self._futures, force=True)
+
+    def close(self) -> None:
+        with contextlib.suppress(Exception):
+            self.client.close()
+
+
+def _executor(workers: int, scheduler: str | None) -> _Executor:
+    if scheduler:
+        return _Dask(scheduler)
+    if workers == 1:
+        return _InProcess()
+    return _ProcessPool(workers)
+
+
+# ------------------------------------------------------------------------------------ report
+
+
+@dataclass
+class GenerateReport:
+    """What :func:`generate` did.
+
+    Attributes:
+        out_dir: the dataset folder; num_scenes: scenes asked for; seed: dataset seed.
+        results: the scene results of this run (ok and failed), by scene index.
+        skipped: scenes already complete (``--resume``).
+        labels_computed, labels_cached: objects labelled now / read from the cache.
+        label_seconds: wall time of the object-label step; wall_seconds: of the whole run.
+        output_bytes: size of the dataset folder at the end.
+        not_run: scenes not attempted (stopped by a full disk).
+    """
+
+    out_dir: Path
+    num_scenes: int
+    seed: int
+    results: dict[int, SceneResult] = field(default_factory=dict)
+    skipped: list[int] = field(default_factory=list)
+    labels_computed: int = 0
+    labels_cached: int = 0
+    label_seconds: float = 0.0
+    wall_seconds: float = 0.0
+    output_bytes: int = 0
+    not_run: list[int] = field(default_factory=list)
+
+    @property
+    def ok(self) -> list[SceneResult]:
+        return [r for _, r in sorted(self.results.items()) if r.ok]
+
+    @property
+    def failed(self) -> list[SceneResult]:
+        return [r for _, r in sorted(self.results.items()) if not r.ok]
+
+    @property
+    def complete(self) -> bool:
+        return not self.failed and not self.not_run
+
+    def stage_seconds(self) -> dict[str, float]:
+        """Total seconds per stage over the scenes of this run."""
+        return {s: sum(r.times.get(s, 0.0) for r in self.results.values()) for s in STAGES}
+
+    def format_summary(self) -> str:
+        n_ok = len(self.ok) + len(self.skipped)
+        lines = [
+            f"dataset {self.out_dir}: {n_ok}/{self.num_scenes} scenes complete "
+            f"({len(self.ok)} written now, {len(self.skipped)} already there), "
+            f"{len(self.failed)} failed"
+            + (f", {len(self.not_run)} not run" if self.not_run else "")
+        ]
+        lines.append(
+            f"  object labels: {self.labels_computed} computed, {self.labels_cached} from the "
+            f"cache ({self.label_seconds:.1f} s)"
+        )
+        if self.results:
+            st = self.stage_seconds()
+            k = max(len(self.results), 1)
+            parts = ", ".join(f"{s} {v:.1f} s ({v / k:.2f} s/scene)" for s, v in st.items())
+            lines.append(f"  scene stages (summed over workers): {parts}")
+        rate = 3600.0 * len(self.ok) / self.wall_seconds if self.wall_seconds > 0 else 0.0
+        lines.append(
+            f"  wall time {self.wall_seconds:.1f} s ({rate:.0f} scenes/hour); output "
+            f"{self.output_bytes / 1e6:.1f} MB"
+        )
+        for r in self.failed:
+            lines.append(f"  FAILED scene{r.index} (seed {r.seed}): {r.error}")
+        if self.not_run:
+            lines.append(f"  not run: {', '.join(f'scene{i}' for i in self.not_run)}")
+        if not self.complete:
+            lines.append("  rerun with --resume to redo the missing scenes")
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------- generate
+
+
+def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
+    from mgn.objects import builtin_objects, load_objects_yaml
+
+    catalogue = list(builtin_objects())
+    sources: dict[str, str] = {}
+    for path in config.objects.user_objects:
+        for spec in load_objects_yaml(path):
+            catalogue.append(spec)
+            sources[spec.name] = os.fspath(Path(path).resolve())
+    return catalogue, sources
+
+
+def _compose(config: Config, catalogue: list[ObjectSpec], seed: int) -> list[ObjectSpec]:
+    from mgn.scene.compose import compose_objects
+
+    try:
+        return compose_objects(**config.objects.compose_kwargs(), seed=seed, catalogue=catalogue)
+    except InvalidArgumentError as e:
+        raise ConfigError(f"config key 'objects': {e}") from e
+
+
+def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extra: Any) -> dict:
+    return {
+        "schema_version": DATASET_SCHEMA_VERSION,
+        "mgn_version": __version__,
+        "seed": int(seed),
+        "num_scenes": int(num_scenes),
+        "scene_seed": SCENE_SEED_RULE,
+        "scene_folders": "scene<i>, i = 0..num_scenes-1",
+        "depth_invalid": "NaN",
+        "config": config.to_dict(),
+        "splits": {"train": [], "val": [], "test": []},
+        "status": status,
+        **extra,
+    }
+
+
+def _write_dataset_json(out: Path, doc: dict) -> None:
+    atomic_write_text(out / "dataset.json", json.dumps(doc, indent=1) + "\n")
+
+
+def _clean_tmp(out: Path) -> list[Path]:
+    removed = []
+    for p in out.glob(f"{TMP_PREFIX}*"):
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
+
+
+def _check_resume(out: Path, config: Config, seed: int) -> None:
+    try:
+        doc = json.loads((out / "dataset.json").read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return  # nothing started yet: a fresh run
+    except (OSError, ValueError) as e:
+        raise IoError(f"--resume: cannot read '{out / 'dataset.json'}': {e}") from e
+    if doc.get("seed") != seed:
+        raise InvalidArgumentError(
+            f"--resume: '{out}' was generated with seed {doc.get('seed')}, got --seed {seed}"
+        )
+    if doc.get("config") != json.loads(json.dumps(config.to_dict())):
+        raise InvalidArgumentError(
+            f"--resume: the config differs from the one recorded in '{out / 'dataset.json'}'; "
+            "use the same config (or a new output folder)"
+        )
+
+
+def generate(
+    out_dir: str | os.PathLike[str],
+    num_scenes: int,
+    *,
+    config: Config | str | os.PathLike[str] | None = None,
+    seed: int = 0,
+    objects: Sequence[str] | None = None,
+    workers: int = 1,
+    resume: bool = False,
+    scheduler: str | None = None,
+    progress: bool = True,
+    use_cache: bool = True,
+) -> GenerateReport:
+    """Generate (or, with ``resume``, complete) a dataset of ``num_scenes`` scenes in
+    ``out_dir`` (see the module doc).
+
+    Args:
+        config: a :class:`Config`, a YAML path, or None for the MGN defaults.
+        seed: dataset seed; scene i uses :func:`scene_seed` (seed, i).
+        objects: object names (repeat for copies) replacing ``config.objects``.
+        workers: local worker processes (1 = in this process); ignored with ``scheduler``.
+        resume: keep complete scenes, redo the others; the config and seed must be those
+            recorded in ``dataset.json``.
+        scheduler: address of a Dask scheduler (``tcp://host:8786``).
+        progress: show tqdm progress bars.
+        use_cache: read/write the object-label cache.
+
+    Returns:
+        A :class:`GenerateReport` (:meth:`GenerateReport.format_summary` for people).
+
+    Raises:
+        InvalidArgumentError / ConfigError: bad arguments or config (before anything is written).
+        IoError: ``out_dir`` already holds a dataset and ``resume`` is not set; a full disk
+            while writing ``dataset.json`` or ``models/``.
+        KeyboardInterrupt: after removing the temporary folders of the run.
+    """
+    from tqdm import tqdm
+
+    t_start = time.perf_counter()
+    cfg = config if isinstance(config, Config) else load_config(config)
+    if objects:
+        cfg = dataclasses.replace(
+            cfg, objects=dataclasses.replace(cfg.objects, names=tuple(objects), count=None,
+                                             categories=None)
+        )  # fmt: skip
+    if isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
+        raise InvalidArgumentError(
+            f"generate: --scenes must be an integer >= 1, got {num_scenes!r}"
+        )
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InvalidArgumentError(f"generate: --workers must be an integer >= 1, got {workers!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InvalidArgumentError(f"generate: --seed must be an integer >= 0, got {seed!r}")
+    out = Path(out_dir).resolve()
+    if out.exists() and not out.is_dir():
+        raise IoError(f"generate: '{out}' exists and is not a folder")
+    if resume:
+        _check_resume(out, cfg, seed)
+    elif out.exists() and any(out.iterdir()):
+        raise IoError(
+            f"generate: '{out}' is not empty; use --resume to continue the dataset in it, or an "
+            "empty or new folder"
+        )
+
+    # Compose every scene first (cheap, deterministic): the object set decides the labels.
+    catalogue, sources = _catalogue(cfg)
+    seeds = [scene_seed(seed, i) for i in range(num_scenes)]
+    per_scene = [_compose(cfg, catalogue, s) for s in seeds]
+    from mgn.scene.scene import BUILTIN
+
+    unique: dict[str, ObjectSpec] = {}
+    for specs in per_scene:
+        for s in specs:
+            unique.setdefault(s.name, s)
+    ordered = sorted(unique.values(), key=lambda s: s.category_id)
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        if resume:
+            _clean_tmp(out)
+        report = GenerateReport(out, num_scenes, seed)
+        _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running"))
+    except OSError as e:
+        from mgn.io.atomic import _io_error
+
+        raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
+
+    executor = _executor(workers, scheduler)
+    try:
+        # Object labels: cached ones read here, the others computed as tasks.
+        t0 = time.perf_counter()
+        labels: dict[str, ObjectLabels] = {}
+        missing = []
+        from mgn.pipeline.label_cache import load_cached_labels, save_cached_labels
+
+        for spec in ordered:
+            cached = load_cached_labels(spec, cfg) if use_cache else None
+            if cached is not None:
+                labels[spec.name] = cached
+            else:
+                missing.append(spec)
+        report.labels_cached = len(labels)
+        if missing and (cfg.labels.suction or cfg.labels.paralleljaw):
+            bar = tqdm(total=len(missing), desc="object labels", unit="obj", disable=not progress)
+            items = [(s, cfg, executor.threads_per_task) for s in missing]
+            for (spec, _, _), value, exc in executor.run(_label_task, items):
+                if exc is not None:
+                    raise InvalidArgumentError(
+                        f"labelling object '{spec.name}' failed: {type(exc).__name__}: {exc}"
+                    ) from exc
+                labels[spec.name] = value
+                if use_cache:
+                    save_cached_labels(spec, cfg, value)
+                bar.update(1)
+            bar.close()
+            report.labels_computed = len(missing)
+        from mgn.pipeline.label_cache import write_models
+
+        write_models(out, ordered, labels, cfg)
+        report.label_seconds = time.perf_counter() - t0
+
+        # Scenes.
+        todo = []
+        for i, specs in enumerate(per_scene):
+            folder = out / f"scene{i}"
+            if resume and folder.is_dir() and check_manifest(folder) is None:
+                report.skipped.append(i)
+                continue
+            todo.append(
+                SceneTask(
+                    index=i,
+                    seed=seeds[i],
+                    out_dir=os.fspath(out),
+                    config=cfg,
+                    objects=tuple((s.name, sources.get(s.name, BUILTIN)) for s in specs),
+                    labels={s.name: labels[s.name] for s in specs if s.name in labels},
+                )
+            )
+        bar = tqdm(
+            total=num_scenes,
+            initial=len(report.skipped),
+            desc="scenes",
+            unit="scene",
+            disable=not progress,
+        )
+        t_scenes = time.perf_counter()
+        for task, result, exc in executor.run(run_scene, todo):
+            if exc is not None:  # the task itself could not run (e.g. a worker process died)
+                result = SceneResult(
+                    task.index, task.seed, False, f"worker failed: {type(exc).__name__}: {exc}"
+                )
+            report.results[task.index] = result
+            bar.update(1)
+            elapsed = time.perf_counter() - t_scenes
+            done = sum(r.ok for r in report.results.values())
+            bar.set_postfix(
+                {"scenes/h": f"{3600 * done / max(elapsed, 1e-9):.0f}",
+                 "failed": len(report.results) - done}
+            )  # fmt: skip
+            if result.disk_full:
+                executor.cancel()
+                break
+        bar.close()
+        report.not_run = sorted(t.index for t in todo if t.index not in report.results)
+    except KeyboardInterrupt:
+        executor.cancel()
+        _clean_tmp(out)
+        raise
+    finally:
+        executor.close()
+
+    report.wall_seconds = time.perf_counter() - t_start
+    status = "complete" if report.complete else "incomplete"
+    failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
+    with contextlib.suppress(OSError):
+        _write_dataset_json(
+            out,
+            _dataset_doc(
+                cfg, seed, num_scenes, status, **({"failed_scenes": failed} if failed else {})
+            ),
+        )
+    _clean_tmp(out)
+    report.output_bytes = _folder_size(out)
+    return report

@@ -1,0 +1,427 @@
+"""``mgn generate``: determinism across executors, resume after a kill, failures, full disk."""
+
+from __future__ import annotations
+
+import errno
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from mgn.config import Config, load_config
+from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.deterministic import NPZ_DATE_TIME, h5_create_dataset, h5_create_group, npz_bytes
+from mgn.pipeline import check_manifest, generate, scene_seed, scene_views, write_manifest
+
+# 2 scenes x 3 views at 120 x 120 px, few objects, tiny label sizes.
+SMALL = {
+    "objects": {"categories": ["box_tea", "can_soda"], "copies": [1, 2]},
+    "camera": {"views": [0, 5, 17], "resolution_scale": 0.1},
+    "object_labels": {
+        "suction_points": 30,
+        "pj_points": 30,
+        "physics_grasps": 3,
+        "physics_grid": 2,
+    },
+    "drop": {"max_time": 2.0},
+}
+SEED = 7
+
+
+def checksums(root: Path) -> dict[str, str]:
+    """sha256 of every file below root (relative POSIX paths)."""
+    return {
+        p.relative_to(root).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
+
+
+@pytest.fixture(scope="module")
+def cache_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("mgn_cache")
+
+
+@pytest.fixture
+def env(cache_dir: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.setenv("MGN_CACHE_DIR", str(cache_dir))
+    return cache_dir
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory, cache_dir: Path) -> tuple[Path, dict]:
+    """An uninterrupted in-process run (labels computed and cached)."""
+    out = tmp_path_factory.mktemp("ref") / "ds"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MGN_CACHE_DIR", str(cache_dir))
+        report = generate(out, 2, config=load_config(SMALL), seed=SEED, progress=False)
+    assert report.complete, report.format_summary()
+    assert report.labels_computed == 2 and report.labels_cached == 0
+    return out, checksums(out)
+
+
+def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
+    out, sums = reference
+    doc = json.loads((out / "dataset.json").read_text())
+    assert doc["schema_version"] == 1 and doc["seed"] == SEED and doc["num_scenes"] == 2
+    assert doc["status"] == "complete" and set(doc["splits"]) == {"train", "val", "test"}
+    assert Config.from_dict(doc["config"]) == load_config(SMALL)
+    for i in range(2):
+        folder = out / f"scene{i}"
+        assert check_manifest(folder) is None
+        scene = json.loads((folder / "scene.json").read_text())
+        # Independent re-statement of the documented seed rule.
+        expected = int(np.random.SeedSequence([SEED, i]).generate_state(1, np.uint32)[0]) >> 1
+        assert scene["seed"] == expected
+        assert 2 <= len(scene["instances"]) <= 4
+        for v in (0, 5, 17):
+            for suffix in ("_rgb.png", "_depth.png", "_depth.npz", "_instances.png"):
+                assert f"scene{i}/{v}{suffix}" in sums
+        assert not any(k.startswith(f"scene{i}/1_") for k in sums)  # only the kept views
+    assert not list(out.glob(".tmp-*"))
+    # Object folders carry the labels (rows = labels, no padding).
+    for cid in ("003", "006"):
+        with h5py.File(out / "models" / cid / "textured.obj.hdf5", "r") as h5:
+            pj = h5["grasps/paralleljaw/pregrasp_transform"]
+            sc = h5["grasps/suctioncup/pregrasp_transform"]
+            assert pj.shape[1] == 10 and pj.shape[0] > 0
+            assert sc.shape[1] == 6 and 0 < sc.shape[0] <= 30
+            sim = np.asarray(h5["grasps/paralleljaw/quality_score_simulation"])
+            assert np.isfinite(sim).sum() == 3  # physics_grasps
+
+
+def test_two_workers_give_the_same_bytes(
+    reference: tuple[Path, dict], tmp_path: Path, env: Path
+) -> None:
+    out = tmp_path / "ds"
+    report = generate(out, 2, config=load_config(SMALL), seed=SEED, workers=2, progress=False)
+    assert report.complete and report.labels_cached == 2
+    assert checksums(out) == reference[1]
+
+
+def test_dask_local_cluster_gives_the_same_bytes(
+    reference: tuple[Path, dict], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import distributed  # the optional 'cluster' extra
+
+    # A fresh cache: the object labels are computed on the Dask workers too.
+    monkeypatch.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "ds"
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        report = generate(
+            out,
+            2,
+            config=load_config(SMALL),
+            seed=SEED,
+            scheduler=cluster.scheduler_address,
+            progress=False,
+        )
+    assert report.complete and report.labels_computed == 2
+    assert checksums(out) == reference[1]
+
+
+KILL_SCRIPT = """
+import os, signal, sys
+from pathlib import Path
+import mgn.pipeline.scene_writer as sw
+real = sw.write_scene
+def dying(scene, folder, config, labels):
+    real(scene, folder, config, labels)
+    if Path(folder).name.startswith(".tmp-scene1-"):
+        (Path(folder) / "half.bin").write_bytes(b"x" * 10)
+        os.kill(os.getpid(), signal.SIGKILL)  # killed mid-scene
+sw.write_scene = dying
+from mgn.config import load_config
+from mgn.pipeline import generate
+generate(sys.argv[1], 2, config=load_config({config!r}), seed={seed}, progress=False)
+"""
+
+
+def test_killed_run_resumes_to_the_same_dataset(
+    reference: tuple[Path, dict], tmp_path: Path, env: Path
+) -> None:
+    out = tmp_path / "ds"
+    script = tmp_path / "kill.py"
+    script.write_text(KILL_SCRIPT.format(config=SMALL, seed=SEED))
+    proc = subprocess.run([sys.executable, str(script), str(out)], capture_output=True, timeout=120)
+    assert proc.returncode == -9, proc.stderr.decode()[-2000:]
+    assert check_manifest(out / "scene0") is None
+    assert not (out / "scene1").exists()
+    assert len(list(out.glob(".tmp-scene1-*"))) == 1  # the half scene, under its temporary name
+    assert json.loads((out / "dataset.json").read_text())["status"] == "running"
+    with pytest.raises(IoError, match="--resume"):
+        generate(out, 2, config=load_config(SMALL), seed=SEED, progress=False)
+    report = generate(out, 2, config=load_config(SMALL), seed=SEED, resume=True, progress=False)
+    assert report.skipped == [0] and [r.index for r in report.ok] == [1]
+    assert checksums(out) == reference[1]
+
+
+def test_interrupt_leaves_no_half_scene_and_resume_redoes_bad_scenes(
+    reference: tuple[Path, dict], tmp_path: Path, env: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import mgn.pipeline.scene_writer as sw
+
+    real = sw.write_scene
+
+    def interrupted(scene, folder, config, labels):  # noqa: ANN001
+        real(scene, folder, config, labels)
+        if Path(folder).name.startswith(".tmp-scene1-"):
+            raise KeyboardInterrupt
+
+    out = tmp_path / "ds"
+    monkeypatch.setattr(sw, "write_scene", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        generate(out, 2, config=load_config(SMALL), seed=SEED, progress=False)
+    assert not list(out.glob(".tmp-*")) and not (out / "scene1").exists()
+    monkeypatch.setattr(sw, "write_scene", real)
+    # A complete-looking scene whose file no longer matches its manifest is redone.
+    shutil.copytree(reference[0] / "scene1", out / "scene1")
+    (out / "scene1" / "0_rgb.png").write_bytes(b"corrupt")
+    report = generate(out, 2, config=load_config(SMALL), seed=SEED, resume=True, progress=False)
+    assert report.skipped == [0] and [r.index for r in report.ok] == [1]
+    assert checksums(out) == reference[1]
+
+
+def test_resume_refuses_another_seed_or_config(reference: tuple[Path, dict], env: Path) -> None:
+    out = reference[0]
+    with pytest.raises(InvalidArgumentError, match="seed"):
+        generate(out, 2, config=load_config(SMALL), seed=SEED + 1, resume=True, progress=False)
+    other = load_config({**SMALL, "drop": {"max_time": 3.0}})
+    with pytest.raises(InvalidArgumentError, match="config differs"):
+        generate(out, 2, config=other, seed=SEED, resume=True, progress=False)
+    assert checksums(out) == reference[1]  # nothing was touched
+
+
+CUBE_OBJ = """mtllib cube.mtl
+usemtl grey
+v -0.5 -0.5 -0.5
+v 0.5 -0.5 -0.5
+v 0.5 0.5 -0.5
+v -0.5 0.5 -0.5
+v -0.5 -0.5 0.5
+v 0.5 -0.5 0.5
+v 0.5 0.5 0.5
+v -0.5 0.5 0.5
+f 1 3 2
+f 1 4 3
+f 5 6 7
+f 5 7 8
+f 1 2 6
+f 1 6 5
+f 2 3 7
+f 2 7 6
+f 3 4 8
+f 3 8 7
+f 4 1 5
+f 4 5 8
+"""
+
+
+def test_failing_scene_is_reported_and_the_others_finish(tmp_path: Path, env: Path) -> None:
+    """A 1 m cube cannot be dropped into the 0.4 m tote: the scenes that draw it fail."""
+    (tmp_path / "cube.obj").write_text(CUBE_OBJ)
+    (tmp_path / "cube.mtl").write_text("newmtl grey\nKd 0.6 0.6 0.6\nKs 0.1 0.1 0.1\nNs 20\n")
+    (tmp_path / "objects.yaml").write_text(
+        "objects:\n  - {name: huge_cube, mesh: cube.obj, density: 100, friction: 0.5}\n"
+    )
+    cfg = dict(SMALL)
+    cfg["objects"] = {
+        "categories": ["box_tea", "huge_cube"],
+        "count": 1,
+        "copies": [1, 1],
+        "user_objects": [str(tmp_path / "objects.yaml")],
+    }
+    config = load_config(cfg)
+    from mgn.objects import builtin_objects, load_objects_yaml
+    from mgn.scene import compose_objects
+
+    catalogue = [*builtin_objects(), *load_objects_yaml(tmp_path / "objects.yaml")]
+    n = 6
+    drawn = [
+        compose_objects(**config.objects.compose_kwargs(), seed=scene_seed(SEED, i),
+                        catalogue=catalogue)[0].name
+        for i in range(n)
+    ]  # fmt: skip
+    bad = [i for i, name in enumerate(drawn) if name == "huge_cube"]
+    assert 0 < len(bad) < n  # the seed draws both kinds of scene
+    out = tmp_path / "ds"
+    report = generate(out, n, config=config, seed=SEED, progress=False)
+    assert [r.index for r in report.failed] == bad
+    assert sorted(r.index for r in report.ok) == sorted(set(range(n)) - set(bad))
+    for r in report.failed:
+        assert r.seed == scene_seed(SEED, r.index) and "huge_cube" in r.error
+        assert f"scene{r.index} (seed {r.seed})" in report.format_summary()
+        assert not (out / f"scene{r.index}").exists()
+    doc = json.loads((out / "dataset.json").read_text())
+    assert doc["status"] == "incomplete"
+    assert [f["scene"] for f in doc["failed_scenes"]] == bad
+    assert not list(out.glob(".tmp-*"))
+
+
+def test_disk_full_is_reported_with_the_path(
+    tmp_path: Path, env: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    import mgn.pipeline.scene_writer as sw
+    from mgn.cli import main
+
+    def full(scene, folder, config, labels):  # noqa: ANN001
+        path = Path(folder) / "0_rgb.png"
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+    monkeypatch.setattr(sw, "write_scene", full)
+    cfg = tmp_path / "small.yaml"
+    cfg.write_text(json.dumps(SMALL))  # JSON is YAML
+    out = tmp_path / "ds"
+    argv = ["generate", "--scenes", "3", "--out", str(out), "--config", str(cfg), "--quiet"]
+    assert main(argv) == 1
+    text = capsys.readouterr().out
+    assert "disk full while writing scene0" in text and "0_rgb.png" in text
+    assert "not run: scene1, scene2" in text  # no new scene is started on a full disk
+    assert not list(out.glob("scene*")) and not list(out.glob(".tmp-*"))
+
+
+def test_scene_seed_rule() -> None:
+    seeds = [scene_seed(3, i) for i in range(100)]
+    assert len(set(seeds)) == 100 and all(0 <= s < 2**31 for s in seeds)
+    assert scene_seed(3, 5) != scene_seed(5, 3)
+    with pytest.raises(InvalidArgumentError, match="seed"):
+        scene_seed(-1, 0)
+    with pytest.raises(InvalidArgumentError, match="index"):
+        scene_seed(0, -2)
+
+
+def test_bad_arguments_are_refused_before_writing(tmp_path: Path, env: Path) -> None:
+    out = tmp_path / "ds"
+    with pytest.raises(InvalidArgumentError, match="--scenes"):
+        generate(out, 0, config=load_config(SMALL), progress=False)
+    with pytest.raises(InvalidArgumentError, match="--workers"):
+        generate(out, 1, config=load_config(SMALL), workers=0, progress=False)
+    with pytest.raises(InvalidArgumentError, match="objects"):
+        generate(out, 1, config=load_config(SMALL), objects=["no_such_object"], progress=False)
+    assert not out.exists()
+
+
+def test_scene_views_follow_the_rig() -> None:
+    from mgn.objects import ToteSpec
+    from mgn.render import hemisphere_rig, mgn_rig
+    from mgn.scene import Scene
+
+    scene = Scene((), ToteSpec(), 11)
+    cfg = load_config({"camera": {"views": [0, 5, 17], "resolution_scale": 0.5}})
+    views = scene_views(scene, cfg.camera)
+    poses, _ = mgn_rig(11)
+    assert [v for v, _ in views] == [0, 5, 17]
+    for v, cam in views:
+        np.testing.assert_array_equal(cam.X_WC, poses[v])
+        assert (cam.K.width, cam.K.height) == (600, 600)
+    hemi = {"radii": [0.8], "tilts": [0.2, 0.5], "azimuths": [0.0, 1.0, 2.0]}
+    cfg = load_config({"camera": {"rig": "hemisphere", "hemisphere": hemi, "views": [4, 1]}})
+    poses = hemisphere_rig(hemi["radii"], hemi["tilts"], hemi["azimuths"])
+    views = scene_views(scene, cfg.camera)
+    assert [v for v, _ in views] == [4, 1]
+    np.testing.assert_array_equal(views[0][1].X_WC, poses[4])
+
+
+def test_manifest_detects_missing_resized_and_altered_files(tmp_path: Path) -> None:
+    (tmp_path / "a.bin").write_bytes(b"abc")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "b.txt").write_text("hello")
+    m = write_manifest(tmp_path, scene=3)
+    assert m["scene"] == 3
+    assert m["files"]["sub/b.txt"] == {
+        "size": 5,
+        "sha256": hashlib.sha256(b"hello").hexdigest(),
+    }
+    assert check_manifest(tmp_path) is None
+    (tmp_path / "a.bin").write_bytes(b"abd")  # same size, other bytes
+    assert "checksum" in check_manifest(tmp_path)
+    assert check_manifest(tmp_path, checksums=False) is None
+    (tmp_path / "a.bin").write_bytes(b"abcd")
+    assert "4 bytes" in check_manifest(tmp_path)
+    (tmp_path / "sub" / "b.txt").unlink()
+    (tmp_path / "a.bin").write_bytes(b"abc")
+    assert "missing file 'sub/b.txt'" in check_manifest(tmp_path)
+    (tmp_path / "manifest.json").unlink()
+    assert check_manifest(tmp_path) == "no manifest"
+
+
+def test_npz_bytes_are_reproducible_and_readable() -> None:
+    import io
+
+    arrays = {
+        "depth": np.linspace(0, 1, 12, dtype=np.float32).reshape(3, 4),
+        "ok": np.eye(3, 4) > 0,
+    }
+    data = npz_bytes(**arrays)
+    with np.load(io.BytesIO(data)) as z:
+        assert z.files == ["depth", "ok"]
+        for k, v in arrays.items():
+            np.testing.assert_array_equal(z[k], v)
+            assert z[k].dtype == v.dtype
+    with zipfile.ZipFile(io.BytesIO(data)) as zf:
+        assert all(i.date_time == NPZ_DATE_TIME for i in zf.infolist())
+        assert all(i.compress_type == zipfile.ZIP_DEFLATED for i in zf.infolist())
+    assert npz_bytes(**arrays) == data
+    with pytest.raises(ValueError, match="object"):
+        npz_bytes(bad=np.array([None, 1], dtype=object))
+
+
+def test_h5_helpers_write_without_timestamps(tmp_path: Path) -> None:
+    path = tmp_path / "a.h5"
+    with h5py.File(path, "w", libver="latest") as h5:  # v2 object headers can hold times
+        g = h5_create_group(h5, "grasps/paralleljaw")
+        d = h5_create_dataset(g, "quality_score", np.arange(4, dtype=np.float32))
+        control = h5.create_dataset("stamped", data=np.zeros(2), track_times=True)
+        assert h5py.h5g.get_objinfo(control.id).mtime > 0  # the check can see a timestamp
+        assert h5py.h5g.get_objinfo(g.id).mtime == 0
+        assert h5py.h5g.get_objinfo(d.id).mtime == 0
+    with h5py.File(path, "r") as h5:
+        np.testing.assert_array_equal(h5["grasps/paralleljaw/quality_score"], np.arange(4))
+
+
+def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
+    import dataclasses
+
+    from mgn.objects import get_object
+    from mgn.pipeline.label_cache import (
+        compute_object_labels,
+        label_keys,
+        load_cached_labels,
+        object_labels,
+    )
+
+    spec = get_object("box_tea")
+    config = load_config(SMALL)
+    computed = compute_object_labels(spec, config, num_threads=1)
+    got = object_labels(spec, config)  # cached by the reference run, or computed now
+    cached = load_cached_labels(spec, config)
+    assert cached is not None
+    for kind in ("suction", "paralleljaw"):
+        a, b, c = (getattr(x, kind) for x in (computed, got, cached))
+        for f in dataclasses.fields(a):
+            va, vb, vc = (getattr(x, f.name) for x in (a, b, c))
+            if isinstance(va, np.ndarray):
+                np.testing.assert_array_equal(va, vb)
+                np.testing.assert_array_equal(va, vc)
+                assert va.dtype == vc.dtype
+            else:
+                assert va == vb == vc
+    keys = label_keys(spec, config)
+    other_cup = dataclasses.replace(config, cup=dataclasses.replace(config.cup, radius=0.01))
+    assert label_keys(spec, other_cup)["suction"] != keys["suction"]
+    assert label_keys(spec, other_cup)["paralleljaw"] == keys["paralleljaw"]
+    heavier = dataclasses.replace(spec, density=spec.density * 2)
+    assert label_keys(heavier, config) != keys
+    no_physics = load_config({**SMALL, "labels": {"pj_physics": False, "suction": False}})
+    assert set(label_keys(spec, no_physics)) == {"paralleljaw"}
+    assert label_keys(spec, no_physics)["paralleljaw"] != keys["paralleljaw"]
