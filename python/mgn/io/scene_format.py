@@ -17,7 +17,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn.io.atomic import atomic_write_bytes, atomic_write_text
+from mgn.io.deterministic import h5_create_dataset, h5_create_group, npz_bytes
 from mgn.render.camera import Intrinsics
 
 __all__ = [
@@ -36,7 +36,6 @@ __all__ = [
     "M_TO_CM",
     "ViewRecord",
     "hdf5_bytes",
-    "npz_bytes",
     "from_cm",
     "png_bytes",
     "scene_gt_entries",
@@ -174,34 +173,17 @@ def view_file_names(v: int) -> list[str]:
     ]
 
 
-#: Fixed zip entry time: npz files carry no wall-clock time, so they are reproducible.
-_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
-
-
-def npz_bytes(arrays: Mapping[str, np.ndarray], *, compress: bool = True) -> bytes:
-    """A ``.npz`` archive of ``arrays`` (readable by ``numpy.load``) without timestamps."""
-    from numpy.lib import format as npy_format
-
-    buf = io.BytesIO()
-    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
-    with zipfile.ZipFile(buf, "w", compression=method) as zf:
-        for name, value in arrays.items():
-            info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_TIME)
-            info.compress_type = method
-            info.external_attr = 0o644 << 16
-            member = io.BytesIO()
-            npy_format.write_array(member, np.ascontiguousarray(value), allow_pickle=False)
-            zf.writestr(info, member.getvalue())
-    return buf.getvalue()
-
-
 def hdf5_bytes(datasets: Mapping[str, np.ndarray], attrs: Mapping[str, Any] | None = None) -> bytes:
     """An HDF5 file holding ``datasets`` (path -> array, written as given) without timestamps;
     ``attrs`` go on the root group (dicts and lists as JSON)."""
     buf = io.BytesIO()
     with h5py.File(buf, "w") as h5:
         for path, value in datasets.items():
-            h5.create_dataset(path, data=np.asarray(value), track_times=False)
+            parent, _, name = path.rpartition("/")
+            group = h5
+            if parent:
+                group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
+            h5_create_dataset(group, name, np.asarray(value))
         for key, value in (attrs or {}).items():
             h5.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
     return buf.getvalue()
@@ -248,7 +230,7 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     h5 = {path: to_cm(path, value).astype(f4) for path, value in rec.scene_hdf5.items()}
     files: dict[str, bytes] = {
         f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
-        f"{v}.npz": npz_bytes(npz),
+        f"{v}.npz": npz_bytes(**npz),
         f"{v}_depth.png": png_bytes(depth_picture(rec.depth)),
         f"{v}_scene.hdf5": hdf5_bytes(h5),
         f"{v}_order.csv": rec.order_csv.encode(),

@@ -6,8 +6,6 @@ of range, inconsistent with the other files of the view, checksum different from
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,9 +17,6 @@ from mgn.io.dataset import Dataset, SceneFolder, View
 from mgn.io.scene_format import HDF5_FLOAT_KEYS, view_file_names
 
 __all__ = ["Problem", "validate_dataset"]
-
-#: Name of the per-scene manifest (files, sizes, sha256) written when a scene is complete.
-MANIFEST = "manifest.json"
 
 _NPZ_KEYS = {
     "depth": np.float32,
@@ -40,44 +35,6 @@ class Problem:
 
     def __str__(self) -> str:
         return f"{self.path}: {self.message}"
-
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def check_manifest(folder: Path) -> list[tuple[str, str]]:
-    """(file, problem) pairs of a scene folder against its manifest (none if it has none).
-
-    The manifest is JSON with ``files``: a mapping name -> {"size", "sha256"} (or a list of
-    {"name"/"path", "size", "sha256"})."""
-    p = folder / MANIFEST
-    if not p.exists():
-        return []
-    try:
-        data = json.loads(p.read_text())
-        files = data["files"]
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        return [(MANIFEST, f"unreadable manifest: {e}")]
-    if isinstance(files, dict):
-        items = [(name, info) for name, info in files.items()]
-    else:
-        items = [(str(f.get("name", f.get("path"))), f) for f in files]
-    out = []
-    for name, info in items:
-        f = folder / name
-        if not f.exists():
-            out.append((name, "listed in the manifest but missing"))
-            continue
-        if "size" in info and f.stat().st_size != int(info["size"]):
-            out.append((name, f"size {f.stat().st_size} != manifest {info['size']}"))
-        elif "sha256" in info and _sha256(f) != info["sha256"]:
-            out.append((name, "checksum differs from the manifest (file changed or corrupt)"))
-    return out
 
 
 def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
@@ -193,8 +150,13 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
 
 
 def _check_scene(scene: SceneFolder, problems: list[Problem], root: Path) -> None:
+    from mgn.pipeline.manifest import MANIFEST, check_manifest
+
     found: list[tuple[str, str]] = []
-    found.extend(check_manifest(scene.folder))
+    if (scene.folder / MANIFEST).exists():
+        reason = check_manifest(scene.folder)
+        if reason is not None:
+            found.append((MANIFEST, reason))
     if not scene.view_ids:
         found.append((".", "no views"))
     for view in scene.views():

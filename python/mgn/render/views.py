@@ -16,11 +16,11 @@ list of :class:`~mgn.render.camera.CameraView`), and an output folder. Per view 
 
 from __future__ import annotations
 
-import io
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -33,7 +33,7 @@ from mgn.render.camera import CameraView, Intrinsics, mgn_rig
 from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
 
-__all__ = ["ViewImages", "depth_picture", "render_views", "tote_mesh"]
+__all__ = ["ViewImages", "depth_picture", "iter_views", "render_views", "tote_mesh"]
 
 M_TO_CM = 100.0
 #: Side of the square floor slab drawn under the tote, m.
@@ -101,19 +101,10 @@ def depth_picture(depth: npt.ArrayLike) -> npt.NDArray[np.uint8]:
     return out
 
 
-def _png(array: np.ndarray) -> bytes:
-    from PIL import Image
-
-    buf = io.BytesIO()
-    Image.fromarray(array).save(buf, format="PNG")
-    return buf.getvalue()
-
-
-def render_views(
+def iter_views(
     objects: Sequence[tuple[Mesh, npt.ArrayLike, int]],
     tote: Mesh | None,
-    views: Sequence[int] | Sequence[CameraView] | None = None,
-    out_dir: str | os.PathLike[str] | None = None,
+    views: Sequence[int] | Sequence[CameraView] | Sequence[tuple[int, CameraView]] | None = None,
     *,
     X_W_tote: npt.ArrayLike | None = None,
     rig_seed: int = 0,
@@ -124,29 +115,11 @@ def render_views(
     floor: bool = True,
     shadows: bool = True,
     renderer: Renderer | None = None,
-) -> list[ViewImages]:
-    """Render views of a scene; write the images when ``out_dir`` is given.
-
-    Args:
-        objects: (mesh, X_WO (4, 4), instance id >= 1) per object; meshes shared by several
-            instances are uploaded once (by identity).
-        tote: the tote mesh (e.g. :func:`tote_mesh`) or None; drawn with instance id 0.
-        views: view indices of the MetaGraspNet rig (default: all 37), or explicit cameras.
-        out_dir: folder for the files (created); None writes nothing.
-        X_W_tote: pose of the tote in the world (default identity). The rig looks at its origin
-            (the centre of the inner floor).
-        rig_seed: seed of the rig (:func:`mgn.render.mgn_rig`).
-        K: intrinsics for rig views (default MGN synthetic, 1200 x 1200).
-        sensor: depth sensor preset for ``depth``.
-        randomize: per-view light and tote / floor colour randomisation from (seed, view).
-        seed: seed of lighting randomisation and sensor noise (the noise of view v uses
-            seed + v).
-        floor: draw a floor slab under the tote (instance id 0).
-        renderer: reuse a Renderer large enough for the views (the meshes are added to it, its
-            instances replaced); default or too small: a new one.
-
-    Returns:
-        One :class:`ViewImages` per view, in order.
+) -> Iterator[ViewImages]:
+    """Render the views of a scene one at a time (the arguments of :func:`render_views`, without
+    ``out_dir``): the scene is uploaded once and each view's images are yielded before the next
+    view is rendered, so memory does not grow with the number of views. ``views`` may also be
+    (view index, camera) pairs: the index names the files and seeds the view's randomisation.
     """
     X_tote = np.eye(4) if X_W_tote is None else np.asarray(X_W_tote, np.float64)
     if X_tote.shape != (4, 4) or not np.all(np.isfinite(X_tote)):
@@ -172,9 +145,15 @@ def render_views(
     else:
         cams = []
         for k, v in enumerate(views):
-            if not isinstance(v, CameraView):
-                raise TypeError(f"views[{k}] must be a view index or a CameraView, got {v!r}")
-            cams.append((k, v))
+            if isinstance(v, tuple) and len(v) == 2 and isinstance(v[1], CameraView):
+                cams.append((int(v[0]), v[1]))
+            elif isinstance(v, CameraView):
+                cams.append((k, v))
+            else:
+                raise TypeError(
+                    f"views[{k}] must be a view index, a CameraView or (index, CameraView), "
+                    f"got {v!r}"
+                )
     max_w = max(c.K.width for _, c in cams)
     max_h = max(c.K.height for _, c in cams)
 
@@ -211,10 +190,6 @@ def render_views(
     r.set_instances(instances)
     flags = r.surface_flags_by_id()
 
-    out_path = None if out_dir is None else Path(out_dir)
-    if out_path is not None:
-        out_path.mkdir(parents=True, exist_ok=True)
-    results: list[ViewImages] = []
     for v, cam in cams:
         img = r.render(cam, randomize=randomize, seed=seed, view_index=v, shadows=shadows)
         assert img.rgb is not None and img.depth is not None and img.instance_ids is not None
@@ -224,6 +199,48 @@ def render_views(
         res = ViewImages(
             v, cam, img.rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light
         )
+        yield res
+
+
+def render_views(
+    objects: Sequence[tuple[Mesh, npt.ArrayLike, int]],
+    tote: Mesh | None,
+    views: Sequence[int] | Sequence[CameraView] | Sequence[tuple[int, CameraView]] | None = None,
+    out_dir: str | os.PathLike[str] | None = None,
+    **kwargs: Any,
+) -> list[ViewImages]:
+    """Render views of a scene; write the images when ``out_dir`` is given.
+
+    Args:
+        objects: (mesh, X_WO (4, 4), instance id >= 1) per object; meshes shared by several
+            instances are uploaded once (by identity).
+        tote: the tote mesh (e.g. :func:`tote_mesh`) or None; drawn with instance id 0.
+        views: view indices of the MetaGraspNet rig (default: all 37), explicit cameras, or
+            (view index, camera) pairs.
+        out_dir: folder for the files (created); None writes nothing.
+        X_W_tote: pose of the tote in the world (default identity). The rig looks at its origin
+            (the centre of the inner floor).
+        rig_seed: seed of the rig (:func:`mgn.render.mgn_rig`).
+        K: intrinsics for rig views (default MGN synthetic, 1200 x 1200).
+        sensor: depth sensor preset for ``depth``.
+        randomize: per-view light and tote / floor colour randomisation from (seed, view).
+        seed: seed of lighting randomisation and sensor noise (the noise of view v uses
+            seed + v).
+        floor: draw a floor slab under the tote (instance id 0).
+        renderer: reuse a Renderer large enough for the views (the meshes are added to it, its
+            instances replaced); default or too small: a new one.
+
+        **kwargs: the keyword arguments of :func:`iter_views` (``X_W_tote``, ``rig_seed``,
+            ``K``, ``sensor``, ``randomize``, ``seed``, ``floor``, ``shadows``, ``renderer``).
+
+    Returns:
+        One :class:`ViewImages` per view, in order.
+    """
+    out_path = None if out_dir is None else Path(out_dir)
+    if out_path is not None:
+        out_path.mkdir(parents=True, exist_ok=True)
+    results: list[ViewImages] = []
+    for res in iter_views(objects, tote, views, **kwargs):
         results.append(res)
         if out_path is not None:
             _write_view(out_path, res)
@@ -231,6 +248,8 @@ def render_views(
 
 
 def _write_view(folder: Path, res: ViewImages) -> None:
+    from mgn.io.scene_format import png_bytes as _png
+
     v = res.index
     atomic_write_bytes(folder / f"{v}_rgb.png", _png(res.rgb))
     atomic_write_bytes(folder / f"{v}_depth.png", _png(depth_picture(res.depth)))
