@@ -177,8 +177,9 @@ def run_scene(task: SceneTask) -> SceneResult:
         if tmp.exists():
             shutil.rmtree(tmp)
         tmp.mkdir(parents=True)
-        write_scene(scene, tmp, task.config, task.labels)
+        stages = write_scene(scene, tmp, task.config, task.labels)
         times["write"] = time.perf_counter() - t1
+        times.update({f"write: {k}": v for k, v in stages.items()})
         t2 = time.perf_counter()
         write_manifest(tmp, scene=task.index, seed=task.seed)
         size = _folder_size(tmp)

@@ -5,15 +5,12 @@ to ``scene<N>`` (with its manifest) only when the function returns. Whatever it 
 byte-reproducible (see :mod:`mgn.io.deterministic`): the same scene and config give the same
 bytes whatever the executor.
 
-For now it writes ``scene.json`` (:meth:`mgn.scene.Scene.to_json`) and the rendered views of
-:func:`mgn.render.views.render_views` (``{v}_rgb.png``, ``{v}_depth.png``, ``{v}_depth.npz``,
-``{v}_instances.png``); the full FORMAT.md writer (per-view labels, HDF5, layout) replaces its
-body, keeping the signature.
+It renders and labels every kept view with :func:`mgn.scene.label.label_scene`, which writes
+the FORMAT.md files of each view, ``scene_gt.json`` and ``scene.json``.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -56,7 +53,9 @@ def write_scene(
     folder: str | os.PathLike[str],
     config: Config,
     object_labels: Mapping[str, ObjectLabels],
-) -> None:
+    *,
+    num_threads: int = 0,
+) -> dict[str, float]:
     """Write the files of one scene into ``folder`` (an existing, empty temporary folder).
 
     Args:
@@ -64,47 +63,37 @@ def write_scene(
         folder: where to write; the caller renames it to ``scene<N>`` afterwards.
         config: the dataset configuration (cameras, sensor, labels switched on).
         object_labels: name -> the cached labels of every object of the scene (object frame).
+        num_threads: C++ threads per scene (0 = all cores).
+
+    Returns:
+        Seconds per labelling stage (render, object labels, layout, scene grasps, write, ...).
 
     Raises:
         OSError: a file cannot be written (``errno.ENOSPC`` when the disk is full).
     """
-    from mgn.render.views import _write_view, render_views, tote_mesh
+    from mgn.scene.label import LabelOptions, label_scene
 
     out = Path(folder)
-    scene.to_json(out / "scene.json")
     if len(scene) == 0:
-        return  # every object left the tote: nothing to render but the scene file says so
-    meshes: dict[tuple[str, str], object] = {}
-    objects = []
-    for k, inst in enumerate(scene.instances):
-        key = (inst.name, inst.source)
-        if key not in meshes:  # copies share one mesh (uploaded once)
-            meshes[key] = scene.mesh(k)
-        objects.append((meshes[key], inst.X_WO, inst.instance_id))
-    cams = scene_views(scene, config.camera)
-    common = {
-        "sensor": config.camera.sensor,
-        "randomize": config.camera.randomize,
-        "seed": scene.seed,
-    }
-    if config.camera.rig == "mgn":
-        render_views(
-            objects,  # type: ignore[arg-type]
-            tote_mesh(scene.tote),
-            views=[v for v, _ in cams],
-            out_dir=out,
-            rig_seed=scene.seed,
-            K=cams[0][1].K,
-            **common,  # type: ignore[arg-type]
-        )
-        return
-    # Explicit cameras: render_views numbers them by position; write them under the rig index.
-    images = render_views(
-        objects,  # type: ignore[arg-type]
-        tote_mesh(scene.tote),
-        views=[c for _, c in cams],
-        out_dir=None,
-        **common,  # type: ignore[arg-type]
+        scene.to_json(out / "scene.json")
+        return {}  # every object left the tote: nothing to render but the scene file says so
+    labels = config.labels
+    pj = su = None
+    if labels.scene_grasps:
+        got = [object_labels.get(inst.name) for inst in scene.instances]
+        if labels.paralleljaw:
+            pj = [g.paralleljaw if g is not None else None for g in got]
+        if labels.suction:
+            su = [g.suction if g is not None else None for g in got]
+    options = LabelOptions(
+        sensor=config.camera.sensor,  # type: ignore[arg-type]
+        randomize=config.camera.randomize,
+        seed=scene.seed,
+        layout=labels.layout,
+        scene_grasps=labels.scene_grasps,
+        num_threads=num_threads,
     )
-    for (v, _), res in zip(cams, images, strict=True):
-        _write_view(out, dataclasses.replace(res, index=v))
+    views = scene_views(scene, config.camera)
+    timings = label_scene(scene, out, views, pj_labels=pj, suction_labels=su,
+                          gripper=config.gripper, cup=config.cup, options=options)  # fmt: skip
+    return timings.seconds
