@@ -143,8 +143,83 @@ def _register_render(ssub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_render)
 
 
+def _cmd_label(args: argparse.Namespace) -> int:
+    import time
+
+    from tqdm import tqdm
+
+    from mgn.config import load_config
+    from mgn.io.atomic import atomic_dir
+    from mgn.pipeline.label_cache import object_labels
+    from mgn.pipeline.scene_writer import scene_views
+    from mgn.scene.label import LabelOptions, label_scene
+    from mgn.scene.scene import Scene
+
+    config = load_config(args.config)
+    scene = Scene.from_json(args.scene)
+    if len(scene) == 0:
+        raise ValueError(f"'{args.scene}': the scene has no objects to label")
+    views = scene_views(scene, config.camera)
+    if args.view is not None:
+        known = {v for v, _ in views}
+        missing = sorted(set(args.view) - known)
+        if missing:
+            raise ValueError(f"--view {missing}: not among the configured views {sorted(known)}")
+        views = [(v, c) for v, c in views if v in set(args.view)]
+    grasps = config.labels.scene_grasps and not args.no_grasps
+    pj: list | None = None
+    su: list | None = None
+    if grasps:
+        t0 = time.perf_counter()
+        by_name = {}
+        names = sorted({(inst.name, inst.source) for inst in scene.instances})
+        for name, source in tqdm(names, desc="object labels", unit="object", disable=None):
+            idx = next(i for i, inst in enumerate(scene.instances)
+                       if (inst.name, inst.source) == (name, source))  # fmt: skip
+            by_name[name] = object_labels(scene.object_spec(idx), config,
+                                          num_threads=args.num_threads)  # fmt: skip
+        got = [by_name[inst.name] for inst in scene.instances]
+        pj = [g.paralleljaw for g in got] if config.labels.paralleljaw else None
+        su = [g.suction for g in got] if config.labels.suction else None
+        print(f"object labels of {len(names)} objects in {time.perf_counter() - t0:.1f} s")
+    options = LabelOptions(
+        sensor=config.camera.sensor,  # type: ignore[arg-type]
+        randomize=config.camera.randomize,
+        seed=scene.seed,
+        layout=config.labels.layout,
+        scene_grasps=grasps,
+        num_threads=args.num_threads,
+    )
+    with tqdm(total=len(views), desc="views", unit="view", disable=None) as bar:
+        with atomic_dir(args.out, overwrite=args.overwrite) as tmp:
+            timings = label_scene(scene, tmp, views, pj_labels=pj, suction_labels=su,
+                                  gripper=config.gripper, cup=config.cup, options=options,
+                                  progress=lambda done, total: bar.update(1))  # fmt: skip
+    split = ", ".join(f"{k} {v:.0f}" for k, v in timings.per_view_ms().items())
+    print(f"{len(views)} views of {len(scene)} objects in {args.out} (ms per view: {split})")
+    return 0
+
+
+def _register_label(ssub: argparse._SubParsersAction) -> None:
+    p = ssub.add_parser(
+        "label", help="render and label a dropped scene: one MetaGraspNet scene folder"
+    )
+    p.add_argument("scene", help="scene JSON written by `mgn scene drop`")
+    p.add_argument("--out", required=True, help="the scene folder to write (created)")
+    p.add_argument("--config", help="dataset config YAML (cameras, sensor, labels, gripper, cup)")
+    p.add_argument("--view", type=int, nargs="+", help="only these views of the configured rig")
+    p.add_argument("--no-grasps", action="store_true", help="skip the scene grasp labels")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing folder")
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    p.set_defaults(func=_cmd_label)
+
+
 #: Functions adding one action each to the ``scene`` subparsers.
-ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [_register_drop, _register_render]
+ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [
+    _register_drop,
+    _register_render,
+    _register_label,
+]
 
 
 def register(sub: argparse._SubParsersAction) -> argparse._SubParsersAction:
