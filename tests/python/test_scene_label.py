@@ -1,0 +1,205 @@
+"""label_scene and `mgn scene label` end to end on a hand-built scene: a cube resting on a shoe
+box on the tote floor, and a tea box on its own, seen from the MetaGraspNet rig at low
+resolution. The numerics of each label are tested in their own files; here: the pieces agree
+with each other and with the format once written and read back."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+
+from mgn.io.dataset import Dataset
+from mgn.io.validate import validate_dataset
+from mgn.objects import ToteSpec, get_object
+from mgn.render.camera import CameraView, Intrinsics, mgn_rig
+from mgn.scene.label import LabelOptions, label_scene
+from mgn.scene.scene import BUILTIN, Scene, SceneInstance
+
+VIEWS = (0, 3, 20)
+
+
+def _pose(x: float, y: float, z: float) -> np.ndarray:
+    X = np.eye(4)
+    X[:3, 3] = (x, y, z)
+    return X
+
+
+def _scene() -> Scene:
+    def inst(i: int, name: str, X: np.ndarray, contacts: tuple[str, ...]) -> SceneInstance:
+        return SceneInstance(i, name, get_object(name).category_id, BUILTIN, X, contacts)
+
+    return Scene(
+        instances=(
+            inst(1, "box_shoe", _pose(-0.02, 0.0, 0.045), ("floor",)),  # 240 x 150 x 90 mm
+            inst(2, "box_cube", _pose(0.0, 0.0, 0.12), ()),  # 60 mm cube on top of the shoe box
+            inst(3, "box_tea", _pose(0.0, 0.11, 0.0325), ("floor", "+y")),  # against a wall
+        ),
+        tote=ToteSpec(),
+        seed=3,
+    )
+
+
+def _views(scale: float = 0.2) -> list[tuple[int, CameraView]]:
+    poses, _ = mgn_rig(3)
+    K = Intrinsics.mgn_synthetic().scaled(scale)
+    return [(v, CameraView(K, poses[v])) for v in VIEWS]
+
+
+@pytest.fixture(scope="module")
+def object_labels(tmp_path_factory):
+    from mgn.config import load_config
+    from mgn.pipeline.label_cache import object_labels as labels_of
+
+    config = load_config({
+        "labels": {"pj_physics": False},
+        "object_labels": {"suction_points": 300, "pj_points": 300},
+    })  # fmt: skip
+    mp = pytest.MonkeyPatch()
+    mp.setenv("MGN_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
+    try:
+        scene = _scene()
+        got = [labels_of(scene.object_spec(i), config, use_cache=False) for i in range(3)]
+    finally:
+        mp.undo()
+    return got
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory, object_labels):
+    root = tmp_path_factory.mktemp("ds")
+    timings = label_scene(
+        _scene(),
+        root / "scene0",
+        _views(),
+        pj_labels=[g.paralleljaw for g in object_labels],
+        suction_labels=[g.suction for g in object_labels],
+        options=LabelOptions(randomize=False, num_threads=2),
+    )
+    return root, timings
+
+
+def test_every_file_is_written_and_valid(written):
+    root, timings = written
+    assert validate_dataset(root) == []
+    scene = Dataset(root).scene(0)
+    assert scene.view_ids == list(VIEWS)
+    assert set(timings.seconds) >= {"render", "object labels", "layout", "scene grasps", "write"}
+    assert timings.views == len(VIEWS)
+    gt = scene.scene_gt
+    assert sorted(gt) == [str(v) for v in VIEWS]
+    assert scene.scene_json["seed"] == 3
+
+
+def test_top_view_layout(written):
+    root, _ = written
+    view = Dataset(root).scene(0).view(0)
+    inst, amodal = view.instances, view.amodal
+    assert amodal.shape[0] == 3
+    for i in range(3):
+        vis = inst == i + 1
+        assert vis.any(), f"instance {i + 1} not seen from the top"
+        assert not np.any(vis & ~amodal[i]), "a visible mask leaves its amodal mask"
+    # The cube lies on the shoe box: the relation matrix, the graph and the layers say so.
+    m = view.relation_matrix
+    assert m[0, 1] == -1 and m[1, 0] == 0 and m[2].tolist() == [0, 0, 0]
+    order = view.order
+    assert [p["id"] for p in order["1"]["parents"]] == [2]
+    assert order["1"]["layer"] == 1 and order["2"]["layer"] == 0 and order["3"]["layer"] == 0
+    assert order["1"]["parents"][0]["edge_size"] > 0
+    # The depth step from the cube's top to the shoe box's top is 60 mm (written in cm).
+    assert order["1"]["parents"][0]["depth_diff"] == pytest.approx(6.0, abs=0.8)
+    assert order["3"]["bin_rel"] == "edge" and order["1"]["bin_rel"] == "no_rel"
+    # Occlusion: the shoe box is partly covered, the others are not.
+    assert 0.02 < order["1"]["occlusion"] < 0.5
+    assert order["2"]["occlusion"] == pytest.approx(0.0, abs=1e-6)
+    occ_map = view.occlusion_map
+    assert np.allclose(occ_map[inst == 1], order["1"]["occlusion"], atol=1e-6)
+    # Boxes: the loose (amodal) box of the shoe contains its visible pixels.
+    x, y, w, h = view.hdf5["objects/bbox_loose"][0]
+    ys, xs = np.nonzero(inst == 1)
+    assert x <= xs.min() and xs.max() < x + w and y <= ys.min() and ys.max() < y + h
+    # Three distinct classes, all complete, two layers, small occlusion above 5 %: level 2.
+    assert view.layout["difficulty"] in (1, 2)
+    assert view.layout["order"][:2] != [1, 2]  # the shoe box is never picked before the cube
+
+
+def test_poses_and_keypoints_in_the_camera_frame(written):
+    root, _ = written
+    view = Dataset(root).scene(0).view(3)
+    scene = _scene()
+    X_CW = np.linalg.inv(view.X_WC)
+    for i, inst in enumerate(scene.instances):
+        assert np.allclose(view.X_CO[i], X_CW @ inst.X_WO, atol=1e-5)
+    kp = view.hdf5["keypts/byhand/keypts_relative_to_camera"]
+    occl = view.hdf5["keypts/byhand/occluded_keypts_relative_to_camera"]
+    total = sum(len(get_object(inst.name).keypoints) for inst in scene.instances)
+    assert len(kp) + len(occl) <= total and len(kp) > 0
+    assert np.all(kp[:, 3] > 0)  # in front of the camera (z forward, metres)
+
+
+def test_scene_grasps_are_split_and_in_range(written):
+    root, _ = written
+    view = Dataset(root).scene(0).view(0)
+    for kind in ("paralleljaw", "suctioncup"):
+        ok = view.grasps(kind)
+        bad = view.grasps(kind, colliding=True)
+        assert len(ok["object_id"]) > 0, kind
+        assert set(np.unique(ok["object_id"]).astype(int)) <= {0, 1, 2}
+        assert np.all((ok["score_analytical"] >= 0) & (ok["score_analytical"] <= 1))
+        poses = ok["contact_poses_relative_to_camera"]
+        assert np.allclose(np.linalg.det(poses[:, :3, :3]), 1.0, atol=1e-4)
+        assert len(bad["object_id"]) >= 0
+    # The shoe box lies on the floor: some of its suction grasps (bottom face) collide, or are
+    # not visible from the top; none of the kept ones is on its bottom face.
+    su = view.grasps("suctioncup")
+    X_WC = view.X_WC
+    shoe = su["object_id"] == 0
+    p_W = (X_WC[:3, :3] @ su["contact_poses_relative_to_camera"][shoe, :3, 3].T).T + X_WC[:3, 3]
+    assert np.all(p_W[:, 2] > 0.005)
+
+
+def test_same_input_same_bytes(tmp_path, object_labels):
+    def digest(folder):
+        return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in folder.iterdir()}
+
+    runs = []
+    for k, threads in enumerate((1, 2)):
+        label_scene(_scene(), tmp_path / f"r{k}", _views(0.1)[:2],
+                    pj_labels=[g.paralleljaw for g in object_labels], suction_labels=None,
+                    options=LabelOptions(num_threads=threads))  # fmt: skip
+        runs.append(digest(tmp_path / f"r{k}"))
+    assert runs[0] == runs[1]
+
+
+def test_bad_input(tmp_path):
+    from mgn.errors import InvalidArgumentError
+
+    empty = Scene(instances=(), tote=ToteSpec(), seed=0)
+    with pytest.raises(InvalidArgumentError, match="no objects"):
+        label_scene(empty, tmp_path / "a", _views())
+    with pytest.raises(InvalidArgumentError, match="no views"):
+        label_scene(_scene(), tmp_path / "b", [])
+
+
+def test_scene_label_command(tmp_path):
+    from mgn.cli import main
+
+    _scene().to_json(tmp_path / "scene.json")
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(
+        "camera: {views: [0, 7], resolution_scale: 0.1, randomize: false}\n"
+        "labels: {pj_physics: false}\n"
+        "object_labels: {suction_points: 200, pj_points: 200}\n"
+    )
+    out = tmp_path / "scene5"
+    args = ["scene", "label", str(tmp_path / "scene.json"), "--out", str(out), "--config", str(cfg)]
+    assert main(args) == 0
+    assert sorted(Dataset(tmp_path).scene(5).view_ids) == [0, 7]
+    assert validate_dataset(tmp_path) == []
+    assert main(args) == 1  # exists already, no --overwrite
+    assert main([*args, "--view", "9"]) == 1  # not a configured view
+    layout = json.loads((out / "7_layout.json").read_text())
+    assert 1 <= layout["difficulty"] <= 5
