@@ -15,4 +15,5 @@ void bind_render(pybind11::module_& m);
 void bind_scene(pybind11::module_& m);
 void bind_pj(pybind11::module_& m);
 void bind_shake(pybind11::module_& m);
+void bind_view_labels(pybind11::module_& m);
 }  // namespace mgn::py_bind

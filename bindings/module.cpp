@@ -16,4 +16,5 @@ PYBIND11_MODULE(_core, m) {
   mgn::py_bind::bind_scene(m);
   mgn::py_bind::bind_pj(m);
   mgn::py_bind::bind_shake(m);
+  mgn::py_bind::bind_view_labels(m);
 }

@@ -25,4 +25,5 @@
 #include <mgn/render/depth_sensor.hpp>
 #include <mgn/render/renderer.hpp>
 #include <mgn/scene/drop.hpp>
+#include <mgn/scene/view_labels.hpp>
 #include <mgn/version.hpp>

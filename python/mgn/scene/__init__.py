@@ -32,6 +32,10 @@ _EXPORTS = {
     "Scene": "scene",
     "SceneInstance": "scene",
     "resolve_object": "scene",
+    "DEFAULT_KEYPOINT_TOLERANCE": "view_labels",
+    "SceneRayModel": "view_labels",
+    "ViewObjectLabels": "view_labels",
+    "view_object_labels": "view_labels",
 }
 
 __all__ = [
@@ -51,6 +55,10 @@ __all__ = [
     "drop_scene",
     "resolve_object",
     "tote_mesh",
+    "DEFAULT_KEYPOINT_TOLERANCE",
+    "SceneRayModel",
+    "ViewObjectLabels",
+    "view_object_labels",
 ]
 
 
@@ -83,4 +91,10 @@ if TYPE_CHECKING:
         Scene,
         SceneInstance,
         resolve_object,
+    )
+    from mgn.scene.view_labels import (
+        DEFAULT_KEYPOINT_TOLERANCE,
+        SceneRayModel,
+        ViewObjectLabels,
+        view_object_labels,
     )
