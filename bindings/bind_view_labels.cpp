@@ -12,9 +12,7 @@ namespace mgn::py_bind {
 
 namespace {
 
-py::array image(py::array flat, int h, int w) {
-  return flat.attr("reshape")(py::make_tuple(h, w));
-}
+py::array image(py::array flat, int h, int w) { return flat.attr("reshape")(py::make_tuple(h, w)); }
 
 py::array poses_to_numpy(const std::vector<Pose>& X) {
   py::array_t<double> out({static_cast<py::ssize_t>(X.size()), py::ssize_t{4}, py::ssize_t{4}});
@@ -36,16 +34,15 @@ void bind_view_labels(py::module_& m) {
                        const std::vector<py::handle>& com_points, const py::handle& coms,
                        const Mesh* tote, const py::handle& X_W_tote) {
              const std::size_t n = meshes.size();
-             const std::vector<Pose> X =
-                 n == 0 ? std::vector<Pose>{} : to_poses(poses, "poses");
+             const std::vector<Pose> X = n == 0 ? std::vector<Pose>{} : to_poses(poses, "poses");
              const Points3d c = to_rows<double, 3>(coms, "coms");
              if (X.size() != n || category_ids.size() != n || keypoints.size() != n ||
                  com_points.size() != n || static_cast<std::size_t>(c.rows()) != n) {
-               throw_error<InvalidArgument>(
-                   "ViewLabelModel: got ", n, " meshes, ", X.size(), " poses, ",
-                   category_ids.size(), " category ids, ", keypoints.size(), " keypoint arrays, ",
-                   com_points.size(), " CoM point arrays and ", c.rows(),
-                   " centres of mass; expected one of each per object");
+               throw_error<InvalidArgument>("ViewLabelModel: got ", n, " meshes, ", X.size(),
+                                            " poses, ", category_ids.size(), " category ids, ",
+                                            keypoints.size(), " keypoint arrays, ",
+                                            com_points.size(), " CoM point arrays and ", c.rows(),
+                                            " centres of mass; expected one of each per object");
              }
              std::vector<ViewLabelObject> objects(n);
              for (std::size_t i = 0; i < n; ++i) {
@@ -56,7 +53,8 @@ void bind_view_labels(py::module_& m) {
                objects[i].com_points = to_rows<double, 4>(com_points[i], "com_points");
                objects[i].com_O = c.row(static_cast<Eigen::Index>(i)).transpose();
              }
-             const Pose X_tote = X_W_tote.is_none() ? Pose::Identity() : to_pose(X_W_tote, "X_W_tote");
+             const Pose X_tote =
+                 X_W_tote.is_none() ? Pose::Identity() : to_pose(X_W_tote, "X_W_tote");
              py::gil_scoped_release release;
              return std::make_unique<ViewLabelModel>(objects, tote, X_tote);
            }),
@@ -95,8 +93,8 @@ void bind_view_labels(py::module_& m) {
             py::dict out;
             out["visible"] = image(to_numpy(std::move(L.visible)), h, w);
             out["semantic"] = image(to_numpy(std::move(L.semantic)), h, w);
-            out["amodal"] = to_bool_numpy(std::move(L.amodal)).attr("reshape")(
-                py::make_tuple(n, h, w));
+            out["amodal"] =
+                to_bool_numpy(std::move(L.amodal)).attr("reshape")(py::make_tuple(n, h, w));
             out["visible_pixels"] = to_numpy(std::move(L.visible_pixels));
             out["amodal_pixels"] = to_numpy(std::move(L.amodal_pixels));
             out["occlusion"] = to_numpy(std::move(L.occlusion));

@@ -35,6 +35,7 @@ __all__: list[str] = [
     "SealModel",
     "ShakeOptions",
     "UnsupportedError",
+    "ViewLabelModel",
     "apply_depth_sensor",
     "build_info",
     "calibrate_cup",
@@ -786,6 +787,35 @@ class ShakeOptions:
     def solver_iterations(self) -> int: ...
     @solver_iterations.setter
     def solver_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+
+class ViewLabelModel:
+    """
+    Ray-tracing model of one scene for per-view object labels.
+    """
+    def __init__(
+        self,
+        meshes: collections.abc.Sequence[Mesh],
+        poses: typing.Any,
+        category_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
+        keypoints: collections.abc.Sequence[typing.Any],
+        com_points: collections.abc.Sequence[typing.Any],
+        coms: typing.Any,
+        tote: Mesh = None,
+        X_W_tote: typing.Any = None,
+    ) -> None: ...
+    def label_view(
+        self,
+        K: Intrinsics,
+        X_WC: typing.Any,
+        instance_image: typing.Any,
+        keypoint_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.002,
+        keypoints: bool = True,
+        num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+    ) -> dict: ...
+    @property
+    def has_tote(self) -> bool: ...
+    @property
+    def num_objects(self) -> int: ...
 
 def apply_depth_sensor(
     depth: typing.Any,

@@ -100,8 +100,8 @@ TEST(ViewLabels, BoxesSideBySideAreNotOccludedAndMasksMatchProjectedRectangles) 
 }
 
 TEST(ViewLabels, BoxOnLargerBoxOcclusionEqualsCoveredFraction) {
-  const mgn::Mesh a = mgn::make_box({0.1, 0.1, 0.05});   // on top
-  const mgn::Mesh b = mgn::make_box({0.3, 0.2, 0.05});   // below
+  const mgn::Mesh a = mgn::make_box({0.1, 0.1, 0.05});  // on top
+  const mgn::Mesh b = mgn::make_box({0.3, 0.2, 0.05});  // below
   const mgn::Pose Xa = at(0.02, 0.01, 0.075), Xb = at(0.0, 0.0, 0.025);
   const auto img = instance_image({{&a, Xa, 1}, {&b, Xb, 2}});
   mgn::ViewLabelObject oa = object(a, Xa, 1), ob = object(b, Xb, 2);
@@ -123,7 +123,8 @@ TEST(ViewLabels, BoxOnLargerBoxOcclusionEqualsCoveredFraction) {
   const double covered = double(ra.count()) / double(rb.count());
   EXPECT_NEAR(L.occlusion[1], covered, 1e-12);
   // Continuous areas give the same within the pixel rounding of the rectangles' perimeters.
-  const double area_a = std::pow(200 * 0.1 / 0.9, 2), area_b = (200 * 0.3 / 0.95) * (200 * 0.2 / 0.95);
+  const double area_a = std::pow(200 * 0.1 / 0.9, 2),
+               area_b = (200 * 0.3 / 0.95) * (200 * 0.2 / 0.95);
   EXPECT_NEAR(L.occlusion[1], area_a / area_b, 2.0 * (4 * 22.2) / area_b);
   EXPECT_DOUBLE_EQ(L.occlusion[0], 0.0);
   // Every amodal mask contains its visible mask; occlusion map carries the rate.
@@ -176,8 +177,8 @@ TEST(ViewLabels, OneAndTwoThreadsGiveIdenticalLabels) {
   ob.com_points.resize(50, 4);
   for (int k = 0; k < 50; ++k) {
     const double th = 0.3 * k, ph = 0.11 * k;
-    ob.com_points.row(k) << 0.5, 0.08 * std::cos(th) * std::sin(ph), 0.08 * std::sin(th) * std::sin(ph),
-        0.08 * std::cos(ph);
+    ob.com_points.row(k) << 0.5, 0.08 * std::cos(th) * std::sin(ph),
+        0.08 * std::sin(th) * std::sin(ph), 0.08 * std::cos(ph);
   }
   mgn::ViewLabelModel model({oa, ob}, &tote, Xt);
   EXPECT_TRUE(model.has_tote());
@@ -215,8 +216,7 @@ TEST(ViewLabels, BadInputIsRejectedWithClearErrors) {
   std::vector<std::int32_t> img(200 * 200, 0);
   EXPECT_THROW(model.label_view(intrinsics(), top_down(), img.data(), 100, 200),
                mgn::InvalidArgument);
-  EXPECT_THROW(model.label_view(intrinsics(), top_down(), nullptr, 200, 200),
-               mgn::InvalidArgument);
+  EXPECT_THROW(model.label_view(intrinsics(), top_down(), nullptr, 200, 200), mgn::InvalidArgument);
   img[pix(3, 4)] = 2;  // only one object
   try {
     model.label_view(intrinsics(), top_down(), img.data(), 200, 200);

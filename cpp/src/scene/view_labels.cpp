@@ -18,8 +18,7 @@ constexpr const char* kLabel = "ViewLabelModel::label_view";
 constexpr long kTileRays = 2048;
 
 void check_rigid(const Pose& X, const std::string& what) {
-  if (!X.matrix().allFinite())
-    throw_error<InvalidArgument>(what, ": pose has non-finite entries");
+  if (!X.matrix().allFinite()) throw_error<InvalidArgument>(what, ": pose has non-finite entries");
   const Mat3d R = X.linear();
   const double orth = (R.transpose() * R - Mat3d::Identity()).cwiseAbs().maxCoeff();
   const Eigen::RowVector4d last = X.matrix().row(3);
@@ -203,8 +202,7 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
   std::vector<PixelBox> cast_box(N);
   for (int i = 0; i < N; ++i) {
     const Points3d& V = impl_->objects[i].vertices_W;
-    const Points3d p_C =
-        (V * X_CW.linear().transpose()).rowwise() + X_CW.translation().transpose();
+    const Points3d p_C = (V * X_CW.linear().transpose()).rowwise() + X_CW.translation().transpose();
     PixelBox b{0, 0, W - 1, H - 1};
     if (p_C.col(2).minCoeff() > 1e-9) {
       const Eigen::ArrayXd x = K.fx * p_C.col(0).array() / p_C.col(2).array() + K.cx;
@@ -264,8 +262,8 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
         d.resize(n, 3);
         for (Eigen::Index k = 0; k < n; ++k) {
           o.row(k) = origin;
-          d.row(k) = pixel_direction(R_WC, K, static_cast<int>(ps[k] % W),
-                                     static_cast<int>(ps[k] / W));
+          d.row(k) =
+              pixel_direction(R_WC, K, static_cast<int>(ps[k] % W), static_cast<int>(ps[k] / W));
         }
       };
       std::uint8_t* mask = out.amodal.data() + static_cast<std::size_t>(i) * P;

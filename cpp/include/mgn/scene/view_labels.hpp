@@ -74,16 +74,16 @@ struct ViewLabels {
   std::vector<double> occlusion;
   /// (H*W) each visible pixel carries its object's occlusion rate; 0 on background.
   std::vector<float> occlusion_map;
-  Boxes4i bbox_tight;       ///< (N,4) COCO [x, y, w, h] px of the visible mask; zeros if empty
-  Boxes4i bbox_loose;       ///< (N,4) COCO [x, y, w, h] px of the amodal mask; zeros if empty
-  std::vector<Pose> X_CO;   ///< (N) object poses in the camera frame, X_WC^-1 X_WO
-  Keypoints4d keypoints;    ///< visible semantic keypoints [id, x, y, z], camera frame, m
+  Boxes4i bbox_tight;      ///< (N,4) COCO [x, y, w, h] px of the visible mask; zeros if empty
+  Boxes4i bbox_loose;      ///< (N,4) COCO [x, y, w, h] px of the amodal mask; zeros if empty
+  std::vector<Pose> X_CO;  ///< (N) object poses in the camera frame, X_WC^-1 X_WO
+  Keypoints4d keypoints;   ///< visible semantic keypoints [id, x, y, z], camera frame, m
   std::vector<std::int32_t> keypoint_object;  ///< object index (0-based) of each row
   Keypoints4d occluded_keypoints;             ///< the other semantic keypoints, same layout
   std::vector<std::int32_t> occluded_keypoint_object;
   /// All CoM-scored points of all objects [score, x, y, z], camera frame, m, object by object.
   Keypoints4d com_points;
-  std::vector<std::int32_t> com_object;  ///< object index of each CoM point
+  std::vector<std::int32_t> com_object;   ///< object index of each CoM point
   std::vector<std::uint8_t> com_visible;  ///< 1 if the CoM point is visible
   /// (H*W) centre-of-mass heat map in [0, 1]. For a visible pixel of object i whose centre ray
   /// first hits object i at the world point x: heat = clamp((d_max - |x - c|) / (d_max - d_min),
