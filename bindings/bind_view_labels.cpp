@@ -67,7 +67,7 @@ void bind_view_labels(py::module_& m) {
           "label_view",
           [](const ViewLabelModel& model, const Intrinsics& K, const py::handle& X_WC,
              const py::handle& instance_image, double keypoint_tolerance, bool keypoints,
-             int num_threads) {
+             int num_threads, const py::handle& depth) {
             const Pose X = to_pose(X_WC, "X_WC");
             CArray<std::int32_t> img;
             try {
@@ -84,6 +84,19 @@ void bind_view_labels(py::module_& m) {
             o.keypoints = keypoints;
             o.num_threads = num_threads;
             const int h = static_cast<int>(img.shape(0)), w = static_cast<int>(img.shape(1));
+            CArray<float> z;
+            if (!depth.is_none()) {
+              try {
+                z = py::cast<CArray<float>>(depth);
+              } catch (const py::cast_error&) {
+                throw_error<InvalidArgument>("depth: expected a float (H, W) array");
+              }
+              if (z.ndim() != 2 || z.shape(0) != h || z.shape(1) != w) {
+                throw_error<InvalidArgument>("depth: expected the shape of instance_image (", h,
+                                             ", ", w, ")");
+              }
+              o.depth = z.data();
+            }
             ViewLabels L;
             {
               py::gil_scoped_release release;
@@ -114,7 +127,7 @@ void bind_view_labels(py::module_& m) {
           },
           py::arg("K"), py::arg("X_WC"), py::arg("instance_image"),
           py::arg("keypoint_tolerance") = 0.002, py::arg("keypoints") = true,
-          py::arg("num_threads") = 0);
+          py::arg("num_threads") = 0, py::arg("depth") = py::none());
 }
 
 }  // namespace mgn::py_bind

@@ -811,6 +811,7 @@ class ViewLabelModel:
         keypoint_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.002,
         keypoints: bool = True,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+        depth: typing.Any = None,
     ) -> dict: ...
     @property
     def has_tote(self) -> bool: ...

@@ -222,6 +222,22 @@ TEST(ViewLabels, BoxOnLargerBoxOcclusionEqualsCoveredFraction) {
   const double d_max = std::sqrt(0.15 * 0.15 + 0.1 * 0.1 + 0.025 * 0.025);
   EXPECT_NEAR(L.com_heatmap[pix(u, v)], (d_max - d) / d_max, 1e-4);
   EXPECT_EQ(L.com_heatmap[pix(0, 0)], 0.0f);
+
+  // With a depth image (here the analytic z of the top faces) the heat map is the same formula
+  // on the back-projected pixels, and nothing else changes.
+  std::vector<float> depth_image(200 * 200, 0.0f);
+  for (std::size_t q = 0; q < depth_image.size(); ++q) {
+    if (L.visible[q] == 1) depth_image[q] = 0.9f;
+    if (L.visible[q] == 2) depth_image[q] = 0.95f;
+  }
+  mgn::ViewLabelOptions with_depth;
+  with_depth.depth = depth_image.data();
+  const auto Ld = model.label_view(intrinsics(), top_down(), img.data(), 200, 200, with_depth);
+  EXPECT_NEAR(Ld.com_heatmap[pix(u, v)], (d_max - d) / d_max, 1e-6);
+  EXPECT_EQ(Ld.amodal, L.amodal);
+  EXPECT_EQ(Ld.occlusion, L.occlusion);
+  for (std::size_t q = 0; q < depth_image.size(); ++q)
+    ASSERT_NEAR(Ld.com_heatmap[q], L.com_heatmap[q], 1e-4) << q;
 }
 
 TEST(ViewLabels, OneAndTwoThreadsGiveIdenticalLabels) {

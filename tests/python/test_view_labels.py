@@ -243,6 +243,12 @@ def test_amodal_matches_the_renderer_alone_on_99_percent(library_scene, library_
         expected[sel] = np.clip((d_pts.max() - d) / (d_pts.max() - d_pts.min()), 0, 1)
     err = np.abs(L.com_heatmap[vv, uu] - expected)
     assert np.median(err) < 0.01 and np.mean(err < 0.05) > 0.95
+    # Given the depth image, the heat map is that formula on the rendered surface (no rays).
+    Ld = view_object_labels(library_model, view, ids, depth=full.depth)
+    np.testing.assert_allclose(Ld.com_heatmap[vv, uu], expected, atol=1e-5)
+    assert np.all(Ld.com_heatmap[ids == 0] == 0)
+    for name in ("amodal", "occlusion", "bbox_loose", "com_visible", "keypoints"):
+        np.testing.assert_array_equal(getattr(Ld, name), getattr(L, name), err_msg=name)
     assert L.com_heatmap.max() <= 1.0 and L.com_heatmap.min() >= 0.0
     assert np.all(L.com_heatmap[L.visible == 0] == 0)
     assert L.com_heatmap[L.visible > 0].mean() > 0.2
@@ -289,6 +295,10 @@ def test_bad_input_gives_clear_errors(library_model) -> None:
         view_object_labels(library_model, view, bad)
     with pytest.raises(InvalidArgumentError, match="integer"):
         view_object_labels(library_model, view, np.zeros((200, 200), np.float32))
+    with pytest.raises(InvalidArgumentError, match="depth has shape"):
+        view_object_labels(
+            library_model, view, np.zeros((200, 200), np.int32), depth=np.zeros((200, 100))
+        )
     with pytest.raises(ValueError, match="no objects"):
         SceneRayModel([], np.zeros((0, 4, 4)), [])
     with pytest.raises(ValueError, match="no objects"):

@@ -253,7 +253,11 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
       for (int v = tile.v0; v < tile.v1; ++v) {
         for (int u = b.u0; u <= b.u1; ++u) {
           const std::size_t p = static_cast<std::size_t>(v) * W + u;
-          (instance_image[p] == id ? p_vis : p_hid).push_back(p);
+          if (instance_image[p] != id) {
+            p_hid.push_back(p);
+          } else if (options.depth == nullptr) {
+            p_vis.push_back(p);
+          }
         }
       }
       auto fill = [&](const std::vector<std::size_t>& ps, Points3f& o, Points3f& d) {
@@ -287,11 +291,27 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
     }
   };
   parallel_for(tiles.size(), options.num_threads, 1, body);
-  // Visible pixels outside the cast box (only when rasteriser and box disagree) are amodal too.
-  for (std::size_t p = 0; p < P; ++p) {
-    const std::int32_t id = instance_image[p];
-    if (id > 0) out.amodal[static_cast<std::size_t>(id - 1) * P + p] = 1;
-  }
+  // Every visible pixel is amodal (also outside the cast box, should rasteriser and box
+  // disagree); with a depth image the heat map comes from the back-projected pixels.
+  auto visible_rows = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      for (int u = 0; u < W; ++u) {
+        const std::size_t p = v * static_cast<std::size_t>(W) + u;
+        const std::int32_t id = instance_image[p];
+        if (id <= 0) continue;
+        out.amodal[static_cast<std::size_t>(id - 1) * P + p] = 1;
+        if (options.depth == nullptr) continue;
+        const double z = options.depth[p];
+        if (!(z > 0.0) || !std::isfinite(z)) continue;
+        const Impl::Object& obj = impl_->objects[id - 1];
+        const Vec3d p_C(z * (u + 0.5 - K.cx) / K.fx, z * (v + 0.5 - K.cy) / K.fy, z);
+        const double d = (X_WC * p_C - obj.com_W).norm();
+        const double span = std::max(obj.d_max - obj.d_min, 1e-12);
+        out.com_heatmap[p] = static_cast<float>(std::clamp((obj.d_max - d) / span, 0.0, 1.0));
+      }
+    }
+  };
+  parallel_for(static_cast<std::size_t>(H), options.num_threads, 64, visible_rows);
 
   out.amodal_pixels.assign(N, 0);
   out.occlusion.assign(N, 1.0);

@@ -66,10 +66,11 @@ class ViewObjectLabels:
         com_visible: (Q,) bool, the point is visible (same test as the semantic keypoints).
         com_heatmap: (H, W) float32 in [0, 1]: the CoM score of the surface seen at each visible
             pixel. For a visible pixel of object i whose centre ray first hits object i at x
-            (world), ``clamp((d_max - |x - c|) / (d_max - d_min), 0, 1)`` with c the centre of
-            mass and d_min, d_max the smallest and largest distance of its CoM-scored points to
-            c (the score of ``mgn.io.model_folder.com_keypoints``); 0 on background and on edge
-            pixels where the ray misses the object.
+            (world; with a depth image, x is the pixel's back-projected depth point),
+            ``clamp((d_max - |x - c|) / (d_max - d_min), 0, 1)`` with c the centre of mass and
+            d_min, d_max the smallest and largest distance of its CoM-scored points to c (the
+            score of ``mgn.io.model_folder.com_keypoints``); 0 on background, on edge pixels
+            where the ray misses the object and on pixels without a valid depth.
     """
 
     instance_ids: npt.NDArray[np.int32]
@@ -237,6 +238,7 @@ def view_object_labels(
     view: CameraView,
     instance_image: npt.ArrayLike,
     *,
+    depth: npt.ArrayLike | None = None,
     keypoint_tolerance: float = DEFAULT_KEYPOINT_TOLERANCE,
     keypoints: bool = True,
     num_threads: int = 0,
@@ -248,6 +250,11 @@ def view_object_labels(
         view: the camera (intrinsics and ``X_WC``).
         instance_image: (H, W) integer instance ids of the view (0 = background, tote and floor,
             else 1..N), e.g. ``ViewImages.instance_ids``; H, W must be the camera's size.
+        depth: optional (H, W) z-depth of the same view, m (<= 0 or NaN where nothing is seen),
+            e.g. ``ViewImages.depth_ideal``. With it the heat map takes each visible pixel's
+            3-D point from the depth (back-projected through the pixel centre) instead of a ray
+            cast per visible pixel: about half the rays, and the heat map follows the rendered
+            surface exactly. Masks, occlusion and keypoints do not depend on it.
         keypoint_tolerance: see :data:`DEFAULT_KEYPOINT_TOLERANCE`, m.
         keypoints: compute the keypoint sets (False leaves them empty).
         num_threads: threads (0 = all); the result does not depend on it.
@@ -274,6 +281,16 @@ def view_object_labels(
             f"instance_image ids must be in 0..{model.num_objects} (the number of objects), "
             f"got {int(img.min())}..{int(img.max())}"
         )
+    z = None
+    if depth is not None:
+        z = np.asarray(depth)
+        if not np.issubdtype(z.dtype, np.floating):
+            raise InvalidArgumentError(f"depth must be a float array, got dtype {z.dtype}")
+        if z.shape != img.shape:
+            raise InvalidArgumentError(
+                f"depth has shape {z.shape}; expected the instance image's {img.shape}"
+            )
+        z = np.ascontiguousarray(z, np.float32)
     out = model._model.label_view(
         view.K.to_core(),
         view.X_WC,
@@ -281,6 +298,7 @@ def view_object_labels(
         float(keypoint_tolerance),
         bool(keypoints),
         int(num_threads),
+        z,
     )
     n = model.num_objects
     return ViewObjectLabels(

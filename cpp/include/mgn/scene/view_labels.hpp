@@ -52,6 +52,11 @@ struct ViewLabelOptions {
   double keypoint_tolerance = 0.002;
   /// Compute the keypoint sets (false leaves them empty).
   bool keypoints = true;
+  /// Optional (H*W) row-major z-depth image of the same view (m; <= 0 or NaN where nothing is
+  /// seen), e.g. the renderer's ideal depth. When given, the heat map takes the 3-D point of
+  /// each visible pixel from it (p_C = z ((u + 0.5 - cx) / fx, (v + 0.5 - cy) / fy, 1)) instead
+  /// of casting a ray per visible pixel, which roughly halves the ray count. Not owned.
+  const float* depth = nullptr;
   int num_threads = 0;  ///< 0 = all hardware threads; results do not depend on it
 };
 
@@ -86,11 +91,13 @@ struct ViewLabels {
   std::vector<std::int32_t> com_object;   ///< object index of each CoM point
   std::vector<std::uint8_t> com_visible;  ///< 1 if the CoM point is visible
   /// (H*W) centre-of-mass heat map in [0, 1]. For a visible pixel of object i whose centre ray
-  /// first hits object i at the world point x: heat = clamp((d_max - |x - c|) / (d_max - d_min),
+  /// first hits object i at the world point x (or, with ViewLabelOptions::depth, the pixel's
+  /// back-projected depth point): heat = clamp((d_max - |x - c|) / (d_max - d_min),
   /// 0, 1), with c the object's centre of mass and d_min, d_max the smallest and largest distance
   /// of its CoM-scored points to c (the same score as the CoM keypoints); without CoM points
-  /// d_min = 0 and d_max = the largest vertex distance. 0 on background and on visible pixels
-  /// whose ray misses the object (edge pixels where rasteriser and ray tracer disagree).
+  /// d_min = 0 and d_max = the largest vertex distance. 0 on background, on visible pixels whose
+  /// ray misses the object (edge pixels where rasteriser and ray tracer disagree) and on visible
+  /// pixels without a valid depth.
   std::vector<float> com_heatmap;
 };
 
