@@ -7,7 +7,8 @@ scene's ray model (:class:`mgn.scene.SceneRayModel`) is built once, untimed, as 
 does for its 37 views. One timed call = the labels of one view:
 
 - mgn "masks": visible / semantic / amodal masks, occlusion, boxes, poses, CoM heat map
-  (``keypoints=False``).
+  (``keypoints=False``; the rendered depth is passed, as the scene pipeline has it, so the heat
+  map needs no rays).
 - mgn "masks + keypoints": the same plus the visibility of every semantic keypoint and of the
   20 x 1000 CoM-scored points (one ray each through the whole scene).
 - peer: ``Renderer.render(view, visible_instances=[i])`` for each of the 20 objects (the
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -31,7 +33,7 @@ AGREEMENT_MIN = 0.99
 VIEWS = (0, 14)
 
 
-def _setup(width: int) -> tuple[Any, Any, Any, list[tuple[int, Any, np.ndarray]]]:
+def _setup(width: int) -> tuple[Any, Any, float, list[tuple[int, Any, np.ndarray, np.ndarray]]]:
     from mgn.geometry import mass_properties
     from mgn.io.model_folder import com_keypoints
     from mgn.objects import builtin_objects
@@ -70,7 +72,8 @@ def _setup(width: int) -> tuple[Any, Any, Any, list[tuple[int, Any, np.ndarray]]
     frames = []
     for v in VIEWS:
         view = CameraView(K, poses[v])
-        frames.append((v, view, r.render(view, rgb=False, depth=False).instance_ids))
+        out = r.render(view, rgb=False, depth=True)
+        frames.append((v, view, out.instance_ids, out.depth))
     return model, r, build, frames
 
 
@@ -108,7 +111,7 @@ def run(
     model, r, build, frames = _setup(width)
     log(f"  view labels: ray model of 20 objects + tote built in {1e3 * build:.0f} ms (untimed)")
     threads = thread_counts()
-    for v, view, ids in frames:
+    for v, view, ids, depth in frames:
         for with_kp in (False, True):
             what = "masks + keypoints" if with_kp else "masks"
             row = Row(
@@ -120,8 +123,14 @@ def run(
             )
             cases: dict[str, Callable[[], object]] = {}
             for t in threads:
-                cases[f"mgn{t}"] = lambda t=t, w=with_kp, view=view, ids=ids: view_object_labels(
-                    model, view, ids, keypoints=w, num_threads=t
+                cases[f"mgn{t}"] = partial(
+                    view_object_labels,
+                    model,
+                    view,
+                    ids,
+                    depth=depth,
+                    keypoints=with_kp,
+                    num_threads=t,
                 )
             cases["peer"] = lambda view=view, ids=ids: _peer(r, view, ids)
             warm = {k: f() for k, f in cases.items()}

@@ -173,7 +173,11 @@ def test_amodal_matches_the_renderer_alone_on_99_percent(library_scene, library_
     ids = full.instance_ids
     L = view_object_labels(library_model, view, ids)
     assert L.num_objects == 5
+    origins, directions = view.rays()
     for i in range(5):
+        # Brute force: every pixel's centre ray against the object alone (no box, no hull).
+        hit = mgn.RayScene(scene.mesh(i), scene.instances[i].X_WO).occluded(origins, directions)
+        np.testing.assert_array_equal(L.amodal[i], hit.reshape(200, 200) | (ids == i + 1))
         alone = r.render(view, rgb=False, depth=False, visible_instances=[i + 1]).instance_ids
         rendered = alone == i + 1
         union = rendered | L.amodal[i]
@@ -283,6 +287,26 @@ def test_one_and_two_threads_are_identical(library_scene, library_model) -> None
     b = view_object_labels(library_model, view, ids, num_threads=2)
     for name in ViewObjectLabels.__dataclass_fields__:
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+
+
+def test_amodal_masks_are_exact_for_objects_cut_by_the_image_border(
+    library_scene, library_model
+) -> None:
+    # Close to the objects: several run off the image; amodal = every pixel whose centre ray
+    # hits the object alone (brute force over the whole image), plus its visible pixels.
+    view = CameraView(K200, look_at([0.05, -0.12, 0.22], [0.0, 0.0, 0.03]))
+    items = [(library_scene.mesh(i), inst.X_WO, inst.instance_id)
+             for i, inst in enumerate(library_scene.instances)]  # fmt: skip
+    ids = render_ids(view, items)
+    L = view_object_labels(library_model, view, ids)
+    origins, directions = view.rays()
+    cut = 0
+    for i, (mesh, X, _) in enumerate(items):
+        hit = mgn.RayScene(mesh, X).occluded(origins, directions).reshape(200, 200)
+        np.testing.assert_array_equal(L.amodal[i], hit | (ids == i + 1))
+        m = L.amodal[i]
+        cut += bool(m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any())
+    assert cut >= 2
 
 
 def test_bad_input_gives_clear_errors(library_model) -> None:

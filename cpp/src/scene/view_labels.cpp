@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 namespace mgn {
 
@@ -51,6 +52,47 @@ Eigen::Matrix<std::int32_t, 1, 4> coco_box(const PixelBox& b) {
     out << b.u0, b.v0, b.u1 - b.u0 + 1, b.v1 - b.v0 + 1;
   }
   return out;
+}
+
+/// Convex hull of 2-D points, counter-clockwise (Andrew's monotone chain); the points if < 3.
+std::vector<Eigen::Vector2d> convex_hull(std::vector<Eigen::Vector2d> pts) {
+  std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return pts;
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Eigen::Vector2d> h(2 * pts.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], pts[i]) <= 0) --k;
+    h[k++] = pts[i];
+  }
+  for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(h[k - 2], h[k - 1], pts[i]) <= 0) --k;
+    h[k++] = pts[i];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+/// Widens [xl, xr] by where the horizontal line at height y crosses the convex polygon `hull`.
+void hull_row(const std::vector<Eigen::Vector2d>& hull, double y, double& xl, double& xr) {
+  for (std::size_t j = 0; j < hull.size(); ++j) {
+    const Eigen::Vector2d& a = hull[j];
+    const Eigen::Vector2d& b = hull[(j + 1) % hull.size()];
+    if (y < std::min(a.y(), b.y()) || y > std::max(a.y(), b.y())) continue;
+    if (a.y() == b.y()) {
+      xl = std::min({xl, a.x(), b.x()});
+      xr = std::max({xr, a.x(), b.x()});
+    } else {
+      const double x = a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+      xl = std::min(xl, x);
+      xr = std::max(xr, x);
+    }
+  }
 }
 
 }  // namespace
@@ -195,18 +237,32 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
     b.v1 = std::max(b.v1, v);
   }
 
-  // Projected box of every object: the bounding box of its projected vertices (which contains
-  // its silhouette); the whole image if a vertex is not in front of the camera.
+  // Pixels to cast per object: a span of columns per row of its projected box. The silhouette
+  // of a mesh lies inside the convex hull of its projected vertices, so a row's span is where
+  // the row's centre line crosses that hull (widened by a pixel for rounding). If a vertex is
+  // not in front of the camera, every pixel is cast.
   const Pose X_CW = X_WC.inverse();
   const Mat3d R_WC = X_WC.linear();
   std::vector<PixelBox> cast_box(N);
+  std::vector<std::vector<std::pair<int, int>>> spans(N);  // per row of cast_box: [u_lo, u_hi]
   for (int i = 0; i < N; ++i) {
     const Points3d& V = impl_->objects[i].vertices_W;
     const Points3d p_C = (V * X_CW.linear().transpose()).rowwise() + X_CW.translation().transpose();
     PixelBox b{0, 0, W - 1, H - 1};
+    std::vector<Eigen::Vector2d> hull;
     if (p_C.col(2).minCoeff() > 1e-9) {
-      const Eigen::ArrayXd x = K.fx * p_C.col(0).array() / p_C.col(2).array() + K.cx;
-      const Eigen::ArrayXd y = K.fy * p_C.col(1).array() / p_C.col(2).array() + K.cy;
+      std::vector<Eigen::Vector2d> pts(static_cast<std::size_t>(p_C.rows()));
+      for (Eigen::Index k = 0; k < p_C.rows(); ++k) {
+        pts[k] = {K.fx * p_C(k, 0) / p_C(k, 2) + K.cx, K.fy * p_C(k, 1) / p_C(k, 2) + K.cy};
+      }
+      hull = convex_hull(std::move(pts));
+      double x0 = hull[0].x(), x1 = x0, y0 = hull[0].y(), y1 = y0;
+      for (const auto& q : hull) {
+        x0 = std::min(x0, q.x());
+        x1 = std::max(x1, q.x());
+        y0 = std::min(y0, q.y());
+        y1 = std::max(y1, q.y());
+      }
       // Pixel u's centre is u + 0.5: u in [ceil(xmin - 0.5), floor(xmax - 0.5)], plus 1 px slack.
       auto lo = [](double m, int size) {
         return static_cast<int>(std::clamp(std::ceil(m - 0.5) - 1.0, 0.0, double(size)));
@@ -214,13 +270,27 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
       auto hi = [](double m, int size) {
         return static_cast<int>(std::clamp(std::floor(m - 0.5) + 1.0, -1.0, double(size - 1)));
       };
-      b = PixelBox{lo(x.minCoeff(), W), lo(y.minCoeff(), H), hi(x.maxCoeff(), W),
-                   hi(y.maxCoeff(), H)};
+      b = PixelBox{lo(x0, W), lo(y0, H), hi(x1, W), hi(y1, H)};
     }
     cast_box[i] = b;
+    if (b.empty()) continue;
+    auto& rows = spans[i];
+    rows.assign(static_cast<std::size_t>(b.v1 - b.v0 + 1), {b.u0, b.u1});
+    if (hull.size() < 3) continue;
+    for (int v = b.v0; v <= b.v1; ++v) {
+      double xl = std::numeric_limits<double>::infinity(), xr = -xl;
+      for (const double dy : {-0.05, 0.0, 0.05}) hull_row(hull, v + 0.5 + dy, xl, xr);
+      auto& span = rows[static_cast<std::size_t>(v - b.v0)];
+      if (xl > xr) {
+        span = {b.u0, b.u0 - 1};
+      } else {
+        span = {std::max(b.u0, static_cast<int>(std::ceil(xl - 0.5)) - 1),
+                std::min(b.u1, static_cast<int>(std::floor(xr - 0.5)) + 1)};
+      }
+    }
   }
 
-  // Tiles: (object, band of rows of its box), about kTileRays rays each, in a fixed order.
+  // Tiles: (object, band of rows), about kTileRays rays each, in a fixed order.
   struct Tile {
     int object, v0, v1;  // rows [v0, v1)
   };
@@ -228,9 +298,17 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
   for (int i = 0; i < N; ++i) {
     const PixelBox& b = cast_box[i];
     if (b.empty()) continue;
-    const long bw = b.u1 - b.u0 + 1;
-    const int rows = static_cast<int>(std::max<long>(1, kTileRays / bw));
-    for (int v = b.v0; v <= b.v1; v += rows) tiles.push_back({i, v, std::min(v + rows, b.v1 + 1)});
+    long rays = 0;
+    int start = b.v0;
+    for (int v = b.v0; v <= b.v1; ++v) {
+      const auto& span = spans[i][static_cast<std::size_t>(v - b.v0)];
+      rays += std::max(0, span.second - span.first + 1);
+      if (rays >= kTileRays || v == b.v1) {
+        tiles.push_back({i, start, v + 1});
+        start = v + 1;
+        rays = 0;
+      }
+    }
   }
 
   out.amodal.assign(static_cast<std::size_t>(N) * P, 0);
@@ -251,7 +329,8 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
       p_vis.clear();
       p_hid.clear();
       for (int v = tile.v0; v < tile.v1; ++v) {
-        for (int u = b.u0; u <= b.u1; ++u) {
+        const auto& span = spans[i][static_cast<std::size_t>(v - b.v0)];
+        for (int u = span.first; u <= span.second; ++u) {
           const std::size_t p = static_cast<std::size_t>(v) * W + u;
           if (instance_image[p] != id) {
             p_hid.push_back(p);
