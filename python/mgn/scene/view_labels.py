@@ -15,6 +15,7 @@ seen in the view (their masks are empty, their occlusion is 1).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -23,6 +24,9 @@ from mgn import _core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry import Mesh, mass_properties
 from mgn.render.camera import CameraView
+
+if TYPE_CHECKING:
+    from mgn.scene.scene import Scene
 
 __all__ = [
     "DEFAULT_KEYPOINT_TOLERANCE",
@@ -140,7 +144,7 @@ class SceneRayModel:
             raise InvalidArgumentError(
                 "SceneRayModel: the scene has no objects; expected at least one"
             )
-        P = np.asarray(poses, np.float64).reshape(-1, 4, 4) if n else np.zeros((0, 4, 4))
+        P = np.asarray(poses, np.float64).reshape(-1, 4, 4)
         cats = np.asarray(category_ids, np.int64).reshape(-1)
 
         def rows4(items: list[npt.ArrayLike] | None, name: str) -> list[np.ndarray]:
@@ -174,7 +178,7 @@ class SceneRayModel:
         )
 
     @classmethod
-    def from_scene(cls, scene: object, *, tote: bool = True) -> SceneRayModel:
+    def from_scene(cls, scene: Scene, *, tote: bool = True) -> SceneRayModel:
         """The model of a :class:`~mgn.scene.Scene`: every instance's mesh at its ``X_WO``, its
         category, semantic keypoints (``ObjectSpec.keypoints``), its 1000 CoM-scored points
         (:func:`mgn.io.model_folder.com_keypoints` with the object-folder seed, the category
@@ -184,7 +188,7 @@ class SceneRayModel:
         from mgn.render.views import tote_mesh
         from mgn.scene.scene import Scene
 
-        if not isinstance(scene, Scene):
+        if not isinstance(scene, Scene):  # a runtime check for callers without a type checker
             raise TypeError(f"from_scene expects a Scene, got {type(scene).__name__}")
         if len(scene.instances) == 0:
             raise InvalidArgumentError(
