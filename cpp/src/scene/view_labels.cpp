@@ -223,18 +223,22 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
   out.semantic.assign(P, 0);
   out.visible_pixels.assign(N, 0);
   std::vector<PixelBox> tight(N, PixelBox{W, H, -1, -1});
-  for (std::size_t p = 0; p < P; ++p) {
-    const std::int32_t id = instance_image[p];
-    if (id == 0) continue;
-    const int i = id - 1;
-    out.semantic[p] = impl_->objects[i].category_id;
-    ++out.visible_pixels[i];
-    PixelBox& b = tight[i];
-    const int u = static_cast<int>(p % W), v = static_cast<int>(p / W);
-    b.u0 = std::min(b.u0, u);
-    b.u1 = std::max(b.u1, u);
-    b.v0 = std::min(b.v0, v);
-    b.v1 = std::max(b.v1, v);
+  std::vector<std::int32_t> category(N + 1, 0);
+  for (int i = 0; i < N; ++i) category[i + 1] = impl_->objects[i].category_id;
+  for (int v = 0; v < H; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * W;
+    for (int u = 0; u < W; ++u) {
+      const std::int32_t id = instance_image[row + u];
+      out.semantic[row + u] = category[id];
+      if (id == 0) continue;
+      const int i = id - 1;
+      ++out.visible_pixels[i];
+      PixelBox& b = tight[i];
+      b.u0 = std::min(b.u0, u);
+      b.u1 = std::max(b.u1, u);
+      b.v0 = std::min(b.v0, v);
+      b.v1 = std::max(b.v1, v);
+    }
   }
 
   // Pixels to cast per object: a span of columns per row of its projected box. The silhouette
