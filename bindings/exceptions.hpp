@@ -17,4 +17,5 @@ void bind_pj(pybind11::module_& m);
 void bind_shake(pybind11::module_& m);
 void bind_layout(pybind11::module_& m);
 void bind_scene_grasps(pybind11::module_& m);
+void bind_view_labels(pybind11::module_& m);
 }  // namespace mgn::py_bind

@@ -18,4 +18,5 @@ PYBIND11_MODULE(_core, m) {
   mgn::py_bind::bind_shake(m);
   mgn::py_bind::bind_layout(m);
   mgn::py_bind::bind_scene_grasps(m);
+  mgn::py_bind::bind_view_labels(m);
 }

@@ -36,6 +36,7 @@ __all__: list[str] = [
     "SealModel",
     "ShakeOptions",
     "UnsupportedError",
+    "ViewLabelModel",
     "apply_depth_sensor",
     "build_info",
     "calibrate_cup",
@@ -792,6 +793,8 @@ class ShakeOptions:
 class SceneGraspModel:
     """
     Per-scene grasp model: placement, collisions and wrench scores at construction; view_grasps per camera (see mgn/scene/scene_grasps.hpp).
+class ViewLabelModel:
+    Ray-tracing model of one scene for per-view object labels.
     """
     def __init__(
         self,
@@ -838,6 +841,22 @@ class SceneGraspModel:
     def num_objects(self) -> int: ...
     @property
     def offsets(self) -> list[float]: ...
+        category_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
+        keypoints: collections.abc.Sequence[typing.Any],
+        com_points: collections.abc.Sequence[typing.Any],
+        tote: Mesh = None,
+        X_W_tote: typing.Any = None,
+    def label_view(
+        self,
+        K: Intrinsics,
+        X_WC: typing.Any,
+        instance_image: typing.Any,
+        keypoint_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.002,
+        keypoints: bool = True,
+        num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+        depth: typing.Any = None,
+    ) -> dict: ...
+    def has_tote(self) -> bool: ...
 
 def apply_depth_sensor(
     depth: typing.Any,

@@ -27,4 +27,5 @@
 #include <mgn/scene/drop.hpp>
 #include <mgn/scene/layout.hpp>
 #include <mgn/scene/scene_grasps.hpp>
+#include <mgn/scene/view_labels.hpp>
 #include <mgn/version.hpp>

@@ -47,6 +47,10 @@ _EXPORTS = {
     "GraspGroups": "scene_grasps",
     "PlacedGrasps": "scene_grasps",
     "GraspCollisions": "scene_grasps",
+    "DEFAULT_KEYPOINT_TOLERANCE": "view_labels",
+    "SceneRayModel": "view_labels",
+    "ViewObjectLabels": "view_labels",
+    "view_object_labels": "view_labels",
 }
 
 __all__ = [
@@ -79,6 +83,10 @@ __all__ = [
     "GraspGroups",
     "PlacedGrasps",
     "GraspCollisions",
+    "DEFAULT_KEYPOINT_TOLERANCE",
+    "SceneRayModel",
+    "ViewObjectLabels",
+    "view_object_labels",
 ]
 
 
@@ -128,4 +136,9 @@ if TYPE_CHECKING:
         SceneGraspModel,
         SceneGrasps,
         SuctionGraspSet,
+    from mgn.scene.view_labels import (
+        DEFAULT_KEYPOINT_TOLERANCE,
+        SceneRayModel,
+        ViewObjectLabels,
+        view_object_labels,
     )
