@@ -12,11 +12,14 @@ from . import (
     bench_collision,
     bench_drop,
     bench_layout,
+    bench_pipeline,
     bench_pj,
     bench_raycast,
     bench_render,
+    bench_scene_grasps,
     bench_seal,
     bench_shake,
+    bench_view_labels,
 )
 from .common import (
     import_mgn,
@@ -38,6 +41,9 @@ SUITES = {
     "drop": bench_drop,
     "render": bench_render,
     "layout": bench_layout,
+    "view_labels": bench_view_labels,
+    "scene_grasps": bench_scene_grasps,
+    "pipeline": bench_pipeline,
 }
 
 

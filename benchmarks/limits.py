@@ -71,7 +71,8 @@ def measure_limits(
             X[:3, 3] = [0.22 * (k % 4) - 0.33, 0.22 * (k // 4) - 0.22, 0.0]
             instances.append(Instance(mid, X, k + 1))
         renderer.set_instances(instances)
-        view = CameraView(Intrinsics.mgn_synthetic(), look_at([0.0, 0.0, 1.0], [0.0, 0.0, 0.0], up=[0.0, 1.0, 0.0]))
+        X_WC = look_at([0.0, 0.0, 1.0], [0.0, 0.0, 0.0], up=[0.0, 1.0, 0.0])
+        view = CameraView(Intrinsics.mgn_synthetic(), X_WC)
         tris = 12 * 81_920
 
         def frame() -> None:

@@ -793,8 +793,6 @@ class ShakeOptions:
 class SceneGraspModel:
     """
     Per-scene grasp model: placement, collisions and wrench scores at construction; view_grasps per camera (see mgn/scene/scene_grasps.hpp).
-class ViewLabelModel:
-    Ray-tracing model of one scene for per-view object labels.
     """
     def __init__(
         self,
@@ -841,11 +839,22 @@ class ViewLabelModel:
     def num_objects(self) -> int: ...
     @property
     def offsets(self) -> list[float]: ...
+
+class ViewLabelModel:
+    """
+    Ray-tracing model of one scene for per-view object labels.
+    """
+    def __init__(
+        self,
+        meshes: collections.abc.Sequence[Mesh],
+        poses: typing.Any,
         category_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
         keypoints: collections.abc.Sequence[typing.Any],
         com_points: collections.abc.Sequence[typing.Any],
+        coms: typing.Any,
         tote: Mesh = None,
         X_W_tote: typing.Any = None,
+    ) -> None: ...
     def label_view(
         self,
         K: Intrinsics,
@@ -856,7 +865,10 @@ class ViewLabelModel:
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
         depth: typing.Any = None,
     ) -> dict: ...
+    @property
     def has_tote(self) -> bool: ...
+    @property
+    def num_objects(self) -> int: ...
 
 def apply_depth_sensor(
     depth: typing.Any,

@@ -136,6 +136,7 @@ if TYPE_CHECKING:
         SceneGraspModel,
         SceneGrasps,
         SuctionGraspSet,
+    )
     from mgn.scene.view_labels import (
         DEFAULT_KEYPOINT_TOLERANCE,
         SceneRayModel,

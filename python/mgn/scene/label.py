@@ -217,8 +217,14 @@ def label_scene(
         t1 = time.perf_counter()
         timings.add("render", t1 - t0)
         v, view = views[k]
-        labels = view_object_labels(rays, view, images.instance_ids, keypoints=opt.keypoints,
-                                    num_threads=opt.num_threads)  # fmt: skip
+        labels = view_object_labels(
+            rays,
+            view,
+            images.instance_ids,
+            depth=images.depth_ideal,
+            keypoints=opt.keypoints,
+            num_threads=opt.num_threads,
+        )
         t2 = time.perf_counter()
         timings.add("object labels", t2 - t1)
         layout = None
