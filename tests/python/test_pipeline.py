@@ -19,6 +19,7 @@ import pytest
 from mgn.config import Config, load_config
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.deterministic import NPZ_DATE_TIME, h5_create_dataset, h5_create_group, npz_bytes
+from mgn.io.scene_format import view_file_names
 from mgn.pipeline import check_manifest, generate, scene_seed, scene_views, write_manifest
 
 # 2 scenes x 3 views at 120 x 120 px, few objects, tiny label sizes.
@@ -82,9 +83,10 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
         expected = int(np.random.SeedSequence([SEED, i]).generate_state(1, np.uint32)[0]) >> 1
         assert scene["seed"] == expected
         assert 2 <= len(scene["instances"]) <= 4
+        assert f"scene{i}/scene_gt.json" in sums
         for v in (0, 5, 17):
-            for suffix in ("_rgb.png", "_depth.png", "_depth.npz", "_instances.png"):
-                assert f"scene{i}/{v}{suffix}" in sums
+            for name in view_file_names(v):
+                assert f"scene{i}/{name}" in sums
         assert not any(k.startswith(f"scene{i}/1_") for k in sums)  # only the kept views
     assert not list(out.glob(".tmp-*"))
     # Object folders carry the labels (rows = labels, no padding).
@@ -96,6 +98,49 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
             assert sc.shape[1] == 6 and 0 < sc.shape[0] <= 30
             sim = np.asarray(h5["grasps/paralleljaw/quality_score_simulation"])
             assert np.isfinite(sim).sum() == 3  # physics_grasps
+
+
+def test_reference_dataset_validates_reads_and_exports(
+    reference: tuple[Path, dict], tmp_path: Path
+) -> None:
+    """The issue's end-to-end check: validate, read back, COCO (AP = 1 for the ground truth
+    against itself), and `mgn show` writes a PNG of the view's size."""
+    from PIL import Image
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+
+    from mgn.cli import main
+    from mgn.io import coco
+    from mgn.io.dataset import Dataset
+    from mgn.io.validate import validate_dataset
+
+    out, _ = reference
+    assert validate_dataset(out) == []
+    ds = Dataset(out)
+    assert ds.scene_ids == [0, 1] and ds.info["seed"] == SEED
+    view = ds.scene(1).view(5)
+    n = len(ds.scene(1).scene_json["instances"])
+    assert view.amodal.shape[0] == n and view.instances.max() <= n
+    assert view.rgb.shape == (*view.depth.shape, 3) and np.nanmax(view.depth) < 2.0  # metres
+    assert 1 <= view.layout["difficulty"] <= 5
+    ann = coco.export_coco(ds, tmp_path / "annotations.json")
+    gt = COCO(str(ann))
+    anns = gt.loadAnns(gt.getAnnIds())
+    assert len(gt.getImgIds()) == 6 and anns
+    for iou in ("bbox", "segm"):
+        dets = [{"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"],
+                 "segmentation": a["segmentation"], "score": 1.0} for a in anns]  # fmt: skip
+        ev = COCOeval(gt, gt.loadRes(dets), iou)
+        ev.evaluate()
+        ev.accumulate()
+        ev.summarize()
+        assert ev.stats[0] == pytest.approx(1.0)
+    png = tmp_path / "show.png"
+    args = ["show", str(out), "--scene", "0", "--view", "17", "--grasps", "pj", "--layout"]
+    assert main([*args, "-o", str(png)]) == 0
+    with Image.open(png) as im:
+        assert im.size == (view.intrinsics.width, view.intrinsics.height + 20)
+        assert np.asarray(im).std() > 0
 
 
 def test_two_workers_give_the_same_bytes(
@@ -136,10 +181,11 @@ from pathlib import Path
 import mgn.pipeline.scene_writer as sw
 real = sw.write_scene
 def dying(scene, folder, config, labels):
-    real(scene, folder, config, labels)
+    stages = real(scene, folder, config, labels)
     if Path(folder).name.startswith(".tmp-scene1-"):
         (Path(folder) / "half.bin").write_bytes(b"x" * 10)
         os.kill(os.getpid(), signal.SIGKILL)  # killed mid-scene
+    return stages
 sw.write_scene = dying
 from mgn.config import load_config
 from mgn.pipeline import generate
@@ -174,9 +220,10 @@ def test_interrupt_leaves_no_half_scene_and_resume_redoes_bad_scenes(
     real = sw.write_scene
 
     def interrupted(scene, folder, config, labels):  # noqa: ANN001
-        real(scene, folder, config, labels)
+        stages = real(scene, folder, config, labels)
         if Path(folder).name.startswith(".tmp-scene1-"):
             raise KeyboardInterrupt
+        return stages
 
     out = tmp_path / "ds"
     monkeypatch.setattr(sw, "write_scene", interrupted)

@@ -179,7 +179,7 @@ def run_scene(task: SceneTask) -> SceneResult:
         tmp.mkdir(parents=True)
         stages = write_scene(scene, tmp, task.config, task.labels)
         times["write"] = time.perf_counter() - t1
-        times.update({f"write: {k}": v for k, v in stages.items()})
+        times.update({f"write: {k}": v for k, v in (stages or {}).items()})
         t2 = time.perf_counter()
         write_manifest(tmp, scene=task.index, seed=task.seed)
         size = _folder_size(tmp)
