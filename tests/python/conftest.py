@@ -30,3 +30,21 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
     if np.linalg.det(q) < 0:
         q[:, 0] *= -1
     return q
+
+
+def coco_ground_truth_ap(gt: object) -> tuple[float, float]:
+    """(box AP, mask AP) of a pycocotools COCO ground truth scored against itself as detections
+    (every annotation submitted with score 1): both must be 1.0 for a consistent export."""
+    from pycocotools.cocoeval import COCOeval
+
+    anns = gt.loadAnns(gt.getAnnIds())  # type: ignore[attr-defined]
+    dets = [{"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"],
+             "segmentation": a["segmentation"], "score": 1.0} for a in anns]  # fmt: skip
+    out = []
+    for iou in ("bbox", "segm"):
+        ev = COCOeval(gt, gt.loadRes(dets), iou)  # type: ignore[attr-defined]
+        ev.evaluate()
+        ev.accumulate()
+        ev.summarize()
+        out.append(float(ev.stats[0]))
+    return out[0], out[1]

@@ -104,7 +104,7 @@ def test_top_view_layout(written):
         assert not np.any(vis & ~amodal[i]), "a visible mask leaves its amodal mask"
     # The cube lies on the shoe box: the relation matrix, the graph and the layers say so.
     m = view.relation_matrix
-    assert m[0, 1] == -1 and m[1, 0] == 0 and m[2].tolist() == [0, 0, 0]
+    assert m[0, 1] == -1 and m[1, 0] == 1 and m[2].tolist() == [0, 0, 0]
     order = view.order
     assert [p["id"] for p in order["1"]["parents"]] == [2]
     assert order["1"]["layer"] == 1 and order["2"]["layer"] == 0 and order["3"]["layer"] == 0

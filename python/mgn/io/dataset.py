@@ -197,22 +197,12 @@ class View:
 
     @cached_property
     def relation_matrix(self) -> npt.NDArray[np.int8]:
-        """(N, N) int8 from ``{v}_order.csv``: M[i][j] = -1 if instance j+1 occludes i+1."""
-        p = self.path("_order.csv")
-        try:
-            text = p.read_text().strip()
-        except OSError as e:
-            raise IoError(f"'{p}' is not readable: {e}") from e
-        if not text:
-            return np.zeros((0, 0), np.int8)
-        try:
-            rows = [[int(float(x)) for x in line.split(",")] for line in text.splitlines()]
-            m = np.array(rows, np.int8)
-        except ValueError as e:
-            raise IoError(f"'{p}' is not an N x N comma-separated matrix: {e}") from e
-        if m.ndim != 2 or m.shape[0] != m.shape[1]:
-            raise IoError(f"'{p}' must be N x N, got {m.shape}")
-        return m
+        """(N, N) int8 relation matrix from ``{v}_order.csv``: M[i][j] = -1 if instance j+1
+        lies on / occludes instance i+1, +1 for the reverse (the file stores the -1 entries;
+        :func:`mgn.scene.layout.read_order_csv`)."""
+        from mgn.scene.layout import read_order_csv
+
+        return read_order_csv(self.path("_order.csv"))
 
     @cached_property
     def intrinsics(self) -> Intrinsics:
