@@ -345,3 +345,17 @@ def test_report_is_a_self_contained_page(dataset, tmp_path):
     assert stats["visible_per_view"] == [2, 2, 2, 2]
     assert stats["layers"] == {"0": 4, "1": 4} and stats["difficulty"] == {"2": 4}
     assert stats["grasp_counts"]["non_colliding"] == {"paralleljaw": 8}
+
+
+def test_large_hdf5_datasets_are_compressed_and_exact():
+    import io as _io
+
+    import h5py
+
+    rng = np.random.default_rng(0)
+    big = np.repeat(rng.normal(size=(1, 4, 4)), 5000, axis=0).astype(np.float32)
+    data = hdf5_bytes({"g/poses": big, "g/small": np.arange(3, dtype=np.float32)})
+    assert len(data) < big.nbytes / 4
+    with h5py.File(_io.BytesIO(data), "r") as h5:
+        assert h5["g/poses"].compression == "gzip" and h5["g/small"].compression is None
+        assert np.array_equal(h5["g/poses"][()], big)

@@ -203,3 +203,19 @@ def test_scene_label_command(tmp_path):
     assert main([*args, "--view", "9"]) == 1  # not a configured view
     layout = json.loads((out / "7_layout.json").read_text())
     assert 1 <= layout["difficulty"] <= 5
+
+
+def test_strided_subset_keeps_grasps_evenly(object_labels):
+    from mgn.scene.label import strided_subset
+
+    pj = object_labels[1].paralleljaw  # the cube (the shoe box is wider than the gripper)
+    m = len(pj.width)
+    assert m > 50
+    sub = strided_subset(pj, 50)
+    assert len(sub.width) == 50 and len(sub.approach) == 50 and len(sub.point_index) == 50
+    assert np.array_equal(sub.p1[0], pj.p1[0]) and np.array_equal(sub.p1[-1], pj.p1[-1])
+    assert len(sub.point_score) == len(pj.point_score)  # per-point data untouched
+    assert strided_subset(pj, 0) is pj and strided_subset(pj, m) is pj
+    su = strided_subset(object_labels[0].suction, 7)
+    assert len(su.points) == len(su.score) == len(su.reason) == 7
+    assert strided_subset(None, 5) is None

@@ -15,6 +15,7 @@ number of views.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -34,7 +35,7 @@ if TYPE_CHECKING:
     from mgn.scene.scene import Scene
     from mgn.suction.labels import SuctionLabels
 
-__all__ = ["LabelOptions", "LabelTimings", "label_scene", "view_record"]
+__all__ = ["LabelOptions", "LabelTimings", "label_scene", "strided_subset", "view_record"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,10 @@ class LabelOptions:
         scene_grasps: place and collision-check the object grasps.
         keypoints: keypoint visibility sets.
         grasp_offsets: distances back along the approach where the tools are checked, m.
+        max_grasps_per_object: object grasps of each kind placed in the scene per object (an
+            evenly strided subset of the object labels when there are more; 0 = all).
+            Object labels often hold tens of thousands of parallel-jaw grasps; MetaGraspNet's
+            scenes carry a few thousand per object.
         num_threads: C++ threads (0 = all cores); results do not depend on it.
     """
 
@@ -59,6 +64,7 @@ class LabelOptions:
     scene_grasps: bool = True
     keypoints: bool = True
     grasp_offsets: tuple[float, ...] = (0.0, 0.1)
+    max_grasps_per_object: int = 2000
     num_threads: int = 0
 
 
@@ -75,6 +81,25 @@ class LabelTimings:
     def per_view_ms(self) -> dict[str, float]:
         n = max(self.views, 1)
         return {k: 1000.0 * v / n for k, v in self.seconds.items()}
+
+
+#: Per-grasp fields of the object label dataclasses (the others are per object or per point).
+_PJ_GRASP_FIELDS = ("approach", "closing", "p1", "width", "quality_score", "score_wrench",
+                    "quality_score_simulation", "point_index")  # fmt: skip
+_SUCTION_GRASP_FIELDS = ("points", "approach", "score", "wrench", "reason")
+
+
+def strided_subset(labels: Any, limit: int) -> Any:
+    """``labels`` (PjLabels or SuctionLabels) reduced to at most ``limit`` grasps, evenly strided
+    over the label order (deterministic; keeps the score distribution); None stays None."""
+    if labels is None or limit <= 0:
+        return labels
+    fields = _PJ_GRASP_FIELDS if hasattr(labels, "closing") else _SUCTION_GRASP_FIELDS
+    m = len(getattr(labels, fields[0]))
+    if m <= limit:
+        return labels
+    keep = np.unique(np.linspace(0, m - 1, limit).round().astype(np.int64))
+    return dataclasses.replace(labels, **{f: getattr(labels, f)[keep] for f in fields})
 
 
 def _empty_layout_files(n: int) -> tuple[dict[str, Any], str, dict[str, Any]]:
@@ -189,10 +214,13 @@ def label_scene(
     sgm = None
     if opt.scene_grasps and (pj_labels is not None or suction_labels is not None):
         t0 = time.perf_counter()
+        cap = opt.max_grasps_per_object
         sgm = SceneGraspModel(
             scene,
-            list(pj_labels) if pj_labels is not None else [None] * n,
-            list(suction_labels) if suction_labels is not None else [None] * n,
+            [strided_subset(g, cap) for g in pj_labels] if pj_labels is not None else [None] * n,
+            [strided_subset(g, cap) for g in suction_labels]
+            if suction_labels is not None
+            else [None] * n,
             gripper,
             cup,
             offsets=opt.grasp_offsets,
