@@ -17,6 +17,7 @@ from . import (
     bench_raycast,
     bench_render,
     bench_scene_grasps,
+    bench_scene_labels,
     bench_seal,
     bench_shake,
     bench_view_labels,
@@ -43,6 +44,7 @@ SUITES = {
     "layout": bench_layout,
     "view_labels": bench_view_labels,
     "scene_grasps": bench_scene_grasps,
+    "scene_labels": bench_scene_labels,
     "pipeline": bench_pipeline,
 }
 

@@ -198,11 +198,12 @@ def hdf5_bytes(datasets: Mapping[str, np.ndarray], attrs: Mapping[str, Any] | No
 
 
 def png_bytes(image: npt.ArrayLike) -> bytes:
-    """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible)."""
+    """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible;
+    zlib level 1: several times faster than the default for ~10 % more bytes)."""
     from PIL import Image
 
     buf = io.BytesIO()
-    Image.fromarray(np.asarray(image)).save(buf, format="PNG")
+    Image.fromarray(np.asarray(image)).save(buf, format="PNG", compress_level=1)
     return buf.getvalue()
 
 

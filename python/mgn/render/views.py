@@ -82,22 +82,29 @@ _CMAP = np.array(
 )
 
 
+def _depth_lut() -> npt.NDArray[np.uint8]:
+    t = np.linspace(0.0, len(_CMAP) - 1, 256)
+    i0 = np.minimum(t.astype(np.int64), len(_CMAP) - 2)
+    f = (t - i0)[:, None]
+    return np.round(_CMAP[i0] * (1 - f) + _CMAP[i0 + 1] * f).astype(np.uint8)
+
+
+_DEPTH_LUT = _depth_lut()
+
+
 def depth_picture(depth: npt.ArrayLike) -> npt.NDArray[np.uint8]:
     """(H, W, 3) uint8 picture of a depth image (m; NaN or <= 0 invalid): inverse depth
-    normalised over the valid pixels, colour-mapped from dark blue (far) to red (near); invalid
-    pixels black."""
-    d = np.asarray(depth, np.float64)
+    normalised over the valid pixels, colour-mapped (256 levels) from dark blue (far) to red
+    (near); invalid pixels black."""
+    d = np.asarray(depth, np.float32)
     valid = np.isfinite(d) & (d > 0)
     out = np.zeros((*d.shape, 3), np.uint8)
     if not valid.any():
         return out
-    inv = np.zeros_like(d)
-    inv[valid] = 1.0 / d[valid]
-    lo, hi = inv[valid].min(), inv[valid].max()
-    t = (inv[valid] - lo) / max(hi - lo, 1e-12) * (len(_CMAP) - 1)
-    i0 = np.minimum(t.astype(np.int64), len(_CMAP) - 2)
-    f = (t - i0)[:, None]
-    out[valid] = np.round(_CMAP[i0] * (1 - f) + _CMAP[i0 + 1] * f).astype(np.uint8)
+    inv = 1.0 / d[valid]
+    lo, hi = float(inv.min()), float(inv.max())
+    level = np.round((inv - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.uint8)
+    out[valid] = _DEPTH_LUT[level]
     return out
 
 

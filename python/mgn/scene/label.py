@@ -18,7 +18,9 @@ from __future__ import annotations
 import dataclasses
 import os
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -238,40 +240,52 @@ def label_scene(
         objects.append((meshes[key], inst.X_WO, inst.instance_id))
     gt: dict[int, list[dict[str, Any]]] = {}
 
-    t0 = time.perf_counter()
-    for k, images in enumerate(iter_views(objects, tote_mesh(scene.tote), views,
-                                          sensor=opt.sensor, randomize=opt.randomize,
-                                          seed=opt.seed)):  # fmt: skip
-        t1 = time.perf_counter()
-        timings.add("render", t1 - t0)
-        v, view = views[k]
-        labels = view_object_labels(
-            rays,
-            view,
-            images.instance_ids,
-            depth=images.depth_ideal,
-            keypoints=opt.keypoints,
-            num_threads=opt.num_threads,
-        )
-        t2 = time.perf_counter()
-        timings.add("object labels", t2 - t1)
-        layout = None
-        if opt.layout:
-            layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal,
-                                    categories, bins, occlusion=labels.occlusion,
-                                    num_threads=opt.num_threads)  # fmt: skip
-        t3 = time.perf_counter()
-        timings.add("layout", t3 - t2)
-        grasps = sgm.view_grasps(view, labels.visible_pixels > 0) if sgm is not None else None
-        t4 = time.perf_counter()
-        timings.add("scene grasps", t4 - t3)
-        write_view(out, view_record(v, view, images, labels, layout, grasps))
-        gt[v] = scene_gt_entries(labels.X_CO, categories, labels.visible_pixels > 0)
+    pending: deque[Future[Any]] = deque()
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool:
         t0 = time.perf_counter()
-        timings.add("write", t0 - t4)
-        timings.views += 1
-        if progress is not None:
-            progress(k + 1, len(views))
+        frames = iter_views(objects, tote_mesh(scene.tote), views, sensor=opt.sensor,
+                            randomize=opt.randomize, seed=opt.seed)  # fmt: skip
+        for k, images in enumerate(frames):
+            t1 = time.perf_counter()
+            timings.add("render", t1 - t0)
+            v, view = views[k]
+            labels = view_object_labels(
+                rays,
+                view,
+                images.instance_ids,
+                depth=images.depth_ideal,
+                keypoints=opt.keypoints,
+                num_threads=opt.num_threads,
+            )
+            t2 = time.perf_counter()
+            timings.add("object labels", t2 - t1)
+            layout = None
+            if opt.layout:
+                layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal,
+                                        categories, bins, occlusion=labels.occlusion,
+                                        num_threads=opt.num_threads)  # fmt: skip
+            t3 = time.perf_counter()
+            timings.add("layout", t3 - t2)
+            seen = labels.visible_pixels > 0
+            grasps = sgm.view_grasps(view, seen) if sgm is not None else None
+            t4 = time.perf_counter()
+            timings.add("scene grasps", t4 - t3)
+            # Files are encoded (zlib, PNG; both release the GIL) by writer threads while the next
+            # view renders; at most two views wait, so memory stays bounded.
+            record = view_record(v, view, images, labels, layout, grasps)
+            pending.append(pool.submit(write_view, out, record))
+            while len(pending) > 2:
+                pending.popleft().result()
+            gt[v] = scene_gt_entries(labels.X_CO, categories, seen)
+            t0 = time.perf_counter()
+            timings.add("write (waiting)", t0 - t4)
+            timings.views += 1
+            if progress is not None:
+                progress(k + 1, len(views))
+        t4 = time.perf_counter()
+        for fut in pending:
+            fut.result()
+        timings.add("write (waiting)", time.perf_counter() - t4)
     write_scene_gt(out, gt)
     scene.to_json(out / "scene.json")
     return timings
