@@ -11,7 +11,9 @@
 /// avoided deterministically: objects are placed in order of their drawn height, and an object
 /// whose bounding box would overlap one already placed is lifted just above it. The simulation
 /// runs until every object in the tote has been at rest for DropOptions::rest_time, or until
-/// DropOptions::max_time. Objects that left the tote are removed. The result depends only on the
+/// DropOptions::max_time. Objects that left the tote (fell below the floor, or rest on or over the
+/// rim) are removed, and the remaining objects are simulated again until they are at rest (at most
+/// DropOptions::resettle_time more), so nothing is left leaning on a removed object. The result depends only on the
 /// inputs and DropOptions::seed (object i draws from Rng(seed, i)).
 
 #include <mgn/core/types.hpp>
@@ -79,6 +81,22 @@ struct DropOptions {
   double contact_distance = 0.002;
   /// Remove objects that are still moving at max_time (else keep them with settled = false).
   bool remove_unsettled = false;
+  /// Each convex part's Bullet hull is reduced to at most this many vertices (0: keep all; else
+  /// >= 4) by reduce_convex_points(): a support query costs time linear in the vertex count and
+  /// dominates the drop. The reduced hull lies inside the part (see hull_tolerance).
+  int max_hull_vertices = 48;
+  /// Stop reducing a hull early once every vertex of the part is within this distance (m, >= 0)
+  /// of the reduced hull's face planes.
+  double hull_tolerance = 0.0002;
+  /// Contacts between convex parts (and with the tote boxes) from Bullet's polyhedral clipping
+  /// (a whole face-on-face contact patch in one step: piles come to rest much sooner) instead of
+  /// one GJK point per step. The hulls are then not shrunk by the margin (the clipping ignores
+  /// margins), so the contact surface is the part itself.
+  bool polyhedral_contacts = true;
+  /// When the pile has come to rest (or at max_time), objects that are not entirely inside the
+  /// walls (e.g. on the rim) are removed and the rest simulated again until at rest; this is the
+  /// extra simulated time (s, >= 0) allowed for that beyond max_time, over all rounds.
+  double resettle_time = 2.0;
   ToteCollision tote_collision = ToteCollision::Boxes;
   std::uint64_t seed = 0;
 };
@@ -114,7 +132,10 @@ struct DropResult {
   std::vector<DroppedObject> objects;
   std::int64_t steps = 0;       ///< simulation steps taken
   double simulated_time = 0.0;  ///< s
-  bool settled = false;         ///< every remaining object was at rest before max_time
+  /// Every remaining object was at rest before the time ran out (max_time, plus resettle_time
+  /// after removals).
+  bool settled = false;
+  int resettle_rounds = 0;  ///< how often objects were removed and the rest simulated again
   /// Deepest penetration between any two bodies (objects or tote) at the end, from Bullet's
   /// contact points, m (>= 0).
   double max_penetration = 0.0;
