@@ -124,8 +124,7 @@ std::vector<Eigen::Index> reduce_convex_points(const Points3d& points, int max_v
     return (r - r.dot(ab) * ab).squaredNorm();
   });
   const Vec3d nrm = (p(b) - p(a)).cross(p(c) - p(a)).normalized();
-  const auto [d, d_plane] =
-      farthest([&](const Vec3d& q) { return std::abs((q - p(a)).dot(nrm)); });
+  const auto [d, d_plane] = farthest([&](const Vec3d& q) { return std::abs((q - p(a)).dot(nrm)); });
   const double scale = std::sqrt(d_ab);
   if (!(scale > 0) || !(std::sqrt(d_line) > 1e-9 * scale) || !(d_plane > 1e-9 * scale))
     return all;  // no volume: nothing sensible to reduce
@@ -139,10 +138,11 @@ std::vector<Eigen::Index> reduce_convex_points(const Points3d& points, int max_v
   while (true) {
     // Face planes of the hull of the chosen points.
     coords.clear();
-    for (Eigen::Index i : chosen) coords.insert(coords.end(), {points(i, 0), points(i, 1), points(i, 2)});
+    for (Eigen::Index i : chosen)
+      coords.insert(coords.end(), {points(i, 0), points(i, 1), points(i, 2)});
     btConvexHullComputer hc;
-    hc.compute(coords.data(), static_cast<int>(3 * sizeof(double)),
-               static_cast<int>(chosen.size()), 0.0, 0.0);
+    hc.compute(coords.data(), static_cast<int>(3 * sizeof(double)), static_cast<int>(chosen.size()),
+               0.0, 0.0);
     normals.clear();
     offsets.clear();
     for (int f = 0; f < hc.faces.size(); ++f) {
@@ -167,20 +167,39 @@ std::vector<Eigen::Index> reduce_convex_points(const Points3d& points, int max_v
       normals.push_back(nn);
       offsets.push_back(nn.dot(centre / count));
     }
-    Eigen::Index best = -1;
-    double d_best = 0.0;
+    // Each point's distance outside the hull; per face, its farthest point beyond tolerance.
+    std::vector<std::pair<double, Eigen::Index>> per_face(normals.size(), {0.0, -1});
+    deviation = 0.0;
     for (Eigen::Index i = 0; i < n; ++i) {
       if (in[static_cast<std::size_t>(i)]) continue;
       const Vec3d q = p(i);
       double out = -1e300;
-      for (std::size_t f = 0; f < normals.size(); ++f)
-        out = std::max(out, normals[f].dot(q) - offsets[f]);
-      if (out > d_best) d_best = out, best = i;
+      std::size_t face = 0;
+      for (std::size_t f = 0; f < normals.size(); ++f) {
+        const double d = normals[f].dot(q) - offsets[f];
+        if (d > out) out = d, face = f;
+      }
+      deviation = std::max(deviation, out);
+      if (out > tolerance && out > per_face[face].first) per_face[face] = {out, i};
     }
-    deviation = d_best;
-    if (best < 0 || d_best <= tolerance || static_cast<int>(chosen.size()) >= max_vertices) break;
-    chosen.push_back(best);
-    in[static_cast<std::size_t>(best)] = 1;
+    const auto budget = static_cast<std::size_t>(max_vertices) - chosen.size();
+    if (budget == 0) break;
+    // Add the farthest point of every face that has one (quickhull-like rounds keep the work
+    // logarithmic in the number of points added), farthest first while the budget lasts.
+    std::vector<std::pair<double, Eigen::Index>> add;
+    for (const auto& c : per_face)
+      if (c.second >= 0) add.push_back(c);
+    if (add.empty()) break;
+    std::sort(add.begin(), add.end(), [](const auto& x, const auto& y) {
+      return x.first != y.first ? x.first > y.first : x.second < y.second;
+    });
+    // At most half as many as chosen so far per round: later rounds see the refined hull.
+    const std::size_t round = std::min(budget, std::max<std::size_t>(1, chosen.size() / 2));
+    for (std::size_t k = 0; k < add.size() && k < round; ++k) {
+      if (in[static_cast<std::size_t>(add[k].second)]) continue;  // farthest for two faces
+      chosen.push_back(add[k].second);
+      in[static_cast<std::size_t>(add[k].second)] = 1;
+    }
   }
   if (max_deviation) *max_deviation = deviation;
   return chosen;

@@ -89,8 +89,7 @@ Principal principal_frame(const DropObject& o, std::size_t i) {
 /// Its vertices are reduced to at most `max_vertices` (0: all) within `tolerance` (m).
 /// With `polyhedral` the hull is not shrunk and gets Bullet's polyhedral features.
 std::unique_ptr<btConvexHullShape> hull_shape(const Mesh& part, const Pose& X_BO, double margin,
-                                              int max_vertices, double tolerance,
-                                              bool polyhedral) {
+                                              int max_vertices, double tolerance, bool polyhedral) {
   const auto& V = part.vertices();
   std::vector<double> coords(static_cast<std::size_t>(3 * V.rows()));
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
@@ -209,8 +208,7 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
           "options.max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [4, 100000]");
   require(std::isfinite(o.hull_tolerance) && o.hull_tolerance >= 0, "options.hull_tolerance",
           o.hull_tolerance, "finite and >= 0 (m)");
-  require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 &&
-              o.resettle_time / o.dt <= 1e7,
+  require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 && o.resettle_time / o.dt <= 1e7,
           "options.resettle_time", o.resettle_time, "finite, >= 0 s and <= 1e7 steps");
   require(std::isfinite(o.rolling_friction) && o.rolling_friction >= 0, "options.rolling_friction",
           o.rolling_friction, "finite and >= 0");
@@ -399,9 +397,8 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
     btTransform identity;
     identity.setIdentity();
     for (const Mesh& part : ob.convex_parts) {
-      auto hull =
-          hull_shape(part, X_BO, o.collision_margin, o.max_hull_vertices, o.hull_tolerance,
-                     o.polyhedral_contacts);
+      auto hull = hull_shape(part, X_BO, o.collision_margin, o.max_hull_vertices, o.hull_tolerance,
+                             o.polyhedral_contacts);
       compound->addChildShape(identity, hull.get());
       w->shapes.push_back(std::move(hull));
     }
@@ -431,7 +428,14 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
   const auto max_steps = static_cast<std::int64_t>(std::ceil(o.max_time / o.dt - 1e-9));
   const auto rest_steps = static_cast<std::int64_t>(std::ceil(o.rest_time / o.dt - 1e-9));
   const auto resettle_steps = static_cast<std::int64_t>(std::ceil(o.resettle_time / o.dt - 1e-9));
+  // At rest: slower than the thresholds now, and moved less than they allow over the last
+  // rest_time (a pose reference that is reset whenever the object strays further from it). A
+  // speed spike of a resting object (solver jitter) does not restart the count; real motion does.
   std::vector<std::int64_t> at_rest(n, 0);
+  std::vector<btTransform> rest_ref(n);
+  for (std::size_t i = 0; i < n; ++i) rest_ref[i] = body[i]->getCenterOfMassTransform();
+  const double max_shift = o.linear_rest * o.rest_time;
+  const double max_turn = o.angular_rest * o.rest_time;
   const double fall_z = -box.floor_thickness - 0.02;
   const double tol = o.collision_margin + o.contact_distance;
   auto pose_of = [&](std::size_t i) {
@@ -450,11 +454,26 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
   std::int64_t step = 0;
   std::int64_t limit = max_steps;
   bool all_rest = false;
+  // Objects left the tote: the rest may have leaned on them and must come to rest again, with
+  // resettle_time more to do so.
+  auto restart = [&]() {
+    limit = std::max(limit, max_steps + resettle_steps);
+    ++result.resettle_rounds;
+    all_rest = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!body[i]->isInWorld()) continue;
+      at_rest[i] = 0;
+      rest_ref[i] = body[i]->getCenterOfMassTransform();
+      body[i]->activate(true);
+    }
+  };
+  std::vector<std::size_t> on_rim;
   while (true) {
     while (step < limit) {
       w->world.stepSimulation(btScalar(o.dt), 0, btScalar(o.dt));
       ++step;
       all_rest = true;
+      on_rim.clear();
       for (std::size_t i = 0; i < n; ++i) {
         btRigidBody* rb = body[i];
         if (!rb->isInWorld()) continue;
@@ -462,14 +481,29 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
           remove(i);
           continue;
         }
-        const bool rest = double(rb->getLinearVelocity().length()) < o.linear_rest &&
+        const btTransform& X = rb->getCenterOfMassTransform();
+        const double shift = double((X.getOrigin() - rest_ref[i].getOrigin()).length());
+        const double turn = double(X.getRotation().angleShortestPath(rest_ref[i].getRotation()));
+        if (shift > max_shift || turn > max_turn) {
+          rest_ref[i] = X;  // moving: start a new window here
+          at_rest[i] = 0;
+        } else {
+          ++at_rest[i];
+        }
+        const bool slow = double(rb->getLinearVelocity().length()) < o.linear_rest &&
                           double(rb->getAngularVelocity().length()) < o.angular_rest;
-        at_rest[i] = rest ? at_rest[i] + 1 : 0;
-        if (at_rest[i] < rest_steps) all_rest = false;
+        if (!slow || at_rest[i] < rest_steps) all_rest = false;
+        // Came to rest on or over the rim: it leaves now, not after the whole pile rests.
+        if (slow && at_rest[i] == rest_steps && outside_walls(i)) on_rim.push_back(i);
+      }
+      if (!on_rim.empty()) {
+        for (std::size_t i : on_rim) remove(i);
+        restart();
+        continue;
       }
       if (all_rest) break;
     }
-    // Objects on or over the rim leave; whatever leaned on them settles again.
+    // Time is up: objects on or over the rim leave; whatever leaned on them settles again.
     bool removed = false;
     for (std::size_t i = 0; i < n; ++i)
       if (body[i]->isInWorld() && outside_walls(i)) {
@@ -477,15 +511,8 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
         removed = true;
       }
     if (!removed) break;
-    if (result.resettle_rounds == 0) limit = std::max(step, max_steps) + resettle_steps;
-    ++result.resettle_rounds;
+    restart();
     if (step >= limit) break;
-    all_rest = false;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!body[i]->isInWorld()) continue;
-      at_rest[i] = 0;
-      body[i]->activate(true);
-    }
   }
   result.steps = step;
   result.simulated_time = double(step) * o.dt;
@@ -543,7 +570,9 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
     btRigidBody* rb = body[i];
     if (!rb->isInWorld()) continue;  // fell out, pose recorded then
     r.X_WO = from_bt(rb->getWorldTransform()) * X_OB[i].inverse();
-    r.settled = at_rest[i] >= rest_steps;
+    r.settled = at_rest[i] >= rest_steps &&
+                double(rb->getLinearVelocity().length()) < o.linear_rest &&
+                double(rb->getAngularVelocity().length()) < o.angular_rest;
     r.contacts = contacts[i];
     const Aabb b = world_aabb(hull_points[i], r.X_WO);
     if (b.lo.x() < -hx - tol || b.hi.x() > hx + tol || b.lo.y() < -hy - tol ||
