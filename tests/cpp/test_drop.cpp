@@ -8,6 +8,7 @@
 #include <mgn/geometry/sampling.hpp>
 #include <mgn/scene/drop.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace {
@@ -236,4 +237,119 @@ TEST(Drop, ObjectsReleasedFromOnePointAreStackedWithoutOverlap) {
                            (b[j].row(0).array() < b[i].row(1).array()).all();
       EXPECT_FALSE(overlap) << i << " and " << j;
     }
+}
+
+TEST(ReduceConvexPoints, KeepsFewPointsInsideTheHullCloseToIt) {
+  // A 64-gon cylinder (128 points): the reduced hull must use at most 24 of the points, lie inside
+  // the full hull (its points are a subset) and keep every point within the reported deviation,
+  // checked here independently against the face planes of the reduced hull.
+  const mgn::Mesh cyl = mgn::make_cylinder(0.04, 0.10, 64);
+  const mgn::Points3d P = cyl.vertices().cast<double>();
+  double dev = -1.0;
+  const auto idx = mgn::reduce_convex_points(P, 24, 0.0, &dev);
+  ASSERT_EQ(idx.size(), 24u);
+  std::vector<Eigen::Index> sorted = idx;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(std::unique(sorted.begin(), sorted.end()), sorted.end()) << "indices repeat";
+  mgn::Points3f sub(static_cast<Eigen::Index>(idx.size()), 3);
+  for (std::size_t k = 0; k < idx.size(); ++k)
+    sub.row(static_cast<Eigen::Index>(k)) = P.row(idx[k]).cast<float>();
+  const mgn::Mesh hull = mgn::convex_hull_of_points(sub);
+  const auto n = hull.face_normals();
+  double worst = 0.0;
+  for (Eigen::Index v = 0; v < P.rows(); ++v) {
+    double out = -1e300;
+    for (Eigen::Index f = 0; f < hull.num_faces(); ++f) {
+      const mgn::Vec3d q = hull.vertices().row(hull.faces()(f, 0)).cast<double>().transpose();
+      out = std::max(out, n.row(f).cast<double>().dot(P.row(v).transpose() - q));
+    }
+    worst = std::max(worst, out);
+  }
+  EXPECT_NEAR(worst, dev, 1e-6);
+  // The best 24 points (a 12-gon per rim) deviate by r (1 - cos(pi / 12)) = 1.4 mm; the greedy
+  // choice must come within 2.5x of that and keep 95 % of the volume (12-gon: 95.5 %).
+  EXPECT_LT(dev, 2.5 * 0.04 * (1 - std::cos(M_PI / 12)));
+  EXPECT_GT(mgn::closed_mesh_volume(hull), 0.95 * mgn::closed_mesh_volume(cyl));
+  // A tolerance stops early; few points come back unchanged; bad arguments are rejected.
+  double dev_tol = 0.0;
+  const auto coarse = mgn::reduce_convex_points(P, 128, 0.002, &dev_tol);
+  EXPECT_LT(coarse.size(), 40u);
+  EXPECT_LE(dev_tol, 0.002);
+  EXPECT_EQ(mgn::reduce_convex_points(P.topRows(8), 24).size(), 8u);
+  EXPECT_THROW(mgn::reduce_convex_points(P, 3), mgn::InvalidArgument);
+  EXPECT_THROW(mgn::reduce_convex_points(P, 24, -1.0), mgn::InvalidArgument);
+}
+
+TEST(Drop, FullAndReducedHullsBothSettleTheSamePile) {
+  // Fine spheres and cylinders (hundreds of hull vertices): with reduced hulls (the default) the
+  // pile must settle as well as with every vertex kept, and without more interpenetration.
+  const mgn::ToteBox box;
+  const mgn::Mesh tote = tote_mesh(box);
+  std::vector<mgn::Mesh> meshes = {
+      mgn::make_sphere(0.03, 48, 24), mgn::make_cylinder(0.03, 0.1, 96),
+      mgn::make_sphere(0.025, 48, 24), mgn::make_cylinder(0.04, 0.05, 96),
+      mgn::make_box({0.08, 0.05, 0.04})};
+  std::vector<mgn::DropObject> objects;
+  for (const auto& m : meshes) objects.push_back(object_of(m, 600, "o"));
+  for (int full = 0; full < 2; ++full) {
+    mgn::DropOptions o;
+    o.seed = 21;
+    o.max_hull_vertices = full ? 0 : 48;
+    const auto r = mgn::drop_objects(objects, tote, box, o);
+    EXPECT_TRUE(r.settled) << "full " << full;
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+      ASSERT_TRUE(r.objects[i].kept()) << i;
+      EXPECT_TRUE(r.objects[i].settled) << i;
+      EXPECT_GE(meshes[i].transformed(r.objects[i].X_WO).bounds()(0, 2), -0.002) << i;
+    }
+    for (std::size_t i = 0; i < meshes.size(); ++i)
+      for (std::size_t j = 0; j < meshes.size(); ++j)
+        if (i != j)
+          EXPECT_LT(penetration(meshes[i].transformed(r.objects[i].X_WO),
+                                meshes[j].transformed(r.objects[j].X_WO)),
+                    0.003)
+              << i << " in " << j << " full " << full;
+  }
+}
+
+TEST(Drop, ObjectsOverTheRimAreRemovedAndTheRestSettlesAgain) {
+  // Rods into a shallow 120 mm tray: some end over the rim. They are removed, and what stays
+  // must have settled again afterwards: at rest, inside, and held up by the floor or by another
+  // kept object (never by a removed one, i.e. floating).
+  mgn::ToteBox box;
+  box.inner_length = 0.12;
+  box.inner_width = 0.12;
+  box.inner_height = 0.02;
+  const mgn::Mesh rod = mgn::make_box({0.15, 0.02, 0.02});
+  std::vector<mgn::DropObject> objects(6, object_of(rod, 500, "rod"));
+  int rounds = 0;
+  for (std::uint64_t seed = 0; seed < 4; ++seed) {
+    mgn::DropOptions o;
+    o.window_min = {-0.03, -0.03, 0.1};
+    o.window_max = {0.03, 0.03, 0.3};
+    o.seed = seed;
+    const auto r = mgn::drop_objects(objects, tote_mesh(box), box, o);
+    rounds += r.resettle_rounds;
+    EXPECT_TRUE(r.settled) << "seed " << seed;
+    std::vector<mgn::Mesh> kept;
+    for (const auto& d : r.objects)
+      if (d.kept()) {
+        EXPECT_TRUE(d.settled);
+        kept.push_back(rod.transformed(d.X_WO));
+      }
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      const auto b = kept[i].bounds();
+      EXPECT_TRUE(b(0, 0) > -0.063 && b(1, 0) < 0.063 && b(0, 1) > -0.063 && b(1, 1) < 0.063);
+      if (b(0, 2) < 0.003) continue;  // on the floor
+      bool held = false;
+      for (std::size_t j = 0; j < kept.size(); ++j) {
+        if (j == i) continue;
+        const auto c = kept[j].bounds();
+        held |= (b.row(0).array() < c.row(1).array() + 0.003).all() &&
+                (c.row(0).array() < b.row(1).array() + 0.003).all() && c(1, 2) < b(1, 2);
+      }
+      EXPECT_TRUE(held) << "seed " << seed << ": kept rod " << i << " floats at z " << b(0, 2);
+    }
+  }
+  EXPECT_GT(rounds, 0) << "no seed put a rod over the rim: the test tests nothing";
 }

@@ -419,3 +419,36 @@ TEST(Renderer, ColorTemperatureFollowsPlanck) {
   EXPECT_LT(cold.x(), cold.y());
   EXPECT_THROW(mgn::color_temperature_rgb(0.0), mgn::InvalidArgument);
 }
+
+TEST(Renderer, BackFaceCullingOfClosedMeshesChangesNoPixel) {
+  // Closed outward meshes are drawn with back faces culled; the same meshes wound inwards are
+  // not culled (culling them would show their insides). Both must give the same depth and ids,
+  // and the same colours except on a few silhouette pixels (rasterisation ties).
+  const Scene s = test_scene();
+  mgn::Renderer culled(400, 400), plain(400, 400);
+  for (const auto& m : s.meshes) {
+    culled.add_mesh(m);
+    plain.add_mesh(m.flipped());
+  }
+  culled.set_instances(s.instances);
+  plain.set_instances(s.instances);
+  const auto rig = mgn::mgn_rig(3, {0, 0, 0.05});
+  for (int v : {0, 12, 30}) {
+    const mgn::CameraView view{small_camera(), rig[v]};
+    const auto a = culled.render(view);
+    const auto b = plain.render(view);
+    std::size_t same_z = 0, same_id = 0, close_rgb = 0;
+    for (std::size_t i = 0; i < a.depth.size(); ++i) {
+      same_z += std::abs(a.depth[i] - b.depth[i]) < 1e-5f;
+      same_id += a.instance_ids[i] == b.instance_ids[i];
+      int diff = 0;
+      for (int c = 0; c < 3; ++c)
+        diff = std::max(diff, std::abs(a.rgb[3 * i + c] - b.rgb[3 * i + c]));
+      close_rgb += diff <= 2;
+    }
+    const double n = static_cast<double>(a.depth.size());
+    EXPECT_GE(same_z, 0.999 * n) << v;
+    EXPECT_GE(same_id, 0.999 * n) << v;
+    EXPECT_GE(close_rgb, 0.995 * n) << v;
+  }
+}

@@ -234,3 +234,20 @@ def test_cli_scene_drop(tmp_path, capsys):
     assert sorted(i.name for i in scene.instances) == ["box_cube", "pear"]
     assert main(["scene", "drop", "--objects", "nope", "--out", str(out)]) == 1
     assert "unknown object" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("seed", [1, 4])
+def test_twelve_builtin_objects_come_to_rest_inside_the_tote(seed):
+    # Issue 5: a 12-object drop did not come to rest within 7 s of simulated time.
+    objects = compose_objects(count=12, seed=seed)
+    scene = drop_scene(objects, seed=seed)
+    assert scene.stats["settled"] is True
+    assert scene.stats["simulated_time"] < 7.0 + DropOptions().rest_time
+    assert len(scene) + len(scene.removed) == 12
+    assert all(inst.settled for inst in scene.instances)
+    tote = scene.tote
+    for i in range(len(scene)):
+        lo, hi = scene.world_mesh(i).bounds
+        assert lo[2] >= -TOL
+        assert lo[0] >= -tote.inner_length / 2 - TOL and hi[0] <= tote.inner_length / 2 + TOL
+        assert lo[1] >= -tote.inner_width / 2 - TOL and hi[1] <= tote.inner_width / 2 + TOL

@@ -90,6 +90,121 @@ Mesh convex_hull_of_points(const Points3f& points) {
   return hull;
 }
 
+std::vector<Eigen::Index> reduce_convex_points(const Points3d& points, int max_vertices,
+                                               double tolerance, double* max_deviation) {
+  constexpr const char* fn = "reduce_convex_points";
+  if (max_vertices < 4)
+    throw_error<InvalidArgument>(fn, ": max_vertices must be >= 4, got ", max_vertices);
+  if (!(std::isfinite(tolerance) && tolerance >= 0))
+    throw_error<InvalidArgument>(fn, ": tolerance must be finite and >= 0 m, got ", tolerance);
+  if (!points.allFinite()) throw_error<InvalidArgument>(fn, ": points must be finite");
+  const Eigen::Index n = points.rows();
+  std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
+  if (max_deviation) *max_deviation = 0.0;
+  if (n <= max_vertices) return all;
+  auto p = [&](Eigen::Index i) -> Vec3d { return points.row(i).transpose(); };
+  // Initial tetrahedron of extreme points.
+  Eigen::Index a = 0;
+  for (Eigen::Index i = 1; i < n; ++i)
+    if (points(i, 0) < points(a, 0)) a = i;
+  auto farthest = [&](auto&& dist) {
+    Eigen::Index best = 0;
+    double d_best = -1.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double d = dist(p(i));
+      if (d > d_best) d_best = d, best = i;
+    }
+    return std::make_pair(best, d_best);
+  };
+  const auto [b, d_ab] = farthest([&](const Vec3d& q) { return (q - p(a)).squaredNorm(); });
+  const Vec3d ab = (p(b) - p(a)).normalized();
+  const auto [c, d_line] = farthest([&](const Vec3d& q) {
+    const Vec3d r = q - p(a);
+    return (r - r.dot(ab) * ab).squaredNorm();
+  });
+  const Vec3d nrm = (p(b) - p(a)).cross(p(c) - p(a)).normalized();
+  const auto [d, d_plane] = farthest([&](const Vec3d& q) { return std::abs((q - p(a)).dot(nrm)); });
+  const double scale = std::sqrt(d_ab);
+  if (!(scale > 0) || !(std::sqrt(d_line) > 1e-9 * scale) || !(d_plane > 1e-9 * scale))
+    return all;  // no volume: nothing sensible to reduce
+  std::vector<Eigen::Index> chosen = {a, b, c, d};
+  std::vector<char> in(static_cast<std::size_t>(n), 0);
+  for (Eigen::Index i : chosen) in[static_cast<std::size_t>(i)] = 1;
+  std::vector<double> coords;
+  std::vector<Vec3d> normals;
+  std::vector<double> offsets;
+  double deviation = 0.0;
+  while (true) {
+    // Face planes of the hull of the chosen points.
+    coords.clear();
+    for (Eigen::Index i : chosen)
+      coords.insert(coords.end(), {points(i, 0), points(i, 1), points(i, 2)});
+    btConvexHullComputer hc;
+    hc.compute(coords.data(), static_cast<int>(3 * sizeof(double)), static_cast<int>(chosen.size()),
+               0.0, 0.0);
+    normals.clear();
+    offsets.clear();
+    for (int f = 0; f < hc.faces.size(); ++f) {
+      // Newell normal of the face polygon (outward: counter-clockwise seen from outside).
+      const btConvexHullComputer::Edge* first = &hc.edges[hc.faces[f]];
+      const btConvexHullComputer::Edge* e = first;
+      Vec3d nn = Vec3d::Zero(), centre = Vec3d::Zero();
+      int count = 0;
+      do {
+        const btVector3& u = hc.vertices[e->getSourceVertex()];
+        const btVector3& v = hc.vertices[e->getTargetVertex()];
+        nn.x() += (double(u.y()) - double(v.y())) * (double(u.z()) + double(v.z()));
+        nn.y() += (double(u.z()) - double(v.z())) * (double(u.x()) + double(v.x()));
+        nn.z() += (double(u.x()) - double(v.x())) * (double(u.y()) + double(v.y()));
+        centre += Vec3d(double(u.x()), double(u.y()), double(u.z()));
+        ++count;
+        e = e->getNextEdgeOfFace();
+      } while (e != first && count < 100000);
+      const double len = nn.norm();
+      if (!(len > 0)) continue;
+      nn /= len;
+      normals.push_back(nn);
+      offsets.push_back(nn.dot(centre / count));
+    }
+    // Each point's distance outside the hull; per face, its farthest point beyond tolerance.
+    std::vector<std::pair<double, Eigen::Index>> per_face(normals.size(), {0.0, -1});
+    deviation = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (in[static_cast<std::size_t>(i)]) continue;
+      const Vec3d q = p(i);
+      double out = -1e300;
+      std::size_t face = 0;
+      for (std::size_t f = 0; f < normals.size(); ++f) {
+        const double d = normals[f].dot(q) - offsets[f];
+        if (d > out) out = d, face = f;
+      }
+      deviation = std::max(deviation, out);
+      if (out > tolerance && out > per_face[face].first) per_face[face] = {out, i};
+    }
+    const auto budget = static_cast<std::size_t>(max_vertices) - chosen.size();
+    if (budget == 0) break;
+    // Add the farthest point of every face that has one (quickhull-like rounds keep the work
+    // logarithmic in the number of points added), farthest first while the budget lasts.
+    std::vector<std::pair<double, Eigen::Index>> add;
+    for (const auto& c : per_face)
+      if (c.second >= 0) add.push_back(c);
+    if (add.empty()) break;
+    std::sort(add.begin(), add.end(), [](const auto& x, const auto& y) {
+      return x.first != y.first ? x.first > y.first : x.second < y.second;
+    });
+    // At most half as many as chosen so far per round: later rounds see the refined hull.
+    const std::size_t round = std::min(budget, std::max<std::size_t>(1, chosen.size() / 2));
+    for (std::size_t k = 0; k < add.size() && k < round; ++k) {
+      if (in[static_cast<std::size_t>(add[k].second)]) continue;  // farthest for two faces
+      chosen.push_back(add[k].second);
+      in[static_cast<std::size_t>(add[k].second)] = 1;
+    }
+  }
+  if (max_deviation) *max_deviation = deviation;
+  return chosen;
+}
+
 Mesh convex_hull(const Mesh& mesh) {
   check_finite(mesh, "convex_hull");
   Mesh h = convex_hull_of_points(mesh.vertices());

@@ -146,7 +146,11 @@ struct GpuMesh {
   std::vector<GpuMaterial> materials;
   Eigen::Vector3d lo, hi;  // object-frame bounds
   bool closed = false;     // watertight: the camera-inside test applies
-  Points3f vertices;       // for the camera-inside test (closed meshes only)
+  /// Closed and wound outwards: its back faces are always hidden behind its front faces (the
+  /// camera is never inside, see check_camera_inside; the light is outside the scene bounds),
+  /// so they are culled in every opaque pass (half the triangles to set up and rasterise).
+  bool cull_back = false;
+  Points3f vertices;  // for the camera-inside test (closed meshes only)
   Faces faces;
 };
 
@@ -486,7 +490,9 @@ int Renderer::add_mesh(const Mesh& mesh) {
   const auto b = mesh.bounds();
   g.lo = b.row(0).transpose();
   g.hi = b.row(1).transpose();
-  g.closed = mesh.validate().is_watertight;
+  const auto report = mesh.validate();
+  g.closed = report.is_watertight;
+  g.cull_back = report.is_watertight && report.is_outward;
   if (g.closed) {
     g.vertices = V;
     g.faces = F;
@@ -625,6 +631,17 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
 
+  // Back-face culling of closed outward meshes (GpuMesh::cull_back); `front` is the winding of
+  // front faces in window space.
+  auto set_culling = [](bool cull, GLenum front) {
+    if (cull) {
+      glEnable(GL_CULL_FACE);
+      glFrontFace(front);
+      glCullFace(GL_BACK);
+    } else {
+      glDisable(GL_CULL_FACE);
+    }
+  };
   if (shadows) {
     light_vp = light_view_projection(light.position_W, center, radius);
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
@@ -639,6 +656,7 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
       const GpuMesh& m = I.meshes[in.mesh_id];
       const Mat4f model = in.X_WO.matrix().cast<float>();
       glUniformMatrix4fv(I.lsh.model, 1, GL_FALSE, model.data());
+      set_culling(m.cull_back, GL_CCW);  // a standard GL projection: front faces anticlockwise
       glBindVertexArray(m.vao);
       for (const DrawGroup& dg : m.groups) {
         if (dg.material >= 0 && m.materials[dg.material].alpha < 0.5f) continue;
@@ -647,6 +665,7 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
       }
     }
     glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_CULL_FACE);
   }
 
   glBindFramebuffer(GL_FRAMEBUFFER, I.fbo);
@@ -728,6 +747,8 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
   auto draw_opaque = [&](bool shade) {
     for (std::size_t i : drawn) {
       const GpuMesh& m = I.meshes[I.instances[i].mesh_id];
+      // Window y = image row flips the apparent winding: front faces are clockwise.
+      set_culling(m.cull_back, GL_CW);
       bool bound = false;
       for (const DrawGroup& dg : m.groups) {
         if (full && dg.transparent) continue;

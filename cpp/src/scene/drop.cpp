@@ -1,5 +1,6 @@
 #include <mgn/core/error.hpp>
 #include <mgn/core/rng.hpp>
+#include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/scene/drop.hpp>
 
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
@@ -85,7 +86,10 @@ Principal principal_frame(const DropObject& o, std::size_t i) {
 }
 
 /// Convex hull shape of a part, in frame B, shrunk by the margin (Bullet adds it back).
-std::unique_ptr<btConvexHullShape> hull_shape(const Mesh& part, const Pose& X_BO, double margin) {
+/// Its vertices are reduced to at most `max_vertices` (0: all) within `tolerance` (m).
+/// With `polyhedral` the hull is not shrunk and gets Bullet's polyhedral features.
+std::unique_ptr<btConvexHullShape> hull_shape(const Mesh& part, const Pose& X_BO, double margin,
+                                              int max_vertices, double tolerance, bool polyhedral) {
   const auto& V = part.vertices();
   std::vector<double> coords(static_cast<std::size_t>(3 * V.rows()));
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
@@ -95,11 +99,21 @@ std::unique_ptr<btConvexHullShape> hull_shape(const Mesh& part, const Pose& X_BO
     coords[3 * v + 2] = p.z();
   }
   btConvexHullComputer hc;
-  const btScalar shrunk = hc.compute(coords.data(), 3 * sizeof(double), static_cast<int>(V.rows()),
-                                     btScalar(margin), btScalar(0.3));
+  const btScalar shrunk =
+      hc.compute(coords.data(), 3 * sizeof(double), static_cast<int>(V.rows()),
+                 polyhedral ? btScalar(0) : btScalar(margin), btScalar(polyhedral ? 0.0 : 0.3));
   auto shape = std::make_unique<btConvexHullShape>();
   if (shrunk >= 0 && hc.vertices.size() >= 4) {
-    for (int k = 0; k < hc.vertices.size(); ++k) shape->addPoint(hc.vertices[k], false);
+    if (max_vertices > 0 && hc.vertices.size() > max_vertices) {
+      Points3d hv(hc.vertices.size(), 3);
+      for (int k = 0; k < hc.vertices.size(); ++k)
+        hv.row(k) << double(hc.vertices[k].x()), double(hc.vertices[k].y()),
+            double(hc.vertices[k].z());
+      for (Eigen::Index k : reduce_convex_points(hv, max_vertices, tolerance))
+        shape->addPoint(hc.vertices[static_cast<int>(k)], false);
+    } else {
+      for (int k = 0; k < hc.vertices.size(); ++k) shape->addPoint(hc.vertices[k], false);
+    }
   } else {
     for (Eigen::Index v = 0; v < V.rows(); ++v)
       shape->addPoint(btVector3(btScalar(coords[3 * v]), btScalar(coords[3 * v + 1]),
@@ -107,7 +121,12 @@ std::unique_ptr<btConvexHullShape> hull_shape(const Mesh& part, const Pose& X_BO
                       false);
   }
   shape->recalcLocalAabb();
-  shape->setMargin(btScalar(std::max(0.0, shrunk > 0 ? double(shrunk) : 0.0)));
+  if (polyhedral) {
+    shape->setMargin(btScalar(margin));
+    shape->initializePolyhedralFeatures();
+  } else {
+    shape->setMargin(btScalar(std::max(0.0, shrunk > 0 ? double(shrunk) : 0.0)));
+  }
   return shape;
 }
 
@@ -185,6 +204,12 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
           "options.collision_margin", o.collision_margin, "in (0, 0.01] m");
   require(std::isfinite(o.contact_distance) && o.contact_distance > 0, "options.contact_distance",
           o.contact_distance, "finite and > 0 (m)");
+  require(o.max_hull_vertices == 0 || (o.max_hull_vertices >= 4 && o.max_hull_vertices <= 100000),
+          "options.max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [4, 100000]");
+  require(std::isfinite(o.hull_tolerance) && o.hull_tolerance >= 0, "options.hull_tolerance",
+          o.hull_tolerance, "finite and >= 0 (m)");
+  require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 && o.resettle_time / o.dt <= 1e7,
+          "options.resettle_time", o.resettle_time, "finite, >= 0 s and <= 1e7 steps");
   require(std::isfinite(o.rolling_friction) && o.rolling_friction >= 0, "options.rolling_friction",
           o.rolling_friction, "finite and >= 0");
   require(std::isfinite(o.angular_damping) && o.angular_damping >= 0 && o.angular_damping < 1,
@@ -279,6 +304,7 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
     auto add_box = [&](const Vec3d& lo, const Vec3d& hi) {
       auto shape = std::make_unique<btBoxShape>(to_bt(0.5 * (hi - lo)));
       shape->setMargin(btScalar(std::min(o.collision_margin, 0.25 * (hi - lo).minCoeff())));
+      if (o.polyhedral_contacts) shape->initializePolyhedralFeatures();
       btTransform X;
       X.setIdentity();
       X.setOrigin(to_bt(0.5 * (hi + lo)));
@@ -371,7 +397,8 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
     btTransform identity;
     identity.setIdentity();
     for (const Mesh& part : ob.convex_parts) {
-      auto hull = hull_shape(part, X_BO, o.collision_margin);
+      auto hull = hull_shape(part, X_BO, o.collision_margin, o.max_hull_vertices, o.hull_tolerance,
+                             o.polyhedral_contacts);
       compound->addChildShape(identity, hull.get());
       w->shapes.push_back(std::move(hull));
     }
@@ -400,29 +427,92 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
   // --- simulate ---
   const auto max_steps = static_cast<std::int64_t>(std::ceil(o.max_time / o.dt - 1e-9));
   const auto rest_steps = static_cast<std::int64_t>(std::ceil(o.rest_time / o.dt - 1e-9));
+  const auto resettle_steps = static_cast<std::int64_t>(std::ceil(o.resettle_time / o.dt - 1e-9));
+  // At rest: slower than the thresholds now, and moved less than they allow over the last
+  // rest_time (a pose reference that is reset whenever the object strays further from it). A
+  // speed spike of a resting object (solver jitter) does not restart the count; real motion does.
   std::vector<std::int64_t> at_rest(n, 0);
+  std::vector<btTransform> rest_ref(n);
+  for (std::size_t i = 0; i < n; ++i) rest_ref[i] = body[i]->getCenterOfMassTransform();
+  const double max_shift = o.linear_rest * o.rest_time;
+  const double max_turn = o.angular_rest * o.rest_time;
   const double fall_z = -box.floor_thickness - 0.02;
+  const double tol = o.collision_margin + o.contact_distance;
+  auto pose_of = [&](std::size_t i) {
+    return Pose(from_bt(body[i]->getWorldTransform()) * X_OB[i].inverse());
+  };
+  auto outside_walls = [&](std::size_t i) {
+    const Aabb b = world_aabb(hull_points[i], pose_of(i));
+    return b.lo.x() < -hx - tol || b.hi.x() > hx + tol || b.lo.y() < -hy - tol ||
+           b.hi.y() > hy + tol || b.lo.z() < -tol;
+  };
+  auto remove = [&](std::size_t i) {
+    result.objects[i].X_WO = pose_of(i);
+    result.objects[i].status = DropStatus::LeftTote;
+    w->world.removeRigidBody(body[i]);
+  };
   std::int64_t step = 0;
+  std::int64_t limit = max_steps;
   bool all_rest = false;
-  while (step < max_steps) {
-    w->world.stepSimulation(btScalar(o.dt), 0, btScalar(o.dt));
-    ++step;
-    all_rest = true;
+  // Objects left the tote: the rest may have leaned on them and must come to rest again, with
+  // resettle_time more to do so.
+  auto restart = [&]() {
+    limit = std::max(limit, max_steps + resettle_steps);
+    ++result.resettle_rounds;
+    all_rest = false;
     for (std::size_t i = 0; i < n; ++i) {
-      btRigidBody* rb = body[i];
-      if (!rb->isInWorld()) continue;
-      if (double(rb->getCenterOfMassPosition().z()) < fall_z) {
-        result.objects[i].X_WO = from_bt(rb->getWorldTransform()) * X_OB[i].inverse();
-        result.objects[i].status = DropStatus::LeftTote;
-        w->world.removeRigidBody(rb);
+      if (!body[i]->isInWorld()) continue;
+      at_rest[i] = 0;
+      rest_ref[i] = body[i]->getCenterOfMassTransform();
+      body[i]->activate(true);
+    }
+  };
+  std::vector<std::size_t> on_rim;
+  while (true) {
+    while (step < limit) {
+      w->world.stepSimulation(btScalar(o.dt), 0, btScalar(o.dt));
+      ++step;
+      all_rest = true;
+      on_rim.clear();
+      for (std::size_t i = 0; i < n; ++i) {
+        btRigidBody* rb = body[i];
+        if (!rb->isInWorld()) continue;
+        if (double(rb->getCenterOfMassPosition().z()) < fall_z) {
+          remove(i);
+          continue;
+        }
+        const btTransform& X = rb->getCenterOfMassTransform();
+        const double shift = double((X.getOrigin() - rest_ref[i].getOrigin()).length());
+        const double turn = double(X.getRotation().angleShortestPath(rest_ref[i].getRotation()));
+        if (shift > max_shift || turn > max_turn) {
+          rest_ref[i] = X;  // moving: start a new window here
+          at_rest[i] = 0;
+        } else {
+          ++at_rest[i];
+        }
+        const bool slow = double(rb->getLinearVelocity().length()) < o.linear_rest &&
+                          double(rb->getAngularVelocity().length()) < o.angular_rest;
+        if (!slow || at_rest[i] < rest_steps) all_rest = false;
+        // Came to rest on or over the rim: it leaves now, not after the whole pile rests.
+        if (slow && at_rest[i] == rest_steps && outside_walls(i)) on_rim.push_back(i);
+      }
+      if (!on_rim.empty()) {
+        for (std::size_t i : on_rim) remove(i);
+        restart();
         continue;
       }
-      const bool rest = double(rb->getLinearVelocity().length()) < o.linear_rest &&
-                        double(rb->getAngularVelocity().length()) < o.angular_rest;
-      at_rest[i] = rest ? at_rest[i] + 1 : 0;
-      if (at_rest[i] < rest_steps) all_rest = false;
+      if (all_rest) break;
     }
-    if (all_rest) break;
+    // Time is up: objects on or over the rim leave; whatever leaned on them settles again.
+    bool removed = false;
+    for (std::size_t i = 0; i < n; ++i)
+      if (body[i]->isInWorld() && outside_walls(i)) {
+        remove(i);
+        removed = true;
+      }
+    if (!removed) break;
+    restart();
+    if (step >= limit) break;
   }
   result.steps = step;
   result.simulated_time = double(step) * o.dt;
@@ -475,13 +565,14 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
   result.max_penetration = max_pen;
 
   // --- final poses and what is kept ---
-  const double tol = o.collision_margin + o.contact_distance;
   for (std::size_t i = 0; i < n; ++i) {
     DroppedObject& r = result.objects[i];
     btRigidBody* rb = body[i];
     if (!rb->isInWorld()) continue;  // fell out, pose recorded then
     r.X_WO = from_bt(rb->getWorldTransform()) * X_OB[i].inverse();
-    r.settled = at_rest[i] >= rest_steps;
+    r.settled = at_rest[i] >= rest_steps &&
+                double(rb->getLinearVelocity().length()) < o.linear_rest &&
+                double(rb->getAngularVelocity().length()) < o.angular_rest;
     r.contacts = contacts[i];
     const Aabb b = world_aabb(hull_points[i], r.X_WO);
     if (b.lo.x() < -hx - tol || b.hi.x() > hx + tol || b.lo.y() < -hy - tol ||

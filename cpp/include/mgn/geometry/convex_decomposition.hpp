@@ -58,6 +58,20 @@ Mesh convex_hull_of_points(const Points3f& points);
 std::vector<Mesh> convex_decomposition(const Mesh& mesh,
                                        const ConvexDecompositionOptions& options = {});
 
+/// Reduced convex hull for fast physics (the cost of a Bullet convex-hull support query is linear
+/// in its vertex count). Chooses a subset of `points` greedily: it starts from a tetrahedron of
+/// extreme points and then, in rounds, adds for each face of the hull of the points chosen so far
+/// the point farthest outside it (farthest first while the budget lasts), until `max_vertices` are
+/// chosen or every point lies within `tolerance` (m) of a face plane of that hull. The hull of the
+/// subset lies inside the hull of all points. Returns the row indices of the chosen points (in
+/// order of selection; all rows, in order, if there are at most `max_vertices` or they span no
+/// volume). If `max_deviation` is given it receives the largest distance (m) of any point outside a
+/// face plane of the reduced hull (0 when every point was kept). Deterministic. Throws
+/// InvalidArgument for non-finite points, max_vertices < 4 or a negative / non-finite tolerance.
+std::vector<Eigen::Index> reduce_convex_points(const Points3d& points, int max_vertices,
+                                               double tolerance = 0.0,
+                                               double* max_deviation = nullptr);
+
 /// Enclosed volume (m^3) of a closed mesh by the divergence theorem (absolute value).
 double closed_mesh_volume(const Mesh& mesh);
 

@@ -11,8 +11,10 @@
 /// avoided deterministically: objects are placed in order of their drawn height, and an object
 /// whose bounding box would overlap one already placed is lifted just above it. The simulation
 /// runs until every object in the tote has been at rest for DropOptions::rest_time, or until
-/// DropOptions::max_time. Objects that left the tote are removed. The result depends only on the
-/// inputs and DropOptions::seed (object i draws from Rng(seed, i)).
+/// DropOptions::max_time. Objects that left the tote (fell below the floor, or rest on or over the
+/// rim) are removed, and the remaining objects are simulated again until they are at rest (at most
+/// DropOptions::resettle_time more), so nothing is left leaning on a removed object. The result
+/// depends only on the inputs and DropOptions::seed (object i draws from Rng(seed, i)).
 
 #include <mgn/core/types.hpp>
 #include <mgn/geometry/mesh.hpp>
@@ -61,12 +63,16 @@ struct DropOptions {
   /// horizontally, z min >= 0). MetaGraspNet: x +-0.06, y +-0.03, z 0.3-0.8.
   Vec3d window_min = Vec3d(-0.06, -0.03, 0.30);
   Vec3d window_max = Vec3d(0.06, 0.03, 0.80);
-  double dt = 1.0 / 240.0;          ///< s, fixed time step, in (0, 0.02]
-  int solver_iterations = 20;       ///< Bullet sequential-impulse iterations, >= 1
-  double max_time = 7.0;            ///< s of simulated time at most (MetaGraspNet: 7 s), > dt
-  double linear_rest = 0.01;        ///< m/s: an object is at rest below this speed ...
-  double angular_rest = 0.1;        ///< rad/s: ... and this angular speed ...
-  double rest_time = 0.2;           ///< s: ... held for this long. All > 0.
+  double dt = 1.0 / 240.0;     ///< s, fixed time step, in (0, 0.02]
+  int solver_iterations = 20;  ///< Bullet sequential-impulse iterations, >= 1
+  double max_time = 7.0;       ///< s of simulated time at most (MetaGraspNet: 7 s), > dt
+  /// An object is at rest when it is slower than linear_rest (m/s) and angular_rest (rad/s) and
+  /// over the last rest_time (s) has moved less than linear_rest * rest_time and turned less than
+  /// angular_rest * rest_time (so a momentary speed spike of a resting object, solver jitter,
+  /// does not restart the count, but real motion does). All > 0.
+  double linear_rest = 0.01;
+  double angular_rest = 0.1;        ///< rad/s, see linear_rest
+  double rest_time = 0.2;           ///< s, see linear_rest
   double gravity = 9.81;            ///< m/s^2, > 0, along -z
   double rolling_friction = 0.002;  ///< Bullet rolling-friction coefficient of the objects, >= 0
   double angular_damping = 0.05;    ///< fraction of angular velocity lost per second, [0, 1)
@@ -79,6 +85,22 @@ struct DropOptions {
   double contact_distance = 0.002;
   /// Remove objects that are still moving at max_time (else keep them with settled = false).
   bool remove_unsettled = false;
+  /// Each convex part's Bullet hull is reduced to at most this many vertices (0: keep all; else
+  /// >= 4) by reduce_convex_points(): a support query costs time linear in the vertex count and
+  /// dominates the drop. The reduced hull lies inside the part (see hull_tolerance).
+  int max_hull_vertices = 96;
+  /// Stop reducing a hull early once every vertex of the part is within this distance (m, >= 0)
+  /// of the reduced hull's face planes.
+  double hull_tolerance = 0.0005;
+  /// Contacts between convex parts (and with the tote boxes) from Bullet's polyhedral clipping
+  /// (a whole face-on-face contact patch in one step: piles come to rest much sooner) instead of
+  /// one GJK point per step. The hulls are then not shrunk by the margin (the clipping ignores
+  /// margins), so the contact surface is the part itself.
+  bool polyhedral_contacts = true;
+  /// An object that comes to rest not entirely inside the walls (on or over the rim) is removed
+  /// at once (and so is any such object at max_time); the others are then simulated again until
+  /// they are at rest, with this much simulated time (s, >= 0) allowed beyond max_time.
+  double resettle_time = 2.0;
   ToteCollision tote_collision = ToteCollision::Boxes;
   std::uint64_t seed = 0;
 };
@@ -114,7 +136,10 @@ struct DropResult {
   std::vector<DroppedObject> objects;
   std::int64_t steps = 0;       ///< simulation steps taken
   double simulated_time = 0.0;  ///< s
-  bool settled = false;         ///< every remaining object was at rest before max_time
+  /// Every remaining object was at rest before the time ran out (max_time, plus resettle_time
+  /// after removals).
+  bool settled = false;
+  int resettle_rounds = 0;  ///< how often objects were removed and the rest simulated again
   /// Deepest penetration between any two bodies (objects or tote) at the end, from Bullet's
   /// contact points, m (>= 0).
   double max_penetration = 0.0;
