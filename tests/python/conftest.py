@@ -48,3 +48,25 @@ def coco_ground_truth_ap(gt: object) -> tuple[float, float]:
         ev.summarize()
         out.append(float(ev.stats[0]))
     return out[0], out[1]
+
+
+def check_difficulty(layout: dict) -> int:
+    """Re-derive a ``{v}_layout.json``'s difficulty from its per-object entries by the paper's
+    Table IV (MODELS.md §8), assert it equals the stored level and ingredients; return it."""
+    seen = [o for o in layout["objects"].values() if o["visible"]]
+    cats = [o["category_id"] for o in seen]
+    unique = len(cats) == len(set(cats))
+    complete = all(o["complete"] for o in seen)
+    layers = len({o["layer"] for o in seen})
+    assert layout["classes_unique"] == unique and layout["all_complete"] == complete
+    assert layout["num_layers"] == layers
+    if complete and unique:
+        level = 1 if layers <= 2 and layout["max_occlusion"] <= 0.05 else 2
+    elif unique:
+        level = 3
+    elif complete:
+        level = 4
+    else:
+        level = 5
+    assert layout["difficulty"] == level
+    return level
