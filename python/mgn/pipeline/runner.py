@@ -39,6 +39,7 @@ import os
 import shutil
 import time
 import traceback
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -216,19 +217,20 @@ def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
 # --------------------------------------------------------------------------------- executors
 
 
-class _Executor:
+class _Executor(ABC):
     """Runs independent tasks; yields (item, result, exception) as they complete."""
 
     threads_per_task = 0
 
+    @abstractmethod
     def run(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[tuple]:
-        raise NotImplementedError
+        """Run ``fn`` on every item; yield (item, result, exception) in completion order."""
 
-    def cancel(self) -> None:
+    def cancel(self) -> None:  # noqa: B027 (optional hook: nothing to stop by default)
         """Stop scheduling; stop running tasks where possible."""
 
-    def close(self) -> None:
-        pass
+    def close(self) -> None:  # noqa: B027 (optional hook: nothing to release by default)
+        """Release the executor's workers."""
 
 
 class _InProcess(_Executor):

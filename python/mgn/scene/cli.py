@@ -106,15 +106,8 @@ def _cmd_render(args: argparse.Namespace) -> int:
     scene = Scene.from_json(args.scene)
     if len(scene) == 0:
         raise ValueError(f"'{args.scene}': the scene has no objects to render")
-    meshes: dict[tuple[str, str], object] = {}
-    objects = []
-    for k, inst in enumerate(scene.instances):
-        key = (inst.name, inst.source)
-        if key not in meshes:  # copies of an object share one mesh (uploaded once)
-            meshes[key] = scene.mesh(k)
-        objects.append((meshes[key], inst.X_WO, inst.instance_id))
     views = render_views(
-        objects,
+        scene.render_items(),
         tote_mesh(scene.tote),
         views=args.view,
         out_dir=args.out,

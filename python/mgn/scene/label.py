@@ -231,13 +231,7 @@ def label_scene(
         timings.add("prepare: scene grasp collisions", time.perf_counter() - t0)
     categories = np.array([inst.category_id for inst in scene.instances], np.int64)
     bins = [inst.bin_relation for inst in scene.instances]
-    meshes: dict[tuple[str, str], Any] = {}
-    objects = []
-    for i, inst in enumerate(scene.instances):
-        key = (inst.name, inst.source)
-        if key not in meshes:  # copies share one mesh, uploaded to the renderer once
-            meshes[key] = scene.mesh(i)
-        objects.append((meshes[key], inst.X_WO, inst.instance_id))
+    objects = scene.render_items()
     gt: dict[int, list[dict[str, Any]]] = {}
 
     pending: deque[Future[Any]] = deque()

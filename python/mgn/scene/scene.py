@@ -239,6 +239,18 @@ class Scene:
 
         return object_mesh(self.object_spec(index))
 
+    def render_items(self) -> list[tuple[Mesh, npt.NDArray[np.float64], int]]:
+        """(mesh, X_WO, instance id) per instance, as :func:`mgn.render.render_views` takes them;
+        copies of an object share one Mesh (so a renderer uploads it once)."""
+        meshes: dict[tuple[str, str], Mesh] = {}
+        items = []
+        for i, inst in enumerate(self.instances):
+            key = (inst.name, inst.source)
+            if key not in meshes:
+                meshes[key] = self.mesh(i)
+            items.append((meshes[key], inst.X_WO, inst.instance_id))
+        return items
+
     def world_mesh(self, index: int) -> Mesh:
         """The mesh of instance ``index`` placed at its pose (tote frame)."""
         return self.mesh(index).transformed(self.instances[index].X_WO)
