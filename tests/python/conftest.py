@@ -70,3 +70,38 @@ def check_difficulty(layout: dict) -> int:
         level = 5
     assert layout["difficulty"] == level
     return level
+
+
+# A small labelled dataset shared by the evaluation tests: 2 scenes x 3 views at 120 x 120 px,
+# object labels (suction and parallel-jaw grasps) with tiny sizes.
+SMALL_DATASET_CONFIG = {
+    "objects": {"categories": ["box_tea", "can_soda", "box_cereal"], "copies": [1, 2]},
+    "camera": {"views": [0, 5, 17], "resolution_scale": 0.1},
+    "object_labels": {
+        "suction_points": 60,
+        "pj_points": 60,
+        "physics_grasps": 3,
+        "physics_grid": 2,
+    },
+    "drop": {"max_time": 2.0},
+}
+SMALL_DATASET_SEED = 11
+
+
+@pytest.fixture(scope="session")
+def small_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Root of a generated dataset (SMALL_DATASET_CONFIG, seed SMALL_DATASET_SEED), made once per
+    test session with its own label cache. Treat it as read-only."""
+    from mgn.config import load_config
+    from mgn.pipeline import generate
+
+    out = tmp_path_factory.mktemp("small_dataset") / "ds"
+    cache = tmp_path_factory.mktemp("small_dataset_cache")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MGN_CACHE_DIR", str(cache))
+        report = generate(
+            out, 2, config=load_config(SMALL_DATASET_CONFIG), seed=SMALL_DATASET_SEED,
+            progress=False,
+        )  # fmt: skip
+    assert report.complete, report.format_summary()
+    return out

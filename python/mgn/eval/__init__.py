@@ -1,0 +1,9 @@
+"""Evaluation: test-set builders, detection / grasp / layout metrics and closed-loop picking.
+
+Every metric reads a dataset written by ``mgn generate`` (or an original MetaGraspNet download)
+through :class:`mgn.Dataset`, scores predictions against its labels and returns a frozen result
+object with ``to_dict()`` (JSON) and ``table()`` (the printed table, see
+:func:`mgn.eval.results.format_table`). The command line is ``mgn eval ...`` and ``mgn pick``.
+"""
+
+from __future__ import annotations
