@@ -34,7 +34,7 @@ import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.scene_format import M_TO_CM, from_cm
-from mgn.render.camera import Intrinsics
+from mgn.render.camera import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
 __all__ = ["Dataset", "SceneFolder", "View"]
 
@@ -200,14 +200,25 @@ class View:
         """(N, N) int8 relation matrix from ``{v}_order.csv``: M[i][j] = -1 if instance j+1
         lies on / occludes instance i+1, +1 for the reverse (the file stores the -1 entries;
         :func:`mgn.scene.layout.read_order_csv`)."""
-        from mgn.scene.layout import read_order_csv
+        from mgn.scene.layout import read_order_csv, read_order_json
 
-        return read_order_csv(self.path("_order.csv"))
+        csv = self.path("_order.csv")
+        if csv.exists():
+            return read_order_csv(csv)
+        # Original MetaGraspNet downloads lack the CSV of some views: the JSON's parents say it.
+        return np.array(read_order_json(self.path("_order.json")).relation, np.int8)
 
     @cached_property
     def intrinsics(self) -> Intrinsics:
-        """The camera intrinsics of the view."""
-        return intrinsics_from_params(_read_json(self.path("_camera_params.json")))
+        """The camera intrinsics of the view. Original MetaGraspNet synthetic scenes have no
+        ``{v}_camera_params.json``: their camera is the MGN one (35 mm focal length on a 20.955 mm
+        aperture, square pixels, principal point at the image centre) at the RGB image's size."""
+        p = self.path("_camera_params.json")
+        if p.exists():
+            return intrinsics_from_params(_read_json(p))
+        h, w = self.rgb.shape[:2]
+        f = MGN_FOCAL_LENGTH_MM * w / MGN_APERTURE_MM
+        return Intrinsics(int(w), int(h), f, f, w / 2.0, h / 2.0)
 
 
 class SceneFolder:
