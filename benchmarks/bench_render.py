@@ -57,6 +57,13 @@ def scene_items() -> list[tuple[Any, np.ndarray, int]]:
     return items
 
 
+def scene_triangles() -> int:
+    """Triangles of the benchmark scene: its objects plus the tote."""
+    from mgn.render import tote_mesh
+
+    return sum(len(m.faces) for m, _, _ in scene_items()) + len(tote_mesh().faces)
+
+
 def camera(width: int) -> tuple[Any, np.ndarray]:
     from mgn.render import Intrinsics, mgn_rig
 
@@ -214,6 +221,9 @@ def run(
     if m is not None:
         # llvmpipe rasterises with its own threads (LP_NUM_THREADS, default: every core).
         row.mgn = {threads[-1]: Timing(m["wall"], m["cpu"])}
+        # Bound by llvmpipe: every triangle is drawn in three passes per view (the light's shadow
+        # map, the depth/id pre-pass, the shading pass), so a view's work is 3 x triangles.
+        row.limit_work = ("llvmpipe_triangles", 3.0 * scene_triangles())
         row.notes.append(
             f"mgn {1000 * float(np.median(m['wall'])):.0f} ms/view, peak RSS "
             f"{m['peak_kib'] / 1024:.0f} MiB, setup {m['setup_s']:.1f} s"
