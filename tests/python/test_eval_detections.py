@@ -208,7 +208,9 @@ def test_seen_unseen_split(tiny: Path) -> None:
     # the unseen set can be given explicitly; with none, "unseen" is empty
     res = evaluate_detections(tiny, unseen_only, unseen_categories=[])
     assert res.row("split", "unseen").box_ap is None and res.row("split", "unseen").num_gt == 0
-    assert res.row("split", "seen").box_ap == pytest.approx(interpolated_ap([True], 3))
+    # every object seen now: per-category AP 0, 0, 1 (categories 1, 2, 3), averaged
+    per_category = [0.0, 0.0, interpolated_ap([True], 1)]
+    assert res.row("split", "seen").box_ap == pytest.approx(np.mean(per_category))
 
 
 def test_occlusion_bins(tiny: Path) -> None:
