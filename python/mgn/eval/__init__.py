@@ -7,3 +7,21 @@ object with ``to_dict()`` (JSON) and ``table()`` (the printed table, see
 """
 
 from __future__ import annotations
+
+from mgn.eval.detections import (
+    DetectionResults,
+    DetectionRow,
+    evaluate_detections,
+    ground_truth_detections,
+)
+from mgn.eval.layout_metrics import LayoutResults, evaluate_layout, ground_truth_layout
+
+__all__ = [
+    "DetectionResults",
+    "DetectionRow",
+    "LayoutResults",
+    "evaluate_detections",
+    "evaluate_layout",
+    "ground_truth_detections",
+    "ground_truth_layout",
+]
