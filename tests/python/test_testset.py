@@ -142,7 +142,9 @@ def test_split_compositions() -> None:
         t = [s.name for s in compose_scene(test, catalogue, seed, s_test)]
         assert len(t) == 20 and set(t) & novel
         # Without the split the same seed gives the plain composition (MGN: 20 objects).
-        plain = compose_scene(load_config(None), catalogue, seed, resolve_split(Config(), catalogue))
+        plain = compose_scene(
+            load_config(None), catalogue, seed, resolve_split(Config(), catalogue)
+        )
         seen_any += bool({s.name for s in plain} & novel)
         for level in (1, 2, 3):
             lo, hi, _ = RECIPES[level]  # type: ignore[misc]
@@ -162,24 +164,39 @@ def scene_names(root: Path, i: int) -> tuple[set[str], set[str]]:
 
 
 def test_train_and_test_split_datasets(tmp_path: Path) -> None:
-    novel = novel_names()
-    objects = {"categories": None, "count": 3, "copies": [1, 1]}
-    cfg_train = tiny(objects=objects, split={"name": "train"}, camera={"views": [0]})
-    cfg_test = tiny(objects=objects, split={"name": "test"}, camera={"views": [0]})
-    for cfg, name in ((cfg_train, "train"), (cfg_test, "test")):
+    """Generated scenes (scene.json): unseen categories never lie in a train scene and are
+    composed into every test scene. Cheap objects keep it fast (the default 'novel' set is
+    checked on compositions above): the train split holds out every object but three, drawn
+    from the whole catalogue; the test split draws from three categories, box_cube unseen."""
+    cheap = ["box_tea", "can_soda", "box_cube"]
+    held_out = sorted(o.name for o in builtin_objects() if o.name not in cheap)
+    cfg_train = tiny(
+        objects={"categories": None, "count": 2, "copies": [1, 1]},
+        split={"name": "train", "unseen": held_out},
+        camera={"views": [0]},
+    )
+    cfg_test = tiny(
+        objects={"count": 2, "copies": [1, 1]},
+        split={"name": "test", "unseen": ["box_cube"]},
+        camera={"views": [0]},
+    )
+    ids = {o.name: o.category_id for o in builtin_objects()}
+    for cfg, name, unseen in ((cfg_train, "train", held_out), (cfg_test, "test", ["box_cube"])):
         out = tmp_path / name
         report = generate(out, 3, config=cfg, seed=SEED, progress=False)
         assert report.complete, report.format_summary()
-        split = json.loads((out / "dataset.json").read_text())["split"]
-        assert split["name"] == name and set(split["unseen_names"]) == novel
+        recorded = json.loads((out / "dataset.json").read_text())["split"]
+        assert recorded["name"] == name and set(recorded["unseen_names"]) == set(unseen)
+        assert recorded["unseen_categories"] == sorted(ids[n] for n in unseen)
         for i in range(3):
             inside, removed = scene_names(out, i)
             if name == "train":
-                assert not (inside | removed) & novel
+                assert not (inside | removed) & set(unseen) and inside <= set(cheap)
             else:
-                assert (inside | removed) & novel
+                assert "box_cube" in inside | removed
+    unseen = {"box_cube"}
     inside_test = set().union(*(scene_names(tmp_path / "test", i)[0] for i in range(3)))
-    assert inside_test & novel  # unseen objects do lie in the test scenes
+    assert inside_test & unseen  # the unseen object does lie in the test scenes
     with pytest.raises(InvalidArgumentError, match="split"):
         generate(tmp_path / "train", 3, config=cfg_test, seed=SEED, resume=True, progress=False)
 
