@@ -452,6 +452,7 @@ def run_balanced(run: Any, catalogue: Sequence[ObjectSpec], split: Split, record
         state = SelectionState.from_json(recorded["selection"], tuple(sel.quota), batch)
         state.pruned = sel.prune_rejected
     attempted = state.batches_done * batch
+    report.skipped += list(range(attempted))  # recorded batches of a resumed run
 
     def record(status: str) -> None:
         run.extra["selection"] = state.to_json()
