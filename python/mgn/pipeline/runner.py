@@ -18,6 +18,12 @@ Scene seeds: scene ``i`` (0-based, folder ``scene<i>``) of a dataset with seed `
 numpy.uint32)[0] >> 1`` (31 bits): independent of the other scenes, of the executor and of the
 number of workers, so the same seed gives byte-identical files.
 
+Test sets (:mod:`mgn.pipeline.testset`, docs/testsets.md): the config's ``split`` section holds
+unseen categories out of a ``train`` set (or into every scene of a ``test`` set); with a
+``selection.quota`` the scenes are generated in batches steered towards the difficulty levels
+still missing, and exactly the asked number of views per level is selected (``dataset.json``
+records ``split`` and ``selection``).
+
 Executors: in-process (``workers=1``), a local process pool (``workers=K``, spawned processes),
 or a Dask distributed cluster (``scheduler="tcp://host:8786"``; every worker must see ``DIR``
 at the same path and have mgn installed; see docs/cluster.md).
