@@ -31,6 +31,14 @@ Sections:
 - ``object_labels``: sizes of the per-object labels: ``suction_points``, ``pj_points`` (MGN:
   5000 each), ``physics_grasps`` (grasps per object given a physics score), ``physics_grid``
   (S of the S x S friction x mass grid, MGN 10), ``suction_model``, ``seed``.
+- ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
+  ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
+  scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
+  or a list of object names / category ids).
+- ``selection``: a difficulty-balanced test set (docs/testsets.md): ``quota`` (views wanted per
+  difficulty level, e.g. ``{1: 20, 2: 20, 3: 20, 4: 20, 5: 20}``; null = no selection),
+  ``batch_scenes`` (scenes generated per batch), ``max_scenes`` (give up after this many
+  scenes), ``prune_rejected`` (delete the files of the views not selected).
 """
 
 from __future__ import annotations
@@ -59,6 +67,8 @@ __all__ = [
     "LabelsConfig",
     "ObjectLabelsConfig",
     "ObjectsConfig",
+    "SelectionConfig",
+    "SplitConfig",
     "default_config",
     "dump_config",
     "load_config",
@@ -70,6 +80,9 @@ RIGS = ("mgn", "hemisphere")
 SEAL_MODELS = ("spring", "strain", "smoothness")
 #: Views of the MetaGraspNet rig.
 MGN_NUM_VIEWS = 37
+SPLIT_NAMES = ("all", "train", "test")
+#: Difficulty levels of a view (paper Table IV, :mod:`mgn.scene.layout`).
+DIFFICULTY_LEVELS = (1, 2, 3, 4, 5)
 
 
 class ConfigError(InvalidArgumentError):
@@ -361,6 +374,97 @@ class ObjectLabelsConfig(_Section):
     }
 
 
+def _unseen(value: Any, key: str) -> str | tuple[str | int, ...]:
+    if value == "novel":
+        return "novel"
+    if isinstance(value, str):
+        raise _fail(key, value, "'novel' or a list of object names / category ids")
+    names = _list(_name)(value, key)
+    if len(set(names)) != len(names):
+        raise _fail(key, list(value), "distinct object names")
+    return names
+
+
+@dataclass(frozen=True)
+class SplitConfig(_Section):
+    """The unseen-object split (see the module doc and docs/testsets.md).
+
+    Attributes:
+        name: ``all`` (no split), ``train`` (unseen categories never appear) or ``test``
+            (unseen categories appear: each scene gets at least one when the pool allows).
+        unseen: ``"novel"`` (the objects tagged ``novel``) or object names / category ids.
+    """
+
+    name: str = "all"
+    unseen: str | tuple[str | int, ...] = "novel"
+
+    _CHECKS = {"name": _choice(*SPLIT_NAMES), "unseen": _unseen}
+
+
+def _quota(value: Any, key: str) -> tuple[int, ...] | None:
+    if value is None:
+        return None
+    if not isinstance(value, Mapping) or not value:
+        raise _fail(key, value, "a mapping of difficulty levels 1..5 to view counts")
+    counts = [0] * len(DIFFICULTY_LEVELS)
+    for level, n in value.items():
+        try:
+            lv = int(level) if not isinstance(level, bool) else -1
+        except (TypeError, ValueError):
+            lv = -1
+        if lv not in DIFFICULTY_LEVELS or (isinstance(level, str) and level.strip() != str(lv)):
+            raise _fail(f"{key}.{level}", level, "a difficulty level 1..5")
+        counts[lv - 1] = _int(0)(n, f"{key}.{lv}")
+    if sum(counts) == 0:
+        raise _fail(key, dict(value), "at least one level with a quota >= 1")
+    return tuple(counts)
+
+
+@dataclass(frozen=True)
+class SelectionConfig(_Section):
+    """A difficulty-balanced test set (see the module doc and docs/testsets.md).
+
+    Attributes:
+        quota: views wanted per difficulty level (index 0 = level 1), or None (no selection).
+            In YAML/JSON a mapping ``{1: n1, ..., 5: n5}``; missing levels get 0.
+        batch_scenes: scenes per batch (the composition of a batch depends on the quotas left
+            after the previous batches only).
+        max_scenes: stop with an error once this many scenes were generated without meeting
+            every quota (a resumed run may raise it).
+        prune_rejected: delete the files of the views that were not selected.
+    """
+
+    quota: tuple[int, ...] | None = None
+    batch_scenes: int = 4
+    max_scenes: int = 100
+    prune_rejected: bool = False
+
+    _CHECKS = {
+        "quota": _quota,
+        "batch_scenes": _int(1),
+        "max_scenes": _int(1),
+        "prune_rejected": _bool,
+    }
+
+    def __post_init__(self) -> None:
+        if self.quota is not None and (
+            len(self.quota) != len(DIFFICULTY_LEVELS) or min(self.quota) < 0
+        ):
+            raise _fail("selection.quota", self.quota, "5 view counts >= 0 (levels 1..5)")
+
+    @property
+    def quota_dict(self) -> dict[str, int] | None:
+        """``{"1": n1, ..., "5": n5}`` (the dataset.json form), or None."""
+        if self.quota is None:
+            return None
+        return {str(lv): int(n) for lv, n in zip(DIFFICULTY_LEVELS, self.quota, strict=True)}
+
+    def to_dict(self) -> dict[str, Any]:
+        d = super().to_dict()
+        d["quota"] = self.quota_dict
+        return d
+
+
 def _external(cls: type, data: Any, key: str) -> Any:
     """Build one of mgn's own dataclasses (ToteSpec, gripper, cup, DropOptions) from a mapping."""
     d = _mapping(data, key)
@@ -387,6 +491,8 @@ class Config(_Section):
     labels: LabelsConfig = field(default_factory=LabelsConfig)
     object_labels: ObjectLabelsConfig = field(default_factory=ObjectLabelsConfig)
     drop: DropOptions = field(default_factory=DropOptions)
+    split: SplitConfig = field(default_factory=SplitConfig)
+    selection: SelectionConfig = field(default_factory=SelectionConfig)
 
     _CHECKS = {
         "objects": lambda v, k: ObjectsConfig.from_dict(v, k),
@@ -397,6 +503,8 @@ class Config(_Section):
         "labels": lambda v, k: LabelsConfig.from_dict(v, k),
         "object_labels": lambda v, k: ObjectLabelsConfig.from_dict(v, k),
         "drop": lambda v, k: _external(DropOptions, v, k),
+        "split": lambda v, k: SplitConfig.from_dict(v, k),
+        "selection": lambda v, k: SelectionConfig.from_dict(v, k),
     }
 
     @classmethod
@@ -446,6 +554,8 @@ _SECTION_DOCS = {
     "labels": "which labels to make",
     "object_labels": "per-object label sizes (cached per object)",
     "drop": "drop simulation (m, s): mgn.scene.DropOptions",
+    "split": "unseen-object split: name all | train | test; unseen: novel | [names]",
+    "selection": "difficulty-balanced test set: quota {level: views} (null = off), batches",
 }
 
 

@@ -17,6 +17,8 @@ Tags (a subset of :data:`ALLOWED_TAGS`) describe the object for dataset splits:
 - ``nonconvex`` clearly non-convex (volume < 70 % of its convex hull: cups, pipes, brackets...);
 - ``transparent`` material opacity < 0.5; ``black`` base colour below 0.05 in every channel;
 - ``deformable`` soft in reality (the mesh is one static shape); ``textured`` has a texture;
+- ``novel`` held out of training sets by default (the unseen split of ``mgn generate --split``):
+  the paper's novel set of non-convex, black, shape-varying and transparent objects;
 - ``small`` largest extent <= 70 mm; ``large`` largest extent >= 180 mm; ``thin`` smallest
   extent <= 25 mm. The three size tags are derived from the mesh, never declared by hand.
 """
@@ -65,6 +67,7 @@ ALLOWED_TAGS: frozenset[str] = frozenset(
         "transparent",
         "black",
         "deformable",
+        "novel",
         "textured",
         "small",
         "large",
@@ -719,7 +722,7 @@ def _bowl() -> _Built:
     "cup_black",
     "Black plastic cup, tapered, 86 mm rim diameter.",
     material=_mat("black_plastic", _BLACK, 0.3, 30.0),
-    density=1100.0, friction=0.5, tags=("nonconvex", "black"),
+    density=1100.0, friction=0.5, tags=("nonconvex", "black", "novel"),
 )  # fmt: skip
 def _cup_black() -> _Built:
     s = np.linspace(0, 1, 10)
@@ -827,7 +830,7 @@ def _hex_nut() -> _Built:
     "clamp",
     "C-clamp: C-shaped frame, screw with pad and T-bar.",
     material=_mat("red_cast_iron", _lin("#b3261e"), 0.4, 40.0),
-    density=4500.0, friction=0.5, tags=("nonconvex",),
+    density=4500.0, friction=0.5, tags=("nonconvex", "novel"),
 )  # fmt: skip
 def _clamp() -> _Built:
     outline = _mm([(0, 0), (70, 0), (70, 16), (14, 16), (14, 84), (70, 84), (70, 100), (0, 100)])
@@ -913,7 +916,7 @@ def _marker() -> _Built:
     "cable_coil",
     "Black cable coiled in 3.5 turns, 6 mm cable, 86 mm coil diameter.",
     material=_mat("black_rubber", _BLACK, 0.2, 15.0),
-    density=1800.0, friction=0.8, tags=("nonconvex", "black", "deformable"),
+    density=1800.0, friction=0.8, tags=("nonconvex", "black", "deformable", "novel"),
 )  # fmt: skip
 def _cable_coil() -> _Built:
     turns, radius, pitch, r = 3.5, 40.0, 9.5, 3.0  # pitch > 2 r: turns do not touch
@@ -931,7 +934,7 @@ def _cable_coil() -> _Built:
 @_register(
     "wine_glass",
     "Clear wine glass, 80 mm bowl diameter, 166 mm tall.",
-    material=_GLASS, density=2500.0, friction=0.4, tags=("nonconvex", "transparent"),
+    material=_GLASS, density=2500.0, friction=0.4, tags=("nonconvex", "transparent", "novel"),
 )  # fmt: skip
 def _wine_glass() -> _Built:
     # bowl: outer ellipse (40 x 50 mm) and inner ellipse 1.5 mm inside it, same centre
@@ -957,7 +960,7 @@ def _wine_glass() -> _Built:
     "bottle_clear",
     "Clear empty glass bottle with open mouth, 60 mm diameter, 200 mm tall.",
     material=_GLASS, density=2500.0, friction=0.4,
-    tags=("nonconvex", "transparent", "cylindrical"),
+    tags=("nonconvex", "transparent", "cylindrical", "novel"),
 )  # fmt: skip
 def _bottle_clear() -> _Built:
     out_sh = _arc((12, 140), (18, 35), 0, np.pi / 2, 12)
@@ -1004,7 +1007,7 @@ def _remote() -> _Built:
     "sack",
     "Small filled sack (pillow-like, static shape), 200 x 140 x 64 mm.",
     material=_mat("burlap", _lin("#b79a6b"), 0.05, 5.0),
-    density=600.0, friction=0.9, tags=("deformable",),
+    density=600.0, friction=0.9, tags=("deformable", "novel"),
 )  # fmt: skip
 def _sack() -> _Built:
     noise = _smooth_noise(7, 0.05)

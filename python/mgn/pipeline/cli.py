@@ -2,6 +2,13 @@
 
 mgn generate --out DIR [--scenes N] [--config cfg.yaml] [--objects NAME ...] [--seed S]
              [--workers K] [--resume] [--scheduler tcp://host:8786] [--quiet] [--no-cache]
+             [--split all|train|test] [--difficulty-quota 1=20,2=20,3=20,4=20,5=20
+             [--max-scenes M] [--batch-scenes B] [--prune-rejected]]
+
+Test sets (docs/testsets.md): --split train leaves the unseen categories (config split.unseen,
+default: the objects tagged 'novel') out of every scene; --split test puts at least one in every
+scene. --difficulty-quota generates scenes in batches until exactly that many views of each
+difficulty level are selected (recorded in dataset.json), at most --max-scenes scenes.
 mgn config dump [--out cfg.yaml]     the default configuration (every key, MGN values)
 mgn config check cfg.yaml            validate a configuration file
 """
@@ -14,13 +21,45 @@ import sys
 __all__ = ["register"]
 
 
+def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.config.Config)
+    """The config of ``--config`` with the test-set options applied."""
+    import dataclasses
+
+    from mgn.config import load_config
+    from mgn.pipeline.testset import parse_quota
+
+    cfg = load_config(args.config)
+    if args.split is not None:
+        cfg = dataclasses.replace(cfg, split=dataclasses.replace(cfg.split, name=args.split))
+    sel = {}
+    if args.difficulty_quota is not None:
+        quota = parse_quota(args.difficulty_quota)
+        sel["quota"] = {str(k + 1): n for k, n in enumerate(quota)}
+    if args.max_scenes is not None:
+        sel["max_scenes"] = args.max_scenes
+    if args.batch_scenes is not None:
+        sel["batch_scenes"] = args.batch_scenes
+    if args.prune_rejected:
+        sel["prune_rejected"] = True
+    if sel:
+        from mgn.config import SelectionConfig
+
+        merged = {**cfg.selection.to_dict(), **sel}
+        cfg = dataclasses.replace(cfg, selection=SelectionConfig.from_dict(merged, "selection"))
+    return cfg
+
+
 def _cmd_generate(args: argparse.Namespace) -> int:
     from mgn.pipeline.runner import generate
 
+    cfg = _config_with_overrides(args)
+    scenes = args.scenes
+    if scenes is None and cfg.selection.quota is None:
+        scenes = 3
     report = generate(
         args.out,
-        args.scenes,
-        config=args.config,
+        scenes,
+        config=cfg,
         seed=args.seed,
         objects=args.objects,
         workers=args.workers,
@@ -64,7 +103,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--scenes", type=int, default=3, metavar="N", help="scenes (default 3)")
+    p.add_argument(
+        "--scenes", type=int, metavar="N", help="scenes (default 3; not with a difficulty quota)"
+    )
     p.add_argument("--out", required=True, metavar="DIR", help="dataset folder")
     p.add_argument("--config", metavar="YAML", help="configuration (default: MGN defaults)")
     p.add_argument(
@@ -76,6 +117,24 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument("--no-cache", action="store_true", help="do not read/write the label cache")
+    p.add_argument(
+        "--split",
+        choices=("all", "train", "test"),
+        help="unseen-object split: train = without the unseen categories, test = with them "
+        "(config key split; default all)",
+    )
+    p.add_argument(
+        "--difficulty-quota",
+        metavar="L=N,...",
+        help="views per difficulty level, e.g. 1=20,2=20,3=20,4=20,5=20 (config selection.quota)",
+    )
+    p.add_argument(
+        "--max-scenes", type=int, metavar="M", help="give up after M scenes (default 100)"
+    )
+    p.add_argument("--batch-scenes", type=int, metavar="B", help="scenes per batch (default 4)")
+    p.add_argument(
+        "--prune-rejected", action="store_true", help="delete the files of the views not selected"
+    )
     p.set_defaults(func=_cmd_generate)
 
     c = sub.add_parser("config", help="the dataset configuration (YAML)")

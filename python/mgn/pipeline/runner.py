@@ -18,6 +18,12 @@ Scene seeds: scene ``i`` (0-based, folder ``scene<i>``) of a dataset with seed `
 numpy.uint32)[0] >> 1`` (31 bits): independent of the other scenes, of the executor and of the
 number of workers, so the same seed gives byte-identical files.
 
+Test sets (:mod:`mgn.pipeline.testset`, docs/testsets.md): the config's ``split`` section holds
+unseen categories out of a ``train`` set (or into every scene of a ``test`` set); with a
+``selection.quota`` the scenes are generated in batches steered towards the difficulty levels
+still missing, and exactly the asked number of views per level is selected (``dataset.json``
+records ``split`` and ``selection``).
+
 Executors: in-process (``workers=1``), a local process pool (``workers=K``, spawned processes),
 or a Dask distributed cluster (``scheduler="tcp://host:8786"``; every worker must see ``DIR``
 at the same path and have mgn installed; see docs/cluster.md).
@@ -367,6 +373,8 @@ class GenerateReport:
     wall_seconds: float = 0.0
     output_bytes: int = 0
     not_run: list[int] = field(default_factory=list)
+    selection: dict[str, Any] | None = None
+    unmet: dict[int, int] = field(default_factory=dict)
 
     @property
     def ok(self) -> list[SceneResult]:
@@ -378,7 +386,7 @@ class GenerateReport:
 
     @property
     def complete(self) -> bool:
-        return not self.failed and not self.not_run
+        return not self.failed and not self.not_run and not self.unmet
 
     def stage_seconds(self) -> dict[str, float]:
         """Total seconds per stage over the scenes of this run."""
@@ -410,7 +418,24 @@ class GenerateReport:
             lines.append(f"  FAILED scene{r.index} (seed {r.seed}): {r.error}")
         if self.not_run:
             lines.append(f"  not run: {', '.join(f'scene{i}' for i in self.not_run)}")
-        if not self.complete:
+        if self.selection is not None:
+            q = self.selection["quota"]
+            got = {k: 0 for k in q}
+            for e in self.selection["views"]:
+                got[str(e["difficulty"])] += 1
+            per = ", ".join(f"{k}: {got[k]}/{n}" for k, n in q.items())
+            lines.append(
+                f"  difficulty selection (level: selected/quota): {per}; "
+                f"{len(self.selection['rejected'])} views rejected"
+                + (" (files pruned)" if self.selection.get("pruned") else "")
+            )
+        if self.unmet and not self.failed and not self.not_run:
+            short = ", ".join(f"level {k} lacks {n}" for k, n in sorted(self.unmet.items()))
+            lines.append(
+                f"  DIFFICULTY QUOTA NOT MET after {self.num_scenes} scenes: {short}; rerun "
+                "with --resume and a larger --max-scenes to continue"
+            )
+        elif not self.complete:
             lines.append("  rerun with --resume to redo the missing scenes")
         return "\n".join(lines)
 
@@ -468,27 +493,156 @@ def _clean_tmp(out: Path) -> list[Path]:
     return removed
 
 
-def _check_resume(out: Path, config: Config, seed: int) -> None:
+def _comparable(config_doc: Any) -> Any:
+    """A config dict as compared by ``--resume`` (``selection.max_scenes`` may change)."""
+    doc = json.loads(json.dumps(config_doc))
+    if isinstance(doc, dict) and isinstance(doc.get("selection"), dict):
+        doc["selection"].pop("max_scenes", None)
+    return doc
+
+
+def _check_resume(out: Path, config: Config, seed: int) -> dict | None:
+    """The recorded ``dataset.json`` of ``out`` (None: nothing started yet), checked against
+    the seed and config of the resumed run."""
     try:
         doc = json.loads((out / "dataset.json").read_text(encoding="utf-8"))
     except FileNotFoundError:
-        return  # nothing started yet: a fresh run
+        return None  # nothing started yet: a fresh run
     except (OSError, ValueError) as e:
         raise IoError(f"--resume: cannot read '{out / 'dataset.json'}': {e}") from e
     if doc.get("seed") != seed:
         raise InvalidArgumentError(
             f"--resume: '{out}' was generated with seed {doc.get('seed')}, got --seed {seed}"
         )
-    if doc.get("config") != json.loads(json.dumps(config.to_dict())):
+    recorded = doc.get("config") if isinstance(doc.get("config"), dict) else {}
+    split = json.loads(json.dumps(config.split.to_dict()))
+    if recorded.get("split", {"name": "all", "unseen": "novel"}) != split:
+        raise InvalidArgumentError(
+            f"--resume: '{out}' was generated with split {recorded.get('split')}, got {split} "
+            "(--split / config key 'split'); use the same split or a new output folder"
+        )
+    if _comparable(recorded) != _comparable(config.to_dict()):
         raise InvalidArgumentError(
             f"--resume: the config differs from the one recorded in '{out / 'dataset.json'}'; "
             "use the same config (or a new output folder)"
+        )
+    return doc
+
+
+@dataclass
+class _Run:
+    """What the scene loop of :func:`generate` needs (shared with the test-set builder)."""
+
+    out: Path
+    cfg: Config
+    seed: int
+    executor: _Executor
+    report: GenerateReport
+    sources: dict[str, str]
+    use_cache: bool
+    progress: bool
+    resume: bool
+    extra: dict[str, Any] = field(default_factory=dict)  # dataset.json keys (split, selection)
+    labels: dict[str, ObjectLabels] = field(default_factory=dict)
+    modelled: set[str] = field(default_factory=set)
+
+    def ensure_labels(self, specs: Sequence[ObjectSpec]) -> None:
+        """Read or compute the labels of the objects not labelled yet in this run and write
+        their ``models/<id>/`` folders."""
+        from tqdm import tqdm
+
+        from mgn.pipeline.label_cache import load_cached_labels, save_cached_labels, write_models
+
+        t0 = time.perf_counter()
+        unique: dict[str, ObjectSpec] = {}
+        for s in specs:
+            if s.name not in self.modelled:
+                unique.setdefault(s.name, s)
+        new = sorted(unique.values(), key=lambda s: s.category_id)
+        if not new:
+            return
+        cfg, missing = self.cfg, []
+        for spec in new:
+            cached = load_cached_labels(spec, cfg) if self.use_cache else None
+            if cached is not None:
+                self.labels[spec.name] = cached
+                self.report.labels_cached += 1
+            else:
+                missing.append(spec)
+        if missing and (cfg.labels.suction or cfg.labels.paralleljaw):
+            bar = tqdm(total=len(missing), desc="object labels", unit="obj",
+                       disable=not self.progress)  # fmt: skip
+            items = [(s, cfg, self.executor.threads_per_task) for s in missing]
+            for (spec, _, _), value, exc in self.executor.run(_label_task, items):
+                if exc is not None:
+                    raise InvalidArgumentError(
+                        f"labelling object '{spec.name}' failed: {type(exc).__name__}: {exc}"
+                    ) from exc
+                self.labels[spec.name] = value
+                if self.use_cache:
+                    save_cached_labels(spec, cfg, value)
+                bar.update(1)
+            bar.close()
+            self.report.labels_computed += len(missing)
+        write_models(self.out, new, self.labels, cfg)
+        self.modelled.update(s.name for s in new)
+        self.report.label_seconds += time.perf_counter() - t0
+
+    def run_scenes(self, scenes: Sequence[tuple[int, list[ObjectSpec]]], total: int) -> None:
+        """Run the scenes (index, objects) that are not complete yet (``--resume`` keeps the
+        complete ones); results go to the report. Stops scheduling on a full disk."""
+        from tqdm import tqdm
+
+        from mgn.scene.scene import BUILTIN
+
+        report, todo = self.report, []
+        for i, specs in scenes:
+            folder = self.out / f"scene{i}"
+            if self.resume and folder.is_dir() and check_manifest(folder) is None:
+                report.skipped.append(i)
+                continue
+            todo.append(
+                SceneTask(
+                    index=i,
+                    seed=scene_seed(self.seed, i),
+                    out_dir=os.fspath(self.out),
+                    config=self.cfg,
+                    objects=tuple((s.name, self.sources.get(s.name, BUILTIN)) for s in specs),
+                    labels={s.name: self.labels[s.name] for s in specs if s.name in self.labels},
+                )
+            )
+        bar = tqdm(total=total, initial=len(report.skipped) + len(report.results),
+                   desc="scenes", unit="scene", disable=not self.progress)  # fmt: skip
+        t_scenes = time.perf_counter()
+        n_before = sum(r.ok for r in report.results.values())
+        for task, result, exc in self.executor.run(run_scene, todo):
+            if exc is not None:  # the task itself could not run (e.g. a worker process died)
+                result = SceneResult(
+                    task.index, task.seed, False, f"worker failed: {type(exc).__name__}: {exc}"
+                )
+            report.results[task.index] = result
+            bar.update(1)
+            elapsed = time.perf_counter() - t_scenes
+            done = sum(r.ok for r in report.results.values()) - n_before
+            bar.set_postfix(
+                {"scenes/h": f"{3600 * done / max(elapsed, 1e-9):.0f}",
+                 "failed": len(report.failed)}
+            )  # fmt: skip
+            if result.disk_full:
+                self.executor.cancel()
+                break
+        bar.close()
+        report.not_run += sorted(t.index for t in todo if t.index not in report.results)
+
+    def write_doc(self, num_scenes: int, status: str, **more: Any) -> None:
+        _write_dataset_json(
+            self.out, _dataset_doc(self.cfg, self.seed, num_scenes, status, **self.extra, **more)
         )
 
 
 def generate(
     out_dir: str | os.PathLike[str],
-    num_scenes: int,
+    num_scenes: int | None = None,
     *,
     config: Config | str | os.PathLike[str] | None = None,
     seed: int = 0,
@@ -500,21 +654,27 @@ def generate(
     use_cache: bool = True,
 ) -> GenerateReport:
     """Generate (or, with ``resume``, complete) a dataset of ``num_scenes`` scenes in
-    ``out_dir`` (see the module doc).
+    ``out_dir`` (see the module doc), or, when ``config.selection.quota`` is set, a
+    difficulty-balanced test set (:mod:`mgn.pipeline.testset`; ``num_scenes`` must then be
+    None: the scene count follows from the quotas, at most ``selection.max_scenes``).
 
     Args:
-        config: a :class:`Config`, a YAML path, or None for the MGN defaults.
+        config: a :class:`Config`, a YAML path, or None for the MGN defaults. Its ``split``
+            section chooses the unseen-object split (``all``, ``train``, ``test``).
         seed: dataset seed; scene i uses :func:`scene_seed` (seed, i).
         objects: object names (repeat for copies) replacing ``config.objects``.
         workers: local worker processes (1 = in this process); ignored with ``scheduler``.
-        resume: keep complete scenes, redo the others; the config and seed must be those
-            recorded in ``dataset.json``.
+        resume: keep complete scenes, redo the others; the config (but
+            ``selection.max_scenes``), split and seed must be those recorded in
+            ``dataset.json``.
         scheduler: address of a Dask scheduler (``tcp://host:8786``).
         progress: show tqdm progress bars.
         use_cache: read/write the object-label cache.
 
     Returns:
-        A :class:`GenerateReport` (:meth:`GenerateReport.format_summary` for people).
+        A :class:`GenerateReport` (:meth:`GenerateReport.format_summary` for people). A
+        balanced run that reached ``max_scenes`` with levels still short is not ``complete``:
+        ``report.unmet`` lists them (level -> views missing).
 
     Raises:
         InvalidArgumentError / ConfigError: bad arguments or config (before anything is written).
@@ -522,7 +682,7 @@ def generate(
             while writing ``dataset.json`` or ``models/``.
         KeyboardInterrupt: after removing the temporary folders of the run.
     """
-    from tqdm import tqdm
+    from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 
     t_start = time.perf_counter()
     cfg = config if isinstance(config, Config) else load_config(config)
@@ -531,7 +691,19 @@ def generate(
             cfg, objects=dataclasses.replace(cfg.objects, names=tuple(objects), count=None,
                                              categories=None)
         )  # fmt: skip
-    if isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
+    quota = cfg.selection.quota
+    if quota is not None:
+        if num_scenes is not None:
+            raise InvalidArgumentError(
+                "generate: --scenes cannot be combined with a difficulty quota (the quotas decide "
+                f"the scene count; use --max-scenes), got --scenes {num_scenes!r}"
+            )
+        if not cfg.labels.layout:
+            raise ConfigError(
+                "config key 'labels.layout': a difficulty quota needs the layout labels "
+                "(the views' difficulty); expected true, got false"
+            )
+    elif isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
         raise InvalidArgumentError(
             f"generate: --scenes must be an integer >= 1, got {num_scenes!r}"
         )
@@ -542,8 +714,9 @@ def generate(
     out = Path(out_dir).resolve()
     if out.exists() and not out.is_dir():
         raise IoError(f"generate: '{out}' exists and is not a folder")
+    recorded = None
     if resume:
-        _check_resume(out, cfg, seed)
+        recorded = _check_resume(out, cfg, seed)
     elif out.exists() and any(out.iterdir()):
         raise IoError(
             f"generate: '{out}' is not empty; use --resume to continue the dataset in it, or an "
@@ -552,104 +725,34 @@ def generate(
 
     # Compose every scene first (cheap, deterministic): the object set decides the labels.
     catalogue, sources = _catalogue(cfg)
-    seeds = [scene_seed(seed, i) for i in range(num_scenes)]
-    per_scene = [_compose(cfg, catalogue, s) for s in seeds]
-    from mgn.scene.scene import BUILTIN
-
-    unique: dict[str, ObjectSpec] = {}
-    for specs in per_scene:
-        for s in specs:
-            unique.setdefault(s.name, s)
-    ordered = sorted(unique.values(), key=lambda s: s.category_id)
+    split = resolve_split(cfg, catalogue)
+    extra: dict[str, Any] = {"split": split.to_json()} if split.name != "all" else {}
+    per_scene: list[list[ObjectSpec]] = []
+    if quota is None:
+        assert num_scenes is not None
+        per_scene = [compose_scene(cfg, catalogue, scene_seed(seed, i), split)
+                     for i in range(num_scenes)]  # fmt: skip
 
     try:
         out.mkdir(parents=True, exist_ok=True)
         if resume:
             _clean_tmp(out)
-        report = GenerateReport(out, num_scenes, seed)
-        _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running"))
+        report = GenerateReport(out, num_scenes or 0, seed)
+        if quota is None:
+            _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running", **extra))
     except OSError as e:
         from mgn.io.atomic import _io_error
 
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 
     executor = _executor(workers, scheduler)
+    run = _Run(out, cfg, seed, executor, report, sources, use_cache, progress, resume, extra)
     try:
-        # Object labels: cached ones read here, the others computed as tasks.
-        t0 = time.perf_counter()
-        labels: dict[str, ObjectLabels] = {}
-        missing = []
-        from mgn.pipeline.label_cache import load_cached_labels, save_cached_labels
-
-        for spec in ordered:
-            cached = load_cached_labels(spec, cfg) if use_cache else None
-            if cached is not None:
-                labels[spec.name] = cached
-            else:
-                missing.append(spec)
-        report.labels_cached = len(labels)
-        if missing and (cfg.labels.suction or cfg.labels.paralleljaw):
-            bar = tqdm(total=len(missing), desc="object labels", unit="obj", disable=not progress)
-            items = [(s, cfg, executor.threads_per_task) for s in missing]
-            for (spec, _, _), value, exc in executor.run(_label_task, items):
-                if exc is not None:
-                    raise InvalidArgumentError(
-                        f"labelling object '{spec.name}' failed: {type(exc).__name__}: {exc}"
-                    ) from exc
-                labels[spec.name] = value
-                if use_cache:
-                    save_cached_labels(spec, cfg, value)
-                bar.update(1)
-            bar.close()
-            report.labels_computed = len(missing)
-        from mgn.pipeline.label_cache import write_models
-
-        write_models(out, ordered, labels, cfg)
-        report.label_seconds = time.perf_counter() - t0
-
-        # Scenes.
-        todo = []
-        for i, specs in enumerate(per_scene):
-            folder = out / f"scene{i}"
-            if resume and folder.is_dir() and check_manifest(folder) is None:
-                report.skipped.append(i)
-                continue
-            todo.append(
-                SceneTask(
-                    index=i,
-                    seed=seeds[i],
-                    out_dir=os.fspath(out),
-                    config=cfg,
-                    objects=tuple((s.name, sources.get(s.name, BUILTIN)) for s in specs),
-                    labels={s.name: labels[s.name] for s in specs if s.name in labels},
-                )
-            )
-        bar = tqdm(
-            total=num_scenes,
-            initial=len(report.skipped),
-            desc="scenes",
-            unit="scene",
-            disable=not progress,
-        )
-        t_scenes = time.perf_counter()
-        for task, result, exc in executor.run(run_scene, todo):
-            if exc is not None:  # the task itself could not run (e.g. a worker process died)
-                result = SceneResult(
-                    task.index, task.seed, False, f"worker failed: {type(exc).__name__}: {exc}"
-                )
-            report.results[task.index] = result
-            bar.update(1)
-            elapsed = time.perf_counter() - t_scenes
-            done = sum(r.ok for r in report.results.values())
-            bar.set_postfix(
-                {"scenes/h": f"{3600 * done / max(elapsed, 1e-9):.0f}",
-                 "failed": len(report.results) - done}
-            )  # fmt: skip
-            if result.disk_full:
-                executor.cancel()
-                break
-        bar.close()
-        report.not_run = sorted(t.index for t in todo if t.index not in report.results)
+        if quota is None:
+            run.ensure_labels([s for specs in per_scene for s in specs])
+            run.run_scenes(list(enumerate(per_scene)), num_scenes or 0)
+        else:
+            run_balanced(run, catalogue, split, recorded)
     except KeyboardInterrupt:
         executor.cancel()
         _clean_tmp(out)
@@ -661,12 +764,7 @@ def generate(
     status = "complete" if report.complete else "incomplete"
     failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
     with contextlib.suppress(OSError):
-        _write_dataset_json(
-            out,
-            _dataset_doc(
-                cfg, seed, num_scenes, status, **({"failed_scenes": failed} if failed else {})
-            ),
-        )
+        run.write_doc(report.num_scenes, status, **({"failed_scenes": failed} if failed else {}))
     _clean_tmp(out)
     report.output_bytes = _folder_size(out)
     return report
