@@ -7,3 +7,5 @@ object with ``to_dict()`` (JSON) and ``table()`` (the printed table, see
 """
 
 from __future__ import annotations
+
+from mgn.eval.pick import PickAttempt, PickResults, PickState, run_picking  # noqa: E402, F401
