@@ -538,28 +538,29 @@ def run_picking(
             stop = "failures"
             break
         n = len(cur.instances)
-        per = [strided_subset(labels[inst.name], max_grasps_per_object) for inst in cur.instances]
-        model = SceneGraspModel(
-            cur,
-            per if gripper == "paralleljaw" else [None] * n,
-            per if gripper == "suction" else [None] * n,
-            config.gripper,
-            config.cup,
-            num_threads=num_threads,
-        )
-        g = model.suction if gripper == "suction" else model.pj
+        if observed is None:  # the pile changed (or first step): model, view and labels
+            per = [strided_subset(labels[i.name], max_grasps_per_object) for i in cur.instances]
+            model = SceneGraspModel(
+                cur,
+                per if gripper == "paralleljaw" else [None] * n,
+                per if gripper == "suction" else [None] * n,
+                config.gripper,
+                config.cup,
+                num_threads=num_threads,
+            )
+            g = model.suction if gripper == "suction" else model.pj
+            images, vlabels, layout = _observe(cur, view, num_threads)
+            vis = model.view_grasps(view, np.asarray(vlabels.visible_pixels) > 0)
+            visible = np.zeros(len(g), bool)
+            for s in (vis.non_colliding, vis.colliding):
+                visible[(s.suctioncup if gripper == "suction" else s.paralleljaw).index] = True
+            score = _grasp_scores(g, gripper)
+            visible.setflags(write=False)
+            score.setflags(write=False)
+            observed = (model, g, images, vlabels, layout, visible, score)
+        model, g, images, vlabels, layout, visible, score = observed
         obj = np.asarray(g.object_id, np.int64)
         start_row = np.searchsorted(obj, np.arange(n))  # rows are grouped by object in order
-        if observed is None:
-            observed = _observe(cur, view, num_threads)
-        images, vlabels, layout = observed
-        seen = np.asarray(vlabels.visible_pixels) > 0
-        vis = model.view_grasps(view, seen)
-        sets = (vis.non_colliding, vis.colliding)
-        visible = np.zeros(len(g), bool)
-        for s in sets:
-            visible[(s.suctioncup if gripper == "suction" else s.paralleljaw).index] = True
-        score = _grasp_scores(g, gripper)
         eligible = np.array([failures[ids[k]] < max_failures_per_object for k in range(n)])
         tried_mask = np.zeros(len(g), bool)
         for k in range(n):
