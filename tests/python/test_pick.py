@@ -224,3 +224,42 @@ def test_bad_input_is_rejected_clearly(stack, pick_config):
         run_picking(_scene(), config=pick_config)
     with pytest.raises(InvalidArgumentError, match="cannot load policy"):
         run_picking(stack, policy="no_such_module_xyz:f", config=pick_config)
+
+
+def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_path, capsys):
+    import mgn
+    from mgn.cli import main
+
+    scene = mgn.Dataset(small_dataset).scenes()[0]
+    n = len(json.loads((scene.folder / "scene.json").read_text())["instances"])
+    out = tmp_path / "run"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
+        code = main(["pick", str(scene.folder), "--policy", "label", "--out", str(out),
+                     "--max-attempts", "2", "--resolution", "96"])  # fmt: skip
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "R_grasp" in printed and "R_object" in printed
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["num_objects"] == n and 1 <= doc["num_attempts"] <= 2
+    assert doc["policy"] == "label" and doc["gripper"] == "suction"
+    assert (out / "picking.gif").is_file() and (out / "step_000.png").is_file()
+    # The dataset's config was used: the labels cached are those of its object-label settings.
+    from mgn.config import load_config
+    from mgn.pipeline.label_cache import label_keys
+    from mgn.scene import Scene
+
+    config = load_config(mgn.Dataset(small_dataset).info["config"])
+    sc = Scene.from_json(scene.folder / "scene.json")
+    for i in range(len(sc)):
+        key = label_keys(sc.object_spec(i), config)["suction"]
+        assert (tmp_path / "cache" / "labels" / f"suction-{key}.npz").is_file()
+
+
+def test_cli_reports_an_unknown_policy(single_box, tmp_path, capsys):
+    from mgn.cli import main
+
+    path = single_box.to_json(tmp_path / "scene.json")
+    code = main(["pick", str(path), "--policy", "nonsense", "--out", str(tmp_path / "o")])
+    assert code == 1
+    assert "unknown policy 'nonsense'" in capsys.readouterr().err
