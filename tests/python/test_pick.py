@@ -207,6 +207,7 @@ def test_same_seed_same_records(stack, pick_config):
     b = run_picking(stack, seed=4, **kw)
     assert a == b and len(a.attempts) >= 1
     assert a.to_dict() == b.to_dict()
+    assert run_picking(stack, seed=4, num_threads=1, **kw) == a  # whatever the thread count
 
 
 def test_bad_input_is_rejected_clearly(stack, pick_config):
