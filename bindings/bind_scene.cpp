@@ -61,7 +61,8 @@ void bind_scene(py::module_& m) {
       [](const std::vector<std::vector<Mesh>>& parts, const std::vector<double>& mass,
          const py::handle& coms, const py::handle& inertias, const std::vector<double>& mu,
          const std::vector<double>& e, const std::vector<std::string>& names, const Mesh& tote,
-         const std::vector<double>& tote_box, const py::dict& options) {
+         const std::vector<double>& tote_box, const py::dict& options,
+         const py::object& X_WO_start) {
         const std::size_t n = parts.size();
         const auto com = to_rows<double, 3>(coms, "coms");
         const auto inertia = to_rows<double, 9>(inertias, "inertias");
@@ -143,10 +144,20 @@ void bind_scene(py::module_& m) {
             throw_error<InvalidArgument>("drop_objects: unknown option '", key, "'");
           }
         }
+        std::vector<Pose> start;  // settle_objects(): start at rest at these poses
+        if (!X_WO_start.is_none()) {
+          const auto rows = to_rows<double, 16>(X_WO_start, "X_WO_start");
+          for (Eigen::Index i = 0; i < rows.rows(); ++i) {
+            Pose X = Pose::Identity();
+            for (int k = 0; k < 16; ++k) X.matrix()(k / 4, k % 4) = rows(i, k);
+            start.push_back(X);
+          }
+        }
         DropResult r;
         {
           py::gil_scoped_release release;
-          r = drop_objects(objects, tote, box, o);
+          r = X_WO_start.is_none() ? drop_objects(objects, tote, box, o)
+                                   : settle_objects(objects, start, tote, box, o);
         }
         Eigen::Matrix<double, Eigen::Dynamic, 16, Eigen::RowMajor> X(n, 16), X0(n, 16);
         std::vector<std::int32_t> status(n);
@@ -177,7 +188,7 @@ void bind_scene(py::module_& m) {
       },
       py::arg("parts"), py::arg("masses"), py::arg("coms"), py::arg("inertias"),
       py::arg("frictions"), py::arg("restitutions"), py::arg("names"), py::arg("tote"),
-      py::arg("tote_box"), py::arg("options"));
+      py::arg("tote_box"), py::arg("options"), py::arg("X_WO_start") = py::none());
 }
 
 }  // namespace mgn::py_bind

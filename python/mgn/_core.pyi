@@ -985,6 +985,7 @@ def drop_objects(
     tote: Mesh,
     tote_box: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
     options: dict,
+    X_WO_start: typing.Any = None,
 ) -> dict: ...
 def gripper_meshes(
     gripper: ParallelJawGripper, opening: typing.SupportsFloat | typing.SupportsIndex

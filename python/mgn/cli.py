@@ -341,6 +341,7 @@ def build_parser() -> argparse.ArgumentParser:
     __import__("mgn.io.cli", fromlist=["register"]).register(sub)
     __import__("mgn.pipeline.cli", fromlist=["register"]).register(sub)  # generate, config
     __import__("mgn.eval.cli", fromlist=["register"]).register(sub)  # eval detections|grasps|...
+    __import__("mgn.eval.pick", fromlist=["register"]).register(sub)  # mgn pick
     return parser
 
 

@@ -275,8 +275,12 @@ struct World {
 
 }  // namespace
 
-DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote,
-                        const ToteBox& box, const DropOptions& o) {
+namespace {
+
+/// drop_objects() and, with `X_WO_start`, settle_objects(): the objects then start at rest at
+/// these poses instead of at random release poses.
+DropResult simulate(const std::vector<DropObject>& objects, const Mesh& tote, const ToteBox& box,
+                    const DropOptions& o, const std::vector<Pose>* X_WO_start) {
   validate(objects, tote, box, o);
   const std::size_t n = objects.size();
   const double hx = 0.5 * box.inner_length, hy = 0.5 * box.inner_width, H = box.inner_height;
@@ -381,6 +385,7 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
     if (lift > 0) X_WO[i].translation().z() += lift;
     placed.push_back(world_aabb(hull_points[i], X_WO[i]));
   }
+  if (X_WO_start != nullptr) X_WO = *X_WO_start;  // settle: start at rest where given
 
   // --- dynamic bodies ---
   DropResult result;
@@ -585,6 +590,39 @@ DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote
     }
   }
   return result;
+}
+
+}  // namespace
+
+DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote,
+                        const ToteBox& box, const DropOptions& o) {
+  return simulate(objects, tote, box, o, nullptr);
+}
+
+DropResult settle_objects(const std::vector<DropObject>& objects,
+                          const std::vector<Pose>& X_WO_start, const Mesh& tote, const ToteBox& box,
+                          const DropOptions& o) {
+  constexpr const char* fn = "settle_objects";
+  if (X_WO_start.size() != objects.size())
+    throw_error<InvalidArgument>(fn, ": X_WO_start has ", X_WO_start.size(),
+                                 " poses, expected one per object (", objects.size(), ")");
+  for (std::size_t i = 0; i < X_WO_start.size(); ++i) {
+    const Mat4d M = X_WO_start[i].matrix();
+    const Mat3d R = M.topLeftCorner<3, 3>();
+    if (!M.allFinite() || (R.transpose() * R - Mat3d::Identity()).norm() > 1e-6 ||
+        R.determinant() < 0 || (M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-12)
+      throw_error<InvalidArgument>(fn, ": X_WO_start[", i, "] ('", objects[i].name,
+                                   "') must be a finite rigid transform (rotation and "
+                                   "translation), got\n",
+                                   M);
+  }
+  try {
+    return simulate(objects, tote, box, o, &X_WO_start);
+  } catch (const InvalidArgument& e) {  // validate() names drop_objects: name this function
+    const std::string what = e.what(), prefix = kFn;
+    if (what.compare(0, prefix.size(), prefix) != 0) throw;
+    throw InvalidArgument(fn + what.substr(prefix.size()));
+  }
 }
 
 }  // namespace mgn

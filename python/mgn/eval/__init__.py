@@ -15,13 +15,18 @@ from mgn.eval.detections import (
     ground_truth_detections,
 )
 from mgn.eval.layout_metrics import LayoutResults, evaluate_layout, ground_truth_layout
+from mgn.eval.pick import PickAttempt, PickResults, PickState, run_picking
 
 __all__ = [
     "DetectionResults",
     "DetectionRow",
     "LayoutResults",
+    "PickAttempt",
+    "PickResults",
+    "PickState",
     "evaluate_detections",
     "evaluate_layout",
     "ground_truth_detections",
     "ground_truth_layout",
+    "run_picking",
 ]

@@ -26,6 +26,8 @@ _EXPORTS = {
     "convex_decomposition": "convex",
     "convex_hull": "convex",
     "drop_scene": "drop",
+    "settle": "drop",
+    "settle_tracked": "drop",
     "tote_mesh": "drop",
     "BUILTIN": "scene",
     "CONTACT_NAMES": "scene",
@@ -68,6 +70,8 @@ __all__ = [
     "convex_decomposition",
     "convex_hull",
     "drop_scene",
+    "settle",
+    "settle_tracked",
     "resolve_object",
     "tote_mesh",
     "BIN_RELATIONS",
@@ -110,7 +114,7 @@ if TYPE_CHECKING:
         convex_decomposition,
         convex_hull,
     )
-    from mgn.scene.drop import drop_scene, tote_mesh
+    from mgn.scene.drop import drop_scene, settle, settle_tracked, tote_mesh
     from mgn.scene.layout import (
         BIN_RELATIONS,
         Layout,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -23,7 +24,7 @@ from mgn.scene.scene import (
     SceneInstance,
 )
 
-__all__ = ["RESTITUTION", "drop_scene", "tote_mesh"]
+__all__ = ["RESTITUTION", "drop_scene", "settle", "settle_tracked", "tote_mesh"]
 
 #: Restitution of the objects (the library carries friction but not restitution).
 RESTITUTION = 0.1
@@ -58,6 +59,7 @@ def _simulate(
     sources: dict[str, str | os.PathLike[str]] | None,
     decomposition: ConvexDecompositionOptions | None,
     use_cache: bool,
+    X_WO_start: np.ndarray | None = None,
 ) -> tuple[dict[str, Any], dict[str, str]]:
     """Validates, prepares the per-object physics and runs the C++ drop. Returns the raw result
     (X_WO, X_WO_release, status, settled, contacts, steps, ...) and each name's source."""
@@ -102,6 +104,7 @@ def _simulate(
             tote.floor_thickness,
         ],
         opts,
+        None if X_WO_start is None else np.asarray(X_WO_start, np.float64).reshape(-1, 16),
     )
     return out, {k: v[2] for k, v in per_name.items()}
 
@@ -167,3 +170,93 @@ def drop_scene(
         "num_dropped": len(objects),
     }
     return Scene(tuple(instances), tote, int(seed), options, tuple(removed), stats)
+
+
+def settle_tracked(
+    scene: Scene,
+    *,
+    remove: Sequence[int] = (),
+    options: DropOptions | None = None,
+    decomposition: ConvexDecompositionOptions | None = None,
+    use_cache: bool = True,
+) -> tuple[Scene, tuple[int, ...]]:
+    """:func:`settle`, also returning for each instance of the new scene the instance id it had
+    in ``scene`` (instances are renumbered 1..M in their old order)."""
+    n = len(scene.instances)
+    ids = []
+    for r in remove:
+        if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or not 1 <= r <= n:
+            raise InvalidArgumentError(
+                f"settle: remove must hold instance ids of the scene (1..{n}), got {r!r}"
+            )
+        ids.append(int(r))
+    keep = [inst for inst in scene.instances if inst.instance_id not in set(ids)]
+    options = options or scene.drop_options
+    if not keep:
+        empty = dataclasses.replace(scene, instances=(), stats={"num_dropped": 0})
+        return empty, ()
+    specs = [scene.object_spec(inst.instance_id - 1) for inst in keep]
+    sources = {inst.name: inst.source for inst in keep if inst.source != BUILTIN}
+    start = np.stack([inst.X_WO for inst in keep])
+    out, sources_of = _simulate(specs, scene.seed, scene.tote, options, sources, decomposition,
+                                use_cache, X_WO_start=start)  # fmt: skip
+    instances: list[SceneInstance] = []
+    removed = list(scene.removed)
+    old_ids: list[int] = []
+    for k, (inst, spec) in enumerate(zip(keep, specs, strict=True)):
+        status = _STATUS[int(out["status"][k])]
+        if status != "kept":
+            removed.append(RemovedInstance(spec.name, sources_of[spec.name], status))
+            continue
+        bits = int(out["contacts"][k])
+        instances.append(
+            dataclasses.replace(
+                inst,
+                instance_id=len(instances) + 1,
+                X_WO=out["X_WO"][k],
+                contacts=tuple(c for b, c in enumerate(CONTACT_NAMES) if bits & (1 << b)),
+                settled=bool(out["settled"][k]),
+            )
+        )
+        old_ids.append(inst.instance_id)
+    stats = {
+        "steps": int(out["steps"]),
+        "simulated_time": float(out["simulated_time"]),
+        "settled": bool(out["all_settled"]),
+        "max_penetration": float(out["max_penetration"]),
+        "num_dropped": len(keep),
+    }
+    new = Scene(tuple(instances), scene.tote, scene.seed, scene.drop_options, tuple(removed), stats)
+    return new, tuple(old_ids)
+
+
+def settle(
+    scene: Scene,
+    *,
+    remove: Sequence[int] = (),
+    options: DropOptions | None = None,
+    decomposition: ConvexDecompositionOptions | None = None,
+    use_cache: bool = True,
+) -> Scene:
+    """Take the instances ``remove`` (instance ids) out of ``scene`` and let the others settle
+    again from their current poses, starting at rest (C++ ``settle_objects``: the drop's
+    simulation, rest test and removal of objects that left the tote, without the random
+    release). Returns a new :class:`Scene`: the remaining instances renumbered 1..M in their old
+    order, with their settled poses, tote contacts (hence bin relations) and ``settled`` flags;
+    objects that left the tote while settling are appended to ``removed``; ``stats`` describe
+    this simulation. An already resting pile stays put (sub-millimetre creep).
+
+    Args:
+        scene: the current scene.
+        remove: instance ids (1..N) to take out first (e.g. the object just picked).
+        options: simulation options (default: the scene's drop options; the release window
+            and seed are not used).
+        decomposition, use_cache: as in :func:`drop_scene`.
+
+    Raises:
+        InvalidArgumentError: an id in ``remove`` that is not an instance id of the scene, bad
+            options.
+    """
+    return settle_tracked(
+        scene, remove=remove, options=options, decomposition=decomposition, use_cache=use_cache
+    )[0]

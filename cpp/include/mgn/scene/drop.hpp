@@ -155,6 +155,19 @@ struct DropResult {
 DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote,
                         const ToteBox& box, const DropOptions& options = {});
 
+/// Simulates `objects` from the poses `X_WO_start` (object frames in the tote frame, one per
+/// object, m), all starting at rest (zero velocity), until every object in the tote is at rest:
+/// the same simulation, rest test and removal of objects that left the tote (or rest on the rim)
+/// as drop_objects(), without the random release (DropOptions::window_min/max and seed are not
+/// used). Used to let a pile settle again after objects were taken out of it: pass the remaining
+/// objects at their current poses. An already resting pile stays where it is (up to solver
+/// creep, well below a millimetre). DroppedObject::X_WO_release is the start pose. Throws
+/// InvalidArgument for a pose count different from the object count, a non-finite or non-rigid
+/// pose, and everything drop_objects() rejects (naming settle_objects).
+DropResult settle_objects(const std::vector<DropObject>& objects,
+                          const std::vector<Pose>& X_WO_start, const Mesh& tote, const ToteBox& box,
+                          const DropOptions& options = {});
+
 /// Name of a status ("kept", "left_tote", "not_settled").
 const char* to_string(DropStatus status);
 
