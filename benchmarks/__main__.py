@@ -12,6 +12,7 @@ from . import (
     bench_collision,
     bench_drop,
     bench_layout,
+    bench_pick,
     bench_pipeline,
     bench_pj,
     bench_raycast,
@@ -45,6 +46,7 @@ SUITES = {
     "view_labels": bench_view_labels,
     "scene_grasps": bench_scene_grasps,
     "scene_labels": bench_scene_labels,
+    "pick": bench_pick,
     "pipeline": bench_pipeline,
 }
 
