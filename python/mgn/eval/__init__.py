@@ -7,3 +7,7 @@ object with ``to_dict()`` (JSON) and ``table()`` (the printed table, see
 """
 
 from __future__ import annotations
+
+from mgn.eval.grasps import GraspResults, evaluate_grasps, ground_truth_grasps
+
+__all__ = ["GraspResults", "evaluate_grasps", "ground_truth_grasps"]

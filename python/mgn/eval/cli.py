@@ -14,6 +14,7 @@ __all__ = ["register"]
 # One _MODULES.append("mgn.eval.<module>") line per evaluation module (each defines
 # register(eval_sub)), added after the next line.
 _MODULES: list[str] = []
+_MODULES.append("mgn.eval.grasps")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
