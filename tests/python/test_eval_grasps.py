@@ -139,7 +139,7 @@ def test_collides_bad_input(small_dataset):
         model.collides("suction", X, target_object=[99])
     bad = X.copy()
     bad[0, 0, 0] = 2.0
-    with pytest.raises(ValueError, match="rigid"):
+    with pytest.raises(ValueError, match="proper rotation"):
         model.collides("suction", bad)
 
 
@@ -285,6 +285,17 @@ def test_suction_pixel_predictions_at_label_contacts_match(small_dataset):
             win = inst[r - 2 : r + 3, c - 2 : c + 3]
             # Interior of the object's visible region, on the surface seen at that pixel.
             if (win != g["object_id"][j] + 1).any() or abs(depth[r, c] - x[2, 3]) > 0.003:
+                continue
+            # ... on a flat patch (the 5 x 5 pixels lie within 1 mm of the label's tangent
+            # plane) that faces the camera (approach within 60 deg of the viewing ray): the
+            # cases where a normal from depth pixels can be right.
+            rows, cols = np.mgrid[r - 2 : r + 3, c - 2 : c + 3]
+            z = depth[r - 2 : r + 3, c - 2 : c + 3].astype(np.float64)
+            q = np.stack([(cols + 0.5 - K.cx) / K.fx * z, (rows + 0.5 - K.cy) / K.fy * z, z], -1)
+            a = x[:3, 2]
+            if np.abs((q - x[:3, 3]) @ a).max() > 0.001:
+                continue
+            if a @ x[:3, 3] / np.linalg.norm(x[:3, 3]) < math.cos(math.radians(60)):
                 continue
             grasps.append({"uv": [u, v], "score": 1.0})
         expected += len(grasps)

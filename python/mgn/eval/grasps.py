@@ -563,21 +563,32 @@ def _match(
     if n == 0 or m == 0:
         return np.full(n, -1, np.int64)
     a, la = X[:, :3, 2], L[:, :3, 2]
-    ang = _angle(a @ la.T)
+    v, lv = X[:, :3, 0], L[:, :3, 0]
+    p1, q1 = X[:, :3, 3], L[:, :3, 3]
     if kind == "suction":
-        dist = np.linalg.norm(X[:, None, :3, 3] - L[None, :, :3, 3], axis=2)
+        c, lc = p1, q1
     else:
-        v, lv = X[:, :3, 0], L[:, :3, 0]
-        p1, q1 = X[:, :3, 3], L[:, :3, 3]
         p2, q2 = p1 + width[:, None] * v, q1 + Lw[:, None] * lv
+        # Midpoints: under the better pairing they are at most the contact distance apart.
+        c, lc = 0.5 * (p1 + p2), 0.5 * (q1 + q2)
+    # Candidate pairs by the centre distance (|c|^2 + |l|^2 - 2 c.l, with a margin for rounding).
+    sq = (c * c).sum(1)[:, None] + (lc * lc).sum(1)[None, :] - 2.0 * (c @ lc.T)
+    i, j = np.nonzero(sq <= (match_distance + 1e-6) ** 2)
+    ang = _angle((a[i] * la[j]).sum(1))
+    if kind == "suction":
+        dist = np.linalg.norm(p1[i] - q1[j], axis=1)
+    else:
 
         def d(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-            return np.linalg.norm(p[:, None, :] - q[None, :, :], axis=2)
+            return np.linalg.norm(p - q, axis=1)
 
-        dist = np.minimum(np.maximum(d(p1, q1), d(p2, q2)), np.maximum(d(p1, q2), d(p2, q1)))
-        ang = np.maximum(ang, _angle(np.abs(v @ lv.T)))
-    cost = dist / match_distance + ang / match_angle
-    cost[(dist > match_distance) | (ang > match_angle)] = np.inf
+        same = np.maximum(d(p1[i], q1[j]), d(p2[i], q2[j]))
+        swapped = np.maximum(d(p1[i], q2[j]), d(p2[i], q1[j]))
+        dist = np.minimum(same, swapped)
+        ang = np.maximum(ang, _angle(np.abs((v[i] * lv[j]).sum(1))))
+    ok = (dist <= match_distance) & (ang <= match_angle)
+    cost = np.full((n, m), np.inf)
+    cost[i[ok], j[ok]] = dist[ok] / match_distance + ang[ok] / match_angle
     best = np.argmin(cost, axis=1)
     return np.where(np.isfinite(cost[np.arange(n), best]), best, -1)
 
