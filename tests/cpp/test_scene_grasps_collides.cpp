@@ -123,10 +123,10 @@ TEST(SceneGraspsCollides, SameAnswerForAnyThreadCount) {
   const SceneGraspModel m1 = model_of(objs, 1);
   const SceneGraspModel m4 = model_of(objs, 4);
   const PlacedGrasps& p = m1.pj();
-  const ToolCollisions a = m1.collides(GraspKind::ParallelJaw, p.X_W_contact, widths(p),
-                                       p.object_index, true);
-  const ToolCollisions b = m4.collides(GraspKind::ParallelJaw, p.X_W_contact, widths(p),
-                                       p.object_index, true);
+  const ToolCollisions a =
+      m1.collides(GraspKind::ParallelJaw, p.X_W_contact, widths(p), p.object_index, true);
+  const ToolCollisions b =
+      m4.collides(GraspKind::ParallelJaw, p.X_W_contact, widths(p), p.object_index, true);
   EXPECT_EQ(a.colliding, b.colliding);
   EXPECT_EQ(a.hit, b.hit);
 }
@@ -152,7 +152,7 @@ TEST(SceneGraspsCollides, ParallelJawTargetIsSkippedAtTheGraspUnlessAsked) {
   // shifted 30 mm along x puts the right finger into the box at offset 0 only.
   std::vector<SceneGraspObject> objs = {object(box_mesh(), at(0, 0, 0.025))};
   const SceneGraspModel m = model_of(objs);
-  Pose G = at(-0.02, 0.0, 0.03);  // p1 on the -x face, 20 mm below the top
+  Pose G = at(-0.02, 0.0, 0.03);        // p1 on the -x face, 20 mm below the top
   G.linear().col(0) = Vec3d(1, 0, 0);   // closing
   G.linear().col(1) = Vec3d(0, -1, 0);  // a x v
   G.linear().col(2) = Vec3d(0, 0, -1);  // approach, down
