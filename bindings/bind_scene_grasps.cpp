@@ -173,6 +173,36 @@ void bind_scene_grasps(py::module_& m) {
           },
           "Suction grasps in the world: dict of arrays.")
       .def(
+          "collides",
+          [](const SceneGraspModel& s, const std::string& kind, const py::handle& poses,
+             const std::vector<double>& width, const std::vector<std::int32_t>& target_object,
+             bool check_target_at_grasp) {
+            GraspKind k = GraspKind::Suction;
+            if (kind == "pj") {
+              k = GraspKind::ParallelJaw;
+            } else if (kind != "suction") {
+              throw_error<InvalidArgument>("collides: kind must be 'pj' or 'suction', got '", kind,
+                                           "'");
+            }
+            const std::vector<Pose> X = to_poses(poses, "X_W_contact");
+            ToolCollisions r;
+            {
+              py::gil_scoped_release release;
+              r = s.collides(k, X, width, target_object, check_target_at_grasp);
+            }
+            py::dict out;
+            const auto n = static_cast<py::ssize_t>(r.size());
+            out["colliding"] = to_bool_numpy(std::move(r.colliding));
+            py::array hit = to_numpy(std::move(r.hit));
+            out["hit"] =
+                hit.attr("reshape")(n, static_cast<py::ssize_t>(s.options().offsets.size()));
+            return out;
+          },
+          py::arg("kind"), py::arg("X_W_contact"), py::arg("width"), py::arg("target_object"),
+          py::arg("check_target_at_grasp") = false,
+          "Collision of arbitrary grasp (contact-frame) poses with the labels' test: dict with "
+          "colliding (M,) bool and hit (M, K) int32.")
+      .def(
           "visible",
           [](const SceneGraspModel& s, const Intrinsics& K, const py::handle& X_WC,
              const py::handle& points) {

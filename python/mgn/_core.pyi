@@ -819,6 +819,17 @@ class SceneGraspModel:
         near_plane: typing.SupportsFloat | typing.SupportsIndex,
         num_threads: typing.SupportsInt | typing.SupportsIndex,
     ) -> None: ...
+    def collides(
+        self,
+        kind: str,
+        X_W_contact: typing.Any,
+        width: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
+        target_object: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
+        check_target_at_grasp: bool = False,
+    ) -> dict:
+        """
+        Collision of arbitrary grasp (contact-frame) poses with the labels' test: dict with colliding (M,) bool and hit (M, K) int32.
+        """
     def pj(self) -> dict:
         """
         Parallel-jaw grasps in the world: dict of arrays.

@@ -175,6 +175,37 @@ struct SceneGraspModel::Impl {
     }
     return -1;
   }
+
+  /// Parallel-jaw hand at X_WH with the fingers at `opening`, at every offset: writes the first
+  /// hit per offset into hit[0..K) and returns whether any offset collides. The object `own`
+  /// (0-based, -1 none) is skipped at offset 0 exactly unless `check_own_at_grasp`.
+  bool pj_hits(const Pose& X_WH, double opening, std::int64_t own, bool check_own_at_grasp,
+               std::int32_t* hit) const {
+    const std::array<const Solid*, 3> parts = {hand[1].get(), hand[2].get(), hand[0].get()};
+    bool any = false;
+    for (std::size_t k = 0; k < options.offsets.size(); ++k) {
+      const double d = options.offsets[k];
+      const Pose X = back_off(X_WH, d);
+      const std::array<Pose, 3> poses = {X * finger_offset(0, opening),
+                                         X * finger_offset(1, opening), X};
+      hit[k] = first_hit(parts, poses, d == 0.0 && !check_own_at_grasp ? own : -1);
+      any = any || hit[k] >= 0;
+    }
+    return any;
+  }
+
+  /// Suction tool (cup body and shaft) at the contact frame X_WS, at every offset, against
+  /// every obstacle: as pj_hits.
+  bool suction_hits(const Pose& X_WS, std::int32_t* hit) const {
+    const std::array<const Solid*, 2> parts = {tool[0].get(), tool[1].get()};
+    bool any = false;
+    for (std::size_t k = 0; k < options.offsets.size(); ++k) {
+      const Pose X = back_off(X_WS, options.offsets[k]);
+      hit[k] = first_hit(parts, std::array<Pose, 2>{X, X}, -1);
+      any = any || hit[k] >= 0;
+    }
+    return any;
+  }
 };
 
 SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, const Mesh& tote,
@@ -362,31 +393,16 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
 
   // Collisions (parallel over grasps; each result depends only on its row).
   const int threads = resolve_num_threads(options.num_threads);
-  const std::array<const Solid*, 3> hand = {m.hand[1].get(), m.hand[2].get(), m.hand[0].get()};
   parallel_for(num_pj, threads, 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t r = begin; r < end; ++r) {
       const double opening = gripper.collision_opening(pj.width[r]);
       const auto own = static_cast<std::int64_t>(pj.object_index[r]);
-      for (std::size_t k = 0; k < K; ++k) {
-        const double d = options.offsets[k];
-        const Pose X_WH = back_off(pj.X_W_tool[r], d);
-        const std::array<Pose, 3> poses = {X_WH * finger_offset(0, opening),
-                                           X_WH * finger_offset(1, opening), X_WH};
-        const std::int32_t h = m.first_hit(hand, poses, d == 0.0 ? own : -1);
-        pj.hit[r * K + k] = h;
-        if (h >= 0) pj.colliding[r] = 1;
-      }
+      pj.colliding[r] = m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K]) ? 1 : 0;
     }
   });
-  const std::array<const Solid*, 2> tool = {m.tool[0].get(), m.tool[1].get()};
   parallel_for(num_suction, threads, 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t r = begin; r < end; ++r) {
-      for (std::size_t k = 0; k < K; ++k) {
-        const Pose X = back_off(su.X_W_contact[r], options.offsets[k]);
-        const std::int32_t h = m.first_hit(tool, std::array<Pose, 2>{X, X}, -1);
-        su.hit[r * K + k] = h;
-        if (h >= 0) su.colliding[r] = 1;
-      }
+      su.colliding[r] = m.suction_hits(su.X_W_contact[r], &su.hit[r * K]) ? 1 : 0;
     }
   });
 }
@@ -397,6 +413,66 @@ std::size_t SceneGraspModel::num_objects() const { return impl_->num_objects; }
 const SceneGraspOptions& SceneGraspModel::options() const { return impl_->options; }
 const PlacedGrasps& SceneGraspModel::pj() const { return impl_->pj; }
 const PlacedGrasps& SceneGraspModel::suction() const { return impl_->suction; }
+
+ToolCollisions SceneGraspModel::collides(GraspKind kind, const std::vector<Pose>& X_W_contact,
+                                         const std::vector<double>& width,
+                                         const std::vector<std::int32_t>& target_object,
+                                         bool check_target_at_grasp) const {
+  const Impl& m = *impl_;
+  const bool pj = kind == GraspKind::ParallelJaw;
+  if (!pj && kind != GraspKind::Suction) {
+    throw_error<InvalidArgument>(
+        "SceneGraspModel::collides: kind must be ParallelJaw (0) or "
+        "Suction (1), got ",
+        static_cast<int>(kind));
+  }
+  const std::size_t n = X_W_contact.size();
+  if (target_object.size() != n || (pj && width.size() != n) ||
+      (!pj && !width.empty() && width.size() != n)) {
+    throw_error<InvalidArgument>("SceneGraspModel::collides: ", n, " poses but ", width.size(),
+                                 " widths and ", target_object.size(),
+                                 " target objects; expected one of each per pose (widths may be "
+                                 "empty for suction)");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    check_pose(X_W_contact[i], "collides: X_W_contact", i);
+    const std::int32_t t = target_object[i];
+    if (t < -1 || t >= static_cast<std::int32_t>(m.num_objects)) {
+      throw_error<InvalidArgument>("SceneGraspModel::collides: target_object[", i, "] = ", t,
+                                   "; expected -1 (none) or an object index in [0, ", m.num_objects,
+                                   ")");
+    }
+    if (pj &&
+        (!std::isfinite(width[i]) || width[i] < 0.0 || width[i] > m.gripper.max_opening + 1e-9)) {
+      throw_error<InvalidArgument>(
+          "SceneGraspModel::collides: width[", i, "] = ", width[i],
+          " m; expected a finite width in [0, max_opening = ", m.gripper.max_opening, "] m");
+    }
+  }
+  const std::size_t K = m.options.offsets.size();
+  ToolCollisions out;
+  out.colliding.assign(n, 0);
+  out.hit.assign(n * K, -1);
+  const double depth = m.gripper.grasp_depth();
+  parallel_for(n, resolve_num_threads(m.options.num_threads), 16,
+               [&](std::size_t begin, std::size_t end) {
+                 for (std::size_t r = begin; r < end; ++r) {
+                   bool c = false;
+                   if (pj) {
+                     // The hand of gripper.hpp: X_GH = (I, (w/2) x - grasp_depth z).
+                     const double w = std::min(width[r], m.gripper.max_opening);
+                     Pose X_WH = X_W_contact[r];
+                     X_WH.translation() += X_W_contact[r].linear() * Vec3d(0.5 * w, 0.0, -depth);
+                     c = m.pj_hits(X_WH, m.gripper.collision_opening(w), target_object[r],
+                                   check_target_at_grasp, &out.hit[r * K]);
+                   } else {
+                     c = m.suction_hits(X_W_contact[r], &out.hit[r * K]);
+                   }
+                   out.colliding[r] = c ? 1 : 0;
+                 }
+               });
+  return out;
+}
 
 std::vector<std::uint8_t> SceneGraspModel::visible(const CameraView& view,
                                                    const Points3d& points) const {

@@ -14,19 +14,23 @@ from mgn.eval.detections import (
     evaluate_detections,
     ground_truth_detections,
 )
+from mgn.eval.grasps import GraspResults, evaluate_grasps, ground_truth_grasps
 from mgn.eval.layout_metrics import LayoutResults, evaluate_layout, ground_truth_layout
 from mgn.eval.pick import PickAttempt, PickResults, PickState, run_picking
 
 __all__ = [
     "DetectionResults",
     "DetectionRow",
+    "GraspResults",
     "LayoutResults",
     "PickAttempt",
     "PickResults",
     "PickState",
     "evaluate_detections",
+    "evaluate_grasps",
     "evaluate_layout",
     "ground_truth_detections",
+    "ground_truth_grasps",
     "ground_truth_layout",
     "run_picking",
 ]

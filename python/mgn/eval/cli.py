@@ -16,6 +16,7 @@ __all__ = ["register"]
 _MODULES: list[str] = []
 _MODULES.append("mgn.eval.detections")
 _MODULES.append("mgn.eval.layout_metrics")
+_MODULES.append("mgn.eval.grasps")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

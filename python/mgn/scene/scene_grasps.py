@@ -58,6 +58,7 @@ __all__ = [
     "SceneGraspModel",
     "SceneGrasps",
     "SuctionGraspSet",
+    "ToolCollisions",
 ]
 
 #: Radius of the suction tool shaft behind the cup body, m (a vacuum tube / tool body).
@@ -209,6 +210,23 @@ class GraspCollisions:
     colliding: int
     at_offset: dict[float, int]
     by_obstacle: dict[str | int, int]
+
+
+@dataclass(frozen=True)
+class ToolCollisions:
+    """Result of :meth:`SceneGraspModel.collides` (one row per queried pose).
+
+    Attributes:
+        colliding: (M,) bool, the tool collides at some offset.
+        hit: (M, K) int32 first obstacle hit at offset k: -1 none, 0 the tote, else the instance
+            id of the object hit (as :attr:`PlacedGrasps.hit`).
+    """
+
+    colliding: npt.NDArray[np.bool_]
+    hit: npt.NDArray[np.int32]
+
+    def __len__(self) -> int:
+        return len(self.colliding)
 
 
 def _pose_array(poses: np.ndarray) -> np.ndarray:
@@ -424,6 +442,67 @@ class SceneGraspModel:
             by_obstacle={
                 ("tote" if i == 0 else int(i)): int(c) for i, c in zip(ids, counts, strict=True)
             },
+        )
+
+    def collides(
+        self,
+        kind: str,
+        contact_poses: npt.ArrayLike,
+        width: npt.ArrayLike | None = None,
+        target_object: npt.ArrayLike | None = None,
+        *,
+        check_target_at_grasp: bool = False,
+    ) -> ToolCollisions:
+        """Collision of arbitrary grasps with exactly the test that made the labels'
+        ``colliding`` flags (same tool geometry, offsets and obstacles).
+
+        Args:
+            kind: ``"pj"`` or ``"suction"``.
+            contact_poses: (M, 4, 4) world poses in the frame of :attr:`PlacedGrasps.contact_poses`:
+                parallel-jaw: the grasp frame at the first contact p1 (x = closing, z =
+                approach); suction: the contact frame (z = approach into the surface).
+            width: (M,) parallel-jaw contact widths, m (fingers checked at the collision opening
+                ``min(w + margin, max_opening)``); ignored for suction.
+            target_object: (M,) 0-based index of the grasped object, -1 for none (default: all
+                -1). Parallel-jaw: skipped at offset 0 exactly, as for the labels, unless
+                ``check_target_at_grasp`` (then the hand must not touch it there either).
+                Suction: the target is always checked (as for the labels).
+
+        For the label grasps, ``collides(kind, p.contact_poses, p.width, p.object_id)`` equals
+        ``p.colliding`` / ``p.hit`` (``p = model.pj`` or ``model.suction``).
+
+        Raises:
+            InvalidArgumentError: a bad kind, shapes that do not agree, a non-finite or non-rigid
+                pose, a width outside [0, max_opening], a target outside [-1, N).
+        """
+        if kind not in ("pj", "suction"):
+            raise InvalidArgumentError(f"collides: kind must be 'pj' or 'suction', got {kind!r}")
+        X = np.asarray(contact_poses, np.float64)
+        if X.ndim != 3 or X.shape[1:] != (4, 4):
+            raise InvalidArgumentError(
+                f"collides: contact_poses must have shape (M, 4, 4), got {X.shape}"
+            )
+        m = X.shape[0]
+        if width is None:
+            if kind == "pj":
+                raise InvalidArgumentError("collides: parallel-jaw grasps need width (M,) in m")
+            w = np.zeros(m)
+        else:
+            w = np.asarray(width, np.float64).reshape(-1)
+        t = (
+            np.full(m, -1, np.int32)
+            if target_object is None
+            else np.asarray(target_object).astype(np.int32).reshape(-1)
+        )
+        if len(w) != m or len(t) != m:
+            raise InvalidArgumentError(
+                f"collides: {m} poses but {len(w)} widths and {len(t)} target objects; "
+                "expected one of each per pose"
+            )
+        r = self._core.collides(kind, X, w.tolist(), t.tolist(), bool(check_target_at_grasp))
+        return ToolCollisions(
+            colliding=np.asarray(r["colliding"], bool),
+            hit=np.asarray(r["hit"], np.int32).reshape(m, len(self.offsets)),
         )
 
     def visible(self, view: CameraView, points: npt.ArrayLike) -> npt.NDArray[np.bool_]:

@@ -110,6 +110,17 @@ struct PlacedGrasps {
   std::size_t size() const { return object_index.size(); }
 };
 
+/// Kind of a grasp (tool) for SceneGraspModel::collides().
+enum class GraspKind : std::uint8_t { ParallelJaw = 0, Suction = 1 };
+
+/// Per-pose result of SceneGraspModel::collides() (the same fields as PlacedGrasps).
+struct ToolCollisions {
+  std::vector<std::uint8_t> colliding;  ///< (M) 1 when the tool collides at any offset
+  /// (M x K) row-major first obstacle hit at offset k: -1 none, 0 the tote, i + 1 object i.
+  std::vector<std::int32_t> hit;
+  std::size_t size() const { return colliding.size(); }
+};
+
 /// The grasps kept in one view (rows of SceneGraspModel::pj() / suction(), ascending), with their
 /// poses in the camera frame.
 struct ViewGrasps {
@@ -147,6 +158,39 @@ class SceneGraspModel {
   /// Grasps kept in a view. `seen` has one entry per object (non-zero: the object has visible
   /// pixels in the view). Throws InvalidArgument for a wrong length or an invalid view.
   ViewGrasps view_grasps(const CameraView& view, const std::vector<std::uint8_t>& seen) const;
+
+  /// Collision of arbitrary tool poses with exactly the test that made the labels' `colliding`
+  /// flags (same tool geometry, same offsets, same obstacles: every object and the tote).
+  ///
+  /// @param kind          ParallelJaw or Suction.
+  /// @param X_W_contact   (M) grasp poses in the world, the contact frames of PlacedGrasps:
+  ///                      parallel-jaw: the grasp frame at the first contact p1 (x = closing,
+  ///                      z = approach); the hand is at X_W_contact * (I, ((w/2), 0, -grasp_depth))
+  ///                      (gripper.hpp). Suction: the contact frame (z = approach into the
+  ///                      surface, origin at the contact); the cup body and shaft lie at z < 0.
+  /// @param width         (M) contact width w of each parallel-jaw grasp, m, in [0, max_opening]
+  ///                      (the fingers are checked at gripper.collision_opening(w)); ignored and
+  ///                      may be empty for suction.
+  /// @param target_object (M) 0-based scene index of the object being grasped, or -1 (none).
+  ///                      Parallel-jaw: as for the labels, the target is skipped at offset 0
+  ///                      exactly (the object-level sampler checked the hand against it there)
+  ///                      and checked at every other offset; with `check_target_at_grasp` the
+  ///                      hand is tested against the target at offset 0 too, with the same
+  ///                      test (surface contact or a part inside it): the fingers, open at the
+  ///                      collision opening around the grasp, must not touch it. Suction: the
+  ///                      target is checked like every other obstacle at every offset (as for
+  ///                      the labels); the argument is only validated.
+  /// @return per pose: colliding flag and the first obstacle hit per offset.
+  ///
+  /// For the label grasps, collides(kind, placed.X_W_contact, placed.width, placed.object_index)
+  /// reproduces placed.colliding and placed.hit. Thread-safe (the model is immutable); runs with
+  /// options().num_threads, results do not depend on it. Throws InvalidArgument for lengths that
+  /// differ, a non-finite or non-rigid pose, a width outside [0, max_opening] or a target outside
+  /// [-1, num_objects).
+  ToolCollisions collides(GraspKind kind, const std::vector<Pose>& X_W_contact,
+                          const std::vector<double>& width,
+                          const std::vector<std::int32_t>& target_object,
+                          bool check_target_at_grasp = false) const;
 
   struct Impl;
 
