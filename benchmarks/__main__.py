@@ -11,6 +11,7 @@ from pathlib import Path
 from . import (
     bench_collision,
     bench_drop,
+    bench_eval_grasps,
     bench_layout,
     bench_pick,
     bench_pipeline,
@@ -47,6 +48,7 @@ SUITES = {
     "scene_grasps": bench_scene_grasps,
     "scene_labels": bench_scene_labels,
     "pick": bench_pick,
+    "eval_grasps": bench_eval_grasps,
     "pipeline": bench_pipeline,
 }
 
