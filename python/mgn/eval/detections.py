@@ -59,7 +59,7 @@ from typing import Any
 import numpy as np
 
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.eval.results import format_table, write_results_json
+from mgn.eval.results import format_table, print_and_write
 from mgn.io.coco import AGNOSTIC_ID, coco_dict
 from mgn.io.dataset import Dataset
 
@@ -678,11 +678,7 @@ def _cmd_detections(args: argparse.Namespace) -> int:
         amodal=args.amodal,
         strict=not args.lenient,
     )
-    print(res.table())
-    if args.out:
-        write_results_json(args.out, res)
-        print(f"wrote {args.out}")
-    return 0
+    return print_and_write(res, args.out)
 
 
 def register(eval_sub: argparse._SubParsersAction) -> None:

@@ -92,7 +92,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.eval.results import format_table, write_results_json
+from mgn.eval.results import format_table, print_and_write
 
 __all__ = [
     "DEFAULT_KS",
@@ -805,11 +805,7 @@ def _cmd(args: argparse.Namespace) -> int:
         label_score=args.label_score,
         num_threads=args.threads,
     )
-    print(res.table())
-    if args.out:
-        write_results_json(args.out, res)
-        print(f"wrote {args.out}")
-    return 0
+    return print_and_write(res, args.out)
 
 
 def register(eval_sub: argparse._SubParsersAction) -> None:

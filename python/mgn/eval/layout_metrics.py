@@ -35,7 +35,7 @@ import numpy as np
 
 from mgn.errors import InvalidArgumentError
 from mgn.eval.detections import as_dataset, as_prediction_list, is_int, selected_views
-from mgn.eval.results import format_table, write_results_json
+from mgn.eval.results import format_table, print_and_write
 from mgn.io.dataset import Dataset
 
 __all__ = ["LayoutResults", "evaluate_layout", "ground_truth_layout"]
@@ -249,11 +249,7 @@ def evaluate_layout(
 
 def _cmd_layout(args: argparse.Namespace) -> int:
     res = evaluate_layout(args.dataset, args.predictions)
-    print(res.table())
-    if args.out:
-        write_results_json(args.out, res)
-        print(f"wrote {args.out}")
-    return 0
+    return print_and_write(res, args.out)
 
 
 def register(eval_sub: argparse._SubParsersAction) -> None:

@@ -10,7 +10,7 @@ from typing import Any
 
 from mgn.io.atomic import atomic_write_text
 
-__all__ = ["format_table", "to_jsonable", "write_results_json"]
+__all__ = ["format_table", "print_and_write", "to_jsonable", "write_results_json"]
 
 
 def _cell(value: Any, digits: int) -> str:
@@ -74,3 +74,13 @@ def write_results_json(path: str | os.PathLike[str], results: Any) -> None:
     """Write ``results`` (a dict, or an object with ``to_dict()``) as indented JSON, atomically."""
     doc = results.to_dict() if hasattr(results, "to_dict") else results
     atomic_write_text(path, json.dumps(to_jsonable(doc), indent=2) + "\n")
+
+
+def print_and_write(results: Any, out: str | os.PathLike[str] | None) -> int:
+    """What every ``mgn eval`` command does at the end: print ``results.table()``, write the JSON
+    to ``out`` if given, say so; returns the exit code 0."""
+    print(results.table())
+    if out:
+        write_results_json(out, results)
+        print(f"wrote {os.fspath(out)}")
+    return 0
