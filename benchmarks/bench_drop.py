@@ -58,13 +58,14 @@ def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
     from mgn.io.model_folder import object_mesh
     from mgn.objects import ToteSpec
     from mgn.scene import DropOptions, cached_convex_decomposition
+    from mgn.scene.convex import DROP_DECOMPOSITION
     from mgn.scene.drop import _simulate
 
     out, _ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
     parts, props = [], []
     for s in objects:
         mesh = object_mesh(s)
-        parts.append(cached_convex_decomposition(mesh))
+        parts.append(cached_convex_decomposition(mesh, DROP_DECOMPOSITION))
         props.append(mass_properties(mesh, s.density))
     return out, parts, props
 

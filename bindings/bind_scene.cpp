@@ -141,6 +141,8 @@ void bind_scene(py::module_& m) {
             o.polyhedral_contacts = value.cast<bool>();
           else if (key == "resettle_time")
             o.resettle_time = value.cast<double>();
+          else if (key == "two_friction_directions")
+            o.two_friction_directions = value.cast<bool>();
           else if (key == "seed")
             o.seed = value.cast<std::uint64_t>();
           else if (key == "tote_collision") {

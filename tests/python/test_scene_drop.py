@@ -269,11 +269,13 @@ def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
         "remove_unsettled",
         "tote_collision",
         "solver_iterations",
+        "two_friction_directions",
     } <= fields
     o = DropOptions(
         max_hull_vertices=0,
         hull_tolerance=0.001,
         polyhedral_contacts=False,
+        two_friction_directions=True,
         resettle_time=0.5,
         solver_iterations=12,
         dt=1 / 200,

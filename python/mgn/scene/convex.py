@@ -24,6 +24,7 @@ from mgn.geometry import Mesh
 from mgn.io.atomic import atomic_write_bytes
 
 __all__ = [
+    "DROP_DECOMPOSITION",
     "ConvexDecompositionOptions",
     "cache_dir",
     "cached_convex_decomposition",
@@ -71,6 +72,13 @@ class ConvexDecompositionOptions:
     grid_resolution: int = 40
     merge_volume_tolerance: float = 0.0
     merge_max_parts: int = 0
+
+
+#: The decomposition the scene drop uses by default: HACD parts merged while they add at most 10 %
+#: of the object's hull volume (mug 27 -> 9 parts, wine glass 32 -> 11, cable coil 30 -> 16). It
+#: makes the 20-object drop ~4x cheaper per step (compound-compound pairs dominate); see
+#: third_party_notes/bullet.md for the measurements.
+DROP_DECOMPOSITION = ConvexDecompositionOptions(merge_volume_tolerance=0.10)
 
 
 def convex_hull(mesh: Mesh) -> Mesh:

@@ -103,6 +103,8 @@ class DropOptions:
             settle sooner) instead of one GJK point per step.
         resettle_time: after objects on or over the rim are removed, the rest may take this many
             more simulated seconds (beyond max_time) to settle again (>= 0).
+        two_friction_directions: friction along two tangent directions per contact (large
+            piles settle ~1.6x sooner; a symmetric resting contact may drift to one side).
     """
 
     window_min: tuple[float, float, float] = (-0.06, -0.03, 0.30)
@@ -126,6 +128,7 @@ class DropOptions:
     hull_tolerance: float = 0.0005
     polyhedral_contacts: bool = True
     resettle_time: float = 2.0
+    two_friction_directions: bool = False
 
     def __post_init__(self) -> None:
         for name in ("window_min", "window_max"):
@@ -150,7 +153,7 @@ class DropOptions:
             raise InvalidArgumentError(
                 f"DropOptions.tote_collision must be 'boxes' or 'mesh', got {self.tote_collision!r}"
             )
-        for name in ("remove_unsettled", "polyhedral_contacts"):
+        for name in ("remove_unsettled", "polyhedral_contacts", "two_friction_directions"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InvalidArgumentError(
                     f"DropOptions.{name} must be true or false, got {getattr(self, name)!r}"
