@@ -1,15 +1,21 @@
 """Scene drop: mgn.scene (Bullet in C++) against pybullet running the same drop.
 
-Both sides drop the same 20 built-in objects (the same convex parts from mgn's cached
-decomposition, the same masses and centres of mass, the same friction and restitution), from the
-same release poses (the ones mgn draws for the seed), into the same tote (five static boxes), with
-the same time step, solver iterations and rest thresholds, and stop when every object has been at
-rest for the same time or at 7 s. pybullet is driven as a user writes it: a Python loop of
-`stepSimulation` and `getBaseVelocity`. Differences that remain: pybullet computes the inertia
-from the shapes (mgn uses the exact mesh inertia), and pybullet keeps its own contact settings.
+Both sides drop the same 20 built-in objects (the same convex parts: mgn's cached decomposition
+with the drop's part merging, `mgn.scene.convex.DROP_DECOMPOSITION`; the same masses and centres of
+mass, the same friction and restitution), from the same release poses (the ones mgn draws for the
+seed), into the same tote (five static boxes), with the same time step, solver iterations and rest
+thresholds, and stop when every object has been at rest for the same time or at 7 s. pybullet is
+driven as a user writes it: a Python loop of `stepSimulation` and `getBaseVelocity`. Differences
+that remain: pybullet computes the inertia from the shapes (mgn uses the exact mesh inertia), and
+pybullet keeps its own contact settings.
 
 Peak memory of each side is measured in a fresh subprocess (ru_maxrss), minus the same
 process's footprint after the imports.
+
+Measured (session 4, 2 shared cores, 8 seeds, median): default drop 1.9 s wall (0.3-3.7 s per
+seed; it was 4.4 s before the part merging), 0.86 s with DropOptions(two_friction_directions=True).
+The single-seed row here is one sample of a chaotic quantity: compare settings over several seeds
+(third_party_notes/bullet.md has the table and how it was measured).
 
 Run alone: `python -m benchmarks.bench_drop [--quick]`.
 """
@@ -58,13 +64,14 @@ def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
     from mgn.io.model_folder import object_mesh
     from mgn.objects import ToteSpec
     from mgn.scene import DropOptions, cached_convex_decomposition
+    from mgn.scene.convex import DROP_DECOMPOSITION
     from mgn.scene.drop import _simulate
 
     out, _ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
     parts, props = [], []
     for s in objects:
         mesh = object_mesh(s)
-        parts.append(cached_convex_decomposition(mesh))
+        parts.append(cached_convex_decomposition(mesh, DROP_DECOMPOSITION))
         props.append(mass_properties(mesh, s.density))
     return out, parts, props
 

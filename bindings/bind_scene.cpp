@@ -37,7 +37,8 @@ void bind_scene(py::module_& m) {
       "convex_decomposition",
       [](const Mesh& mesh, double convex_volume_tolerance, double max_concavity, int min_parts,
          int max_parts, double compactness_weight, double volume_weight,
-         bool extra_concavity_points, std::int64_t max_hacd_faces, int grid_resolution) {
+         bool extra_concavity_points, std::int64_t max_hacd_faces, int grid_resolution,
+         double merge_volume_tolerance, int merge_max_parts) {
         ConvexDecompositionOptions o;
         o.convex_volume_tolerance = convex_volume_tolerance;
         o.max_concavity = max_concavity;
@@ -48,13 +49,17 @@ void bind_scene(py::module_& m) {
         o.extra_concavity_points = extra_concavity_points;
         o.max_hacd_faces = max_hacd_faces;
         o.grid_resolution = grid_resolution;
+        o.merge_volume_tolerance = merge_volume_tolerance;
+        o.merge_max_parts = merge_max_parts;
         py::gil_scoped_release release;
         return convex_decomposition(mesh, o);
       },
       py::arg("mesh"), py::arg("convex_volume_tolerance") = 0.10, py::arg("max_concavity") = 0.02,
       py::arg("min_parts") = 1, py::arg("max_parts") = 32, py::arg("compactness_weight") = 0.1,
       py::arg("volume_weight") = 0.0, py::arg("extra_concavity_points") = true,
-      py::arg("max_hacd_faces") = 1500, py::arg("grid_resolution") = 40);
+      py::arg("max_hacd_faces") = 1500, py::arg("grid_resolution") = 40,
+      py::arg("merge_volume_tolerance") = ConvexDecompositionOptions{}.merge_volume_tolerance,
+      py::arg("merge_max_parts") = ConvexDecompositionOptions{}.merge_max_parts);
 
   m.def(
       "drop_objects",
@@ -129,6 +134,16 @@ void bind_scene(py::module_& m) {
             o.contact_distance = value.cast<double>();
           else if (key == "remove_unsettled")
             o.remove_unsettled = value.cast<bool>();
+          else if (key == "max_hull_vertices")
+            o.max_hull_vertices = value.cast<int>();
+          else if (key == "hull_tolerance")
+            o.hull_tolerance = value.cast<double>();
+          else if (key == "polyhedral_contacts")
+            o.polyhedral_contacts = value.cast<bool>();
+          else if (key == "resettle_time")
+            o.resettle_time = value.cast<double>();
+          else if (key == "two_friction_directions")
+            o.two_friction_directions = value.cast<bool>();
           else if (key == "seed")
             o.seed = value.cast<std::uint64_t>();
           else if (key == "tote_collision") {

@@ -974,6 +974,8 @@ def convex_decomposition(
     extra_concavity_points: bool = True,
     max_hacd_faces: typing.SupportsInt | typing.SupportsIndex = 1500,
     grid_resolution: typing.SupportsInt | typing.SupportsIndex = 40,
+    merge_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+    merge_max_parts: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> list[Mesh]: ...
 def convex_hull(mesh: Mesh) -> Mesh: ...
 def distance(

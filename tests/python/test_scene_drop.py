@@ -251,3 +251,92 @@ def test_twelve_builtin_objects_come_to_rest_inside_the_tote(seed):
         assert lo[2] >= -TOL
         assert lo[0] >= -tote.inner_length / 2 - TOL and hi[0] <= tote.inner_length / 2 + TOL
         assert lo[1] >= -tote.inner_width / 2 - TOL and hi[1] <= tote.inner_width / 2 + TOL
+
+
+# ------------------------------------------------------------------ options from Python (issue 5)
+
+
+def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
+    import dataclasses
+
+    fields = {f.name for f in dataclasses.fields(DropOptions)}
+    # Every C++ DropOptions field except the seed (drop_scene's own argument) is here.
+    assert {
+        "max_hull_vertices",
+        "hull_tolerance",
+        "polyhedral_contacts",
+        "resettle_time",
+        "remove_unsettled",
+        "tote_collision",
+        "solver_iterations",
+        "two_friction_directions",
+    } <= fields
+    o = DropOptions(
+        max_hull_vertices=0,
+        hull_tolerance=0.001,
+        polyhedral_contacts=False,
+        two_friction_directions=True,
+        resettle_time=0.5,
+        solver_iterations=12,
+        dt=1 / 200,
+    )
+    assert DropOptions.from_dict(json.loads(json.dumps(o.to_dict()))) == o
+    # The binding knows every key (an unknown key would raise), and the values take effect:
+    # a 10-step budget stops the simulation after exactly 10 steps.
+    objects = [get_object("box_cube")]
+    short = dataclasses.replace(o, max_time=10 / 200, rest_time=1 / 200, resettle_time=0.0)
+    scene = drop_scene(objects, seed=1, options=short)
+    assert scene.stats["steps"] == 10
+    assert scene.drop_options == short
+    path = scene.to_json(tmp_path / "s.json")
+    assert Scene.from_json(path).drop_options == short
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"max_hull_vertices": 3}, "max_hull_vertices"),
+        ({"max_hull_vertices": 2.5}, "max_hull_vertices"),
+        ({"hull_tolerance": -1e-3}, "hull_tolerance"),
+        ({"resettle_time": float("inf")}, "resettle_time"),
+        ({"polyhedral_contacts": "yes"}, "polyhedral_contacts"),
+        ({"solver_iterations": 0}, "solver_iterations"),
+        ({"dt": 0.05}, "dt"),
+        ({"collision_margin": 0.0}, "collision_margin"),
+        ({"angular_damping": 1.0}, "angular_damping"),
+        ({"tote_restitution": 1.5}, "tote_restitution"),
+        ({"rest_time": 8.0}, "rest_time"),
+        ({"window_min": (0.0, 0.0)}, "window_min"),
+        ({"linear_rest": float("nan")}, "linear_rest"),
+    ],
+)
+def test_bad_drop_options_are_rejected_when_made(kwargs, match):
+    with pytest.raises(mgn.InvalidArgumentError, match=rf"DropOptions\.{match}"):
+        DropOptions(**kwargs)
+    with pytest.raises(ValueError):  # InvalidArgumentError is a ValueError
+        DropOptions(**kwargs)
+
+
+@pytest.mark.parametrize("name", ["hex_nut", "cable_coil"])
+def test_merged_parts_still_cover_the_object_and_respect_cap_and_budget(name):
+    mesh = object_mesh(get_object(name))
+    base = ConvexDecompositionOptions()
+    plain = convex_decomposition(mesh, base)
+    v_hull = _volume(convex_hull(mesh))
+    verts = np.unique(np.asarray(mesh.vertices, np.float64), axis=0)
+    for tol, cap in ((0.05, 0), (0.0, 6), (0.05, 8)):
+        merged = convex_decomposition(
+            mesh,
+            ConvexDecompositionOptions(merge_volume_tolerance=tol, merge_max_parts=cap),
+        )
+        assert len(merged) <= len(plain)
+        if cap:
+            assert len(merged) <= cap
+        if not cap:  # the volume budget alone: at most tol * hull volume added
+            assert sum(_volume(p) for p in merged) <= sum(_volume(p) for p in plain) + (
+                tol * v_hull * 1.001
+            )
+        inside_some = np.min(np.stack([_outside(p, verts) for p in merged]), axis=0)
+        assert inside_some.max() <= 2e-5, (name, tol, cap)
+    with pytest.raises(mgn.InvalidArgumentError, match="merge_max_parts"):
+        convex_decomposition(mesh, ConvexDecompositionOptions(merge_max_parts=-2))

@@ -23,6 +23,100 @@ void check_finite(const Mesh& mesh, const char* fn) {
     throw_error<InvalidArgument>(fn, ": mesh '", mesh.name(), "' has non-finite vertices");
 }
 
+/// Volume (m^3) of the convex hull of `pts` (x, y, z, x, ...; 0 if they span no volume). With
+/// `hull`, that receives the hull's vertices in the same layout.
+double hull_volume(const std::vector<double>& pts, std::vector<double>* hull = nullptr) {
+  btConvexHullComputer hc;
+  hc.compute(pts.data(), static_cast<int>(3 * sizeof(double)), static_cast<int>(pts.size() / 3),
+             0.0, 0.0);
+  if (hull) {
+    hull->clear();
+    for (int k = 0; k < hc.vertices.size(); ++k)
+      hull->insert(hull->end(), {double(hc.vertices[k].x()), double(hc.vertices[k].y()),
+                                 double(hc.vertices[k].z())});
+    if (hc.vertices.size() < 4) *hull = pts;
+  }
+  if (hc.vertices.size() < 4) return 0.0;
+  const btVector3 o = hc.vertices[0];
+  double six_v = 0.0;
+  for (int f = 0; f < hc.faces.size(); ++f) {
+    const btConvexHullComputer::Edge* first = &hc.edges[hc.faces[f]];
+    const btVector3 a = hc.vertices[first->getSourceVertex()] - o;
+    const btConvexHullComputer::Edge* e = first->getNextEdgeOfFace();
+    while (e->getTargetVertex() != first->getSourceVertex()) {
+      const btVector3 b = hc.vertices[e->getSourceVertex()] - o;
+      const btVector3 c = hc.vertices[e->getTargetVertex()] - o;
+      six_v += double(a.dot(b.cross(c)));
+      e = e->getNextEdgeOfFace();
+    }
+  }
+  return std::abs(six_v) / 6.0;
+}
+
+/// Greedy merging of convex point clusters (see ConvexDecompositionOptions::
+/// merge_volume_tolerance): returns the merged clusters. `budget` is the volume (m^3) that may be
+/// added in total; beyond it, merging goes on only while more than `max_parts` (0: no cap) are
+/// left. Deterministic: ties go to the lowest pair of indices.
+std::vector<Points3f> merge_clusters(std::vector<Points3f> clusters, double budget, int max_parts) {
+  auto coords = [](const Points3f& a) {
+    std::vector<double> c(static_cast<std::size_t>(3 * a.rows()));
+    for (Eigen::Index i = 0; i < a.rows(); ++i)
+      for (int k = 0; k < 3; ++k) c[static_cast<std::size_t>(3 * i + k)] = double(a(i, k));
+    return c;
+  };
+  std::vector<std::vector<double>> pts;
+  std::vector<double> vol;
+  for (const auto& c : clusters) {  // pts: hull vertices only (the pair hulls are the same)
+    std::vector<double> h;
+    vol.push_back(hull_volume(coords(c), &h));
+    pts.push_back(std::move(h));
+  }
+  // cost[i][j] (i < j): volume the merged hull adds.
+  const std::size_t n = clusters.size();
+  std::vector<std::vector<double>> cost(n, std::vector<double>(n, 0.0));
+  auto pair_cost = [&](std::size_t i, std::size_t j) {
+    std::vector<double> both = pts[i];
+    both.insert(both.end(), pts[j].begin(), pts[j].end());
+    return std::max(0.0, hull_volume(both) - vol[i] - vol[j]);
+  };
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) cost[i][j] = pair_cost(i, j);
+  std::vector<char> alive(n, 1);
+  std::size_t left = n;
+  double added = 0.0;
+  while (left > 1) {
+    std::size_t bi = 0, bj = 0;
+    double best = 1e300;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!alive[i]) continue;
+      for (std::size_t j = i + 1; j < n; ++j)
+        if (alive[j] && cost[i][j] < best) best = cost[i][j], bi = i, bj = j;
+    }
+    const bool within = added + best <= budget;
+    const bool forced = max_parts > 0 && left > static_cast<std::size_t>(max_parts);
+    if (!within && !forced) break;
+    added += best;
+    Points3f merged(clusters[bi].rows() + clusters[bj].rows(), 3);
+    merged << clusters[bi], clusters[bj];
+    clusters[bi] = std::move(merged);
+    pts[bi].insert(pts[bi].end(), pts[bj].begin(), pts[bj].end());
+    std::vector<double> h;
+    vol[bi] = hull_volume(pts[bi], &h);
+    pts[bi] = std::move(h);
+    alive[bj] = 0;
+    --left;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!alive[k] || k == bi) continue;
+      const double c = pair_cost(std::min(k, bi), std::max(k, bi));
+      cost[std::min(k, bi)][std::max(k, bi)] = c;
+    }
+  }
+  std::vector<Points3f> out;
+  for (std::size_t i = 0; i < n; ++i)
+    if (alive[i]) out.push_back(std::move(clusters[i]));
+  return out;
+}
+
 }  // namespace
 
 double closed_mesh_volume(const Mesh& mesh) {
@@ -230,6 +324,9 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     bad_option("volume_weight", o.volume_weight, "finite and >= 0");
   if (o.max_hacd_faces < 4) bad_option("max_hacd_faces", o.max_hacd_faces, ">= 4");
   if (o.grid_resolution < 4) bad_option("grid_resolution", o.grid_resolution, ">= 4");
+  if (!(std::isfinite(o.merge_volume_tolerance) && o.merge_volume_tolerance >= 0))
+    bad_option("merge_volume_tolerance", o.merge_volume_tolerance, "finite and >= 0");
+  if (o.merge_max_parts < 0) bad_option("merge_max_parts", o.merge_max_parts, "0 (no cap) or >= 1");
 
   Mesh hull = convex_hull(mesh);
   const double hull_volume = closed_mesh_volume(hull);
@@ -376,6 +473,16 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     Points3f merged(clusters[best].rows() + clusters[c].rows(), 3);
     merged << clusters[best], clusters[c];
     clusters[best] = std::move(merged);
+  }
+  {
+    std::vector<Points3f> solid;
+    for (std::size_t c = 0; c < clusters.size(); ++c)
+      if (!flat[c]) solid.push_back(std::move(clusters[c]));
+    if (o.merge_volume_tolerance > 0 || o.merge_max_parts > 0)
+      solid = merge_clusters(std::move(solid), o.merge_volume_tolerance * hull_volume,
+                             o.merge_max_parts);
+    clusters = std::move(solid);
+    flat.assign(clusters.size(), false);
   }
   std::vector<Mesh> parts;
   for (std::size_t c = 0; c < clusters.size(); ++c) {

@@ -288,6 +288,10 @@ DropResult simulate(const std::vector<DropObject>& objects, const Mesh& tote, co
   auto w = std::make_unique<World>();
   w->world.setGravity(btVector3(0, 0, btScalar(-o.gravity)));
   w->world.getSolverInfo().m_numIterations = o.solver_iterations;
+  // Two friction directions per contact, kept from step to step (see DropOptions).
+  if (o.two_friction_directions)
+    w->world.getSolverInfo().m_solverMode |=
+        SOLVER_USE_2_FRICTION_DIRECTIONS | SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
 
   // --- the static tote ---
   std::vector<const btCollisionObject*> tote_bodies;
@@ -416,7 +420,12 @@ DropResult simulate(const std::vector<DropObject>& objects, const Mesh& tote, co
     info.m_spinningFriction = btScalar(o.rolling_friction);
     info.m_angularDamping = btScalar(o.angular_damping);
     auto rb = std::make_unique<btRigidBody>(info);
-    rb->setActivationState(DISABLE_DEACTIVATION);
+    // Sleeping: Bullet's own timer (the process-wide gDeactivationTime) is not used; a body
+    // found at rest below (our test) is marked WANTS_DEACTIVATION, and Bullet freezes an island
+    // once all its bodies are so marked and wakes it when something moving touches it. The
+    // per-body thresholds keep the mark only while the body stays slower than the rest speeds.
+    rb->setActivationState(ACTIVE_TAG);
+    rb->setSleepingThresholds(btScalar(o.linear_rest), btScalar(o.angular_rest));
     // Continuous collision detection against tunnelling through thin walls.
     const Aabb local = world_aabb(hull_points[i], Pose::Identity());
     const double min_extent = (local.hi - local.lo).minCoeff();
@@ -498,6 +507,8 @@ DropResult simulate(const std::vector<DropObject>& objects, const Mesh& tote, co
         const bool slow = double(rb->getLinearVelocity().length()) < o.linear_rest &&
                           double(rb->getAngularVelocity().length()) < o.angular_rest;
         if (!slow || at_rest[i] < rest_steps) all_rest = false;
+        if (slow && at_rest[i] >= rest_steps && rb->getActivationState() == ACTIVE_TAG)
+          rb->setActivationState(WANTS_DEACTIVATION);
         // Came to rest on or over the rim: it leaves now, not after the whole pile rests.
         if (slow && at_rest[i] == rest_steps && outside_walls(i)) on_rim.push_back(i);
       }
@@ -524,6 +535,9 @@ DropResult simulate(const std::vector<DropObject>& objects, const Mesh& tote, co
   result.settled = all_rest;
 
   // --- contacts at the final state ---
+  // Sleeping bodies get no fresh contacts with the (inactive) tote: wake them (no motion).
+  for (std::size_t i = 0; i < n; ++i)
+    if (body[i]->isInWorld()) body[i]->activate(true);
   w->world.performDiscreteCollisionDetection();
   std::vector<std::uint32_t> contacts(n, 0);
   auto object_index = [&](const btCollisionObject* c) -> long {

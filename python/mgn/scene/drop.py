@@ -14,7 +14,11 @@ from mgn import _core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry import Mesh, mass_properties
 from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, make_tote
-from mgn.scene.convex import ConvexDecompositionOptions, cached_convex_decomposition
+from mgn.scene.convex import (
+    DROP_DECOMPOSITION,
+    ConvexDecompositionOptions,
+    cached_convex_decomposition,
+)
 from mgn.scene.scene import (
     BUILTIN,
     CONTACT_NAMES,
@@ -80,7 +84,9 @@ def _simulate(
             continue
         mesh = object_mesh(spec)
         props = mass_properties(mesh, spec.density)
-        parts = cached_convex_decomposition(mesh, decomposition, use_cache=use_cache)
+        parts = cached_convex_decomposition(
+            mesh, decomposition or DROP_DECOMPOSITION, use_cache=use_cache
+        )
         per_name[spec.name] = (parts, props, _source_of(spec, src))
 
     parts = [per_name[s.name][0] for s in objects]
@@ -132,7 +138,8 @@ def drop_scene(
         tote: the tote (default :func:`mgn.objects.default_tote`).
         options: simulation options (MetaGraspNet defaults).
         sources: for user objects, name -> the YAML file they were loaded from.
-        decomposition: convex decomposition options.
+        decomposition: convex decomposition options (default
+            :data:`mgn.scene.convex.DROP_DECOMPOSITION`: HACD parts merged for speed).
         use_cache: read/write the decomposition cache (:func:`mgn.scene.convex.cache_dir`).
 
     Raises:

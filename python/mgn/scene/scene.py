@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +56,27 @@ CONTACT_NAMES: tuple[str, ...] = ("-x", "+x", "-y", "+y", "floor")
 _WALLS = frozenset(CONTACT_NAMES[:4])
 
 
+#: DropOptions integer fields: inclusive range (max_hull_vertices also accepts 0).
+_INT_RANGES = {"solver_iterations": (1, 1000), "max_hull_vertices": (4, 100000)}
+#: DropOptions float fields: (low, low open?, high or None, high open?, unit), as in drop.cpp.
+_FLOAT_RANGES: dict[str, tuple[float, bool, float | None, bool, str]] = {
+    "dt": (0.0, True, 0.02, False, "s"),
+    "max_time": (0.0, True, None, False, "s"),
+    "linear_rest": (0.0, True, None, False, "m/s"),
+    "angular_rest": (0.0, True, None, False, "rad/s"),
+    "rest_time": (0.0, True, None, False, "s"),
+    "gravity": (0.0, True, None, False, "m/s^2"),
+    "rolling_friction": (0.0, False, None, False, ""),
+    "angular_damping": (0.0, False, 1.0, True, ""),
+    "tote_friction": (0.0, False, None, False, ""),
+    "tote_restitution": (0.0, False, 1.0, False, ""),
+    "collision_margin": (0.0, True, 0.01, False, "m"),
+    "contact_distance": (0.0, True, None, False, "m"),
+    "hull_tolerance": (0.0, False, None, False, "m"),
+    "resettle_time": (0.0, False, None, False, "s"),
+}
+
+
 @dataclass(frozen=True)
 class DropOptions:
     """Simulation options of the drop (SI units; see cpp/include/mgn/scene/drop.hpp).
@@ -73,6 +95,16 @@ class DropOptions:
         remove_unsettled: drop objects still moving at max_time.
         tote_collision: ``"boxes"`` (five static boxes fitted to the cavity, robust) or
             ``"mesh"`` (the tote's triangle mesh).
+        max_hull_vertices: each convex part's Bullet hull keeps at most this many vertices (0:
+            all, else >= 4); the reduced hull lies inside the part.
+        hull_tolerance: stop reducing a hull once every part vertex is within this distance of
+            it, m (>= 0).
+        polyhedral_contacts: whole contact patches from Bullet's polyhedral clipping (piles
+            settle sooner) instead of one GJK point per step.
+        resettle_time: after objects on or over the rim are removed, the rest may take this many
+            more simulated seconds (beyond max_time) to settle again (>= 0).
+        two_friction_directions: friction along two tangent directions per contact (large
+            piles settle ~1.6x sooner; a symmetric resting contact may drift to one side).
     """
 
     window_min: tuple[float, float, float] = (-0.06, -0.03, 0.30)
@@ -92,16 +124,79 @@ class DropOptions:
     contact_distance: float = 0.002
     remove_unsettled: bool = False
     tote_collision: str = "boxes"
+    max_hull_vertices: int = 96
+    hull_tolerance: float = 0.0005
+    polyhedral_contacts: bool = True
+    resettle_time: float = 2.0
+    two_friction_directions: bool = False
 
     def __post_init__(self) -> None:
         for name in ("window_min", "window_max"):
-            value = tuple(float(v) for v in getattr(self, name))
-            if len(value) != 3:
-                raise InvalidArgumentError(f"DropOptions.{name} must be 3 numbers, got {value}")
+            raw = getattr(self, name)
+            try:
+                value = tuple(float(v) for v in raw)
+            except (TypeError, ValueError) as e:
+                raise InvalidArgumentError(
+                    f"DropOptions.{name} must be 3 numbers, got {raw!r}"
+                ) from e
+            if len(value) != 3 or not all(math.isfinite(v) for v in value):
+                raise InvalidArgumentError(
+                    f"DropOptions.{name} must be 3 finite numbers, got {raw}"
+                )
             object.__setattr__(self, name, value)
+        if any(a > b for a, b in zip(self.window_min, self.window_max, strict=True)):
+            raise InvalidArgumentError(
+                f"DropOptions.window_min must be <= window_max, got min {self.window_min} "
+                f"max {self.window_max}"
+            )
         if self.tote_collision not in ("boxes", "mesh"):
             raise InvalidArgumentError(
                 f"DropOptions.tote_collision must be 'boxes' or 'mesh', got {self.tote_collision!r}"
+            )
+        for name in ("remove_unsettled", "polyhedral_contacts", "two_friction_directions"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InvalidArgumentError(
+                    f"DropOptions.{name} must be true or false, got {getattr(self, name)!r}"
+                )
+            object.__setattr__(self, name, bool(getattr(self, name)))
+        for name, (lo, hi) in _INT_RANGES.items():
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise InvalidArgumentError(f"DropOptions.{name} must be an integer, got {v!r}")
+            v = int(v)
+            ok = lo <= v <= hi or (name == "max_hull_vertices" and v == 0)
+            if not ok:
+                extra = "0 (keep all) or " if name == "max_hull_vertices" else ""
+                raise InvalidArgumentError(
+                    f"DropOptions.{name} must be {extra}in [{lo}, {hi}], got {v}"
+                )
+            object.__setattr__(self, name, v)
+        for name, (lo, lo_open, hi, hi_open, unit) in _FLOAT_RANGES.items():
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+                raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {v!r}")
+            v = float(v)
+            ok = math.isfinite(v) and (v > lo if lo_open else v >= lo)
+            ok = ok and (hi is None or (v < hi if hi_open else v <= hi))
+            if not ok:
+                rng = f"{'(' if lo_open else '['}{lo}, {'inf)' if hi is None else hi}"
+                rng += "" if hi is None else (")" if hi_open else "]")
+                raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {v}")
+            object.__setattr__(self, name, v)
+        if not self.max_time > self.dt:
+            raise InvalidArgumentError(
+                f"DropOptions.max_time must be > dt ({self.dt} s), got {self.max_time}"
+            )
+        for name in ("max_time", "resettle_time"):
+            if getattr(self, name) / self.dt > 1e7:
+                raise InvalidArgumentError(
+                    f"DropOptions.{name} must be at most 1e7 steps of dt ({self.dt} s), got "
+                    f"{getattr(self, name)}"
+                )
+        if not self.rest_time < self.max_time:
+            raise InvalidArgumentError(
+                f"DropOptions.rest_time must be < max_time ({self.max_time} s), got "
+                f"{self.rest_time}"
             )
 
     def to_dict(self) -> dict[str, Any]:

@@ -39,6 +39,18 @@ struct ConvexDecompositionOptions {
   /// from the original vertices, so they contain every one). >= 4 each.
   std::int64_t max_hacd_faces = 1500;
   int grid_resolution = 40;
+  /// After HACD, parts are merged greedily, the pair whose merged hull adds the least volume
+  /// first (added volume = hull(A u B) - vol(A) - vol(B), counted as >= 0), while the total
+  /// volume added stays within this fraction of the volume of the mesh's convex hull (so that
+  /// thin-walled objects, whose own volume is small, are treated like solid ones of their
+  /// size; a cavity larger than the budget, such as a glass's bowl, stays open). Fewer parts
+  /// make the physics
+  /// much cheaper (compound-compound contact pairs); the merged hull contains both parts, so
+  /// every input vertex still lies in some part. 0: no merging. >= 0.
+  double merge_volume_tolerance = 0.0;
+  /// After the merging above, parts are merged further (cheapest first, whatever the volume
+  /// added) until at most this many are left. 0: no cap; else >= 1.
+  int merge_max_parts = 0;
 };
 
 /// Convex hull of the mesh's vertices (Bullet's btConvexHullComputer), as a closed,
