@@ -122,7 +122,7 @@ def test_reference_dataset_validates_reads_and_exports(
     n = len(ds.scene(1).scene_json["instances"])
     assert view.amodal.shape[0] == n and view.instances.max() <= n
     assert view.rgb.shape == (*view.depth.shape, 3) and np.nanmax(view.depth) < 2.0  # metres
-    assert 1 <= check_difficulty(view.layout) <= 5
+    check_difficulty(view.layout)  # asserts the stored level is Table IV of its entries
     ann = coco.export_coco(ds, tmp_path / "annotations.json")
     gt = COCO(str(ann))
     anns = gt.loadAnns(gt.getAnnIds())

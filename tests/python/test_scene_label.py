@@ -209,7 +209,7 @@ def test_scene_label_command(tmp_path):
     assert main(args) == 1  # exists already, no --overwrite
     assert main([*args, "--view", "9"]) == 1  # not a configured view
     layout = json.loads((out / "7_layout.json").read_text())
-    assert 1 <= check_difficulty(layout) <= 5
+    check_difficulty(layout)  # asserts the stored level is Table IV of its entries
 
 
 def test_strided_subset_keeps_grasps_evenly(object_labels):
