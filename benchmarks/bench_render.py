@@ -180,6 +180,8 @@ def _run_child(side: str, width: int, repeats: int, out: Path) -> tuple[dict | N
     if proc.returncode != 0:
         last = (proc.stderr.strip().splitlines() or ["?"])[-1]
         status = PEER_NOT_INSTALLED if "ModuleNotFoundError" in proc.stderr else "failed"
+        if "OSMesaCreateContextAttribs" in proc.stderr:
+            status = 'failed: PyOpenGL too old for OSMesa, pip install "PyOpenGL>=3.1.5"'
         return None, f"{status} ({last})"
     return json.loads(proc.stdout.strip().splitlines()[-1]), ""
 
