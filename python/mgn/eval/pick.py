@@ -488,7 +488,7 @@ def run_picking(
     """
     from mgn.config import default_config
     from mgn.scene.drop import settle_tracked
-    from mgn.scene.label import strided_subset
+    from mgn.scene.label import LabelOptions, strided_subset
     from mgn.scene.scene_grasps import SceneGraspModel
 
     if len(scene.instances) == 0:
@@ -546,6 +546,7 @@ def run_picking(
                 per if gripper == "suction" else [None] * n,
                 config.gripper,
                 config.cup,
+                offsets=LabelOptions().grasp_offsets,  # the labels' collision model, exactly
                 num_threads=num_threads,
             )
             g = model.suction if gripper == "suction" else model.pj
