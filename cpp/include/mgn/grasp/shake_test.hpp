@@ -30,21 +30,17 @@
 #include <mgn/core/types.hpp>
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/grasp/gripper.hpp>
+#include <mgn/physics/rigid_object.hpp>
 
 #include <cstdint>
 #include <vector>
 
 namespace mgn {
 
-/// The object to shake: convex parts and rigid-body properties at density factor 1.
-struct PhysicsObject {
-  /// Convex parts in the object frame O (each part is used as the convex hull of its vertices,
-  /// e.g. the output of a convex decomposition, or the object itself when it is convex).
-  std::vector<Mesh> convex_parts;
-  double mass = 0.0;                  ///< kg at density factor 1, > 0
-  Vec3d com = Vec3d::Zero();          ///< centre of mass in O, m
-  Mat3d inertia = Mat3d::Identity();  ///< about the centre of mass, axes of O, kg m², SPD
-};
+/// The object to shake: its convex parts and rigid-body properties at density factor 1 (mass,
+/// com, inertia; friction and restitution are not used: the friction comes from the grid). One
+/// type with the drop's objects (see mgn/physics/rigid_object.hpp for the fields and defaults).
+using PhysicsObject = RigidObject;
 
 /// Parameters of the shake test. Defaults: MetaGraspNet where it publishes a value (grid, ranges,
 /// dt, step counts, 0.5 m/s, 0.2–0.3 rad), otherwise mgn's choice.

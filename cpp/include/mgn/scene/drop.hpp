@@ -18,6 +18,7 @@
 
 #include <mgn/core/types.hpp>
 #include <mgn/geometry/mesh.hpp>
+#include <mgn/physics/rigid_object.hpp>
 
 #include <cstdint>
 #include <string>
@@ -25,18 +26,9 @@
 
 namespace mgn {
 
-/// A dynamic object to drop.
-struct DropObject {
-  /// Closed convex meshes in the object frame O whose union is the collision shape (see
-  /// convex_decomposition()). At least one.
-  std::vector<Mesh> convex_parts;
-  double mass = 0.0;              ///< kg, > 0
-  Vec3d com = Vec3d::Zero();      ///< centre of mass p_OCm, m, object frame
-  Mat3d inertia = Mat3d::Zero();  ///< kg m^2 about the centre of mass, axes of O; symmetric PD
-  double friction = 0.5;          ///< Coulomb coefficient, >= 0
-  double restitution = 0.1;       ///< in [0, 1]
-  std::string name;               ///< used in error messages only
-};
+/// A dynamic object to drop: convex parts, mass properties, friction and restitution (one type
+/// with the shake test's objects; see mgn/physics/rigid_object.hpp for the fields and defaults).
+using DropObject = RigidObject;
 
 /// The tote's inner cavity (tote frame as above). Walls are named by their outward side:
 /// -x at x = -inner_length/2, +x at x = +inner_length/2, -y, +y likewise; floor at z = 0.
