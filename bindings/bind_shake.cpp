@@ -114,6 +114,8 @@ void bind_shake(py::module_& m) {
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
       .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
+      .def_readwrite("staircase", &ShakeOptions::staircase)
+      .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
       .def_readwrite("num_threads", &ShakeOptions::num_threads)
       .def_readwrite("seed", &ShakeOptions::seed)
       .def("validate", &ShakeOptions::validate)
@@ -143,6 +145,9 @@ void bind_shake(py::module_& m) {
         out["frictions"] = to_numpy(std::move(r.frictions));
         out["density_factors"] = to_numpy(std::move(r.density_factors));
         out["total_steps"] = r.total_steps;
+        out["trial_simulated"] =
+            to_bool_numpy(std::move(r.trial_simulated)).attr("reshape")(G, S, S);
+        out["fallback"] = to_bool_numpy(std::move(r.fallback));
         return out;
       },
       py::arg("parts"), py::arg("mass"), py::arg("com"), py::arg("inertia"), py::arg("grasps"),

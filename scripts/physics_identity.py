@@ -32,14 +32,14 @@ def _drop_cases(out: dict[str, np.ndarray]) -> None:
     }
     for name, opt in options.items():
         for seed in (0, 1):
-            raw, _ = _simulate(specs, seed, ToteSpec(), opt, None, None, True)
+            raw, *_ = _simulate(specs, seed, ToteSpec(), opt, None, None, True)
             for key in ("X_WO", "X_WO_release", "status", "settled", "contacts"):
                 out[f"drop/{name}/{seed}/{key}"] = np.asarray(raw[key])
             for key in ("steps", "max_penetration"):
                 out[f"drop/{name}/{seed}/{key}"] = np.asarray(raw[key])
     scene = drop_scene(specs[:5], seed=3)
     X = np.array([i.X_WO for i in scene.instances])
-    raw, _ = _simulate(
+    raw, *_ = _simulate(
         [next(s for s in specs if s.name == i.name) for i in scene.instances],
         0,
         ToteSpec(),

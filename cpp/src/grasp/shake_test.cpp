@@ -460,6 +460,7 @@ void ShakeOptions::validate() const {
           "an integer in [8, 100000]", max_hull_vertices);
   require(solver_iterations >= 1 && solver_iterations <= 1000, "solver_iterations",
           "an integer in [1, 1000]", solver_iterations);
+  require(staircase_checks >= 0, "staircase_checks", "an integer >= 0", staircase_checks);
   require(num_threads >= 0, "num_threads", "an integer >= 0 (0 = all hardware threads)",
           num_threads);
 }
@@ -515,6 +516,55 @@ void validate_physics_object(const PhysicsObject& object) {
   }
 }
 
+StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks) {
+  if (S < 1) throw_error<InvalidArgument>("staircase_grid: S must be >= 1, got ", S);
+  if (checks < 0) throw_error<InvalidArgument>("staircase_grid: checks must be >= 0, got ", checks);
+  StaircaseGrid g;
+  const std::size_t n = static_cast<std::size_t>(S) * S;
+  g.success.assign(n, 0);
+  g.simulated.assign(n, 0);
+  auto at = [S](int i, int j) { return static_cast<std::size_t>(i) * S + j; };
+  auto run = [&](int i, int j) {
+    const bool ok = trial(i, j);
+    g.success[at(i, j)] = ok;
+    g.simulated[at(i, j)] = 1;
+    ++g.trials;
+    return ok;
+  };
+  // The walk: b[i] = successes in row i (cells j < b[i]), non-decreasing in i.
+  std::vector<int> b(static_cast<std::size_t>(S), 0);
+  int j = 0;
+  for (int i = 0; i < S; ++i) {
+    while (j < S && run(i, j)) ++j;
+    b[i] = j;
+    for (int k = 0; k < j; ++k) g.success[at(i, k)] = 1;  // inferred (or simulated) successes
+  }
+  // Checks: inferred cells next to the boundary, spread over the rows.
+  std::vector<std::pair<int, int>> candidates;
+  for (int i = 0; i < S; ++i) {
+    if (i > 0 && b[i - 1] > 0 && !g.simulated[at(i, b[i - 1] - 1)])
+      candidates.emplace_back(i, b[i - 1] - 1);  // inferred success
+    if (b[i] + 1 < S && !g.simulated[at(i, b[i] + 1)])
+      candidates.emplace_back(i, b[i] + 1);  // inferred failure
+  }
+  const int m = static_cast<int>(candidates.size());
+  const int c = std::min(checks, m);
+  bool contradicted = false;
+  for (int k = 0; k < c && !contradicted; ++k) {
+    const int idx = c == 1 ? m / 2 : static_cast<int>(std::lround(double(k) * (m - 1) / (c - 1)));
+    const auto [ci, cj] = candidates[static_cast<std::size_t>(idx)];
+    const bool inferred = g.success[at(ci, cj)] != 0;
+    if (run(ci, cj) != inferred) contradicted = true;
+  }
+  if (contradicted) {
+    g.fallback = true;
+    for (int i = 0; i < S; ++i)
+      for (int jj = 0; jj < S; ++jj)
+        if (!g.simulated[at(i, jj)]) run(i, jj);
+  }
+  return g;
+}
+
 ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gripper,
                        const std::vector<ParallelJawGrasp>& grasps, const ShakeOptions& options) {
   options.validate();
@@ -532,19 +582,37 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
   r.trial_success.assign(n, 0);
   r.trial_ended_early.assign(n, 0);
   r.trial_steps.assign(n, 0);
-  parallel_for(n, options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t) {
-      const std::size_t g = t / per_grasp;
-      const std::size_t i = (t % per_grasp) / S;
-      const std::size_t j = t % S;
-      const TrialSetting s = make_setting(r.frictions[i], r.density_factors[j], options, t);
-      TrialWorld world(prepared, gripper, grasps[g], s, options);
-      const TrialOutcome o = world.run([](const StepState&) {});
-      r.trial_success[t] = o.success;
-      r.trial_ended_early[t] = o.ended_early;
-      r.trial_steps[t] = o.steps;
-    }
-  });
+  r.trial_simulated.assign(n, 0);
+  r.fallback.assign(grasps.size(), 0);
+  auto run_trial = [&](std::size_t t) {
+    const std::size_t g = t / per_grasp;
+    const std::size_t i = (t % per_grasp) / S;
+    const std::size_t j = t % S;
+    const TrialSetting s = make_setting(r.frictions[i], r.density_factors[j], options, t);
+    TrialWorld world(prepared, gripper, grasps[g], s, options);
+    const TrialOutcome o = world.run([](const StepState&) {});
+    r.trial_success[t] = o.success;
+    r.trial_ended_early[t] = o.ended_early;
+    r.trial_steps[t] = o.steps;
+    r.trial_simulated[t] = 1;
+    return o.success;
+  };
+  if (options.staircase) {
+    parallel_for(grasps.size(), options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t g = begin; g < end; ++g) {
+        const std::size_t base = g * per_grasp;
+        const StaircaseGrid sg = staircase_grid(
+            S, [&](int i, int j) { return run_trial(base + std::size_t(i) * S + j); },
+            options.staircase_checks);
+        for (std::size_t k = 0; k < per_grasp; ++k) r.trial_success[base + k] = sg.success[k];
+        r.fallback[g] = sg.fallback;
+      }
+    });
+  } else {
+    parallel_for(n, options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t t = begin; t < end; ++t) run_trial(t);
+    });
+  }
   r.score.assign(grasps.size(), 0.0);
   for (std::size_t t = 0; t < n; ++t) {
     r.score[t / per_grasp] += r.trial_success[t];

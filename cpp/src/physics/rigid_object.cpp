@@ -55,6 +55,7 @@ struct Planes {
   std::vector<Vec3d> normals;
   std::vector<double> offsets;
   std::vector<Vec3d> vertices;
+  std::vector<std::vector<int>> face_points;  ///< per plane: indices of the input points on it
 };
 
 Planes hull_planes(const std::vector<Vec3d>& points) {
@@ -87,6 +88,14 @@ Planes hull_planes(const std::vector<Vec3d>& points) {
     n /= len;
     out.normals.push_back(n);
     out.offsets.push_back(n.dot(centre / count));
+    std::vector<int> on;
+    e = first;
+    int guard = 0;
+    do {
+      on.push_back(hc.original_vertex_index[e->getSourceVertex()]);
+      e = e->getNextEdgeOfFace();
+    } while (e != first && ++guard < 100000);
+    out.face_points.push_back(std::move(on));
   }
   // Every hull vertex on the inner side of every plane (float rounding of the hull computer).
   for (std::size_t f = 0; f < out.normals.size(); ++f)
@@ -116,7 +125,19 @@ std::vector<Vec3d> polytope_vertices(const Planes& all, const std::vector<std::s
     // A dual face m.q = e is the primal vertex x with (x - c).q = 1, i.e. x = c + m / e; the
     // origin (c) must lie strictly inside the dual hull, else the intersection is unbounded.
     if (!(d.offsets[k] > 1e-9 * scale)) return {};
-    out.push_back(c + d.normals[k] / d.offsets[k]);
+    // The vertex is where the planes of the dual face's points meet: solved in double precision
+    // (least squares over them; exact for three) rather than from the single-precision dual hull.
+    Mat3d A = Mat3d::Zero();
+    Vec3d b = Vec3d::Zero();
+    for (int q : d.face_points[k]) {
+      const std::size_t f = chosen[static_cast<std::size_t>(q)];
+      A += all.normals[f] * all.normals[f].transpose();
+      b += all.normals[f] * all.offsets[f];
+    }
+    const Vec3d guess = c + d.normals[k] / d.offsets[k];
+    const Vec3d x = A.ldlt().solve(b);
+    out.push_back(
+        x.allFinite() && (x - guess).norm() < 1e-3 * (1.0 / scale + guess.norm()) ? x : guess);
   }
   return out;
 }
@@ -195,7 +216,16 @@ std::vector<Vec3d> outer_hull_vertices(const std::vector<Vec3d>& points, int max
     chosen = std::move(next);
     vertices = std::move(more);
   }
-  if (max_excess) *max_excess = std::max(0.0, worst);
+  // Vertices where more than three planes nearly meet are only least-squares exact: move every
+  // vertex out from c by 1e-4 of its distance (micrometres) so their hull surely contains the
+  // points.
+  worst = 0.0;
+  for (Vec3d& v : vertices) {
+    v = c + (1.0 + 1e-4) * (v - c);
+    std::size_t f = 0;
+    worst = std::max(worst, excess(v, &f));
+  }
+  if (max_excess) *max_excess = worst;
   return vertices;
 }
 

@@ -109,8 +109,8 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
           "options.collision_margin", o.collision_margin, "in (0, 0.01] m");
   require(std::isfinite(o.contact_distance) && o.contact_distance > 0, "options.contact_distance",
           o.contact_distance, "finite and > 0 (m)");
-  require(o.max_hull_vertices == 0 || (o.max_hull_vertices >= 4 && o.max_hull_vertices <= 100000),
-          "options.max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [4, 100000]");
+  require(o.max_hull_vertices == 0 || (o.max_hull_vertices >= 8 && o.max_hull_vertices <= 100000),
+          "options.max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [8, 100000]");
   require(std::isfinite(o.hull_tolerance) && o.hull_tolerance >= 0, "options.hull_tolerance",
           o.hull_tolerance, "finite and >= 0 (m)");
   require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 && o.resettle_time / o.dt <= 1e7,
@@ -189,7 +189,7 @@ constexpr const physics::BulletUnits& kUnits = physics::kDropUnits;
 /// How the convex parts become Bullet hulls (see DropOptions).
 physics::HullShapeOptions hull_options(const DropOptions& o) {
   physics::HullShapeOptions h;
-  h.reduction = HullReduction::InnerGreedy;
+  h.reduction = HullReduction::Outer;
   h.max_vertices = o.max_hull_vertices;
   h.tolerance = o.hull_tolerance;
   h.margin = o.collision_margin;

@@ -78,12 +78,14 @@ struct DropOptions {
   /// Remove objects that are still moving at max_time (else keep them with settled = false).
   bool remove_unsettled = false;
   /// Each convex part's Bullet hull is reduced to at most this many vertices (0: keep all; else
-  /// >= 4) by reduce_convex_points(): a support query costs time linear in the vertex count and
-  /// dominates the drop. The reduced hull lies inside the part (see hull_tolerance).
+  /// >= 8) by outer_hull_vertices(): a support query costs time linear in the vertex count and
+  /// dominates the drop. The reduced hull CONTAINS the part (it is cut from the part's own face
+  /// planes), so resting objects do not sink into the floor or into each other; it protrudes
+  /// beyond the part by at most hull_tolerance where the vertex budget allows.
   int max_hull_vertices = 96;
-  /// Stop reducing a hull early once every vertex of the part is within this distance (m, >= 0)
-  /// of the reduced hull's face planes.
-  double hull_tolerance = 0.0005;
+  /// Stop reducing a hull once no vertex of the reduced hull lies farther than this distance
+  /// (m, >= 0) outside the part.
+  double hull_tolerance = 0.0002;
   /// Contacts between convex parts (and with the tote boxes) from Bullet's polyhedral clipping
   /// (a whole face-on-face contact patch in one step: piles come to rest much sooner) instead of
   /// one GJK point per step. The hulls are then not shrunk by the margin (the clipping ignores
