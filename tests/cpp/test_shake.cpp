@@ -386,5 +386,33 @@ TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
     if (stair.trial_simulated[t]) EXPECT_EQ(stair.trial_success[t], full.trial_success[t]);
 }
 
+TEST(Shake, MeshGripperIsSimulatedWithItsOwnFingers) {
+  // A user's mesh gripper: with the box gripper's own meshes it holds the box like the boxes do;
+  // with fingers moved 60 mm sideways (they pass beside the box) it holds nothing, so the score
+  // must follow the meshes, not the box fields (which stay the defaults).
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), 0.05);
+  const ShakeOptions o = small_grid(2, 1.0, 2.0);
+  const ParallelJawGripper boxes;
+  const ShakeResult by_boxes = shake_test(box, boxes, {centre_grasp(0.04)}, o);
+  ParallelJawGripper same = boxes;
+  const GripperMeshes m = gripper_meshes(boxes, 0.0);
+  same.palm_mesh = m.palm;
+  same.finger_left_mesh = m.finger_left;
+  same.finger_right_mesh = m.finger_right;
+  const ShakeResult by_meshes = shake_test(box, same, {centre_grasp(0.04)}, o);
+  EXPECT_EQ(by_boxes.score[0], 1.0);
+  EXPECT_EQ(by_meshes.score[0], 1.0);
+  ParallelJawGripper aside = same;
+  Pose shift = Pose::Identity();
+  shift.translation() = Vec3d(0.0, 0.06, 0.0);
+  aside.finger_left_mesh = m.finger_left.transformed(shift);
+  aside.finger_right_mesh = m.finger_right.transformed(shift);
+  const ShakeResult missed = shake_test(box, aside, {centre_grasp(0.04)}, o);
+  EXPECT_EQ(missed.score[0], 0.0);
+  const ShakeTrajectory tr = shake_trajectory(box, aside, centre_grasp(0.04), 1.0, 1.0, o, 10);
+  for (std::size_t k = 0; k < tr.contact_left.size(); ++k)
+    EXPECT_FALSE(tr.contact_left[k] || tr.contact_right[k]) << "a finger touched at " << k;
+}
+
 }  // namespace
 }  // namespace mgn

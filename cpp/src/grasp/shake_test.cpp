@@ -199,21 +199,45 @@ class TrialWorld {
     info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
     X_OB_ = obj.X_OB;
 
-    const Vec3d& f = g.finger_size;
-    palm_centre_ = Vec3d(0.0, 0.0, g.flange_to_tip - f.z() - 0.5 * g.palm_size.z());
-    finger_z_ = g.flange_to_tip - 0.5 * f.z();
-    palm_shape_ = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * g.palm_size)));
-    finger_shape_ = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * f)));
-    for (btBoxShape* b : {palm_shape_.get(), finger_shape_.get()}) {
-      b->setMargin(btScalar(kUnits.length * o.margin));
-      if (o.polyhedral_contacts) b->initializePolyhedralFeatures();
+    btCollisionShape* palm_shape = nullptr;
+    btCollisionShape* finger_shapes[2] = {nullptr, nullptr};
+    if (g.has_meshes()) {
+      // A user's mesh gripper: palm and fingers are the convex hulls of their meshes (hand frame
+      // H, fingers closed; at an inner-face offset d each finger moves by -d / +d along x).
+      physics::HullShapeOptions h;
+      h.margin = o.margin;
+      h.shrink_by_margin = true;  // the surface stays the mesh's, as with the boxes
+      h.polyhedral = o.polyhedral_contacts;
+      const Mesh* meshes[3] = {&g.palm_mesh, &g.finger_left_mesh, &g.finger_right_mesh};
+      for (int k = 0; k < 3; ++k)
+        mesh_shapes_[k] = physics::hull_shape(
+            physics::hull_points(*meshes[k], Pose::Identity(), kUnits, h), kUnits, h);
+      palm_centre_ = Vec3d::Zero();
+      finger_z_ = 0.0;
+      finger_half_x_ = 0.0;
+      palm_shape = mesh_shapes_[0].get();
+      finger_shapes[0] = mesh_shapes_[1].get();
+      finger_shapes[1] = mesh_shapes_[2].get();
+    } else {
+      const Vec3d& f = g.finger_size;
+      palm_centre_ = Vec3d(0.0, 0.0, g.flange_to_tip - f.z() - 0.5 * g.palm_size.z());
+      finger_z_ = g.flange_to_tip - 0.5 * f.z();
+      finger_half_x_ = 0.5 * f.x();
+      palm_shape_ = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * g.palm_size)));
+      finger_shape_ = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * f)));
+      for (btBoxShape* b : {palm_shape_.get(), finger_shape_.get()}) {
+        b->setMargin(btScalar(kUnits.length * o.margin));
+        if (o.polyhedral_contacts) b->initializePolyhedralFeatures();
+      }
+      palm_shape = palm_shape_.get();
+      finger_shapes[0] = finger_shapes[1] = finger_shape_.get();
     }
 
     d_ = 0.5 * g.collision_opening(grasp.width);
     const Pose X_WH = path_.initial();
-    palm_ = make_kinematic(palm_shape_.get(), palm_pose(X_WH), 1.0);
+    palm_ = make_kinematic(palm_shape, palm_pose(X_WH), 1.0);
     for (int side = 0; side < 2; ++side) {
-      fingers_[side] = make_kinematic(finger_shape_.get(), finger_pose(X_WH, side, d_), 1.0);
+      fingers_[side] = make_kinematic(finger_shapes[side], finger_pose(X_WH, side, d_), 1.0);
       fingers_[side]->setContactStiffnessAndDamping(btScalar(o.pad_stiffness),
                                                     btScalar(o.pad_damping));
     }
@@ -317,7 +341,7 @@ class TrialWorld {
   Pose finger_pose(const Pose& X_WH, int side, double d) const {
     const double sign = side == 0 ? -1.0 : 1.0;
     Pose X = X_WH;
-    X.translate(Vec3d(sign * (d + 0.5 * g_.finger_size.x()), 0.0, finger_z_));
+    X.translate(Vec3d(sign * (d + finger_half_x_), 0.0, finger_z_));
     return X;
   }
 
@@ -398,7 +422,8 @@ class TrialWorld {
   Pose X_OB_;
   Vec3d palm_centre_;
   double finger_z_ = 0;
-  double d_ = 0;  // current inner-face offset of both fingers from the hand axis, m
+  double finger_half_x_ = 0;  // finger box: centre to inner face along x, m (meshes: 0)
+  double d_ = 0;              // current inner-face offset of both fingers from the hand axis, m
 
   btDefaultCollisionConfiguration config_;
   btCollisionDispatcher dispatcher_;
@@ -407,6 +432,7 @@ class TrialWorld {
   btDiscreteDynamicsWorld world_;
 
   std::unique_ptr<btBoxShape> palm_shape_, finger_shape_;
+  std::unique_ptr<btConvexHullShape> mesh_shapes_[3];  // palm, left, right (mesh gripper)
   physics::RigidShape shape_;
   std::unique_ptr<btRigidBody> palm_, object_;
   std::unique_ptr<btRigidBody> fingers_[2];

@@ -25,6 +25,7 @@ import numpy.typing as npt
 from mgn import _core
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import ParallelJawGripper, default_gripper
+from mgn.pj.sampler import core_gripper
 
 Mesh = _core.Mesh
 
@@ -240,7 +241,7 @@ def shake_scores(
     """
     m, c, inertia_arr = _inputs(mass, com, inertia)
     rows = grasp_rows(grasps)
-    g = gripper if gripper is not None else default_gripper()
+    g = core_gripper(gripper if gripper is not None else default_gripper())
     o = (options if options is not None else ShakeOptions()).to_core()
     r = _core.shake_test(_parts(mesh_or_parts), m, c, inertia_arr, rows, g, o)
     return ShakeScores(
@@ -280,7 +281,7 @@ def shake_trajectory(
     row = grasp_rows([grasp] if hasattr(grasp, "approach") else grasp)
     if row.shape[0] != 1:
         raise InvalidArgumentError(f"grasp: expected one grasp, got {row.shape[0]}")
-    g = gripper if gripper is not None else default_gripper()
+    g = core_gripper(gripper if gripper is not None else default_gripper())
     o = (options if options is not None else ShakeOptions()).to_core()
     t = _core.shake_trajectory(
         _parts(mesh_or_parts),

@@ -11,6 +11,9 @@
 /// if both fingers still touch the object at the end. The score of a grasp is the success
 /// fraction over the S×S grid of settings.
 ///
+/// A gripper given by meshes (ParallelJawGripper::has_meshes()) is simulated as the convex hulls
+/// of its palm and finger meshes; otherwise as its boxes.
+///
 /// Frames: O = object (the frame of the convex parts and of the grasps); H = hand (flange) frame
 /// of gripper.hpp (z = approach, x = closing); W = simulation world, z up, gravity −z, with the
 /// hand initially at the origin pointing down: X_WH(0) = rotation of π about x. Units SI.
