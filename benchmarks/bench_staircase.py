@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         parts, props, rows = real_grasps(name, args.grasps_per_object)
         base = dict(num_threads=args.threads)
 
-        def run(staircase: bool):
+        def run(staircase: bool, parts=parts, props=props, rows=rows, base=base):
             t0 = time.perf_counter()
             r = shake_scores(
                 parts,
@@ -80,7 +80,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"{name}: {len(rows)} grasps, identical scores {n_same}/{len(rows)}, "
             f"mean |diff| {np.mean(np.abs(full.score - stair.score)):.4f}, "
-            f"trials/grasp {stair.num_trials / len(rows):.1f} (full {full.num_trials / len(rows):.0f}), "
+            f"trials/grasp {stair.num_trials / len(rows):.1f} "
+            f"(full {full.num_trials / len(rows):.0f}), "
             f"fallback {int(stair.fallback.sum())}, time full {tf:.1f} s staircase {ts:.1f} s, "
             f"mean score {full.score.mean():.3f}",
             flush=True,
