@@ -21,7 +21,7 @@ from typing import Any, TypeVar
 
 import yaml
 
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import InvalidArgumentError
 
 T = TypeVar("T", bound="_YamlDataclass")
 
@@ -73,16 +73,18 @@ class _YamlDataclass:
     @classmethod
     def from_yaml(cls: type[T], path: str | os.PathLike[str]) -> T:
         """Read from a YAML file (keys as in :meth:`to_dict`; missing keys keep defaults)."""
-        try:
-            with open(path, encoding="utf-8") as fh:
-                data = yaml.safe_load(fh)
-        except FileNotFoundError as e:
-            raise IoError(f"{cls.__name__}.from_yaml: file not found: '{os.fspath(path)}'") from e
-        except yaml.YAMLError as e:
+        from mgn.io.yaml_file import read_yaml
+
+        data = read_yaml(path, f"{cls.__name__} YAML")
+        if data is not None and not isinstance(data, dict):
             raise InvalidArgumentError(
-                f"{cls.__name__}.from_yaml: '{os.fspath(path)}' is not valid YAML: {e}"
-            ) from e
-        return cls.from_dict(data or {})
+                f"{cls.__name__} YAML '{os.fspath(path)}': expected a mapping of keys to values, "
+                f"got {type(data).__name__}"
+            )
+        try:
+            return cls.from_dict(data or {})
+        except (InvalidArgumentError, ValueError, TypeError) as e:
+            raise InvalidArgumentError(f"{cls.__name__} YAML '{os.fspath(path)}': {e}") from e
 
 
 @dataclass(frozen=True)

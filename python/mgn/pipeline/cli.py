@@ -1,6 +1,7 @@
 """``mgn generate`` and ``mgn config``::
 
 mgn generate --out DIR [--scenes N] [--config cfg.yaml] [--objects NAME ...] [--seed S]
+             [--add my_objects.yaml] [--categories NAME ...]
              [--workers K] [--resume] [--scheduler tcp://host:8786] [--quiet] [--no-cache]
              [--split all|train|test] [--difficulty-quota 1=20,2=20,3=20,4=20,5=20
              [--max-scenes M] [--batch-scenes B] [--prune-rejected]]
@@ -29,6 +30,19 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.confi
     from mgn.pipeline.testset import parse_quota
 
     cfg = load_config(args.config)
+    if args.add:
+        import os
+
+        added = tuple(os.path.abspath(a) for a in args.add)
+        cfg = dataclasses.replace(cfg, objects=dataclasses.replace(
+            cfg.objects, user_objects=cfg.objects.user_objects + added))  # fmt: skip
+    if args.categories:
+        if args.objects:
+            from mgn.errors import InvalidArgumentError
+
+            raise InvalidArgumentError("mgn generate: give --objects or --categories, not both")
+        cfg = dataclasses.replace(cfg, objects=dataclasses.replace(
+            cfg.objects, names=None, categories=tuple(args.categories)))  # fmt: skip
     if args.split is not None:
         cfg = dataclasses.replace(cfg, split=dataclasses.replace(cfg.split, name=args.split))
     sel = {}
@@ -110,6 +124,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--config", metavar="YAML", help="configuration (default: MGN defaults)")
     p.add_argument(
         "--objects", nargs="+", metavar="NAME", help="these objects in every scene (names or ids)"
+    )
+    p.add_argument(
+        "--categories",
+        nargs="+",
+        metavar="NAME",
+        help="draw the scenes from these objects, 2-5 copies each (config objects.categories)",
+    )
+    p.add_argument(
+        "--add",
+        action="append",
+        metavar="YAML",
+        help="user objects of this YAML file join the catalogue (repeatable; config "
+        "objects.user_objects; write one with `mgn objects add`)",
     )
     p.add_argument("--seed", type=int, default=0, help="dataset seed (default 0)")
     p.add_argument("--workers", type=int, default=1, help="local worker processes (default 1)")
