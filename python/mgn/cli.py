@@ -138,10 +138,9 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
             name, k = f"{stem}_{k}", k + 1
         taken.add(name)
         entry: dict = {"name": name}
-        try:
-            entry["mesh"] = os.path.relpath(path.resolve(), base)
-        except ValueError:  # another drive (Windows)
-            entry["mesh"] = os.fspath(path.resolve())
+        full = path.resolve()  # relative to the YAML file when below it, else absolute
+        entry["mesh"] = full.relative_to(base).as_posix() if full.is_relative_to(base) else (
+            os.fspath(full))  # fmt: skip
         entry.update(scale=args.scale, density=args.density, friction=args.friction)
         closed = report.is_watertight and report.is_winding_consistent
         if not closed:
@@ -159,6 +158,8 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             specs = load_objects_yaml(tmp)  # the whole file, as generate will read it
+    except MgnError as e:
+        raise type(e)(str(e).replace(os.fspath(tmp), os.fspath(target))) from None
     finally:
         tmp.unlink(missing_ok=True)
     for w in caught:

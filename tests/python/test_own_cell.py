@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 import types
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -169,14 +170,15 @@ def test_info_json_is_the_same_from_python_and_cpp(tmp_path, data_dir, capsys):
 # ------------------------------------------------------------ foreign meshes -> a dataset
 
 
-def pybullet_meshes() -> list[Path]:
+def pybullet_meshes() -> list[tuple[Path, float]]:
+    """An OBJ, a DAE and an STL shipped by pybullet, with the scale that makes each ~8 cm."""
     import pybullet_data
 
     root = Path(pybullet_data.getDataPath())
-    picks = ["duck_vhacd.obj", "cube.obj", "teddy_vhacd.obj", "sphere_smooth.obj",
-             "lego/lego.obj"]  # fmt: skip
-    found = [root / p for p in picks if (root / p).is_file()]
-    assert len(found) >= 3, f"pybullet_data under {root} lacks the expected OBJ files"
+    picks = [("duck_vhacd.obj", 0.05), ("racecar/meshes/cone.dae", 0.5),
+             ("laikago/hip_motor.stl", 1.0)]  # fmt: skip
+    found = [(root / p, s) for p, s in picks if (root / p).is_file()]
+    assert len(found) == 3, f"pybullet_data under {root} lacks {picks}"
     return found
 
 
@@ -195,29 +197,29 @@ def test_foreign_meshes_load_as_objects(tmp_path, capsys):
     ok, failed = 0, []
     for i, f in enumerate(files):
         target = tmp_path / f"objs{i}.yaml"
-        try:
-            with pytest.warns() as caught:
-                code = main(["objects", "add", str(f), "--to", str(target)])
-            assert all(issubclass(w.category, ImplausibleSizeWarning) for w in caught)
-        except pytest.fail.Exception:
-            code = main(["objects", "add", str(f), "--to", str(target)])
-        if code == 0:
+        if main(["objects", "add", str(f), "--to", str(target)]) == 0:
             ok += 1
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ImplausibleSizeWarning)  # some are in cm or mm
+                assert load_objects_yaml(target)[0].material.shininess > 0
         else:
             failed.append(f.name)
     err = capsys.readouterr().err
-    # A file that cannot be an object (no triangles, degenerate) fails with a message naming it.
-    for name in failed:
-        assert name in err
+    # A file that cannot be an object (e.g. a 2-triangle plane) fails with a message naming it
+    # and the YAML file it was to be added to.
+    for i, f in enumerate(files):
+        if f.name in failed:
+            assert f"{f.name}': " in err and f"objs{i}.yaml" in err, err
     assert ok >= 0.8 * len(files), f"{len(failed)} of {len(files)} failed: {failed}\n{err}"
 
 
 def test_foreign_meshes_through_add_generate_validate(tmp_path, capsys):
-    meshes = pybullet_meshes()[:3]
     objs = tmp_path / "my_objects.yaml"
-    assert main(["objects", "add", *map(str, meshes), "--to", str(objs), "--density", "800"]) == 0
+    for mesh, scale in pybullet_meshes():
+        args = ["objects", "add", str(mesh), "--to", str(objs), "--scale", str(scale)]
+        assert main([*args, "--density", "800"]) == 0
     out = capsys.readouterr().out
-    names = [s.name for s in load_objects_yaml(objs)]
+    names = [s.name for s in load_objects_yaml(objs)]  # no size warning: scales are right
     assert len(names) == 3 and f"--categories {' '.join(names)}" in out
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(
@@ -257,6 +259,8 @@ def test_open_mesh_object_in_generate(tmp_path, capsys):
     code = main(["generate", "--out", str(ds), "--scenes", "1", "--config", str(cfg), "--add",
                  str(objs), "--quiet", "--no-cache"])  # fmt: skip
     assert code == 0, capsys.readouterr()
+    scene = json.loads((ds / "scene0" / "scene.json").read_text())
+    assert "cup" in {i["name"] for i in scene["instances"]} | {r["name"] for r in scene["removed"]}
     assert main(["validate", str(ds)]) == 0
 
 

@@ -18,7 +18,9 @@ Example ``my_objects.yaml`` (paths relative to the YAML file; SI units)::
         description: Aluminium bracket
 
 The mesh keeps its own frame. It must be watertight (mass properties are exact), unless
-``allow_open: true`` is given, in which case the documented shell model is used.
+``allow_open: true`` is given, in which case the documented shell model is used (2 mm walls)
+and the object gets suction labels only: its parallel-jaw label set is empty (``pj_skipped`` in
+the metadata says why), since the antipodal sampler needs a closed volume.
 
 Any mesh file works: a material the file does not give (an OBJ without ``.mtl``, ``Ns 0``) gets
 the default grey plastic. Numbers may be written ``2.7e3`` or ``1.0e-3``. Every error names the
@@ -205,7 +207,7 @@ def _object_from_entry(
             tags=frozenset(entry.get("tags", ())),
         )
     except ValueError as e:
-        raise InvalidArgumentError(f"{where}: {e}") from e
+        raise InvalidArgumentError(f"{where}: mesh '{mesh_path}': {e}") from e
 
 
 def load_objects_yaml(path: str | os.PathLike[str]) -> tuple[ObjectSpec, ...]:

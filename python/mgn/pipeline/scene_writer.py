@@ -38,7 +38,8 @@ def scene_views(scene: Scene, camera: CameraConfig) -> list[tuple[int, CameraVie
 
     The ``mgn`` rig is drawn from the scene seed (:func:`mgn.render.mgn_rig`), looking at the
     tote centre (the world origin); the ``hemisphere`` rig and the user ``poses`` are fixed.
-    View indices are those of the full rig, so ``views: [0, 5, 17]`` gives files ``0_*``, ``5_*`` and ``17_*``.
+    View indices are those of the full rig, so ``views: [0, 5, 17]`` gives files ``0_*``,
+    ``5_*`` and ``17_*``.
     """
     K = scene_intrinsics(camera)
     if camera.rig == "mgn":
