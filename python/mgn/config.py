@@ -632,6 +632,15 @@ class Config(_Section):
         config = super().from_dict(data, key)
         if base_dir is not None:
             config = config.resolved(base_dir)
+        if config.tote.mesh is not None and (base_dir is not None or os.path.isabs(
+                config.tote.mesh)):  # fmt: skip
+            from mgn.errors import MgnError
+            from mgn.objects import make_tote
+
+            try:
+                make_tote(config.tote)  # the file reads and fits the inner box
+            except MgnError as e:
+                raise ConfigError(f"config key 'tote.mesh': {e}") from e
         return config
 
     def resolved(self, base_dir: str | os.PathLike[str]) -> Config:
@@ -644,6 +653,9 @@ class Config(_Section):
         objects = dataclasses.replace(
             self.objects, user_objects=tuple(absolute(p) or p for p in self.objects.user_objects)
         )
+        tote = self.tote
+        if tote.mesh is not None and not os.path.isabs(tote.mesh):
+            tote = dataclasses.replace(tote, mesh=absolute(tote.mesh))
         g = self.gripper
         meshes = {
             f: absolute(getattr(g, f))
@@ -651,7 +663,10 @@ class Config(_Section):
             if absolute(getattr(g, f)) is not None
         }
         return dataclasses.replace(
-            self, objects=objects, gripper=dataclasses.replace(g, **meshes) if meshes else g
+            self,
+            objects=objects,
+            tote=tote,
+            gripper=dataclasses.replace(g, **meshes) if meshes else g,
         )
 
     def to_yaml(self) -> str:
@@ -661,7 +676,8 @@ class Config(_Section):
 
 _SECTION_DOCS = {
     "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
-    "tote": "the bin (m): mgn.objects.ToteSpec",
+    "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
+    "box inside its cavity",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
     "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
     "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "

@@ -379,3 +379,57 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
         from mgn.scene.export import export_scene_glb
 
         export_scene_glb(scene, tmp_path / "x.glb", grasps="vacuum")
+
+
+# ------------------------------------------------------------------------------------ any bin
+
+
+def round_bin(folder: Path) -> Path:
+    """A round bin (180 mm inner radius, 10 mm walls and floor) in millimetres, tote frame."""
+    import trimesh
+
+    outer = trimesh.creation.cylinder(radius=200.0, height=170.0, sections=48)
+    outer.apply_translation([0.0, 0.0, 75.0])  # floor underside at z = -10 mm
+    inner = trimesh.creation.cylinder(radius=180.0, height=200.0, sections=48)
+    inner.apply_translation([0.0, 0.0, 100.0])
+    b = outer.difference(inner)
+    assert b.is_watertight
+    path = folder / "round_bin.stl"
+    b.export(path)
+    return path
+
+
+def test_user_bin_mesh_objects_drop_inside(tmp_path):
+    from mgn.scene import compose_objects, drop_scene
+    from mgn.scene.scene import DropOptions
+
+    round_bin(tmp_path)
+    cfg_path = tmp_path / "bin.yaml"
+    cfg_path.write_text(
+        "tote: {mesh: round_bin.stl, mesh_scale: 1.0e-3, inner_length: 0.36, inner_width: 0.36,"
+        " inner_height: 0.15}\n"
+        "drop: {tote_collision: mesh}\n"
+    )
+    cfg = load_config(cfg_path)
+    assert cfg.tote.mesh == str(tmp_path / "round_bin.stl")  # resolved against the config
+    v, _ = mgn.objects.make_tote(cfg.tote)
+    assert np.ptp(v, axis=0) == pytest.approx([0.4, 0.4, 0.17], abs=1e-3)
+    objects = compose_objects(names=["box_tea", "spray_can", "mug", "tennis_ball", "pear",
+                                     "box_tea"])  # fmt: skip
+    scene = drop_scene(objects, seed=2, tote=cfg.tote, options=cfg.drop)
+    assert len(scene) >= 4, scene.removed
+    for i, inst in enumerate(scene.instances):
+        w = np.asarray(scene.world_mesh(i).vertices, np.float64)
+        r = np.hypot(w[:, 0], w[:, 1])
+        assert r.max() < 0.18 + 0.004 and w[:, 2].min() > -0.004, inst.name  # inside the bin
+    assert any("floor" in inst.contacts for inst in scene.instances)
+    # The scene file keeps the bin; a bin that does not hold the inner box is an error.
+    again = mgn.scene.Scene.from_dict(scene.to_dict())
+    assert again.tote == cfg.tote
+    cfg_path.write_text(
+        "tote: {mesh: round_bin.stl, mesh_scale: 1.0e-3, inner_length: 0.5, inner_width: 0.36,"
+        " inner_height: 0.15}\n"
+    )  # a 0.5 m cavity in a 0.4 m bin
+    with pytest.raises(ConfigError, match=r"'tote\.mesh'.*round_bin\.stl"):
+        load_config(cfg_path)
+    assert DropOptions().tote_collision == "boxes"
