@@ -70,23 +70,26 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
     from mgn.hardware import default_cup, default_gripper
     from mgn.io.model_folder import write_model_folder, write_tote
     from mgn.objects import default_tote
+    from mgn.scene.cli import _split
 
     specs = _catalogue(args.add)
+    args.only = _split(args.only)
     if args.only:
         by_key = {s.name: s for s in specs} | {str(s.category_id): s for s in specs}
         missing = [n for n in args.only if n not in by_key]
         if missing:
             raise KeyError(f"unknown object(s) {missing}; known: {sorted(s.name for s in specs)}")
-        specs = [by_key[n] for n in args.only]
+        specs = list({id(by_key[n]): by_key[n] for n in args.only}.values())  # once each
+    written = set()
     for spec in tqdm(specs, desc="exporting objects", unit="obj", disable=args.quiet):
-        write_model_folder(spec, args.dir, overwrite=True)
+        written.add(write_model_folder(spec, args.dir, overwrite=True))
     from pathlib import Path
 
     root = Path(args.dir)
     default_gripper().to_yaml(root / "gripper.yaml")
     default_cup().to_yaml(root / "suction_cup.yaml")
     write_tote(default_tote(), root)
-    print(f"wrote {len(specs)} object folders to {root / 'models'} (+ tote, gripper, cup)")
+    print(f"wrote {len(written)} object folders to {root / 'models'} (+ tote, gripper, cup)")
     return 0
 
 
@@ -261,7 +264,9 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
     root = Path(args.root)
     folders = object_folders(root)
     if args.objects:
-        wanted = set(args.objects)
+        from mgn.scene.cli import _split
+
+        wanted = set(_split(args.objects) or ())
         folders = [
             f
             for f in folders
@@ -403,7 +408,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_objects_list)
     p = osub.add_parser("export", help="write the objects as MetaGraspNet model folders")
     p.add_argument("dir", help="output root; objects go to DIR/models/<id>/")
-    p.add_argument("--only", nargs="+", metavar="NAME", help="export only these (names or ids)")
+    p.add_argument("--objects", "--only", dest="only", nargs="+", metavar="NAME",
+                   help="export only these (names or ids)")  # fmt: skip
     p.add_argument("--add", action="append", metavar="YAML", help=add_help)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_objects_export)

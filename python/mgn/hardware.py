@@ -242,3 +242,40 @@ def default_gripper() -> ParallelJawGripper:
 def default_cup() -> SuctionCup:
     """The MetaGraspNet default suction cup."""
     return SuctionCup()
+
+
+#: The one name of each grasp kind, and the aliases accepted for it (MetaGraspNet folder names).
+GRASP_KINDS: dict[str, tuple[str, ...]] = {
+    "suction": ("suction", "suctioncup", "suction_cup", "cup"),
+    "paralleljaw": ("paralleljaw", "parallel_jaw", "pj", "gripper"),
+}
+
+
+def normalize_grasp_kind(kind: str) -> str:
+    """``"suction"`` or ``"paralleljaw"`` for any accepted spelling (e.g. the MetaGraspNet folder
+    names ``suctioncup`` and ``paralleljaw``, or ``pj``).
+
+    Raises:
+        InvalidArgumentError: an unknown kind (the message lists the accepted names).
+    """
+    k = str(kind).strip().lower().replace("-", "_")
+    for name, aliases in GRASP_KINDS.items():
+        if k in aliases:
+            return name
+    accepted = ", ".join(a for v in GRASP_KINDS.values() for a in v)
+    raise InvalidArgumentError(f"unknown grasp kind {kind!r}; expected suction or paralleljaw "
+                               f"(also accepted: {accepted})")  # fmt: skip
+
+
+def grasp_kind_arg(text: str) -> str:
+    """argparse ``type=`` of a grasp kind: the normalised name, or a usage error listing them."""
+    import argparse
+
+    try:
+        return normalize_grasp_kind(text)
+    except InvalidArgumentError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+#: The MetaGraspNet folder name of each grasp kind (``grasps/<folder>/``, ``*_grasps/<folder>``).
+MGN_FOLDER = {"suction": "suctioncup", "paralleljaw": "paralleljaw"}

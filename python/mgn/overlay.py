@@ -121,9 +121,9 @@ def render_overlay(
 
     notes = []
     if grasps is not None:
-        from mgn.scene.export import normalize_grasp_kind
+        from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 
-        kind = {"paralleljaw": "paralleljaw", "suction": "suctioncup"}[normalize_grasp_kind(grasps)]
+        kind = MGN_FOLDER[normalize_grasp_kind(grasps)]
         g = view.grasps(kind)
         poses = g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4)))
         score = g.get("score_analytical", np.ones(len(poses)))

@@ -237,6 +237,18 @@ def test_foreign_meshes_through_add_generate_validate(tmp_path, capsys):
     used = {i["name"] for i in scene["instances"]} | {r["name"] for r in scene["removed"]}
     assert used <= set(names) and used
     assert main(["validate", str(ds)]) == 0
+    capsys.readouterr()
+    assert main(["stats", str(ds), "--json"]) == 0
+    st = json.loads(capsys.readouterr().out)
+    kept = [i["name"] for i in scene["instances"]]
+    assert st["scenes"] == 1 and st["views"] == 1
+    assert st["objects"] == {n: kept.count(n) for n in set(kept)}
+    assert sum(st["difficulty"].values()) == 1
+    for kind in ("suction", "paralleljaw"):
+        assert (
+            sum(st["grasp_score_histograms"][kind]["counts"])
+            == (st["grasp_labels"][kind]["non_colliding"])
+        )
 
 
 def test_open_mesh_object_in_generate(tmp_path, capsys):
@@ -433,3 +445,57 @@ def test_user_bin_mesh_objects_drop_inside(tmp_path):
     with pytest.raises(ConfigError, match=r"'tote\.mesh'.*round_bin\.stl"):
         load_config(cfg_path)
     assert DropOptions().tote_collision == "boxes"
+
+
+# ------------------------------------------------------------ one vocabulary, housekeeping
+
+
+def test_grasp_kinds_have_one_name_and_aliases(capsys):
+    from mgn.cli import build_parser
+    from mgn.hardware import normalize_grasp_kind
+
+    for alias, name in [("suction", "suction"), ("suctioncup", "suction"), ("Suction-Cup",
+                        "suction"), ("paralleljaw", "paralleljaw"), ("pj", "paralleljaw"),
+                        ("parallel_jaw", "paralleljaw")]:  # fmt: skip
+        assert normalize_grasp_kind(alias) == name
+    parser = build_parser()
+    args = parser.parse_args(["eval", "grasps", "p.json", "--dataset", "D", "--kind", "pj"])
+    assert args.kind == "paralleljaw"
+    assert (
+        parser.parse_args(["pick", "s.json", "--out", "o", "--gripper", "suctioncup"]).gripper
+        == "suction"
+    )
+    with pytest.raises(SystemExit):
+        parser.parse_args(["pick", "s.json", "--out", "o", "--gripper", "vacuum"])
+    assert "unknown grasp kind 'vacuum'" in capsys.readouterr().err
+
+
+def test_object_lists_and_export_counts(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["objects", "export", str(out), "--objects", "mug,pear", "mug", "--quiet"]) == 0
+    assert "wrote 2 object folders" in capsys.readouterr().out
+    assert len(list((out / "models").iterdir())) == 2
+    assert main(["objects", "export", str(out), "--only", "12", "--quiet"]) == 0
+    assert "wrote 1 object folders" in capsys.readouterr().out
+
+
+def test_cache_list_and_clear(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
+    labels = tmp_path / "cache" / "labels"
+    convex = tmp_path / "cache" / "convex"
+    labels.mkdir(parents=True)
+    convex.mkdir(parents=True)
+    (labels / "suction-abc.npz").write_bytes(b"x" * 100)
+    (labels / "pj-abc.npz").write_bytes(b"x" * 50)
+    (labels / "pj-def.npz").write_bytes(b"x" * 50)
+    (convex / "part.npz").write_bytes(b"x" * 10)
+    assert main(["cache", "list", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["suction labels"] == {"entries": 1, "bytes": 100}
+    assert doc["parallel-jaw labels"] == {"entries": 2, "bytes": 100}
+    assert doc["convex decompositions"]["entries"] == 1
+    assert main(["cache", "clear", "--labels-only"]) == 0
+    assert "removed 3 cache entries" in capsys.readouterr().out
+    assert not list(labels.iterdir()) and (convex / "part.npz").exists()
+    assert main(["cache", "clear"]) == 0
+    assert not (convex / "part.npz").exists()

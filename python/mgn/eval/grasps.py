@@ -598,9 +598,12 @@ def _match(
 
 
 def _check_kind(kind: Any, what: str) -> str:
-    if kind not in KINDS:
-        raise InvalidArgumentError(f"{what}: kind must be 'suction' or 'paralleljaw', got {kind!r}")
-    return kind
+    from mgn.hardware import normalize_grasp_kind
+
+    try:
+        return normalize_grasp_kind(kind)
+    except InvalidArgumentError as e:
+        raise InvalidArgumentError(f"{what}: {e}") from None
 
 
 def _default_label_score(kind: str, label_score: str | None) -> str:
@@ -817,7 +820,11 @@ def register(eval_sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("predictions", metavar="PRED.json", help="prediction list (see the docs)")
     p.add_argument("--dataset", required=True, metavar="DIR", help="dataset folder")
-    p.add_argument("--kind", choices=KINDS, default="suction", help="grasp kind (default suction)")
+    from mgn.hardware import grasp_kind_arg
+
+    p.add_argument("--kind", type=grasp_kind_arg, default="suction",
+                   help="grasp kind: suction or paralleljaw (default suction; aliases "
+                        "suctioncup, pj)")  # fmt: skip
     p.add_argument("--out", metavar="JSON", help="write the results here")
     p.add_argument("--k", type=int, nargs="+", default=list(DEFAULT_KS), metavar="K",
                    help="k of precision@k (default 1 5 10 25 50)")  # fmt: skip

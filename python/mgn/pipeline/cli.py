@@ -65,7 +65,9 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.confi
 
 def _cmd_generate(args: argparse.Namespace) -> int:
     from mgn.pipeline.runner import generate
+    from mgn.scene.cli import _split
 
+    args.objects, args.categories = _split(args.objects), _split(args.categories)
     cfg = _config_with_overrides(args)
     scenes = args.scenes
     if scenes is None and cfg.selection.quota is None:
@@ -106,6 +108,64 @@ def _cmd_config_check(args: argparse.Namespace) -> int:
     config = load_config(args.file)
     views = len(config.camera.view_indices)
     print(f"{args.file}: valid ({config.camera.rig} rig, {views} views per scene)")
+    return 0
+
+
+def _cache_entries() -> dict[str, list]:
+    """Cache files by kind: suction labels, parallel-jaw labels, convex decompositions."""
+    from mgn.pipeline.label_cache import label_cache_dir
+    from mgn.scene.convex import cache_dir
+
+    labels, convex = label_cache_dir(), cache_dir()
+    files = {
+        "suction labels": sorted(labels.glob("suction-*")) if labels.is_dir() else [],
+        "parallel-jaw labels": sorted(labels.glob("pj-*")) if labels.is_dir() else [],
+        "convex decompositions": sorted(p for p in convex.rglob("*") if p.is_file())
+        if convex.is_dir() else [],
+    }  # fmt: skip
+    return files
+
+
+def _cmd_cache_list(args: argparse.Namespace) -> int:
+    import json
+
+    from mgn.pipeline.label_cache import label_cache_dir
+    from mgn.scene.convex import cache_dir
+
+    files = _cache_entries()
+    rows = {k: {"entries": len(v), "bytes": sum(p.stat().st_size for p in v)}
+            for k, v in files.items()}  # fmt: skip
+    if args.json:
+        doc = {"label_dir": str(label_cache_dir()), "convex_dir": str(cache_dir()), **rows}
+        print(json.dumps(doc, indent=2))
+        return 0
+    print(f"object-label cache: {label_cache_dir()}  (MGN_CACHE_DIR moves it)")
+    print(f"convex-decomposition cache: {cache_dir()}")
+    for k, r in rows.items():
+        print(f"  {k:<22} {r['entries']:>6} entries  {r['bytes'] / 2**20:8.1f} MiB")
+    return 0
+
+
+def _cmd_cache_clear(args: argparse.Namespace) -> int:
+    files = _cache_entries()
+    kinds = ["suction labels", "parallel-jaw labels"] if args.labels_only else list(files)
+    n = size = 0
+    for k in kinds:
+        for p in files[k]:
+            size += p.stat().st_size
+            p.unlink(missing_ok=True)
+            n += 1
+    print(f"removed {n} cache entries ({size / 2**20:.1f} MiB): {', '.join(kinds)}")
+    return 0
+
+
+def _cmd_stats(args: argparse.Namespace) -> int:
+    import json
+
+    from mgn.io.stats import dataset_stats, format_stats
+
+    st = dataset_stats(args.dir, max_views=args.max_views)
+    print(json.dumps(st, indent=2) if args.json else format_stats(st))
     return 0
 
 
@@ -169,6 +229,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = csub.add_parser("dump", help="print the default configuration")
     p.add_argument("--out", metavar="YAML", help="write it to this file instead")
     p.set_defaults(func=_cmd_config_dump)
+    p = sub.add_parser("stats", help="what a dataset holds: objects, views, labels, histograms")
+    p.add_argument("dir", help="dataset folder")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.add_argument("--max-views", type=int, metavar="N", help="read at most N views (default all)")
+    p.set_defaults(func=_cmd_stats)
+
+    k = sub.add_parser("cache", help="the object-label and convex-decomposition caches")
+    ksub = k.add_subparsers(dest="cache_command", metavar="ACTION", required=True)
+    p = ksub.add_parser("list", help="where the caches are, entries and size")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.set_defaults(func=_cmd_cache_list)
+    p = ksub.add_parser("clear", help="delete the cached entries (recomputed when needed)")
+    p.add_argument("--labels-only", action="store_true",
+                   help="keep the convex decompositions (default: clear both)")  # fmt: skip
+    p.set_defaults(func=_cmd_cache_clear)
+
     p = csub.add_parser("check", help="validate a configuration file")
     p.add_argument("file", help="configuration YAML")
     p.set_defaults(func=_cmd_config_check)

@@ -16,10 +16,12 @@ from pathlib import Path
 __all__ = ["ACTIONS", "register"]
 
 
-def _split(text: str | None) -> list[str] | None:
-    if text is None:
+def _split(values: str | list[str] | None) -> list[str] | None:
+    """Object names or ids given as ``a b c`` or ``a,b,c`` (both forms in every command)."""
+    if values is None:
         return None
-    return [t.strip() for t in text.split(",") if t.strip()]
+    items = [values] if isinstance(values, str) else values
+    return [t.strip() for v in items for t in v.split(",") if t.strip()]
 
 
 def _copies(text: str) -> tuple[int, int]:
@@ -83,10 +85,12 @@ def _cmd_drop(args: argparse.Namespace) -> int:
 
 def _register_drop(ssub: argparse._SubParsersAction) -> None:
     p = ssub.add_parser("drop", help="drop objects into the tote and write the settled scene")
-    p.add_argument("--objects", metavar="NAME[,NAME..]", help="these objects (names or ids)")
+    p.add_argument("--objects", nargs="+", metavar="NAME",
+                   help="these objects (names or ids; repeat a name for copies)")  # fmt: skip
     p.add_argument(
         "--categories",
-        metavar="NAME[,NAME..]",
+        nargs="+",
+        metavar="NAME",
         help="these categories, each with --copies copies (MetaGraspNet: 2-5)",
     )
     p.add_argument("--count", type=int, help="total number of objects")

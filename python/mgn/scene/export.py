@@ -25,6 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, UnsupportedError
+from mgn.hardware import normalize_grasp_kind
 
 __all__ = ["export_scene_glb", "score_colors"]
 
@@ -228,26 +229,3 @@ def trimesh_colors(mesh: Any, rgba: npt.NDArray[np.uint8]) -> Any:
     """Face colours of ``mesh`` all set to ``rgba``."""
     trimesh = _trimesh()
     return trimesh.visual.ColorVisuals(mesh, face_colors=np.tile(rgba, (len(mesh.faces), 1)))
-
-
-#: The one name of each grasp kind, and the aliases accepted for it (MetaGraspNet folder names).
-GRASP_KINDS: dict[str, tuple[str, ...]] = {
-    "suction": ("suction", "suctioncup", "suction_cup", "cup"),
-    "paralleljaw": ("paralleljaw", "parallel_jaw", "pj", "gripper"),
-}
-
-
-def normalize_grasp_kind(kind: str) -> str:
-    """``"suction"`` or ``"paralleljaw"`` for any accepted spelling (e.g. the MetaGraspNet folder
-    names ``suctioncup`` and ``paralleljaw``, or ``pj``).
-
-    Raises:
-        InvalidArgumentError: an unknown kind (the message lists the accepted names).
-    """
-    k = str(kind).strip().lower().replace("-", "_")
-    for name, aliases in GRASP_KINDS.items():
-        if k in aliases:
-            return name
-    accepted = ", ".join(a for v in GRASP_KINDS.values() for a in v)
-    raise InvalidArgumentError(f"unknown grasp kind {kind!r}; expected suction or paralleljaw "
-                               f"(also accepted: {accepted})")  # fmt: skip
