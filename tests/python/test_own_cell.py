@@ -499,3 +499,33 @@ def test_cache_list_and_clear(tmp_path, monkeypatch, capsys):
     assert not list(labels.iterdir()) and (convex / "part.npz").exists()
     assert main(["cache", "clear"]) == 0
     assert not (convex / "part.npz").exists()
+
+
+def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
+    """The README's Python block, run as is in a folder with a part.stl (mm) and a dataset DS."""
+    import re
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", readme, re.S)
+    assert blocks, "README has a Python block"
+    monkeypatch.chdir(tmp_path)
+    cube_obj(tmp_path, "part.obj", scale=1000.0)
+    import trimesh
+
+    trimesh.load(tmp_path / "part.obj", force="mesh").export(tmp_path / "part.stl")
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(
+        "objects: {names: [box_tea, mug]}\n"
+        "camera: {views: [0], resolution_scale: 0.1, randomize: false}\n"
+        "object_labels: {suction_points: 100, pj_points: 100}\n"
+        "labels: {pj_physics: false}\n"
+    )
+    assert main(["generate", "--out", "DS", "--scenes", "1", "--config", str(cfg), "--quiet",
+                 "--no-cache"]) == 0  # fmt: skip
+    namespace: dict = {}
+    exec(compile(blocks[0], "README.md", "exec"), namespace)  # noqa: S102
+    assert namespace["props"].mass == pytest.approx(2700 * 0.04**3, rel=1e-4)
+    hits = namespace["hits"]  # straight down onto the top face of the 40 mm cube
+    assert hits.distance[0] == pytest.approx(0.98) and hits.instance_ids[0] == 1
+    assert namespace["rgb"].ndim == 3
+    assert "True" in capsys.readouterr().out  # the two identical cubes collide
