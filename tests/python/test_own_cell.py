@@ -529,3 +529,51 @@ def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
     assert hits.distance[0] == pytest.approx(0.98) and hits.instance_ids[0] == 1
     assert namespace["rgb"].ndim == 3
     assert "True" in capsys.readouterr().out  # the two identical cubes collide
+
+
+def test_report_opens_in_headless_chromium(tmp_path, capsys):
+    """The report, opened in a real browser: warnings first, the plots there with labelled axes,
+    the configuration folded, and pixels actually drawn."""
+    import re
+
+    from PIL import Image
+
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    assert exe, "chromium is installed by scripts/install-system-deps.sh"
+    objs = tmp_path / "o.yaml"
+    mm = cube_obj(tmp_path, "big.obj", scale=1.0)
+    assert main(["objects", "add", str(mm), "--to", str(objs)]) == 0
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(
+        "objects: {names: [box_tea, mug, big, tennis_ball]}\n"
+        "camera: {views: [0, 3], resolution_scale: 0.1, randomize: false}\n"
+        "object_labels: {suction_points: 100, pj_points: 100}\n"
+        "labels: {pj_physics: false}\n"
+    )
+    ds = tmp_path / "DS"
+    assert main(["generate", "--out", str(ds), "--scenes", "1", "--config", str(cfg), "--add",
+                 str(objs), "--quiet", "--no-cache"]) == 0  # fmt: skip
+    page = tmp_path / "r.html"
+    assert main(["report", str(ds), "-o", str(page)]) == 0
+    err = capsys.readouterr().err
+    assert "mgn report: statistics" in err and "writing the page" in err  # progress
+    r = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom",
+                        page.as_uri()], capture_output=True, text=True, timeout=120)  # fmt: skip
+    dom = r.stdout
+    assert r.returncode == 0 and "<svg" in dom, r.stderr[-2000:]
+    svgs = re.findall(r"<svg.*?</svg>", dom, re.S)
+    assert len(svgs) >= 5
+    titles = [re.search(r'font-weight="bold">(.*?)</text>', s).group(1) for s in svgs]
+    assert "difficulty level of views" in titles and "suction score (non-colliding)" in titles
+    for s in svgs:  # every plot has a y-axis label and an x-axis label
+        assert 'transform="rotate(-90' in s and s.count("<rect") >= 1
+    assert dom.index("Warnings") < dom.index("Sample views") or "No warnings" in dom
+    assert "<details><summary>Configuration" in dom and "<details open" not in dom
+    shot = tmp_path / "r.png"
+    r = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                        f"--screenshot={shot}", "--window-size=1200,1800", page.as_uri()],
+                       capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert shot.is_file(), r.stderr[-2000:]
+    img = np.asarray(Image.open(shot).convert("RGB"), np.int32)
+    bar_blue = np.all(np.abs(img - [0x3B, 0x75, 0xAF]) <= 3, axis=-1)
+    assert bar_blue.sum() > 2000  # the bars are drawn
