@@ -602,8 +602,11 @@ def _check_kind(kind: Any, what: str) -> str:
 
     try:
         return normalize_grasp_kind(kind)
-    except InvalidArgumentError as e:
-        raise InvalidArgumentError(f"{what}: {e}") from None
+    except InvalidArgumentError:
+        raise InvalidArgumentError(
+            f"{what}: kind must be 'suction' or 'paralleljaw' (or an alias: suctioncup, pj, ...), "
+            f"got {kind!r}"
+        ) from None
 
 
 def _default_label_score(kind: str, label_score: str | None) -> str:
