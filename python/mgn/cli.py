@@ -492,7 +492,38 @@ def build_parser() -> argparse.ArgumentParser:
     __import__("mgn.pipeline.cli", fromlist=["register"]).register(sub)  # generate, config
     __import__("mgn.eval.cli", fromlist=["register"]).register(sub)  # eval detections|grasps|...
     __import__("mgn.eval.pick", fromlist=["register"]).register(sub)  # mgn pick
+    _use_formatter(parser)
     return parser
+
+
+def _shows_default(action: argparse.Action) -> bool:
+    d = action.default
+    return not (d is None or d is False or d is True or d == argparse.SUPPRESS)
+
+
+class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Descriptions as written; every option's default in its help unless the help names it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if (
+            action.option_strings
+            and _shows_default(action)
+            and "default" not in text
+            and "%(default)" not in text
+        ):
+            text = f"{text} (default: %(default)s)"
+        return text
+
+
+def _use_formatter(parser: argparse.ArgumentParser) -> None:
+    parser.formatter_class = _HelpFormatter
+    for action in parser._actions:  # noqa: SLF001 (argparse has no public walk)
+        if action.help is None and action.option_strings and _shows_default(action):
+            action.help = "default: %(default)s"
+        if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
+            for sub in action.choices.values():
+                _use_formatter(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -819,7 +819,7 @@ def register(eval_sub: argparse._SubParsersAction) -> None:
     p = eval_sub.add_parser(
         "grasps",
         help="precision@k of suction / parallel-jaw grasp predictions",
-        description=__doc__.split("\n\n")[0],
+        description=__doc__.split("\n\n")[0].replace("``", ""),
     )
     p.add_argument("predictions", metavar="PRED.json", help="prediction list (see the docs)")
     p.add_argument("--dataset", required=True, metavar="DIR", help="dataset folder")

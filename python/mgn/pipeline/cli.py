@@ -174,7 +174,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "generate",
         help="generate a dataset (resumable; local processes or a Dask cluster)",
-        description=__doc__,
+        description=__doc__.replace("``", "").replace("::", ":"),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument(
