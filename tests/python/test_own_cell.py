@@ -120,6 +120,11 @@ def test_binary_file_folder_and_numbers_in_yaml(tmp_path):
         with pytest.raises(IoError) as info:
             load(tmp_path)
         assert str(tmp_path) in str(info.value) and "folder" in str(info.value)
+    cube = cube_obj(tmp_path)
+    for bad, what in ((junk, "binary file"), (tmp_path, "is a folder")):  # mgn-cli's reader too
+        r = subprocess.run([mgn_cli(), "pj", "--mesh", str(cube), "--gripper", str(bad), "--out",
+                            str(tmp_path / "pj.json")], capture_output=True, text=True)  # fmt: skip
+        assert r.returncode != 0 and str(bad) in r.stderr and what in r.stderr, r.stderr
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text("cup: {radius: 7.0e-3, pressure_difference: 7e-1}\ndrop: {max_time: 1E1}\n")
     c = load_config(cfg)
