@@ -377,21 +377,41 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
                  "--grasps", "suctioncup", "--top-k", "3"]) == 0  # fmt: skip
     capsys.readouterr()
     scene = mgn.scene.Scene.from_json(scene_json)
+    from mgn.pipeline.scene_writer import scene_views
+
     loaded = trimesh.load(glb)
     nodes = set(loaded.graph.nodes_geometry)
     objects = {f"{i.instance_id}_{i.name}" for i in scene.instances}
     grasps = {n for n in nodes if n.startswith("grasp_suction_")}
     assert objects <= nodes and {"tote", "camera_0", "camera_5"} <= nodes
-    assert len(grasps) == 3 * len(scene.instances)
+    assert 1 <= len(grasps) <= 3 * len(scene.instances)  # collision-free ones only
     assert len(nodes) == len(objects) + 1 + 2 + len(grasps)
+    # Nodes hang under tote_frame, which turns z up into glTF's y up: the tote's floor normal
+    # (+z in the tote frame) is +y in the file.
+    X_root, _ = loaded.graph["tote_frame"]
+    np.testing.assert_allclose(X_root[:3, :3] @ [0, 0, 1], [0, 1, 0], atol=1e-12)
+    to_tote = np.linalg.inv(X_root)
     for inst in scene.instances:
         X, _ = loaded.graph[f"{inst.instance_id}_{inst.name}"]
-        np.testing.assert_allclose(X, inst.X_WO, atol=1e-6)
-    from mgn.pipeline.scene_writer import scene_views
-
+        np.testing.assert_allclose(to_tote @ X, inst.X_WO, atol=1e-6)
     for v, cam in scene_views(scene, load_config(cfg).camera):
         X, _ = loaded.graph[f"camera_{v}"]
-        np.testing.assert_allclose(X, cam.X_WC, atol=1e-6)
+        np.testing.assert_allclose(to_tote @ X, cam.X_WC, atol=1e-6)
+    # The grasps are coloured by score (red 0 -> green 1), best first: rank 0 is the greenest.
+    from mgn.scene.export import score_colors
+
+    assert tuple(score_colors([0.0])[0][:3]) == (255, 0, 26)
+    assert tuple(score_colors([1.0])[0][:3]) == (0, 255, 26)
+    for inst in scene.instances:
+        rgba = []
+        ranks = sorted(int(n.rsplit("_", 1)[1]) for n in grasps
+                       if n.startswith(f"grasp_suction_{inst.instance_id}_"))  # fmt: skip
+        assert ranks == list(range(len(ranks)))
+        for rank in ranks:
+            _, geom = loaded.graph[f"grasp_suction_{inst.instance_id}_{rank}"]
+            rgba.append(np.asarray(loaded.geometry[geom].visual.face_colors[0], int))
+        greenness = [c[1] - c[0] for c in rgba]
+        assert greenness == sorted(greenness, reverse=True)
     with pytest.raises(InvalidArgumentError, match="unknown grasp kind 'vacuum'"):
         from mgn.scene.export import export_scene_glb
 

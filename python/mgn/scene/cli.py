@@ -236,7 +236,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
     counts = export_scene_glb(scene, args.out, views=views, grasps=args.grasps, top_k=args.top_k,
                               config=config, num_threads=args.num_threads)  # fmt: skip
     print(f"{args.out}: {counts['objects']} objects, tote, {counts['cameras']} cameras, "
-          f"{counts['grasps']} grasps ({counts['nodes']} nodes; z up, metres)")  # fmt: skip
+          f"{counts['grasps']} collision-free grasps ({counts['nodes']} nodes, metres; node "
+          "tote_frame turns the tote's z up into glTF's y up)")  # fmt: skip
     return 0
 
 
@@ -246,7 +247,8 @@ def _register_export(ssub: argparse._SubParsersAction) -> None:
         help="write the scene as glTF binary (.glb): objects, tote, cameras, optional grasps",
         description="Write a scene as .glb for any glTF viewer: one node per object (matrix = "
         "X_WO), the tote, a frustum per camera (matrix = X_WC) and, with --grasps, the best "
-        "--top-k grasps of every object (cup or hand meshes, red = score 0, green = 1).",
+        "--top-k collision-free grasps of every object (cup or hand meshes, red = score 0, "
+        "green = 1).",
     )
     p.add_argument("scene", help="scene JSON (mgn scene drop) or a scene folder")
     p.add_argument("out", help="output .glb file")

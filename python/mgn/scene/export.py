@@ -6,12 +6,15 @@ node per camera (``camera_<view>``: a small frustum pyramid whose node matrix is
 OpenCV camera frame, apex at the optical centre and the base towards +z) and, when asked, the
 best ``top_k`` grasps of every object: the suction cup body or the parallel-jaw hand at the
 grasp pose (``grasp_<kind>_<instance>_<rank>``), coloured by score from red (0) to green (1).
+Every node hangs under the node ``tote_frame``, whose matrix turns the tote frame (z up) into
+glTF's y-up world (:data:`X_GLTF_TOTE`), so viewers show the tote upright; a node's matrix
+relative to ``tote_frame`` is the pose in the tote frame.
 
 Grasps come from the per-object labels (the same cached labels ``mgn generate`` uses), placed
-with the instance pose; they are not checked against the other objects (the scene grasp labels
-of a labelled view are). All lengths in metres, the world frame is the tote frame (z up); glTF's
-own convention (y up) is not applied, so viewers show the scene lying on its side unless they
-offer z-up.
+with the instance pose and kept only when the tool is collision-free in the scene, under the
+same collision model as the scene grasp labels
+(:class:`mgn.scene.scene_grasps.SceneGraspModel`); the best ``top_k`` of each object by analytic
+score are drawn (fewer when fewer are free). All lengths in metres.
 """
 
 from __future__ import annotations
@@ -27,7 +30,12 @@ import numpy.typing as npt
 from mgn.errors import InvalidArgumentError, UnsupportedError
 from mgn.hardware import normalize_grasp_kind
 
-__all__ = ["export_scene_glb", "score_colors"]
+__all__ = ["X_GLTF_TOTE", "export_scene_glb", "score_colors"]
+
+#: The tote frame (z up) in glTF's world (y up, z towards the viewer): x -> x, z -> y, y -> -z.
+X_GLTF_TOTE = np.array(
+    [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+)
 
 
 def score_colors(score: npt.ArrayLike) -> npt.NDArray[np.uint8]:
@@ -83,18 +91,6 @@ def _cup_body(radius: float, height: float) -> Any:
     return c
 
 
-def _suction_frames(points: np.ndarray, approach: np.ndarray) -> np.ndarray:
-    """(N, 4, 4) frames at the contact points with +z along the approach (into the surface)."""
-    z = approach / np.linalg.norm(approach, axis=1, keepdims=True)
-    helper = np.where(np.abs(z[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x, axis=1, keepdims=True)
-    y = np.cross(z, x)
-    X = np.tile(np.eye(4), (len(points), 1, 1))
-    X[:, :3, 0], X[:, :3, 1], X[:, :3, 2], X[:, :3, 3] = x, y, z, points
-    return X
-
-
 def export_scene_glb(
     scene: Any,
     path: str | os.PathLike[str],
@@ -136,8 +132,9 @@ def export_scene_glb(
     if isinstance(top_k, bool) or int(top_k) < 1:
         raise InvalidArgumentError(f"export_scene_glb: top_k must be >= 1, got {top_k!r}")
     tm_scene = trimesh.Scene(base_frame="world")
+    tm_scene.graph.update(frame_from="world", frame_to="tote_frame", matrix=X_GLTF_TOTE)
     tm_scene.add_geometry(_tm(*_arrays(tote_mesh(scene.tote)), scene.tote.color), node_name="tote",
-                          geom_name="tote", parent_node_name="world")  # fmt: skip
+                          geom_name="tote", parent_node_name="tote_frame")  # fmt: skip
     geoms: dict[tuple[str, str], Any] = {}
     for i, inst in enumerate(scene.instances):
         key = (inst.name, inst.source)
@@ -146,11 +143,11 @@ def export_scene_glb(
             geoms[key] = _tm(spec.vertices, spec.faces, spec.material.base_color)
         tm_scene.add_geometry(geoms[key], node_name=f"{inst.instance_id}_{inst.name}",
                               geom_name=inst.name, transform=np.asarray(inst.X_WO),
-                              parent_node_name="world")  # fmt: skip
+                              parent_node_name="tote_frame")  # fmt: skip
     for v, cam in views:
         tm_scene.add_geometry(_tm(*_frustum(cam.K), (0.1, 0.1, 0.1, 1.0)), node_name=f"camera_{v}",
                               geom_name=f"camera_{v}", transform=np.asarray(cam.X_WC),
-                              parent_node_name="world")  # fmt: skip
+                              parent_node_name="tote_frame")  # fmt: skip
     num_grasps = 0
     if kind is not None and len(scene):
         num_grasps = _add_grasps(tm_scene, scene, kind, int(top_k), config, num_threads)
@@ -160,7 +157,7 @@ def export_scene_glb(
         "objects": len(scene),
         "cameras": len(views),
         "grasps": num_grasps,
-        "nodes": 1 + len(scene) + len(views) + num_grasps,
+        "nodes": 2 + len(scene) + len(views) + num_grasps,
     }
 
 
@@ -170,6 +167,7 @@ def _add_grasps(tm_scene: Any, scene: Any, kind: str, top_k: int, config: Any,
 
     from mgn.config import Config
     from mgn.pipeline.label_cache import object_labels
+    from mgn.scene.scene_grasps import SceneGraspModel
 
     cfg = config if config is not None else Config()
     labels_cfg = dataclasses.replace(
@@ -177,51 +175,45 @@ def _add_grasps(tm_scene: Any, scene: Any, kind: str, top_k: int, config: Any,
     )
     cfg = dataclasses.replace(cfg, labels=labels_cfg)
     cache: dict[tuple[str, str], Any] = {}
-    count = 0
+    got = []
     for i, inst in enumerate(scene.instances):
         key = (inst.name, inst.source)
         if key not in cache:
             cache[key] = object_labels(scene.object_spec(i), cfg, num_threads=num_threads)
-        got = cache[key]
-        X_WO = np.asarray(inst.X_WO)
-        if kind == "suction":
-            lab = got.suction
-            order = np.argsort(-lab.score, kind="stable")[:top_k]
-            frames = _suction_frames(np.asarray(lab.points, np.float64)[order],
-                                     np.asarray(lab.approach, np.float64)[order])  # fmt: skip
-            body = _cup_body(cfg.cup.outer_radius, cfg.cup.body_height)
-            for rank, (X_OG, c) in enumerate(zip(frames, score_colors(lab.score[order]),
-                                                 strict=True)):  # fmt: skip
+        got.append(cache[key])
+    pj = [g.paralleljaw for g in got] if kind == "paralleljaw" else [None] * len(got)
+    su = [g.suction for g in got] if kind == "suction" else [None] * len(got)
+    model = SceneGraspModel(scene, pj, su, cfg.gripper, cfg.cup, num_threads=num_threads)
+    placed = model.pj if kind == "paralleljaw" else model.suction
+    body = _cup_body(cfg.cup.outer_radius, cfg.cup.body_height)
+    count = 0
+    for i, inst in enumerate(scene.instances):
+        mine = np.nonzero((placed.object_id == i) & ~placed.colliding)[0]
+        score = np.nan_to_num(np.asarray(placed.score_analytical, np.float64)[mine], nan=0.0)
+        best = mine[np.argsort(-score, kind="stable")[:top_k]]
+        colors = score_colors(np.nan_to_num(placed.score_analytical[best], nan=0.0))
+        for rank, (k, color) in enumerate(zip(best, colors, strict=True)):
+            name = f"grasp_{kind}_{inst.instance_id}_{rank}"
+            if kind == "suction":
                 g = body.copy()
-                g.visual = trimesh_colors(g, c)
-                tm_scene.add_geometry(g, node_name=f"grasp_suction_{inst.instance_id}_{rank}",
-                                      transform=X_WO @ X_OG, parent_node_name="world")  # fmt: skip
-                count += 1
-        else:
-            from mgn.pj.sampler import gripper_meshes, hand_poses
+                g.visual = trimesh_colors(g, color)
+                X = placed.contact_poses[k]  # z into the surface; the body lies along -z
+            else:
+                from mgn.pj.sampler import gripper_meshes
 
-            lab = got.paralleljaw
-            score = np.asarray(lab.quality_score, np.float64)
-            order = np.argsort(-score, kind="stable")[:top_k]
-            X_OH = hand_poses(lab.p1[order], lab.closing[order], lab.approach[order],
-                              lab.width[order], cfg.gripper)  # fmt: skip
-            for rank, k in enumerate(order):
-                opening = min(float(lab.width[k]) + cfg.gripper.collision_margin,
+                opening = min(float(placed.width[k]) + cfg.gripper.collision_margin,
                               cfg.gripper.max_opening)  # fmt: skip
                 parts = gripper_meshes(cfg.gripper, opening)
-                color = score_colors(score[k : k + 1])[0]
                 v = np.concatenate([_arrays(p)[0] for p in parts])
                 offs = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
                 f = np.concatenate(
                     [np.asarray(p.faces) + o for p, o in zip(parts, offs, strict=True)]
                 )
-                tm_scene.add_geometry(
-                    _tm(v, f, color),
-                    node_name=f"grasp_paralleljaw_{inst.instance_id}_{rank}",
-                    transform=X_WO @ X_OH[rank],
-                    parent_node_name="world",
-                )
-                count += 1
+                g = _tm(v, f, color)
+                X = placed.tool_poses[k]  # the hand (flange) pose X_WH
+            tm_scene.add_geometry(g, node_name=name, transform=np.asarray(X),
+                                  parent_node_name="tote_frame")  # fmt: skip
+            count += 1
     return count
 
 
