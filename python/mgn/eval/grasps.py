@@ -839,5 +839,6 @@ def register(eval_sub: argparse._SubParsersAction) -> None:
                    metavar="DEG", help="axis tolerance, degrees (default 30)")  # fmt: skip
     p.add_argument("--label-score", choices=_LABEL_SCORES, default=None,
                    help="label score held against the thresholds (default analytical)")  # fmt: skip
-    p.add_argument("--threads", type=int, default=0, help="C++ threads (0 = all)")
+    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
+                   help="C++ threads (0 = all cores)")  # fmt: skip
     p.set_defaults(func=_cmd)

@@ -790,6 +790,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stochastic", action="store_true",
                    help="success with probability = score (else score >= 0.5)")  # fmt: skip
     p.add_argument("--resolution", type=int, default=160, help="top-view image size, px")
-    p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
+                   help="C++ threads (0 = all cores)")  # fmt: skip
     p.add_argument("--out", required=True, help="output folder")
     p.set_defaults(func=_cmd_pick)
