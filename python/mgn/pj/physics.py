@@ -174,6 +174,17 @@ class ShakeTrajectory:
     density_factor: float
 
 
+def _gripper(gripper: ParallelJawGripper | None) -> _core.ParallelJawGripper:
+    """The C++ gripper (boxes or meshes) through the one conversion, core_gripper()."""
+    if gripper is None:
+        gripper = default_gripper()
+    if not isinstance(gripper, ParallelJawGripper):
+        raise InvalidArgumentError(
+            f"gripper: expected a mgn.hardware.ParallelJawGripper, got {type(gripper).__name__}"
+        )
+    return core_gripper(gripper)
+
+
 def _parts(mesh_or_parts: Mesh | Sequence[Mesh]) -> list[Mesh]:
     if isinstance(mesh_or_parts, Mesh):
         return [mesh_or_parts]
@@ -241,7 +252,7 @@ def shake_scores(
     """
     m, c, inertia_arr = _inputs(mass, com, inertia)
     rows = grasp_rows(grasps)
-    g = core_gripper(gripper if gripper is not None else default_gripper())
+    g = _gripper(gripper)
     o = (options if options is not None else ShakeOptions()).to_core()
     r = _core.shake_test(_parts(mesh_or_parts), m, c, inertia_arr, rows, g, o)
     return ShakeScores(
@@ -281,7 +292,7 @@ def shake_trajectory(
     row = grasp_rows([grasp] if hasattr(grasp, "approach") else grasp)
     if row.shape[0] != 1:
         raise InvalidArgumentError(f"grasp: expected one grasp, got {row.shape[0]}")
-    g = core_gripper(gripper if gripper is not None else default_gripper())
+    g = _gripper(gripper)
     o = (options if options is not None else ShakeOptions()).to_core()
     t = _core.shake_trajectory(
         _parts(mesh_or_parts),
