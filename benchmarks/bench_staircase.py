@@ -7,6 +7,14 @@ boundary, check cells next to it, fall back to the full grid where a check fails
 identical scores, mean absolute score difference, trials per grasp, fallback share, time.
 
     python -m benchmarks.bench_staircase [--grasps-per-object 170] [--objects a,b,c]
+
+Measured 2026-11-24 on the shared 2-core machine (load average ~20, so times are long; the
+ratios hold), 10x10 grid, default options, 170 labelled grasps per object:
+  box_tea   165/170 identical scores, mean |diff| 0.0006, 15.0 trials/grasp, 2 fallbacks
+  can_soda  150/170 identical scores, mean |diff| 0.0065, 22.3 trials/grasp, 16 fallbacks
+  together  315/340 identical (92.6 %; target 99 % not reached: single trials near the boundary
+            are not monotone in friction/density), 5.4x fewer trials (full grid 100/grasp);
+            staircase time 96.9 + 229.3 s against 807.6 + 1229.6 s for the full grid.
 """
 
 from __future__ import annotations
