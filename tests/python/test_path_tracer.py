@@ -313,8 +313,13 @@ def test_same_seed_same_bytes_for_one_and_two_threads():
                       [AreaLight(X_WL, "rect", (0.4, 0.4), intensity=15)],
                       Environment(kind="sky", intensity=0.5))  # fmt: skip
     view = camera((0, -2.0, 1.0), (0, 0, 0), 40, 50)
-    outs = [scene.render(view, PathTraceOptions(spp=4, seed=9, view_index=2, num_threads=t,
-                                                 aperture_radius=0.01)) for t in (1, 2)]  # fmt: skip
+    outs = [
+        scene.render(
+            view,
+            PathTraceOptions(spp=4, seed=9, view_index=2, num_threads=t, aperture_radius=0.01),
+        )
+        for t in (1, 2)
+    ]
     for name in ("radiance", "albedo", "normal", "depth", "instance_ids"):
         assert getattr(outs[0], name).tobytes() == getattr(outs[1], name).tobytes(), name
     film = [FilmOptions(shot_noise=0.05, read_noise=0.01, seed=4, num_threads=t) for t in (1, 2)]

@@ -1,9 +1,9 @@
 """Physically based path tracing on the CPU (typed façade over the C++ core, Embree).
 
 A :class:`PathScene` is built once from meshes placed in the world frame W, one
-:class:`PbrMaterial` per mesh material slot, area lights and an environment; :meth:`PathScene.render`
-then renders any number of camera views and :func:`develop` turns the linear radiance into an
-8-bit sRGB picture.
+:class:`PbrMaterial` per mesh material slot, area lights and an environment;
+:meth:`PathScene.render` then renders any number of camera views and :func:`develop` turns the
+linear radiance into an 8-bit sRGB picture.
 
 Units and frames: metres, radians; poses are (4, 4) float64 ``X_AB`` (frame B in frame A); the
 camera model is :class:`mgn.render.CameraView` (OpenCV frame, pixel (u, v) covers the square
