@@ -422,3 +422,37 @@ def test_bad_parameters_name_the_setting():
         PathScene([sphere], np.eye(4)[None], [-3], [[PbrMaterial()]])
     with pytest.raises(InvalidArgumentError, match=r"develop: radiance"):
         develop(np.zeros((4, 4)))
+
+
+# ---------------------------------------------------------------------------------------------
+# Thin lens.
+
+
+def test_thin_lens_blur_circle_and_autofocus():
+    """A tiny emitter at distance d seen through a thin lens of aperture radius A focused at s
+    spreads over a disc of radius f * A * |1/s - 1/d| px (f in px) and keeps its total radiance
+    sum (each lens point sees the same emitter, shifted); focused on it (also by the automatic
+    focus on the image centre) it stays as sharp as with a pinhole."""
+    f, d, A = 100.0, 1.0, 0.05
+    emitter = quad(0.01, z=0.0)
+    mat = PbrMaterial(base_color=(0, 0, 0), ior=1.0, emission=(1.0, 1.0, 1.0))
+    scene = PathScene([emitter], np.eye(4)[None], [1], [[mat]], (), BLACK)
+    K = Intrinsics(33, 33, f, f, 16.5, 16.5)
+    view = CameraView(K, look_at(np.array([0, 0, d]), np.zeros(3), np.array([0, 1.0, 0])))
+    pin = scene.render(view, PathTraceOptions(spp=64, max_bounces=0)).radiance[..., 0]
+    s = 0.5
+    blur = scene.render(
+        view, PathTraceOptions(spp=256, max_bounces=0, aperture_radius=A, focus_distance=s)
+    ).radiance[..., 0]
+    auto = scene.render(view, PathTraceOptions(spp=64, max_bounces=0, aperture_radius=A)).radiance[
+        ..., 0
+    ]
+    radius = f * A * abs(1 / s - 1 / d)  # 5 px
+    v, u = np.nonzero(blur > 0)
+    r = np.hypot(u + 0.5 - 16.5, v + 0.5 - 16.5)
+    assert r.max() <= radius + 1.5 and r.max() >= radius - 1.0
+    assert blur.sum() == pytest.approx(pin.sum(), rel=0.05)
+    assert (pin > 0).sum() <= 4
+    v, u = np.nonzero(auto > 0)
+    assert np.hypot(u + 0.5 - 16.5, v + 0.5 - 16.5).max() <= 1.5
+    assert auto.sum() == pytest.approx(pin.sum(), rel=0.05)

@@ -863,25 +863,55 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
   auto worker = [&](std::size_t, std::size_t) {
     detail::FtzDazGuard guard;
     Integrator it(G, L, options);
-    RTCRayHit rh;
+    RTCIntersectContext coherent;
+    rtcInitIntersectContext(&coherent);
+    coherent.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    const RTCScene scene = G.rays->impl().scene;
+    alignas(64) RTCRayHit16 rh16;
+    alignas(64) int valid16[16];
     for (;;) {
       const std::size_t tile = next_tile.fetch_add(1);
       if (tile >= n_tiles) break;
       const int tx = static_cast<int>(tile % tiles_x), ty = static_cast<int>(tile / tiles_x);
       const int u1 = std::min(W, (tx + 1) * kTile), v1 = std::min(H, (ty + 1) * kTile);
       for (int v = ty * kTile; v < v1; ++v) {
+        // Labels: the pinhole rays through the pixel centres of this tile row, as one coherent
+        // packet (at most kTile = 16 rays).
+        {
+          const int u0 = tx * kTile, m = u1 - u0;
+          float len[kTile];
+          for (int k = 0; k < kTile; ++k) {
+            const int u = u0 + std::min(k, m - 1);
+            const F3 dc((u + 0.5f - cam.cx) / cam.fx, (v + 0.5f - cam.cy) / cam.fy, 1.0f);
+            len[k] = length(dc);
+            const F3 d = cam.to_world(dc / len[k]);
+            valid16[k] = k < m ? -1 : 0;
+            rh16.ray.org_x[k] = cam.o.x;
+            rh16.ray.org_y[k] = cam.o.y;
+            rh16.ray.org_z[k] = cam.o.z;
+            rh16.ray.dir_x[k] = d.x;
+            rh16.ray.dir_y[k] = d.y;
+            rh16.ray.dir_z[k] = d.z;
+            rh16.ray.tnear[k] = 0.0f;
+            rh16.ray.tfar[k] = std::numeric_limits<float>::infinity();
+            rh16.ray.time[k] = 0.0f;
+            rh16.ray.mask[k] = 0xFFFFFFFFu;
+            rh16.ray.id[k] = static_cast<unsigned>(k);
+            rh16.ray.flags[k] = 0;
+            rh16.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+            rh16.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+          }
+          rtcIntersect16(valid16, scene, &coherent, &rh16);
+          it.counters.rays += m;
+          for (int k = 0; k < m; ++k) {
+            if (rh16.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+            const std::size_t pix = static_cast<std::size_t>(v) * W + u0 + k;
+            out.depth[pix] = rh16.ray.tfar[k] / len[k];
+            out.instance_ids[pix] = G.geoms[rh16.hit.geomID[k]].instance_id;
+          }
+        }
         for (int u = tx * kTile; u < u1; ++u) {
           const std::size_t pix = static_cast<std::size_t>(v) * W + u;
-          // Labels: the pinhole ray through the pixel centre.
-          {
-            const F3 dc((u + 0.5f - cam.cx) / cam.fx, (v + 0.5f - cam.cy) / cam.fy, 1.0f);
-            const float len = length(dc);
-            if (it.intersect(cam.o, cam.to_world(dc / len), std::numeric_limits<float>::infinity(),
-                             rh)) {
-              out.depth[pix] = rh.ray.tfar / len;
-              out.instance_ids[pix] = G.geoms[rh.hit.geomID].instance_id;
-            }
-          }
           const std::uint32_t pixel_seed =
               static_cast<std::uint32_t>(mix64(stream ^ static_cast<std::uint64_t>(pix)));
           F3 sum(0.0f), alb(0.0f), nrm(0.0f);

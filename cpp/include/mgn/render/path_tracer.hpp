@@ -1,5 +1,5 @@
 #pragma once
-/// @file path_tracer.hpp  Physically based CPU path tracer on Embree (docs/architecture.md).
+/// @file path_tracer.hpp  Physically based CPU path tracer on Embree.
 ///
 /// Units and frames: lengths in metres, angles in radians, poses X_AB map frame B to frame A; the
 /// world frame W is the frame of the mesh poses and of the camera pose X_WC. The camera model is
