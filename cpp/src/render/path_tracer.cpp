@@ -257,9 +257,12 @@ struct PathScene::Lighting {
   Environment environment;
   std::vector<LightData> light_data;
   // Light selection: cumulative weights over (lights..., environment).
-  std::vector<float> cdf;  // size lights + 1, cdf.back() == 1
+  // Light selection among the area lights (cdf, pmf over the lights), then entry `lights` for
+  // the environment (pmf 1 when it is on: sampled at every shading point).
+  std::vector<float> cdf;
   std::vector<float> pmf;
   bool env_on = false;
+  bool area_on = false;
   // Environment.
   int kind = 0;  // 0 uniform, 1 gradient, 2 sky
   F3 color, zenith, horizon, ground;
@@ -309,46 +312,43 @@ std::shared_ptr<PathScene::Lighting> make_lighting(
   L->zenith = f3(environment.zenith) * I;
   L->horizon = f3(environment.horizon) * I;
   L->ground = f3(environment.ground) * I;
-  float env_lum = 0.0f;
+  float sky_lum = 0.0f;  // rough mean luminance of the dome (without the sun)
   if (environment.kind == Environment::Kind::Uniform) {
-    env_lum = luminance(L->color);
+    sky_lum = luminance(L->color);
   } else {
-    env_lum = 0.5f * luminance((L->zenith + L->horizon * 2.0f) * (1.0f / 3.0f)) +
+    sky_lum = 0.5f * luminance((L->zenith + L->horizon * 2.0f) * (1.0f / 3.0f)) +
               0.5f * luminance(L->ground);
   }
+  float e_sun = 0.0f;
   if (environment.kind == Environment::Kind::Sky) {
     L->sun_dir = normalize(f3(environment.sun_direction));
     const float r = environment.sun_angular_radius;
     L->sun_cos = std::cos(r);
     const float s = std::sin(r);
     L->sun_radiance = F3(environment.sun_strength * luminance(L->zenith) / (s * s));
-    const float e_sun = environment.sun_strength * pt::kPi * luminance(L->zenith);
-    if (e_sun > 0.0f) L->p_sun = 0.5f;
-    env_lum += e_sun / (4.0f * pt::kPi);
+    e_sun = environment.sun_strength * pt::kPi * luminance(L->zenith);
+    // Share of environment samples aimed at the sun: its share of the irradiance, in [0.2, 0.9].
+    if (e_sun > 0.0f)
+      L->p_sun = std::min(0.9f, std::max(0.2f, e_sun / (e_sun + pt::kPi * sky_lum)));
   }
-  // The environment's power on the scene ~ pi L * (cross-section of the scene's bounding sphere).
-  const double radius = std::max(0.05, 0.5 * (bounds.row(1) - bounds.row(0)).norm());
-  float w_env = static_cast<float>(pt::kPi * env_lum * 4.0 * pt::kPi * radius * radius);
-  L->env_on = w_env > 0.0f;
-  float total_lights = 0.0f;
-  for (float x : w) total_lights += x;
-  if (L->env_on && total_lights > 0.0f) {
-    // Keep both strategies alive: the environment gets between 10 % and 90 %.
-    const float p_env = std::min(0.9f, std::max(0.1f, w_env / (w_env + total_lights)));
-    w_env = total_lights * p_env / (1.0f - p_env);
-  }
-  w.push_back(L->env_on ? w_env : 0.0f);
+  L->env_on = sky_lum > 0.0f || e_sun > 0.0f;
+  // Area lights: one is chosen per shading point with probability proportional to its power;
+  // the environment is sampled at every shading point as well (its own shadow ray).
   float total = 0.0f;
   for (float x : w) total += x;
-  L->pmf.resize(w.size());
-  L->cdf.resize(w.size());
+  const std::size_t n = w.size();
+  L->pmf.assign(n + 1, 0.0f);
+  L->cdf.assign(n + 1, 0.0f);
   float acc = 0.0f;
-  for (std::size_t i = 0; i < w.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     L->pmf[i] = total > 0.0f ? w[i] / total : 0.0f;
     acc += L->pmf[i];
     L->cdf[i] = acc;
   }
-  if (total > 0.0f) L->cdf.back() = 1.0f;
+  if (n > 0 && total > 0.0f) L->cdf[n - 1] = 1.0f;
+  L->area_on = n > 0 && total > 0.0f;
+  L->pmf[n] = L->env_on ? 1.0f : 0.0f;  // the environment's "selection" probability
+  L->cdf[n] = 1.0f;
   return L;
 }
 
@@ -652,15 +652,23 @@ class Integrator {
       const F3 wo = frame.to_local(wo_w);
       pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
       sm.prepare(wo.z);
-      const std::uint32_t base_pair = 2 + 4 * static_cast<std::uint32_t>(depth);
+      const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
       const pt::Sample2 u_light = s.get(base_pair);
       const pt::Sample2 u_bsdf = s.get(base_pair + 1);
       const pt::Sample2 u_sel = s.get(base_pair + 2);
       const pt::Sample2 u_rr = s.get(base_pair + 3);
+      const pt::Sample2 u_env = s.get(base_pair + 4);
 
       // Next-event estimation.
-      if (sm.has_nondelta && !L_.pmf.empty() && L_.cdf.back() > 0.0f)
-        L += beta * direct(h, frame, wo, sm, u_sel.x, u_light);
+      if (sm.has_nondelta) {
+        if (L_.area_on) {
+          const std::size_t n = L_.light_data.size();
+          std::size_t k = 0;
+          while (k + 1 < n && u_sel.x >= L_.cdf[k]) ++k;
+          L += beta * direct(h, frame, wo, sm, k, u_light);
+        }
+        if (L_.env_on) L += beta * direct(h, frame, wo, sm, L_.light_data.size(), u_env);
+      }
 
       // BSDF sampling.
       F3 wi_w;
@@ -687,12 +695,11 @@ class Integrator {
   Counters counters;
 
  private:
-  /// One light sample with MIS; returns the contribution (without beta).
-  F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm, float u_sel,
-            pt::Sample2 u) {
-    const std::size_t n = L_.cdf.size();
-    std::size_t k = 0;
-    while (k + 1 < n && u_sel >= L_.cdf[k]) ++k;
+  /// One sample of light k (k = number of area lights: the environment) with MIS; returns the
+  /// contribution (without beta).
+  F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
+            std::size_t k, pt::Sample2 u) {
+    const std::size_t n = L_.pmf.size();
     const float p_sel = L_.pmf[k];
     if (p_sel <= 0.0f) return F3(0.0f);
     F3 wi_w, Le;
