@@ -456,3 +456,62 @@ def test_thin_lens_blur_circle_and_autofocus():
     v, u = np.nonzero(auto > 0)
     assert np.hypot(u + 0.5 - 16.5, v + 0.5 - 16.5).max() <= 1.5
     assert auto.sum() == pytest.approx(pin.sum(), rel=0.05)
+
+
+def test_base_color_texture_is_looked_up_at_the_mesh_uvs():
+    """A quad textured with 2x2 texels (sRGB) under a uniform dome L = 1 (one bounce: the open
+    plane sees the whole upper dome) shows each texel's linear colour in its quadrant, with
+    texel row 0 (the image top) at v = 1."""
+    h = 0.5
+    v = [[-h, -h, 0], [h, -h, 0], [h, h, 0], [-h, h, 0]]
+    uv = [[0, 0], [1, 0], [1, 1], [0, 1]]
+    plane = mesh_from_arrays(v, [[0, 1, 2], [0, 2, 3]], uvs=uv)
+    tex = np.array([[[255, 0, 0], [0, 255, 0]], [[0, 0, 255], [128, 128, 128]]], np.uint8)
+    mat = PbrMaterial(base_color=(1, 1, 1), ior=1.0, base_color_texture=tex)
+    scene = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), uniform(1.0))
+    view = camera((0, 0, 2.0), (0, 0, 0), 40, 20, up=(0, 1, 0))  # image up = world +y
+    out = scene.render(view, PathTraceOptions(spp=4, max_bounces=1))
+    # Texel centres are at uv 0.25 / 0.75, i.e. world +-0.25: find their pixels.
+    K = view.K
+    lin = srgb_to_linear(tex.astype(float) / 255)
+    for (x, y), texel in [((-0.25, 0.25), lin[0, 0]), ((0.25, 0.25), lin[0, 1]),
+                          ((-0.25, -0.25), lin[1, 0]), ((0.25, -0.25), lin[1, 1])]:  # fmt: skip
+        p_C = np.linalg.inv(view.X_WC) @ np.array([x, y, 0.0, 1.0])
+        u = int(K.fx * p_C[0] / p_C[2] + K.cx)
+        w = int(K.fy * p_C[1] / p_C[2] + K.cy)
+        # (the pixel footprint blends ~2 % of the neighbour texel through bilinear filtering)
+        np.testing.assert_allclose(out.radiance[w, u], texel, atol=0.03)
+
+
+def srgb_to_linear(c):
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def test_sky_dome_colours_and_sun_irradiance():
+    """Directly seen, the gradient dome shows the zenith colour straight up and the ground colour
+    below the horizon; the sky's sun disc adds an irradiance of sun_strength * pi * lum(zenith)
+    at normal incidence, i.e. a * sun_strength * lum(zenith) in the radiance of a Lambertian
+    plane of albedo a facing the sun (sky minus gradient with the same colours)."""
+    kw = dict(
+        zenith=(0.2, 0.3, 0.6), horizon=(0.7, 0.7, 0.7), ground=(0.1, 0.2, 0.1), intensity=2.0
+    )
+    grad = Environment(kind="gradient", **kw)
+    sky = Environment(kind="sky", sun_direction=(0, 0, 1), sun_strength=4.0, **kw)
+    dummy = quad(0.01, z=-50.0)
+    scene = PathScene([dummy], np.eye(4)[None], [1], [[PbrMaterial()]], (), grad)
+    up = scene.render(camera((0, 0, 0), (0, 0, 1), 8, 5, up=(0, 1, 0)), PathTraceOptions(spp=1))
+    zenith = np.multiply(kw["zenith"], 2.0)
+    np.testing.assert_allclose(up.radiance, np.broadcast_to(zenith, (8, 8, 3)), rtol=5e-3)
+    down = scene.render(camera((0, 0, 0), (1, 0, -1), 8, 5), PathTraceOptions(spp=1))
+    ground = np.multiply(kw["ground"], 2.0)
+    np.testing.assert_allclose(down.radiance, np.broadcast_to(ground, (8, 8, 3)), rtol=1e-6)
+    a = 0.5
+    plane = quad(40.0)
+    mat = PbrMaterial(base_color=(a,) * 3, ior=1.0)
+    view = camera((0.3, 0.2, 1.0), (0.3, 0.2, 0.0), 16, 30, up=(0, 1, 0))
+    opts = PathTraceOptions(spp=64, max_bounces=1)
+    s_grad = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), grad).render(view, opts)
+    s_sky = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), sky).render(view, opts)
+    lum_zenith = 2.0 * (0.2126 * 0.2 + 0.7152 * 0.3 + 0.0722 * 0.6)
+    diff = (s_sky.radiance - s_grad.radiance).mean()
+    assert diff == pytest.approx(a * 4.0 * lum_zenith, rel=0.02)
