@@ -13,9 +13,11 @@
 /// [0, 1]. The rendered image is the mean radiance over the pixel's samples (before exposure);
 /// develop() turns it into 8-bit sRGB.
 ///
-/// Algorithm: unidirectional path tracing with next-event estimation (one shadow ray per
-/// non-specular vertex to one light chosen by power) and multiple importance sampling (power
-/// heuristic, beta = 2) between light and BSDF sampling for the area lights and the environment;
+/// Algorithm: unidirectional path tracing with next-event estimation (at every non-specular
+/// vertex one shadow ray to a point on one area light chosen by power, and one to the
+/// environment, sampled by a cosine lobe around the shading normal mixed with the sun cone) and
+/// multiple importance sampling (power heuristic, beta = 2) between light and BSDF sampling for
+/// the area lights and the environment; emissive materials are found by BSDF sampling only;
 /// Russian roulette from PathTraceOptions::rr_depth on. Materials follow glTF 2.0
 /// metallic-roughness: a Lambertian diffuse lobe under a GGX (Trowbridge-Reitz) specular lobe
 /// with the height-correlated Smith masking-shadowing term and visible-normal sampling; exact
