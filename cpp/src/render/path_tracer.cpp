@@ -462,6 +462,7 @@ F3 texture_lookup(const MaterialData& m, float u, float v) {
   const float fx = std::floor(x), fy = std::floor(y);
   const float ax = x - fx, ay = y - fy;
   auto wrap = [](long i, int n) {
+    if (i >= 0 && i < n) return static_cast<int>(i);  // the usual case: no division
     long r = i % n;
     return static_cast<int>(r < 0 ? r + n : r);
   };
@@ -653,11 +654,11 @@ class Integrator {
       pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
       sm.prepare(wo.z);
       const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
-      const pt::Sample2 u_light = s.get(base_pair);
+      // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
+      // (roulette, Fresnel choice), environment direction.
       const pt::Sample2 u_bsdf = s.get(base_pair + 1);
       const pt::Sample2 u_sel = s.get(base_pair + 2);
       const pt::Sample2 u_rr = s.get(base_pair + 3);
-      const pt::Sample2 u_env = s.get(base_pair + 4);
 
       // Next-event estimation.
       if (sm.has_nondelta) {
@@ -665,9 +666,10 @@ class Integrator {
           const std::size_t n = L_.light_data.size();
           std::size_t k = 0;
           while (k + 1 < n && u_sel.x >= L_.cdf[k]) ++k;
-          L += beta * direct(h, frame, wo, sm, k, u_light);
+          L += beta * direct(h, frame, wo, sm, k, s.get(base_pair));
         }
-        if (L_.env_on) L += beta * direct(h, frame, wo, sm, L_.light_data.size(), u_env);
+        if (L_.env_on)
+          L += beta * direct(h, frame, wo, sm, L_.light_data.size(), s.get(base_pair + 4));
       }
 
       // BSDF sampling.
