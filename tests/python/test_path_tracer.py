@@ -573,3 +573,16 @@ def test_glossy_metal_plane_under_rect_light_matches_quadrature():
     np.testing.assert_allclose(got[bright], expected[bright], rtol=0.03)
     # The highlight sum (all pixels) agrees too.
     assert got.sum() == pytest.approx(expected.sum(), rel=0.01)
+
+
+def test_bad_shapes_and_types_are_invalid_argument_errors():
+    with pytest.raises(InvalidArgumentError, match=r"PbrMaterial.base_color must be 3 numbers"):
+        PbrMaterial(base_color=(1, 1))
+    with pytest.raises(InvalidArgumentError, match=r"AreaLight.X_WL must be a \(4, 4\) pose"):
+        AreaLight(np.eye(3))
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.seed must be >= 0"):
+        PathTraceOptions(seed=-1)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.spp must be an integer"):
+        PathTraceOptions(spp=2.5)
+    with pytest.raises(InvalidArgumentError, match=r"base_color_texture must be an \(H, W, 3\)"):
+        PbrMaterial(base_color_texture=np.zeros((4, 4), np.uint8))

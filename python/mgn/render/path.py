@@ -32,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.errors import InvalidArgumentError
 from mgn.geometry import Material, Mesh
 from mgn.render.camera import CameraView
 
@@ -52,7 +53,7 @@ Color = tuple[float, float, float]
 def _color(value: Sequence[float], name: str) -> Color:
     a = np.asarray(value, dtype=np.float64)
     if a.shape != (3,):
-        raise ValueError(f"{name} must be 3 numbers (linear RGB), got shape {a.shape}")
+        raise InvalidArgumentError(f"{name} must be 3 numbers (linear RGB), got shape {a.shape}")
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
@@ -91,7 +92,7 @@ class PbrMaterial:
         if self.base_color_texture is not None:
             tex = np.ascontiguousarray(self.base_color_texture)
             if tex.dtype != np.uint8 or tex.ndim != 3 or tex.shape[2] != 3:
-                raise ValueError(
+                raise InvalidArgumentError(
                     "PbrMaterial.base_color_texture must be an (H, W, 3) uint8 array, got "
                     f"{tex.dtype} {tex.shape}"
                 )
@@ -167,12 +168,12 @@ class AreaLight:
     def __post_init__(self) -> None:
         X = np.array(self.X_WL, dtype=np.float64)
         if X.shape != (4, 4):
-            raise ValueError(f"AreaLight.X_WL must be a (4, 4) pose, got shape {X.shape}")
+            raise InvalidArgumentError(f"AreaLight.X_WL must be a (4, 4) pose, got shape {X.shape}")
         X.setflags(write=False)
         object.__setattr__(self, "X_WL", X)
         s = np.asarray(self.size, np.float64).reshape(-1)
         if s.shape != (2,):
-            raise ValueError(f"AreaLight.size must be 2 numbers (m), got shape {s.shape}")
+            raise InvalidArgumentError(f"AreaLight.size must be 2 numbers (m), got shape {s.shape}")
         object.__setattr__(self, "size", (float(s[0]), float(s[1])))
         object.__setattr__(self, "color", _color(self.color, "AreaLight.color"))
         object.__setattr__(self, "intensity", float(self.intensity))
@@ -262,10 +263,14 @@ class PathTraceOptions:
         for name in ("spp", "max_bounces", "seed", "view_index", "num_threads", "rr_depth"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-                raise ValueError(f"PathTraceOptions.{name} must be an integer, got {value!r}")
+                raise InvalidArgumentError(
+                    f"PathTraceOptions.{name} must be an integer, got {value!r}"
+                )
         for name in ("seed", "view_index"):
             if getattr(self, name) < 0:
-                raise ValueError(f"PathTraceOptions.{name} must be >= 0, got {getattr(self, name)}")
+                raise InvalidArgumentError(
+                    f"PathTraceOptions.{name} must be >= 0, got {getattr(self, name)}"
+                )
         self.to_core().validate()
 
     def to_core(self) -> _core.PathTraceOptions:
@@ -304,7 +309,9 @@ class FilmOptions:
     def __post_init__(self) -> None:
         for name in ("seed", "view_index"):
             if int(getattr(self, name)) < 0:
-                raise ValueError(f"FilmOptions.{name} must be >= 0, got {getattr(self, name)}")
+                raise InvalidArgumentError(
+                    f"FilmOptions.{name} must be >= 0, got {getattr(self, name)}"
+                )
         self.to_core().validate()
 
     def to_core(self) -> _core.FilmOptions:
