@@ -586,3 +586,24 @@ def test_bad_shapes_and_types_are_invalid_argument_errors():
         PathTraceOptions(spp=2.5)
     with pytest.raises(InvalidArgumentError, match=r"base_color_texture must be an \(H, W, 3\)"):
         PbrMaterial(base_color_texture=np.zeros((4, 4), np.uint8))
+
+
+def test_clamp_indirect_clamps_only_light_found_after_the_first_bounce():
+    """Interior furnace (E = 0.6, a = 0.5, two bounces): the camera ray's hit emits E, the first
+    bounce brings a E (direct light), the second a^2 E = 0.15 (indirect). clamp_indirect = 0.1
+    clamps only the last: E + a E + 0.1; the default (10) changes nothing."""
+    E, a = 0.6, 0.5
+    mat = PbrMaterial(base_color=(a,) * 3, ior=1.0, emission=(E,) * 3)
+    scene = PathScene(
+        [make_sphere(1.0, 256, 128).flipped()], np.eye(4)[None], [1], [[mat]], (), BLACK
+    )
+    view = camera((0, 0, 0), (1, 0.2, 0.1), 8, 90)
+    base = dict(spp=16, max_bounces=2, rr_depth=100)
+    clamped = scene.render(view, PathTraceOptions(**base, clamp_indirect=0.1)).radiance
+    default = scene.render(view, PathTraceOptions(**base)).radiance
+    off = scene.render(view, PathTraceOptions(**base, clamp_indirect=0.0)).radiance
+    assert clamped.mean() == pytest.approx(E + a * E + 0.1, rel=2e-3)
+    assert default.tobytes() == off.tobytes()
+    assert default.mean() == pytest.approx(E * (1 + a + a * a), rel=2e-3)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.clamp_indirect"):
+        PathTraceOptions(clamp_indirect=-1.0)

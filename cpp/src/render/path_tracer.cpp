@@ -144,6 +144,9 @@ void PathTraceOptions::validate() const {
                                  focus_distance);
   if (!(clamp >= 0.0) || !std::isfinite(clamp))
     throw_error<InvalidArgument>(w, ".clamp must be finite and >= 0 (0 = off), got ", clamp);
+  if (!(clamp_indirect >= 0.0) || !std::isfinite(clamp_indirect))
+    throw_error<InvalidArgument>(w, ".clamp_indirect must be finite and >= 0 (0 = off), got ",
+                                 clamp_indirect);
 }
 
 void FilmOptions::validate() const {
@@ -579,7 +582,11 @@ struct Counters {
 class Integrator {
  public:
   Integrator(const Geometry& G, const Lighting& L, const PathTraceOptions& o)
-      : G_(G), L_(L), opt_(o), scene_(G.rays->impl().scene) {
+      : G_(G),
+        L_(L),
+        opt_(o),
+        scene_(G.rays->impl().scene),
+        clamp_indirect_(static_cast<float>(o.clamp_indirect)) {
     rtcInitIntersectContext(&ctx_);
   }
 
@@ -623,7 +630,7 @@ class Integrator {
           const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
           w = power_heuristic(prev_pdf, pl);
         }
-        L += beta * l.radiance * w;
+        add(L, beta * l.radiance * w, depth >= 2);
         if (depth == 0) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
         break;
       }
@@ -633,7 +640,7 @@ class Integrator {
           float w = 1.0f;
           if (!prev_delta && L_.env_on)
             w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
-          L += beta * Le * w;
+          add(L, beta * Le * w, depth >= 2);
           if (depth == 0)
             aov_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
         }
@@ -642,7 +649,7 @@ class Integrator {
       make_hit(G_, rh, d, h);
       const MaterialData& m = *h.mat;
       const F3 wo_w = -d;
-      if (m.emissive && h.front) L += beta * m.emission;
+      if (m.emissive && h.front) add(L, beta * m.emission, depth >= 2);
       if (depth == 0) {
         aov_albedo = h.base;
         aov_normal = h.ns;
@@ -666,10 +673,11 @@ class Integrator {
           const std::size_t n = L_.light_data.size();
           std::size_t k = 0;
           while (k + 1 < n && u_sel.x >= L_.cdf[k]) ++k;
-          L += beta * direct(h, frame, wo, sm, k, s.get(base_pair));
+          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
         }
         if (L_.env_on)
-          L += beta * direct(h, frame, wo, sm, L_.light_data.size(), s.get(base_pair + 4));
+          add(L, beta * direct(h, frame, wo, sm, L_.light_data.size(), s.get(base_pair + 4)),
+              depth >= 1);
       }
 
       // BSDF sampling.
@@ -697,6 +705,16 @@ class Integrator {
   Counters counters;
 
  private:
+  /// Adds a contribution; indirect ones (light that has bounced at least twice: found at the
+  /// second path vertex or later) are clamped to clamp_indirect in luminance.
+  void add(F3& L, F3 c, bool indirect) const {
+    if (indirect && clamp_indirect_ > 0.0f) {
+      const float lum = luminance(c);
+      if (lum > clamp_indirect_) c *= clamp_indirect_ / lum;
+    }
+    L += c;
+  }
+
   /// One sample of light k (k = number of area lights: the environment) with MIS; returns the
   /// contribution (without beta).
   F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
@@ -810,6 +828,7 @@ class Integrator {
   const Lighting& L_;
   const PathTraceOptions& opt_;
   RTCScene scene_;
+  float clamp_indirect_;
   RTCIntersectContext ctx_;
 };
 

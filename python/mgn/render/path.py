@@ -247,6 +247,10 @@ class PathTraceOptions:
         focus_distance: distance in focus along the optical axis, m (0 = the depth at the image
             centre, or 1 m if nothing is seen there).
         clamp: maximum luminance of one sample (0 = off; > 0 biases but removes fireflies).
+        clamp_indirect: maximum luminance of one indirect contribution of a sample (light found
+            at the second path vertex or later) (0 = off). The default 10 leaves ordinary
+            indirect light alone and removes the fireflies of caustics (diffuse -> glass -> sun)
+            at the cost of dimming those caustics.
     """
 
     spp: int = 16
@@ -258,6 +262,7 @@ class PathTraceOptions:
     aperture_radius: float = 0.0
     focus_distance: float = 0.0
     clamp: float = 0.0
+    clamp_indirect: float = 10.0
 
     def __post_init__(self) -> None:
         for name in ("spp", "max_bounces", "seed", "view_index", "num_threads", "rr_depth"):
@@ -284,6 +289,7 @@ class PathTraceOptions:
         o.aperture_radius = float(self.aperture_radius)
         o.focus_distance = float(self.focus_distance)
         o.clamp = float(self.clamp)
+        o.clamp_indirect = float(self.clamp_indirect)
         return o
 
 

@@ -120,6 +120,11 @@ struct PathTraceOptions {
   /// centre, or 1 m if nothing is seen there).
   double focus_distance = 0.0;
   double clamp = 0.0;  ///< max luminance of one sample (>= 0; 0 = no clamping)
+  /// Max luminance of one indirect contribution of a sample (light found at the second path
+  /// vertex or later, e.g. caustics through glass) (>= 0; 0 = off). The default 10 leaves
+  /// ordinary indirect light alone (contributions of order 1) and removes the fireflies of
+  /// caustic paths (diffuse -> glass -> sun), at the cost of a small bias (caustics are dimmed).
+  double clamp_indirect = 10.0;
 
   void validate() const;
 };
