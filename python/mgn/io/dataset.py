@@ -109,6 +109,51 @@ class View:
         except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
             raise IoError(f"'{p}' is not a readable npz: {e}") from e
 
+    def npz_array(self, key: str) -> np.ndarray:
+        """One array of ``{v}.npz`` as stored, reading (decompressing) only that array; kept.
+        IoError if the file or the key is missing."""
+        if "npz" in self.__dict__:
+            try:
+                return self.__dict__["npz"][key]
+            except KeyError:
+                raise IoError(f"'{self.path('.npz')}' has no array '{key}'") from None
+        cache = self.__dict__.setdefault("_npz_arrays", {})
+        if key not in cache:
+            p = self.path(".npz")
+            try:
+                with np.load(p, allow_pickle=False) as z:
+                    if key not in z.files:
+                        raise IoError(f"'{p}' has no array '{key}' (it has {z.files})")
+                    cache[key] = z[key]
+            except FileNotFoundError:
+                raise IoError(f"'{p}' does not exist") from None
+            except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+                if isinstance(e, IoError):
+                    raise
+                raise IoError(f"'{p}' is not a readable npz: {e}") from e
+        return cache[key]
+
+    def hdf5_dataset(self, name: str) -> np.ndarray:
+        """One dataset of ``{v}_scene.hdf5`` (lengths in metres), reading only that dataset.
+        IoError if the file or the dataset is missing."""
+        if "hdf5" in self.__dict__:
+            try:
+                return self.__dict__["hdf5"][name]
+            except KeyError:
+                raise IoError(f"'{self.path('_scene.hdf5')}' has no dataset '{name}'") from None
+        p = self.path("_scene.hdf5")
+        try:
+            with h5py.File(p, "r") as h5:
+                if name not in h5:
+                    raise IoError(f"'{p}' has no dataset '{name}'")
+                return from_cm(name, h5[name][()])
+        except FileNotFoundError:
+            raise IoError(f"'{p}' does not exist") from None
+        except OSError as e:
+            if isinstance(e, IoError):
+                raise
+            raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
+
     @property
     def depth(self) -> npt.NDArray[np.float32]:
         """(H, W) sensor z-depth, m, NaN invalid."""
