@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from . import (
+    bench_cluster,
     bench_collision,
     bench_drop,
     bench_eval_grasps,
@@ -50,6 +51,7 @@ SUITES = {
     "pick": bench_pick,
     "eval_grasps": bench_eval_grasps,
     "pipeline": bench_pipeline,
+    "cluster": bench_cluster,
 }
 
 
