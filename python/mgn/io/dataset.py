@@ -159,11 +159,46 @@ class View:
         """(H, W) sensor z-depth, m, NaN invalid."""
         return (self.npz["depth"] / np.float32(M_TO_CM)).astype(np.float32)
 
+    def mgn_image(self, name: str) -> np.ndarray | None:
+        """An image of ``{v}_mgn.hdf5`` as stored (``depth_ideal`` in cm), reading only it; kept.
+        Datasets written before that file existed had these images in ``{v}.npz``: read from
+        there. None if the view has no such image (original MetaGraspNet folders)."""
+        cache = self.__dict__.setdefault("_mgn_images", {})
+        if name in cache:
+            return cache[name]
+        p = self.path("_mgn.hdf5")
+        value = None
+        if p.exists():
+            try:
+                with h5py.File(p, "r") as h5:
+                    if name in h5:
+                        value = h5[name][()]
+            except OSError as e:
+                raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
+        elif self.path(".npz").exists():
+            with np.load(self.path(".npz"), allow_pickle=False) as z:
+                value = z[name] if name in z.files else None
+        cache[name] = value
+        return value
+
     @property
     def depth_ideal(self) -> npt.NDArray[np.float32] | None:
         """(H, W) noise-free z-depth, m (mgn files only; None otherwise)."""
-        d = self.npz.get("depth_ideal")
+        d = self.mgn_image("depth_ideal")
         return None if d is None else (d / np.float32(M_TO_CM)).astype(np.float32)
+
+    @property
+    def valid_depth(self) -> npt.NDArray[np.bool_]:
+        """(H, W) bool: pixels where the sensor measured a depth (stored only when it is not
+        exactly the finite pixels of ``depth``)."""
+        v = self.mgn_image("valid_depth")
+        return np.isfinite(self.npz_array("depth")) if v is None else v.astype(bool)
+
+    @property
+    def com_heatmap(self) -> npt.NDArray[np.float32] | None:
+        """(H, W) CoM score of the surface seen at each pixel in [0, 1] (mgn files only)."""
+        c = self.mgn_image("com_heatmap")
+        return None if c is None else c.astype(np.float32)
 
     @property
     def instances(self) -> npt.NDArray[np.int32]:
