@@ -84,3 +84,29 @@ def test_streaming_coco_equals_the_reference(small_dataset: Path, tmp_path: Path
     # Byte for byte what json.dumps gives for the reference dictionary.
     assert path.read_text() == json.dumps(ref)
     assert coco_dict(Dataset(small_dataset), class_agnostic=agnostic) == ref
+
+
+def test_run_length_helpers_match_pycocotools_on_border_cases():
+    """Masks touching the first and last rows (runs that continue into the next column), full
+    columns, single pixels, empty masks: RLE, box and area equal pycocotools / numpy's."""
+    from mgn.io.coco import _box_of_runs, _compress, _counts, _runs_of_mask, _visible_runs
+
+    rng = np.random.default_rng(5)
+    h, w = 9, 7
+    ids = rng.integers(0, 4, size=(h, w))
+    ids[:, 2] = 3  # a full column: its run continues from the columns around it
+    ids[-1, 4], ids[0, 5] = 2, 2  # last row of one column, first row of the next
+    masks = [ids == k for k in range(1, 4)]
+    masks += [np.zeros((h, w), bool), np.ones((h, w), bool)]
+    single = np.zeros((h, w), bool)
+    single[h - 1, 0] = True
+    masks.append(single)
+    runs = _visible_runs(ids, np.arange(1, 4))
+    for k, m in enumerate(masks):
+        st, en, box, area = _runs_of_mask(m)
+        assert _compress([_counts(st, en, h * w)], h, w)[0] == _rle(m)
+        assert list(box) == _bbox(m) and area == int(m.sum())
+        if k < 3:
+            vs, ve = runs[k + 1]
+            assert _compress([_counts(vs, ve, h * w)], h, w)[0] == _rle(m)
+            assert list(_box_of_runs(vs, ve, h)) == _bbox(m)

@@ -11,7 +11,8 @@ Image ids are ``scene_id * 1000 + view_id``.
 Streaming: :func:`export_coco` reads one view at a time (only the two npz arrays it needs and the
 categories of the HDF5 file) and writes its annotations to the output as it goes, so memory does
 not grow with the dataset; the file is byte-identical to ``json.dumps(coco_dict(...))``.
-All masks of a view are run-length encoded by one pycocotools call.
+The runs of the masks are found without building one image per mask (visible: one pass over
+the instance image; amodal: inside each mask's box); pycocotools compresses them.
 """
 
 from __future__ import annotations
@@ -41,25 +42,86 @@ def rle(mask: np.ndarray) -> dict[str, Any]:
     return {"size": [int(r["size"][0]), int(r["size"][1])], "counts": r["counts"].decode("ascii")}
 
 
-def _rles(masks_t: np.ndarray) -> tuple[list[dict[str, Any]], np.ndarray, np.ndarray]:
-    """RLEs, areas and boxes of K masks given transposed, as a C-ordered (K, W, H) uint8 array
-    (= the (H, W, K) Fortran array pycocotools wants, without a copy)."""
+def _compress(counts: list[list[int]], h: int, w: int) -> list[dict[str, Any]]:
+    """JSON-ready compressed RLEs from uncompressed COCO counts (pycocotools' string form)."""
     from pycocotools import mask as mask_utils
 
-    k = masks_t.shape[0]
-    if k == 0:
-        return [], np.zeros(0), np.zeros((0, 4))
-    enc = mask_utils.encode(masks_t.transpose(2, 1, 0))
-    areas = mask_utils.area(enc)
-    boxes = mask_utils.toBbox(enc)
-    out = [
-        {"size": [int(r["size"][0]), int(r["size"][1])], "counts": r["counts"].decode("ascii")}
-        for r in enc
-    ]
-    return out, areas, boxes
+    if not counts:
+        return []
+    enc = mask_utils.frPyObjects([{"counts": c, "size": [h, w]} for c in counts], h, w)
+    return [{"size": [h, w], "counts": r["counts"].decode("ascii")} for r in enc]
 
 
-def _box(b: np.ndarray) -> list[float]:
+def _counts(starts: np.ndarray, ends: np.ndarray, total: int) -> list[int]:
+    """COCO counts (zeros first, alternating) of the runs [starts, ends) of ones, ascending and
+    not touching, in a mask of ``total`` pixels (column-major order)."""
+    edges = np.empty(2 * len(starts) + 2, np.int64)
+    edges[0] = 0
+    edges[1:-1:2] = starts
+    edges[2:-1:2] = ends
+    edges[-1] = total
+    counts = np.diff(edges).tolist()
+    if len(counts) > 1 and counts[-1] == 0:
+        counts.pop()  # ends with ones: no trailing zero run (as pycocotools writes it)
+    return counts
+
+
+def _runs_of_mask(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[float, ...], int]:
+    """Column-major runs of ones of an (H, W) bool mask, read only inside its bounding box:
+    (starts, ends, COCO box, area)."""
+    h, w = mask.shape
+    cols = np.flatnonzero(mask.any(axis=0))
+    if len(cols) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), (0.0, 0.0, 0.0, 0.0), 0
+    rows = np.flatnonzero(mask[:, cols[0] : cols[-1] + 1].any(axis=1))
+    x0, x1, y0, y1 = int(cols[0]), int(cols[-1]), int(rows[0]), int(rows[-1])
+    crop = mask[y0 : y1 + 1, x0 : x1 + 1].T  # (columns, rows of the box)
+    padded = np.zeros((crop.shape[0], crop.shape[1] + 2), np.int8)
+    padded[:, 1:-1] = crop
+    d = np.diff(padded, axis=1)
+    cs, rs = np.nonzero(d == 1)
+    ce, re = np.nonzero(d == -1)
+    starts = (x0 + cs) * h + y0 + rs
+    ends = (x0 + ce) * h + y0 + re
+    # A run reaching the last row continues at the top of the next column when the box spans
+    # every row: merge runs that touch.
+    if len(starts) > 1:
+        touch = starts[1:] == ends[:-1]
+        if touch.any():
+            keep_start = np.concatenate([[True], ~touch])
+            keep_end = np.concatenate([~touch, [True]])
+            starts, ends = starts[keep_start], ends[keep_end]
+    area = int((ends - starts).sum())
+    return starts, ends, (float(x0), float(y0), float(x1 - x0 + 1), float(y1 - y0 + 1)), area
+
+
+def _visible_runs(ids: np.ndarray, wanted: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Column-major runs [start, end) of every id in ``wanted`` of an (H, W) id image, from one
+    pass over the image."""
+    flat = np.ascontiguousarray(ids.T).reshape(-1)
+    change = np.flatnonzero(flat[1:] != flat[:-1]) + 1
+    starts = np.concatenate([[0], change])
+    ends = np.concatenate([change, [flat.size]])
+    values = flat[starts]
+    out = {}
+    for k in wanted.tolist():
+        sel = values == k
+        out[k] = (starts[sel], ends[sel])
+    return out
+
+
+def _box_of_runs(starts: np.ndarray, ends: np.ndarray, h: int) -> tuple[float, ...]:
+    """COCO box of a mask given by its column-major runs (a run may continue from the last row
+    of one column to the first row of the next: it then covers every row)."""
+    xs0, xs1 = starts // h, (ends - 1) // h
+    x0, x1 = int(xs0.min()), int(xs1.max())
+    span = xs1 > xs0
+    y0 = 0 if span.any() else int((starts % h).min())
+    y1 = h - 1 if span.any() else int(((ends - 1) % h).max())
+    return (float(x0), float(y0), float(x1 - x0 + 1), float(y1 - y0 + 1))
+
+
+def _box(b: Any) -> list[float]:
     return [float(b[0]), float(b[1]), float(b[2]), float(b[3])]
 
 
@@ -102,17 +164,25 @@ def _view_entries(
     if level is not None:
         image["difficulty"] = level
     n = amodal.shape[0]
-    ids_t = np.ascontiguousarray(inst.T).astype(np.int32)  # (W, H): column-major pixel order
-    present = np.bincount(ids_t.reshape(-1), minlength=n + 1)[1 : n + 1] > 0
+    present = np.bincount(inst.reshape(-1).astype(np.int64), minlength=n + 1)[1 : n + 1] > 0
     visible_ids = np.flatnonzero(present) + 1  # instance ids with at least one visible pixel
     if len(visible_ids) == 0:
         return image, []
-    vis_t = (ids_t[None] == visible_ids[:, None, None]).view(np.uint8)
-    amodal_t = np.ascontiguousarray(
-        np.asarray(amodal[visible_ids - 1], bool).transpose(0, 2, 1)
-    ).view(np.uint8)
-    vis_rle, vis_area, vis_box = _rles(vis_t)
-    am_rle, am_area, am_box = _rles(amodal_t)
+    vis_runs = _visible_runs(inst, visible_ids)
+    vis_counts, vis_area, vis_box = [], [], []
+    for iid in visible_ids.tolist():
+        st, en = vis_runs[iid]
+        vis_counts.append(_counts(st, en, h * w))
+        vis_area.append(int((en - st).sum()))
+        vis_box.append(_box_of_runs(st, en, h))
+    am_counts, am_area, am_box = [], [], []
+    for iid in visible_ids.tolist():
+        st, en, box, area = _runs_of_mask(np.asarray(amodal[iid - 1], bool))
+        am_counts.append(_counts(st, en, h * w))
+        am_area.append(area)
+        am_box.append(box)
+    vis_rle = _compress(vis_counts, h, w)
+    am_rle = _compress(am_counts, h, w)
     categories = view.hdf5_dataset("objects/categories").astype(np.int64).reshape(-1)
     order = view.order
     anns: list[dict[str, Any]] = []
