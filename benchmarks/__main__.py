@@ -13,6 +13,7 @@ from . import (
     bench_collision,
     bench_drop,
     bench_eval_grasps,
+    bench_format,
     bench_layout,
     bench_pick,
     bench_pipeline,
@@ -50,6 +51,7 @@ SUITES = {
     "scene_labels": bench_scene_labels,
     "pick": bench_pick,
     "eval_grasps": bench_eval_grasps,
+    "format": bench_format,
     "pipeline": bench_pipeline,
     "cluster": bench_cluster,
 }
