@@ -72,6 +72,7 @@ CameraView camera(const Intrinsics& K, const py::handle& X_WC) {
 }  // namespace
 
 void bind_scene_grasps(py::module_& m) {
+  m.attr("SUCTION_TOOL_OFFSET") = kSuctionToolOffset;
   py::class_<SceneGraspModel, std::shared_ptr<SceneGraspModel>>(
       m, "SceneGraspModel",
       "Per-scene grasp model: placement, collisions and wrench scores at construction; "

@@ -29,6 +29,7 @@ __all__: list[str] = [
     "RayScene",
     "Renderer",
     "SEAL_FAILURE_NAMES",
+    "SUCTION_TOOL_OFFSET",
     "SURFACE_DARK",
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
@@ -1144,6 +1145,7 @@ SEAL_FAILURE_NAMES: tuple = (
     "strain",
     "rough",
 )
+SUCTION_TOOL_OFFSET: float = 0.1321
 SURFACE_DARK: int = 2
 SURFACE_MIRROR: int = 4
 SURFACE_TRANSPARENT: int = 1

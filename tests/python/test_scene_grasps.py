@@ -91,7 +91,8 @@ def test_suction_on_the_bottom_face_hits_the_floor_and_on_the_top_face_does_not(
     assert m.suction.hit[1, 0] == 0  # the tote, at the grasp
     # Tool pose: same axes as the contact frame, body_height + shaft behind the contact.
     assert np.allclose(m.suction.contact_poses[0][:3, 2], [0, 0, -1])
-    assert np.allclose(m.suction.tool_poses[0][:3, 3], [0, 0, 0.05 + 0.03 + 0.15], atol=1e-6)
+    # MetaGraspNet: tool origin 2 cm (cup) + 11.21 cm (tool) behind the contact.
+    assert np.allclose(m.suction.tool_poses[0][:3, 3], [0, 0, 0.05 + 0.02 + 0.1121], atol=1e-6)
     c = m.collisions("suction")
     assert (c.total, c.colliding, c.by_obstacle) == (2, 1, {"tote": 1})
     assert np.isnan(m.suction.score_simulation).all()

@@ -338,7 +338,6 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
     p->colliding.assign(n, 0);
     p->hit.assign(n * K, -1);
   }
-  const double tool_length = cup.body_height + options.tool.shaft_length;
   std::size_t row_pj = 0, row_su = 0;
   for (std::size_t i = 0; i < N; ++i) {
     const SceneGraspObject& o = objects[i];
@@ -378,7 +377,7 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
         X_WS.linear() = frame_z_to(a_W);
         X_WS.translation() = c_W;
         su.X_W_contact[row_su] = X_WS;
-        su.X_W_tool[row_su] = back_off(X_WS, tool_length);
+        su.X_W_tool[row_su] = back_off(X_WS, kSuctionToolOffset);
         su.contacts.row(r) = c_W.transpose();
         su.second_contacts.row(r) = c_W.transpose();
         if (!o.suction_score_analytical.empty())

@@ -6,8 +6,9 @@ documents the model). Built once per scene, reused for every view:
 
 1. Placement: every object-level parallel-jaw grasp becomes a hand (flange) pose and a grasp frame
    at the first contact p1 (x = closing, z = approach); every suction grasp a contact frame
-   (z = approach into the surface, origin at the contact) and a tool pose (same axes, origin at
-   the end of the tool shaft, ``cup.body_height + shaft_length`` behind the contact). World frame.
+   (z = approach into the surface, origin at the contact) and a tool pose (same axes, origin
+   :data:`SUCTION_TOOL_OFFSET` = 13.21 cm behind the contact, MetaGraspNet's convention). World
+   frame.
 2. Collision, once per scene: the hand (fingers at the pre-grasp opening ``min(w + margin,
    max_opening)``) and the suction tool (cup body of ``cup.outer_radius`` from ``clearance`` to
    ``cup.body_height`` behind the contact, then a shaft of :data:`DEFAULT_SHAFT_RADIUS` x
@@ -50,6 +51,7 @@ if TYPE_CHECKING:
     from mgn.scene.scene import Scene
 
 __all__ = [
+    "SUCTION_TOOL_OFFSET",
     "DEFAULT_SHAFT_LENGTH",
     "DEFAULT_SHAFT_RADIUS",
     "GraspCollisions",
@@ -62,6 +64,9 @@ __all__ = [
     "ToolCollisions",
 ]
 
+#: MetaGraspNet's suction tool pose: the contact frame moved back along the approach by 2 cm
+#: (cup) + 11.21 cm (tool) = 0.1321 m (the one constant, defined in the C++ core).
+SUCTION_TOOL_OFFSET: float = float(_core.SUCTION_TOOL_OFFSET)
 #: Radius of the suction tool shaft behind the cup body, m (a vacuum tube / tool body).
 DEFAULT_SHAFT_RADIUS = 0.015
 #: Length of the suction tool shaft behind the cup body, m.
@@ -104,8 +109,8 @@ class SuctionGraspSet:
     """Suction grasps of one view and one group (camera frame, metres).
 
     Attributes:
-        suction_poses: (K, 4, 4) tool poses X_CT: z = approach, origin at the end of the tool
-            shaft (``cup.body_height + shaft_length`` behind the contact).
+        suction_poses: (K, 4, 4) tool poses X_CT: z = approach, origin
+            :data:`SUCTION_TOOL_OFFSET` behind the contact (MetaGraspNet: 2 + 11.21 cm).
         contact_poses: (K, 4, 4) contact frames X_CS: z = approach into the surface, origin at
             the contact.
         score_analytical: (K,) float32 seal score; score_simulation: (K,) NaN when not available;

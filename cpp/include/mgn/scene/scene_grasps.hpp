@@ -11,8 +11,8 @@
 ///     X_WG = X_WO * (grasp_rotation(grasp), p1) (x = closing, z = approach, origin at p1).
 ///     A suction grasp (contact c, approach a into the surface) becomes the contact frame
 ///     X_WS = (R, c) with R's z column = a (x, y: the branch-free orthonormal basis of Duff et al.
-///     2017, deterministic) and the tool (flange) pose X_WT = X_WS * translation(0, 0, -L) with
-///     L = cup.body_height + tool.shaft_length: the end of the tool shaft, same axes.
+///     2017, deterministic) and the tool pose X_WT = X_WS * translation(0, 0, -kSuctionToolOffset)
+///     (MetaGraspNet's convention, 13.21 cm behind the contact, same axes).
 ///  2. Collision. The tool is placed at the grasp and moved back along the approach by every
 ///     offset d (X * translation(0, 0, -d) in the hand/contact frame). It collides when any part
 ///     intersects an obstacle surface (FCL) or lies entirely inside an obstacle, or an obstacle
@@ -49,6 +49,11 @@
 #include <vector>
 
 namespace mgn {
+
+/// Where MetaGraspNet puts the suction tool pose (`suction_poses_relative_to_camera`): the contact
+/// frame moved back along the approach by its cup approach distance (2 cm) plus its suction tool
+/// height (11.21 cm), m. Only the written pose uses it; the collision geometry is SuctionTool.
+inline constexpr double kSuctionToolOffset = 0.02 + 0.1121;
 
 /// Geometry of the suction tool behind the cup body, for the scene collision check (m).
 struct SuctionTool {
