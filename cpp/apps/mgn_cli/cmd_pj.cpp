@@ -114,7 +114,12 @@ int cmd_pj(const std::vector<std::string>& args) {
 
   const mgn::ParallelJawGripper gripper =
       gripper_path.empty() ? mgn::ParallelJawGripper{} : read_gripper(gripper_path);
-  const mgn::Mesh mesh = mgn::load_mesh(mesh_path);
+  mgn::Mesh mesh = mgn::load_mesh(mesh_path);
+  // A closed mesh wound inward (e.g. a mirrored export) would give inward surface normals and no
+  // grasp at all: use the same geometry wound outward (as mgn's user-object path does).
+  const mgn::MeshReport report = mesh.validate();
+  if (report.is_watertight && report.is_winding_consistent && report.signed_volume < 0)
+    mesh = mesh.flipped();
   mgn::MassOptions mass_options;
   mass_options.density = density;
   mass_options.open_mesh = mgn::OpenMeshPolicy::Error;
