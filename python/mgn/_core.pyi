@@ -819,6 +819,7 @@ class SceneGraspModel:
         visibility_tolerance: typing.SupportsFloat | typing.SupportsIndex,
         near_plane: typing.SupportsFloat | typing.SupportsIndex,
         num_threads: typing.SupportsInt | typing.SupportsIndex,
+        approach_step: typing.SupportsFloat | typing.SupportsIndex = 0.005,
     ) -> None: ...
     def collides(
         self,

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from mgn.io.dataset import Dataset, View
+from mgn.io.scene_format import COLLISION_OBSTACLES, COLLISION_PARTS
 
 __all__ = ["collect_stats", "svg_bars", "write_report"]
 
@@ -83,6 +84,8 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
     occl, visible_per_view, layers, levels = [], [], Counter(), Counter()
     scores: dict[str, list[np.ndarray]] = {"paralleljaw": [], "suctioncup": []}
     counts = {"non_colliding": Counter(), "colliding": Counter()}
+    # Why grasps collide: (kind, part, obstacle) -> count, from colliding_grasps/*/collision_*.
+    why: Counter = Counter()
     invalid = []
     for view in views:
         inst = view.instances
@@ -110,9 +113,14 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
             if s is not None:
                 scores[kind].append(np.asarray(s, float))
                 counts["non_colliding"][kind] += len(s)
-            c = view.grasps(kind, colliding=True).get("score_analytical")
+            cg = view.grasps(kind, colliding=True)
+            c = cg.get("score_analytical")
             if c is not None:
                 counts["colliding"][kind] += len(c)
+            part, obst = cg.get("collision_part"), cg.get("collision_obstacle")
+            if part is not None and obst is not None:
+                for pa, ob in zip(np.asarray(part, int), np.asarray(obst, int), strict=True):
+                    why[(kind, COLLISION_PARTS.get(pa, "?"), COLLISION_OBSTACLES.get(ob, "?"))] += 1
         d = view.npz["depth"]
         invalid.append(float(np.mean(~np.isfinite(d) | (d <= 0))))
     return {
@@ -125,6 +133,10 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
         "difficulty": {str(k): v for k, v in sorted(levels.items())},
         "grasp_scores": {k: (np.concatenate(v).tolist() if v else []) for k, v in scores.items()},
         "grasp_counts": {k: dict(v) for k, v in counts.items()},
+        "collision_reasons": {
+            kind: {f"{pa} / {ob}": n for (k, pa, ob), n in sorted(why.items()) if k == kind}
+            for kind in scores
+        },
         "invalid_depth_share": invalid,
     }
 
@@ -206,6 +218,12 @@ def write_report(
         "non-colliding grasps (sampled views)": gc["non_colliding"],
         "colliding grasps (sampled views)": gc["colliding"],
     }
+    for kind, split in stats.get("collision_reasons", {}).items():
+        if split:
+            summary[f"why {kind} grasps collide (part / obstacle)"] = split
+    removed = info.get("removed_objects")
+    if removed:
+        summary["objects that left the tote (removed)"] = removed
     rows = "".join(
         f"<tr><th>{html.escape(k)}</th><td>{html.escape(json.dumps(v))}</td></tr>"
         for k, v in summary.items()

@@ -177,7 +177,9 @@ def real_scene():
 
 def test_collisions_agree_with_python_fcl_on_a_real_scene(real_scene):
     scene, pj, su = real_scene
-    m = SceneGraspModel(scene, pj, su, num_threads=2)
+    # approach_step 1 m: only the listed offsets are checked, each compared with FCL here (the
+    # path between them is tested in test_approach_path.py).
+    m = SceneGraspModel(scene, pj, su, num_threads=2, approach_step=1.0)
     assert len(m.pj) == sum(len(p) for p in pj) > 0
     from mgn.render.views import tote_mesh
 
@@ -232,7 +234,9 @@ def test_view_grasps_of_a_real_scene_are_consistent(real_scene):
     assert 0 < kept < len(m.suction)
     paths = out.datasets()
     assert paths["colliding_grasps/suctioncup/object_id"].dtype == np.int32
-    assert len(paths) == 2 * (7 + 6)
+    # 7 parallel-jaw and 6 suction datasets per group, plus why each colliding grasp collides.
+    assert len(paths) == 2 * (7 + 6) + 2 * 2
+    assert paths["colliding_grasps/paralleljaw/collision_part"].dtype == np.uint8
     # Nothing seen: nothing kept.
     none = m.view_grasps(view, np.zeros(len(scene.instances), bool))
     assert len(none.non_colliding.paralleljaw) == len(none.colliding.suctioncup) == 0

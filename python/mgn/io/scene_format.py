@@ -32,6 +32,8 @@ from mgn.render.camera import Intrinsics
 
 __all__ = [
     "CM_RULES",
+    "COLLISION_OBSTACLES",
+    "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
     "HDF5_INT_LEAVES",
     "M_TO_CM",
@@ -68,6 +70,17 @@ HDF5_INT_LEAVES: tuple[str, ...] = (
     "collision_obstacle",
 )
 
+#: Codes of ``colliding_grasps/*/collision_part``: the gripper part that collides first along
+#: the approach.
+COLLISION_PARTS: dict[int, str] = {1: "palm", 2: "finger", 3: "cup", 4: "shaft"}
+#: Codes of ``colliding_grasps/*/collision_obstacle``: floor = the tote where the part reaches
+#: below its inner floor surface, wall = the rest of the tote.
+COLLISION_OBSTACLES: dict[int, str] = {
+    1: "floor",
+    2: "wall",
+    3: "other object",
+    4: "grasped object",
+}
 #: Datasets every view's ``{v}_scene.hdf5`` has (empty groups have zero-length datasets).
 HDF5_FLOAT_KEYS: tuple[str, ...] = (
     "camera/pose_relative_to_world",
