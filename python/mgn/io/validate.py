@@ -80,6 +80,8 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
                 ids = z["instances_objects"]
                 if np.any(ids != np.round(ids)) or ids.min(initial=0) < 0 or ids.max(initial=0) > n:
                     bad(".npz", f"'instances_objects' must hold whole ids 0..{n}")
+                elif ids.max(initial=0) < 1:
+                    bad(".npz", "no visible object in this view (the camera sees only the tote)")
                 elif am.ndim == 3 and am.shape[1:] == ids.shape:
                     for i in range(n):
                         vis = ids == i + 1
