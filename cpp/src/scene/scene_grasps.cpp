@@ -174,7 +174,8 @@ struct SceneGraspModel::Impl {
     const std::vector<double>& off = options.offsets;
     if (k == 0) return {off[0]};
     const double a = off[k - 1], b = off[k];
-    const auto n = static_cast<int>(std::max(1.0, std::ceil(std::abs(b - a) / options.approach_step)));
+    const auto n =
+        static_cast<int>(std::max(1.0, std::ceil(std::abs(b - a) / options.approach_step)));
     std::vector<double> d(static_cast<std::size_t>(n));
     for (int i = 1; i <= n; ++i) d[static_cast<std::size_t>(i - 1)] = a + (b - a) * i / n;
     return d;
@@ -255,7 +256,8 @@ struct SceneGraspModel::Impl {
         hit[k] = first_hit(parts, std::array<Pose, 2>{X, X}, -1, &pi, &oj);
         if (hit[k] < 0) continue;
         if (!any && why_part) {
-          *why_part = static_cast<std::uint8_t>(pi == 0 ? CollisionPart::Cup : CollisionPart::Shaft);
+          *why_part =
+              static_cast<std::uint8_t>(pi == 0 ? CollisionPart::Cup : CollisionPart::Shaft);
           *why_obstacle = obstacle_code(*parts[pi], X, oj, own);
         }
         any = true;

@@ -13,11 +13,12 @@
 ///     X_WS = (R, c) with R's z column = a (x, y: the branch-free orthonormal basis of Duff et al.
 ///     2017, deterministic) and the tool pose X_WT = X_WS * translation(0, 0, -kSuctionToolOffset)
 ///     (MetaGraspNet's convention, 13.21 cm behind the contact, same axes).
-///  2. Collision. The tool is placed at the grasp and moved back along the approach by every
-///     offset d (X * translation(0, 0, -d) in the hand/contact frame), and at poses at most
-///     options.approach_step apart on the path between consecutive offsets (the whole approach). It collides when any part
-///     intersects an obstacle surface (FCL) or lies entirely inside an obstacle, or an obstacle
-///     lies entirely inside a part (ray-parity tests). Obstacles: every object and the tote.
+///  2. Collision. The tool is placed at the grasp and moved back along the approach by every offset
+///     d (X * translation(0, 0, -d) in the hand/contact frame), and at poses at most
+///     options.approach_step apart on the path between consecutive offsets (the whole approach). It
+///     collides when any part intersects an obstacle surface (FCL) or lies entirely inside an
+///     obstacle, or an obstacle lies entirely inside a part (ray-parity tests). Obstacles: every
+///     object and the tote.
 ///     - Parallel-jaw: palm and fingers of gripper_meshes() with the fingers at the pre-grasp
 ///       opening gripper.collision_opening(w). The grasped object itself is skipped at offset 0
 ///       exactly (the object-level sampler already checked the same hand against it) and checked
