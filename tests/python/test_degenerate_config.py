@@ -83,3 +83,18 @@ def test_validate_flags_a_view_without_visible_objects(small_dataset: Path, tmp_
     assert zipfile.is_zipfile(npz)
     problems = validate_dataset(ds)
     assert any("no visible object" in p.message and npz.name in p.path for p in problems), problems
+
+
+def test_generate_prints_the_warning(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    cfg = {
+        "objects": {"names": ["box_tea", "can_soda"]},
+        "camera": {"views": [0], "resolution_scale": 0.02},  # 24 x 24 px
+        "labels": {k: False for k in ("suction", "paralleljaw", "pj_physics", "layout",
+                                      "scene_grasps")},
+        "drop": {"max_time": 1.0},
+    }  # fmt: skip
+    (tmp_path / "cfg.yaml").write_text(yaml.safe_dump(cfg))
+    args = ["generate", "--out", str(tmp_path / "ds"), "--scenes", "1"]
+    assert main([*args, "--config", str(tmp_path / "cfg.yaml"), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: camera.resolution_scale = 0.02: images of 24x24 px" in err
