@@ -35,6 +35,7 @@ __all__: list[str] = [
     "RayScene",
     "Renderer",
     "SEAL_FAILURE_NAMES",
+    "SUCTION_TOOL_OFFSET",
     "SURFACE_DARK",
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
@@ -1050,6 +1051,7 @@ class SceneGraspModel:
         visibility_tolerance: typing.SupportsFloat | typing.SupportsIndex,
         near_plane: typing.SupportsFloat | typing.SupportsIndex,
         num_threads: typing.SupportsInt | typing.SupportsIndex,
+        approach_step: typing.SupportsFloat | typing.SupportsIndex = 0.005,
     ) -> None: ...
     def collides(
         self,
@@ -1382,6 +1384,7 @@ SEAL_FAILURE_NAMES: tuple = (
     "strain",
     "rough",
 )
+SUCTION_TOOL_OFFSET: float = 0.1321
 SURFACE_DARK: int = 2
 SURFACE_MIRROR: int = 4
 SURFACE_TRANSPARENT: int = 1

@@ -29,7 +29,14 @@ from mgn.scene.scene import (
     SceneInstance,
 )
 
-__all__ = ["RESTITUTION", "drop_scene", "settle", "settle_tracked", "tote_mesh"]
+__all__ = [
+    "RESTITUTION",
+    "drop_scene",
+    "drop_scene_refilled",
+    "settle",
+    "settle_tracked",
+    "tote_mesh",
+]
 
 #: Restitution of the objects (the library carries friction but not restitution).
 RESTITUTION = 0.1
@@ -280,3 +287,34 @@ def settle(
     return settle_tracked(
         scene, remove=remove, options=options, decomposition=decomposition, use_cache=use_cache
     )[0]
+
+
+def drop_scene_refilled(
+    objects: Sequence[ObjectSpec],
+    *,
+    seed: int = 0,
+    attempts: int = 5,
+    **kwargs: Any,
+) -> Scene:
+    """:func:`drop_scene` again until every object stays in the tote (``objects.refill``).
+
+    Attempt 0 uses ``seed``; attempt k > 0 the seed derived from (seed, k) (deterministic). Stops
+    at the first scene without removed objects, else after ``attempts`` drops and keeps the
+    scene with the most objects in the tote (the earliest on a tie). ``stats["drop_attempts"]``
+    records the drops made. Other arguments as :func:`drop_scene`.
+    """
+    if isinstance(attempts, bool) or not isinstance(attempts, int) or attempts < 1:
+        raise InvalidArgumentError(
+            f"objects.refill_attempts must be an integer >= 1, got {attempts!r}"
+        )
+    best: Scene | None = None
+    for k in range(attempts):
+        s = seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
+        scene = drop_scene(objects, seed=s, **kwargs)
+        if best is None or len(scene.instances) > len(best.instances):
+            best = scene
+        if not scene.removed:
+            break
+    assert best is not None
+    best.stats["drop_attempts"] = k + 1
+    return best
