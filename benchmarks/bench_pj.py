@@ -117,7 +117,7 @@ def run(
     )
     cases: dict[str, Callable[[], object]] = {}
     if mgn is not None:
-        from mgn.geometry import mass_properties
+        from mgn.geometry.mesh import mass_properties
         from mgn.pj import AntipodalSampler, label_object
 
         mesh = object_mesh(spec)

@@ -65,7 +65,7 @@ def scene_triangles() -> int:
 
 
 def camera(width: int) -> tuple[Any, np.ndarray]:
-    from mgn.render import Intrinsics, mgn_rig
+    from mgn.scene.cameras import Intrinsics, mgn_rig
 
     K = Intrinsics.mgn_synthetic().scaled(width / 1200)
     poses, _ = mgn_rig(2024, (0.0, 0.0, 0.0))
@@ -73,7 +73,8 @@ def camera(width: int) -> tuple[Any, np.ndarray]:
 
 
 def _side_mgn(width: int, views: list[int]) -> tuple[Callable[[int], tuple], Any]:
-    from mgn.render import CameraView, Instance, Renderer, tote_mesh
+    from mgn.render import Instance, Renderer, tote_mesh
+    from mgn.scene.cameras import CameraView
 
     K, poses = camera(width)
     r = Renderer(K.width, K.height)

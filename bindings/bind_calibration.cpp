@@ -119,7 +119,7 @@ void bind_calibration(py::module_& m) {
         out["predicted"] = to_bool_numpy(std::move(r.predicted));
         return out;
       },
-      "Fit c1, c2 of the cup to measured outcomes (see mgn.suction.calibrate).",
+      "Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).",
       py::arg("surfaces"), py::arg("surface_index"), py::arg("points"), py::arg("normals"),
       py::arg("sealed"), py::arg("cup"), py::arg("c1_min") = defaults.c1_min,
       py::arg("c1_max") = defaults.c1_max, py::arg("c2_min") = defaults.c2_min,

@@ -1,5 +1,5 @@
 // Scene grasp labels (mgn/scene/scene_grasps.hpp): mgn._core.SceneGraspModel.
-// The typed façade is mgn.scene.scene_grasps.SceneGraspModel.
+// The typed façade is mgn.view_labels.grasps.SceneGraspModel.
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 #include <mgn/scene/scene_grasps.hpp>

@@ -914,7 +914,7 @@ def calibrate_cup(
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict:
     """
-    Fit c1, c2 of the cup to measured outcomes (see mgn.suction.calibrate).
+    Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).
     """
 
 def camera_rays(
@@ -954,7 +954,7 @@ def compute_layout(
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict:
     """
-    Layout labels of one view (see mgn/scene/layout.hpp); use mgn.scene.compute_layout.
+    Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.
     """
 
 def compute_mass_properties(

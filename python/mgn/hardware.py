@@ -65,7 +65,7 @@ class _YamlDataclass:
         """YAML text of the fields; also written to ``path`` when given."""
         text = yaml.safe_dump(self.to_dict(), sort_keys=False)
         if path is not None:
-            from mgn.io.atomic import atomic_write_text
+            from mgn.base.atomic import atomic_write_text
 
             atomic_write_text(path, text)
         return text

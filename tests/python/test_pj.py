@@ -15,8 +15,8 @@ import pytest
 import trimesh
 
 import mgn
-from mgn.cli import main
-from mgn.geometry import make_box, make_sphere, mass_properties
+from mgn.cli.main import main
+from mgn.geometry.mesh import make_box, make_sphere, mass_properties
 from mgn.hardware import ParallelJawGripper
 from mgn.io.model_folder import write_model_folder
 from mgn.objects import builtin_objects

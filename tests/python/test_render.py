@@ -12,19 +12,15 @@ import mgn
 from mgn.io.model_folder import object_mesh
 from mgn.objects import get_object
 from mgn.render import (
-    CameraView,
     Instance,
-    Intrinsics,
     Renderer,
     apply_depth_sensor,
-    hemisphere_rig,
-    mgn_rig,
-    mgn_rig_from_params,
     render_views,
     sensor_params,
     surface_flags,
     tote_mesh,
 )
+from mgn.scene.cameras import CameraView, Intrinsics, hemisphere_rig, mgn_rig, mgn_rig_from_params
 
 SMALL = Intrinsics.mgn_synthetic().scaled(0.25)  # 300 x 300, same field of view
 
@@ -183,7 +179,7 @@ def test_amodal_pass_of_a_subset(scene) -> None:
 def test_bad_input_gives_clear_errors(scene) -> None:
     r = Renderer(64, 64)
     K = Intrinsics(64, 64, 80.0, 80.0, 32.0, 32.0)
-    view = CameraView(K, mgn.render.look_at((0, 0, 1.0), (0, 0, 0), (0, 1, 0)))
+    view = CameraView(K, mgn.scene.cameras.look_at((0, 0, 1.0), (0, 0, 0), (0, 1, 0)))
     with pytest.raises(mgn.InvalidArgumentError, match="nothing to draw"):
         r.render(view)  # empty scene
     with pytest.raises(ValueError, match="non-finite"):
@@ -241,7 +237,7 @@ def test_builtin_textures_reach_the_mesh() -> None:
 def test_cli_rig_prints_the_37_poses(capsys) -> None:
     import json
 
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     assert main(["render", "rig", "--seed", "5", "--target", "0", "0", "0"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -272,7 +268,7 @@ def test_texture_orientation_follows_the_obj_uv_convention() -> None:
     r.set_instances([Instance(r.add_mesh(quad), np.eye(4), 1)])
     K = Intrinsics(64, 64, 100.0, 100.0, 32.0, 32.0)
     # Straight down, image up = world +y, image right = world +x.
-    view = CameraView(K, mgn.render.look_at((0, 0, 0.5), (0, 0, 0), (0, 1, 0)))
+    view = CameraView(K, mgn.scene.cameras.look_at((0, 0, 0.5), (0, 0, 0), (0, 1, 0)))
     rgb = r.render(view, shadows=False).rgb.astype(int)
     tl, tr, bl, br = rgb[20, 20], rgb[20, 44], rgb[44, 20], rgb[44, 44]
     assert tl[0] > 2 * max(tl[1], tl[2])  # red

@@ -8,18 +8,15 @@ import numpy as np
 import pytest
 
 import mgn
-from mgn.io.model_folder import object_mesh
-from mgn.objects import ToteSpec, get_object
-from mgn.scene import (
+from mgn.geometry.convex import (
     ConvexDecompositionOptions,
-    DropOptions,
-    Scene,
     cached_convex_decomposition,
-    compose_objects,
     convex_decomposition,
     convex_hull,
-    drop_scene,
 )
+from mgn.io.model_folder import object_mesh
+from mgn.objects import ToteSpec, get_object
+from mgn.scene import DropOptions, Scene, compose_objects, drop_scene
 
 TOL = 0.003  # m: allowed interpenetration / overshoot after settling
 
@@ -223,7 +220,7 @@ def test_bad_input_gives_clear_errors():
 
 
 def test_cli_scene_drop(tmp_path, capsys):
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     out = tmp_path / "s.json"
     assert (

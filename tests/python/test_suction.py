@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import mgn
-from mgn.cli import main
+from mgn.cli.main import main
 from mgn.hardware import SuctionCup
 from mgn.io.model_folder import object_mesh
 from mgn.objects import get_object
@@ -121,7 +121,7 @@ def test_cli_writes_suction_labels_in_the_metagraspnet_layout(tmp_path):
 def test_cli_board_then_calibrate_recovers_the_model(tmp_path):
     import csv
 
-    from mgn.suction import make_calibration_board
+    from mgn.calibration import make_calibration_board
 
     assert main(["suction", "board", str(tmp_path)]) == 0
     with (tmp_path / "poses.csv").open() as fh:

@@ -2,7 +2,7 @@
 
 Predictions are matched to the scene grasp labels of each view (FORMAT.md ``{v}_scene.hdf5``,
 both the ``non_colliding_grasps`` and the ``colliding_grasps`` groups) and checked for collision
-by the SAME model that made the labels (:meth:`mgn.scene.scene_grasps.SceneGraspModel.collides`:
+by the SAME model that made the labels (:meth:`mgn.view_labels.grasps.SceneGraspModel.collides`:
 same gripper / cup and tool geometry from the dataset's config, same approach offsets, the tote
 and every object of the scene), rebuilt from the scene's ``scene.json``.
 
@@ -345,7 +345,7 @@ class _Context:
 
             info = self.ds.info
             if info is not None and isinstance(info.get("config"), Mapping):
-                from mgn.config import Config
+                from mgn.pipeline.config import Config
 
                 cfg = Config.from_dict(info["config"], base_dir=self.ds.root)
                 self._hardware = (cfg.gripper, cfg.cup)
@@ -412,9 +412,9 @@ class _Context:
     def model(self, scene_id: int) -> Any:
         """The scene's SceneGraspModel: obstacles and tools of the labels (no labels needed)."""
         if scene_id not in self._models:
+            from mgn.pipeline.label_scene import LabelOptions
             from mgn.scene import Scene
-            from mgn.scene.label import LabelOptions
-            from mgn.scene.scene_grasps import SceneGraspModel
+            from mgn.view_labels.grasps import SceneGraspModel
 
             folder = self.ds.scene(scene_id).folder
             path = folder / "scene.json"

@@ -9,8 +9,8 @@ until the tote is empty, every remaining object has failed ``max_failures_per_ob
 Success model (the label model, rebuilt at the current poses every step):
 
 1. The grasp is one of the object-level labels placed at the object's current pose by
-   :class:`mgn.scene.SceneGraspModel` (a policy giving a tool pose is matched to the nearest
-   label of that object: tool origin within :data:`MATCH_DISTANCE`, approach within
+   :class:`mgn.view_labels.grasps.SceneGraspModel` (a policy giving a tool pose is matched to the
+   nearest label of that object: tool origin within :data:`MATCH_DISTANCE`, approach within
    :data:`MATCH_ANGLE`; otherwise the attempt fails with reason ``"no_label"``).
 2. It must be collision-free: the tool at the grasp and along its approach (the label model's
    offsets) touches no other object and not the tote; else reason ``"collision"``.
@@ -29,8 +29,8 @@ again with another grasp until it has failed ``max_failures_per_object`` times.
 Policies:
 
 - ``"label"``: the best-scored collision-free grasp whose contact is visible in the top view,
-  among the top-layer objects (layer 0 of :func:`mgn.scene.compute_layout` on the top view)
-  that may still be tried; grasps already tried on an object are skipped. If no top-layer
+  among the top-layer objects (layer 0 of :func:`mgn.view_labels.layout.compute_layout` on the top
+  view) that may still be tried; grasps already tried on an object are skipped. If no top-layer
   object has such a grasp, all visible objects are considered; if none has one, the run stops.
 - ``"random"``: a random visible object that may still be tried, and a random visible grasp
   of it (colliding or not) not tried before, from a stream seeded by (seed, step).
@@ -66,14 +66,14 @@ import numpy.typing as npt
 from mgn.errors import InvalidArgumentError
 
 if TYPE_CHECKING:
-    from mgn.config import Config
+    from mgn.pipeline.config import Config
     from mgn.pipeline.label_cache import ObjectLabels
-    from mgn.render.camera import CameraView
     from mgn.render.views import ViewImages
-    from mgn.scene.layout import Layout
+    from mgn.scene.cameras import CameraView
     from mgn.scene.scene import DropOptions, Scene
-    from mgn.scene.scene_grasps import PlacedGrasps, SceneGraspModel
-    from mgn.scene.view_labels import ViewObjectLabels
+    from mgn.view_labels.grasps import PlacedGrasps, SceneGraspModel
+    from mgn.view_labels.layout import Layout
+    from mgn.view_labels.objects import ViewObjectLabels
 
 __all__ = [
     "MATCH_ANGLE",
@@ -105,7 +105,7 @@ class PickState:
             (``layer``: 0 = top layer).
         grasps: every grasp label of the gripper placed at the current poses (world frame,
             objects concatenated; ``object_id`` = instance id - 1, ``colliding``, scores).
-        model: the :class:`~mgn.scene.SceneGraspModel` the grasps come from.
+        model: the :class:`~mgn.view_labels.grasps.SceneGraspModel` the grasps come from.
         visible: (M,) bool, the grasp's contact is visible in the top view.
         score: (M,) float, the success model's score of each grasp (see the module doc).
         eligible: (N,) bool, the instance may still be tried (fewer failures than allowed).
@@ -310,7 +310,7 @@ def _labels_for(
 
 def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
     from mgn.pipeline.scene_writer import scene_intrinsics
-    from mgn.render.camera import CameraView, mgn_rig
+    from mgn.scene.cameras import CameraView, mgn_rig
 
     poses, _ = mgn_rig(scene.seed)
     K = scene_intrinsics(config.camera)
@@ -328,8 +328,8 @@ def _render(scene: Scene, view: CameraView) -> ViewImages:
 
 
 def _observe(scene: Scene, view: CameraView, num_threads: int) -> tuple[Any, Any, Any]:
-    from mgn.scene.layout import compute_layout
-    from mgn.scene.view_labels import SceneRayModel, view_object_labels
+    from mgn.view_labels.layout import compute_layout
+    from mgn.view_labels.objects import SceneRayModel, view_object_labels
 
     images = _render(scene, view)
     rays = SceneRayModel.from_scene(scene)
@@ -469,7 +469,7 @@ def run_picking(
         object_labels: name -> :class:`~mgn.pipeline.label_cache.ObjectLabels` of the scene's
             objects (e.g. a dataset's); missing ones are computed with ``config`` and cached.
         config: dataset configuration (object-label settings, gripper, cup, camera); default
-            :func:`mgn.config.default_config`.
+            :func:`mgn.pipeline.config.default_config`.
         max_failures_per_object: failed attempts after which an object is given up (>= 1).
         max_attempts: attempts at most (default: (max_failures_per_object + 1) x objects).
         seed: seeds the random policy and the stochastic success draws.
@@ -486,10 +486,10 @@ def run_picking(
         InvalidArgumentError: an empty scene, an unknown policy or gripper, bad numbers, a policy
             answer that names an unknown instance or grasp.
     """
-    from mgn.config import default_config
+    from mgn.pipeline.config import default_config
+    from mgn.pipeline.label_scene import LabelOptions, strided_subset
     from mgn.scene.drop import settle_tracked
-    from mgn.scene.label import LabelOptions, strided_subset
-    from mgn.scene.scene_grasps import SceneGraspModel
+    from mgn.view_labels.grasps import SceneGraspModel
 
     if len(scene.instances) == 0:
         raise InvalidArgumentError("run_picking: the scene has no objects; nothing to pick")
@@ -723,7 +723,7 @@ def _load_scene(path: Path) -> tuple[Scene, Config | None]:
     dataset.json when there is one) or of a scene.json file."""
     import json
 
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
     from mgn.scene.scene import Scene
 
     file = path / "scene.json" if path.is_dir() else path
@@ -738,7 +738,7 @@ def _load_scene(path: Path) -> tuple[Scene, Config | None]:
 
 
 def _cmd_pick(args: argparse.Namespace) -> int:
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
 
     scene, config = _load_scene(Path(args.scene))
     if args.config is not None:

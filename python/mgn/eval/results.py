@@ -8,7 +8,7 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mgn.io.atomic import atomic_write_text
+from mgn.base.atomic import atomic_write_text
 
 __all__ = ["format_table", "print_and_write", "to_jsonable", "write_results_json"]
 

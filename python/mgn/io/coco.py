@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from mgn.io.atomic import atomic_write_text
+from mgn.base.atomic import atomic_write_text
 from mgn.io.dataset import Dataset, View
 
 __all__ = ["coco_dict", "export_coco", "rle"]

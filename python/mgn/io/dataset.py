@@ -34,7 +34,7 @@ import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.scene_format import M_TO_CM, from_cm
-from mgn.render.camera import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
+from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
 __all__ = ["Dataset", "SceneFolder", "View"]
 
@@ -199,8 +199,8 @@ class View:
     def relation_matrix(self) -> npt.NDArray[np.int8]:
         """(N, N) int8 relation matrix from ``{v}_order.csv``: M[i][j] = -1 if instance j+1
         lies on / occludes instance i+1, +1 for the reverse (the file stores the -1 entries;
-        :func:`mgn.scene.layout.read_order_csv`)."""
-        from mgn.scene.layout import read_order_csv, read_order_json
+        :func:`mgn.view_labels.layout.read_order_csv`)."""
+        from mgn.view_labels.layout import read_order_csv, read_order_json
 
         csv = self.path("_order.csv")
         if csv.exists():

@@ -26,8 +26,8 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Mesh, load_mesh, mass_properties, sample_surface
-from mgn.io.atomic import atomic_dir
+from mgn.base.atomic import atomic_dir
+from mgn.geometry.mesh import Mesh, load_mesh, mass_properties, sample_surface
 from mgn.objects import MaterialSpec, ObjectSpec, ToteSpec, make_tote
 
 M_TO_CM = 100.0

@@ -26,9 +26,9 @@ import h5py
 import numpy as np
 import numpy.typing as npt
 
-from mgn.io.atomic import atomic_write_bytes, atomic_write_text
-from mgn.io.deterministic import h5_create_dataset, h5_create_group, npz_bytes
-from mgn.render.camera import Intrinsics
+from mgn.base.atomic import atomic_write_bytes, atomic_write_text
+from mgn.base.deterministic import h5_create_dataset, h5_create_group, npz_bytes
+from mgn.scene.cameras import Intrinsics
 
 __all__ = [
     "CM_RULES",

@@ -150,7 +150,7 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
 
 
 def _check_scene(scene: SceneFolder, problems: list[Problem], root: Path) -> None:
-    from mgn.pipeline.manifest import MANIFEST, check_manifest
+    from mgn.io.manifest import MANIFEST, check_manifest
 
     found: list[tuple[str, str]] = []
     if (scene.folder / MANIFEST).exists():

@@ -31,7 +31,7 @@ import numpy as np
 import yaml
 
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.geometry import load_mesh
+from mgn.geometry.mesh import load_mesh
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
 
 _KEYS = {

@@ -4,7 +4,7 @@ Each object's suction and parallel-jaw labels (:func:`mgn.suction.label_object`,
 :func:`mgn.pj.label_object`) depend only on its geometry, its density, the cup or gripper and the
 label parameters, never on a scene. They are computed once and kept in
 ``$MGN_CACHE_DIR/labels`` (default ``~/.cache/mgn/labels``, next to the convex-decomposition
-cache of :func:`mgn.scene.convex.cache_dir`), one file per object and label kind:
+cache of :func:`mgn.geometry.convex.cache_dir`), one file per object and label kind:
 
     labels/suction-<sha256>.npz    labels/pj-<sha256>.npz
 
@@ -34,11 +34,11 @@ from typing import Any
 import numpy as np
 
 from mgn import __version__
-from mgn.config import Config
+from mgn.base.atomic import atomic_write_bytes
+from mgn.base.deterministic import npz_bytes
 from mgn.errors import IoError
-from mgn.io.atomic import atomic_write_bytes
-from mgn.io.deterministic import npz_bytes
 from mgn.objects import ObjectSpec
+from mgn.pipeline.config import Config
 from mgn.pj.labels import PjLabels
 from mgn.suction.labels import SuctionLabels
 
@@ -79,7 +79,7 @@ class ObjectLabels:
 
 def label_cache_dir() -> Path:
     """``$MGN_CACHE_DIR/labels`` or ``~/.cache/mgn/labels``."""
-    from mgn.scene.convex import cache_dir
+    from mgn.geometry.convex import cache_dir
 
     return cache_dir().parent / "labels"
 
@@ -133,7 +133,7 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
 def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0) -> ObjectLabels:
     """Compute the labels of one object (no cache). Deterministic for the config's seed,
     whatever ``num_threads`` (0 = all cores)."""
-    from mgn.geometry import mass_properties
+    from mgn.geometry.mesh import mass_properties
     from mgn.io.model_folder import object_mesh
 
     mesh = object_mesh(spec)
@@ -289,7 +289,7 @@ def write_models(
     except OSError as e:
         if isinstance(e, IoError):
             raise
-        from mgn.io.atomic import _io_error
+        from mgn.base.atomic import _io_error
 
         raise _io_error(out / "models", e) from e
     finally:

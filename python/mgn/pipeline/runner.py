@@ -10,7 +10,7 @@ Steps:
    executor) and ``models/<id>/`` is written.
 3. Every scene is an independent task (:func:`run_scene`): drop the objects
    (:func:`mgn.scene.drop_scene`), then :func:`mgn.pipeline.scene_writer.write_scene` into
-   ``DIR/.tmp-scene<N>-<pid>``, then the manifest (:mod:`mgn.pipeline.manifest`), then a rename
+   ``DIR/.tmp-scene<N>-<pid>``, then the manifest (:mod:`mgn.io.manifest`), then a rename
    to ``DIR/scene<N>``. A half-written scene therefore only ever exists under a ``.tmp-`` name.
 
 Scene seeds: scene ``i`` (0-based, folder ``scene<i>``) of a dataset with seed ``S`` uses
@@ -54,12 +54,12 @@ from typing import Any
 import numpy as np
 
 from mgn import __version__
-from mgn.config import Config, ConfigError, load_config
+from mgn.base.atomic import atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.io.atomic import atomic_write_text
+from mgn.io.manifest import check_manifest, write_manifest
 from mgn.objects import ObjectSpec
+from mgn.pipeline.config import Config, ConfigError, load_config
 from mgn.pipeline.label_cache import ObjectLabels
-from mgn.pipeline.manifest import check_manifest, write_manifest
 
 __all__ = [
     "DATASET_SCHEMA_VERSION",
@@ -741,7 +741,7 @@ def generate(
         if quota is None:
             _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running", **extra))
     except OSError as e:
-        from mgn.io.atomic import _io_error
+        from mgn.base.atomic import _io_error
 
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 

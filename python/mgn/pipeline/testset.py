@@ -1,7 +1,7 @@
 """Test-set builders: the unseen-object split and the difficulty-balanced view selection.
 
-Both are driven by the config (``split`` and ``selection`` sections, :mod:`mgn.config`) and run
-inside :func:`mgn.pipeline.generate`; docs/testsets.md explains the design for users.
+Both are driven by the config (``split`` and ``selection`` sections, :mod:`mgn.pipeline.config`) and
+run inside :func:`mgn.pipeline.generate`; docs/testsets.md explains the design for users.
 
 Unseen split (``split.name``):
 
@@ -46,10 +46,10 @@ from typing import Any
 
 import numpy as np
 
-from mgn.config import DIFFICULTY_LEVELS, Config, ConfigError
+from mgn.base.atomic import atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.io.atomic import atomic_write_text
 from mgn.objects import ObjectSpec
+from mgn.pipeline.config import DIFFICULTY_LEVELS, Config, ConfigError
 
 __all__ = [
     "NOVEL_TAG",
@@ -335,8 +335,8 @@ def prune_scene(folder: str | os.PathLike[str], views: Sequence[int]) -> bool:
     again finishes the job. A scene left without views is removed as a whole (renamed to a
     ``.tmp-`` name first). Returns True if the scene folder was removed.
     """
+    from mgn.io.manifest import MANIFEST, file_sha256
     from mgn.io.scene_format import view_file_names
-    from mgn.pipeline.manifest import MANIFEST, file_sha256
 
     root = Path(folder)
     if not root.is_dir():
@@ -501,7 +501,7 @@ def parse_quota(text: str) -> tuple[int, ...]:
     Raises:
         ConfigError: naming ``--difficulty-quota``, the text and the expected form.
     """
-    from mgn.config import SelectionConfig
+    from mgn.pipeline.config import SelectionConfig
 
     mapping: dict[str, Any] = {}
     for part in str(text).split(","):

@@ -20,7 +20,7 @@ import numpy.typing as npt
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import Mesh, sample_surface
+from mgn.geometry.mesh import Mesh, sample_surface
 from mgn.hardware import ParallelJawGripper
 from mgn.io.grasp_file import replace_grasp_group
 from mgn.pj.sampler import AntipodalSampler, pj_wrench_scores

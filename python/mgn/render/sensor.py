@@ -22,8 +22,8 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Material, Mesh
-from mgn.render.camera import Intrinsics
+from mgn.geometry.mesh import Material, Mesh
+from mgn.scene.cameras import Intrinsics
 
 __all__ = [
     "SURFACE_DARK",

@@ -2,7 +2,7 @@
 
 :func:`render_views` is the one entry point a scene pipeline calls: objects as (mesh, X_WO,
 instance id) triples, the tote mesh and its pose, which views of the MetaGraspNet rig (or any
-list of :class:`~mgn.render.camera.CameraView`), and an output folder. Per view ``v`` it writes
+list of :class:`~mgn.scene.cameras.CameraView`), and an output folder. Per view ``v`` it writes
 (atomically):
 
 - ``{v}_rgb.png``: 8-bit RGB.
@@ -26,12 +26,12 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Mesh, make_box
-from mgn.io.atomic import atomic_write_bytes
+from mgn.base.atomic import atomic_write_bytes
+from mgn.geometry.mesh import Mesh, make_box
 from mgn.objects import ToteSpec, make_tote
-from mgn.render.camera import CameraView, Intrinsics, mgn_rig
 from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
+from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 
 __all__ = ["ViewImages", "depth_picture", "iter_views", "render_views", "tote_mesh"]
 
@@ -227,7 +227,7 @@ def render_views(
         out_dir: folder for the files (created); None writes nothing.
         X_W_tote: pose of the tote in the world (default identity). The rig looks at its origin
             (the centre of the inner floor).
-        rig_seed: seed of the rig (:func:`mgn.render.mgn_rig`).
+        rig_seed: seed of the rig (:func:`mgn.scene.cameras.mgn_rig`).
         K: intrinsics for rig views (default MGN synthetic, 1200 x 1200).
         sensor: depth sensor preset for ``depth``.
         randomize: per-view light and tote / floor colour randomisation from (seed, view).
@@ -261,7 +261,7 @@ def _write_view(folder: Path, res: ViewImages) -> None:
     atomic_write_bytes(folder / f"{v}_rgb.png", _png(res.rgb))
     atomic_write_bytes(folder / f"{v}_depth.png", _png(depth_picture(res.depth)))
     ideal = np.where(res.depth_ideal > 0, res.depth_ideal, np.nan).astype(np.float32)
-    from mgn.io.deterministic import npz_bytes  # reproducible bytes (no zip timestamps)
+    from mgn.base.deterministic import npz_bytes  # reproducible bytes (no zip timestamps)
 
     data = npz_bytes(
         depth=(res.depth * M_TO_CM).astype(np.float32),

@@ -12,13 +12,13 @@ import numpy as np
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import Mesh, mass_properties
-from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, make_tote
-from mgn.scene.convex import (
+from mgn.geometry.convex import (
     DROP_DECOMPOSITION,
     ConvexDecompositionOptions,
     cached_convex_decomposition,
 )
+from mgn.geometry.mesh import Mesh, mass_properties
+from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, make_tote
 from mgn.scene.scene import (
     BUILTIN,
     CONTACT_NAMES,
@@ -139,8 +139,8 @@ def drop_scene(
         options: simulation options (MetaGraspNet defaults).
         sources: for user objects, name -> the YAML file they were loaded from.
         decomposition: convex decomposition options (default
-            :data:`mgn.scene.convex.DROP_DECOMPOSITION`: HACD parts merged for speed).
-        use_cache: read/write the decomposition cache (:func:`mgn.scene.convex.cache_dir`).
+            :data:`mgn.geometry.convex.DROP_DECOMPOSITION`: HACD parts merged for speed).
+        use_cache: read/write the decomposition cache (:func:`mgn.geometry.convex.cache_dir`).
 
     Raises:
         InvalidArgumentError: no objects, an object larger than the tote, bad options, an

@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from mgn.base.atomic import atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.geometry import Mesh
-from mgn.io.atomic import atomic_write_text
+from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
 
 __all__ = [

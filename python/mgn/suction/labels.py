@@ -14,8 +14,8 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.collision import CollisionModel, collide
-from mgn.geometry import Mesh, make_cylinder, sample_surface
+from mgn.geometry.collision import CollisionModel, collide
+from mgn.geometry.mesh import Mesh, make_cylinder, sample_surface
 from mgn.hardware import SuctionCup
 from mgn.io.grasp_file import replace_grasp_group
 from mgn.suction.seal import SealModel, SealModelName, suction_wrench_scores

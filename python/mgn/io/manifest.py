@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from mgn.io.atomic import atomic_write_text
+from mgn.base.atomic import atomic_write_text
 
 __all__ = ["MANIFEST", "check_manifest", "file_sha256", "write_manifest"]
 

@@ -55,7 +55,7 @@ def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path |
 def _cmd_label(args: argparse.Namespace) -> int:
     import h5py
 
-    from mgn.geometry import load_mesh, mass_properties
+    from mgn.geometry.mesh import load_mesh, mass_properties
     from mgn.hardware import ParallelJawGripper
     from mgn.io.model_folder import read_model_folder
     from mgn.pj.labels import label_object, write_pj_labels
@@ -132,6 +132,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_label)
-    from mgn.pj.show_trial import register_show_trial
+    from mgn.viz.shake_trial import register_show_trial
 
     register_show_trial(psub)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from mgn.geometry import Mesh, sample_surface
+from mgn.geometry.mesh import Mesh, sample_surface
 from mgn.hardware import SuctionCup
 from mgn.suction.seal import FAILURE_REASONS, SealModel
 
@@ -159,7 +159,7 @@ def compare_models(
 def comparison_picture(mesh: Mesh, comparison: Comparison, *, size: int = 360) -> np.ndarray:
     """(H, W, 3) uint8: the object once per model, points coloured red (0) → green (1) by score,
     plus a last panel marking the controversial points in magenta."""
-    from mgn.viz import draw_points, panels, score_colors, snapshot
+    from mgn.viz.pictures import draw_points, panels, score_colors, snapshot
 
     snap = snapshot(mesh, size=size)
     imgs, titles = [], []

@@ -37,7 +37,7 @@ import numpy.typing as npt
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import Mesh, mass_properties
+from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.pj.labels import PjLabels
 from mgn.pj.sampler import core_gripper
@@ -45,7 +45,7 @@ from mgn.suction.labels import CUP_BODY_CLEARANCE, SuctionLabels
 from mgn.suction.seal import core_cup
 
 if TYPE_CHECKING:
-    from mgn.render.camera import CameraView
+    from mgn.scene.cameras import CameraView
     from mgn.scene.scene import Scene
 
 __all__ = [
@@ -507,7 +507,7 @@ class SceneGraspModel:
 
     def visible(self, view: CameraView, points: npt.ArrayLike) -> npt.NDArray[np.bool_]:
         """(N,) bool: whether each world point (N, 3) is visible from ``view`` (a
-        :class:`~mgn.render.CameraView`)."""
+        :class:`~mgn.scene.cameras.CameraView`)."""
         pts = np.asarray(points, np.float64).reshape(-1, 3)
         return self._core.visible(view.K.to_core(), view.X_WC, pts)
 
@@ -515,7 +515,7 @@ class SceneGraspModel:
         """The grasp labels of one view (camera frame, metres).
 
         Args:
-            view: a :class:`~mgn.render.CameraView` (``.K`` intrinsics, ``.X_WC``).
+            view: a :class:`~mgn.scene.cameras.CameraView` (``.K`` intrinsics, ``.X_WC``).
             seen: (N,) bool, True where instance i+1 has visible pixels in the view.
         """
         s = np.asarray(seen)

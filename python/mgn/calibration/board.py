@@ -600,8 +600,8 @@ def write_calibration_board(
     Raises:
         IoError: a file exists (without ``overwrite``) or cannot be written.
     """
+    from mgn.base.atomic import atomic_write_bytes, atomic_write_text
     from mgn.errors import IoError
-    from mgn.io.atomic import atomic_write_bytes, atomic_write_text
 
     root = Path(out_dir)
     paths = {

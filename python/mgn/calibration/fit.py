@@ -27,7 +27,7 @@ import numpy.typing as npt
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.geometry import Mesh, load_mesh
+from mgn.geometry.mesh import Mesh, load_mesh
 from mgn.hardware import SuctionCup
 from mgn.suction.seal import core_cup
 
@@ -376,7 +376,7 @@ def _blank(row: dict) -> bool:
 
 
 def read_poses_csv(path: str | os.PathLike[str]) -> BoardPoses:
-    """Read a board's ``poses.csv`` (see :func:`mgn.suction.write_calibration_board`).
+    """Read a board's ``poses.csv`` (see :func:`mgn.calibration.write_calibration_board`).
 
     Raises:
         IoError: the file cannot be read.
@@ -484,7 +484,7 @@ def read_results_csv(
 
 
 def _default_board() -> tuple[Mesh, BoardPoses]:
-    from mgn.suction.board import board_poses, make_calibration_board
+    from mgn.calibration.board import board_poses, make_calibration_board
 
     v, f, feats = make_calibration_board()
     ids, names, params, pts, nrm = board_poses(feats)
@@ -508,7 +508,7 @@ def calibrate_from_csv(
     Args:
         results_csv: the filled-in results (columns ``pose_id``, ``sealed``, optional
             ``tear_off_force_N``; see :func:`read_results_csv`).
-        board_dir: folder written by :func:`mgn.suction.write_calibration_board` (its
+        board_dir: folder written by :func:`mgn.calibration.write_calibration_board` (its
             ``poses.csv`` and ``board.stl``, millimetres). None: the folder of ``results_csv`` if
             it holds both files, else the board of this mgn version (built in memory).
         cup: the starting cup (default: :class:`SuctionCup` defaults).

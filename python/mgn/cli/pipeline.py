@@ -21,11 +21,11 @@ import sys
 __all__ = ["register"]
 
 
-def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.config.Config)
+def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipeline.config.Config)
     """The config of ``--config`` with the test-set options applied."""
     import dataclasses
 
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
     from mgn.pipeline.testset import parse_quota
 
     cfg = load_config(args.config)
@@ -42,7 +42,7 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.confi
     if args.prune_rejected:
         sel["prune_rejected"] = True
     if sel:
-        from mgn.config import SelectionConfig
+        from mgn.pipeline.config import SelectionConfig
 
         merged = {**cfg.selection.to_dict(), **sel}
         cfg = dataclasses.replace(cfg, selection=SelectionConfig.from_dict(merged, "selection"))
@@ -73,11 +73,11 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_config_dump(args: argparse.Namespace) -> int:
-    from mgn.config import dump_config
+    from mgn.pipeline.config import dump_config
 
     text = dump_config()
     if args.out:
-        from mgn.io.atomic import atomic_write_text
+        from mgn.base.atomic import atomic_write_text
 
         atomic_write_text(args.out, text)
         print(f"default configuration written to {args.out}", file=sys.stderr)
@@ -87,7 +87,7 @@ def _cmd_config_dump(args: argparse.Namespace) -> int:
 
 
 def _cmd_config_check(args: argparse.Namespace) -> int:
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
 
     config = load_config(args.file)
     views = len(config.camera.view_indices)

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from mgn.geometry import Mesh
-from mgn.raytrace import RayScene, camera_rays
-from mgn.render.camera import look_at
+from mgn.geometry.mesh import Mesh
+from mgn.geometry.raytrace import RayScene, camera_rays
+from mgn.scene.cameras import look_at
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ def _cmd_coco(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    from mgn.overlay import show
+    from mgn.viz.overlay import show
 
     path = show(args.dir, args.scene, args.view, args.out, grasps=args.grasps, layout=args.layout,
                 keypoints=not args.no_keypoints)  # fmt: skip
@@ -44,7 +44,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from mgn.report import write_report
+    from mgn.viz.report import write_report
 
     path = write_report(args.dir, args.out, samples=args.samples, max_views=args.max_views)
     print(f"wrote {path}")

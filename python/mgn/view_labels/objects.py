@@ -7,7 +7,7 @@ view's instance image (``ViewImages.instance_ids``).
 Frames and units: the world W is the tote frame (metres); the camera frame C is OpenCV (x right,
 y down, z forward); ``X_AB`` is the (4, 4) pose of B in A. Pixel (u, v) is the ray through the
 image point (u + 0.5, v + 0.5), the same model as the renderer and
-:meth:`mgn.render.CameraView.rays`. The object axis of every per-object array has length
+:meth:`mgn.scene.cameras.CameraView.rays`. The object axis of every per-object array has length
 N = ``len(scene.instances)`` in scene order: row i is instance id i + 1, including objects not
 seen in the view (their masks are empty, their occlusion is 1).
 """
@@ -22,8 +22,8 @@ import numpy.typing as npt
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import Mesh, mass_properties
-from mgn.render.camera import CameraView
+from mgn.geometry.mesh import Mesh, mass_properties
+from mgn.scene.cameras import CameraView
 
 if TYPE_CHECKING:
     from mgn.scene.scene import Scene

@@ -1,6 +1,6 @@
 """``mgn render`` subcommands: the camera rig and a demo render of built-in objects.
 
-Wired into :func:`mgn.cli.build_parser` by one call to :func:`register`.
+Wired into :func:`mgn.cli.main.build_parser` by one call to :func:`register`.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _cmd_rig(args: argparse.Namespace) -> int:
-    from mgn.render import mgn_rig
+    from mgn.scene.cameras import mgn_rig
 
     poses, params = mgn_rig(args.seed, args.target)
     print(json.dumps({"params": vars(params), "X_WC": poses.tolist()}, indent=1))
@@ -46,7 +46,8 @@ def _cmd_rig(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from mgn.io.model_folder import object_mesh
     from mgn.objects import builtin_objects
-    from mgn.render import Intrinsics, render_views, tote_mesh
+    from mgn.render import render_views, tote_mesh
+    from mgn.scene.cameras import Intrinsics
 
     if not 1 <= args.objects <= len(builtin_objects()):
         raise ValueError(f"--objects must be in 1..{len(builtin_objects())}, got {args.objects}")

@@ -3,9 +3,9 @@
 :func:`label_scene` is the scene step of ``mgn generate`` and of ``mgn scene label``: it renders
 every view (RGB, sensor and ideal depth, instance ids), computes the per-view object labels
 (visible / semantic / amodal masks, occlusion, boxes, poses, keypoints, CoM heat map:
-:mod:`mgn.scene.view_labels`), the layout (relations, layers, order, bin relation, difficulty:
-:mod:`mgn.scene.layout`) and the scene grasps (object grasps placed at the settled poses,
-collision-checked once per scene, kept per view when seen: :mod:`mgn.scene.scene_grasps`), and
+:mod:`mgn.view_labels.objects`), the layout (relations, layers, order, bin relation, difficulty:
+:mod:`mgn.view_labels.layout`) and the scene grasps (object grasps placed at the settled poses,
+collision-checked once per scene, kept per view when seen: :mod:`mgn.view_labels.grasps`), and
 writes the files of FORMAT.md with :func:`mgn.io.scene_format.write_view`.
 
 Models built once per scene (Embree scene, FCL models, GL meshes) are reused by all views; a
@@ -29,7 +29,7 @@ import numpy as np
 
 from mgn.errors import InvalidArgumentError
 from mgn.io.scene_format import ViewRecord, scene_gt_entries, write_scene_gt, write_view
-from mgn.render.camera import CameraView
+from mgn.scene.cameras import CameraView
 
 if TYPE_CHECKING:
     from mgn.pj.labels import PjLabels
@@ -196,9 +196,9 @@ def label_scene(
         Time per stage over the views.
     """
     from mgn.render.views import iter_views, tote_mesh
-    from mgn.scene.layout import compute_layout
-    from mgn.scene.scene_grasps import SceneGraspModel
-    from mgn.scene.view_labels import SceneRayModel, view_object_labels
+    from mgn.view_labels.grasps import SceneGraspModel
+    from mgn.view_labels.layout import compute_layout
+    from mgn.view_labels.objects import SceneRayModel, view_object_labels
 
     opt = options or LabelOptions()
     n = len(scene.instances)

@@ -142,7 +142,7 @@ class CameraView:
 
     def rays(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
         """Rays through the pixel centres (see :func:`mgn.camera_rays`)."""
-        from mgn.raytrace import camera_rays
+        from mgn.geometry.raytrace import camera_rays
 
         return camera_rays(self.K.K, self.K.width, self.K.height, self.X_WC)
 

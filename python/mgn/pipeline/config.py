@@ -81,7 +81,7 @@ SEAL_MODELS = ("spring", "strain", "smoothness")
 #: Views of the MetaGraspNet rig.
 MGN_NUM_VIEWS = 37
 SPLIT_NAMES = ("all", "train", "test")
-#: Difficulty levels of a view (paper Table IV, :mod:`mgn.scene.layout`).
+#: Difficulty levels of a view (paper Table IV, :mod:`mgn.view_labels.layout`).
 DIFFICULTY_LEVELS = (1, 2, 3, 4, 5)
 
 

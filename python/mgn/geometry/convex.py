@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from mgn import _core
-from mgn.geometry import Mesh
-from mgn.io.atomic import atomic_write_bytes
+from mgn.base.atomic import atomic_write_bytes
+from mgn.geometry.mesh import Mesh
 
 __all__ = [
     "DROP_DECOMPOSITION",

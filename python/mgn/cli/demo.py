@@ -16,12 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from mgn.collision import CollisionModel, collide
-from mgn.geometry import Mesh, load_mesh, make_box, mass_properties
-from mgn.io.atomic import atomic_write_bytes, atomic_write_text
+from mgn.base.atomic import atomic_write_bytes, atomic_write_text
+from mgn.geometry.collision import CollisionModel, collide
+from mgn.geometry.mesh import Mesh, load_mesh, make_box, mass_properties
+from mgn.geometry.raytrace import RayScene, camera_rays
 from mgn.io.model_folder import object_mesh, write_model_folder
 from mgn.objects import ObjectSpec, builtin_objects
-from mgn.raytrace import RayScene, camera_rays
 
 
 @dataclass(frozen=True)

@@ -146,8 +146,8 @@ def write_report(
     """Write the HTML report of the dataset at ``root`` to ``out`` (atomically)."""
     from PIL import Image
 
-    from mgn.io.atomic import atomic_write_text
-    from mgn.overlay import render_overlay
+    from mgn.base.atomic import atomic_write_text
+    from mgn.viz.overlay import render_overlay
 
     ds = Dataset(root)
     stats = collect_stats(ds, max_views=max_views)

@@ -35,7 +35,7 @@ def _catalogue(extra_yaml: Sequence[str] | None) -> list:
 
 
 def _cmd_objects_list(args: argparse.Namespace) -> int:
-    from mgn.geometry import mass_properties
+    from mgn.geometry.mesh import mass_properties
     from mgn.io.model_folder import object_mesh
 
     rows = []
@@ -91,7 +91,7 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from mgn.geometry import load_mesh, mass_properties
+    from mgn.geometry.mesh import load_mesh, mass_properties
 
     mesh = load_mesh(args.mesh, scale=args.scale)
     r = mesh.validate()
@@ -116,7 +116,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from mgn.demo import run_demo
+    from mgn.cli.demo import run_demo
 
     result = run_demo(args.out, num_threads=args.num_threads)
     failed = (result.num_objects - result.reloaded_ok) + result.collision_errors
@@ -130,7 +130,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _cmd_suction_label(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from mgn.geometry import load_mesh, mass_properties
+    from mgn.geometry.mesh import load_mesh, mass_properties
     from mgn.hardware import SuctionCup
     from mgn.io.model_folder import object_folders, read_model_folder
     from mgn.suction import label_object, write_suction_labels
@@ -175,7 +175,7 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
 
 
 def _cmd_suction_board(args: argparse.Namespace) -> int:
-    from mgn.suction import write_calibration_board
+    from mgn.calibration import write_calibration_board
 
     paths = write_calibration_board(args.out, overwrite=args.overwrite)
     print(f"calibration board: {paths['stl']} (mm); poses to try: {paths['poses']}")
@@ -184,8 +184,8 @@ def _cmd_suction_board(args: argparse.Namespace) -> int:
 
 
 def _cmd_suction_calibrate(args: argparse.Namespace) -> int:
+    from mgn.calibration import calibrate_from_csv
     from mgn.hardware import SuctionCup
-    from mgn.suction import calibrate_from_csv
 
     cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
     report = calibrate_from_csv(
@@ -201,7 +201,7 @@ def _mesh_or_builtin(arg: str, scale: float):
     """A mesh file, or the name/id of a built-in object."""
     import os
 
-    from mgn.geometry import load_mesh
+    from mgn.geometry.mesh import load_mesh
 
     if os.path.exists(arg):
         return load_mesh(arg, scale=scale)
@@ -219,9 +219,9 @@ def _mesh_or_builtin(arg: str, scale: float):
 def _cmd_suction_compare(args: argparse.Namespace) -> int:
     import json
 
+    from mgn.base.atomic import atomic_write_bytes, atomic_write_text
     from mgn.hardware import SuctionCup
-    from mgn.io.atomic import atomic_write_bytes, atomic_write_text
-    from mgn.suction.compare import compare_models, comparison_picture
+    from mgn.viz.suction_compare import compare_models, comparison_picture
 
     mesh = _mesh_or_builtin(args.mesh, args.scale)
     cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
@@ -324,9 +324,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="FILE", help="write points and scores (JSON)")
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.set_defaults(func=_cmd_suction_compare)
-    __import__("mgn.pj.cli").pj.cli.register(sub)  # mgn pj label (python/mgn/pj/cli.py)
+    __import__("mgn.cli.pj", fromlist=["register"]).register(
+        sub
+    )  # mgn pj label (python/mgn/cli/pj.py)
 
-    __import__("mgn.scene.cli", fromlist=["register"]).register(sub)
+    __import__("mgn.cli.scene", fromlist=["register"]).register(sub)
     p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
     p.add_argument("--scale", type=float, default=1.0, help="coordinate scale (0.001 for mm)")
@@ -337,10 +339,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="demo_out", help="output folder (default: demo_out)")
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.set_defaults(func=_cmd_demo)
-    __import__("mgn.render.cli", fromlist=["register"]).register(sub)
-    __import__("mgn.io.cli", fromlist=["register"]).register(sub)
-    __import__("mgn.pipeline.cli", fromlist=["register"]).register(sub)  # generate, config
-    __import__("mgn.eval.cli", fromlist=["register"]).register(sub)  # eval detections|grasps|...
+    __import__("mgn.cli.render", fromlist=["register"]).register(sub)
+    __import__("mgn.cli.io", fromlist=["register"]).register(sub)
+    __import__("mgn.cli.pipeline", fromlist=["register"]).register(sub)  # generate, config
+    __import__("mgn.cli.eval", fromlist=["register"]).register(sub)  # eval detections|grasps|...
     __import__("mgn.eval.pick", fromlist=["register"]).register(sub)  # mgn pick
     return parser
 

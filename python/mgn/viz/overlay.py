@@ -2,9 +2,9 @@
 
 Drawn (each switchable): instance colours over the visible masks, amodal contours, per object
 its id, occlusion and layer; parallel-jaw grasps as a line between the two contacts and suction
-grasps as discs, coloured by score (red 0 → green 1; :func:`mgn.viz.score_colors`); semantic
-keypoints (visible: white discs, occluded: grey rings); the layout graph as arrows from each parent
-(on top) to its child. The picture has the size of the view (plus a one-line footer).
+grasps as discs, coloured by score (red 0 → green 1; :func:`mgn.viz.pictures.score_colors`);
+semantic keypoints (visible: white discs, occluded: grey rings); the layout graph as arrows from
+each parent (on top) to its child. The picture has the size of the view (plus a one-line footer).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn.io.dataset import Dataset, View
-from mgn.viz import score_colors
+from mgn.viz.pictures import score_colors
 
 __all__ = ["instance_colors", "project", "render_overlay", "show"]
 
@@ -182,7 +182,7 @@ def show(
     **kwargs: object,
 ) -> Path:
     """Write the overlay of ``scene``/``view`` of the dataset at ``root`` to ``out`` (PNG)."""
-    from mgn.io.atomic import atomic_write_bytes
+    from mgn.base.atomic import atomic_write_bytes
     from mgn.io.scene_format import png_bytes
 
     image = render_overlay(Dataset(root).scene(scene).view(view), **kwargs)  # type: ignore[arg-type]

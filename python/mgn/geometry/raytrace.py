@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Mesh
+from mgn.geometry.mesh import Mesh
 
 
 @dataclass(frozen=True)

@@ -141,11 +141,11 @@ def _cmd_label(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from mgn.config import load_config
-    from mgn.io.atomic import atomic_dir
+    from mgn.base.atomic import atomic_dir
+    from mgn.pipeline.config import load_config
     from mgn.pipeline.label_cache import object_labels
+    from mgn.pipeline.label_scene import LabelOptions, label_scene
     from mgn.pipeline.scene_writer import scene_views
-    from mgn.scene.label import LabelOptions, label_scene
     from mgn.scene.scene import Scene
 
     config = load_config(args.config)
