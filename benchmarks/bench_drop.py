@@ -62,7 +62,6 @@ def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
     """mgn's release poses and, per object, its convex parts and mass properties."""
     from mgn.geometry.convex import DROP_DECOMPOSITION, cached_convex_decomposition
     from mgn.geometry.mesh import mass_properties
-    from mgn.io.model_folder import object_mesh
     from mgn.objects import ToteSpec
     from mgn.scene import DropOptions
     from mgn.scene.drop import _simulate
@@ -70,7 +69,7 @@ def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
     out, _ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
     parts, props = [], []
     for s in objects:
-        mesh = object_mesh(s)
+        mesh = s.to_mesh()
         parts.append(cached_convex_decomposition(mesh, DROP_DECOMPOSITION))
         props.append(mass_properties(mesh, s.density))
     return out, parts, props

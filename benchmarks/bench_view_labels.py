@@ -35,9 +35,8 @@ VIEWS = (0, 14)
 
 def _setup(width: int) -> tuple[Any, Any, float, list[tuple[int, Any, np.ndarray, np.ndarray]]]:
     from mgn.geometry.mesh import mass_properties
-    from mgn.io.model_folder import com_keypoints
-    from mgn.objects import builtin_objects
-    from mgn.render import Instance, Renderer, tote_mesh
+    from mgn.objects import builtin_objects, com_keypoints, tote_mesh
+    from mgn.render import Instance, Renderer
     from mgn.scene.cameras import CameraView
     from mgn.view_labels.objects import SceneRayModel
 

@@ -21,6 +21,7 @@ from typing import Any, TypeVar
 
 import yaml
 
+from mgn.base.atomic import atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
 
 T = TypeVar("T", bound="_YamlDataclass")
@@ -65,8 +66,6 @@ class _YamlDataclass:
         """YAML text of the fields; also written to ``path`` when given."""
         text = yaml.safe_dump(self.to_dict(), sort_keys=False)
         if path is not None:
-            from mgn.base.atomic import atomic_write_text
-
             atomic_write_text(path, text)
         return text
 

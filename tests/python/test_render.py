@@ -9,17 +9,9 @@ import pytest
 from conftest import translation
 
 import mgn
-from mgn.io.model_folder import object_mesh
-from mgn.objects import get_object
-from mgn.render import (
-    Instance,
-    Renderer,
-    apply_depth_sensor,
-    render_views,
-    sensor_params,
-    surface_flags,
-    tote_mesh,
-)
+from mgn.io.view_images import render_views
+from mgn.objects import get_object, tote_mesh
+from mgn.render import Instance, Renderer, apply_depth_sensor, sensor_params, surface_flags
 from mgn.scene.cameras import CameraView, Intrinsics, hemisphere_rig, mgn_rig, mgn_rig_from_params
 
 SMALL = Intrinsics.mgn_synthetic().scaled(0.25)  # 300 x 300, same field of view
@@ -27,7 +19,7 @@ SMALL = Intrinsics.mgn_synthetic().scaled(0.25)  # 300 x 300, same field of view
 
 def place(spec_name: str, x: float, y: float, yaw: float = 0.0) -> tuple[mgn.Mesh, np.ndarray]:
     """A built-in object resting on the tote floor (z = 0) at (x, y), turned by yaw."""
-    mesh = object_mesh(get_object(spec_name))
+    mesh = get_object(spec_name).to_mesh()
     X = translation(x, y, -float(np.asarray(mesh.bounds)[0, 2]))
     c, s = math.cos(yaw), math.sin(yaw)
     X[:2, :2] = [[c, -s], [s, c]]
@@ -229,7 +221,7 @@ def test_render_views_writes_images(scene, tmp_path) -> None:
 
 
 def test_builtin_textures_reach_the_mesh() -> None:
-    mesh = object_mesh(get_object("box_cereal"))
+    mesh = get_object("box_cereal").to_mesh()
     data = mesh.materials[0].texture_data
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
 

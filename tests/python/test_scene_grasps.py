@@ -178,7 +178,7 @@ def test_collisions_agree_with_python_fcl_on_a_real_scene(real_scene):
     scene, pj, su = real_scene
     m = SceneGraspModel(scene, pj, su, num_threads=2)
     assert len(m.pj) == sum(len(p) for p in pj) > 0
-    from mgn.render.views import tote_mesh
+    from mgn.objects import tote_mesh
 
     n = len(scene.instances)
     obstacles = [_fcl_object(scene.mesh(i), scene.instances[i].X_WO) for i in range(n)]

@@ -12,9 +12,8 @@ from conftest import translation
 import mgn
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import make_box
-from mgn.io.model_folder import object_mesh
-from mgn.objects import ToteSpec, get_object
-from mgn.render import Instance, Renderer, tote_mesh
+from mgn.objects import ToteSpec, get_object, tote_mesh
+from mgn.render import Instance, Renderer
 from mgn.scene import BUILTIN, Scene, SceneInstance
 from mgn.scene.cameras import CameraView, Intrinsics, look_at
 from mgn.view_labels.objects import SceneRayModel, ViewObjectLabels, view_object_labels
@@ -144,7 +143,7 @@ def library_scene() -> Scene:
     inst = []
     for k, (name, (x, y, yaw)) in enumerate(zip(names, spots, strict=True)):
         spec = get_object(name)
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         X = translation(x, y, -float(np.asarray(mesh.bounds)[0, 2]))
         c, s = math.cos(yaw), math.sin(yaw)
         X[:2, :2] = [[c, -s], [s, c]]

@@ -18,8 +18,11 @@ import io
 import zipfile
 from typing import Any
 
+import h5py
 import numpy as np
 import numpy.typing as npt
+
+from mgn.errors import InvalidArgumentError
 
 __all__ = [
     "H5_DATASET_KWARGS",
@@ -53,7 +56,9 @@ def npz_bytes(*, compress: bool = True, level: int = 1, **arrays: npt.ArrayLike)
         for name, value in arrays.items():
             array = np.asanyarray(value)
             if array.dtype.hasobject:
-                raise ValueError(f"npz_bytes: array '{name}' has dtype object; expected numbers")
+                raise InvalidArgumentError(
+                    f"npz_bytes: array '{name}' has dtype object; expected numbers"
+                )
             info = zipfile.ZipInfo(f"{name}.npy", date_time=NPZ_DATE_TIME)
             info.compress_type = method
             try:
@@ -78,7 +83,6 @@ def h5_create_group(parent: Any, name: str) -> Any:
     low-level API with a group-creation property list that disables them. Intermediate groups of
     a path ``a/b/c`` are created the same way.
     """
-    import h5py
 
     gcpl = h5py.h5p.create(h5py.h5p.GROUP_CREATE)
     gcpl.set_obj_track_times(False)

@@ -53,6 +53,9 @@ import manifold3d
 import numpy as np
 import numpy.typing as npt
 
+from mgn.base.atomic import atomic_write_bytes, atomic_write_text
+from mgn.errors import BackendError, IoError
+
 __all__ = [
     "PLATE_SIZE",
     "TOP_Z",
@@ -432,7 +435,7 @@ def _build() -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int32], list[dict[
     solid = manifold3d.Manifold.batch_boolean([plate, *adds], manifold3d.OpType.Add)
     solid = manifold3d.Manifold.batch_boolean([solid, *cuts], manifold3d.OpType.Subtract)
     if solid.status() != manifold3d.Error.NoError or solid.genus() != len(_HOLE_DIAMETERS_MM):
-        raise RuntimeError(
+        raise BackendError(
             f"calibration board: boolean failed ({solid.status()}, genus {solid.genus()})"
         )
     mesh = solid.to_mesh64()
@@ -600,8 +603,6 @@ def write_calibration_board(
     Raises:
         IoError: a file exists (without ``overwrite``) or cannot be written.
     """
-    from mgn.base.atomic import atomic_write_bytes, atomic_write_text
-    from mgn.errors import IoError
 
     root = Path(out_dir)
     paths = {

@@ -26,6 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.calibration.board import board_poses, make_calibration_board
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.geometry.mesh import Mesh, load_mesh
 from mgn.hardware import SuctionCup
@@ -484,7 +485,6 @@ def read_results_csv(
 
 
 def _default_board() -> tuple[Mesh, BoardPoses]:
-    from mgn.calibration.board import board_poses, make_calibration_board
 
     v, f, feats = make_calibration_board()
     ids, names, params, pts, nrm = board_poses(feats)

@@ -8,6 +8,7 @@ generation.
 
 from __future__ import annotations
 
+import io
 import json
 import time
 from dataclasses import dataclass
@@ -15,12 +16,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from PIL import Image
 
 from mgn.base.atomic import atomic_write_bytes, atomic_write_text
 from mgn.geometry.collision import CollisionModel, collide
 from mgn.geometry.mesh import Mesh, load_mesh, make_box, mass_properties
 from mgn.geometry.raytrace import RayScene, camera_rays
-from mgn.io.model_folder import object_mesh, write_model_folder
+from mgn.io.model_folder import write_model_folder
 from mgn.objects import ObjectSpec, builtin_objects
 
 
@@ -101,7 +103,6 @@ def run_demo(out: str | Path, *, num_threads: int = 0, image_size: int = 900) ->
     collide; every object collides with a copy of itself shifted by 30 % of its width and not
     with one shifted clear of its bounding box.
     """
-    from PIL import Image
 
     out_dir = Path(out)
     specs = builtin_objects()
@@ -110,7 +111,7 @@ def run_demo(out: str | Path, *, num_threads: int = 0, image_size: int = 900) ->
     rows = []
     for spec in specs:
         folder = write_model_folder(spec, out_dir, overwrite=True)
-        original = object_mesh(spec)
+        original = spec.to_mesh()
         reloaded = load_mesh(folder / "textured.obj")
         report = reloaded.validate()
         v0 = mass_properties(original, spec.density).volume
@@ -119,7 +120,7 @@ def run_demo(out: str | Path, *, num_threads: int = 0, image_size: int = 900) ->
         reloaded_ok += ok
         rows.append((spec.category_id, spec.name, reloaded.num_faces, v1 * 1e6, ok))
 
-    meshes = [object_mesh(s) for s in specs]
+    meshes = [s.to_mesh() for s in specs]
     spacing = 0.27
     poses = _grid_poses(meshes, spacing)
     extent = spacing * int(np.ceil(np.sqrt(len(meshes))))
@@ -132,7 +133,6 @@ def run_demo(out: str | Path, *, num_threads: int = 0, image_size: int = 900) ->
     colors = np.array([_display_color(s) for s in specs] + [(0.55, 0.55, 0.5)])
     image, rate = _picture(scene, colors, extent, image_size, num_threads)
     picture = out_dir / "gallery.png"
-    import io
 
     buf = io.BytesIO()
     Image.fromarray(image).save(buf, format="PNG")

@@ -5,11 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 
+from mgn.io.coco import export_coco
+from mgn.io.validate import validate_dataset
+from mgn.viz.overlay import show
+from mgn.viz.report import write_report
+
 __all__ = ["register"]
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from mgn.io.validate import validate_dataset
 
     problems = validate_dataset(args.dir)
     for p in problems[: args.max_problems]:
@@ -24,7 +28,6 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_coco(args: argparse.Namespace) -> int:
-    from mgn.io.coco import export_coco
 
     scenes = None
     if args.scenes:
@@ -35,8 +38,6 @@ def _cmd_coco(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    from mgn.viz.overlay import show
-
     path = show(args.dir, args.scene, args.view, args.out, grasps=args.grasps, layout=args.layout,
                 keypoints=not args.no_keypoints)  # fmt: skip
     print(f"wrote {path}")
@@ -44,7 +45,6 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from mgn.viz.report import write_report
 
     path = write_report(args.dir, args.out, samples=args.samples, max_views=args.max_views)
     print(f"wrote {path}")

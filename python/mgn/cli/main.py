@@ -14,19 +14,33 @@ Subcommands::
 from __future__ import annotations
 
 import argparse
+import io
 import json
+import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
+from PIL import Image
+from tqdm import tqdm
 
-from mgn import __version__
-from mgn.errors import MgnError
+from mgn._core import __version__
+from mgn.base.atomic import atomic_write_bytes, atomic_write_text
+from mgn.calibration import calibrate_from_csv, write_calibration_board
+from mgn.cli.demo import run_demo
+from mgn.errors import InvalidArgumentError, MgnError
+from mgn.geometry.mesh import load_mesh, mass_properties
+from mgn.hardware import SuctionCup, default_cup, default_gripper
+from mgn.io.grasp_file import write_suction_labels
+from mgn.io.model_folder import object_folders, read_model_folder, write_model_folder, write_tote
+from mgn.objects import builtin_objects, default_tote, get_object, load_objects_yaml, object_names
+from mgn.suction import label_object
+from mgn.viz.suction_compare import compare_models, comparison_picture
 
 
 def _catalogue(extra_yaml: Sequence[str] | None) -> list:
     """Built-in objects followed by the user objects of each ``--add`` YAML file."""
-    from mgn.objects import builtin_objects, load_objects_yaml
 
     specs = list(builtin_objects())
     for path in extra_yaml or ():
@@ -35,13 +49,11 @@ def _catalogue(extra_yaml: Sequence[str] | None) -> list:
 
 
 def _cmd_objects_list(args: argparse.Namespace) -> int:
-    from mgn.geometry.mesh import mass_properties
-    from mgn.io.model_folder import object_mesh
 
     rows = []
     for spec in _catalogue(args.add):
         size = np.ptp(np.asarray(spec.vertices), axis=0) * 1000
-        mass = mass_properties(object_mesh(spec), spec.density).mass
+        mass = mass_properties(spec.to_mesh(), spec.density).mass
         rows.append(
             {
                 "id": spec.category_id,
@@ -65,11 +77,6 @@ def _cmd_objects_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_objects_export(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from mgn.hardware import default_cup, default_gripper
-    from mgn.io.model_folder import write_model_folder, write_tote
-    from mgn.objects import default_tote
 
     specs = _catalogue(args.add)
     if args.only:
@@ -80,7 +87,6 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
         specs = [by_key[n] for n in args.only]
     for spec in tqdm(specs, desc="exporting objects", unit="obj", disable=args.quiet):
         write_model_folder(spec, args.dir, overwrite=True)
-    from pathlib import Path
 
     root = Path(args.dir)
     default_gripper().to_yaml(root / "gripper.yaml")
@@ -91,7 +97,6 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from mgn.geometry.mesh import load_mesh, mass_properties
 
     mesh = load_mesh(args.mesh, scale=args.scale)
     r = mesh.validate()
@@ -116,7 +121,6 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from mgn.cli.demo import run_demo
 
     result = run_demo(args.out, num_threads=args.num_threads)
     failed = (result.num_objects - result.reloaded_ok) + result.collision_errors
@@ -128,12 +132,6 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_suction_label(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from mgn.geometry.mesh import load_mesh, mass_properties
-    from mgn.hardware import SuctionCup
-    from mgn.io.model_folder import object_folders, read_model_folder
-    from mgn.suction import label_object, write_suction_labels
 
     root = Path(args.root)
     folders = object_folders(root)
@@ -147,7 +145,7 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
             or read_model_folder(f).metadata.get("name") in wanted
         ]
     if not folders:
-        raise ValueError(f"no object folders to label under '{root / 'models'}'")
+        raise InvalidArgumentError(f"no object folders to label under '{root / 'models'}'")
     cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
     for folder in folders:
         mf = read_model_folder(folder)
@@ -175,7 +173,6 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
 
 
 def _cmd_suction_board(args: argparse.Namespace) -> int:
-    from mgn.calibration import write_calibration_board
 
     paths = write_calibration_board(args.out, overwrite=args.overwrite)
     print(f"calibration board: {paths['stl']} (mm); poses to try: {paths['poses']}")
@@ -184,8 +181,6 @@ def _cmd_suction_board(args: argparse.Namespace) -> int:
 
 
 def _cmd_suction_calibrate(args: argparse.Namespace) -> int:
-    from mgn.calibration import calibrate_from_csv
-    from mgn.hardware import SuctionCup
 
     cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
     report = calibrate_from_csv(
@@ -199,17 +194,12 @@ def _cmd_suction_calibrate(args: argparse.Namespace) -> int:
 
 def _mesh_or_builtin(arg: str, scale: float):
     """A mesh file, or the name/id of a built-in object."""
-    import os
-
-    from mgn.geometry.mesh import load_mesh
 
     if os.path.exists(arg):
         return load_mesh(arg, scale=scale)
-    from mgn.io.model_folder import object_mesh
-    from mgn.objects import get_object, object_names
 
     try:
-        return object_mesh(get_object(arg))
+        return get_object(arg).to_mesh()
     except KeyError:
         raise FileNotFoundError(
             f"'{arg}' is neither a mesh file nor a built-in object ({', '.join(object_names())})"
@@ -217,11 +207,6 @@ def _mesh_or_builtin(arg: str, scale: float):
 
 
 def _cmd_suction_compare(args: argparse.Namespace) -> int:
-    import json
-
-    from mgn.base.atomic import atomic_write_bytes, atomic_write_text
-    from mgn.hardware import SuctionCup
-    from mgn.viz.suction_compare import compare_models, comparison_picture
 
     mesh = _mesh_or_builtin(args.mesh, args.scale)
     cup = SuctionCup.from_yaml(args.cup) if args.cup else SuctionCup()
@@ -230,10 +215,6 @@ def _cmd_suction_compare(args: argparse.Namespace) -> int:
     )
     print(comp.format_table())
     if args.png:
-        import io
-
-        from PIL import Image
-
         buf = io.BytesIO()
         Image.fromarray(comparison_picture(mesh, comp)).save(buf, format="PNG")
         atomic_write_bytes(args.png, buf.getvalue())

@@ -16,17 +16,19 @@ mgn config check cfg.yaml            validate a configuration file
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
+
+from mgn.base.atomic import atomic_write_text
+from mgn.pipeline.config import SelectionConfig, dump_config, load_config
+from mgn.pipeline.runner import generate
+from mgn.pipeline.testset import parse_quota
 
 __all__ = ["register"]
 
 
 def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipeline.config.Config)
     """The config of ``--config`` with the test-set options applied."""
-    import dataclasses
-
-    from mgn.pipeline.config import load_config
-    from mgn.pipeline.testset import parse_quota
 
     cfg = load_config(args.config)
     if args.split is not None:
@@ -42,15 +44,12 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipel
     if args.prune_rejected:
         sel["prune_rejected"] = True
     if sel:
-        from mgn.pipeline.config import SelectionConfig
-
         merged = {**cfg.selection.to_dict(), **sel}
         cfg = dataclasses.replace(cfg, selection=SelectionConfig.from_dict(merged, "selection"))
     return cfg
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
-    from mgn.pipeline.runner import generate
 
     cfg = _config_with_overrides(args)
     scenes = args.scenes
@@ -73,12 +72,9 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_config_dump(args: argparse.Namespace) -> int:
-    from mgn.pipeline.config import dump_config
 
     text = dump_config()
     if args.out:
-        from mgn.base.atomic import atomic_write_text
-
         atomic_write_text(args.out, text)
         print(f"default configuration written to {args.out}", file=sys.stderr)
     else:
@@ -87,7 +83,6 @@ def _cmd_config_dump(args: argparse.Namespace) -> int:
 
 
 def _cmd_config_check(args: argparse.Namespace) -> int:
-    from mgn.pipeline.config import load_config
 
     config = load_config(args.file)
     views = len(config.camera.view_indices)

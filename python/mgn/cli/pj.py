@@ -12,12 +12,20 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mgn.pj.labels import PhysicsScorer
+import h5py
+
+from mgn.errors import InvalidArgumentError
+from mgn.geometry.mesh import load_mesh, mass_properties
+from mgn.hardware import ParallelJawGripper
+from mgn.io.grasp_file import write_pj_labels
+from mgn.io.model_folder import object_folders, read_model_folder
+from mgn.pj.labels import PhysicsScorer, label_object
+from mgn.pj.physics import ShakeOptions, ShakeScorer
+from mgn.viz.shake_trial import register_show_trial
 
 
 def _physics_scorer(args: argparse.Namespace, gripper) -> PhysicsScorer:
     """The Bullet shake-test scorer on at most ``--physics-grasps`` grasps per object."""
-    from mgn.pj.physics import ShakeOptions, ShakeScorer
 
     return ShakeScorer(
         density=args.density,
@@ -29,7 +37,6 @@ def _physics_scorer(args: argparse.Namespace, gripper) -> PhysicsScorer:
 
 def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path | None]]:
     """(mesh file, hdf5 file, model folder or None) for each PATH."""
-    from mgn.io.model_folder import object_folders
 
     targets = []
     for raw in paths:
@@ -39,13 +46,13 @@ def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path |
         elif p.is_dir() and (p / "models").is_dir():
             folders = object_folders(p)
             if not folders:
-                raise ValueError(f"no object folders under '{p / 'models'}'")
+                raise InvalidArgumentError(f"no object folders under '{p / 'models'}'")
             targets.extend((f / "textured.obj", f / "textured.obj.hdf5", f) for f in folders)
         elif p.is_file():
             if out is None and len(paths) == 1:
-                raise ValueError(f"'{p}' is a mesh file: give --out LABELS.hdf5")
+                raise InvalidArgumentError(f"'{p}' is a mesh file: give --out LABELS.hdf5")
             if len(paths) != 1:
-                raise ValueError("--out works with a single mesh file")
+                raise InvalidArgumentError("--out works with a single mesh file")
             targets.append((p, Path(out), None))  # type: ignore[arg-type]
         else:
             raise FileNotFoundError(f"'{p}' is neither an object folder, an export root nor a mesh")
@@ -53,12 +60,6 @@ def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path |
 
 
 def _cmd_label(args: argparse.Namespace) -> int:
-    import h5py
-
-    from mgn.geometry.mesh import load_mesh, mass_properties
-    from mgn.hardware import ParallelJawGripper
-    from mgn.io.model_folder import read_model_folder
-    from mgn.pj.labels import label_object, write_pj_labels
 
     gripper = ParallelJawGripper.from_yaml(args.gripper) if args.gripper else ParallelJawGripper()
     physics = _physics_scorer(args, gripper) if args.physics else None
@@ -132,6 +133,5 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_label)
-    from mgn.viz.shake_trial import register_show_trial
 
     register_show_trial(psub)

@@ -11,6 +11,11 @@ import math
 
 import numpy as np
 
+from mgn.errors import InvalidArgumentError
+from mgn.io.view_images import render_views
+from mgn.objects import builtin_objects, tote_mesh
+from mgn.scene.cameras import Intrinsics, mgn_rig
+
 __all__ = ["register"]
 
 
@@ -36,7 +41,6 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _cmd_rig(args: argparse.Namespace) -> int:
-    from mgn.scene.cameras import mgn_rig
 
     poses, params = mgn_rig(args.seed, args.target)
     print(json.dumps({"params": vars(params), "X_WC": poses.tolist()}, indent=1))
@@ -44,20 +48,18 @@ def _cmd_rig(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from mgn.io.model_folder import object_mesh
-    from mgn.objects import builtin_objects
-    from mgn.render import render_views, tote_mesh
-    from mgn.scene.cameras import Intrinsics
 
     if not 1 <= args.objects <= len(builtin_objects()):
-        raise ValueError(f"--objects must be in 1..{len(builtin_objects())}, got {args.objects}")
+        raise InvalidArgumentError(
+            f"--objects must be in 1..{len(builtin_objects())}, got {args.objects}"
+        )
     if not 0.05 <= args.scale <= 2.0:
-        raise ValueError(f"--scale must be in [0.05, 2], got {args.scale}")
+        raise InvalidArgumentError(f"--scale must be in [0.05, 2], got {args.scale}")
     items = []
     cols = math.ceil(math.sqrt(args.objects * 4 / 3))
     rows = math.ceil(args.objects / cols)
     for k, spec in enumerate(builtin_objects()[: args.objects]):
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         X = np.eye(4)
         yaw = 0.7 * k
         X[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]

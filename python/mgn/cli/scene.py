@@ -10,8 +10,23 @@ each takes the ``scene`` subparsers object and adds its parser with ``set_defaul
 from __future__ import annotations
 
 import argparse
+import time
 from collections.abc import Callable
 from pathlib import Path
+
+from tqdm import tqdm
+
+from mgn.base.atomic import atomic_dir
+from mgn.errors import InvalidArgumentError
+from mgn.io.view_images import render_views
+from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
+from mgn.pipeline.config import load_config
+from mgn.pipeline.label_cache import object_labels
+from mgn.pipeline.label_scene import LabelOptions, label_scene
+from mgn.pipeline.scene_writer import scene_views
+from mgn.scene.compose import compose_objects
+from mgn.scene.drop import drop_scene
+from mgn.scene.scene import DropOptions, Scene
 
 __all__ = ["ACTIONS", "register"]
 
@@ -31,11 +46,6 @@ def _copies(text: str) -> tuple[int, int]:
 
 
 def _cmd_drop(args: argparse.Namespace) -> int:
-    from mgn.errors import InvalidArgumentError
-    from mgn.objects import builtin_objects, load_objects_yaml
-    from mgn.scene.compose import compose_objects
-    from mgn.scene.drop import drop_scene
-    from mgn.scene.scene import DropOptions
 
     catalogue = list(builtin_objects())
     sources: dict[str, str] = {}
@@ -100,12 +110,10 @@ def _register_drop(ssub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
-    from mgn.render.views import render_views, tote_mesh
-    from mgn.scene.scene import Scene
 
     scene = Scene.from_json(args.scene)
     if len(scene) == 0:
-        raise ValueError(f"'{args.scene}': the scene has no objects to render")
+        raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to render")
     views = render_views(
         scene.render_items(),
         tote_mesh(scene.tote),
@@ -137,27 +145,19 @@ def _register_render(ssub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_label(args: argparse.Namespace) -> int:
-    import time
-
-    from tqdm import tqdm
-
-    from mgn.base.atomic import atomic_dir
-    from mgn.pipeline.config import load_config
-    from mgn.pipeline.label_cache import object_labels
-    from mgn.pipeline.label_scene import LabelOptions, label_scene
-    from mgn.pipeline.scene_writer import scene_views
-    from mgn.scene.scene import Scene
 
     config = load_config(args.config)
     scene = Scene.from_json(args.scene)
     if len(scene) == 0:
-        raise ValueError(f"'{args.scene}': the scene has no objects to label")
+        raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to label")
     views = scene_views(scene, config.camera)
     if args.view is not None:
         known = {v for v, _ in views}
         missing = sorted(set(args.view) - known)
         if missing:
-            raise ValueError(f"--view {missing}: not among the configured views {sorted(known)}")
+            raise InvalidArgumentError(
+                f"--view {missing}: not among the configured views {sorted(known)}"
+            )
         views = [(v, c) for v, c in views if v in set(args.view)]
     grasps = config.labels.scene_grasps and not args.no_grasps
     pj: list | None = None

@@ -57,6 +57,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pycocotools import mask as mask_utils
+from pycocotools.coco import COCO
+from pycocotools.cocoeval import COCOeval
 
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.eval.results import format_table, print_and_write
@@ -365,7 +368,6 @@ def _rle_string_counts(s: str) -> list[int] | None:
 
 def _check_rle(seg: Any, shape: tuple[int, int], where: str) -> dict[str, Any]:
     """A validated compressed RLE (``counts`` as bytes) for an image of ``shape`` (h, w)."""
-    from pycocotools import mask as mask_utils
 
     h, w = shape
     if not isinstance(seg, Mapping) or "size" not in seg or "counts" not in seg:
@@ -408,7 +410,6 @@ def _check_predictions(
     preds: list[Any], images: Mapping[int, tuple[int, int]], *, class_agnostic: bool, strict: bool
 ) -> tuple[list[dict[str, Any]], int, bool]:
     """(cleaned detections, number dropped, have segmentation)."""
-    from pycocotools import mask as mask_utils
 
     out: list[dict[str, Any]] = []
     unknown: list[int] = []
@@ -482,7 +483,6 @@ def _check_predictions(
 
 
 def _coco(data: dict[str, Any]) -> Any:
-    from pycocotools.coco import COCO
 
     c = COCO()
     c.dataset = data
@@ -492,7 +492,6 @@ def _coco(data: dict[str, Any]) -> Any:
 
 
 def _make_eval_class() -> type:
-    from pycocotools.cocoeval import COCOeval
 
     class _SubsetEval(COCOeval):  # type: ignore[misc]
         """COCOeval that marks the GT annotations of ``ignore_ids`` as ignored (after

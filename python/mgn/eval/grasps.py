@@ -93,6 +93,12 @@ import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.eval.results import format_table, print_and_write
+from mgn.hardware import ParallelJawGripper, SuctionCup
+from mgn.io.dataset import Dataset
+from mgn.pipeline.config import Config
+from mgn.pipeline.label_scene import LabelOptions
+from mgn.scene import Scene
+from mgn.view_labels.grasps import SceneGraspModel
 
 __all__ = [
     "DEFAULT_KS",
@@ -328,7 +334,6 @@ class _Context:
     """Lazy per-view data and per-scene collision models of one dataset."""
 
     def __init__(self, dataset: Any, kind: str, label_score: str, num_threads: int) -> None:
-        from mgn.io.dataset import Dataset
 
         self.ds = dataset if isinstance(dataset, Dataset) else Dataset(dataset)
         self.kind = kind
@@ -341,12 +346,8 @@ class _Context:
     def hardware(self) -> tuple[Any, Any]:
         """(gripper, cup) of the dataset: its config, else the root YAML files, else defaults."""
         if self._hardware is None:
-            from mgn.hardware import ParallelJawGripper, SuctionCup
-
             info = self.ds.info
             if info is not None and isinstance(info.get("config"), Mapping):
-                from mgn.pipeline.config import Config
-
                 cfg = Config.from_dict(info["config"], base_dir=self.ds.root)
                 self._hardware = (cfg.gripper, cfg.cup)
             else:
@@ -412,10 +413,6 @@ class _Context:
     def model(self, scene_id: int) -> Any:
         """The scene's SceneGraspModel: obstacles and tools of the labels (no labels needed)."""
         if scene_id not in self._models:
-            from mgn.pipeline.label_scene import LabelOptions
-            from mgn.scene import Scene
-            from mgn.view_labels.grasps import SceneGraspModel
-
             folder = self.ds.scene(scene_id).folder
             path = folder / "scene.json"
             if not path.exists():
@@ -762,7 +759,6 @@ def ground_truth_grasps(
     """The non-colliding label grasps of every view as a prediction list (6-DoF contact poses,
     camera frame; score = the label score, NaN scores become 0). ``min_score`` keeps only labels
     with score >= it. Views without such grasps get an entry with an empty list."""
-    from mgn.io.dataset import Dataset
 
     kind = _check_kind(kind, "ground_truth_grasps")
     score_name = _default_label_score(kind, label_score)

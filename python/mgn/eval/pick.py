@@ -53,27 +53,33 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib
+import json
 import math
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from PIL import Image, ImageDraw
 
 from mgn.errors import InvalidArgumentError
-
-if TYPE_CHECKING:
-    from mgn.pipeline.config import Config
-    from mgn.pipeline.label_cache import ObjectLabels
-    from mgn.render.views import ViewImages
-    from mgn.scene.cameras import CameraView
-    from mgn.scene.scene import DropOptions, Scene
-    from mgn.view_labels.grasps import PlacedGrasps, SceneGraspModel
-    from mgn.view_labels.layout import Layout
-    from mgn.view_labels.objects import ViewObjectLabels
+from mgn.eval.results import format_table, write_results_json
+from mgn.objects import tote_mesh
+from mgn.pipeline.config import Config, default_config, load_config
+from mgn.pipeline.label_cache import ObjectLabels
+from mgn.pipeline.label_cache import object_labels as cached_labels
+from mgn.pipeline.label_scene import LabelOptions, strided_subset
+from mgn.pipeline.scene_writer import scene_intrinsics
+from mgn.render.views import ViewImages, iter_views
+from mgn.scene.cameras import CameraView, mgn_rig
+from mgn.scene.drop import settle_tracked
+from mgn.scene.scene import DropOptions, Scene
+from mgn.view_labels.grasps import PlacedGrasps, SceneGraspModel
+from mgn.view_labels.layout import Layout, compute_layout
+from mgn.view_labels.objects import SceneRayModel, ViewObjectLabels, view_object_labels
 
 __all__ = [
     "MATCH_ANGLE",
@@ -231,7 +237,6 @@ class PickResults:
         }
 
     def table(self) -> str:
-        from mgn.eval.results import format_table
 
         rows = [
             {
@@ -285,7 +290,6 @@ def _labels_for(
     gripper: str,
 ) -> dict[str, Any]:
     """name -> the gripper's object labels (computed and cached when not given)."""
-    from mgn.pipeline.label_cache import object_labels as cached_labels
 
     need = sorted({inst.name for inst in scene.instances})
     out: dict[str, Any] = {}
@@ -309,8 +313,6 @@ def _labels_for(
 
 
 def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
-    from mgn.pipeline.scene_writer import scene_intrinsics
-    from mgn.scene.cameras import CameraView, mgn_rig
 
     poses, _ = mgn_rig(scene.seed)
     K = scene_intrinsics(config.camera)
@@ -320,7 +322,6 @@ def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
 
 def _render(scene: Scene, view: CameraView) -> ViewImages:
     """The top view without noise or randomisation."""
-    from mgn.render.views import iter_views, tote_mesh
 
     frames = iter_views(scene.render_items(), tote_mesh(scene.tote), [(0, view)], sensor="ideal",
                         randomize=False, seed=scene.seed)  # fmt: skip
@@ -328,8 +329,6 @@ def _render(scene: Scene, view: CameraView) -> ViewImages:
 
 
 def _observe(scene: Scene, view: CameraView, num_threads: int) -> tuple[Any, Any, Any]:
-    from mgn.view_labels.layout import compute_layout
-    from mgn.view_labels.objects import SceneRayModel, view_object_labels
 
     images = _render(scene, view)
     rays = SceneRayModel.from_scene(scene)
@@ -358,7 +357,6 @@ def _project(view: CameraView, p_W: np.ndarray) -> tuple[float, float] | None:
 def _draw(rgb: np.ndarray, view: CameraView, attempt: PickAttempt | None, contact: Any) -> Any:
     """The top view with the attempted grasp: a circle at the contact and a line along the
     approach (green: success, red: failure)."""
-    from PIL import Image, ImageDraw
 
     img = Image.fromarray(np.ascontiguousarray(rgb[..., :3]))
     if attempt is None or contact is None:
@@ -486,10 +484,6 @@ def run_picking(
         InvalidArgumentError: an empty scene, an unknown policy or gripper, bad numbers, a policy
             answer that names an unknown instance or grasp.
     """
-    from mgn.pipeline.config import default_config
-    from mgn.pipeline.label_scene import LabelOptions, strided_subset
-    from mgn.scene.drop import settle_tracked
-    from mgn.view_labels.grasps import SceneGraspModel
 
     if len(scene.instances) == 0:
         raise InvalidArgumentError("run_picking: the scene has no objects; nothing to pick")
@@ -704,7 +698,6 @@ def run_picking(
 def _write_outputs(
     folder: Path, results: PickResults, scene: Scene, view: CameraView, frames: list, threads: int
 ) -> None:
-    from mgn.eval.results import write_results_json
 
     final = _render(scene, view)
     img = _draw(final.rgb, view, None, None)
@@ -721,10 +714,6 @@ def _write_outputs(
 def _load_scene(path: Path) -> tuple[Scene, Config | None]:
     """The scene of a scene folder (its scene.json; the dataset's config from the parent's
     dataset.json when there is one) or of a scene.json file."""
-    import json
-
-    from mgn.pipeline.config import load_config
-    from mgn.scene.scene import Scene
 
     file = path / "scene.json" if path.is_dir() else path
     scene = Scene.from_json(file)
@@ -738,7 +727,6 @@ def _load_scene(path: Path) -> tuple[Scene, Config | None]:
 
 
 def _cmd_pick(args: argparse.Namespace) -> int:
-    from mgn.pipeline.config import load_config
 
     scene, config = _load_scene(Path(args.scene))
     if args.config is not None:

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pycocotools import mask as mask_utils
 
 from mgn.base.atomic import atomic_write_text
 from mgn.io.dataset import Dataset, View
@@ -30,7 +31,6 @@ AGNOSTIC_ID = 1
 
 def rle(mask: np.ndarray) -> dict[str, Any]:
     """COCO RLE of an (H, W) bool mask, JSON-ready (``counts`` as str)."""
-    from pycocotools import mask as mask_utils
 
     r = mask_utils.encode(np.asfortranarray(np.asarray(mask, np.uint8)))
     return {"size": [int(r["size"][0]), int(r["size"][1])], "counts": r["counts"].decode("ascii")}

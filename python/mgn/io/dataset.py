@@ -31,10 +31,14 @@ from typing import Any
 import h5py
 import numpy as np
 import numpy.typing as npt
+from PIL import Image
 
+from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.io.scene_format import M_TO_CM, from_cm
+from mgn.io.model_folder import object_folders
+from mgn.io.scene_format import from_cm
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
+from mgn.view_labels.layout import read_order_csv, read_order_json
 
 __all__ = ["Dataset", "SceneFolder", "View"]
 
@@ -85,7 +89,6 @@ class View:
     @cached_property
     def rgb(self) -> npt.NDArray[np.uint8]:
         """(H, W, 3) uint8."""
-        from PIL import Image
 
         try:
             with Image.open(self.path("_rgb.png")) as im:
@@ -200,7 +203,6 @@ class View:
         """(N, N) int8 relation matrix from ``{v}_order.csv``: M[i][j] = -1 if instance j+1
         lies on / occludes instance i+1, +1 for the reverse (the file stores the -1 entries;
         :func:`mgn.view_labels.layout.read_order_csv`)."""
-        from mgn.view_labels.layout import read_order_csv, read_order_json
 
         csv = self.path("_order.csv")
         if csv.exists():
@@ -299,7 +301,6 @@ class Dataset:
 
     def model_folders(self) -> list[Path]:
         """The object folders ``models/<id>/``."""
-        from mgn.io.model_folder import object_folders
 
         return object_folders(self.root)
 

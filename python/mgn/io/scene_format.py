@@ -25,9 +25,13 @@ from typing import Any
 import h5py
 import numpy as np
 import numpy.typing as npt
+from PIL import Image
 
 from mgn.base.atomic import atomic_write_bytes, atomic_write_text
 from mgn.base.deterministic import h5_create_dataset, h5_create_group, npz_bytes
+from mgn.base.units import M_TO_CM
+from mgn.errors import InvalidArgumentError
+from mgn.render.views import depth_picture
 from mgn.scene.cameras import Intrinsics
 
 __all__ = [
@@ -45,7 +49,6 @@ __all__ = [
     "write_view",
 ]
 
-M_TO_CM = 100.0
 
 #: How lengths are stored in the scene HDF5 (path suffix -> what is in centimetres):
 #: ``"pose"``: the translation column of (…, 4, 4) matrices; ``"xyz"``: columns 1..3 of (…, 4)
@@ -142,21 +145,29 @@ class ViewRecord:
                      "occlusion_map"):  # fmt: skip
             shape = np.shape(getattr(self, name))
             if shape != (h, w):
-                raise ValueError(f"ViewRecord {v}: {name} must be ({h}, {w}), got {shape}")
+                raise InvalidArgumentError(
+                    f"ViewRecord {v}: {name} must be ({h}, {w}), got {shape}"
+                )
         if np.shape(self.rgb) != (h, w, 3):
-            raise ValueError(f"ViewRecord {v}: rgb must be ({h}, {w}, 3), got {np.shape(self.rgb)}")
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: rgb must be ({h}, {w}, 3), got {np.shape(self.rgb)}"
+            )
         amodal = np.shape(self.amodal)
         if len(amodal) != 3 or amodal[1:] != (h, w):
-            raise ValueError(f"ViewRecord {v}: amodal must be (N, {h}, {w}), got {amodal}")
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: amodal must be (N, {h}, {w}), got {amodal}"
+            )
         n = amodal[0]
         top = int(np.max(self.instances, initial=0))
         if top > n or int(np.min(self.instances, initial=0)) < 0:
-            raise ValueError(f"ViewRecord {v}: instance ids must be in 0..{n}, got max {top}")
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: instance ids must be in 0..{n}, got max {top}"
+            )
         if n > 255:
-            raise ValueError(f"ViewRecord {v}: at most 255 instances per view, got {n}")
+            raise InvalidArgumentError(f"ViewRecord {v}: at most 255 instances per view, got {n}")
         for key in HDF5_FLOAT_KEYS:
             if key not in self.scene_hdf5:
-                raise ValueError(f"ViewRecord {v}: scene_hdf5 lacks '{key}'")
+                raise InvalidArgumentError(f"ViewRecord {v}: scene_hdf5 lacks '{key}'")
 
 
 def view_file_names(v: int) -> list[str]:
@@ -200,7 +211,6 @@ def hdf5_bytes(datasets: Mapping[str, np.ndarray], attrs: Mapping[str, Any] | No
 def png_bytes(image: npt.ArrayLike) -> bytes:
     """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible;
     zlib level 1: several times faster than the default for ~10 % more bytes)."""
-    from PIL import Image
 
     buf = io.BytesIO()
     Image.fromarray(np.asarray(image)).save(buf, format="PNG", compress_level=1)
@@ -217,7 +227,6 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     Units: the npz depth and every HDF5 length are converted to centimetres; ids and categories
     are stored as float32 as in the original files.
     """
-    from mgn.render.views import depth_picture
 
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
@@ -234,7 +243,9 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     }
     for key, value in rec.extra_npz.items():
         if key in npz:
-            raise ValueError(f"write_view: extra npz key '{key}' would replace a FORMAT.md key")
+            raise InvalidArgumentError(
+                f"write_view: extra npz key '{key}' would replace a FORMAT.md key"
+            )
         npz[key] = np.asarray(value)
     h5 = {path: to_cm(path, value).astype(f4) for path, value in rec.scene_hdf5.items()}
     files: dict[str, bytes] = {

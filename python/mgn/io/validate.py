@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from mgn.io.dataset import Dataset, SceneFolder, View
+from mgn.io.manifest import MANIFEST, check_manifest
 from mgn.io.scene_format import HDF5_FLOAT_KEYS, view_file_names
 
 __all__ = ["Problem", "validate_dataset"]
@@ -150,7 +151,6 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
 
 
 def _check_scene(scene: SceneFolder, problems: list[Problem], root: Path) -> None:
-    from mgn.io.manifest import MANIFEST, check_manifest
 
     found: list[tuple[str, str]] = []
     if (scene.folder / MANIFEST).exists():

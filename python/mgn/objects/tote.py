@@ -13,7 +13,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-__all__ = ["ToteSpec", "make_tote", "default_tote", "tote_volume"]
+from mgn.errors import InvalidArgumentError, InvalidTypeError
+from mgn.geometry import mesh as geo
+
+__all__ = ["ToteSpec", "make_tote", "default_tote", "tote_mesh", "tote_volume"]
 
 
 @dataclass(frozen=True)
@@ -44,15 +47,19 @@ class ToteSpec:
             if isinstance(value, bool) or not isinstance(
                 value, (int, float, np.floating, np.integer)
             ):
-                raise ValueError(f"ToteSpec.{f.name} must be a number, got {value!r}")
+                raise InvalidArgumentError(f"ToteSpec.{f.name} must be a number, got {value!r}")
             if not math.isfinite(float(value)) or float(value) <= 0.0:
-                raise ValueError(f"ToteSpec.{f.name} must be finite and > 0, got {value!r}")
+                raise InvalidArgumentError(
+                    f"ToteSpec.{f.name} must be finite and > 0, got {value!r}"
+                )
             object.__setattr__(self, f.name, float(value))
         color = tuple(self.color)
         if len(color) != 4 or not all(
             isinstance(c, (int, float)) and 0.0 <= float(c) <= 1.0 for c in color
         ):
-            raise ValueError(f"ToteSpec.color must be 4 values in [0, 1], got {self.color!r}")
+            raise InvalidArgumentError(
+                f"ToteSpec.color must be 4 values in [0, 1], got {self.color!r}"
+            )
         object.__setattr__(self, "color", tuple(float(c) for c in color))
 
     @property
@@ -91,7 +98,7 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     """
     s = default_tote() if spec is None else spec
     if not isinstance(s, ToteSpec):
-        raise TypeError(f"make_tote expects a ToteSpec, got {type(s).__name__}")
+        raise InvalidTypeError(f"make_tote expects a ToteSpec, got {type(s).__name__}")
     hx, hy = 0.5 * s.inner_length, 0.5 * s.inner_width
     ox, oy = hx + s.wall_thickness, hy + s.wall_thickness
     top, bottom = s.inner_height, -s.floor_thickness
@@ -118,3 +125,18 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
         faces += [(8 + i, 8 + j, 12 + j), (8 + i, 12 + j, 12 + i)]  # inner wall, facing the cavity
     faces += [(12, 13, 14), (12, 14, 15)]  # inner floor, +z
     return vertices, np.asarray(faces, dtype=np.int32)
+
+
+def tote_mesh(spec: ToteSpec | None = None) -> geo.Mesh:
+    """The tote (:func:`make_tote`, default :class:`ToteSpec`) as a closed :class:`mgn.Mesh` in
+    the tote frame, with its colour as material. The one tote mesh of mgn: physics, rendering and
+    labels use it."""
+    s = ToteSpec() if spec is None else spec
+    vertices, faces = make_tote(s)
+    mat = geo.Material()
+    mat.name = "tote"
+    mat.base_color = np.asarray(s.color, np.float32)
+    mat.specular = np.full(3, 0.1, np.float32)
+    return geo.Mesh(
+        np.asarray(vertices, np.float32), np.asarray(faces, np.int32), None, [mat], [], "tote"
+    )

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 import yaml
+from PIL import Image
 
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.geometry.mesh import load_mesh
@@ -53,7 +54,6 @@ _KEYS = {
 def _texture(path: str) -> np.ndarray | None:
     if not path:
         return None
-    from PIL import Image
 
     try:
         with Image.open(path) as img:

@@ -21,7 +21,7 @@ _EXPORTS = {
     "SceneTask": "runner",
     "generate": "runner",
     "run_scene": "runner",
-    "scene_seed": "runner",
+    "scene_seed": "seeds",
     "ObjectLabels": "label_cache",
     "label_cache_dir": "label_cache",
     "object_labels": "label_cache",
@@ -70,6 +70,6 @@ if TYPE_CHECKING:
         SceneTask,
         generate,
         run_scene,
-        scene_seed,
     )
     from mgn.pipeline.scene_writer import scene_views, write_scene
+    from mgn.pipeline.seeds import scene_seed

@@ -23,19 +23,22 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from mgn.errors import InvalidArgumentError
 from mgn.io.scene_format import ViewRecord, scene_gt_entries, write_scene_gt, write_view
+from mgn.objects import tote_mesh
+from mgn.pj.labels import PjLabels
+from mgn.render.sensor import SensorName
+from mgn.render.views import iter_views
 from mgn.scene.cameras import CameraView
-
-if TYPE_CHECKING:
-    from mgn.pj.labels import PjLabels
-    from mgn.render.sensor import SensorName
-    from mgn.scene.scene import Scene
-    from mgn.suction.labels import SuctionLabels
+from mgn.scene.scene import Scene
+from mgn.suction.labels import SuctionLabels
+from mgn.view_labels.grasps import SceneGraspModel
+from mgn.view_labels.layout import compute_layout
+from mgn.view_labels.objects import SceneRayModel, view_object_labels
 
 __all__ = ["LabelOptions", "LabelTimings", "label_scene", "strided_subset", "view_record"]
 
@@ -195,10 +198,6 @@ def label_scene(
     Returns:
         Time per stage over the views.
     """
-    from mgn.render.views import iter_views, tote_mesh
-    from mgn.view_labels.grasps import SceneGraspModel
-    from mgn.view_labels.layout import compute_layout
-    from mgn.view_labels.objects import SceneRayModel, view_object_labels
 
     opt = options or LabelOptions()
     n = len(scene.instances)

@@ -41,25 +41,39 @@ import contextlib
 import dataclasses
 import errno
 import json
+import multiprocessing
 import os
 import shutil
+import socket
 import time
 import traceback
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from tqdm import tqdm
 
-from mgn import __version__
-from mgn.base.atomic import atomic_write_text
+from mgn._core import __version__
+from mgn.base.atomic import _io_error, atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.manifest import check_manifest, write_manifest
-from mgn.objects import ObjectSpec
+from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml
 from mgn.pipeline.config import Config, ConfigError, load_config
-from mgn.pipeline.label_cache import ObjectLabels
+from mgn.pipeline.label_cache import (
+    ObjectLabels,
+    compute_object_labels,
+    load_cached_labels,
+    save_cached_labels,
+    write_models,
+)
+from mgn.pipeline.scene_writer import write_scene
+from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
+from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
+from mgn.scene.drop import drop_scene
+from mgn.scene.scene import BUILTIN, resolve_object
 
 __all__ = [
     "DATASET_SCHEMA_VERSION",
@@ -68,24 +82,12 @@ __all__ = [
     "SceneTask",
     "generate",
     "run_scene",
-    "scene_seed",
 ]
 
 #: ``schema_version`` of ``dataset.json``.
 DATASET_SCHEMA_VERSION = 1
 TMP_PREFIX = ".tmp-"
-SCENE_SEED_RULE = "numpy.random.SeedSequence([seed, i]).generate_state(1, numpy.uint32)[0] >> 1"
 STAGES = ("drop", "write", "finalize")
-
-
-def scene_seed(seed: int, index: int) -> int:
-    """The seed of scene ``index`` of a dataset with seed ``seed`` (see the module doc)."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InvalidArgumentError(f"scene_seed: seed must be an integer >= 0, got {seed!r}")
-    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
-        raise InvalidArgumentError(f"scene_seed: index must be an integer >= 0, got {index!r}")
-    state = np.random.SeedSequence([int(seed), int(index)]).generate_state(1, np.uint32)
-    return int(state[0]) >> 1
 
 
 # ------------------------------------------------------------------------------------- tasks
@@ -157,11 +159,6 @@ def run_scene(task: SceneTask) -> SceneResult:
     """Drop, write and finalise one scene (see the module doc). Never raises for an ordinary
     error: the result says what went wrong. The temporary folder is removed on any failure,
     including KeyboardInterrupt (which is re-raised)."""
-    import socket
-
-    from mgn.pipeline.scene_writer import write_scene
-    from mgn.scene.drop import drop_scene
-    from mgn.scene.scene import BUILTIN, resolve_object
 
     out = Path(task.out_dir)
     final = out / f"scene{task.index}"
@@ -214,7 +211,6 @@ def run_scene(task: SceneTask) -> SceneResult:
 
 
 def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
-    from mgn.pipeline.label_cache import compute_object_labels
 
     spec, config, num_threads = args
     return compute_object_labels(spec, config, num_threads)
@@ -259,8 +255,6 @@ class _InProcess(_Executor):
 
 class _ProcessPool(_Executor):
     def __init__(self, workers: int) -> None:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
 
         # spawn, not fork: the parent may hold OpenMP/TBB/Embree threads and a GL context.
         ctx = multiprocessing.get_context("spawn")
@@ -270,7 +264,6 @@ class _ProcessPool(_Executor):
         self._futures: list = []
 
     def run(self, fn, items):  # noqa: ANN001, ANN201
-        from concurrent.futures import as_completed
 
         futures = {self.pool.submit(fn, item): item for item in items}
         self._futures = list(futures)
@@ -444,7 +437,6 @@ class GenerateReport:
 
 
 def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
-    from mgn.objects import builtin_objects, load_objects_yaml
 
     catalogue = list(builtin_objects())
     sources: dict[str, str] = {}
@@ -453,15 +445,6 @@ def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
             catalogue.append(spec)
             sources[spec.name] = os.fspath(Path(path).resolve())
     return catalogue, sources
-
-
-def _compose(config: Config, catalogue: list[ObjectSpec], seed: int) -> list[ObjectSpec]:
-    from mgn.scene.compose import compose_objects
-
-    try:
-        return compose_objects(**config.objects.compose_kwargs(), seed=seed, catalogue=catalogue)
-    except InvalidArgumentError as e:
-        raise ConfigError(f"config key 'objects': {e}") from e
 
 
 def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extra: Any) -> dict:
@@ -549,9 +532,6 @@ class _Run:
     def ensure_labels(self, specs: Sequence[ObjectSpec]) -> None:
         """Read or compute the labels of the objects not labelled yet in this run and write
         their ``models/<id>/`` folders."""
-        from tqdm import tqdm
-
-        from mgn.pipeline.label_cache import load_cached_labels, save_cached_labels, write_models
 
         t0 = time.perf_counter()
         unique: dict[str, ObjectSpec] = {}
@@ -591,9 +571,6 @@ class _Run:
     def run_scenes(self, scenes: Sequence[tuple[int, list[ObjectSpec]]], total: int) -> None:
         """Run the scenes (index, objects) that are not complete yet (``--resume`` keeps the
         complete ones); results go to the report. Stops scheduling on a full disk."""
-        from tqdm import tqdm
-
-        from mgn.scene.scene import BUILTIN
 
         report, todo = self.report, []
         for i, specs in scenes:
@@ -682,7 +659,6 @@ def generate(
             while writing ``dataset.json`` or ``models/``.
         KeyboardInterrupt: after removing the temporary folders of the run.
     """
-    from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 
     t_start = time.perf_counter()
     cfg = config if isinstance(config, Config) else load_config(config)
@@ -741,8 +717,6 @@ def generate(
         if quota is None:
             _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running", **extra))
     except OSError as e:
-        from mgn.base.atomic import _io_error
-
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 
     executor = _executor(workers, scheduler)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from mgn.pipeline.config import CameraConfig, Config
 from mgn.pipeline.label_cache import ObjectLabels
+from mgn.pipeline.label_scene import LabelOptions, label_scene
 from mgn.scene.cameras import CameraView, Intrinsics, hemisphere_rig, mgn_rig
 from mgn.scene.scene import Scene
 
@@ -71,7 +72,6 @@ def write_scene(
     Raises:
         OSError: a file cannot be written (``errno.ENOSPC`` when the disk is full).
     """
-    from mgn.pipeline.label_scene import LabelOptions, label_scene
 
     out = Path(folder)
     if len(scene) == 0:

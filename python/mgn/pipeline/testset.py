@@ -48,8 +48,12 @@ import numpy as np
 
 from mgn.base.atomic import atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.manifest import MANIFEST, file_sha256
+from mgn.io.scene_format import view_file_names
 from mgn.objects import ObjectSpec
-from mgn.pipeline.config import DIFFICULTY_LEVELS, Config, ConfigError
+from mgn.pipeline.config import DIFFICULTY_LEVELS, Config, ConfigError, SelectionConfig
+from mgn.pipeline.seeds import scene_seed
+from mgn.scene.compose import compose_objects
 
 __all__ = [
     "NOVEL_TAG",
@@ -206,7 +210,6 @@ def compose_scene(
     Raises:
         ConfigError: the composition is impossible (e.g. an unknown object).
     """
-    from mgn.scene.compose import compose_objects
 
     if target_level is not None and target_level not in DIFFICULTY_LEVELS:
         raise InvalidArgumentError(f"compose_scene: target_level must be 1..5, got {target_level}")
@@ -335,8 +338,6 @@ def prune_scene(folder: str | os.PathLike[str], views: Sequence[int]) -> bool:
     again finishes the job. A scene left without views is removed as a whole (renamed to a
     ``.tmp-`` name first). Returns True if the scene folder was removed.
     """
-    from mgn.io.manifest import MANIFEST, file_sha256
-    from mgn.io.scene_format import view_file_names
 
     root = Path(folder)
     if not root.is_dir():
@@ -441,7 +442,6 @@ def run_balanced(run: Any, catalogue: Sequence[ObjectSpec], split: Split, record
     with its run context; see the module doc). Fills ``run.report`` (``selection``,
     ``unmet``, ``num_scenes``) and records the selection in ``dataset.json`` after each batch.
     """
-    from mgn.pipeline.runner import scene_seed
 
     cfg, report = run.cfg, run.report
     sel = cfg.selection
@@ -501,7 +501,6 @@ def parse_quota(text: str) -> tuple[int, ...]:
     Raises:
         ConfigError: naming ``--difficulty-quota``, the text and the expected form.
     """
-    from mgn.pipeline.config import SelectionConfig
 
     mapping: dict[str, Any] = {}
     for part in str(text).split(","):

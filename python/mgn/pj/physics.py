@@ -24,6 +24,8 @@ import numpy.typing as npt
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
+from mgn.geometry.convex import cached_convex_decomposition
+from mgn.geometry.mesh import mass_properties
 from mgn.hardware import ParallelJawGripper, default_gripper
 
 Mesh = _core.Mesh
@@ -306,8 +308,6 @@ class ShakeScorer:
         return f"Bullet shake test, grid {o.grid}x{o.grid}, at most {self.max_grasps} grasps"
 
     def __call__(self, mesh: Mesh, labels: Any) -> npt.NDArray[np.float32]:
-        from mgn.geometry.convex import cached_convex_decomposition
-        from mgn.geometry.mesh import mass_properties
 
         n = len(labels)
         out = np.full(n, np.nan, np.float32)

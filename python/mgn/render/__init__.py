@@ -4,7 +4,8 @@
   context reused across views).
 - :mod:`mgn.render.sensor`: :func:`apply_depth_sensor` with presets ``ideal``,
   ``structured-light`` and ``tof``.
-- :mod:`mgn.render.views`: :func:`render_views`, render and write the views of a scene.
+- :mod:`mgn.render.views`: :func:`iter_views`, render the views of a scene as arrays
+  (:func:`mgn.render_views` also writes them).
 """
 
 from mgn.render.renderer import Instance, LightSample, Renderer, RenderOutput
@@ -17,7 +18,7 @@ from mgn.render.sensor import (
     sensor_params,
     surface_flags,
 )
-from mgn.render.views import ViewImages, depth_picture, render_views, tote_mesh
+from mgn.render.views import ViewImages, depth_picture, iter_views
 
 __all__ = [
     "SURFACE_DARK",
@@ -31,8 +32,7 @@ __all__ = [
     "ViewImages",
     "apply_depth_sensor",
     "depth_picture",
-    "render_views",
+    "iter_views",
     "sensor_params",
     "surface_flags",
-    "tote_mesh",
 ]

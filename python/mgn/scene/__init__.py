@@ -21,7 +21,6 @@ _EXPORTS = {
     "drop_scene": "drop",
     "settle": "drop",
     "settle_tracked": "drop",
-    "tote_mesh": "drop",
     "BUILTIN": "scene",
     "CONTACT_NAMES": "scene",
     "DropOptions": "scene",
@@ -60,7 +59,6 @@ __all__ = [
     "resolve_object",
     "settle",
     "settle_tracked",
-    "tote_mesh",
 ]
 
 
@@ -87,7 +85,7 @@ if TYPE_CHECKING:
         mgn_views,
     )
     from mgn.scene.compose import MGN_COPIES, compose_objects
-    from mgn.scene.drop import drop_scene, settle, settle_tracked, tote_mesh
+    from mgn.scene.drop import drop_scene, settle, settle_tracked
     from mgn.scene.scene import (
         BUILTIN,
         CONTACT_NAMES,

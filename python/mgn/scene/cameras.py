@@ -15,6 +15,8 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.errors import InvalidArgumentError, InvalidTypeError
+from mgn.geometry.raytrace import camera_rays
 
 __all__ = [
     "CameraView",
@@ -53,7 +55,7 @@ class Intrinsics:
         for name in ("width", "height"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-                raise ValueError(f"Intrinsics.{name} must be an integer, got {value!r}")
+                raise InvalidArgumentError(f"Intrinsics.{name} must be an integer, got {value!r}")
             object.__setattr__(self, name, int(value))
         for name in ("fx", "fy", "cx", "cy"):
             object.__setattr__(self, name, float(getattr(self, name)))
@@ -116,9 +118,9 @@ class Intrinsics:
 def _pose(X: npt.ArrayLike, name: str) -> npt.NDArray[np.float64]:
     a = np.array(X, dtype=np.float64)
     if a.shape != (4, 4):
-        raise ValueError(f"{name} must be a (4, 4) pose, got shape {a.shape}")
+        raise InvalidArgumentError(f"{name} must be a (4, 4) pose, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} has non-finite entries")
+        raise InvalidArgumentError(f"{name} has non-finite entries")
     a.setflags(write=False)
     return a
 
@@ -132,7 +134,9 @@ class CameraView:
 
     def __post_init__(self) -> None:
         if not isinstance(self.K, Intrinsics):
-            raise TypeError(f"CameraView.K must be an Intrinsics, got {type(self.K).__name__}")
+            raise InvalidTypeError(
+                f"CameraView.K must be an Intrinsics, got {type(self.K).__name__}"
+            )
         object.__setattr__(self, "X_WC", _pose(self.X_WC, "CameraView.X_WC"))
 
     @property
@@ -142,7 +146,6 @@ class CameraView:
 
     def rays(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
         """Rays through the pixel centres (see :func:`mgn.camera_rays`)."""
-        from mgn.geometry.raytrace import camera_rays
 
         return camera_rays(self.K.K, self.K.width, self.K.height, self.X_WC)
 
@@ -162,7 +165,7 @@ class MgnRigParams:
 def _vec3(x: npt.ArrayLike, name: str) -> npt.NDArray[np.float64]:
     a = np.asarray(x, dtype=np.float64)
     if a.shape != (3,):
-        raise ValueError(f"{name} must be 3 numbers, got shape {a.shape}")
+        raise InvalidArgumentError(f"{name} must be 3 numbers, got shape {a.shape}")
     return a
 
 

@@ -17,8 +17,8 @@ from mgn.geometry.convex import (
     ConvexDecompositionOptions,
     cached_convex_decomposition,
 )
-from mgn.geometry.mesh import Mesh, mass_properties
-from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, make_tote
+from mgn.geometry.mesh import mass_properties
+from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, tote_mesh
 from mgn.scene.scene import (
     BUILTIN,
     CONTACT_NAMES,
@@ -28,17 +28,11 @@ from mgn.scene.scene import (
     SceneInstance,
 )
 
-__all__ = ["RESTITUTION", "drop_scene", "settle", "settle_tracked", "tote_mesh"]
+__all__ = ["RESTITUTION", "drop_scene", "settle", "settle_tracked"]
 
 #: Restitution of the objects (the library carries friction but not restitution).
 RESTITUTION = 0.1
 _STATUS = {0: "kept", 1: "left_tote", 2: "not_settled"}
-
-
-def tote_mesh(spec: ToteSpec) -> Mesh:
-    """The tote's closed triangle mesh in the tote frame (from :func:`mgn.objects.make_tote`)."""
-    v, f = make_tote(spec)
-    return Mesh(np.asarray(v, np.float32), np.asarray(f, np.int32), None, [], [], "tote")
 
 
 def _source_of(spec: ObjectSpec, sources: dict[str, str]) -> str:
@@ -72,8 +66,6 @@ def _simulate(
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidArgumentError(f"drop_scene: seed must be an integer >= 0, got {seed!r}")
     src = {k: os.fspath(Path(v).resolve()) for k, v in (sources or {}).items()}
-    from mgn.io.model_folder import object_mesh
-
     per_name: dict[str, tuple] = {}
     for spec in objects:
         if not isinstance(spec, ObjectSpec):
@@ -82,7 +74,7 @@ def _simulate(
             )
         if spec.name in per_name:
             continue
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         props = mass_properties(mesh, spec.density)
         parts = cached_convex_decomposition(
             mesh, decomposition or DROP_DECOMPOSITION, use_cache=use_cache

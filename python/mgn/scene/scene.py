@@ -330,12 +330,11 @@ class Scene:
 
     def mesh(self, index: int) -> Mesh:
         """The :data:`mgn.Mesh` of instance ``index`` in its object frame (with its material)."""
-        from mgn.io.model_folder import object_mesh
 
-        return object_mesh(self.object_spec(index))
+        return self.object_spec(index).to_mesh()
 
     def render_items(self) -> list[tuple[Mesh, npt.NDArray[np.float64], int]]:
-        """(mesh, X_WO, instance id) per instance, as :func:`mgn.render.render_views` takes them;
+        """(mesh, X_WO, instance id) per instance, as :func:`mgn.render_views` takes them;
         copies of an object share one Mesh (so a renderer uploads it once)."""
         meshes: dict[tuple[str, str], Mesh] = {}
         items = []

@@ -2,11 +2,11 @@
 
 SealModel(mesh, cup, model)         seal score of candidates (spring, strain, smoothness)
 suction_wrench_scores(...)          wrench resistance under gravity
-label_object(mesh, mass=, com=)     object labels; write_suction_labels(hdf5, labels)
+label_object(mesh, mass=, com=)     object labels (mgn.io.grasp_file.write_suction_labels)
 
 """
 
-from mgn.suction.labels import SuctionLabels, label_object, write_suction_labels
+from mgn.suction.labels import SuctionLabels, label_object
 from mgn.suction.seal import (
     FAILURE_REASONS,
     SEAL_MODELS,
@@ -25,5 +25,4 @@ __all__ = [
     "core_cup",
     "label_object",
     "suction_wrench_scores",
-    "write_suction_labels",
 ]

@@ -30,7 +30,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -39,14 +38,13 @@ from mgn import _core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.hardware import ParallelJawGripper, SuctionCup
+from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
 from mgn.pj.sampler import core_gripper
+from mgn.scene.cameras import CameraView
+from mgn.scene.scene import Scene
 from mgn.suction.labels import CUP_BODY_CLEARANCE, SuctionLabels
 from mgn.suction.seal import core_cup
-
-if TYPE_CHECKING:
-    from mgn.scene.cameras import CameraView
-    from mgn.scene.scene import Scene
 
 __all__ = [
     "DEFAULT_SHAFT_LENGTH",
@@ -293,8 +291,6 @@ class SceneGraspModel:
         _objects: tuple | None = None,
     ) -> None:
         if _objects is None:
-            from mgn.render.views import tote_mesh
-
             n = len(scene.instances)
             meshes = [scene.mesh(i) for i in range(n)]
             masses, coms = [], []

@@ -45,6 +45,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError, IoError
 
 __all__ = [
@@ -58,7 +59,6 @@ __all__ = [
 
 #: Valid per-object bin relations.
 BIN_RELATIONS: tuple[str, ...] = ("no_rel", "edge", "corner")
-_CM = 100.0  # metres -> centimetres, at the file boundary only
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -124,7 +124,7 @@ class Layout:
         def entry(other: int, dd: float, edge: int) -> dict[str, Any]:
             return {
                 "id": other,
-                "depth_diff": 0.0 if math.isnan(dd) else round(dd * _CM, 6),
+                "depth_diff": 0.0 if math.isnan(dd) else round(dd * M_TO_CM, 6),
                 "edge_size": edge,
             }
 
@@ -258,9 +258,9 @@ def read_order_json(path: str | os.PathLike[str]) -> OrderGraph:
                 if j == 0:
                     continue
                 if not 1 <= j <= n:
-                    raise ValueError(f"object {i + 1}: parent id {j} not in 1..{n}")
+                    raise InvalidArgumentError(f"object {i + 1}: parent id {j} not in 1..{n}")
                 parent[i, j - 1] = True
-                dd[i, j - 1] = float(p["depth_diff"]) / _CM
+                dd[i, j - 1] = float(p["depth_diff"]) / M_TO_CM
                 edge[i, j - 1] = float(p["edge_size"])
     except (KeyError, ValueError, TypeError) as e:
         raise InvalidArgumentError(f"read_order_json: '{os.fspath(path)}': {e!r}") from e

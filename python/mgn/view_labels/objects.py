@@ -15,18 +15,16 @@ seen in the view (their masks are empty, their occlusion is 1).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.errors import InvalidArgumentError
+from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry.mesh import Mesh, mass_properties
+from mgn.objects import com_keypoints, tote_mesh
 from mgn.scene.cameras import CameraView
-
-if TYPE_CHECKING:
-    from mgn.scene.scene import Scene
+from mgn.scene.scene import Scene
 
 __all__ = [
     "DEFAULT_KEYPOINT_TOLERANCE",
@@ -73,7 +71,7 @@ class ViewObjectLabels:
             (world; with a depth image, x is the pixel's back-projected depth point),
             ``clamp((d_max - |x - c|) / (d_max - d_min), 0, 1)`` with c the centre of mass and
             d_min, d_max the smallest and largest distance of its CoM-scored points to c (the
-            score of ``mgn.io.model_folder.com_keypoints``); 0 on background, on edge pixels
+            score of ``mgn.objects.com_keypoints``); 0 on background, on edge pixels
             where the ray misses the object and on pixels without a valid depth.
     """
 
@@ -181,15 +179,12 @@ class SceneRayModel:
     def from_scene(cls, scene: Scene, *, tote: bool = True) -> SceneRayModel:
         """The model of a :class:`~mgn.scene.Scene`: every instance's mesh at its ``X_WO``, its
         category, semantic keypoints (``ObjectSpec.keypoints``), its 1000 CoM-scored points
-        (:func:`mgn.io.model_folder.com_keypoints` with the object-folder seed, the category
+        (:func:`mgn.objects.com_keypoints` with the object-folder seed, the category
         id) and centre of mass at the object's density; the tote (world = tote frame) when
         ``tote`` is True. Objects repeated in the scene are prepared once."""
-        from mgn.io.model_folder import com_keypoints
-        from mgn.render.views import tote_mesh
-        from mgn.scene.scene import Scene
 
         if not isinstance(scene, Scene):  # a runtime check for callers without a type checker
-            raise TypeError(f"from_scene expects a Scene, got {type(scene).__name__}")
+            raise InvalidTypeError(f"from_scene expects a Scene, got {type(scene).__name__}")
         if len(scene.instances) == 0:
             raise InvalidArgumentError(
                 "SceneRayModel.from_scene: the scene has no objects; expected at least one"
@@ -267,9 +262,9 @@ def view_object_labels(
         InvalidArgumentError: image of the wrong size or type, ids outside 0..N, bad camera.
     """
     if not isinstance(model, SceneRayModel):
-        raise TypeError(f"model must be a SceneRayModel, got {type(model).__name__}")
+        raise InvalidTypeError(f"model must be a SceneRayModel, got {type(model).__name__}")
     if not isinstance(view, CameraView):
-        raise TypeError(f"view must be a CameraView, got {type(view).__name__}")
+        raise InvalidTypeError(f"view must be a CameraView, got {type(view).__name__}")
     img = np.asarray(instance_image)
     if img.dtype == np.bool_ or not np.issubdtype(img.dtype, np.integer):
         raise InvalidArgumentError(

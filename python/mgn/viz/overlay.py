@@ -15,8 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
+from PIL import Image, ImageDraw
 
+from mgn.base.atomic import atomic_write_bytes
+from mgn.errors import InvalidArgumentError
 from mgn.io.dataset import Dataset, View
+from mgn.io.scene_format import png_bytes
 from mgn.viz.pictures import score_colors
 
 __all__ = ["instance_colors", "project", "render_overlay", "show"]
@@ -65,7 +69,6 @@ def render_overlay(
         layout: draw the relation graph (parent → child arrows) and each object's layer.
         keypoints: draw the semantic keypoints.
     """
-    from PIL import Image, ImageDraw
 
     rgb = view.rgb.astype(np.float64)
     inst = view.instances
@@ -95,12 +98,16 @@ def render_overlay(
     if grasps is not None:
         kind = {"pj": "paralleljaw", "suction": "suctioncup"}.get(grasps)
         if kind is None:
-            raise ValueError(f"render_overlay: grasps must be 'pj' or 'suction', got {grasps!r}")
+            raise InvalidArgumentError(
+                f"render_overlay: grasps must be 'pj' or 'suction', got {grasps!r}"
+            )
         g = view.grasps(kind)
         poses = g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4)))
         score = g.get("score_analytical", np.ones(len(poses)))
         if len(score) != len(poses):
-            raise ValueError(f"{view}: {kind} grasps have {len(poses)} poses, {len(score)} scores")
+            raise InvalidArgumentError(
+                f"{view}: {kind} grasps have {len(poses)} poses, {len(score)} scores"
+            )
         keep = np.argsort(-np.nan_to_num(score, nan=-1.0), kind="stable")[:max_grasps][::-1]
         cols = score_colors(np.nan_to_num(score, nan=0.0))
         p0, f0 = project(poses[:, :3, 3], K)
@@ -182,8 +189,6 @@ def show(
     **kwargs: object,
 ) -> Path:
     """Write the overlay of ``scene``/``view`` of the dataset at ``root`` to ``out`` (PNG)."""
-    from mgn.base.atomic import atomic_write_bytes
-    from mgn.io.scene_format import png_bytes
 
     image = render_overlay(Dataset(root).scene(scene).view(view), **kwargs)  # type: ignore[arg-type]
     path = Path(out)

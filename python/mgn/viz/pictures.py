@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from PIL import Image, ImageDraw
 
 from mgn.geometry.mesh import Mesh
 from mgn.geometry.raytrace import RayScene, camera_rays
@@ -118,7 +119,6 @@ def panels(
     images: Sequence[npt.NDArray[np.uint8]], titles: Sequence[str], *, footer: str = ""
 ) -> npt.NDArray[np.uint8]:
     """Images side by side with a title above each (and an optional footer line)."""
-    from PIL import Image, ImageDraw
 
     h = max(i.shape[0] for i in images)
     w = sum(i.shape[1] for i in images)

@@ -18,8 +18,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from PIL import Image
 
+from mgn.base.atomic import atomic_write_text
 from mgn.io.dataset import Dataset, View
+from mgn.io.scene_format import png_bytes
+from mgn.viz.overlay import render_overlay
 
 __all__ = ["collect_stats", "svg_bars", "write_report"]
 
@@ -130,7 +134,6 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
 
 
 def _png_tag(image: np.ndarray, width: int) -> str:
-    from mgn.io.scene_format import png_bytes
 
     data = base64.b64encode(png_bytes(image)).decode("ascii")
     return f'<img src="data:image/png;base64,{data}" width="{width}">'
@@ -144,10 +147,6 @@ def write_report(
     max_views: int = 400,
 ) -> Path:
     """Write the HTML report of the dataset at ``root`` to ``out`` (atomically)."""
-    from PIL import Image
-
-    from mgn.base.atomic import atomic_write_text
-    from mgn.viz.overlay import render_overlay
 
     ds = Dataset(root)
     stats = collect_stats(ds, max_views=max_views)

@@ -26,7 +26,10 @@ from PIL import Image, ImageDraw
 from mgn import _core
 from mgn.base.atomic import atomic_write_bytes
 from mgn.errors import InvalidArgumentError
+from mgn.geometry.mesh import load_mesh, mass_properties
+from mgn.geometry.raytrace import RayScene
 from mgn.hardware import ParallelJawGripper, default_gripper
+from mgn.objects import get_object
 from mgn.pj.physics import PHASE_NAMES, ShakeOptions, ShakeTrajectory, shake_trajectory
 
 Mesh = _core.Mesh
@@ -191,7 +194,6 @@ def default_grasp(mesh: Mesh, com: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """A grasp across the object's narrower horizontal extent, approaching from +z: one row
     [a, v, p1, w] (m). The contacts are the ray hits through the centre of mass, raised if
     needed so that the top of the object stays 35 mm below the grasp line (clear of the palm)."""
-    from mgn.geometry.raytrace import RayScene
 
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     c = np.asarray(com, dtype=np.float64).copy()
@@ -211,17 +213,13 @@ def default_grasp(mesh: Mesh, com: npt.ArrayLike) -> npt.NDArray[np.float64]:
 
 def _load_object(name: str) -> tuple[Mesh, float, np.ndarray, np.ndarray]:
     """A built-in object (name or id) or a mesh file: (mesh, mass, com, inertia)."""
-    from mgn.geometry.mesh import load_mesh, mass_properties
 
     if Path(name).suffix and Path(name).exists():
         mesh = load_mesh(name)
         density = 500.0
     else:
-        from mgn.io.model_folder import object_mesh
-        from mgn.objects import get_object
-
         spec = get_object(name)
-        mesh, density = object_mesh(spec), spec.density
+        mesh, density = spec.to_mesh(), spec.density
     mp = mass_properties(mesh, density)
     return mesh, float(mp.mass), np.asarray(mp.center_of_mass), np.asarray(mp.inertia)
 

@@ -14,9 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh, sample_surface
 from mgn.hardware import SuctionCup
 from mgn.suction.seal import FAILURE_REASONS, SealModel
+from mgn.viz.pictures import draw_points, panels, score_colors, snapshot
 
 MODELS: tuple[str, ...] = ("spring", "strain", "smoothness")
 LOW, HIGH = 0.2, 0.8
@@ -109,7 +111,9 @@ def pair_stats(
     """Agreement and controversial counts of model ``a`` against model ``b``."""
     sa, sb = np.asarray(score_a), np.asarray(score_b)
     if sa.shape != sb.shape:
-        raise ValueError(f"pair_stats: score arrays differ in shape {sa.shape} vs {sb.shape}")
+        raise InvalidArgumentError(
+            f"pair_stats: score arrays differ in shape {sa.shape} vs {sb.shape}"
+        )
     b_seal = sb >= threshold
     agreement = float(np.mean((sa >= threshold) == b_seal)) if sa.size else 1.0
     return PairStats(
@@ -137,9 +141,13 @@ def compare_models(
     for their trial perturbations, so differences come from the models alone.
     """
     if not 0.0 < seal_threshold <= 1.0:
-        raise ValueError(f"seal_threshold: expected a value in (0, 1], got {seal_threshold}")
+        raise InvalidArgumentError(
+            f"seal_threshold: expected a value in (0, 1], got {seal_threshold}"
+        )
     if len(models) < 2:
-        raise ValueError(f"models: expected at least two models to compare, got {models!r}")
+        raise InvalidArgumentError(
+            f"models: expected at least two models to compare, got {models!r}"
+        )
     cup = cup if cup is not None else SuctionCup()
     samples = sample_surface(mesh, num_points, method="even", seed=seed)
     scores: dict[str, np.ndarray] = {}
@@ -159,7 +167,6 @@ def compare_models(
 def comparison_picture(mesh: Mesh, comparison: Comparison, *, size: int = 360) -> np.ndarray:
     """(H, W, 3) uint8: the object once per model, points coloured red (0) → green (1) by score,
     plus a last panel marking the controversial points in magenta."""
-    from mgn.viz.pictures import draw_points, panels, score_colors, snapshot
 
     snap = snapshot(mesh, size=size)
     imgs, titles = [], []
