@@ -863,7 +863,7 @@ class ViewLabelModel:
         keypoints: collections.abc.Sequence[typing.Any],
         com_points: collections.abc.Sequence[typing.Any],
         coms: typing.Any,
-        tote: Mesh = None,
+        tote: Mesh | None = None,
         X_W_tote: typing.Any = None,
     ) -> None: ...
     def label_view(

@@ -150,7 +150,7 @@ class ParallelJawGripper(_YamlDataclass):
         g = super().from_yaml(path)
         base = os.path.dirname(os.path.abspath(path))
         fields = ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
-        resolved = {
+        resolved: dict[str, Any] = {
             f: os.path.join(base, getattr(g, f))
             for f in fields
             if getattr(g, f) is not None and not os.path.isabs(getattr(g, f))

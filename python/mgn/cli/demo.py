@@ -148,8 +148,8 @@ def run_demo(out: str | Path, *, num_threads: int = 0, image_size: int = 900) ->
         width = float(np.ptp(meshes[i].bounds[:, 0]))
         near = _translation(0.3 * width, 0, 0)
         far = _translation(width + 0.001, 0, 0)
-        hits = collide(
-            models[i], np.eye(4), models[i], np.stack([near, far]), num_threads=num_threads
+        hits = np.asarray(
+            collide(models[i], np.eye(4), models[i], np.stack([near, far]), num_threads=num_threads)
         )
         checks += 2
         errors += int(not hits[0]) + int(hits[1])

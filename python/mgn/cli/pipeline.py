@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+from typing import Any
 
 from mgn.base.atomic import atomic_write_text
 from mgn.pipeline.config import SelectionConfig, dump_config, load_config
@@ -33,7 +34,7 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipel
     cfg = load_config(args.config)
     if args.split is not None:
         cfg = dataclasses.replace(cfg, split=dataclasses.replace(cfg.split, name=args.split))
-    sel = {}
+    sel: dict[str, Any] = {}
     if args.difficulty_quota is not None:
         quota = parse_quota(args.difficulty_quota)
         sel["quota"] = {str(k + 1): n for k, n in enumerate(quota)}

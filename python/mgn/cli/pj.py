@@ -19,12 +19,12 @@ from mgn.geometry.mesh import load_mesh, mass_properties
 from mgn.hardware import ParallelJawGripper
 from mgn.io.grasp_file import write_pj_labels
 from mgn.io.model_folder import object_folders, read_model_folder
-from mgn.pj.labels import PhysicsScorer, label_object
+from mgn.pj.labels import label_object
 from mgn.pj.physics import ShakeOptions, ShakeScorer
 from mgn.viz.shake_trial import register_show_trial
 
 
-def _physics_scorer(args: argparse.Namespace, gripper) -> PhysicsScorer:
+def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> ShakeScorer:
     """The Bullet shake-test scorer on at most ``--physics-grasps`` grasps per object."""
 
     return ShakeScorer(
@@ -38,7 +38,7 @@ def _physics_scorer(args: argparse.Namespace, gripper) -> PhysicsScorer:
 def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path | None]]:
     """(mesh file, hdf5 file, model folder or None) for each PATH."""
 
-    targets = []
+    targets: list[tuple[Path, Path, Path | None]] = []
     for raw in paths:
         p = Path(raw)
         if p.is_dir() and (p / "textured.obj").is_file():
@@ -53,7 +53,8 @@ def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path |
                 raise InvalidArgumentError(f"'{p}' is a mesh file: give --out LABELS.hdf5")
             if len(paths) != 1:
                 raise InvalidArgumentError("--out works with a single mesh file")
-            targets.append((p, Path(out), None))  # type: ignore[arg-type]
+            assert out is not None  # checked above
+            targets.append((p, Path(out), None))
         else:
             raise FileNotFoundError(f"'{p}' is neither an object folder, an export root nor a mesh")
     return targets

@@ -296,7 +296,7 @@ def _ground_truth(ds: Dataset, *, amodal: bool, class_agnostic: bool) -> dict[st
     wanted = {s * 1000 + v for s, v in views}
     gt = coco_dict(ds, scenes=sorted({s for s, _ in views}))
     gt["images"] = [im for im in gt["images"] if im["id"] in wanted]
-    anns = []
+    anns: list[dict[str, Any]] = []
     for a in gt["annotations"]:
         if a["image_id"] not in wanted:
             continue

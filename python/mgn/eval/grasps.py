@@ -689,10 +689,10 @@ def evaluate_grasps(
 
     # Parse everything first (errors before any collision work), then score per view.
     parsed = []
-    for e_i, entry in mine:
+    for e_i, pred in mine:
         what = f"predictions[{e_i}]"
-        data = ctx.view(int(entry["image_id"]), what)
-        parsed.append((int(entry["image_id"]), data, *_parse_view(ctx, data, entry, what)))
+        data = ctx.view(int(pred["image_id"]), what)
+        parsed.append((int(pred["image_id"]), data, *_parse_view(ctx, data, pred, what)))
 
     views: list[ViewGraspResult] = []
     total = matched_all = colliding_all = 0

@@ -634,16 +634,17 @@ def run_picking(
             before = {ids[j]: cur.instances[j].X_WO for j in range(n) if j != k}
             nxt, old = settle_tracked(cur, remove=(int(target),), options=settle_options)
             new_ids = tuple(ids[o - 1] for o in old)
-            t, r = [], []
+            moved: list[float] = []
+            turned: list[float] = []
             for j, inst in zip(new_ids, nxt.instances, strict=True):
-                t.append(float(np.linalg.norm(inst.X_WO[:3, 3] - before[j][:3, 3])))
-                r.append(_rotation_angle(before[j][:3, :3], inst.X_WO[:3, :3]))
+                moved.append(float(np.linalg.norm(inst.X_WO[:3, 3] - before[j][:3, 3])))
+                turned.append(_rotation_angle(before[j][:3, :3], inst.X_WO[:3, :3]))
             lost = tuple(sorted(set(before) - set(new_ids)))
             record = {
-                "disturbance_max_translation": max(t, default=0.0),
-                "disturbance_mean_translation": float(np.mean(t)) if t else 0.0,
-                "disturbance_max_rotation": max(r, default=0.0),
-                "disturbance_mean_rotation": float(np.mean(r)) if r else 0.0,
+                "disturbance_max_translation": max(moved, default=0.0),
+                "disturbance_mean_translation": float(np.mean(moved)) if moved else 0.0,
+                "disturbance_max_rotation": max(turned, default=0.0),
+                "disturbance_mean_rotation": float(np.mean(turned)) if turned else 0.0,
                 "lost": lost,
             }
             if failures[orig] == 0:

@@ -220,7 +220,7 @@ def write_tote(spec: ToteSpec, root: str | os.PathLike[str]) -> Path:
     """
     vertices, faces = make_tote(spec)
     params = {f.name: getattr(spec, f.name) for f in dataclasses.fields(spec)}
-    material = MaterialSpec(name="tote", base_color=tuple(spec.color))
+    material = MaterialSpec(name="tote", base_color=spec.color)
     with atomic_dir(Path(root) / "tote", overwrite=True) as tmp:
         header = "tote: origin at the centre of the inner floor, z up; metres"
         (tmp / "tote.obj").write_text(

@@ -17,7 +17,7 @@ from __future__ import annotations
 import io
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -232,7 +232,7 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     v = rec.index
     f4 = np.float32
-    npz = {
+    npz: dict[str, Any] = {
         "depth": (np.asarray(rec.depth, np.float64) * M_TO_CM).astype(f4),
         "instances_objects": np.asarray(rec.instances).astype(f4),
         "instances_semantic": np.asarray(rec.semantic).astype(f4),
@@ -266,14 +266,16 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
 
 
 def scene_gt_entries(
-    X_CO: npt.ArrayLike, obj_ids: Sequence[int], seen: Sequence[bool] | None = None
+    X_CO: npt.ArrayLike, obj_ids: npt.ArrayLike, seen: npt.ArrayLike | None = None
 ) -> list[dict[str, Any]]:
     """``scene_gt.json`` entries of one view: per instance ``cam_R_m2c`` (3x3 row-major),
     ``cam_t_m2c`` (cm) and ``obj_id``; instances with ``seen`` False are left out."""
     X = np.asarray(X_CO, np.float64)
+    ids = np.asarray(obj_ids).reshape(-1)
+    keep = np.ones(len(ids), bool) if seen is None else np.asarray(seen, bool).reshape(-1)
     out = []
-    for i, oid in enumerate(obj_ids):
-        if seen is not None and not seen[i]:
+    for i, oid in enumerate(ids):
+        if not keep[i]:
             continue
         out.append({
             "cam_R_m2c": [float(x) for x in X[i, :3, :3].reshape(-1)],

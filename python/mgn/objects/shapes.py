@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import manifold3d
 import numpy as np
+import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError
 
@@ -119,7 +120,7 @@ class Mesh:
         return self.flipped() if self.signed_volume < 0 else self
 
 
-def rotation_matrix(axis: Sequence[float], angle: float) -> np.ndarray:
+def rotation_matrix(axis: npt.ArrayLike, angle: float) -> np.ndarray:
     """3x3 rotation by ``angle`` radians about ``axis`` (right-hand rule)."""
     a = np.asarray(axis, dtype=np.float64)
     a = a / np.linalg.norm(a)
@@ -241,7 +242,7 @@ def rings_to_mesh(
 
 
 def revolve(
-    profile: Sequence[Sequence[float]],
+    profile: npt.ArrayLike,
     segments: int = 64,
     *,
     closed: bool = False,
@@ -290,8 +291,8 @@ def revolve(
         return rings_to_mesh(
             rings,
             closed=closed,
-            start_cap=None if pole0 is None else [0.0, 0.0, pole0[1]],
-            end_cap=None if pole1 is None else [0.0, 0.0, pole1[1]],
+            start_cap=None if pole0 is None else np.array([0.0, 0.0, pole0[1]]),
+            end_cap=None if pole1 is None else np.array([0.0, 0.0, pole1[1]]),
         )
     # Textured variant: one extra seam column (a bit-identical copy of column 0) and, for open
     # profiles, one pole vertex per angular step.
@@ -313,6 +314,7 @@ def revolve(
         uvs.append(np.stack([u, np.ones(n)], axis=1))
         tris.append(_band(idx[k - 1], np.arange(last, last + n), False))
     else:
+        assert pole0 is not None and pole1 is not None  # an open profile has both poles
         uc = (np.arange(segments) + 0.5) / segments
         base = k * n
         poles0 = np.arange(base, base + segments)
@@ -384,9 +386,7 @@ def _tube_rings(path: np.ndarray, radius: np.ndarray, segments: int) -> np.ndarr
     return path[:, None, :] + radius[:, None, None] * offs
 
 
-def sweep_circle(
-    path: Sequence[Sequence[float]], radius: float | Sequence[float], segments: int = 16
-) -> Mesh:
+def sweep_circle(path: npt.ArrayLike, radius: float | Sequence[float], segments: int = 16) -> Mesh:
     """Solid circular tube along a polyline, both ends closed by flat caps.
 
     Args:
@@ -402,7 +402,7 @@ def sweep_circle(
 
 
 def sweep_hollow(
-    path: Sequence[Sequence[float]], outer_radius: float, inner_radius: float, segments: int = 32
+    path: npt.ArrayLike, outer_radius: float, inner_radius: float, segments: int = 32
 ) -> Mesh:
     """Hollow circular tube (a pipe) along a polyline, closed by flat annular end faces.
 
@@ -432,8 +432,8 @@ def _loop_area(loop: np.ndarray) -> float:
 
 
 def extrude(
-    outer: Sequence[Sequence[float]],
-    holes: Sequence[Sequence[Sequence[float]]] = (),
+    outer: npt.ArrayLike,
+    holes: Sequence[npt.ArrayLike] = (),
     height: float = 0.01,
     *,
     layers: int = 1,

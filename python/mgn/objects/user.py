@@ -51,6 +51,14 @@ _KEYS = {
 }
 
 
+def _rgba(v: Any) -> tuple[float, float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]), float(v[3]))
+
+
+def _rgb(v: Any) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
 def _texture(path: str) -> np.ndarray | None:
     if not path:
         return None
@@ -96,8 +104,8 @@ def _object_from_entry(
         color = [*color, 1.0]
     material = MaterialSpec(
         name=f"{name}_material",
-        base_color=tuple(float(c) for c in color),
-        specular=tuple(float(s) for s in (mat.specular if mat is not None else (0.2,) * 3)),
+        base_color=_rgba(color),
+        specular=_rgb(mat.specular if mat is not None else (0.2,) * 3),
         shininess=float(mat.shininess) if mat is not None else 20.0,
         opacity=float(entry.get("opacity", mat.opacity if mat is not None else 1.0)),
         texture=texture,
@@ -119,7 +127,7 @@ def _object_from_entry(
             )
         keypoints.append(Keypoint(i, str(kp_name), (float(p[0]), float(p[1]), float(p[2]))))
     if len(keypoints) == 1:
-        keypoints.append(Keypoint(2, "centre", tuple(float(x) for x in centre)))
+        keypoints.append(Keypoint(2, "centre", _rgb(centre)))
     try:
         return ObjectSpec(
             category_id=int(entry.get("category_id", default_id)),

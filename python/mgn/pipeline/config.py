@@ -531,7 +531,7 @@ class Config(_Section):
             self.objects, user_objects=tuple(absolute(p) or p for p in self.objects.user_objects)
         )
         g = self.gripper
-        meshes = {
+        meshes: dict[str, Any] = {
             f: absolute(getattr(g, f))
             for f in ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
             if absolute(getattr(g, f)) is not None

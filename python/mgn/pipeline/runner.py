@@ -715,6 +715,7 @@ def generate(
             _clean_tmp(out)
         report = GenerateReport(out, num_scenes or 0, seed)
         if quota is None:
+            assert num_scenes is not None  # checked above: without a quota the count is given
             _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running", **extra))
     except OSError as e:
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e

@@ -226,6 +226,7 @@ def compose_scene(
     try:
         if recipe is not None:
             lo, hi, copies = recipe
+            assert target_level is not None  # a recipe exists only for a level
             rng = np.random.default_rng([int(seed), _RECIPE_STREAM, int(target_level)])
             count = int(rng.integers(lo, hi + 1))
             if copies == (1, 1):

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -168,7 +169,7 @@ def label_object(
         grip_force=grip_force,
         contact_radius=contact_radius,
     )
-    metadata = {
+    metadata: dict[str, Any] = {
         "pj_gripper": gripper.to_dict(),
         "pj_seed": int(seed),
         "pj_num_points": int(num_points),
@@ -205,7 +206,7 @@ def label_object(
         point_index=point_index,
         point_score=cat("point_score", np.float32),
         num_points=int(num_points),
-        num_colliding=metadata["pj_num_colliding"],
+        num_colliding=int(metadata["pj_num_colliding"]),
         metadata=metadata,
     )
     if physics is not None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -126,22 +127,26 @@ def iter_views(
     cams: list[tuple[int, CameraView]]
     if views is None or all(isinstance(v, (int, np.integer)) for v in views):
         poses, _ = mgn_rig(rig_seed, X_tote[:3, 3])
-        idx = range(len(poses)) if views is None else [int(v) for v in views]  # type: ignore[union-attr]
+        idx = range(len(poses)) if views is None else [int(cast(int, v)) for v in views]
         for v in idx:
             if not 0 <= v < len(poses):
                 raise InvalidArgumentError(f"view index must be in 0..{len(poses) - 1}, got {v}")
         cams = [(v, CameraView(intr, poses[v])) for v in idx]
     else:
         cams = []
-        for k, v in enumerate(views):
-            if isinstance(v, tuple) and len(v) == 2 and isinstance(v[1], CameraView):
-                cams.append((int(v[0]), v[1]))
-            elif isinstance(v, CameraView):
-                cams.append((k, v))
+        for k, view_item in enumerate(views):
+            if (
+                isinstance(view_item, tuple)
+                and len(view_item) == 2
+                and isinstance(view_item[1], CameraView)
+            ):
+                cams.append((int(view_item[0]), view_item[1]))
+            elif isinstance(view_item, CameraView):
+                cams.append((k, view_item))
             else:
                 raise InvalidTypeError(
                     f"views[{k}] must be a view index, a CameraView or (index, CameraView), "
-                    f"got {v!r}"
+                    f"got {view_item!r}"
                 )
     max_w = max(c.K.width for _, c in cams)
     max_h = max(c.K.height for _, c in cams)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +54,7 @@ def _simulate(
     seed: int,
     tote: ToteSpec,
     options: DropOptions,
-    sources: dict[str, str | os.PathLike[str]] | None,
+    sources: Mapping[str, str | os.PathLike[str]] | None,
     decomposition: ConvexDecompositionOptions | None,
     use_cache: bool,
     X_WO_start: np.ndarray | None = None,
@@ -81,15 +81,15 @@ def _simulate(
         )
         per_name[spec.name] = (parts, props, _source_of(spec, src))
 
-    parts = [per_name[s.name][0] for s in objects]
-    props = [per_name[s.name][1] for s in objects]
+    all_parts = [per_name[s.name][0] for s in objects]
+    all_props = [per_name[s.name][1] for s in objects]
     opts = options.to_dict()
     opts["seed"] = int(seed)
     out = _core.drop_objects(
-        parts,
-        [p.mass for p in props],
-        np.array([np.asarray(p.center_of_mass) for p in props], np.float64),
-        np.array([np.asarray(p.inertia).reshape(9) for p in props], np.float64),
+        all_parts,
+        [p.mass for p in all_props],
+        np.array([np.asarray(p.center_of_mass) for p in all_props], np.float64),
+        np.array([np.asarray(p.inertia).reshape(9) for p in all_props], np.float64),
         [float(s.friction) for s in objects],
         [RESTITUTION] * len(objects),
         [s.name for s in objects],

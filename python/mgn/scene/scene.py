@@ -171,18 +171,20 @@ class DropOptions:
                     f"DropOptions.{name} must be {extra}in [{lo}, {hi}], got {v}"
                 )
             object.__setattr__(self, name, v)
-        for name, (lo, lo_open, hi, hi_open, unit) in _FLOAT_RANGES.items():
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {v!r}")
-            v = float(v)
-            ok = math.isfinite(v) and (v > lo if lo_open else v >= lo)
-            ok = ok and (hi is None or (v < hi if hi_open else v <= hi))
+        for name, (flo, lo_open, fhi, hi_open, unit) in _FLOAT_RANGES.items():
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(
+                value, (int, float, np.integer, np.floating)
+            ):
+                raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {value!r}")
+            x = float(value)
+            ok = math.isfinite(x) and (x > flo if lo_open else x >= flo)
+            ok = ok and (fhi is None or (x < fhi if hi_open else x <= fhi))
             if not ok:
-                rng = f"{'(' if lo_open else '['}{lo}, {'inf)' if hi is None else hi}"
-                rng += "" if hi is None else (")" if hi_open else "]")
-                raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {v}")
-            object.__setattr__(self, name, v)
+                rng = f"{'(' if lo_open else '['}{flo}, {'inf)' if fhi is None else fhi}"
+                rng += "" if fhi is None else (")" if hi_open else "]")
+                raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {x}")
+            object.__setattr__(self, name, x)
         if not self.max_time > self.dt:
             raise InvalidArgumentError(
                 f"DropOptions.max_time must be > dt ({self.dt} s), got {self.max_time}"

@@ -291,6 +291,8 @@ class SceneGraspModel:
         _objects: tuple | None = None,
     ) -> None:
         if _objects is None:
+            if scene is None:
+                raise InvalidArgumentError("SceneGraspModel: give a scene (or use from_meshes)")
             n = len(scene.instances)
             meshes = [scene.mesh(i) for i in range(n)]
             masses, coms = [], []

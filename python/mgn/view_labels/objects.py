@@ -14,6 +14,7 @@ seen in the view (their masks are empty, their occlusion is 1).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -130,8 +131,8 @@ class SceneRayModel:
         poses: npt.ArrayLike,
         category_ids: list[int] | npt.ArrayLike,
         *,
-        keypoints: list[npt.ArrayLike] | None = None,
-        com_points: list[npt.ArrayLike] | None = None,
+        keypoints: Sequence[npt.ArrayLike] | None = None,
+        com_points: Sequence[npt.ArrayLike] | None = None,
         coms: npt.ArrayLike | None = None,
         tote: Mesh | None = None,
         X_W_tote: npt.ArrayLike | None = None,
@@ -145,7 +146,7 @@ class SceneRayModel:
         P = np.asarray(poses, np.float64).reshape(-1, 4, 4)
         cats = np.asarray(category_ids, np.int64).reshape(-1)
 
-        def rows4(items: list[npt.ArrayLike] | None, name: str) -> list[np.ndarray]:
+        def rows4(items: Sequence[npt.ArrayLike] | None, name: str) -> list[np.ndarray]:
             if items is None:
                 return [np.zeros((0, 4))] * n
             out = [np.asarray(k, np.float64).reshape(-1, 4) for k in items]

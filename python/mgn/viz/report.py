@@ -84,9 +84,12 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
             objects_per_scene.append(len(sj.get("instances", [])))
         elif s.view_ids:
             objects_per_scene.append(s.view(s.view_ids[0]).num_instances)
-    occl, visible_per_view, layers, levels = [], [], Counter(), Counter()
+    occl: list[float] = []
+    visible_per_view: list[int] = []
+    layers: Counter[int] = Counter()
+    levels: Counter[int] = Counter()
     scores: dict[str, list[np.ndarray]] = {"paralleljaw": [], "suctioncup": []}
-    counts = {"non_colliding": Counter(), "colliding": Counter()}
+    counts: dict[str, Counter[str]] = {"non_colliding": Counter(), "colliding": Counter()}
     invalid = []
     for view in views:
         inst = view.instances
@@ -110,10 +113,10 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
             levels[int(level)] += 1
         for kind in scores:
             g = view.grasps(kind)
-            s = g.get("score_analytical")
-            if s is not None:
-                scores[kind].append(np.asarray(s, float))
-                counts["non_colliding"][kind] += len(s)
+            nc = g.get("score_analytical")
+            if nc is not None:
+                scores[kind].append(np.asarray(nc, float))
+                counts["non_colliding"][kind] += len(nc)
             c = view.grasps(kind, colliding=True).get("score_analytical")
             if c is not None:
                 counts["colliding"][kind] += len(c)

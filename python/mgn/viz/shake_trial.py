@@ -54,7 +54,7 @@ def _view_rotation() -> npt.NDArray[np.float64]:
     return np.stack([right, up, forward])
 
 
-def _box(size: Sequence[float], centre: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+def _box(size: npt.ArrayLike, centre: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     m = _core.make_box(np.asarray(size, dtype=np.float64))
     return np.asarray(m.vertices, dtype=np.float64) + np.asarray(centre), np.asarray(m.faces)
 
@@ -138,7 +138,7 @@ def render_frames(
         xy[:, :, 1] = 0.5 * n - xy[:, :, 1]
         for i in order:
             draw.polygon([tuple(p) for p in xy[i]], fill=tuple(int(c) for c in col[i]))
-        img = img.resize((size, size), Image.LANCZOS)
+        img = img.resize((size, size), Image.Resampling.LANCZOS)
         label = f"{PHASE_NAMES[int(traj.phase[k])]}  t={traj.time[k]:.2f}s"
         ImageDraw.Draw(img).text((6, 4), label, fill=(30, 30, 30))
         frames.append(img)
