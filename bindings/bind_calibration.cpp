@@ -119,11 +119,10 @@ void bind_calibration(py::module_& m) {
         out["predicted"] = to_bool_numpy(std::move(r.predicted));
         return out;
       },
-      "Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).",
-      py::arg("surfaces"), py::arg("surface_index"), py::arg("points"), py::arg("normals"),
-      py::arg("sealed"), py::arg("cup"), py::arg("c1_min") = defaults.c1_min,
-      py::arg("c1_max") = defaults.c1_max, py::arg("c2_min") = defaults.c2_min,
-      py::arg("c2_max") = defaults.c2_max,
+      "Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).", py::arg("surfaces"),
+      py::arg("surface_index"), py::arg("points"), py::arg("normals"), py::arg("sealed"),
+      py::arg("cup"), py::arg("c1_min") = defaults.c1_min, py::arg("c1_max") = defaults.c1_max,
+      py::arg("c2_min") = defaults.c2_min, py::arg("c2_max") = defaults.c2_max,
       py::arg("global_evaluations") = defaults.global_evaluations,
       py::arg("local_evaluations") = defaults.local_evaluations,
       py::arg("xtol_rel") = defaults.xtol_rel, py::arg("ftol_abs") = defaults.ftol_abs,

@@ -118,7 +118,8 @@ void bind_layout(py::module_& m) {
       py::arg("occlusion"), py::arg("min_overlap_px") = 10, py::arg("min_overlap_fraction") = 0.1,
       py::arg("min_region_px") = 10, py::arg("min_region_fraction") = 0.005,
       py::arg("max_occlusion_level1") = 0.05, py::arg("num_threads") = 0,
-      "Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.");
+      "Layout labels of one view (see mgn/scene/layout.hpp); use "
+      "mgn.view_labels.layout.compute_layout.");
 }
 
 }  // namespace mgn::py_bind
