@@ -406,6 +406,23 @@ def _finite(x: Any) -> bool:
     return isinstance(x, Real) and not isinstance(x, bool) and math.isfinite(float(x))
 
 
+def _required_fields(p: Any, where: str) -> tuple[Any, Any, Any]:
+    """(image_id, category_id, score) of one prediction, checked."""
+    if not isinstance(p, Mapping):
+        raise InvalidArgumentError(f"{where}: expected a dict, got {type(p).__name__}")
+    for key in ("image_id", "category_id", "score"):
+        if key not in p:
+            raise InvalidArgumentError(f"{where}: missing '{key}' (keys: {sorted(p)})")
+    image_id, cat, score = p["image_id"], p["category_id"], p["score"]
+    if not is_int(image_id):
+        raise InvalidArgumentError(f"{where}: image_id must be an integer, got {image_id!r}")
+    if not is_int(cat):
+        raise InvalidArgumentError(f"{where}: category_id must be an integer, got {cat!r}")
+    if not _finite(score):
+        raise InvalidArgumentError(f"{where}: score must be a finite number, got {score!r}")
+    return image_id, cat, score
+
+
 def _check_predictions(
     preds: list[Any], images: Mapping[int, tuple[int, int]], *, class_agnostic: bool, strict: bool
 ) -> tuple[list[dict[str, Any]], int, bool]:
@@ -416,18 +433,7 @@ def _check_predictions(
     with_seg = 0
     for k, p in enumerate(preds):
         where = f"prediction {k}"
-        if not isinstance(p, Mapping):
-            raise InvalidArgumentError(f"{where}: expected a dict, got {type(p).__name__}")
-        for key in ("image_id", "category_id", "score"):
-            if key not in p:
-                raise InvalidArgumentError(f"{where}: missing '{key}' (keys: {sorted(p)})")
-        image_id, cat, score = p["image_id"], p["category_id"], p["score"]
-        if not is_int(image_id):
-            raise InvalidArgumentError(f"{where}: image_id must be an integer, got {image_id!r}")
-        if not is_int(cat):
-            raise InvalidArgumentError(f"{where}: category_id must be an integer, got {cat!r}")
-        if not _finite(score):
-            raise InvalidArgumentError(f"{where}: score must be a finite number, got {score!r}")
+        image_id, cat, score = _required_fields(p, where)
         if int(image_id) not in images:
             unknown.append(int(image_id))
             continue

@@ -61,6 +61,7 @@ from mgn.base.atomic import _io_error, atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.manifest import check_manifest, write_manifest
 from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml
+from mgn.pipeline import scene_writer
 from mgn.pipeline.config import Config, ConfigError, load_config
 from mgn.pipeline.label_cache import (
     ObjectLabels,
@@ -69,7 +70,6 @@ from mgn.pipeline.label_cache import (
     save_cached_labels,
     write_models,
 )
-from mgn.pipeline.scene_writer import write_scene
 from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
 from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 from mgn.scene.drop import drop_scene
@@ -181,7 +181,8 @@ def run_scene(task: SceneTask) -> SceneResult:
         if tmp.exists():
             shutil.rmtree(tmp)
         tmp.mkdir(parents=True)
-        stages = write_scene(scene, tmp, task.config, task.labels)
+        # Looked up on the module at call time (tests replace it to simulate an interrupt).
+        stages = scene_writer.write_scene(scene, tmp, task.config, task.labels)
         times["write"] = time.perf_counter() - t1
         times.update({f"write: {k}": v for k, v in (stages or {}).items()})
         t2 = time.perf_counter()
@@ -617,6 +618,30 @@ class _Run:
         )
 
 
+def _check_generate_args(cfg: Config, num_scenes: int | None, workers: int, seed: int) -> None:
+    """The argument checks of :func:`generate` (before anything is written)."""
+    quota = cfg.selection.quota
+    if quota is not None:
+        if num_scenes is not None:
+            raise InvalidArgumentError(
+                "generate: --scenes cannot be combined with a difficulty quota (the quotas decide "
+                f"the scene count; use --max-scenes), got --scenes {num_scenes!r}"
+            )
+        if not cfg.labels.layout:
+            raise ConfigError(
+                "config key 'labels.layout': a difficulty quota needs the layout labels "
+                "(the views' difficulty); expected true, got false"
+            )
+    elif isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
+        raise InvalidArgumentError(
+            f"generate: --scenes must be an integer >= 1, got {num_scenes!r}"
+        )
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InvalidArgumentError(f"generate: --workers must be an integer >= 1, got {workers!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InvalidArgumentError(f"generate: --seed must be an integer >= 0, got {seed!r}")
+
+
 def generate(
     out_dir: str | os.PathLike[str],
     num_scenes: int | None = None,
@@ -668,25 +693,7 @@ def generate(
                                              categories=None)
         )  # fmt: skip
     quota = cfg.selection.quota
-    if quota is not None:
-        if num_scenes is not None:
-            raise InvalidArgumentError(
-                "generate: --scenes cannot be combined with a difficulty quota (the quotas decide "
-                f"the scene count; use --max-scenes), got --scenes {num_scenes!r}"
-            )
-        if not cfg.labels.layout:
-            raise ConfigError(
-                "config key 'labels.layout': a difficulty quota needs the layout labels "
-                "(the views' difficulty); expected true, got false"
-            )
-    elif isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
-        raise InvalidArgumentError(
-            f"generate: --scenes must be an integer >= 1, got {num_scenes!r}"
-        )
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise InvalidArgumentError(f"generate: --workers must be an integer >= 1, got {workers!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise InvalidArgumentError(f"generate: --seed must be an integer >= 0, got {seed!r}")
+    _check_generate_args(cfg, num_scenes, workers, seed)
     out = Path(out_dir).resolve()
     if out.exists() and not out.is_dir():
         raise IoError(f"generate: '{out}' exists and is not a folder")

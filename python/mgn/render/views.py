@@ -85,26 +85,12 @@ def depth_picture(depth: npt.ArrayLike) -> npt.NDArray[np.uint8]:
     return out
 
 
-def iter_views(
+def _checked_scene(
     objects: Sequence[tuple[Mesh, npt.ArrayLike, int]],
     tote: Mesh | None,
-    views: Sequence[int] | Sequence[CameraView] | Sequence[tuple[int, CameraView]] | None = None,
-    *,
-    X_W_tote: npt.ArrayLike | None = None,
-    rig_seed: int = 0,
-    K: Intrinsics | None = None,
-    sensor: SensorName = "structured-light",
-    randomize: bool = True,
-    seed: int = 0,
-    floor: bool = True,
-    shadows: bool = True,
-    renderer: Renderer | None = None,
-) -> Iterator[ViewImages]:
-    """Render the views of a scene one at a time (the arguments of :func:`mgn.render_views`, without
-    ``out_dir``): the scene is uploaded once and each view's images are yielded before the next
-    view is rendered, so memory does not grow with the number of views. ``views`` may also be
-    (view index, camera) pairs: the index names the files and seeds the view's randomisation.
-    """
+    X_W_tote: npt.ArrayLike | None,
+) -> np.ndarray:
+    """Checks the scene arguments of :func:`iter_views`; returns the tote pose (4, 4)."""
     X_tote = np.eye(4) if X_W_tote is None else np.asarray(X_W_tote, np.float64)
     if X_tote.shape != (4, 4) or not np.all(np.isfinite(X_tote)):
         raise InvalidArgumentError(
@@ -122,8 +108,16 @@ def iter_views(
     if not objects and tote is None:
         raise InvalidArgumentError("render_views: empty scene (no objects and no tote)")
 
-    # Cameras.
-    intr = Intrinsics.mgn_synthetic() if K is None else K
+    return X_tote
+
+
+def _cameras(
+    views: Sequence[int] | Sequence[CameraView] | Sequence[tuple[int, CameraView]] | None,
+    intr: Intrinsics,
+    rig_seed: int,
+    X_tote: np.ndarray,
+) -> list[tuple[int, CameraView]]:
+    """(view index, camera) per requested view of :func:`iter_views`."""
     cams: list[tuple[int, CameraView]]
     if views is None or all(isinstance(v, (int, np.integer)) for v in views):
         poses, _ = mgn_rig(rig_seed, X_tote[:3, 3])
@@ -148,6 +142,31 @@ def iter_views(
                     f"views[{k}] must be a view index, a CameraView or (index, CameraView), "
                     f"got {view_item!r}"
                 )
+    return cams
+
+
+def iter_views(
+    objects: Sequence[tuple[Mesh, npt.ArrayLike, int]],
+    tote: Mesh | None,
+    views: Sequence[int] | Sequence[CameraView] | Sequence[tuple[int, CameraView]] | None = None,
+    *,
+    X_W_tote: npt.ArrayLike | None = None,
+    rig_seed: int = 0,
+    K: Intrinsics | None = None,
+    sensor: SensorName = "structured-light",
+    randomize: bool = True,
+    seed: int = 0,
+    floor: bool = True,
+    shadows: bool = True,
+    renderer: Renderer | None = None,
+) -> Iterator[ViewImages]:
+    """Render the views of a scene one at a time (the arguments of :func:`mgn.render_views`, without
+    ``out_dir``): the scene is uploaded once and each view's images are yielded before the next
+    view is rendered, so memory does not grow with the number of views. ``views`` may also be
+    (view index, camera) pairs: the index names the files and seeds the view's randomisation.
+    """
+    X_tote = _checked_scene(objects, tote, X_W_tote)
+    cams = _cameras(views, Intrinsics.mgn_synthetic() if K is None else K, rig_seed, X_tote)
     max_w = max(c.K.width for _, c in cams)
     max_h = max(c.K.height for _, c in cams)
 

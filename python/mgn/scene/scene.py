@@ -77,6 +77,34 @@ _FLOAT_RANGES: dict[str, tuple[float, bool, float | None, bool, str]] = {
 }
 
 
+def _checked_int(name: str, v: Any) -> int:
+    """DropOptions.<name> as an int in its range of ``_INT_RANGES``."""
+    lo, hi = _INT_RANGES[name]
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+        raise InvalidArgumentError(f"DropOptions.{name} must be an integer, got {v!r}")
+    v = int(v)
+    ok = lo <= v <= hi or (name == "max_hull_vertices" and v == 0)
+    if not ok:
+        extra = "0 (keep all) or " if name == "max_hull_vertices" else ""
+        raise InvalidArgumentError(f"DropOptions.{name} must be {extra}in [{lo}, {hi}], got {v}")
+    return v
+
+
+def _checked_float(name: str, value: Any) -> float:
+    """DropOptions.<name> as a float in its range of ``_FLOAT_RANGES``."""
+    flo, lo_open, fhi, hi_open, unit = _FLOAT_RANGES[name]
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {value!r}")
+    x = float(value)
+    ok = math.isfinite(x) and (x > flo if lo_open else x >= flo)
+    ok = ok and (fhi is None or (x < fhi if hi_open else x <= fhi))
+    if not ok:
+        rng = f"{'(' if lo_open else '['}{flo}, {'inf)' if fhi is None else fhi}"
+        rng += "" if fhi is None else (")" if hi_open else "]")
+        raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {x}")
+    return x
+
+
 @dataclass(frozen=True)
 class DropOptions:
     """Simulation options of the drop (SI units; see cpp/include/mgn/scene/drop.hpp).
@@ -159,32 +187,10 @@ class DropOptions:
                     f"DropOptions.{name} must be true or false, got {getattr(self, name)!r}"
                 )
             object.__setattr__(self, name, bool(getattr(self, name)))
-        for name, (lo, hi) in _INT_RANGES.items():
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-                raise InvalidArgumentError(f"DropOptions.{name} must be an integer, got {v!r}")
-            v = int(v)
-            ok = lo <= v <= hi or (name == "max_hull_vertices" and v == 0)
-            if not ok:
-                extra = "0 (keep all) or " if name == "max_hull_vertices" else ""
-                raise InvalidArgumentError(
-                    f"DropOptions.{name} must be {extra}in [{lo}, {hi}], got {v}"
-                )
-            object.__setattr__(self, name, v)
-        for name, (flo, lo_open, fhi, hi_open, unit) in _FLOAT_RANGES.items():
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(
-                value, (int, float, np.integer, np.floating)
-            ):
-                raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {value!r}")
-            x = float(value)
-            ok = math.isfinite(x) and (x > flo if lo_open else x >= flo)
-            ok = ok and (fhi is None or (x < fhi if hi_open else x <= fhi))
-            if not ok:
-                rng = f"{'(' if lo_open else '['}{flo}, {'inf)' if fhi is None else fhi}"
-                rng += "" if fhi is None else (")" if hi_open else "]")
-                raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {x}")
-            object.__setattr__(self, name, x)
+        for name in _INT_RANGES:
+            object.__setattr__(self, name, _checked_int(name, getattr(self, name)))
+        for name in _FLOAT_RANGES:
+            object.__setattr__(self, name, _checked_float(name, getattr(self, name)))
         if not self.max_time > self.dt:
             raise InvalidArgumentError(
                 f"DropOptions.max_time must be > dt ({self.dt} s), got {self.max_time}"

@@ -12,6 +12,7 @@ from __future__ import annotations
 import colorsys
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -51,6 +52,83 @@ def _contours(mask: np.ndarray) -> np.ndarray:
     inner[:, 1:] &= mask[:, :-1]
     inner[:, :-1] &= mask[:, 1:]
     return mask & ~inner
+
+
+def _draw_grasps(
+    draw: ImageDraw.ImageDraw, view: View, grasps: str, K: np.ndarray, max_grasps: int
+) -> str:
+    """Draw the best ``max_grasps`` non-colliding grasps of a kind; returns the footer note."""
+    kind = {"pj": "paralleljaw", "suction": "suctioncup"}.get(grasps)
+    if kind is None:
+        raise InvalidArgumentError(
+            f"render_overlay: grasps must be 'pj' or 'suction', got {grasps!r}"
+        )
+    g = view.grasps(kind)
+    poses = g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4)))
+    score = g.get("score_analytical", np.ones(len(poses)))
+    if len(score) != len(poses):
+        raise InvalidArgumentError(
+            f"{view}: {kind} grasps have {len(poses)} poses, {len(score)} scores"
+        )
+    keep = np.argsort(-np.nan_to_num(score, nan=-1.0), kind="stable")[:max_grasps][::-1]
+    cols = score_colors(np.nan_to_num(score, nan=0.0))
+    p0, f0 = project(poses[:, :3, 3], K)
+    if kind == "paralleljaw":
+        width = g.get("contact_width", np.zeros(len(poses)))[: len(poses)]
+        p_far = poses[:, :3, 3] + poses[:, :3, 0] * width[:, None]
+        p1, f1 = project(p_far, K)
+        for k in keep:
+            if f0[k] and f1[k]:
+                c = tuple(int(x) for x in cols[k])
+                draw.line([tuple(p0[k]), tuple(p1[k])], fill=c, width=2)
+    else:
+        for k in keep:
+            if f0[k]:
+                u, v = p0[k]
+                draw.ellipse([u - 3, v - 3, u + 3, v + 3], fill=tuple(int(x) for x in cols[k]))
+    return f"{len(poses)} {grasps} grasps (best {len(keep)} drawn)"
+
+
+def _draw_keypoints(draw: ImageDraw.ImageDraw, view: View, K: np.ndarray) -> None:
+    """Semantic keypoints: visible as white discs, occluded as grey rings."""
+    for key, visible in (("keypts_relative_to_camera", True),
+                         ("occluded_keypts_relative_to_camera", False)):  # fmt: skip
+        kp = view.hdf5.get(f"keypts/byhand/{key}")
+        if kp is None or len(kp) == 0:
+            continue
+        uv, front = project(kp[:, 1:4], K)
+        for (u, v), ok in zip(uv, front, strict=True):
+            if not ok:
+                continue
+            if visible:
+                draw.ellipse([u - 3, v - 3, u + 3, v + 3], fill="white", outline="black")
+            else:
+                draw.ellipse([u - 3, v - 3, u + 3, v + 3], outline=(150, 150, 150))
+
+
+def _draw_relations(
+    draw: ImageDraw.ImageDraw,
+    order: dict[str, Any],
+    centroids: dict[int, tuple[float, float]],
+) -> None:
+    """The layout graph: an arrow from each parent (on top) to its child."""
+    for key, entry in order.items():
+        child = int(key)
+        for parent in entry.get("parents", []):
+            pid = int(parent["id"])
+            if pid in centroids and child in centroids:
+                (x0, y0), (x1, y1) = centroids[pid], centroids[child]
+                draw.line([(x0, y0), (x1, y1)], fill="white", width=2)
+                # Arrow head at the child.
+                d = np.array([x1 - x0, y1 - y0])
+                length = float(np.linalg.norm(d))
+                if length > 1:
+                    d /= length
+                    nrm = np.array([-d[1], d[0]])
+                    tip = np.array([x1, y1])
+                    a = tip - 9 * d + 5 * nrm
+                    b = tip - 9 * d - 5 * nrm
+                    draw.polygon([tuple(tip), tuple(a), tuple(b)], fill="white")
 
 
 def render_overlay(
@@ -96,69 +174,13 @@ def render_overlay(
 
     notes = []
     if grasps is not None:
-        kind = {"pj": "paralleljaw", "suction": "suctioncup"}.get(grasps)
-        if kind is None:
-            raise InvalidArgumentError(
-                f"render_overlay: grasps must be 'pj' or 'suction', got {grasps!r}"
-            )
-        g = view.grasps(kind)
-        poses = g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4)))
-        score = g.get("score_analytical", np.ones(len(poses)))
-        if len(score) != len(poses):
-            raise InvalidArgumentError(
-                f"{view}: {kind} grasps have {len(poses)} poses, {len(score)} scores"
-            )
-        keep = np.argsort(-np.nan_to_num(score, nan=-1.0), kind="stable")[:max_grasps][::-1]
-        cols = score_colors(np.nan_to_num(score, nan=0.0))
-        p0, f0 = project(poses[:, :3, 3], K)
-        if kind == "paralleljaw":
-            width = g.get("contact_width", np.zeros(len(poses)))[: len(poses)]
-            p_far = poses[:, :3, 3] + poses[:, :3, 0] * width[:, None]
-            p1, f1 = project(p_far, K)
-            for k in keep:
-                if f0[k] and f1[k]:
-                    c = tuple(int(x) for x in cols[k])
-                    draw.line([tuple(p0[k]), tuple(p1[k])], fill=c, width=2)
-        else:
-            for k in keep:
-                if f0[k]:
-                    u, v = p0[k]
-                    draw.ellipse([u - 3, v - 3, u + 3, v + 3], fill=tuple(int(x) for x in cols[k]))
-        notes.append(f"{len(poses)} {grasps} grasps (best {len(keep)} drawn)")
+        notes.append(_draw_grasps(draw, view, grasps, K, max_grasps))
 
     if keypoints:
-        for key, visible in (("keypts_relative_to_camera", True),
-                             ("occluded_keypts_relative_to_camera", False)):  # fmt: skip
-            kp = view.hdf5.get(f"keypts/byhand/{key}")
-            if kp is None or len(kp) == 0:
-                continue
-            uv, front = project(kp[:, 1:4], K)
-            for (u, v), ok in zip(uv, front, strict=True):
-                if not ok:
-                    continue
-                if visible:
-                    draw.ellipse([u - 3, v - 3, u + 3, v + 3], fill="white", outline="black")
-                else:
-                    draw.ellipse([u - 3, v - 3, u + 3, v + 3], outline=(150, 150, 150))
+        _draw_keypoints(draw, view, K)
 
     if layout:
-        for key, entry in order.items():
-            child = int(key)
-            for parent in entry.get("parents", []):
-                pid = int(parent["id"])
-                if pid in centroids and child in centroids:
-                    (x0, y0), (x1, y1) = centroids[pid], centroids[child]
-                    draw.line([(x0, y0), (x1, y1)], fill="white", width=2)
-                    # Arrow head at the child.
-                    d = np.array([x1 - x0, y1 - y0])
-                    length = float(np.linalg.norm(d))
-                    if length > 1:
-                        d /= length
-                        nrm = np.array([-d[1], d[0]])
-                        tip = np.array([x1, y1])
-                        a = tip - 9 * d + 5 * nrm
-                        b = tip - 9 * d - 5 * nrm
-                        draw.polygon([tuple(tip), tuple(a), tuple(b)], fill="white")
+        _draw_relations(draw, order, centroids)
 
     for oid, (x, y) in centroids.items():
         entry = order.get(str(oid), {})
