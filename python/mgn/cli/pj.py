@@ -12,12 +12,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import h5py
-
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import load_mesh, mass_properties
 from mgn.hardware import ParallelJawGripper
-from mgn.io.grasp_file import write_pj_labels
+from mgn.io.grasp_file import create_labels_file, write_pj_labels
 from mgn.io.model_folder import object_folders, read_model_folder
 from mgn.pj.labels import label_object
 from mgn.pj.physics import ShakeOptions, ShakeScorer
@@ -87,9 +85,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
             physics=physics,
         )
         if folder is None and not h5_path.exists():
-            h5_path.parent.mkdir(parents=True, exist_ok=True)
-            with h5py.File(h5_path, "w") as h5:
-                h5.create_group("grasps/paralleljaw")
+            create_labels_file(h5_path)
         write_pj_labels(h5_path, labels)
         good = int((labels.point_score >= 1.0).sum())
         print(

@@ -27,6 +27,15 @@ EMPTY_GROUPS: dict[str, dict[str, tuple[int, ...]]] = {
 }
 
 
+def create_labels_file(hdf5_path: str | os.PathLike[str]) -> None:
+    """Create the labels file of a bare mesh file: an HDF5 file with an empty
+    ``grasps/paralleljaw`` group (its parent folder is created)."""
+    path = Path(hdf5_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with h5py.File(path, "w") as h5:
+        h5.create_group("grasps/paralleljaw")
+
+
 def replace_grasp_group(
     hdf5_path: str | os.PathLike[str],
     group: str,
