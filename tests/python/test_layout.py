@@ -11,7 +11,8 @@ import pytest
 from scipy import ndimage
 
 from mgn.errors import InvalidArgumentError
-from mgn.view_labels.layout import Layout, compute_layout, read_order_csv, read_order_json
+from mgn.io.order_files import read_order_csv, read_order_json
+from mgn.view_labels.layout import Layout, compute_layout
 
 # ----------------------------------------------------------------------------------------------
 # Synthetic views: shapes at constant depths, rendered with a z-buffer written here.

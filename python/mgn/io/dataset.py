@@ -36,9 +36,9 @@ from PIL import Image
 from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.model_folder import object_folders
+from mgn.io.order_files import read_order_csv, read_order_json
 from mgn.io.scene_format import from_cm
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
-from mgn.view_labels.layout import read_order_csv, read_order_json
 
 __all__ = ["Dataset", "SceneFolder", "View"]
 
@@ -202,7 +202,7 @@ class View:
     def relation_matrix(self) -> npt.NDArray[np.int8]:
         """(N, N) int8 relation matrix from ``{v}_order.csv``: M[i][j] = -1 if instance j+1
         lies on / occludes instance i+1, +1 for the reverse (the file stores the -1 entries;
-        :func:`mgn.view_labels.layout.read_order_csv`)."""
+        :func:`mgn.io.order_files.read_order_csv`)."""
 
         csv = self.path("_order.csv")
         if csv.exists():

@@ -3,7 +3,7 @@
 - :mod:`mgn.view_labels.objects`: :class:`SceneRayModel`, :func:`view_object_labels` (masks,
   occlusion, boxes, poses, keypoints, CoM heat map of each object in a view).
 - :mod:`mgn.view_labels.layout`: :func:`compute_layout` (relations, layers, picking order,
-  difficulty) -> :class:`Layout`; :func:`read_order_json`, :func:`read_order_csv`.
+  difficulty) -> :class:`Layout` (its files are read back by :mod:`mgn.io.order_files`).
 - :mod:`mgn.view_labels.grasps`: :class:`SceneGraspModel`, the object grasps placed at the settled
   poses and collision-checked once per scene.
 
@@ -18,10 +18,7 @@ from typing import TYPE_CHECKING, Any
 _EXPORTS = {
     "BIN_RELATIONS": "layout",
     "Layout": "layout",
-    "OrderGraph": "layout",
     "compute_layout": "layout",
-    "read_order_csv": "layout",
-    "read_order_json": "layout",
     "SceneGraspModel": "grasps",
     "SceneGrasps": "grasps",
     "PjGraspSet": "grasps",
@@ -41,7 +38,6 @@ __all__ = [
     "GraspCollisions",
     "GraspGroups",
     "Layout",
-    "OrderGraph",
     "PjGraspSet",
     "PlacedGrasps",
     "SceneGraspModel",
@@ -50,8 +46,6 @@ __all__ = [
     "SuctionGraspSet",
     "ViewObjectLabels",
     "compute_layout",
-    "read_order_csv",
-    "read_order_json",
     "view_object_labels",
 ]
 
@@ -80,10 +74,7 @@ if TYPE_CHECKING:
     from mgn.view_labels.layout import (
         BIN_RELATIONS,
         Layout,
-        OrderGraph,
         compute_layout,
-        read_order_csv,
-        read_order_json,
     )
     from mgn.view_labels.objects import (
         DEFAULT_KEYPOINT_TOLERANCE,

@@ -69,20 +69,9 @@ PhysicsObject object_from(std::vector<Mesh> parts, double mass, const Vec3d& com
   return o;
 }
 
-py::array poses_to_numpy(const std::vector<Pose>& poses) {
-  py::array_t<double> out({static_cast<py::ssize_t>(poses.size()), py::ssize_t(4), py::ssize_t(4)});
-  auto a = out.mutable_unchecked<3>();
-  for (std::size_t k = 0; k < poses.size(); ++k) {
-    const Mat4d M = poses[k].matrix();
-    for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c) a(k, r, c) = M(r, c);
-  }
-  return out;
-}
-
 }  // namespace
 
-void bind_shake(py::module_& m) {
+void bind_grasp_shake_test(py::module_& m) {
   py::class_<ShakeOptions>(m, "ShakeOptions",
                            "Options of the Bullet shake test (SI units; see mgn.pj.physics).")
       .def(py::init<>())

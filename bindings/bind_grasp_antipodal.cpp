@@ -45,7 +45,7 @@ std::vector<ParallelJawGrasp> to_grasps(const py::handle& p1, const py::handle& 
 
 }  // namespace
 
-void bind_pj(py::module_& m) {
+void bind_grasp_antipodal(py::module_& m) {
   py::class_<ParallelJawGripper>(
       m, "ParallelJawGripper",
       "Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless "
@@ -83,15 +83,10 @@ void bind_pj(py::module_& m) {
       [](const py::handle& p1, const py::handle& closing, const py::handle& approach,
          const py::handle& width, const ParallelJawGripper& g) {
         const std::vector<ParallelJawGrasp> grasps = to_grasps(p1, closing, approach, width);
-        py::array_t<double> out(
-            {static_cast<py::ssize_t>(grasps.size()), py::ssize_t{4}, py::ssize_t{4}});
-        auto r = out.mutable_unchecked<3>();
-        for (std::size_t i = 0; i < grasps.size(); ++i) {
-          const Mat4d X = hand_pose(grasps[i], g).matrix();
-          for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 4; ++b) r(i, a, b) = X(a, b);
-        }
-        return out;
+        std::vector<Pose> X_OH;
+        X_OH.reserve(grasps.size());
+        for (const ParallelJawGrasp& grasp : grasps) X_OH.push_back(hand_pose(grasp, g));
+        return poses_to_numpy(X_OH);
       },
       py::arg("p1"), py::arg("closing"), py::arg("approach"), py::arg("width"), py::arg("gripper"),
       "(N,4,4) hand (flange) poses X_OH of grasps in the object frame.");

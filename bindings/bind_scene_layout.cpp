@@ -31,7 +31,7 @@ CArray<T> as_array(const py::handle& obj, const char* arg, const char* expected)
 
 }  // namespace
 
-void bind_layout(py::module_& m) {
+void bind_scene_layout(py::module_& m) {
   m.def(
       "compute_layout",
       [](const py::handle& visible_obj, const py::handle& amodal_obj, const py::handle& depth_obj,

@@ -36,7 +36,7 @@ const char* kind_name(SealModelKind k) {
 
 }  // namespace
 
-void bind_grasp(py::module_& m) {
+void bind_grasp_seal(py::module_& m) {
   py::class_<Cup>(m, "Cup",
                   "Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).")
       .def(py::init<>())

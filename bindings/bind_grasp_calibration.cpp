@@ -1,6 +1,6 @@
 // Cup calibration (mgn/grasp/calibration.hpp): calibrate_cup, predict_experiments,
 // classification_metrics. Experiments cross the boundary as parallel arrays; cups as
-// mgn._core.Cup (bound in bind_grasp.cpp; mgn.suction.core_cup converts a SuctionCup).
+// mgn._core.Cup (bound in bind_grasp_seal.cpp; mgn.suction.core_cup converts a SuctionCup).
 #include <pybind11/stl.h>
 #include <mgn/grasp/calibration.hpp>
 
@@ -81,7 +81,7 @@ py::array indices_to_numpy(const std::vector<std::size_t>& idx) {
 
 }  // namespace
 
-void bind_calibration(py::module_& m) {
+void bind_grasp_calibration(py::module_& m) {
   const CalibrationOptions defaults;
   m.def(
       "calibrate_cup",

@@ -24,7 +24,7 @@ Vec3d vec3(const py::handle& obj, const char* arg) {
 
 }  // namespace
 
-void bind_scene(py::module_& m) {
+void bind_scene_drop(py::module_& m) {
   m.def(
       "convex_hull",
       [](const Mesh& mesh) {

@@ -14,18 +14,9 @@ namespace {
 
 py::array image(py::array flat, int h, int w) { return flat.attr("reshape")(py::make_tuple(h, w)); }
 
-py::array poses_to_numpy(const std::vector<Pose>& X) {
-  py::array_t<double> out({static_cast<py::ssize_t>(X.size()), py::ssize_t{4}, py::ssize_t{4}});
-  auto a = out.mutable_unchecked<3>();
-  for (std::size_t k = 0; k < X.size(); ++k)
-    for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c) a(k, r, c) = X[k].matrix()(r, c);
-  return out;
-}
-
 }  // namespace
 
-void bind_view_labels(py::module_& m) {
+void bind_scene_view_labels(py::module_& m) {
   py::class_<ViewLabelModel>(m, "ViewLabelModel",
                              "Ray-tracing model of one scene for per-view object labels.")
       .def(py::init([](const std::vector<const Mesh*>& meshes, const py::handle& poses,
