@@ -85,7 +85,7 @@ def replace_grasp_group(
 
 
 def write_pj_labels(hdf5_path: str | os.PathLike[str], labels: PjLabels) -> None:
-    """Replace ``grasps/paralleljaw/*`` of an object's ``textured.obj.hdf5`` (FORMAT.md).
+    """Replace ``grasps/paralleljaw/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
 
     Writes ``pregrasp_transform`` (M, 10) [a (3), v (3), p1 (3, cm), w (cm)],
     ``quality_score`` (M,) (analytic), ``quality_score_simulation`` (M,) (NaN when physics was
@@ -126,7 +126,7 @@ def read_pj_labels(hdf5_path: str | os.PathLike[str]) -> dict[str, npt.NDArray[n
 
 
 def write_suction_labels(hdf5_path: str | os.PathLike[str], labels: SuctionLabels) -> None:
-    """Replace ``grasps/suctioncup/*`` of an object's ``textured.obj.hdf5`` (FORMAT.md).
+    """Replace ``grasps/suctioncup/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
 
     Writes ``pregrasp_transform`` (K, 6) [approach (3, into the surface), contact (3, cm)],
     ``quality_score`` (K,) (seal score) and the mgn extensions ``score_wrench`` (K,) and

@@ -6,7 +6,7 @@ byte-reproducible (see :mod:`mgn.base.deterministic`): the same scene and config
 bytes whatever the executor.
 
 It renders and labels every kept view with :func:`mgn.pipeline.label_scene.label_scene`, which
-writes the FORMAT.md files of each view, ``scene_gt.json`` and ``scene.json``.
+writes the docs/format.md files of each view, ``scene_gt.json`` and ``scene.json``.
 """
 
 from __future__ import annotations

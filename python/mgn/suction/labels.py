@@ -1,4 +1,4 @@
-"""Object-level suction labels (``grasps/suctioncup/*`` of ``textured.obj.hdf5``, FORMAT.md).
+"""Object-level suction labels (``grasps/suctioncup/*`` of ``textured.obj.hdf5``, docs/format.md).
 
 Pipeline per object: sample candidate points evenly on the surface (MetaGraspNet: 5000), score
 each with a seal model (robust 10-trial score), drop candidates whose cup body would collide with

@@ -25,7 +25,7 @@ in short:
   classes unique; 2 = all complete, classes unique; 3 = unique, some incomplete; 4 = all complete,
   some class repeated; 5 = some incomplete and some repeated.
 
-Serialisation (MetaGraspNet layout, see FORMAT.md): :meth:`Layout.order_json` (``{v}_order.json``,
+Serialisation (MetaGraspNet layout, docs/format.md): :meth:`Layout.order_json` (``{v}_order.json``,
 depth differences in cm), :meth:`Layout.order_csv` (``{v}_order.csv``, the -1 entries only),
 :meth:`Layout.layout_json` (``{v}_layout.json``: difficulty and its ingredients); the files are
 written by :func:`mgn.io.scene_format.write_view` and read back by :mod:`mgn.io.order_files`.
