@@ -220,12 +220,18 @@ def problems(root: Path) -> dict[str, list[str]]:
 
 def test_every_module_has_a_layer():
     for name in module_names(PACKAGE):
-        assert layer(name)[0] != "mgn" or name == "mgn", f"{name} is in no layer of LAYERS"
+        assert layer(name)[0] != "mgn" or name == "mgn", (
+            f"{name} is in no layer of LAYERS: put it into an existing package, or add the new"
+            " package to LAYERS and to the table of docs/architecture.md"
+        )
 
 
 def test_imports_go_downward_only():
     bad = problems(PACKAGE)["upward"]
-    assert not bad, "imports of a higher layer or a sibling package:\n" + "\n".join(bad)
+    assert not bad, (
+        "imports of a higher layer or a sibling package (docs/architecture.md: move the code to the"
+        " layer that owns it, or pass the object down as an argument):\n" + "\n".join(bad)
+    )
 
 
 def test_no_import_cycles():
@@ -235,7 +241,10 @@ def test_no_import_cycles():
 
 def test_imports_at_module_level():
     bad = problems(PACKAGE)["function_level"]
-    assert not bad, "imports inside functions:\n" + "\n".join(bad)
+    assert not bad, (
+        "imports inside functions (move them to the top of the module; only the optional heavy"
+        " dependencies of LAZY_IMPORTS may be imported late):\n" + "\n".join(bad)
+    )
 
 
 def test_raises_use_mgn_errors():
