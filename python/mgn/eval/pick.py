@@ -67,6 +67,7 @@ from PIL import Image, ImageDraw
 
 from mgn.errors import InvalidArgumentError
 from mgn.eval.results import format_table, write_results_json
+from mgn.hardware import grasp_kind_arg, normalize_grasp_kind
 from mgn.objects import tote_mesh
 from mgn.pipeline.config import Config, default_config, load_config
 from mgn.pipeline.label_cache import ObjectLabels
@@ -440,6 +441,14 @@ def _match_tool_pose(g: PlacedGrasps, rows: np.ndarray, X: np.ndarray) -> int:
 # ---------------------------------------------------------------------------- the loop
 
 
+def _grasp_kind(gripper: str) -> str:
+    """``gripper`` as a grasp kind name (``normalize_grasp_kind``), errors naming run_picking."""
+    try:
+        return normalize_grasp_kind(gripper)
+    except InvalidArgumentError as e:
+        raise InvalidArgumentError(f"run_picking: gripper: {e}") from None
+
+
 def _check_picking_args(
     scene: Scene,
     gripper: str,
@@ -660,6 +669,7 @@ def run_picking(
             answer that names an unknown instance or grasp.
     """
 
+    gripper = _grasp_kind(gripper)
     policy_name, policy_fn = _resolve_policy(policy)
     n0 = len(scene.instances)
     limit = _check_picking_args(
@@ -833,7 +843,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--policy", default="label",
                    help="'label', 'random' or 'module:function' (policy(state) -> "
                         "(instance_id, grasp index or X_W_tool) or None)")  # fmt: skip
-    p.add_argument("--gripper", choices=_GRIPPERS, default="suction")
+
+    p.add_argument(
+        "--gripper",
+        type=grasp_kind_arg,
+        default="suction",
+        help="suction or paralleljaw (default suction; aliases suctioncup, pj)",
+    )
     p.add_argument("--config", default=None,
                    help="config YAML (object labels, gripper, cup, camera); default: the "
                         "dataset's config, else the defaults")  # fmt: skip
@@ -843,6 +859,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stochastic", action="store_true",
                    help="success with probability = score (else score >= 0.5)")  # fmt: skip
     p.add_argument("--resolution", type=int, default=160, help="top-view image size, px")
-    p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
+                   help="C++ threads (0 = all cores)")  # fmt: skip
     p.add_argument("--out", required=True, help="output folder")
     p.set_defaults(func=_cmd_pick)

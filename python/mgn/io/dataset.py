@@ -34,7 +34,8 @@ import numpy.typing as npt
 from PIL import Image
 
 from mgn.base.units import M_TO_CM
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import IoError
+from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
 from mgn.io.scene_format import from_cm
@@ -178,12 +179,12 @@ class View:
         return self.hdf5["objects/poses_relative_to_camera"]
 
     def grasps(self, kind: str, *, colliding: bool = False) -> dict[str, np.ndarray]:
-        """The scene grasps of ``kind`` ("paralleljaw" or "suctioncup"), camera frame, metres:
-        the datasets of ``(non_)colliding_grasps/<kind>/`` by name (empty dict if absent)."""
-        if kind not in ("paralleljaw", "suctioncup"):
-            raise InvalidArgumentError(
-                f"grasps: kind must be paralleljaw or suctioncup, got {kind!r}"
-            )
+        """The scene grasps of ``kind`` (``"suction"`` or ``"paralleljaw"``; the MetaGraspNet
+        folder names ``"suctioncup"`` and aliases such as ``"pj"`` work too), camera frame,
+        metres: the datasets of ``(non_)colliding_grasps/<folder>/`` by name (empty dict if
+        absent)."""
+
+        kind = MGN_FOLDER[normalize_grasp_kind(kind)]
         prefix = f"{'colliding' if colliding else 'non_colliding'}_grasps/{kind}/"
         return {k[len(prefix) :]: v for k, v in self.hdf5.items() if k.startswith(prefix)}
 
