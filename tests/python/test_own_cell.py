@@ -476,7 +476,7 @@ def test_user_bin_mesh_objects_drop_inside(tmp_path):
 
 
 def test_grasp_kinds_have_one_name_and_aliases(capsys):
-    from mgn.cli import build_parser
+    from mgn.cli.main import build_parser
     from mgn.hardware import normalize_grasp_kind
 
     for alias, name in [("suction", "suction"), ("suctioncup", "suction"), ("Suction-Cup",
