@@ -19,6 +19,7 @@ from mgn.geometry.mesh import (
     make_cylinder,
     make_sphere,
     mass_properties,
+    mesh_from_arrays,
     sample_surface,
 )
 
@@ -33,5 +34,6 @@ __all__ = [
     "make_cylinder",
     "make_sphere",
     "mass_properties",
+    "mesh_from_arrays",
     "sample_surface",
 ]

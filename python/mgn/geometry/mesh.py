@@ -112,3 +112,24 @@ def make_sphere(radius: float, segments: int = 64, rings: int = 32) -> Mesh:
 def make_cylinder(radius: float, height: float, segments: int = 64) -> Mesh:
     """Closed cylinder along z, centred at the origin (``radius``, ``height`` in metres)."""
     return _core.make_cylinder(radius, height, segments)
+
+
+def mesh_from_arrays(
+    vertices: npt.ArrayLike,
+    faces: npt.ArrayLike,
+    *,
+    uvs: npt.ArrayLike | None = None,
+    material: Material | None = None,
+    name: str = "",
+) -> Mesh:
+    """A :data:`Mesh` from arrays (vertices (N, 3) m, faces (M, 3), optional uvs (N, 2)) with at
+    most one material."""
+    materials = [material] if material is not None else []
+    return Mesh(
+        np.asarray(vertices, dtype=np.float32),
+        np.asarray(faces, dtype=np.int32),
+        None if uvs is None else np.asarray(uvs, dtype=np.float32),
+        materials,
+        [],
+        name,
+    )
