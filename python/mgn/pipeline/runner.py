@@ -188,7 +188,9 @@ def run_scene(task: SceneTask) -> SceneResult:
         times["write"] = time.perf_counter() - t1
         times.update({f"write: {k}": v for k, v in (stages or {}).items()})
         t2 = time.perf_counter()
-        write_manifest(tmp, scene=task.index, seed=task.seed)
+        # What made the RGB images (engine, samples, denoiser), for `mgn report`.
+        write_manifest(tmp, scene=task.index, seed=task.seed,
+                       render=task.config.render.describe())  # fmt: skip
         size = _folder_size(tmp)
         if final.exists():  # an inconsistent leftover the caller decided to redo
             shutil.rmtree(final)
