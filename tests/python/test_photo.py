@@ -307,16 +307,20 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
 
     items, tote = _small_scene()
     view = _view(96)
-    raster = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=False)))
+    raster = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=False,
+                                  floor=False)))  # fmt: skip
     s = RenderSettings(engine="path", spp=1, denoise=False, spp_without_denoiser=1)
     pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, randomize=False)
     _, out = pr.render(view, 0)
     agree = out.instance_ids == raster.instance_ids
     assert agree.mean() >= 0.999, agree.mean()
     assert len(np.unique(raster.instance_ids)) == 5  # background and the four objects
-    both = agree & (raster.depth_ideal > 0) & (out.depth > 0)
-    assert both.mean() > 0.999 * agree.mean()
-    assert np.allclose(out.depth[both], raster.depth_ideal[both], rtol=1e-3, atol=1e-4)
+    seen_r, seen_p = raster.depth_ideal > 0, out.depth > 0
+    assert (seen_r == seen_p).mean() >= 0.999  # the tote is seen at the same pixels too
+    assert seen_r.mean() > 0.5
+    both = agree & seen_r & seen_p
+    close = np.isclose(out.depth[both], raster.depth_ideal[both], rtol=1e-3, atol=1e-4)
+    assert close.mean() >= 0.999, close.mean()
     # The path-traced views of iter_views come with exactly the raster labels.
     pv = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=True,
                               render=s)))  # fmt: skip

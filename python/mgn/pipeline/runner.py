@@ -500,6 +500,11 @@ def _comparable(config_doc: Any) -> Any:
     doc = json.loads(json.dumps(config_doc))
     if isinstance(doc, dict) and isinstance(doc.get("selection"), dict):
         doc["selection"].pop("max_scenes", None)
+    if isinstance(doc, dict) and "render" not in doc:
+        # Recorded before the render section existed: those images came from the raster.
+        from mgn.render.photo import RenderSettings
+
+        doc["render"] = json.loads(json.dumps(Config(render=RenderSettings()).to_dict()["render"]))
     return doc
 
 
