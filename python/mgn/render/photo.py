@@ -95,7 +95,9 @@ class RandomizeSettings:
         light_size: (min, max) side of a rectangular light, m.
         light_height: (min, max) height of a light above the tote floor, m.
         light_offset: largest horizontal distance of a light from the tote centre, m.
-        light_intensity: (min, max) radiance of a light (before dividing by the light count).
+        light_irradiance: (min, max) irradiance the lights together cast on the tote floor's
+            centre (radiance units x sr; a white matte floor then shows irradiance / pi): the
+            brightness of the scene, independent of the number, size and distance of the lights.
         light_temperature: (min, max) colour temperature, K.
         environment_intensity: (min, max) radiance scale of the environment.
         exposure_range: EV, the half width of the exposure jitter.
@@ -109,7 +111,7 @@ class RandomizeSettings:
     light_size: tuple[float, float] = (0.4, 1.2)
     light_height: tuple[float, float] = (1.2, 2.2)
     light_offset: float = 1.0
-    light_intensity: tuple[float, float] = (12.0, 30.0)
+    light_irradiance: tuple[float, float] = (3.0, 9.0)
     light_temperature: tuple[float, float] = (3500.0, 7500.0)
     environment_intensity: tuple[float, float] = (0.2, 0.8)
     exposure_range: float = 0.5
@@ -128,7 +130,7 @@ class RandomizeSettings:
             )
         object.__setattr__(self, "light_count", (int(c[0]), int(c[1])))
         for key, lo, hi in (("light_size", 1e-3, None), ("light_height", 0.1, None),
-                            ("light_intensity", 0.0, None), ("light_temperature", 1000.0, 40000.0),
+                            ("light_irradiance", 0.0, None), ("light_temperature", 1000.0, 40000.0),
                             ("environment_intensity", 0.0, None)):  # fmt: skip
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
             object.__setattr__(self, key, rng)
@@ -429,17 +431,18 @@ def draw_lighting(
             phi = g_light.uniform(0.0, 2 * math.pi)
             pos = target + np.array([rad * math.cos(phi), rad * math.sin(phi), h])
             temp = g_light.uniform(*r.light_temperature)
-            # Split the drawn power among the lights; scale by the area so a small light is
-            # not much dimmer (the mean irradiance depends on intensity, not on the size).
-            power = g_light.uniform(*r.light_intensity) / n
+            # Each light casts 1/n of the drawn irradiance on the target: a small light facing
+            # the target at distance d and height h gives E = L A h / d^3 (A cos0 cos(theta)/d^2).
+            e = g_light.uniform(*r.light_irradiance) / n
             area = side * side * aspect
+            d = float(np.linalg.norm(pos - target))
             lights.append(
                 AreaLight(
                     _look_down_pose(pos, target, g_light.uniform(0.0, math.pi)),
                     "rect",
                     (side, side * aspect),
                     blackbody_rgb(temp),
-                    power / area,
+                    e * d**3 / (area * h),
                 )
             )
         summary["lights"] = n
