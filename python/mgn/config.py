@@ -39,6 +39,7 @@ Sections:
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
   it ``spp_without_denoiser`` samples are traced and a warning names the package),
+  ``denoise_quality``,
   ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone`` (``filmic`` | ``linear``),
   ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
   ``randomize`` (path engine, when ``camera.randomize`` is on: switches ``lights``,
