@@ -25,41 +25,74 @@ __all__ = ["collect_stats", "svg_bars", "write_report"]
 
 
 def svg_bars(
-    labels: list[str], values: list[float], *, title: str, width: int = 420, height: int = 200
+    labels: list[str],
+    values: list[float],
+    *,
+    title: str,
+    width: int = 460,
+    height: int = 240,
+    xlabel: str = "",
+    ylabel: str = "count",
 ) -> str:
-    """An SVG bar chart (inline in HTML) of ``values`` with category ``labels``."""
+    """An SVG bar chart (inline in HTML) of ``values`` with category ``labels``: a labelled
+    x axis (``xlabel``) and y axis (``ylabel``, ticks at 0, half and the top), the value of
+    every bar as a tooltip and, when there are few bars, as text above it."""
     n = max(len(values), 1)
     top = max(max(values, default=0.0), 1e-12)
-    left, bottom, head = 40, 28, 22
+    left, bottom, head = 52, 44, 36
     plot_w, plot_h = width - left - 10, height - bottom - head
     bw = plot_w / n
+    y0 = head + plot_h
     parts = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}">',
-        f'<text x="{width / 2}" y="15" text-anchor="middle" font-size="13">{html.escape(title)}'
-        "</text>",
-        f'<line x1="{left}" y1="{head + plot_h}" x2="{left + plot_w}" y2="{head + plot_h}" '
-        'stroke="#444"/>',
-        f'<text x="{left - 4}" y="{head + 8}" text-anchor="end" font-size="10">{top:.3g}</text>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
+        'font-family="sans-serif">',
+        f'<text x="{width / 2}" y="16" text-anchor="middle" font-size="14" font-weight="bold">'
+        f"{html.escape(title)}</text>",
+        f'<line x1="{left}" y1="{y0}" x2="{left + plot_w}" y2="{y0}" stroke="#444"/>',
+        f'<line x1="{left}" y1="{head}" x2="{left}" y2="{y0}" stroke="#444"/>',
     ]
+    for frac in (0.0, 0.5, 1.0):
+        y = y0 - plot_h * frac
+        parts.append(f'<line x1="{left - 4}" y1="{y:.1f}" x2="{left}" y2="{y:.1f}" '
+                     'stroke="#444"/>')  # fmt: skip
+        parts.append(f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">'
+                     f"{_tick(top * frac)}</text>")  # fmt: skip
+    if ylabel:
+        parts.append(f'<text x="12" y="{head + plot_h / 2:.1f}" text-anchor="middle" '
+                     f'font-size="12" transform="rotate(-90 12 {head + plot_h / 2:.1f})">'
+                     f"{html.escape(ylabel)}</text>")  # fmt: skip
+    if xlabel:
+        parts.append(f'<text x="{left + plot_w / 2:.1f}" y="{height - 6}" text-anchor="middle" '
+                     f'font-size="12">{html.escape(xlabel)}</text>')  # fmt: skip
     for k, (label, value) in enumerate(zip(labels, values, strict=True)):
         h = plot_h * value / top
         x = left + k * bw
         parts.append(
-            f'<rect x="{x + 1:.1f}" y="{head + plot_h - h:.1f}" width="{max(bw - 2, 1):.1f}" '
+            f'<rect x="{x + 1:.1f}" y="{y0 - h:.1f}" width="{max(bw - 2, 1):.1f}" '
             f'height="{h:.1f}" fill="#3b75af"><title>{html.escape(label)}: {value:g}</title></rect>'
         )
+        if n <= 12:
+            parts.append(f'<text x="{x + bw / 2:.1f}" y="{y0 - h - 3:.1f}" text-anchor="middle" '
+                         f'font-size="10" fill="#333">{value:g}</text>')  # fmt: skip
         if n <= 12 or k % max(n // 10, 1) == 0:
             parts.append(
-                f'<text x="{x + bw / 2:.1f}" y="{head + plot_h + 14}" text-anchor="middle" '
-                f'font-size="10">{html.escape(label)}</text>'
+                f'<text x="{x + bw / 2:.1f}" y="{y0 + 15}" text-anchor="middle" '
+                f'font-size="11">{html.escape(label)}</text>'
             )
     parts.append("</svg>")
     return "".join(parts)
 
 
+def _tick(v: float) -> str:
+    """A y-axis tick: whole numbers without exponent (1070, 12.5k), else 3 digits."""
+    if v >= 1e4:
+        return f"{v / 1e3:.3g}k"
+    return f"{v:.0f}" if v >= 100 or float(v).is_integer() else f"{v:.3g}"
+
+
 def _hist(values: np.ndarray, bins: int, lo: float, hi: float) -> tuple[list[str], list[float]]:
     counts, edges = np.histogram(values, bins=bins, range=(lo, hi))
-    return [f"{e:.2g}" for e in edges[:-1]], [float(c) for c in counts]
+    return [f"{e:.1f}" for e in edges[:-1]], [float(c) for c in counts]
 
 
 def _sample_views(ds: Dataset, max_views: int) -> list[View]:
@@ -129,6 +162,35 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
     }
 
 
+def _warnings(ds: Dataset, stats: dict[str, Any]) -> list[str]:
+    """What a user should look at first: objects lost from the tote, views with nothing
+    visible, NaN grasp scores, a low collision-free share of the grasps."""
+    out = []
+    lost = Counter()
+    for s in ds.scenes():
+        for r in (s.scene_json or {}).get("removed", []):
+            lost[r.get("reason", "removed")] += 1
+    if lost:
+        out.append(f"{sum(lost.values())} object(s) did not stay in the tote while dropping ("
+                   + ", ".join(f"{v} {k}" for k, v in lost.items()) + "): the scenes hold fewer "
+                   "objects than asked")  # fmt: skip
+    empty = sum(1 for n in stats["visible_per_view"] if n == 0)
+    if empty:
+        out.append(f"{empty} of {stats['views_sampled']} sampled views show no object")
+    for kind, s in stats["grasp_scores"].items():
+        bad = int(np.sum(~np.isfinite(np.asarray(s, float)))) if s else 0
+        if bad:
+            out.append(f"{bad} {kind} grasp score(s) are NaN")
+    for kind in stats["grasp_counts"]["non_colliding"]:
+        free = stats["grasp_counts"]["non_colliding"].get(kind, 0)
+        hit = stats["grasp_counts"]["colliding"].get(kind, 0)
+        if free + hit and free / (free + hit) < 0.05:
+            share = 100 * free / (free + hit)
+            out.append(f"only {share:.1f}% of the {kind} grasps are collision-free in the "
+                       "scenes (gripper too large for the clutter?)")  # fmt: skip
+    return out
+
+
 def _png_tag(image: np.ndarray, width: int) -> str:
     from mgn.io.scene_format import png_bytes
 
@@ -176,44 +238,65 @@ def write_report(
     *,
     samples: int = 6,
     max_views: int = 400,
+    progress: bool = False,
 ) -> Path:
-    """Write the HTML report of the dataset at ``root`` to ``out`` (atomically)."""
+    """Write the HTML report of the dataset at ``root`` to ``out`` (atomically). ``progress``
+    prints what is being done to stderr."""
+    import sys
+
     from PIL import Image
 
     from mgn.io.atomic import atomic_write_text
     from mgn.overlay import render_overlay
 
+    def step(text: str) -> None:
+        if progress:
+            print(f"mgn report: {text}", file=sys.stderr, flush=True)
+
     ds = Dataset(root)
+    step(f"statistics of up to {max_views} views of {len(ds)} scenes ...")
     stats = collect_stats(ds, max_views=max_views)
     charts = []
     ops = Counter(stats["objects_per_scene"])
     if ops:
         keys = list(range(min(ops), max(ops) + 1))
         charts.append(svg_bars([str(k) for k in keys], [ops[k] for k in keys],
-                               title="objects per scene"))  # fmt: skip
+                               title="objects per scene", xlabel="objects in the tote",
+                               ylabel="scenes"))  # fmt: skip
     vpv = Counter(stats["visible_per_view"])
     if vpv:
         keys = list(range(0, max(vpv) + 1))
         charts.append(svg_bars([str(k) for k in keys], [vpv[k] for k in keys],
-                               title="visible objects per view"))  # fmt: skip
+                               title="visible objects per view", xlabel="objects visible",
+                               ylabel="views"))  # fmt: skip
     if stats["occlusion"]:
         charts.append(svg_bars(*_hist(np.array(stats["occlusion"]), 10, 0, 1),
-                               title="occlusion rate of visible objects"))  # fmt: skip
+                               title="occlusion rate of visible objects",
+                               xlabel="occluded share of the object (bin start)",
+                               ylabel="objects"))  # fmt: skip
     names = {"0": "top", "1": "secondary", "2": "interlock", "3": "others"}
     if stats["layers"]:
         charts.append(svg_bars([names.get(k, k) for k in stats["layers"]],
-                               list(stats["layers"].values()), title="layers"))  # fmt: skip
+                               list(stats["layers"].values()), title="layers",
+                               xlabel="layer (top = nothing lies on it)",
+                               ylabel="objects"))  # fmt: skip
     if stats["difficulty"]:
         lv = [str(k) for k in range(1, 6)]
         charts.append(svg_bars(lv, [stats["difficulty"].get(k, 0) for k in lv],
-                               title="difficulty level of views"))  # fmt: skip
+                               title="difficulty level of views",
+                               xlabel="level (1 easy - 5 hard)", ylabel="views"))  # fmt: skip
     for kind, s in stats["grasp_scores"].items():
         if s:
             charts.append(svg_bars(*_hist(np.array(s), 10, 0, 1),
-                                   title=f"{kind} score (non-colliding)"))  # fmt: skip
+                                   title=f"{kind.replace('suctioncup', 'suction')} score "
+                                   "(non-colliding)",
+                                   xlabel="analytic score (bin start)",
+                                   ylabel="grasps"))  # fmt: skip
     if stats["invalid_depth_share"]:
         charts.append(svg_bars(*_hist(np.array(stats["invalid_depth_share"]), 10, 0, 1),
-                               title="invalid depth share per view"))  # fmt: skip
+                               title="invalid depth share per view",
+                               xlabel="share of pixels without depth (bin start)",
+                               ylabel="views"))  # fmt: skip
 
     all_views = [v for s in ds.scenes() for v in s.views()]
     picks = []
@@ -221,7 +304,8 @@ def write_report(
         idx = np.linspace(0, len(all_views) - 1, min(samples, len(all_views))).round()
         picks = [all_views[int(i)] for i in sorted(set(idx.astype(int)))]
     thumbs = []
-    for view in picks:
+    for i, view in enumerate(picks):
+        step(f"sample view {i + 1}/{len(picks)}: {view.folder.name} view {view.index}")
         img = render_overlay(view, layout=True)
         h, w = img.shape[:2]
         scale = min(1.0, 360 / w)
@@ -232,29 +316,47 @@ def write_report(
         )
     info = ds.info or {}
     gc = stats["grasp_counts"]
+
+    def kinds(counter: dict) -> str:
+        names = {"suctioncup": "suction"}
+        return ", ".join(f"{names.get(k, k)} {v}" for k, v in counter.items()) or "none"
+
     summary = {
-        "scenes": stats["scenes"],
+        "scenes": str(stats["scenes"]),
         "RGB images made by": image_engines(ds),
-        "views sampled for statistics": stats["views_sampled"],
-        "mgn version": info.get("mgn_version", "?"),
-        "seed": info.get("seed", "?"),
-        "non-colliding grasps (sampled views)": gc["non_colliding"],
-        "colliding grasps (sampled views)": gc["colliding"],
+        "views sampled for statistics": str(stats["views_sampled"]),
+        "mgn version": str(info.get("mgn_version", "?")),
+        "seed": str(info.get("seed", "?")),
+        "non-colliding grasps (sampled views)": kinds(gc["non_colliding"]),
+        "colliding grasps (sampled views)": kinds(gc["colliding"]),
     }
     rows = "".join(
-        f"<tr><th>{html.escape(k)}</th><td>{html.escape(json.dumps(v))}</td></tr>"
-        for k, v in summary.items()
+        f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in summary.items()
     )
+    warnings = _warnings(ds, stats)
+    warn_html = (
+        '<div class="warn"><h2>Warnings</h2><ul>'
+        + "".join(f"<li>{html.escape(w)}</li>" for w in warnings)
+        + "</ul></div>"
+        if warnings
+        else '<p class="ok">No warnings: no object lost from the tote, every sampled view shows '
+        "objects, no NaN labels.</p>"
+    )
+    config = html.escape(json.dumps(info.get("config", {}), indent=1))
+    step("writing the page")
     page = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>mgn dataset report: {html.escape(str(ds.root))}</title>
 <style>body{{font-family:sans-serif;margin:20px}} figure{{display:inline-block;margin:6px}}
-.charts svg{{margin:6px;border:1px solid #ddd}} th{{text-align:left;padding-right:12px}}</style>
+.charts svg{{margin:6px;border:1px solid #ddd}} th{{text-align:left;padding-right:12px}}
+.warn{{background:#fff4e5;border:1px solid #f0a030;padding:4px 12px;margin:10px 0}}
+.ok{{color:#2a7a2a}} summary{{cursor:pointer;font-weight:bold;font-size:1.2em}}</style>
 </head><body>
 <h1>mgn dataset report</h1><p>{html.escape(str(ds.root.resolve()))}</p>
+{warn_html}
 <table>{rows}</table>
 <h2>Sample views</h2><div>{"".join(thumbs) or "<p>no views</p>"}</div>
 <h2>Statistics</h2><div class="charts">{"".join(charts) or "<p>no labels</p>"}</div>
-<h2>Configuration</h2><pre>{html.escape(json.dumps(info.get("config", {}), indent=1))}</pre>
+<details><summary>Configuration (click to unfold)</summary><pre>{config}</pre></details>
 </body></html>
 """
     path = Path(out)

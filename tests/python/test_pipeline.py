@@ -132,7 +132,8 @@ def test_reference_dataset_validates_reads_and_exports(
     args = ["show", str(out), "--scene", "0", "--view", "17", "--grasps", "pj", "--layout"]
     assert main([*args, "-o", str(png)]) == 0
     with Image.open(png) as im:
-        assert im.size == (view.intrinsics.width, view.intrinsics.height + 20)
+        # The view with its legend below (what the colours and labels mean).
+        assert im.size[0] == view.intrinsics.width and im.size[1] > view.intrinsics.height + 20
         assert np.asarray(im).std() > 0
 
 

@@ -1,6 +1,6 @@
 """Read a dataset back: ``mgn.Dataset(DIR)`` (lazy; SI units; also original MetaGraspNet folders).
 
-Layout (FORMAT.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` object folders and
+Layout (docs/format.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` object folders and
 ``DIR/scene<N>/`` scene folders with the files of :mod:`mgn.io.scene_format`. Nothing is read
 before it is asked for, and what is read is kept (a :class:`View` caches its arrays).
 
@@ -32,7 +32,7 @@ import h5py
 import numpy as np
 import numpy.typing as npt
 
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import IoError
 from mgn.io.scene_format import M_TO_CM, from_cm
 from mgn.render.camera import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
@@ -175,12 +175,13 @@ class View:
         return self.hdf5["objects/poses_relative_to_camera"]
 
     def grasps(self, kind: str, *, colliding: bool = False) -> dict[str, np.ndarray]:
-        """The scene grasps of ``kind`` ("paralleljaw" or "suctioncup"), camera frame, metres:
-        the datasets of ``(non_)colliding_grasps/<kind>/`` by name (empty dict if absent)."""
-        if kind not in ("paralleljaw", "suctioncup"):
-            raise InvalidArgumentError(
-                f"grasps: kind must be paralleljaw or suctioncup, got {kind!r}"
-            )
+        """The scene grasps of ``kind`` (``"suction"`` or ``"paralleljaw"``; the MetaGraspNet
+        folder names ``"suctioncup"`` and aliases such as ``"pj"`` work too), camera frame,
+        metres: the datasets of ``(non_)colliding_grasps/<folder>/`` by name (empty dict if
+        absent)."""
+        from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
+
+        kind = MGN_FOLDER[normalize_grasp_kind(kind)]
         prefix = f"{'colliding' if colliding else 'non_colliding'}_grasps/{kind}/"
         return {k[len(prefix) :]: v for k, v in self.hdf5.items() if k.startswith(prefix)}
 

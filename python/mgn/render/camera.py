@@ -1,4 +1,4 @@
-"""Pinhole cameras and camera rigs (MODELS.md §6; typed façade over the C++ core).
+"""Pinhole cameras and camera rigs (docs/models.md §6; typed façade over the C++ core).
 
 Camera frame C is OpenCV: x right, y down, z forward. Pixel (u, v) has its centre at image
 coordinates (u + 0.5, v + 0.5), the same model as :func:`mgn.camera_rays`. Poses ``X_WC`` are
@@ -26,6 +26,17 @@ __all__ = [
     "mgn_rig_from_params",
     "mgn_views",
 ]
+
+#: Real-sensor presets: (width, height, fx = fy px), principal point at the image centre.
+#: Derived from the manufacturers' published resolution and field of view (docs/cameras.md):
+#: Zivid 2+ M130: 2448 x 2048, 0.32 mm per pixel at 1300 mm -> f = 1300 / 0.32 px;
+#: Photoneo PhoXi 3D Scanner M: 2064 x 1544, 47.5 deg horizontal field -> f = 1032 / tan(23.75 deg);
+#: Intel RealSense D435 depth: 1280 x 720, 87 deg horizontal field -> f = 640 / tan(43.5 deg).
+SENSOR_PRESETS: dict[str, tuple[int, int, float]] = {
+    "zivid2_plus_m130": (2448, 2048, 1300.0 / 0.32),
+    "photoneo_phoxi_m": (2064, 1544, 1032.0 / math.tan(math.radians(23.75))),
+    "realsense_d435": (1280, 720, 640.0 / math.tan(math.radians(43.5))),
+}
 
 #: MetaGraspNet synthetic camera: focal length and horizontal aperture, mm.
 MGN_FOCAL_LENGTH_MM = 35.0
@@ -70,6 +81,26 @@ class Intrinsics:
         return cls._from_core(_core.Intrinsics.zivid_two_like())
 
     @classmethod
+    def preset(cls, name: str) -> Intrinsics:
+        """A named preset: ``mgn_synthetic``, ``zivid_two_like`` or a real sensor of
+        :data:`SENSOR_PRESETS` (``zivid2_plus_m130``, ``photoneo_phoxi_m``, ``realsense_d435``).
+
+        Raises:
+            InvalidArgumentError: an unknown name (the message lists the presets).
+        """
+        if name == "mgn_synthetic":
+            return cls.mgn_synthetic()
+        if name == "zivid_two_like":
+            return cls.zivid_two_like()
+        if name in SENSOR_PRESETS:
+            w, h, f = SENSOR_PRESETS[name]
+            return cls(w, h, f, f, w / 2.0, h / 2.0)
+        from mgn.errors import InvalidArgumentError
+
+        names = ["mgn_synthetic", "zivid_two_like", *SENSOR_PRESETS]
+        raise InvalidArgumentError(f"unknown intrinsics preset {name!r}; presets: {names}")
+
+    @classmethod
     def _from_core(cls, k: _core.Intrinsics) -> Intrinsics:
         return cls(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
 
@@ -88,7 +119,7 @@ class Intrinsics:
                           self.cx * w / self.width, self.cy * h / self.height)  # fmt: skip
 
     def camera_params(self, clipping_range: tuple[float, float] = (0.01, 10.0)) -> dict[str, Any]:
-        """``{v}_camera_params.json`` content (FORMAT.md): px values plus MetaGraspNet's keys.
+        """``{v}_camera_params.json`` content (docs/format.md): px values plus MetaGraspNet's keys.
 
         The apertures are those of a 35 mm lens giving these focal lengths (mm).
         """
@@ -173,7 +204,7 @@ def mgn_rig(
 
     View 0 looks straight down from R_start; view v = 1 + 12 i_R + 4 i_theta + i_phi sits at
     radius R_start + i_R (R_end - R_start)/2, tilt theta_start + i_theta (theta_end -
-    theta_start)/2 and azimuth i_phi phi_end/4, looking at the target (MODELS.md §6).
+    theta_start)/2 and azimuth i_phi phi_end/4, looking at the target (docs/models.md §6).
 
     Returns:
         ((37, 4, 4) float64 poses X_WC, MgnRigParams).
