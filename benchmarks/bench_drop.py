@@ -164,11 +164,10 @@ _PART_DIR: dict[str, list[str]] = {}
 
 def _part_files(name: str, parts: list) -> list[str]:
     """One OBJ per convex part (pybullet builds a convex hull from each mesh file)."""
-    import tempfile
-    from pathlib import Path
+    from .common import bench_tempdir
 
     if name not in _PART_DIR:
-        root = Path(tempfile.mkdtemp(prefix="mgn_bench_drop_"))
+        root = bench_tempdir("mgn_bench_drop_")
         files = []
         for i, m in enumerate(parts):
             path = root / f"{name}_{i}.obj"

@@ -95,17 +95,39 @@ def _hist(values: np.ndarray, bins: int, lo: float, hi: float) -> tuple[list[str
     return [f"{e:.1f}" for e in edges[:-1]], [float(c) for c in counts]
 
 
-def _sample_views(ds: Dataset, max_views: int) -> list[View]:
-    views = [v for s in ds.scenes() for v in s.views()]
-    if len(views) <= max_views:
-        return views
-    idx = np.linspace(0, len(views) - 1, max_views).round().astype(int)
-    return [views[i] for i in sorted(set(idx))]
+def _view_refs(ds: Dataset) -> list[tuple[Path, int]]:
+    """(scene folder, view index) of every view, in order (no file of a view is read)."""
+    return [(s.folder, v) for s in ds.scenes() for v in s.view_ids]
+
+
+def _sample_views(ds: Dataset, max_views: int) -> list[tuple[Path, int]]:
+    refs = _view_refs(ds)
+    if len(refs) <= max_views:
+        return refs
+    idx = np.linspace(0, len(refs) - 1, max_views).round().astype(int)
+    return [refs[i] for i in sorted(set(idx))]
+
+
+def _grasp_scores(view: View) -> dict[tuple[str, str], np.ndarray]:
+    """(non_colliding | colliding, kind) -> score_analytical of the view, reading nothing else
+    of its HDF5 file."""
+    import h5py
+
+    out = {}
+    with h5py.File(view.path("_scene.hdf5"), "r") as h5:
+        for group in ("non_colliding", "colliding"):
+            for kind in ("paralleljaw", "suctioncup"):
+                name = f"{group}_grasps/{kind}/score_analytical"
+                if name in h5:
+                    out[group, kind] = np.asarray(h5[name][()], float).reshape(-1)
+    return out
 
 
 def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
-    """Per-label statistics of ``ds`` over (a sample of) its views, JSON-ready."""
-    views = _sample_views(ds, max_views)
+    """Per-label statistics of ``ds`` over (a sample of) its views, JSON-ready. The views are
+    read one at a time, and only the arrays the statistics need: memory does not grow with the
+    dataset."""
+    refs = _sample_views(ds, max_views)
     objects_per_scene = []
     for s in ds.scenes():
         sj = s.scene_json
@@ -117,8 +139,9 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
     scores: dict[str, list[np.ndarray]] = {"paralleljaw": [], "suctioncup": []}
     counts = {"non_colliding": Counter(), "colliding": Counter()}
     invalid = []
-    for view in views:
-        inst = view.instances
+    for folder, index in refs:
+        view = View(folder, index)  # dropped after this iteration, with the arrays it read
+        inst = view.npz_array("instances_objects")
         vis_ids = np.unique(inst[inst > 0])
         visible_per_view.append(len(vis_ids))
         try:
@@ -137,20 +160,15 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
             level = level.get("level")
         if level is not None:
             levels[int(level)] += 1
-        for kind in scores:
-            g = view.grasps(kind)
-            s = g.get("score_analytical")
-            if s is not None:
-                scores[kind].append(np.asarray(s, float))
-                counts["non_colliding"][kind] += len(s)
-            c = view.grasps(kind, colliding=True).get("score_analytical")
-            if c is not None:
-                counts["colliding"][kind] += len(c)
-        d = view.npz["depth"]
+        for (group, kind), s in _grasp_scores(view).items():
+            if group == "non_colliding":
+                scores[kind].append(s)
+            counts[group][kind] += len(s)
+        d = view.npz_array("depth")
         invalid.append(float(np.mean(~np.isfinite(d) | (d <= 0))))
     return {
         "scenes": len(ds),
-        "views_sampled": len(views),
+        "views_sampled": len(refs),
         "objects_per_scene": objects_per_scene,
         "visible_per_view": visible_per_view,
         "occlusion": occl,
@@ -298,13 +316,14 @@ def write_report(
                                xlabel="share of pixels without depth (bin start)",
                                ylabel="views"))  # fmt: skip
 
-    all_views = [v for s in ds.scenes() for v in s.views()]
+    all_views = _view_refs(ds)
     picks = []
     if all_views:
         idx = np.linspace(0, len(all_views) - 1, min(samples, len(all_views))).round()
         picks = [all_views[int(i)] for i in sorted(set(idx.astype(int)))]
     thumbs = []
-    for i, view in enumerate(picks):
+    for i, (folder, index) in enumerate(picks):
+        view = View(folder, index)
         step(f"sample view {i + 1}/{len(picks)}: {view.folder.name} view {view.index}")
         img = render_overlay(view, layout=True)
         h, w = img.shape[:2]

@@ -146,6 +146,19 @@ def test_two_workers_give_the_same_bytes(
     assert checksums(out) == reference[1]
 
 
+def test_four_workers_collecting_give_the_same_bytes(
+    reference: tuple[Path, dict], tmp_path: Path, env: Path
+) -> None:
+    """Workers that write into folders of their own and send the files back (--collect, for
+    cluster workers without a shared disk) give the same dataset, byte for byte."""
+    out = tmp_path / "ds"
+    report = generate(out, 2, config=load_config(SMALL), seed=SEED, workers=4, collect=True,
+                      progress=False)  # fmt: skip
+    assert report.complete and all(r.files is None for r in report.results.values())
+    assert checksums(out) == reference[1]
+    assert not list(out.glob(".tmp-*"))
+
+
 def test_dask_local_cluster_gives_the_same_bytes(
     reference: tuple[Path, dict], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

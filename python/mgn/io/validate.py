@@ -18,11 +18,12 @@ from mgn.io.scene_format import HDF5_FLOAT_KEYS, view_file_names
 
 __all__ = ["Problem", "validate_dataset"]
 
-_NPZ_KEYS = {
-    "depth": np.float32,
-    "instances_objects": np.float32,
-    "instances_semantic": np.float32,
-    "occlusion": np.float32,
+#: npz key -> the dtypes allowed (mgn writes the first; MetaGraspNet's files have float32).
+_NPZ_KEYS: dict[str, tuple[type, ...]] = {
+    "depth": (np.float32,),
+    "instances_objects": (np.uint8, np.float32),
+    "instances_semantic": (np.uint16, np.uint8, np.float32),
+    "occlusion": (np.float32,),
 }
 
 
@@ -61,14 +62,12 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
     n = None
     try:
         z = view.npz
-        for key, dtype in _NPZ_KEYS.items():
+        for key, dtypes in _NPZ_KEYS.items():
             if key not in z:
                 bad(".npz", f"lacks '{key}'")
-            elif z[key].dtype != dtype or (hw is not None and z[key].shape != hw):
-                bad(
-                    ".npz",
-                    f"'{key}' is {z[key].dtype} {z[key].shape}, expected {np.dtype(dtype)} {hw}",
-                )
+            elif z[key].dtype not in dtypes or (hw is not None and z[key].shape != hw):
+                names = " or ".join(str(np.dtype(d)) for d in dtypes)
+                bad(".npz", f"'{key}' is {z[key].dtype} {z[key].shape}, expected {names} {hw}")
         if "occlusion_objects" not in z:
             bad(".npz", "lacks 'occlusion_objects'")
         else:

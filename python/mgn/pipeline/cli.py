@@ -2,7 +2,8 @@
 
 mgn generate --out DIR [--scenes N] [--config cfg.yaml] [--objects NAME ...] [--seed S]
              [--add my_objects.yaml] [--categories NAME ...]
-             [--workers K] [--resume] [--scheduler tcp://host:8786] [--quiet] [--no-cache]
+             [--workers K] [--resume] [--scheduler tcp://host:8786 [--collect]] [--quiet]
+             [--no-cache]
              [--split all|train|test] [--difficulty-quota 1=20,2=20,3=20,4=20,5=20
              [--max-scenes M] [--batch-scenes B] [--prune-rejected]]
 
@@ -86,6 +87,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         progress=not args.quiet,
         use_cache=not args.no_cache,
+        collect=args.collect,
     )
     print(report.format_summary())
     return 0 if report.complete else 1
@@ -205,6 +207,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=int, default=1, help="local worker processes (default 1)")
     p.add_argument("--resume", action="store_true", help="keep complete scenes, redo the others")
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786")
+    p.add_argument(
+        "--collect",
+        action="store_true",
+        help="workers send each scene's files back and this process writes them (cluster "
+        "workers without the output folder on a shared disk; docs/cluster.md)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument("--no-cache", action="store_true", help="do not read/write the label cache")
     p.add_argument(

@@ -102,6 +102,9 @@ class SceneTask:
         objects: (name, source) of the objects to drop, in drop order (source ``"builtin"`` or
             a user-objects YAML path).
         labels: name -> the labels of the objects of this scene.
+        collect: write into a temporary folder of the worker and return the files in the
+            result (``SceneResult.files``) instead of writing into ``out_dir``: for workers
+            that do not see the output folder; the caller writes them.
     """
 
     index: int
@@ -110,6 +113,7 @@ class SceneTask:
     config: Config
     objects: tuple[tuple[str, str], ...]
     labels: dict[str, ObjectLabels] = field(default_factory=dict)
+    collect: bool = False
 
 
 @dataclass(frozen=True)
@@ -122,6 +126,8 @@ class SceneResult:
         times: seconds per stage (drop, write, finalize).
         num_bytes: size of the scene folder; num_objects: objects in the tote.
         worker: host and process id that ran it.
+        files: with ``SceneTask.collect``: the scene's files (relative path -> bytes, the
+            manifest included), for the caller to write; None otherwise.
     """
 
     index: int
@@ -133,6 +139,7 @@ class SceneResult:
     num_bytes: int = 0
     num_objects: int = 0
     worker: str = ""
+    files: dict[str, bytes] | None = field(default=None, repr=False, compare=False)
 
 
 def _disk_full(e: BaseException) -> OSError | None:
@@ -158,6 +165,7 @@ def run_scene(task: SceneTask) -> SceneResult:
     error: the result says what went wrong. The temporary folder is removed on any failure,
     including KeyboardInterrupt (which is re-raised)."""
     import socket
+    import tempfile
 
     from mgn.pipeline.scene_writer import write_scene
     from mgn.scene.drop import drop_scene
@@ -165,7 +173,10 @@ def run_scene(task: SceneTask) -> SceneResult:
 
     out = Path(task.out_dir)
     final = out / f"scene{task.index}"
-    tmp = out / f"{TMP_PREFIX}scene{task.index}-{os.getpid()}"
+    if task.collect:  # the worker may not see out_dir: a folder of its own, returned as bytes
+        tmp = Path(tempfile.mkdtemp(prefix=f"{TMP_PREFIX}scene{task.index}-")) / "scene"
+    else:
+        tmp = out / f"{TMP_PREFIX}scene{task.index}-{os.getpid()}"
     worker = f"{socket.gethostname()}:{os.getpid()}"
     times: dict[str, float] = {}
     t0 = time.perf_counter()
@@ -192,6 +203,13 @@ def run_scene(task: SceneTask) -> SceneResult:
         write_manifest(tmp, scene=task.index, seed=task.seed,
                        render=task.config.render.describe())  # fmt: skip
         size = _folder_size(tmp)
+        if task.collect:
+            files = {p.relative_to(tmp).as_posix(): p.read_bytes()
+                     for p in sorted(tmp.rglob("*")) if p.is_file()}  # fmt: skip
+            shutil.rmtree(tmp.parent, ignore_errors=True)
+            times["finalize"] = time.perf_counter() - t2
+            return SceneResult(task.index, task.seed, True, None, False, times, size,
+                               len(scene), worker, files)  # fmt: skip
         if final.exists():  # an inconsistent leftover the caller decided to redo
             shutil.rmtree(final)
         os.rename(tmp, final)
@@ -200,7 +218,7 @@ def run_scene(task: SceneTask) -> SceneResult:
             task.index, task.seed, True, None, False, times, size, len(scene), worker
         )
     except Exception as e:  # noqa: BLE001 (reported per scene, the others go on)
-        shutil.rmtree(tmp, ignore_errors=True)
+        shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         full = _disk_full(e)
         if full is not None:
             where = full.filename or tmp
@@ -211,8 +229,36 @@ def run_scene(task: SceneTask) -> SceneResult:
             msg = f"{type(e).__name__}: {e}{at}"
         return SceneResult(task.index, task.seed, False, msg, full is not None, times, 0, 0, worker)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         raise
+
+
+def store_collected(out: Path, result: SceneResult) -> SceneResult:
+    """Write the files a collecting scene task returned (``SceneResult.files``) into
+    ``out/scene<N>`` the way a worker would (a temporary folder renamed when complete); returns
+    the result without the bytes, or a failed result if they cannot be written."""
+    if result.files is None:
+        return result
+    final = out / f"scene{result.index}"
+    tmp = out / f"{TMP_PREFIX}scene{result.index}-{os.getpid()}"
+    try:
+        if tmp.exists():
+            shutil.rmtree(tmp)
+        for rel, data in result.files.items():
+            path = tmp / rel
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
+        if final.exists():
+            shutil.rmtree(final)
+        os.rename(tmp, final)
+    except OSError as e:
+        shutil.rmtree(tmp, ignore_errors=True)
+        full = _disk_full(e)
+        msg = (f"disk full while writing scene{result.index}" if full is not None
+               else f"cannot write scene{result.index}: {e}")  # fmt: skip
+        return dataclasses.replace(result, ok=False, error=msg, disk_full=full is not None,
+                                   files=None)  # fmt: skip
+    return dataclasses.replace(result, files=None)
 
 
 def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
@@ -552,6 +598,7 @@ class _Run:
     extra: dict[str, Any] = field(default_factory=dict)  # dataset.json keys (split, selection)
     labels: dict[str, ObjectLabels] = field(default_factory=dict)
     modelled: set[str] = field(default_factory=set)
+    collect: bool = False  # workers return the scene files; this process writes them
 
     def ensure_labels(self, specs: Sequence[ObjectSpec]) -> None:
         """Read or compute the labels of the objects not labelled yet in this run and write
@@ -616,6 +663,7 @@ class _Run:
                     config=self.cfg,
                     objects=tuple((s.name, self.sources.get(s.name, BUILTIN)) for s in specs),
                     labels={s.name: self.labels[s.name] for s in specs if s.name in self.labels},
+                    collect=self.collect,
                 )
             )
         bar = tqdm(total=total, initial=len(report.skipped) + len(report.results),
@@ -627,6 +675,8 @@ class _Run:
                 result = SceneResult(
                     task.index, task.seed, False, f"worker failed: {type(exc).__name__}: {exc}"
                 )
+            elif result.files is not None:
+                result = store_collected(self.out, result)
             report.results[task.index] = result
             bar.update(1)
             elapsed = time.perf_counter() - t_scenes
@@ -659,6 +709,7 @@ def generate(
     scheduler: str | None = None,
     progress: bool = True,
     use_cache: bool = True,
+    collect: bool = False,
 ) -> GenerateReport:
     """Generate (or, with ``resume``, complete) a dataset of ``num_scenes`` scenes in
     ``out_dir`` (see the module doc), or, when ``config.selection.quota`` is set, a
@@ -677,6 +728,9 @@ def generate(
         scheduler: address of a Dask scheduler (``tcp://host:8786``).
         progress: show tqdm progress bars.
         use_cache: read/write the object-label cache.
+        collect: the workers write each scene into a temporary folder of their own and send
+            the files back; this process writes them into ``out_dir`` (for cluster workers that
+            do not share a disk with it). The files are the same bytes either way.
 
     Returns:
         A :class:`GenerateReport` (:meth:`GenerateReport.format_summary` for people). A
@@ -753,7 +807,8 @@ def generate(
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 
     executor = _executor(workers, scheduler)
-    run = _Run(out, cfg, seed, executor, report, sources, use_cache, progress, resume, extra)
+    run = _Run(out, cfg, seed, executor, report, sources, use_cache, progress, resume, extra,
+               collect=collect)  # fmt: skip
     try:
         if quota is None:
             run.ensure_labels([s for specs in per_scene for s in specs])
