@@ -35,6 +35,7 @@ __all__: list[str] = [
     "RayScene",
     "Renderer",
     "SEAL_FAILURE_NAMES",
+    "SUCTION_TOOL_OFFSET",
     "SURFACE_DARK",
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
@@ -931,6 +932,7 @@ class ShakeOptions:
     """
 
     polyhedral_contacts: bool
+    staircase: bool
     def __init__(self) -> None: ...
     def density_factors(self) -> list[float]: ...
     def frictions(self) -> list[float]: ...
@@ -1051,6 +1053,10 @@ class ShakeOptions:
     def solver_iterations(self) -> int: ...
     @solver_iterations.setter
     def solver_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def staircase_checks(self) -> int: ...
+    @staircase_checks.setter
+    def staircase_checks(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
 
 class SceneGraspModel:
     """
@@ -1080,6 +1086,7 @@ class SceneGraspModel:
         visibility_tolerance: typing.SupportsFloat | typing.SupportsIndex,
         near_plane: typing.SupportsFloat | typing.SupportsIndex,
         num_threads: typing.SupportsInt | typing.SupportsIndex,
+        approach_step: typing.SupportsFloat | typing.SupportsIndex = 0.005,
     ) -> None: ...
     def collides(
         self,
@@ -1412,6 +1419,7 @@ SEAL_FAILURE_NAMES: tuple = (
     "strain",
     "rough",
 )
+SUCTION_TOOL_OFFSET: float = 0.1321
 SURFACE_DARK: int = 2
 SURFACE_MIRROR: int = 4
 SURFACE_TRANSPARENT: int = 1
