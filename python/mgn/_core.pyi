@@ -123,12 +123,40 @@ class Material:
         self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[4, 1]"]
     ) -> None: ...
     @property
+    def has_pbr(self) -> bool:
+        """
+        True when metallic/roughness/ior/transmission are given (glTF, built-in)
+        """
+    @has_pbr.setter
+    def has_pbr(self, arg0: bool) -> None: ...
+    @property
+    def ior(self) -> float:
+        """
+        index of refraction >= 1 (KHR_materials_ior)
+        """
+    @ior.setter
+    def ior(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def metallic(self) -> float:
+        """
+        [0,1] (glTF metallicFactor)
+        """
+    @metallic.setter
+    def metallic(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
     def opacity(self) -> float:
         """
         1 opaque .. 0 invisible
         """
     @opacity.setter
     def opacity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def roughness(self) -> float:
+        """
+        perceptual roughness [0,1] (glTF roughnessFactor)
+        """
+    @roughness.setter
+    def roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def shininess(self) -> float:
         """
@@ -159,6 +187,13 @@ class Material:
         """
     @texture_path.setter
     def texture_path(self, arg0: str) -> None: ...
+    @property
+    def transmission(self) -> float:
+        """
+        [0,1], 1 = clear dielectric (KHR_materials_transmission)
+        """
+    @transmission.setter
+    def transmission(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
 
 class MeshReport:
     """

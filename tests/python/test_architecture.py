@@ -55,7 +55,9 @@ LAYERS: dict[str, int] = {
 
 # Third-party modules that may be imported inside a function: optional extras (dask, distributed,
 # scipy, trimesh, fcl are not dependencies of mgn) or heavy and used by one command only.
-LAZY_IMPORTS: frozenset[str] = frozenset({"dask", "distributed", "scipy", "trimesh", "fcl"})
+LAZY_IMPORTS: frozenset[str] = frozenset(
+    {"dask", "distributed", "scipy", "trimesh", "fcl", "pyoidn"}  # pyoidn: optional denoiser
+)
 
 
 # Builtins mgn never raises itself: each has an mgn.errors class that also derives from it.

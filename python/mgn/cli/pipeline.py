@@ -34,6 +34,7 @@ from mgn.pipeline.label_cache import label_cache_dir
 from mgn.pipeline.runner import generate
 from mgn.pipeline.sanity import config_warnings
 from mgn.pipeline.testset import parse_quota
+from mgn.render.photo import add_engine_arguments, settings_from_args
 
 __all__ = ["register"]
 
@@ -63,6 +64,8 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipel
         sel["batch_scenes"] = args.batch_scenes
     if args.prune_rejected:
         sel["prune_rejected"] = True
+
+    cfg = dataclasses.replace(cfg, render=settings_from_args(cfg.render, args))
     if sel:
         merged = {**cfg.selection.to_dict(), **sel}
         cfg = dataclasses.replace(cfg, selection=SelectionConfig.from_dict(merged, "selection"))
@@ -226,6 +229,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--prune-rejected", action="store_true", help="delete the files of the views not selected"
     )
+
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_generate)
 
     c = sub.add_parser("config", help="the dataset configuration (YAML)")

@@ -14,6 +14,7 @@ import numpy as np
 from mgn.errors import InvalidArgumentError
 from mgn.io.view_images import render_views
 from mgn.objects import builtin_objects, tote_mesh
+from mgn.render.photo import RenderSettings, add_engine_arguments, settings_from_args
 from mgn.scene.cameras import Intrinsics, mgn_rig
 
 __all__ = ["register"]
@@ -37,6 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--scale", type=float, default=1.0, help="image size factor (1 = 1200 px)")
     p.add_argument("--no-randomize", action="store_true", help="fixed light and colours")
+
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_demo)
 
 
@@ -71,6 +74,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     res = render_views(
         items, tote_mesh(), args.views, args.out, rig_seed=args.seed, K=K, sensor=args.sensor,
         randomize=not args.no_randomize, seed=args.seed,
+        render=settings_from_args(RenderSettings(), args),
     )  # fmt: skip
     for r in res:
         print(f"view {r.index}: {r.valid.mean():.1%} valid depth -> {args.out}/{r.index}_*.png")

@@ -25,6 +25,7 @@ from mgn.pipeline.config import load_config
 from mgn.pipeline.label_cache import object_labels
 from mgn.pipeline.label_scene import LabelOptions, label_scene
 from mgn.pipeline.scene_writer import scene_views
+from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.scene.compose import compose_objects
 from mgn.scene.drop import drop_scene
 from mgn.scene.scene import DropOptions, Scene
@@ -117,6 +118,7 @@ def _register_drop(ssub: argparse._SubParsersAction) -> None:
 
 def _cmd_render(args: argparse.Namespace) -> int:
 
+    render = settings_from_args(load_config(args.config).render, args)
     scene = Scene.from_json(args.scene)
     if len(scene) == 0:
         raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to render")
@@ -129,6 +131,8 @@ def _cmd_render(args: argparse.Namespace) -> int:
         sensor=args.sensor,
         randomize=not args.no_randomize,
         seed=scene.seed,
+        render=render,
+        num_threads=args.num_threads,
     )
     for v in views:
         print(f"view {v.index}: {args.out}/{v.index}_rgb.png, _depth.png, _instances.png")
@@ -147,12 +151,16 @@ def _register_render(ssub: argparse._SubParsersAction) -> None:
         "--sensor", choices=["ideal", "structured-light", "tof"], default="structured-light"
     )
     p.add_argument("--no-randomize", action="store_true", help="fixed light and colours")
+    p.add_argument("--config", help="dataset config YAML (its render section)")
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_render)
 
 
 def _cmd_label(args: argparse.Namespace) -> int:
 
     config = load_config(args.config)
+    render = settings_from_args(config.render, args)
     scene = Scene.from_json(args.scene)
     if len(scene) == 0:
         raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to label")
@@ -188,6 +196,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
         layout=config.labels.layout,
         scene_grasps=grasps,
         num_threads=args.num_threads,
+        render=render,
     )
     with tqdm(total=len(views), desc="views", unit="view", disable=None) as bar:
         with atomic_dir(args.out, overwrite=args.overwrite) as tmp:
@@ -210,6 +219,7 @@ def _register_label(ssub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-grasps", action="store_true", help="skip the scene grasp labels")
     p.add_argument("--overwrite", action="store_true", help="replace an existing folder")
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_label)
 
 

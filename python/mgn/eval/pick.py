@@ -74,6 +74,7 @@ from mgn.pipeline.label_cache import ObjectLabels
 from mgn.pipeline.label_cache import object_labels as cached_labels
 from mgn.pipeline.label_scene import LabelOptions, strided_subset
 from mgn.pipeline.scene_writer import scene_intrinsics
+from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.render.views import ViewImages, iter_views
 from mgn.scene.cameras import CameraView, mgn_rig
 from mgn.scene.drop import settle_tracked
@@ -321,17 +322,21 @@ def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
     return CameraView(K, poses[0])
 
 
-def _render(scene: Scene, view: CameraView) -> ViewImages:
-    """The top view without noise or randomisation."""
+def _render(scene: Scene, view: CameraView, render: Any = None, num_threads: int = 0) -> ViewImages:
+    """The top view without noise or randomisation; the picture by ``render``
+    (:class:`mgn.render.photo.RenderSettings`, default the raster engine)."""
 
     frames = iter_views(scene.render_items(), tote_mesh(scene.tote), [(0, view)], sensor="ideal",
-                        randomize=False, seed=scene.seed)  # fmt: skip
+                        randomize=False, seed=scene.seed, render=render,
+                        num_threads=num_threads)  # fmt: skip
     return next(iter(frames))
 
 
-def _observe(scene: Scene, view: CameraView, num_threads: int) -> tuple[Any, Any, Any]:
+def _observe(
+    scene: Scene, view: CameraView, num_threads: int, render: Any = None
+) -> tuple[Any, Any, Any]:
 
-    images = _render(scene, view)
+    images = _render(scene, view, render, num_threads)
     rays = SceneRayModel.from_scene(scene)
     labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal,
                                 keypoints=False, num_threads=num_threads)  # fmt: skip
@@ -504,7 +509,7 @@ def _observe_pile(
         num_threads=num_threads,
     )
     g = model.suction if gripper == "suction" else model.pj
-    images, vlabels, layout = _observe(cur, view, num_threads)
+    images, vlabels, layout = _observe(cur, view, num_threads, config.render)
     vis = model.view_grasps(view, np.asarray(vlabels.visible_pixels) > 0)
     visible = np.zeros(len(g), bool)
     for s in (vis.non_colliding, vis.colliding):
@@ -775,15 +780,21 @@ def run_picking(
         success_threshold=float(success_threshold),
     )
     if folder is not None:
-        _write_outputs(folder, results, cur, view, frames, num_threads)
+        _write_outputs(folder, results, cur, view, frames, num_threads, config.render)
     return results
 
 
 def _write_outputs(
-    folder: Path, results: PickResults, scene: Scene, view: CameraView, frames: list, threads: int
+    folder: Path,
+    results: PickResults,
+    scene: Scene,
+    view: CameraView,
+    frames: list,
+    threads: int,
+    render: Any = None,
 ) -> None:
 
-    final = _render(scene, view)
+    final = _render(scene, view, render, threads)
     img = _draw(final.rgb, view, None, None)
     img.save(folder / "final.png")
     frames = [*frames, img]
@@ -815,6 +826,9 @@ def _cmd_pick(args: argparse.Namespace) -> int:
     scene, config = _load_scene(Path(args.scene))
     if args.config is not None:
         config = load_config(args.config)
+    if args.engine is not None or args.spp is not None:
+        config = config or default_config()
+        config = dataclasses.replace(config, render=settings_from_args(config.render, args))
     results = run_picking(
         scene,
         policy=args.policy,
@@ -862,4 +876,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
                    help="C++ threads (0 = all cores)")  # fmt: skip
     p.add_argument("--out", required=True, help="output folder")
+
+    add_engine_arguments(p, what="the step pictures")
     p.set_defaults(func=_cmd_pick)

@@ -31,6 +31,7 @@ from mgn.errors import InvalidArgumentError
 from mgn.io.scene_format import ViewRecord, scene_gt_entries, write_scene_gt, write_view
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
+from mgn.render.photo import RenderSettings
 from mgn.render.sensor import SensorName
 from mgn.render.views import iter_views
 from mgn.scene.cameras import CameraView
@@ -60,6 +61,8 @@ class LabelOptions:
             Object labels often hold tens of thousands of parallel-jaw grasps; MetaGraspNet's
             scenes carry a few thousand per object.
         num_threads: C++ threads (0 = all cores); results do not depend on it.
+        render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
+            None = the raster engine). Labels do not depend on it.
     """
 
     sensor: SensorName = "structured-light"
@@ -71,6 +74,7 @@ class LabelOptions:
     grasp_offsets: tuple[float, ...] = (0.0, 0.1)
     max_grasps_per_object: int = 2000
     num_threads: int = 0
+    render: RenderSettings | None = None
 
 
 @dataclass
@@ -79,6 +83,8 @@ class LabelTimings:
 
     seconds: dict[str, float] = field(default_factory=dict)
     views: int = 0
+    #: What made the RGB images (``ViewImages.engine`` of the last view).
+    engine: dict[str, Any] = field(default_factory=dict)
 
     def add(self, stage: str, dt: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
@@ -237,10 +243,12 @@ def label_scene(
     with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool:
         t0 = time.perf_counter()
         frames = iter_views(objects, tote_mesh(scene.tote), views, sensor=opt.sensor,
-                            randomize=opt.randomize, seed=opt.seed)  # fmt: skip
+                            randomize=opt.randomize, seed=opt.seed, render=opt.render,
+                            num_threads=opt.num_threads)  # fmt: skip
         for k, images in enumerate(frames):
             t1 = time.perf_counter()
             timings.add("render", t1 - t0)
+            timings.engine = dict(images.engine)
             v, view = views[k]
             labels = view_object_labels(
                 rays,

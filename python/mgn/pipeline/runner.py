@@ -73,6 +73,7 @@ from mgn.pipeline.label_cache import (
 )
 from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
 from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
+from mgn.render.photo import RenderSettings
 from mgn.scene.drop import drop_scene, drop_scene_refilled
 from mgn.scene.scene import BUILTIN, resolve_object
 
@@ -204,7 +205,9 @@ def run_scene(task: SceneTask) -> SceneResult:
         times["write"] = time.perf_counter() - t1
         times.update({f"write: {k}": v for k, v in (stages or {}).items()})
         t2 = time.perf_counter()
-        write_manifest(tmp, scene=task.index, seed=task.seed)
+        # What made the RGB images (engine, samples, denoiser), for `mgn report`.
+        write_manifest(tmp, scene=task.index, seed=task.seed,
+                       render=task.config.render.describe())  # fmt: skip
         size = _folder_size(tmp)
         if task.collect:
             files = {p.relative_to(tmp).as_posix(): p.read_bytes()
@@ -569,6 +572,10 @@ def _comparable(config_doc: Any) -> Any:
     doc = json.loads(json.dumps(config_doc))
     if isinstance(doc, dict) and isinstance(doc.get("selection"), dict):
         doc["selection"].pop("max_scenes", None)
+    if isinstance(doc, dict) and "render" not in doc:
+        # Recorded before the render section existed: those images came from the raster.
+
+        doc["render"] = json.loads(json.dumps(Config(render=RenderSettings()).to_dict()["render"]))
     return doc
 
 

@@ -10,14 +10,15 @@ list of :class:`~mgn.scene.cameras.CameraView`). It yields one :class:`ViewImage
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
-from typing import cast
+from dataclasses import dataclass, field
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry.mesh import Mesh, make_box
+from mgn.render.photo import PhotoRenderer, RenderSettings
 from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
 from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
@@ -40,7 +41,9 @@ class ViewImages:
         depth_ideal: (H, W) float32 noise-free z-depth, m, 0 where nothing is seen.
         valid: (H, W) bool.
         instance_ids: (H, W) int32, 0 = background.
-        light: the light used.
+        light: the light used (raster engine; the path engine's lights are in ``engine``).
+        engine: what made ``rgb``: ``{"engine": "raster"}`` or ``{"engine": "path", "spp",
+            "denoised", "max_bounces"}`` (:meth:`mgn.render.photo.RenderSettings.describe`).
     """
 
     index: int
@@ -51,6 +54,7 @@ class ViewImages:
     valid: npt.NDArray[np.bool_]
     instance_ids: npt.NDArray[np.int32]
     light: LightSample
+    engine: dict[str, Any] = field(default_factory=lambda: {"engine": "raster"})
 
 
 _CMAP = np.array(
@@ -159,12 +163,19 @@ def iter_views(
     floor: bool = True,
     shadows: bool = True,
     renderer: Renderer | None = None,
+    render: RenderSettings | None = None,
+    num_threads: int = 0,
 ) -> Iterator[ViewImages]:
     """Render the views of a scene one at a time (the arguments of :func:`mgn.render_views`, without
     ``out_dir``): the scene is uploaded once and each view's images are yielded before the next
     view is rendered, so memory does not grow with the number of views. ``views`` may also be
     (view index, camera) pairs: the index names the files and seeds the view's randomisation.
+
+    With ``render.engine == "path"`` the RGB image is path-traced (:mod:`mgn.render.photo`);
+    depth and instance ids still come from the raster's geometry passes, which the tracer
+    matches pixel for pixel.
     """
+    settings = render if render is not None else RenderSettings()
     X_tote = _checked_scene(objects, tote, X_W_tote)
     cams = _cameras(views, Intrinsics.mgn_synthetic() if K is None else K, rig_seed, X_tote)
     max_w = max(c.K.width for _, c in cams)
@@ -202,14 +213,30 @@ def iter_views(
         instances.append(Instance(upload(slab), X_floor, 0, randomize_color=True))
     r.set_instances(instances)
     flags = r.surface_flags_by_id()
+    photo = None
+    if settings.engine == "path":
+        tote_color: tuple[float, ...] = (0.2, 0.35, 0.6)
+        if tote is not None and tote.materials:
+            tote_color = tuple(float(c) for c in np.asarray(tote.materials[0].base_color)[:3])
+        photo = PhotoRenderer(
+            objects, tote, X_tote, (slab, X_floor) if floor else None, settings,
+            tote_color=tote_color, randomize=randomize, seed=seed, num_threads=num_threads,
+        )  # fmt: skip
 
     for v, cam in cams:
-        img = r.render(cam, randomize=randomize, seed=seed, view_index=v, shadows=shadows)
-        assert img.rgb is not None and img.depth is not None and img.instance_ids is not None
+        img = r.render(cam, rgb=photo is None, randomize=randomize, seed=seed, view_index=v,
+                       shadows=shadows)  # fmt: skip
+        assert img.depth is not None and img.instance_ids is not None
+        if photo is not None:
+            rgb, _ = photo.render(cam, v)
+            engine = photo.describe()
+        else:
+            assert img.rgb is not None
+            rgb, engine = img.rgb, {"engine": "raster"}
         sens = apply_depth_sensor(
             img.depth, img.instance_ids, cam.K, sensor, flags_by_id=flags, seed=seed + v
         )
         res = ViewImages(
-            v, cam, img.rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light
+            v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine
         )
         yield res
