@@ -277,6 +277,15 @@ class RayScene:
         coherent: bool = False,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
     ) -> dict: ...
+    def intersect_ids(
+        self,
+        origins: typing.Any,
+        directions: typing.Any,
+        tnear: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+        tfar: typing.SupportsFloat | typing.SupportsIndex = ...,
+        coherent: bool = False,
+        num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+    ) -> tuple: ...
     def intersect_all(
         self,
         origins: typing.Any,
