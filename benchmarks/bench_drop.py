@@ -67,7 +67,7 @@ def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
     from mgn.scene.convex import DROP_DECOMPOSITION
     from mgn.scene.drop import _simulate
 
-    out, _ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
+    out, *_ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
     parts, props = [], []
     for s in objects:
         mesh = object_mesh(s)

@@ -12,11 +12,14 @@ import numpy.typing
 
 __all__: list[str] = [
     "AntipodalSampler",
+    "AreaLight",
     "BackendError",
     "CollisionModel",
     "Cup",
     "DepthSensorParams",
     "DepthSensorPreset",
+    "Environment",
+    "FilmOptions",
     "Intrinsics",
     "InvalidArgumentError",
     "IoError",
@@ -26,9 +29,13 @@ __all__: list[str] = [
     "MeshReport",
     "MgnError",
     "ParallelJawGripper",
+    "PathScene",
+    "PathTraceOptions",
+    "PbrMaterial",
     "RayScene",
     "Renderer",
     "SEAL_FAILURE_NAMES",
+    "SUCTION_TOOL_OFFSET",
     "SURFACE_DARK",
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
@@ -48,6 +55,7 @@ __all__: list[str] = [
     "compute_mass_properties",
     "convex_decomposition",
     "convex_hull",
+    "develop_radiance",
     "distance",
     "drop_objects",
     "gripper_meshes",
@@ -58,6 +66,7 @@ __all__: list[str] = [
     "make_box",
     "make_cylinder",
     "make_sphere",
+    "material_texture_rgb",
     "mesh_surface_flags",
     "mgn_rig",
     "mgn_rig_from_params",
@@ -598,6 +607,225 @@ class DepthSensorParams:
     @sigma_z0.setter
     def sigma_z0(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
 
+class PbrMaterial:
+    """
+    glTF 2.0 metallic-roughness material (path tracer).
+    """
+    def __init__(self) -> None: ...
+    def set_texture(self, texture: typing.Any) -> None:
+        """
+        (H, W, 3) uint8 sRGB, top row first, or None
+        """
+    def validate(self) -> None: ...
+    @property
+    def base_color(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[3, 1]"]: ...
+    @base_color.setter
+    def base_color(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"]
+    ) -> None: ...
+    @property
+    def emission(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[3, 1]"]: ...
+    @emission.setter
+    def emission(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"]
+    ) -> None: ...
+    @property
+    def ior(self) -> float: ...
+    @ior.setter
+    def ior(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def metallic(self) -> float: ...
+    @metallic.setter
+    def metallic(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def roughness(self) -> float: ...
+    @roughness.setter
+    def roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def transmission(self) -> float: ...
+    @transmission.setter
+    def transmission(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
+class AreaLight:
+    """
+    One-sided rect or disc area light emitting along +z_L.
+    """
+
+    shape: str
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+    @property
+    def X_WL(self) -> numpy.ndarray: ...
+    @X_WL.setter
+    def X_WL(self, arg1: typing.Any) -> None: ...
+    @property
+    def color(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[3, 1]"]: ...
+    @color.setter
+    def color(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"]
+    ) -> None: ...
+    @property
+    def intensity(self) -> float: ...
+    @intensity.setter
+    def intensity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def size(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[2, 1]"]: ...
+    @size.setter
+    def size(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"]
+    ) -> None: ...
+
+class Environment:
+    """
+    Environment dome: uniform, gradient or sky.
+    """
+
+    kind: str
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+    @property
+    def color(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[3, 1]"]: ...
+    @color.setter
+    def color(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"]
+    ) -> None: ...
+    @property
+    def ground(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[3, 1]"]: ...
+    @ground.setter
+    def ground(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"]
+    ) -> None: ...
+    @property
+    def horizon(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[3, 1]"]: ...
+    @horizon.setter
+    def horizon(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"]
+    ) -> None: ...
+    @property
+    def intensity(self) -> float: ...
+    @intensity.setter
+    def intensity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def sun_angular_radius(self) -> float: ...
+    @sun_angular_radius.setter
+    def sun_angular_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def sun_direction(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]: ...
+    @sun_direction.setter
+    def sun_direction(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"]
+    ) -> None: ...
+    @property
+    def sun_strength(self) -> float: ...
+    @sun_strength.setter
+    def sun_strength(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def zenith(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float32], "[3, 1]"]: ...
+    @zenith.setter
+    def zenith(
+        self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"]
+    ) -> None: ...
+
+class PathTraceOptions:
+    """
+    Path tracing settings of one view.
+    """
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+    @property
+    def aperture_radius(self) -> float: ...
+    @aperture_radius.setter
+    def aperture_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def clamp(self) -> float: ...
+    @clamp.setter
+    def clamp(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def clamp_indirect(self) -> float: ...
+    @clamp_indirect.setter
+    def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def focus_distance(self) -> float: ...
+    @focus_distance.setter
+    def focus_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def max_bounces(self) -> int: ...
+    @max_bounces.setter
+    def max_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def num_threads(self) -> int: ...
+    @num_threads.setter
+    def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def rr_depth(self) -> int: ...
+    @rr_depth.setter
+    def rr_depth(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def seed(self) -> int: ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def spp(self) -> int: ...
+    @spp.setter
+    def spp(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def view_index(self) -> int: ...
+    @view_index.setter
+    def view_index(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+
+class FilmOptions:
+    """
+    Radiance to 8-bit sRGB development settings.
+    """
+
+    tone: str
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+    @property
+    def exposure(self) -> float: ...
+    @exposure.setter
+    def exposure(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def num_threads(self) -> int: ...
+    @num_threads.setter
+    def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def read_noise(self) -> float: ...
+    @read_noise.setter
+    def read_noise(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def seed(self) -> int: ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def shot_noise(self) -> float: ...
+    @shot_noise.setter
+    def shot_noise(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def view_index(self) -> int: ...
+    @view_index.setter
+    def view_index(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+
+class PathScene:
+    """
+    Immutable path-traced scene (Embree geometry + lights).
+    """
+    def __init__(
+        self,
+        meshes: collections.abc.Sequence[Mesh],
+        poses: typing.Any,
+        instance_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
+        materials: collections.abc.Sequence[collections.abc.Sequence[PbrMaterial]],
+        lights: collections.abc.Sequence[AreaLight],
+        environment: Environment,
+    ) -> None: ...
+    def render(self, K: Intrinsics, X_WC: typing.Any, options: PathTraceOptions) -> dict: ...
+    def with_lighting(
+        self, lights: collections.abc.Sequence[AreaLight], environment: Environment
+    ) -> PathScene: ...
+    @property
+    def num_triangles(self) -> int: ...
+
 class ParallelJawGripper:
     """
     Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless palm_mesh, finger_left_mesh and finger_right_mesh are all set (closed, hand frame, fingers at opening 0).
@@ -678,6 +906,7 @@ class ShakeOptions:
     """
 
     polyhedral_contacts: bool
+    staircase: bool
     def __init__(self) -> None: ...
     def density_factors(self) -> list[float]: ...
     def frictions(self) -> list[float]: ...
@@ -798,6 +1027,10 @@ class ShakeOptions:
     def solver_iterations(self) -> int: ...
     @solver_iterations.setter
     def solver_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def staircase_checks(self) -> int: ...
+    @staircase_checks.setter
+    def staircase_checks(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
 
 class SceneGraspModel:
     """
@@ -827,6 +1060,7 @@ class SceneGraspModel:
         visibility_tolerance: typing.SupportsFloat | typing.SupportsIndex,
         near_plane: typing.SupportsFloat | typing.SupportsIndex,
         num_threads: typing.SupportsInt | typing.SupportsIndex,
+        approach_step: typing.SupportsFloat | typing.SupportsIndex = 0.005,
     ) -> None: ...
     def collides(
         self,
@@ -987,6 +1221,7 @@ def convex_decomposition(
     merge_max_parts: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> list[Mesh]: ...
 def convex_hull(mesh: Mesh) -> Mesh: ...
+def develop_radiance(radiance: typing.Any, film: FilmOptions) -> typing.Any: ...
 def distance(
     a: CollisionModel,
     X_WA: typing.Any,
@@ -1053,6 +1288,11 @@ def make_sphere(
     segments: typing.SupportsInt | typing.SupportsIndex = 64,
     rings: typing.SupportsInt | typing.SupportsIndex = 32,
 ) -> Mesh: ...
+def material_texture_rgb(material: Material) -> typing.Any:
+    """
+    The material's base colour texture decoded to (H, W, 3) uint8 sRGB (top row first), or None.
+    """
+
 def mesh_surface_flags(mesh: Mesh) -> int: ...
 def mgn_rig(
     seed: typing.SupportsInt | typing.SupportsIndex, target: typing.Any
@@ -1153,6 +1393,7 @@ SEAL_FAILURE_NAMES: tuple = (
     "strain",
     "rough",
 )
+SUCTION_TOOL_OFFSET: float = 0.1321
 SURFACE_DARK: int = 2
 SURFACE_MIRROR: int = 4
 SURFACE_TRANSPARENT: int = 1

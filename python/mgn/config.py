@@ -249,6 +249,11 @@ class ObjectsConfig(_Section):
             defaults to 20 objects from randomly drawn categories with ``copies`` copies each.
         copies: (min, max) copies per chosen category (MGN: 2-5).
         user_objects: user-object YAML files added to the catalogue.
+        refill: when objects leave the tote during the drop, drop the scene again (the same
+            objects, a seed derived from the scene seed and the attempt) until every asked
+            object stays in, at most ``refill_attempts`` drops; the scene with the most objects
+            in the tote is kept. Without it the objects that left are removed (and reported).
+        refill_attempts: drops at most per scene with ``refill`` (>= 1).
     """
 
     names: tuple[str | int, ...] | None = None
@@ -256,6 +261,8 @@ class ObjectsConfig(_Section):
     count: int | None = None
     copies: tuple[int, int] = (2, 5)
     user_objects: tuple[str, ...] = ()
+    refill: bool = False
+    refill_attempts: int = 5
 
     _CHECKS = {
         "names": _optional(_list(_name)),
@@ -263,6 +270,8 @@ class ObjectsConfig(_Section):
         "count": _optional(_int(1)),
         "copies": _list(_int(1), length=2),
         "user_objects": _list(_path, nonempty=False),
+        "refill": _bool,
+        "refill_attempts": _int(1),
     }
 
     #: Objects per scene when nothing is chosen.

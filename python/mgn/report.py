@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from mgn.io.dataset import Dataset, View
+from mgn.io.scene_format import COLLISION_OBSTACLES, COLLISION_PARTS
 
 __all__ = ["collect_stats", "svg_bars", "write_report"]
 
@@ -123,6 +124,23 @@ def _grasp_scores(view: View) -> dict[tuple[str, str], np.ndarray]:
     return out
 
 
+def _collision_reasons(view: View) -> Counter:
+    """(kind, gripper part, obstacle) -> number of colliding grasps of the view
+    (``colliding_grasps/<kind>/collision_part`` and ``collision_obstacle``)."""
+    import h5py
+
+    out: Counter = Counter()
+    with h5py.File(view.path("_scene.hdf5"), "r") as h5:
+        for kind in ("paralleljaw", "suctioncup"):
+            g = f"colliding_grasps/{kind}/"
+            if g + "collision_part" in h5 and g + "collision_obstacle" in h5:
+                part = np.asarray(h5[g + "collision_part"][()], int).reshape(-1)
+                obst = np.asarray(h5[g + "collision_obstacle"][()], int).reshape(-1)
+                for pa, ob in zip(part, obst, strict=True):
+                    out[kind, COLLISION_PARTS.get(pa, "?"), COLLISION_OBSTACLES.get(ob, "?")] += 1
+    return out
+
+
 def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
     """Per-label statistics of ``ds`` over (a sample of) its views, JSON-ready. The views are
     read one at a time, and only the arrays the statistics need: memory does not grow with the
@@ -138,6 +156,8 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
     occl, visible_per_view, layers, levels = [], [], Counter(), Counter()
     scores: dict[str, list[np.ndarray]] = {"paralleljaw": [], "suctioncup": []}
     counts = {"non_colliding": Counter(), "colliding": Counter()}
+    # Why grasps collide: (kind, part, obstacle) -> count, from colliding_grasps/*/collision_*.
+    why: Counter = Counter()
     invalid = []
     for folder, index in refs:
         view = View(folder, index)  # dropped after this iteration, with the arrays it read
@@ -160,10 +180,12 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
             level = level.get("level")
         if level is not None:
             levels[int(level)] += 1
-        for (group, kind), s in _grasp_scores(view).items():
+        for (group, kind), sc in _grasp_scores(view).items():
             if group == "non_colliding":
-                scores[kind].append(s)
-            counts[group][kind] += len(s)
+                scores[kind].append(sc)
+            counts[group][kind] += len(sc)
+        for (kind, pa, ob), n in _collision_reasons(view).items():
+            why[(kind, pa, ob)] += n
         d = view.npz_array("depth")
         invalid.append(float(np.mean(~np.isfinite(d) | (d <= 0))))
     return {
@@ -176,6 +198,10 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
         "difficulty": {str(k): v for k, v in sorted(levels.items())},
         "grasp_scores": {k: (np.concatenate(v).tolist() if v else []) for k, v in scores.items()},
         "grasp_counts": {k: dict(v) for k, v in counts.items()},
+        "collision_reasons": {
+            kind: {f"{pa} / {ob}": n for (k, pa, ob), n in sorted(why.items()) if k == kind}
+            for kind in scores
+        },
         "invalid_depth_share": invalid,
     }
 
@@ -314,6 +340,11 @@ def write_report(
         "non-colliding grasps (sampled views)": kinds(gc["non_colliding"]),
         "colliding grasps (sampled views)": kinds(gc["colliding"]),
     }
+    for kind, split in stats.get("collision_reasons", {}).items():
+        if split:
+            summary[f"why {kind} grasps collide (part / obstacle)"] = ", ".join(
+                f"{k} {n}" for k, n in sorted(split.items(), key=lambda kv: -kv[1])
+            )
     rows = "".join(
         f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in summary.items()
     )

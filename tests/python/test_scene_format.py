@@ -168,7 +168,8 @@ def test_written_view_reads_back_in_si(dataset):
     assert [e["obj_id"] for e in gt["1"]] == [11, 12]
     assert np.allclose(gt["1"][1]["cam_t_m2c"], [2, 2, 65])
     with h5_open(view.path("_scene.hdf5")) as h5:
-        assert all(h5[k].dtype == np.float32 for k in ("objects/categories", "objects/bbox_loose"))
+        assert h5["objects/bbox_loose"].dtype == np.float32
+        assert h5["objects/categories"].dtype == np.int32  # integer-valued labels as integers
 
 
 def h5_open(path):

@@ -123,8 +123,13 @@ int cmd_pj(const std::vector<std::string>& args) {
       gripper_path.empty() ? mgn::ParallelJawGripper{} : read_gripper(gripper_path);
   mgn::LoadOptions load;
   load.scale = scale;
-  const mgn::Mesh mesh = mgn::load_mesh(mesh_path, load);
+  mgn::Mesh mesh = mgn::load_mesh(mesh_path, load);
   warn_implausible_size("mgn-cli pj", mesh_path, mesh);
+  // A closed mesh wound inward (e.g. a mirrored export) would give inward surface normals and no
+  // grasp at all: use the same geometry wound outward (as mgn's user-object path does).
+  const mgn::MeshReport report = mesh.validate();
+  if (report.is_watertight && report.is_winding_consistent && report.signed_volume < 0)
+    mesh = mesh.flipped();
   mgn::MassOptions mass_options;
   mass_options.density = density;
   mass_options.open_mesh = mgn::OpenMeshPolicy::Error;

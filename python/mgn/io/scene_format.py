@@ -43,7 +43,10 @@ from mgn.render.camera import Intrinsics
 
 __all__ = [
     "CM_RULES",
+    "COLLISION_OBSTACLES",
+    "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
+    "HDF5_INT_LEAVES",
     "MGN_HDF5_CM",
     "M_TO_CM",
     "ViewRecord",
@@ -71,6 +74,27 @@ CM_RULES: tuple[tuple[str, str], ...] = (
     ("keypts_relative_to_camera", "xyz"),
 )
 
+#: Leaf names of ``{v}_scene.hdf5`` datasets stored as int32 (integer-valued labels; MetaGraspNet's
+#: readers only index with them). Everything else is float32, as in MetaGraspNet's files.
+HDF5_INT_LEAVES: tuple[str, ...] = (
+    "object_id",
+    "occluded_object_id",
+    "categories",
+    "collision_part",
+    "collision_obstacle",
+)
+
+#: Codes of ``colliding_grasps/*/collision_part``: the gripper part that collides first along
+#: the approach.
+COLLISION_PARTS: dict[int, str] = {1: "palm", 2: "finger", 3: "cup", 4: "shaft"}
+#: Codes of ``colliding_grasps/*/collision_obstacle``: floor = the tote where the part reaches
+#: below its inner floor surface, wall = the rest of the tote.
+COLLISION_OBSTACLES: dict[int, str] = {
+    1: "floor",
+    2: "wall",
+    3: "other object",
+    4: "grasped object",
+}
 #: Datasets every view's ``{v}_scene.hdf5`` has (empty groups have zero-length datasets).
 HDF5_FLOAT_KEYS: tuple[str, ...] = (
     "camera/pose_relative_to_world",
@@ -287,7 +311,12 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
         if key in npz or key in images or key == "valid_depth":
             raise ValueError(f"write_view: extra image '{key}' would replace a format key")
         images[key] = np.asarray(value)
-    h5 = {path: to_cm(path, value).astype(f4) for path, value in rec.scene_hdf5.items()}
+    h5 = {
+        path: np.asarray(value).astype(np.int32)
+        if path.rpartition("/")[2] in HDF5_INT_LEAVES
+        else to_cm(path, value).astype(f4)
+        for path, value in rec.scene_hdf5.items()
+    }
     files: dict[str, bytes] = {
         f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
         f"{v}.npz": npz_bytes(**npz),
@@ -309,15 +338,16 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
 def scene_gt_entries(
     X_CO: npt.ArrayLike, obj_ids: Sequence[int], seen: Sequence[bool] | None = None
 ) -> list[dict[str, Any]]:
-    """``scene_gt.json`` entries of one view: per instance ``cam_R_m2c`` (3x3 row-major),
-    ``cam_t_m2c`` (cm) and ``obj_id``; instances with ``seen`` False are left out."""
+    """``scene_gt.json`` entries of one view: per instance ``cam_R_m2c`` (a nested 3x3 list, one
+    list per row of R_CO, as MetaGraspNet writes it), ``cam_t_m2c`` (cm) and ``obj_id`` (int);
+    instances with ``seen`` False are left out."""
     X = np.asarray(X_CO, np.float64)
     out = []
     for i, oid in enumerate(obj_ids):
         if seen is not None and not seen[i]:
             continue
         out.append({
-            "cam_R_m2c": [float(x) for x in X[i, :3, :3].reshape(-1)],
+            "cam_R_m2c": [[float(x) for x in row] for row in X[i, :3, :3]],
             "cam_t_m2c": [float(x) for x in X[i, :3, 3] * M_TO_CM],
             "obj_id": int(oid),
         })  # fmt: skip

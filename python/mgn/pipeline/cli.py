@@ -66,10 +66,13 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.confi
 
 def _cmd_generate(args: argparse.Namespace) -> int:
     from mgn.pipeline.runner import generate
+    from mgn.pipeline.sanity import config_warnings
     from mgn.scene.cli import _split
 
     args.objects, args.categories = _split(args.objects), _split(args.categories)
     cfg = _config_with_overrides(args)
+    for w in config_warnings(cfg):
+        print(f"mgn: warning: {w}", file=sys.stderr)
     scenes = args.scenes
     if scenes is None and cfg.selection.quota is None:
         scenes = 3
@@ -106,10 +109,15 @@ def _cmd_config_dump(args: argparse.Namespace) -> int:
 
 def _cmd_config_check(args: argparse.Namespace) -> int:
     from mgn.config import load_config
+    from mgn.pipeline.sanity import config_warnings
 
     config = load_config(args.file)
     views = len(config.camera.view_indices)
-    print(f"{args.file}: valid ({config.camera.rig} rig, {views} views per scene)")
+    warnings = config_warnings(config)
+    for w in warnings:
+        print(f"mgn: warning: {w}", file=sys.stderr)
+    extra = f"; {len(warnings)} warning(s)" if warnings else ""
+    print(f"{args.file}: valid ({config.camera.rig} rig, {views} views per scene{extra})")
     return 0
 
 

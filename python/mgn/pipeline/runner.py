@@ -128,6 +128,7 @@ class SceneResult:
         worker: host and process id that ran it.
         files: with ``SceneTask.collect``: the scene's files (relative path -> bytes, the
             manifest included), for the caller to write; None otherwise.
+        removed: names of the objects that left the tote during the drop (not in the scene).
     """
 
     index: int
@@ -140,6 +141,7 @@ class SceneResult:
     num_objects: int = 0
     worker: str = ""
     files: dict[str, bytes] | None = field(default=None, repr=False, compare=False)
+    removed: tuple[str, ...] = ()
 
 
 def _disk_full(e: BaseException) -> OSError | None:
@@ -168,7 +170,7 @@ def run_scene(task: SceneTask) -> SceneResult:
     import tempfile
 
     from mgn.pipeline.scene_writer import write_scene
-    from mgn.scene.drop import drop_scene
+    from mgn.scene.drop import drop_scene, drop_scene_refilled
     from mgn.scene.scene import BUILTIN, resolve_object
 
     out = Path(task.out_dir)
@@ -183,13 +185,18 @@ def run_scene(task: SceneTask) -> SceneResult:
     try:
         specs = [resolve_object(name, source) for name, source in task.objects]
         sources = {name: source for name, source in task.objects if source != BUILTIN}
-        scene = drop_scene(
-            specs,
-            seed=task.seed,
-            tote=task.config.tote,
-            options=task.config.drop,
-            sources=sources,  # type: ignore[arg-type]
-        )
+        drop_kw: dict[str, Any] = {
+            "seed": task.seed,
+            "tote": task.config.tote,
+            "options": task.config.drop,
+            "sources": sources,
+        }
+        if task.config.objects.refill:
+            scene = drop_scene_refilled(
+                specs, attempts=task.config.objects.refill_attempts, **drop_kw
+            )
+        else:
+            scene = drop_scene(specs, **drop_kw)
         times["drop"] = time.perf_counter() - t0
         t1 = time.perf_counter()
         if tmp.exists():
@@ -207,14 +214,16 @@ def run_scene(task: SceneTask) -> SceneResult:
             shutil.rmtree(tmp.parent, ignore_errors=True)
             times["finalize"] = time.perf_counter() - t2
             return SceneResult(task.index, task.seed, True, None, False, times, size,
-                               len(scene), worker, files)  # fmt: skip
+                               len(scene), worker, files,
+                               removed=tuple(r.name for r in scene.removed))  # fmt: skip
         if final.exists():  # an inconsistent leftover the caller decided to redo
             shutil.rmtree(final)
         os.rename(tmp, final)
         times["finalize"] = time.perf_counter() - t2
         return SceneResult(
-            task.index, task.seed, True, None, False, times, size, len(scene), worker
-        )
+            task.index, task.seed, True, None, False, times, size, len(scene), worker,
+            removed=tuple(r.name for r in scene.removed),
+        )  # fmt: skip
     except Exception as e:  # noqa: BLE001 (reported per scene, the others go on)
         shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         full = _disk_full(e)
@@ -460,6 +469,17 @@ class GenerateReport:
             f"  wall time {self.wall_seconds:.1f} s ({rate:.0f} scenes/hour); output "
             f"{self.output_bytes / 1e6:.1f} MB"
         )
+        lost = [r for r in self.ok if r.removed]
+        if lost:
+            n_lost = sum(len(r.removed) for r in lost)
+            kept = sum(r.num_objects for r in self.ok)
+            lines.append(
+                f"  {n_lost} objects left the tote and were removed ({kept} kept) in "
+                f"{len(lost)} of {len(self.ok)} scenes"
+                + ("" if len(lost) > 5 else ": " + "; ".join(
+                    f"scene{r.index}: {', '.join(r.removed)}" for r in lost))
+                + " (objects.refill: true drops again until they stay in)"
+            )  # fmt: skip
         for r in self.failed:
             lines.append(f"  FAILED scene{r.index} (seed {r.seed}): {r.error}")
         if self.not_run:
@@ -523,6 +543,27 @@ def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extr
         "splits": {"train": [], "val": [], "test": []},
         "status": status,
         **extra,
+    }
+
+
+def _removed_objects(out: Path) -> dict[str, Any]:
+    """``dataset.json`` ``removed_objects``: the objects that left the tote during the drops of
+    the scenes present (read from each ``scene.json``, so resumed runs count every scene)."""
+    by_scene: dict[str, list[str]] = {}
+    dropped = 0
+    for sj in sorted(out.glob("scene*/scene.json")):
+        try:
+            doc = json.loads(sj.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        dropped += int(doc.get("stats", {}).get("num_dropped", len(doc.get("instances", []))))
+        names = [str(r.get("name")) for r in doc.get("removed", [])]
+        if names:
+            by_scene[sj.parent.name.removeprefix("scene")] = names
+    return {
+        "count": sum(len(v) for v in by_scene.values()),
+        "dropped": dropped,
+        "by_scene": dict(sorted(by_scene.items(), key=lambda kv: int(kv[0]))),
     }
 
 
@@ -818,8 +859,11 @@ def generate(
     report.wall_seconds = time.perf_counter() - t_start
     status = "complete" if report.complete else "incomplete"
     failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
+    more: dict[str, Any] = {"removed_objects": _removed_objects(out)}
+    if failed:
+        more["failed_scenes"] = failed
     with contextlib.suppress(OSError):
-        run.write_doc(report.num_scenes, status, **({"failed_scenes": failed} if failed else {}))
+        run.write_doc(report.num_scenes, status, **more)
     _clean_tmp(out)
     report.output_bytes = _folder_size(out)
     return report
