@@ -87,6 +87,7 @@ void bind_shake(py::module_& m) {
       .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
       .def_readwrite("num_threads", &ShakeOptions::num_threads)
       .def_readwrite("seed", &ShakeOptions::seed)
+      .def_readwrite("first_grasp_index", &ShakeOptions::first_grasp_index)
       .def("validate", &ShakeOptions::validate)
       .def("frictions", &ShakeOptions::frictions)
       .def("density_factors", &ShakeOptions::density_factors);
