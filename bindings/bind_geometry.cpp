@@ -202,7 +202,8 @@ void bind_geometry(py::module_& m) {
       py::arg("mesh"), py::arg("count"), py::arg("method") = "random", py::arg("seed") = 0,
       py::arg("oversampling") = 6);
 
-  m.def("make_box", [](const Vec3d& extents) { return make_box(extents); }, py::arg("extents"));
+  m.def(
+      "make_box", [](const Vec3d& extents) { return make_box(extents); }, py::arg("extents"));
   m.def("make_sphere", &make_sphere, py::arg("radius"), py::arg("segments") = 64,
         py::arg("rings") = 32);
   m.def("make_cylinder", &make_cylinder, py::arg("radius"), py::arg("height"),

@@ -1106,7 +1106,7 @@ class ViewLabelModel:
         keypoints: collections.abc.Sequence[typing.Any],
         com_points: collections.abc.Sequence[typing.Any],
         coms: typing.Any,
-        tote: Mesh = None,
+        tote: Mesh | None = None,
         X_W_tote: typing.Any = None,
     ) -> None: ...
     def label_view(
@@ -1157,7 +1157,7 @@ def calibrate_cup(
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict:
     """
-    Fit c1, c2 of the cup to measured outcomes (see mgn.suction.calibrate).
+    Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).
     """
 
 def camera_rays(
@@ -1197,7 +1197,7 @@ def compute_layout(
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict:
     """
-    Layout labels of one view (see mgn/scene/layout.hpp); use mgn.scene.compute_layout.
+    Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.
     """
 
 def compute_mass_properties(

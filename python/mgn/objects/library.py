@@ -26,10 +26,16 @@ Tags (a subset of :data:`ALLOWED_TAGS`) describe the object for dataset splits:
 from __future__ import annotations
 
 import functools
+import io
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
+from PIL import Image
+
+from mgn.errors import InvalidArgumentError, InvalidTypeError
+from mgn.geometry import mesh as geo
 
 from . import textures as tx
 from .shapes import (
@@ -49,6 +55,8 @@ from .shapes import (
 )
 
 __all__ = [
+    "NUM_COM_KEYPOINTS",
+    "com_keypoints",
     "ALLOWED_TAGS",
     "MaterialSpec",
     "Keypoint",
@@ -109,17 +117,21 @@ class MaterialSpec:
 
     def __post_init__(self) -> None:
         if len(self.base_color) != 4 or not all(0.0 <= float(c) <= 1.0 for c in self.base_color):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"MaterialSpec.base_color must be 4 values in [0, 1], got {self.base_color!r}"
             )
         if len(self.specular) != 3 or not all(0.0 <= float(c) <= 1.0 for c in self.specular):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"MaterialSpec.specular must be 3 values in [0, 1], got {self.specular!r}"
             )
         if not (np.isfinite(self.shininess) and self.shininess > 0):
-            raise ValueError(f"MaterialSpec.shininess must be > 0, got {self.shininess!r}")
+            raise InvalidArgumentError(
+                f"MaterialSpec.shininess must be > 0, got {self.shininess!r}"
+            )
         if not 0.0 < self.opacity <= 1.0:
-            raise ValueError(f"MaterialSpec.opacity must be in (0, 1], got {self.opacity!r}")
+            raise InvalidArgumentError(
+                f"MaterialSpec.opacity must be in (0, 1], got {self.opacity!r}"
+            )
         object.__setattr__(self, "base_color", tuple(float(c) for c in self.base_color))
         object.__setattr__(self, "specular", tuple(float(c) for c in self.specular))
         if self.texture is not None:
@@ -131,7 +143,7 @@ class MaterialSpec:
                 or t.shape[0] < 1
                 or t.shape[1] < 1
             ):
-                raise ValueError(
+                raise InvalidArgumentError(
                     "MaterialSpec.texture must be an (H, W, 3) uint8 array, "
                     f"got {t.dtype} {t.shape}"
                 )
@@ -192,40 +204,46 @@ class ObjectSpec:
         v = np.asarray(self.vertices, dtype=np.float64)
         f = np.asarray(self.faces)
         if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4 or not np.all(np.isfinite(v)):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: vertices must be a finite (V >= 4, 3) array, got {v.shape}"
             )
         if f.ndim != 2 or f.shape[1] != 3 or len(f) < 4 or not np.issubdtype(f.dtype, np.integer):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: faces must be an integer (F >= 4, 3) array, got {f.dtype} {f.shape}"
             )
         if f.min() < 0 or f.max() >= len(v):
-            raise ValueError(f"{self.name}: faces index outside 0..{len(v) - 1}")
+            raise InvalidArgumentError(f"{self.name}: faces index outside 0..{len(v) - 1}")
         object.__setattr__(self, "vertices", _readonly(v))
         object.__setattr__(self, "faces", _readonly(f.astype(np.int32)))
         has_tex = self.material.texture is not None
         if (self.uvs is not None) != has_tex:
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: uvs must be given exactly when the material has a texture"
             )
         if self.uvs is not None:
             uv = np.asarray(self.uvs, dtype=np.float32)
             if uv.shape != (len(v), 2) or not np.all((uv >= 0) & (uv <= 1)):
-                raise ValueError(
+                raise InvalidArgumentError(
                     f"{self.name}: uvs must be a (V, 2) array in [0, 1], got {uv.shape}"
                 )
             object.__setattr__(self, "uvs", _readonly(uv))
         if not (np.isfinite(self.density) and self.density > 0):
-            raise ValueError(f"{self.name}: density must be > 0 kg/m^3, got {self.density!r}")
+            raise InvalidArgumentError(
+                f"{self.name}: density must be > 0 kg/m^3, got {self.density!r}"
+            )
         if not (np.isfinite(self.friction) and 0 < self.friction <= 2):
-            raise ValueError(f"{self.name}: friction must be in (0, 2], got {self.friction!r}")
+            raise InvalidArgumentError(
+                f"{self.name}: friction must be in (0, 2], got {self.friction!r}"
+            )
         if not 2 <= len(self.keypoints) <= 8:
-            raise ValueError(f"{self.name}: needs 2..8 keypoints, got {len(self.keypoints)}")
+            raise InvalidArgumentError(
+                f"{self.name}: needs 2..8 keypoints, got {len(self.keypoints)}"
+            )
         if [k.id for k in self.keypoints] != list(range(1, len(self.keypoints) + 1)):
-            raise ValueError(f"{self.name}: keypoint ids must be 1..K in order")
+            raise InvalidArgumentError(f"{self.name}: keypoint ids must be 1..K in order")
         bad = set(self.tags) - ALLOWED_TAGS
         if bad:
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: unknown tags {sorted(bad)}; allowed: {sorted(ALLOWED_TAGS)}"
             )
         object.__setattr__(self, "tags", frozenset(self.tags))
@@ -278,6 +296,50 @@ class ObjectSpec:
     def mass(self) -> float:
         """density x volume, kg."""
         return self.density * self.volume
+
+    def to_mesh(self) -> geo.Mesh:
+        """The :class:`mgn.Mesh` of this object (metres, object frame), with its material (its
+        texture, if any, embedded as PNG bytes in ``Material.texture_data``)."""
+        mat = geo.Material()
+        mat.name = self.material.name
+        mat.base_color = np.asarray(self.material.base_color, np.float32)
+        mat.specular = np.asarray(self.material.specular, np.float32)
+        mat.shininess = float(self.material.shininess)
+        mat.opacity = float(self.material.opacity)
+        uvs = None if self.uvs is None else np.asarray(self.uvs, np.float32)
+        if self.material.texture is not None and uvs is not None:
+            # The texture travels with the mesh as embedded PNG bytes (the renderer decodes them).
+            buf = io.BytesIO()
+            Image.fromarray(np.asarray(self.material.texture, np.uint8)).save(buf, format="PNG")
+            mat.texture_data = buf.getvalue()
+        return geo.Mesh(
+            np.asarray(self.vertices, np.float32),
+            np.asarray(self.faces, np.int32),
+            uvs,
+            [mat],
+            [],
+            self.name,
+        )
+
+
+#: Number of centre-of-mass keypoints per object (MetaGraspNet).
+NUM_COM_KEYPOINTS = 1000
+
+
+def com_keypoints(mesh: geo.Mesh, density: float, *, seed: int) -> npt.NDArray[np.float64]:
+    """(1000, 4) [score, x, y, z] in metres: surface points scored by closeness to the CoM.
+
+    score = (d_max - d) / (d_max - d_min), d = distance to the mass-weighted centre of mass.
+    Points are spread evenly (blue noise) with a fixed ``seed``.
+    """
+    com = geo.mass_properties(mesh, density).center_of_mass
+    pts = geo.sample_surface(mesh, NUM_COM_KEYPOINTS, method="even", seed=seed).points.astype(
+        np.float64
+    )
+    d = np.linalg.norm(pts - com, axis=1)
+    span = max(float(d.max() - d.min()), 1e-12)
+    score = (d.max() - d) / span
+    return np.column_stack([score, pts])
 
 
 # ----------------------------------------------------------------------------------------------
@@ -429,7 +491,7 @@ def _register(
 
     def add(build: Callable[[], _Built]) -> Callable[[], _Built]:
         if any(e.name == name for e in _CATALOGUE):
-            raise ValueError(f"duplicate object name {name!r}")
+            raise InvalidArgumentError(f"duplicate object name {name!r}")
         _CATALOGUE.append(
             _Entry(name, description, build, material, density, friction, frozenset(tags))
         )
@@ -1174,7 +1236,7 @@ def get_object(name_or_id: str | int) -> ObjectSpec:
     """
     names = object_names()
     if isinstance(name_or_id, bool) or not isinstance(name_or_id, (str, int, np.integer)):
-        raise TypeError(
+        raise InvalidTypeError(
             "get_object expects a name (str) or a category id (int), "
             f"got {type(name_or_id).__name__}"
         )

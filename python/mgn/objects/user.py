@@ -38,9 +38,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from PIL import Image
 
+from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
-from mgn.geometry import load_mesh
+from mgn.geometry.mesh import load_mesh
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
 
 __all__ = ["ImplausibleSizeWarning", "load_objects_yaml", "warn_implausible_size"]
@@ -76,9 +78,9 @@ def warn_implausible_size(vertices: np.ndarray, source: str) -> bool:
 def _number(entry: dict[str, Any], key: str, where: str, default: float | None = None) -> float:
     value = entry.get(key, default)
     ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-    if not ok or not math.isfinite(float(value)) or float(value) <= 0:
+    if not ok or not math.isfinite(float(value)) or float(value) <= 0:  # type: ignore[arg-type]
         raise InvalidArgumentError(f"{where}: key '{key}': expected a number > 0, got {value!r}")
-    return float(value)
+    return float(value)  # type: ignore[arg-type]
 
 
 _KEYS = {
@@ -97,16 +99,73 @@ _KEYS = {
 }
 
 
+def _rgba(v: Any) -> tuple[float, float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]), float(v[3]))
+
+
+def _rgb(v: Any) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
 def _texture(path: str) -> np.ndarray | None:
     if not path:
         return None
-    from PIL import Image
 
     try:
         with Image.open(path) as img:
             return np.asarray(img.convert("RGB"), dtype=np.uint8)
     except OSError:
         return None  # a missing texture leaves the base colour; the mesh is still usable
+
+
+def _material(entry: dict[str, Any], mat: Any, texture: Any, name: str, where: str) -> MaterialSpec:
+    """The material of a user object: the entry's color/opacity over the file's material."""
+    color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
+    if len(color) == 3:
+        color = [*color, 1.0]
+    if not isinstance(color, (list, tuple)) or len(color) != 4:
+        raise InvalidArgumentError(f"{where}: key 'color': expected [r, g, b] or [r, g, b, a] in "
+                                   f"[0, 1], got {entry.get('color')!r}")  # fmt: skip
+    try:
+        material = MaterialSpec(
+            name=f"{name}_material",
+            base_color=_rgba(color),
+            specular=_rgb(mat.specular if mat is not None else (0.2,) * 3),
+            # A file without a material (OBJ without .mtl, `Ns 0`) gets the default shininess.
+            shininess=float(mat.shininess) if mat is not None and mat.shininess > 0 else 20.0,
+            opacity=float(entry.get("opacity", mat.opacity if mat is not None else 1.0)),
+            texture=texture,
+        )
+    except (TypeError, ValueError) as e:
+        key = "opacity" if "opacity" in str(e) else "color"
+        raise InvalidArgumentError(f"{where}: key '{key}' (or the file's material): {e}") from e
+    return material
+
+
+def _keypoints(
+    entry: dict[str, Any], centre: np.ndarray, hi: np.ndarray, lo: np.ndarray, where: str
+) -> tuple[Keypoint, ...]:
+    """The semantic keypoints of a user object (default: top and bottom of the box)."""
+    named = entry.get("keypoints") or {
+        "top": [centre[0], centre[1], hi[2]],
+        "bottom": [centre[0], centre[1], lo[2]],
+    }
+    if not isinstance(named, dict):
+        raise InvalidArgumentError(
+            f"{where}: key 'keypoints': expected a mapping of names to [x, y, z] in metres, got "
+            f"{named!r}"
+        )
+    keypoints = []
+    for i, (kp_name, pos) in enumerate(named.items(), start=1):
+        p = np.asarray(pos, dtype=np.float64)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise InvalidArgumentError(
+                f"{where}: key 'keypoints.{kp_name}': expected [x, y, z] in metres, got {pos!r}"
+            )
+        keypoints.append(Keypoint(i, str(kp_name), (float(p[0]), float(p[1]), float(p[2]))))
+    if len(keypoints) == 1:
+        keypoints.append(Keypoint(2, "centre", _rgb(centre)))
+    return tuple(keypoints)
 
 
 def _object_from_entry(
@@ -152,46 +211,10 @@ def _object_from_entry(
     uvs = mesh.uvs if texture is not None else None
     if uvs is not None and (np.any(uvs < 0) or np.any(uvs > 1)):
         uvs = np.mod(uvs, 1.0)  # wrap repeating uvs into the unit square
-    color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
-    if len(color) == 3:
-        color = [*color, 1.0]
-    if not isinstance(color, (list, tuple)) or len(color) != 4:
-        raise InvalidArgumentError(f"{where}: key 'color': expected [r, g, b] or [r, g, b, a] in "
-                                   f"[0, 1], got {entry.get('color')!r}")  # fmt: skip
-    try:
-        material = MaterialSpec(
-            name=f"{name}_material",
-            base_color=tuple(float(c) for c in color),
-            specular=tuple(float(s) for s in (mat.specular if mat is not None else (0.2,) * 3)),
-            # A file without a material (OBJ without .mtl, `Ns 0`) gets the default shininess.
-            shininess=float(mat.shininess) if mat is not None and mat.shininess > 0 else 20.0,
-            opacity=float(entry.get("opacity", mat.opacity if mat is not None else 1.0)),
-            texture=texture,
-        )
-    except (TypeError, ValueError) as e:
-        key = "opacity" if "opacity" in str(e) else "color"
-        raise InvalidArgumentError(f"{where}: key '{key}' (or the file's material): {e}") from e
+    material = _material(entry, mat, texture, name, where)
     lo, hi = mesh.bounds
     centre = (lo + hi) / 2
-    named = entry.get("keypoints") or {
-        "top": [centre[0], centre[1], hi[2]],
-        "bottom": [centre[0], centre[1], lo[2]],
-    }
-    if not isinstance(named, dict):
-        raise InvalidArgumentError(
-            f"{where}: key 'keypoints': expected a mapping of names to [x, y, z] in metres, got "
-            f"{named!r}"
-        )
-    keypoints = []
-    for i, (kp_name, pos) in enumerate(named.items(), start=1):
-        p = np.asarray(pos, dtype=np.float64)
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise InvalidArgumentError(
-                f"{where}: key 'keypoints.{kp_name}': expected [x, y, z] in metres, got {pos!r}"
-            )
-        keypoints.append(Keypoint(i, str(kp_name), (float(p[0]), float(p[1]), float(p[2]))))
-    if len(keypoints) == 1:
-        keypoints.append(Keypoint(2, "centre", tuple(float(x) for x in centre)))
+    keypoints = _keypoints(entry, centre, hi, lo, where)
     try:
         return ObjectSpec(
             category_id=int(entry.get("category_id", default_id)),
@@ -203,7 +226,7 @@ def _object_from_entry(
             material=material,
             density=density,
             friction=friction,
-            keypoints=tuple(keypoints),
+            keypoints=keypoints,
             tags=frozenset(entry.get("tags", ())),
         )
     except ValueError as e:
@@ -216,7 +239,6 @@ def load_objects_yaml(path: str | os.PathLike[str]) -> tuple[ObjectSpec, ...]:
     Category ids default to consecutive numbers after the built-in objects; names and ids must
     not clash with the built-in ones or each other.
     """
-    from mgn.io.yaml_file import read_yaml
 
     p = Path(path)
     data = read_yaml(p, "user-object YAML")
