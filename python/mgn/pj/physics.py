@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from tqdm import tqdm
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
@@ -370,8 +371,6 @@ class ShakeScorer:
             )  # fmt: skip
             out[idx] = scores.score
             return out
-        from tqdm import tqdm
-
         # Pieces of a few grasps per thread; grasp g keeps its random streams (first_grasp_index).
         step = 2 * _core.resolve_num_threads(int(self.options.num_threads))
         score = np.empty(len(rows), np.float32)
