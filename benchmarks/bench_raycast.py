@@ -4,7 +4,10 @@ Both sides get the same triangles in the same world frame and the same float32 r
 timed with 1 thread and with every usable core; the peer as it comes (trimesh's
 `RayMeshIntersector` over embreex). The Python-side work each library does around the trace
 (trimesh unitises directions and computes hit points with a plane intersection in NumPy; mgn
-fills its result arrays in C++) is part of what is measured: it is what a user pays.
+fills its result arrays in C++) is part of what is measured: it is what a user pays. Each row
+times the mgn call that answers the same question as the peer's: `intersect` (distance, point,
+normal, ids) against `intersects_location`, `intersect_ids` (ids only, the same ids as
+`intersect`'s) against `intersects_first`, `occluded` against `intersects_any`.
 """
 
 from __future__ import annotations
@@ -235,9 +238,11 @@ def agreement(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> tuple[str, 
 
 
 def _same(a: Any, b: Any) -> bool:
-    """Whether two mgn results (hit records or boolean arrays) are bit-identical."""
+    """Whether two mgn results (hit records, id tuples or boolean arrays) are bit-identical."""
     if isinstance(a, np.ndarray):
         return np.array_equal(a, b)
+    if isinstance(a, tuple):
+        return all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
     ka, kb = mgn_hits(a), mgn_hits(b)
     return all(np.array_equal(ka[k], kb[k]) for k in ka)
 
@@ -255,6 +260,9 @@ def ray_calls(
     if mgn_scene is not None:
         for t in threads:
             cases[f"mgn.intersect/{t}"] = lambda t=t: mgn_scene.intersect(
+                origins, directions, coherent=coherent, num_threads=t
+            )
+            cases[f"mgn.intersect_ids/{t}"] = lambda t=t: mgn_scene.intersect_ids(
                 origins, directions, coherent=coherent, num_threads=t
             )
             cases[f"mgn.occluded/{t}"] = lambda t=t: mgn_scene.occluded(
@@ -312,13 +320,13 @@ def run(
                 call: all(
                     _same(results[f"mgn.{call}/1"], results[f"mgn.{call}/{t}"]) for t in threads
                 )
-                for call in ("intersect", "occluded")
+                for call in ("intersect", "intersect_ids", "occluded")
                 if mgn_scene is not None
             }
             specs = [
                 ("first hit with distance and point", "intersect", "location",
                  "intersects_location(multiple_hits=False)"),
-                ("first hit, triangle index", "intersect", "first", "intersects_first"),
+                ("first hit, triangle index", "intersect_ids", "first", "intersects_first"),
                 ("any hit (hit/miss only)", "occluded", "any", "intersects_any"),
             ]  # fmt: skip
             for query, mgn_call, peer_key, peer_call in specs:
@@ -354,7 +362,19 @@ def run(
                         row.agreement, row.agreement_ok = agreement(m_first, p)
                     elif peer_key == "first":
                         p = peer_first_hits(data, np.asarray(results["peer.first"]))
-                        m = {k: v for k, v in m_first.items() if k != "distance"}
+                        inst, face = results[f"mgn.intersect_ids/{threads[-1]}"]
+                        m = {"hit": inst >= 0, "instance": inst, "face": face}
+                        ids_same = all(
+                            np.array_equal(a, b)
+                            for a, b in zip(
+                                (inst, face), (m_first["instance"], m_first["face"]), strict=True
+                            )
+                        )
+                        row.notes.append(
+                            "mgn.intersect_ids ids "
+                            + ("identical to" if ids_same else "DIFFER from")
+                            + " mgn.intersect's"
+                        )
                         row.agreement, row.agreement_ok = agreement(m, p)
                     else:
                         m = {"hit": np.asarray(results[f"mgn.occluded/{threads[-1]}"], bool)}

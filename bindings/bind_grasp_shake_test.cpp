@@ -76,6 +76,7 @@ void bind_grasp_shake_test(py::module_& m) {
       .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
       .def_readwrite("num_threads", &ShakeOptions::num_threads)
       .def_readwrite("seed", &ShakeOptions::seed)
+      .def_readwrite("first_grasp_index", &ShakeOptions::first_grasp_index)
       .def("validate", &ShakeOptions::validate)
       .def("frictions", &ShakeOptions::frictions)
       .def("density_factors", &ShakeOptions::density_factors);

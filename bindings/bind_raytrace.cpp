@@ -86,6 +86,23 @@ void bind_raytrace(py::module_& m) {
           py::arg("tfar") = std::numeric_limits<float>::infinity(), py::arg("coherent") = false,
           py::arg("num_threads") = 0)
       .def(
+          "intersect_ids",
+          [](const RayScene& s, const py::handle& origins, const py::handle& directions,
+             float tnear, float tfar, bool coherent, int num_threads) {
+            const Points3f o = to_rows<float, 3>(origins, "origins");
+            const Points3f d = to_rows<float, 3>(directions, "directions");
+            RayHitIds h;
+            {
+              py::gil_scoped_release release;
+              h = s.intersect_ids(o, d, cast_options(tnear, tfar, coherent, num_threads));
+            }
+            return py::make_tuple(to_numpy(std::move(h.instance_ids)),
+                                  to_numpy(std::move(h.face_ids)));
+          },
+          py::arg("origins"), py::arg("directions"), py::arg("tnear") = 0.0f,
+          py::arg("tfar") = std::numeric_limits<float>::infinity(), py::arg("coherent") = false,
+          py::arg("num_threads") = 0)
+      .def(
           "occluded",
           [](const RayScene& s, const py::handle& origins, const py::handle& directions,
              float tnear, float tfar, bool coherent, int num_threads) {

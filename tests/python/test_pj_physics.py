@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -70,6 +71,48 @@ def test_threads_and_seed_give_identical_results():
     np.testing.assert_array_equal(a.trial_success, b.trial_success)
     np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
     np.testing.assert_array_equal(a.score, b.score)
+
+
+def test_grasps_scored_in_pieces_match_the_whole_list():
+    """first_grasp_index keeps every grasp's random streams: pieces give the whole list's
+    trials (the progress bar of ShakeScorer relies on it)."""
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.8)
+    grasps = np.stack([centre_grasp(0.04)] * 3)
+    grasps[1, 6:9] = [-0.02, 0.01, 0.015]
+    grasps[2, 6:9] = [-0.02, -0.01, -0.01]
+    opts = ShakeOptions(grid=2, friction_range=(0.2, 1.0), seed=3, num_threads=2)
+    whole = shake_scores(mesh, m, com, inertia, grasps, options=opts)
+    first = shake_scores(mesh, m, com, inertia, grasps[:1], options=opts)
+    rest = shake_scores(
+        mesh, m, com, inertia, grasps[1:], options=replace(opts, first_grasp_index=1)
+    )
+    for field in ("trial_success", "trial_steps", "trial_ended_early", "score"):
+        pieces = np.concatenate([getattr(first, field), getattr(rest, field)])
+        np.testing.assert_array_equal(pieces, getattr(whole, field))
+
+
+def test_shake_scorer_progress_bar_keeps_the_scores(capsys):
+    from mgn.pj.physics import ShakeScorer
+
+    mesh, *_ = box_object([0.04, 0.05, 0.05], 0.8)
+    row = centre_grasp(0.04)
+    n = 5
+
+    class Labels(SimpleNamespace):
+        def __len__(self):
+            return n
+
+    labels = Labels(
+        approach=np.tile(row[0:3], (n, 1)),
+        closing=np.tile(row[3:6], (n, 1)),
+        p1=np.tile(row[6:9], (n, 1)) + np.linspace(-0.01, 0.01, n)[:, None] * [0, 1, 0],
+        width=np.full(n, row[9]),
+    )
+    opts = ShakeOptions(grid=2, friction_range=(0.2, 1.0), num_threads=1)
+    quiet = ShakeScorer(density=800.0, options=opts, max_grasps=None, progress=False)(mesh, labels)
+    shown = ShakeScorer(density=800.0, options=opts, max_grasps=None, progress=True)(mesh, labels)
+    np.testing.assert_array_equal(quiet, shown)
+    assert "physics" in capsys.readouterr().err
 
 
 def test_grasp_objects_and_rows_agree():

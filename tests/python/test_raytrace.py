@@ -74,6 +74,32 @@ def test_first_hits_agree_with_brute_force(two_object_scene, rng):
     np.testing.assert_array_equal(occluded, expect_hit)
 
 
+def test_intersect_ids_agree_with_brute_force_and_intersect(two_object_scene, rng):
+    scene, V, F, inst = two_object_scene
+    o, d = random_rays(rng, 600)
+    t = brute_force_all_hits(V, F, o, d)
+    first = t.argmin(axis=1)
+    expect_hit = np.isfinite(t[np.arange(len(o)), first])
+    instance_ids, face_ids = scene.intersect_ids(o, d)
+    assert instance_ids.dtype == np.int32 and face_ids.dtype == np.int32
+    np.testing.assert_array_equal(instance_ids >= 0, expect_hit)
+    np.testing.assert_array_equal(face_ids[~expect_hit], -1)
+    np.testing.assert_array_equal(instance_ids[expect_hit], inst[first[expect_hit]])
+    sphere_faces = int((inst == 10).sum())
+    global_face = face_ids + np.where(instance_ids == 20, sphere_faces, 0)
+    np.testing.assert_array_equal(global_face[expect_hit], first[expect_hit])
+    # The same ids as intersect's, for single rays and packets, any number of threads.
+    o, d = random_rays(rng, 20_011)
+    full = scene.intersect(o, d, num_threads=1)
+    for coherent in (False, True):
+        for threads in (1, 2):
+            ids = scene.intersect_ids(o, d, coherent=coherent, num_threads=threads)
+            np.testing.assert_array_equal(ids[0], full.instance_ids)
+            np.testing.assert_array_equal(ids[1], full.face_ids)
+    with pytest.raises(mgn.errors.InvalidArgumentError, match="directions"):
+        scene.intersect_ids(o, d[:-1])
+
+
 def test_all_hits_agree_with_brute_force(two_object_scene, rng):
     scene, V, F, _ = two_object_scene
     o, d = random_rays(rng, 300)

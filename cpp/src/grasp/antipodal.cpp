@@ -48,9 +48,53 @@ struct AntipodalSampler::Impl {
   // that no sphere touches cannot touch the surface.
   Points3d tri_centres;
   std::vector<double> tri_radii;
+  // Spatial blocks of consecutive rows of surface_points and of tri_centres (the rows are stored
+  // in block order; the pre-filters only ask whether any row passes, so the order is free). A
+  // block whose bounding sphere misses a box's region lets ProbePoints skip all its rows.
+  struct Block {
+    Vec3d centre;
+    double radius = 0;      // max distance of a row's point (or sphere centre) from centre
+    double max_sphere = 0;  // largest triangle-sphere radius in the block (0 for points)
+    Eigen::Index begin = 0, end = 0;
+  };
+  std::vector<Block> point_blocks, sphere_blocks;
 };
 
 namespace {
+
+/// Row order of `points` in which every run of at most `leaf` consecutive rows is spatially
+/// compact (median splits along the longest axis), and the blocks (begin, end) of those runs.
+std::vector<Eigen::Index> block_order(const Points3d& points, Eigen::Index leaf,
+                                      std::vector<std::pair<Eigen::Index, Eigen::Index>>& blocks) {
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(points.rows()));
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> stack{{0, points.rows()}};
+  while (!stack.empty()) {
+    const auto [b, e] = stack.back();
+    stack.pop_back();
+    if (e - b <= leaf) {
+      if (e > b) blocks.emplace_back(b, e);
+      continue;
+    }
+    Eigen::RowVector3d lo = points.row(order[b]), hi = lo;
+    for (Eigen::Index i = b; i < e; ++i) {
+      lo = lo.cwiseMin(points.row(order[i]));
+      hi = hi.cwiseMax(points.row(order[i]));
+    }
+    Eigen::Index axis = 0;
+    (hi - lo).maxCoeff(&axis);
+    const Eigen::Index mid = b + (e - b) / 2;
+    std::nth_element(order.begin() + b, order.begin() + mid, order.begin() + e,
+                     [&](Eigen::Index x, Eigen::Index y) {
+                       const double px = points(x, axis), py = points(y, axis);
+                       return px < py || (px == py && x < y);
+                     });
+    stack.emplace_back(mid, e);
+    stack.emplace_back(b, mid);
+  }
+  std::sort(blocks.begin(), blocks.end());
+  return order;
+}
 
 /// Axis-aligned box in the hand frame H: centre and half extents, m.
 struct HandBox {
@@ -74,10 +118,15 @@ struct ProbePoints {
   };
   std::array<BoxPoints, 3> lists;  // palm, left finger, right finger at the probe's opening
 
-  ProbePoints(const Points3d& surface, const Points3d& centres, const std::vector<double>& radii,
-              const ParallelJawGripper& g, const ParallelJawGrasp& grasp, const Vec3d& e1,
-              const Vec3d& e2, double opening) {
+  /// Fills the lists for one accepted probe (reusing their storage). `m` holds the object's
+  /// surface points and triangle spheres in spatial blocks; blocks that cannot reach a box's
+  /// region are skipped whole, the rows of the others pass the same per-row tests.
+  void build(const AntipodalSampler::Impl& m, const ParallelJawGripper& g,
+             const ParallelJawGrasp& grasp, const Vec3d& e1, const Vec3d& e2, double opening) {
     constexpr double kEps = 1e-7;  // boxes shrunk by this: inside means strictly inside
+    // Slack of the block tests (m): covers the rounding of the block-level distances, so a
+    // skipped block never holds a row that the per-row tests would keep.
+    constexpr double kSlack = 1e-6;
     const Vec3d& f = g.finger_size;
     const Vec3d& pb = g.palm_size;
     const double depth = g.grasp_depth();
@@ -85,10 +134,12 @@ struct ProbePoints {
         HandBox{Vec3d(0, 0, g.flange_to_tip - f.z() - 0.5 * pb.z()), 0.5 * pb},
         HandBox{Vec3d(-0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f},
         HandBox{Vec3d(0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f}};
-    std::array<double, 3> r2_min{}, r2_max{};
+    std::array<double, 3> r2_min{}, r2_max{}, r_min{}, r_max{};
     for (int k = 0; k < 3; ++k) {
       const HandBox& b = boxes[k];
       BoxPoints& l = lists[k];
+      l.y0.clear(), l.y1.clear(), l.z0.clear(), l.z1.clear();
+      l.sx.clear(), l.sy0.clear(), l.sy1.clear(), l.sz0.clear(), l.sz1.clear(), l.sr.clear();
       l.y_half = b.half.y() - kEps;
       l.z_lo = b.centre.z() - b.half.z() + kEps - depth;
       l.z_hi = b.centre.z() + b.half.z() - kEps - depth;
@@ -96,42 +147,66 @@ struct ProbePoints {
       const double z_far = std::max(std::abs(l.z_lo), std::abs(l.z_hi));
       r2_min[k] = z_near * z_near;  // the box's nearest and farthest distance from the axis
       r2_max[k] = z_far * z_far + l.y_half * l.y_half;
+      r_min[k] = std::sqrt(r2_min[k]);
+      r_max[k] = std::sqrt(r2_max[k]);
     }
     const Vec3d c = grasp.p1 + 0.5 * grasp.width * grasp.closing;
     const Vec3d& v = grasp.closing;
     const Vec3d w1 = e1.cross(v), w2 = e2.cross(v);
-    for (Eigen::Index i = 0; i < surface.rows(); ++i) {
-      const Vec3d q = surface.row(i).transpose() - c;
-      const double xq = q.dot(v);
-      const double r2 = q.squaredNorm() - xq * xq;
-      for (int k = 0; k < 3; ++k) {
-        const HandBox& b = boxes[k];
-        if (std::abs(xq - b.centre.x()) >= b.half.x() - kEps) continue;
-        if (r2 < r2_min[k] || r2 > r2_max[k]) continue;
-        BoxPoints& l = lists[k];
-        l.y0.push_back(q.dot(w1));
-        l.y1.push_back(q.dot(w2));
-        l.z0.push_back(q.dot(e1));
-        l.z1.push_back(q.dot(e2));
-      }
-    }
-    for (Eigen::Index i = 0; i < centres.rows(); ++i) {
-      const Vec3d q = centres.row(i).transpose() - c;
-      const double r = radii[i];
+    // Whether a block (every row within `reach` of its centre, reach including the sphere radii)
+    // may hold a row that reaches box k.
+    const auto block_may_reach = [&](const AntipodalSampler::Impl::Block& blk, double reach) {
+      const Vec3d q = blk.centre - c;
       const double xq = q.dot(v);
       const double rho = std::sqrt(std::max(0.0, q.squaredNorm() - xq * xq));
       for (int k = 0; k < 3; ++k) {
         const HandBox& b = boxes[k];
-        const double dx = std::max(0.0, std::abs(xq - b.centre.x()) - b.half.x());
-        if (dx > r) continue;
-        if (rho + r < std::sqrt(r2_min[k]) || rho - r > std::sqrt(r2_max[k])) continue;
-        BoxPoints& l = lists[k];
-        l.sx.push_back(dx);
-        l.sy0.push_back(q.dot(w1));
-        l.sy1.push_back(q.dot(w2));
-        l.sz0.push_back(q.dot(e1));
-        l.sz1.push_back(q.dot(e2));
-        l.sr.push_back(r);
+        if (std::abs(xq - b.centre.x()) - reach > b.half.x() + kSlack) continue;
+        if (rho + reach < r_min[k] - kSlack || rho - reach > r_max[k] + kSlack) continue;
+        return true;
+      }
+      return false;
+    };
+    const Points3d& surface = m.surface_points;
+    for (const auto& blk : m.point_blocks) {
+      if (!block_may_reach(blk, blk.radius)) continue;
+      for (Eigen::Index i = blk.begin; i < blk.end; ++i) {
+        const Vec3d q = surface.row(i).transpose() - c;
+        const double xq = q.dot(v);
+        const double r2 = q.squaredNorm() - xq * xq;
+        for (int k = 0; k < 3; ++k) {
+          const HandBox& b = boxes[k];
+          if (std::abs(xq - b.centre.x()) >= b.half.x() - kEps) continue;
+          if (r2 < r2_min[k] || r2 > r2_max[k]) continue;
+          BoxPoints& l = lists[k];
+          l.y0.push_back(q.dot(w1));
+          l.y1.push_back(q.dot(w2));
+          l.z0.push_back(q.dot(e1));
+          l.z1.push_back(q.dot(e2));
+        }
+      }
+    }
+    const Points3d& centres = m.tri_centres;
+    for (const auto& blk : m.sphere_blocks) {
+      if (!block_may_reach(blk, blk.radius + blk.max_sphere)) continue;
+      for (Eigen::Index i = blk.begin; i < blk.end; ++i) {
+        const Vec3d q = centres.row(i).transpose() - c;
+        const double r = m.tri_radii[static_cast<std::size_t>(i)];
+        const double xq = q.dot(v);
+        const double rho = std::sqrt(std::max(0.0, q.squaredNorm() - xq * xq));
+        for (int k = 0; k < 3; ++k) {
+          const HandBox& b = boxes[k];
+          const double dx = std::max(0.0, std::abs(xq - b.centre.x()) - b.half.x());
+          if (dx > r) continue;
+          if (rho + r < r_min[k] || rho - r > r_max[k]) continue;
+          BoxPoints& l = lists[k];
+          l.sx.push_back(dx);
+          l.sy0.push_back(q.dot(w1));
+          l.sy1.push_back(q.dot(w2));
+          l.sz0.push_back(q.dot(e1));
+          l.sz1.push_back(q.dot(e2));
+          l.sr.push_back(r);
+        }
       }
     }
   }
@@ -215,6 +290,41 @@ AntipodalSampler::AntipodalSampler(const Mesh& object, const ParallelJawGripper&
       impl_->tri_radii[f] =
           std::max({(a - centre).norm(), (b - centre).norm(), (cc - centre).norm()}) * (1 + 1e-9);
     }
+    // Store both row sets in spatial block order (see Impl::Block).
+    constexpr Eigen::Index kLeaf = 16;
+    const auto make_blocks = [&](Points3d& rows, std::vector<double>* radii,
+                                 std::vector<Impl::Block>& out) {
+      std::vector<std::pair<Eigen::Index, Eigen::Index>> ranges;
+      const std::vector<Eigen::Index> order = block_order(rows, kLeaf, ranges);
+      Points3d sorted(rows.rows(), 3);
+      std::vector<double> sorted_radii(radii ? radii->size() : 0);
+      for (std::size_t i = 0; i < order.size(); ++i) {
+        sorted.row(static_cast<Eigen::Index>(i)) = rows.row(order[i]);
+        if (radii) sorted_radii[i] = (*radii)[static_cast<std::size_t>(order[i])];
+      }
+      rows = std::move(sorted);
+      if (radii) *radii = std::move(sorted_radii);
+      for (const auto& [b, e] : ranges) {
+        Impl::Block blk;
+        blk.begin = b;
+        blk.end = e;
+        Eigen::RowVector3d lo = rows.row(b), hi = lo;
+        for (Eigen::Index i = b; i < e; ++i) {
+          lo = lo.cwiseMin(rows.row(i));
+          hi = hi.cwiseMax(rows.row(i));
+        }
+        blk.centre = (0.5 * (lo + hi)).transpose();
+        for (Eigen::Index i = b; i < e; ++i) {
+          blk.radius = std::max(blk.radius, (rows.row(i).transpose() - blk.centre).norm());
+          if (radii)
+            blk.max_sphere = std::max(blk.max_sphere, (*radii)[static_cast<std::size_t>(i)]);
+        }
+        blk.radius *= 1 + 1e-9;
+        out.push_back(blk);
+      }
+    };
+    make_blocks(impl_->surface_points, nullptr, impl_->point_blocks);
+    make_blocks(impl_->tri_centres, &impl_->tri_radii, impl_->sphere_blocks);
   }
 }
 
@@ -302,6 +412,7 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
   std::vector<std::int64_t> colliding(static_cast<std::size_t>(n), 0);
 
   const auto process = [&](std::size_t begin, std::size_t end) {
+    ProbePoints near;  // the pre-filter lists of the current probe (storage reused)
     const auto count = static_cast<Eigen::Index>(end - begin);
     // 1. Probes of the whole chunk, drawn per point from its own stream, cast in one batch.
     std::vector<Rng> rngs;
@@ -371,10 +482,7 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
         // triangle sphere touches a box) pre-filters; FCL decides the rest.
         const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
                                o.approaches_tried > 0 && o.approaches_kept > 0;
-        const Points3d none;
-        const ProbePoints near = prefilter ? ProbePoints(m.surface_points, m.tri_centres,
-                                                         m.tri_radii, g, grasp, e1, e2, opening)
-                                           : ProbePoints(none, none, {}, g, grasp, e1, e2, opening);
+        if (prefilter) near.build(m, g, grasp, e1, e2, opening);
         int num_kept = 0;
         // All angles are drawn even when the loop stops early, so the stream of the next probe
         // does not depend on collision outcomes.

@@ -614,7 +614,8 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
     const std::size_t g = t / per_grasp;
     const std::size_t i = (t % per_grasp) / S;
     const std::size_t j = t % S;
-    const TrialSetting s = make_setting(r.frictions[i], r.density_factors[j], options, t);
+    const TrialSetting s = make_setting(r.frictions[i], r.density_factors[j], options,
+                                        t + options.first_grasp_index * per_grasp);
     TrialWorld world(prepared, gripper, grasps[g], s, options);
     const TrialOutcome o = world.run([](const StepState&) {});
     r.trial_success[t] = o.success;

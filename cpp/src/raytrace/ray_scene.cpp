@@ -202,19 +202,14 @@ std::size_t RayScene::num_geometries() const { return impl_->instance_ids.size()
 std::int64_t RayScene::num_triangles() const { return impl_->triangles; }
 Eigen::Matrix<double, 2, 3, Eigen::RowMajor> RayScene::bounds() const { return impl_->bounds; }
 
-RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
-                            const CastOptions& options) const {
-  check_rays("RayScene::intersect", origins, directions, options);
-  const Eigen::Index n = origins.rows();
-  RayHits out;
-  out.distance.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::infinity());
-  out.points = Points3f::Zero(n, 3);
-  out.normals = Points3f::Zero(n, 3);
-  out.instance_ids.assign(static_cast<std::size_t>(n), -1);
-  out.face_ids.assign(static_cast<std::size_t>(n), -1);
-  out.barycentric = Points2f::Zero(n, 2);
-  const Impl& impl = *impl_;
+namespace {
 
+/// Casts the first-hit query of every ray and calls on_hit(ray, t, geomID, primID, u, v) for each
+/// ray that hits (misses are left to the caller's defaults).
+template <typename OnHit>
+void trace_first_hits(RTCScene scene, const Points3f& origins, const Points3f& directions,
+                      const CastOptions& options, const OnHit& on_hit) {
+  const Eigen::Index n = origins.rows();
   auto body = [&](std::size_t begin, std::size_t end) {
     detail::FtzDazGuard guard;
     RTCIntersectContext ctx;
@@ -233,11 +228,11 @@ RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
           rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
           rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
-        rtcIntersect16(valid, impl.scene, &ctx, &rh);
+        rtcIntersect16(valid, scene, &ctx, &rh);
         for (std::size_t k = 0; k < m; ++k) {
           if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-          impl.fill_hit(static_cast<Eigen::Index>(s + k), origins, directions, rh.ray.tfar[k],
-                        rh.hit.geomID[k], rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], out);
+          on_hit(static_cast<Eigen::Index>(s + k), rh.ray.tfar[k], rh.hit.geomID[k],
+                 rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k]);
         }
       }
     } else {
@@ -246,14 +241,50 @@ RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
         set_ray(rh.ray, &origins(i, 0), &directions(i, 0), options.tnear, options.tfar);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(impl.scene, &ctx, &rh);
+        rtcIntersect1(scene, &ctx, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        impl.fill_hit(static_cast<Eigen::Index>(i), origins, directions, rh.ray.tfar, rh.hit.geomID,
-                      rh.hit.primID, rh.hit.u, rh.hit.v, out);
+        on_hit(static_cast<Eigen::Index>(i), rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.u,
+               rh.hit.v);
       }
     }
   };
   parallel_for(static_cast<std::size_t>(n), options.num_threads, 4096, body);
+}
+
+}  // namespace
+
+RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
+                            const CastOptions& options) const {
+  check_rays("RayScene::intersect", origins, directions, options);
+  const Eigen::Index n = origins.rows();
+  RayHits out;
+  out.distance.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::infinity());
+  out.points = Points3f::Zero(n, 3);
+  out.normals = Points3f::Zero(n, 3);
+  out.instance_ids.assign(static_cast<std::size_t>(n), -1);
+  out.face_ids.assign(static_cast<std::size_t>(n), -1);
+  out.barycentric = Points2f::Zero(n, 2);
+  const Impl& impl = *impl_;
+  trace_first_hits(impl.scene, origins, directions, options,
+                   [&](Eigen::Index i, float t, unsigned geom, unsigned prim, float u, float v) {
+                     impl.fill_hit(i, origins, directions, t, geom, prim, u, v, out);
+                   });
+  return out;
+}
+
+RayHitIds RayScene::intersect_ids(const Points3f& origins, const Points3f& directions,
+                                  const CastOptions& options) const {
+  check_rays("RayScene::intersect_ids", origins, directions, options);
+  const auto n = static_cast<std::size_t>(origins.rows());
+  RayHitIds out;
+  out.instance_ids.assign(n, -1);
+  out.face_ids.assign(n, -1);
+  const Impl& impl = *impl_;
+  trace_first_hits(impl.scene, origins, directions, options,
+                   [&](Eigen::Index i, float, unsigned geom, unsigned prim, float, float) {
+                     out.instance_ids[static_cast<std::size_t>(i)] = impl.instance_ids[geom];
+                     out.face_ids[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(prim);
+                   });
   return out;
 }
 

@@ -14,13 +14,15 @@ units; the file writer converts to cm), or objects with ``approach``, ``closing`
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from dataclasses import field as dataclass_field
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from tqdm import tqdm
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
@@ -46,7 +48,9 @@ class ShakeOptions:
     contact point, ``pad_damping`` N s/m). ``staircase`` walks each grasp's success boundary
     (success is monotone: more friction helps, more mass hurts) with at most ``2 grid - 1``
     trials plus ``staircase_checks`` checks of inferred cells, falling back to the full grid
-    where a check contradicts monotonicity (``ShakeScores.fallback``).
+    where a check contradicts monotonicity (``ShakeScores.fallback``). ``first_grasp_index``:
+    grasp ``g`` of a call draws the random streams of grasp ``first_grasp_index + g``, so a grasp
+    list scored in consecutive pieces gets the same scores as scored whole.
     """
 
     grid: int = 10
@@ -78,6 +82,7 @@ class ShakeOptions:
     staircase_checks: int = 4
     num_threads: int = 0
     seed: int = 0
+    first_grasp_index: int = 0
 
     def to_core(self) -> _core.ShakeOptions:
         """The C++ options (validated there; errors name the field)."""
@@ -320,12 +325,15 @@ class ShakeScorer:
     of at most ``max_grasps`` grasps of an object (``None``: all); the other grasps keep NaN in
     ``quality_score_simulation``. The object is simulated as its cached convex decomposition
     (:func:`mgn.geometry.convex.cached_convex_decomposition`) with uniform ``density`` (kg/m^3).
+    ``progress`` shows a progress bar with an ETA on stderr (None: when stderr is a terminal);
+    the scores do not depend on it.
     """
 
     density: float = 1000.0
     gripper: ParallelJawGripper | None = None
     options: ShakeOptions = dataclass_field(default_factory=lambda: ShakeOptions(grid=5))
     max_grasps: int | None = 200
+    progress: bool | None = None
 
     @property
     def __name__(self) -> str:  # recorded in the label metadata
@@ -354,14 +362,27 @@ class ShakeScorer:
             ],
             axis=1,
         )
-        scores = shake_scores(
-            cached_convex_decomposition(mesh),
-            props.mass,
-            props.center_of_mass,
-            props.inertia,
-            rows,
-            self.gripper,
-            self.options,
-        )
-        out[idx] = scores.score
+        parts = cached_convex_decomposition(mesh)
+        progress = sys.stderr.isatty() if self.progress is None else bool(self.progress)
+        if not progress:
+            scores = shake_scores(
+                parts, props.mass, props.center_of_mass, props.inertia, rows, self.gripper,
+                self.options,
+            )  # fmt: skip
+            out[idx] = scores.score
+            return out
+        # Pieces of a few grasps per thread; grasp g keeps its random streams (first_grasp_index).
+        step = 2 * _core.resolve_num_threads(int(self.options.num_threads))
+        score = np.empty(len(rows), np.float32)
+        name = getattr(mesh, "name", "") or "object"
+        with tqdm(total=len(rows), desc=f"physics {name}", unit="grasp") as bar:
+            for start in range(0, len(rows), step):
+                piece = shake_scores(
+                    parts, props.mass, props.center_of_mass, props.inertia,
+                    rows[start : start + step], self.gripper,
+                    replace(self.options, first_grasp_index=self.options.first_grasp_index + start),
+                )  # fmt: skip
+                score[start : start + len(piece.score)] = piece.score
+                bar.update(len(piece.score))
+        out[idx] = score
         return out

@@ -43,6 +43,12 @@ struct RayHits {
   Points2f barycentric;                    ///< (N,2) (u,v): p = (1-u-v) v0 + u v1 + v v2
 };
 
+/// Ids of the first hits of a batch (what RayHits holds in instance_ids and face_ids).
+struct RayHitIds {
+  std::vector<std::int32_t> instance_ids;  ///< (N) -1 on a miss
+  std::vector<std::int32_t> face_ids;      ///< (N) face index within its mesh, -1 on a miss
+};
+
 /// All hits along each ray, sorted by distance, in CSR layout: the hits of ray i are the entries
 /// offsets[i] .. offsets[i+1]-1. A ray crossing a shared edge or vertex is reported once.
 struct RayAllHits {
@@ -76,6 +82,10 @@ class RayScene {
   /// non-finite values or a zero direction, or if tnear > tfar.
   RayHits intersect(const Points3f& origins, const Points3f& directions,
                     const CastOptions& options = {}) const;
+  /// The instance and face ids of intersect's first hits (identical to its instance_ids and
+  /// face_ids), without computing distances, points, normals and barycentrics. Same errors.
+  RayHitIds intersect_ids(const Points3f& origins, const Points3f& directions,
+                          const CastOptions& options = {}) const;
   /// Whether each ray hits anything in [tnear, tfar] (cheaper than intersect).
   std::vector<std::uint8_t> occluded(const Points3f& origins, const Points3f& directions,
                                      const CastOptions& options = {}) const;
