@@ -320,11 +320,13 @@ def plot(ev: dict[str, Any], path: Path, title: str) -> bool:
         rows = sorted((r for r in ev["table"] if r["label"] == label), key=lambda r: r["spp"])
         t = [r["seconds"] for r in rows]
         style = "-" if "OIDN" in label else "--"
-        for ax, key in zip(axes, ("flip", "psnr")):
+        for ax, key in zip(axes, ("flip", "psnr"), strict=True):
             ax.plot(t, [r[key] for r in rows], style, marker="o", label=label)
             for r in rows:
                 ax.annotate(str(r["spp"]), (r["seconds"], r[key]), fontsize=7)
-    for ax, name in zip(axes, ("FLIP (lower is better)", "PSNR dB (higher is better)")):
+    for ax, name in zip(
+        axes, ("FLIP (lower is better)", "PSNR dB (higher is better)"), strict=True
+    ):
         ax.set_xscale("log")
         ax.set_xlabel("seconds per view (2 threads, shared machine)")
         ax.set_ylabel(name)
@@ -436,7 +438,7 @@ def raster_ids(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
     r.set_instances(
         [
             Instance(r.add_mesh(m), X, i)
-            for m, X, i in zip(inp["meshes"], inp["poses"], inp["instance_ids"])
+            for m, X, i in zip(inp["meshes"], inp["poses"], inp["instance_ids"], strict=True)
         ]
     )
     K = Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy)

@@ -55,7 +55,7 @@ def raster_rgb(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
     r.set_instances(
         [
             Instance(r.add_mesh(m), X, i)
-            for m, X, i in zip(inp["meshes"], inp["poses"], inp["instance_ids"])
+            for m, X, i in zip(inp["meshes"], inp["poses"], inp["instance_ids"], strict=True)
         ]
     )
     K = Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy)

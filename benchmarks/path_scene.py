@@ -260,7 +260,12 @@ def describe(
     inp = mgn_inputs(scene_json)
     items = []
     for mesh, X, inst, mats, name in zip(
-        inp["meshes"], inp["poses"], inp["instance_ids"], inp["materials"], inp["names"]
+        inp["meshes"],
+        inp["poses"],
+        inp["instance_ids"],
+        inp["materials"],
+        inp["names"],
+        strict=True,
     ):
         V = np.asarray(mesh.vertices, np.float64)
         F = np.asarray(mesh.faces, np.int32)
