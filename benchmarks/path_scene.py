@@ -79,6 +79,7 @@ class Part:
     faces: np.ndarray  # (F, 3) int32
     uvs: np.ndarray | None  # (V, 2) float32
     material: Pbr
+    normals: np.ndarray | None = None  # (F, 3, 3) unit shading normal per face corner
 
 
 @dataclasses.dataclass(frozen=True)
@@ -273,16 +274,61 @@ def describe(
         fm = np.asarray(mesh.face_materials, np.int64)
         if fm.size != len(F):
             fm = np.zeros(len(F), np.int64)
+        normals = corner_normals(V, F)
         parts = []
         for slot, pm in enumerate(mats):
-            sel = F[fm == slot]
-            if len(sel):
-                parts.append(Part(V, sel, uv, _to_pbr(pm)))
+            sel = fm == slot
+            if np.any(sel):
+                parts.append(Part(V, F[sel], uv, _to_pbr(pm), normals[sel]))
         items.append(Item(name, inst, X, tuple(parts)))
     lights, env = lights_and_environment()
     K, X_WC = camera(width, view)
     cam = Camera(K.width, K.height, K.fx, K.fy, K.cx + cx_shift, K.cy + cy_shift, X_WC)
     return SceneDesc(tuple(items), tuple(lights), env, cam)
+
+
+CREASE_COS = math.cos(math.radians(45.0))
+
+
+def corner_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """(F, 3, 3) shading normals as mgn's path tracer makes them: at each face corner, the
+    angle-weighted mean of the normals of the faces around the position-welded vertex that lie
+    within 45 degrees of this face's normal (sharp edges stay sharp)."""
+    P = V[F]  # (F, 3, 3)
+    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+    ang = np.empty((len(F), 3))
+    for k in range(3):
+        a = P[:, (k + 1) % 3] - P[:, k]
+        b = P[:, (k + 2) % 3] - P[:, k]
+        a /= np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-30)
+        b /= np.maximum(np.linalg.norm(b, axis=1, keepdims=True), 1e-30)
+        ang[:, k] = np.arccos(np.clip(np.sum(a * b, axis=1), -1.0, 1.0))
+    _, weld = np.unique(V.astype(np.float32), axis=0, return_inverse=True)
+    wc = weld.reshape(-1)[F.reshape(-1)]  # welded vertex of each corner
+    order = np.argsort(wc, kind="stable")
+    ws = wc[order]
+    bounds = np.flatnonzero(np.diff(ws)) + 1
+    starts = np.concatenate([[0], bounds])
+    sizes = np.diff(np.concatenate([starts, [len(ws)]]))
+    grp_start = np.repeat(starts, sizes)
+    grp_size = np.repeat(sizes, sizes)
+    total = int(grp_size.sum())
+    i = np.repeat(np.arange(len(ws)), grp_size)
+    j = np.repeat(grp_start, grp_size) + (
+        np.arange(total) - np.repeat(np.cumsum(grp_size) - grp_size, grp_size)
+    )
+    ci, cj = order[i], order[j]  # corner ids (3 f + k)
+    fi, fj = ci // 3, cj // 3
+    keep = np.sum(n[fi] * n[fj], axis=1) >= CREASE_COS
+    w = (n[fj] * ang.reshape(-1)[cj][:, None])[keep]
+    acc = np.zeros((3 * len(F), 3))
+    for d in range(3):
+        acc[:, d] = np.bincount(ci[keep], weights=w[:, d], minlength=3 * len(F))
+    length = np.linalg.norm(acc, axis=1, keepdims=True)
+    fallback = np.repeat(n, 3, axis=0)
+    out = np.where(length > 0, acc / np.maximum(length, 1e-30), fallback)
+    return out.reshape(len(F), 3, 3)
 
 
 def srgb_to_linear(u8: np.ndarray) -> np.ndarray:
@@ -414,8 +460,11 @@ def _blender_mesh(name: str, part: Part) -> Any:
         uv = me.uv_layers.new(name="uv")
         uv.data.foreach_set("uv", part.uvs[used][F].astype(np.float32).ravel())
     me.update()
-    me.validate()
-    me.shade_flat()
+    if part.normals is None:
+        me.shade_flat()
+    else:
+        me.shade_smooth()
+        me.normals_split_custom_set(part.normals.reshape(-1, 3).astype(np.float32).tolist())
     return me
 
 
@@ -575,14 +624,20 @@ def mitsuba_variant() -> str:
     raise RuntimeError(f"no CPU variant of Mitsuba loads (have {mi.variants()})")
 
 
-def _write_ply(path: Path, V: np.ndarray, F: np.ndarray, uv: np.ndarray | None) -> None:
+def _write_ply(
+    path: Path, V: np.ndarray, F: np.ndarray, uv: np.ndarray | None, N: np.ndarray | None = None
+) -> None:
     nv = len(V)
     head = ["ply", "format binary_little_endian 1.0", f"element vertex {nv}"]
     head += ["property float x", "property float y", "property float z"]
+    if N is not None:
+        head += ["property float nx", "property float ny", "property float nz"]
     if uv is not None:
         head += ["property float u", "property float v"]
     head += [f"element face {len(F)}", "property list uchar int vertex_indices", "end_header"]
     vert = V.astype(np.float32)
+    if N is not None:
+        vert = np.concatenate([vert, N.astype(np.float32)], axis=1)
     if uv is not None:
         vert = np.concatenate([vert, uv.astype(np.float32)], axis=1)
     faces = np.zeros(len(F), dtype=[("n", "u1"), ("i", "<i4", (3,))])
@@ -635,16 +690,20 @@ def mitsuba_dict(desc: SceneDesc, tmp: Path, spp: int, ids: bool = False) -> dic
     n = 0
     for item in desc.items:
         for part in item.parts:
-            used = np.unique(part.faces)
-            remap = np.full(len(part.vertices), -1, np.int64)
-            remap[used] = np.arange(len(used))
+            # one vertex per face corner, with mgn's per-corner shading normal
+            corners = part.faces.reshape(-1)
             path = tmp / f"m{n}.ply"
-            uv = None if part.uvs is None else part.uvs[used]
-            _write_ply(path, part.vertices[used], remap[part.faces], uv)
+            uv = None
+            if part.uvs is not None:  # Mitsuba's bitmap has v = 0 at the bottom row
+                uv = part.uvs[corners].astype(np.float32)
+                uv[:, 1] = 1.0 - uv[:, 1]
+            nrm = None if part.normals is None else part.normals.reshape(-1, 3)
+            tri = np.arange(len(corners), dtype=np.int32).reshape(-1, 3)
+            _write_ply(path, part.vertices[corners], tri, uv, nrm)
             shape: dict[str, Any] = {
                 "type": "ply",
                 "filename": str(path),
-                "face_normals": True,
+                "face_normals": nrm is None,
                 "to_world": mi.ScalarTransform4f(np.asarray(item.X_WO).tolist()),
             }
             if ids:
