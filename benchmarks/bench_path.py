@@ -493,6 +493,7 @@ def describe_results(ev: dict[str, Any], width: int, ref_spp: int) -> dict[str, 
                 f"reference would take about {full / 3600:.1f} h at that rate; setup "
                 f"{r['setup_s']:.1f} s; version {r.get('version') or 'this checkout'}"
             )
+    notes += target_notes(ev)
     intro = (
         f"{width}x{width} px (the MetaGraspNet camera scaled by {width / 1200:g}), view 0, "
         f"max 6 bounces, 2 threads; error against each engine's own {ref_spp}-spp reference "
@@ -506,6 +507,76 @@ def describe_results(ev: dict[str, Any], width: int, ref_spp: int) -> dict[str, 
         "notes": notes,
         "title": f"{width}x{width}, error vs own {ref_spp}-spp reference",
     }
+
+
+def flip_at(rows: list[dict[str, Any]], seconds: float) -> tuple[float, str]:
+    """FLIP of one engine configuration at a given time per view, interpolated log-log between
+    the measured sample counts; ("", "beyond ...") when outside the measured range."""
+    rows = sorted(rows, key=lambda r: r["seconds"])
+    t = np.log([r["seconds"] for r in rows])
+    f = np.log([r["flip"] for r in rows])
+    x = float(np.log(seconds))
+    if x < t[0]:
+        return float("nan"), f"below its fastest point ({rows[0]['seconds']:.2f} s)"
+    if x > t[-1]:
+        return float(rows[-1]["flip"]), (
+            f"beyond its slowest point ({rows[-1]['seconds']:.2f} s, {rows[-1]['spp']} spp); its "
+            "FLIP there is given, an upper bound of what it would reach in that time"
+        )
+    return float(np.exp(np.interp(x, t, f))), "interpolated"
+
+
+def target_notes(ev: dict[str, Any]) -> list[str]:
+    """The issue's target, checked at the study's size: each denoised mgn point against what
+    Cycles (raw or with OIDN, whichever is better) and Mitsuba 3 reach in 10x its time; then
+    mgn's measured time at 1200 x 1200."""
+    notes = []
+    table = ev["table"]
+    mgn_d = sorted(
+        (r for r in table if r["engine"] == "mgn" and r["denoise"]), key=lambda r: r["spp"]
+    )
+    peers = {}
+    for r in table:
+        if r["engine"] != "mgn":
+            peers.setdefault(r["label"], []).append(r)
+    for m in mgn_d:
+        parts = []
+        for label, rows in sorted(peers.items()):
+            if len(rows) < 2:
+                continue
+            for factor in (1.0, 10.0):
+                val, how = flip_at(rows, factor * m["seconds"])
+                txt = "n/a" if np.isnan(val) else f"{val:.4f}"
+                parts.append(f"{label} in {factor:g}x: {txt} ({how})")
+        notes.append(
+            f"- target check: mgn {m['spp']} spp + OIDN, {m['seconds']:.2f} s, FLIP "
+            f"{m['flip']:.4f}; " + "; ".join(parts)
+        )
+    tgt = ev.get("target") or {}
+    r = tgt.get("mgn")
+    if isinstance(r, dict):
+        for c in r["configs"]:
+            if c["denoise"]:
+                notes.append(
+                    f"- 1200x1200: mgn {c['spp']} spp + OIDN took {np.median(c['wall']):.2f} s per "
+                    f"view (load {np.mean(c['load1']):.1f}; target <= 3 s on 2 idle cores), "
+                    f"without OIDN "
+                    + ", ".join(
+                        f"{np.median(d['wall']):.2f} s"
+                        for d in r["configs"]
+                        if d["spp"] == c["spp"] and not d["denoise"]
+                    )
+                )
+    elif r:
+        notes.append(f"- 1200x1200 mgn: {r}")
+    r = tgt.get("cycles")
+    if isinstance(r, dict):
+        for c in r["configs"]:
+            notes.append(
+                f"- 1200x1200: Cycles {c['spp']} spp{' + OIDN' if c['denoise'] else ''} took "
+                f"{np.median(c['wall']):.2f} s per view (load {np.mean(c['load1']):.1f})"
+            )
+    return notes
 
 
 def rows_for_runner(ev: dict[str, Any], width: int) -> list[Row]:
