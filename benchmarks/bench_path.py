@@ -69,6 +69,13 @@ def _engine_mgn(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Ca
     c = desc.camera
     view = CameraView(Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy), c.X_WC)
 
+    try:
+        from mgn.render.photo import denoise as mgn_denoise  # what `render.denoise` runs
+    except ImportError:
+
+        def mgn_denoise(radiance: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> Any:
+            return pyoidn.denoise(radiance, albedo=albedo, normal=normal, hdr=True)
+
     def render(spp: int, denoise: bool, seed: int) -> np.ndarray:
         opts = mpath.PathTraceOptions(
             spp=spp, max_bounces=desc.max_bounces, seed=seed, num_threads=THREADS
@@ -76,10 +83,7 @@ def _engine_mgn(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Ca
         out = scene.render(view, opts)
         if not denoise:
             return out.radiance
-        return np.asarray(
-            pyoidn.denoise(out.radiance, albedo=out.albedo, normal=out.normal, hdr=True),
-            np.float32,
-        )
+        return np.asarray(mgn_denoise(out.radiance, out.albedo, out.normal), np.float32)
 
     def ids() -> np.ndarray:
         opts = mpath.PathTraceOptions(spp=1, max_bounces=0, num_threads=THREADS)

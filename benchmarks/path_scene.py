@@ -130,15 +130,20 @@ def drop(path: Path) -> Path:
     return scene.to_json(path)
 
 
-def pbr_materials(mesh: Any, is_tote: bool = False) -> list[Any]:
-    """mgn's PBR materials of a mesh, one per material slot: pt-int's built-in materials when
-    that helper is available, else ``PbrMaterial.from_material`` of the legacy material."""
+def pbr_materials(mesh: Any) -> list[Any]:
+    """mgn's PBR materials of a mesh, one per material slot, as mgn's ``path`` engine uses them
+    (``mgn.render.photo.pbr_material``: the built-in objects' own PBR parameters), else
+    ``PbrMaterial.from_material`` of the legacy material."""
     slots = list(mesh.materials) or [None]
     try:
         from mgn.render import path as mpath
     except ImportError:  # the tracer is not built: the legacy material, mapped here
         return [_fallback_pbr(m) for m in slots]
-    return [mpath.PbrMaterial() if m is None else mpath.PbrMaterial.from_material(m) for m in slots]
+    try:
+        from mgn.render.photo import pbr_material  # the built-in objects' own PBR parameters
+    except ImportError:
+        pbr_material = mpath.PbrMaterial.from_material
+    return [mpath.PbrMaterial() if m is None else pbr_material(m) for m in slots]
 
 
 def _fallback_pbr(m: Any) -> Pbr:
@@ -241,7 +246,7 @@ def mgn_inputs(scene_json: Path) -> dict[str, Any]:
     meshes.append(tote)
     poses.append(np.eye(4))
     ids.append(0)
-    materials.append(pbr_materials(tote, is_tote=True))
+    materials.append(pbr_materials(tote))
     names.append("tote")
     return {
         "meshes": meshes,
