@@ -51,6 +51,14 @@ void bind_geometry(py::module_& m) {
             mat.texture_data.assign(s.begin(), s.end());
           },
           "compressed bytes of an embedded texture, or b''")
+      .def_readwrite("has_pbr", &Material::has_pbr,
+                     "True when metallic/roughness/ior/transmission are given (glTF, built-in)")
+      .def_readwrite("metallic", &Material::metallic, "[0,1] (glTF metallicFactor)")
+      .def_readwrite("roughness", &Material::roughness,
+                     "perceptual roughness [0,1] (glTF roughnessFactor)")
+      .def_readwrite("ior", &Material::ior, "index of refraction >= 1 (KHR_materials_ior)")
+      .def_readwrite("transmission", &Material::transmission,
+                     "[0,1], 1 = clear dielectric (KHR_materials_transmission)")
       .def("__repr__", [](const Material& mat) {
         return "Material(name='" + mat.name + "', opacity=" + std::to_string(mat.opacity) +
                (mat.texture_path.empty() ? "" : ", texture='" + mat.texture_path + "'") + ")";

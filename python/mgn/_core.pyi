@@ -113,6 +113,35 @@ class Material:
     def base_color(
         self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[4, 1]"]
     ) -> None: ...
+    has_pbr: bool
+    @property
+    def metallic(self) -> float:
+        """
+        [0,1] (glTF metallicFactor)
+        """
+    @metallic.setter
+    def metallic(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def roughness(self) -> float:
+        """
+        perceptual roughness [0,1] (glTF roughnessFactor)
+        """
+    @roughness.setter
+    def roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def ior(self) -> float:
+        """
+        index of refraction >= 1 (KHR_materials_ior)
+        """
+    @ior.setter
+    def ior(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def transmission(self) -> float:
+        """
+        [0,1], 1 = clear dielectric (KHR_materials_transmission)
+        """
+    @transmission.setter
+    def transmission(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def opacity(self) -> float:
         """

@@ -35,6 +35,15 @@ Sections:
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
   scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
   or a list of object names / category ids).
+- ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
+  ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
+  ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
+  it ``spp_without_denoiser`` samples are traced and a warning names the package),
+  ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone`` (``filmic`` | ``linear``),
+  ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
+  ``randomize`` (path engine, when ``camera.randomize`` is on: switches ``lights``,
+  ``environment``, ``materials`` (tote / floor), ``exposure`` and their ranges). Labels do not
+  depend on the engine.
 - ``selection``: a difficulty-balanced test set (docs/testsets.md): ``quota`` (views wanted per
   difficulty level, e.g. ``{1: 20, 2: 20, 3: 20, 4: 20, 5: 20}``; null = no selection),
   ``batch_scenes`` (scenes generated per batch), ``max_scenes`` (give up after this many
@@ -57,6 +66,7 @@ import yaml
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec
+from mgn.render.photo import RandomizeSettings, RenderSettings
 from mgn.scene.scene import DropOptions
 
 __all__ = [
@@ -472,11 +482,22 @@ def _external(cls: type, data: Any, key: str) -> Any:
     kwargs = {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
     try:
         return cls(**kwargs)
+    except ConfigError:
+        raise
     except (ValueError, TypeError) as e:
         # The dataclasses name the field as "<Class>.<field>"; name the config key the same way.
         m = re.search(rf"{cls.__name__}\.(\w+)", str(e))
         sub = f"{key}.{m.group(1)}" if m and m.group(1) in kwargs else key
         raise ConfigError(f"config key '{sub}': {e}") from e
+
+
+def _render(data: Any, key: str) -> RenderSettings:
+    """The ``render`` section: RenderSettings with its nested ``randomize`` mapping."""
+    d = _mapping(data, key)
+    _check_keys(d, [f.name for f in dataclasses.fields(RenderSettings)], key)
+    if "randomize" in d:
+        d["randomize"] = _external(RandomizeSettings, d["randomize"], f"{key}.randomize")
+    return _external(RenderSettings, d, key)
 
 
 @dataclass(frozen=True)
@@ -493,6 +514,7 @@ class Config(_Section):
     drop: DropOptions = field(default_factory=DropOptions)
     split: SplitConfig = field(default_factory=SplitConfig)
     selection: SelectionConfig = field(default_factory=SelectionConfig)
+    render: RenderSettings = field(default_factory=RenderSettings)
 
     _CHECKS = {
         "objects": lambda v, k: ObjectsConfig.from_dict(v, k),
@@ -505,6 +527,7 @@ class Config(_Section):
         "drop": lambda v, k: _external(DropOptions, v, k),
         "split": lambda v, k: SplitConfig.from_dict(v, k),
         "selection": lambda v, k: SelectionConfig.from_dict(v, k),
+        "render": _render,
     }
 
     @classmethod
@@ -556,6 +579,8 @@ _SECTION_DOCS = {
     "drop": "drop simulation (m, s): mgn.scene.DropOptions",
     "split": "unseen-object split: name all | train | test; unseen: novel | [names]",
     "selection": "difficulty-balanced test set: quota {level: views} (null = off), batches",
+    "render": "RGB images: engine raster (fast preview) | path (path tracer), spp, denoise, "
+    "film; randomize: per-view lights / environment / tote+floor materials / exposure",
 }
 
 

@@ -136,6 +136,40 @@ def _png_tag(image: np.ndarray, width: int) -> str:
     return f'<img src="data:image/png;base64,{data}" width="{width}">'
 
 
+def _engine_text(d: dict[str, Any]) -> str:
+    if d.get("engine") == "path":
+        den = "denoised (Open Image Denoise)" if d.get("denoised") else "not denoised"
+        return f"path tracer, {d.get('spp', '?')} spp, {den}"
+    if d.get("engine") == "raster":
+        return "raster (OpenGL preview)"
+    return "unknown"
+
+
+def image_engines(ds: Dataset) -> str:
+    """Which engine made the RGB images, as recorded per scene (``render`` of each scene's
+    manifest.json) or else by the dataset's config (``render`` section of dataset.json; none:
+    the raster engine, the only one before it was recorded): e.g. ``"path tracer, 16 spp,
+    denoised (Open Image Denoise): 3 scenes"``."""
+    counts: Counter[str] = Counter()
+    for scene in ds.scenes():
+        rec = None
+        try:
+            rec = json.loads((scene.folder / "manifest.json").read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            pass
+        d = rec.get("render") if isinstance(rec, dict) else None
+        if not isinstance(d, dict):
+            cfg = (ds.info or {}).get("config", {})
+            d = cfg.get("render") if isinstance(cfg, dict) else None
+            d = d if isinstance(d, dict) else {"engine": "raster"}
+            if d.get("engine") == "path":
+                d = {"engine": "path", "spp": d.get("spp"), "denoised": d.get("denoise")}
+        counts[_engine_text(d)] += 1
+    if not counts:
+        return "no scenes"
+    return "; ".join(f"{k}: {n} scene{'s' * (n != 1)}" for k, n in sorted(counts.items()))
+
+
 def write_report(
     root: str | os.PathLike[str],
     out: str | os.PathLike[str],
@@ -200,6 +234,7 @@ def write_report(
     gc = stats["grasp_counts"]
     summary = {
         "scenes": stats["scenes"],
+        "RGB images made by": image_engines(ds),
         "views sampled for statistics": stats["views_sampled"],
         "mgn version": info.get("mgn_version", "?"),
         "seed": info.get("seed", "?"),

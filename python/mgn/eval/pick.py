@@ -318,20 +318,24 @@ def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
     return CameraView(K, poses[0])
 
 
-def _render(scene: Scene, view: CameraView) -> ViewImages:
-    """The top view without noise or randomisation."""
+def _render(scene: Scene, view: CameraView, render: Any = None, num_threads: int = 0) -> ViewImages:
+    """The top view without noise or randomisation; the picture by ``render``
+    (:class:`mgn.render.photo.RenderSettings`, default the raster engine)."""
     from mgn.render.views import iter_views, tote_mesh
 
     frames = iter_views(scene.render_items(), tote_mesh(scene.tote), [(0, view)], sensor="ideal",
-                        randomize=False, seed=scene.seed)  # fmt: skip
+                        randomize=False, seed=scene.seed, render=render,
+                        num_threads=num_threads)  # fmt: skip
     return next(iter(frames))
 
 
-def _observe(scene: Scene, view: CameraView, num_threads: int) -> tuple[Any, Any, Any]:
+def _observe(
+    scene: Scene, view: CameraView, num_threads: int, render: Any = None
+) -> tuple[Any, Any, Any]:
     from mgn.scene.layout import compute_layout
     from mgn.scene.view_labels import SceneRayModel, view_object_labels
 
-    images = _render(scene, view)
+    images = _render(scene, view, render, num_threads)
     rays = SceneRayModel.from_scene(scene)
     labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal,
                                 keypoints=False, num_threads=num_threads)  # fmt: skip
@@ -550,7 +554,7 @@ def run_picking(
                 num_threads=num_threads,
             )
             g = model.suction if gripper == "suction" else model.pj
-            images, vlabels, layout = _observe(cur, view, num_threads)
+            images, vlabels, layout = _observe(cur, view, num_threads, config.render)
             vis = model.view_grasps(view, np.asarray(vlabels.visible_pixels) > 0)
             visible = np.zeros(len(g), bool)
             for s in (vis.non_colliding, vis.colliding):
@@ -697,16 +701,22 @@ def run_picking(
         success_threshold=float(success_threshold),
     )
     if folder is not None:
-        _write_outputs(folder, results, cur, view, frames, num_threads)
+        _write_outputs(folder, results, cur, view, frames, num_threads, config.render)
     return results
 
 
 def _write_outputs(
-    folder: Path, results: PickResults, scene: Scene, view: CameraView, frames: list, threads: int
+    folder: Path,
+    results: PickResults,
+    scene: Scene,
+    view: CameraView,
+    frames: list,
+    threads: int,
+    render: Any = None,
 ) -> None:
     from mgn.eval.results import write_results_json
 
-    final = _render(scene, view)
+    final = _render(scene, view, render, threads)
     img = _draw(final.rgb, view, None, None)
     img.save(folder / "final.png")
     frames = [*frames, img]
@@ -739,10 +749,18 @@ def _load_scene(path: Path) -> tuple[Scene, Config | None]:
 
 def _cmd_pick(args: argparse.Namespace) -> int:
     from mgn.config import load_config
+    from mgn.render.photo import settings_from_args
 
     scene, config = _load_scene(Path(args.scene))
     if args.config is not None:
         config = load_config(args.config)
+    if args.engine is not None or args.spp is not None:
+        import dataclasses
+
+        from mgn.config import default_config
+
+        config = config or default_config()
+        config = dataclasses.replace(config, render=settings_from_args(config.render, args))
     results = run_picking(
         scene,
         policy=args.policy,
@@ -783,4 +801,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--resolution", type=int, default=160, help="top-view image size, px")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--out", required=True, help="output folder")
+    from mgn.render.photo import add_engine_arguments
+
+    add_engine_arguments(p, what="the step pictures")
     p.set_defaults(func=_cmd_pick)

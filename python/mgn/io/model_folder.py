@@ -44,6 +44,11 @@ def object_mesh(spec: ObjectSpec) -> Mesh:
     mat.specular = np.asarray(spec.material.specular, np.float32)
     mat.shininess = float(spec.material.shininess)
     mat.opacity = float(spec.material.opacity)
+    mat.has_pbr = True
+    mat.metallic = float(spec.material.metallic)
+    mat.roughness = float(spec.material.roughness)
+    mat.ior = float(spec.material.ior)
+    mat.transmission = float(spec.material.transmission)
     uvs = None if spec.uvs is None else np.asarray(spec.uvs, np.float32)
     if spec.material.texture is not None and uvs is not None:
         # The texture travels with the mesh as embedded PNG bytes (the renderer decodes them).

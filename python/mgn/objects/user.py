@@ -11,6 +11,10 @@ Example ``my_objects.yaml`` (paths relative to the YAML file; SI units)::
         category_id: 101           # optional; default: after the built-in objects
         color: [0.6, 0.6, 0.65, 1.0]   # optional linear RGBA; default: the file's material
         opacity: 1.0               # optional
+        metallic: 0.0              # optional, [0, 1]        (physically based, path tracer;
+        roughness: 0.4             # optional, [0, 1]         default: the file's glTF/GLB
+        ior: 1.5                   # optional, [1, 4]         factors, else derived from its
+        transmission: 0.0          # optional, [0, 1]         Phong material)
         keypoints:                 # optional, object frame, metres (default: top/bottom)
           tip: [0.0, 0.0, 0.05]
           hole: [0.01, 0.0, 0.0]
@@ -23,6 +27,7 @@ The mesh keeps its own frame. It must be watertight (mass properties are exact),
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -31,7 +36,7 @@ import numpy as np
 import yaml
 
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.geometry import load_mesh
+from mgn.geometry import Material, load_mesh
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
 
 _KEYS = {
@@ -43,6 +48,10 @@ _KEYS = {
     "category_id",
     "color",
     "opacity",
+    "metallic",
+    "roughness",
+    "ior",
+    "transmission",
     "keypoints",
     "tags",
     "description",
@@ -60,6 +69,55 @@ def _texture(path: str) -> np.ndarray | None:
             return np.asarray(img.convert("RGB"), dtype=np.uint8)
     except OSError:
         return None  # a missing texture leaves the base colour; the mesh is still usable
+
+
+def _embedded_texture(data: bytes) -> np.ndarray | None:
+    """An embedded (GLB) texture's PNG/JPEG bytes as an RGB image; None if absent or broken."""
+    if not data:
+        return None
+    import io
+
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(data)) as img:
+            return np.asarray(img.convert("RGB"), dtype=np.uint8)
+    except OSError:
+        return None
+
+
+def _number(entry: dict[str, Any], key: str, where: str, lo: float, hi: float) -> float | None:
+    """``entry[key]`` as a float in [lo, hi], None when absent; else an error naming the field."""
+    if key not in entry:
+        return None
+    value = entry[key]
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if not ok or not (math.isfinite(float(value)) and lo <= float(value) <= hi):
+        raise InvalidArgumentError(
+            f"{where}: field '{key}' must be a number in [{lo:g}, {hi:g}], got {value!r}"
+        )
+    return float(value)
+
+
+def pbr_defaults(mat: Material | None, opacity: float = 1.0) -> dict[str, float]:
+    """metallic, roughness, ior, transmission of a mesh file's material: its glTF/GLB factors
+    when it has them (``Material.has_pbr``), else derived from the Phong description: roughness
+    from the Phong exponent n through the Beckmann correspondence alpha = sqrt(2 / (n + 2)),
+    roughness = sqrt(alpha) (clamped to [0.05, 1]); a mirror-like specular (luminance >= 0.8,
+    n >= 200) is a metal; opacity < 0.5 a clear dielectric (transmission 1)."""
+    if mat is not None and mat.has_pbr:
+        return {"metallic": float(mat.metallic), "roughness": float(mat.roughness),
+                "ior": float(mat.ior), "transmission": float(mat.transmission)}  # fmt: skip
+    n = float(mat.shininess) if mat is not None else 20.0
+    roughness = min(1.0, max(0.05, math.sqrt(math.sqrt(2.0 / (max(n, 0.0) + 2.0)))))
+    spec = np.asarray(mat.specular if mat is not None else (0.2, 0.2, 0.2), np.float64)
+    lum = float(0.2126 * spec[0] + 0.7152 * spec[1] + 0.0722 * spec[2])
+    metallic = 1.0 if lum >= 0.8 and n >= 200.0 else 0.0
+    transmission = 1.0 if opacity < 0.5 else 0.0
+    if transmission:
+        roughness = 0.02
+    return {"metallic": metallic, "roughness": roughness, "ior": 1.5,
+            "transmission": transmission}  # fmt: skip
 
 
 def _object_from_entry(
@@ -87,20 +145,33 @@ def _object_from_entry(
     if report.signed_volume < 0:
         mesh = mesh.flipped()  # inward-wound file: make the normals point outward
     mat = mesh.materials[0] if mesh.materials else None
-    texture = _texture(mat.texture_path) if mat is not None else None
+    texture = None
+    if mat is not None:
+        texture = _texture(mat.texture_path)
+        if texture is None:
+            texture = _embedded_texture(bytes(mat.texture_data))
     uvs = mesh.uvs if texture is not None else None
     if uvs is not None and (np.any(uvs < 0) or np.any(uvs > 1)):
         uvs = np.mod(uvs, 1.0)  # wrap repeating uvs into the unit square
     color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
     if len(color) == 3:
         color = [*color, 1.0]
+    opacity = _number(entry, "opacity", where, 1e-6, 1.0)
+    opacity = opacity if opacity is not None else (float(mat.opacity) if mat is not None else 1.0)
+    pbr = pbr_defaults(mat, opacity)
+    for key, lo, hi in (("metallic", 0.0, 1.0), ("roughness", 0.0, 1.0), ("ior", 1.0, 4.0),
+                        ("transmission", 0.0, 1.0)):  # fmt: skip
+        value = _number(entry, key, where, lo, hi)
+        if value is not None:
+            pbr[key] = value
     material = MaterialSpec(
         name=f"{name}_material",
         base_color=tuple(float(c) for c in color),
         specular=tuple(float(s) for s in (mat.specular if mat is not None else (0.2,) * 3)),
         shininess=float(mat.shininess) if mat is not None else 20.0,
-        opacity=float(entry.get("opacity", mat.opacity if mat is not None else 1.0)),
+        opacity=opacity,
         texture=texture,
+        **pbr,
     )
     lo, hi = mesh.bounds
     centre = (lo + hi) / 2

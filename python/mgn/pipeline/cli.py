@@ -41,6 +41,9 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.confi
         sel["batch_scenes"] = args.batch_scenes
     if args.prune_rejected:
         sel["prune_rejected"] = True
+    from mgn.render.photo import settings_from_args
+
+    cfg = dataclasses.replace(cfg, render=settings_from_args(cfg.render, args))
     if sel:
         from mgn.config import SelectionConfig
 
@@ -135,6 +138,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--prune-rejected", action="store_true", help="delete the files of the views not selected"
     )
+    from mgn.render.photo import add_engine_arguments
+
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_generate)
 
     c = sub.add_parser("config", help="the dataset configuration (YAML)")

@@ -188,7 +188,9 @@ def run_scene(task: SceneTask) -> SceneResult:
         times["write"] = time.perf_counter() - t1
         times.update({f"write: {k}": v for k, v in (stages or {}).items()})
         t2 = time.perf_counter()
-        write_manifest(tmp, scene=task.index, seed=task.seed)
+        # What made the RGB images (engine, samples, denoiser), for `mgn report`.
+        write_manifest(tmp, scene=task.index, seed=task.seed,
+                       render=task.config.render.describe())  # fmt: skip
         size = _folder_size(tmp)
         if final.exists():  # an inconsistent leftover the caller decided to redo
             shutil.rmtree(final)
@@ -498,6 +500,11 @@ def _comparable(config_doc: Any) -> Any:
     doc = json.loads(json.dumps(config_doc))
     if isinstance(doc, dict) and isinstance(doc.get("selection"), dict):
         doc["selection"].pop("max_scenes", None)
+    if isinstance(doc, dict) and "render" not in doc:
+        # Recorded before the render section existed: those images came from the raster.
+        from mgn.render.photo import RenderSettings
+
+        doc["render"] = json.loads(json.dumps(Config(render=RenderSettings()).to_dict()["render"]))
     return doc
 
 

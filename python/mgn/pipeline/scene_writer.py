@@ -92,6 +92,7 @@ def write_scene(
         layout=labels.layout,
         scene_grasps=labels.scene_grasps,
         num_threads=num_threads,
+        render=config.render,
     )
     views = scene_views(scene, config.camera)
     timings = label_scene(scene, out, views, pj_labels=pj, suction_labels=su,

@@ -32,6 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     )
     p.add_argument("--scale", type=float, default=1.0, help="image size factor (1 = 1200 px)")
     p.add_argument("--no-randomize", action="store_true", help="fixed light and colours")
+    from mgn.render.photo import add_engine_arguments
+
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_demo)
 
 
@@ -47,6 +50,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from mgn.io.model_folder import object_mesh
     from mgn.objects import builtin_objects
     from mgn.render import Intrinsics, render_views, tote_mesh
+    from mgn.render.photo import RenderSettings, settings_from_args
 
     if not 1 <= args.objects <= len(builtin_objects()):
         raise ValueError(f"--objects must be in 1..{len(builtin_objects())}, got {args.objects}")
@@ -68,6 +72,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     res = render_views(
         items, tote_mesh(), args.views, args.out, rig_seed=args.seed, K=K, sensor=args.sensor,
         randomize=not args.no_randomize, seed=args.seed,
+        render=settings_from_args(RenderSettings(), args),
     )  # fmt: skip
     for r in res:
         print(f"view {r.index}: {r.valid.mean():.1%} valid depth -> {args.out}/{r.index}_*.png")

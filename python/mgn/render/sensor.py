@@ -65,8 +65,9 @@ def sensor_params(preset: SensorName, **overrides: float | bool) -> _core.DepthS
 
 def surface_flags(item: Material | Mesh) -> int:
     """Flag bits of a material (or the union over a mesh's materials): transparent if opacity x
-    alpha < 0.5, dark if untextured with linear luminance < 0.03, mirror if specular luminance
-    >= 0.8 and shininess >= 200."""
+    alpha < 0.5 or (PBR) transmission >= 0.5, dark if untextured with linear luminance < 0.03,
+    mirror if specular luminance >= 0.8 and shininess >= 200 or (PBR) metallic >= 0.5 with
+    roughness <= 0.25 (polished metal)."""
     if isinstance(item, Mesh):
         return int(_core.mesh_surface_flags(item))
     return int(_core.surface_flags(item))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +30,7 @@ from mgn.geometry import Mesh, make_box
 from mgn.io.atomic import atomic_write_bytes
 from mgn.objects import ToteSpec, make_tote
 from mgn.render.camera import CameraView, Intrinsics, mgn_rig
+from mgn.render.photo import PhotoRenderer, RenderSettings
 from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
 
@@ -52,7 +53,9 @@ class ViewImages:
         depth_ideal: (H, W) float32 noise-free z-depth, m, 0 where nothing is seen.
         valid: (H, W) bool.
         instance_ids: (H, W) int32, 0 = background.
-        light: the light used.
+        light: the light used (raster engine; the path engine's lights are in ``engine``).
+        engine: what made ``rgb``: ``{"engine": "raster"}`` or ``{"engine": "path", "spp",
+            "denoised", "max_bounces"}`` (:meth:`mgn.render.photo.RenderSettings.describe`).
     """
 
     index: int
@@ -63,6 +66,7 @@ class ViewImages:
     valid: npt.NDArray[np.bool_]
     instance_ids: npt.NDArray[np.int32]
     light: LightSample
+    engine: dict[str, Any] = field(default_factory=lambda: {"engine": "raster"})
 
 
 def tote_mesh(spec: ToteSpec | None = None) -> Mesh:
@@ -122,12 +126,19 @@ def iter_views(
     floor: bool = True,
     shadows: bool = True,
     renderer: Renderer | None = None,
+    render: RenderSettings | None = None,
+    num_threads: int = 0,
 ) -> Iterator[ViewImages]:
     """Render the views of a scene one at a time (the arguments of :func:`render_views`, without
     ``out_dir``): the scene is uploaded once and each view's images are yielded before the next
     view is rendered, so memory does not grow with the number of views. ``views`` may also be
     (view index, camera) pairs: the index names the files and seeds the view's randomisation.
+
+    With ``render.engine == "path"`` the RGB image is path-traced (:mod:`mgn.render.photo`);
+    depth and instance ids still come from the raster's geometry passes, which the tracer
+    matches pixel for pixel.
     """
+    settings = render if render is not None else RenderSettings()
     X_tote = np.eye(4) if X_W_tote is None else np.asarray(X_W_tote, np.float64)
     if X_tote.shape != (4, 4) or not np.all(np.isfinite(X_tote)):
         raise ValueError(f"X_W_tote must be a finite (4, 4) pose, got shape {X_tote.shape}")
@@ -196,15 +207,31 @@ def iter_views(
         instances.append(Instance(upload(slab), X_floor, 0, randomize_color=True))
     r.set_instances(instances)
     flags = r.surface_flags_by_id()
+    photo = None
+    if settings.engine == "path":
+        tote_color = (0.2, 0.35, 0.6)
+        if tote is not None and tote.materials:
+            tote_color = tuple(float(c) for c in np.asarray(tote.materials[0].base_color)[:3])
+        photo = PhotoRenderer(
+            objects, tote, X_tote, (slab, X_floor) if floor else None, settings,
+            tote_color=tote_color, randomize=randomize, seed=seed, num_threads=num_threads,
+        )  # fmt: skip
 
     for v, cam in cams:
-        img = r.render(cam, randomize=randomize, seed=seed, view_index=v, shadows=shadows)
-        assert img.rgb is not None and img.depth is not None and img.instance_ids is not None
+        img = r.render(cam, rgb=photo is None, randomize=randomize, seed=seed, view_index=v,
+                       shadows=shadows)  # fmt: skip
+        assert img.depth is not None and img.instance_ids is not None
+        if photo is not None:
+            rgb, _ = photo.render(cam, v)
+            engine = photo.describe()
+        else:
+            assert img.rgb is not None
+            rgb, engine = img.rgb, {"engine": "raster"}
         sens = apply_depth_sensor(
             img.depth, img.instance_ids, cam.K, sensor, flags_by_id=flags, seed=seed + v
         )
         res = ViewImages(
-            v, cam, img.rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light
+            v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine
         )
         yield res
 
@@ -236,9 +263,13 @@ def render_views(
         floor: draw a floor slab under the tote (instance id 0).
         renderer: reuse a Renderer large enough for the views (the meshes are added to it, its
             instances replaced); default or too small: a new one.
+        render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`; default
+            the raster engine).
+        num_threads: path tracer threads (0 = all cores); images do not depend on it.
 
         **kwargs: the keyword arguments of :func:`iter_views` (``X_W_tote``, ``rig_seed``,
-            ``K``, ``sensor``, ``randomize``, ``seed``, ``floor``, ``shadows``, ``renderer``).
+            ``K``, ``sensor``, ``randomize``, ``seed``, ``floor``, ``shadows``, ``renderer``,
+            ``render``, ``num_threads``).
 
     Returns:
         One :class:`ViewImages` per view, in order.

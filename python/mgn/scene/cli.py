@@ -13,6 +13,8 @@ import argparse
 from collections.abc import Callable
 from pathlib import Path
 
+from mgn.render.photo import add_engine_arguments
+
 __all__ = ["ACTIONS", "register"]
 
 
@@ -100,9 +102,12 @@ def _register_drop(ssub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
+    from mgn.config import load_config
+    from mgn.render.photo import settings_from_args
     from mgn.render.views import render_views, tote_mesh
     from mgn.scene.scene import Scene
 
+    render = settings_from_args(load_config(args.config).render, args)
     scene = Scene.from_json(args.scene)
     if len(scene) == 0:
         raise ValueError(f"'{args.scene}': the scene has no objects to render")
@@ -115,6 +120,8 @@ def _cmd_render(args: argparse.Namespace) -> int:
         sensor=args.sensor,
         randomize=not args.no_randomize,
         seed=scene.seed,
+        render=render,
+        num_threads=args.num_threads,
     )
     for v in views:
         print(f"view {v.index}: {args.out}/{v.index}_rgb.png, _depth.png, _instances.png")
@@ -133,6 +140,9 @@ def _register_render(ssub: argparse._SubParsersAction) -> None:
         "--sensor", choices=["ideal", "structured-light", "tof"], default="structured-light"
     )
     p.add_argument("--no-randomize", action="store_true", help="fixed light and colours")
+    p.add_argument("--config", help="dataset config YAML (its render section)")
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_render)
 
 
@@ -145,10 +155,12 @@ def _cmd_label(args: argparse.Namespace) -> int:
     from mgn.io.atomic import atomic_dir
     from mgn.pipeline.label_cache import object_labels
     from mgn.pipeline.scene_writer import scene_views
+    from mgn.render.photo import settings_from_args
     from mgn.scene.label import LabelOptions, label_scene
     from mgn.scene.scene import Scene
 
     config = load_config(args.config)
+    render = settings_from_args(config.render, args)
     scene = Scene.from_json(args.scene)
     if len(scene) == 0:
         raise ValueError(f"'{args.scene}': the scene has no objects to label")
@@ -182,6 +194,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
         layout=config.labels.layout,
         scene_grasps=grasps,
         num_threads=args.num_threads,
+        render=render,
     )
     with tqdm(total=len(views), desc="views", unit="view", disable=None) as bar:
         with atomic_dir(args.out, overwrite=args.overwrite) as tmp:
@@ -204,6 +217,7 @@ def _register_label(ssub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-grasps", action="store_true", help="skip the scene grasp labels")
     p.add_argument("--overwrite", action="store_true", help="replace an existing folder")
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    add_engine_arguments(p)
     p.set_defaults(func=_cmd_label)
 
 

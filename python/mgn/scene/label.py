@@ -33,6 +33,7 @@ from mgn.render.camera import CameraView
 
 if TYPE_CHECKING:
     from mgn.pj.labels import PjLabels
+    from mgn.render.photo import RenderSettings
     from mgn.render.sensor import SensorName
     from mgn.scene.scene import Scene
     from mgn.suction.labels import SuctionLabels
@@ -57,6 +58,8 @@ class LabelOptions:
             Object labels often hold tens of thousands of parallel-jaw grasps; MetaGraspNet's
             scenes carry a few thousand per object.
         num_threads: C++ threads (0 = all cores); results do not depend on it.
+        render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
+            None = the raster engine). Labels do not depend on it.
     """
 
     sensor: SensorName = "structured-light"
@@ -68,6 +71,7 @@ class LabelOptions:
     grasp_offsets: tuple[float, ...] = (0.0, 0.1)
     max_grasps_per_object: int = 2000
     num_threads: int = 0
+    render: RenderSettings | None = None
 
 
 @dataclass
@@ -76,6 +80,8 @@ class LabelTimings:
 
     seconds: dict[str, float] = field(default_factory=dict)
     views: int = 0
+    #: What made the RGB images (``ViewImages.engine`` of the last view).
+    engine: dict[str, Any] = field(default_factory=dict)
 
     def add(self, stage: str, dt: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
@@ -238,10 +244,12 @@ def label_scene(
     with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool:
         t0 = time.perf_counter()
         frames = iter_views(objects, tote_mesh(scene.tote), views, sensor=opt.sensor,
-                            randomize=opt.randomize, seed=opt.seed)  # fmt: skip
+                            randomize=opt.randomize, seed=opt.seed, render=opt.render,
+                            num_threads=opt.num_threads)  # fmt: skip
         for k, images in enumerate(frames):
             t1 = time.perf_counter()
             timings.add("render", t1 - t0)
+            timings.engine = dict(images.engine)
             v, view = views[k]
             labels = view_object_labels(
                 rays,
