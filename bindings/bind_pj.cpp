@@ -1,4 +1,5 @@
-// Parallel-jaw grasps: gripper, antipodal sampler and soft-finger wrench score (MODELS.md §5).
+// Parallel-jaw grasps: gripper, antipodal sampler and soft-finger wrench score
+// (docs/models.md §5).
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 #include <mgn/grasp/antipodal.hpp>

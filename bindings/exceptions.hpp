@@ -12,6 +12,7 @@ void bind_collision(pybind11::module_& m);
 void bind_grasp(pybind11::module_& m);
 void bind_calibration(pybind11::module_& m);
 void bind_render(pybind11::module_& m);
+void bind_path_tracer(pybind11::module_& m);
 void bind_scene(pybind11::module_& m);
 void bind_pj(pybind11::module_& m);
 void bind_shake(pybind11::module_& m);

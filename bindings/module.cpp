@@ -13,6 +13,7 @@ PYBIND11_MODULE(_core, m) {
   mgn::py_bind::bind_grasp(m);
   mgn::py_bind::bind_calibration(m);
   mgn::py_bind::bind_render(m);
+  mgn::py_bind::bind_path_tracer(m);
   mgn::py_bind::bind_scene(m);
   mgn::py_bind::bind_pj(m);
   mgn::py_bind::bind_shake(m);

@@ -1,6 +1,6 @@
 # Finds every third-party library mgn builds against and exposes each as an imported target.
 # This file is installed next to mgnConfig.cmake so that find_package(mgn) re-creates the same
-# targets for consumers of the static library. See DEPENDENCIES.md for the reasons behind each call.
+# targets for consumers of the static library. Why each library is used: third_party_notes/<lib>.md.
 include_guard(GLOBAL)
 include(CMakeFindDependencyMacro)
 find_package(PkgConfig REQUIRED)

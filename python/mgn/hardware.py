@@ -1,6 +1,6 @@
 """The default end effectors: a Franka-hand-like parallel-jaw gripper and a bellows suction cup.
 
-Values are the MetaGraspNet defaults (MODELS.md §1 and §5), in SI units. Both are frozen
+Values are the MetaGraspNet defaults (docs/models.md §1 and §5), in SI units. Both are frozen
 dataclasses that validate themselves and round-trip through YAML, so users describe their own
 hardware in a small file::
 
@@ -185,7 +185,7 @@ class SuctionCup(_YamlDataclass):
         pressure_difference: vacuum pressure difference, bar.
         compensable_height: largest height difference the lip absorbs (hill check), m.
         approach_height: start height of the projection above the contact, m.
-        c1: fitted compression-spring constant (calibrated, see MODELS.md §4).
+        c1: fitted compression-spring constant (calibrated, see docs/models.md §4).
         c2: fitted ring-spring constant (calibrated); MetaGraspNet's convention: ring stiffness
             k = E·1e6·π·c2 / (N·L) with the rest length L in cm (see Cup::ring_stiffness).
         outer_radius: outer radius of the cup body for collision checks, m.

@@ -17,7 +17,7 @@ namespace mgn_cli {
 const char* kPjUsage =
     "  pj --mesh MESH --out LABELS.json [--gripper G.yaml] [--points N] [--seed S]\n"
     "     [--density D] [--threads T]\n"
-    "      Parallel-jaw labels of a watertight mesh (MODELS.md 5): N contact points (default\n"
+    "      Parallel-jaw labels of a watertight mesh (docs/models.md 5): N contact points (default\n"
     "      5000) sampled evenly, antipodal robust sampler, collision check, soft-finger wrench\n"
     "      score (density D kg/m^3, default 1000, gravity -z). G is a gripper YAML as written by\n"
     "      mgn.hardware.ParallelJawGripper (default: the MetaGraspNet hand). Output JSON in SI\n"

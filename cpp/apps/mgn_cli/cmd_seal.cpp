@@ -16,7 +16,7 @@ const char* kSealUsage =
     "  seal --mesh MESH --points PTS.csv [--cup CUP.yaml] [--model spring|strain|smoothness]\n"
     "       [--out OUT.csv|OUT.json] [--scale S] [--trials T | --nominal] [--seed S] [--threads "
     "T]\n"
-    "      Seal scores of suction candidates (MODELS.md 1-2). PTS.csv rows: x,y,z,nx,ny,nz in\n"
+    "      Seal scores of suction points (docs/models.md 1-2). PTS.csv rows: x,y,z,nx,ny,nz in\n"
     "      the mesh frame (metres after --scale; outward normals; a header line is allowed).\n"
     "      CUP is a cup YAML as written by mgn.hardware.SuctionCup (default: MetaGraspNet cup).\n"
     "      Prints (or writes) per point: index, score in [0,1] (fraction of T perturbed trials,\n"

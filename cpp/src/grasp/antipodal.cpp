@@ -1,4 +1,4 @@
-// Antipodal robust sampling of parallel-jaw grasps (MODELS.md §5).
+// Antipodal robust sampling of parallel-jaw grasps (docs/models.md §5).
 #include <mgn/collision/collision_model.hpp>
 #include <mgn/core/error.hpp>
 #include <mgn/core/parallel.hpp>

@@ -1,5 +1,5 @@
-// Cup calibration (MODELS.md §4): fit c1, c2 of the spring seal model to measured outcomes with
-// NLopt (GN_DIRECT_L, then LN_BOBYQA) over (ln c1, ln c2). See calibration.hpp for the objective
+// Cup calibration (docs/models.md §4): fit c1, c2 of the spring seal model to measured outcomes
+// with NLopt (GN_DIRECT_L, then LN_BOBYQA) over (ln c1, ln c2). See calibration.hpp for the objective
 // and the tie rule.
 #include <mgn/core/error.hpp>
 #include <mgn/core/rng.hpp>
@@ -329,7 +329,8 @@ CalibrationResult calibrate_cup(const std::vector<const Mesh*>& surfaces,
   split(experiments, options.holdout_fraction, options.seed, out.train_indices, out.test_indices);
 
   // One pass with the initial cup. The miss, obstruction, hill and hole checks of the spring
-  // model run before the force balance and do not involve c1 or c2 (MODELS.md §1, steps 1-3), so
+  // model run before the force balance and do not involve c1 or c2 (docs/models.md §1, steps
+  // 1-3), so
   // an experiment failing one of them fails for every (c1, c2): only the others are re-evaluated
   // during the search.
   const Predictor predictor(fn, surfaces, experiments, initial, options.num_threads);

@@ -1,4 +1,4 @@
-// Soft-finger wrench score of parallel-jaw grasps (MODELS.md §5); the model is documented in
+// Soft-finger wrench score of parallel-jaw grasps (docs/models.md §5); the model is documented in
 // pj_wrench.hpp.
 #include <mgn/core/error.hpp>
 #include <mgn/grasp/pj_wrench.hpp>

@@ -1,4 +1,4 @@
-// The two baseline seal models of MODELS.md §2, one deterministic trial each.
+// The two baseline seal models of docs/models.md §2, one deterministic trial each.
 //
 // Strain model — follows the cone-of-springs contact model of Dex-Net 3.0 (Mahler et al., "Dex-Net
 // 3.0: Computing Robust Vacuum Suction Grasp Targets in Point Clouds using a New Analytic Model and

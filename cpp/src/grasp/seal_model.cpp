@@ -1,5 +1,5 @@
 // SealModel: batch evaluation, trial perturbations and the force-based spring-mass model
-// (MODELS.md §1). The two baselines live in seal_baselines.cpp.
+// (docs/models.md §1). The two baselines live in seal_baselines.cpp.
 #include <mgn/core/error.hpp>
 #include <mgn/core/parallel.hpp>
 #include <mgn/core/rng.hpp>

@@ -10,24 +10,11 @@
 #include <mutex>
 
 #include "raytrace/detail/parallel_rays.hpp"
+#include "raytrace/detail/ray_scene_impl.hpp"
 
 namespace mgn {
 
 namespace {
-
-/// Embree wants flush-to-zero and denormals-are-zero in tracing threads. The mode is saved and
-/// restored so a call made on the Python thread leaves its floating-point state unchanged.
-class FtzDazGuard {
- public:
-  FtzDazGuard() : saved_(_mm_getcsr()) {
-    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
-    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-  }
-  ~FtzDazGuard() { _mm_setcsr(saved_); }
-
- private:
-  unsigned int saved_;
-};
 
 std::mutex g_device_mutex;
 std::string g_last_error;
@@ -150,33 +137,11 @@ void check_rays(const char* fn, const Points3f& origins, const Points3f& directi
 
 }  // namespace
 
-struct RayScene::Impl {
-  RTCScene scene = nullptr;
-  std::vector<std::int32_t> instance_ids;  // by Embree geomID
-  std::vector<Points3f> world_normals;     // per geometry, per face
-  std::int64_t triangles = 0;
-  Eigen::Matrix<double, 2, 3, Eigen::RowMajor> bounds;
-
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-  }
-
-  void fill_hit(Eigen::Index i, const Points3f& origins, const Points3f& directions, float t,
-                unsigned geom, unsigned prim, float u, float v, RayHits& out) const {
-    out.distance[i] = t;
-    out.points.row(i) = origins.row(i) + t * directions.row(i);
-    out.normals.row(i) = world_normals[geom].row(prim);
-    out.instance_ids[i] = instance_ids[geom];
-    out.face_ids[i] = static_cast<std::int32_t>(prim);
-    out.barycentric.row(i) << u, v;
-  }
-};
-
 RayScene::RayScene(const std::vector<RayGeometry>& geometries) : impl_(std::make_unique<Impl>()) {
   const char* fn = "RayScene";
   if (geometries.empty())
     throw_error<InvalidArgument>(fn, ": no geometry given; expected at least one mesh");
-  FtzDazGuard guard;
+  detail::FtzDazGuard guard;
   RTCDevice device = shared_device();
   impl_->scene = rtcNewScene(device);
   rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
@@ -251,7 +216,7 @@ RayHits RayScene::intersect(const Points3f& origins, const Points3f& directions,
   const Impl& impl = *impl_;
 
   auto body = [&](std::size_t begin, std::size_t end) {
-    FtzDazGuard guard;
+    detail::FtzDazGuard guard;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     if (options.coherent) {
@@ -299,7 +264,7 @@ std::vector<std::uint8_t> RayScene::occluded(const Points3f& origins, const Poin
   std::vector<std::uint8_t> out(static_cast<std::size_t>(n), 0);
   const Impl& impl = *impl_;
   auto body = [&](std::size_t begin, std::size_t end) {
-    FtzDazGuard guard;
+    detail::FtzDazGuard guard;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     if (options.coherent) {
@@ -342,7 +307,7 @@ RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& dire
   std::vector<std::vector<HitRecord>> per_ray(static_cast<std::size_t>(n));
   const Impl& impl = *impl_;
   auto body = [&](std::size_t begin, std::size_t end) {
-    FtzDazGuard guard;
+    detail::FtzDazGuard guard;
     std::vector<HitRecord> hits;
     for (std::size_t i = begin; i < end; ++i) {
       hits.clear();
@@ -456,7 +421,7 @@ void fill_packet(RTCRay16& r, int* valid, const ParallelRays& rays, int start) {
 }  // namespace
 
 void parallel_first_hits(const RayScene& scene, const ParallelRays& rays, float* t, Vec3f* normal) {
-  FtzDazGuard guard;
+  detail::FtzDazGuard guard;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -487,7 +452,7 @@ namespace {
 /// Casts occlusion packets; returns early as soon as `stop(occluded)` is true for any ray.
 template <typename Stop>
 bool parallel_occlusion_until(const RayScene& scene, const ParallelRays& rays, Stop stop) {
-  FtzDazGuard guard;
+  detail::FtzDazGuard guard;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;

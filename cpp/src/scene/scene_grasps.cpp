@@ -1,4 +1,4 @@
-// Scene grasp labels (MODELS.md §9); the model is documented in scene_grasps.hpp.
+// Scene grasp labels (docs/models.md §9); the model is documented in scene_grasps.hpp.
 #include <mgn/collision/collision_model.hpp>
 #include <mgn/core/error.hpp>
 #include <mgn/core/parallel.hpp>

@@ -1,6 +1,6 @@
 """``mgn eval grasps``: precision@k of suction and parallel-jaw grasp predictions per view.
 
-Predictions are matched to the scene grasp labels of each view (FORMAT.md ``{v}_scene.hdf5``,
+Predictions are matched to the scene grasp labels of each view (docs/format.md ``{v}_scene.hdf5``,
 both the ``non_colliding_grasps`` and the ``colliding_grasps`` groups) and checked for collision
 by the SAME model that made the labels (:meth:`mgn.scene.scene_grasps.SceneGraspModel.collides`:
 same gripper / cup and tool geometry from the dataset's config, same approach offsets, the tote
@@ -20,10 +20,10 @@ Prediction file (JSON, metres and radians, camera frame = OpenCV: x right, y dow
         {"uv": [50.5, 70.5], "angle": 0.3, "width": 0.04,
          "depth": 0.02, "score": 0.6}]}]                            # pixel (planar)
 
-- Suction 6-DoF ``pose``: the suction CONTACT pose X_CS, as FORMAT.md's
+- Suction 6-DoF ``pose``: the suction CONTACT pose X_CS, as docs/format.md's
   ``suctioncup/contact_poses_relative_to_camera``: origin at the contact point on the surface,
   z = approach direction into the surface (x, y free: the cup is axially symmetric).
-- Parallel-jaw 6-DoF ``pose`` + ``width``: the CONTACT (grasp) frame X_CG, as FORMAT.md's
+- Parallel-jaw 6-DoF ``pose`` + ``width``: the CONTACT (grasp) frame X_CG, as docs/format.md's
   ``paralleljaw/contact_poses_relative_to_camera``: origin at the first contact p1,
   x = closing direction v (towards the second contact p2 = p1 + width v), z = approach a; y = z x x.
   ``width`` = contact width |p2 - p1| in m, in [0, gripper max_opening]. The hand (flange) is at

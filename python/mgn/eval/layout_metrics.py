@@ -2,7 +2,7 @@
 
 Predictions are dicts ``{"image_id", "instance_id", "layer"}``: ``image_id`` = scene * 1000 +
 view (:mod:`mgn.io.coco`), ``instance_id`` a GT instance id 1..N of that view, ``layer`` 0 top,
-1 secondary, 2 interlock, 3 others (FORMAT.md ``{v}_order.json``). The GT layer of an object is
+1 secondary, 2 interlock, 3 others (docs/format.md ``{v}_order.json``). The GT layer of an object is
 the ``layer`` of its ``{v}_order.json`` entry.
 
 Metrics, over the *visible* GT objects (at least one pixel in the view's instance map) of the

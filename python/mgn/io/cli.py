@@ -53,7 +53,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``validate`` and ``coco`` to the ``mgn`` subcommands."""
-    p = sub.add_parser("validate", help="check every file of a dataset against FORMAT.md")
+    p = sub.add_parser("validate", help="check every file of a dataset against docs/format.md")
     p.add_argument("dir", help="dataset folder")
     p.add_argument("--max-problems", type=int, default=50, help="problems printed (default 50)")
     p.set_defaults(func=_cmd_validate)

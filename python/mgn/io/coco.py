@@ -1,4 +1,4 @@
-"""COCO export of a dataset (FORMAT.md "COCO export"), made with pycocotools.
+"""COCO export of a dataset (docs/format.md "COCO export"), made with pycocotools.
 
 One ``annotations.json`` per split: ``images`` (one per view; ``file_name`` relative to the dataset
 root), ``categories`` (the object classes, or the single class "object" when class-agnostic), and

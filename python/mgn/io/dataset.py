@@ -1,6 +1,6 @@
 """Read a dataset back: ``mgn.Dataset(DIR)`` (lazy; SI units; also original MetaGraspNet folders).
 
-Layout (FORMAT.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` object folders and
+Layout (docs/format.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` object folders and
 ``DIR/scene<N>/`` scene folders with the files of :mod:`mgn.io.scene_format`. Nothing is read
 before it is asked for, and what is read is kept (a :class:`View` caches its arrays).
 

@@ -1,4 +1,4 @@
-"""Atomic updates of the grasp groups of an object's ``textured.obj.hdf5`` (FORMAT.md)."""
+"""Atomic updates of the grasp groups of an object's ``textured.obj.hdf5`` (docs/format.md)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The MetaGraspNet object folder: ``<root>/models/<3-digit id>/`` (FORMAT.md).
+"""The MetaGraspNet object folder: ``<root>/models/<3-digit id>/`` (docs/format.md).
 
 Written files (all atomically, the folder renamed into place when complete):
 

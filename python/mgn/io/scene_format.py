@@ -1,4 +1,4 @@
-"""The MetaGraspNet scene folder (FORMAT.md): the one writer of a labelled view, and its schema.
+"""The MetaGraspNet scene folder (docs/format.md): the one writer of a labelled view, its schema.
 
 A scene folder ``<root>/scene<N>/`` holds, per view ``v``: ``{v}_rgb.png``, ``{v}.npz``,
 ``{v}_depth.png``, ``{v}_scene.hdf5``, ``{v}_order.csv``, ``{v}_order.json``,
@@ -112,8 +112,8 @@ class ViewRecord:
         occlusion_map: (H, W) each visible pixel's object occlusion rate in [0, 1].
         amodal: (N, H, W) bool amodal masks (row i = instance i + 1).
         intrinsics: the camera intrinsics.
-        scene_hdf5: ``{v}_scene.hdf5`` datasets by path (FORMAT.md), lengths in metres.
-        order_json: ``{v}_order.json`` content (its lengths already in cm, as FORMAT.md says).
+        scene_hdf5: ``{v}_scene.hdf5`` datasets by path (docs/format.md), lengths in metres.
+        order_json: ``{v}_order.json`` content (its lengths already in cm, as docs/format.md says).
         order_csv: ``{v}_order.csv`` text.
         layout_json: ``{v}_layout.json`` content (mgn: bin relations, difficulty).
         extra_npz: further ``{v}.npz`` arrays under mgn's own keys (e.g. ``com_heatmap``).
@@ -234,7 +234,7 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     }
     for key, value in rec.extra_npz.items():
         if key in npz:
-            raise ValueError(f"write_view: extra npz key '{key}' would replace a FORMAT.md key")
+            raise ValueError(f"write_view: extra npz key '{key}' would replace a format key")
         npz[key] = np.asarray(value)
     h5 = {path: to_cm(path, value).astype(f4) for path, value in rec.scene_hdf5.items()}
     files: dict[str, bytes] = {

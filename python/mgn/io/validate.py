@@ -1,4 +1,4 @@
-"""``mgn validate DIR``: check every file of a dataset against the schema of FORMAT.md.
+"""``mgn validate DIR``: check every file of a dataset against the schema of docs/format.md.
 
 Reports, per file, what is missing or corrupt (unreadable, wrong keys, shapes, dtypes, values out
 of range, inconsistent with the other files of the view, checksum different from the manifest).

@@ -6,7 +6,7 @@ byte-reproducible (see :mod:`mgn.io.deterministic`): the same scene and config g
 bytes whatever the executor.
 
 It renders and labels every kept view with :func:`mgn.scene.label.label_scene`, which writes
-the FORMAT.md files of each view, ``scene_gt.json`` and ``scene.json``.
+the docs/format.md files of each view, ``scene_gt.json`` and ``scene.json``.
 """
 
 from __future__ import annotations

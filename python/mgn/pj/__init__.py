@@ -1,7 +1,7 @@
 """Parallel-jaw grasps: gripper conversion, antipodal sampling, wrench score, object labels.
 
 core_gripper(gripper)                  the C++ gripper for a mgn.hardware.ParallelJawGripper
-AntipodalSampler(mesh, gripper)        antipodal robust sampler (MODELS.md §5)
+AntipodalSampler(mesh, gripper)        antipodal robust sampler (docs/models.md §5)
 pj_wrench_scores(...)                  soft-finger wrench score under gravity
 label_object(mesh, mass=, com=)        object labels; write_pj_labels(hdf5, labels)
 shake_scores(...), ShakeScorer         Bullet shake test (physics score), label_object's scorer

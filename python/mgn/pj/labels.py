@@ -1,6 +1,6 @@
-"""Object-level parallel-jaw labels (``grasps/paralleljaw/*`` of ``textured.obj.hdf5``, FORMAT.md).
+"""Object-level parallel-jaw labels (``grasps/paralleljaw/*`` of ``textured.obj.hdf5``).
 
-Pipeline per object (MODELS.md §5): sample contact points evenly on the surface (MetaGraspNet:
+Pipeline per object (docs/models.md §5): sample contact points evenly on the surface (MetaGraspNet:
 5000), run the antipodal robust sampler (5 perturbed probes per point, analytic score = accepted
 probes / 5, up to 20 collision-free approaches per accepted probe), compute the soft-finger wrench
 score with gravity along -z of the object frame, and, when a physics scorer is given, the
@@ -77,7 +77,7 @@ class PjLabels:
 
 
 #: A physics scorer: (mesh, labels without physics) -> (M,) scores in [0, 1] (e.g. the Bullet
-#: shake test of MODELS.md §5).
+#: shake test of docs/models.md §5).
 PhysicsScorer = Callable[[Mesh, PjLabels], npt.ArrayLike]
 
 
@@ -234,7 +234,7 @@ def label_object(
 
 
 def write_pj_labels(hdf5_path: str | os.PathLike[str], labels: PjLabels) -> None:
-    """Replace ``grasps/paralleljaw/*`` of an object's ``textured.obj.hdf5`` (FORMAT.md).
+    """Replace ``grasps/paralleljaw/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
 
     Writes ``pregrasp_transform`` (M, 10) [a (3), v (3), p1 (3, cm), w (cm)],
     ``quality_score`` (M,) (analytic), ``quality_score_simulation`` (M,) (NaN when physics was

@@ -1,4 +1,4 @@
-"""Physics score of parallel-jaw grasps: the Bullet shake test (typed façade, MODELS.md §5).
+"""Physics score of parallel-jaw grasps: the Bullet shake test (typed façade, docs/models.md §5).
 
 Per grasp, S×S trials (friction ``linspace(*friction_range, S)`` × density factor
 ``linspace(*density_range, S)``): the object sits in the open gripper with gravity off, the

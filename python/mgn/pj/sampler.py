@@ -1,4 +1,4 @@
-"""Typed façade over the C++ parallel-jaw code (MODELS.md §5): gripper, sampler, wrench score.
+"""Typed façade over the C++ parallel-jaw code (docs/models.md §5): gripper, sampler, wrench.
 
 Frames and units: object frame O, metres. A grasp is MetaGraspNet's [a, v, p1, w]: approach a
 (unit, into the object), closing direction v (unit, from p1 towards the second contact, a ⟂ v),
@@ -91,7 +91,7 @@ class AntipodalResult:
 
 
 class AntipodalSampler:
-    """Antipodal robust sampler of one object for one gripper (MODELS.md §5); build once.
+    """Antipodal robust sampler of one object for one gripper (docs/models.md §5); build once.
 
     Args:
         mesh: the object, metres, object frame; must be watertight (a closed volume).

@@ -1,4 +1,4 @@
-"""Pinhole cameras and camera rigs (MODELS.md §6; typed façade over the C++ core).
+"""Pinhole cameras and camera rigs (docs/models.md §6; typed façade over the C++ core).
 
 Camera frame C is OpenCV: x right, y down, z forward. Pixel (u, v) has its centre at image
 coordinates (u + 0.5, v + 0.5), the same model as :func:`mgn.camera_rays`. Poses ``X_WC`` are
@@ -88,7 +88,7 @@ class Intrinsics:
                           self.cx * w / self.width, self.cy * h / self.height)  # fmt: skip
 
     def camera_params(self, clipping_range: tuple[float, float] = (0.01, 10.0)) -> dict[str, Any]:
-        """``{v}_camera_params.json`` content (FORMAT.md): px values plus MetaGraspNet's keys.
+        """``{v}_camera_params.json`` content (docs/format.md): px values plus MetaGraspNet's keys.
 
         The apertures are those of a 35 mm lens giving these focal lengths (mm).
         """
@@ -173,7 +173,7 @@ def mgn_rig(
 
     View 0 looks straight down from R_start; view v = 1 + 12 i_R + 4 i_theta + i_phi sits at
     radius R_start + i_R (R_end - R_start)/2, tilt theta_start + i_theta (theta_end -
-    theta_start)/2 and azimuth i_phi phi_end/4, looking at the target (MODELS.md §6).
+    theta_start)/2 and azimuth i_phi phi_end/4, looking at the target (docs/models.md §6).
 
     Returns:
         ((37, 4, 4) float64 poses X_WC, MgnRigParams).

@@ -9,8 +9,8 @@ list of :class:`~mgn.render.camera.CameraView`), and an output folder. Per view 
 - ``{v}_depth.png``: a picture of depth for people: colour-mapped normalised inverse depth of the
   sensor depth (8-bit RGB, invalid pixels black).
 - ``{v}_depth.npz``: ``depth`` (sensor z-depth, **cm**, NaN invalid), ``depth_ideal`` (noise-free,
-  cm, NaN where nothing is seen) and ``valid_depth`` (bool), float32, named as the FORMAT.md keys
-  of ``{v}.npz`` so the scene writer can merge them.
+  cm, NaN where nothing is seen) and ``valid_depth`` (bool), float32, named as the keys
+  (docs/format.md) of ``{v}.npz`` so the scene writer can merge them.
 - ``{v}_instances.png``: 16-bit instance ids (0 = background, tote and floor).
 """
 

@@ -6,7 +6,7 @@ every view (RGB, sensor and ideal depth, instance ids), computes the per-view ob
 :mod:`mgn.scene.view_labels`), the layout (relations, layers, order, bin relation, difficulty:
 :mod:`mgn.scene.layout`) and the scene grasps (object grasps placed at the settled poses,
 collision-checked once per scene, kept per view when seen: :mod:`mgn.scene.scene_grasps`), and
-writes the files of FORMAT.md with :func:`mgn.io.scene_format.write_view`.
+writes the files of docs/format.md with :func:`mgn.io.scene_format.write_view`.
 
 Models built once per scene (Embree scene, FCL models, GL meshes) are reused by all views; a
 view's arrays are released before the next view is rendered, so memory does not grow with the

@@ -25,7 +25,7 @@ in short:
   classes unique; 2 = all complete, classes unique; 3 = unique, some incomplete; 4 = all complete,
   some class repeated; 5 = some incomplete and some repeated.
 
-Serialisation (MetaGraspNet layout, see FORMAT.md): :meth:`Layout.order_json` (``{v}_order.json``,
+Serialisation (MetaGraspNet layout, docs/format.md): :meth:`Layout.order_json` (``{v}_order.json``,
 depth differences in cm), :meth:`Layout.order_csv` (``{v}_order.csv``, the -1 entries only),
 :meth:`Layout.layout_json` (``{v}_layout.json``: difficulty and its ingredients), and the readers
 :func:`read_order_json` and :func:`read_order_csv`.

@@ -1,4 +1,5 @@
-"""Scene grasp labels (MODELS.md §9; the ``*_grasps`` groups of FORMAT.md's ``{v}_scene.hdf5``).
+"""Scene grasp labels (docs/models.md §9; the ``*_grasps`` groups of ``{v}_scene.hdf5``,
+docs/format.md).
 
 Typed façade over the C++ ``SceneGraspModel`` (cpp/include/mgn/scene/scene_grasps.hpp, which
 documents the model). Built once per scene, reused for every view:
@@ -127,7 +128,7 @@ class SuctionGraspSet:
 
 @dataclass(frozen=True)
 class GraspGroups:
-    """One FORMAT.md group (``non_colliding_grasps`` or ``colliding_grasps``)."""
+    """One docs/format.md group (``non_colliding_grasps`` or ``colliding_grasps``)."""
 
     paralleljaw: PjGraspSet
     suctioncup: SuctionGraspSet
@@ -135,7 +136,7 @@ class GraspGroups:
 
 @dataclass(frozen=True)
 class SceneGrasps:
-    """The grasp labels of one view, split like FORMAT.md's ``{v}_scene.hdf5`` groups."""
+    """The grasp labels of one view, split like docs/format.md's ``{v}_scene.hdf5`` groups."""
 
     non_colliding: GraspGroups
     colliding: GraspGroups

@@ -1,4 +1,4 @@
-"""Per-view object labels (MODELS.md §7): masks, occlusion, boxes, poses, keypoints, CoM heat map.
+"""Per-view object labels (docs/models.md §7): masks, occlusion, boxes, poses, keypoints, CoM map.
 
 Build a :class:`SceneRayModel` once per scene (Embree scenes of every object alone, and of all
 objects with the tote), then call :func:`view_object_labels` for each rendered view with the

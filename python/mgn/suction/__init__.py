@@ -6,7 +6,7 @@ label_object(mesh, mass=, com=)     object labels; write_suction_labels(hdf5, la
 
 make_calibration_board()            board mesh (m) + graded features with the poses to try
 write_calibration_board(out_dir)    board.stl (mm), poses.csv, results_template.csv, README
-calibrate_from_csv(results_csv)     fit c1, c2 to measured outcomes (MODELS.md §4)
+calibrate_from_csv(results_csv)     fit c1, c2 to measured outcomes (docs/models.md §4)
 """
 
 from mgn.suction.board import make_calibration_board, write_calibration_board

@@ -1,4 +1,4 @@
-"""The suction-cup calibration board: a printable plate with graded features (MODELS.md §4).
+"""The suction-cup calibration board: a printable plate with graded features (docs/models.md §4).
 
 The board is one watertight solid built with ``manifold3d`` booleans: a 300 x 200 x 15 mm plate
 with features added on top (steps, ridges, convex cylinders, domes) or cut into it (grooves,
@@ -31,7 +31,7 @@ F     179      through-holes 2 .. 12 mm, poses beside the rim; approach tilt 2..
 Flat controls sit at the free right end of rows B..F, and two more on the plate's right side
 face (normal +x, the cup approaches horizontally).
 
-Why tilt poses: with the spring model (MODELS.md §1) the force balance on curved surfaces
+Why tilt poses: with the spring model (docs/models.md §1) the force balance on curved surfaces
 depends mostly on c2 (ring springs), while a tilted approach on a plane depends only on c1
 (compression springs: the ring points sit at different heights along the approach axis); steps,
 ridges, grooves and holes mostly test the geometric checks. Together they make both constants

@@ -1,6 +1,6 @@
 """Fit the suction cup constants c1, c2 of the spring seal model to measured outcomes.
 
-The workflow (MODELS.md §4)::
+The workflow (docs/models.md §4)::
 
     mgn suction board OUT/            # print OUT/board.stl, try the poses of OUT/poses.csv
     mgn suction calibrate results.csv # fit c1, c2 and print the metrics table
@@ -101,7 +101,7 @@ class CalibrationReport:
 
         n = len(self.measured)
         lines = [
-            "Suction cup calibration (spring seal model, nominal trial; MODELS.md §4)",
+            "Suction cup calibration (spring seal model, nominal trial; docs/models.md §4)",
             f"experiments: {n} ({int(self.measured.sum())} sealed), "
             f"train {len(self.train_indices)} / held-out {len(self.test_indices)} "
             f"(stratified, seed {self.seed}); {self.evaluations} objective evaluations",

@@ -3,7 +3,7 @@
 Every model scores the same evenly sampled surface points with the same cup. A model *predicts a
 seal* when its score is >= ``seal_threshold`` (0.5). A point is *controversial* for the ordered
 pair (A, B) when A scores it < 0.2 while B predicts a seal, or A scores it > 0.8 while B predicts
-no seal (MODELS.md §2).
+no seal (docs/models.md §2).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Object-level suction labels (``grasps/suctioncup/*`` of ``textured.obj.hdf5``, FORMAT.md).
+"""Object-level suction labels (``grasps/suctioncup/*`` of ``textured.obj.hdf5``, docs/format.md).
 
 Pipeline per object: sample candidate points evenly on the surface (MetaGraspNet: 5000), score
 each with a seal model (robust 10-trial score), drop candidates whose cup body would collide with
@@ -151,7 +151,7 @@ def label_object(
 
 
 def write_suction_labels(hdf5_path: str | os.PathLike[str], labels: SuctionLabels) -> None:
-    """Replace ``grasps/suctioncup/*`` of an object's ``textured.obj.hdf5`` (FORMAT.md).
+    """Replace ``grasps/suctioncup/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
 
     Writes ``pregrasp_transform`` (K, 6) [approach (3, into the surface), contact (3, cm)],
     ``quality_score`` (K,) (seal score) and the mgn extensions ``score_wrench`` (K,) and

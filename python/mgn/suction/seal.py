@@ -1,4 +1,4 @@
-"""Will a suction cup seal here? Typed façade over the C++ seal models (MODELS.md §1–3).
+"""Will a suction cup seal here? Typed façade over the C++ seal models (docs/models.md §1–3).
 
 Frames and units: points and normals are in the object frame O, metres; normals are unit outward
 surface normals and the cup approaches along ``-normal``. Scores are in [0, 1].

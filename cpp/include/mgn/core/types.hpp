@@ -1,7 +1,7 @@
 #pragma once
 /// @file types.hpp  Eigen aliases used across the mgn public API.
 ///
-/// Conventions (see ARCHITECTURE.md): SI units (m, kg, s, N, rad). Poses are 4x4 homogeneous
+/// Conventions (see docs/architecture.md): SI units (m, kg, s, N, rad). Poses are 4x4 homogeneous
 /// transforms in double precision named after their frames, e.g. `X_WO` maps object-frame
 /// coordinates to world-frame coordinates. Geometry arrays are float32, row-major (N,3), so they
 /// map to numpy without copies.

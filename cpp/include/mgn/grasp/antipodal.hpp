@@ -1,5 +1,5 @@
 #pragma once
-/// @file antipodal.hpp  Antipodal robust sampling of parallel-jaw grasps (MODELS.md §5).
+/// @file antipodal.hpp  Antipodal robust sampling of parallel-jaw grasps (docs/models.md §5).
 ///
 /// For every contact point p (object frame O, metres) with unit outward normal n, `probes` probes
 /// are cast: the inward direction -n is tilted by Euler angles (x, y, z) ~ U(-tilt, tilt) and the

@@ -5,8 +5,8 @@
 /// An experiment is one measured suction attempt: a cup pose on a surface (typically the printed
 /// calibration board) and whether it sealed. calibrate_cup() searches (c1, c2) so that the
 /// nominal (unperturbed, one deterministic trial) prediction of the force-based spring model
-/// (MODELS.md §1, SealModelKind::Spring) agrees with the measurements on a training split as
-/// often as possible, and reports classification metrics on both splits (MODELS.md §4).
+/// (docs/models.md §1, SealModelKind::Spring) agrees with the measurements on a training split as
+/// often as possible, and reports classification metrics on both splits (docs/models.md §4).
 ///
 /// Search: the objective is piecewise constant in (c1, c2), so a derivative-free global search
 /// (NLopt GN_DIRECT_L) runs over (log c1, log c2) inside the box first, then a local polish

@@ -1,5 +1,5 @@
 #pragma once
-/// @file cup.hpp  Vacuum suction cup parameters (MODELS.md §1; MetaGraspNet defaults).
+/// @file cup.hpp  Vacuum suction cup parameters (docs/models.md §1; MetaGraspNet defaults).
 
 #include <string>
 

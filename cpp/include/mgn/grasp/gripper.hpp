@@ -1,5 +1,5 @@
 #pragma once
-/// @file gripper.hpp  Parallel-jaw gripper geometry and the grasp frame (MODELS.md §5).
+/// @file gripper.hpp  Parallel-jaw gripper geometry and the grasp frame (docs/models.md §5).
 ///
 /// Hand frame H: origin at the flange, z = approach direction (towards the object), x = closing
 /// direction (from finger 1 towards finger 2 at the object), y = z × x. Lengths in metres.

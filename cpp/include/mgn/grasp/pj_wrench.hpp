@@ -1,5 +1,5 @@
 #pragma once
-/// @file pj_wrench.hpp  Soft-finger wrench score of parallel-jaw grasps (MODELS.md §5).
+/// @file pj_wrench.hpp  Soft-finger wrench score of parallel-jaw grasps (docs/models.md §5).
 ///
 /// Variant implemented (mgn): the object (mass m at centre of mass c) hangs under gravity
 /// F = m g ĝ in the two fingers, each pressing with the normal force f = grip_force. Each contact

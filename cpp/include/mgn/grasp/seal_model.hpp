@@ -4,7 +4,7 @@
 /// A SealModel is built once from an object mesh (object frame O, metres) and a cup, and is then
 /// immutable and thread-safe. evaluate() scores N candidates, each a contact point c on the
 /// surface with its unit outward surface normal n (the cup approaches along -n). The robust score
-/// of a candidate is the fraction of `num_trials` perturbed trials that seal (MODELS.md §1):
+/// of a candidate is the fraction of `num_trials` perturbed trials that seal (docs/models.md §1):
 /// each trial rotates n by Euler angles ~ N(0, angle_sigma) and moves c by ~ N(0, (r/4)^2) per
 /// axis. Trial perturbations come from the random stream (seed, candidate index), so results do
 /// not depend on the thread count.

@@ -1,6 +1,6 @@
 #pragma once
 /// @file shake_test.hpp  Physics score of parallel-jaw grasps: the Bullet shake test
-/// (MODELS.md §5, "Physics score").
+/// (docs/models.md §5, "Physics score").
 ///
 /// One trial = one grasp × one (friction, density factor) setting: the object is placed in the
 /// open gripper, gravity off; the fingers close at a set speed until they touch, then a force

@@ -1,5 +1,5 @@
 #pragma once
-/// @file wrench.hpp  Wrench resistance scores of grasps under gravity (MODELS.md §3).
+/// @file wrench.hpp  Wrench resistance scores of grasps under gravity (docs/models.md §3).
 
 #include <mgn/core/types.hpp>
 

@@ -1,5 +1,5 @@
 #pragma once
-/// @file camera.hpp  Pinhole intrinsics, camera views and camera rigs (MODELS.md §6).
+/// @file camera.hpp  Pinhole intrinsics, camera views and camera rigs (docs/models.md §6).
 ///
 /// Camera frame C is OpenCV: x right, y down, z forward (the optical axis). A pixel (u, v) has its
 /// centre at image coordinates (u + 0.5, v + 0.5), so a point p_C projects to
@@ -52,7 +52,7 @@ struct CameraView {
 /// target, or `up` is (nearly) parallel to the viewing direction.
 Pose look_at(const Vec3d& eye, const Vec3d& target, const Vec3d& up = Vec3d::UnitZ());
 
-/// The random parameters of one MetaGraspNet rig (MODELS.md §6).
+/// The random parameters of one MetaGraspNet rig (docs/models.md §6).
 struct MgnRigParams {
   double R_start = 0.0;      ///< radius of view 0 and of the first ring, m, ~ U(0.70, 0.80)
   double R_end = 0.0;        ///< radius of the last ring, m, ~ U(1.00, 1.40)

@@ -1,6 +1,6 @@
 #pragma once
-/// @file scene_grasps.hpp  Scene grasp labels (MODELS.md §9): object grasps placed at the settled
-/// object poses, checked for collision in the scene once, then selected per camera view.
+/// @file scene_grasps.hpp  Scene grasp labels (docs/models.md §9): object grasps placed at the
+/// settled object poses, checked for collision in the scene once, then selected per camera view.
 ///
 /// Frames and units: world W = tote frame, metres. X_AB = pose of B in A. Camera frame C is OpenCV
 /// (x right, y down, z forward).

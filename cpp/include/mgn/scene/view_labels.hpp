@@ -1,5 +1,5 @@
 #pragma once
-/// @file view_labels.hpp  Per-view object labels (MODELS.md §7): visible / semantic / amodal
+/// @file view_labels.hpp  Per-view object labels (docs/models.md §7): visible / semantic / amodal
 /// masks, occlusion, 2-D boxes, object poses in the camera frame, keypoint visibility and a
 /// centre-of-mass heat map.
 ///

@@ -24,13 +24,13 @@ struct SealContext {
 /// The unit ring pattern described in SealContext::ring_pattern.
 std::vector<Eigen::Vector2d> unit_ring(int num_points);
 
-/// Force-based spring-mass model (MODELS.md §1). Fills `detail` when not null.
+/// Force-based spring-mass model (docs/models.md §1). Fills `detail` when not null.
 SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, SealTrial* detail);
 
-/// Dex-Net 3.0 style strain model (MODELS.md §2). `quality` (may be null) gets 1 or 0.
+/// Dex-Net 3.0 style strain model (docs/models.md §2). `quality` (may be null) gets 1 or 0.
 SealFailure strain_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, float* quality);
 
-/// SuctionNet style smoothness model (MODELS.md §2). `quality` gets deform x fit in [0, 1];
+/// SuctionNet style smoothness model (docs/models.md §2). `quality` gets deform x fit in [0, 1];
 /// the trial seals when quality >= smoothness_threshold.
 SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
                              float* quality);

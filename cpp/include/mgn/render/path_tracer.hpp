@@ -1,0 +1,200 @@
+#pragma once
+/// @file path_tracer.hpp  Physically based CPU path tracer on Embree (docs/architecture.md).
+///
+/// Units and frames: lengths in metres, angles in radians, poses X_AB map frame B to frame A; the
+/// world frame W is the frame of the mesh poses and of the camera pose X_WC. The camera model is
+/// the one of camera.hpp (OpenCV frame: x right, y down, z forward; pixel (u, v) covers the square
+/// [u, u+1) x [v, v+1) of continuous image coordinates and has its centre at (u + 0.5, v + 0.5)),
+/// so the depth and instance-id passes equal the raster passes and mgn::camera_rays.
+///
+/// Radiance convention: linear RGB radiance in arbitrary but consistent units (W sr^-1 m^-2 per
+/// unit colour). An emitter of radiance L seen directly shows L in the image; a white Lambertian
+/// surface under irradiance E shows E / pi. Material colours are linear RGB reflectances in
+/// [0, 1]. The rendered image is the mean radiance over the pixel's samples (before exposure);
+/// develop() turns it into 8-bit sRGB.
+///
+/// Algorithm: unidirectional path tracing with next-event estimation (one shadow ray per
+/// non-specular vertex to one light chosen by power) and multiple importance sampling (power
+/// heuristic, beta = 2) between light and BSDF sampling for the area lights and the environment;
+/// Russian roulette from PathTraceOptions::rr_depth on. Materials follow glTF 2.0
+/// metallic-roughness: a Lambertian diffuse lobe under a GGX (Trowbridge-Reitz) specular lobe
+/// with the height-correlated Smith masking-shadowing term and visible-normal sampling; exact
+/// dielectric Fresnel (ior) for the specular layer of non-metals, Schlick's Fresnel with F0 =
+/// base colour for metals; `transmission` blends in a smooth dielectric (Fresnel reflection,
+/// refraction, total internal reflection; transmitted light tinted by the base colour). Meshes
+/// are closed or open triangle soups; a surface whose geometric normal faces the ray is entered,
+/// otherwise left (for refraction). Shading normals are per-corner normals averaged over the
+/// faces around a vertex whose normals are within 45 degrees (sharp creases keep flat normals);
+/// where the shading normal would face away from the viewer the geometric normal is used.
+/// Samples come from an Owen-scrambled (hash-based nested uniform scrambling) 2-D Sobol sequence
+/// per pixel and dimension pair, seeded from (seed, view_index, pixel): images are bit-identical
+/// for any number of threads.
+
+#include <mgn/geometry/mesh.hpp>
+#include <mgn/render/camera.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mgn {
+
+/// glTF 2.0 metallic-roughness material (+ KHR_materials_transmission / KHR_materials_ior).
+struct PbrMaterial {
+  Vec3f base_color = Vec3f(0.8f, 0.8f, 0.8f);  ///< linear RGB in [0, 1]
+  float metallic = 0.0f;                       ///< [0, 1]
+  float roughness = 0.5f;                      ///< perceptual roughness [0, 1]; GGX alpha = r^2
+  /// Index of refraction (>= 1) of the specular layer and of the dielectric; 1 = no specular
+  /// layer (a pure Lambertian surface when metallic = 0).
+  float ior = 1.5f;
+  float transmission = 0.0f;       ///< [0, 1]; 1 = clear dielectric (glass)
+  Vec3f emission = Vec3f::Zero();  ///< emitted radiance (front side), linear RGB >= 0
+  /// Base colour texture: 8-bit sRGB RGB, row-major, top row first, `texture_width` x
+  /// `texture_height` (empty = none). Multiplies base_color; looked up at the mesh uvs with
+  /// (u, v) -> column u * width, row (1 - v) * height, bilinear, repeating.
+  std::vector<std::uint8_t> texture;
+  int texture_width = 0;
+  int texture_height = 0;
+
+  /// Throws InvalidArgument naming `what` and the setting if a value is out of range or
+  /// non-finite, or the texture size does not match.
+  void validate(const std::string& what) const;
+};
+
+/// One-sided area light emitting uniformly (Lambertian) towards +z of its frame L.
+struct AreaLight {
+  enum class Shape { Rect, Disc };
+  Pose X_WL = Pose::Identity();  ///< pose of the light frame in the world (rigid)
+  Shape shape = Shape::Rect;
+  /// Rect: full side lengths along x_L and y_L (m). Disc: radius in size.x() (m).
+  Eigen::Vector2d size = Eigen::Vector2d(0.5, 0.5);
+  Vec3f color = Vec3f(1.0f, 1.0f, 1.0f);  ///< linear RGB >= 0
+  float intensity = 10.0f;                ///< radiance = color * intensity (>= 0)
+
+  void validate(const std::string& what) const;
+};
+
+/// Infinitely distant environment seen by rays that escape. World +z is "up".
+struct Environment {
+  enum class Kind { Uniform, Gradient, Sky };
+  Kind kind = Kind::Uniform;
+  Vec3f color = Vec3f(1.0f, 1.0f, 1.0f);  ///< Uniform: radiance colour
+  /// Gradient / Sky: radiance straight up, at the horizon and below the horizon. Above the
+  /// horizon the colour goes linearly in sqrt(d.z) from horizon to zenith; below it is `ground`.
+  Vec3f zenith = Vec3f(0.6f, 0.7f, 0.9f);
+  Vec3f horizon = Vec3f(0.9f, 0.9f, 0.9f);
+  Vec3f ground = Vec3f(0.3f, 0.3f, 0.3f);
+  /// Sky only: direction towards the sun (world, need not be unit). The sun is a disc of angular
+  /// radius `sun_angular_radius` whose irradiance at normal incidence is `sun_strength` times
+  /// pi * luminance(zenith) (white, times intensity), plus the gradient sky.
+  Vec3d sun_direction = Vec3d(0.3, 0.2, 0.93);
+  float sun_strength = 3.0f;
+  float sun_angular_radius = 0.035f;  ///< rad (about 2 degrees: soft sun shadows)
+  float intensity = 1.0f;             ///< scales everything (>= 0)
+
+  void validate(const std::string& what) const;
+};
+
+/// One mesh placed in the path-traced scene.
+struct PathGeometry {
+  const Mesh* mesh = nullptr;    ///< copied at build time
+  Pose X_WO = Pose::Identity();  ///< pose of the mesh in the world
+  std::int32_t instance_id = 0;  ///< >= 0; reported in the instance pass (0 = background)
+  /// One material per mesh material slot: max(1, mesh->materials().size()) entries; face f uses
+  /// materials[mesh->face_materials()[f]] (or [0] without face materials).
+  std::vector<PbrMaterial> materials;
+};
+
+struct PathTraceOptions {
+  int spp = 16;                  ///< samples per pixel (>= 1)
+  int max_bounces = 6;           ///< path segments after the camera ray (>= 0; 0 = emission only)
+  std::uint64_t seed = 0;        ///< scene seed
+  std::uint64_t view_index = 0;  ///< view number; sample streams derive from (seed, view, pixel)
+  int num_threads = 0;           ///< 0 = all hardware threads; image identical for any value
+  int rr_depth = 3;              ///< Russian roulette from this bounce on (>= 0)
+  double aperture_radius = 0.0;  ///< thin-lens aperture radius, m (>= 0; 0 = pinhole)
+  /// Distance of the plane in focus along the optical axis, m (>= 0; 0 = the depth at the image
+  /// centre, or 1 m if nothing is seen there).
+  double focus_distance = 0.0;
+  double clamp = 0.0;  ///< max luminance of one sample (>= 0; 0 = no clamping)
+
+  void validate() const;
+};
+
+/// Images of one view, row-major, top row first.
+struct PathTraceOutput {
+  int width = 0, height = 0;
+  std::vector<float> radiance;  ///< (H,W,3) mean linear radiance
+  std::vector<float> albedo;    ///< (H,W,3) mean first-hit albedo (denoiser auxiliary)
+  std::vector<float> normal;    ///< (H,W,3) unit mean first-hit shading normal, world (0 = none)
+  std::vector<float> depth;     ///< (H,W) z-depth (m) through the pixel centre, 0 = none
+  std::vector<std::int32_t> instance_ids;  ///< (H,W) instance id at the pixel centre, 0 = none
+  std::int64_t rays = 0;                   ///< rays cast (camera, bounce and shadow rays)
+};
+
+/// Immutable path-traced scene: Embree geometry (through mgn::RayScene) plus per-corner shading
+/// normals, uvs and materials; thread-safe.
+class PathScene {
+ public:
+  /// Throws InvalidArgument (naming the geometry index and the setting) for an empty list, a null
+  /// or empty mesh, a non-finite pose, a negative instance id, a wrong number of materials, an
+  /// invalid material, light or environment.
+  PathScene(const std::vector<PathGeometry>& geometries, const std::vector<AreaLight>& lights = {},
+            const Environment& environment = {});
+  ~PathScene();
+  PathScene(const PathScene&);
+  PathScene& operator=(const PathScene&);
+  PathScene(PathScene&&) noexcept;
+  PathScene& operator=(PathScene&&) noexcept;
+
+  /// A scene sharing this one's geometry (no copy) with other lights and environment.
+  PathScene with_lighting(const std::vector<AreaLight>& lights,
+                          const Environment& environment) const;
+
+  std::int64_t num_triangles() const;
+  const std::vector<AreaLight>& lights() const;
+  const Environment& environment() const;
+
+  /// Renders one view. Throws InvalidArgument for invalid options or view.
+  PathTraceOutput render(const CameraView& view, const PathTraceOptions& options = {}) const;
+
+  struct Geometry;
+  struct Lighting;
+
+ private:
+  std::shared_ptr<const Geometry> geometry_;
+  std::shared_ptr<const Lighting> lighting_;
+};
+
+/// Film / sensor development of a radiance image.
+struct FilmOptions {
+  double exposure = 0.0;  ///< EV stops: radiance is multiplied by 2^exposure
+  /// "filmic": y = 1 - exp(-x) per channel (an exponential film response: about linear in the
+  /// shadows, a soft shoulder, never clips), then the sRGB OETF. "linear": clip to [0, 1], sRGB.
+  enum class Tone { Filmic, Linear };
+  Tone tone = Tone::Filmic;
+  /// Sensor noise added to the exposed linear value x before the tone curve:
+  /// x + shot_noise * sqrt(max(x, 0)) * N1 + read_noise * N2, with N1, N2 standard normal
+  /// variates drawn per pixel and channel from (seed, view_index, pixel).
+  double shot_noise = 0.0;
+  double read_noise = 0.0;
+  std::uint64_t seed = 0;
+  std::uint64_t view_index = 0;
+  int num_threads = 0;
+
+  void validate() const;
+};
+
+/// (H,W,3) linear radiance -> (H,W,3) 8-bit sRGB (row-major). Throws InvalidArgument for a size
+/// mismatch or invalid options. Non-finite radiance becomes 0.
+std::vector<std::uint8_t> develop(const std::vector<float>& radiance, int width, int height,
+                                  const FilmOptions& film = {});
+
+/// Decodes the base colour texture of a mesh material (embedded bytes or file) to 8-bit sRGB RGB,
+/// row-major, top row first. Returns false if the material has no texture; throws IoError if it
+/// cannot be decoded or read.
+bool decode_base_color_texture(const Material& material, std::vector<std::uint8_t>& rgb, int& width,
+                               int& height);
+
+}  // namespace mgn

@@ -1,0 +1,1010 @@
+#include <mgn/core/error.hpp>
+#include <mgn/core/parallel.hpp>
+#include <mgn/core/rng.hpp>
+#include <mgn/render/path_tracer.hpp>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include "raytrace/detail/ray_scene_impl.hpp"
+#include "render/detail/pt_math.hpp"
+
+namespace mgn {
+
+using pt::F3;
+
+namespace {
+
+bool finite3(const Vec3f& v) { return v.allFinite(); }
+
+void check_unit_range(const std::string& what, const char* name, float v) {
+  if (!(v >= 0.0f && v <= 1.0f))
+    throw_error<InvalidArgument>(what, ": PbrMaterial.", name, " must be in [0, 1], got ", v);
+}
+
+void check_colour(const std::string& what, const char* cls, const char* name, const Vec3f& c,
+                  bool unit) {
+  if (!finite3(c) || c.minCoeff() < 0.0f || (unit && c.maxCoeff() > 1.0f)) {
+    throw_error<InvalidArgument>(what, ": ", cls, ".", name, " must be ",
+                                 unit ? "3 values in [0, 1]" : "3 finite values >= 0", ", got (",
+                                 c.x(), ", ", c.y(), ", ", c.z(), ")");
+  }
+}
+
+void check_rigid(const std::string& what, const char* name, const Pose& X) {
+  const Mat3d R = X.linear();
+  if (!X.matrix().allFinite() ||
+      (R.transpose() * R - Mat3d::Identity()).cwiseAbs().maxCoeff() > 1e-5 ||
+      R.determinant() < 0.0) {
+    throw_error<InvalidArgument>(what, ": ", name,
+                                 " must be a finite rigid transform (orthonormal rotation)");
+  }
+}
+
+F3 f3(const Vec3f& v) { return {v.x(), v.y(), v.z()}; }
+F3 f3(const Vec3d& v) {
+  return {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+}
+
+float srgb_to_linear(float c) {
+  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+float linear_to_srgb(float c) {
+  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+struct SrgbLut {
+  float v[256];
+  SrgbLut() {
+    for (int i = 0; i < 256; ++i) v[i] = srgb_to_linear(static_cast<float>(i) / 255.0f);
+  }
+};
+const SrgbLut& srgb_lut() {
+  static const SrgbLut lut;
+  return lut;
+}
+
+constexpr float kMinAlpha = 2e-3f;         // GGX alpha floor (float precision of D near a delta)
+constexpr float kCreaseCos = 0.70710678f;  // 45 degrees: normals are not smoothed across
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Validation.
+
+void PbrMaterial::validate(const std::string& what) const {
+  check_colour(what, "PbrMaterial", "base_color", base_color, true);
+  check_unit_range(what, "metallic", metallic);
+  check_unit_range(what, "roughness", roughness);
+  check_unit_range(what, "transmission", transmission);
+  if (!(ior >= 1.0f && ior <= 10.0f))
+    throw_error<InvalidArgument>(what, ": PbrMaterial.ior must be in [1, 10], got ", ior);
+  check_colour(what, "PbrMaterial", "emission", emission, false);
+  if (texture_width < 0 || texture_height < 0 ||
+      texture.size() != static_cast<std::size_t>(texture_width) * texture_height * 3) {
+    throw_error<InvalidArgument>(what, ": PbrMaterial.base_color_texture has ", texture.size(),
+                                 " bytes; expected width*height*3 = ", texture_width, "*",
+                                 texture_height, "*3");
+  }
+}
+
+void AreaLight::validate(const std::string& what) const {
+  check_rigid(what, "AreaLight.X_WL", X_WL);
+  if (!size.allFinite() || !(size.x() > 0.0) || !(size.y() > 0.0)) {
+    throw_error<InvalidArgument>(what, ": AreaLight.size must be 2 values > 0 (m), got (", size.x(),
+                                 ", ", size.y(), ")");
+  }
+  check_colour(what, "AreaLight", "color", color, false);
+  if (!(intensity >= 0.0f) || !std::isfinite(intensity))
+    throw_error<InvalidArgument>(what, ": AreaLight.intensity must be finite and >= 0, got ",
+                                 intensity);
+}
+
+void Environment::validate(const std::string& what) const {
+  check_colour(what, "Environment", "color", color, false);
+  check_colour(what, "Environment", "zenith", zenith, false);
+  check_colour(what, "Environment", "horizon", horizon, false);
+  check_colour(what, "Environment", "ground", ground, false);
+  if (!(intensity >= 0.0f) || !std::isfinite(intensity))
+    throw_error<InvalidArgument>(what, ": Environment.intensity must be finite and >= 0, got ",
+                                 intensity);
+  if (kind == Kind::Sky) {
+    if (!sun_direction.allFinite() || sun_direction.norm() == 0.0)
+      throw_error<InvalidArgument>(what,
+                                   ": Environment.sun_direction must be a finite non-zero vector");
+    if (!(sun_strength >= 0.0f) || !std::isfinite(sun_strength))
+      throw_error<InvalidArgument>(what, ": Environment.sun_strength must be finite and >= 0, got ",
+                                   sun_strength);
+    if (!(sun_angular_radius > 0.0f && sun_angular_radius < 0.5f))
+      throw_error<InvalidArgument>(what,
+                                   ": Environment.sun_angular_radius must be in (0, 0.5) rad, got ",
+                                   sun_angular_radius);
+  }
+}
+
+void PathTraceOptions::validate() const {
+  const char* w = "PathTraceOptions";
+  if (spp < 1) throw_error<InvalidArgument>(w, ".spp must be >= 1, got ", spp);
+  if (max_bounces < 0 || max_bounces > 1000)
+    throw_error<InvalidArgument>(w, ".max_bounces must be in [0, 1000], got ", max_bounces);
+  if (num_threads < 0)
+    throw_error<InvalidArgument>(w, ".num_threads must be >= 0 (0 = all), got ", num_threads);
+  if (rr_depth < 0) throw_error<InvalidArgument>(w, ".rr_depth must be >= 0, got ", rr_depth);
+  if (!(aperture_radius >= 0.0) || !std::isfinite(aperture_radius))
+    throw_error<InvalidArgument>(w, ".aperture_radius must be finite and >= 0 (m), got ",
+                                 aperture_radius);
+  if (!(focus_distance >= 0.0) || !std::isfinite(focus_distance))
+    throw_error<InvalidArgument>(w, ".focus_distance must be finite and >= 0 (m), got ",
+                                 focus_distance);
+  if (!(clamp >= 0.0) || !std::isfinite(clamp))
+    throw_error<InvalidArgument>(w, ".clamp must be finite and >= 0 (0 = off), got ", clamp);
+}
+
+void FilmOptions::validate() const {
+  const char* w = "FilmOptions";
+  if (!std::isfinite(exposure))
+    throw_error<InvalidArgument>(w, ".exposure must be finite (EV), got ", exposure);
+  if (!(shot_noise >= 0.0) || !std::isfinite(shot_noise))
+    throw_error<InvalidArgument>(w, ".shot_noise must be finite and >= 0, got ", shot_noise);
+  if (!(read_noise >= 0.0) || !std::isfinite(read_noise))
+    throw_error<InvalidArgument>(w, ".read_noise must be finite and >= 0, got ", read_noise);
+  if (num_threads < 0)
+    throw_error<InvalidArgument>(w, ".num_threads must be >= 0 (0 = all), got ", num_threads);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene data.
+
+namespace {
+
+/// A material prepared for shading.
+struct MaterialData {
+  F3 base;
+  float metallic, alpha, ior, transmission;
+  F3 emission;
+  bool emissive;
+  const std::uint8_t* tex = nullptr;  // points into `texture` of the owning PbrMaterial copy
+  int tw = 0, th = 0;
+};
+
+struct GeometryData {
+  Points3f vertices;  // world
+  Faces faces;
+  std::vector<F3> corner_normals;           // (F*3) unit shading normals per face corner, world
+  Points2f uvs;                             // (V,2) or empty
+  std::vector<std::int32_t> face_material;  // (F) global material index
+  std::int32_t instance_id = 0;
+};
+
+/// Per-corner shading normals: at each corner, the angle-weighted mean of the normals of the
+/// faces around the (position-welded) vertex that are within the crease angle of this face.
+std::vector<F3> corner_normals(const Mesh& world) {
+  const auto nf = world.num_faces();
+  const auto nv = world.num_vertices();
+  const Points3f fn = world.face_normals();
+  const auto& V = world.vertices();
+  const auto& F = world.faces();
+  const std::vector<std::int32_t> weld = world.weld_map();
+  std::vector<float> angle(static_cast<std::size_t>(3 * nf));
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3f p = V.row(F(f, k)).transpose();
+      const Eigen::Vector3f a = V.row(F(f, (k + 1) % 3)).transpose() - p;
+      const Eigen::Vector3f b = V.row(F(f, (k + 2) % 3)).transpose() - p;
+      const float c = a.normalized().dot(b.normalized());
+      angle[3 * f + k] = std::acos(std::min(1.0f, std::max(-1.0f, c)));
+    }
+  }
+  // CSR of (face) per welded vertex.
+  std::vector<std::int64_t> start(static_cast<std::size_t>(nv) + 1, 0);
+  for (Eigen::Index f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) ++start[weld[F(f, k)] + 1];
+  for (Eigen::Index i = 0; i < nv; ++i) start[i + 1] += start[i];
+  std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
+  std::vector<std::int64_t> corners(static_cast<std::size_t>(3 * nf));
+  for (Eigen::Index f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) corners[fill[weld[F(f, k)]]++] = 3 * f + k;
+  std::vector<F3> out(static_cast<std::size_t>(3 * nf));
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    const F3 nf3(fn(f, 0), fn(f, 1), fn(f, 2));
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t w = weld[F(f, k)];
+      F3 sum(0.0f);
+      for (std::int64_t j = start[w]; j < start[w + 1]; ++j) {
+        const std::int64_t c = corners[j];
+        const std::int64_t g = c / 3;
+        const F3 ng(fn(g, 0), fn(g, 1), fn(g, 2));
+        if (dot(ng, nf3) >= kCreaseCos) sum += ng * angle[c];
+      }
+      const float l = length(sum);
+      out[3 * f + k] = l > 0.0f ? sum / l : nf3;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+struct PathScene::Geometry {
+  std::unique_ptr<RayScene> rays;
+  std::vector<GeometryData> geoms;
+  std::vector<PbrMaterial> materials;  // owns the textures
+  std::vector<MaterialData> mats;
+  std::int64_t triangles = 0;
+  Eigen::Matrix<double, 2, 3, Eigen::RowMajor> bounds;
+};
+
+namespace {
+
+struct LightData {
+  F3 centre, ex, ey, n;  // unit axes, normal = +z_L
+  float hx, hy;          // rect half sizes; disc: radius in hx
+  bool disc;
+  float area;
+  F3 radiance;
+};
+
+}  // namespace
+
+struct PathScene::Lighting {
+  std::vector<AreaLight> lights;
+  Environment environment;
+  std::vector<LightData> light_data;
+  // Light selection: cumulative weights over (lights..., environment).
+  std::vector<float> cdf;  // size lights + 1, cdf.back() == 1
+  std::vector<float> pmf;
+  bool env_on = false;
+  // Environment.
+  int kind = 0;  // 0 uniform, 1 gradient, 2 sky
+  F3 color, zenith, horizon, ground;
+  F3 sun_dir;
+  float sun_cos = 1.0f;
+  F3 sun_radiance;
+  float p_sun = 0.0f;  // probability of sampling the sun cone in environment sampling
+
+  F3 env(F3 d) const {
+    if (kind == 0) return color;
+    F3 c = d.z >= 0.0f ? pt::lerp(horizon, zenith, std::sqrt(d.z)) : ground;
+    if (kind == 2 && dot(d, sun_dir) >= sun_cos) c += sun_radiance;
+    return c;
+  }
+};
+
+namespace {
+
+std::shared_ptr<PathScene::Lighting> make_lighting(
+    const std::vector<AreaLight>& lights, const Environment& environment,
+    const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>& bounds) {
+  for (std::size_t i = 0; i < lights.size(); ++i)
+    lights[i].validate("PathScene: light " + std::to_string(i));
+  environment.validate("PathScene: environment");
+  auto L = std::make_shared<PathScene::Lighting>();
+  L->lights = lights;
+  L->environment = environment;
+  std::vector<float> w;
+  for (const AreaLight& a : lights) {
+    LightData d;
+    const Mat3d R = a.X_WL.linear();
+    d.centre = f3(Vec3d(a.X_WL.translation()));
+    d.ex = f3(Vec3d(R.col(0)));
+    d.ey = f3(Vec3d(R.col(1)));
+    d.n = f3(Vec3d(R.col(2)));
+    d.disc = a.shape == AreaLight::Shape::Disc;
+    d.hx = static_cast<float>(d.disc ? a.size.x() : 0.5 * a.size.x());
+    d.hy = static_cast<float>(d.disc ? a.size.x() : 0.5 * a.size.y());
+    d.area = d.disc ? pt::kPi * d.hx * d.hx : 4.0f * d.hx * d.hy;
+    d.radiance = f3(a.color) * a.intensity;
+    L->light_data.push_back(d);
+    w.push_back(pt::kPi * d.area * luminance(d.radiance));
+  }
+  const float I = environment.intensity;
+  L->kind = static_cast<int>(environment.kind);
+  L->color = f3(environment.color) * I;
+  L->zenith = f3(environment.zenith) * I;
+  L->horizon = f3(environment.horizon) * I;
+  L->ground = f3(environment.ground) * I;
+  float env_lum = 0.0f;
+  if (environment.kind == Environment::Kind::Uniform) {
+    env_lum = luminance(L->color);
+  } else {
+    env_lum = 0.5f * luminance((L->zenith + L->horizon * 2.0f) * (1.0f / 3.0f)) +
+              0.5f * luminance(L->ground);
+  }
+  if (environment.kind == Environment::Kind::Sky) {
+    L->sun_dir = normalize(f3(environment.sun_direction));
+    const float r = environment.sun_angular_radius;
+    L->sun_cos = std::cos(r);
+    const float s = std::sin(r);
+    L->sun_radiance = F3(environment.sun_strength * luminance(L->zenith) / (s * s));
+    const float e_sun = environment.sun_strength * pt::kPi * luminance(L->zenith);
+    if (e_sun > 0.0f) L->p_sun = 0.5f;
+    env_lum += e_sun / (4.0f * pt::kPi);
+  }
+  // The environment's power on the scene ~ pi L * (cross-section of the scene's bounding sphere).
+  const double radius = std::max(0.05, 0.5 * (bounds.row(1) - bounds.row(0)).norm());
+  float w_env = static_cast<float>(pt::kPi * env_lum * 4.0 * pt::kPi * radius * radius);
+  L->env_on = w_env > 0.0f;
+  float total_lights = 0.0f;
+  for (float x : w) total_lights += x;
+  if (L->env_on && total_lights > 0.0f) {
+    // Keep both strategies alive: the environment gets between 10 % and 90 %.
+    const float p_env = std::min(0.9f, std::max(0.1f, w_env / (w_env + total_lights)));
+    w_env = total_lights * p_env / (1.0f - p_env);
+  }
+  w.push_back(L->env_on ? w_env : 0.0f);
+  float total = 0.0f;
+  for (float x : w) total += x;
+  L->pmf.resize(w.size());
+  L->cdf.resize(w.size());
+  float acc = 0.0f;
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    L->pmf[i] = total > 0.0f ? w[i] / total : 0.0f;
+    acc += L->pmf[i];
+    L->cdf[i] = acc;
+  }
+  if (total > 0.0f) L->cdf.back() = 1.0f;
+  return L;
+}
+
+}  // namespace
+
+PathScene::PathScene(const std::vector<PathGeometry>& geometries,
+                     const std::vector<AreaLight>& lights, const Environment& environment) {
+  const char* fn = "PathScene";
+  if (geometries.empty())
+    throw_error<InvalidArgument>(fn, ": no geometry given; expected at least one mesh");
+  auto G = std::make_shared<Geometry>();
+  std::vector<RayGeometry> rg;
+  std::size_t n_mats = 0;
+  for (std::size_t g = 0; g < geometries.size(); ++g) {
+    const PathGeometry& item = geometries[g];
+    if (item.mesh == nullptr) throw_error<InvalidArgument>(fn, ": geometry ", g, " has no mesh");
+    const std::size_t want = std::max<std::size_t>(1, item.mesh->materials().size());
+    if (item.materials.size() != want) {
+      throw_error<InvalidArgument>(fn, ": geometry ", g, " (mesh '", item.mesh->name(), "') has ",
+                                   item.materials.size(),
+                                   " materials; expected one per mesh material slot: ", want);
+    }
+    for (std::size_t k = 0; k < item.materials.size(); ++k)
+      item.materials[k].validate(std::string(fn) + ": geometry " + std::to_string(g) +
+                                 " material " + std::to_string(k));
+    rg.push_back({item.mesh, item.X_WO, item.instance_id});
+    n_mats += want;
+  }
+  G->rays = std::make_unique<RayScene>(rg);  // validates meshes, poses and ids; builds the BVH
+  G->materials.reserve(n_mats);
+  for (std::size_t g = 0; g < geometries.size(); ++g) {
+    const PathGeometry& item = geometries[g];
+    const std::int32_t base = static_cast<std::int32_t>(G->materials.size());
+    for (const PbrMaterial& m : item.materials) G->materials.push_back(m);
+    const Mesh world = item.mesh->transformed(item.X_WO);
+    GeometryData d;
+    d.vertices = world.vertices();
+    d.faces = world.faces();
+    d.corner_normals = corner_normals(world);
+    if (world.uvs().rows() == world.num_vertices()) d.uvs = world.uvs();
+    d.face_material.assign(static_cast<std::size_t>(world.num_faces()), base);
+    const auto& fm = world.face_materials();
+    if (!fm.empty()) {
+      for (std::size_t f = 0; f < fm.size(); ++f)
+        d.face_material[f] = base + std::max<std::int32_t>(0, fm[f]);
+    }
+    d.instance_id = item.instance_id;
+    G->geoms.push_back(std::move(d));
+  }
+  for (const PbrMaterial& m : G->materials) {
+    MaterialData d;
+    d.base = f3(m.base_color);
+    d.metallic = m.metallic;
+    d.alpha = std::max(kMinAlpha, m.roughness * m.roughness);
+    d.ior = m.ior;
+    d.transmission = m.transmission;
+    d.emission = f3(m.emission);
+    d.emissive = m.emission.maxCoeff() > 0.0f;
+    if (!m.texture.empty()) {
+      d.tex = m.texture.data();
+      d.tw = m.texture_width;
+      d.th = m.texture_height;
+    }
+    G->mats.push_back(d);
+  }
+  G->triangles = G->rays->num_triangles();
+  G->bounds = G->rays->bounds();
+  lighting_ = make_lighting(lights, environment, G->bounds);
+  geometry_ = std::move(G);
+}
+
+PathScene::~PathScene() = default;
+PathScene::PathScene(const PathScene&) = default;
+PathScene& PathScene::operator=(const PathScene&) = default;
+PathScene::PathScene(PathScene&&) noexcept = default;
+PathScene& PathScene::operator=(PathScene&&) noexcept = default;
+
+PathScene PathScene::with_lighting(const std::vector<AreaLight>& lights,
+                                   const Environment& environment) const {
+  PathScene s(*this);
+  s.lighting_ = make_lighting(lights, environment, geometry_->bounds);
+  return s;
+}
+
+std::int64_t PathScene::num_triangles() const { return geometry_->triangles; }
+const std::vector<AreaLight>& PathScene::lights() const { return lighting_->lights; }
+const Environment& PathScene::environment() const { return lighting_->environment; }
+
+// ---------------------------------------------------------------------------------------------
+// The integrator.
+
+namespace {
+
+using Geometry = PathScene::Geometry;
+using Lighting = PathScene::Lighting;
+
+/// Surface interaction at a ray hit.
+struct Hit {
+  F3 p;        // world position
+  F3 ng;       // geometric normal, towards the side the ray came from
+  F3 ns;       // shading normal, same side as ng and facing wo
+  bool front;  // the ray hit the outward (CCW) side
+  const MaterialData* mat;
+  F3 base;  // textured base colour
+  std::int32_t instance_id;
+};
+
+F3 texture_lookup(const MaterialData& m, float u, float v) {
+  const float x = u * static_cast<float>(m.tw) - 0.5f;
+  const float y = (1.0f - v) * static_cast<float>(m.th) - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float ax = x - fx, ay = y - fy;
+  auto wrap = [](long i, int n) {
+    long r = i % n;
+    return static_cast<int>(r < 0 ? r + n : r);
+  };
+  const long ix = static_cast<long>(fx), iy = static_cast<long>(fy);
+  const int x0 = wrap(ix, m.tw), x1 = wrap(ix + 1, m.tw);
+  const int y0 = wrap(iy, m.th), y1 = wrap(iy + 1, m.th);
+  const float* lut = srgb_lut().v;
+  auto texel = [&](int xx, int yy) {
+    const std::uint8_t* t = m.tex + 3 * (static_cast<std::size_t>(yy) * m.tw + xx);
+    return F3(lut[t[0]], lut[t[1]], lut[t[2]]);
+  };
+  return pt::lerp(pt::lerp(texel(x0, y0), texel(x1, y0), ax),
+                  pt::lerp(texel(x0, y1), texel(x1, y1), ax), ay);
+}
+
+void make_hit(const Geometry& G, const RTCRayHit& rh, F3 dir, Hit& h) {
+  const GeometryData& g = G.geoms[rh.hit.geomID];
+  const unsigned f = rh.hit.primID;
+  const float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.0f - b1 - b2;
+  const std::int32_t i0 = g.faces(f, 0), i1 = g.faces(f, 1), i2 = g.faces(f, 2);
+  auto vert = [&](std::int32_t i) {
+    return F3(g.vertices(i, 0), g.vertices(i, 1), g.vertices(i, 2));
+  };
+  h.p = vert(i0) * b0 + vert(i1) * b1 + vert(i2) * b2;
+  const auto& fnr = G.rays->impl().world_normals[rh.hit.geomID];
+  F3 ng(fnr(f, 0), fnr(f, 1), fnr(f, 2));
+  const F3* cn = &g.corner_normals[3 * static_cast<std::size_t>(f)];
+  F3 ns = normalize(cn[0] * b0 + cn[1] * b1 + cn[2] * b2);
+  h.front = dot(dir, ng) < 0.0f;
+  if (!h.front) {
+    ng = -ng;
+    ns = -ns;
+  }
+  if (dot(ns, ng) <= 0.0f || dot(ns, -dir) <= 1e-4f) ns = ng;  // fall back at flips
+  h.ng = ng;
+  h.ns = ns;
+  h.mat = &G.mats[g.face_material[f]];
+  h.base = h.mat->base;
+  if (h.mat->tex != nullptr && g.uvs.rows() > 0) {
+    const float u = g.uvs(i0, 0) * b0 + g.uvs(i1, 0) * b1 + g.uvs(i2, 0) * b2;
+    const float v = g.uvs(i0, 1) * b0 + g.uvs(i1, 1) * b1 + g.uvs(i2, 1) * b2;
+    h.base = h.base * texture_lookup(*h.mat, u, v);
+  }
+  h.instance_id = g.instance_id;
+}
+
+void set_ray(RTCRay& r, F3 o, F3 d, float tfar) {
+  r.org_x = o.x;
+  r.org_y = o.y;
+  r.org_z = o.z;
+  r.dir_x = d.x;
+  r.dir_y = d.y;
+  r.dir_z = d.z;
+  r.tnear = 0.0f;
+  r.tfar = tfar;
+  r.time = 0.0f;
+  r.mask = 0xFFFFFFFFu;
+  r.id = 0;
+  r.flags = 0;
+}
+
+/// Ray origin moved off the surface to the side of direction d.
+F3 offset_origin(const Hit& h, F3 d) {
+  const float scale =
+      2e-5f * (1.0f + std::max(std::abs(h.p.x), std::max(std::abs(h.p.y), std::abs(h.p.z))));
+  return h.p + h.ng * (dot(d, h.ng) >= 0.0f ? scale : -scale);
+}
+
+/// Nearest front-facing area light along the ray within (0, tmax). Returns its index or -1.
+int hit_light(const Lighting& L, F3 o, F3 d, float tmax, float& t_out) {
+  int best = -1;
+  for (std::size_t i = 0; i < L.light_data.size(); ++i) {
+    const LightData& l = L.light_data[i];
+    const float dn = dot(d, l.n);
+    if (dn >= 0.0f) continue;  // back side or parallel: one-sided emitter
+    const float t = dot(l.centre - o, l.n) / dn;
+    if (!(t > 0.0f && t < tmax)) continue;
+    const F3 q = o + d * t - l.centre;
+    const float x = dot(q, l.ex), y = dot(q, l.ey);
+    const bool inside =
+        l.disc ? (x * x + y * y <= l.hx * l.hx) : (std::abs(x) <= l.hx && std::abs(y) <= l.hy);
+    if (!inside) continue;
+    tmax = t;
+    best = static_cast<int>(i);
+  }
+  t_out = tmax;
+  return best;
+}
+
+/// Pdf (solid angle, at the shading point with normal n) of environment sampling.
+float env_pdf(const Lighting& L, F3 n, F3 w) {
+  float p = (1.0f - L.p_sun) * std::max(0.0f, dot(n, w)) * pt::kInvPi;
+  if (L.p_sun > 0.0f && dot(w, L.sun_dir) >= L.sun_cos)
+    p += L.p_sun / (2.0f * pt::kPi * (1.0f - L.sun_cos));
+  return p;
+}
+
+inline float power_heuristic(float a, float b) {
+  const float a2 = a * a, b2 = b * b;
+  return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+struct Camera {
+  float fx, fy, cx, cy;
+  F3 o;
+  F3 r0, r1, r2;  // columns of R_WC
+  F3 to_world(F3 v) const { return r0 * v.x + r1 * v.y + r2 * v.z; }
+};
+
+struct Counters {
+  std::int64_t rays = 0;
+};
+
+class Integrator {
+ public:
+  Integrator(const Geometry& G, const Lighting& L, const PathTraceOptions& o)
+      : G_(G), L_(L), opt_(o), scene_(G.rays->impl().scene) {
+    rtcInitIntersectContext(&ctx_);
+  }
+
+  bool intersect(F3 o, F3 d, float tfar, RTCRayHit& rh) {
+    set_ray(rh.ray, o, d, tfar);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &ctx_, &rh);
+    ++counters.rays;
+    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+  }
+
+  bool occluded(F3 o, F3 d, float tfar) {
+    RTCRay r;
+    set_ray(r, o, d, tfar);
+    rtcOccluded1(scene_, &ctx_, &r);
+    ++counters.rays;
+    return r.tfar == -std::numeric_limits<float>::infinity();
+  }
+
+  /// Radiance along a camera ray; first-hit albedo and normal are written to aov_*.
+  F3 trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& aov_normal) {
+    F3 L(0.0f), beta(1.0f);
+    bool prev_delta = true;
+    float prev_pdf = 0.0f;  // solid-angle pdf of the BSDF sample that made the current ray
+    F3 prev_n(0.0f);        // shading normal at the previous vertex (for the environment pdf)
+    aov_albedo = F3(0.0f);
+    aov_normal = F3(0.0f);
+    RTCRayHit rh;
+    Hit h;
+    for (int depth = 0;; ++depth) {
+      const bool hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
+      const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
+      float t_light;
+      const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
+      if (li >= 0) {
+        const LightData& l = L_.light_data[li];
+        float w = 1.0f;
+        if (!prev_delta) {
+          const float cos_l = -dot(d, l.n);
+          const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
+          w = power_heuristic(prev_pdf, pl);
+        }
+        L += beta * l.radiance * w;
+        if (depth == 0) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
+        break;
+      }
+      if (!hit) {
+        if (L_.env_on || depth == 0) {
+          const F3 Le = L_.env(d);
+          float w = 1.0f;
+          if (!prev_delta && L_.env_on)
+            w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
+          L += beta * Le * w;
+          if (depth == 0)
+            aov_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+        }
+        break;
+      }
+      make_hit(G_, rh, d, h);
+      const MaterialData& m = *h.mat;
+      const F3 wo_w = -d;
+      if (m.emissive && h.front) L += beta * m.emission;
+      if (depth == 0) {
+        aov_albedo = h.base;
+        aov_normal = h.ns;
+      }
+      if (depth >= opt_.max_bounces) break;
+
+      const pt::Frame frame(h.ns);
+      const F3 wo = frame.to_local(wo_w);
+      pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
+      sm.prepare(wo.z);
+      const std::uint32_t base_pair = 2 + 4 * static_cast<std::uint32_t>(depth);
+      const pt::Sample2 u_light = s.get(base_pair);
+      const pt::Sample2 u_bsdf = s.get(base_pair + 1);
+      const pt::Sample2 u_sel = s.get(base_pair + 2);
+      const pt::Sample2 u_rr = s.get(base_pair + 3);
+
+      // Next-event estimation.
+      if (sm.has_nondelta && !L_.pmf.empty() && L_.cdf.back() > 0.0f)
+        L += beta * direct(h, frame, wo, sm, u_sel.x, u_light);
+
+      // BSDF sampling.
+      F3 wi_w;
+      F3 weight;
+      bool delta;
+      float pdf;
+      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta)) break;
+      beta *= weight;
+      if (!all_finite(beta) || max_comp(beta) <= 0.0f) break;
+      if (depth + 1 >= opt_.rr_depth) {
+        const float q = std::min(1.0f, max_comp(beta));
+        if (u_rr.x >= q) break;
+        beta *= 1.0f / q;
+      }
+      prev_delta = delta;
+      prev_pdf = pdf;
+      prev_n = h.ns;
+      o = offset_origin(h, wi_w);
+      d = wi_w;
+    }
+    return L;
+  }
+
+  Counters counters;
+
+ private:
+  /// One light sample with MIS; returns the contribution (without beta).
+  F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm, float u_sel,
+            pt::Sample2 u) {
+    const std::size_t n = L_.cdf.size();
+    std::size_t k = 0;
+    while (k + 1 < n && u_sel >= L_.cdf[k]) ++k;
+    const float p_sel = L_.pmf[k];
+    if (p_sel <= 0.0f) return F3(0.0f);
+    F3 wi_w, Le;
+    float pdf_light, dist;
+    if (k + 1 == n) {  // environment
+      float pu = u.x;
+      if (L_.p_sun > 0.0f && pu < L_.p_sun) {
+        pu /= L_.p_sun;
+        const pt::Frame sf(L_.sun_dir);
+        wi_w = sf.to_world(pt::uniform_cone(pu, u.y, L_.sun_cos));
+      } else {
+        if (L_.p_sun > 0.0f) pu = (pu - L_.p_sun) / (1.0f - L_.p_sun);
+        wi_w = frame.to_world(pt::cosine_hemisphere(std::min(pu, 0.99999994f), u.y));
+      }
+      pdf_light = env_pdf(L_, h.ns, wi_w);
+      if (pdf_light <= 0.0f) return F3(0.0f);
+      dist = std::numeric_limits<float>::infinity();
+      Le = L_.env(wi_w);
+    } else {
+      const LightData& l = L_.light_data[k];
+      F3 q;
+      if (l.disc) {
+        const pt::Sample2 dd = pt::concentric_disc(u.x, u.y);
+        q = l.centre + l.ex * (dd.x * l.hx) + l.ey * (dd.y * l.hx);
+      } else {
+        q = l.centre + l.ex * ((2.0f * u.x - 1.0f) * l.hx) + l.ey * ((2.0f * u.y - 1.0f) * l.hy);
+      }
+      const F3 v = q - h.p;
+      const float d2 = dot(v, v);
+      if (!(d2 > 0.0f)) return F3(0.0f);
+      dist = std::sqrt(d2);
+      wi_w = v / dist;
+      const float cos_l = -dot(wi_w, l.n);
+      if (cos_l <= 0.0f) return F3(0.0f);
+      pdf_light = d2 / (l.area * cos_l);
+      Le = l.radiance;
+    }
+    if (dot(wi_w, h.ng) <= 0.0f) return F3(0.0f);
+    const F3 wi = frame.to_local(wi_w);
+    F3 f;
+    float pdf_bsdf;
+    sm.eval(wo, wi, f, pdf_bsdf);
+    if (max_comp(f) <= 0.0f || max_comp(Le) <= 0.0f) return F3(0.0f);
+    const F3 o = offset_origin(h, wi_w);
+    const float tfar = std::isinf(dist) ? dist : dist * (1.0f - 1e-4f);
+    if (occluded(o, wi_w, tfar)) return F3(0.0f);
+    const float pl = p_sel * pdf_light;
+    const float w = power_heuristic(pl, pdf_bsdf);
+    return f * Le * (wi.z * w / pl);
+  }
+
+  /// Samples the BSDF: direction, weight f*cos/pdf (including lobe choice), solid-angle pdf of
+  /// the non-delta part (for MIS) and whether a delta lobe was chosen.
+  bool sample_bsdf(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
+                   float u_lobe, float u_fresnel, pt::Sample2 u, F3& wi_w, F3& weight, float& pdf,
+                   bool& delta) {
+    if (u_lobe < sm.p_delta) {
+      // Smooth dielectric: reflect with probability F, otherwise refract.
+      delta = true;
+      pdf = 0.0f;
+      const float eta = h.front ? sm.ior : 1.0f / sm.ior;  // n_t / n_i
+      // The interface normal is the shading normal (smooth curved glass); where it would send
+      // the reflected or refracted ray to the wrong side of the surface, the geometric normal.
+      const F3 wo_w = frame.to_world(wo);
+      F3 n = h.ns;
+      float ci = std::max(0.0f, dot(wo_w, n));
+      const float F = pt::fresnel_dielectric(ci, eta);
+      const float scale = sm.w_trans / sm.p_delta;
+      auto refract = [&](F3 nn, float c) {
+        const float sin2_t = (1.0f - c * c) / (eta * eta);
+        const float ct = std::sqrt(std::max(0.0f, 1.0f - sin2_t));
+        return normalize(-wo_w * (1.0f / eta) + nn * (c / eta - ct));
+      };
+      if (u_fresnel < F) {
+        wi_w = pt::reflect(wo_w, n);
+        if (dot(wi_w, h.ng) <= 0.0f) wi_w = pt::reflect(wo_w, h.ng);
+        weight = F3(scale);
+      } else {
+        wi_w = refract(n, ci);
+        if (dot(wi_w, h.ng) >= 0.0f) wi_w = refract(h.ng, std::max(0.0f, dot(wo_w, h.ng)));
+        weight = sm.base * (scale / (eta * eta));
+      }
+      return true;
+    }
+    delta = false;
+    if (!sm.has_nondelta) return false;
+    const float ul = (u_lobe - sm.p_delta) / (1.0f - sm.p_delta);
+    F3 wi;
+    if (ul < sm.p_spec) {
+      const F3 m = pt::ggx_sample_vndf(wo, sm.alpha, u.x, u.y);
+      wi = pt::reflect(wo, m);
+    } else {
+      wi = pt::cosine_hemisphere(u.x, u.y);
+    }
+    if (wi.z <= 0.0f) return false;
+    wi_w = frame.to_world(wi);
+    if (dot(wi_w, h.ng) <= 0.0f) return false;
+    F3 f;
+    sm.eval(wo, wi, f, pdf);
+    if (!(pdf > 0.0f)) return false;
+    weight = f * (wi.z / pdf);
+    return true;
+  }
+
+  const Geometry& G_;
+  const Lighting& L_;
+  const PathTraceOptions& opt_;
+  RTCScene scene_;
+  RTCIntersectContext ctx_;
+};
+
+}  // namespace
+
+PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions& options) const {
+  options.validate();
+  view.validate("PathScene::render: view");
+  const Geometry& G = *geometry_;
+  const Lighting& L = *lighting_;
+  const int W = view.K.width, H = view.K.height;
+  PathTraceOutput out;
+  out.width = W;
+  out.height = H;
+  const std::size_t np = static_cast<std::size_t>(W) * H;
+  out.radiance.assign(3 * np, 0.0f);
+  out.albedo.assign(3 * np, 0.0f);
+  out.normal.assign(3 * np, 0.0f);
+  out.depth.assign(np, 0.0f);
+  out.instance_ids.assign(np, 0);
+
+  Camera cam;
+  cam.fx = static_cast<float>(view.K.fx);
+  cam.fy = static_cast<float>(view.K.fy);
+  cam.cx = static_cast<float>(view.K.cx);
+  cam.cy = static_cast<float>(view.K.cy);
+  const Mat3d R = view.X_WC.linear();
+  cam.o = f3(Vec3d(view.X_WC.translation()));
+  cam.r0 = f3(Vec3d(R.col(0)));
+  cam.r1 = f3(Vec3d(R.col(1)));
+  cam.r2 = f3(Vec3d(R.col(2)));
+
+  float focus = static_cast<float>(options.focus_distance);
+  const float aperture = static_cast<float>(options.aperture_radius);
+  std::atomic<std::int64_t> total_rays{0};
+  if (aperture > 0.0f && focus == 0.0f) {
+    detail::FtzDazGuard guard;
+    Integrator it(G, L, options);
+    RTCRayHit rh;
+    // Depth at the image centre through the principal point.
+    const F3 dc = F3((0.5f * W - cam.cx) / cam.fx, (0.5f * H - cam.cy) / cam.fy, 1.0f);
+    const float len = length(dc);
+    focus = it.intersect(cam.o, cam.to_world(dc / len), std::numeric_limits<float>::infinity(), rh)
+                ? rh.ray.tfar / len
+                : 1.0f;
+    total_rays += it.counters.rays;
+  }
+
+  constexpr int kTile = 16;
+  const int tiles_x = (W + kTile - 1) / kTile, tiles_y = (H + kTile - 1) / kTile;
+  const std::size_t n_tiles = static_cast<std::size_t>(tiles_x) * tiles_y;
+  std::atomic<std::size_t> next_tile{0};
+  const int threads =
+      std::min<int>(resolve_num_threads(options.num_threads), static_cast<int>(n_tiles));
+  const std::uint64_t stream =
+      mix64(options.seed ^ mix64(options.view_index + 0x5851F42D4C957F2DULL));
+  const float clamp = static_cast<float>(options.clamp);
+  const float inv_spp = 1.0f / static_cast<float>(options.spp);
+
+  auto worker = [&](std::size_t, std::size_t) {
+    detail::FtzDazGuard guard;
+    Integrator it(G, L, options);
+    RTCRayHit rh;
+    for (;;) {
+      const std::size_t tile = next_tile.fetch_add(1);
+      if (tile >= n_tiles) break;
+      const int tx = static_cast<int>(tile % tiles_x), ty = static_cast<int>(tile / tiles_x);
+      const int u1 = std::min(W, (tx + 1) * kTile), v1 = std::min(H, (ty + 1) * kTile);
+      for (int v = ty * kTile; v < v1; ++v) {
+        for (int u = tx * kTile; u < u1; ++u) {
+          const std::size_t pix = static_cast<std::size_t>(v) * W + u;
+          // Labels: the pinhole ray through the pixel centre.
+          {
+            const F3 dc((u + 0.5f - cam.cx) / cam.fx, (v + 0.5f - cam.cy) / cam.fy, 1.0f);
+            const float len = length(dc);
+            if (it.intersect(cam.o, cam.to_world(dc / len), std::numeric_limits<float>::infinity(),
+                             rh)) {
+              out.depth[pix] = rh.ray.tfar / len;
+              out.instance_ids[pix] = G.geoms[rh.hit.geomID].instance_id;
+            }
+          }
+          const std::uint32_t pixel_seed =
+              static_cast<std::uint32_t>(mix64(stream ^ static_cast<std::uint64_t>(pix)));
+          F3 sum(0.0f), alb(0.0f), nrm(0.0f);
+          for (int k = 0; k < options.spp; ++k) {
+            const pt::PixelSampler s(pixel_seed, static_cast<std::uint32_t>(k));
+            const pt::Sample2 j = s.get(0);
+            F3 dc(((u + j.x) - cam.cx) / cam.fx, ((v + j.y) - cam.cy) / cam.fy, 1.0f);
+            F3 o = cam.o;
+            if (aperture > 0.0f) {
+              const pt::Sample2 ls = s.get(1);
+              const pt::Sample2 dd = pt::concentric_disc(ls.x, ls.y);
+              const F3 lens(dd.x * aperture, dd.y * aperture, 0.0f);
+              dc = dc * focus - lens;
+              o = cam.o + cam.to_world(lens);
+            }
+            const F3 d = normalize(cam.to_world(dc));
+            F3 a, n;
+            F3 c = it.trace(o, d, s, a, n);
+            if (!all_finite(c)) c = F3(0.0f);
+            if (clamp > 0.0f) {
+              const float lum = luminance(c);
+              if (lum > clamp) c *= clamp / lum;
+            }
+            sum += c;
+            alb += a;
+            nrm += n;
+          }
+          float* r = &out.radiance[3 * pix];
+          r[0] = sum.x * inv_spp;
+          r[1] = sum.y * inv_spp;
+          r[2] = sum.z * inv_spp;
+          float* a = &out.albedo[3 * pix];
+          a[0] = alb.x * inv_spp;
+          a[1] = alb.y * inv_spp;
+          a[2] = alb.z * inv_spp;
+          const F3 nn = normalize(nrm);
+          float* n = &out.normal[3 * pix];
+          n[0] = nn.x;
+          n[1] = nn.y;
+          n[2] = nn.z;
+        }
+      }
+    }
+    total_rays += it.counters.rays;
+  };
+  parallel_for(static_cast<std::size_t>(threads), threads, 1, worker);
+  out.rays = total_rays.load();
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Development.
+
+std::vector<std::uint8_t> develop(const std::vector<float>& radiance, int width, int height,
+                                  const FilmOptions& film) {
+  film.validate();
+  if (width <= 0 || height <= 0 ||
+      radiance.size() != static_cast<std::size_t>(width) * height * 3) {
+    throw_error<InvalidArgument>(
+        "develop: radiance has ", radiance.size(),
+        " values; expected an (H, W, 3) image with H, W > 0, got H=", height, " W=", width);
+  }
+  const std::size_t np = static_cast<std::size_t>(width) * height;
+  std::vector<std::uint8_t> out(3 * np);
+  const float gain = static_cast<float>(std::exp2(film.exposure));
+  const bool noisy = film.shot_noise > 0.0 || film.read_noise > 0.0;
+  const std::uint64_t stream = mix64(film.seed ^ mix64(film.view_index + 0x2545F4914F6CDD1DULL));
+  const float shot = static_cast<float>(film.shot_noise),
+              read = static_cast<float>(film.read_noise);
+  const bool filmic = film.tone == FilmOptions::Tone::Filmic;
+  parallel_for(np, film.num_threads, 16384, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      float x[3];
+      for (int c = 0; c < 3; ++c) {
+        const float r = radiance[3 * i + c];
+        x[c] = std::isfinite(r) ? std::max(0.0f, r) * gain : 0.0f;
+      }
+      if (noisy) {
+        Rng rng(stream, i);
+        for (int c = 0; c < 3; ++c) {
+          const float n1 = static_cast<float>(rng.normal());
+          const float n2 = static_cast<float>(rng.normal());
+          x[c] = std::max(0.0f, x[c] + shot * std::sqrt(x[c]) * n1 + read * n2);
+        }
+      }
+      for (int c = 0; c < 3; ++c) {
+        const float y = filmic ? 1.0f - std::exp(-x[c]) : std::min(1.0f, x[c]);
+        const float s = linear_to_srgb(std::min(1.0f, std::max(0.0f, y)));
+        out[3 * i + c] = static_cast<std::uint8_t>(std::lround(s * 255.0f));
+      }
+    }
+  });
+  return out;
+}
+
+bool decode_base_color_texture(const Material& material, std::vector<std::uint8_t>& rgb, int& width,
+                               int& height) {
+  cv::Mat img;
+  if (!material.texture_data.empty()) {
+    const cv::Mat buf(1, static_cast<int>(material.texture_data.size()), CV_8U,
+                      const_cast<std::uint8_t*>(material.texture_data.data()));
+    img = cv::imdecode(buf, cv::IMREAD_COLOR);
+    if (img.empty()) {
+      throw_error<IoError>("decode_base_color_texture: embedded texture of material '",
+                           material.name, "' could not be decoded (", material.texture_data.size(),
+                           " bytes; expected PNG or JPEG)");
+    }
+  } else if (!material.texture_path.empty()) {
+    img = cv::imread(material.texture_path, cv::IMREAD_COLOR);
+    if (img.empty()) {
+      throw_error<IoError>("decode_base_color_texture: texture '", material.texture_path,
+                           "' of material '", material.name, "' could not be read");
+    }
+  } else {
+    return false;
+  }
+  cv::Mat out;
+  cv::cvtColor(img, out, cv::COLOR_BGR2RGB);
+  if (!out.isContinuous()) out = out.clone();
+  width = out.cols;
+  height = out.rows;
+  rgb.assign(out.data, out.data + static_cast<std::size_t>(3) * width * height);
+  return true;
+}
+
+}  // namespace mgn

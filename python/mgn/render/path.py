@@ -1,0 +1,460 @@
+"""Physically based path tracing on the CPU (typed façade over the C++ core, Embree).
+
+A :class:`PathScene` is built once from meshes placed in the world frame W, one
+:class:`PbrMaterial` per mesh material slot, area lights and an environment;
+:meth:`PathScene.render` then renders any number of camera views and :func:`develop` turns the
+linear radiance into an 8-bit sRGB picture.
+
+Units and frames: metres, radians; poses are (4, 4) float64 ``X_AB`` (frame B in frame A); the
+camera model is :class:`mgn.render.CameraView` (OpenCV frame, pixel (u, v) covers the square
+[u, u+1) x [v, v+1) with its centre at (u + 0.5, v + 0.5)), so the depth and instance-id passes
+equal the raster passes and :func:`mgn.camera_rays`.
+
+Radiance convention: linear RGB radiance; an emitter of radiance L seen directly shows L, a white
+Lambertian surface under irradiance E shows E / pi. Lights and the environment use the same units.
+
+Algorithm (see ``cpp/include/mgn/render/path_tracer.hpp``): unidirectional path tracing with
+next-event estimation and multiple importance sampling (power heuristic) for the area lights and
+the environment, Russian roulette, glTF 2.0 metallic-roughness materials (Lambert + GGX with
+height-correlated Smith masking, visible-normal sampling) and smooth dielectrics (Fresnel,
+refraction, total internal reflection), Owen-scrambled Sobol samples per pixel seeded from
+(seed, view_index, pixel): the image is identical for any number of threads. Long calls release
+the GIL.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from mgn import _core
+from mgn.geometry import Material, Mesh
+from mgn.render.camera import CameraView
+
+__all__ = [
+    "AreaLight",
+    "Environment",
+    "FilmOptions",
+    "PathScene",
+    "PathTraceOptions",
+    "PathTraceOutput",
+    "PbrMaterial",
+    "develop",
+]
+
+Color = tuple[float, float, float]
+
+
+def _color(value: Sequence[float], name: str) -> Color:
+    a = np.asarray(value, dtype=np.float64)
+    if a.shape != (3,):
+        raise ValueError(f"{name} must be 3 numbers (linear RGB), got shape {a.shape}")
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+@dataclass(frozen=True)
+class PbrMaterial:
+    """glTF 2.0 metallic-roughness material (+ KHR_materials_transmission / ior).
+
+    Attributes:
+        base_color: linear RGB in [0, 1] (diffuse albedo of dielectrics, F0 of metals, tint of
+            transmitted light).
+        metallic: [0, 1].
+        roughness: perceptual roughness in [0, 1]; GGX alpha = roughness ** 2.
+        ior: index of refraction (>= 1) of the specular layer and of the dielectric; 1 removes
+            the specular layer (a pure Lambertian surface when metallic = 0).
+        transmission: [0, 1]; 1 = clear smooth dielectric (glass, clear plastic).
+        emission: emitted radiance (front side), linear RGB >= 0, same units as the lights.
+        base_color_texture: (H, W, 3) uint8 sRGB image, top row first, multiplying base_color,
+            looked up at the mesh uvs (u right, v up), bilinear, repeating; None = none.
+    """
+
+    base_color: Color = (0.8, 0.8, 0.8)
+    metallic: float = 0.0
+    roughness: float = 0.5
+    ior: float = 1.5
+    transmission: float = 0.0
+    emission: Color = (0.0, 0.0, 0.0)
+    base_color_texture: npt.NDArray[np.uint8] | None = field(
+        default=None, repr=False, compare=False
+    )
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "base_color", _color(self.base_color, "PbrMaterial.base_color"))
+        object.__setattr__(self, "emission", _color(self.emission, "PbrMaterial.emission"))
+        for name in ("metallic", "roughness", "ior", "transmission"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        if self.base_color_texture is not None:
+            tex = np.ascontiguousarray(self.base_color_texture)
+            if tex.dtype != np.uint8 or tex.ndim != 3 or tex.shape[2] != 3:
+                raise ValueError(
+                    "PbrMaterial.base_color_texture must be an (H, W, 3) uint8 array, got "
+                    f"{tex.dtype} {tex.shape}"
+                )
+            tex.setflags(write=False)
+            object.__setattr__(self, "base_color_texture", tex)
+        self.to_core().validate()  # InvalidArgumentError naming the setting
+
+    def to_core(self) -> _core.PbrMaterial:
+        m = _core.PbrMaterial()
+        m.base_color = self.base_color
+        m.metallic = self.metallic
+        m.roughness = self.roughness
+        m.ior = self.ior
+        m.transmission = self.transmission
+        m.emission = self.emission
+        m.set_texture(self.base_color_texture)
+        return m
+
+    @staticmethod
+    def from_material(m: Material) -> PbrMaterial:
+        """A plausible PBR material for a legacy (Phong) mesh material.
+
+        base colour = the material's RGB (and its texture); roughness from the Phong exponent n
+        through the Beckmann correspondence alpha = sqrt(2 / (n + 2)), roughness = sqrt(alpha),
+        clamped to [0.08, 1]; a mirror-like material (specular luminance >= 0.8 and n >= 200) is a
+        metal with the specular colour as base colour; a transparent one (opacity < 1) becomes a
+        clear dielectric (transmission = min(1, 2 (1 - opacity)), its tint moved 70 % towards
+        white so that two surface crossings do not darken it, roughness 0.05).
+        """
+        base = np.clip(np.asarray(m.base_color, np.float64)[:3], 0.0, 1.0)
+        spec = np.clip(np.asarray(m.specular, np.float64)[:3], 0.0, 1.0)
+        n = max(float(m.shininess), 0.0)
+        alpha = math.sqrt(2.0 / (n + 2.0))
+        roughness = min(1.0, max(0.08, math.sqrt(alpha)))
+        metallic = 0.0
+        spec_lum = float(0.2126 * spec[0] + 0.7152 * spec[1] + 0.0722 * spec[2])
+        if spec_lum >= 0.8 and n >= 200.0:
+            metallic, base = 1.0, spec
+        opacity = float(m.opacity) * float(np.asarray(m.base_color)[3])
+        transmission = 0.0
+        if opacity < 1.0:
+            transmission = min(1.0, 2.0 * (1.0 - opacity))
+            base = base + 0.7 * (1.0 - base)
+            roughness = 0.05
+        texture = _core.material_texture_rgb(m)
+        return PbrMaterial(
+            base_color=(float(base[0]), float(base[1]), float(base[2])),
+            metallic=metallic,
+            roughness=roughness,
+            transmission=transmission,
+            base_color_texture=texture,
+        )
+
+
+@dataclass(frozen=True)
+class AreaLight:
+    """One-sided area light emitting uniformly (Lambertian) towards +z of its frame L.
+
+    Attributes:
+        X_WL: (4, 4) pose of the light frame in the world (rigid).
+        shape: "rect" | "disc".
+        size: rect: full side lengths along x_L, y_L (m); disc: (radius, radius) (m).
+        color: linear RGB >= 0.
+        intensity: radiance scale (>= 0): the light's radiance is color * intensity.
+    """
+
+    X_WL: npt.NDArray[np.float64] = field(repr=False)
+    shape: str = "rect"
+    size: tuple[float, float] = (0.5, 0.5)
+    color: Color = (1.0, 1.0, 1.0)
+    intensity: float = 10.0
+
+    def __post_init__(self) -> None:
+        X = np.array(self.X_WL, dtype=np.float64)
+        if X.shape != (4, 4):
+            raise ValueError(f"AreaLight.X_WL must be a (4, 4) pose, got shape {X.shape}")
+        X.setflags(write=False)
+        object.__setattr__(self, "X_WL", X)
+        s = np.asarray(self.size, np.float64).reshape(-1)
+        if s.shape != (2,):
+            raise ValueError(f"AreaLight.size must be 2 numbers (m), got shape {s.shape}")
+        object.__setattr__(self, "size", (float(s[0]), float(s[1])))
+        object.__setattr__(self, "color", _color(self.color, "AreaLight.color"))
+        object.__setattr__(self, "intensity", float(self.intensity))
+        self.to_core().validate()
+
+    def to_core(self) -> _core.AreaLight:
+        a = _core.AreaLight()
+        a.X_WL = self.X_WL
+        a.shape = self.shape
+        a.size = self.size
+        a.color = self.color
+        a.intensity = self.intensity
+        return a
+
+
+@dataclass(frozen=True)
+class Environment:
+    """Infinitely distant dome seen by rays that escape; world +z is up.
+
+    Attributes:
+        kind: "uniform" (radiance ``color``) | "gradient" (``horizon`` to ``zenith`` linearly in
+            sqrt(d.z) above the horizon, ``ground`` below) | "sky" (the gradient plus a sun disc
+            of angular radius ``sun_angular_radius`` towards ``sun_direction`` whose irradiance
+            at normal incidence is ``sun_strength`` * pi * luminance(zenith)).
+        intensity: scales everything (>= 0).
+    """
+
+    kind: str = "uniform"
+    color: Color = (1.0, 1.0, 1.0)
+    zenith: Color = (0.6, 0.7, 0.9)
+    horizon: Color = (0.9, 0.9, 0.9)
+    ground: Color = (0.3, 0.3, 0.3)
+    sun_direction: tuple[float, float, float] = (0.3, 0.2, 0.93)
+    intensity: float = 1.0
+    sun_strength: float = 3.0
+    sun_angular_radius: float = 0.035
+
+    def __post_init__(self) -> None:
+        for name in ("color", "zenith", "horizon", "ground", "sun_direction"):
+            object.__setattr__(self, name, _color(getattr(self, name), f"Environment.{name}"))
+        for name in ("intensity", "sun_strength", "sun_angular_radius"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        self.to_core().validate()
+
+    def to_core(self) -> _core.Environment:
+        e = _core.Environment()
+        e.kind = self.kind
+        e.color = self.color
+        e.zenith = self.zenith
+        e.horizon = self.horizon
+        e.ground = self.ground
+        e.sun_direction = self.sun_direction
+        e.intensity = self.intensity
+        e.sun_strength = self.sun_strength
+        e.sun_angular_radius = self.sun_angular_radius
+        return e
+
+
+@dataclass(frozen=True)
+class PathTraceOptions:
+    """Settings of one path-traced view.
+
+    Attributes:
+        spp: samples per pixel (>= 1).
+        max_bounces: path segments after the camera ray (>= 0; 0 = directly seen emission only,
+            1 = direct lighting only).
+        seed, view_index: the sample streams derive from (seed, view_index, pixel).
+        num_threads: 0 = all hardware threads; the image is identical for any value.
+        rr_depth: Russian roulette from this bounce on (>= 0).
+        aperture_radius: thin-lens aperture radius, m (0 = pinhole).
+        focus_distance: distance in focus along the optical axis, m (0 = the depth at the image
+            centre, or 1 m if nothing is seen there).
+        clamp: maximum luminance of one sample (0 = off; > 0 biases but removes fireflies).
+    """
+
+    spp: int = 16
+    max_bounces: int = 6
+    seed: int = 0
+    view_index: int = 0
+    num_threads: int = 0
+    rr_depth: int = 3
+    aperture_radius: float = 0.0
+    focus_distance: float = 0.0
+    clamp: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("spp", "max_bounces", "seed", "view_index", "num_threads", "rr_depth"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise ValueError(f"PathTraceOptions.{name} must be an integer, got {value!r}")
+        for name in ("seed", "view_index"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"PathTraceOptions.{name} must be >= 0, got {getattr(self, name)}")
+        self.to_core().validate()
+
+    def to_core(self) -> _core.PathTraceOptions:
+        o = _core.PathTraceOptions()
+        o.spp = max(-(2**31), min(2**31 - 1, int(self.spp)))
+        o.max_bounces = max(-(2**31), min(2**31 - 1, int(self.max_bounces)))
+        o.seed = int(self.seed) & (2**64 - 1)
+        o.view_index = int(self.view_index) & (2**64 - 1)
+        o.num_threads = max(-(2**31), min(2**31 - 1, int(self.num_threads)))
+        o.rr_depth = max(-(2**31), min(2**31 - 1, int(self.rr_depth)))
+        o.aperture_radius = float(self.aperture_radius)
+        o.focus_distance = float(self.focus_distance)
+        o.clamp = float(self.clamp)
+        return o
+
+
+@dataclass(frozen=True)
+class FilmOptions:
+    """Development of linear radiance into 8-bit sRGB.
+
+    The exposed value is x = radiance * 2 ** exposure. Sensor noise (optional) is added to x:
+    x + shot_noise * sqrt(x) * N1 + read_noise * N2 (N1, N2 standard normal per pixel and
+    channel, drawn from (seed, view_index, pixel)). Tone "filmic" maps each channel through
+    y = 1 - exp(-x) (an exponential film response: about linear in the shadows, a soft shoulder,
+    never clipping; mid grey 0.18 -> 0.165); "linear" clips to [0, 1]. Then the sRGB OETF.
+    """
+
+    exposure: float = 0.0
+    tone: str = "filmic"
+    shot_noise: float = 0.0
+    read_noise: float = 0.0
+    seed: int = 0
+    view_index: int = 0
+    num_threads: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("seed", "view_index"):
+            if int(getattr(self, name)) < 0:
+                raise ValueError(f"FilmOptions.{name} must be >= 0, got {getattr(self, name)}")
+        self.to_core().validate()
+
+    def to_core(self) -> _core.FilmOptions:
+        f = _core.FilmOptions()
+        f.exposure = float(self.exposure)
+        f.tone = self.tone
+        f.shot_noise = float(self.shot_noise)
+        f.read_noise = float(self.read_noise)
+        f.seed = int(self.seed) & (2**64 - 1)
+        f.view_index = int(self.view_index) & (2**64 - 1)
+        f.num_threads = int(self.num_threads)
+        return f
+
+
+@dataclass(frozen=True)
+class PathTraceOutput:
+    """Images of one path-traced view (top row first).
+
+    Attributes:
+        radiance: (H, W, 3) float32 linear RGB, mean over the samples (before exposure).
+        albedo: (H, W, 3) float32 mean first-hit base colour (denoiser auxiliary; the clipped
+            environment radiance where nothing is hit).
+        normal: (H, W, 3) float32 unit mean first-hit shading normal, world frame, facing the
+            camera (0 where nothing is hit).
+        depth: (H, W) float32 z-depth in m of the hit through the pixel centre, 0 = none.
+        instance_ids: (H, W) int32 instance id hit through the pixel centre, 0 = background.
+        rays: number of rays cast (camera, bounce and shadow rays).
+    """
+
+    radiance: npt.NDArray[np.float32]
+    albedo: npt.NDArray[np.float32]
+    normal: npt.NDArray[np.float32]
+    depth: npt.NDArray[np.float32]
+    instance_ids: npt.NDArray[np.int32]
+    rays: int = 0
+
+
+class PathScene:
+    """Immutable path-traced scene, built once (Embree geometry shared with the ray scene's
+    loader, per-corner shading normals), then rendered for any number of views.
+
+    Args:
+        meshes: the meshes (copied at construction).
+        poses: (N, 4, 4) float64 poses X_WO of the meshes in the world.
+        instance_ids: per mesh, the id reported in the instance pass (>= 0; 0 = background).
+        materials: per mesh, one :class:`PbrMaterial` per mesh material slot
+            (``max(1, len(mesh.materials))`` entries; face f uses slot ``mesh.face_materials[f]``).
+        lights: area lights.
+        environment: the dome.
+
+    Raises:
+        InvalidArgumentError: mismatched lengths, bad pose, negative id, wrong material count,
+            an invalid material, light or environment (the message names the setting).
+    """
+
+    def __init__(
+        self,
+        meshes: Sequence[Mesh],
+        poses: npt.ArrayLike,
+        instance_ids: Sequence[int],
+        materials: Sequence[Sequence[PbrMaterial]],
+        lights: Sequence[AreaLight] = (),
+        environment: Environment | None = None,
+    ) -> None:
+        env = environment if environment is not None else Environment()
+        mesh_list = list(meshes)
+        P = np.asarray(poses, dtype=np.float64)
+        if len(mesh_list) == 0:
+            P = np.zeros((0, 4, 4))
+        mats = [[_as_material(m, i, k) for k, m in enumerate(ms)] for i, ms in enumerate(materials)]
+        self._lights = tuple(lights)
+        self._environment = env
+        self._scene = _core.PathScene(
+            mesh_list,
+            P,
+            [int(i) for i in instance_ids],
+            [[m.to_core() for m in ms] for ms in mats],
+            [_as_light(a, i).to_core() for i, a in enumerate(self._lights)],
+            env.to_core(),
+        )
+
+    @classmethod
+    def _wrap(
+        cls, scene: _core.PathScene, lights: tuple[AreaLight, ...], env: Environment
+    ) -> PathScene:
+        self = cls.__new__(cls)
+        self._scene = scene
+        self._lights = lights
+        self._environment = env
+        return self
+
+    @property
+    def lights(self) -> tuple[AreaLight, ...]:
+        return self._lights
+
+    @property
+    def environment(self) -> Environment:
+        return self._environment
+
+    @property
+    def num_triangles(self) -> int:
+        return int(self._scene.num_triangles)
+
+    def with_lighting(
+        self, lights: Sequence[AreaLight], environment: Environment | None = None
+    ) -> PathScene:
+        """A scene sharing this one's geometry (no copy, cheap) with other lights and
+        environment (default: the uniform default environment)."""
+        env = environment if environment is not None else Environment()
+        lights_t = tuple(lights)
+        core = self._scene.with_lighting(
+            [_as_light(a, i).to_core() for i, a in enumerate(lights_t)], env.to_core()
+        )
+        return PathScene._wrap(core, lights_t, env)
+
+    def render(self, view: CameraView, options: PathTraceOptions | None = None) -> PathTraceOutput:
+        """Path-trace one view (GIL released; ``options.num_threads`` threads)."""
+        opts = options if options is not None else PathTraceOptions()
+        if not isinstance(view, CameraView):
+            raise TypeError(f"view must be a CameraView, got {type(view).__name__}")
+        d = self._scene.render(view.K.to_core(), view.X_WC, opts.to_core())
+        return PathTraceOutput(
+            radiance=d["radiance"],
+            albedo=d["albedo"],
+            normal=d["normal"],
+            depth=d["depth"],
+            instance_ids=d["instance_ids"],
+            rays=int(d["rays"]),
+        )
+
+
+def _as_material(m: object, i: int, k: int) -> PbrMaterial:
+    if not isinstance(m, PbrMaterial):
+        raise TypeError(
+            f"PathScene: materials[{i}][{k}] must be a PbrMaterial, got {type(m).__name__}"
+        )
+    return m
+
+
+def _as_light(a: object, i: int) -> AreaLight:
+    if not isinstance(a, AreaLight):
+        raise TypeError(f"PathScene: lights[{i}] must be an AreaLight, got {type(a).__name__}")
+    return a
+
+
+def develop(radiance: npt.ArrayLike, film: FilmOptions | None = None) -> npt.NDArray[np.uint8]:
+    """(H, W, 3) linear radiance -> (H, W, 3) uint8 sRGB (see :class:`FilmOptions`).
+
+    Non-finite values become 0. Deterministic for any ``film.num_threads``.
+    """
+    f = film if film is not None else FilmOptions()
+    a = np.ascontiguousarray(radiance, dtype=np.float32)
+    return _core.develop_radiance(a, f.to_core())

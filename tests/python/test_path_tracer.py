@@ -1,0 +1,424 @@
+"""The path tracer (mgn.render.path) against analytic radiometry and the raster passes.
+
+Every expected value is derived here from first principles (furnace tests, the irradiance of a
+rect light by quadrature, Fresnel transmission of a pane), not taken from a previous run.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mgn.errors import InvalidArgumentError
+from mgn.geometry import make_box, make_sphere, mesh_from_arrays
+from mgn.render import CameraView, Intrinsics, look_at
+from mgn.render.path import (
+    AreaLight,
+    Environment,
+    FilmOptions,
+    PathScene,
+    PathTraceOptions,
+    PbrMaterial,
+    develop,
+)
+
+LAMBERT_WHITE = PbrMaterial(base_color=(1.0, 1.0, 1.0), ior=1.0, roughness=1.0)
+
+
+def camera(eye, target, size: int, fov_deg: float, up=(0.0, 0.0, 1.0)) -> CameraView:
+    f = 0.5 * size / math.tan(math.radians(fov_deg) / 2)
+    K = Intrinsics(size, size, f, f, size / 2, size / 2)
+    return CameraView(
+        K, look_at(np.asarray(eye, float), np.asarray(target, float), np.asarray(up, float))
+    )
+
+
+def quad(size: float, z: float = 0.0):
+    """Square of side `size` in the plane z, normal +z (CCW seen from +z)."""
+    h = size / 2
+    v = [[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]]
+    return mesh_from_arrays(v, [[0, 1, 2], [0, 2, 3]])
+
+
+def uniform(L: float) -> Environment:
+    return Environment(kind="uniform", color=(1.0, 1.0, 1.0), intensity=L)
+
+
+def interior(mask: np.ndarray) -> np.ndarray:
+    """Pixels of `mask` whose 8 neighbours are in it too (no silhouette pixels, which mix the
+    object and what is behind it)."""
+    m = mask.copy()
+    p = np.pad(mask, 1)
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            m &= p[1 + di : 1 + di + mask.shape[0], 1 + dj : 1 + dj + mask.shape[1]]
+    return m
+
+
+BLACK = Environment(kind="uniform", color=(0.0, 0.0, 0.0), intensity=0.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Furnace tests.
+
+
+@pytest.mark.parametrize("albedo", [1.0, 0.5])
+def test_exterior_furnace_lambert_sphere_shows_albedo_times_L(albedo):
+    """A convex Lambertian sphere of albedo a in a uniform dome L: every path leaves after one
+    bounce and sees L, so the sphere shows a * L (and the background L)."""
+    L = 0.8
+    mat = PbrMaterial(base_color=(albedo,) * 3, ior=1.0)
+    # Fine tessellation: smooth shading normals differ little from the facets (a cosine lobe
+    # around the shading normal loses the directions below the facet).
+    scene = PathScene([make_sphere(0.5, 128, 64)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
+    out = scene.render(camera((0, -3, 0.5), (0, 0, 0), 24, 25), PathTraceOptions(spp=8, seed=3))
+    on = interior(out.instance_ids == 1)
+    off = interior(out.instance_ids == 0)
+    assert on.sum() > 150 and off.sum() > 50
+    np.testing.assert_allclose(out.radiance[on], albedo * L, rtol=3e-3)
+    np.testing.assert_allclose(out.radiance[off], L, rtol=1e-6)
+    # No bounce allowed: the sphere is black, the dome still seen directly.
+    out0 = scene.render(
+        camera((0, -3, 0.5), (0, 0, 0), 24, 25), PathTraceOptions(spp=2, max_bounces=0)
+    )
+    assert np.all(out0.radiance[interior(out0.instance_ids == 1)] == 0)
+    np.testing.assert_allclose(out0.radiance[interior(out0.instance_ids == 0)], L, rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("max_bounces", "rr_depth"), [(0, 100), (1, 100), (2, 100), (3, 100), (200, 1)]
+)
+def test_interior_furnace_closed_emitting_sphere(max_bounces, rr_depth):
+    """Inside a closed sphere whose inner surface emits E and reflects with albedo a (Lambert),
+    every point receives the same radiance from every direction, so a path of k segments after
+    the camera ray collects E (1 + a + ... + a^k) = E (1 - a^(k+1)) / (1 - a); with unlimited
+    bounces E / (1 - a) (here with Russian roulette from the first bounce: unbiased)."""
+    E, a = 0.6, 0.5
+    mat = PbrMaterial(base_color=(a,) * 3, ior=1.0, emission=(E,) * 3)
+    inner = make_sphere(1.0, 256, 128).flipped()  # normals (front sides) face the centre
+    scene = PathScene([inner], np.eye(4)[None], [1], [[mat]], (), BLACK)
+    view = camera((0, 0, 0), (1, 0.2, 0.1), 16, 90)
+    out = scene.render(view, PathTraceOptions(spp=64, max_bounces=max_bounces, rr_depth=rr_depth))
+    expected = E * (1 - a ** (max_bounces + 1)) / (1 - a)
+    mean = out.radiance.mean()
+    if rr_depth >= max_bounces:  # no roulette: every sample is exact
+        # A few directions sampled about a smooth shading normal fall below the facet and are
+        # lost: the mean is exact to 0.1 %, single pixels to 1 %.
+        assert mean == pytest.approx(expected, rel=1e-3)
+        np.testing.assert_allclose(out.radiance, expected, rtol=1e-2)
+    else:
+        sem = out.radiance[..., 1].std() / math.sqrt(out.radiance[..., 1].size)
+        assert abs(mean - expected) < max(4 * sem, 0.01 * expected), (mean, expected, sem)
+
+
+@pytest.mark.parametrize("metallic", [0.0, 1.0])
+@pytest.mark.parametrize("roughness", [0.1, 0.5, 1.0])
+def test_ggx_sphere_in_furnace_gains_no_energy(metallic, roughness):
+    """A white GGX sphere (any roughness, dielectric or metal) in a uniform dome L never shows
+    more than L (single-scattering microfacets only lose energy), and not much less than L for
+    a white dielectric (Lambert under the coat) or a smooth metal."""
+    L = 1.0
+    mat = PbrMaterial(base_color=(1.0, 1.0, 1.0), metallic=metallic, roughness=roughness, ior=1.5)
+    scene = PathScene([make_sphere(0.5, 64, 32)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
+    out = scene.render(camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=32, seed=5))
+    v = out.radiance[interior(out.instance_ids == 1)][:, 1]
+    sem = v.std() / math.sqrt(v.size)
+    assert v.mean() <= L + 4 * sem + 1e-4, (v.mean(), sem)
+    # Per pixel: no pixel clearly above L either.
+    assert np.quantile(v, 0.9) <= L * 1.05
+    # Single-scattering GGX at alpha = 1 keeps only ~30-50 % (e.g. E(mu=1) = 0.31 by quadrature
+    # of D G2 / (4 cos_o cos_i) cos_i): the rough metal is darker, but not black.
+    lower = 0.3 if metallic == 1.0 and roughness == 1.0 else 0.85
+    assert v.mean() >= lower * L
+
+
+# ---------------------------------------------------------------------------------------------
+# Direct lighting.
+
+
+def rect_irradiance(p, centre, size, Le, n=400):
+    """Irradiance (W m^-2 per unit radiance colour) at point p (normal +z) from a horizontal rect
+    light centred at `centre`, facing down, by midpoint quadrature of Le cos_s cos_l / r^2."""
+    h = size / 2
+    g = (np.arange(n) + 0.5) / n * size - h
+    X, Y = np.meshgrid(g + centre[0], g + centre[1])
+    d = np.stack([X - p[0], Y - p[1], np.full_like(X, centre[2] - p[2])], -1)
+    r2 = (d**2).sum(-1)
+    cos_s = d[..., 2] / np.sqrt(r2)
+    cos_l = cos_s  # parallel planes
+    return Le * (cos_s * cos_l / r2).sum() * (size / n) ** 2
+
+
+def test_lambert_plane_under_rect_light_matches_analytic_irradiance():
+    """A Lambertian plane of albedo a under a small rect light of radiance Le shows
+    a / pi * E(p), E from the radiometric integral (direct lighting only)."""
+    a, Le, size, height = 0.5, 20.0, 0.1, 0.5
+    plane = quad(4.0)
+    mat = PbrMaterial(base_color=(a,) * 3, ior=1.0)
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down (+z_L = -z_W)
+    X_WL[:3, 3] = (0.0, 0.0, height)
+    light = AreaLight(X_WL, "rect", (size, size), (1.0, 1.0, 1.0), Le)
+    scene = PathScene([plane], np.eye(4)[None], [1], [[mat]], [light], BLACK)
+    view = camera((0.35, 0.0, 1.5), (0.35, 0.0, 0.0), 32, 60, up=(0, 1, 0))
+    out = scene.render(view, PathTraceOptions(spp=64, max_bounces=1, seed=1))
+    # Pixel centre rays -> points on the plane.
+    K = view.K
+    u, v = np.meshgrid(np.arange(K.width) + 0.5, np.arange(K.height) + 0.5)
+    d_C = np.stack([(u - K.cx) / K.fx, (v - K.cy) / K.fy, np.ones_like(u)], -1)
+    d_W = d_C @ view.X_WC[:3, :3].T
+    t = -view.X_WC[2, 3] / d_W[..., 2]
+    P = view.X_WC[:3, 3] + t[..., None] * d_W
+    checked = 0
+    for i, j in [(16, 16), (16, 4), (16, 28), (4, 16), (28, 28), (2, 2)]:
+        E = rect_irradiance(P[i, j], (0.0, 0.0, height), size, Le)
+        expected = a / math.pi * E
+        got = out.radiance[i, j].mean()
+        assert got == pytest.approx(expected, rel=0.02), ((i, j), got, expected)
+        checked += 1
+    assert checked == 6
+    # Falloff sanity: the brightest pixel is the one under the light (x = 0).
+    col = np.argmax(out.radiance[16, :, 1])
+    assert abs(P[16, col, 0]) < 0.06
+
+
+def test_disc_light_and_soft_shadow():
+    """A disc light over a plane with a small blocker casts a shadow with an umbra and a
+    penumbra (soft shadow): values strictly between the umbra and the lit plane exist."""
+    plane = quad(4.0)
+    blocker = make_box([0.1, 0.1, 0.02])
+    Xb = np.eye(4)
+    Xb[:3, 3] = (0, 0, 0.25)
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])
+    X_WL[:3, 3] = (0.0, 0.0, 0.5)
+    light = AreaLight(X_WL, "disc", (0.08, 0.08), (1, 1, 1), 20.0)
+    mat = PbrMaterial(base_color=(0.5,) * 3, ior=1.0)
+    scene = PathScene(
+        [plane, blocker], np.stack([np.eye(4), Xb]), [1, 2], [[mat], [mat]], [light], BLACK
+    )
+    # Look at the shadow from below the blocker's height, from the side.
+    view = camera((0.0, -0.6, 0.2), (0.0, 0.0, 0.0), 48, 60)
+    out = scene.render(view, PathTraceOptions(spp=64, max_bounces=1))
+    row = out.radiance[..., 1][out.instance_ids == 1]
+    lit = np.quantile(row, 0.95)
+    dark = row.min()
+    assert dark < 0.2 * lit
+    mid = ((row > dark + 0.2 * (lit - dark)) & (row < dark + 0.8 * (lit - dark))).sum()
+    assert mid >= 10  # penumbra pixels
+
+
+# ---------------------------------------------------------------------------------------------
+# Dielectrics.
+
+
+@pytest.mark.parametrize("ior", [1.5, 2.5])
+def test_glass_pane_at_normal_incidence_transmits_fresnel_loss(ior):
+    """A clear pane (two parallel faces) in front of an emitter seen at normal incidence:
+    R = ((n-1)/(n+1))^2 per surface; one pass through both faces transmits (1-R)^2; with all
+    internal reflections (1-R)^2 / (1-R^2) = (1-R)/(1+R)."""
+    Le = 1.0
+    R = ((ior - 1) / (ior + 1)) ** 2
+    pane = make_box([2.0, 2.0, 0.02])
+    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
+    emitter = quad(4.0, z=-0.5)
+    black_emitter = PbrMaterial(base_color=(0, 0, 0), ior=1.0, emission=(Le,) * 3)
+    scene = PathScene([pane, emitter], np.stack([np.eye(4), np.eye(4)]), [1, 2],
+                      [[glass], [black_emitter]], (), BLACK)  # fmt: skip
+    view = camera((0, 0, 1.0), (0, 0, 0), 32, 10, up=(0, 1, 0))
+    one_pass = scene.render(view, PathTraceOptions(spp=64, max_bounces=2, rr_depth=100)).radiance
+    full = scene.render(view, PathTraceOptions(spp=64, max_bounces=40, rr_depth=100)).radiance
+    n = one_pass[..., 0].size * 64
+    tol = 4 * math.sqrt(R * (1 - R) / n) + 1e-4
+    assert one_pass.mean() == pytest.approx(Le * (1 - R) ** 2, abs=tol)
+    assert full.mean() == pytest.approx(Le * (1 - R) / (1 + R), abs=tol)
+
+
+def test_glass_sphere_total_internal_reflection_keeps_energy():
+    """A clear glass sphere in a uniform dome L reflects and refracts without absorption: every
+    path eventually escapes (total internal reflection included), so the sphere shows L."""
+    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=1.5)
+    scene = PathScene([make_sphere(0.5, 64, 32)], np.eye(4)[None], [1], [[glass]], (), uniform(0.7))
+    out = scene.render(
+        camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=16, max_bounces=64, rr_depth=64)
+    )
+    np.testing.assert_allclose(out.radiance[interior(out.instance_ids == 1)], 0.7, rtol=1e-3)
+
+
+# ---------------------------------------------------------------------------------------------
+# Labels against the raster renderer, determinism.
+
+
+def tote_scene_items(n_objects: int = 6):
+    from mgn.io.model_folder import object_mesh
+    from mgn.objects import builtin_objects
+    from mgn.render import tote_mesh
+
+    items = []
+    for k, spec in enumerate(builtin_objects()[:n_objects]):
+        mesh = object_mesh(spec)
+        lo = np.asarray(mesh.bounds)[0]
+        X = np.eye(4)
+        yaw = 0.7 * k
+        X[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
+        X[:3, 3] = (-0.12 + 0.09 * (k % 3), -0.07 + 0.12 * (k // 3), -lo[2])
+        items.append((mesh, X, k + 1))
+    items.append((tote_mesh(), np.eye(4), 0))
+    return items
+
+
+def path_scene(items, lights=(), env=None):
+    meshes = [m for m, _, _ in items]
+    mats = [[PbrMaterial.from_material(x) for x in (m.materials or [None])] if m.materials
+            else [PbrMaterial()] for m in meshes]  # fmt: skip
+    return PathScene(meshes, np.stack([X for _, X, _ in items]), [i for _, _, i in items], mats,
+                     lights, env)  # fmt: skip
+
+
+def test_primary_ids_and_depth_agree_with_raster_renderer():
+    from mgn.render import Instance, Renderer, mgn_rig
+
+    items = tote_scene_items()
+    K = Intrinsics.mgn_synthetic().scaled(0.12)
+    poses, _ = mgn_rig(7, (0.0, 0.0, 0.0))
+    r = Renderer(K.width, K.height)
+    r.set_instances([Instance(r.add_mesh(m), X, i) for m, X, i in items])
+    scene = path_scene(items)
+    for v in (0, 17):
+        view = CameraView(K, poses[v])
+        ras = r.render(view, rgb=False)
+        out = scene.render(view, PathTraceOptions(spp=1, max_bounces=0))
+        agree = (ras.instance_ids == out.instance_ids).mean()
+        assert agree >= 0.999, agree
+        assert (out.instance_ids > 0).mean() > 0.05
+        both = (ras.depth > 0) & (out.depth > 0) & (ras.instance_ids == out.instance_ids)
+        assert ((ras.depth > 0) == (out.depth > 0)).mean() >= 0.999
+        assert both.mean() > 0.3
+        assert np.abs(ras.depth[both] - out.depth[both]).max() < 1e-3
+
+
+def test_same_seed_same_bytes_for_one_and_two_threads():
+    sphere = make_sphere(0.3, 32, 16)
+    box = make_box([0.3, 0.3, 0.3])
+    floor = quad(3.0, z=-0.3)
+    Xs, Xb = np.eye(4), np.eye(4)
+    Xs[:3, 3] = (-0.35, 0, 0)
+    Xb[:3, 3] = (0.35, 0, -0.15)
+    mats = [[PbrMaterial(transmission=1.0, roughness=0.0)],
+            [PbrMaterial(base_color=(0.9, 0.6, 0.2), metallic=1.0, roughness=0.3)],
+            [PbrMaterial(base_color=(0.5, 0.5, 0.5))]]  # fmt: skip
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])
+    X_WL[:3, 3] = (0, 0, 1.2)
+    scene = PathScene([sphere, box, floor], np.stack([Xs, Xb, np.eye(4)]), [1, 2, 3], mats,
+                      [AreaLight(X_WL, "rect", (0.4, 0.4), intensity=15)],
+                      Environment(kind="sky", intensity=0.5))  # fmt: skip
+    view = camera((0, -2.0, 1.0), (0, 0, 0), 40, 50)
+    outs = [
+        scene.render(
+            view,
+            PathTraceOptions(spp=4, seed=9, view_index=2, num_threads=t, aperture_radius=0.01),
+        )
+        for t in (1, 2)
+    ]
+    for name in ("radiance", "albedo", "normal", "depth", "instance_ids"):
+        assert getattr(outs[0], name).tobytes() == getattr(outs[1], name).tobytes(), name
+    film = [FilmOptions(shot_noise=0.05, read_noise=0.01, seed=4, num_threads=t) for t in (1, 2)]
+    assert (
+        develop(outs[0].radiance, film[0]).tobytes() == develop(outs[1].radiance, film[1]).tobytes()
+    )
+    other = scene.render(view, PathTraceOptions(spp=4, seed=10, view_index=2))
+    assert other.radiance.tobytes() != outs[0].radiance.tobytes()
+    assert np.all(np.isfinite(outs[0].radiance))
+    np.testing.assert_allclose(
+        np.linalg.norm(outs[0].normal[outs[0].instance_ids > 0], axis=-1), 1, atol=1e-4
+    )
+
+
+def test_with_lighting_shares_geometry_and_changes_light():
+    scene = PathScene(
+        [make_sphere(0.5, 24, 12)], np.eye(4)[None], [1], [[LAMBERT_WHITE]], (), uniform(1.0)
+    )
+    brighter = scene.with_lighting([], uniform(2.0))
+    view = camera((0, -3, 0), (0, 0, 0), 16, 25)
+    a = scene.render(view, PathTraceOptions(spp=2)).radiance
+    b = brighter.render(view, PathTraceOptions(spp=2)).radiance
+    np.testing.assert_allclose(b, 2 * a, rtol=1e-5)
+    assert brighter.num_triangles == scene.num_triangles
+
+
+# ---------------------------------------------------------------------------------------------
+# develop().
+
+
+def srgb(x):
+    x = np.asarray(x, float)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def test_develop_tone_curves_and_exposure():
+    rad = np.array([[[0.0, 0.18, 1.0], [0.5, 4.0, np.nan]]], np.float32)
+    lin = develop(rad, FilmOptions(tone="linear"))
+    expected = np.round(srgb(np.clip(np.nan_to_num(rad), 0, 1)) * 255)
+    np.testing.assert_array_equal(lin, expected)
+    film = develop(rad, FilmOptions(tone="filmic", exposure=1.0))
+    expected = np.round(srgb(1 - np.exp(-2 * np.nan_to_num(rad))) * 255)
+    np.testing.assert_array_equal(film, expected)
+    assert film.dtype == np.uint8 and film.shape == (1, 2, 3)
+
+
+def test_develop_sensor_noise_statistics_and_seed():
+    rad = np.full((64, 64, 3), 0.25, np.float32)
+    clean = develop(rad, FilmOptions(tone="linear"))
+    noisy = develop(rad, FilmOptions(tone="linear", read_noise=0.02, seed=1))
+    again = develop(rad, FilmOptions(tone="linear", read_noise=0.02, seed=1))
+    other = develop(rad, FilmOptions(tone="linear", read_noise=0.02, seed=2))
+    assert noisy.tobytes() == again.tobytes() and noisy.tobytes() != other.tobytes()
+    assert np.all(clean == clean[0, 0, 0])
+    # Read noise of std 0.02 around 0.25 in linear -> sRGB slope there * 0.02 * 255 counts.
+    slope = (srgb(0.26) - srgb(0.24)) / 0.02
+    std = noisy.astype(float).std()
+    assert std == pytest.approx(slope * 0.02 * 255, rel=0.15)
+
+
+# ---------------------------------------------------------------------------------------------
+# Errors.
+
+
+def test_bad_parameters_name_the_setting():
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.spp must be >= 1, got 0"):
+        PathTraceOptions(spp=0)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.max_bounces"):
+        PathTraceOptions(max_bounces=-1)
+    with pytest.raises(
+        InvalidArgumentError, match=r"PbrMaterial.roughness must be in \[0, 1\], got -0.1"
+    ):
+        PbrMaterial(roughness=-0.1)
+    with pytest.raises(InvalidArgumentError, match=r"PbrMaterial.roughness"):
+        PbrMaterial(roughness=1.5)
+    with pytest.raises(InvalidArgumentError, match=r"PbrMaterial.metallic"):
+        PbrMaterial(metallic=2.0)
+    with pytest.raises(InvalidArgumentError, match=r"PbrMaterial.ior"):
+        PbrMaterial(ior=0.5)
+    X = np.eye(4)
+    X[0, 3] = np.nan
+    with pytest.raises(InvalidArgumentError, match=r"AreaLight.X_WL"):
+        AreaLight(X)
+    with pytest.raises(InvalidArgumentError, match=r"AreaLight.intensity must be finite and >= 0"):
+        AreaLight(np.eye(4), intensity=-1.0)
+    with pytest.raises(InvalidArgumentError, match=r"AreaLight.shape"):
+        AreaLight(np.eye(4), shape="triangle")
+    with pytest.raises(InvalidArgumentError, match=r"Environment.kind"):
+        Environment(kind="hdri")
+    with pytest.raises(InvalidArgumentError, match=r"Environment.intensity"):
+        Environment(intensity=-2)
+    with pytest.raises(InvalidArgumentError, match=r"FilmOptions.tone"):
+        FilmOptions(tone="aces")
+    with pytest.raises(InvalidArgumentError, match=r"FilmOptions.shot_noise"):
+        FilmOptions(shot_noise=-1)
+    sphere = make_sphere(0.5, 16, 8)
+    with pytest.raises(InvalidArgumentError, match=r"geometry 0 .* has 2 materials; expected"):
+        PathScene([sphere], np.eye(4)[None], [1], [[PbrMaterial(), PbrMaterial()]])
+    with pytest.raises(InvalidArgumentError, match=r"instance id -3"):
+        PathScene([sphere], np.eye(4)[None], [-3], [[PbrMaterial()]])
+    with pytest.raises(InvalidArgumentError, match=r"develop: radiance"):
+        develop(np.zeros((4, 4)))
