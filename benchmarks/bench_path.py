@@ -530,57 +530,85 @@ def flip_at(rows: list[dict[str, Any]], seconds: float) -> tuple[float, str]:
     return float(np.exp(np.interp(x, t, f))), "interpolated"
 
 
+def _flip_cell(rows: list[dict[str, Any]], seconds: float) -> str:
+    if len(rows) < 2:
+        return "—"
+    val, how = flip_at(rows, seconds)
+    if np.isnan(val):
+        return "n/a (slower)"
+    return f"≤ {val:.4f}" if how.startswith("beyond") else f"{val:.4f}"
+
+
 def target_notes(ev: dict[str, Any]) -> list[str]:
-    """The issue's target, checked at the study's size: each denoised mgn point against what
-    Cycles (raw or with OIDN, whichever is better) and Mitsuba 3 reach in 10x its time; then
-    mgn's measured time at 1200 x 1200."""
-    notes = []
+    """The issue's target, checked at the study's size: each denoised mgn point against the
+    FLIP each peer configuration reaches in the same time and in 10x that time (log-log
+    interpolation between its measured sample counts; "≤ x" = beyond its slowest point, where x
+    is its FLIP at that point, an upper bound; "n/a" = even its 1 spp is slower); then the
+    measured times at 1200 x 1200."""
     table = ev["table"]
     mgn_d = sorted(
         (r for r in table if r["engine"] == "mgn" and r["denoise"]), key=lambda r: r["spp"]
     )
-    peers = {}
+    peers: dict[str, list[dict[str, Any]]] = {}
     for r in table:
         if r["engine"] != "mgn":
             peers.setdefault(r["label"], []).append(r)
-    for m in mgn_d:
-        parts = []
-        for label, rows in sorted(peers.items()):
-            if len(rows) < 2:
-                continue
-            for factor in (1.0, 10.0):
-                val, how = flip_at(rows, factor * m["seconds"])
-                txt = "n/a" if np.isnan(val) else f"{val:.4f}"
-                parts.append(f"{label} in {factor:g}x: {txt} ({how})")
-        notes.append(
-            f"- target check: mgn {m['spp']} spp + OIDN, {m['seconds']:.2f} s, FLIP "
-            f"{m['flip']:.4f}; " + "; ".join(parts)
-        )
+    labels = sorted(peers)
+    lines = []
+    if mgn_d and labels:
+        lines += [
+            "",
+            "Target check (FLIP, lower is better): each denoised mgn point against what each "
+            "peer reaches in the same time (1×) and in 10× that time, interpolated between its "
+            "measured sample counts (≤ x: beyond its slowest point, x is an upper bound; n/a: "
+            "its 1 spp is already slower).",
+            "",
+            "| mgn + OIDN | s/view | FLIP | "
+            + " | ".join(f"{lab} 1× | {lab} 10×" for lab in labels)
+            + " |",
+            "|---|---|---|" + "---|---|" * len(labels),
+        ]
+        for m in mgn_d:
+            cells = []
+            for lab in labels:
+                cells += [
+                    _flip_cell(peers[lab], m["seconds"]),
+                    _flip_cell(peers[lab], 10 * m["seconds"]),
+                ]
+            lines.append(
+                f"| {m['spp']} spp | {m['seconds']:.2f} | {m['flip']:.4f} | "
+                + " | ".join(cells)
+                + " |"
+            )
+        lines.append("")
     tgt = ev.get("target") or {}
     r = tgt.get("mgn")
     if isinstance(r, dict):
         for c in r["configs"]:
             if c["denoise"]:
-                notes.append(
-                    f"- 1200x1200: mgn {c['spp']} spp + OIDN took {np.median(c['wall']):.2f} s per "
-                    f"view (load {np.mean(c['load1']):.1f}; target <= 3 s on 2 idle cores), "
-                    f"without OIDN "
-                    + ", ".join(
-                        f"{np.median(d['wall']):.2f} s"
-                        for d in r["configs"]
-                        if d["spp"] == c["spp"] and not d["denoise"]
-                    )
+                raw = [
+                    f"{np.median(d['wall']):.2f} s"
+                    for d in r["configs"]
+                    if d["spp"] == c["spp"] and not d["denoise"]
+                ]
+                lines.append(
+                    f"- 1200x1200: mgn {c['spp']} spp + OIDN took {np.median(c['wall']):.2f} s "
+                    f"per view (load {np.mean(c['load1']):.1f}, {np.median(c['cpu']):.1f} CPU-s; "
+                    f"target <= 3 s on 2 idle cores); without OIDN {', '.join(raw)}"
                 )
     elif r:
-        notes.append(f"- 1200x1200 mgn: {r}")
+        lines.append(f"- 1200x1200 mgn: {r}")
     r = tgt.get("cycles")
     if isinstance(r, dict):
         for c in r["configs"]:
-            notes.append(
+            lines.append(
                 f"- 1200x1200: Cycles {c['spp']} spp{' + OIDN' if c['denoise'] else ''} took "
-                f"{np.median(c['wall']):.2f} s per view (load {np.mean(c['load1']):.1f})"
+                f"{np.median(c['wall']):.2f} s per view (load {np.mean(c['load1']):.1f}, "
+                f"{np.median(c['cpu']):.1f} CPU-s)"
             )
-    return notes
+    elif r:
+        lines.append(f"- 1200x1200 Cycles: {r}")
+    return lines
 
 
 def rows_for_runner(ev: dict[str, Any], width: int) -> list[Row]:
@@ -620,5 +648,17 @@ def rows_for_runner(ev: dict[str, Any], width: int) -> list[Row]:
     return rows
 
 
+def report_main(json_path: Path) -> int:
+    """Rewrites path_results.md and path.png next to a path_results.json."""
+    ev = json.loads(json_path.read_text())
+    cfg = ev["config"]
+    meta = describe_results(ev, cfg["width"], cfg["ref_spp"])
+    json_path.with_name("path_results.md").write_text(markdown(ev, meta))
+    plot(ev, json_path.with_name("path.png"), meta["title"])
+    return 0
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["--report"]:
+        sys.exit(report_main(Path(sys.argv[2])))
     sys.exit(child_main(sys.argv[1:]))

@@ -121,12 +121,12 @@ class SceneDesc:
 # The scene (mgn side)
 
 
-def drop(path: Path) -> Path:
+def drop(path: Path, names: tuple[str, ...] = OBJECT_NAMES, seed: int = DROP_SEED) -> Path:
     """Drop the benchmark objects (fixed seed) and write the scene JSON to ``path``."""
     from mgn.scene import compose_objects, drop_scene
 
-    objects = compose_objects(names=list(OBJECT_NAMES))
-    scene = drop_scene(objects, seed=DROP_SEED)
+    objects = compose_objects(names=list(names))
+    scene = drop_scene(objects, seed=seed)
     return scene.to_json(path)
 
 
