@@ -23,6 +23,7 @@ alternated as in common.py); the 1-minute load average is recorded beside every 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import pickle
@@ -80,6 +81,8 @@ def _engine_mgn(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Ca
         opts = mpath.PathTraceOptions(
             spp=spp, max_bounces=desc.max_bounces, seed=seed, num_threads=THREADS
         )
+        if hasattr(opts, "clamp_indirect"):  # unclamped, as the peers are set up
+            opts = dataclasses.replace(opts, clamp_indirect=0.0)
         out = scene.render(view, opts)
         if not denoise:
             return out.radiance
@@ -287,6 +290,7 @@ def evaluate(
                     "spp": cfg["spp"],
                     "denoise": cfg["denoise"],
                     "seconds": float(np.median(cfg["wall"])),
+                    "cpu_seconds": float(np.median(cfg["cpu"])),
                     "cores_used": float(np.median(np.asarray(cfg["cpu"]) / cfg["wall"])),
                     "load1": float(np.mean(cfg["load1"])),
                     "flip": flip_error(ref_t, test),
@@ -322,17 +326,17 @@ def plot(ev: dict[str, Any], path: Path, title: str) -> bool:
     labels = sorted({r["label"] for r in ev["table"]})
     for label in labels:
         rows = sorted((r for r in ev["table"] if r["label"] == label), key=lambda r: r["spp"])
-        t = [r["seconds"] for r in rows]
+        t = [r["cpu_seconds"] for r in rows]
         style = "-" if "OIDN" in label else "--"
         for ax, key in zip(axes, ("flip", "psnr"), strict=True):
             ax.plot(t, [r[key] for r in rows], style, marker="o", label=label)
             for r in rows:
-                ax.annotate(str(r["spp"]), (r["seconds"], r[key]), fontsize=7)
+                ax.annotate(str(r["spp"]), (r["cpu_seconds"], r[key]), fontsize=7)
     for ax, name in zip(
         axes, ("FLIP (lower is better)", "PSNR dB (higher is better)"), strict=True
     ):
         ax.set_xscale("log")
-        ax.set_xlabel("seconds per view (2 threads, shared machine)")
+        ax.set_xlabel("CPU seconds per view (2 threads; ~2x the wall time on 2 idle cores)")
         ax.set_ylabel(name)
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_yscale("log")
@@ -346,17 +350,19 @@ def plot(ev: dict[str, Any], path: Path, title: str) -> bool:
 
 def markdown(ev: dict[str, Any], meta: dict[str, Any]) -> str:
     lines = [
-        "## Path tracing (`--only path`)",
+        "## Path tracing (`python -m benchmarks --only path`)",
         "",
         meta["intro"],
         "",
-        "| engine | spp | s/view | load (1 min) | cores used | FLIP | PSNR dB | peak RSS MiB |",
-        "|---|---|---|---|---|---|---|---|",
+        "| engine | spp | s/view | CPU-s/view | load (1 min) | cores used | FLIP | PSNR dB "
+        "| peak RSS MiB |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in sorted(ev["table"], key=lambda r: (r["label"], r["spp"])):
         lines.append(
-            f"| {r['label']} | {r['spp']} | {r['seconds']:.2f} | {r['load1']:.1f} | "
-            f"{r['cores_used']:.2f} | {r['flip']:.4f} | {r['psnr']:.1f} | {r['peak_mib']:.0f} |"
+            f"| {r['label']} | {r['spp']} | {r['seconds']:.2f} | {r['cpu_seconds']:.2f} | "
+            f"{r['load1']:.1f} | {r['cores_used']:.2f} | {r['flip']:.4f} | {r['psnr']:.1f} | "
+            f"{r['peak_mib']:.0f} |"
         )
     lines += ["", *meta["notes"], ""]
     return "\n".join(lines)
@@ -516,15 +522,16 @@ def describe_results(ev: dict[str, Any], width: int, ref_spp: int) -> dict[str, 
 def flip_at(rows: list[dict[str, Any]], seconds: float) -> tuple[float, str]:
     """FLIP of one engine configuration at a given time per view, interpolated log-log between
     the measured sample counts; ("", "beyond ...") when outside the measured range."""
-    rows = sorted(rows, key=lambda r: r["seconds"])
-    t = np.log([r["seconds"] for r in rows])
+    rows = sorted(rows, key=lambda r: r["cpu_seconds"])
+    t = np.log([r["cpu_seconds"] for r in rows])
     f = np.log([r["flip"] for r in rows])
     x = float(np.log(seconds))
     if x < t[0]:
-        return float("nan"), f"below its fastest point ({rows[0]['seconds']:.2f} s)"
+        return float("nan"), f"below its fastest point ({rows[0]['cpu_seconds']:.2f} CPU-s)"
     if x > t[-1]:
         return float(rows[-1]["flip"]), (
-            f"beyond its slowest point ({rows[-1]['seconds']:.2f} s, {rows[-1]['spp']} spp); its "
+            f"beyond its slowest point ({rows[-1]['cpu_seconds']:.2f} CPU-s, {rows[-1]['spp']} "
+            "spp); its "
             "FLIP there is given, an upper bound of what it would reach in that time"
         )
     return float(np.exp(np.interp(x, t, f))), "interpolated"
@@ -559,11 +566,13 @@ def target_notes(ev: dict[str, Any]) -> list[str]:
         lines += [
             "",
             "Target check (FLIP, lower is better): each denoised mgn point against what each "
-            "peer reaches in the same time (1×) and in 10× that time, interpolated between its "
+            "peer reaches with the same CPU time (1×) and with 10× that CPU time (CPU seconds, "
+            "not wall time, because the shared machine gave each process a varying share of its "
+            "cores), interpolated between its "
             "measured sample counts (≤ x: beyond its slowest point, x is an upper bound; n/a: "
             "its 1 spp is already slower).",
             "",
-            "| mgn + OIDN | s/view | FLIP | "
+            "| mgn + OIDN | CPU-s/view | FLIP | "
             + " | ".join(f"{lab} 1× | {lab} 10×" for lab in labels)
             + " |",
             "|---|---|---|" + "---|---|" * len(labels),
@@ -572,11 +581,11 @@ def target_notes(ev: dict[str, Any]) -> list[str]:
             cells = []
             for lab in labels:
                 cells += [
-                    _flip_cell(peers[lab], m["seconds"]),
-                    _flip_cell(peers[lab], 10 * m["seconds"]),
+                    _flip_cell(peers[lab], m["cpu_seconds"]),
+                    _flip_cell(peers[lab], 10 * m["cpu_seconds"]),
                 ]
             lines.append(
-                f"| {m['spp']} spp | {m['seconds']:.2f} | {m['flip']:.4f} | "
+                f"| {m['spp']} spp | {m['cpu_seconds']:.2f} | {m['flip']:.4f} | "
                 + " | ".join(cells)
                 + " |"
             )
@@ -651,11 +660,37 @@ def rows_for_runner(ev: dict[str, Any], width: int) -> list[Row]:
 def report_main(json_path: Path) -> int:
     """Rewrites path_results.md and path.png next to a path_results.json."""
     ev = json.loads(json_path.read_text())
+    for row in ev["table"]:
+        if "cpu_seconds" not in row:
+            for c in ev["results"][row["engine"]]["configs"]:
+                if c["spp"] == row["spp"] and c["denoise"] == row["denoise"]:
+                    row["cpu_seconds"] = float(np.median(c["cpu"]))
+    json_path.write_text(json.dumps(ev, indent=1, default=float) + "\n")
     cfg = ev["config"]
     meta = describe_results(ev, cfg["width"], cfg["ref_spp"])
-    json_path.with_name("path_results.md").write_text(markdown(ev, meta))
+    text = markdown(ev, meta)
+    json_path.with_name("path_results.md").write_text(text)
     plot(ev, json_path.with_name("path.png"), meta["title"])
+    splice_results(json_path.with_name("RESULTS.md"), text)
     return 0
+
+
+BEGIN, END = "<!-- path:begin -->", "<!-- path:end -->"
+
+
+def splice_results(results_md: Path, section: str) -> None:
+    """Puts the path-tracing section into RESULTS.md (between markers, replacing an older one),
+    leaving the rest of the full-suite report as it is."""
+    if not results_md.exists():
+        return
+    old = results_md.read_text()
+    block = f"{BEGIN}\n{section}\n![path tracing: error against CPU time](path.png)\n{END}\n"
+    if BEGIN in old and END in old:
+        head, rest = old.split(BEGIN, 1)
+        new = head + block + rest.split(END, 1)[1].lstrip("\n")
+    else:
+        new = old.rstrip("\n") + "\n\n" + block
+    results_md.write_text(new)
 
 
 if __name__ == "__main__":
