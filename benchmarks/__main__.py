@@ -9,9 +9,11 @@ import time
 from pathlib import Path
 
 from . import (
+    bench_cluster,
     bench_collision,
     bench_drop,
     bench_eval_grasps,
+    bench_format,
     bench_layout,
     bench_path,
     bench_pick,
@@ -51,7 +53,9 @@ SUITES = {
     "scene_labels": bench_scene_labels,
     "pick": bench_pick,
     "eval_grasps": bench_eval_grasps,
+    "format": bench_format,
     "pipeline": bench_pipeline,
+    "cluster": bench_cluster,
 }
 
 

@@ -67,7 +67,7 @@ def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
     from mgn.scene.convex import DROP_DECOMPOSITION
     from mgn.scene.drop import _simulate
 
-    out, _ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
+    out, *_ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
     parts, props = [], []
     for s in objects:
         mesh = object_mesh(s)
@@ -164,11 +164,10 @@ _PART_DIR: dict[str, list[str]] = {}
 
 def _part_files(name: str, parts: list) -> list[str]:
     """One OBJ per convex part (pybullet builds a convex hull from each mesh file)."""
-    import tempfile
-    from pathlib import Path
+    from .common import bench_tempdir
 
     if name not in _PART_DIR:
-        root = Path(tempfile.mkdtemp(prefix="mgn_bench_drop_"))
+        root = bench_tempdir("mgn_bench_drop_")
         files = []
         for i, m in enumerate(parts):
             path = root / f"{name}_{i}.obj"

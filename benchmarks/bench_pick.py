@@ -15,12 +15,11 @@ from __future__ import annotations
 import json
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from typing import Any
 
-from .common import Row, measure_alternating, thread_counts
+from .common import Row, bench_tempdir, measure_alternating, thread_counts
 
 SEED = 2
 RESOLUTION = 160
@@ -62,7 +61,7 @@ def run(
     from mgn.eval.pick import run_picking
     from mgn.scene import compose_objects, drop_scene
 
-    os.environ.setdefault("MGN_CACHE_DIR", tempfile.mkdtemp(prefix="mgn-bench-pick-"))
+    os.environ.setdefault("MGN_CACHE_DIR", str(bench_tempdir("mgn-bench-pick-")))
     config = _config(quick)
     scene = drop_scene(compose_objects(count=num_objects, seed=SEED), seed=SEED)
     threads = thread_counts()[-1]

@@ -32,7 +32,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .common import Row, Timing
+from .common import Row, Timing, load_average
 
 HERE = Path(__file__).resolve().parent
 SEED = 2024
@@ -53,6 +53,15 @@ def bench_config(quick: bool) -> dict[str, Any]:
             "physics_grid": 5,
         },
     }
+
+
+def _substages(report: Any) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for r in report.results.values():
+        for k, v in r.times.items():
+            if k.startswith("write: "):
+                out[k[len("write: ") :]] = out.get(k[len("write: ") :], 0.0) + v
+    return out
 
 
 def child_main(argv: list[str]) -> int:
@@ -84,6 +93,9 @@ def child_main(argv: list[str]) -> int:
             "wall_s": wall,
             "label_s": report.label_seconds,
             "stage_s": report.stage_seconds(),
+            # The labelling stages inside "write" (render, object labels, layout, scene grasps,
+            # waiting for the file writers, ...), summed over the scenes.
+            "substage_s": _substages(report),
             "objects_per_scene": [r.num_objects for r in report.ok],
             "bytes_per_scene": report.output_bytes / max(a.scenes, 1),
             "peak_rss_worker_mib": rss_children if a.workers > 1 else rss_self,
@@ -146,6 +158,12 @@ def run(
             notes = [
                 f"{3600 * result['ok'] / result['wall_s']:.0f} scenes/hour",
                 "per scene " + ", ".join(f"{k} {v:.1f} s" for k, v in per.items()),
+                "inside write, per scene: "
+                + ", ".join(
+                    f"{k} {v / max(result['ok'], 1):.1f} s"
+                    for k, v in result.get("substage_s", {}).items()
+                ),
+                f"load average {load_average()}",
                 f"peak RSS per worker {result['peak_rss_worker_mib']:.0f} MiB",
                 f"{result['bytes_per_scene'] / 1e6:.1f} MB per scene",
             ]

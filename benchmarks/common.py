@@ -8,13 +8,16 @@ call that is not timed; its result is the one the agreement checks look at.
 
 from __future__ import annotations
 
+import atexit
 import dataclasses
 import gc
 import importlib.metadata
 import os
 import platform
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -48,6 +51,14 @@ def thread_counts() -> list[int]:
     except AttributeError:  # not Linux
         cores = os.cpu_count() or 1
     return sorted({1, max(1, cores)})
+
+
+def bench_tempdir(prefix: str) -> Path:
+    """A new temporary folder that is removed when the process exits (a benchmark leaves
+    nothing behind in the temporary directory, even when it fails half-way)."""
+    path = Path(tempfile.mkdtemp(prefix=prefix))
+    atexit.register(shutil.rmtree, path, True)
+    return path
 
 
 # ----------------------------------------------------------------------------------------------

@@ -138,6 +138,7 @@ void bind_path_tracer(py::module_& m) {
       .def_readwrite("aperture_radius", &PathTraceOptions::aperture_radius)
       .def_readwrite("focus_distance", &PathTraceOptions::focus_distance)
       .def_readwrite("clamp", &PathTraceOptions::clamp)
+      .def_readwrite("clamp_indirect", &PathTraceOptions::clamp_indirect)
       .def("validate", &PathTraceOptions::validate);
 
   py::class_<FilmOptions>(m, "FilmOptions", "Radiance to 8-bit sRGB development settings.")

@@ -59,6 +59,8 @@ py::dict placed_dict(const PlacedGrasps& p, std::size_t num_offsets) {
   py::array hit = to_numpy(std::vector<std::int32_t>(p.hit));
   out["hit"] = hit.attr("reshape")(static_cast<py::ssize_t>(p.size()),
                                    static_cast<py::ssize_t>(num_offsets));
+  out["collision_part"] = to_numpy(std::vector<std::uint8_t>(p.collision_part));
+  out["collision_obstacle"] = to_numpy(std::vector<std::uint8_t>(p.collision_obstacle));
   return out;
 }
 
@@ -72,6 +74,7 @@ CameraView camera(const Intrinsics& K, const py::handle& X_WC) {
 }  // namespace
 
 void bind_scene_grasps(py::module_& m) {
+  m.attr("SUCTION_TOOL_OFFSET") = kSuctionToolOffset;
   py::class_<SceneGraspModel, std::shared_ptr<SceneGraspModel>>(
       m, "SceneGraspModel",
       "Per-scene grasp model: placement, collisions and wrench scores at construction; "
@@ -84,7 +87,7 @@ void bind_scene_grasps(py::module_& m) {
                        double shaft_radius, double shaft_length, const Vec3d& gravity_world,
                        double pj_friction, double grip_force, double contact_radius,
                        double suction_k, double visibility_tolerance, double near_plane,
-                       int num_threads) {
+                       int num_threads, double approach_step) {
              const std::size_t n = meshes.size();
              const std::vector<Pose> X = n ? to_poses(poses, "poses") : std::vector<Pose>{};
              const Points3d com = n ? to_rows<double, 3>(coms, "coms") : Points3d();
@@ -139,6 +142,7 @@ void bind_scene_grasps(py::module_& m) {
              const Pose X_tote = to_pose(X_WT, "X_WT");
              SceneGraspOptions opt;
              opt.offsets = offsets;
+             opt.approach_step = approach_step;
              opt.tool.clearance = clearance;
              opt.tool.shaft_radius = shaft_radius;
              opt.tool.shaft_length = shaft_length;
@@ -158,7 +162,8 @@ void bind_scene_grasps(py::module_& m) {
            py::arg("offsets"), py::arg("clearance"), py::arg("shaft_radius"),
            py::arg("shaft_length"), py::arg("gravity_world"), py::arg("pj_friction"),
            py::arg("grip_force"), py::arg("contact_radius"), py::arg("suction_k"),
-           py::arg("visibility_tolerance"), py::arg("near_plane"), py::arg("num_threads"))
+           py::arg("visibility_tolerance"), py::arg("near_plane"), py::arg("num_threads"),
+           py::arg("approach_step") = SceneGraspOptions{}.approach_step)
       .def_property_readonly("num_objects", &SceneGraspModel::num_objects)
       .def_property_readonly("offsets",
                              [](const SceneGraspModel& s) { return s.options().offsets; })

@@ -1,6 +1,6 @@
 // Bindings of the Bullet shake test (mgn/grasp/shake_test.hpp). The typed façade is
-// python/mgn/pj/physics.py. The gripper is read from any object with the attributes of
-// mgn.hardware.ParallelJawGripper (duck typing), so no second gripper class is bound here.
+// python/mgn/pj/physics.py. The gripper is the bound C++ ParallelJawGripper (boxes or the three
+// meshes), made by the one conversion mgn.pj.sampler.core_gripper() like every other consumer.
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 #include <mgn/grasp/shake_test.hpp>
@@ -14,37 +14,6 @@ using namespace mgn::py_conv;
 namespace mgn::py_bind {
 
 namespace {
-
-Vec3d vec3_attr(const py::handle& obj, const char* name) {
-  const py::object v = obj.attr(name);
-  const auto seq = py::cast<std::vector<double>>(v);
-  if (seq.size() != 3) {
-    throw_error<InvalidArgument>("gripper.", name, ": expected three values, got ", seq.size());
-  }
-  return Vec3d(seq[0], seq[1], seq[2]);
-}
-
-ParallelJawGripper gripper_from(const py::handle& obj) {
-  ParallelJawGripper g;
-  try {
-    g.name = py::cast<std::string>(obj.attr("name"));
-    g.max_opening = py::cast<double>(obj.attr("max_opening"));
-    g.flange_to_tip = py::cast<double>(obj.attr("flange_to_tip"));
-    g.contact_from_tip = py::cast<double>(obj.attr("contact_from_tip"));
-    g.collision_margin = py::cast<double>(obj.attr("collision_margin"));
-    g.friction = py::cast<double>(obj.attr("friction"));
-    g.finger_size = vec3_attr(obj, "finger_size");
-    g.palm_size = vec3_attr(obj, "palm_size");
-  } catch (const py::error_already_set&) {
-    throw_error<InvalidArgument>(
-        "gripper: expected an object with the fields of mgn.hardware.ParallelJawGripper");
-  } catch (const py::cast_error&) {
-    throw_error<InvalidArgument>(
-        "gripper: expected an object with the fields of mgn.hardware.ParallelJawGripper");
-  }
-  g.validate();
-  return g;
-}
 
 /// (N, 10) rows [a (3), v (3), p1 (3), w] in metres (MetaGraspNet order, SI units).
 std::vector<ParallelJawGrasp> grasps_from(const py::handle& obj) {
@@ -114,6 +83,8 @@ void bind_shake(py::module_& m) {
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
       .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
+      .def_readwrite("staircase", &ShakeOptions::staircase)
+      .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
       .def_readwrite("num_threads", &ShakeOptions::num_threads)
       .def_readwrite("seed", &ShakeOptions::seed)
       .def("validate", &ShakeOptions::validate)
@@ -123,10 +94,9 @@ void bind_shake(py::module_& m) {
   m.def(
       "shake_test",
       [](std::vector<Mesh> parts, double mass, const Vec3d& com, const Mat3d& inertia,
-         const py::handle& grasps, const py::handle& gripper, const ShakeOptions& options) {
+         const py::handle& grasps, const ParallelJawGripper& grip, const ShakeOptions& options) {
         const PhysicsObject object = object_from(std::move(parts), mass, com, inertia);
         const std::vector<ParallelJawGrasp> g = grasps_from(grasps);
-        const ParallelJawGripper grip = gripper_from(gripper);
         ShakeResult r;
         {
           py::gil_scoped_release release;
@@ -143,6 +113,9 @@ void bind_shake(py::module_& m) {
         out["frictions"] = to_numpy(std::move(r.frictions));
         out["density_factors"] = to_numpy(std::move(r.density_factors));
         out["total_steps"] = r.total_steps;
+        out["trial_simulated"] =
+            to_bool_numpy(std::move(r.trial_simulated)).attr("reshape")(G, S, S);
+        out["fallback"] = to_bool_numpy(std::move(r.fallback));
         return out;
       },
       py::arg("parts"), py::arg("mass"), py::arg("com"), py::arg("inertia"), py::arg("grasps"),
@@ -152,8 +125,9 @@ void bind_shake(py::module_& m) {
   m.def(
       "shake_trajectory",
       [](std::vector<Mesh> parts, double mass, const Vec3d& com, const Mat3d& inertia,
-         const py::handle& grasp, const py::handle& gripper, double friction, double density_factor,
-         const ShakeOptions& options, int record_every, std::uint64_t trial_index) {
+         const py::handle& grasp, const ParallelJawGripper& grip, double friction,
+         double density_factor, const ShakeOptions& options, int record_every,
+         std::uint64_t trial_index) {
         const PhysicsObject object = object_from(std::move(parts), mass, com, inertia);
         const py::object row =
             py::module_::import("numpy").attr("asarray")(grasp).attr("reshape")(-1, 10);
@@ -161,7 +135,6 @@ void bind_shake(py::module_& m) {
         if (g.size() != 1) {
           throw_error<InvalidArgument>("grasp: expected one row of 10 values, got ", g.size());
         }
-        const ParallelJawGripper grip = gripper_from(gripper);
         ShakeTrajectory t;
         {
           py::gil_scoped_release release;

@@ -35,6 +35,7 @@ __all__: list[str] = [
     "RayScene",
     "Renderer",
     "SEAL_FAILURE_NAMES",
+    "SUCTION_TOOL_OFFSET",
     "SURFACE_DARK",
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
@@ -121,21 +122,13 @@ class Material:
     def base_color(
         self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[4, 1]"]
     ) -> None: ...
-    has_pbr: bool
     @property
-    def metallic(self) -> float:
+    def has_pbr(self) -> bool:
         """
-        [0,1] (glTF metallicFactor)
+        True when metallic/roughness/ior/transmission are given (glTF, built-in)
         """
-    @metallic.setter
-    def metallic(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
-    @property
-    def roughness(self) -> float:
-        """
-        perceptual roughness [0,1] (glTF roughnessFactor)
-        """
-    @roughness.setter
-    def roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @has_pbr.setter
+    def has_pbr(self, arg0: bool) -> None: ...
     @property
     def ior(self) -> float:
         """
@@ -144,12 +137,12 @@ class Material:
     @ior.setter
     def ior(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
-    def transmission(self) -> float:
+    def metallic(self) -> float:
         """
-        [0,1], 1 = clear dielectric (KHR_materials_transmission)
+        [0,1] (glTF metallicFactor)
         """
-    @transmission.setter
-    def transmission(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @metallic.setter
+    def metallic(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def opacity(self) -> float:
         """
@@ -157,6 +150,13 @@ class Material:
         """
     @opacity.setter
     def opacity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def roughness(self) -> float:
+        """
+        perceptual roughness [0,1] (glTF roughnessFactor)
+        """
+    @roughness.setter
+    def roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def shininess(self) -> float:
         """
@@ -187,6 +187,13 @@ class Material:
         """
     @texture_path.setter
     def texture_path(self, arg0: str) -> None: ...
+    @property
+    def transmission(self) -> float:
+        """
+        [0,1], 1 = clear dielectric (KHR_materials_transmission)
+        """
+    @transmission.setter
+    def transmission(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
 
 class MeshReport:
     """
@@ -760,6 +767,10 @@ class PathTraceOptions:
     @clamp.setter
     def clamp(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
+    def clamp_indirect(self) -> float: ...
+    @clamp_indirect.setter
+    def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
     def focus_distance(self) -> float: ...
     @focus_distance.setter
     def focus_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
@@ -921,6 +932,7 @@ class ShakeOptions:
     """
 
     polyhedral_contacts: bool
+    staircase: bool
     def __init__(self) -> None: ...
     def density_factors(self) -> list[float]: ...
     def frictions(self) -> list[float]: ...
@@ -1041,6 +1053,10 @@ class ShakeOptions:
     def solver_iterations(self) -> int: ...
     @solver_iterations.setter
     def solver_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def staircase_checks(self) -> int: ...
+    @staircase_checks.setter
+    def staircase_checks(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
 
 class SceneGraspModel:
     """
@@ -1070,6 +1086,7 @@ class SceneGraspModel:
         visibility_tolerance: typing.SupportsFloat | typing.SupportsIndex,
         near_plane: typing.SupportsFloat | typing.SupportsIndex,
         num_threads: typing.SupportsInt | typing.SupportsIndex,
+        approach_step: typing.SupportsFloat | typing.SupportsIndex = 0.005,
     ) -> None: ...
     def collides(
         self,
@@ -1402,6 +1419,7 @@ SEAL_FAILURE_NAMES: tuple = (
     "strain",
     "rough",
 )
+SUCTION_TOOL_OFFSET: float = 0.1321
 SURFACE_DARK: int = 2
 SURFACE_MIRROR: int = 4
 SURFACE_TRANSPARENT: int = 1

@@ -70,47 +70,173 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
     from mgn.hardware import default_cup, default_gripper
     from mgn.io.model_folder import write_model_folder, write_tote
     from mgn.objects import default_tote
+    from mgn.scene.cli import _split
 
     specs = _catalogue(args.add)
+    args.only = _split(args.only)
     if args.only:
         by_key = {s.name: s for s in specs} | {str(s.category_id): s for s in specs}
         missing = [n for n in args.only if n not in by_key]
         if missing:
             raise KeyError(f"unknown object(s) {missing}; known: {sorted(s.name for s in specs)}")
-        specs = [by_key[n] for n in args.only]
+        specs = list({id(by_key[n]): by_key[n] for n in args.only}.values())  # once each
+    written = set()
     for spec in tqdm(specs, desc="exporting objects", unit="obj", disable=args.quiet):
-        write_model_folder(spec, args.dir, overwrite=True)
+        written.add(write_model_folder(spec, args.dir, overwrite=True))
     from pathlib import Path
 
     root = Path(args.dir)
     default_gripper().to_yaml(root / "gripper.yaml")
     default_cup().to_yaml(root / "suction_cup.yaml")
     write_tote(default_tote(), root)
-    print(f"wrote {len(specs)} object folders to {root / 'models'} (+ tote, gripper, cup)")
+    print(f"wrote {len(written)} object folders to {root / 'models'} (+ tote, gripper, cup)")
     return 0
 
 
-def _cmd_info(args: argparse.Namespace) -> int:
-    from mgn.geometry import load_mesh, mass_properties
+def _snake(stem: str) -> str:
+    import re
 
-    mesh = load_mesh(args.mesh, scale=args.scale)
+    name = re.sub(r"[^a-z0-9]+", "_", stem.lower()).strip("_")
+    return name if name and not name[0].isdigit() else f"part_{name}"
+
+
+def _cmd_objects_add(args: argparse.Namespace) -> int:
+    """Append one user-object entry per mesh to a YAML file, validating each one."""
+    import os
+    import warnings
+    from pathlib import Path
+
+    import yaml
+
+    from mgn.errors import InvalidArgumentError
+    from mgn.geometry import load_mesh
+    from mgn.io.atomic import atomic_write_text
+    from mgn.io.yaml_file import read_yaml
+    from mgn.objects import builtin_objects, load_objects_yaml
+
+    target = Path(args.to)
+    data = read_yaml(target, "user-object YAML") if target.exists() else None
+    if data is None:
+        data = {"objects": []}
+    if not isinstance(data, dict) or not isinstance(data.get("objects"), list):
+        raise InvalidArgumentError(f"user-object YAML '{target}': expected a top-level "
+                                   "'objects:' list")  # fmt: skip
+    if args.name and len(args.name) != len(args.meshes):
+        raise InvalidArgumentError(
+            f"mgn objects add: --name gives {len(args.name)} name(s) for {len(args.meshes)} "
+            "mesh(es); expected one per mesh"
+        )
+    taken = {s.name for s in builtin_objects()} | {
+        str(e.get("name")) for e in data["objects"] if isinstance(e, dict)
+    }
+    base = target.resolve().parent
+    added = []
+    for i, mesh_arg in enumerate(args.meshes):
+        path = Path(mesh_arg)
+        mesh = load_mesh(path, scale=args.scale)  # IoError / InvalidArgumentError name the file
+        report = mesh.validate()
+        name = args.name[i] if args.name else _snake(path.stem)
+        stem, k = name, 2
+        while name in taken:
+            name, k = f"{stem}_{k}", k + 1
+        taken.add(name)
+        entry: dict = {"name": name}
+        full = path.resolve()  # relative to the YAML file when below it, else absolute
+        entry["mesh"] = full.relative_to(base).as_posix() if full.is_relative_to(base) else (
+            os.fspath(full))  # fmt: skip
+        entry.update(scale=args.scale, density=args.density, friction=args.friction)
+        closed = report.is_watertight and report.is_winding_consistent
+        if not closed:
+            entry["allow_open"] = True
+        if args.tags:
+            entry["tags"] = list(args.tags)
+        data["objects"].append(entry)
+        size = np.ptp(np.asarray(mesh.vertices), axis=0) * 1000
+        note = "" if closed else f" (open: {report.num_boundary_edges} boundary edges; shell mass)"
+        added.append(f"  {name}: {path} {'x'.join(f'{v:.0f}' for v in size)} mm{note}")
+    text = yaml.safe_dump(data, sort_keys=False)
+    tmp = target.with_name(f".{target.name}.check.yaml")
+    tmp.write_text(text, encoding="utf-8")
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            specs = load_objects_yaml(tmp)  # the whole file, as generate will read it
+    except MgnError as e:
+        raise type(e)(str(e).replace(os.fspath(tmp), os.fspath(target))) from None
+    finally:
+        tmp.unlink(missing_ok=True)
+    for w in caught:
+        print(f"mgn: warning: {w.message}".replace(os.fspath(tmp), os.fspath(target)),
+              file=sys.stderr)  # fmt: skip
+    atomic_write_text(target, text)
+    print(f"{target}: {len(specs)} object(s); added:")
+    print("\n".join(added))
+    names = " ".join(s.name for s in specs)
+    print(f"next: mgn generate --out DS --scenes 10 --add {target} --categories {names}")
+    return 0
+
+
+def mesh_info(path: str, scale: float = 1.0, density: float = 1000.0) -> dict:
+    """The ``mgn info`` / ``mgn-cli info`` JSON document of a mesh file (same keys and values,
+    numbers to 10 significant digits): counts, bounds (m), validation, mass properties (kg, m,
+    kg m^2 about the centre of mass; open meshes as a 2 mm shell)."""
+    import math
+
+    from mgn.geometry import load_mesh, mass_properties
+    from mgn.objects.user import warn_implausible_size
+
+    mesh = load_mesh(path, scale=scale)
+    warn_implausible_size(mesh.vertices, f"'{path}' (scale {scale:g})")
     r = mesh.validate()
-    p = mass_properties(mesh, args.density)
-    info = {
-        "path": args.mesh,
+    p = mass_properties(mesh, density)
+
+    def num(v: float) -> float | None:
+        return float(f"{float(v):.10g}") if math.isfinite(float(v)) else None
+
+    def vec(v) -> list:  # noqa: ANN001
+        return [num(x) for x in np.asarray(v, np.float64).ravel()]
+
+    lo, hi = np.asarray(mesh.bounds, np.float64)
+    uvs = mesh.uvs
+    return {
+        "path": path,
+        "name": mesh.name,
         "num_vertices": r.num_vertices,
         "num_faces": r.num_faces,
-        "bounds_m": mesh.bounds.tolist(),
-        "is_watertight": r.is_watertight,
-        "is_winding_consistent": r.is_winding_consistent,
-        "is_outward": r.is_outward,
-        "num_boundary_edges": r.num_boundary_edges,
-        "volume_m3": p.volume,
-        "mass_kg": p.mass,
-        "center_of_mass_m": np.asarray(p.center_of_mass).tolist(),
-        "inertia_kg_m2": np.asarray(p.inertia).tolist(),
-        "mass_properties_exact": p.is_exact,
+        "num_materials": len(mesh.materials),
+        "has_uvs": uvs is not None and len(uvs) > 0,
+        "bounds_min": vec(lo),
+        "bounds_max": vec(hi),
+        "validation": {
+            "is_watertight": r.is_watertight,
+            "is_winding_consistent": r.is_winding_consistent,
+            "is_outward": r.is_outward,
+            "num_boundary_edges": r.num_boundary_edges,
+            "num_nonmanifold_edges": r.num_nonmanifold_edges,
+            "num_misoriented_edges": r.num_misoriented_edges,
+            "num_components": r.num_components,
+            "area": num(r.area),
+            "signed_volume": num(r.signed_volume),
+        },
+        "mass_properties": {
+            "density": num(density),
+            "volume": num(p.volume),
+            "mass": num(p.mass),
+            "center_of_mass": vec(p.center_of_mass),
+            "inertia": [vec(row) for row in np.asarray(p.inertia)],
+            "is_exact": bool(p.is_exact),
+        },
     }
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        info = mesh_info(args.mesh, args.scale, args.density)
+    for w in caught:
+        print(f"mgn info: warning: {w.message}", file=sys.stderr)
     print(json.dumps(info, indent=2))
     return 0
 
@@ -138,7 +264,9 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
     root = Path(args.root)
     folders = object_folders(root)
     if args.objects:
-        wanted = set(args.objects)
+        from mgn.scene.cli import _split
+
+        wanted = set(_split(args.objects) or ())
         folders = [
             f
             for f in folders
@@ -280,10 +408,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_objects_list)
     p = osub.add_parser("export", help="write the objects as MetaGraspNet model folders")
     p.add_argument("dir", help="output root; objects go to DIR/models/<id>/")
-    p.add_argument("--only", nargs="+", metavar="NAME", help="export only these (names or ids)")
+    p.add_argument("--objects", "--only", dest="only", nargs="+", metavar="NAME",
+                   help="export only these (names or ids)")  # fmt: skip
     p.add_argument("--add", action="append", metavar="YAML", help=add_help)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_objects_export)
+    p = osub.add_parser(
+        "add",
+        help="describe your meshes as user objects (appends to a YAML file, validating each)",
+        description="Append one entry per mesh to the user-object YAML file --to (created if "
+        "missing; format: mgn.objects.user). Open meshes get allow_open: true (thin-shell "
+        "mass). Then: mgn generate --out DS --add FILE --categories NAME ...",
+    )
+    p.add_argument("meshes", nargs="+", metavar="MESH", help="mesh files (OBJ, STL, PLY, GLB...)")
+    p.add_argument("--to", required=True, metavar="YAML", help="user-object YAML to append to")
+    p.add_argument("--name", nargs="+", metavar="NAME",
+                   help="object names, one per mesh (default: from the file names)")  # fmt: skip
+    p.add_argument("--scale", type=float, default=1.0,
+                   help="coordinate scale (default 1; 0.001 for files in millimetres)")  # fmt: skip
+    p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
+    p.add_argument("--friction", type=float, default=0.5, help="Coulomb friction (default 0.5)")
+    p.add_argument("--tags", nargs="+", metavar="TAG", help="tags (mgn.objects.ALLOWED_TAGS)")
+    p.set_defaults(func=_cmd_objects_add)
 
     suction = sub.add_parser("suction", help="suction grasp labels")
     ssub = suction.add_subparsers(dest="suction_command", metavar="ACTION", required=True)
@@ -327,9 +473,13 @@ def build_parser() -> argparse.ArgumentParser:
     __import__("mgn.pj.cli").pj.cli.register(sub)  # mgn pj label (python/mgn/pj/cli.py)
 
     __import__("mgn.scene.cli", fromlist=["register"]).register(sub)
-    p = sub.add_parser("info", help="validation and mass properties of a mesh file (JSON)")
+    p = sub.add_parser(
+        "info", help="validation and mass properties of a mesh file (JSON, as mgn-cli info)"
+    )
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
-    p.add_argument("--scale", type=float, default=1.0, help="coordinate scale (0.001 for mm)")
+    p.add_argument(
+        "--scale", type=float, default=1.0, help="coordinate scale (default 1; 0.001 for mm)"
+    )
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
     p.set_defaults(func=_cmd_info)
 
@@ -342,7 +492,38 @@ def build_parser() -> argparse.ArgumentParser:
     __import__("mgn.pipeline.cli", fromlist=["register"]).register(sub)  # generate, config
     __import__("mgn.eval.cli", fromlist=["register"]).register(sub)  # eval detections|grasps|...
     __import__("mgn.eval.pick", fromlist=["register"]).register(sub)  # mgn pick
+    _use_formatter(parser)
     return parser
+
+
+def _shows_default(action: argparse.Action) -> bool:
+    d = action.default
+    return not (d is None or d is False or d is True or d == argparse.SUPPRESS)
+
+
+class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Descriptions as written; every option's default in its help unless the help names it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if (
+            action.option_strings
+            and _shows_default(action)
+            and "default" not in text
+            and "%(default)" not in text
+        ):
+            text = f"{text} (default: %(default)s)"
+        return text
+
+
+def _use_formatter(parser: argparse.ArgumentParser) -> None:
+    parser.formatter_class = _HelpFormatter
+    for action in parser._actions:  # noqa: SLF001 (argparse has no public walk)
+        if action.help is None and action.option_strings and _shows_default(action):
+            action.help = "default: %(default)s"
+        if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
+            for sub in action.choices.values():
+                _use_formatter(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

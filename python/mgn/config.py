@@ -22,9 +22,12 @@ Sections:
   :class:`mgn.hardware.ParallelJawGripper` fields. ``cup``: :class:`mgn.hardware.SuctionCup`
   fields. ``drop``: :class:`mgn.scene.DropOptions` fields.
 - ``camera``: ``rig`` (``mgn``: the 37-view MetaGraspNet rig, drawn per scene; ``hemisphere``:
-  every (radius, tilt, azimuth) of ``hemisphere``), ``views`` (indices of the rig's views to
-  keep, e.g. ``[0, 5, 17]``; null = all), ``intrinsics`` preset, ``resolution_scale`` (same field
-  of view, scaled pixel count), depth ``sensor`` preset, ``randomize`` (per-view light and
+  every (radius, tilt, azimuth) of ``hemisphere``; ``poses``: your own cameras, ``poses`` = a
+  list of 4x4 ``X_WC`` or ``{eye, target, up}``), ``views`` (indices of the rig's views to
+  keep, e.g. ``[0, 5, 17]``; null = all), ``intrinsics`` (a preset: ``mgn_synthetic``,
+  ``zivid2_plus_m130``, ``photoneo_phoxi_m``, ``realsense_d435``, ... — or your own
+  ``{width, height, fx, fy, cx, cy, distortion}``; docs/cameras.md), ``resolution_scale`` (same
+  field of view, scaled pixel count), depth ``sensor`` preset, ``randomize`` (per-view light and
   tote/floor colour randomisation).
 - ``labels``: which labels to make (``suction``, ``paralleljaw``, ``pj_physics``, ``layout``,
   ``scene_grasps``).
@@ -39,6 +42,7 @@ Sections:
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
   it ``spp_without_denoiser`` samples are traced and a warning names the package),
+  ``denoise_quality``,
   ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone`` (``filmic`` | ``linear``),
   ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
   ``randomize`` (path engine, when ``camera.randomize`` is on: switches ``lights``,
@@ -63,7 +67,7 @@ from typing import Any
 
 import yaml
 
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import InvalidArgumentError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec
 from mgn.render.photo import RandomizeSettings, RenderSettings
@@ -74,6 +78,7 @@ __all__ = [
     "Config",
     "ConfigError",
     "HemisphereConfig",
+    "IntrinsicsConfig",
     "LabelsConfig",
     "ObjectLabelsConfig",
     "ObjectsConfig",
@@ -84,9 +89,15 @@ __all__ = [
     "load_config",
 ]
 
-INTRINSICS_PRESETS = ("mgn_synthetic", "zivid_two_like")
+INTRINSICS_PRESETS = (
+    "mgn_synthetic",
+    "zivid_two_like",
+    "zivid2_plus_m130",
+    "photoneo_phoxi_m",
+    "realsense_d435",
+)
 SENSOR_PRESETS = ("ideal", "structured-light", "tof")
-RIGS = ("mgn", "hemisphere")
+RIGS = ("mgn", "hemisphere", "poses")
 SEAL_MODELS = ("spring", "strain", "smoothness")
 #: Views of the MetaGraspNet rig.
 MGN_NUM_VIEWS = 37
@@ -249,6 +260,11 @@ class ObjectsConfig(_Section):
             defaults to 20 objects from randomly drawn categories with ``copies`` copies each.
         copies: (min, max) copies per chosen category (MGN: 2-5).
         user_objects: user-object YAML files added to the catalogue.
+        refill: when objects leave the tote during the drop, drop the scene again (the same
+            objects, a seed derived from the scene seed and the attempt) until every asked
+            object stays in, at most ``refill_attempts`` drops; the scene with the most objects
+            in the tote is kept. Without it the objects that left are removed (and reported).
+        refill_attempts: drops at most per scene with ``refill`` (>= 1).
     """
 
     names: tuple[str | int, ...] | None = None
@@ -256,6 +272,8 @@ class ObjectsConfig(_Section):
     count: int | None = None
     copies: tuple[int, int] = (2, 5)
     user_objects: tuple[str, ...] = ()
+    refill: bool = False
+    refill_attempts: int = 5
 
     _CHECKS = {
         "names": _optional(_list(_name)),
@@ -263,6 +281,8 @@ class ObjectsConfig(_Section):
         "count": _optional(_int(1)),
         "copies": _list(_int(1), length=2),
         "user_objects": _list(_path, nonempty=False),
+        "refill": _bool,
+        "refill_attempts": _int(1),
     }
 
     #: Objects per scene when nothing is chosen.
@@ -309,14 +329,111 @@ class HemisphereConfig(_Section):
         return len(self.radii) * len(self.tilts) * len(self.azimuths)
 
 
+def _distortion(value: Any, key: str) -> tuple[float, ...]:
+    coeffs = _list(_num(), nonempty=False)(value, key)
+    if len(coeffs) not in (0, 4, 5, 8, 12, 14):
+        raise _fail(key, value, "OpenCV distortion coefficients [k1, k2, p1, p2(, k3, ...)]: "
+                    "4, 5, 8, 12 or 14 numbers")  # fmt: skip
+    return coeffs
+
+
+@dataclass(frozen=True)
+class IntrinsicsConfig(_Section):
+    """User camera intrinsics (pixels; OpenCV pinhole, principal point in continuous image
+    coordinates, the image centre is (width/2, height/2)).
+
+    ``distortion`` (OpenCV order k1, k2, p1, p2, k3, ...) describes the real lens; it is recorded
+    with the config in ``dataset.json`` but the images and labels are rendered with the ideal
+    pinhole: they are the *rectified* images (what Zivid, Photoneo and RealSense deliver with
+    their point clouds). To train on distorted images, distort RGB, depth and masks with
+    ``cv2.initUndistortRectifyMap`` (inverse map) using these coefficients.
+    """
+
+    width: int = 0
+    height: int = 0
+    fx: float = 0.0
+    fy: float = 0.0
+    cx: float = 0.0
+    cy: float = 0.0
+    distortion: tuple[float, ...] = ()
+
+    _CHECKS = {
+        "width": _int(1),
+        "height": _int(1),
+        "fx": _num(0.0),
+        "fy": _num(0.0),
+        "cx": _num(),
+        "cy": _num(),
+        "distortion": _distortion,
+    }
+
+    @classmethod
+    def from_dict(cls, data: Any, key: str = "") -> Any:
+        d = _mapping(data, key)
+        missing = [k for k in ("width", "height", "fx", "fy", "cx", "cy") if k not in d]
+        if missing:
+            raise ConfigError(
+                f"config key '{key}': missing {', '.join(missing)}; expected a preset name "
+                f"({', '.join(INTRINSICS_PRESETS)}) or width, height, fx, fy, cx, cy (px) and "
+                "optionally distortion"
+            )
+        return super().from_dict(d, key)
+
+
+def _intrinsics(value: Any, key: str) -> str | IntrinsicsConfig:
+    if isinstance(value, Mapping):
+        return IntrinsicsConfig.from_dict(value, key)
+    if isinstance(value, IntrinsicsConfig):
+        return value
+    if isinstance(value, str):
+        return _choice(*INTRINSICS_PRESETS)(value, key)
+    raise _fail(key, value, f"a preset ({', '.join(INTRINSICS_PRESETS)}) or a mapping with width, "
+                "height, fx, fy, cx, cy")  # fmt: skip
+
+
+def _camera_pose(value: Any, key: str) -> tuple[tuple[float, ...], ...]:
+    """A camera pose X_WC: a 4x4 matrix (rows), or {eye, target, up} (look-at), world = tote."""
+    import numpy as np
+
+    if isinstance(value, Mapping):
+        _check_keys(value, ["eye", "target", "up"], key)
+        if "eye" not in value:
+            raise _fail(key, dict(value), "a mapping with 'eye' (and 'target', 'up')")
+        eye = _list(_num(), length=3)(value["eye"], f"{key}.eye")
+        target = _list(_num(), length=3)(value.get("target", [0.0, 0.0, 0.0]), f"{key}.target")
+        up = _list(_num(), length=3)(value.get("up", [0.0, 0.0, 1.0]), f"{key}.up")
+        from mgn.render.camera import look_at
+
+        try:
+            X = look_at(eye, target, up)
+        except ValueError as e:
+            raise ConfigError(f"config key '{key}': {e}") from e
+    else:
+        rows = _list(_list(_num(), length=4), length=4)(value, key)
+        X = np.asarray(rows, np.float64)
+        R = X[:3, :3]
+        if not (np.allclose(R.T @ R, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0
+                and np.allclose(X[3], [0, 0, 0, 1])):  # fmt: skip
+            raise _fail(key, value, "a rigid 4x4 pose (rotation block orthonormal, det +1, last "
+                        "row [0, 0, 0, 1])")  # fmt: skip
+    return tuple(tuple(float(x) for x in row) for row in np.asarray(X))
+
+
 @dataclass(frozen=True)
 class CameraConfig(_Section):
-    """Cameras and sensor (see the module doc)."""
+    """Cameras and sensor (see the module doc).
+
+    ``intrinsics`` is a preset name (:data:`INTRINSICS_PRESETS`, docs/cameras.md) or an
+    :class:`IntrinsicsConfig` mapping. ``rig: poses`` takes the cameras from ``poses``: each a
+    4x4 camera pose ``X_WC`` (OpenCV frame: x right, y down, z forward) in the tote frame, or
+    ``{eye, target, up}`` in metres.
+    """
 
     rig: str = "mgn"
     views: tuple[int, ...] | None = None
     hemisphere: HemisphereConfig = field(default_factory=HemisphereConfig)
-    intrinsics: str = "mgn_synthetic"
+    poses: tuple[tuple[tuple[float, ...], ...], ...] = ()
+    intrinsics: str | IntrinsicsConfig = "mgn_synthetic"
     resolution_scale: float = 1.0
     sensor: str = "structured-light"
     randomize: bool = True
@@ -325,13 +442,18 @@ class CameraConfig(_Section):
         "rig": _choice(*RIGS),
         "views": _optional(_list(_int(0))),
         "hemisphere": lambda v, k: HemisphereConfig.from_dict(v, k),
-        "intrinsics": _choice(*INTRINSICS_PRESETS),
+        "poses": _list(_camera_pose, nonempty=False),
+        "intrinsics": _intrinsics,
         "resolution_scale": _num(0.0),
         "sensor": _choice(*SENSOR_PRESETS),
         "randomize": _bool,
     }
 
     def __post_init__(self) -> None:
+        if self.rig == "poses" and not self.poses:
+            raise _fail("camera.poses", [], "at least one camera pose with rig: poses")
+        if self.rig != "poses" and self.poses:
+            raise _fail("camera.rig", self.rig, "'poses' when camera.poses is given")
         n = self.num_rig_views
         if self.views is not None:
             bad = [v for v in self.views if not 0 <= v < n]
@@ -342,6 +464,8 @@ class CameraConfig(_Section):
 
     @property
     def num_rig_views(self) -> int:
+        if self.rig == "poses":
+            return len(self.poses)
         return MGN_NUM_VIEWS if self.rig == "mgn" else self.hemisphere.num_views
 
     @property
@@ -541,6 +665,15 @@ class Config(_Section):
         config = super().from_dict(data, key)
         if base_dir is not None:
             config = config.resolved(base_dir)
+        if config.tote.mesh is not None and (base_dir is not None or os.path.isabs(
+                config.tote.mesh)):  # fmt: skip
+            from mgn.errors import MgnError
+            from mgn.objects import make_tote
+
+            try:
+                make_tote(config.tote)  # the file reads and fits the inner box
+            except MgnError as e:
+                raise ConfigError(f"config key 'tote.mesh': {e}") from e
         return config
 
     def resolved(self, base_dir: str | os.PathLike[str]) -> Config:
@@ -553,6 +686,9 @@ class Config(_Section):
         objects = dataclasses.replace(
             self.objects, user_objects=tuple(absolute(p) or p for p in self.objects.user_objects)
         )
+        tote = self.tote
+        if tote.mesh is not None and not os.path.isabs(tote.mesh):
+            tote = dataclasses.replace(tote, mesh=absolute(tote.mesh))
         g = self.gripper
         meshes = {
             f: absolute(getattr(g, f))
@@ -560,7 +696,10 @@ class Config(_Section):
             if absolute(getattr(g, f)) is not None
         }
         return dataclasses.replace(
-            self, objects=objects, gripper=dataclasses.replace(g, **meshes) if meshes else g
+            self,
+            objects=objects,
+            tote=tote,
+            gripper=dataclasses.replace(g, **meshes) if meshes else g,
         )
 
     def to_yaml(self) -> str:
@@ -570,10 +709,12 @@ class Config(_Section):
 
 _SECTION_DOCS = {
     "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
-    "tote": "the bin (m): mgn.objects.ToteSpec",
+    "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
+    "box inside its cavity",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
     "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
-    "camera": "rig: mgn (37 views) | hemisphere; views: indices to keep (null = all)",
+    "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "
+    "intrinsics: preset or {width, height, fx, fy, cx, cy, distortion}",
     "labels": "which labels to make",
     "object_labels": "per-object label sizes (cached per object)",
     "drop": "drop simulation (m, s): mgn.scene.DropOptions",
@@ -618,22 +759,21 @@ def load_config(source: str | os.PathLike[str] | Mapping[str, Any] | None) -> Co
     Relative paths in a file are taken relative to the file's folder.
 
     Raises:
-        IoError: the file does not exist.
-        ConfigError: invalid YAML, an unknown key or a bad value (the message names the key).
+        IoError: the file does not exist or is a folder.
+        ConfigError: a binary file, invalid YAML, an unknown key or a bad value (the message
+            names the key).
     """
     if source is None:
         return Config()
     if isinstance(source, Mapping):
         return Config.from_dict(source)
+    from mgn.io.yaml_file import read_yaml
+
     path = Path(source)
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError as e:
-        raise IoError(f"config file not found: '{path}'") from e
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as e:
-        raise ConfigError(f"config file '{path}' is not valid YAML: {e}") from e
+        data = read_yaml(path, "config file")
+    except InvalidArgumentError as e:
+        raise ConfigError(str(e)) from None
     try:
         return Config.from_dict(data, base_dir=path.parent)
     except ConfigError as e:

@@ -21,7 +21,7 @@ from typing import Any, TypeVar
 
 import yaml
 
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import InvalidArgumentError
 
 T = TypeVar("T", bound="_YamlDataclass")
 
@@ -73,16 +73,18 @@ class _YamlDataclass:
     @classmethod
     def from_yaml(cls: type[T], path: str | os.PathLike[str]) -> T:
         """Read from a YAML file (keys as in :meth:`to_dict`; missing keys keep defaults)."""
-        try:
-            with open(path, encoding="utf-8") as fh:
-                data = yaml.safe_load(fh)
-        except FileNotFoundError as e:
-            raise IoError(f"{cls.__name__}.from_yaml: file not found: '{os.fspath(path)}'") from e
-        except yaml.YAMLError as e:
+        from mgn.io.yaml_file import read_yaml
+
+        data = read_yaml(path, f"{cls.__name__} YAML")
+        if data is not None and not isinstance(data, dict):
             raise InvalidArgumentError(
-                f"{cls.__name__}.from_yaml: '{os.fspath(path)}' is not valid YAML: {e}"
-            ) from e
-        return cls.from_dict(data or {})
+                f"{cls.__name__} YAML '{os.fspath(path)}': expected a mapping of keys to values, "
+                f"got {type(data).__name__}"
+            )
+        try:
+            return cls.from_dict(data or {})
+        except (InvalidArgumentError, ValueError, TypeError) as e:
+            raise InvalidArgumentError(f"{cls.__name__} YAML '{os.fspath(path)}': {e}") from e
 
 
 @dataclass(frozen=True)
@@ -240,3 +242,40 @@ def default_gripper() -> ParallelJawGripper:
 def default_cup() -> SuctionCup:
     """The MetaGraspNet default suction cup."""
     return SuctionCup()
+
+
+#: The one name of each grasp kind, and the aliases accepted for it (MetaGraspNet folder names).
+GRASP_KINDS: dict[str, tuple[str, ...]] = {
+    "suction": ("suction", "suctioncup", "suction_cup", "cup"),
+    "paralleljaw": ("paralleljaw", "parallel_jaw", "pj", "gripper"),
+}
+
+
+def normalize_grasp_kind(kind: str) -> str:
+    """``"suction"`` or ``"paralleljaw"`` for any accepted spelling (e.g. the MetaGraspNet folder
+    names ``suctioncup`` and ``paralleljaw``, or ``pj``).
+
+    Raises:
+        InvalidArgumentError: an unknown kind (the message lists the accepted names).
+    """
+    k = str(kind).strip().lower().replace("-", "_")
+    for name, aliases in GRASP_KINDS.items():
+        if k in aliases:
+            return name
+    accepted = ", ".join(a for v in GRASP_KINDS.values() for a in v)
+    raise InvalidArgumentError(f"unknown grasp kind {kind!r}; expected suction or paralleljaw "
+                               f"(also accepted: {accepted})")  # fmt: skip
+
+
+def grasp_kind_arg(text: str) -> str:
+    """argparse ``type=`` of a grasp kind: the normalised name, or a usage error listing them."""
+    import argparse
+
+    try:
+        return normalize_grasp_kind(text)
+    except InvalidArgumentError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+#: The MetaGraspNet folder name of each grasp kind (``grasps/<folder>/``, ``*_grasps/<folder>``).
+MGN_FOLDER = {"suction": "suctioncup", "paralleljaw": "paralleljaw"}

@@ -4,7 +4,9 @@ Drawn (each switchable): instance colours over the visible masks, amodal contour
 its id, occlusion and layer; parallel-jaw grasps as a line between the two contacts and suction
 grasps as discs, coloured by score (red 0 → green 1; :func:`mgn.viz.score_colors`); semantic
 keypoints (visible: white discs, occluded: grey rings); the layout graph as arrows from each parent
-(on top) to its child. The picture has the size of the view (plus a one-line footer).
+(on top) to its child. ``alpha`` sets how strongly the masks tint the RGB (0 = outlines only);
+``panels`` adds the amodal masks and the depth image beside the overlay. A legend below the
+picture explains every mark, e.g. ``4 14% L0`` = instance 4, 14 % occluded, layer 0 (top).
 """
 
 from __future__ import annotations
@@ -56,17 +58,26 @@ def render_overlay(
     layout: bool = False,
     keypoints: bool = True,
     max_grasps: int = 300,
+    alpha: float = 0.45,
+    panels: bool = False,
 ) -> npt.NDArray[np.uint8]:
-    """The overlay picture of ``view`` as (H + 20, W, 3) uint8.
+    """The overlay picture of ``view`` as (H + legend, W, 3) uint8 (3 W wide with ``panels``).
 
     Args:
-        grasps: None, ``"pj"`` or ``"suction"``: draw the non-colliding scene grasps of that kind
-            (at most ``max_grasps``, the best-scored first).
+        grasps: None, ``"suction"`` or ``"paralleljaw"`` (also ``"pj"``, ``"suctioncup"``):
+            draw the non-colliding scene grasps of that kind (at most ``max_grasps``, the
+            best-scored first).
         layout: draw the relation graph (parent → child arrows) and each object's layer.
         keypoints: draw the semantic keypoints.
+        alpha: weight of the instance colours over the RGB in [0, 1]; 0 draws the visible masks
+            as outlines only, so the RGB shows through.
+        panels: add two panels to the right: the amodal masks (whole objects, overlaps darker)
+            and the depth image (near = bright, invalid = black).
     """
     from PIL import Image, ImageDraw
 
+    if not (isinstance(alpha, (int, float)) and 0.0 <= float(alpha) <= 1.0):
+        raise ValueError(f"render_overlay: alpha must be in [0, 1], got {alpha!r}")
     rgb = view.rgb.astype(np.float64)
     inst = view.instances
     amodal = view.amodal
@@ -74,14 +85,31 @@ def render_overlay(
     colors = instance_colors(n)
     out = rgb.copy()
     fg = inst > 0
-    out[fg] = 0.55 * rgb[fg] + 0.45 * colors[inst[fg]]
+    out[fg] = (1.0 - alpha) * rgb[fg] + alpha * colors[inst[fg]]
     for i in range(n):
         edge = _contours(amodal[i])
         out[edge] = colors[i + 1] * 0.6
+        if alpha == 0:
+            out[_thick(_contours(inst == i + 1))] = colors[i + 1]
     h, w = inst.shape
-    canvas = Image.new("RGB", (w, h + 20), "white")
+    font = _font(max(11, w // 70))
+    legend_lines = [
+        part
+        for line in _legend_lines(grasps, layout, keypoints, alpha, panels)
+        for part in _wrap(line, font, w * (3 if panels else 1) - 8)
+    ]
+    line_h = font.size + 6 if hasattr(font, "size") else 18
+    footer = line_h * (len(legend_lines) + 1) + 8
+    canvas = Image.new("RGB", (w * (3 if panels else 1), h + footer), "white")
     canvas.paste(Image.fromarray(out.clip(0, 255).astype(np.uint8)), (0, 0))
+    if panels:
+        canvas.paste(Image.fromarray(_amodal_panel(amodal, colors)), (w, 0))
+        canvas.paste(Image.fromarray(_depth_panel(view)), (2 * w, 0))
     draw = ImageDraw.Draw(canvas)
+    if panels:
+        for k, title in ((1, "amodal masks (whole objects)"), (2, "depth (near = bright)")):
+            draw.text((k * w + 6, 4), title, fill="white", font=font, stroke_width=2,
+                      stroke_fill="black")  # fmt: skip
     K = view.intrinsics.K
     order = view.order if view.path("_order.json").exists() else {}
 
@@ -93,9 +121,9 @@ def render_overlay(
 
     notes = []
     if grasps is not None:
-        kind = {"pj": "paralleljaw", "suction": "suctioncup"}.get(grasps)
-        if kind is None:
-            raise ValueError(f"render_overlay: grasps must be 'pj' or 'suction', got {grasps!r}")
+        from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
+
+        kind = MGN_FOLDER[normalize_grasp_kind(grasps)]
         g = view.grasps(kind)
         poses = g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4)))
         score = g.get("score_analytical", np.ones(len(poses)))
@@ -160,32 +188,143 @@ def render_overlay(
             text += f" {100 * float(entry['occlusion']):.0f}%"
         if layout and "layer" in entry:
             text += f" L{entry['layer']}"
-        draw.text((x - 8, y - 6), text, fill="black", stroke_width=2, stroke_fill="white")
+        draw.text((x - 8, y - 6), text, fill="black", stroke_width=2, stroke_fill="white",
+                  font=font)  # fmt: skip
 
     level = (view.layout or {}).get("difficulty") if view.path("_layout.json").exists() else None
     if isinstance(level, dict):
         level = level.get("level")
-    footer = f"view {view.index}: {len(centroids)} objects visible"
+    summary = f"view {view.index}: {len(centroids)} objects visible"
     if level is not None:
-        footer += f", difficulty {level}"
+        summary += f", difficulty {level} (1 easy - 5 hard)"
     if notes:
-        footer += ", " + ", ".join(notes)
-    draw.text((4, h + 4), footer, fill=(40, 40, 40))
+        summary += ", " + ", ".join(notes)
+    y = h + 4
+    draw.text((4, y), summary, fill=(20, 20, 20), font=font)
+    for line in legend_lines:
+        y += line_h
+        if line == "<scorebar>":
+            _score_bar(draw, 4, y, font, line_h)
+        else:
+            draw.text((4, y), line, fill=(60, 60, 60), font=font)
     return np.asarray(canvas)
+
+
+def _font(size: int):  # noqa: ANN202 (a PIL font)
+    from PIL import ImageFont
+
+    try:
+        return ImageFont.load_default(size=size)
+    except TypeError:  # Pillow < 10.1: the fixed bitmap font
+        return ImageFont.load_default()
+
+
+def _wrap(text: str, font, width: float) -> list[str]:  # noqa: ANN001
+    """``text`` broken at spaces into lines no wider than ``width`` px in ``font``."""
+    if text == "<scorebar>":
+        return [text]
+    lines: list[str] = []
+    for word in text.split(" "):
+        if lines and font.getlength(lines[-1] + " " + word) <= width:
+            lines[-1] += " " + word
+        else:
+            lines.append(word)
+    return lines
+
+
+def _thick(edge: np.ndarray) -> np.ndarray:
+    out = edge.copy()
+    out[1:, :] |= edge[:-1, :]
+    out[:, 1:] |= edge[:, :-1]
+    return out
+
+
+def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: float,
+                  panels: bool) -> list[str]:  # fmt: skip
+    lines = [
+        "label '4 14%" + (" L0" if layout else "") + "' = instance 4, 14% of it occluded"
+        + (", layer 0 (0 = top of the pile)" if layout else "")
+        + "; " + ("tint" if alpha > 0 else "thick outline") + " = visible mask, thin dark "
+        "outline = amodal mask (the whole object)",
+    ]  # fmt: skip
+    if grasps is not None:
+        lines.append(
+            "grasps: "
+            + (
+                "lines between the two finger contacts"
+                if "j" in grasps.lower() or grasps == "pj"
+                else "discs at the cup contact"
+            )
+            + ", coloured by score:"
+        )
+        lines.append("<scorebar>")
+    if keypoints:
+        lines.append("keypoints: white disc = visible, grey ring = occluded")
+    if layout:
+        lines.append("white arrow: from a parent (lying on top) to its child (below it)")
+    return lines
+
+
+def _score_bar(draw, x: int, y: int, font, height: int) -> None:  # noqa: ANN001
+    draw.text((x, y), "score 0", fill=(60, 60, 60), font=font)
+    x0 = x + int(draw.textlength("score 0 ", font=font))
+    cols = score_colors(np.linspace(0.0, 1.0, 200))
+    for i, c in enumerate(cols):
+        draw.line([(x0 + i, y + 2), (x0 + i, y + height - 6)], fill=tuple(int(v) for v in c))
+    draw.text((x0 + 206, y), "1", fill=(60, 60, 60), font=font)
+
+
+def _amodal_panel(amodal: np.ndarray, colors: np.ndarray) -> np.ndarray:
+    """Every amodal mask in its instance colour, averaged where masks overlap, darker there."""
+    n, h, w = amodal.shape
+    acc = np.zeros((h, w, 3))
+    count = amodal.sum(axis=0)
+    for i in range(n):
+        acc[amodal[i]] += colors[i + 1]
+    out = np.zeros((h, w, 3))
+    hit = count > 0
+    out[hit] = acc[hit] / count[hit, None] / np.sqrt(count[hit, None])
+    return out.clip(0, 255).astype(np.uint8)
+
+
+def _depth_panel(view: View) -> np.ndarray:
+    d = np.asarray(view.depth, np.float64)
+    valid = np.isfinite(d) & (d > 0)
+    out = np.zeros(d.shape + (3,), np.uint8)
+    if valid.any():
+        lo, hi = np.percentile(d[valid], [1, 99])
+        t = np.clip((hi - d[valid]) / max(hi - lo, 1e-9), 0, 1)
+        g = (40 + 215 * t).astype(np.uint8)
+        out[valid] = np.stack([g, g, g], axis=-1)
+    return out
+
+
+def _scene_folder(root: str | os.PathLike[str], scene: int | None):  # noqa: ANN202
+    """The scene folder: ``root`` itself when it is one (``mgn scene label``), else
+    ``root/scene<scene>`` of a dataset."""
+    from mgn.io.dataset import SceneFolder
+
+    r = Path(root)
+    if any(r.glob("*_rgb.png")):
+        return SceneFolder(r, scene if scene is not None else 0)
+    if scene is None:
+        raise ValueError(f"'{r}' is a dataset folder: give --scene N (or pass a scene folder)")
+    return Dataset(r).scene(scene)
 
 
 def show(
     root: str | os.PathLike[str],
-    scene: int,
+    scene: int | None,
     view: int,
     out: str | os.PathLike[str],
     **kwargs: object,
 ) -> Path:
-    """Write the overlay of ``scene``/``view`` of the dataset at ``root`` to ``out`` (PNG)."""
+    """Write the overlay of ``scene``/``view`` to ``out`` (PNG). ``root`` is a dataset (then
+    ``scene`` is required) or a single scene folder (``mgn scene label --out``)."""
     from mgn.io.atomic import atomic_write_bytes
     from mgn.io.scene_format import png_bytes
 
-    image = render_overlay(Dataset(root).scene(scene).view(view), **kwargs)  # type: ignore[arg-type]
+    image = render_overlay(_scene_folder(root, scene).view(view), **kwargs)  # type: ignore[arg-type]
     path = Path(out)
     atomic_write_bytes(path, png_bytes(image))
     return path

@@ -123,8 +123,9 @@ TEST(Layout, RectangleOnRectangle) {
   // B pixels 4-adjacent to A: row 19 over cols 20..29 (10), col 19 and col 30 over rows 20..29
   // (10 each).
   EXPECT_EQ(r->edge_size, 30);
-  EXPECT_EQ(L.total_covered_edge[1], 30);
-  EXPECT_EQ(L.total_covered_edge[0], 0);
+  // MetaGraspNet: the sum of the children's edge sizes (A covers B along 30 px).
+  EXPECT_EQ(L.total_covered_edge[0], 30);
+  EXPECT_EQ(L.total_covered_edge[1], 0);
   EXPECT_EQ(L.order, (std::vector<std::int32_t>{1, 2}));
   EXPECT_EQ(L.complete[1], 1);  // B is a U shape: one region
   // B is 100/800 = 12.5 % occluded: level 2 (not 1).

@@ -85,7 +85,9 @@ TEST(SceneGrasps, SuctionOnBottomFaceHitsTheFloorTopFaceIsFree) {
   // Placement: contact frame z = approach, origin at the contact; tool end behind it.
   EXPECT_TRUE(s.X_W_contact[0].translation().isApprox(Vec3d(0, 0, 0.05), 1e-6));
   EXPECT_TRUE(s.X_W_contact[0].linear().col(2).isApprox(Vec3d(0, 0, -1), 1e-12));
-  EXPECT_NEAR(s.X_W_tool[0].translation().z(), 0.05 + Cup().body_height + 0.15, 1e-6);
+  // MetaGraspNet's tool pose: 2 cm (cup) + 11.21 cm (tool) behind the contact.
+  EXPECT_NEAR(s.X_W_tool[0].translation().z(), 0.05 + 0.02 + 0.1121, 1e-6);
+  EXPECT_NEAR(kSuctionToolOffset, 0.1321, 1e-12);
   EXPECT_NEAR(s.X_W_contact[0].linear().determinant(), 1.0, 1e-12);
 }
 

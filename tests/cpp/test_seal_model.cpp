@@ -1,4 +1,4 @@
-// The force-based spring-mass seal model on canonical shapes (MODELS.md §1).
+// The force-based spring-mass seal model on canonical shapes (docs/models.md §1).
 #include <gtest/gtest.h>
 #include <mgn/core/error.hpp>
 #include <mgn/geometry/primitives.hpp>
@@ -161,6 +161,29 @@ TEST(SpringSeal, RoofAboveTheCupFailsByObstruction) {
       mgn::Mesh::merge({plane(), placed(mgn::make_box({0.05, 0.05, 0.005}), 0, 0, 0.02)});
   EXPECT_EQ(nominal(low_roof, {0.0, 0.0, 0.0}, kUp), mgn::SealFailure::Obstruction);
   EXPECT_EQ(nominal(m, {0.07, 0.07, 0.0}, kUp), mgn::SealFailure::None);  // away from the roof
+}
+
+TEST(SpringSeal, JitteredTrialsOnALargePlaneAllSealAwayFromItsEdge) {
+  // The jitter moves the cup, not the surface: a trial whose point is jittered more than the
+  // compensable height below a plane must not see a "roof" above its contact. A 4 mm jitter per
+  // axis puts ~4 % of the trials more than h = 7 mm below the plane; every trial must still seal.
+  const mgn::Mesh m = placed(mgn::make_box({0.6, 0.6, 0.05}), 0, 0, -0.025);
+  mgn::SealModel model(m, mgn::Cup{});
+  const int side = 15;
+  mgn::Points3f p(side * side, 3), nn(side * side, 3);
+  for (int i = 0; i < side * side; ++i) {
+    p.row(i) << -0.1f + 0.2f * static_cast<float>(i % side) / (side - 1),
+        -0.1f + 0.2f * static_cast<float>(i / side) / (side - 1), 0.0f;
+    nn.row(i) << 0.0f, 0.0f, 1.0f;
+  }
+  mgn::SealOptions o;
+  o.position_sigma = 0.004;
+  o.seed = 3;
+  const mgn::SealResult r = model.evaluate(p, nn, o);
+  for (int i = 0; i < side * side; ++i) EXPECT_EQ(r.score[i], 1.0f) << "point " << i;
+  mgn::SealOptions d;  // the default jitter (r / 4)
+  d.seed = 4;
+  for (float s : model.evaluate(p, nn, d).score) EXPECT_EQ(s, 1.0f);
 }
 
 TEST(SpringSeal, BatchIsDeterministicForSeedsAndThreads) {

@@ -314,5 +314,105 @@ TEST(Shake, BadInputIsRejectedWithAClearMessage) {
   EXPECT_TRUE(empty.score.empty());
 }
 
+TEST(Staircase, EqualsTheFullGridOnMonotoneGridsWithFewTrials) {
+  // Random monotone grids (boundary b_i non-decreasing in the friction index i, success for
+  // density index j < b_i): the staircase reproduces every cell with <= 2S - 1 + checks trials.
+  std::uint64_t state = 12345;
+  auto next = [&state](int n) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((state >> 33) % static_cast<std::uint64_t>(n));
+  };
+  for (int S : {1, 2, 5, 10}) {
+    for (int rep = 0; rep < 200; ++rep) {
+      std::vector<int> b(static_cast<std::size_t>(S));
+      for (int i = 0; i < S; ++i) b[i] = std::max(i > 0 ? b[i - 1] : 0, next(S + 1));
+      auto truth = [&](int i, int j) { return j < b[i]; };
+      const StaircaseGrid g = staircase_grid(S, truth, 4);
+      EXPECT_FALSE(g.fallback);
+      EXPECT_LE(g.trials, 2 * S - 1 + 4);
+      for (int i = 0; i < S; ++i)
+        for (int j = 0; j < S; ++j)
+          ASSERT_EQ(g.success[static_cast<std::size_t>(i * S + j)], truth(i, j) ? 1 : 0)
+              << "S " << S << " rep " << rep << " cell " << i << "," << j;
+    }
+  }
+  EXPECT_THROW(staircase_grid(
+                   0, [](int, int) { return true; }, 4),
+               InvalidArgument);
+  EXPECT_THROW(staircase_grid(
+                   3, [](int, int) { return true; }, -1),
+               InvalidArgument);
+}
+
+TEST(Staircase, FallsBackToTheFullGridWhereMonotonicityIsViolated) {
+  // Boundary at j = 5 in every row, but cell (3, 4) fails although (2, 4) succeeds (more
+  // friction made it worse): the walk infers (3, 4) a success; a check next to the boundary
+  // catches it and every cell is simulated, so the result is the truth.
+  const int S = 10;
+  auto truth = [](int i, int j) { return j < 5 && !(i == 3 && j == 4); };
+  const StaircaseGrid g = staircase_grid(S, truth, 100);
+  EXPECT_TRUE(g.fallback);
+  EXPECT_EQ(g.trials, S * S);
+  for (int i = 0; i < S; ++i)
+    for (int j = 0; j < S; ++j) EXPECT_EQ(g.success[i * S + j], truth(i, j) ? 1 : 0);
+  // Without checks the violation goes unnoticed (the inferred cell is wrong).
+  const StaircaseGrid blind = staircase_grid(S, truth, 0);
+  EXPECT_FALSE(blind.fallback);
+  EXPECT_EQ(blind.success[3 * S + 4], 1);
+}
+
+TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
+  // A real case: a 70 g box 40 x 40 x 60 mm, grasped at heights from the centre to near its top
+  // edge (scores between 0 and 1): the staircase search gives the full grid's scores.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.06), 0.07);
+  std::vector<ParallelJawGrasp> grasps;
+  for (double dz : {0.0, 0.012, 0.022, 0.027}) {
+    ParallelJawGrasp g = centre_grasp(0.04);
+    g.p1.z() = dz;
+    grasps.push_back(g);
+  }
+  ShakeOptions o = small_grid(5, 0.1, 1.0);
+  o.grip_force = 5.0;
+  o.num_threads = 2;
+  const ShakeResult full = shake_test(box, ParallelJawGripper{}, grasps, o);
+  o.staircase = true;
+  const ShakeResult stair = shake_test(box, ParallelJawGripper{}, grasps, o);
+  int simulated = 0;
+  for (auto v : stair.trial_simulated) simulated += v;
+  EXPECT_LT(simulated, static_cast<int>(full.trial_success.size()));
+  for (std::size_t g = 0; g < grasps.size(); ++g)
+    EXPECT_EQ(stair.score[g], full.score[g]) << "grasp " << g;
+  for (std::size_t t = 0; t < full.trial_success.size(); ++t)
+    if (stair.trial_simulated[t]) EXPECT_EQ(stair.trial_success[t], full.trial_success[t]);
+}
+
+TEST(Shake, MeshGripperIsSimulatedWithItsOwnFingers) {
+  // A user's mesh gripper: with the box gripper's own meshes it holds the box like the boxes do;
+  // with fingers moved 60 mm sideways (they pass beside the box) it holds nothing, so the score
+  // must follow the meshes, not the box fields (which stay the defaults).
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), 0.05);
+  const ShakeOptions o = small_grid(2, 1.0, 2.0);
+  const ParallelJawGripper boxes;
+  const ShakeResult by_boxes = shake_test(box, boxes, {centre_grasp(0.04)}, o);
+  ParallelJawGripper same = boxes;
+  const GripperMeshes m = gripper_meshes(boxes, 0.0);
+  same.palm_mesh = m.palm;
+  same.finger_left_mesh = m.finger_left;
+  same.finger_right_mesh = m.finger_right;
+  const ShakeResult by_meshes = shake_test(box, same, {centre_grasp(0.04)}, o);
+  EXPECT_EQ(by_boxes.score[0], 1.0);
+  EXPECT_EQ(by_meshes.score[0], 1.0);
+  ParallelJawGripper aside = same;
+  Pose shift = Pose::Identity();
+  shift.translation() = Vec3d(0.0, 0.06, 0.0);
+  aside.finger_left_mesh = m.finger_left.transformed(shift);
+  aside.finger_right_mesh = m.finger_right.transformed(shift);
+  const ShakeResult missed = shake_test(box, aside, {centre_grasp(0.04)}, o);
+  EXPECT_EQ(missed.score[0], 0.0);
+  const ShakeTrajectory tr = shake_trajectory(box, aside, centre_grasp(0.04), 1.0, 1.0, o, 10);
+  for (std::size_t k = 0; k < tr.contact_left.size(); ++k)
+    EXPECT_FALSE(tr.contact_left[k] || tr.contact_right[k]) << "a finger touched at " << k;
+}
+
 }  // namespace
 }  // namespace mgn

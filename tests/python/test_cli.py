@@ -38,7 +38,8 @@ def test_objects_export_only(tmp_path, capsys):
 def test_info_reports_json(data_dir, capsys):
     assert main(["info", str(data_dir / "cube.stl"), "--density", "500"]) == 0
     info = json.loads(capsys.readouterr().out)
-    assert info["is_watertight"] and info["mass_kg"] == pytest.approx(0.004, rel=1e-5)
+    v, m = info["validation"], info["mass_properties"]
+    assert v["is_watertight"] and m["mass"] == pytest.approx(0.004, rel=1e-5)
 
 
 def test_errors_are_one_line_without_traceback(data_dir):

@@ -75,7 +75,7 @@ def test_rectangle_on_rectangle():
     assert L.layer.tolist() == [0, 1]
     assert L.parents(2) == [(1, pytest.approx(0.1, abs=1e-6), 30)]
     assert L.children(1) == [(2, pytest.approx(0.1, abs=1e-6), 30)]
-    assert L.total_covered_edge.tolist() == [0, 30]
+    assert L.total_covered_edge.tolist() == [30, 0]  # A covers B along 30 px
     assert L.seen_px.tolist() == [100]
     assert L.order.tolist() == [1, 2]
     assert L.max_occlusion == pytest.approx(0.125)
@@ -242,15 +242,8 @@ def brute_force(visible, amodal, depth, occ, min_px=10, frac=0.1):
                 diffs.append(depth[r, c] - np.mean([depth[y, x] for y, x in nb]))
         edge[(a + 1, b + 1)] = (count, float(np.median(diffs)) if diffs else np.nan)
 
-    def next_to_parent(b: int, r: int, c: int) -> bool:
-        for y, x in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
-            if 0 <= y < H and 0 <= x < W and visible[y, x] > 0 and parent[b, visible[y, x] - 1]:
-                return True
-        return False
-
-    covered = [
-        sum(next_to_parent(b, r, c) for r, c in np.argwhere(visible == b + 1)) for b in range(n)
-    ]
+    # MetaGraspNet's total_covered_edge: the sum of the edge sizes of the object's children.
+    covered = [sum(cnt for (a, _b), (cnt, _d) in edge.items() if a == i + 1) for i in range(n)]
     regions = [
         ndimage.label(visible == i + 1, structure=np.ones((3, 3)))[1] if vis_px[i] else 0
         for i in range(n)

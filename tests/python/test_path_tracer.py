@@ -422,3 +422,188 @@ def test_bad_parameters_name_the_setting():
         PathScene([sphere], np.eye(4)[None], [-3], [[PbrMaterial()]])
     with pytest.raises(InvalidArgumentError, match=r"develop: radiance"):
         develop(np.zeros((4, 4)))
+
+
+# ---------------------------------------------------------------------------------------------
+# Thin lens.
+
+
+def test_thin_lens_blur_circle_and_autofocus():
+    """A tiny emitter at distance d seen through a thin lens of aperture radius A focused at s
+    spreads over a disc of radius f * A * |1/s - 1/d| px (f in px) and keeps its total radiance
+    sum (each lens point sees the same emitter, shifted); focused on it (also by the automatic
+    focus on the image centre) it stays as sharp as with a pinhole."""
+    f, d, A = 100.0, 1.0, 0.05
+    emitter = quad(0.01, z=0.0)
+    mat = PbrMaterial(base_color=(0, 0, 0), ior=1.0, emission=(1.0, 1.0, 1.0))
+    scene = PathScene([emitter], np.eye(4)[None], [1], [[mat]], (), BLACK)
+    K = Intrinsics(33, 33, f, f, 16.5, 16.5)
+    view = CameraView(K, look_at(np.array([0, 0, d]), np.zeros(3), np.array([0, 1.0, 0])))
+    pin = scene.render(view, PathTraceOptions(spp=64, max_bounces=0)).radiance[..., 0]
+    s = 0.5
+    blur = scene.render(
+        view, PathTraceOptions(spp=256, max_bounces=0, aperture_radius=A, focus_distance=s)
+    ).radiance[..., 0]
+    auto = scene.render(view, PathTraceOptions(spp=64, max_bounces=0, aperture_radius=A)).radiance[
+        ..., 0
+    ]
+    radius = f * A * abs(1 / s - 1 / d)  # 5 px
+    v, u = np.nonzero(blur > 0)
+    r = np.hypot(u + 0.5 - 16.5, v + 0.5 - 16.5)
+    assert r.max() <= radius + 1.5 and r.max() >= radius - 1.0
+    assert blur.sum() == pytest.approx(pin.sum(), rel=0.05)
+    assert (pin > 0).sum() <= 4
+    v, u = np.nonzero(auto > 0)
+    assert np.hypot(u + 0.5 - 16.5, v + 0.5 - 16.5).max() <= 1.5
+    assert auto.sum() == pytest.approx(pin.sum(), rel=0.05)
+
+
+def test_base_color_texture_is_looked_up_at_the_mesh_uvs():
+    """A quad textured with 2x2 texels (sRGB) under a uniform dome L = 1 (one bounce: the open
+    plane sees the whole upper dome) shows each texel's linear colour in its quadrant, with
+    texel row 0 (the image top) at v = 1."""
+    h = 0.5
+    v = [[-h, -h, 0], [h, -h, 0], [h, h, 0], [-h, h, 0]]
+    uv = [[0, 0], [1, 0], [1, 1], [0, 1]]
+    plane = mesh_from_arrays(v, [[0, 1, 2], [0, 2, 3]], uvs=uv)
+    tex = np.array([[[255, 0, 0], [0, 255, 0]], [[0, 0, 255], [128, 128, 128]]], np.uint8)
+    mat = PbrMaterial(base_color=(1, 1, 1), ior=1.0, base_color_texture=tex)
+    scene = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), uniform(1.0))
+    view = camera((0, 0, 2.0), (0, 0, 0), 40, 20, up=(0, 1, 0))  # image up = world +y
+    out = scene.render(view, PathTraceOptions(spp=4, max_bounces=1))
+    # Texel centres are at uv 0.25 / 0.75, i.e. world +-0.25: find their pixels.
+    K = view.K
+    lin = srgb_to_linear(tex.astype(float) / 255)
+    for (x, y), texel in [((-0.25, 0.25), lin[0, 0]), ((0.25, 0.25), lin[0, 1]),
+                          ((-0.25, -0.25), lin[1, 0]), ((0.25, -0.25), lin[1, 1])]:  # fmt: skip
+        p_C = np.linalg.inv(view.X_WC) @ np.array([x, y, 0.0, 1.0])
+        u = int(K.fx * p_C[0] / p_C[2] + K.cx)
+        w = int(K.fy * p_C[1] / p_C[2] + K.cy)
+        # (the pixel footprint blends ~2 % of the neighbour texel through bilinear filtering)
+        np.testing.assert_allclose(out.radiance[w, u], texel, atol=0.03)
+
+
+def srgb_to_linear(c):
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def test_sky_dome_colours_and_sun_irradiance():
+    """Directly seen, the gradient dome shows the zenith colour straight up and the ground colour
+    below the horizon; the sky's sun disc adds an irradiance of sun_strength * pi * lum(zenith)
+    at normal incidence, i.e. a * sun_strength * lum(zenith) in the radiance of a Lambertian
+    plane of albedo a facing the sun (sky minus gradient with the same colours)."""
+    kw = dict(
+        zenith=(0.2, 0.3, 0.6), horizon=(0.7, 0.7, 0.7), ground=(0.1, 0.2, 0.1), intensity=2.0
+    )
+    grad = Environment(kind="gradient", **kw)
+    sky = Environment(kind="sky", sun_direction=(0, 0, 1), sun_strength=4.0, **kw)
+    dummy = quad(0.01, z=-50.0)
+    scene = PathScene([dummy], np.eye(4)[None], [1], [[PbrMaterial()]], (), grad)
+    up = scene.render(camera((0, 0, 0), (0, 0, 1), 8, 5, up=(0, 1, 0)), PathTraceOptions(spp=1))
+    zenith = np.multiply(kw["zenith"], 2.0)
+    np.testing.assert_allclose(up.radiance, np.broadcast_to(zenith, (8, 8, 3)), rtol=5e-3)
+    down = scene.render(camera((0, 0, 0), (1, 0, -1), 8, 5), PathTraceOptions(spp=1))
+    ground = np.multiply(kw["ground"], 2.0)
+    np.testing.assert_allclose(down.radiance, np.broadcast_to(ground, (8, 8, 3)), rtol=1e-6)
+    a = 0.5
+    plane = quad(40.0)
+    mat = PbrMaterial(base_color=(a,) * 3, ior=1.0)
+    view = camera((0.3, 0.2, 1.0), (0.3, 0.2, 0.0), 16, 30, up=(0, 1, 0))
+    opts = PathTraceOptions(spp=64, max_bounces=1)
+    s_grad = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), grad).render(view, opts)
+    s_sky = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), sky).render(view, opts)
+    lum_zenith = 2.0 * (0.2126 * 0.2 + 0.7152 * 0.3 + 0.0722 * 0.6)
+    diff = (s_sky.radiance - s_grad.radiance).mean()
+    assert diff == pytest.approx(a * 4.0 * lum_zenith, rel=0.02)
+
+
+def ggx_metal_radiance(p, cam, centre, size, Le, f0, alpha, n=240):
+    """Radiance towards `cam` from point p (normal +z) of a GGX metal (Schlick F, height-
+    correlated Smith G2) lit by a horizontal rect light facing down, by quadrature over the
+    light of f(wo, wi) Le cos_i cos_l / r^2."""
+    h = size / 2
+    g = (np.arange(n) + 0.5) / n * size - h
+    X, Y = np.meshgrid(g + centre[0], g + centre[1])
+    d = np.stack([X - p[0], Y - p[1], np.full_like(X, centre[2] - p[2])], -1)
+    r2 = (d**2).sum(-1)
+    wi = d / np.sqrt(r2)[..., None]
+    wo = np.asarray(cam, float) - p
+    wo = wo / np.linalg.norm(wo)
+    hv = wi + wo
+    hv /= np.linalg.norm(hv, axis=-1, keepdims=True)
+    a2 = alpha**2
+    D = a2 / (np.pi * (hv[..., 2] ** 2 * (a2 - 1) + 1) ** 2)
+
+    def lam(c):
+        return 0.5 * (-1 + np.sqrt(1 + a2 * (1 - c**2) / c**2))
+
+    G2 = 1 / (1 + lam(wo[2]) + lam(wi[..., 2]))
+    F = f0 + (1 - f0) * (1 - (wo * hv).sum(-1)) ** 5
+    f = F * D * G2 / (4 * wo[2] * wi[..., 2])
+    cos_i = wi[..., 2]
+    cos_l = wi[..., 2]
+    return Le * (f * cos_i * cos_l / r2).sum() * (size / n) ** 2
+
+
+def test_glossy_metal_plane_under_rect_light_matches_quadrature():
+    """Light sampling and BSDF sampling combined by MIS give the reflected radiance of a rough
+    GGX metal plane under a rect light (direct lighting only), pixel by pixel within 3 %."""
+    f0, roughness, Le, size, height = 0.9, 0.4, 5.0, 0.2, 0.5
+    mat = PbrMaterial(base_color=(f0,) * 3, metallic=1.0, roughness=roughness)
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])
+    X_WL[:3, 3] = (0.0, 0.0, height)
+    light = AreaLight(X_WL, "rect", (size, size), (1.0, 1.0, 1.0), Le)
+    scene = PathScene([quad(4.0)], np.eye(4)[None], [1], [[mat]], [light], BLACK)
+    eye = np.array([0.6, 0.0, 0.6])
+    view = camera(eye, (-0.1, 0.0, 0.0), 24, 40)
+    out = scene.render(view, PathTraceOptions(spp=256, max_bounces=1, seed=2))
+    K = view.K
+    expected = np.zeros((K.height, K.width))
+    for i in range(K.height):
+        for j in range(K.width):
+            d_C = np.array([(j + 0.5 - K.cx) / K.fx, (i + 0.5 - K.cy) / K.fy, 1.0])
+            d_W = view.X_WC[:3, :3] @ d_C
+            p = eye + (-eye[2] / d_W[2]) * d_W
+            expected[i, j] = ggx_metal_radiance(
+                p, eye, (0.0, 0.0, height), size, Le, f0, roughness**2, n=100
+            )
+    got = out.radiance[..., 1]
+    bright = expected > 0.2 * expected.max()
+    assert 20 <= bright.sum() <= 400
+    np.testing.assert_allclose(got[bright], expected[bright], rtol=0.03)
+    # The highlight sum (all pixels) agrees too.
+    assert got.sum() == pytest.approx(expected.sum(), rel=0.01)
+
+
+def test_bad_shapes_and_types_are_invalid_argument_errors():
+    with pytest.raises(InvalidArgumentError, match=r"PbrMaterial.base_color must be 3 numbers"):
+        PbrMaterial(base_color=(1, 1))
+    with pytest.raises(InvalidArgumentError, match=r"AreaLight.X_WL must be a \(4, 4\) pose"):
+        AreaLight(np.eye(3))
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.seed must be >= 0"):
+        PathTraceOptions(seed=-1)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.spp must be an integer"):
+        PathTraceOptions(spp=2.5)
+    with pytest.raises(InvalidArgumentError, match=r"base_color_texture must be an \(H, W, 3\)"):
+        PbrMaterial(base_color_texture=np.zeros((4, 4), np.uint8))
+
+
+def test_clamp_indirect_clamps_only_light_found_after_the_first_bounce():
+    """Interior furnace (E = 0.6, a = 0.5, two bounces): the camera ray's hit emits E, the first
+    bounce brings a E (direct light), the second a^2 E = 0.15 (indirect). clamp_indirect = 0.1
+    clamps only the last: E + a E + 0.1; the default (10) changes nothing."""
+    E, a = 0.6, 0.5
+    mat = PbrMaterial(base_color=(a,) * 3, ior=1.0, emission=(E,) * 3)
+    scene = PathScene(
+        [make_sphere(1.0, 256, 128).flipped()], np.eye(4)[None], [1], [[mat]], (), BLACK
+    )
+    view = camera((0, 0, 0), (1, 0.2, 0.1), 8, 90)
+    base = dict(spp=16, max_bounces=2, rr_depth=100)
+    clamped = scene.render(view, PathTraceOptions(**base, clamp_indirect=0.1)).radiance
+    default = scene.render(view, PathTraceOptions(**base)).radiance
+    off = scene.render(view, PathTraceOptions(**base, clamp_indirect=0.0)).radiance
+    assert clamped.mean() == pytest.approx(E + a * E + 0.1, rel=2e-3)
+    assert default.tobytes() == off.tobytes()
+    assert default.mean() == pytest.approx(E * (1 + a + a * a), rel=2e-3)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.clamp_indirect"):
+        PathTraceOptions(clamp_indirect=-1.0)

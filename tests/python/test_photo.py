@@ -31,6 +31,7 @@ from mgn.render.photo import RandomizeSettings, RenderSettings, draw_lighting
         ({"denoise": "yes"}, "render.denoise"),
         ({"max_bounces": -1}, "render.max_bounces"),
         ({"tone": "aces"}, "render.tone"),
+        ({"denoise_quality": "best"}, "render.denoise_quality"),
         ({"exposure": float("nan")}, "render.exposure"),
         ({"aperture_radius": -0.001}, "render.aperture_radius"),
         ({"randomize": {"light_count": [3, 1]}}, "render.randomize.light_count"),

@@ -340,3 +340,38 @@ def test_merged_parts_still_cover_the_object_and_respect_cap_and_budget(name):
         assert inside_some.max() <= 2e-5, (name, tol, cap)
     with pytest.raises(mgn.InvalidArgumentError, match="merge_max_parts"):
         convex_decomposition(mesh, ConvexDecompositionOptions(merge_max_parts=-2))
+
+
+def test_render_penetration_of_two_overlapping_spheres_is_their_overlap():
+    from mgn.scene.penetration import render_penetration
+
+    r, depth = 0.03, 0.002
+    ball = mgn.make_sphere(r, 96, 48)
+    X1, X2 = np.eye(4), np.eye(4)
+    X1[:3, 3] = (-(r - depth / 2), 0.0, 0.05)
+    X2[:3, 3] = (r - depth / 2, 0.0, 0.05)
+    # Analytic: the deepest vertex of one sphere inside the other lies `depth` below its surface
+    # (up to the tessellation's chord error, r (1 - cos(pi/48)) ~ 0.06 mm here).
+    got = render_penetration([ball, ball], [X1, X2], ToteSpec())
+    assert abs(got - depth) < 1e-4
+    X2[:3, 3] = (r + 0.001, 0.0, 0.05)  # apart
+    assert render_penetration([ball, ball], [X1, X2], ToteSpec()) < 1e-9
+    X1[2, 3] = r - 0.0015  # sunk 1.5 mm into the floor
+    assert abs(render_penetration([ball], [X1], ToteSpec()) - 0.0015) < 1e-4
+
+
+def test_round_objects_rest_on_the_floor_and_do_not_overlap():
+    """Physics hulls contain the render meshes: a ball rests on its lowest render-mesh point
+    (not sunk into the floor), and balls in a pile do not overlap (issue: 1-1.8 mm before)."""
+    ball = get_object("tennis_ball")
+    scene = drop_scene([ball], seed=2)
+    (inst,) = scene.instances
+    v = np.asarray(object_mesh(ball).vertices, np.float64)
+    z = v @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3]
+    assert abs(z[:, 2].min()) < 3e-4
+    pile = drop_scene([ball] * 6, seed=4)
+    assert len(pile.instances) >= 4
+    assert pile.stats["max_penetration"] < 5e-4  # render meshes, vertices inside others
+    for inst in pile.instances:
+        z = v @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3]
+        assert z[:, 2].min() > -3e-4

@@ -19,6 +19,7 @@ from mgn.io.scene_format import (
     hdf5_bytes,
     scene_gt_entries,
     to_cm,
+    view_file_names,
     write_scene_gt,
     write_view,
 )
@@ -167,7 +168,8 @@ def test_written_view_reads_back_in_si(dataset):
     assert [e["obj_id"] for e in gt["1"]] == [11, 12]
     assert np.allclose(gt["1"][1]["cam_t_m2c"], [2, 2, 65])
     with h5_open(view.path("_scene.hdf5")) as h5:
-        assert all(h5[k].dtype == np.float32 for k in ("objects/categories", "objects/bbox_loose"))
+        assert h5["objects/bbox_loose"].dtype == np.float32
+        assert h5["objects/categories"].dtype == np.int32  # integer-valued labels as integers
 
 
 def h5_open(path):
@@ -201,7 +203,7 @@ def test_files_are_reproducible(tmp_path):
                 for p in (tmp_path / str(k)).iterdir()
             }
         )
-    assert digests[0] == digests[1] and len(digests[0]) == 8
+    assert digests[0] == digests[1] and len(digests[0]) == len(view_file_names(0))
 
 
 def test_record_checks_shapes():
@@ -314,7 +316,7 @@ def test_show_draws_the_view(dataset, tmp_path):
     assert main(["show", str(dataset), "--scene", "0", "--view", "1", "--grasps", "pj",
                  "--layout", "-o", str(out)]) == 0  # fmt: skip
     with Image.open(out) as im:
-        assert im.size == (W, H + 20)
+        assert im.size[0] == W and im.size[1] > H  # the legend below the view
     view = Dataset(dataset).scene(0).view(1)
     img = render_overlay(view, keypoints=False)
     # Instance colours are blended over the visible pixels only; the background below the
@@ -327,8 +329,43 @@ def test_show_draws_the_view(dataset, tmp_path):
     uv, front = project([[0.0, 0.0, 1.0], [0.1, 0.0, -1.0]], np.array([[50, 0, 30], [0, 50, 20],
                                                                        [0, 0, 1.0]]))  # fmt: skip
     assert np.allclose(uv[0], [30, 20]) and list(front) == [True, False]
-    with pytest.raises(ValueError, match="grasps must be"):
+    with pytest.raises(ValueError, match="unknown grasp kind 'magnetic'"):
         render_overlay(view, grasps="magnetic")
+
+
+def test_show_outline_mode_panels_and_a_single_scene_folder(dataset, tmp_path):
+    from PIL import Image
+
+    from mgn.cli import main
+    from mgn.overlay import render_overlay
+
+    view = Dataset(dataset).scene(0).view(1)
+    inst = view.instances
+    fg = inst > 0
+
+    def unchanged(alpha: float) -> int:  # visible-mask pixels where the RGB shows through
+        img = render_overlay(view, keypoints=False, alpha=alpha)
+        return int(np.all(img[:H][fg] == view.rgb[fg], axis=-1).sum())
+
+    # Outline mode: only the mask borders, amodal contours and labels cover the RGB; with a
+    # tint every visible pixel changes but those under the labels' white strokes.
+    assert unchanged(0.0) > unchanged(0.45) + 0.15 * fg.sum()
+    assert unchanged(1.0) <= unchanged(0.45)
+    panels = render_overlay(view, keypoints=False, panels=True)
+    assert panels.shape[1] == 3 * W
+    amodal_panel = panels[24:H, W : 2 * W]  # below the panel's title
+    any_amodal = view.amodal.any(axis=0)[24:]
+    assert any_amodal.any() and (amodal_panel.sum(axis=-1) > 0)[any_amodal].all()
+    assert (amodal_panel.sum(axis=-1) == 0)[~any_amodal].all()
+    with pytest.raises(ValueError, match="alpha"):
+        render_overlay(view, alpha=1.5)
+    # A single scene folder (as `mgn scene label` writes it) works without --scene.
+    out = tmp_path / "s.png"
+    assert main(["show", str(dataset / "scene0"), "--view", "1", "--alpha", "0", "--panels",
+                 "--grasps", "paralleljaw", "-o", str(out)]) == 0  # fmt: skip
+    with Image.open(out) as im:
+        assert im.size[0] == 3 * W
+    assert main(["show", str(dataset), "--view", "1", "-o", str(out)]) == 1  # which scene?
 
 
 def test_report_is_a_self_contained_page(dataset, tmp_path):

@@ -91,7 +91,8 @@ def test_suction_on_the_bottom_face_hits_the_floor_and_on_the_top_face_does_not(
     assert m.suction.hit[1, 0] == 0  # the tote, at the grasp
     # Tool pose: same axes as the contact frame, body_height + shaft behind the contact.
     assert np.allclose(m.suction.contact_poses[0][:3, 2], [0, 0, -1])
-    assert np.allclose(m.suction.tool_poses[0][:3, 3], [0, 0, 0.05 + 0.03 + 0.15], atol=1e-6)
+    # MetaGraspNet: tool origin 2 cm (cup) + 11.21 cm (tool) behind the contact.
+    assert np.allclose(m.suction.tool_poses[0][:3, 3], [0, 0, 0.05 + 0.02 + 0.1121], atol=1e-6)
     c = m.collisions("suction")
     assert (c.total, c.colliding, c.by_obstacle) == (2, 1, {"tote": 1})
     assert np.isnan(m.suction.score_simulation).all()
@@ -176,7 +177,9 @@ def real_scene():
 
 def test_collisions_agree_with_python_fcl_on_a_real_scene(real_scene):
     scene, pj, su = real_scene
-    m = SceneGraspModel(scene, pj, su, num_threads=2)
+    # approach_step 1 m: only the listed offsets are checked, each compared with FCL here (the
+    # path between them is tested in test_approach_path.py).
+    m = SceneGraspModel(scene, pj, su, num_threads=2, approach_step=1.0)
     assert len(m.pj) == sum(len(p) for p in pj) > 0
     from mgn.render.views import tote_mesh
 
@@ -231,7 +234,9 @@ def test_view_grasps_of_a_real_scene_are_consistent(real_scene):
     assert 0 < kept < len(m.suction)
     paths = out.datasets()
     assert paths["colliding_grasps/suctioncup/object_id"].dtype == np.int32
-    assert len(paths) == 2 * (7 + 6)
+    # 7 parallel-jaw and 6 suction datasets per group, plus why each colliding grasp collides.
+    assert len(paths) == 2 * (7 + 6) + 2 * 2
+    assert paths["colliding_grasps/paralleljaw/collision_part"].dtype == np.uint8
     # Nothing seen: nothing kept.
     none = m.view_grasps(view, np.zeros(len(scene.instances), bool))
     assert len(none.non_colliding.paralleljaw) == len(none.colliding.suctioncup) == 0

@@ -200,7 +200,8 @@ def test_amodal_matches_the_renderer_alone_on_99_percent(library_scene, library_
     assert L.com_points.shape == (5000, 4)
     np.testing.assert_array_equal(L.com_object, np.repeat(np.arange(5), 1000))
     # CoM point visibility, first by brute force in Python: one ray per point through a RayScene
-    # of every object and the tote, seen when the first hit is not nearer than 2 mm before it.
+    # of every object and the tote, seen when the first hit is the point's own object within
+    # 2 mm of the point.
     p_C = L.com_points[:, 1:]
     X_WC = view.X_WC
     p_W = p_C @ X_WC[:3, :3].T + X_WC[:3, 3]
@@ -209,10 +210,13 @@ def test_amodal_matches_the_renderer_alone_on_99_percent(library_scene, library_
     everything = mgn.RayScene(
         [scene.mesh(i) for i in range(5)] + [tote_mesh(scene.tote)],
         np.stack([inst.X_WO for inst in scene.instances] + [np.eye(4)]),
+        instance_ids=[1, 2, 3, 4, 5, 0],
     )
     origins = np.repeat(X_WC[None, :3, 3], len(p_W), axis=0).astype(np.float32)
-    first = everything.intersect(origins, (rays / dist[:, None]).astype(np.float32)).distance
-    np.testing.assert_array_equal(L.com_visible, first >= dist - 0.002)
+    hits = everything.intersect(origins, (rays / dist[:, None]).astype(np.float32))
+    first = hits.distance
+    own = np.asarray(hits.instance_ids) == L.com_object + 1
+    np.testing.assert_array_equal(L.com_visible, own & (np.abs(first - dist) <= 0.002))
     assert 0.1 < L.com_visible.mean() < 0.9
     # Second opinion from the rasteriser's depth buffer at 4x the resolution (same field of
     # view): a point is seen when the rendered z-depth at its pixel is its own z within 2.5 mm;

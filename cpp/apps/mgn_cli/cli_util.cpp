@@ -1,12 +1,14 @@
 #include "cli_util.hpp"
 
 #include <mgn/core/error.hpp>
+#include <mgn/geometry/mesh.hpp>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <sstream>
 
 namespace mgn_cli {
@@ -87,6 +89,26 @@ void write_atomically(const std::string& path, const std::string& text, const st
     std::remove(tmp.c_str());
     throw mgn::IoError(who + ": cannot rename '" + tmp + "' to '" + path + "'");
   }
+}
+
+bool warn_implausible_size(const std::string& who, const std::string& path, const mgn::Mesh& mesh) {
+  if (mesh.num_vertices() == 0) return false;
+  const auto b = mesh.bounds();
+  const double extent = (b.row(1) - b.row(0)).maxCoeff();
+  std::ostringstream msg;
+  msg << std::setprecision(3);
+  if (extent > 1.0) {
+    msg << who << ": warning: '" << path << "' is " << extent
+        << " m across, too large for a part in a tote; if the file is in millimetres, "
+           "pass --scale 0.001";
+  } else if (extent < 1e-3) {
+    msg << who << ": warning: '" << path << "' is " << extent * 1e3
+        << " mm across, too small for a picked part; check --scale (the file's unit)";
+  } else {
+    return false;
+  }
+  std::cerr << msg.str() << "\n";
+  return true;
 }
 
 }  // namespace mgn_cli

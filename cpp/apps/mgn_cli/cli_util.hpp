@@ -2,6 +2,10 @@
 // Small helpers shared by the mgn-cli subcommands: argument parsing, JSON strings, atomic writes.
 #include <string>
 
+namespace mgn {
+class Mesh;
+}
+
 namespace mgn_cli {
 
 /// `text` as an integer; InvalidArgument naming `what` (e.g. "mgn-cli pj: --seed") otherwise.
@@ -16,5 +20,9 @@ std::string json_string(const std::string& s);
 /// Writes `text` to `path` through a temporary file and a rename, so readers never see a partial
 /// file. IoError naming `who` and the path on failure.
 void write_atomically(const std::string& path, const std::string& text, const std::string& who);
+/// Prints a warning to stderr (naming `who` and `path`) when the largest extent of `mesh` is
+/// implausible for a picked part: above 1 m (a file in millimetres read as metres?) or below
+/// 1 mm (a file in metres scaled down twice?). Returns true when it warned.
+bool warn_implausible_size(const std::string& who, const std::string& path, const mgn::Mesh& mesh);
 
 }  // namespace mgn_cli

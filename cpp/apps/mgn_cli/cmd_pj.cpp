@@ -16,10 +16,11 @@ namespace mgn_cli {
 
 const char* kPjUsage =
     "  pj --mesh MESH --out LABELS.json [--gripper G.yaml] [--points N] [--seed S]\n"
-    "     [--density D] [--threads T]\n"
+    "     [--density D] [--scale S] [--threads T]\n"
     "      Parallel-jaw labels of a watertight mesh (docs/models.md 5): N contact points (default\n"
     "      5000) sampled evenly, antipodal robust sampler, collision check, soft-finger wrench\n"
-    "      score (density D kg/m^3, default 1000, gravity -z). G is a gripper YAML as written by\n"
+    "      score (density D kg/m^3, default 1000, gravity -z). S scales the mesh coordinates\n"
+    "      (default 1; 0.001 for a file in millimetres). G is a gripper YAML as written by\n"
     "      mgn.hardware.ParallelJawGripper (default: the MetaGraspNet hand). Output JSON in SI\n"
     "      units (m): rows [a (3), v (3), p1 (3), w] with quality_score and score_wrench.\n";
 
@@ -77,6 +78,7 @@ int cmd_pj(const std::vector<std::string>& args) {
   int points = 5000, threads = 0;
   long long seed = 0;
   double density = 1000.0;
+  double scale = 1.0;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (i + 1 >= args.size()) throw mgn::InvalidArgument("mgn-cli pj: " + a + " needs a value");
@@ -95,6 +97,8 @@ int cmd_pj(const std::vector<std::string>& args) {
       threads = to_int("mgn-cli pj: " + a, v);
     } else if (a == "--density") {
       density = to_double("mgn-cli pj: " + a, v);
+    } else if (a == "--scale") {
+      scale = to_double("mgn-cli pj: " + a, v);
     } else {
       throw mgn::InvalidArgument("mgn-cli pj: unknown option '" + a + "'");
     }
@@ -111,10 +115,21 @@ int cmd_pj(const std::vector<std::string>& args) {
   }
   if (points < 1) throw mgn::InvalidArgument("mgn-cli pj: --points must be >= 1");
   if (seed < 0) throw mgn::InvalidArgument("mgn-cli pj: --seed must be >= 0");
+  if (!(scale > 0.0) || !std::isfinite(scale)) {
+    throw mgn::InvalidArgument("mgn-cli pj: --scale must be a finite number > 0");
+  }
 
   const mgn::ParallelJawGripper gripper =
       gripper_path.empty() ? mgn::ParallelJawGripper{} : read_gripper(gripper_path);
-  const mgn::Mesh mesh = mgn::load_mesh(mesh_path);
+  mgn::LoadOptions load;
+  load.scale = scale;
+  mgn::Mesh mesh = mgn::load_mesh(mesh_path, load);
+  warn_implausible_size("mgn-cli pj", mesh_path, mesh);
+  // A closed mesh wound inward (e.g. a mirrored export) would give inward surface normals and no
+  // grasp at all: use the same geometry wound outward (as mgn's user-object path does).
+  const mgn::MeshReport report = mesh.validate();
+  if (report.is_watertight && report.is_winding_consistent && report.signed_volume < 0)
+    mesh = mesh.flipped();
   mgn::MassOptions mass_options;
   mass_options.density = density;
   mass_options.open_mesh = mgn::OpenMeshPolicy::Error;

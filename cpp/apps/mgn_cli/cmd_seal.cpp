@@ -153,6 +153,7 @@ int cmd_seal(const std::vector<std::string>& args) {
   mgn::LoadOptions load;
   load.scale = scale;
   const mgn::Mesh mesh = mgn::load_mesh(mesh_path, load);
+  warn_implausible_size("mgn-cli seal", mesh_path, mesh);
   mgn::Points3f points, normals;
   read_points(points_path, scale, points, normals);
 

@@ -4,6 +4,7 @@
 
 #include <cctype>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -133,11 +134,24 @@ FlatYaml FlatYaml::parse(const std::string& text, const std::string& source) {
 }
 
 FlatYaml FlatYaml::load(const std::string& path) {
-  std::ifstream in(path);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    mgn::throw_error<mgn::IoError>("YAML file '", path, "' is a folder; expected a YAML file");
+  }
+  std::ifstream in(path, std::ios::binary);
   if (!in) mgn::throw_error<mgn::IoError>("cannot read YAML file '", path, "'");
   std::stringstream ss;
   ss << in.rdbuf();
-  return parse(ss.str(), path);
+  const std::string text = ss.str();
+  // Text only: no NUL byte and no control characters other than tab, CR and LF.
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u == 0 || (u < 0x20 && c != '\t' && c != '\n' && c != '\r') || u == 0x7f) {
+      mgn::throw_error<mgn::InvalidArgument>("YAML file '", path,
+                                             "' is a binary file; expected YAML text");
+    }
+  }
+  return parse(text, path);
 }
 
 bool FlatYaml::is_null(const std::string& key) const {

@@ -86,6 +86,7 @@ int cmd_info(const std::vector<std::string>& args) {
   }
   if (path.empty()) throw mgn::InvalidArgument("mgn-cli info: missing MESH argument");
   const mgn::Mesh mesh = mgn::load_mesh(path, load);
+  mgn_cli::warn_implausible_size("mgn-cli info", path, mesh);
   const mgn::MeshReport r = mesh.validate();
   const mgn::MassProperties m = mgn::compute_mass_properties(mesh, mass);
   const auto b = mesh.bounds();

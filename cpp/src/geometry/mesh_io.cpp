@@ -29,7 +29,8 @@ Material read_material(const aiScene* scene, const aiMaterial* m, const fs::path
   aiColor3D s;
   if (m->Get(AI_MATKEY_COLOR_SPECULAR, s) == AI_SUCCESS) out.specular = Vec3f(s.r, s.g, s.b);
   float value = 0.0f;
-  if (m->Get(AI_MATKEY_SHININESS, value) == AI_SUCCESS && std::isfinite(value))
+  // OBJ files without a .mtl (and `Ns 0`) report a shininess of 0: keep the default then.
+  if (m->Get(AI_MATKEY_SHININESS, value) == AI_SUCCESS && std::isfinite(value) && value > 0.0f)
     out.shininess = value;
   if (m->Get(AI_MATKEY_OPACITY, value) == AI_SUCCESS && std::isfinite(value)) {
     out.opacity = std::clamp(value, 0.0f, 1.0f);

@@ -64,26 +64,35 @@ SurfaceSamples sample_surface(const Mesh& mesh, std::int64_t count, const Sample
   out.normals.resize(count, 3);
   out.face_ids.resize(static_cast<std::size_t>(count));
   if (count == 0) return out;
-  std::vector<float> min_d2(static_cast<std::size_t>(pool_size),
-                            std::numeric_limits<float>::infinity());
-  std::int64_t pick = 0;
+  // Structure of arrays: the distance update is a plain loop the compiler vectorises, and the
+  // arg-max (first index of the largest value) is a second pass; same picks as one fused loop.
+  const auto n_pool = static_cast<std::size_t>(pool_size);
+  std::vector<float> xs(n_pool), ys(n_pool), zs(n_pool);
+  for (std::size_t j = 0; j < n_pool; ++j) {
+    const auto r = static_cast<Eigen::Index>(j);
+    xs[j] = pool.points(r, 0);
+    ys[j] = pool.points(r, 1);
+    zs[j] = pool.points(r, 2);
+  }
+  std::vector<float> min_d2(n_pool, std::numeric_limits<float>::infinity());
+  std::size_t pick = 0;
   for (std::int64_t i = 0; i < count; ++i) {
-    out.points.row(i) = pool.points.row(pick);
-    out.normals.row(i) = pool.normals.row(pick);
+    const auto r = static_cast<Eigen::Index>(pick);
+    out.points.row(i) = pool.points.row(r);
+    out.normals.row(i) = pool.normals.row(r);
     out.face_ids[i] = pool.face_ids[pick];
-    const Eigen::RowVector3f p = pool.points.row(pick);
-    float best = -1.0f;
-    std::int64_t best_idx = 0;
-    for (std::int64_t j = 0; j < pool_size; ++j) {
-      const float d2 = (pool.points.row(j) - p).squaredNorm();
-      float& m = min_d2[j];
-      if (d2 < m) m = d2;
-      if (m > best) {
-        best = m;
-        best_idx = j;
-      }
+    const float px = xs[pick], py = ys[pick], pz = zs[pick];
+    const float* __restrict x = xs.data();
+    const float* __restrict y = ys.data();
+    const float* __restrict z = zs.data();
+    float* __restrict m = min_d2.data();
+    for (std::size_t j = 0; j < n_pool; ++j) {
+      const float dx = x[j] - px, dy = y[j] - py, dz = z[j] - pz;
+      const float d2 = dx * dx + dy * dy + dz * dz;
+      m[j] = d2 < m[j] ? d2 : m[j];
     }
-    pick = best_idx;
+    pick = static_cast<std::size_t>(std::max_element(min_d2.begin(), min_d2.end()) -
+                                    min_d2.begin());
   }
   return out;
 }

@@ -1,6 +1,6 @@
 // Cup calibration (docs/models.md §4): fit c1, c2 of the spring seal model to measured outcomes
-// with NLopt (GN_DIRECT_L, then LN_BOBYQA) over (ln c1, ln c2). See calibration.hpp for the objective
-// and the tie rule.
+// with NLopt (GN_DIRECT_L, then LN_BOBYQA) over (ln c1, ln c2). See calibration.hpp for the
+// objective and the tie rule.
 #include <mgn/core/error.hpp>
 #include <mgn/core/rng.hpp>
 #include <mgn/grasp/calibration.hpp>

@@ -59,7 +59,7 @@ std::vector<Eigen::Vector2d> unit_ring(int num_points) {
 }
 
 SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
-                         SealTrial* detail) {
+                         SealTrial* detail, const Vec3d* nominal) {
   const Cup& cup = ctx.cup;
   const int N = cup.num_points;
   const double r = cup.radius;
@@ -97,10 +97,12 @@ SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
   }
 
   // 3a. Obstruction: material above the ring, or the centre ray stopped by material standing
-  //     more than the compensable height above the contact point (a roof below the cup).
+  //     more than the compensable height above the (nominal) contact point (a roof below the
+  //     cup). Measured from the unperturbed contact: the jitter moves the cup, not the surface.
   ParallelRays up{lift_base, u, v, n, ring.data(), N, r};
   if (parallel_any_hit(ctx.scene, up)) return SealFailure::Obstruction;
-  if (centre_hit && s_c - c.dot(n) > cup.compensable_height) return SealFailure::Obstruction;
+  const Vec3d& c_roof = nominal ? *nominal : c;
+  if (centre_hit && s_c - c_roof.dot(n) > cup.compensable_height) return SealFailure::Obstruction;
 
   // 3b. Hill: the centre sticks up above the lowest ring point by more than h.
   if (centre_hit && s_c - s.minCoeff() > cup.compensable_height) return SealFailure::Hill;
@@ -198,10 +200,10 @@ std::vector<Eigen::Vector2d> disc_pattern(int n) {
 }
 
 SealFailure run_trial(SealModelKind kind, const detail::SealContext& ctx, const Vec3d& c,
-                      const Vec3d& n, float& quality) {
+                      const Vec3d& n, float& quality, const Vec3d* nominal = nullptr) {
   switch (kind) {
     case SealModelKind::Spring: {
-      const SealFailure f = detail::spring_trial(ctx, c, n, nullptr);
+      const SealFailure f = detail::spring_trial(ctx, c, n, nullptr, nominal);
       quality = f == SealFailure::None ? 1.0f : 0.0f;
       return f;
     }
@@ -347,7 +349,7 @@ SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals,
               c = c0 + Vec3d(jx, jy, jz);
             }
             float q = 0.0f;
-            const SealFailure f = run_trial(kind_, ctx, c, n, q);
+            const SealFailure f = run_trial(kind_, ctx, c, n, q, &c0);
             const std::size_t slot = i * T + static_cast<std::size_t>(t);
             out.trial_sealed[slot] = f == SealFailure::None;
             out.trial_reason[slot] = static_cast<std::uint8_t>(f);

@@ -10,7 +10,8 @@
 #include <mgn/core/rng.hpp>
 #include <mgn/grasp/shake_test.hpp>
 
-#include <LinearMath/btConvexHullComputer.h>
+#include "physics/bullet.hpp"
+
 #include <btBulletDynamicsCommon.h>
 
 #include <Eigen/Eigenvalues>
@@ -40,106 +41,36 @@ std::vector<double> linspace(double lo, double hi, int n) {
   return v;
 }
 
-btVector3 bt(const Vec3d& v) {
-  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
+/// The shake test runs in decimetres (see physics/bullet.hpp).
+constexpr const physics::BulletUnits& kUnits = physics::kShakeUnits;
+
+/// How the object's parts become Bullet hulls: inner support-direction reduction to at most
+/// max_hull_vertices, the margin outside the hull.
+physics::HullShapeOptions hull_options(const ShakeOptions& o) {
+  physics::HullShapeOptions h;
+  h.reduction = HullReduction::InnerSupportDirections;
+  h.max_vertices = o.max_hull_vertices;
+  h.margin = o.margin;
+  h.polyhedral = o.polyhedral_contacts;
+  return h;
 }
 
-/// Bullet runs in decimetres: its collision tolerances are absolute and tuned for bodies of
-/// 0.1–10 units; at centimetre-sized objects in metres its GJK misses vertex–face contacts of
-/// finely tessellated hulls. Lengths are multiplied by kLength at the Bullet boundary only (time
-/// and mass unchanged, so forces scale by kLength too; stiffness and damping are unchanged).
-constexpr double kLength = 10.0;
-
-btTransform bt(const Pose& X) {
-  const Mat3d R = X.linear();
-  btMatrix3x3 B(btScalar(R(0, 0)), btScalar(R(0, 1)), btScalar(R(0, 2)), btScalar(R(1, 0)),
-                btScalar(R(1, 1)), btScalar(R(1, 2)), btScalar(R(2, 0)), btScalar(R(2, 1)),
-                btScalar(R(2, 2)));
-  return btTransform(B, bt(Vec3d(kLength * X.translation())));
-}
-
-Vec3d to_eigen(const btVector3& v) { return Vec3d(v.x(), v.y(), v.z()); }
-
-Pose to_pose(const btTransform& T) {
-  Pose X = Pose::Identity();
-  const btMatrix3x3& B = T.getBasis();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) X.linear()(r, c) = B[r][c];
-  X.translation() = to_eigen(T.getOrigin()) / kLength;
-  // Bullet works in single precision: re-orthonormalise so the pose is a clean rigid transform.
-  const Eigen::Quaterniond q(X.linear());
-  X.linear() = q.normalized().toRotationMatrix();
-  return X;
-}
-
-/// The object prepared once per call: hull vertices of every part in the principal frame B.
+/// The object prepared once per call: hulls of every part in the principal frame B.
 struct PreparedObject {
-  std::vector<std::vector<btScalar>> hulls;  // xyz triples, body frame B, Bullet units
-  Pose X_OB = Pose::Identity();              // principal frame at the centre of mass
-  Vec3d principal_inertia = Vec3d::Zero();   // kg m² at density factor 1
+  physics::RigidGeometry geometry;
+  Pose X_OB = Pose::Identity();             // principal frame at the centre of mass
+  Vec3d principal_inertia = Vec3d::Zero();  // kg m² at density factor 1
   double mass = 0.0;
-  double bounding_radius = 0.0;  // largest distance of a hull vertex from the centre of mass, m
 };
 
-/// Support points of a point set along n well-spread unit directions (a Fibonacci sphere): an
-/// inner approximation of its hull with at most n vertices (deterministic).
-std::vector<Vec3d> spread_support_points(const std::vector<Vec3d>& points, int n) {
-  std::vector<Vec3d> out;
-  std::vector<char> used(points.size(), 0);
-  const double golden = kPi * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - 2.0 * (i + 0.5) / n;
-    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    const Vec3d d(r * std::cos(golden * i), r * std::sin(golden * i), z);
-    std::size_t best = 0;
-    for (std::size_t k = 1; k < points.size(); ++k) {
-      if (points[k].dot(d) > points[best].dot(d)) best = k;
-    }
-    if (!used[best]) {
-      used[best] = 1;
-      out.push_back(points[best]);
-    }
-  }
-  return out;
-}
-
-PreparedObject prepare(const PhysicsObject& object, int max_hull_vertices) {
+PreparedObject prepare(const PhysicsObject& object, const ShakeOptions& o) {
   validate_physics_object(object);
   PreparedObject p;
   p.mass = object.mass;
-  const Mat3d I = 0.5 * (object.inertia + object.inertia.transpose());
-  Eigen::SelfAdjointEigenSolver<Mat3d> eig(I);
-  Mat3d R = eig.eigenvectors();
-  if (R.determinant() < 0) R.col(2) = -R.col(2);
-  p.principal_inertia = eig.eigenvalues();
-  p.X_OB.linear() = R;
-  p.X_OB.translation() = object.com;
-  const Pose X_BO = p.X_OB.inverse();
-  for (const Mesh& part : object.convex_parts) {
-    const Points3f& V = part.vertices();
-    std::vector<double> pts(static_cast<std::size_t>(V.rows()) * 3);
-    for (Eigen::Index i = 0; i < V.rows(); ++i) {
-      const Vec3d q = kLength * (X_BO * V.row(i).transpose().cast<double>());
-      for (int k = 0; k < 3; ++k) pts[3 * i + k] = q[k];
-    }
-    btConvexHullComputer hull;
-    hull.compute(pts.data(), 3 * sizeof(double), static_cast<int>(V.rows()), 0.0, 0.0);
-    if (hull.vertices.size() > max_hull_vertices) {
-      std::vector<Vec3d> all;
-      for (int i = 0; i < hull.vertices.size(); ++i) all.push_back(to_eigen(hull.vertices[i]));
-      const std::vector<Vec3d> few = spread_support_points(all, max_hull_vertices);
-      std::vector<double> q;
-      for (const Vec3d& v : few) q.insert(q.end(), {v.x(), v.y(), v.z()});
-      hull.compute(q.data(), 3 * sizeof(double), static_cast<int>(few.size()), 0.0, 0.0);
-    }
-    std::vector<btScalar> h;
-    h.reserve(static_cast<std::size_t>(hull.vertices.size()) * 3);
-    for (int i = 0; i < hull.vertices.size(); ++i) {
-      for (int k = 0; k < 3; ++k) h.push_back(hull.vertices[i][k]);
-      p.bounding_radius = std::max(p.bounding_radius, double(hull.vertices[i].length()) / kLength);
-    }
-    p.hulls.push_back(std::move(h));
-  }
+  const PrincipalFrame principal = principal_frame(object, "PhysicsObject");
+  p.principal_inertia = principal.moments;
+  p.X_OB = principal.X_OB;
+  p.geometry = physics::rigid_geometry(object, principal, kUnits, hull_options(o));
   return p;
 }
 
@@ -268,47 +199,58 @@ class TrialWorld {
     info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
     X_OB_ = obj.X_OB;
 
-    const Vec3d& f = g.finger_size;
-    palm_centre_ = Vec3d(0.0, 0.0, g.flange_to_tip - f.z() - 0.5 * g.palm_size.z());
-    finger_z_ = g.flange_to_tip - 0.5 * f.z();
-    palm_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * kLength * g.palm_size)));
-    finger_shape_ = std::make_unique<btBoxShape>(bt(Vec3d(0.5 * kLength * f)));
-    for (btBoxShape* b : {palm_shape_.get(), finger_shape_.get()}) {
-      b->setMargin(btScalar(kLength * o.margin));
-      if (o.polyhedral_contacts) b->initializePolyhedralFeatures();
+    btCollisionShape* palm_shape = nullptr;
+    btCollisionShape* finger_shapes[2] = {nullptr, nullptr};
+    if (g.has_meshes()) {
+      // A user's mesh gripper: palm and fingers are the convex hulls of their meshes (hand frame
+      // H, fingers closed; at an inner-face offset d each finger moves by -d / +d along x).
+      physics::HullShapeOptions h;
+      h.margin = o.margin;
+      h.shrink_by_margin = true;  // the surface stays the mesh's, as with the boxes
+      h.polyhedral = o.polyhedral_contacts;
+      const Mesh* meshes[3] = {&g.palm_mesh, &g.finger_left_mesh, &g.finger_right_mesh};
+      for (int k = 0; k < 3; ++k)
+        mesh_shapes_[k] = physics::hull_shape(
+            physics::hull_points(*meshes[k], Pose::Identity(), kUnits, h), kUnits, h);
+      palm_centre_ = Vec3d::Zero();
+      finger_z_ = 0.0;
+      finger_half_x_ = 0.0;
+      palm_shape = mesh_shapes_[0].get();
+      finger_shapes[0] = mesh_shapes_[1].get();
+      finger_shapes[1] = mesh_shapes_[2].get();
+    } else {
+      const Vec3d& f = g.finger_size;
+      palm_centre_ = Vec3d(0.0, 0.0, g.flange_to_tip - f.z() - 0.5 * g.palm_size.z());
+      finger_z_ = g.flange_to_tip - 0.5 * f.z();
+      finger_half_x_ = 0.5 * f.x();
+      palm_shape_ = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * g.palm_size)));
+      finger_shape_ = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * f)));
+      for (btBoxShape* b : {palm_shape_.get(), finger_shape_.get()}) {
+        b->setMargin(btScalar(kUnits.length * o.margin));
+        if (o.polyhedral_contacts) b->initializePolyhedralFeatures();
+      }
+      palm_shape = palm_shape_.get();
+      finger_shapes[0] = finger_shapes[1] = finger_shape_.get();
     }
 
     d_ = 0.5 * g.collision_opening(grasp.width);
     const Pose X_WH = path_.initial();
-    palm_ = make_kinematic(palm_shape_.get(), palm_pose(X_WH), 1.0);
+    palm_ = make_kinematic(palm_shape, palm_pose(X_WH), 1.0);
     for (int side = 0; side < 2; ++side) {
-      fingers_[side] = make_kinematic(finger_shape_.get(), finger_pose(X_WH, side, d_), 1.0);
+      fingers_[side] = make_kinematic(finger_shapes[side], finger_pose(X_WH, side, d_), 1.0);
       fingers_[side]->setContactStiffnessAndDamping(btScalar(o.pad_stiffness),
                                                     btScalar(o.pad_damping));
     }
 
     // Object: one hull, or a compound of hulls, in its principal frame B.
-    for (const auto& h : obj.hulls) {
-      auto hull = std::make_unique<btConvexHullShape>(h.data(), static_cast<int>(h.size() / 3),
-                                                      static_cast<int>(3 * sizeof(btScalar)));
-      hull->setMargin(btScalar(kLength * o.margin));
-      if (o.polyhedral_contacts) hull->initializePolyhedralFeatures();
-      hulls_.push_back(std::move(hull));
-    }
-    btCollisionShape* shape = hulls_.front().get();
-    if (hulls_.size() > 1) {
-      compound_ = std::make_unique<btCompoundShape>(true, static_cast<int>(hulls_.size()));
-      for (auto& h : hulls_) compound_->addChildShape(btTransform::getIdentity(), h.get());
-      shape = compound_.get();
-    }
+    shape_ = physics::rigid_shape(obj.geometry, kUnits, hull_options(o), false);
     const double m = obj.mass * s.density_factor;
     // Inertia floor (see ShakeOptions::inertia_floor): m (floor·R)² about every principal axis.
-    const double rho = o.inertia_floor * obj.bounding_radius;
+    const double rho = o.inertia_floor * obj.geometry.bounding_radius;
     const Vec3d I = (obj.principal_inertia * s.density_factor).cwiseMax(m * rho * rho);
-    btRigidBody::btRigidBodyConstructionInfo ci(btScalar(m), nullptr, shape,
-                                                bt(Vec3d(kLength * kLength * I)));
     const Pose X_HO = hand_pose(grasp, g).inverse();
-    ci.m_startWorldTransform = bt(X_WH * X_HO * obj.X_OB);
+    btRigidBody::btRigidBodyConstructionInfo ci =
+        physics::body_info(m, I, shape_.shape(), X_WH * X_HO * obj.X_OB, kUnits);
     ci.m_friction = btScalar(s.friction);
     ci.m_restitution = 0;
     object_ = std::make_unique<btRigidBody>(ci);
@@ -351,7 +293,7 @@ class TrialWorld {
       }
     }
 
-    world_.setGravity(btVector3(0, 0, btScalar(-kLength * o_.gravity)));
+    world_.setGravity(btVector3(0, 0, btScalar(-kUnits.length * o_.gravity)));
     int lost[2] = {0, 0};
     for (int phase = 1; phase <= 2; ++phase) {
       const int n = phase == 1 ? o_.shake_steps : o_.rotate_steps;
@@ -380,7 +322,7 @@ class TrialWorld {
   std::unique_ptr<btRigidBody> make_kinematic(btCollisionShape* shape, const Pose& X,
                                               double friction) {
     btRigidBody::btRigidBodyConstructionInfo ci(0, nullptr, shape);
-    ci.m_startWorldTransform = bt(X);
+    ci.m_startWorldTransform = kUnits.pose(X);
     ci.m_friction = btScalar(friction);
     auto body = std::make_unique<btRigidBody>(ci);
     body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
@@ -399,7 +341,7 @@ class TrialWorld {
   Pose finger_pose(const Pose& X_WH, int side, double d) const {
     const double sign = side == 0 ? -1.0 : 1.0;
     Pose X = X_WH;
-    X.translate(Vec3d(sign * (d + 0.5 * g_.finger_size.x()), 0.0, finger_z_));
+    X.translate(Vec3d(sign * (d + finger_half_x_), 0.0, finger_z_));
     return X;
   }
 
@@ -408,8 +350,8 @@ class TrialWorld {
   /// at its pose at the start of the step, with the velocity of the move to its pose at the end
   /// (through a virtual previous pose), and jumps there after the step.
   static void drive(btRigidBody& body, const Pose& now_pose, const Pose& next_pose) {
-    const btTransform now = bt(now_pose);
-    const btTransform next = bt(next_pose);
+    const btTransform now = kUnits.pose(now_pose);
+    const btTransform next = kUnits.pose(next_pose);
     btTransform before;
     before.setBasis((now.getBasis() * next.getBasis().transpose()) * now.getBasis());
     before.setOrigin(now.getOrigin() * 2 - next.getOrigin());
@@ -437,10 +379,10 @@ class TrialWorld {
     world_.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
     d_ = d_next;
     // The hand bodies jump to their end-of-step poses (velocity unchanged until the next step).
-    palm_->setWorldTransform(bt(palm_pose(X_WH_next)));
+    palm_->setWorldTransform(kUnits.pose(palm_pose(X_WH_next)));
     palm_->setInterpolationWorldTransform(palm_->getWorldTransform());
     for (int side = 0; side < 2; ++side) {
-      fingers_[side]->setWorldTransform(bt(finger_pose(X_WH_next, side, d_)));
+      fingers_[side]->setWorldTransform(kUnits.pose(finger_pose(X_WH_next, side, d_)));
       fingers_[side]->setInterpolationWorldTransform(fingers_[side]->getWorldTransform());
     }
   }
@@ -450,7 +392,7 @@ class TrialWorld {
     s.time = time;
     s.phase = phase;
     s.X_WH = X_WH;
-    s.X_WO = to_pose(object_->getWorldTransform()) * X_OB_.inverse();
+    s.X_WO = kUnits.pose(object_->getWorldTransform()) * X_OB_.inverse();
     s.left = s.right = d_;
     s.touch_left = s.touch_right = false;
     s.force_left = s.force_right = 0.0;
@@ -467,8 +409,8 @@ class TrialWorld {
       double& force = side == 0 ? s.force_left : s.force_right;
       for (int c = 0; c < m->getNumContacts(); ++c) {
         const btManifoldPoint& p = m->getContactPoint(c);
-        if (p.getDistance() < kLength * o_.contact_distance) touch = true;
-        force += p.getAppliedImpulse() / (o_.dt * kLength);
+        if (p.getDistance() < kUnits.length * o_.contact_distance) touch = true;
+        force += kUnits.force(p.getAppliedImpulse(), o_.dt);
       }
     }
     return s;
@@ -480,7 +422,8 @@ class TrialWorld {
   Pose X_OB_;
   Vec3d palm_centre_;
   double finger_z_ = 0;
-  double d_ = 0;  // current inner-face offset of both fingers from the hand axis, m
+  double finger_half_x_ = 0;  // finger box: centre to inner face along x, m (meshes: 0)
+  double d_ = 0;              // current inner-face offset of both fingers from the hand axis, m
 
   btDefaultCollisionConfiguration config_;
   btCollisionDispatcher dispatcher_;
@@ -489,8 +432,8 @@ class TrialWorld {
   btDiscreteDynamicsWorld world_;
 
   std::unique_ptr<btBoxShape> palm_shape_, finger_shape_;
-  std::vector<std::unique_ptr<btConvexHullShape>> hulls_;
-  std::unique_ptr<btCompoundShape> compound_;
+  std::unique_ptr<btConvexHullShape> mesh_shapes_[3];  // palm, left, right (mesh gripper)
+  physics::RigidShape shape_;
   std::unique_ptr<btRigidBody> palm_, object_;
   std::unique_ptr<btRigidBody> fingers_[2];
 };
@@ -543,6 +486,7 @@ void ShakeOptions::validate() const {
           "an integer in [8, 100000]", max_hull_vertices);
   require(solver_iterations >= 1 && solver_iterations <= 1000, "solver_iterations",
           "an integer in [1, 1000]", solver_iterations);
+  require(staircase_checks >= 0, "staircase_checks", "an integer >= 0", staircase_checks);
   require(num_threads >= 0, "num_threads", "an integer >= 0 (0 = all hardware threads)",
           num_threads);
 }
@@ -598,12 +542,61 @@ void validate_physics_object(const PhysicsObject& object) {
   }
 }
 
+StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks) {
+  if (S < 1) throw_error<InvalidArgument>("staircase_grid: S must be >= 1, got ", S);
+  if (checks < 0) throw_error<InvalidArgument>("staircase_grid: checks must be >= 0, got ", checks);
+  StaircaseGrid g;
+  const std::size_t n = static_cast<std::size_t>(S) * S;
+  g.success.assign(n, 0);
+  g.simulated.assign(n, 0);
+  auto at = [S](int i, int j) { return static_cast<std::size_t>(i) * S + j; };
+  auto run = [&](int i, int j) {
+    const bool ok = trial(i, j);
+    g.success[at(i, j)] = ok;
+    g.simulated[at(i, j)] = 1;
+    ++g.trials;
+    return ok;
+  };
+  // The walk: b[i] = successes in row i (cells j < b[i]), non-decreasing in i.
+  std::vector<int> b(static_cast<std::size_t>(S), 0);
+  int j = 0;
+  for (int i = 0; i < S; ++i) {
+    while (j < S && run(i, j)) ++j;
+    b[i] = j;
+    for (int k = 0; k < j; ++k) g.success[at(i, k)] = 1;  // inferred (or simulated) successes
+  }
+  // Checks: inferred cells next to the boundary, spread over the rows.
+  std::vector<std::pair<int, int>> candidates;
+  for (int i = 0; i < S; ++i) {
+    if (i > 0 && b[i - 1] > 0 && !g.simulated[at(i, b[i - 1] - 1)])
+      candidates.emplace_back(i, b[i - 1] - 1);  // inferred success
+    if (b[i] + 1 < S && !g.simulated[at(i, b[i] + 1)])
+      candidates.emplace_back(i, b[i] + 1);  // inferred failure
+  }
+  const int m = static_cast<int>(candidates.size());
+  const int c = std::min(checks, m);
+  bool contradicted = false;
+  for (int k = 0; k < c && !contradicted; ++k) {
+    const int idx = c == 1 ? m / 2 : static_cast<int>(std::lround(double(k) * (m - 1) / (c - 1)));
+    const auto [ci, cj] = candidates[static_cast<std::size_t>(idx)];
+    const bool inferred = g.success[at(ci, cj)] != 0;
+    if (run(ci, cj) != inferred) contradicted = true;
+  }
+  if (contradicted) {
+    g.fallback = true;
+    for (int i = 0; i < S; ++i)
+      for (int jj = 0; jj < S; ++jj)
+        if (!g.simulated[at(i, jj)]) run(i, jj);
+  }
+  return g;
+}
+
 ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gripper,
                        const std::vector<ParallelJawGrasp>& grasps, const ShakeOptions& options) {
   options.validate();
   gripper.validate();
   validate_grasps(gripper, grasps);
-  const PreparedObject prepared = prepare(object, options.max_hull_vertices);
+  const PreparedObject prepared = prepare(object, options);
 
   ShakeResult r;
   const int S = options.grid;
@@ -615,19 +608,37 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
   r.trial_success.assign(n, 0);
   r.trial_ended_early.assign(n, 0);
   r.trial_steps.assign(n, 0);
-  parallel_for(n, options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t) {
-      const std::size_t g = t / per_grasp;
-      const std::size_t i = (t % per_grasp) / S;
-      const std::size_t j = t % S;
-      const TrialSetting s = make_setting(r.frictions[i], r.density_factors[j], options, t);
-      TrialWorld world(prepared, gripper, grasps[g], s, options);
-      const TrialOutcome o = world.run([](const StepState&) {});
-      r.trial_success[t] = o.success;
-      r.trial_ended_early[t] = o.ended_early;
-      r.trial_steps[t] = o.steps;
-    }
-  });
+  r.trial_simulated.assign(n, 0);
+  r.fallback.assign(grasps.size(), 0);
+  auto run_trial = [&](std::size_t t) {
+    const std::size_t g = t / per_grasp;
+    const std::size_t i = (t % per_grasp) / S;
+    const std::size_t j = t % S;
+    const TrialSetting s = make_setting(r.frictions[i], r.density_factors[j], options, t);
+    TrialWorld world(prepared, gripper, grasps[g], s, options);
+    const TrialOutcome o = world.run([](const StepState&) {});
+    r.trial_success[t] = o.success;
+    r.trial_ended_early[t] = o.ended_early;
+    r.trial_steps[t] = o.steps;
+    r.trial_simulated[t] = 1;
+    return o.success;
+  };
+  if (options.staircase) {
+    parallel_for(grasps.size(), options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t g = begin; g < end; ++g) {
+        const std::size_t base = g * per_grasp;
+        const StaircaseGrid sg = staircase_grid(
+            S, [&](int i, int j) { return run_trial(base + std::size_t(i) * S + j); },
+            options.staircase_checks);
+        for (std::size_t k = 0; k < per_grasp; ++k) r.trial_success[base + k] = sg.success[k];
+        r.fallback[g] = sg.fallback;
+      }
+    });
+  } else {
+    parallel_for(n, options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t t = begin; t < end; ++t) run_trial(t);
+    });
+  }
   r.score.assign(grasps.size(), 0.0);
   for (std::size_t t = 0; t < n; ++t) {
     r.score[t / per_grasp] += r.trial_success[t];
@@ -655,7 +666,7 @@ ShakeTrajectory shake_trajectory(const PhysicsObject& object, const ParallelJawG
   if (record_every < 1) {
     throw_error<InvalidArgument>("shake_trajectory: record_every must be >= 1, got ", record_every);
   }
-  const PreparedObject prepared = prepare(object, options.max_hull_vertices);
+  const PreparedObject prepared = prepare(object, options);
   const TrialSetting s = make_setting(friction, density_factor, options, trial_index);
   ShakeTrajectory tr;
   tr.friction = friction;

@@ -144,6 +144,9 @@ void PathTraceOptions::validate() const {
                                  focus_distance);
   if (!(clamp >= 0.0) || !std::isfinite(clamp))
     throw_error<InvalidArgument>(w, ".clamp must be finite and >= 0 (0 = off), got ", clamp);
+  if (!(clamp_indirect >= 0.0) || !std::isfinite(clamp_indirect))
+    throw_error<InvalidArgument>(w, ".clamp_indirect must be finite and >= 0 (0 = off), got ",
+                                 clamp_indirect);
 }
 
 void FilmOptions::validate() const {
@@ -257,9 +260,12 @@ struct PathScene::Lighting {
   Environment environment;
   std::vector<LightData> light_data;
   // Light selection: cumulative weights over (lights..., environment).
-  std::vector<float> cdf;  // size lights + 1, cdf.back() == 1
+  // Light selection among the area lights (cdf, pmf over the lights), then entry `lights` for
+  // the environment (pmf 1 when it is on: sampled at every shading point).
+  std::vector<float> cdf;
   std::vector<float> pmf;
   bool env_on = false;
+  bool area_on = false;
   // Environment.
   int kind = 0;  // 0 uniform, 1 gradient, 2 sky
   F3 color, zenith, horizon, ground;
@@ -309,46 +315,43 @@ std::shared_ptr<PathScene::Lighting> make_lighting(
   L->zenith = f3(environment.zenith) * I;
   L->horizon = f3(environment.horizon) * I;
   L->ground = f3(environment.ground) * I;
-  float env_lum = 0.0f;
+  float sky_lum = 0.0f;  // rough mean luminance of the dome (without the sun)
   if (environment.kind == Environment::Kind::Uniform) {
-    env_lum = luminance(L->color);
+    sky_lum = luminance(L->color);
   } else {
-    env_lum = 0.5f * luminance((L->zenith + L->horizon * 2.0f) * (1.0f / 3.0f)) +
+    sky_lum = 0.5f * luminance((L->zenith + L->horizon * 2.0f) * (1.0f / 3.0f)) +
               0.5f * luminance(L->ground);
   }
+  float e_sun = 0.0f;
   if (environment.kind == Environment::Kind::Sky) {
     L->sun_dir = normalize(f3(environment.sun_direction));
     const float r = environment.sun_angular_radius;
     L->sun_cos = std::cos(r);
     const float s = std::sin(r);
     L->sun_radiance = F3(environment.sun_strength * luminance(L->zenith) / (s * s));
-    const float e_sun = environment.sun_strength * pt::kPi * luminance(L->zenith);
-    if (e_sun > 0.0f) L->p_sun = 0.5f;
-    env_lum += e_sun / (4.0f * pt::kPi);
+    e_sun = environment.sun_strength * pt::kPi * luminance(L->zenith);
+    // Share of environment samples aimed at the sun: its share of the irradiance, in [0.2, 0.9].
+    if (e_sun > 0.0f)
+      L->p_sun = std::min(0.9f, std::max(0.2f, e_sun / (e_sun + pt::kPi * sky_lum)));
   }
-  // The environment's power on the scene ~ pi L * (cross-section of the scene's bounding sphere).
-  const double radius = std::max(0.05, 0.5 * (bounds.row(1) - bounds.row(0)).norm());
-  float w_env = static_cast<float>(pt::kPi * env_lum * 4.0 * pt::kPi * radius * radius);
-  L->env_on = w_env > 0.0f;
-  float total_lights = 0.0f;
-  for (float x : w) total_lights += x;
-  if (L->env_on && total_lights > 0.0f) {
-    // Keep both strategies alive: the environment gets between 10 % and 90 %.
-    const float p_env = std::min(0.9f, std::max(0.1f, w_env / (w_env + total_lights)));
-    w_env = total_lights * p_env / (1.0f - p_env);
-  }
-  w.push_back(L->env_on ? w_env : 0.0f);
+  L->env_on = sky_lum > 0.0f || e_sun > 0.0f;
+  // Area lights: one is chosen per shading point with probability proportional to its power;
+  // the environment is sampled at every shading point as well (its own shadow ray).
   float total = 0.0f;
   for (float x : w) total += x;
-  L->pmf.resize(w.size());
-  L->cdf.resize(w.size());
+  const std::size_t n = w.size();
+  L->pmf.assign(n + 1, 0.0f);
+  L->cdf.assign(n + 1, 0.0f);
   float acc = 0.0f;
-  for (std::size_t i = 0; i < w.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     L->pmf[i] = total > 0.0f ? w[i] / total : 0.0f;
     acc += L->pmf[i];
     L->cdf[i] = acc;
   }
-  if (total > 0.0f) L->cdf.back() = 1.0f;
+  if (n > 0 && total > 0.0f) L->cdf[n - 1] = 1.0f;
+  L->area_on = n > 0 && total > 0.0f;
+  L->pmf[n] = L->env_on ? 1.0f : 0.0f;  // the environment's "selection" probability
+  L->cdf[n] = 1.0f;
   return L;
 }
 
@@ -462,6 +465,7 @@ F3 texture_lookup(const MaterialData& m, float u, float v) {
   const float fx = std::floor(x), fy = std::floor(y);
   const float ax = x - fx, ay = y - fy;
   auto wrap = [](long i, int n) {
+    if (i >= 0 && i < n) return static_cast<int>(i);  // the usual case: no division
     long r = i % n;
     return static_cast<int>(r < 0 ? r + n : r);
   };
@@ -578,7 +582,11 @@ struct Counters {
 class Integrator {
  public:
   Integrator(const Geometry& G, const Lighting& L, const PathTraceOptions& o)
-      : G_(G), L_(L), opt_(o), scene_(G.rays->impl().scene) {
+      : G_(G),
+        L_(L),
+        opt_(o),
+        scene_(G.rays->impl().scene),
+        clamp_indirect_(static_cast<float>(o.clamp_indirect)) {
     rtcInitIntersectContext(&ctx_);
   }
 
@@ -622,7 +630,7 @@ class Integrator {
           const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
           w = power_heuristic(prev_pdf, pl);
         }
-        L += beta * l.radiance * w;
+        add(L, beta * l.radiance * w, depth >= 2);
         if (depth == 0) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
         break;
       }
@@ -632,7 +640,7 @@ class Integrator {
           float w = 1.0f;
           if (!prev_delta && L_.env_on)
             w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
-          L += beta * Le * w;
+          add(L, beta * Le * w, depth >= 2);
           if (depth == 0)
             aov_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
         }
@@ -641,7 +649,7 @@ class Integrator {
       make_hit(G_, rh, d, h);
       const MaterialData& m = *h.mat;
       const F3 wo_w = -d;
-      if (m.emissive && h.front) L += beta * m.emission;
+      if (m.emissive && h.front) add(L, beta * m.emission, depth >= 2);
       if (depth == 0) {
         aov_albedo = h.base;
         aov_normal = h.ns;
@@ -652,15 +660,25 @@ class Integrator {
       const F3 wo = frame.to_local(wo_w);
       pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
       sm.prepare(wo.z);
-      const std::uint32_t base_pair = 2 + 4 * static_cast<std::uint32_t>(depth);
-      const pt::Sample2 u_light = s.get(base_pair);
+      const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
+      // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
+      // (roulette, Fresnel choice), environment direction.
       const pt::Sample2 u_bsdf = s.get(base_pair + 1);
       const pt::Sample2 u_sel = s.get(base_pair + 2);
       const pt::Sample2 u_rr = s.get(base_pair + 3);
 
       // Next-event estimation.
-      if (sm.has_nondelta && !L_.pmf.empty() && L_.cdf.back() > 0.0f)
-        L += beta * direct(h, frame, wo, sm, u_sel.x, u_light);
+      if (sm.has_nondelta) {
+        if (L_.area_on) {
+          const std::size_t n = L_.light_data.size();
+          std::size_t k = 0;
+          while (k + 1 < n && u_sel.x >= L_.cdf[k]) ++k;
+          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
+        }
+        if (L_.env_on)
+          add(L, beta * direct(h, frame, wo, sm, L_.light_data.size(), s.get(base_pair + 4)),
+              depth >= 1);
+      }
 
       // BSDF sampling.
       F3 wi_w;
@@ -687,12 +705,21 @@ class Integrator {
   Counters counters;
 
  private:
-  /// One light sample with MIS; returns the contribution (without beta).
-  F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm, float u_sel,
-            pt::Sample2 u) {
-    const std::size_t n = L_.cdf.size();
-    std::size_t k = 0;
-    while (k + 1 < n && u_sel >= L_.cdf[k]) ++k;
+  /// Adds a contribution; indirect ones (light that has bounced at least twice: found at the
+  /// second path vertex or later) are clamped to clamp_indirect in luminance.
+  void add(F3& L, F3 c, bool indirect) const {
+    if (indirect && clamp_indirect_ > 0.0f) {
+      const float lum = luminance(c);
+      if (lum > clamp_indirect_) c *= clamp_indirect_ / lum;
+    }
+    L += c;
+  }
+
+  /// One sample of light k (k = number of area lights: the environment) with MIS; returns the
+  /// contribution (without beta).
+  F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
+            std::size_t k, pt::Sample2 u) {
+    const std::size_t n = L_.pmf.size();
     const float p_sel = L_.pmf[k];
     if (p_sel <= 0.0f) return F3(0.0f);
     F3 wi_w, Le;
@@ -801,6 +828,7 @@ class Integrator {
   const Lighting& L_;
   const PathTraceOptions& opt_;
   RTCScene scene_;
+  float clamp_indirect_;
   RTCIntersectContext ctx_;
 };
 
@@ -863,25 +891,55 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
   auto worker = [&](std::size_t, std::size_t) {
     detail::FtzDazGuard guard;
     Integrator it(G, L, options);
-    RTCRayHit rh;
+    RTCIntersectContext coherent;
+    rtcInitIntersectContext(&coherent);
+    coherent.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    const RTCScene scene = G.rays->impl().scene;
+    alignas(64) RTCRayHit16 rh16;
+    alignas(64) int valid16[16];
     for (;;) {
       const std::size_t tile = next_tile.fetch_add(1);
       if (tile >= n_tiles) break;
       const int tx = static_cast<int>(tile % tiles_x), ty = static_cast<int>(tile / tiles_x);
       const int u1 = std::min(W, (tx + 1) * kTile), v1 = std::min(H, (ty + 1) * kTile);
       for (int v = ty * kTile; v < v1; ++v) {
+        // Labels: the pinhole rays through the pixel centres of this tile row, as one coherent
+        // packet (at most kTile = 16 rays).
+        {
+          const int u0 = tx * kTile, m = u1 - u0;
+          float len[kTile];
+          for (int k = 0; k < kTile; ++k) {
+            const int u = u0 + std::min(k, m - 1);
+            const F3 dc((u + 0.5f - cam.cx) / cam.fx, (v + 0.5f - cam.cy) / cam.fy, 1.0f);
+            len[k] = length(dc);
+            const F3 d = cam.to_world(dc / len[k]);
+            valid16[k] = k < m ? -1 : 0;
+            rh16.ray.org_x[k] = cam.o.x;
+            rh16.ray.org_y[k] = cam.o.y;
+            rh16.ray.org_z[k] = cam.o.z;
+            rh16.ray.dir_x[k] = d.x;
+            rh16.ray.dir_y[k] = d.y;
+            rh16.ray.dir_z[k] = d.z;
+            rh16.ray.tnear[k] = 0.0f;
+            rh16.ray.tfar[k] = std::numeric_limits<float>::infinity();
+            rh16.ray.time[k] = 0.0f;
+            rh16.ray.mask[k] = 0xFFFFFFFFu;
+            rh16.ray.id[k] = static_cast<unsigned>(k);
+            rh16.ray.flags[k] = 0;
+            rh16.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+            rh16.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+          }
+          rtcIntersect16(valid16, scene, &coherent, &rh16);
+          it.counters.rays += m;
+          for (int k = 0; k < m; ++k) {
+            if (rh16.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+            const std::size_t pix = static_cast<std::size_t>(v) * W + u0 + k;
+            out.depth[pix] = rh16.ray.tfar[k] / len[k];
+            out.instance_ids[pix] = G.geoms[rh16.hit.geomID[k]].instance_id;
+          }
+        }
         for (int u = tx * kTile; u < u1; ++u) {
           const std::size_t pix = static_cast<std::size_t>(v) * W + u;
-          // Labels: the pinhole ray through the pixel centre.
-          {
-            const F3 dc((u + 0.5f - cam.cx) / cam.fx, (v + 0.5f - cam.cy) / cam.fy, 1.0f);
-            const float len = length(dc);
-            if (it.intersect(cam.o, cam.to_world(dc / len), std::numeric_limits<float>::infinity(),
-                             rh)) {
-              out.depth[pix] = rh.ray.tfar / len;
-              out.instance_ids[pix] = G.geoms[rh.hit.geomID].instance_id;
-            }
-          }
           const std::uint32_t pixel_seed =
               static_cast<std::uint32_t>(mix64(stream ^ static_cast<std::uint64_t>(pix)));
           F3 sum(0.0f), alb(0.0f), nrm(0.0f);

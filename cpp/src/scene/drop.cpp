@@ -3,11 +3,10 @@
 #include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/scene/drop.hpp>
 
-#include <BulletCollision/CollisionShapes/btConvexHullShape.h>
-#include <LinearMath/btConvexHullComputer.h>
+#include "physics/bullet.hpp"
+
 #include <btBulletDynamicsCommon.h>
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -34,100 +33,6 @@ constexpr const char* kFn = "drop_objects";
 
 void require(bool ok, const char* what, double value, const char* expected) {
   if (!ok) throw_error<InvalidArgument>(kFn, ": ", what, " must be ", expected, ", got ", value);
-}
-
-btVector3 to_bt(const Vec3d& v) {
-  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
-}
-
-btTransform to_bt(const Pose& X) {
-  const Eigen::Quaterniond q(X.rotation());
-  return btTransform(
-      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-      to_bt(Vec3d(X.translation())));
-}
-
-Pose from_bt(const btTransform& t) {
-  const btQuaternion q = t.getRotation();
-  Eigen::Quaterniond qd(double(q.w()), double(q.x()), double(q.y()), double(q.z()));
-  qd.normalize();
-  Pose X = Pose::Identity();
-  X.linear() = qd.toRotationMatrix();
-  const btVector3& p = t.getOrigin();
-  X.translation() = Vec3d(double(p.x()), double(p.y()), double(p.z()));
-  return X;
-}
-
-/// Principal frame B of an object: X_OB (origin at the CoM, axes = principal axes), and the
-/// principal moments.
-struct Principal {
-  Pose X_OB = Pose::Identity();
-  Vec3d moments = Vec3d::Zero();
-};
-
-Principal principal_frame(const DropObject& o, std::size_t i) {
-  const Mat3d I = 0.5 * (o.inertia + o.inertia.transpose());
-  if (!o.inertia.allFinite() ||
-      (o.inertia - o.inertia.transpose()).norm() > 1e-6 * o.inertia.norm())
-    throw_error<InvalidArgument>(kFn, ": objects[", i, "] ('", o.name,
-                                 "'): inertia must be a finite symmetric 3x3 matrix");
-  Eigen::SelfAdjointEigenSolver<Mat3d> es(I);
-  Principal p;
-  p.moments = es.eigenvalues();
-  if (!(p.moments.minCoeff() > 0))
-    throw_error<InvalidArgument>(kFn, ": objects[", i, "] ('", o.name,
-                                 "'): inertia must be positive definite, got eigenvalues ",
-                                 p.moments.transpose());
-  Mat3d R = es.eigenvectors();
-  if (R.determinant() < 0) R.col(2) *= -1.0;
-  p.X_OB.linear() = R;
-  p.X_OB.translation() = o.com;
-  return p;
-}
-
-/// Convex hull shape of a part, in frame B, shrunk by the margin (Bullet adds it back).
-/// Its vertices are reduced to at most `max_vertices` (0: all) within `tolerance` (m).
-/// With `polyhedral` the hull is not shrunk and gets Bullet's polyhedral features.
-std::unique_ptr<btConvexHullShape> hull_shape(const Mesh& part, const Pose& X_BO, double margin,
-                                              int max_vertices, double tolerance, bool polyhedral) {
-  const auto& V = part.vertices();
-  std::vector<double> coords(static_cast<std::size_t>(3 * V.rows()));
-  for (Eigen::Index v = 0; v < V.rows(); ++v) {
-    const Vec3d p = X_BO * Vec3d(V.row(v).cast<double>().transpose());
-    coords[3 * v] = p.x();
-    coords[3 * v + 1] = p.y();
-    coords[3 * v + 2] = p.z();
-  }
-  btConvexHullComputer hc;
-  const btScalar shrunk =
-      hc.compute(coords.data(), 3 * sizeof(double), static_cast<int>(V.rows()),
-                 polyhedral ? btScalar(0) : btScalar(margin), btScalar(polyhedral ? 0.0 : 0.3));
-  auto shape = std::make_unique<btConvexHullShape>();
-  if (shrunk >= 0 && hc.vertices.size() >= 4) {
-    if (max_vertices > 0 && hc.vertices.size() > max_vertices) {
-      Points3d hv(hc.vertices.size(), 3);
-      for (int k = 0; k < hc.vertices.size(); ++k)
-        hv.row(k) << double(hc.vertices[k].x()), double(hc.vertices[k].y()),
-            double(hc.vertices[k].z());
-      for (Eigen::Index k : reduce_convex_points(hv, max_vertices, tolerance))
-        shape->addPoint(hc.vertices[static_cast<int>(k)], false);
-    } else {
-      for (int k = 0; k < hc.vertices.size(); ++k) shape->addPoint(hc.vertices[k], false);
-    }
-  } else {
-    for (Eigen::Index v = 0; v < V.rows(); ++v)
-      shape->addPoint(btVector3(btScalar(coords[3 * v]), btScalar(coords[3 * v + 1]),
-                                btScalar(coords[3 * v + 2])),
-                      false);
-  }
-  shape->recalcLocalAabb();
-  if (polyhedral) {
-    shape->setMargin(btScalar(margin));
-    shape->initializePolyhedralFeatures();
-  } else {
-    shape->setMargin(btScalar(std::max(0.0, shrunk > 0 ? double(shrunk) : 0.0)));
-  }
-  return shape;
 }
 
 struct Aabb {
@@ -204,8 +109,8 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
           "options.collision_margin", o.collision_margin, "in (0, 0.01] m");
   require(std::isfinite(o.contact_distance) && o.contact_distance > 0, "options.contact_distance",
           o.contact_distance, "finite and > 0 (m)");
-  require(o.max_hull_vertices == 0 || (o.max_hull_vertices >= 4 && o.max_hull_vertices <= 100000),
-          "options.max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [4, 100000]");
+  require(o.max_hull_vertices == 0 || (o.max_hull_vertices >= 8 && o.max_hull_vertices <= 100000),
+          "options.max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [8, 100000]");
   require(std::isfinite(o.hull_tolerance) && o.hull_tolerance >= 0, "options.hull_tolerance",
           o.hull_tolerance, "finite and >= 0 (m)");
   require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 && o.resettle_time / o.dt <= 1e7,
@@ -265,6 +170,7 @@ struct World {
   btSequentialImpulseConstraintSolver solver;
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  std::vector<std::unique_ptr<physics::RigidShape>> rigid_shapes;
   std::vector<std::unique_ptr<btRigidBody>> bodies;
   std::unique_ptr<btTriangleMesh> tote_triangles;
   ~World() {
@@ -277,333 +183,421 @@ struct World {
 
 namespace {
 
+/// The drop runs in metres (see physics/bullet.hpp).
+constexpr const physics::BulletUnits& kUnits = physics::kDropUnits;
+
+/// How the convex parts become Bullet hulls (see DropOptions).
+physics::HullShapeOptions hull_options(const DropOptions& o) {
+  physics::HullShapeOptions h;
+  h.reduction = HullReduction::Outer;
+  h.max_vertices = o.max_hull_vertices;
+  h.tolerance = o.hull_tolerance;
+  h.margin = o.collision_margin;
+  h.shrink_by_margin = !o.polyhedral_contacts;  // polyhedral clipping ignores margins
+  h.polyhedral = o.polyhedral_contacts;
+  return h;
+}
+
+/// One drop (or settle) simulation, in named steps: build_tote(), release_poses(),
+/// add_bodies(), step_until_rest(), measure_contacts(), final_objects().
+class DropSimulation {
+ public:
+  DropSimulation(const std::vector<DropObject>& objects, const Mesh& tote, const ToteBox& box,
+                 const DropOptions& o)
+      : objects_(objects),
+        tote_(tote),
+        box_(box),
+        o_(o),
+        n_(objects.size()),
+        hx_(0.5 * box.inner_length),
+        hy_(0.5 * box.inner_width),
+        H_(box.inner_height),
+        w_(std::make_unique<World>()) {
+    w_->world.setGravity(btVector3(0, 0, btScalar(-kUnits.length * o.gravity)));
+    w_->world.getSolverInfo().m_numIterations = o.solver_iterations;
+    // Two friction directions per contact, kept from step to step (see DropOptions).
+    if (o.two_friction_directions)
+      w_->world.getSolverInfo().m_solverMode |=
+          SOLVER_USE_2_FRICTION_DIRECTIONS | SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
+    result_.objects.resize(n_);
+    X_OB_.resize(n_);
+    body_.assign(n_, nullptr);
+    hull_points_.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) hull_points_[i] = part_vertices(objects[i]);
+  }
+
+  /// X_WO_start: the settle start poses (at rest), or nullptr for random release poses.
+  DropResult run(const std::vector<Pose>* X_WO_start) {
+    build_tote();
+    std::vector<Pose> X_WO = release_poses();
+    if (X_WO_start != nullptr) X_WO = *X_WO_start;  // settle: start at rest where given
+    add_bodies(X_WO);
+    step_until_rest();
+    measure_contacts();
+    final_objects();
+    return std::move(result_);
+  }
+
+ private:
+  /// Every part vertex of an object (object frame), for bounding boxes.
+  static Points3d part_vertices(const DropObject& ob) {
+    Eigen::Index rows = 0;
+    for (const Mesh& part : ob.convex_parts) rows += part.num_vertices();
+    Points3d P(rows, 3);
+    rows = 0;
+    for (const Mesh& part : ob.convex_parts) {
+      P.middleRows(rows, part.num_vertices()) = part.vertices().cast<double>();
+      rows += part.num_vertices();
+    }
+    return P;
+  }
+
+  void add_static(std::unique_ptr<btCollisionShape> shape, const btTransform& X) {
+    btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape.get());
+    info.m_startWorldTransform = X;
+    info.m_friction = btScalar(o_.tote_friction);
+    info.m_restitution = btScalar(o_.tote_restitution);
+    auto body = std::make_unique<btRigidBody>(info);
+    w_->world.addRigidBody(body.get());
+    tote_bodies_.push_back(body.get());
+    w_->shapes.push_back(std::move(shape));
+    w_->bodies.push_back(std::move(body));
+  }
+
+  /// The static tote: five boxes fitted to the cavity, or the triangle mesh.
+  void build_tote() {
+    if (o_.tote_collision == ToteCollision::Boxes) {
+      const double T = std::max(box_.wall_thickness, 0.02);  // thickened outwards
+      const double F = std::max(box_.floor_thickness, 0.02);
+      const double hx = hx_, hy = hy_, H = H_;
+      auto add_box = [&](const Vec3d& lo, const Vec3d& hi) {
+        auto shape = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * (hi - lo))));
+        shape->setMargin(
+            btScalar(kUnits.length * std::min(o_.collision_margin, 0.25 * (hi - lo).minCoeff())));
+        if (o_.polyhedral_contacts) shape->initializePolyhedralFeatures();
+        btTransform X;
+        X.setIdentity();
+        X.setOrigin(kUnits.vector(Vec3d(0.5 * (hi + lo))));
+        add_static(std::move(shape), X);
+      };
+      add_box(Vec3d(-hx - T, -hy - T, -F), Vec3d(hx + T, hy + T, 0));  // floor
+      add_box(Vec3d(-hx - T, -hy - T, -F), Vec3d(-hx, hy + T, H));     // -x wall
+      add_box(Vec3d(hx, -hy - T, -F), Vec3d(hx + T, hy + T, H));       // +x wall
+      add_box(Vec3d(-hx, -hy - T, -F), Vec3d(hx, -hy, H));             // -y wall
+      add_box(Vec3d(-hx, hy, -F), Vec3d(hx, hy + T, H));               // +y wall
+    } else {
+      w_->tote_triangles = std::make_unique<btTriangleMesh>(true, false);
+      const auto& V = tote_.vertices();
+      const auto& Fc = tote_.faces();
+      for (Eigen::Index f = 0; f < Fc.rows(); ++f) {
+        auto vtx = [&](int c) {
+          return kUnits.vector(Vec3d(V.row(Fc(f, c)).cast<double>().transpose()));
+        };
+        w_->tote_triangles->addTriangle(vtx(0), vtx(1), vtx(2), false);
+      }
+      auto shape = std::make_unique<btBvhTriangleMeshShape>(w_->tote_triangles.get(), true);
+      shape->setMargin(btScalar(0.0));
+      btTransform X;
+      X.setIdentity();
+      add_static(std::move(shape), X);
+    }
+  }
+
+  /// Random release poses (per-object random streams), de-overlapped in order of height.
+  std::vector<Pose> release_poses() const {
+    std::vector<Pose> X_WO(n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      Rng rng(o_.seed, i);
+      Eigen::Quaterniond q(rng.normal(), rng.normal(), rng.normal(), rng.normal());
+      if (q.norm() < 1e-12) q = Eigen::Quaterniond::Identity();
+      q.normalize();
+      X_WO[i] = Pose::Identity();
+      X_WO[i].linear() = q.toRotationMatrix();
+      const Vec3d p(rng.uniform(o_.window_min.x(), o_.window_max.x()),
+                    rng.uniform(o_.window_min.y(), o_.window_max.y()),
+                    rng.uniform(o_.window_min.z(), o_.window_max.z()));
+      // The drawn point is the centre of the object's rotated bounding box.
+      const Aabb b = world_aabb(hull_points_[i], X_WO[i]);
+      X_WO[i].translation() = p - 0.5 * (b.lo + b.hi);
+    }
+    std::vector<std::size_t> order(n_);
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return X_WO[a].translation().z() < X_WO[b].translation().z();
+    });
+    constexpr double kGap = 0.005;
+    std::vector<Aabb> placed;
+    for (std::size_t i : order) {
+      Aabb b = world_aabb(hull_points_[i], X_WO[i]);
+      double lift = 0.0;
+      const bool inside = b.lo.x() > -hx_ + kGap && b.hi.x() < hx_ - kGap &&
+                          b.lo.y() > -hy_ + kGap && b.hi.y() < hy_ - kGap;
+      lift = std::max(lift, (inside ? 0.0 : H_) + kGap - b.lo.z());
+      for (bool moved = true; moved;) {
+        moved = false;
+        Aabb c{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};
+        for (const Aabb& other : placed)
+          if (c.overlaps(other, kGap)) {
+            lift = other.hi.z() + 2 * kGap - b.lo.z();  // 2x: no float ping-pong at the boundary
+            moved = true;
+            c = Aabb{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};
+          }
+      }
+      if (lift > 0) X_WO[i].translation().z() += lift;
+      placed.push_back(world_aabb(hull_points_[i], X_WO[i]));
+    }
+    return X_WO;
+  }
+
+  /// One dynamic body per object, in its principal frame, starting at rest at X_WO.
+  void add_bodies(const std::vector<Pose>& X_WO) {
+    const physics::HullShapeOptions hulls = hull_options(o_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      const DropObject& ob = objects_[i];
+      const PrincipalFrame pr =
+          principal_frame(ob, detail::concat(kFn, ": objects[", i, "] ('", ob.name, "')"));
+      X_OB_[i] = pr.X_OB;
+      const physics::RigidGeometry geometry = physics::rigid_geometry(ob, pr, kUnits, hulls);
+      auto shape = std::make_unique<physics::RigidShape>(
+          physics::rigid_shape(geometry, kUnits, hulls, /*always_compound=*/true));
+      btRigidBody::btRigidBodyConstructionInfo info =
+          physics::body_info(ob.mass, pr.moments, shape->shape(), X_WO[i] * pr.X_OB, kUnits);
+      info.m_friction = btScalar(ob.friction);
+      info.m_restitution = btScalar(ob.restitution);
+      info.m_rollingFriction = btScalar(o_.rolling_friction);
+      info.m_spinningFriction = btScalar(o_.rolling_friction);
+      info.m_angularDamping = btScalar(o_.angular_damping);
+      auto rb = std::make_unique<btRigidBody>(info);
+      // Sleeping: Bullet's own timer (the process-wide gDeactivationTime) is not used; a body
+      // found at rest below (our test) is marked WANTS_DEACTIVATION, and Bullet freezes an
+      // island once all its bodies are so marked and wakes it when something moving touches it.
+      // The per-body thresholds keep the mark only while the body stays slower than the rest
+      // speeds.
+      rb->setActivationState(ACTIVE_TAG);
+      rb->setSleepingThresholds(btScalar(kUnits.length * o_.linear_rest),
+                                btScalar(o_.angular_rest));
+      // Continuous collision detection against tunnelling through thin walls.
+      const Aabb local = world_aabb(hull_points_[i], Pose::Identity());
+      const double min_extent = (local.hi - local.lo).minCoeff();
+      rb->setCcdMotionThreshold(btScalar(kUnits.length * 0.5 * min_extent));
+      rb->setCcdSweptSphereRadius(btScalar(kUnits.length * 0.2 * min_extent));
+      w_->world.addRigidBody(rb.get());
+      body_[i] = rb.get();
+      result_.objects[i].X_WO_release = X_WO[i];
+      w_->rigid_shapes.push_back(std::move(shape));
+      w_->bodies.push_back(std::move(rb));
+    }
+  }
+
+  Pose pose_of(std::size_t i) const {
+    return Pose(kUnits.pose(body_[i]->getWorldTransform()) * X_OB_[i].inverse());
+  }
+
+  /// Not entirely inside the walls (on or over the rim, or below the floor).
+  bool outside_walls(const Pose& X_WO, std::size_t i) const {
+    const double tol = o_.collision_margin + o_.contact_distance;
+    const Aabb b = world_aabb(hull_points_[i], X_WO);
+    return b.lo.x() < -hx_ - tol || b.hi.x() > hx_ + tol || b.lo.y() < -hy_ - tol ||
+           b.hi.y() > hy_ + tol || b.lo.z() < -tol;
+  }
+
+  void remove(std::size_t i) {
+    result_.objects[i].X_WO = pose_of(i);
+    result_.objects[i].status = DropStatus::LeftTote;
+    w_->world.removeRigidBody(body_[i]);
+  }
+
+  /// Objects left the tote: the rest may have leaned on them and must come to rest again, with
+  /// resettle_time more to do so.
+  void restart() {
+    limit_ = std::max(limit_, max_steps_ + resettle_steps_);
+    ++result_.resettle_rounds;
+    all_rest_ = false;
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!body_[i]->isInWorld()) continue;
+      at_rest_[i] = 0;
+      rest_ref_[i] = body_[i]->getCenterOfMassTransform();
+      body_[i]->activate(true);
+    }
+  }
+
+  /// One simulation step and the rest test of every object; returns the objects that came to
+  /// rest on or over the rim in this step.
+  std::vector<std::size_t> step_and_test() {
+    w_->world.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
+    ++step_;
+    all_rest_ = true;
+    std::vector<std::size_t> on_rim;
+    const double fall_z = -box_.floor_thickness - 0.02;
+    const double max_shift = o_.linear_rest * o_.rest_time;
+    const double max_turn = o_.angular_rest * o_.rest_time;
+    for (std::size_t i = 0; i < n_; ++i) {
+      btRigidBody* rb = body_[i];
+      if (!rb->isInWorld()) continue;
+      if (double(rb->getCenterOfMassPosition().z()) < kUnits.length * fall_z) {
+        remove(i);
+        continue;
+      }
+      // At rest: slower than the thresholds now, and moved less than they allow over the last
+      // rest_time (a pose reference that is reset whenever the object strays further from it).
+      // A speed spike of a resting object (solver jitter) does not restart the count; real
+      // motion does.
+      const btTransform& X = rb->getCenterOfMassTransform();
+      const double shift =
+          double((X.getOrigin() - rest_ref_[i].getOrigin()).length()) / kUnits.length;
+      const double turn = double(X.getRotation().angleShortestPath(rest_ref_[i].getRotation()));
+      if (shift > max_shift || turn > max_turn) {
+        rest_ref_[i] = X;  // moving: start a new window here
+        at_rest_[i] = 0;
+      } else {
+        ++at_rest_[i];
+      }
+      const bool slow = double(rb->getLinearVelocity().length()) / kUnits.length < o_.linear_rest &&
+                        double(rb->getAngularVelocity().length()) < o_.angular_rest;
+      if (!slow || at_rest_[i] < rest_steps_) all_rest_ = false;
+      if (slow && at_rest_[i] >= rest_steps_ && rb->getActivationState() == ACTIVE_TAG)
+        rb->setActivationState(WANTS_DEACTIVATION);
+      // Came to rest on or over the rim: it leaves now, not after the whole pile rests.
+      if (slow && at_rest_[i] == rest_steps_ && outside_walls(pose_of(i), i)) on_rim.push_back(i);
+    }
+    return on_rim;
+  }
+
+  /// Steps until every object in the tote is at rest or the time is up; objects that left the
+  /// tote are removed on the way and the rest settles again (see the file comment).
+  void step_until_rest() {
+    max_steps_ = static_cast<std::int64_t>(std::ceil(o_.max_time / o_.dt - 1e-9));
+    rest_steps_ = static_cast<std::int64_t>(std::ceil(o_.rest_time / o_.dt - 1e-9));
+    resettle_steps_ = static_cast<std::int64_t>(std::ceil(o_.resettle_time / o_.dt - 1e-9));
+    limit_ = max_steps_;
+    at_rest_.assign(n_, 0);
+    rest_ref_.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) rest_ref_[i] = body_[i]->getCenterOfMassTransform();
+    while (true) {
+      while (step_ < limit_) {
+        const std::vector<std::size_t> on_rim = step_and_test();
+        if (!on_rim.empty()) {
+          for (std::size_t i : on_rim) remove(i);
+          restart();
+          continue;
+        }
+        if (all_rest_) break;
+      }
+      // Time is up: objects on or over the rim leave; whatever leaned on them settles again.
+      bool removed = false;
+      for (std::size_t i = 0; i < n_; ++i)
+        if (body_[i]->isInWorld() && outside_walls(pose_of(i), i)) {
+          remove(i);
+          removed = true;
+        }
+      if (!removed) break;
+      restart();
+      if (step_ >= limit_) break;
+    }
+    result_.steps = step_;
+    result_.simulated_time = double(step_) * o_.dt;
+    result_.settled = all_rest_;
+  }
+
+  /// Tote contacts of every object and the deepest penetration, at the final state.
+  void measure_contacts() {
+    // Sleeping bodies get no fresh contacts with the (inactive) tote: wake them (no motion).
+    for (std::size_t i = 0; i < n_; ++i)
+      if (body_[i]->isInWorld()) body_[i]->activate(true);
+    w_->world.performDiscreteCollisionDetection();
+    contacts_.assign(n_, 0);
+    auto object_index = [&](const btCollisionObject* c) -> long {
+      for (std::size_t i = 0; i < n_; ++i)
+        if (body_[i] == c) return static_cast<long>(i);
+      return -1;
+    };
+    auto is_tote = [&](const btCollisionObject* c) {
+      return std::find(tote_bodies_.begin(), tote_bodies_.end(), c) != tote_bodies_.end();
+    };
+    double max_pen = 0.0;
+    btDispatcher* d = w_->world.getDispatcher();
+    for (int m = 0; m < d->getNumManifolds(); ++m) {
+      const btPersistentManifold* man = d->getManifoldByIndexInternal(m);
+      const btCollisionObject* a = man->getBody0();
+      const btCollisionObject* b = man->getBody1();
+      for (int c = 0; c < man->getNumContacts(); ++c) {
+        const btManifoldPoint& pt = man->getContactPoint(c);
+        const double dist = double(pt.getDistance()) / kUnits.length;
+        max_pen = std::max(max_pen, -dist);
+        if (dist > o_.contact_distance) continue;
+        long obj = -1;
+        btVector3 n_tote_to_obj;
+        btVector3 p_tote;
+        if (is_tote(a) && !is_tote(b)) {
+          obj = object_index(b);
+          n_tote_to_obj = -pt.m_normalWorldOnB;  // normal on B points towards A
+          p_tote = pt.getPositionWorldOnA();
+        } else if (is_tote(b) && !is_tote(a)) {
+          obj = object_index(a);
+          n_tote_to_obj = pt.m_normalWorldOnB;
+          p_tote = pt.getPositionWorldOnB();
+        }
+        if (obj < 0) continue;
+        constexpr double kAxis = 0.7;
+        const double nx = n_tote_to_obj.x(), ny = n_tote_to_obj.y(), nz = n_tote_to_obj.z();
+        if (nz > kAxis && double(p_tote.z()) / kUnits.length < 0.5 * H_)
+          contacts_[obj] |= ContactFloor;
+        if (nx > kAxis) contacts_[obj] |= ContactWallMinusX;
+        if (nx < -kAxis) contacts_[obj] |= ContactWallPlusX;
+        if (ny > kAxis) contacts_[obj] |= ContactWallMinusY;
+        if (ny < -kAxis) contacts_[obj] |= ContactWallPlusY;
+      }
+    }
+    result_.max_penetration = max_pen;
+  }
+
+  /// Final poses and what is kept.
+  void final_objects() {
+    for (std::size_t i = 0; i < n_; ++i) {
+      DroppedObject& r = result_.objects[i];
+      btRigidBody* rb = body_[i];
+      if (!rb->isInWorld()) continue;  // fell out, pose recorded then
+      r.X_WO = pose_of(i);
+      r.settled = at_rest_[i] >= rest_steps_ &&
+                  double(rb->getLinearVelocity().length()) / kUnits.length < o_.linear_rest &&
+                  double(rb->getAngularVelocity().length()) < o_.angular_rest;
+      r.contacts = contacts_[i];
+      if (outside_walls(r.X_WO, i)) {
+        r.status = DropStatus::LeftTote;
+        r.contacts = 0;
+      } else if (!r.settled && o_.remove_unsettled) {
+        r.status = DropStatus::NotSettled;
+        r.contacts = 0;
+      }
+    }
+  }
+
+  const std::vector<DropObject>& objects_;
+  const Mesh& tote_;
+  const ToteBox& box_;
+  const DropOptions& o_;
+  const std::size_t n_;
+  const double hx_, hy_, H_;
+  std::unique_ptr<World> w_;
+  std::vector<const btCollisionObject*> tote_bodies_;
+  std::vector<Points3d> hull_points_;  // every part vertex, object frame
+  std::vector<Pose> X_OB_;
+  std::vector<btRigidBody*> body_;
+  DropResult result_;
+  // Stepping state.
+  std::int64_t step_ = 0, limit_ = 0, max_steps_ = 0, rest_steps_ = 0, resettle_steps_ = 0;
+  bool all_rest_ = false;
+  std::vector<std::int64_t> at_rest_;
+  std::vector<btTransform> rest_ref_;
+  std::vector<std::uint32_t> contacts_;
+};
+
 /// drop_objects() and, with `X_WO_start`, settle_objects(): the objects then start at rest at
 /// these poses instead of at random release poses.
 DropResult simulate(const std::vector<DropObject>& objects, const Mesh& tote, const ToteBox& box,
                     const DropOptions& o, const std::vector<Pose>* X_WO_start) {
   validate(objects, tote, box, o);
-  const std::size_t n = objects.size();
-  const double hx = 0.5 * box.inner_length, hy = 0.5 * box.inner_width, H = box.inner_height;
-
-  auto w = std::make_unique<World>();
-  w->world.setGravity(btVector3(0, 0, btScalar(-o.gravity)));
-  w->world.getSolverInfo().m_numIterations = o.solver_iterations;
-  // Two friction directions per contact, kept from step to step (see DropOptions).
-  if (o.two_friction_directions)
-    w->world.getSolverInfo().m_solverMode |=
-        SOLVER_USE_2_FRICTION_DIRECTIONS | SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
-
-  // --- the static tote ---
-  std::vector<const btCollisionObject*> tote_bodies;
-  auto add_static = [&](std::unique_ptr<btCollisionShape> shape, const btTransform& X) {
-    btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape.get());
-    info.m_startWorldTransform = X;
-    info.m_friction = btScalar(o.tote_friction);
-    info.m_restitution = btScalar(o.tote_restitution);
-    auto body = std::make_unique<btRigidBody>(info);
-    w->world.addRigidBody(body.get());
-    tote_bodies.push_back(body.get());
-    w->shapes.push_back(std::move(shape));
-    w->bodies.push_back(std::move(body));
-  };
-  if (o.tote_collision == ToteCollision::Boxes) {
-    const double T = std::max(box.wall_thickness, 0.02);  // thickened outwards
-    const double F = std::max(box.floor_thickness, 0.02);
-    auto add_box = [&](const Vec3d& lo, const Vec3d& hi) {
-      auto shape = std::make_unique<btBoxShape>(to_bt(0.5 * (hi - lo)));
-      shape->setMargin(btScalar(std::min(o.collision_margin, 0.25 * (hi - lo).minCoeff())));
-      if (o.polyhedral_contacts) shape->initializePolyhedralFeatures();
-      btTransform X;
-      X.setIdentity();
-      X.setOrigin(to_bt(0.5 * (hi + lo)));
-      add_static(std::move(shape), X);
-    };
-    add_box(Vec3d(-hx - T, -hy - T, -F), Vec3d(hx + T, hy + T, 0));  // floor
-    add_box(Vec3d(-hx - T, -hy - T, -F), Vec3d(-hx, hy + T, H));     // -x wall
-    add_box(Vec3d(hx, -hy - T, -F), Vec3d(hx + T, hy + T, H));       // +x wall
-    add_box(Vec3d(-hx, -hy - T, -F), Vec3d(hx, -hy, H));             // -y wall
-    add_box(Vec3d(-hx, hy, -F), Vec3d(hx, hy + T, H));               // +y wall
-  } else {
-    w->tote_triangles = std::make_unique<btTriangleMesh>(true, false);
-    const auto& V = tote.vertices();
-    const auto& Fc = tote.faces();
-    for (Eigen::Index f = 0; f < Fc.rows(); ++f) {
-      auto vtx = [&](int c) { return btVector3(V(Fc(f, c), 0), V(Fc(f, c), 1), V(Fc(f, c), 2)); };
-      w->tote_triangles->addTriangle(vtx(0), vtx(1), vtx(2), false);
-    }
-    auto shape = std::make_unique<btBvhTriangleMeshShape>(w->tote_triangles.get(), true);
-    shape->setMargin(btScalar(0.0));
-    btTransform X;
-    X.setIdentity();
-    add_static(std::move(shape), X);
-  }
-
-  // --- release poses (per-object random streams), de-overlapped in order of height ---
-  std::vector<Pose> X_WO(n);
-  std::vector<Points3d> hull_points(n);  // every part vertex, object frame
-  for (std::size_t i = 0; i < n; ++i) {
-    Rng rng(o.seed, i);
-    Eigen::Quaterniond q(rng.normal(), rng.normal(), rng.normal(), rng.normal());
-    if (q.norm() < 1e-12) q = Eigen::Quaterniond::Identity();
-    q.normalize();
-    X_WO[i] = Pose::Identity();
-    X_WO[i].linear() = q.toRotationMatrix();
-    const Vec3d p(rng.uniform(o.window_min.x(), o.window_max.x()),
-                  rng.uniform(o.window_min.y(), o.window_max.y()),
-                  rng.uniform(o.window_min.z(), o.window_max.z()));
-    Eigen::Index rows = 0;
-    for (const Mesh& part : objects[i].convex_parts) rows += part.num_vertices();
-    hull_points[i].resize(rows, 3);
-    rows = 0;
-    for (const Mesh& part : objects[i].convex_parts) {
-      hull_points[i].middleRows(rows, part.num_vertices()) = part.vertices().cast<double>();
-      rows += part.num_vertices();
-    }
-    // The drawn point is the centre of the object's rotated bounding box.
-    const Aabb b = world_aabb(hull_points[i], X_WO[i]);
-    X_WO[i].translation() = p - 0.5 * (b.lo + b.hi);
-  }
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return X_WO[a].translation().z() < X_WO[b].translation().z();
-  });
-  constexpr double kGap = 0.005;
-  std::vector<Aabb> placed;
-  for (std::size_t i : order) {
-    Aabb b = world_aabb(hull_points[i], X_WO[i]);
-    double lift = 0.0;
-    const bool inside = b.lo.x() > -hx + kGap && b.hi.x() < hx - kGap && b.lo.y() > -hy + kGap &&
-                        b.hi.y() < hy - kGap;
-    lift = std::max(lift, (inside ? 0.0 : H) + kGap - b.lo.z());
-    for (bool moved = true; moved;) {
-      moved = false;
-      Aabb c{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};
-      for (const Aabb& other : placed)
-        if (c.overlaps(other, kGap)) {
-          lift = other.hi.z() + 2 * kGap - b.lo.z();  // 2x: no float ping-pong at the boundary
-          moved = true;
-          c = Aabb{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};
-        }
-    }
-    if (lift > 0) X_WO[i].translation().z() += lift;
-    placed.push_back(world_aabb(hull_points[i], X_WO[i]));
-  }
-  if (X_WO_start != nullptr) X_WO = *X_WO_start;  // settle: start at rest where given
-
-  // --- dynamic bodies ---
-  DropResult result;
-  result.objects.resize(n);
-  std::vector<Pose> X_OB(n);
-  std::vector<btRigidBody*> body(n, nullptr);
-  for (std::size_t i = 0; i < n; ++i) {
-    const DropObject& ob = objects[i];
-    const Principal pr = principal_frame(ob, i);
-    X_OB[i] = pr.X_OB;
-    const Pose X_BO = pr.X_OB.inverse();
-    auto compound =
-        std::make_unique<btCompoundShape>(true, static_cast<int>(ob.convex_parts.size()));
-    btTransform identity;
-    identity.setIdentity();
-    for (const Mesh& part : ob.convex_parts) {
-      auto hull = hull_shape(part, X_BO, o.collision_margin, o.max_hull_vertices, o.hull_tolerance,
-                             o.polyhedral_contacts);
-      compound->addChildShape(identity, hull.get());
-      w->shapes.push_back(std::move(hull));
-    }
-    btRigidBody::btRigidBodyConstructionInfo info(btScalar(ob.mass), nullptr, compound.get(),
-                                                  to_bt(pr.moments));
-    info.m_startWorldTransform = to_bt(X_WO[i] * pr.X_OB);
-    info.m_friction = btScalar(ob.friction);
-    info.m_restitution = btScalar(ob.restitution);
-    info.m_rollingFriction = btScalar(o.rolling_friction);
-    info.m_spinningFriction = btScalar(o.rolling_friction);
-    info.m_angularDamping = btScalar(o.angular_damping);
-    auto rb = std::make_unique<btRigidBody>(info);
-    // Sleeping: Bullet's own timer (the process-wide gDeactivationTime) is not used; a body
-    // found at rest below (our test) is marked WANTS_DEACTIVATION, and Bullet freezes an island
-    // once all its bodies are so marked and wakes it when something moving touches it. The
-    // per-body thresholds keep the mark only while the body stays slower than the rest speeds.
-    rb->setActivationState(ACTIVE_TAG);
-    rb->setSleepingThresholds(btScalar(o.linear_rest), btScalar(o.angular_rest));
-    // Continuous collision detection against tunnelling through thin walls.
-    const Aabb local = world_aabb(hull_points[i], Pose::Identity());
-    const double min_extent = (local.hi - local.lo).minCoeff();
-    rb->setCcdMotionThreshold(btScalar(0.5 * min_extent));
-    rb->setCcdSweptSphereRadius(btScalar(0.2 * min_extent));
-    w->world.addRigidBody(rb.get());
-    body[i] = rb.get();
-    result.objects[i].X_WO_release = X_WO[i];
-    w->shapes.push_back(std::move(compound));
-    w->bodies.push_back(std::move(rb));
-  }
-
-  // --- simulate ---
-  const auto max_steps = static_cast<std::int64_t>(std::ceil(o.max_time / o.dt - 1e-9));
-  const auto rest_steps = static_cast<std::int64_t>(std::ceil(o.rest_time / o.dt - 1e-9));
-  const auto resettle_steps = static_cast<std::int64_t>(std::ceil(o.resettle_time / o.dt - 1e-9));
-  // At rest: slower than the thresholds now, and moved less than they allow over the last
-  // rest_time (a pose reference that is reset whenever the object strays further from it). A
-  // speed spike of a resting object (solver jitter) does not restart the count; real motion does.
-  std::vector<std::int64_t> at_rest(n, 0);
-  std::vector<btTransform> rest_ref(n);
-  for (std::size_t i = 0; i < n; ++i) rest_ref[i] = body[i]->getCenterOfMassTransform();
-  const double max_shift = o.linear_rest * o.rest_time;
-  const double max_turn = o.angular_rest * o.rest_time;
-  const double fall_z = -box.floor_thickness - 0.02;
-  const double tol = o.collision_margin + o.contact_distance;
-  auto pose_of = [&](std::size_t i) {
-    return Pose(from_bt(body[i]->getWorldTransform()) * X_OB[i].inverse());
-  };
-  auto outside_walls = [&](std::size_t i) {
-    const Aabb b = world_aabb(hull_points[i], pose_of(i));
-    return b.lo.x() < -hx - tol || b.hi.x() > hx + tol || b.lo.y() < -hy - tol ||
-           b.hi.y() > hy + tol || b.lo.z() < -tol;
-  };
-  auto remove = [&](std::size_t i) {
-    result.objects[i].X_WO = pose_of(i);
-    result.objects[i].status = DropStatus::LeftTote;
-    w->world.removeRigidBody(body[i]);
-  };
-  std::int64_t step = 0;
-  std::int64_t limit = max_steps;
-  bool all_rest = false;
-  // Objects left the tote: the rest may have leaned on them and must come to rest again, with
-  // resettle_time more to do so.
-  auto restart = [&]() {
-    limit = std::max(limit, max_steps + resettle_steps);
-    ++result.resettle_rounds;
-    all_rest = false;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!body[i]->isInWorld()) continue;
-      at_rest[i] = 0;
-      rest_ref[i] = body[i]->getCenterOfMassTransform();
-      body[i]->activate(true);
-    }
-  };
-  std::vector<std::size_t> on_rim;
-  while (true) {
-    while (step < limit) {
-      w->world.stepSimulation(btScalar(o.dt), 0, btScalar(o.dt));
-      ++step;
-      all_rest = true;
-      on_rim.clear();
-      for (std::size_t i = 0; i < n; ++i) {
-        btRigidBody* rb = body[i];
-        if (!rb->isInWorld()) continue;
-        if (double(rb->getCenterOfMassPosition().z()) < fall_z) {
-          remove(i);
-          continue;
-        }
-        const btTransform& X = rb->getCenterOfMassTransform();
-        const double shift = double((X.getOrigin() - rest_ref[i].getOrigin()).length());
-        const double turn = double(X.getRotation().angleShortestPath(rest_ref[i].getRotation()));
-        if (shift > max_shift || turn > max_turn) {
-          rest_ref[i] = X;  // moving: start a new window here
-          at_rest[i] = 0;
-        } else {
-          ++at_rest[i];
-        }
-        const bool slow = double(rb->getLinearVelocity().length()) < o.linear_rest &&
-                          double(rb->getAngularVelocity().length()) < o.angular_rest;
-        if (!slow || at_rest[i] < rest_steps) all_rest = false;
-        if (slow && at_rest[i] >= rest_steps && rb->getActivationState() == ACTIVE_TAG)
-          rb->setActivationState(WANTS_DEACTIVATION);
-        // Came to rest on or over the rim: it leaves now, not after the whole pile rests.
-        if (slow && at_rest[i] == rest_steps && outside_walls(i)) on_rim.push_back(i);
-      }
-      if (!on_rim.empty()) {
-        for (std::size_t i : on_rim) remove(i);
-        restart();
-        continue;
-      }
-      if (all_rest) break;
-    }
-    // Time is up: objects on or over the rim leave; whatever leaned on them settles again.
-    bool removed = false;
-    for (std::size_t i = 0; i < n; ++i)
-      if (body[i]->isInWorld() && outside_walls(i)) {
-        remove(i);
-        removed = true;
-      }
-    if (!removed) break;
-    restart();
-    if (step >= limit) break;
-  }
-  result.steps = step;
-  result.simulated_time = double(step) * o.dt;
-  result.settled = all_rest;
-
-  // --- contacts at the final state ---
-  // Sleeping bodies get no fresh contacts with the (inactive) tote: wake them (no motion).
-  for (std::size_t i = 0; i < n; ++i)
-    if (body[i]->isInWorld()) body[i]->activate(true);
-  w->world.performDiscreteCollisionDetection();
-  std::vector<std::uint32_t> contacts(n, 0);
-  auto object_index = [&](const btCollisionObject* c) -> long {
-    for (std::size_t i = 0; i < n; ++i)
-      if (body[i] == c) return static_cast<long>(i);
-    return -1;
-  };
-  auto is_tote = [&](const btCollisionObject* c) {
-    return std::find(tote_bodies.begin(), tote_bodies.end(), c) != tote_bodies.end();
-  };
-  double max_pen = 0.0;
-  btDispatcher* d = w->world.getDispatcher();
-  for (int m = 0; m < d->getNumManifolds(); ++m) {
-    const btPersistentManifold* man = d->getManifoldByIndexInternal(m);
-    const btCollisionObject* a = man->getBody0();
-    const btCollisionObject* b = man->getBody1();
-    for (int c = 0; c < man->getNumContacts(); ++c) {
-      const btManifoldPoint& pt = man->getContactPoint(c);
-      const double dist = double(pt.getDistance());
-      max_pen = std::max(max_pen, -dist);
-      if (dist > o.contact_distance) continue;
-      long obj = -1;
-      btVector3 n_tote_to_obj;
-      btVector3 p_tote;
-      if (is_tote(a) && !is_tote(b)) {
-        obj = object_index(b);
-        n_tote_to_obj = -pt.m_normalWorldOnB;  // normal on B points towards A
-        p_tote = pt.getPositionWorldOnA();
-      } else if (is_tote(b) && !is_tote(a)) {
-        obj = object_index(a);
-        n_tote_to_obj = pt.m_normalWorldOnB;
-        p_tote = pt.getPositionWorldOnB();
-      }
-      if (obj < 0) continue;
-      constexpr double kAxis = 0.7;
-      const double nx = n_tote_to_obj.x(), ny = n_tote_to_obj.y(), nz = n_tote_to_obj.z();
-      if (nz > kAxis && double(p_tote.z()) < 0.5 * H) contacts[obj] |= ContactFloor;
-      if (nx > kAxis) contacts[obj] |= ContactWallMinusX;
-      if (nx < -kAxis) contacts[obj] |= ContactWallPlusX;
-      if (ny > kAxis) contacts[obj] |= ContactWallMinusY;
-      if (ny < -kAxis) contacts[obj] |= ContactWallPlusY;
-    }
-  }
-  result.max_penetration = max_pen;
-
-  // --- final poses and what is kept ---
-  for (std::size_t i = 0; i < n; ++i) {
-    DroppedObject& r = result.objects[i];
-    btRigidBody* rb = body[i];
-    if (!rb->isInWorld()) continue;  // fell out, pose recorded then
-    r.X_WO = from_bt(rb->getWorldTransform()) * X_OB[i].inverse();
-    r.settled = at_rest[i] >= rest_steps &&
-                double(rb->getLinearVelocity().length()) < o.linear_rest &&
-                double(rb->getAngularVelocity().length()) < o.angular_rest;
-    r.contacts = contacts[i];
-    const Aabb b = world_aabb(hull_points[i], r.X_WO);
-    if (b.lo.x() < -hx - tol || b.hi.x() > hx + tol || b.lo.y() < -hy - tol ||
-        b.hi.y() > hy + tol || b.lo.z() < -tol) {
-      r.status = DropStatus::LeftTote;
-      r.contacts = 0;
-    } else if (!r.settled && o.remove_unsettled) {
-      r.status = DropStatus::NotSettled;
-      r.contacts = 0;
-    }
-  }
-  return result;
+  return DropSimulation(objects, tote, box, o).run(X_WO_start);
 }
 
 }  // namespace

@@ -251,7 +251,6 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
         if (c > 0) look(p - 1);
         if (c + 1 < W) look(p + 1);
         if (k == 0) continue;
-        ++L.total_covered_edge[b];
         const float dp = depth[p];
         for (int i = 0; i < k; ++i) {
           if (nb_rel[i] < 0) continue;  // already counted for this pixel
@@ -276,6 +275,7 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
     for (std::size_t k = 0; k < L.relations.size(); ++k) {
       L.relations[k].edge_size = static_cast<int>(edges[k]);
       L.relations[k].depth_diff = median(diffs[k]);
+      L.total_covered_edge[static_cast<std::size_t>(L.relations[k].parent)] += edges[k];
     }
   }
 

@@ -36,6 +36,11 @@ void SceneGraspOptions::validate() const {
                                    "]: expected a finite distance >= 0 m, got ", offsets[k]);
     }
   }
+  if (!(approach_step > 0.0) || !std::isfinite(approach_step)) {
+    throw_error<InvalidArgument>("SceneGraspOptions.approach_step: expected a finite value > 0 m, "
+                                 "got ",
+                                 approach_step);
+  }
   tool.validate();
   if (!gravity_world.allFinite() || !(gravity_world.norm() > 1e-12)) {
     throw_error<InvalidArgument>(
@@ -147,6 +152,34 @@ struct SceneGraspModel::Impl {
   std::unique_ptr<RayScene> scene;             // everything, for visibility
   PlacedGrasps pj, suction;
   std::size_t num_objects = 0;
+  std::unique_ptr<Solid> floor;  // tote frame slab below the inner floor surface (z < 0)
+  Pose X_W_floor = Pose::Identity();
+
+  /// Why a part at X_WP hit obstacle j (the grasped object: own).
+  std::uint8_t obstacle_code(const Solid& part, const Pose& X_WP, std::size_t j,
+                             std::int64_t own) const {
+    if (j < num_objects) {
+      return static_cast<std::uint8_t>(static_cast<std::int64_t>(j) == own
+                                           ? CollisionObstacle::GraspedObject
+                                           : CollisionObstacle::OtherObject);
+    }
+    return static_cast<std::uint8_t>(collide(*part.model, X_WP, *floor->model, X_W_floor)
+                                         ? CollisionObstacle::Floor
+                                         : CollisionObstacle::Wall);
+  }
+
+  /// The tool poses checked on the path of segment k: offsets[0] for k = 0, else the poses at
+  /// most approach_step apart after offsets[k-1] up to offsets[k].
+  std::vector<double> segment(std::size_t k) const {
+    const std::vector<double>& off = options.offsets;
+    if (k == 0) return {off[0]};
+    const double a = off[k - 1], b = off[k];
+    const auto n =
+        static_cast<int>(std::max(1.0, std::ceil(std::abs(b - a) / options.approach_step)));
+    std::vector<double> d(static_cast<std::size_t>(n));
+    for (int i = 1; i <= n; ++i) d[static_cast<std::size_t>(i - 1)] = a + (b - a) * i / n;
+    return d;
+  }
 
   /// Collision of one part (at X_WP) with obstacle j.
   bool part_hits(const Solid& part, const Pose& X_WP, std::size_t j) const {
@@ -161,14 +194,18 @@ struct SceneGraspModel::Impl {
     return false;
   }
 
-  /// First obstacle hit by the parts at their poses (-1 none, 0 tote, i + 1 object i).
+  /// First obstacle hit by the parts at their poses (-1 none, 0 tote, i + 1 object i); the
+  /// part index and obstacle index go to *part / *obstacle when hit.
   template <std::size_t P>
   std::int32_t first_hit(const std::array<const Solid*, P>& parts, const std::array<Pose, P>& poses,
-                         std::int64_t skip) const {
+                         std::int64_t skip, std::size_t* part = nullptr,
+                         std::size_t* obstacle = nullptr) const {
     for (std::size_t j = 0; j < obstacles.size(); ++j) {
       if (static_cast<std::int64_t>(j) == skip) continue;
       for (std::size_t k = 0; k < P; ++k) {
         if (part_hits(*parts[k], poses[k], j)) {
+          if (part) *part = k;
+          if (obstacle) *obstacle = j;
           return j == num_objects ? 0 : static_cast<std::int32_t>(j + 1);
         }
       }
@@ -180,29 +217,52 @@ struct SceneGraspModel::Impl {
   /// hit per offset into hit[0..K) and returns whether any offset collides. The object `own`
   /// (0-based, -1 none) is skipped at offset 0 exactly unless `check_own_at_grasp`.
   bool pj_hits(const Pose& X_WH, double opening, std::int64_t own, bool check_own_at_grasp,
-               std::int32_t* hit) const {
+               std::int32_t* hit, std::uint8_t* why_part = nullptr,
+               std::uint8_t* why_obstacle = nullptr) const {
     const std::array<const Solid*, 3> parts = {hand[1].get(), hand[2].get(), hand[0].get()};
     bool any = false;
     for (std::size_t k = 0; k < options.offsets.size(); ++k) {
-      const double d = options.offsets[k];
-      const Pose X = back_off(X_WH, d);
-      const std::array<Pose, 3> poses = {X * finger_offset(0, opening),
-                                         X * finger_offset(1, opening), X};
-      hit[k] = first_hit(parts, poses, d == 0.0 && !check_own_at_grasp ? own : -1);
-      any = any || hit[k] >= 0;
+      hit[k] = -1;
+      for (const double d : segment(k)) {
+        const Pose X = back_off(X_WH, d);
+        const std::array<Pose, 3> poses = {X * finger_offset(0, opening),
+                                           X * finger_offset(1, opening), X};
+        std::size_t pi = 0, oj = 0;
+        hit[k] = first_hit(parts, poses, d == 0.0 && !check_own_at_grasp ? own : -1, &pi, &oj);
+        if (hit[k] < 0) continue;
+        if (!any && why_part) {
+          *why_part = static_cast<std::uint8_t>(pi == 2 ? CollisionPart::Palm
+                                                        : CollisionPart::Finger);
+          *why_obstacle = obstacle_code(*parts[pi], poses[pi], oj, own);
+        }
+        any = true;
+        break;
+      }
     }
     return any;
   }
 
   /// Suction tool (cup body and shaft) at the contact frame X_WS, at every offset, against
   /// every obstacle: as pj_hits.
-  bool suction_hits(const Pose& X_WS, std::int32_t* hit) const {
+  bool suction_hits(const Pose& X_WS, std::int32_t* hit, std::int64_t own = -1,
+                    std::uint8_t* why_part = nullptr, std::uint8_t* why_obstacle = nullptr) const {
     const std::array<const Solid*, 2> parts = {tool[0].get(), tool[1].get()};
     bool any = false;
     for (std::size_t k = 0; k < options.offsets.size(); ++k) {
-      const Pose X = back_off(X_WS, options.offsets[k]);
-      hit[k] = first_hit(parts, std::array<Pose, 2>{X, X}, -1);
-      any = any || hit[k] >= 0;
+      hit[k] = -1;
+      for (const double d : segment(k)) {
+        const Pose X = back_off(X_WS, d);
+        std::size_t pi = 0, oj = 0;
+        hit[k] = first_hit(parts, std::array<Pose, 2>{X, X}, -1, &pi, &oj);
+        if (hit[k] < 0) continue;
+        if (!any && why_part) {
+          *why_part =
+              static_cast<std::uint8_t>(pi == 0 ? CollisionPart::Cup : CollisionPart::Shaft);
+          *why_obstacle = obstacle_code(*parts[pi], X, oj, own);
+        }
+        any = true;
+        break;
+      }
     }
     return any;
   }
@@ -299,6 +359,16 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
   }
   m.scene = std::make_unique<RayScene>(geoms);
   {
+    // The floor slab: the tote's footprint below its inner floor surface (z < 0, tote frame).
+    const auto b = tote.bounds();
+    const double depth = std::max(0.01, -b(0, 2) + 0.01);
+    const Vec3d size(b(1, 0) - b(0, 0) + 0.02, b(1, 1) - b(0, 1) + 0.02, depth);
+    Pose X = Pose::Identity();
+    X.translation() = Vec3d(0.5 * (b(0, 0) + b(1, 0)), 0.5 * (b(0, 1) + b(1, 1)), -0.5 * depth);
+    m.floor = std::make_unique<Solid>(make_box(size).transformed(X));
+    m.X_W_floor = X_WT;
+  }
+  {
     const GripperMeshes gm = gripper_meshes(gripper, 0.0);
     m.hand[0] = std::make_unique<Solid>(gm.palm);
     m.hand[1] = std::make_unique<Solid>(gm.finger_left);
@@ -337,8 +407,9 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
     p->object_index.assign(n, 0);
     p->colliding.assign(n, 0);
     p->hit.assign(n * K, -1);
+    p->collision_part.assign(n, 0);
+    p->collision_obstacle.assign(n, 0);
   }
-  const double tool_length = cup.body_height + options.tool.shaft_length;
   std::size_t row_pj = 0, row_su = 0;
   for (std::size_t i = 0; i < N; ++i) {
     const SceneGraspObject& o = objects[i];
@@ -378,7 +449,7 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
         X_WS.linear() = frame_z_to(a_W);
         X_WS.translation() = c_W;
         su.X_W_contact[row_su] = X_WS;
-        su.X_W_tool[row_su] = back_off(X_WS, tool_length);
+        su.X_W_tool[row_su] = back_off(X_WS, kSuctionToolOffset);
         su.contacts.row(r) = c_W.transpose();
         su.second_contacts.row(r) = c_W.transpose();
         if (!o.suction_score_analytical.empty())
@@ -397,12 +468,19 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
     for (std::size_t r = begin; r < end; ++r) {
       const double opening = gripper.collision_opening(pj.width[r]);
       const auto own = static_cast<std::int64_t>(pj.object_index[r]);
-      pj.colliding[r] = m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K]) ? 1 : 0;
+      pj.colliding[r] = m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K],
+                                  &pj.collision_part[r], &pj.collision_obstacle[r])
+                            ? 1
+                            : 0;
     }
   });
   parallel_for(num_suction, threads, 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t r = begin; r < end; ++r) {
-      su.colliding[r] = m.suction_hits(su.X_W_contact[r], &su.hit[r * K]) ? 1 : 0;
+      su.colliding[r] = m.suction_hits(su.X_W_contact[r], &su.hit[r * K],
+                                       static_cast<std::int64_t>(su.object_index[r]),
+                                       &su.collision_part[r], &su.collision_obstacle[r])
+                            ? 1
+                            : 0;
     }
   });
 }

@@ -484,13 +484,21 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
       d.row(k) = (dir / dist).cast<float>().transpose();
       tfar[k] = static_cast<float>(std::max(dist - options.keypoint_tolerance, 0.0));
     }
-    // Visible when the first hit is not nearer than tfar = distance - tolerance.
+    // Visible when the first hit along the ray is the point's own object, within the tolerance
+    // of the point (|hit - distance| <= tolerance): nothing in front of it, and the point lies on
+    // the surface the camera sees (a keypoint floating in a hole or above the object is not
+    // visible, even if whatever lies behind it is).
     std::vector<std::uint8_t> visible(static_cast<std::size_t>(n), 0);
     if (!cand.empty()) {
       CastOptions co;
       co.num_threads = options.num_threads;
       const RayHits hits = impl_->all->intersect(o, d, co);
-      for (std::size_t k = 0; k < cand.size(); ++k) visible[cand[k]] = hits.distance[k] >= tfar[k];
+      const float tol2 = 2.0f * static_cast<float>(options.keypoint_tolerance);
+      for (std::size_t k = 0; k < cand.size(); ++k) {
+        const float t = hits.distance[k];
+        visible[cand[k]] = std::isfinite(t) && t >= tfar[k] && t <= tfar[k] + tol2 &&
+                           hits.instance_ids[k] == owner[cand[k]] + 1;
+      }
     }
 
     Eigen::Index nv = 0;

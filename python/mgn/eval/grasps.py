@@ -598,9 +598,15 @@ def _match(
 
 
 def _check_kind(kind: Any, what: str) -> str:
-    if kind not in KINDS:
-        raise InvalidArgumentError(f"{what}: kind must be 'suction' or 'paralleljaw', got {kind!r}")
-    return kind
+    from mgn.hardware import normalize_grasp_kind
+
+    try:
+        return normalize_grasp_kind(kind)
+    except InvalidArgumentError:
+        raise InvalidArgumentError(
+            f"{what}: kind must be 'suction' or 'paralleljaw' (or an alias: suctioncup, pj, ...), "
+            f"got {kind!r}"
+        ) from None
 
 
 def _default_label_score(kind: str, label_score: str | None) -> str:
@@ -813,11 +819,15 @@ def register(eval_sub: argparse._SubParsersAction) -> None:
     p = eval_sub.add_parser(
         "grasps",
         help="precision@k of suction / parallel-jaw grasp predictions",
-        description=__doc__.split("\n\n")[0],
+        description=__doc__.split("\n\n")[0].replace("``", ""),
     )
     p.add_argument("predictions", metavar="PRED.json", help="prediction list (see the docs)")
     p.add_argument("--dataset", required=True, metavar="DIR", help="dataset folder")
-    p.add_argument("--kind", choices=KINDS, default="suction", help="grasp kind (default suction)")
+    from mgn.hardware import grasp_kind_arg
+
+    p.add_argument("--kind", type=grasp_kind_arg, default="suction",
+                   help="grasp kind: suction or paralleljaw (default suction; aliases "
+                        "suctioncup, pj)")  # fmt: skip
     p.add_argument("--out", metavar="JSON", help="write the results here")
     p.add_argument("--k", type=int, nargs="+", default=list(DEFAULT_KS), metavar="K",
                    help="k of precision@k (default 1 5 10 25 50)")  # fmt: skip
@@ -829,5 +839,6 @@ def register(eval_sub: argparse._SubParsersAction) -> None:
                    metavar="DEG", help="axis tolerance, degrees (default 30)")  # fmt: skip
     p.add_argument("--label-score", choices=_LABEL_SCORES, default=None,
                    help="label score held against the thresholds (default analytical)")  # fmt: skip
-    p.add_argument("--threads", type=int, default=0, help="C++ threads (0 = all)")
+    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
+                   help="C++ threads (0 = all cores)")  # fmt: skip
     p.set_defaults(func=_cmd)

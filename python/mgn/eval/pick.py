@@ -497,10 +497,12 @@ def run_picking(
 
     if len(scene.instances) == 0:
         raise InvalidArgumentError("run_picking: the scene has no objects; nothing to pick")
-    if gripper not in _GRIPPERS:
-        raise InvalidArgumentError(
-            f"run_picking: gripper must be one of {list(_GRIPPERS)}, got {gripper!r}"
-        )
+    from mgn.hardware import normalize_grasp_kind
+
+    try:
+        gripper = normalize_grasp_kind(gripper)
+    except InvalidArgumentError as e:
+        raise InvalidArgumentError(f"run_picking: gripper: {e}") from None
     policy_name, policy_fn = _resolve_policy(policy)
     if isinstance(max_failures_per_object, bool) or int(max_failures_per_object) < 1:
         raise InvalidArgumentError(
@@ -789,7 +791,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--policy", default="label",
                    help="'label', 'random' or 'module:function' (policy(state) -> "
                         "(instance_id, grasp index or X_W_tool) or None)")  # fmt: skip
-    p.add_argument("--gripper", choices=_GRIPPERS, default="suction")
+    from mgn.hardware import grasp_kind_arg
+
+    p.add_argument(
+        "--gripper",
+        type=grasp_kind_arg,
+        default="suction",
+        help="suction or paralleljaw (default suction; aliases suctioncup, pj)",
+    )
     p.add_argument("--config", default=None,
                    help="config YAML (object labels, gripper, cup, camera); default: the "
                         "dataset's config, else the defaults")  # fmt: skip
@@ -799,7 +808,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stochastic", action="store_true",
                    help="success with probability = score (else score >= 0.5)")  # fmt: skip
     p.add_argument("--resolution", type=int, default=160, help="top-view image size, px")
-    p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
+                   help="C++ threads (0 = all cores)")  # fmt: skip
     p.add_argument("--out", required=True, help="output folder")
     from mgn.render.photo import add_engine_arguments
 

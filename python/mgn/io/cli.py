@@ -38,7 +38,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
     from mgn.overlay import show
 
     path = show(args.dir, args.scene, args.view, args.out, grasps=args.grasps, layout=args.layout,
-                keypoints=not args.no_keypoints)  # fmt: skip
+                keypoints=not args.no_keypoints, alpha=args.alpha, panels=args.panels)  # fmt: skip
     print(f"wrote {path}")
     return 0
 
@@ -46,7 +46,8 @@ def _cmd_show(args: argparse.Namespace) -> int:
 def _cmd_report(args: argparse.Namespace) -> int:
     from mgn.report import write_report
 
-    path = write_report(args.dir, args.out, samples=args.samples, max_views=args.max_views)
+    path = write_report(args.dir, args.out, samples=args.samples, max_views=args.max_views,
+                        progress=not args.quiet)  # fmt: skip
     print(f"wrote {path}")
     return 0
 
@@ -65,13 +66,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--class-agnostic", action="store_true", help="one category 'object'")
     p.set_defaults(func=_cmd_coco)
 
-    p = sub.add_parser("show", help="draw one view's labels on its RGB image (PNG)")
-    p.add_argument("dir", help="dataset folder")
-    p.add_argument("--scene", type=int, required=True, help="scene id N of scene<N>")
+    p = sub.add_parser("show", help="draw one view's labels on its RGB image (PNG, with a legend)")
+    p.add_argument("dir", help="dataset folder, or one scene folder (mgn scene label --out)")
+    p.add_argument("--scene", type=int, help="scene id N of scene<N> (needed for a dataset)")
     p.add_argument("--view", type=int, default=0, help="view index (default 0)")
-    p.add_argument("--grasps", choices=["pj", "suction"], help="draw scene grasps of this kind")
+    p.add_argument(
+        "--grasps",
+        metavar="KIND",
+        help="draw scene grasps: suction or paralleljaw (aliases: suctioncup, pj)",
+    )
     p.add_argument("--layout", action="store_true", help="draw the relation graph and layers")
     p.add_argument("--no-keypoints", action="store_true", help="do not draw keypoints")
+    p.add_argument(
+        "--alpha",
+        type=float,
+        default=0.45,
+        help="mask tint over the RGB, 0..1 (default 0.45; 0 = outlines only)",
+    )
+    p.add_argument(
+        "--panels", action="store_true", help="add amodal-mask and depth panels beside the overlay"
+    )
     p.add_argument("-o", "--out", required=True, help="output PNG")
     p.set_defaults(func=_cmd_show)
 
@@ -79,5 +93,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("dir", help="dataset folder")
     p.add_argument("-o", "--out", required=True, help="output HTML file")
     p.add_argument("--samples", type=int, default=6, help="sample views shown (default 6)")
-    p.add_argument("--max-views", type=int, default=400, help="views used for the statistics")
+    p.add_argument("--max-views", type=int, default=400,
+                   help="views used for the statistics (default 400)")  # fmt: skip
+    p.add_argument("--quiet", action="store_true", help="no progress messages")
     p.set_defaults(func=_cmd_report)

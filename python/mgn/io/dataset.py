@@ -32,7 +32,7 @@ import h5py
 import numpy as np
 import numpy.typing as npt
 
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import IoError
 from mgn.io.scene_format import M_TO_CM, from_cm
 from mgn.render.camera import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
@@ -109,16 +109,96 @@ class View:
         except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
             raise IoError(f"'{p}' is not a readable npz: {e}") from e
 
+    def npz_array(self, key: str) -> np.ndarray:
+        """One array of ``{v}.npz`` as stored, reading (decompressing) only that array; kept.
+        IoError if the file or the key is missing."""
+        if "npz" in self.__dict__:
+            try:
+                return self.__dict__["npz"][key]
+            except KeyError:
+                raise IoError(f"'{self.path('.npz')}' has no array '{key}'") from None
+        cache = self.__dict__.setdefault("_npz_arrays", {})
+        if key not in cache:
+            p = self.path(".npz")
+            try:
+                with np.load(p, allow_pickle=False) as z:
+                    if key not in z.files:
+                        raise IoError(f"'{p}' has no array '{key}' (it has {z.files})")
+                    cache[key] = z[key]
+            except FileNotFoundError:
+                raise IoError(f"'{p}' does not exist") from None
+            except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+                if isinstance(e, IoError):
+                    raise
+                raise IoError(f"'{p}' is not a readable npz: {e}") from e
+        return cache[key]
+
+    def hdf5_dataset(self, name: str) -> np.ndarray:
+        """One dataset of ``{v}_scene.hdf5`` (lengths in metres), reading only that dataset.
+        IoError if the file or the dataset is missing."""
+        if "hdf5" in self.__dict__:
+            try:
+                return self.__dict__["hdf5"][name]
+            except KeyError:
+                raise IoError(f"'{self.path('_scene.hdf5')}' has no dataset '{name}'") from None
+        p = self.path("_scene.hdf5")
+        try:
+            with h5py.File(p, "r") as h5:
+                if name not in h5:
+                    raise IoError(f"'{p}' has no dataset '{name}'")
+                return from_cm(name, h5[name][()])
+        except FileNotFoundError:
+            raise IoError(f"'{p}' does not exist") from None
+        except OSError as e:
+            if isinstance(e, IoError):
+                raise
+            raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
+
     @property
     def depth(self) -> npt.NDArray[np.float32]:
         """(H, W) sensor z-depth, m, NaN invalid."""
         return (self.npz["depth"] / np.float32(M_TO_CM)).astype(np.float32)
 
+    def mgn_image(self, name: str) -> np.ndarray | None:
+        """An image of ``{v}_mgn.hdf5`` as stored (``depth_ideal`` in cm), reading only it; kept.
+        Datasets written before that file existed had these images in ``{v}.npz``: read from
+        there. None if the view has no such image (original MetaGraspNet folders)."""
+        cache = self.__dict__.setdefault("_mgn_images", {})
+        if name in cache:
+            return cache[name]
+        p = self.path("_mgn.hdf5")
+        value = None
+        if p.exists():
+            try:
+                with h5py.File(p, "r") as h5:
+                    if name in h5:
+                        value = h5[name][()]
+            except OSError as e:
+                raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
+        elif self.path(".npz").exists():
+            with np.load(self.path(".npz"), allow_pickle=False) as z:
+                value = z[name] if name in z.files else None
+        cache[name] = value
+        return value
+
     @property
     def depth_ideal(self) -> npt.NDArray[np.float32] | None:
         """(H, W) noise-free z-depth, m (mgn files only; None otherwise)."""
-        d = self.npz.get("depth_ideal")
+        d = self.mgn_image("depth_ideal")
         return None if d is None else (d / np.float32(M_TO_CM)).astype(np.float32)
+
+    @property
+    def valid_depth(self) -> npt.NDArray[np.bool_]:
+        """(H, W) bool: pixels where the sensor measured a depth (stored only when it is not
+        exactly the finite pixels of ``depth``)."""
+        v = self.mgn_image("valid_depth")
+        return np.isfinite(self.npz_array("depth")) if v is None else v.astype(bool)
+
+    @property
+    def com_heatmap(self) -> npt.NDArray[np.float32] | None:
+        """(H, W) CoM score of the surface seen at each pixel in [0, 1] (mgn files only)."""
+        c = self.mgn_image("com_heatmap")
+        return None if c is None else c.astype(np.float32)
 
     @property
     def instances(self) -> npt.NDArray[np.int32]:
@@ -175,12 +255,13 @@ class View:
         return self.hdf5["objects/poses_relative_to_camera"]
 
     def grasps(self, kind: str, *, colliding: bool = False) -> dict[str, np.ndarray]:
-        """The scene grasps of ``kind`` ("paralleljaw" or "suctioncup"), camera frame, metres:
-        the datasets of ``(non_)colliding_grasps/<kind>/`` by name (empty dict if absent)."""
-        if kind not in ("paralleljaw", "suctioncup"):
-            raise InvalidArgumentError(
-                f"grasps: kind must be paralleljaw or suctioncup, got {kind!r}"
-            )
+        """The scene grasps of ``kind`` (``"suction"`` or ``"paralleljaw"``; the MetaGraspNet
+        folder names ``"suctioncup"`` and aliases such as ``"pj"`` work too), camera frame,
+        metres: the datasets of ``(non_)colliding_grasps/<folder>/`` by name (empty dict if
+        absent)."""
+        from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
+
+        kind = MGN_FOLDER[normalize_grasp_kind(kind)]
         prefix = f"{'colliding' if colliding else 'non_colliding'}_grasps/{kind}/"
         return {k[len(prefix) :]: v for k, v in self.hdf5.items() if k.startswith(prefix)}
 

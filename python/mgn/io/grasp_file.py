@@ -31,7 +31,8 @@ def replace_grasp_group(
     who: str,
 ) -> None:
     """Replace ``group`` (e.g. ``"grasps/suctioncup"``) of an existing HDF5 file with
-    ``datasets`` (written as float32) and merge ``metadata`` into the ``metadata`` group's
+    ``datasets`` (written as float32; integer arrays, e.g. ``failure_reason``, keep their integer
+    type) and merge ``metadata`` into the ``metadata`` group's
     attributes (dicts and lists as JSON). The other groups are kept; an absent grasp group of
     :data:`EMPTY_GROUPS` is created empty. The update is made on a temporary copy that replaces
     the file only when complete, keeping its permissions.
@@ -52,7 +53,10 @@ def replace_grasp_group(
                 del h5[group]
             g = h5.require_group(group)
             for name, data in datasets.items():
-                g.create_dataset(name, data=np.asarray(data, np.float32))
+                a = np.asarray(data)
+                if not np.issubdtype(a.dtype, np.integer):
+                    a = a.astype(np.float32)
+                g.create_dataset(name, data=a)
             for other, shapes in EMPTY_GROUPS.items():
                 if other not in h5:
                     e = h5.require_group(other)

@@ -2,11 +2,22 @@
 
 A scene folder ``<root>/scene<N>/`` holds, per view ``v``: ``{v}_rgb.png``, ``{v}.npz``,
 ``{v}_depth.png``, ``{v}_scene.hdf5``, ``{v}_order.csv``, ``{v}_order.json``,
-``{v}_layout.json`` (mgn: bin relations and the difficulty level) and
-``{v}_camera_params.json``; and once per scene ``scene_gt.json``. Lengths are **centimetres** in
-these files (MetaGraspNet's convention) and SI everywhere else in mgn: :class:`ViewRecord` holds
-metres, the writer converts, and :mod:`mgn.io.dataset` converts back with the same table
-(:data:`CM_RULES`).
+``{v}_layout.json`` (mgn: bin relations and the difficulty level), ``{v}_mgn.hdf5`` (mgn: the
+images MetaGraspNet does not have) and ``{v}_camera_params.json``; and once per scene
+``scene_gt.json``.
+
+Bytes (docs/format.md): the npz holds MetaGraspNet's keys only, with the dtypes its own scripts
+work with unchanged: ``depth`` and ``occlusion`` float32, ``instances_objects`` uint8 (at most 255
+instances), ``instances_semantic`` uint16 (float32 if a category id exceeds 65535),
+``occlusion_objects`` bool; zip deflate level 1. mgn's own images go to ``{v}_mgn.hdf5`` where
+HDF5's shuffle filter (standard in every HDF5 library) lets deflate compress float32 images
+better than in a zip: ``depth_ideal`` (cm, float32), ``com_heatmap`` (float32), and
+``valid_depth`` only when it is not exactly ``isfinite(depth)`` (the sensors mark invalid pixels
+NaN, so normally it is derived on reading). Every array reads back bit-identical.
+
+Lengths are **centimetres** in these files (MetaGraspNet's convention) and SI everywhere else in
+mgn: :class:`ViewRecord` holds metres, the writer converts, and :mod:`mgn.io.dataset` converts
+back with the same table (:data:`CM_RULES`).
 
 Every file is written atomically, and byte-for-byte reproducibly (no timestamps in the zip entries
 of the npz nor in the HDF5 objects), so the same seed gives files with the same checksums.
@@ -32,11 +43,17 @@ from mgn.render.camera import Intrinsics
 
 __all__ = [
     "CM_RULES",
+    "COLLISION_OBSTACLES",
+    "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
+    "HDF5_INT_LEAVES",
+    "MGN_HDF5_CM",
     "M_TO_CM",
     "ViewRecord",
     "hdf5_bytes",
     "from_cm",
+    "id_image_dtype",
+    "mgn_hdf5_bytes",
     "png_bytes",
     "scene_gt_entries",
     "to_cm",
@@ -57,6 +74,27 @@ CM_RULES: tuple[tuple[str, str], ...] = (
     ("keypts_relative_to_camera", "xyz"),
 )
 
+#: Leaf names of ``{v}_scene.hdf5`` datasets stored as int32 (integer-valued labels; MetaGraspNet's
+#: readers only index with them). Everything else is float32, as in MetaGraspNet's files.
+HDF5_INT_LEAVES: tuple[str, ...] = (
+    "object_id",
+    "occluded_object_id",
+    "categories",
+    "collision_part",
+    "collision_obstacle",
+)
+
+#: Codes of ``colliding_grasps/*/collision_part``: the gripper part that collides first along
+#: the approach.
+COLLISION_PARTS: dict[int, str] = {1: "palm", 2: "finger", 3: "cup", 4: "shaft"}
+#: Codes of ``colliding_grasps/*/collision_obstacle``: floor = the tote where the part reaches
+#: below its inner floor surface, wall = the rest of the tote.
+COLLISION_OBSTACLES: dict[int, str] = {
+    1: "floor",
+    2: "wall",
+    3: "other object",
+    4: "grasped object",
+}
 #: Datasets every view's ``{v}_scene.hdf5`` has (empty groups have zero-length datasets).
 HDF5_FLOAT_KEYS: tuple[str, ...] = (
     "camera/pose_relative_to_world",
@@ -116,7 +154,8 @@ class ViewRecord:
         order_json: ``{v}_order.json`` content (its lengths already in cm, as docs/format.md says).
         order_csv: ``{v}_order.csv`` text.
         layout_json: ``{v}_layout.json`` content (mgn: bin relations, difficulty).
-        extra_npz: further ``{v}.npz`` arrays under mgn's own keys (e.g. ``com_heatmap``).
+        extra_npz: further (H, W) images under mgn's own names (e.g. ``com_heatmap``), written
+            to ``{v}_mgn.hdf5``.
     """
 
     index: int
@@ -166,11 +205,40 @@ def view_file_names(v: int) -> list[str]:
         f"{v}.npz",
         f"{v}_depth.png",
         f"{v}_scene.hdf5",
+        f"{v}_mgn.hdf5",
         f"{v}_order.csv",
         f"{v}_order.json",
         f"{v}_layout.json",
         f"{v}_camera_params.json",
     ]
+
+
+#: ``{v}_mgn.hdf5`` datasets that hold lengths in centimetres.
+MGN_HDF5_CM: tuple[str, ...] = ("depth_ideal",)
+#: Rows per HDF5 chunk of an (H, W) image in ``{v}_mgn.hdf5`` (shuffle + deflate per chunk).
+_IMAGE_CHUNK_ROWS = 64
+
+
+def id_image_dtype(values: npt.ArrayLike, *, instances: bool) -> np.dtype:
+    """The npz dtype of an id image: uint8 for instance ids (at most 255 instances per view);
+    uint16 for category ids, float32 (MetaGraspNet's own dtype) if one exceeds 65535."""
+    if instances:
+        return np.dtype(np.uint8)
+    top = int(np.max(values, initial=0))
+    return np.dtype(np.uint16) if top <= np.iinfo(np.uint16).max else np.dtype(np.float32)
+
+
+def mgn_hdf5_bytes(images: Mapping[str, np.ndarray]) -> bytes:
+    """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate level 1,
+    without timestamps."""
+    buf = io.BytesIO()
+    with h5py.File(buf, "w") as h5:
+        for name, value in images.items():
+            data = np.ascontiguousarray(value)
+            chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:]) if data.size else None
+            kw: dict[str, Any] = {"chunks": chunks, **_COMPRESSION} if chunks else {}
+            h5_create_dataset(h5, name, data, **kw)
+    return buf.getvalue()
 
 
 #: Datasets with at least this many values are stored chunked with gzip (level 1) and the
@@ -214,8 +282,8 @@ def _json(data: Any) -> str:
 def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     """Write the files of one view into ``folder`` (created); returns the paths written.
 
-    Units: the npz depth and every HDF5 length are converted to centimetres; ids and categories
-    are stored as float32 as in the original files.
+    Units: the npz depth, ``depth_ideal`` and every HDF5 length are converted to centimetres.
+    Dtypes and layout: see the module doc.
     """
     from mgn.render.views import depth_picture
 
@@ -223,25 +291,38 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     v = rec.index
     f4 = np.float32
+    depth_cm = (np.asarray(rec.depth, np.float64) * M_TO_CM).astype(f4)
     npz = {
-        "depth": (np.asarray(rec.depth, np.float64) * M_TO_CM).astype(f4),
-        "instances_objects": np.asarray(rec.instances).astype(f4),
-        "instances_semantic": np.asarray(rec.semantic).astype(f4),
+        "depth": depth_cm,
+        "instances_objects": np.asarray(rec.instances).astype(id_image_dtype(0, instances=True)),
+        "instances_semantic": np.asarray(rec.semantic).astype(
+            id_image_dtype(rec.semantic, instances=False)
+        ),
         "occlusion": np.asarray(rec.occlusion_map, f4),
         "occlusion_objects": np.asarray(rec.amodal, bool),
-        "depth_ideal": (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4),
-        "valid_depth": np.asarray(rec.valid_depth, bool),
     }
+    images: dict[str, np.ndarray] = {
+        "depth_ideal": (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4),
+    }
+    valid = np.asarray(rec.valid_depth, bool)
+    if not np.array_equal(valid, np.isfinite(depth_cm)):
+        images["valid_depth"] = valid  # not derivable from the depth: stored
     for key, value in rec.extra_npz.items():
-        if key in npz:
-            raise ValueError(f"write_view: extra npz key '{key}' would replace a format key")
-        npz[key] = np.asarray(value)
-    h5 = {path: to_cm(path, value).astype(f4) for path, value in rec.scene_hdf5.items()}
+        if key in npz or key in images or key == "valid_depth":
+            raise ValueError(f"write_view: extra image '{key}' would replace a format key")
+        images[key] = np.asarray(value)
+    h5 = {
+        path: np.asarray(value).astype(np.int32)
+        if path.rpartition("/")[2] in HDF5_INT_LEAVES
+        else to_cm(path, value).astype(f4)
+        for path, value in rec.scene_hdf5.items()
+    }
     files: dict[str, bytes] = {
         f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
         f"{v}.npz": npz_bytes(**npz),
         f"{v}_depth.png": png_bytes(depth_picture(rec.depth)),
         f"{v}_scene.hdf5": hdf5_bytes(h5),
+        f"{v}_mgn.hdf5": mgn_hdf5_bytes(images),
         f"{v}_order.csv": rec.order_csv.encode(),
         f"{v}_order.json": _json(rec.order_json).encode(),
         f"{v}_layout.json": _json(rec.layout_json).encode(),
@@ -257,15 +338,16 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
 def scene_gt_entries(
     X_CO: npt.ArrayLike, obj_ids: Sequence[int], seen: Sequence[bool] | None = None
 ) -> list[dict[str, Any]]:
-    """``scene_gt.json`` entries of one view: per instance ``cam_R_m2c`` (3x3 row-major),
-    ``cam_t_m2c`` (cm) and ``obj_id``; instances with ``seen`` False are left out."""
+    """``scene_gt.json`` entries of one view: per instance ``cam_R_m2c`` (a nested 3x3 list, one
+    list per row of R_CO, as MetaGraspNet writes it), ``cam_t_m2c`` (cm) and ``obj_id`` (int);
+    instances with ``seen`` False are left out."""
     X = np.asarray(X_CO, np.float64)
     out = []
     for i, oid in enumerate(obj_ids):
         if seen is not None and not seen[i]:
             continue
         out.append({
-            "cam_R_m2c": [float(x) for x in X[i, :3, :3].reshape(-1)],
+            "cam_R_m2c": [[float(x) for x in row] for row in X[i, :3, :3]],
             "cam_t_m2c": [float(x) for x in X[i, :3, 3] * M_TO_CM],
             "obj_id": int(oid),
         })  # fmt: skip

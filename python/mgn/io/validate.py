@@ -18,11 +18,12 @@ from mgn.io.scene_format import HDF5_FLOAT_KEYS, view_file_names
 
 __all__ = ["Problem", "validate_dataset"]
 
-_NPZ_KEYS = {
-    "depth": np.float32,
-    "instances_objects": np.float32,
-    "instances_semantic": np.float32,
-    "occlusion": np.float32,
+#: npz key -> the dtypes allowed (mgn writes the first; MetaGraspNet's files have float32).
+_NPZ_KEYS: dict[str, tuple[type, ...]] = {
+    "depth": (np.float32,),
+    "instances_objects": (np.uint8, np.float32),
+    "instances_semantic": (np.uint16, np.uint8, np.float32),
+    "occlusion": (np.float32,),
 }
 
 
@@ -61,14 +62,12 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
     n = None
     try:
         z = view.npz
-        for key, dtype in _NPZ_KEYS.items():
+        for key, dtypes in _NPZ_KEYS.items():
             if key not in z:
                 bad(".npz", f"lacks '{key}'")
-            elif z[key].dtype != dtype or (hw is not None and z[key].shape != hw):
-                bad(
-                    ".npz",
-                    f"'{key}' is {z[key].dtype} {z[key].shape}, expected {np.dtype(dtype)} {hw}",
-                )
+            elif z[key].dtype not in dtypes or (hw is not None and z[key].shape != hw):
+                names = " or ".join(str(np.dtype(d)) for d in dtypes)
+                bad(".npz", f"'{key}' is {z[key].dtype} {z[key].shape}, expected {names} {hw}")
         if "occlusion_objects" not in z:
             bad(".npz", "lacks 'occlusion_objects'")
         else:
@@ -80,6 +79,8 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
                 ids = z["instances_objects"]
                 if np.any(ids != np.round(ids)) or ids.min(initial=0) < 0 or ids.max(initial=0) > n:
                     bad(".npz", f"'instances_objects' must hold whole ids 0..{n}")
+                elif ids.max(initial=0) < 1:
+                    bad(".npz", "no visible object in this view (the camera sees only the tote)")
                 elif am.ndim == 3 and am.shape[1:] == ids.shape:
                     for i in range(n):
                         vis = ids == i + 1
@@ -165,16 +166,72 @@ def _check_scene(scene: SceneFolder, problems: list[Problem], root: Path) -> Non
     problems.extend(Problem(str(rel / name), msg) for name, msg in found)
 
 
+def _check_completeness(ds: Dataset, info: dict[str, Any], problems: list[Problem]) -> None:
+    """An mgn dataset (one with ``dataset.json``) holds exactly the scenes it announces.
+
+    ``num_scenes`` fixes the scene folders ``scene0 .. scene<num_scenes - 1>``; a folder may be
+    absent only when a difficulty-balanced run pruned it (``selection.pruned`` and none of its
+    views selected). ``status`` must be ``complete``: ``running`` means the run was stopped (killed,
+    out of disk), ``incomplete`` that scenes failed. Every scene folder needs its manifest (it is
+    written last, so a folder without one was never finished).
+    """
+    from mgn.pipeline.manifest import MANIFEST
+
+    status = info.get("status")
+    if status != "complete":
+        failed = info.get("failed_scenes")
+        more = f" (failed scenes: {failed})" if failed else ""
+        problems.append(
+            Problem(
+                "dataset.json",
+                f"status is {status!r}, expected 'complete': the run did not finish{more}; "
+                "complete it with 'mgn generate --resume'",
+            )
+        )
+    num = info.get("num_scenes")
+    if isinstance(num, bool) or not isinstance(num, int) or num < 0:
+        problems.append(Problem("dataset.json", f"num_scenes must be an integer >= 0, got {num!r}"))
+        return
+    present = set(ds.scene_ids)
+    sel = info.get("selection") if isinstance(info.get("selection"), dict) else {}
+    selected = {int(e["scene"]) for e in sel.get("views", []) if isinstance(e, dict)}
+    prunable = bool(sel.get("pruned")) if sel else False
+    missing = [i for i in range(num) if i not in present and not (prunable and i not in selected)]
+    if missing:
+        shown = ", ".join(f"scene{i}" for i in missing[:10]) + (" ..." if len(missing) > 10 else "")
+        problems.append(
+            Problem(
+                ".",
+                f"{len(missing)} of num_scenes={num} scene folders missing: {shown}",
+            )
+        )
+    extra = sorted(i for i in present if i >= num)
+    if extra:
+        problems.append(
+            Problem(".", f"scene folders beyond num_scenes={num}: " + ", ".join(map(str, extra)))
+        )
+    for i in sorted(present):
+        if not (ds.root / f"scene{i}" / MANIFEST).exists():
+            problems.append(Problem(f"scene{i}/{MANIFEST}", "missing: the scene was not finished"))
+
+
 def validate_dataset(root: str | os.PathLike[str]) -> list[Problem]:
-    """Every problem found in the dataset at ``root`` (an empty list: valid)."""
+    """Every problem found in the dataset at ``root`` (an empty list: valid).
+
+    Besides every file of every scene, an mgn dataset (with ``dataset.json``) must be complete:
+    its status ``complete`` and the scene folders the ones ``num_scenes`` announces.
+    """
     ds = Dataset(root)
     problems: list[Problem] = []
+    info: dict[str, Any] | None = None
     try:
-        _ = ds.info
+        info = ds.info
     except Exception as e:  # noqa: BLE001
         problems.append(Problem("dataset.json", str(e)))
     if not ds.scene_ids:
         problems.append(Problem(".", "no scene<N> folders"))
+    if isinstance(info, dict):
+        _check_completeness(ds, info, problems)
     for scene in ds.scenes():
         _check_scene(scene, problems, ds.root)
     return problems

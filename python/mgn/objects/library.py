@@ -100,7 +100,7 @@ class MaterialSpec:
         texture: (H, W, 3) uint8 sRGB image (row 0 = top of the image) or ``None``. Read-only;
             excluded from equality and hashing.
         metallic, roughness, ior, transmission: the physically based description used by the
-            path tracer (glTF 2.0 metallic-roughness, docs/models.md): metallic in [0, 1],
+            path tracer (glTF 2.0 metallic-roughness, mgn.render.path): metallic in [0, 1],
             perceptual roughness in [0, 1] (GGX alpha = roughness^2), index of refraction
             >= 1, transmission in [0, 1] (1 = clear glass or plastic). The Phong fields above
             drive the raster preview.

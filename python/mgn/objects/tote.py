@@ -4,11 +4,24 @@ Tote frame: origin at the centre of the inner floor surface (the top face of the
 the inner length, y along the inner width, z up. Objects resting in the tote have z >= 0. The
 inner walls are the planes x = +-inner_length / 2 and y = +-inner_width / 2, the rim is at
 z = inner_height, the outer bottom at z = -floor_thickness. All lengths in metres.
+
+Your own bin: ``mesh`` (a mesh file, read with ``mesh_scale``) replaces the parametric box for
+rendering, the labels and ``drop.tote_collision: mesh`` (use it for any bin that is not a
+rectangular box). It must be in the tote frame (origin at the centre of the inner floor, z up).
+``inner_length`` x ``inner_width`` x ``inner_height`` are then the bounding box of its cavity:
+an object that ends outside that box has left the tote, and ``tote_collision: boxes`` puts its
+walls there. In a config (a round bin of 180 mm inner radius, drawn in millimetres)::
+
+    tote: {mesh: bins/round_bin.stl, mesh_scale: 0.001, inner_length: 0.36, inner_width: 0.36,
+           inner_height: 0.15}
+    drop: {tote_collision: mesh}
 """
 
 from __future__ import annotations
 
+import functools
 import math
+import os
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -27,6 +40,8 @@ class ToteSpec:
         wall_thickness: side-wall thickness, metres.
         floor_thickness: floor thickness, metres.
         color: linear RGBA in [0, 1].
+        mesh: a user bin mesh file in the tote frame, or None (the parametric box).
+        mesh_scale: multiplies the mesh coordinates (0.001 for a file in millimetres).
     """
 
     inner_length: float = 0.400
@@ -35,10 +50,17 @@ class ToteSpec:
     wall_thickness: float = 0.008
     floor_thickness: float = 0.010
     color: tuple[float, float, float, float] = (0.2, 0.35, 0.6, 1.0)
+    mesh: str | None = None
+    mesh_scale: float = 1.0
 
     def __post_init__(self) -> None:
+        if self.mesh is not None and (not isinstance(self.mesh, (str, os.PathLike)) or not
+                                      os.fspath(self.mesh)):  # fmt: skip
+            raise ValueError(f"ToteSpec.mesh must be a mesh file path or None, got {self.mesh!r}")
+        if self.mesh is not None:
+            object.__setattr__(self, "mesh", os.fspath(self.mesh))
         for f in fields(self):
-            if f.name == "color":
+            if f.name in ("color", "mesh"):
                 continue
             value = getattr(self, f.name)
             if isinstance(value, bool) or not isinstance(
@@ -83,7 +105,7 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     walls and inner floor.
 
     Args:
-        spec: dimensions (default :func:`default_tote`).
+        spec: dimensions (default :func:`default_tote`), or a user bin (``spec.mesh``).
 
     Returns:
         (vertices (16, 3) float64 metres, faces (28, 3) int32 counter-clockwise seen from
@@ -92,6 +114,8 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     s = default_tote() if spec is None else spec
     if not isinstance(s, ToteSpec):
         raise TypeError(f"make_tote expects a ToteSpec, got {type(s).__name__}")
+    if s.mesh is not None:
+        return _user_tote(s)
     hx, hy = 0.5 * s.inner_length, 0.5 * s.inner_width
     ox, oy = hx + s.wall_thickness, hy + s.wall_thickness
     top, bottom = s.inner_height, -s.floor_thickness
@@ -118,3 +142,37 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
         faces += [(8 + i, 8 + j, 12 + j), (8 + i, 12 + j, 12 + i)]  # inner wall, facing the cavity
     faces += [(12, 13, 14), (12, 14, 15)]  # inner floor, +z
     return vertices, np.asarray(faces, dtype=np.int32)
+
+
+def _user_tote(s: ToteSpec) -> tuple[np.ndarray, np.ndarray]:
+    path = os.path.abspath(s.mesh)  # type: ignore[arg-type]
+    try:
+        stamp = os.stat(path).st_mtime_ns
+    except OSError:
+        stamp = -1  # load_mesh names the missing file
+    v, f = _load_user_tote(path, s.mesh_scale, stamp)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    tol = 0.005
+    need_lo = np.array([-s.inner_length / 2, -s.inner_width / 2, 0.0])
+    need_hi = np.array([s.inner_length / 2, s.inner_width / 2, s.inner_height])
+    if np.any(lo > need_lo + tol) or np.any(hi < need_hi - tol) or lo[2] > -1e-4:
+        from mgn.errors import InvalidArgumentError
+
+        raise InvalidArgumentError(
+            f"tote.mesh '{s.mesh}' (scale {s.mesh_scale:g}) spans {lo.round(3).tolist()} .. "
+            f"{hi.round(3).tolist()} m; expected a bin in the tote frame (origin at the centre of "
+            "the inner floor, z up, material below z = 0) around the inner box of inner_length x "
+            f"inner_width x inner_height = {s.inner_length:g} x {s.inner_width:g} x "
+            f"{s.inner_height:g} m"
+        )
+    return v.copy(), f.copy()
+
+
+@functools.lru_cache(maxsize=8)
+def _load_user_tote(path: str, scale: float, stamp: int) -> tuple[np.ndarray, np.ndarray]:
+    from mgn.geometry import load_mesh
+
+    mesh = load_mesh(path, scale=scale)
+    if mesh.validate().signed_volume < 0:
+        mesh = mesh.flipped()
+    return np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int32)

@@ -22,22 +22,68 @@ Example ``my_objects.yaml`` (paths relative to the YAML file; SI units)::
         description: Aluminium bracket
 
 The mesh keeps its own frame. It must be watertight (mass properties are exact), unless
-``allow_open: true`` is given, in which case the documented shell model is used.
+``allow_open: true`` is given, in which case the documented shell model is used (2 mm walls)
+and the object gets suction labels only: its parallel-jaw label set is empty (``pj_skipped`` in
+the metadata says why), since the antipodal sampler needs a closed volume.
+
+Any mesh file works: a material the file does not give (an OBJ without ``.mtl``, ``Ns 0``) gets
+the default grey plastic. Numbers may be written ``2.7e3`` or ``1.0e-3``. Every error names the
+YAML file, the object and the key; a part whose largest extent (after ``scale``) is above 1 m or
+below 1 mm gets a :class:`ImplausibleSizeWarning` (a file in millimetres read as metres is the
+usual cause). ``mgn objects add MESH... --to my_objects.yaml`` writes this file for you.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import InvalidArgumentError, MgnError
 from mgn.geometry import Material, load_mesh
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
+
+__all__ = ["ImplausibleSizeWarning", "load_objects_yaml", "warn_implausible_size"]
+
+#: Largest extents (m) outside which a part is reported as implausible for a tote.
+PLAUSIBLE_EXTENT_M = (1e-3, 1.0)
+
+
+class ImplausibleSizeWarning(UserWarning):
+    """A part is larger than 1 m or smaller than 1 mm: probably a wrong ``scale``."""
+
+
+def warn_implausible_size(vertices: np.ndarray, source: str) -> bool:
+    """Warn (:class:`ImplausibleSizeWarning`, naming ``source``) when the largest extent of
+    ``vertices`` (m) is outside :data:`PLAUSIBLE_EXTENT_M`. Returns True when it warned."""
+    v = np.asarray(vertices, np.float64).reshape(-1, 3)
+    if len(v) == 0:
+        return False
+    extent = float(np.ptp(v, axis=0).max())
+    lo, hi = PLAUSIBLE_EXTENT_M
+    if extent > hi:
+        msg = (f"{source} is {extent:.3g} m across, too large for a part in a tote; if the file "
+               "is in millimetres, use scale 0.001")  # fmt: skip
+    elif extent < lo:
+        msg = (f"{source} is {extent * 1e3:.3g} mm across, too small for a picked part; check "
+               "its scale (the file's unit)")  # fmt: skip
+    else:
+        return False
+    warnings.warn(msg, ImplausibleSizeWarning, stacklevel=3)
+    return True
+
+
+def _number(entry: dict[str, Any], key: str, where: str, default: float | None = None) -> float:
+    value = entry.get(key, default)
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if not ok or not math.isfinite(float(value)) or float(value) <= 0:
+        raise InvalidArgumentError(f"{where}: key '{key}': expected a number > 0, got {value!r}")
+    return float(value)
+
 
 _KEYS = {
     "name",
@@ -86,15 +132,15 @@ def _embedded_texture(data: bytes) -> np.ndarray | None:
         return None
 
 
-def _number(entry: dict[str, Any], key: str, where: str, lo: float, hi: float) -> float | None:
-    """``entry[key]`` as a float in [lo, hi], None when absent; else an error naming the field."""
+def _number_in(entry: dict[str, Any], key: str, where: str, lo: float, hi: float) -> float | None:
+    """``entry[key]`` as a float in [lo, hi], None when absent; else an error naming the key."""
     if key not in entry:
         return None
     value = entry[key]
     ok = isinstance(value, (int, float)) and not isinstance(value, bool)
     if not ok or not (math.isfinite(float(value)) and lo <= float(value) <= hi):
         raise InvalidArgumentError(
-            f"{where}: field '{key}' must be a number in [{lo:g}, {hi:g}], got {value!r}"
+            f"{where}: key '{key}': expected a number in [{lo:g}, {hi:g}], got {value!r}"
         )
     return float(value)
 
@@ -133,15 +179,29 @@ def _object_from_entry(
             raise InvalidArgumentError(f"{where}: missing required key '{key}'")
     name = str(entry["name"])
     where = f"{where} ('{name}')"
-    mesh_path = base / str(entry["mesh"])
-    mesh = load_mesh(mesh_path, scale=float(entry.get("scale", 1.0)))
+    scale = _number(entry, "scale", where, 1.0)
+    density = _number(entry, "density", where)
+    friction = _number(entry, "friction", where)
+    allow_open = entry.get("allow_open", False)
+    if not isinstance(allow_open, bool):
+        raise InvalidArgumentError(f"{where}: key 'allow_open': expected true or false, got "
+                                   f"{allow_open!r}")  # fmt: skip
+    if not isinstance(entry["mesh"], str) or not entry["mesh"]:
+        raise InvalidArgumentError(f"{where}: key 'mesh': expected a file path, got "
+                                   f"{entry['mesh']!r}")  # fmt: skip
+    mesh_path = base / entry["mesh"]
+    try:
+        mesh = load_mesh(mesh_path, scale=scale)
+    except MgnError as e:
+        raise type(e)(f"{where}: key 'mesh': {e}") from e
     report = mesh.validate()
-    if not (report.is_watertight and report.is_winding_consistent) and not entry.get("allow_open"):
+    if not (report.is_watertight and report.is_winding_consistent) and not allow_open:
         raise InvalidArgumentError(
-            f"{where}: mesh '{mesh_path}' is not closed ({report.num_boundary_edges} boundary, "
-            f"{report.num_nonmanifold_edges} non-manifold edges); repair it, or set "
+            f"{where}: key 'mesh': '{mesh_path}' is not closed ({report.num_boundary_edges} "
+            f"boundary, {report.num_nonmanifold_edges} non-manifold edges); repair it, or set "
             "allow_open: true to use the thin-shell mass model"
         )
+    warn_implausible_size(mesh.vertices, f"{where}: mesh '{mesh_path}' (scale {scale:g})")
     if report.signed_volume < 0:
         mesh = mesh.flipped()  # inward-wound file: make the normals point outward
     mat = mesh.materials[0] if mesh.materials else None
@@ -156,23 +216,31 @@ def _object_from_entry(
     color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
     if len(color) == 3:
         color = [*color, 1.0]
-    opacity = _number(entry, "opacity", where, 1e-6, 1.0)
+    if not isinstance(color, (list, tuple)) or len(color) != 4:
+        raise InvalidArgumentError(f"{where}: key 'color': expected [r, g, b] or [r, g, b, a] in "
+                                   f"[0, 1], got {entry.get('color')!r}")  # fmt: skip
+    opacity = _number_in(entry, "opacity", where, 1e-6, 1.0)
     opacity = opacity if opacity is not None else (float(mat.opacity) if mat is not None else 1.0)
     pbr = pbr_defaults(mat, opacity)
     for key, lo, hi in (("metallic", 0.0, 1.0), ("roughness", 0.0, 1.0), ("ior", 1.0, 4.0),
                         ("transmission", 0.0, 1.0)):  # fmt: skip
-        value = _number(entry, key, where, lo, hi)
+        value = _number_in(entry, key, where, lo, hi)
         if value is not None:
             pbr[key] = value
-    material = MaterialSpec(
-        name=f"{name}_material",
-        base_color=tuple(float(c) for c in color),
-        specular=tuple(float(s) for s in (mat.specular if mat is not None else (0.2,) * 3)),
-        shininess=float(mat.shininess) if mat is not None else 20.0,
-        opacity=opacity,
-        texture=texture,
-        **pbr,
-    )
+    try:
+        material = MaterialSpec(
+            name=f"{name}_material",
+            base_color=tuple(float(c) for c in color),
+            specular=tuple(float(s) for s in (mat.specular if mat is not None else (0.2,) * 3)),
+            # A file without a material (OBJ without .mtl, `Ns 0`) gets the default shininess.
+            shininess=float(mat.shininess) if mat is not None and mat.shininess > 0 else 20.0,
+            opacity=opacity,
+            texture=texture,
+            **pbr,
+        )
+    except (TypeError, ValueError) as e:
+        key = "opacity" if "opacity" in str(e) else "color"
+        raise InvalidArgumentError(f"{where}: key '{key}' (or the file's material): {e}") from e
     lo, hi = mesh.bounds
     centre = (lo + hi) / 2
     named = entry.get("keypoints") or {
@@ -180,13 +248,16 @@ def _object_from_entry(
         "bottom": [centre[0], centre[1], lo[2]],
     }
     if not isinstance(named, dict):
-        raise InvalidArgumentError(f"{where}: keypoints must map names to [x, y, z] in metres")
+        raise InvalidArgumentError(
+            f"{where}: key 'keypoints': expected a mapping of names to [x, y, z] in metres, got "
+            f"{named!r}"
+        )
     keypoints = []
     for i, (kp_name, pos) in enumerate(named.items(), start=1):
         p = np.asarray(pos, dtype=np.float64)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise InvalidArgumentError(
-                f"{where}: keypoint '{kp_name}' must be [x, y, z], got {pos}"
+                f"{where}: key 'keypoints.{kp_name}': expected [x, y, z] in metres, got {pos!r}"
             )
         keypoints.append(Keypoint(i, str(kp_name), (float(p[0]), float(p[1]), float(p[2]))))
     if len(keypoints) == 1:
@@ -200,13 +271,13 @@ def _object_from_entry(
             faces=np.asarray(mesh.faces, np.int32),
             uvs=uvs,
             material=material,
-            density=float(entry["density"]),
-            friction=float(entry["friction"]),
+            density=density,
+            friction=friction,
             keypoints=tuple(keypoints),
             tags=frozenset(entry.get("tags", ())),
         )
     except ValueError as e:
-        raise InvalidArgumentError(f"{where}: {e}") from e
+        raise InvalidArgumentError(f"{where}: mesh '{mesh_path}': {e}") from e
 
 
 def load_objects_yaml(path: str | os.PathLike[str]) -> tuple[ObjectSpec, ...]:
@@ -215,25 +286,26 @@ def load_objects_yaml(path: str | os.PathLike[str]) -> tuple[ObjectSpec, ...]:
     Category ids default to consecutive numbers after the built-in objects; names and ids must
     not clash with the built-in ones or each other.
     """
+    from mgn.io.yaml_file import read_yaml
+
     p = Path(path)
-    try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except FileNotFoundError as e:
-        raise IoError(f"load_objects_yaml: file not found: '{p}'") from e
-    except yaml.YAMLError as e:
-        raise InvalidArgumentError(f"load_objects_yaml: '{p}' is not valid YAML: {e}") from e
+    data = read_yaml(p, "user-object YAML")
     if not isinstance(data, dict) or not isinstance(data.get("objects"), list):
-        raise InvalidArgumentError(f"load_objects_yaml: '{p}' needs a top-level 'objects:' list")
+        raise InvalidArgumentError(
+            f"user-object YAML '{p}': expected a top-level 'objects:' list (see "
+            "mgn.objects.user), got " + (f"keys {sorted(map(str, data))}" if isinstance(data, dict)
+                                         else type(data).__name__)
+        )  # fmt: skip
     builtin = builtin_objects()
     taken_ids = {s.category_id for s in builtin}
     taken_names = {s.name for s in builtin}
     next_id = max(taken_ids) + 1
     out = []
     for i, entry in enumerate(data["objects"]):
-        spec = _object_from_entry(entry, p.parent, next_id, f"{p.name}: objects[{i}]")
+        spec = _object_from_entry(entry, p.parent, next_id, f"{p}: objects[{i}]")
         if spec.category_id in taken_ids or spec.name in taken_names:
             raise InvalidArgumentError(
-                f"{p.name}: objects[{i}] ('{spec.name}', id {spec.category_id}) clashes with an "
+                f"{p}: objects[{i}] ('{spec.name}', id {spec.category_id}) clashes with an "
                 "existing object name or category id"
             )
         taken_ids.add(spec.category_id)

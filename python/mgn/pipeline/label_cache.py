@@ -154,7 +154,11 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
             num_threads=num_threads,
         )
     pj = None
-    if config.labels.paralleljaw:
+    report = mesh.validate()
+    if config.labels.paralleljaw and not report.is_watertight:
+        pj = _no_pj_labels(config, f"open mesh ({report.num_boundary_edges} boundary edges, "
+                           "allow_open): the antipodal sampler needs a closed volume")  # fmt: skip
+    elif config.labels.paralleljaw:
         from mgn.pj.labels import label_object as pj_label_object
 
         physics = None
@@ -178,6 +182,29 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
             physics=physics,
         )
     return ObjectLabels(spec.name, spec.category_id, suction, pj)
+
+
+def _no_pj_labels(config: Config, reason: str) -> PjLabels:
+    """Parallel-jaw labels with no grasp (an ``allow_open`` object), ``pj_skipped`` = reason."""
+    from mgn import _core
+
+    f3 = np.zeros((0, 3), np.float32)
+    f1 = np.zeros(0, np.float32)
+    metadata = {
+        "pj_gripper": config.gripper.to_dict(),
+        "pj_seed": int(config.object_labels.seed),
+        "pj_num_points": 0,
+        "pj_num_accepted_probes": 0,
+        "pj_num_colliding": 0,
+        "pj_physics": "not run (no grasps)",
+        "pj_skipped": reason,
+        "mgn_version": _core.__version__,
+    }
+    return PjLabels(approach=f3, closing=f3.copy(), p1=f3.copy(), width=f1,
+                    quality_score=f1.copy(), score_wrench=f1.copy(),
+                    quality_score_simulation=f1.copy(), point_index=np.zeros(0, np.int64),
+                    point_score=f1.copy(), num_points=0, num_colliding=0,
+                    metadata=metadata)  # fmt: skip
 
 
 def _pack(labels: SuctionLabels | PjLabels) -> bytes:

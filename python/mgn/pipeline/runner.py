@@ -102,6 +102,9 @@ class SceneTask:
         objects: (name, source) of the objects to drop, in drop order (source ``"builtin"`` or
             a user-objects YAML path).
         labels: name -> the labels of the objects of this scene.
+        collect: write into a temporary folder of the worker and return the files in the
+            result (``SceneResult.files``) instead of writing into ``out_dir``: for workers
+            that do not see the output folder; the caller writes them.
     """
 
     index: int
@@ -110,6 +113,7 @@ class SceneTask:
     config: Config
     objects: tuple[tuple[str, str], ...]
     labels: dict[str, ObjectLabels] = field(default_factory=dict)
+    collect: bool = False
 
 
 @dataclass(frozen=True)
@@ -122,6 +126,9 @@ class SceneResult:
         times: seconds per stage (drop, write, finalize).
         num_bytes: size of the scene folder; num_objects: objects in the tote.
         worker: host and process id that ran it.
+        files: with ``SceneTask.collect``: the scene's files (relative path -> bytes, the
+            manifest included), for the caller to write; None otherwise.
+        removed: names of the objects that left the tote during the drop (not in the scene).
     """
 
     index: int
@@ -133,6 +140,8 @@ class SceneResult:
     num_bytes: int = 0
     num_objects: int = 0
     worker: str = ""
+    files: dict[str, bytes] | None = field(default=None, repr=False, compare=False)
+    removed: tuple[str, ...] = ()
 
 
 def _disk_full(e: BaseException) -> OSError | None:
@@ -158,27 +167,36 @@ def run_scene(task: SceneTask) -> SceneResult:
     error: the result says what went wrong. The temporary folder is removed on any failure,
     including KeyboardInterrupt (which is re-raised)."""
     import socket
+    import tempfile
 
     from mgn.pipeline.scene_writer import write_scene
-    from mgn.scene.drop import drop_scene
+    from mgn.scene.drop import drop_scene, drop_scene_refilled
     from mgn.scene.scene import BUILTIN, resolve_object
 
     out = Path(task.out_dir)
     final = out / f"scene{task.index}"
-    tmp = out / f"{TMP_PREFIX}scene{task.index}-{os.getpid()}"
+    if task.collect:  # the worker may not see out_dir: a folder of its own, returned as bytes
+        tmp = Path(tempfile.mkdtemp(prefix=f"{TMP_PREFIX}scene{task.index}-")) / "scene"
+    else:
+        tmp = out / f"{TMP_PREFIX}scene{task.index}-{os.getpid()}"
     worker = f"{socket.gethostname()}:{os.getpid()}"
     times: dict[str, float] = {}
     t0 = time.perf_counter()
     try:
         specs = [resolve_object(name, source) for name, source in task.objects]
         sources = {name: source for name, source in task.objects if source != BUILTIN}
-        scene = drop_scene(
-            specs,
-            seed=task.seed,
-            tote=task.config.tote,
-            options=task.config.drop,
-            sources=sources,  # type: ignore[arg-type]
-        )
+        drop_kw: dict[str, Any] = {
+            "seed": task.seed,
+            "tote": task.config.tote,
+            "options": task.config.drop,
+            "sources": sources,
+        }
+        if task.config.objects.refill:
+            scene = drop_scene_refilled(
+                specs, attempts=task.config.objects.refill_attempts, **drop_kw
+            )
+        else:
+            scene = drop_scene(specs, **drop_kw)
         times["drop"] = time.perf_counter() - t0
         t1 = time.perf_counter()
         if tmp.exists():
@@ -192,15 +210,24 @@ def run_scene(task: SceneTask) -> SceneResult:
         write_manifest(tmp, scene=task.index, seed=task.seed,
                        render=task.config.render.describe())  # fmt: skip
         size = _folder_size(tmp)
+        if task.collect:
+            files = {p.relative_to(tmp).as_posix(): p.read_bytes()
+                     for p in sorted(tmp.rglob("*")) if p.is_file()}  # fmt: skip
+            shutil.rmtree(tmp.parent, ignore_errors=True)
+            times["finalize"] = time.perf_counter() - t2
+            return SceneResult(task.index, task.seed, True, None, False, times, size,
+                               len(scene), worker, files,
+                               removed=tuple(r.name for r in scene.removed))  # fmt: skip
         if final.exists():  # an inconsistent leftover the caller decided to redo
             shutil.rmtree(final)
         os.rename(tmp, final)
         times["finalize"] = time.perf_counter() - t2
         return SceneResult(
-            task.index, task.seed, True, None, False, times, size, len(scene), worker
-        )
+            task.index, task.seed, True, None, False, times, size, len(scene), worker,
+            removed=tuple(r.name for r in scene.removed),
+        )  # fmt: skip
     except Exception as e:  # noqa: BLE001 (reported per scene, the others go on)
-        shutil.rmtree(tmp, ignore_errors=True)
+        shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         full = _disk_full(e)
         if full is not None:
             where = full.filename or tmp
@@ -211,8 +238,36 @@ def run_scene(task: SceneTask) -> SceneResult:
             msg = f"{type(e).__name__}: {e}{at}"
         return SceneResult(task.index, task.seed, False, msg, full is not None, times, 0, 0, worker)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         raise
+
+
+def store_collected(out: Path, result: SceneResult) -> SceneResult:
+    """Write the files a collecting scene task returned (``SceneResult.files``) into
+    ``out/scene<N>`` the way a worker would (a temporary folder renamed when complete); returns
+    the result without the bytes, or a failed result if they cannot be written."""
+    if result.files is None:
+        return result
+    final = out / f"scene{result.index}"
+    tmp = out / f"{TMP_PREFIX}scene{result.index}-{os.getpid()}"
+    try:
+        if tmp.exists():
+            shutil.rmtree(tmp)
+        for rel, data in result.files.items():
+            path = tmp / rel
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
+        if final.exists():
+            shutil.rmtree(final)
+        os.rename(tmp, final)
+    except OSError as e:
+        shutil.rmtree(tmp, ignore_errors=True)
+        full = _disk_full(e)
+        msg = (f"disk full while writing scene{result.index}" if full is not None
+               else f"cannot write scene{result.index}: {e}")  # fmt: skip
+        return dataclasses.replace(result, ok=False, error=msg, disk_full=full is not None,
+                                   files=None)  # fmt: skip
+    return dataclasses.replace(result, files=None)
 
 
 def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
@@ -416,6 +471,17 @@ class GenerateReport:
             f"  wall time {self.wall_seconds:.1f} s ({rate:.0f} scenes/hour); output "
             f"{self.output_bytes / 1e6:.1f} MB"
         )
+        lost = [r for r in self.ok if r.removed]
+        if lost:
+            n_lost = sum(len(r.removed) for r in lost)
+            kept = sum(r.num_objects for r in self.ok)
+            lines.append(
+                f"  {n_lost} objects left the tote and were removed ({kept} kept) in "
+                f"{len(lost)} of {len(self.ok)} scenes"
+                + ("" if len(lost) > 5 else ": " + "; ".join(
+                    f"scene{r.index}: {', '.join(r.removed)}" for r in lost))
+                + " (objects.refill: true drops again until they stay in)"
+            )  # fmt: skip
         for r in self.failed:
             lines.append(f"  FAILED scene{r.index} (seed {r.seed}): {r.error}")
         if self.not_run:
@@ -479,6 +545,27 @@ def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extr
         "splits": {"train": [], "val": [], "test": []},
         "status": status,
         **extra,
+    }
+
+
+def _removed_objects(out: Path) -> dict[str, Any]:
+    """``dataset.json`` ``removed_objects``: the objects that left the tote during the drops of
+    the scenes present (read from each ``scene.json``, so resumed runs count every scene)."""
+    by_scene: dict[str, list[str]] = {}
+    dropped = 0
+    for sj in sorted(out.glob("scene*/scene.json")):
+        try:
+            doc = json.loads(sj.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        dropped += int(doc.get("stats", {}).get("num_dropped", len(doc.get("instances", []))))
+        names = [str(r.get("name")) for r in doc.get("removed", [])]
+        if names:
+            by_scene[sj.parent.name.removeprefix("scene")] = names
+    return {
+        "count": sum(len(v) for v in by_scene.values()),
+        "dropped": dropped,
+        "by_scene": dict(sorted(by_scene.items(), key=lambda kv: int(kv[0]))),
     }
 
 
@@ -552,6 +639,7 @@ class _Run:
     extra: dict[str, Any] = field(default_factory=dict)  # dataset.json keys (split, selection)
     labels: dict[str, ObjectLabels] = field(default_factory=dict)
     modelled: set[str] = field(default_factory=set)
+    collect: bool = False  # workers return the scene files; this process writes them
 
     def ensure_labels(self, specs: Sequence[ObjectSpec]) -> None:
         """Read or compute the labels of the objects not labelled yet in this run and write
@@ -616,6 +704,7 @@ class _Run:
                     config=self.cfg,
                     objects=tuple((s.name, self.sources.get(s.name, BUILTIN)) for s in specs),
                     labels={s.name: self.labels[s.name] for s in specs if s.name in self.labels},
+                    collect=self.collect,
                 )
             )
         bar = tqdm(total=total, initial=len(report.skipped) + len(report.results),
@@ -627,6 +716,8 @@ class _Run:
                 result = SceneResult(
                     task.index, task.seed, False, f"worker failed: {type(exc).__name__}: {exc}"
                 )
+            elif result.files is not None:
+                result = store_collected(self.out, result)
             report.results[task.index] = result
             bar.update(1)
             elapsed = time.perf_counter() - t_scenes
@@ -659,6 +750,7 @@ def generate(
     scheduler: str | None = None,
     progress: bool = True,
     use_cache: bool = True,
+    collect: bool = False,
 ) -> GenerateReport:
     """Generate (or, with ``resume``, complete) a dataset of ``num_scenes`` scenes in
     ``out_dir`` (see the module doc), or, when ``config.selection.quota`` is set, a
@@ -677,6 +769,9 @@ def generate(
         scheduler: address of a Dask scheduler (``tcp://host:8786``).
         progress: show tqdm progress bars.
         use_cache: read/write the object-label cache.
+        collect: the workers write each scene into a temporary folder of their own and send
+            the files back; this process writes them into ``out_dir`` (for cluster workers that
+            do not share a disk with it). The files are the same bytes either way.
 
     Returns:
         A :class:`GenerateReport` (:meth:`GenerateReport.format_summary` for people). A
@@ -753,7 +848,8 @@ def generate(
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 
     executor = _executor(workers, scheduler)
-    run = _Run(out, cfg, seed, executor, report, sources, use_cache, progress, resume, extra)
+    run = _Run(out, cfg, seed, executor, report, sources, use_cache, progress, resume, extra,
+               collect=collect)  # fmt: skip
     try:
         if quota is None:
             run.ensure_labels([s for specs in per_scene for s in specs])
@@ -770,8 +866,11 @@ def generate(
     report.wall_seconds = time.perf_counter() - t_start
     status = "complete" if report.complete else "incomplete"
     failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
+    more: dict[str, Any] = {"removed_objects": _removed_objects(out)}
+    if failed:
+        more["failed_scenes"] = failed
     with contextlib.suppress(OSError):
-        run.write_doc(report.num_scenes, status, **({"failed_scenes": failed} if failed else {}))
+        run.write_doc(report.num_scenes, status, **more)
     _clean_tmp(out)
     report.output_bytes = _folder_size(out)
     return report

@@ -24,11 +24,12 @@ __all__ = ["scene_intrinsics", "scene_views", "write_scene"]
 
 
 def scene_intrinsics(camera: CameraConfig) -> Intrinsics:
-    """The intrinsics preset of ``camera`` at its resolution scale."""
-    preset = {
-        "mgn_synthetic": Intrinsics.mgn_synthetic,
-        "zivid_two_like": Intrinsics.zivid_two_like,
-    }[camera.intrinsics]()
+    """The intrinsics of ``camera`` (a preset or the user's) at its resolution scale."""
+    k = camera.intrinsics
+    if isinstance(k, str):
+        preset = Intrinsics.preset(k)
+    else:
+        preset = Intrinsics(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
     return preset if camera.resolution_scale == 1.0 else preset.scaled(camera.resolution_scale)
 
 
@@ -36,12 +37,17 @@ def scene_views(scene: Scene, camera: CameraConfig) -> list[tuple[int, CameraVie
     """(view index, camera) of every view kept by ``camera.views``, in order.
 
     The ``mgn`` rig is drawn from the scene seed (:func:`mgn.render.mgn_rig`), looking at the
-    tote centre (the world origin); the ``hemisphere`` rig is fixed. View indices are those of
-    the full rig, so ``views: [0, 5, 17]`` gives files ``0_*``, ``5_*`` and ``17_*``.
+    tote centre (the world origin); the ``hemisphere`` rig and the user ``poses`` are fixed.
+    View indices are those of the full rig, so ``views: [0, 5, 17]`` gives files ``0_*``,
+    ``5_*`` and ``17_*``.
     """
     K = scene_intrinsics(camera)
     if camera.rig == "mgn":
         poses, _ = mgn_rig(scene.seed)
+    elif camera.rig == "poses":
+        import numpy as np
+
+        poses = np.asarray(camera.poses, np.float64)
     else:
         h = camera.hemisphere
         poses = hemisphere_rig(h.radii, h.tilts, h.azimuths)

@@ -105,7 +105,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = psub.add_parser(
         "label",
         help="label objects (writes grasps/paralleljaw/* of textured.obj.hdf5)",
-        description=__doc__,
+        description=__doc__.replace("``", "").replace("::", ":"),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("paths", nargs="+", metavar="PATH", help="object folder, export root or mesh")

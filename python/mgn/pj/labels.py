@@ -101,7 +101,8 @@ def label_object(
     """Parallel-jaw labels of one object: see the module docstring. Deterministic for ``seed``.
 
     Args:
-        mesh: the object, metres, object frame; must be watertight.
+        mesh: the object, metres, object frame; must be watertight. A closed mesh wound inward
+            is used with its winding reversed (same geometry).
         mass: kg (> 0); com: centre of mass (m, object frame) — for the wrench score.
         gripper: the gripper (default: MetaGraspNet's Franka-like hand).
         num_points: contact points sampled evenly on the surface.
@@ -134,6 +135,12 @@ def label_object(
             raise InvalidArgumentError(
                 f"label_object: pass {reserved} as an argument, not in sampler_options"
             )
+    report = mesh.validate()
+    if report.is_watertight and report.is_winding_consistent and report.signed_volume < 0:
+        # Inward-wound closed mesh (e.g. a mirrored STL export): the surface normals would point
+        # into the object and every probe would fail. Same geometry, outward winding (as the
+        # user-object path does); the labels are in the same object frame.
+        mesh = mesh.flipped()
     sampler = AntipodalSampler(mesh, gripper)
     samples = sample_surface(mesh, num_points, method="even", seed=seed)
     points = np.asarray(samples.points, np.float64)

@@ -25,6 +25,7 @@ import numpy.typing as npt
 from mgn import _core
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import ParallelJawGripper, default_gripper
+from mgn.pj.sampler import core_gripper
 
 Mesh = _core.Mesh
 
@@ -40,7 +41,10 @@ class ShakeOptions:
     and 0.2–0.3 rad. The others are mgn's (see ``cpp/include/mgn/grasp/shake_test.hpp``):
     ``settle_steps`` and ``lost_contact_steps`` end phases and trials early (0 disables them),
     ``inertia_floor`` stabilises light objects, the pads are soft (``pad_stiffness`` N/m per
-    contact point, ``pad_damping`` N s/m).
+    contact point, ``pad_damping`` N s/m). ``staircase`` walks each grasp's success boundary
+    (success is monotone: more friction helps, more mass hurts) with at most ``2 grid - 1``
+    trials plus ``staircase_checks`` checks of inferred cells, falling back to the full grid
+    where a check contradicts monotonicity (``ShakeScores.fallback``).
     """
 
     grid: int = 10
@@ -68,6 +72,8 @@ class ShakeOptions:
     polyhedral_contacts: bool = True
     max_hull_vertices: int = 64
     solver_iterations: int = 10
+    staircase: bool = False
+    staircase_checks: int = 4
     num_threads: int = 0
     seed: int = 0
 
@@ -114,6 +120,9 @@ class ShakeScores:
         frictions: (S,) friction coefficients of the grid.
         density_factors: (S,) density (mass) factors of the grid.
         total_steps: sum of trial_steps.
+        trial_simulated: (G, S, S) bool, the trial was simulated (False: inferred by the
+            staircase search).
+        fallback: (G,) bool, the staircase search fell back to the full grid.
     """
 
     score: npt.NDArray[np.float64]
@@ -123,10 +132,13 @@ class ShakeScores:
     frictions: npt.NDArray[np.float64]
     density_factors: npt.NDArray[np.float64]
     total_steps: int
+    trial_simulated: npt.NDArray[np.bool_]
+    fallback: npt.NDArray[np.bool_]
 
     @property
     def num_trials(self) -> int:
-        return int(self.trial_success.size)
+        """Trials simulated (all of the grid unless the staircase search inferred some)."""
+        return int(self.trial_simulated.sum())
 
     @property
     def early_fraction(self) -> float:
@@ -160,6 +172,17 @@ class ShakeTrajectory:
     steps: int
     friction: float
     density_factor: float
+
+
+def _gripper(gripper: ParallelJawGripper | None) -> _core.ParallelJawGripper:
+    """The C++ gripper (boxes or meshes) through the one conversion, core_gripper()."""
+    if gripper is None:
+        gripper = default_gripper()
+    if not isinstance(gripper, ParallelJawGripper):
+        raise InvalidArgumentError(
+            f"gripper: expected a mgn.hardware.ParallelJawGripper, got {type(gripper).__name__}"
+        )
+    return core_gripper(gripper)
 
 
 def _parts(mesh_or_parts: Mesh | Sequence[Mesh]) -> list[Mesh]:
@@ -229,7 +252,7 @@ def shake_scores(
     """
     m, c, inertia_arr = _inputs(mass, com, inertia)
     rows = grasp_rows(grasps)
-    g = gripper if gripper is not None else default_gripper()
+    g = _gripper(gripper)
     o = (options if options is not None else ShakeOptions()).to_core()
     r = _core.shake_test(_parts(mesh_or_parts), m, c, inertia_arr, rows, g, o)
     return ShakeScores(
@@ -240,6 +263,8 @@ def shake_scores(
         frictions=r["frictions"],
         density_factors=r["density_factors"],
         total_steps=int(r["total_steps"]),
+        trial_simulated=r["trial_simulated"],
+        fallback=r["fallback"],
     )
 
 
@@ -267,7 +292,7 @@ def shake_trajectory(
     row = grasp_rows([grasp] if hasattr(grasp, "approach") else grasp)
     if row.shape[0] != 1:
         raise InvalidArgumentError(f"grasp: expected one grasp, got {row.shape[0]}")
-    g = gripper if gripper is not None else default_gripper()
+    g = _gripper(gripper)
     o = (options if options is not None else ShakeOptions()).to_core()
     t = _core.shake_trajectory(
         _parts(mesh_or_parts),

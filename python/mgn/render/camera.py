@@ -27,6 +27,17 @@ __all__ = [
     "mgn_views",
 ]
 
+#: Real-sensor presets: (width, height, fx = fy px), principal point at the image centre.
+#: Derived from the manufacturers' published resolution and field of view (docs/cameras.md):
+#: Zivid 2+ M130: 2448 x 2048, 0.32 mm per pixel at 1300 mm -> f = 1300 / 0.32 px;
+#: Photoneo PhoXi 3D Scanner M: 2064 x 1544, 47.5 deg horizontal field -> f = 1032 / tan(23.75 deg);
+#: Intel RealSense D435 depth: 1280 x 720, 87 deg horizontal field -> f = 640 / tan(43.5 deg).
+SENSOR_PRESETS: dict[str, tuple[int, int, float]] = {
+    "zivid2_plus_m130": (2448, 2048, 1300.0 / 0.32),
+    "photoneo_phoxi_m": (2064, 1544, 1032.0 / math.tan(math.radians(23.75))),
+    "realsense_d435": (1280, 720, 640.0 / math.tan(math.radians(43.5))),
+}
+
 #: MetaGraspNet synthetic camera: focal length and horizontal aperture, mm.
 MGN_FOCAL_LENGTH_MM = 35.0
 MGN_APERTURE_MM = 20.955
@@ -68,6 +79,26 @@ class Intrinsics:
     def zivid_two_like(cls) -> Intrinsics:
         """1944 x 1200, fx = fy = 1780 px: an industrial camera like a Zivid Two (approximate)."""
         return cls._from_core(_core.Intrinsics.zivid_two_like())
+
+    @classmethod
+    def preset(cls, name: str) -> Intrinsics:
+        """A named preset: ``mgn_synthetic``, ``zivid_two_like`` or a real sensor of
+        :data:`SENSOR_PRESETS` (``zivid2_plus_m130``, ``photoneo_phoxi_m``, ``realsense_d435``).
+
+        Raises:
+            InvalidArgumentError: an unknown name (the message lists the presets).
+        """
+        if name == "mgn_synthetic":
+            return cls.mgn_synthetic()
+        if name == "zivid_two_like":
+            return cls.zivid_two_like()
+        if name in SENSOR_PRESETS:
+            w, h, f = SENSOR_PRESETS[name]
+            return cls(w, h, f, f, w / 2.0, h / 2.0)
+        from mgn.errors import InvalidArgumentError
+
+        names = ["mgn_synthetic", "zivid_two_like", *SENSOR_PRESETS]
+        raise InvalidArgumentError(f"unknown intrinsics preset {name!r}; presets: {names}")
 
     @classmethod
     def _from_core(cls, k: _core.Intrinsics) -> Intrinsics:

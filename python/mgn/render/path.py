@@ -32,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.errors import InvalidArgumentError
 from mgn.geometry import Material, Mesh
 from mgn.render.camera import CameraView
 
@@ -52,7 +53,7 @@ Color = tuple[float, float, float]
 def _color(value: Sequence[float], name: str) -> Color:
     a = np.asarray(value, dtype=np.float64)
     if a.shape != (3,):
-        raise ValueError(f"{name} must be 3 numbers (linear RGB), got shape {a.shape}")
+        raise InvalidArgumentError(f"{name} must be 3 numbers (linear RGB), got shape {a.shape}")
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
@@ -91,7 +92,7 @@ class PbrMaterial:
         if self.base_color_texture is not None:
             tex = np.ascontiguousarray(self.base_color_texture)
             if tex.dtype != np.uint8 or tex.ndim != 3 or tex.shape[2] != 3:
-                raise ValueError(
+                raise InvalidArgumentError(
                     "PbrMaterial.base_color_texture must be an (H, W, 3) uint8 array, got "
                     f"{tex.dtype} {tex.shape}"
                 )
@@ -167,12 +168,12 @@ class AreaLight:
     def __post_init__(self) -> None:
         X = np.array(self.X_WL, dtype=np.float64)
         if X.shape != (4, 4):
-            raise ValueError(f"AreaLight.X_WL must be a (4, 4) pose, got shape {X.shape}")
+            raise InvalidArgumentError(f"AreaLight.X_WL must be a (4, 4) pose, got shape {X.shape}")
         X.setflags(write=False)
         object.__setattr__(self, "X_WL", X)
         s = np.asarray(self.size, np.float64).reshape(-1)
         if s.shape != (2,):
-            raise ValueError(f"AreaLight.size must be 2 numbers (m), got shape {s.shape}")
+            raise InvalidArgumentError(f"AreaLight.size must be 2 numbers (m), got shape {s.shape}")
         object.__setattr__(self, "size", (float(s[0]), float(s[1])))
         object.__setattr__(self, "color", _color(self.color, "AreaLight.color"))
         object.__setattr__(self, "intensity", float(self.intensity))
@@ -246,6 +247,10 @@ class PathTraceOptions:
         focus_distance: distance in focus along the optical axis, m (0 = the depth at the image
             centre, or 1 m if nothing is seen there).
         clamp: maximum luminance of one sample (0 = off; > 0 biases but removes fireflies).
+        clamp_indirect: maximum luminance of one indirect contribution of a sample (light found
+            at the second path vertex or later) (0 = off). The default 10 leaves ordinary
+            indirect light alone and removes the fireflies of caustics (diffuse -> glass -> sun)
+            at the cost of dimming those caustics.
     """
 
     spp: int = 16
@@ -257,15 +262,20 @@ class PathTraceOptions:
     aperture_radius: float = 0.0
     focus_distance: float = 0.0
     clamp: float = 0.0
+    clamp_indirect: float = 10.0
 
     def __post_init__(self) -> None:
         for name in ("spp", "max_bounces", "seed", "view_index", "num_threads", "rr_depth"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-                raise ValueError(f"PathTraceOptions.{name} must be an integer, got {value!r}")
+                raise InvalidArgumentError(
+                    f"PathTraceOptions.{name} must be an integer, got {value!r}"
+                )
         for name in ("seed", "view_index"):
             if getattr(self, name) < 0:
-                raise ValueError(f"PathTraceOptions.{name} must be >= 0, got {getattr(self, name)}")
+                raise InvalidArgumentError(
+                    f"PathTraceOptions.{name} must be >= 0, got {getattr(self, name)}"
+                )
         self.to_core().validate()
 
     def to_core(self) -> _core.PathTraceOptions:
@@ -279,6 +289,7 @@ class PathTraceOptions:
         o.aperture_radius = float(self.aperture_radius)
         o.focus_distance = float(self.focus_distance)
         o.clamp = float(self.clamp)
+        o.clamp_indirect = float(self.clamp_indirect)
         return o
 
 
@@ -304,7 +315,9 @@ class FilmOptions:
     def __post_init__(self) -> None:
         for name in ("seed", "view_index"):
             if int(getattr(self, name)) < 0:
-                raise ValueError(f"FilmOptions.{name} must be >= 0, got {getattr(self, name)}")
+                raise InvalidArgumentError(
+                    f"FilmOptions.{name} must be >= 0, got {getattr(self, name)}"
+                )
         self.to_core().validate()
 
     def to_core(self) -> _core.FilmOptions:

@@ -57,6 +57,7 @@ __all__ = [
 #: Render engines of ``render.engine`` / ``--engine``.
 ENGINES = ("raster", "path")
 TONES = ("filmic", "linear")
+DENOISE_QUALITIES = ("high", "balanced", "fast")
 ENVIRONMENTS = ("uniform", "gradient", "sky")
 TEXTURES = ("plain", "noise", "checker", "stripes")
 
@@ -95,7 +96,9 @@ class RandomizeSettings:
         light_size: (min, max) side of a rectangular light, m.
         light_height: (min, max) height of a light above the tote floor, m.
         light_offset: largest horizontal distance of a light from the tote centre, m.
-        light_intensity: (min, max) radiance of a light (before dividing by the light count).
+        light_irradiance: (min, max) irradiance the lights together cast on the tote floor's
+            centre (radiance units x sr; a white matte floor then shows irradiance / pi): the
+            brightness of the scene, independent of the number, size and distance of the lights.
         light_temperature: (min, max) colour temperature, K.
         environment_intensity: (min, max) radiance scale of the environment.
         exposure_range: EV, the half width of the exposure jitter.
@@ -109,7 +112,7 @@ class RandomizeSettings:
     light_size: tuple[float, float] = (0.4, 1.2)
     light_height: tuple[float, float] = (1.2, 2.2)
     light_offset: float = 1.0
-    light_intensity: tuple[float, float] = (12.0, 30.0)
+    light_irradiance: tuple[float, float] = (3.0, 9.0)
     light_temperature: tuple[float, float] = (3500.0, 7500.0)
     environment_intensity: tuple[float, float] = (0.2, 0.8)
     exposure_range: float = 0.5
@@ -128,7 +131,7 @@ class RandomizeSettings:
             )
         object.__setattr__(self, "light_count", (int(c[0]), int(c[1])))
         for key, lo, hi in (("light_size", 1e-3, None), ("light_height", 0.1, None),
-                            ("light_intensity", 0.0, None), ("light_temperature", 1000.0, 40000.0),
+                            ("light_irradiance", 0.0, None), ("light_temperature", 1000.0, 40000.0),
                             ("environment_intensity", 0.0, None)):  # fmt: skip
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
             object.__setattr__(self, key, rng)
@@ -149,6 +152,8 @@ class RenderSettings:
         denoise: denoise with Intel Open Image Denoise (``pyoidn``). Without pyoidn installed
             a warning names the package and ``spp_without_denoiser`` samples are traced instead.
         spp_without_denoiser: samples per pixel when ``denoise`` is false or pyoidn is missing.
+        denoise_quality: OIDN filter quality, ``high`` (best), ``balanced`` or ``fast`` (about
+            half the time of ``high`` on the CPU, slightly softer).
         max_bounces: path segments after the camera ray.
         clamp: firefly clamp, the largest luminance of one sample (0 = off).
         exposure: EV added to the developed image.
@@ -164,6 +169,7 @@ class RenderSettings:
     spp: int = 16
     denoise: bool = True
     spp_without_denoiser: int = 128
+    denoise_quality: str = "high"
     max_bounces: int = 6
     clamp: float = 20.0
     exposure: float = 0.0
@@ -177,6 +183,11 @@ class RenderSettings:
         if self.engine not in ENGINES:
             raise InvalidArgumentError(
                 f"RenderSettings.engine must be one of {', '.join(ENGINES)}, got {self.engine!r}"
+            )
+        if self.denoise_quality not in DENOISE_QUALITIES:
+            raise InvalidArgumentError(
+                "RenderSettings.denoise_quality must be one of "
+                f"{', '.join(DENOISE_QUALITIES)}, got {self.denoise_quality!r}"
             )
         if self.tone not in TONES:
             raise InvalidArgumentError(
@@ -243,16 +254,22 @@ def denoise(
     radiance: npt.NDArray[np.float32],
     albedo: npt.NDArray[np.float32] | None = None,
     normal: npt.NDArray[np.float32] | None = None,
+    quality: str = "high",
 ) -> npt.NDArray[np.float32]:
     """Denoise linear HDR radiance (H, W, 3) with OIDN's ray-tracing filter, guided by the
-    first-hit albedo and normal when given. Raises ImportError when pyoidn is missing."""
+    first-hit albedo and normal when given; ``quality`` high | balanced | fast. Raises
+    ImportError when pyoidn is missing."""
     oidn = _pyoidn()
     if oidn is None:
         raise ImportError("denoising needs the 'pyoidn' package: pip install 'mgn[render]'")
     c = np.ascontiguousarray(np.nan_to_num(radiance, nan=0.0, posinf=0.0), np.float32)
     a = None if albedo is None else np.ascontiguousarray(np.clip(albedo, 0.0, 1.0), np.float32)
     n = None if normal is None else np.ascontiguousarray(np.clip(normal, -1.0, 1.0), np.float32)
-    out = oidn.denoise(c, a, n, hdr=True, quality="high")
+    if quality not in DENOISE_QUALITIES:
+        raise InvalidArgumentError(
+            f"denoise quality must be one of {DENOISE_QUALITIES}, got {quality!r}"
+        )
+    out = oidn.denoise(c, a, n, hdr=True, quality=quality)
     return np.maximum(np.asarray(out, np.float32), 0.0)
 
 
@@ -429,17 +446,18 @@ def draw_lighting(
             phi = g_light.uniform(0.0, 2 * math.pi)
             pos = target + np.array([rad * math.cos(phi), rad * math.sin(phi), h])
             temp = g_light.uniform(*r.light_temperature)
-            # Split the drawn power among the lights; scale by the area so a small light is
-            # not much dimmer (the mean irradiance depends on intensity, not on the size).
-            power = g_light.uniform(*r.light_intensity) / n
+            # Each light casts 1/n of the drawn irradiance on the target: a small light facing
+            # the target at distance d and height h gives E = L A h / d^3 (A cos0 cos(theta)/d^2).
+            e = g_light.uniform(*r.light_irradiance) / n
             area = side * side * aspect
+            d = float(np.linalg.norm(pos - target))
             lights.append(
                 AreaLight(
                     _look_down_pose(pos, target, g_light.uniform(0.0, math.pi)),
                     "rect",
                     (side, side * aspect),
                     blackbody_rgb(temp),
-                    power / area,
+                    e * d**3 / (area * h),
                 )
             )
         summary["lights"] = n
@@ -632,7 +650,7 @@ class PhotoRenderer:
         )  # fmt: skip
         radiance = out.radiance
         if self.denoised:
-            radiance = denoise(radiance, out.albedo, out.normal)
+            radiance = denoise(radiance, out.albedo, out.normal, s.denoise_quality)
         rgb = develop(
             radiance,
             FilmOptions(

@@ -18,10 +18,12 @@ from mgn.render.photo import add_engine_arguments
 __all__ = ["ACTIONS", "register"]
 
 
-def _split(text: str | None) -> list[str] | None:
-    if text is None:
+def _split(values: str | list[str] | None) -> list[str] | None:
+    """Object names or ids given as ``a b c`` or ``a,b,c`` (both forms in every command)."""
+    if values is None:
         return None
-    return [t.strip() for t in text.split(",") if t.strip()]
+    items = [values] if isinstance(values, str) else values
+    return [t.strip() for v in items for t in v.split(",") if t.strip()]
 
 
 def _copies(text: str) -> tuple[int, int]:
@@ -85,10 +87,12 @@ def _cmd_drop(args: argparse.Namespace) -> int:
 
 def _register_drop(ssub: argparse._SubParsersAction) -> None:
     p = ssub.add_parser("drop", help="drop objects into the tote and write the settled scene")
-    p.add_argument("--objects", metavar="NAME[,NAME..]", help="these objects (names or ids)")
+    p.add_argument("--objects", nargs="+", metavar="NAME",
+                   help="these objects (names or ids; repeat a name for copies)")  # fmt: skip
     p.add_argument(
         "--categories",
-        metavar="NAME[,NAME..]",
+        nargs="+",
+        metavar="NAME",
         help="these categories, each with --copies copies (MetaGraspNet: 2-5)",
     )
     p.add_argument("--count", type=int, help="total number of objects")
@@ -221,11 +225,62 @@ def _register_label(ssub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_label)
 
 
+def _scene_path(arg: str) -> str:
+    """A scene JSON, or a scene folder (``mgn scene label`` / ``mgn generate``) holding one."""
+    import os
+
+    if os.path.isdir(arg):
+        p = os.path.join(arg, "scene.json")
+        if not os.path.exists(p):
+            raise FileNotFoundError(f"'{arg}' is a folder without scene.json; expected a scene "
+                                    "JSON (mgn scene drop) or a scene folder")  # fmt: skip
+        return p
+    return arg
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from mgn.config import load_config
+    from mgn.pipeline.scene_writer import scene_views
+    from mgn.scene.export import export_scene_glb
+    from mgn.scene.scene import Scene
+
+    config = load_config(args.config)
+    scene = Scene.from_json(_scene_path(args.scene))
+    views = [] if args.no_cameras else scene_views(scene, config.camera)
+    counts = export_scene_glb(scene, args.out, views=views, grasps=args.grasps, top_k=args.top_k,
+                              config=config, num_threads=args.num_threads)  # fmt: skip
+    print(f"{args.out}: {counts['objects']} objects, tote, {counts['cameras']} cameras, "
+          f"{counts['grasps']} collision-free grasps ({counts['nodes']} nodes, metres; node "
+          "tote_frame turns the tote's z up into glTF's y up)")  # fmt: skip
+    return 0
+
+
+def _register_export(ssub: argparse._SubParsersAction) -> None:
+    p = ssub.add_parser(
+        "export",
+        help="write the scene as glTF binary (.glb): objects, tote, cameras, optional grasps",
+        description="Write a scene as .glb for any glTF viewer: one node per object (matrix = "
+        "X_WO), the tote, a frustum per camera (matrix = X_WC) and, with --grasps, the best "
+        "--top-k collision-free grasps of every object (cup or hand meshes, red = score 0, "
+        "green = 1).",
+    )
+    p.add_argument("scene", help="scene JSON (mgn scene drop) or a scene folder")
+    p.add_argument("out", help="output .glb file")
+    p.add_argument("--config", help="config YAML: cameras, gripper, cup (default: MGN defaults)")
+    p.add_argument("--grasps", metavar="KIND",
+                   help="also draw grasps: suction or paralleljaw (default: none)")  # fmt: skip
+    p.add_argument("--top-k", type=int, default=5, help="grasps per object (default 5)")
+    p.add_argument("--no-cameras", action="store_true", help="leave the camera frustums out")
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores (default)")
+    p.set_defaults(func=_cmd_export)
+
+
 #: Functions adding one action each to the ``scene`` subparsers.
 ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [
     _register_drop,
     _register_render,
     _register_label,
+    _register_export,
 ]
 
 

@@ -19,6 +19,7 @@ from mgn.scene.convex import (
     ConvexDecompositionOptions,
     cached_convex_decomposition,
 )
+from mgn.scene.penetration import render_penetration
 from mgn.scene.scene import (
     BUILTIN,
     CONTACT_NAMES,
@@ -28,7 +29,14 @@ from mgn.scene.scene import (
     SceneInstance,
 )
 
-__all__ = ["RESTITUTION", "drop_scene", "settle", "settle_tracked", "tote_mesh"]
+__all__ = [
+    "RESTITUTION",
+    "drop_scene",
+    "drop_scene_refilled",
+    "settle",
+    "settle_tracked",
+    "tote_mesh",
+]
 
 #: Restitution of the objects (the library carries friction but not restitution).
 RESTITUTION = 0.1
@@ -64,9 +72,9 @@ def _simulate(
     decomposition: ConvexDecompositionOptions | None,
     use_cache: bool,
     X_WO_start: np.ndarray | None = None,
-) -> tuple[dict[str, Any], dict[str, str]]:
+) -> tuple[dict[str, Any], dict[str, str], dict[str, Mesh]]:
     """Validates, prepares the per-object physics and runs the C++ drop. Returns the raw result
-    (X_WO, X_WO_release, status, settled, contacts, steps, ...) and each name's source."""
+    (X_WO, X_WO_release, status, settled, contacts, steps, ...), each name's source and mesh."""
     if len(objects) == 0:
         raise InvalidArgumentError("drop_scene: expected at least one object, got none")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -87,7 +95,7 @@ def _simulate(
         parts = cached_convex_decomposition(
             mesh, decomposition or DROP_DECOMPOSITION, use_cache=use_cache
         )
-        per_name[spec.name] = (parts, props, _source_of(spec, src))
+        per_name[spec.name] = (parts, props, _source_of(spec, src), mesh)
 
     parts = [per_name[s.name][0] for s in objects]
     props = [per_name[s.name][1] for s in objects]
@@ -112,7 +120,29 @@ def _simulate(
         opts,
         None if X_WO_start is None else np.asarray(X_WO_start, np.float64).reshape(-1, 16),
     )
-    return out, {k: v[2] for k, v in per_name.items()}
+    return out, {k: v[2] for k, v in per_name.items()}, {k: v[3] for k, v in per_name.items()}
+
+
+def _stats(
+    out: dict[str, Any],
+    instances: Sequence[SceneInstance],
+    meshes: dict[str, Mesh],
+    tote: ToteSpec,
+    num_dropped: int,
+) -> dict[str, Any]:
+    """Scene stats; ``max_penetration`` is measured on the render meshes of the kept objects
+    (:func:`mgn.scene.penetration.render_penetration`), ``max_penetration_hulls`` is Bullet's on
+    the simulated hulls."""
+    return {
+        "steps": int(out["steps"]),
+        "simulated_time": float(out["simulated_time"]),
+        "settled": bool(out["all_settled"]),
+        "max_penetration": render_penetration(
+            [meshes[i.name] for i in instances], [i.X_WO for i in instances], tote
+        ),
+        "max_penetration_hulls": float(out["max_penetration"]),
+        "num_dropped": num_dropped,
+    }
 
 
 def drop_scene(
@@ -148,7 +178,9 @@ def drop_scene(
     """
     tote = tote or ToteSpec()
     options = options or DropOptions()
-    out, sources_of = _simulate(objects, seed, tote, options, sources, decomposition, use_cache)
+    out, sources_of, meshes = _simulate(
+        objects, seed, tote, options, sources, decomposition, use_cache
+    )
     instances: list[SceneInstance] = []
     removed: list[RemovedInstance] = []
     for k, spec in enumerate(objects):
@@ -169,13 +201,7 @@ def drop_scene(
                 settled=bool(out["settled"][k]),
             )
         )
-    stats = {
-        "steps": int(out["steps"]),
-        "simulated_time": float(out["simulated_time"]),
-        "settled": bool(out["all_settled"]),
-        "max_penetration": float(out["max_penetration"]),
-        "num_dropped": len(objects),
-    }
+    stats = _stats(out, instances, meshes, tote, len(objects))
     return Scene(tuple(instances), tote, int(seed), options, tuple(removed), stats)
 
 
@@ -205,8 +231,8 @@ def settle_tracked(
     specs = [scene.object_spec(inst.instance_id - 1) for inst in keep]
     sources = {inst.name: inst.source for inst in keep if inst.source != BUILTIN}
     start = np.stack([inst.X_WO for inst in keep])
-    out, sources_of = _simulate(specs, scene.seed, scene.tote, options, sources, decomposition,
-                                use_cache, X_WO_start=start)  # fmt: skip
+    out, sources_of, meshes = _simulate(specs, scene.seed, scene.tote, options, sources,
+                                        decomposition, use_cache, X_WO_start=start)  # fmt: skip
     instances: list[SceneInstance] = []
     removed = list(scene.removed)
     old_ids: list[int] = []
@@ -226,13 +252,7 @@ def settle_tracked(
             )
         )
         old_ids.append(inst.instance_id)
-    stats = {
-        "steps": int(out["steps"]),
-        "simulated_time": float(out["simulated_time"]),
-        "settled": bool(out["all_settled"]),
-        "max_penetration": float(out["max_penetration"]),
-        "num_dropped": len(keep),
-    }
+    stats = _stats(out, instances, meshes, scene.tote, len(keep))
     new = Scene(tuple(instances), scene.tote, scene.seed, scene.drop_options, tuple(removed), stats)
     return new, tuple(old_ids)
 
@@ -267,3 +287,34 @@ def settle(
     return settle_tracked(
         scene, remove=remove, options=options, decomposition=decomposition, use_cache=use_cache
     )[0]
+
+
+def drop_scene_refilled(
+    objects: Sequence[ObjectSpec],
+    *,
+    seed: int = 0,
+    attempts: int = 5,
+    **kwargs: Any,
+) -> Scene:
+    """:func:`drop_scene` again until every object stays in the tote (``objects.refill``).
+
+    Attempt 0 uses ``seed``; attempt k > 0 the seed derived from (seed, k) (deterministic). Stops
+    at the first scene without removed objects, else after ``attempts`` drops and keeps the
+    scene with the most objects in the tote (the earliest on a tie). ``stats["drop_attempts"]``
+    records the drops made. Other arguments as :func:`drop_scene`.
+    """
+    if isinstance(attempts, bool) or not isinstance(attempts, int) or attempts < 1:
+        raise InvalidArgumentError(
+            f"objects.refill_attempts must be an integer >= 1, got {attempts!r}"
+        )
+    best: Scene | None = None
+    for k in range(attempts):
+        s = seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
+        scene = drop_scene(objects, seed=s, **kwargs)
+        if best is None or len(scene.instances) > len(best.instances):
+            best = scene
+        if not scene.removed:
+            break
+    assert best is not None
+    best.stats["drop_attempts"] = k + 1
+    return best

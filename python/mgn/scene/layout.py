@@ -88,7 +88,7 @@ class Layout:
     layer: npt.NDArray[np.int8]  #: (N,) 0 top, 1 secondary, 2 interlock, 3 others
     num_regions: npt.NDArray[np.int32]  #: (N,) visible regions above the speck size
     complete: npt.NDArray[np.bool_]  #: (N,) visible and one region
-    total_covered_edge: npt.NDArray[np.int64]  #: (N,) px next to any parent
+    total_covered_edge: npt.NDArray[np.int64]  #: (N,) px, sum of the children's edge_size
     order: npt.NDArray[np.int32]  #: picking order of the visible objects (instance ids)
     num_layers: int  #: distinct layers among the visible objects
     max_occlusion: float  #: largest occlusion rate of a visible object (0 without any)

@@ -57,7 +57,7 @@ _WALLS = frozenset(CONTACT_NAMES[:4])
 
 
 #: DropOptions integer fields: inclusive range (max_hull_vertices also accepts 0).
-_INT_RANGES = {"solver_iterations": (1, 1000), "max_hull_vertices": (4, 100000)}
+_INT_RANGES = {"solver_iterations": (1, 1000), "max_hull_vertices": (8, 100000)}
 #: DropOptions float fields: (low, low open?, high or None, high open?, unit), as in drop.cpp.
 _FLOAT_RANGES: dict[str, tuple[float, bool, float | None, bool, str]] = {
     "dt": (0.0, True, 0.02, False, "s"),
@@ -96,9 +96,9 @@ class DropOptions:
         tote_collision: ``"boxes"`` (five static boxes fitted to the cavity, robust) or
             ``"mesh"`` (the tote's triangle mesh).
         max_hull_vertices: each convex part's Bullet hull keeps at most this many vertices (0:
-            all, else >= 4); the reduced hull lies inside the part.
-        hull_tolerance: stop reducing a hull once every part vertex is within this distance of
-            it, m (>= 0).
+            all, else >= 8); the reduced hull contains the part (cut from its face planes).
+        hull_tolerance: stop reducing a hull once it protrudes at most this far beyond the
+            part, m (>= 0).
         polyhedral_contacts: whole contact patches from Bullet's polyhedral clipping (piles
             settle sooner) instead of one GJK point per step.
         resettle_time: after objects on or over the rim are removed, the rest may take this many
@@ -125,7 +125,7 @@ class DropOptions:
     remove_unsettled: bool = False
     tote_collision: str = "boxes"
     max_hull_vertices: int = 96
-    hull_tolerance: float = 0.0005
+    hull_tolerance: float = 0.0002
     polyhedral_contacts: bool = True
     resettle_time: float = 2.0
     two_friction_directions: bool = False
@@ -296,7 +296,8 @@ class Scene:
         seed: the seed the scene was dropped with.
         drop_options: the simulation options used.
         removed: objects that were dropped but left the tote (or did not settle).
-        stats: steps, simulated_time (s), settled (bool), max_penetration (m).
+        stats: steps, simulated_time (s), settled (bool), max_penetration (m, of the render
+            meshes), max_penetration_hulls (m, of the simulated hulls).
     """
 
     instances: tuple[SceneInstance, ...]

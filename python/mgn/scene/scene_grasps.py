@@ -6,8 +6,9 @@ documents the model). Built once per scene, reused for every view:
 
 1. Placement: every object-level parallel-jaw grasp becomes a hand (flange) pose and a grasp frame
    at the first contact p1 (x = closing, z = approach); every suction grasp a contact frame
-   (z = approach into the surface, origin at the contact) and a tool pose (same axes, origin at
-   the end of the tool shaft, ``cup.body_height + shaft_length`` behind the contact). World frame.
+   (z = approach into the surface, origin at the contact) and a tool pose (same axes, origin
+   :data:`SUCTION_TOOL_OFFSET` = 13.21 cm behind the contact, MetaGraspNet's convention). World
+   frame.
 2. Collision, once per scene: the hand (fingers at the pre-grasp opening ``min(w + margin,
    max_opening)``) and the suction tool (cup body of ``cup.outer_radius`` from ``clearance`` to
    ``cup.body_height`` behind the contact, then a shaft of :data:`DEFAULT_SHAFT_RADIUS` x
@@ -30,7 +31,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -40,6 +41,7 @@ from mgn import _core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry import Mesh, mass_properties
 from mgn.hardware import ParallelJawGripper, SuctionCup
+from mgn.io.scene_format import COLLISION_OBSTACLES, COLLISION_PARTS
 from mgn.pj.labels import PjLabels
 from mgn.pj.sampler import core_gripper
 from mgn.suction.labels import CUP_BODY_CLEARANCE, SuctionLabels
@@ -50,6 +52,10 @@ if TYPE_CHECKING:
     from mgn.scene.scene import Scene
 
 __all__ = [
+    "DEFAULT_APPROACH_STEP",
+    "COLLISION_OBSTACLES",
+    "COLLISION_PARTS",
+    "SUCTION_TOOL_OFFSET",
     "DEFAULT_SHAFT_LENGTH",
     "DEFAULT_SHAFT_RADIUS",
     "GraspCollisions",
@@ -62,6 +68,11 @@ __all__ = [
     "ToolCollisions",
 ]
 
+#: MetaGraspNet's suction tool pose: the contact frame moved back along the approach by 2 cm
+#: (cup) + 11.21 cm (tool) = 0.1321 m (the one constant, defined in the C++ core).
+SUCTION_TOOL_OFFSET: float = float(_core.SUCTION_TOOL_OFFSET)
+#: Largest spacing of the tool poses checked along the approach between two offsets, m.
+DEFAULT_APPROACH_STEP = 0.005
 #: Radius of the suction tool shaft behind the cup body, m (a vacuum tube / tool body).
 DEFAULT_SHAFT_RADIUS = 0.015
 #: Length of the suction tool shaft behind the cup body, m.
@@ -94,6 +105,10 @@ class PjGraspSet:
     score_wrench: npt.NDArray[np.float32]
     object_id: npt.NDArray[np.int32]
     index: npt.NDArray[np.int64]
+    #: (M,) uint8 why each grasp collides (:data:`COLLISION_PARTS`, 0 in the non-colliding group)
+    collision_part: npt.NDArray[np.uint8] = field(default_factory=lambda: np.zeros(0, np.uint8))
+    #: (M,) uint8 what it hits (:data:`COLLISION_OBSTACLES`)
+    collision_obstacle: npt.NDArray[np.uint8] = field(default_factory=lambda: np.zeros(0, np.uint8))
 
     def __len__(self) -> int:
         return len(self.object_id)
@@ -104,8 +119,8 @@ class SuctionGraspSet:
     """Suction grasps of one view and one group (camera frame, metres).
 
     Attributes:
-        suction_poses: (K, 4, 4) tool poses X_CT: z = approach, origin at the end of the tool
-            shaft (``cup.body_height + shaft_length`` behind the contact).
+        suction_poses: (K, 4, 4) tool poses X_CT: z = approach, origin
+            :data:`SUCTION_TOOL_OFFSET` behind the contact (MetaGraspNet: 2 + 11.21 cm).
         contact_poses: (K, 4, 4) contact frames X_CS: z = approach into the surface, origin at
             the contact.
         score_analytical: (K,) float32 seal score; score_simulation: (K,) NaN when not available;
@@ -121,6 +136,10 @@ class SuctionGraspSet:
     score_wrench: npt.NDArray[np.float32]
     object_id: npt.NDArray[np.int32]
     index: npt.NDArray[np.int64]
+    #: (M,) uint8 why each grasp collides (:data:`COLLISION_PARTS`, 0 in the non-colliding group)
+    collision_part: npt.NDArray[np.uint8] = field(default_factory=lambda: np.zeros(0, np.uint8))
+    #: (M,) uint8 what it hits (:data:`COLLISION_OBSTACLES`)
+    collision_obstacle: npt.NDArray[np.uint8] = field(default_factory=lambda: np.zeros(0, np.uint8))
 
     def __len__(self) -> int:
         return len(self.object_id)
@@ -155,11 +174,17 @@ class SceneGrasps:
             out[base + "contact_width"] = pj.contact_width
             for name in ("score_analytical", "score_simulation", "score_wrench", "object_id"):
                 out[base + name] = getattr(pj, name)
+            if group == "colliding_grasps":
+                out[base + "collision_part"] = pj.collision_part
+                out[base + "collision_obstacle"] = pj.collision_obstacle
             base = f"{group}/suctioncup/"
             out[base + "suction_poses_relative_to_camera"] = su.suction_poses
             out[base + "contact_poses_relative_to_camera"] = su.contact_poses
             for name in ("score_analytical", "score_simulation", "score_wrench", "object_id"):
                 out[base + name] = getattr(su, name)
+            if group == "colliding_grasps":
+                out[base + "collision_part"] = su.collision_part
+                out[base + "collision_obstacle"] = su.collision_obstacle
         return out
 
 
@@ -176,8 +201,12 @@ class PlacedGrasps:
         score_analytical, score_simulation, score_wrench: (M,) float32 (NaN: not available).
         object_id: (M,) int32 instance id - 1.
         colliding: (M,) bool, the tool collides at some offset.
-        hit: (M, K) int32 first obstacle hit at offset k: -1 none, 0 the tote, else the instance
-            id of the object hit (objects are tried in scene order, then the tote).
+        hit: (M, K) int32 first obstacle hit on the approach path ending at offset k (k = 0: at
+            the first offset): -1 none, 0 the tote, else the instance id of the object hit
+            (objects are tried in scene order, then the tote).
+        collision_part, collision_obstacle: (M,) uint8, why the grasp collides at the first
+            colliding pose along the approach (:data:`COLLISION_PARTS`,
+            :data:`COLLISION_OBSTACLES`; 0 = does not collide).
     """
 
     tool_poses: npt.NDArray[np.float64]
@@ -191,6 +220,8 @@ class PlacedGrasps:
     object_id: npt.NDArray[np.int32]
     colliding: npt.NDArray[np.bool_]
     hit: npt.NDArray[np.int32]
+    collision_part: npt.NDArray[np.uint8]
+    collision_obstacle: npt.NDArray[np.uint8]
 
     def __len__(self) -> int:
         return len(self.object_id)
@@ -261,6 +292,8 @@ class SceneGraspModel:
         suction_labels: likewise with :class:`~mgn.suction.SuctionLabels` or None.
         gripper, cup: the end effectors the labels were made for (defaults: MetaGraspNet's).
         offsets: distances back along the approach where the tool is checked, m.
+        approach_step: largest spacing of the poses checked on the path between consecutive
+            offsets, m (the whole approach is checked; docs/models.md §9).
         shaft_radius, shaft_length: the suction tool shaft behind the cup body, m.
         gravity_world: direction of gravity in the world (tote frame).
         friction, grip_force, contact_radius: parallel-jaw wrench constants; default: those in
@@ -282,6 +315,7 @@ class SceneGraspModel:
         cup: SuctionCup | None = None,
         *,
         offsets: Sequence[float] = (0.0, 0.1),
+        approach_step: float = DEFAULT_APPROACH_STEP,
         shaft_radius: float = DEFAULT_SHAFT_RADIUS,
         shaft_length: float = DEFAULT_SHAFT_LENGTH,
         gravity_world: Sequence[float] = (0.0, 0.0, -1.0),
@@ -378,6 +412,7 @@ class SceneGraspModel:
             float(visibility_tolerance),
             float(near_plane),
             int(num_threads),
+            float(approach_step),
         )
         self.offsets: tuple[float, ...] = tuple(offs)
         self.pj: PlacedGrasps = self._placed(self._core.pj())
@@ -419,6 +454,8 @@ class SceneGraspModel:
             object_id=d["object_index"],
             colliding=d["colliding"],
             hit=d["hit"],
+            collision_part=np.asarray(d["collision_part"], np.uint8),
+            collision_obstacle=np.asarray(d["collision_obstacle"], np.uint8),
         )
 
     @property
@@ -542,6 +579,8 @@ class SceneGraspModel:
                 score_wrench=self.pj.score_wrench[i],
                 object_id=self.pj.object_id[i],
                 index=i.astype(np.int64),
+                collision_part=self.pj.collision_part[i],
+                collision_obstacle=self.pj.collision_obstacle[i],
             )
             m = self.suction.colliding[su_idx] == want
             i = su_idx[m]
@@ -553,6 +592,8 @@ class SceneGraspModel:
                 score_wrench=self.suction.score_wrench[i],
                 object_id=self.suction.object_id[i],
                 index=i.astype(np.int64),
+                collision_part=self.suction.collision_part[i],
+                collision_obstacle=self.suction.collision_obstacle[i],
             )
             groups.append(GraspGroups(paralleljaw=pj, suctioncup=su))
         return SceneGrasps(non_colliding=groups[0], colliding=groups[1])

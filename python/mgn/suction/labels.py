@@ -155,7 +155,8 @@ def write_suction_labels(hdf5_path: str | os.PathLike[str], labels: SuctionLabel
 
     Writes ``pregrasp_transform`` (K, 6) [approach (3, into the surface), contact (3, cm)],
     ``quality_score`` (K,) (seal score) and the mgn extensions ``score_wrench`` (K,) and
-    ``failure_reason`` (K,), all float32, plus the metadata attributes. The file is updated on a
+    ``failure_reason`` (K,) (uint8 codes of ``mgn.suction.FAILURE_REASONS``; the others
+    float32), plus the metadata attributes. The file is updated on a
     temporary copy that replaces the original only when complete.
     """
     replace_grasp_group(

@@ -28,7 +28,7 @@ struct Material {
   std::vector<std::uint8_t> texture_data;
 
   /// Physically based parameters (glTF 2.0 metallic-roughness with KHR_materials_transmission
-  /// and KHR_materials_ior; docs/models.md), used by the path tracer. Meaningful when has_pbr is
+  /// and KHR_materials_ior; path_tracer.hpp), used by the path tracer. Meaningful when has_pbr is
   /// true (a glTF/GLB file, a built-in object, a user object with PBR keys); otherwise the path
   /// tracer derives them from the Phong fields above.
   bool has_pbr = false;

@@ -11,6 +11,9 @@
 /// if both fingers still touch the object at the end. The score of a grasp is the success
 /// fraction over the S×S grid of settings.
 ///
+/// A gripper given by meshes (ParallelJawGripper::has_meshes()) is simulated as the convex hulls
+/// of its palm and finger meshes; otherwise as its boxes.
+///
 /// Frames: O = object (the frame of the convex parts and of the grasps); H = hand (flange) frame
 /// of gripper.hpp (z = approach, x = closing); W = simulation world, z up, gravity −z, with the
 /// hand initially at the origin pointing down: X_WH(0) = rotation of π about x. Units SI.
@@ -30,21 +33,18 @@
 #include <mgn/core/types.hpp>
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/grasp/gripper.hpp>
+#include <mgn/physics/rigid_object.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace mgn {
 
-/// The object to shake: convex parts and rigid-body properties at density factor 1.
-struct PhysicsObject {
-  /// Convex parts in the object frame O (each part is used as the convex hull of its vertices,
-  /// e.g. the output of a convex decomposition, or the object itself when it is convex).
-  std::vector<Mesh> convex_parts;
-  double mass = 0.0;                  ///< kg at density factor 1, > 0
-  Vec3d com = Vec3d::Zero();          ///< centre of mass in O, m
-  Mat3d inertia = Mat3d::Identity();  ///< about the centre of mass, axes of O, kg m², SPD
-};
+/// The object to shake: its convex parts and rigid-body properties at density factor 1 (mass,
+/// com, inertia; friction and restitution are not used: the friction comes from the grid). One
+/// type with the drop's objects (see mgn/physics/rigid_object.hpp for the fields and defaults).
+using PhysicsObject = RigidObject;
 
 /// Parameters of the shake test. Defaults: MetaGraspNet where it publishes a value (grid, ranges,
 /// dt, step counts, 0.5 m/s, 0.2–0.3 rad), otherwise mgn's choice.
@@ -102,8 +102,15 @@ struct ShakeOptions {
   /// Bullet sequential-impulse iterations, >= 1; multiplied by ceil(grip_force / (150 m g))
   /// (at most 8) for light objects, which the solver otherwise lets spin out of the grip.
   int solver_iterations = 10;
-  int num_threads = 0;     ///< 0 = all hardware threads; results do not depend on it
-  std::uint64_t seed = 0;  ///< seed of the per-trial random streams
+  /// Staircase search instead of the full grid: success is monotone wherever physics behaves
+  /// (more friction helps, more mass hurts), so each grasp's success boundary is walked with at
+  /// most 2S - 1 trials (see staircase_grid()), plus `staircase_checks` trials of inferred cells
+  /// next to the boundary; if one of them contradicts the inference the grasp falls back to the
+  /// full grid. Every simulated cell uses the same trial (index, random stream) as the full grid.
+  bool staircase = false;
+  int staircase_checks = 4;  ///< >= 0
+  int num_threads = 0;       ///< 0 = all hardware threads; results do not depend on it
+  std::uint64_t seed = 0;    ///< seed of the per-trial random streams
 
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
@@ -123,7 +130,28 @@ struct ShakeResult {
   std::vector<double> frictions;                ///< (S)
   std::vector<double> density_factors;          ///< (S)
   std::int64_t total_steps = 0;                 ///< sum of trial_steps
+  /// (G·S²) 1 if the trial was simulated, 0 if its outcome was inferred (staircase only; the
+  /// full grid simulates every trial).
+  std::vector<std::uint8_t> trial_simulated;
+  std::vector<std::uint8_t> fallback;  ///< (G) 1 if the staircase fell back to the full grid
 };
+
+/// Outcome of staircase_grid().
+struct StaircaseGrid {
+  std::vector<std::uint8_t> success;    ///< (S·S) row-major [friction i][density j]
+  std::vector<std::uint8_t> simulated;  ///< (S·S) 1 where `trial` was called
+  bool fallback = false;                ///< a check failed: every cell was simulated
+  int trials = 0;                       ///< calls of `trial`
+};
+
+/// Success over an S×S grid whose success is assumed monotone: non-decreasing in the friction
+/// index i and non-increasing in the density index j. Row by row (i = 0..S-1) it walks the
+/// density index up from the previous row's boundary while trials succeed (cells left of it
+/// are inferred successes, cells right of the first failure inferred failures): at most 2S - 1
+/// trials. Then `checks` inferred cells next to the boundary (spread over the rows) are
+/// simulated; if any contradicts its inference, every remaining cell is simulated (fallback).
+/// `trial(i, j)` runs one trial. Deterministic. Throws InvalidArgument for S < 1 or checks < 0.
+StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks);
 
 /// Phases of a trial (ShakeTrajectory::phase).
 enum class ShakePhase : std::int8_t { Close = 0, Translate = 1, Rotate = 2 };

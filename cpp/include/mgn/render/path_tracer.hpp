@@ -1,5 +1,5 @@
 #pragma once
-/// @file path_tracer.hpp  Physically based CPU path tracer on Embree (docs/architecture.md).
+/// @file path_tracer.hpp  Physically based CPU path tracer on Embree.
 ///
 /// Units and frames: lengths in metres, angles in radians, poses X_AB map frame B to frame A; the
 /// world frame W is the frame of the mesh poses and of the camera pose X_WC. The camera model is
@@ -13,9 +13,11 @@
 /// [0, 1]. The rendered image is the mean radiance over the pixel's samples (before exposure);
 /// develop() turns it into 8-bit sRGB.
 ///
-/// Algorithm: unidirectional path tracing with next-event estimation (one shadow ray per
-/// non-specular vertex to one light chosen by power) and multiple importance sampling (power
-/// heuristic, beta = 2) between light and BSDF sampling for the area lights and the environment;
+/// Algorithm: unidirectional path tracing with next-event estimation (at every non-specular
+/// vertex one shadow ray to a point on one area light chosen by power, and one to the
+/// environment, sampled by a cosine lobe around the shading normal mixed with the sun cone) and
+/// multiple importance sampling (power heuristic, beta = 2) between light and BSDF sampling for
+/// the area lights and the environment; emissive materials are found by BSDF sampling only;
 /// Russian roulette from PathTraceOptions::rr_depth on. Materials follow glTF 2.0
 /// metallic-roughness: a Lambertian diffuse lobe under a GGX (Trowbridge-Reitz) specular lobe
 /// with the height-correlated Smith masking-shadowing term and visible-normal sampling; exact
@@ -118,6 +120,11 @@ struct PathTraceOptions {
   /// centre, or 1 m if nothing is seen there).
   double focus_distance = 0.0;
   double clamp = 0.0;  ///< max luminance of one sample (>= 0; 0 = no clamping)
+  /// Max luminance of one indirect contribution of a sample (light found at the second path
+  /// vertex or later, e.g. caustics through glass) (>= 0; 0 = off). The default 10 leaves
+  /// ordinary indirect light alone (contributions of order 1) and removes the fireflies of
+  /// caustic paths (diffuse -> glass -> sun), at the cost of a small bias (caustics are dimmed).
+  double clamp_indirect = 10.0;
 
   void validate() const;
 };

@@ -18,6 +18,7 @@
 
 #include <mgn/core/types.hpp>
 #include <mgn/geometry/mesh.hpp>
+#include <mgn/physics/rigid_object.hpp>
 
 #include <cstdint>
 #include <string>
@@ -25,18 +26,9 @@
 
 namespace mgn {
 
-/// A dynamic object to drop.
-struct DropObject {
-  /// Closed convex meshes in the object frame O whose union is the collision shape (see
-  /// convex_decomposition()). At least one.
-  std::vector<Mesh> convex_parts;
-  double mass = 0.0;              ///< kg, > 0
-  Vec3d com = Vec3d::Zero();      ///< centre of mass p_OCm, m, object frame
-  Mat3d inertia = Mat3d::Zero();  ///< kg m^2 about the centre of mass, axes of O; symmetric PD
-  double friction = 0.5;          ///< Coulomb coefficient, >= 0
-  double restitution = 0.1;       ///< in [0, 1]
-  std::string name;               ///< used in error messages only
-};
+/// A dynamic object to drop: convex parts, mass properties, friction and restitution (one type
+/// with the shake test's objects; see mgn/physics/rigid_object.hpp for the fields and defaults).
+using DropObject = RigidObject;
 
 /// The tote's inner cavity (tote frame as above). Walls are named by their outward side:
 /// -x at x = -inner_length/2, +x at x = +inner_length/2, -y, +y likewise; floor at z = 0.
@@ -86,12 +78,14 @@ struct DropOptions {
   /// Remove objects that are still moving at max_time (else keep them with settled = false).
   bool remove_unsettled = false;
   /// Each convex part's Bullet hull is reduced to at most this many vertices (0: keep all; else
-  /// >= 4) by reduce_convex_points(): a support query costs time linear in the vertex count and
-  /// dominates the drop. The reduced hull lies inside the part (see hull_tolerance).
+  /// >= 8) by outer_hull_vertices(): a support query costs time linear in the vertex count and
+  /// dominates the drop. The reduced hull CONTAINS the part (it is cut from the part's own face
+  /// planes), so resting objects do not sink into the floor or into each other; it protrudes
+  /// beyond the part by at most hull_tolerance where the vertex budget allows.
   int max_hull_vertices = 96;
-  /// Stop reducing a hull early once every vertex of the part is within this distance (m, >= 0)
-  /// of the reduced hull's face planes.
-  double hull_tolerance = 0.0005;
+  /// Stop reducing a hull once no vertex of the reduced hull lies farther than this distance
+  /// (m, >= 0) outside the part.
+  double hull_tolerance = 0.0002;
   /// Contacts between convex parts (and with the tote boxes) from Bullet's polyhedral clipping
   /// (a whole face-on-face contact patch in one step: piles come to rest much sooner) instead of
   /// one GJK point per step. The hulls are then not shrunk by the margin (the clipping ignores

@@ -11,12 +11,14 @@
 ///     X_WG = X_WO * (grasp_rotation(grasp), p1) (x = closing, z = approach, origin at p1).
 ///     A suction grasp (contact c, approach a into the surface) becomes the contact frame
 ///     X_WS = (R, c) with R's z column = a (x, y: the branch-free orthonormal basis of Duff et al.
-///     2017, deterministic) and the tool (flange) pose X_WT = X_WS * translation(0, 0, -L) with
-///     L = cup.body_height + tool.shaft_length: the end of the tool shaft, same axes.
-///  2. Collision. The tool is placed at the grasp and moved back along the approach by every
-///     offset d (X * translation(0, 0, -d) in the hand/contact frame). It collides when any part
-///     intersects an obstacle surface (FCL) or lies entirely inside an obstacle, or an obstacle
-///     lies entirely inside a part (ray-parity tests). Obstacles: every object and the tote.
+///     2017, deterministic) and the tool pose X_WT = X_WS * translation(0, 0, -kSuctionToolOffset)
+///     (MetaGraspNet's convention, 13.21 cm behind the contact, same axes).
+///  2. Collision. The tool is placed at the grasp and moved back along the approach by every offset
+///     d (X * translation(0, 0, -d) in the hand/contact frame), and at poses at most
+///     options.approach_step apart on the path between consecutive offsets (the whole approach). It
+///     collides when any part intersects an obstacle surface (FCL) or lies entirely inside an
+///     obstacle, or an obstacle lies entirely inside a part (ray-parity tests). Obstacles: every
+///     object and the tote.
 ///     - Parallel-jaw: palm and fingers of gripper_meshes() with the fingers at the pre-grasp
 ///       opening gripper.collision_opening(w). The grasped object itself is skipped at offset 0
 ///       exactly (the object-level sampler already checked the same hand against it) and checked
@@ -25,7 +27,9 @@
 ///       cup.body_height behind the contact (the body the object-level labels checked), plus a
 ///       shaft cylinder of tool.shaft_radius and tool.shaft_length behind the cup body. Checked
 ///       against every obstacle, the grasped object included, at every offset.
-///     Only the listed offsets are checked, not the sweep between them.
+///     hit[k] records the first obstacle on the path from offsets[k-1] to offsets[k] (k = 0: at
+///     offsets[0]); collision_part / collision_obstacle say what hit what at the first colliding
+///     pose.
 ///  3. Wrench scores recomputed with gravity of the scene: options.gravity_world expressed in the
 ///     object frame, R_WO^T g (pj_wrench_scores / suction_wrench_scores). Analytical and
 ///     simulation scores are carried over.
@@ -50,6 +54,11 @@
 
 namespace mgn {
 
+/// Where MetaGraspNet puts the suction tool pose (`suction_poses_relative_to_camera`): the contact
+/// frame moved back along the approach by its cup approach distance (2 cm) plus its suction tool
+/// height (11.21 cm), m. Only the written pose uses it; the collision geometry is SuctionTool.
+inline constexpr double kSuctionToolOffset = 0.02 + 0.1121;
+
 /// Geometry of the suction tool behind the cup body, for the scene collision check (m).
 struct SuctionTool {
   /// Gap between the contact and the bottom of the cup body cylinder: the lip touches the surface
@@ -66,6 +75,13 @@ struct SceneGraspOptions {
   /// Distances back along the approach at which the tool is checked, m (finite, >= 0, at least
   /// one; default: at the grasp and 100 mm back).
   std::vector<double> offsets = {0.0, 0.1};
+  /// Largest spacing of the poses checked along the path between consecutive offsets, m (> 0).
+  /// The whole approach is checked: between offsets[k-1] and offsets[k] the tool is placed every
+  /// approach_step (at most). A part whose extent along the approach is at least the step (every
+  /// default part: palm 60 mm, fingers 50 mm, cup body 27 mm, shaft 150 mm) sweeps through every
+  /// point between two checked poses, so nothing is missed for box- and cylinder-shaped parts;
+  /// for other shapes only an obstacle thinner than the step along the approach can slip through.
+  double approach_step = 0.005;
   SuctionTool tool;
   Vec3d gravity_world = Vec3d(0.0, 0.0, -1.0);  ///< direction of gravity in W (normalised here)
   PjWrenchOptions pj_wrench;                    ///< constants of the parallel-jaw wrench score
@@ -107,7 +123,22 @@ struct PlacedGrasps {
   /// tote, i + 1 object i (its instance id). Obstacles are tried in the order objects 0..N-1,
   /// then the tote.
   std::vector<std::int32_t> hit;
+  /// (M) why the grasp collides, at the first colliding pose along the approach (the grasp
+  /// first): the gripper part (CollisionPart) and the obstacle (CollisionObstacle); 0 = none.
+  std::vector<std::uint8_t> collision_part, collision_obstacle;
   std::size_t size() const { return object_index.size(); }
+};
+
+/// Gripper part of a collision (PlacedGrasps::collision_part).
+enum class CollisionPart : std::uint8_t { None = 0, Palm = 1, Finger = 2, Cup = 3, Shaft = 4 };
+/// Obstacle of a collision (PlacedGrasps::collision_obstacle). Floor: the tote where the part
+/// reaches below the inner floor surface (z < 0 in the tote frame); wall: the rest of the tote.
+enum class CollisionObstacle : std::uint8_t {
+  None = 0,
+  Floor = 1,
+  Wall = 2,
+  OtherObject = 3,
+  GraspedObject = 4
 };
 
 /// Kind of a grasp (tool) for SceneGraspModel::collides().

@@ -46,9 +46,10 @@ struct ViewLabelObject {
 
 /// Options of one labelling call.
 struct ViewLabelOptions {
-  /// A keypoint is visible when nothing is hit along the ray from the camera centre before
-  /// (distance to the point - keypoint_tolerance), m. 2 mm absorbs the float32 geometry and
-  /// points sampled on the surface.
+  /// A keypoint (or CoM point) is visible when the first hit along the ray from the camera
+  /// centre is on its own object and within keypoint_tolerance of the point (m): unoccluded and
+  /// on the surface the camera sees. A point floating off its surface (a hole centre, say) is
+  /// occluded. 2 mm absorbs the float32 geometry and points sampled on the surface.
   double keypoint_tolerance = 0.002;
   /// Compute the keypoint sets (false leaves them empty).
   bool keypoints = true;

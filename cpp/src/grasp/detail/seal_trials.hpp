@@ -25,7 +25,11 @@ struct SealContext {
 std::vector<Eigen::Vector2d> unit_ring(int num_points);
 
 /// Force-based spring-mass model (docs/models.md §1). Fills `detail` when not null.
-SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, SealTrial* detail);
+/// `nominal` (may be null: c itself) is the unperturbed contact point of a jittered trial; the
+/// roof check measures from it, because the jitter moves the cup, not the surface (a trial
+/// jittered below a flat surface must not find a "roof" above its contact).
+SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, SealTrial* detail,
+                         const Vec3d* nominal = nullptr);
 
 /// Dex-Net 3.0 style strain model (docs/models.md §2). `quality` (may be null) gets 1 or 0.
 SealFailure strain_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, float* quality);

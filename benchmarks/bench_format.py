@@ -1,0 +1,298 @@
+"""Scene files: bytes per scene, write and read time per view, against the previous layout.
+
+One scene of the pipeline benchmark's size (20 objects, 37 views at 1200 x 1200, all labels; the
+object labels come from the label cache, or are computed once) is generated, then every view's
+arrays are written again twice in the same loop: with the current writer
+(`mgn.io.scene_format.write_view`) and with the layout mgn wrote before (all arrays in `{v}.npz`,
+float32 ids, `depth_ideal`, `valid_depth` and `com_heatmap` in the npz; reproduced here as the
+"peer"). Reading is timed on the current files: every array of a view through `mgn.Dataset`.
+Bytes per scene are the sum over the scene folder (views, `scene_gt.json`, `scene.json`).
+
+Run alone: `python -m benchmarks.bench_format [--quick]` (quick: 10 objects, 5 views at 600 px).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .common import Row, Timing, bench_tempdir, load_average
+
+SEED = 2024
+
+
+def _legacy_files(rec: Any) -> dict[str, bytes]:
+    """The files of one view in the layout mgn wrote before (for the comparison)."""
+    from mgn.io.deterministic import npz_bytes
+    from mgn.io.scene_format import M_TO_CM, hdf5_bytes, png_bytes, to_cm
+    from mgn.render.views import depth_picture
+
+    f4 = np.float32
+    v = rec.index
+    npz = {
+        "depth": (np.asarray(rec.depth, np.float64) * M_TO_CM).astype(f4),
+        "instances_objects": np.asarray(rec.instances).astype(f4),
+        "instances_semantic": np.asarray(rec.semantic).astype(f4),
+        "occlusion": np.asarray(rec.occlusion_map, f4),
+        "occlusion_objects": np.asarray(rec.amodal, bool),
+        "depth_ideal": (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4),
+        "valid_depth": np.asarray(rec.valid_depth, bool),
+        **{k: np.asarray(a) for k, a in rec.extra_npz.items()},
+    }
+    h5 = {p: to_cm(p, a).astype(f4) for p, a in rec.scene_hdf5.items()}
+    dump = lambda d: (json.dumps(d, indent=1) + "\n").encode()  # noqa: E731
+    return {
+        f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
+        f"{v}.npz": npz_bytes(**npz),
+        f"{v}_depth.png": png_bytes(depth_picture(rec.depth)),
+        f"{v}_scene.hdf5": hdf5_bytes(h5),
+        f"{v}_order.csv": rec.order_csv.encode(),
+        f"{v}_order.json": dump(rec.order_json),
+        f"{v}_layout.json": dump(rec.layout_json),
+        f"{v}_camera_params.json": dump(rec.intrinsics.camera_params()),
+    }
+
+
+def _write_legacy(folder: Path, rec: Any) -> int:
+    from mgn.io.atomic import atomic_write_bytes
+
+    total = 0
+    for name, data in _legacy_files(rec).items():
+        atomic_write_bytes(folder / name, data)
+        total += len(data)
+    return total
+
+
+def _record(view: Any) -> Any:
+    """A ViewRecord holding the arrays of a written view (SI units)."""
+    from mgn.io.scene_format import ViewRecord
+
+    return ViewRecord(
+        index=view.index,
+        rgb=view.rgb,
+        depth=view.depth,
+        depth_ideal=view.depth_ideal,
+        valid_depth=view.valid_depth,
+        instances=view.instances,
+        semantic=view.semantic,
+        occlusion_map=view.occlusion_map,
+        amodal=view.amodal,
+        intrinsics=view.intrinsics,
+        scene_hdf5=view.hdf5,
+        order_json=view.order,
+        order_csv=view.path("_order.csv").read_text(),
+        layout_json=view.layout or {},
+        extra_npz={"com_heatmap": view.com_heatmap},
+    )
+
+
+def _same_arrays(new_dir: Path, old_dir: Path, v: int) -> bool:
+    from mgn.io.dataset import View
+
+    new = View(new_dir, v)
+    with np.load(old_dir / f"{v}.npz") as z:
+        old = {k: z[k] for k in z.files}
+    pairs = [(new.npz_array(k), old[k]) for k in ("depth", "occlusion", "occlusion_objects")]
+    pairs += [
+        (new.mgn_image("depth_ideal"), old["depth_ideal"]),
+        (new.com_heatmap, old["com_heatmap"]),
+        (new.valid_depth, old["valid_depth"]),
+    ]
+
+    def bits(a: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(a).view(np.uint8)
+
+    same = all(np.array_equal(bits(a), bits(b)) for a, b in pairs)
+    return same and all(
+        np.array_equal(new.npz_array(k), old[k])
+        for k in ("instances_objects", "instances_semantic")
+    )
+
+
+def _coco_previous(ds: Any) -> dict[str, Any]:
+    """The COCO export as mgn made it before streaming: whole views in memory (every array of
+    the npz), one pycocotools call per mask (for the comparison)."""
+    from pycocotools import mask as mask_utils
+
+    def rle(m: np.ndarray) -> dict[str, Any]:
+        r = mask_utils.encode(np.asfortranarray(m.astype(np.uint8)))
+        return {"size": [int(r["size"][0]), int(r["size"][1])], "counts": r["counts"].decode()}
+
+    def bbox(m: np.ndarray) -> list[float]:
+        ys, xs = np.nonzero(m)
+        if len(xs) == 0:
+            return [0.0] * 4
+        return [float(xs.min()), float(ys.min()), float(xs.max() - xs.min() + 1),
+                float(ys.max() - ys.min() + 1)]  # fmt: skip
+
+    images, anns = [], []
+    for sid in ds.scene_ids:
+        for view in ds.scene(sid).views():
+            _ = view.npz
+            inst, amodal = view.instances, view.amodal
+            images.append({"id": sid * 1000 + view.index})
+            cats = view.hdf5["objects/categories"]
+            for i in range(amodal.shape[0]):
+                vis = inst == i + 1
+                if vis.any():
+                    anns.append({"category_id": int(cats[i]), "segmentation": rle(vis),
+                                 "bbox": bbox(vis), "amodal_segmentation": rle(amodal[i]),
+                                 "amodal_bbox": bbox(amodal[i])})  # fmt: skip
+    return {"images": images, "annotations": anns}
+
+
+def _coco_row(ds_root: Path, n_views: int, size: int, objects: int) -> Row:
+    import tracemalloc
+
+    from mgn.io.coco import export_coco
+    from mgn.io.dataset import Dataset
+
+    row = Row(
+        group="dataset files",
+        case=f"mgn coco of one scene ({n_views} views, {objects} objects at {size}x{size})",
+        n=n_views,
+        unit="views/s",
+        peer_name="previous mgn export (whole views in memory, one pycocotools call per mask)",
+    )
+    out = ds_root.parent / "coco.json"
+    res: dict[str, tuple[float, float, float]] = {}
+    sides = [("mgn", lambda: export_coco(ds_root, out)),
+             ("peer", lambda: _coco_previous(Dataset(ds_root)))]  # fmt: skip
+    for name, fn in sides:
+        tracemalloc.start()
+        t, c = time.perf_counter(), time.process_time()
+        fn()
+        wall, cpu = time.perf_counter() - t, time.process_time() - c
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        res[name] = (wall, cpu, peak)
+    row.mgn[1] = Timing(wall=[res["mgn"][0]], cpu=[res["mgn"][1]])
+    row.peer = Timing(wall=[res["peer"][0]], cpu=[res["peer"][1]])
+    doc = json.loads(out.read_text())
+    prev = _coco_previous(Dataset(ds_root))
+    same = [a["segmentation"] for a in doc["annotations"]] == [
+        a["segmentation"] for a in prev["annotations"]
+    ] and [a["amodal_bbox"] for a in doc["annotations"]] == [
+        a["amodal_bbox"] for a in prev["annotations"]
+    ]
+    row.agreement = "same masks and boxes" if same else "DIFFERENT annotations"
+    row.agreement_ok = same
+    row.notes = [
+        f"peak traced memory {res['mgn'][2] / 2**20:.0f} MiB (previous {res['peer'][2] / 2**20:.0f}"
+        " MiB)",
+        f"{1e3 * res['mgn'][0] / n_views:.0f} ms/view (previous "
+        f"{1e3 * res['peer'][0] / n_views:.0f} ms/view)",
+        f"load average {load_average()}",
+    ]
+    return row
+
+
+def _read_all(folder: Path, index: int) -> None:
+    from mgn.io.dataset import View
+
+    v = View(folder, index)
+    _ = (v.rgb, v.npz, v.depth_ideal, v.com_heatmap, v.valid_depth, v.hdf5, v.order, v.layout)
+
+
+def run(
+    *,
+    quick: bool,
+    repeats: int,
+    mgn: Any,
+    mgn_status: str,
+    log: Callable[[str], None],
+) -> list[Row]:
+    from .bench_pipeline import bench_config
+
+    cfg = bench_config(quick)
+    size = int(1200 * cfg["camera"]["resolution_scale"])
+    n_views = len(cfg["camera"]["views"] or range(37))
+    row = Row(
+        group="dataset files",
+        case=f"write one view's files, {cfg['objects']['count']} objects at {size}x{size}",
+        n=1,
+        unit="views/s",
+        peer_name="previous mgn layout (all arrays in the npz, float32 ids)",
+    )
+    if mgn is None:
+        row.mgn_status = row.peer_status = mgn_status
+        return [row]
+    from mgn.config import load_config
+    from mgn.io.dataset import Dataset
+    from mgn.io.scene_format import write_view
+    from mgn.pipeline import generate
+
+    root = bench_tempdir("mgn_bench_format_")
+    log(f"  format: generating one scene ({n_views} views at {size} px), load {load_average()}")
+    report = generate(root / "ds", 1, config=load_config(cfg), seed=SEED, progress=False)
+    if not report.complete:
+        row.mgn_status = f"generation failed: {report.failed[0].error if report.failed else '?'}"
+        return [row]
+    scene = Dataset(root / "ds").scene(0)
+    new_dir, old_dir = root / "new", root / "old"
+    new_dir.mkdir()
+    old_dir.mkdir()
+    walls: dict[str, list[float]] = {"new": [], "old": [], "read": []}
+    cpus: dict[str, list[float]] = {"new": [], "old": [], "read": []}
+    identical = True
+    for k, v in enumerate(scene.view_ids):
+        rec = _record(scene.view(v))
+        sides = [("new", lambda r=rec: write_view(new_dir, r)),
+                 ("old", lambda r=rec: _write_legacy(old_dir, r))]  # fmt: skip
+        for name, fn in sides if k % 2 == 0 else sides[::-1]:
+            t, c = time.perf_counter(), time.process_time()
+            fn()
+            walls[name].append(time.perf_counter() - t)
+            cpus[name].append(time.process_time() - c)
+        t, c = time.perf_counter(), time.process_time()
+        _read_all(new_dir, v)
+        walls["read"].append(time.perf_counter() - t)
+        cpus["read"].append(time.process_time() - c)
+        # Both layouts hold the same arrays, bit for bit.
+        identical &= _same_arrays(new_dir, old_dir, v)
+    per_scene = {
+        "new": sum(p.stat().st_size for p in scene.folder.iterdir() if p.name != "manifest.json"),
+        "old": sum(p.stat().st_size for p in old_dir.iterdir())
+        + sum((scene.folder / n).stat().st_size for n in ("scene_gt.json", "scene.json")),
+    }
+    row.mgn[1] = Timing(wall=walls["new"], cpu=cpus["new"])
+    row.peer = Timing(wall=walls["old"], cpu=cpus["old"])
+    row.agreement = "same arrays, bit for bit" if identical else "DIFFERENT arrays"
+    row.agreement_ok = identical
+    scale = 37 / n_views
+    row.notes = [
+        f"{per_scene['new'] * scale / 1e6:.1f} MB per 37-view scene "
+        f"(previous layout {per_scene['old'] * scale / 1e6:.1f} MB)",
+        f"write {1e3 * np.median(walls['new']):.0f} ms/view (previous "
+        f"{1e3 * np.median(walls['old']):.0f} ms/view), read every array "
+        f"{1e3 * np.median(walls['read']):.0f} ms/view",
+        f"load average {load_average()}",
+    ]
+    coco = _coco_row(root / "ds", n_views, size, cfg["objects"]["count"])
+    shutil.rmtree(root, ignore_errors=True)
+    return [row, coco]
+
+
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    p = argparse.ArgumentParser(prog="python -m benchmarks.bench_format")
+    p.add_argument("--quick", action="store_true")
+    a = p.parse_args(sys.argv[1:] if argv is None else argv)
+    from .common import import_mgn
+
+    mgn, status = import_mgn()
+    for row in run(quick=a.quick, repeats=1, mgn=mgn, mgn_status=status, log=print):
+        print(row.case, "|", row.agreement, "|", "; ".join(row.notes) or row.mgn_status)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,117 @@
+"""Penetration of the render meshes of a settled pile (what a user sees, not the physics hulls).
+
+The drop simulates reduced convex hulls; what is rendered and labelled are the objects' meshes.
+:func:`render_penetration` measures how deep those meshes sink into the tote (floor and inner
+walls, planes of the tote frame) and into each other: the largest distance of a mesh vertex
+below the floor / beyond a wall, or inside another object's closed mesh from that mesh's surface.
+Units m, tote frame W (see :mod:`mgn.scene.drop`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from mgn.errors import InvalidArgumentError
+from mgn.geometry import Mesh
+from mgn.objects import ToteSpec
+from mgn.raytrace import RayScene
+
+__all__ = ["point_triangle_distance", "render_penetration"]
+
+# A fixed ray direction off every axis and diagonal, for the ray-parity inside test.
+_PARITY = np.array([0.5773, 0.6213, 0.5297]) / np.linalg.norm([0.5773, 0.6213, 0.5297])
+
+
+def point_triangle_distance(
+    points: npt.ArrayLike, triangles: npt.ArrayLike
+) -> npt.NDArray[np.float64]:
+    """(N,) distance (m) of each point to the nearest of (F, 3, 3) triangles (brute force)."""
+    p = np.asarray(points, np.float64)[:, None, :]
+    t = np.asarray(triangles, np.float64)[None]
+    a, b, c = t[..., 0, :], t[..., 1, :], t[..., 2, :]
+    ab, ac, ap = b - a, c - a, p - a
+    # Closest point on a triangle by its Voronoi regions, evaluated for every pair at once:
+    # the projection onto the plane if it falls inside, else the nearest point of the 3 edges.
+    n = np.cross(ab, ac)
+    nn = np.maximum(np.einsum("...k,...k", n, n), 1e-300)
+    d_plane = np.einsum("...k,...k", ap, n) / nn
+    q = p - d_plane[..., None] * n
+    # Barycentric inside test of the projection.
+    v0, v1, v2 = ab, ac, q - a
+    d00 = np.einsum("...k,...k", v0, v0)
+    d01 = np.einsum("...k,...k", v0, v1)
+    d11 = np.einsum("...k,...k", v1, v1)
+    d20 = np.einsum("...k,...k", v2, v0)
+    d21 = np.einsum("...k,...k", v2, v1)
+    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+    v = (d11 * d20 - d01 * d21) / den
+    w = (d00 * d21 - d01 * d20) / den
+    inside = (v >= 0) & (w >= 0) & (v + w <= 1)
+    best = np.where(inside, np.linalg.norm(p - q, axis=-1), np.inf)
+    for s, e in ((a, b), (b, c), (c, a)):
+        se = e - s
+        u = np.clip(
+            np.einsum("...k,...k", p - s, se) / np.maximum(np.einsum("...k,...k", se, se), 1e-300),
+            0.0,
+            1.0,
+        )
+        best = np.minimum(best, np.linalg.norm(p - (s + u[..., None] * se), axis=-1))
+    return best.min(axis=1)
+
+
+def _inside(scene: RayScene, points: np.ndarray) -> np.ndarray:
+    if len(points) == 0:
+        return np.zeros(0, bool)
+    d = np.broadcast_to(_PARITY, points.shape)
+    hits = scene.intersect_all(points, d, num_threads=1)
+    return hits.counts() % 2 == 1
+
+
+def render_penetration(
+    meshes: Sequence[Mesh], X_WO: Sequence[npt.ArrayLike], tote: ToteSpec
+) -> float:
+    """Deepest penetration (m, >= 0) of closed meshes at poses ``X_WO`` (tote frame): of a vertex
+    below the floor (z < 0) or beyond an inner wall below the rim, and of a vertex of one mesh
+    inside another (its distance to that mesh's surface). A vertex-based measure: the depth of an
+    edge crossing a face between vertices is not seen (it is bounded by the mesh resolution)."""
+    if len(meshes) != len(X_WO):
+        raise InvalidArgumentError(
+            f"render_penetration: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
+        )
+    hx, hy, H = 0.5 * tote.inner_length, 0.5 * tote.inner_width, tote.inner_height
+    worst = 0.0
+    local = [np.asarray(m.vertices, np.float64) for m in meshes]
+    poses = [np.asarray(X, np.float64) for X in X_WO]
+    world = [v @ X[:3, :3].T + X[:3, 3] for v, X in zip(local, poses, strict=True)]
+    for w in world:
+        worst = max(worst, float(-w[:, 2].min()))
+        low = w[w[:, 2] <= H]
+        if len(low):
+            worst = max(worst, float((np.abs(low[:, 0]) - hx).max()))
+            worst = max(worst, float((np.abs(low[:, 1]) - hy).max()))
+    lo = [w.min(axis=0) for w in world]
+    hi = [w.max(axis=0) for w in world]
+    scenes: dict[int, RayScene] = {}
+    for a in range(len(meshes)):
+        for b in range(len(meshes)):
+            if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
+                continue
+            # Vertices of a in b's frame, inside b's bounding box, then inside b's mesh.
+            Xb = poses[b]
+            p = (world[a] - Xb[:3, 3]) @ Xb[:3, :3]
+            blo, bhi = local[b].min(axis=0), local[b].max(axis=0)
+            p = p[np.all((p >= blo) & (p <= bhi), axis=1)]
+            if len(p) == 0:
+                continue
+            if b not in scenes:
+                scenes[b] = RayScene(meshes[b])
+            p = p[_inside(scenes[b], p)]
+            if len(p) == 0:
+                continue
+            tri = local[b][np.asarray(meshes[b].faces)]
+            for k in range(0, len(p), 64):
+                worst = max(worst, float(point_triangle_distance(p[k : k + 64], tri).max()))
+    return max(worst, 0.0)

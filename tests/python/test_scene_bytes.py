@@ -1,0 +1,170 @@
+"""The compact view files: every array reads back bit-identical to the array written, and the
+keys and dtypes MetaGraspNet's own scripts read (Scripts/visualize_2d.py, visualize_layout.py,
+colored_pcl.py: np.load / h5py, the operations they apply) still work unchanged."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from mgn.io.dataset import View
+from mgn.io.scene_format import ViewRecord, write_view
+from mgn.render.camera import Intrinsics
+
+H, W, N = 48, 64, 3
+
+
+def _cm(a: np.ndarray) -> np.ndarray:
+    """The writer's metre -> centimetre rule, written out: float64 product, then float32."""
+    return (a.astype(np.float64) * 100.0).astype(np.float32)
+
+
+def _record(rng: np.random.Generator, *, categories=(5, 300, 7), valid_is_finite=True):
+    inst = rng.integers(0, N + 1, size=(H, W)).astype(np.int32)
+    amodal = np.stack([(inst == i + 1) | (rng.random((H, W)) < 0.2) for i in range(N)])
+    # Noisy floats: every mantissa bit carries information.
+    depth = (0.6 + 0.3 * rng.random((H, W))).astype(np.float32)
+    depth[rng.random((H, W)) < 0.2] = np.nan
+    ideal = (0.6 + 0.3 * rng.random((H, W))).astype(np.float32)
+    valid = np.isfinite(depth)
+    if not valid_is_finite:
+        valid = valid.copy()
+        valid[0, :5] = ~valid[0, :5]
+    sem = np.where(inst > 0, np.asarray(categories)[np.maximum(inst - 1, 0)], 0)
+    occ_map = rng.random((H, W)).astype(np.float32)
+    com = rng.random((H, W)).astype(np.float32)
+    pose = np.eye(4)
+    pose[:3, 3] = rng.random(3)
+    X_CO = np.repeat(pose[None], N, axis=0)
+    hand = np.repeat(pose[None], 5, axis=0)
+    h5 = {
+        "camera/pose_relative_to_world": pose[None],
+        "objects/poses_relative_to_camera": X_CO,
+        "objects/categories": np.asarray(categories, float),
+        "objects/bbox_loose": rng.random((N, 4)) * 10,
+        "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera": hand,
+        "non_colliding_grasps/paralleljaw/contact_poses_relative_to_camera": hand,
+        "non_colliding_grasps/paralleljaw/contact_width": rng.random(5) * 0.05,
+        "non_colliding_grasps/paralleljaw/score_analytical": rng.random(5),
+        "non_colliding_grasps/paralleljaw/score_simulation": rng.random(5),
+        "non_colliding_grasps/paralleljaw/object_id": np.arange(5) % N,
+        "non_colliding_grasps/suctioncup/suction_poses_relative_to_camera": hand,
+        "keypts/com/keypts_relative_to_camera": rng.random((4, 4)),
+        "keypts/com/object_id": np.arange(4) % N,
+    }
+    order = {str(i + 1): {"id": i + 1, "parents": [], "children": []} for i in range(N)}
+    csv = "0,-1,0\n0,0,0\n0,0,0\n"
+    return ViewRecord(
+        index=3,
+        rgb=rng.integers(0, 256, size=(H, W, 3), dtype=np.uint8),
+        depth=depth,
+        depth_ideal=ideal,
+        valid_depth=valid,
+        instances=inst,
+        semantic=sem,
+        occlusion_map=occ_map,
+        amodal=amodal,
+        intrinsics=Intrinsics(W, H, 50.0, 50.0, W / 2, H / 2),
+        scene_hdf5=h5,
+        order_json=order,
+        order_csv=csv,
+        layout_json={},
+        extra_npz={"com_heatmap": com},
+    )
+
+
+def _bits(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a).view(np.uint8)
+
+
+@pytest.mark.parametrize("valid_is_finite", [True, False])
+def test_view_arrays_read_back_bit_identical(tmp_path: Path, valid_is_finite: bool):
+    rec = _record(np.random.default_rng(1), valid_is_finite=valid_is_finite)
+    write_view(tmp_path, rec)
+    with np.load(tmp_path / "3.npz") as z:
+        stored = {k: z[k] for k in z.files}
+    assert set(stored) == {"depth", "instances_objects", "instances_semantic", "occlusion",
+                           "occlusion_objects"}  # fmt: skip
+    assert np.array_equal(_bits(stored["depth"]), _bits(_cm(rec.depth)))  # NaNs included
+    assert np.array_equal(stored["instances_objects"], rec.instances)
+    assert np.array_equal(stored["instances_semantic"], rec.semantic)
+    assert np.array_equal(_bits(stored["occlusion"]), _bits(rec.occlusion_map))
+    assert np.array_equal(stored["occlusion_objects"], rec.amodal)
+    view = View(tmp_path, 3)
+    assert np.array_equal(_bits(view.mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal)))
+    assert np.array_equal(_bits(view.com_heatmap), _bits(rec.extra_npz["com_heatmap"]))
+    assert np.array_equal(view.valid_depth, rec.valid_depth)
+    with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
+        # valid_depth is stored exactly when it cannot be derived from the depth.
+        assert ("valid_depth" in h5) == (not valid_is_finite)
+    assert np.array_equal(view.rgb, rec.rgb)
+    # The reader gives the SI arrays back.
+    assert np.array_equal(view.instances, rec.instances)
+    assert np.array_equal(view.semantic, rec.semantic)
+
+
+def test_category_ids_beyond_uint16_stay_float32(tmp_path: Path):
+    rec = _record(np.random.default_rng(2), categories=(5, 70000, 7))
+    write_view(tmp_path, rec)
+    with np.load(tmp_path / "3.npz") as z:
+        sem = z["instances_semantic"]
+    assert sem.dtype == np.float32 and np.array_equal(sem, rec.semantic)
+
+
+def test_metagraspnet_scripts_read_the_files_unchanged(tmp_path: Path):
+    """What the published scripts do with the files, on mgn's files and on the same arrays with
+    MetaGraspNet's original float32 ids: the results agree."""
+    rec = _record(np.random.default_rng(3))
+    write_view(tmp_path, rec)
+    with np.load(str(tmp_path / "3.npz")) as data:
+        depth = data["depth"]
+        instances_objects = data["instances_objects"]
+        instances_semantic = data["instances_semantic"]
+        occlusion = data["occlusion"]
+        occlusion_masks = data["occlusion_objects"]
+    original_ids = rec.instances.astype(np.float32)  # MetaGraspNet's dtype
+    # visualize_layout.py: the object count and one mask per object.
+    num = len(np.unique(instances_objects)) - 1
+    assert num == len(np.unique(original_ids)) - 1 == N
+    for i in range(num):
+        assert np.array_equal(instances_objects == (i + 1), original_ids == (i + 1))
+    # visualize_2d.py: per-pixel ids into a uint8 label image, occlusion in percent, contours of
+    # the amodal masks.
+    seg = np.zeros(depth.shape, dtype=np.uint8)
+    nz = instances_objects != 0
+    seg[nz] = [int(x) for x in instances_objects[nz]]
+    assert np.array_equal(seg, original_ids.astype(np.uint8))
+    assert (occlusion * 100).dtype == np.float32
+    assert np.array_equal(np.asarray(instances_semantic, np.float32), rec.semantic)
+    # The amodal masks keep MetaGraspNet's bool (N, H, W) (contoured at level 0.8 there).
+    assert occlusion_masks.dtype == bool and np.array_equal(occlusion_masks, rec.amodal)
+    # colored_pcl.py: NaN -> 0 in a float32 depth (Open3D wants float32), cm -> m by 100.
+    assert depth.dtype == np.float32 and depth.flags.c_contiguous
+    depth[np.isnan(depth)] = 0.0
+    f = h5py.File(str(tmp_path / "3_scene.hdf5"), "r")
+    try:
+        g = f["non_colliding_grasps"]["paralleljaw"]
+        poses = list(g["franka_poses_relative_to_camera"])
+        widths = list(g["contact_width"])
+        ids = list(g["object_id"])
+        sa, ss = list(g["score_analytical"]), list(g["score_simulation"])
+        assert len(poses) == len(widths) == len(ids) == len(sa) == len(ss) == 5
+        for grasp_transform in poses:
+            before = grasp_transform[0, 3]
+            grasp_transform[0, 3] /= 100  # in place: needs a float dtype
+            assert grasp_transform[0, 3] == np.float32(before) / np.float32(100)
+        for name in ("contact_poses_relative_to_camera",):
+            assert g[name].dtype == np.float32
+        assert f["non_colliding_grasps"]["suctioncup"][
+            "suction_poses_relative_to_camera"
+        ].dtype == (np.float32)
+        keypts = list(f["keypts"]["com"]["keypts_relative_to_camera"])
+        assert all(k.dtype == np.float32 and k.shape == (4,) for k in keypts)
+    finally:
+        f.close()
+    # visualize_layout.py reads the order matrix with np.loadtxt.
+    order_mat = np.loadtxt(str(tmp_path / "3_order.csv"), delimiter=",")
+    assert order_mat.shape == (N, N)
