@@ -59,7 +59,7 @@ def load1() -> float:
 def _engine_mgn(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Callable]:
     import pyoidn
 
-    from mgn.render import CameraView, Intrinsics
+    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
     from mgn.render import path as mpath
 
     inp = ps.mgn_inputs(scene_json)
@@ -440,7 +440,9 @@ def run(
 
 def raster_ids(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
     """mgn's raster instance ids of the view (the labels' id image)."""
-    from mgn.render import CameraView, Instance, Intrinsics, Renderer
+    from mgn.render import Instance, Renderer
+
+    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
 
     c = desc.camera
     inp = ps.mgn_inputs(scene_json)

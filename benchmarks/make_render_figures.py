@@ -47,7 +47,9 @@ def save_png(rgb: np.ndarray, path: Path, max_kib: int = 400) -> None:
 
 
 def raster_rgb(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
-    from mgn.render import CameraView, Instance, Intrinsics, Renderer
+    from mgn.render import Instance, Renderer
+
+    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
 
     c = desc.camera
     inp = ps.mgn_inputs(scene_json)

@@ -121,6 +121,25 @@ class SceneDesc:
 # The scene (mgn side)
 
 
+def cameras() -> Any:
+    """The module with Intrinsics, CameraView and mgn_rig (mgn.scene.cameras; older layout:
+    mgn.render)."""
+    try:
+        from mgn.scene import cameras as mod
+    except ImportError:
+        from mgn import render as mod
+    return mod
+
+
+def tote_mesh_of(spec: Any) -> Any:
+    """The tote mesh with its material (mgn.objects.tote_mesh; older layout: mgn.render.views)."""
+    try:
+        from mgn.objects import tote_mesh
+    except ImportError:
+        from mgn.render.views import tote_mesh
+    return tote_mesh(spec)
+
+
 def drop(path: Path, names: tuple[str, ...] = OBJECT_NAMES, seed: int = DROP_SEED) -> Path:
     """Drop the benchmark objects (fixed seed) and write the scene JSON to ``path``."""
     from mgn.scene import compose_objects, drop_scene
@@ -222,7 +241,8 @@ def look_at_light(position: np.ndarray, target: np.ndarray) -> np.ndarray:
 
 def camera(width: int, view: int = VIEW) -> tuple[Any, np.ndarray]:
     """mgn Intrinsics (MetaGraspNet synthetic camera scaled to ``width``) and X_WC of ``view``."""
-    from mgn.render import Intrinsics, mgn_rig
+    cams = cameras()
+    Intrinsics, mgn_rig = cams.Intrinsics, cams.mgn_rig  # noqa: N806
 
     K = Intrinsics.mgn_synthetic().scaled(width / 1200)
     poses, _ = mgn_rig(RIG_SEED, (0.0, 0.0, 0.0))
@@ -231,7 +251,6 @@ def camera(width: int, view: int = VIEW) -> tuple[Any, np.ndarray]:
 
 def mgn_inputs(scene_json: Path) -> dict[str, Any]:
     """Everything mgn's PathScene takes: meshes, poses, ids, materials, lights, environment."""
-    from mgn.render.views import tote_mesh
     from mgn.scene import Scene
 
     scene = Scene.from_json(scene_json)
@@ -242,7 +261,7 @@ def mgn_inputs(scene_json: Path) -> dict[str, Any]:
         ids.append(int(inst))
         materials.append(pbr_materials(mesh))
         names.append(mesh.name)
-    tote = tote_mesh(scene.tote)
+    tote = tote_mesh_of(scene.tote)
     meshes.append(tote)
     poses.append(np.eye(4))
     ids.append(0)
