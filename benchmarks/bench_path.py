@@ -380,7 +380,9 @@ def run(
     cfg = QUICK if quick else FULL
     width, spps, ref_spp = cfg["width"], cfg["spps"], cfg["ref_spp"]
     reps = min(repeats, 2)
-    out_dir = out_dir or HERE
+    # The committed section comes from a full run; a quick run writes beside the temp files.
+    out_dir = out_dir or (Path(tempfile.gettempdir()) / "mgn_path_quick" if quick else HERE)
+    out_dir.mkdir(parents=True, exist_ok=True)
     if mgn is None:
         log(f"  path: {mgn_status}; nothing to compare")
         return []
