@@ -7,6 +7,8 @@ python -m pip install --quiet pybind11-stubgen
 out=$(mktemp -d)
 pybind11-stubgen mgn._core -o "$out" --numpy-array-wrap-with-annotated
 cp "$out/mgn/_core.pyi" python/mgn/_core.pyi
+# Pointer arguments defaulting to nullptr accept None: say so (mypy checks the callers).
+sed -E -i 's/: ([A-Za-z_.]+) = None,/: \1 | None = None,/' python/mgn/_core.pyi
 ruff check --fix --quiet python/mgn/_core.pyi >/dev/null 2>&1 || true
 ruff format python/mgn/_core.pyi >/dev/null 2>&1 || true
 echo "updated python/mgn/_core.pyi"

@@ -271,7 +271,7 @@ class Mesh:
         self,
         vertices: typing.Any,
         faces: typing.Any,
-        uvs: typing.Any = None,
+        uvs: typing.Any | None = None,
         materials: collections.abc.Sequence[Material] = [],
         face_materials: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [],
         name: str = "",
@@ -309,7 +309,7 @@ class RayScene:
     def __init__(
         self,
         meshes: collections.abc.Sequence[Mesh],
-        poses: typing.Any = None,
+        poses: typing.Any | None = None,
         instance_ids: typing.Any = None,
     ) -> None: ...
     def intersect(
@@ -507,7 +507,7 @@ class Renderer:
         randomize: bool = False,
         seed: typing.SupportsInt | typing.SupportsIndex = 0,
         view_index: typing.SupportsInt | typing.SupportsIndex = 0,
-        light_position: typing.Any = None,
+        light_position: typing.Any | None = None,
         light_intensity: typing.SupportsFloat | typing.SupportsIndex = 1.0,
         light_color_temperature: typing.SupportsFloat | typing.SupportsIndex = 6500.0,
         light_ambient: typing.SupportsFloat | typing.SupportsIndex = 0.25,
@@ -1145,7 +1145,7 @@ class ViewLabelModel:
         keypoints: collections.abc.Sequence[typing.Any],
         com_points: collections.abc.Sequence[typing.Any],
         coms: typing.Any,
-        tote: Mesh = None,
+        tote: Mesh | None = None,
         X_W_tote: typing.Any = None,
     ) -> None: ...
     def label_view(
