@@ -4,6 +4,7 @@
 // osmesa.h includes GL/gl.h; the 4.5 entry points come from glext.h (exported by libOSMesa).
 #include <GL/glext.h>
 
+#include <mgn/collision/point_inside.hpp>
 #include <mgn/core/error.hpp>
 #include <mgn/core/rng.hpp>
 #include <mgn/render/renderer.hpp>
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <numeric>
 #include <opencv2/core.hpp>
@@ -150,35 +152,8 @@ struct GpuMesh {
   /// camera is never inside, see check_camera_inside; the light is outside the scene bounds),
   /// so they are culled in every opaque pass (half the triangles to set up and rasterise).
   bool cull_back = false;
-  Points3f vertices;  // for the camera-inside test (closed meshes only)
-  Faces faces;
+  std::shared_ptr<const PointInsideTest> inside;  // camera-inside test (closed meshes only)
 };
-
-/// Whether point p (mesh frame) is inside a closed mesh: parity of crossings of a ray along an
-/// irrational direction (avoids edges and vertices of axis-aligned geometry).
-bool point_inside(const GpuMesh& m, const Vec3d& p) {
-  if ((p.array() < m.lo.array()).any() || (p.array() > m.hi.array()).any()) return false;
-  const Vec3d d = Vec3d(0.5773502, 0.6123724, 0.5400617).normalized();
-  int crossings = 0;
-  for (Eigen::Index f = 0; f < m.faces.rows(); ++f) {
-    const Vec3d a = m.vertices.row(m.faces(f, 0)).cast<double>().transpose();
-    const Vec3d b = m.vertices.row(m.faces(f, 1)).cast<double>().transpose();
-    const Vec3d c = m.vertices.row(m.faces(f, 2)).cast<double>().transpose();
-    const Vec3d e1 = b - a, e2 = c - a;
-    const Vec3d h = d.cross(e2);
-    const double det = e1.dot(h);
-    if (std::abs(det) < 1e-18) continue;
-    const double inv = 1.0 / det;
-    const Vec3d s = p - a;
-    const double u = s.dot(h) * inv;
-    if (u < 0.0 || u > 1.0) continue;
-    const Vec3d q = s.cross(e1);
-    const double v = d.dot(q) * inv;
-    if (v < 0.0 || u + v > 1.0) continue;
-    if (e2.dot(q) * inv > 0.0) ++crossings;
-  }
-  return crossings % 2 == 1;
-}
 
 void check_pose(const Pose& X, const char* what) {
   if (!X.matrix().allFinite()) throw_error<InvalidArgument>(what, ": pose has non-finite entries");
@@ -493,10 +468,7 @@ int Renderer::add_mesh(const Mesh& mesh) {
   const auto report = mesh.validate();
   g.closed = report.is_watertight;
   g.cull_back = report.is_watertight && report.is_outward;
-  if (g.closed) {
-    g.vertices = V;
-    g.faces = F;
-  }
+  if (g.closed) g.inside = std::make_shared<const PointInsideTest>(mesh);
   I.meshes.push_back(std::move(g));
   return static_cast<int>(I.meshes.size()) - 1;
 }
@@ -568,7 +540,7 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
       zmin = std::min(zmin, z);
       zmax = std::max(zmax, z);
     }
-    if (opt.check_camera_inside && m.closed && point_inside(m, in.X_WO.inverse() * eye)) {
+    if (opt.check_camera_inside && m.closed && m.inside->contains(in.X_WO.inverse() * eye)) {
       throw_error<InvalidArgument>("Renderer::render: the camera centre (", eye.x(), ", ", eye.y(),
                                    ", ", eye.z(), ") m is inside instance ", in.instance_id,
                                    " (mesh ", in.mesh_id,
