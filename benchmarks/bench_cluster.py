@@ -71,8 +71,8 @@ def child_main(argv: list[str]) -> int:
     a = p.parse_args(argv)
     from distributed import LocalCluster
 
-    from mgn.config import load_config
     from mgn.pipeline import generate
+    from mgn.pipeline.config import load_config
 
     config = load_config(SCENE_CONFIG)
     t0 = time.perf_counter()

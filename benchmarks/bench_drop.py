@@ -1,8 +1,8 @@
 """Scene drop: mgn.scene (Bullet in C++) against pybullet running the same drop.
 
 Both sides drop the same 20 built-in objects (the same convex parts: mgn's cached decomposition
-with the drop's part merging, `mgn.scene.convex.DROP_DECOMPOSITION`; the same masses and centres of
-mass, the same friction and restitution), from the same release poses (the ones mgn draws for the
+with the drop's part merging, `mgn.geometry.convex.DROP_DECOMPOSITION`; the same masses and centres
+of mass, the same friction and restitution), from the same release poses (the ones mgn draws for the
 seed), into the same tote (five static boxes), with the same time step, solver iterations and rest
 thresholds, and stop when every object has been at rest for the same time or at 7 s. pybullet is
 driven as a user writes it: a Python loop of `stepSimulation` and `getBaseVelocity`. Differences
@@ -60,17 +60,16 @@ def mgn_drop(objects: list) -> Any:
 
 def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
     """mgn's release poses and, per object, its convex parts and mass properties."""
-    from mgn.geometry import mass_properties
-    from mgn.io.model_folder import object_mesh
+    from mgn.geometry.convex import DROP_DECOMPOSITION, cached_convex_decomposition
+    from mgn.geometry.mesh import mass_properties
     from mgn.objects import ToteSpec
-    from mgn.scene import DropOptions, cached_convex_decomposition
-    from mgn.scene.convex import DROP_DECOMPOSITION
+    from mgn.scene import DropOptions
     from mgn.scene.drop import _simulate
 
     out, *_ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
     parts, props = [], []
     for s in objects:
-        mesh = object_mesh(s)
+        mesh = s.to_mesh()
         parts.append(cached_convex_decomposition(mesh, DROP_DECOMPOSITION))
         props.append(mass_properties(mesh, s.density))
     return out, parts, props

@@ -41,7 +41,7 @@ def run(
             r.mgn_status = mgn_status
         return rows
     from mgn.eval.grasps import DEFAULT_MATCH_ANGLE, DEFAULT_MATCH_DISTANCE, _match
-    from mgn.scene.scene_grasps import SceneGraspModel
+    from mgn.view_labels.grasps import SceneGraspModel
 
     scene = _scene(mgn)
     pj, su = _labels(mgn, scene, per_object)

@@ -30,7 +30,7 @@ SEED = 2024
 
 def _legacy_files(rec: Any) -> dict[str, bytes]:
     """The files of one view in the layout mgn wrote before (for the comparison)."""
-    from mgn.io.deterministic import npz_bytes
+    from mgn.base.deterministic import npz_bytes
     from mgn.io.scene_format import M_TO_CM, hdf5_bytes, png_bytes, to_cm
     from mgn.render.views import depth_picture
 
@@ -61,7 +61,7 @@ def _legacy_files(rec: Any) -> dict[str, bytes]:
 
 
 def _write_legacy(folder: Path, rec: Any) -> int:
-    from mgn.io.atomic import atomic_write_bytes
+    from mgn.base.atomic import atomic_write_bytes
 
     total = 0
     for name, data in _legacy_files(rec).items():
@@ -224,10 +224,10 @@ def run(
     if mgn is None:
         row.mgn_status = row.peer_status = mgn_status
         return [row]
-    from mgn.config import load_config
     from mgn.io.dataset import Dataset
     from mgn.io.scene_format import write_view
     from mgn.pipeline import generate
+    from mgn.pipeline.config import load_config
 
     root = bench_tempdir("mgn_bench_format_")
     log(f"  format: generating one scene ({n_views} views at {size} px), load {load_average()}")

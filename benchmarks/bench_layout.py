@@ -1,4 +1,5 @@
-"""Layout labels: mgn.scene.compute_layout against the same rules written with NumPy and SciPy.
+"""Layout labels: mgn.view_labels.layout.compute_layout against the same rules written with NumPy
+and SciPy.
 
 Synthetic view: 20 random overlapping ellipses with a random z order at 1200×1200 (600×600 in
 quick mode), rendered with a z-buffer; amodal masks, visible ids, depth and occlusion rates as the
@@ -107,7 +108,7 @@ def run(
     )
     cases: dict[str, Callable[[], object]] = {}
     if mgn is not None:
-        from mgn.scene import compute_layout
+        from mgn.view_labels.layout import compute_layout
 
         cats = np.arange(N_OBJECTS)
         bins = ["no_rel"] * N_OBJECTS

@@ -26,7 +26,7 @@ RESOLUTION = 160
 
 
 def _config(quick: bool) -> Any:
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
 
     points = 200 if quick else 1000
     return load_config(

@@ -71,8 +71,8 @@ def child_main(argv: list[str]) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--quick", action="store_true")
     a = p.parse_args(argv)
-    from mgn.config import load_config
     from mgn.pipeline import generate
+    from mgn.pipeline.config import load_config
 
     config = load_config(bench_config(a.quick))
     with tempfile.TemporaryDirectory() as tmp:

@@ -90,7 +90,6 @@ def run(
 ) -> list[Row]:
     import trimesh
 
-    from mgn.io.model_folder import object_mesh
     from mgn.objects import builtin_objects
 
     threads = thread_counts()
@@ -117,10 +116,10 @@ def run(
     )
     cases: dict[str, Callable[[], object]] = {}
     if mgn is not None:
-        from mgn.geometry import mass_properties
+        from mgn.geometry.mesh import mass_properties
         from mgn.pj import AntipodalSampler, label_object
 
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         props = mass_properties(mesh, spec.density)
         samples = mgn.sample_surface(mesh, num_points, method="even", seed=0)
         pts = np.asarray(samples.points, np.float64)

@@ -41,13 +41,12 @@ HERE = Path(__file__).resolve().parent
 
 def scene_items() -> list[tuple[Any, np.ndarray, int]]:
     """(mgn.Mesh, X_WO, instance id) of 20 built-in objects in a 5 x 4 grid in the tote."""
-    from mgn.io.model_folder import object_mesh
     from mgn.objects import builtin_objects
 
     specs = builtin_objects()[:N_OBJECTS]
     items = []
     for k, spec in enumerate(specs):
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         lo = np.asarray(mesh.bounds)[0]
         X = np.eye(4)
         yaw = 0.7 * k
@@ -59,13 +58,13 @@ def scene_items() -> list[tuple[Any, np.ndarray, int]]:
 
 def scene_triangles() -> int:
     """Triangles of the benchmark scene: its objects plus the tote."""
-    from mgn.render import tote_mesh
+    from mgn.objects import tote_mesh
 
     return sum(len(m.faces) for m, _, _ in scene_items()) + len(tote_mesh().faces)
 
 
 def camera(width: int) -> tuple[Any, np.ndarray]:
-    from mgn.render import Intrinsics, mgn_rig
+    from mgn.scene.cameras import Intrinsics, mgn_rig
 
     K = Intrinsics.mgn_synthetic().scaled(width / 1200)
     poses, _ = mgn_rig(2024, (0.0, 0.0, 0.0))
@@ -73,7 +72,9 @@ def camera(width: int) -> tuple[Any, np.ndarray]:
 
 
 def _side_mgn(width: int, views: list[int]) -> tuple[Callable[[int], tuple], Any]:
-    from mgn.render import CameraView, Instance, Renderer, tote_mesh
+    from mgn.objects import tote_mesh
+    from mgn.render import Instance, Renderer
+    from mgn.scene.cameras import CameraView
 
     K, poses = camera(width)
     r = Renderer(K.width, K.height)
@@ -96,7 +97,7 @@ def _side_pyrender(width: int, views: list[int]) -> tuple[Callable[[int], tuple]
     import trimesh
     from PIL import Image
 
-    from mgn.render import tote_mesh
+    from mgn.objects import tote_mesh
 
     K, poses = camera(width)
     scene = pyrender.Scene(ambient_light=(0.25, 0.25, 0.25), bg_color=(0, 0, 0, 0))

@@ -50,7 +50,7 @@ def _scene(mgn: Any):
 
 
 def _labels(mgn: Any, scene: Any, n: int):
-    from mgn.geometry import sample_surface
+    from mgn.geometry.mesh import sample_surface
     from mgn.pj.labels import PjLabels
     from mgn.suction.labels import SuctionLabels
 
@@ -111,8 +111,8 @@ def run(
         for r in rows:
             r.mgn_status = mgn_status
         return rows
-    from mgn.render.camera import mgn_views
-    from mgn.scene.scene_grasps import SceneGraspModel
+    from mgn.scene.cameras import mgn_views
+    from mgn.view_labels.grasps import SceneGraspModel
 
     scene = _scene(mgn)
     pj, su = _labels(mgn, scene, per_object)

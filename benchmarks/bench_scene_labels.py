@@ -1,4 +1,4 @@
-"""Scene labels per view, all stages together: :func:`mgn.scene.label.label_scene`.
+"""Scene labels per view, all stages together: :func:`mgn.pipeline.label_scene.label_scene`.
 
 The scene: the 20 built-in objects of the render benchmark (a 5 x 4 grid in the default tote),
 each with object labels of both kinds (cached in $MGN_CACHE_DIR; physics off: it does not change
@@ -28,8 +28,8 @@ LABEL_STAGES = ("object labels", "layout", "scene grasps")
 
 
 def _scene_and_labels() -> tuple[Any, list[Any]]:
-    from mgn.config import load_config
     from mgn.objects import ToteSpec, builtin_objects
+    from mgn.pipeline.config import load_config
     from mgn.pipeline.label_cache import object_labels
     from mgn.scene.scene import BUILTIN, Scene, SceneInstance
 
@@ -52,8 +52,8 @@ def _scene_and_labels() -> tuple[Any, list[Any]]:
 def run(
     quick: bool, repeats: int, mgn: Any, mgn_status: str, log: Callable[[str], None]
 ) -> list[Row]:
-    from mgn.render import CameraView
-    from mgn.scene.label import LabelOptions, label_scene
+    from mgn.pipeline.label_scene import LabelOptions, label_scene
+    from mgn.scene.cameras import CameraView
 
     width = 600 if quick else 1200
     views_idx = (0, 14) if quick else (0, 5, 14, 27)

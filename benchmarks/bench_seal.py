@@ -209,14 +209,13 @@ def _object_rows(
     log: Callable[[str], None],
 ) -> list[Row]:
     """The three rows of one object: evaluations/s, rays/s, the coherent-ray limit."""
-    from mgn.io.model_folder import object_mesh
     from mgn.objects import get_object
     from mgn.suction import FAILURE_REASONS, SealModel
 
     threads = thread_counts()
     tmax = threads[-1]
     rows: list[Row] = []
-    mesh = object_mesh(get_object(name))
+    mesh = get_object(name).to_mesh()
     samples = mgn.sample_surface(mesh, n_cand, method="even", seed=SAMPLE_SEED)
     points = np.ascontiguousarray(samples.points, np.float32)
     normals = np.ascontiguousarray(samples.normals, np.float32)

@@ -27,13 +27,12 @@ import numpy as np
 
 def real_grasps(name: str, n: int, seed: int = 0):
     from mgn.geometry import mass_properties
-    from mgn.io.model_folder import object_mesh
+    from mgn.geometry.convex import cached_convex_decomposition
     from mgn.objects import get_object
     from mgn.pj.labels import label_object
-    from mgn.scene.convex import cached_convex_decomposition
 
     spec = get_object(name)
-    mesh = object_mesh(spec)
+    mesh = spec.to_mesh()
     props = mass_properties(mesh, spec.density)
     labels = label_object(
         mesh, mass=props.mass, com=props.center_of_mass, num_points=1500, seed=seed

@@ -1,10 +1,10 @@
-"""Per-view object labels: mgn.scene.view_object_labels (Embree) against amodal masks rendered
-one object at a time with the OSMesa renderer.
+"""Per-view object labels: mgn.view_labels.objects.view_object_labels (Embree) against amodal
+masks rendered one object at a time with the OSMesa renderer.
 
 The frame: the 20 built-in objects of the render benchmark (a 5 x 4 grid on the floor of the
 default tote), seen from views of the MetaGraspNet rig at 1200 x 1200 (quick: 600 x 600). The
-scene's ray model (:class:`mgn.scene.SceneRayModel`) is built once, untimed, as a scene pipeline
-does for its 37 views. One timed call = the labels of one view:
+scene's ray model (:class:`mgn.view_labels.objects.SceneRayModel`) is built once, untimed, as a
+scene pipeline does for its 37 views. One timed call = the labels of one view:
 
 - mgn "masks": visible / semantic / amodal masks, occlusion, boxes, poses, CoM heat map
   (``keypoints=False``; the rendered depth is passed, as the scene pipeline has it, so the heat
@@ -34,11 +34,11 @@ VIEWS = (0, 14)
 
 
 def _setup(width: int) -> tuple[Any, Any, float, list[tuple[int, Any, np.ndarray, np.ndarray]]]:
-    from mgn.geometry import mass_properties
-    from mgn.io.model_folder import com_keypoints
-    from mgn.objects import builtin_objects
-    from mgn.render import CameraView, Instance, Renderer, tote_mesh
-    from mgn.scene import SceneRayModel
+    from mgn.geometry.mesh import mass_properties
+    from mgn.objects import builtin_objects, com_keypoints, tote_mesh
+    from mgn.render import Instance, Renderer
+    from mgn.scene.cameras import CameraView
+    from mgn.view_labels.objects import SceneRayModel
 
     items = scene_items()
     specs = builtin_objects()[:N_OBJECTS]
@@ -106,7 +106,7 @@ def run(
                 mgn_status=mgn_status,
             )
         ]
-    from mgn.scene import view_object_labels
+    from mgn.view_labels.objects import view_object_labels
 
     model, r, build, frames = _setup(width)
     log(f"  view labels: ray model of 20 objects + tote built in {1e3 * build:.0f} ms (untimed)")

@@ -60,8 +60,9 @@ def measure_limits(
     n = {"embree_coherent": len(cam_o), "embree_random": len(rnd_o)}
     renderer = None
     try:
-        from mgn.render import CameraView, Intrinsics, Renderer, look_at
+        from mgn.render import Renderer
         from mgn.render.renderer import Instance
+        from mgn.scene.cameras import CameraView, Intrinsics, look_at
 
         renderer = Renderer(1200, 1200)
         mid = renderer.add_mesh(mesh)

@@ -51,6 +51,14 @@ void bind_geometry(py::module_& m) {
             mat.texture_data.assign(s.begin(), s.end());
           },
           "compressed bytes of an embedded texture, or b''")
+      .def_readwrite("has_pbr", &Material::has_pbr,
+                     "True when metallic/roughness/ior/transmission are given (glTF, built-in)")
+      .def_readwrite("metallic", &Material::metallic, "[0,1] (glTF metallicFactor)")
+      .def_readwrite("roughness", &Material::roughness,
+                     "perceptual roughness [0,1] (glTF roughnessFactor)")
+      .def_readwrite("ior", &Material::ior, "index of refraction >= 1 (KHR_materials_ior)")
+      .def_readwrite("transmission", &Material::transmission,
+                     "[0,1], 1 = clear dielectric (KHR_materials_transmission)")
       .def("__repr__", [](const Material& mat) {
         return "Material(name='" + mat.name + "', opacity=" + std::to_string(mat.opacity) +
                (mat.texture_path.empty() ? "" : ", texture='" + mat.texture_path + "'") + ")";
@@ -202,7 +210,8 @@ void bind_geometry(py::module_& m) {
       py::arg("mesh"), py::arg("count"), py::arg("method") = "random", py::arg("seed") = 0,
       py::arg("oversampling") = 6);
 
-  m.def("make_box", [](const Vec3d& extents) { return make_box(extents); }, py::arg("extents"));
+  m.def(
+      "make_box", [](const Vec3d& extents) { return make_box(extents); }, py::arg("extents"));
   m.def("make_sphere", &make_sphere, py::arg("radius"), py::arg("segments") = 64,
         py::arg("rings") = 32);
   m.def("make_cylinder", &make_cylinder, py::arg("radius"), py::arg("height"),

@@ -17,16 +17,6 @@ namespace mgn::py_bind {
 
 namespace {
 
-py::array poses_to_numpy(const std::vector<Pose>& poses) {
-  py::array_t<double> out({static_cast<py::ssize_t>(poses.size()), py::ssize_t{4}, py::ssize_t{4}});
-  double* o = out.mutable_data();
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> M = poses[i].matrix();
-    std::copy(M.data(), M.data() + 16, o + 16 * i);
-  }
-  return out;
-}
-
 /// Moves an (H*W*C) vector into an (H, W[, C]) numpy array without copying.
 template <typename T>
 py::object image(std::vector<T>&& v, int h, int w, int c = 1) {

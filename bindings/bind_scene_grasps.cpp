@@ -1,5 +1,5 @@
 // Scene grasp labels (mgn/scene/scene_grasps.hpp): mgn._core.SceneGraspModel.
-// The typed façade is mgn.scene.scene_grasps.SceneGraspModel.
+// The typed façade is mgn.view_labels.grasps.SceneGraspModel.
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 #include <mgn/scene/scene_grasps.hpp>
@@ -15,17 +15,6 @@ using namespace mgn::py_conv;
 namespace mgn::py_bind {
 
 namespace {
-
-py::array poses_array(const std::vector<Pose>& poses) {
-  py::array_t<double> out({static_cast<py::ssize_t>(poses.size()), py::ssize_t{4}, py::ssize_t{4}});
-  auto r = out.mutable_unchecked<3>();
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const Mat4d& X = poses[i].matrix();
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) r(static_cast<py::ssize_t>(i), a, b) = X(a, b);
-  }
-  return out;
-}
 
 std::vector<float> floats(const py::dict& d, const char* key, const std::string& what) {
   if (!d.contains(key) || d[key].is_none()) return {};
@@ -46,8 +35,8 @@ py::handle item(const py::dict& d, const char* key, const std::string& what) {
 
 py::dict placed_dict(const PlacedGrasps& p, std::size_t num_offsets) {
   py::dict out;
-  out["tool_poses"] = poses_array(p.X_W_tool);
-  out["contact_poses"] = poses_array(p.X_W_contact);
+  out["tool_poses"] = poses_to_numpy(p.X_W_tool);
+  out["contact_poses"] = poses_to_numpy(p.X_W_contact);
   out["contacts"] = to_numpy(Points3d(p.contacts));
   out["second_contacts"] = to_numpy(Points3d(p.second_contacts));
   out["width"] = to_numpy(std::vector<float>(p.width));
@@ -242,11 +231,11 @@ void bind_scene_grasps(py::module_& m) {
             }
             py::dict out;
             out["pj_index"] = to_numpy(std::move(r.pj_index));
-            out["pj_tool"] = poses_array(r.pj_X_C_tool);
-            out["pj_contact"] = poses_array(r.pj_X_C_contact);
+            out["pj_tool"] = poses_to_numpy(r.pj_X_C_tool);
+            out["pj_contact"] = poses_to_numpy(r.pj_X_C_contact);
             out["suction_index"] = to_numpy(std::move(r.suction_index));
-            out["suction_tool"] = poses_array(r.suction_X_C_tool);
-            out["suction_contact"] = poses_array(r.suction_X_C_contact);
+            out["suction_tool"] = poses_to_numpy(r.suction_X_C_tool);
+            out["suction_contact"] = poses_to_numpy(r.suction_X_C_contact);
             return out;
           },
           py::arg("K"), py::arg("X_WC"), py::arg("seen"),

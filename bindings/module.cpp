@@ -1,4 +1,5 @@
-// mgn._core: registration only. Each C++ module is bound in its own bind_<module>.cpp.
+// mgn._core: registration only. bind_<module>.cpp binds a C++ module (cpp/include/mgn/<module>/);
+// a module bound in several files has bind_<module>_<header>.cpp (docs/architecture.md).
 #include <pybind11/pybind11.h>
 
 #include "exceptions.hpp"
@@ -10,14 +11,14 @@ PYBIND11_MODULE(_core, m) {
   mgn::py_bind::bind_geometry(m);
   mgn::py_bind::bind_raytrace(m);
   mgn::py_bind::bind_collision(m);
-  mgn::py_bind::bind_grasp(m);
-  mgn::py_bind::bind_calibration(m);
+  mgn::py_bind::bind_grasp_seal(m);
+  mgn::py_bind::bind_grasp_calibration(m);
   mgn::py_bind::bind_render(m);
-  mgn::py_bind::bind_path_tracer(m);
-  mgn::py_bind::bind_scene(m);
-  mgn::py_bind::bind_pj(m);
-  mgn::py_bind::bind_shake(m);
-  mgn::py_bind::bind_layout(m);
+  mgn::py_bind::bind_scene_drop(m);
+  mgn::py_bind::bind_grasp_antipodal(m);
+  mgn::py_bind::bind_grasp_shake_test(m);
+  mgn::py_bind::bind_scene_layout(m);
+  mgn::py_bind::bind_render_path_tracer(m);
   mgn::py_bind::bind_scene_grasps(m);
-  mgn::py_bind::bind_view_labels(m);
+  mgn::py_bind::bind_scene_view_labels(m);
 }

@@ -75,4 +75,15 @@ py::array pose_to_numpy(const Pose& X) {
   return out;
 }
 
+py::array poses_to_numpy(const std::vector<Pose>& poses) {
+  py::array_t<double> out({static_cast<py::ssize_t>(poses.size()), py::ssize_t{4}, py::ssize_t{4}});
+  auto a = out.mutable_unchecked<3>();
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const Mat4d M = poses[k].matrix();
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) a(static_cast<py::ssize_t>(k), r, c) = M(r, c);
+  }
+  return out;
+}
+
 }  // namespace mgn::py_conv

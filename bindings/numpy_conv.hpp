@@ -77,4 +77,7 @@ Pose to_pose(const py::handle& obj, const char* arg);
 /// Rigid pose -> (4,4) float64 array.
 py::array pose_to_numpy(const Pose& X);
 
+/// Rigid poses -> (N,4,4) float64 array.
+py::array poses_to_numpy(const std::vector<Pose>& poses);
+
 }  // namespace mgn::py_conv

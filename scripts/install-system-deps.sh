@@ -15,6 +15,7 @@ packages=(
   libosmesa6-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libgtest-dev libgmock-dev
+  clang-format
   chromium  # headless, only for the test that opens `mgn report` pages (tests/python)
 )
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Creates the virtual environment .venv (if missing) and installs mgn into it with the test
-# extras. Builds the C++ extension (scikit-build-core); takes about a minute on 2 cores.
+# extras and the dev extra (the pinned checkers scripts/test.sh runs). Builds the C++ extension (scikit-build-core); takes about a minute on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON="${PYTHON:-python3}"
@@ -9,5 +9,5 @@ if [ ! -x .venv/bin/python ]; then
 fi
 . .venv/bin/activate
 python -m pip install --quiet --upgrade pip
-python -m pip install --quiet ".[test]"
+python -m pip install --quiet ".[test,dev]"
 python -c "import mgn; print('mgn', mgn.__version__, 'installed in .venv')"

@@ -5,10 +5,12 @@ Units are SI (m, kg, s, N, rad); poses are (4, 4) float64 homogeneous transforms
 their frames, e.g. ``X_WO`` is the pose of object O in the world W.
 """
 
+from mgn import _core
 from mgn._core import __version__
-from mgn.collision import CollisionModel, DistanceResult, collide, distance
 from mgn.errors import BackendError, InvalidArgumentError, IoError, MgnError, UnsupportedError
-from mgn.geometry import (
+from mgn.geometry.collision import CollisionModel, DistanceResult, collide, distance
+from mgn.geometry.convex import convex_decomposition, convex_hull
+from mgn.geometry.mesh import (
     MassProperties,
     Material,
     Mesh,
@@ -21,10 +23,11 @@ from mgn.geometry import (
     mass_properties,
     sample_surface,
 )
+from mgn.geometry.raytrace import RayAllHits, RayHits, RayScene, camera_rays
 from mgn.io.dataset import Dataset
-from mgn.raytrace import RayAllHits, RayHits, RayScene, camera_rays
-from mgn.render import CameraView, Intrinsics, Renderer, mgn_rig, render_views
-from mgn.scene.convex import convex_decomposition, convex_hull
+from mgn.io.view_images import render_views
+from mgn.render import Renderer
+from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 
 __all__ = [
     "__version__",
@@ -66,6 +69,5 @@ __all__ = [
 
 def build_info() -> dict[str, str]:
     """Versions of mgn and of every C++ library the core was built against."""
-    from mgn import _core
 
     return dict(_core.build_info())

@@ -2,6 +2,6 @@
 
 import sys
 
-from mgn.cli import main
+from mgn.cli.main import main
 
 sys.exit(main())

@@ -123,12 +123,40 @@ class Material:
         self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[4, 1]"]
     ) -> None: ...
     @property
+    def has_pbr(self) -> bool:
+        """
+        True when metallic/roughness/ior/transmission are given (glTF, built-in)
+        """
+    @has_pbr.setter
+    def has_pbr(self, arg0: bool) -> None: ...
+    @property
+    def ior(self) -> float:
+        """
+        index of refraction >= 1 (KHR_materials_ior)
+        """
+    @ior.setter
+    def ior(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def metallic(self) -> float:
+        """
+        [0,1] (glTF metallicFactor)
+        """
+    @metallic.setter
+    def metallic(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
     def opacity(self) -> float:
         """
         1 opaque .. 0 invisible
         """
     @opacity.setter
     def opacity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def roughness(self) -> float:
+        """
+        perceptual roughness [0,1] (glTF roughnessFactor)
+        """
+    @roughness.setter
+    def roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def shininess(self) -> float:
         """
@@ -159,6 +187,13 @@ class Material:
         """
     @texture_path.setter
     def texture_path(self, arg0: str) -> None: ...
+    @property
+    def transmission(self) -> float:
+        """
+        [0,1], 1 = clear dielectric (KHR_materials_transmission)
+        """
+    @transmission.setter
+    def transmission(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
 
 class MeshReport:
     """
@@ -1097,7 +1132,7 @@ class ViewLabelModel:
         keypoints: collections.abc.Sequence[typing.Any],
         com_points: collections.abc.Sequence[typing.Any],
         coms: typing.Any,
-        tote: Mesh = None,
+        tote: Mesh | None = None,
         X_W_tote: typing.Any = None,
     ) -> None: ...
     def label_view(
@@ -1148,7 +1183,7 @@ def calibrate_cup(
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict:
     """
-    Fit c1, c2 of the cup to measured outcomes (see mgn.suction.calibrate).
+    Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).
     """
 
 def camera_rays(
@@ -1188,7 +1223,7 @@ def compute_layout(
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> dict:
     """
-    Layout labels of one view (see mgn/scene/layout.hpp); use mgn.scene.compute_layout.
+    Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.
     """
 
 def compute_mass_properties(

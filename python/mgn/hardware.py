@@ -13,6 +13,7 @@ centre along -z. The cup's z axis points from the cup into the surface (approach
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import math
 import os
@@ -21,6 +22,8 @@ from typing import Any, TypeVar
 
 import yaml
 
+from mgn.base.atomic import atomic_write_text
+from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError
 
 T = TypeVar("T", bound="_YamlDataclass")
@@ -65,15 +68,12 @@ class _YamlDataclass:
         """YAML text of the fields; also written to ``path`` when given."""
         text = yaml.safe_dump(self.to_dict(), sort_keys=False)
         if path is not None:
-            from mgn.io.atomic import atomic_write_text
-
             atomic_write_text(path, text)
         return text
 
     @classmethod
     def from_yaml(cls: type[T], path: str | os.PathLike[str]) -> T:
         """Read from a YAML file (keys as in :meth:`to_dict`; missing keys keep defaults)."""
-        from mgn.io.yaml_file import read_yaml
 
         data = read_yaml(path, f"{cls.__name__} YAML")
         if data is not None and not isinstance(data, dict):
@@ -153,7 +153,7 @@ class ParallelJawGripper(_YamlDataclass):
         g = super().from_yaml(path)
         base = os.path.dirname(os.path.abspath(path))
         fields = ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
-        resolved = {
+        resolved: dict[str, Any] = {
             f: os.path.join(base, getattr(g, f))
             for f in fields
             if getattr(g, f) is not None and not os.path.isabs(getattr(g, f))
@@ -269,7 +269,6 @@ def normalize_grasp_kind(kind: str) -> str:
 
 def grasp_kind_arg(text: str) -> str:
     """argparse ``type=`` of a grasp kind: the normalised name, or a usage error listing them."""
-    import argparse
 
     try:
         return normalize_grasp_kind(text)

@@ -92,8 +92,8 @@ SMALL_DATASET_SEED = 11
 def small_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Root of a generated dataset (SMALL_DATASET_CONFIG, seed SMALL_DATASET_SEED), made once per
     test session with its own label cache. Treat it as read-only."""
-    from mgn.config import load_config
     from mgn.pipeline import generate
+    from mgn.pipeline.config import load_config
 
     out = tmp_path_factory.mktemp("small_dataset") / "ds"
     cache = tmp_path_factory.mktemp("small_dataset_cache")

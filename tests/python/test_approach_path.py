@@ -12,12 +12,12 @@ from mgn.geometry import make_box, mass_properties
 from mgn.objects import ToteSpec
 from mgn.pj import label_object as pj_label_object
 from mgn.scene.drop import tote_mesh
-from mgn.scene.scene_grasps import (
+from mgn.suction.labels import label_object as suction_label_object
+from mgn.view_labels.grasps import (
     COLLISION_OBSTACLES,
     COLLISION_PARTS,
     SceneGraspModel,
 )
-from mgn.suction.labels import label_object as suction_label_object
 
 TOTE = tote_mesh(ToteSpec())  # inner 400 x 300 x 150 mm, floor top at z = 0 (tote frame = W)
 BOX = (0.04, 0.06, 0.05)
@@ -101,7 +101,7 @@ def test_collision_reasons_on_analytic_cases() -> None:
 
 def test_report_shows_why_grasps_collide(small_dataset, tmp_path) -> None:
     from mgn.io.dataset import Dataset
-    from mgn.report import collect_stats, write_report
+    from mgn.viz.report import collect_stats, write_report
 
     stats = collect_stats(Dataset(small_dataset))
     for kind in ("paralleljaw", "suctioncup"):

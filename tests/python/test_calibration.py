@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 
 import mgn
-from mgn.hardware import SuctionCup
-from mgn.suction import calibrate_from_csv, make_calibration_board, write_calibration_board
-from mgn.suction.board import PLATE_SIZE, TOP_Z, board_poses
-from mgn.suction.calibrate import (
+from mgn.calibration import calibrate_from_csv, make_calibration_board, write_calibration_board
+from mgn.calibration.board import PLATE_SIZE, TOP_Z, board_poses
+from mgn.calibration.fit import (
     calibrate,
     classification_metrics,
     predict_seals,
     read_results_csv,
 )
+from mgn.hardware import SuctionCup
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from mgn.cli import main
+from mgn.cli.main import main
 from mgn.objects import builtin_objects
 
 

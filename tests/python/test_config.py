@@ -9,16 +9,16 @@ from pathlib import Path
 import pytest
 import yaml
 
-from mgn.config import (
+from mgn.errors import InvalidArgumentError, IoError
+from mgn.hardware import ParallelJawGripper, SuctionCup
+from mgn.objects import ToteSpec
+from mgn.pipeline.config import (
     Config,
     ConfigError,
     default_config,
     dump_config,
     load_config,
 )
-from mgn.errors import InvalidArgumentError, IoError
-from mgn.hardware import ParallelJawGripper, SuctionCup
-from mgn.objects import ToteSpec
 from mgn.scene import DropOptions
 
 
@@ -68,7 +68,7 @@ def test_dump_then_load_gives_the_same_config(tmp_path: Path) -> None:
 
 
 def test_cli_dump_prints_the_defaults(capsys: pytest.CaptureFixture, tmp_path: Path) -> None:
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     assert main(["config", "dump"]) == 0
     assert load_config(yaml.safe_load(capsys.readouterr().out)) == Config()

@@ -15,9 +15,9 @@ import trimesh
 import yaml
 
 from mgn.cli import main
-from mgn.config import load_config
 from mgn.io.validate import validate_dataset
 from mgn.objects.user import ImplausibleSizeWarning
+from mgn.pipeline.config import load_config
 from mgn.pipeline.sanity import config_warnings
 
 

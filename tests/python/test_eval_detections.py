@@ -399,7 +399,7 @@ def test_small_dataset_matches_plain_cocoeval(small_dataset: Path) -> None:
 
 
 def test_cli_detections(small_dataset: Path, tmp_path: Path, capsys) -> None:
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     pred = tmp_path / "pred.json"
     pred.write_text(json.dumps(ground_truth_detections(small_dataset, class_agnostic=True)))

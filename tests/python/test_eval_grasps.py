@@ -10,9 +10,9 @@ import pytest
 
 import mgn
 from mgn.eval.grasps import evaluate_grasps, ground_truth_grasps
+from mgn.pipeline.label_scene import LabelOptions
 from mgn.scene import Scene
-from mgn.scene.label import LabelOptions
-from mgn.scene.scene_grasps import SceneGraspModel
+from mgn.view_labels.grasps import SceneGraspModel
 
 GROUP = {"suction": "suctioncup", "paralleljaw": "paralleljaw"}
 
@@ -24,7 +24,7 @@ def _views(root):
 
 def _model(root, scene_id: int) -> SceneGraspModel:
     """The scene's collision model rebuilt from the dataset, as the evaluation does."""
-    from mgn.config import Config
+    from mgn.pipeline.config import Config
 
     ds = mgn.Dataset(root)
     cfg = Config.from_dict(ds.info["config"])
@@ -430,7 +430,7 @@ def test_bad_input_gives_clear_errors(small_dataset, tmp_path):
 
 
 def test_cli_prints_the_table_and_writes_json(small_dataset, tmp_path, capsys):
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     preds = [e for e in ground_truth_grasps(small_dataset, "suction", min_score=0.4)
              if e["grasps"]]  # fmt: skip

@@ -132,7 +132,7 @@ def test_small_dataset_ground_truth(small_dataset: Path) -> None:
 
 
 def test_cli_layout(small_dataset: Path, tmp_path: Path, capsys) -> None:
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     pred = tmp_path / "layout.json"
     pred.write_text(json.dumps(ground_truth_layout(small_dataset)))

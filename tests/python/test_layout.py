@@ -1,5 +1,6 @@
-"""Layout labels (mgn.scene.compute_layout) on hand-built label images with known answers, and
-against a brute-force NumPy/SciPy re-implementation of the documented rules on random stacks."""
+"""Layout labels (mgn.view_labels.layout.compute_layout) on hand-built label images with known
+answers, and against a brute-force NumPy/SciPy re-implementation of the documented rules on random
+stacks."""
 
 from __future__ import annotations
 
@@ -10,12 +11,8 @@ import pytest
 from scipy import ndimage
 
 from mgn.errors import InvalidArgumentError
-from mgn.scene import (
-    Layout,
-    compute_layout,
-    read_order_csv,
-    read_order_json,
-)
+from mgn.io.order_files import read_order_csv, read_order_json
+from mgn.view_labels.layout import Layout, compute_layout
 
 # ----------------------------------------------------------------------------------------------
 # Synthetic views: shapes at constant depths, rendered with a z-buffer written here.

@@ -6,13 +6,12 @@ import pytest
 
 import mgn
 from mgn.io import read_model_folder, write_model_folder
-from mgn.io.model_folder import NUM_COM_KEYPOINTS, object_mesh
-from mgn.objects import builtin_objects, get_object
+from mgn.objects import NUM_COM_KEYPOINTS, builtin_objects, get_object
 
 
 @pytest.mark.parametrize("spec", builtin_objects(), ids=lambda s: s.name)
 def test_builtin_object_is_a_valid_solid_in_mgn(spec):
-    mesh = object_mesh(spec)
+    mesh = spec.to_mesh()
     report = mesh.validate()
     assert report.is_watertight and report.is_outward, report
     props = mgn.mass_properties(mesh, spec.density)
@@ -61,7 +60,7 @@ def test_round_trip_keeps_geometry_material_and_mass(exported):
     _, specs, folders = exported
     for spec, folder in zip(specs, folders, strict=True):
         mf = read_model_folder(folder)
-        original = object_mesh(spec)
+        original = spec.to_mesh()
         assert mf.mesh.validate().is_outward
         v0 = mgn.mass_properties(original, spec.density)
         v1 = mgn.mass_properties(mf.mesh, spec.density)

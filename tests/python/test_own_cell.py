@@ -14,10 +14,10 @@ import pytest
 
 import mgn
 from mgn.cli import main
-from mgn.config import ConfigError, load_config
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.objects import load_objects_yaml
 from mgn.objects.user import ImplausibleSizeWarning
+from mgn.pipeline.config import ConfigError, load_config
 
 CUBE_OBJ = """v -0.02 -0.02 -0.02
 v 0.02 -0.02 -0.02
@@ -398,7 +398,7 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
         X, _ = loaded.graph[f"camera_{v}"]
         np.testing.assert_allclose(to_tote @ X, cam.X_WC, atol=1e-6)
     # The grasps are coloured by score (red 0 -> green 1), best first: rank 0 is the greenest.
-    from mgn.scene.export import score_colors
+    from mgn.viz.scene_export import score_colors
 
     assert tuple(score_colors([0.0])[0][:3]) == (255, 0, 26)
     assert tuple(score_colors([1.0])[0][:3]) == (0, 255, 26)
@@ -413,7 +413,7 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
         greenness = [c[1] - c[0] for c in rgba]
         assert greenness == sorted(greenness, reverse=True)
     with pytest.raises(InvalidArgumentError, match="unknown grasp kind 'vacuum'"):
-        from mgn.scene.export import export_scene_glb
+        from mgn.viz.scene_export import export_scene_glb
 
         export_scene_glb(scene, tmp_path / "x.glb", grasps="vacuum")
 
@@ -476,7 +476,7 @@ def test_user_bin_mesh_objects_drop_inside(tmp_path):
 
 
 def test_grasp_kinds_have_one_name_and_aliases(capsys):
-    from mgn.cli import build_parser
+    from mgn.cli.main import build_parser
     from mgn.hardware import normalize_grasp_kind
 
     for alias, name in [("suction", "suction"), ("suctioncup", "suction"), ("Suction-Cup",

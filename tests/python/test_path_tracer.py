@@ -13,7 +13,6 @@ import pytest
 
 from mgn.errors import InvalidArgumentError
 from mgn.geometry import make_box, make_sphere, mesh_from_arrays
-from mgn.render import CameraView, Intrinsics, look_at
 from mgn.render.path import (
     AreaLight,
     Environment,
@@ -23,6 +22,7 @@ from mgn.render.path import (
     PbrMaterial,
     develop,
 )
+from mgn.scene.cameras import CameraView, Intrinsics, look_at
 
 LAMBERT_WHITE = PbrMaterial(base_color=(1.0, 1.0, 1.0), ior=1.0, roughness=1.0)
 
@@ -250,13 +250,11 @@ def test_glass_sphere_total_internal_reflection_keeps_energy():
 
 
 def tote_scene_items(n_objects: int = 6):
-    from mgn.io.model_folder import object_mesh
-    from mgn.objects import builtin_objects
-    from mgn.render import tote_mesh
+    from mgn.objects import builtin_objects, tote_mesh
 
     items = []
     for k, spec in enumerate(builtin_objects()[:n_objects]):
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         lo = np.asarray(mesh.bounds)[0]
         X = np.eye(4)
         yaw = 0.7 * k
@@ -276,7 +274,8 @@ def path_scene(items, lights=(), env=None):
 
 
 def test_primary_ids_and_depth_agree_with_raster_renderer():
-    from mgn.render import Instance, Renderer, mgn_rig
+    from mgn.render import Instance, Renderer
+    from mgn.scene.cameras import mgn_rig
 
     items = tote_scene_items()
     K = Intrinsics.mgn_synthetic().scaled(0.12)

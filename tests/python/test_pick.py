@@ -22,7 +22,7 @@ LOWER, UPPER = "box_shoe", "box_tea"  # 240 x 150 x 90 mm and 125 x 75 x 65 mm
 def pick_config(tmp_path_factory: pytest.TempPathFactory):
     """A config with tiny object labels (suction only is computed for suction runs), and a
     private label cache for this module."""
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
 
     cache = tmp_path_factory.mktemp("pick_cache")
     with pytest.MonkeyPatch.context() as mp:
@@ -229,7 +229,7 @@ def test_bad_input_is_rejected_clearly(stack, pick_config):
 
 def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_path, capsys):
     import mgn
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     scene = mgn.Dataset(small_dataset).scenes()[0]
     n = len(json.loads((scene.folder / "scene.json").read_text())["instances"])
@@ -246,7 +246,7 @@ def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_pa
     assert doc["policy"] == "label" and doc["gripper"] == "suction"
     assert (out / "picking.gif").is_file() and (out / "step_000.png").is_file()
     # The dataset's config was used: the labels cached are those of its object-label settings.
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
     from mgn.pipeline.label_cache import label_keys
     from mgn.scene import Scene
 
@@ -258,7 +258,7 @@ def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_pa
 
 
 def test_cli_reports_an_unknown_policy(single_box, tmp_path, capsys):
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     path = single_box.to_json(tmp_path / "scene.json")
     code = main(["pick", str(path), "--policy", "nonsense", "--out", str(tmp_path / "o")])

@@ -17,11 +17,12 @@ import numpy as np
 import pytest
 from conftest import check_difficulty, coco_ground_truth_ap
 
-from mgn.config import Config, load_config
+from mgn.base.deterministic import NPZ_DATE_TIME, h5_create_dataset, h5_create_group, npz_bytes
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.io.deterministic import NPZ_DATE_TIME, h5_create_dataset, h5_create_group, npz_bytes
+from mgn.io.manifest import check_manifest, write_manifest
 from mgn.io.scene_format import view_file_names
-from mgn.pipeline import check_manifest, generate, scene_seed, scene_views, write_manifest
+from mgn.pipeline import generate, scene_seed, scene_views
+from mgn.pipeline.config import Config, load_config
 
 # 2 scenes x 3 views at 120 x 120 px, few objects, tiny label sizes.
 SMALL = {
@@ -109,7 +110,7 @@ def test_reference_dataset_validates_reads_and_exports(
     from PIL import Image
     from pycocotools.coco import COCO
 
-    from mgn.cli import main
+    from mgn.cli.main import main
     from mgn.io import coco
     from mgn.io.dataset import Dataset
     from mgn.io.validate import validate_dataset
@@ -194,7 +195,7 @@ def dying(scene, folder, config, labels):
         os.kill(os.getpid(), signal.SIGKILL)  # killed mid-scene
     return stages
 sw.write_scene = dying
-from mgn.config import load_config
+from mgn.pipeline.config import load_config
 from mgn.pipeline import generate
 generate(sys.argv[1], 2, config=load_config({config!r}), seed={seed}, progress=False)
 """
@@ -326,7 +327,7 @@ def test_disk_full_is_reported_with_the_path(
     tmp_path: Path, env: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
 ) -> None:
     import mgn.pipeline.scene_writer as sw
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     def full(scene, folder, config, labels):  # noqa: ANN001
         path = Path(folder) / "0_rgb.png"
@@ -367,8 +368,8 @@ def test_bad_arguments_are_refused_before_writing(tmp_path: Path, env: Path) -> 
 
 def test_scene_views_follow_the_rig() -> None:
     from mgn.objects import ToteSpec
-    from mgn.render import hemisphere_rig, mgn_rig
     from mgn.scene import Scene
+    from mgn.scene.cameras import hemisphere_rig, mgn_rig
 
     scene = Scene((), ToteSpec(), 11)
     cfg = load_config({"camera": {"views": [0, 5, 17], "resolution_scale": 0.5}})

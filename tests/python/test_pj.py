@@ -15,9 +15,10 @@ import pytest
 import trimesh
 
 import mgn
-from mgn.cli import main
-from mgn.geometry import make_box, make_sphere, mass_properties
+from mgn.cli.main import main
+from mgn.geometry.mesh import make_box, make_sphere, mass_properties
 from mgn.hardware import ParallelJawGripper
+from mgn.io.grasp_file import read_pj_labels, write_pj_labels
 from mgn.io.model_folder import write_model_folder
 from mgn.objects import builtin_objects
 from mgn.pj import (
@@ -27,8 +28,6 @@ from mgn.pj import (
     hand_poses,
     label_object,
     pj_wrench_scores,
-    read_pj_labels,
-    write_pj_labels,
 )
 
 BOX = (0.04, 0.06, 0.12)  # x and y graspable (< 80 mm), z not

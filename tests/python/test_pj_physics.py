@@ -1,4 +1,4 @@
-"""The Bullet shake test through mgn.pj.physics, and its pictures (mgn.pj.show_trial)."""
+"""The Bullet shake test through mgn.pj.physics, and its pictures (mgn.viz.shake_trial)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import mgn
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import ParallelJawGripper
 from mgn.pj.physics import ShakeOptions, grasp_rows, shake_scores, shake_trajectory
-from mgn.pj.show_trial import register_show_trial, render_frames, write_trial_pictures
+from mgn.viz.shake_trial import register_show_trial, render_frames, write_trial_pictures
 
 
 def box_object(size, mass):

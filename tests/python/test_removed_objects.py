@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from mgn.config import load_config
 from mgn.pipeline import generate
-from mgn.report import write_report
+from mgn.pipeline.config import load_config
+from mgn.viz.report import write_report
 
 # 24 large cereal boxes cannot all lie in a 400 x 300 x 150 mm tote: some leave it.
 OVERFULL = {

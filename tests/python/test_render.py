@@ -9,29 +9,17 @@ import pytest
 from conftest import translation
 
 import mgn
-from mgn.io.model_folder import object_mesh
-from mgn.objects import get_object
-from mgn.render import (
-    CameraView,
-    Instance,
-    Intrinsics,
-    Renderer,
-    apply_depth_sensor,
-    hemisphere_rig,
-    mgn_rig,
-    mgn_rig_from_params,
-    render_views,
-    sensor_params,
-    surface_flags,
-    tote_mesh,
-)
+from mgn.io.view_images import render_views
+from mgn.objects import get_object, tote_mesh
+from mgn.render import Instance, Renderer, apply_depth_sensor, sensor_params, surface_flags
+from mgn.scene.cameras import CameraView, Intrinsics, hemisphere_rig, mgn_rig, mgn_rig_from_params
 
 SMALL = Intrinsics.mgn_synthetic().scaled(0.25)  # 300 x 300, same field of view
 
 
 def place(spec_name: str, x: float, y: float, yaw: float = 0.0) -> tuple[mgn.Mesh, np.ndarray]:
     """A built-in object resting on the tote floor (z = 0) at (x, y), turned by yaw."""
-    mesh = object_mesh(get_object(spec_name))
+    mesh = get_object(spec_name).to_mesh()
     X = translation(x, y, -float(np.asarray(mesh.bounds)[0, 2]))
     c, s = math.cos(yaw), math.sin(yaw)
     X[:2, :2] = [[c, -s], [s, c]]
@@ -183,7 +171,7 @@ def test_amodal_pass_of_a_subset(scene) -> None:
 def test_bad_input_gives_clear_errors(scene) -> None:
     r = Renderer(64, 64)
     K = Intrinsics(64, 64, 80.0, 80.0, 32.0, 32.0)
-    view = CameraView(K, mgn.render.look_at((0, 0, 1.0), (0, 0, 0), (0, 1, 0)))
+    view = CameraView(K, mgn.scene.cameras.look_at((0, 0, 1.0), (0, 0, 0), (0, 1, 0)))
     with pytest.raises(mgn.InvalidArgumentError, match="nothing to draw"):
         r.render(view)  # empty scene
     with pytest.raises(ValueError, match="non-finite"):
@@ -233,7 +221,7 @@ def test_render_views_writes_images(scene, tmp_path) -> None:
 
 
 def test_builtin_textures_reach_the_mesh() -> None:
-    mesh = object_mesh(get_object("box_cereal"))
+    mesh = get_object("box_cereal").to_mesh()
     data = mesh.materials[0].texture_data
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -241,7 +229,7 @@ def test_builtin_textures_reach_the_mesh() -> None:
 def test_cli_rig_prints_the_37_poses(capsys) -> None:
     import json
 
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     assert main(["render", "rig", "--seed", "5", "--target", "0", "0", "0"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -272,7 +260,7 @@ def test_texture_orientation_follows_the_obj_uv_convention() -> None:
     r.set_instances([Instance(r.add_mesh(quad), np.eye(4), 1)])
     K = Intrinsics(64, 64, 100.0, 100.0, 32.0, 32.0)
     # Straight down, image up = world +y, image right = world +x.
-    view = CameraView(K, mgn.render.look_at((0, 0, 0.5), (0, 0, 0), (0, 1, 0)))
+    view = CameraView(K, mgn.scene.cameras.look_at((0, 0, 0.5), (0, 0, 0), (0, 1, 0)))
     rgb = r.render(view, shadows=False).rgb.astype(int)
     tl, tr, bl, br = rgb[20, 20], rgb[20, 44], rgb[44, 20], rgb[44, 44]
     assert tl[0] > 2 * max(tl[1], tl[2])  # red

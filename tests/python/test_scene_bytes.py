@@ -12,7 +12,7 @@ import pytest
 
 from mgn.io.dataset import View
 from mgn.io.scene_format import ViewRecord, write_view
-from mgn.render.camera import Intrinsics
+from mgn.scene.cameras import Intrinsics
 
 H, W, N = 48, 64, 3
 

@@ -8,18 +8,14 @@ import numpy as np
 import pytest
 
 import mgn
-from mgn.io.model_folder import object_mesh
-from mgn.objects import ToteSpec, get_object
-from mgn.scene import (
+from mgn.geometry.convex import (
     ConvexDecompositionOptions,
-    DropOptions,
-    Scene,
     cached_convex_decomposition,
-    compose_objects,
     convex_decomposition,
     convex_hull,
-    drop_scene,
 )
+from mgn.objects import ToteSpec, get_object
+from mgn.scene import DropOptions, Scene, compose_objects, drop_scene
 
 TOL = 0.003  # m: allowed interpenetration / overshoot after settling
 
@@ -46,7 +42,7 @@ def _outside(part, points: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("name", ["mug", "l_bracket", "hex_nut", "clamp"])
 def test_decomposition_covers_the_object_and_matches_its_volume(name):
-    mesh = object_mesh(get_object(name))
+    mesh = get_object(name).to_mesh()
     parts = convex_decomposition(mesh)
     hull = convex_hull(mesh)
     assert len(parts) >= 2  # all four are clearly non-convex
@@ -72,7 +68,7 @@ def test_convex_object_gives_its_single_hull():
 
 def test_cache_is_written_reused_and_survives_corruption(tmp_path, monkeypatch):
     monkeypatch.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
-    mesh = object_mesh(get_object("l_bracket"))
+    mesh = get_object("l_bracket").to_mesh()
     first = cached_convex_decomposition(mesh)
     files = list((tmp_path / "cache" / "convex").glob("*.npz"))
     assert len(files) == 1
@@ -219,11 +215,11 @@ def test_bad_input_gives_clear_errors():
     with pytest.raises(mgn.InvalidArgumentError, match="seed"):
         drop_scene(cube, seed=-1)
     with pytest.raises(mgn.InvalidArgumentError):
-        convex_decomposition(object_mesh(cube[0]), ConvexDecompositionOptions(max_parts=0))
+        convex_decomposition(cube[0].to_mesh(), ConvexDecompositionOptions(max_parts=0))
 
 
 def test_cli_scene_drop(tmp_path, capsys):
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     out = tmp_path / "s.json"
     assert (
@@ -319,7 +315,7 @@ def test_bad_drop_options_are_rejected_when_made(kwargs, match):
 
 @pytest.mark.parametrize("name", ["hex_nut", "cable_coil"])
 def test_merged_parts_still_cover_the_object_and_respect_cap_and_budget(name):
-    mesh = object_mesh(get_object(name))
+    mesh = get_object(name).to_mesh()
     base = ConvexDecompositionOptions()
     plain = convex_decomposition(mesh, base)
     v_hull = _volume(convex_hull(mesh))
@@ -366,7 +362,7 @@ def test_round_objects_rest_on_the_floor_and_do_not_overlap():
     ball = get_object("tennis_ball")
     scene = drop_scene([ball], seed=2)
     (inst,) = scene.instances
-    v = np.asarray(object_mesh(ball).vertices, np.float64)
+    v = np.asarray(ball.to_mesh().vertices, np.float64)
     z = v @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3]
     assert abs(z[:, 2].min()) < 3e-4
     pile = drop_scene([ball] * 6, seed=4)

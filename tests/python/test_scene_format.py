@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from conftest import coco_ground_truth_ap
 
+from mgn.base.deterministic import npz_bytes
 from mgn.io.coco import coco_dict, export_coco, rle
 from mgn.io.dataset import Dataset, intrinsics_from_params
-from mgn.io.deterministic import npz_bytes
 from mgn.io.scene_format import (
     ViewRecord,
     from_cm,
@@ -24,7 +24,7 @@ from mgn.io.scene_format import (
     write_view,
 )
 from mgn.io.validate import validate_dataset
-from mgn.render.camera import Intrinsics
+from mgn.scene.cameras import Intrinsics
 
 H, W = 40, 60
 
@@ -293,7 +293,7 @@ def test_dataset_errors(tmp_path):
 
 
 def test_validate_and_coco_commands(dataset, tmp_path, capsys):
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     assert main(["validate", str(dataset)]) == 0
     assert "valid" in capsys.readouterr().out
@@ -309,8 +309,8 @@ def test_validate_and_coco_commands(dataset, tmp_path, capsys):
 def test_show_draws_the_view(dataset, tmp_path):
     from PIL import Image
 
-    from mgn.cli import main
-    from mgn.overlay import instance_colors, project, render_overlay
+    from mgn.cli.main import main
+    from mgn.viz.overlay import instance_colors, project, render_overlay
 
     out = tmp_path / "v.png"
     assert main(["show", str(dataset), "--scene", "0", "--view", "1", "--grasps", "pj",
@@ -337,7 +337,7 @@ def test_show_outline_mode_panels_and_a_single_scene_folder(dataset, tmp_path):
     from PIL import Image
 
     from mgn.cli import main
-    from mgn.overlay import render_overlay
+    from mgn.viz.overlay import render_overlay
 
     view = Dataset(dataset).scene(0).view(1)
     inst = view.instances
@@ -369,8 +369,8 @@ def test_show_outline_mode_panels_and_a_single_scene_folder(dataset, tmp_path):
 
 
 def test_report_is_a_self_contained_page(dataset, tmp_path):
-    from mgn.cli import main
-    from mgn.report import collect_stats
+    from mgn.cli.main import main
+    from mgn.viz.report import collect_stats
 
     out = tmp_path / "r.html"
     assert main(["report", str(dataset), "-o", str(out)]) == 0

@@ -8,17 +8,17 @@ import pytest
 from conftest import translation
 
 import mgn
-from mgn.geometry import make_box, make_cylinder, mass_properties
+from mgn.geometry.mesh import make_box, make_cylinder, mass_properties
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.pj.labels import PjLabels
 from mgn.pj.labels import label_object as pj_label_object
 from mgn.pj.sampler import gripper_meshes, pj_wrench_scores
-from mgn.render.camera import CameraView, Intrinsics, look_at
 from mgn.scene import Scene, SceneInstance
-from mgn.scene.scene_grasps import SceneGraspModel
+from mgn.scene.cameras import CameraView, Intrinsics, look_at
 from mgn.suction.labels import CUP_BODY_CLEARANCE, SuctionLabels
 from mgn.suction.labels import label_object as suction_label_object
 from mgn.suction.seal import suction_wrench_scores
+from mgn.view_labels.grasps import SceneGraspModel
 
 BOX = (0.04, 0.06, 0.05)
 FLOOR = make_box((0.8, 0.8, 0.01))
@@ -181,7 +181,7 @@ def test_collisions_agree_with_python_fcl_on_a_real_scene(real_scene):
     # path between them is tested in test_approach_path.py).
     m = SceneGraspModel(scene, pj, su, num_threads=2, approach_step=1.0)
     assert len(m.pj) == sum(len(p) for p in pj) > 0
-    from mgn.render.views import tote_mesh
+    from mgn.objects import tote_mesh
 
     n = len(scene.instances)
     obstacles = [_fcl_object(scene.mesh(i), scene.instances[i].X_WO) for i in range(n)]

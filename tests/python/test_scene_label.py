@@ -15,8 +15,8 @@ from conftest import check_difficulty
 from mgn.io.dataset import Dataset
 from mgn.io.validate import validate_dataset
 from mgn.objects import ToteSpec, get_object
-from mgn.render.camera import CameraView, Intrinsics, mgn_rig
-from mgn.scene.label import LabelOptions, label_scene
+from mgn.pipeline.label_scene import LabelOptions, label_scene
+from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 from mgn.scene.scene import BUILTIN, Scene, SceneInstance
 
 VIEWS = (0, 3, 20)
@@ -51,7 +51,7 @@ def _views(scale: float = 0.2) -> list[tuple[int, CameraView]]:
 
 @pytest.fixture(scope="module")
 def object_labels(tmp_path_factory):
-    from mgn.config import load_config
+    from mgn.pipeline.config import load_config
     from mgn.pipeline.label_cache import object_labels as labels_of
 
     config = load_config({
@@ -192,7 +192,7 @@ def test_bad_input(tmp_path):
 
 
 def test_scene_label_command(tmp_path):
-    from mgn.cli import main
+    from mgn.cli.main import main
 
     _scene().to_json(tmp_path / "scene.json")
     cfg = tmp_path / "cfg.yaml"
@@ -213,7 +213,7 @@ def test_scene_label_command(tmp_path):
 
 
 def test_strided_subset_keeps_grasps_evenly(object_labels):
-    from mgn.scene.label import strided_subset
+    from mgn.pipeline.label_scene import strided_subset
 
     pj = object_labels[1].paralleljaw  # the cube (the shoe box is wider than the gripper)
     m = len(pj.width)

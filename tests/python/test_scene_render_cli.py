@@ -3,7 +3,7 @@
 import numpy as np
 from PIL import Image
 
-from mgn.cli import main
+from mgn.cli.main import main
 from mgn.objects import ToteSpec, get_object
 from mgn.scene.scene import Scene, SceneInstance
 

@@ -1,6 +1,7 @@
 """The committed type stubs of the compiled core cover every public name (scripts/gen-stubs.sh)."""
 
 import ast
+import re
 from pathlib import Path
 
 import mgn
@@ -26,3 +27,97 @@ def test_stub_declares_every_public_name_and_method():
 
 def test_package_is_marked_typed():
     assert STUB.with_name("py.typed").is_file()
+
+
+def _split_params(text: str) -> list[str]:
+    """Top-level comma split of a parameter list (brackets and quotes nest)."""
+    parts, depth, cur, quote = [], 0, "", None
+    for ch in text:
+        if quote:
+            quote = None if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append(cur.strip())
+            cur = ""
+            continue
+        cur += ch
+    if cur.strip():
+        parts.append(cur.strip())
+    return parts
+
+
+def _runtime_signatures(obj: object, name: str) -> set[tuple[tuple[str, bool], ...]]:
+    """(parameter name, has default) per overload, from pybind11's docstring signature lines."""
+    found = set()
+    for line in (getattr(obj, "__doc__", None) or "").splitlines():
+        m = re.match(rf"^(?:\d+\. )?{re.escape(name)}\((.*)\) -> ", line)
+        if m is None:
+            continue
+        params = []
+        for p in _split_params(m.group(1)):
+            pname = p.split(":", 1)[0].split("=", 1)[0].strip()
+            if pname in ("*", "/") or pname.startswith("*"):
+                continue
+            params.append((pname, "=" in p.split(":", 1)[-1] or "=" in p))
+        found.add(tuple(params))
+    return found
+
+
+def _stub_signatures(fn: ast.FunctionDef) -> tuple[tuple[str, bool], ...]:
+    args = fn.args
+    positional = args.posonlyargs + args.args
+    first_default = len(positional) - len(args.defaults)
+    params = [(a.arg, i >= first_default) for i, a in enumerate(positional)]
+    params += [
+        (a.arg, d is not None) for a, d in zip(args.kwonlyargs, args.kw_defaults, strict=True)
+    ]
+    return tuple(params)
+
+
+def _stub_functions(body: list[ast.stmt]) -> dict[str, set[tuple[tuple[str, bool], ...]]]:
+    """Parameters per overload of every function of a stub body (properties left out)."""
+    out: dict[str, set[tuple[tuple[str, bool], ...]]] = {}
+    for node in body:
+        if isinstance(node, ast.FunctionDef):
+            decorators = [ast.unparse(d) for d in node.decorator_list]
+            if any("property" in d or ".setter" in d for d in decorators):
+                continue
+            out.setdefault(node.name, set()).add(_stub_signatures(node))
+    return out
+
+
+def test_stub_signatures_match_the_compiled_core():
+    """Every function and method of the stub has the parameters (names, order, which have a
+    default) that the compiled core reports, overload by overload."""
+    tree = ast.parse(STUB.read_text())
+    checked = 0
+    mismatches = []
+    targets = [(_core, tree.body, "")]
+    targets += [
+        (getattr(_core, n.name), n.body, n.name + ".")
+        for n in tree.body
+        if isinstance(n, ast.ClassDef) and hasattr(_core, n.name)
+    ]
+    for owner, body, prefix in targets:
+        for name, stub_sigs in _stub_functions(body).items():
+            runtime = _runtime_signatures(getattr(owner, name, None), name)
+            checked += 1
+            if runtime != stub_sigs:
+                mismatches.append(
+                    f"{prefix}{name}: stub {sorted(stub_sigs)}, core {sorted(runtime)}"
+                )
+    assert checked >= 90, f"only {checked} functions and methods were compared"
+    assert not mismatches, "run scripts/gen-stubs.sh:\n" + "\n".join(mismatches)
+
+
+def test_the_signature_check_finds_a_renamed_parameter():
+    sigs = _runtime_signatures(_core.make_box, "make_box")
+    assert sigs == {(("extents", False),)}
+    fn = ast.parse("def make_box(size: int) -> None: ...").body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    assert {_stub_signatures(fn)} != sigs

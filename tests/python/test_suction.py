@@ -5,9 +5,8 @@ import numpy as np
 import pytest
 
 import mgn
-from mgn.cli import main
+from mgn.cli.main import main
 from mgn.hardware import SuctionCup
-from mgn.io.model_folder import object_mesh
 from mgn.objects import get_object
 from mgn.suction import (
     FAILURE_REASONS,
@@ -81,7 +80,7 @@ def test_wrench_score_matches_the_torque_formula():
 
 def test_object_labels_are_deterministic_and_sensible():
     spec = get_object("box_tea")
-    mesh = object_mesh(spec)
+    mesh = spec.to_mesh()
     p = mgn.mass_properties(mesh, spec.density)
     a = label_object(mesh, mass=p.mass, com=p.center_of_mass, num_points=300, seed=2)
     b = label_object(mesh, mass=p.mass, com=p.center_of_mass, num_points=300, seed=2, chunk=37)
@@ -97,7 +96,7 @@ def test_object_labels_are_deterministic_and_sensible():
 
 def test_mug_interior_is_obstructed_or_colliding():
     spec = get_object("mug")
-    mesh = object_mesh(spec)
+    mesh = spec.to_mesh()
     p = mgn.mass_properties(mesh, spec.density)
     labels = label_object(mesh, mass=p.mass, com=p.center_of_mass, num_points=400, seed=0)
     assert labels.num_colliding > 0
@@ -121,7 +120,7 @@ def test_cli_writes_suction_labels_in_the_metagraspnet_layout(tmp_path):
 def test_cli_board_then_calibrate_recovers_the_model(tmp_path):
     import csv
 
-    from mgn.suction import make_calibration_board
+    from mgn.calibration import make_calibration_board
 
     assert main(["suction", "board", str(tmp_path)]) == 0
     with (tmp_path / "poses.csv").open() as fh:

@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 
 import mgn
-from mgn.cli import main
-from mgn.suction.compare import (
+from mgn.cli.main import main
+from mgn.viz.suction_compare import (
     HIGH,
     LOW,
     compare_models,

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from mgn.config import Config, ConfigError, load_config
 from mgn.errors import InvalidArgumentError
 from mgn.objects import builtin_objects
 from mgn.pipeline import generate, scene_seed
+from mgn.pipeline.config import Config, ConfigError, load_config
 from mgn.pipeline.testset import (
     NOVEL_TAG,
     RECIPES,
@@ -263,7 +263,7 @@ def test_same_selection_in_process_and_resumed_past_max_scenes(
 
 
 def test_pruned_balanced_dataset_validates(balanced: tuple[Path, dict], tmp_path: Path) -> None:
-    from mgn.cli import main
+    from mgn.cli.main import main
     from mgn.io.dataset import Dataset
     from mgn.io.validate import validate_dataset
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import mgn
-from mgn.cli import main
+from mgn.cli.main import main
 from mgn.io import read_model_folder
 from mgn.objects import builtin_objects, load_objects_yaml
 

@@ -1,4 +1,4 @@
-"""Tests of mgn.scene.view_labels: masks, occlusion, boxes, keypoints against analytic box scenes
+"""Tests of mgn.view_labels.objects: masks, occlusion, boxes, keypoints against analytic box scenes
 and against the OSMesa renderer (an independent rasteriser)."""
 
 from __future__ import annotations
@@ -11,18 +11,12 @@ from conftest import translation
 
 import mgn
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import make_box
-from mgn.io.model_folder import object_mesh
-from mgn.objects import ToteSpec, get_object
-from mgn.render import CameraView, Instance, Intrinsics, Renderer, look_at, tote_mesh
-from mgn.scene import (
-    BUILTIN,
-    Scene,
-    SceneInstance,
-    SceneRayModel,
-    ViewObjectLabels,
-    view_object_labels,
-)
+from mgn.geometry.mesh import make_box
+from mgn.objects import ToteSpec, get_object, tote_mesh
+from mgn.render import Instance, Renderer
+from mgn.scene import BUILTIN, Scene, SceneInstance
+from mgn.scene.cameras import CameraView, Intrinsics, look_at
+from mgn.view_labels.objects import SceneRayModel, ViewObjectLabels, view_object_labels
 
 H_CAM = 1.0
 K200 = Intrinsics(200, 200, 200.0, 200.0, 100.0, 100.0)
@@ -149,7 +143,7 @@ def library_scene() -> Scene:
     inst = []
     for k, (name, (x, y, yaw)) in enumerate(zip(names, spots, strict=True)):
         spec = get_object(name)
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         X = translation(x, y, -float(np.asarray(mesh.bounds)[0, 2]))
         c, s = math.cos(yaw), math.sin(yaw)
         X[:2, :2] = [[c, -s], [s, c]]

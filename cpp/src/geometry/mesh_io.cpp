@@ -38,6 +38,25 @@ Material read_material(const aiScene* scene, const aiMaterial* m, const fs::path
     out.opacity = std::clamp(1.0f - value, 0.0f, 1.0f);
   }
   if (out.base_color[3] < 1.0f) out.opacity = std::min(out.opacity, out.base_color[3]);
+  // glTF 2.0 metallic-roughness factors (assimp's glTF2 importer; other formats have none).
+  if (m->Get(AI_MATKEY_METALLIC_FACTOR, value) == AI_SUCCESS && std::isfinite(value)) {
+    out.has_pbr = true;
+    out.metallic = std::clamp(value, 0.0f, 1.0f);
+    // glTF defaults: roughness 1 when the factor is absent.
+    out.roughness = 1.0f;
+  }
+  if (m->Get(AI_MATKEY_ROUGHNESS_FACTOR, value) == AI_SUCCESS && std::isfinite(value)) {
+    out.has_pbr = true;
+    out.roughness = std::clamp(value, 0.0f, 1.0f);
+  }
+  if (m->Get(AI_MATKEY_TRANSMISSION_FACTOR, value) == AI_SUCCESS && std::isfinite(value)) {
+    out.has_pbr = true;
+    out.transmission = std::clamp(value, 0.0f, 1.0f);
+  }
+  if (out.has_pbr && m->Get(AI_MATKEY_REFRACTI, value) == AI_SUCCESS && std::isfinite(value) &&
+      value >= 1.0f) {
+    out.ior = value;
+  }
   aiString tex;
   if (m->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) == AI_SUCCESS ||
       m->GetTexture(aiTextureType_DIFFUSE, 0, &tex) == AI_SUCCESS) {

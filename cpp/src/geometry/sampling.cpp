@@ -91,8 +91,8 @@ SurfaceSamples sample_surface(const Mesh& mesh, std::int64_t count, const Sample
       const float d2 = dx * dx + dy * dy + dz * dz;
       m[j] = d2 < m[j] ? d2 : m[j];
     }
-    pick = static_cast<std::size_t>(std::max_element(min_d2.begin(), min_d2.end()) -
-                                    min_d2.begin());
+    pick =
+        static_cast<std::size_t>(std::max_element(min_d2.begin(), min_d2.end()) - min_d2.begin());
   }
   return out;
 }

@@ -18,9 +18,12 @@ float luminance(const Vec3f& c) { return 0.2126f * c.x() + 0.7152f * c.y() + 0.0
 std::uint8_t surface_flags(const Material& m) {
   std::uint8_t f = 0;
   if (m.opacity * m.base_color[3] < 0.5f) f |= kSurfaceTransparent;
+  if (m.has_pbr && m.transmission >= 0.5f) f |= kSurfaceTransparent;
   const bool textured = !m.texture_path.empty() || !m.texture_data.empty();
   if (!textured && luminance(m.base_color.head<3>()) < 0.03f) f |= kSurfaceDark;
   if (luminance(m.specular) >= 0.8f && m.shininess >= 200.0f) f |= kSurfaceMirror;
+  // A polished metal reflects the projector away from the camera like a mirror.
+  if (m.has_pbr && m.metallic >= 0.5f && m.roughness <= 0.25f) f |= kSurfaceMirror;
   return f;
 }
 

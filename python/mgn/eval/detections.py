@@ -57,6 +57,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pycocotools import mask as mask_utils
+from pycocotools.coco import COCO
+from pycocotools.cocoeval import COCOeval
 
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.eval.results import format_table, print_and_write
@@ -293,7 +296,7 @@ def _ground_truth(ds: Dataset, *, amodal: bool, class_agnostic: bool) -> dict[st
     wanted = {s * 1000 + v for s, v in views}
     gt = coco_dict(ds, scenes=sorted({s for s, _ in views}))
     gt["images"] = [im for im in gt["images"] if im["id"] in wanted]
-    anns = []
+    anns: list[dict[str, Any]] = []
     for a in gt["annotations"]:
         if a["image_id"] not in wanted:
             continue
@@ -365,7 +368,6 @@ def _rle_string_counts(s: str) -> list[int] | None:
 
 def _check_rle(seg: Any, shape: tuple[int, int], where: str) -> dict[str, Any]:
     """A validated compressed RLE (``counts`` as bytes) for an image of ``shape`` (h, w)."""
-    from pycocotools import mask as mask_utils
 
     h, w = shape
     if not isinstance(seg, Mapping) or "size" not in seg or "counts" not in seg:
@@ -404,29 +406,34 @@ def _finite(x: Any) -> bool:
     return isinstance(x, Real) and not isinstance(x, bool) and math.isfinite(float(x))
 
 
+def _required_fields(p: Any, where: str) -> tuple[Any, Any, Any]:
+    """(image_id, category_id, score) of one prediction, checked."""
+    if not isinstance(p, Mapping):
+        raise InvalidArgumentError(f"{where}: expected a dict, got {type(p).__name__}")
+    for key in ("image_id", "category_id", "score"):
+        if key not in p:
+            raise InvalidArgumentError(f"{where}: missing '{key}' (keys: {sorted(p)})")
+    image_id, cat, score = p["image_id"], p["category_id"], p["score"]
+    if not is_int(image_id):
+        raise InvalidArgumentError(f"{where}: image_id must be an integer, got {image_id!r}")
+    if not is_int(cat):
+        raise InvalidArgumentError(f"{where}: category_id must be an integer, got {cat!r}")
+    if not _finite(score):
+        raise InvalidArgumentError(f"{where}: score must be a finite number, got {score!r}")
+    return image_id, cat, score
+
+
 def _check_predictions(
     preds: list[Any], images: Mapping[int, tuple[int, int]], *, class_agnostic: bool, strict: bool
 ) -> tuple[list[dict[str, Any]], int, bool]:
     """(cleaned detections, number dropped, have segmentation)."""
-    from pycocotools import mask as mask_utils
 
     out: list[dict[str, Any]] = []
     unknown: list[int] = []
     with_seg = 0
     for k, p in enumerate(preds):
         where = f"prediction {k}"
-        if not isinstance(p, Mapping):
-            raise InvalidArgumentError(f"{where}: expected a dict, got {type(p).__name__}")
-        for key in ("image_id", "category_id", "score"):
-            if key not in p:
-                raise InvalidArgumentError(f"{where}: missing '{key}' (keys: {sorted(p)})")
-        image_id, cat, score = p["image_id"], p["category_id"], p["score"]
-        if not is_int(image_id):
-            raise InvalidArgumentError(f"{where}: image_id must be an integer, got {image_id!r}")
-        if not is_int(cat):
-            raise InvalidArgumentError(f"{where}: category_id must be an integer, got {cat!r}")
-        if not _finite(score):
-            raise InvalidArgumentError(f"{where}: score must be a finite number, got {score!r}")
+        image_id, cat, score = _required_fields(p, where)
         if int(image_id) not in images:
             unknown.append(int(image_id))
             continue
@@ -482,7 +489,6 @@ def _check_predictions(
 
 
 def _coco(data: dict[str, Any]) -> Any:
-    from pycocotools.coco import COCO
 
     c = COCO()
     c.dataset = data
@@ -492,9 +498,8 @@ def _coco(data: dict[str, Any]) -> Any:
 
 
 def _make_eval_class() -> type:
-    from pycocotools.cocoeval import COCOeval
 
-    class _SubsetEval(COCOeval):  # type: ignore[misc]
+    class _SubsetEval(COCOeval):
         """COCOeval that marks the GT annotations of ``ignore_ids`` as ignored (after
         ``_prepare``, which resets the flag from iscrowd) and reuses IoUs across subsets."""
 

@@ -2,7 +2,7 @@
 
 Predictions are matched to the scene grasp labels of each view (docs/format.md ``{v}_scene.hdf5``,
 both the ``non_colliding_grasps`` and the ``colliding_grasps`` groups) and checked for collision
-by the SAME model that made the labels (:meth:`mgn.scene.scene_grasps.SceneGraspModel.collides`:
+by the SAME model that made the labels (:meth:`mgn.view_labels.grasps.SceneGraspModel.collides`:
 same gripper / cup and tool geometry from the dataset's config, same approach offsets, the tote
 and every object of the scene), rebuilt from the scene's ``scene.json``.
 
@@ -93,6 +93,12 @@ import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.eval.results import format_table, print_and_write
+from mgn.hardware import ParallelJawGripper, SuctionCup, grasp_kind_arg, normalize_grasp_kind
+from mgn.io.dataset import Dataset
+from mgn.pipeline.config import Config
+from mgn.pipeline.label_scene import LabelOptions
+from mgn.scene import Scene
+from mgn.view_labels.grasps import SceneGraspModel
 
 __all__ = [
     "DEFAULT_KS",
@@ -328,7 +334,6 @@ class _Context:
     """Lazy per-view data and per-scene collision models of one dataset."""
 
     def __init__(self, dataset: Any, kind: str, label_score: str, num_threads: int) -> None:
-        from mgn.io.dataset import Dataset
 
         self.ds = dataset if isinstance(dataset, Dataset) else Dataset(dataset)
         self.kind = kind
@@ -341,12 +346,8 @@ class _Context:
     def hardware(self) -> tuple[Any, Any]:
         """(gripper, cup) of the dataset: its config, else the root YAML files, else defaults."""
         if self._hardware is None:
-            from mgn.hardware import ParallelJawGripper, SuctionCup
-
             info = self.ds.info
             if info is not None and isinstance(info.get("config"), Mapping):
-                from mgn.config import Config
-
                 cfg = Config.from_dict(info["config"], base_dir=self.ds.root)
                 self._hardware = (cfg.gripper, cfg.cup)
             else:
@@ -412,10 +413,6 @@ class _Context:
     def model(self, scene_id: int) -> Any:
         """The scene's SceneGraspModel: obstacles and tools of the labels (no labels needed)."""
         if scene_id not in self._models:
-            from mgn.scene import Scene
-            from mgn.scene.label import LabelOptions
-            from mgn.scene.scene_grasps import SceneGraspModel
-
             folder = self.ds.scene(scene_id).folder
             path = folder / "scene.json"
             if not path.exists():
@@ -598,7 +595,6 @@ def _match(
 
 
 def _check_kind(kind: Any, what: str) -> str:
-    from mgn.hardware import normalize_grasp_kind
 
     try:
         return normalize_grasp_kind(kind)
@@ -698,10 +694,10 @@ def evaluate_grasps(
 
     # Parse everything first (errors before any collision work), then score per view.
     parsed = []
-    for e_i, entry in mine:
+    for e_i, pred in mine:
         what = f"predictions[{e_i}]"
-        data = ctx.view(int(entry["image_id"]), what)
-        parsed.append((int(entry["image_id"]), data, *_parse_view(ctx, data, entry, what)))
+        data = ctx.view(int(pred["image_id"]), what)
+        parsed.append((int(pred["image_id"]), data, *_parse_view(ctx, data, pred, what)))
 
     views: list[ViewGraspResult] = []
     total = matched_all = colliding_all = 0
@@ -768,7 +764,6 @@ def ground_truth_grasps(
     """The non-colliding label grasps of every view as a prediction list (6-DoF contact poses,
     camera frame; score = the label score, NaN scores become 0). ``min_score`` keeps only labels
     with score >= it. Views without such grasps get an entry with an empty list."""
-    from mgn.io.dataset import Dataset
 
     kind = _check_kind(kind, "ground_truth_grasps")
     score_name = _default_label_score(kind, label_score)
@@ -823,7 +818,6 @@ def register(eval_sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("predictions", metavar="PRED.json", help="prediction list (see the docs)")
     p.add_argument("--dataset", required=True, metavar="DIR", help="dataset folder")
-    from mgn.hardware import grasp_kind_arg
 
     p.add_argument("--kind", type=grasp_kind_arg, default="suction",
                    help="grasp kind: suction or paralleljaw (default suction; aliases "

@@ -152,21 +152,10 @@ def _num_instances(ds: Dataset, image_id: int) -> int:
     return ds.scene(image_id // 1000).view(image_id % 1000).num_instances
 
 
-def evaluate_layout(
-    dataset: Dataset | str | os.PathLike[str],
-    predictions: Sequence[Mapping[str, Any]] | str | os.PathLike[str],
-) -> LayoutResults:
-    """Score layer predictions (module docstring) against ``dataset``'s layout labels.
-
-    Raises:
-        IoError: a missing or unreadable predictions file.
-        InvalidArgumentError: a malformed prediction, an image that is not evaluated, an
-            instance id the view does not have, or two predictions for one object (each error
-            names the prediction index and the value).
-    """
-    ds = as_dataset(dataset)
-    preds = as_prediction_list(predictions, "evaluate_layout: predictions")
-    truth = _view_truth(ds)
+def _predicted_layers(
+    ds: Dataset, preds: Sequence[Any], truth: Mapping[int, Any]
+) -> dict[tuple[int, int], int]:
+    """The checked predictions of :func:`evaluate_layout`: (image id, instance id) -> layer."""
     counts: dict[int, int] = {}
     predicted: dict[tuple[int, int], int] = {}
     unknown_images: list[int] = []
@@ -203,6 +192,25 @@ def evaluate_layout(
             f"scene * 1000 + view, only the dataset's selection): {names[:_MAX_REPORTED]}; "
             f"evaluated ids: {sorted(truth)[:_MAX_REPORTED]}..."
         )
+    return predicted
+
+
+def evaluate_layout(
+    dataset: Dataset | str | os.PathLike[str],
+    predictions: Sequence[Mapping[str, Any]] | str | os.PathLike[str],
+) -> LayoutResults:
+    """Score layer predictions (module docstring) against ``dataset``'s layout labels.
+
+    Raises:
+        IoError: a missing or unreadable predictions file.
+        InvalidArgumentError: a malformed prediction, an image that is not evaluated, an
+            instance id the view does not have, or two predictions for one object (each error
+            names the prediction index and the value).
+    """
+    ds = as_dataset(dataset)
+    preds = as_prediction_list(predictions, "evaluate_layout: predictions")
+    truth = _view_truth(ds)
+    predicted = _predicted_layers(ds, preds, truth)
 
     confusion = np.zeros((NUM_LAYERS, NUM_LAYERS + 1), np.int64)
     correct_w = total_w = 0

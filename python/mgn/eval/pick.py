@@ -9,8 +9,8 @@ until the tote is empty, every remaining object has failed ``max_failures_per_ob
 Success model (the label model, rebuilt at the current poses every step):
 
 1. The grasp is one of the object-level labels placed at the object's current pose by
-   :class:`mgn.scene.SceneGraspModel` (a policy giving a tool pose is matched to the nearest
-   label of that object: tool origin within :data:`MATCH_DISTANCE`, approach within
+   :class:`mgn.view_labels.grasps.SceneGraspModel` (a policy giving a tool pose is matched to the
+   nearest label of that object: tool origin within :data:`MATCH_DISTANCE`, approach within
    :data:`MATCH_ANGLE`; otherwise the attempt fails with reason ``"no_label"``).
 2. It must be collision-free: the tool at the grasp and along its approach (the label model's
    offsets) touches no other object and not the tote; else reason ``"collision"``.
@@ -29,8 +29,8 @@ again with another grasp until it has failed ``max_failures_per_object`` times.
 Policies:
 
 - ``"label"``: the best-scored collision-free grasp whose contact is visible in the top view,
-  among the top-layer objects (layer 0 of :func:`mgn.scene.compute_layout` on the top view)
-  that may still be tried; grasps already tried on an object are skipped. If no top-layer
+  among the top-layer objects (layer 0 of :func:`mgn.view_labels.layout.compute_layout` on the top
+  view) that may still be tried; grasps already tried on an object are skipped. If no top-layer
   object has such a grasp, all visible objects are considered; if none has one, the run stops.
 - ``"random"``: a random visible object that may still be tried, and a random visible grasp
   of it (colliding or not) not tried before, from a stream seeded by (seed, step).
@@ -53,27 +53,35 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib
+import json
 import math
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from PIL import Image, ImageDraw
 
 from mgn.errors import InvalidArgumentError
-
-if TYPE_CHECKING:
-    from mgn.config import Config
-    from mgn.pipeline.label_cache import ObjectLabels
-    from mgn.render.camera import CameraView
-    from mgn.render.views import ViewImages
-    from mgn.scene.layout import Layout
-    from mgn.scene.scene import DropOptions, Scene
-    from mgn.scene.scene_grasps import PlacedGrasps, SceneGraspModel
-    from mgn.scene.view_labels import ViewObjectLabels
+from mgn.eval.results import format_table, write_results_json
+from mgn.hardware import grasp_kind_arg, normalize_grasp_kind
+from mgn.objects import tote_mesh
+from mgn.pipeline.config import Config, default_config, load_config
+from mgn.pipeline.label_cache import ObjectLabels
+from mgn.pipeline.label_cache import object_labels as cached_labels
+from mgn.pipeline.label_scene import LabelOptions, strided_subset
+from mgn.pipeline.scene_writer import scene_intrinsics
+from mgn.render.photo import add_engine_arguments, settings_from_args
+from mgn.render.views import ViewImages, iter_views
+from mgn.scene.cameras import CameraView, mgn_rig
+from mgn.scene.drop import settle_tracked
+from mgn.scene.scene import DropOptions, Scene
+from mgn.view_labels.grasps import PlacedGrasps, SceneGraspModel
+from mgn.view_labels.layout import Layout, compute_layout
+from mgn.view_labels.objects import SceneRayModel, ViewObjectLabels, view_object_labels
 
 __all__ = [
     "MATCH_ANGLE",
@@ -105,7 +113,7 @@ class PickState:
             (``layer``: 0 = top layer).
         grasps: every grasp label of the gripper placed at the current poses (world frame,
             objects concatenated; ``object_id`` = instance id - 1, ``colliding``, scores).
-        model: the :class:`~mgn.scene.SceneGraspModel` the grasps come from.
+        model: the :class:`~mgn.view_labels.grasps.SceneGraspModel` the grasps come from.
         visible: (M,) bool, the grasp's contact is visible in the top view.
         score: (M,) float, the success model's score of each grasp (see the module doc).
         eligible: (N,) bool, the instance may still be tried (fewer failures than allowed).
@@ -231,7 +239,6 @@ class PickResults:
         }
 
     def table(self) -> str:
-        from mgn.eval.results import format_table
 
         rows = [
             {
@@ -285,7 +292,6 @@ def _labels_for(
     gripper: str,
 ) -> dict[str, Any]:
     """name -> the gripper's object labels (computed and cached when not given)."""
-    from mgn.pipeline.label_cache import object_labels as cached_labels
 
     need = sorted({inst.name for inst in scene.instances})
     out: dict[str, Any] = {}
@@ -309,8 +315,6 @@ def _labels_for(
 
 
 def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
-    from mgn.pipeline.scene_writer import scene_intrinsics
-    from mgn.render.camera import CameraView, mgn_rig
 
     poses, _ = mgn_rig(scene.seed)
     K = scene_intrinsics(config.camera)
@@ -318,20 +322,21 @@ def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
     return CameraView(K, poses[0])
 
 
-def _render(scene: Scene, view: CameraView) -> ViewImages:
-    """The top view without noise or randomisation."""
-    from mgn.render.views import iter_views, tote_mesh
+def _render(scene: Scene, view: CameraView, render: Any = None, num_threads: int = 0) -> ViewImages:
+    """The top view without noise or randomisation; the picture by ``render``
+    (:class:`mgn.render.photo.RenderSettings`, default the raster engine)."""
 
     frames = iter_views(scene.render_items(), tote_mesh(scene.tote), [(0, view)], sensor="ideal",
-                        randomize=False, seed=scene.seed)  # fmt: skip
+                        randomize=False, seed=scene.seed, render=render,
+                        num_threads=num_threads)  # fmt: skip
     return next(iter(frames))
 
 
-def _observe(scene: Scene, view: CameraView, num_threads: int) -> tuple[Any, Any, Any]:
-    from mgn.scene.layout import compute_layout
-    from mgn.scene.view_labels import SceneRayModel, view_object_labels
+def _observe(
+    scene: Scene, view: CameraView, num_threads: int, render: Any = None
+) -> tuple[Any, Any, Any]:
 
-    images = _render(scene, view)
+    images = _render(scene, view, render, num_threads)
     rays = SceneRayModel.from_scene(scene)
     labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal,
                                 keypoints=False, num_threads=num_threads)  # fmt: skip
@@ -358,7 +363,6 @@ def _project(view: CameraView, p_W: np.ndarray) -> tuple[float, float] | None:
 def _draw(rgb: np.ndarray, view: CameraView, attempt: PickAttempt | None, contact: Any) -> Any:
     """The top view with the attempted grasp: a circle at the contact and a line along the
     approach (green: success, red: failure)."""
-    from PIL import Image, ImageDraw
 
     img = Image.fromarray(np.ascontiguousarray(rgb[..., :3]))
     if attempt is None or contact is None:
@@ -442,6 +446,189 @@ def _match_tool_pose(g: PlacedGrasps, rows: np.ndarray, X: np.ndarray) -> int:
 # ---------------------------------------------------------------------------- the loop
 
 
+def _grasp_kind(gripper: str) -> str:
+    """``gripper`` as a grasp kind name (``normalize_grasp_kind``), errors naming run_picking."""
+    try:
+        return normalize_grasp_kind(gripper)
+    except InvalidArgumentError as e:
+        raise InvalidArgumentError(f"run_picking: gripper: {e}") from None
+
+
+def _check_picking_args(
+    scene: Scene,
+    gripper: str,
+    max_failures_per_object: int,
+    success_threshold: float,
+    resolution: int,
+    max_attempts: int | None,
+) -> int:
+    """The argument checks of :func:`run_picking`; returns the attempt limit."""
+    if len(scene.instances) == 0:
+        raise InvalidArgumentError("run_picking: the scene has no objects; nothing to pick")
+    if gripper not in _GRIPPERS:
+        raise InvalidArgumentError(
+            f"run_picking: gripper must be one of {list(_GRIPPERS)}, got {gripper!r}"
+        )
+    if isinstance(max_failures_per_object, bool) or int(max_failures_per_object) < 1:
+        raise InvalidArgumentError(
+            f"run_picking: max_failures_per_object must be >= 1, got {max_failures_per_object!r}"
+        )
+    if not 0.0 <= float(success_threshold) <= 1.0:
+        raise InvalidArgumentError(
+            f"run_picking: success_threshold must be in [0, 1], got {success_threshold!r}"
+        )
+    if int(resolution) < 16:
+        raise InvalidArgumentError(f"run_picking: resolution must be >= 16 px, got {resolution}")
+    n0 = len(scene.instances)
+    limit = (int(max_failures_per_object) + 1) * n0 if max_attempts is None else int(max_attempts)
+    if limit < 1:
+        raise InvalidArgumentError(f"run_picking: max_attempts must be >= 1, got {max_attempts}")
+    return limit
+
+
+def _observe_pile(
+    cur: Scene,
+    labels: dict[str, Any],
+    view: CameraView,
+    gripper: str,
+    config: Config,
+    max_grasps_per_object: int,
+    num_threads: int,
+) -> tuple[Any, ...]:
+    """Scene grasp model, top view and labels of the current pile:
+    (model, grasps, images, view labels, layout, visible (G,), score (G,))."""
+    n = len(cur.instances)
+    per = [strided_subset(labels[i.name], max_grasps_per_object) for i in cur.instances]
+    model = SceneGraspModel(
+        cur,
+        per if gripper == "paralleljaw" else [None] * n,
+        per if gripper == "suction" else [None] * n,
+        config.gripper,
+        config.cup,
+        offsets=LabelOptions().grasp_offsets,  # the labels' collision model, exactly
+        num_threads=num_threads,
+    )
+    g = model.suction if gripper == "suction" else model.pj
+    images, vlabels, layout = _observe(cur, view, num_threads, config.render)
+    vis = model.view_grasps(view, np.asarray(vlabels.visible_pixels) > 0)
+    visible = np.zeros(len(g), bool)
+    for s in (vis.non_colliding, vis.colliding):
+        visible[(s.suctioncup if gripper == "suction" else s.paralleljaw).index] = True
+    score = _grasp_scores(g, gripper)
+    visible.setflags(write=False)
+    score.setflags(write=False)
+    return model, g, images, vlabels, layout, visible, score
+
+
+def _checked_choice(
+    choice: Any, obj: np.ndarray, g: Any, eligible: np.ndarray, max_failures_per_object: int
+) -> tuple[int, int, np.ndarray]:
+    """(object index k, grasp row or -1 when no label matches, X_W_tool) of a policy's choice."""
+    n = len(eligible)
+    try:
+        target, grasp = choice
+    except (TypeError, ValueError) as e:
+        raise InvalidArgumentError(
+            f"run_picking: the policy must return (instance_id, grasp index or X_W_tool) or "
+            f"None, got {choice!r}"
+        ) from e
+    if isinstance(target, bool) or not isinstance(target, (int, np.integer)):
+        raise InvalidArgumentError(
+            f"run_picking: the policy returned instance id {target!r}; expected an int"
+        )
+    if not 1 <= int(target) <= n:
+        raise InvalidArgumentError(
+            f"run_picking: the policy returned instance id {target}, but the scene has "
+            f"instances 1..{n}"
+        )
+    k = int(target) - 1
+    if not eligible[k]:
+        raise InvalidArgumentError(
+            f"run_picking: the policy chose instance {target}, which already failed "
+            f"{max_failures_per_object} times (see state.eligible)"
+        )
+    rows = np.flatnonzero(obj == k)
+    if isinstance(grasp, (int, np.integer)) and not isinstance(grasp, bool):
+        row = int(grasp)
+        if row not in set(rows.tolist()):
+            raise InvalidArgumentError(
+                f"run_picking: the policy returned grasp {row} for instance {target}, but "
+                f"that object's grasps are rows {rows[:1].tolist()}..{rows[-1:].tolist()} "
+                f"of state.grasps ({len(g)} rows)"
+            )
+        X_tool = g.tool_poses[row]
+    else:
+        X_tool = np.asarray(grasp, np.float64)
+        if X_tool.shape != (4, 4) or not np.all(np.isfinite(X_tool)):
+            raise InvalidArgumentError(
+                "run_picking: the policy's grasp must be a row index of state.grasps or a "
+                f"finite (4, 4) tool pose, got {grasp!r}"
+            )
+        row = _match_tool_pose(g, rows, X_tool)
+    return k, row, X_tool
+
+
+def _remove_and_settle(
+    cur: Scene, ids: tuple[int, ...], k: int, settle_options: DropOptions | None
+) -> tuple[Scene, tuple[int, ...], dict[str, Any]]:
+    """Remove object k and let the rest settle: (new scene, its start-scene ids, the
+    disturbance record of the attempt)."""
+    n = len(cur.instances)
+    before = {ids[j]: cur.instances[j].X_WO for j in range(n) if j != k}
+    nxt, old = settle_tracked(cur, remove=(k + 1,), options=settle_options)
+    new_ids = tuple(ids[o - 1] for o in old)
+    moved: list[float] = []
+    turned: list[float] = []
+    for j, inst in zip(new_ids, nxt.instances, strict=True):
+        moved.append(float(np.linalg.norm(inst.X_WO[:3, 3] - before[j][:3, 3])))
+        turned.append(_rotation_angle(before[j][:3, :3], inst.X_WO[:3, :3]))
+    lost = tuple(sorted(set(before) - set(new_ids)))
+    record = {
+        "disturbance_max_translation": max(moved, default=0.0),
+        "disturbance_mean_translation": float(np.mean(moved)) if moved else 0.0,
+        "disturbance_max_rotation": max(turned, default=0.0),
+        "disturbance_mean_rotation": float(np.mean(turned)) if turned else 0.0,
+        "lost": lost,
+    }
+    return nxt, new_ids, record
+
+
+def _tried_mask(num_rows: int, start_row: np.ndarray, tried: list[set[int]]) -> np.ndarray:
+    """(G,) bool: the grasp rows already tried (``tried[k]``: row offsets within object k)."""
+    mask = np.zeros(num_rows, bool)
+    for k, rows in enumerate(tried):
+        for r in rows:
+            mask[start_row[k] + r] = True
+    return mask
+
+
+def _choose(
+    policy_name: str, policy_fn: Callable[[PickState], Any] | None, state: PickState, seed: int
+) -> Any:
+    """The policy's choice for ``state`` (None: nothing left to try)."""
+    if policy_fn is not None:
+        return policy_fn(state)
+    if policy_name == "label":
+        return _label_policy(state)
+    return _random_policy(state, seed)
+
+
+def _outcome(
+    g: Any, score: np.ndarray, row: int, *, stochastic: bool, seed: int, step: int, threshold: float
+) -> tuple[bool, str, float]:
+    """(success, reason, score) of the attempt with grasp ``row`` (-1: no label matched)."""
+    if row < 0:
+        return False, "no_label", float("nan")
+    s_val = float(score[row])
+    if bool(g.colliding[row]):
+        return False, "collision", s_val
+    if stochastic:
+        u = np.random.default_rng([int(seed), step, 2]).random()
+        return bool(u < s_val), ("ok" if u < s_val else "draw"), s_val
+    ok = s_val >= threshold
+    return ok, ("ok" if ok else "score"), s_val
+
+
 def run_picking(
     scene: Scene,
     *,
@@ -469,7 +656,7 @@ def run_picking(
         object_labels: name -> :class:`~mgn.pipeline.label_cache.ObjectLabels` of the scene's
             objects (e.g. a dataset's); missing ones are computed with ``config`` and cached.
         config: dataset configuration (object-label settings, gripper, cup, camera); default
-            :func:`mgn.config.default_config`.
+            :func:`mgn.pipeline.config.default_config`.
         max_failures_per_object: failed attempts after which an object is given up (>= 1).
         max_attempts: attempts at most (default: (max_failures_per_object + 1) x objects).
         seed: seeds the random policy and the stochastic success draws.
@@ -486,34 +673,13 @@ def run_picking(
         InvalidArgumentError: an empty scene, an unknown policy or gripper, bad numbers, a policy
             answer that names an unknown instance or grasp.
     """
-    from mgn.config import default_config
-    from mgn.scene.drop import settle_tracked
-    from mgn.scene.label import LabelOptions, strided_subset
-    from mgn.scene.scene_grasps import SceneGraspModel
 
-    if len(scene.instances) == 0:
-        raise InvalidArgumentError("run_picking: the scene has no objects; nothing to pick")
-    from mgn.hardware import normalize_grasp_kind
-
-    try:
-        gripper = normalize_grasp_kind(gripper)
-    except InvalidArgumentError as e:
-        raise InvalidArgumentError(f"run_picking: gripper: {e}") from None
+    gripper = _grasp_kind(gripper)
     policy_name, policy_fn = _resolve_policy(policy)
-    if isinstance(max_failures_per_object, bool) or int(max_failures_per_object) < 1:
-        raise InvalidArgumentError(
-            f"run_picking: max_failures_per_object must be >= 1, got {max_failures_per_object!r}"
-        )
-    if not 0.0 <= float(success_threshold) <= 1.0:
-        raise InvalidArgumentError(
-            f"run_picking: success_threshold must be in [0, 1], got {success_threshold!r}"
-        )
-    if int(resolution) < 16:
-        raise InvalidArgumentError(f"run_picking: resolution must be >= 16 px, got {resolution}")
     n0 = len(scene.instances)
-    limit = (int(max_failures_per_object) + 1) * n0 if max_attempts is None else int(max_attempts)
-    if limit < 1:
-        raise InvalidArgumentError(f"run_picking: max_attempts must be >= 1, got {max_attempts}")
+    limit = _check_picking_args(
+        scene, gripper, max_failures_per_object, success_threshold, resolution, max_attempts
+    )
     config = config or default_config()
     labels = _labels_for(scene, object_labels, config, gripper)
     view = _top_view(scene, config, int(resolution))
@@ -541,119 +707,34 @@ def run_picking(
             break
         n = len(cur.instances)
         if observed is None:  # the pile changed (or first step): model, view and labels
-            per = [strided_subset(labels[i.name], max_grasps_per_object) for i in cur.instances]
-            model = SceneGraspModel(
-                cur,
-                per if gripper == "paralleljaw" else [None] * n,
-                per if gripper == "suction" else [None] * n,
-                config.gripper,
-                config.cup,
-                offsets=LabelOptions().grasp_offsets,  # the labels' collision model, exactly
-                num_threads=num_threads,
+            observed = _observe_pile(
+                cur, labels, view, gripper, config, max_grasps_per_object, num_threads
             )
-            g = model.suction if gripper == "suction" else model.pj
-            images, vlabels, layout = _observe(cur, view, num_threads)
-            vis = model.view_grasps(view, np.asarray(vlabels.visible_pixels) > 0)
-            visible = np.zeros(len(g), bool)
-            for s in (vis.non_colliding, vis.colliding):
-                visible[(s.suctioncup if gripper == "suction" else s.paralleljaw).index] = True
-            score = _grasp_scores(g, gripper)
-            visible.setflags(write=False)
-            score.setflags(write=False)
-            observed = (model, g, images, vlabels, layout, visible, score)
         model, g, images, vlabels, layout, visible, score = observed
         obj = np.asarray(g.object_id, np.int64)
         start_row = np.searchsorted(obj, np.arange(n))  # rows are grouped by object in order
         eligible = np.array([failures[ids[k]] < max_failures_per_object for k in range(n)])
-        tried_mask = np.zeros(len(g), bool)
-        for k in range(n):
-            for r in tried[ids[k]]:
-                tried_mask[start_row[k] + r] = True
+        tried_mask = _tried_mask(len(g), start_row, [tried[i] for i in ids])
         state = PickState(step, cur, ids, view, images, vlabels, layout, g, model, visible,
                           score, eligible, tried_mask)  # fmt: skip
-        if policy_fn is not None:
-            choice = policy_fn(state)
-        elif policy_name == "label":
-            choice = _label_policy(state)
-        else:
-            choice = _random_policy(state, seed)
+        choice = _choose(policy_name, policy_fn, state, seed)
         if choice is None:
             stop = "no_grasp"
             break
-        try:
-            target, grasp = choice
-        except (TypeError, ValueError) as e:
-            raise InvalidArgumentError(
-                f"run_picking: the policy must return (instance_id, grasp index or X_W_tool) or "
-                f"None, got {choice!r}"
-            ) from e
-        if isinstance(target, bool) or not isinstance(target, (int, np.integer)):
-            raise InvalidArgumentError(
-                f"run_picking: the policy returned instance id {target!r}; expected an int"
-            )
-        if not 1 <= int(target) <= n:
-            raise InvalidArgumentError(
-                f"run_picking: the policy returned instance id {target}, but the scene has "
-                f"instances 1..{n}"
-            )
-        k = int(target) - 1
-        if not eligible[k]:
-            raise InvalidArgumentError(
-                f"run_picking: the policy chose instance {target}, which already failed "
-                f"{max_failures_per_object} times (see state.eligible)"
-            )
-        rows = np.flatnonzero(obj == k)
-        if isinstance(grasp, (int, np.integer)) and not isinstance(grasp, bool):
-            row = int(grasp)
-            if row not in set(rows.tolist()):
-                raise InvalidArgumentError(
-                    f"run_picking: the policy returned grasp {row} for instance {target}, but "
-                    f"that object's grasps are rows {rows[:1].tolist()}..{rows[-1:].tolist()} "
-                    f"of state.grasps ({len(g)} rows)"
-                )
-            X_tool = g.tool_poses[row]
-        else:
-            X_tool = np.asarray(grasp, np.float64)
-            if X_tool.shape != (4, 4) or not np.all(np.isfinite(X_tool)):
-                raise InvalidArgumentError(
-                    "run_picking: the policy's grasp must be a row index of state.grasps or a "
-                    f"finite (4, 4) tool pose, got {grasp!r}"
-                )
-            row = _match_tool_pose(g, rows, X_tool)
+        k, row, X_tool = _checked_choice(choice, obj, g, eligible, max_failures_per_object)
         orig = ids[k]
         name = cur.instances[k].name
-        if row < 0:
-            success, reason, s_val, index = False, "no_label", float("nan"), -1
-        else:
-            index = int(row - start_row[k])
-            s_val = float(score[row])
+        index = -1 if row < 0 else int(row - start_row[k])
+        if row >= 0:
             X_tool = g.tool_poses[row]
-            if bool(g.colliding[row]):
-                success, reason = False, "collision"
-            elif stochastic:
-                u = np.random.default_rng([int(seed), step, 2]).random()
-                success, reason = bool(u < s_val), ("ok" if u < s_val else "draw")
-            else:
-                ok = s_val >= success_threshold
-                success, reason = ok, ("ok" if ok else "score")
             tried[orig].add(index)
+        success, reason, s_val = _outcome(
+            g, score, row, stochastic=stochastic, seed=seed, step=step, threshold=success_threshold
+        )
         record: dict[str, Any] = {}
         if success:
-            before = {ids[j]: cur.instances[j].X_WO for j in range(n) if j != k}
-            nxt, old = settle_tracked(cur, remove=(int(target),), options=settle_options)
-            new_ids = tuple(ids[o - 1] for o in old)
-            t, r = [], []
-            for j, inst in zip(new_ids, nxt.instances, strict=True):
-                t.append(float(np.linalg.norm(inst.X_WO[:3, 3] - before[j][:3, 3])))
-                r.append(_rotation_angle(before[j][:3, :3], inst.X_WO[:3, :3]))
-            lost = tuple(sorted(set(before) - set(new_ids)))
-            record = {
-                "disturbance_max_translation": max(t, default=0.0),
-                "disturbance_mean_translation": float(np.mean(t)) if t else 0.0,
-                "disturbance_max_rotation": max(r, default=0.0),
-                "disturbance_mean_rotation": float(np.mean(r)) if r else 0.0,
-                "lost": lost,
-            }
+            nxt, new_ids, record = _remove_and_settle(cur, ids, k, settle_options)
+            lost = record["lost"]
             if failures[orig] == 0:
                 first.append(orig)
             cleared.append(orig)
@@ -699,16 +780,21 @@ def run_picking(
         success_threshold=float(success_threshold),
     )
     if folder is not None:
-        _write_outputs(folder, results, cur, view, frames, num_threads)
+        _write_outputs(folder, results, cur, view, frames, num_threads, config.render)
     return results
 
 
 def _write_outputs(
-    folder: Path, results: PickResults, scene: Scene, view: CameraView, frames: list, threads: int
+    folder: Path,
+    results: PickResults,
+    scene: Scene,
+    view: CameraView,
+    frames: list,
+    threads: int,
+    render: Any = None,
 ) -> None:
-    from mgn.eval.results import write_results_json
 
-    final = _render(scene, view)
+    final = _render(scene, view, render, threads)
     img = _draw(final.rgb, view, None, None)
     img.save(folder / "final.png")
     frames = [*frames, img]
@@ -723,10 +809,6 @@ def _write_outputs(
 def _load_scene(path: Path) -> tuple[Scene, Config | None]:
     """The scene of a scene folder (its scene.json; the dataset's config from the parent's
     dataset.json when there is one) or of a scene.json file."""
-    import json
-
-    from mgn.config import load_config
-    from mgn.scene.scene import Scene
 
     file = path / "scene.json" if path.is_dir() else path
     scene = Scene.from_json(file)
@@ -740,11 +822,13 @@ def _load_scene(path: Path) -> tuple[Scene, Config | None]:
 
 
 def _cmd_pick(args: argparse.Namespace) -> int:
-    from mgn.config import load_config
 
     scene, config = _load_scene(Path(args.scene))
     if args.config is not None:
         config = load_config(args.config)
+    if args.engine is not None or args.spp is not None:
+        config = config or default_config()
+        config = dataclasses.replace(config, render=settings_from_args(config.render, args))
     results = run_picking(
         scene,
         policy=args.policy,
@@ -773,7 +857,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--policy", default="label",
                    help="'label', 'random' or 'module:function' (policy(state) -> "
                         "(instance_id, grasp index or X_W_tool) or None)")  # fmt: skip
-    from mgn.hardware import grasp_kind_arg
 
     p.add_argument(
         "--gripper",
@@ -793,4 +876,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
                    help="C++ threads (0 = all cores)")  # fmt: skip
     p.add_argument("--out", required=True, help="output folder")
+
+    add_engine_arguments(p, what="the step pictures")
     p.set_defaults(func=_cmd_pick)

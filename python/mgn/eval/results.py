@@ -8,7 +8,9 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mgn.io.atomic import atomic_write_text
+import numpy as np
+
+from mgn.base.atomic import atomic_write_text
 
 __all__ = ["format_table", "print_and_write", "to_jsonable", "write_results_json"]
 
@@ -55,7 +57,6 @@ def format_table(
 
 def to_jsonable(obj: Any) -> Any:
     """numpy scalars/arrays, tuples and mappings converted for ``json.dumps``; NaN becomes None."""
-    import numpy as np
 
     if isinstance(obj, Mapping):
         return {str(k): to_jsonable(v) for k, v in obj.items()}

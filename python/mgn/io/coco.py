@@ -19,13 +19,15 @@ from __future__ import annotations
 
 import json
 import os
+import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
+from pycocotools import mask as mask_utils
 
-from mgn.io.atomic import atomic_open
+from mgn.base.atomic import atomic_open
 from mgn.io.dataset import Dataset, View
 
 __all__ = ["coco_dict", "export_coco", "iter_coco_views", "rle"]
@@ -36,7 +38,6 @@ AGNOSTIC_ID = 1
 
 def rle(mask: np.ndarray) -> dict[str, Any]:
     """COCO RLE of an (H, W) bool mask, JSON-ready (``counts`` as str)."""
-    from pycocotools import mask as mask_utils
 
     r = mask_utils.encode(np.asfortranarray(np.asarray(mask, np.uint8)))
     return {"size": [int(r["size"][0]), int(r["size"][1])], "counts": r["counts"].decode("ascii")}
@@ -44,7 +45,6 @@ def rle(mask: np.ndarray) -> dict[str, Any]:
 
 def _compress(counts: list[list[int]], h: int, w: int) -> list[dict[str, Any]]:
     """JSON-ready compressed RLEs from uncompressed COCO counts (pycocotools' string form)."""
-    from pycocotools import mask as mask_utils
 
     if not counts:
         return []
@@ -269,7 +269,6 @@ def _write_coco(fh: IO[str], ds: Dataset, scene_ids: list[int], class_agnostic: 
     seen: set[int] = set()
     # The key order of coco_dict is info, images, annotations, categories; the images are only
     # known at the end, so the annotations are spooled and the parts joined afterwards.
-    import tempfile
 
     with tempfile.TemporaryFile("w+", encoding="utf-8") as spool:
         first = True

@@ -31,10 +31,15 @@ from typing import Any
 import h5py
 import numpy as np
 import numpy.typing as npt
+from PIL import Image
 
+from mgn.base.units import M_TO_CM
 from mgn.errors import IoError
-from mgn.io.scene_format import M_TO_CM, from_cm
-from mgn.render.camera import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
+from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
+from mgn.io.model_folder import object_folders
+from mgn.io.order_files import read_order_csv, read_order_json
+from mgn.io.scene_format import from_cm
+from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
 __all__ = ["Dataset", "SceneFolder", "View"]
 
@@ -85,7 +90,6 @@ class View:
     @cached_property
     def rgb(self) -> npt.NDArray[np.uint8]:
         """(H, W, 3) uint8."""
-        from PIL import Image
 
         try:
             with Image.open(self.path("_rgb.png")) as im:
@@ -259,7 +263,6 @@ class View:
         folder names ``"suctioncup"`` and aliases such as ``"pj"`` work too), camera frame,
         metres: the datasets of ``(non_)colliding_grasps/<folder>/`` by name (empty dict if
         absent)."""
-        from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 
         kind = MGN_FOLDER[normalize_grasp_kind(kind)]
         prefix = f"{'colliding' if colliding else 'non_colliding'}_grasps/{kind}/"
@@ -280,8 +283,7 @@ class View:
     def relation_matrix(self) -> npt.NDArray[np.int8]:
         """(N, N) int8 relation matrix from ``{v}_order.csv``: M[i][j] = -1 if instance j+1
         lies on / occludes instance i+1, +1 for the reverse (the file stores the -1 entries;
-        :func:`mgn.scene.layout.read_order_csv`)."""
-        from mgn.scene.layout import read_order_csv, read_order_json
+        :func:`mgn.io.order_files.read_order_csv`)."""
 
         csv = self.path("_order.csv")
         if csv.exists():
@@ -380,7 +382,6 @@ class Dataset:
 
     def model_folders(self) -> list[Path]:
         """The object folders ``models/<id>/``."""
-        from mgn.io.model_folder import object_folders
 
         return object_folders(self.root)
 

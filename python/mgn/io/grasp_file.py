@@ -1,4 +1,5 @@
-"""Atomic updates of the grasp groups of an object's ``textured.obj.hdf5`` (docs/format.md)."""
+"""The grasp groups of an object's ``textured.obj.hdf5`` (docs/format.md): atomic updates, the
+parallel-jaw and suction label writers, the parallel-jaw reader."""
 
 from __future__ import annotations
 
@@ -12,14 +13,27 @@ from typing import Any
 
 import h5py
 import numpy as np
+import numpy.typing as npt
 
+from mgn.base.units import M_TO_CM
 from mgn.errors import IoError
+from mgn.pj.labels import PjLabels
+from mgn.suction.labels import SuctionLabels
 
 #: Empty datasets written for a grasp group that has no labels yet (readers open both groups).
 EMPTY_GROUPS: dict[str, dict[str, tuple[int, ...]]] = {
     "grasps/paralleljaw": {"pregrasp_transform": (0, 10), "quality_score": (0,)},
     "grasps/suctioncup": {"pregrasp_transform": (0, 6), "quality_score": (0,)},
 }
+
+
+def create_labels_file(hdf5_path: str | os.PathLike[str]) -> None:
+    """Create the labels file of a bare mesh file: an HDF5 file with an empty
+    ``grasps/paralleljaw`` group (its parent folder is created)."""
+    path = Path(hdf5_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with h5py.File(path, "w") as h5:
+        h5.create_group("grasps/paralleljaw")
 
 
 def replace_grasp_group(
@@ -72,3 +86,69 @@ def replace_grasp_group(
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def write_pj_labels(hdf5_path: str | os.PathLike[str], labels: PjLabels) -> None:
+    """Replace ``grasps/paralleljaw/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
+
+    Writes ``pregrasp_transform`` (M, 10) [a (3), v (3), p1 (3, cm), w (cm)],
+    ``quality_score`` (M,) (analytic), ``quality_score_simulation`` (M,) (NaN when physics was
+    not run) and the mgn extension ``score_wrench`` (M,), all float32, plus the metadata
+    attributes. Other groups (suction labels, keypoints) are kept. The file is updated on a
+    temporary copy that replaces the original only when complete.
+    """
+    replace_grasp_group(
+        hdf5_path,
+        "grasps/paralleljaw",
+        {
+            "pregrasp_transform": labels.pregrasp_transform().reshape(-1, 10),
+            "quality_score": labels.quality_score,
+            "quality_score_simulation": labels.quality_score_simulation,
+            "score_wrench": labels.score_wrench,
+        },
+        labels.metadata,
+        who="write_pj_labels",
+    )
+
+
+def read_pj_labels(hdf5_path: str | os.PathLike[str]) -> dict[str, npt.NDArray[np.float64]]:
+    """The ``grasps/paralleljaw`` datasets of a file in metres: approach, closing, p1 (M, 3),
+    width, quality_score, quality_score_simulation, score_wrench (M,) (absent ones omitted)."""
+    with h5py.File(hdf5_path, "r") as h5:
+        g = h5["grasps/paralleljaw"]
+        pre = np.asarray(g["pregrasp_transform"], np.float64).reshape(-1, 10)
+        out = {
+            "approach": pre[:, 0:3],
+            "closing": pre[:, 3:6],
+            "p1": pre[:, 6:9] / M_TO_CM,
+            "width": pre[:, 9] / M_TO_CM,
+        }
+        for name in ("quality_score", "quality_score_simulation", "score_wrench"):
+            if name in g:
+                out[name] = np.asarray(g[name], np.float64)
+    return out
+
+
+def write_suction_labels(hdf5_path: str | os.PathLike[str], labels: SuctionLabels) -> None:
+    """Replace ``grasps/suctioncup/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
+
+    Writes ``pregrasp_transform`` (K, 6) [approach (3, into the surface), contact (3, cm)],
+    ``quality_score`` (K,) (seal score) and the mgn extensions ``score_wrench`` (K,) and
+    ``failure_reason`` (K,) (uint8 codes of ``mgn.suction.FAILURE_REASONS``; the others
+    float32), plus the metadata attributes. The file is updated on a temporary copy that
+    replaces the original only when complete.
+    """
+    replace_grasp_group(
+        hdf5_path,
+        "grasps/suctioncup",
+        {
+            "pregrasp_transform": np.concatenate(
+                [labels.approach, labels.points * M_TO_CM], axis=1
+            ).reshape(-1, 6),
+            "quality_score": labels.score,
+            "score_wrench": labels.wrench,
+            "failure_reason": labels.reason,
+        },
+        labels.metadata,
+        who="write_suction_labels",
+    )

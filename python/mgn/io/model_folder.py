@@ -24,58 +24,13 @@ from typing import Any
 import h5py
 import numpy as np
 import numpy.typing as npt
+from PIL import Image
 
 from mgn import _core
-from mgn.geometry import Mesh, load_mesh, mass_properties, sample_surface
-from mgn.io.atomic import atomic_dir
-from mgn.objects import MaterialSpec, ObjectSpec, ToteSpec, make_tote
-
-M_TO_CM = 100.0
-#: Number of centre-of-mass keypoints per object (MetaGraspNet).
-NUM_COM_KEYPOINTS = 1000
-
-
-def object_mesh(spec: ObjectSpec) -> Mesh:
-    """The :data:`mgn.Mesh` of an object spec (metres, object frame), with its material (its
-    texture, if any, embedded as PNG bytes in ``Material.texture_data``)."""
-    mat = _core.Material()
-    mat.name = spec.material.name
-    mat.base_color = np.asarray(spec.material.base_color, np.float32)
-    mat.specular = np.asarray(spec.material.specular, np.float32)
-    mat.shininess = float(spec.material.shininess)
-    mat.opacity = float(spec.material.opacity)
-    uvs = None if spec.uvs is None else np.asarray(spec.uvs, np.float32)
-    if spec.material.texture is not None and uvs is not None:
-        # The texture travels with the mesh as embedded PNG bytes (the renderer decodes them).
-        from PIL import Image
-
-        buf = io.BytesIO()
-        Image.fromarray(np.asarray(spec.material.texture, np.uint8)).save(buf, format="PNG")
-        mat.texture_data = buf.getvalue()
-    return Mesh(
-        np.asarray(spec.vertices, np.float32),
-        np.asarray(spec.faces, np.int32),
-        uvs,
-        [mat],
-        [],
-        spec.name,
-    )
-
-
-def com_keypoints(mesh: Mesh, density: float, *, seed: int) -> npt.NDArray[np.float64]:
-    """(1000, 4) [score, x, y, z] in metres: surface points scored by closeness to the CoM.
-
-    score = (d_max - d) / (d_max - d_min), d = distance to the mass-weighted centre of mass.
-    Points are spread evenly (blue noise) with a fixed ``seed``.
-    """
-    com = mass_properties(mesh, density).center_of_mass
-    pts = sample_surface(mesh, NUM_COM_KEYPOINTS, method="even", seed=seed).points.astype(
-        np.float64
-    )
-    d = np.linalg.norm(pts - com, axis=1)
-    span = max(float(d.max() - d.min()), 1e-12)
-    score = (d.max() - d) / span
-    return np.column_stack([score, pts])
+from mgn.base.atomic import atomic_dir
+from mgn.base.units import M_TO_CM
+from mgn.geometry.mesh import Mesh, load_mesh, mass_properties
+from mgn.objects import MaterialSpec, ObjectSpec, ToteSpec, com_keypoints, make_tote
 
 
 def obj_text(
@@ -178,10 +133,9 @@ def write_model_folder(
     The folder is built under a temporary name and renamed when complete, so an interrupted
     export never leaves a partial object folder.
     """
-    from PIL import Image
 
     target = Path(root) / "models" / f"{spec.category_id:03d}"
-    mesh = object_mesh(spec)
+    mesh = spec.to_mesh()
     props = mass_properties(mesh, spec.density)
     com_kp = com_keypoints(mesh, spec.density, seed=spec.category_id)
     has_texture = spec.material.texture is not None and spec.uvs is not None
@@ -266,7 +220,7 @@ def write_tote(spec: ToteSpec, root: str | os.PathLike[str]) -> Path:
     """
     vertices, faces = make_tote(spec)
     params = {f.name: getattr(spec, f.name) for f in dataclasses.fields(spec)}
-    material = MaterialSpec(name="tote", base_color=tuple(spec.color))
+    material = MaterialSpec(name="tote", base_color=spec.color)
     with atomic_dir(Path(root) / "tote", overwrite=True) as tmp:
         header = "tote: origin at the centre of the inner floor, z up; metres"
         (tmp / "tote.obj").write_text(

@@ -28,7 +28,7 @@ from __future__ import annotations
 import io
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,10 +36,15 @@ from typing import Any
 import h5py
 import numpy as np
 import numpy.typing as npt
+from PIL import Image
 
-from mgn.io.atomic import atomic_write_bytes, atomic_write_text
-from mgn.io.deterministic import h5_create_dataset, h5_create_group, npz_bytes
-from mgn.render.camera import Intrinsics
+from mgn.base.atomic import atomic_write_bytes, atomic_write_text
+from mgn.base.deterministic import h5_create_dataset, h5_create_group, npz_bytes
+from mgn.base.units import M_TO_CM
+from mgn.errors import InvalidArgumentError
+from mgn.render.views import depth_picture
+from mgn.scene.cameras import Intrinsics
+from mgn.view_labels.grasps import COLLISION_OBSTACLES, COLLISION_PARTS
 
 __all__ = [
     "CM_RULES",
@@ -62,7 +67,6 @@ __all__ = [
     "write_view",
 ]
 
-M_TO_CM = 100.0
 
 #: How lengths are stored in the scene HDF5 (path suffix -> what is in centimetres):
 #: ``"pose"``: the translation column of (…, 4, 4) matrices; ``"xyz"``: columns 1..3 of (…, 4)
@@ -84,17 +88,6 @@ HDF5_INT_LEAVES: tuple[str, ...] = (
     "collision_obstacle",
 )
 
-#: Codes of ``colliding_grasps/*/collision_part``: the gripper part that collides first along
-#: the approach.
-COLLISION_PARTS: dict[int, str] = {1: "palm", 2: "finger", 3: "cup", 4: "shaft"}
-#: Codes of ``colliding_grasps/*/collision_obstacle``: floor = the tote where the part reaches
-#: below its inner floor surface, wall = the rest of the tote.
-COLLISION_OBSTACLES: dict[int, str] = {
-    1: "floor",
-    2: "wall",
-    3: "other object",
-    4: "grasped object",
-}
 #: Datasets every view's ``{v}_scene.hdf5`` has (empty groups have zero-length datasets).
 HDF5_FLOAT_KEYS: tuple[str, ...] = (
     "camera/pose_relative_to_world",
@@ -181,21 +174,29 @@ class ViewRecord:
                      "occlusion_map"):  # fmt: skip
             shape = np.shape(getattr(self, name))
             if shape != (h, w):
-                raise ValueError(f"ViewRecord {v}: {name} must be ({h}, {w}), got {shape}")
+                raise InvalidArgumentError(
+                    f"ViewRecord {v}: {name} must be ({h}, {w}), got {shape}"
+                )
         if np.shape(self.rgb) != (h, w, 3):
-            raise ValueError(f"ViewRecord {v}: rgb must be ({h}, {w}, 3), got {np.shape(self.rgb)}")
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: rgb must be ({h}, {w}, 3), got {np.shape(self.rgb)}"
+            )
         amodal = np.shape(self.amodal)
         if len(amodal) != 3 or amodal[1:] != (h, w):
-            raise ValueError(f"ViewRecord {v}: amodal must be (N, {h}, {w}), got {amodal}")
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: amodal must be (N, {h}, {w}), got {amodal}"
+            )
         n = amodal[0]
         top = int(np.max(self.instances, initial=0))
         if top > n or int(np.min(self.instances, initial=0)) < 0:
-            raise ValueError(f"ViewRecord {v}: instance ids must be in 0..{n}, got max {top}")
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: instance ids must be in 0..{n}, got max {top}"
+            )
         if n > 255:
-            raise ValueError(f"ViewRecord {v}: at most 255 instances per view, got {n}")
+            raise InvalidArgumentError(f"ViewRecord {v}: at most 255 instances per view, got {n}")
         for key in HDF5_FLOAT_KEYS:
             if key not in self.scene_hdf5:
-                raise ValueError(f"ViewRecord {v}: scene_hdf5 lacks '{key}'")
+                raise InvalidArgumentError(f"ViewRecord {v}: scene_hdf5 lacks '{key}'")
 
 
 def view_file_names(v: int) -> list[str]:
@@ -268,7 +269,6 @@ def hdf5_bytes(datasets: Mapping[str, np.ndarray], attrs: Mapping[str, Any] | No
 def png_bytes(image: npt.ArrayLike) -> bytes:
     """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible;
     zlib level 1: several times faster than the default for ~10 % more bytes)."""
-    from PIL import Image
 
     buf = io.BytesIO()
     Image.fromarray(np.asarray(image)).save(buf, format="PNG", compress_level=1)
@@ -285,14 +285,13 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     Units: the npz depth, ``depth_ideal`` and every HDF5 length are converted to centimetres.
     Dtypes and layout: see the module doc.
     """
-    from mgn.render.views import depth_picture
 
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     v = rec.index
     f4 = np.float32
     depth_cm = (np.asarray(rec.depth, np.float64) * M_TO_CM).astype(f4)
-    npz = {
+    npz: dict[str, Any] = {
         "depth": depth_cm,
         "instances_objects": np.asarray(rec.instances).astype(id_image_dtype(0, instances=True)),
         "instances_semantic": np.asarray(rec.semantic).astype(
@@ -309,7 +308,9 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
         images["valid_depth"] = valid  # not derivable from the depth: stored
     for key, value in rec.extra_npz.items():
         if key in npz or key in images or key == "valid_depth":
-            raise ValueError(f"write_view: extra image '{key}' would replace a format key")
+            raise InvalidArgumentError(
+                f"write_view: extra image '{key}' would replace a format key"
+            )
         images[key] = np.asarray(value)
     h5 = {
         path: np.asarray(value).astype(np.int32)
@@ -336,15 +337,17 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
 
 
 def scene_gt_entries(
-    X_CO: npt.ArrayLike, obj_ids: Sequence[int], seen: Sequence[bool] | None = None
+    X_CO: npt.ArrayLike, obj_ids: npt.ArrayLike, seen: npt.ArrayLike | None = None
 ) -> list[dict[str, Any]]:
     """``scene_gt.json`` entries of one view: per instance ``cam_R_m2c`` (a nested 3x3 list, one
     list per row of R_CO, as MetaGraspNet writes it), ``cam_t_m2c`` (cm) and ``obj_id`` (int);
     instances with ``seen`` False are left out."""
     X = np.asarray(X_CO, np.float64)
+    ids = np.asarray(obj_ids).reshape(-1)
+    keep = np.ones(len(ids), bool) if seen is None else np.asarray(seen, bool).reshape(-1)
     out = []
-    for i, oid in enumerate(obj_ids):
-        if seen is not None and not seen[i]:
+    for i, oid in enumerate(ids):
+        if not keep[i]:
             continue
         out.append({
             "cam_R_m2c": [[float(x) for x in row] for row in X[i, :3, :3]],

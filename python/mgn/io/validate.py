@@ -7,6 +7,7 @@ of range, inconsistent with the other files of the view, checksum different from
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -14,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from mgn.io.dataset import Dataset, SceneFolder, View
+from mgn.io.manifest import MANIFEST, check_manifest
 from mgn.io.scene_format import HDF5_FLOAT_KEYS, view_file_names
 
 __all__ = ["Problem", "validate_dataset"]
@@ -38,18 +40,14 @@ class Problem:
         return f"{self.path}: {self.message}"
 
 
-def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
-    v = view.index
+Report = Callable[[str, str], None]  # bad(file suffix, message)
 
-    def bad(suffix: str, msg: str) -> None:
-        problems.append((f"{v}{suffix}", msg))
 
-    for name in view_file_names(v):
-        if not (view.folder / name).exists():
-            problems.append((name, "missing"))
+def _check_camera_and_rgb(view: View, bad: Report) -> tuple[int, int] | None:
+    """Checks ``_camera_params.json`` and ``_rgb.png``; returns the image (height, width)."""
     try:
         K = view.intrinsics
-        hw = (K.height, K.width)
+        hw: tuple[int, int] | None = (K.height, K.width)
     except Exception as e:  # noqa: BLE001 (report any failure as a finding)
         bad("_camera_params.json", str(e))
         hw = None
@@ -59,6 +57,32 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
             bad("_rgb.png", f"shape {rgb.shape}, camera params say {(*hw, 3)}")
     except Exception as e:  # noqa: BLE001
         bad("_rgb.png", str(e))
+    return hw
+
+
+def _check_masks(z: Any, hw: tuple[int, int] | None, bad: Report) -> int:
+    """Checks the amodal and visible masks of a view's ``.npz``; returns the instance count."""
+    am = z["occlusion_objects"]
+    n = int(am.shape[0])
+    if am.ndim != 3 or (hw is not None and am.shape[1:] != hw):
+        bad(".npz", f"'occlusion_objects' has shape {am.shape}, expected (N, *{hw})")
+    if "instances_objects" in z:
+        ids = z["instances_objects"]
+        if np.any(ids != np.round(ids)) or ids.min(initial=0) < 0 or ids.max(initial=0) > n:
+            bad(".npz", f"'instances_objects' must hold whole ids 0..{n}")
+        elif ids.max(initial=0) < 1:
+            bad(".npz", "no visible object in this view (the camera sees only the tote)")
+        elif am.ndim == 3 and am.shape[1:] == ids.shape:
+            for i in range(n):
+                vis = ids == i + 1
+                if vis.any() and np.any(vis & ~am[i]):
+                    bad(".npz", f"visible mask of instance {i + 1} not inside its amodal mask")
+                    break
+    return n
+
+
+def _check_npz(view: View, hw: tuple[int, int] | None, bad: Report) -> int | None:
+    """Checks a view's ``.npz``; returns the instance count (None: unknown)."""
     n = None
     try:
         z = view.npz
@@ -71,31 +95,39 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
         if "occlusion_objects" not in z:
             bad(".npz", "lacks 'occlusion_objects'")
         else:
-            am = z["occlusion_objects"]
-            n = am.shape[0]
-            if am.ndim != 3 or (hw is not None and am.shape[1:] != hw):
-                bad(".npz", f"'occlusion_objects' has shape {am.shape}, expected (N, *{hw})")
-            if "instances_objects" in z:
-                ids = z["instances_objects"]
-                if np.any(ids != np.round(ids)) or ids.min(initial=0) < 0 or ids.max(initial=0) > n:
-                    bad(".npz", f"'instances_objects' must hold whole ids 0..{n}")
-                elif ids.max(initial=0) < 1:
-                    bad(".npz", "no visible object in this view (the camera sees only the tote)")
-                elif am.ndim == 3 and am.shape[1:] == ids.shape:
-                    for i in range(n):
-                        vis = ids == i + 1
-                        if vis.any() and np.any(vis & ~am[i]):
-                            bad(
-                                ".npz",
-                                f"visible mask of instance {i + 1} not inside its amodal mask",
-                            )
-                            break
+            n = _check_masks(z, hw, bad)
         if "occlusion" in z:
             occ = z["occlusion"]
             if np.any(~np.isfinite(occ)) or occ.min(initial=0) < 0 or occ.max(initial=0) > 1:
                 bad(".npz", "'occlusion' must lie in [0, 1]")
     except Exception as e:  # noqa: BLE001
         bad(".npz", str(e))
+    return n
+
+
+def _check_groups(h5: Any, n: int | None, bad: Report) -> None:
+    """Checks the grasp and keypoint groups of a view's ``_scene.hdf5``."""
+    groups: dict[str, dict[str, Any]] = {}
+    for key, value in h5.items():
+        if "grasps/" in key or key.startswith("keypts/"):
+            g, _, leaf = key.rpartition("/")
+            groups.setdefault(g, {})[leaf] = value
+    for g, leaves in groups.items():
+        lengths = {leaf: len(a) for leaf, a in leaves.items()}
+        if len(set(lengths.values())) > 1 and "occluded_object_id" not in leaves:
+            bad("_scene.hdf5", f"group '{g}' has datasets of different lengths {lengths}")
+        for leaf, a in leaves.items():
+            if leaf.endswith("object_id") and n is not None and len(a):
+                if a.min() < 0 or a.max() >= n:
+                    bad("_scene.hdf5", f"'{g}/{leaf}' must lie in 0..{n - 1}")
+            if leaf.startswith("score") and len(a):
+                finite = a[np.isfinite(a)]
+                if len(finite) and (finite.min() < 0 or finite.max() > 1):
+                    bad("_scene.hdf5", f"'{g}/{leaf}' must lie in [0, 1]")
+
+
+def _check_hdf5(view: View, n: int | None, bad: Report) -> None:
+    """Checks a view's ``_scene.hdf5``."""
     try:
         h5 = view.hdf5
         for key in HDF5_FLOAT_KEYS:
@@ -111,25 +143,14 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
             for key, shape in expect.items():
                 if key in h5 and h5[key].shape != shape:
                     bad("_scene.hdf5", f"'{key}' has shape {h5[key].shape}, expected {shape}")
-        groups: dict[str, dict[str, Any]] = {}
-        for key, value in h5.items():
-            if "grasps/" in key or key.startswith("keypts/"):
-                g, _, leaf = key.rpartition("/")
-                groups.setdefault(g, {})[leaf] = value
-        for g, leaves in groups.items():
-            lengths = {leaf: len(a) for leaf, a in leaves.items()}
-            if len(set(lengths.values())) > 1 and "occluded_object_id" not in leaves:
-                bad("_scene.hdf5", f"group '{g}' has datasets of different lengths {lengths}")
-            for leaf, a in leaves.items():
-                if leaf.endswith("object_id") and n is not None and len(a):
-                    if a.min() < 0 or a.max() >= n:
-                        bad("_scene.hdf5", f"'{g}/{leaf}' must lie in 0..{n - 1}")
-                if leaf.startswith("score") and len(a):
-                    finite = a[np.isfinite(a)]
-                    if len(finite) and (finite.min() < 0 or finite.max() > 1):
-                        bad("_scene.hdf5", f"'{g}/{leaf}' must lie in [0, 1]")
+        _check_groups(h5, n, bad)
     except Exception as e:  # noqa: BLE001
         bad("_scene.hdf5", str(e))
+
+
+def _check_order(view: View, n: int | None, bad: Report) -> None:
+    """Checks a view's ``_order.csv`` and ``_order.json`` against each other."""
+    v = view.index
     try:
         m = view.relation_matrix
         if n is not None and m.shape != (n, n) and m.size:
@@ -150,8 +171,22 @@ def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
         bad("_order.json", str(e))
 
 
+def _check_view(view: View, problems: list[tuple[str, str]]) -> None:
+    v = view.index
+
+    def bad(suffix: str, msg: str) -> None:
+        problems.append((f"{v}{suffix}", msg))
+
+    for name in view_file_names(v):
+        if not (view.folder / name).exists():
+            problems.append((name, "missing"))
+    hw = _check_camera_and_rgb(view, bad)
+    n = _check_npz(view, hw, bad)
+    _check_hdf5(view, n, bad)
+    _check_order(view, n, bad)
+
+
 def _check_scene(scene: SceneFolder, problems: list[Problem], root: Path) -> None:
-    from mgn.pipeline.manifest import MANIFEST, check_manifest
 
     found: list[tuple[str, str]] = []
     if (scene.folder / MANIFEST).exists():
@@ -175,8 +210,6 @@ def _check_completeness(ds: Dataset, info: dict[str, Any], problems: list[Proble
     out of disk), ``incomplete`` that scenes failed. Every scene folder needs its manifest (it is
     written last, so a folder without one was never finished).
     """
-    from mgn.pipeline.manifest import MANIFEST
-
     status = info.get("status")
     if status != "complete":
         failed = info.get("failed_scenes")
@@ -193,7 +226,8 @@ def _check_completeness(ds: Dataset, info: dict[str, Any], problems: list[Proble
         problems.append(Problem("dataset.json", f"num_scenes must be an integer >= 0, got {num!r}"))
         return
     present = set(ds.scene_ids)
-    sel = info.get("selection") if isinstance(info.get("selection"), dict) else {}
+    raw_sel = info.get("selection")
+    sel: dict[str, Any] = raw_sel if isinstance(raw_sel, dict) else {}
     selected = {int(e["scene"]) for e in sel.get("views", []) if isinstance(e, dict)}
     prunable = bool(sel.get("pruned")) if sel else False
     missing = [i for i in range(num) if i not in present and not (prunable and i not in selected)]

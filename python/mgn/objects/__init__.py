@@ -10,27 +10,32 @@
 
 from .library import (
     ALLOWED_TAGS,
+    NUM_COM_KEYPOINTS,
     Keypoint,
     MaterialSpec,
     ObjectSpec,
     builtin_objects,
+    com_keypoints,
     get_object,
     object_names,
 )
-from .tote import ToteSpec, default_tote, make_tote, tote_volume
+from .tote import ToteSpec, default_tote, make_tote, tote_mesh, tote_volume
 from .user import load_objects_yaml
 
 __all__ = [
     "ALLOWED_TAGS",
+    "NUM_COM_KEYPOINTS",
     "Keypoint",
     "MaterialSpec",
     "ObjectSpec",
     "ToteSpec",
     "builtin_objects",
+    "com_keypoints",
     "default_tote",
     "get_object",
     "load_objects_yaml",
     "make_tote",
+    "tote_mesh",
     "object_names",
     "tote_volume",
 ]

@@ -25,11 +25,18 @@ Tags (a subset of :data:`ALLOWED_TAGS`) describe the object for dataset splits:
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import io
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
+from PIL import Image
+
+from mgn.errors import InvalidArgumentError, InvalidTypeError
+from mgn.geometry import mesh as geo
 
 from . import textures as tx
 from .shapes import (
@@ -49,6 +56,8 @@ from .shapes import (
 )
 
 __all__ = [
+    "NUM_COM_KEYPOINTS",
+    "com_keypoints",
     "ALLOWED_TAGS",
     "MaterialSpec",
     "Keypoint",
@@ -98,6 +107,11 @@ class MaterialSpec:
         opacity: 1 opaque, lower is more transparent (e.g. 0.15 for clear glass).
         texture: (H, W, 3) uint8 sRGB image (row 0 = top of the image) or ``None``. Read-only;
             excluded from equality and hashing.
+        metallic, roughness, ior, transmission: the physically based description used by the
+            path tracer (glTF 2.0 metallic-roughness, mgn.render.path): metallic in [0, 1],
+            perceptual roughness in [0, 1] (GGX alpha = roughness^2), index of refraction
+            >= 1, transmission in [0, 1] (1 = clear glass or plastic). The Phong fields above
+            drive the raster preview.
     """
 
     name: str
@@ -106,20 +120,36 @@ class MaterialSpec:
     shininess: float = 20.0
     opacity: float = 1.0
     texture: np.ndarray | None = field(default=None, compare=False, hash=False, repr=False)
+    metallic: float = 0.0
+    roughness: float = 0.5
+    ior: float = 1.5
+    transmission: float = 0.0
 
     def __post_init__(self) -> None:
         if len(self.base_color) != 4 or not all(0.0 <= float(c) <= 1.0 for c in self.base_color):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"MaterialSpec.base_color must be 4 values in [0, 1], got {self.base_color!r}"
             )
         if len(self.specular) != 3 or not all(0.0 <= float(c) <= 1.0 for c in self.specular):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"MaterialSpec.specular must be 3 values in [0, 1], got {self.specular!r}"
             )
         if not (np.isfinite(self.shininess) and self.shininess > 0):
-            raise ValueError(f"MaterialSpec.shininess must be > 0, got {self.shininess!r}")
+            raise InvalidArgumentError(
+                f"MaterialSpec.shininess must be > 0, got {self.shininess!r}"
+            )
         if not 0.0 < self.opacity <= 1.0:
-            raise ValueError(f"MaterialSpec.opacity must be in (0, 1], got {self.opacity!r}")
+            raise InvalidArgumentError(
+                f"MaterialSpec.opacity must be in (0, 1], got {self.opacity!r}"
+            )
+        for key in ("metallic", "roughness", "transmission"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not (np.isfinite(v) and 0.0 <= v <= 1.0):
+                raise InvalidArgumentError(f"MaterialSpec.{key} must be in [0, 1], got {v!r}")
+            object.__setattr__(self, key, float(v))
+        if isinstance(self.ior, bool) or not (np.isfinite(self.ior) and 1.0 <= self.ior <= 4.0):
+            raise InvalidArgumentError(f"MaterialSpec.ior must be in [1, 4], got {self.ior!r}")
+        object.__setattr__(self, "ior", float(self.ior))
         object.__setattr__(self, "base_color", tuple(float(c) for c in self.base_color))
         object.__setattr__(self, "specular", tuple(float(c) for c in self.specular))
         if self.texture is not None:
@@ -131,7 +161,7 @@ class MaterialSpec:
                 or t.shape[0] < 1
                 or t.shape[1] < 1
             ):
-                raise ValueError(
+                raise InvalidArgumentError(
                     "MaterialSpec.texture must be an (H, W, 3) uint8 array, "
                     f"got {t.dtype} {t.shape}"
                 )
@@ -192,40 +222,46 @@ class ObjectSpec:
         v = np.asarray(self.vertices, dtype=np.float64)
         f = np.asarray(self.faces)
         if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4 or not np.all(np.isfinite(v)):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: vertices must be a finite (V >= 4, 3) array, got {v.shape}"
             )
         if f.ndim != 2 or f.shape[1] != 3 or len(f) < 4 or not np.issubdtype(f.dtype, np.integer):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: faces must be an integer (F >= 4, 3) array, got {f.dtype} {f.shape}"
             )
         if f.min() < 0 or f.max() >= len(v):
-            raise ValueError(f"{self.name}: faces index outside 0..{len(v) - 1}")
+            raise InvalidArgumentError(f"{self.name}: faces index outside 0..{len(v) - 1}")
         object.__setattr__(self, "vertices", _readonly(v))
         object.__setattr__(self, "faces", _readonly(f.astype(np.int32)))
         has_tex = self.material.texture is not None
         if (self.uvs is not None) != has_tex:
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: uvs must be given exactly when the material has a texture"
             )
         if self.uvs is not None:
             uv = np.asarray(self.uvs, dtype=np.float32)
             if uv.shape != (len(v), 2) or not np.all((uv >= 0) & (uv <= 1)):
-                raise ValueError(
+                raise InvalidArgumentError(
                     f"{self.name}: uvs must be a (V, 2) array in [0, 1], got {uv.shape}"
                 )
             object.__setattr__(self, "uvs", _readonly(uv))
         if not (np.isfinite(self.density) and self.density > 0):
-            raise ValueError(f"{self.name}: density must be > 0 kg/m^3, got {self.density!r}")
+            raise InvalidArgumentError(
+                f"{self.name}: density must be > 0 kg/m^3, got {self.density!r}"
+            )
         if not (np.isfinite(self.friction) and 0 < self.friction <= 2):
-            raise ValueError(f"{self.name}: friction must be in (0, 2], got {self.friction!r}")
+            raise InvalidArgumentError(
+                f"{self.name}: friction must be in (0, 2], got {self.friction!r}"
+            )
         if not 2 <= len(self.keypoints) <= 8:
-            raise ValueError(f"{self.name}: needs 2..8 keypoints, got {len(self.keypoints)}")
+            raise InvalidArgumentError(
+                f"{self.name}: needs 2..8 keypoints, got {len(self.keypoints)}"
+            )
         if [k.id for k in self.keypoints] != list(range(1, len(self.keypoints) + 1)):
-            raise ValueError(f"{self.name}: keypoint ids must be 1..K in order")
+            raise InvalidArgumentError(f"{self.name}: keypoint ids must be 1..K in order")
         bad = set(self.tags) - ALLOWED_TAGS
         if bad:
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"{self.name}: unknown tags {sorted(bad)}; allowed: {sorted(ALLOWED_TAGS)}"
             )
         object.__setattr__(self, "tags", frozenset(self.tags))
@@ -278,6 +314,55 @@ class ObjectSpec:
     def mass(self) -> float:
         """density x volume, kg."""
         return self.density * self.volume
+
+    def to_mesh(self) -> geo.Mesh:
+        """The :class:`mgn.Mesh` of this object (metres, object frame), with its material (its
+        texture, if any, embedded as PNG bytes in ``Material.texture_data``)."""
+        mat = geo.Material()
+        mat.name = self.material.name
+        mat.base_color = np.asarray(self.material.base_color, np.float32)
+        mat.specular = np.asarray(self.material.specular, np.float32)
+        mat.shininess = float(self.material.shininess)
+        mat.opacity = float(self.material.opacity)
+        mat.has_pbr = True
+        mat.metallic = float(self.material.metallic)
+        mat.roughness = float(self.material.roughness)
+        mat.ior = float(self.material.ior)
+        mat.transmission = float(self.material.transmission)
+        uvs = None if self.uvs is None else np.asarray(self.uvs, np.float32)
+        if self.material.texture is not None and uvs is not None:
+            # The texture travels with the mesh as embedded PNG bytes (the renderer decodes them).
+            buf = io.BytesIO()
+            Image.fromarray(np.asarray(self.material.texture, np.uint8)).save(buf, format="PNG")
+            mat.texture_data = buf.getvalue()
+        return geo.Mesh(
+            np.asarray(self.vertices, np.float32),
+            np.asarray(self.faces, np.int32),
+            uvs,
+            [mat],
+            [],
+            self.name,
+        )
+
+
+#: Number of centre-of-mass keypoints per object (MetaGraspNet).
+NUM_COM_KEYPOINTS = 1000
+
+
+def com_keypoints(mesh: geo.Mesh, density: float, *, seed: int) -> npt.NDArray[np.float64]:
+    """(1000, 4) [score, x, y, z] in metres: surface points scored by closeness to the CoM.
+
+    score = (d_max - d) / (d_max - d_min), d = distance to the mass-weighted centre of mass.
+    Points are spread evenly (blue noise) with a fixed ``seed``.
+    """
+    com = geo.mass_properties(mesh, density).center_of_mass
+    pts = geo.sample_surface(mesh, NUM_COM_KEYPOINTS, method="even", seed=seed).points.astype(
+        np.float64
+    )
+    d = np.linalg.norm(pts - com, axis=1)
+    span = max(float(d.max() - d.min()), 1e-12)
+    score = (d.max() - d) / span
+    return np.column_stack([score, pts])
 
 
 # ----------------------------------------------------------------------------------------------
@@ -429,7 +514,7 @@ def _register(
 
     def add(build: Callable[[], _Built]) -> Callable[[], _Built]:
         if any(e.name == name for e in _CATALOGUE):
-            raise ValueError(f"duplicate object name {name!r}")
+            raise InvalidArgumentError(f"duplicate object name {name!r}")
         _CATALOGUE.append(
             _Entry(name, description, build, material, density, friction, frozenset(tags))
         )
@@ -444,16 +529,29 @@ def _mat(
     specular: float = 0.2,
     shininess: float = 20.0,
     opacity: float = 1.0,
+    *,
+    roughness: float,
+    metallic: float = 0.0,
+    transmission: float = 0.0,
+    ior: float = 1.5,
 ) -> MaterialSpec:
-    """Material with a grey specular colour of level ``specular``."""
-    return MaterialSpec(name, color, (specular, specular, specular), shininess, opacity)
+    """Material with a grey specular colour of level ``specular`` (raster preview) and its
+    physically based parameters (path tracer)."""
+    return MaterialSpec(
+        name, color, (specular, specular, specular), shininess, opacity, None,
+        metallic=metallic, roughness=roughness, ior=ior, transmission=transmission,
+    )  # fmt: skip
 
 
 _WHITE = (1.0, 1.0, 1.0, 1.0)
 _BLACK = (0.03, 0.03, 0.03, 1.0)
-_PRINT = _mat("cardboard_print", _WHITE, 0.1, 10.0)
-_TIN = _mat("printed_metal", _WHITE, 0.6, 60.0)
-_GLASS = _mat("clear_glass", (0.85, 0.92, 0.9, 0.15), 0.9, 120.0, 0.15)
+# Printed cardboard: a rough dielectric (uncoated board, matte print).
+_PRINT = _mat("cardboard_print", _WHITE, 0.1, 10.0, roughness=0.75)
+# Printed tinplate: lacquered print over steel, the metal showing through.
+_TIN = _mat("printed_metal", _WHITE, 0.6, 60.0, roughness=0.28, metallic=0.45)
+# Clear soda-lime glass / PET: a smooth dielectric that transmits (n = 1.5).
+_GLASS = _mat("clear_glass", (0.85, 0.92, 0.9, 0.15), 0.9, 120.0, 0.15,
+              roughness=0.02, transmission=1.0, ior=1.5)  # fmt: skip
 
 
 # ----------------------------------------------------------------------------------------------
@@ -598,7 +696,7 @@ def _spray_can() -> _Built:
 @_register(
     "bottle_water",
     "Opaque plastic water bottle with neck and screw cap, 208 mm tall.",
-    material=_mat("blue_plastic", _lin("#5fa8d3"), 0.4, 40.0),
+    material=_mat("blue_plastic", _lin("#5fa8d3"), 0.4, 40.0, roughness=0.3),
     density=850.0, friction=0.4, tags=("cylindrical",),
 )  # fmt: skip
 def _bottle_water() -> _Built:
@@ -625,7 +723,7 @@ def _bottle_water() -> _Built:
 @_register(
     "bottle_detergent",
     "Detergent bottle, rounded-rectangle section 95 x 60 mm, with cap.",
-    material=_mat("orange_plastic", _lin("#f08a24"), 0.3, 30.0),
+    material=_mat("orange_plastic", _lin("#f08a24"), 0.3, 30.0, roughness=0.4),
     density=700.0, friction=0.45,
 )  # fmt: skip
 def _bottle_detergent() -> _Built:
@@ -643,7 +741,7 @@ def _bottle_detergent() -> _Built:
 @_register(
     "jar",
     "Jam jar with a metal lid, 82 mm diameter, 115 mm tall.",
-    material=_mat("red_jam_glass", _lin("#8c1c24"), 0.6, 80.0),
+    material=_mat("red_jam_glass", _lin("#8c1c24"), 0.6, 80.0, roughness=0.06),
     density=1300.0, friction=0.4, tags=("cylindrical",),
 )  # fmt: skip
 def _jar() -> _Built:
@@ -666,7 +764,7 @@ def _jar() -> _Built:
 @_register(
     "mug",
     "Ceramic mug with a handle, 82 mm diameter, 96 mm tall.",
-    material=_mat("white_ceramic", _lin("#ece8df"), 0.5, 60.0),
+    material=_mat("white_ceramic", _lin("#ece8df"), 0.5, 60.0, roughness=0.12),
     density=2300.0, friction=0.6, tags=("nonconvex",),
 )  # fmt: skip
 def _mug(path_steps: int = 36, handle_segments: int = 16) -> _Built:
@@ -697,7 +795,7 @@ def _mug(path_steps: int = 36, handle_segments: int = 16) -> _Built:
 @_register(
     "bowl",
     "Thick-walled ceramic bowl, 156 mm diameter.",
-    material=_mat("green_ceramic", _lin("#6b9e78"), 0.5, 60.0),
+    material=_mat("green_ceramic", _lin("#6b9e78"), 0.5, 60.0, roughness=0.12),
     density=2300.0, friction=0.6, tags=("nonconvex",),
 )  # fmt: skip
 def _bowl() -> _Built:
@@ -721,7 +819,7 @@ def _bowl() -> _Built:
 @_register(
     "cup_black",
     "Black plastic cup, tapered, 86 mm rim diameter.",
-    material=_mat("black_plastic", _BLACK, 0.3, 30.0),
+    material=_mat("black_plastic", _BLACK, 0.3, 30.0, roughness=0.35),
     density=1100.0, friction=0.5, tags=("nonconvex", "black", "novel"),
 )  # fmt: skip
 def _cup_black() -> _Built:
@@ -745,7 +843,7 @@ def _cup_black() -> _Built:
 @_register(
     "pipe_straight",
     "Straight PVC pipe, 40 mm outer / 32 mm inner diameter, 200 mm long.",
-    material=_mat("grey_pvc", _lin("#9a9ea3"), 0.3, 30.0),
+    material=_mat("grey_pvc", _lin("#9a9ea3"), 0.3, 30.0, roughness=0.55),
     density=1400.0, friction=0.5, tags=("nonconvex", "cylindrical"),
 )  # fmt: skip
 def _pipe_straight() -> _Built:
@@ -762,7 +860,7 @@ def _pipe_straight() -> _Built:
 @_register(
     "pipe_elbow",
     "90-degree PVC elbow, 40 mm outer diameter, 50 mm bend radius.",
-    material=_mat("white_pvc", _lin("#e6e6e1"), 0.3, 30.0),
+    material=_mat("white_pvc", _lin("#e6e6e1"), 0.3, 30.0, roughness=0.55),
     density=1400.0, friction=0.5, tags=("nonconvex",),
 )  # fmt: skip
 def _pipe_elbow() -> _Built:
@@ -784,7 +882,7 @@ def _pipe_elbow() -> _Built:
 @_register(
     "l_bracket",
     "Steel L-bracket, 80 x 60 x 40 mm, 4 mm plate, two holes.",
-    material=_mat("zinc_steel", _lin("#b8bcc2"), 0.8, 80.0),
+    material=_mat("zinc_steel", _lin("#b8bcc2"), 0.8, 80.0, roughness=0.4, metallic=1.0),
     density=7850.0, friction=0.4, tags=("nonconvex",),
 )  # fmt: skip
 def _l_bracket() -> _Built:
@@ -809,7 +907,7 @@ def _l_bracket() -> _Built:
 @_register(
     "hex_nut",
     "M16 steel hex nut, 24 mm across flats, 13 mm thick.",
-    material=_mat("steel", _lin("#a7abb0"), 0.8, 80.0),
+    material=_mat("steel", _lin("#a7abb0"), 0.8, 80.0, roughness=0.18, metallic=1.0),
     density=7850.0, friction=0.4, tags=("nonconvex",),
 )  # fmt: skip
 def _hex_nut() -> _Built:
@@ -829,7 +927,7 @@ def _hex_nut() -> _Built:
 @_register(
     "clamp",
     "C-clamp: C-shaped frame, screw with pad and T-bar.",
-    material=_mat("red_cast_iron", _lin("#b3261e"), 0.4, 40.0),
+    material=_mat("red_cast_iron", _lin("#b3261e"), 0.4, 40.0, roughness=0.5),
     density=4500.0, friction=0.5, tags=("nonconvex", "novel"),
 )  # fmt: skip
 def _clamp() -> _Built:
@@ -852,7 +950,7 @@ def _clamp() -> _Built:
 @_register(
     "pear",
     "Pear-shaped fruit with a stem, 100 mm tall.",
-    material=_mat("pear_green", _lin("#b5c64a"), 0.3, 25.0),
+    material=_mat("pear_green", _lin("#b5c64a"), 0.3, 25.0, roughness=0.45),
     density=980.0, friction=0.6,
 )  # fmt: skip
 def _pear(stem_steps: int = 10, stem_segments: int = 10) -> _Built:
@@ -878,7 +976,7 @@ def _pear(stem_steps: int = 10, stem_segments: int = 10) -> _Built:
 @_register(
     "tennis_ball",
     "Tennis ball, 67 mm diameter.",
-    material=_mat("felt_yellow", _lin("#d4e83a"), 0.05, 5.0),
+    material=_mat("felt_yellow", _lin("#d4e83a"), 0.05, 5.0, roughness=0.95),
     density=360.0, friction=0.8,
 )  # fmt: skip
 def _tennis_ball() -> _Built:
@@ -890,7 +988,7 @@ def _tennis_ball() -> _Built:
 @_register(
     "marker_pen",
     "Marker pen with clip, 17 mm diameter, 142 mm long.",
-    material=_mat("marker_blue", _lin("#1f4fb4"), 0.4, 40.0),
+    material=_mat("marker_blue", _lin("#1f4fb4"), 0.4, 40.0, roughness=0.3),
     density=600.0, friction=0.4, tags=("cylindrical",),
 )  # fmt: skip
 def _marker() -> _Built:
@@ -915,7 +1013,7 @@ def _marker() -> _Built:
 @_register(
     "cable_coil",
     "Black cable coiled in 3.5 turns, 6 mm cable, 86 mm coil diameter.",
-    material=_mat("black_rubber", _BLACK, 0.2, 15.0),
+    material=_mat("black_rubber", _BLACK, 0.2, 15.0, roughness=0.85),
     density=1800.0, friction=0.8, tags=("nonconvex", "black", "deformable", "novel"),
 )  # fmt: skip
 def _cable_coil() -> _Built:
@@ -986,7 +1084,7 @@ def _bottle_clear() -> _Built:
 @_register(
     "remote_control",
     "Black remote control, rounded 180 x 48 x 22 mm with buttons.",
-    material=_mat("black_abs", _BLACK, 0.3, 30.0),
+    material=_mat("black_abs", _BLACK, 0.3, 30.0, roughness=0.3),
     density=800.0, friction=0.5, tags=("black",),
 )  # fmt: skip
 def _remote() -> _Built:
@@ -1006,7 +1104,7 @@ def _remote() -> _Built:
 @_register(
     "sack",
     "Small filled sack (pillow-like, static shape), 200 x 140 x 64 mm.",
-    material=_mat("burlap", _lin("#b79a6b"), 0.05, 5.0),
+    material=_mat("burlap", _lin("#b79a6b"), 0.05, 5.0, roughness=0.95),
     density=600.0, friction=0.9, tags=("deformable", "novel"),
 )  # fmt: skip
 def _sack() -> _Built:
@@ -1031,7 +1129,7 @@ def _sack() -> _Built:
 @_register(
     "sponge",
     "Kitchen sponge, 95 x 65 x 30 mm.",
-    material=_mat("sponge_yellow", _lin("#f2d13a"), 0.05, 5.0),
+    material=_mat("sponge_yellow", _lin("#f2d13a"), 0.05, 5.0, roughness=0.9),
     density=40.0, friction=1.0, tags=("deformable",),
 )  # fmt: skip
 def _sponge() -> _Built:
@@ -1046,7 +1144,7 @@ def _sponge() -> _Built:
 @_register(
     "toothpaste_tube",
     "Toothpaste tube with cap, flattened at the crimped end.",
-    material=_mat("tube_white", _lin("#f4f6f8"), 0.4, 40.0),
+    material=_mat("tube_white", _lin("#f4f6f8"), 0.4, 40.0, roughness=0.3),
     density=1100.0, friction=0.5, tags=("deformable",),
 )  # fmt: skip
 def _toothpaste() -> _Built:
@@ -1082,7 +1180,7 @@ def _toothpaste() -> _Built:
 @_register(
     "tape_roll",
     "Roll of packing tape, 110 mm outer / 76 mm inner diameter, 48 mm wide.",
-    material=_mat("tape_brown", _lin("#a8763e"), 0.5, 50.0),
+    material=_mat("tape_brown", _lin("#a8763e"), 0.5, 50.0, roughness=0.25),
     density=1100.0, friction=0.6, tags=("nonconvex", "cylindrical"),
 )  # fmt: skip
 def _tape_roll() -> _Built:
@@ -1130,14 +1228,7 @@ def _finish(category_id: int, entry: _Entry) -> ObjectSpec:
     material = entry.material
     tags = set(entry.tags) | _size_tags(vertices.max(axis=0) - vertices.min(axis=0))
     if built.texture is not None:
-        material = MaterialSpec(
-            material.name,
-            material.base_color,
-            material.specular,
-            material.shininess,
-            material.opacity,
-            built.texture,
-        )
+        material = dataclasses.replace(material, texture=built.texture)
         tags.add("textured")
     return ObjectSpec(
         category_id=category_id,
@@ -1174,7 +1265,7 @@ def get_object(name_or_id: str | int) -> ObjectSpec:
     """
     names = object_names()
     if isinstance(name_or_id, bool) or not isinstance(name_or_id, (str, int, np.integer)):
-        raise TypeError(
+        raise InvalidTypeError(
             "get_object expects a name (str) or a category id (int), "
             f"got {type(name_or_id).__name__}"
         )

@@ -26,6 +26,9 @@ from dataclasses import dataclass
 
 import manifold3d
 import numpy as np
+import numpy.typing as npt
+
+from mgn.errors import InvalidArgumentError
 
 __all__ = [
     "Mesh",
@@ -75,7 +78,9 @@ class Mesh:
         if self.uvs is not None:
             uv = np.ascontiguousarray(self.uvs, dtype=np.float32).reshape(-1, 2)
             if len(uv) != len(v):
-                raise ValueError(f"uvs has {len(uv)} rows but the mesh has {len(v)} vertices")
+                raise InvalidArgumentError(
+                    f"uvs has {len(uv)} rows but the mesh has {len(v)} vertices"
+                )
             object.__setattr__(self, "uvs", uv)
 
     @property
@@ -115,7 +120,7 @@ class Mesh:
         return self.flipped() if self.signed_volume < 0 else self
 
 
-def rotation_matrix(axis: Sequence[float], angle: float) -> np.ndarray:
+def rotation_matrix(axis: npt.ArrayLike, angle: float) -> np.ndarray:
     """3x3 rotation by ``angle`` radians about ``axis`` (right-hand rule)."""
     a = np.asarray(axis, dtype=np.float64)
     a = a / np.linalg.norm(a)
@@ -237,7 +242,7 @@ def rings_to_mesh(
 
 
 def revolve(
-    profile: Sequence[Sequence[float]],
+    profile: npt.ArrayLike,
     segments: int = 64,
     *,
     closed: bool = False,
@@ -261,14 +266,16 @@ def revolve(
     """
     p = np.asarray(profile, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 2 or len(p) < 3:
-        raise ValueError("profile must be an (N >= 3, 2) array of (r, z)")
+        raise InvalidArgumentError("profile must be an (N >= 3, 2) array of (r, z)")
     if closed:
         if np.any(p[:, 0] <= 0):
-            raise ValueError("a closed profile must have r > 0 everywhere")
+            raise InvalidArgumentError("a closed profile must have r > 0 everywhere")
         ring_pts, pole0, pole1 = p, None, None
     else:
         if p[0, 0] != 0.0 or p[-1, 0] != 0.0 or np.any(p[1:-1, 0] <= 0):
-            raise ValueError("an open profile starts and ends on the axis (r == 0), r > 0 between")
+            raise InvalidArgumentError(
+                "an open profile starts and ends on the axis (r == 0), r > 0 between"
+            )
         ring_pts, pole0, pole1 = p[1:-1], p[0], p[-1]
     theta = np.arange(segments) * (2.0 * np.pi / segments)
     c, s = np.cos(theta), np.sin(theta)
@@ -284,8 +291,8 @@ def revolve(
         return rings_to_mesh(
             rings,
             closed=closed,
-            start_cap=None if pole0 is None else [0.0, 0.0, pole0[1]],
-            end_cap=None if pole1 is None else [0.0, 0.0, pole1[1]],
+            start_cap=None if pole0 is None else np.array([0.0, 0.0, pole0[1]]),
+            end_cap=None if pole1 is None else np.array([0.0, 0.0, pole1[1]]),
         )
     # Textured variant: one extra seam column (a bit-identical copy of column 0) and, for open
     # profiles, one pole vertex per angular step.
@@ -307,6 +314,7 @@ def revolve(
         uvs.append(np.stack([u, np.ones(n)], axis=1))
         tris.append(_band(idx[k - 1], np.arange(last, last + n), False))
     else:
+        assert pole0 is not None and pole1 is not None  # an open profile has both poles
         uc = (np.arange(segments) + 0.5) / segments
         base = k * n
         poles0 = np.arange(base, base + segments)
@@ -378,9 +386,7 @@ def _tube_rings(path: np.ndarray, radius: np.ndarray, segments: int) -> np.ndarr
     return path[:, None, :] + radius[:, None, None] * offs
 
 
-def sweep_circle(
-    path: Sequence[Sequence[float]], radius: float | Sequence[float], segments: int = 16
-) -> Mesh:
+def sweep_circle(path: npt.ArrayLike, radius: float | Sequence[float], segments: int = 16) -> Mesh:
     """Solid circular tube along a polyline, both ends closed by flat caps.
 
     Args:
@@ -396,7 +402,7 @@ def sweep_circle(
 
 
 def sweep_hollow(
-    path: Sequence[Sequence[float]], outer_radius: float, inner_radius: float, segments: int = 32
+    path: npt.ArrayLike, outer_radius: float, inner_radius: float, segments: int = 32
 ) -> Mesh:
     """Hollow circular tube (a pipe) along a polyline, closed by flat annular end faces.
 
@@ -407,7 +413,7 @@ def sweep_hollow(
         segments: points around each cross-section.
     """
     if not 0.0 < inner_radius < outer_radius:
-        raise ValueError("need 0 < inner_radius < outer_radius")
+        raise InvalidArgumentError("need 0 < inner_radius < outer_radius")
     p = np.asarray(path, dtype=np.float64)
     k = len(p)
     outer = _tube_rings(p, np.full(k, outer_radius), segments)
@@ -426,8 +432,8 @@ def _loop_area(loop: np.ndarray) -> float:
 
 
 def extrude(
-    outer: Sequence[Sequence[float]],
-    holes: Sequence[Sequence[Sequence[float]]] = (),
+    outer: npt.ArrayLike,
+    holes: Sequence[npt.ArrayLike] = (),
     height: float = 0.01,
     *,
     layers: int = 1,
@@ -441,7 +447,7 @@ def extrude(
         layers: number of slices of the side walls along z (more triangles, same shape).
     """
     if height <= 0:
-        raise ValueError("height must be > 0")
+        raise InvalidArgumentError("height must be > 0")
     loops = [np.asarray(outer, dtype=np.float64)]
     if _loop_area(loops[0]) < 0:
         loops[0] = loops[0][::-1]
@@ -607,7 +613,7 @@ def rounded_box(
     """
     half = 0.5 * np.asarray(size, dtype=np.float64)
     if not 0.0 < radius < half.min():
-        raise ValueError("rounded_box needs 0 < radius < min(size) / 2")
+        raise InvalidArgumentError("rounded_box needs 0 < radius < min(size) / 2")
     inner = half - radius
     coords = [
         _rounded_axis(h, radius, max(1, int(np.ceil(2 * (h - radius) / max_edge))), round_steps)
@@ -639,7 +645,7 @@ def star_blob(radius_of: Callable[[np.ndarray], np.ndarray], steps: int = 16) ->
     sphere = _cube_sphere_dirs(steps)
     r = np.asarray(radius_of(sphere.vertices), dtype=np.float64)
     if np.any(~np.isfinite(r)) or np.any(r <= 0):
-        raise ValueError("radius_of must return finite positive radii")
+        raise InvalidArgumentError("radius_of must return finite positive radii")
     return Mesh(sphere.vertices * r[:, None], sphere.faces).oriented_outward()
 
 
@@ -690,13 +696,13 @@ def _to_manifold(mesh: Mesh) -> manifold3d.Manifold:
         )
     )
     if man.status() != manifold3d.Error.NoError or man.is_empty():
-        raise ValueError(f"mesh is not a closed oriented 2-manifold ({man.status()})")
+        raise InvalidArgumentError(f"mesh is not a closed oriented 2-manifold ({man.status()})")
     return man
 
 
 def _from_manifold(man: manifold3d.Manifold) -> Mesh:
     if man.status() != manifold3d.Error.NoError:
-        raise ValueError(f"boolean failed: {man.status()}")
+        raise InvalidArgumentError(f"boolean failed: {man.status()}")
     out = man.to_mesh64()
     v = np.asarray(out.vert_properties, dtype=np.float64)[:, :3]
     f = np.asarray(out.tri_verts, dtype=np.int64)

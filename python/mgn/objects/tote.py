@@ -26,7 +26,11 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-__all__ = ["ToteSpec", "make_tote", "default_tote", "tote_volume"]
+from mgn.errors import InvalidArgumentError, InvalidTypeError
+from mgn.geometry import load_mesh
+from mgn.geometry import mesh as geo
+
+__all__ = ["ToteSpec", "make_tote", "default_tote", "tote_mesh", "tote_volume"]
 
 
 @dataclass(frozen=True)
@@ -56,7 +60,9 @@ class ToteSpec:
     def __post_init__(self) -> None:
         if self.mesh is not None and (not isinstance(self.mesh, (str, os.PathLike)) or not
                                       os.fspath(self.mesh)):  # fmt: skip
-            raise ValueError(f"ToteSpec.mesh must be a mesh file path or None, got {self.mesh!r}")
+            raise InvalidArgumentError(
+                f"ToteSpec.mesh must be a mesh file path or None, got {self.mesh!r}"
+            )
         if self.mesh is not None:
             object.__setattr__(self, "mesh", os.fspath(self.mesh))
         for f in fields(self):
@@ -66,15 +72,19 @@ class ToteSpec:
             if isinstance(value, bool) or not isinstance(
                 value, (int, float, np.floating, np.integer)
             ):
-                raise ValueError(f"ToteSpec.{f.name} must be a number, got {value!r}")
+                raise InvalidArgumentError(f"ToteSpec.{f.name} must be a number, got {value!r}")
             if not math.isfinite(float(value)) or float(value) <= 0.0:
-                raise ValueError(f"ToteSpec.{f.name} must be finite and > 0, got {value!r}")
+                raise InvalidArgumentError(
+                    f"ToteSpec.{f.name} must be finite and > 0, got {value!r}"
+                )
             object.__setattr__(self, f.name, float(value))
         color = tuple(self.color)
         if len(color) != 4 or not all(
             isinstance(c, (int, float)) and 0.0 <= float(c) <= 1.0 for c in color
         ):
-            raise ValueError(f"ToteSpec.color must be 4 values in [0, 1], got {self.color!r}")
+            raise InvalidArgumentError(
+                f"ToteSpec.color must be 4 values in [0, 1], got {self.color!r}"
+            )
         object.__setattr__(self, "color", tuple(float(c) for c in color))
 
     @property
@@ -113,7 +123,7 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     """
     s = default_tote() if spec is None else spec
     if not isinstance(s, ToteSpec):
-        raise TypeError(f"make_tote expects a ToteSpec, got {type(s).__name__}")
+        raise InvalidTypeError(f"make_tote expects a ToteSpec, got {type(s).__name__}")
     if s.mesh is not None:
         return _user_tote(s)
     hx, hy = 0.5 * s.inner_length, 0.5 * s.inner_width
@@ -144,8 +154,24 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     return vertices, np.asarray(faces, dtype=np.int32)
 
 
+def tote_mesh(spec: ToteSpec | None = None) -> geo.Mesh:
+    """The tote (:func:`make_tote`, default :class:`ToteSpec`) as a closed :class:`mgn.Mesh` in
+    the tote frame, with its colour as material. The one tote mesh of mgn: physics, rendering and
+    labels use it."""
+    s = ToteSpec() if spec is None else spec
+    vertices, faces = make_tote(s)
+    mat = geo.Material()
+    mat.name = "tote"
+    mat.base_color = np.asarray(s.color, np.float32)
+    mat.specular = np.full(3, 0.1, np.float32)
+    return geo.Mesh(
+        np.asarray(vertices, np.float32), np.asarray(faces, np.int32), None, [mat], [], "tote"
+    )
+
+
 def _user_tote(s: ToteSpec) -> tuple[np.ndarray, np.ndarray]:
-    path = os.path.abspath(s.mesh)  # type: ignore[arg-type]
+    assert s.mesh is not None  # make_tote calls this for a user bin only
+    path = os.path.abspath(s.mesh)
     try:
         stamp = os.stat(path).st_mtime_ns
     except OSError:
@@ -156,8 +182,6 @@ def _user_tote(s: ToteSpec) -> tuple[np.ndarray, np.ndarray]:
     need_lo = np.array([-s.inner_length / 2, -s.inner_width / 2, 0.0])
     need_hi = np.array([s.inner_length / 2, s.inner_width / 2, s.inner_height])
     if np.any(lo > need_lo + tol) or np.any(hi < need_hi - tol) or lo[2] > -1e-4:
-        from mgn.errors import InvalidArgumentError
-
         raise InvalidArgumentError(
             f"tote.mesh '{s.mesh}' (scale {s.mesh_scale:g}) spans {lo.round(3).tolist()} .. "
             f"{hi.round(3).tolist()} m; expected a bin in the tote frame (origin at the centre of "
@@ -170,7 +194,6 @@ def _user_tote(s: ToteSpec) -> tuple[np.ndarray, np.ndarray]:
 
 @functools.lru_cache(maxsize=8)
 def _load_user_tote(path: str, scale: float, stamp: int) -> tuple[np.ndarray, np.ndarray]:
-    from mgn.geometry import load_mesh
 
     mesh = load_mesh(path, scale=scale)
     if mesh.validate().signed_volume < 0:

@@ -11,6 +11,10 @@ Example ``my_objects.yaml`` (paths relative to the YAML file; SI units)::
         category_id: 101           # optional; default: after the built-in objects
         color: [0.6, 0.6, 0.65, 1.0]   # optional linear RGBA; default: the file's material
         opacity: 1.0               # optional
+        metallic: 0.0              # optional, [0, 1]        (physically based, path tracer;
+        roughness: 0.4             # optional, [0, 1]         default: the file's glTF/GLB
+        ior: 1.5                   # optional, [1, 4]         factors, else derived from its
+        transmission: 0.0          # optional, [0, 1]         Phong material)
         keypoints:                 # optional, object frame, metres (default: top/bottom)
           tip: [0.0, 0.0, 0.05]
           hole: [0.01, 0.0, 0.0]
@@ -31,6 +35,7 @@ usual cause). ``mgn objects add MESH... --to my_objects.yaml`` writes this file 
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import warnings
@@ -38,9 +43,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from PIL import Image
 
+from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
-from mgn.geometry import load_mesh
+from mgn.geometry.mesh import Material, load_mesh
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
 
 __all__ = ["ImplausibleSizeWarning", "load_objects_yaml", "warn_implausible_size"]
@@ -76,9 +83,9 @@ def warn_implausible_size(vertices: np.ndarray, source: str) -> bool:
 def _number(entry: dict[str, Any], key: str, where: str, default: float | None = None) -> float:
     value = entry.get(key, default)
     ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-    if not ok or not math.isfinite(float(value)) or float(value) <= 0:
+    if not ok or not math.isfinite(float(value)) or float(value) <= 0:  # type: ignore[arg-type]
         raise InvalidArgumentError(f"{where}: key '{key}': expected a number > 0, got {value!r}")
-    return float(value)
+    return float(value)  # type: ignore[arg-type]
 
 
 _KEYS = {
@@ -90,6 +97,10 @@ _KEYS = {
     "category_id",
     "color",
     "opacity",
+    "metallic",
+    "roughness",
+    "ior",
+    "transmission",
     "keypoints",
     "tags",
     "description",
@@ -97,16 +108,128 @@ _KEYS = {
 }
 
 
+def _rgba(v: Any) -> tuple[float, float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]), float(v[3]))
+
+
+def _rgb(v: Any) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
 def _texture(path: str) -> np.ndarray | None:
     if not path:
         return None
-    from PIL import Image
 
     try:
         with Image.open(path) as img:
             return np.asarray(img.convert("RGB"), dtype=np.uint8)
     except OSError:
         return None  # a missing texture leaves the base colour; the mesh is still usable
+
+
+def _embedded_texture(data: bytes) -> np.ndarray | None:
+    """An embedded (GLB) texture's PNG/JPEG bytes as an RGB image; None if absent or broken."""
+    if not data:
+        return None
+    try:
+        with Image.open(io.BytesIO(data)) as img:
+            return np.asarray(img.convert("RGB"), dtype=np.uint8)
+    except OSError:
+        return None
+
+
+def _number_in(entry: dict[str, Any], key: str, where: str, lo: float, hi: float) -> float | None:
+    """``entry[key]`` as a float in [lo, hi], None when absent; else an error naming the key."""
+    if key not in entry:
+        return None
+    value = entry[key]
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if not ok or not (math.isfinite(float(value)) and lo <= float(value) <= hi):
+        raise InvalidArgumentError(
+            f"{where}: key '{key}': expected a number in [{lo:g}, {hi:g}], got {value!r}"
+        )
+    return float(value)
+
+
+def pbr_defaults(mat: Material | None, opacity: float = 1.0) -> dict[str, float]:
+    """metallic, roughness, ior, transmission of a mesh file's material: its glTF/GLB factors
+    when it has them (``Material.has_pbr``), else derived from the Phong description: roughness
+    from the Phong exponent n through the Beckmann correspondence alpha = sqrt(2 / (n + 2)),
+    roughness = sqrt(alpha) (clamped to [0.05, 1]); a mirror-like specular (luminance >= 0.8,
+    n >= 200) is a metal; opacity < 0.5 a clear dielectric (transmission 1)."""
+    if mat is not None and mat.has_pbr:
+        return {"metallic": float(mat.metallic), "roughness": float(mat.roughness),
+                "ior": float(mat.ior), "transmission": float(mat.transmission)}  # fmt: skip
+    n = float(mat.shininess) if mat is not None else 20.0
+    roughness = min(1.0, max(0.05, math.sqrt(math.sqrt(2.0 / (max(n, 0.0) + 2.0)))))
+    spec = np.asarray(mat.specular if mat is not None else (0.2, 0.2, 0.2), np.float64)
+    lum = float(0.2126 * spec[0] + 0.7152 * spec[1] + 0.0722 * spec[2])
+    metallic = 1.0 if lum >= 0.8 and n >= 200.0 else 0.0
+    transmission = 1.0 if opacity < 0.5 else 0.0
+    if transmission:
+        roughness = 0.02
+    return {"metallic": metallic, "roughness": roughness, "ior": 1.5,
+            "transmission": transmission}  # fmt: skip
+
+
+def _material(entry: dict[str, Any], mat: Any, texture: Any, name: str, where: str) -> MaterialSpec:
+    """The material of a user object: the entry's color/opacity/PBR keys over the file's
+    material (:func:`pbr_defaults`)."""
+    color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
+    if len(color) == 3:
+        color = [*color, 1.0]
+    if not isinstance(color, (list, tuple)) or len(color) != 4:
+        raise InvalidArgumentError(f"{where}: key 'color': expected [r, g, b] or [r, g, b, a] in "
+                                   f"[0, 1], got {entry.get('color')!r}")  # fmt: skip
+    opacity = _number_in(entry, "opacity", where, 1e-6, 1.0)
+    opacity = opacity if opacity is not None else (float(mat.opacity) if mat is not None else 1.0)
+    pbr = pbr_defaults(mat, opacity)
+    for key, lo, hi in (("metallic", 0.0, 1.0), ("roughness", 0.0, 1.0), ("ior", 1.0, 4.0),
+                        ("transmission", 0.0, 1.0)):  # fmt: skip
+        value = _number_in(entry, key, where, lo, hi)
+        if value is not None:
+            pbr[key] = value
+    try:
+        material = MaterialSpec(
+            name=f"{name}_material",
+            base_color=_rgba(color),
+            specular=_rgb(mat.specular if mat is not None else (0.2,) * 3),
+            # A file without a material (OBJ without .mtl, `Ns 0`) gets the default shininess.
+            shininess=float(mat.shininess) if mat is not None and mat.shininess > 0 else 20.0,
+            opacity=opacity,
+            texture=texture,
+            **pbr,
+        )
+    except (TypeError, ValueError) as e:
+        key = "opacity" if "opacity" in str(e) else "color"
+        raise InvalidArgumentError(f"{where}: key '{key}' (or the file's material): {e}") from e
+    return material
+
+
+def _keypoints(
+    entry: dict[str, Any], centre: np.ndarray, hi: np.ndarray, lo: np.ndarray, where: str
+) -> tuple[Keypoint, ...]:
+    """The semantic keypoints of a user object (default: top and bottom of the box)."""
+    named = entry.get("keypoints") or {
+        "top": [centre[0], centre[1], hi[2]],
+        "bottom": [centre[0], centre[1], lo[2]],
+    }
+    if not isinstance(named, dict):
+        raise InvalidArgumentError(
+            f"{where}: key 'keypoints': expected a mapping of names to [x, y, z] in metres, got "
+            f"{named!r}"
+        )
+    keypoints = []
+    for i, (kp_name, pos) in enumerate(named.items(), start=1):
+        p = np.asarray(pos, dtype=np.float64)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise InvalidArgumentError(
+                f"{where}: key 'keypoints.{kp_name}': expected [x, y, z] in metres, got {pos!r}"
+            )
+        keypoints.append(Keypoint(i, str(kp_name), (float(p[0]), float(p[1]), float(p[2]))))
+    if len(keypoints) == 1:
+        keypoints.append(Keypoint(2, "centre", _rgb(centre)))
+    return tuple(keypoints)
 
 
 def _object_from_entry(
@@ -148,50 +271,18 @@ def _object_from_entry(
     if report.signed_volume < 0:
         mesh = mesh.flipped()  # inward-wound file: make the normals point outward
     mat = mesh.materials[0] if mesh.materials else None
-    texture = _texture(mat.texture_path) if mat is not None else None
+    texture = None
+    if mat is not None:
+        texture = _texture(mat.texture_path)
+        if texture is None:
+            texture = _embedded_texture(bytes(mat.texture_data))
     uvs = mesh.uvs if texture is not None else None
     if uvs is not None and (np.any(uvs < 0) or np.any(uvs > 1)):
         uvs = np.mod(uvs, 1.0)  # wrap repeating uvs into the unit square
-    color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
-    if len(color) == 3:
-        color = [*color, 1.0]
-    if not isinstance(color, (list, tuple)) or len(color) != 4:
-        raise InvalidArgumentError(f"{where}: key 'color': expected [r, g, b] or [r, g, b, a] in "
-                                   f"[0, 1], got {entry.get('color')!r}")  # fmt: skip
-    try:
-        material = MaterialSpec(
-            name=f"{name}_material",
-            base_color=tuple(float(c) for c in color),
-            specular=tuple(float(s) for s in (mat.specular if mat is not None else (0.2,) * 3)),
-            # A file without a material (OBJ without .mtl, `Ns 0`) gets the default shininess.
-            shininess=float(mat.shininess) if mat is not None and mat.shininess > 0 else 20.0,
-            opacity=float(entry.get("opacity", mat.opacity if mat is not None else 1.0)),
-            texture=texture,
-        )
-    except (TypeError, ValueError) as e:
-        key = "opacity" if "opacity" in str(e) else "color"
-        raise InvalidArgumentError(f"{where}: key '{key}' (or the file's material): {e}") from e
+    material = _material(entry, mat, texture, name, where)
     lo, hi = mesh.bounds
     centre = (lo + hi) / 2
-    named = entry.get("keypoints") or {
-        "top": [centre[0], centre[1], hi[2]],
-        "bottom": [centre[0], centre[1], lo[2]],
-    }
-    if not isinstance(named, dict):
-        raise InvalidArgumentError(
-            f"{where}: key 'keypoints': expected a mapping of names to [x, y, z] in metres, got "
-            f"{named!r}"
-        )
-    keypoints = []
-    for i, (kp_name, pos) in enumerate(named.items(), start=1):
-        p = np.asarray(pos, dtype=np.float64)
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise InvalidArgumentError(
-                f"{where}: key 'keypoints.{kp_name}': expected [x, y, z] in metres, got {pos!r}"
-            )
-        keypoints.append(Keypoint(i, str(kp_name), (float(p[0]), float(p[1]), float(p[2]))))
-    if len(keypoints) == 1:
-        keypoints.append(Keypoint(2, "centre", tuple(float(x) for x in centre)))
+    keypoints = _keypoints(entry, centre, hi, lo, where)
     try:
         return ObjectSpec(
             category_id=int(entry.get("category_id", default_id)),
@@ -203,7 +294,7 @@ def _object_from_entry(
             material=material,
             density=density,
             friction=friction,
-            keypoints=tuple(keypoints),
+            keypoints=keypoints,
             tags=frozenset(entry.get("tags", ())),
         )
     except ValueError as e:
@@ -216,7 +307,6 @@ def load_objects_yaml(path: str | os.PathLike[str]) -> tuple[ObjectSpec, ...]:
     Category ids default to consecutive numbers after the built-in objects; names and ids must
     not clash with the built-in ones or each other.
     """
-    from mgn.io.yaml_file import read_yaml
 
     p = Path(path)
     data = read_yaml(p, "user-object YAML")

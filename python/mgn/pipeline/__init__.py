@@ -1,12 +1,11 @@
 """The dataset pipeline: ``mgn generate`` (scene tasks on a process pool or Dask), object-label
-cache, scene manifests and the scene writer.
+cache, the config and the scene writer.
 
 - :func:`generate`: objects, gripper and cup in, a complete dataset out (resumable).
 - :func:`scene_seed`: the seed of scene i of a dataset.
 - :func:`run_scene`: one scene task (drop, write, manifest, rename).
 - :func:`write_scene`: the one function that writes a scene folder.
 - :func:`object_labels`: an object's labels, cached in ``$MGN_CACHE_DIR/labels``.
-- :func:`write_manifest`, :func:`check_manifest`: a scene folder's list of files and checksums.
 
 Names are imported on first use, so ``import mgn`` stays light.
 """
@@ -22,9 +21,7 @@ _EXPORTS = {
     "SceneTask": "runner",
     "generate": "runner",
     "run_scene": "runner",
-    "scene_seed": "runner",
-    "check_manifest": "manifest",
-    "write_manifest": "manifest",
+    "scene_seed": "seeds",
     "ObjectLabels": "label_cache",
     "label_cache_dir": "label_cache",
     "object_labels": "label_cache",
@@ -38,14 +35,12 @@ __all__ = [
     "ObjectLabels",
     "SceneResult",
     "SceneTask",
-    "check_manifest",
     "generate",
     "label_cache_dir",
     "object_labels",
     "run_scene",
     "scene_seed",
     "scene_views",
-    "write_manifest",
     "write_models",
     "write_scene",
 ]
@@ -69,13 +64,12 @@ if TYPE_CHECKING:
         object_labels,
         write_models,
     )
-    from mgn.pipeline.manifest import check_manifest, write_manifest
     from mgn.pipeline.runner import (
         GenerateReport,
         SceneResult,
         SceneTask,
         generate,
         run_scene,
-        scene_seed,
     )
     from mgn.pipeline.scene_writer import scene_views, write_scene
+    from mgn.pipeline.seeds import scene_seed

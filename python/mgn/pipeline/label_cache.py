@@ -4,7 +4,7 @@ Each object's suction and parallel-jaw labels (:func:`mgn.suction.label_object`,
 :func:`mgn.pj.label_object`) depend only on its geometry, its density, the cup or gripper and the
 label parameters, never on a scene. They are computed once and kept in
 ``$MGN_CACHE_DIR/labels`` (default ``~/.cache/mgn/labels``, next to the convex-decomposition
-cache of :func:`mgn.scene.convex.cache_dir`), one file per object and label kind:
+cache of :func:`mgn.geometry.convex.cache_dir`), one file per object and label kind:
 
     labels/suction-<sha256>.npz    labels/pj-<sha256>.npz
 
@@ -15,7 +15,7 @@ unreadable entry is recomputed. The entries are written atomically and are byte-
 
 The dataset's ``models/<3-digit id>/`` folders are then written from these labels with the
 existing writers (:func:`mgn.io.model_folder.write_model_folder`,
-:func:`mgn.suction.write_suction_labels`, :func:`mgn.pj.write_pj_labels`).
+:func:`mgn.io.grasp_file.write_suction_labels`, :func:`~mgn.io.grasp_file.write_pj_labels`).
 """
 
 from __future__ import annotations
@@ -33,14 +33,22 @@ from typing import Any
 
 import numpy as np
 
-from mgn import __version__
-from mgn.config import Config
+from mgn import _core
+from mgn._core import __version__
+from mgn.base.atomic import _io_error, atomic_write_bytes
+from mgn.base.deterministic import npz_bytes
 from mgn.errors import IoError
-from mgn.io.atomic import atomic_write_bytes
-from mgn.io.deterministic import npz_bytes
+from mgn.geometry.convex import cache_dir
+from mgn.geometry.mesh import mass_properties
+from mgn.io.grasp_file import write_pj_labels, write_suction_labels
+from mgn.io.model_folder import write_model_folder, write_tote
 from mgn.objects import ObjectSpec
+from mgn.pipeline.config import Config
 from mgn.pj.labels import PjLabels
+from mgn.pj.labels import label_object as pj_label_object
+from mgn.pj.physics import ShakeOptions, ShakeScorer
 from mgn.suction.labels import SuctionLabels
+from mgn.suction.labels import label_object as suction_label_object
 
 __all__ = [
     "CACHE_VERSION",
@@ -56,8 +64,6 @@ __all__ = [
 
 #: Bump when the label layout or algorithms change, so old cache entries are not reused.
 CACHE_VERSION = "object-labels-1"
-_SUCTION_FIELDS = [f.name for f in dataclasses.fields(SuctionLabels)]
-_PJ_FIELDS = [f.name for f in dataclasses.fields(PjLabels)]
 
 
 @dataclass(frozen=True)
@@ -79,7 +85,6 @@ class ObjectLabels:
 
 def label_cache_dir() -> Path:
     """``$MGN_CACHE_DIR/labels`` or ``~/.cache/mgn/labels``."""
-    from mgn.scene.convex import cache_dir
 
     return cache_dir().parent / "labels"
 
@@ -133,16 +138,12 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
 def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0) -> ObjectLabels:
     """Compute the labels of one object (no cache). Deterministic for the config's seed,
     whatever ``num_threads`` (0 = all cores)."""
-    from mgn.geometry import mass_properties
-    from mgn.io.model_folder import object_mesh
 
-    mesh = object_mesh(spec)
+    mesh = spec.to_mesh()
     props = mass_properties(mesh, spec.density)
     ol = config.object_labels
     suction = None
     if config.labels.suction:
-        from mgn.suction.labels import label_object as suction_label_object
-
         suction = suction_label_object(
             mesh,
             mass=props.mass,
@@ -159,12 +160,8 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
         pj = _no_pj_labels(config, f"open mesh ({report.num_boundary_edges} boundary edges, "
                            "allow_open): the antipodal sampler needs a closed volume")  # fmt: skip
     elif config.labels.paralleljaw:
-        from mgn.pj.labels import label_object as pj_label_object
-
         physics = None
         if config.labels.pj_physics:
-            from mgn.pj.physics import ShakeOptions, ShakeScorer
-
             physics = ShakeScorer(
                 density=spec.density,
                 gripper=config.gripper,
@@ -186,7 +183,6 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
 
 def _no_pj_labels(config: Config, reason: str) -> PjLabels:
     """Parallel-jaw labels with no grasp (an ``allow_open`` object), ``pj_skipped`` = reason."""
-    from mgn import _core
 
     f3 = np.zeros((0, 3), np.float32)
     f1 = np.zeros(0, np.float32)
@@ -288,9 +284,6 @@ def write_models(
     Each object folder is built completely under ``<root>/.tmp-models-<pid>/`` and then renamed
     into place (replacing an older one), so an interrupted run never leaves a partial folder.
     """
-    from mgn.io.model_folder import write_model_folder, write_tote
-    from mgn.pj.labels import write_pj_labels
-    from mgn.suction.labels import write_suction_labels
 
     out = Path(root)
     staging = out / f".tmp-models-{os.getpid()}"
@@ -316,7 +309,6 @@ def write_models(
     except OSError as e:
         if isinstance(e, IoError):
             raise
-        from mgn.io.atomic import _io_error
 
         raise _io_error(out / "models", e) from e
     finally:

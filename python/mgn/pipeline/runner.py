@@ -10,7 +10,7 @@ Steps:
    executor) and ``models/<id>/`` is written.
 3. Every scene is an independent task (:func:`run_scene`): drop the objects
    (:func:`mgn.scene.drop_scene`), then :func:`mgn.pipeline.scene_writer.write_scene` into
-   ``DIR/.tmp-scene<N>-<pid>``, then the manifest (:mod:`mgn.pipeline.manifest`), then a rename
+   ``DIR/.tmp-scene<N>-<pid>``, then the manifest (:mod:`mgn.io.manifest`), then a rename
    to ``DIR/scene<N>``. A half-written scene therefore only ever exists under a ``.tmp-`` name.
 
 Scene seeds: scene ``i`` (0-based, folder ``scene<i>``) of a dataset with seed ``S`` uses
@@ -41,25 +41,41 @@ import contextlib
 import dataclasses
 import errno
 import json
+import multiprocessing
 import os
 import shutil
+import socket
+import tempfile
 import time
 import traceback
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from tqdm import tqdm
 
-from mgn import __version__
-from mgn.config import Config, ConfigError, load_config
+from mgn._core import __version__
+from mgn.base.atomic import _io_error, atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.io.atomic import atomic_write_text
-from mgn.objects import ObjectSpec
-from mgn.pipeline.label_cache import ObjectLabels
-from mgn.pipeline.manifest import check_manifest, write_manifest
+from mgn.io.manifest import check_manifest, write_manifest
+from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml
+from mgn.pipeline import scene_writer
+from mgn.pipeline.config import Config, ConfigError, load_config
+from mgn.pipeline.label_cache import (
+    ObjectLabels,
+    compute_object_labels,
+    load_cached_labels,
+    save_cached_labels,
+    write_models,
+)
+from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
+from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
+from mgn.render.photo import RenderSettings
+from mgn.scene.drop import drop_scene, drop_scene_refilled
+from mgn.scene.scene import BUILTIN, resolve_object
 
 __all__ = [
     "DATASET_SCHEMA_VERSION",
@@ -68,24 +84,12 @@ __all__ = [
     "SceneTask",
     "generate",
     "run_scene",
-    "scene_seed",
 ]
 
 #: ``schema_version`` of ``dataset.json``.
 DATASET_SCHEMA_VERSION = 1
 TMP_PREFIX = ".tmp-"
-SCENE_SEED_RULE = "numpy.random.SeedSequence([seed, i]).generate_state(1, numpy.uint32)[0] >> 1"
 STAGES = ("drop", "write", "finalize")
-
-
-def scene_seed(seed: int, index: int) -> int:
-    """The seed of scene ``index`` of a dataset with seed ``seed`` (see the module doc)."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InvalidArgumentError(f"scene_seed: seed must be an integer >= 0, got {seed!r}")
-    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
-        raise InvalidArgumentError(f"scene_seed: index must be an integer >= 0, got {index!r}")
-    state = np.random.SeedSequence([int(seed), int(index)]).generate_state(1, np.uint32)
-    return int(state[0]) >> 1
 
 
 # ------------------------------------------------------------------------------------- tasks
@@ -166,12 +170,6 @@ def run_scene(task: SceneTask) -> SceneResult:
     """Drop, write and finalise one scene (see the module doc). Never raises for an ordinary
     error: the result says what went wrong. The temporary folder is removed on any failure,
     including KeyboardInterrupt (which is re-raised)."""
-    import socket
-    import tempfile
-
-    from mgn.pipeline.scene_writer import write_scene
-    from mgn.scene.drop import drop_scene, drop_scene_refilled
-    from mgn.scene.scene import BUILTIN, resolve_object
 
     out = Path(task.out_dir)
     final = out / f"scene{task.index}"
@@ -202,11 +200,14 @@ def run_scene(task: SceneTask) -> SceneResult:
         if tmp.exists():
             shutil.rmtree(tmp)
         tmp.mkdir(parents=True)
-        stages = write_scene(scene, tmp, task.config, task.labels)
+        # Looked up on the module at call time (tests replace it to simulate an interrupt).
+        stages = scene_writer.write_scene(scene, tmp, task.config, task.labels)
         times["write"] = time.perf_counter() - t1
         times.update({f"write: {k}": v for k, v in (stages or {}).items()})
         t2 = time.perf_counter()
-        write_manifest(tmp, scene=task.index, seed=task.seed)
+        # What made the RGB images (engine, samples, denoiser), for `mgn report`.
+        write_manifest(tmp, scene=task.index, seed=task.seed,
+                       render=task.config.render.describe())  # fmt: skip
         size = _folder_size(tmp)
         if task.collect:
             files = {p.relative_to(tmp).as_posix(): p.read_bytes()
@@ -269,7 +270,6 @@ def store_collected(out: Path, result: SceneResult) -> SceneResult:
 
 
 def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
-    from mgn.pipeline.label_cache import compute_object_labels
 
     spec, config, num_threads = args
     return compute_object_labels(spec, config, num_threads)
@@ -314,8 +314,6 @@ class _InProcess(_Executor):
 
 class _ProcessPool(_Executor):
     def __init__(self, workers: int) -> None:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
 
         # spawn, not fork: the parent may hold OpenMP/TBB/Embree threads and a GL context.
         ctx = multiprocessing.get_context("spawn")
@@ -325,7 +323,6 @@ class _ProcessPool(_Executor):
         self._futures: list = []
 
     def run(self, fn, items):  # noqa: ANN001, ANN201
-        from concurrent.futures import as_completed
 
         futures = {self.pool.submit(fn, item): item for item in items}
         self._futures = list(futures)
@@ -510,7 +507,6 @@ class GenerateReport:
 
 
 def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
-    from mgn.objects import builtin_objects, load_objects_yaml
 
     catalogue = list(builtin_objects())
     sources: dict[str, str] = {}
@@ -519,15 +515,6 @@ def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
             catalogue.append(spec)
             sources[spec.name] = os.fspath(Path(path).resolve())
     return catalogue, sources
-
-
-def _compose(config: Config, catalogue: list[ObjectSpec], seed: int) -> list[ObjectSpec]:
-    from mgn.scene.compose import compose_objects
-
-    try:
-        return compose_objects(**config.objects.compose_kwargs(), seed=seed, catalogue=catalogue)
-    except InvalidArgumentError as e:
-        raise ConfigError(f"config key 'objects': {e}") from e
 
 
 def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extra: Any) -> dict:
@@ -585,6 +572,10 @@ def _comparable(config_doc: Any) -> Any:
     doc = json.loads(json.dumps(config_doc))
     if isinstance(doc, dict) and isinstance(doc.get("selection"), dict):
         doc["selection"].pop("max_scenes", None)
+    if isinstance(doc, dict) and "render" not in doc:
+        # Recorded before the render section existed: those images came from the raster.
+
+        doc["render"] = json.loads(json.dumps(Config(render=RenderSettings()).to_dict()["render"]))
     return doc
 
 
@@ -637,9 +628,6 @@ class _Run:
     def ensure_labels(self, specs: Sequence[ObjectSpec]) -> None:
         """Read or compute the labels of the objects not labelled yet in this run and write
         their ``models/<id>/`` folders."""
-        from tqdm import tqdm
-
-        from mgn.pipeline.label_cache import load_cached_labels, save_cached_labels, write_models
 
         t0 = time.perf_counter()
         unique: dict[str, ObjectSpec] = {}
@@ -679,9 +667,6 @@ class _Run:
     def run_scenes(self, scenes: Sequence[tuple[int, list[ObjectSpec]]], total: int) -> None:
         """Run the scenes (index, objects) that are not complete yet (``--resume`` keeps the
         complete ones); results go to the report. Stops scheduling on a full disk."""
-        from tqdm import tqdm
-
-        from mgn.scene.scene import BUILTIN
 
         report, todo = self.report, []
         for i, specs in scenes:
@@ -731,6 +716,30 @@ class _Run:
         )
 
 
+def _check_generate_args(cfg: Config, num_scenes: int | None, workers: int, seed: int) -> None:
+    """The argument checks of :func:`generate` (before anything is written)."""
+    quota = cfg.selection.quota
+    if quota is not None:
+        if num_scenes is not None:
+            raise InvalidArgumentError(
+                "generate: --scenes cannot be combined with a difficulty quota (the quotas decide "
+                f"the scene count; use --max-scenes), got --scenes {num_scenes!r}"
+            )
+        if not cfg.labels.layout:
+            raise ConfigError(
+                "config key 'labels.layout': a difficulty quota needs the layout labels "
+                "(the views' difficulty); expected true, got false"
+            )
+    elif isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
+        raise InvalidArgumentError(
+            f"generate: --scenes must be an integer >= 1, got {num_scenes!r}"
+        )
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InvalidArgumentError(f"generate: --workers must be an integer >= 1, got {workers!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InvalidArgumentError(f"generate: --seed must be an integer >= 0, got {seed!r}")
+
+
 def generate(
     out_dir: str | os.PathLike[str],
     num_scenes: int | None = None,
@@ -777,7 +786,6 @@ def generate(
             while writing ``dataset.json`` or ``models/``.
         KeyboardInterrupt: after removing the temporary folders of the run.
     """
-    from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 
     t_start = time.perf_counter()
     cfg = config if isinstance(config, Config) else load_config(config)
@@ -787,25 +795,7 @@ def generate(
                                              categories=None)
         )  # fmt: skip
     quota = cfg.selection.quota
-    if quota is not None:
-        if num_scenes is not None:
-            raise InvalidArgumentError(
-                "generate: --scenes cannot be combined with a difficulty quota (the quotas decide "
-                f"the scene count; use --max-scenes), got --scenes {num_scenes!r}"
-            )
-        if not cfg.labels.layout:
-            raise ConfigError(
-                "config key 'labels.layout': a difficulty quota needs the layout labels "
-                "(the views' difficulty); expected true, got false"
-            )
-    elif isinstance(num_scenes, bool) or not isinstance(num_scenes, int) or num_scenes < 1:
-        raise InvalidArgumentError(
-            f"generate: --scenes must be an integer >= 1, got {num_scenes!r}"
-        )
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise InvalidArgumentError(f"generate: --workers must be an integer >= 1, got {workers!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise InvalidArgumentError(f"generate: --seed must be an integer >= 0, got {seed!r}")
+    _check_generate_args(cfg, num_scenes, workers, seed)
     out = Path(out_dir).resolve()
     if out.exists() and not out.is_dir():
         raise IoError(f"generate: '{out}' exists and is not a folder")
@@ -834,10 +824,9 @@ def generate(
             _clean_tmp(out)
         report = GenerateReport(out, num_scenes or 0, seed)
         if quota is None:
+            assert num_scenes is not None  # checked above: without a quota the count is given
             _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running", **extra))
     except OSError as e:
-        from mgn.io.atomic import _io_error
-
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 
     executor = _executor(workers, scheduler)

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import math
 
-from mgn.config import Config
+from mgn.objects import builtin_objects, load_objects_yaml
+from mgn.pipeline.config import Config
+from mgn.pipeline.scene_writer import scene_intrinsics
 
 __all__ = [
     "MAX_OBJECT_FILL",
@@ -40,8 +42,6 @@ def _asked_objects(config: Config) -> tuple[str, int]:
 
 def _catalogue_sizes(config: Config) -> dict[str, tuple[float, float]]:
     """name -> (largest extent m, bounding-box volume m^3) of every object that can be drawn."""
-    from mgn.objects import builtin_objects, load_objects_yaml
-
     specs = list(builtin_objects())
     for path in config.objects.user_objects:
         specs.extend(load_objects_yaml(path))
@@ -55,8 +55,6 @@ def _catalogue_sizes(config: Config) -> dict[str, tuple[float, float]]:
 def config_warnings(config: Config) -> list[str]:
     """Human-readable warnings, each naming the setting, for a config that would give a
     degenerate dataset. An empty list: nothing suspicious."""
-    from mgn.pipeline.scene_writer import scene_intrinsics
-
     warnings: list[str] = []
     tote = config.tote
     # Images.

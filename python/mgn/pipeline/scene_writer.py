@@ -2,11 +2,11 @@
 
 ``mgn generate`` calls :func:`write_scene` once per scene, on a temporary folder that is renamed
 to ``scene<N>`` (with its manifest) only when the function returns. Whatever it writes must be
-byte-reproducible (see :mod:`mgn.io.deterministic`): the same scene and config give the same
+byte-reproducible (see :mod:`mgn.base.deterministic`): the same scene and config give the same
 bytes whatever the executor.
 
-It renders and labels every kept view with :func:`mgn.scene.label.label_scene`, which writes
-the docs/format.md files of each view, ``scene_gt.json`` and ``scene.json``.
+It renders and labels every kept view with :func:`mgn.pipeline.label_scene.label_scene`, which
+writes the docs/format.md files of each view, ``scene_gt.json`` and ``scene.json``.
 """
 
 from __future__ import annotations
@@ -15,9 +15,12 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
-from mgn.config import CameraConfig, Config
+import numpy as np
+
+from mgn.pipeline.config import CameraConfig, Config
 from mgn.pipeline.label_cache import ObjectLabels
-from mgn.render.camera import CameraView, Intrinsics, hemisphere_rig, mgn_rig
+from mgn.pipeline.label_scene import LabelOptions, label_scene
+from mgn.scene.cameras import CameraView, Intrinsics, hemisphere_rig, mgn_rig
 from mgn.scene.scene import Scene
 
 __all__ = ["scene_intrinsics", "scene_views", "write_scene"]
@@ -36,7 +39,7 @@ def scene_intrinsics(camera: CameraConfig) -> Intrinsics:
 def scene_views(scene: Scene, camera: CameraConfig) -> list[tuple[int, CameraView]]:
     """(view index, camera) of every view kept by ``camera.views``, in order.
 
-    The ``mgn`` rig is drawn from the scene seed (:func:`mgn.render.mgn_rig`), looking at the
+    The ``mgn`` rig is drawn from the scene seed (:func:`mgn.scene.cameras.mgn_rig`), looking at the
     tote centre (the world origin); the ``hemisphere`` rig and the user ``poses`` are fixed.
     View indices are those of the full rig, so ``views: [0, 5, 17]`` gives files ``0_*``,
     ``5_*`` and ``17_*``.
@@ -45,8 +48,6 @@ def scene_views(scene: Scene, camera: CameraConfig) -> list[tuple[int, CameraVie
     if camera.rig == "mgn":
         poses, _ = mgn_rig(scene.seed)
     elif camera.rig == "poses":
-        import numpy as np
-
         poses = np.asarray(camera.poses, np.float64)
     else:
         h = camera.hemisphere
@@ -77,7 +78,6 @@ def write_scene(
     Raises:
         OSError: a file cannot be written (``errno.ENOSPC`` when the disk is full).
     """
-    from mgn.scene.label import LabelOptions, label_scene
 
     out = Path(folder)
     if len(scene) == 0:
@@ -98,6 +98,7 @@ def write_scene(
         layout=labels.layout,
         scene_grasps=labels.scene_grasps,
         num_threads=num_threads,
+        render=config.render,
     )
     views = scene_views(scene, config.camera)
     timings = label_scene(scene, out, views, pj_labels=pj, suction_labels=su,

@@ -1,7 +1,7 @@
 """Test-set builders: the unseen-object split and the difficulty-balanced view selection.
 
-Both are driven by the config (``split`` and ``selection`` sections, :mod:`mgn.config`) and run
-inside :func:`mgn.pipeline.generate`; docs/testsets.md explains the design for users.
+Both are driven by the config (``split`` and ``selection`` sections, :mod:`mgn.pipeline.config`) and
+run inside :func:`mgn.pipeline.generate`; docs/testsets.md explains the design for users.
 
 Unseen split (``split.name``):
 
@@ -30,15 +30,15 @@ continues to the same result a larger limit would have given from the start).
 
 After each batch ``dataset.json`` records ``"selection": {"quota", "views", "rejected",
 "batch_scenes", "batches_done", "scenes_generated", "unmet", "complete", "pruned"}``; with
-``selection.prune_rejected`` the files of rejected views are then deleted (:func:`prune_scene`:
-manifest and ``scene_gt.json`` rewritten, a scene left without views removed as a whole).
+``selection.prune_rejected`` the files of rejected views are then deleted
+(:func:`mgn.io.manifest.prune_scene`: manifest and ``scene_gt.json`` rewritten, a scene left
+without views removed as a whole).
 """
 
 from __future__ import annotations
 
 import json
 import os
-import shutil
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,10 +46,12 @@ from typing import Any
 
 import numpy as np
 
-from mgn.config import DIFFICULTY_LEVELS, Config, ConfigError
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.io.atomic import atomic_write_text
+from mgn.io.manifest import prune_scene, scene_view_ids
 from mgn.objects import ObjectSpec
+from mgn.pipeline.config import DIFFICULTY_LEVELS, Config, ConfigError, SelectionConfig
+from mgn.pipeline.seeds import scene_seed
+from mgn.scene.compose import compose_objects
 
 __all__ = [
     "NOVEL_TAG",
@@ -59,10 +61,8 @@ __all__ = [
     "compose_scene",
     "parse_quota",
     "plan_batch",
-    "prune_scene",
     "resolve_split",
     "run_balanced",
-    "scene_view_ids",
     "select_views",
     "view_difficulty",
 ]
@@ -206,7 +206,6 @@ def compose_scene(
     Raises:
         ConfigError: the composition is impossible (e.g. an unknown object).
     """
-    from mgn.scene.compose import compose_objects
 
     if target_level is not None and target_level not in DIFFICULTY_LEVELS:
         raise InvalidArgumentError(f"compose_scene: target_level must be 1..5, got {target_level}")
@@ -223,6 +222,7 @@ def compose_scene(
     try:
         if recipe is not None:
             lo, hi, copies = recipe
+            assert target_level is not None  # a recipe exists only for a level
             rng = np.random.default_rng([int(seed), _RECIPE_STREAM, int(target_level)])
             count = int(rng.integers(lo, hi + 1))
             if copies == (1, 1):
@@ -299,16 +299,6 @@ def view_difficulty(folder: str | os.PathLike[str], view: int) -> int:
     return int(d)
 
 
-def scene_view_ids(folder: str | os.PathLike[str]) -> list[int]:
-    """The view indices of a written scene folder, ascending (from ``{v}_layout.json``)."""
-    ids = []
-    for p in Path(folder).glob("*_layout.json"):
-        head = p.name.split("_", 1)[0]
-        if head.isdigit():
-            ids.append(int(head))
-    return sorted(ids)
-
-
 def select_views(
     views: Sequence[tuple[int, int, int]], remaining: Sequence[int]
 ) -> tuple[list[dict[str, int]], list[dict[str, int]], list[int]]:
@@ -324,47 +314,6 @@ def select_views(
         else:
             rejected.append(entry)
     return selected, rejected, left
-
-
-def prune_scene(folder: str | os.PathLike[str], views: Sequence[int]) -> bool:
-    """Delete the files of ``views`` from a complete scene folder, keeping it consistent.
-
-    ``scene_gt.json`` loses the views' entries and ``manifest.json`` their files (the other
-    entries are kept as they are; the ``scene_gt.json`` entry is recomputed), then the files
-    are deleted: a kill at any point leaves a manifest whose files all exist, and running it
-    again finishes the job. A scene left without views is removed as a whole (renamed to a
-    ``.tmp-`` name first). Returns True if the scene folder was removed.
-    """
-    from mgn.io.scene_format import view_file_names
-    from mgn.pipeline.manifest import MANIFEST, file_sha256
-
-    root = Path(folder)
-    if not root.is_dir():
-        return True
-    drop = {int(v) for v in views}
-    left = [v for v in scene_view_ids(root) if v not in drop]
-    if not left:
-        tmp = root.parent / f".tmp-pruned-{root.name}-{os.getpid()}"
-        os.rename(root, tmp)
-        shutil.rmtree(tmp, ignore_errors=True)
-        return True
-    gt_path = root / "scene_gt.json"
-    if gt_path.exists():
-        gt = json.loads(gt_path.read_text(encoding="utf-8"))
-        gt = {k: val for k, val in gt.items() if int(k) not in drop}
-        atomic_write_text(gt_path, json.dumps(gt, indent=1, allow_nan=True) + "\n")
-    mpath = root / MANIFEST
-    manifest = json.loads(mpath.read_text(encoding="utf-8"))
-    gone = {name for v in drop for name in view_file_names(v)}
-    files = {k: e for k, e in manifest["files"].items() if k not in gone}
-    if "scene_gt.json" in files:
-        files["scene_gt.json"] = {"size": gt_path.stat().st_size, "sha256": file_sha256(gt_path)}
-    manifest["files"] = files
-    manifest["pruned_views"] = sorted(set(manifest.get("pruned_views", [])) | drop)
-    atomic_write_text(mpath, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
-    for name in sorted(gone):
-        (root / name).unlink(missing_ok=True)
-    return False
 
 
 @dataclass
@@ -441,7 +390,6 @@ def run_balanced(run: Any, catalogue: Sequence[ObjectSpec], split: Split, record
     with its run context; see the module doc). Fills ``run.report`` (``selection``,
     ``unmet``, ``num_scenes``) and records the selection in ``dataset.json`` after each batch.
     """
-    from mgn.pipeline.runner import scene_seed
 
     cfg, report = run.cfg, run.report
     sel = cfg.selection
@@ -501,7 +449,6 @@ def parse_quota(text: str) -> tuple[int, ...]:
     Raises:
         ConfigError: naming ``--difficulty-quota``, the text and the expected form.
     """
-    from mgn.config import SelectionConfig
 
     mapping: dict[str, Any] = {}
     for part in str(text).split(","):

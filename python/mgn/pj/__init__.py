@@ -3,11 +3,11 @@
 core_gripper(gripper)                  the C++ gripper for a mgn.hardware.ParallelJawGripper
 AntipodalSampler(mesh, gripper)        antipodal robust sampler (docs/models.md §5)
 pj_wrench_scores(...)                  soft-finger wrench score under gravity
-label_object(mesh, mass=, com=)        object labels; write_pj_labels(hdf5, labels)
+label_object(mesh, mass=, com=)        object labels (written by mgn.io.grasp_file.write_pj_labels)
 shake_scores(...), ShakeScorer         Bullet shake test (physics score), label_object's scorer
 """
 
-from mgn.pj.labels import PjLabels, label_object, read_pj_labels, write_pj_labels
+from mgn.pj.labels import PjLabels, label_object
 from mgn.pj.physics import (
     ShakeOptions,
     ShakeScorer,
@@ -38,8 +38,6 @@ __all__ = [
     "hand_poses",
     "label_object",
     "pj_wrench_scores",
-    "read_pj_labels",
     "shake_scores",
     "shake_trajectory",
-    "write_pj_labels",
 ]

@@ -10,22 +10,20 @@ simulation score. Everything is in metres here; the writer converts to centimetr
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Any
 
-import h5py
 import numpy as np
 import numpy.typing as npt
+from tqdm import tqdm
 
 from mgn import _core
+from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import Mesh, sample_surface
+from mgn.geometry.mesh import Mesh, sample_surface
 from mgn.hardware import ParallelJawGripper
-from mgn.io.grasp_file import replace_grasp_group
 from mgn.pj.sampler import AntipodalSampler, pj_wrench_scores
-
-M_TO_CM = 100.0
 
 
 @dataclass(frozen=True)
@@ -62,11 +60,6 @@ class PjLabels:
 
     def __len__(self) -> int:
         return len(self.width)
-
-    @property
-    def physics_done(self) -> bool:
-        """True when the simulation score was computed for every grasp."""
-        return bool(np.isfinite(self.quality_score_simulation).all())
 
     def pregrasp_transform(self) -> npt.NDArray[np.float32]:
         """(M, 10) MetaGraspNet rows [a (3), v (3), p1 (3, cm), w (cm)], float32."""
@@ -116,7 +109,6 @@ def label_object(
         InvalidArgumentError: non-positive mass or num_points, a mesh with no closed volume, an
             invalid gripper.
     """
-    from tqdm import tqdm
 
     if not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass > 0):
         raise InvalidArgumentError(
@@ -184,7 +176,7 @@ def label_object(
         grip_force=grip_force,
         contact_radius=contact_radius,
     )
-    metadata = {
+    metadata: dict[str, Any] = {
         "pj_gripper": gripper.to_dict(),
         "pj_seed": int(seed),
         "pj_num_points": int(num_points),
@@ -221,7 +213,7 @@ def label_object(
         point_index=point_index,
         point_score=cat("point_score", np.float32),
         num_points=int(num_points),
-        num_colliding=metadata["pj_num_colliding"],
+        num_colliding=int(metadata["pj_num_colliding"]),
         metadata=metadata,
     )
     if physics is not None:
@@ -238,44 +230,3 @@ def label_object(
             metadata=labels.metadata | {"pj_physics": f"run ({scorer})"},
         )
     return labels
-
-
-def write_pj_labels(hdf5_path: str | os.PathLike[str], labels: PjLabels) -> None:
-    """Replace ``grasps/paralleljaw/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
-
-    Writes ``pregrasp_transform`` (M, 10) [a (3), v (3), p1 (3, cm), w (cm)],
-    ``quality_score`` (M,) (analytic), ``quality_score_simulation`` (M,) (NaN when physics was
-    not run) and the mgn extension ``score_wrench`` (M,), all float32, plus the metadata
-    attributes. Other groups (suction labels, keypoints) are kept. The file is updated on a
-    temporary copy that replaces the original only when complete.
-    """
-    replace_grasp_group(
-        hdf5_path,
-        "grasps/paralleljaw",
-        {
-            "pregrasp_transform": labels.pregrasp_transform().reshape(-1, 10),
-            "quality_score": labels.quality_score,
-            "quality_score_simulation": labels.quality_score_simulation,
-            "score_wrench": labels.score_wrench,
-        },
-        labels.metadata,
-        who="write_pj_labels",
-    )
-
-
-def read_pj_labels(hdf5_path: str | os.PathLike[str]) -> dict[str, npt.NDArray[np.float64]]:
-    """The ``grasps/paralleljaw`` datasets of a file in metres: approach, closing, p1 (M, 3),
-    width, quality_score, quality_score_simulation, score_wrench (M,) (absent ones omitted)."""
-    with h5py.File(hdf5_path, "r") as h5:
-        g = h5["grasps/paralleljaw"]
-        pre = np.asarray(g["pregrasp_transform"], np.float64).reshape(-1, 10)
-        out = {
-            "approach": pre[:, 0:3],
-            "closing": pre[:, 3:6],
-            "p1": pre[:, 6:9] / M_TO_CM,
-            "width": pre[:, 9] / M_TO_CM,
-        }
-        for name in ("quality_score", "quality_score_simulation", "score_wrench"):
-            if name in g:
-                out[name] = np.asarray(g[name], np.float64)
-    return out

@@ -24,6 +24,8 @@ import numpy.typing as npt
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
+from mgn.geometry.convex import cached_convex_decomposition
+from mgn.geometry.mesh import mass_properties
 from mgn.hardware import ParallelJawGripper, default_gripper
 from mgn.pj.sampler import core_gripper
 
@@ -282,7 +284,7 @@ def shake_trajectory(
     record_every: int = 5,
     trial_index: int = 0,
 ) -> ShakeTrajectory:
-    """One shake trial recorded every ``record_every`` steps (for :mod:`mgn.pj.show_trial`).
+    """One shake trial recorded every ``record_every`` steps (for :mod:`mgn.viz.shake_trial`).
 
     ``trial_index`` selects the random stream (rotation axis and angle); trial
     ``g*S*S + i*S + j`` of :func:`shake_scores` is reproduced with ``frictions[i]`` and
@@ -317,7 +319,7 @@ class ShakeScorer:
     The shake test costs ``grid²`` Bullet trials per grasp, so it runs on an evenly strided subset
     of at most ``max_grasps`` grasps of an object (``None``: all); the other grasps keep NaN in
     ``quality_score_simulation``. The object is simulated as its cached convex decomposition
-    (:func:`mgn.scene.convex.cached_convex_decomposition`) with uniform ``density`` (kg/m^3).
+    (:func:`mgn.geometry.convex.cached_convex_decomposition`) with uniform ``density`` (kg/m^3).
     """
 
     density: float = 1000.0
@@ -331,8 +333,6 @@ class ShakeScorer:
         return f"Bullet shake test, grid {o.grid}x{o.grid}, at most {self.max_grasps} grasps"
 
     def __call__(self, mesh: Mesh, labels: Any) -> npt.NDArray[np.float32]:
-        from mgn.geometry import mass_properties
-        from mgn.scene.convex import cached_convex_decomposition
 
         n = len(labels)
         out = np.full(n, np.nan, np.float32)

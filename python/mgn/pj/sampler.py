@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Mesh, load_mesh
+from mgn.geometry.mesh import Mesh, load_mesh
 from mgn.hardware import ParallelJawGripper
 
 _MESH_FIELDS = ("palm_mesh", "finger_left_mesh", "finger_right_mesh")

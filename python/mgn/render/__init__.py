@@ -1,25 +1,13 @@
-"""Cameras, OSMesa rendering and depth sensor models.
+"""OSMesa rendering and depth sensor models (the cameras are :mod:`mgn.scene.cameras`).
 
-- :mod:`mgn.render.camera`: :class:`Intrinsics` (MGN synthetic and Zivid-Two-like presets),
-  :class:`CameraView`, the 37-view MetaGraspNet rig (:func:`mgn_rig`), hemisphere rigs,
-  :func:`look_at`.
 - :mod:`mgn.render.renderer`: :class:`Renderer` (RGB, metric z-depth, instance ids; one GL
   context reused across views).
 - :mod:`mgn.render.sensor`: :func:`apply_depth_sensor` with presets ``ideal``,
   ``structured-light`` and ``tof``.
-- :mod:`mgn.render.views`: :func:`render_views`, render and write the views of a scene.
+- :mod:`mgn.render.views`: :func:`iter_views`, render the views of a scene as arrays
+  (:func:`mgn.render_views` also writes them).
 """
 
-from mgn.render.camera import (
-    CameraView,
-    Intrinsics,
-    MgnRigParams,
-    hemisphere_rig,
-    look_at,
-    mgn_rig,
-    mgn_rig_from_params,
-    mgn_views,
-)
 from mgn.render.renderer import Instance, LightSample, Renderer, RenderOutput
 from mgn.render.sensor import (
     SURFACE_DARK,
@@ -30,30 +18,21 @@ from mgn.render.sensor import (
     sensor_params,
     surface_flags,
 )
-from mgn.render.views import ViewImages, depth_picture, render_views, tote_mesh
+from mgn.render.views import ViewImages, depth_picture, iter_views
 
 __all__ = [
     "SURFACE_DARK",
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
-    "CameraView",
     "DepthImage",
     "Instance",
-    "Intrinsics",
     "LightSample",
-    "MgnRigParams",
     "RenderOutput",
     "Renderer",
     "ViewImages",
     "apply_depth_sensor",
     "depth_picture",
-    "hemisphere_rig",
-    "look_at",
-    "mgn_rig",
-    "mgn_rig_from_params",
-    "mgn_views",
-    "render_views",
+    "iter_views",
     "sensor_params",
     "surface_flags",
-    "tote_mesh",
 ]

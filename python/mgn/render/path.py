@@ -32,9 +32,9 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.errors import InvalidArgumentError
+from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry import Material, Mesh
-from mgn.render.camera import CameraView
+from mgn.scene.cameras import CameraView
 
 __all__ = [
     "AreaLight",
@@ -437,7 +437,7 @@ class PathScene:
         """Path-trace one view (GIL released; ``options.num_threads`` threads)."""
         opts = options if options is not None else PathTraceOptions()
         if not isinstance(view, CameraView):
-            raise TypeError(f"view must be a CameraView, got {type(view).__name__}")
+            raise InvalidTypeError(f"view must be a CameraView, got {type(view).__name__}")
         d = self._scene.render(view.K.to_core(), view.X_WC, opts.to_core())
         return PathTraceOutput(
             radiance=d["radiance"],
@@ -451,7 +451,7 @@ class PathScene:
 
 def _as_material(m: object, i: int, k: int) -> PbrMaterial:
     if not isinstance(m, PbrMaterial):
-        raise TypeError(
+        raise InvalidTypeError(
             f"PathScene: materials[{i}][{k}] must be a PbrMaterial, got {type(m).__name__}"
         )
     return m
@@ -459,7 +459,9 @@ def _as_material(m: object, i: int, k: int) -> PbrMaterial:
 
 def _as_light(a: object, i: int) -> AreaLight:
     if not isinstance(a, AreaLight):
-        raise TypeError(f"PathScene: lights[{i}] must be an AreaLight, got {type(a).__name__}")
+        raise InvalidTypeError(
+            f"PathScene: lights[{i}] must be an AreaLight, got {type(a).__name__}"
+        )
     return a
 
 

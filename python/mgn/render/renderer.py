@@ -18,8 +18,8 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Mesh
-from mgn.render.camera import CameraView
+from mgn.geometry.mesh import Mesh
+from mgn.scene.cameras import CameraView
 
 __all__ = ["Instance", "LightSample", "RenderOutput", "Renderer"]
 

@@ -22,8 +22,9 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Material, Mesh
-from mgn.render.camera import Intrinsics
+from mgn.errors import InvalidArgumentError
+from mgn.geometry.mesh import Material, Mesh
+from mgn.scene.cameras import Intrinsics
 
 __all__ = [
     "SURFACE_DARK",
@@ -53,11 +54,13 @@ def sensor_params(preset: SensorName, **overrides: float | bool) -> _core.DepthS
     """Default parameters of a preset, with fields overridden by keyword (SI units), e.g.
     ``sensor_params("structured-light", baseline=0.05)``."""
     if preset not in _PRESETS:
-        raise ValueError(f"sensor preset must be one of {sorted(_PRESETS)}, got {preset!r}")
+        raise InvalidArgumentError(
+            f"sensor preset must be one of {sorted(_PRESETS)}, got {preset!r}"
+        )
     p = _core.DepthSensorParams.preset_defaults(_PRESETS[preset])
     for key, value in overrides.items():
         if key == "preset" or not hasattr(p, key):
-            raise ValueError(f"unknown depth sensor parameter {key!r}")
+            raise InvalidArgumentError(f"unknown depth sensor parameter {key!r}")
         setattr(p, key, value)
     p.validate()
     return p
@@ -65,8 +68,9 @@ def sensor_params(preset: SensorName, **overrides: float | bool) -> _core.DepthS
 
 def surface_flags(item: Material | Mesh) -> int:
     """Flag bits of a material (or the union over a mesh's materials): transparent if opacity x
-    alpha < 0.5, dark if untextured with linear luminance < 0.03, mirror if specular luminance
-    >= 0.8 and shininess >= 200."""
+    alpha < 0.5 or (PBR) transmission >= 0.5, dark if untextured with linear luminance < 0.03,
+    mirror if specular luminance >= 0.8 and shininess >= 200 or (PBR) metallic >= 0.5 with
+    roughness <= 0.25 (polished metal)."""
     if isinstance(item, Mesh):
         return int(_core.mesh_surface_flags(item))
     return int(_core.surface_flags(item))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -12,13 +12,13 @@ import numpy as np
 
 from mgn import _core
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import Mesh, mass_properties
-from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, make_tote
-from mgn.scene.convex import (
+from mgn.geometry.convex import (
     DROP_DECOMPOSITION,
     ConvexDecompositionOptions,
     cached_convex_decomposition,
 )
+from mgn.geometry.mesh import Mesh, mass_properties
+from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, tote_mesh
 from mgn.scene.penetration import render_penetration
 from mgn.scene.scene import (
     BUILTIN,
@@ -35,18 +35,11 @@ __all__ = [
     "drop_scene_refilled",
     "settle",
     "settle_tracked",
-    "tote_mesh",
 ]
 
 #: Restitution of the objects (the library carries friction but not restitution).
 RESTITUTION = 0.1
 _STATUS = {0: "kept", 1: "left_tote", 2: "not_settled"}
-
-
-def tote_mesh(spec: ToteSpec) -> Mesh:
-    """The tote's closed triangle mesh in the tote frame (from :func:`mgn.objects.make_tote`)."""
-    v, f = make_tote(spec)
-    return Mesh(np.asarray(v, np.float32), np.asarray(f, np.int32), None, [], [], "tote")
 
 
 def _source_of(spec: ObjectSpec, sources: dict[str, str]) -> str:
@@ -68,7 +61,7 @@ def _simulate(
     seed: int,
     tote: ToteSpec,
     options: DropOptions,
-    sources: dict[str, str | os.PathLike[str]] | None,
+    sources: Mapping[str, str | os.PathLike[str]] | None,
     decomposition: ConvexDecompositionOptions | None,
     use_cache: bool,
     X_WO_start: np.ndarray | None = None,
@@ -80,8 +73,6 @@ def _simulate(
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidArgumentError(f"drop_scene: seed must be an integer >= 0, got {seed!r}")
     src = {k: os.fspath(Path(v).resolve()) for k, v in (sources or {}).items()}
-    from mgn.io.model_folder import object_mesh
-
     per_name: dict[str, tuple] = {}
     for spec in objects:
         if not isinstance(spec, ObjectSpec):
@@ -90,22 +81,22 @@ def _simulate(
             )
         if spec.name in per_name:
             continue
-        mesh = object_mesh(spec)
+        mesh = spec.to_mesh()
         props = mass_properties(mesh, spec.density)
         parts = cached_convex_decomposition(
             mesh, decomposition or DROP_DECOMPOSITION, use_cache=use_cache
         )
         per_name[spec.name] = (parts, props, _source_of(spec, src), mesh)
 
-    parts = [per_name[s.name][0] for s in objects]
-    props = [per_name[s.name][1] for s in objects]
+    all_parts = [per_name[s.name][0] for s in objects]
+    all_props = [per_name[s.name][1] for s in objects]
     opts = options.to_dict()
     opts["seed"] = int(seed)
     out = _core.drop_objects(
-        parts,
-        [p.mass for p in props],
-        np.array([np.asarray(p.center_of_mass) for p in props], np.float64),
-        np.array([np.asarray(p.inertia).reshape(9) for p in props], np.float64),
+        all_parts,
+        [p.mass for p in all_props],
+        np.array([np.asarray(p.center_of_mass) for p in all_props], np.float64),
+        np.array([np.asarray(p.inertia).reshape(9) for p in all_props], np.float64),
         [float(s.friction) for s in objects],
         [RESTITUTION] * len(objects),
         [s.name for s in objects],
@@ -169,8 +160,8 @@ def drop_scene(
         options: simulation options (MetaGraspNet defaults).
         sources: for user objects, name -> the YAML file they were loaded from.
         decomposition: convex decomposition options (default
-            :data:`mgn.scene.convex.DROP_DECOMPOSITION`: HACD parts merged for speed).
-        use_cache: read/write the decomposition cache (:func:`mgn.scene.convex.cache_dir`).
+            :data:`mgn.geometry.convex.DROP_DECOMPOSITION`: HACD parts merged for speed).
+        use_cache: read/write the decomposition cache (:func:`mgn.geometry.convex.cache_dir`).
 
     Raises:
         InvalidArgumentError: no objects, an object larger than the tote, bad options, an

@@ -16,8 +16,8 @@ import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError
 from mgn.geometry import Mesh
+from mgn.geometry.raytrace import RayScene
 from mgn.objects import ToteSpec
-from mgn.raytrace import RayScene
 
 __all__ = ["point_triangle_distance", "render_penetration"]
 

@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from mgn.base.atomic import atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.geometry import Mesh
-from mgn.io.atomic import atomic_write_text
+from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
 
 __all__ = [
@@ -75,6 +75,34 @@ _FLOAT_RANGES: dict[str, tuple[float, bool, float | None, bool, str]] = {
     "hull_tolerance": (0.0, False, None, False, "m"),
     "resettle_time": (0.0, False, None, False, "s"),
 }
+
+
+def _checked_int(name: str, v: Any) -> int:
+    """DropOptions.<name> as an int in its range of ``_INT_RANGES``."""
+    lo, hi = _INT_RANGES[name]
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+        raise InvalidArgumentError(f"DropOptions.{name} must be an integer, got {v!r}")
+    v = int(v)
+    ok = lo <= v <= hi or (name == "max_hull_vertices" and v == 0)
+    if not ok:
+        extra = "0 (keep all) or " if name == "max_hull_vertices" else ""
+        raise InvalidArgumentError(f"DropOptions.{name} must be {extra}in [{lo}, {hi}], got {v}")
+    return v
+
+
+def _checked_float(name: str, value: Any) -> float:
+    """DropOptions.<name> as a float in its range of ``_FLOAT_RANGES``."""
+    flo, lo_open, fhi, hi_open, unit = _FLOAT_RANGES[name]
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {value!r}")
+    x = float(value)
+    ok = math.isfinite(x) and (x > flo if lo_open else x >= flo)
+    ok = ok and (fhi is None or (x < fhi if hi_open else x <= fhi))
+    if not ok:
+        rng = f"{'(' if lo_open else '['}{flo}, {'inf)' if fhi is None else fhi}"
+        rng += "" if fhi is None else (")" if hi_open else "]")
+        raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {x}")
+    return x
 
 
 @dataclass(frozen=True)
@@ -159,30 +187,10 @@ class DropOptions:
                     f"DropOptions.{name} must be true or false, got {getattr(self, name)!r}"
                 )
             object.__setattr__(self, name, bool(getattr(self, name)))
-        for name, (lo, hi) in _INT_RANGES.items():
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-                raise InvalidArgumentError(f"DropOptions.{name} must be an integer, got {v!r}")
-            v = int(v)
-            ok = lo <= v <= hi or (name == "max_hull_vertices" and v == 0)
-            if not ok:
-                extra = "0 (keep all) or " if name == "max_hull_vertices" else ""
-                raise InvalidArgumentError(
-                    f"DropOptions.{name} must be {extra}in [{lo}, {hi}], got {v}"
-                )
-            object.__setattr__(self, name, v)
-        for name, (lo, lo_open, hi, hi_open, unit) in _FLOAT_RANGES.items():
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {v!r}")
-            v = float(v)
-            ok = math.isfinite(v) and (v > lo if lo_open else v >= lo)
-            ok = ok and (hi is None or (v < hi if hi_open else v <= hi))
-            if not ok:
-                rng = f"{'(' if lo_open else '['}{lo}, {'inf)' if hi is None else hi}"
-                rng += "" if hi is None else (")" if hi_open else "]")
-                raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {v}")
-            object.__setattr__(self, name, v)
+        for name in _INT_RANGES:
+            object.__setattr__(self, name, _checked_int(name, getattr(self, name)))
+        for name in _FLOAT_RANGES:
+            object.__setattr__(self, name, _checked_float(name, getattr(self, name)))
         if not self.max_time > self.dt:
             raise InvalidArgumentError(
                 f"DropOptions.max_time must be > dt ({self.dt} s), got {self.max_time}"
@@ -331,12 +339,11 @@ class Scene:
 
     def mesh(self, index: int) -> Mesh:
         """The :data:`mgn.Mesh` of instance ``index`` in its object frame (with its material)."""
-        from mgn.io.model_folder import object_mesh
 
-        return object_mesh(self.object_spec(index))
+        return self.object_spec(index).to_mesh()
 
     def render_items(self) -> list[tuple[Mesh, npt.NDArray[np.float64], int]]:
-        """(mesh, X_WO, instance id) per instance, as :func:`mgn.render.render_views` takes them;
+        """(mesh, X_WO, instance id) per instance, as :func:`mgn.render_views` takes them;
         copies of an object share one Mesh (so a renderer uploads it once)."""
         meshes: dict[tuple[str, str], Mesh] = {}
         items = []

@@ -7,20 +7,18 @@ the object (FCL), and compute the suction wrench score with gravity along -z of 
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
+from tqdm import tqdm
 
 from mgn import _core
-from mgn.collision import CollisionModel, collide
-from mgn.geometry import Mesh, make_cylinder, sample_surface
+from mgn.geometry.collision import CollisionModel, collide
+from mgn.geometry.mesh import Mesh, make_cylinder, sample_surface
 from mgn.hardware import SuctionCup
-from mgn.io.grasp_file import replace_grasp_group
 from mgn.suction.seal import SealModel, SealModelName, suction_wrench_scores
 
-M_TO_CM = 100.0
 #: Gap between the contact and the bottom of the cup body in the collision check, m: the lip
 #: itself touches the surface, so the body cylinder starts this far above the contact.
 CUP_BODY_CLEARANCE = 0.003
@@ -95,7 +93,6 @@ def label_object(
         num_points: candidates sampled evenly on the surface.
         progress: show a tqdm progress bar.
     """
-    from tqdm import tqdm
 
     cup = cup if cup is not None else SuctionCup()
     samples = sample_surface(mesh, num_points, method="even", seed=seed)
@@ -147,29 +144,4 @@ def label_object(
         int(num_points),
         int((~keep).sum()),
         metadata,
-    )
-
-
-def write_suction_labels(hdf5_path: str | os.PathLike[str], labels: SuctionLabels) -> None:
-    """Replace ``grasps/suctioncup/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
-
-    Writes ``pregrasp_transform`` (K, 6) [approach (3, into the surface), contact (3, cm)],
-    ``quality_score`` (K,) (seal score) and the mgn extensions ``score_wrench`` (K,) and
-    ``failure_reason`` (K,) (uint8 codes of ``mgn.suction.FAILURE_REASONS``; the others
-    float32), plus the metadata attributes. The file is updated on a
-    temporary copy that replaces the original only when complete.
-    """
-    replace_grasp_group(
-        hdf5_path,
-        "grasps/suctioncup",
-        {
-            "pregrasp_transform": np.concatenate(
-                [labels.approach, labels.points * M_TO_CM], axis=1
-            ).reshape(-1, 6),
-            "quality_score": labels.score,
-            "score_wrench": labels.wrench,
-            "failure_reason": labels.reason,
-        },
-        labels.metadata,
-        who="write_suction_labels",
     )

@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.geometry import Mesh
+from mgn.geometry.mesh import Mesh
 from mgn.hardware import SuctionCup
 
 #: The seal models: the force-based spring-mass model of MetaGraspNet and two baselines.

@@ -26,6 +26,16 @@ struct Material {
   std::string texture_path;
   /// Compressed bytes (PNG/JPEG) of an embedded texture (GLB), empty if none.
   std::vector<std::uint8_t> texture_data;
+
+  /// Physically based parameters (glTF 2.0 metallic-roughness with KHR_materials_transmission
+  /// and KHR_materials_ior; path_tracer.hpp), used by the path tracer. Meaningful when has_pbr is
+  /// true (a glTF/GLB file, a built-in object, a user object with PBR keys); otherwise the path
+  /// tracer derives them from the Phong fields above.
+  bool has_pbr = false;
+  float metallic = 0.0f;      ///< [0,1]
+  float roughness = 0.5f;     ///< perceptual roughness in [0,1] (GGX alpha = roughness^2)
+  float ior = 1.5f;           ///< index of refraction (>= 1)
+  float transmission = 0.0f;  ///< [0,1]; 1 = clear dielectric (glass, clear plastic)
 };
 
 /// Result of Mesh::validate(). Topology is computed after welding vertices with identical

@@ -30,9 +30,12 @@ enum class DepthSensorPreset { Ideal, StructuredLight, ToF };
 
 /// Bits of a surface's flags.
 enum SurfaceFlag : std::uint8_t {
-  kSurfaceTransparent = 1,  ///< opacity * base alpha < 0.5
-  kSurfaceDark = 2,         ///< untextured, base colour luminance < 0.03 (linear)
-  kSurfaceMirror = 4,       ///< specular luminance >= 0.8 and shininess >= 200
+  /// opacity * base alpha < 0.5, or (PBR) transmission >= 0.5
+  kSurfaceTransparent = 1,
+  kSurfaceDark = 2,  ///< untextured, base colour luminance < 0.03 (linear)
+  /// specular luminance >= 0.8 and shininess >= 200, or (PBR) metallic >= 0.5 and
+  /// roughness <= 0.25 (polished metal)
+  kSurfaceMirror = 4,
 };
 
 /// Flags of a material by the thresholds documented on SurfaceFlag.

@@ -1,0 +1,190 @@
+// Parallel-jaw grasps: gripper, antipodal sampler and soft-finger wrench score
+// (docs/models.md §5).
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+#include <mgn/grasp/antipodal.hpp>
+#include <mgn/grasp/gripper.hpp>
+#include <mgn/grasp/pj_wrench.hpp>
+
+#include "exceptions.hpp"
+#include "numpy_conv.hpp"
+
+namespace py = pybind11;
+using namespace mgn::py_conv;
+
+namespace mgn::py_bind {
+
+namespace {
+
+/// Grasps from (N,3) p1, closing, approach and (N,) width arrays.
+std::vector<ParallelJawGrasp> to_grasps(const py::handle& p1, const py::handle& closing,
+                                        const py::handle& approach, const py::handle& width) {
+  const Points3d p = to_rows<double, 3>(p1, "p1");
+  const Points3d v = to_rows<double, 3>(closing, "closing");
+  const Points3d a = approach.is_none() ? Points3d() : to_rows<double, 3>(approach, "approach");
+  CArray<double> w;
+  try {
+    w = py::cast<CArray<double>>(width);
+  } catch (const py::cast_error&) {
+    throw_error<InvalidArgument>("width: expected a numeric array of shape (N,)");
+  }
+  if (w.ndim() != 1 || v.rows() != p.rows() || w.shape(0) != p.rows() ||
+      (!approach.is_none() && a.rows() != p.rows())) {
+    throw_error<InvalidArgument>("grasps: p1 has ", p.rows(),
+                                 " rows; expected closing, approach (N, 3) and width (N,) with the "
+                                 "same N");
+  }
+  std::vector<ParallelJawGrasp> out(static_cast<std::size_t>(p.rows()));
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    out[i].p1 = p.row(i).transpose();
+    out[i].closing = v.row(i).transpose();
+    if (!approach.is_none()) out[i].approach = a.row(i).transpose();
+    out[i].width = w.at(i);
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_grasp_antipodal(py::module_& m) {
+  py::class_<ParallelJawGripper>(
+      m, "ParallelJawGripper",
+      "Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless "
+      "palm_mesh, finger_left_mesh and finger_right_mesh are all set (closed, hand frame, fingers "
+      "at opening 0).")
+      .def(py::init<>())
+      .def_readwrite("name", &ParallelJawGripper::name)
+      .def_readwrite("max_opening", &ParallelJawGripper::max_opening)
+      .def_readwrite("flange_to_tip", &ParallelJawGripper::flange_to_tip)
+      .def_readwrite("contact_from_tip", &ParallelJawGripper::contact_from_tip)
+      .def_readwrite("collision_margin", &ParallelJawGripper::collision_margin)
+      .def_readwrite("finger_size", &ParallelJawGripper::finger_size)
+      .def_readwrite("palm_size", &ParallelJawGripper::palm_size)
+      .def_readwrite("friction", &ParallelJawGripper::friction)
+      .def_readwrite("palm_mesh", &ParallelJawGripper::palm_mesh)
+      .def_readwrite("finger_left_mesh", &ParallelJawGripper::finger_left_mesh)
+      .def_readwrite("finger_right_mesh", &ParallelJawGripper::finger_right_mesh)
+      .def("has_meshes", &ParallelJawGripper::has_meshes)
+      .def("validate", &ParallelJawGripper::validate)
+      .def("grasp_depth", &ParallelJawGripper::grasp_depth)
+      .def("collision_opening", &ParallelJawGripper::collision_opening, py::arg("width"));
+
+  m.def(
+      "gripper_meshes",
+      [](const ParallelJawGripper& g, double opening) {
+        GripperMeshes out = gripper_meshes(g, opening);
+        return py::make_tuple(std::move(out.palm), std::move(out.finger_left),
+                              std::move(out.finger_right));
+      },
+      py::arg("gripper"), py::arg("opening"),
+      "(palm, finger_left, finger_right) closed meshes in the hand frame at an opening (m).");
+
+  m.def(
+      "hand_poses",
+      [](const py::handle& p1, const py::handle& closing, const py::handle& approach,
+         const py::handle& width, const ParallelJawGripper& g) {
+        const std::vector<ParallelJawGrasp> grasps = to_grasps(p1, closing, approach, width);
+        std::vector<Pose> X_OH;
+        X_OH.reserve(grasps.size());
+        for (const ParallelJawGrasp& grasp : grasps) X_OH.push_back(hand_pose(grasp, g));
+        return poses_to_numpy(X_OH);
+      },
+      py::arg("p1"), py::arg("closing"), py::arg("approach"), py::arg("width"), py::arg("gripper"),
+      "(N,4,4) hand (flange) poses X_OH of grasps in the object frame.");
+
+  py::class_<AntipodalSampler, std::shared_ptr<AntipodalSampler>>(
+      m, "AntipodalSampler", "Immutable antipodal grasp sampler of one object for one gripper.")
+      .def(py::init([](const Mesh& mesh, const ParallelJawGripper& g) {
+             py::gil_scoped_release release;
+             return std::make_shared<AntipodalSampler>(mesh, g);
+           }),
+           py::arg("mesh"), py::arg("gripper"))
+      .def_property_readonly("gripper", &AntipodalSampler::gripper)
+      .def(
+          "sample",
+          [](const AntipodalSampler& s, const py::handle& points, const py::handle& normals,
+             int probes, double tilt, double offset, double start_offset, double friction_coef,
+             int approaches_tried, int approaches_kept, bool check_collision, std::uint64_t seed,
+             std::uint64_t first_index, int num_threads) {
+            const Points3d p = to_rows<double, 3>(points, "points");
+            const Points3d n = to_rows<double, 3>(normals, "normals");
+            AntipodalOptions o;
+            o.probes = probes;
+            o.tilt = tilt;
+            o.offset = offset;
+            o.start_offset = start_offset;
+            o.friction_coef = friction_coef;
+            o.approaches_tried = approaches_tried;
+            o.approaches_kept = approaches_kept;
+            o.check_collision = check_collision;
+            o.seed = seed;
+            o.first_index = first_index;
+            o.num_threads = num_threads;
+            AntipodalResult r;
+            {
+              py::gil_scoped_release release;
+              r = s.sample(p, n, o);
+            }
+            const auto M = static_cast<Eigen::Index>(r.grasps.size());
+            Points3d p1(M, 3), v(M, 3), a(M, 3);
+            std::vector<double> width(r.grasps.size());
+            std::vector<std::int64_t> point_index(r.grasps.size());
+            std::vector<std::int32_t> probe(r.grasps.size());
+            std::vector<float> score(r.grasps.size());
+            for (Eigen::Index i = 0; i < M; ++i) {
+              const AntipodalGrasp& g = r.grasps[i];
+              p1.row(i) = g.grasp.p1.transpose();
+              v.row(i) = g.grasp.closing.transpose();
+              a.row(i) = g.grasp.approach.transpose();
+              width[i] = g.grasp.width;
+              point_index[i] = g.point_index;
+              probe[i] = g.probe;
+              score[i] = g.score;
+            }
+            py::dict out;
+            out["point_score"] = to_numpy(std::move(r.point_score));
+            out["num_kept"] = to_numpy(std::move(r.num_kept));
+            out["p1"] = to_numpy(std::move(p1));
+            out["closing"] = to_numpy(std::move(v));
+            out["approach"] = to_numpy(std::move(a));
+            out["width"] = to_numpy(std::move(width));
+            out["point_index"] = to_numpy(std::move(point_index));
+            out["probe"] = to_numpy(std::move(probe));
+            out["score"] = to_numpy(std::move(score));
+            out["num_accepted_probes"] = r.num_accepted_probes;
+            out["num_colliding"] = r.num_colliding;
+            return out;
+          },
+          py::arg("points"), py::arg("normals"), py::arg("probes") = 5,
+          py::arg("tilt") = M_PI / 16.0, py::arg("offset") = 0.005, py::arg("start_offset") = 0.010,
+          py::arg("friction_coef") = 0.41421356237309503, py::arg("approaches_tried") = 50,
+          py::arg("approaches_kept") = 20, py::arg("check_collision") = true, py::arg("seed") = 0,
+          py::arg("first_index") = 0, py::arg("num_threads") = 0)
+      .def(
+          "collides",
+          [](const AntipodalSampler& s, const py::handle& X_OH, double opening) {
+            const Pose X = to_pose(X_OH, "X_OH");
+            py::gil_scoped_release release;
+            return s.collides(X, opening);
+          },
+          py::arg("X_OH"), py::arg("opening"));
+
+  m.def(
+      "pj_wrench_scores",
+      [](const py::handle& p1, const py::handle& closing, const py::handle& width, double mass,
+         const Vec3d& com, const Vec3d& gravity_direction, double friction, double grip_force,
+         double contact_radius, double gravity) {
+        const std::vector<ParallelJawGrasp> grasps = to_grasps(p1, closing, py::none(), width);
+        PjWrenchOptions o;
+        o.friction = friction;
+        o.grip_force = grip_force;
+        o.contact_radius = contact_radius;
+        o.gravity = gravity;
+        return to_numpy(pj_wrench_scores(grasps, mass, com, gravity_direction, o));
+      },
+      py::arg("p1"), py::arg("closing"), py::arg("width"), py::arg("mass"), py::arg("com"),
+      py::arg("gravity_direction"), py::arg("friction") = 0.5, py::arg("grip_force") = 70.0,
+      py::arg("contact_radius") = 0.005, py::arg("gravity") = 9.81);
+}
+
+}  // namespace mgn::py_bind

@@ -1,0 +1,155 @@
+// Bindings of the Bullet shake test (mgn/grasp/shake_test.hpp). The typed façade is
+// python/mgn/pj/physics.py. The gripper is the bound C++ ParallelJawGripper (boxes or the three
+// meshes), made by the one conversion mgn.pj.sampler.core_gripper() like every other consumer.
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+#include <mgn/grasp/shake_test.hpp>
+
+#include "exceptions.hpp"
+#include "numpy_conv.hpp"
+
+namespace py = pybind11;
+using namespace mgn::py_conv;
+
+namespace mgn::py_bind {
+
+namespace {
+
+/// (N, 10) rows [a (3), v (3), p1 (3), w] in metres (MetaGraspNet order, SI units).
+std::vector<ParallelJawGrasp> grasps_from(const py::handle& obj) {
+  const auto rows = to_rows<double, 10>(obj, "grasps");
+  std::vector<ParallelJawGrasp> out(static_cast<std::size_t>(rows.rows()));
+  for (Eigen::Index i = 0; i < rows.rows(); ++i) {
+    out[i].approach = rows.row(i).segment<3>(0).transpose();
+    out[i].closing = rows.row(i).segment<3>(3).transpose();
+    out[i].p1 = rows.row(i).segment<3>(6).transpose();
+    out[i].width = rows(i, 9);
+  }
+  return out;
+}
+
+PhysicsObject object_from(std::vector<Mesh> parts, double mass, const Vec3d& com,
+                          const Mat3d& inertia) {
+  PhysicsObject o;
+  o.convex_parts = std::move(parts);
+  o.mass = mass;
+  o.com = com;
+  o.inertia = inertia;
+  return o;
+}
+
+}  // namespace
+
+void bind_grasp_shake_test(py::module_& m) {
+  py::class_<ShakeOptions>(m, "ShakeOptions",
+                           "Options of the Bullet shake test (SI units; see mgn.pj.physics).")
+      .def(py::init<>())
+      .def_readwrite("grid", &ShakeOptions::grid)
+      .def_readwrite("friction_min", &ShakeOptions::friction_min)
+      .def_readwrite("friction_max", &ShakeOptions::friction_max)
+      .def_readwrite("density_min", &ShakeOptions::density_min)
+      .def_readwrite("density_max", &ShakeOptions::density_max)
+      .def_readwrite("dt", &ShakeOptions::dt)
+      .def_readwrite("close_steps", &ShakeOptions::close_steps)
+      .def_readwrite("shake_steps", &ShakeOptions::shake_steps)
+      .def_readwrite("rotate_steps", &ShakeOptions::rotate_steps)
+      .def_readwrite("gravity", &ShakeOptions::gravity)
+      .def_readwrite("shake_speed", &ShakeOptions::shake_speed)
+      .def_readwrite("shake_cycles", &ShakeOptions::shake_cycles)
+      .def_readwrite("angle_min", &ShakeOptions::angle_min)
+      .def_readwrite("angle_max", &ShakeOptions::angle_max)
+      .def_readwrite("rotate_cycles", &ShakeOptions::rotate_cycles)
+      .def_readwrite("grip_force", &ShakeOptions::grip_force)
+      .def_readwrite("close_speed", &ShakeOptions::close_speed)
+      .def_readwrite("pad_stiffness", &ShakeOptions::pad_stiffness)
+      .def_readwrite("pad_damping", &ShakeOptions::pad_damping)
+      .def_readwrite("controller_stiffness", &ShakeOptions::controller_stiffness)
+      .def_readwrite("inertia_floor", &ShakeOptions::inertia_floor)
+      .def_readwrite("contact_distance", &ShakeOptions::contact_distance)
+      .def_readwrite("settle_steps", &ShakeOptions::settle_steps)
+      .def_readwrite("lost_contact_steps", &ShakeOptions::lost_contact_steps)
+      .def_readwrite("margin", &ShakeOptions::margin)
+      .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
+      .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
+      .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
+      .def_readwrite("staircase", &ShakeOptions::staircase)
+      .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
+      .def_readwrite("num_threads", &ShakeOptions::num_threads)
+      .def_readwrite("seed", &ShakeOptions::seed)
+      .def("validate", &ShakeOptions::validate)
+      .def("frictions", &ShakeOptions::frictions)
+      .def("density_factors", &ShakeOptions::density_factors);
+
+  m.def(
+      "shake_test",
+      [](std::vector<Mesh> parts, double mass, const Vec3d& com, const Mat3d& inertia,
+         const py::handle& grasps, const ParallelJawGripper& grip, const ShakeOptions& options) {
+        const PhysicsObject object = object_from(std::move(parts), mass, com, inertia);
+        const std::vector<ParallelJawGrasp> g = grasps_from(grasps);
+        ShakeResult r;
+        {
+          py::gil_scoped_release release;
+          r = shake_test(object, grip, g, options);
+        }
+        const auto G = static_cast<py::ssize_t>(r.score.size());
+        const py::ssize_t S = r.grid;
+        py::dict out;
+        out["score"] = to_numpy(std::move(r.score));
+        out["trial_success"] = to_bool_numpy(std::move(r.trial_success)).attr("reshape")(G, S, S);
+        out["trial_ended_early"] =
+            to_bool_numpy(std::move(r.trial_ended_early)).attr("reshape")(G, S, S);
+        out["trial_steps"] = to_numpy(std::move(r.trial_steps)).attr("reshape")(G, S, S);
+        out["frictions"] = to_numpy(std::move(r.frictions));
+        out["density_factors"] = to_numpy(std::move(r.density_factors));
+        out["total_steps"] = r.total_steps;
+        out["trial_simulated"] =
+            to_bool_numpy(std::move(r.trial_simulated)).attr("reshape")(G, S, S);
+        out["fallback"] = to_bool_numpy(std::move(r.fallback));
+        return out;
+      },
+      py::arg("parts"), py::arg("mass"), py::arg("com"), py::arg("inertia"), py::arg("grasps"),
+      py::arg("gripper"), py::arg("options"),
+      "Shake test of (N, 10) grasps [a, v, p1, w] (m); dict of numpy arrays (GIL released).");
+
+  m.def(
+      "shake_trajectory",
+      [](std::vector<Mesh> parts, double mass, const Vec3d& com, const Mat3d& inertia,
+         const py::handle& grasp, const ParallelJawGripper& grip, double friction,
+         double density_factor, const ShakeOptions& options, int record_every,
+         std::uint64_t trial_index) {
+        const PhysicsObject object = object_from(std::move(parts), mass, com, inertia);
+        const py::object row =
+            py::module_::import("numpy").attr("asarray")(grasp).attr("reshape")(-1, 10);
+        const std::vector<ParallelJawGrasp> g = grasps_from(row);
+        if (g.size() != 1) {
+          throw_error<InvalidArgument>("grasp: expected one row of 10 values, got ", g.size());
+        }
+        ShakeTrajectory t;
+        {
+          py::gil_scoped_release release;
+          t = shake_trajectory(object, grip, g[0], friction, density_factor, options, record_every,
+                               trial_index);
+        }
+        py::dict out;
+        out["time"] = to_numpy(std::move(t.time));
+        out["phase"] = to_numpy(std::move(t.phase));
+        out["X_WO"] = poses_to_numpy(t.X_WO);
+        out["X_WH"] = poses_to_numpy(t.X_WH);
+        out["finger_left"] = to_numpy(std::move(t.finger_left));
+        out["finger_right"] = to_numpy(std::move(t.finger_right));
+        out["contact_left"] = to_bool_numpy(std::move(t.contact_left));
+        out["contact_right"] = to_bool_numpy(std::move(t.contact_right));
+        out["success"] = t.success;
+        out["ended_early"] = t.ended_early;
+        out["steps"] = t.steps;
+        out["friction"] = t.friction;
+        out["density_factor"] = t.density_factor;
+        return out;
+      },
+      py::arg("parts"), py::arg("mass"), py::arg("com"), py::arg("inertia"), py::arg("grasp"),
+      py::arg("gripper"), py::arg("friction"), py::arg("density_factor"), py::arg("options"),
+      py::arg("record_every") = 5, py::arg("trial_index") = 0,
+      "One recorded shake trial (poses in the world W: z up, gravity -z).");
+}
+
+}  // namespace mgn::py_bind

@@ -1,0 +1,124 @@
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+#include <mgn/scene/view_labels.hpp>
+
+#include "exceptions.hpp"
+#include "numpy_conv.hpp"
+
+namespace py = pybind11;
+using namespace mgn::py_conv;
+
+namespace mgn::py_bind {
+
+namespace {
+
+py::array image(py::array flat, int h, int w) { return flat.attr("reshape")(py::make_tuple(h, w)); }
+
+}  // namespace
+
+void bind_scene_view_labels(py::module_& m) {
+  py::class_<ViewLabelModel>(m, "ViewLabelModel",
+                             "Ray-tracing model of one scene for per-view object labels.")
+      .def(py::init([](const std::vector<const Mesh*>& meshes, const py::handle& poses,
+                       const std::vector<std::int32_t>& category_ids,
+                       const std::vector<py::handle>& keypoints,
+                       const std::vector<py::handle>& com_points, const py::handle& coms,
+                       const Mesh* tote, const py::handle& X_W_tote) {
+             const std::size_t n = meshes.size();
+             const std::vector<Pose> X = n == 0 ? std::vector<Pose>{} : to_poses(poses, "poses");
+             const Points3d c = to_rows<double, 3>(coms, "coms");
+             if (X.size() != n || category_ids.size() != n || keypoints.size() != n ||
+                 com_points.size() != n || static_cast<std::size_t>(c.rows()) != n) {
+               throw_error<InvalidArgument>("ViewLabelModel: got ", n, " meshes, ", X.size(),
+                                            " poses, ", category_ids.size(), " category ids, ",
+                                            keypoints.size(), " keypoint arrays, ",
+                                            com_points.size(), " CoM point arrays and ", c.rows(),
+                                            " centres of mass; expected one of each per object");
+             }
+             std::vector<ViewLabelObject> objects(n);
+             for (std::size_t i = 0; i < n; ++i) {
+               objects[i].mesh = meshes[i];
+               objects[i].X_WO = X[i];
+               objects[i].category_id = category_ids[i];
+               objects[i].keypoints = to_rows<double, 4>(keypoints[i], "keypoints");
+               objects[i].com_points = to_rows<double, 4>(com_points[i], "com_points");
+               objects[i].com_O = c.row(static_cast<Eigen::Index>(i)).transpose();
+             }
+             const Pose X_tote =
+                 X_W_tote.is_none() ? Pose::Identity() : to_pose(X_W_tote, "X_W_tote");
+             py::gil_scoped_release release;
+             return std::make_unique<ViewLabelModel>(objects, tote, X_tote);
+           }),
+           py::arg("meshes"), py::arg("poses"), py::arg("category_ids"), py::arg("keypoints"),
+           py::arg("com_points"), py::arg("coms"), py::arg("tote") = nullptr,
+           py::arg("X_W_tote") = py::none())
+      .def_property_readonly("num_objects", &ViewLabelModel::num_objects)
+      .def_property_readonly("has_tote", &ViewLabelModel::has_tote)
+      .def(
+          "label_view",
+          [](const ViewLabelModel& model, const Intrinsics& K, const py::handle& X_WC,
+             const py::handle& instance_image, double keypoint_tolerance, bool keypoints,
+             int num_threads, const py::handle& depth) {
+            const Pose X = to_pose(X_WC, "X_WC");
+            CArray<std::int32_t> img;
+            try {
+              img = py::cast<CArray<std::int32_t>>(instance_image);
+            } catch (const py::cast_error&) {
+              throw_error<InvalidArgument>("instance_image: expected an integer (H, W) array");
+            }
+            if (img.ndim() != 2) {
+              throw_error<InvalidArgument>("instance_image: expected a 2-D (H, W) array, got ",
+                                           img.ndim(), " dimensions");
+            }
+            ViewLabelOptions o;
+            o.keypoint_tolerance = keypoint_tolerance;
+            o.keypoints = keypoints;
+            o.num_threads = num_threads;
+            const int h = static_cast<int>(img.shape(0)), w = static_cast<int>(img.shape(1));
+            CArray<float> z;
+            if (!depth.is_none()) {
+              try {
+                z = py::cast<CArray<float>>(depth);
+              } catch (const py::cast_error&) {
+                throw_error<InvalidArgument>("depth: expected a float (H, W) array");
+              }
+              if (z.ndim() != 2 || z.shape(0) != h || z.shape(1) != w) {
+                throw_error<InvalidArgument>("depth: expected the shape of instance_image (", h,
+                                             ", ", w, ")");
+              }
+              o.depth = z.data();
+            }
+            ViewLabels L;
+            {
+              py::gil_scoped_release release;
+              L = model.label_view(K, X, img.data(), w, h, o);
+            }
+            const int n = L.num_objects;
+            py::dict out;
+            out["visible"] = image(to_numpy(std::move(L.visible)), h, w);
+            out["semantic"] = image(to_numpy(std::move(L.semantic)), h, w);
+            out["amodal"] =
+                to_bool_numpy(std::move(L.amodal)).attr("reshape")(py::make_tuple(n, h, w));
+            out["visible_pixels"] = to_numpy(std::move(L.visible_pixels));
+            out["amodal_pixels"] = to_numpy(std::move(L.amodal_pixels));
+            out["occlusion"] = to_numpy(std::move(L.occlusion));
+            out["occlusion_map"] = image(to_numpy(std::move(L.occlusion_map)), h, w);
+            out["bbox_tight"] = to_numpy(std::move(L.bbox_tight));
+            out["bbox_loose"] = to_numpy(std::move(L.bbox_loose));
+            out["X_CO"] = poses_to_numpy(L.X_CO);
+            out["keypoints"] = to_numpy(std::move(L.keypoints));
+            out["keypoint_object"] = to_numpy(std::move(L.keypoint_object));
+            out["occluded_keypoints"] = to_numpy(std::move(L.occluded_keypoints));
+            out["occluded_keypoint_object"] = to_numpy(std::move(L.occluded_keypoint_object));
+            out["com_points"] = to_numpy(std::move(L.com_points));
+            out["com_object"] = to_numpy(std::move(L.com_object));
+            out["com_visible"] = to_bool_numpy(std::move(L.com_visible));
+            out["com_heatmap"] = image(to_numpy(std::move(L.com_heatmap)), h, w);
+            return out;
+          },
+          py::arg("K"), py::arg("X_WC"), py::arg("instance_image"),
+          py::arg("keypoint_tolerance") = 0.002, py::arg("keypoints") = true,
+          py::arg("num_threads") = 0, py::arg("depth") = py::none());
+}
+
+}  // namespace mgn::py_bind

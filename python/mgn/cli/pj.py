@@ -1,0 +1,134 @@
+"""``mgn pj``: parallel-jaw labels from the command line.
+
+    mgn pj label PATH [PATH ...] [--gripper G.yaml] [--points N] [--seed S] [--no-physics]
+
+PATH is an object folder (``textured.obj`` + ``textured.obj.hdf5``), an export root (its
+``models/NNN`` folders are all labelled) or a mesh file (then ``--out`` names the HDF5 file to
+write and ``--density`` gives the mass).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from mgn.errors import InvalidArgumentError
+from mgn.geometry.mesh import load_mesh, mass_properties
+from mgn.hardware import ParallelJawGripper
+from mgn.io.grasp_file import create_labels_file, write_pj_labels
+from mgn.io.model_folder import object_folders, read_model_folder
+from mgn.pj.labels import label_object
+from mgn.pj.physics import ShakeOptions, ShakeScorer
+from mgn.viz.shake_trial import register_show_trial
+
+
+def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> ShakeScorer:
+    """The Bullet shake-test scorer on at most ``--physics-grasps`` grasps per object."""
+
+    return ShakeScorer(
+        density=args.density,
+        gripper=gripper,
+        options=ShakeOptions(grid=args.physics_grid, num_threads=args.num_threads),
+        max_grasps=args.physics_grasps,
+    )
+
+
+def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path | None]]:
+    """(mesh file, hdf5 file, model folder or None) for each PATH."""
+
+    targets: list[tuple[Path, Path, Path | None]] = []
+    for raw in paths:
+        p = Path(raw)
+        if p.is_dir() and (p / "textured.obj").is_file():
+            targets.append((p / "textured.obj", p / "textured.obj.hdf5", p))
+        elif p.is_dir() and (p / "models").is_dir():
+            folders = object_folders(p)
+            if not folders:
+                raise InvalidArgumentError(f"no object folders under '{p / 'models'}'")
+            targets.extend((f / "textured.obj", f / "textured.obj.hdf5", f) for f in folders)
+        elif p.is_file():
+            if out is None and len(paths) == 1:
+                raise InvalidArgumentError(f"'{p}' is a mesh file: give --out LABELS.hdf5")
+            if len(paths) != 1:
+                raise InvalidArgumentError("--out works with a single mesh file")
+            assert out is not None  # checked above
+            targets.append((p, Path(out), None))
+        else:
+            raise FileNotFoundError(f"'{p}' is neither an object folder, an export root nor a mesh")
+    return targets
+
+
+def _cmd_label(args: argparse.Namespace) -> int:
+
+    gripper = ParallelJawGripper.from_yaml(args.gripper) if args.gripper else ParallelJawGripper()
+    physics = _physics_scorer(args, gripper) if args.physics else None
+    for mesh_path, h5_path, folder in _targets(args.paths, args.out):
+        mesh = load_mesh(mesh_path)
+        density = args.density
+        name = mesh_path.stem
+        if folder is not None:
+            meta = read_model_folder(folder).metadata
+            density = float(meta.get("density_kg_m3", density))
+            name = f"{folder.name} {meta.get('name', '')}"
+        props = mass_properties(mesh, density)
+        if physics is not None:
+            physics.density = density
+        labels = label_object(
+            mesh,
+            mass=props.mass,
+            com=props.center_of_mass,
+            gripper=gripper,
+            num_points=args.points,
+            seed=args.seed,
+            num_threads=args.num_threads,
+            progress=not args.quiet,
+            physics=physics,
+        )
+        if folder is None and not h5_path.exists():
+            create_labels_file(h5_path)
+        write_pj_labels(h5_path, labels)
+        good = int((labels.point_score >= 1.0).sum())
+        print(
+            f"{name}: {len(labels)} parallel-jaw grasps from {labels.num_points} points "
+            f"({good} points with analytic score 1.0, {labels.num_colliding} colliding "
+            f"approaches dropped) -> {h5_path}"
+        )
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``pj`` command group to the ``mgn`` subparsers."""
+    pj = sub.add_parser("pj", help="parallel-jaw grasp labels")
+    psub = pj.add_subparsers(dest="pj_command", metavar="ACTION", required=True)
+    p = psub.add_parser(
+        "label",
+        help="label objects (writes grasps/paralleljaw/* of textured.obj.hdf5)",
+        description=__doc__.replace("``", "").replace("::", ":"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("paths", nargs="+", metavar="PATH", help="object folder, export root or mesh")
+    p.add_argument("--gripper", metavar="YAML", help="gripper YAML (default: MetaGraspNet hand)")
+    p.add_argument("--points", type=int, default=5000, help="contact points per object")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
+    p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 for a bare mesh file")
+    p.add_argument("--out", metavar="HDF5", help="output file when PATH is a mesh file")
+    p.add_argument(
+        "--physics",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="run the physics (shake) score; --no-physics for the fast analytic path",
+    )
+    p.add_argument(
+        "--physics-grasps",
+        type=int,
+        default=200,
+        help="grasps per object given a physics score (evenly strided; the others keep NaN)",
+    )
+    p.add_argument(
+        "--physics-grid", type=int, default=5, help="S of the S x S friction x density grid"
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_label)
+
+    register_show_trial(psub)

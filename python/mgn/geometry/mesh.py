@@ -1,0 +1,135 @@
+"""Meshes, mass properties and surface sampling (typed façade over the C++ core).
+
+Units: metres, kilograms, kg/m^3. Mesh vertices are in the mesh's own frame O; faces are wound
+counter-clockwise seen from outside.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from mgn import _core
+
+#: Indexed triangle mesh (vertices (V,3) float32 m, faces (F,3) int32, optional uvs (V,2)).
+#: Invariants checked on construction: finite vertices, in-range indices, no zero-area face.
+Mesh = _core.Mesh
+#: Surface appearance (base colour RGBA, specular, shininess, opacity, texture).
+Material = _core.Material
+#: Validation report: watertightness, winding, boundary/non-manifold edges, signed volume.
+MeshReport = _core.MeshReport
+#: Volume (m^3), mass (kg), centre of mass (m, mesh frame), inertia about the CoM (kg m^2).
+MassProperties = _core.MassProperties
+
+
+def load_mesh(
+    path: str | os.PathLike[str],
+    *,
+    scale: float = 1.0,
+    merge: bool = True,
+    drop_degenerate: bool = True,
+) -> Mesh:
+    """Load a mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...) with assimp.
+
+    Args:
+        path: the file.
+        scale: multiplies every coordinate (0.001 for a file in millimetres); result in metres.
+        merge: merge sub-meshes (node transforms applied); if False the file must hold one mesh.
+        drop_degenerate: remove zero-area faces; if False such a file raises InvalidArgumentError.
+
+    Raises:
+        IoError: missing, unreadable or non-mesh file.
+        InvalidArgumentError: no triangles, non-finite vertices, bad scale.
+    """
+    return _core.load_mesh(os.fspath(path), scale, merge, drop_degenerate)
+
+
+def mass_properties(
+    mesh: Mesh,
+    density: float = 1000.0,
+    *,
+    open_mesh: Literal["shell", "error"] = "shell",
+    shell_thickness: float = 0.002,
+) -> MassProperties:
+    """Volume, mass, centre of mass and inertia of ``mesh`` for a uniform ``density`` (kg/m^3).
+
+    Closed, consistently wound meshes are integrated exactly (divergence theorem). For an open
+    mesh, ``open_mesh="shell"`` treats the surface as a shell ``shell_thickness`` metres thick
+    (``is_exact`` is then False) and ``"error"`` raises InvalidArgumentError.
+    """
+    return _core.compute_mass_properties(mesh, density, open_mesh, shell_thickness)
+
+
+@dataclass(frozen=True)
+class SurfaceSamples:
+    """Points on a mesh surface, in the mesh frame.
+
+    Attributes:
+        points: (n, 3) float32, metres.
+        normals: (n, 3) float32 unit outward face normals.
+        face_ids: (n,) int32 index of the face each point lies on.
+    """
+
+    points: npt.NDArray[np.float32]
+    normals: npt.NDArray[np.float32]
+    face_ids: npt.NDArray[np.int32]
+
+    def __len__(self) -> int:
+        return int(self.points.shape[0])
+
+
+def sample_surface(
+    mesh: Mesh,
+    count: int,
+    *,
+    method: Literal["random", "even"] = "random",
+    seed: int = 0,
+    oversampling: int = 6,
+) -> SurfaceSamples:
+    """Sample ``count`` points on the surface, deterministically for a ``seed``.
+
+    ``"random"`` is area-weighted uniform; ``"even"`` is blue-noise (farthest-point selection
+    from ``oversampling * count`` area-weighted candidates), as used for grasp candidates.
+    """
+    out = _core.sample_surface(mesh, int(count), method, int(seed), int(oversampling))
+    return SurfaceSamples(out["points"], out["normals"], out["face_ids"])
+
+
+def make_box(extents: npt.ArrayLike) -> Mesh:
+    """Closed box centred at the origin with edge lengths ``extents`` (x, y, z) in metres."""
+    return _core.make_box(np.asarray(extents, dtype=np.float64).reshape(3))
+
+
+def make_sphere(radius: float, segments: int = 64, rings: int = 32) -> Mesh:
+    """Closed UV sphere of ``radius`` metres centred at the origin."""
+    return _core.make_sphere(radius, segments, rings)
+
+
+def make_cylinder(radius: float, height: float, segments: int = 64) -> Mesh:
+    """Closed cylinder along z, centred at the origin (``radius``, ``height`` in metres)."""
+    return _core.make_cylinder(radius, height, segments)
+
+
+def mesh_from_arrays(
+    vertices: npt.ArrayLike,
+    faces: npt.ArrayLike,
+    *,
+    uvs: npt.ArrayLike | None = None,
+    material: Material | None = None,
+    name: str = "",
+) -> Mesh:
+    """A :data:`Mesh` from arrays (vertices (N, 3) m, faces (M, 3), optional uvs (N, 2)) with at
+    most one material."""
+    materials = [material] if material is not None else []
+    return Mesh(
+        np.asarray(vertices, dtype=np.float32),
+        np.asarray(faces, dtype=np.int32),
+        None if uvs is None else np.asarray(uvs, dtype=np.float32),
+        materials,
+        [],
+        name,
+    )

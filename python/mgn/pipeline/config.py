@@ -1,0 +1,777 @@
+"""The dataset configuration: one YAML file, validated, with MetaGraspNet defaults.
+
+:class:`Config` gathers everything ``mgn generate`` needs besides the scene count, the output
+folder and the seed. Every section is a frozen dataclass whose defaults are the MetaGraspNet
+(MGN) values; a YAML file only needs the keys it changes::
+
+    objects: {count: 10}
+    camera: {views: [0, 5, 17], resolution_scale: 0.5}
+    labels: {pj_physics: false}
+
+Validation names the key, the value received and what was expected; unknown keys are errors
+(``mgn config dump`` prints every key with its default). Units are SI (m, kg, s, rad).
+
+Sections:
+
+- ``objects``: which objects fall into each scene: ``names`` (explicit list, repeat a name for
+  copies), or ``categories`` (each with ``copies`` = (min, max) copies, MGN 2-5) and/or a total
+  ``count``; with none of them, ``count`` defaults to 20 objects from categories drawn at random
+  (MGN). ``user_objects``: YAML files of user objects (see :func:`mgn.objects.load_objects_yaml`)
+  added to the catalogue; relative paths are relative to the config file.
+- ``tote``: :class:`mgn.objects.ToteSpec` fields. ``gripper``:
+  :class:`mgn.hardware.ParallelJawGripper` fields. ``cup``: :class:`mgn.hardware.SuctionCup`
+  fields. ``drop``: :class:`mgn.scene.DropOptions` fields.
+- ``camera``: ``rig`` (``mgn``: the 37-view MetaGraspNet rig, drawn per scene; ``hemisphere``:
+  every (radius, tilt, azimuth) of ``hemisphere``; ``poses``: your own cameras, ``poses`` = a
+  list of 4x4 ``X_WC`` or ``{eye, target, up}``), ``views`` (indices of the rig's views to
+  keep, e.g. ``[0, 5, 17]``; null = all), ``intrinsics`` (a preset: ``mgn_synthetic``,
+  ``zivid2_plus_m130``, ``photoneo_phoxi_m``, ``realsense_d435``, ... — or your own
+  ``{width, height, fx, fy, cx, cy, distortion}``; docs/cameras.md), ``resolution_scale`` (same
+  field of view, scaled pixel count), depth ``sensor`` preset, ``randomize`` (per-view light and
+  tote/floor colour randomisation).
+- ``labels``: which labels to make (``suction``, ``paralleljaw``, ``pj_physics``, ``layout``,
+  ``scene_grasps``).
+- ``object_labels``: sizes of the per-object labels: ``suction_points``, ``pj_points`` (MGN:
+  5000 each), ``physics_grasps`` (grasps per object given a physics score), ``physics_grid``
+  (S of the S x S friction x mass grid, MGN 10), ``suction_model``, ``seed``.
+- ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
+  ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
+  scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
+  or a list of object names / category ids).
+- ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
+  ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
+  ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
+  it ``spp_without_denoiser`` samples are traced and a warning names the package),
+  ``denoise_quality``,
+  ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone`` (``filmic`` | ``linear``),
+  ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
+  ``randomize`` (path engine, when ``camera.randomize`` is on: switches ``lights``,
+  ``environment``, ``materials`` (tote / floor), ``exposure`` and their ranges). Labels do not
+  depend on the engine.
+- ``selection``: a difficulty-balanced test set (docs/testsets.md): ``quota`` (views wanted per
+  difficulty level, e.g. ``{1: 20, 2: 20, 3: 20, 4: 20, 5: 20}``; null = no selection),
+  ``batch_scenes`` (scenes generated per batch), ``max_scenes`` (give up after this many
+  scenes), ``prune_rejected`` (delete the files of the views not selected).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from mgn.base.yaml_file import read_yaml
+from mgn.errors import InvalidArgumentError, MgnError
+from mgn.hardware import ParallelJawGripper, SuctionCup
+from mgn.objects import ToteSpec, make_tote
+from mgn.render.photo import RandomizeSettings, RenderSettings
+from mgn.scene.cameras import look_at
+from mgn.scene.scene import DropOptions
+
+__all__ = [
+    "CameraConfig",
+    "Config",
+    "ConfigError",
+    "HemisphereConfig",
+    "IntrinsicsConfig",
+    "LabelsConfig",
+    "ObjectLabelsConfig",
+    "ObjectsConfig",
+    "SelectionConfig",
+    "SplitConfig",
+    "default_config",
+    "dump_config",
+    "load_config",
+]
+
+INTRINSICS_PRESETS = (
+    "mgn_synthetic",
+    "zivid_two_like",
+    "zivid2_plus_m130",
+    "photoneo_phoxi_m",
+    "realsense_d435",
+)
+SENSOR_PRESETS = ("ideal", "structured-light", "tof")
+RIGS = ("mgn", "hemisphere", "poses")
+SEAL_MODELS = ("spring", "strain", "smoothness")
+#: Views of the MetaGraspNet rig.
+MGN_NUM_VIEWS = 37
+SPLIT_NAMES = ("all", "train", "test")
+#: Difficulty levels of a view (paper Table IV, :mod:`mgn.view_labels.layout`).
+DIFFICULTY_LEVELS = (1, 2, 3, 4, 5)
+
+
+class ConfigError(InvalidArgumentError):
+    """A configuration value or key is invalid (a ValueError); the message names the key."""
+
+
+# ---------------------------------------------------------------------------------- validators
+
+Check = Callable[[Any, str], Any]
+
+
+def _fail(key: str, value: Any, expected: str) -> ConfigError:
+    return ConfigError(f"config key '{key}': expected {expected}, got {value!r}")
+
+
+def _bool(value: Any, key: str) -> bool:
+    if not isinstance(value, bool):
+        raise _fail(key, value, "true or false")
+    return value
+
+
+def _int(lo: int | None = None) -> Check:
+    def check(value: Any, key: str) -> int:
+        ok = isinstance(value, int) and not isinstance(value, bool)
+        if not ok or (lo is not None and value < lo):
+            raise _fail(key, value, "an integer" + (f" >= {lo}" if lo is not None else ""))
+        return int(value)
+
+    return check
+
+
+def _num(lo: float | None = None, *, strict: bool = True) -> Check:
+    def check(value: Any, key: str) -> float:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        ok = ok and math.isfinite(float(value))
+        if ok and lo is not None:
+            ok = float(value) > lo if strict else float(value) >= lo
+        if not ok:
+            bound = "" if lo is None else f" {'>' if strict else '>='} {lo:g}"
+            raise _fail(key, value, f"a finite number{bound}")
+        return float(value)
+
+    return check
+
+
+def _choice(*options: str) -> Check:
+    def check(value: Any, key: str) -> str:
+        if value not in options:
+            raise _fail(key, value, "one of " + ", ".join(repr(o) for o in options))
+        return str(value)
+
+    return check
+
+
+def _optional(inner: Check) -> Check:
+    def check(value: Any, key: str) -> Any:
+        return None if value is None else inner(value, key)
+
+    return check
+
+
+def _name(value: Any, key: str) -> str | int:
+    if isinstance(value, bool) or not isinstance(value, (str, int)) or value == "":
+        raise _fail(key, value, "an object name or category id")
+    return value
+
+
+def _path(value: Any, key: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise _fail(key, value, "a file path")
+    return value
+
+
+def _list(inner: Check, *, length: int | None = None, nonempty: bool = True) -> Check:
+    def check(value: Any, key: str) -> tuple:
+        if not isinstance(value, (list, tuple)):
+            raise _fail(key, value, "a list" if length is None else f"a list of {length} values")
+        if length is not None and len(value) != length:
+            raise _fail(key, value, f"a list of {length} values")
+        if nonempty and len(value) == 0:
+            raise _fail(key, value, "a non-empty list")
+        return tuple(inner(v, f"{key}[{i}]") for i, v in enumerate(value))
+
+    return check
+
+
+def _mapping(data: Any, key: str) -> dict[str, Any]:
+    if data is None:
+        return {}
+    if not isinstance(data, Mapping):
+        raise _fail(key or "<top level>", data, "a mapping of keys to values")
+    return dict(data)
+
+
+def _check_keys(data: Mapping[str, Any], valid: list[str], key: str) -> None:
+    unknown = sorted(str(k) for k in set(data) - set(valid))
+    if unknown:
+        where = f"'{key}.{unknown[0]}'" if key else f"'{unknown[0]}'"
+        raise ConfigError(
+            f"config: unknown key {where}"
+            + (f" (and {unknown[1:]})" if len(unknown) > 1 else "")
+            + f"; valid keys{' of ' + repr(key) if key else ''}: {', '.join(sorted(valid))}"
+        )
+
+
+class _Section:
+    """A config section: fields validated by ``_CHECKS`` (field name -> validator)."""
+
+    _CHECKS: dict[str, Check] = {}
+
+    @classmethod
+    def from_dict(cls, data: Any, key: str = "") -> Any:
+        d = _mapping(data, key)
+        names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
+        _check_keys(d, names, key)
+        kwargs = {}
+        for k, v in d.items():
+            sub = f"{key}.{k}" if key else k
+            kwargs[k] = cls._CHECKS[k](v, sub)
+        try:
+            return cls(**kwargs)
+        except ConfigError:
+            raise
+        except (ValueError, TypeError) as e:
+            raise ConfigError(f"config key '{key}': {e}") from e
+
+    def to_dict(self) -> dict[str, Any]:
+        return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}  # type: ignore[arg-type]
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, _Section):
+        return value.to_dict()
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        if hasattr(value, "to_dict"):
+            return value.to_dict()
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    return value
+
+
+# ------------------------------------------------------------------------------------ sections
+
+
+@dataclass(frozen=True)
+class ObjectsConfig(_Section):
+    """Which objects fall into each scene (see the module doc).
+
+    Attributes:
+        names: explicit objects (names or ids; repeat for copies), or None.
+        categories: categories to use, each with ``copies`` copies, or None.
+        count: total objects per scene, or None. With neither ``names`` nor ``categories`` it
+            defaults to 20 objects from randomly drawn categories with ``copies`` copies each.
+        copies: (min, max) copies per chosen category (MGN: 2-5).
+        user_objects: user-object YAML files added to the catalogue.
+        refill: when objects leave the tote during the drop, drop the scene again (the same
+            objects, a seed derived from the scene seed and the attempt) until every asked
+            object stays in, at most ``refill_attempts`` drops; the scene with the most objects
+            in the tote is kept. Without it the objects that left are removed (and reported).
+        refill_attempts: drops at most per scene with ``refill`` (>= 1).
+    """
+
+    names: tuple[str | int, ...] | None = None
+    categories: tuple[str | int, ...] | None = None
+    count: int | None = None
+    copies: tuple[int, int] = (2, 5)
+    user_objects: tuple[str, ...] = ()
+    refill: bool = False
+    refill_attempts: int = 5
+
+    _CHECKS = {
+        "names": _optional(_list(_name)),
+        "categories": _optional(_list(_name)),
+        "count": _optional(_int(1)),
+        "copies": _list(_int(1), length=2),
+        "user_objects": _list(_path, nonempty=False),
+        "refill": _bool,
+        "refill_attempts": _int(1),
+    }
+
+    #: Objects per scene when nothing is chosen.
+    DEFAULT_COUNT = 20
+
+    def __post_init__(self) -> None:
+        if self.names is not None and (self.categories is not None or self.count is not None):
+            raise ConfigError(
+                "config key 'objects': give 'names', or 'categories' and/or 'count', not both "
+                f"(got names={list(self.names)!r}, categories={self.categories!r}, "
+                f"count={self.count!r})"
+            )
+        lo, hi = self.copies
+        if not 1 <= lo <= hi:
+            raise _fail("objects.copies", list(self.copies), "[min, max] with 1 <= min <= max")
+
+    def compose_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`mgn.scene.compose_objects` (without seed/catalogue)."""
+        if self.names is not None:
+            return {"names": list(self.names)}
+        count = self.count
+        if self.categories is None and count is None:
+            count = self.DEFAULT_COUNT
+        cats = None if self.categories is None else list(self.categories)
+        return {"categories": cats, "count": count, "copies": tuple(self.copies)}
+
+
+@dataclass(frozen=True)
+class HemisphereConfig(_Section):
+    """A hemisphere rig: every (radius m, tilt from vertical rad, azimuth rad), radius-major."""
+
+    radii: tuple[float, ...] = (0.75, 1.0)
+    tilts: tuple[float, ...] = (0.3, 0.6)
+    azimuths: tuple[float, ...] = (0.0, math.pi / 2, math.pi, 3 * math.pi / 2)
+
+    _CHECKS = {
+        "radii": _list(_num(0.0)),
+        "tilts": _list(_num(0.0, strict=False)),
+        "azimuths": _list(_num()),
+    }
+
+    @property
+    def num_views(self) -> int:
+        return len(self.radii) * len(self.tilts) * len(self.azimuths)
+
+
+def _distortion(value: Any, key: str) -> tuple[float, ...]:
+    coeffs = _list(_num(), nonempty=False)(value, key)
+    if len(coeffs) not in (0, 4, 5, 8, 12, 14):
+        raise _fail(key, value, "OpenCV distortion coefficients [k1, k2, p1, p2(, k3, ...)]: "
+                    "4, 5, 8, 12 or 14 numbers")  # fmt: skip
+    return coeffs
+
+
+@dataclass(frozen=True)
+class IntrinsicsConfig(_Section):
+    """User camera intrinsics (pixels; OpenCV pinhole, principal point in continuous image
+    coordinates, the image centre is (width/2, height/2)).
+
+    ``distortion`` (OpenCV order k1, k2, p1, p2, k3, ...) describes the real lens; it is recorded
+    with the config in ``dataset.json`` but the images and labels are rendered with the ideal
+    pinhole: they are the *rectified* images (what Zivid, Photoneo and RealSense deliver with
+    their point clouds). To train on distorted images, distort RGB, depth and masks with
+    ``cv2.initUndistortRectifyMap`` (inverse map) using these coefficients.
+    """
+
+    width: int = 0
+    height: int = 0
+    fx: float = 0.0
+    fy: float = 0.0
+    cx: float = 0.0
+    cy: float = 0.0
+    distortion: tuple[float, ...] = ()
+
+    _CHECKS = {
+        "width": _int(1),
+        "height": _int(1),
+        "fx": _num(0.0),
+        "fy": _num(0.0),
+        "cx": _num(),
+        "cy": _num(),
+        "distortion": _distortion,
+    }
+
+    @classmethod
+    def from_dict(cls, data: Any, key: str = "") -> Any:
+        d = _mapping(data, key)
+        missing = [k for k in ("width", "height", "fx", "fy", "cx", "cy") if k not in d]
+        if missing:
+            raise ConfigError(
+                f"config key '{key}': missing {', '.join(missing)}; expected a preset name "
+                f"({', '.join(INTRINSICS_PRESETS)}) or width, height, fx, fy, cx, cy (px) and "
+                "optionally distortion"
+            )
+        return super().from_dict(d, key)
+
+
+def _intrinsics(value: Any, key: str) -> str | IntrinsicsConfig:
+    if isinstance(value, Mapping):
+        return IntrinsicsConfig.from_dict(value, key)
+    if isinstance(value, IntrinsicsConfig):
+        return value
+    if isinstance(value, str):
+        return _choice(*INTRINSICS_PRESETS)(value, key)
+    raise _fail(key, value, f"a preset ({', '.join(INTRINSICS_PRESETS)}) or a mapping with width, "
+                "height, fx, fy, cx, cy")  # fmt: skip
+
+
+def _camera_pose(value: Any, key: str) -> tuple[tuple[float, ...], ...]:
+    """A camera pose X_WC: a 4x4 matrix (rows), or {eye, target, up} (look-at), world = tote."""
+
+    if isinstance(value, Mapping):
+        _check_keys(value, ["eye", "target", "up"], key)
+        if "eye" not in value:
+            raise _fail(key, dict(value), "a mapping with 'eye' (and 'target', 'up')")
+        eye = _list(_num(), length=3)(value["eye"], f"{key}.eye")
+        target = _list(_num(), length=3)(value.get("target", [0.0, 0.0, 0.0]), f"{key}.target")
+        up = _list(_num(), length=3)(value.get("up", [0.0, 0.0, 1.0]), f"{key}.up")
+
+        try:
+            X = look_at(eye, target, up)
+        except ValueError as e:
+            raise ConfigError(f"config key '{key}': {e}") from e
+    else:
+        rows = _list(_list(_num(), length=4), length=4)(value, key)
+        X = np.asarray(rows, np.float64)
+        R = X[:3, :3]
+        if not (np.allclose(R.T @ R, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0
+                and np.allclose(X[3], [0, 0, 0, 1])):  # fmt: skip
+            raise _fail(key, value, "a rigid 4x4 pose (rotation block orthonormal, det +1, last "
+                        "row [0, 0, 0, 1])")  # fmt: skip
+    return tuple(tuple(float(x) for x in row) for row in np.asarray(X))
+
+
+@dataclass(frozen=True)
+class CameraConfig(_Section):
+    """Cameras and sensor (see the module doc).
+
+    ``intrinsics`` is a preset name (:data:`INTRINSICS_PRESETS`, docs/cameras.md) or an
+    :class:`IntrinsicsConfig` mapping. ``rig: poses`` takes the cameras from ``poses``: each a
+    4x4 camera pose ``X_WC`` (OpenCV frame: x right, y down, z forward) in the tote frame, or
+    ``{eye, target, up}`` in metres.
+    """
+
+    rig: str = "mgn"
+    views: tuple[int, ...] | None = None
+    hemisphere: HemisphereConfig = field(default_factory=HemisphereConfig)
+    poses: tuple[tuple[tuple[float, ...], ...], ...] = ()
+    intrinsics: str | IntrinsicsConfig = "mgn_synthetic"
+    resolution_scale: float = 1.0
+    sensor: str = "structured-light"
+    randomize: bool = True
+
+    _CHECKS = {
+        "rig": _choice(*RIGS),
+        "views": _optional(_list(_int(0))),
+        "hemisphere": lambda v, k: HemisphereConfig.from_dict(v, k),
+        "poses": _list(_camera_pose, nonempty=False),
+        "intrinsics": _intrinsics,
+        "resolution_scale": _num(0.0),
+        "sensor": _choice(*SENSOR_PRESETS),
+        "randomize": _bool,
+    }
+
+    def __post_init__(self) -> None:
+        if self.rig == "poses" and not self.poses:
+            raise _fail("camera.poses", [], "at least one camera pose with rig: poses")
+        if self.rig != "poses" and self.poses:
+            raise _fail("camera.rig", self.rig, "'poses' when camera.poses is given")
+        n = self.num_rig_views
+        if self.views is not None:
+            bad = [v for v in self.views if not 0 <= v < n]
+            if bad:
+                raise _fail("camera.views", list(self.views), f"view indices in 0..{n - 1}")
+            if len(set(self.views)) != len(self.views):
+                raise _fail("camera.views", list(self.views), "distinct view indices")
+
+    @property
+    def num_rig_views(self) -> int:
+        if self.rig == "poses":
+            return len(self.poses)
+        return MGN_NUM_VIEWS if self.rig == "mgn" else self.hemisphere.num_views
+
+    @property
+    def view_indices(self) -> tuple[int, ...]:
+        """The rig's views to render, in order."""
+        return tuple(range(self.num_rig_views)) if self.views is None else self.views
+
+
+@dataclass(frozen=True)
+class LabelsConfig(_Section):
+    """Which labels to make."""
+
+    suction: bool = True
+    paralleljaw: bool = True
+    pj_physics: bool = True
+    layout: bool = True
+    scene_grasps: bool = True
+
+    _CHECKS = {k: _bool for k in ("suction", "paralleljaw", "pj_physics", "layout", "scene_grasps")}
+
+
+@dataclass(frozen=True)
+class ObjectLabelsConfig(_Section):
+    """Sizes of the per-object labels (computed once per object and cached)."""
+
+    suction_points: int = 5000
+    pj_points: int = 5000
+    physics_grasps: int = 200
+    physics_grid: int = 10
+    suction_model: str = "spring"
+    seed: int = 0
+
+    _CHECKS = {
+        "suction_points": _int(1),
+        "pj_points": _int(1),
+        "physics_grasps": _int(1),
+        "physics_grid": _int(1),
+        "suction_model": _choice(*SEAL_MODELS),
+        "seed": _int(0),
+    }
+
+
+def _unseen(value: Any, key: str) -> str | tuple[str | int, ...]:
+    if value == "novel":
+        return "novel"
+    if isinstance(value, str):
+        raise _fail(key, value, "'novel' or a list of object names / category ids")
+    names = _list(_name)(value, key)
+    if len(set(names)) != len(names):
+        raise _fail(key, list(value), "distinct object names")
+    return names
+
+
+@dataclass(frozen=True)
+class SplitConfig(_Section):
+    """The unseen-object split (see the module doc and docs/testsets.md).
+
+    Attributes:
+        name: ``all`` (no split), ``train`` (unseen categories never appear) or ``test``
+            (unseen categories appear: each scene gets at least one when the pool allows).
+        unseen: ``"novel"`` (the objects tagged ``novel``) or object names / category ids.
+    """
+
+    name: str = "all"
+    unseen: str | tuple[str | int, ...] = "novel"
+
+    _CHECKS = {"name": _choice(*SPLIT_NAMES), "unseen": _unseen}
+
+
+def _quota(value: Any, key: str) -> tuple[int, ...] | None:
+    if value is None:
+        return None
+    if not isinstance(value, Mapping) or not value:
+        raise _fail(key, value, "a mapping of difficulty levels 1..5 to view counts")
+    counts = [0] * len(DIFFICULTY_LEVELS)
+    for level, n in value.items():
+        try:
+            lv = int(level) if not isinstance(level, bool) else -1
+        except (TypeError, ValueError):
+            lv = -1
+        if lv not in DIFFICULTY_LEVELS or (isinstance(level, str) and level.strip() != str(lv)):
+            raise _fail(f"{key}.{level}", level, "a difficulty level 1..5")
+        counts[lv - 1] = _int(0)(n, f"{key}.{lv}")
+    if sum(counts) == 0:
+        raise _fail(key, dict(value), "at least one level with a quota >= 1")
+    return tuple(counts)
+
+
+@dataclass(frozen=True)
+class SelectionConfig(_Section):
+    """A difficulty-balanced test set (see the module doc and docs/testsets.md).
+
+    Attributes:
+        quota: views wanted per difficulty level (index 0 = level 1), or None (no selection).
+            In YAML/JSON a mapping ``{1: n1, ..., 5: n5}``; missing levels get 0.
+        batch_scenes: scenes per batch (the composition of a batch depends on the quotas left
+            after the previous batches only).
+        max_scenes: stop with an error once this many scenes were generated without meeting
+            every quota (a resumed run may raise it).
+        prune_rejected: delete the files of the views that were not selected.
+    """
+
+    quota: tuple[int, ...] | None = None
+    batch_scenes: int = 4
+    max_scenes: int = 100
+    prune_rejected: bool = False
+
+    _CHECKS = {
+        "quota": _quota,
+        "batch_scenes": _int(1),
+        "max_scenes": _int(1),
+        "prune_rejected": _bool,
+    }
+
+    def __post_init__(self) -> None:
+        if self.quota is not None and (
+            len(self.quota) != len(DIFFICULTY_LEVELS) or min(self.quota) < 0
+        ):
+            raise _fail("selection.quota", self.quota, "5 view counts >= 0 (levels 1..5)")
+
+    @property
+    def quota_dict(self) -> dict[str, int] | None:
+        """``{"1": n1, ..., "5": n5}`` (the dataset.json form), or None."""
+        if self.quota is None:
+            return None
+        return {str(lv): int(n) for lv, n in zip(DIFFICULTY_LEVELS, self.quota, strict=True)}
+
+    def to_dict(self) -> dict[str, Any]:
+        d = super().to_dict()
+        d["quota"] = self.quota_dict
+        return d
+
+
+def _external(cls: type, data: Any, key: str) -> Any:
+    """Build one of mgn's own dataclasses (ToteSpec, gripper, cup, DropOptions) from a mapping."""
+    d = _mapping(data, key)
+    _check_keys(d, [f.name for f in dataclasses.fields(cls)], key)
+    kwargs = {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
+    try:
+        return cls(**kwargs)
+    except ConfigError:
+        raise
+    except (ValueError, TypeError) as e:
+        # The dataclasses name the field as "<Class>.<field>"; name the config key the same way.
+        m = re.search(rf"{cls.__name__}\.(\w+)", str(e))
+        sub = f"{key}.{m.group(1)}" if m and m.group(1) in kwargs else key
+        raise ConfigError(f"config key '{sub}': {e}") from e
+
+
+def _render(data: Any, key: str) -> RenderSettings:
+    """The ``render`` section: RenderSettings with its nested ``randomize`` mapping."""
+    d = _mapping(data, key)
+    _check_keys(d, [f.name for f in dataclasses.fields(RenderSettings)], key)
+    if "randomize" in d:
+        d["randomize"] = _external(RandomizeSettings, d["randomize"], f"{key}.randomize")
+    return _external(RenderSettings, d, key)
+
+
+@dataclass(frozen=True)
+class Config(_Section):
+    """The whole dataset configuration (see the module doc for the sections)."""
+
+    objects: ObjectsConfig = field(default_factory=ObjectsConfig)
+    tote: ToteSpec = field(default_factory=ToteSpec)
+    gripper: ParallelJawGripper = field(default_factory=ParallelJawGripper)
+    cup: SuctionCup = field(default_factory=SuctionCup)
+    camera: CameraConfig = field(default_factory=CameraConfig)
+    labels: LabelsConfig = field(default_factory=LabelsConfig)
+    object_labels: ObjectLabelsConfig = field(default_factory=ObjectLabelsConfig)
+    drop: DropOptions = field(default_factory=DropOptions)
+    split: SplitConfig = field(default_factory=SplitConfig)
+    selection: SelectionConfig = field(default_factory=SelectionConfig)
+    render: RenderSettings = field(default_factory=RenderSettings)
+
+    _CHECKS = {
+        "objects": lambda v, k: ObjectsConfig.from_dict(v, k),
+        "tote": lambda v, k: _external(ToteSpec, v, k),
+        "gripper": lambda v, k: _external(ParallelJawGripper, v, k),
+        "cup": lambda v, k: _external(SuctionCup, v, k),
+        "camera": lambda v, k: CameraConfig.from_dict(v, k),
+        "labels": lambda v, k: LabelsConfig.from_dict(v, k),
+        "object_labels": lambda v, k: ObjectLabelsConfig.from_dict(v, k),
+        "drop": lambda v, k: _external(DropOptions, v, k),
+        "split": lambda v, k: SplitConfig.from_dict(v, k),
+        "selection": lambda v, k: SelectionConfig.from_dict(v, k),
+        "render": _render,
+    }
+
+    @classmethod
+    def from_dict(cls, data: Any, key: str = "", *, base_dir: str | os.PathLike[str] | None = None):
+        """Build and validate from a mapping. Relative paths (user objects, gripper meshes) are
+        resolved against ``base_dir`` when given.
+
+        Raises:
+            ConfigError: naming the key, the value and what was expected.
+        """
+        config = super().from_dict(data, key)
+        if base_dir is not None:
+            config = config.resolved(base_dir)
+        if config.tote.mesh is not None and (base_dir is not None or os.path.isabs(
+                config.tote.mesh)):  # fmt: skip
+            try:
+                make_tote(config.tote)  # the file reads and fits the inner box
+            except MgnError as e:
+                raise ConfigError(f"config key 'tote.mesh': {e}") from e
+        return config
+
+    def resolved(self, base_dir: str | os.PathLike[str]) -> Config:
+        """The same config with relative file paths made absolute against ``base_dir``."""
+        base = Path(base_dir).resolve()
+
+        def absolute(p: str | None) -> str | None:
+            return None if p is None or os.path.isabs(p) else os.fspath(base / p)
+
+        objects = dataclasses.replace(
+            self.objects, user_objects=tuple(absolute(p) or p for p in self.objects.user_objects)
+        )
+        tote = self.tote
+        if tote.mesh is not None and not os.path.isabs(tote.mesh):
+            tote = dataclasses.replace(tote, mesh=absolute(tote.mesh))
+        g = self.gripper
+        meshes: dict[str, Any] = {
+            f: absolute(getattr(g, f))
+            for f in ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
+            if absolute(getattr(g, f)) is not None
+        }
+        return dataclasses.replace(
+            self,
+            objects=objects,
+            tote=tote,
+            gripper=dataclasses.replace(g, **meshes) if meshes else g,
+        )
+
+    def to_yaml(self) -> str:
+        """YAML text of every key (see :func:`dump_config`)."""
+        return dump_config(self)
+
+
+_SECTION_DOCS = {
+    "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
+    "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
+    "box inside its cavity",
+    "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
+    "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
+    "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "
+    "intrinsics: preset or {width, height, fx, fy, cx, cy, distortion}",
+    "labels": "which labels to make",
+    "object_labels": "per-object label sizes (cached per object)",
+    "drop": "drop simulation (m, s): mgn.scene.DropOptions",
+    "split": "unseen-object split: name all | train | test; unseen: novel | [names]",
+    "selection": "difficulty-balanced test set: quota {level: views} (null = off), batches",
+    "render": "RGB images: engine raster (fast preview) | path (path tracer), spp, denoise, "
+    "film; randomize: per-view lights / environment / tote+floor materials / exposure",
+}
+
+
+class _Dumper(yaml.SafeDumper):
+    """Block style, except lists of scalars on one line ([0.2, 0.35, 0.6, 1.0])."""
+
+    def represent_list(self, data: list) -> yaml.Node:  # noqa: D102
+        flow = all(not isinstance(v, (list, dict)) for v in data)
+        return self.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
+
+
+_Dumper.add_representer(list, _Dumper.represent_list)
+
+
+def dump_config(config: Config | None = None) -> str:
+    """YAML text of ``config`` (default: the MGN defaults), one commented block per section.
+    :func:`load_config` of this text gives back an equal config."""
+    c = config if config is not None else Config()
+    d = c.to_dict()
+    out = ["# mgn dataset configuration (SI units). Defaults: MetaGraspNet.\n"]
+    for name, value in d.items():
+        out.append(f"\n# {_SECTION_DOCS[name]}\n")
+        out.append(yaml.dump({name: value}, Dumper=_Dumper, sort_keys=False))
+    return "".join(out)
+
+
+def default_config() -> Config:
+    """The MetaGraspNet defaults."""
+    return Config()
+
+
+def load_config(source: str | os.PathLike[str] | Mapping[str, Any] | None) -> Config:
+    """A :class:`Config` from a YAML file, a mapping or None (defaults).
+
+    Relative paths in a file are taken relative to the file's folder.
+
+    Raises:
+        IoError: the file does not exist or is a folder.
+        ConfigError: a binary file, invalid YAML, an unknown key or a bad value (the message
+            names the key).
+    """
+    if source is None:
+        return Config()
+    if isinstance(source, Mapping):
+        return Config.from_dict(source)
+
+    path = Path(source)
+    try:
+        data = read_yaml(path, "config file")
+    except InvalidArgumentError as e:
+        raise ConfigError(str(e)) from None
+    try:
+        return Config.from_dict(data, base_dir=path.parent)
+    except ConfigError as e:
+        raise ConfigError(f"{path}: {e}") from None

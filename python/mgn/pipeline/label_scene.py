@@ -1,0 +1,292 @@
+"""Label a settled scene and write its MetaGraspNet scene folder (issue "Scene labels").
+
+:func:`label_scene` is the scene step of ``mgn generate`` and of ``mgn scene label``: it renders
+every view (RGB, sensor and ideal depth, instance ids), computes the per-view object labels
+(visible / semantic / amodal masks, occlusion, boxes, poses, keypoints, CoM heat map:
+:mod:`mgn.view_labels.objects`), the layout (relations, layers, order, bin relation, difficulty:
+:mod:`mgn.view_labels.layout`) and the scene grasps (object grasps placed at the settled poses,
+collision-checked once per scene, kept per view when seen: :mod:`mgn.view_labels.grasps`), and
+writes the files of docs/format.md with :func:`mgn.io.scene_format.write_view`.
+
+Models built once per scene (Embree scene, FCL models, GL meshes) are reused by all views; a
+view's arrays are released before the next view is rendered, so memory does not grow with the
+number of views.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mgn.errors import InvalidArgumentError
+from mgn.io.scene_format import ViewRecord, scene_gt_entries, write_scene_gt, write_view
+from mgn.objects import tote_mesh
+from mgn.pj.labels import PjLabels
+from mgn.render.photo import RenderSettings
+from mgn.render.sensor import SensorName
+from mgn.render.views import iter_views
+from mgn.scene.cameras import CameraView
+from mgn.scene.scene import Scene
+from mgn.suction.labels import SuctionLabels
+from mgn.view_labels.grasps import SceneGraspModel
+from mgn.view_labels.layout import compute_layout
+from mgn.view_labels.objects import SceneRayModel, view_object_labels
+
+__all__ = ["LabelOptions", "LabelTimings", "label_scene", "strided_subset", "view_record"]
+
+
+@dataclass(frozen=True)
+class LabelOptions:
+    """What to label and how (defaults: everything, MetaGraspNet settings).
+
+    Attributes:
+        sensor: depth sensor preset of ``depth`` (the ideal depth is kept too).
+        randomize: per-view light and tote / floor colour randomisation.
+        seed: seed of the randomisation and of the sensor noise (view v uses seed + v).
+        layout: relations, layers, order and difficulty (else empty order files, difficulty 0).
+        scene_grasps: place and collision-check the object grasps.
+        keypoints: keypoint visibility sets.
+        grasp_offsets: distances back along the approach where the tools are checked, m.
+        max_grasps_per_object: object grasps of each kind placed in the scene per object (an
+            evenly strided subset of the object labels when there are more; 0 = all).
+            Object labels often hold tens of thousands of parallel-jaw grasps; MetaGraspNet's
+            scenes carry a few thousand per object.
+        num_threads: C++ threads (0 = all cores); results do not depend on it.
+        render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
+            None = the raster engine). Labels do not depend on it.
+    """
+
+    sensor: SensorName = "structured-light"
+    randomize: bool = True
+    seed: int = 0
+    layout: bool = True
+    scene_grasps: bool = True
+    keypoints: bool = True
+    grasp_offsets: tuple[float, ...] = (0.0, 0.1)
+    max_grasps_per_object: int = 2000
+    num_threads: int = 0
+    render: RenderSettings | None = None
+
+
+@dataclass
+class LabelTimings:
+    """Seconds spent per stage over all views of a scene (wall clock)."""
+
+    seconds: dict[str, float] = field(default_factory=dict)
+    views: int = 0
+    #: What made the RGB images (``ViewImages.engine`` of the last view).
+    engine: dict[str, Any] = field(default_factory=dict)
+
+    def add(self, stage: str, dt: float) -> None:
+        self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
+
+    def per_view_ms(self) -> dict[str, float]:
+        n = max(self.views, 1)
+        return {k: 1000.0 * v / n for k, v in self.seconds.items()}
+
+
+#: Per-grasp fields of the object label dataclasses (the others are per object or per point).
+_PJ_GRASP_FIELDS = ("approach", "closing", "p1", "width", "quality_score", "score_wrench",
+                    "quality_score_simulation", "point_index")  # fmt: skip
+_SUCTION_GRASP_FIELDS = ("points", "approach", "score", "wrench", "reason")
+
+
+def strided_subset(labels: Any, limit: int) -> Any:
+    """``labels`` (PjLabels or SuctionLabels) reduced to at most ``limit`` grasps, evenly strided
+    over the label order (deterministic; keeps the score distribution); None stays None."""
+    if labels is None or limit <= 0:
+        return labels
+    fields = _PJ_GRASP_FIELDS if hasattr(labels, "closing") else _SUCTION_GRASP_FIELDS
+    m = len(getattr(labels, fields[0]))
+    if m <= limit:
+        return labels
+    keep = np.unique(np.linspace(0, m - 1, limit).round().astype(np.int64))
+    return dataclasses.replace(labels, **{f: getattr(labels, f)[keep] for f in fields})
+
+
+def _empty_layout_files(n: int) -> tuple[dict[str, Any], str, dict[str, Any]]:
+    order = {
+        str(i + 1): {"id": i + 1, "parents": [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
+                     "children": []}
+        for i in range(n)
+    }  # fmt: skip
+    return order, "".join(",".join("0" for _ in range(n)) + "\n" for _ in range(n)), {}
+
+
+def view_record(
+    index: int,
+    view: CameraView,
+    images: Any,
+    labels: Any,
+    layout: Any | None,
+    grasps: Any | None,
+) -> ViewRecord:
+    """The :class:`ViewRecord` of one view from its images (``ViewImages``), object labels
+    (``ViewObjectLabels``), layout (``Layout`` or None) and scene grasps (``SceneGrasps`` or
+    None). Lengths in metres; the writer converts."""
+    n = labels.num_objects
+    h5: dict[str, np.ndarray] = {
+        "camera/pose_relative_to_world": np.asarray(view.X_WC, np.float64)[None],
+        "objects/poses_relative_to_camera": labels.X_CO,
+        "objects/categories": labels.category_ids,
+        "objects/bbox_loose": labels.bbox_loose,
+        "objects/bbox_tight": labels.bbox_tight,
+        "objects/occlusion": labels.occlusion,
+        "keypts/byhand/keypts_relative_to_camera": labels.keypoints.reshape(-1, 4),
+        "keypts/byhand/object_id": labels.keypoint_object,
+        "keypts/byhand/occluded_keypts_relative_to_camera": labels.occluded_keypoints.reshape(
+            -1, 4
+        ),
+        "keypts/byhand/occluded_object_id": labels.occluded_keypoint_object,
+        "keypts/com/keypts_relative_to_camera": labels.com_points.reshape(-1, 4),
+        "keypts/com/object_id": labels.com_object,
+        "keypts/com/visible": labels.com_visible,
+    }
+    if grasps is not None:
+        h5.update(grasps.datasets())
+    if layout is not None:
+        order, csv, extra = layout.order_json(), layout.order_csv(), layout.layout_json()
+    else:
+        order, csv, extra = _empty_layout_files(n)
+    depth_ideal = np.where(images.depth_ideal > 0, images.depth_ideal, np.nan).astype(np.float32)
+    return ViewRecord(
+        index=index,
+        rgb=images.rgb,
+        depth=images.depth,
+        depth_ideal=depth_ideal,
+        valid_depth=images.valid,
+        instances=labels.visible,
+        semantic=labels.semantic,
+        occlusion_map=labels.occlusion_map,
+        amodal=labels.amodal,
+        intrinsics=view.K,
+        scene_hdf5=h5,
+        order_json=order,
+        order_csv=csv,
+        layout_json=extra,
+        extra_npz={"com_heatmap": labels.com_heatmap},
+    )
+
+
+def label_scene(
+    scene: Scene,
+    folder: str | os.PathLike[str],
+    views: Sequence[tuple[int, CameraView]],
+    *,
+    pj_labels: Sequence[PjLabels | None] | None = None,
+    suction_labels: Sequence[SuctionLabels | None] | None = None,
+    gripper: Any = None,
+    cup: Any = None,
+    options: LabelOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> LabelTimings:
+    """Render and label ``views`` of ``scene`` and write the scene folder into ``folder``.
+
+    Args:
+        scene: a settled scene with at least one object.
+        folder: the scene folder (created); files are written atomically.
+        views: (view index, camera) pairs, e.g. from the MetaGraspNet rig.
+        pj_labels, suction_labels: object-level labels per instance in scene order (object
+            frame), None entries for objects without them; None: no grasps of that kind.
+        gripper, cup: the end effectors the labels were made for (defaults: MetaGraspNet's).
+        options: what to label (:class:`LabelOptions`).
+        progress: called with (views done, views) after each view.
+
+    Returns:
+        Time per stage over the views.
+    """
+
+    opt = options or LabelOptions()
+    n = len(scene.instances)
+    if n == 0:
+        raise InvalidArgumentError("label_scene: the scene has no objects; nothing to label")
+    if not views:
+        raise InvalidArgumentError("label_scene: no views given; expected at least one camera")
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    timings = LabelTimings()
+
+    t0 = time.perf_counter()
+    rays = SceneRayModel.from_scene(scene)
+    timings.add("prepare: ray model", time.perf_counter() - t0)
+    sgm = None
+    if opt.scene_grasps and (pj_labels is not None or suction_labels is not None):
+        t0 = time.perf_counter()
+        cap = opt.max_grasps_per_object
+        sgm = SceneGraspModel(
+            scene,
+            [strided_subset(g, cap) for g in pj_labels] if pj_labels is not None else [None] * n,
+            [strided_subset(g, cap) for g in suction_labels]
+            if suction_labels is not None
+            else [None] * n,
+            gripper,
+            cup,
+            offsets=opt.grasp_offsets,
+            num_threads=opt.num_threads,
+        )
+        timings.add("prepare: scene grasp collisions", time.perf_counter() - t0)
+    categories = np.array([inst.category_id for inst in scene.instances], np.int64)
+    bins = [inst.bin_relation for inst in scene.instances]
+    objects = scene.render_items()
+    gt: dict[int, list[dict[str, Any]]] = {}
+
+    pending: deque[Future[Any]] = deque()
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool:
+        t0 = time.perf_counter()
+        frames = iter_views(objects, tote_mesh(scene.tote), views, sensor=opt.sensor,
+                            randomize=opt.randomize, seed=opt.seed, render=opt.render,
+                            num_threads=opt.num_threads)  # fmt: skip
+        for k, images in enumerate(frames):
+            t1 = time.perf_counter()
+            timings.add("render", t1 - t0)
+            timings.engine = dict(images.engine)
+            v, view = views[k]
+            labels = view_object_labels(
+                rays,
+                view,
+                images.instance_ids,
+                depth=images.depth_ideal,
+                keypoints=opt.keypoints,
+                num_threads=opt.num_threads,
+            )
+            t2 = time.perf_counter()
+            timings.add("object labels", t2 - t1)
+            layout = None
+            if opt.layout:
+                layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal,
+                                        categories, bins, occlusion=labels.occlusion,
+                                        num_threads=opt.num_threads)  # fmt: skip
+            t3 = time.perf_counter()
+            timings.add("layout", t3 - t2)
+            seen = labels.visible_pixels > 0
+            grasps = sgm.view_grasps(view, seen) if sgm is not None else None
+            t4 = time.perf_counter()
+            timings.add("scene grasps", t4 - t3)
+            # Files are encoded (zlib, PNG; both release the GIL) by writer threads while the next
+            # view renders; at most two views wait, so memory stays bounded.
+            record = view_record(v, view, images, labels, layout, grasps)
+            pending.append(pool.submit(write_view, out, record))
+            while len(pending) > 2:
+                pending.popleft().result()
+            gt[v] = scene_gt_entries(labels.X_CO, categories, seen)
+            t0 = time.perf_counter()
+            timings.add("write (waiting)", t0 - t4)
+            timings.views += 1
+            if progress is not None:
+                progress(k + 1, len(views))
+        t4 = time.perf_counter()
+        for fut in pending:
+            fut.result()
+        timings.add("write (waiting)", time.perf_counter() - t4)
+    write_scene_gt(out, gt)
+    scene.to_json(out / "scene.json")
+    return timings

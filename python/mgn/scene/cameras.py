@@ -1,0 +1,262 @@
+"""Pinhole cameras and camera rigs (docs/models.md §6; typed façade over the C++ core).
+
+Camera frame C is OpenCV: x right, y down, z forward. Pixel (u, v) has its centre at image
+coordinates (u + 0.5, v + 0.5), the same model as :func:`mgn.camera_rays`. Poses ``X_WC`` are
+(4, 4) float64 camera poses in the world. Lengths in metres, angles in radians, intrinsics in px.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from mgn import _core
+from mgn.errors import InvalidArgumentError, InvalidTypeError
+from mgn.geometry.raytrace import camera_rays
+
+__all__ = [
+    "CameraView",
+    "Intrinsics",
+    "MgnRigParams",
+    "hemisphere_rig",
+    "look_at",
+    "mgn_rig",
+    "mgn_rig_from_params",
+    "mgn_views",
+]
+
+#: Real-sensor presets: (width, height, fx = fy px), principal point at the image centre.
+#: Derived from the manufacturers' published resolution and field of view (docs/cameras.md):
+#: Zivid 2+ M130: 2448 x 2048, 0.32 mm per pixel at 1300 mm -> f = 1300 / 0.32 px;
+#: Photoneo PhoXi 3D Scanner M: 2064 x 1544, 47.5 deg horizontal field -> f = 1032 / tan(23.75 deg);
+#: Intel RealSense D435 depth: 1280 x 720, 87 deg horizontal field -> f = 640 / tan(43.5 deg).
+SENSOR_PRESETS: dict[str, tuple[int, int, float]] = {
+    "zivid2_plus_m130": (2448, 2048, 1300.0 / 0.32),
+    "photoneo_phoxi_m": (2064, 1544, 1032.0 / math.tan(math.radians(23.75))),
+    "realsense_d435": (1280, 720, 640.0 / math.tan(math.radians(43.5))),
+}
+
+#: MetaGraspNet synthetic camera: focal length and horizontal aperture, mm.
+MGN_FOCAL_LENGTH_MM = 35.0
+MGN_APERTURE_MM = 20.955
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    """Pinhole intrinsics in pixels (no distortion). Validated on construction.
+
+    Attributes:
+        width, height: image size, px (> 0).
+        fx, fy: focal lengths, px (> 0).
+        cx, cy: principal point, px (continuous image coordinates; the image centre is W/2, H/2).
+    """
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise InvalidArgumentError(f"Intrinsics.{name} must be an integer, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        for name in ("fx", "fy", "cx", "cy"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        self.to_core()  # validates (InvalidArgumentError names the bad value)
+
+    @classmethod
+    def mgn_synthetic(cls) -> Intrinsics:
+        """1200 x 1200, 35 mm focal length on a 20.955 mm aperture (fx = fy ~= 2004.3 px)."""
+        return cls._from_core(_core.Intrinsics.mgn_synthetic())
+
+    @classmethod
+    def zivid_two_like(cls) -> Intrinsics:
+        """1944 x 1200, fx = fy = 1780 px: an industrial camera like a Zivid Two (approximate)."""
+        return cls._from_core(_core.Intrinsics.zivid_two_like())
+
+    @classmethod
+    def preset(cls, name: str) -> Intrinsics:
+        """A named preset: ``mgn_synthetic``, ``zivid_two_like`` or a real sensor of
+        :data:`SENSOR_PRESETS` (``zivid2_plus_m130``, ``photoneo_phoxi_m``, ``realsense_d435``).
+
+        Raises:
+            InvalidArgumentError: an unknown name (the message lists the presets).
+        """
+        if name == "mgn_synthetic":
+            return cls.mgn_synthetic()
+        if name == "zivid_two_like":
+            return cls.zivid_two_like()
+        if name in SENSOR_PRESETS:
+            w, h, f = SENSOR_PRESETS[name]
+            return cls(w, h, f, f, w / 2.0, h / 2.0)
+
+        names = ["mgn_synthetic", "zivid_two_like", *SENSOR_PRESETS]
+        raise InvalidArgumentError(f"unknown intrinsics preset {name!r}; presets: {names}")
+
+    @classmethod
+    def _from_core(cls, k: _core.Intrinsics) -> Intrinsics:
+        return cls(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
+
+    def to_core(self) -> _core.Intrinsics:
+        return _core.Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
+
+    @property
+    def K(self) -> npt.NDArray[np.float64]:  # noqa: N802 (the usual symbol)
+        """(3, 3) matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    def scaled(self, factor: float) -> Intrinsics:
+        """The same field of view at ``factor`` times the resolution (rounded)."""
+        w, h = round(self.width * factor), round(self.height * factor)
+        return Intrinsics(w, h, self.fx * w / self.width, self.fy * h / self.height,
+                          self.cx * w / self.width, self.cy * h / self.height)  # fmt: skip
+
+    def camera_params(self, clipping_range: tuple[float, float] = (0.01, 10.0)) -> dict[str, Any]:
+        """``{v}_camera_params.json`` content (docs/format.md): px values plus MetaGraspNet's keys.
+
+        The apertures are those of a 35 mm lens giving these focal lengths (mm).
+        """
+        hfov = 2.0 * math.atan(0.5 * self.width / self.fx)
+        vfov = 2.0 * math.atan(0.5 * self.height / self.fy)
+        h_ap = MGN_FOCAL_LENGTH_MM * self.width / self.fx
+        v_ap = MGN_FOCAL_LENGTH_MM * self.height / self.fy
+        return {
+            "fx": self.fx,
+            "fy": self.fy,
+            "cx": self.cx,
+            "cy": self.cy,
+            "width": self.width,
+            "height": self.height,
+            "focal_length": MGN_FOCAL_LENGTH_MM,
+            "horizontal_aperture": h_ap,
+            "vertical_aperture": v_ap,
+            "horizontal_fov": math.degrees(hfov),
+            "vertical_fov": math.degrees(vfov),
+            "resolution": {"height": self.height, "width": self.width},
+            "clipping_range": list(clipping_range),
+        }
+
+
+def _pose(X: npt.ArrayLike, name: str) -> npt.NDArray[np.float64]:
+    a = np.array(X, dtype=np.float64)
+    if a.shape != (4, 4):
+        raise InvalidArgumentError(f"{name} must be a (4, 4) pose, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise InvalidArgumentError(f"{name} has non-finite entries")
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True)
+class CameraView:
+    """A camera: intrinsics and the (4, 4) pose ``X_WC`` of its OpenCV frame in the world."""
+
+    K: Intrinsics
+    X_WC: npt.NDArray[np.float64] = field(repr=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.K, Intrinsics):
+            raise InvalidTypeError(
+                f"CameraView.K must be an Intrinsics, got {type(self.K).__name__}"
+            )
+        object.__setattr__(self, "X_WC", _pose(self.X_WC, "CameraView.X_WC"))
+
+    @property
+    def position(self) -> npt.NDArray[np.float64]:
+        """Camera centre in the world, m."""
+        return self.X_WC[:3, 3].copy()
+
+    def rays(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """Rays through the pixel centres (see :func:`mgn.camera_rays`)."""
+
+        return camera_rays(self.K.K, self.K.width, self.K.height, self.X_WC)
+
+
+@dataclass(frozen=True)
+class MgnRigParams:
+    """Random parameters of a MetaGraspNet rig: radii (m), tilts from vertical and azimuth span
+    (rad)."""
+
+    R_start: float
+    R_end: float
+    theta_start: float
+    theta_end: float
+    phi_end: float
+
+
+def _vec3(x: npt.ArrayLike, name: str) -> npt.NDArray[np.float64]:
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape != (3,):
+        raise InvalidArgumentError(f"{name} must be 3 numbers, got shape {a.shape}")
+    return a
+
+
+def mgn_rig(
+    seed: int, target: npt.ArrayLike = (0.0, 0.0, 0.0)
+) -> tuple[npt.NDArray[np.float64], MgnRigParams]:
+    """The 37 MetaGraspNet camera poses around ``target`` and the drawn parameters.
+
+    View 0 looks straight down from R_start; view v = 1 + 12 i_R + 4 i_theta + i_phi sits at
+    radius R_start + i_R (R_end - R_start)/2, tilt theta_start + i_theta (theta_end -
+    theta_start)/2 and azimuth i_phi phi_end/4, looking at the target (docs/models.md §6).
+
+    Returns:
+        ((37, 4, 4) float64 poses X_WC, MgnRigParams).
+    """
+    poses, params = _core.mgn_rig(int(seed), _vec3(target, "target"))
+    return poses, MgnRigParams(**params)
+
+
+def mgn_rig_from_params(
+    params: MgnRigParams, target: npt.ArrayLike = (0.0, 0.0, 0.0)
+) -> npt.NDArray[np.float64]:
+    """(37, 4, 4) poses of given rig parameters."""
+    return _core.mgn_rig_from_params(
+        params.R_start,
+        params.R_end,
+        params.theta_start,
+        params.theta_end,
+        params.phi_end,
+        _vec3(target, "target"),
+    )
+
+
+def hemisphere_rig(
+    radii: npt.ArrayLike,
+    tilts: npt.ArrayLike,
+    azimuths: npt.ArrayLike,
+    target: npt.ArrayLike = (0.0, 0.0, 0.0),
+) -> npt.NDArray[np.float64]:
+    """(N, 4, 4) poses on a hemisphere: every (radius m, tilt from vertical rad, azimuth rad),
+    radius-major, then tilt, then azimuth."""
+    return _core.hemisphere_rig(
+        [float(r) for r in np.atleast_1d(radii)],
+        [float(t) for t in np.atleast_1d(tilts)],
+        [float(a) for a in np.atleast_1d(azimuths)],
+        _vec3(target, "target"),
+    )
+
+
+def look_at(
+    eye: npt.ArrayLike, target: npt.ArrayLike, up: npt.ArrayLike = (0.0, 0.0, 1.0)
+) -> npt.NDArray[np.float64]:
+    """(4, 4) camera pose at ``eye`` looking at ``target``, image up as close to ``up`` as
+    possible."""
+    return _core.look_at(_vec3(eye, "eye"), _vec3(target, "target"), _vec3(up, "up"))
+
+
+def mgn_views(
+    seed: int, target: npt.ArrayLike = (0.0, 0.0, 0.0), K: Intrinsics | None = None
+) -> list[CameraView]:
+    """The 37 MetaGraspNet views as :class:`CameraView` (default intrinsics: MGN synthetic)."""
+    intr = Intrinsics.mgn_synthetic() if K is None else K
+    poses, _ = mgn_rig(seed, target)
+    return [CameraView(intr, X) for X in poses]

@@ -1,0 +1,308 @@
+"""Per-view object labels (docs/models.md §7): masks, occlusion, boxes, poses, keypoints, CoM map.
+
+Build a :class:`SceneRayModel` once per scene (Embree scenes of every object alone, and of all
+objects with the tote), then call :func:`view_object_labels` for each rendered view with the
+view's instance image (``ViewImages.instance_ids``).
+
+Frames and units: the world W is the tote frame (metres); the camera frame C is OpenCV (x right,
+y down, z forward); ``X_AB`` is the (4, 4) pose of B in A. Pixel (u, v) is the ray through the
+image point (u + 0.5, v + 0.5), the same model as the renderer and
+:meth:`mgn.scene.cameras.CameraView.rays`. The object axis of every per-object array has length
+N = ``len(scene.instances)`` in scene order: row i is instance id i + 1, including objects not
+seen in the view (their masks are empty, their occlusion is 1).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from mgn import _core
+from mgn.errors import InvalidArgumentError, InvalidTypeError
+from mgn.geometry.mesh import Mesh, mass_properties
+from mgn.objects import com_keypoints, tote_mesh
+from mgn.scene.cameras import CameraView
+from mgn.scene.scene import Scene
+
+__all__ = [
+    "DEFAULT_KEYPOINT_TOLERANCE",
+    "SceneRayModel",
+    "ViewObjectLabels",
+    "view_object_labels",
+]
+
+#: A keypoint is visible when nothing lies on the ray from the camera centre closer than its
+#: distance minus this tolerance, m (absorbs float32 geometry and points sampled on the surface).
+DEFAULT_KEYPOINT_TOLERANCE = 0.002
+
+
+@dataclass(frozen=True)
+class ViewObjectLabels:
+    """Object labels of one view (SI units: metres; images (H, W) top row first).
+
+    Attributes:
+        instance_ids: (N,) int32 instance ids 1..N.
+        category_ids: (N,) int32 category id of each instance.
+        visible: (H, W) int32 visible instance mask, 0 = background / tote / floor, else i + 1.
+        semantic: (H, W) int32 category id of the visible object, 0 = background.
+        amodal: (N, H, W) bool, object i alone (every other object and the tote ignored): the
+            pixels whose centre ray hits it, united with its visible pixels (so it always
+            contains the visible mask).
+        visible_pixels, amodal_pixels: (N,) int64 pixel counts.
+        occlusion: (N,) float64 occlusion rate 1 - visible / amodal in [0, 1] (1.0 when the
+            amodal mask is empty); every occluder counts, the tote included.
+        occlusion_map: (H, W) float32, each visible pixel carries its object's occlusion rate.
+        bbox_tight: (N, 4) int32 COCO [x, y, w, h] px of the visible mask (zeros when empty).
+        bbox_loose: (N, 4) int32 COCO [x, y, w, h] px of the amodal mask (zeros when empty).
+        X_CO: (N, 4, 4) float64 object poses in the camera frame, ``X_WC^-1 X_WO``.
+        keypoints: (P, 4) float64 visible semantic keypoints [id, x, y, z], camera frame, m.
+        keypoint_object: (P,) int32 object index (instance id - 1) of each row.
+        occluded_keypoints: (P', 4) float64 the other semantic keypoints (hidden, behind the
+            camera or outside the image), same layout.
+        occluded_keypoint_object: (P',) int32.
+        com_points: (Q, 4) float64 every CoM-scored surface point [score, x, y, z], camera
+            frame, m, object by object (1000 per object).
+        com_object: (Q,) int32 object index of each CoM point.
+        com_visible: (Q,) bool, the point is visible (same test as the semantic keypoints).
+        com_heatmap: (H, W) float32 in [0, 1]: the CoM score of the surface seen at each visible
+            pixel. For a visible pixel of object i whose centre ray first hits object i at x
+            (world; with a depth image, x is the pixel's back-projected depth point),
+            ``clamp((d_max - |x - c|) / (d_max - d_min), 0, 1)`` with c the centre of mass and
+            d_min, d_max the smallest and largest distance of its CoM-scored points to c (the
+            score of ``mgn.objects.com_keypoints``); 0 on background, on edge pixels
+            where the ray misses the object and on pixels without a valid depth.
+    """
+
+    instance_ids: npt.NDArray[np.int32]
+    category_ids: npt.NDArray[np.int32]
+    visible: npt.NDArray[np.int32]
+    semantic: npt.NDArray[np.int32]
+    amodal: npt.NDArray[np.bool_]
+    visible_pixels: npt.NDArray[np.int64]
+    amodal_pixels: npt.NDArray[np.int64]
+    occlusion: npt.NDArray[np.float64]
+    occlusion_map: npt.NDArray[np.float32]
+    bbox_tight: npt.NDArray[np.int32]
+    bbox_loose: npt.NDArray[np.int32]
+    X_CO: npt.NDArray[np.float64]
+    keypoints: npt.NDArray[np.float64]
+    keypoint_object: npt.NDArray[np.int32]
+    occluded_keypoints: npt.NDArray[np.float64]
+    occluded_keypoint_object: npt.NDArray[np.int32]
+    com_points: npt.NDArray[np.float64]
+    com_object: npt.NDArray[np.int32]
+    com_visible: npt.NDArray[np.bool_]
+    com_heatmap: npt.NDArray[np.float32]
+
+    @property
+    def num_objects(self) -> int:
+        return int(self.instance_ids.shape[0])
+
+
+class SceneRayModel:
+    """Ray-tracing model of one scene, built once and reused for all its views.
+
+    Holds one Embree scene per object (for its amodal mask) and one of all objects and the tote
+    (for keypoint visibility). Immutable; thread-safe.
+
+    Build it from a :class:`~mgn.scene.Scene` with :meth:`from_scene`, or from explicit parts
+    with the constructor.
+
+    Args:
+        meshes: N object-frame meshes.
+        poses: (N, 4, 4) object poses ``X_WO`` in the world (tote frame), m.
+        category_ids: N category ids (>= 1).
+        keypoints: per object a (K_i, 4) array [id, x, y, z] of semantic keypoints, object frame,
+            m; None for none.
+        com_points: per object a (Q_i, 4) array [score, x, y, z] of CoM-scored surface points,
+            object frame, m; None for none.
+        coms: (N, 3) centres of mass, object frame, m; None = the mass centre of each mesh at
+            uniform density.
+        tote: tote mesh (an occluder of keypoints only) or None.
+        X_W_tote: (4, 4) tote pose in the world (default identity).
+    """
+
+    def __init__(
+        self,
+        meshes: list[Mesh],
+        poses: npt.ArrayLike,
+        category_ids: list[int] | npt.ArrayLike,
+        *,
+        keypoints: Sequence[npt.ArrayLike] | None = None,
+        com_points: Sequence[npt.ArrayLike] | None = None,
+        coms: npt.ArrayLike | None = None,
+        tote: Mesh | None = None,
+        X_W_tote: npt.ArrayLike | None = None,
+    ) -> None:
+        meshes = list(meshes)
+        n = len(meshes)
+        if n == 0:
+            raise InvalidArgumentError(
+                "SceneRayModel: the scene has no objects; expected at least one"
+            )
+        P = np.asarray(poses, np.float64).reshape(-1, 4, 4)
+        cats = np.asarray(category_ids, np.int64).reshape(-1)
+
+        def rows4(items: Sequence[npt.ArrayLike] | None, name: str) -> list[np.ndarray]:
+            if items is None:
+                return [np.zeros((0, 4))] * n
+            out = [np.asarray(k, np.float64).reshape(-1, 4) for k in items]
+            if len(out) != n:
+                raise InvalidArgumentError(
+                    f"SceneRayModel: {name} has {len(out)} entries; expected one per mesh ({n})"
+                )
+            return out
+
+        kp = rows4(keypoints, "keypoints")
+        cp = rows4(com_points, "com_points")
+        if coms is None:
+            c = np.stack([mass_properties(m).center_of_mass for m in meshes])
+        else:
+            c = np.asarray(coms, np.float64).reshape(-1, 3)
+        self._meshes = meshes
+        self._tote = tote
+        self._category_ids = cats.astype(np.int32)
+        self._model = _core.ViewLabelModel(
+            meshes,
+            P,
+            [int(x) for x in cats],
+            kp,
+            cp,
+            c,
+            tote,
+            None if X_W_tote is None else np.asarray(X_W_tote, np.float64),
+        )
+
+    @classmethod
+    def from_scene(cls, scene: Scene, *, tote: bool = True) -> SceneRayModel:
+        """The model of a :class:`~mgn.scene.Scene`: every instance's mesh at its ``X_WO``, its
+        category, semantic keypoints (``ObjectSpec.keypoints``), its 1000 CoM-scored points
+        (:func:`mgn.objects.com_keypoints` with the object-folder seed, the category
+        id) and centre of mass at the object's density; the tote (world = tote frame) when
+        ``tote`` is True. Objects repeated in the scene are prepared once."""
+
+        if not isinstance(scene, Scene):  # a runtime check for callers without a type checker
+            raise InvalidTypeError(f"from_scene expects a Scene, got {type(scene).__name__}")
+        if len(scene.instances) == 0:
+            raise InvalidArgumentError(
+                "SceneRayModel.from_scene: the scene has no objects; expected at least one"
+            )
+        cache: dict[tuple[str, str], tuple[Mesh, np.ndarray, np.ndarray, np.ndarray]] = {}
+        meshes, kps, cps, coms = [], [], [], []
+        for i, inst in enumerate(scene.instances):
+            key = (inst.name, inst.source)
+            if key not in cache:
+                spec = scene.object_spec(i)
+                mesh = scene.mesh(i)
+                kp = np.array([[k.id, *k.position] for k in spec.keypoints], np.float64)
+                com = mass_properties(mesh, spec.density).center_of_mass
+                cp = com_keypoints(mesh, spec.density, seed=spec.category_id)
+                cache[key] = (mesh, kp.reshape(-1, 4), cp, np.asarray(com, np.float64))
+            mesh, kp, cp, com = cache[key]
+            meshes.append(mesh)
+            kps.append(kp)
+            cps.append(cp)
+            coms.append(com)
+        return cls(
+            meshes,
+            scene.poses,
+            [inst.category_id for inst in scene.instances],
+            keypoints=kps,
+            com_points=cps,
+            coms=np.stack(coms),
+            tote=tote_mesh(scene.tote) if tote else None,
+        )
+
+    @property
+    def num_objects(self) -> int:
+        return int(self._model.num_objects)
+
+    @property
+    def has_tote(self) -> bool:
+        return bool(self._model.has_tote)
+
+    @property
+    def category_ids(self) -> npt.NDArray[np.int32]:
+        """(N,) category ids in scene order."""
+        return self._category_ids.copy()
+
+    def __repr__(self) -> str:
+        return f"SceneRayModel(objects={self.num_objects}, tote={self.has_tote})"
+
+
+def view_object_labels(
+    model: SceneRayModel,
+    view: CameraView,
+    instance_image: npt.ArrayLike,
+    *,
+    depth: npt.ArrayLike | None = None,
+    keypoint_tolerance: float = DEFAULT_KEYPOINT_TOLERANCE,
+    keypoints: bool = True,
+    num_threads: int = 0,
+) -> ViewObjectLabels:
+    """Object labels of one view.
+
+    Args:
+        model: the scene's :class:`SceneRayModel`.
+        view: the camera (intrinsics and ``X_WC``).
+        instance_image: (H, W) integer instance ids of the view (0 = background, tote and floor,
+            else 1..N), e.g. ``ViewImages.instance_ids``; H, W must be the camera's size.
+        depth: optional (H, W) z-depth of the same view, m (<= 0 or NaN where nothing is seen),
+            e.g. ``ViewImages.depth_ideal``. With it the heat map takes each visible pixel's
+            3-D point from the depth (back-projected through the pixel centre) instead of a ray
+            cast per visible pixel: about half the rays, and the heat map follows the rendered
+            surface exactly. Masks, occlusion and keypoints do not depend on it.
+        keypoint_tolerance: see :data:`DEFAULT_KEYPOINT_TOLERANCE`, m.
+        keypoints: compute the keypoint sets (False leaves them empty).
+        num_threads: threads (0 = all); the result does not depend on it.
+
+    Raises:
+        InvalidArgumentError: image of the wrong size or type, ids outside 0..N, bad camera.
+    """
+    if not isinstance(model, SceneRayModel):
+        raise InvalidTypeError(f"model must be a SceneRayModel, got {type(model).__name__}")
+    if not isinstance(view, CameraView):
+        raise InvalidTypeError(f"view must be a CameraView, got {type(view).__name__}")
+    img = np.asarray(instance_image)
+    if img.dtype == np.bool_ or not np.issubdtype(img.dtype, np.integer):
+        raise InvalidArgumentError(
+            f"instance_image must be an integer array, got dtype {img.dtype}"
+        )
+    if img.shape != (view.K.height, view.K.width):
+        raise InvalidArgumentError(
+            f"instance_image has shape {img.shape}; expected (H, W) = "
+            f"({view.K.height}, {view.K.width}) of the camera"
+        )
+    if img.size and (int(img.min()) < 0 or int(img.max()) > model.num_objects):
+        raise InvalidArgumentError(
+            f"instance_image ids must be in 0..{model.num_objects} (the number of objects), "
+            f"got {int(img.min())}..{int(img.max())}"
+        )
+    z = None
+    if depth is not None:
+        z = np.asarray(depth)
+        if not np.issubdtype(z.dtype, np.floating):
+            raise InvalidArgumentError(f"depth must be a float array, got dtype {z.dtype}")
+        if z.shape != img.shape:
+            raise InvalidArgumentError(
+                f"depth has shape {z.shape}; expected the instance image's {img.shape}"
+            )
+        z = np.ascontiguousarray(z, np.float32)
+    out = model._model.label_view(
+        view.K.to_core(),
+        view.X_WC,
+        np.ascontiguousarray(img, np.int32),
+        float(keypoint_tolerance),
+        bool(keypoints),
+        int(num_threads),
+        z,
+    )
+    n = model.num_objects
+    return ViewObjectLabels(
+        instance_ids=np.arange(1, n + 1, dtype=np.int32),
+        category_ids=model.category_ids,
+        **out,
+    )

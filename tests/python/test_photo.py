@@ -1,0 +1,418 @@
+"""The photo-realistic RGB engine around the path tracer: config and CLI, materials (built-in,
+user YAML, glTF PBR factors), pixel alignment with the raster labels, per-view randomisation,
+denoising, and a tiny path-traced dataset."""
+
+from __future__ import annotations
+
+import base64
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mgn.config import ConfigError, dump_config, load_config
+
+import mgn
+from mgn.errors import InvalidArgumentError
+from mgn.objects import builtin_objects
+from mgn.render import CameraView, Intrinsics, look_at, photo
+from mgn.render.photo import RandomizeSettings, RenderSettings, draw_lighting
+
+# ------------------------------------------------------------------------------ config / CLI
+
+
+@pytest.mark.parametrize(
+    ("section", "key"),
+    [
+        ({"engine": "cycles"}, "render.engine"),
+        ({"spp": 0}, "render.spp"),
+        ({"spp": 2.5}, "render.spp"),
+        ({"denoise": "yes"}, "render.denoise"),
+        ({"max_bounces": -1}, "render.max_bounces"),
+        ({"tone": "aces"}, "render.tone"),
+        ({"denoise_quality": "best"}, "render.denoise_quality"),
+        ({"exposure": float("nan")}, "render.exposure"),
+        ({"aperture_radius": -0.001}, "render.aperture_radius"),
+        ({"randomize": {"light_count": [3, 1]}}, "render.randomize.light_count"),
+        ({"randomize": {"light_temperature": [100, 200]}}, "render.randomize.light_temperature"),
+        ({"randomize": {"lights": 1}}, "render.randomize.lights"),
+        ({"randomize": {"sun": True}}, "render.randomize.sun"),
+        ({"bogus": 1}, "render.bogus"),
+    ],
+)
+def test_render_config_errors_name_the_key(section: dict, key: str) -> None:
+    with pytest.raises(ConfigError, match=key.replace(".", r"\.")):
+        load_config({"render": section})
+
+
+def test_render_config_round_trip() -> None:
+    rnd = {"lights": False, "light_count": [2, 4]}
+    cfg = load_config({"render": {"engine": "path", "spp": 8, "randomize": rnd}})
+    assert cfg.render.engine == "path" and cfg.render.spp == 8
+    assert cfg.render.randomize.light_count == (2, 4) and not cfg.render.randomize.lights
+    import yaml
+
+    again = load_config(yaml.safe_load(dump_config(cfg)))
+    assert again.render == cfg.render
+    assert "render:" in dump_config() and "engine: raster" in dump_config()
+
+
+@pytest.mark.parametrize("command", [
+    ["generate", "--out", "X", "--engine", "cycles"],
+    ["scene", "render", "s.json", "--out", "X", "--engine", "cycles"],
+    ["scene", "label", "s.json", "--out", "X", "--engine", "cycles"],
+    ["pick", "s.json", "--out", "X", "--engine", "cycles"],
+])  # fmt: skip
+def test_cli_engine_choices(command: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+    from mgn.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main(command)
+    assert e.value.code == 2
+    assert "--engine" in capsys.readouterr().err
+
+
+def test_cli_spp_must_be_positive() -> None:
+    import argparse
+
+    base = RenderSettings(engine="path")
+    with pytest.raises(InvalidArgumentError, match="--spp"):
+        photo.settings_from_args(base, argparse.Namespace(engine=None, spp=0))
+    got = photo.settings_from_args(base, argparse.Namespace(engine="raster", spp=4))
+    assert got.engine == "raster" and got.spp == 4
+
+
+# ------------------------------------------------------------------------------ materials
+
+
+def test_builtin_materials_are_plausible() -> None:
+    by_name = {o.name: o.material for o in builtin_objects()}
+    for name, m in by_name.items():
+        assert 0.0 <= m.roughness <= 1.0 and 0.0 <= m.metallic <= 1.0, name
+    for name in ("wine_glass", "bottle_clear"):
+        assert by_name[name].transmission == 1.0 and by_name[name].ior == 1.5
+    assert by_name["hex_nut"].metallic == 1.0 and by_name["hex_nut"].roughness < 0.25  # polished
+    assert by_name["l_bracket"].metallic == 1.0 and by_name["l_bracket"].roughness >= 0.3
+    assert by_name["box_cereal"].roughness >= 0.6 and by_name["box_cereal"].metallic == 0.0
+    assert by_name["cable_coil"].roughness >= 0.8  # rubber
+    # Transparent-tagged objects are exactly the transmissive ones.
+    for o in builtin_objects():
+        assert ("transparent" in o.tags) == (o.material.transmission > 0.5), o.name
+
+
+def test_builtin_mesh_carries_pbr_and_sensor_flags() -> None:
+    from mgn.io.model_folder import object_mesh
+    from mgn.render.sensor import SURFACE_MIRROR, SURFACE_TRANSPARENT, surface_flags
+
+    glass = object_mesh(mgn.objects.get_object("bottle_clear")).materials[0]
+    assert glass.has_pbr and glass.transmission == 1.0 and glass.ior == pytest.approx(1.5)
+    assert surface_flags(glass) & SURFACE_TRANSPARENT
+    m = mgn.geometry.Material()
+    m.has_pbr, m.metallic, m.roughness = True, 1.0, 0.1
+    assert surface_flags(m) & SURFACE_MIRROR
+    m.roughness = 0.6  # brushed metal scatters: not a mirror
+    assert not surface_flags(m) & SURFACE_MIRROR
+    t = mgn.geometry.Material()
+    t.has_pbr, t.transmission = True, 1.0
+    assert surface_flags(t) & SURFACE_TRANSPARENT
+    assert not surface_flags(mgn.geometry.Material()) & SURFACE_TRANSPARENT
+
+
+def _write_gltf(path: Path, material: dict, extensions: list[str]) -> None:
+    """A one-triangle-pair glTF (embedded buffer) with the given material."""
+    pos = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
+    idx = np.array([0, 1, 2, 0, 2, 3], np.uint16)
+    data = pos.tobytes() + idx.tobytes()
+    doc = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": extensions,
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1,
+                                    "material": 0}]}],
+        "materials": [material],
+        "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
+                     + base64.b64encode(data).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+    }  # fmt: skip
+    path.write_text(json.dumps(doc))
+
+
+def test_glb_pbr_factors_read_back(tmp_path: Path) -> None:
+    trimesh = pytest.importorskip("trimesh")
+    box = trimesh.creation.box((0.1, 0.1, 0.1))
+    box.visual = trimesh.visual.TextureVisuals(
+        material=trimesh.visual.material.PBRMaterial(
+            baseColorFactor=[51, 102, 204, 255], metallicFactor=0.8, roughnessFactor=0.3
+        )
+    )
+    box.export(tmp_path / "box.glb")
+    m = mgn.load_mesh(tmp_path / "box.glb").materials[0]
+    assert m.has_pbr
+    assert m.metallic == pytest.approx(0.8, abs=1e-6)
+    assert m.roughness == pytest.approx(0.3, abs=1e-6)
+    assert np.allclose(np.asarray(m.base_color)[:3], np.array([51, 102, 204]) / 255, atol=1e-3)
+    # KHR_materials_transmission and KHR_materials_ior from a hand-written glTF.
+    mat = {"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.95, 1.0, 1.0],
+                                    "metallicFactor": 0.0, "roughnessFactor": 0.05},
+           "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                          "KHR_materials_ior": {"ior": 1.45}}}  # fmt: skip
+    _write_gltf(tmp_path / "pane.gltf", mat, ["KHR_materials_transmission", "KHR_materials_ior"])
+    g = mgn.load_mesh(tmp_path / "pane.gltf").materials[0]
+    assert g.has_pbr and g.transmission == pytest.approx(1.0)
+    assert g.roughness == pytest.approx(0.05, abs=1e-6) and g.metallic == 0.0
+    # A plain OBJ/STL has no PBR description: the tracer derives one.
+    stl = mgn.load_mesh(Path(__file__).resolve().parents[1] / "data" / "cube.stl")
+    assert not any(mm.has_pbr for mm in stl.materials)
+
+
+def _user_yaml(tmp_path: Path, extra: str) -> Path:
+    src = Path(__file__).resolve().parents[1] / "data" / "cube.stl"
+    p = tmp_path / "objs.yaml"
+    p.write_text(
+        "objects:\n  - name: part_a\n    mesh: " + str(src) + "\n    scale: 1.0\n"
+        "    density: 1000\n    friction: 0.5\n" + extra
+    )
+    return p
+
+
+@pytest.mark.parametrize(("extra", "field"), [
+    ("    metallic: 1.5\n", "metallic"),
+    ("    roughness: -0.1\n", "roughness"),
+    ("    ior: 0.9\n", "ior"),
+    ("    transmission: yes\n", "transmission"),
+])  # fmt: skip
+def test_user_object_pbr_errors_name_file_object_field(
+    tmp_path: Path, extra: str, field: str
+) -> None:
+    from mgn.objects import load_objects_yaml
+
+    with pytest.raises(InvalidArgumentError, match=rf"objs\.yaml.*part_a.*'{field}'"):
+        load_objects_yaml(_user_yaml(tmp_path, extra))
+
+
+def test_user_object_pbr_values_reach_the_tracer(tmp_path: Path) -> None:
+    from mgn.io.model_folder import object_mesh
+    from mgn.objects import load_objects_yaml
+
+    extra = "    metallic: 1.0\n    roughness: 0.2\n    ior: 1.4\n    transmission: 0.0\n"
+    (spec,) = load_objects_yaml(_user_yaml(tmp_path, extra))
+    assert (spec.material.metallic, spec.material.roughness, spec.material.ior) == (1.0, 0.2, 1.4)
+    pbr = photo.pbr_material(object_mesh(spec).materials[0])
+    assert (pbr.metallic, pbr.roughness, pbr.transmission) == (1.0, pytest.approx(0.2), 0.0)
+    assert pbr.ior == pytest.approx(1.4)
+
+
+# ------------------------------------------------------------------------------ randomisation
+
+
+def test_blackbody_tints() -> None:
+    warm, white, cool = (np.array(photo.blackbody_rgb(t)) for t in (3000.0, 6500.0, 10000.0))
+    assert np.allclose(white, 1.0, atol=1e-9)
+    assert warm[0] > warm[1] > warm[2] and cool[2] > cool[1] > cool[0]
+    for c in (warm, cool):
+        assert 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2] == pytest.approx(1.0)
+
+
+def _lighting_key(lit: photo.ViewLighting) -> tuple:
+    lights = tuple((a.X_WL.tobytes(), a.size, a.color, a.intensity) for a in lit.lights)
+    tex = tuple(None if m.base_color_texture is None else m.base_color_texture.tobytes()
+                for m in (lit.tote, lit.floor))  # fmt: skip
+    return (lights, lit.environment, lit.tote, lit.floor, tex, lit.exposure)
+
+
+def test_randomisation_is_drawn_from_seed_and_view() -> None:
+    s = RenderSettings(engine="path")
+    a = _lighting_key(draw_lighting(s, 7, 3))
+    assert a == _lighting_key(draw_lighting(s, 7, 3))
+    assert a != _lighting_key(draw_lighting(s, 7, 4))
+    assert a != _lighting_key(draw_lighting(s, 8, 3))
+    # Many views: the ranges are honoured and every environment / texture kind occurs.
+    kinds, textures, counts = set(), set(), set()
+    for v in range(60):
+        lit = draw_lighting(s, 1, v)
+        counts.add(len(lit.lights))
+        kinds.add(lit.environment.kind)
+        textures.add(lit.summary["floor_texture"])
+        assert abs(lit.exposure) <= s.randomize.exposure_range
+        for light in lit.lights:
+            assert s.randomize.light_size[0] <= light.size[0] <= s.randomize.light_size[1]
+            h = light.X_WL[2, 3]
+            assert s.randomize.light_height[0] <= h <= s.randomize.light_height[1]
+            # Every light faces the tote (its +z axis points down at the target).
+            assert light.X_WL[2, 2] < 0
+    assert counts == {1, 2, 3} and kinds == set(photo.ENVIRONMENTS)
+    assert textures == set(photo.TEXTURES)
+
+
+def test_randomisation_switches_are_independent() -> None:
+    on = RenderSettings(engine="path")
+    off_lights = RenderSettings(engine="path", randomize=RandomizeSettings(lights=False))
+    a, b = draw_lighting(on, 5, 2), draw_lighting(off_lights, 5, 2)
+    assert len(b.lights) == 1 and b.lights[0].size == (1.0, 1.0)  # the fixed default light
+    assert (a.environment, a.tote, a.floor, a.exposure) == (b.environment, b.tote, b.floor,
+                                                            b.exposure)  # fmt: skip
+    fixed = draw_lighting(on, 5, 2, randomize=False)
+    assert fixed.exposure == on.exposure and fixed.tote.base_color_texture is None
+
+
+def test_procedural_textures() -> None:
+    g = np.random.default_rng(0)
+    for kind in ("noise", "checker", "stripes"):
+        t = photo.procedural_texture(kind, g, size=64)
+        assert t.shape == (64, 64, 3) and t.dtype == np.uint8
+        assert t.max() == 255 or kind == "noise"
+        assert t.min() < t.max()
+        # Tileable: the first and last rows / columns are neighbours of similar level.
+        assert abs(int(t[0, :, 0].mean()) - int(t[-1, :, 0].mean())) < 60
+    assert photo.procedural_texture("plain", g) is None
+    with pytest.raises(InvalidArgumentError, match="texture kind"):
+        photo.procedural_texture("marble", g)
+
+
+# ------------------------------------------------------------------------------ tracer
+
+
+def _small_scene() -> tuple[list, mgn.Mesh]:
+    from mgn.io.model_folder import object_mesh
+    from mgn.render.views import tote_mesh
+
+    items = []
+    placed = [("box_tea", (-0.08, -0.04)), ("can_soda", (0.07, 0.05)),
+              ("bottle_clear", (0.05, -0.08)), ("hex_nut", (-0.06, 0.08))]  # fmt: skip
+    for k, (name, xy) in enumerate(placed):
+        mesh = object_mesh(mgn.objects.get_object(name))
+        X = np.eye(4)
+        c, s = np.cos(0.4 * k), np.sin(0.4 * k)
+        X[:2, :2] = [[c, -s], [s, c]]
+        X[:3, 3] = (*xy, -float(np.asarray(mesh.bounds)[0, 2]))
+        items.append((mesh, X, k + 1))
+    return items, tote_mesh()
+
+
+def _view(size: int = 64) -> CameraView:
+    K = Intrinsics.mgn_synthetic().scaled(size / 1200.0)
+    return CameraView(K, look_at((0.15, -0.25, 0.75), (0.0, 0.0, 0.03)))
+
+
+def test_path_ids_and_depth_align_with_the_raster() -> None:
+    from mgn.render.views import iter_views
+
+    items, tote = _small_scene()
+    view = _view(96)
+    raster = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=False,
+                                  floor=False)))  # fmt: skip
+    s = RenderSettings(engine="path", spp=1, denoise=False, spp_without_denoiser=1)
+    pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, randomize=False)
+    _, out = pr.render(view, 0)
+    agree = out.instance_ids == raster.instance_ids
+    assert agree.mean() >= 0.999, agree.mean()
+    assert len(np.unique(raster.instance_ids)) == 5  # background and the four objects
+    seen_r, seen_p = raster.depth_ideal > 0, out.depth > 0
+    assert (seen_r == seen_p).mean() >= 0.999  # the tote is seen at the same pixels too
+    assert seen_r.mean() > 0.5
+    both = agree & seen_r & seen_p
+    close = np.isclose(out.depth[both], raster.depth_ideal[both], rtol=1e-3, atol=1e-4)
+    assert close.mean() >= 0.999, close.mean()
+    # The path-traced views of iter_views come with exactly the raster labels.
+    pv = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=True,
+                              render=s)))  # fmt: skip
+    assert np.array_equal(pv.instance_ids, raster.instance_ids)
+    assert pv.engine == {"engine": "path", "spp": 1, "denoised": False, "max_bounces": 6}
+    assert pv.rgb.shape == raster.rgb.shape and pv.rgb.dtype == np.uint8
+
+
+@pytest.mark.parametrize("denoise", [True, False])
+def test_same_png_for_one_and_two_threads(denoise: bool) -> None:
+    from mgn.io.scene_format import png_bytes
+
+    if denoise and not photo.denoiser_available():
+        pytest.fail("pyoidn (test extra) is not installed")
+    items, tote = _small_scene()
+    s = RenderSettings(engine="path", spp=2, spp_without_denoiser=2, denoise=denoise,
+                       shot_noise=0.02, read_noise=0.002)  # fmt: skip
+    pngs = []
+    for threads in (1, 2):
+        pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, seed=3, num_threads=threads)
+        rgb, _ = pr.render(_view(48), 5)
+        pngs.append(png_bytes(rgb))
+    assert pngs[0] == pngs[1]
+
+
+def test_denoiser_reduces_the_error() -> None:
+    if not photo.denoiser_available():
+        pytest.fail("pyoidn (test extra) is not installed")
+    items, tote = _small_scene()
+    view = _view(64)
+
+    def radiance(spp: int) -> photo.Any:
+        s = RenderSettings(engine="path", spp=spp, denoise=False, spp_without_denoiser=spp)
+        pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, randomize=False, seed=1)
+        lit = pr.lighting(0)
+        from mgn.render.path import PathTraceOptions
+
+        return pr._scene_for(lit).render(view, PathTraceOptions(spp=spp, seed=1, clamp=20.0))
+
+    ref = radiance(256).radiance
+    noisy = radiance(4)
+    den = photo.denoise(noisy.radiance, noisy.albedo, noisy.normal)
+    mse_raw = float(np.mean((noisy.radiance - ref) ** 2))
+    mse_den = float(np.mean((den - ref) ** 2))
+    assert mse_den < 0.5 * mse_raw, (mse_den, mse_raw)
+
+
+def test_missing_denoiser_warns_and_traces_more_samples(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(photo, "_DENOISER", None)
+    monkeypatch.setattr(photo, "_DENOISER_CHECKED", True)
+    monkeypatch.setattr(photo, "_WARNED_NO_DENOISER", False)
+    items, tote = _small_scene()
+    s = RenderSettings(engine="path", spp=2, spp_without_denoiser=6)
+    with pytest.warns(RuntimeWarning, match="pyoidn"):
+        pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s)
+    assert pr.spp == 6 and pr.describe() == {"engine": "path", "spp": 6, "denoised": False,
+                                             "max_bounces": 6}  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # warned once per process
+        photo.PhotoRenderer(items, tote, np.eye(4), None, s)
+    with pytest.raises(ImportError, match="pyoidn"):
+        photo.denoise(np.zeros((4, 4, 3), np.float32))
+
+
+def test_tiny_path_traced_dataset_validates(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from mgn.report import image_engines
+
+    from mgn.cli import main
+
+    monkeypatch.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
+    cfg = {
+        "objects": {"names": ["box_tea", "can_soda", "bottle_clear"]},
+        "camera": {"views": [0, 9], "resolution_scale": 0.05},
+        "labels": {"suction": False, "paralleljaw": False, "pj_physics": False,
+                   "scene_grasps": False},
+        "drop": {"max_time": 1.0},
+        "render": {"spp": 2},
+    }  # fmt: skip
+    (tmp_path / "cfg.yaml").write_text(json.dumps(cfg))
+    out = tmp_path / "ds"
+    assert main(["generate", "--out", str(out), "--scenes", "1", "--config",
+                 str(tmp_path / "cfg.yaml"), "--engine", "path", "--quiet"]) == 0  # fmt: skip
+    assert main(["validate", str(out)]) == 0
+    info = json.loads((out / "dataset.json").read_text())
+    assert info["config"]["render"]["engine"] == "path"
+    manifest = json.loads((out / "scene0" / "manifest.json").read_text())
+    assert manifest["render"]["engine"] == "path"
+    assert image_engines(mgn.Dataset(out)).startswith("path tracer, ")
+    from PIL import Image
+
+    rgb = np.asarray(Image.open(out / "scene0" / "0_rgb.png"))
+    assert rgb.shape == (60, 60, 3) and rgb.std() > 5  # a picture, not a flat fill
