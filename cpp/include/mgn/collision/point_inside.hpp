@@ -11,9 +11,10 @@
 /// RayScene::intersect_all). Points outside the mesh's axis-aligned bounding box are outside
 /// without a ray cast.
 ///
-/// Boundary: a point on the surface (within float precision) is undetermined: it may be reported
-/// inside or outside, depending on whether the ray's hit at distance ~0 is kept. Points at least
-/// ~1e-6 of the mesh size away from the surface are classified exactly.
+/// Boundary: a point on the surface (within float rounding of its coordinates, about 1e-7 times
+/// their magnitude) is undetermined: it may be reported inside or outside. Two crossings closer
+/// than about 1e-5 m along the ray (walls thinner than that) count as one, so points near such
+/// thin features may be misclassified. Every other point is classified by the exact parity.
 ///
 /// The answer is meaningful only for a closed (watertight) mesh; for an open mesh it is the
 /// parity along one ray. Coordinates are in the mesh's own frame, in the mesh's units (m).
