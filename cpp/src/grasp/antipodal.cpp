@@ -1,5 +1,6 @@
 // Antipodal robust sampling of parallel-jaw grasps (docs/models.md §5).
 #include <mgn/collision/collision_model.hpp>
+#include <mgn/collision/point_inside.hpp>
 #include <mgn/core/error.hpp>
 #include <mgn/core/parallel.hpp>
 #include <mgn/core/rng.hpp>
@@ -38,6 +39,7 @@ struct AntipodalSampler::Impl {
   ParallelJawGripper gripper;
   std::unique_ptr<RayScene> scene;
   std::unique_ptr<CollisionModel> object;
+  std::unique_ptr<PointInsideTest> inside;  // the object's point-inside test
   // Gripper parts at opening 0 in the hand frame: palm, left finger, right finger.
   std::array<std::unique_ptr<CollisionModel>, 3> parts;
   std::array<Vec3d, 3> part_vertex;  // one vertex of each part (for the inside test), frame H
@@ -262,6 +264,7 @@ AntipodalSampler::AntipodalSampler(const Mesh& object, const ParallelJawGripper&
   impl_->scene =
       std::make_unique<RayScene>(std::vector<RayGeometry>{{&object, Pose::Identity(), 0}});
   impl_->object = std::make_unique<CollisionModel>(object);
+  impl_->inside = std::make_unique<PointInsideTest>(object);
   const GripperMeshes meshes = gripper_meshes(gripper, 0.0);
   const std::array<const Mesh*, 3> parts = {&meshes.palm, &meshes.finger_left,
                                             &meshes.finger_right};
@@ -341,9 +344,6 @@ Mat3d euler_xyz(double ax, double ay, double az) {
       .toRotationMatrix();
 }
 
-// A fixed direction off every axis and diagonal, for the ray-parity inside test.
-const Vec3d kParityDirection = Vec3d(0.5773, 0.6213, 0.5297).normalized();
-
 }  // namespace
 
 bool AntipodalSampler::collides(const Pose& X_OH, double opening) const {
@@ -368,18 +368,9 @@ bool AntipodalSampler::part_inside_object(const Impl& m, const Pose& X_OH, doubl
   // No surface contact: a part is either fully outside or fully inside the closed object.
   const std::array<Pose, 3> X = {X_OH, X_OH * finger_offset(0, opening),
                                  X_OH * finger_offset(1, opening)};
-  Points3f origins(3, 3), directions(3, 3);
-  for (int k = 0; k < 3; ++k) {
-    origins.row(k) = (X[k] * m.part_vertex[k]).cast<float>().transpose();
-    directions.row(k) = kParityDirection.cast<float>().transpose();
-  }
-  CastOptions cast;
-  cast.num_threads = 1;
-  const RayAllHits hits = m.scene->intersect_all(origins, directions, 1024, cast);
-  for (int k = 0; k < 3; ++k) {
-    if ((hits.offsets[k + 1] - hits.offsets[k]) % 2 == 1) return true;
-  }
-  return false;
+  Points3d points(3, 3);
+  for (int k = 0; k < 3; ++k) points.row(k) = (X[k] * m.part_vertex[k]).transpose();
+  return m.inside->contains_any(points);
 }
 
 AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d& normals,

@@ -4,6 +4,7 @@
 // osmesa.h includes GL/gl.h; the 4.5 entry points come from glext.h (exported by libOSMesa).
 #include <GL/glext.h>
 
+#include <mgn/collision/point_inside.hpp>
 #include <mgn/core/error.hpp>
 #include <mgn/core/rng.hpp>
 #include <mgn/render/renderer.hpp>
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <numeric>
 #include <opencv2/core.hpp>
@@ -150,35 +152,8 @@ struct GpuMesh {
   /// camera is never inside, see check_camera_inside; the light is outside the scene bounds),
   /// so they are culled in every opaque pass (half the triangles to set up and rasterise).
   bool cull_back = false;
-  Points3f vertices;  // for the camera-inside test (closed meshes only)
-  Faces faces;
+  std::shared_ptr<const PointInsideTest> inside;  // camera-inside test (closed meshes only)
 };
-
-/// Whether point p (mesh frame) is inside a closed mesh: parity of crossings of a ray along an
-/// irrational direction (avoids edges and vertices of axis-aligned geometry).
-bool point_inside(const GpuMesh& m, const Vec3d& p) {
-  if ((p.array() < m.lo.array()).any() || (p.array() > m.hi.array()).any()) return false;
-  const Vec3d d = Vec3d(0.5773502, 0.6123724, 0.5400617).normalized();
-  int crossings = 0;
-  for (Eigen::Index f = 0; f < m.faces.rows(); ++f) {
-    const Vec3d a = m.vertices.row(m.faces(f, 0)).cast<double>().transpose();
-    const Vec3d b = m.vertices.row(m.faces(f, 1)).cast<double>().transpose();
-    const Vec3d c = m.vertices.row(m.faces(f, 2)).cast<double>().transpose();
-    const Vec3d e1 = b - a, e2 = c - a;
-    const Vec3d h = d.cross(e2);
-    const double det = e1.dot(h);
-    if (std::abs(det) < 1e-18) continue;
-    const double inv = 1.0 / det;
-    const Vec3d s = p - a;
-    const double u = s.dot(h) * inv;
-    if (u < 0.0 || u > 1.0) continue;
-    const Vec3d q = s.cross(e1);
-    const double v = d.dot(q) * inv;
-    if (v < 0.0 || u + v > 1.0) continue;
-    if (e2.dot(q) * inv > 0.0) ++crossings;
-  }
-  return crossings % 2 == 1;
-}
 
 void check_pose(const Pose& X, const char* what) {
   if (!X.matrix().allFinite()) throw_error<InvalidArgument>(what, ": pose has non-finite entries");
@@ -493,10 +468,7 @@ int Renderer::add_mesh(const Mesh& mesh) {
   const auto report = mesh.validate();
   g.closed = report.is_watertight;
   g.cull_back = report.is_watertight && report.is_outward;
-  if (g.closed) {
-    g.vertices = V;
-    g.faces = F;
-  }
+  if (g.closed) g.inside = std::make_shared<const PointInsideTest>(mesh);
   I.meshes.push_back(std::move(g));
   return static_cast<int>(I.meshes.size()) - 1;
 }
@@ -520,130 +492,152 @@ void Renderer::set_instances(std::vector<Instance> instances) {
   I.instances = std::move(instances);
 }
 
-RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) {
-  Impl& I = *impl_;
-  std::lock_guard<std::mutex> lock(I.mutex);
-  view.validate("Renderer::render: view");
-  const Intrinsics& K = view.K;
-  if (K.width > I.max_w || K.height > I.max_h) {
-    throw_error<InvalidArgument>("Renderer::render: view is ", K.width, "x", K.height,
-                                 " px but the renderer was created for at most ", I.max_w, "x",
-                                 I.max_h);
-  }
-  if (!opt.rgb && !opt.depth && !opt.instances) {
-    throw_error<InvalidArgument>(
-        "Renderer::render: no pass requested (rgb, depth, instances all "
-        "false)");
-  }
-  // Instances to draw.
+namespace {
+
+/// What one render call draws: the selected instances (indices into Renderer::Impl::instances)
+/// and the camera-dependent bounds of their geometry.
+struct Frame {
   std::vector<std::size_t> drawn;
-  for (std::size_t i = 0; i < I.instances.size(); ++i) {
-    if (opt.visible_instances.empty() ||
-        std::find(opt.visible_instances.begin(), opt.visible_instances.end(),
-                  I.instances[i].instance_id) != opt.visible_instances.end()) {
-      drawn.push_back(i);
-    }
-  }
-  if (drawn.empty()) {
-    throw_error<InvalidArgument>(
-        "Renderer::render: nothing to draw (", I.instances.size(), " instances, ",
-        opt.visible_instances.size(),
-        " visible_instances requested); expected a non-empty scene (set_instances)");
-  }
-  const Vec3d eye = view.X_WC.translation();
-  // World bounds of what is drawn, and the camera-inside test.
-  Vec3d wlo = Vec3d::Constant(1e300), whi = Vec3d::Constant(-1e300);
-  const Pose X_CW = view.X_WC.inverse();
-  double zmin = 1e300, zmax = -1e300;
-  for (std::size_t i : drawn) {
-    const Instance& in = I.instances[i];
-    const GpuMesh& m = I.meshes[in.mesh_id];
-    for (int c = 0; c < 8; ++c) {
-      const Vec3d p_O((c & 1) ? m.hi.x() : m.lo.x(), (c & 2) ? m.hi.y() : m.lo.y(),
-                      (c & 4) ? m.hi.z() : m.lo.z());
-      const Vec3d p_W = in.X_WO * p_O;
-      wlo = wlo.cwiseMin(p_W);
-      whi = whi.cwiseMax(p_W);
-      const double z = (X_CW * p_W).z();
-      zmin = std::min(zmin, z);
-      zmax = std::max(zmax, z);
-    }
-    if (opt.check_camera_inside && m.closed && point_inside(m, in.X_WO.inverse() * eye)) {
-      throw_error<InvalidArgument>("Renderer::render: the camera centre (", eye.x(), ", ", eye.y(),
-                                   ", ", eye.z(), ") m is inside instance ", in.instance_id,
-                                   " (mesh ", in.mesh_id,
-                                   "); expected a camera outside every solid");
-    }
-  }
-  if (zmax <= 0.0) {
-    throw_error<InvalidArgument>(
-        "Renderer::render: the whole scene is behind the camera "
-        "(camera-frame z of its bounds <= 0); check X_WC");
-  }
-  const double znear = std::max(zmin * 0.99, std::max(1e-3, zmax * 1e-5));
-  const double zfar = std::max(zmax * 1.01 + 1e-3, znear * 2.0);
-  const Vec3d center = 0.5 * (wlo + whi);
-  const double radius = std::max(0.5 * (whi - wlo).norm(), 1e-3);
+  Vec3d eye = Vec3d::Zero();  // camera centre, world frame, m
+  Pose X_CW = Pose::Identity();
+  double znear = 0.0, zfar = 0.0;  // clip planes, m
+  Vec3d center = Vec3d::Zero();    // centre of the world bounds of the drawn geometry, m
+  double radius = 0.0;             // half diagonal of those bounds, m
+};
 
-  // Lighting (and colour randomisation).
-  RenderOutput out;
-  out.width = K.width;
-  out.height = K.height;
-  LightSample light = opt.light;
-  std::vector<Vec3f> random_colors(I.instances.size(), Vec3f::Zero());
-  if (opt.randomize) {
-    Rng rng(opt.seed, opt.view_index);
-    const double r = rng.uniform(1.0, 2.0), tilt = rng.uniform(0.0, 0.7),
-                 az = rng.uniform(0.0, 2.0 * kPi);
-    light.position_W = center + r * Vec3d(std::cos(az) * std::sin(tilt),
-                                          std::sin(az) * std::sin(tilt), std::cos(tilt));
-    light.intensity = rng.uniform(0.6, 1.3);
-    light.color_temperature = rng.uniform(3000.0, 8000.0);
-    light.ambient = rng.uniform(0.1, 0.35);
-    for (std::size_t i = 0; i < I.instances.size(); ++i) {
-      if (!I.instances[i].randomize_color) continue;
-      const double h = rng.uniform(), s = rng.uniform(0.1, 0.9), v = rng.uniform(0.15, 0.9);
-      random_colors[i] = hsv_to_rgb(h, s, v).cast<float>();
-    }
+/// Back-face culling of closed outward meshes (GpuMesh::cull_back); `front` is the winding of
+/// front faces in window space.
+void set_culling(bool cull, GLenum front) {
+  if (cull) {
+    glEnable(GL_CULL_FACE);
+    glFrontFace(front);
+    glCullFace(GL_BACK);
   } else {
-    if (!light.position_W.allFinite()) light.position_W = center + Vec3d(0.3, -0.2, 1.5);
-    if (!(std::isfinite(light.intensity) && light.intensity >= 0.0) ||
-        !(std::isfinite(light.ambient) && light.ambient >= 0.0)) {
-      throw_error<InvalidArgument>(
-          "Renderer::render: light intensity and ambient must be finite "
-          "and >= 0, got ",
-          light.intensity, ", ", light.ambient);
-    }
+    glDisable(GL_CULL_FACE);
   }
-  out.light = light;
+}
 
-  I.make_current();
-  const Mat4f view_m = X_CW.matrix().cast<float>();
-  const Mat4f proj = cv_projection(K, znear, zfar);
-  const bool full = opt.rgb;
-  const double light_dist = (light.position_W - center).norm();
-  const bool shadows = full && opt.shadows && light_dist > radius * 1.1;
+/// The steps of Renderer::render, in the order it calls them (all under the renderer's mutex).
+struct RenderSteps {
+  Renderer::Impl& I;
+  const CameraView& view;
+  const RenderOptions& opt;
+  Frame frame;
+  LightSample light;
+  std::vector<Vec3f> random_colors;  // per instance, used when opt.randomize
+  bool full = false;                 // colour requested: the shading program runs
+  bool shadows = false;              // shadow map in use
   Mat4f light_vp = Mat4f::Identity();
 
-  glDisable(GL_BLEND);
-  glDisable(GL_CULL_FACE);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDepthMask(GL_TRUE);
-
-  // Back-face culling of closed outward meshes (GpuMesh::cull_back); `front` is the winding of
-  // front faces in window space.
-  auto set_culling = [](bool cull, GLenum front) {
-    if (cull) {
-      glEnable(GL_CULL_FACE);
-      glFrontFace(front);
-      glCullFace(GL_BACK);
-    } else {
-      glDisable(GL_CULL_FACE);
+  /// Checks the view size and the requested passes.
+  void validate() const {
+    view.validate("Renderer::render: view");
+    const Intrinsics& K = view.K;
+    if (K.width > I.max_w || K.height > I.max_h) {
+      throw_error<InvalidArgument>("Renderer::render: view is ", K.width, "x", K.height,
+                                   " px but the renderer was created for at most ", I.max_w, "x",
+                                   I.max_h);
     }
-  };
-  if (shadows) {
-    light_vp = light_view_projection(light.position_W, center, radius);
+    if (!opt.rgb && !opt.depth && !opt.instances) {
+      throw_error<InvalidArgument>(
+          "Renderer::render: no pass requested (rgb, depth, instances all "
+          "false)");
+    }
+  }
+
+  /// The instances to draw (all, or those in opt.visible_instances).
+  void select_instances() {
+    for (std::size_t i = 0; i < I.instances.size(); ++i) {
+      if (opt.visible_instances.empty() ||
+          std::find(opt.visible_instances.begin(), opt.visible_instances.end(),
+                    I.instances[i].instance_id) != opt.visible_instances.end()) {
+        frame.drawn.push_back(i);
+      }
+    }
+    if (frame.drawn.empty()) {
+      throw_error<InvalidArgument>(
+          "Renderer::render: nothing to draw (", I.instances.size(), " instances, ",
+          opt.visible_instances.size(),
+          " visible_instances requested); expected a non-empty scene (set_instances)");
+    }
+  }
+
+  /// World bounds of what is drawn, clip planes, and the camera-inside test.
+  void bound_scene() {
+    frame.eye = view.X_WC.translation();
+    Vec3d wlo = Vec3d::Constant(1e300), whi = Vec3d::Constant(-1e300);
+    frame.X_CW = view.X_WC.inverse();
+    double zmin = 1e300, zmax = -1e300;
+    for (std::size_t i : frame.drawn) {
+      const Instance& in = I.instances[i];
+      const GpuMesh& m = I.meshes[in.mesh_id];
+      for (int c = 0; c < 8; ++c) {
+        const Vec3d p_O((c & 1) ? m.hi.x() : m.lo.x(), (c & 2) ? m.hi.y() : m.lo.y(),
+                        (c & 4) ? m.hi.z() : m.lo.z());
+        const Vec3d p_W = in.X_WO * p_O;
+        wlo = wlo.cwiseMin(p_W);
+        whi = whi.cwiseMax(p_W);
+        const double z = (frame.X_CW * p_W).z();
+        zmin = std::min(zmin, z);
+        zmax = std::max(zmax, z);
+      }
+      if (opt.check_camera_inside && m.closed &&
+          m.inside->contains(in.X_WO.inverse() * frame.eye)) {
+        const Vec3d& eye = frame.eye;
+        throw_error<InvalidArgument>("Renderer::render: the camera centre (", eye.x(), ", ",
+                                     eye.y(), ", ", eye.z(), ") m is inside instance ",
+                                     in.instance_id, " (mesh ", in.mesh_id,
+                                     "); expected a camera outside every solid");
+      }
+    }
+    if (zmax <= 0.0) {
+      throw_error<InvalidArgument>(
+          "Renderer::render: the whole scene is behind the camera "
+          "(camera-frame z of its bounds <= 0); check X_WC");
+    }
+    frame.znear = std::max(zmin * 0.99, std::max(1e-3, zmax * 1e-5));
+    frame.zfar = std::max(zmax * 1.01 + 1e-3, frame.znear * 2.0);
+    frame.center = 0.5 * (wlo + whi);
+    frame.radius = std::max(0.5 * (whi - wlo).norm(), 1e-3);
+  }
+
+  /// The light (opt.light, or a random one with random instance colours when opt.randomize).
+  void choose_light() {
+    light = opt.light;
+    random_colors.assign(I.instances.size(), Vec3f::Zero());
+    if (opt.randomize) {
+      Rng rng(opt.seed, opt.view_index);
+      const double r = rng.uniform(1.0, 2.0), tilt = rng.uniform(0.0, 0.7),
+                   az = rng.uniform(0.0, 2.0 * kPi);
+      light.position_W = frame.center + r * Vec3d(std::cos(az) * std::sin(tilt),
+                                                  std::sin(az) * std::sin(tilt), std::cos(tilt));
+      light.intensity = rng.uniform(0.6, 1.3);
+      light.color_temperature = rng.uniform(3000.0, 8000.0);
+      light.ambient = rng.uniform(0.1, 0.35);
+      for (std::size_t i = 0; i < I.instances.size(); ++i) {
+        if (!I.instances[i].randomize_color) continue;
+        const double h = rng.uniform(), s = rng.uniform(0.1, 0.9), v = rng.uniform(0.15, 0.9);
+        random_colors[i] = hsv_to_rgb(h, s, v).cast<float>();
+      }
+    } else {
+      if (!light.position_W.allFinite()) light.position_W = frame.center + Vec3d(0.3, -0.2, 1.5);
+      if (!(std::isfinite(light.intensity) && light.intensity >= 0.0) ||
+          !(std::isfinite(light.ambient) && light.ambient >= 0.0)) {
+        throw_error<InvalidArgument>(
+            "Renderer::render: light intensity and ambient must be finite "
+            "and >= 0, got ",
+            light.intensity, ", ", light.ambient);
+      }
+    }
+    full = opt.rgb;
+    const double light_dist = (light.position_W - frame.center).norm();
+    shadows = full && opt.shadows && light_dist > frame.radius * 1.1;
+  }
+
+  /// Shadow map of the opaque groups seen from the light (only when `shadows`); sets light_vp.
+  void shadow_pass() {
+    if (!shadows) return;
+    light_vp = light_view_projection(light.position_W, frame.center, frame.radius);
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
     glViewport(0, 0, kShadowSize, kShadowSize);
     glClear(GL_DEPTH_BUFFER_BIT);
@@ -651,7 +645,7 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     glPolygonOffset(2.0f, 4.0f);
     glUseProgram(I.prog_shadow);
     glUniformMatrix4fv(I.lsh.light_vp, 1, GL_FALSE, light_vp.data());
-    for (std::size_t i : drawn) {
+    for (std::size_t i : frame.drawn) {
       const Instance& in = I.instances[i];
       const GpuMesh& m = I.meshes[in.mesh_id];
       const Mat4f model = in.X_WO.matrix().cast<float>();
@@ -668,32 +662,38 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     glDisable(GL_CULL_FACE);
   }
 
-  glBindFramebuffer(GL_FRAMEBUFFER, I.fbo);
-  glViewport(0, 0, K.width, K.height);
-  const GLenum all_bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-  glDrawBuffers(3, all_bufs);
-  glEnable(GL_FRAMEBUFFER_SRGB);  // linear shader output and clear colour, sRGB storage
-  const GLfloat bg[4] = {std::clamp(opt.background.x(), 0.0f, 1.0f),
-                         std::clamp(opt.background.y(), 0.0f, 1.0f),
-                         std::clamp(opt.background.z(), 0.0f, 1.0f), 1.0f};
-  const GLfloat zero_f[4] = {0, 0, 0, 0};
-  const GLint zero_i[4] = {0, 0, 0, 0};
-  const GLfloat one = 1.0f;
-  glClearBufferfv(GL_COLOR, 0, bg);
-  glClearBufferfv(GL_COLOR, 1, zero_f);
-  glClearBufferiv(GL_COLOR, 2, zero_i);
-  glClearBufferfv(GL_DEPTH, 0, &one);
+  /// Binds the main framebuffer and clears colour (background), z-depth, ids and depth.
+  void clear_targets() {
+    glBindFramebuffer(GL_FRAMEBUFFER, I.fbo);
+    glViewport(0, 0, view.K.width, view.K.height);
+    const GLenum all_bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, all_bufs);
+    glEnable(GL_FRAMEBUFFER_SRGB);  // linear shader output and clear colour, sRGB storage
+    const GLfloat bg[4] = {std::clamp(opt.background.x(), 0.0f, 1.0f),
+                           std::clamp(opt.background.y(), 0.0f, 1.0f),
+                           std::clamp(opt.background.z(), 0.0f, 1.0f), 1.0f};
+    const GLfloat zero_f[4] = {0, 0, 0, 0};
+    const GLint zero_i[4] = {0, 0, 0, 0};
+    const GLfloat one = 1.0f;
+    glClearBufferfv(GL_COLOR, 0, bg);
+    glClearBufferfv(GL_COLOR, 1, zero_f);
+    glClearBufferiv(GL_COLOR, 2, zero_i);
+    glClearBufferfv(GL_DEPTH, 0, &one);
+  }
 
-  // Per-frame uniforms of both programs.
-  glUseProgram(I.prog_simple);
-  glUniformMatrix4fv(I.ls.view, 1, GL_FALSE, view_m.data());
-  glUniformMatrix4fv(I.ls.proj, 1, GL_FALSE, proj.data());
-  if (full) {
+  /// Per-frame uniforms of both programs: camera, and light and shadow map for shading.
+  void set_frame_uniforms() {
+    const Mat4f view_m = frame.X_CW.matrix().cast<float>();
+    const Mat4f proj = cv_projection(view.K, frame.znear, frame.zfar);
+    glUseProgram(I.prog_simple);
+    glUniformMatrix4fv(I.ls.view, 1, GL_FALSE, view_m.data());
+    glUniformMatrix4fv(I.ls.proj, 1, GL_FALSE, proj.data());
+    if (!full) return;
     glUseProgram(I.prog_full);
     glUniformMatrix4fv(I.lf.view, 1, GL_FALSE, view_m.data());
     glUniformMatrix4fv(I.lf.proj, 1, GL_FALSE, proj.data());
     glUniformMatrix4fv(I.lf.light_vp, 1, GL_FALSE, light_vp.data());
-    const Vec3f eyef = eye.cast<float>(), lp = light.position_W.cast<float>();
+    const Vec3f eyef = frame.eye.cast<float>(), lp = light.position_W.cast<float>();
     const Vec3f lrgb =
         (color_temperature_rgb(light.color_temperature) * light.intensity).cast<float>();
     const Vec3f amb = Vec3f::Constant(static_cast<float>(light.ambient));
@@ -710,7 +710,24 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     glActiveTexture(GL_TEXTURE0);
   }
 
-  auto draw_group = [&](std::size_t i, const DrawGroup& dg, bool shade) {
+  /// Sets the per-instance uniforms of the current program and binds the instance's mesh.
+  void bind_instance(std::size_t i, bool shade) const {
+    const Instance& in = I.instances[i];
+    const Mat4f model = in.X_WO.matrix().cast<float>();
+    if (shade) {
+      const Mat3f nmat = in.X_WO.linear().cast<float>();  // rigid: normal matrix = rotation
+      glUniformMatrix4fv(I.lf.model, 1, GL_FALSE, model.data());
+      glUniformMatrix3fv(I.lf.nmat, 1, GL_FALSE, nmat.data());
+      glUniform1i(I.lf.id, in.instance_id);
+    } else {
+      glUniformMatrix4fv(I.ls.model, 1, GL_FALSE, model.data());
+      glUniform1i(I.ls.id, in.instance_id);
+    }
+    glBindVertexArray(I.meshes[in.mesh_id].vao);
+  }
+
+  /// Draws one group of instance i (with its material when shading).
+  void draw_group(std::size_t i, const DrawGroup& dg, bool shade) const {
     const Instance& in = I.instances[i];
     const GpuMesh& m = I.meshes[in.mesh_id];
     if (shade) {
@@ -728,24 +745,11 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     }
     glDrawElements(GL_TRIANGLES, dg.count, GL_UNSIGNED_INT,
                    reinterpret_cast<void*>(static_cast<std::size_t>(dg.first) * 4));
-  };
-  auto bind_instance = [&](std::size_t i, bool shade) {
-    const Instance& in = I.instances[i];
-    const Mat4f model = in.X_WO.matrix().cast<float>();
-    if (shade) {
-      const Mat3f nmat = in.X_WO.linear().cast<float>();  // rigid: normal matrix = rotation
-      glUniformMatrix4fv(I.lf.model, 1, GL_FALSE, model.data());
-      glUniformMatrix3fv(I.lf.nmat, 1, GL_FALSE, nmat.data());
-      glUniform1i(I.lf.id, in.instance_id);
-    } else {
-      glUniformMatrix4fv(I.ls.model, 1, GL_FALSE, model.data());
-      glUniform1i(I.ls.id, in.instance_id);
-    }
-    glBindVertexArray(I.meshes[in.mesh_id].vao);
-  };
-  // Draws the opaque groups (every group if !full) of the drawn instances with one program.
-  auto draw_opaque = [&](bool shade) {
-    for (std::size_t i : drawn) {
+  }
+
+  /// Draws the opaque groups (every group if !full) of the drawn instances with one program.
+  void draw_opaque(bool shade) const {
+    for (std::size_t i : frame.drawn) {
       const GpuMesh& m = I.meshes[I.instances[i].mesh_id];
       // Window y = image row flips the apparent winding: front faces are clockwise.
       set_culling(m.cull_back, GL_CW);
@@ -756,15 +760,18 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
         draw_group(i, dg, shade);
       }
     }
-  };
+  }
 
-  // 1. Geometry pass of the opaque surfaces: z-depth, ids and the depth buffer.
-  const GLenum geo_bufs[] = {GL_NONE, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-  glDrawBuffers(3, geo_bufs);
-  glUseProgram(I.prog_simple);
-  draw_opaque(false);
-  if (full) {
-    // 2. Shading of the visible opaque fragments only (depth pre-pass: no overdraw shading).
+  /// Geometry pass of the opaque surfaces: z-depth, ids and the depth buffer.
+  void id_depth_pass() const {
+    const GLenum geo_bufs[] = {GL_NONE, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, geo_bufs);
+    glUseProgram(I.prog_simple);
+    draw_opaque(false);
+  }
+
+  /// Shading of the visible opaque fragments only (after id_depth_pass: no overdraw shading).
+  void colour_pass() const {
     const GLenum color_bufs[] = {GL_COLOR_ATTACHMENT0, GL_NONE, GL_NONE};
     glDrawBuffers(3, color_bufs);
     glDepthFunc(GL_LEQUAL);
@@ -773,64 +780,102 @@ RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) 
     draw_opaque(true);
     glDepthMask(GL_TRUE);
     glDepthFunc(GL_LESS);
-    // 3. Transparent groups back to front, blended into the colour; their front faces also
-    // write z-depth and ids (depth sensors decide later what they see).
+  }
+
+  /// Transparent groups back to front, blended into the colour; their front faces also write
+  /// z-depth and ids (depth sensors decide later what they see).
+  void transparent_pass() const {
     std::vector<std::pair<double, std::size_t>> transparent;
-    for (std::size_t i : drawn) {
+    for (std::size_t i : frame.drawn) {
       const GpuMesh& m = I.meshes[I.instances[i].mesh_id];
       if (std::none_of(m.groups.begin(), m.groups.end(),
                        [](const DrawGroup& g) { return g.transparent; }))
         continue;
       const Vec3d c_W = I.instances[i].X_WO * (0.5 * (m.lo + m.hi));
-      transparent.emplace_back((X_CW * c_W).z(), i);
+      transparent.emplace_back((frame.X_CW * c_W).z(), i);
     }
-    if (!transparent.empty()) {
-      std::sort(transparent.begin(), transparent.end(),
-                [](const auto& a, const auto& b) { return a.first > b.first; });
-      glDrawBuffers(3, all_bufs);
-      glEnablei(GL_BLEND, 0);
-      glDisablei(GL_BLEND, 1);
-      glDisablei(GL_BLEND, 2);
-      glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
-      glEnable(GL_CULL_FACE);
-      glFrontFace(GL_CW);  // window y = image row flips the apparent winding
-      glCullFace(GL_BACK);
-      for (const auto& t : transparent) {
-        bind_instance(t.second, true);
-        const GpuMesh& m = I.meshes[I.instances[t.second].mesh_id];
-        for (const DrawGroup& dg : m.groups)
-          if (dg.transparent) draw_group(t.second, dg, true);
-      }
-      glDisable(GL_CULL_FACE);
-      glDisablei(GL_BLEND, 0);
+    if (transparent.empty()) return;
+    std::sort(transparent.begin(), transparent.end(),
+              [](const auto& a, const auto& b) { return a.first > b.first; });
+    const GLenum all_bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, all_bufs);
+    glEnablei(GL_BLEND, 0);
+    glDisablei(GL_BLEND, 1);
+    glDisablei(GL_BLEND, 2);
+    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
+    glEnable(GL_CULL_FACE);
+    glFrontFace(GL_CW);  // window y = image row flips the apparent winding
+    glCullFace(GL_BACK);
+    for (const auto& t : transparent) {
+      bind_instance(t.second, true);
+      const GpuMesh& m = I.meshes[I.instances[t.second].mesh_id];
+      for (const DrawGroup& dg : m.groups)
+        if (dg.transparent) draw_group(t.second, dg, true);
     }
+    glDisable(GL_CULL_FACE);
+    glDisablei(GL_BLEND, 0);
+  }
+
+  /// Reads the requested images back (window y = image row: already top row first).
+  RenderOutput read_back() const {
+    RenderOutput out;
+    out.width = view.K.width;
+    out.height = view.K.height;
+    out.light = light;
+    const int w = view.K.width, h = view.K.height;
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    const std::size_t npx = static_cast<std::size_t>(w) * h;
+    if (opt.rgb) {
+      out.rgb.resize(npx * 3);
+      glReadBuffer(GL_COLOR_ATTACHMENT0);
+      glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, out.rgb.data());
+    }
+    if (opt.depth) {
+      out.depth.resize(npx);
+      glReadBuffer(GL_COLOR_ATTACHMENT1);
+      glReadPixels(0, 0, w, h, GL_RED, GL_FLOAT, out.depth.data());
+    }
+    if (opt.instances) {
+      out.instance_ids.resize(npx);
+      glReadBuffer(GL_COLOR_ATTACHMENT2);
+      glReadPixels(0, 0, w, h, GL_RED_INTEGER, GL_INT, out.instance_ids.data());
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    const GLenum err = glGetError();
+    if (err != GL_NO_ERROR) {
+      throw_error<BackendError>("Renderer::render: OpenGL error 0x", std::hex, err);
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
+RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) {
+  Impl& I = *impl_;
+  std::lock_guard<std::mutex> lock(I.mutex);
+  RenderSteps s{I, view, opt};
+  s.validate();
+  s.select_instances();
+  s.bound_scene();
+  s.choose_light();
+
+  I.make_current();
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  s.shadow_pass();
+  s.clear_targets();
+  s.set_frame_uniforms();
+  s.id_depth_pass();
+  if (s.full) {
+    s.colour_pass();
+    s.transparent_pass();
   }
   glBindVertexArray(0);
-
-  // Read back (window y = image row: already top row first).
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  const std::size_t npx = static_cast<std::size_t>(K.width) * K.height;
-  if (opt.rgb) {
-    out.rgb.resize(npx * 3);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, K.width, K.height, GL_RGB, GL_UNSIGNED_BYTE, out.rgb.data());
-  }
-  if (opt.depth) {
-    out.depth.resize(npx);
-    glReadBuffer(GL_COLOR_ATTACHMENT1);
-    glReadPixels(0, 0, K.width, K.height, GL_RED, GL_FLOAT, out.depth.data());
-  }
-  if (opt.instances) {
-    out.instance_ids.resize(npx);
-    glReadBuffer(GL_COLOR_ATTACHMENT2);
-    glReadPixels(0, 0, K.width, K.height, GL_RED_INTEGER, GL_INT, out.instance_ids.data());
-  }
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  const GLenum err = glGetError();
-  if (err != GL_NO_ERROR) {
-    throw_error<BackendError>("Renderer::render: OpenGL error 0x", std::hex, err);
-  }
-  return out;
+  return s.read_back();
 }
 
 }  // namespace mgn

@@ -1,5 +1,6 @@
 // Scene grasp labels (docs/models.md §9); the model is documented in scene_grasps.hpp.
 #include <mgn/collision/collision_model.hpp>
+#include <mgn/collision/point_inside.hpp>
 #include <mgn/core/error.hpp>
 #include <mgn/core/parallel.hpp>
 #include <mgn/geometry/primitives.hpp>
@@ -37,9 +38,10 @@ void SceneGraspOptions::validate() const {
     }
   }
   if (!(approach_step > 0.0) || !std::isfinite(approach_step)) {
-    throw_error<InvalidArgument>("SceneGraspOptions.approach_step: expected a finite value > 0 m, "
-                                 "got ",
-                                 approach_step);
+    throw_error<InvalidArgument>(
+        "SceneGraspOptions.approach_step: expected a finite value > 0 m, "
+        "got ",
+        approach_step);
   }
   tool.validate();
   if (!gravity_world.allFinite() || !(gravity_world.norm() > 1e-12)) {
@@ -67,36 +69,24 @@ namespace {
 
 using Box = Eigen::AlignedBox3d;
 
-// A fixed direction off every axis and diagonal, for the ray-parity inside tests.
-const Vec3f kParity = Vec3f(0.5773f, 0.6213f, 0.5297f).normalized();
-
-/// A closed mesh with what the tests need: FCL model, a ray scene for parity, its local bounding
+/// A closed mesh with what the tests need: FCL model, the point-inside test, its local bounding
 /// box and one of its vertices (all in its own frame).
 struct Solid {
   std::unique_ptr<CollisionModel> model;
-  std::unique_ptr<RayScene> rays;
+  std::unique_ptr<PointInsideTest> inside;
   Box box;
   Vec3d vertex = Vec3d::Zero();
 
   explicit Solid(const Mesh& mesh) {
     model = std::make_unique<CollisionModel>(mesh);
-    rays = std::make_unique<RayScene>(std::vector<RayGeometry>{{&mesh, Pose::Identity(), 0}});
+    inside = std::make_unique<PointInsideTest>(mesh);
     const auto b = mesh.bounds();
     box = Box(b.row(0).transpose(), b.row(1).transpose());
     vertex = mesh.vertices().row(0).transpose().cast<double>();
   }
 
-  /// Whether a point (own frame) is inside the closed mesh (odd number of crossings).
-  bool contains(const Vec3d& p) const {
-    if (!box.contains(p)) return false;
-    Points3f o(1, 3), d(1, 3);
-    o.row(0) = p.cast<float>().transpose();
-    d.row(0) = kParity.transpose();
-    CastOptions cast;
-    cast.num_threads = 1;
-    const RayAllHits hits = rays->intersect_all(o, d, 4096, cast);
-    return (hits.offsets[1] - hits.offsets[0]) % 2 == 1;
-  }
+  /// Whether a point (own frame) is inside the closed mesh.
+  bool contains(const Vec3d& p) const { return inside->contains(p); }
 };
 
 /// World bounding box of a local box under X.
@@ -231,8 +221,8 @@ struct SceneGraspModel::Impl {
         hit[k] = first_hit(parts, poses, d == 0.0 && !check_own_at_grasp ? own : -1, &pi, &oj);
         if (hit[k] < 0) continue;
         if (!any && why_part) {
-          *why_part = static_cast<std::uint8_t>(pi == 2 ? CollisionPart::Palm
-                                                        : CollisionPart::Finger);
+          *why_part =
+              static_cast<std::uint8_t>(pi == 2 ? CollisionPart::Palm : CollisionPart::Finger);
           *why_obstacle = obstacle_code(*parts[pi], poses[pi], oj, own);
         }
         any = true;
