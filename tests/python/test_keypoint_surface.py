@@ -9,7 +9,7 @@ from conftest import translation
 from test_view_labels import render_ids, top_down
 
 from mgn.geometry import make_box
-from mgn.scene import SceneRayModel, view_object_labels
+from mgn.view_labels import SceneRayModel, view_object_labels
 
 
 def test_floating_keypoints_are_not_visible() -> None:

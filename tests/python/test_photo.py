@@ -4,6 +4,7 @@ denoising, and a tiny path-traced dataset."""
 
 from __future__ import annotations
 
+import argparse
 import base64
 import json
 import warnings
@@ -11,13 +12,22 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from mgn.config import ConfigError, dump_config, load_config
+import yaml
+from PIL import Image
 
 import mgn
+from mgn.cli import main
 from mgn.errors import InvalidArgumentError
-from mgn.objects import builtin_objects
-from mgn.render import CameraView, Intrinsics, look_at, photo
+from mgn.io.scene_format import png_bytes
+from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
+from mgn.pipeline.config import ConfigError, dump_config, load_config
+from mgn.render import photo
+from mgn.render.path import PathTraceOptions
 from mgn.render.photo import RandomizeSettings, RenderSettings, draw_lighting
+from mgn.render.sensor import SURFACE_MIRROR, SURFACE_TRANSPARENT, surface_flags
+from mgn.render.views import iter_views
+from mgn.scene.cameras import CameraView, Intrinsics, look_at
+from mgn.viz.report import image_engines
 
 # ------------------------------------------------------------------------------ config / CLI
 
@@ -51,7 +61,6 @@ def test_render_config_round_trip() -> None:
     cfg = load_config({"render": {"engine": "path", "spp": 8, "randomize": rnd}})
     assert cfg.render.engine == "path" and cfg.render.spp == 8
     assert cfg.render.randomize.light_count == (2, 4) and not cfg.render.randomize.lights
-    import yaml
 
     again = load_config(yaml.safe_load(dump_config(cfg)))
     assert again.render == cfg.render
@@ -65,7 +74,6 @@ def test_render_config_round_trip() -> None:
     ["pick", "s.json", "--out", "X", "--engine", "cycles"],
 ])  # fmt: skip
 def test_cli_engine_choices(command: list[str], capsys: pytest.CaptureFixture[str]) -> None:
-    from mgn.cli import main
 
     with pytest.raises(SystemExit) as e:
         main(command)
@@ -74,7 +82,6 @@ def test_cli_engine_choices(command: list[str], capsys: pytest.CaptureFixture[st
 
 
 def test_cli_spp_must_be_positive() -> None:
-    import argparse
 
     base = RenderSettings(engine="path")
     with pytest.raises(InvalidArgumentError, match="--spp"):
@@ -102,10 +109,8 @@ def test_builtin_materials_are_plausible() -> None:
 
 
 def test_builtin_mesh_carries_pbr_and_sensor_flags() -> None:
-    from mgn.io.model_folder import object_mesh
-    from mgn.render.sensor import SURFACE_MIRROR, SURFACE_TRANSPARENT, surface_flags
 
-    glass = object_mesh(mgn.objects.get_object("bottle_clear")).materials[0]
+    glass = mgn.objects.get_object("bottle_clear").to_mesh().materials[0]
     assert glass.has_pbr and glass.transmission == 1.0 and glass.ior == pytest.approx(1.5)
     assert surface_flags(glass) & SURFACE_TRANSPARENT
     m = mgn.geometry.Material()
@@ -193,20 +198,17 @@ def _user_yaml(tmp_path: Path, extra: str) -> Path:
 def test_user_object_pbr_errors_name_file_object_field(
     tmp_path: Path, extra: str, field: str
 ) -> None:
-    from mgn.objects import load_objects_yaml
 
     with pytest.raises(InvalidArgumentError, match=rf"objs\.yaml.*part_a.*'{field}'"):
         load_objects_yaml(_user_yaml(tmp_path, extra))
 
 
 def test_user_object_pbr_values_reach_the_tracer(tmp_path: Path) -> None:
-    from mgn.io.model_folder import object_mesh
-    from mgn.objects import load_objects_yaml
 
     extra = "    metallic: 1.0\n    roughness: 0.2\n    ior: 1.4\n    transmission: 0.0\n"
     (spec,) = load_objects_yaml(_user_yaml(tmp_path, extra))
     assert (spec.material.metallic, spec.material.roughness, spec.material.ior) == (1.0, 0.2, 1.4)
-    pbr = photo.pbr_material(object_mesh(spec).materials[0])
+    pbr = photo.pbr_material(spec.to_mesh().materials[0])
     assert (pbr.metallic, pbr.roughness, pbr.transmission) == (1.0, pytest.approx(0.2), 0.0)
     assert pbr.ior == pytest.approx(1.4)
 
@@ -282,14 +284,12 @@ def test_procedural_textures() -> None:
 
 
 def _small_scene() -> tuple[list, mgn.Mesh]:
-    from mgn.io.model_folder import object_mesh
-    from mgn.render.views import tote_mesh
 
     items = []
     placed = [("box_tea", (-0.08, -0.04)), ("can_soda", (0.07, 0.05)),
               ("bottle_clear", (0.05, -0.08)), ("hex_nut", (-0.06, 0.08))]  # fmt: skip
     for k, (name, xy) in enumerate(placed):
-        mesh = object_mesh(mgn.objects.get_object(name))
+        mesh = mgn.objects.get_object(name).to_mesh()
         X = np.eye(4)
         c, s = np.cos(0.4 * k), np.sin(0.4 * k)
         X[:2, :2] = [[c, -s], [s, c]]
@@ -304,7 +304,6 @@ def _view(size: int = 64) -> CameraView:
 
 
 def test_path_ids_and_depth_align_with_the_raster() -> None:
-    from mgn.render.views import iter_views
 
     items, tote = _small_scene()
     view = _view(96)
@@ -332,7 +331,6 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
 
 @pytest.mark.parametrize("denoise", [True, False])
 def test_same_png_for_one_and_two_threads(denoise: bool) -> None:
-    from mgn.io.scene_format import png_bytes
 
     if denoise and not photo.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
@@ -357,7 +355,6 @@ def test_denoiser_reduces_the_error() -> None:
         s = RenderSettings(engine="path", spp=spp, denoise=False, spp_without_denoiser=spp)
         pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, randomize=False, seed=1)
         lit = pr.lighting(0)
-        from mgn.render.path import PathTraceOptions
 
         return pr._scene_for(lit).render(view, PathTraceOptions(spp=spp, seed=1, clamp=20.0))
 
@@ -389,9 +386,6 @@ def test_missing_denoiser_warns_and_traces_more_samples(monkeypatch: pytest.Monk
 def test_tiny_path_traced_dataset_validates(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from mgn.report import image_engines
-
-    from mgn.cli import main
 
     monkeypatch.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
     cfg = {
@@ -412,7 +406,6 @@ def test_tiny_path_traced_dataset_validates(
     manifest = json.loads((out / "scene0" / "manifest.json").read_text())
     assert manifest["render"]["engine"] == "path"
     assert image_engines(mgn.Dataset(out)).startswith("path tracer, ")
-    from PIL import Image
 
     rgb = np.asarray(Image.open(out / "scene0" / "0_rgb.png"))
     assert rgb.shape == (60, 60, 3) and rgb.std() > 5  # a picture, not a flat fill
