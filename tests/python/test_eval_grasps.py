@@ -107,8 +107,11 @@ def test_collides_matches_the_placed_labels_and_finds_a_pose_inside_an_object(sm
                                 score=np.ones(m, np.float32), wrench=np.zeros(m, np.float32),
                                 reason=np.zeros(m, np.uint8), num_candidates=m,
                                 num_colliding=0))  # fmt: skip
+    # approach_step=1.0: only the listed offsets, so that random grasps through the objects'
+    # centres leave some collision-free (the whole-approach sweep blocks them all).
     labelled = SceneGraspModel(scene, pj, su, model.gripper, model.cup,
-                               offsets=LabelOptions().grasp_offsets, num_threads=2)  # fmt: skip
+                               offsets=LabelOptions().grasp_offsets, approach_step=1.0,
+                               num_threads=2)  # fmt: skip
     for core, p in (("pj", labelled.pj), ("suction", labelled.suction)):
         r = labelled.collides(core, p.contact_poses, p.width, p.object_id)
         np.testing.assert_array_equal(r.colliding, p.colliding)
@@ -319,20 +322,22 @@ def test_suction_pixel_predictions_at_label_contacts_match(small_dataset):
 def test_paralleljaw_pixel_predictions_at_label_centres_match(small_dataset):
     preds, expected = [], 0
     for scene, view in _views(small_dataset):
-        g, X = _labels(view, "paralleljaw")
         K, depth = view.intrinsics, view.depth_ideal
         grasps = []
-        for j, x in enumerate(X):
-            a, v, w = x[:3, 2], x[:3, 0], float(g["contact_width"][j])
-            if a[2] < math.cos(math.radians(5)):  # top-down in this camera only
-                continue
-            centre = x[:3, 3] + 0.5 * w * v
-            u, vv = _project(K, centre)
-            c, r = int(u), int(vv)
-            if not (0 <= c < K.width and 0 <= r < K.height) or not np.isfinite(depth[r, c]):
-                continue
-            grasps.append({"uv": [u, vv], "angle": math.atan2(v[1], v[0]), "width": w,
-                           "depth": float(centre[2] - depth[r, c]), "score": 1.0})  # fmt: skip
+        for colliding in (False, True):  # predictions are matched against both label groups
+            g, X = _labels(view, "paralleljaw", colliding=colliding)
+            for j, x in enumerate(X):
+                a, v, w = x[:3, 2], x[:3, 0], float(g["contact_width"][j])
+                if a[2] < math.cos(math.radians(5)):  # top-down in this camera only
+                    continue
+                centre = x[:3, 3] + 0.5 * w * v
+                u, vv = _project(K, centre)
+                c, r = int(u), int(vv)
+                if not (0 <= c < K.width and 0 <= r < K.height) or not np.isfinite(depth[r, c]):
+                    continue
+                grasps.append({"uv": [u, vv], "angle": math.atan2(v[1], v[0]), "width": w,
+                               "depth": float(centre[2] - depth[r, c]),
+                               "score": 1.0})  # fmt: skip
         expected += len(grasps)
         if grasps:
             preds.append({"image_id": scene.scene_id * 1000 + view.index,
