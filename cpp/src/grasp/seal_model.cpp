@@ -58,8 +58,8 @@ std::vector<Eigen::Vector2d> unit_ring(int num_points) {
   return ring;
 }
 
-SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n,
-                         SealTrial* detail, const Vec3d* nominal) {
+SealFailure spring_trial(const SealContext& ctx, const Vec3d& c, const Vec3d& n, SealTrial* detail,
+                         const Vec3d* nominal) {
   const Cup& cup = ctx.cup;
   const int N = cup.num_points;
   const double r = cup.radius;
