@@ -12,8 +12,9 @@ Names are imported on first use, so ``import mgn`` stays light.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from mgn.base.lazy import lazy_exports
 
 _EXPORTS = {
     "BIN_RELATIONS": "layout",
@@ -50,15 +51,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'mgn.view_labels' has no attribute {name!r}")
-    return getattr(importlib.import_module(f"mgn.view_labels.{module}"), name)
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_exports("mgn.view_labels", _EXPORTS, globals())
 
 
 if TYPE_CHECKING:
