@@ -440,8 +440,8 @@ def run(
     return rows_for_runner(ev, width)
 
 
-def raster_ids(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
-    """mgn's raster instance ids of the view (the labels' id image)."""
+def raster_render(desc: ps.SceneDesc, scene_json: Path):  # noqa: ANN201 (mgn RenderOutput)
+    """mgn's raster render (RGB, depth, instance ids) of the benchmark view."""
     from mgn.render import Instance, Renderer
 
     CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
@@ -456,7 +456,12 @@ def raster_ids(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
         ]
     )
     K = Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy)
-    return np.asarray(r.render(CameraView(K, c.X_WC), randomize=False).instance_ids, np.int32)
+    return r.render(CameraView(K, c.X_WC), randomize=False)
+
+
+def raster_ids(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
+    """mgn's raster instance ids of the view (the labels' id image)."""
+    return np.asarray(raster_render(desc, scene_json).instance_ids, np.int32)
 
 
 def full_size_target(

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from . import path_scene as ps
-from .bench_path import raster_ids, run_child
+from .bench_path import raster_ids, raster_render, run_child
 
 ROOT = Path(__file__).resolve().parent.parent
 GLASS_NAMES = ("wine_glass", "bottle_clear", "can_soda", "box_tea", "tennis_ball", "pear", "mug")
@@ -47,21 +47,7 @@ def save_png(rgb: np.ndarray, path: Path, max_kib: int = 400) -> None:
 
 
 def raster_rgb(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
-    from mgn.render import Instance, Renderer
-
-    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
-
-    c = desc.camera
-    inp = ps.mgn_inputs(scene_json)
-    r = Renderer(c.width, c.height)
-    r.set_instances(
-        [
-            Instance(r.add_mesh(m), X, i)
-            for m, X, i in zip(inp["meshes"], inp["poses"], inp["instance_ids"], strict=True)
-        ]
-    )
-    K = Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy)
-    return np.asarray(r.render(CameraView(K, c.X_WC), randomize=False).rgb, np.uint8)
+    return np.asarray(raster_render(desc, scene_json).rgb, np.uint8)
 
 
 def glass_camera(scene_json: Path, width: int) -> ps.Camera:
