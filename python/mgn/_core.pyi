@@ -15,9 +15,12 @@ __all__: list[str] = [
     "AreaLight",
     "BackendError",
     "CollisionModel",
+    "ConvexDecompositionOptions",
     "Cup",
     "DepthSensorParams",
     "DepthSensorPreset",
+    "DropOptions",
+    "DropResult",
     "Environment",
     "FilmOptions",
     "Intrinsics",
@@ -642,6 +645,210 @@ class DepthSensorParams:
     @sigma_z0.setter
     def sigma_z0(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
 
+class ConvexDecompositionOptions:
+    """
+    Options of convex_decomposition (mgn/geometry/convex_decomposition.hpp); the defaults are the C++ struct's.
+    """
+
+    extra_concavity_points: bool
+    def __init__(self) -> None: ...
+    @property
+    def compactness_weight(self) -> float: ...
+    @compactness_weight.setter
+    def compactness_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def convex_volume_tolerance(self) -> float: ...
+    @convex_volume_tolerance.setter
+    def convex_volume_tolerance(
+        self, arg0: typing.SupportsFloat | typing.SupportsIndex
+    ) -> None: ...
+    @property
+    def grid_resolution(self) -> int: ...
+    @grid_resolution.setter
+    def grid_resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def max_concavity(self) -> float: ...
+    @max_concavity.setter
+    def max_concavity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def max_hacd_faces(self) -> int: ...
+    @max_hacd_faces.setter
+    def max_hacd_faces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def max_parts(self) -> int: ...
+    @max_parts.setter
+    def max_parts(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def merge_max_parts(self) -> int: ...
+    @merge_max_parts.setter
+    def merge_max_parts(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def merge_volume_tolerance(self) -> float: ...
+    @merge_volume_tolerance.setter
+    def merge_volume_tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def min_parts(self) -> int: ...
+    @min_parts.setter
+    def min_parts(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def volume_weight(self) -> float: ...
+    @volume_weight.setter
+    def volume_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
+class DropOptions:
+    """
+    Options of drop_objects (mgn/scene/drop.hpp, SI units); the defaults are the C++ struct's, validate() checks the ranges.
+    """
+
+    polyhedral_contacts: bool
+    remove_unsettled: bool
+    tote_collision: str
+    two_friction_directions: bool
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def angular_damping(self) -> float: ...
+    @angular_damping.setter
+    def angular_damping(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def angular_rest(self) -> float: ...
+    @angular_rest.setter
+    def angular_rest(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def collision_margin(self) -> float: ...
+    @collision_margin.setter
+    def collision_margin(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def contact_distance(self) -> float: ...
+    @contact_distance.setter
+    def contact_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def dt(self) -> float: ...
+    @dt.setter
+    def dt(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def gravity(self) -> float: ...
+    @gravity.setter
+    def gravity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def hull_tolerance(self) -> float: ...
+    @hull_tolerance.setter
+    def hull_tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def linear_rest(self) -> float: ...
+    @linear_rest.setter
+    def linear_rest(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def max_hull_vertices(self) -> int: ...
+    @max_hull_vertices.setter
+    def max_hull_vertices(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def max_time(self) -> float: ...
+    @max_time.setter
+    def max_time(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def resettle_time(self) -> float: ...
+    @resettle_time.setter
+    def resettle_time(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def rest_time(self) -> float: ...
+    @rest_time.setter
+    def rest_time(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def rolling_friction(self) -> float: ...
+    @rolling_friction.setter
+    def rolling_friction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def seed(self) -> int: ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def solver_iterations(self) -> int: ...
+    @solver_iterations.setter
+    def solver_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def tote_friction(self) -> float: ...
+    @tote_friction.setter
+    def tote_friction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def tote_restitution(self) -> float: ...
+    @tote_restitution.setter
+    def tote_restitution(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def window_max(self) -> tuple[float, float, float]: ...
+    @window_max.setter
+    def window_max(
+        self,
+        arg1: tuple[
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+        ],
+    ) -> None: ...
+    @property
+    def window_min(self) -> tuple[float, float, float]: ...
+    @window_min.setter
+    def window_min(
+        self,
+        arg1: tuple[
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+        ],
+    ) -> None: ...
+
+class DropResult:
+    """
+    drop_objects() result: one row per input object, in input order.
+    """
+    @property
+    def X_WO(self) -> numpy.ndarray:
+        """
+        (N,4,4) float64 settled poses, m
+        """
+    @property
+    def X_WO_release(self) -> numpy.ndarray:
+        """
+        (N,4,4) float64 release (or start) poses, m
+        """
+    @property
+    def contacts(self) -> numpy.ndarray:
+        """
+        (N,) uint32 tote contact flags (bits -x, +x, -y, +y walls, floor)
+        """
+    @property
+    def max_penetration(self) -> float:
+        """
+        deepest contact penetration on the simulated hulls, m
+        """
+    @property
+    def object_settled(self) -> numpy.ndarray:
+        """
+        (N,) bool: at rest when the simulation stopped
+        """
+    @property
+    def resettle_rounds(self) -> int: ...
+    @property
+    def settled(self) -> bool:
+        """
+        every remaining object came to rest
+        """
+    @property
+    def simulated_time(self) -> float:
+        """
+        s
+        """
+    @property
+    def status(self) -> numpy.ndarray:
+        """
+        (N,) int32: 0 kept, 1 left the tote, 2 not settled
+        """
+    @property
+    def steps(self) -> int: ...
+
 class ParallelJawGripper:
     """
     Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless palm_mesh, finger_left_mesh and finger_right_mesh are all set (closed, hand frame, fingers at opening 0).
@@ -1245,20 +1452,7 @@ def compute_mass_properties(
     open_mesh: str = "shell",
     shell_thickness: typing.SupportsFloat | typing.SupportsIndex = 0.002,
 ) -> MassProperties: ...
-def convex_decomposition(
-    mesh: Mesh,
-    convex_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.1,
-    max_concavity: typing.SupportsFloat | typing.SupportsIndex = 0.02,
-    min_parts: typing.SupportsInt | typing.SupportsIndex = 1,
-    max_parts: typing.SupportsInt | typing.SupportsIndex = 32,
-    compactness_weight: typing.SupportsFloat | typing.SupportsIndex = 0.1,
-    volume_weight: typing.SupportsFloat | typing.SupportsIndex = 0.0,
-    extra_concavity_points: bool = True,
-    max_hacd_faces: typing.SupportsInt | typing.SupportsIndex = 1500,
-    grid_resolution: typing.SupportsInt | typing.SupportsIndex = 40,
-    merge_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.0,
-    merge_max_parts: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> list[Mesh]: ...
+def convex_decomposition(mesh: Mesh, options: ConvexDecompositionOptions = ...) -> list[Mesh]: ...
 def convex_hull(mesh: Mesh) -> Mesh: ...
 def develop_radiance(radiance: typing.Any, film: FilmOptions) -> typing.Any: ...
 def distance(
@@ -1280,9 +1474,9 @@ def drop_objects(
     names: collections.abc.Sequence[str],
     tote: Mesh,
     tote_box: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
-    options: dict,
+    options: DropOptions,
     X_WO_start: typing.Any = None,
-) -> dict: ...
+) -> DropResult: ...
 def gripper_meshes(
     gripper: ParallelJawGripper, opening: typing.SupportsFloat | typing.SupportsIndex
 ) -> tuple[Mesh, Mesh, Mesh]:

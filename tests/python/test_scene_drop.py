@@ -16,6 +16,7 @@ from mgn.geometry.convex import (
 )
 from mgn.objects import ToteSpec, get_object
 from mgn.scene import DropOptions, Scene, compose_objects, drop_scene
+from mgn.scene.drop import _simulate
 
 TOL = 0.003  # m: allowed interpenetration / overshoot after settling
 
@@ -371,3 +372,65 @@ def test_round_objects_rest_on_the_floor_and_do_not_overlap():
     for inst in pile.instances:
         z = v @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3]
         assert z[:, 2].min() > -3e-4
+
+
+# ------------------------------------------------- the typed C++ boundary (issue 18, item 4)
+
+
+@pytest.mark.parametrize(
+    ("python_cls", "core_cls", "own_args"),
+    [
+        (DropOptions, mgn._core.DropOptions, {"seed"}),
+        (ConvexDecompositionOptions, mgn._core.ConvexDecompositionOptions, set()),
+    ],
+)
+def test_python_options_mirror_the_bound_cpp_struct_and_its_defaults(
+    python_cls, core_cls, own_args
+):
+    import dataclasses
+
+    core = core_cls()
+    cpp_fields = {n for n in dir(core) if not n.startswith("_") and n != "validate"}
+    py = python_cls()
+    assert {f.name for f in dataclasses.fields(python_cls)} == cpp_fields - own_args
+    for name in cpp_fields - own_args:
+        assert getattr(py, name) == getattr(core, name), name
+    # to_core() carries every value across, not only the defaults.
+    changed = {
+        f.name: (not getattr(py, f.name))
+        if isinstance(getattr(py, f.name), bool)
+        else getattr(py, f.name)
+        for f in dataclasses.fields(python_cls)
+    }
+    back = dataclasses.replace(py, **changed).to_core()
+    for name, value in changed.items():
+        assert getattr(back, name) == value, name
+
+
+def test_drop_options_ranges_are_checked_by_the_core():
+    o = mgn._core.DropOptions()
+    o.validate()  # the defaults are valid
+    o.angular_damping = 1.0
+    with pytest.raises(mgn.InvalidArgumentError, match=r"DropOptions\.angular_damping"):
+        o.validate()
+    o = mgn._core.DropOptions()
+    o.window_min = (0.0, 0.0, 0.9)
+    with pytest.raises(mgn.InvalidArgumentError, match=r"window_min must be <= window_max"):
+        o.validate()
+    with pytest.raises(mgn.InvalidArgumentError, match=r"DropOptions\.tote_collision"):
+        o.tote_collision = "sphere"
+    with pytest.raises(mgn.InvalidArgumentError, match=r"ConvexDecompositionOptions\.max_parts"):
+        ConvexDecompositionOptions(max_parts=2.5).to_core()  # type: ignore[arg-type]
+
+
+def test_drop_result_is_a_typed_object_with_one_row_per_object():
+    objects = [get_object("box_cube"), get_object("pear")]
+    scene = drop_scene(objects, seed=3)
+    assert scene.stats["steps"] > 0 and scene.stats["settled"] is True
+    # Same drop straight through the core, checked field by field.
+    out, _, _ = _simulate(objects, 3, ToteSpec(), DropOptions(), None, None, True)
+    assert isinstance(out, mgn._core.DropResult)
+    assert out.X_WO.shape == (2, 4, 4) and out.X_WO_release.shape == (2, 4, 4)
+    assert out.status.dtype == np.int32 and out.object_settled.dtype == bool
+    assert out.steps == scene.stats["steps"]
+    np.testing.assert_array_equal(out.X_WO[out.status == 0][0], scene.instances[0].X_WO)
