@@ -14,11 +14,14 @@ __all__: list[str] = [
     "AntipodalSampler",
     "AreaLight",
     "BackendError",
+    "CalibrationResult",
+    "ClassificationMetrics",
     "CollisionModel",
     "ConvexDecompositionOptions",
     "Cup",
     "DepthSensorParams",
     "DepthSensorPreset",
+    "DistanceResult",
     "DropOptions",
     "DropResult",
     "Environment",
@@ -26,6 +29,7 @@ __all__: list[str] = [
     "Intrinsics",
     "InvalidArgumentError",
     "IoError",
+    "LayoutArrays",
     "MassProperties",
     "Material",
     "Mesh",
@@ -35,6 +39,8 @@ __all__: list[str] = [
     "PathScene",
     "PathTraceOptions",
     "PbrMaterial",
+    "RayAllHits",
+    "RayHits",
     "RayScene",
     "Renderer",
     "SEAL_FAILURE_NAMES",
@@ -45,6 +51,7 @@ __all__: list[str] = [
     "SceneGraspModel",
     "SealModel",
     "ShakeOptions",
+    "SurfaceSamples",
     "UnsupportedError",
     "ViewLabelModel",
     "apply_depth_sensor",
@@ -107,6 +114,26 @@ class BackendError(MgnError, RuntimeError):
     """
     A third-party backend reported a failure (also a RuntimeError).
     """
+
+class SurfaceSamples:
+    """
+    sample_surface() result (mgn/geometry/sampling.hpp), mesh frame.
+    """
+    @property
+    def face_ids(self) -> numpy.ndarray:
+        """
+        (N,) int32 index of the face each point lies on
+        """
+    @property
+    def normals(self) -> numpy.ndarray:
+        """
+        (N,3) float32 unit outward face normals
+        """
+    @property
+    def points(self) -> numpy.ndarray:
+        """
+        (N,3) float32 points on the surface, m
+        """
 
 class Material:
     """
@@ -305,6 +332,81 @@ class Mesh:
     @property
     def vertices(self) -> numpy.ndarray: ...
 
+class RayHits:
+    """
+    RayScene.intersect() result (mgn/raytrace/ray_scene.hpp), world frame; misses have distance inf and ids -1.
+    """
+    @property
+    def barycentric(self) -> numpy.ndarray:
+        """
+        (N,2) float32 (u, v): p = (1-u-v) v0 + u v1 + v v2
+        """
+    @property
+    def distance(self) -> numpy.ndarray:
+        """
+        (N,) float32 m
+        """
+    @property
+    def face_ids(self) -> numpy.ndarray:
+        """
+        (N,) int32 face index within its mesh
+        """
+    @property
+    def instance_ids(self) -> numpy.ndarray:
+        """
+        (N,) int32
+        """
+    @property
+    def normals(self) -> numpy.ndarray:
+        """
+        (N,3) float32 unit geometric normal, outward for CCW faces
+        """
+    @property
+    def points(self) -> numpy.ndarray:
+        """
+        (N,3) float32
+        """
+
+class RayAllHits:
+    """
+    RayScene.intersect_all() result: the hits of ray i are entries offsets[i] .. offsets[i+1]-1, sorted by distance.
+    """
+    @property
+    def distance(self) -> numpy.ndarray:
+        """
+        (H,) float32 m
+        """
+    @property
+    def face_ids(self) -> numpy.ndarray:
+        """
+        (H,) int32
+        """
+    @property
+    def instance_ids(self) -> numpy.ndarray:
+        """
+        (H,) int32
+        """
+    @property
+    def normals(self) -> numpy.ndarray:
+        """
+        (H,3) float32
+        """
+    @property
+    def offsets(self) -> numpy.ndarray:
+        """
+        (N+1,) int64
+        """
+    @property
+    def points(self) -> numpy.ndarray:
+        """
+        (H,3) float32
+        """
+    @property
+    def ray_ids(self) -> numpy.ndarray:
+        """
+        (H,) int32 ray of each hit
+        """
+
 class RayScene:
     """
     Immutable Embree scene of meshes placed in the world frame.
@@ -323,7 +425,7 @@ class RayScene:
         tfar: typing.SupportsFloat | typing.SupportsIndex = ...,
         coherent: bool = False,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> RayHits: ...
     def intersect_all(
         self,
         origins: typing.Any,
@@ -332,7 +434,7 @@ class RayScene:
         tnear: typing.SupportsFloat | typing.SupportsIndex = 0.0,
         tfar: typing.SupportsFloat | typing.SupportsIndex = ...,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> RayAllHits: ...
     def intersect_ids(
         self,
         origins: typing.Any,
@@ -357,6 +459,31 @@ class RayScene:
     def num_geometries(self) -> int: ...
     @property
     def num_triangles(self) -> int: ...
+
+class DistanceResult:
+    """
+    distance() result (mgn/collision/collision_model.hpp), one row per pose pair.
+    """
+    @property
+    def collide(self) -> numpy.ndarray:
+        """
+        (N,) bool
+        """
+    @property
+    def distance(self) -> numpy.ndarray:
+        """
+        (N,) float64 m, 0 for intersecting pairs
+        """
+    @property
+    def points_a(self) -> numpy.ndarray:
+        """
+        (N,3) float64 closest point on A, world frame
+        """
+    @property
+    def points_b(self) -> numpy.ndarray:
+        """
+        (N,3) float64 closest point on B, world frame
+        """
 
 class CollisionModel:
     """
@@ -451,6 +578,84 @@ class SealModel:
     def cup(self) -> Cup: ...
     @property
     def model(self) -> str: ...
+
+class ClassificationMetrics:
+    """
+    Confusion counts and rates (mgn/grasp/calibration.hpp); NaN for a zero denominator.
+    """
+    def to_dict(self) -> dict:
+        """
+        {name: value} of the fields above, for JSON.
+        """
+    @property
+    def accuracy(self) -> float:
+        """
+        (tp + tn) / count
+        """
+    @property
+    def fn(self) -> int: ...
+    @property
+    def fp(self) -> int: ...
+    @property
+    def npv(self) -> float:
+        """
+        tn / (tn + fn)
+        """
+    @property
+    def ppv(self) -> float:
+        """
+        tp / (tp + fp), precision
+        """
+    @property
+    def sensitivity(self) -> float:
+        """
+        tp / (tp + fn)
+        """
+    @property
+    def specificity(self) -> float:
+        """
+        tn / (tn + fp)
+        """
+    @property
+    def tn(self) -> int: ...
+    @property
+    def tp(self) -> int: ...
+
+class CalibrationResult:
+    """
+    calibrate_cup() result (mgn/grasp/calibration.hpp).
+    """
+    @property
+    def cup(self) -> Cup:
+        """
+        the initial cup with the fitted c1, c2
+        """
+    @property
+    def evaluations(self) -> int: ...
+    @property
+    def objective(self) -> float:
+        """
+        training accuracy of the fitted cup
+        """
+    @property
+    def predicted(self) -> numpy.ndarray:
+        """
+        (N,) bool nominal prediction of the fitted cup
+        """
+    @property
+    def test(self) -> ClassificationMetrics: ...
+    @property
+    def test_indices(self) -> numpy.ndarray:
+        """
+        (H,) int64 ascending
+        """
+    @property
+    def train(self) -> ClassificationMetrics: ...
+    @property
+    def train_indices(self) -> numpy.ndarray:
+        """
+        (T,) int64 ascending
+        """
 
 class Intrinsics:
     """
@@ -1059,6 +1264,87 @@ class ShakeOptions:
     @staircase_checks.setter
     def staircase_checks(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
 
+class LayoutArrays:
+    """
+    compute_layout() result (mgn/scene/layout.hpp): 0-based object indices; rel_* are the relations sorted by (child, parent).
+    """
+    @property
+    def classes_unique(self) -> bool: ...
+    @property
+    def complete(self) -> numpy.ndarray:
+        """
+        (N,) bool
+        """
+    @property
+    def difficulty(self) -> int:
+        """
+        1..5
+        """
+    @property
+    def layer(self) -> numpy.ndarray:
+        """
+        (N,) int8
+        """
+    @property
+    def max_occlusion(self) -> float: ...
+    @property
+    def num_layers(self) -> int: ...
+    @property
+    def num_regions(self) -> numpy.ndarray:
+        """
+        (N,) int32
+        """
+    @property
+    def order(self) -> numpy.ndarray:
+        """
+        picking order, int32 1-based ids
+        """
+    @property
+    def rel_child(self) -> numpy.ndarray:
+        """
+        (R,) int32 0-based
+        """
+    @property
+    def rel_depth_diff(self) -> numpy.ndarray:
+        """
+        (R,) float64 m
+        """
+    @property
+    def rel_edge_size(self) -> numpy.ndarray:
+        """
+        (R,) int32 px
+        """
+    @property
+    def rel_parent(self) -> numpy.ndarray:
+        """
+        (R,) int32 0-based
+        """
+    @property
+    def rel_seen_px(self) -> numpy.ndarray:
+        """
+        (R,) int64 px
+        """
+    @property
+    def relation(self) -> numpy.ndarray:
+        """
+        (N,N) int8 relation matrix
+        """
+    @property
+    def total_covered_edge(self) -> numpy.ndarray:
+        """
+        (N,) int64 px
+        """
+    @property
+    def visible(self) -> numpy.ndarray:
+        """
+        (N,) bool
+        """
+    @property
+    def visible_px(self) -> numpy.ndarray:
+        """
+        (N,) int64
+        """
+
 class PbrMaterial:
     """
     glTF 2.0 metallic-roughness material (path tracer).
@@ -1401,7 +1687,7 @@ def calibrate_cup(
     holdout_fraction: typing.SupportsFloat | typing.SupportsIndex = 0.3,
     seed: typing.SupportsInt | typing.SupportsIndex = 0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> dict:
+) -> CalibrationResult:
     """
     Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).
     """
@@ -1414,7 +1700,7 @@ def camera_rays(
 ) -> tuple[numpy.ndarray, numpy.ndarray]: ...
 def classification_metrics(
     predicted: collections.abc.Sequence[bool], measured: collections.abc.Sequence[bool]
-) -> dict:
+) -> ClassificationMetrics:
     """
     Confusion counts and PPV, NPV, sensitivity, specificity, accuracy (NaN for a zero denominator).
     """
@@ -1441,7 +1727,7 @@ def compute_layout(
     min_region_fraction: typing.SupportsFloat | typing.SupportsIndex = 0.005,
     max_occlusion_level1: typing.SupportsFloat | typing.SupportsIndex = 0.05,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> dict:
+) -> LayoutArrays:
     """
     Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.
     """
@@ -1463,7 +1749,7 @@ def distance(
     rel_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     abs_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> dict: ...
+) -> DistanceResult: ...
 def drop_objects(
     parts: collections.abc.Sequence[collections.abc.Sequence[Mesh]],
     masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
@@ -1573,7 +1859,7 @@ def sample_surface(
     method: str = "random",
     seed: typing.SupportsInt | typing.SupportsIndex = 0,
     oversampling: typing.SupportsInt | typing.SupportsIndex = 6,
-) -> dict: ...
+) -> SurfaceSamples: ...
 def shake_test(
     parts: collections.abc.Sequence[Mesh],
     mass: typing.SupportsFloat | typing.SupportsIndex,
