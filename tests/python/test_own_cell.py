@@ -15,6 +15,7 @@ import pytest
 import mgn
 from mgn.cli import main
 from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.scene_file import read_scene_json
 from mgn.objects import load_objects_yaml
 from mgn.objects.user import ImplausibleSizeWarning
 from mgn.pipeline.config import ConfigError, load_config
@@ -376,7 +377,7 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
     assert main(["scene", "export", str(scene_json), str(glb), "--config", str(cfg),
                  "--grasps", "suctioncup", "--top-k", "3"]) == 0  # fmt: skip
     capsys.readouterr()
-    scene = mgn.scene.Scene.from_json(scene_json)
+    scene = read_scene_json(scene_json)
     from mgn.pipeline.scene_writer import scene_views
 
     loaded = trimesh.load(glb)

@@ -14,6 +14,7 @@ from mgn.geometry.convex import (
     convex_decomposition,
     convex_hull,
 )
+from mgn.io.scene_file import read_scene_json, write_scene_json
 from mgn.objects import ToteSpec, get_object
 from mgn.scene import DropOptions, Scene, compose_objects, drop_scene
 from mgn.scene.drop import _simulate
@@ -163,8 +164,8 @@ def test_same_seed_same_scene_other_seed_other_scene():
 
 def test_json_round_trip_and_meshes_come_back(dropped, tmp_path):
     _, scene = dropped
-    path = scene.to_json(tmp_path / "scene.json")
-    back = Scene.from_json(path)
+    path = write_scene_json(scene, tmp_path / "scene.json")
+    back = read_scene_json(path)
     assert back == scene
     np.testing.assert_array_equal(back.poses, scene.poses)
     assert [i.contacts for i in back.instances] == [i.contacts for i in scene.instances]
@@ -176,9 +177,9 @@ def test_json_round_trip_and_meshes_come_back(dropped, tmp_path):
     data["schema_version"] = 99
     (tmp_path / "bad.json").write_text(json.dumps(data))
     with pytest.raises(mgn.InvalidArgumentError, match="schema_version"):
-        Scene.from_json(tmp_path / "bad.json")
+        read_scene_json(tmp_path / "bad.json")
     with pytest.raises(mgn.IoError):
-        Scene.from_json(tmp_path / "missing.json")
+        read_scene_json(tmp_path / "missing.json")
 
 
 def test_compose_by_categories_and_count_is_seeded():
@@ -227,7 +228,7 @@ def test_cli_scene_drop(tmp_path, capsys):
         main(["scene", "drop", "--objects", "box_cube,pear", "--seed", "2", "--out", str(out)]) == 0
     )
     assert "scene written to" in capsys.readouterr().out
-    scene = Scene.from_json(out)
+    scene = read_scene_json(out)
     assert sorted(i.name for i in scene.instances) == ["box_cube", "pear"]
     assert main(["scene", "drop", "--objects", "nope", "--out", str(out)]) == 1
     assert "unknown object" in capsys.readouterr().err
@@ -285,8 +286,8 @@ def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
     scene = drop_scene(objects, seed=1, options=short)
     assert scene.stats["steps"] == 10
     assert scene.drop_options == short
-    path = scene.to_json(tmp_path / "s.json")
-    assert Scene.from_json(path).drop_options == short
+    path = write_scene_json(scene, tmp_path / "s.json")
+    assert read_scene_json(path).drop_options == short
 
 
 @pytest.mark.parametrize(

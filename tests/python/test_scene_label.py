@@ -13,6 +13,7 @@ import pytest
 from conftest import check_difficulty
 
 from mgn.io.dataset import Dataset
+from mgn.io.scene_file import write_scene_json
 from mgn.io.validate import validate_dataset
 from mgn.objects import ToteSpec, get_object
 from mgn.pipeline.label_scene import LabelOptions, label_scene
@@ -194,7 +195,7 @@ def test_bad_input(tmp_path):
 def test_scene_label_command(tmp_path):
     from mgn.cli.main import main
 
-    _scene().to_json(tmp_path / "scene.json")
+    write_scene_json(_scene(), tmp_path / "scene.json")
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(
         "camera: {views: [0, 7], resolution_scale: 0.1, randomize: false}\n"

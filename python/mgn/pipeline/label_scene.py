@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from mgn.errors import InvalidArgumentError
+from mgn.io.scene_file import write_scene_json
 from mgn.io.scene_format import ViewRecord, scene_gt_entries, write_scene_gt, write_view
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
@@ -288,5 +289,5 @@ def label_scene(
             fut.result()
         timings.add("write (waiting)", time.perf_counter() - t4)
     write_scene_gt(out, gt)
-    scene.to_json(out / "scene.json")
+    write_scene_json(scene, out / "scene.json")
     return timings

@@ -6,7 +6,7 @@ contacts), the tote, the seed and the drop options. Frames: the world W is the t
 (origin at the centre of the inner floor top, z up; see :mod:`mgn.objects.tote`); ``X_WO`` maps
 object-frame coordinates to world coordinates (4x4 float64, metres).
 
-JSON layout (``schema_version`` 1)::
+JSON layout (``schema_version`` 1; the file is written and read by :mod:`mgn.io.scene_file`)::
 
     {"schema_version": 1, "seed": 0,
      "tote": {ToteSpec fields}, "drop_options": {DropOptions fields},
@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,8 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.base.atomic import atomic_write_text
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
 
@@ -375,21 +373,3 @@ class Scene:
             raise InvalidArgumentError(
                 f"Scene: malformed scene data ({type(e).__name__}: {e})"
             ) from e
-
-    def to_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write the scene as JSON (atomically). Returns the path."""
-        text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
-        atomic_write_text(path, text + "\n")
-        return Path(path)
-
-    @classmethod
-    def from_json(cls, path: str | os.PathLike[str]) -> Scene:
-        """Read a scene written by :meth:`to_json`."""
-        p = Path(path)
-        try:
-            data = json.loads(p.read_text(encoding="utf-8"))
-        except FileNotFoundError as e:
-            raise IoError(f"Scene.from_json: file not found: '{p}'") from e
-        except json.JSONDecodeError as e:
-            raise InvalidArgumentError(f"Scene.from_json: '{p}' is not valid JSON: {e}") from e
-        return cls.from_dict(data)
