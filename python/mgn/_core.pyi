@@ -39,6 +39,7 @@ __all__: list[str] = [
     "PathScene",
     "PathTraceOptions",
     "PbrMaterial",
+    "PlacedGraspArrays",
     "RayAllHits",
     "RayHits",
     "RayScene",
@@ -52,7 +53,10 @@ __all__: list[str] = [
     "SealModel",
     "ShakeOptions",
     "SurfaceSamples",
+    "ToolCollisionArrays",
     "UnsupportedError",
+    "ViewGraspArrays",
+    "ViewLabelArrays",
     "ViewLabelModel",
     "apply_depth_sensor",
     "build_info",
@@ -1564,6 +1568,63 @@ class PathScene:
     @property
     def num_triangles(self) -> int: ...
 
+class PlacedGraspArrays:
+    """
+    SceneGraspModel.pj / .suction (mgn/scene/scene_grasps.hpp): world-frame grasps of every object; mgn.view_labels.grasps.PlacedGrasps documents each array.
+    """
+    @property
+    def colliding(self) -> numpy.ndarray: ...
+    @property
+    def collision_obstacle(self) -> numpy.ndarray: ...
+    @property
+    def collision_part(self) -> numpy.ndarray: ...
+    @property
+    def contact_poses(self) -> numpy.ndarray: ...
+    @property
+    def contacts(self) -> numpy.ndarray: ...
+    @property
+    def hit(self) -> numpy.ndarray: ...
+    @property
+    def object_index(self) -> numpy.ndarray: ...
+    @property
+    def score_analytical(self) -> numpy.ndarray: ...
+    @property
+    def score_simulation(self) -> numpy.ndarray: ...
+    @property
+    def score_wrench(self) -> numpy.ndarray: ...
+    @property
+    def second_contacts(self) -> numpy.ndarray: ...
+    @property
+    def tool_poses(self) -> numpy.ndarray: ...
+    @property
+    def width(self) -> numpy.ndarray: ...
+
+class ToolCollisionArrays:
+    """
+    SceneGraspModel.collides(): colliding (M,) bool, hit (M, K) int32.
+    """
+    @property
+    def colliding(self) -> numpy.ndarray: ...
+    @property
+    def hit(self) -> numpy.ndarray: ...
+
+class ViewGraspArrays:
+    """
+    SceneGraspModel.view_grasps(): row indices and camera-frame (N,4,4) tool and contact poses of the grasps kept in a view.
+    """
+    @property
+    def pj_contact(self) -> numpy.ndarray: ...
+    @property
+    def pj_index(self) -> numpy.ndarray: ...
+    @property
+    def pj_tool(self) -> numpy.ndarray: ...
+    @property
+    def suction_contact(self) -> numpy.ndarray: ...
+    @property
+    def suction_index(self) -> numpy.ndarray: ...
+    @property
+    def suction_tool(self) -> numpy.ndarray: ...
+
 class SceneGraspModel:
     """
     Per-scene grasp model: placement, collisions and wrench scores at construction; view_grasps per camera (see mgn/scene/scene_grasps.hpp).
@@ -1601,19 +1662,19 @@ class SceneGraspModel:
         width: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
         target_object: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
         check_target_at_grasp: bool = False,
-    ) -> dict:
+    ) -> ToolCollisionArrays:
         """
-        Collision of arbitrary grasp (contact-frame) poses with the labels' test: dict with colliding (M,) bool and hit (M, K) int32.
+        Collision of arbitrary grasp (contact-frame) poses with the labels' test: colliding (M,) bool and hit (M, K) int32.
         """
-    def pj(self) -> dict:
+    def pj(self) -> PlacedGraspArrays:
         """
         Parallel-jaw grasps in the world: dict of arrays.
         """
-    def suction(self) -> dict:
+    def suction(self) -> PlacedGraspArrays:
         """
         Suction grasps in the world: dict of arrays.
         """
-    def view_grasps(self, K: Intrinsics, X_WC: typing.Any, seen: typing.Any) -> dict:
+    def view_grasps(self, K: Intrinsics, X_WC: typing.Any, seen: typing.Any) -> ViewGraspArrays:
         """
         Grasps kept in a view: row indices and camera-frame poses.
         """
@@ -1625,6 +1686,47 @@ class SceneGraspModel:
     def num_objects(self) -> int: ...
     @property
     def offsets(self) -> list[float]: ...
+
+class ViewLabelArrays:
+    """
+    ViewLabelModel.label_view() result (mgn/scene/view_labels.hpp); mgn.view_labels.objects.ViewObjectLabels documents each array.
+    """
+    @property
+    def X_CO(self) -> numpy.ndarray: ...
+    @property
+    def amodal(self) -> numpy.ndarray: ...
+    @property
+    def amodal_pixels(self) -> numpy.ndarray: ...
+    @property
+    def bbox_loose(self) -> numpy.ndarray: ...
+    @property
+    def bbox_tight(self) -> numpy.ndarray: ...
+    @property
+    def com_heatmap(self) -> numpy.ndarray: ...
+    @property
+    def com_object(self) -> numpy.ndarray: ...
+    @property
+    def com_points(self) -> numpy.ndarray: ...
+    @property
+    def com_visible(self) -> numpy.ndarray: ...
+    @property
+    def keypoint_object(self) -> numpy.ndarray: ...
+    @property
+    def keypoints(self) -> numpy.ndarray: ...
+    @property
+    def occluded_keypoint_object(self) -> numpy.ndarray: ...
+    @property
+    def occluded_keypoints(self) -> numpy.ndarray: ...
+    @property
+    def occlusion(self) -> numpy.ndarray: ...
+    @property
+    def occlusion_map(self) -> numpy.ndarray: ...
+    @property
+    def semantic(self) -> numpy.ndarray: ...
+    @property
+    def visible(self) -> numpy.ndarray: ...
+    @property
+    def visible_pixels(self) -> numpy.ndarray: ...
 
 class ViewLabelModel:
     """
@@ -1650,7 +1752,7 @@ class ViewLabelModel:
         keypoints: bool = True,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
         depth: typing.Any = None,
-    ) -> dict: ...
+    ) -> ViewLabelArrays: ...
     @property
     def has_tote(self) -> bool: ...
     @property
