@@ -21,6 +21,7 @@ __all__: list[str] = [
     "Cup",
     "DepthSensorParams",
     "DepthSensorPreset",
+    "DepthSensorResult",
     "DistanceResult",
     "DropOptions",
     "DropResult",
@@ -30,11 +31,13 @@ __all__: list[str] = [
     "InvalidArgumentError",
     "IoError",
     "LayoutArrays",
+    "LightSample",
     "MassProperties",
     "Material",
     "Mesh",
     "MeshReport",
     "MgnError",
+    "MgnRigParams",
     "ParallelJawGripper",
     "PathScene",
     "PathTraceOptions",
@@ -43,6 +46,7 @@ __all__: list[str] = [
     "RayAllHits",
     "RayHits",
     "RayScene",
+    "RenderResult",
     "Renderer",
     "SEAL_FAILURE_NAMES",
     "SUCTION_TOOL_OFFSET",
@@ -661,6 +665,70 @@ class CalibrationResult:
         (T,) int64 ascending
         """
 
+class LightSample:
+    """
+    The light a view was rendered with (mgn/render/renderer.hpp).
+    """
+    @property
+    def ambient(self) -> float:
+        """
+        relative to white
+        """
+    @property
+    def color_temperature(self) -> float:
+        """
+        K
+        """
+    @property
+    def intensity(self) -> float:
+        """
+        radiance scale (1 = nominal)
+        """
+    @property
+    def position_W(self) -> tuple[float, float, float]:
+        """
+        point light position, world frame, m
+        """
+
+class RenderResult:
+    """
+    Renderer.render() result: (H,W,3) uint8 rgb, (H,W) float32 depth (m), (H,W) int32 instance_ids (None when not requested), light.
+    """
+    @property
+    def depth(self) -> typing.Any: ...
+    @property
+    def instance_ids(self) -> typing.Any: ...
+    @property
+    def light(self) -> LightSample: ...
+    @property
+    def rgb(self) -> typing.Any: ...
+
+class DepthSensorResult:
+    """
+    apply_depth_sensor() result: (H,W) float32 depth and depth_ideal (m), (H,W) bool valid.
+    """
+    @property
+    def depth(self) -> typing.Any: ...
+    @property
+    def depth_ideal(self) -> typing.Any: ...
+    @property
+    def valid(self) -> typing.Any: ...
+
+class MgnRigParams:
+    """
+    Drawn parameters of the MetaGraspNet rig (mgn/render/camera.hpp): radii m, angles rad.
+    """
+    @property
+    def R_end(self) -> float: ...
+    @property
+    def R_start(self) -> float: ...
+    @property
+    def phi_end(self) -> float: ...
+    @property
+    def theta_end(self) -> float: ...
+    @property
+    def theta_start(self) -> float: ...
+
 class Intrinsics:
     """
     Pinhole intrinsics in pixels (OpenCV model).
@@ -725,7 +793,7 @@ class Renderer:
         light_ambient: typing.SupportsFloat | typing.SupportsIndex = 0.25,
         background: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"] = ...,
         check_camera_inside: bool = True,
-    ) -> dict: ...
+    ) -> RenderResult: ...
     def set_instances(
         self,
         mesh_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
@@ -1765,7 +1833,7 @@ def apply_depth_sensor(
     K: Intrinsics,
     params: DepthSensorParams,
     seed: typing.SupportsInt | typing.SupportsIndex,
-) -> dict: ...
+) -> DepthSensorResult: ...
 def build_info() -> list[tuple[str, str]]:
     """
     (library, version) pairs for mgn and every library the core was built against.
@@ -1917,7 +1985,7 @@ def material_texture_rgb(material: Material) -> typing.Any:
 def mesh_surface_flags(mesh: Mesh) -> int: ...
 def mgn_rig(
     seed: typing.SupportsInt | typing.SupportsIndex, target: typing.Any
-) -> tuple[numpy.ndarray, dict]: ...
+) -> tuple[numpy.ndarray, MgnRigParams]: ...
 def mgn_rig_from_params(
     R_start: typing.SupportsFloat | typing.SupportsIndex,
     R_end: typing.SupportsFloat | typing.SupportsIndex,
