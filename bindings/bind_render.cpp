@@ -17,21 +17,6 @@ namespace mgn::py_bind {
 
 namespace {
 
-/// Moves an (H*W*C) vector into an (H, W[, C]) numpy array without copying.
-template <typename T>
-py::object image(std::vector<T>&& v, int h, int w, int c = 1) {
-  if (v.empty()) return py::none();
-  py::array flat = to_numpy(std::move(v));
-  if (c == 1) return flat.attr("reshape")(h, w);
-  return flat.attr("reshape")(h, w, c);
-}
-
-Vec3d to_vec3(const py::handle& obj, const char* arg) {
-  const auto rows = to_rows<double, 3>(
-      py::module_::import("numpy").attr("reshape")(obj, py::make_tuple(1, 3)), arg);
-  return rows.row(0).transpose();
-}
-
 /// Renderer.render() result: images as numpy arrays (None when not requested) and the light.
 struct RenderArrays {
   py::object rgb, depth, instance_ids;
@@ -212,9 +197,9 @@ void bind_render(py::module_& m) {
               out = r.render(view, o);
             }
             const int h = out.height, w = out.width;
-            return RenderArrays{image(std::move(out.rgb), h, w, 3),
-                                image(std::move(out.depth), h, w),
-                                image(std::move(out.instance_ids), h, w), out.light};
+            return RenderArrays{to_image(std::move(out.rgb), h, w, 3),
+                                to_image(std::move(out.depth), h, w),
+                                to_image(std::move(out.instance_ids), h, w), out.light};
           },
           py::arg("K"), py::arg("X_WC"), py::arg("rgb") = true, py::arg("depth") = true,
           py::arg("instances") = true, py::arg("visible_instances") = std::vector<std::int32_t>{},
@@ -287,9 +272,9 @@ void bind_render(py::module_& m) {
           out = apply_depth_sensor(dv, iv, flags_by_id, K, params, seed);
         }
         const int h = out.height, w = out.width;
-        return DepthArrays{image(std::move(out.depth), h, w),
-                           image(std::move(out.depth_ideal), h, w),
-                           image(std::move(out.valid), h, w).attr("astype")("bool")};
+        return DepthArrays{to_image(std::move(out.depth), h, w),
+                           to_image(std::move(out.depth_ideal), h, w),
+                           to_image(std::move(out.valid), h, w).attr("astype")("bool")};
       },
       py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
       py::arg("params"), py::arg("seed"));

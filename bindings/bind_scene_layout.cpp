@@ -14,12 +14,6 @@ namespace mgn::py_bind {
 
 namespace {
 
-std::string shape_of(const py::array& a) {
-  std::string s = "(";
-  for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
-  return s + (a.ndim() == 1 ? ",)" : ")");
-}
-
 template <typename T>
 CArray<T> as_array(const py::handle& obj, const char* arg, const char* expected) {
   try {

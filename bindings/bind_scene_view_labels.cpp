@@ -12,8 +12,6 @@ namespace mgn::py_bind {
 
 namespace {
 
-py::array image(py::array flat, int h, int w) { return flat.attr("reshape")(py::make_tuple(h, w)); }
-
 /// ViewLabels as numpy arrays (moved, no copies; images reshaped to (H, W)).
 struct ViewLabelArrays {
   py::array visible, semantic, amodal, visible_pixels, amodal_pixels, occlusion, occlusion_map,
@@ -125,14 +123,14 @@ void bind_scene_view_labels(py::module_& m) {
             }
             const int n = L.num_objects;
             ViewLabelArrays out;
-            out.visible = image(to_numpy(std::move(L.visible)), h, w);
-            out.semantic = image(to_numpy(std::move(L.semantic)), h, w);
+            out.visible = as_image(to_numpy(std::move(L.visible)), h, w);
+            out.semantic = as_image(to_numpy(std::move(L.semantic)), h, w);
             out.amodal =
                 to_bool_numpy(std::move(L.amodal)).attr("reshape")(py::make_tuple(n, h, w));
             out.visible_pixels = to_numpy(std::move(L.visible_pixels));
             out.amodal_pixels = to_numpy(std::move(L.amodal_pixels));
             out.occlusion = to_numpy(std::move(L.occlusion));
-            out.occlusion_map = image(to_numpy(std::move(L.occlusion_map)), h, w);
+            out.occlusion_map = as_image(to_numpy(std::move(L.occlusion_map)), h, w);
             out.bbox_tight = to_numpy(std::move(L.bbox_tight));
             out.bbox_loose = to_numpy(std::move(L.bbox_loose));
             out.X_CO = poses_to_numpy(L.X_CO);
@@ -143,7 +141,7 @@ void bind_scene_view_labels(py::module_& m) {
             out.com_points = to_numpy(std::move(L.com_points));
             out.com_object = to_numpy(std::move(L.com_object));
             out.com_visible = to_bool_numpy(std::move(L.com_visible));
-            out.com_heatmap = image(to_numpy(std::move(L.com_heatmap)), h, w);
+            out.com_heatmap = as_image(to_numpy(std::move(L.com_heatmap)), h, w);
             return out;
           },
           py::arg("K"), py::arg("X_WC"), py::arg("instance_image"),
