@@ -299,6 +299,8 @@ def look_at_by_hand(eye, target, up):
 def test_user_intrinsics_and_poses_project_a_point_to_the_expected_pixel(tmp_path):
     from mgn.pipeline.scene_writer import scene_views
     from mgn.render.renderer import Instance, Renderer
+    from mgn.render.views import iter_views
+    from mgn.scene.cameras import CameraView
 
     eye, target, up = [0.1, -0.05, 0.6], [0.02, 0.01, 0.0], [0.0, 1.0, 0.0]
     X_hand = look_at_by_hand(eye, target, up)
@@ -322,17 +324,32 @@ def test_user_intrinsics_and_poses_project_a_point_to_the_expected_pixel(tmp_pat
     P_W = np.array([0.05, 0.03, 0.02])
     ball = trimesh.creation.icosphere(subdivisions=4, radius=0.008)
     mesh = mgn.Mesh(np.asarray(ball.vertices + P_W, np.float32), np.asarray(ball.faces, np.int32))
+    assert views[0][1].K.distortion == (0.1, -0.02, 0.0, 0.0, 0.0)
+    p_C = np.linalg.inv(X_hand) @ np.append(P_W, 1.0)
+    x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
+    # The rectified (pinhole) camera: u = fx x + cx; pixel (i, j) has its centre at
+    # (i + 0.5, j + 0.5).
     r = Renderer(320, 240)
     r.set_instances([Instance(r.add_mesh(mesh), np.eye(4), 7)])
-    out = r.render(views[0][1], rgb=False, depth=False, shadows=False)
+    out = r.render(CameraView(views[0][1].K.pinhole(), X_hand), rgb=False, depth=False,
+                   shadows=False)  # fmt: skip
     vs, us = np.nonzero(out.instance_ids == 7)
     assert len(us) > 10
-    p_C = np.linalg.inv(X_hand) @ np.append(P_W, 1.0)
-    u = 300.0 * p_C[0] / p_C[2] + 150.5
-    v = 310.0 * p_C[1] / p_C[2] + 125.0
-    # Pixel (i, j) has its centre at (i + 0.5, j + 0.5).
-    assert us.mean() + 0.5 == pytest.approx(u, abs=0.3)
-    assert vs.mean() + 0.5 == pytest.approx(v, abs=0.3)
+    assert us.mean() + 0.5 == pytest.approx(300.0 * x + 150.5, abs=0.3)
+    assert vs.mean() + 0.5 == pytest.approx(310.0 * y + 125.0, abs=0.3)
+    # The configured camera, radial distortion k1 = 0.1, k2 = -0.02 applied (docs/cameras.md),
+    # on a ball far enough from the axis to move by 3.4 px.
+    X_ball = np.eye(4)
+    X_ball[:3, 3] = np.array([0.26, 0.16, 0.02]) - P_W
+    img = next(iter(iter_views([(mesh, X_ball, 7)], None, [views[0][1]], sensor="ideal",
+                               randomize=False, shadows=False)))  # fmt: skip
+    vs, us = np.nonzero(img.instance_ids == 7)
+    p_C = np.linalg.inv(X_hand) @ np.array([0.26, 0.16, 0.02, 1.0])
+    x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
+    f = 1.0 + 0.1 * (x * x + y * y) - 0.02 * (x * x + y * y) ** 2
+    assert np.hypot(300.0 * x * (f - 1), 310.0 * y * (f - 1)) > 3.0
+    assert us.mean() + 0.5 == pytest.approx(300.0 * x * f + 150.5, abs=0.3)
+    assert vs.mean() + 0.5 == pytest.approx(310.0 * y * f + 125.0, abs=0.3)
 
 
 def test_sensor_presets_and_camera_errors(tmp_path):
