@@ -277,3 +277,65 @@ def test_a_distorted_dataset_records_its_lens(tmp_path):
     assert view.intrinsics.distortion == dist
     params = json.loads((tmp_path / "ds" / "scene0" / "0_camera_params.json").read_text())
     assert params["distortion_model"] == "opencv" and params["distortion"] == list(dist)
+
+
+def test_grasps_are_kept_where_the_lens_sees_their_contacts():
+    from mgn.pj.labels import PjLabels
+    from mgn.suction.labels import SuctionLabels
+    from mgn.view_labels.grasps import SceneGraspModel
+
+    # A 0.8 m plate, 20 mm thick, wider than the image; grasp points on its top face.
+    g = np.linspace(-0.38, 0.38, 39)
+    pts = np.array([[x, y, 0.01] for x in g for y in g], np.float32)
+    n = len(pts)
+    down = np.tile(np.float32([0, 0, 1]), (n, 1))  # object frame: approach into the face
+    su = SuctionLabels(points=pts, approach=-down, score=np.ones(n, np.float32),
+                       wrench=np.zeros(n, np.float32), reason=np.zeros(n, np.uint8),
+                       num_candidates=n, num_colliding=0)  # fmt: skip
+    closing = np.tile(np.float32([1, 0, 0]), (n, 1))
+    pj = PjLabels(approach=-down, closing=closing, p1=pts, width=np.full(n, 0.06, np.float32),
+                  quality_score=np.ones(n, np.float32), score_wrench=np.zeros(n, np.float32),
+                  quality_score_simulation=np.ones(n, np.float32), point_index=np.arange(n),
+                  point_score=np.ones(n, np.float32), num_points=n, num_colliding=0)  # fmt: skip
+    X = np.eye(4)
+    X[2, 3] = 0.01
+    floor = make_box((1.0, 1.0, 0.01))
+    X_floor = np.eye(4)
+    X_floor[2, 3] = -0.005
+    sgm = SceneGraspModel.from_meshes([make_box((0.8, 0.8, 0.02))], X[None], [1.0],
+                                      np.zeros((1, 3)), [pj], [su], floor, X_floor,
+                                      num_threads=1)  # fmt: skip
+    for dist in [(0.25, 0.05, 0.002, 0.001, 0.0), (-0.3, 0.12, 0.001, -0.002, -0.02)]:
+        K = Intrinsics(320, 240, 300.0, 300.0, 161.0, 118.0, dist)
+        view = _cam_down(K, 0.45)
+        got = sgm.view_grasps(view, np.array([True]))
+        X_CW = np.linalg.inv(view.X_WC)
+
+        def seen(p_W, K=K, X_CW=X_CW):
+            uv = _opencv_uv(K, p_W @ X_CW[:3, :3].T + X_CW[:3, 3])
+            return (uv[:, 0] >= 0) & (uv[:, 0] < K.width) & (uv[:, 1] >= 0) & (uv[:, 1] < K.height)
+
+        top = pts.astype(np.float64) + [0.0, 0.0, 0.01]
+        want_su = np.flatnonzero(seen(top))
+        want_pj = np.flatnonzero(seen(top) | seen(top + [0.06, 0.0, 0.0]))
+        assert 0 < len(want_su) < n and len(want_pj) > len(want_su)
+        su_idx = np.sort(np.concatenate([got.non_colliding.suctioncup.index,
+                                         got.colliding.suctioncup.index]))  # fmt: skip
+        pj_idx = np.sort(np.concatenate([got.non_colliding.paralleljaw.index,
+                                         got.colliding.paralleljaw.index]))  # fmt: skip
+        np.testing.assert_array_equal(su_idx, want_su)
+        np.testing.assert_array_equal(pj_idx, want_pj)
+        # The pinhole with the same K keeps a different set: the lens matters here.
+        pin = sgm.view_grasps(_cam_down(K.pinhole(), 0.45), np.array([True]))
+        pin_su = np.concatenate([pin.non_colliding.suctioncup.index,
+                                 pin.colliding.suctioncup.index])  # fmt: skip
+        assert len(pin_su) != len(want_su)
+
+
+def test_config_rejects_a_lens_that_folds_over():
+    from mgn.pipeline.config import ConfigError, load_config
+
+    with pytest.raises(ConfigError, match=r"camera\.intrinsics\.distortion.*cannot be inverted"):
+        load_config({"camera": {"intrinsics": {"width": 320, "height": 240, "fx": 300, "fy": 300,
+                                               "cx": 160, "cy": 120,
+                                               "distortion": [-2.0, 0, 0, 0, 0]}}})  # fmt: skip

@@ -65,18 +65,22 @@ class ViewImages:
 
 def _distorted(images: ViewImages, view: CameraView, lens: Lens) -> ViewImages:
     """The images of the distorted camera ``view`` resampled from the pinhole render ``images``
-    (docs/cameras.md): ids nearest, RGB bilinear, depth bilinear in 1/z inside one surface
-    (the ideal depth takes the nearest pixel at edges, the sensor depth is invalid there)."""
+    (docs/cameras.md): ids nearest, RGB bilinear, the ideal depth bilinear in 1/z inside one
+    surface (the nearest pixel at edges). The sensor depth is that same interpolated surface plus
+    the sensor's deviation at the nearest pinhole pixel (its noise keeps its statistics), invalid
+    where the sensor gave nothing and at depth discontinuities."""
     ids = images.instance_ids
-    depth = lens.warp_depth(images.depth, ids, at_edges="invalid")
-    valid = lens.warp_nearest(images.valid) & np.isfinite(depth)
-    depth = np.where(valid, depth, np.float32(np.nan)).astype(np.float32)
+    ideal = images.depth_ideal
+    deviation = np.where(images.valid, images.depth - ideal, np.float32(np.nan))
+    surface = lens.warp_depth(ideal, at_edges="invalid")
+    depth = (surface + lens.warp_nearest(deviation)).astype(np.float32)
+    valid = np.isfinite(depth)
     return ViewImages(
         images.index,
         view,
         lens.warp_rgb(images.rgb),
         depth,
-        lens.warp_depth(images.depth_ideal, ids, at_edges="nearest"),
+        lens.warp_depth(ideal, ids, at_edges="nearest"),
         valid,
         lens.warp_nearest(ids),
         images.light,

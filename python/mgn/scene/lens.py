@@ -201,9 +201,9 @@ class Lens:
         z along the optical axis does not change with the image-plane warp. A pixel whose four
         pinhole neighbours are valid (finite, > 0), show the same instance and differ by less
         than :data:`DEPTH_JUMP` (relative) is interpolated bilinearly in 1/z (exact on a plane).
-        Elsewhere (an edge): ``at_edges="nearest"`` takes the nearest pinhole pixel (the one the
-        instance ids come from), ``"invalid"`` gives NaN, as a depth sensor does at edges.
-        Invalid input pixels stay invalid (their value: 0 or NaN as given).
+        Elsewhere (an edge, or next to an invalid pixel): ``at_edges="nearest"`` takes the nearest
+        pinhole pixel (the one the instance ids come from; 0 or NaN there stays as given),
+        ``"invalid"`` gives NaN, as a depth sensor does at edges.
         """
         if at_edges not in ("nearest", "invalid"):
             raise InvalidArgumentError(
