@@ -339,3 +339,30 @@ def test_config_rejects_a_lens_that_folds_over():
         load_config({"camera": {"intrinsics": {"width": 320, "height": 240, "fx": 300, "fy": 300,
                                                "cx": 160, "cy": 120,
                                                "distortion": [-2.0, 0, 0, 0, 0]}}})  # fmt: skip
+
+
+def test_the_path_tracer_goes_through_the_same_lens():
+    from mgn.render.photo import RenderSettings
+
+    K = _K((-0.3, 0.12, 0.001, -0.002, -0.02), 320, 240)
+    K = Intrinsics(320, 240, 250.0, 250.0, 161.0, 118.0, K.distortion)
+    view = _cam_down(K, 0.5)
+    X = np.eye(4)
+    X[:3, 3] = (0.2, -0.14, 0.03)  # near the corner, where the lens moves it most
+    objs = [(make_box((0.06, 0.06, 0.06)), X, 1)]
+    settings = RenderSettings(engine="path", spp=4, denoise=False, spp_without_denoiser=4,
+                              max_bounces=1)  # fmt: skip
+    path = next(iter(iter_views(objs, None, [view], sensor="ideal", randomize=False,
+                                render=settings)))  # fmt: skip
+    raster = _render(objs, view)
+    assert path.engine["engine"] == "path" and path.rgb.shape == raster.rgb.shape
+    np.testing.assert_array_equal(path.instance_ids, raster.instance_ids)
+    # The box's colour edge in the traced picture follows the lens: the box is where its ids are.
+    grey = path.rgb.astype(np.float32).mean(axis=2)
+    inside = raster.instance_ids == 1
+    ring = cv2.dilate(inside.astype(np.uint8), np.ones((7, 7), np.uint8)).astype(bool) & ~inside
+    assert abs(float(grey[inside].mean()) - float(grey[ring].mean())) > 10.0
+    edge_in = inside & ~cv2.erode(inside.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    gy, gx = np.gradient(cv2.GaussianBlur(grey, (3, 3), 0))
+    mag = np.hypot(gx, gy)
+    assert mag[edge_in].mean() > 3.0 * mag[~(inside | ring)].mean()
