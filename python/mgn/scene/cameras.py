@@ -32,7 +32,8 @@ __all__ = [
 #: Real-sensor presets: (width, height, fx = fy px), principal point at the image centre.
 #: Derived from the manufacturers' published resolution and field of view (docs/cameras.md):
 #: Zivid 2+ M130: 2448 x 2048, 0.32 mm per pixel at 1300 mm -> f = 1300 / 0.32 px;
-#: Photoneo PhoXi 3D Scanner M: 2064 x 1544, 47.5 deg horizontal field -> f = 1032 / tan(23.75 deg);
+#: Photoneo PhoXi 3D Scanner M: 2064 x 1544 (Photoneo wiki and ROS driver), 47.5 deg horizontal
+#: projection angle -> f = 1032 / tan(23.75 deg) (36.4 deg vertically; published 36.0 +- 2 deg);
 #: Intel RealSense D435 depth: 1280 x 720, 87 deg horizontal field -> f = 640 / tan(43.5 deg).
 SENSOR_PRESETS: dict[str, tuple[int, int, float]] = {
     "zivid2_plus_m130": (2448, 2048, 1300.0 / 0.32),
