@@ -362,10 +362,10 @@ def test_sensor_presets_and_camera_errors(tmp_path):
         assert (K.width, K.height, K.cx, K.cy) == (w, h, w / 2, h / 2)
         if hfov is not None:
             assert np.degrees(2 * np.arctan(w / 2 / K.fx)) == pytest.approx(hfov)
-        if name == "photoneo_phoxi_m":  # published vertical projection angle 36.0 +- 2 deg
-            assert abs(np.degrees(2 * np.arctan(h / 2 / K.fy)) - 36.0) < 2.0
         else:  # 0.32 mm between pixels at 1.3 m
             assert 1.3 / K.fx == pytest.approx(0.32e-3)
+        if name == "photoneo_phoxi_m":  # published vertical projection angle 36.0 +- 2 deg
+            assert abs(np.degrees(2 * np.arctan(h / 2 / K.fy)) - 36.0) < 2.0
     bad = [
         ({"intrinsics": {"width": 640, "fx": 500}}, "camera.intrinsics"),
         ({"intrinsics": {"width": 640, "height": 480, "fx": 500, "fy": 500, "cx": 320,
