@@ -621,3 +621,55 @@ def test_report_opens_in_headless_chromium(tmp_path, capsys):
     img = np.asarray(Image.open(shot).convert("RGB"), np.int32)
     bar_blue = np.all(np.abs(img - [0x3B, 0x75, 0xAF]) <= 3, axis=-1)
     assert bar_blue.sum() > 2000  # the bars are drawn
+
+
+# ------------------------------------------------------------------------------ table top
+
+
+def test_table_top_without_walls(tmp_path):
+    from mgn.io.dataset import Dataset
+    from mgn.io.validate import validate_dataset
+    from mgn.objects import ToteSpec, get_object, make_tote
+    from mgn.pipeline.label_scene import LabelOptions, label_scene
+    from mgn.scene import DropOptions, drop_scene
+    from mgn.scene.cameras import CameraView, Intrinsics, look_at
+
+    from mgn.pipeline.config import load_config
+
+    table = load_config({"tote": {"inner_length": 0.30, "inner_width": 0.22, "walls": False}}).tote
+    assert table == ToteSpec(inner_length=0.30, inner_width=0.22, walls=False)
+    v, f = make_tote(table)
+    assert v[:, 2].max() == 0.0 and v[:, 2].min() == pytest.approx(-table.floor_thickness)
+    assert np.abs(v[:, :2]).max(axis=0) == pytest.approx([0.15, 0.11])
+    names = ["box_cube", "box_tea", "tennis_ball", "box_cube", "box_tea", "tennis_ball",
+             "box_cube", "box_tea"]  # fmt: skip
+    options = DropOptions(window_min=(-0.12, -0.09, 0.05), window_max=(0.12, 0.09, 0.35))
+    scene = drop_scene([get_object(n) for n in names], seed=4, tote=table, options=options)
+    assert len(scene) >= 3
+    # Dropped from up to 0.35 m onto a board without walls, some roll off its edges.
+    assert len(scene.removed) >= 1
+    assert {r.reason for r in scene.removed} == {"left_tote"}
+    assert scene.stats["max_penetration"] < 1e-3  # overhanging an edge is not a penetration
+    for i, inst in enumerate(scene.instances):
+        lowest = (np.asarray(scene.mesh(i).vertices, np.float64) @ inst.X_WO[:3, :3].T
+                  + inst.X_WO[:3, 3])[:, 2].min()  # fmt: skip
+        assert lowest > -0.003, (inst.name, lowest)  # on the board, not below it
+        assert inst.bin_relation == "no_rel" and set(inst.contacts) <= {"floor"}
+    # The JSON says it is a table; a tote's JSON is unchanged (no "walls" key).
+    again = type(scene).from_json(scene.to_json(tmp_path / "scene.json"))
+    assert again.tote == table
+    assert "walls" not in type(scene)(scene.instances, ToteSpec(), 0).to_dict()["tote"]
+    # Labels: written and valid, every bin relation no_rel.
+    K = Intrinsics(240, 200, 260.0, 260.0, 120.0, 100.0)
+    views = [(0, CameraView(K, look_at([0.0, 0.0, 0.6], [0, 0, 0], [0, 1, 0]))),
+             (1, CameraView(K, look_at([0.35, -0.2, 0.4], [0, 0, 0], [0, 0, 1])))]  # fmt: skip
+    label_scene(scene, tmp_path / "ds" / "scene0", views,
+                options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
+    assert validate_dataset(tmp_path / "ds") == []
+    order = json.loads((tmp_path / "ds" / "scene0" / "0_order.json").read_text())
+    assert {o["bin_rel"] for o in order.values()} == {"no_rel"}
+    view = Dataset(tmp_path / "ds").scenes()[0].views()[0]
+    seen = np.unique(view.instances)
+    assert len(seen[seen > 0]) >= 2
+    with pytest.raises(InvalidArgumentError, match="walls"):
+        ToteSpec(walls=False, mesh="bin.obj")

@@ -716,7 +716,7 @@ class Config(_Section):
 _SECTION_DOCS = {
     "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
     "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
-    "box inside its cavity",
+    "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width)",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
     "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
     "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "
