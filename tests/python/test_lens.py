@@ -366,3 +366,18 @@ def test_the_path_tracer_goes_through_the_same_lens():
     gy, gx = np.gradient(cv2.GaussianBlur(grey, (3, 3), 0))
     mag = np.hypot(gx, gy)
     assert mag[edge_in].mean() > 3.0 * mag[~(inside | ring)].mean()
+
+
+def test_pictures_and_pixel_predictions_go_through_the_lens():
+    from mgn.viz.overlay import project
+
+    K = _K((-0.3, 0.12, 0.001, -0.002, -0.02))
+    lens = lens_for(K)
+    rng = np.random.default_rng(5)
+    p_C = rng.uniform([-0.3, -0.2, 0.5], [0.3, 0.2, 0.7], (200, 3))
+    uv, front = project(p_C, K)  # what `mgn show` draws keypoints and grasps with
+    assert front.all()
+    np.testing.assert_allclose(uv, _opencv_uv(K, p_C), atol=1e-6)
+    # A pixel prediction (u, v) and its depth back-project onto the ray OpenCV gives.
+    xy = lens.normalized(uv[:, 0], uv[:, 1])
+    np.testing.assert_allclose(xy, p_C[:, :2] / p_C[:, 2:], atol=1e-9)

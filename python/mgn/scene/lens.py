@@ -241,6 +241,15 @@ class Lens:
         uv[~(z > 0)] = np.nan
         return uv
 
+    def normalized(self, u: npt.ArrayLike, v: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """(N, 2) normalised ray coordinates (x/z, y/z) of image points (u, v) of the distorted
+        image (continuous image coordinates, px): the inverse of :meth:`project`."""
+        k = self.K
+        ua = np.atleast_1d(np.asarray(u, np.float64)).reshape(-1)
+        va = np.atleast_1d(np.asarray(v, np.float64)).reshape(-1)
+        x, y, _ = _undistort((ua - k.cx) / k.fx, (va - k.cy) / k.fy, k.distortion)
+        return np.stack([x, y], axis=1)
+
     def in_image(self, points_C: npt.ArrayLike, near: float = 0.0) -> npt.NDArray[np.bool_]:
         """(N,) bool: camera-frame points (N, 3) in front of the camera (z > ``near``, m) whose
         distorted projection lies inside the image and whose ray is one of the image's rays
