@@ -434,7 +434,7 @@ TEST(Drop, TableTopKeepsOverhangsAndLosesWhatFallsOff) {
   std::vector<mgn::Pose> start(3, mgn::Pose::Identity());
   start[0].translation() = mgn::Vec3d(0.0, 0.0, 0.0255);
   start[1].translation() = mgn::Vec3d(0.135, 0.0, 0.0255);
-  start[2].translation() = mgn::Vec3d(0.17, 0.0, 0.0255);
+  start[2].translation() = mgn::Vec3d(0.17, 0.07, 0.0255);
   mgn::DropOptions o;
   o.window_min = {-0.1, -0.05, 0.1};
   o.window_max = {0.1, 0.05, 0.2};
