@@ -630,11 +630,10 @@ def test_table_top_without_walls(tmp_path):
     from mgn.io.dataset import Dataset
     from mgn.io.validate import validate_dataset
     from mgn.objects import ToteSpec, get_object, make_tote
+    from mgn.pipeline.config import load_config
     from mgn.pipeline.label_scene import LabelOptions, label_scene
     from mgn.scene import DropOptions, drop_scene
     from mgn.scene.cameras import CameraView, Intrinsics, look_at
-
-    from mgn.pipeline.config import load_config
 
     table = load_config({"tote": {"inner_length": 0.30, "inner_width": 0.22, "walls": False}}).tote
     assert table == ToteSpec(inner_length=0.30, inner_width=0.22, walls=False)
