@@ -3,9 +3,12 @@
 - :func:`compose_objects`: choose the objects (names, categories x 2-5 copies, or a count).
 - :func:`drop_scene`: drop them and let them settle -> :class:`Scene`.
 - :class:`Scene`: instances with settled poses ``X_WO`` (tote frame) and tote contacts;
-  ``to_json`` / ``from_json``; ``mesh(i)`` gives an instance's mesh back.
+  ``to_dict`` / ``from_dict`` (the file: :mod:`mgn.io.scene_file`); ``mesh(i)`` gives an
+  instance's mesh back.
 - :mod:`mgn.scene.cameras`: :class:`Intrinsics`, :class:`CameraView`, the 37-view MetaGraspNet rig
   (:func:`mgn_rig`), hemisphere rigs, :func:`look_at`.
+- :mod:`mgn.scene.lens`: the OpenCV lens-distortion model and the resampling of pinhole renders
+  (:func:`lens_for`, :class:`Lens`).
 
 Names are imported on first use, so ``import mgn`` stays light.
 """
@@ -37,6 +40,8 @@ _EXPORTS = {
     "mgn_rig": "cameras",
     "mgn_rig_from_params": "cameras",
     "mgn_views": "cameras",
+    "Lens": "lens",
+    "lens_for": "lens",
 }
 
 __all__ = [
@@ -44,6 +49,7 @@ __all__ = [
     "CONTACT_NAMES",
     "CameraView",
     "DropOptions",
+    "Lens",
     "Intrinsics",
     "MGN_COPIES",
     "MgnRigParams",
@@ -53,6 +59,7 @@ __all__ = [
     "compose_objects",
     "drop_scene",
     "hemisphere_rig",
+    "lens_for",
     "look_at",
     "mgn_rig",
     "mgn_rig_from_params",
@@ -79,6 +86,7 @@ if TYPE_CHECKING:
     )
     from mgn.scene.compose import MGN_COPIES, compose_objects
     from mgn.scene.drop import drop_scene, settle, settle_tracked
+    from mgn.scene.lens import Lens, lens_for
     from mgn.scene.scene import (
         BUILTIN,
         CONTACT_NAMES,
