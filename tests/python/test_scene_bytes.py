@@ -4,6 +4,7 @@ colored_pcl.py: np.load / h5py, the operations they apply) still work unchanged.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import h5py
@@ -11,7 +12,14 @@ import numpy as np
 import pytest
 
 from mgn.io.dataset import View
-from mgn.io.scene_format import ViewRecord, write_view
+from mgn.io.scene_format import (
+    FLOAT_DELTA_ENCODING,
+    ViewRecord,
+    decode_float_image,
+    encode_float_image,
+    write_view,
+)
+from mgn.render.sensor import apply_depth_sensor
 from mgn.scene.cameras import Intrinsics
 
 H, W, N = 48, 64, 3
@@ -168,3 +176,54 @@ def test_metagraspnet_scripts_read_the_files_unchanged(tmp_path: Path):
     # visualize_layout.py reads the order matrix with np.loadtxt.
     order_mat = np.loadtxt(str(tmp_path / "3_order.csv"), delimiter=",")
     assert order_mat.shape == (N, N)
+
+
+def test_sensor_depth_on_its_grid_is_stored_on_the_grid_and_reads_back_in_metres(tmp_path: Path):
+    """The sensor presets report z on a 1/256 cm grid: the npz holds exact multiples of it (float32
+    cm, MetaGraspNet's dtype) and the reader's metres equal the sensor's float32 bit for bit."""
+    rng = np.random.default_rng(4)
+    K = Intrinsics(W, H, 50.0, 50.0, W / 2, H / 2)
+    ideal = (0.5 + 0.7 * rng.random((H, W))).astype(np.float32)
+    ids = np.ones((H, W), np.int32)
+    for preset, step_cm in (("structured-light", 2.0**-8), ("tof", 2.0**-6)):
+        sensed = apply_depth_sensor(ideal, ids, K, preset, seed=7)
+        assert sensed.valid.mean() > 0.5
+        rec = replace(_record(rng), depth=sensed.depth, valid_depth=sensed.valid)
+        write_view(tmp_path, rec)
+        with np.load(tmp_path / "3.npz") as z:
+            stored = z["depth"]
+        assert stored.dtype == np.float32
+        ok = np.isfinite(stored)
+        assert np.array_equal(ok, sensed.valid)
+        k = stored[ok].astype(np.float64) / step_cm
+        assert np.array_equal(k, np.round(k))  # exact multiples of the preset's grid
+        # Within half a step of the sensor's metres, and the metres come back bit for bit.
+        assert np.abs(stored[ok] - sensed.depth[ok].astype(np.float64) * 100).max() < 1e-4
+        assert np.array_equal(_bits(View(tmp_path, 3).depth), _bits(sensed.depth))
+
+
+def test_float_images_round_trip_every_bit_pattern():
+    """The delta coding of mgn's float images restores any float32 bit pattern (NaN payloads,
+    infinities, -0.0, subnormals, jumps that overflow int32)."""
+    rng = np.random.default_rng(5)
+    bits = rng.integers(-(2**31), 2**31, size=(7, 33), dtype=np.int64).astype(np.int32)
+    a = bits.view(np.float32).copy()
+    a[0, :6] = [np.nan, np.inf, -np.inf, -0.0, 1e-45, np.finfo(np.float32).max]
+    coded = encode_float_image(a)
+    assert coded.dtype == np.int32
+    assert np.array_equal(_bits(decode_float_image(coded)), _bits(a))
+    # A smooth image gives small differences (what makes deflate effective).
+    ramp = np.linspace(70.0, 71.0, 64, dtype=np.float32)[None, :].repeat(3, 0)
+    assert np.abs(encode_float_image(ramp)[:, 1:]).max() < 2**16
+
+
+def test_mgn_images_are_stored_delta_coded_and_read_back(tmp_path: Path):
+    rec = _record(np.random.default_rng(6))
+    write_view(tmp_path, rec)
+    with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
+        for name in ("depth_ideal", "com_heatmap"):
+            assert h5[name].dtype == np.int32
+            assert h5[name].attrs["mgn_encoding"] == FLOAT_DELTA_ENCODING
+    view = View(tmp_path, 3)
+    assert np.array_equal(_bits(view.mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal)))
+    assert np.array_equal(_bits(view.com_heatmap), _bits(rec.extra_npz["com_heatmap"]))

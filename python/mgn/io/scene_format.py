@@ -49,12 +49,17 @@ from mgn.view_labels.grasps import COLLISION_OBSTACLES, COLLISION_PARTS
 __all__ = [
     "CM_RULES",
     "COLLISION_OBSTACLES",
+    "DEPTH_GRID_CM",
+    "FLOAT_DELTA_ENCODING",
     "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
     "HDF5_INT_LEAVES",
     "MGN_HDF5_CM",
     "M_TO_CM",
     "ViewRecord",
+    "decode_float_image",
+    "depth_to_cm",
+    "encode_float_image",
     "hdf5_bytes",
     "from_cm",
     "id_image_dtype",
@@ -229,16 +234,61 @@ def id_image_dtype(values: npt.ArrayLike, *, instances: bool) -> np.dtype:
     return np.dtype(np.uint16) if top <= np.iinfo(np.uint16).max else np.dtype(np.float32)
 
 
+#: Grid (cm) on which the writer stores the sensor depth exactly: the sensor presets report z on
+#: multiples of it (``DepthSensorParams.depth_step``: 1/256 cm structured light, 1/64 cm ToF), and
+#: float32 values on a power-of-two grid end in zero bits, which deflate compresses (docs/format.md).
+DEPTH_GRID_CM = 2.0**-8
+
+#: Value of the ``mgn_encoding`` attribute of a ``{v}_mgn.hdf5`` float32 image stored as the int32
+#: differences of its bit patterns along each row (lossless; smooth images shrink ~30 %).
+FLOAT_DELTA_ENCODING = "float32-bits-delta-rows"
+
+
+def depth_to_cm(depth_m: npt.ArrayLike) -> npt.NDArray[np.float32]:
+    """float32 centimetres of a depth image in metres, such that ``cm / float32(100)`` (what
+    :class:`mgn.io.dataset.View` does) gives back the metres bit for bit wherever that is possible
+    on the :data:`DEPTH_GRID_CM` grid (the sensor presets' output); other pixels (ideal sensor,
+    user grids) hold ``float32(m * 100)``. NaN stays NaN."""
+    m = np.asarray(depth_m, np.float32)
+    plain = (m.astype(np.float64) * M_TO_CM).astype(np.float32)
+    with np.errstate(invalid="ignore"):
+        snapped = (np.round(plain / DEPTH_GRID_CM) * DEPTH_GRID_CM).astype(np.float32)
+        exact = snapped / np.float32(M_TO_CM) == m
+    return np.where(exact, snapped, plain)
+
+
+def encode_float_image(image: npt.ArrayLike) -> npt.NDArray[np.int32]:
+    """(H, W) float32 -> int32 differences of the bit patterns along each row (first column
+    kept); wraps modulo 2^32, so :func:`decode_float_image` restores every bit (NaN included)."""
+    bits = np.ascontiguousarray(image, np.float32).view(np.int32)
+    out = bits.copy()
+    with np.errstate(over="ignore"):
+        out[:, 1:] = bits[:, 1:] - bits[:, :-1]
+    return out
+
+
+def decode_float_image(coded: npt.ArrayLike) -> npt.NDArray[np.float32]:
+    """The inverse of :func:`encode_float_image`."""
+    a = np.asarray(coded, np.int32)
+    return np.cumsum(a, axis=1, dtype=np.int32).view(np.float32)
+
+
 def mgn_hdf5_bytes(images: Mapping[str, np.ndarray]) -> bytes:
     """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate level 1,
-    without timestamps."""
+    without timestamps; float32 images stored with :func:`encode_float_image` (attribute
+    ``mgn_encoding`` = :data:`FLOAT_DELTA_ENCODING`)."""
     buf = io.BytesIO()
     with h5py.File(buf, "w") as h5:
         for name, value in images.items():
             data = np.ascontiguousarray(value)
+            coded = data.dtype == np.float32 and data.ndim == 2 and data.size > 0
+            if coded:
+                data = encode_float_image(data)
             chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:]) if data.size else None
             kw: dict[str, Any] = {"chunks": chunks, **_COMPRESSION} if chunks else {}
-            h5_create_dataset(h5, name, data, **kw)
+            ds = h5_create_dataset(h5, name, data, **kw)
+            if coded:
+                ds.attrs["mgn_encoding"] = FLOAT_DELTA_ENCODING
     return buf.getvalue()
 
 
@@ -290,7 +340,7 @@ def write_view(folder: str | os.PathLike[str], rec: ViewRecord) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     v = rec.index
     f4 = np.float32
-    depth_cm = (np.asarray(rec.depth, np.float64) * M_TO_CM).astype(f4)
+    depth_cm = depth_to_cm(rec.depth)
     npz: dict[str, Any] = {
         "depth": depth_cm,
         "instances_objects": np.asarray(rec.instances).astype(id_image_dtype(0, instances=True)),
