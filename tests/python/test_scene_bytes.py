@@ -4,22 +4,27 @@ colored_pcl.py: np.load / h5py, the operations they apply) still work unchanged.
 
 from __future__ import annotations
 
+import io
 from dataclasses import replace
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
+from PIL import Image
 
 from mgn.io.dataset import View
 from mgn.io.scene_format import (
+    ARCHIVAL_DEPTH_STEP_CM,
     FLOAT_DELTA_ENCODING,
     ViewRecord,
     decode_float_image,
+    depth_picture_png,
     encode_float_image,
     write_view,
 )
 from mgn.render.sensor import apply_depth_sensor
+from mgn.render.views import depth_picture
 from mgn.scene.cameras import Intrinsics
 
 H, W, N = 48, 64, 3
@@ -227,3 +232,51 @@ def test_mgn_images_are_stored_delta_coded_and_read_back(tmp_path: Path):
     view = View(tmp_path, 3)
     assert np.array_equal(_bits(view.mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal)))
     assert np.array_equal(_bits(view.com_heatmap), _bits(rec.extra_npz["com_heatmap"]))
+
+
+def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: Path):
+    rec = _record(np.random.default_rng(7))
+    # 100 depth levels and invalid pixels: 101 colours.
+    depth = np.repeat(np.linspace(0.6, 0.9, 100, dtype=np.float32), H * W // 100 + 1)[: H * W]
+    depth = depth.reshape(H, W)
+    depth[:3] = np.nan
+    rec = replace(rec, depth=depth, valid_depth=np.isfinite(depth))
+    write_view(tmp_path, rec)
+    with Image.open(tmp_path / "3_depth.png") as im:
+        assert im.mode == "P"
+        rgb = np.asarray(im.convert("RGB"))
+    assert np.array_equal(rgb, depth_picture(rec.depth))
+    # All 256 levels and invalid pixels: 257 colours, more than a palette holds -> RGB PNG.
+    inv = np.linspace(1.0, 2.0, 256)
+    depth = np.concatenate([1.0 / inv, [np.nan]]).astype(np.float32).reshape(1, -1)
+    with Image.open(io.BytesIO(depth_picture_png(depth))) as im:
+        assert im.mode == "RGB"
+        assert np.array_equal(np.asarray(im), depth_picture(depth))
+
+
+def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtypes(tmp_path: Path):
+    rng = np.random.default_rng(8)
+    rec = _record(rng)
+    exact, arch = tmp_path / "exact", tmp_path / "archival"
+    write_view(exact, rec)
+    write_view(arch, rec, archival=True)
+    with np.load(arch / "3.npz") as z, np.load(exact / "3.npz") as e:
+        assert {k: z[k].dtype for k in z.files} == {k: e[k].dtype for k in e.files}
+        d = z["depth"]
+        assert np.array_equal(e["occlusion_objects"], z["occlusion_objects"])
+    ok = np.isfinite(d)
+    assert np.array_equal(ok, np.isfinite(rec.depth))
+    step = ARCHIVAL_DEPTH_STEP_CM
+    k = d[ok].astype(np.float64) / step
+    assert np.array_equal(k, np.round(k))
+    # At most half a step (0.078 mm) from the model's depth, for the sensor and the ideal depth.
+    assert np.abs(d[ok] - _cm(rec.depth)[ok]).max() <= step / 2 + 1e-5
+    view = View(arch, 3)
+    ideal = view.mgn_image("depth_ideal")
+    assert np.abs(ideal - _cm(rec.depth_ideal)).max() <= step / 2 + 1e-5
+    com = view.com_heatmap
+    assert com.dtype == np.float32
+    assert np.abs(com - rec.extra_npz["com_heatmap"]).max() <= 0.5 / 65535 + 1e-7
+    assert np.array_equal(view.valid_depth, rec.valid_depth)
+    size = {p.name: p.stat().st_size for p in arch.iterdir()}
+    assert size["3_mgn.hdf5"] < (exact / "3_mgn.hdf5").stat().st_size

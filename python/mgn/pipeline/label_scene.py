@@ -63,6 +63,7 @@ class LabelOptions:
         num_threads: C++ threads (0 = all cores); results do not depend on it.
         render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
             None = the raster engine). Labels do not depend on it.
+        archival: write the compact archival files (docs/format.md; lossy depth).
     """
 
     sensor: SensorName = "structured-light"
@@ -75,6 +76,7 @@ class LabelOptions:
     max_grasps_per_object: int = 2000
     num_threads: int = 0
     render: RenderSettings | None = None
+    archival: bool = False
 
 
 @dataclass
@@ -274,7 +276,7 @@ def label_scene(
             # Files are encoded (zlib, PNG; both release the GIL) by writer threads while the next
             # view renders; at most two views wait, so memory stays bounded.
             record = view_record(v, view, images, labels, layout, grasps)
-            pending.append(pool.submit(write_view, out, record))
+            pending.append(pool.submit(write_view, out, record, archival=options.archival))
             while len(pending) > 2:
                 pending.popleft().result()
             gt[v] = scene_gt_entries(labels.X_CO, categories, seen)

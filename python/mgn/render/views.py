@@ -23,7 +23,7 @@ from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
 from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 
-__all__ = ["ViewImages", "depth_picture", "iter_views"]
+__all__ = ["ViewImages", "depth_picture", "depth_picture_indexed", "iter_views"]
 
 #: Side of the square floor slab drawn under the tote, m.
 FLOOR_SIZE = 3.0
@@ -77,16 +77,31 @@ def depth_picture(depth: npt.ArrayLike) -> npt.NDArray[np.uint8]:
     """(H, W, 3) uint8 picture of a depth image (m; NaN or <= 0 invalid): inverse depth
     normalised over the valid pixels, colour-mapped (256 levels) from dark blue (far) to red
     (near); invalid pixels black."""
+    index, palette = depth_picture_indexed(depth)
+    return palette[index]
+
+
+def depth_picture_indexed(
+    depth: npt.ArrayLike,
+) -> tuple[npt.NDArray[np.uint8] | npt.NDArray[np.uint16], npt.NDArray[np.uint8]]:
+    """The picture of :func:`depth_picture` as (H, W) indices into a (K, 3) uint8 palette of the
+    colours it uses (K <= 257): ``palette[index]`` is the picture. The index is uint8 when K <= 256
+    (a palette PNG: a third of the bytes of the RGB picture), else uint16."""
     d = np.asarray(depth, np.float32)
-    valid = np.isfinite(d) & (d > 0)
-    out = np.zeros((*d.shape, 3), np.uint8)
-    if not valid.any():
-        return out
-    inv = 1.0 / d[valid]
-    lo, hi = float(inv.min()), float(inv.max())
-    level = np.round((inv - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.uint8)
-    out[valid] = _DEPTH_LUT[level]
-    return out
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(d) & (d > 0)
+    key = np.zeros(d.shape, np.int32)  # 0 invalid (black), 1 + level otherwise
+    if valid.any():
+        inv = 1.0 / d[valid]
+        lo, hi = float(inv.min()), float(inv.max())
+        level = np.round((inv - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.int32)
+        key[valid] = 1 + level
+    colours = np.concatenate([np.zeros((1, 3), np.uint8), _DEPTH_LUT])
+    used = np.flatnonzero(np.bincount(key.ravel(), minlength=257))
+    remap = np.zeros(257, np.int32)
+    remap[used] = np.arange(len(used))
+    dtype = np.uint8 if len(used) <= 256 else np.uint16
+    return remap[key].astype(dtype), colours[used]
 
 
 def _checked_scene(
