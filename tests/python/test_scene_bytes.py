@@ -16,6 +16,7 @@ from PIL import Image
 from mgn.io.dataset import View
 from mgn.io.scene_format import (
     ARCHIVAL_DEPTH_STEP_CM,
+    ARCHIVAL_ROTATION_STEP,
     FLOAT_DELTA_ENCODING,
     ViewRecord,
     decode_float_image,
@@ -24,7 +25,7 @@ from mgn.io.scene_format import (
     write_view,
 )
 from mgn.render.sensor import apply_depth_sensor
-from mgn.render.views import depth_picture
+from mgn.render.views import depth_picture, depth_picture_indexed
 from mgn.scene.cameras import Intrinsics
 
 H, W, N = 48, 64, 3
@@ -246,12 +247,16 @@ def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: 
         assert im.mode == "P"
         rgb = np.asarray(im.convert("RGB"))
     assert np.array_equal(rgb, depth_picture(rec.depth))
-    # All 256 levels and invalid pixels: 257 colours, more than a palette holds -> RGB PNG.
-    inv = np.linspace(1.0, 2.0, 256)
-    depth = np.concatenate([1.0 / inv, [np.nan]]).astype(np.float32).reshape(1, -1)
+    # Every level and invalid pixels still fit one palette; the picture spans the colour map.
+    depth = np.concatenate([1.0 / np.linspace(1.0, 2.0, 1000), [np.nan]]).astype(np.float32)
+    depth = depth.reshape(1, -1)
     with Image.open(io.BytesIO(depth_picture_png(depth))) as im:
-        assert im.mode == "RGB"
-        assert np.array_equal(np.asarray(im), depth_picture(depth))
+        assert im.mode == "P"
+        rgb = np.asarray(im.convert("RGB"))
+    assert np.array_equal(rgb, depth_picture(depth))
+    index, palette = depth_picture_indexed(depth)
+    assert len(np.unique(index)) == len(palette) == 256  # black and all 255 levels
+    assert (rgb[0, -1] == 0).all()
 
 
 def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtypes(tmp_path: Path):
@@ -280,3 +285,17 @@ def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtype
     assert np.array_equal(view.valid_depth, rec.valid_depth)
     size = {p.name: p.stat().st_size for p in arch.iterdir()}
     assert size["3_mgn.hdf5"] < (exact / "3_mgn.hdf5").stat().st_size
+    # Grasp poses: float32, rotations within 2^-17 and translations within 1/2048 cm of the
+    # exact file; object poses and scores exact.
+    with h5py.File(arch / "3_scene.hdf5", "r") as a, h5py.File(exact / "3_scene.hdf5", "r") as e:
+        g = "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera"
+        assert a[g].dtype == np.float32 and a[g].shape == e[g].shape
+        pa, pe = a[g][()], e[g][()]
+        assert np.abs(pa[:, :3, :3] - pe[:, :3, :3]).max() <= 2.0**-17 + 1e-7
+        assert np.abs(pa[:, :3, 3] - pe[:, :3, 3]).max() <= 2.0**-11 + 1e-5
+        assert np.array_equal(pa[:, 3], pe[:, 3])
+        k = pa[:, :3, :3].astype(np.float64) / ARCHIVAL_ROTATION_STEP
+        assert np.array_equal(k, np.round(k))
+        for key in ("objects/poses_relative_to_camera", "non_colliding_grasps/paralleljaw/"
+                    "score_analytical"):  # fmt: skip
+            assert np.array_equal(a[key][()], e[key][()])

@@ -51,6 +51,8 @@ from mgn.view_labels.grasps import COLLISION_OBSTACLES, COLLISION_PARTS
 
 __all__ = [
     "ARCHIVAL_DEPTH_STEP_CM",
+    "ARCHIVAL_POSE_STEP_CM",
+    "ARCHIVAL_ROTATION_STEP",
     "CM_RULES",
     "COLLISION_OBSTACLES",
     "DEPTH_GRID_CM",
@@ -288,6 +290,23 @@ def decode_float_image(coded: npt.ArrayLike) -> npt.NDArray[np.float32]:
     return np.cumsum(a, axis=1, dtype=np.int32).view(np.float32)
 
 
+#: Archival mode: grid of the rotation entries and of the translations (cm) of the grasp poses
+#: (2^-16: at most 0.0004 degrees; 1/1024 cm = 0.01 mm).
+ARCHIVAL_ROTATION_STEP = 2.0**-16
+ARCHIVAL_POSE_STEP_CM = 2.0**-10
+_GRASP_GROUPS = ("colliding_grasps/", "non_colliding_grasps/")
+
+
+def _archival_poses(poses_cm: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+    """(…, 4, 4) float32 poses (cm) with rotation entries and translations on the archival
+    grids (the last row stays [0, 0, 0, 1])."""
+    out = np.array(poses_cm, np.float32)
+    if out.size:
+        out[..., :3, :3] = _snap(out[..., :3, :3], ARCHIVAL_ROTATION_STEP)
+        out[..., :3, 3] = _snap(out[..., :3, 3], ARCHIVAL_POSE_STEP_CM)
+    return out
+
+
 def _snap(a: npt.NDArray[np.float32], step: float) -> npt.NDArray[np.float32]:
     """float32 ``a`` rounded to multiples of ``step`` (a power of two; NaN stays NaN)."""
     return (np.round(a / np.float32(step)) * np.float32(step)).astype(np.float32)
@@ -352,11 +371,9 @@ def png_bytes(image: npt.ArrayLike) -> bytes:
 
 def depth_picture_png(depth: npt.ArrayLike) -> bytes:
     """``{v}_depth.png`` of a depth image (m): :func:`mgn.render.views.depth_picture` as a palette
-    PNG (every reader converts it to the same RGB; ~half the bytes, ~6x faster to write than
-    the RGB PNG); RGB if it uses more than 256 colours."""
+    PNG (every reader converts it to the same RGB; ~half the bytes and faster to write than the
+    RGB PNG)."""
     index, palette = depth_picture_indexed(depth)
-    if index.dtype != np.uint8:
-        return png_bytes(palette[index])
     im = Image.frombytes(
         "P", (index.shape[1], index.shape[0]), np.ascontiguousarray(index).tobytes()
     )
@@ -377,8 +394,9 @@ def write_view(
 
     Units: the npz depth, ``depth_ideal`` and every HDF5 length are converted to centimetres.
     Dtypes and layout: see the module doc. ``archival``: the compact archival mode (lossy:
-    depths rounded to :data:`ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 16 bits; same keys and
-    dtypes in the files MetaGraspNet reads).
+    depths rounded to :data:`ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 16 bits, grasp poses
+    to :data:`ARCHIVAL_ROTATION_STEP` / :data:`ARCHIVAL_POSE_STEP_CM`; same keys and dtypes in the
+    files MetaGraspNet reads).
     """
 
     out = Path(folder)
@@ -419,6 +437,10 @@ def write_view(
         else to_cm(path, value).astype(f4)
         for path, value in rec.scene_hdf5.items()
     }
+    if archival:
+        for path, value in h5.items():
+            if path.startswith(_GRASP_GROUPS) and path.endswith("poses_relative_to_camera"):
+                h5[path] = _archival_poses(value)
     files: dict[str, bytes] = {
         f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
         f"{v}.npz": npz_bytes(**npz),

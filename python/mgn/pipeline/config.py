@@ -741,6 +741,8 @@ _SECTION_DOCS = {
     "selection": "difficulty-balanced test set: quota {level: views} (null = off), batches",
     "render": "RGB images: engine raster (fast preview) | path (path tracer), spp, denoise, "
     "film; randomize: per-view lights / environment / tote+floor materials / exposure",
+    "io": "files: archival true = compact archival mode (depth on a 1/64 cm grid, heat map in "
+    "16 bits; docs/format.md), false = every array exact",
 }
 
 

@@ -276,7 +276,7 @@ def label_scene(
             # Files are encoded (zlib, PNG; both release the GIL) by writer threads while the next
             # view renders; at most two views wait, so memory stays bounded.
             record = view_record(v, view, images, labels, layout, grasps)
-            pending.append(pool.submit(write_view, out, record, archival=options.archival))
+            pending.append(pool.submit(write_view, out, record, archival=opt.archival))
             while len(pending) > 2:
                 pending.popleft().result()
             gt[v] = scene_gt_entries(labels.X_CO, categories, seen)
