@@ -297,7 +297,7 @@ ARCHIVAL_POSE_STEP_CM = 2.0**-10
 _GRASP_GROUPS = ("colliding_grasps/", "non_colliding_grasps/")
 
 
-def _archival_poses(poses_cm: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+def _archival_poses(poses_cm: npt.ArrayLike) -> npt.NDArray[np.float32]:
     """(…, 4, 4) float32 poses (cm) with rotation entries and translations on the archival
     grids (the last row stays [0, 0, 0, 1])."""
     out = np.array(poses_cm, np.float32)

@@ -40,7 +40,8 @@ Sections:
   or a list of object names / category ids).
 - ``io``: how the files are written: ``archival`` (false: every array exactly as the models make
   it; true: the compact archival mode of docs/format.md — depth on a 1/64 cm grid (at most
-  0.078 mm off), ``com_heatmap`` in 16 bits; MetaGraspNet's scripts still read every file).
+  0.078 mm off), ``com_heatmap`` in 16 bits, grasp poses rounded (< 0.001°, 0.005 mm);
+  MetaGraspNet's scripts still read every file).
 - ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
@@ -635,8 +636,9 @@ class IoConfig(_Section):
 
     Attributes:
         archival: the compact archival mode (lossy: sensor and ideal depth rounded to
-            :data:`mgn.io.scene_format.ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 1/65535);
-            false keeps every array bit for bit.
+            :data:`mgn.io.scene_format.ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 1/65535,
+            grasp poses to 2^-16 per rotation entry and 1/1024 cm); false keeps every array bit
+            for bit.
     """
 
     archival: bool = False
@@ -742,7 +744,7 @@ _SECTION_DOCS = {
     "render": "RGB images: engine raster (fast preview) | path (path tracer), spp, denoise, "
     "film; randomize: per-view lights / environment / tote+floor materials / exposure",
     "io": "files: archival true = compact archival mode (depth on a 1/64 cm grid, heat map in "
-    "16 bits; docs/format.md), false = every array exact",
+    "16 bits, grasp poses rounded; docs/format.md), false = every array exact",
 }
 
 
