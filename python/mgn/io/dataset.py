@@ -62,11 +62,13 @@ def _read_json(path: Path) -> Any:
 
 
 def intrinsics_from_params(p: dict[str, Any]) -> Intrinsics:
-    """Intrinsics from a ``{v}_camera_params.json`` (mgn's px keys, or MetaGraspNet's focal
-    length and apertures in mm with the principal point at the image centre)."""
+    """Intrinsics from a ``{v}_camera_params.json`` (mgn's px keys with the OpenCV
+    ``distortion`` when the images are distorted, or MetaGraspNet's focal length and apertures
+    in mm with the principal point at the image centre)."""
     if all(k in p for k in ("fx", "fy", "cx", "cy", "width", "height")):
         return Intrinsics(int(p["width"]), int(p["height"]), float(p["fx"]), float(p["fy"]),
-                          float(p["cx"]), float(p["cy"]))  # fmt: skip
+                          float(p["cx"]), float(p["cy"]),
+                          tuple(float(c) for c in p.get("distortion", ())))  # fmt: skip
     try:
         w = int(p["resolution"]["width"])
         h = int(p["resolution"]["height"])

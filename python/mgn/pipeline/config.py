@@ -77,7 +77,8 @@ from mgn.errors import InvalidArgumentError, MgnError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec, make_tote
 from mgn.render.photo import RandomizeSettings, RenderSettings
-from mgn.scene.cameras import look_at
+from mgn.scene.cameras import Intrinsics, look_at
+from mgn.scene.lens import lens_for
 from mgn.scene.scene import DropOptions
 
 __all__ = [
@@ -350,11 +351,11 @@ class IntrinsicsConfig(_Section):
     """User camera intrinsics (pixels; OpenCV pinhole, principal point in continuous image
     coordinates, the image centre is (width/2, height/2)).
 
-    ``distortion`` (OpenCV order k1, k2, p1, p2, k3, ...) describes the real lens; it is recorded
-    with the config in ``dataset.json`` but the images and labels are rendered with the ideal
-    pinhole: they are the *rectified* images (what Zivid, Photoneo and RealSense deliver with
-    their point clouds). To train on distorted images, distort RGB, depth and masks with
-    ``cv2.initUndistortRectifyMap`` (inverse map) using these coefficients.
+    ``distortion`` (OpenCV order k1, k2, p1, p2, k3, ...) describes the real lens: images, depth
+    and every pixel label are those of that lens (rendered as a covering pinhole and resampled,
+    :mod:`mgn.scene.lens`), and each view's ``camera_params.json`` records the coefficients.
+    Leave it out (or all zeros) for rectified images, which is what Zivid, Photoneo and
+    RealSense deliver with their point clouds.
     """
 
     width: int = 0
@@ -385,7 +386,14 @@ class IntrinsicsConfig(_Section):
                 f"({', '.join(INTRINSICS_PRESETS)}) or width, height, fx, fy, cx, cy (px) and "
                 "optionally distortion"
             )
-        return super().from_dict(d, key)
+        out = super().from_dict(d, key)
+        if out.distortion:
+            try:  # the lens must be invertible over the image (built once, cached)
+                lens_for(Intrinsics(out.width, out.height, out.fx, out.fy, out.cx, out.cy,
+                                    out.distortion))  # fmt: skip
+            except InvalidArgumentError as e:
+                raise ConfigError(f"config key '{key}.distortion': {e}") from e
+        return out
 
 
 def _intrinsics(value: Any, key: str) -> str | IntrinsicsConfig:
@@ -731,7 +739,7 @@ class Config(_Section):
 _SECTION_DOCS = {
     "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
     "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
-    "box inside its cavity",
+    "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width)",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
     "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
     "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "

@@ -39,7 +39,11 @@ from mgn.scene.scene import Scene
 from mgn.suction.labels import SuctionLabels
 from mgn.view_labels.grasps import SceneGraspModel
 from mgn.view_labels.layout import compute_layout
-from mgn.view_labels.objects import SceneRayModel, view_object_labels
+from mgn.view_labels.objects import (
+    SceneRayModel,
+    distort_view_object_labels,
+    view_object_labels,
+)
 
 __all__ = ["LabelOptions", "LabelTimings", "label_scene", "strided_subset", "view_record"]
 
@@ -252,14 +256,19 @@ def label_scene(
             timings.add("render", t1 - t0)
             timings.engine = dict(images.engine)
             v, view = views[k]
+            # A camera with lens distortion: label its pinhole render, then resample the labels
+            # through the lens (the images are resampled the same way, docs/cameras.md).
+            src = images.pinhole if images.pinhole is not None else images
             labels = view_object_labels(
                 rays,
-                view,
-                images.instance_ids,
-                depth=images.depth_ideal,
+                src.view,
+                src.instance_ids,
+                depth=src.depth_ideal,
                 keypoints=opt.keypoints,
                 num_threads=opt.num_threads,
             )
+            if images.lens is not None:
+                labels = distort_view_object_labels(labels, images.lens)
             t2 = time.perf_counter()
             timings.add("object labels", t2 - t1)
             layout = None

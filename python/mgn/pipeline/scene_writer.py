@@ -27,12 +27,13 @@ __all__ = ["scene_intrinsics", "scene_views", "write_scene"]
 
 
 def scene_intrinsics(camera: CameraConfig) -> Intrinsics:
-    """The intrinsics of ``camera`` (a preset or the user's) at its resolution scale."""
+    """The intrinsics of ``camera`` (a preset or the user's, with its lens distortion) at its
+    resolution scale."""
     k = camera.intrinsics
     if isinstance(k, str):
         preset = Intrinsics.preset(k)
     else:
-        preset = Intrinsics(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
+        preset = Intrinsics(k.width, k.height, k.fx, k.fy, k.cx, k.cy, k.distortion)
     return preset if camera.resolution_scale == 1.0 else preset.scaled(camera.resolution_scale)
 
 
