@@ -8,6 +8,7 @@ import io
 from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import h5py
 import numpy as np
 import pytest
@@ -247,6 +248,10 @@ def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: 
         assert im.mode == "P"
         rgb = np.asarray(im.convert("RGB"))
     assert np.array_equal(rgb, depth_picture(rec.depth))
+    # OpenCV, as MetaGraspNet's scripts read their PNGs, gives the same picture (BGR).
+    bgr = cv2.imread(str(tmp_path / "3_depth.png"), cv2.IMREAD_COLOR)
+    assert np.array_equal(bgr[..., ::-1], rgb)
+    assert np.array_equal(cv2.imread(str(tmp_path / "3_rgb.png"))[..., ::-1], rec.rgb)
     # Every level and invalid pixels still fit one palette; the picture spans the colour map.
     depth = np.concatenate([1.0 / np.linspace(1.0, 2.0, 1000), [np.nan]]).astype(np.float32)
     depth = depth.reshape(1, -1)

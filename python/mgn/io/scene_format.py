@@ -31,6 +31,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -362,10 +363,13 @@ def hdf5_bytes(datasets: Mapping[str, np.ndarray], attrs: Mapping[str, Any] | No
 
 def png_bytes(image: npt.ArrayLike) -> bytes:
     """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible;
-    zlib level 1: several times faster than the default for ~10 % more bytes)."""
+    zlib level 1 with the run-length strategy: rendered images come out ~16 % smaller than
+    with the default strategy at the same speed, and several times faster than level 6)."""
 
     buf = io.BytesIO()
-    Image.fromarray(np.asarray(image)).save(buf, format="PNG", compress_level=1)
+    Image.fromarray(np.asarray(image)).save(
+        buf, format="PNG", compress_level=1, compress_type=zlib.Z_RLE
+    )
     return buf.getvalue()
 
 
