@@ -38,7 +38,12 @@ from mgn.errors import IoError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
-from mgn.io.scene_format import from_cm
+from mgn.io.scene_format import (
+    FLOAT_DELTA_ENCODING,
+    UNORM16_ENCODING,
+    decode_float_image,
+    from_cm,
+)
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
 __all__ = ["Dataset", "SceneFolder", "View"]
@@ -179,6 +184,11 @@ class View:
                 with h5py.File(p, "r") as h5:
                     if name in h5:
                         value = h5[name][()]
+                        coding = h5[name].attrs.get("mgn_encoding")
+                        if coding == FLOAT_DELTA_ENCODING:
+                            value = decode_float_image(value)
+                        elif coding == UNORM16_ENCODING:
+                            value = value.astype(np.float32) / np.float32(65535.0)
             except OSError as e:
                 raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
         elif self.path(".npz").exists():

@@ -38,6 +38,10 @@ Sections:
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
   scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
   or a list of object names / category ids).
+- ``io``: how the files are written: ``archival`` (false: every array exactly as the models make
+  it; true: the compact archival mode of docs/format.md — depth on a 1/64 cm grid (at most
+  0.078 mm off), ``com_heatmap`` in 16 bits, grasp poses rounded (< 0.001°, 0.005 mm);
+  MetaGraspNet's scripts still read every file).
 - ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
@@ -80,6 +84,7 @@ from mgn.scene.scene import DropOptions
 __all__ = [
     "CameraConfig",
     "Config",
+    "IoConfig",
     "ConfigError",
     "HemisphereConfig",
     "IntrinsicsConfig",
@@ -634,6 +639,22 @@ def _render(data: Any, key: str) -> RenderSettings:
 
 
 @dataclass(frozen=True)
+class IoConfig(_Section):
+    """How the scene files are written (docs/format.md).
+
+    Attributes:
+        archival: the compact archival mode (lossy: sensor and ideal depth rounded to
+            :data:`mgn.io.scene_format.ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 1/65535,
+            grasp poses to 2^-16 per rotation entry and 1/1024 cm); false keeps every array bit
+            for bit.
+    """
+
+    archival: bool = False
+
+    _CHECKS = {"archival": _bool}
+
+
+@dataclass(frozen=True)
 class Config(_Section):
     """The whole dataset configuration (see the module doc for the sections)."""
 
@@ -648,6 +669,7 @@ class Config(_Section):
     split: SplitConfig = field(default_factory=SplitConfig)
     selection: SelectionConfig = field(default_factory=SelectionConfig)
     render: RenderSettings = field(default_factory=RenderSettings)
+    io: IoConfig = field(default_factory=IoConfig)
 
     _CHECKS = {
         "objects": lambda v, k: ObjectsConfig.from_dict(v, k),
@@ -661,6 +683,7 @@ class Config(_Section):
         "split": lambda v, k: SplitConfig.from_dict(v, k),
         "selection": lambda v, k: SelectionConfig.from_dict(v, k),
         "render": _render,
+        "io": lambda v, k: IoConfig.from_dict(v, k),
     }
 
     @classmethod
@@ -728,6 +751,8 @@ _SECTION_DOCS = {
     "selection": "difficulty-balanced test set: quota {level: views} (null = off), batches",
     "render": "RGB images: engine raster (fast preview) | path (path tracer), spp, denoise, "
     "film; randomize: per-view lights / environment / tote+floor materials / exposure",
+    "io": "files: archival true = compact archival mode (depth on a 1/64 cm grid, heat map in "
+    "16 bits, grasp poses rounded; docs/format.md), false = every array exact",
 }
 
 

@@ -68,6 +68,7 @@ class LabelOptions:
         num_threads: C++ threads (0 = all cores); results do not depend on it.
         render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
             None = the raster engine). Labels do not depend on it.
+        archival: write the compact archival files (docs/format.md; lossy depth).
     """
 
     sensor: SensorName = "structured-light"
@@ -80,6 +81,7 @@ class LabelOptions:
     max_grasps_per_object: int = 2000
     num_threads: int = 0
     render: RenderSettings | None = None
+    archival: bool = False
 
 
 @dataclass
@@ -284,7 +286,7 @@ def label_scene(
             # Files are encoded (zlib, PNG; both release the GIL) by writer threads while the next
             # view renders; at most two views wait, so memory stays bounded.
             record = view_record(v, view, images, labels, layout, grasps)
-            pending.append(pool.submit(write_view, out, record))
+            pending.append(pool.submit(write_view, out, record, archival=opt.archival))
             while len(pending) > 2:
                 pending.popleft().result()
             gt[v] = scene_gt_entries(labels.X_CO, categories, seen)

@@ -101,6 +101,7 @@ def write_scene(
         scene_grasps=labels.scene_grasps,
         num_threads=num_threads,
         render=config.render,
+        archival=config.io.archival,
     )
     views = scene_views(scene, config.camera)
     timings = label_scene(scene, out, views, pj_labels=pj, suction_labels=su,

@@ -24,7 +24,7 @@ from mgn.render.sensor import SensorName, apply_depth_sensor
 from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 from mgn.scene.lens import Lens, lens_for
 
-__all__ = ["ViewImages", "depth_picture", "iter_views"]
+__all__ = ["ViewImages", "depth_picture", "depth_picture_indexed", "iter_views"]
 
 #: Side of the square floor slab drawn under the tote, m.
 FLOOR_SIZE = 3.0
@@ -108,18 +108,34 @@ _DEPTH_LUT = _depth_lut()
 
 def depth_picture(depth: npt.ArrayLike) -> npt.NDArray[np.uint8]:
     """(H, W, 3) uint8 picture of a depth image (m; NaN or <= 0 invalid): inverse depth
-    normalised over the valid pixels, colour-mapped (256 levels) from dark blue (far) to red
-    (near); invalid pixels black."""
+    normalised over the valid pixels, colour-mapped (255 levels, so that with black the picture
+    fits a 256-colour palette) from dark blue (far) to red (near); invalid pixels black."""
+    index, palette = depth_picture_indexed(depth)
+    return palette[index]
+
+
+def depth_picture_indexed(
+    depth: npt.ArrayLike,
+) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
+    """The picture of :func:`depth_picture` as (H, W) uint8 indices into a (K, 3) uint8 palette of
+    the colours it uses (K <= 256: black and 255 levels): ``palette[index]`` is the picture (a
+    palette PNG: about half the bytes of the RGB picture)."""
     d = np.asarray(depth, np.float32)
-    valid = np.isfinite(d) & (d > 0)
-    out = np.zeros((*d.shape, 3), np.uint8)
-    if not valid.any():
-        return out
-    inv = 1.0 / d[valid]
-    lo, hi = float(inv.min()), float(inv.max())
-    level = np.round((inv - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.uint8)
-    out[valid] = _DEPTH_LUT[level]
-    return out
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(d) & (d > 0)
+    key = np.zeros(d.shape, np.int32)  # 0 invalid (black), 1 + level otherwise
+    if valid.any():
+        inv = 1.0 / d[valid]
+        lo, hi = float(inv.min()), float(inv.max())
+        level = np.round((inv - lo) * (254.0 / max(hi - lo, 1e-12))).astype(np.int32)
+        key[valid] = 1 + level
+    # Level l of 0..254 takes the colour map's entry round(l * 255 / 254) (both ends kept).
+    lut = _DEPTH_LUT[np.round(np.arange(255) * (255.0 / 254.0)).astype(np.int64)]
+    colours = np.concatenate([np.zeros((1, 3), np.uint8), lut])
+    used = np.flatnonzero(np.bincount(key.ravel(), minlength=256))
+    remap = np.zeros(256, np.int32)
+    remap[used] = np.arange(len(used))
+    return remap[key].astype(np.uint8), colours[used]
 
 
 def _checked_scene(
