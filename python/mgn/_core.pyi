@@ -11,6 +11,7 @@ import numpy
 import numpy.typing
 
 __all__: list[str] = [
+    "AntipodalResult",
     "AntipodalSampler",
     "AreaLight",
     "BackendError",
@@ -55,6 +56,8 @@ __all__: list[str] = [
     "SURFACE_TRANSPARENT",
     "SceneGraspModel",
     "SealModel",
+    "SealResult",
+    "SealTrial",
     "ShakeOptions",
     "SurfaceSamples",
     "ToolCollisionArrays",
@@ -503,6 +506,58 @@ class CollisionModel:
     @property
     def num_vertices(self) -> int: ...
 
+class SealResult:
+    """
+    SealModel.evaluate() result (mgn/grasp/seal_model.hpp); mgn.suction.seal.SealResult documents each array.
+    """
+    @property
+    def quality(self) -> numpy.ndarray: ...
+    @property
+    def reason(self) -> numpy.ndarray: ...
+    @property
+    def score(self) -> numpy.ndarray: ...
+    @property
+    def trial_reason(self) -> numpy.ndarray: ...
+    @property
+    def trial_sealed(self) -> numpy.ndarray: ...
+
+class SealTrial:
+    """
+    SealModel.trial() result: failure name, projected ring (object frame, m), spring forces (N).
+    """
+    @property
+    def center(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        """
+        projected centre, m
+        """
+    @property
+    def elastic_force(self) -> numpy.ndarray:
+        """
+        (N,) float64, N
+        """
+    @property
+    def failure(self) -> str: ...
+    @property
+    def ring_force(self) -> numpy.ndarray:
+        """
+        (N,3) float64, N
+        """
+    @property
+    def ring_normals(self) -> numpy.ndarray:
+        """
+        (N,3) float32
+        """
+    @property
+    def ring_points(self) -> numpy.ndarray:
+        """
+        (N,3) float32
+        """
+    @property
+    def total_elastic_force(self) -> float:
+        """
+        N
+        """
+
 class Cup:
     """
     Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).
@@ -575,12 +630,12 @@ class SealModel:
         seed: typing.SupportsInt | typing.SupportsIndex = 0,
         first_index: typing.SupportsInt | typing.SupportsIndex = 0,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> SealResult: ...
     def trial(
         self,
         point: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
         normal: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
-    ) -> dict: ...
+    ) -> SealTrial: ...
     def with_cup(self, cup: Cup) -> SealModel: ...
     @property
     def cup(self) -> Cup: ...
@@ -1133,6 +1188,33 @@ class DropResult:
     @property
     def steps(self) -> int: ...
 
+class AntipodalResult:
+    """
+    AntipodalSampler.sample() result (mgn/grasp/antipodal.hpp); mgn.pj.sampler.AntipodalResult documents each array.
+    """
+    @property
+    def approach(self) -> numpy.ndarray: ...
+    @property
+    def closing(self) -> numpy.ndarray: ...
+    @property
+    def num_accepted_probes(self) -> int: ...
+    @property
+    def num_colliding(self) -> int: ...
+    @property
+    def num_kept(self) -> numpy.ndarray: ...
+    @property
+    def p1(self) -> numpy.ndarray: ...
+    @property
+    def point_index(self) -> numpy.ndarray: ...
+    @property
+    def point_score(self) -> numpy.ndarray: ...
+    @property
+    def probe(self) -> numpy.ndarray: ...
+    @property
+    def score(self) -> numpy.ndarray: ...
+    @property
+    def width(self) -> numpy.ndarray: ...
+
 class ParallelJawGripper:
     """
     Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless palm_mesh, finger_left_mesh and finger_right_mesh are all set (closed, hand frame, fingers at opening 0).
@@ -1203,7 +1285,7 @@ class AntipodalSampler:
         seed: typing.SupportsInt | typing.SupportsIndex = 0,
         first_index: typing.SupportsInt | typing.SupportsIndex = 0,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> AntipodalResult: ...
     @property
     def gripper(self) -> ParallelJawGripper: ...
 

@@ -127,9 +127,6 @@ def test_the_signature_check_finds_a_renamed_parameter():
 #: other function returns a bound class (docs/architecture.md, "The typed boundary").
 DICT_RETURNS = {
     "ClassificationMetrics.to_dict": "the JSON form of a bound result class",
-    "SealModel.evaluate": "object labels (bind_grasp_seal.cpp), converted last (issue 18)",
-    "SealModel.trial": "object labels (bind_grasp_seal.cpp), converted last (issue 18)",
-    "AntipodalSampler.sample": "object labels (bind_grasp_antipodal.cpp), converted last",
     "PathScene.render": "the path tracer's binding, owned by its own work item",
     "shake_test": "the physics shake test's binding, owned by its own work item",
     "shake_trajectory": "the physics shake test's binding, owned by its own work item",
