@@ -159,7 +159,8 @@ def view_record(
         order, csv, extra = layout.order_json(), layout.order_csv(), layout.layout_json()
     else:
         order, csv, extra = _empty_layout_files(n)
-    depth_ideal = np.where(images.depth_ideal > 0, images.depth_ideal, np.nan).astype(np.float32)
+    depth_ideal = np.where(images.depth_ideal > 0, images.depth_ideal, np.float32(np.nan))
+    depth_ideal = depth_ideal.astype(np.float32, copy=False)
     return ViewRecord(
         index=index,
         rgb=images.rgb,
@@ -288,11 +289,11 @@ def label_scene(
     t0 = time.perf_counter()
     rays = SceneRayModel.from_scene(scene)
     timings.add("prepare: ray model", time.perf_counter() - t0)
-    sgm = None
-    if opt.scene_grasps and (pj_labels is not None or suction_labels is not None):
-        t0 = time.perf_counter()
+
+    def grasp_model() -> SceneGraspModel:
+        t = time.perf_counter()
         cap = opt.max_grasps_per_object
-        sgm = SceneGraspModel(
+        model = SceneGraspModel(
             scene,
             [strided_subset(g, cap) for g in pj_labels] if pj_labels is not None else [None] * n,
             [strided_subset(g, cap) for g in suction_labels]
@@ -303,7 +304,10 @@ def label_scene(
             offsets=opt.grasp_offsets,
             num_threads=opt.num_threads,
         )
-        timings.add("prepare: scene grasp collisions", time.perf_counter() - t0)
+        timings.add("prepare: scene grasp collisions", time.perf_counter() - t)
+        return model
+
+    want_grasps = opt.scene_grasps and (pj_labels is not None or suction_labels is not None)
     categories = np.array([inst.category_id for inst in scene.instances], np.int64)
     bins = [inst.bin_relation for inst in scene.instances]
     objects = scene.render_items()
@@ -321,7 +325,13 @@ def label_scene(
                            seed=opt.seed, render=opt.render, num_threads=opt.num_threads)
     )  # fmt: skip
     try:
-        with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool:
+        with (
+            ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool,
+            ThreadPoolExecutor(max_workers=1, thread_name_prefix="mgn-grasps") as prepare,
+        ):
+            # The scene grasps' collision pass (once per scene) runs while the first views
+            # render and are labelled; the first view_grasps waits for it.
+            sgm_future = prepare.submit(grasp_model) if want_grasps else None
             t0 = time.perf_counter()
             for k, images in enumerate(ahead):
                 t1 = time.perf_counter()
@@ -347,7 +357,9 @@ def label_scene(
                 timings.add("layout", t3 - t2)
                 seen = labels.visible_pixels > 0
                 gt[v] = scene_gt_entries(labels.X_CO, categories, seen)
-                grasps = sgm.view_grasps(view, seen) if sgm is not None else None
+                grasps = None
+                if sgm_future is not None:
+                    grasps = sgm_future.result().view_grasps(view, seen)
                 t4 = time.perf_counter()
                 timings.add("scene grasps", t4 - t3)
                 record = view_record(v, view, images, labels, layout, grasps)
