@@ -81,7 +81,12 @@ class LabelOptions:
 
 @dataclass
 class LabelTimings:
-    """Seconds spent per stage over all views of a scene (wall clock)."""
+    """Seconds spent per stage over all views of a scene (wall clock).
+
+    ``render`` is the time of the render thread, which overlaps the other stages; ``render
+    (waiting)`` is the time the labelling waited for it. ``prepare: scene grasp collisions``
+    also runs in a thread of its own; ``scene grasps`` includes waiting for it at the first
+    view."""
 
     seconds: dict[str, float] = field(default_factory=dict)
     views: int = 0
