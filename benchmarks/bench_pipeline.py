@@ -11,6 +11,12 @@ candidates, 30 shaken grasps per object): a scene places at most 2000 grasps of 
 object either way (LabelOptions.max_grasps_per_object), so it costs what it costs with the MGN
 label sizes. One timed run per worker count (4 scenes each; ~5 min in all when idle).
 
+CPU per scene is each worker process's CPU over its scene (all its threads: OSMesa, parallel
+loops, the writer threads), recorded by `run_scene`; the label cache is filled before the timed
+run. A last row runs the stages of scene 0 one after the other (`--child --stages`) and gives the
+CPU and wall seconds of each: drop, ray model, scene grasp collisions, render, object labels,
+layout, scene grasps, write.
+
 Peak memory per worker is ru_maxrss of the largest worker process (RUSAGE_CHILDREN for a pool,
 RUSAGE_SELF in-process). There is no peer program that makes MetaGraspNet scenes on the CPU, so
 the rows have no peer column.
