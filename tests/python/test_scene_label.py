@@ -269,7 +269,7 @@ def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_lab
         )
         gt[v] = scene_gt_entries(labels.X_CO, cats, seen)
     write_scene_gt(serial, gt)
-    scene.to_json(serial / "scene.json")
+    write_scene_json(scene, serial / "scene.json")
 
     def digest(folder):
         return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in folder.iterdir()}
