@@ -118,7 +118,7 @@ def test_every_stored_pj_grasp_gets_a_physics_score_by_default(tmp_path: Path, e
     cfg = {
         "objects": {"names": ["box_tea"]},
         "camera": {"views": [0], "resolution_scale": 0.1},
-        "object_labels": {"suction_points": 30, "pj_points": 30, "physics_grid": 2},
+        "object_labels": {"suction_points": 30, "pj_points": 8, "physics_grid": 2},
         "labels": {"suction": False, "layout": False},
         "drop": {"max_time": 2.0},
     }
