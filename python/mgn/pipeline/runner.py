@@ -128,7 +128,8 @@ class SceneResult:
     Attributes:
         index, seed: the scene. ok: written completely.
         error: one-line error when not ok; disk_full: the error was a full disk.
-        times: seconds per stage (drop, write, finalize).
+        times: seconds per stage (drop, write, finalize, and "write: <label stage>"); "cpu": CPU
+            seconds of the worker process over the scene, all its threads.
         num_bytes: size of the scene folder; num_objects: objects in the tote.
         worker: host and process id that ran it.
         files: with ``SceneTask.collect``: the scene's files (relative path -> bytes, the
@@ -181,6 +182,8 @@ def run_scene(task: SceneTask) -> SceneResult:
     worker = f"{socket.gethostname()}:{os.getpid()}"
     times: dict[str, float] = {}
     t0 = time.perf_counter()
+    # CPU of this process over the scene, all threads (a worker runs one scene at a time).
+    c0 = time.process_time()
     try:
         specs = [resolve_object(name, source) for name, source in task.objects]
         sources = {name: source for name, source in task.objects if source != BUILTIN}
@@ -215,6 +218,7 @@ def run_scene(task: SceneTask) -> SceneResult:
                      for p in sorted(tmp.rglob("*")) if p.is_file()}  # fmt: skip
             shutil.rmtree(tmp.parent, ignore_errors=True)
             times["finalize"] = time.perf_counter() - t2
+            times["cpu"] = time.process_time() - c0
             return SceneResult(task.index, task.seed, True, None, False, times, size,
                                len(scene), worker, files,
                                removed=tuple(r.name for r in scene.removed))  # fmt: skip
@@ -222,6 +226,7 @@ def run_scene(task: SceneTask) -> SceneResult:
             shutil.rmtree(final)
         os.rename(tmp, final)
         times["finalize"] = time.perf_counter() - t2
+        times["cpu"] = time.process_time() - c0
         return SceneResult(
             task.index, task.seed, True, None, False, times, size, len(scene), worker,
             removed=tuple(r.name for r in scene.removed),
