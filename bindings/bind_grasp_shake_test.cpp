@@ -2,6 +2,7 @@
 // python/mgn/pj/physics.py. The gripper is the bound C++ ParallelJawGripper (boxes or the three
 // meshes), made by the one conversion mgn.pj.sampler.core_gripper() like every other consumer.
 #include <pybind11/eigen.h>
+#include <pybind11/functional.h>
 #include <pybind11/stl.h>
 #include <mgn/grasp/shake_test.hpp>
 
@@ -111,6 +112,23 @@ void bind_grasp_shake_test(py::module_& m) {
       py::arg("parts"), py::arg("mass"), py::arg("com"), py::arg("inertia"), py::arg("grasps"),
       py::arg("gripper"), py::arg("options"),
       "Shake test of (N, 10) grasps [a, v, p1, w] (m); dict of numpy arrays (GIL released).");
+
+  m.def(
+      "staircase_grid",
+      [](int S, const std::function<bool(int, int)>& trial, int checks) {
+        const StaircaseGrid g = staircase_grid(S, trial, checks);
+        py::dict out;
+        out["success"] = to_bool_numpy(std::vector<std::uint8_t>(g.success)).attr("reshape")(S, S);
+        out["simulated"] =
+            to_bool_numpy(std::vector<std::uint8_t>(g.simulated)).attr("reshape")(S, S);
+        out["fallback"] = g.fallback;
+        out["trials"] = g.trials;
+        return out;
+      },
+      py::arg("S"), py::arg("trial"), py::arg("checks"),
+      "The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for "
+      "the cells it simulates (friction index i, density index j); dict success (S, S), "
+      "simulated (S, S), fallback, trials.");
 
   m.def(
       "shake_trajectory",

@@ -97,6 +97,7 @@ __all__: list[str] = [
     "sample_surface",
     "shake_test",
     "shake_trajectory",
+    "staircase_grid",
     "suction_wrench_scores",
     "surface_flags",
 ]
@@ -2147,6 +2148,15 @@ def shake_trajectory(
 ) -> dict:
     """
     One recorded shake trial (poses in the world W: z up, gravity -z).
+    """
+
+def staircase_grid(
+    S: typing.SupportsInt | typing.SupportsIndex,
+    trial: collections.abc.Callable[[int, int], bool],
+    checks: typing.SupportsInt | typing.SupportsIndex,
+) -> dict:
+    """
+    The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for the cells it simulates (friction index i, density index j); dict success (S, S), simulated (S, S), fallback, trials.
     """
 
 def suction_wrench_scores(

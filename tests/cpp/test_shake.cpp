@@ -361,6 +361,42 @@ TEST(Staircase, FallsBackToTheFullGridWhereMonotonicityIsViolated) {
   EXPECT_EQ(blind.success[3 * S + 4], 1);
 }
 
+TEST(Staircase, ChecksFindViolationsNearTheBoundaryFirstAndAnywhereWithAFullBudget) {
+  // Monotone random grids with one cell flipped. (a) A flipped cell at distance 1 or 2 from its
+  // row's boundary is among the first 4S checks (distance-1 and distance-2 cells come first), so
+  // the search falls back and returns the truth. (b) With checks >= S*S every inferred cell is
+  // verified: any flipped cell that the walk did not simulate triggers the fallback, and the
+  // result always equals the truth.
+  std::uint64_t state = 777;
+  auto next = [&state](int n) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((state >> 33) % static_cast<std::uint64_t>(n));
+  };
+  const int S = 10;
+  int near_cases = 0;
+  for (int rep = 0; rep < 400; ++rep) {
+    std::vector<int> b(S);
+    for (int i = 0; i < S; ++i) b[i] = std::max(i > 0 ? b[i - 1] : 0, next(S + 1));
+    const int fi = next(S), fj = next(S);
+    auto truth = [&](int i, int j) { return (j < b[i]) != (i == fi && j == fj); };
+    const StaircaseGrid full = staircase_grid(S, truth, S * S);
+    for (int i = 0; i < S; ++i)
+      for (int j = 0; j < S; ++j)
+        ASSERT_EQ(full.success[i * S + j], truth(i, j) ? 1 : 0) << "rep " << rep;
+    const bool near = std::abs(fj - b[fi]) <= 2 && fj != b[fi];
+    const StaircaseGrid walk = staircase_grid(S, truth, 0);
+    if (walk.simulated[fi * S + fj]) continue;  // the walk itself met the flipped cell
+    const StaircaseGrid few = staircase_grid(S, truth, 4 * S);
+    if (near) {
+      ++near_cases;
+      EXPECT_TRUE(few.fallback) << "rep " << rep << " flipped " << fi << "," << fj;
+      for (int i = 0; i < S; ++i)
+        for (int j = 0; j < S; ++j) ASSERT_EQ(few.success[i * S + j], truth(i, j) ? 1 : 0);
+    }
+  }
+  EXPECT_GT(near_cases, 20);
+}
+
 TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
   // A real case: a 70 g box 40 x 40 x 60 mm, grasped at heights from the centre to near its top
   // edge (scores between 0 and 1): the staircase search gives the full grid's scores.
@@ -376,6 +412,7 @@ TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
   o.num_threads = 2;
   const ShakeResult full = shake_test(box, ParallelJawGripper{}, grasps, o);
   o.staircase = true;
+  o.staircase_checks = 4;  // the default (20) would verify almost every cell of a 5 x 5 grid
   const ShakeResult stair = shake_test(box, ParallelJawGripper{}, grasps, o);
   int simulated = 0;
   for (auto v : stair.trial_simulated) simulated += v;

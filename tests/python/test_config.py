@@ -28,6 +28,9 @@ def test_defaults_are_the_mgn_values() -> None:
     assert c.tote == ToteSpec() and c.drop == DropOptions()
     assert c.object_labels.suction_points == 5000 and c.object_labels.pj_points == 5000
     assert c.object_labels.physics_grid == 10
+    # Every stored parallel-jaw grasp gets a physics score by default, with the staircase search.
+    assert c.object_labels.physics_grasps is None
+    assert c.object_labels.physics_search == "staircase"
     assert c.objects.copies == (2, 5)
     assert c.objects.compose_kwargs() == {"categories": None, "count": 20, "copies": (2, 5)}
     assert c.camera.rig == "mgn" and c.camera.view_indices == tuple(range(37))
@@ -96,6 +99,8 @@ def test_cli_dump_prints_the_defaults(capsys: pytest.CaptureFixture, tmp_path: P
         ({"camera": {"hemisphere": {"radii": []}}}, "'camera.hemisphere.radii'", "non-empty"),
         ({"labels": {"suction": "yes"}}, "'labels.suction'", "true or false"),
         ({"object_labels": {"pj_points": 0}}, "'object_labels.pj_points'", ">= 1"),
+        ({"object_labels": {"physics_grasps": 0}}, "'object_labels.physics_grasps'", ">= 1"),
+        ({"object_labels": {"physics_search": "grid"}}, "'object_labels.physics_search'", "full"),
         ({"objects": {"count": True}}, "'objects.count'", "integer"),
         ({"objects": {"copies": [3, 2]}}, "'objects.copies'", "min <= max"),
         ({"objects": {"copies": [2]}}, "'objects.copies'", "2 values"),

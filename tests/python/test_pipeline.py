@@ -100,6 +100,49 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
             assert sc.shape[1] == 6 and 0 < sc.shape[0] <= 30
             sim = np.asarray(h5["grasps/paralleljaw/quality_score_simulation"])
             assert np.isfinite(sim).sum() == 3  # physics_grasps
+            meta = h5["metadata"].attrs
+            assert int(meta["pj_physics_scored"]) == 3
+            assert int(meta["pj_physics_unscored"]) == sim.shape[0] - 3
+    # The cap is recorded in dataset.json: every object's stored and scored grasps.
+    rec = doc["physics_scores"]
+    assert rec["cap"] == 3 and rec["search"] == "staircase" and rec["grid"] == 2
+    assert set(rec["objects"]) == {"box_tea", "can_soda"}
+    assert rec["capped_objects"] == ["box_tea", "can_soda"]
+    assert all(o["scored"] == 3 for o in rec["objects"].values())
+    assert rec["unscored"] == rec["grasps"] - 6 > 0
+
+
+def test_every_stored_pj_grasp_gets_a_physics_score_by_default(tmp_path: Path, env: Path) -> None:
+    """No cap (the default): no stored parallel-jaw grasp, in the object files or in the scene
+    grasp files, is left without a physics score, and dataset.json says so."""
+    cfg = {
+        "objects": {"names": ["box_tea"]},
+        "camera": {"views": [0], "resolution_scale": 0.1},
+        "object_labels": {"suction_points": 30, "pj_points": 8, "physics_grid": 2},
+        "labels": {"suction": False, "layout": False},
+        "drop": {"max_time": 2.0},
+    }
+    assert load_config(cfg).object_labels.physics_grasps is None
+    report = generate(tmp_path / "ds", 1, config=load_config(cfg), seed=3, progress=False)
+    assert report.complete, report.format_summary()
+    doc = json.loads((tmp_path / "ds" / "dataset.json").read_text())
+    rec = doc["physics_scores"]
+    assert rec["cap"] is None and rec["unscored"] == 0 and rec["capped_objects"] == []
+    assert rec["grasps"] == rec["scored"] == rec["objects"]["box_tea"]["grasps"] > 0
+    (model,) = (tmp_path / "ds" / "models").iterdir()
+    with h5py.File(model / "textured.obj.hdf5", "r") as h5:
+        sim = np.asarray(h5["grasps/paralleljaw/quality_score_simulation"])
+    assert sim.shape == (rec["grasps"],) and np.isfinite(sim).all()
+    n_scene = 0
+    with h5py.File(tmp_path / "ds" / "scene0" / "0_scene.hdf5", "r") as h5:
+        for group in ("non_colliding_grasps", "colliding_grasps"):
+            name = f"{group}/paralleljaw/score_simulation"
+            if name in h5:
+                scene_sim = np.asarray(h5[name][()], float).reshape(-1)
+                n_scene += scene_sim.size
+                assert np.isfinite(scene_sim).all(), name
+    assert n_scene > 0
+    assert "physics scores" not in report.format_summary()  # nothing capped to report
 
 
 def test_reference_dataset_validates_reads_and_exports(

@@ -115,6 +115,77 @@ def test_shake_scorer_progress_bar_keeps_the_scores(capsys):
     assert "physics" in capsys.readouterr().err
 
 
+def test_staircase_scores_in_pieces_match_the_whole_list():
+    """With the staircase search too, a list scored in pieces (first_grasp_index) simulates the
+    same cells with the same outcomes as the whole list (ShakeScorer's progress bar relies on
+    it, and so does scoring every stored grasp of an object in one call or several)."""
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.3)
+    grasps = np.stack([centre_grasp(0.04)] * 4)
+    grasps[:, 6:9] += np.array([[0, 0, 0], [0, 0.01, 0.015], [0, -0.01, -0.01], [0, 0.02, 0]])
+    opts = ShakeOptions(
+        grid=3, friction_range=(0.1, 1.0), staircase=True, staircase_checks=1, num_threads=2
+    )
+    whole = shake_scores(mesh, m, com, inertia, grasps, options=opts)
+    pieces = [
+        shake_scores(mesh, m, com, inertia, grasps[a:b], options=replace(opts, first_grasp_index=a))
+        for a, b in ((0, 1), (1, 3), (3, 4))
+    ]
+    for field in ("score", "trial_success", "trial_simulated", "trial_steps", "fallback"):
+        got = np.concatenate([getattr(p, field) for p in pieces])
+        np.testing.assert_array_equal(got, getattr(whole, field), err_msg=field)
+    assert whole.num_trials < grasps.shape[0] * 9  # the staircase inferred some cells
+
+
+def test_staircase_grid_binding_against_brute_force():
+    """_core.staircase_grid calls the trial only for the cells it reports simulated, never twice,
+    and with a budget of S*S checks returns every cell of any grid (monotone or not)."""
+    rng = np.random.default_rng(4)
+    S = 6
+    for _ in range(60):
+        b = np.maximum.accumulate(rng.integers(0, S + 1, S))
+        truth = np.arange(S)[None, :] < b[:, None]
+        flips = rng.integers(0, S, (rng.integers(0, 3), 2))
+        for i, j in flips:
+            truth[i, j] = ~truth[i, j]
+        calls: list[tuple[int, int]] = []
+
+        def trial(i: int, j: int, truth=truth, calls=calls) -> bool:
+            calls.append((i, j))
+            return bool(truth[i, j])
+
+        r = mgn._core.staircase_grid(S, trial, S * S)
+        np.testing.assert_array_equal(r["success"], truth)
+        assert len(calls) == len(set(calls)) == r["trials"] == int(r["simulated"].sum())
+        assert all(r["simulated"][i, j] for i, j in calls)
+        mono = (np.arange(S)[None, :] < b[:, None]) == truth
+        if mono.all():  # monotone: no fallback
+            assert not r["fallback"]
+
+
+def test_shake_scorer_scores_every_grasp_unless_capped_and_records_it():
+    from mgn.pj.labels import label_object
+    from mgn.pj.physics import ShakeScorer
+
+    mesh, m, com, _ = box_object([0.04, 0.05, 0.06], 0.1)
+    opts = ShakeOptions(grid=2, friction_range=(0.5, 1.0), staircase=True, num_threads=2)
+    few = {"approaches_kept": 1}  # ~30 grasps: a short test
+    full = label_object(mesh, mass=m, com=com, num_points=10, seed=1, sampler_options=few,
+                        physics=ShakeScorer(400.0, options=opts))  # fmt: skip
+    n = len(full)
+    assert n > 3
+    assert np.isfinite(full.quality_score_simulation).all()
+    assert full.metadata["pj_physics_scored"] == n and full.metadata["pj_physics_unscored"] == 0
+    assert "every grasp" in full.metadata["pj_physics"]
+    cap = ShakeScorer(400.0, options=opts, max_grasps=3)
+    capped = label_object(mesh, mass=m, com=com, num_points=10, seed=1, sampler_options=few,
+                          physics=cap)  # fmt: skip
+    sim = capped.quality_score_simulation
+    assert np.isfinite(sim).sum() == 3
+    assert capped.metadata["pj_physics_scored"] == 3
+    assert capped.metadata["pj_physics_unscored"] == n - 3
+    assert "at most 3 grasps" in capped.metadata["pj_physics"]
+
+
 def test_grasp_objects_and_rows_agree():
     row = centre_grasp(0.04)
     obj = SimpleNamespace(approach=row[0:3], closing=row[3:6], p1=row[6:9], width=row[9])

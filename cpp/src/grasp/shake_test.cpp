@@ -565,20 +565,36 @@ StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, 
     b[i] = j;
     for (int k = 0; k < j; ++k) g.success[at(i, k)] = 1;  // inferred (or simulated) successes
   }
-  // Checks: inferred cells next to the boundary, spread over the rows.
+  // Checks, in this order: the inferred cells next to the boundary of every row (distance 1,
+  // then 2: where physics noise flips outcomes most), then the other inferred cells in a
+  // low-discrepancy (golden-ratio) order over the grid, which finds isolated failures far from
+  // the boundary. The first `checks` of them are simulated.
+  std::vector<std::uint8_t> queued(n, 0);
   std::vector<std::pair<int, int>> candidates;
-  for (int i = 0; i < S; ++i) {
-    if (i > 0 && b[i - 1] > 0 && !g.simulated[at(i, b[i - 1] - 1)])
-      candidates.emplace_back(i, b[i - 1] - 1);  // inferred success
-    if (b[i] + 1 < S && !g.simulated[at(i, b[i] + 1)])
-      candidates.emplace_back(i, b[i] + 1);  // inferred failure
+  for (int d = 1; d <= 2; ++d) {
+    for (int i = 0; i < S; ++i) {
+      for (const int cj : {b[i] - d, b[i] + d}) {
+        if (cj < 0 || cj >= S || g.simulated[at(i, cj)] || queued[at(i, cj)]) continue;
+        queued[at(i, cj)] = 1;
+        candidates.emplace_back(i, cj);
+      }
+    }
   }
-  const int m = static_cast<int>(candidates.size());
-  const int c = std::min(checks, m);
+  std::vector<std::pair<int, int>> rest;
+  for (int i = 0; i < S; ++i)
+    for (int jj = 0; jj < S; ++jj)
+      if (!g.simulated[at(i, jj)] && !queued[at(i, jj)]) rest.emplace_back(i, jj);
+  std::vector<std::pair<double, std::size_t>> order(rest.size());
+  for (std::size_t k = 0; k < rest.size(); ++k) {
+    const double x = double(k + 1) * 0.6180339887498949;
+    order[k] = {x - std::floor(x), k};
+  }
+  std::sort(order.begin(), order.end());
+  for (const auto& [key, k] : order) candidates.push_back(rest[k]);
+  const int c = std::min<int>(checks, static_cast<int>(candidates.size()));
   bool contradicted = false;
   for (int k = 0; k < c && !contradicted; ++k) {
-    const int idx = c == 1 ? m / 2 : static_cast<int>(std::lround(double(k) * (m - 1) / (c - 1)));
-    const auto [ci, cj] = candidates[static_cast<std::size_t>(idx)];
+    const auto [ci, cj] = candidates[static_cast<std::size_t>(k)];
     const bool inferred = g.success[at(ci, cj)] != 0;
     if (run(ci, cj) != inferred) contradicted = true;
   }

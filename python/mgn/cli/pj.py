@@ -23,12 +23,16 @@ from mgn.viz.shake_trial import register_show_trial
 
 
 def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> ShakeScorer:
-    """The Bullet shake-test scorer on at most ``--physics-grasps`` grasps per object."""
+    """The Bullet shake-test scorer (every grasp, or at most ``--physics-grasps`` per object)."""
 
     return ShakeScorer(
         density=args.density,
         gripper=gripper,
-        options=ShakeOptions(grid=args.physics_grid, num_threads=args.num_threads),
+        options=ShakeOptions(
+            grid=args.physics_grid,
+            staircase=args.physics_search == "staircase",
+            num_threads=args.num_threads,
+        ),
         max_grasps=args.physics_grasps,
     )
 
@@ -122,8 +126,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--physics-grasps",
         type=int,
-        default=200,
-        help="grasps per object given a physics score (evenly strided; the others keep NaN)",
+        default=None,
+        metavar="N",
+        help="cap: at most N grasps per object get a physics score (evenly strided; the others "
+        "keep NaN, counted in the metadata); default: every grasp",
+    )
+    p.add_argument(
+        "--physics-search",
+        choices=("staircase", "full"),
+        default="staircase",
+        help="staircase: walk the monotone success boundary, falling back to the full grid where "
+        "a check fails (default); full: simulate every grid cell",
     )
     p.add_argument(
         "--physics-grid", type=int, default=5, help="S of the S x S friction x density grid"

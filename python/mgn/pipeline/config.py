@@ -32,8 +32,13 @@ Sections:
 - ``labels``: which labels to make (``suction``, ``paralleljaw``, ``pj_physics``, ``layout``,
   ``scene_grasps``).
 - ``object_labels``: sizes of the per-object labels: ``suction_points``, ``pj_points`` (MGN:
-  5000 each), ``physics_grasps`` (grasps per object given a physics score), ``physics_grid``
-  (S of the S x S friction x mass grid, MGN 10), ``suction_model``, ``seed``.
+  5000 each), ``physics_grasps`` (cap on the grasps per object given a physics score, an
+  evenly strided subset; null, the default, scores every stored grasp; the capped count is
+  recorded in each object's label metadata and in ``dataset.json`` ``physics_scores``),
+  ``physics_grid`` (S of the S x S friction x mass grid, MGN 10), ``physics_search``
+  (``staircase``: walk each grasp's monotone success boundary with checks and fall back to the
+  full grid where they fail, the default; ``full``: simulate all S x S trials), ``suction_model``,
+  ``seed``.
 - ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
   scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
@@ -507,16 +512,18 @@ class ObjectLabelsConfig(_Section):
 
     suction_points: int = 5000
     pj_points: int = 5000
-    physics_grasps: int = 200
+    physics_grasps: int | None = None
     physics_grid: int = 10
+    physics_search: str = "staircase"
     suction_model: str = "spring"
     seed: int = 0
 
     _CHECKS = {
         "suction_points": _int(1),
         "pj_points": _int(1),
-        "physics_grasps": _int(1),
+        "physics_grasps": _optional(_int(1)),
         "physics_grid": _int(1),
+        "physics_search": _choice("staircase", "full"),
         "suction_model": _choice(*SEAL_MODELS),
         "seed": _int(0),
     }

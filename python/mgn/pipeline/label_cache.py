@@ -63,7 +63,7 @@ __all__ = [
 ]
 
 #: Bump when the label layout or algorithms change, so old cache entries are not reused.
-CACHE_VERSION = "object-labels-1"
+CACHE_VERSION = "object-labels-2"
 
 
 @dataclass(frozen=True)
@@ -127,6 +127,7 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
             "physics": config.labels.pj_physics,
             "physics_grasps": ol.physics_grasps if config.labels.pj_physics else None,
             "physics_grid": ol.physics_grid if config.labels.pj_physics else None,
+            "physics_search": ol.physics_search if config.labels.pj_physics else None,
         }
         h.update(json.dumps(params, sort_keys=True).encode())
         for f in ("palm_mesh", "finger_left_mesh", "finger_right_mesh"):
@@ -165,7 +166,11 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
             physics = ShakeScorer(
                 density=spec.density,
                 gripper=config.gripper,
-                options=ShakeOptions(grid=ol.physics_grid, num_threads=num_threads),
+                options=ShakeOptions(
+                    grid=ol.physics_grid,
+                    staircase=ol.physics_search == "staircase",
+                    num_threads=num_threads,
+                ),
                 max_grasps=ol.physics_grasps,
             )
         pj = pj_label_object(

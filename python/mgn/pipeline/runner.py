@@ -49,12 +49,13 @@ import tempfile
 import time
 import traceback
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from tqdm import tqdm
 
 from mgn._core import __version__
@@ -418,6 +419,8 @@ class GenerateReport:
         label_seconds: wall time of the object-label step; wall_seconds: of the whole run.
         output_bytes: size of the dataset folder at the end.
         not_run: scenes not attempted (stopped by a full disk).
+        physics: ``dataset.json`` ``physics_scores`` (see :func:`physics_record`), None when no
+            parallel-jaw labels with physics were made.
     """
 
     out_dir: Path
@@ -433,6 +436,7 @@ class GenerateReport:
     not_run: list[int] = field(default_factory=list)
     selection: dict[str, Any] | None = None
     unmet: dict[int, int] = field(default_factory=dict)
+    physics: dict[str, Any] | None = None
 
     @property
     def ok(self) -> list[SceneResult]:
@@ -483,6 +487,13 @@ class GenerateReport:
                     f"scene{r.index}: {', '.join(r.removed)}" for r in lost))
                 + " (objects.refill: true drops again until they stay in)"
             )  # fmt: skip
+        if self.physics is not None and self.physics["unscored"]:
+            p = self.physics
+            lines.append(
+                f"  physics scores: {p['scored']} of {p['grasps']} parallel-jaw grasps scored, "
+                f"{p['unscored']} left NaN by object_labels.physics_grasps = {p['cap']} "
+                "(null scores every grasp)"
+            )
         for r in self.failed:
             lines.append(f"  FAILED scene{r.index} (seed {r.seed}): {r.error}")
         if self.not_run:
@@ -536,6 +547,36 @@ def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extr
         "splits": {"train": [], "val": [], "test": []},
         "status": status,
         **extra,
+    }
+
+
+def physics_record(config: Config, labels: Mapping[str, ObjectLabels]) -> dict[str, Any] | None:
+    """``dataset.json`` ``physics_scores``: how the parallel-jaw physics scores were made and how
+    many stored grasps of each object got one (``scored``) or kept NaN because of the cap
+    ``object_labels.physics_grasps`` (``unscored``). None without physics labels."""
+
+    if not (config.labels.paralleljaw and config.labels.pj_physics):
+        return None
+    ol = config.object_labels
+    objects: dict[str, dict[str, int]] = {}
+    for name in sorted(labels):
+        pj = labels[name].paralleljaw
+        if pj is None:
+            continue
+        sim = np.asarray(pj.quality_score_simulation)
+        scored = int(np.count_nonzero(np.isfinite(sim)))
+        objects[name] = {"grasps": int(sim.shape[0]), "scored": scored}
+    total = sum(o["grasps"] for o in objects.values())
+    scored = sum(o["scored"] for o in objects.values())
+    return {
+        "cap": ol.physics_grasps,
+        "search": ol.physics_search,
+        "grid": ol.physics_grid,
+        "grasps": total,
+        "scored": scored,
+        "unscored": total - scored,
+        "capped_objects": sorted(n for n, o in objects.items() if o["scored"] < o["grasps"]),
+        "objects": objects,
     }
 
 
@@ -830,6 +871,9 @@ def generate(
     status = "complete" if report.complete else "incomplete"
     failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
     more: dict[str, Any] = {"removed_objects": removed_objects(out)}
+    report.physics = physics_record(cfg, run.labels)
+    if report.physics is not None:
+        more["physics_scores"] = report.physics
     if failed:
         more["failed_scenes"] = failed
     with contextlib.suppress(OSError):

@@ -101,6 +101,8 @@ def label_object(
         num_points: contact points sampled evenly on the surface.
         progress: show a tqdm progress bar.
         physics: optional scorer filling ``quality_score_simulation``; None leaves it NaN.
+            The metadata then records ``pj_physics_scored`` / ``pj_physics_unscored``: how
+            many grasps got a score and how many kept NaN (a capped scorer).
         friction, grip_force, contact_radius: wrench-score constants (see pj_wrench_scores).
         sampler_options: extra keyword arguments of :meth:`AntipodalSampler.sample`
             (probes, tilt, offset, friction_coef, approaches_tried, approaches_kept, ...).
@@ -224,9 +226,15 @@ def label_object(
                 f"{len(labels)} grasps"
             )
         scorer = getattr(physics, "__name__", type(physics).__name__)
+        scored = int(np.count_nonzero(np.isfinite(sim)))
         labels = replace(
             labels,
             quality_score_simulation=sim,
-            metadata=labels.metadata | {"pj_physics": f"run ({scorer})"},
+            metadata=labels.metadata
+            | {
+                "pj_physics": f"run ({scorer})",
+                "pj_physics_scored": scored,
+                "pj_physics_unscored": len(sim) - scored,
+            },
         )
     return labels

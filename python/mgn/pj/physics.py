@@ -79,7 +79,7 @@ class ShakeOptions:
     max_hull_vertices: int = 64
     solver_iterations: int = 10
     staircase: bool = False
-    staircase_checks: int = 4
+    staircase_checks: int = 20
     num_threads: int = 0
     seed: int = 0
     first_grasp_index: int = 0
@@ -321,9 +321,11 @@ def shake_trajectory(
 class ShakeScorer:
     """The physics scorer of :func:`mgn.pj.label_object` (``physics=ShakeScorer(...)``).
 
-    The shake test costs ``grid²`` Bullet trials per grasp, so it runs on an evenly strided subset
-    of at most ``max_grasps`` grasps of an object (``None``: all); the other grasps keep NaN in
-    ``quality_score_simulation``. The object is simulated as its cached convex decomposition
+    Every grasp gets a score by default (``max_grasps=None``), found with the staircase search
+    of ``options`` (``ShakeOptions.staircase``, on by default here). ``max_grasps`` caps the cost:
+    only an evenly strided subset of at most that many grasps is simulated and the others keep
+    NaN in ``quality_score_simulation`` (:func:`mgn.pj.label_object` records how many were
+    scored in the label metadata). The object is simulated as its cached convex decomposition
     (:func:`mgn.geometry.convex.cached_convex_decomposition`) with uniform ``density`` (kg/m^3).
     ``progress`` shows a progress bar with an ETA on stderr (None: when stderr is a terminal);
     the scores do not depend on it.
@@ -331,14 +333,18 @@ class ShakeScorer:
 
     density: float = 1000.0
     gripper: ParallelJawGripper | None = None
-    options: ShakeOptions = dataclass_field(default_factory=lambda: ShakeOptions(grid=5))
-    max_grasps: int | None = 200
+    options: ShakeOptions = dataclass_field(
+        default_factory=lambda: ShakeOptions(grid=5, staircase=True)
+    )
+    max_grasps: int | None = None
     progress: bool | None = None
 
     @property
     def __name__(self) -> str:  # recorded in the label metadata
         o = self.options
-        return f"Bullet shake test, grid {o.grid}x{o.grid}, at most {self.max_grasps} grasps"
+        search = "staircase search" if o.staircase else "full grid"
+        cap = "every grasp" if self.max_grasps is None else f"at most {self.max_grasps} grasps"
+        return f"Bullet shake test, grid {o.grid}x{o.grid}, {search}, {cap}"
 
     def __call__(self, mesh: Mesh, labels: Any) -> npt.NDArray[np.float32]:
 

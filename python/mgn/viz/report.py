@@ -230,6 +230,11 @@ def _warnings(ds: Dataset, stats: dict[str, Any]) -> list[str]:
         bad = int(np.sum(~np.isfinite(np.asarray(s, float)))) if s else 0
         if bad:
             out.append(f"{bad} {kind} grasp score(s) are NaN")
+    rec = (ds.info or {}).get("physics_scores")
+    if isinstance(rec, dict) and rec.get("unscored"):
+        out.append(f"{rec['unscored']} of {rec.get('grasps', '?')} parallel-jaw grasps have no "
+                   f"physics score (object_labels.physics_grasps = {rec.get('cap')}): "
+                   "quality_score_simulation is NaN for them")  # fmt: skip
     for kind in stats["grasp_counts"]["non_colliding"]:
         free = stats["grasp_counts"]["non_colliding"].get(kind, 0)
         hit = stats["grasp_counts"]["colliding"].get(kind, 0)
@@ -238,6 +243,21 @@ def _warnings(ds: Dataset, stats: dict[str, Any]) -> list[str]:
             out.append(f"only {share:.1f}% of the {kind} grasps are collision-free in the "
                        "scenes (gripper too large for the clutter?)")  # fmt: skip
     return out
+
+
+def _physics_text(rec: Any) -> str:
+    """The ``dataset.json`` ``physics_scores`` record in words."""
+    if not isinstance(rec, dict):
+        return "not run"
+    cap = rec.get("cap")
+    text = (
+        f"{rec.get('scored', '?')} of {rec.get('grasps', '?')} stored grasps scored "
+        f"({rec.get('search', '?')} search, {rec.get('grid', '?')}x{rec.get('grid', '?')} grid"
+    )
+    if rec.get("unscored"):
+        capped = ", ".join(rec.get("capped_objects", []))
+        return text + f"; capped at {cap} per object, {rec['unscored']} left NaN: {capped})"
+    return text + ("; no cap)" if cap is None else f"; cap {cap} not reached)")
 
 
 def _png_tag(image: np.ndarray, width: int) -> str:
@@ -378,6 +398,7 @@ def write_report(
         "seed": str(info.get("seed", "?")),
         "non-colliding grasps (sampled views)": kinds(gc["non_colliding"]),
         "colliding grasps (sampled views)": kinds(gc["colliding"]),
+        "parallel-jaw physics scores": _physics_text(info.get("physics_scores")),
     }
     for kind, split in stats.get("collision_reasons", {}).items():
         if split:
