@@ -2,13 +2,15 @@
 
 One scene of the pipeline benchmark's size (20 objects, 37 views at 1200 x 1200, all labels; the
 object labels come from the label cache, or are computed once) is generated, then every view's
-arrays are written again twice in the same loop: with the current writer
-(`mgn.io.scene_format.write_view`) and with the layout mgn wrote before (all arrays in `{v}.npz`,
-float32 ids, `depth_ideal`, `valid_depth` and `com_heatmap` in the npz; reproduced here as the
-"peer"). Reading is timed on the current files: every array of a view through `mgn.Dataset`.
-Bytes per scene are the sum over the scene folder (views, `scene_gt.json`, `scene.json`).
+arrays are written again three times in the same loop: with the current writer
+(`mgn.io.scene_format.write_view`), with its archival mode (`io.archival: true`) and with the
+layout mgn wrote first (all arrays in `{v}.npz`, float32 ids, `depth_ideal`, `valid_depth` and
+`com_heatmap` in the npz, RGB depth picture; reproduced here as the "peer"). Reading is timed on
+the current files: every array of a view through `mgn.Dataset`. Bytes per scene are the sum over
+the scene folder (views, `scene_gt.json`, `scene.json`), also split by file kind.
 
-Run alone: `python -m benchmarks.bench_format [--quick]` (quick: 10 objects, 5 views at 600 px).
+Run alone: `python -m benchmarks.bench_format [--quick] [--dataset DIR]` (quick: 10 objects,
+5 views at 600 px; `--dataset`: measure scene 0 of an existing dataset instead of generating).
 """
 
 from __future__ import annotations
@@ -93,13 +95,16 @@ def _record(view: Any) -> Any:
     )
 
 
-def _same_arrays(new_dir: Path, old_dir: Path, v: int) -> bool:
+def _same_arrays(new_dir: Path, old_dir: Path, v: int, rec: Any) -> bool:
     from mgn.io.dataset import View
 
     new = View(new_dir, v)
     with np.load(old_dir / f"{v}.npz") as z:
         old = {k: z[k] for k in z.files}
-    pairs = [(new.npz_array(k), old[k]) for k in ("depth", "occlusion", "occlusion_objects")]
+    pairs = [(new.npz_array(k), old[k]) for k in ("occlusion", "occlusion_objects")]
+    # The sensor depth: the metres read back are the sensor's own float32 (the previous layout
+    # stored float32(m * 100), whose last bit may differ from the grid value the writer stores).
+    pairs += [(new.depth, np.asarray(rec.depth, np.float32))]
     pairs += [
         (new.mgn_image("depth_ideal"), old["depth_ideal"]),
         (new.com_heatmap, old["com_heatmap"]),
@@ -194,6 +199,15 @@ def _coco_row(ds_root: Path, n_views: int, size: int, objects: int) -> Row:
     return row
 
 
+def _kinds(folder: Path) -> dict[str, int]:
+    """Bytes per file kind (the file name without its view index) of a folder."""
+    out: dict[str, int] = {}
+    for p in folder.iterdir():
+        kind = p.name.lstrip("0123456789")
+        out[kind] = out.get(kind, 0) + p.stat().st_size
+    return out
+
+
 def _read_all(folder: Path, index: int) -> None:
     from mgn.io.dataset import View
 
@@ -208,6 +222,8 @@ def run(
     mgn: Any,
     mgn_status: str,
     log: Callable[[str], None],
+    dataset: Path | None = None,
+    coco: bool = True,
 ) -> list[Row]:
     from .bench_pipeline import bench_config
 
@@ -230,54 +246,76 @@ def run(
     from mgn.pipeline.config import load_config
 
     root = bench_tempdir("mgn_bench_format_")
-    log(f"  format: generating one scene ({n_views} views at {size} px), load {load_average()}")
-    report = generate(root / "ds", 1, config=load_config(cfg), seed=SEED, progress=False)
-    if not report.complete:
-        row.mgn_status = f"generation failed: {report.failed[0].error if report.failed else '?'}"
-        return [row]
-    scene = Dataset(root / "ds").scene(0)
-    new_dir, old_dir = root / "new", root / "old"
-    new_dir.mkdir()
-    old_dir.mkdir()
-    walls: dict[str, list[float]] = {"new": [], "old": [], "read": []}
-    cpus: dict[str, list[float]] = {"new": [], "old": [], "read": []}
+    if dataset is None:
+        log(f"  format: generating one scene ({n_views} views at {size} px), load {load_average()}")
+        report = generate(root / "ds", 1, config=load_config(cfg), seed=SEED, progress=False)
+        if not report.complete:
+            err = report.failed[0].error if report.failed else "?"
+            row.mgn_status = f"generation failed: {err}"
+            return [row]
+        ds_root = root / "ds"
+    else:
+        ds_root = dataset
+    scene = Dataset(ds_root).scene(0)
+    n_views = len(scene.view_ids)
+    dirs = {name: root / name for name in ("new", "archival", "old")}
+    for d in dirs.values():
+        d.mkdir()
+    walls: dict[str, list[float]] = {"new": [], "archival": [], "old": [], "read": []}
+    cpus: dict[str, list[float]] = {k: [] for k in walls}
     identical = True
     for k, v in enumerate(scene.view_ids):
         rec = _record(scene.view(v))
-        sides = [("new", lambda r=rec: write_view(new_dir, r)),
-                 ("old", lambda r=rec: _write_legacy(old_dir, r))]  # fmt: skip
+        sides = [("new", lambda r=rec: write_view(dirs["new"], r)),
+                 ("archival", lambda r=rec: write_view(dirs["archival"], r, archival=True)),
+                 ("old", lambda r=rec: _write_legacy(dirs["old"], r))]  # fmt: skip
         for name, fn in sides if k % 2 == 0 else sides[::-1]:
             t, c = time.perf_counter(), time.process_time()
             fn()
             walls[name].append(time.perf_counter() - t)
             cpus[name].append(time.process_time() - c)
         t, c = time.perf_counter(), time.process_time()
-        _read_all(new_dir, v)
+        _read_all(dirs["new"], v)
         walls["read"].append(time.perf_counter() - t)
         cpus["read"].append(time.process_time() - c)
         # Both layouts hold the same arrays, bit for bit.
-        identical &= _same_arrays(new_dir, old_dir, v)
-    per_scene = {
-        "new": sum(p.stat().st_size for p in scene.folder.iterdir() if p.name != "manifest.json"),
-        "old": sum(p.stat().st_size for p in old_dir.iterdir())
-        + sum((scene.folder / n).stat().st_size for n in ("scene_gt.json", "scene.json")),
-    }
+        identical &= _same_arrays(dirs["new"], dirs["old"], v, rec)
+    scene_files = sum((scene.folder / n).stat().st_size for n in ("scene_gt.json", "scene.json"))
+    kinds = {name: _kinds(d) for name, d in dirs.items()}
+    per_scene = {name: sum(kk.values()) + scene_files for name, kk in kinds.items()}
     row.mgn[1] = Timing(wall=walls["new"], cpu=cpus["new"])
     row.peer = Timing(wall=walls["old"], cpu=cpus["old"])
     row.agreement = "same arrays, bit for bit" if identical else "DIFFERENT arrays"
     row.agreement_ok = identical
     scale = 37 / n_views
+
+    def mb(x: float) -> str:
+        return f"{x * scale / 1e6:.1f}"
+
+    order = sorted(kinds["new"], key=lambda kk: -kinds["old"].get(kk, kinds["new"][kk]))
+    split = ", ".join(
+        f"{kk} {mb(kinds['new'][kk])} (archival {mb(kinds['archival'].get(kk, 0))}, "
+        f"previous {mb(kinds['old'].get(kk, 0))})"
+        for kk in order
+        if kinds["new"][kk] * scale > 1e5
+    )
+    med = {name: 1e3 * float(np.median(w)) for name, w in walls.items()}
+    med_cpu = {name: 1e3 * float(np.median(c)) for name, c in cpus.items()}
     row.notes = [
-        f"{per_scene['new'] * scale / 1e6:.1f} MB per 37-view scene "
-        f"(previous layout {per_scene['old'] * scale / 1e6:.1f} MB)",
-        f"write {1e3 * np.median(walls['new']):.0f} ms/view (previous "
-        f"{1e3 * np.median(walls['old']):.0f} ms/view), read every array "
-        f"{1e3 * np.median(walls['read']):.0f} ms/view",
+        f"{mb(per_scene['new'])} MB per 37-view scene (archival {mb(per_scene['archival'])} MB, "
+        f"previous layout {mb(per_scene['old'])} MB)",
+        f"MB per scene by file kind: {split}",
+        f"write {med['new']:.0f} ms/view wall, {med_cpu['new']:.0f} ms CPU (archival "
+        f"{med['archival']:.0f} / {med_cpu['archival']:.0f}, previous {med['old']:.0f} / "
+        f"{med_cpu['old']:.0f}); read every array {med['read']:.0f} ms/view wall, "
+        f"{med_cpu['read']:.0f} ms CPU",
         f"load average {load_average()}",
     ]
-    coco = _coco_row(root / "ds", n_views, size, cfg["objects"]["count"])
+    rows = [row]
+    if coco:
+        rows.append(_coco_row(ds_root, n_views, size, cfg["objects"]["count"]))
     shutil.rmtree(root, ignore_errors=True)
-    return [row, coco]
+    return rows
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -285,12 +323,16 @@ def main(argv: list[str] | None = None) -> int:
 
     p = argparse.ArgumentParser(prog="python -m benchmarks.bench_format")
     p.add_argument("--quick", action="store_true")
+    p.add_argument("--dataset", type=Path, default=None, help="measure scene 0 of this dataset")
+    p.add_argument("--no-coco", action="store_true", help="skip the COCO export row")
     a = p.parse_args(sys.argv[1:] if argv is None else argv)
     from .common import import_mgn
 
     mgn, status = import_mgn()
-    for row in run(quick=a.quick, repeats=1, mgn=mgn, mgn_status=status, log=print):
-        print(row.case, "|", row.agreement, "|", "; ".join(row.notes) or row.mgn_status)
+    rows = run(quick=a.quick, repeats=1, mgn=mgn, mgn_status=status, log=print, dataset=a.dataset,
+               coco=not a.no_coco)  # fmt: skip
+    for row in rows:
+        print(row.case, "|", row.agreement, "|", "\n  ".join(row.notes) or row.mgn_status)
     return 0
 
 

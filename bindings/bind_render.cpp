@@ -217,6 +217,8 @@ void bind_render(py::module_& m) {
       .def_readwrite("shadow_tolerance_px", &DepthSensorParams::shadow_tolerance_px, "px")
       .def_readwrite("edge_threshold", &DepthSensorParams::edge_threshold, "m")
       .def_readwrite("flying_pixel_probability", &DepthSensorParams::flying_pixel_probability)
+      .def_readwrite("depth_step", &DepthSensorParams::depth_step,
+                     "m, grid of the reported z (0 = continuous)")
       .def_readwrite("invalid_transparent", &DepthSensorParams::invalid_transparent)
       .def_readwrite("invalid_dark", &DepthSensorParams::invalid_dark)
       .def_readwrite("invalid_mirror", &DepthSensorParams::invalid_mirror)

@@ -93,12 +93,13 @@ void bind_scene_drop(py::module_& m) {
           objects[i].restitution = e[i];
           objects[i].name = names[i];
         }
-        if (tote_box.size() != 5)
+        if (tote_box.size() != 5 && tote_box.size() != 6)
           throw_error<InvalidArgument>(
               "drop_objects: tote_box must be (inner_length, inner_width, inner_height, "
-              "wall_thickness, floor_thickness), got ",
+              "wall_thickness, floor_thickness[, walls 1 or 0]), got ",
               tote_box.size(), " values");
         ToteBox box{tote_box[0], tote_box[1], tote_box[2], tote_box[3], tote_box[4]};
+        if (tote_box.size() == 6) box.walls = tote_box[5] != 0.0;
         DropOptions o;
         for (const auto& [key_h, value] : options) {
           const std::string key = py::str(key_h);

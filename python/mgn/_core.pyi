@@ -587,6 +587,13 @@ class DepthSensorParams:
     @baseline.setter
     def baseline(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
+    def depth_step(self) -> float:
+        """
+        m, grid of the reported z (0 = continuous)
+        """
+    @depth_step.setter
+    def depth_step(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
     def edge_threshold(self) -> float:
         """
         m

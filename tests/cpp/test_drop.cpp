@@ -416,3 +416,38 @@ TEST(Drop, ObjectsOverTheRimAreRemovedAndTheRestSettlesAgain) {
   }
   EXPECT_GT(rounds, 0) << "no seed put a rod over the rim: the test tests nothing";
 }
+
+TEST(Drop, TableTopKeepsOverhangsAndLosesWhatFallsOff) {
+  // A 300 x 200 mm board without walls, 10 mm thick, top at z = 0 (python make_tote with
+  // walls=False). Three 50 mm cubes start at rest just above it: one in the middle, one
+  // overhanging the +x edge by 10 mm (centre on the board: it stays, though in a tote of the
+  // same size it would be over the rim) and one with its centre 20 mm beyond the edge (it falls).
+  mgn::ToteBox box;
+  box.inner_length = 0.3;
+  box.inner_width = 0.2;
+  box.walls = false;
+  mgn::Pose X_board = mgn::Pose::Identity();
+  X_board.translation() = mgn::Vec3d(0, 0, -0.005);
+  const mgn::Mesh board = mgn::make_box({0.3, 0.2, 0.01}).transformed(X_board);
+  const mgn::Mesh cube = mgn::make_box({0.05, 0.05, 0.05});
+  std::vector<mgn::DropObject> objects(3, object_of(cube, 500, "cube"));
+  std::vector<mgn::Pose> start(3, mgn::Pose::Identity());
+  start[0].translation() = mgn::Vec3d(0.0, 0.0, 0.0255);
+  start[1].translation() = mgn::Vec3d(0.135, 0.0, 0.0255);
+  start[2].translation() = mgn::Vec3d(0.17, 0.07, 0.0255);
+  mgn::DropOptions o;
+  o.window_min = {-0.1, -0.05, 0.1};
+  o.window_max = {0.1, 0.05, 0.2};
+  const auto r = mgn::settle_objects(objects, start, board, box, o);
+  ASSERT_TRUE(r.objects[0].kept());
+  ASSERT_TRUE(r.objects[1].kept());
+  EXPECT_EQ(r.objects[2].status, mgn::DropStatus::LeftTote);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(r.objects[i].contacts, mgn::ContactFloor) << i;  // the edge is no wall
+    EXPECT_NEAR(r.objects[i].X_WO.translation().z(), 0.025, 0.002) << i;
+  }
+  EXPECT_NEAR(r.objects[1].X_WO.translation().x(), 0.135, 0.005);
+  // The same board with walls is rejected as a tote (its mesh has no rim at inner_height).
+  box.walls = true;
+  EXPECT_THROW(mgn::settle_objects(objects, start, board, box, o), mgn::InvalidArgument);
+}

@@ -366,7 +366,18 @@ TEST(DepthSensor, NoiseMaterialsAndDeterminism) {
     EXPECT_NEAR(std::sqrt(s2 / n), sigma, 0.03 * sigma);
     EXPECT_NEAR(s / n, 0.0, 0.03 * sigma);
     EXPECT_EQ(a.depth_ideal, depth);
+    // The sensor reports z on its grid: each value is the float nearest a multiple of the step.
+    ASSERT_GT(p.depth_step, 0.0);
+    std::size_t distinct_off_grid = 0;
+    for (std::size_t i = 100; i < a.depth.size(); ++i) {
+      const double k = std::round(a.depth[i] / p.depth_step);
+      distinct_off_grid += a.depth[i] != static_cast<float>(k * p.depth_step);
+    }
+    EXPECT_EQ(distinct_off_grid, 0u);
   }
+  auto step = mgn::DepthSensorParams::preset_defaults(mgn::DepthSensorPreset::StructuredLight);
+  step.depth_step = -1e-5;
+  EXPECT_THROW(mgn::apply_depth_sensor(depth, ids, flags, K, step, 0), mgn::InvalidArgument);
   const auto ideal = mgn::apply_depth_sensor(
       depth, ids, flags, K, mgn::DepthSensorParams::preset_defaults(mgn::DepthSensorPreset::Ideal),
       5);

@@ -144,3 +144,14 @@ def test_hemisphere_view_count() -> None:
     assert c.camera.num_rig_views == 2 * 1 * 4
     with pytest.raises(ConfigError, match=r"0\.\.15"):  # default: 2 radii x 2 tilts x 4
         load_config({"camera": {"rig": "hemisphere", "views": [16]}})
+
+
+def test_io_archival_switch() -> None:
+    assert default_config().io.archival is False
+    c = load_config({"io": {"archival": True}})
+    assert c.io.archival is True
+    assert Config.from_dict(c.to_dict()).io.archival is True  # round trip (dataset.json)
+    with pytest.raises(ConfigError, match="io.archival"):
+        load_config({"io": {"archival": "yes"}})
+    with pytest.raises(ConfigError, match="io"):
+        load_config({"io": {"compact": True}})

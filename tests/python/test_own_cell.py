@@ -299,6 +299,8 @@ def look_at_by_hand(eye, target, up):
 def test_user_intrinsics_and_poses_project_a_point_to_the_expected_pixel(tmp_path):
     from mgn.pipeline.scene_writer import scene_views
     from mgn.render.renderer import Instance, Renderer
+    from mgn.render.views import iter_views
+    from mgn.scene.cameras import CameraView
 
     eye, target, up = [0.1, -0.05, 0.6], [0.02, 0.01, 0.0], [0.0, 1.0, 0.0]
     X_hand = look_at_by_hand(eye, target, up)
@@ -322,17 +324,32 @@ def test_user_intrinsics_and_poses_project_a_point_to_the_expected_pixel(tmp_pat
     P_W = np.array([0.05, 0.03, 0.02])
     ball = trimesh.creation.icosphere(subdivisions=4, radius=0.008)
     mesh = mgn.Mesh(np.asarray(ball.vertices + P_W, np.float32), np.asarray(ball.faces, np.int32))
+    assert views[0][1].K.distortion == (0.1, -0.02, 0.0, 0.0, 0.0)
+    p_C = np.linalg.inv(X_hand) @ np.append(P_W, 1.0)
+    x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
+    # The rectified (pinhole) camera: u = fx x + cx; pixel (i, j) has its centre at
+    # (i + 0.5, j + 0.5).
     r = Renderer(320, 240)
     r.set_instances([Instance(r.add_mesh(mesh), np.eye(4), 7)])
-    out = r.render(views[0][1], rgb=False, depth=False, shadows=False)
+    out = r.render(CameraView(views[0][1].K.pinhole(), X_hand), rgb=False, depth=False,
+                   shadows=False)  # fmt: skip
     vs, us = np.nonzero(out.instance_ids == 7)
     assert len(us) > 10
-    p_C = np.linalg.inv(X_hand) @ np.append(P_W, 1.0)
-    u = 300.0 * p_C[0] / p_C[2] + 150.5
-    v = 310.0 * p_C[1] / p_C[2] + 125.0
-    # Pixel (i, j) has its centre at (i + 0.5, j + 0.5).
-    assert us.mean() + 0.5 == pytest.approx(u, abs=0.3)
-    assert vs.mean() + 0.5 == pytest.approx(v, abs=0.3)
+    assert us.mean() + 0.5 == pytest.approx(300.0 * x + 150.5, abs=0.3)
+    assert vs.mean() + 0.5 == pytest.approx(310.0 * y + 125.0, abs=0.3)
+    # The configured camera, radial distortion k1 = 0.1, k2 = -0.02 applied (docs/cameras.md),
+    # on a ball far enough from the axis to move by 3.4 px.
+    X_ball = np.eye(4)
+    X_ball[:3, 3] = np.array([0.26, 0.16, 0.02]) - P_W
+    img = next(iter(iter_views([(mesh, X_ball, 7)], None, [views[0][1]], sensor="ideal",
+                               randomize=False, shadows=False)))  # fmt: skip
+    vs, us = np.nonzero(img.instance_ids == 7)
+    p_C = np.linalg.inv(X_hand) @ np.array([0.26, 0.16, 0.02, 1.0])
+    x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
+    f = 1.0 + 0.1 * (x * x + y * y) - 0.02 * (x * x + y * y) ** 2
+    assert np.hypot(300.0 * x * (f - 1), 310.0 * y * (f - 1)) > 3.0
+    assert us.mean() + 0.5 == pytest.approx(300.0 * x * f + 150.5, abs=0.3)
+    assert vs.mean() + 0.5 == pytest.approx(310.0 * y * f + 125.0, abs=0.3)
 
 
 def test_sensor_presets_and_camera_errors(tmp_path):
@@ -347,6 +364,8 @@ def test_sensor_presets_and_camera_errors(tmp_path):
             assert np.degrees(2 * np.arctan(w / 2 / K.fx)) == pytest.approx(hfov)
         else:  # 0.32 mm between pixels at 1.3 m
             assert 1.3 / K.fx == pytest.approx(0.32e-3)
+        if name == "photoneo_phoxi_m":  # published vertical projection angle 36.0 +- 2 deg
+            assert abs(np.degrees(2 * np.arctan(h / 2 / K.fy)) - 36.0) < 2.0
     bad = [
         ({"intrinsics": {"width": 640, "fx": 500}}, "camera.intrinsics"),
         ({"intrinsics": {"width": 640, "height": 480, "fx": 500, "fy": 500, "cx": 320,
@@ -602,3 +621,54 @@ def test_report_opens_in_headless_chromium(tmp_path, capsys):
     img = np.asarray(Image.open(shot).convert("RGB"), np.int32)
     bar_blue = np.all(np.abs(img - [0x3B, 0x75, 0xAF]) <= 3, axis=-1)
     assert bar_blue.sum() > 2000  # the bars are drawn
+
+
+# ------------------------------------------------------------------------------ table top
+
+
+def test_table_top_without_walls(tmp_path):
+    from mgn.io.dataset import Dataset
+    from mgn.io.validate import validate_dataset
+    from mgn.objects import ToteSpec, get_object, make_tote
+    from mgn.pipeline.config import load_config
+    from mgn.pipeline.label_scene import LabelOptions, label_scene
+    from mgn.scene import DropOptions, drop_scene
+    from mgn.scene.cameras import CameraView, Intrinsics, look_at
+
+    table = load_config({"tote": {"inner_length": 0.30, "inner_width": 0.22, "walls": False}}).tote
+    assert table == ToteSpec(inner_length=0.30, inner_width=0.22, walls=False)
+    v, f = make_tote(table)
+    assert v[:, 2].max() == 0.0 and v[:, 2].min() == pytest.approx(-table.floor_thickness)
+    assert np.abs(v[:, :2]).max(axis=0) == pytest.approx([0.15, 0.11])
+    names = ["box_cube", "box_tea", "tennis_ball", "box_cube", "box_tea", "tennis_ball",
+             "box_cube", "box_tea"]  # fmt: skip
+    options = DropOptions(window_min=(-0.12, -0.09, 0.05), window_max=(0.12, 0.09, 0.35))
+    scene = drop_scene([get_object(n) for n in names], seed=4, tote=table, options=options)
+    assert len(scene) >= 3
+    # Dropped from up to 0.35 m onto a board without walls, some roll off its edges.
+    assert len(scene.removed) >= 1
+    assert {r.reason for r in scene.removed} == {"left_tote"}
+    assert scene.stats["max_penetration"] < 1e-3  # overhanging an edge is not a penetration
+    for i, inst in enumerate(scene.instances):
+        lowest = (np.asarray(scene.mesh(i).vertices, np.float64) @ inst.X_WO[:3, :3].T
+                  + inst.X_WO[:3, 3])[:, 2].min()  # fmt: skip
+        assert lowest > -0.003, (inst.name, lowest)  # on the board, not below it
+        assert inst.bin_relation == "no_rel" and set(inst.contacts) <= {"floor"}
+    # The JSON says it is a table; a tote's JSON is unchanged (no "walls" key).
+    again = type(scene).from_json(scene.to_json(tmp_path / "scene.json"))
+    assert again.tote == table
+    assert "walls" not in type(scene)(scene.instances, ToteSpec(), 0).to_dict()["tote"]
+    # Labels: written and valid, every bin relation no_rel.
+    K = Intrinsics(240, 200, 260.0, 260.0, 120.0, 100.0)
+    views = [(0, CameraView(K, look_at([0.0, 0.0, 0.6], [0, 0, 0], [0, 1, 0]))),
+             (1, CameraView(K, look_at([0.35, -0.2, 0.4], [0, 0, 0], [0, 0, 1])))]  # fmt: skip
+    label_scene(scene, tmp_path / "ds" / "scene0", views,
+                options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
+    assert validate_dataset(tmp_path / "ds") == []
+    order = json.loads((tmp_path / "ds" / "scene0" / "0_order.json").read_text())
+    assert {o["bin_rel"] for o in order.values()} == {"no_rel"}
+    view = Dataset(tmp_path / "ds").scenes()[0].views()[0]
+    seen = np.unique(view.instances)
+    assert len(seen[seen > 0]) >= 2
+    with pytest.raises(InvalidArgumentError, match="walls"):
+        ToteSpec(walls=False, mesh="bin.obj")

@@ -213,7 +213,9 @@ def test_render_views_writes_images(scene, tmp_path) -> None:
             seen = r.depth_ideal > 0
             np.testing.assert_allclose(z["depth_ideal"][seen], r.depth_ideal[seen] * 100, rtol=1e-6)
             assert np.isnan(z["depth_ideal"][~seen]).all()
-        pic = np.asarray(Image.open(tmp_path / f"{v}_depth.png"))
+        with Image.open(tmp_path / f"{v}_depth.png") as im:
+            assert im.mode == "P"  # a palette PNG (docs/format.md)
+            pic = np.asarray(im.convert("RGB"))
         assert pic.shape == (300, 300, 3)
         assert np.all(pic[~r.valid] == 0)
     # The tote and floor are drawn with id 0 and the camera sees them: depth beyond the objects.

@@ -4,14 +4,29 @@ colored_pcl.py: np.load / h5py, the operations they apply) still work unchanged.
 
 from __future__ import annotations
 
+import io
+from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import h5py
 import numpy as np
 import pytest
+from PIL import Image
 
 from mgn.io.dataset import View
-from mgn.io.scene_format import ViewRecord, write_view
+from mgn.io.scene_format import (
+    ARCHIVAL_DEPTH_STEP_CM,
+    ARCHIVAL_ROTATION_STEP,
+    FLOAT_DELTA_ENCODING,
+    ViewRecord,
+    decode_float_image,
+    depth_picture_png,
+    encode_float_image,
+    write_view,
+)
+from mgn.render.sensor import apply_depth_sensor
+from mgn.render.views import depth_picture, depth_picture_indexed
 from mgn.scene.cameras import Intrinsics
 
 H, W, N = 48, 64, 3
@@ -168,3 +183,124 @@ def test_metagraspnet_scripts_read_the_files_unchanged(tmp_path: Path):
     # visualize_layout.py reads the order matrix with np.loadtxt.
     order_mat = np.loadtxt(str(tmp_path / "3_order.csv"), delimiter=",")
     assert order_mat.shape == (N, N)
+
+
+def test_sensor_depth_on_its_grid_is_stored_on_the_grid_and_reads_back_in_metres(tmp_path: Path):
+    """The sensor presets report z on a 1/256 cm grid: the npz holds exact multiples of it (float32
+    cm, MetaGraspNet's dtype) and the reader's metres equal the sensor's float32 bit for bit."""
+    rng = np.random.default_rng(4)
+    K = Intrinsics(W, H, 50.0, 50.0, W / 2, H / 2)
+    ideal = (0.5 + 0.7 * rng.random((H, W))).astype(np.float32)
+    ids = np.ones((H, W), np.int32)
+    for preset, step_cm in (("structured-light", 2.0**-8), ("tof", 2.0**-6)):
+        sensed = apply_depth_sensor(ideal, ids, K, preset, seed=7)
+        assert sensed.valid.mean() > 0.5
+        rec = replace(_record(rng), depth=sensed.depth, valid_depth=sensed.valid)
+        write_view(tmp_path, rec)
+        with np.load(tmp_path / "3.npz") as z:
+            stored = z["depth"]
+        assert stored.dtype == np.float32
+        ok = np.isfinite(stored)
+        assert np.array_equal(ok, sensed.valid)
+        k = stored[ok].astype(np.float64) / step_cm
+        assert np.array_equal(k, np.round(k))  # exact multiples of the preset's grid
+        # Within half a step of the sensor's metres, and the metres come back bit for bit.
+        assert np.abs(stored[ok] - sensed.depth[ok].astype(np.float64) * 100).max() < 1e-4
+        assert np.array_equal(_bits(View(tmp_path, 3).depth), _bits(sensed.depth))
+
+
+def test_float_images_round_trip_every_bit_pattern():
+    """The delta coding of mgn's float images restores any float32 bit pattern (NaN payloads,
+    infinities, -0.0, subnormals, jumps that overflow int32)."""
+    rng = np.random.default_rng(5)
+    bits = rng.integers(-(2**31), 2**31, size=(7, 33), dtype=np.int64).astype(np.int32)
+    a = bits.view(np.float32).copy()
+    a[0, :6] = [np.nan, np.inf, -np.inf, -0.0, 1e-45, np.finfo(np.float32).max]
+    coded = encode_float_image(a)
+    assert coded.dtype == np.int32
+    assert np.array_equal(_bits(decode_float_image(coded)), _bits(a))
+    # A smooth image gives small differences (what makes deflate effective).
+    ramp = np.linspace(70.0, 71.0, 64, dtype=np.float32)[None, :].repeat(3, 0)
+    assert np.abs(encode_float_image(ramp)[:, 1:]).max() < 2**16
+
+
+def test_mgn_images_are_stored_delta_coded_and_read_back(tmp_path: Path):
+    rec = _record(np.random.default_rng(6))
+    write_view(tmp_path, rec)
+    with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
+        for name in ("depth_ideal", "com_heatmap"):
+            assert h5[name].dtype == np.int32
+            assert h5[name].attrs["mgn_encoding"] == FLOAT_DELTA_ENCODING
+    view = View(tmp_path, 3)
+    assert np.array_equal(_bits(view.mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal)))
+    assert np.array_equal(_bits(view.com_heatmap), _bits(rec.extra_npz["com_heatmap"]))
+
+
+def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: Path):
+    rec = _record(np.random.default_rng(7))
+    # 100 depth levels and invalid pixels: 101 colours.
+    depth = np.repeat(np.linspace(0.6, 0.9, 100, dtype=np.float32), H * W // 100 + 1)[: H * W]
+    depth = depth.reshape(H, W)
+    depth[:3] = np.nan
+    rec = replace(rec, depth=depth, valid_depth=np.isfinite(depth))
+    write_view(tmp_path, rec)
+    with Image.open(tmp_path / "3_depth.png") as im:
+        assert im.mode == "P"
+        rgb = np.asarray(im.convert("RGB"))
+    assert np.array_equal(rgb, depth_picture(rec.depth))
+    # OpenCV, as MetaGraspNet's scripts read their PNGs, gives the same picture (BGR).
+    bgr = cv2.imread(str(tmp_path / "3_depth.png"), cv2.IMREAD_COLOR)
+    assert np.array_equal(bgr[..., ::-1], rgb)
+    assert np.array_equal(cv2.imread(str(tmp_path / "3_rgb.png"))[..., ::-1], rec.rgb)
+    # Every level and invalid pixels still fit one palette; the picture spans the colour map.
+    depth = np.concatenate([1.0 / np.linspace(1.0, 2.0, 1000), [np.nan]]).astype(np.float32)
+    depth = depth.reshape(1, -1)
+    with Image.open(io.BytesIO(depth_picture_png(depth))) as im:
+        assert im.mode == "P"
+        rgb = np.asarray(im.convert("RGB"))
+    assert np.array_equal(rgb, depth_picture(depth))
+    index, palette = depth_picture_indexed(depth)
+    assert len(np.unique(index)) == len(palette) == 256  # black and all 255 levels
+    assert (rgb[0, -1] == 0).all()
+
+
+def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtypes(tmp_path: Path):
+    rng = np.random.default_rng(8)
+    rec = _record(rng)
+    exact, arch = tmp_path / "exact", tmp_path / "archival"
+    write_view(exact, rec)
+    write_view(arch, rec, archival=True)
+    with np.load(arch / "3.npz") as z, np.load(exact / "3.npz") as e:
+        assert {k: z[k].dtype for k in z.files} == {k: e[k].dtype for k in e.files}
+        d = z["depth"]
+        assert np.array_equal(e["occlusion_objects"], z["occlusion_objects"])
+    ok = np.isfinite(d)
+    assert np.array_equal(ok, np.isfinite(rec.depth))
+    step = ARCHIVAL_DEPTH_STEP_CM
+    k = d[ok].astype(np.float64) / step
+    assert np.array_equal(k, np.round(k))
+    # At most half a step (0.078 mm) from the model's depth, for the sensor and the ideal depth.
+    assert np.abs(d[ok] - _cm(rec.depth)[ok]).max() <= step / 2 + 1e-5
+    view = View(arch, 3)
+    ideal = view.mgn_image("depth_ideal")
+    assert np.abs(ideal - _cm(rec.depth_ideal)).max() <= step / 2 + 1e-5
+    com = view.com_heatmap
+    assert com.dtype == np.float32
+    assert np.abs(com - rec.extra_npz["com_heatmap"]).max() <= 0.5 / 65535 + 1e-7
+    assert np.array_equal(view.valid_depth, rec.valid_depth)
+    size = {p.name: p.stat().st_size for p in arch.iterdir()}
+    assert size["3_mgn.hdf5"] < (exact / "3_mgn.hdf5").stat().st_size
+    # Grasp poses: float32, rotations within 2^-17 and translations within 1/2048 cm of the
+    # exact file; object poses and scores exact.
+    with h5py.File(arch / "3_scene.hdf5", "r") as a, h5py.File(exact / "3_scene.hdf5", "r") as e:
+        g = "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera"
+        assert a[g].dtype == np.float32 and a[g].shape == e[g].shape
+        pa, pe = a[g][()], e[g][()]
+        assert np.abs(pa[:, :3, :3] - pe[:, :3, :3]).max() <= 2.0**-17 + 1e-7
+        assert np.abs(pa[:, :3, 3] - pe[:, :3, 3]).max() <= 2.0**-11 + 1e-5
+        assert np.array_equal(pa[:, 3], pe[:, 3])
+        k = pa[:, :3, :3].astype(np.float64) / ARCHIVAL_ROTATION_STEP
+        assert np.array_equal(k, np.round(k))
+        for key in ("objects/poses_relative_to_camera", "non_colliding_grasps/paralleljaw/"
+                    "score_analytical"):  # fmt: skip
+            assert np.array_equal(a[key][()], e[key][()])

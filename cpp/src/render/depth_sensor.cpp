@@ -47,6 +47,7 @@ DepthSensorParams DepthSensorParams::preset_defaults(DepthSensorPreset preset) {
       p.sigma_z0 = 0.0;
       p.baseline = 0.1;
       p.invalid_transparent = p.invalid_dark = p.invalid_mirror = true;
+      p.depth_step = 0.01 / 256.0;
       break;
     case DepthSensorPreset::ToF:
       p.min_range = 0.5;
@@ -57,17 +58,18 @@ DepthSensorParams DepthSensorParams::preset_defaults(DepthSensorPreset preset) {
       p.edge_threshold = 0.02;
       p.flying_pixel_probability = 0.5;
       p.invalid_transparent = p.invalid_dark = p.invalid_mirror = true;
+      p.depth_step = 0.01 / 64.0;
       break;
   }
   return p;
 }
 
 void DepthSensorParams::validate() const {
-  const double nonneg[] = {min_range, max_range,           sigma_a,
-                           sigma_b,   shadow_tolerance_px, edge_threshold};
-  const char* names[] = {"min_range", "max_range",           "sigma_a",
-                         "sigma_b",   "shadow_tolerance_px", "edge_threshold"};
-  for (int i = 0; i < 6; ++i) {
+  const double nonneg[] = {min_range,           max_range,      sigma_a,   sigma_b,
+                           shadow_tolerance_px, edge_threshold, depth_step};
+  const char* names[] = {"min_range",           "max_range",      "sigma_a",   "sigma_b",
+                         "shadow_tolerance_px", "edge_threshold", "depth_step"};
+  for (int i = 0; i < 7; ++i) {
     if (!(std::isfinite(nonneg[i]) && nonneg[i] >= 0.0)) {
       throw_error<InvalidArgument>("DepthSensorParams: ", names[i],
                                    " must be finite and >= 0, got ", nonneg[i]);
@@ -183,6 +185,7 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
           }
           const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
           if (sigma > 0.0) zz += sigma * rng.normal();
+          if (p.depth_step > 0.0) zz = std::round(zz / p.depth_step) * p.depth_step;
           if (!(zz > 0.0)) continue;
         }
         out.depth[i] = static_cast<float>(zz);

@@ -69,8 +69,9 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
   {
     const auto b = tote.bounds();
     const double hx = 0.5 * box.inner_length, hy = 0.5 * box.inner_width, tol = 1e-4;
+    const double top = box.walls ? box.inner_height : 0.0;  // a table top has no rim
     if (b(0, 0) > -hx + tol || b(1, 0) < hx - tol || b(0, 1) > -hy + tol || b(1, 1) < hy - tol ||
-        b(1, 2) < box.inner_height - tol || b(0, 2) > tol)
+        b(1, 2) < top - tol || b(0, 2) > tol)
       throw_error<InvalidArgument>(
           kFn, ": the tote mesh (bounds x [", b(0, 0), ", ", b(1, 0), "], y [", b(0, 1), ", ",
           b(1, 1), "], z [", b(0, 2), ", ", b(1, 2),
@@ -280,6 +281,10 @@ class DropSimulation {
         X.setOrigin(kUnits.vector(Vec3d(0.5 * (hi + lo))));
         add_static(std::move(shape), X);
       };
+      if (!box_.walls) {  // a table top: the slab alone, its edges exact
+        add_box(Vec3d(-hx, -hy, -F), Vec3d(hx, hy, 0));
+        return;
+      }
       add_box(Vec3d(-hx - T, -hy - T, -F), Vec3d(hx + T, hy + T, 0));  // floor
       add_box(Vec3d(-hx - T, -hy - T, -F), Vec3d(-hx, hy + T, H));     // -x wall
       add_box(Vec3d(hx, -hy - T, -F), Vec3d(hx + T, hy + T, H));       // +x wall
@@ -393,10 +398,12 @@ class DropSimulation {
     return Pose(kUnits.pose(body_[i]->getWorldTransform()) * X_OB_[i].inverse());
   }
 
-  /// Not entirely inside the walls (on or over the rim, or below the floor).
+  /// Not entirely inside the walls (on or over the rim, or below the floor). Without walls (a
+  /// table top): below the top, i.e. falling or hanging off an edge.
   bool outside_walls(const Pose& X_WO, std::size_t i) const {
     const double tol = o_.collision_margin + o_.contact_distance;
     const Aabb b = world_aabb(hull_points_[i], X_WO);
+    if (!box_.walls) return b.lo.z() < -tol;
     return b.lo.x() < -hx_ - tol || b.hi.x() > hx_ + tol || b.lo.y() < -hy_ - tol ||
            b.hi.y() > hy_ + tol || b.lo.z() < -tol;
   }
@@ -542,6 +549,7 @@ class DropSimulation {
         const double nx = n_tote_to_obj.x(), ny = n_tote_to_obj.y(), nz = n_tote_to_obj.z();
         if (nz > kAxis && double(p_tote.z()) / kUnits.length < 0.5 * H_)
           contacts_[obj] |= ContactFloor;
+        if (!box_.walls) continue;  // a table top's edges are not walls
         if (nx > kAxis) contacts_[obj] |= ContactWallMinusX;
         if (nx < -kAxis) contacts_[obj] |= ContactWallPlusX;
         if (ny > kAxis) contacts_[obj] |= ContactWallMinusY;

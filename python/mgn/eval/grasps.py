@@ -98,6 +98,7 @@ from mgn.io.dataset import Dataset
 from mgn.pipeline.config import Config
 from mgn.pipeline.label_scene import LabelOptions
 from mgn.scene import Scene
+from mgn.scene.lens import lens_for
 from mgn.view_labels.grasps import SceneGraspModel
 
 __all__ = [
@@ -434,8 +435,19 @@ class _Context:
 # Predictions -> contact frames
 
 
+def _rays(K: Any, u: npt.ArrayLike, v: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """(N, 2) normalised rays (x/z, y/z) through image points (u, v), px, through the lens of
+    the view's camera (docs/cameras.md)."""
+    lens = lens_for(K)
+    if lens is not None:
+        return lens.normalized(u, v)
+    ua, va = np.atleast_1d(np.asarray(u, np.float64)), np.atleast_1d(np.asarray(v, np.float64))
+    return np.stack([(ua - K.cx) / K.fx, (va - K.cy) / K.fy], axis=1)
+
+
 def _backproject(K: Any, u: float, v: float, z: float) -> npt.NDArray[np.float64]:
-    return np.array([(u - K.cx) / K.fx * z, (v - K.cy) / K.fy * z, z])
+    x, y = _rays(K, u, v)[0]
+    return np.array([x * z, y * z, z])
 
 
 def _pixel(ctx: _Context, data: _ViewData, g: Mapping[str, Any], what: str):
@@ -464,9 +476,8 @@ def _suction_pixel(ctx, data, g, what) -> npt.NDArray[np.float64] | None:
     ok = np.isfinite(zz) & (inst[r0:r1, c0:c1] == inst[r, c])
     if ok.sum() < 3:
         return None
-    pts = np.column_stack([
-        (cols[ok] + 0.5 - K.cx) / K.fx * zz[ok], (rows[ok] + 0.5 - K.cy) / K.fy * zz[ok], zz[ok]
-    ])  # fmt: skip
+    xy = _rays(K, cols[ok] + 0.5, rows[ok] + 0.5)
+    pts = np.column_stack([xy[:, 0] * zz[ok], xy[:, 1] * zz[ok], zz[ok]])
     centred = pts - pts.mean(axis=0)
     _, s, vt = np.linalg.svd(centred, full_matrices=False)
     if len(s) < 3 or s[1] <= 1e-12:

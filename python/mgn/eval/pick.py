@@ -317,7 +317,9 @@ def _labels_for(
 def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
 
     poses, _ = mgn_rig(scene.seed)
-    K = scene_intrinsics(config.camera)
+    # The rectified camera: picking decides from the ideal pinhole view (lens distortion changes
+    # only where pixels are, not what the policy sees).
+    K = scene_intrinsics(config.camera).pinhole()
     K = K.scaled(resolution / max(K.width, K.height))
     return CameraView(K, poses[0])
 

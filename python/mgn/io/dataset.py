@@ -38,7 +38,12 @@ from mgn.errors import IoError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
-from mgn.io.scene_format import from_cm
+from mgn.io.scene_format import (
+    FLOAT_DELTA_ENCODING,
+    UNORM16_ENCODING,
+    decode_float_image,
+    from_cm,
+)
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
 __all__ = ["Dataset", "SceneFolder", "View"]
@@ -57,11 +62,13 @@ def _read_json(path: Path) -> Any:
 
 
 def intrinsics_from_params(p: dict[str, Any]) -> Intrinsics:
-    """Intrinsics from a ``{v}_camera_params.json`` (mgn's px keys, or MetaGraspNet's focal
-    length and apertures in mm with the principal point at the image centre)."""
+    """Intrinsics from a ``{v}_camera_params.json`` (mgn's px keys with the OpenCV
+    ``distortion`` when the images are distorted, or MetaGraspNet's focal length and apertures
+    in mm with the principal point at the image centre)."""
     if all(k in p for k in ("fx", "fy", "cx", "cy", "width", "height")):
         return Intrinsics(int(p["width"]), int(p["height"]), float(p["fx"]), float(p["fy"]),
-                          float(p["cx"]), float(p["cy"]))  # fmt: skip
+                          float(p["cx"]), float(p["cy"]),
+                          tuple(float(c) for c in p.get("distortion", ())))  # fmt: skip
     try:
         w = int(p["resolution"]["width"])
         h = int(p["resolution"]["height"])
@@ -177,6 +184,11 @@ class View:
                 with h5py.File(p, "r") as h5:
                     if name in h5:
                         value = h5[name][()]
+                        coding = h5[name].attrs.get("mgn_encoding")
+                        if coding == FLOAT_DELTA_ENCODING:
+                            value = decode_float_image(value)
+                        elif coding == UNORM16_ENCODING:
+                            value = value.astype(np.float32) / np.float32(65535.0)
             except OSError as e:
                 raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
         elif self.path(".npz").exists():

@@ -5,7 +5,7 @@ writes per view ``v`` (atomically):
 
 - ``{v}_rgb.png``: 8-bit RGB.
 - ``{v}_depth.png``: a picture of depth for people: colour-mapped normalised inverse depth of the
-  sensor depth (8-bit RGB, invalid pixels black).
+  sensor depth (8-bit palette PNG, read as RGB; invalid pixels black).
 - ``{v}_depth.npz``: ``depth`` (sensor z-depth, **cm**, NaN invalid), ``depth_ideal`` (noise-free,
   cm, NaN where nothing is seen) and ``valid_depth`` (bool), float32, named as the docs/format.md
   keys of ``{v}.npz`` so the scene writer can merge them.
@@ -27,8 +27,8 @@ from mgn.base.deterministic import npz_bytes
 from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
-from mgn.io.scene_format import png_bytes
-from mgn.render.views import ViewImages, depth_picture, iter_views
+from mgn.io.scene_format import depth_picture_png, png_bytes
+from mgn.render.views import ViewImages, iter_views
 from mgn.scene.cameras import CameraView
 
 __all__ = ["render_views", "write_view_images"]
@@ -84,7 +84,7 @@ def write_view_images(folder: Path, res: ViewImages) -> None:
     """Write the image files of one rendered view into ``folder`` (see the module doc)."""
     v = res.index
     atomic_write_bytes(folder / f"{v}_rgb.png", png_bytes(res.rgb))
-    atomic_write_bytes(folder / f"{v}_depth.png", png_bytes(depth_picture(res.depth)))
+    atomic_write_bytes(folder / f"{v}_depth.png", depth_picture_png(res.depth))
     ideal = np.where(res.depth_ideal > 0, res.depth_ideal, np.nan).astype(np.float32)
     data = npz_bytes(
         depth=(res.depth * M_TO_CM).astype(np.float32),

@@ -46,6 +46,10 @@ class ToteSpec:
         color: linear RGBA in [0, 1].
         mesh: a user bin mesh file in the tote frame, or None (the parametric box).
         mesh_scale: multiplies the mesh coordinates (0.001 for a file in millimetres).
+        walls: False for a table top (a shelf board, a conveyor): no walls, the "tote" is a
+            slab of inner_length x inner_width x floor_thickness with its top at z = 0;
+            inner_height then only bounds the drop. Objects that fall off an edge leave the
+            scene, and every bin relation is ``no_rel``. wall_thickness is unused.
     """
 
     inner_length: float = 0.400
@@ -56,6 +60,7 @@ class ToteSpec:
     color: tuple[float, float, float, float] = (0.2, 0.35, 0.6, 1.0)
     mesh: str | None = None
     mesh_scale: float = 1.0
+    walls: bool = True
 
     def __post_init__(self) -> None:
         if self.mesh is not None and (not isinstance(self.mesh, (str, os.PathLike)) or not
@@ -65,8 +70,16 @@ class ToteSpec:
             )
         if self.mesh is not None:
             object.__setattr__(self, "mesh", os.fspath(self.mesh))
+        if not isinstance(self.walls, (bool, np.bool_)):
+            raise InvalidArgumentError(f"ToteSpec.walls must be true or false, got {self.walls!r}")
+        object.__setattr__(self, "walls", bool(self.walls))
+        if not self.walls and self.mesh is not None:
+            raise InvalidArgumentError(
+                f"ToteSpec: walls: false (a table top) and mesh '{self.mesh}' exclude each other; "
+                "expected a bin mesh or a table top"
+            )
         for f in fields(self):
-            if f.name in ("color", "mesh"):
+            if f.name in ("color", "mesh", "walls"):
                 continue
             value = getattr(self, f.name)
             if isinstance(value, bool) or not isinstance(
@@ -89,7 +102,9 @@ class ToteSpec:
 
     @property
     def outer_size(self) -> tuple[float, float, float]:
-        """Outer (length, width, height) in metres."""
+        """Outer (length, width, height) in metres (a table top: the slab)."""
+        if not self.walls:
+            return (self.inner_length, self.inner_width, self.floor_thickness)
         return (
             self.inner_length + 2.0 * self.wall_thickness,
             self.inner_width + 2.0 * self.wall_thickness,
@@ -103,8 +118,10 @@ def default_tote() -> ToteSpec:
 
 
 def tote_volume(spec: ToteSpec) -> float:
-    """Material volume of the tote in m^3: outer box minus the cavity."""
+    """Material volume of the tote in m^3: outer box minus the cavity (a table top: the slab)."""
     lx, ly, lz = spec.outer_size
+    if not spec.walls:
+        return lx * ly * lz
     return lx * ly * lz - spec.inner_length * spec.inner_width * spec.inner_height
 
 
@@ -112,7 +129,8 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Closed, outward-wound triangle mesh of the tote in the tote frame.
 
     One polyhedron of 16 vertices and 28 triangles: outer bottom, outer sides, top rim, inner
-    walls and inner floor.
+    walls and inner floor; for a table top (``walls=False``) the slab, 8 vertices and 12
+    triangles.
 
     Args:
         spec: dimensions (default :func:`default_tote`), or a user bin (``spec.mesh``).
@@ -127,6 +145,13 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
     if s.mesh is not None:
         return _user_tote(s)
     hx, hy = 0.5 * s.inner_length, 0.5 * s.inner_width
+    if not s.walls:  # a table top: the slab, top face at z = 0
+        v = np.array([[x, y, z] for z in (-s.floor_thickness, 0.0) for y in (-hy, hy)
+                      for x in (-hx, hx)], np.float64)  # fmt: skip
+        # Vertex k: x = k & 1, y = k & 2, z = k & 4 (bits set: +).
+        quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+        tri = [(a, b, c) for a, b, c, d in quads] + [(a, c, d) for a, b, c, d in quads]
+        return v, np.asarray(tri, np.int32)
     ox, oy = hx + s.wall_thickness, hy + s.wall_thickness
     top, bottom = s.inner_height, -s.floor_thickness
     corners = np.array(

@@ -38,6 +38,10 @@ Sections:
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
   scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
   or a list of object names / category ids).
+- ``io``: how the files are written: ``archival`` (false: every array exactly as the models make
+  it; true: the compact archival mode of docs/format.md — depth on a 1/64 cm grid (at most
+  0.078 mm off), ``com_heatmap`` in 16 bits, grasp poses rounded (< 0.001°, 0.005 mm);
+  MetaGraspNet's scripts still read every file).
 - ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
@@ -73,12 +77,14 @@ from mgn.errors import InvalidArgumentError, MgnError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec, make_tote
 from mgn.render.photo import RandomizeSettings, RenderSettings
-from mgn.scene.cameras import look_at
+from mgn.scene.cameras import Intrinsics, look_at
+from mgn.scene.lens import lens_for
 from mgn.scene.scene import DropOptions
 
 __all__ = [
     "CameraConfig",
     "Config",
+    "IoConfig",
     "ConfigError",
     "HemisphereConfig",
     "IntrinsicsConfig",
@@ -345,11 +351,11 @@ class IntrinsicsConfig(_Section):
     """User camera intrinsics (pixels; OpenCV pinhole, principal point in continuous image
     coordinates, the image centre is (width/2, height/2)).
 
-    ``distortion`` (OpenCV order k1, k2, p1, p2, k3, ...) describes the real lens; it is recorded
-    with the config in ``dataset.json`` but the images and labels are rendered with the ideal
-    pinhole: they are the *rectified* images (what Zivid, Photoneo and RealSense deliver with
-    their point clouds). To train on distorted images, distort RGB, depth and masks with
-    ``cv2.initUndistortRectifyMap`` (inverse map) using these coefficients.
+    ``distortion`` (OpenCV order k1, k2, p1, p2, k3, ...) describes the real lens: images, depth
+    and every pixel label are those of that lens (rendered as a covering pinhole and resampled,
+    :mod:`mgn.scene.lens`), and each view's ``camera_params.json`` records the coefficients.
+    Leave it out (or all zeros) for rectified images, which is what Zivid, Photoneo and
+    RealSense deliver with their point clouds.
     """
 
     width: int = 0
@@ -380,7 +386,14 @@ class IntrinsicsConfig(_Section):
                 f"({', '.join(INTRINSICS_PRESETS)}) or width, height, fx, fy, cx, cy (px) and "
                 "optionally distortion"
             )
-        return super().from_dict(d, key)
+        out = super().from_dict(d, key)
+        if out.distortion:
+            try:  # the lens must be invertible over the image (built once, cached)
+                lens_for(Intrinsics(out.width, out.height, out.fx, out.fy, out.cx, out.cy,
+                                    out.distortion))  # fmt: skip
+            except InvalidArgumentError as e:
+                raise ConfigError(f"config key '{key}.distortion': {e}") from e
+        return out
 
 
 def _intrinsics(value: Any, key: str) -> str | IntrinsicsConfig:
@@ -626,6 +639,22 @@ def _render(data: Any, key: str) -> RenderSettings:
 
 
 @dataclass(frozen=True)
+class IoConfig(_Section):
+    """How the scene files are written (docs/format.md).
+
+    Attributes:
+        archival: the compact archival mode (lossy: sensor and ideal depth rounded to
+            :data:`mgn.io.scene_format.ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 1/65535,
+            grasp poses to 2^-16 per rotation entry and 1/1024 cm); false keeps every array bit
+            for bit.
+    """
+
+    archival: bool = False
+
+    _CHECKS = {"archival": _bool}
+
+
+@dataclass(frozen=True)
 class Config(_Section):
     """The whole dataset configuration (see the module doc for the sections)."""
 
@@ -640,6 +669,7 @@ class Config(_Section):
     split: SplitConfig = field(default_factory=SplitConfig)
     selection: SelectionConfig = field(default_factory=SelectionConfig)
     render: RenderSettings = field(default_factory=RenderSettings)
+    io: IoConfig = field(default_factory=IoConfig)
 
     _CHECKS = {
         "objects": lambda v, k: ObjectsConfig.from_dict(v, k),
@@ -653,6 +683,7 @@ class Config(_Section):
         "split": lambda v, k: SplitConfig.from_dict(v, k),
         "selection": lambda v, k: SelectionConfig.from_dict(v, k),
         "render": _render,
+        "io": lambda v, k: IoConfig.from_dict(v, k),
     }
 
     @classmethod
@@ -708,7 +739,7 @@ class Config(_Section):
 _SECTION_DOCS = {
     "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
     "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
-    "box inside its cavity",
+    "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width)",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
     "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
     "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "
@@ -720,6 +751,8 @@ _SECTION_DOCS = {
     "selection": "difficulty-balanced test set: quota {level: views} (null = off), batches",
     "render": "RGB images: engine raster (fast preview) | path (path tracer), spp, denoise, "
     "film; randomize: per-view lights / environment / tote+floor materials / exposure",
+    "io": "files: archival true = compact archival mode (depth on a 1/64 cm grid, heat map in "
+    "16 bits, grasp poses rounded; docs/format.md), false = every array exact",
 }
 
 

@@ -39,7 +39,11 @@ from mgn.scene.scene import Scene
 from mgn.suction.labels import SuctionLabels
 from mgn.view_labels.grasps import SceneGraspModel
 from mgn.view_labels.layout import compute_layout
-from mgn.view_labels.objects import SceneRayModel, view_object_labels
+from mgn.view_labels.objects import (
+    SceneRayModel,
+    distort_view_object_labels,
+    view_object_labels,
+)
 
 __all__ = ["LabelOptions", "LabelTimings", "label_scene", "strided_subset", "view_record"]
 
@@ -63,6 +67,7 @@ class LabelOptions:
         num_threads: C++ threads (0 = all cores); results do not depend on it.
         render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
             None = the raster engine). Labels do not depend on it.
+        archival: write the compact archival files (docs/format.md; lossy depth).
     """
 
     sensor: SensorName = "structured-light"
@@ -75,6 +80,7 @@ class LabelOptions:
     max_grasps_per_object: int = 2000
     num_threads: int = 0
     render: RenderSettings | None = None
+    archival: bool = False
 
 
 @dataclass
@@ -250,14 +256,19 @@ def label_scene(
             timings.add("render", t1 - t0)
             timings.engine = dict(images.engine)
             v, view = views[k]
+            # A camera with lens distortion: label its pinhole render, then resample the labels
+            # through the lens (the images are resampled the same way, docs/cameras.md).
+            src = images.pinhole if images.pinhole is not None else images
             labels = view_object_labels(
                 rays,
-                view,
-                images.instance_ids,
-                depth=images.depth_ideal,
+                src.view,
+                src.instance_ids,
+                depth=src.depth_ideal,
                 keypoints=opt.keypoints,
                 num_threads=opt.num_threads,
             )
+            if images.lens is not None:
+                labels = distort_view_object_labels(labels, images.lens)
             t2 = time.perf_counter()
             timings.add("object labels", t2 - t1)
             layout = None
@@ -274,7 +285,7 @@ def label_scene(
             # Files are encoded (zlib, PNG; both release the GIL) by writer threads while the next
             # view renders; at most two views wait, so memory stays bounded.
             record = view_record(v, view, images, labels, layout, grasps)
-            pending.append(pool.submit(write_view, out, record))
+            pending.append(pool.submit(write_view, out, record, archival=opt.archival))
             while len(pending) > 2:
                 pending.popleft().result()
             gt[v] = scene_gt_entries(labels.X_CO, categories, seen)

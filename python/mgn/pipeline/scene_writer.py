@@ -27,12 +27,13 @@ __all__ = ["scene_intrinsics", "scene_views", "write_scene"]
 
 
 def scene_intrinsics(camera: CameraConfig) -> Intrinsics:
-    """The intrinsics of ``camera`` (a preset or the user's) at its resolution scale."""
+    """The intrinsics of ``camera`` (a preset or the user's, with its lens distortion) at its
+    resolution scale."""
     k = camera.intrinsics
     if isinstance(k, str):
         preset = Intrinsics.preset(k)
     else:
-        preset = Intrinsics(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
+        preset = Intrinsics(k.width, k.height, k.fx, k.fy, k.cx, k.cy, k.distortion)
     return preset if camera.resolution_scale == 1.0 else preset.scaled(camera.resolution_scale)
 
 
@@ -99,6 +100,7 @@ def write_scene(
         scene_grasps=labels.scene_grasps,
         num_threads=num_threads,
         render=config.render,
+        archival=config.io.archival,
     )
     views = scene_views(scene, config.camera)
     timings = label_scene(scene, out, views, pj_labels=pj, suction_labels=su,

@@ -438,6 +438,12 @@ class PathScene:
         opts = options if options is not None else PathTraceOptions()
         if not isinstance(view, CameraView):
             raise InvalidTypeError(f"view must be a CameraView, got {type(view).__name__}")
+        if view.K.distortion:
+            raise InvalidArgumentError(
+                f"PathScene.render traces pinhole images; the camera has distortion "
+                f"{list(view.K.distortion)}: render it with mgn.render.iter_views (which resamples "
+                "through the lens) or trace lens_for(K).render_K (mgn.scene.lens)"
+            )
         d = self._scene.render(view.K.to_core(), view.X_WC, opts.to_core())
         return PathTraceOutput(
             radiance=d["radiance"],

@@ -18,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 from mgn.scene.cameras import CameraView
 
@@ -145,6 +146,12 @@ class Renderer:
             background: linear RGB of empty pixels.
             check_camera_inside: raise if the camera centre is inside a closed mesh.
         """
+        if view.K.distortion:
+            raise InvalidArgumentError(
+                f"Renderer.render draws pinhole images; the camera has distortion "
+                f"{list(view.K.distortion)}: render it with mgn.render.iter_views (which resamples "
+                "through the lens) or render lens_for(K).render_K (mgn.scene.lens)"
+            )
         li = LightSample() if light is None else light
         out = self._r.render(
             view.K.to_core(),

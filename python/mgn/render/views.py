@@ -22,8 +22,9 @@ from mgn.render.photo import PhotoRenderer, RenderSettings
 from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
 from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
+from mgn.scene.lens import Lens, lens_for
 
-__all__ = ["ViewImages", "depth_picture", "iter_views"]
+__all__ = ["ViewImages", "depth_picture", "depth_picture_indexed", "iter_views"]
 
 #: Side of the square floor slab drawn under the tote, m.
 FLOOR_SIZE = 3.0
@@ -44,6 +45,9 @@ class ViewImages:
         light: the light used (raster engine; the path engine's lights are in ``engine``).
         engine: what made ``rgb``: ``{"engine": "raster"}`` or ``{"engine": "path", "spp",
             "denoised", "max_bounces"}`` (:meth:`mgn.render.photo.RenderSettings.describe`).
+        pinhole: for a camera with lens distortion, the pinhole render (camera
+            ``lens.render_K``, same pose) these images were resampled from; None otherwise.
+        lens: the camera's :class:`~mgn.scene.lens.Lens` (None for a pinhole camera).
     """
 
     index: int
@@ -55,6 +59,35 @@ class ViewImages:
     instance_ids: npt.NDArray[np.int32]
     light: LightSample
     engine: dict[str, Any] = field(default_factory=lambda: {"engine": "raster"})
+    pinhole: ViewImages | None = field(default=None, repr=False)
+    lens: Lens | None = field(default=None, repr=False)
+
+
+def _distorted(images: ViewImages, view: CameraView, lens: Lens) -> ViewImages:
+    """The images of the distorted camera ``view`` resampled from the pinhole render ``images``
+    (docs/cameras.md): ids nearest, RGB bilinear, the ideal depth bilinear in 1/z inside one
+    surface (the nearest pixel at edges). The sensor depth is that same interpolated surface plus
+    the sensor's deviation at the nearest pinhole pixel (its noise keeps its statistics), invalid
+    where the sensor gave nothing and at depth discontinuities."""
+    ids = images.instance_ids
+    ideal = images.depth_ideal
+    deviation = np.where(images.valid, images.depth - ideal, np.float32(np.nan))
+    surface = lens.warp_depth(ideal, at_edges="invalid")
+    depth = (surface + lens.warp_nearest(deviation)).astype(np.float32)
+    valid = np.isfinite(depth)
+    return ViewImages(
+        images.index,
+        view,
+        lens.warp_rgb(images.rgb),
+        depth,
+        lens.warp_depth(ideal, ids, at_edges="nearest"),
+        valid,
+        lens.warp_nearest(ids),
+        images.light,
+        images.engine,
+        pinhole=images,
+        lens=lens,
+    )
 
 
 _CMAP = np.array(
@@ -75,18 +108,34 @@ _DEPTH_LUT = _depth_lut()
 
 def depth_picture(depth: npt.ArrayLike) -> npt.NDArray[np.uint8]:
     """(H, W, 3) uint8 picture of a depth image (m; NaN or <= 0 invalid): inverse depth
-    normalised over the valid pixels, colour-mapped (256 levels) from dark blue (far) to red
-    (near); invalid pixels black."""
+    normalised over the valid pixels, colour-mapped (255 levels, so that with black the picture
+    fits a 256-colour palette) from dark blue (far) to red (near); invalid pixels black."""
+    index, palette = depth_picture_indexed(depth)
+    return palette[index]
+
+
+def depth_picture_indexed(
+    depth: npt.ArrayLike,
+) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
+    """The picture of :func:`depth_picture` as (H, W) uint8 indices into a (K, 3) uint8 palette of
+    the colours it uses (K <= 256: black and 255 levels): ``palette[index]`` is the picture (a
+    palette PNG: about half the bytes of the RGB picture)."""
     d = np.asarray(depth, np.float32)
-    valid = np.isfinite(d) & (d > 0)
-    out = np.zeros((*d.shape, 3), np.uint8)
-    if not valid.any():
-        return out
-    inv = 1.0 / d[valid]
-    lo, hi = float(inv.min()), float(inv.max())
-    level = np.round((inv - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.uint8)
-    out[valid] = _DEPTH_LUT[level]
-    return out
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(d) & (d > 0)
+    key = np.zeros(d.shape, np.int32)  # 0 invalid (black), 1 + level otherwise
+    if valid.any():
+        inv = 1.0 / d[valid]
+        lo, hi = float(inv.min()), float(inv.max())
+        level = np.round((inv - lo) * (254.0 / max(hi - lo, 1e-12))).astype(np.int32)
+        key[valid] = 1 + level
+    # Level l of 0..254 takes the colour map's entry round(l * 255 / 254) (both ends kept).
+    lut = _DEPTH_LUT[np.round(np.arange(255) * (255.0 / 254.0)).astype(np.int64)]
+    colours = np.concatenate([np.zeros((1, 3), np.uint8), lut])
+    used = np.flatnonzero(np.bincount(key.ravel(), minlength=256))
+    remap = np.zeros(256, np.int32)
+    remap[used] = np.arange(len(used))
+    return remap[key].astype(np.uint8), colours[used]
 
 
 def _checked_scene(
@@ -174,12 +223,23 @@ def iter_views(
     With ``render.engine == "path"`` the RGB image is path-traced (:mod:`mgn.render.photo`);
     depth and instance ids still come from the raster's geometry passes, which the tracer
     matches pixel for pixel.
+
+    A camera with lens distortion (``K.distortion``) is rendered by either engine as the pinhole
+    ``lens_for(K).render_K`` and resampled through the OpenCV model (:mod:`mgn.scene.lens`,
+    docs/cameras.md); the yielded images are the distorted ones, ``ViewImages.pinhole`` holds
+    the render they came from (the per-view labels are computed on it and resampled).
     """
     settings = render if render is not None else RenderSettings()
     X_tote = _checked_scene(objects, tote, X_W_tote)
     cams = _cameras(views, Intrinsics.mgn_synthetic() if K is None else K, rig_seed, X_tote)
-    max_w = max(c.K.width for _, c in cams)
-    max_h = max(c.K.height for _, c in cams)
+    # A camera with distortion is rendered as the pinhole that covers it, then resampled.
+    lenses = [lens_for(c.K) for _, c in cams]
+    shot = [
+        c if ln is None else CameraView(ln.render_K, c.X_WC)
+        for (_, c), ln in zip(cams, lenses, strict=True)
+    ]
+    max_w = max(c.K.width for c in shot)
+    max_h = max(c.K.height for c in shot)
 
     # Scene.
     r = renderer
@@ -223,7 +283,7 @@ def iter_views(
             tote_color=tote_color, randomize=randomize, seed=seed, num_threads=num_threads,
         )  # fmt: skip
 
-    for v, cam in cams:
+    for (v, view), lens, cam in zip(cams, lenses, shot, strict=True):
         img = r.render(cam, rgb=photo is None, randomize=randomize, seed=seed, view_index=v,
                        shadows=shadows)  # fmt: skip
         assert img.depth is not None and img.instance_ids is not None
@@ -239,4 +299,4 @@ def iter_views(
         res = ViewImages(
             v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine
         )
-        yield res
+        yield res if lens is None else _distorted(res, view, lens)

@@ -6,6 +6,8 @@
   ``to_json`` / ``from_json``; ``mesh(i)`` gives an instance's mesh back.
 - :mod:`mgn.scene.cameras`: :class:`Intrinsics`, :class:`CameraView`, the 37-view MetaGraspNet rig
   (:func:`mgn_rig`), hemisphere rigs, :func:`look_at`.
+- :mod:`mgn.scene.lens`: the OpenCV lens-distortion model and the resampling of pinhole renders
+  (:func:`lens_for`, :class:`Lens`).
 
 Names are imported on first use, so ``import mgn`` stays light.
 """
@@ -37,6 +39,8 @@ _EXPORTS = {
     "mgn_rig": "cameras",
     "mgn_rig_from_params": "cameras",
     "mgn_views": "cameras",
+    "Lens": "lens",
+    "lens_for": "lens",
 }
 
 __all__ = [
@@ -44,6 +48,7 @@ __all__ = [
     "CONTACT_NAMES",
     "CameraView",
     "DropOptions",
+    "Lens",
     "Intrinsics",
     "MGN_COPIES",
     "MgnRigParams",
@@ -53,6 +58,7 @@ __all__ = [
     "compose_objects",
     "drop_scene",
     "hemisphere_rig",
+    "lens_for",
     "look_at",
     "mgn_rig",
     "mgn_rig_from_params",
@@ -79,6 +85,7 @@ if TYPE_CHECKING:
     )
     from mgn.scene.compose import MGN_COPIES, compose_objects
     from mgn.scene.drop import drop_scene, settle, settle_tracked
+    from mgn.scene.lens import Lens, lens_for
     from mgn.scene.scene import (
         BUILTIN,
         CONTACT_NAMES,

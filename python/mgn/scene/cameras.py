@@ -32,7 +32,8 @@ __all__ = [
 #: Real-sensor presets: (width, height, fx = fy px), principal point at the image centre.
 #: Derived from the manufacturers' published resolution and field of view (docs/cameras.md):
 #: Zivid 2+ M130: 2448 x 2048, 0.32 mm per pixel at 1300 mm -> f = 1300 / 0.32 px;
-#: Photoneo PhoXi 3D Scanner M: 2064 x 1544, 47.5 deg horizontal field -> f = 1032 / tan(23.75 deg);
+#: Photoneo PhoXi 3D Scanner M: 2064 x 1544 (Photoneo wiki and ROS driver), 47.5 deg horizontal
+#: projection angle -> f = 1032 / tan(23.75 deg) (36.4 deg vertically; published 36.0 +- 2 deg);
 #: Intel RealSense D435 depth: 1280 x 720, 87 deg horizontal field -> f = 640 / tan(43.5 deg).
 SENSOR_PRESETS: dict[str, tuple[int, int, float]] = {
     "zivid2_plus_m130": (2448, 2048, 1300.0 / 0.32),
@@ -47,12 +48,19 @@ MGN_APERTURE_MM = 20.955
 
 @dataclass(frozen=True)
 class Intrinsics:
-    """Pinhole intrinsics in pixels (no distortion). Validated on construction.
+    """Camera intrinsics in pixels: a pinhole, optionally with OpenCV lens distortion.
+    Validated on construction.
 
     Attributes:
         width, height: image size, px (> 0).
         fx, fy: focal lengths, px (> 0).
-        cx, cy: principal point, px (continuous image coordinates; the image centre is W/2, H/2).
+        cx, cy: principal point, px (continuous image coordinates; the image centre is W/2, H/2;
+            OpenCV's camera matrix has cx - 0.5, cy - 0.5: :attr:`K_opencv`).
+        distortion: OpenCV coefficients k1, k2, p1, p2[, k3[, k4, k5, k6[, s1..s4[, tau_x,
+            tau_y]]]] (4, 5, 8, 12 or 14 numbers; the model is in :mod:`mgn.scene.lens`); empty
+            for a pinhole. All zeros is stored as empty (the same camera). Images of a camera
+            with distortion are rendered as a pinhole and resampled
+            (:func:`mgn.scene.lens.lens_for`).
     """
 
     width: int
@@ -61,6 +69,7 @@ class Intrinsics:
     fy: float
     cx: float
     cy: float
+    distortion: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         for name in ("width", "height"):
@@ -70,6 +79,18 @@ class Intrinsics:
             object.__setattr__(self, name, int(value))
         for name in ("fx", "fy", "cx", "cy"):
             object.__setattr__(self, name, float(getattr(self, name)))
+        try:
+            dist = tuple(float(c) for c in self.distortion)
+        except (TypeError, ValueError) as e:
+            raise InvalidArgumentError(
+                f"Intrinsics.distortion must be a list of numbers, got {self.distortion!r}"
+            ) from e
+        if len(dist) not in (0, 4, 5, 8, 12, 14) or not all(math.isfinite(c) for c in dist):
+            raise InvalidArgumentError(
+                "Intrinsics.distortion must be 4, 5, 8, 12 or 14 finite OpenCV coefficients "
+                f"(k1, k2, p1, p2, k3, ...), got {list(dist)}"
+            )
+        object.__setattr__(self, "distortion", dist if any(c != 0.0 for c in dist) else ())
         self.to_core()  # validates (InvalidArgumentError names the bad value)
 
     @classmethod
@@ -106,6 +127,7 @@ class Intrinsics:
         return cls(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
 
     def to_core(self) -> _core.Intrinsics:
+        """The C++ pinhole intrinsics (the distortion is not part of them)."""
         return _core.Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
 
     @property
@@ -113,16 +135,33 @@ class Intrinsics:
         """(3, 3) matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]."""
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
 
+    @property
+    def K_opencv(self) -> npt.NDArray[np.float64]:  # noqa: N802 (the usual symbol)
+        """(3, 3) camera matrix in OpenCV's pixel convention (pixel centres on integers):
+        ``K`` with cx - 0.5, cy - 0.5. With :attr:`distortion` it is what ``cv2.projectPoints``,
+        ``cv2.undistort`` and ``cv2.initUndistortRectifyMap`` take for mgn's images."""
+        return np.array(
+            [[self.fx, 0.0, self.cx - 0.5], [0.0, self.fy, self.cy - 0.5], [0.0, 0.0, 1.0]]
+        )
+
+    def pinhole(self) -> Intrinsics:
+        """The same intrinsics without distortion (the rectified camera)."""
+        return Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
+
     def scaled(self, factor: float) -> Intrinsics:
-        """The same field of view at ``factor`` times the resolution (rounded)."""
+        """The same field of view at ``factor`` times the resolution (rounded). The distortion
+        coefficients act on normalised coordinates and are kept."""
         w, h = round(self.width * factor), round(self.height * factor)
         return Intrinsics(w, h, self.fx * w / self.width, self.fy * h / self.height,
-                          self.cx * w / self.width, self.cy * h / self.height)  # fmt: skip
+                          self.cx * w / self.width, self.cy * h / self.height,
+                          self.distortion)  # fmt: skip
 
     def camera_params(self, clipping_range: tuple[float, float] = (0.01, 10.0)) -> dict[str, Any]:
         """``{v}_camera_params.json`` content (docs/format.md): px values plus MetaGraspNet's keys.
 
-        The apertures are those of a 35 mm lens giving these focal lengths (mm).
+        The apertures are those of a 35 mm lens giving these focal lengths (mm). A camera with
+        distortion adds ``distortion_model: "opencv"`` and ``distortion`` (the coefficients;
+        the images are distorted by them, docs/cameras.md).
         """
         hfov = 2.0 * math.atan(0.5 * self.width / self.fx)
         vfov = 2.0 * math.atan(0.5 * self.height / self.fy)
@@ -142,7 +181,11 @@ class Intrinsics:
             "vertical_fov": math.degrees(vfov),
             "resolution": {"height": self.height, "width": self.width},
             "clipping_range": list(clipping_range),
-        }
+        } | (
+            {"distortion_model": "opencv", "distortion": list(self.distortion)}
+            if self.distortion
+            else {}
+        )
 
 
 def _pose(X: npt.ArrayLike, name: str) -> npt.NDArray[np.float64]:

@@ -107,6 +107,7 @@ def _simulate(
             tote.inner_height,
             tote.wall_thickness,
             tote.floor_thickness,
+            1.0 if tote.walls else 0.0,
         ],
         opts,
         None if X_WO_start is None else np.asarray(X_WO_start, np.float64).reshape(-1, 16),

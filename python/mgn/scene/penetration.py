@@ -74,9 +74,10 @@ def render_penetration(
     meshes: Sequence[Mesh], X_WO: Sequence[npt.ArrayLike], tote: ToteSpec
 ) -> float:
     """Deepest penetration (m, >= 0) of closed meshes at poses ``X_WO`` (tote frame): of a vertex
-    below the floor (z < 0) or beyond an inner wall below the rim, and of a vertex of one mesh
-    inside another (its distance to that mesh's surface). A vertex-based measure: the depth of an
-    edge crossing a face between vertices is not seen (it is bounded by the mesh resolution)."""
+    below the floor (z < 0) or beyond an inner wall below the rim (a tote with walls), and of a
+    vertex of one mesh inside another (its distance to that mesh's surface). A vertex-based
+    measure: the depth of an edge crossing a face between vertices is not seen (it is bounded by
+    the mesh resolution)."""
     if len(meshes) != len(X_WO):
         raise InvalidArgumentError(
             f"render_penetration: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
@@ -89,7 +90,7 @@ def render_penetration(
     for w in world:
         worst = max(worst, float(-w[:, 2].min()))
         low = w[w[:, 2] <= H]
-        if len(low):
+        if len(low) and tote.walls:  # a table top has no walls to penetrate
             worst = max(worst, float((np.abs(low[:, 0]) - hx).max()))
             worst = max(worst, float((np.abs(low[:, 1]) - hy).max()))
     lo = [w.min(axis=0) for w in world]

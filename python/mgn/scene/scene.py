@@ -363,6 +363,8 @@ class Scene:
     def to_dict(self) -> dict[str, Any]:
         tote = dataclasses.asdict(self.tote)
         tote["color"] = list(self.tote.color)
+        if tote["walls"]:
+            del tote["walls"]  # a tote (the default); "walls": false marks a table top
         return {
             "schema_version": SCHEMA_VERSION,
             "seed": int(self.seed),

@@ -31,6 +31,7 @@ _EXPORTS = {
     "SceneRayModel": "objects",
     "ViewObjectLabels": "objects",
     "view_object_labels": "objects",
+    "distort_view_object_labels": "objects",
 }
 
 __all__ = [
@@ -48,6 +49,7 @@ __all__ = [
     "ViewObjectLabels",
     "compute_layout",
     "view_object_labels",
+    "distort_view_object_labels",
 ]
 
 
@@ -73,5 +75,6 @@ if TYPE_CHECKING:
         DEFAULT_KEYPOINT_TOLERANCE,
         SceneRayModel,
         ViewObjectLabels,
+        distort_view_object_labels,
         view_object_labels,
     )

@@ -44,6 +44,7 @@ from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
 from mgn.pj.sampler import core_gripper
 from mgn.scene.cameras import CameraView
+from mgn.scene.lens import Lens, lens_for
 from mgn.scene.scene import Scene
 from mgn.suction.labels import CUP_BODY_CLEARANCE, SuctionLabels
 from mgn.suction.seal import core_cup
@@ -288,6 +289,15 @@ def _wrench_option(labels: Sequence[PjLabels | None], key: str, default: float) 
             f"{sorted(values)}; pass {key}= explicitly"
         )
     return values.pop() if values else default
+
+
+def _in_lens_image(
+    lens: Lens, view: CameraView, points_W: npt.NDArray[np.float64]
+) -> npt.NDArray[np.bool_]:
+    """(N,) bool: world points (N, 3), m, projecting inside the distorted image of ``view``."""
+    X_CW = np.linalg.inv(view.X_WC)
+    p = np.asarray(points_W, np.float64).reshape(-1, 3)
+    return lens.in_image(p @ X_CW[:3, :3].T + X_CW[:3, 3])
 
 
 class SceneGraspModel:
@@ -556,10 +566,16 @@ class SceneGraspModel:
         """(N,) bool: whether each world point (N, 3) is visible from ``view`` (a
         :class:`~mgn.scene.cameras.CameraView`)."""
         pts = np.asarray(points, np.float64).reshape(-1, 3)
-        return self._core.visible(view.K.to_core(), view.X_WC, pts)
+        lens = lens_for(view.K)
+        if lens is None:
+            return self._core.visible(view.K.to_core(), view.X_WC, pts)
+        # Through a lens: visible from the covering pinhole and inside the distorted image.
+        seen = self._core.visible(lens.render_K.to_core(), view.X_WC, pts)
+        return np.asarray(seen, bool) & _in_lens_image(lens, view, pts)
 
     def view_grasps(self, view: CameraView, seen: npt.ArrayLike) -> SceneGrasps:
-        """The grasp labels of one view (camera frame, metres).
+        """The grasp labels of one view (camera frame, metres). With lens distortion, "inside
+        the image" is decided through the lens (:meth:`mgn.scene.lens.Lens.in_image`).
 
         Args:
             view: a :class:`~mgn.scene.cameras.CameraView` (``.K`` intrinsics, ``.X_WC``).
@@ -571,10 +587,23 @@ class SceneGraspModel:
                 f"view_grasps: seen must have shape ({self.num_objects},) (one entry per scene "
                 f"instance), got {s.shape}"
             )
-        r = self._core.view_grasps(view.K.to_core(), view.X_WC, s.astype(bool))
+        lens = lens_for(view.K)
+        K = view.K if lens is None else lens.render_K
+        r = self._core.view_grasps(K.to_core(), view.X_WC, s.astype(bool))
         pj_idx, su_idx = r["pj_index"], r["suction_index"]
         pj_tool, pj_contact = _pose_array(r["pj_tool"]), _pose_array(r["pj_contact"])
         su_tool, su_contact = _pose_array(r["suction_tool"]), _pose_array(r["suction_contact"])
+        if lens is not None:
+            # The covering pinhole sees more than the lens: keep a grasp only when a contact
+            # that is visible also projects inside the distorted image.
+            pin = CameraView(lens.render_K, view.X_WC)
+            p1, p2 = self.pj.contacts[pj_idx], self.pj.second_contacts[pj_idx]
+            ok = (_in_lens_image(lens, view, p1) & self.visible(pin, p1)) | (
+                _in_lens_image(lens, view, p2) & self.visible(pin, p2)
+            )
+            pj_idx, pj_tool, pj_contact = pj_idx[ok], pj_tool[ok], pj_contact[ok]
+            ok = _in_lens_image(lens, view, self.suction.contacts[su_idx])
+            su_idx, su_tool, su_contact = su_idx[ok], su_tool[ok], su_contact[ok]
         groups = []
         for want in (False, True):
             m = self.pj.colliding[pj_idx] == want

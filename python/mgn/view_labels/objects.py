@@ -25,12 +25,14 @@ from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.objects import com_keypoints, tote_mesh
 from mgn.scene.cameras import CameraView
+from mgn.scene.lens import Lens
 from mgn.scene.scene import Scene
 
 __all__ = [
     "DEFAULT_KEYPOINT_TOLERANCE",
     "SceneRayModel",
     "ViewObjectLabels",
+    "distort_view_object_labels",
     "view_object_labels",
 ]
 
@@ -266,6 +268,12 @@ def view_object_labels(
         raise InvalidTypeError(f"model must be a SceneRayModel, got {type(model).__name__}")
     if not isinstance(view, CameraView):
         raise InvalidTypeError(f"view must be a CameraView, got {type(view).__name__}")
+    if view.K.distortion:
+        raise InvalidArgumentError(
+            f"view_object_labels works on pinhole views; the camera has distortion "
+            f"{list(view.K.distortion)}: label the pinhole render (ViewImages.pinhole) and "
+            "resample the labels with distort_view_object_labels"
+        )
     img = np.asarray(instance_image)
     if img.dtype == np.bool_ or not np.issubdtype(img.dtype, np.integer):
         raise InvalidArgumentError(
@@ -305,4 +313,81 @@ def view_object_labels(
         instance_ids=np.arange(1, n + 1, dtype=np.int32),
         category_ids=model.category_ids,
         **out,
+    )
+
+
+def _coco_boxes(masks: npt.NDArray[np.bool_]) -> npt.NDArray[np.int32]:
+    """(N, 4) int32 COCO [x, y, w, h] of (N, H, W) masks (zeros when empty)."""
+    out = np.zeros((masks.shape[0], 4), np.int32)
+    cols = np.asarray(masks.any(axis=1), bool)
+    rows = np.asarray(masks.any(axis=2), bool)
+    for i in range(masks.shape[0]):
+        c, r = np.flatnonzero(cols[i]), np.flatnonzero(rows[i])
+        if c.size:
+            out[i] = (c[0], r[0], c[-1] - c[0] + 1, r[-1] - r[0] + 1)
+    return out
+
+
+def _move_outside(
+    kept: npt.NDArray[np.float64],
+    kept_obj: npt.NDArray[np.int32],
+    other: npt.NDArray[np.float64],
+    other_obj: npt.NDArray[np.int32],
+    inside: npt.NDArray[np.bool_],
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int32], npt.NDArray[np.float64],
+           npt.NDArray[np.int32]]:  # fmt: skip
+    """Moves the rows of ``kept`` not ``inside`` to ``other`` (object by object, stable)."""
+    rows = np.concatenate([other.reshape(-1, 4), kept[~inside].reshape(-1, 4)])
+    objs = np.concatenate([other_obj, kept_obj[~inside]]).astype(np.int32)
+    order = np.argsort(objs, kind="stable")
+    return kept[inside], kept_obj[inside], rows[order], objs[order]
+
+
+def distort_view_object_labels(labels: ViewObjectLabels, lens: Lens) -> ViewObjectLabels:
+    """The labels of a camera with lens distortion from those of its pinhole render.
+
+    ``labels`` are :func:`view_object_labels` of the pinhole view ``lens.render_K`` (same pose;
+    ``ViewImages.pinhole``). Pixel images (visible, semantic, amodal masks, CoM heat map) are
+    resampled by nearest neighbour (:meth:`mgn.scene.lens.Lens.warp_nearest`, the same map as
+    the instance image); pixel counts, occlusion, the occlusion map and the boxes are recomputed
+    from the resampled masks; keypoints and CoM points whose projection through the lens falls
+    outside the image become occluded / not visible. Poses and 3-D points do not change.
+    """
+    vis = lens.warp_nearest(labels.visible)
+    amodal = lens.warp_nearest(labels.amodal, stacked=True)
+    n = labels.num_objects
+    vis_px = np.bincount(vis.reshape(-1), minlength=n + 1)[1 : n + 1].astype(np.int64)
+    am_px = amodal.reshape(n, -1).sum(axis=1).astype(np.int64)
+    occ = np.where(am_px > 0, 1.0 - vis_px / np.maximum(am_px, 1), 1.0)
+    occ_map = np.where(vis > 0, np.concatenate([[0.0], occ])[vis], 0.0).astype(np.float32)
+    tight = _coco_boxes(np.stack([vis == i + 1 for i in range(n)]) if n else amodal)
+    kp, kp_obj, okp, okp_obj = labels.keypoints, labels.keypoint_object, \
+        labels.occluded_keypoints, labels.occluded_keypoint_object  # fmt: skip
+    if kp.shape[0]:
+        kp, kp_obj, okp, okp_obj = _move_outside(kp, kp_obj, okp, okp_obj,
+                                                 lens.in_image(kp[:, 1:]))  # fmt: skip
+    com_visible = labels.com_visible
+    if labels.com_points.shape[0]:
+        com_visible = com_visible & lens.in_image(labels.com_points[:, 1:])
+    return ViewObjectLabels(
+        instance_ids=labels.instance_ids,
+        category_ids=labels.category_ids,
+        visible=vis,
+        semantic=lens.warp_nearest(labels.semantic),
+        amodal=amodal,
+        visible_pixels=vis_px,
+        amodal_pixels=am_px,
+        occlusion=occ,
+        occlusion_map=occ_map,
+        bbox_tight=tight,
+        bbox_loose=_coco_boxes(amodal),
+        X_CO=labels.X_CO,
+        keypoints=kp,
+        keypoint_object=kp_obj,
+        occluded_keypoints=okp,
+        occluded_keypoint_object=okp_obj,
+        com_points=labels.com_points,
+        com_object=labels.com_object,
+        com_visible=com_visible,
+        com_heatmap=lens.warp_nearest(labels.com_heatmap),
     )

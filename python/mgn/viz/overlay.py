@@ -26,6 +26,8 @@ from mgn.errors import InvalidArgumentError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.dataset import Dataset, SceneFolder, View
 from mgn.io.scene_format import png_bytes
+from mgn.scene.cameras import Intrinsics
+from mgn.scene.lens import lens_for
 from mgn.viz.pictures import score_colors
 
 __all__ = ["instance_colors", "project", "render_overlay", "show"]
@@ -40,11 +42,23 @@ def instance_colors(n: int) -> npt.NDArray[np.uint8]:
     return out
 
 
-def project(points_C: npt.ArrayLike, K: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Pixel coordinates (N, 2) of camera-frame points (N, 3) and whether each is in front."""
+def project(
+    points_C: npt.ArrayLike, K: Intrinsics | npt.ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates (N, 2) of camera-frame points (N, 3) and whether each is in front.
+    ``K``: a (3, 3) pinhole matrix, or :class:`~mgn.scene.cameras.Intrinsics` (with its lens
+    distortion, if any: the points land where the distorted image shows them)."""
     p = np.asarray(points_C, np.float64).reshape(-1, 3)
     z = p[:, 2]
     front = z > 1e-6
+    if isinstance(K, Intrinsics):
+        lens = lens_for(K)
+        if lens is not None:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                r = np.hypot(p[:, 0] / z, p[:, 1] / z)
+            seen = front & (r <= 1.1 * lens.max_radius)  # beyond, the model folds back
+            return np.nan_to_num(lens.project(p)), seen
+        K = K.K
     uv = (p @ np.asarray(K, np.float64).T)[:, :2] / np.where(front, z, 1.0)[:, None]
     return uv, front
 
@@ -59,7 +73,7 @@ def _contours(mask: np.ndarray) -> np.ndarray:
 
 
 def _draw_grasps(
-    draw: ImageDraw.ImageDraw, view: View, grasps: str, K: np.ndarray, max_grasps: int
+    draw: ImageDraw.ImageDraw, view: View, grasps: str, K: Intrinsics, max_grasps: int
 ) -> str:
     """Draw the best ``max_grasps`` non-colliding grasps of a kind; returns the footer note."""
     kind = MGN_FOLDER[normalize_grasp_kind(grasps)]
@@ -89,7 +103,7 @@ def _draw_grasps(
     return f"{len(poses)} {grasps} grasps (best {len(keep)} drawn)"
 
 
-def _draw_keypoints(draw: ImageDraw.ImageDraw, view: View, K: np.ndarray) -> None:
+def _draw_keypoints(draw: ImageDraw.ImageDraw, view: View, K: Intrinsics) -> None:
     """Semantic keypoints: visible as white discs, occluded as grey rings."""
     for key, visible in (("keypts_relative_to_camera", True),
                          ("occluded_keypts_relative_to_camera", False)):  # fmt: skip
@@ -228,7 +242,7 @@ def render_overlay(
         for k, title in ((1, "amodal masks (whole objects)"), (2, "depth (near = bright)")):
             draw.text((k * w + 6, 4), title, fill="white", font=font, stroke_width=2,
                       stroke_fill="black")  # fmt: skip
-    K = view.intrinsics.K
+    K = view.intrinsics
     order = view.order if view.path("_order.json").exists() else {}
 
     centroids: dict[int, tuple[float, float]] = {}

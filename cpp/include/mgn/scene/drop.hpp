@@ -38,6 +38,11 @@ struct ToteBox {
   double inner_height = 0.150;     ///< m, floor top to rim
   double wall_thickness = 0.008;   ///< m
   double floor_thickness = 0.010;  ///< m
+  /// false: a table top without walls. The "tote" is then a slab of inner_length x inner_width x
+  /// floor_thickness with its top at z = 0 (the tote mesh needs not reach inner_height, which only
+  /// bounds the release window); objects leave when they fall below the top (off an edge) rather
+  /// than when they rest over a rim, and no object touches a wall (every bin relation is no_rel).
+  bool walls = true;
 };
 
 /// How the static tote collides.
