@@ -42,10 +42,12 @@ from . import path_scene as ps
 from .common import PEER_NOT_INSTALLED, Row, Timing
 
 HERE = Path(__file__).resolve().parent
-FULL = {"width": 240, "spps": (1, 4, 16, 64), "ref_spp": 512, "target_spp": (4, 16)}
+FULL = {"width": 240, "spps": (1, 4, 16, 64), "ref_spp": 512, "target_spp": (1, 4)}
 QUICK = {"width": 120, "spps": (1, 4, 16), "ref_spp": 128, "target_spp": (4,)}
 ENGINES = ("mgn", "cycles", "mitsuba")
 THREADS = 2
+#: OIDN qualities compared on mgn's traced images (each with and without ``clean_aux``).
+DENOISE_STUDY = ("fast", "balanced", "high")
 
 
 def load1() -> float:
@@ -70,29 +72,52 @@ def _engine_mgn(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Ca
     c = desc.camera
     view = CameraView(Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy), c.X_WC)
 
-    try:
-        from mgn.render.photo import denoise as mgn_denoise  # what `render.denoise` runs
+    try:  # what `render.denoise` runs, with the default `render.denoise_quality`
+        from mgn.render.photo import RenderSettings
+        from mgn.render.photo import denoise as photo_denoise
+
+        quality = RenderSettings().denoise_quality
+
+        def mgn_denoise(radiance: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> Any:
+            return photo_denoise(radiance, albedo, normal, quality)
+
     except ImportError:
 
         def mgn_denoise(radiance: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> Any:
             return pyoidn.denoise(radiance, albedo=albedo, normal=normal, hdr=True)
 
-    def render(spp: int, denoise: bool, seed: int) -> np.ndarray:
+    def trace(spp: int, seed: int) -> Any:
         opts = mpath.PathTraceOptions(
             spp=spp, max_bounces=desc.max_bounces, seed=seed, num_threads=THREADS
         )
         if hasattr(opts, "clamp_indirect"):  # unclamped, as the peers are set up
             opts = dataclasses.replace(opts, clamp_indirect=0.0)
-        out = scene.render(view, opts)
+        return scene.render(view, opts)
+
+    def render(spp: int, denoise: bool, seed: int) -> np.ndarray:
+        out = trace(spp, seed)
         if not denoise:
             return out.radiance
         return np.asarray(mgn_denoise(out.radiance, out.albedo, out.normal), np.float32)
+
+    def denoiser_study(spp: int, seed: int) -> list[tuple[str, bool, float, np.ndarray]]:
+        """The OIDN settings on one traced image: (quality, clean_aux, CPU-s, image)."""
+        out = trace(spp, seed)
+        a = np.ascontiguousarray(np.clip(out.albedo, 0.0, 1.0), np.float32)
+        n = np.ascontiguousarray(np.clip(out.normal, -1.0, 1.0), np.float32)
+        rows = []
+        for q in DENOISE_STUDY:
+            for clean in (False, True):
+                c0 = time.process_time()
+                img = pyoidn.denoise(out.radiance, a, n, hdr=True, quality=q, clean_aux=clean)
+                rows.append((q, clean, time.process_time() - c0, np.asarray(img, np.float32)))
+        return rows
 
     def ids() -> np.ndarray:
         opts = mpath.PathTraceOptions(spp=1, max_bounces=0, num_threads=THREADS)
         return np.asarray(scene.render(view, opts).instance_ids, np.int32)
 
-    return {"render": render, "ids": ids, "keep": scene}
+    return {"render": render, "ids": ids, "keep": scene, "denoiser_study": denoiser_study}
 
 
 def _engine_cycles(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Callable]:
@@ -175,6 +200,15 @@ def child_main(argv: list[str]) -> int:
                     {"spp": spp, "denoise": denoise, "wall": wall, "cpu": cpu, "load1": loads}
                 )
                 print(f"{a.engine} {key}: {np.median(wall):.2f} s", file=sys.stderr, flush=True)
+        if "denoiser_study" in eng and a.ref_spp > 0:
+            result["denoiser_study"] = []
+            for spp in spps[:2]:
+                for q, clean, cpu, img in eng["denoiser_study"](spp, 0):
+                    key = f"dn{spp}_{q}_{int(clean)}"
+                    images[key] = img
+                    result["denoiser_study"].append(
+                        {"spp": spp, "quality": q, "clean_aux": clean, "cpu": cpu, "key": key}
+                    )
         if a.ref_spp > 0:
             load = load1()
             w0 = time.perf_counter()
@@ -298,6 +332,19 @@ def evaluate(
                     "peak_mib": res["peak_kib"] / 1024,
                 }
             )
+    study = []
+    res_mgn = results.get("mgn")
+    if res_mgn is not None and "ref" in frames.get("mgn", {}):
+        e = exposure_of(frames["mgn"]["ref"])
+        ref_t = tonemap(frames["mgn"]["ref"], e)
+        raw_cpu = {c["spp"]: float(np.median(c["cpu"])) for c in res_mgn["configs"]
+                   if not c["denoise"]}  # fmt: skip
+        for d in res_mgn.get("denoiser_study", []):
+            test = tonemap(frames["mgn"][d["key"]], e)
+            study.append(
+                {**d, "trace_cpu": raw_cpu.get(d["spp"], float("nan")),
+                 "flip": flip_error(ref_t, test), "psnr": psnr(ref_t, test)}
+            )  # fmt: skip
     # Faithfulness of the exports: the engines' references against each other, each with the
     # mgn reference's exposure (same radiometry expected).
     cross = {}
@@ -311,7 +358,7 @@ def evaluate(
                     "flip": flip_error(base, other),
                     "mean_radiance_ratio": float(ref.mean() / max(refs["mgn"][0].mean(), 1e-9)),
                 }
-    return {"table": table, "id_agreement": agreement, "cross": cross}
+    return {"table": table, "id_agreement": agreement, "cross": cross, "denoiser_study": study}
 
 
 def plot(ev: dict[str, Any], path: Path, title: str) -> bool:
@@ -365,6 +412,22 @@ def markdown(ev: dict[str, Any], meta: dict[str, Any]) -> str:
             f"{r['peak_mib']:.0f} |"
         )
     lines += ["", *meta["notes"], ""]
+    if ev.get("denoiser_study"):
+        lines += [
+            "Denoiser settings (mgn's traced image of the table, seed 0, through `pyoidn` with "
+            "each OIDN quality, with and without `clean_aux`; CPU-s of the denoiser alone and "
+            "with the trace; error against mgn's reference):",
+            "",
+            "| spp | quality | clean_aux | denoise CPU-s | trace + denoise CPU-s | FLIP "
+            "| PSNR dB |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for d in ev["denoiser_study"]:
+            lines.append(
+                f"| {d['spp']} | {d['quality']} | {d['clean_aux']} | {d['cpu']:.2f} | "
+                f"{d['cpu'] + d['trace_cpu']:.2f} | {d['flip']:.4f} | {d['psnr']:.1f} |"
+            )
+        lines.append("")
     return "\n".join(lines)
 
 

@@ -11,6 +11,12 @@ candidates, 30 shaken grasps per object): a scene places at most 2000 grasps of 
 object either way (LabelOptions.max_grasps_per_object), so it costs what it costs with the MGN
 label sizes. One timed run per worker count (4 scenes each; ~5 min in all when idle).
 
+CPU per scene is each worker process's CPU over its scene (all its threads: OSMesa, parallel
+loops, the writer threads), recorded by `run_scene`; the label cache is filled before the timed
+run. A last row runs the stages of scene 0 one after the other (`--child --stages`) and gives the
+CPU and wall seconds of each: drop, ray model, scene grasp collisions, render, object labels,
+layout, scene grasps, write.
+
 Peak memory per worker is ru_maxrss of the largest worker process (RUSAGE_CHILDREN for a pool,
 RUSAGE_SELF in-process). There is no peer program that makes MetaGraspNet scenes on the CPU, so
 the rows have no peer column.
@@ -64,19 +70,114 @@ def _substages(report: Any) -> dict[str, float]:
     return out
 
 
+def _cpu_seconds() -> float:
+    """User + system CPU seconds of this process (all threads) and of its waited-for children."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _cache_labels(config: Any, scenes: int) -> None:
+    """Puts the object labels of scenes 0..scenes-1 (seed SEED) in the cache, so the timed run
+    spends its CPU on scenes only."""
+    from mgn.pipeline.label_cache import object_labels
+    from mgn.pipeline.runner import _catalogue
+    from mgn.pipeline.seeds import scene_seed
+    from mgn.pipeline.testset import compose_scene, resolve_split
+
+    catalogue, _ = _catalogue(config)
+    split = resolve_split(config, catalogue)
+    for i in range(scenes):
+        for spec in compose_scene(config, catalogue, scene_seed(SEED, i), split):
+            object_labels(spec, config)
+
+
+def stage_cpu(config: Any) -> dict[str, Any]:
+    """CPU and wall seconds per stage of one scene (seed SEED, scene 0), the stages run one
+    after the other in this process (C++ stages with their default threads): drop, the two
+    per-scene preparations, then per view render (raster + depth sensor), object labels,
+    layout, scene grasps and write (encode + files). The CPU of a stage is this process's
+    getrusage difference around it, so it counts every thread the stage uses (OSMesa's
+    llvmpipe threads, parallel loops)."""
+    import numpy as np
+
+    from mgn.io.scene_format import scene_gt_entries, write_view
+    from mgn.objects import tote_mesh
+    from mgn.pipeline.label_cache import object_labels
+    from mgn.pipeline.label_scene import strided_subset, view_record
+    from mgn.pipeline.runner import _catalogue
+    from mgn.pipeline.scene_writer import scene_views
+    from mgn.pipeline.seeds import scene_seed
+    from mgn.pipeline.testset import compose_scene, resolve_split
+    from mgn.render.views import iter_views
+    from mgn.scene.drop import drop_scene
+    from mgn.view_labels.grasps import SceneGraspModel
+    from mgn.view_labels.layout import compute_layout
+    from mgn.view_labels.objects import SceneRayModel, view_object_labels
+
+    stages: dict[str, list[float]] = {}
+
+    def timed(stage: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+        t0, c0 = time.perf_counter(), _cpu_seconds()
+        out = fn(*args, **kwargs)
+        acc = stages.setdefault(stage, [0.0, 0.0])
+        acc[0] += time.perf_counter() - t0
+        acc[1] += _cpu_seconds() - c0
+        return out
+
+    with tempfile.TemporaryDirectory() as tmp:
+        # The objects of scene 0 of `generate(..., seed=SEED)`.
+        catalogue, _ = _catalogue(config)
+        seed = scene_seed(SEED, 0)
+        picked = compose_scene(config, catalogue, seed, resolve_split(config, catalogue))
+        labels = {s.name: object_labels(s, config) for s in picked}
+        scene = timed("drop", drop_scene, picked, seed=seed, tote=config.tote,
+                      options=config.drop)  # fmt: skip
+        got = [labels[inst.name] for inst in scene.instances]
+        rays = timed("prepare: ray model", SceneRayModel.from_scene, scene)
+        pj = [strided_subset(g.paralleljaw, 2000) for g in got]
+        su = [strided_subset(g.suction, 2000) for g in got]
+        sgm = timed("prepare: scene grasp collisions", SceneGraspModel, scene, pj, su,
+                    config.gripper, config.cup)  # fmt: skip
+        views = scene_views(scene, config.camera)
+        cats = np.array([i.category_id for i in scene.instances], np.int64)
+        bins = [i.bin_relation for i in scene.instances]
+        frames = iter_views(scene.render_items(), tote_mesh(scene.tote), views,
+                            sensor=config.camera.sensor, seed=seed)  # fmt: skip
+        out = Path(tmp)
+        for v, view in views:
+            images = timed("render", next, frames)
+            lab = timed("object labels", view_object_labels, rays, view, images.instance_ids,
+                        depth=images.depth_ideal)  # fmt: skip
+            lay = timed("layout", compute_layout, lab.visible, lab.amodal, images.depth_ideal,
+                        cats, bins, occlusion=lab.occlusion)  # fmt: skip
+            seen = lab.visible_pixels > 0
+            gr = timed("scene grasps", sgm.view_grasps, view, seen)
+            scene_gt_entries(lab.X_CO, cats, seen)
+            record = view_record(v, view, images, lab, lay, gr)
+            timed("write", write_view, out, record)
+    return {"objects": len(scene.instances), "views": len(views),
+            "stages": {k: {"wall_s": w, "cpu_s": c} for k, (w, c) in stages.items()}}  # fmt: skip
+
+
 def child_main(argv: list[str]) -> int:
     """Generate in this process tree and print one JSON line of measurements."""
     p = argparse.ArgumentParser()
     p.add_argument("--scenes", type=int, required=True)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--quick", action="store_true")
+    p.add_argument("--stages", action="store_true")
     a = p.parse_args(argv)
     from mgn.pipeline import generate
     from mgn.pipeline.config import load_config
 
     config = load_config(bench_config(a.quick))
+    if a.stages:
+        print(json.dumps(stage_cpu(config)))
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         generate(Path(tmp) / "warm", 1, config=config, seed=SEED + 1, progress=False)
+        _cache_labels(config, a.scenes)
         t0 = time.perf_counter()
         report = generate(
             Path(tmp) / "ds", a.scenes, config=config, seed=SEED, workers=a.workers, progress=False
@@ -84,6 +185,8 @@ def child_main(argv: list[str]) -> int:
         # Object labels missing from the cache are computed before any scene starts: their
         # time (report.label_seconds) is not scene time.
         wall = time.perf_counter() - t0 - report.label_seconds
+        # CPU of the scene tasks: each worker process's CPU over its scene (all its threads).
+        cpu = sum(r.times.get("cpu", 0.0) for r in report.results.values())
         rss_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         rss_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
         out = {
@@ -91,6 +194,7 @@ def child_main(argv: list[str]) -> int:
             "ok": len(report.ok),
             "workers": a.workers,
             "wall_s": wall,
+            "cpu_s": cpu,
             "label_s": report.label_seconds,
             "stage_s": report.stage_seconds(),
             # The labelling stages inside "write" (render, object labels, layout, scene grasps,
@@ -105,9 +209,12 @@ def child_main(argv: list[str]) -> int:
     return 0
 
 
-def _run_child(scenes: int, workers: int, quick: bool) -> tuple[dict | None, str]:
+def _run_child(
+    scenes: int, workers: int, quick: bool, stages: bool = False
+) -> tuple[dict | None, str]:
     cmd = [sys.executable, "-m", "benchmarks.bench_pipeline", "--child"]
     cmd += ["--scenes", str(scenes), "--workers", str(workers)] + (["--quick"] if quick else [])
+    cmd += ["--stages"] if stages else []
     proc = subprocess.run(cmd, cwd=HERE.parent, capture_output=True, text=True, env=os.environ)
     if proc.returncode != 0:
         last = (proc.stderr.strip().splitlines() or ["?"])[-1]
@@ -146,17 +253,20 @@ def run(
             rows.append(row)
             continue
         log(f"  pipeline: {scenes} scenes, {workers} worker(s)")
-        walls, notes = [], []
+        walls, cpus, notes = [], [], []
         for _ in range(1):  # one run of `scenes` scenes: minutes each
             result, status = _run_child(scenes, workers, quick)
             if result is None:
                 row.mgn_status = status
                 break
             walls.append(result["wall_s"])
+            cpus.append(result.get("cpu_s", result["wall_s"]))
             st = result["stage_s"]
             per = {k: v / max(result["ok"], 1) for k, v in st.items()}
             notes = [
                 f"{3600 * result['ok'] / result['wall_s']:.0f} scenes/hour",
+                f"{result['wall_s'] / max(result['ok'], 1):.1f} s wall and "
+                f"{result.get('cpu_s', 0.0) / max(result['ok'], 1):.1f} CPU-s per scene",
                 "per scene " + ", ".join(f"{k} {v:.1f} s" for k, v in per.items()),
                 "inside write, per scene: "
                 + ", ".join(
@@ -168,8 +278,34 @@ def run(
                 f"{result['bytes_per_scene'] / 1e6:.1f} MB per scene",
             ]
         if walls:
-            row.mgn[workers] = Timing(wall=walls, cpu=walls)
+            row.mgn[workers] = Timing(wall=walls, cpu=cpus)
             row.notes = notes
+        rows.append(row)
+    if mgn is not None:
+        log("  pipeline: stages of one scene, one after the other")
+        result, status = _run_child(1, 1, quick, stages=True)
+        row = Row(
+            group="dataset generation",
+            case=f"stages of one scene ({cfg['objects']['count']} objects, {views} views at "
+            f"{size}x{size}), run one after the other",
+            n=1,
+            unit="scenes/s",
+            peer_name="—",
+            peer_status="no peer (no other CPU MetaGraspNet generator)",
+        )
+        if result is None:
+            row.mgn_status = status
+        else:
+            st = result["stages"]
+            wall = sum(v["wall_s"] for v in st.values())
+            cpu = sum(v["cpu_s"] for v in st.values())
+            row.mgn[1] = Timing(wall=[wall], cpu=[cpu])
+            row.notes = [
+                "CPU-s (wall s) per stage: "
+                + ", ".join(f"{k} {v['cpu_s']:.1f} ({v['wall_s']:.1f})" for k, v in st.items()),
+                f"total {cpu:.1f} CPU-s ({wall:.1f} s wall) for {result['objects']} objects",
+                f"load average {load_average()}",
+            ]
         rows.append(row)
     return rows
 

@@ -115,7 +115,7 @@ def detect_ring_unit(
     try:
         for c, nrm in zip(points.astype(np.float64), normals.astype(np.float64), strict=True):
             n = nrm / np.linalg.norm(nrm)
-            f_mgn = np.asarray(model.trial(c, n)["ring_force"], np.float64)
+            f_mgn = np.asarray(model.trial(c, n).ring_force, np.float64)
             if f_mgn.size == 0 or not np.any(f_mgn):
                 continue
             x = peer.projected_ring(c, n)

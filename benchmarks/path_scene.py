@@ -146,7 +146,9 @@ def drop(path: Path, names: tuple[str, ...] = OBJECT_NAMES, seed: int = DROP_SEE
 
     objects = compose_objects(names=list(names))
     scene = drop_scene(objects, seed=seed)
-    return scene.to_json(path)
+    from mgn.io.scene_file import write_scene_json
+
+    return write_scene_json(scene, path)
 
 
 def pbr_materials(mesh: Any) -> list[Any]:
@@ -251,9 +253,10 @@ def camera(width: int, view: int = VIEW) -> tuple[Any, np.ndarray]:
 
 def mgn_inputs(scene_json: Path) -> dict[str, Any]:
     """Everything mgn's PathScene takes: meshes, poses, ids, materials, lights, environment."""
-    from mgn.scene import Scene
 
-    scene = Scene.from_json(scene_json)
+    from mgn.io.scene_file import read_scene_json
+
+    scene = read_scene_json(scene_json)
     meshes, poses, ids, materials, names = [], [], [], [], []
     for mesh, X, inst in scene.render_items():
         meshes.append(mesh)

@@ -9,7 +9,27 @@ using namespace mgn::py_conv;
 
 namespace mgn::py_bind {
 
+namespace {
+
+/// DistanceResult as numpy arrays (moved, no copies).
+struct DistanceArrays {
+  py::array distance, points_a, points_b, collide;
+};
+
+}  // namespace
+
 void bind_collision(py::module_& m) {
+  py::class_<DistanceArrays>(m, "DistanceResult",
+                             "distance() result (mgn/collision/collision_model.hpp), one row per "
+                             "pose pair.")
+      .def_readonly("distance", &DistanceArrays::distance,
+                    "(N,) float64 m, 0 for intersecting pairs")
+      .def_readonly("points_a", &DistanceArrays::points_a,
+                    "(N,3) float64 closest point on A, world frame")
+      .def_readonly("points_b", &DistanceArrays::points_b,
+                    "(N,3) float64 closest point on B, world frame")
+      .def_readonly("collide", &DistanceArrays::collide, "(N,) bool");
+
   py::class_<CollisionModel, std::shared_ptr<CollisionModel>>(
       m, "CollisionModel", "Immutable FCL BVH (OBBRSS) of a mesh.")
       .def(py::init([](const Mesh& mesh) {
@@ -52,12 +72,8 @@ void bind_collision(py::module_& m) {
           py::gil_scoped_release release;
           r = distance(a, xa, b, xb, req);
         }
-        py::dict out;
-        out["distance"] = to_numpy(std::move(r.distance));
-        out["points_a"] = to_numpy(std::move(r.points_a));
-        out["points_b"] = to_numpy(std::move(r.points_b));
-        out["collide"] = to_bool_numpy(std::move(r.collide));
-        return out;
+        return DistanceArrays{to_numpy(std::move(r.distance)), to_numpy(std::move(r.points_a)),
+                              to_numpy(std::move(r.points_b)), to_bool_numpy(std::move(r.collide))};
       },
       py::arg("a"), py::arg("X_WA"), py::arg("b"), py::arg("X_WB"), py::arg("rel_err") = 0.0,
       py::arg("abs_err") = 0.0, py::arg("num_threads") = 0);

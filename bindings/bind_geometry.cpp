@@ -27,9 +27,21 @@ py::array view_of(const M& mat, py::handle owner) {
   return arr;
 }
 
+/// SurfaceSamples as numpy arrays (moved, no copies).
+struct SampleArrays {
+  py::array points, normals, face_ids;
+};
+
 }  // namespace
 
 void bind_geometry(py::module_& m) {
+  py::class_<SampleArrays>(m, "SurfaceSamples",
+                           "sample_surface() result (mgn/geometry/sampling.hpp), mesh frame.")
+      .def_readonly("points", &SampleArrays::points, "(N,3) float32 points on the surface, m")
+      .def_readonly("normals", &SampleArrays::normals, "(N,3) float32 unit outward face normals")
+      .def_readonly("face_ids", &SampleArrays::face_ids,
+                    "(N,) int32 index of the face each point lies on");
+
   py::class_<Material>(m, "Material",
                        "Surface appearance of a mesh (colours linear RGBA in [0,1]).")
       .def(py::init<>())
@@ -201,11 +213,8 @@ void bind_geometry(py::module_& m) {
           py::gil_scoped_release release;
           s = sample_surface(mesh, count, o);
         }
-        py::dict out;
-        out["points"] = to_numpy(std::move(s.points));
-        out["normals"] = to_numpy(std::move(s.normals));
-        out["face_ids"] = to_numpy(std::move(s.face_ids));
-        return out;
+        return SampleArrays{to_numpy(std::move(s.points)), to_numpy(std::move(s.normals)),
+                            to_numpy(std::move(s.face_ids))};
       },
       py::arg("mesh"), py::arg("count"), py::arg("method") = "random", py::arg("seed") = 0,
       py::arg("oversampling") = 6);

@@ -44,9 +44,30 @@ std::vector<ParallelJawGrasp> to_grasps(const py::handle& p1, const py::handle& 
   return out;
 }
 
+/// AntipodalResult as numpy arrays (moved, no copies), one row per kept grasp.
+struct AntipodalArrays {
+  py::array point_score, num_kept, p1, closing, approach, width, point_index, probe, score;
+  std::int64_t num_accepted_probes = 0, num_colliding = 0;
+};
+
 }  // namespace
 
 void bind_grasp_antipodal(py::module_& m) {
+  py::class_<AntipodalArrays>(m, "AntipodalResult",
+                              "AntipodalSampler.sample() result (mgn/grasp/antipodal.hpp); "
+                              "mgn.pj.sampler.AntipodalResult documents each array.")
+      .def_readonly("point_score", &AntipodalArrays::point_score)
+      .def_readonly("num_kept", &AntipodalArrays::num_kept)
+      .def_readonly("p1", &AntipodalArrays::p1)
+      .def_readonly("closing", &AntipodalArrays::closing)
+      .def_readonly("approach", &AntipodalArrays::approach)
+      .def_readonly("width", &AntipodalArrays::width)
+      .def_readonly("point_index", &AntipodalArrays::point_index)
+      .def_readonly("probe", &AntipodalArrays::probe)
+      .def_readonly("score", &AntipodalArrays::score)
+      .def_readonly("num_accepted_probes", &AntipodalArrays::num_accepted_probes)
+      .def_readonly("num_colliding", &AntipodalArrays::num_colliding);
+
   py::class_<ParallelJawGripper>(
       m, "ParallelJawGripper",
       "Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless "
@@ -141,18 +162,18 @@ void bind_grasp_antipodal(py::module_& m) {
               probe[i] = g.probe;
               score[i] = g.score;
             }
-            py::dict out;
-            out["point_score"] = to_numpy(std::move(r.point_score));
-            out["num_kept"] = to_numpy(std::move(r.num_kept));
-            out["p1"] = to_numpy(std::move(p1));
-            out["closing"] = to_numpy(std::move(v));
-            out["approach"] = to_numpy(std::move(a));
-            out["width"] = to_numpy(std::move(width));
-            out["point_index"] = to_numpy(std::move(point_index));
-            out["probe"] = to_numpy(std::move(probe));
-            out["score"] = to_numpy(std::move(score));
-            out["num_accepted_probes"] = r.num_accepted_probes;
-            out["num_colliding"] = r.num_colliding;
+            AntipodalArrays out;
+            out.point_score = to_numpy(std::move(r.point_score));
+            out.num_kept = to_numpy(std::move(r.num_kept));
+            out.p1 = to_numpy(std::move(p1));
+            out.closing = to_numpy(std::move(v));
+            out.approach = to_numpy(std::move(a));
+            out.width = to_numpy(std::move(width));
+            out.point_index = to_numpy(std::move(point_index));
+            out.probe = to_numpy(std::move(probe));
+            out.score = to_numpy(std::move(score));
+            out.num_accepted_probes = r.num_accepted_probes;
+            out.num_colliding = r.num_colliding;
             return out;
           },
           py::arg("points"), py::arg("normals"), py::arg("probes") = 5,

@@ -60,19 +60,14 @@ std::vector<CalibrationExperiment> to_experiments(const py::handle& surface_inde
   return out;
 }
 
-py::dict metrics_to_dict(const ClassificationMetrics& m) {
-  py::dict d;
-  d["tp"] = m.tp;
-  d["fp"] = m.fp;
-  d["tn"] = m.tn;
-  d["fn"] = m.fn;
-  d["ppv"] = m.ppv;
-  d["npv"] = m.npv;
-  d["sensitivity"] = m.sensitivity;
-  d["specificity"] = m.specificity;
-  d["accuracy"] = m.accuracy;
-  return d;
-}
+/// CalibrationResult with its arrays as numpy (moved, no copies).
+struct CalibrationArrays {
+  Cup cup;
+  double objective = 0.0;
+  int evaluations = 0;
+  ClassificationMetrics train, test;
+  py::array train_indices, test_indices, predicted;
+};
 
 py::array indices_to_numpy(const std::vector<std::size_t>& idx) {
   std::vector<std::int64_t> v(idx.begin(), idx.end());
@@ -82,6 +77,48 @@ py::array indices_to_numpy(const std::vector<std::size_t>& idx) {
 }  // namespace
 
 void bind_grasp_calibration(py::module_& m) {
+  py::class_<ClassificationMetrics>(m, "ClassificationMetrics",
+                                    "Confusion counts and rates (mgn/grasp/calibration.hpp); "
+                                    "NaN for a zero denominator.")
+      .def_readonly("tp", &ClassificationMetrics::tp)
+      .def_readonly("fp", &ClassificationMetrics::fp)
+      .def_readonly("tn", &ClassificationMetrics::tn)
+      .def_readonly("fn", &ClassificationMetrics::fn)
+      .def_readonly("ppv", &ClassificationMetrics::ppv, "tp / (tp + fp), precision")
+      .def_readonly("npv", &ClassificationMetrics::npv, "tn / (tn + fn)")
+      .def_readonly("sensitivity", &ClassificationMetrics::sensitivity, "tp / (tp + fn)")
+      .def_readonly("specificity", &ClassificationMetrics::specificity, "tn / (tn + fp)")
+      .def_readonly("accuracy", &ClassificationMetrics::accuracy, "(tp + tn) / count")
+      .def(
+          "to_dict",
+          [](const ClassificationMetrics& c) {
+            py::dict d;  // the JSON form (mgn calibrate writes it)
+            d["tp"] = c.tp;
+            d["fp"] = c.fp;
+            d["tn"] = c.tn;
+            d["fn"] = c.fn;
+            d["ppv"] = c.ppv;
+            d["npv"] = c.npv;
+            d["sensitivity"] = c.sensitivity;
+            d["specificity"] = c.specificity;
+            d["accuracy"] = c.accuracy;
+            return d;
+          },
+          "{name: value} of the fields above, for JSON.");
+
+  py::class_<CalibrationArrays>(m, "CalibrationResult",
+                                "calibrate_cup() result (mgn/grasp/calibration.hpp).")
+      .def_readonly("cup", &CalibrationArrays::cup, "the initial cup with the fitted c1, c2")
+      .def_readonly("objective", &CalibrationArrays::objective,
+                    "training accuracy of the fitted cup")
+      .def_readonly("evaluations", &CalibrationArrays::evaluations)
+      .def_readonly("train", &CalibrationArrays::train)
+      .def_readonly("test", &CalibrationArrays::test)
+      .def_readonly("train_indices", &CalibrationArrays::train_indices, "(T,) int64 ascending")
+      .def_readonly("test_indices", &CalibrationArrays::test_indices, "(H,) int64 ascending")
+      .def_readonly("predicted", &CalibrationArrays::predicted,
+                    "(N,) bool nominal prediction of the fitted cup");
+
   const CalibrationOptions defaults;
   m.def(
       "calibrate_cup",
@@ -108,16 +145,14 @@ void bind_grasp_calibration(py::module_& m) {
           py::gil_scoped_release release;
           r = calibrate_cup(surfaces, experiments, initial, o);
         }
-        py::dict out;
-        out["cup"] = r.cup;
-        out["objective"] = r.objective;
-        out["evaluations"] = r.evaluations;
-        out["train"] = metrics_to_dict(r.train);
-        out["test"] = metrics_to_dict(r.test);
-        out["train_indices"] = indices_to_numpy(r.train_indices);
-        out["test_indices"] = indices_to_numpy(r.test_indices);
-        out["predicted"] = to_bool_numpy(std::move(r.predicted));
-        return out;
+        return CalibrationArrays{r.cup,
+                                 r.objective,
+                                 r.evaluations,
+                                 r.train,
+                                 r.test,
+                                 indices_to_numpy(r.train_indices),
+                                 indices_to_numpy(r.test_indices),
+                                 to_bool_numpy(std::move(r.predicted))};
       },
       "Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).", py::arg("surfaces"),
       py::arg("surface_index"), py::arg("points"), py::arg("normals"), py::arg("sealed"),
@@ -150,7 +185,7 @@ void bind_grasp_calibration(py::module_& m) {
       [](const std::vector<bool>& predicted, const std::vector<bool>& measured) {
         const std::vector<std::uint8_t> p(predicted.begin(), predicted.end());
         const std::vector<std::uint8_t> y(measured.begin(), measured.end());
-        return metrics_to_dict(classification_metrics(p, y));
+        return classification_metrics(p, y);
       },
       "Confusion counts and PPV, NPV, sensitivity, specificity, accuracy (NaN for a zero "
       "denominator).",

@@ -34,9 +34,41 @@ const char* kind_name(SealModelKind k) {
   return "unknown";
 }
 
+/// SealResult as numpy arrays (moved, no copies); trial arrays (count, num_trials).
+struct SealArrays {
+  py::array score, quality, reason, trial_sealed, trial_reason;
+};
+
+/// SealTrial with its arrays as numpy.
+struct TrialArrays {
+  std::string failure;
+  py::array ring_points, ring_normals, elastic_force, ring_force;
+  Vec3d center = Vec3d::Zero();
+  double total_elastic_force = 0.0;
+};
+
 }  // namespace
 
 void bind_grasp_seal(py::module_& m) {
+  py::class_<SealArrays>(m, "SealResult",
+                         "SealModel.evaluate() result (mgn/grasp/seal_model.hpp); "
+                         "mgn.suction.seal.SealResult documents each array.")
+      .def_readonly("score", &SealArrays::score)
+      .def_readonly("quality", &SealArrays::quality)
+      .def_readonly("reason", &SealArrays::reason)
+      .def_readonly("trial_sealed", &SealArrays::trial_sealed)
+      .def_readonly("trial_reason", &SealArrays::trial_reason);
+  py::class_<TrialArrays>(m, "SealTrial",
+                          "SealModel.trial() result: failure name, projected ring (object "
+                          "frame, m), spring forces (N).")
+      .def_readonly("failure", &TrialArrays::failure)
+      .def_readonly("ring_points", &TrialArrays::ring_points, "(N,3) float32")
+      .def_readonly("ring_normals", &TrialArrays::ring_normals, "(N,3) float32")
+      .def_readonly("center", &TrialArrays::center, "projected centre, m")
+      .def_readonly("elastic_force", &TrialArrays::elastic_force, "(N,) float64, N")
+      .def_readonly("ring_force", &TrialArrays::ring_force, "(N,3) float64, N")
+      .def_readonly("total_elastic_force", &TrialArrays::total_elastic_force, "N");
+
   py::class_<Cup>(m, "Cup",
                   "Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).")
       .def(py::init<>())
@@ -95,13 +127,12 @@ void bind_grasp_seal(py::module_& m) {
             }
             const auto count = static_cast<py::ssize_t>(r.score.size());
             const int T = r.num_trials;
-            py::dict out;
-            out["score"] = to_numpy(std::move(r.score));
-            out["quality"] = to_numpy(std::move(r.quality));
-            out["reason"] = to_numpy(std::move(r.reason));
-            out["trial_sealed"] =
-                to_bool_numpy(std::move(r.trial_sealed)).attr("reshape")(count, T);
-            out["trial_reason"] = to_numpy(std::move(r.trial_reason)).attr("reshape")(count, T);
+            SealArrays out;
+            out.score = to_numpy(std::move(r.score));
+            out.quality = to_numpy(std::move(r.quality));
+            out.reason = to_numpy(std::move(r.reason));
+            out.trial_sealed = to_bool_numpy(std::move(r.trial_sealed)).attr("reshape")(count, T);
+            out.trial_reason = to_numpy(std::move(r.trial_reason)).attr("reshape")(count, T);
             return out;
           },
           py::arg("points"), py::arg("normals"), py::arg("num_trials") = 10,
@@ -116,14 +147,14 @@ void bind_grasp_seal(py::module_& m) {
               py::gil_scoped_release release;
               t = s.trial(point, normal);
             }
-            py::dict out;
-            out["failure"] = failure_name(t.failure);
-            out["ring_points"] = to_numpy(std::move(t.ring_points));
-            out["ring_normals"] = to_numpy(std::move(t.ring_normals));
-            out["center"] = t.center;
-            out["elastic_force"] = to_numpy(Eigen::VectorXd(t.elastic_force));
-            out["ring_force"] = to_numpy(std::move(t.ring_force));
-            out["total_elastic_force"] = t.total_elastic_force;
+            TrialArrays out;
+            out.failure = failure_name(t.failure);
+            out.ring_points = to_numpy(std::move(t.ring_points));
+            out.ring_normals = to_numpy(std::move(t.ring_normals));
+            out.center = t.center;
+            out.elastic_force = to_numpy(Eigen::VectorXd(t.elastic_force));
+            out.ring_force = to_numpy(std::move(t.ring_force));
+            out.total_elastic_force = t.total_elastic_force;
             return out;
           },
           py::arg("point"), py::arg("normal"))

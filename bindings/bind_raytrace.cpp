@@ -21,9 +21,41 @@ CastOptions cast_options(float tnear, float tfar, bool coherent, int num_threads
   return o;
 }
 
+/// RayHits as numpy arrays (moved, no copies).
+struct HitArrays {
+  py::array distance, points, normals, instance_ids, face_ids, barycentric;
+};
+
+/// RayAllHits as numpy arrays (moved, no copies).
+struct AllHitArrays {
+  py::array offsets, distance, points, normals, instance_ids, face_ids, ray_ids;
+};
+
 }  // namespace
 
 void bind_raytrace(py::module_& m) {
+  py::class_<HitArrays>(m, "RayHits",
+                        "RayScene.intersect() result (mgn/raytrace/ray_scene.hpp), world frame; "
+                        "misses have distance inf and ids -1.")
+      .def_readonly("distance", &HitArrays::distance, "(N,) float32 m")
+      .def_readonly("points", &HitArrays::points, "(N,3) float32")
+      .def_readonly("normals", &HitArrays::normals,
+                    "(N,3) float32 unit geometric normal, outward for CCW faces")
+      .def_readonly("instance_ids", &HitArrays::instance_ids, "(N,) int32")
+      .def_readonly("face_ids", &HitArrays::face_ids, "(N,) int32 face index within its mesh")
+      .def_readonly("barycentric", &HitArrays::barycentric,
+                    "(N,2) float32 (u, v): p = (1-u-v) v0 + u v1 + v v2");
+  py::class_<AllHitArrays>(m, "RayAllHits",
+                           "RayScene.intersect_all() result: the hits of ray i are entries "
+                           "offsets[i] .. offsets[i+1]-1, sorted by distance.")
+      .def_readonly("offsets", &AllHitArrays::offsets, "(N+1,) int64")
+      .def_readonly("distance", &AllHitArrays::distance, "(H,) float32 m")
+      .def_readonly("points", &AllHitArrays::points, "(H,3) float32")
+      .def_readonly("normals", &AllHitArrays::normals, "(H,3) float32")
+      .def_readonly("instance_ids", &AllHitArrays::instance_ids, "(H,) int32")
+      .def_readonly("face_ids", &AllHitArrays::face_ids, "(H,) int32")
+      .def_readonly("ray_ids", &AllHitArrays::ray_ids, "(H,) int32 ray of each hit");
+
   py::class_<RayScene>(m, "RayScene", "Immutable Embree scene of meshes placed in the world frame.")
       .def(py::init([](const std::vector<const Mesh*>& meshes, const py::object& poses,
                        const py::object& instance_ids) {
@@ -73,14 +105,9 @@ void bind_raytrace(py::module_& m) {
               py::gil_scoped_release release;
               h = s.intersect(o, d, cast_options(tnear, tfar, coherent, num_threads));
             }
-            py::dict out;
-            out["distance"] = to_numpy(std::move(h.distance));
-            out["points"] = to_numpy(std::move(h.points));
-            out["normals"] = to_numpy(std::move(h.normals));
-            out["instance_ids"] = to_numpy(std::move(h.instance_ids));
-            out["face_ids"] = to_numpy(std::move(h.face_ids));
-            out["barycentric"] = to_numpy(std::move(h.barycentric));
-            return out;
+            return HitArrays{to_numpy(std::move(h.distance)), to_numpy(std::move(h.points)),
+                             to_numpy(std::move(h.normals)),  to_numpy(std::move(h.instance_ids)),
+                             to_numpy(std::move(h.face_ids)), to_numpy(std::move(h.barycentric))};
           },
           py::arg("origins"), py::arg("directions"), py::arg("tnear") = 0.0f,
           py::arg("tfar") = std::numeric_limits<float>::infinity(), py::arg("coherent") = false,
@@ -129,15 +156,11 @@ void bind_raytrace(py::module_& m) {
               py::gil_scoped_release release;
               h = s.intersect_all(o, d, max_hits, cast_options(tnear, tfar, false, num_threads));
             }
-            py::dict out;
-            out["offsets"] = to_numpy(std::move(h.offsets));
-            out["distance"] = to_numpy(std::move(h.distance));
-            out["points"] = to_numpy(std::move(h.points));
-            out["normals"] = to_numpy(std::move(h.normals));
-            out["instance_ids"] = to_numpy(std::move(h.instance_ids));
-            out["face_ids"] = to_numpy(std::move(h.face_ids));
-            out["ray_ids"] = to_numpy(std::move(h.ray_ids));
-            return out;
+            return AllHitArrays{
+                to_numpy(std::move(h.offsets)),      to_numpy(std::move(h.distance)),
+                to_numpy(std::move(h.points)),       to_numpy(std::move(h.normals)),
+                to_numpy(std::move(h.instance_ids)), to_numpy(std::move(h.face_ids)),
+                to_numpy(std::move(h.ray_ids))};
           },
           py::arg("origins"), py::arg("directions"), py::arg("max_hits_per_ray") = 64,
           py::arg("tnear") = 0.0f, py::arg("tfar") = std::numeric_limits<float>::infinity(),

@@ -17,33 +17,52 @@ namespace mgn::py_bind {
 
 namespace {
 
-/// Moves an (H*W*C) vector into an (H, W[, C]) numpy array without copying.
-template <typename T>
-py::object image(std::vector<T>&& v, int h, int w, int c = 1) {
-  if (v.empty()) return py::none();
-  py::array flat = to_numpy(std::move(v));
-  if (c == 1) return flat.attr("reshape")(h, w);
-  return flat.attr("reshape")(h, w, c);
-}
+/// Renderer.render() result: images as numpy arrays (None when not requested) and the light.
+struct RenderArrays {
+  py::object rgb, depth, instance_ids;
+  LightSample light;
+};
 
-Vec3d to_vec3(const py::handle& obj, const char* arg) {
-  const auto rows = to_rows<double, 3>(
-      py::module_::import("numpy").attr("reshape")(obj, py::make_tuple(1, 3)), arg);
-  return rows.row(0).transpose();
-}
-
-py::dict light_dict(const LightSample& l) {
-  py::dict d;
-  d["position_W"] = py::array_t<double>(3, l.position_W.data());
-  d["intensity"] = l.intensity;
-  d["color_temperature"] = l.color_temperature;
-  d["ambient"] = l.ambient;
-  return d;
-}
+/// apply_depth_sensor() result as (H, W) numpy arrays.
+struct DepthArrays {
+  py::object depth, depth_ideal, valid;
+};
 
 }  // namespace
 
 void bind_render(py::module_& m) {
+  py::class_<LightSample>(m, "LightSample",
+                          "The light a view was rendered with (mgn/render/renderer.hpp).")
+      .def_property_readonly(
+          "position_W",
+          [](const LightSample& l) {
+            return std::make_tuple(l.position_W.x(), l.position_W.y(), l.position_W.z());
+          },
+          "point light position, world frame, m")
+      .def_readonly("intensity", &LightSample::intensity, "radiance scale (1 = nominal)")
+      .def_readonly("color_temperature", &LightSample::color_temperature, "K")
+      .def_readonly("ambient", &LightSample::ambient, "relative to white");
+  py::class_<RenderArrays>(m, "RenderResult",
+                           "Renderer.render() result: (H,W,3) uint8 rgb, (H,W) float32 depth "
+                           "(m), (H,W) int32 instance_ids (None when not requested), light.")
+      .def_readonly("rgb", &RenderArrays::rgb)
+      .def_readonly("depth", &RenderArrays::depth)
+      .def_readonly("instance_ids", &RenderArrays::instance_ids)
+      .def_readonly("light", &RenderArrays::light);
+  py::class_<DepthArrays>(m, "DepthSensorResult",
+                          "apply_depth_sensor() result: (H,W) float32 depth and depth_ideal (m), "
+                          "(H,W) bool valid.")
+      .def_readonly("depth", &DepthArrays::depth)
+      .def_readonly("depth_ideal", &DepthArrays::depth_ideal)
+      .def_readonly("valid", &DepthArrays::valid);
+  py::class_<MgnRigParams>(m, "MgnRigParams",
+                           "Drawn parameters of the MetaGraspNet rig (mgn/render/camera.hpp): "
+                           "radii m, angles rad.")
+      .def_readonly("R_start", &MgnRigParams::R_start)
+      .def_readonly("R_end", &MgnRigParams::R_end)
+      .def_readonly("theta_start", &MgnRigParams::theta_start)
+      .def_readonly("theta_end", &MgnRigParams::theta_end)
+      .def_readonly("phi_end", &MgnRigParams::phi_end);
   py::class_<Intrinsics>(m, "Intrinsics", "Pinhole intrinsics in pixels (OpenCV model).")
       .def(py::init([](int width, int height, double fx, double fy, double cx, double cy) {
              Intrinsics k{width, height, fx, fy, cx, cy};
@@ -80,13 +99,7 @@ void bind_render(py::module_& m) {
       [](std::uint64_t seed, const py::handle& target) {
         MgnRigParams p;
         const auto poses = mgn_rig(seed, to_vec3(target, "target"), &p);
-        py::dict d;
-        d["R_start"] = p.R_start;
-        d["R_end"] = p.R_end;
-        d["theta_start"] = p.theta_start;
-        d["theta_end"] = p.theta_end;
-        d["phi_end"] = p.phi_end;
-        return py::make_tuple(poses_to_numpy(poses), d);
+        return py::make_tuple(poses_to_numpy(poses), p);
       },
       py::arg("seed"), py::arg("target"));
   m.def(
@@ -183,13 +196,10 @@ void bind_render(py::module_& m) {
               py::gil_scoped_release release;
               out = r.render(view, o);
             }
-            py::dict d;
             const int h = out.height, w = out.width;
-            d["rgb"] = image(std::move(out.rgb), h, w, 3);
-            d["depth"] = image(std::move(out.depth), h, w);
-            d["instance_ids"] = image(std::move(out.instance_ids), h, w);
-            d["light"] = light_dict(out.light);
-            return d;
+            return RenderArrays{to_image(std::move(out.rgb), h, w, 3),
+                                to_image(std::move(out.depth), h, w),
+                                to_image(std::move(out.instance_ids), h, w), out.light};
           },
           py::arg("K"), py::arg("X_WC"), py::arg("rgb") = true, py::arg("depth") = true,
           py::arg("instances") = true, py::arg("visible_instances") = std::vector<std::int32_t>{},
@@ -263,12 +273,10 @@ void bind_render(py::module_& m) {
           py::gil_scoped_release release;
           out = apply_depth_sensor(dv, iv, flags_by_id, K, params, seed);
         }
-        py::dict r;
         const int h = out.height, w = out.width;
-        r["depth"] = image(std::move(out.depth), h, w);
-        r["depth_ideal"] = image(std::move(out.depth_ideal), h, w);
-        r["valid"] = image(std::move(out.valid), h, w).attr("astype")("bool");
-        return r;
+        return DepthArrays{to_image(std::move(out.depth), h, w),
+                           to_image(std::move(out.depth_ideal), h, w),
+                           to_image(std::move(out.valid), h, w).attr("astype")("bool")};
       },
       py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
       py::arg("params"), py::arg("seed"));

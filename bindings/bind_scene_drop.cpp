@@ -1,8 +1,10 @@
 // Bindings of mgn/scene/drop and of the convex decomposition it uses (geometry/
 // convex_decomposition): numpy in/out, GIL released during the work.
 #include <pybind11/stl.h>
+
 #include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/scene/drop.hpp>
+#include <tuple>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -14,12 +16,141 @@ namespace mgn::py_bind {
 
 namespace {
 
-Vec3d vec3(const py::handle& obj, const char* arg) {
-  const auto rows = to_rows<double, 3>(
-      py::module_::import("numpy").attr("reshape")(obj, py::make_tuple(-1, 3)), arg);
-  if (rows.rows() != 1)
-    throw_error<InvalidArgument>(arg, ": expected 3 numbers, got ", 3 * rows.rows());
-  return rows.row(0).transpose();
+/// drop_objects()/settle_objects() result as numpy arrays (moved, no copies), one row per input
+/// object; bound as DropResult.
+struct DropArrays {
+  py::array X_WO;            ///< (N,4,4) settled poses
+  py::array X_WO_release;    ///< (N,4,4) release (or start) poses
+  py::array status;          ///< (N,) int32 DropStatus
+  py::array object_settled;  ///< (N,) bool, at rest when the simulation stopped
+  py::array contacts;        ///< (N,) uint32 ToteContact flags
+  std::int64_t steps = 0;
+  double simulated_time = 0.0;
+  bool settled = false;
+  int resettle_rounds = 0;
+  double max_penetration = 0.0;
+};
+
+DropArrays to_arrays(const DropResult& r) {
+  const auto n = static_cast<Eigen::Index>(r.objects.size());
+  Eigen::Matrix<double, Eigen::Dynamic, 16, Eigen::RowMajor> X(n, 16), X0(n, 16);
+  std::vector<std::int32_t> status(r.objects.size());
+  std::vector<std::uint8_t> settled(r.objects.size());
+  std::vector<std::uint32_t> contacts(r.objects.size());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& d = r.objects[static_cast<std::size_t>(i)];
+    for (int k = 0; k < 16; ++k) {
+      X(i, k) = d.X_WO.matrix()(k / 4, k % 4);
+      X0(i, k) = d.X_WO_release.matrix()(k / 4, k % 4);
+    }
+    status[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(d.status);
+    settled[static_cast<std::size_t>(i)] = d.settled ? 1 : 0;
+    contacts[static_cast<std::size_t>(i)] = d.contacts;
+  }
+  DropArrays out;
+  out.X_WO = to_numpy(std::move(X)).attr("reshape")(n, 4, 4);
+  out.X_WO_release = to_numpy(std::move(X0)).attr("reshape")(n, 4, 4);
+  out.status = to_numpy(std::move(status));
+  out.object_settled = to_bool_numpy(std::move(settled));
+  out.contacts = to_numpy(std::move(contacts));
+  out.steps = r.steps;
+  out.simulated_time = r.simulated_time;
+  out.settled = r.settled;
+  out.resettle_rounds = r.resettle_rounds;
+  out.max_penetration = r.max_penetration;
+  return out;
+}
+
+void bind_options(py::module_& m) {
+  py::class_<ConvexDecompositionOptions>(
+      m, "ConvexDecompositionOptions",
+      "Options of convex_decomposition (mgn/geometry/convex_decomposition.hpp); the defaults "
+      "are the C++ struct's.")
+      .def(py::init<>())
+      .def_readwrite("convex_volume_tolerance",
+                     &ConvexDecompositionOptions::convex_volume_tolerance)
+      .def_readwrite("max_concavity", &ConvexDecompositionOptions::max_concavity)
+      .def_readwrite("min_parts", &ConvexDecompositionOptions::min_parts)
+      .def_readwrite("max_parts", &ConvexDecompositionOptions::max_parts)
+      .def_readwrite("compactness_weight", &ConvexDecompositionOptions::compactness_weight)
+      .def_readwrite("volume_weight", &ConvexDecompositionOptions::volume_weight)
+      .def_readwrite("extra_concavity_points", &ConvexDecompositionOptions::extra_concavity_points)
+      .def_readwrite("max_hacd_faces", &ConvexDecompositionOptions::max_hacd_faces)
+      .def_readwrite("grid_resolution", &ConvexDecompositionOptions::grid_resolution)
+      .def_readwrite("merge_volume_tolerance", &ConvexDecompositionOptions::merge_volume_tolerance)
+      .def_readwrite("merge_max_parts", &ConvexDecompositionOptions::merge_max_parts);
+
+  using Window = std::tuple<double, double, double>;
+  auto window_get = [](const Vec3d& v) { return Window{v.x(), v.y(), v.z()}; };
+  py::class_<DropOptions>(m, "DropOptions",
+                          "Options of drop_objects (mgn/scene/drop.hpp, SI units); the defaults "
+                          "are the C++ struct's, validate() checks the ranges.")
+      .def(py::init<>())
+      .def_property(
+          "window_min", [=](const DropOptions& o) { return window_get(o.window_min); },
+          [](DropOptions& o, const Window& w) {
+            o.window_min = Vec3d(std::get<0>(w), std::get<1>(w), std::get<2>(w));
+          })
+      .def_property(
+          "window_max", [=](const DropOptions& o) { return window_get(o.window_max); },
+          [](DropOptions& o, const Window& w) {
+            o.window_max = Vec3d(std::get<0>(w), std::get<1>(w), std::get<2>(w));
+          })
+      .def_readwrite("dt", &DropOptions::dt)
+      .def_readwrite("solver_iterations", &DropOptions::solver_iterations)
+      .def_readwrite("max_time", &DropOptions::max_time)
+      .def_readwrite("linear_rest", &DropOptions::linear_rest)
+      .def_readwrite("angular_rest", &DropOptions::angular_rest)
+      .def_readwrite("rest_time", &DropOptions::rest_time)
+      .def_readwrite("gravity", &DropOptions::gravity)
+      .def_readwrite("rolling_friction", &DropOptions::rolling_friction)
+      .def_readwrite("angular_damping", &DropOptions::angular_damping)
+      .def_readwrite("tote_friction", &DropOptions::tote_friction)
+      .def_readwrite("tote_restitution", &DropOptions::tote_restitution)
+      .def_readwrite("collision_margin", &DropOptions::collision_margin)
+      .def_readwrite("contact_distance", &DropOptions::contact_distance)
+      .def_readwrite("remove_unsettled", &DropOptions::remove_unsettled)
+      .def_readwrite("max_hull_vertices", &DropOptions::max_hull_vertices)
+      .def_readwrite("hull_tolerance", &DropOptions::hull_tolerance)
+      .def_readwrite("polyhedral_contacts", &DropOptions::polyhedral_contacts)
+      .def_readwrite("resettle_time", &DropOptions::resettle_time)
+      .def_readwrite("two_friction_directions", &DropOptions::two_friction_directions)
+      .def_property(
+          "tote_collision",
+          [](const DropOptions& o) {
+            return std::string(o.tote_collision == ToteCollision::Boxes ? "boxes" : "mesh");
+          },
+          [](DropOptions& o, const std::string& mode) {
+            if (mode == "boxes")
+              o.tote_collision = ToteCollision::Boxes;
+            else if (mode == "mesh")
+              o.tote_collision = ToteCollision::TriangleMesh;
+            else
+              throw_error<InvalidArgument>(
+                  "DropOptions.tote_collision must be 'boxes' or 'mesh', got '", mode, "'");
+          })
+      .def_readwrite("seed", &DropOptions::seed)
+      .def(
+          "validate", [](const DropOptions& o) { validate(o); },
+          "Raises InvalidArgumentError naming the first field out of its range.");
+
+  py::class_<DropArrays>(m, "DropResult",
+                         "drop_objects() result: one row per input object, in input order.")
+      .def_readonly("X_WO", &DropArrays::X_WO, "(N,4,4) float64 settled poses, m")
+      .def_readonly("X_WO_release", &DropArrays::X_WO_release,
+                    "(N,4,4) float64 release (or start) poses, m")
+      .def_readonly("status", &DropArrays::status,
+                    "(N,) int32: 0 kept, 1 left the tote, 2 not settled")
+      .def_readonly("object_settled", &DropArrays::object_settled,
+                    "(N,) bool: at rest when the simulation stopped")
+      .def_readonly("contacts", &DropArrays::contacts,
+                    "(N,) uint32 tote contact flags (bits -x, +x, -y, +y walls, floor)")
+      .def_readonly("steps", &DropArrays::steps)
+      .def_readonly("simulated_time", &DropArrays::simulated_time, "s")
+      .def_readonly("settled", &DropArrays::settled, "every remaining object came to rest")
+      .def_readonly("resettle_rounds", &DropArrays::resettle_rounds)
+      .def_readonly("max_penetration", &DropArrays::max_penetration,
+                    "deepest contact penetration on the simulated hulls, m");
 }
 
 }  // namespace
@@ -33,40 +164,23 @@ void bind_scene_drop(py::module_& m) {
       },
       py::arg("mesh"));
 
+  bind_options(m);
+
   m.def(
       "convex_decomposition",
-      [](const Mesh& mesh, double convex_volume_tolerance, double max_concavity, int min_parts,
-         int max_parts, double compactness_weight, double volume_weight,
-         bool extra_concavity_points, std::int64_t max_hacd_faces, int grid_resolution,
-         double merge_volume_tolerance, int merge_max_parts) {
-        ConvexDecompositionOptions o;
-        o.convex_volume_tolerance = convex_volume_tolerance;
-        o.max_concavity = max_concavity;
-        o.min_parts = min_parts;
-        o.max_parts = max_parts;
-        o.compactness_weight = compactness_weight;
-        o.volume_weight = volume_weight;
-        o.extra_concavity_points = extra_concavity_points;
-        o.max_hacd_faces = max_hacd_faces;
-        o.grid_resolution = grid_resolution;
-        o.merge_volume_tolerance = merge_volume_tolerance;
-        o.merge_max_parts = merge_max_parts;
+      [](const Mesh& mesh, const ConvexDecompositionOptions& options) {
         py::gil_scoped_release release;
-        return convex_decomposition(mesh, o);
+        return convex_decomposition(mesh, options);
       },
-      py::arg("mesh"), py::arg("convex_volume_tolerance") = 0.10, py::arg("max_concavity") = 0.02,
-      py::arg("min_parts") = 1, py::arg("max_parts") = 32, py::arg("compactness_weight") = 0.1,
-      py::arg("volume_weight") = 0.0, py::arg("extra_concavity_points") = true,
-      py::arg("max_hacd_faces") = 1500, py::arg("grid_resolution") = 40,
-      py::arg("merge_volume_tolerance") = ConvexDecompositionOptions{}.merge_volume_tolerance,
-      py::arg("merge_max_parts") = ConvexDecompositionOptions{}.merge_max_parts);
+      py::arg("mesh"),
+      py::arg_v("options", ConvexDecompositionOptions{}, "ConvexDecompositionOptions()"));
 
   m.def(
       "drop_objects",
       [](const std::vector<std::vector<Mesh>>& parts, const std::vector<double>& mass,
          const py::handle& coms, const py::handle& inertias, const std::vector<double>& mu,
          const std::vector<double>& e, const std::vector<std::string>& names, const Mesh& tote,
-         const std::vector<double>& tote_box, const py::dict& options,
+         const std::vector<double>& tote_box, const DropOptions& options,
          const py::object& X_WO_start) {
         const std::size_t n = parts.size();
         const auto com = to_rows<double, 3>(coms, "coms");
@@ -100,66 +214,6 @@ void bind_scene_drop(py::module_& m) {
               tote_box.size(), " values");
         ToteBox box{tote_box[0], tote_box[1], tote_box[2], tote_box[3], tote_box[4]};
         if (tote_box.size() == 6) box.walls = tote_box[5] != 0.0;
-        DropOptions o;
-        for (const auto& [key_h, value] : options) {
-          const std::string key = py::str(key_h);
-          if (key == "window_min")
-            o.window_min = vec3(value, "window_min");
-          else if (key == "window_max")
-            o.window_max = vec3(value, "window_max");
-          else if (key == "dt")
-            o.dt = value.cast<double>();
-          else if (key == "solver_iterations")
-            o.solver_iterations = value.cast<int>();
-          else if (key == "max_time")
-            o.max_time = value.cast<double>();
-          else if (key == "linear_rest")
-            o.linear_rest = value.cast<double>();
-          else if (key == "angular_rest")
-            o.angular_rest = value.cast<double>();
-          else if (key == "rest_time")
-            o.rest_time = value.cast<double>();
-          else if (key == "gravity")
-            o.gravity = value.cast<double>();
-          else if (key == "rolling_friction")
-            o.rolling_friction = value.cast<double>();
-          else if (key == "angular_damping")
-            o.angular_damping = value.cast<double>();
-          else if (key == "tote_friction")
-            o.tote_friction = value.cast<double>();
-          else if (key == "tote_restitution")
-            o.tote_restitution = value.cast<double>();
-          else if (key == "collision_margin")
-            o.collision_margin = value.cast<double>();
-          else if (key == "contact_distance")
-            o.contact_distance = value.cast<double>();
-          else if (key == "remove_unsettled")
-            o.remove_unsettled = value.cast<bool>();
-          else if (key == "max_hull_vertices")
-            o.max_hull_vertices = value.cast<int>();
-          else if (key == "hull_tolerance")
-            o.hull_tolerance = value.cast<double>();
-          else if (key == "polyhedral_contacts")
-            o.polyhedral_contacts = value.cast<bool>();
-          else if (key == "resettle_time")
-            o.resettle_time = value.cast<double>();
-          else if (key == "two_friction_directions")
-            o.two_friction_directions = value.cast<bool>();
-          else if (key == "seed")
-            o.seed = value.cast<std::uint64_t>();
-          else if (key == "tote_collision") {
-            const std::string mode = value.cast<std::string>();
-            if (mode == "boxes")
-              o.tote_collision = ToteCollision::Boxes;
-            else if (mode == "mesh")
-              o.tote_collision = ToteCollision::TriangleMesh;
-            else
-              throw_error<InvalidArgument>(
-                  "drop_objects: tote_collision must be 'boxes' or 'mesh', got '", mode, "'");
-          } else {
-            throw_error<InvalidArgument>("drop_objects: unknown option '", key, "'");
-          }
-        }
         std::vector<Pose> start;  // settle_objects(): start at rest at these poses
         if (!X_WO_start.is_none()) {
           const auto rows = to_rows<double, 16>(X_WO_start, "X_WO_start");
@@ -172,35 +226,10 @@ void bind_scene_drop(py::module_& m) {
         DropResult r;
         {
           py::gil_scoped_release release;
-          r = X_WO_start.is_none() ? drop_objects(objects, tote, box, o)
-                                   : settle_objects(objects, start, tote, box, o);
+          r = X_WO_start.is_none() ? drop_objects(objects, tote, box, options)
+                                   : settle_objects(objects, start, tote, box, options);
         }
-        Eigen::Matrix<double, Eigen::Dynamic, 16, Eigen::RowMajor> X(n, 16), X0(n, 16);
-        std::vector<std::int32_t> status(n);
-        std::vector<std::uint8_t> settled(n);
-        std::vector<std::uint32_t> contacts(n);
-        for (std::size_t i = 0; i < n; ++i) {
-          const auto& d = r.objects[i];
-          const auto ri = static_cast<Eigen::Index>(i);
-          for (int k = 0; k < 16; ++k) {
-            X(ri, k) = d.X_WO.matrix()(k / 4, k % 4);
-            X0(ri, k) = d.X_WO_release.matrix()(k / 4, k % 4);
-          }
-          status[i] = static_cast<std::int32_t>(d.status);
-          settled[i] = d.settled ? 1 : 0;
-          contacts[i] = d.contacts;
-        }
-        py::dict out;
-        out["X_WO"] = to_numpy(std::move(X)).attr("reshape")(n, 4, 4);
-        out["X_WO_release"] = to_numpy(std::move(X0)).attr("reshape")(n, 4, 4);
-        out["status"] = to_numpy(std::move(status));
-        out["settled"] = to_bool_numpy(std::move(settled));
-        out["contacts"] = to_numpy(std::move(contacts));
-        out["steps"] = r.steps;
-        out["simulated_time"] = r.simulated_time;
-        out["all_settled"] = r.settled;
-        out["max_penetration"] = r.max_penetration;
-        return out;
+        return to_arrays(r);
       },
       py::arg("parts"), py::arg("masses"), py::arg("coms"), py::arg("inertias"),
       py::arg("frictions"), py::arg("restitutions"), py::arg("names"), py::arg("tote"),

@@ -33,24 +33,75 @@ py::handle item(const py::dict& d, const char* key, const std::string& what) {
   return d[key];
 }
 
-py::dict placed_dict(const PlacedGrasps& p, std::size_t num_offsets) {
-  py::dict out;
-  out["tool_poses"] = poses_to_numpy(p.X_W_tool);
-  out["contact_poses"] = poses_to_numpy(p.X_W_contact);
-  out["contacts"] = to_numpy(Points3d(p.contacts));
-  out["second_contacts"] = to_numpy(Points3d(p.second_contacts));
-  out["width"] = to_numpy(std::vector<float>(p.width));
-  out["score_analytical"] = to_numpy(std::vector<float>(p.score_analytical));
-  out["score_simulation"] = to_numpy(std::vector<float>(p.score_simulation));
-  out["score_wrench"] = to_numpy(std::vector<float>(p.score_wrench));
-  out["object_index"] = to_numpy(std::vector<std::int32_t>(p.object_index));
-  out["colliding"] = to_bool_numpy(std::vector<std::uint8_t>(p.colliding));
+/// PlacedGrasps as numpy arrays (copies: the model keeps its own).
+struct PlacedArrays {
+  py::array tool_poses, contact_poses, contacts, second_contacts, width, score_analytical;
+  py::array score_simulation, score_wrench, object_index, colliding, hit, collision_part;
+  py::array collision_obstacle;
+};
+
+/// ToolCollisions: colliding (M,) bool, hit (M, K) int32.
+struct CollisionArrays {
+  py::array colliding, hit;
+};
+
+/// ViewGrasps: row indices and camera-frame poses of the grasps kept in a view.
+struct ViewGraspArrays {
+  py::array pj_index, pj_tool, pj_contact, suction_index, suction_tool, suction_contact;
+};
+
+PlacedArrays placed_arrays(const PlacedGrasps& p, std::size_t num_offsets) {
+  PlacedArrays out;
+  out.tool_poses = poses_to_numpy(p.X_W_tool);
+  out.contact_poses = poses_to_numpy(p.X_W_contact);
+  out.contacts = to_numpy(Points3d(p.contacts));
+  out.second_contacts = to_numpy(Points3d(p.second_contacts));
+  out.width = to_numpy(std::vector<float>(p.width));
+  out.score_analytical = to_numpy(std::vector<float>(p.score_analytical));
+  out.score_simulation = to_numpy(std::vector<float>(p.score_simulation));
+  out.score_wrench = to_numpy(std::vector<float>(p.score_wrench));
+  out.object_index = to_numpy(std::vector<std::int32_t>(p.object_index));
+  out.colliding = to_bool_numpy(std::vector<std::uint8_t>(p.colliding));
   py::array hit = to_numpy(std::vector<std::int32_t>(p.hit));
-  out["hit"] = hit.attr("reshape")(static_cast<py::ssize_t>(p.size()),
-                                   static_cast<py::ssize_t>(num_offsets));
-  out["collision_part"] = to_numpy(std::vector<std::uint8_t>(p.collision_part));
-  out["collision_obstacle"] = to_numpy(std::vector<std::uint8_t>(p.collision_obstacle));
+  out.hit = hit.attr("reshape")(static_cast<py::ssize_t>(p.size()),
+                                static_cast<py::ssize_t>(num_offsets));
+  out.collision_part = to_numpy(std::vector<std::uint8_t>(p.collision_part));
+  out.collision_obstacle = to_numpy(std::vector<std::uint8_t>(p.collision_obstacle));
   return out;
+}
+
+void bind_results(py::module_& m) {
+  py::class_<PlacedArrays>(m, "PlacedGraspArrays",
+                           "SceneGraspModel.pj / .suction (mgn/scene/scene_grasps.hpp): world-"
+                           "frame grasps of every object; mgn.view_labels.grasps.PlacedGrasps "
+                           "documents each array.")
+      .def_readonly("tool_poses", &PlacedArrays::tool_poses)
+      .def_readonly("contact_poses", &PlacedArrays::contact_poses)
+      .def_readonly("contacts", &PlacedArrays::contacts)
+      .def_readonly("second_contacts", &PlacedArrays::second_contacts)
+      .def_readonly("width", &PlacedArrays::width)
+      .def_readonly("score_analytical", &PlacedArrays::score_analytical)
+      .def_readonly("score_simulation", &PlacedArrays::score_simulation)
+      .def_readonly("score_wrench", &PlacedArrays::score_wrench)
+      .def_readonly("object_index", &PlacedArrays::object_index)
+      .def_readonly("colliding", &PlacedArrays::colliding)
+      .def_readonly("hit", &PlacedArrays::hit)
+      .def_readonly("collision_part", &PlacedArrays::collision_part)
+      .def_readonly("collision_obstacle", &PlacedArrays::collision_obstacle);
+  py::class_<CollisionArrays>(m, "ToolCollisionArrays",
+                              "SceneGraspModel.collides(): colliding (M,) bool, hit (M, K) "
+                              "int32.")
+      .def_readonly("colliding", &CollisionArrays::colliding)
+      .def_readonly("hit", &CollisionArrays::hit);
+  py::class_<ViewGraspArrays>(m, "ViewGraspArrays",
+                              "SceneGraspModel.view_grasps(): row indices and camera-frame "
+                              "(N,4,4) tool and contact poses of the grasps kept in a view.")
+      .def_readonly("pj_index", &ViewGraspArrays::pj_index)
+      .def_readonly("pj_tool", &ViewGraspArrays::pj_tool)
+      .def_readonly("pj_contact", &ViewGraspArrays::pj_contact)
+      .def_readonly("suction_index", &ViewGraspArrays::suction_index)
+      .def_readonly("suction_tool", &ViewGraspArrays::suction_tool)
+      .def_readonly("suction_contact", &ViewGraspArrays::suction_contact);
 }
 
 CameraView camera(const Intrinsics& K, const py::handle& X_WC) {
@@ -63,6 +114,7 @@ CameraView camera(const Intrinsics& K, const py::handle& X_WC) {
 }  // namespace
 
 void bind_scene_grasps(py::module_& m) {
+  bind_results(m);
   m.attr("SUCTION_TOOL_OFFSET") = kSuctionToolOffset;
   py::class_<SceneGraspModel, std::shared_ptr<SceneGraspModel>>(
       m, "SceneGraspModel",
@@ -158,12 +210,14 @@ void bind_scene_grasps(py::module_& m) {
                              [](const SceneGraspModel& s) { return s.options().offsets; })
       .def(
           "pj",
-          [](const SceneGraspModel& s) { return placed_dict(s.pj(), s.options().offsets.size()); },
+          [](const SceneGraspModel& s) {
+            return placed_arrays(s.pj(), s.options().offsets.size());
+          },
           "Parallel-jaw grasps in the world: dict of arrays.")
       .def(
           "suction",
           [](const SceneGraspModel& s) {
-            return placed_dict(s.suction(), s.options().offsets.size());
+            return placed_arrays(s.suction(), s.options().offsets.size());
           },
           "Suction grasps in the world: dict of arrays.")
       .def(
@@ -184,17 +238,16 @@ void bind_scene_grasps(py::module_& m) {
               py::gil_scoped_release release;
               r = s.collides(k, X, width, target_object, check_target_at_grasp);
             }
-            py::dict out;
+            CollisionArrays out;
             const auto n = static_cast<py::ssize_t>(r.size());
-            out["colliding"] = to_bool_numpy(std::move(r.colliding));
+            out.colliding = to_bool_numpy(std::move(r.colliding));
             py::array hit = to_numpy(std::move(r.hit));
-            out["hit"] =
-                hit.attr("reshape")(n, static_cast<py::ssize_t>(s.options().offsets.size()));
+            out.hit = hit.attr("reshape")(n, static_cast<py::ssize_t>(s.options().offsets.size()));
             return out;
           },
           py::arg("kind"), py::arg("X_W_contact"), py::arg("width"), py::arg("target_object"),
           py::arg("check_target_at_grasp") = false,
-          "Collision of arbitrary grasp (contact-frame) poses with the labels' test: dict with "
+          "Collision of arbitrary grasp (contact-frame) poses with the labels' test: "
           "colliding (M,) bool and hit (M, K) int32.")
       .def(
           "visible",
@@ -229,13 +282,13 @@ void bind_scene_grasps(py::module_& m) {
               py::gil_scoped_release release;
               r = s.view_grasps(v, flags);
             }
-            py::dict out;
-            out["pj_index"] = to_numpy(std::move(r.pj_index));
-            out["pj_tool"] = poses_to_numpy(r.pj_X_C_tool);
-            out["pj_contact"] = poses_to_numpy(r.pj_X_C_contact);
-            out["suction_index"] = to_numpy(std::move(r.suction_index));
-            out["suction_tool"] = poses_to_numpy(r.suction_X_C_tool);
-            out["suction_contact"] = poses_to_numpy(r.suction_X_C_contact);
+            ViewGraspArrays out;
+            out.pj_index = to_numpy(std::move(r.pj_index));
+            out.pj_tool = poses_to_numpy(r.pj_X_C_tool);
+            out.pj_contact = poses_to_numpy(r.pj_X_C_contact);
+            out.suction_index = to_numpy(std::move(r.suction_index));
+            out.suction_tool = poses_to_numpy(r.suction_X_C_tool);
+            out.suction_contact = poses_to_numpy(r.suction_X_C_contact);
             return out;
           },
           py::arg("K"), py::arg("X_WC"), py::arg("seen"),

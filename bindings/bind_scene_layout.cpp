@@ -1,5 +1,5 @@
 // Bindings of mgn/scene/layout: label images in (numpy, no copy when already of the right dtype
-// and C-contiguous), a dict of numpy arrays out; GIL released during the work.
+// and C-contiguous), a LayoutArrays of numpy arrays out; GIL released during the work.
 #include <mgn/scene/layout.hpp>
 
 #include <string>
@@ -14,12 +14,6 @@ namespace mgn::py_bind {
 
 namespace {
 
-std::string shape_of(const py::array& a) {
-  std::string s = "(";
-  for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
-  return s + (a.ndim() == 1 ? ",)" : ")");
-}
-
 template <typename T>
 CArray<T> as_array(const py::handle& obj, const char* arg, const char* expected) {
   try {
@@ -29,9 +23,41 @@ CArray<T> as_array(const py::handle& obj, const char* arg, const char* expected)
   }
 }
 
+/// Layout as numpy arrays (moved, no copies); the relations as parallel arrays.
+struct LayoutArrays {
+  py::array relation, rel_parent, rel_child, rel_depth_diff, rel_edge_size, rel_seen_px;
+  py::array visible_px, visible, layer, num_regions, complete, total_covered_edge, order;
+  int num_layers = 0;
+  double max_occlusion = 0.0;
+  bool classes_unique = true;
+  int difficulty = 1;
+};
+
 }  // namespace
 
 void bind_scene_layout(py::module_& m) {
+  py::class_<LayoutArrays>(m, "LayoutArrays",
+                           "compute_layout() result (mgn/scene/layout.hpp): 0-based object "
+                           "indices; rel_* are the relations sorted by (child, parent).")
+      .def_readonly("relation", &LayoutArrays::relation, "(N,N) int8 relation matrix")
+      .def_readonly("rel_parent", &LayoutArrays::rel_parent, "(R,) int32 0-based")
+      .def_readonly("rel_child", &LayoutArrays::rel_child, "(R,) int32 0-based")
+      .def_readonly("rel_depth_diff", &LayoutArrays::rel_depth_diff, "(R,) float64 m")
+      .def_readonly("rel_edge_size", &LayoutArrays::rel_edge_size, "(R,) int32 px")
+      .def_readonly("rel_seen_px", &LayoutArrays::rel_seen_px, "(R,) int64 px")
+      .def_readonly("visible_px", &LayoutArrays::visible_px, "(N,) int64")
+      .def_readonly("visible", &LayoutArrays::visible, "(N,) bool")
+      .def_readonly("layer", &LayoutArrays::layer, "(N,) int8")
+      .def_readonly("num_regions", &LayoutArrays::num_regions, "(N,) int32")
+      .def_readonly("complete", &LayoutArrays::complete, "(N,) bool")
+      .def_readonly("total_covered_edge", &LayoutArrays::total_covered_edge, "(N,) int64 px")
+      .def_readonly("order", &LayoutArrays::order, "picking order, int32 1-based ids")
+      .def_readonly("num_layers", &LayoutArrays::num_layers)
+      .def_readonly("max_occlusion", &LayoutArrays::max_occlusion)
+      .def_readonly("classes_unique", &LayoutArrays::classes_unique)
+      .def_readonly("difficulty", &LayoutArrays::difficulty, "1..5");
+
+  const LayoutOptions defaults;
   m.def(
       "compute_layout",
       [](const py::handle& visible_obj, const py::handle& amodal_obj, const py::handle& depth_obj,
@@ -94,30 +120,33 @@ void bind_scene_layout(py::module_& m) {
           ddiff[k] = L.relations[k].depth_diff;
           seen[k] = L.relations[k].seen_px;
         }
-        py::dict out;
-        out["relation"] = to_numpy(std::move(L.relation)).attr("reshape")(N, N);
-        out["rel_parent"] = to_numpy(std::move(parent));
-        out["rel_child"] = to_numpy(std::move(child));
-        out["rel_depth_diff"] = to_numpy(std::move(ddiff));
-        out["rel_edge_size"] = to_numpy(std::move(edge));
-        out["rel_seen_px"] = to_numpy(std::move(seen));
-        out["visible_px"] = to_numpy(std::move(L.visible_px));
-        out["visible"] = to_bool_numpy(std::move(L.visible));
-        out["layer"] = to_numpy(std::move(L.layer));
-        out["num_regions"] = to_numpy(std::move(L.num_regions));
-        out["complete"] = to_bool_numpy(std::move(L.complete));
-        out["total_covered_edge"] = to_numpy(std::move(L.total_covered_edge));
-        out["order"] = to_numpy(std::move(L.order));
-        out["num_layers"] = L.num_layers;
-        out["max_occlusion"] = L.max_occlusion;
-        out["classes_unique"] = L.classes_unique;
-        out["difficulty"] = L.difficulty;
+        LayoutArrays out;
+        out.relation = to_numpy(std::move(L.relation)).attr("reshape")(N, N);
+        out.rel_parent = to_numpy(std::move(parent));
+        out.rel_child = to_numpy(std::move(child));
+        out.rel_depth_diff = to_numpy(std::move(ddiff));
+        out.rel_edge_size = to_numpy(std::move(edge));
+        out.rel_seen_px = to_numpy(std::move(seen));
+        out.visible_px = to_numpy(std::move(L.visible_px));
+        out.visible = to_bool_numpy(std::move(L.visible));
+        out.layer = to_numpy(std::move(L.layer));
+        out.num_regions = to_numpy(std::move(L.num_regions));
+        out.complete = to_bool_numpy(std::move(L.complete));
+        out.total_covered_edge = to_numpy(std::move(L.total_covered_edge));
+        out.order = to_numpy(std::move(L.order));
+        out.num_layers = L.num_layers;
+        out.max_occlusion = L.max_occlusion;
+        out.classes_unique = L.classes_unique;
+        out.difficulty = L.difficulty;
         return out;
       },
       py::arg("visible"), py::arg("amodal"), py::arg("depth"), py::arg("categories"),
-      py::arg("occlusion"), py::arg("min_overlap_px") = 10, py::arg("min_overlap_fraction") = 0.1,
-      py::arg("min_region_px") = 10, py::arg("min_region_fraction") = 0.005,
-      py::arg("max_occlusion_level1") = 0.05, py::arg("num_threads") = 0,
+      py::arg("occlusion"), py::arg("min_overlap_px") = defaults.min_overlap_px,
+      py::arg("min_overlap_fraction") = defaults.min_overlap_fraction,
+      py::arg("min_region_px") = defaults.min_region_px,
+      py::arg("min_region_fraction") = defaults.min_region_fraction,
+      py::arg("max_occlusion_level1") = defaults.max_occlusion_level1,
+      py::arg("num_threads") = defaults.num_threads,
       "Layout labels of one view (see mgn/scene/layout.hpp); use "
       "mgn.view_labels.layout.compute_layout.");
 }

@@ -12,11 +12,39 @@ namespace mgn::py_bind {
 
 namespace {
 
-py::array image(py::array flat, int h, int w) { return flat.attr("reshape")(py::make_tuple(h, w)); }
+/// ViewLabels as numpy arrays (moved, no copies; images reshaped to (H, W)).
+struct ViewLabelArrays {
+  py::array visible, semantic, amodal, visible_pixels, amodal_pixels, occlusion, occlusion_map,
+      bbox_tight, bbox_loose;
+  py::array X_CO, keypoints, keypoint_object, occluded_keypoints, occluded_keypoint_object,
+      com_points, com_object, com_visible, com_heatmap;
+};
 
 }  // namespace
 
 void bind_scene_view_labels(py::module_& m) {
+  py::class_<ViewLabelArrays>(m, "ViewLabelArrays",
+                              "ViewLabelModel.label_view() result (mgn/scene/view_labels.hpp); "
+                              "mgn.view_labels.objects.ViewObjectLabels documents each array.")
+      .def_readonly("visible", &ViewLabelArrays::visible)
+      .def_readonly("semantic", &ViewLabelArrays::semantic)
+      .def_readonly("amodal", &ViewLabelArrays::amodal)
+      .def_readonly("visible_pixels", &ViewLabelArrays::visible_pixels)
+      .def_readonly("amodal_pixels", &ViewLabelArrays::amodal_pixels)
+      .def_readonly("occlusion", &ViewLabelArrays::occlusion)
+      .def_readonly("occlusion_map", &ViewLabelArrays::occlusion_map)
+      .def_readonly("bbox_tight", &ViewLabelArrays::bbox_tight)
+      .def_readonly("bbox_loose", &ViewLabelArrays::bbox_loose)
+      .def_readonly("X_CO", &ViewLabelArrays::X_CO)
+      .def_readonly("keypoints", &ViewLabelArrays::keypoints)
+      .def_readonly("keypoint_object", &ViewLabelArrays::keypoint_object)
+      .def_readonly("occluded_keypoints", &ViewLabelArrays::occluded_keypoints)
+      .def_readonly("occluded_keypoint_object", &ViewLabelArrays::occluded_keypoint_object)
+      .def_readonly("com_points", &ViewLabelArrays::com_points)
+      .def_readonly("com_object", &ViewLabelArrays::com_object)
+      .def_readonly("com_visible", &ViewLabelArrays::com_visible)
+      .def_readonly("com_heatmap", &ViewLabelArrays::com_heatmap);
+
   py::class_<ViewLabelModel>(m, "ViewLabelModel",
                              "Ray-tracing model of one scene for per-view object labels.")
       .def(py::init([](const std::vector<const Mesh*>& meshes, const py::handle& poses,
@@ -94,26 +122,26 @@ void bind_scene_view_labels(py::module_& m) {
               L = model.label_view(K, X, img.data(), w, h, o);
             }
             const int n = L.num_objects;
-            py::dict out;
-            out["visible"] = image(to_numpy(std::move(L.visible)), h, w);
-            out["semantic"] = image(to_numpy(std::move(L.semantic)), h, w);
-            out["amodal"] =
+            ViewLabelArrays out;
+            out.visible = as_image(to_numpy(std::move(L.visible)), h, w);
+            out.semantic = as_image(to_numpy(std::move(L.semantic)), h, w);
+            out.amodal =
                 to_bool_numpy(std::move(L.amodal)).attr("reshape")(py::make_tuple(n, h, w));
-            out["visible_pixels"] = to_numpy(std::move(L.visible_pixels));
-            out["amodal_pixels"] = to_numpy(std::move(L.amodal_pixels));
-            out["occlusion"] = to_numpy(std::move(L.occlusion));
-            out["occlusion_map"] = image(to_numpy(std::move(L.occlusion_map)), h, w);
-            out["bbox_tight"] = to_numpy(std::move(L.bbox_tight));
-            out["bbox_loose"] = to_numpy(std::move(L.bbox_loose));
-            out["X_CO"] = poses_to_numpy(L.X_CO);
-            out["keypoints"] = to_numpy(std::move(L.keypoints));
-            out["keypoint_object"] = to_numpy(std::move(L.keypoint_object));
-            out["occluded_keypoints"] = to_numpy(std::move(L.occluded_keypoints));
-            out["occluded_keypoint_object"] = to_numpy(std::move(L.occluded_keypoint_object));
-            out["com_points"] = to_numpy(std::move(L.com_points));
-            out["com_object"] = to_numpy(std::move(L.com_object));
-            out["com_visible"] = to_bool_numpy(std::move(L.com_visible));
-            out["com_heatmap"] = image(to_numpy(std::move(L.com_heatmap)), h, w);
+            out.visible_pixels = to_numpy(std::move(L.visible_pixels));
+            out.amodal_pixels = to_numpy(std::move(L.amodal_pixels));
+            out.occlusion = to_numpy(std::move(L.occlusion));
+            out.occlusion_map = as_image(to_numpy(std::move(L.occlusion_map)), h, w);
+            out.bbox_tight = to_numpy(std::move(L.bbox_tight));
+            out.bbox_loose = to_numpy(std::move(L.bbox_loose));
+            out.X_CO = poses_to_numpy(L.X_CO);
+            out.keypoints = to_numpy(std::move(L.keypoints));
+            out.keypoint_object = to_numpy(std::move(L.keypoint_object));
+            out.occluded_keypoints = to_numpy(std::move(L.occluded_keypoints));
+            out.occluded_keypoint_object = to_numpy(std::move(L.occluded_keypoint_object));
+            out.com_points = to_numpy(std::move(L.com_points));
+            out.com_object = to_numpy(std::move(L.com_object));
+            out.com_visible = to_bool_numpy(std::move(L.com_visible));
+            out.com_heatmap = as_image(to_numpy(std::move(L.com_heatmap)), h, w);
             return out;
           },
           py::arg("K"), py::arg("X_WC"), py::arg("instance_image"),

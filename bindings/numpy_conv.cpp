@@ -4,6 +4,20 @@
 
 namespace mgn::py_conv {
 
+std::string shape_of(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+Vec3d to_vec3(const py::handle& obj, const char* arg) {
+  const auto rows = to_rows<double, 3>(
+      py::module_::import("numpy").attr("reshape")(obj, py::make_tuple(-1, 3)), arg);
+  if (rows.rows() != 1)
+    throw_error<InvalidArgument>(arg, ": expected 3 numbers, got ", 3 * rows.rows());
+  return rows.row(0).transpose();
+}
+
 namespace {
 Pose checked_pose(const double* p, const char* arg, py::ssize_t index, bool batched) {
   const std::string where =

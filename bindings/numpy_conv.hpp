@@ -17,6 +17,12 @@ namespace py = pybind11;
 template <typename T>
 using CArray = py::array_t<T, py::array::c_style | py::array::forcecast>;
 
+/// "(2, 3)"-style text of an array's shape, for error messages.
+std::string shape_of(const py::array& a);
+
+/// 3 numbers (any array-like of 3 values) -> Vec3d. Names `arg` in errors.
+Vec3d to_vec3(const py::handle& obj, const char* arg);
+
 /// (N,cols) array -> row-major Eigen matrix (copy). Names `arg` in errors.
 template <typename Scalar, int Cols>
 Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor> to_rows(const py::handle& obj,
@@ -27,14 +33,9 @@ Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor> to_rows(const py::h
   } catch (const py::cast_error&) {
     throw_error<InvalidArgument>(arg, ": expected a numeric array of shape (N, ", Cols, ")");
   }
-  if (a.ndim() != 2 || a.shape(1) != Cols) {
-    std::string shape = "(";
-    for (py::ssize_t i = 0; i < a.ndim(); ++i)
-      shape += (i ? ", " : "") + std::to_string(a.shape(i));
-    shape += a.ndim() == 1 ? ",)" : ")";
+  if (a.ndim() != 2 || a.shape(1) != Cols)
     throw_error<InvalidArgument>(arg, ": expected an array of shape (N, ", Cols, "), got shape ",
-                                 shape);
-  }
+                                 shape_of(a));
   using M = Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor>;
   return Eigen::Map<const M>(a.data(), a.shape(0), Cols);
 }
@@ -65,6 +66,20 @@ py::array to_numpy(std::vector<T>&& v) {
 inline py::array to_bool_numpy(std::vector<std::uint8_t>&& v) {
   py::array arr = to_numpy(std::move(v));
   return arr.attr("view")(py::dtype::of<bool>());
+}
+
+/// A flat row-major image array viewed as (h, w) or, for c > 1, (h, w, c) (no copy).
+inline py::array as_image(const py::array& flat, int h, int w, int c = 1) {
+  if (c == 1) return flat.attr("reshape")(h, w);
+  return flat.attr("reshape")(h, w, c);
+}
+
+/// Moves an (h*w*c) vector into an (h, w[, c]) numpy array without copying; None when the
+/// vector is empty (an image that was not asked for).
+template <typename T>
+py::object to_image(std::vector<T>&& v, int h, int w, int c = 1) {
+  if (v.empty()) return py::none();
+  return as_image(to_numpy(std::move(v)), h, w, c);
 }
 
 /// (4,4) or (N,4,4) float64 -> rigid poses. Checks finiteness, a [0 0 0 1] last row and an

@@ -11,28 +11,43 @@ import numpy
 import numpy.typing
 
 __all__: list[str] = [
+    "AntipodalResult",
     "AntipodalSampler",
     "AreaLight",
     "BackendError",
+    "CalibrationResult",
+    "ClassificationMetrics",
     "CollisionModel",
+    "ConvexDecompositionOptions",
     "Cup",
     "DepthSensorParams",
     "DepthSensorPreset",
+    "DepthSensorResult",
+    "DistanceResult",
+    "DropOptions",
+    "DropResult",
     "Environment",
     "FilmOptions",
     "Intrinsics",
     "InvalidArgumentError",
     "IoError",
+    "LayoutArrays",
+    "LightSample",
     "MassProperties",
     "Material",
     "Mesh",
     "MeshReport",
     "MgnError",
+    "MgnRigParams",
     "ParallelJawGripper",
     "PathScene",
     "PathTraceOptions",
     "PbrMaterial",
+    "PlacedGraspArrays",
+    "RayAllHits",
+    "RayHits",
     "RayScene",
+    "RenderResult",
     "Renderer",
     "SEAL_FAILURE_NAMES",
     "SUCTION_TOOL_OFFSET",
@@ -41,8 +56,14 @@ __all__: list[str] = [
     "SURFACE_TRANSPARENT",
     "SceneGraspModel",
     "SealModel",
+    "SealResult",
+    "SealTrial",
     "ShakeOptions",
+    "SurfaceSamples",
+    "ToolCollisionArrays",
     "UnsupportedError",
+    "ViewGraspArrays",
+    "ViewLabelArrays",
     "ViewLabelModel",
     "apply_depth_sensor",
     "build_info",
@@ -104,6 +125,26 @@ class BackendError(MgnError, RuntimeError):
     """
     A third-party backend reported a failure (also a RuntimeError).
     """
+
+class SurfaceSamples:
+    """
+    sample_surface() result (mgn/geometry/sampling.hpp), mesh frame.
+    """
+    @property
+    def face_ids(self) -> numpy.ndarray:
+        """
+        (N,) int32 index of the face each point lies on
+        """
+    @property
+    def normals(self) -> numpy.ndarray:
+        """
+        (N,3) float32 unit outward face normals
+        """
+    @property
+    def points(self) -> numpy.ndarray:
+        """
+        (N,3) float32 points on the surface, m
+        """
 
 class Material:
     """
@@ -302,6 +343,81 @@ class Mesh:
     @property
     def vertices(self) -> numpy.ndarray: ...
 
+class RayHits:
+    """
+    RayScene.intersect() result (mgn/raytrace/ray_scene.hpp), world frame; misses have distance inf and ids -1.
+    """
+    @property
+    def barycentric(self) -> numpy.ndarray:
+        """
+        (N,2) float32 (u, v): p = (1-u-v) v0 + u v1 + v v2
+        """
+    @property
+    def distance(self) -> numpy.ndarray:
+        """
+        (N,) float32 m
+        """
+    @property
+    def face_ids(self) -> numpy.ndarray:
+        """
+        (N,) int32 face index within its mesh
+        """
+    @property
+    def instance_ids(self) -> numpy.ndarray:
+        """
+        (N,) int32
+        """
+    @property
+    def normals(self) -> numpy.ndarray:
+        """
+        (N,3) float32 unit geometric normal, outward for CCW faces
+        """
+    @property
+    def points(self) -> numpy.ndarray:
+        """
+        (N,3) float32
+        """
+
+class RayAllHits:
+    """
+    RayScene.intersect_all() result: the hits of ray i are entries offsets[i] .. offsets[i+1]-1, sorted by distance.
+    """
+    @property
+    def distance(self) -> numpy.ndarray:
+        """
+        (H,) float32 m
+        """
+    @property
+    def face_ids(self) -> numpy.ndarray:
+        """
+        (H,) int32
+        """
+    @property
+    def instance_ids(self) -> numpy.ndarray:
+        """
+        (H,) int32
+        """
+    @property
+    def normals(self) -> numpy.ndarray:
+        """
+        (H,3) float32
+        """
+    @property
+    def offsets(self) -> numpy.ndarray:
+        """
+        (N+1,) int64
+        """
+    @property
+    def points(self) -> numpy.ndarray:
+        """
+        (H,3) float32
+        """
+    @property
+    def ray_ids(self) -> numpy.ndarray:
+        """
+        (H,) int32 ray of each hit
+        """
+
 class RayScene:
     """
     Immutable Embree scene of meshes placed in the world frame.
@@ -320,7 +436,7 @@ class RayScene:
         tfar: typing.SupportsFloat | typing.SupportsIndex = ...,
         coherent: bool = False,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> RayHits: ...
     def intersect_all(
         self,
         origins: typing.Any,
@@ -329,7 +445,7 @@ class RayScene:
         tnear: typing.SupportsFloat | typing.SupportsIndex = 0.0,
         tfar: typing.SupportsFloat | typing.SupportsIndex = ...,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> RayAllHits: ...
     def intersect_ids(
         self,
         origins: typing.Any,
@@ -355,6 +471,31 @@ class RayScene:
     @property
     def num_triangles(self) -> int: ...
 
+class DistanceResult:
+    """
+    distance() result (mgn/collision/collision_model.hpp), one row per pose pair.
+    """
+    @property
+    def collide(self) -> numpy.ndarray:
+        """
+        (N,) bool
+        """
+    @property
+    def distance(self) -> numpy.ndarray:
+        """
+        (N,) float64 m, 0 for intersecting pairs
+        """
+    @property
+    def points_a(self) -> numpy.ndarray:
+        """
+        (N,3) float64 closest point on A, world frame
+        """
+    @property
+    def points_b(self) -> numpy.ndarray:
+        """
+        (N,3) float64 closest point on B, world frame
+        """
+
 class CollisionModel:
     """
     Immutable FCL BVH (OBBRSS) of a mesh.
@@ -364,6 +505,58 @@ class CollisionModel:
     def num_triangles(self) -> int: ...
     @property
     def num_vertices(self) -> int: ...
+
+class SealResult:
+    """
+    SealModel.evaluate() result (mgn/grasp/seal_model.hpp); mgn.suction.seal.SealResult documents each array.
+    """
+    @property
+    def quality(self) -> numpy.ndarray: ...
+    @property
+    def reason(self) -> numpy.ndarray: ...
+    @property
+    def score(self) -> numpy.ndarray: ...
+    @property
+    def trial_reason(self) -> numpy.ndarray: ...
+    @property
+    def trial_sealed(self) -> numpy.ndarray: ...
+
+class SealTrial:
+    """
+    SealModel.trial() result: failure name, projected ring (object frame, m), spring forces (N).
+    """
+    @property
+    def center(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        """
+        projected centre, m
+        """
+    @property
+    def elastic_force(self) -> numpy.ndarray:
+        """
+        (N,) float64, N
+        """
+    @property
+    def failure(self) -> str: ...
+    @property
+    def ring_force(self) -> numpy.ndarray:
+        """
+        (N,3) float64, N
+        """
+    @property
+    def ring_normals(self) -> numpy.ndarray:
+        """
+        (N,3) float32
+        """
+    @property
+    def ring_points(self) -> numpy.ndarray:
+        """
+        (N,3) float32
+        """
+    @property
+    def total_elastic_force(self) -> float:
+        """
+        N
+        """
 
 class Cup:
     """
@@ -437,17 +630,159 @@ class SealModel:
         seed: typing.SupportsInt | typing.SupportsIndex = 0,
         first_index: typing.SupportsInt | typing.SupportsIndex = 0,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> SealResult: ...
     def trial(
         self,
         point: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
         normal: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
-    ) -> dict: ...
+    ) -> SealTrial: ...
     def with_cup(self, cup: Cup) -> SealModel: ...
     @property
     def cup(self) -> Cup: ...
     @property
     def model(self) -> str: ...
+
+class ClassificationMetrics:
+    """
+    Confusion counts and rates (mgn/grasp/calibration.hpp); NaN for a zero denominator.
+    """
+    def to_dict(self) -> dict:
+        """
+        {name: value} of the fields above, for JSON.
+        """
+    @property
+    def accuracy(self) -> float:
+        """
+        (tp + tn) / count
+        """
+    @property
+    def fn(self) -> int: ...
+    @property
+    def fp(self) -> int: ...
+    @property
+    def npv(self) -> float:
+        """
+        tn / (tn + fn)
+        """
+    @property
+    def ppv(self) -> float:
+        """
+        tp / (tp + fp), precision
+        """
+    @property
+    def sensitivity(self) -> float:
+        """
+        tp / (tp + fn)
+        """
+    @property
+    def specificity(self) -> float:
+        """
+        tn / (tn + fp)
+        """
+    @property
+    def tn(self) -> int: ...
+    @property
+    def tp(self) -> int: ...
+
+class CalibrationResult:
+    """
+    calibrate_cup() result (mgn/grasp/calibration.hpp).
+    """
+    @property
+    def cup(self) -> Cup:
+        """
+        the initial cup with the fitted c1, c2
+        """
+    @property
+    def evaluations(self) -> int: ...
+    @property
+    def objective(self) -> float:
+        """
+        training accuracy of the fitted cup
+        """
+    @property
+    def predicted(self) -> numpy.ndarray:
+        """
+        (N,) bool nominal prediction of the fitted cup
+        """
+    @property
+    def test(self) -> ClassificationMetrics: ...
+    @property
+    def test_indices(self) -> numpy.ndarray:
+        """
+        (H,) int64 ascending
+        """
+    @property
+    def train(self) -> ClassificationMetrics: ...
+    @property
+    def train_indices(self) -> numpy.ndarray:
+        """
+        (T,) int64 ascending
+        """
+
+class LightSample:
+    """
+    The light a view was rendered with (mgn/render/renderer.hpp).
+    """
+    @property
+    def ambient(self) -> float:
+        """
+        relative to white
+        """
+    @property
+    def color_temperature(self) -> float:
+        """
+        K
+        """
+    @property
+    def intensity(self) -> float:
+        """
+        radiance scale (1 = nominal)
+        """
+    @property
+    def position_W(self) -> tuple[float, float, float]:
+        """
+        point light position, world frame, m
+        """
+
+class RenderResult:
+    """
+    Renderer.render() result: (H,W,3) uint8 rgb, (H,W) float32 depth (m), (H,W) int32 instance_ids (None when not requested), light.
+    """
+    @property
+    def depth(self) -> typing.Any: ...
+    @property
+    def instance_ids(self) -> typing.Any: ...
+    @property
+    def light(self) -> LightSample: ...
+    @property
+    def rgb(self) -> typing.Any: ...
+
+class DepthSensorResult:
+    """
+    apply_depth_sensor() result: (H,W) float32 depth and depth_ideal (m), (H,W) bool valid.
+    """
+    @property
+    def depth(self) -> typing.Any: ...
+    @property
+    def depth_ideal(self) -> typing.Any: ...
+    @property
+    def valid(self) -> typing.Any: ...
+
+class MgnRigParams:
+    """
+    Drawn parameters of the MetaGraspNet rig (mgn/render/camera.hpp): radii m, angles rad.
+    """
+    @property
+    def R_end(self) -> float: ...
+    @property
+    def R_start(self) -> float: ...
+    @property
+    def phi_end(self) -> float: ...
+    @property
+    def theta_end(self) -> float: ...
+    @property
+    def theta_start(self) -> float: ...
 
 class Intrinsics:
     """
@@ -513,7 +848,7 @@ class Renderer:
         light_ambient: typing.SupportsFloat | typing.SupportsIndex = 0.25,
         background: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"] = ...,
         check_camera_inside: bool = True,
-    ) -> dict: ...
+    ) -> RenderResult: ...
     def set_instances(
         self,
         mesh_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
@@ -649,6 +984,237 @@ class DepthSensorParams:
     @sigma_z0.setter
     def sigma_z0(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
 
+class ConvexDecompositionOptions:
+    """
+    Options of convex_decomposition (mgn/geometry/convex_decomposition.hpp); the defaults are the C++ struct's.
+    """
+
+    extra_concavity_points: bool
+    def __init__(self) -> None: ...
+    @property
+    def compactness_weight(self) -> float: ...
+    @compactness_weight.setter
+    def compactness_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def convex_volume_tolerance(self) -> float: ...
+    @convex_volume_tolerance.setter
+    def convex_volume_tolerance(
+        self, arg0: typing.SupportsFloat | typing.SupportsIndex
+    ) -> None: ...
+    @property
+    def grid_resolution(self) -> int: ...
+    @grid_resolution.setter
+    def grid_resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def max_concavity(self) -> float: ...
+    @max_concavity.setter
+    def max_concavity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def max_hacd_faces(self) -> int: ...
+    @max_hacd_faces.setter
+    def max_hacd_faces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def max_parts(self) -> int: ...
+    @max_parts.setter
+    def max_parts(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def merge_max_parts(self) -> int: ...
+    @merge_max_parts.setter
+    def merge_max_parts(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def merge_volume_tolerance(self) -> float: ...
+    @merge_volume_tolerance.setter
+    def merge_volume_tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def min_parts(self) -> int: ...
+    @min_parts.setter
+    def min_parts(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def volume_weight(self) -> float: ...
+    @volume_weight.setter
+    def volume_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
+class DropOptions:
+    """
+    Options of drop_objects (mgn/scene/drop.hpp, SI units); the defaults are the C++ struct's, validate() checks the ranges.
+    """
+
+    polyhedral_contacts: bool
+    remove_unsettled: bool
+    tote_collision: str
+    two_friction_directions: bool
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def angular_damping(self) -> float: ...
+    @angular_damping.setter
+    def angular_damping(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def angular_rest(self) -> float: ...
+    @angular_rest.setter
+    def angular_rest(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def collision_margin(self) -> float: ...
+    @collision_margin.setter
+    def collision_margin(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def contact_distance(self) -> float: ...
+    @contact_distance.setter
+    def contact_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def dt(self) -> float: ...
+    @dt.setter
+    def dt(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def gravity(self) -> float: ...
+    @gravity.setter
+    def gravity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def hull_tolerance(self) -> float: ...
+    @hull_tolerance.setter
+    def hull_tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def linear_rest(self) -> float: ...
+    @linear_rest.setter
+    def linear_rest(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def max_hull_vertices(self) -> int: ...
+    @max_hull_vertices.setter
+    def max_hull_vertices(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def max_time(self) -> float: ...
+    @max_time.setter
+    def max_time(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def resettle_time(self) -> float: ...
+    @resettle_time.setter
+    def resettle_time(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def rest_time(self) -> float: ...
+    @rest_time.setter
+    def rest_time(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def rolling_friction(self) -> float: ...
+    @rolling_friction.setter
+    def rolling_friction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def seed(self) -> int: ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def solver_iterations(self) -> int: ...
+    @solver_iterations.setter
+    def solver_iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def tote_friction(self) -> float: ...
+    @tote_friction.setter
+    def tote_friction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def tote_restitution(self) -> float: ...
+    @tote_restitution.setter
+    def tote_restitution(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def window_max(self) -> tuple[float, float, float]: ...
+    @window_max.setter
+    def window_max(
+        self,
+        arg1: tuple[
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+        ],
+    ) -> None: ...
+    @property
+    def window_min(self) -> tuple[float, float, float]: ...
+    @window_min.setter
+    def window_min(
+        self,
+        arg1: tuple[
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+        ],
+    ) -> None: ...
+
+class DropResult:
+    """
+    drop_objects() result: one row per input object, in input order.
+    """
+    @property
+    def X_WO(self) -> numpy.ndarray:
+        """
+        (N,4,4) float64 settled poses, m
+        """
+    @property
+    def X_WO_release(self) -> numpy.ndarray:
+        """
+        (N,4,4) float64 release (or start) poses, m
+        """
+    @property
+    def contacts(self) -> numpy.ndarray:
+        """
+        (N,) uint32 tote contact flags (bits -x, +x, -y, +y walls, floor)
+        """
+    @property
+    def max_penetration(self) -> float:
+        """
+        deepest contact penetration on the simulated hulls, m
+        """
+    @property
+    def object_settled(self) -> numpy.ndarray:
+        """
+        (N,) bool: at rest when the simulation stopped
+        """
+    @property
+    def resettle_rounds(self) -> int: ...
+    @property
+    def settled(self) -> bool:
+        """
+        every remaining object came to rest
+        """
+    @property
+    def simulated_time(self) -> float:
+        """
+        s
+        """
+    @property
+    def status(self) -> numpy.ndarray:
+        """
+        (N,) int32: 0 kept, 1 left the tote, 2 not settled
+        """
+    @property
+    def steps(self) -> int: ...
+
+class AntipodalResult:
+    """
+    AntipodalSampler.sample() result (mgn/grasp/antipodal.hpp); mgn.pj.sampler.AntipodalResult documents each array.
+    """
+    @property
+    def approach(self) -> numpy.ndarray: ...
+    @property
+    def closing(self) -> numpy.ndarray: ...
+    @property
+    def num_accepted_probes(self) -> int: ...
+    @property
+    def num_colliding(self) -> int: ...
+    @property
+    def num_kept(self) -> numpy.ndarray: ...
+    @property
+    def p1(self) -> numpy.ndarray: ...
+    @property
+    def point_index(self) -> numpy.ndarray: ...
+    @property
+    def point_score(self) -> numpy.ndarray: ...
+    @property
+    def probe(self) -> numpy.ndarray: ...
+    @property
+    def score(self) -> numpy.ndarray: ...
+    @property
+    def width(self) -> numpy.ndarray: ...
+
 class ParallelJawGripper:
     """
     Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless palm_mesh, finger_left_mesh and finger_right_mesh are all set (closed, hand frame, fingers at opening 0).
@@ -719,7 +1285,7 @@ class AntipodalSampler:
         seed: typing.SupportsInt | typing.SupportsIndex = 0,
         first_index: typing.SupportsInt | typing.SupportsIndex = 0,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> dict: ...
+    ) -> AntipodalResult: ...
     @property
     def gripper(self) -> ParallelJawGripper: ...
 
@@ -858,6 +1424,87 @@ class ShakeOptions:
     def staircase_checks(self) -> int: ...
     @staircase_checks.setter
     def staircase_checks(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+
+class LayoutArrays:
+    """
+    compute_layout() result (mgn/scene/layout.hpp): 0-based object indices; rel_* are the relations sorted by (child, parent).
+    """
+    @property
+    def classes_unique(self) -> bool: ...
+    @property
+    def complete(self) -> numpy.ndarray:
+        """
+        (N,) bool
+        """
+    @property
+    def difficulty(self) -> int:
+        """
+        1..5
+        """
+    @property
+    def layer(self) -> numpy.ndarray:
+        """
+        (N,) int8
+        """
+    @property
+    def max_occlusion(self) -> float: ...
+    @property
+    def num_layers(self) -> int: ...
+    @property
+    def num_regions(self) -> numpy.ndarray:
+        """
+        (N,) int32
+        """
+    @property
+    def order(self) -> numpy.ndarray:
+        """
+        picking order, int32 1-based ids
+        """
+    @property
+    def rel_child(self) -> numpy.ndarray:
+        """
+        (R,) int32 0-based
+        """
+    @property
+    def rel_depth_diff(self) -> numpy.ndarray:
+        """
+        (R,) float64 m
+        """
+    @property
+    def rel_edge_size(self) -> numpy.ndarray:
+        """
+        (R,) int32 px
+        """
+    @property
+    def rel_parent(self) -> numpy.ndarray:
+        """
+        (R,) int32 0-based
+        """
+    @property
+    def rel_seen_px(self) -> numpy.ndarray:
+        """
+        (R,) int64 px
+        """
+    @property
+    def relation(self) -> numpy.ndarray:
+        """
+        (N,N) int8 relation matrix
+        """
+    @property
+    def total_covered_edge(self) -> numpy.ndarray:
+        """
+        (N,) int64 px
+        """
+    @property
+    def visible(self) -> numpy.ndarray:
+        """
+        (N,) bool
+        """
+    @property
+    def visible_px(self) -> numpy.ndarray:
+        """
+        (N,) int64
+        """
 
 class PbrMaterial:
     """
@@ -1078,6 +1725,63 @@ class PathScene:
     @property
     def num_triangles(self) -> int: ...
 
+class PlacedGraspArrays:
+    """
+    SceneGraspModel.pj / .suction (mgn/scene/scene_grasps.hpp): world-frame grasps of every object; mgn.view_labels.grasps.PlacedGrasps documents each array.
+    """
+    @property
+    def colliding(self) -> numpy.ndarray: ...
+    @property
+    def collision_obstacle(self) -> numpy.ndarray: ...
+    @property
+    def collision_part(self) -> numpy.ndarray: ...
+    @property
+    def contact_poses(self) -> numpy.ndarray: ...
+    @property
+    def contacts(self) -> numpy.ndarray: ...
+    @property
+    def hit(self) -> numpy.ndarray: ...
+    @property
+    def object_index(self) -> numpy.ndarray: ...
+    @property
+    def score_analytical(self) -> numpy.ndarray: ...
+    @property
+    def score_simulation(self) -> numpy.ndarray: ...
+    @property
+    def score_wrench(self) -> numpy.ndarray: ...
+    @property
+    def second_contacts(self) -> numpy.ndarray: ...
+    @property
+    def tool_poses(self) -> numpy.ndarray: ...
+    @property
+    def width(self) -> numpy.ndarray: ...
+
+class ToolCollisionArrays:
+    """
+    SceneGraspModel.collides(): colliding (M,) bool, hit (M, K) int32.
+    """
+    @property
+    def colliding(self) -> numpy.ndarray: ...
+    @property
+    def hit(self) -> numpy.ndarray: ...
+
+class ViewGraspArrays:
+    """
+    SceneGraspModel.view_grasps(): row indices and camera-frame (N,4,4) tool and contact poses of the grasps kept in a view.
+    """
+    @property
+    def pj_contact(self) -> numpy.ndarray: ...
+    @property
+    def pj_index(self) -> numpy.ndarray: ...
+    @property
+    def pj_tool(self) -> numpy.ndarray: ...
+    @property
+    def suction_contact(self) -> numpy.ndarray: ...
+    @property
+    def suction_index(self) -> numpy.ndarray: ...
+    @property
+    def suction_tool(self) -> numpy.ndarray: ...
+
 class SceneGraspModel:
     """
     Per-scene grasp model: placement, collisions and wrench scores at construction; view_grasps per camera (see mgn/scene/scene_grasps.hpp).
@@ -1115,19 +1819,19 @@ class SceneGraspModel:
         width: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
         target_object: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
         check_target_at_grasp: bool = False,
-    ) -> dict:
+    ) -> ToolCollisionArrays:
         """
-        Collision of arbitrary grasp (contact-frame) poses with the labels' test: dict with colliding (M,) bool and hit (M, K) int32.
+        Collision of arbitrary grasp (contact-frame) poses with the labels' test: colliding (M,) bool and hit (M, K) int32.
         """
-    def pj(self) -> dict:
+    def pj(self) -> PlacedGraspArrays:
         """
         Parallel-jaw grasps in the world: dict of arrays.
         """
-    def suction(self) -> dict:
+    def suction(self) -> PlacedGraspArrays:
         """
         Suction grasps in the world: dict of arrays.
         """
-    def view_grasps(self, K: Intrinsics, X_WC: typing.Any, seen: typing.Any) -> dict:
+    def view_grasps(self, K: Intrinsics, X_WC: typing.Any, seen: typing.Any) -> ViewGraspArrays:
         """
         Grasps kept in a view: row indices and camera-frame poses.
         """
@@ -1139,6 +1843,47 @@ class SceneGraspModel:
     def num_objects(self) -> int: ...
     @property
     def offsets(self) -> list[float]: ...
+
+class ViewLabelArrays:
+    """
+    ViewLabelModel.label_view() result (mgn/scene/view_labels.hpp); mgn.view_labels.objects.ViewObjectLabels documents each array.
+    """
+    @property
+    def X_CO(self) -> numpy.ndarray: ...
+    @property
+    def amodal(self) -> numpy.ndarray: ...
+    @property
+    def amodal_pixels(self) -> numpy.ndarray: ...
+    @property
+    def bbox_loose(self) -> numpy.ndarray: ...
+    @property
+    def bbox_tight(self) -> numpy.ndarray: ...
+    @property
+    def com_heatmap(self) -> numpy.ndarray: ...
+    @property
+    def com_object(self) -> numpy.ndarray: ...
+    @property
+    def com_points(self) -> numpy.ndarray: ...
+    @property
+    def com_visible(self) -> numpy.ndarray: ...
+    @property
+    def keypoint_object(self) -> numpy.ndarray: ...
+    @property
+    def keypoints(self) -> numpy.ndarray: ...
+    @property
+    def occluded_keypoint_object(self) -> numpy.ndarray: ...
+    @property
+    def occluded_keypoints(self) -> numpy.ndarray: ...
+    @property
+    def occlusion(self) -> numpy.ndarray: ...
+    @property
+    def occlusion_map(self) -> numpy.ndarray: ...
+    @property
+    def semantic(self) -> numpy.ndarray: ...
+    @property
+    def visible(self) -> numpy.ndarray: ...
+    @property
+    def visible_pixels(self) -> numpy.ndarray: ...
 
 class ViewLabelModel:
     """
@@ -1164,7 +1909,7 @@ class ViewLabelModel:
         keypoints: bool = True,
         num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
         depth: typing.Any = None,
-    ) -> dict: ...
+    ) -> ViewLabelArrays: ...
     @property
     def has_tote(self) -> bool: ...
     @property
@@ -1177,7 +1922,7 @@ def apply_depth_sensor(
     K: Intrinsics,
     params: DepthSensorParams,
     seed: typing.SupportsInt | typing.SupportsIndex,
-) -> dict: ...
+) -> DepthSensorResult: ...
 def build_info() -> list[tuple[str, str]]:
     """
     (library, version) pairs for mgn and every library the core was built against.
@@ -1201,7 +1946,7 @@ def calibrate_cup(
     holdout_fraction: typing.SupportsFloat | typing.SupportsIndex = 0.3,
     seed: typing.SupportsInt | typing.SupportsIndex = 0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> dict:
+) -> CalibrationResult:
     """
     Fit c1, c2 of the cup to measured outcomes (see mgn.calibration.fit).
     """
@@ -1214,7 +1959,7 @@ def camera_rays(
 ) -> tuple[numpy.ndarray, numpy.ndarray]: ...
 def classification_metrics(
     predicted: collections.abc.Sequence[bool], measured: collections.abc.Sequence[bool]
-) -> dict:
+) -> ClassificationMetrics:
     """
     Confusion counts and PPV, NPV, sensitivity, specificity, accuracy (NaN for a zero denominator).
     """
@@ -1241,7 +1986,7 @@ def compute_layout(
     min_region_fraction: typing.SupportsFloat | typing.SupportsIndex = 0.005,
     max_occlusion_level1: typing.SupportsFloat | typing.SupportsIndex = 0.05,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> dict:
+) -> LayoutArrays:
     """
     Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.
     """
@@ -1252,20 +1997,7 @@ def compute_mass_properties(
     open_mesh: str = "shell",
     shell_thickness: typing.SupportsFloat | typing.SupportsIndex = 0.002,
 ) -> MassProperties: ...
-def convex_decomposition(
-    mesh: Mesh,
-    convex_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.1,
-    max_concavity: typing.SupportsFloat | typing.SupportsIndex = 0.02,
-    min_parts: typing.SupportsInt | typing.SupportsIndex = 1,
-    max_parts: typing.SupportsInt | typing.SupportsIndex = 32,
-    compactness_weight: typing.SupportsFloat | typing.SupportsIndex = 0.1,
-    volume_weight: typing.SupportsFloat | typing.SupportsIndex = 0.0,
-    extra_concavity_points: bool = True,
-    max_hacd_faces: typing.SupportsInt | typing.SupportsIndex = 1500,
-    grid_resolution: typing.SupportsInt | typing.SupportsIndex = 40,
-    merge_volume_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.0,
-    merge_max_parts: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> list[Mesh]: ...
+def convex_decomposition(mesh: Mesh, options: ConvexDecompositionOptions = ...) -> list[Mesh]: ...
 def convex_hull(mesh: Mesh) -> Mesh: ...
 def develop_radiance(radiance: typing.Any, film: FilmOptions) -> typing.Any: ...
 def distance(
@@ -1276,7 +2008,7 @@ def distance(
     rel_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     abs_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> dict: ...
+) -> DistanceResult: ...
 def drop_objects(
     parts: collections.abc.Sequence[collections.abc.Sequence[Mesh]],
     masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
@@ -1287,9 +2019,9 @@ def drop_objects(
     names: collections.abc.Sequence[str],
     tote: Mesh,
     tote_box: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
-    options: dict,
+    options: DropOptions,
     X_WO_start: typing.Any = None,
-) -> dict: ...
+) -> DropResult: ...
 def gripper_meshes(
     gripper: ParallelJawGripper, opening: typing.SupportsFloat | typing.SupportsIndex
 ) -> tuple[Mesh, Mesh, Mesh]:
@@ -1342,7 +2074,7 @@ def material_texture_rgb(material: Material) -> typing.Any:
 def mesh_surface_flags(mesh: Mesh) -> int: ...
 def mgn_rig(
     seed: typing.SupportsInt | typing.SupportsIndex, target: typing.Any
-) -> tuple[numpy.ndarray, dict]: ...
+) -> tuple[numpy.ndarray, MgnRigParams]: ...
 def mgn_rig_from_params(
     R_start: typing.SupportsFloat | typing.SupportsIndex,
     R_end: typing.SupportsFloat | typing.SupportsIndex,
@@ -1386,7 +2118,7 @@ def sample_surface(
     method: str = "random",
     seed: typing.SupportsInt | typing.SupportsIndex = 0,
     oversampling: typing.SupportsInt | typing.SupportsIndex = 6,
-) -> dict: ...
+) -> SurfaceSamples: ...
 def shake_test(
     parts: collections.abc.Sequence[Mesh],
     mass: typing.SupportsFloat | typing.SupportsIndex,

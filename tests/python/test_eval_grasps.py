@@ -10,8 +10,8 @@ import pytest
 
 import mgn
 from mgn.eval.grasps import evaluate_grasps, ground_truth_grasps
+from mgn.io.scene_file import read_scene_json
 from mgn.pipeline.label_scene import LabelOptions
-from mgn.scene import Scene
 from mgn.view_labels.grasps import SceneGraspModel
 
 GROUP = {"suction": "suctioncup", "paralleljaw": "paralleljaw"}
@@ -28,7 +28,7 @@ def _model(root, scene_id: int) -> SceneGraspModel:
 
     ds = mgn.Dataset(root)
     cfg = Config.from_dict(ds.info["config"])
-    scene = Scene.from_json(ds.scene(scene_id).folder / "scene.json")
+    scene = read_scene_json(ds.scene(scene_id).folder / "scene.json")
     n = len(scene.instances)
     return SceneGraspModel(scene, [None] * n, [None] * n, cfg.gripper, cfg.cup,
                            offsets=LabelOptions().grasp_offsets)  # fmt: skip
@@ -79,7 +79,7 @@ def test_collides_matches_the_placed_labels_and_finds_a_pose_inside_an_object(sm
     query reproduces the constructor's flags and first hits exactly; a suction tool placed at
     the centre of another object collides with that object."""
     model = _model(small_dataset, 0)
-    scene = Scene.from_json(mgn.Dataset(small_dataset).scene(0).folder / "scene.json")
+    scene = read_scene_json(mgn.Dataset(small_dataset).scene(0).folder / "scene.json")
     n = len(scene.instances)
     rng = np.random.default_rng(3)
     from mgn.pj.labels import PjLabels

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from mgn.errors import InvalidArgumentError
+from mgn.io.scene_file import read_scene_json, write_scene_json
 
 LOWER, UPPER = "box_shoe", "box_tea"  # 240 x 150 x 90 mm and 125 x 75 x 65 mm
 
@@ -248,10 +249,9 @@ def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_pa
     # The dataset's config was used: the labels cached are those of its object-label settings.
     from mgn.pipeline.config import load_config
     from mgn.pipeline.label_cache import label_keys
-    from mgn.scene import Scene
 
     config = load_config(mgn.Dataset(small_dataset).info["config"])
-    sc = Scene.from_json(scene.folder / "scene.json")
+    sc = read_scene_json(scene.folder / "scene.json")
     for i in range(len(sc)):
         key = label_keys(sc.object_spec(i), config)["suction"]
         assert (tmp_path / "cache" / "labels" / f"suction-{key}.npz").is_file()
@@ -260,7 +260,7 @@ def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_pa
 def test_cli_reports_an_unknown_policy(single_box, tmp_path, capsys):
     from mgn.cli.main import main
 
-    path = single_box.to_json(tmp_path / "scene.json")
+    path = write_scene_json(single_box, tmp_path / "scene.json")
     code = main(["pick", str(path), "--policy", "nonsense", "--out", str(tmp_path / "o")])
     assert code == 1
     assert "unknown policy 'nonsense'" in capsys.readouterr().err

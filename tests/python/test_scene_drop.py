@@ -14,8 +14,10 @@ from mgn.geometry.convex import (
     convex_decomposition,
     convex_hull,
 )
+from mgn.io.scene_file import read_scene_json, write_scene_json
 from mgn.objects import ToteSpec, get_object
 from mgn.scene import DropOptions, Scene, compose_objects, drop_scene
+from mgn.scene.drop import _simulate
 
 TOL = 0.003  # m: allowed interpenetration / overshoot after settling
 
@@ -162,8 +164,8 @@ def test_same_seed_same_scene_other_seed_other_scene():
 
 def test_json_round_trip_and_meshes_come_back(dropped, tmp_path):
     _, scene = dropped
-    path = scene.to_json(tmp_path / "scene.json")
-    back = Scene.from_json(path)
+    path = write_scene_json(scene, tmp_path / "scene.json")
+    back = read_scene_json(path)
     assert back == scene
     np.testing.assert_array_equal(back.poses, scene.poses)
     assert [i.contacts for i in back.instances] == [i.contacts for i in scene.instances]
@@ -175,9 +177,9 @@ def test_json_round_trip_and_meshes_come_back(dropped, tmp_path):
     data["schema_version"] = 99
     (tmp_path / "bad.json").write_text(json.dumps(data))
     with pytest.raises(mgn.InvalidArgumentError, match="schema_version"):
-        Scene.from_json(tmp_path / "bad.json")
+        read_scene_json(tmp_path / "bad.json")
     with pytest.raises(mgn.IoError):
-        Scene.from_json(tmp_path / "missing.json")
+        read_scene_json(tmp_path / "missing.json")
 
 
 def test_compose_by_categories_and_count_is_seeded():
@@ -226,7 +228,7 @@ def test_cli_scene_drop(tmp_path, capsys):
         main(["scene", "drop", "--objects", "box_cube,pear", "--seed", "2", "--out", str(out)]) == 0
     )
     assert "scene written to" in capsys.readouterr().out
-    scene = Scene.from_json(out)
+    scene = read_scene_json(out)
     assert sorted(i.name for i in scene.instances) == ["box_cube", "pear"]
     assert main(["scene", "drop", "--objects", "nope", "--out", str(out)]) == 1
     assert "unknown object" in capsys.readouterr().err
@@ -284,8 +286,8 @@ def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
     scene = drop_scene(objects, seed=1, options=short)
     assert scene.stats["steps"] == 10
     assert scene.drop_options == short
-    path = scene.to_json(tmp_path / "s.json")
-    assert Scene.from_json(path).drop_options == short
+    path = write_scene_json(scene, tmp_path / "s.json")
+    assert read_scene_json(path).drop_options == short
 
 
 @pytest.mark.parametrize(
@@ -371,3 +373,65 @@ def test_round_objects_rest_on_the_floor_and_do_not_overlap():
     for inst in pile.instances:
         z = v @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3]
         assert z[:, 2].min() > -3e-4
+
+
+# ------------------------------------------------- the typed C++ boundary (issue 18, item 4)
+
+
+@pytest.mark.parametrize(
+    ("python_cls", "core_cls", "own_args"),
+    [
+        (DropOptions, mgn._core.DropOptions, {"seed"}),
+        (ConvexDecompositionOptions, mgn._core.ConvexDecompositionOptions, set()),
+    ],
+)
+def test_python_options_mirror_the_bound_cpp_struct_and_its_defaults(
+    python_cls, core_cls, own_args
+):
+    import dataclasses
+
+    core = core_cls()
+    cpp_fields = {n for n in dir(core) if not n.startswith("_") and n != "validate"}
+    py = python_cls()
+    assert {f.name for f in dataclasses.fields(python_cls)} == cpp_fields - own_args
+    for name in cpp_fields - own_args:
+        assert getattr(py, name) == getattr(core, name), name
+    # to_core() carries every value across, not only the defaults.
+    changed = {
+        f.name: (not getattr(py, f.name))
+        if isinstance(getattr(py, f.name), bool)
+        else getattr(py, f.name)
+        for f in dataclasses.fields(python_cls)
+    }
+    back = dataclasses.replace(py, **changed).to_core()
+    for name, value in changed.items():
+        assert getattr(back, name) == value, name
+
+
+def test_drop_options_ranges_are_checked_by_the_core():
+    o = mgn._core.DropOptions()
+    o.validate()  # the defaults are valid
+    o.angular_damping = 1.0
+    with pytest.raises(mgn.InvalidArgumentError, match=r"DropOptions\.angular_damping"):
+        o.validate()
+    o = mgn._core.DropOptions()
+    o.window_min = (0.0, 0.0, 0.9)
+    with pytest.raises(mgn.InvalidArgumentError, match=r"window_min must be <= window_max"):
+        o.validate()
+    with pytest.raises(mgn.InvalidArgumentError, match=r"DropOptions\.tote_collision"):
+        o.tote_collision = "sphere"
+    with pytest.raises(mgn.InvalidArgumentError, match=r"ConvexDecompositionOptions\.max_parts"):
+        ConvexDecompositionOptions(max_parts=2.5).to_core()  # type: ignore[arg-type]
+
+
+def test_drop_result_is_a_typed_object_with_one_row_per_object():
+    objects = [get_object("box_cube"), get_object("pear")]
+    scene = drop_scene(objects, seed=3)
+    assert scene.stats["steps"] > 0 and scene.stats["settled"] is True
+    # Same drop straight through the core, checked field by field.
+    out, _, _ = _simulate(objects, 3, ToteSpec(), DropOptions(), None, None, True)
+    assert isinstance(out, mgn._core.DropResult)
+    assert out.X_WO.shape == (2, 4, 4) and out.X_WO_release.shape == (2, 4, 4)
+    assert out.status.dtype == np.int32 and out.object_settled.dtype == bool
+    assert out.steps == scene.stats["steps"]
+    np.testing.assert_array_equal(out.X_WO[out.status == 0][0], scene.instances[0].X_WO)

@@ -13,6 +13,7 @@ import pytest
 from conftest import check_difficulty
 
 from mgn.io.dataset import Dataset
+from mgn.io.scene_file import write_scene_json
 from mgn.io.validate import validate_dataset
 from mgn.objects import ToteSpec, get_object
 from mgn.pipeline.label_scene import LabelOptions, label_scene
@@ -194,7 +195,7 @@ def test_bad_input(tmp_path):
 def test_scene_label_command(tmp_path):
     from mgn.cli.main import main
 
-    _scene().to_json(tmp_path / "scene.json")
+    write_scene_json(_scene(), tmp_path / "scene.json")
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(
         "camera: {views: [0, 7], resolution_scale: 0.1, randomize: false}\n"
@@ -226,3 +227,106 @@ def test_strided_subset_keeps_grasps_evenly(object_labels):
     su = strided_subset(object_labels[0].suction, 7)
     assert len(su.points) == len(su.score) == len(su.reason) == 7
     assert strided_subset(None, 5) is None
+
+
+def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_labels):
+    """label_scene renders view k + 1 and builds the grasp collisions in threads while view k is
+    labelled; the files must be those of the plain serial loop over the same public steps."""
+    from mgn.io.scene_format import scene_gt_entries, write_scene_gt, write_view
+    from mgn.pipeline.label_scene import strided_subset, view_record
+    from mgn.render.views import iter_views
+    from mgn.view_labels.grasps import SceneGraspModel
+    from mgn.view_labels.layout import compute_layout
+    from mgn.view_labels.objects import SceneRayModel, view_object_labels
+
+    scene, views = _scene(), _views(0.1)
+    pj = [g.paralleljaw for g in object_labels]
+    su = [g.suction for g in object_labels]
+    opt = LabelOptions(seed=5, num_threads=2)
+    label_scene(scene, tmp_path / "overlap", views, pj_labels=pj, suction_labels=su, options=opt)
+
+    serial = tmp_path / "serial"
+    serial.mkdir()
+    rays = SceneRayModel.from_scene(scene)
+    cap = opt.max_grasps_per_object
+    sgm = SceneGraspModel(
+        scene,
+        [strided_subset(g, cap) for g in pj],
+        [strided_subset(g, cap) for g in su],
+        offsets=opt.grasp_offsets,
+    )
+    cats = np.array([inst.category_id for inst in scene.instances], np.int64)
+    bins = [inst.bin_relation for inst in scene.instances]
+    gt = {}
+    frames = iter_views(scene.render_items(), get_tote(scene), views, seed=opt.seed)
+    for (v, view), images in zip(views, frames, strict=True):
+        labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal)
+        layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal, cats, bins,
+                                occlusion=labels.occlusion)  # fmt: skip
+        seen = labels.visible_pixels > 0
+        write_view(
+            serial, view_record(v, view, images, labels, layout, sgm.view_grasps(view, seen))
+        )
+        gt[v] = scene_gt_entries(labels.X_CO, cats, seen)
+    write_scene_gt(serial, gt)
+    write_scene_json(scene, serial / "scene.json")
+
+    def digest(folder):
+        return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in folder.iterdir()}
+
+    a, b = digest(tmp_path / "overlap"), digest(serial)
+    assert len(a) > 5 * len(views)  # every view's files (9 each) and the scene's
+    assert a == b
+
+
+def get_tote(scene):
+    from mgn.objects import tote_mesh
+
+    return tote_mesh(scene.tote)
+
+
+def test_render_ahead_keeps_order_errors_and_stops():
+    """The render thread of label_scene: same items in the same order, made in another thread;
+    the iterator's error reaches the consumer after the items before it; closing early stops the
+    producer within one item and closes the iterator in its own thread."""
+    import threading
+    import time
+
+    from mgn.pipeline.label_scene import _RenderAhead
+
+    main = threading.get_ident()
+    made, closed = [], []
+
+    def gen(n, fail_at=None):
+        try:
+            for i in range(n):
+                if i == fail_at:
+                    raise OSError(f"item {i} failed")
+                made.append((i, threading.get_ident()))
+                yield i * i
+        finally:
+            closed.append(threading.get_ident())
+
+    ahead = _RenderAhead(lambda: gen(50))
+    assert list(ahead) == [i * i for i in range(50)]
+    ahead.close()
+    assert all(t != main for _, t in made) and closed and closed[0] != main
+    assert ahead.busy >= 0.0
+
+    made.clear(), closed.clear()
+    ahead = _RenderAhead(lambda: gen(10, fail_at=4))
+    got = []
+    with pytest.raises(OSError, match="item 4 failed"):
+        for x in ahead:
+            got.append(x)
+    ahead.close()
+    assert got == [0, 1, 4, 9]
+
+    made.clear(), closed.clear()
+    ahead = _RenderAhead(lambda: gen(1000), depth=1)
+    it = iter(ahead)
+    assert [next(it) for _ in range(3)] == [0, 1, 4]
+    time.sleep(0.3)  # the producer fills the queue and blocks
+    ahead.close()
+    assert len(made) <= 3 + 2  # consumed, one queued, one in hand
+    assert len(closed) == 1 and closed[0] != main

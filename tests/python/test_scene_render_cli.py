@@ -4,6 +4,7 @@ import numpy as np
 from PIL import Image
 
 from mgn.cli.main import main
+from mgn.io.scene_file import write_scene_json
 from mgn.objects import ToteSpec, get_object
 from mgn.scene.scene import Scene, SceneInstance
 
@@ -13,7 +14,7 @@ def test_render_writes_the_views_and_sees_the_object(tmp_path, capsys):
     X = np.eye(4)
     X[2, 3] = 0.5 * float(spec.extents[2])  # resting on the tote floor, at the centre
     inst = SceneInstance(1, spec.name, spec.category_id, "builtin", X, ("floor",))
-    Scene((inst,), ToteSpec(), seed=3).to_json(tmp_path / "scene.json")
+    write_scene_json(Scene((inst,), ToteSpec(), seed=3), tmp_path / "scene.json")
     out = tmp_path / "views"
     args = ["scene", "render", str(tmp_path / "scene.json"), "--view", "0", "7", "--out", str(out)]
     assert main([*args, "--sensor", "ideal"]) == 0
@@ -31,6 +32,6 @@ def test_render_writes_the_views_and_sees_the_object(tmp_path, capsys):
 
 
 def test_render_rejects_an_empty_scene(tmp_path, capsys):
-    Scene((), ToteSpec(), seed=0).to_json(tmp_path / "empty.json")
+    write_scene_json(Scene((), ToteSpec(), seed=0), tmp_path / "empty.json")
     assert main(["scene", "render", str(tmp_path / "empty.json"), "--out", str(tmp_path)]) != 0
     assert "no objects" in capsys.readouterr().err

@@ -121,3 +121,36 @@ def test_the_signature_check_finds_a_renamed_parameter():
     fn = ast.parse("def make_box(size: int) -> None: ...").body[0]
     assert isinstance(fn, ast.FunctionDef)
     assert {_stub_signatures(fn)} != sigs
+
+
+#: Functions of the compiled core that still return a plain dict, each with the reason. Every
+#: other function returns a bound class (docs/architecture.md, "The typed boundary").
+DICT_RETURNS = {
+    "ClassificationMetrics.to_dict": "the JSON form of a bound result class",
+    "PathScene.render": "the path tracer's binding, owned by its own work item",
+    "shake_test": "the physics shake test's binding, owned by its own work item",
+    "shake_trajectory": "the physics shake test's binding, owned by its own work item",
+}
+
+
+def _dict_returning(body: list[ast.stmt], prefix: str = "") -> set[str]:
+    found: set[str] = set()
+    for node in body:
+        if isinstance(node, ast.ClassDef):
+            found |= _dict_returning(node.body, node.name + ".")
+        elif isinstance(node, ast.FunctionDef) and node.returns is not None:
+            ret = ast.unparse(node.returns)
+            if ret == "dict" or ret.startswith(("dict[", "typing.Dict")):
+                found.add(prefix + node.name)
+    return found
+
+
+def test_results_cross_the_boundary_as_classes_not_dicts():
+    found = _dict_returning(ast.parse(STUB.read_text()).body)
+    assert found - set(DICT_RETURNS) == set(), "bind a result class instead of returning a dict"
+    assert set(DICT_RETURNS) - found == set(), "converted: remove it from DICT_RETURNS"
+
+
+def test_the_dict_check_finds_a_dict_returning_function():
+    stub = "class A:\n    def f(self) -> dict: ...\ndef g() -> dict[str, int]: ...\n"
+    assert _dict_returning(ast.parse(stub).body) == {"A.f", "g"}

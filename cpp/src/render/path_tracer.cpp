@@ -607,8 +607,11 @@ class Integrator {
     return r.tfar == -std::numeric_limits<float>::infinity();
   }
 
-  /// Radiance along a camera ray; first-hit albedo and normal are written to aov_*.
-  F3 trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& aov_normal) {
+  /// Radiance along a camera ray; first-hit albedo and normal are written to aov_*. `first`,
+  /// when given, is the camera ray's hit already found (a packet of camera rays): its tfar,
+  /// geomID, primID, u and v are used instead of tracing the ray again.
+  F3 trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& aov_normal,
+           const RTCRayHit* first = nullptr) {
     F3 L(0.0f), beta(1.0f);
     bool prev_delta = true;
     float prev_pdf = 0.0f;  // solid-angle pdf of the BSDF sample that made the current ray
@@ -618,7 +621,13 @@ class Integrator {
     RTCRayHit rh;
     Hit h;
     for (int depth = 0;; ++depth) {
-      const bool hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
+      bool hit;
+      if (depth == 0 && first != nullptr) {
+        rh = *first;
+        hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+      } else {
+        hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
+      }
       const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
       float t_light;
       const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
@@ -938,15 +947,25 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
             out.instance_ids[pix] = G.geoms[rh16.hit.geomID[k]].instance_id;
           }
         }
-        for (int u = tx * kTile; u < u1; ++u) {
-          const std::size_t pix = static_cast<std::size_t>(v) * W + u;
-          const std::uint32_t pixel_seed =
+        // Camera rays: sample k of the (at most kTile = 16) pixels of this tile row as one
+        // coherent packet; each path then continues on its own. Per pixel the samples are
+        // summed in the order k = 0, 1, ... as before.
+        const int u0 = tx * kTile, m = u1 - u0;
+        std::uint32_t pixel_seed[kTile];
+        F3 sum[kTile], alb[kTile], nrm[kTile];
+        F3 org[kTile], dir[kTile];
+        for (int l = 0; l < m; ++l) {
+          const std::size_t pix = static_cast<std::size_t>(v) * W + u0 + l;
+          pixel_seed[l] =
               static_cast<std::uint32_t>(mix64(stream ^ static_cast<std::uint64_t>(pix)));
-          F3 sum(0.0f), alb(0.0f), nrm(0.0f);
-          for (int k = 0; k < options.spp; ++k) {
-            const pt::PixelSampler s(pixel_seed, static_cast<std::uint32_t>(k));
+          sum[l] = alb[l] = nrm[l] = F3(0.0f);
+        }
+        for (int k = 0; k < options.spp; ++k) {
+          for (int l = 0; l < kTile; ++l) {
+            const int ll = std::min(l, m - 1);
+            const pt::PixelSampler s(pixel_seed[ll], static_cast<std::uint32_t>(k));
             const pt::Sample2 j = s.get(0);
-            F3 dc(((u + j.x) - cam.cx) / cam.fx, ((v + j.y) - cam.cy) / cam.fy, 1.0f);
+            F3 dc(((u0 + ll + j.x) - cam.cx) / cam.fx, ((v + j.y) - cam.cy) / cam.fy, 1.0f);
             F3 o = cam.o;
             if (aperture > 0.0f) {
               const pt::Sample2 ls = s.get(1);
@@ -956,26 +975,57 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
               o = cam.o + cam.to_world(lens);
             }
             const F3 d = normalize(cam.to_world(dc));
+            org[l] = o;
+            dir[l] = d;
+            valid16[l] = l < m ? -1 : 0;
+            rh16.ray.org_x[l] = o.x;
+            rh16.ray.org_y[l] = o.y;
+            rh16.ray.org_z[l] = o.z;
+            rh16.ray.dir_x[l] = d.x;
+            rh16.ray.dir_y[l] = d.y;
+            rh16.ray.dir_z[l] = d.z;
+            rh16.ray.tnear[l] = 0.0f;
+            rh16.ray.tfar[l] = std::numeric_limits<float>::infinity();
+            rh16.ray.time[l] = 0.0f;
+            rh16.ray.mask[l] = 0xFFFFFFFFu;
+            rh16.ray.id[l] = static_cast<unsigned>(l);
+            rh16.ray.flags[l] = 0;
+            rh16.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+            rh16.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+          }
+          rtcIntersect16(valid16, scene, &coherent, &rh16);
+          it.counters.rays += m;
+          for (int l = 0; l < m; ++l) {
+            RTCRayHit first;
+            first.ray.tfar = rh16.ray.tfar[l];
+            first.hit.geomID = rh16.hit.geomID[l];
+            first.hit.primID = rh16.hit.primID[l];
+            first.hit.u = rh16.hit.u[l];
+            first.hit.v = rh16.hit.v[l];
+            const pt::PixelSampler s(pixel_seed[l], static_cast<std::uint32_t>(k));
             F3 a, n;
-            F3 c = it.trace(o, d, s, a, n);
+            F3 c = it.trace(org[l], dir[l], s, a, n, &first);
             if (!all_finite(c)) c = F3(0.0f);
             if (clamp > 0.0f) {
               const float lum = luminance(c);
               if (lum > clamp) c *= clamp / lum;
             }
-            sum += c;
-            alb += a;
-            nrm += n;
+            sum[l] += c;
+            alb[l] += a;
+            nrm[l] += n;
           }
+        }
+        for (int l = 0; l < m; ++l) {
+          const std::size_t pix = static_cast<std::size_t>(v) * W + u0 + l;
           float* r = &out.radiance[3 * pix];
-          r[0] = sum.x * inv_spp;
-          r[1] = sum.y * inv_spp;
-          r[2] = sum.z * inv_spp;
+          r[0] = sum[l].x * inv_spp;
+          r[1] = sum[l].y * inv_spp;
+          r[2] = sum[l].z * inv_spp;
           float* a = &out.albedo[3 * pix];
-          a[0] = alb.x * inv_spp;
-          a[1] = alb.y * inv_spp;
-          a[2] = alb.z * inv_spp;
-          const F3 nn = normalize(nrm);
+          a[0] = alb[l].x * inv_spp;
+          a[1] = alb[l].y * inv_spp;
+          a[2] = alb[l].z * inv_spp;
+          const F3 nn = normalize(nrm[l]);
           float* n = &out.normal[3 * pix];
           n[0] = nn.x;
           n[1] = nn.y;

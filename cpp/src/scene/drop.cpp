@@ -78,12 +78,11 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
           "]) does not enclose the tote box's cavity; expected the mesh of make_tote(spec) in "
           "the tote frame for the same dimensions");
   }
-  if (!o.window_min.allFinite() || !o.window_max.allFinite())
-    throw_error<InvalidArgument>(kFn, ": options.window_min/max must be finite");
-  if ((o.window_min.array() > o.window_max.array()).any())
-    throw_error<InvalidArgument>(kFn, ": options.window_min must be <= window_max, got min (",
-                                 o.window_min.transpose(), ") max (", o.window_max.transpose(),
-                                 ")");
+  try {
+    mgn::validate(o);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(std::string(kFn) + ": " + e.what());
+  }
   if (o.window_min.x() < -0.5 * box.inner_length || o.window_max.x() > 0.5 * box.inner_length ||
       o.window_min.y() < -0.5 * box.inner_width || o.window_max.y() > 0.5 * box.inner_width ||
       o.window_min.z() < 0)
@@ -92,38 +91,6 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
         o.window_max.transpose(),
         ") must lie above the tote's cavity (|x| <= ", 0.5 * box.inner_length,
         ", |y| <= ", 0.5 * box.inner_width, ", z >= 0)");
-  require(std::isfinite(o.dt) && o.dt > 0 && o.dt <= 0.02, "options.dt", o.dt, "in (0, 0.02] s");
-  require(std::isfinite(o.max_time) && o.max_time > o.dt, "options.max_time", o.max_time,
-          "finite and > dt (s)");
-  require(o.max_time / o.dt <= 1e7, "options.max_time / dt", o.max_time / o.dt, "<= 1e7 steps");
-  require(o.solver_iterations >= 1 && o.solver_iterations <= 1000, "options.solver_iterations",
-          o.solver_iterations, "in [1, 1000]");
-  require(std::isfinite(o.linear_rest) && o.linear_rest > 0, "options.linear_rest", o.linear_rest,
-          "finite and > 0 (m/s)");
-  require(std::isfinite(o.angular_rest) && o.angular_rest > 0, "options.angular_rest",
-          o.angular_rest, "finite and > 0 (rad/s)");
-  require(std::isfinite(o.rest_time) && o.rest_time > 0 && o.rest_time < o.max_time,
-          "options.rest_time", o.rest_time, "in (0, max_time) s");
-  require(std::isfinite(o.gravity) && o.gravity > 0, "options.gravity", o.gravity,
-          "finite and > 0 (m/s^2)");
-  require(std::isfinite(o.collision_margin) && o.collision_margin > 0 && o.collision_margin <= 0.01,
-          "options.collision_margin", o.collision_margin, "in (0, 0.01] m");
-  require(std::isfinite(o.contact_distance) && o.contact_distance > 0, "options.contact_distance",
-          o.contact_distance, "finite and > 0 (m)");
-  require(o.max_hull_vertices == 0 || (o.max_hull_vertices >= 8 && o.max_hull_vertices <= 100000),
-          "options.max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [8, 100000]");
-  require(std::isfinite(o.hull_tolerance) && o.hull_tolerance >= 0, "options.hull_tolerance",
-          o.hull_tolerance, "finite and >= 0 (m)");
-  require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 && o.resettle_time / o.dt <= 1e7,
-          "options.resettle_time", o.resettle_time, "finite, >= 0 s and <= 1e7 steps");
-  require(std::isfinite(o.rolling_friction) && o.rolling_friction >= 0, "options.rolling_friction",
-          o.rolling_friction, "finite and >= 0");
-  require(std::isfinite(o.angular_damping) && o.angular_damping >= 0 && o.angular_damping < 1,
-          "options.angular_damping", o.angular_damping, "in [0, 1)");
-  require(std::isfinite(o.tote_friction) && o.tote_friction >= 0, "options.tote_friction",
-          o.tote_friction, "finite and >= 0");
-  require(std::isfinite(o.tote_restitution) && o.tote_restitution >= 0 && o.tote_restitution <= 1,
-          "options.tote_restitution", o.tote_restitution, "in [0, 1]");
 
   const double diag = std::hypot(box.inner_length, box.inner_width);
   const double width = std::min(box.inner_length, box.inner_width);
@@ -609,6 +576,53 @@ DropResult simulate(const std::vector<DropObject>& objects, const Mesh& tote, co
 }
 
 }  // namespace
+
+void validate(const DropOptions& o) {
+  auto require = [](bool ok, const char* field, double value, const char* expected) {
+    if (!ok)
+      throw_error<InvalidArgument>("DropOptions.", field, " must be ", expected, ", got ", value);
+  };
+  if (!o.window_min.allFinite() || !o.window_max.allFinite())
+    throw_error<InvalidArgument>("DropOptions.window_min/window_max must be finite, got min (",
+                                 o.window_min.transpose(), ") max (", o.window_max.transpose(),
+                                 ")");
+  if ((o.window_min.array() > o.window_max.array()).any())
+    throw_error<InvalidArgument>("DropOptions.window_min must be <= window_max, got min (",
+                                 o.window_min.transpose(), ") max (", o.window_max.transpose(),
+                                 ")");
+  require(std::isfinite(o.dt) && o.dt > 0 && o.dt <= 0.02, "dt", o.dt, "in (0, 0.02] s");
+  require(std::isfinite(o.max_time) && o.max_time > o.dt, "max_time", o.max_time,
+          "finite and > dt (s)");
+  require(o.max_time / o.dt <= 1e7, "max_time", o.max_time, "at most 1e7 steps of dt");
+  require(o.solver_iterations >= 1 && o.solver_iterations <= 1000, "solver_iterations",
+          o.solver_iterations, "in [1, 1000]");
+  require(std::isfinite(o.linear_rest) && o.linear_rest > 0, "linear_rest", o.linear_rest,
+          "finite and > 0 (m/s)");
+  require(std::isfinite(o.angular_rest) && o.angular_rest > 0, "angular_rest", o.angular_rest,
+          "finite and > 0 (rad/s)");
+  require(std::isfinite(o.rest_time) && o.rest_time > 0 && o.rest_time < o.max_time, "rest_time",
+          o.rest_time, "in (0, max_time) s");
+  require(std::isfinite(o.gravity) && o.gravity > 0, "gravity", o.gravity,
+          "finite and > 0 (m/s^2)");
+  require(std::isfinite(o.collision_margin) && o.collision_margin > 0 && o.collision_margin <= 0.01,
+          "collision_margin", o.collision_margin, "in (0, 0.01] m");
+  require(std::isfinite(o.contact_distance) && o.contact_distance > 0, "contact_distance",
+          o.contact_distance, "finite and > 0 (m)");
+  require(o.max_hull_vertices == 0 || (o.max_hull_vertices >= 8 && o.max_hull_vertices <= 100000),
+          "max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [8, 100000]");
+  require(std::isfinite(o.hull_tolerance) && o.hull_tolerance >= 0, "hull_tolerance",
+          o.hull_tolerance, "finite and >= 0 (m)");
+  require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 && o.resettle_time / o.dt <= 1e7,
+          "resettle_time", o.resettle_time, "finite, >= 0 s and at most 1e7 steps of dt");
+  require(std::isfinite(o.rolling_friction) && o.rolling_friction >= 0, "rolling_friction",
+          o.rolling_friction, "finite and >= 0");
+  require(std::isfinite(o.angular_damping) && o.angular_damping >= 0 && o.angular_damping < 1,
+          "angular_damping", o.angular_damping, "in [0, 1)");
+  require(std::isfinite(o.tote_friction) && o.tote_friction >= 0, "tote_friction", o.tote_friction,
+          "finite and >= 0");
+  require(std::isfinite(o.tote_restitution) && o.tote_restitution >= 0 && o.tote_restitution <= 1,
+          "tote_restitution", o.tote_restitution, "in [0, 1]");
+}
 
 DropResult drop_objects(const std::vector<DropObject>& objects, const Mesh& tote,
                         const ToteBox& box, const DropOptions& o) {

@@ -157,7 +157,9 @@ def _core_cup(cup: SuctionCup) -> _core.Cup:
     return core_cup(cup)
 
 
-def _metrics(d: dict[str, float]) -> dict[str, float]:
+def _metrics(m: _core.ClassificationMetrics) -> dict[str, float]:
+    """The JSON form of the core's metrics: counts as int, rates as float."""
+    d = m.to_dict()
     return {k: (int(v) if k in ("tp", "fp", "tn", "fn") else float(v)) for k, v in d.items()}
 
 
@@ -279,22 +281,22 @@ def calibrate(
         seed=int(seed),
         num_threads=int(num_threads),
     )
-    fitted = dataclasses.replace(initial, c1=float(out["cup"].c1), c2=float(out["cup"].c2))
-    train_idx = np.asarray(out["train_indices"], dtype=np.int64)
-    test_idx = np.asarray(out["test_indices"], dtype=np.int64)
+    fitted = dataclasses.replace(initial, c1=float(out.cup.c1), c2=float(out.cup.c2))
+    train_idx = np.asarray(out.train_indices, dtype=np.int64)
+    test_idx = np.asarray(out.test_indices, dtype=np.int64)
     before = _core.predict_experiments(meshes, idx, pts, nrm, _core_cup(initial), int(num_threads))
     return CalibrationReport(
         cup=fitted,
         initial_cup=initial,
-        train=_metrics(out["train"]),
-        test=_metrics(out["test"]),
+        train=_metrics(out.train),
+        test=_metrics(out.test),
         initial_train=classification_metrics(before[train_idx], y[train_idx]),
         initial_test=classification_metrics(before[test_idx], y[test_idx]),
-        objective=float(out["objective"]),
-        evaluations=int(out["evaluations"]),
+        objective=float(out.objective),
+        evaluations=int(out.evaluations),
         train_indices=train_idx,
         test_indices=test_idx,
-        predicted=np.asarray(out["predicted"], dtype=bool),
+        predicted=np.asarray(out.predicted, dtype=bool),
         measured=y,
         pose_ids=None if pose_ids is None else tuple(int(p) for p in pose_ids),
         features=None if features is None else tuple(str(f) for f in features),

@@ -1,27 +1,123 @@
 """``mgn eval ...``: score predictions against a dataset's labels.
 
-Each evaluation module listed in ``_MODULES`` has a ``register(eval_sub)`` function that adds its
-action (``detections``, ``grasps``, ``layout``, ...) to the ``eval`` subparsers.
+The ``eval`` command group: ``detections`` (:mod:`mgn.eval.detections`), ``layout``
+(:mod:`mgn.eval.layout_metrics`) and ``grasps`` (:mod:`mgn.eval.grasps`). The evaluation itself
+lives in :mod:`mgn.eval`; this module only parses the arguments and prints or writes the results.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
+import math
+
+from mgn.eval import grasps as grasps_module
+from mgn.eval.detections import evaluate_detections
+from mgn.eval.grasps import (
+    DEFAULT_KS,
+    DEFAULT_MATCH_ANGLE,
+    DEFAULT_MATCH_DISTANCE,
+    DEFAULT_THRESHOLDS,
+    LABEL_SCORES,
+    evaluate_grasps,
+)
+from mgn.eval.layout_metrics import evaluate_layout
+from mgn.eval.results import print_and_write
+from mgn.hardware import grasp_kind_arg
 
 __all__ = ["register"]
 
-# One _MODULES.append("mgn.eval.<module>") line per evaluation module (each defines
-# register(eval_sub)), added after the next line.
-_MODULES: list[str] = []
-_MODULES.append("mgn.eval.detections")
-_MODULES.append("mgn.eval.layout_metrics")
-_MODULES.append("mgn.eval.grasps")
+grasps_module_doc = grasps_module.__doc__ or ""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``eval`` command group to the ``mgn`` subparsers."""
     p = sub.add_parser("eval", help="score predictions against a dataset's labels")
     eval_sub = p.add_subparsers(dest="eval_command", metavar="ACTION", required=True)
-    for name in _MODULES:
-        importlib.import_module(name).register(eval_sub)
+    _register_detections(eval_sub)
+    _register_layout(eval_sub)
+    _register_grasps(eval_sub)
+
+
+def _cmd_detections(args: argparse.Namespace) -> int:
+    res = evaluate_detections(
+        args.dataset,
+        args.predictions,
+        class_agnostic=args.class_agnostic,
+        amodal=args.amodal,
+        strict=not args.lenient,
+    )
+    return print_and_write(res, args.out)
+
+
+def _register_detections(eval_sub: argparse._SubParsersAction) -> None:
+    """Add ``detections`` to the ``mgn eval`` actions."""
+    p = eval_sub.add_parser(
+        "detections", help="box / mask AP of COCO-format predictions (overall and by subset)"
+    )
+    p.add_argument("predictions", help="COCO results JSON (list of detections)")
+    p.add_argument("--dataset", required=True, help="dataset folder")
+    p.add_argument("--class-agnostic", action="store_true", help="one category 'object'")
+    p.add_argument("--amodal", action="store_true", help="score against the amodal masks/boxes")
+    p.add_argument(
+        "--lenient", action="store_true", help="drop predictions for images not evaluated"
+    )
+    p.add_argument("--out", help="write the results as JSON here")
+    p.set_defaults(func=_cmd_detections)
+
+
+def _cmd_layout(args: argparse.Namespace) -> int:
+    res = evaluate_layout(args.dataset, args.predictions)
+    return print_and_write(res, args.out)
+
+
+def _register_layout(eval_sub: argparse._SubParsersAction) -> None:
+    """Add ``layout`` to the ``mgn eval`` actions."""
+    p = eval_sub.add_parser("layout", help="layer accuracy and top-object scores of predictions")
+    p.add_argument("predictions", help="JSON list of {image_id, instance_id, layer}")
+    p.add_argument("--dataset", required=True, help="dataset folder")
+    p.add_argument("--out", help="write the results as JSON here")
+    p.set_defaults(func=_cmd_layout)
+
+
+def _cmd_grasps(args: argparse.Namespace) -> int:
+    res = evaluate_grasps(
+        args.dataset,
+        args.predictions,
+        kind=args.kind,
+        ks=args.k,
+        thresholds=args.thresholds,
+        match_distance=args.match_distance,
+        match_angle=math.radians(args.match_angle_deg),
+        label_score=args.label_score,
+        num_threads=args.threads,
+    )
+    return print_and_write(res, args.out)
+
+
+def _register_grasps(eval_sub: argparse._SubParsersAction) -> None:
+    """Add ``grasps`` to the ``mgn eval`` subparsers."""
+    p = eval_sub.add_parser(
+        "grasps",
+        help="precision@k of suction / parallel-jaw grasp predictions",
+        description=grasps_module_doc.split("\n\n")[0].replace("``", ""),
+    )
+    p.add_argument("predictions", metavar="PRED.json", help="prediction list (see the docs)")
+    p.add_argument("--dataset", required=True, metavar="DIR", help="dataset folder")
+
+    p.add_argument("--kind", type=grasp_kind_arg, default="suction",
+                   help="grasp kind: suction or paralleljaw (default suction; aliases "
+                        "suctioncup, pj)")  # fmt: skip
+    p.add_argument("--out", metavar="JSON", help="write the results here")
+    p.add_argument("--k", type=int, nargs="+", default=list(DEFAULT_KS), metavar="K",
+                   help="k of precision@k (default 1 5 10 25 50)")  # fmt: skip
+    p.add_argument("--thresholds", type=float, nargs="+", default=list(DEFAULT_THRESHOLDS),
+                   metavar="T", help="label-score thresholds (default 0.2 ... 0.8)")  # fmt: skip
+    p.add_argument("--match-distance", type=float, default=DEFAULT_MATCH_DISTANCE, metavar="M",
+                   help="contact tolerance, m (default 0.01)")  # fmt: skip
+    p.add_argument("--match-angle-deg", type=float, default=math.degrees(DEFAULT_MATCH_ANGLE),
+                   metavar="DEG", help="axis tolerance, degrees (default 30)")  # fmt: skip
+    p.add_argument("--label-score", choices=LABEL_SCORES, default=None,
+                   help="label score held against the thresholds (default analytical)")  # fmt: skip
+    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
+                   help="C++ threads (0 = all cores)")  # fmt: skip
+    p.set_defaults(func=_cmd_grasps)

@@ -462,7 +462,7 @@ def build_parser() -> argparse.ArgumentParser:
     __import__("mgn.cli.io", fromlist=["register"]).register(sub)
     __import__("mgn.cli.pipeline", fromlist=["register"]).register(sub)  # generate, config
     __import__("mgn.cli.eval", fromlist=["register"]).register(sub)  # eval detections|grasps|...
-    __import__("mgn.eval.pick", fromlist=["register"]).register(sub)  # mgn pick
+    __import__("mgn.cli.pick", fromlist=["register"]).register(sub)  # mgn pick
     _use_formatter(parser)
     return parser
 

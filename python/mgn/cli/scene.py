@@ -19,6 +19,7 @@ from tqdm import tqdm
 
 from mgn.base.atomic import atomic_dir
 from mgn.errors import InvalidArgumentError
+from mgn.io.scene_file import read_scene_json, write_scene_json
 from mgn.io.view_images import render_views
 from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
 from mgn.pipeline.config import load_config
@@ -28,7 +29,7 @@ from mgn.pipeline.scene_writer import scene_views
 from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.scene.compose import compose_objects
 from mgn.scene.drop import drop_scene
-from mgn.scene.scene import DropOptions, Scene
+from mgn.scene.scene import DropOptions
 from mgn.viz.scene_export import export_scene_glb
 
 __all__ = ["ACTIONS", "register"]
@@ -78,7 +79,7 @@ def _cmd_drop(args: argparse.Namespace) -> int:
         options=options,
         sources={k: v for k, v in sources.items() if k in used},
     )
-    scene.to_json(args.out)
+    write_scene_json(scene, args.out)
     st = scene.stats
     print(
         f"dropped {st['num_dropped']} objects (seed {args.seed}): {len(scene)} in the tote, "
@@ -119,7 +120,7 @@ def _register_drop(ssub: argparse._SubParsersAction) -> None:
 def _cmd_render(args: argparse.Namespace) -> int:
 
     render = settings_from_args(load_config(args.config).render, args)
-    scene = Scene.from_json(args.scene)
+    scene = read_scene_json(args.scene)
     if len(scene) == 0:
         raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to render")
     views = render_views(
@@ -161,7 +162,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
 
     config = load_config(args.config)
     render = settings_from_args(config.render, args)
-    scene = Scene.from_json(args.scene)
+    scene = read_scene_json(args.scene)
     if len(scene) == 0:
         raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to label")
     views = scene_views(scene, config.camera)
@@ -238,7 +239,7 @@ def _scene_path(arg: str) -> str:
 def _cmd_export(args: argparse.Namespace) -> int:
 
     config = load_config(args.config)
-    scene = Scene.from_json(_scene_path(args.scene))
+    scene = read_scene_json(_scene_path(args.scene))
     views = [] if args.no_cameras else scene_views(scene, config.camera)
     counts = export_scene_glb(scene, args.out, views=views, grasps=args.grasps, top_k=args.top_k,
                               config=config, num_threads=args.num_threads)  # fmt: skip

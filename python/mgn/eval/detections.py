@@ -43,7 +43,6 @@ Example::
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import copy
 import io
@@ -62,7 +61,7 @@ from pycocotools.coco import COCO
 from pycocotools.cocoeval import COCOeval
 
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.eval.results import format_table, print_and_write
+from mgn.eval.results import format_table
 from mgn.io.coco import AGNOSTIC_ID, coco_dict
 from mgn.io.dataset import Dataset
 
@@ -669,34 +668,3 @@ def evaluate_detections(
         unseen_categories=tuple(sorted(unseen)),
         occlusion_bins=bins,
     )
-
-
-# ---------------------------------------------------------------------------------------------
-# Command line
-
-
-def _cmd_detections(args: argparse.Namespace) -> int:
-    res = evaluate_detections(
-        args.dataset,
-        args.predictions,
-        class_agnostic=args.class_agnostic,
-        amodal=args.amodal,
-        strict=not args.lenient,
-    )
-    return print_and_write(res, args.out)
-
-
-def register(eval_sub: argparse._SubParsersAction) -> None:
-    """Add ``detections`` to the ``mgn eval`` actions."""
-    p = eval_sub.add_parser(
-        "detections", help="box / mask AP of COCO-format predictions (overall and by subset)"
-    )
-    p.add_argument("predictions", help="COCO results JSON (list of detections)")
-    p.add_argument("--dataset", required=True, help="dataset folder")
-    p.add_argument("--class-agnostic", action="store_true", help="one category 'object'")
-    p.add_argument("--amodal", action="store_true", help="score against the amodal masks/boxes")
-    p.add_argument(
-        "--lenient", action="store_true", help="drop predictions for images not evaluated"
-    )
-    p.add_argument("--out", help="write the results as JSON here")
-    p.set_defaults(func=_cmd_detections)

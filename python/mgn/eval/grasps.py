@@ -79,7 +79,6 @@ colliding, or matched and free but below each threshold. Predictions are judged 
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -92,12 +91,12 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.eval.results import format_table, print_and_write
-from mgn.hardware import ParallelJawGripper, SuctionCup, grasp_kind_arg, normalize_grasp_kind
+from mgn.eval.results import format_table
+from mgn.hardware import ParallelJawGripper, SuctionCup, normalize_grasp_kind
 from mgn.io.dataset import Dataset
+from mgn.io.scene_file import read_scene_json
 from mgn.pipeline.config import Config
 from mgn.pipeline.label_scene import LabelOptions
-from mgn.scene import Scene
 from mgn.scene.lens import lens_for
 from mgn.view_labels.grasps import SceneGraspModel
 
@@ -106,12 +105,12 @@ __all__ = [
     "DEFAULT_MATCH_ANGLE",
     "DEFAULT_MATCH_DISTANCE",
     "DEFAULT_THRESHOLDS",
+    "LABEL_SCORES",
     "GraspResults",
     "ViewGraspResult",
     "evaluate_grasps",
     "ground_truth_grasps",
     "load_predictions",
-    "register",
 ]
 
 #: Kinds of grasps (the ``kind`` of a prediction entry).
@@ -125,7 +124,7 @@ DEFAULT_MATCH_ANGLE = math.pi / 6
 #: A pose's rotation may deviate this much from orthonormal (max |R^T R - I|) before it is
 #: rejected; accepted rotations are re-orthonormalised.
 ORTHONORMAL_TOLERANCE = 1e-3
-_LABEL_SCORES = ("analytical", "simulation", "wrench")
+LABEL_SCORES = ("analytical", "simulation", "wrench")
 _GROUP = {"suction": "suctioncup", "paralleljaw": "paralleljaw"}
 _WINDOW = 2  # half-size of the normal-estimation window, px
 
@@ -421,7 +420,7 @@ class _Context:
                     f"{folder}: no scene.json; grasp evaluation needs the scene (object poses, "
                     "tote) to check collisions with the labels' model"
                 )
-            scene = Scene.from_json(path)
+            scene = read_scene_json(path)
             gripper, cup = self.hardware()
             n = len(scene.instances)
             self._models[scene_id] = SceneGraspModel(
@@ -618,9 +617,9 @@ def _check_kind(kind: Any, what: str) -> str:
 
 def _default_label_score(kind: str, label_score: str | None) -> str:
     score = label_score if label_score is not None else "analytical"
-    if score not in _LABEL_SCORES:
+    if score not in LABEL_SCORES:
         raise InvalidArgumentError(
-            f"label_score must be one of {list(_LABEL_SCORES)}, got {label_score!r}"
+            f"label_score must be one of {list(LABEL_SCORES)}, got {label_score!r}"
         )
     if kind == "suction" and score == "simulation":
         raise InvalidArgumentError(
@@ -799,51 +798,3 @@ def ground_truth_grasps(
                 {"image_id": scene.scene_id * 1000 + view.index, "kind": kind, "grasps": grasps}
             )
     return out
-
-
-# --------------------------------------------------------------------------------------------
-# Command line
-
-
-def _cmd(args: argparse.Namespace) -> int:
-    res = evaluate_grasps(
-        args.dataset,
-        args.predictions,
-        kind=args.kind,
-        ks=args.k,
-        thresholds=args.thresholds,
-        match_distance=args.match_distance,
-        match_angle=math.radians(args.match_angle_deg),
-        label_score=args.label_score,
-        num_threads=args.threads,
-    )
-    return print_and_write(res, args.out)
-
-
-def register(eval_sub: argparse._SubParsersAction) -> None:
-    """Add ``grasps`` to the ``mgn eval`` subparsers."""
-    p = eval_sub.add_parser(
-        "grasps",
-        help="precision@k of suction / parallel-jaw grasp predictions",
-        description=__doc__.split("\n\n")[0].replace("``", ""),
-    )
-    p.add_argument("predictions", metavar="PRED.json", help="prediction list (see the docs)")
-    p.add_argument("--dataset", required=True, metavar="DIR", help="dataset folder")
-
-    p.add_argument("--kind", type=grasp_kind_arg, default="suction",
-                   help="grasp kind: suction or paralleljaw (default suction; aliases "
-                        "suctioncup, pj)")  # fmt: skip
-    p.add_argument("--out", metavar="JSON", help="write the results here")
-    p.add_argument("--k", type=int, nargs="+", default=list(DEFAULT_KS), metavar="K",
-                   help="k of precision@k (default 1 5 10 25 50)")  # fmt: skip
-    p.add_argument("--thresholds", type=float, nargs="+", default=list(DEFAULT_THRESHOLDS),
-                   metavar="T", help="label-score thresholds (default 0.2 ... 0.8)")  # fmt: skip
-    p.add_argument("--match-distance", type=float, default=DEFAULT_MATCH_DISTANCE, metavar="M",
-                   help="contact tolerance, m (default 0.01)")  # fmt: skip
-    p.add_argument("--match-angle-deg", type=float, default=math.degrees(DEFAULT_MATCH_ANGLE),
-                   metavar="DEG", help="axis tolerance, degrees (default 30)")  # fmt: skip
-    p.add_argument("--label-score", choices=_LABEL_SCORES, default=None,
-                   help="label score held against the thresholds (default analytical)")  # fmt: skip
-    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
-                   help="C++ threads (0 = all cores)")  # fmt: skip
-    p.set_defaults(func=_cmd)

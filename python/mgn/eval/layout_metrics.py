@@ -25,7 +25,6 @@ that are not visible are accepted and ignored. With ``w_i`` = the visible pixel 
 
 from __future__ import annotations
 
-import argparse
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -35,7 +34,7 @@ import numpy as np
 
 from mgn.errors import InvalidArgumentError
 from mgn.eval.detections import as_dataset, as_prediction_list, is_int, selected_views
-from mgn.eval.results import format_table, print_and_write
+from mgn.eval.results import format_table
 from mgn.io.dataset import Dataset
 
 __all__ = ["LayoutResults", "evaluate_layout", "ground_truth_layout"]
@@ -253,17 +252,3 @@ def evaluate_layout(
         top_recall=float(np.mean(recalls)) if recalls else None,
         top_f1=float(np.mean(f1s)) if f1s else None,
     )
-
-
-def _cmd_layout(args: argparse.Namespace) -> int:
-    res = evaluate_layout(args.dataset, args.predictions)
-    return print_and_write(res, args.out)
-
-
-def register(eval_sub: argparse._SubParsersAction) -> None:
-    """Add ``layout`` to the ``mgn eval`` actions."""
-    p = eval_sub.add_parser("layout", help="layer accuracy and top-object scores of predictions")
-    p.add_argument("predictions", help="JSON list of {image_id, instance_id, layer}")
-    p.add_argument("--dataset", required=True, help="dataset folder")
-    p.add_argument("--out", help="write the results as JSON here")
-    p.set_defaults(func=_cmd_layout)

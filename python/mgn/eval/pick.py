@@ -50,10 +50,8 @@ settling are listed in ``lost``.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import importlib
-import json
 import math
 import os
 from collections.abc import Callable, Mapping
@@ -67,14 +65,13 @@ from PIL import Image, ImageDraw
 
 from mgn.errors import InvalidArgumentError
 from mgn.eval.results import format_table, write_results_json
-from mgn.hardware import grasp_kind_arg, normalize_grasp_kind
+from mgn.hardware import normalize_grasp_kind
 from mgn.objects import tote_mesh
-from mgn.pipeline.config import Config, default_config, load_config
+from mgn.pipeline.config import Config, default_config
 from mgn.pipeline.label_cache import ObjectLabels
 from mgn.pipeline.label_cache import object_labels as cached_labels
 from mgn.pipeline.label_scene import LabelOptions, strided_subset
 from mgn.pipeline.scene_writer import scene_intrinsics
-from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.render.views import ViewImages, iter_views
 from mgn.scene.cameras import CameraView, mgn_rig
 from mgn.scene.drop import settle_tracked
@@ -89,7 +86,6 @@ __all__ = [
     "PickAttempt",
     "PickResults",
     "PickState",
-    "register",
     "run_picking",
 ]
 
@@ -803,81 +799,3 @@ def _write_outputs(
     frames[0].save(folder / "picking.gif", save_all=True, append_images=frames[1:], duration=600,
                    loop=0)  # fmt: skip
     write_results_json(folder / "results.json", results)
-
-
-# ---------------------------------------------------------------------------- command line
-
-
-def _load_scene(path: Path) -> tuple[Scene, Config | None]:
-    """The scene of a scene folder (its scene.json; the dataset's config from the parent's
-    dataset.json when there is one) or of a scene.json file."""
-
-    file = path / "scene.json" if path.is_dir() else path
-    scene = Scene.from_json(file)
-    info = file.parent.parent / "dataset.json"
-    config = None
-    if info.is_file():
-        doc = json.loads(info.read_text(encoding="utf-8"))
-        if isinstance(doc.get("config"), dict):
-            config = load_config(doc["config"])
-    return scene, config
-
-
-def _cmd_pick(args: argparse.Namespace) -> int:
-
-    scene, config = _load_scene(Path(args.scene))
-    if args.config is not None:
-        config = load_config(args.config)
-    if args.engine is not None or args.spp is not None:
-        config = config or default_config()
-        config = dataclasses.replace(config, render=settings_from_args(config.render, args))
-    results = run_picking(
-        scene,
-        policy=args.policy,
-        gripper=args.gripper,
-        config=config,
-        max_failures_per_object=args.max_failures,
-        max_attempts=args.max_attempts,
-        seed=args.seed,
-        stochastic=args.stochastic,
-        resolution=args.resolution,
-        out=args.out,
-        num_threads=args.threads,
-    )
-    print(results.table())
-    print(f"results, step images and picking.gif in {args.out}")
-    return 0
-
-
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``mgn pick`` to the ``mgn`` subparsers."""
-    p = sub.add_parser(
-        "pick",
-        help="closed-loop picking in simulation (R_grasp, R_object, R_mixture, disturbance)",
-    )
-    p.add_argument("scene", help="a scene folder of a dataset (scene<N>/) or a scene.json")
-    p.add_argument("--policy", default="label",
-                   help="'label', 'random' or 'module:function' (policy(state) -> "
-                        "(instance_id, grasp index or X_W_tool) or None)")  # fmt: skip
-
-    p.add_argument(
-        "--gripper",
-        type=grasp_kind_arg,
-        default="suction",
-        help="suction or paralleljaw (default suction; aliases suctioncup, pj)",
-    )
-    p.add_argument("--config", default=None,
-                   help="config YAML (object labels, gripper, cup, camera); default: the "
-                        "dataset's config, else the defaults")  # fmt: skip
-    p.add_argument("--max-attempts", type=int, default=None)
-    p.add_argument("--max-failures", type=int, default=2, help="failed attempts per object")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--stochastic", action="store_true",
-                   help="success with probability = score (else score >= 0.5)")  # fmt: skip
-    p.add_argument("--resolution", type=int, default=160, help="top-view image size, px")
-    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
-                   help="C++ threads (0 = all cores)")  # fmt: skip
-    p.add_argument("--out", required=True, help="output folder")
-
-    add_engine_arguments(p, what="the step pictures")
-    p.set_defaults(func=_cmd_pick)

@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.core_result import from_core
 
 #: Immutable FCL bounding-volume hierarchy (OBBRSS) of a mesh; share it freely across threads.
 CollisionModel = _core.CollisionModel
@@ -71,4 +72,4 @@ def distance(
     """Minimum distance between A and B with the closest points (always batched arrays)."""
     xa = np.asarray(X_WA, dtype=np.float64)
     xb = np.asarray(X_WB, dtype=np.float64)
-    return DistanceResult(**_core.distance(a, xa, b, xb, rel_err, abs_err, num_threads))
+    return from_core(DistanceResult, _core.distance(a, xa, b, xb, rel_err, abs_err, num_threads))

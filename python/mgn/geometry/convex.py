@@ -21,6 +21,7 @@ import numpy as np
 
 from mgn import _core
 from mgn.base.atomic import atomic_write_bytes
+from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 
 __all__ = [
@@ -34,6 +35,10 @@ __all__ = [
 
 #: Bump when the decomposition algorithm changes, so old cache entries are not reused.
 _CACHE_VERSION = "hacd-4"
+
+
+#: The C++ defaults (mgn/geometry/convex_decomposition.hpp), the one place they are written.
+_CORE = _core.ConvexDecompositionOptions()
 
 
 @dataclass(frozen=True)
@@ -61,17 +66,30 @@ class ConvexDecompositionOptions:
             left. 0: no cap.
     """
 
-    convex_volume_tolerance: float = 0.10
-    max_concavity: float = 0.02
-    min_parts: int = 1
-    max_parts: int = 32
-    compactness_weight: float = 0.1
-    volume_weight: float = 0.0
-    extra_concavity_points: bool = True
-    max_hacd_faces: int = 1500
-    grid_resolution: int = 40
-    merge_volume_tolerance: float = 0.0
-    merge_max_parts: int = 0
+    convex_volume_tolerance: float = _CORE.convex_volume_tolerance
+    max_concavity: float = _CORE.max_concavity
+    min_parts: int = _CORE.min_parts
+    max_parts: int = _CORE.max_parts
+    compactness_weight: float = _CORE.compactness_weight
+    volume_weight: float = _CORE.volume_weight
+    extra_concavity_points: bool = _CORE.extra_concavity_points
+    max_hacd_faces: int = _CORE.max_hacd_faces
+    grid_resolution: int = _CORE.grid_resolution
+    merge_volume_tolerance: float = _CORE.merge_volume_tolerance
+    merge_max_parts: int = _CORE.merge_max_parts
+
+    def to_core(self) -> _core.ConvexDecompositionOptions:
+        """The C++ options (the core checks the ranges when it decomposes)."""
+        o = _core.ConvexDecompositionOptions()
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            try:
+                setattr(o, f.name, value)
+            except TypeError as e:
+                raise InvalidArgumentError(
+                    f"ConvexDecompositionOptions.{f.name} must be {f.type}, got {value!r}"
+                ) from e
+        return o
 
 
 #: The decomposition the scene drop uses by default: HACD parts merged while they add at most 10 %
@@ -96,22 +114,7 @@ def convex_decomposition(
     :func:`cached_convex_decomposition`.
     """
     o = options or ConvexDecompositionOptions()
-    return list(
-        _core.convex_decomposition(
-            mesh,
-            float(o.convex_volume_tolerance),
-            float(o.max_concavity),
-            int(o.min_parts),
-            int(o.max_parts),
-            float(o.compactness_weight),
-            float(o.volume_weight),
-            bool(o.extra_concavity_points),
-            int(o.max_hacd_faces),
-            int(o.grid_resolution),
-            float(o.merge_volume_tolerance),
-            int(o.merge_max_parts),
-        )
-    )
+    return list(_core.convex_decomposition(mesh, o.to_core()))
 
 
 def cache_dir() -> Path:

@@ -96,7 +96,7 @@ def sample_surface(
     from ``oversampling * count`` area-weighted candidates), as used for grasp candidates.
     """
     out = _core.sample_surface(mesh, int(count), method, int(seed), int(oversampling))
-    return SurfaceSamples(out["points"], out["normals"], out["face_ids"])
+    return SurfaceSamples(out.points, out.normals, out.face_ids)
 
 
 def make_box(extents: npt.ArrayLike) -> Mesh:

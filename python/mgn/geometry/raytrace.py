@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.core_result import from_core
 from mgn.geometry.mesh import Mesh
 
 
@@ -120,7 +121,7 @@ class RayScene:
         results, faster).
         """
         out = self._scene.intersect(origins, directions, tnear, tfar, coherent, num_threads)
-        return RayHits(**out)
+        return from_core(RayHits, out)
 
     def intersect_ids(
         self,
@@ -164,7 +165,7 @@ class RayScene:
         out = self._scene.intersect_all(
             origins, directions, max_hits_per_ray, tnear, tfar, num_threads
         )
-        return RayAllHits(**out)
+        return from_core(RayAllHits, out)
 
     def __repr__(self) -> str:
         return f"RayScene(geometries={self.num_geometries}, triangles={self.num_triangles})"

@@ -17,9 +17,11 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import queue
+import threading
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from mgn.errors import InvalidArgumentError
+from mgn.io.scene_file import write_scene_json
 from mgn.io.scene_format import ViewRecord, scene_gt_entries, write_scene_gt, write_view
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
@@ -85,7 +88,12 @@ class LabelOptions:
 
 @dataclass
 class LabelTimings:
-    """Seconds spent per stage over all views of a scene (wall clock)."""
+    """Seconds spent per stage over all views of a scene (wall clock).
+
+    ``render`` is the time of the render thread, which overlaps the other stages; ``render
+    (waiting)`` is the time the labelling waited for it. ``prepare: scene grasp collisions``
+    also runs in a thread of its own; ``scene grasps`` includes waiting for it at the first
+    view."""
 
     seconds: dict[str, float] = field(default_factory=dict)
     views: int = 0
@@ -163,7 +171,8 @@ def view_record(
         order, csv, extra = layout.order_json(), layout.order_csv(), layout.layout_json()
     else:
         order, csv, extra = _empty_layout_files(n)
-    depth_ideal = np.where(images.depth_ideal > 0, images.depth_ideal, np.nan).astype(np.float32)
+    depth_ideal = np.where(images.depth_ideal > 0, images.depth_ideal, np.float32(np.nan))
+    depth_ideal = depth_ideal.astype(np.float32, copy=False)
     return ViewRecord(
         index=index,
         rgb=images.rgb,
@@ -181,6 +190,74 @@ def view_record(
         layout_json=extra,
         extra_npz={"com_heatmap": labels.com_heatmap},
     )
+
+
+class _RenderAhead:
+    """Runs an iterator (the view renderer) in a thread of its own, at most ``depth`` items ahead
+    of the consumer, so view k + 1 renders (OpenGL and the depth sensor release the GIL) while
+    view k is labelled. Items come out in the iterator's order; an exception in the iterator is
+    raised in the consumer. ``busy`` is the time the thread spent producing items, s.
+
+    The iterator is created, advanced and closed in the thread only (the OpenGL context of the
+    renderer lives there)."""
+
+    def __init__(self, make: Callable[[], Iterator[Any]], depth: int = 1) -> None:
+        self.busy = 0.0
+        self._queue: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=depth)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, args=(make,), name="mgn-render",
+                                        daemon=True)  # fmt: skip
+        self._thread.start()
+
+    def _put(self, message: tuple[str, Any]) -> bool:
+        while not self._stop.is_set():
+            try:
+                self._queue.put(message, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def _run(self, make: Callable[[], Iterator[Any]]) -> None:
+        it: Iterator[Any] | None = None
+        try:
+            it = make()
+            while not self._stop.is_set():
+                t0 = time.perf_counter()
+                try:
+                    item = next(it)
+                except StopIteration:
+                    break
+                self.busy += time.perf_counter() - t0
+                if not self._put(("item", item)):
+                    break
+            self._put(("end", None))
+        except BaseException as e:  # noqa: BLE001 (handed to the consumer, which raises it)
+            self._put(("error", e))
+        finally:
+            close = getattr(it, "close", None)
+            if close is not None:
+                close()
+
+    def __iter__(self) -> Iterator[Any]:
+        while True:
+            kind, value = self._queue.get()
+            if kind == "item":
+                yield value
+            elif kind == "error":
+                raise value
+            else:
+                return
+
+    def close(self) -> None:
+        """Stops the thread (after the item it is producing) and waits for it."""
+        self._stop.set()
+        while self._thread.is_alive():
+            try:
+                self._queue.get(timeout=0.1)
+            except queue.Empty:
+                pass
+        self._thread.join()
 
 
 def label_scene(
@@ -224,11 +301,11 @@ def label_scene(
     t0 = time.perf_counter()
     rays = SceneRayModel.from_scene(scene)
     timings.add("prepare: ray model", time.perf_counter() - t0)
-    sgm = None
-    if opt.scene_grasps and (pj_labels is not None or suction_labels is not None):
-        t0 = time.perf_counter()
+
+    def grasp_model() -> SceneGraspModel:
+        t = time.perf_counter()
         cap = opt.max_grasps_per_object
-        sgm = SceneGraspModel(
+        model = SceneGraspModel(
             scene,
             [strided_subset(g, cap) for g in pj_labels] if pj_labels is not None else [None] * n,
             [strided_subset(g, cap) for g in suction_labels]
@@ -239,65 +316,90 @@ def label_scene(
             offsets=opt.grasp_offsets,
             num_threads=opt.num_threads,
         )
-        timings.add("prepare: scene grasp collisions", time.perf_counter() - t0)
+        timings.add("prepare: scene grasp collisions", time.perf_counter() - t)
+        return model
+
+    want_grasps = opt.scene_grasps and (pj_labels is not None or suction_labels is not None)
     categories = np.array([inst.category_id for inst in scene.instances], np.int64)
     bins = [inst.bin_relation for inst in scene.instances]
     objects = scene.render_items()
     gt: dict[int, list[dict[str, Any]]] = {}
 
     pending: deque[Future[Any]] = deque()
-    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool:
-        t0 = time.perf_counter()
-        frames = iter_views(objects, tote_mesh(scene.tote), views, sensor=opt.sensor,
-                            randomize=opt.randomize, seed=opt.seed, render=opt.render,
-                            num_threads=opt.num_threads)  # fmt: skip
-        for k, images in enumerate(frames):
-            t1 = time.perf_counter()
-            timings.add("render", t1 - t0)
-            timings.engine = dict(images.engine)
-            v, view = views[k]
-            # A camera with lens distortion: label its pinhole render, then resample the labels
-            # through the lens (the images are resampled the same way, docs/cameras.md).
-            src = images.pinhole if images.pinhole is not None else images
-            labels = view_object_labels(
-                rays,
-                src.view,
-                src.instance_ids,
-                depth=src.depth_ideal,
-                keypoints=opt.keypoints,
-                num_threads=opt.num_threads,
-            )
-            if images.lens is not None:
-                labels = distort_view_object_labels(labels, images.lens)
-            t2 = time.perf_counter()
-            timings.add("object labels", t2 - t1)
-            layout = None
-            if opt.layout:
-                layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal,
-                                        categories, bins, occlusion=labels.occlusion,
-                                        num_threads=opt.num_threads)  # fmt: skip
-            t3 = time.perf_counter()
-            timings.add("layout", t3 - t2)
-            seen = labels.visible_pixels > 0
-            grasps = sgm.view_grasps(view, seen) if sgm is not None else None
-            t4 = time.perf_counter()
-            timings.add("scene grasps", t4 - t3)
-            # Files are encoded (zlib, PNG; both release the GIL) by writer threads while the next
-            # view renders; at most two views wait, so memory stays bounded.
-            record = view_record(v, view, images, labels, layout, grasps)
-            pending.append(pool.submit(write_view, out, record, archival=opt.archival))
-            while len(pending) > 2:
-                pending.popleft().result()
-            gt[v] = scene_gt_entries(labels.X_CO, categories, seen)
+    # View k + 1 renders in its own thread while view k is labelled; files are encoded (zlib,
+    # PNG; both release the GIL) by writer threads. At most one rendered view and two views
+    # being written wait, so memory stays bounded. Every view's result depends only on the
+    # view (its randomisation is seeded by the view index), so the bytes do not depend on this
+    # overlap.
+    tote = tote_mesh(scene.tote)
+    ahead = _RenderAhead(
+        lambda: iter_views(objects, tote, views, sensor=opt.sensor, randomize=opt.randomize,
+                           seed=opt.seed, render=opt.render, num_threads=opt.num_threads)
+    )  # fmt: skip
+    try:
+        with (
+            ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool,
+            ThreadPoolExecutor(max_workers=1, thread_name_prefix="mgn-grasps") as prepare,
+        ):
+            # The scene grasps' collision pass (once per scene) runs while the first views
+            # render and are labelled; the first view_grasps waits for it.
+            sgm_future = prepare.submit(grasp_model) if want_grasps else None
             t0 = time.perf_counter()
-            timings.add("write (waiting)", t0 - t4)
-            timings.views += 1
-            if progress is not None:
-                progress(k + 1, len(views))
-        t4 = time.perf_counter()
-        for fut in pending:
-            fut.result()
-        timings.add("write (waiting)", time.perf_counter() - t4)
+            for k, images in enumerate(ahead):
+                t1 = time.perf_counter()
+                timings.add("render (waiting)", t1 - t0)
+                timings.engine = dict(images.engine)
+                v, view = views[k]
+                # A camera with lens distortion: label its pinhole render, then resample the
+                # labels through the lens (the images are resampled the same way,
+                # docs/cameras.md).
+                src = images.pinhole if images.pinhole is not None else images
+                labels = view_object_labels(
+                    rays,
+                    src.view,
+                    src.instance_ids,
+                    depth=src.depth_ideal,
+                    keypoints=opt.keypoints,
+                    num_threads=opt.num_threads,
+                )
+                if images.lens is not None:
+                    labels = distort_view_object_labels(labels, images.lens)
+                del src
+                t2 = time.perf_counter()
+                timings.add("object labels", t2 - t1)
+                layout = None
+                if opt.layout:
+                    layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal,
+                                            categories, bins, occlusion=labels.occlusion,
+                                            num_threads=opt.num_threads)  # fmt: skip
+                t3 = time.perf_counter()
+                timings.add("layout", t3 - t2)
+                seen = labels.visible_pixels > 0
+                gt[v] = scene_gt_entries(labels.X_CO, categories, seen)
+                grasps = None
+                if sgm_future is not None:
+                    grasps = sgm_future.result().view_grasps(view, seen)
+                t4 = time.perf_counter()
+                timings.add("scene grasps", t4 - t3)
+                record = view_record(v, view, images, labels, layout, grasps)
+                del images, labels, layout, grasps
+                pending.append(pool.submit(write_view, out, record, archival=opt.archival))
+                del record
+                while len(pending) > 2:
+                    pending.popleft().result()
+                t0 = time.perf_counter()
+                timings.add("write (waiting)", t0 - t4)
+                timings.views += 1
+                if progress is not None:
+                    progress(k + 1, len(views))
+            t4 = time.perf_counter()
+            for fut in pending:
+                fut.result()
+            timings.add("write (waiting)", time.perf_counter() - t4)
+    finally:
+        ahead.close()
+    # Time the render thread spent rendering (overlapped with the stages above).
+    timings.add("render", ahead.busy)
     write_scene_gt(out, gt)
-    scene.to_json(out / "scene.json")
+    write_scene_json(scene, out / "scene.json")
     return timings

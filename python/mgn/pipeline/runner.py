@@ -58,8 +58,9 @@ from typing import Any
 from tqdm import tqdm
 
 from mgn._core import __version__
-from mgn.base.atomic import _io_error, atomic_write_text
+from mgn.base.atomic import _io_error
 from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.dataset_record import read_dataset_record, removed_objects, write_dataset_record
 from mgn.io.manifest import check_manifest, write_manifest
 from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml
 from mgn.pipeline import scene_writer
@@ -127,7 +128,8 @@ class SceneResult:
     Attributes:
         index, seed: the scene. ok: written completely.
         error: one-line error when not ok; disk_full: the error was a full disk.
-        times: seconds per stage (drop, write, finalize).
+        times: seconds per stage (drop, write, finalize, and "write: <label stage>"); "cpu": CPU
+            seconds of the worker process over the scene, all its threads.
         num_bytes: size of the scene folder; num_objects: objects in the tote.
         worker: host and process id that ran it.
         files: with ``SceneTask.collect``: the scene's files (relative path -> bytes, the
@@ -180,6 +182,8 @@ def run_scene(task: SceneTask) -> SceneResult:
     worker = f"{socket.gethostname()}:{os.getpid()}"
     times: dict[str, float] = {}
     t0 = time.perf_counter()
+    # CPU of this process over the scene, all threads (a worker runs one scene at a time).
+    c0 = time.process_time()
     try:
         specs = [resolve_object(name, source) for name, source in task.objects]
         sources = {name: source for name, source in task.objects if source != BUILTIN}
@@ -214,6 +218,7 @@ def run_scene(task: SceneTask) -> SceneResult:
                      for p in sorted(tmp.rglob("*")) if p.is_file()}  # fmt: skip
             shutil.rmtree(tmp.parent, ignore_errors=True)
             times["finalize"] = time.perf_counter() - t2
+            times["cpu"] = time.process_time() - c0
             return SceneResult(task.index, task.seed, True, None, False, times, size,
                                len(scene), worker, files,
                                removed=tuple(r.name for r in scene.removed))  # fmt: skip
@@ -221,6 +226,7 @@ def run_scene(task: SceneTask) -> SceneResult:
             shutil.rmtree(final)
         os.rename(tmp, final)
         times["finalize"] = time.perf_counter() - t2
+        times["cpu"] = time.process_time() - c0
         return SceneResult(
             task.index, task.seed, True, None, False, times, size, len(scene), worker,
             removed=tuple(r.name for r in scene.removed),
@@ -533,31 +539,6 @@ def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extr
     }
 
 
-def _removed_objects(out: Path) -> dict[str, Any]:
-    """``dataset.json`` ``removed_objects``: the objects that left the tote during the drops of
-    the scenes present (read from each ``scene.json``, so resumed runs count every scene)."""
-    by_scene: dict[str, list[str]] = {}
-    dropped = 0
-    for sj in sorted(out.glob("scene*/scene.json")):
-        try:
-            doc = json.loads(sj.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            continue
-        dropped += int(doc.get("stats", {}).get("num_dropped", len(doc.get("instances", []))))
-        names = [str(r.get("name")) for r in doc.get("removed", [])]
-        if names:
-            by_scene[sj.parent.name.removeprefix("scene")] = names
-    return {
-        "count": sum(len(v) for v in by_scene.values()),
-        "dropped": dropped,
-        "by_scene": dict(sorted(by_scene.items(), key=lambda kv: int(kv[0]))),
-    }
-
-
-def _write_dataset_json(out: Path, doc: dict) -> None:
-    atomic_write_text(out / "dataset.json", json.dumps(doc, indent=1) + "\n")
-
-
 def _clean_tmp(out: Path) -> list[Path]:
     removed = []
     for p in out.glob(f"{TMP_PREFIX}*"):
@@ -583,16 +564,16 @@ def _check_resume(out: Path, config: Config, seed: int) -> dict | None:
     """The recorded ``dataset.json`` of ``out`` (None: nothing started yet), checked against
     the seed and config of the resumed run."""
     try:
-        doc = json.loads((out / "dataset.json").read_text(encoding="utf-8"))
-    except FileNotFoundError:
+        doc = read_dataset_record(out)
+    except IoError as e:
+        raise IoError(f"--resume: {e}") from e
+    if doc is None:
         return None  # nothing started yet: a fresh run
-    except (OSError, ValueError) as e:
-        raise IoError(f"--resume: cannot read '{out / 'dataset.json'}': {e}") from e
     if doc.get("seed") != seed:
         raise InvalidArgumentError(
             f"--resume: '{out}' was generated with seed {doc.get('seed')}, got --seed {seed}"
         )
-    recorded = doc.get("config") if isinstance(doc.get("config"), dict) else {}
+    recorded: dict[str, Any] = doc["config"] if isinstance(doc.get("config"), dict) else {}
     split = json.loads(json.dumps(config.split.to_dict()))
     if recorded.get("split", {"name": "all", "unseen": "novel"}) != split:
         raise InvalidArgumentError(
@@ -711,7 +692,7 @@ class _Run:
         report.not_run += sorted(t.index for t in todo if t.index not in report.results)
 
     def write_doc(self, num_scenes: int, status: str, **more: Any) -> None:
-        _write_dataset_json(
+        write_dataset_record(
             self.out, _dataset_doc(self.cfg, self.seed, num_scenes, status, **self.extra, **more)
         )
 
@@ -825,7 +806,7 @@ def generate(
         report = GenerateReport(out, num_scenes or 0, seed)
         if quota is None:
             assert num_scenes is not None  # checked above: without a quota the count is given
-            _write_dataset_json(out, _dataset_doc(cfg, seed, num_scenes, "running", **extra))
+            write_dataset_record(out, _dataset_doc(cfg, seed, num_scenes, "running", **extra))
     except OSError as e:
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 
@@ -848,7 +829,7 @@ def generate(
     report.wall_seconds = time.perf_counter() - t_start
     status = "complete" if report.complete else "incomplete"
     failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
-    more: dict[str, Any] = {"removed_objects": _removed_objects(out)}
+    more: dict[str, Any] = {"removed_objects": removed_objects(out)}
     if failed:
         more["failed_scenes"] = failed
     with contextlib.suppress(OSError):

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mgn.io.scene_file import write_scene_json
 from mgn.pipeline.config import CameraConfig, Config
 from mgn.pipeline.label_cache import ObjectLabels
 from mgn.pipeline.label_scene import LabelOptions, label_scene
@@ -82,7 +83,7 @@ def write_scene(
 
     out = Path(folder)
     if len(scene) == 0:
-        scene.to_json(out / "scene.json")
+        write_scene_json(scene, out / "scene.json")
         return {}  # every object left the tote: nothing to render but the scene file says so
     labels = config.labels
     pj = su = None

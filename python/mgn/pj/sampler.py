@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.core_result import from_core
 from mgn.geometry.mesh import Mesh, load_mesh
 from mgn.hardware import ParallelJawGripper
 
@@ -147,7 +148,7 @@ class AntipodalSampler:
             int(first_index),
             int(num_threads),
         )
-        return AntipodalResult(**out)
+        return from_core(AntipodalResult, out)
 
     def collides(self, X_OH: npt.ArrayLike, opening: float) -> bool:
         """Whether the gripper at hand pose ``X_OH`` (4, 4), opened at ``opening`` m, intersects

@@ -171,11 +171,11 @@ class Renderer:
             np.asarray(background, np.float32),
             check_camera_inside,
         )
-        ld = out["light"]
+        ld = out.light
         used = LightSample(
-            tuple(float(x) for x in ld["position_W"]),  # type: ignore[arg-type]
-            float(ld["intensity"]),
-            float(ld["color_temperature"]),
-            float(ld["ambient"]),
+            tuple(float(x) for x in ld.position_W),  # type: ignore[arg-type]
+            float(ld.intensity),
+            float(ld.color_temperature),
+            float(ld.ambient),
         )
-        return RenderOutput(out["rgb"], out["depth"], out["instance_ids"], used)
+        return RenderOutput(out.rgb, out.depth, out.instance_ids, used)

@@ -116,4 +116,4 @@ def apply_depth_sensor(
         params,
         int(seed),
     )
-    return DepthImage(out["depth"], out["depth_ideal"], out["valid"])
+    return DepthImage(out.depth, out.depth_ideal, out.valid)

@@ -3,7 +3,8 @@
 - :func:`compose_objects`: choose the objects (names, categories x 2-5 copies, or a count).
 - :func:`drop_scene`: drop them and let them settle -> :class:`Scene`.
 - :class:`Scene`: instances with settled poses ``X_WO`` (tote frame) and tote contacts;
-  ``to_json`` / ``from_json``; ``mesh(i)`` gives an instance's mesh back.
+  ``to_dict`` / ``from_dict`` (the file: :mod:`mgn.io.scene_file`); ``mesh(i)`` gives an
+  instance's mesh back.
 - :mod:`mgn.scene.cameras`: :class:`Intrinsics`, :class:`CameraView`, the 37-view MetaGraspNet rig
   (:func:`mgn_rig`), hemisphere rigs, :func:`look_at`.
 - :mod:`mgn.scene.lens`: the OpenCV lens-distortion model and the resampling of pinhole renders

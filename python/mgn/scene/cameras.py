@@ -255,7 +255,9 @@ def mgn_rig(
         ((37, 4, 4) float64 poses X_WC, MgnRigParams).
     """
     poses, params = _core.mgn_rig(int(seed), _vec3(target, "target"))
-    return poses, MgnRigParams(**params)
+    return poses, MgnRigParams(
+        params.R_start, params.R_end, params.theta_start, params.theta_end, params.phi_end
+    )
 
 
 def mgn_rig_from_params(

@@ -65,9 +65,10 @@ def _simulate(
     decomposition: ConvexDecompositionOptions | None,
     use_cache: bool,
     X_WO_start: np.ndarray | None = None,
-) -> tuple[dict[str, Any], dict[str, str], dict[str, Mesh]]:
-    """Validates, prepares the per-object physics and runs the C++ drop. Returns the raw result
-    (X_WO, X_WO_release, status, settled, contacts, steps, ...), each name's source and mesh."""
+) -> tuple[_core.DropResult, dict[str, str], dict[str, Mesh]]:
+    """Validates, prepares the per-object physics and runs the C++ drop. Returns the C++ result
+    (X_WO, X_WO_release, status, object_settled, contacts, steps, ...), each name's source and
+    mesh."""
     if len(objects) == 0:
         raise InvalidArgumentError("drop_scene: expected at least one object, got none")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -90,8 +91,6 @@ def _simulate(
 
     all_parts = [per_name[s.name][0] for s in objects]
     all_props = [per_name[s.name][1] for s in objects]
-    opts = options.to_dict()
-    opts["seed"] = int(seed)
     out = _core.drop_objects(
         all_parts,
         [p.mass for p in all_props],
@@ -109,14 +108,14 @@ def _simulate(
             tote.floor_thickness,
             1.0 if tote.walls else 0.0,
         ],
-        opts,
+        options.to_core(int(seed)),
         None if X_WO_start is None else np.asarray(X_WO_start, np.float64).reshape(-1, 16),
     )
     return out, {k: v[2] for k, v in per_name.items()}, {k: v[3] for k, v in per_name.items()}
 
 
 def _stats(
-    out: dict[str, Any],
+    out: _core.DropResult,
     instances: Sequence[SceneInstance],
     meshes: dict[str, Mesh],
     tote: ToteSpec,
@@ -126,13 +125,13 @@ def _stats(
     (:func:`mgn.scene.penetration.render_penetration`), ``max_penetration_hulls`` is Bullet's on
     the simulated hulls."""
     return {
-        "steps": int(out["steps"]),
-        "simulated_time": float(out["simulated_time"]),
-        "settled": bool(out["all_settled"]),
+        "steps": int(out.steps),
+        "simulated_time": float(out.simulated_time),
+        "settled": bool(out.settled),
         "max_penetration": render_penetration(
             [meshes[i.name] for i in instances], [i.X_WO for i in instances], tote
         ),
-        "max_penetration_hulls": float(out["max_penetration"]),
+        "max_penetration_hulls": float(out.max_penetration),
         "num_dropped": num_dropped,
     }
 
@@ -177,20 +176,20 @@ def drop_scene(
     removed: list[RemovedInstance] = []
     for k, spec in enumerate(objects):
         source = sources_of[spec.name]
-        status = _STATUS[int(out["status"][k])]
+        status = _STATUS[int(out.status[k])]
         if status != "kept":
             removed.append(RemovedInstance(spec.name, source, status))
             continue
-        bits = int(out["contacts"][k])
+        bits = int(out.contacts[k])
         instances.append(
             SceneInstance(
                 instance_id=len(instances) + 1,
                 name=spec.name,
                 category_id=spec.category_id,
                 source=source,
-                X_WO=out["X_WO"][k],
+                X_WO=out.X_WO[k],
                 contacts=tuple(c for b, c in enumerate(CONTACT_NAMES) if bits & (1 << b)),
-                settled=bool(out["settled"][k]),
+                settled=bool(out.object_settled[k]),
             )
         )
     stats = _stats(out, instances, meshes, tote, len(objects))
@@ -229,18 +228,18 @@ def settle_tracked(
     removed = list(scene.removed)
     old_ids: list[int] = []
     for k, (inst, spec) in enumerate(zip(keep, specs, strict=True)):
-        status = _STATUS[int(out["status"][k])]
+        status = _STATUS[int(out.status[k])]
         if status != "kept":
             removed.append(RemovedInstance(spec.name, sources_of[spec.name], status))
             continue
-        bits = int(out["contacts"][k])
+        bits = int(out.contacts[k])
         instances.append(
             dataclasses.replace(
                 inst,
                 instance_id=len(instances) + 1,
-                X_WO=out["X_WO"][k],
+                X_WO=out.X_WO[k],
                 contacts=tuple(c for b, c in enumerate(CONTACT_NAMES) if bits & (1 << b)),
-                settled=bool(out["settled"][k]),
+                settled=bool(out.object_settled[k]),
             )
         )
         old_ids.append(inst.instance_id)

@@ -6,7 +6,7 @@ contacts), the tote, the seed and the drop options. Frames: the world W is the t
 (origin at the centre of the inner floor top, z up; see :mod:`mgn.objects.tote`); ``X_WO`` maps
 object-frame coordinates to world coordinates (4x4 float64, metres).
 
-JSON layout (``schema_version`` 1)::
+JSON layout (``schema_version`` 1; the file is written and read by :mod:`mgn.io.scene_file`)::
 
     {"schema_version": 1, "seed": 0,
      "tote": {ToteSpec fields}, "drop_options": {DropOptions fields},
@@ -23,8 +23,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import json
-import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,8 +31,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from mgn.base.atomic import atomic_write_text
-from mgn.errors import InvalidArgumentError, IoError
+from mgn import _core
+from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
 
@@ -56,53 +54,25 @@ CONTACT_NAMES: tuple[str, ...] = ("-x", "+x", "-y", "+y", "floor")
 _WALLS = frozenset(CONTACT_NAMES[:4])
 
 
-#: DropOptions integer fields: inclusive range (max_hull_vertices also accepts 0).
-_INT_RANGES = {"solver_iterations": (1, 1000), "max_hull_vertices": (8, 100000)}
-#: DropOptions float fields: (low, low open?, high or None, high open?, unit), as in drop.cpp.
-_FLOAT_RANGES: dict[str, tuple[float, bool, float | None, bool, str]] = {
-    "dt": (0.0, True, 0.02, False, "s"),
-    "max_time": (0.0, True, None, False, "s"),
-    "linear_rest": (0.0, True, None, False, "m/s"),
-    "angular_rest": (0.0, True, None, False, "rad/s"),
-    "rest_time": (0.0, True, None, False, "s"),
-    "gravity": (0.0, True, None, False, "m/s^2"),
-    "rolling_friction": (0.0, False, None, False, ""),
-    "angular_damping": (0.0, False, 1.0, True, ""),
-    "tote_friction": (0.0, False, None, False, ""),
-    "tote_restitution": (0.0, False, 1.0, False, ""),
-    "collision_margin": (0.0, True, 0.01, False, "m"),
-    "contact_distance": (0.0, True, None, False, "m"),
-    "hull_tolerance": (0.0, False, None, False, "m"),
-    "resettle_time": (0.0, False, None, False, "s"),
-}
+#: The C++ defaults (mgn/scene/drop.hpp): the one place DropOptions' defaults are written.
+_CORE = _core.DropOptions()
 
 
-def _checked_int(name: str, v: Any) -> int:
-    """DropOptions.<name> as an int in its range of ``_INT_RANGES``."""
-    lo, hi = _INT_RANGES[name]
-    if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-        raise InvalidArgumentError(f"DropOptions.{name} must be an integer, got {v!r}")
-    v = int(v)
-    ok = lo <= v <= hi or (name == "max_hull_vertices" and v == 0)
-    if not ok:
-        extra = "0 (keep all) or " if name == "max_hull_vertices" else ""
-        raise InvalidArgumentError(f"DropOptions.{name} must be {extra}in [{lo}, {hi}], got {v}")
-    return v
-
-
-def _checked_float(name: str, value: Any) -> float:
-    """DropOptions.<name> as a float in its range of ``_FLOAT_RANGES``."""
-    flo, lo_open, fhi, hi_open, unit = _FLOAT_RANGES[name]
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+def _checked_type(name: str, kind: type, value: Any) -> Any:
+    """DropOptions.<name> as a ``kind`` (bool, int or float); ranges are the C++ core's."""
+    if kind is bool:
+        if not isinstance(value, (bool, np.bool_)):
+            raise InvalidArgumentError(f"DropOptions.{name} must be true or false, got {value!r}")
+        return bool(value)
+    if isinstance(value, (bool, np.bool_)):
         raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {value!r}")
-    x = float(value)
-    ok = math.isfinite(x) and (x > flo if lo_open else x >= flo)
-    ok = ok and (fhi is None or (x < fhi if hi_open else x <= fhi))
-    if not ok:
-        rng = f"{'(' if lo_open else '['}{flo}, {'inf)' if fhi is None else fhi}"
-        rng += "" if fhi is None else (")" if hi_open else "]")
-        raise InvalidArgumentError(f"DropOptions.{name} must be in {rng} {unit}, got {x}")
-    return x
+    if kind is int:
+        if not isinstance(value, (int, np.integer)):
+            raise InvalidArgumentError(f"DropOptions.{name} must be an integer, got {value!r}")
+        return int(value)
+    if not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InvalidArgumentError(f"DropOptions.{name} must be a number, got {value!r}")
+    return float(value)
 
 
 @dataclass(frozen=True)
@@ -135,30 +105,32 @@ class DropOptions:
             piles settle ~1.6x sooner; a symmetric resting contact may drift to one side).
     """
 
-    window_min: tuple[float, float, float] = (-0.06, -0.03, 0.30)
-    window_max: tuple[float, float, float] = (0.06, 0.03, 0.80)
-    dt: float = 1.0 / 240.0
-    solver_iterations: int = 20
-    max_time: float = 7.0
-    linear_rest: float = 0.01
-    angular_rest: float = 0.1
-    rest_time: float = 0.2
-    gravity: float = 9.81
-    rolling_friction: float = 0.002
-    angular_damping: float = 0.05
-    tote_friction: float = 0.5
-    tote_restitution: float = 0.1
-    collision_margin: float = 0.001
-    contact_distance: float = 0.002
-    remove_unsettled: bool = False
-    tote_collision: str = "boxes"
-    max_hull_vertices: int = 96
-    hull_tolerance: float = 0.0002
-    polyhedral_contacts: bool = True
-    resettle_time: float = 2.0
-    two_friction_directions: bool = False
+    window_min: tuple[float, float, float] = _CORE.window_min
+    window_max: tuple[float, float, float] = _CORE.window_max
+    dt: float = _CORE.dt
+    solver_iterations: int = _CORE.solver_iterations
+    max_time: float = _CORE.max_time
+    linear_rest: float = _CORE.linear_rest
+    angular_rest: float = _CORE.angular_rest
+    rest_time: float = _CORE.rest_time
+    gravity: float = _CORE.gravity
+    rolling_friction: float = _CORE.rolling_friction
+    angular_damping: float = _CORE.angular_damping
+    tote_friction: float = _CORE.tote_friction
+    tote_restitution: float = _CORE.tote_restitution
+    collision_margin: float = _CORE.collision_margin
+    contact_distance: float = _CORE.contact_distance
+    remove_unsettled: bool = _CORE.remove_unsettled
+    tote_collision: str = _CORE.tote_collision
+    max_hull_vertices: int = _CORE.max_hull_vertices
+    hull_tolerance: float = _CORE.hull_tolerance
+    polyhedral_contacts: bool = _CORE.polyhedral_contacts
+    resettle_time: float = _CORE.resettle_time
+    two_friction_directions: bool = _CORE.two_friction_directions
 
     def __post_init__(self) -> None:
+        """Python types here (the fields are plain numbers afterwards); ranges in C++
+        (``mgn::validate(const DropOptions&)``), which names the field."""
         for name in ("window_min", "window_max"):
             raw = getattr(self, name)
             try:
@@ -167,45 +139,27 @@ class DropOptions:
                 raise InvalidArgumentError(
                     f"DropOptions.{name} must be 3 numbers, got {raw!r}"
                 ) from e
-            if len(value) != 3 or not all(math.isfinite(v) for v in value):
-                raise InvalidArgumentError(
-                    f"DropOptions.{name} must be 3 finite numbers, got {raw}"
-                )
+            if len(value) != 3:
+                raise InvalidArgumentError(f"DropOptions.{name} must be 3 numbers, got {raw}")
             object.__setattr__(self, name, value)
-        if any(a > b for a, b in zip(self.window_min, self.window_max, strict=True)):
-            raise InvalidArgumentError(
-                f"DropOptions.window_min must be <= window_max, got min {self.window_min} "
-                f"max {self.window_max}"
-            )
-        if self.tote_collision not in ("boxes", "mesh"):
+        if not isinstance(self.tote_collision, str):
             raise InvalidArgumentError(
                 f"DropOptions.tote_collision must be 'boxes' or 'mesh', got {self.tote_collision!r}"
             )
-        for name in ("remove_unsettled", "polyhedral_contacts", "two_friction_directions"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise InvalidArgumentError(
-                    f"DropOptions.{name} must be true or false, got {getattr(self, name)!r}"
-                )
-            object.__setattr__(self, name, bool(getattr(self, name)))
-        for name in _INT_RANGES:
-            object.__setattr__(self, name, _checked_int(name, getattr(self, name)))
-        for name in _FLOAT_RANGES:
-            object.__setattr__(self, name, _checked_float(name, getattr(self, name)))
-        if not self.max_time > self.dt:
-            raise InvalidArgumentError(
-                f"DropOptions.max_time must be > dt ({self.dt} s), got {self.max_time}"
-            )
-        for name in ("max_time", "resettle_time"):
-            if getattr(self, name) / self.dt > 1e7:
-                raise InvalidArgumentError(
-                    f"DropOptions.{name} must be at most 1e7 steps of dt ({self.dt} s), got "
-                    f"{getattr(self, name)}"
-                )
-        if not self.rest_time < self.max_time:
-            raise InvalidArgumentError(
-                f"DropOptions.rest_time must be < max_time ({self.max_time} s), got "
-                f"{self.rest_time}"
-            )
+        kinds = {"bool": bool, "int": int, "float": float}
+        for f in dataclasses.fields(self):
+            kind = kinds.get(str(f.type))
+            if kind is not None:
+                object.__setattr__(self, f.name, _checked_type(f.name, kind, getattr(self, f.name)))
+        self.to_core().validate()
+
+    def to_core(self, seed: int = 0) -> _core.DropOptions:
+        """The C++ options (``seed`` is :func:`mgn.scene.drop_scene`'s own argument)."""
+        o = _core.DropOptions()
+        for f in dataclasses.fields(self):
+            setattr(o, f.name, getattr(self, f.name))
+        o.seed = int(seed)
+        return o
 
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -421,21 +375,3 @@ class Scene:
             raise InvalidArgumentError(
                 f"Scene: malformed scene data ({type(e).__name__}: {e})"
             ) from e
-
-    def to_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write the scene as JSON (atomically). Returns the path."""
-        text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
-        atomic_write_text(path, text + "\n")
-        return Path(path)
-
-    @classmethod
-    def from_json(cls, path: str | os.PathLike[str]) -> Scene:
-        """Read a scene written by :meth:`to_json`."""
-        p = Path(path)
-        try:
-            data = json.loads(p.read_text(encoding="utf-8"))
-        except FileNotFoundError as e:
-            raise IoError(f"Scene.from_json: file not found: '{p}'") from e
-        except json.JSONDecodeError as e:
-            raise InvalidArgumentError(f"Scene.from_json: '{p}' is not valid JSON: {e}") from e
-        return cls.from_dict(data)

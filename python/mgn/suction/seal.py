@@ -15,6 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.core_result import from_core
 from mgn.geometry.mesh import Mesh
 from mgn.hardware import SuctionCup
 
@@ -111,9 +112,9 @@ class SealModel:
             int(first_index),
             int(num_threads),
         )
-        return SealResult(**out)
+        return from_core(SealResult, out)
 
-    def trial(self, point: Sequence[float], normal: Sequence[float]) -> dict:
+    def trial(self, point: Sequence[float], normal: Sequence[float]) -> _core.SealTrial:
         """One deterministic trial with its intermediate quantities (failure name, projected
         ring points and normals, elastic and ring-spring forces in N) for plots and debugging."""
         return self._core.trial(np.asarray(point, np.float64), np.asarray(normal, np.float64))

@@ -460,21 +460,21 @@ class SceneGraspModel:
         return cls(None, pj_labels, suction_labels, gripper, cup, _objects=objects, **options)
 
     @staticmethod
-    def _placed(d: dict) -> PlacedGrasps:
+    def _placed(d: _core.PlacedGraspArrays) -> PlacedGrasps:
         return PlacedGrasps(
-            tool_poses=_pose_array(d["tool_poses"]),
-            contact_poses=_pose_array(d["contact_poses"]),
-            contacts=np.asarray(d["contacts"], np.float64).reshape(-1, 3),
-            second_contacts=np.asarray(d["second_contacts"], np.float64).reshape(-1, 3),
-            width=d["width"],
-            score_analytical=d["score_analytical"],
-            score_simulation=d["score_simulation"],
-            score_wrench=d["score_wrench"],
-            object_id=d["object_index"],
-            colliding=d["colliding"],
-            hit=d["hit"],
-            collision_part=np.asarray(d["collision_part"], np.uint8),
-            collision_obstacle=np.asarray(d["collision_obstacle"], np.uint8),
+            tool_poses=_pose_array(d.tool_poses),
+            contact_poses=_pose_array(d.contact_poses),
+            contacts=np.asarray(d.contacts, np.float64).reshape(-1, 3),
+            second_contacts=np.asarray(d.second_contacts, np.float64).reshape(-1, 3),
+            width=d.width,
+            score_analytical=d.score_analytical,
+            score_simulation=d.score_simulation,
+            score_wrench=d.score_wrench,
+            object_id=d.object_index,
+            colliding=d.colliding,
+            hit=d.hit,
+            collision_part=np.asarray(d.collision_part, np.uint8),
+            collision_obstacle=np.asarray(d.collision_obstacle, np.uint8),
         )
 
     @property
@@ -558,8 +558,8 @@ class SceneGraspModel:
             )
         r = self._core.collides(kind, X, w.tolist(), t.tolist(), bool(check_target_at_grasp))
         return ToolCollisions(
-            colliding=np.asarray(r["colliding"], bool),
-            hit=np.asarray(r["hit"], np.int32).reshape(m, len(self.offsets)),
+            colliding=np.asarray(r.colliding, bool),
+            hit=np.asarray(r.hit, np.int32).reshape(m, len(self.offsets)),
         )
 
     def visible(self, view: CameraView, points: npt.ArrayLike) -> npt.NDArray[np.bool_]:
@@ -590,9 +590,9 @@ class SceneGraspModel:
         lens = lens_for(view.K)
         K = view.K if lens is None else lens.render_K
         r = self._core.view_grasps(K.to_core(), view.X_WC, s.astype(bool))
-        pj_idx, su_idx = r["pj_index"], r["suction_index"]
-        pj_tool, pj_contact = _pose_array(r["pj_tool"]), _pose_array(r["pj_contact"])
-        su_tool, su_contact = _pose_array(r["suction_tool"]), _pose_array(r["suction_contact"])
+        pj_idx, su_idx = r.pj_index, r.suction_index
+        pj_tool, pj_contact = _pose_array(r.pj_tool), _pose_array(r.pj_contact)
+        su_tool, su_contact = _pose_array(r.suction_tool), _pose_array(r.suction_contact)
         if lens is not None:
             # The covering pinhole sees more than the lens: keep a grasp only when a contact
             # that is visible also projects inside the distorted image.

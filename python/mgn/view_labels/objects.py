@@ -21,6 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.core_result import from_core
 from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.objects import com_keypoints, tote_mesh
@@ -309,10 +310,11 @@ def view_object_labels(
         z,
     )
     n = model.num_objects
-    return ViewObjectLabels(
+    return from_core(
+        ViewObjectLabels,
+        out,
         instance_ids=np.arange(1, n + 1, dtype=np.int32),
         category_ids=model.category_ids,
-        **out,
     )
 
 

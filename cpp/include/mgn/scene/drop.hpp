@@ -109,6 +109,11 @@ struct DropOptions {
   std::uint64_t seed = 0;
 };
 
+/// Checks every DropOptions field against its documented range (the release window only for
+/// min <= max: whether it lies above the cavity depends on the ToteBox and is checked by
+/// drop_objects()). Throws InvalidArgument "DropOptions.<field> must be <range>, got <value>".
+void validate(const DropOptions& options);
+
 /// Why an object is not kept.
 enum class DropStatus {
   Kept = 0,        ///< at rest inside the tote

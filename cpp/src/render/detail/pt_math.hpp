@@ -99,13 +99,15 @@ inline std::uint32_t hash_combine(std::uint32_t seed, std::uint32_t v) {
 }
 
 /// Second Sobol dimension as a 32-bit fraction, by byte tables (generator matrix columns XORed).
+/// The table holds it bit-reversed (`rev`): reverse_bits is linear over XOR, so the reversed
+/// value is the XOR of the reversed columns.
 struct SobolTable {
   std::uint32_t t[4][256];
   SobolTable() {
     std::uint32_t col[32];
     std::uint32_t v = 1u << 31;
     for (int k = 0; k < 32; ++k) {
-      col[k] = v;
+      col[k] = reverse_bits(v);
       v ^= v >> 1;
     }
     for (int byte = 0; byte < 4; ++byte) {
@@ -117,7 +119,8 @@ struct SobolTable {
       }
     }
   }
-  std::uint32_t operator()(std::uint32_t i) const {
+  /// reverse_bits(second Sobol dimension of point i).
+  std::uint32_t rev(std::uint32_t i) const {
     return t[0][i & 255u] ^ t[1][(i >> 8) & 255u] ^ t[2][(i >> 16) & 255u] ^ t[3][i >> 24];
   }
 };
@@ -133,20 +136,25 @@ struct Sample2 {
 };
 
 /// Stream of one pixel: sample `index` of dimension pair `pair` is a point in [0,1)^2.
+///
+/// Point: i = owen_scramble(index, s) (a scrambled sample order), then dimension 0 (the
+/// van der Corput radical inverse, reverse_bits(i)) and dimension 1 (Sobol) of point i, each
+/// Owen-scrambled with its own seed. Written with owen_scramble(x) = rev(lk(rev(x))) and
+/// rev(rev(x)) = x so that only the needed bit reversals are done.
 class PixelSampler {
  public:
   PixelSampler(std::uint32_t pixel_seed, std::uint32_t index)
-      : seed_(pixel_seed), index_(index), table_(&sobol_table()) {}
+      : seed_(pixel_seed), rev_index_(reverse_bits(index)), table_(&sobol_table()) {}
   Sample2 get(std::uint32_t pair) const {
     const std::uint32_t s = hash_combine(seed_, pair);
-    const std::uint32_t i = owen_scramble(index_, s);
-    const std::uint32_t a = owen_scramble(reverse_bits(i), hash32(s ^ 0xa511e9b3u));
-    const std::uint32_t b = owen_scramble((*table_)(i), hash32(s ^ 0x63d83595u));
+    const std::uint32_t i = reverse_bits(lk_permute(rev_index_, s));
+    const std::uint32_t a = reverse_bits(lk_permute(i, hash32(s ^ 0xa511e9b3u)));
+    const std::uint32_t b = reverse_bits(lk_permute(table_->rev(i), hash32(s ^ 0x63d83595u)));
     return {to_unit(a), to_unit(b)};
   }
 
  private:
-  std::uint32_t seed_, index_;
+  std::uint32_t seed_, rev_index_;
   const SobolTable* table_;
 };
 
