@@ -120,23 +120,52 @@ struct ProbePoints {
   };
   std::array<BoxPoints, 3> lists;  // palm, left finger, right finger at the probe's opening
 
-  /// Fills the lists for one accepted probe (reusing their storage). `m` holds the object's
-  /// surface points and triangle spheres in spatial blocks; blocks that cannot reach a box's
-  /// region are skipped whole, the rows of the others pass the same per-row tests.
+  // The probe's geometry, kept for the sphere lists (built on first use by surely_clear: many
+  // probes never need them, every approach being rejected by any_inside first).
+  const AntipodalSampler::Impl* model = nullptr;
+  std::array<HandBox, 3> boxes;
+  std::array<double, 3> r2_min{}, r2_max{}, r_min{}, r_max{};
+  Vec3d c, v, w1, w2, e1, e2;
+  bool spheres_built = false;
+  std::size_t next_point_block = 0;  // point blocks before this one are in the lists
+
+  // Slack of the block tests (m): covers the rounding of the block-level distances, so a
+  // skipped block never holds a row that the per-row tests would keep.
+  static constexpr double kSlack = 1e-6;
+  static constexpr double kEps = 1e-7;  // boxes shrunk by this: inside means strictly inside
+
+  /// Whether a block (every row within `reach` of its centre, reach including the sphere radii)
+  /// may hold a row that reaches a box.
+  bool block_may_reach(const AntipodalSampler::Impl::Block& blk, double reach) const {
+    const Vec3d q = blk.centre - c;
+    const double xq = q.dot(v);
+    const double rho = std::sqrt(std::max(0.0, q.squaredNorm() - xq * xq));
+    for (int k = 0; k < 3; ++k) {
+      const HandBox& b = boxes[k];
+      if (std::abs(xq - b.centre.x()) - reach > b.half.x() + kSlack) continue;
+      if (rho + reach < r_min[k] - kSlack || rho - reach > r_max[k] + kSlack) continue;
+      return true;
+    }
+    return false;
+  }
+
+  /// Fills the point lists for one accepted probe (reusing their storage) and clears the sphere
+  /// lists. `m` holds the object's surface points and triangle spheres in spatial blocks; blocks
+  /// that cannot reach a box's region are skipped whole, the rows of the others pass the same
+  /// per-row tests.
   void build(const AntipodalSampler::Impl& m, const ParallelJawGripper& g,
-             const ParallelJawGrasp& grasp, const Vec3d& e1, const Vec3d& e2, double opening) {
-    constexpr double kEps = 1e-7;  // boxes shrunk by this: inside means strictly inside
-    // Slack of the block tests (m): covers the rounding of the block-level distances, so a
-    // skipped block never holds a row that the per-row tests would keep.
-    constexpr double kSlack = 1e-6;
+             const ParallelJawGrasp& grasp, const Vec3d& e1_in, const Vec3d& e2_in,
+             double opening) {
     const Vec3d& f = g.finger_size;
     const Vec3d& pb = g.palm_size;
     const double depth = g.grasp_depth();
-    const std::array<HandBox, 3> boxes = {
-        HandBox{Vec3d(0, 0, g.flange_to_tip - f.z() - 0.5 * pb.z()), 0.5 * pb},
-        HandBox{Vec3d(-0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f},
-        HandBox{Vec3d(0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f}};
-    std::array<double, 3> r2_min{}, r2_max{}, r_min{}, r_max{};
+    model = &m;
+    spheres_built = false;
+    e1 = e1_in;
+    e2 = e2_in;
+    boxes = {HandBox{Vec3d(0, 0, g.flange_to_tip - f.z() - 0.5 * pb.z()), 0.5 * pb},
+             HandBox{Vec3d(-0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f},
+             HandBox{Vec3d(0.5 * (opening + f.x()), 0, g.flange_to_tip - 0.5 * f.z()), 0.5 * f}};
     for (int k = 0; k < 3; ++k) {
       const HandBox& b = boxes[k];
       BoxPoints& l = lists[k];
@@ -152,25 +181,19 @@ struct ProbePoints {
       r_min[k] = std::sqrt(r2_min[k]);
       r_max[k] = std::sqrt(r2_max[k]);
     }
-    const Vec3d c = grasp.p1 + 0.5 * grasp.width * grasp.closing;
-    const Vec3d& v = grasp.closing;
-    const Vec3d w1 = e1.cross(v), w2 = e2.cross(v);
-    // Whether a block (every row within `reach` of its centre, reach including the sphere radii)
-    // may hold a row that reaches box k.
-    const auto block_may_reach = [&](const AntipodalSampler::Impl::Block& blk, double reach) {
-      const Vec3d q = blk.centre - c;
-      const double xq = q.dot(v);
-      const double rho = std::sqrt(std::max(0.0, q.squaredNorm() - xq * xq));
-      for (int k = 0; k < 3; ++k) {
-        const HandBox& b = boxes[k];
-        if (std::abs(xq - b.centre.x()) - reach > b.half.x() + kSlack) continue;
-        if (rho + reach < r_min[k] - kSlack || rho - reach > r_max[k] + kSlack) continue;
-        return true;
-      }
-      return false;
-    };
+    c = grasp.p1 + 0.5 * grasp.width * grasp.closing;
+    v = grasp.closing;
+    w1 = e1.cross(v), w2 = e2.cross(v);
+    next_point_block = 0;
+  }
+
+  /// Adds the rows of the next point block that may reach a box to the point lists; false when
+  /// every block has been added.
+  bool extend_points() {
+    const AntipodalSampler::Impl& m = *model;
     const Points3d& surface = m.surface_points;
-    for (const auto& blk : m.point_blocks) {
+    while (next_point_block < m.point_blocks.size()) {
+      const auto& blk = m.point_blocks[next_point_block++];
       if (!block_may_reach(blk, blk.radius)) continue;
       for (Eigen::Index i = blk.begin; i < blk.end; ++i) {
         const Vec3d q = surface.row(i).transpose() - c;
@@ -187,7 +210,15 @@ struct ProbePoints {
           l.z1.push_back(q.dot(e2));
         }
       }
+      return true;
     }
+    return false;
+  }
+
+  /// Fills the sphere lists of the probe given to build().
+  void build_spheres() {
+    spheres_built = true;
+    const AntipodalSampler::Impl& m = *model;
     const Points3d& centres = m.tri_centres;
     for (const auto& blk : m.sphere_blocks) {
       if (!block_may_reach(blk, blk.radius + blk.max_sphere)) continue;
@@ -215,8 +246,9 @@ struct ProbePoints {
 
   /// True when no triangle sphere touches a box (with a 1e-6 m margin) for the approach angle t:
   /// then the gripper surface cannot touch the object surface.
-  bool surely_clear(double t) const {
+  bool surely_clear(double t) {
     constexpr double kMargin = 1e-6;
+    if (!spheres_built) build_spheres();
     const double ct = std::cos(t), st = std::sin(t);
     for (const BoxPoints& l : lists) {
       const std::size_t n = l.sr.size();
@@ -232,18 +264,26 @@ struct ProbePoints {
     return true;
   }
 
-  /// Whether an object point lies strictly inside a gripper box for the approach angle t.
-  bool any_inside(double t) const {
+  /// Whether an object point lies strictly inside a gripper box for the approach angle t. The
+  /// point lists are built block by block only as far as needed: a colliding approach usually
+  /// finds an inside point early, and every later call first scans the rows already built. The
+  /// answer ("any row inside") is that of a scan of every row.
+  bool any_inside(double t) {
     const double ct = std::cos(t), st = std::sin(t);
-    for (const BoxPoints& l : lists) {
-      const std::size_t n = l.y0.size();
-      for (std::size_t i = 0; i < n; ++i) {
-        const double z = ct * l.z0[i] + st * l.z1[i];
-        const double y = ct * l.y0[i] + st * l.y1[i];
-        if (z > l.z_lo && z < l.z_hi && std::abs(y) < l.y_half) return true;
+    std::array<std::size_t, 3> from{};
+    while (true) {
+      for (int k = 0; k < 3; ++k) {
+        const BoxPoints& l = lists[k];
+        const std::size_t n = l.y0.size();
+        for (std::size_t i = from[k]; i < n; ++i) {
+          const double z = ct * l.z0[i] + st * l.z1[i];
+          const double y = ct * l.y0[i] + st * l.y1[i];
+          if (z > l.z_lo && z < l.z_hi && std::abs(y) < l.y_half) return true;
+        }
+        from[k] = n;
       }
+      if (!extend_points()) return false;
     }
-    return false;
   }
 };
 

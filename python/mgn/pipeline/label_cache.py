@@ -39,7 +39,7 @@ from mgn.base.atomic import _io_error, atomic_write_bytes
 from mgn.base.deterministic import npz_bytes
 from mgn.errors import IoError
 from mgn.geometry.convex import cache_dir
-from mgn.geometry.mesh import mass_properties
+from mgn.geometry.mesh import SurfaceSamples, mass_properties, sample_surface
 from mgn.io.grasp_file import write_pj_labels, write_suction_labels
 from mgn.io.model_folder import write_model_folder, write_tote
 from mgn.objects import ObjectSpec
@@ -143,6 +143,10 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
     mesh = spec.to_mesh()
     props = mass_properties(mesh, spec.density)
     ol = config.object_labels
+    # The even surface samples are drawn once when both kinds use the same count (same seed).
+    shared: SurfaceSamples | None = None
+    if config.labels.suction and config.labels.paralleljaw and ol.suction_points == ol.pj_points:
+        shared = sample_surface(mesh, ol.suction_points, method="even", seed=ol.seed)
     suction = None
     if config.labels.suction:
         suction = suction_label_object(
@@ -154,6 +158,7 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
             num_points=ol.suction_points,
             seed=ol.seed,
             num_threads=num_threads,
+            samples=shared,
         )
     pj = None
     report = mesh.validate()
@@ -182,6 +187,7 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
             seed=ol.seed,
             num_threads=num_threads,
             physics=physics,
+            samples=shared,
         )
     return ObjectLabels(spec.name, spec.category_id, suction, pj)
 

@@ -21,7 +21,7 @@ from tqdm import tqdm
 from mgn import _core
 from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError
-from mgn.geometry.mesh import Mesh, sample_surface
+from mgn.geometry.mesh import Mesh, SurfaceSamples, sample_surface
 from mgn.hardware import ParallelJawGripper
 from mgn.pj.sampler import AntipodalSampler, pj_wrench_scores
 
@@ -90,6 +90,7 @@ def label_object(
     grip_force: float = 70.0,
     contact_radius: float = 0.005,
     sampler_options: dict | None = None,
+    samples: SurfaceSamples | None = None,
 ) -> PjLabels:
     """Parallel-jaw labels of one object: see the module docstring. Deterministic for ``seed``.
 
@@ -106,6 +107,10 @@ def label_object(
         friction, grip_force, contact_radius: wrench-score constants (see pj_wrench_scores).
         sampler_options: extra keyword arguments of :meth:`AntipodalSampler.sample`
             (probes, tilt, offset, friction_coef, approaches_tried, approaches_kept, ...).
+        samples: the contact points, if already drawn: they must be
+            ``sample_surface(mesh, num_points, method="even", seed=seed)`` of the given mesh
+            (e.g. shared with :func:`mgn.suction.label_object`); None draws them here. They are
+            ignored (drawn again) when the mesh is used with its winding reversed.
 
     Raises:
         InvalidArgumentError: non-positive mass or num_points, a mesh with no closed volume, an
@@ -129,14 +134,21 @@ def label_object(
             raise InvalidArgumentError(
                 f"label_object: pass {reserved} as an argument, not in sampler_options"
             )
+    if samples is not None and len(samples.points) != num_points:
+        raise InvalidArgumentError(
+            f"label_object: samples holds {len(samples.points)} points, expected num_points = "
+            f"{num_points}"
+        )
     report = mesh.validate()
     if report.is_watertight and report.is_winding_consistent and report.signed_volume < 0:
         # Inward-wound closed mesh (e.g. a mirrored STL export): the surface normals would point
         # into the object and every probe would fail. Same geometry, outward winding (as the
         # user-object path does); the labels are in the same object frame.
         mesh = mesh.flipped()
+        samples = None  # the flipped mesh draws different points and normals
     sampler = AntipodalSampler(mesh, gripper)
-    samples = sample_surface(mesh, num_points, method="even", seed=seed)
+    if samples is None:
+        samples = sample_surface(mesh, num_points, method="even", seed=seed)
     points = np.asarray(samples.points, np.float64)
     normals = np.asarray(samples.normals, np.float64)
 

@@ -14,8 +14,9 @@ import numpy.typing as npt
 from tqdm import tqdm
 
 from mgn import _core
+from mgn.errors import InvalidArgumentError
 from mgn.geometry.collision import CollisionModel, collide
-from mgn.geometry.mesh import Mesh, make_cylinder, sample_surface
+from mgn.geometry.mesh import Mesh, SurfaceSamples, make_cylinder, sample_surface
 from mgn.hardware import SuctionCup
 from mgn.suction.seal import SealModel, SealModelName, suction_wrench_scores
 
@@ -82,6 +83,7 @@ def label_object(
     num_threads: int = 0,
     progress: bool = False,
     chunk: int = 250,
+    samples: SurfaceSamples | None = None,
 ) -> SuctionLabels:
     """Suction labels of one object: see the module docstring. Deterministic for ``seed``.
 
@@ -92,10 +94,19 @@ def label_object(
         model: seal model name.
         num_points: candidates sampled evenly on the surface.
         progress: show a tqdm progress bar.
+        samples: the candidates, if already drawn: they must be
+            ``sample_surface(mesh, num_points, method="even", seed=seed)`` (e.g. shared with
+            :func:`mgn.pj.label_object`); None draws them here.
     """
 
     cup = cup if cup is not None else SuctionCup()
-    samples = sample_surface(mesh, num_points, method="even", seed=seed)
+    if samples is None:
+        samples = sample_surface(mesh, num_points, method="even", seed=seed)
+    elif len(samples.points) != num_points:
+        raise InvalidArgumentError(
+            f"suction label_object: samples holds {len(samples.points)} points, expected "
+            f"num_points = {num_points}"
+        )
     points, normals = samples.points, samples.normals
     body = CollisionModel(make_cylinder(cup.outer_radius, cup.body_height - CUP_BODY_CLEARANCE, 32))
     obj = CollisionModel(mesh)
