@@ -39,6 +39,28 @@ PhysicsObject object_from(std::vector<Mesh> parts, double mass, const Vec3d& com
   return o;
 }
 
+/// ShakeResult as numpy arrays (moved, no copies); per-trial arrays shaped (G, S, S).
+struct ShakeArrays {
+  py::array score, trial_success, trial_ended_early, trial_steps, frictions, density_factors,
+      trial_simulated, fallback;
+  long long total_steps = 0;
+};
+
+/// StaircaseGrid as numpy arrays shaped (S, S).
+struct StaircaseArrays {
+  py::array success, simulated;
+  bool fallback = false;
+  int trials = 0;
+};
+
+/// ShakeTrajectory as numpy arrays, one row per recorded step.
+struct TrajectoryArrays {
+  py::array time, phase, X_WO, X_WH, finger_left, finger_right, contact_left, contact_right;
+  bool success = false, ended_early = false;
+  int steps = 0;
+  double friction = 0.0, density_factor = 0.0;
+};
+
 }  // namespace
 
 void bind_grasp_shake_test(py::module_& m) {
@@ -82,6 +104,48 @@ void bind_grasp_shake_test(py::module_& m) {
       .def("frictions", &ShakeOptions::frictions)
       .def("density_factors", &ShakeOptions::density_factors);
 
+  py::class_<ShakeArrays>(m, "ShakeResult",
+                          "shake_test() result (mgn/grasp/shake_test.hpp): G grasps on an S x S "
+                          "friction x density grid.")
+      .def_readonly("score", &ShakeArrays::score, "(G,) float64 success fraction over the grid")
+      .def_readonly("trial_success", &ShakeArrays::trial_success,
+                    "(G, S, S) bool [grasp][friction i][density j]")
+      .def_readonly("trial_ended_early", &ShakeArrays::trial_ended_early, "(G, S, S) bool")
+      .def_readonly("trial_steps", &ShakeArrays::trial_steps, "(G, S, S) int steps simulated")
+      .def_readonly("frictions", &ShakeArrays::frictions, "(S,) friction coefficients")
+      .def_readonly("density_factors", &ShakeArrays::density_factors, "(S,) density factors")
+      .def_readonly("trial_simulated", &ShakeArrays::trial_simulated,
+                    "(G, S, S) bool: simulated (else inferred by the staircase search)")
+      .def_readonly("fallback", &ShakeArrays::fallback,
+                    "(G,) bool: a staircase check failed and the full grid was simulated")
+      .def_readonly("total_steps", &ShakeArrays::total_steps, "simulation steps of all trials");
+
+  py::class_<StaircaseArrays>(m, "StaircaseGridResult",
+                              "staircase_grid() result: success and simulated (S, S) bool "
+                              "[friction i][density j], fallback, trials.")
+      .def_readonly("success", &StaircaseArrays::success, "(S, S) bool")
+      .def_readonly("simulated", &StaircaseArrays::simulated, "(S, S) bool: trial() was called")
+      .def_readonly("fallback", &StaircaseArrays::fallback,
+                    "a check contradicted its inference: every cell was simulated")
+      .def_readonly("trials", &StaircaseArrays::trials, "calls of trial()");
+
+  py::class_<TrajectoryArrays>(m, "ShakeTrajectoryResult",
+                               "shake_trajectory() result, one row per recorded step (world W: "
+                               "z up; poses (K, 4, 4) m).")
+      .def_readonly("time", &TrajectoryArrays::time, "(K,) s since the start")
+      .def_readonly("phase", &TrajectoryArrays::phase, "(K,) int8 ShakePhase")
+      .def_readonly("X_WO", &TrajectoryArrays::X_WO, "(K, 4, 4) object pose")
+      .def_readonly("X_WH", &TrajectoryArrays::X_WH, "(K, 4, 4) hand pose")
+      .def_readonly("finger_left", &TrajectoryArrays::finger_left, "(K,) finger opening, m")
+      .def_readonly("finger_right", &TrajectoryArrays::finger_right, "(K,) finger opening, m")
+      .def_readonly("contact_left", &TrajectoryArrays::contact_left, "(K,) bool")
+      .def_readonly("contact_right", &TrajectoryArrays::contact_right, "(K,) bool")
+      .def_readonly("success", &TrajectoryArrays::success)
+      .def_readonly("ended_early", &TrajectoryArrays::ended_early)
+      .def_readonly("steps", &TrajectoryArrays::steps)
+      .def_readonly("friction", &TrajectoryArrays::friction)
+      .def_readonly("density_factor", &TrajectoryArrays::density_factor);
+
   m.def(
       "shake_test",
       [](std::vector<Mesh> parts, double mass, const Vec3d& com, const Mat3d& inertia,
@@ -95,40 +159,37 @@ void bind_grasp_shake_test(py::module_& m) {
         }
         const auto G = static_cast<py::ssize_t>(r.score.size());
         const py::ssize_t S = r.grid;
-        py::dict out;
-        out["score"] = to_numpy(std::move(r.score));
-        out["trial_success"] = to_bool_numpy(std::move(r.trial_success)).attr("reshape")(G, S, S);
-        out["trial_ended_early"] =
+        ShakeArrays out;
+        out.score = to_numpy(std::move(r.score));
+        out.trial_success = to_bool_numpy(std::move(r.trial_success)).attr("reshape")(G, S, S);
+        out.trial_ended_early =
             to_bool_numpy(std::move(r.trial_ended_early)).attr("reshape")(G, S, S);
-        out["trial_steps"] = to_numpy(std::move(r.trial_steps)).attr("reshape")(G, S, S);
-        out["frictions"] = to_numpy(std::move(r.frictions));
-        out["density_factors"] = to_numpy(std::move(r.density_factors));
-        out["total_steps"] = r.total_steps;
-        out["trial_simulated"] =
-            to_bool_numpy(std::move(r.trial_simulated)).attr("reshape")(G, S, S);
-        out["fallback"] = to_bool_numpy(std::move(r.fallback));
+        out.trial_steps = to_numpy(std::move(r.trial_steps)).attr("reshape")(G, S, S);
+        out.frictions = to_numpy(std::move(r.frictions));
+        out.density_factors = to_numpy(std::move(r.density_factors));
+        out.total_steps = static_cast<long long>(r.total_steps);
+        out.trial_simulated = to_bool_numpy(std::move(r.trial_simulated)).attr("reshape")(G, S, S);
+        out.fallback = to_bool_numpy(std::move(r.fallback));
         return out;
       },
       py::arg("parts"), py::arg("mass"), py::arg("com"), py::arg("inertia"), py::arg("grasps"),
       py::arg("gripper"), py::arg("options"),
-      "Shake test of (N, 10) grasps [a, v, p1, w] (m); dict of numpy arrays (GIL released).");
+      "Shake test of (N, 10) grasps [a, v, p1, w] (m); a ShakeResult (GIL released).");
 
   m.def(
       "staircase_grid",
       [](int S, const std::function<bool(int, int)>& trial, int checks) {
         const StaircaseGrid g = staircase_grid(S, trial, checks);
-        py::dict out;
-        out["success"] = to_bool_numpy(std::vector<std::uint8_t>(g.success)).attr("reshape")(S, S);
-        out["simulated"] =
-            to_bool_numpy(std::vector<std::uint8_t>(g.simulated)).attr("reshape")(S, S);
-        out["fallback"] = g.fallback;
-        out["trials"] = g.trials;
+        StaircaseArrays out;
+        out.success = to_bool_numpy(std::vector<std::uint8_t>(g.success)).attr("reshape")(S, S);
+        out.simulated = to_bool_numpy(std::vector<std::uint8_t>(g.simulated)).attr("reshape")(S, S);
+        out.fallback = g.fallback;
+        out.trials = g.trials;
         return out;
       },
       py::arg("S"), py::arg("trial"), py::arg("checks"),
       "The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for "
-      "the cells it simulates (friction index i, density index j); dict success (S, S), "
-      "simulated (S, S), fallback, trials.");
+      "the cells it simulates (friction index i, density index j); a StaircaseGridResult.");
 
   m.def(
       "shake_trajectory",
@@ -149,20 +210,20 @@ void bind_grasp_shake_test(py::module_& m) {
           t = shake_trajectory(object, grip, g[0], friction, density_factor, options, record_every,
                                trial_index);
         }
-        py::dict out;
-        out["time"] = to_numpy(std::move(t.time));
-        out["phase"] = to_numpy(std::move(t.phase));
-        out["X_WO"] = poses_to_numpy(t.X_WO);
-        out["X_WH"] = poses_to_numpy(t.X_WH);
-        out["finger_left"] = to_numpy(std::move(t.finger_left));
-        out["finger_right"] = to_numpy(std::move(t.finger_right));
-        out["contact_left"] = to_bool_numpy(std::move(t.contact_left));
-        out["contact_right"] = to_bool_numpy(std::move(t.contact_right));
-        out["success"] = t.success;
-        out["ended_early"] = t.ended_early;
-        out["steps"] = t.steps;
-        out["friction"] = t.friction;
-        out["density_factor"] = t.density_factor;
+        TrajectoryArrays out;
+        out.time = to_numpy(std::move(t.time));
+        out.phase = to_numpy(std::move(t.phase));
+        out.X_WO = poses_to_numpy(t.X_WO);
+        out.X_WH = poses_to_numpy(t.X_WH);
+        out.finger_left = to_numpy(std::move(t.finger_left));
+        out.finger_right = to_numpy(std::move(t.finger_right));
+        out.contact_left = to_bool_numpy(std::move(t.contact_left));
+        out.contact_right = to_bool_numpy(std::move(t.contact_right));
+        out.success = t.success;
+        out.ended_early = t.ended_early;
+        out.steps = t.steps;
+        out.friction = t.friction;
+        out.density_factor = t.density_factor;
         return out;
       },
       py::arg("parts"), py::arg("mass"), py::arg("com"), py::arg("inertia"), py::arg("grasp"),

@@ -59,6 +59,9 @@ __all__: list[str] = [
     "SealResult",
     "SealTrial",
     "ShakeOptions",
+    "ShakeResult",
+    "ShakeTrajectoryResult",
+    "StaircaseGridResult",
     "SurfaceSamples",
     "ToolCollisionArrays",
     "UnsupportedError",
@@ -1426,6 +1429,136 @@ class ShakeOptions:
     @staircase_checks.setter
     def staircase_checks(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
 
+class ShakeResult:
+    """
+    shake_test() result (mgn/grasp/shake_test.hpp): G grasps on an S x S friction x density grid.
+    """
+    @property
+    def density_factors(self) -> numpy.ndarray:
+        """
+        (S,) density factors
+        """
+    @property
+    def fallback(self) -> numpy.ndarray:
+        """
+        (G,) bool: a staircase check failed and the full grid was simulated
+        """
+    @property
+    def frictions(self) -> numpy.ndarray:
+        """
+        (S,) friction coefficients
+        """
+    @property
+    def score(self) -> numpy.ndarray:
+        """
+        (G,) float64 success fraction over the grid
+        """
+    @property
+    def total_steps(self) -> int:
+        """
+        simulation steps of all trials
+        """
+    @property
+    def trial_ended_early(self) -> numpy.ndarray:
+        """
+        (G, S, S) bool
+        """
+    @property
+    def trial_simulated(self) -> numpy.ndarray:
+        """
+        (G, S, S) bool: simulated (else inferred by the staircase search)
+        """
+    @property
+    def trial_steps(self) -> numpy.ndarray:
+        """
+        (G, S, S) int steps simulated
+        """
+    @property
+    def trial_success(self) -> numpy.ndarray:
+        """
+        (G, S, S) bool [grasp][friction i][density j]
+        """
+
+class StaircaseGridResult:
+    """
+    staircase_grid() result: success and simulated (S, S) bool [friction i][density j], fallback, trials.
+    """
+    @property
+    def fallback(self) -> bool:
+        """
+        a check contradicted its inference: every cell was simulated
+        """
+    @property
+    def simulated(self) -> numpy.ndarray:
+        """
+        (S, S) bool: trial() was called
+        """
+    @property
+    def success(self) -> numpy.ndarray:
+        """
+        (S, S) bool
+        """
+    @property
+    def trials(self) -> int:
+        """
+        calls of trial()
+        """
+
+class ShakeTrajectoryResult:
+    """
+    shake_trajectory() result, one row per recorded step (world W: z up; poses (K, 4, 4) m).
+    """
+    @property
+    def X_WH(self) -> numpy.ndarray:
+        """
+        (K, 4, 4) hand pose
+        """
+    @property
+    def X_WO(self) -> numpy.ndarray:
+        """
+        (K, 4, 4) object pose
+        """
+    @property
+    def contact_left(self) -> numpy.ndarray:
+        """
+        (K,) bool
+        """
+    @property
+    def contact_right(self) -> numpy.ndarray:
+        """
+        (K,) bool
+        """
+    @property
+    def density_factor(self) -> float: ...
+    @property
+    def ended_early(self) -> bool: ...
+    @property
+    def finger_left(self) -> numpy.ndarray:
+        """
+        (K,) finger opening, m
+        """
+    @property
+    def finger_right(self) -> numpy.ndarray:
+        """
+        (K,) finger opening, m
+        """
+    @property
+    def friction(self) -> float: ...
+    @property
+    def phase(self) -> numpy.ndarray:
+        """
+        (K,) int8 ShakePhase
+        """
+    @property
+    def steps(self) -> int: ...
+    @property
+    def success(self) -> bool: ...
+    @property
+    def time(self) -> numpy.ndarray:
+        """
+        (K,) s since the start
+        """
+
 class LayoutArrays:
     """
     compute_layout() result (mgn/scene/layout.hpp): 0-based object indices; rel_* are the relations sorted by (child, parent).
@@ -2128,9 +2261,9 @@ def shake_test(
     grasps: typing.Any,
     gripper: ParallelJawGripper,
     options: ShakeOptions,
-) -> dict:
+) -> ShakeResult:
     """
-    Shake test of (N, 10) grasps [a, v, p1, w] (m); dict of numpy arrays (GIL released).
+    Shake test of (N, 10) grasps [a, v, p1, w] (m); a ShakeResult (GIL released).
     """
 
 def shake_trajectory(
@@ -2145,7 +2278,7 @@ def shake_trajectory(
     options: ShakeOptions,
     record_every: typing.SupportsInt | typing.SupportsIndex = 5,
     trial_index: typing.SupportsInt | typing.SupportsIndex = 0,
-) -> dict:
+) -> ShakeTrajectoryResult:
     """
     One recorded shake trial (poses in the world W: z up, gravity -z).
     """
@@ -2154,9 +2287,9 @@ def staircase_grid(
     S: typing.SupportsInt | typing.SupportsIndex,
     trial: collections.abc.Callable[[int, int], bool],
     checks: typing.SupportsInt | typing.SupportsIndex,
-) -> dict:
+) -> StaircaseGridResult:
     """
-    The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for the cells it simulates (friction index i, density index j); dict success (S, S), simulated (S, S), fallback, trials.
+    The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for the cells it simulates (friction index i, density index j); a StaircaseGridResult.
     """
 
 def suction_wrench_scores(

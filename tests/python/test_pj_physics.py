@@ -154,12 +154,12 @@ def test_staircase_grid_binding_against_brute_force():
             return bool(truth[i, j])
 
         r = mgn._core.staircase_grid(S, trial, S * S)
-        np.testing.assert_array_equal(r["success"], truth)
-        assert len(calls) == len(set(calls)) == r["trials"] == int(r["simulated"].sum())
-        assert all(r["simulated"][i, j] for i, j in calls)
+        np.testing.assert_array_equal(r.success, truth)
+        assert len(calls) == len(set(calls)) == r.trials == int(r.simulated.sum())
+        assert all(r.simulated[i, j] for i, j in calls)
         mono = (np.arange(S)[None, :] < b[:, None]) == truth
         if mono.all():  # monotone: no fallback
-            assert not r["fallback"]
+            assert not r.fallback
 
 
 def test_shake_scorer_scores_every_grasp_unless_capped_and_records_it():

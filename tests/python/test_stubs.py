@@ -128,8 +128,6 @@ def test_the_signature_check_finds_a_renamed_parameter():
 DICT_RETURNS = {
     "ClassificationMetrics.to_dict": "the JSON form of a bound result class",
     "PathScene.render": "the path tracer's binding, owned by its own work item",
-    "shake_test": "the physics shake test's binding, owned by its own work item",
-    "shake_trajectory": "the physics shake test's binding, owned by its own work item",
 }
 
 

@@ -25,6 +25,7 @@ import numpy.typing as npt
 from tqdm import tqdm
 
 from mgn import _core
+from mgn.base.core_result import from_core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.convex import cached_convex_decomposition
 from mgn.geometry.mesh import mass_properties
@@ -262,17 +263,7 @@ def shake_scores(
     g = _gripper(gripper)
     o = (options if options is not None else ShakeOptions()).to_core()
     r = _core.shake_test(_parts(mesh_or_parts), m, c, inertia_arr, rows, g, o)
-    return ShakeScores(
-        score=r["score"],
-        trial_success=r["trial_success"],
-        trial_ended_early=r["trial_ended_early"],
-        trial_steps=r["trial_steps"],
-        frictions=r["frictions"],
-        density_factors=r["density_factors"],
-        total_steps=int(r["total_steps"]),
-        trial_simulated=r["trial_simulated"],
-        fallback=r["fallback"],
-    )
+    return from_core(ShakeScores, r, total_steps=int(r.total_steps))
 
 
 def shake_trajectory(
@@ -314,7 +305,7 @@ def shake_trajectory(
         int(record_every),
         int(trial_index),
     )
-    return ShakeTrajectory(**t)
+    return from_core(ShakeTrajectory, t)
 
 
 @dataclass
