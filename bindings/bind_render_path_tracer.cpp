@@ -16,11 +16,17 @@ namespace mgn::py_bind {
 namespace {
 
 template <typename T>
-py::object image(std::vector<T>&& v, int h, int w, int c = 1) {
+py::array image(std::vector<T>&& v, int h, int w, int c = 1) {
   py::array flat = to_numpy(std::move(v));
-  if (c == 1) return flat.attr("reshape")(h, w);
-  return flat.attr("reshape")(h, w, c);
+  if (c == 1) return py::array(flat.attr("reshape")(h, w));
+  return py::array(flat.attr("reshape")(h, w, c));
 }
+
+/// PathTraceResult as numpy arrays (moved, no copies), top row first.
+struct PathImages {
+  py::array radiance, albedo, normal, depth, instance_ids;
+  long long rays = 0;
+};
 
 }  // namespace
 
@@ -166,6 +172,16 @@ void bind_render_path_tracer(py::module_& m) {
       .def_readwrite("num_threads", &FilmOptions::num_threads)
       .def("validate", &FilmOptions::validate);
 
+  py::class_<PathImages>(m, "PathTraceResult",
+                         "PathScene.render() result (mgn/render/path_tracer.hpp), top row first.")
+      .def_readonly("radiance", &PathImages::radiance, "(H, W, 3) float32 linear RGB, sample mean")
+      .def_readonly("albedo", &PathImages::albedo, "(H, W, 3) float32 first-hit base colour")
+      .def_readonly("normal", &PathImages::normal,
+                    "(H, W, 3) float32 first-hit shading normal, world frame")
+      .def_readonly("depth", &PathImages::depth, "(H, W) float32 z-depth in m, 0 = no hit")
+      .def_readonly("instance_ids", &PathImages::instance_ids, "(H, W) int32, 0 = background")
+      .def_readonly("rays", &PathImages::rays, "rays cast (camera, bounce and shadow)");
+
   py::class_<PathScene>(m, "PathScene", "Immutable path-traced scene (Embree geometry + lights).")
       .def(py::init([](const std::vector<const Mesh*>& meshes, const py::handle& poses,
                        const std::vector<std::int32_t>& instance_ids,
@@ -212,13 +228,13 @@ void bind_render_path_tracer(py::module_& m) {
               out = s.render(view, options);
             }
             const int h = out.height, w = out.width;
-            py::dict d;
-            d["radiance"] = image(std::move(out.radiance), h, w, 3);
-            d["albedo"] = image(std::move(out.albedo), h, w, 3);
-            d["normal"] = image(std::move(out.normal), h, w, 3);
-            d["depth"] = image(std::move(out.depth), h, w);
-            d["instance_ids"] = image(std::move(out.instance_ids), h, w);
-            d["rays"] = out.rays;
+            PathImages d;
+            d.radiance = image(std::move(out.radiance), h, w, 3);
+            d.albedo = image(std::move(out.albedo), h, w, 3);
+            d.normal = image(std::move(out.normal), h, w, 3);
+            d.depth = image(std::move(out.depth), h, w);
+            d.instance_ids = image(std::move(out.instance_ids), h, w);
+            d.rays = static_cast<long long>(out.rays);
             return d;
           },
           py::arg("K"), py::arg("X_WC"), py::arg("options"));

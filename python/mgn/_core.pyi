@@ -42,6 +42,7 @@ __all__: list[str] = [
     "ParallelJawGripper",
     "PathScene",
     "PathTraceOptions",
+    "PathTraceResult",
     "PbrMaterial",
     "PlacedGraspArrays",
     "RayAllHits",
@@ -1839,6 +1840,41 @@ class FilmOptions:
     @view_index.setter
     def view_index(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
 
+class PathTraceResult:
+    """
+    PathScene.render() result (mgn/render/path_tracer.hpp), top row first.
+    """
+    @property
+    def albedo(self) -> numpy.ndarray:
+        """
+        (H, W, 3) float32 first-hit base colour
+        """
+    @property
+    def depth(self) -> numpy.ndarray:
+        """
+        (H, W) float32 z-depth in m, 0 = no hit
+        """
+    @property
+    def instance_ids(self) -> numpy.ndarray:
+        """
+        (H, W) int32, 0 = background
+        """
+    @property
+    def normal(self) -> numpy.ndarray:
+        """
+        (H, W, 3) float32 first-hit shading normal, world frame
+        """
+    @property
+    def radiance(self) -> numpy.ndarray:
+        """
+        (H, W, 3) float32 linear RGB, sample mean
+        """
+    @property
+    def rays(self) -> int:
+        """
+        rays cast (camera, bounce and shadow)
+        """
+
 class PathScene:
     """
     Immutable path-traced scene (Embree geometry + lights).
@@ -1852,7 +1888,9 @@ class PathScene:
         lights: collections.abc.Sequence[AreaLight],
         environment: Environment,
     ) -> None: ...
-    def render(self, K: Intrinsics, X_WC: typing.Any, options: PathTraceOptions) -> dict: ...
+    def render(
+        self, K: Intrinsics, X_WC: typing.Any, options: PathTraceOptions
+    ) -> PathTraceResult: ...
     def with_lighting(
         self, lights: collections.abc.Sequence[AreaLight], environment: Environment
     ) -> PathScene: ...
@@ -2133,7 +2171,7 @@ def compute_mass_properties(
 ) -> MassProperties: ...
 def convex_decomposition(mesh: Mesh, options: ConvexDecompositionOptions = ...) -> list[Mesh]: ...
 def convex_hull(mesh: Mesh) -> Mesh: ...
-def develop_radiance(radiance: typing.Any, film: FilmOptions) -> typing.Any: ...
+def develop_radiance(radiance: typing.Any, film: FilmOptions) -> numpy.ndarray: ...
 def distance(
     a: CollisionModel,
     X_WA: typing.Any,

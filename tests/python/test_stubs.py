@@ -127,7 +127,6 @@ def test_the_signature_check_finds_a_renamed_parameter():
 #: other function returns a bound class (docs/architecture.md, "The typed boundary").
 DICT_RETURNS = {
     "ClassificationMetrics.to_dict": "the JSON form of a bound result class",
-    "PathScene.render": "the path tracer's binding, owned by its own work item",
 }
 
 

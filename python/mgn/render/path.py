@@ -32,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.core_result import from_core
 from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry import Material, Mesh
 from mgn.scene.cameras import CameraView
@@ -445,14 +446,7 @@ class PathScene:
                 "through the lens) or trace lens_for(K).render_K (mgn.scene.lens)"
             )
         d = self._scene.render(view.K.to_core(), view.X_WC, opts.to_core())
-        return PathTraceOutput(
-            radiance=d["radiance"],
-            albedo=d["albedo"],
-            normal=d["normal"],
-            depth=d["depth"],
-            instance_ids=d["instance_ids"],
-            rays=int(d["rays"]),
-        )
+        return from_core(PathTraceOutput, d, rays=int(d.rays))
 
 
 def _as_material(m: object, i: int, k: int) -> PbrMaterial:
