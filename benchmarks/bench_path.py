@@ -160,6 +160,7 @@ def child_main(argv: list[str]) -> int:
     p.add_argument("--ref-spp", type=int, required=True)
     p.add_argument("--repeats", type=int, default=1)
     p.add_argument("--denoise", action="store_true", help="also the denoised variants")
+    p.add_argument("--denoised-only", action="store_true", help="only the denoised variants")
     p.add_argument("--out", required=True)
     a = p.parse_args(argv)
     with open(a.desc, "rb") as f:
@@ -182,11 +183,11 @@ def child_main(argv: list[str]) -> int:
             print(json.dumps(result))
             return 0
         render = eng["render"]
-        render(1, False, 99)  # warm-up (JIT, BVH, denoiser weights)
-        if a.denoise:
-            render(1, True, 99)
+        variants = (True,) if a.denoised_only else (False, True) if a.denoise else (False,)
+        for denoise in variants:  # warm-up (JIT, BVH, denoiser weights)
+            render(1, denoise, 99)
         for spp in spps:
-            for denoise in (False, True) if a.denoise else (False,):
+            for denoise in variants:
                 wall, cpu, loads = [], [], []
                 for _ in range(a.repeats):
                     loads.append(load1())
@@ -237,6 +238,7 @@ def run_child(
     repeats: int,
     out: Path,
     log: Callable[[str], None],
+    denoised_only: bool = False,
 ) -> tuple[dict | None, str]:
     cmd = [_python_for(engine), "-m", "benchmarks.bench_path", "--engine", engine]
     cmd += ["--desc", str(desc_path), "--scene", str(scene_json), "--out", str(out)]
@@ -244,6 +246,8 @@ def run_child(
     cmd += ["--repeats", str(repeats)]
     if engine in ("mgn", "cycles"):
         cmd.append("--denoise")
+    if denoised_only:
+        cmd.append("--denoised-only")
     proc = subprocess.Popen(
         cmd, cwd=HERE.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
@@ -768,4 +772,8 @@ def splice_results(results_md: Path, section: str) -> None:
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--report"]:
         sys.exit(report_main(Path(sys.argv[2])))
+    if sys.argv[1:2] == ["--study"]:
+        from . import bench_path_crop
+
+        sys.exit(bench_path_crop.main(sys.argv[2:]))
     sys.exit(child_main(sys.argv[1:]))

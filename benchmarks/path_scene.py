@@ -314,6 +314,23 @@ def describe(
     return SceneDesc(tuple(items), tuple(lights), env, cam)
 
 
+def crop(desc: SceneDesc, x0: int, y0: int, width: int, height: int) -> SceneDesc:
+    """The same scene seen through a window of its camera: pixels [x0, x0 + width) x
+    [y0, y0 + height) of the full image, as a camera with the same focal lengths, the principal
+    point moved by (-x0, -y0) and the window's size (pixel (u, v) of the crop is pixel
+    (x0 + u, y0 + v) of the full image, the same rays)."""
+    c = desc.camera
+    if not (0 <= x0 and 0 <= y0 and 0 < width and 0 < height):
+        raise ValueError(f"crop window ({x0}, {y0}, {width}, {height}) must be non-negative")
+    if x0 + width > c.width or y0 + height > c.height:
+        raise ValueError(
+            f"crop window ({x0}, {y0}, {width}, {height}) must lie inside the "
+            f"{c.width}x{c.height} image"
+        )
+    cam = dataclasses.replace(c, width=width, height=height, cx=c.cx - x0, cy=c.cy - y0)
+    return dataclasses.replace(desc, camera=cam)
+
+
 CREASE_COS = math.cos(math.radians(45.0))
 
 

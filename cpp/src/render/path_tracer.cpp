@@ -896,6 +896,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
       mix64(options.seed ^ mix64(options.view_index + 0x5851F42D4C957F2DULL));
   const float clamp = static_cast<float>(options.clamp);
   const float inv_spp = 1.0f / static_cast<float>(options.spp);
+  const int spp_log2 = pt::ceil_log2(static_cast<std::uint32_t>(options.spp));
 
   auto worker = [&](std::size_t, std::size_t) {
     detail::FtzDazGuard guard;
@@ -951,19 +952,19 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
         // coherent packet; each path then continues on its own. Per pixel the samples are
         // summed in the order k = 0, 1, ... as before.
         const int u0 = tx * kTile, m = u1 - u0;
-        std::uint32_t pixel_seed[kTile];
+        pt::PixelStream pixel_stream[kTile];
         F3 sum[kTile], alb[kTile], nrm[kTile];
         F3 org[kTile], dir[kTile];
         for (int l = 0; l < m; ++l) {
-          const std::size_t pix = static_cast<std::size_t>(v) * W + u0 + l;
-          pixel_seed[l] =
-              static_cast<std::uint32_t>(mix64(stream ^ static_cast<std::uint64_t>(pix)));
+          pixel_stream[l] = pt::pixel_stream(stream, static_cast<std::uint32_t>(u0 + l),
+                                             static_cast<std::uint32_t>(v), spp_log2);
           sum[l] = alb[l] = nrm[l] = F3(0.0f);
         }
         for (int k = 0; k < options.spp; ++k) {
           for (int l = 0; l < kTile; ++l) {
             const int ll = std::min(l, m - 1);
-            const pt::PixelSampler s(pixel_seed[ll], static_cast<std::uint32_t>(k));
+            const pt::PixelSampler s(pixel_stream[ll].seed,
+                                     pixel_stream[ll].base | static_cast<std::uint32_t>(k));
             const pt::Sample2 j = s.get(0);
             F3 dc(((u0 + ll + j.x) - cam.cx) / cam.fx, ((v + j.y) - cam.cy) / cam.fy, 1.0f);
             F3 o = cam.o;
@@ -1002,7 +1003,8 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
             first.hit.primID = rh16.hit.primID[l];
             first.hit.u = rh16.hit.u[l];
             first.hit.v = rh16.hit.v[l];
-            const pt::PixelSampler s(pixel_seed[l], static_cast<std::uint32_t>(k));
+            const pt::PixelSampler s(pixel_stream[l].seed,
+                                     pixel_stream[l].base | static_cast<std::uint32_t>(k));
             F3 a, n;
             F3 c = it.trace(org[l], dir[l], s, a, n, &first);
             if (!all_finite(c)) c = F3(0.0f);

@@ -158,6 +158,51 @@ class PixelSampler {
   const SobolTable* table_;
 };
 
+/// Bits per axis of the 2-D Morton (Z-order) index of (x, y) < 2^bits (bit k of x goes to bit 2k,
+/// of y to bit 2k + 1).
+inline std::uint32_t morton2(std::uint32_t x, std::uint32_t y, int bits) {
+  std::uint32_t m = 0;
+  for (int k = 0; k < bits; ++k)
+    m |= (((x >> k) & 1u) << (2 * k)) | (((y >> k) & 1u) << (2 * k + 1));
+  return m;
+}
+
+/// ceil(log2(n)) for n >= 1.
+inline int ceil_log2(std::uint32_t n) {
+  int l = 0;
+  while (l < 32 && (std::uint64_t{1} << l) < n) ++l;
+  return l;
+}
+
+/// Where the samples of one pixel sit in the image-wide sample sequence: sample k of pixel
+/// (u, v) is PixelSampler(seed, base | k).
+///
+/// The image is cut into blocks of 2^b x 2^b pixels (b <= 6, fewer when spp needs the bits);
+/// each block has one seed (from `stream` and the block), and inside it the pixels take
+/// consecutive ranges of 2^ceil(log2(spp)) indices in Morton order. PixelSampler scrambles the
+/// index with a nested uniform permutation per dimension pair, which maps every aligned range
+/// of indices to an aligned range: the samples of any aligned 2^j x 2^j group of pixels are then
+/// one Owen-scrambled Sobol net of 4^j * spp points in every dimension pair, i.e. stratified
+/// across neighbouring pixels, while each single sample stays uniformly distributed (unbiased).
+/// The error is thereby pushed to high spatial frequencies ("blue"), which a denoiser removes
+/// best (after Ahmed and Wonka, "Screen-space blue-noise diffusion of Monte Carlo sampling
+/// error via hierarchical ordering of pixels", SIGGRAPH Asia 2020).
+struct PixelStream {
+  std::uint32_t seed, base;
+};
+inline PixelStream pixel_stream(std::uint64_t stream, std::uint32_t u, std::uint32_t v,
+                                int spp_log2) {
+  const int b = std::max(0, std::min(6, (32 - spp_log2) / 2));
+  const std::uint32_t mask = (1u << b) - 1u;
+  const std::uint64_t block = (static_cast<std::uint64_t>(v >> b) << 32) | (u >> b);
+  std::uint64_t z = stream ^ (block + 0x9E3779B97F4A7C15ULL);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  const std::uint32_t m = morton2(u & mask, v & mask, b);
+  return {static_cast<std::uint32_t>(z), spp_log2 >= 32 ? 0u : (m << spp_log2)};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Warps.
 
