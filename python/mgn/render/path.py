@@ -17,8 +17,9 @@ Algorithm (see ``cpp/include/mgn/render/path_tracer.hpp``): unidirectional path 
 next-event estimation and multiple importance sampling (power heuristic) for the area lights and
 the environment, Russian roulette, glTF 2.0 metallic-roughness materials (Lambert + GGX with
 height-correlated Smith masking, visible-normal sampling) and smooth dielectrics (Fresnel,
-refraction, total internal reflection), Owen-scrambled Sobol samples per pixel seeded from
-(seed, view_index, pixel): the image is identical for any number of threads. Long calls release
+refraction, total internal reflection), Owen-scrambled Sobol samples stratified across
+neighbouring pixels (blue-noise error), seeded from (seed, view_index, pixel block): the image is
+identical for any number of threads. Long calls release
 the GIL.
 """
 

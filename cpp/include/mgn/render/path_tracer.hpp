@@ -29,8 +29,9 @@
 /// faces around a vertex whose normals are within 45 degrees (sharp creases keep flat normals);
 /// where the shading normal would face away from the viewer the geometric normal is used.
 /// Samples come from an Owen-scrambled (hash-based nested uniform scrambling) 2-D Sobol sequence
-/// per pixel and dimension pair, seeded from (seed, view_index, pixel): images are bit-identical
-/// for any number of threads.
+/// per dimension pair, shared by the pixels of each 64 x 64 block in Morton order, so that the
+/// samples of neighbouring pixels are stratified together (blue-noise error); seeded from (seed,
+/// view_index, block): images are bit-identical for any number of threads.
 
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/render/camera.hpp>
