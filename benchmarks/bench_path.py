@@ -432,6 +432,9 @@ def markdown(ev: dict[str, Any], meta: dict[str, Any]) -> str:
                 f"{d['cpu'] + d['trace_cpu']:.2f} | {d['flip']:.4f} | {d['psnr']:.1f} |"
             )
         lines.append("")
+    crop = HERE / "path_crop_results.md"  # the 1200x1200 window study (bench_path_crop)
+    if crop.exists():
+        lines += ["#" + crop.read_text().rstrip(), ""]
     return "\n".join(lines)
 
 

@@ -42,6 +42,7 @@ from .bench_path import (
     load1,
     psnr,
     raster_ids,
+    report_main,
     run_child,
     tonemap,
 )
@@ -288,5 +289,7 @@ def main(argv: list[str]) -> int:
         (out / "path_crop_results.json").write_text(json.dumps(ev, indent=1, default=float) + "\n")
         (out / "path_crop_results.md").write_text(markdown(ev))
         picture(work, ev, tags, work / "window.png")
+        if (out / "path_results.json").exists():  # path_results.md and RESULTS.md include it
+            report_main(out / "path_results.json")
         _log(markdown(ev))
     return 0

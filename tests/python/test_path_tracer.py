@@ -440,8 +440,10 @@ def test_thin_lens_blur_circle_and_autofocus():
     view = CameraView(K, look_at(np.array([0, 0, d]), np.zeros(3), np.array([0, 1.0, 0])))
     pin = scene.render(view, PathTraceOptions(spp=64, max_bounces=0)).radiance[..., 0]
     s = 0.5
+    # 4096 spp: the blurred total is a Monte Carlo sum of ~1 % relative std (3.8 % at 256 spp
+    # over seeds, too close to the 5 % tolerance).
     blur = scene.render(
-        view, PathTraceOptions(spp=256, max_bounces=0, aperture_radius=A, focus_distance=s)
+        view, PathTraceOptions(spp=4096, max_bounces=0, aperture_radius=A, focus_distance=s)
     ).radiance[..., 0]
     auto = scene.render(view, PathTraceOptions(spp=64, max_bounces=0, aperture_radius=A)).radiance[
         ..., 0
