@@ -8,8 +8,8 @@ and denoised at 1200 x 1200 (the denoiser sees the whole view) and only then cro
 each engine's reference is rendered for that window alone (a camera with the same focal lengths,
 the principal point moved by the window's corner and the window's size:
 :func:`path_scene.crop`), so a high-spp reference costs the window's pixels only. The window
-(default 320 x 320 px at (400, 130)) holds the clear bottle, the white pipe elbow, the black
-remote, the water bottle and the tote floor with soft shadows.
+(default 320 x 320 px at (400, 130)) holds the clear bottle (glass, close up), the black
+remote, parts of the water and detergent bottles and the tote wall.
 
 Each engine's reference is also checked for alignment: its instance ids of the window equal mgn's
 raster instance ids of the full view cut to the window. Error = FLIP and PSNR against the
@@ -160,8 +160,9 @@ def markdown(ev: dict[str, Any]) -> str:
         "(`python -m benchmarks.bench_path --study full-res-crop`)",
         "",
         f"Every image is rendered (and denoised) at 1200×1200, view 0, max 6 bounces, 2 threads; "
-        f"the error is measured on the {s}×{s} px window at ({x0}, {y0}) (clear bottle, pipe "
-        "elbow, black remote, water bottle, tote floor with soft shadows) against each engine's "
+        f"the error is measured on the {s}×{s} px window at ({x0}, {y0}) (the clear glass "
+        "bottle close up, the black remote, parts of the water and detergent bottles, the tote "
+        "wall) against each engine's "
         "own reference of that window, rendered through a camera cut to the window (same rays). "
         "Time: CPU seconds of the whole 1200×1200 view (wall seconds and the 1-minute load "
         "beside: the machine was shared, so wall time is pessimistic).",
