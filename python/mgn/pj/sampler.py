@@ -183,11 +183,11 @@ def pj_wrench_scores(
         float(mass),
         np.asarray(com, np.float64),
         np.asarray(gravity_direction, np.float64),
-        pj_wrench_options(friction, grip_force, contact_radius, gravity),
+        _wrench_options(friction, grip_force, contact_radius, gravity),
     )
 
 
-def pj_wrench_options(
+def _wrench_options(
     friction: float = _PJ_WRENCH.friction,
     grip_force: float = _PJ_WRENCH.grip_force,
     contact_radius: float = _PJ_WRENCH.contact_radius,
