@@ -16,17 +16,6 @@ namespace mgn::py_bind {
 
 namespace {
 
-/// Read-only numpy view of a mesh array, kept alive by the Python Mesh object.
-template <typename M>
-py::array view_of(const M& mat, py::handle owner) {
-  using Scalar = typename M::Scalar;
-  py::array_t<Scalar> arr(
-      {static_cast<py::ssize_t>(mat.rows()), static_cast<py::ssize_t>(mat.cols())}, mat.data(),
-      owner);
-  arr.attr("setflags")(py::arg("write") = false);
-  return arr;
-}
-
 /// SurfaceSamples as numpy arrays (moved, no copies).
 struct SampleArrays {
   py::array points, normals, face_ids;
