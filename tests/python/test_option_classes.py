@@ -5,6 +5,7 @@ labels of the scene grasp model are a typed ``ObjectGraspLabels``."""
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import math
 
@@ -16,6 +17,7 @@ from mgn import _core
 from mgn.geometry import make_box
 from mgn.pj import AntipodalSampler, pj_wrench_scores
 from mgn.render import Renderer
+from mgn.render.path import FilmOptions, PathTraceOptions
 from mgn.render.renderer import LightSample
 from mgn.scene.cameras import CameraView, Intrinsics
 from mgn.suction import SealModel, suction_wrench_scores
@@ -126,3 +128,15 @@ def test_object_grasp_labels_are_typed_and_checked():
         _core.ObjectGraspLabels(suction_points=pts, suction_approach=pts[:1])
     with pytest.raises(mgn.InvalidArgumentError, match=r"ObjectGraspLabels\.pj_width"):
         _core.ObjectGraspLabels(pj_p1=p1, pj_closing=v, pj_approach=a, pj_width=w[:, None])
+
+
+def test_path_tracer_dataclasses_default_to_the_bound_structs():
+    trace, film = PathTraceOptions(), FilmOptions()
+    core_trace, core_film = _core.PathTraceOptions(), _core.FilmOptions()
+    for f in dataclasses.fields(trace):
+        assert getattr(trace, f.name) == getattr(core_trace, f.name), f.name
+    for f in dataclasses.fields(film):
+        assert getattr(film, f.name) == getattr(core_film, f.name), f.name
+    # The values mgn/render/path_tracer.hpp documents, written here again as a second source.
+    assert (trace.spp, trace.max_bounces, trace.rr_depth, trace.clamp_indirect) == (16, 6, 3, 10.0)
+    assert (film.exposure, film.tone) == (0.0, "filmic")
