@@ -262,6 +262,9 @@ struct ShadingMaterial {
   float p_delta = 0;              ///< probability of the delta (dielectric) lobe
   bool has_nondelta = false;
 
+  /// Transmission tint of one interface: the square root of the base colour.
+  F3 sqrt_base() const { return {std::sqrt(base.x), std::sqrt(base.y), std::sqrt(base.z)}; }
+
   void prepare(float cos_o) {
     w_trans = (1.0f - metallic) * transmission;
     w_diel = (1.0f - metallic) * (1.0f - transmission);
