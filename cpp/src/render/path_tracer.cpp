@@ -725,7 +725,7 @@ class Integrator {
       const pt::Frame frame(h.ns);
       const F3 wo = frame.to_local(wo_w);
       pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
-      sm.prepare(wo.z);
+      sm.prepare(wo.z, h.front);
       const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
       // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
       // (roulette, Fresnel choice), environment direction.
@@ -860,6 +860,30 @@ class Integrator {
                    float u_lobe, float u_fresnel, pt::Sample2 u, F3& wi_w, F3& weight, float& pdf,
                    bool& delta, float& eta2) {
     eta2 = 1.0f;
+    if (u_lobe < sm.p_delta && sm.rough) {
+      // Rough dielectric: refraction (no light is sampled below the surface, so the light this
+      // ray finds is weighted 1, as after a delta lobe) or reflection (weighed by the whole
+      // non-delta BSDF and its pdf, as the other lobes' samples).
+      F3 wi;
+      if (sm.sample_rough(wo, u_fresnel, u.x, u.y, wi, weight)) {
+        if (wi.z >= 0.0f) return false;
+        wi_w = frame.to_world(wi);
+        if (dot(wi_w, h.ng) >= 0.0f) return false;
+        delta = true;
+        pdf = 0.0f;
+        eta2 = sm.eta * sm.eta;
+        return true;
+      }
+      delta = false;
+      if (wi.z <= 0.0f) return false;
+      wi_w = frame.to_world(wi);
+      if (dot(wi_w, h.ng) <= 0.0f) return false;
+      F3 f;
+      sm.eval(wo, wi, f, pdf);
+      if (!(pdf > 0.0f)) return false;
+      weight = f * (wi.z / pdf);
+      return true;
+    }
     if (u_lobe < sm.p_delta) {
       // Smooth dielectric: reflect with probability F, otherwise refract.
       delta = true;
@@ -893,7 +917,7 @@ class Integrator {
       return true;
     }
     delta = false;
-    if (!sm.has_nondelta) return false;
+    if (!sm.has_other) return false;
     const float ul = (u_lobe - sm.p_delta) / (1.0f - sm.p_delta);
     F3 wi;
     if (ul < sm.p_spec) {
