@@ -23,9 +23,11 @@
 /// metallic-roughness: a Lambertian diffuse lobe under a GGX (Trowbridge-Reitz) specular lobe
 /// with the height-correlated Smith masking-shadowing term and visible-normal sampling; exact
 /// dielectric Fresnel (ior) for the specular layer of non-metals, Schlick's Fresnel with F0 =
-/// base colour for metals; `transmission` blends in a smooth dielectric (Fresnel reflection,
+/// base colour for metals; `transmission` blends in a dielectric (Fresnel reflection,
 /// refraction, total internal reflection; each refraction tints by the square root of the base
-/// colour, so light through a closed wall, in and out, is tinted by the base colour once). Meshes
+/// colour, so light through a closed wall, in and out, is tinted by the base colour once):
+/// smooth (a delta lobe) below roughness ~0.055 (GGX alpha 0.003), above it a rough dielectric
+/// (GGX reflection and refraction after Walter et al. 2007, visible-normal sampling). Meshes
 /// are closed or open triangle soups; a surface whose geometric normal faces the ray is entered,
 /// otherwise left (for refraction). Shading normals are per-corner normals averaged over the
 /// faces around a vertex whose normals are within 45 degrees (sharp creases keep flat normals);
