@@ -355,6 +355,30 @@ def test_slightly_rough_pane_transmits_like_the_smooth_one(roughness):
     assert full.mean() == pytest.approx((1 - R) / (1 + R), rel=2e-3)
 
 
+def test_denoiser_albedo_and_normal_are_taken_through_smooth_glass():
+    """The albedo and normal buffers (the denoiser's guides) show what is seen through a smooth
+    glass pane, not the pane: a red Lambertian floor behind a clear pane gives a red albedo
+    (weighted by the pane's transmittance, the reflected share shows the black dome) and the
+    floor's normal; behind a frosted pane the pane itself is the guide."""
+    red = PbrMaterial(base_color=(0.8, 0.1, 0.1), ior=1.0)
+    X = np.eye(4)
+    X[:3, 3] = (0, 0, 0.3)
+    view = camera((0, 0, 1.0), (0, 0, 0), 16, 10, up=(0, 1, 0))
+    for roughness, expect in ((0.0, (0.8, 0.1, 0.1)), (0.5, (0.9, 0.9, 0.9))):
+        glass = PbrMaterial(base_color=(0.9, 0.9, 0.9), transmission=1.0, roughness=roughness)
+        scene = PathScene([quad(4.0), make_box([2.0, 2.0, 0.02])], np.stack([np.eye(4), X]),
+                          [1, 2], [[red], [glass]], (), BLACK)  # fmt: skip
+        out = scene.render(view, PathTraceOptions(spp=64, max_bounces=8))
+        assert np.all(out.instance_ids == 2)
+        albedo = out.albedo.reshape(-1, 3).mean(0)
+        if roughness == 0.0:  # transmitted share (1 - R)^2 ~ 0.92 reaches the floor
+            np.testing.assert_allclose(albedo / albedo[0], np.array(expect) / expect[0], atol=0.02)
+            assert albedo[0] > 0.8 * 0.85
+        else:
+            np.testing.assert_allclose(albedo, expect, atol=1e-5)
+        np.testing.assert_allclose(out.normal.reshape(-1, 3).mean(0), (0, 0, 1), atol=1e-3)
+
+
 def test_glass_sphere_total_internal_reflection_keeps_energy():
     """A clear glass sphere in a uniform dome L reflects and refracts without absorption: every
     path eventually escapes (total internal reflection included), so the sphere shows L."""

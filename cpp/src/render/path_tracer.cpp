@@ -660,6 +660,10 @@ class Integrator {
     float eta_scale = 1.0f;  // product of eta^2 over the refractions so far
     aov_albedo = F3(0.0f);
     aov_normal = F3(0.0f);
+    // The albedo and normal for the denoiser are those of the first surface that is not smooth
+    // glass: through (or in) a smooth dielectric they are taken at the next hit, so that the
+    // denoiser keeps what is seen through glass instead of smoothing it into a flat surface.
+    bool aov_open = true;
     RTCRayHit rh;
     Hit h;
     for (int depth = 0;; ++depth) {
@@ -682,17 +686,17 @@ class Integrator {
           w = power_heuristic(prev_pdf, pl);
         }
         add(L, beta * l.radiance * w, depth >= 2);
-        if (depth == 0) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
+        if (aov_open) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
         break;
       }
       if (!hit) {
-        if (L_.env_on || depth == 0) {
+        if (L_.env_on || aov_open) {
           const F3 Le = L_.env(d);
           float w = 1.0f;
           if (!prev_delta && L_.env_on)
             w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
           add(L, beta * Le * w, depth >= 2);
-          if (depth == 0)
+          if (aov_open)
             aov_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
         }
         break;
@@ -716,9 +720,11 @@ class Integrator {
         }
         add(L, beta * m.emission * w, depth >= 2);
       }
-      if (depth == 0) {
+      if (aov_open) {
         aov_albedo = h.base;
         aov_normal = h.ns;
+        aov_open = m.transmission * (1.0f - m.metallic) >= 0.5f &&
+                   m.alpha <= pt::ShadingMaterial::kRoughAlpha;
       }
       if (depth >= opt_.max_bounces) break;
 
