@@ -23,6 +23,7 @@ from mgn.io.scene_format import (
     decode_float_image,
     depth_picture_png,
     encode_float_image,
+    from_cm,
     write_view,
 )
 from mgn.render.sensor import apply_depth_sensor
@@ -304,3 +305,100 @@ def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtype
         for key in ("objects/poses_relative_to_camera", "non_colliding_grasps/paralleljaw/"
                     "score_analytical"):  # fmt: skip
             assert np.array_equal(a[key][()], e[key][()])
+
+
+def _random_poses(rng: np.random.Generator, m: int) -> np.ndarray:
+    """(m, 4, 4) rigid poses with random rotations (QR of Gaussian matrices), metres."""
+    q, r = np.linalg.qr(rng.normal(size=(m, 3, 3)))
+    q = q * np.sign(np.diagonal(r, axis1=1, axis2=2))[:, None, :]
+    q[np.linalg.det(q) < 0, :, 0] *= -1
+    X = np.repeat(np.eye(4)[None], m, axis=0)
+    X[:, :3, :3] = q
+    X[:, :3, 3] = rng.normal(size=(m, 3)) * 0.2 + [0.0, 0.0, 0.8]
+    return X
+
+
+def _moved_along_axes(X: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """The poses X moved by ``offset`` (3,) expressed in their own axes (same rotation)."""
+    out = X.copy()
+    out[:, :3, 3] = X[:, :3, 3] + np.einsum("mij,j->mi", X[:, :3, :3], offset)
+    return out
+
+
+def _grasp_record(rng: np.random.Generator, m: int = 700, k: int = 300) -> ViewRecord:
+    """A record whose tool poses share their rotation with the contact poses (as the grasp
+    labels do: the flange and the suction tool sit on the contact frame's approach axis), except
+    the colliding suction group, whose rotations differ."""
+    rec = _record(rng)
+    h5 = dict(rec.scene_hdf5)
+    pj_contact = _random_poses(rng, m)
+    su_contact = _random_poses(rng, k)
+    other = _random_poses(rng, k)
+    for group in ("non_colliding_grasps", "colliding_grasps"):
+        h5[f"{group}/paralleljaw/contact_poses_relative_to_camera"] = pj_contact
+        h5[f"{group}/paralleljaw/franka_poses_relative_to_camera"] = _moved_along_axes(
+            pj_contact, np.array([0.01, 0.0, -0.1041])
+        )
+        h5[f"{group}/paralleljaw/object_id"] = np.arange(m) % N
+        h5[f"{group}/suctioncup/contact_poses_relative_to_camera"] = su_contact
+        h5[f"{group}/suctioncup/object_id"] = np.arange(k) % N
+    h5["non_colliding_grasps/suctioncup/suction_poses_relative_to_camera"] = _moved_along_axes(
+        su_contact, np.array([0.0, 0.0, -0.1321])
+    )
+    h5["colliding_grasps/suctioncup/suction_poses_relative_to_camera"] = other
+    h5["colliding_grasps/suctioncup/score_analytical"] = rng.random(k)
+    return replace(rec, scene_hdf5=h5)
+
+
+@pytest.mark.parametrize("archival", [False, True])
+def test_tool_poses_sharing_the_contact_rotation_read_back_bit_identical(
+    tmp_path: Path, archival: bool
+):
+    """Tool poses whose rotation equals the contact poses' are virtual datasets over them; what
+    h5py reads (as MetaGraspNet's colored_pcl.py does: whole, and row by row with ``list``) and
+    what mgn.Dataset reads are the arrays written, bit for bit; other tool poses stay plain."""
+    rec = _grasp_record(np.random.default_rng(11))
+    write_view(tmp_path, rec, archival=archival)
+    # The arrays the writer stores: float32 cm (archival: on the archival grids), computed here
+    # independently of the file.
+    ref = {
+        path: _cm_pose(np.asarray(a), archival)
+        for path, a in rec.scene_hdf5.items()
+        if path.endswith("poses_relative_to_camera") and "grasps/" in path
+    }
+    virtual = {
+        "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera",
+        "colliding_grasps/paralleljaw/franka_poses_relative_to_camera",
+        "non_colliding_grasps/suctioncup/suction_poses_relative_to_camera",
+    }
+    with h5py.File(str(tmp_path / "3_scene.hdf5"), "r") as f:
+        for path, expected in ref.items():
+            ds = f[path]
+            assert ds.is_virtual == (path in virtual), path
+            assert ds.dtype == np.float32 and ds.shape == expected.shape
+            assert np.array_equal(_bits(ds[()]), _bits(expected)), path
+            rows = list(ds)
+            assert len(rows) == len(expected)
+            assert np.array_equal(_bits(np.stack(rows)), _bits(expected)), path
+            # colored_pcl.py scales the translation of each row in place.
+            rows[0][0, 3] /= 100
+    view = View(tmp_path, 3)
+    assert not any(k.startswith("mgn_pose_columns") for k in view.hdf5)
+    for path, expected in ref.items():
+        back = view.hdf5[path]
+        # The reader's metre conversion of the stored cm (the same for plain datasets).
+        assert np.array_equal(_bits(back), _bits(from_cm(path, expected))), path
+        assert np.array_equal(_bits(view.hdf5_dataset(path)), _bits(back)), path
+
+
+def _cm_pose(X: np.ndarray, archival: bool) -> np.ndarray:
+    """The float32 cm poses the writer stores (archival: rotation entries on 2^-16, translations
+    on ARCHIVAL_POSE_STEP_CM), written out independently of the writer."""
+    out = X.astype(np.float64)
+    out[:, :3, 3] *= 100.0
+    out = out.astype(np.float32)
+    if archival:
+        rs, ts = np.float32(ARCHIVAL_ROTATION_STEP), np.float32(2.0**-10)
+        out[:, :3, :3] = np.round(out[:, :3, :3] / rs) * rs
+        out[:, :3, 3] = np.round(out[:, :3, 3] / ts) * ts
+    return out

@@ -40,9 +40,11 @@ from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
 from mgn.io.scene_format import (
     FLOAT_DELTA_ENCODING,
+    POSE_COLUMNS_GROUP,
     UNORM16_ENCODING,
     decode_float_image,
     from_cm,
+    read_scene_dataset,
 )
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
@@ -157,7 +159,7 @@ class View:
             with h5py.File(p, "r") as h5:
                 if name not in h5:
                     raise IoError(f"'{p}' has no dataset '{name}'")
-                return from_cm(name, h5[name][()])
+                return from_cm(name, read_scene_dataset(h5, name))
         except FileNotFoundError:
             raise IoError(f"'{p}' does not exist") from None
         except OSError as e:
@@ -250,8 +252,8 @@ class View:
             with h5py.File(p, "r") as h5:
 
                 def visit(name: str, obj: Any) -> None:
-                    if isinstance(obj, h5py.Dataset):
-                        out[name] = from_cm(name, obj[()])
+                    if isinstance(obj, h5py.Dataset) and not name.startswith(POSE_COLUMNS_GROUP):
+                        out[name] = from_cm(name, read_scene_dataset(h5, name))
 
                 h5.visititems(visit)
         except FileNotFoundError:

@@ -62,6 +62,9 @@ __all__ = [
     "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
     "HDF5_INT_LEAVES",
+    "POSE_COLUMNS_GROUP",
+    "SHARED_ROTATION_ENCODING",
+    "TOOL_POSE_LEAVES",
     "MGN_HDF5_CM",
     "M_TO_CM",
     "ViewRecord",
@@ -74,6 +77,7 @@ __all__ = [
     "id_image_dtype",
     "mgn_hdf5_bytes",
     "png_bytes",
+    "read_scene_dataset",
     "scene_gt_entries",
     "to_cm",
     "view_file_names",
@@ -339,23 +343,131 @@ def mgn_hdf5_bytes(images: Mapping[str, np.ndarray], *, unorm16: tuple[str, ...]
 
 #: Datasets with at least this many values are stored chunked with gzip (level 1) and the
 #: shuffle filter: grasp sets shrink ~3x; every HDF5 reader (h5py, the C library) has gzip.
-_COMPRESS_FROM = 4096
+_COMPRESS_FROM = 256
 _COMPRESSION: dict[str, Any] = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
+#: Rows per chunk of a compressed (M, ...) dataset of ``{v}_scene.hdf5``; a chunk holds one
+#: entry (e.g. row 0, column 3 of every pose) of up to this many rows, which shuffle + deflate
+#: compress better than whole rows; the chunks a row spans (16 of 32 KiB for poses) fit HDF5's
+#: 1 MiB chunk cache, so reading row by row (``list(dataset)``) stays fast.
+_CHUNK_ROWS = 8192
+
+#: Tool-pose datasets of ``{v}_scene.hdf5`` whose rotation block equals the one of the group's
+#: ``contact_poses_relative_to_camera`` (same axes, moved along them): stored as HDF5 virtual
+#: datasets that take columns 0..2 from the contact poses.
+TOOL_POSE_LEAVES: tuple[str, ...] = (
+    "franka_poses_relative_to_camera",
+    "suction_poses_relative_to_camera",
+)
+#: Group of ``{v}_scene.hdf5`` holding the last column (translation, 1) of the tool poses stored
+#: as virtual datasets, under the tool dataset's own path.
+POSE_COLUMNS_GROUP = "mgn_pose_columns"
+#: ``mgn_encoding`` of a tool-pose virtual dataset (columns 0..2 from the contact poses, column 3
+#: from :data:`POSE_COLUMNS_GROUP`).
+SHARED_ROTATION_ENCODING = "rotation-of-contact-poses"
+_CONTACT_LEAF = "contact_poses_relative_to_camera"
 
 
-def hdf5_bytes(datasets: Mapping[str, np.ndarray], attrs: Mapping[str, Any] | None = None) -> bytes:
+def _chunked(data: np.ndarray) -> dict[str, Any]:
+    """Compression keywords of a dataset of ``{v}_scene.hdf5`` (none when it is small)."""
+    if data.size < _COMPRESS_FROM or data.ndim == 0:
+        return {}
+    chunks = (min(len(data), _CHUNK_ROWS), *([1] * (data.ndim - 1)))
+    return {"chunks": chunks, **_COMPRESSION}
+
+
+def _shares_rotation(datasets: Mapping[str, np.ndarray], path: str) -> bool:
+    """Whether the (M, 4, 4) tool poses at ``path`` equal the group's contact poses bit for bit in
+    columns 0..2 (rotation and the bottom row's zeros), so they can be a virtual dataset."""
+    parent, _, leaf = path.rpartition("/")
+    contact = datasets.get(f"{parent}/{_CONTACT_LEAF}")
+    tool = datasets[path]
+    if leaf not in TOOL_POSE_LEAVES or contact is None or tool.size == 0:
+        return False
+    if tool.dtype != contact.dtype or tool.shape != contact.shape or tool.shape[1:] != (4, 4):
+        return False
+    return bool(
+        np.array_equal(
+            np.ascontiguousarray(tool[:, :, :3]).view(np.uint8),
+            np.ascontiguousarray(contact[:, :, :3]).view(np.uint8),
+        )
+    )
+
+
+def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray) -> None:
+    """Write ``tool`` (M, 4, 4) at ``path`` as a virtual dataset: columns 0..2 from the group's
+    contact poses (same file), column 3 from ``POSE_COLUMNS_GROUP/path`` (written here); no
+    timestamps."""
+    parent = path.rpartition("/")[0]
+    contact = f"{parent}/{_CONTACT_LEAF}"
+    column_path = f"{POSE_COLUMNS_GROUP}/{path}"
+    column = np.ascontiguousarray(tool[:, :, 3])
+    group_path, _, name = column_path.rpartition("/")
+    group = h5[group_path] if group_path in h5 else h5_create_group(h5, group_path)
+    h5_create_dataset(group, name, column, **_chunked(column))
+    m = tool.shape[0]
+    dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+    dcpl.set_layout(h5py.h5d.VIRTUAL)
+    dcpl.set_obj_track_times(False)
+    dcpl.set_fill_value(np.zeros(1, tool.dtype))
+    for src_path, src_shape, v_start, v_count in (
+        (contact, (m, 4, 4), (0, 0, 0), (m, 4, 3)),
+        (column_path, (m, 4), (0, 0, 3), (m, 4, 1)),
+    ):
+        vspace = h5py.h5s.create_simple(tool.shape)
+        vspace.select_hyperslab(v_start, v_count)
+        sspace = h5py.h5s.create_simple(src_shape)
+        if len(src_shape) == 3:
+            sspace.select_hyperslab((0, 0, 0), v_count)
+        else:
+            sspace.select_all()
+        dcpl.set_virtual(vspace, b".", src_path.encode(), sspace)
+    tid = h5py.h5t.py_create(tool.dtype, logical=True)
+    space = h5py.h5s.create_simple(tool.shape)
+    parent_group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
+    dsid = h5py.h5d.create(parent_group.id, path.rpartition("/")[2].encode(), tid, space,
+                           dcpl=dcpl)  # fmt: skip
+    h5py.Dataset(dsid).attrs["mgn_encoding"] = SHARED_ROTATION_ENCODING
+
+
+def read_scene_dataset(h5: Any, path: str) -> np.ndarray:
+    """The array of ``{v}_scene.hdf5`` dataset ``path`` as stored (cm): what ``h5[path][()]``
+    gives, assembling the tool poses stored as virtual datasets (:data:`TOOL_POSE_LEAVES`) from
+    their sources directly (a few times faster than HDF5's virtual-dataset read)."""
+    ds = h5[path]
+    if not ds.is_virtual or ds.attrs.get("mgn_encoding") != SHARED_ROTATION_ENCODING:
+        return np.asarray(ds[()])
+    out = np.asarray(h5[f"{path.rpartition('/')[0]}/{_CONTACT_LEAF}"][()]).copy()
+    out[:, :, 3] = h5[f"{POSE_COLUMNS_GROUP}/{path}"][()]
+    return out
+
+
+def hdf5_bytes(
+    datasets: Mapping[str, np.ndarray],
+    attrs: Mapping[str, Any] | None = None,
+    *,
+    share_rotations: bool = False,
+) -> bytes:
     """An HDF5 file holding ``datasets`` (path -> array, written as given) without timestamps;
-    ``attrs`` go on the root group (dicts and lists as JSON)."""
+    ``attrs`` go on the root group (dicts and lists as JSON). Datasets of at least
+    ``_COMPRESS_FROM`` values are chunked by entry (``_CHUNK_ROWS`` rows) with shuffle + gzip.
+    ``share_rotations``: tool poses (:data:`TOOL_POSE_LEAVES`) whose columns 0..2 equal their
+    group's contact poses bit for bit are stored as virtual datasets reading those columns from
+    the contact poses (every HDF5 >= 1.10 reader, h5py included, sees the same array)."""
     buf = io.BytesIO()
     with h5py.File(buf, "w") as h5:
+        shared = []
         for path, value in datasets.items():
+            data = np.asarray(value)
+            if share_rotations and _shares_rotation(datasets, path):
+                shared.append(path)
+                continue
             parent, _, name = path.rpartition("/")
             group = h5
             if parent:
                 group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
-            data = np.asarray(value)
-            big = data.size >= _COMPRESS_FROM
-            h5_create_dataset(group, name, data, **(_COMPRESSION if big else {}))
+            h5_create_dataset(group, name, data, **_chunked(data))
+        for path in shared:
+            _virtual_tool_poses(h5, path, np.asarray(datasets[path]))
         for key, value in (attrs or {}).items():
             h5.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
     return buf.getvalue()
@@ -449,7 +561,7 @@ def write_view(
         f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
         f"{v}.npz": npz_bytes(**npz),
         f"{v}_depth.png": depth_picture_png(rec.depth),
-        f"{v}_scene.hdf5": hdf5_bytes(h5),
+        f"{v}_scene.hdf5": hdf5_bytes(h5, share_rotations=True),
         f"{v}_mgn.hdf5": mgn_hdf5_bytes(images, unorm16=("com_heatmap",) if archival else ()),
         f"{v}_order.csv": rec.order_csv.encode(),
         f"{v}_order.json": _json(rec.order_json).encode(),
