@@ -503,6 +503,14 @@ def _json(data: Any) -> str:
     return json.dumps(data, indent=1, sort_keys=False, allow_nan=True) + "\n"
 
 
+#: npz entries deflated with the run-length strategy: bool masks and uint8 instance ids, long
+#: runs of equal bytes, ~3.5x smaller than plain level 1 at the same speed (not the uint16
+#: category ids, whose runs are of byte pairs). Per-entry deflate levels: ``occlusion`` (one
+#: value per object region) halves at level 6 for ~10 ms.
+_NPZ_RUN_LENGTH = ("instances_objects", "occlusion_objects")
+_NPZ_LEVELS = {"occlusion": 6}
+
+
 def write_view(
     folder: str | os.PathLike[str], rec: ViewRecord, *, archival: bool = False
 ) -> list[Path]:
@@ -559,7 +567,7 @@ def write_view(
                 h5[path] = _archival_poses(value)
     files: dict[str, bytes] = {
         f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
-        f"{v}.npz": npz_bytes(**npz),
+        f"{v}.npz": npz_bytes(**npz, levels=_NPZ_LEVELS, run_length=_NPZ_RUN_LENGTH),
         f"{v}_depth.png": depth_picture_png(rec.depth),
         f"{v}_scene.hdf5": hdf5_bytes(h5, share_rotations=True),
         f"{v}_mgn.hdf5": mgn_hdf5_bytes(images, unorm16=("com_heatmap",) if archival else ()),
