@@ -5,6 +5,7 @@ colored_pcl.py: np.load / h5py, the operations they apply) still work unchanged.
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -402,3 +403,57 @@ def _cm_pose(X: np.ndarray, archival: bool) -> np.ndarray:
         out[:, :3, :3] = np.round(out[:, :3, :3] / rs) * rs
         out[:, :3, 3] = np.round(out[:, :3, 3] / ts) * ts
     return out
+
+
+def _com_by_hand(depth_m, inst, X_WC, K, params) -> np.ndarray:
+    """The heat map of docs/models.md §7 pixel by pixel in plain Python floats."""
+    fx, fy, cx, cy = K
+    out = np.zeros(inst.shape, np.float32)
+    for v in range(inst.shape[0]):
+        for u in range(inst.shape[1]):
+            i, z = int(inst[v, u]), float(depth_m[v, u])
+            if i == 0 or not np.isfinite(z) or z <= 0:
+                continue
+            p = [z * (u + 0.5 - cx) / fx, z * (v + 0.5 - cy) / fy, z]
+            w = [
+                sum(float(X_WC[r, k]) * p[k] for k in range(3)) + float(X_WC[r, 3])
+                for r in range(3)
+            ]
+            c = params[i - 1]
+            d = math.sqrt(sum((w[r] - c[r]) ** 2 for r in range(3)))
+            span = max(c[4] - c[3], 1e-12)
+            out[v, u] = min(max((c[4] - d) / span, 0.0), 1.0)
+    return out
+
+
+@pytest.mark.parametrize("exact", [True, False])
+def test_com_heatmap_stored_as_residual_reads_back_bit_identical(tmp_path: Path, exact: bool):
+    """With the scene's CoM parameters the heat map is stored as its difference from the
+    prediction: a heat map that is the formula (computed here pixel by pixel) leaves a zero
+    residual, any other (noise added) still reads back bit for bit; depth_ideal is kept in
+    metres, bit for bit, and read in cm as before."""
+    rng = np.random.default_rng(21)
+    rec = _record(rng)
+    X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], float).reshape(4, 4)
+    k = rec.intrinsics
+    # Centres of mass near the seen surface (0.75 m in front of the camera), heat maps that
+    # range over [0, 1] across the image.
+    c_W = (X_WC @ [0.0, 0.0, 0.75, 1.0])[:3] + rng.normal(size=(N, 3)) * 0.05
+    params = np.column_stack([c_W, 0.01 + 0.02 * rng.random(N), 0.4 + 0.2 * rng.random(N)])
+    com = _com_by_hand(rec.depth_ideal, rec.instances, X_WC, (k.fx, k.fy, k.cx, k.cy), params)
+    assert np.count_nonzero(com) > H * W // 4  # a real heat map, not zeros
+    if not exact:
+        com = com + rng.normal(size=com.shape).astype(np.float32) * 1e-3
+    rec = replace(rec, extra_npz={"com_heatmap": com}, com_parameters=params)
+    write_view(tmp_path, rec)
+    with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
+        assert h5["com_heatmap"].attrs["mgn_encoding"] == "float32-bits-minus-com-prediction"
+        assert h5["com_heatmap"].dtype == np.int32
+        assert (not np.any(h5["com_heatmap"][()])) == exact
+        assert h5["depth_ideal"].attrs["mgn_units"] == "m"
+    view = View(tmp_path, 3)
+    assert np.array_equal(_bits(view.com_heatmap), _bits(com))
+    assert np.array_equal(_bits(view.depth_ideal), _bits(rec.depth_ideal))
+    assert np.array_equal(
+        _bits(View(tmp_path, 3).mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal))
+    )

@@ -55,9 +55,11 @@ __all__ = [
     "ARCHIVAL_POSE_STEP_CM",
     "ARCHIVAL_ROTATION_STEP",
     "CM_RULES",
+    "COM_RESIDUAL_ENCODING",
     "COLLISION_OBSTACLES",
     "DEPTH_GRID_CM",
     "FLOAT_DELTA_ENCODING",
+    "UNITS_ATTR",
     "UNORM16_ENCODING",
     "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
@@ -68,6 +70,8 @@ __all__ = [
     "MGN_HDF5_CM",
     "M_TO_CM",
     "ViewRecord",
+    "com_heatmap_prediction",
+    "decode_com_residual",
     "decode_float_image",
     "depth_picture_png",
     "depth_to_cm",
@@ -167,6 +171,10 @@ class ViewRecord:
         layout_json: ``{v}_layout.json`` content (mgn: bin relations, difficulty).
         extra_npz: further (H, W) images under mgn's own names (e.g. ``com_heatmap``), written
             to ``{v}_mgn.hdf5``.
+        com_parameters: (N, 5) per instance [c_W (3), d_min, d_max], world frame, m
+            (:meth:`mgn.view_labels.objects.SceneRayModel.com_parameters`), or None. Given (and
+            a ``com_heatmap`` image), the heat map is stored as its difference from
+            :func:`com_heatmap_prediction` (lossless, a tenth of the bytes).
     """
 
     index: int
@@ -184,6 +192,7 @@ class ViewRecord:
     order_csv: str
     layout_json: Mapping[str, Any]
     extra_npz: Mapping[str, np.ndarray] = field(default_factory=dict)
+    com_parameters: npt.NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         h, w = self.intrinsics.height, self.intrinsics.width
@@ -317,11 +326,83 @@ def _snap(a: npt.NDArray[np.float32], step: float) -> npt.NDArray[np.float32]:
     return (np.round(a / np.float32(step)) * np.float32(step)).astype(np.float32)
 
 
-def mgn_hdf5_bytes(images: Mapping[str, np.ndarray], *, unorm16: tuple[str, ...] = ()) -> bytes:
+#: ``mgn_encoding`` of a ``com_heatmap`` stored as the int32 differences (modulo 2^32) of its
+#: float32 bit patterns from :func:`com_heatmap_prediction`, whose inputs the dataset's
+#: attributes hold (``com_parameters``, ``X_WC``, ``K``) with ``depth_ideal`` (m) of the same
+#: file and ``instances_objects`` of ``{v}.npz``.
+COM_RESIDUAL_ENCODING = "float32-bits-minus-com-prediction"
+#: Attribute of a ``{v}_mgn.hdf5`` depth image giving its unit (absent: cm).
+UNITS_ATTR = "mgn_units"
+
+
+def com_heatmap_prediction(
+    depth_ideal_m: npt.ArrayLike,
+    instances: npt.ArrayLike,
+    X_WC: npt.ArrayLike,
+    K: npt.ArrayLike,
+    com_parameters: npt.ArrayLike,
+) -> npt.NDArray[np.float32]:
+    """The CoM heat map (docs/models.md §7) of a view from its noise-free depth, as the C++ label
+    model computes it: at each pixel (u, v) of instance i with a depth z (m), the point
+    p_C = (z (u + 0.5 - cx) / fx, z (v + 0.5 - cy) / fy, z) moved to the world by ``X_WC``
+    (4, 4, m) scores clip((d_max - |p_W - c_W|) / max(d_max - d_min, 1e-12), 0, 1) with
+    [c_W, d_min, d_max] = ``com_parameters[i - 1]`` (N, 5); 0 elsewhere. ``K`` = (fx, fy, cx, cy)
+    px. Only IEEE-exact operations in a fixed order, so every machine predicts the same bits
+    (the stored residual makes the heat map exact whatever the prediction's error)."""
+    inst = np.asarray(instances)
+    params = np.asarray(com_parameters, np.float64).reshape(-1, 5)
+    out = np.zeros(inst.shape, np.float32)
+    vv, uu = np.nonzero(inst > 0)
+    if len(vv) == 0:
+        return out
+    ids = inst[vv, uu].astype(np.int64)
+    if int(ids.max()) > len(params):
+        raise InvalidArgumentError(
+            f"com_heatmap_prediction: instance id {int(ids.max())} but only {len(params)} rows "
+            "of com_parameters; expected one row per instance"
+        )
+    z = np.asarray(depth_ideal_m, np.float32)[vv, uu].astype(np.float64)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(z) & (z > 0.0)
+    vv, uu, z, q = vv[ok], uu[ok], z[ok], params[ids[ok] - 1]
+    fx, fy, cx, cy = (float(k) for k in np.asarray(K, np.float64).reshape(4))
+    x = z * (uu + 0.5 - cx) / fx
+    y = z * (vv + 0.5 - cy) / fy
+    X = np.asarray(X_WC, np.float64).reshape(4, 4)
+    d2 = np.zeros_like(z)
+    for r in range(3):
+        c = X[r, 0] * x + X[r, 1] * y + X[r, 2] * z + X[r, 3] - q[:, r]
+        d2 += c * c
+    span = np.maximum(q[:, 4] - q[:, 3], 1e-12)
+    out[vv, uu] = np.clip((q[:, 4] - np.sqrt(d2)) / span, 0.0, 1.0)
+    return out
+
+
+def _com_residual(com: npt.ArrayLike, prediction: npt.NDArray[np.float32]) -> npt.NDArray[np.int32]:
+    bits = np.ascontiguousarray(com, np.float32).view(np.int32)
+    with np.errstate(over="ignore"):
+        return bits - prediction.view(np.int32)
+
+
+def decode_com_residual(
+    residual: npt.ArrayLike, prediction: npt.NDArray[np.float32]
+) -> npt.NDArray[np.float32]:
+    """The heat map of a ``com_heatmap`` stored with :data:`COM_RESIDUAL_ENCODING`."""
+    with np.errstate(over="ignore"):
+        return (np.asarray(residual, np.int32) + prediction.view(np.int32)).view(np.float32)
+
+
+def mgn_hdf5_bytes(
+    images: Mapping[str, np.ndarray],
+    *,
+    unorm16: tuple[str, ...] = (),
+    attrs: Mapping[str, Mapping[str, Any]] | None = None,
+) -> bytes:
     """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate level 1,
     without timestamps; float32 images stored with :func:`encode_float_image` (attribute
     ``mgn_encoding`` = :data:`FLOAT_DELTA_ENCODING`), those named in ``unorm16`` (values in
-    [0, 1]) as uint16 ``round(x * 65535)`` (:data:`UNORM16_ENCODING`, lossy: archival mode)."""
+    [0, 1]) as uint16 ``round(x * 65535)`` (:data:`UNORM16_ENCODING`, lossy: archival mode);
+    ``attrs``: further attributes by image name. Integer images are stored as given."""
     buf = io.BytesIO()
     with h5py.File(buf, "w") as h5:
         for name, value in images.items():
@@ -338,6 +419,8 @@ def mgn_hdf5_bytes(images: Mapping[str, np.ndarray], *, unorm16: tuple[str, ...]
             ds = h5_create_dataset(h5, name, data, **kw)
             if coded:
                 ds.attrs["mgn_encoding"] = coded
+            for key, value in (attrs or {}).get(name, {}).items():
+                ds.attrs[key] = value
     return buf.getvalue()
 
 
@@ -543,9 +626,14 @@ def write_view(
         "occlusion": np.asarray(rec.occlusion_map, f4),
         "occlusion_objects": np.asarray(rec.amodal, bool),
     }
-    images: dict[str, np.ndarray] = {
-        "depth_ideal": ideal_cm,
-    }
+    image_attrs: dict[str, dict[str, Any]] = {}
+    images: dict[str, np.ndarray] = {"depth_ideal": ideal_cm}
+    ideal_m = np.asarray(rec.depth_ideal, f4)
+    if not archival:
+        # The renderer's own float32 metres (cm in float32 would round some away); the heat map
+        # prediction below needs them exactly.
+        images["depth_ideal"] = ideal_m
+        image_attrs["depth_ideal"] = {UNITS_ATTR: "m"}
     valid = np.asarray(rec.valid_depth, bool)
     if not np.array_equal(valid, np.isfinite(depth_cm)):
         images["valid_depth"] = valid  # not derivable from the depth: stored
@@ -555,6 +643,20 @@ def write_view(
                 f"write_view: extra image '{key}' would replace a format key"
             )
         images[key] = np.asarray(value)
+    com = images.get("com_heatmap")
+    if not archival and com is not None and rec.com_parameters is not None:
+        X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], np.float64)
+        K = rec.intrinsics
+        K4 = np.array([K.fx, K.fy, K.cx, K.cy], np.float64)
+        params = np.asarray(rec.com_parameters, np.float64).reshape(-1, 5)
+        pred = com_heatmap_prediction(ideal_m, rec.instances, X_WC.reshape(4, 4), K4, params)
+        images["com_heatmap"] = _com_residual(com, pred)
+        image_attrs["com_heatmap"] = {
+            "mgn_encoding": COM_RESIDUAL_ENCODING,
+            "com_parameters": params,
+            "X_WC": X_WC.reshape(4, 4),
+            "K": K4,
+        }
     h5 = {
         path: np.asarray(value).astype(np.int32)
         if path.rpartition("/")[2] in HDF5_INT_LEAVES
@@ -570,7 +672,9 @@ def write_view(
         f"{v}.npz": npz_bytes(**npz, levels=_NPZ_LEVELS, run_length=_NPZ_RUN_LENGTH),
         f"{v}_depth.png": depth_picture_png(rec.depth),
         f"{v}_scene.hdf5": hdf5_bytes(h5, share_rotations=True),
-        f"{v}_mgn.hdf5": mgn_hdf5_bytes(images, unorm16=("com_heatmap",) if archival else ()),
+        f"{v}_mgn.hdf5": mgn_hdf5_bytes(
+            images, unorm16=("com_heatmap",) if archival else (), attrs=image_attrs
+        ),
         f"{v}_order.csv": rec.order_csv.encode(),
         f"{v}_order.json": _json(rec.order_json).encode(),
         f"{v}_layout.json": _json(rec.layout_json).encode(),
