@@ -72,7 +72,15 @@ def _write_legacy(folder: Path, rec: Any) -> int:
     return total
 
 
-def _record(view: Any) -> Any:
+def _com_parameters(folder: Path) -> Any:
+    """(N, 5) CoM parameters of the scene in ``folder`` (as the pipeline passes them)."""
+    from mgn.io.scene_file import read_scene_json
+    from mgn.view_labels.objects import SceneRayModel
+
+    return SceneRayModel.from_scene(read_scene_json(folder / "scene.json")).com_parameters()
+
+
+def _record(view: Any, com_parameters: Any = None) -> Any:
     """A ViewRecord holding the arrays of a written view (SI units)."""
     from mgn.io.scene_format import ViewRecord
 
@@ -92,6 +100,7 @@ def _record(view: Any) -> Any:
         order_csv=view.path("_order.csv").read_text(),
         layout_json=view.layout or {},
         extra_npz={"com_heatmap": view.com_heatmap},
+        com_parameters=com_parameters,
     )
 
 
@@ -264,8 +273,9 @@ def run(
     walls: dict[str, list[float]] = {"new": [], "archival": [], "old": [], "read": []}
     cpus: dict[str, list[float]] = {k: [] for k in walls}
     identical = True
+    com_parameters = _com_parameters(scene.folder)
     for k, v in enumerate(scene.view_ids):
-        rec = _record(scene.view(v))
+        rec = _record(scene.view(v), com_parameters)
         sides = [("new", lambda r=rec: write_view(dirs["new"], r)),
                  ("archival", lambda r=rec: write_view(dirs["archival"], r, archival=True)),
                  ("old", lambda r=rec: _write_legacy(dirs["old"], r))]  # fmt: skip

@@ -457,3 +457,25 @@ def test_com_heatmap_stored_as_residual_reads_back_bit_identical(tmp_path: Path,
     assert np.array_equal(
         _bits(View(tmp_path, 3).mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal))
     )
+
+
+def test_archival_com_heatmap_residual_stays_within_unorm16(tmp_path: Path):
+    """Archival mode with the CoM parameters: the heat map is stored as a 16-bit residual from
+    the prediction on the rounded depth; it reads back within 0.5 / 65535 (+ float32 rounding)
+    of the heat map written, exact zeros where nothing is seen."""
+    rng = np.random.default_rng(22)
+    rec = _record(rng)
+    X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], float).reshape(4, 4)
+    k = rec.intrinsics
+    c_W = (X_WC @ [0.0, 0.0, 0.75, 1.0])[:3] + rng.normal(size=(N, 3)) * 0.05
+    params = np.column_stack([c_W, 0.01 + 0.02 * rng.random(N), 0.4 + 0.2 * rng.random(N)])
+    com = _com_by_hand(rec.depth_ideal, rec.instances, X_WC, (k.fx, k.fy, k.cx, k.cy), params)
+    rec = replace(rec, extra_npz={"com_heatmap": com}, com_parameters=params)
+    write_view(tmp_path, rec, archival=True)
+    with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
+        assert h5["com_heatmap"].attrs["mgn_encoding"] == "unorm16-minus-com-prediction"
+        assert "mgn_units" not in h5["depth_ideal"].attrs  # archival depth: cm on its grid
+    back = View(tmp_path, 3).com_heatmap
+    assert back.dtype == np.float32
+    assert np.max(np.abs(back.astype(np.float64) - com)) <= 0.5 / 65535 + 1e-7
+    assert np.all(back[com == 0] == 0)

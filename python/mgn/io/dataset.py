@@ -40,6 +40,7 @@ from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
 from mgn.io.scene_format import (
     COM_RESIDUAL_ENCODING,
+    COM_UNORM16_RESIDUAL_ENCODING,
     FLOAT_DELTA_ENCODING,
     POSE_COLUMNS_GROUP,
     UNITS_ATTR,
@@ -48,6 +49,7 @@ from mgn.io.scene_format import (
     decode_com_residual,
     decode_float_image,
     from_cm,
+    ideal_metres,
     read_scene_dataset,
 )
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
@@ -196,7 +198,7 @@ class View:
                             value = decode_float_image(value)
                         elif coding == UNORM16_ENCODING:
                             value = value.astype(np.float32) / np.float32(65535.0)
-                        elif coding == COM_RESIDUAL_ENCODING:
+                        elif coding in (COM_RESIDUAL_ENCODING, COM_UNORM16_RESIDUAL_ENCODING):
                             ideal = self._depth_ideal_m()
                             if ideal is None:
                                 raise IoError(f"'{p}': com_heatmap needs depth_ideal, absent")
@@ -207,7 +209,7 @@ class View:
                                 ds.attrs["K"],
                                 ds.attrs["com_parameters"],
                             )
-                            value = decode_com_residual(value, pred)
+                            value = decode_com_residual(value, pred, coding)
                         if ds.attrs.get(UNITS_ATTR) == "m":
                             # Stored in metres (the renderer's float32): kept, and given in cm
                             # as the writer converts them (float32 of the float64 product).
@@ -228,7 +230,7 @@ class View:
         cache = self.__dict__["_mgn_images"]
         if "depth_ideal (m)" in cache:
             return cache["depth_ideal (m)"]
-        return None if d is None else (d / np.float32(M_TO_CM)).astype(np.float32)
+        return None if d is None else ideal_metres(d)
 
     @property
     def depth_ideal(self) -> npt.NDArray[np.float32] | None:

@@ -56,6 +56,7 @@ __all__ = [
     "ARCHIVAL_ROTATION_STEP",
     "CM_RULES",
     "COM_RESIDUAL_ENCODING",
+    "COM_UNORM16_RESIDUAL_ENCODING",
     "COLLISION_OBSTACLES",
     "DEPTH_GRID_CM",
     "FLOAT_DELTA_ENCODING",
@@ -79,6 +80,7 @@ __all__ = [
     "hdf5_bytes",
     "from_cm",
     "id_image_dtype",
+    "ideal_metres",
     "mgn_hdf5_bytes",
     "png_bytes",
     "read_scene_dataset",
@@ -331,6 +333,10 @@ def _snap(a: npt.NDArray[np.float32], step: float) -> npt.NDArray[np.float32]:
 #: attributes hold (``com_parameters``, ``X_WC``, ``K``) with ``depth_ideal`` (m) of the same
 #: file and ``instances_objects`` of ``{v}.npz``.
 COM_RESIDUAL_ENCODING = "float32-bits-minus-com-prediction"
+#: Archival mode: ``mgn_encoding`` of a ``com_heatmap`` stored as int32 k = round((heat map -
+#: prediction) * 65535), the prediction made from the archival (rounded) ``depth_ideal``; read as
+#: float32(prediction + k / 65535), within 7.7e-6 of the heat map, as ``unorm16``.
+COM_UNORM16_RESIDUAL_ENCODING = "unorm16-minus-com-prediction"
 #: Attribute of a ``{v}_mgn.hdf5`` depth image giving its unit (absent: cm).
 UNITS_ATTR = "mgn_units"
 
@@ -384,12 +390,29 @@ def _com_residual(com: npt.ArrayLike, prediction: npt.NDArray[np.float32]) -> np
         return bits - prediction.view(np.int32)
 
 
+def _unorm16_residual(
+    com: npt.ArrayLike, prediction: npt.NDArray[np.float32]
+) -> npt.NDArray[np.int32]:
+    diff = np.asarray(com, np.float64) - prediction.astype(np.float64)
+    return np.round(diff * 65535.0).astype(np.int32)
+
+
 def decode_com_residual(
-    residual: npt.ArrayLike, prediction: npt.NDArray[np.float32]
+    residual: npt.ArrayLike, prediction: npt.NDArray[np.float32], coding: str
 ) -> npt.NDArray[np.float32]:
-    """The heat map of a ``com_heatmap`` stored with :data:`COM_RESIDUAL_ENCODING`."""
+    """The heat map of a ``com_heatmap`` stored with :data:`COM_RESIDUAL_ENCODING` (exact) or
+    :data:`COM_UNORM16_RESIDUAL_ENCODING` (archival: within 7.7e-6)."""
+    if coding == COM_UNORM16_RESIDUAL_ENCODING:
+        k = np.asarray(residual, np.int32).astype(np.float64)
+        return (prediction.astype(np.float64) + k / 65535.0).astype(np.float32)
     with np.errstate(over="ignore"):
         return (np.asarray(residual, np.int32) + prediction.view(np.int32)).view(np.float32)
+
+
+def ideal_metres(depth_ideal_cm: npt.ArrayLike) -> npt.NDArray[np.float32]:
+    """float32 metres of a ``depth_ideal`` stored in cm (archival mode, earlier files), as
+    :class:`mgn.io.dataset.View` gives them."""
+    return (np.asarray(depth_ideal_cm, np.float32) / np.float32(M_TO_CM)).astype(np.float32)
 
 
 def mgn_hdf5_bytes(
@@ -644,15 +667,24 @@ def write_view(
             )
         images[key] = np.asarray(value)
     com = images.get("com_heatmap")
-    if not archival and com is not None and rec.com_parameters is not None:
+    unorm16: tuple[str, ...] = ("com_heatmap",) if archival else ()
+    if com is not None and rec.com_parameters is not None:
         X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], np.float64)
         K = rec.intrinsics
         K4 = np.array([K.fx, K.fy, K.cx, K.cy], np.float64)
         params = np.asarray(rec.com_parameters, np.float64).reshape(-1, 5)
-        pred = com_heatmap_prediction(ideal_m, rec.instances, X_WC.reshape(4, 4), K4, params)
-        images["com_heatmap"] = _com_residual(com, pred)
+        # The prediction from the depth the reader will have (archival: the rounded cm).
+        z = ideal_metres(ideal_cm) if archival else ideal_m
+        pred = com_heatmap_prediction(z, rec.instances, X_WC.reshape(4, 4), K4, params)
+        if archival:
+            images["com_heatmap"] = _unorm16_residual(com, pred)
+            coding = COM_UNORM16_RESIDUAL_ENCODING
+            unorm16 = ()
+        else:
+            images["com_heatmap"] = _com_residual(com, pred)
+            coding = COM_RESIDUAL_ENCODING
         image_attrs["com_heatmap"] = {
-            "mgn_encoding": COM_RESIDUAL_ENCODING,
+            "mgn_encoding": coding,
             "com_parameters": params,
             "X_WC": X_WC.reshape(4, 4),
             "K": K4,
@@ -672,9 +704,7 @@ def write_view(
         f"{v}.npz": npz_bytes(**npz, levels=_NPZ_LEVELS, run_length=_NPZ_RUN_LENGTH),
         f"{v}_depth.png": depth_picture_png(rec.depth),
         f"{v}_scene.hdf5": hdf5_bytes(h5, share_rotations=True),
-        f"{v}_mgn.hdf5": mgn_hdf5_bytes(
-            images, unorm16=("com_heatmap",) if archival else (), attrs=image_attrs
-        ),
+        f"{v}_mgn.hdf5": mgn_hdf5_bytes(images, unorm16=unorm16, attrs=image_attrs),
         f"{v}_order.csv": rec.order_csv.encode(),
         f"{v}_order.json": _json(rec.order_json).encode(),
         f"{v}_layout.json": _json(rec.layout_json).encode(),
