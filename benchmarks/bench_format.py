@@ -80,6 +80,21 @@ def _com_parameters(folder: Path) -> Any:
     return SceneRayModel.from_scene(read_scene_json(folder / "scene.json")).com_parameters()
 
 
+def _exact_camera(view: Any, hdf5: dict[str, Any]) -> dict[str, Any]:
+    """The view's datasets with the camera pose the pipeline had (float64, kept with the heat
+    map's prediction inputs in ``{v}_mgn.hdf5``), so that the heat map predicts as when the
+    scene was written; the float32 cm pose in ``{v}_scene.hdf5`` is the same."""
+    import h5py
+
+    out = dict(hdf5)
+    p = view.path("_mgn.hdf5")
+    if p.exists():
+        with h5py.File(p, "r") as h5:
+            if "com_heatmap" in h5 and "X_WC" in h5["com_heatmap"].attrs:
+                out["camera/pose_relative_to_world"] = h5["com_heatmap"].attrs["X_WC"][None]
+    return out
+
+
 def _record(view: Any, com_parameters: Any = None) -> Any:
     """A ViewRecord holding the arrays of a written view (SI units)."""
     from mgn.io.scene_format import ViewRecord
@@ -95,7 +110,7 @@ def _record(view: Any, com_parameters: Any = None) -> Any:
         occlusion_map=view.occlusion_map,
         amodal=view.amodal,
         intrinsics=view.intrinsics,
-        scene_hdf5=view.hdf5,
+        scene_hdf5=_exact_camera(view, view.hdf5),
         order_json=view.order,
         order_csv=view.path("_order.csv").read_text(),
         layout_json=view.layout or {},
