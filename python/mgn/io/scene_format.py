@@ -358,29 +358,57 @@ def com_heatmap_prediction(
     inst = np.asarray(instances)
     params = np.asarray(com_parameters, np.float64).reshape(-1, 5)
     out = np.zeros(inst.shape, np.float32)
-    vv, uu = np.nonzero(inst > 0)
-    if len(vv) == 0:
+    w = inst.shape[1] if inst.ndim == 2 else 1
+    idx = np.flatnonzero(inst.ravel() > 0)
+    if len(idx) == 0:
         return out
-    ids = inst[vv, uu].astype(np.int64)
+    ids = inst.ravel()[idx].astype(np.intp)
     if int(ids.max()) > len(params):
         raise InvalidArgumentError(
             f"com_heatmap_prediction: instance id {int(ids.max())} but only {len(params)} rows "
             "of com_parameters; expected one row per instance"
         )
-    z = np.asarray(depth_ideal_m, np.float32)[vv, uu].astype(np.float64)
+    z = np.asarray(depth_ideal_m, np.float32).ravel()[idx].astype(np.float64)
     with np.errstate(invalid="ignore"):
         ok = np.isfinite(z) & (z > 0.0)
-    vv, uu, z, q = vv[ok], uu[ok], z[ok], params[ids[ok] - 1]
+    if not ok.all():
+        idx, ids, z = idx[ok], ids[ok], z[ok]
+    q = params[ids - 1]
+    vv, uu = np.divmod(idx, w)
     fx, fy, cx, cy = (float(k) for k in np.asarray(K, np.float64).reshape(4))
-    x = z * (uu + 0.5 - cx) / fx
-    y = z * (vv + 0.5 - cy) / fy
+    # In place, in the order of z * (u + 0.5 - cx) / fx (products commute exactly in IEEE).
+    x = uu.astype(np.float64)
+    x += 0.5
+    x -= cx
+    x *= z
+    x /= fx
+    y = vv.astype(np.float64)
+    y += 0.5
+    y -= cy
+    y *= z
+    y /= fy
     X = np.asarray(X_WC, np.float64).reshape(4, 4)
     d2 = np.zeros_like(z)
+    acc = np.empty_like(z)
+    tmp = np.empty_like(z)
     for r in range(3):
-        c = X[r, 0] * x + X[r, 1] * y + X[r, 2] * z + X[r, 3] - q[:, r]
-        d2 += c * c
-    span = np.maximum(q[:, 4] - q[:, 3], 1e-12)
-    out[vv, uu] = np.clip((q[:, 4] - np.sqrt(d2)) / span, 0.0, 1.0)
+        # ((X_r0 x + X_r1 y) + X_r2 z) + X_r3 - c_r
+        np.multiply(x, X[r, 0], out=acc)
+        np.multiply(y, X[r, 1], out=tmp)
+        acc += tmp
+        np.multiply(z, X[r, 2], out=tmp)
+        acc += tmp
+        acc += X[r, 3]
+        acc -= q[:, r]
+        acc *= acc
+        d2 += acc
+    np.sqrt(d2, out=d2)
+    span = q[:, 4] - q[:, 3]
+    np.maximum(span, 1e-12, out=span)
+    np.subtract(q[:, 4], d2, out=d2)
+    d2 /= span
+    np.clip(d2, 0.0, 1.0, out=d2)
+    out.ravel()[idx] = d2
     return out
 
 
