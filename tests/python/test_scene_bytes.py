@@ -459,10 +459,9 @@ def test_com_heatmap_stored_as_residual_reads_back_bit_identical(tmp_path: Path,
     )
 
 
-def test_archival_com_heatmap_residual_stays_within_unorm16(tmp_path: Path):
-    """Archival mode with the CoM parameters: the heat map is stored as a 16-bit residual from
-    the prediction on the rounded depth; it reads back within 0.5 / 65535 (+ float32 rounding)
-    of the heat map written, exact zeros where nothing is seen."""
+def test_archival_mode_with_com_parameters_keeps_the_mgn_images_exact(tmp_path: Path):
+    """Archival mode with the CoM parameters: the sensor depth is rounded, but depth_ideal and
+    the heat map (its residual from the prediction) read back bit for bit."""
     rng = np.random.default_rng(22)
     rec = _record(rng)
     X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], float).reshape(4, 4)
@@ -473,9 +472,12 @@ def test_archival_com_heatmap_residual_stays_within_unorm16(tmp_path: Path):
     rec = replace(rec, extra_npz={"com_heatmap": com}, com_parameters=params)
     write_view(tmp_path, rec, archival=True)
     with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
-        assert h5["com_heatmap"].attrs["mgn_encoding"] == "unorm16-minus-com-prediction"
-        assert "mgn_units" not in h5["depth_ideal"].attrs  # archival depth: cm on its grid
-    back = View(tmp_path, 3).com_heatmap
-    assert back.dtype == np.float32
-    assert np.max(np.abs(back.astype(np.float64) - com)) <= 0.5 / 65535 + 1e-7
-    assert np.all(back[com == 0] == 0)
+        assert h5["com_heatmap"].attrs["mgn_encoding"] == "float32-bits-minus-com-prediction"
+        assert h5["depth_ideal"].attrs["mgn_units"] == "m"
+    view = View(tmp_path, 3)
+    assert np.array_equal(_bits(view.com_heatmap), _bits(com))
+    assert np.array_equal(_bits(view.depth_ideal), _bits(rec.depth_ideal))
+    step = np.float32(ARCHIVAL_DEPTH_STEP_CM)
+    stored = view.npz_array("depth")
+    finite = np.isfinite(stored)
+    assert np.all(np.round(stored[finite] / step) * step == stored[finite])

@@ -40,7 +40,6 @@ from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
 from mgn.io.scene_format import (
     COM_RESIDUAL_ENCODING,
-    COM_UNORM16_RESIDUAL_ENCODING,
     FLOAT_DELTA_ENCODING,
     POSE_COLUMNS_GROUP,
     UNITS_ATTR,
@@ -198,7 +197,7 @@ class View:
                             value = decode_float_image(value)
                         elif coding == UNORM16_ENCODING:
                             value = value.astype(np.float32) / np.float32(65535.0)
-                        elif coding in (COM_RESIDUAL_ENCODING, COM_UNORM16_RESIDUAL_ENCODING):
+                        elif coding == COM_RESIDUAL_ENCODING:
                             ideal = self._depth_ideal_m()
                             if ideal is None:
                                 raise IoError(f"'{p}': com_heatmap needs depth_ideal, absent")
@@ -209,7 +208,7 @@ class View:
                                 ds.attrs["K"],
                                 ds.attrs["com_parameters"],
                             )
-                            value = decode_com_residual(value, pred, coding)
+                            value = decode_com_residual(value, pred)
                         if ds.attrs.get(UNITS_ATTR) == "m":
                             # Stored in metres (the renderer's float32): kept, and given in cm
                             # as the writer converts them (float32 of the float64 product).

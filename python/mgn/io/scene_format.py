@@ -56,7 +56,6 @@ __all__ = [
     "ARCHIVAL_ROTATION_STEP",
     "CM_RULES",
     "COM_RESIDUAL_ENCODING",
-    "COM_UNORM16_RESIDUAL_ENCODING",
     "COLLISION_OBSTACLES",
     "DEPTH_GRID_CM",
     "FLOAT_DELTA_ENCODING",
@@ -333,10 +332,6 @@ def _snap(a: npt.NDArray[np.float32], step: float) -> npt.NDArray[np.float32]:
 #: attributes hold (``com_parameters``, ``X_WC``, ``K``) with ``depth_ideal`` (m) of the same
 #: file and ``instances_objects`` of ``{v}.npz``.
 COM_RESIDUAL_ENCODING = "float32-bits-minus-com-prediction"
-#: Archival mode: ``mgn_encoding`` of a ``com_heatmap`` stored as int32 k = round((heat map -
-#: prediction) * 65535), the prediction made from the archival (rounded) ``depth_ideal``; read as
-#: float32(prediction + k / 65535), within 7.7e-6 of the heat map, as ``unorm16``.
-COM_UNORM16_RESIDUAL_ENCODING = "unorm16-minus-com-prediction"
 #: Attribute of a ``{v}_mgn.hdf5`` depth image giving its unit (absent: cm).
 UNITS_ATTR = "mgn_units"
 
@@ -418,21 +413,10 @@ def _com_residual(com: npt.ArrayLike, prediction: npt.NDArray[np.float32]) -> np
         return bits - prediction.view(np.int32)
 
 
-def _unorm16_residual(
-    com: npt.ArrayLike, prediction: npt.NDArray[np.float32]
-) -> npt.NDArray[np.int32]:
-    diff = np.asarray(com, np.float64) - prediction.astype(np.float64)
-    return np.round(diff * 65535.0).astype(np.int32)
-
-
 def decode_com_residual(
-    residual: npt.ArrayLike, prediction: npt.NDArray[np.float32], coding: str
+    residual: npt.ArrayLike, prediction: npt.NDArray[np.float32]
 ) -> npt.NDArray[np.float32]:
-    """The heat map of a ``com_heatmap`` stored with :data:`COM_RESIDUAL_ENCODING` (exact) or
-    :data:`COM_UNORM16_RESIDUAL_ENCODING` (archival: within 7.7e-6)."""
-    if coding == COM_UNORM16_RESIDUAL_ENCODING:
-        k = np.asarray(residual, np.int32).astype(np.float64)
-        return (prediction.astype(np.float64) + k / 65535.0).astype(np.float32)
+    """The heat map of a ``com_heatmap`` stored with :data:`COM_RESIDUAL_ENCODING`."""
     with np.errstate(over="ignore"):
         return (np.asarray(residual, np.int32) + prediction.view(np.int32)).view(np.float32)
 
@@ -637,12 +621,15 @@ def _json(data: Any) -> str:
     return json.dumps(data, indent=1, sort_keys=False, allow_nan=True) + "\n"
 
 
-#: npz entries deflated with the run-length strategy: bool masks and uint8 instance ids, long
-#: runs of equal bytes, ~3.5x smaller than plain level 1 at the same speed (not the uint16
-#: category ids, whose runs are of byte pairs). Per-entry deflate levels: ``occlusion`` (one
-#: value per object region) halves at level 6 for ~10 ms.
-_NPZ_RUN_LENGTH = ("instances_objects", "occlusion_objects")
-_NPZ_LEVELS = {"occlusion": 6}
+#: Archival mode's npz: the masks (bool ``occlusion_objects``, uint8 ``instances_objects``: long
+#: runs of equal bytes) deflated with zlib's run-length strategy, 3.5x smaller than level 1 in the
+#: same write time, and ``occlusion`` (one value per object region) at level 6, half the bytes.
+#: Not the default: zlib inflates such streams 2.5x slower (+60 ms per 1200 x 1200 view of 20
+#: objects), for 5 MB of a 190 MB scene.
+_NPZ_ARCHIVAL: dict[str, Any] = {
+    "run_length": ("instances_objects", "occlusion_objects"),
+    "levels": {"occlusion": 6},
+}
 
 
 def write_view(
@@ -650,11 +637,13 @@ def write_view(
 ) -> list[Path]:
     """Write the files of one view into ``folder`` (created); returns the paths written.
 
-    Units: the npz depth, ``depth_ideal`` and every HDF5 length are converted to centimetres.
-    Dtypes and layout: see the module doc. ``archival``: the compact archival mode (lossy:
-    depths rounded to :data:`ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 16 bits, grasp poses
-    to :data:`ARCHIVAL_ROTATION_STEP` / :data:`ARCHIVAL_POSE_STEP_CM`; same keys and dtypes in the
-    files MetaGraspNet reads).
+    Units: the npz depth and every HDF5 length are converted to centimetres; ``depth_ideal``
+    is stored in metres (the renderer's float32) when the heat map is stored as its residual.
+    Dtypes and layout: see the module doc. ``archival``: the compact archival mode (lossy: the
+    sensor depth rounded to :data:`ARCHIVAL_DEPTH_STEP_CM`, grasp poses to
+    :data:`ARCHIVAL_ROTATION_STEP` / :data:`ARCHIVAL_POSE_STEP_CM`; without
+    ``rec.com_parameters`` also ``depth_ideal`` rounded and ``com_heatmap`` in 16 bits; same keys
+    and dtypes in the files MetaGraspNet reads).
     """
 
     out = Path(folder)
@@ -663,11 +652,14 @@ def write_view(
     f4 = np.float32
     depth_cm = depth_to_cm(rec.depth)
     ideal_cm = (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4)
+    com = rec.extra_npz.get("com_heatmap")
+    # With the CoM parameters the heat map costs ~nothing (its residual from the prediction,
+    # which needs the exact depth_ideal): exact in both modes, and smaller than rounding both.
+    residual = com is not None and rec.com_parameters is not None
     if archival:
-        depth_cm, ideal_cm = (
-            _snap(depth_cm, ARCHIVAL_DEPTH_STEP_CM),
-            _snap(ideal_cm, ARCHIVAL_DEPTH_STEP_CM),
-        )
+        depth_cm = _snap(depth_cm, ARCHIVAL_DEPTH_STEP_CM)
+        if not residual:
+            ideal_cm = _snap(ideal_cm, ARCHIVAL_DEPTH_STEP_CM)
     npz: dict[str, Any] = {
         "depth": depth_cm,
         "instances_objects": np.asarray(rec.instances).astype(id_image_dtype(0, instances=True)),
@@ -680,7 +672,7 @@ def write_view(
     image_attrs: dict[str, dict[str, Any]] = {}
     images: dict[str, np.ndarray] = {"depth_ideal": ideal_cm}
     ideal_m = np.asarray(rec.depth_ideal, f4)
-    if not archival:
+    if residual:
         # The renderer's own float32 metres (cm in float32 would round some away); the heat map
         # prediction below needs them exactly.
         images["depth_ideal"] = ideal_m
@@ -694,25 +686,16 @@ def write_view(
                 f"write_view: extra image '{key}' would replace a format key"
             )
         images[key] = np.asarray(value)
-    com = images.get("com_heatmap")
-    unorm16: tuple[str, ...] = ("com_heatmap",) if archival else ()
-    if com is not None and rec.com_parameters is not None:
+    unorm16: tuple[str, ...] = ("com_heatmap",) if archival and not residual else ()
+    if residual:
         X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], np.float64)
         K = rec.intrinsics
         K4 = np.array([K.fx, K.fy, K.cx, K.cy], np.float64)
         params = np.asarray(rec.com_parameters, np.float64).reshape(-1, 5)
-        # The prediction from the depth the reader will have (archival: the rounded cm).
-        z = ideal_metres(ideal_cm) if archival else ideal_m
-        pred = com_heatmap_prediction(z, rec.instances, X_WC.reshape(4, 4), K4, params)
-        if archival:
-            images["com_heatmap"] = _unorm16_residual(com, pred)
-            coding = COM_UNORM16_RESIDUAL_ENCODING
-            unorm16 = ()
-        else:
-            images["com_heatmap"] = _com_residual(com, pred)
-            coding = COM_RESIDUAL_ENCODING
+        pred = com_heatmap_prediction(ideal_m, rec.instances, X_WC.reshape(4, 4), K4, params)
+        images["com_heatmap"] = _com_residual(images["com_heatmap"], pred)
         image_attrs["com_heatmap"] = {
-            "mgn_encoding": coding,
+            "mgn_encoding": COM_RESIDUAL_ENCODING,
             "com_parameters": params,
             "X_WC": X_WC.reshape(4, 4),
             "K": K4,
@@ -729,7 +712,7 @@ def write_view(
                 h5[path] = _archival_poses(value)
     files: dict[str, bytes] = {
         f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
-        f"{v}.npz": npz_bytes(**npz, levels=_NPZ_LEVELS, run_length=_NPZ_RUN_LENGTH),
+        f"{v}.npz": npz_bytes(**npz, **(_NPZ_ARCHIVAL if archival else {})),
         f"{v}_depth.png": depth_picture_png(rec.depth),
         f"{v}_scene.hdf5": hdf5_bytes(h5, share_rotations=True),
         f"{v}_mgn.hdf5": mgn_hdf5_bytes(images, unorm16=unorm16, attrs=image_attrs),
