@@ -13,10 +13,14 @@ instances), ``instances_semantic`` uint16 (float32 if a category id exceeds 6553
 :data:`DEPTH_GRID_CM` grid the sensor presets report (:func:`depth_to_cm`): exact, and half the
 bytes. mgn's own images go to ``{v}_mgn.hdf5`` with HDF5's shuffle filter (standard in every HDF5
 library), float32 images delta-coded along rows (:func:`encode_float_image`): ``depth_ideal``
-(cm), ``com_heatmap``, and ``valid_depth`` only when it is not exactly ``isfinite(depth)`` (the
-sensors mark invalid pixels NaN, so normally it is derived on reading). The depth picture is a
-palette PNG. Every array reads back bit-identical; ``write_view(..., archival=True)`` is the lossy
-compact archival mode (depths on :data:`ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` in 16 bits).
+(metres, the renderer's values, when the heat map is a residual; else cm), ``com_heatmap``
+(given the scene's CoM parameters, as its residual from :func:`com_heatmap_prediction`: zeros for
+the pipeline's heat maps), and ``valid_depth`` only when it is not exactly ``isfinite(depth)``
+(the sensors mark invalid pixels NaN, so normally it is derived on reading). In
+``{v}_scene.hdf5`` the tool poses that share their contact poses' rotation are HDF5 virtual
+datasets over them (:func:`hdf5_bytes`). The depth picture is a palette PNG. Every array reads
+back bit-identical; ``write_view(..., archival=True)`` is the lossy compact archival mode (sensor
+depth on :data:`ARCHIVAL_DEPTH_STEP_CM`, grasp poses rounded).
 
 Lengths are **centimetres** in these files (MetaGraspNet's convention) and SI everywhere else in
 mgn: :class:`ViewRecord` holds metres, the writer converts, and :mod:`mgn.io.dataset` converts
