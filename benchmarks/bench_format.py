@@ -7,7 +7,9 @@ arrays are written again three times in the same loop: with the current writer
 layout mgn wrote first (all arrays in `{v}.npz`, float32 ids, `depth_ideal`, `valid_depth` and
 `com_heatmap` in the npz, RGB depth picture; reproduced here as the "peer"). Reading is timed on
 the current files: every array of a view through `mgn.Dataset`. Bytes per scene are the sum over
-the scene folder (views, `scene_gt.json`, `scene.json`), also split by file kind.
+the scene folder (views, `scene_gt.json`, `scene.json`), also split by file kind. The records
+carry the scene's CoM parameters and the camera pose the pipeline had, so `com_heatmap` is
+stored as when the scene was generated (its residual from the prediction).
 
 Run alone: `python -m benchmarks.bench_format [--quick] [--dataset DIR]` (quick: 10 objects,
 5 views at 600 px; `--dataset`: measure scene 0 of an existing dataset instead of generating).
