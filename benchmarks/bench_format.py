@@ -7,7 +7,9 @@ arrays are written again three times in the same loop: with the current writer
 layout mgn wrote first (all arrays in `{v}.npz`, float32 ids, `depth_ideal`, `valid_depth` and
 `com_heatmap` in the npz, RGB depth picture; reproduced here as the "peer"). Reading is timed on
 the current files: every array of a view through `mgn.Dataset`. Bytes per scene are the sum over
-the scene folder (views, `scene_gt.json`, `scene.json`), also split by file kind.
+the scene folder (views, `scene_gt.json`, `scene.json`), also split by file kind. The records
+carry the scene's CoM parameters and the camera pose the pipeline had, so `com_heatmap` is
+stored as when the scene was generated (its residual from the prediction).
 
 Run alone: `python -m benchmarks.bench_format [--quick] [--dataset DIR]` (quick: 10 objects,
 5 views at 600 px; `--dataset`: measure scene 0 of an existing dataset instead of generating).
@@ -72,7 +74,30 @@ def _write_legacy(folder: Path, rec: Any) -> int:
     return total
 
 
-def _record(view: Any) -> Any:
+def _com_parameters(folder: Path) -> Any:
+    """(N, 5) CoM parameters of the scene in ``folder`` (as the pipeline passes them)."""
+    from mgn.io.scene_file import read_scene_json
+    from mgn.view_labels.objects import SceneRayModel
+
+    return SceneRayModel.from_scene(read_scene_json(folder / "scene.json")).com_parameters()
+
+
+def _exact_camera(view: Any, hdf5: dict[str, Any]) -> dict[str, Any]:
+    """The view's datasets with the camera pose the pipeline had (float64, kept with the heat
+    map's prediction inputs in ``{v}_mgn.hdf5``), so that the heat map predicts as when the
+    scene was written; the float32 cm pose in ``{v}_scene.hdf5`` is the same."""
+    import h5py
+
+    out = dict(hdf5)
+    p = view.path("_mgn.hdf5")
+    if p.exists():
+        with h5py.File(p, "r") as h5:
+            if "com_heatmap" in h5 and "X_WC" in h5["com_heatmap"].attrs:
+                out["camera/pose_relative_to_world"] = h5["com_heatmap"].attrs["X_WC"][None]
+    return out
+
+
+def _record(view: Any, com_parameters: Any = None) -> Any:
     """A ViewRecord holding the arrays of a written view (SI units)."""
     from mgn.io.scene_format import ViewRecord
 
@@ -87,11 +112,12 @@ def _record(view: Any) -> Any:
         occlusion_map=view.occlusion_map,
         amodal=view.amodal,
         intrinsics=view.intrinsics,
-        scene_hdf5=view.hdf5,
+        scene_hdf5=_exact_camera(view, view.hdf5),
         order_json=view.order,
         order_csv=view.path("_order.csv").read_text(),
         layout_json=view.layout or {},
         extra_npz={"com_heatmap": view.com_heatmap},
+        com_parameters=com_parameters,
     )
 
 
@@ -264,8 +290,9 @@ def run(
     walls: dict[str, list[float]] = {"new": [], "archival": [], "old": [], "read": []}
     cpus: dict[str, list[float]] = {k: [] for k in walls}
     identical = True
+    com_parameters = _com_parameters(scene.folder)
     for k, v in enumerate(scene.view_ids):
-        rec = _record(scene.view(v))
+        rec = _record(scene.view(v), com_parameters)
         sides = [("new", lambda r=rec: write_view(dirs["new"], r)),
                  ("archival", lambda r=rec: write_view(dirs["archival"], r, archival=True)),
                  ("old", lambda r=rec: _write_legacy(dirs["old"], r))]  # fmt: skip

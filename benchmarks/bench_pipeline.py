@@ -17,6 +17,11 @@ run. A last row runs the stages of scene 0 one after the other (`--child --stage
 CPU and wall seconds of each: drop, ray model, scene grasp collisions, render, object labels,
 layout, scene grasps, write.
 
+With one worker (in-process) the drop of scene k + 1 runs in a thread alongside the labelling
+of scene k, so the "drop" seconds of that row are the time spent waiting for the drop and a
+scene's CPU includes the next scene's drop (the sum over the scenes is the run's CPU). The
+stage-by-stage row is the one to read for the CPU of each stage.
+
 Peak memory per worker is ru_maxrss of the largest worker process (RUSAGE_CHILDREN for a pool,
 RUSAGE_SELF in-process). There is no peer program that makes MetaGraspNet scenes on the CPU, so
 the rows have no peer column.

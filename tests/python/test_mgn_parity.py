@@ -67,6 +67,9 @@ def test_generated_files_follow_metagraspnet(small_dataset):
             su["suction_poses_relative_to_camera"][:],
             su["contact_poses_relative_to_camera"][:],
         )
+        # Stored as a virtual dataset over the contact poses' rotation; h5py reads the array.
+        assert len(tool) > 0 and su["suction_poses_relative_to_camera"].is_virtual
+        assert np.array_equal(tool[:, :3, :3], contact[:, :3, :3])
         # MetaGraspNet: tool origin 2 cm (cup) + 11.21 cm (tool) behind the contact (cm files).
         back = contact[:, :3, 3] - tool[:, :3, 3]
         assert np.allclose(np.linalg.norm(back, axis=1), 13.21, atol=1e-3)

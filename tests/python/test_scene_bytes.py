@@ -5,6 +5,7 @@ colored_pcl.py: np.load / h5py, the operations they apply) still work unchanged.
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -23,6 +24,7 @@ from mgn.io.scene_format import (
     decode_float_image,
     depth_picture_png,
     encode_float_image,
+    from_cm,
     write_view,
 )
 from mgn.render.sensor import apply_depth_sensor
@@ -304,3 +306,178 @@ def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtype
         for key in ("objects/poses_relative_to_camera", "non_colliding_grasps/paralleljaw/"
                     "score_analytical"):  # fmt: skip
             assert np.array_equal(a[key][()], e[key][()])
+
+
+def _random_poses(rng: np.random.Generator, m: int) -> np.ndarray:
+    """(m, 4, 4) rigid poses with random rotations (QR of Gaussian matrices), metres."""
+    q, r = np.linalg.qr(rng.normal(size=(m, 3, 3)))
+    q = q * np.sign(np.diagonal(r, axis1=1, axis2=2))[:, None, :]
+    q[np.linalg.det(q) < 0, :, 0] *= -1
+    X = np.repeat(np.eye(4)[None], m, axis=0)
+    X[:, :3, :3] = q
+    X[:, :3, 3] = rng.normal(size=(m, 3)) * 0.2 + [0.0, 0.0, 0.8]
+    return X
+
+
+def _moved_along_axes(X: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """The poses X moved by ``offset`` (3,) expressed in their own axes (same rotation)."""
+    out = X.copy()
+    out[:, :3, 3] = X[:, :3, 3] + np.einsum("mij,j->mi", X[:, :3, :3], offset)
+    return out
+
+
+def _grasp_record(rng: np.random.Generator, m: int = 700, k: int = 300) -> ViewRecord:
+    """A record whose tool poses share their rotation with the contact poses (as the grasp
+    labels do: the flange and the suction tool sit on the contact frame's approach axis), except
+    the colliding suction group, whose rotations differ."""
+    rec = _record(rng)
+    h5 = dict(rec.scene_hdf5)
+    pj_contact = _random_poses(rng, m)
+    su_contact = _random_poses(rng, k)
+    other = _random_poses(rng, k)
+    for group in ("non_colliding_grasps", "colliding_grasps"):
+        h5[f"{group}/paralleljaw/contact_poses_relative_to_camera"] = pj_contact
+        h5[f"{group}/paralleljaw/franka_poses_relative_to_camera"] = _moved_along_axes(
+            pj_contact, np.array([0.01, 0.0, -0.1041])
+        )
+        h5[f"{group}/paralleljaw/object_id"] = np.arange(m) % N
+        h5[f"{group}/suctioncup/contact_poses_relative_to_camera"] = su_contact
+        h5[f"{group}/suctioncup/object_id"] = np.arange(k) % N
+    h5["non_colliding_grasps/suctioncup/suction_poses_relative_to_camera"] = _moved_along_axes(
+        su_contact, np.array([0.0, 0.0, -0.1321])
+    )
+    h5["colliding_grasps/suctioncup/suction_poses_relative_to_camera"] = other
+    h5["colliding_grasps/suctioncup/score_analytical"] = rng.random(k)
+    return replace(rec, scene_hdf5=h5)
+
+
+@pytest.mark.parametrize("archival", [False, True])
+def test_tool_poses_sharing_the_contact_rotation_read_back_bit_identical(
+    tmp_path: Path, archival: bool
+):
+    """Tool poses whose rotation equals the contact poses' are virtual datasets over them; what
+    h5py reads (as MetaGraspNet's colored_pcl.py does: whole, and row by row with ``list``) and
+    what mgn.Dataset reads are the arrays written, bit for bit; other tool poses stay plain."""
+    rec = _grasp_record(np.random.default_rng(11))
+    write_view(tmp_path, rec, archival=archival)
+    # The arrays the writer stores: float32 cm (archival: on the archival grids), computed here
+    # independently of the file.
+    ref = {
+        path: _cm_pose(np.asarray(a), archival)
+        for path, a in rec.scene_hdf5.items()
+        if path.endswith("poses_relative_to_camera") and "grasps/" in path
+    }
+    virtual = {
+        "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera",
+        "colliding_grasps/paralleljaw/franka_poses_relative_to_camera",
+        "non_colliding_grasps/suctioncup/suction_poses_relative_to_camera",
+    }
+    with h5py.File(str(tmp_path / "3_scene.hdf5"), "r") as f:
+        for path, expected in ref.items():
+            ds = f[path]
+            assert ds.is_virtual == (path in virtual), path
+            assert ds.dtype == np.float32 and ds.shape == expected.shape
+            assert np.array_equal(_bits(ds[()]), _bits(expected)), path
+            rows = list(ds)
+            assert len(rows) == len(expected)
+            assert np.array_equal(_bits(np.stack(rows)), _bits(expected)), path
+            # colored_pcl.py scales the translation of each row in place.
+            rows[0][0, 3] /= 100
+    view = View(tmp_path, 3)
+    assert not any(k.startswith("mgn_pose_columns") for k in view.hdf5)
+    for path, expected in ref.items():
+        back = view.hdf5[path]
+        # The reader's metre conversion of the stored cm (the same for plain datasets).
+        assert np.array_equal(_bits(back), _bits(from_cm(path, expected))), path
+        assert np.array_equal(_bits(view.hdf5_dataset(path)), _bits(back)), path
+
+
+def _cm_pose(X: np.ndarray, archival: bool) -> np.ndarray:
+    """The float32 cm poses the writer stores (archival: rotation entries on 2^-16, translations
+    on ARCHIVAL_POSE_STEP_CM), written out independently of the writer."""
+    out = X.astype(np.float64)
+    out[:, :3, 3] *= 100.0
+    out = out.astype(np.float32)
+    if archival:
+        rs, ts = np.float32(ARCHIVAL_ROTATION_STEP), np.float32(2.0**-10)
+        out[:, :3, :3] = np.round(out[:, :3, :3] / rs) * rs
+        out[:, :3, 3] = np.round(out[:, :3, 3] / ts) * ts
+    return out
+
+
+def _com_by_hand(depth_m, inst, X_WC, K, params) -> np.ndarray:
+    """The heat map of docs/models.md §7 pixel by pixel in plain Python floats."""
+    fx, fy, cx, cy = K
+    out = np.zeros(inst.shape, np.float32)
+    for v in range(inst.shape[0]):
+        for u in range(inst.shape[1]):
+            i, z = int(inst[v, u]), float(depth_m[v, u])
+            if i == 0 or not np.isfinite(z) or z <= 0:
+                continue
+            p = [z * (u + 0.5 - cx) / fx, z * (v + 0.5 - cy) / fy, z]
+            w = [
+                sum(float(X_WC[r, k]) * p[k] for k in range(3)) + float(X_WC[r, 3])
+                for r in range(3)
+            ]
+            c = params[i - 1]
+            d = math.sqrt(sum((w[r] - c[r]) ** 2 for r in range(3)))
+            span = max(c[4] - c[3], 1e-12)
+            out[v, u] = min(max((c[4] - d) / span, 0.0), 1.0)
+    return out
+
+
+@pytest.mark.parametrize("exact", [True, False])
+def test_com_heatmap_stored_as_residual_reads_back_bit_identical(tmp_path: Path, exact: bool):
+    """With the scene's CoM parameters the heat map is stored as its difference from the
+    prediction: a heat map that is the formula (computed here pixel by pixel) leaves a zero
+    residual, any other (noise added) still reads back bit for bit; depth_ideal is kept in
+    metres, bit for bit, and read in cm as before."""
+    rng = np.random.default_rng(21)
+    rec = _record(rng)
+    X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], float).reshape(4, 4)
+    k = rec.intrinsics
+    # Centres of mass near the seen surface (0.75 m in front of the camera), heat maps that
+    # range over [0, 1] across the image.
+    c_W = (X_WC @ [0.0, 0.0, 0.75, 1.0])[:3] + rng.normal(size=(N, 3)) * 0.05
+    params = np.column_stack([c_W, 0.01 + 0.02 * rng.random(N), 0.4 + 0.2 * rng.random(N)])
+    com = _com_by_hand(rec.depth_ideal, rec.instances, X_WC, (k.fx, k.fy, k.cx, k.cy), params)
+    assert np.count_nonzero(com) > H * W // 4  # a real heat map, not zeros
+    if not exact:
+        com = com + rng.normal(size=com.shape).astype(np.float32) * 1e-3
+    rec = replace(rec, extra_npz={"com_heatmap": com}, com_parameters=params)
+    write_view(tmp_path, rec)
+    with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
+        assert h5["com_heatmap"].attrs["mgn_encoding"] == "float32-bits-minus-com-prediction"
+        assert h5["com_heatmap"].dtype == np.int32
+        assert (not np.any(h5["com_heatmap"][()])) == exact
+        assert h5["depth_ideal"].attrs["mgn_units"] == "m"
+    view = View(tmp_path, 3)
+    assert np.array_equal(_bits(view.com_heatmap), _bits(com))
+    assert np.array_equal(_bits(view.depth_ideal), _bits(rec.depth_ideal))
+    assert np.array_equal(
+        _bits(View(tmp_path, 3).mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal))
+    )
+
+
+def test_archival_mode_with_com_parameters_keeps_the_mgn_images_exact(tmp_path: Path):
+    """Archival mode with the CoM parameters: the sensor depth is rounded, but depth_ideal and
+    the heat map (its residual from the prediction) read back bit for bit."""
+    rng = np.random.default_rng(22)
+    rec = _record(rng)
+    X_WC = np.asarray(rec.scene_hdf5["camera/pose_relative_to_world"], float).reshape(4, 4)
+    k = rec.intrinsics
+    c_W = (X_WC @ [0.0, 0.0, 0.75, 1.0])[:3] + rng.normal(size=(N, 3)) * 0.05
+    params = np.column_stack([c_W, 0.01 + 0.02 * rng.random(N), 0.4 + 0.2 * rng.random(N)])
+    com = _com_by_hand(rec.depth_ideal, rec.instances, X_WC, (k.fx, k.fy, k.cx, k.cy), params)
+    rec = replace(rec, extra_npz={"com_heatmap": com}, com_parameters=params)
+    write_view(tmp_path, rec, archival=True)
+    with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
+        assert h5["com_heatmap"].attrs["mgn_encoding"] == "float32-bits-minus-com-prediction"
+        assert h5["depth_ideal"].attrs["mgn_units"] == "m"
+    view = View(tmp_path, 3)
+    assert np.array_equal(_bits(view.com_heatmap), _bits(com))
+    assert np.array_equal(_bits(view.depth_ideal), _bits(rec.depth_ideal))
+    step = np.float32(ARCHIVAL_DEPTH_STEP_CM)
+    stored = view.npz_array("depth")
+    finite = np.isfinite(stored)
+    assert np.all(np.round(stored[finite] / step) * step == stored[finite])

@@ -358,6 +358,53 @@ def test_render_penetration_of_two_overlapping_spheres_is_their_overlap():
     assert abs(render_penetration([ball], [X1], ToteSpec()) - 0.0015) < 1e-4
 
 
+def test_render_penetration_equals_brute_force_on_overlapping_objects():
+    """The pruned search (points in order of their nearest-vertex bound) gives exactly the
+    brute-force maximum: every vertex of one mesh against every triangle of the other, the
+    inside test by the sign of the distance to the nearest face of a convex mesh."""
+    from mgn.scene.penetration import point_triangle_distance, render_penetration
+
+    box = mgn.make_box((0.05, 0.04, 0.03))  # convex: inside = on the inner side of every face
+    can = mgn.make_cylinder(0.02, 0.06, 24)
+    rng = np.random.default_rng(3)
+    tote = ToteSpec()
+    for trial in range(6):
+        meshes = [box, can, box]
+        poses = []
+        for _ in meshes:
+            X = np.eye(4)
+            q = rng.normal(size=4)
+            q /= np.linalg.norm(q)
+            w, x, y, z = q
+            X[:3, :3] = [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+            ]
+            X[:3, 3] = (rng.normal(0, 0.012), rng.normal(0, 0.012), 0.06)
+            poses.append(X)
+        want = 0.0
+        for a, ma in enumerate(meshes):
+            va = np.asarray(ma.vertices, np.float64) @ poses[a][:3, :3].T + poses[a][:3, 3]
+            want = max(want, float(-va[:, 2].min()))
+            for b, mb in enumerate(meshes):
+                if a == b:
+                    continue
+                vb = np.asarray(mb.vertices, np.float64)
+                fb = np.asarray(mb.faces)
+                p = (va - poses[b][:3, 3]) @ poses[b][:3, :3]
+                tri = vb[fb]
+                n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+                n /= np.linalg.norm(n, axis=1, keepdims=True)
+                side = np.einsum("pk,fk->pf", p, n) - np.einsum("fk,fk->f", tri[:, 0], n)
+                inside = p[np.all(side < 0, axis=1)]
+                if len(inside):
+                    want = max(want, float(point_triangle_distance(inside, tri).max()))
+        got = render_penetration(meshes, poses, tote)
+        assert got == pytest.approx(want, rel=1e-9, abs=1e-12), trial
+        assert trial == 0 or got > 0.0  # the objects overlap
+
+
 def test_round_objects_rest_on_the_floor_and_do_not_overlap():
     """Physics hulls contain the render meshes: a ball rests on its lowest render-mesh point
     (not sunk into the floor), and balls in a pile do not overlap (issue: 1-1.8 mm before)."""

@@ -264,9 +264,9 @@ def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_lab
         layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal, cats, bins,
                                 occlusion=labels.occlusion)  # fmt: skip
         seen = labels.visible_pixels > 0
-        write_view(
-            serial, view_record(v, view, images, labels, layout, sgm.view_grasps(view, seen))
-        )
+        grasps = sgm.view_grasps(view, seen)
+        com = rays.com_parameters()
+        write_view(serial, view_record(v, view, images, labels, layout, grasps, com))
         gt[v] = scene_gt_entries(labels.X_CO, cats, seen)
     write_scene_gt(serial, gt)
     write_scene_json(scene, serial / "scene.json")

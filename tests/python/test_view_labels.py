@@ -12,7 +12,8 @@ from conftest import translation
 import mgn
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import make_box
-from mgn.objects import ToteSpec, get_object, tote_mesh
+from mgn.io.scene_format import com_heatmap_prediction
+from mgn.objects import ToteSpec, com_keypoints, get_object, tote_mesh
 from mgn.render import Instance, Renderer
 from mgn.scene import BUILTIN, Scene, SceneInstance
 from mgn.scene.cameras import CameraView, Intrinsics, look_at
@@ -254,6 +255,41 @@ def test_amodal_matches_the_renderer_alone_on_99_percent(library_scene, library_
     assert L.com_heatmap.max() <= 1.0 and L.com_heatmap.min() >= 0.0
     assert np.all(L.com_heatmap[L.visible == 0] == 0)
     assert L.com_heatmap[L.visible > 0].mean() > 0.2
+
+
+def test_com_parameters_predict_the_heat_map_to_the_bit(library_scene, library_model) -> None:
+    """The dataset writer stores the heat map as its difference from a prediction made from
+    SceneRayModel.com_parameters and the depth: against the C++ model's own heat map (given the
+    same depth) the prediction matches nearly every pixel to the bit. The parameters are the
+    centre of mass and the nearest / farthest CoM point, worked out here from the object specs."""
+    scene = library_scene
+    view = CameraView(K200, look_at([0.35, -0.45, 0.55], [0.0, 0.0, 0.05]))
+    r = Renderer(200, 200)
+    items = [(scene.mesh(i), inst.X_WO, inst.instance_id) for i, inst in enumerate(scene.instances)]
+    r.set_instances(
+        [Instance(r.add_mesh(m), X, i) for m, X, i in items]
+        + [Instance(r.add_mesh(tote_mesh(scene.tote)), np.eye(4), 0)]
+    )
+    full = r.render(view, rgb=False, depth=True)
+    ids = full.instance_ids
+    L = view_object_labels(library_model, view, ids, depth=full.depth)
+    params = library_model.com_parameters()
+    for i, inst in enumerate(scene.instances):
+        spec = scene.object_spec(i)
+        com_O = mgn.mass_properties(scene.mesh(i), spec.density).center_of_mass
+        c_W = inst.X_WO[:3, :3] @ com_O + inst.X_WO[:3, 3]
+        np.testing.assert_allclose(params[i, :3], c_W, atol=1e-12)
+        cp = com_keypoints(scene.mesh(i), spec.density, seed=spec.category_id)
+        d = np.linalg.norm(cp[:, 1:4] @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3] - c_W, axis=1)
+        np.testing.assert_allclose(params[i, 3:], [d.min(), d.max()], atol=1e-12)
+    assert np.all(params[:, 3] < params[:, 4])
+    K = view.K
+    pred = com_heatmap_prediction(full.depth, ids, view.X_WC, [K.fx, K.fy, K.cx, K.cy], params)
+    seen = ids > 0
+    assert np.array_equal(pred[~seen], L.com_heatmap[~seen])
+    same = pred[seen].view(np.uint32) == L.com_heatmap[seen].view(np.uint32)
+    assert same.mean() > 0.99
+    np.testing.assert_allclose(pred, L.com_heatmap, atol=1e-6)
 
 
 def test_tote_wall_counts_as_an_occluder(library_scene, library_model) -> None:

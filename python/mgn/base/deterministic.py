@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import io
 import zipfile
+import zlib
+from collections.abc import Collection, Mapping
 from typing import Any
 
 import h5py
@@ -38,14 +40,24 @@ NPZ_DATE_TIME: tuple[int, int, int, int, int, int] = (1980, 1, 1, 0, 0, 0)
 H5_DATASET_KWARGS: dict[str, Any] = {"track_times": False}
 
 
-def npz_bytes(*, compress: bool = True, level: int = 1, **arrays: npt.ArrayLike) -> bytes:
+def npz_bytes(
+    *,
+    compress: bool = True,
+    level: int = 1,
+    levels: Mapping[str, int] | None = None,
+    run_length: Collection[str] = (),
+    **arrays: npt.ArrayLike,
+) -> bytes:
     """The bytes of an ``.npz`` file holding ``arrays`` (readable by ``np.load``), reproducible.
 
     Like ``np.savez_compressed`` (``compress=True``) or ``np.savez``, but every zip entry carries
     the fixed date :data:`NPZ_DATE_TIME` and fixed permissions, and entries are in the order the
     keywords are given. Object arrays are refused (no pickles). ``level`` is the deflate level
-    (1 = fastest, as the scene writer uses: masks and depth images shrink nearly as much as at
-    numpy's level 6, several times faster).
+    (1 = fastest, as the scene writer uses: depth images shrink nearly as much as at numpy's
+    level 6, several times faster); ``levels`` overrides it per array name. Arrays named in
+    ``run_length`` are deflated with zlib's run-length strategy (``Z_RLE``): masks and id
+    images, which are long runs of equal bytes, come out ~3.5x smaller than at level 1 in the
+    same time. Every entry is standard deflate: ``np.load`` (``zipfile``) reads them all.
 
     Raises:
         ValueError: an array of dtype object.
@@ -61,12 +73,17 @@ def npz_bytes(*, compress: bool = True, level: int = 1, **arrays: npt.ArrayLike)
                 )
             info = zipfile.ZipInfo(f"{name}.npy", date_time=NPZ_DATE_TIME)
             info.compress_type = method
+            lvl = (levels or {}).get(name, level)
             try:
-                info.compress_level = level  # type: ignore[attr-defined]  # Python >= 3.13
+                info.compress_level = lvl  # type: ignore[attr-defined]  # Python >= 3.13
             except AttributeError:
-                info._compresslevel = level  # type: ignore[attr-defined]  # Python <= 3.12
+                info._compresslevel = lvl  # type: ignore[attr-defined]  # Python <= 3.12
             info.external_attr = 0o644 << 16  # rw-r--r--, as numpy's own writer
             with zf.open(info, mode="w", force_zip64=True) as fh:
+                if compress and name in run_length and hasattr(fh, "_compressor"):
+                    # zipfile has no strategy argument: the entry's raw-deflate compressor
+                    # (what zipfile makes itself: wbits -15) with the run-length strategy.
+                    fh._compressor = zlib.compressobj(lvl, zlib.DEFLATED, -15, 8, zlib.Z_RLE)
                 np.lib.format.write_array(fh, array, allow_pickle=False)
     return out.getvalue()
 

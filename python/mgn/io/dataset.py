@@ -39,10 +39,17 @@ from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
 from mgn.io.scene_format import (
+    COM_RESIDUAL_ENCODING,
     FLOAT_DELTA_ENCODING,
+    POSE_COLUMNS_GROUP,
+    UNITS_ATTR,
     UNORM16_ENCODING,
+    com_heatmap_prediction,
+    decode_com_residual,
     decode_float_image,
     from_cm,
+    ideal_metres,
+    read_scene_dataset,
 )
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
@@ -157,7 +164,7 @@ class View:
             with h5py.File(p, "r") as h5:
                 if name not in h5:
                     raise IoError(f"'{p}' has no dataset '{name}'")
-                return from_cm(name, h5[name][()])
+                return from_cm(name, read_scene_dataset(h5, name))
         except FileNotFoundError:
             raise IoError(f"'{p}' does not exist") from None
         except OSError as e:
@@ -183,12 +190,30 @@ class View:
             try:
                 with h5py.File(p, "r") as h5:
                     if name in h5:
-                        value = h5[name][()]
-                        coding = h5[name].attrs.get("mgn_encoding")
+                        ds = h5[name]
+                        value = ds[()]
+                        coding = ds.attrs.get("mgn_encoding")
                         if coding == FLOAT_DELTA_ENCODING:
                             value = decode_float_image(value)
                         elif coding == UNORM16_ENCODING:
                             value = value.astype(np.float32) / np.float32(65535.0)
+                        elif coding == COM_RESIDUAL_ENCODING:
+                            ideal = self._depth_ideal_m()
+                            if ideal is None:
+                                raise IoError(f"'{p}': com_heatmap needs depth_ideal, absent")
+                            pred = com_heatmap_prediction(
+                                ideal,
+                                self.npz_array("instances_objects"),
+                                ds.attrs["X_WC"],
+                                ds.attrs["K"],
+                                ds.attrs["com_parameters"],
+                            )
+                            value = decode_com_residual(value, pred)
+                        if ds.attrs.get(UNITS_ATTR) == "m":
+                            # Stored in metres (the renderer's float32): kept, and given in cm
+                            # as the writer converts them (float32 of the float64 product).
+                            cache[f"{name} (m)"] = value
+                            value = (value.astype(np.float64) * M_TO_CM).astype(np.float32)
             except OSError as e:
                 raise IoError(f"'{p}' is not a readable HDF5 file: {e}") from e
         elif self.path(".npz").exists():
@@ -197,11 +222,19 @@ class View:
         cache[name] = value
         return value
 
+    def _depth_ideal_m(self) -> npt.NDArray[np.float32] | None:
+        """``depth_ideal`` in metres: as stored when the file holds metres (the renderer's
+        values), else the stored cm / 100."""
+        d = self.mgn_image("depth_ideal")
+        cache = self.__dict__["_mgn_images"]
+        if "depth_ideal (m)" in cache:
+            return cache["depth_ideal (m)"]
+        return None if d is None else ideal_metres(d)
+
     @property
     def depth_ideal(self) -> npt.NDArray[np.float32] | None:
         """(H, W) noise-free z-depth, m (mgn files only; None otherwise)."""
-        d = self.mgn_image("depth_ideal")
-        return None if d is None else (d / np.float32(M_TO_CM)).astype(np.float32)
+        return self._depth_ideal_m()
 
     @property
     def valid_depth(self) -> npt.NDArray[np.bool_]:
@@ -250,8 +283,8 @@ class View:
             with h5py.File(p, "r") as h5:
 
                 def visit(name: str, obj: Any) -> None:
-                    if isinstance(obj, h5py.Dataset):
-                        out[name] = from_cm(name, obj[()])
+                    if isinstance(obj, h5py.Dataset) and not name.startswith(POSE_COLUMNS_GROUP):
+                        out[name] = from_cm(name, read_scene_dataset(h5, name))
 
                 h5.visititems(visit)
         except FileNotFoundError:

@@ -44,9 +44,9 @@ Sections:
   scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
   or a list of object names / category ids).
 - ``io``: how the files are written: ``archival`` (false: every array exactly as the models make
-  it; true: the compact archival mode of docs/format.md — depth on a 1/64 cm grid (at most
-  0.078 mm off), ``com_heatmap`` in 16 bits, grasp poses rounded (< 0.001°, 0.005 mm);
-  MetaGraspNet's scripts still read every file).
+  it; true: the compact archival mode of docs/format.md — sensor depth on a 1/64 cm grid (at
+  most 0.078 mm off), grasp poses rounded (< 0.001°, 0.005 mm); MetaGraspNet's scripts still
+  read every file).
 - ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
@@ -650,10 +650,10 @@ class IoConfig(_Section):
     """How the scene files are written (docs/format.md).
 
     Attributes:
-        archival: the compact archival mode (lossy: sensor and ideal depth rounded to
-            :data:`mgn.io.scene_format.ARCHIVAL_DEPTH_STEP_CM`, ``com_heatmap`` to 1/65535,
-            grasp poses to 2^-16 per rotation entry and 1/1024 cm); false keeps every array bit
-            for bit.
+        archival: the compact archival mode (lossy: the sensor depth rounded to
+            :data:`mgn.io.scene_format.ARCHIVAL_DEPTH_STEP_CM`, grasp poses to 2^-16 per rotation
+            entry and 1/1024 cm; views through a lens also the ideal depth and ``com_heatmap``
+            to 1/65535); false keeps every array bit for bit.
     """
 
     archival: bool = False
@@ -758,8 +758,8 @@ _SECTION_DOCS = {
     "selection": "difficulty-balanced test set: quota {level: views} (null = off), batches",
     "render": "RGB images: engine raster (fast preview) | path (path tracer), spp, denoise, "
     "film; randomize: per-view lights / environment / tote+floor materials / exposure",
-    "io": "files: archival true = compact archival mode (depth on a 1/64 cm grid, heat map in "
-    "16 bits, grasp poses rounded; docs/format.md), false = every array exact",
+    "io": "files: archival true = compact archival mode (sensor depth on a 1/64 cm grid, grasp "
+    "poses rounded; docs/format.md), false = every array exact",
 }
 
 

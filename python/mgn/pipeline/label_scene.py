@@ -143,10 +143,14 @@ def view_record(
     labels: Any,
     layout: Any | None,
     grasps: Any | None,
+    com_parameters: np.ndarray | None = None,
 ) -> ViewRecord:
     """The :class:`ViewRecord` of one view from its images (``ViewImages``), object labels
     (``ViewObjectLabels``), layout (``Layout`` or None) and scene grasps (``SceneGrasps`` or
-    None). Lengths in metres; the writer converts."""
+    None). Lengths in metres; the writer converts. ``com_parameters``: the scene's
+    (:meth:`~mgn.view_labels.objects.SceneRayModel.com_parameters`) when the heat map was computed
+    from ``images.depth_ideal`` through ``view`` (no lens): the writer then stores it as a
+    residual."""
     n = labels.num_objects
     h5: dict[str, np.ndarray] = {
         "camera/pose_relative_to_world": np.asarray(view.X_WC, np.float64)[None],
@@ -189,6 +193,7 @@ def view_record(
         order_csv=csv,
         layout_json=extra,
         extra_npz={"com_heatmap": labels.com_heatmap},
+        com_parameters=com_parameters,
     )
 
 
@@ -381,7 +386,8 @@ def label_scene(
                     grasps = sgm_future.result().view_grasps(view, seen)
                 t4 = time.perf_counter()
                 timings.add("scene grasps", t4 - t3)
-                record = view_record(v, view, images, labels, layout, grasps)
+                com = rays.com_parameters() if images.lens is None else None
+                record = view_record(v, view, images, labels, layout, grasps, com)
                 del images, labels, layout, grasps
                 pending.append(pool.submit(write_view, out, record, archival=opt.archival))
                 del record

@@ -50,7 +50,7 @@ import time
 import traceback
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -77,7 +77,7 @@ from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
 from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 from mgn.render.photo import RenderSettings
 from mgn.scene.drop import drop_scene, drop_scene_refilled
-from mgn.scene.scene import BUILTIN, resolve_object
+from mgn.scene.scene import BUILTIN, Scene, resolve_object
 
 __all__ = [
     "DATASET_SCHEMA_VERSION",
@@ -169,10 +169,31 @@ def _folder_size(folder: Path) -> int:
     return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
 
 
-def run_scene(task: SceneTask) -> SceneResult:
+def drop_task_scene(task: SceneTask) -> Scene:
+    """The settled scene of ``task`` (its objects dropped with its seed): the drop step of
+    :func:`run_scene`. Depends only on the task, never on when or in which thread it runs."""
+    specs = [resolve_object(name, source) for name, source in task.objects]
+    sources = {name: source for name, source in task.objects if source != BUILTIN}
+    drop_kw: dict[str, Any] = {
+        "seed": task.seed,
+        "tote": task.config.tote,
+        "options": task.config.drop,
+        "sources": sources,
+    }
+    if task.config.objects.refill:
+        return drop_scene_refilled(specs, attempts=task.config.objects.refill_attempts, **drop_kw)
+    return drop_scene(specs, **drop_kw)
+
+
+def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneResult:
     """Drop, write and finalise one scene (see the module doc). Never raises for an ordinary
     error: the result says what went wrong. The temporary folder is removed on any failure,
-    including KeyboardInterrupt (which is re-raised)."""
+    including KeyboardInterrupt (which is re-raised).
+
+    ``dropped``: the task's drop (:func:`drop_task_scene`) already started elsewhere (the
+    in-process executor drops scene k + 1 while scene k is labelled); ``times["drop"]`` is
+    then the time spent waiting for it and ``times["cpu"]`` this process's CPU over the
+    scene, which includes the next scene's drop running alongside."""
 
     out = Path(task.out_dir)
     final = out / f"scene{task.index}"
@@ -186,20 +207,7 @@ def run_scene(task: SceneTask) -> SceneResult:
     # CPU of this process over the scene, all threads (a worker runs one scene at a time).
     c0 = time.process_time()
     try:
-        specs = [resolve_object(name, source) for name, source in task.objects]
-        sources = {name: source for name, source in task.objects if source != BUILTIN}
-        drop_kw: dict[str, Any] = {
-            "seed": task.seed,
-            "tote": task.config.tote,
-            "options": task.config.drop,
-            "sources": sources,
-        }
-        if task.config.objects.refill:
-            scene = drop_scene_refilled(
-                specs, attempts=task.config.objects.refill_attempts, **drop_kw
-            )
-        else:
-            scene = drop_scene(specs, **drop_kw)
+        scene = drop_task_scene(task) if dropped is None else dropped.result()
         times["drop"] = time.perf_counter() - t0
         t1 = time.perf_counter()
         if tmp.exists():
@@ -302,11 +310,19 @@ class _Executor(ABC):
 
 
 class _InProcess(_Executor):
+    """Runs the tasks one after the other in this process. Scenes (``fn`` is
+    :func:`run_scene`): the drop of scene k + 1 (one core, Bullet releases the GIL) runs in a
+    thread of its own while scene k is rendered, labelled and written, so the second core is
+    not idle during the drop. A drop depends only on its task, so the files do not change."""
+
     def __init__(self) -> None:
         self._stop = False
 
     def run(self, fn, items):  # noqa: ANN001, ANN201
         self._stop = False
+        if fn is run_scene:
+            yield from self._run_scenes(items)
+            return
         for item in items:
             if self._stop:
                 return
@@ -314,6 +330,25 @@ class _InProcess(_Executor):
                 yield item, fn(item), None
             except Exception as e:  # noqa: BLE001
                 yield item, None, e
+
+    def _run_scenes(self, tasks: Sequence[SceneTask]) -> Iterator[tuple]:
+        pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mgn-drop")
+        try:
+            ahead = pool.submit(drop_task_scene, tasks[0]) if tasks else None
+            for k, task in enumerate(tasks):
+                if self._stop:
+                    return
+                current = ahead
+                ahead = None
+                if k + 1 < len(tasks):
+                    ahead = pool.submit(drop_task_scene, tasks[k + 1])
+                try:
+                    yield task, run_scene(task, current), None
+                except Exception as e:  # noqa: BLE001
+                    yield task, None, e
+        finally:
+            # A cancelled run does not wait for a drop nobody will use (it finishes alone).
+            pool.shutdown(wait=False, cancel_futures=True)
 
     def cancel(self) -> None:
         self._stop = True

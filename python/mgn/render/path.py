@@ -16,10 +16,12 @@ Lambertian surface under irradiance E shows E / pi. Lights and the environment u
 Algorithm (see ``cpp/include/mgn/render/path_tracer.hpp``): unidirectional path tracing with
 next-event estimation and multiple importance sampling (power heuristic) for the area lights and
 the environment, Russian roulette, glTF 2.0 metallic-roughness materials (Lambert + GGX with
-height-correlated Smith masking, visible-normal sampling) and smooth dielectrics (Fresnel,
-refraction, total internal reflection), Owen-scrambled Sobol samples stratified across
-neighbouring pixels (blue-noise error), seeded from (seed, view_index, pixel block): the image is
-identical for any number of threads. Long calls release
+height-correlated Smith masking, visible-normal sampling) and dielectrics (Fresnel,
+refraction, total internal reflection; smooth below roughness ~0.055, GGX microfacet reflection
+and refraction above; each refraction tints by sqrt(base colour), so a closed wall tints once),
+emissive meshes sampled as lights, Owen-scrambled Sobol samples stratified across neighbouring
+pixels (blue-noise error), seeded from (seed, view_index, pixel block): the image is identical
+for any number of threads. Long calls release
 the GIL.
 """
 
@@ -59,19 +61,27 @@ def _color(value: Sequence[float], name: str) -> Color:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
+#: The C++ defaults of the tracer and the film (mgn/render/path_tracer.hpp): the one place they
+#: are written.
+_TRACE = _core.PathTraceOptions()
+_FILM = _core.FilmOptions()
+
+
 @dataclass(frozen=True)
 class PbrMaterial:
     """glTF 2.0 metallic-roughness material (+ KHR_materials_transmission / ior).
 
     Attributes:
         base_color: linear RGB in [0, 1] (diffuse albedo of dielectrics, F0 of metals, tint of
-            transmitted light).
+            light transmitted through a closed wall: sqrt(base_color) per refraction).
         metallic: [0, 1].
         roughness: perceptual roughness in [0, 1]; GGX alpha = roughness ** 2.
         ior: index of refraction (>= 1) of the specular layer and of the dielectric; 1 removes
             the specular layer (a pure Lambertian surface when metallic = 0).
-        transmission: [0, 1]; 1 = clear smooth dielectric (glass, clear plastic).
-        emission: emitted radiance (front side), linear RGB >= 0, same units as the lights.
+        transmission: [0, 1]; 1 = clear dielectric (glass, clear plastic): smooth when
+            roughness < ~0.055, frosted (GGX microfacet refraction) above.
+        emission: emitted radiance (front side), linear RGB >= 0, same units as the lights;
+            faces with emission > 0 are sampled by next-event estimation like area lights.
         base_color_texture: (H, W, 3) uint8 sRGB image, top row first, multiplying base_color,
             looked up at the mesh uvs (u right, v up), bilinear, repeating; None = none.
     """
@@ -122,7 +132,8 @@ class PbrMaterial:
         clamped to [0.08, 1]; a mirror-like material (specular luminance >= 0.8 and n >= 200) is a
         metal with the specular colour as base colour; a transparent one (opacity < 1) becomes a
         clear dielectric (transmission = min(1, 2 (1 - opacity)), its tint moved 70 % towards
-        white so that two surface crossings do not darken it, roughness 0.05).
+        white: a Phong colour describes the surface, clear plastic barely tints what is seen
+        through it; roughness 0.05, a smooth dielectric).
         """
         base = np.clip(np.asarray(m.base_color, np.float64)[:3], 0.0, 1.0)
         spec = np.clip(np.asarray(m.specular, np.float64)[:3], 0.0, 1.0)
@@ -255,16 +266,16 @@ class PathTraceOptions:
             at the cost of dimming those caustics.
     """
 
-    spp: int = 16
-    max_bounces: int = 6
-    seed: int = 0
-    view_index: int = 0
-    num_threads: int = 0
-    rr_depth: int = 3
-    aperture_radius: float = 0.0
-    focus_distance: float = 0.0
-    clamp: float = 0.0
-    clamp_indirect: float = 10.0
+    spp: int = _TRACE.spp
+    max_bounces: int = _TRACE.max_bounces
+    seed: int = _TRACE.seed
+    view_index: int = _TRACE.view_index
+    num_threads: int = _TRACE.num_threads
+    rr_depth: int = _TRACE.rr_depth
+    aperture_radius: float = _TRACE.aperture_radius
+    focus_distance: float = _TRACE.focus_distance
+    clamp: float = _TRACE.clamp
+    clamp_indirect: float = _TRACE.clamp_indirect
 
     def __post_init__(self) -> None:
         for name in ("spp", "max_bounces", "seed", "view_index", "num_threads", "rr_depth"):
@@ -306,13 +317,13 @@ class FilmOptions:
     never clipping; mid grey 0.18 -> 0.165); "linear" clips to [0, 1]. Then the sRGB OETF.
     """
 
-    exposure: float = 0.0
-    tone: str = "filmic"
-    shot_noise: float = 0.0
-    read_noise: float = 0.0
-    seed: int = 0
-    view_index: int = 0
-    num_threads: int = 0
+    exposure: float = _FILM.exposure
+    tone: str = _FILM.tone
+    shot_noise: float = _FILM.shot_noise
+    read_noise: float = _FILM.read_noise
+    seed: int = _FILM.seed
+    view_index: int = _FILM.view_index
+    num_threads: int = _FILM.num_threads
 
     def __post_init__(self) -> None:
         for name in ("seed", "view_index"):

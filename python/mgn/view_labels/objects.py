@@ -168,6 +168,7 @@ class SceneRayModel:
         self._meshes = meshes
         self._tote = tote
         self._category_ids = cats.astype(np.int32)
+        self._com_parameters = _com_parameters(P, c, cp, meshes)
         self._model = _core.ViewLabelModel(
             meshes,
             P,
@@ -227,6 +228,15 @@ class SceneRayModel:
     def has_tote(self) -> bool:
         return bool(self._model.has_tote)
 
+    def com_parameters(self) -> npt.NDArray[np.float64]:
+        """(N, 5) per instance [c_W (3), d_min, d_max], world frame, m: the centre of mass and
+        the nearest and farthest distances of the CoM-scored points from it, which define
+        ``com_heatmap`` = clip((d_max - |p_W - c_W|) / (d_max - d_min), 0, 1) at each visible
+        surface point p_W (docs/models.md §7; computed here as the C++ model does, to the last
+        bits or nearly: the dataset writer predicts the heat map from them,
+        :func:`mgn.io.scene_format.com_heatmap_prediction`)."""
+        return self._com_parameters.copy()
+
     @property
     def category_ids(self) -> npt.NDArray[np.int32]:
         """(N,) category ids in scene order."""
@@ -234,6 +244,24 @@ class SceneRayModel:
 
     def __repr__(self) -> str:
         return f"SceneRayModel(objects={self.num_objects}, tote={self.has_tote})"
+
+
+def _com_parameters(
+    poses: np.ndarray, coms: np.ndarray, com_points: list[np.ndarray], meshes: list[Mesh]
+) -> npt.NDArray[np.float64]:
+    """(N, 5) [c_W, d_min, d_max] of :meth:`SceneRayModel.com_parameters`."""
+    out = np.zeros((len(meshes), 5))
+    for i, (X, c, cp, mesh) in enumerate(zip(poses, coms, com_points, meshes, strict=True)):
+        R, t = X[:3, :3], X[:3, 3]
+        c_W = R @ c + t
+        if len(cp):
+            pts = cp[:, 1:4] @ R.T + t
+            d = np.sqrt(np.sum((pts - c_W) ** 2, axis=1))
+            out[i] = [*c_W, d.min(), d.max()]
+        else:
+            v = np.asarray(mesh.vertices, np.float64) @ R.T + t
+            out[i] = [*c_W, 0.0, np.sqrt(np.sum((v - c_W) ** 2, axis=1)).max()]
+    return out
 
 
 def view_object_labels(
