@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 DEFAULT_CHECKS = (0, 5, 10, 15, 20, 30, 40, 60)
-OBJECTS = "can_soda:100,mug:80,box_cereal:170,can_food:100,bottle_water:100"
+OBJECTS = "can_soda:170,mug:170,box_cereal:170,can_food:100,bottle_water:100"
 GOLDEN = 0.6180339887498949
 
 
@@ -159,8 +159,12 @@ def _search_bisect(grid: np.ndarray, checks: int, band: bool) -> tuple[int, int,
             lo, hi = (m + 1, hi) if run(i, m) else (lo, m)
         b.append(lo)
         inf[i, :lo] = True
-    near = [(i, c) for i in range(S) for c in (b[i] - 1, b[i]) if 0 <= c < S and band]
-    near = [c for c in near if not sim[c]]
+    near = []
+    for i in range(S if band else 0):  # nearest unsimulated cell on each side of the boundary
+        for c, step in ((b[i] - 1, -1), (b[i], 1)):
+            c += step if 0 <= c < S and sim[i, c] else 0
+            if 0 <= c < S and not sim[i, c]:
+                near.append((i, c))
     rest = [(i, jj) for i in range(S) for jj in range(S) if not sim[i, jj] and (i, jj) not in near]
     return _verify(grid, sim, inf, near, checks, _golden(rest))
 
@@ -192,7 +196,7 @@ def replay(grid: np.ndarray, checks: int) -> tuple[int, int, bool]:
 VARIANTS = {
     "previous (walk right, checks at distance 1-2)": _search_previous,
     "gallop+bisect, no band": lambda g, c: _search_bisect(g, c, band=False),
-    "gallop+bisect, band +-1 (staircase_grid)": replay,
+    "gallop+bisect, band (staircase_grid)": replay,
 }
 
 

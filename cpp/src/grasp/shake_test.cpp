@@ -592,14 +592,17 @@ StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, 
     b[i] = lo;
     for (int k = 0; k < lo; ++k) g.success[at(i, k)] = 1;  // inferred (or simulated) successes
   }
-  // Verification: every row's cells next to its boundary (the last inferred success and the
-  // first inferred failure), then the first `checks` other inferred cells in a golden-ratio
-  // (low-discrepancy) order over the grid, which finds isolated failures away from the
-  // boundary. The first contradiction stops the checks and every remaining cell is simulated.
+  // Verification: in every row the inferred cell nearest to the boundary on each side (the
+  // last success b-1, else b-2 if the walk simulated b-1; the first failure b, else b+1), then
+  // the first `checks` other inferred cells in a golden-ratio (low-discrepancy) order over the
+  // grid, which finds isolated failures away from the boundary. The first contradiction stops
+  // the checks and every remaining cell is simulated.
   std::vector<std::pair<int, int>> candidates;
   std::vector<std::uint8_t> queued(n, 0);
   for (int i = 0; i < S; ++i) {
-    for (const int cj : {b[i] - 1, b[i]}) {
+    for (const int side : {-1, 1}) {
+      int cj = side < 0 ? b[i] - 1 : b[i];
+      if (cj >= 0 && cj < S && g.simulated[at(i, cj)]) cj += side;
       if (cj < 0 || cj >= S || g.simulated[at(i, cj)] || queued[at(i, cj)]) continue;
       queued[at(i, cj)] = 1;
       candidates.emplace_back(i, cj);

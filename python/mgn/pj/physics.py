@@ -81,7 +81,7 @@ class ShakeOptions:
     max_hull_vertices: int = 64
     solver_iterations: int = 10
     staircase: bool = False
-    staircase_checks: int = 10
+    staircase_checks: int = 6
     num_threads: int = 0
     seed: int = 0
     first_grasp_index: int = 0

@@ -112,7 +112,7 @@ struct ShakeOptions {
   /// exactly monotone (isolated failures anywhere in the grid, unrelated to the cell's random
   /// shake axis), so more checks buy agreement with trials.
   bool staircase = false;
-  int staircase_checks = 10;  ///< >= 0
+  int staircase_checks = 6;  ///< >= 0
   int num_threads = 0;        ///< 0 = all hardware threads; results do not depend on it
   std::uint64_t seed = 0;     ///< seed of the per-trial random streams
   /// Index of the first grasp in a larger list: grasp g of this call uses the random streams of
@@ -158,12 +158,13 @@ struct StaircaseGrid {
 /// row 0 first probes its hardest cell (0, S-1), which settles a grid that succeeds everywhere
 /// with one trial; then each row probes the cell at its lower bound and gallops right (offsets
 /// 0, 1, 3, 7, ...) and bisects the last gap; a row whose lower bound is S costs nothing. Cells
-/// left of b[i] are inferred successes, the others inferred failures. Verification: the inferred
-/// cells next to every row's boundary ((i, b[i]-1) and (i, b[i])), then the first `checks`
+/// left of b[i] are inferred successes, the others inferred failures. Verification: in every row
+/// the inferred cell nearest to the boundary on each side (the last success b[i]-1, or b[i]-2
+/// where the walk simulated b[i]-1; the first failure b[i], or b[i]+1), then the first `checks`
 /// other inferred cells in a golden-ratio (low-discrepancy) order are simulated; if any
 /// contradicts its inference, every remaining cell is simulated (fallback), so the result is
-/// then exact. With checks >= S·S every cell is verified. Trials without fallback: at most 29 +
-/// checks for S = 10 (every monotone 10×10 grid enumerated), S + checks for a grid that
+/// then exact. With checks >= S·S every cell is verified. Trials without fallback: at most 39 +
+/// checks for S = 10 (every monotone 10×10 grid enumerated), S + 1 + checks for a grid that
 /// succeeds everywhere. `trial(i, j)` runs one trial, never twice for a cell. Deterministic.
 /// Throws InvalidArgument for S < 1 or checks < 0.
 StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks);
