@@ -3,41 +3,24 @@
 For several built-in objects, parallel-jaw grasps come from mgn's own labeller (antipodal
 sampling, collision-free, an evenly strided subset). Each grasp is simulated once over the full
 friction x density grid (every trial; optionally kept in ``--grid-cache`` so a rerun only adds
-grasps). Every cell's trial is deterministic (its own random stream, the same in both
-searches), so the staircase search's result is a function of the full grid: it is replayed on
-the stored grids through ``mgn._core.staircase_grid`` for several check budgets
-(``ShakeOptions.staircase_checks``), and the default budget is also run for real with
-``ShakeOptions(staircase=True)`` on the first ``--confirm`` grasps of each object, which must
-give the replayed scores. Reported per object and budget: identical scores, mean and max
-absolute score difference, trials per grasp, fallback share; wall and CPU time and load.
+grasps). Every cell's trial is deterministic (its own random stream, the same in every search),
+so a search's result is a function of the full grid: three searches are replayed on the stored
+grids for several check budgets -- the previous search (session 6, re-implemented here), the
+gallop+bisect walk without the boundary band, and mgn's ``staircase_grid`` (through
+``mgn._core``) -- and the default budget is also run for real with
+``ShakeOptions(staircase=True)`` on the first ``--confirm`` grasps of each object, which must give
+the replayed scores. Reported: identical scores, misses, mean and max absolute score difference,
+mean and max trials per grasp, fallbacks; where the walk's inference is wrong; wall and CPU time.
 
-    python -m benchmarks.bench_staircase [--grasps-per-object 170] [--objects a,b,c]
-        [--grid-cache DIR [--cached-only]] [--checks 0,4,10,20] [--confirm 10]
+    python -m benchmarks.bench_staircase [--objects name:grasps,...] [--grid-cache DIR
+        [--cached-only]] [--checks 0,5,6,10] [--confirm 10]
 
-Measured 2026-11-24 on the shared 2-core machine (load 12-22): full grids of 350 grasps
-(can_soda 100, mug 80, box_cereal 170; 10x10, default options) took 182, 332 and 227 CPU-s
-(1.8, 4.2 and 1.3 CPU-s per grasp); the replay table (this benchmark with --cached-only, 18 CPU-s,
-52 s wall at load 15):
-
-  checks  grasps  identical  mean|diff|  max|diff|  trials/grasp  fallback
-       0     350      91.7 %      0.0056       0.27          10.1     0.0 %
-       4     350      96.0 %      0.0025       0.18          18.0     4.6 %
-      10     350      96.9 %      0.0021       0.18          24.4     5.4 %
-      20     350      98.6 %      0.0001       0.01          35.0     7.1 %   <- default
-      30     350      98.6 %      0.0001       0.01          44.3     7.1 %
-      40     350      98.9 %      0.0001       0.01          53.7     7.4 %
-      60     350      99.1 %      0.0001       0.01          72.3     7.7 %
-
-  per object at 20 checks: can_soda 96.0 % (42.0 trials/grasp, 21/100 grids not monotone),
-  mug 100 % (32.6; 3/80), box_cereal 99.4 % (32.1; 6/170). The previous check rule (4 cells
-  next to the boundary only) gave 95.7 % at 17.5 trials/grasp on the same grids (can_soda
-  87 %), with differences up to 0.18. The real staircase runs equal the replay.
-
-Why not 99 %: the trial outcomes are not monotone in friction. Failures of real grasps cluster
-at high friction and middle density as isolated cells (e.g. a can whose 10x10 grid succeeds
-everywhere but at 4 cells of friction >= 1.0), also when every cell of a grasp shares one random
-shake axis, so a search that infers cells cannot see a single such hole without simulating it:
-more checks buy agreement with trials.
+Measured 2026-11-25 (shared 2-core machine, load 17-25): 550 grasps of 5 objects (can_soda 100,
+mug 80, box_cereal 170 -- the first grasps of 170 strided ones -- can_food 100, bottle_water 100);
+table and findings in benchmarks/README.md. At the default (6 checks): 96.9 % identical scores,
+23.9 trials per grasp (max 100 on a fallback, 42 fallbacks), score differences <= 0.15 (mean
+0.0007); the previous search needs 10 checks for 25.0 trials and gets 95.3 %; 99 % needs about
+60 checks (~74 trials) with either.
 """
 
 from __future__ import annotations
@@ -49,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-DEFAULT_CHECKS = (0, 5, 10, 15, 20, 30, 40, 60)
+DEFAULT_CHECKS = (0, 5, 6, 10, 15, 20, 30, 40, 60)
 OBJECTS = "can_soda:170,mug:170,box_cereal:170,can_food:100,bottle_water:100"
 GOLDEN = 0.6180339887498949
 
@@ -201,8 +184,9 @@ VARIANTS = {
 
 
 def where(grids: np.ndarray) -> str:
-    """Where the walk of staircase_grid (no checks) infers cells wrongly: per grid the number of
-    wrong cells, and of grids with exactly one wrong cell how many are next to a row boundary."""
+    """Where staircase_grid without spread checks (walk and boundary band only) infers cells
+    wrongly: per grid the number of wrong cells, and of grids with exactly one wrong cell how
+    many are next to a row boundary."""
     wrong, single_near = [], 0
     for g in grids:
         r = _core_grid(g, 0)
@@ -214,7 +198,7 @@ def where(grids: np.ndarray) -> str:
             single_near += j in (b - 1, b)
     wrong_a = np.array(wrong)
     return (
-        f"grids with wrong cells after the walk {int((wrong_a > 0).sum())}: one cell "
+        f"grids with wrong cells after walk and band {int((wrong_a > 0).sum())}: one cell "
         f"{int((wrong_a == 1).sum())} ({single_near} next to the boundary), 2-3 cells "
         f"{int(((wrong_a >= 2) & (wrong_a <= 3)).sum())}, >= 4 cells {int((wrong_a >= 4).sum())}"
     )
