@@ -116,9 +116,10 @@ def test_shake_scorer_progress_bar_keeps_the_scores(capsys):
 
 
 def test_staircase_scores_in_pieces_match_the_whole_list():
-    """With the staircase search too, a list scored in pieces (first_grasp_index) simulates the
-    same cells with the same outcomes as the whole list (ShakeScorer's progress bar relies on
-    it, and so does scoring every stored grasp of an object in one call or several)."""
+    """With the staircase search too, a list scored in pieces (first_grasp_index) or with 1
+    thread instead of 2 simulates the same cells with the same outcomes as the whole list
+    (ShakeScorer's progress bar relies on it, and so does scoring every stored grasp of an
+    object in one call or several)."""
     mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.3)
     grasps = np.stack([centre_grasp(0.04)] * 4)
     grasps[:, 6:9] += np.array([[0, 0, 0], [0, 0.01, 0.015], [0, -0.01, -0.01], [0, 0.02, 0]])
@@ -130,9 +131,11 @@ def test_staircase_scores_in_pieces_match_the_whole_list():
         shake_scores(mesh, m, com, inertia, grasps[a:b], options=replace(opts, first_grasp_index=a))
         for a, b in ((0, 1), (1, 3), (3, 4))
     ]
+    one_thread = shake_scores(mesh, m, com, inertia, grasps, options=replace(opts, num_threads=1))
     for field in ("score", "trial_success", "trial_simulated", "trial_steps", "fallback"):
         got = np.concatenate([getattr(p, field) for p in pieces])
         np.testing.assert_array_equal(got, getattr(whole, field), err_msg=field)
+        np.testing.assert_array_equal(getattr(one_thread, field), getattr(whole, field))
     assert whole.num_trials < grasps.shape[0] * 9  # the staircase inferred some cells
 
 
