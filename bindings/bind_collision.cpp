@@ -55,7 +55,8 @@ void bind_collision(py::module_& m) {
         }
         return to_bool_numpy(std::move(hit));
       },
-      py::arg("a"), py::arg("X_WA"), py::arg("b"), py::arg("X_WB"), py::arg("num_threads") = 0);
+      py::arg("a"), py::arg("X_WA"), py::arg("b"), py::arg("X_WB"),
+      py::arg("num_threads") = CollisionRequest{}.num_threads);
 
   m.def(
       "distance",
@@ -75,8 +76,10 @@ void bind_collision(py::module_& m) {
         return DistanceArrays{to_numpy(std::move(r.distance)), to_numpy(std::move(r.points_a)),
                               to_numpy(std::move(r.points_b)), to_bool_numpy(std::move(r.collide))};
       },
-      py::arg("a"), py::arg("X_WA"), py::arg("b"), py::arg("X_WB"), py::arg("rel_err") = 0.0,
-      py::arg("abs_err") = 0.0, py::arg("num_threads") = 0);
+      py::arg("a"), py::arg("X_WA"), py::arg("b"), py::arg("X_WB"),
+      py::arg("rel_err") = DistanceRequest{}.rel_err,
+      py::arg("abs_err") = DistanceRequest{}.abs_err,
+      py::arg("num_threads") = DistanceRequest{}.num_threads);
 }
 
 }  // namespace mgn::py_bind

@@ -16,17 +16,6 @@ namespace mgn::py_bind {
 
 namespace {
 
-/// Read-only numpy view of a mesh array, kept alive by the Python Mesh object.
-template <typename M>
-py::array view_of(const M& mat, py::handle owner) {
-  using Scalar = typename M::Scalar;
-  py::array_t<Scalar> arr(
-      {static_cast<py::ssize_t>(mat.rows()), static_cast<py::ssize_t>(mat.cols())}, mat.data(),
-      owner);
-  arr.attr("setflags")(py::arg("write") = false);
-  return arr;
-}
-
 /// SurfaceSamples as numpy arrays (moved, no copies).
 struct SampleArrays {
   py::array points, normals, face_ids;
@@ -169,8 +158,9 @@ void bind_geometry(py::module_& m) {
         py::gil_scoped_release release;
         return load_mesh(path, o);
       },
-      py::arg("path"), py::arg("scale") = 1.0, py::arg("merge") = true,
-      py::arg("drop_degenerate") = true);
+      py::arg("path"), py::arg("scale") = LoadOptions{}.scale,
+      py::arg("merge") = LoadOptions{}.merge,
+      py::arg("drop_degenerate") = LoadOptions{}.drop_degenerate);
 
   m.def(
       "compute_mass_properties",
@@ -190,8 +180,8 @@ void bind_geometry(py::module_& m) {
         py::gil_scoped_release release;
         return compute_mass_properties(mesh, o);
       },
-      py::arg("mesh"), py::arg("density") = 1000.0, py::arg("open_mesh") = "shell",
-      py::arg("shell_thickness") = 0.002);
+      py::arg("mesh"), py::arg("density") = MassOptions{}.density, py::arg("open_mesh") = "shell",
+      py::arg("shell_thickness") = MassOptions{}.shell_thickness);
 
   m.def(
       "sample_surface",
@@ -216,8 +206,9 @@ void bind_geometry(py::module_& m) {
         return SampleArrays{to_numpy(std::move(s.points)), to_numpy(std::move(s.normals)),
                             to_numpy(std::move(s.face_ids))};
       },
-      py::arg("mesh"), py::arg("count"), py::arg("method") = "random", py::arg("seed") = 0,
-      py::arg("oversampling") = 6);
+      py::arg("mesh"), py::arg("count"), py::arg("method") = "random",
+      py::arg("seed") = SampleOptions{}.seed,
+      py::arg("oversampling") = SampleOptions{}.oversampling);
 
   m.def(
       "make_box", [](const Vec3d& extents) { return make_box(extents); }, py::arg("extents"));

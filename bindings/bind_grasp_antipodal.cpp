@@ -68,6 +68,44 @@ void bind_grasp_antipodal(py::module_& m) {
       .def_readonly("num_accepted_probes", &AntipodalArrays::num_accepted_probes)
       .def_readonly("num_colliding", &AntipodalArrays::num_colliding);
 
+  py::class_<AntipodalOptions>(m, "AntipodalOptions",
+                               "Options of AntipodalSampler.sample (mgn/grasp/antipodal.hpp, SI "
+                               "units); the defaults are the C++ struct's (MetaGraspNet), "
+                               "validate() checks the ranges.")
+      .def(py::init<>())
+      .def_readwrite("probes", &AntipodalOptions::probes, "perturbed probes per contact point")
+      .def_readwrite("tilt", &AntipodalOptions::tilt,
+                     "bound of each Euler angle of the probe tilt, rad")
+      .def_readwrite("offset", &AntipodalOptions::offset, "bound of the start offset per axis, m")
+      .def_readwrite("start_offset", &AntipodalOptions::start_offset,
+                     "the probe ray starts this far outside the surface, m")
+      .def_readwrite("friction_coef", &AntipodalOptions::friction_coef,
+                     "mu; friction cone half-angle atan(mu)")
+      .def_readwrite("approaches_tried", &AntipodalOptions::approaches_tried,
+                     "random approach directions tried per accepted probe")
+      .def_readwrite("approaches_kept", &AntipodalOptions::approaches_kept,
+                     "collision-free approaches kept per accepted probe")
+      .def_readwrite("check_collision", &AntipodalOptions::check_collision,
+                     "false: keep the first approaches_kept approaches unchecked")
+      .def_readwrite("seed", &AntipodalOptions::seed)
+      .def_readwrite("first_index", &AntipodalOptions::first_index,
+                     "point i uses the random stream (seed, first_index + i)")
+      .def_readwrite("num_threads", &AntipodalOptions::num_threads, "0 = all hardware threads")
+      .def("validate", &AntipodalOptions::validate,
+           "Raises InvalidArgumentError naming the first field out of its range.");
+
+  py::class_<PjWrenchOptions>(m, "PjWrenchOptions",
+                              "Constants of pj_wrench_scores (mgn/grasp/pj_wrench.hpp, SI units); "
+                              "the defaults are the C++ struct's, validate() checks the ranges.")
+      .def(py::init<>())
+      .def_readwrite("friction", &PjWrenchOptions::friction, "mu between finger pads and object")
+      .def_readwrite("grip_force", &PjWrenchOptions::grip_force, "normal force per finger, N")
+      .def_readwrite("contact_radius", &PjWrenchOptions::contact_radius,
+                     "radius of the soft contact patch, m")
+      .def_readwrite("gravity", &PjWrenchOptions::gravity, "m/s^2")
+      .def("validate", &PjWrenchOptions::validate,
+           "Raises InvalidArgumentError naming the first field out of its range.");
+
   py::class_<ParallelJawGripper>(
       m, "ParallelJawGripper",
       "Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless "
@@ -124,23 +162,9 @@ void bind_grasp_antipodal(py::module_& m) {
       .def(
           "sample",
           [](const AntipodalSampler& s, const py::handle& points, const py::handle& normals,
-             int probes, double tilt, double offset, double start_offset, double friction_coef,
-             int approaches_tried, int approaches_kept, bool check_collision, std::uint64_t seed,
-             std::uint64_t first_index, int num_threads) {
+             const AntipodalOptions& o) {
             const Points3d p = to_rows<double, 3>(points, "points");
             const Points3d n = to_rows<double, 3>(normals, "normals");
-            AntipodalOptions o;
-            o.probes = probes;
-            o.tilt = tilt;
-            o.offset = offset;
-            o.start_offset = start_offset;
-            o.friction_coef = friction_coef;
-            o.approaches_tried = approaches_tried;
-            o.approaches_kept = approaches_kept;
-            o.check_collision = check_collision;
-            o.seed = seed;
-            o.first_index = first_index;
-            o.num_threads = num_threads;
             AntipodalResult r;
             {
               py::gil_scoped_release release;
@@ -176,11 +200,10 @@ void bind_grasp_antipodal(py::module_& m) {
             out.num_colliding = r.num_colliding;
             return out;
           },
-          py::arg("points"), py::arg("normals"), py::arg("probes") = 5,
-          py::arg("tilt") = M_PI / 16.0, py::arg("offset") = 0.005, py::arg("start_offset") = 0.010,
-          py::arg("friction_coef") = 0.41421356237309503, py::arg("approaches_tried") = 50,
-          py::arg("approaches_kept") = 20, py::arg("check_collision") = true, py::arg("seed") = 0,
-          py::arg("first_index") = 0, py::arg("num_threads") = 0)
+          py::arg("points"), py::arg("normals"),
+          py::arg_v("options", AntipodalOptions{}, "AntipodalOptions()"),
+          "Antipodal grasps from (N,3) contact points and unit outward normals (object frame, "
+          "m).")
       .def(
           "collides",
           [](const AntipodalSampler& s, const py::handle& X_OH, double opening) {
@@ -193,19 +216,12 @@ void bind_grasp_antipodal(py::module_& m) {
   m.def(
       "pj_wrench_scores",
       [](const py::handle& p1, const py::handle& closing, const py::handle& width, double mass,
-         const Vec3d& com, const Vec3d& gravity_direction, double friction, double grip_force,
-         double contact_radius, double gravity) {
+         const Vec3d& com, const Vec3d& gravity_direction, const PjWrenchOptions& o) {
         const std::vector<ParallelJawGrasp> grasps = to_grasps(p1, closing, py::none(), width);
-        PjWrenchOptions o;
-        o.friction = friction;
-        o.grip_force = grip_force;
-        o.contact_radius = contact_radius;
-        o.gravity = gravity;
         return to_numpy(pj_wrench_scores(grasps, mass, com, gravity_direction, o));
       },
       py::arg("p1"), py::arg("closing"), py::arg("width"), py::arg("mass"), py::arg("com"),
-      py::arg("gravity_direction"), py::arg("friction") = 0.5, py::arg("grip_force") = 70.0,
-      py::arg("contact_radius") = 0.005, py::arg("gravity") = 9.81);
+      py::arg("gravity_direction"), py::arg_v("options", PjWrenchOptions{}, "PjWrenchOptions()"));
 }
 
 }  // namespace mgn::py_bind

@@ -69,6 +69,37 @@ void bind_grasp_seal(py::module_& m) {
       .def_readonly("ring_force", &TrialArrays::ring_force, "(N,3) float64, N")
       .def_readonly("total_elastic_force", &TrialArrays::total_elastic_force, "N");
 
+  py::class_<SealOptions>(m, "SealOptions",
+                          "Options of SealModel.evaluate (mgn/grasp/seal_model.hpp, SI units); the "
+                          "defaults are the C++ struct's, validate() checks the ranges.")
+      .def(py::init<>())
+      .def_readwrite("num_trials", &SealOptions::num_trials, "perturbed trials per candidate")
+      .def_readwrite("angle_sigma", &SealOptions::angle_sigma,
+                     "std of each Euler angle of the normal perturbation, rad")
+      .def_readwrite("position_sigma", &SealOptions::position_sigma,
+                     "std of the point jitter per axis, m (< 0: cup radius / 4)")
+      .def_readwrite("perturb", &SealOptions::perturb,
+                     "false: one deterministic trial at the nominal pose")
+      .def_readwrite("on_surface_tolerance", &SealOptions::on_surface_tolerance,
+                     "candidates must lie on the mesh within this distance along the normal, m")
+      .def_readwrite("seed", &SealOptions::seed)
+      .def_readwrite("first_index", &SealOptions::first_index,
+                     "candidate i draws from the stream (seed, first_index + i)")
+      .def_readwrite("num_threads", &SealOptions::num_threads, "0 = all hardware threads")
+      .def("validate", &SealOptions::validate,
+           "Raises InvalidArgumentError naming the first field out of its range.");
+
+  py::class_<SuctionWrenchOptions>(
+      m, "SuctionWrenchOptions",
+      "Constants of suction_wrench_scores (mgn/grasp/wrench.hpp); the defaults are the C++ "
+      "struct's, validate() checks the ranges.")
+      .def(py::init<>())
+      .def_readwrite("k", &SuctionWrenchOptions::k,
+                     "tau_max = k * cup radius * pi * sqrt(2) (k in N, radius in m)")
+      .def_readwrite("gravity", &SuctionWrenchOptions::gravity, "m/s^2")
+      .def("validate", &SuctionWrenchOptions::validate,
+           "Raises InvalidArgumentError naming the first field out of its range.");
+
   py::class_<Cup>(m, "Cup",
                   "Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).")
       .def(py::init<>())
@@ -106,20 +137,9 @@ void bind_grasp_seal(py::module_& m) {
       .def(
           "evaluate",
           [](const SealModel& s, const py::handle& points, const py::handle& normals,
-             int num_trials, double angle_sigma, double position_sigma, bool perturb,
-             double on_surface_tolerance, std::uint64_t seed, std::uint64_t first_index,
-             int num_threads) {
+             const SealOptions& o) {
             const Points3f p = to_rows<float, 3>(points, "points");
             const Points3f n = to_rows<float, 3>(normals, "normals");
-            SealOptions o;
-            o.num_trials = num_trials;
-            o.angle_sigma = angle_sigma;
-            o.position_sigma = position_sigma;
-            o.perturb = perturb;
-            o.on_surface_tolerance = on_surface_tolerance;
-            o.seed = seed;
-            o.first_index = first_index;
-            o.num_threads = num_threads;
             SealResult r;
             {
               py::gil_scoped_release release;
@@ -135,10 +155,9 @@ void bind_grasp_seal(py::module_& m) {
             out.trial_reason = to_numpy(std::move(r.trial_reason)).attr("reshape")(count, T);
             return out;
           },
-          py::arg("points"), py::arg("normals"), py::arg("num_trials") = 10,
-          py::arg("angle_sigma") = 0.1, py::arg("position_sigma") = -1.0, py::arg("perturb") = true,
-          py::arg("on_surface_tolerance") = 1e-3, py::arg("seed") = 0, py::arg("first_index") = 0,
-          py::arg("num_threads") = 0)
+          py::arg("points"), py::arg("normals"),
+          py::arg_v("options", SealOptions{}, "SealOptions()"),
+          "Seal scores of (N,3) candidates (object frame, m; unit outward normals).")
       .def(
           "trial",
           [](const SealModel& s, const Vec3d& point, const Vec3d& normal) {
@@ -168,17 +187,14 @@ void bind_grasp_seal(py::module_& m) {
   m.def(
       "suction_wrench_scores",
       [](const py::handle& contacts, const py::handle& approach, double mass, const Vec3d& com,
-         const Vec3d& gravity_direction, double cup_radius, double k, double gravity) {
+         const Vec3d& gravity_direction, double cup_radius, const SuctionWrenchOptions& o) {
         const Points3f c = to_rows<float, 3>(contacts, "contacts");
         const Points3f a = to_rows<float, 3>(approach, "approach");
-        SuctionWrenchOptions o;
-        o.k = k;
-        o.gravity = gravity;
         return to_numpy(suction_wrench_scores(c, a, mass, com, gravity_direction, cup_radius, o));
       },
       py::arg("contacts"), py::arg("approach"), py::arg("mass"), py::arg("com"),
-      py::arg("gravity_direction"), py::arg("cup_radius"), py::arg("k") = 15.6,
-      py::arg("gravity") = 9.81);
+      py::arg("gravity_direction"), py::arg("cup_radius"),
+      py::arg_v("options", SuctionWrenchOptions{}, "SuctionWrenchOptions()"));
 }
 
 }  // namespace mgn::py_bind

@@ -109,9 +109,9 @@ void bind_raytrace(py::module_& m) {
                              to_numpy(std::move(h.normals)),  to_numpy(std::move(h.instance_ids)),
                              to_numpy(std::move(h.face_ids)), to_numpy(std::move(h.barycentric))};
           },
-          py::arg("origins"), py::arg("directions"), py::arg("tnear") = 0.0f,
-          py::arg("tfar") = std::numeric_limits<float>::infinity(), py::arg("coherent") = false,
-          py::arg("num_threads") = 0)
+          py::arg("origins"), py::arg("directions"), py::arg("tnear") = CastOptions{}.tnear,
+          py::arg("tfar") = CastOptions{}.tfar, py::arg("coherent") = CastOptions{}.coherent,
+          py::arg("num_threads") = CastOptions{}.num_threads)
       .def(
           "intersect_ids",
           [](const RayScene& s, const py::handle& origins, const py::handle& directions,
@@ -126,9 +126,9 @@ void bind_raytrace(py::module_& m) {
             return py::make_tuple(to_numpy(std::move(h.instance_ids)),
                                   to_numpy(std::move(h.face_ids)));
           },
-          py::arg("origins"), py::arg("directions"), py::arg("tnear") = 0.0f,
-          py::arg("tfar") = std::numeric_limits<float>::infinity(), py::arg("coherent") = false,
-          py::arg("num_threads") = 0)
+          py::arg("origins"), py::arg("directions"), py::arg("tnear") = CastOptions{}.tnear,
+          py::arg("tfar") = CastOptions{}.tfar, py::arg("coherent") = CastOptions{}.coherent,
+          py::arg("num_threads") = CastOptions{}.num_threads)
       .def(
           "occluded",
           [](const RayScene& s, const py::handle& origins, const py::handle& directions,
@@ -142,9 +142,9 @@ void bind_raytrace(py::module_& m) {
             }
             return to_bool_numpy(std::move(hit));
           },
-          py::arg("origins"), py::arg("directions"), py::arg("tnear") = 0.0f,
-          py::arg("tfar") = std::numeric_limits<float>::infinity(), py::arg("coherent") = false,
-          py::arg("num_threads") = 0)
+          py::arg("origins"), py::arg("directions"), py::arg("tnear") = CastOptions{}.tnear,
+          py::arg("tfar") = CastOptions{}.tfar, py::arg("coherent") = CastOptions{}.coherent,
+          py::arg("num_threads") = CastOptions{}.num_threads)
       .def(
           "intersect_all",
           [](const RayScene& s, const py::handle& origins, const py::handle& directions,
@@ -163,8 +163,8 @@ void bind_raytrace(py::module_& m) {
                 to_numpy(std::move(h.ray_ids))};
           },
           py::arg("origins"), py::arg("directions"), py::arg("max_hits_per_ray") = 64,
-          py::arg("tnear") = 0.0f, py::arg("tfar") = std::numeric_limits<float>::infinity(),
-          py::arg("num_threads") = 0);
+          py::arg("tnear") = CastOptions{}.tnear, py::arg("tfar") = CastOptions{}.tfar,
+          py::arg("num_threads") = CastOptions{}.num_threads);
 
   m.def(
       "camera_rays",

@@ -6,6 +6,7 @@
 #include <mgn/render/renderer.hpp>
 
 #include <limits>
+#include <tuple>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -31,17 +32,54 @@ struct DepthArrays {
 }  // namespace
 
 void bind_render(py::module_& m) {
+  using Triple = std::tuple<double, double, double>;
   py::class_<LightSample>(m, "LightSample",
-                          "The light a view was rendered with (mgn/render/renderer.hpp).")
-      .def_property_readonly(
+                          "The main point light (mgn/render/renderer.hpp): input of "
+                          "RenderOptions.light, and the light a view was rendered with. The "
+                          "defaults are the C++ struct's.")
+      .def(py::init<>())
+      .def_property(
           "position_W",
           [](const LightSample& l) {
-            return std::make_tuple(l.position_W.x(), l.position_W.y(), l.position_W.z());
+            return Triple(l.position_W.x(), l.position_W.y(), l.position_W.z());
           },
-          "point light position, world frame, m")
-      .def_readonly("intensity", &LightSample::intensity, "radiance scale (1 = nominal)")
-      .def_readonly("color_temperature", &LightSample::color_temperature, "K")
-      .def_readonly("ambient", &LightSample::ambient, "relative to white");
+          [](LightSample& l, const Triple& p) {
+            l.position_W = Vec3d(std::get<0>(p), std::get<1>(p), std::get<2>(p));
+          },
+          "point light position, world frame, m (NaN: 1.5 m above the centre of the scene)")
+      .def_readwrite("intensity", &LightSample::intensity, "radiance scale (1 = nominal)")
+      .def_readwrite("color_temperature", &LightSample::color_temperature, "K")
+      .def_readwrite("ambient", &LightSample::ambient, "relative to white");
+  py::class_<RenderOptions>(m, "RenderOptions",
+                            "What Renderer.render draws and how (mgn/render/renderer.hpp); the "
+                            "defaults are the C++ struct's, validate() checks the ranges.")
+      .def(py::init<>())
+      .def_readwrite("rgb", &RenderOptions::rgb, "produce the colour image")
+      .def_readwrite("depth", &RenderOptions::depth, "produce the z-depth image")
+      .def_readwrite("instances", &RenderOptions::instances, "produce the instance-id image")
+      .def_readwrite("visible_instances", &RenderOptions::visible_instances,
+                     "draw only instances with these ids (empty: all)")
+      .def_readwrite("shadows", &RenderOptions::shadows, "shadow mapping from the main light")
+      .def_readwrite("randomize", &RenderOptions::randomize,
+                     "draw the light and the randomize_color colours from (seed, view_index)")
+      .def_readwrite("seed", &RenderOptions::seed)
+      .def_readwrite("view_index", &RenderOptions::view_index)
+      .def_readwrite("light", &RenderOptions::light, "the light used when randomize is false")
+      .def_property(
+          "background",
+          [](const RenderOptions& o) {
+            return Triple(o.background.x(), o.background.y(), o.background.z());
+          },
+          [](RenderOptions& o, const Triple& c) {
+            o.background =
+                Vec3f(static_cast<float>(std::get<0>(c)), static_cast<float>(std::get<1>(c)),
+                      static_cast<float>(std::get<2>(c)));
+          },
+          "linear RGB of empty pixels")
+      .def_readwrite("check_camera_inside", &RenderOptions::check_camera_inside,
+                     "raise if the camera centre is inside a closed mesh")
+      .def("validate", &RenderOptions::validate,
+           "Raises InvalidArgumentError naming the first field out of its range.");
   py::class_<RenderArrays>(m, "RenderResult",
                            "Renderer.render() result: (H,W,3) uint8 rgb, (H,W) float32 depth "
                            "(m), (H,W) int32 instance_ids (None when not requested), light.")
@@ -166,31 +204,10 @@ void bind_render(py::module_& m) {
                              [](const Renderer& r) { return r.instances().size(); })
       .def(
           "render",
-          [](Renderer& r, const Intrinsics& K, const py::handle& X_WC, bool rgb, bool depth,
-             bool instances, const std::vector<std::int32_t>& visible_instances, bool shadows,
-             bool randomize, std::uint64_t seed, std::uint64_t view_index,
-             const py::object& light_position, double light_intensity,
-             double light_color_temperature, double light_ambient, const Vec3f& background,
-             bool check_camera_inside) {
+          [](Renderer& r, const Intrinsics& K, const py::handle& X_WC, const RenderOptions& o) {
             CameraView view;
             view.K = K;
             view.X_WC = to_pose(X_WC, "X_WC");
-            RenderOptions o;
-            o.rgb = rgb;
-            o.depth = depth;
-            o.instances = instances;
-            o.visible_instances = visible_instances;
-            o.shadows = shadows;
-            o.randomize = randomize;
-            o.seed = seed;
-            o.view_index = view_index;
-            if (!light_position.is_none())
-              o.light.position_W = to_vec3(light_position, "light_position");
-            o.light.intensity = light_intensity;
-            o.light.color_temperature = light_color_temperature;
-            o.light.ambient = light_ambient;
-            o.background = background;
-            o.check_camera_inside = check_camera_inside;
             RenderOutput out;
             {
               py::gil_scoped_release release;
@@ -201,13 +218,9 @@ void bind_render(py::module_& m) {
                                 to_image(std::move(out.depth), h, w),
                                 to_image(std::move(out.instance_ids), h, w), out.light};
           },
-          py::arg("K"), py::arg("X_WC"), py::arg("rgb") = true, py::arg("depth") = true,
-          py::arg("instances") = true, py::arg("visible_instances") = std::vector<std::int32_t>{},
-          py::arg("shadows") = true, py::arg("randomize") = false, py::arg("seed") = 0,
-          py::arg("view_index") = 0, py::arg("light_position") = py::none(),
-          py::arg("light_intensity") = 1.0, py::arg("light_color_temperature") = 6500.0,
-          py::arg("light_ambient") = 0.25, py::arg("background") = Vec3f(0, 0, 0),
-          py::arg("check_camera_inside") = true);
+          py::arg("K"), py::arg("X_WC"), py::arg_v("options", RenderOptions{}, "RenderOptions()"),
+          "Renders one view (camera frame OpenCV, X_WC in m): rgb, depth, instance_ids and the "
+          "light used.");
 
   py::enum_<DepthSensorPreset>(m, "DepthSensorPreset")
       .value("Ideal", DepthSensorPreset::Ideal)

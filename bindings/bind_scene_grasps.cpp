@@ -5,6 +5,7 @@
 #include <mgn/scene/scene_grasps.hpp>
 
 #include <string>
+#include <tuple>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -16,21 +17,189 @@ namespace mgn::py_bind {
 
 namespace {
 
-std::vector<float> floats(const py::dict& d, const char* key, const std::string& what) {
-  if (!d.contains(key) || d[key].is_none()) return {};
+/// (M,) float array -> vector; None -> empty. Names ObjectGraspLabels.<field> in errors.
+std::vector<float> floats(const py::handle& obj, const char* field) {
+  if (obj.is_none()) return {};
   CArray<float> a;
   try {
-    a = py::cast<CArray<float>>(d[key]);
+    a = py::cast<CArray<float>>(obj);
   } catch (const py::cast_error&) {
-    throw_error<InvalidArgument>(what, ".", key, ": expected a numeric array of shape (M,)");
+    throw_error<InvalidArgument>("ObjectGraspLabels.", field,
+                                 " must be a numeric array of shape (M,)");
   }
-  if (a.ndim() != 1) throw_error<InvalidArgument>(what, ".", key, ": expected shape (M,)");
+  if (a.ndim() != 1)
+    throw_error<InvalidArgument>("ObjectGraspLabels.", field, " must have shape (M,), got ",
+                                 shape_of(a));
   return std::vector<float>(a.data(), a.data() + a.shape(0));
 }
 
-py::handle item(const py::dict& d, const char* key, const std::string& what) {
-  if (!d.contains(key)) throw_error<InvalidArgument>(what, ": missing key '", key, "'");
-  return d[key];
+/// (M,3) array -> rows; None -> 0 rows. Names ObjectGraspLabels.<field> in errors.
+template <typename Scalar>
+Eigen::Matrix<Scalar, Eigen::Dynamic, 3, Eigen::RowMajor> rows3(const py::handle& obj,
+                                                                const char* field) {
+  if (obj.is_none()) return Eigen::Matrix<Scalar, Eigen::Dynamic, 3, Eigen::RowMajor>(0, 3);
+  const std::string what = std::string("ObjectGraspLabels.") + field;
+  return to_rows<Scalar, 3>(obj, what.c_str());
+}
+
+ObjectGraspLabels make_labels(const py::handle& pj_p1, const py::handle& pj_closing,
+                              const py::handle& pj_approach, const py::handle& pj_width,
+                              const py::handle& pj_score_analytical,
+                              const py::handle& pj_score_simulation,
+                              const py::handle& suction_points, const py::handle& suction_approach,
+                              const py::handle& suction_score_analytical,
+                              const py::handle& suction_score_simulation) {
+  ObjectGraspLabels o;
+  const Points3d p1 = rows3<double>(pj_p1, "pj_p1");
+  const Points3d v = rows3<double>(pj_closing, "pj_closing");
+  const Points3d a = rows3<double>(pj_approach, "pj_approach");
+  const std::vector<float> w = floats(pj_width, "pj_width");
+  const auto m = static_cast<std::size_t>(p1.rows());
+  if (static_cast<std::size_t>(v.rows()) != m || static_cast<std::size_t>(a.rows()) != m ||
+      w.size() != m) {
+    throw_error<InvalidArgument>(
+        "ObjectGraspLabels.pj_closing, pj_approach (M, 3) and pj_width (M,) must have the M of "
+        "pj_p1 (",
+        m, "), got ", v.rows(), ", ", a.rows(), " and ", w.size());
+  }
+  o.pj.resize(m);
+  for (std::size_t g = 0; g < m; ++g) {
+    const auto r = static_cast<Eigen::Index>(g);
+    o.pj[g].p1 = p1.row(r).transpose();
+    o.pj[g].closing = v.row(r).transpose();
+    o.pj[g].approach = a.row(r).transpose();
+    o.pj[g].width = w[g];
+  }
+  o.pj_score_analytical = floats(pj_score_analytical, "pj_score_analytical");
+  o.pj_score_simulation = floats(pj_score_simulation, "pj_score_simulation");
+  o.suction_points = rows3<float>(suction_points, "suction_points");
+  o.suction_approach = rows3<float>(suction_approach, "suction_approach");
+  if (o.suction_approach.rows() != o.suction_points.rows()) {
+    throw_error<InvalidArgument>(
+        "ObjectGraspLabels.suction_approach must have the K of "
+        "suction_points (",
+        o.suction_points.rows(), "), got ", o.suction_approach.rows());
+  }
+  o.suction_score_analytical = floats(suction_score_analytical, "suction_score_analytical");
+  o.suction_score_simulation = floats(suction_score_simulation, "suction_score_simulation");
+  return o;
+}
+
+/// Column `c` of the parallel-jaw grasps as (M,3) rows (0 p1, 1 closing, 2 approach).
+py::array pj_rows(const ObjectGraspLabels& o, int c) {
+  Points3d out(static_cast<Eigen::Index>(o.pj.size()), 3);
+  for (std::size_t g = 0; g < o.pj.size(); ++g) {
+    const ParallelJawGrasp& q = o.pj[g];
+    out.row(static_cast<Eigen::Index>(g)) = (c == 0   ? q.p1
+                                             : c == 1 ? q.closing
+                                                      : q.approach)
+                                                .transpose();
+  }
+  return to_numpy(std::move(out));
+}
+
+void bind_labels(py::module_& m) {
+  py::class_<ObjectGraspLabels>(
+      m, "ObjectGraspLabels",
+      "Object-level grasp labels of one object, the input of SceneGraspModel "
+      "(mgn/scene/scene_grasps.hpp). Object frame O, metres; every argument is optional (None: "
+      "no labels of that kind, or NaN scores).")
+      .def(py::init(&make_labels), py::arg("pj_p1") = py::none(),
+           py::arg("pj_closing") = py::none(), py::arg("pj_approach") = py::none(),
+           py::arg("pj_width") = py::none(), py::arg("pj_score_analytical") = py::none(),
+           py::arg("pj_score_simulation") = py::none(), py::arg("suction_points") = py::none(),
+           py::arg("suction_approach") = py::none(),
+           py::arg("suction_score_analytical") = py::none(),
+           py::arg("suction_score_simulation") = py::none())
+      .def_property_readonly(
+          "pj_p1", [](const ObjectGraspLabels& o) { return pj_rows(o, 0); },
+          "(M,3) float64 first contact p1 of each parallel-jaw grasp, object frame, m")
+      .def_property_readonly(
+          "pj_closing", [](const ObjectGraspLabels& o) { return pj_rows(o, 1); },
+          "(M,3) float64 unit closing direction v (p2 = p1 + w v), object frame")
+      .def_property_readonly(
+          "pj_approach", [](const ObjectGraspLabels& o) { return pj_rows(o, 2); },
+          "(M,3) float64 unit approach direction, object frame")
+      .def_property_readonly(
+          "pj_width",
+          [](const ObjectGraspLabels& o) {
+            std::vector<float> w(o.pj.size());
+            for (std::size_t g = 0; g < o.pj.size(); ++g) w[g] = static_cast<float>(o.pj[g].width);
+            return to_numpy(std::move(w));
+          },
+          "(M,) float32 contact width w, m")
+      .def_property_readonly(
+          "pj_score_analytical",
+          [](const ObjectGraspLabels& o) {
+            return to_numpy(std::vector<float>(o.pj_score_analytical));
+          },
+          "(M,) or (0,) float32 analytical score in [0, 1]")
+      .def_property_readonly(
+          "pj_score_simulation",
+          [](const ObjectGraspLabels& o) {
+            return to_numpy(std::vector<float>(o.pj_score_simulation));
+          },
+          "(M,) or (0,) float32 simulation score in [0, 1]")
+      .def_property_readonly(
+          "suction_points",
+          [](const ObjectGraspLabels& o) { return to_numpy(Points3f(o.suction_points)); },
+          "(K,3) float32 suction contacts, object frame, m")
+      .def_property_readonly(
+          "suction_approach",
+          [](const ObjectGraspLabels& o) { return to_numpy(Points3f(o.suction_approach)); },
+          "(K,3) float32 approach directions into the surface, object frame")
+      .def_property_readonly(
+          "suction_score_analytical",
+          [](const ObjectGraspLabels& o) {
+            return to_numpy(std::vector<float>(o.suction_score_analytical));
+          },
+          "(K,) or (0,) float32 seal score in [0, 1]")
+      .def_property_readonly(
+          "suction_score_simulation",
+          [](const ObjectGraspLabels& o) {
+            return to_numpy(std::vector<float>(o.suction_score_simulation));
+          },
+          "(K,) or (0,) float32 simulation score in [0, 1]");
+}
+
+void bind_options(py::module_& m) {
+  using Triple = std::tuple<double, double, double>;
+  py::class_<SuctionTool>(m, "SuctionTool",
+                          "Suction tool geometry behind the cup body for the scene collision "
+                          "check (mgn/scene/scene_grasps.hpp, m); defaults are the C++ struct's.")
+      .def(py::init<>())
+      .def_readwrite("clearance", &SuctionTool::clearance,
+                     "gap between the contact and the bottom of the cup body, m")
+      .def_readwrite("shaft_radius", &SuctionTool::shaft_radius, "m")
+      .def_readwrite("shaft_length", &SuctionTool::shaft_length, "m")
+      .def("validate", &SuctionTool::validate,
+           "Raises InvalidArgumentError naming the first field out of its range.");
+  py::class_<SceneGraspOptions>(m, "SceneGraspOptions",
+                                "Options of SceneGraspModel (mgn/scene/scene_grasps.hpp, SI "
+                                "units); the defaults are the C++ struct's, validate() checks "
+                                "the ranges.")
+      .def(py::init<>())
+      .def_readwrite("offsets", &SceneGraspOptions::offsets,
+                     "distances back along the approach where the tool is checked, m")
+      .def_readwrite("approach_step", &SceneGraspOptions::approach_step,
+                     "largest spacing of the poses checked between offsets, m")
+      .def_readwrite("tool", &SceneGraspOptions::tool)
+      .def_property(
+          "gravity_world",
+          [](const SceneGraspOptions& o) {
+            return Triple(o.gravity_world.x(), o.gravity_world.y(), o.gravity_world.z());
+          },
+          [](SceneGraspOptions& o, const Triple& g) {
+            o.gravity_world = Vec3d(std::get<0>(g), std::get<1>(g), std::get<2>(g));
+          },
+          "direction of gravity in the world (tote frame), normalised by the model")
+      .def_readwrite("pj_wrench", &SceneGraspOptions::pj_wrench)
+      .def_readwrite("suction_wrench", &SceneGraspOptions::suction_wrench)
+      .def_readwrite("visibility_tolerance", &SceneGraspOptions::visibility_tolerance, "m")
+      .def_readwrite("near_plane", &SceneGraspOptions::near_plane, "m")
+      .def_readwrite("num_threads", &SceneGraspOptions::num_threads, "0 = all hardware threads")
+      .def("validate", &SceneGraspOptions::validate,
+           "Raises InvalidArgumentError naming the first field out of its range.");
 }
 
 /// PlacedGrasps as numpy arrays (copies: the model keeps its own).
@@ -114,6 +283,8 @@ CameraView camera(const Intrinsics& K, const py::handle& X_WC) {
 }  // namespace
 
 void bind_scene_grasps(py::module_& m) {
+  bind_labels(m);
+  bind_options(m);
   bind_results(m);
   m.attr("SUCTION_TOOL_OFFSET") = kSuctionToolOffset;
   py::class_<SceneGraspModel, std::shared_ptr<SceneGraspModel>>(
@@ -122,89 +293,37 @@ void bind_scene_grasps(py::module_& m) {
       "view_grasps per camera (see mgn/scene/scene_grasps.hpp).")
       .def(py::init([](const std::vector<const Mesh*>& meshes, const py::handle& poses,
                        const std::vector<double>& masses, const py::handle& coms,
-                       const std::vector<py::object>& pj, const std::vector<py::object>& suction,
-                       const Mesh& tote, const py::handle& X_WT, const ParallelJawGripper& gripper,
-                       const Cup& cup, const std::vector<double>& offsets, double clearance,
-                       double shaft_radius, double shaft_length, const Vec3d& gravity_world,
-                       double pj_friction, double grip_force, double contact_radius,
-                       double suction_k, double visibility_tolerance, double near_plane,
-                       int num_threads, double approach_step) {
+                       const std::vector<ObjectGraspLabels>& labels, const Mesh& tote,
+                       const py::handle& X_WT, const ParallelJawGripper& gripper, const Cup& cup,
+                       const SceneGraspOptions& options) {
              const std::size_t n = meshes.size();
              const std::vector<Pose> X = n ? to_poses(poses, "poses") : std::vector<Pose>{};
              const Points3d com = n ? to_rows<double, 3>(coms, "coms") : Points3d();
              if (X.size() != n || masses.size() != n || static_cast<std::size_t>(com.rows()) != n ||
-                 pj.size() != n || suction.size() != n) {
-               throw_error<InvalidArgument>(
-                   "SceneGraspModel: ", n, " meshes but ", X.size(), " poses, ", masses.size(),
-                   " masses, ", com.rows(), " coms, ", pj.size(), " parallel-jaw and ",
-                   suction.size(), " suction label entries; expected one of each per object");
+                 labels.size() != n) {
+               throw_error<InvalidArgument>("SceneGraspModel: ", n, " meshes but ", X.size(),
+                                            " poses, ", masses.size(), " masses, ", com.rows(),
+                                            " coms and ", labels.size(),
+                                            " label entries; expected one of each per object");
              }
              std::vector<SceneGraspObject> objects(n);
              for (std::size_t i = 0; i < n; ++i) {
                SceneGraspObject& o = objects[i];
                if (meshes[i] == nullptr)
                  throw_error<InvalidArgument>("SceneGraspModel: mesh ", i, " is None");
+               static_cast<ObjectGraspLabels&>(o) = labels[i];
                o.mesh = meshes[i];
                o.X_WO = X[i];
                o.mass = masses[i];
                o.com = com.row(static_cast<Eigen::Index>(i)).transpose();
-               if (!pj[i].is_none()) {
-                 const std::string what = "pj[" + std::to_string(i) + "]";
-                 const py::dict d = pj[i].cast<py::dict>();
-                 const Points3d p1 = to_rows<double, 3>(item(d, "p1", what), "p1");
-                 const Points3d v = to_rows<double, 3>(item(d, "closing", what), "closing");
-                 const Points3d a = to_rows<double, 3>(item(d, "approach", what), "approach");
-                 const std::vector<float> w = floats(d, "width", what);
-                 if (v.rows() != p1.rows() || a.rows() != p1.rows() ||
-                     w.size() != static_cast<std::size_t>(p1.rows())) {
-                   throw_error<InvalidArgument>(what, ": p1 has ", p1.rows(),
-                                                " rows; expected closing, approach (M, 3) and "
-                                                "width (M,) with the same M");
-                 }
-                 o.pj.resize(static_cast<std::size_t>(p1.rows()));
-                 for (Eigen::Index g = 0; g < p1.rows(); ++g) {
-                   o.pj[g].p1 = p1.row(g).transpose();
-                   o.pj[g].closing = v.row(g).transpose();
-                   o.pj[g].approach = a.row(g).transpose();
-                   o.pj[g].width = w[g];
-                 }
-                 o.pj_score_analytical = floats(d, "score_analytical", what);
-                 o.pj_score_simulation = floats(d, "score_simulation", what);
-               }
-               if (!suction[i].is_none()) {
-                 const std::string what = "suction[" + std::to_string(i) + "]";
-                 const py::dict d = suction[i].cast<py::dict>();
-                 o.suction_points = to_rows<float, 3>(item(d, "points", what), "points");
-                 o.suction_approach = to_rows<float, 3>(item(d, "approach", what), "approach");
-                 o.suction_score_analytical = floats(d, "score_analytical", what);
-                 o.suction_score_simulation = floats(d, "score_simulation", what);
-               }
              }
              const Pose X_tote = to_pose(X_WT, "X_WT");
-             SceneGraspOptions opt;
-             opt.offsets = offsets;
-             opt.approach_step = approach_step;
-             opt.tool.clearance = clearance;
-             opt.tool.shaft_radius = shaft_radius;
-             opt.tool.shaft_length = shaft_length;
-             opt.gravity_world = gravity_world;
-             opt.pj_wrench.friction = pj_friction;
-             opt.pj_wrench.grip_force = grip_force;
-             opt.pj_wrench.contact_radius = contact_radius;
-             opt.suction_wrench.k = suction_k;
-             opt.visibility_tolerance = visibility_tolerance;
-             opt.near_plane = near_plane;
-             opt.num_threads = num_threads;
              py::gil_scoped_release release;
-             return std::make_shared<SceneGraspModel>(objects, tote, X_tote, gripper, cup, opt);
+             return std::make_shared<SceneGraspModel>(objects, tote, X_tote, gripper, cup, options);
            }),
-           py::arg("meshes"), py::arg("poses"), py::arg("masses"), py::arg("coms"), py::arg("pj"),
-           py::arg("suction"), py::arg("tote"), py::arg("X_WT"), py::arg("gripper"), py::arg("cup"),
-           py::arg("offsets"), py::arg("clearance"), py::arg("shaft_radius"),
-           py::arg("shaft_length"), py::arg("gravity_world"), py::arg("pj_friction"),
-           py::arg("grip_force"), py::arg("contact_radius"), py::arg("suction_k"),
-           py::arg("visibility_tolerance"), py::arg("near_plane"), py::arg("num_threads"),
-           py::arg("approach_step") = SceneGraspOptions{}.approach_step)
+           py::arg("meshes"), py::arg("poses"), py::arg("masses"), py::arg("coms"),
+           py::arg("labels"), py::arg("tote"), py::arg("X_WT"), py::arg("gripper"), py::arg("cup"),
+           py::arg_v("options", SceneGraspOptions{}, "SceneGraspOptions()"))
       .def_property_readonly("num_objects", &SceneGraspModel::num_objects)
       .def_property_readonly("offsets",
                              [](const SceneGraspModel& s) { return s.options().offsets; })
@@ -213,13 +332,13 @@ void bind_scene_grasps(py::module_& m) {
           [](const SceneGraspModel& s) {
             return placed_arrays(s.pj(), s.options().offsets.size());
           },
-          "Parallel-jaw grasps in the world: dict of arrays.")
+          "Parallel-jaw grasps in the world (PlacedGraspArrays).")
       .def(
           "suction",
           [](const SceneGraspModel& s) {
             return placed_arrays(s.suction(), s.options().offsets.size());
           },
-          "Suction grasps in the world: dict of arrays.")
+          "Suction grasps in the world (PlacedGraspArrays).")
       .def(
           "collides",
           [](const SceneGraspModel& s, const std::string& kind, const py::handle& poses,

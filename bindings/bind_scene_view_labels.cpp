@@ -145,8 +145,9 @@ void bind_scene_view_labels(py::module_& m) {
             return out;
           },
           py::arg("K"), py::arg("X_WC"), py::arg("instance_image"),
-          py::arg("keypoint_tolerance") = 0.002, py::arg("keypoints") = true,
-          py::arg("num_threads") = 0, py::arg("depth") = py::none());
+          py::arg("keypoint_tolerance") = ViewLabelOptions{}.keypoint_tolerance,
+          py::arg("keypoints") = ViewLabelOptions{}.keypoints,
+          py::arg("num_threads") = ViewLabelOptions{}.num_threads, py::arg("depth") = py::none());
 }
 
 }  // namespace mgn::py_bind

@@ -55,6 +55,18 @@ py::array to_numpy(Derived&& m) {
       heap->data(), owner);
 }
 
+/// Read-only numpy view (no copy) of a row-major Eigen matrix owned by `owner` (e.g. the Python
+/// object of a Mesh), which the view keeps alive.
+template <typename M>
+py::array view_of(const M& mat, py::handle owner) {
+  using Scalar = typename M::Scalar;
+  py::array_t<Scalar> arr(
+      {static_cast<py::ssize_t>(mat.rows()), static_cast<py::ssize_t>(mat.cols())}, mat.data(),
+      owner);
+  arr.attr("setflags")(py::arg("write") = false);
+  return arr;
+}
+
 /// Moves a std::vector into a 1-D numpy array (no copy). uint8 "bool" vectors become bool arrays.
 template <typename T>
 py::array to_numpy(std::vector<T>&& v) {

@@ -11,6 +11,7 @@ import numpy
 import numpy.typing
 
 __all__: list[str] = [
+    "AntipodalOptions",
     "AntipodalResult",
     "AntipodalSampler",
     "AreaLight",
@@ -39,15 +40,18 @@ __all__: list[str] = [
     "MeshReport",
     "MgnError",
     "MgnRigParams",
+    "ObjectGraspLabels",
     "ParallelJawGripper",
     "PathScene",
     "PathTraceOptions",
     "PathTraceResult",
     "PbrMaterial",
+    "PjWrenchOptions",
     "PlacedGraspArrays",
     "RayAllHits",
     "RayHits",
     "RayScene",
+    "RenderOptions",
     "RenderResult",
     "Renderer",
     "SEAL_FAILURE_NAMES",
@@ -56,13 +60,17 @@ __all__: list[str] = [
     "SURFACE_MIRROR",
     "SURFACE_TRANSPARENT",
     "SceneGraspModel",
+    "SceneGraspOptions",
     "SealModel",
+    "SealOptions",
     "SealResult",
     "SealTrial",
     "ShakeOptions",
     "ShakeResult",
     "ShakeTrajectoryResult",
     "StaircaseGridResult",
+    "SuctionTool",
+    "SuctionWrenchOptions",
     "SurfaceSamples",
     "ToolCollisionArrays",
     "UnsupportedError",
@@ -563,6 +571,93 @@ class SealTrial:
         N
         """
 
+class SealOptions:
+    """
+    Options of SealModel.evaluate (mgn/grasp/seal_model.hpp, SI units); the defaults are the C++ struct's, validate() checks the ranges.
+    """
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def angle_sigma(self) -> float:
+        """
+        std of each Euler angle of the normal perturbation, rad
+        """
+    @angle_sigma.setter
+    def angle_sigma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def first_index(self) -> int:
+        """
+        candidate i draws from the stream (seed, first_index + i)
+        """
+    @first_index.setter
+    def first_index(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def num_threads(self) -> int:
+        """
+        0 = all hardware threads
+        """
+    @num_threads.setter
+    def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def num_trials(self) -> int:
+        """
+        perturbed trials per candidate
+        """
+    @num_trials.setter
+    def num_trials(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def on_surface_tolerance(self) -> float:
+        """
+        candidates must lie on the mesh within this distance along the normal, m
+        """
+    @on_surface_tolerance.setter
+    def on_surface_tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def perturb(self) -> bool:
+        """
+        false: one deterministic trial at the nominal pose
+        """
+    @perturb.setter
+    def perturb(self, arg0: bool) -> None: ...
+    @property
+    def position_sigma(self) -> float:
+        """
+        std of the point jitter per axis, m (< 0: cup radius / 4)
+        """
+    @position_sigma.setter
+    def position_sigma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def seed(self) -> int: ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+
+class SuctionWrenchOptions:
+    """
+    Constants of suction_wrench_scores (mgn/grasp/wrench.hpp); the defaults are the C++ struct's, validate() checks the ranges.
+    """
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def gravity(self) -> float:
+        """
+        m/s^2
+        """
+    @gravity.setter
+    def gravity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def k(self) -> float:
+        """
+        tau_max = k * cup radius * pi * sqrt(2) (k in N, radius in m)
+        """
+    @k.setter
+    def k(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
 class Cup:
     """
     Suction cup parameters for the seal models (SI units; see mgn.SuctionCup).
@@ -624,18 +719,11 @@ class SealModel:
     """
     def __init__(self, mesh: Mesh, cup: Cup, model: str = "spring") -> None: ...
     def evaluate(
-        self,
-        points: typing.Any,
-        normals: typing.Any,
-        num_trials: typing.SupportsInt | typing.SupportsIndex = 10,
-        angle_sigma: typing.SupportsFloat | typing.SupportsIndex = 0.1,
-        position_sigma: typing.SupportsFloat | typing.SupportsIndex = -1.0,
-        perturb: bool = True,
-        on_surface_tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.001,
-        seed: typing.SupportsInt | typing.SupportsIndex = 0,
-        first_index: typing.SupportsInt | typing.SupportsIndex = 0,
-        num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> SealResult: ...
+        self, points: typing.Any, normals: typing.Any, options: SealOptions = ...
+    ) -> SealResult:
+        """
+        Seal scores of (N,3) candidates (object frame, m; unit outward normals).
+        """
     def trial(
         self,
         point: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
@@ -727,28 +815,134 @@ class CalibrationResult:
 
 class LightSample:
     """
-    The light a view was rendered with (mgn/render/renderer.hpp).
+    The main point light (mgn/render/renderer.hpp): input of RenderOptions.light, and the light a view was rendered with. The defaults are the C++ struct's.
     """
+    def __init__(self) -> None: ...
     @property
     def ambient(self) -> float:
         """
         relative to white
         """
+    @ambient.setter
+    def ambient(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def color_temperature(self) -> float:
         """
         K
         """
+    @color_temperature.setter
+    def color_temperature(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def intensity(self) -> float:
         """
         radiance scale (1 = nominal)
         """
+    @intensity.setter
+    def intensity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
     def position_W(self) -> tuple[float, float, float]:
         """
-        point light position, world frame, m
+        point light position, world frame, m (NaN: 1.5 m above the centre of the scene)
         """
+    @position_W.setter
+    def position_W(
+        self,
+        arg1: tuple[
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+        ],
+    ) -> None: ...
+
+class RenderOptions:
+    """
+    What Renderer.render draws and how (mgn/render/renderer.hpp); the defaults are the C++ struct's, validate() checks the ranges.
+    """
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def background(self) -> tuple[float, float, float]:
+        """
+        linear RGB of empty pixels
+        """
+    @background.setter
+    def background(
+        self,
+        arg1: tuple[
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+        ],
+    ) -> None: ...
+    @property
+    def check_camera_inside(self) -> bool:
+        """
+        raise if the camera centre is inside a closed mesh
+        """
+    @check_camera_inside.setter
+    def check_camera_inside(self, arg0: bool) -> None: ...
+    @property
+    def depth(self) -> bool:
+        """
+        produce the z-depth image
+        """
+    @depth.setter
+    def depth(self, arg0: bool) -> None: ...
+    @property
+    def instances(self) -> bool:
+        """
+        produce the instance-id image
+        """
+    @instances.setter
+    def instances(self, arg0: bool) -> None: ...
+    @property
+    def light(self) -> LightSample:
+        """
+        the light used when randomize is false
+        """
+    @light.setter
+    def light(self, arg0: LightSample) -> None: ...
+    @property
+    def randomize(self) -> bool:
+        """
+        draw the light and the randomize_color colours from (seed, view_index)
+        """
+    @randomize.setter
+    def randomize(self, arg0: bool) -> None: ...
+    @property
+    def rgb(self) -> bool:
+        """
+        produce the colour image
+        """
+    @rgb.setter
+    def rgb(self, arg0: bool) -> None: ...
+    @property
+    def seed(self) -> int: ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def shadows(self) -> bool:
+        """
+        shadow mapping from the main light
+        """
+    @shadows.setter
+    def shadows(self, arg0: bool) -> None: ...
+    @property
+    def view_index(self) -> int: ...
+    @view_index.setter
+    def view_index(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def visible_instances(self) -> list[int]:
+        """
+        draw only instances with these ids (empty: all)
+        """
+    @visible_instances.setter
+    def visible_instances(
+        self, arg0: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]
+    ) -> None: ...
 
 class RenderResult:
     """
@@ -835,25 +1029,10 @@ class Renderer:
         max_height: typing.SupportsInt | typing.SupportsIndex,
     ) -> None: ...
     def add_mesh(self, mesh: Mesh) -> int: ...
-    def render(
-        self,
-        K: Intrinsics,
-        X_WC: typing.Any,
-        rgb: bool = True,
-        depth: bool = True,
-        instances: bool = True,
-        visible_instances: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [],
-        shadows: bool = True,
-        randomize: bool = False,
-        seed: typing.SupportsInt | typing.SupportsIndex = 0,
-        view_index: typing.SupportsInt | typing.SupportsIndex = 0,
-        light_position: typing.Any | None = None,
-        light_intensity: typing.SupportsFloat | typing.SupportsIndex = 1.0,
-        light_color_temperature: typing.SupportsFloat | typing.SupportsIndex = 6500.0,
-        light_ambient: typing.SupportsFloat | typing.SupportsIndex = 0.25,
-        background: typing.Annotated[numpy.typing.ArrayLike, numpy.float32, "[3, 1]"] = ...,
-        check_camera_inside: bool = True,
-    ) -> RenderResult: ...
+    def render(self, K: Intrinsics, X_WC: typing.Any, options: RenderOptions = ...) -> RenderResult:
+        """
+        Renders one view (camera frame OpenCV, X_WC in m): rgb, depth, instance_ids and the light used.
+        """
     def set_instances(
         self,
         mesh_ids: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex],
@@ -1220,6 +1399,128 @@ class AntipodalResult:
     @property
     def width(self) -> numpy.ndarray: ...
 
+class AntipodalOptions:
+    """
+    Options of AntipodalSampler.sample (mgn/grasp/antipodal.hpp, SI units); the defaults are the C++ struct's (MetaGraspNet), validate() checks the ranges.
+    """
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def approaches_kept(self) -> int:
+        """
+        collision-free approaches kept per accepted probe
+        """
+    @approaches_kept.setter
+    def approaches_kept(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def approaches_tried(self) -> int:
+        """
+        random approach directions tried per accepted probe
+        """
+    @approaches_tried.setter
+    def approaches_tried(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def check_collision(self) -> bool:
+        """
+        false: keep the first approaches_kept approaches unchecked
+        """
+    @check_collision.setter
+    def check_collision(self, arg0: bool) -> None: ...
+    @property
+    def first_index(self) -> int:
+        """
+        point i uses the random stream (seed, first_index + i)
+        """
+    @first_index.setter
+    def first_index(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def friction_coef(self) -> float:
+        """
+        mu; friction cone half-angle atan(mu)
+        """
+    @friction_coef.setter
+    def friction_coef(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def num_threads(self) -> int:
+        """
+        0 = all hardware threads
+        """
+    @num_threads.setter
+    def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def offset(self) -> float:
+        """
+        bound of the start offset per axis, m
+        """
+    @offset.setter
+    def offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def probes(self) -> int:
+        """
+        perturbed probes per contact point
+        """
+    @probes.setter
+    def probes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def seed(self) -> int: ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def start_offset(self) -> float:
+        """
+        the probe ray starts this far outside the surface, m
+        """
+    @start_offset.setter
+    def start_offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def tilt(self) -> float:
+        """
+        bound of each Euler angle of the probe tilt, rad
+        """
+    @tilt.setter
+    def tilt(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
+class PjWrenchOptions:
+    """
+    Constants of pj_wrench_scores (mgn/grasp/pj_wrench.hpp, SI units); the defaults are the C++ struct's, validate() checks the ranges.
+    """
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def contact_radius(self) -> float:
+        """
+        radius of the soft contact patch, m
+        """
+    @contact_radius.setter
+    def contact_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def friction(self) -> float:
+        """
+        mu between finger pads and object
+        """
+    @friction.setter
+    def friction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def gravity(self) -> float:
+        """
+        m/s^2
+        """
+    @gravity.setter
+    def gravity(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def grip_force(self) -> float:
+        """
+        normal force per finger, N
+        """
+    @grip_force.setter
+    def grip_force(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
 class ParallelJawGripper:
     """
     Parallel-jaw gripper (SI units; see mgn.hardware.ParallelJawGripper). Box gripper unless palm_mesh, finger_left_mesh and finger_right_mesh are all set (closed, hand frame, fingers at opening 0).
@@ -1276,21 +1577,11 @@ class AntipodalSampler:
         self, X_OH: typing.Any, opening: typing.SupportsFloat | typing.SupportsIndex
     ) -> bool: ...
     def sample(
-        self,
-        points: typing.Any,
-        normals: typing.Any,
-        probes: typing.SupportsInt | typing.SupportsIndex = 5,
-        tilt: typing.SupportsFloat | typing.SupportsIndex = 0.19634954084936207,
-        offset: typing.SupportsFloat | typing.SupportsIndex = 0.005,
-        start_offset: typing.SupportsFloat | typing.SupportsIndex = 0.01,
-        friction_coef: typing.SupportsFloat | typing.SupportsIndex = 0.41421356237309503,
-        approaches_tried: typing.SupportsInt | typing.SupportsIndex = 50,
-        approaches_kept: typing.SupportsInt | typing.SupportsIndex = 20,
-        check_collision: bool = True,
-        seed: typing.SupportsInt | typing.SupportsIndex = 0,
-        first_index: typing.SupportsInt | typing.SupportsIndex = 0,
-        num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
-    ) -> AntipodalResult: ...
+        self, points: typing.Any, normals: typing.Any, options: AntipodalOptions = ...
+    ) -> AntipodalResult:
+        """
+        Antipodal grasps from (N,3) contact points and unit outward normals (object frame, m).
+        """
     @property
     def gripper(self) -> ParallelJawGripper: ...
 
@@ -1897,6 +2188,170 @@ class PathScene:
     @property
     def num_triangles(self) -> int: ...
 
+class ObjectGraspLabels:
+    """
+    Object-level grasp labels of one object, the input of SceneGraspModel (mgn/scene/scene_grasps.hpp). Object frame O, metres; every argument is optional (None: no labels of that kind, or NaN scores).
+    """
+    def __init__(
+        self,
+        pj_p1: typing.Any | None = None,
+        pj_closing: typing.Any = None,
+        pj_approach: typing.Any = None,
+        pj_width: typing.Any = None,
+        pj_score_analytical: typing.Any = None,
+        pj_score_simulation: typing.Any = None,
+        suction_points: typing.Any = None,
+        suction_approach: typing.Any = None,
+        suction_score_analytical: typing.Any = None,
+        suction_score_simulation: typing.Any = None,
+    ) -> None: ...
+    @property
+    def pj_approach(self) -> numpy.ndarray:
+        """
+        (M,3) float64 unit approach direction, object frame
+        """
+    @property
+    def pj_closing(self) -> numpy.ndarray:
+        """
+        (M,3) float64 unit closing direction v (p2 = p1 + w v), object frame
+        """
+    @property
+    def pj_p1(self) -> numpy.ndarray:
+        """
+        (M,3) float64 first contact p1 of each parallel-jaw grasp, object frame, m
+        """
+    @property
+    def pj_score_analytical(self) -> numpy.ndarray:
+        """
+        (M,) or (0,) float32 analytical score in [0, 1]
+        """
+    @property
+    def pj_score_simulation(self) -> numpy.ndarray:
+        """
+        (M,) or (0,) float32 simulation score in [0, 1]
+        """
+    @property
+    def pj_width(self) -> numpy.ndarray:
+        """
+        (M,) float32 contact width w, m
+        """
+    @property
+    def suction_approach(self) -> numpy.ndarray:
+        """
+        (K,3) float32 approach directions into the surface, object frame
+        """
+    @property
+    def suction_points(self) -> numpy.ndarray:
+        """
+        (K,3) float32 suction contacts, object frame, m
+        """
+    @property
+    def suction_score_analytical(self) -> numpy.ndarray:
+        """
+        (K,) or (0,) float32 seal score in [0, 1]
+        """
+    @property
+    def suction_score_simulation(self) -> numpy.ndarray:
+        """
+        (K,) or (0,) float32 simulation score in [0, 1]
+        """
+
+class SuctionTool:
+    """
+    Suction tool geometry behind the cup body for the scene collision check (mgn/scene/scene_grasps.hpp, m); defaults are the C++ struct's.
+    """
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def clearance(self) -> float:
+        """
+        gap between the contact and the bottom of the cup body, m
+        """
+    @clearance.setter
+    def clearance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def shaft_length(self) -> float:
+        """
+        m
+        """
+    @shaft_length.setter
+    def shaft_length(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def shaft_radius(self) -> float:
+        """
+        m
+        """
+    @shaft_radius.setter
+    def shaft_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
+class SceneGraspOptions:
+    """
+    Options of SceneGraspModel (mgn/scene/scene_grasps.hpp, SI units); the defaults are the C++ struct's, validate() checks the ranges.
+    """
+
+    pj_wrench: PjWrenchOptions
+    suction_wrench: SuctionWrenchOptions
+    tool: SuctionTool
+    def __init__(self) -> None: ...
+    def validate(self) -> None:
+        """
+        Raises InvalidArgumentError naming the first field out of its range.
+        """
+    @property
+    def approach_step(self) -> float:
+        """
+        largest spacing of the poses checked between offsets, m
+        """
+    @approach_step.setter
+    def approach_step(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def gravity_world(self) -> tuple[float, float, float]:
+        """
+        direction of gravity in the world (tote frame), normalised by the model
+        """
+    @gravity_world.setter
+    def gravity_world(
+        self,
+        arg1: tuple[
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+            typing.SupportsFloat | typing.SupportsIndex,
+        ],
+    ) -> None: ...
+    @property
+    def near_plane(self) -> float:
+        """
+        m
+        """
+    @near_plane.setter
+    def near_plane(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
+    def num_threads(self) -> int:
+        """
+        0 = all hardware threads
+        """
+    @num_threads.setter
+    def num_threads(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def offsets(self) -> list[float]:
+        """
+        distances back along the approach where the tool is checked, m
+        """
+    @offsets.setter
+    def offsets(
+        self, arg0: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex]
+    ) -> None: ...
+    @property
+    def visibility_tolerance(self) -> float:
+        """
+        m
+        """
+    @visibility_tolerance.setter
+    def visibility_tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+
 class PlacedGraspArrays:
     """
     SceneGraspModel.pj / .suction (mgn/scene/scene_grasps.hpp): world-frame grasps of every object; mgn.view_labels.grasps.PlacedGrasps documents each array.
@@ -1964,25 +2419,12 @@ class SceneGraspModel:
         poses: typing.Any,
         masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
         coms: typing.Any,
-        pj: collections.abc.Sequence[typing.Any],
-        suction: collections.abc.Sequence[typing.Any],
+        labels: collections.abc.Sequence[ObjectGraspLabels],
         tote: Mesh,
         X_WT: typing.Any,
         gripper: ParallelJawGripper,
         cup: Cup,
-        offsets: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
-        clearance: typing.SupportsFloat | typing.SupportsIndex,
-        shaft_radius: typing.SupportsFloat | typing.SupportsIndex,
-        shaft_length: typing.SupportsFloat | typing.SupportsIndex,
-        gravity_world: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
-        pj_friction: typing.SupportsFloat | typing.SupportsIndex,
-        grip_force: typing.SupportsFloat | typing.SupportsIndex,
-        contact_radius: typing.SupportsFloat | typing.SupportsIndex,
-        suction_k: typing.SupportsFloat | typing.SupportsIndex,
-        visibility_tolerance: typing.SupportsFloat | typing.SupportsIndex,
-        near_plane: typing.SupportsFloat | typing.SupportsIndex,
-        num_threads: typing.SupportsInt | typing.SupportsIndex,
-        approach_step: typing.SupportsFloat | typing.SupportsIndex = 0.005,
+        options: SceneGraspOptions = ...,
     ) -> None: ...
     def collides(
         self,
@@ -1997,11 +2439,11 @@ class SceneGraspModel:
         """
     def pj(self) -> PlacedGraspArrays:
         """
-        Parallel-jaw grasps in the world: dict of arrays.
+        Parallel-jaw grasps in the world (PlacedGraspArrays).
         """
     def suction(self) -> PlacedGraspArrays:
         """
-        Suction grasps in the world: dict of arrays.
+        Suction grasps in the world (PlacedGraspArrays).
         """
     def view_grasps(self, K: Intrinsics, X_WC: typing.Any, seen: typing.Any) -> ViewGraspArrays:
         """
@@ -2262,10 +2704,7 @@ def pj_wrench_scores(
     mass: typing.SupportsFloat | typing.SupportsIndex,
     com: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
     gravity_direction: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
-    friction: typing.SupportsFloat | typing.SupportsIndex = 0.5,
-    grip_force: typing.SupportsFloat | typing.SupportsIndex = 70.0,
-    contact_radius: typing.SupportsFloat | typing.SupportsIndex = 0.005,
-    gravity: typing.SupportsFloat | typing.SupportsIndex = 9.81,
+    options: PjWrenchOptions = ...,
 ) -> numpy.ndarray: ...
 def predict_experiments(
     surfaces: collections.abc.Sequence[Mesh],
@@ -2337,8 +2776,7 @@ def suction_wrench_scores(
     com: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
     gravity_direction: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"],
     cup_radius: typing.SupportsFloat | typing.SupportsIndex,
-    k: typing.SupportsFloat | typing.SupportsIndex = 15.6,
-    gravity: typing.SupportsFloat | typing.SupportsIndex = 9.81,
+    options: SuctionWrenchOptions = ...,
 ) -> numpy.ndarray: ...
 def surface_flags(material: Material) -> int: ...
 

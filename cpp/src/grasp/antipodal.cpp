@@ -20,7 +20,7 @@ namespace mgn {
 
 void AntipodalOptions::validate() const {
   auto fail = [](const char* field, double value, const char* expected) {
-    throw_error<InvalidArgument>("AntipodalOptions.", field, ": expected ", expected, ", got ",
+    throw_error<InvalidArgument>("AntipodalOptions.", field, " must be ", expected, ", got ",
                                  value);
   };
   if (probes < 1) fail("probes", probes, "an integer >= 1");

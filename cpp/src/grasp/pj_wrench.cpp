@@ -9,6 +9,18 @@
 
 namespace mgn {
 
+void PjWrenchOptions::validate() const {
+  auto positive = [](const char* field, double v, const char* unit) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw_error<InvalidArgument>("PjWrenchOptions.", field, " must be finite and > 0", unit,
+                                   ", got ", v);
+  };
+  positive("friction", friction, "");
+  positive("grip_force", grip_force, " (N)");
+  positive("contact_radius", contact_radius, " (m)");
+  positive("gravity", gravity, " (m/s^2)");
+}
+
 std::vector<float> pj_wrench_scores(const std::vector<ParallelJawGrasp>& grasps, double mass,
                                     const Vec3d& com, const Vec3d& gravity_direction,
                                     const PjWrenchOptions& o) {
@@ -20,15 +32,7 @@ std::vector<float> pj_wrench_scores(const std::vector<ParallelJawGrasp>& grasps,
   if (!gravity_direction.allFinite() || !(gravity_direction.norm() > 1e-12)) {
     throw_error<InvalidArgument>(fn, ": gravity_direction must be finite and non-zero");
   }
-  auto positive = [fn](const char* name, double v) {
-    if (!(v > 0.0) || !std::isfinite(v)) {
-      throw_error<InvalidArgument>(fn, ": ", name, " must be a finite value > 0, got ", v);
-    }
-  };
-  positive("friction", o.friction);
-  positive("grip_force", o.grip_force);
-  positive("contact_radius", o.contact_radius);
-  positive("gravity", o.gravity);
+  o.validate();
 
   const Vec3d F = mass * o.gravity * gravity_direction.normalized();
   const double f = o.grip_force;

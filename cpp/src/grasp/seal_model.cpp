@@ -255,6 +255,21 @@ SealTrial SealModel::trial(const Vec3d& point, const Vec3d& normal) const {
   return out;
 }
 
+void SealOptions::validate() const {
+  auto require = [](bool ok, const char* field, double value, const char* expected) {
+    if (!ok)
+      throw_error<InvalidArgument>("SealOptions.", field, " must be ", expected, ", got ", value);
+  };
+  require(num_trials >= 1, "num_trials", num_trials, ">= 1");
+  require(std::isfinite(angle_sigma) && angle_sigma >= 0.0, "angle_sigma", angle_sigma,
+          "finite and >= 0 (rad)");
+  require(std::isfinite(position_sigma), "position_sigma", position_sigma,
+          "finite (m; < 0: cup radius / 4)");
+  require(std::isfinite(on_surface_tolerance) && on_surface_tolerance > 0.0, "on_surface_tolerance",
+          on_surface_tolerance, "finite and > 0 (m)");
+  require(num_threads >= 0, "num_threads", num_threads, "0 (all) or a thread count >= 1");
+}
+
 SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals,
                                const SealOptions& options) const {
   const char* fn = "SealModel::evaluate";
@@ -262,20 +277,7 @@ SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals,
     throw_error<InvalidArgument>(fn, ": points has ", points.rows(), " rows but normals has ",
                                  normals.rows(), "; expected one normal per point");
   }
-  if (options.num_trials < 1)
-    throw_error<InvalidArgument>(fn, ": num_trials must be >= 1, got ", options.num_trials);
-  if (!(options.angle_sigma >= 0.0) || !std::isfinite(options.angle_sigma)) {
-    throw_error<InvalidArgument>(fn, ": angle_sigma must be finite and >= 0 rad, got ",
-                                 options.angle_sigma);
-  }
-  if (!std::isfinite(options.position_sigma)) {
-    throw_error<InvalidArgument>(fn, ": position_sigma must be finite, got ",
-                                 options.position_sigma);
-  }
-  if (!(options.on_surface_tolerance > 0.0)) {
-    throw_error<InvalidArgument>(fn, ": on_surface_tolerance must be > 0 m, got ",
-                                 options.on_surface_tolerance);
-  }
+  options.validate();
   const Eigen::Index n_cand = points.rows();
   Points3f unit(n_cand, 3);
   for (Eigen::Index i = 0; i < n_cand; ++i) {

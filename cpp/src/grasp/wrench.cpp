@@ -5,6 +5,15 @@
 
 namespace mgn {
 
+void SuctionWrenchOptions::validate() const {
+  if (!(k > 0.0) || !std::isfinite(k))
+    throw_error<InvalidArgument>("SuctionWrenchOptions.k must be finite and > 0, got ", k);
+  if (!(gravity >= 0.0) || !std::isfinite(gravity)) {
+    throw_error<InvalidArgument>(
+        "SuctionWrenchOptions.gravity must be finite and >= 0 (m/s^2), got ", gravity);
+  }
+}
+
 std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3f& approach,
                                          double mass, const Vec3d& com,
                                          const Vec3d& gravity_direction, double cup_radius,
@@ -24,10 +33,7 @@ std::vector<float> suction_wrench_scores(const Points3f& contacts, const Points3
   if (!(g_norm > 0.0) || !std::isfinite(g_norm)) {
     throw_error<InvalidArgument>(fn, ": gravity_direction must be a finite non-zero vector");
   }
-  if (!(options.k > 0.0) || !(options.gravity >= 0.0)) {
-    throw_error<InvalidArgument>(fn, ": expected k > 0 and gravity >= 0, got k=", options.k,
-                                 " gravity=", options.gravity);
-  }
+  options.validate();
   const Vec3d weight = mass * options.gravity * gravity_direction / g_norm;  // N
   const double tau_max = options.k * cup_radius * M_PI * std::sqrt(2.0);
   std::vector<float> score(static_cast<std::size_t>(contacts.rows()));

@@ -538,11 +538,7 @@ struct RenderSteps {
                                    " px but the renderer was created for at most ", I.max_w, "x",
                                    I.max_h);
     }
-    if (!opt.rgb && !opt.depth && !opt.instances) {
-      throw_error<InvalidArgument>(
-          "Renderer::render: no pass requested (rgb, depth, instances all "
-          "false)");
-    }
+    opt.validate();
   }
 
   /// The instances to draw (all, or those in opt.visible_instances).
@@ -621,13 +617,6 @@ struct RenderSteps {
       }
     } else {
       if (!light.position_W.allFinite()) light.position_W = frame.center + Vec3d(0.3, -0.2, 1.5);
-      if (!(std::isfinite(light.intensity) && light.intensity >= 0.0) ||
-          !(std::isfinite(light.ambient) && light.ambient >= 0.0)) {
-        throw_error<InvalidArgument>(
-            "Renderer::render: light intensity and ambient must be finite "
-            "and >= 0, got ",
-            light.intensity, ", ", light.ambient);
-      }
     }
     full = opt.rgb;
     const double light_dist = (light.position_W - frame.center).norm();
@@ -850,6 +839,26 @@ struct RenderSteps {
 };
 
 }  // namespace
+
+void RenderOptions::validate() const {
+  if (!rgb && !depth && !instances) {
+    throw_error<InvalidArgument>(
+        "RenderOptions.rgb/depth/instances must request at least one pass, got all false");
+  }
+  if (!background.allFinite()) {
+    throw_error<InvalidArgument>("RenderOptions.background must be finite, got (",
+                                 background.transpose(), ")");
+  }
+  if (randomize) return;  // the light is drawn, the given one is not used
+  if (!(std::isfinite(light.intensity) && light.intensity >= 0.0)) {
+    throw_error<InvalidArgument>("RenderOptions.light.intensity must be finite and >= 0, got ",
+                                 light.intensity);
+  }
+  if (!(std::isfinite(light.ambient) && light.ambient >= 0.0)) {
+    throw_error<InvalidArgument>("RenderOptions.light.ambient must be finite and >= 0, got ",
+                                 light.ambient);
+  }
+}
 
 RenderOutput Renderer::render(const CameraView& view, const RenderOptions& opt) {
   Impl& I = *impl_;

@@ -9,7 +9,6 @@ flange_to_contact a) with R = [v | a x v | a].
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,6 +20,10 @@ from mgn.geometry.mesh import Mesh, load_mesh
 from mgn.hardware import ParallelJawGripper
 
 _MESH_FIELDS = ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
+#: The C++ defaults (mgn/grasp/antipodal.hpp, mgn/grasp/pj_wrench.hpp): the one place they are
+#: written; the keyword defaults below read them.
+_ANTIPODAL = _core.AntipodalOptions()
+_PJ_WRENCH = _core.PjWrenchOptions()
 
 
 def core_gripper(gripper: ParallelJawGripper) -> _core.ParallelJawGripper:
@@ -111,17 +114,17 @@ class AntipodalSampler:
         points: npt.ArrayLike,
         normals: npt.ArrayLike,
         *,
-        probes: int = 5,
-        tilt: float = math.pi / 16,
-        offset: float = 0.005,
-        start_offset: float = 0.010,
-        friction_coef: float = math.tan(math.pi / 8),
-        approaches_tried: int = 50,
-        approaches_kept: int = 20,
-        check_collision: bool = True,
-        seed: int = 0,
-        first_index: int = 0,
-        num_threads: int = 0,
+        probes: int = _ANTIPODAL.probes,
+        tilt: float = _ANTIPODAL.tilt,
+        offset: float = _ANTIPODAL.offset,
+        start_offset: float = _ANTIPODAL.start_offset,
+        friction_coef: float = _ANTIPODAL.friction_coef,
+        approaches_tried: int = _ANTIPODAL.approaches_tried,
+        approaches_kept: int = _ANTIPODAL.approaches_kept,
+        check_collision: bool = _ANTIPODAL.check_collision,
+        seed: int = _ANTIPODAL.seed,
+        first_index: int = _ANTIPODAL.first_index,
+        num_threads: int = _ANTIPODAL.num_threads,
     ) -> AntipodalResult:
         """Sample grasps at N contact points ((N, 3) on the surface, outward normals (N, 3)).
 
@@ -133,22 +136,19 @@ class AntipodalSampler:
         first ``approaches_kept`` collision-free ones are kept. Point i draws from the random
         stream (``seed``, ``first_index`` + i): any thread count or batching gives the same result.
         """
-        out = self._core.sample(
-            points,
-            normals,
-            int(probes),
-            float(tilt),
-            float(offset),
-            float(start_offset),
-            float(friction_coef),
-            int(approaches_tried),
-            int(approaches_kept),
-            bool(check_collision),
-            int(seed),
-            int(first_index),
-            int(num_threads),
-        )
-        return from_core(AntipodalResult, out)
+        o = _core.AntipodalOptions()
+        o.probes = int(probes)
+        o.tilt = float(tilt)
+        o.offset = float(offset)
+        o.start_offset = float(start_offset)
+        o.friction_coef = float(friction_coef)
+        o.approaches_tried = int(approaches_tried)
+        o.approaches_kept = int(approaches_kept)
+        o.check_collision = bool(check_collision)
+        o.seed = int(seed)
+        o.first_index = int(first_index)
+        o.num_threads = int(num_threads)
+        return from_core(AntipodalResult, self._core.sample(points, normals, o))
 
     def collides(self, X_OH: npt.ArrayLike, opening: float) -> bool:
         """Whether the gripper at hand pose ``X_OH`` (4, 4), opened at ``opening`` m, intersects
@@ -164,10 +164,10 @@ def pj_wrench_scores(
     mass: float,
     com: npt.ArrayLike,
     gravity_direction: npt.ArrayLike = (0.0, 0.0, -1.0),
-    friction: float = 0.5,
-    grip_force: float = 70.0,
-    contact_radius: float = 0.005,
-    gravity: float = 9.81,
+    friction: float = _PJ_WRENCH.friction,
+    grip_force: float = _PJ_WRENCH.grip_force,
+    contact_radius: float = _PJ_WRENCH.contact_radius,
+    gravity: float = _PJ_WRENCH.gravity,
 ) -> npt.NDArray[np.float32]:
     """Soft-finger wrench score in [0, 1] of each grasp (see ``mgn/grasp/pj_wrench.hpp``).
 
@@ -183,8 +183,21 @@ def pj_wrench_scores(
         float(mass),
         np.asarray(com, np.float64),
         np.asarray(gravity_direction, np.float64),
-        float(friction),
-        float(grip_force),
-        float(contact_radius),
-        float(gravity),
+        _wrench_options(friction, grip_force, contact_radius, gravity),
     )
+
+
+def _wrench_options(
+    friction: float = _PJ_WRENCH.friction,
+    grip_force: float = _PJ_WRENCH.grip_force,
+    contact_radius: float = _PJ_WRENCH.contact_radius,
+    gravity: float = _PJ_WRENCH.gravity,
+) -> _core.PjWrenchOptions:
+    """The C++ constants of the parallel-jaw wrench score (mu, N, m, m/s^2), range-checked."""
+    o = _core.PjWrenchOptions()
+    o.friction = float(friction)
+    o.grip_force = float(grip_force)
+    o.contact_radius = float(contact_radius)
+    o.gravity = float(gravity)
+    o.validate()
+    return o

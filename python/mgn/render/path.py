@@ -58,6 +58,12 @@ def _color(value: Sequence[float], name: str) -> Color:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
+#: The C++ defaults of the tracer and the film (mgn/render/path_tracer.hpp): the one place they
+#: are written.
+_TRACE = _core.PathTraceOptions()
+_FILM = _core.FilmOptions()
+
+
 @dataclass(frozen=True)
 class PbrMaterial:
     """glTF 2.0 metallic-roughness material (+ KHR_materials_transmission / ior).
@@ -254,16 +260,16 @@ class PathTraceOptions:
             at the cost of dimming those caustics.
     """
 
-    spp: int = 16
-    max_bounces: int = 6
-    seed: int = 0
-    view_index: int = 0
-    num_threads: int = 0
-    rr_depth: int = 3
-    aperture_radius: float = 0.0
-    focus_distance: float = 0.0
-    clamp: float = 0.0
-    clamp_indirect: float = 10.0
+    spp: int = _TRACE.spp
+    max_bounces: int = _TRACE.max_bounces
+    seed: int = _TRACE.seed
+    view_index: int = _TRACE.view_index
+    num_threads: int = _TRACE.num_threads
+    rr_depth: int = _TRACE.rr_depth
+    aperture_radius: float = _TRACE.aperture_radius
+    focus_distance: float = _TRACE.focus_distance
+    clamp: float = _TRACE.clamp
+    clamp_indirect: float = _TRACE.clamp_indirect
 
     def __post_init__(self) -> None:
         for name in ("spp", "max_bounces", "seed", "view_index", "num_threads", "rr_depth"):
@@ -305,13 +311,13 @@ class FilmOptions:
     never clipping; mid grey 0.18 -> 0.165); "linear" clips to [0, 1]. Then the sRGB OETF.
     """
 
-    exposure: float = 0.0
-    tone: str = "filmic"
-    shot_noise: float = 0.0
-    read_noise: float = 0.0
-    seed: int = 0
-    view_index: int = 0
-    num_threads: int = 0
+    exposure: float = _FILM.exposure
+    tone: str = _FILM.tone
+    shot_noise: float = _FILM.shot_noise
+    read_noise: float = _FILM.read_noise
+    seed: int = _FILM.seed
+    view_index: int = _FILM.view_index
+    num_threads: int = _FILM.num_threads
 
     def __post_init__(self) -> None:
         for name in ("seed", "view_index"):

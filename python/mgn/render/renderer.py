@@ -24,6 +24,9 @@ from mgn.scene.cameras import CameraView
 
 __all__ = ["Instance", "LightSample", "RenderOutput", "Renderer"]
 
+#: The C++ defaults (mgn/render/renderer.hpp): the one place they are written.
+_LIGHT = _core.LightSample()
+
 
 @dataclass(frozen=True)
 class Instance:
@@ -49,9 +52,20 @@ class LightSample:
     ambient level. ``position_W=None`` places it 1.5 m above the centre of the scene."""
 
     position_W: tuple[float, float, float] | None = None
-    intensity: float = 1.0
-    color_temperature: float = 6500.0
-    ambient: float = 0.25
+    intensity: float = _LIGHT.intensity
+    color_temperature: float = _LIGHT.color_temperature
+    ambient: float = _LIGHT.ambient
+
+    def to_core(self) -> _core.LightSample:
+        """The C++ light (``position_W=None``: NaN, the default position)."""
+        light = _core.LightSample()
+        if self.position_W is not None:
+            x, y, z = (float(v) for v in self.position_W)
+            light.position_W = (x, y, z)
+        light.intensity = float(self.intensity)
+        light.color_temperature = float(self.color_temperature)
+        light.ambient = float(self.ambient)
+        return light
 
 
 @dataclass(frozen=True)
@@ -152,25 +166,22 @@ class Renderer:
                 f"{list(view.K.distortion)}: render it with mgn.render.iter_views (which resamples "
                 "through the lens) or render lens_for(K).render_K (mgn.scene.lens)"
             )
-        li = LightSample() if light is None else light
-        out = self._r.render(
-            view.K.to_core(),
-            view.X_WC,
-            rgb,
-            depth,
-            instances,
-            [] if visible_instances is None else [int(i) for i in visible_instances],
-            shadows,
-            randomize,
-            int(seed),
-            int(view_index),
-            None if li.position_W is None else np.asarray(li.position_W, np.float64),
-            float(li.intensity),
-            float(li.color_temperature),
-            float(li.ambient),
-            np.asarray(background, np.float32),
-            check_camera_inside,
+        o = _core.RenderOptions()
+        o.rgb = bool(rgb)
+        o.depth = bool(depth)
+        o.instances = bool(instances)
+        o.visible_instances = (
+            [] if visible_instances is None else [int(i) for i in visible_instances]
         )
+        o.shadows = bool(shadows)
+        o.randomize = bool(randomize)
+        o.seed = int(seed)
+        o.view_index = int(view_index)
+        o.light = (LightSample() if light is None else light).to_core()
+        r, g, b = (float(c) for c in background)
+        o.background = (r, g, b)
+        o.check_camera_inside = bool(check_camera_inside)
+        out = self._r.render(view.K.to_core(), view.X_WC, o)
         ld = out.light
         used = LightSample(
             tuple(float(x) for x in ld.position_W),  # type: ignore[arg-type]

@@ -25,6 +25,11 @@ SEAL_MODELS: tuple[str, ...] = ("spring", "strain", "smoothness")
 #: Failure reason names, indexed by the codes in :attr:`SealResult.reason`.
 FAILURE_REASONS: tuple[str, ...] = tuple(_core.SEAL_FAILURE_NAMES)
 
+#: The C++ defaults (mgn/grasp/seal_model.hpp, mgn/grasp/wrench.hpp): the one place they are
+#: written; the keyword defaults below read them.
+_SEAL = _core.SealOptions()
+_WRENCH = _core.SuctionWrenchOptions()
+
 
 def core_cup(cup: SuctionCup) -> _core.Cup:
     """The C++ cup for a :class:`~mgn.hardware.SuctionCup` (same field names, SI units)."""
@@ -81,13 +86,13 @@ class SealModel:
         points: npt.ArrayLike,
         normals: npt.ArrayLike,
         *,
-        num_trials: int = 10,
-        angle_sigma: float = 0.1,
+        num_trials: int = _SEAL.num_trials,
+        angle_sigma: float = _SEAL.angle_sigma,
         position_sigma: float | None = None,
-        perturb: bool = True,
-        seed: int = 0,
-        first_index: int = 0,
-        num_threads: int = 0,
+        perturb: bool = _SEAL.perturb,
+        seed: int = _SEAL.seed,
+        first_index: int = _SEAL.first_index,
+        num_threads: int = _SEAL.num_threads,
     ) -> SealResult:
         """Robust seal score of N candidates (points (N, 3) on the surface, normals (N, 3)).
 
@@ -100,19 +105,16 @@ class SealModel:
             InvalidArgumentError: shapes differ, NaN or zero normals, or a point is not on the
                 mesh surface (within 1 mm along its normal).
         """
-        out = self._core.evaluate(
-            points,
-            normals,
-            int(num_trials),
-            float(angle_sigma),
-            -1.0 if position_sigma is None else float(position_sigma),
-            bool(perturb),
-            1e-3,
-            int(seed),
-            int(first_index),
-            int(num_threads),
-        )
-        return from_core(SealResult, out)
+        o = _core.SealOptions()
+        o.num_trials = int(num_trials)
+        o.angle_sigma = float(angle_sigma)
+        if position_sigma is not None:
+            o.position_sigma = float(position_sigma)
+        o.perturb = bool(perturb)
+        o.seed = int(seed)
+        o.first_index = int(first_index)
+        o.num_threads = int(num_threads)
+        return from_core(SealResult, self._core.evaluate(points, normals, o))
 
     def trial(self, point: Sequence[float], normal: Sequence[float]) -> _core.SealTrial:
         """One deterministic trial with its intermediate quantities (failure name, projected
@@ -128,7 +130,7 @@ def suction_wrench_scores(
     com: npt.ArrayLike,
     gravity_direction: npt.ArrayLike = (0.0, 0.0, -1.0),
     cup_radius: float = 0.007,
-    k: float = 15.6,
+    k: float = _WRENCH.k,
 ) -> npt.NDArray[np.float32]:
     """Suction wrench score in [0, 1] of each contact: 1 - min(1, tau / tau_max).
 
@@ -136,6 +138,8 @@ def suction_wrench_scores(
     object (``mass`` kg at ``com``, m) about the contact; tau_max = k * cup_radius * pi * sqrt(2).
     ``approach`` points into the surface. All vectors in one frame (object or world).
     """
+    o = _core.SuctionWrenchOptions()
+    o.k = float(k)
     return _core.suction_wrench_scores(
         contacts,
         approach,
@@ -143,5 +147,5 @@ def suction_wrench_scores(
         np.asarray(com, np.float64),
         np.asarray(gravity_direction, np.float64),
         float(cup_radius),
-        float(k),
+        o,
     )

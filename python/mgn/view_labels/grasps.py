@@ -29,7 +29,6 @@ Everything here is in metres; the dataset writer converts to centimetres.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -81,16 +80,18 @@ __all__ = [
 #: MetaGraspNet's suction tool pose: the contact frame moved back along the approach by 2 cm
 #: (cup) + 11.21 cm (tool) = 0.1321 m (the one constant, defined in the C++ core).
 SUCTION_TOOL_OFFSET: float = float(_core.SUCTION_TOOL_OFFSET)
+#: The C++ defaults (mgn/scene/scene_grasps.hpp): the one place they are written.
+_CORE_OPTIONS = _core.SceneGraspOptions()
 #: Largest spacing of the tool poses checked along the approach between two offsets, m.
-DEFAULT_APPROACH_STEP = 0.005
+DEFAULT_APPROACH_STEP: float = _CORE_OPTIONS.approach_step
 #: Radius of the suction tool shaft behind the cup body, m (a vacuum tube / tool body).
-DEFAULT_SHAFT_RADIUS = 0.015
+DEFAULT_SHAFT_RADIUS: float = _CORE_OPTIONS.tool.shaft_radius
 #: Length of the suction tool shaft behind the cup body, m.
-DEFAULT_SHAFT_LENGTH = 0.150
+DEFAULT_SHAFT_LENGTH: float = _CORE_OPTIONS.tool.shaft_length
 #: A contact is visible when the first hit from the camera is at most this much closer, m.
-DEFAULT_VISIBILITY_TOLERANCE = 0.002
+DEFAULT_VISIBILITY_TOLERANCE: float = _CORE_OPTIONS.visibility_tolerance
 #: Contacts closer to the camera plane than this are not visible, m.
-DEFAULT_NEAR_PLANE = 0.01
+DEFAULT_NEAR_PLANE: float = _CORE_OPTIONS.near_plane
 
 
 @dataclass(frozen=True)
@@ -291,6 +292,28 @@ def _wrench_option(labels: Sequence[PjLabels | None], key: str, default: float) 
     return values.pop() if values else default
 
 
+def _object_labels(pj: PjLabels | None, suction: SuctionLabels | None) -> _core.ObjectGraspLabels:
+    """The C++ input of one object: its object-level labels (object frame, m; None: none)."""
+
+    def rows(a: npt.ArrayLike | None, dtype: type) -> np.ndarray | None:
+        return None if a is None else np.asarray(a, dtype).reshape(-1, 3)
+
+    def column(a: npt.ArrayLike | None) -> np.ndarray | None:
+        return None if a is None else np.asarray(a, np.float32).reshape(-1)
+
+    return _core.ObjectGraspLabels(
+        pj_p1=rows(None if pj is None else pj.p1, np.float64),
+        pj_closing=rows(None if pj is None else pj.closing, np.float64),
+        pj_approach=rows(None if pj is None else pj.approach, np.float64),
+        pj_width=column(None if pj is None else pj.width),
+        pj_score_analytical=column(None if pj is None else pj.quality_score),
+        pj_score_simulation=column(None if pj is None else pj.quality_score_simulation),
+        suction_points=rows(None if suction is None else suction.points, np.float32),
+        suction_approach=rows(None if suction is None else suction.approach, np.float32),
+        suction_score_analytical=column(None if suction is None else suction.score),
+    )
+
+
 def _in_lens_image(
     lens: Lens, view: CameraView, points_W: npt.NDArray[np.float64]
 ) -> npt.NDArray[np.bool_]:
@@ -333,11 +356,11 @@ class SceneGraspModel:
         gripper: ParallelJawGripper | None = None,
         cup: SuctionCup | None = None,
         *,
-        offsets: Sequence[float] = (0.0, 0.1),
+        offsets: Sequence[float] = tuple(_CORE_OPTIONS.offsets),
         approach_step: float = DEFAULT_APPROACH_STEP,
         shaft_radius: float = DEFAULT_SHAFT_RADIUS,
         shaft_length: float = DEFAULT_SHAFT_LENGTH,
-        gravity_world: Sequence[float] = (0.0, 0.0, -1.0),
+        gravity_world: Sequence[float] = _CORE_OPTIONS.gravity_world,
         friction: float | None = None,
         grip_force: float | None = None,
         contact_radius: float | None = None,
@@ -373,65 +396,46 @@ class SceneGraspModel:
             )
         self.gripper = gripper if gripper is not None else ParallelJawGripper()
         self.cup = cup if cup is not None else SuctionCup()
-        friction = _wrench_option(pj_labels, "friction", 0.5) if friction is None else friction
-        if grip_force is None:
-            grip_force = _wrench_option(pj_labels, "grip_force_N", 70.0)
-        if contact_radius is None:
-            contact_radius = _wrench_option(pj_labels, "contact_radius_m", 0.005)
-        pj = [
-            None
-            if lab is None
-            else {
-                "p1": np.asarray(lab.p1, np.float64).reshape(-1, 3),
-                "closing": np.asarray(lab.closing, np.float64).reshape(-1, 3),
-                "approach": np.asarray(lab.approach, np.float64).reshape(-1, 3),
-                "width": np.asarray(lab.width, np.float32).reshape(-1),
-                "score_analytical": np.asarray(lab.quality_score, np.float32).reshape(-1),
-                "score_simulation": np.asarray(lab.quality_score_simulation, np.float32).reshape(
-                    -1
-                ),
-            }
-            for lab in pj_labels
-        ]
-        suction = [
-            None
-            if lab is None
-            else {
-                "points": np.asarray(lab.points, np.float32).reshape(-1, 3),
-                "approach": np.asarray(lab.approach, np.float32).reshape(-1, 3),
-                "score_analytical": np.asarray(lab.score, np.float32).reshape(-1),
-            }
-            for lab in suction_labels
-        ]
-        offs = [float(o) for o in offsets]
-        if not offs or not all(math.isfinite(o) and o >= 0 for o in offs):
+        wrench = _core.PjWrenchOptions()
+        for name, key, given in (
+            ("friction", "friction", friction),
+            ("grip_force", "grip_force_N", grip_force),
+            ("contact_radius", "contact_radius_m", contact_radius),
+        ):
+            default = float(getattr(wrench, name))
+            value = _wrench_option(pj_labels, key, default) if given is None else given
+            setattr(wrench, name, float(value))
+        try:
+            offs = [float(o) for o in offsets]
+            gx, gy, gz = (float(g) for g in gravity_world)
+        except (TypeError, ValueError) as e:
             raise InvalidArgumentError(
-                f"SceneGraspModel: offsets must be finite distances >= 0 m, got {list(offsets)}"
-            )
+                f"SceneGraspModel: offsets must be distances in m and gravity_world 3 numbers, "
+                f"got {offsets!r} and {gravity_world!r}"
+            ) from e
+        opts = _core.SceneGraspOptions()
+        opts.offsets = offs
+        opts.approach_step = float(approach_step)
+        opts.tool.clearance = CUP_BODY_CLEARANCE
+        opts.tool.shaft_radius = float(shaft_radius)
+        opts.tool.shaft_length = float(shaft_length)
+        opts.gravity_world = (gx, gy, gz)
+        opts.pj_wrench = wrench
+        opts.visibility_tolerance = float(visibility_tolerance)
+        opts.near_plane = float(near_plane)
+        opts.num_threads = int(num_threads)
+        opts.validate()
         self._core = _core.SceneGraspModel(
             list(meshes),
             np.asarray(poses, np.float64).reshape(-1, 4, 4),
             [float(m) for m in masses],
             np.asarray(coms, np.float64).reshape(-1, 3),
-            pj,
-            suction,
+            [_object_labels(p, s) for p, s in zip(pj_labels, suction_labels, strict=True)],
             tote,
             np.asarray(X_WT, np.float64),
             core_gripper(self.gripper),
             core_cup(self.cup),
-            offs,
-            CUP_BODY_CLEARANCE,
-            float(shaft_radius),
-            float(shaft_length),
-            np.asarray(gravity_world, np.float64).reshape(3),
-            float(friction),
-            float(grip_force),
-            float(contact_radius),
-            15.6,
-            float(visibility_tolerance),
-            float(near_plane),
-            int(num_threads),
-            float(approach_step),
+            opts,
         )
         self.offsets: tuple[float, ...] = tuple(offs)
         self.pj: PlacedGrasps = self._placed(self._core.pj())

@@ -49,7 +49,8 @@ struct AntipodalOptions {
   std::uint64_t first_index = 0;  ///< point i uses the random stream (seed, first_index + i)
   int num_threads = 0;            ///< 0 = all hardware threads
 
-  /// Throws InvalidArgument naming the first field out of range.
+  /// Throws InvalidArgument "AntipodalOptions.<field> must be ..." naming the first field out of
+  /// range.
   void validate() const;
 };
 

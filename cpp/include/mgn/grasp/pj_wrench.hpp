@@ -29,6 +29,9 @@ struct PjWrenchOptions {
   double grip_force = 70.0;       ///< N, normal force of each finger (Franka Hand: 70 N continuous)
   double contact_radius = 0.005;  ///< m, radius of the soft contact patch (> 0)
   double gravity = 9.81;          ///< m/s^2 (> 0)
+  /// Throws InvalidArgument "PjWrenchOptions.<field> must be ..." for a field that is not finite
+  /// and > 0.
+  void validate() const;
 };
 
 /// Score in [0, 1] of each grasp (object frame; only p1, closing and width are used).

@@ -76,6 +76,8 @@ struct SealOptions {
   /// + i), so a job evaluated in chunks gives the same scores as in one call.
   std::uint64_t first_index = 0;
   int num_threads = 0;  ///< 0 = all hardware threads
+  /// Throws InvalidArgument "SealOptions.<field> must be ..." naming the first field out of range.
+  void validate() const;
 };
 
 /// Per-candidate results of evaluate().

@@ -13,7 +13,10 @@ struct SuctionWrenchOptions {
   /// r = 0.01 m, i.e. 0.693 N m). mgn scales by the actual cup radius so that larger cups resist
   /// more torque.
   double k = 15.6;
-  double gravity = 9.81;  ///< m/s^2
+  double gravity = 9.81;  ///< m/s^2 (>= 0)
+  /// Throws InvalidArgument "SuctionWrenchOptions.<field> must be ..." (k finite and > 0, gravity
+  /// finite and >= 0).
+  void validate() const;
 };
 
 /// Suction wrench score of each contact in [0, 1]: 1 - min(1, tau / tau_max), where tau is the

@@ -67,6 +67,10 @@ struct RenderOptions {
   /// Check that the camera centre is not inside a closed mesh of the scene (e.g. a tote wall);
   /// the check costs one ray-parity test per mesh whose bounds contain the camera.
   bool check_camera_inside = true;
+  /// Throws InvalidArgument "RenderOptions.<field> must be ...": at least one pass requested,
+  /// a finite background, and (when randomize is false) light.intensity and light.ambient finite
+  /// and >= 0.
+  void validate() const;
 };
 
 /// Images of one render; empty vectors for passes not requested.

@@ -94,19 +94,24 @@ struct SceneGraspOptions {
   void validate() const;
 };
 
-/// One object of the scene with its object-level labels (object frame, metres).
-struct SceneGraspObject {
-  const Mesh* mesh = nullptr;        ///< closed mesh in the object frame (copied at build time)
-  Pose X_WO = Pose::Identity();      ///< settled pose of the object in the world
-  double mass = 0.0;                 ///< kg (> 0)
-  Vec3d com = Vec3d::Zero();         ///< centre of mass, object frame, m
+/// The object-level grasp labels of one object (object frame O, metres), as the scene model
+/// reads them. Empty vectors: no labels of that kind.
+struct ObjectGraspLabels {
   std::vector<ParallelJawGrasp> pj;  ///< parallel-jaw grasps (object frame)
-  /// Per grasp scores, the same length as pj, or empty (then NaN).
+  /// Per grasp scores in [0, 1], the same length as pj, or empty (then NaN).
   std::vector<float> pj_score_analytical, pj_score_simulation;
   Points3f suction_points;    ///< (K,3) suction contacts, object frame, m
   Points3f suction_approach;  ///< (K,3) approach directions into the surface (normalised here)
-  /// Per suction grasp scores, length K or empty (then NaN).
+  /// Per suction grasp scores in [0, 1], length K or empty (then NaN).
   std::vector<float> suction_score_analytical, suction_score_simulation;
+};
+
+/// One object of the scene: its geometry and settled pose, with its object-level labels.
+struct SceneGraspObject : ObjectGraspLabels {
+  const Mesh* mesh = nullptr;    ///< closed mesh in the object frame (copied at build time)
+  Pose X_WO = Pose::Identity();  ///< settled pose of the object in the world
+  double mass = 0.0;             ///< kg (> 0)
+  Vec3d com = Vec3d::Zero();     ///< centre of mass, object frame, m
 };
 
 /// All grasps of one kind placed in the world, objects concatenated in scene order (M rows).
