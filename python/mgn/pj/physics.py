@@ -50,9 +50,10 @@ class ShakeOptions:
     (success is monotone: more friction helps, more mass hurts) by galloping and bisection row
     by row, verifies the cells on both sides of it and ``staircase_checks`` other inferred cells,
     and falls back to the full grid where a check contradicts monotonicity
-    (``ShakeScores.fallback``); see ``staircase_grid`` in the header for the order and bounds. ``first_grasp_index``:
-    grasp ``g`` of a call draws the random streams of grasp ``first_grasp_index + g``, so a grasp
-    list scored in consecutive pieces gets the same scores as scored whole.
+    (``ShakeScores.fallback``); see ``staircase_grid`` in the header for the order and bounds.
+    ``first_grasp_index``: grasp ``g`` of a call draws the random streams of grasp
+    ``first_grasp_index + g``, so a grasp list scored in consecutive pieces gets the same scores
+    as scored whole.
     """
 
     grid: int = 10
