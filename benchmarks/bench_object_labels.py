@@ -14,7 +14,12 @@ with 1 and N threads are compared (they must be identical). There is no peer: Me
 label scripts take minutes per object.
 
     python -m benchmarks --only object_labels [--quick]   (quick: 6 objects, 1000 points)
-    python -m benchmarks.bench_object_labels [--objects mug,box_cereal] [--points 5000]
+    python -m benchmarks.bench_object_labels [--objects mug,box_cereal] [--points 5000] [--stages]
+
+``--stages`` also times the three stages of the same computation one by one (wall / CPU s): the
+shared even surface samples, the suction labels (cup-body collision filter, seal trials, wrench)
+and the parallel-jaw labels (antipodal probes, gripper collision filter, wrench), and checks that
+the staged labels equal compute_object_labels'.
 """
 
 from __future__ import annotations
@@ -64,6 +69,44 @@ def time_object(spec: Any, config: Any, threads: int) -> tuple[Timing, Any]:
     w0, c0 = time.perf_counter(), time.process_time()
     labels = compute_object_labels(spec, config, num_threads=threads)
     return Timing([time.perf_counter() - w0], [time.process_time() - c0]), labels
+
+
+def time_stages(spec: Any, config: Any, threads: int) -> tuple[dict[str, Timing], Any]:
+    """The stages of compute_object_labels (no physics) timed one by one: ({stage: Timing},
+    (suction labels, parallel-jaw labels))."""
+    from mgn.geometry.mesh import mass_properties, sample_surface
+    from mgn.pj.labels import label_object as pj_label_object
+    from mgn.suction.labels import label_object as suction_label_object
+
+    mesh = spec.to_mesh()
+    props = mass_properties(mesh, spec.density)
+    ol = config.object_labels
+    out: dict[str, Timing] = {}
+
+    def timed(name: str, fn: Callable[[], Any]) -> Any:
+        gc.collect()
+        w0, c0 = time.perf_counter(), time.process_time()
+        value = fn()
+        out[name] = Timing([time.perf_counter() - w0], [time.process_time() - c0])
+        return value
+
+    shared = timed(
+        "samples", lambda: sample_surface(mesh, ol.suction_points, method="even", seed=ol.seed)
+    )
+    common = dict(
+        mass=props.mass, com=props.center_of_mass, seed=ol.seed, num_threads=threads, samples=shared
+    )
+    suction = timed(
+        "suction",
+        lambda: suction_label_object(
+            mesh, cup=config.cup, model=ol.suction_model, num_points=ol.suction_points, **common
+        ),
+    )
+    pj = timed(
+        "paralleljaw",
+        lambda: pj_label_object(mesh, gripper=config.gripper, num_points=ol.pj_points, **common),
+    )
+    return out, (suction, pj)
 
 
 def run(
@@ -140,6 +183,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--objects", default="", help="comma-separated names (default: all)")
     ap.add_argument("--points", type=int, default=5000)
     ap.add_argument("--threads", type=int, default=max(thread_counts()))
+    ap.add_argument("--stages", action="store_true", help="also time each stage")
     args = ap.parse_args(argv)
     from mgn.objects import builtin_objects
 
@@ -159,6 +203,15 @@ def main(argv: list[str] | None = None) -> int:
             f"pj {len(labels.paralleljaw.width):6d}",
             flush=True,
         )
+        if args.stages:
+            stages, (suction, pj) = time_stages(spec, config, args.threads)
+            staged = dataclasses.replace(labels, suction=suction, paralleljaw=pj)
+            print(
+                "    stages (wall / CPU s): "
+                + ", ".join(f"{k} {t.wall[0]:.2f} / {t.cpu[0]:.2f}" for k, t in stages.items())
+                + ("; labels identical" if _same(labels, staged) else "; labels DIFFER"),
+                flush=True,
+            )
     print(f"total wall {total_wall:.1f} s, CPU {total_cpu:.1f} s, {args.threads} threads")
     return 0
 

@@ -397,11 +397,15 @@ def cycles_scene(desc: SceneDesc, tmp: Path, threads: int) -> Any:
     c = scene.cycles
     c.use_adaptive_sampling = False
     c.use_denoising = False
-    c.max_bounces = desc.max_bounces
-    c.diffuse_bounces = desc.max_bounces
-    c.glossy_bounces = desc.max_bounces
-    c.transmission_bounces = desc.max_bounces
-    c.transparent_max_bounces = desc.max_bounces
+    # Cycles samples the lights at the vertex where a path reaches its bounce limit, mgn does not:
+    # Cycles' N bounces are mgn's N + 1 (measured: a clear bottle in a white furnace, mgn 7 and
+    # Cycles 6 bounces agree within 0.1 %, mgn 6 is 3.5 % darker).
+    bounces = max(0, desc.max_bounces - 1)
+    c.max_bounces = bounces
+    c.diffuse_bounces = bounces
+    c.glossy_bounces = bounces
+    c.transmission_bounces = bounces
+    c.transparent_max_bounces = bounces
     c.volume_bounces = 0
     c.sample_clamp_direct = 0.0
     c.sample_clamp_indirect = 0.0

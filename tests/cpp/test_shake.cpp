@@ -455,6 +455,43 @@ TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
     if (stair.trial_simulated[t]) EXPECT_EQ(stair.trial_success[t], full.trial_success[t]);
 }
 
+TEST(Shake, TrialsOfABatchEqualTrialsRunAloneWithTheirOwnShapes) {
+  // shake_test builds the collision shapes once per worker and runs many trials with them;
+  // shake_trajectory builds fresh shapes for its one trial. Every trial of a batch must be the
+  // trial run alone: same outcome, same early exit, same number of steps (a step count is exact
+  // to the step, so any state carried from one trial to the next would show). A two-part object
+  // (a compound shape), grasps that hold and grasps that drop, both contact modes.
+  PhysicsObject two = box_object(Vec3d(0.04, 0.05, 0.06), 1.2);
+  Pose up = Pose::Identity(), down = Pose::Identity();
+  up.translation() = Vec3d(0, 0, 0.015);
+  down.translation() = Vec3d(0, 0, -0.015);
+  two.convex_parts = {make_box(Vec3d(0.04, 0.05, 0.03)).transformed(up),
+                      make_box(Vec3d(0.04, 0.05, 0.03)).transformed(down)};
+  std::vector<ParallelJawGrasp> grasps = {centre_grasp(0.04), centre_grasp(0.04),
+                                          centre_grasp(0.04)};
+  grasps[1].p1 = Vec3d(-0.02, 0.015, 0.02);  // off-centre: torque about the closing axis
+  grasps[2].p1 = Vec3d(-0.02, -0.01, -0.025);
+  for (const bool polyhedral : {false, true}) {
+    ShakeOptions o = small_grid(2, 0.1, 1.0);
+    o.seed = 11;
+    o.polyhedral_contacts = polyhedral;
+    const ShakeResult r = shake_test(two, ParallelJawGripper{}, grasps, o);
+    int held = 0, early = 0;
+    for (std::size_t t = 0; t < r.trial_success.size(); ++t) {
+      const std::size_t g = t / 4, i = (t % 4) / 2, j = t % 2;
+      const ShakeTrajectory alone = shake_trajectory(
+          two, ParallelJawGripper{}, grasps[g], r.frictions[i], r.density_factors[j], o, 1000, t);
+      EXPECT_EQ(alone.success, r.trial_success[t] != 0) << "trial " << t << " " << polyhedral;
+      EXPECT_EQ(alone.ended_early, r.trial_ended_early[t] != 0) << "trial " << t;
+      EXPECT_EQ(alone.steps, r.trial_steps[t]) << "trial " << t << " " << polyhedral;
+      held += r.trial_success[t];
+      early += r.trial_ended_early[t];
+    }
+    EXPECT_GT(held, 0);  // mixed outcomes: the comparison covers held and dropped objects
+    EXPECT_GT(early, 0);
+  }
+}
+
 TEST(Shake, MeshGripperIsSimulatedWithItsOwnFingers) {
   // A user's mesh gripper: with the box gripper's own meshes it holds the box like the boxes do;
   // with fingers moved 60 mm sideways (they pass beside the box) it holds nothing, so the score

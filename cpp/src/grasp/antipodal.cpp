@@ -46,20 +46,26 @@ struct AntipodalSampler::Impl {
   // Points on the object surface (its vertices and even samples) for the certain-collision
   // pre-filter of box grippers: a surface point inside a gripper box means a collision.
   Points3d surface_points;
-  // Bounding spheres of the object's triangles (centres, radii) for the certain-free test: a box
-  // that no sphere touches cannot touch the surface.
-  Points3d tri_centres;
-  std::vector<double> tri_radii;
-  // Spatial blocks of consecutive rows of surface_points and of tri_centres (the rows are stored
-  // in block order; the pre-filters only ask whether any row passes, so the order is free). A
-  // block whose bounding sphere misses a box's region lets ProbePoints skip all its rows.
+  // Bounding-sphere tree of the object's triangles for the certain-free test (see TriangleTree).
+  struct TriangleTree {
+    struct Node {
+      Vec3d centre;
+      double radius = 0;  // every vertex of the node's triangles lies within this of centre
+      std::int32_t begin = 0, end = 0;     // triangles [begin, end) (tree order)
+      std::int32_t left = -1, right = -1;  // children; -1: a leaf
+    };
+    std::vector<Node> nodes;                      // nodes[0]: the root
+    std::vector<std::array<Vec3d, 3>> triangles;  // vertices (object frame, m), tree order
+  } tree;
+  // Spatial blocks of consecutive rows of surface_points (the rows are stored in block order; the
+  // pre-filter only asks whether any row passes, so the order is free). A block whose bounding
+  // sphere misses a box's region lets ProbePoints skip all its rows.
   struct Block {
     Vec3d centre;
-    double radius = 0;      // max distance of a row's point (or sphere centre) from centre
-    double max_sphere = 0;  // largest triangle-sphere radius in the block (0 for points)
+    double radius = 0;  // max distance of a row's point from centre
     Eigen::Index begin = 0, end = 0;
   };
-  std::vector<Block> point_blocks, sphere_blocks;
+  std::vector<Block> point_blocks;
 };
 
 namespace {
@@ -98,6 +104,124 @@ std::vector<Eigen::Index> block_order(const Points3d& points, Eigen::Index leaf,
   return order;
 }
 
+/// Whether the triangle p (coordinates relative to the box centre, in the box's axes, m) and the
+/// box of half extents h are disjoint: separated along one of the 13 candidate axes (the box axes,
+/// the triangle's normal, the 9 cross products of a box axis with a triangle edge). Exact up to
+/// the rounding of these few products (~1e-17 m at object sizes).
+bool triangle_box_separated(const std::array<Vec3d, 3>& p, const Vec3d& h) {
+  for (int a = 0; a < 3; ++a) {
+    const double lo = std::min({p[0][a], p[1][a], p[2][a]});
+    const double hi = std::max({p[0][a], p[1][a], p[2][a]});
+    if (lo > h[a] || hi < -h[a]) return true;
+  }
+  const auto separates = [&](const Vec3d& axis) {
+    const double d0 = axis.dot(p[0]), d1 = axis.dot(p[1]), d2 = axis.dot(p[2]);
+    const double r = h.dot(axis.cwiseAbs());
+    return std::min({d0, d1, d2}) > r || std::max({d0, d1, d2}) < -r;
+  };
+  const std::array<Vec3d, 3> e = {p[1] - p[0], p[2] - p[1], p[0] - p[2]};
+  if (separates(e[0].cross(e[1]))) return true;
+  for (const Vec3d& edge : e) {  // unit x, y, z crossed with the edge
+    if (separates(Vec3d(0, -edge.z(), edge.y()))) return true;
+    if (separates(Vec3d(edge.z(), 0, -edge.x()))) return true;
+    if (separates(Vec3d(-edge.y(), edge.x(), 0))) return true;
+  }
+  return false;
+}
+
+using TriangleTree = AntipodalSampler::Impl::TriangleTree;
+
+/// Builds the tree over the mesh triangles: median splits of the centroids along the longest
+/// axis, leaves of at most 4 triangles, each node bounded by a sphere around its vertices.
+void build_triangle_tree(const Mesh& mesh, TriangleTree& tree) {
+  const Points3f& V = mesh.vertices();
+  const Faces& F = mesh.faces();
+  const auto n = static_cast<std::size_t>(F.rows());
+  std::vector<std::array<Vec3d, 3>> tris(n);
+  std::vector<Vec3d> centroid(n);
+  std::vector<std::int32_t> order(n);
+  for (std::size_t f = 0; f < n; ++f) {
+    for (int j = 0; j < 3; ++j)
+      tris[f][j] = V.row(F(static_cast<Eigen::Index>(f), j)).transpose().cast<double>();
+    centroid[f] = (tris[f][0] + tris[f][1] + tris[f][2]) / 3.0;
+    order[f] = static_cast<std::int32_t>(f);
+  }
+  constexpr std::int32_t kLeaf = 4;
+  tree.nodes.clear();
+  tree.nodes.reserve(2 * n / kLeaf + 2);
+  // (node index, begin, end) still to split
+  std::vector<std::array<std::int32_t, 3>> stack;
+  tree.nodes.emplace_back();
+  stack.push_back({0, 0, static_cast<std::int32_t>(n)});
+  while (!stack.empty()) {
+    const auto [id, b, e] = stack.back();
+    stack.pop_back();
+    Vec3d lo = tris[order[b]][0], hi = lo;
+    for (std::int32_t i = b; i < e; ++i)
+      for (const Vec3d& p : tris[order[i]]) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    TriangleTree::Node node;
+    node.centre = 0.5 * (lo + hi);
+    for (std::int32_t i = b; i < e; ++i)
+      for (const Vec3d& p : tris[order[i]])
+        node.radius = std::max(node.radius, (p - node.centre).norm());
+    node.radius = node.radius * (1 + 1e-9) + 1e-12;
+    node.begin = b;
+    node.end = e;
+    if (e - b > kLeaf) {
+      Vec3d clo = centroid[order[b]], chi = clo;
+      for (std::int32_t i = b; i < e; ++i)
+        clo = clo.cwiseMin(centroid[order[i]]), chi = chi.cwiseMax(centroid[order[i]]);
+      Eigen::Index axis = 0;
+      (chi - clo).maxCoeff(&axis);
+      const std::int32_t mid = b + (e - b) / 2;
+      std::nth_element(order.begin() + b, order.begin() + mid, order.begin() + e,
+                       [&](std::int32_t x, std::int32_t y) {
+                         const double px = centroid[x][axis], py = centroid[y][axis];
+                         return px < py || (px == py && x < y);
+                       });
+      node.left = static_cast<std::int32_t>(tree.nodes.size());
+      node.right = node.left + 1;
+      tree.nodes.emplace_back();
+      tree.nodes.emplace_back();
+      stack.push_back({node.left, b, mid});
+      stack.push_back({node.right, mid, e});
+    }
+    tree.nodes[static_cast<std::size_t>(id)] = node;
+  }
+  tree.triangles.resize(n);
+  for (std::size_t i = 0; i < n; ++i) tree.triangles[i] = tris[static_cast<std::size_t>(order[i])];
+}
+
+/// Whether some triangle of the tree is not proven apart from the box (centre and axes R in the
+/// object frame, half extents h, m): spheres that miss the box prune whole subtrees, the
+/// remaining triangles get the separating-axis test.
+bool tree_touches_box(const TriangleTree& tree, const Mat3d& R, const Vec3d& centre, const Vec3d& h,
+                      std::vector<std::int32_t>& stack) {
+  if (tree.nodes.empty()) return false;
+  stack.clear();
+  stack.push_back(0);
+  while (!stack.empty()) {
+    const TriangleTree::Node& node = tree.nodes[static_cast<std::size_t>(stack.back())];
+    stack.pop_back();
+    const Vec3d q = R.transpose() * (node.centre - centre);
+    const Vec3d out = (q.cwiseAbs() - h).cwiseMax(0.0);
+    if (out.squaredNorm() > node.radius * node.radius) continue;
+    if (node.left >= 0) {
+      stack.push_back(node.right);
+      stack.push_back(node.left);
+      continue;
+    }
+    for (std::int32_t i = node.begin; i < node.end; ++i) {
+      const std::array<Vec3d, 3>& t = tree.triangles[static_cast<std::size_t>(i)];
+      const std::array<Vec3d, 3> p = {R.transpose() * (t[0] - centre),
+                                      R.transpose() * (t[1] - centre),
+                                      R.transpose() * (t[2] - centre)};
+      if (!triangle_box_separated(p, h)) return true;
+    }
+  }
+  return false;
+}
+
 /// Axis-aligned box in the hand frame H: centre and half extents, m.
 struct HandBox {
   Vec3d centre;
@@ -114,28 +238,28 @@ struct ProbePoints {
   struct BoxPoints {
     double y_half = 0, z_lo = 0, z_hi = 0;  // box extent in y and in z relative to the centre
     std::vector<double> y0, y1, z0, z1;
-    // Triangle spheres that may touch the box: distance of the centre's x to the box's x range
-    // (0 inside), centre components as above and radius.
-    std::vector<double> sx, sy0, sy1, sz0, sz1, sr;
   };
   std::array<BoxPoints, 3> lists;  // palm, left finger, right finger at the probe's opening
 
-  // The probe's geometry, kept for the sphere lists (built on first use by surely_clear: many
-  // probes never need them, every approach being rejected by any_inside first).
+  // The probe's geometry.
   const AntipodalSampler::Impl* model = nullptr;
   std::array<HandBox, 3> boxes;
   std::array<double, 3> r2_min{}, r2_max{}, r_min{}, r_max{};
   Vec3d c, v, w1, w2, e1, e2;
-  bool spheres_built = false;
+  double depth = 0;
+  std::vector<std::int32_t> stack;   // tree traversal storage (reused)
   std::size_t next_point_block = 0;  // point blocks before this one are in the lists
 
   // Slack of the block tests (m): covers the rounding of the block-level distances, so a
   // skipped block never holds a row that the per-row tests would keep.
   static constexpr double kSlack = 1e-6;
   static constexpr double kEps = 1e-7;  // boxes shrunk by this: inside means strictly inside
+  // Clearance (m) that surely_clear demands between every box and every triangle: far above the
+  // rounding of FCL's tests and of these (~1e-16 m at object sizes), so an approach it clears is
+  // one that FCL finds free.
+  static constexpr double kMargin = 1e-6;
 
-  /// Whether a block (every row within `reach` of its centre, reach including the sphere radii)
-  /// may hold a row that reaches a box.
+  /// Whether a block (every row within `reach` of its centre) may hold a row that reaches a box.
   bool block_may_reach(const AntipodalSampler::Impl::Block& blk, double reach) const {
     const Vec3d q = blk.centre - c;
     const double xq = q.dot(v);
@@ -158,9 +282,8 @@ struct ProbePoints {
              double opening) {
     const Vec3d& f = g.finger_size;
     const Vec3d& pb = g.palm_size;
-    const double depth = g.grasp_depth();
+    depth = g.grasp_depth();
     model = &m;
-    spheres_built = false;
     e1 = e1_in;
     e2 = e2_in;
     boxes = {HandBox{Vec3d(0, 0, g.flange_to_tip - f.z() - 0.5 * pb.z()), 0.5 * pb},
@@ -170,7 +293,6 @@ struct ProbePoints {
       const HandBox& b = boxes[k];
       BoxPoints& l = lists[k];
       l.y0.clear(), l.y1.clear(), l.z0.clear(), l.z1.clear();
-      l.sx.clear(), l.sy0.clear(), l.sy1.clear(), l.sz0.clear(), l.sz1.clear(), l.sr.clear();
       l.y_half = b.half.y() - kEps;
       l.z_lo = b.centre.z() - b.half.z() + kEps - depth;
       l.z_hi = b.centre.z() + b.half.z() - kEps - depth;
@@ -215,51 +337,19 @@ struct ProbePoints {
     return false;
   }
 
-  /// Fills the sphere lists of the probe given to build().
-  void build_spheres() {
-    spheres_built = true;
-    const AntipodalSampler::Impl& m = *model;
-    const Points3d& centres = m.tri_centres;
-    for (const auto& blk : m.sphere_blocks) {
-      if (!block_may_reach(blk, blk.radius + blk.max_sphere)) continue;
-      for (Eigen::Index i = blk.begin; i < blk.end; ++i) {
-        const Vec3d q = centres.row(i).transpose() - c;
-        const double r = m.tri_radii[static_cast<std::size_t>(i)];
-        const double xq = q.dot(v);
-        const double rho = std::sqrt(std::max(0.0, q.squaredNorm() - xq * xq));
-        for (int k = 0; k < 3; ++k) {
-          const HandBox& b = boxes[k];
-          const double dx = std::max(0.0, std::abs(xq - b.centre.x()) - b.half.x());
-          if (dx > r) continue;
-          if (rho + r < r_min[k] || rho - r > r_max[k]) continue;
-          BoxPoints& l = lists[k];
-          l.sx.push_back(dx);
-          l.sy0.push_back(q.dot(w1));
-          l.sy1.push_back(q.dot(w2));
-          l.sz0.push_back(q.dot(e1));
-          l.sz1.push_back(q.dot(e2));
-          l.sr.push_back(r);
-        }
-      }
-    }
-  }
-
-  /// True when no triangle sphere touches a box (with a 1e-6 m margin) for the approach angle t:
-  /// then the gripper surface cannot touch the object surface.
-  bool surely_clear(double t) {
-    constexpr double kMargin = 1e-6;
-    if (!spheres_built) build_spheres();
-    const double ct = std::cos(t), st = std::sin(t);
-    for (const BoxPoints& l : lists) {
-      const std::size_t n = l.sr.size();
-      for (std::size_t i = 0; i < n; ++i) {
-        const double z = ct * l.sz0[i] + st * l.sz1[i];
-        const double y = ct * l.sy0[i] + st * l.sy1[i];
-        const double dz = std::max({0.0, l.z_lo - z, z - l.z_hi});
-        const double dy = std::max(0.0, std::abs(y) - l.y_half);
-        const double rr = l.sr[i] + kMargin;
-        if (l.sx[i] * l.sx[i] + dy * dy + dz * dz <= rr * rr) return false;
-      }
+  /// True when every object triangle is more than kMargin from every gripper box for the approach
+  /// a (the unit vector cos t e1 + sin t e2, as the caller computes it): then the gripper surface
+  /// cannot touch the object surface.
+  bool surely_clear(const Vec3d& a) {
+    Mat3d R;
+    R.col(0) = v;
+    R.col(1) = a.cross(v);
+    R.col(2) = a;
+    const Vec3d origin = c - depth * a;  // the hand frame's origin (see hand_pose)
+    for (int k : {1, 2, 0}) {
+      const HandBox& b = boxes[k];
+      const Vec3d half = b.half + Vec3d::Constant(kMargin);
+      if (tree_touches_box(model->tree, R, origin + R * b.centre, half, stack)) return false;
     }
     return true;
   }
@@ -320,33 +410,16 @@ AntipodalSampler::AntipodalSampler(const Mesh& object, const ParallelJawGripper&
     sp.resize(object.num_vertices() + samples.points.rows(), 3);
     sp.topRows(object.num_vertices()) = object.vertices().cast<double>();
     sp.bottomRows(samples.points.rows()) = samples.points.cast<double>();
-    const Points3f& V = object.vertices();
-    const Faces& F = object.faces();
-    impl_->tri_centres.resize(F.rows(), 3);
-    impl_->tri_radii.resize(static_cast<std::size_t>(F.rows()));
-    for (Eigen::Index f = 0; f < F.rows(); ++f) {
-      const Vec3d a = V.row(F(f, 0)).transpose().cast<double>();
-      const Vec3d b = V.row(F(f, 1)).transpose().cast<double>();
-      const Vec3d cc = V.row(F(f, 2)).transpose().cast<double>();
-      const Vec3d centre = (a + b + cc) / 3.0;
-      impl_->tri_centres.row(f) = centre.transpose();
-      impl_->tri_radii[f] =
-          std::max({(a - centre).norm(), (b - centre).norm(), (cc - centre).norm()}) * (1 + 1e-9);
-    }
-    // Store both row sets in spatial block order (see Impl::Block).
+    build_triangle_tree(object, impl_->tree);
+    // Store the rows in spatial block order (see Impl::Block).
     constexpr Eigen::Index kLeaf = 16;
-    const auto make_blocks = [&](Points3d& rows, std::vector<double>* radii,
-                                 std::vector<Impl::Block>& out) {
+    const auto make_blocks = [&](Points3d& rows, std::vector<Impl::Block>& out) {
       std::vector<std::pair<Eigen::Index, Eigen::Index>> ranges;
       const std::vector<Eigen::Index> order = block_order(rows, kLeaf, ranges);
       Points3d sorted(rows.rows(), 3);
-      std::vector<double> sorted_radii(radii ? radii->size() : 0);
-      for (std::size_t i = 0; i < order.size(); ++i) {
+      for (std::size_t i = 0; i < order.size(); ++i)
         sorted.row(static_cast<Eigen::Index>(i)) = rows.row(order[i]);
-        if (radii) sorted_radii[i] = (*radii)[static_cast<std::size_t>(order[i])];
-      }
       rows = std::move(sorted);
-      if (radii) *radii = std::move(sorted_radii);
       for (const auto& [b, e] : ranges) {
         Impl::Block blk;
         blk.begin = b;
@@ -357,17 +430,13 @@ AntipodalSampler::AntipodalSampler(const Mesh& object, const ParallelJawGripper&
           hi = hi.cwiseMax(rows.row(i));
         }
         blk.centre = (0.5 * (lo + hi)).transpose();
-        for (Eigen::Index i = b; i < e; ++i) {
+        for (Eigen::Index i = b; i < e; ++i)
           blk.radius = std::max(blk.radius, (rows.row(i).transpose() - blk.centre).norm());
-          if (radii)
-            blk.max_sphere = std::max(blk.max_sphere, (*radii)[static_cast<std::size_t>(i)]);
-        }
         blk.radius *= 1 + 1e-9;
         out.push_back(blk);
       }
     };
-    make_blocks(impl_->surface_points, nullptr, impl_->point_blocks);
-    make_blocks(impl_->tri_centres, &impl_->tri_radii, impl_->sphere_blocks);
+    make_blocks(impl_->surface_points, impl_->point_blocks);
   }
 }
 
@@ -509,8 +578,8 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
         Vec3d e1, e2;
         detail::tangent_frame(grasp.closing, e1, e2);
         const double opening = g.collision_opening(grasp.width);
-        // Box grippers: certain-collision (object point inside a box) and certain-free (no
-        // triangle sphere touches a box) pre-filters; FCL decides the rest.
+        // Box grippers: certain-collision (object point inside a box) and certain-free (every
+        // triangle more than 1 um from every box) pre-filters; FCL decides the rest.
         const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
                                o.approaches_tried > 0 && o.approaches_kept > 0;
         if (prefilter) near.build(m, g, grasp, e1, e2, opening);
@@ -531,7 +600,7 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
             // the parity test for a part lying entirely inside the object.
             const Pose X_OH = hand_pose(grasp, g);
             bool hit = false;
-            if (!(prefilter && near.surely_clear(t))) {
+            if (!(prefilter && near.surely_clear(grasp.approach))) {
               for (int k : {1, 2, 0}) {
                 const Pose X = k == 0 ? X_OH : X_OH * finger_offset(k - 1, opening);
                 if ((hit = collide(*m.parts[k], X, *m.object, Pose::Identity()))) break;

@@ -182,7 +182,17 @@ struct GeometryData {
   std::vector<F3> corner_normals;           // (F*3) unit shading normals per face corner, world
   Points2f uvs;                             // (V,2) or empty
   std::vector<std::int32_t> face_material;  // (F) global material index
+  std::vector<std::int32_t> face_emitter;   // (F) index into Geometry::emitters or -1; or empty
   std::int32_t instance_id = 0;
+};
+
+/// One emissive triangle (a face whose material has emission > 0), sampled by next-event
+/// estimation like an area light. It emits from its front (CCW) side.
+struct TriEmitter {
+  F3 p0, e1, e2;  // vertex 0 and the edges to vertices 1 and 2, world
+  F3 n;           // unit geometric normal (front side)
+  float area;
+  F3 radiance;
 };
 
 /// Per-corner shading normals: at each corner, the angle-weighted mean of the normals of the
@@ -239,6 +249,7 @@ struct PathScene::Geometry {
   std::vector<GeometryData> geoms;
   std::vector<PbrMaterial> materials;  // owns the textures
   std::vector<MaterialData> mats;
+  std::vector<TriEmitter> emitters;  // the emissive triangles, for next-event estimation
   std::int64_t triangles = 0;
   Eigen::Matrix<double, 2, 3, Eigen::RowMajor> bounds;
 };
@@ -259,9 +270,12 @@ struct PathScene::Lighting {
   std::vector<AreaLight> lights;
   Environment environment;
   std::vector<LightData> light_data;
-  // Light selection: cumulative weights over (lights..., environment).
-  // Light selection among the area lights (cdf, pmf over the lights), then entry `lights` for
-  // the environment (pmf 1 when it is on: sampled at every shading point).
+  std::vector<TriEmitter> tris;  // the scene's emissive triangles (copied from the geometry)
+  // Light selection: one "local" emitter per shading point, chosen by power among the area
+  // lights (entries 0 .. lights-1) and the emissive triangles (entries lights .. n_local-1)
+  // (cdf, pmf); then entry n_local for the environment (pmf 1 when it is on: sampled at every
+  // shading point).
+  std::size_t n_local = 0;
   std::vector<float> cdf;
   std::vector<float> pmf;
   bool env_on = false;
@@ -284,9 +298,9 @@ struct PathScene::Lighting {
 
 namespace {
 
-std::shared_ptr<PathScene::Lighting> make_lighting(
-    const std::vector<AreaLight>& lights, const Environment& environment,
-    const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>& bounds) {
+std::shared_ptr<PathScene::Lighting> make_lighting(const std::vector<AreaLight>& lights,
+                                                   const Environment& environment,
+                                                   const std::vector<TriEmitter>& tris) {
   for (std::size_t i = 0; i < lights.size(); ++i)
     lights[i].validate("PathScene: light " + std::to_string(i));
   environment.validate("PathScene: environment");
@@ -309,6 +323,8 @@ std::shared_ptr<PathScene::Lighting> make_lighting(
     L->light_data.push_back(d);
     w.push_back(pt::kPi * d.area * luminance(d.radiance));
   }
+  L->tris = tris;
+  for (const TriEmitter& t : tris) w.push_back(pt::kPi * t.area * luminance(t.radiance));
   const float I = environment.intensity;
   L->kind = static_cast<int>(environment.kind);
   L->color = f3(environment.color) * I;
@@ -335,11 +351,13 @@ std::shared_ptr<PathScene::Lighting> make_lighting(
       L->p_sun = std::min(0.9f, std::max(0.2f, e_sun / (e_sun + pt::kPi * sky_lum)));
   }
   L->env_on = sky_lum > 0.0f || e_sun > 0.0f;
-  // Area lights: one is chosen per shading point with probability proportional to its power;
+  // Area lights and emissive triangles: one is chosen per shading point with probability
+  // proportional to its power;
   // the environment is sampled at every shading point as well (its own shadow ray).
   float total = 0.0f;
   for (float x : w) total += x;
   const std::size_t n = w.size();
+  L->n_local = n;
   L->pmf.assign(n + 1, 0.0f);
   L->cdf.assign(n + 1, 0.0f);
   float acc = 0.0f;
@@ -417,9 +435,32 @@ PathScene::PathScene(const std::vector<PathGeometry>& geometries,
     }
     G->mats.push_back(d);
   }
+  for (GeometryData& d : G->geoms) {
+    for (Eigen::Index f = 0; f < d.faces.rows(); ++f) {
+      const MaterialData& m = G->mats[d.face_material[f]];
+      if (!m.emissive) continue;
+      auto vert = [&](int k) {
+        const auto i = d.faces(f, k);
+        return F3(d.vertices(i, 0), d.vertices(i, 1), d.vertices(i, 2));
+      };
+      TriEmitter t;
+      t.p0 = vert(0);
+      t.e1 = vert(1) - t.p0;
+      t.e2 = vert(2) - t.p0;
+      const F3 c = pt::cross(t.e1, t.e2);
+      t.area = 0.5f * length(c);
+      if (!(t.area > 0.0f)) continue;  // degenerate: never hit, never sampled
+      t.n = c / (2.0f * t.area);
+      t.radiance = m.emission;
+      if (d.face_emitter.empty())
+        d.face_emitter.assign(static_cast<std::size_t>(d.faces.rows()), -1);
+      d.face_emitter[f] = static_cast<std::int32_t>(G->emitters.size());
+      G->emitters.push_back(t);
+    }
+  }
   G->triangles = G->rays->num_triangles();
   G->bounds = G->rays->bounds();
-  lighting_ = make_lighting(lights, environment, G->bounds);
+  lighting_ = make_lighting(lights, environment, G->emitters);
   geometry_ = std::move(G);
 }
 
@@ -432,7 +473,7 @@ PathScene& PathScene::operator=(PathScene&&) noexcept = default;
 PathScene PathScene::with_lighting(const std::vector<AreaLight>& lights,
                                    const Environment& environment) const {
   PathScene s(*this);
-  s.lighting_ = make_lighting(lights, environment, geometry_->bounds);
+  s.lighting_ = make_lighting(lights, environment, geometry_->emitters);
   return s;
 }
 
@@ -614,10 +655,15 @@ class Integrator {
            const RTCRayHit* first = nullptr) {
     F3 L(0.0f), beta(1.0f);
     bool prev_delta = true;
-    float prev_pdf = 0.0f;  // solid-angle pdf of the BSDF sample that made the current ray
-    F3 prev_n(0.0f);        // shading normal at the previous vertex (for the environment pdf)
+    float prev_pdf = 0.0f;   // solid-angle pdf of the BSDF sample that made the current ray
+    F3 prev_n(0.0f);         // shading normal at the previous vertex (for the environment pdf)
+    float eta_scale = 1.0f;  // product of eta^2 over the refractions so far
     aov_albedo = F3(0.0f);
     aov_normal = F3(0.0f);
+    // The albedo and normal for the denoiser are those of the first surface that is not smooth
+    // glass: through (or in) a smooth dielectric they are taken at the next hit, so that the
+    // denoiser keeps what is seen through glass instead of smoothing it into a flat surface.
+    bool aov_open = true;
     RTCRayHit rh;
     Hit h;
     for (int depth = 0;; ++depth) {
@@ -640,17 +686,17 @@ class Integrator {
           w = power_heuristic(prev_pdf, pl);
         }
         add(L, beta * l.radiance * w, depth >= 2);
-        if (depth == 0) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
+        if (aov_open) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
         break;
       }
       if (!hit) {
-        if (L_.env_on || depth == 0) {
+        if (L_.env_on || aov_open) {
           const F3 Le = L_.env(d);
           float w = 1.0f;
           if (!prev_delta && L_.env_on)
             w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
           add(L, beta * Le * w, depth >= 2);
-          if (depth == 0)
+          if (aov_open)
             aov_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
         }
         break;
@@ -658,17 +704,34 @@ class Integrator {
       make_hit(G_, rh, d, h);
       const MaterialData& m = *h.mat;
       const F3 wo_w = -d;
-      if (m.emissive && h.front) add(L, beta * m.emission, depth >= 2);
-      if (depth == 0) {
+      if (m.emissive && h.front) {
+        // An emissive triangle found by BSDF sampling: MIS against its next-event estimation.
+        float w = 1.0f;
+        if (!prev_delta) {
+          const auto& fe = G_.geoms[rh.hit.geomID].face_emitter;
+          const std::int32_t e = fe.empty() ? -1 : fe[rh.hit.primID];
+          if (e >= 0) {
+            const float cos_l = std::abs(dot(d, h.ng));
+            const float t = rh.ray.tfar;
+            const float pl = L_.pmf[L_.light_data.size() + e] * t * t /
+                             (L_.tris[e].area * std::max(cos_l, 1e-7f));
+            w = power_heuristic(prev_pdf, pl);
+          }
+        }
+        add(L, beta * m.emission * w, depth >= 2);
+      }
+      if (aov_open) {
         aov_albedo = h.base;
         aov_normal = h.ns;
+        aov_open = m.transmission * (1.0f - m.metallic) >= 0.5f &&
+                   m.alpha <= pt::ShadingMaterial::kRoughAlpha;
       }
       if (depth >= opt_.max_bounces) break;
 
       const pt::Frame frame(h.ns);
       const F3 wo = frame.to_local(wo_w);
       pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
-      sm.prepare(wo.z);
+      sm.prepare(wo.z, h.front);
       const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
       // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
       // (roulette, Fresnel choice), environment direction.
@@ -679,14 +742,13 @@ class Integrator {
       // Next-event estimation.
       if (sm.has_nondelta) {
         if (L_.area_on) {
-          const std::size_t n = L_.light_data.size();
-          std::size_t k = 0;
-          while (k + 1 < n && u_sel.x >= L_.cdf[k]) ++k;
+          const std::size_t n = L_.n_local;
+          const auto k = static_cast<std::size_t>(
+              std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_sel.x) - L_.cdf.begin());
           add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
         }
         if (L_.env_on)
-          add(L, beta * direct(h, frame, wo, sm, L_.light_data.size(), s.get(base_pair + 4)),
-              depth >= 1);
+          add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4)), depth >= 1);
       }
 
       // BSDF sampling.
@@ -694,11 +756,16 @@ class Integrator {
       F3 weight;
       bool delta;
       float pdf;
-      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta)) break;
+      float eta2;
+      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta, eta2))
+        break;
       beta *= weight;
+      eta_scale *= eta2;
       if (!all_finite(beta) || max_comp(beta) <= 0.0f) break;
       if (depth + 1 >= opt_.rr_depth) {
-        const float q = std::min(1.0f, max_comp(beta));
+        // Roulette on the throughput without the 1/eta^2 radiance scaling of refractions, so
+        // that paths inside glass are not killed more often than outside.
+        const float q = std::min(1.0f, max_comp(beta) * eta_scale);
         if (u_rr.x >= q) break;
         beta *= 1.0f / q;
       }
@@ -747,6 +814,19 @@ class Integrator {
       if (pdf_light <= 0.0f) return F3(0.0f);
       dist = std::numeric_limits<float>::infinity();
       Le = L_.env(wi_w);
+    } else if (k >= L_.light_data.size()) {  // an emissive triangle
+      const TriEmitter& t = L_.tris[k - L_.light_data.size()];
+      const float su = std::sqrt(u.x);  // uniform point on the triangle
+      const F3 q = t.p0 + t.e1 * (1.0f - su) + t.e2 * (u.y * su);
+      const F3 v = q - h.p;
+      const float d2 = dot(v, v);
+      if (!(d2 > 0.0f)) return F3(0.0f);
+      dist = std::sqrt(d2);
+      wi_w = v / dist;
+      const float cos_l = -dot(wi_w, t.n);
+      if (cos_l <= 0.0f) return F3(0.0f);
+      pdf_light = d2 / (t.area * cos_l);
+      Le = t.radiance;
     } else {
       const LightData& l = L_.light_data[k];
       F3 q;
@@ -784,7 +864,32 @@ class Integrator {
   /// the non-delta part (for MIS) and whether a delta lobe was chosen.
   bool sample_bsdf(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
                    float u_lobe, float u_fresnel, pt::Sample2 u, F3& wi_w, F3& weight, float& pdf,
-                   bool& delta) {
+                   bool& delta, float& eta2) {
+    eta2 = 1.0f;
+    if (u_lobe < sm.p_delta && sm.rough) {
+      // Rough dielectric: refraction (no light is sampled below the surface, so the light this
+      // ray finds is weighted 1, as after a delta lobe) or reflection (weighed by the whole
+      // non-delta BSDF and its pdf, as the other lobes' samples).
+      F3 wi;
+      if (sm.sample_rough(wo, u_fresnel, u.x, u.y, wi, weight)) {
+        if (wi.z >= 0.0f) return false;
+        wi_w = frame.to_world(wi);
+        if (dot(wi_w, h.ng) >= 0.0f) return false;
+        delta = true;
+        pdf = 0.0f;
+        eta2 = sm.eta * sm.eta;
+        return true;
+      }
+      delta = false;
+      if (wi.z <= 0.0f) return false;
+      wi_w = frame.to_world(wi);
+      if (dot(wi_w, h.ng) <= 0.0f) return false;
+      F3 f;
+      sm.eval(wo, wi, f, pdf);
+      if (!(pdf > 0.0f)) return false;
+      weight = f * (wi.z / pdf);
+      return true;
+    }
     if (u_lobe < sm.p_delta) {
       // Smooth dielectric: reflect with probability F, otherwise refract.
       delta = true;
@@ -809,12 +914,16 @@ class Integrator {
       } else {
         wi_w = refract(n, ci);
         if (dot(wi_w, h.ng) >= 0.0f) wi_w = refract(h.ng, std::max(0.0f, dot(wo_w, h.ng)));
-        weight = sm.base * (scale / (eta * eta));
+        // Tint sqrt(base) at each interface: a pass through a closed wall (in and out) is
+        // tinted by the base colour once, as in Blender's Principled BSDF. Radiance is scaled
+        // by 1/eta^2 on refraction (the solid angle compresses); it cancels on a closed shell.
+        weight = sm.sqrt_base() * (scale / (eta * eta));
+        eta2 = eta * eta;
       }
       return true;
     }
     delta = false;
-    if (!sm.has_nondelta) return false;
+    if (!sm.has_other) return false;
     const float ul = (u_lobe - sm.p_delta) / (1.0f - sm.p_delta);
     F3 wi;
     if (ul < sm.p_spec) {

@@ -16,8 +16,10 @@ Lambertian surface under irradiance E shows E / pi. Lights and the environment u
 Algorithm (see ``cpp/include/mgn/render/path_tracer.hpp``): unidirectional path tracing with
 next-event estimation and multiple importance sampling (power heuristic) for the area lights and
 the environment, Russian roulette, glTF 2.0 metallic-roughness materials (Lambert + GGX with
-height-correlated Smith masking, visible-normal sampling) and smooth dielectrics (Fresnel,
-refraction, total internal reflection), Owen-scrambled Sobol samples per pixel seeded from
+height-correlated Smith masking, visible-normal sampling) and dielectrics (Fresnel,
+refraction, total internal reflection; smooth below roughness ~0.055, GGX microfacet reflection
+and refraction above; each refraction tints by sqrt(base colour), so a closed wall tints once),
+emissive meshes sampled as lights, Owen-scrambled Sobol samples per pixel seeded from
 (seed, view_index, pixel): the image is identical for any number of threads. Long calls release
 the GIL.
 """
@@ -70,13 +72,15 @@ class PbrMaterial:
 
     Attributes:
         base_color: linear RGB in [0, 1] (diffuse albedo of dielectrics, F0 of metals, tint of
-            transmitted light).
+            light transmitted through a closed wall: sqrt(base_color) per refraction).
         metallic: [0, 1].
         roughness: perceptual roughness in [0, 1]; GGX alpha = roughness ** 2.
         ior: index of refraction (>= 1) of the specular layer and of the dielectric; 1 removes
             the specular layer (a pure Lambertian surface when metallic = 0).
-        transmission: [0, 1]; 1 = clear smooth dielectric (glass, clear plastic).
-        emission: emitted radiance (front side), linear RGB >= 0, same units as the lights.
+        transmission: [0, 1]; 1 = clear dielectric (glass, clear plastic): smooth when
+            roughness < ~0.055, frosted (GGX microfacet refraction) above.
+        emission: emitted radiance (front side), linear RGB >= 0, same units as the lights;
+            faces with emission > 0 are sampled by next-event estimation like area lights.
         base_color_texture: (H, W, 3) uint8 sRGB image, top row first, multiplying base_color,
             looked up at the mesh uvs (u right, v up), bilinear, repeating; None = none.
     """
@@ -127,7 +131,8 @@ class PbrMaterial:
         clamped to [0.08, 1]; a mirror-like material (specular luminance >= 0.8 and n >= 200) is a
         metal with the specular colour as base colour; a transparent one (opacity < 1) becomes a
         clear dielectric (transmission = min(1, 2 (1 - opacity)), its tint moved 70 % towards
-        white so that two surface crossings do not darken it, roughness 0.05).
+        white: a Phong colour describes the surface, clear plastic barely tints what is seen
+        through it; roughness 0.05, a smooth dielectric).
         """
         base = np.clip(np.asarray(m.base_color, np.float64)[:3], 0.0, 1.0)
         spec = np.clip(np.asarray(m.specular, np.float64)[:3], 0.0, 1.0)

@@ -258,27 +258,42 @@ struct ShadingMaterial {
   // Derived at the shading point for wo:
   float w_diel = 0, w_trans = 0;  ///< lobe weights (1-m)(1-t), (1-m)t
   float fd_o = 0;                 ///< dielectric Fresnel at cos_o (specular layer)
-  float p_spec = 0, p_diff = 0;   ///< non-delta strategy probabilities (sum 1 if any)
-  float p_delta = 0;              ///< probability of the delta (dielectric) lobe
-  bool has_nondelta = false;
+  float p_spec = 0, p_diff = 0;   ///< strategy probabilities of the other lobes (sum 1 if any)
+  float p_delta = 0;              ///< probability of the transmission (dielectric) lobe
+  float eta = 1.0f;               ///< n_t / n_i of the dielectric seen from wo's side
+  bool rough = false;             ///< the dielectric is rough (GGX), not a delta lobe
+  bool has_other = false;         ///< has the specular / diffuse lobes
+  bool has_nondelta = false;      ///< has any non-delta lobe (next-event estimation applies)
 
-  void prepare(float cos_o) {
+  /// Transmission tint of one interface: the square root of the base colour.
+  F3 sqrt_base() const { return {std::sqrt(base.x), std::sqrt(base.y), std::sqrt(base.z)}; }
+
+  /// Alpha above which the transmission lobe is a rough dielectric (roughness >= ~0.055).
+  static constexpr float kRoughAlpha = 3e-3f;
+
+  /// `front`: wo is on the outward side of the surface (the dielectric is entered).
+  void prepare(float cos_o, bool front = true) {
     w_trans = (1.0f - metallic) * transmission;
+    eta = front ? ior : 1.0f / ior;
+    rough = w_trans > 0.0f && alpha > kRoughAlpha && ior > 1.0f;
     w_diel = (1.0f - metallic) * (1.0f - transmission);
     fd_o = ior > 1.0f ? fresnel_dielectric(cos_o, ior) : 0.0f;
     const float s_spec =
         (ior > 1.0f ? w_diel * fd_o : 0.0f) + metallic * luminance(fresnel_schlick(base, cos_o));
     const float s_diff = w_diel * (1.0f - fd_o) * std::max(luminance(base), 1e-3f);
     const float s_nd = s_spec + s_diff;
-    has_nondelta = s_nd > 0.0f;
-    p_spec = has_nondelta ? s_spec / s_nd : 0.0f;
-    p_diff = has_nondelta ? 1.0f - p_spec : 0.0f;
+    has_other = s_nd > 0.0f;
+    has_nondelta = has_other || rough;
+    p_spec = has_other ? s_spec / s_nd : 0.0f;
+    p_diff = has_other ? 1.0f - p_spec : 0.0f;
     const float s_delta = w_trans;
     p_delta = (s_delta + s_nd) > 0.0f ? s_delta / (s_delta + s_nd) : 0.0f;
   }
 
-  /// Non-delta BSDF value f(wo, wi) (without the cosine) and its sampling pdf (solid angle,
-  /// including the (1 - p_delta) factor). Both zero unless wi.z > 0.
+  /// Non-delta BSDF value f(wo, wi) (without the cosine) and its sampling pdf (solid angle:
+  /// (1 - p_delta) times that of the other lobes, plus p_delta times that of the reflection of
+  /// a rough dielectric). Both zero unless wi.z > 0: the refraction of a rough dielectric is
+  /// only sampled, never evaluated here (no light is sampled below the surface).
   void eval(F3 wo, F3 wi, F3& f, float& pdf) const {
     f = F3(0.0f);
     pdf = 0.0f;
@@ -290,13 +305,42 @@ struct ShadingMaterial {
     const float g1o = 1.0f / (1.0f + lo);
     const float wh = std::max(dot(wo, h), 0.0f);
     const float spec = d * g2 / (4.0f * wo.z * wi.z);
-    F3 spec_color(0.0f);
-    if (ior > 1.0f && w_diel > 0.0f) spec_color += F3(w_diel * fresnel_dielectric(wh, ior));
-    if (metallic > 0.0f) spec_color += fresnel_schlick(base, wh) * metallic;
-    f = spec_color * spec + base * (w_diel * (1.0f - fd_o) * kInvPi);
     const float pdf_spec = g1o * d / (4.0f * wo.z);
-    const float pdf_diff = wi.z * kInvPi;
-    pdf = (1.0f - p_delta) * (p_spec * pdf_spec + p_diff * pdf_diff);
+    if (has_other) {
+      F3 spec_color(0.0f);
+      if (ior > 1.0f && w_diel > 0.0f) spec_color += F3(w_diel * fresnel_dielectric(wh, ior));
+      if (metallic > 0.0f) spec_color += fresnel_schlick(base, wh) * metallic;
+      f = spec_color * spec + base * (w_diel * (1.0f - fd_o) * kInvPi);
+      const float pdf_diff = wi.z * kInvPi;
+      pdf = (1.0f - p_delta) * (p_spec * pdf_spec + p_diff * pdf_diff);
+    }
+    if (rough) {
+      const float fr = fresnel_dielectric(wh, eta);
+      f += F3(w_trans * fr * spec);
+      pdf += p_delta * fr * pdf_spec;
+    }
+  }
+
+  /// Samples the rough dielectric (Walter et al. 2007, visible normals): reflection with the
+  /// probability of the microfacet's Fresnel reflectance, otherwise refraction. On refraction
+  /// returns true with wi (local, wi.z < 0) and the weight f |cos| / pdf of this lobe, i.e.
+  /// sqrt(base) G2 / G1 / eta^2 (radiance scaling) times w_trans / p_delta. On reflection
+  /// returns false with wi set (wi.z may be <= 0: no sample); the caller weighs it with eval.
+  bool sample_rough(F3 wo, float u_fresnel, float u1, float u2, F3& wi, F3& weight) const {
+    const F3 m = ggx_sample_vndf(wo, alpha, u1, u2);
+    const float c = dot(wo, m);
+    const float fr = fresnel_dielectric(c, eta);
+    if (u_fresnel < fr) {
+      wi = reflect(wo, m);
+      return false;
+    }
+    const float sin2_t = (1.0f - c * c) / (eta * eta);
+    const float ct = std::sqrt(std::max(0.0f, 1.0f - sin2_t));
+    wi = normalize(-wo * (1.0f / eta) + m * (c / eta - ct));
+    const float lo = ggx_lambda(wo, alpha), li = ggx_lambda(wi, alpha);
+    const F3 tint(std::sqrt(base.x), std::sqrt(base.y), std::sqrt(base.z));
+    weight = tint * ((1.0f + lo) / (1.0f + lo + li) * (w_trans / p_delta) / (eta * eta));
+    return true;
   }
 };
 
