@@ -46,12 +46,14 @@ class ShakeOptions:
     and 0.2–0.3 rad. The others are mgn's (see ``cpp/include/mgn/grasp/shake_test.hpp``):
     ``settle_steps`` and ``lost_contact_steps`` end phases and trials early (0 disables them),
     ``inertia_floor`` stabilises light objects, the pads are soft (``pad_stiffness`` N/m per
-    contact point, ``pad_damping`` N s/m). ``staircase`` walks each grasp's success boundary
-    (success is monotone: more friction helps, more mass hurts) with at most ``2 grid - 1``
-    trials plus ``staircase_checks`` checks of inferred cells, falling back to the full grid
-    where a check contradicts monotonicity (``ShakeScores.fallback``). ``first_grasp_index``:
-    grasp ``g`` of a call draws the random streams of grasp ``first_grasp_index + g``, so a grasp
-    list scored in consecutive pieces gets the same scores as scored whole.
+    contact point, ``pad_damping`` N s/m). ``staircase`` finds each grasp's success boundary
+    (success is monotone: more friction helps, more mass hurts) by galloping and bisection row
+    by row, verifies the cells on both sides of it and ``staircase_checks`` other inferred cells,
+    and falls back to the full grid where a check contradicts monotonicity
+    (``ShakeScores.fallback``); see ``staircase_grid`` in the header for the order and bounds.
+    ``first_grasp_index``: grasp ``g`` of a call draws the random streams of grasp
+    ``first_grasp_index + g``, so a grasp list scored in consecutive pieces gets the same scores
+    as scored whole.
     ``polyhedral_contacts`` (on here, off in the C++ defaults): whole contact patches from
     Bullet's polyhedral clipping; off, GJK contact points are 1.2–1.5× faster per trial but
     change some outcomes (``benchmarks/bench_shake.py`` measures both).
@@ -83,7 +85,7 @@ class ShakeOptions:
     max_hull_vertices: int = 64
     solver_iterations: int = 10
     staircase: bool = False
-    staircase_checks: int = 20
+    staircase_checks: int = 6
     num_threads: int = 0
     seed: int = 0
     first_grasp_index: int = 0
