@@ -93,12 +93,12 @@ struct ShakeOptions {
   int lost_contact_steps = 10;
   double margin = 5e-4;  ///< Bullet collision margin of every shape, m, > 0
   /// Bullet's polyhedral clipping (a full contact patch per step) instead of GJK points
-  /// gathered over steps; not needed for steady grips (the tests pass both ways). mgn.pj's
-  /// ShakeOptions turns it on (the scores of mgn's datasets). GJK points are 1.2-1.5x faster
+  /// gathered over steps; on by default (the scores of mgn's datasets; the tests pass both
+  /// ways). GJK points are 1.2-1.5x faster
   /// per trial on built-in objects but change some outcomes: on 48 grasps of a can, a mug and a
   /// cereal box, 81 % of 10x10 scores identical, mean |difference| 0.007, at most 0.14
   /// (benchmarks/bench_shake.py measures both).
-  bool polyhedral_contacts = false;
+  bool polyhedral_contacts = true;
   /// Hulls with more vertices are replaced by the hull of their support points along this many
   /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
   int max_hull_vertices = 64;
