@@ -3,41 +3,24 @@
 For several built-in objects, parallel-jaw grasps come from mgn's own labeller (antipodal
 sampling, collision-free, an evenly strided subset). Each grasp is simulated once over the full
 friction x density grid (every trial; optionally kept in ``--grid-cache`` so a rerun only adds
-grasps). Every cell's trial is deterministic (its own random stream, the same in both
-searches), so the staircase search's result is a function of the full grid: it is replayed on
-the stored grids through ``mgn._core.staircase_grid`` for several check budgets
-(``ShakeOptions.staircase_checks``), and the default budget is also run for real with
-``ShakeOptions(staircase=True)`` on the first ``--confirm`` grasps of each object, which must
-give the replayed scores. Reported per object and budget: identical scores, mean and max
-absolute score difference, trials per grasp, fallback share; wall and CPU time and load.
+grasps). Every cell's trial is deterministic (its own random stream, the same in every search),
+so a search's result is a function of the full grid: three searches are replayed on the stored
+grids for several check budgets -- the previous search (session 6, re-implemented here), the
+gallop+bisect walk without the boundary band, and mgn's ``staircase_grid`` (through
+``mgn._core``) -- and the default budget is also run for real with
+``ShakeOptions(staircase=True)`` on the first ``--confirm`` grasps of each object, which must give
+the replayed scores. Reported: identical scores, misses, mean and max absolute score difference,
+mean and max trials per grasp, fallbacks; where the walk's inference is wrong; wall and CPU time.
 
-    python -m benchmarks.bench_staircase [--grasps-per-object 170] [--objects a,b,c]
-        [--grid-cache DIR [--cached-only]] [--checks 0,4,10,20] [--confirm 10]
+    python -m benchmarks.bench_staircase [--objects name:grasps,...] [--grid-cache DIR
+        [--cached-only]] [--checks 0,5,6,10] [--confirm 10]
 
-Measured 2026-11-24 on the shared 2-core machine (load 12-22): full grids of 350 grasps
-(can_soda 100, mug 80, box_cereal 170; 10x10, default options) took 182, 332 and 227 CPU-s
-(1.8, 4.2 and 1.3 CPU-s per grasp); the replay table (this benchmark with --cached-only, 18 CPU-s,
-52 s wall at load 15):
-
-  checks  grasps  identical  mean|diff|  max|diff|  trials/grasp  fallback
-       0     350      91.7 %      0.0056       0.27          10.1     0.0 %
-       4     350      96.0 %      0.0025       0.18          18.0     4.6 %
-      10     350      96.9 %      0.0021       0.18          24.4     5.4 %
-      20     350      98.6 %      0.0001       0.01          35.0     7.1 %   <- default
-      30     350      98.6 %      0.0001       0.01          44.3     7.1 %
-      40     350      98.9 %      0.0001       0.01          53.7     7.4 %
-      60     350      99.1 %      0.0001       0.01          72.3     7.7 %
-
-  per object at 20 checks: can_soda 96.0 % (42.0 trials/grasp, 21/100 grids not monotone),
-  mug 100 % (32.6; 3/80), box_cereal 99.4 % (32.1; 6/170). The previous check rule (4 cells
-  next to the boundary only) gave 95.7 % at 17.5 trials/grasp on the same grids (can_soda
-  87 %), with differences up to 0.18. The real staircase runs equal the replay.
-
-Why not 99 %: the trial outcomes are not monotone in friction. Failures of real grasps cluster
-at high friction and middle density as isolated cells (e.g. a can whose 10x10 grid succeeds
-everywhere but at 4 cells of friction >= 1.0), also when every cell of a grasp shares one random
-shake axis, so a search that infers cells cannot see a single such hole without simulating it:
-more checks buy agreement with trials.
+Measured 2026-11-25 (shared 2-core machine, load 17-25): 550 grasps of 5 objects (can_soda 100,
+mug 80, box_cereal 170 -- the first grasps of 170 strided ones -- can_food 100, bottle_water 100);
+table and findings in benchmarks/README.md. At the default (6 checks): 96.9 % identical scores,
+23.9 trials per grasp (max 100 on a fallback, 42 fallbacks), score differences <= 0.15 (mean
+0.0007); the previous search needs 10 checks for 25.0 trials and gets 95.3 %; 99 % needs about
+60 checks (~74 trials) with either.
 """
 
 from __future__ import annotations
@@ -49,7 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-DEFAULT_CHECKS = (0, 4, 10, 20, 30, 40, 60)
+DEFAULT_CHECKS = (0, 5, 6, 10, 15, 20, 30, 40, 60)
+OBJECTS = "can_soda:170,mug:170,box_cereal:170,can_food:100,bottle_water:100"
+GOLDEN = 0.6180339887498949
 
 
 def real_grasps(name: str, n: int, seed: int = 0):
@@ -104,20 +89,143 @@ def full_grids(name, parts, props, rows, threads, cache: Path | None, cached_onl
     return done, wall, cpu
 
 
+def _search_previous(grid: np.ndarray, checks: int) -> tuple[int, int, bool]:
+    """Session 6's search, replayed: walk each row right from the previous row's boundary while
+    trials succeed, then `checks` checks: cells at distance 1, then 2 from each row's boundary,
+    then golden-ratio order; full grid on a contradiction."""
+    S = grid.shape[0]
+    sim = np.zeros_like(grid)
+    inf = np.zeros_like(grid)
+
+    def run(i: int, j: int) -> bool:
+        sim[i, j] = True
+        return bool(grid[i, j])
+
+    b, j = [], 0
+    for i in range(S):
+        while j < S and run(i, j):
+            j += 1
+        b.append(j)
+        inf[i, :j] = True
+    near = [(i, c) for d in (1, 2) for i in range(S) for c in (b[i] - d, b[i] + d) if 0 <= c < S]
+    near = list(dict.fromkeys(c for c in near if not sim[c]))
+    rest = [(i, jj) for i in range(S) for jj in range(S) if not sim[i, jj] and (i, jj) not in near]
+    return _verify(grid, sim, inf, near + _golden(rest), checks)
+
+
+def _search_bisect(grid: np.ndarray, checks: int, band: bool) -> tuple[int, int, bool]:
+    """The walk of staircase_grid (hardest cell of row 0 first, then per row gallop and bisect
+    from the previous row's boundary), with or without the band of cells next to the boundary
+    before `checks` golden-ratio checks."""
+    S = grid.shape[0]
+    sim = np.zeros_like(grid)
+    inf = np.zeros_like(grid)
+
+    def run(i: int, j: int) -> bool:
+        sim[i, j] = True
+        return bool(grid[i, j])
+
+    b, lo = [], 0
+    for i in range(S):
+        hi = S
+        if i == 0:
+            lo, hi = (S, S) if run(0, S - 1) else (0, S - 1)
+        step = 1
+        while lo < hi:
+            j = min(lo + step - 1, hi - 1)
+            if not run(i, j):
+                hi = j
+                break
+            lo, step = j + 1, 2 * step
+        while lo < hi:
+            m = (lo + hi) // 2
+            lo, hi = (m + 1, hi) if run(i, m) else (lo, m)
+        b.append(lo)
+        inf[i, :lo] = True
+    near = []
+    for i in range(S if band else 0):  # nearest unsimulated cell on each side of the boundary
+        for c, step in ((b[i] - 1, -1), (b[i], 1)):
+            c += step if 0 <= c < S and sim[i, c] else 0
+            if 0 <= c < S and not sim[i, c]:
+                near.append((i, c))
+    rest = [(i, jj) for i in range(S) for jj in range(S) if not sim[i, jj] and (i, jj) not in near]
+    return _verify(grid, sim, inf, near, checks, _golden(rest))
+
+
+def _golden(cells: list) -> list:
+    key = [((k + 1) * GOLDEN) % 1.0 for k in range(len(cells))]
+    return [cells[k] for k in sorted(range(len(cells)), key=lambda k: (key[k], k))]
+
+
+def _verify(grid, sim, inf, first, checks, spread=()):
+    """Simulate `first` (all of it when `spread` is given, else its first `checks`) and the
+    first `checks` of `spread`; on a contradiction every cell: (successes, trials, fallback)."""
+    cells = list(first) + list(spread)[:checks] if spread != () else list(first)[:checks]
+    for c in cells:
+        sim[c] = True
+        if grid[c] != inf[c]:
+            return int(grid.sum()), grid.size, True
+    return int(inf.sum()), int(sim.sum()), False
+
+
 def replay(grid: np.ndarray, checks: int) -> tuple[int, int, bool]:
-    """(successes, trials, fallback) of the staircase search on a known grid."""
+    """(successes, trials, fallback) of mgn's staircase search (_core.staircase_grid)."""
     from mgn import _core
 
     r = _core.staircase_grid(grid.shape[0], lambda i, j: bool(grid[i, j]), checks)
-    return int(r["success"].sum()), int(r["trials"]), bool(r["fallback"])
+    return int(r.success.sum()), int(r.trials), bool(r.fallback)
+
+
+VARIANTS = {
+    "previous (walk right, checks at distance 1-2)": _search_previous,
+    "gallop+bisect, no band": lambda g, c: _search_bisect(g, c, band=False),
+    "gallop+bisect, band (staircase_grid)": replay,
+}
+
+
+def where(grids: np.ndarray) -> str:
+    """Where staircase_grid without spread checks (walk and boundary band only) infers cells
+    wrongly: per grid the number of wrong cells, and of grids with exactly one wrong cell how
+    many are next to a row boundary."""
+    wrong, single_near = [], 0
+    for g in grids:
+        r = _core_grid(g, 0)
+        w = r.success != g
+        wrong.append(int(w.sum()))
+        if w.sum() == 1:
+            i, j = np.argwhere(w)[0]
+            b = int(r.success[i].sum())
+            single_near += j in (b - 1, b)
+    wrong_a = np.array(wrong)
+    return (
+        f"grids with wrong cells after walk and band {int((wrong_a > 0).sum())}: one cell "
+        f"{int((wrong_a == 1).sum())} ({single_near} next to the boundary), 2-3 cells "
+        f"{int(((wrong_a >= 2) & (wrong_a <= 3)).sum())}, >= 4 cells {int((wrong_a >= 4).sum())}"
+    )
+
+
+def _core_grid(g: np.ndarray, checks: int):
+    from mgn import _core
+
+    return _core.staircase_grid(g.shape[0], lambda i, j: bool(g[i, j]), checks)
+
+
+def _line(label: str, truth: np.ndarray, res: list) -> str:
+    s = np.array([r[0] for r in res])
+    tr = np.array([r[1] for r in res])
+    fb = np.array([r[2] for r in res])
+    d = np.abs(s - truth) / 100.0
+    return (
+        f"{label}  {len(d):6d}  {np.mean(d == 0) * 100:7.1f} %  {int((d > 0).sum()):4d}  "
+        f"{d.mean():.4f}  {d.max():.2f}  {tr.mean():6.1f}  {tr.max():4d}  {int(fb.sum()):4d}"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
     from mgn.pj.physics import ShakeOptions, shake_scores
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--grasps-per-object", type=int, default=170)
-    ap.add_argument("--objects", default="can_soda,mug,box_cereal")
+    ap.add_argument("--objects", default=OBJECTS, help="name:grasps,... (evenly strided)")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--grid-cache", type=Path, default=None, help="folder of full-grid results")
     ap.add_argument("--checks", default=",".join(map(str, DEFAULT_CHECKS)))
@@ -128,32 +236,25 @@ def main(argv: list[str] | None = None) -> int:
     default = ShakeOptions().staircase_checks
     if args.grid_cache is not None:
         args.grid_cache.mkdir(parents=True, exist_ok=True)
-    table: dict[int, list] = {c: [] for c in budgets}
-    for name in args.objects.split(","):
-        parts, props, rows = real_grasps(name, args.grasps_per_object)
-        grids, wall, cpu = full_grids(name, parts, props, rows, args.threads, args.grid_cache,
-                                      args.cached_only)  # fmt: skip
-        rows = rows[: len(grids)]
-        truth = grids.sum(axis=(1, 2))
-        g8 = grids.astype(np.int8)
-        monotone = (np.diff(g8, axis=1) >= 0).all(axis=(1, 2)) & (np.diff(g8, axis=2) <= 0).all(
-            axis=(1, 2)
+    all_grids, names = [], []
+    for item in args.objects.split(","):
+        name, _, n = item.partition(":")
+        parts, props, rows = real_grasps(name, int(n or 100))
+        grids, wall, cpu = full_grids(
+            name, parts, props, rows, args.threads, args.grid_cache, args.cached_only
         )
-        holes = int((~monotone).sum())
-        print(f"{name}: {len(grids)} grasps; full grid computed now {wall:.0f} s wall "
-              f"{cpu:.0f} s CPU (load {os.getloadavg()[0]:.1f}); non-monotone grids "
-              f"{holes}/{len(grids)}")  # fmt: skip
-        for c in budgets:
-            res = [replay(g, c) for g in grids]
-            s = np.array([r[0] for r in res])
-            table[c].append((name, truth, s, [r[1] for r in res], [r[2] for r in res]))
-            d = np.abs(s - truth) / 100.0
-            tr, fb = np.mean([r[1] for r in res]), np.mean([r[2] for r in res])
-            print(
-                f"  checks {c:3d}: identical {np.mean(d == 0) * 100:5.1f} %, mean |diff| "
-                f"{d.mean():.4f}, max {d.max():.2f}, trials/grasp {tr:5.1f}, "
-                f"fallback {fb * 100:4.1f} %"
-            )
+        if len(grids) == 0:
+            continue
+        rows = rows[: len(grids)]
+        all_grids.append(grids)
+        names += [name] * len(grids)
+        print(
+            f"{name}: {len(grids)} grasps; full grid computed now {wall:.0f} s wall "
+            f"{cpu:.0f} s CPU (load {os.getloadavg()[0]:.1f}); mean score "
+            f"{grids.mean():.3f}; {where(grids)}"
+        )
+        truth = grids.sum(axis=(1, 2))
+        print(_line(f"  checks {default:3d} (default)", truth, [replay(g, default) for g in grids]))
         k = min(args.confirm, len(rows))
         if k:
             t0, c0 = time.perf_counter(), time.process_time()
@@ -170,22 +271,22 @@ def main(argv: list[str] | None = None) -> int:
             rep = np.array([replay(g, default)[0] for g in grids[:k]]) / 100.0
             ok = np.array_equal(real.score, rep)
             print(
-                f"  real staircase run (checks {default}) on {k} grasps: scores "
-                f"{'EQUAL' if ok else 'DIFFER FROM'} the replay; {real.num_trials / k:.1f} "
-                f"trials/grasp, {w:.1f} s wall {c:.1f} s CPU (load {os.getloadavg()[0]:.1f})"
+                f"  real staircase run on {k} grasps: scores {'EQUAL' if ok else 'DIFFER FROM'}"
+                f" the replay; {real.num_trials / k:.1f} trials/grasp, {w:.1f} s wall {c:.1f} s"
+                f" CPU (load {os.getloadavg()[0]:.1f})"
             )
             if not ok:
                 return 1
-    print("\nALL objects:")
-    print("checks  grasps  identical  mean|diff|  max|diff|  trials/grasp  fallback")
-    for c in budgets:
-        truth = np.concatenate([t[1] for t in table[c]])
-        s = np.concatenate([t[2] for t in table[c]])
-        tr = np.concatenate([t[3] for t in table[c]])
-        fb = np.concatenate([t[4] for t in table[c]])
-        d = np.abs(s - truth) / 100.0
-        print(f"{c:6d}  {len(d):6d}  {np.mean(d == 0) * 100:8.1f} %  {d.mean():10.4f}  "
-              f"{d.max():9.2f}  {tr.mean():12.1f}  {fb.mean() * 100:6.1f} %")  # fmt: skip
+    grids = np.concatenate(all_grids)
+    truth = grids.sum(axis=(1, 2))
+    print(f"\nALL {len(grids)} grasps of {len(set(names))} objects; {where(grids)}")
+    print(
+        "variant / checks                                  grasps  identical  miss  "
+        "mean|d|  max|d|  trials  max  fallbacks"
+    )
+    for label, search in VARIANTS.items():
+        for c in budgets:
+            print(_line(f"{label:44s} {c:3d}", truth, [search(g, c) for g in grids]))
     return 0
 
 

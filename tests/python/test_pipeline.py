@@ -106,6 +106,7 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
     # The cap is recorded in dataset.json: every object's stored and scored grasps.
     rec = doc["physics_scores"]
     assert rec["cap"] == 3 and rec["search"] == "staircase" and rec["grid"] == 2
+    assert rec["checks"] == load_config({}).object_labels.physics_checks
     assert set(rec["objects"]) == {"box_tea", "can_soda"}
     assert rec["capped_objects"] == ["box_tea", "can_soda"]
     assert all(o["scored"] == 3 for o in rec["objects"].values())
@@ -528,6 +529,7 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
         label_keys,
         load_cached_labels,
         object_labels,
+        shake_options,
     )
 
     spec = get_object("box_tea")
@@ -555,3 +557,14 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
     no_physics = load_config({**SMALL, "labels": {"pj_physics": False, "suction": False}})
     assert set(label_keys(spec, no_physics)) == {"paralleljaw"}
     assert label_keys(spec, no_physics)["paralleljaw"] != keys["paralleljaw"]
+    more_checks = dataclasses.replace(
+        config,
+        object_labels=dataclasses.replace(
+            config.object_labels, physics_checks=config.object_labels.physics_checks + 1
+        ),
+    )
+    assert label_keys(spec, more_checks)["paralleljaw"] != keys["paralleljaw"]
+    assert label_keys(spec, more_checks)["suction"] == keys["suction"]
+    o = shake_options(more_checks).to_core()
+    assert o.staircase and o.staircase_checks == config.object_labels.physics_checks + 1
+    assert o.grid == config.object_labels.physics_grid

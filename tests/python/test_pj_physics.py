@@ -116,9 +116,10 @@ def test_shake_scorer_progress_bar_keeps_the_scores(capsys):
 
 
 def test_staircase_scores_in_pieces_match_the_whole_list():
-    """With the staircase search too, a list scored in pieces (first_grasp_index) simulates the
-    same cells with the same outcomes as the whole list (ShakeScorer's progress bar relies on
-    it, and so does scoring every stored grasp of an object in one call or several)."""
+    """With the staircase search too, a list scored in pieces (first_grasp_index) or with 1
+    thread instead of 2 simulates the same cells with the same outcomes as the whole list
+    (ShakeScorer's progress bar relies on it, and so does scoring every stored grasp of an
+    object in one call or several)."""
     mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.3)
     grasps = np.stack([centre_grasp(0.04)] * 4)
     grasps[:, 6:9] += np.array([[0, 0, 0], [0, 0.01, 0.015], [0, -0.01, -0.01], [0, 0.02, 0]])
@@ -130,9 +131,11 @@ def test_staircase_scores_in_pieces_match_the_whole_list():
         shake_scores(mesh, m, com, inertia, grasps[a:b], options=replace(opts, first_grasp_index=a))
         for a, b in ((0, 1), (1, 3), (3, 4))
     ]
+    one_thread = shake_scores(mesh, m, com, inertia, grasps, options=replace(opts, num_threads=1))
     for field in ("score", "trial_success", "trial_simulated", "trial_steps", "fallback"):
         got = np.concatenate([getattr(p, field) for p in pieces])
         np.testing.assert_array_equal(got, getattr(whole, field), err_msg=field)
+        np.testing.assert_array_equal(getattr(one_thread, field), getattr(whole, field))
     assert whole.num_trials < grasps.shape[0] * 9  # the staircase inferred some cells
 
 
@@ -160,6 +163,136 @@ def test_staircase_grid_binding_against_brute_force():
         mono = (np.arange(S)[None, :] < b[:, None]) == truth
         if mono.all():  # monotone: no fallback
             assert not r.fallback
+
+
+GOLDEN = 0.6180339887498949
+
+
+def _reference_boundary(S, lo, run, first):
+    """Successes b of one row given b >= lo (the previous row's): the hardest cell first in the
+    first row, then gallop from lo (offsets 0, 1, 3, 7, ...) and bisect."""
+    hi = S
+    if first:
+        lo, hi = (S, S) if run(S - 1) else (lo, S - 1)
+    step = 1
+    while lo < hi:
+        j = min(lo + step - 1, hi - 1)
+        if not run(j):
+            hi = j
+            break
+        lo, step = j + 1, 2 * step
+    while lo < hi:
+        m = (lo + hi) // 2
+        lo, hi = (m + 1, hi) if run(m) else (lo, m)
+    return lo
+
+
+def reference_staircase(S, trial, checks):
+    """A second implementation of the staircase search (docs in shake_test.hpp, staircase_grid),
+    written from its description: (success, simulated, fallback, trials)."""
+    success = np.zeros((S, S), bool)
+    simulated = np.zeros((S, S), bool)
+
+    def run(i, j):
+        assert not simulated[i, j], f"cell {i},{j} simulated twice"
+        success[i, j], simulated[i, j] = bool(trial(i, j)), True
+        return bool(success[i, j])
+
+    bounds = [0]
+    for i in range(S):
+        bounds.append(_reference_boundary(S, bounds[-1], lambda j, i=i: run(i, j), i == 0))
+        success[i, : bounds[-1]] = True
+    bounds = bounds[1:]
+    band = []
+    for i, b in enumerate(bounds):  # nearest unsimulated cell on each side, within 2 of b
+        for j, step in ((b - 1, -1), (b, 1)):
+            if 0 <= j < S and simulated[i, j]:
+                j += step
+            if 0 <= j < S and not simulated[i, j]:
+                band.append((i, j))
+    rest = [
+        (i, j) for i in range(S) for j in range(S) if not simulated[i, j] and (i, j) not in band
+    ]
+    key = [((k + 1) * GOLDEN) % 1.0 for k in range(len(rest))]
+    spread = [rest[k] for k in sorted(range(len(rest)), key=lambda k: (key[k], k))]
+    fallback = False
+    for c in band + spread[:checks]:
+        if run(*c) != (c[1] < bounds[c[0]]):
+            fallback = True
+            break
+    if fallback:
+        for i, j in np.argwhere(~simulated):
+            run(i, j)
+    return success, simulated, fallback, int(simulated.sum())
+
+
+def monotone_grid(rng, S):
+    b = np.maximum.accumulate(rng.integers(0, S + 1, S))
+    return np.arange(S)[None, :] < b[:, None]
+
+
+def staircase_cases():
+    """Random monotone 10x10 grids, the same with 1-3 flipped cells, non-monotone patterns seen
+    in real shake outcomes (a failing band at high friction, an isolated hole in an all-success
+    grid, a hole next to the boundary), uniform grids and coin-flip noise."""
+    rng = np.random.default_rng(19)
+    S = 10
+    cases = []
+    for _ in range(150):
+        cases.append(monotone_grid(rng, S))
+    for _ in range(150):
+        g = monotone_grid(rng, S)
+        for i, j in rng.integers(0, S, (rng.integers(1, 4), 2)):
+            g[i, j] = ~g[i, j]
+        cases.append(g)
+    full = np.ones((S, S), bool)
+    cases += [full, ~full]
+    for i, j in ((3, 4), (9, 0), (0, 5), (5, 9)):
+        hole = full.copy()
+        hole[i, j] = False
+        cases.append(hole)
+    band = full.copy()
+    band[7:, 2:6] = False  # more friction fails (seen on cans)
+    cases.append(band)
+    edge = np.arange(S)[None, :] < np.full((S, 1), 6)
+    edge[4, 5] = False  # a hole next to the boundary
+    cases.append(edge)
+    cases += [rng.random((S, S)) < 0.5 for _ in range(30)]
+    return cases
+
+
+@pytest.mark.parametrize("checks", [0, 3, 10, 100])
+def test_staircase_grid_equals_the_python_reference(checks):
+    """_core.staircase_grid against the Python reference on random and constructed monotone and
+    non-monotone 10x10 grids: the same cells simulated (each once), the same outcome grid,
+    fallback and trial count; against brute force (the full grid's count): exact on every
+    monotone grid and wherever it fell back, and every simulated cell is the truth."""
+    for n, truth in enumerate(staircase_cases()):
+        calls: list[tuple[int, int]] = []
+
+        def trial(i: int, j: int, truth=truth, calls=calls) -> bool:
+            calls.append((i, j))
+            return bool(truth[i, j])
+
+        r = mgn._core.staircase_grid(10, trial, checks)
+        success, simulated, fallback, trials = reference_staircase(
+            10, lambda i, j, t=truth: t[i, j], checks
+        )
+        msg = f"case {n} checks {checks}"
+        np.testing.assert_array_equal(r.simulated, simulated, err_msg=msg)
+        np.testing.assert_array_equal(r.success, success, err_msg=msg)
+        assert (r.fallback, r.trials) == (fallback, trials), msg
+        assert len(calls) == len(set(calls)) == r.trials, msg
+        np.testing.assert_array_equal(r.success[r.simulated], truth[r.simulated], err_msg=msg)
+        g8 = truth.astype(np.int8)
+        monotone = (np.diff(g8, axis=0) >= 0).all() and (np.diff(g8, axis=1) <= 0).all()
+        if monotone:
+            assert not r.fallback and r.success.sum() == truth.sum(), msg
+            assert r.trials <= 39 + checks, msg
+        if r.fallback:
+            assert r.trials == 100 and r.success.sum() == truth.sum(), msg
+        if checks >= 100:
+            np.testing.assert_array_equal(r.success, truth, err_msg=msg)
 
 
 def test_shake_scorer_scores_every_grasp_unless_capped_and_records_it():

@@ -575,52 +575,82 @@ StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, 
     ++g.trials;
     return ok;
   };
-  // The walk: b[i] = successes in row i (cells j < b[i]), non-decreasing in i.
+  // The walk: b[i] = successes in row i (cells j < b[i]), b[i] in [b[i-1], S]. Cell (i, j)
+  // succeeds iff j < b[i], so b[i] is found by probing cells: row 0 first probes its hardest
+  // cell (S-1: most grids succeed everywhere, one trial then settles the grid); every row
+  // probes the previous row's boundary cell, then gallops right (lo, lo+1, lo+3, ...) and
+  // bisects the last gap. A row whose lower bound is S costs nothing.
   std::vector<int> b(static_cast<std::size_t>(S), 0);
-  int j = 0;
+  int lo = 0;
   for (int i = 0; i < S; ++i) {
-    while (j < S && run(i, j)) ++j;
-    b[i] = j;
-    for (int k = 0; k < j; ++k) g.success[at(i, k)] = 1;  // inferred (or simulated) successes
-  }
-  // Checks, in this order: the inferred cells next to the boundary of every row (distance 1,
-  // then 2: where physics noise flips outcomes most), then the other inferred cells in a
-  // low-discrepancy (golden-ratio) order over the grid, which finds isolated failures far from
-  // the boundary. The first `checks` of them are simulated.
-  std::vector<std::uint8_t> queued(n, 0);
-  std::vector<std::pair<int, int>> candidates;
-  for (int d = 1; d <= 2; ++d) {
-    for (int i = 0; i < S; ++i) {
-      for (const int cj : {b[i] - d, b[i] + d}) {
-        if (cj < 0 || cj >= S || g.simulated[at(i, cj)] || queued[at(i, cj)]) continue;
-        queued[at(i, cj)] = 1;
-        candidates.emplace_back(i, cj);
+    int hi = S;  // b[i] in [lo, hi]
+    if (i == 0 && lo < hi) {
+      if (run(i, hi - 1))
+        lo = hi;
+      else
+        hi = hi - 1;
+    }
+    for (int step = 1; lo < hi;) {  // gallop: probe lo + step - 1
+      const int j = std::min(lo + step - 1, hi - 1);
+      if (run(i, j)) {
+        lo = j + 1;
+        step *= 2;
+      } else {
+        hi = j;
+        break;
       }
+    }
+    while (lo < hi) {  // bisect: b[i] in [lo, hi]
+      const int m = lo + (hi - lo) / 2;
+      if (run(i, m))
+        lo = m + 1;
+      else
+        hi = m;
+    }
+    b[i] = lo;
+    for (int k = 0; k < lo; ++k) g.success[at(i, k)] = 1;  // inferred (or simulated) successes
+  }
+  // Verification: in every row the inferred cell nearest to the boundary on each side (the
+  // last success b-1, else b-2 if the walk simulated b-1; the first failure b, else b+1), then
+  // the first `checks` other inferred cells in a golden-ratio (low-discrepancy) order over the
+  // grid, which finds isolated failures away from the boundary. The first contradiction stops
+  // the checks and every remaining cell is simulated.
+  std::vector<std::pair<int, int>> candidates;
+  std::vector<std::uint8_t> queued(n, 0);
+  for (int i = 0; i < S; ++i) {
+    for (const int side : {-1, 1}) {
+      int cj = side < 0 ? b[i] - 1 : b[i];
+      if (cj >= 0 && cj < S && g.simulated[at(i, cj)]) cj += side;
+      if (cj < 0 || cj >= S || g.simulated[at(i, cj)] || queued[at(i, cj)]) continue;
+      queued[at(i, cj)] = 1;
+      candidates.emplace_back(i, cj);
     }
   }
   std::vector<std::pair<int, int>> rest;
   for (int i = 0; i < S; ++i)
-    for (int jj = 0; jj < S; ++jj)
-      if (!g.simulated[at(i, jj)] && !queued[at(i, jj)]) rest.emplace_back(i, jj);
+    for (int j = 0; j < S; ++j)
+      if (!g.simulated[at(i, j)] && !queued[at(i, j)]) rest.emplace_back(i, j);
   std::vector<std::pair<double, std::size_t>> order(rest.size());
   for (std::size_t k = 0; k < rest.size(); ++k) {
     const double x = double(k + 1) * 0.6180339887498949;
     order[k] = {x - std::floor(x), k};
   }
   std::sort(order.begin(), order.end());
-  for (const auto& [key, k] : order) candidates.push_back(rest[k]);
-  const int c = std::min<int>(checks, static_cast<int>(candidates.size()));
+  const std::size_t extra = std::min(static_cast<std::size_t>(checks), rest.size());
+  for (std::size_t k = 0; k < extra; ++k) candidates.push_back(rest[order[k].second]);
   bool contradicted = false;
-  for (int k = 0; k < c && !contradicted; ++k) {
-    const auto [ci, cj] = candidates[static_cast<std::size_t>(k)];
+  for (const auto& [ci, cj] : candidates) {
     const bool inferred = g.success[at(ci, cj)] != 0;
-    if (run(ci, cj) != inferred) contradicted = true;
+    if (run(ci, cj) != inferred) {
+      contradicted = true;
+      break;
+    }
   }
   if (contradicted) {
     g.fallback = true;
     for (int i = 0; i < S; ++i)
-      for (int jj = 0; jj < S; ++jj)
-        if (!g.simulated[at(i, jj)]) run(i, jj);
+      for (int j = 0; j < S; ++j)
+        if (!g.simulated[at(i, j)]) run(i, j);
   }
   return g;
 }

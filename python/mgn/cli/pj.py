@@ -31,6 +31,7 @@ def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> Sh
         options=ShakeOptions(
             grid=args.physics_grid,
             staircase=args.physics_search == "staircase",
+            staircase_checks=args.physics_checks,
             num_threads=args.num_threads,
         ),
         max_grasps=args.physics_grasps,
@@ -137,6 +138,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="staircase",
         help="staircase: walk the monotone success boundary, falling back to the full grid where "
         "a check fails (default); full: simulate every grid cell",
+    )
+    p.add_argument(
+        "--physics-checks",
+        type=int,
+        default=ShakeOptions.staircase_checks,
+        metavar="N",
+        help="staircase only: N extra inferred cells simulated to catch non-monotone grids "
+        f"(default {ShakeOptions.staircase_checks}; more checks, closer to the full grid)",
     )
     p.add_argument(
         "--physics-grid", type=int, default=5, help="S of the S x S friction x density grid"

@@ -37,8 +37,10 @@ Sections:
   recorded in each object's label metadata and in ``dataset.json`` ``physics_scores``),
   ``physics_grid`` (S of the S x S friction x mass grid, MGN 10), ``physics_search``
   (``staircase``: walk each grasp's monotone success boundary with checks and fall back to the
-  full grid where they fail, the default; ``full``: simulate all S x S trials), ``suction_model``,
-  ``seed``.
+  full grid where they fail, the default; ``full``: simulate all S x S trials),
+  ``physics_checks`` (extra inferred cells the staircase simulates to catch non-monotone grids:
+  more checks, more trials, closer to the full grid; benchmarks/README.md measures the trade),
+  ``suction_model``, ``seed``.
 - ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
   scene when the composition allows) and ``unseen`` (``novel`` = the objects tagged ``novel``,
@@ -81,6 +83,7 @@ from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec, make_tote
+from mgn.pj.physics import ShakeOptions
 from mgn.render.photo import RandomizeSettings, RenderSettings
 from mgn.scene.cameras import Intrinsics, look_at
 from mgn.scene.lens import lens_for
@@ -515,6 +518,7 @@ class ObjectLabelsConfig(_Section):
     physics_grasps: int | None = None
     physics_grid: int = 10
     physics_search: str = "staircase"
+    physics_checks: int = ShakeOptions.staircase_checks
     suction_model: str = "spring"
     seed: int = 0
 
@@ -524,6 +528,7 @@ class ObjectLabelsConfig(_Section):
         "physics_grasps": _optional(_int(1)),
         "physics_grid": _int(1),
         "physics_search": _choice("staircase", "full"),
+        "physics_checks": _int(0),
         "suction_model": _choice(*SEAL_MODELS),
         "seed": _int(0),
     }

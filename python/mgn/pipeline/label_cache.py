@@ -128,12 +128,29 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
             "physics_grasps": ol.physics_grasps if config.labels.pj_physics else None,
             "physics_grid": ol.physics_grid if config.labels.pj_physics else None,
             "physics_search": ol.physics_search if config.labels.pj_physics else None,
+            "physics_checks": (
+                ol.physics_checks
+                if config.labels.pj_physics and ol.physics_search == "staircase"
+                else None
+            ),
         }
         h.update(json.dumps(params, sort_keys=True).encode())
         for f in ("palm_mesh", "finger_left_mesh", "finger_right_mesh"):
             _hash_file(h, getattr(config.gripper, f))
         keys["paralleljaw"] = h.hexdigest()
     return keys
+
+
+def shake_options(config: Config, num_threads: int = 0) -> ShakeOptions:
+    """The shake-test options of ``config.object_labels`` (grid, search, checks)."""
+
+    ol = config.object_labels
+    return ShakeOptions(
+        grid=ol.physics_grid,
+        staircase=ol.physics_search == "staircase",
+        staircase_checks=ol.physics_checks,
+        num_threads=num_threads,
+    )
 
 
 def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0) -> ObjectLabels:
@@ -171,11 +188,7 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
             physics = ShakeScorer(
                 density=spec.density,
                 gripper=config.gripper,
-                options=ShakeOptions(
-                    grid=ol.physics_grid,
-                    staircase=ol.physics_search == "staircase",
-                    num_threads=num_threads,
-                ),
+                options=shake_options(config, num_threads),
                 max_grasps=ol.physics_grasps,
             )
         pj = pj_label_object(

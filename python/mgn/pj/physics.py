@@ -37,6 +37,9 @@ Mesh = _core.Mesh
 #: Phase codes of ShakeTrajectory.phase.
 PHASE_NAMES = ("close", "translate", "rotate")
 
+#: The C++ defaults (cpp/include/mgn/grasp/shake_test.hpp), the one place they are written.
+_CORE = _core.ShakeOptions()
+
 
 @dataclass(frozen=True)
 class ShakeOptions:
@@ -46,47 +49,49 @@ class ShakeOptions:
     and 0.2–0.3 rad. The others are mgn's (see ``cpp/include/mgn/grasp/shake_test.hpp``):
     ``settle_steps`` and ``lost_contact_steps`` end phases and trials early (0 disables them),
     ``inertia_floor`` stabilises light objects, the pads are soft (``pad_stiffness`` N/m per
-    contact point, ``pad_damping`` N s/m). ``staircase`` walks each grasp's success boundary
-    (success is monotone: more friction helps, more mass hurts) with at most ``2 grid - 1``
-    trials plus ``staircase_checks`` checks of inferred cells, falling back to the full grid
-    where a check contradicts monotonicity (``ShakeScores.fallback``). ``first_grasp_index``:
-    grasp ``g`` of a call draws the random streams of grasp ``first_grasp_index + g``, so a grasp
-    list scored in consecutive pieces gets the same scores as scored whole.
-    ``polyhedral_contacts`` (on here, off in the C++ defaults): whole contact patches from
-    Bullet's polyhedral clipping; off, GJK contact points are 1.2–1.5× faster per trial but
-    change some outcomes (``benchmarks/bench_shake.py`` measures both).
+    contact point, ``pad_damping`` N s/m). ``staircase`` finds each grasp's success boundary
+    (success is monotone: more friction helps, more mass hurts) by galloping and bisection row
+    by row, verifies the cells on both sides of it and ``staircase_checks`` other inferred cells,
+    and falls back to the full grid where a check contradicts monotonicity
+    (``ShakeScores.fallback``); see ``staircase_grid`` in the header for the order and bounds.
+    ``first_grasp_index``: grasp ``g`` of a call draws the random streams of grasp
+    ``first_grasp_index + g``, so a grasp list scored in consecutive pieces gets the same scores
+    as scored whole.
+    ``polyhedral_contacts`` (on by default): whole contact patches from Bullet's polyhedral
+    clipping; off, GJK contact points are 1.2–1.5× faster per trial but change some outcomes
+    (``benchmarks/bench_shake.py`` measures both). Every default is the C++ struct's.
     """
 
-    grid: int = 10
-    friction_range: tuple[float, float] = (0.5, 2.0)
-    density_range: tuple[float, float] = (0.25, 1.0)
-    dt: float = 1.0 / 200.0
-    close_steps: int = 400
-    shake_steps: int = 400
-    rotate_steps: int = 300
-    gravity: float = 9.81
-    shake_speed: float = 0.5
-    shake_cycles: int = 2
-    angle_range: tuple[float, float] = (0.2, 0.3)
-    rotate_cycles: int = 1
-    grip_force: float = 20.0
-    close_speed: float = 0.1
-    pad_stiffness: float = 1e4
-    pad_damping: float = 20.0
-    controller_stiffness: float = 1e5
-    inertia_floor: float = 1.0
-    contact_distance: float = 1e-3
-    settle_steps: int = 10
-    lost_contact_steps: int = 10
-    margin: float = 5e-4
-    polyhedral_contacts: bool = True
-    max_hull_vertices: int = 64
-    solver_iterations: int = 10
-    staircase: bool = False
-    staircase_checks: int = 20
-    num_threads: int = 0
-    seed: int = 0
-    first_grasp_index: int = 0
+    grid: int = _CORE.grid
+    friction_range: tuple[float, float] = (_CORE.friction_min, _CORE.friction_max)
+    density_range: tuple[float, float] = (_CORE.density_min, _CORE.density_max)
+    dt: float = _CORE.dt
+    close_steps: int = _CORE.close_steps
+    shake_steps: int = _CORE.shake_steps
+    rotate_steps: int = _CORE.rotate_steps
+    gravity: float = _CORE.gravity
+    shake_speed: float = _CORE.shake_speed
+    shake_cycles: int = _CORE.shake_cycles
+    angle_range: tuple[float, float] = (_CORE.angle_min, _CORE.angle_max)
+    rotate_cycles: int = _CORE.rotate_cycles
+    grip_force: float = _CORE.grip_force
+    close_speed: float = _CORE.close_speed
+    pad_stiffness: float = _CORE.pad_stiffness
+    pad_damping: float = _CORE.pad_damping
+    controller_stiffness: float = _CORE.controller_stiffness
+    inertia_floor: float = _CORE.inertia_floor
+    contact_distance: float = _CORE.contact_distance
+    settle_steps: int = _CORE.settle_steps
+    lost_contact_steps: int = _CORE.lost_contact_steps
+    margin: float = _CORE.margin
+    polyhedral_contacts: bool = _CORE.polyhedral_contacts
+    max_hull_vertices: int = _CORE.max_hull_vertices
+    solver_iterations: int = _CORE.solver_iterations
+    staircase: bool = _CORE.staircase
+    staircase_checks: int = _CORE.staircase_checks
+    num_threads: int = _CORE.num_threads
+    seed: int = _CORE.seed
+    first_grasp_index: int = _CORE.first_grasp_index
 
     def to_core(self) -> _core.ShakeOptions:
         """The C++ options (validated there; errors name the field)."""

@@ -93,12 +93,12 @@ struct ShakeOptions {
   int lost_contact_steps = 10;
   double margin = 5e-4;  ///< Bullet collision margin of every shape, m, > 0
   /// Bullet's polyhedral clipping (a full contact patch per step) instead of GJK points
-  /// gathered over steps; not needed for steady grips (the tests pass both ways). mgn.pj's
-  /// ShakeOptions turns it on (the scores of mgn's datasets). GJK points are 1.2-1.5x faster
+  /// gathered over steps; on by default (the scores of mgn's datasets; the tests pass both
+  /// ways). GJK points are 1.2-1.5x faster
   /// per trial on built-in objects but change some outcomes: on 48 grasps of a can, a mug and a
   /// cereal box, 81 % of 10x10 scores identical, mean |difference| 0.007, at most 0.14
   /// (benchmarks/bench_shake.py measures both).
-  bool polyhedral_contacts = false;
+  bool polyhedral_contacts = true;
   /// Hulls with more vertices are replaced by the hull of their support points along this many
   /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
   int max_hull_vertices = 64;
@@ -106,17 +106,18 @@ struct ShakeOptions {
   /// (at most 8) for light objects, which the solver otherwise lets spin out of the grip.
   int solver_iterations = 10;
   /// Staircase search instead of the full grid: success is monotone wherever physics behaves
-  /// (more friction helps, more mass hurts), so each grasp's success boundary is walked with at
-  /// most 2S - 1 trials (see staircase_grid()), plus `staircase_checks` trials of inferred cells
-  /// (next to the boundary first, then spread over the grid); if one of them contradicts the
-  /// inference the grasp falls back to the full grid. Every simulated cell uses the same trial
-  /// (index, random stream) as the full grid. benchmarks/bench_staircase.py measures the
-  /// agreement with the full grid on real grasps: the shake outcomes are not exactly monotone
-  /// (isolated failures at high friction), so more checks buy agreement with trials.
+  /// (more friction helps, more mass hurts), so each grasp's success boundary is found by
+  /// galloping and bisection row by row (see staircase_grid()), the cells on both sides of it
+  /// are verified, plus `staircase_checks` other inferred cells spread over the grid; if one of
+  /// them contradicts the inference the grasp falls back to the full grid. Every simulated cell
+  /// uses the same trial (index, random stream) as the full grid. benchmarks/bench_staircase.py
+  /// measures the agreement with the full grid on real grasps: the shake outcomes are not
+  /// exactly monotone (isolated failures anywhere in the grid, unrelated to the cell's random
+  /// shake axis), so more checks buy agreement with trials.
   bool staircase = false;
-  int staircase_checks = 20;  ///< >= 0
-  int num_threads = 0;        ///< 0 = all hardware threads; results do not depend on it
-  std::uint64_t seed = 0;     ///< seed of the per-trial random streams
+  int staircase_checks = 6;  ///< >= 0
+  int num_threads = 0;       ///< 0 = all hardware threads; results do not depend on it
+  std::uint64_t seed = 0;    ///< seed of the per-trial random streams
   /// Index of the first grasp in a larger list: grasp g of this call uses the random streams of
   /// grasp first_grasp_index + g, so scoring a list in consecutive pieces gives the same scores
   /// as scoring it whole (used to report progress).
@@ -155,14 +156,20 @@ struct StaircaseGrid {
 };
 
 /// Success over an S×S grid whose success is assumed monotone: non-decreasing in the friction
-/// index i and non-increasing in the density index j. Row by row (i = 0..S-1) it walks the
-/// density index up from the previous row's boundary while trials succeed (cells left of it
-/// are inferred successes, cells right of the first failure inferred failures): at most 2S - 1
-/// trials. Then the first `checks` inferred cells of this order are simulated: the cells at
-/// distance 1 from each row's boundary, then at distance 2, then the other inferred cells in a
-/// golden-ratio (low-discrepancy) order; if any contradicts its inference, every remaining cell
-/// is simulated (fallback). With checks >= S·S every cell is verified.
-/// `trial(i, j)` runs one trial. Deterministic. Throws InvalidArgument for S < 1 or checks < 0.
+/// index i and non-increasing in the density index j, so row i succeeds exactly for j < b[i]
+/// with b non-decreasing. The walk finds b row by row (i = 0..S-1) from the lower bound b[i-1]:
+/// row 0 first probes its hardest cell (0, S-1), which settles a grid that succeeds everywhere
+/// with one trial; then each row probes the cell at its lower bound and gallops right (offsets
+/// 0, 1, 3, 7, ...) and bisects the last gap; a row whose lower bound is S costs nothing. Cells
+/// left of b[i] are inferred successes, the others inferred failures. Verification: in every row
+/// the inferred cell nearest to the boundary on each side (the last success b[i]-1, or b[i]-2
+/// where the walk simulated b[i]-1; the first failure b[i], or b[i]+1), then the first `checks`
+/// other inferred cells in a golden-ratio (low-discrepancy) order are simulated; if any
+/// contradicts its inference, every remaining cell is simulated (fallback), so the result is
+/// then exact. With checks >= S·S every cell is verified. Trials without fallback: at most 39 +
+/// checks for S = 10 (every monotone 10×10 grid enumerated), S + 1 + checks for a grid that
+/// succeeds everywhere. `trial(i, j)` runs one trial, never twice for a cell. Deterministic.
+/// Throws InvalidArgument for S < 1 or checks < 0.
 StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks);
 
 /// Phases of a trial (ShakeTrajectory::phase).
