@@ -3,7 +3,7 @@
 One scene of the pipeline benchmark's size (20 objects, 37 views at 1200 x 1200, all labels; the
 object labels come from the label cache, or are computed once) is generated, then every view's
 arrays are written again three times in the same loop: with the current writer
-(`mgn.io.scene_format.write_view`), with its archival mode (`io.archival: true`) and with the
+(`mgn.io.scene_folder.write_view`), with its archival mode (`io.archival: true`) and with the
 layout mgn wrote first (all arrays in `{v}.npz`, float32 ids, `depth_ideal`, `valid_depth` and
 `com_heatmap` in the npz, RGB depth picture; reproduced here as the "peer"). Reading is timed on
 the current files: every array of a view through `mgn.Dataset`. Bytes per scene are the sum over
@@ -35,7 +35,7 @@ SEED = 2024
 def _legacy_files(rec: Any) -> dict[str, bytes]:
     """The files of one view in the layout mgn wrote before (for the comparison)."""
     from mgn.base.deterministic import npz_bytes
-    from mgn.io.scene_format import M_TO_CM, hdf5_bytes, png_bytes, to_cm
+    from mgn.io.scene_folder import M_TO_CM, hdf5_bytes, png_bytes, to_cm
     from mgn.render.views import depth_picture
 
     f4 = np.float32
@@ -76,7 +76,7 @@ def _write_legacy(folder: Path, rec: Any) -> int:
 
 def _com_parameters(folder: Path) -> Any:
     """(N, 5) CoM parameters of the scene in ``folder`` (as the pipeline passes them)."""
-    from mgn.io.scene_file import read_scene_json
+    from mgn.io.scene_json import read_scene_json
     from mgn.view_labels.objects import SceneRayModel
 
     return SceneRayModel.from_scene(read_scene_json(folder / "scene.json")).com_parameters()
@@ -99,7 +99,7 @@ def _exact_camera(view: Any, hdf5: dict[str, Any]) -> dict[str, Any]:
 
 def _record(view: Any, com_parameters: Any = None) -> Any:
     """A ViewRecord holding the arrays of a written view (SI units)."""
-    from mgn.io.scene_format import ViewRecord
+    from mgn.io.scene_folder import ViewRecord
 
     return ViewRecord(
         index=view.index,
@@ -267,7 +267,7 @@ def run(
         row.mgn_status = row.peer_status = mgn_status
         return [row]
     from mgn.io.dataset import Dataset
-    from mgn.io.scene_format import write_view
+    from mgn.io.scene_folder import write_view
     from mgn.pipeline import generate
     from mgn.pipeline.config import load_config
 

@@ -106,7 +106,7 @@ def stage_cpu(config: Any) -> dict[str, Any]:
     llvmpipe threads, parallel loops)."""
     import numpy as np
 
-    from mgn.io.scene_format import scene_gt_entries, write_view
+    from mgn.io.scene_folder import scene_gt_entries, write_view
     from mgn.objects import tote_mesh
     from mgn.pipeline.label_cache import object_labels
     from mgn.pipeline.label_scene import strided_subset, view_record

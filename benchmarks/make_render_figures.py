@@ -55,7 +55,7 @@ def raster_rgb(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
 def glass_camera(scene_json: Path, width: int) -> ps.Camera:
     """An oblique camera above the tote aimed between the glass objects."""
 
-    from mgn.io.scene_file import read_scene_json
+    from mgn.io.scene_json import read_scene_json
 
     scene = read_scene_json(scene_json)
     glass = [

@@ -146,7 +146,7 @@ def drop(path: Path, names: tuple[str, ...] = OBJECT_NAMES, seed: int = DROP_SEE
 
     objects = compose_objects(names=list(names))
     scene = drop_scene(objects, seed=seed)
-    from mgn.io.scene_file import write_scene_json
+    from mgn.io.scene_json import write_scene_json
 
     return write_scene_json(scene, path)
 
@@ -254,7 +254,7 @@ def camera(width: int, view: int = VIEW) -> tuple[Any, np.ndarray]:
 def mgn_inputs(scene_json: Path) -> dict[str, Any]:
     """Everything mgn's PathScene takes: meshes, poses, ids, materials, lights, environment."""
 
-    from mgn.io.scene_file import read_scene_json
+    from mgn.io.scene_json import read_scene_json
 
     scene = read_scene_json(scene_json)
     meshes, poses, ids, materials, names = [], [], [], [], []

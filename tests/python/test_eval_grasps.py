@@ -10,7 +10,7 @@ import pytest
 
 import mgn
 from mgn.eval.grasps import evaluate_grasps, ground_truth_grasps
-from mgn.io.scene_file import read_scene_json
+from mgn.io.scene_json import read_scene_json
 from mgn.pipeline.label_scene import LabelOptions
 from mgn.view_labels.grasps import SceneGraspModel
 

@@ -10,7 +10,7 @@ import h5py
 import numpy as np
 from test_layout import layout_of, rect
 
-from mgn.io.scene_format import scene_gt_entries
+from mgn.io.scene_folder import scene_gt_entries
 
 
 def test_scene_gt_rotation_is_a_nested_3x3_list_as_metagraspnet_writes_it():

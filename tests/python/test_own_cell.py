@@ -15,7 +15,7 @@ import pytest
 import mgn
 from mgn.cli import main
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.io.scene_file import read_scene_json, write_scene_json
+from mgn.io.scene_json import read_scene_json, write_scene_json
 from mgn.objects import load_objects_yaml
 from mgn.objects.user import ImplausibleSizeWarning
 from mgn.pipeline.config import ConfigError, load_config

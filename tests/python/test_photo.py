@@ -18,7 +18,7 @@ from PIL import Image
 import mgn
 from mgn.cli import main
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_format import png_bytes
+from mgn.io.scene_folder import png_bytes
 from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
 from mgn.pipeline.config import ConfigError, dump_config, load_config
 from mgn.render import photo

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_file import read_scene_json, write_scene_json
+from mgn.io.scene_json import read_scene_json, write_scene_json
 
 LOWER, UPPER = "box_shoe", "box_tea"  # 240 x 150 x 90 mm and 125 x 75 x 65 mm
 

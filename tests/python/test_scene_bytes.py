@@ -16,7 +16,7 @@ import pytest
 from PIL import Image
 
 from mgn.io.dataset import View
-from mgn.io.scene_format import (
+from mgn.io.scene_folder import (
     ARCHIVAL_DEPTH_STEP_CM,
     ARCHIVAL_ROTATION_STEP,
     FLOAT_DELTA_ENCODING,

@@ -14,7 +14,7 @@ from mgn.geometry.convex import (
     convex_decomposition,
     convex_hull,
 )
-from mgn.io.scene_file import read_scene_json, write_scene_json
+from mgn.io.scene_json import read_scene_json, write_scene_json
 from mgn.objects import ToteSpec, get_object
 from mgn.scene import DropOptions, Scene, compose_objects, drop_scene
 from mgn.scene.drop import _simulate

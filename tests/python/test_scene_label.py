@@ -13,7 +13,7 @@ import pytest
 from conftest import check_difficulty
 
 from mgn.io.dataset import Dataset
-from mgn.io.scene_file import write_scene_json
+from mgn.io.scene_json import write_scene_json
 from mgn.io.validate import validate_dataset
 from mgn.objects import ToteSpec, get_object
 from mgn.pipeline.label_scene import LabelOptions, label_scene
@@ -232,7 +232,7 @@ def test_strided_subset_keeps_grasps_evenly(object_labels):
 def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_labels):
     """label_scene renders view k + 1 and builds the grasp collisions in threads while view k is
     labelled; the files must be those of the plain serial loop over the same public steps."""
-    from mgn.io.scene_format import scene_gt_entries, write_scene_gt, write_view
+    from mgn.io.scene_folder import scene_gt_entries, write_scene_gt, write_view
     from mgn.pipeline.label_scene import strided_subset, view_record
     from mgn.render.views import iter_views
     from mgn.view_labels.grasps import SceneGraspModel

@@ -4,7 +4,7 @@ import numpy as np
 from PIL import Image
 
 from mgn.cli.main import main
-from mgn.io.scene_file import write_scene_json
+from mgn.io.scene_json import write_scene_json
 from mgn.objects import ToteSpec, get_object
 from mgn.scene.scene import Scene, SceneInstance
 

@@ -9,7 +9,7 @@ from pathlib import Path
 from mgn.eval.pick import run_picking
 from mgn.hardware import grasp_kind_arg
 from mgn.io.dataset_record import read_dataset_record
-from mgn.io.scene_file import read_scene_json
+from mgn.io.scene_json import read_scene_json
 from mgn.pipeline.config import Config, default_config, load_config
 from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.scene.scene import Scene

@@ -19,7 +19,7 @@ from tqdm import tqdm
 
 from mgn.base.atomic import atomic_dir
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_file import read_scene_json, write_scene_json
+from mgn.io.scene_json import read_scene_json, write_scene_json
 from mgn.io.view_images import render_views
 from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
 from mgn.pipeline.config import load_config

@@ -94,7 +94,7 @@ from mgn.errors import InvalidArgumentError, IoError
 from mgn.eval.results import format_table
 from mgn.hardware import ParallelJawGripper, SuctionCup, normalize_grasp_kind
 from mgn.io.dataset import Dataset
-from mgn.io.scene_file import read_scene_json
+from mgn.io.scene_json import read_scene_json
 from mgn.pipeline.config import Config
 from mgn.pipeline.label_scene import LabelOptions
 from mgn.scene.lens import lens_for

@@ -1,11 +1,11 @@
 """Read a dataset back: ``mgn.Dataset(DIR)`` (lazy; SI units; also original MetaGraspNet folders).
 
 Layout (docs/format.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` object folders and
-``DIR/scene<N>/`` scene folders with the files of :mod:`mgn.io.scene_format`. Nothing is read
+``DIR/scene<N>/`` scene folders with the files of :mod:`mgn.io.scene_folder`. Nothing is read
 before it is asked for, and what is read is kept (a :class:`View` caches its arrays).
 
 Units: the files store centimetres; everything returned here is in metres (the conversion table
-is :data:`mgn.io.scene_format.CM_RULES`), except the ``{v}_order.json`` content, which is
+is :data:`mgn.io.scene_folder.CM_RULES`), except the ``{v}_order.json`` content, which is
 returned as stored (its ``depth_diff`` in cm).
 
 Example::
@@ -38,7 +38,7 @@ from mgn.errors import IoError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
-from mgn.io.scene_format import (
+from mgn.io.scene_folder import (
     COM_RESIDUAL_ENCODING,
     FLOAT_DELTA_ENCODING,
     POSE_COLUMNS_GROUP,

@@ -3,7 +3,7 @@
 :func:`read_order_json` gives an :class:`OrderGraph` (lengths in metres), :func:`read_order_csv`
 the relation matrix. The files are made by :meth:`mgn.view_labels.layout.Layout.order_json` and
 :meth:`~mgn.view_labels.layout.Layout.order_csv` and written by
-:func:`mgn.io.scene_format.write_view`.
+:func:`mgn.io.scene_folder.write_view`.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ import numpy as np
 
 from mgn.io.dataset import Dataset, SceneFolder, View
 from mgn.io.manifest import MANIFEST, check_manifest
-from mgn.io.scene_format import HDF5_FLOAT_KEYS, view_file_names
+from mgn.io.scene_folder import HDF5_FLOAT_KEYS, view_file_names
 
 __all__ = ["Problem", "validate_dataset"]
 

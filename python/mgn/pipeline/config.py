@@ -656,7 +656,7 @@ class IoConfig(_Section):
 
     Attributes:
         archival: the compact archival mode (lossy: the sensor depth rounded to
-            :data:`mgn.io.scene_format.ARCHIVAL_DEPTH_STEP_CM`, grasp poses to 2^-16 per rotation
+            :data:`mgn.io.scene_folder.ARCHIVAL_DEPTH_STEP_CM`, grasp poses to 2^-16 per rotation
             entry and 1/1024 cm; views through a lens also the ideal depth and ``com_heatmap``
             to 1/65535); false keeps every array bit for bit.
     """

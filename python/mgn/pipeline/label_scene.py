@@ -6,7 +6,7 @@ every view (RGB, sensor and ideal depth, instance ids), computes the per-view ob
 :mod:`mgn.view_labels.objects`), the layout (relations, layers, order, bin relation, difficulty:
 :mod:`mgn.view_labels.layout`) and the scene grasps (object grasps placed at the settled poses,
 collision-checked once per scene, kept per view when seen: :mod:`mgn.view_labels.grasps`), and
-writes the files of docs/format.md with :func:`mgn.io.scene_format.write_view`.
+writes the files of docs/format.md with :func:`mgn.io.scene_folder.write_view`.
 
 Models built once per scene (Embree scene, FCL models, GL meshes) are reused by all views; a
 view's arrays are released before the next view is rendered, so memory does not grow with the
@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_file import write_scene_json
-from mgn.io.scene_format import ViewRecord, scene_gt_entries, write_scene_gt, write_view
+from mgn.io.scene_folder import ViewRecord, scene_gt_entries, write_scene_gt, write_view
+from mgn.io.scene_json import write_scene_json
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
 from mgn.render.photo import RenderSettings

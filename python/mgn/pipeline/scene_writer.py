@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mgn.io.scene_file import write_scene_json
+from mgn.io.scene_json import write_scene_json
 from mgn.pipeline.config import CameraConfig, Config
 from mgn.pipeline.label_cache import ObjectLabels
 from mgn.pipeline.label_scene import LabelOptions, label_scene

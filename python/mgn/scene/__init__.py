@@ -3,7 +3,7 @@
 - :func:`compose_objects`: choose the objects (names, categories x 2-5 copies, or a count).
 - :func:`drop_scene`: drop them and let them settle -> :class:`Scene`.
 - :class:`Scene`: instances with settled poses ``X_WO`` (tote frame) and tote contacts;
-  ``to_dict`` / ``from_dict`` (the file: :mod:`mgn.io.scene_file`); ``mesh(i)`` gives an
+  ``to_dict`` / ``from_dict`` (the file: :mod:`mgn.io.scene_json`); ``mesh(i)`` gives an
   instance's mesh back.
 - :mod:`mgn.scene.cameras`: :class:`Intrinsics`, :class:`CameraView`, the 37-view MetaGraspNet rig
   (:func:`mgn_rig`), hemisphere rigs, :func:`look_at`.

@@ -6,7 +6,7 @@ contacts), the tote, the seed and the drop options. Frames: the world W is the t
 (origin at the centre of the inner floor top, z up; see :mod:`mgn.objects.tote`); ``X_WO`` maps
 object-frame coordinates to world coordinates (4x4 float64, metres).
 
-JSON layout (``schema_version`` 1; the file is written and read by :mod:`mgn.io.scene_file`)::
+JSON layout (``schema_version`` 1; the file is written and read by :mod:`mgn.io.scene_json`)::
 
     {"schema_version": 1, "seed": 0,
      "tote": {ToteSpec fields}, "drop_options": {DropOptions fields},

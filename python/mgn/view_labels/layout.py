@@ -28,7 +28,7 @@ in short:
 Serialisation (MetaGraspNet layout, docs/format.md): :meth:`Layout.order_json` (``{v}_order.json``,
 depth differences in cm), :meth:`Layout.order_csv` (``{v}_order.csv``, the -1 entries only),
 :meth:`Layout.layout_json` (``{v}_layout.json``: difficulty and its ingredients); the files are
-written by :func:`mgn.io.scene_format.write_view` and read back by :mod:`mgn.io.order_files`.
+written by :func:`mgn.io.scene_folder.write_view` and read back by :mod:`mgn.io.order_files`.
 """
 
 from __future__ import annotations

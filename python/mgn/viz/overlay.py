@@ -25,7 +25,7 @@ from mgn.base.atomic import atomic_write_bytes
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.dataset import Dataset, SceneFolder, View
-from mgn.io.scene_format import png_bytes
+from mgn.io.scene_folder import png_bytes
 from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import lens_for
 from mgn.viz.pictures import score_colors

@@ -24,7 +24,7 @@ from PIL import Image
 
 from mgn.base.atomic import atomic_write_text
 from mgn.io.dataset import Dataset, View
-from mgn.io.scene_format import COLLISION_OBSTACLES, COLLISION_PARTS, png_bytes
+from mgn.io.scene_folder import COLLISION_OBSTACLES, COLLISION_PARTS, png_bytes
 from mgn.viz.overlay import render_overlay
 
 __all__ = ["collect_stats", "svg_bars", "write_report"]

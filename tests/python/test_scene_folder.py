@@ -13,7 +13,7 @@ from conftest import coco_ground_truth_ap
 from mgn.base.deterministic import npz_bytes
 from mgn.io.coco import coco_dict, export_coco, rle
 from mgn.io.dataset import Dataset, intrinsics_from_params
-from mgn.io.scene_format import (
+from mgn.io.scene_folder import (
     ViewRecord,
     from_cm,
     hdf5_bytes,
