@@ -25,6 +25,10 @@ from mgn.geometry.mesh import Mesh, SurfaceSamples, sample_surface
 from mgn.hardware import ParallelJawGripper
 from mgn.pj.sampler import AntipodalSampler, pj_wrench_scores
 
+#: The C++ defaults of the sampler and the wrench score (the one place they are written).
+_SAMPLER = _core.AntipodalOptions()
+_WRENCH = _core.PjWrenchOptions()
+
 
 @dataclass(frozen=True)
 class PjLabels:
@@ -86,9 +90,9 @@ def label_object(
     progress: bool = False,
     chunk: int = 250,
     physics: PhysicsScorer | None = None,
-    friction: float = 0.5,
-    grip_force: float = 70.0,
-    contact_radius: float = 0.005,
+    friction: float = _WRENCH.friction,
+    grip_force: float = _WRENCH.grip_force,
+    contact_radius: float = _WRENCH.contact_radius,
     sampler_options: dict | None = None,
     samples: SurfaceSamples | None = None,
 ) -> PjLabels:
@@ -196,13 +200,13 @@ def label_object(
         "pj_num_points": int(num_points),
         "pj_grid": "even surface sampling (farthest-point from an area-weighted pool)",
         "pj_sampler": {
-            "probes": 5,
-            "tilt_rad": math.pi / 16,
-            "offset_m": 0.005,
-            "start_offset_m": 0.010,
-            "friction_coef": math.tan(math.pi / 8),
-            "approaches_tried": 50,
-            "approaches_kept": 20,
+            "probes": _SAMPLER.probes,
+            "tilt_rad": _SAMPLER.tilt,
+            "offset_m": _SAMPLER.offset,
+            "start_offset_m": _SAMPLER.start_offset,
+            "friction_coef": _SAMPLER.friction_coef,
+            "approaches_tried": _SAMPLER.approaches_tried,
+            "approaches_kept": _SAMPLER.approaches_kept,
         }
         | {k: v for k, v in opts.items()},
         "pj_num_accepted_probes": int(sum(p.num_accepted_probes for p in parts)),
