@@ -21,7 +21,7 @@ import numpy as np
 
 from mgn import _core
 from mgn.base.atomic import atomic_write_bytes
-from mgn.errors import InvalidArgumentError
+from mgn.base.core_result import to_core
 from mgn.geometry.mesh import Mesh
 
 __all__ = [
@@ -80,16 +80,7 @@ class ConvexDecompositionOptions:
 
     def to_core(self) -> _core.ConvexDecompositionOptions:
         """The C++ options (the core checks the ranges when it decomposes)."""
-        o = _core.ConvexDecompositionOptions()
-        for f in dataclasses.fields(self):
-            value = getattr(self, f.name)
-            try:
-                setattr(o, f.name, value)
-            except TypeError as e:
-                raise InvalidArgumentError(
-                    f"ConvexDecompositionOptions.{f.name} must be {f.type}, got {value!r}"
-                ) from e
-        return o
+        return to_core(self, _core.ConvexDecompositionOptions())
 
 
 #: The decomposition the scene drop uses by default: HACD parts merged while they add at most 10 %

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from dataclasses import field as dataclass_field
 from typing import Any
 
@@ -25,7 +25,7 @@ import numpy.typing as npt
 from tqdm import tqdm
 
 from mgn import _core
-from mgn.base.core_result import from_core
+from mgn.base.core_result import from_core, to_core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.convex import cached_convex_decomposition
 from mgn.geometry.mesh import mass_properties
@@ -95,21 +95,12 @@ class ShakeOptions:
 
     def to_core(self) -> _core.ShakeOptions:
         """The C++ options (validated there; errors name the field)."""
-        o = _core.ShakeOptions()
         pairs = {"friction_range": "friction", "density_range": "density", "angle_range": "angle"}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name in pairs:
-                lo, hi = _pair(f.name, value)
-                setattr(o, pairs[f.name] + "_min", lo)
-                setattr(o, pairs[f.name] + "_max", hi)
-            else:
-                try:
-                    setattr(o, f.name, value)
-                except TypeError as e:
-                    raise InvalidArgumentError(
-                        f"ShakeOptions.{f.name}: expected a number, got {value!r}"
-                    ) from e
+        o = to_core(self, _core.ShakeOptions(), skip=pairs)
+        for name, prefix in pairs.items():
+            lo, hi = _pair(name, getattr(self, name))
+            setattr(o, prefix + "_min", lo)
+            setattr(o, prefix + "_max", hi)
         o.validate()
         return o
 

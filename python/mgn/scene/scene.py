@@ -32,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
+from mgn.base.core_result import to_core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
@@ -155,9 +156,7 @@ class DropOptions:
 
     def to_core(self, seed: int = 0) -> _core.DropOptions:
         """The C++ options (``seed`` is :func:`mgn.scene.drop_scene`'s own argument)."""
-        o = _core.DropOptions()
-        for f in dataclasses.fields(self):
-            setattr(o, f.name, getattr(self, f.name))
+        o = to_core(self, _core.DropOptions())
         o.seed = int(seed)
         return o
 
