@@ -604,6 +604,26 @@ float env_pdf(const Lighting& L, F3 n, F3 w) {
   return p;
 }
 
+/// Lane `l` of a 16-ray packet: the ray o + t d for t in [0, inf), no hit yet; `on` false
+/// leaves the lane inactive (valid[l] = 0) for a tile narrower than the packet.
+inline void set_packet_lane(RTCRayHit16& rh, int* valid, int l, bool on, const F3& o, const F3& d) {
+  valid[l] = on ? -1 : 0;
+  rh.ray.org_x[l] = o.x;
+  rh.ray.org_y[l] = o.y;
+  rh.ray.org_z[l] = o.z;
+  rh.ray.dir_x[l] = d.x;
+  rh.ray.dir_y[l] = d.y;
+  rh.ray.dir_z[l] = d.z;
+  rh.ray.tnear[l] = 0.0f;
+  rh.ray.tfar[l] = std::numeric_limits<float>::infinity();
+  rh.ray.time[l] = 0.0f;
+  rh.ray.mask[l] = 0xFFFFFFFFu;
+  rh.ray.id[l] = static_cast<unsigned>(l);
+  rh.ray.flags[l] = 0;
+  rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+}
+
 inline float power_heuristic(float a, float b) {
   const float a2 = a * a, b2 = b * b;
   return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
@@ -1032,21 +1052,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
             const F3 dc((u + 0.5f - cam.cx) / cam.fx, (v + 0.5f - cam.cy) / cam.fy, 1.0f);
             len[k] = length(dc);
             const F3 d = cam.to_world(dc / len[k]);
-            valid16[k] = k < m ? -1 : 0;
-            rh16.ray.org_x[k] = cam.o.x;
-            rh16.ray.org_y[k] = cam.o.y;
-            rh16.ray.org_z[k] = cam.o.z;
-            rh16.ray.dir_x[k] = d.x;
-            rh16.ray.dir_y[k] = d.y;
-            rh16.ray.dir_z[k] = d.z;
-            rh16.ray.tnear[k] = 0.0f;
-            rh16.ray.tfar[k] = std::numeric_limits<float>::infinity();
-            rh16.ray.time[k] = 0.0f;
-            rh16.ray.mask[k] = 0xFFFFFFFFu;
-            rh16.ray.id[k] = static_cast<unsigned>(k);
-            rh16.ray.flags[k] = 0;
-            rh16.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-            rh16.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+            set_packet_lane(rh16, valid16, k, k < m, cam.o, d);
           }
           rtcIntersect16(valid16, scene, &coherent, &rh16);
           it.counters.rays += m;
@@ -1087,21 +1093,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
             const F3 d = normalize(cam.to_world(dc));
             org[l] = o;
             dir[l] = d;
-            valid16[l] = l < m ? -1 : 0;
-            rh16.ray.org_x[l] = o.x;
-            rh16.ray.org_y[l] = o.y;
-            rh16.ray.org_z[l] = o.z;
-            rh16.ray.dir_x[l] = d.x;
-            rh16.ray.dir_y[l] = d.y;
-            rh16.ray.dir_z[l] = d.z;
-            rh16.ray.tnear[l] = 0.0f;
-            rh16.ray.tfar[l] = std::numeric_limits<float>::infinity();
-            rh16.ray.time[l] = 0.0f;
-            rh16.ray.mask[l] = 0xFFFFFFFFu;
-            rh16.ray.id[l] = static_cast<unsigned>(l);
-            rh16.ray.flags[l] = 0;
-            rh16.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
-            rh16.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+            set_packet_lane(rh16, valid16, l, l < m, o, d);
           }
           rtcIntersect16(valid16, scene, &coherent, &rh16);
           it.counters.rays += m;
