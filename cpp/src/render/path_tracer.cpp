@@ -1036,6 +1036,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
     const RTCScene scene = G.rays->impl().scene;
     alignas(64) RTCRayHit16 rh16;
     alignas(64) int valid16[16];
+    pt::PairSeeds pair_seeds;  // the sampler's per-pair seeds of the current pixel block
     for (;;) {
       const std::size_t tile = next_tile.fetch_add(1);
       if (tile >= n_tiles) break;
@@ -1079,7 +1080,8 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
           for (int l = 0; l < kTile; ++l) {
             const int ll = std::min(l, m - 1);
             const pt::PixelSampler s(pixel_stream[ll].seed,
-                                     pixel_stream[ll].base | static_cast<std::uint32_t>(k));
+                                     pixel_stream[ll].base | static_cast<std::uint32_t>(k),
+                                     &pair_seeds);
             const pt::Sample2 j = s.get(0);
             F3 dc(((u0 + ll + j.x) - cam.cx) / cam.fx, ((v + j.y) - cam.cy) / cam.fy, 1.0f);
             F3 o = cam.o;
@@ -1105,7 +1107,8 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
             first.hit.u = rh16.hit.u[l];
             first.hit.v = rh16.hit.v[l];
             const pt::PixelSampler s(pixel_stream[l].seed,
-                                     pixel_stream[l].base | static_cast<std::uint32_t>(k));
+                                     pixel_stream[l].base | static_cast<std::uint32_t>(k),
+                                     &pair_seeds);
             F3 a, n;
             F3 c = it.trace(org[l], dir[l], s, a, n, &first);
             if (!all_finite(c)) c = F3(0.0f);

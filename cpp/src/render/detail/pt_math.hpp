@@ -1,10 +1,12 @@
 #pragma once
 // Private building blocks of the path tracer (path_tracer.cpp): a small float vector type, the
 // per-pixel low-discrepancy sampler, and the glTF metallic-roughness BSDF (GGX + Lambert +
-// smooth dielectric). Everything here is inline, allocation-free and in float.
+// smooth dielectric). Everything here is inline and in float; only PairSeeds allocates (as it
+// grows, once per thread).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 namespace mgn::pt {
 
@@ -141,21 +143,53 @@ struct Sample2 {
 /// van der Corput radical inverse, reverse_bits(i)) and dimension 1 (Sobol) of point i, each
 /// Owen-scrambled with its own seed. Written with owen_scramble(x) = rev(lk(rev(x))) and
 /// rev(rev(x)) = x so that only the needed bit reversals are done.
+/// The three scramble seeds of dimension pair `pair` of a pixel stream with seed `pixel_seed`:
+/// of the sample order and of dimensions 0 and 1. They depend on neither the pixel inside a
+/// block nor the sample index, so PairSeeds keeps them.
+struct PairSeed {
+  std::uint32_t order, dim0, dim1;
+};
+inline PairSeed pair_seed(std::uint32_t pixel_seed, std::uint32_t pair) {
+  const std::uint32_t s = hash_combine(pixel_seed, pair);
+  return {s, hash32(s ^ 0xa511e9b3u), hash32(s ^ 0x63d83595u)};
+}
+
+/// The pair seeds of the last pixel seed asked for, computed once per (seed, pair) instead of
+/// at every sample (the pixels of a block share one seed). One per thread; not thread-safe.
+class PairSeeds {
+ public:
+  const PairSeed& get(std::uint32_t pixel_seed, std::uint32_t pair) {
+    if (pixel_seed != seed_ || seeds_.empty()) {
+      seed_ = pixel_seed;
+      seeds_.clear();
+    }
+    while (seeds_.size() <= pair)
+      seeds_.push_back(pair_seed(seed_, static_cast<std::uint32_t>(seeds_.size())));
+    return seeds_[pair];
+  }
+
+ private:
+  std::uint32_t seed_ = 0;
+  std::vector<PairSeed> seeds_;
+};
+
 class PixelSampler {
  public:
-  PixelSampler(std::uint32_t pixel_seed, std::uint32_t index)
-      : seed_(pixel_seed), rev_index_(reverse_bits(index)), table_(&sobol_table()) {}
+  /// `cache`, when given, supplies the pair seeds (same values, computed once per pixel seed).
+  PixelSampler(std::uint32_t pixel_seed, std::uint32_t index, PairSeeds* cache = nullptr)
+      : seed_(pixel_seed), rev_index_(reverse_bits(index)), table_(&sobol_table()), cache_(cache) {}
   Sample2 get(std::uint32_t pair) const {
-    const std::uint32_t s = hash_combine(seed_, pair);
-    const std::uint32_t i = reverse_bits(lk_permute(rev_index_, s));
-    const std::uint32_t a = reverse_bits(lk_permute(i, hash32(s ^ 0xa511e9b3u)));
-    const std::uint32_t b = reverse_bits(lk_permute(table_->rev(i), hash32(s ^ 0x63d83595u)));
+    const PairSeed ps = cache_ != nullptr ? cache_->get(seed_, pair) : pair_seed(seed_, pair);
+    const std::uint32_t i = reverse_bits(lk_permute(rev_index_, ps.order));
+    const std::uint32_t a = reverse_bits(lk_permute(i, ps.dim0));
+    const std::uint32_t b = reverse_bits(lk_permute(table_->rev(i), ps.dim1));
     return {to_unit(a), to_unit(b)};
   }
 
  private:
   std::uint32_t seed_, rev_index_;
   const SobolTable* table_;
+  PairSeeds* cache_;
 };
 
 /// Bits per axis of the 2-D Morton (Z-order) index of (x, y) < 2^bits (bit k of x goes to bit 2k,
@@ -309,6 +343,7 @@ struct ShadingMaterial {
   bool rough = false;             ///< the dielectric is rough (GGX), not a delta lobe
   bool has_other = false;         ///< has the specular / diffuse lobes
   bool has_nondelta = false;      ///< has any non-delta lobe (next-event estimation applies)
+  float lambda_o = 0;             ///< ggx_lambda(wo, alpha) (depends on cos_o only)
 
   /// Transmission tint of one interface: the square root of the base colour.
   F3 sqrt_base() const { return {std::sqrt(base.x), std::sqrt(base.y), std::sqrt(base.z)}; }
@@ -316,13 +351,15 @@ struct ShadingMaterial {
   /// Alpha above which the transmission lobe is a rough dielectric (roughness >= ~0.055).
   static constexpr float kRoughAlpha = 3e-3f;
 
-  /// `front`: wo is on the outward side of the surface (the dielectric is entered).
+  /// `cos_o`: wo.z of the wo later given to eval and sample_rough. `front`: wo is on the
+  /// outward side of the surface (the dielectric is entered).
   void prepare(float cos_o, bool front = true) {
     w_trans = (1.0f - metallic) * transmission;
     eta = front ? ior : 1.0f / ior;
     rough = w_trans > 0.0f && alpha > kRoughAlpha && ior > 1.0f;
     w_diel = (1.0f - metallic) * (1.0f - transmission);
     fd_o = ior > 1.0f ? fresnel_dielectric(cos_o, ior) : 0.0f;
+    lambda_o = ggx_lambda(F3(0.0f, 0.0f, cos_o), alpha);
     const float s_spec =
         (ior > 1.0f ? w_diel * fd_o : 0.0f) + metallic * luminance(fresnel_schlick(base, cos_o));
     const float s_diff = w_diel * (1.0f - fd_o) * std::max(luminance(base), 1e-3f);
@@ -345,7 +382,7 @@ struct ShadingMaterial {
     if (!has_nondelta || wi.z <= 0.0f || wo.z <= 0.0f) return;
     const F3 h = normalize(wo + wi);
     const float d = ggx_d(h, alpha);
-    const float lo = ggx_lambda(wo, alpha), li = ggx_lambda(wi, alpha);
+    const float lo = lambda_o, li = ggx_lambda(wi, alpha);
     const float g2 = 1.0f / (1.0f + lo + li);
     const float g1o = 1.0f / (1.0f + lo);
     const float wh = std::max(dot(wo, h), 0.0f);
@@ -382,7 +419,7 @@ struct ShadingMaterial {
     const float sin2_t = (1.0f - c * c) / (eta * eta);
     const float ct = std::sqrt(std::max(0.0f, 1.0f - sin2_t));
     wi = normalize(-wo * (1.0f / eta) + m * (c / eta - ct));
-    const float lo = ggx_lambda(wo, alpha), li = ggx_lambda(wi, alpha);
+    const float lo = lambda_o, li = ggx_lambda(wi, alpha);
     const F3 tint(std::sqrt(base.x), std::sqrt(base.y), std::sqrt(base.z));
     weight = tint * ((1.0f + lo) / (1.0f + lo + li) * (w_trans / p_delta) / (eta * eta));
     return true;
