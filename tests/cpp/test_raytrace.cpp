@@ -6,6 +6,7 @@
 #include <mgn/raytrace/ray_scene.hpp>
 
 #include <cmath>
+#include <vector>
 
 namespace {
 
@@ -129,6 +130,31 @@ TEST(RayScene, ThreadsAndPacketsGiveIdenticalResults) {
   const auto all1 = scene.intersect_all(o, d, 64, one), all2 = scene.intersect_all(o, d, 64, two);
   EXPECT_EQ(all1.offsets, all2.offsets);
   EXPECT_EQ(all1.distance, all2.distance);
+}
+
+TEST(RayScene, WithoutAllHitsGivesTheSameFirstHitsAndOcclusion) {
+  // The path tracer's scene (all_hits = false) against the default one: same bits for every
+  // first hit and occlusion query, single rays and packets; intersect_all is refused.
+  const mgn::Mesh sphere = mgn::make_sphere(0.08, 64, 32);
+  const mgn::Mesh box = mgn::make_box({0.1, 0.05, 0.12});
+  mgn::Pose X = mgn::Pose::Identity();
+  X.translation() << 0.05, 0.0, 0.02;
+  const std::vector<mgn::RayGeometry> g{mgn::RayGeometry{&sphere, mgn::Pose::Identity(), 0},
+                                        mgn::RayGeometry{&box, X, 1}};
+  const mgn::RayScene with(g), without(g, false);
+  mgn::Points3f o, d;
+  random_rays(5003, 12, o, d);
+  for (const bool coherent : {false, true}) {
+    mgn::CastOptions opt;
+    opt.coherent = coherent;
+    const auto a = with.intersect(o, d, opt), b = without.intersect(o, d, opt);
+    EXPECT_EQ(a.distance, b.distance);
+    EXPECT_EQ(a.face_ids, b.face_ids);
+    EXPECT_EQ(a.instance_ids, b.instance_ids);
+    EXPECT_EQ(with.occluded(o, d, opt), without.occluded(o, d, opt));
+  }
+  EXPECT_GT(with.intersect_all(o, d).distance.size(), 0u);
+  EXPECT_THROW(without.intersect_all(o, d), mgn::Unsupported);
 }
 
 TEST(RayScene, RejectsBadInput) {

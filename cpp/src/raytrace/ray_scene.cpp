@@ -137,14 +137,19 @@ void check_rays(const char* fn, const Points3f& origins, const Points3f& directi
 
 }  // namespace
 
-RayScene::RayScene(const std::vector<RayGeometry>& geometries) : impl_(std::make_unique<Impl>()) {
+RayScene::RayScene(const std::vector<RayGeometry>& geometries, bool all_hits)
+    : impl_(std::make_unique<Impl>()) {
   const char* fn = "RayScene";
   if (geometries.empty())
     throw_error<InvalidArgument>(fn, ": no geometry given; expected at least one mesh");
   detail::FtzDazGuard guard;
   RTCDevice device = shared_device();
   impl_->scene = rtcNewScene(device);
-  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  // intersect_all collects the hits with a filter function in the intersect context.
+  impl_->all_hits = all_hits;
+  rtcSetSceneFlags(impl_->scene,
+                   all_hits ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION
+                            : RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
   impl_->bounds.row(0).setConstant(std::numeric_limits<double>::infinity());
   impl_->bounds.row(1).setConstant(-std::numeric_limits<double>::infinity());
@@ -329,6 +334,11 @@ std::vector<std::uint8_t> RayScene::occluded(const Points3f& origins, const Poin
 
 RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& directions,
                                    int max_hits_per_ray, const CastOptions& options) const {
+  if (!impl_->all_hits) {
+    throw_error<Unsupported>(
+        "RayScene::intersect_all: this scene was built with all_hits = false (no all-hits "
+        "queries); build it with all_hits = true");
+  }
   check_rays("RayScene::intersect_all", origins, directions, options);
   if (max_hits_per_ray <= 0) {
     throw_error<InvalidArgument>("RayScene::intersect_all: max_hits_per_ray must be > 0, got ",

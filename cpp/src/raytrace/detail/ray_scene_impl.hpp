@@ -32,6 +32,7 @@ struct RayScene::Impl {
   std::vector<std::int32_t> instance_ids;  // by Embree geomID
   std::vector<Points3f> world_normals;     // per geometry, per face
   std::int64_t triangles = 0;
+  bool all_hits = true;  // built with the context filter intersect_all needs
   Eigen::Matrix<double, 2, 3, Eigen::RowMajor> bounds;
 
   ~Impl() {
