@@ -265,8 +265,8 @@ def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: 
     depth = np.repeat(np.linspace(0.6, 0.9, 100, dtype=np.float32), H * W // 100 + 1)[: H * W]
     depth = depth.reshape(H, W)
     depth[:3] = np.nan
-    # The picture is of the noise-free depth (docs/format.md); the sensor depth differs from it
-    # by noise and has invalid pixels of its own.
+    # The picture is of the noise-free depth where the sensor gives a value (docs/format.md);
+    # the sensor depth differs from it by noise and has invalid pixels of its own.
     sensor = (depth + np.float32(1e-3) * np.float32(rng_noise(H, W))).astype(np.float32)
     sensor[5:7] = np.nan
     rec = replace(rec, depth=sensor, depth_ideal=depth, valid_depth=np.isfinite(sensor))
@@ -274,9 +274,10 @@ def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: 
     with Image.open(tmp_path / "3_depth.png") as im:
         assert im.mode == "P"
         rgb = np.asarray(im.convert("RGB"))
-    assert np.array_equal(rgb, depth_picture(rec.depth_ideal))
+    # The noise-free depth where the sensor has a value, black where it has none.
+    assert np.array_equal(rgb, depth_picture(np.where(np.isfinite(sensor), depth, np.nan)))
     assert not np.array_equal(rgb, depth_picture(rec.depth))
-    assert (rgb[:3] == 0).all() and (rgb[5:7] != 0).any(axis=-1).all()
+    assert (rgb[:3] == 0).all() and (rgb[5:7] == 0).all() and (rgb[7:] != 0).any(axis=-1).all()
     # OpenCV, as MetaGraspNet's scripts read their PNGs, gives the same picture (BGR).
     bgr = cv2.imread(str(tmp_path / "3_depth.png"), cv2.IMREAD_COLOR)
     assert np.array_equal(bgr[..., ::-1], rgb)

@@ -613,9 +613,10 @@ def png_bytes(image: npt.ArrayLike, *, level: int | None = None) -> bytes:
     return buf.getvalue()
 
 
-#: zlib level of the scene writer's ``{v}_depth.png``: the picture of the noise-free depth is bands
-#: of equal colour, which level 6 stores in 0.6x the bytes of level 1 for ~8 ms more per
-#: 1200 x 1200 view (the sensor depth's noise made the picture 5x larger: docs/format.md).
+#: zlib level of the scene writer's ``{v}_depth.png``, a picture of the noise-free depth at the
+#: pixels where the sensor gives a value (black elsewhere): bands of equal colour, which level 6
+#: stores in 0.6x the bytes of level 1 for ~8 ms more per 1200 x 1200 view (the sensor depth's
+#: noise made the picture 4x larger; docs/format.md).
 DEPTH_PICTURE_LEVEL = 6
 
 
@@ -735,7 +736,9 @@ def write_view(
             np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else None
         ),
         f"{v}.npz": npz_bytes(**npz, **(_NPZ_ARCHIVAL if archival else {})),
-        f"{v}_depth.png": depth_picture_png(rec.depth_ideal, level=DEPTH_PICTURE_LEVEL),
+        f"{v}_depth.png": depth_picture_png(
+            np.where(valid, ideal_m, np.float32(np.nan)), level=DEPTH_PICTURE_LEVEL
+        ),
         f"{v}_scene.hdf5": hdf5_bytes(h5, share_rotations=True),
         f"{v}_mgn.hdf5": mgn_hdf5_bytes(images, unorm16=unorm16, attrs=image_attrs),
         f"{v}_order.csv": rec.order_csv.encode(),
