@@ -121,7 +121,8 @@ def npz_bytes(
                 info._compresslevel = lvl  # type: ignore[attr-defined]  # Python <= 3.12
             info.external_attr = 0o644 << 16  # rw-r--r--, as numpy's own writer
             with zf.open(info, mode="w", force_zip64=True) as fh:
-                if name in lzma_entries:
+                if name in lzma_entries and hasattr(fh, "_compressor"):
+                    # zipfile's own LZMA compressor has fixed settings: ours, same stream layout.
                     fh._compressor = _NpzLzma()
                 if compress and name in run_length and hasattr(fh, "_compressor"):
                     # zipfile has no strategy argument: the entry's raw-deflate compressor
