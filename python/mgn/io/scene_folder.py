@@ -18,9 +18,11 @@ library), float32 images delta-coded along rows (:func:`encode_float_image`): ``
 the pipeline's heat maps), and ``valid_depth`` only when it is not exactly ``isfinite(depth)``
 (the sensors mark invalid pixels NaN, so normally it is derived on reading). In
 ``{v}_scene.hdf5`` the tool poses that share their contact poses' rotation are HDF5 virtual
-datasets over them (:func:`hdf5_bytes`). The depth picture is a palette PNG. Every array reads
-back bit-identical; ``write_view(..., archival=True)`` is the lossy compact archival mode (sensor
-depth on :data:`ARCHIVAL_DEPTH_STEP_CM`, grasp poses rounded).
+datasets over them (:func:`hdf5_bytes`). The depth picture is a palette PNG of the noise-free
+depth where the sensor has a value. Every array reads back bit-identical;
+``write_view(..., archival=True)`` is the lossy compact archival mode (sensor depth on
+:data:`ARCHIVAL_DEPTH_STEP_CM` in an LZMA zip entry, grasp poses rounded, RGB and mgn images at
+zlib level 6).
 
 Lengths are **centimetres** in these files (MetaGraspNet's convention) and SI everywhere else in
 mgn: :class:`ViewRecord` holds metres, the writer converts, and :mod:`mgn.io.dataset` converts
@@ -668,7 +670,8 @@ def write_view(
     is stored in metres (the renderer's float32) when the heat map is stored as its residual.
     Dtypes and layout: see the module doc. ``archival``: the compact archival mode (lossy: the
     sensor depth rounded to :data:`ARCHIVAL_DEPTH_STEP_CM`, grasp poses to
-    :data:`ARCHIVAL_ROTATION_STEP` / :data:`ARCHIVAL_POSE_STEP_CM`; without
+    :data:`ARCHIVAL_ROTATION_STEP` / :data:`ARCHIVAL_POSE_STEP_CM`, the depth an LZMA zip entry
+    that ``np.load`` reads; without
     ``rec.com_parameters`` also ``depth_ideal`` rounded and ``com_heatmap`` in 16 bits; same keys
     and dtypes in the files MetaGraspNet reads).
     """
