@@ -265,9 +265,9 @@ def id_image_dtype(values: npt.ArrayLike, *, instances: bool) -> np.dtype:
 
 
 #: Grid (cm) on which the writer stores the sensor depth exactly: the sensor presets report z on
-#: multiples of it (``DepthSensorParams.depth_step``: 1/256 cm structured light, 1/64 cm ToF),
-#: and float32 values on a power-of-two grid end in zero bits, which deflate compresses
-#: (docs/format.md).
+#: multiples of it (``DepthSensorParams.depth_step``: 1/256 cm structured light, 1/64 cm ToF,
+#: times a power of two that grows with the noise: ``depth_step_noise_fraction``), and float32
+#: values on a power-of-two grid end in zero bits, which deflate compresses (docs/format.md).
 DEPTH_GRID_CM = 2.0**-8
 
 #: Value of the ``mgn_encoding`` attribute of a ``{v}_mgn.hdf5`` float32 image stored as the int32
