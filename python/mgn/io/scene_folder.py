@@ -372,9 +372,37 @@ def com_heatmap_prediction(
         ok = np.isfinite(z) & (z > 0.0)
     if not ok.all():
         idx, ids, z = idx[ok], ids[ok], z[ok]
+    fx, fy, cx, cy = (float(k) for k in np.asarray(K, np.float64).reshape(4))
+    X = np.asarray(X_WC, np.float64).reshape(4, 4)
+    flat = out.ravel()
+    # Element-wise only, so blocks of pixels give the same bits as one pass; a block's ~10
+    # float64 temporaries stay in the CPU cache (3x faster than whole-image arrays).
+    for s in range(0, len(idx), _COM_BLOCK):
+        e = s + _COM_BLOCK
+        flat[idx[s:e]] = _com_block(idx[s:e], ids[s:e], z[s:e], w, params, X, fx, fy, cx, cy)
+    return out
+
+
+#: Pixels per block of :func:`com_heatmap_prediction`.
+_COM_BLOCK = 16384
+
+
+def _com_block(
+    idx: npt.NDArray[np.intp],
+    ids: npt.NDArray[np.intp],
+    z: npt.NDArray[np.float64],
+    w: int,
+    params: npt.NDArray[np.float64],
+    X: npt.NDArray[np.float64],
+    fx: float,
+    fy: float,
+    cx: float,
+    cy: float,
+) -> npt.NDArray[np.float64]:
+    """The heat map values of the flat pixel indices ``idx`` (row width ``w``) of instances
+    ``ids`` at depths ``z`` (m): see :func:`com_heatmap_prediction`."""
     q = params[ids - 1]
     vv, uu = np.divmod(idx, w)
-    fx, fy, cx, cy = (float(k) for k in np.asarray(K, np.float64).reshape(4))
     # In place, in the order of z * (u + 0.5 - cx) / fx (products commute exactly in IEEE).
     x = uu.astype(np.float64)
     x += 0.5
@@ -386,7 +414,6 @@ def com_heatmap_prediction(
     y -= cy
     y *= z
     y /= fy
-    X = np.asarray(X_WC, np.float64).reshape(4, 4)
     d2 = np.zeros_like(z)
     acc = np.empty_like(z)
     tmp = np.empty_like(z)
@@ -407,8 +434,7 @@ def com_heatmap_prediction(
     np.subtract(q[:, 4], d2, out=d2)
     d2 /= span
     np.clip(d2, 0.0, 1.0, out=d2)
-    out.ravel()[idx] = d2
-    return out
+    return d2
 
 
 def _com_residual(com: npt.ArrayLike, prediction: npt.NDArray[np.float32]) -> npt.NDArray[np.int32]:
@@ -655,14 +681,15 @@ def write_view(
     v = rec.index
     f4 = np.float32
     depth_cm = depth_to_cm(rec.depth)
-    ideal_cm = (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4)
     com = rec.extra_npz.get("com_heatmap")
     # With the CoM parameters the heat map costs ~nothing (its residual from the prediction,
     # which needs the exact depth_ideal): exact in both modes, and smaller than rounding both.
     residual = com is not None and rec.com_parameters is not None
+    # depth_ideal in cm only when it is not stored in metres (see below).
+    ideal_cm = None if residual else (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4)
     if archival:
         depth_cm = _snap(depth_cm, ARCHIVAL_DEPTH_STEP_CM)
-        if not residual:
+        if ideal_cm is not None:
             ideal_cm = _snap(ideal_cm, ARCHIVAL_DEPTH_STEP_CM)
     npz: dict[str, Any] = {
         "depth": depth_cm,
@@ -674,8 +701,8 @@ def write_view(
         "occlusion_objects": np.asarray(rec.amodal, bool),
     }
     image_attrs: dict[str, dict[str, Any]] = {}
-    images: dict[str, np.ndarray] = {"depth_ideal": ideal_cm}
     ideal_m = np.asarray(rec.depth_ideal, f4)
+    images: dict[str, np.ndarray] = {"depth_ideal": ideal_m if ideal_cm is None else ideal_cm}
     if residual:
         # The renderer's own float32 metres (cm in float32 would round some away); the heat map
         # prediction below needs them exactly.
