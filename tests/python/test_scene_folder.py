@@ -6,6 +6,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import time
 
 import numpy as np
 import pytest
@@ -207,6 +208,17 @@ def test_files_are_reproducible(tmp_path):
             }
         )
     assert digests[0] == digests[1] and len(digests[0]) == len(view_file_names(0))
+    # Timing the parts (the benchmark's breakdown) changes no byte, and accounts for the
+    # calling thread's CPU time of the call.
+    times: dict[str, float] = {}
+    t0 = time.thread_time()
+    write_view(tmp_path / "timed", _record(0), times=times)
+    spent = time.thread_time() - t0
+    assert {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in (tmp_path / "timed").iterdir()} == digests[0]  # fmt: skip
+    assert set(times) == {"arrays", "rgb.png", "npz", "depth.png", "scene.hdf5", "mgn.hdf5",
+                          "json and csv", "files"}  # fmt: skip
+    assert all(t >= 0.0 for t in times.values()) and sum(times.values()) <= spent + 1e-6
 
 
 def test_record_checks_shapes():
