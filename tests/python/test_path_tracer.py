@@ -114,24 +114,30 @@ def test_interior_furnace_closed_emitting_sphere(max_bounces, rr_depth):
 
 
 @pytest.mark.parametrize("metallic", [0.0, 1.0])
-@pytest.mark.parametrize("roughness", [0.1, 0.5, 1.0])
-def test_ggx_sphere_in_furnace_gains_no_energy(metallic, roughness):
-    """A white GGX sphere (any roughness, dielectric or metal) in a uniform dome L never shows
-    more than L (single-scattering microfacets only lose energy), and not much less than L for
-    a white dielectric (Lambert under the coat) or a smooth metal."""
+@pytest.mark.parametrize("roughness", [0.1, 0.3, 0.6, 1.0])
+def test_ggx_sphere_in_furnace_shows_L(metallic, roughness):
+    """A GGX sphere (dielectric over Lambert, or metal) of base colour 1 in a uniform dome L
+    reflects everything it receives, so it shows L: single-scattering microfacets alone lose the
+    light that bounces between microfacets (a metal at roughness 1 kept 0.37 L), which the
+    multiple-scattering compensation returns; under the specular layer the diffuse lobe gets
+    what the layer does not reflect. The red channel of a gold-coloured metal (base red 1, so
+    Fresnel 1 in red) shows L as well, its other channels less (each bounce absorbs)."""
     L = 1.0
-    mat = PbrMaterial(base_color=(1.0, 1.0, 1.0), metallic=metallic, roughness=roughness, ior=1.5)
-    scene = PathScene([make_sphere(0.5, 64, 32)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
-    out = scene.render(camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=32, seed=5))
-    v = out.radiance[interior(out.instance_ids == 1)][:, 1]
-    sem = v.std() / math.sqrt(v.size)
-    assert v.mean() <= L + 4 * sem + 1e-4, (v.mean(), sem)
-    # Per pixel: no pixel clearly above L either.
-    assert np.quantile(v, 0.9) <= L * 1.05
-    # Single-scattering GGX at alpha = 1 keeps only ~30-50 % (e.g. E(mu=1) = 0.31 by quadrature
-    # of D G2 / (4 cos_o cos_i) cos_i): the rough metal is darker, but not black.
-    lower = 0.3 if metallic == 1.0 and roughness == 1.0 else 0.85
-    assert v.mean() >= lower * L
+    base = (1.0, 1.0, 1.0) if metallic == 0.0 else (1.0, 0.78, 0.34)
+    mat = PbrMaterial(base_color=base, metallic=metallic, roughness=roughness, ior=1.5)
+    scene = PathScene([make_sphere(0.5, 128, 64)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
+    out = scene.render(
+        camera((0, -3, 0), (0, 0, 0), 24, 22),
+        PathTraceOptions(spp=64, seed=5, max_bounces=64, rr_depth=64),
+    )
+    v = out.radiance[interior(out.instance_ids == 1)]
+    sem = v[:, 0].std() / math.sqrt(len(v))
+    # 0.3 %: the shading normals of the tessellated sphere lose a few directions below facets.
+    assert abs(v[:, 0].mean() - L) <= 4 * sem + 3e-3, (v.mean(0), sem)
+    assert np.quantile(v[:, 0], 0.9) <= L * 1.05
+    if metallic == 1.0:
+        assert np.all(v[:, 1:].mean(0) < np.asarray(base[1:]) + 4 * sem + 3e-3)
+        assert np.all(v[:, 1:].mean(0) > 0.4 * np.asarray(base[1:]))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -318,13 +324,12 @@ def test_closed_thin_glass_shell_in_the_furnace_shows_L():
 
 
 @pytest.mark.parametrize("roughness", [0.1, 0.3, 0.6, 1.0])
-def test_rough_glass_sphere_in_the_furnace_gains_no_energy(roughness):
-    """A rough dielectric (GGX reflection and refraction, Walter et al. 2007) sphere in a uniform
-    dome L: it neither absorbs nor emits, so it shows at most L; single-scattering microfacets
-    lose the light that scatters more than once between microfacets, nothing at the smooth
-    limit, so at roughness 0.1 (alpha = 0.01) it shows L within 0.5 %. The environment is
-    sampled at the rough surface too (next-event estimation with MIS on the reflection side):
-    a wrong pdf there would shift the mean."""
+def test_rough_glass_sphere_in_the_furnace_shows_L(roughness):
+    """A rough dielectric (GGX reflection and refraction, Walter et al. 2007, with the
+    multiple-scattering compensation) sphere in a uniform dome L neither absorbs nor emits, so it
+    shows L at every roughness (single scattering alone showed 0.97 L at roughness 0.3, 0.72 L at
+    0.6, 0.35 L at 1). The environment is sampled at the rough surface too (next-event estimation
+    with MIS on the reflection side): a wrong pdf there would shift the mean."""
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=roughness, ior=1.5)
     scene = PathScene([make_sphere(0.5, 64, 32)], np.eye(4)[None], [1], [[glass]], (), uniform(0.7))
     out = scene.render(
@@ -332,10 +337,7 @@ def test_rough_glass_sphere_in_the_furnace_gains_no_energy(roughness):
     )
     v = out.radiance[interior(out.instance_ids == 1)] / 0.7
     sigma = v.std() / math.sqrt(v.size)
-    assert v.mean() <= 1.0 + 4 * sigma + 1e-5
-    assert v.mean() > 0.25
-    if roughness <= 0.1:
-        assert v.mean() >= 0.995
+    assert abs(v.mean() - 1.0) <= 4 * sigma + 3e-3, (v.mean(), sigma)
 
 
 @pytest.mark.parametrize("roughness", [0.0, 0.06])
