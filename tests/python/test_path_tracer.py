@@ -6,6 +6,7 @@ rect light by quadrature, Fresnel transmission of a pane), not taken from a prev
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -665,10 +666,46 @@ def test_sky_dome_colours_and_sun_irradiance():
     assert diff == pytest.approx(a * 4.0 * lum_zenith, rel=0.02)
 
 
+def ggx_lambda(c, alpha):
+    return 0.5 * (-1 + np.sqrt(1 + alpha**2 * (1 - c**2) / c**2))
+
+
+def ggx_single_albedo(mu, alpha, n=400):
+    """Directional albedo of white single-scattering GGX (F = 1) for cos theta_o = mu, by
+    quadrature over the hemisphere of D G2 / (4 cos_o cos_i) cos_i, in (theta, phi) with
+    theta = pi/2 s^2 (cells shrink towards the normal)."""
+    s = (np.arange(n) + 0.5) / n
+    th = 0.5 * np.pi * s**2
+    ph = (np.arange(2 * n) + 0.5) / (2 * n) * 2 * np.pi
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    wi = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
+    dw = (np.sin(T) * np.pi * s[:, None] / n) * (2 * np.pi / (2 * n))
+    wo = np.array([np.sqrt(1 - mu**2), 0.0, mu])
+    hv = wi + wo
+    hv /= np.linalg.norm(hv, axis=-1, keepdims=True)
+    D = alpha**2 / (np.pi * (hv[..., 2] ** 2 * (alpha**2 - 1) + 1) ** 2)
+    G2 = 1 / (1 + ggx_lambda(mu, alpha) + ggx_lambda(wi[..., 2], alpha))
+    return float((D * G2 / (4 * mu) * dw).sum())
+
+
+@functools.cache
+def ggx_albedo_table(alpha):
+    """E(mu) of ggx_single_albedo at 48 values of mu, and E_avg = 2 int E mu dmu."""
+    mus = (np.arange(48) + 0.5) / 48
+    E = np.array([ggx_single_albedo(m, alpha) for m in mus])
+    return mus, E, float(2 * (E * mus).sum() / len(mus))
+
+
 def ggx_metal_radiance(p, cam, centre, size, Le, f0, alpha, n=240):
     """Radiance towards `cam` from point p (normal +z) of a GGX metal (Schlick F, height-
     correlated Smith G2) lit by a horizontal rect light facing down, by quadrature over the
-    light of f(wo, wi) Le cos_i cos_l / r^2."""
+    light of f(wo, wi) Le cos_i cos_l / r^2. f has the multiple-scattering lobe of Kulla and
+    Conty 2017 (docs/rendering.md): F_ms (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)),
+    F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)), F_avg = (20 f0 + 1) / 21, with E by the
+    quadrature above (interpolated from 48 values of mu)."""
+    mus, E, E_avg = ggx_albedo_table(alpha)
+    F_avg = (20 * f0 + 1) / 21
+    F_ms = F_avg**2 * E_avg / (1 - F_avg * (1 - E_avg))
     h = size / 2
     g = (np.arange(n) + 0.5) / n * size - h
     X, Y = np.meshgrid(g + centre[0], g + centre[1])
@@ -681,13 +718,12 @@ def ggx_metal_radiance(p, cam, centre, size, Le, f0, alpha, n=240):
     hv /= np.linalg.norm(hv, axis=-1, keepdims=True)
     a2 = alpha**2
     D = a2 / (np.pi * (hv[..., 2] ** 2 * (a2 - 1) + 1) ** 2)
-
-    def lam(c):
-        return 0.5 * (-1 + np.sqrt(1 + a2 * (1 - c**2) / c**2))
-
-    G2 = 1 / (1 + lam(wo[2]) + lam(wi[..., 2]))
+    G2 = 1 / (1 + ggx_lambda(wo[2], alpha) + ggx_lambda(wi[..., 2], alpha))
     F = f0 + (1 - f0) * (1 - (wo * hv).sum(-1)) ** 5
     f = F * D * G2 / (4 * wo[2] * wi[..., 2])
+    e_o = np.interp(wo[2], mus, E)
+    e_i = np.interp(wi[..., 2], mus, E)
+    f = f + F_ms * (1 - e_o) * (1 - e_i) / (np.pi * (1 - E_avg))
     cos_i = wi[..., 2]
     cos_l = wi[..., 2]
     return Le * (f * cos_i * cos_l / r2).sum() * (size / n) ** 2
