@@ -9,7 +9,10 @@
 
 #include <atomic>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <map>
+#include <tuple>
 
 #include "raytrace/detail/ray_scene_impl.hpp"
 #include "render/detail/pt_math.hpp"
@@ -174,6 +177,7 @@ struct MaterialData {
   bool emissive;
   const std::uint8_t* tex = nullptr;  // points into `texture` of the owning PbrMaterial copy
   int tw = 0, th = 0;
+  const pt::MsTables* ms = nullptr;  // multiple-scattering compensation; owned by Geometry
 };
 
 struct GeometryData {
@@ -249,7 +253,8 @@ struct PathScene::Geometry {
   std::vector<GeometryData> geoms;
   std::vector<PbrMaterial> materials;  // owns the textures
   std::vector<MaterialData> mats;
-  std::vector<TriEmitter> emitters;  // the emissive triangles, for next-event estimation
+  std::deque<pt::MsTables> ms_tables;  // shared by the materials of equal (alpha, ior, lobes)
+  std::vector<TriEmitter> emitters;    // the emissive triangles, for next-event estimation
   std::int64_t triangles = 0;
   Eigen::Matrix<double, 2, 3, Eigen::RowMajor> bounds;
 };
@@ -373,6 +378,26 @@ std::shared_ptr<PathScene::Lighting> make_lighting(const std::vector<AreaLight>&
   return L;
 }
 
+using MsKey = std::tuple<float, float, bool, bool, bool>;
+
+/// The multiple-scattering compensation tables of a material (pt::MsTables), built once per
+/// distinct (alpha, ior, lobes) of the scene: none for a nearly smooth material (alpha at most
+/// ShadingMaterial::kRoughAlpha), whose single scattering keeps (all but ~1e-4 of) the energy.
+const pt::MsTables* ms_tables_for(PathScene::Geometry& G,
+                                  std::map<MsKey, const pt::MsTables*>& cache,
+                                  const MaterialData& d) {
+  if (!(d.alpha > pt::ShadingMaterial::kRoughAlpha)) return nullptr;
+  const bool conductor = d.metallic > 0.0f;
+  const bool coat = (1.0f - d.metallic) * (1.0f - d.transmission) > 0.0f && d.ior > 1.0f;
+  const bool dielectric = (1.0f - d.metallic) * d.transmission > 0.0f && d.ior > 1.0f;
+  if (!conductor && !coat && !dielectric) return nullptr;
+  const MsKey key{d.alpha, d.ior, conductor, coat, dielectric};
+  const auto it = cache.find(key);
+  if (it != cache.end()) return it->second;
+  G.ms_tables.push_back(pt::make_ms_tables(d.alpha, d.ior, conductor, coat, dielectric));
+  return cache[key] = &G.ms_tables.back();
+}
+
 }  // namespace
 
 PathScene::PathScene(const std::vector<PathGeometry>& geometries,
@@ -419,6 +444,7 @@ PathScene::PathScene(const std::vector<PathGeometry>& geometries,
     d.instance_id = item.instance_id;
     G->geoms.push_back(std::move(d));
   }
+  std::map<MsKey, const pt::MsTables*> ms_cache;
   for (const PbrMaterial& m : G->materials) {
     MaterialData d;
     d.base = f3(m.base_color);
@@ -433,6 +459,7 @@ PathScene::PathScene(const std::vector<PathGeometry>& geometries,
       d.tw = m.texture_width;
       d.th = m.texture_height;
     }
+    d.ms = ms_tables_for(*G, ms_cache, d);
     G->mats.push_back(d);
   }
   for (GeometryData& d : G->geoms) {
@@ -750,7 +777,7 @@ class Integrator {
 
       const pt::Frame frame(h.ns);
       const F3 wo = frame.to_local(wo_w);
-      pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
+      pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission, m.ms};
       sm.prepare(wo.z, h.front);
       const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
       // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
