@@ -455,6 +455,50 @@ TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
     if (stair.trial_simulated[t]) EXPECT_EQ(stair.trial_success[t], full.trial_success[t]);
 }
 
+TEST(Staircase, ResultsDoNotDependOnThreadCountWithUnevenGrasps) {
+  // Grasps of very different cost (a grid that holds everywhere settles in a few trials, one
+  // near the top edge needs the walk and may fall back to every cell) are handed to the threads
+  // one at a time: whichever thread runs a grasp, and in whatever order, every trial's outcome,
+  // step count and simulated flag must equal the single-thread run's, and the full grid's
+  // (threads handed single trials) must equal it where simulated.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.06), 0.07);
+  std::vector<ParallelJawGrasp> grasps;
+  for (double dz : {0.027, 0.0, 0.022, 0.0, 0.012, 0.027, 0.0}) {
+    ParallelJawGrasp g = centre_grasp(0.04);
+    g.p1.z() = dz;
+    grasps.push_back(g);
+  }
+  ShakeOptions o = small_grid(4, 0.1, 1.0);
+  o.grip_force = 5.0;
+  o.staircase = true;
+  o.staircase_checks = 1;
+  o.num_threads = 1;
+  const ShakeResult one = shake_test(box, ParallelJawGripper{}, grasps, o);
+  o.num_threads = 3;
+  const ShakeResult three = shake_test(box, ParallelJawGripper{}, grasps, o);
+  EXPECT_EQ(one.trial_success, three.trial_success);
+  EXPECT_EQ(one.trial_steps, three.trial_steps);
+  EXPECT_EQ(one.trial_simulated, three.trial_simulated);
+  EXPECT_EQ(one.trial_ended_early, three.trial_ended_early);
+  EXPECT_EQ(one.fallback, three.fallback);
+  EXPECT_EQ(one.score, three.score);
+  int min_trials = 16, max_trials = 0;  // the grasps really differ in cost
+  for (std::size_t g = 0; g < grasps.size(); ++g) {
+    int k = 0;
+    for (int c = 0; c < 16; ++c) k += one.trial_simulated[g * 16 + c];
+    min_trials = std::min(min_trials, k);
+    max_trials = std::max(max_trials, k);
+  }
+  EXPECT_LT(min_trials, max_trials);
+  o.staircase = false;
+  const ShakeResult full = shake_test(box, ParallelJawGripper{}, grasps, o);
+  for (std::size_t t = 0; t < full.trial_success.size(); ++t) {
+    if (!one.trial_simulated[t]) continue;
+    EXPECT_EQ(full.trial_success[t], one.trial_success[t]) << "trial " << t;
+    EXPECT_EQ(full.trial_steps[t], one.trial_steps[t]) << "trial " << t;
+  }
+}
+
 TEST(Shake, TrialsOfABatchEqualTrialsRunAloneWithTheirOwnShapes) {
   // shake_test builds the collision shapes once per worker and runs many trials with them;
   // shake_trajectory builds fresh shapes for its one trial. Every trial of a batch must be the

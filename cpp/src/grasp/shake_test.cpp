@@ -18,6 +18,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -689,24 +690,30 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
     r.trial_simulated[t] = 1;
     return o.success;
   };
-  if (options.staircase) {
-    parallel_for(grasps.size(), options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
-      const TrialShapes shapes(prepared, gripper, options);
-      for (std::size_t g = begin; g < end; ++g) {
-        const std::size_t base = g * per_grasp;
-        const StaircaseGrid sg = staircase_grid(
-            S, [&](int i, int j) { return run_trial(shapes, base + std::size_t(i) * S + j); },
-            options.staircase_checks);
-        for (std::size_t k = 0; k < per_grasp; ++k) r.trial_success[base + k] = sg.success[k];
-        r.fallback[g] = sg.fallback;
+  // Work is handed out one grasp (staircase) or one trial (full grid) at a time from a shared
+  // counter: the cost of a grasp varies from ~17 to S² trials, so fixed contiguous ranges leave
+  // one thread idle while another finishes a slow range. Every item's result depends only on
+  // its index, so the results do not depend on which thread runs it.
+  const std::size_t items = options.staircase ? grasps.size() : n;
+  const std::size_t workers = std::min<std::size_t>(
+      static_cast<std::size_t>(resolve_num_threads(options.num_threads)), items);
+  std::atomic<std::size_t> next{0};
+  // (No grasps: no worker, no shapes.)
+  parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
+    const TrialShapes shapes(prepared, gripper, options);
+    for (std::size_t k = next.fetch_add(1); k < items; k = next.fetch_add(1)) {
+      if (!options.staircase) {
+        run_trial(shapes, k);
+        continue;
       }
-    });
-  } else {
-    parallel_for(n, options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
-      const TrialShapes shapes(prepared, gripper, options);
-      for (std::size_t t = begin; t < end; ++t) run_trial(shapes, t);
-    });
-  }
+      const std::size_t base = k * per_grasp;
+      const StaircaseGrid sg = staircase_grid(
+          S, [&](int i, int j) { return run_trial(shapes, base + std::size_t(i) * S + j); },
+          options.staircase_checks);
+      for (std::size_t c = 0; c < per_grasp; ++c) r.trial_success[base + c] = sg.success[c];
+      r.fallback[k] = sg.fallback;
+    }
+  });
   r.score.assign(grasps.size(), 0.0);
   for (std::size_t t = 0; t < n; ++t) {
     r.score[t / per_grasp] += r.trial_success[t];
