@@ -5,8 +5,14 @@
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/grasp/shake_test.hpp>
 
+#include "grasp/detail/staircase_schedule.hpp"
+
 #include <Eigen/Geometry>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <mutex>
+#include <thread>
 
 namespace mgn {
 namespace {
@@ -394,6 +400,78 @@ TEST(Staircase, FallsBackToTheFullGridWhereMonotonicityIsViolated) {
   EXPECT_FALSE(blind.fallback);
   EXPECT_FALSE(blind.simulated[3 * S + 2]);
   EXPECT_EQ(blind.success[3 * S + 2], 1);
+}
+
+TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
+  // Synthetic grids (no physics): per grasp a monotone boundary, some with a flipped cell that
+  // makes the search fall back. For 1, 2 and 3 threads every cell and fallback flag must equal
+  // staircase_grid() run grasp by grasp, every trial must run at most once and exactly the
+  // cells staircase_grid() simulates must run. Grasp 0 falls back and its trials are slow (2 ms),
+  // the others are instant: the threads that finish the others must take over some of grasp
+  // 0's fallback cells (with contiguous ranges one thread would run all of them).
+  const int S = 6;
+  const std::size_t G = 9, per = S * S;
+  std::vector<int> bound(G);
+  std::vector<int> flip(G, -1);  // cell index made wrong, -1: none
+  for (std::size_t g = 0; g < G; ++g) {
+    bound[g] = static_cast<int>((g * 7) % (S + 1));
+    if (g % 3 == 0) flip[g] = static_cast<int>((g * 13 + 5) % per);
+  }
+  flip[0] = 2 * S + 1;  // (2, 1), inside the success region: found by the checks below
+  bound[0] = S;
+  auto truth = [&](std::size_t t) {
+    const std::size_t g = t / per, c = t % per;
+    const bool ok = static_cast<int>(c % S) < bound[g] + static_cast<int>(c / S) % 2;
+    return static_cast<int>(c) == flip[g] ? !ok : ok;
+  };
+  const int checks = static_cast<int>(per);  // verify every cell: grasp 0 surely falls back
+  std::vector<std::uint8_t> want(G * per), want_sim(G * per);
+  std::vector<std::uint8_t> want_fallback(G);
+  for (std::size_t g = 0; g < G; ++g) {
+    const StaircaseGrid sg = staircase_grid(
+        S, [&](int i, int j) { return truth(g * per + i * S + j); }, checks);
+    for (std::size_t c = 0; c < per; ++c) {
+      want[g * per + c] = sg.success[c];
+      want_sim[g * per + c] = sg.simulated[c];
+    }
+    want_fallback[g] = sg.fallback;
+  }
+  ASSERT_TRUE(want_fallback[0]);
+  for (const int threads : {1, 2, 3}) {
+    std::vector<std::atomic<int>> runs(G * per);
+    std::vector<std::thread::id> who(G * per);
+    std::mutex m;
+    auto make = [&]() -> detail::TrialRunner {
+      return [&](std::size_t t) {
+        if (t < per) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        ++runs[t];
+        std::lock_guard<std::mutex> lock(m);
+        who[t] = std::this_thread::get_id();
+        return truth(t);
+      };
+    };
+    std::vector<std::uint8_t> success, fallback;
+    detail::staircase_schedule(G, S, checks, threads, make, success, fallback);
+    EXPECT_EQ(success, want) << threads << " threads";
+    EXPECT_EQ(fallback, want_fallback) << threads << " threads";
+    for (std::size_t t = 0; t < G * per; ++t)
+      EXPECT_EQ(runs[t].load(), want_sim[t] ? 1 : 0) << "trial " << t << ", " << threads;
+    if (threads > 1) {  // grasp 0's first trial is its walker's; others ran some of its cells
+      int shared = 0;
+      for (std::size_t t = 1; t < per; ++t) shared += runs[t] && who[t] != who[0];
+      EXPECT_GT(shared, 0) << threads << " threads";
+    }
+  }
+  // An exception in a trial reaches the caller (no thread is left waiting).
+  auto failing = [&]() -> detail::TrialRunner {
+    return [&](std::size_t t) -> bool {
+      if (t == 3 * per) throw_error<InvalidArgument>("trial ", t);
+      return truth(t);
+    };
+  };
+  std::vector<std::uint8_t> success, fallback;
+  EXPECT_THROW(detail::staircase_schedule(G, S, checks, 2, failing, success, fallback),
+               InvalidArgument);
 }
 
 TEST(Staircase, ChecksFindViolationsNextToTheBoundaryAlwaysAndAnywhereWithAFullBudget) {
