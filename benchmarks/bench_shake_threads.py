@@ -9,7 +9,8 @@ threads, sum of costs / (2 x finishing time), for two ways to share them:
 - contiguous halves (shake_test before 25 Nov: thread 0 the first half of a call's grasps,
   thread 1 the second);
 - one grasp at a time from a shared counter (now): each thread takes the next grasp when it is
-  done with one,
+  done with one (shake_test also shares the remaining cells of a grasp that falls back between
+  the threads; the model leaves that out, so its busy fraction is a lower bound),
 
 for one call over all grasps and for the calls of ``ShakeScorer``'s progress bar (before: pieces
 of 2 grasps per thread; now 16). The costs are measured, only the schedule is computed, so the
