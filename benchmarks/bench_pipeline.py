@@ -126,6 +126,7 @@ def stage_cpu(config: Any) -> dict[str, Any]:
     from mgn.view_labels.objects import SceneRayModel, view_object_labels
 
     stages: dict[str, list[float]] = {}
+    write_parts: dict[str, float] = {}  # CPU-s of the writer per part (write_view's ``times``)
 
     def timed(stage: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         t0, c0 = time.perf_counter(), _cpu_seconds()
@@ -164,10 +165,11 @@ def stage_cpu(config: Any) -> dict[str, Any]:
             seen = lab.visible_pixels > 0
             gr = timed("scene grasps", sgm.view_grasps, view, seen)
             scene_gt_entries(lab.X_CO, cats, seen)
-            record = view_record(v, view, images, lab, lay, gr)
-            timed("write", write_view, out, record)
+            record = view_record(v, view, images, lab, lay, gr, rays.com_parameters())
+            timed("write", write_view, out, record, times=write_parts)
     return {"objects": len(scene.instances), "views": len(views),
-            "stages": {k: {"wall_s": w, "cpu_s": c} for k, (w, c) in stages.items()}}  # fmt: skip
+            "stages": {k: {"wall_s": w, "cpu_s": c} for k, (w, c) in stages.items()},
+            "write_parts_cpu_s": write_parts}  # fmt: skip
 
 
 def child_main(argv: list[str]) -> int:
@@ -317,6 +319,8 @@ def run(
             row.notes = [
                 "CPU-s (wall s) per stage: "
                 + ", ".join(f"{k} {v['cpu_s']:.1f} ({v['wall_s']:.1f})" for k, v in st.items()),
+                "inside write, CPU-s: "
+                + ", ".join(f"{k} {v:.1f}" for k, v in result.get("write_parts_cpu_s", {}).items()),
                 f"total {cpu:.1f} CPU-s ({wall:.1f} s wall) for {result['objects']} objects",
                 f"load average {load_average()}",
             ]
