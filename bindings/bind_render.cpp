@@ -242,6 +242,9 @@ void bind_render(py::module_& m) {
       .def_readwrite("flying_pixel_probability", &DepthSensorParams::flying_pixel_probability)
       .def_readwrite("depth_step", &DepthSensorParams::depth_step,
                      "m, grid of the reported z (0 = continuous)")
+      .def_readwrite("depth_step_noise_fraction", &DepthSensorParams::depth_step_noise_fraction,
+                     "the grid at a pixel: the largest 2^k depth_step not above this times the "
+                     "noise sigma (0 = fixed depth_step)")
       .def_readwrite("invalid_transparent", &DepthSensorParams::invalid_transparent)
       .def_readwrite("invalid_dark", &DepthSensorParams::invalid_dark)
       .def_readwrite("invalid_mirror", &DepthSensorParams::invalid_mirror)

@@ -1113,6 +1113,15 @@ class DepthSensorParams:
     @depth_step.setter
     def depth_step(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
+    def depth_step_noise_fraction(self) -> float:
+        """
+        the grid at a pixel: the largest 2^k depth_step not above this times the noise sigma (0 = fixed depth_step)
+        """
+    @depth_step_noise_fraction.setter
+    def depth_step_noise_fraction(
+        self, arg0: typing.SupportsFloat | typing.SupportsIndex
+    ) -> None: ...
+    @property
     def edge_threshold(self) -> float:
         """
         m

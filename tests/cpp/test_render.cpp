@@ -374,7 +374,35 @@ TEST(DepthSensor, NoiseMaterialsAndDeterminism) {
       distinct_off_grid += a.depth[i] != static_cast<float>(k * p.depth_step);
     }
     EXPECT_EQ(distinct_off_grid, 0u);
+    // The grid grows with the noise: the largest 2^k depth_step not above half of sigma(1 m)
+    // (structured light 0.15 mm -> 2 steps of 0.039 mm; ToF 0.94 mm -> 4 steps of 0.156 mm).
+    ASSERT_EQ(p.depth_step_noise_fraction, 0.5);
+    const double coarse =
+        p.depth_step * std::exp2(std::floor(std::log2(0.5 * sigma / p.depth_step) + 1e-12));
+    EXPECT_GE(coarse, 2.0 * p.depth_step);
+    std::size_t off_coarse = 0, odd = 0;
+    for (std::size_t i = 100; i < a.depth.size(); ++i) {
+      const double k = std::round(a.depth[i] / coarse);
+      off_coarse += a.depth[i] != static_cast<float>(k * coarse);
+      odd += std::fmod(k, 2.0) != 0.0;  // not on the next coarser grid
+    }
+    EXPECT_EQ(off_coarse, 0u);
+    EXPECT_GT(odd, (a.depth.size() - 100) / 4);
+    // Without the noise fraction the grid is the fixed step: values between the coarse ones.
+    auto fixed = p;
+    fixed.depth_step_noise_fraction = 0.0;
+    const auto c = mgn::apply_depth_sensor(depth, ids, flags, K, fixed, 5);
+    std::size_t between = 0;
+    for (std::size_t i = 100; i < c.depth.size(); ++i) {
+      const double k = std::round(c.depth[i] / p.depth_step);
+      ASSERT_EQ(c.depth[i], static_cast<float>(k * p.depth_step));
+      between += c.depth[i] != static_cast<float>(std::round(c.depth[i] / coarse) * coarse);
+    }
+    EXPECT_GT(between, (c.depth.size() - 100) / 4);
   }
+  auto fraction = mgn::DepthSensorParams::preset_defaults(mgn::DepthSensorPreset::StructuredLight);
+  fraction.depth_step_noise_fraction = -0.5;
+  EXPECT_THROW(mgn::apply_depth_sensor(depth, ids, flags, K, fraction, 0), mgn::InvalidArgument);
   auto step = mgn::DepthSensorParams::preset_defaults(mgn::DepthSensorPreset::StructuredLight);
   step.depth_step = -1e-5;
   EXPECT_THROW(mgn::apply_depth_sensor(depth, ids, flags, K, step, 0), mgn::InvalidArgument);

@@ -5,8 +5,14 @@
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/grasp/shake_test.hpp>
 
+#include "grasp/detail/staircase_schedule.hpp"
+
 #include <Eigen/Geometry>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <mutex>
+#include <thread>
 
 namespace mgn {
 namespace {
@@ -396,6 +402,78 @@ TEST(Staircase, FallsBackToTheFullGridWhereMonotonicityIsViolated) {
   EXPECT_EQ(blind.success[3 * S + 2], 1);
 }
 
+TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
+  // Synthetic grids (no physics): per grasp a monotone boundary, some with a flipped cell that
+  // makes the search fall back. For 1, 2 and 3 threads every cell and fallback flag must equal
+  // staircase_grid() run grasp by grasp, every trial must run at most once and exactly the
+  // cells staircase_grid() simulates must run. Grasp 0 falls back and its trials are slow (2 ms),
+  // the others are instant: the threads that finish the others must take over some of grasp
+  // 0's fallback cells (with contiguous ranges one thread would run all of them).
+  const int S = 6;
+  const std::size_t G = 9, per = S * S;
+  std::vector<int> bound(G);
+  std::vector<int> flip(G, -1);  // cell index made wrong, -1: none
+  for (std::size_t g = 0; g < G; ++g) {
+    bound[g] = static_cast<int>((g * 7) % (S + 1));
+    if (g % 3 == 0) flip[g] = static_cast<int>((g * 13 + 5) % per);
+  }
+  flip[0] = 2 * S + 1;  // (2, 1), inside the success region: found by the checks below
+  bound[0] = S;
+  auto truth = [&](std::size_t t) {
+    const std::size_t g = t / per, c = t % per;
+    const bool ok = static_cast<int>(c % S) < bound[g] + static_cast<int>(c / S) % 2;
+    return static_cast<int>(c) == flip[g] ? !ok : ok;
+  };
+  const int checks = static_cast<int>(per);  // verify every cell: grasp 0 surely falls back
+  std::vector<std::uint8_t> want(G * per), want_sim(G * per);
+  std::vector<std::uint8_t> want_fallback(G);
+  for (std::size_t g = 0; g < G; ++g) {
+    const StaircaseGrid sg = staircase_grid(
+        S, [&](int i, int j) { return truth(g * per + i * S + j); }, checks);
+    for (std::size_t c = 0; c < per; ++c) {
+      want[g * per + c] = sg.success[c];
+      want_sim[g * per + c] = sg.simulated[c];
+    }
+    want_fallback[g] = sg.fallback;
+  }
+  ASSERT_TRUE(want_fallback[0]);
+  for (const int threads : {1, 2, 3}) {
+    std::vector<std::atomic<int>> runs(G * per);
+    std::vector<std::thread::id> who(G * per);
+    std::mutex m;
+    auto make = [&]() -> detail::TrialRunner {
+      return [&](std::size_t t) {
+        if (t < per) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        ++runs[t];
+        std::lock_guard<std::mutex> lock(m);
+        who[t] = std::this_thread::get_id();
+        return truth(t);
+      };
+    };
+    std::vector<std::uint8_t> success, fallback;
+    detail::staircase_schedule(G, S, checks, threads, make, success, fallback);
+    EXPECT_EQ(success, want) << threads << " threads";
+    EXPECT_EQ(fallback, want_fallback) << threads << " threads";
+    for (std::size_t t = 0; t < G * per; ++t)
+      EXPECT_EQ(runs[t].load(), want_sim[t] ? 1 : 0) << "trial " << t << ", " << threads;
+    if (threads > 1) {  // grasp 0's first trial is its walker's; others ran some of its cells
+      int shared = 0;
+      for (std::size_t t = 1; t < per; ++t) shared += runs[t] && who[t] != who[0];
+      EXPECT_GT(shared, 0) << threads << " threads";
+    }
+  }
+  // An exception in a trial reaches the caller (no thread is left waiting).
+  auto failing = [&]() -> detail::TrialRunner {
+    return [&](std::size_t t) -> bool {
+      if (t == 3 * per) throw_error<InvalidArgument>("trial ", t);
+      return truth(t);
+    };
+  };
+  std::vector<std::uint8_t> success, fallback;
+  EXPECT_THROW(detail::staircase_schedule(G, S, checks, 2, failing, success, fallback),
+               InvalidArgument);
+}
+
 TEST(Staircase, ChecksFindViolationsNextToTheBoundaryAlwaysAndAnywhereWithAFullBudget) {
   // Monotone random grids with one cell flipped. (a) A flipped cell next to its row's boundary
   // (j = b_i - 1 or j = b_i) is simulated by the walk or verified, even with no extra checks,
@@ -453,6 +531,50 @@ TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
     EXPECT_EQ(stair.score[g], full.score[g]) << "grasp " << g;
   for (std::size_t t = 0; t < full.trial_success.size(); ++t)
     if (stair.trial_simulated[t]) EXPECT_EQ(stair.trial_success[t], full.trial_success[t]);
+}
+
+TEST(Staircase, ResultsDoNotDependOnThreadCountWithUnevenGrasps) {
+  // Grasps of very different cost (a grid that holds everywhere settles in a few trials, one
+  // near the top edge needs the walk and may fall back to every cell) are handed to the threads
+  // one at a time: whichever thread runs a grasp, and in whatever order, every trial's outcome,
+  // step count and simulated flag must equal the single-thread run's, and the full grid's
+  // (threads handed single trials) must equal it where simulated.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.06), 0.07);
+  std::vector<ParallelJawGrasp> grasps;
+  for (double dz : {0.027, 0.0, 0.022, 0.0, 0.012, 0.027, 0.0}) {
+    ParallelJawGrasp g = centre_grasp(0.04);
+    g.p1.z() = dz;
+    grasps.push_back(g);
+  }
+  ShakeOptions o = small_grid(4, 0.1, 1.0);
+  o.grip_force = 5.0;
+  o.staircase = true;
+  o.staircase_checks = 1;
+  o.num_threads = 1;
+  const ShakeResult one = shake_test(box, ParallelJawGripper{}, grasps, o);
+  o.num_threads = 3;
+  const ShakeResult three = shake_test(box, ParallelJawGripper{}, grasps, o);
+  EXPECT_EQ(one.trial_success, three.trial_success);
+  EXPECT_EQ(one.trial_steps, three.trial_steps);
+  EXPECT_EQ(one.trial_simulated, three.trial_simulated);
+  EXPECT_EQ(one.trial_ended_early, three.trial_ended_early);
+  EXPECT_EQ(one.fallback, three.fallback);
+  EXPECT_EQ(one.score, three.score);
+  int min_trials = 16, max_trials = 0;  // the grasps really differ in cost
+  for (std::size_t g = 0; g < grasps.size(); ++g) {
+    int k = 0;
+    for (int c = 0; c < 16; ++c) k += one.trial_simulated[g * 16 + c];
+    min_trials = std::min(min_trials, k);
+    max_trials = std::max(max_trials, k);
+  }
+  EXPECT_LT(min_trials, max_trials);
+  o.staircase = false;
+  const ShakeResult full = shake_test(box, ParallelJawGripper{}, grasps, o);
+  for (std::size_t t = 0; t < full.trial_success.size(); ++t) {
+    if (!one.trial_simulated[t]) continue;
+    EXPECT_EQ(full.trial_success[t], one.trial_success[t]) << "trial " << t;
+    EXPECT_EQ(full.trial_steps[t], one.trial_steps[t]) << "trial " << t;
+  }
 }
 
 TEST(Shake, TrialsOfABatchEqualTrialsRunAloneWithTheirOwnShapes) {

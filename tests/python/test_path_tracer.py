@@ -6,6 +6,7 @@ rect light by quadrature, Fresnel transmission of a pane), not taken from a prev
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -114,24 +115,30 @@ def test_interior_furnace_closed_emitting_sphere(max_bounces, rr_depth):
 
 
 @pytest.mark.parametrize("metallic", [0.0, 1.0])
-@pytest.mark.parametrize("roughness", [0.1, 0.5, 1.0])
-def test_ggx_sphere_in_furnace_gains_no_energy(metallic, roughness):
-    """A white GGX sphere (any roughness, dielectric or metal) in a uniform dome L never shows
-    more than L (single-scattering microfacets only lose energy), and not much less than L for
-    a white dielectric (Lambert under the coat) or a smooth metal."""
+@pytest.mark.parametrize("roughness", [0.1, 0.3, 0.6, 1.0])
+def test_ggx_sphere_in_furnace_shows_L(metallic, roughness):
+    """A GGX sphere (dielectric over Lambert, or metal) of base colour 1 in a uniform dome L
+    reflects everything it receives, so it shows L: single-scattering microfacets alone lose the
+    light that bounces between microfacets (a metal at roughness 1 kept 0.37 L), which the
+    multiple-scattering compensation returns; under the specular layer the diffuse lobe gets
+    what the layer does not reflect. The red channel of a gold-coloured metal (base red 1, so
+    Fresnel 1 in red) shows L as well, its other channels less (each bounce absorbs)."""
     L = 1.0
-    mat = PbrMaterial(base_color=(1.0, 1.0, 1.0), metallic=metallic, roughness=roughness, ior=1.5)
-    scene = PathScene([make_sphere(0.5, 64, 32)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
-    out = scene.render(camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=32, seed=5))
-    v = out.radiance[interior(out.instance_ids == 1)][:, 1]
-    sem = v.std() / math.sqrt(v.size)
-    assert v.mean() <= L + 4 * sem + 1e-4, (v.mean(), sem)
-    # Per pixel: no pixel clearly above L either.
-    assert np.quantile(v, 0.9) <= L * 1.05
-    # Single-scattering GGX at alpha = 1 keeps only ~30-50 % (e.g. E(mu=1) = 0.31 by quadrature
-    # of D G2 / (4 cos_o cos_i) cos_i): the rough metal is darker, but not black.
-    lower = 0.3 if metallic == 1.0 and roughness == 1.0 else 0.85
-    assert v.mean() >= lower * L
+    base = (1.0, 1.0, 1.0) if metallic == 0.0 else (1.0, 0.78, 0.34)
+    mat = PbrMaterial(base_color=base, metallic=metallic, roughness=roughness, ior=1.5)
+    scene = PathScene([make_sphere(0.5, 128, 64)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
+    out = scene.render(
+        camera((0, -3, 0), (0, 0, 0), 24, 22),
+        PathTraceOptions(spp=64, seed=5, max_bounces=64, rr_depth=64),
+    )
+    v = out.radiance[interior(out.instance_ids == 1)]
+    sem = v[:, 0].std() / math.sqrt(len(v))
+    # 0.3 %: the shading normals of the tessellated sphere lose a few directions below facets.
+    assert abs(v[:, 0].mean() - L) <= 4 * sem + 3e-3, (v.mean(0), sem)
+    assert np.quantile(v[:, 0], 0.9) <= L * 1.05
+    if metallic == 1.0:
+        assert np.all(v[:, 1:].mean(0) < np.asarray(base[1:]) + 4 * sem + 3e-3)
+        assert np.all(v[:, 1:].mean(0) > 0.4 * np.asarray(base[1:]))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -279,6 +286,54 @@ def test_glass_pane_at_normal_incidence_transmits_fresnel_loss(ior):
     assert full.mean() == pytest.approx(Le * (1 - R) / (1 + R), abs=tol)
 
 
+def _fresnel(cos_i: np.ndarray, n: float) -> np.ndarray:
+    """Unpolarised Fresnel reflectance from air into a medium of index n."""
+    sin_t = np.sqrt(1.0 - cos_i**2) / n
+    cos_t = np.sqrt(1.0 - sin_t**2)
+    rs = (cos_i - n * cos_t) / (cos_i + n * cos_t)
+    rp = (n * cos_i - cos_t) / (n * cos_i + cos_t)
+    return 0.5 * (rs**2 + rp**2)
+
+
+def test_light_reflected_in_smooth_glass_is_split_not_sampled():
+    """Fresnel splitting: at a smooth dielectric both the reflected and the refracted ray are
+    traced to the light they meet first, weighted F and 1 - F. A clear pane under a large rect
+    light (behind the camera, black environment) seen near normal incidence: with one bounce
+    every sample of a pixel is exactly F(theta) Le (choosing reflection with probability F
+    would give 0 or Le); with all internal reflections the mean is the slab's 2R / (1 + R) Le
+    and the variance of one sample is well below the p (1 - p) Le^2 of the chosen-branch
+    estimator (p = 2R / (1 + R)): only the internally reflected light stays random."""
+    ior, Le = 1.5, 2.0
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down, above the camera
+    X_WL[:3, 3] = (0.0, 0.0, 1.5)
+    light = AreaLight(X_WL, "rect", (3.0, 3.0), (1.0, 1.0, 1.0), Le)
+    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
+    scene = PathScene([make_box([2.0, 2.0, 0.02])], np.eye(4)[None], [1], [[glass]], [light],
+                      BLACK)  # fmt: skip
+    size = 64
+    view = camera((0, 0, 1.0), (0, 0, 0), size, 10, up=(0, 1, 0))
+    K = view.K
+    u, v = np.meshgrid(np.arange(size) + 0.5, np.arange(size) + 0.5)
+    cos_i = 1.0 / np.sqrt(((u - K.cx) / K.fx) ** 2 + ((v - K.cy) / K.fy) ** 2 + 1.0)
+    one = scene.render(view, PathTraceOptions(spp=1, max_bounces=1, seed=3)).radiance
+    np.testing.assert_allclose(one[..., 1], Le * _fresnel(cos_i, ior), rtol=2e-3)
+    R = ((ior - 1) / (ior + 1)) ** 2
+    p = 2 * R / (1 + R)
+    samples = np.stack(
+        [scene.render(view, PathTraceOptions(spp=1, max_bounces=40, rr_depth=100, seed=s))
+         .radiance[..., 1] for s in range(4)]
+    )  # fmt: skip
+    n = samples.size
+    mean, var = samples.mean(), samples.var(ddof=1)
+    # Mean: within 4 standard errors of the analytic slab reflectance.
+    assert mean == pytest.approx(Le * p, abs=4 * math.sqrt(var / n) + 1e-4)
+    # Variance: the sample variance of a two-valued variable with a rare value has a relative
+    # standard error of about sqrt(1 / (q n)), q ~ R (1 - R) its rarer outcome's probability.
+    q = R * (1 - R)
+    rel = math.sqrt(1.0 / (q * n))
+    assert var * (1 - 4 * rel) < 0.7 * p * (1 - p) * Le**2, (var, p * (1 - p) * Le**2)
+
+
 def test_tinted_glass_pane_tints_once_per_pass_through_the_wall():
     """A tinted pane (base colour c) transmits c (1-R)^2 in one pass and c (1-R)/(1+R) with all
     internal reflections: the tint applies to light that crosses the wall (in and out), once,
@@ -302,9 +357,12 @@ def test_tinted_glass_pane_tints_once_per_pass_through_the_wall():
 def test_closed_thin_glass_shell_in_the_furnace_shows_L():
     """A hollow glass sphere (outer radius 0.5 m, a 1.5 mm wall: a closed outer surface and an
     inward-facing inner one, like the walls of a bottle) in a uniform dome L. Clear glass neither
-    absorbs nor emits, and every path leaves the shell (concentric spheres trap no ray), so each
-    path carries exactly L: the 1/eta^2 radiance scaling of every refraction must be undone by
-    the refraction that leaves the same medium, whichever way the surfaces face."""
+    absorbs nor emits, and every path leaves the shell (concentric spheres trap no ray), so the
+    shell shows L: the 1/eta^2 radiance scaling of every refraction must be undone by the
+    refraction that leaves the same medium, whichever way the surfaces face (a missing or doubled
+    scaling is off by a factor 2.25). Fresnel splitting (the sky seen along both the reflected
+    and the refracted ray, weighted F and 1 - F) makes single samples differ from L, so the mean
+    is checked within 4 standard errors and every pixel within 10 %."""
     outer = make_sphere(0.5, 64, 32)
     inner_src = make_sphere(0.4985, 64, 32)
     inner = mesh_from_arrays(np.asarray(inner_src.vertices), np.asarray(inner_src.faces)[:, ::-1])
@@ -312,19 +370,22 @@ def test_closed_thin_glass_shell_in_the_furnace_shows_L():
     scene = PathScene([outer, inner], np.stack([np.eye(4), np.eye(4)]), [1, 1],
                       [[glass], [glass]], (), uniform(0.7))  # fmt: skip
     out = scene.render(
-        camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=16, max_bounces=64, rr_depth=3)
+        camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=64, max_bounces=64, rr_depth=3)
     )
-    np.testing.assert_allclose(out.radiance[interior(out.instance_ids == 1)], 0.7, rtol=1e-3)
+    px = out.radiance[interior(out.instance_ids == 1)]
+    assert float(px.mean()) == pytest.approx(
+        0.7, abs=4 * float(px.std()) / math.sqrt(px.size) + 1e-4
+    )
+    np.testing.assert_allclose(px, 0.7, rtol=0.1)
 
 
 @pytest.mark.parametrize("roughness", [0.1, 0.3, 0.6, 1.0])
-def test_rough_glass_sphere_in_the_furnace_gains_no_energy(roughness):
-    """A rough dielectric (GGX reflection and refraction, Walter et al. 2007) sphere in a uniform
-    dome L: it neither absorbs nor emits, so it shows at most L; single-scattering microfacets
-    lose the light that scatters more than once between microfacets, nothing at the smooth
-    limit, so at roughness 0.1 (alpha = 0.01) it shows L within 0.5 %. The environment is
-    sampled at the rough surface too (next-event estimation with MIS on the reflection side):
-    a wrong pdf there would shift the mean."""
+def test_rough_glass_sphere_in_the_furnace_shows_L(roughness):
+    """A rough dielectric (GGX reflection and refraction, Walter et al. 2007, with the
+    multiple-scattering compensation) sphere in a uniform dome L neither absorbs nor emits, so it
+    shows L at every roughness (single scattering alone showed 0.97 L at roughness 0.3, 0.72 L at
+    0.6, 0.35 L at 1). The environment is sampled at the rough surface too (next-event estimation
+    with MIS on the reflection side): a wrong pdf there would shift the mean."""
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=roughness, ior=1.5)
     scene = PathScene([make_sphere(0.5, 64, 32)], np.eye(4)[None], [1], [[glass]], (), uniform(0.7))
     out = scene.render(
@@ -332,10 +393,7 @@ def test_rough_glass_sphere_in_the_furnace_gains_no_energy(roughness):
     )
     v = out.radiance[interior(out.instance_ids == 1)] / 0.7
     sigma = v.std() / math.sqrt(v.size)
-    assert v.mean() <= 1.0 + 4 * sigma + 1e-5
-    assert v.mean() > 0.25
-    if roughness <= 0.1:
-        assert v.mean() >= 0.995
+    assert abs(v.mean() - 1.0) <= 4 * sigma + 3e-3, (v.mean(), sigma)
 
 
 @pytest.mark.parametrize("roughness", [0.0, 0.06])
@@ -381,13 +439,18 @@ def test_denoiser_albedo_and_normal_are_taken_through_smooth_glass():
 
 def test_glass_sphere_total_internal_reflection_keeps_energy():
     """A clear glass sphere in a uniform dome L reflects and refracts without absorption: every
-    path eventually escapes (total internal reflection included), so the sphere shows L."""
+    path eventually escapes (total internal reflection included), so the sphere shows L (the
+    mean within 4 standard errors, every pixel within 10 %: with Fresnel splitting single samples
+    differ from L)."""
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=1.5)
     scene = PathScene([make_sphere(0.5, 64, 32)], np.eye(4)[None], [1], [[glass]], (), uniform(0.7))
     out = scene.render(
-        camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=16, max_bounces=64, rr_depth=64)
+        camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=64, max_bounces=64, rr_depth=64)
     )
-    np.testing.assert_allclose(out.radiance[interior(out.instance_ids == 1)], 0.7, rtol=1e-3)
+    px = out.radiance[interior(out.instance_ids == 1)]
+    se = float(px.std()) / math.sqrt(px.size)
+    assert float(px.mean()) == pytest.approx(0.7, abs=4 * se + 1e-4)
+    np.testing.assert_allclose(px, 0.7, rtol=0.1)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -663,10 +726,46 @@ def test_sky_dome_colours_and_sun_irradiance():
     assert diff == pytest.approx(a * 4.0 * lum_zenith, rel=0.02)
 
 
+def ggx_lambda(c, alpha):
+    return 0.5 * (-1 + np.sqrt(1 + alpha**2 * (1 - c**2) / c**2))
+
+
+def ggx_single_albedo(mu, alpha, n=400):
+    """Directional albedo of white single-scattering GGX (F = 1) for cos theta_o = mu, by
+    quadrature over the hemisphere of D G2 / (4 cos_o cos_i) cos_i, in (theta, phi) with
+    theta = pi/2 s^2 (cells shrink towards the normal)."""
+    s = (np.arange(n) + 0.5) / n
+    th = 0.5 * np.pi * s**2
+    ph = (np.arange(2 * n) + 0.5) / (2 * n) * 2 * np.pi
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    wi = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
+    dw = (np.sin(T) * np.pi * s[:, None] / n) * (2 * np.pi / (2 * n))
+    wo = np.array([np.sqrt(1 - mu**2), 0.0, mu])
+    hv = wi + wo
+    hv /= np.linalg.norm(hv, axis=-1, keepdims=True)
+    D = alpha**2 / (np.pi * (hv[..., 2] ** 2 * (alpha**2 - 1) + 1) ** 2)
+    G2 = 1 / (1 + ggx_lambda(mu, alpha) + ggx_lambda(wi[..., 2], alpha))
+    return float((D * G2 / (4 * mu) * dw).sum())
+
+
+@functools.cache
+def ggx_albedo_table(alpha):
+    """E(mu) of ggx_single_albedo at 48 values of mu, and E_avg = 2 int E mu dmu."""
+    mus = (np.arange(48) + 0.5) / 48
+    E = np.array([ggx_single_albedo(m, alpha) for m in mus])
+    return mus, E, float(2 * (E * mus).sum() / len(mus))
+
+
 def ggx_metal_radiance(p, cam, centre, size, Le, f0, alpha, n=240):
     """Radiance towards `cam` from point p (normal +z) of a GGX metal (Schlick F, height-
     correlated Smith G2) lit by a horizontal rect light facing down, by quadrature over the
-    light of f(wo, wi) Le cos_i cos_l / r^2."""
+    light of f(wo, wi) Le cos_i cos_l / r^2. f has the multiple-scattering lobe of Kulla and
+    Conty 2017 (docs/rendering.md): F_ms (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)),
+    F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)), F_avg = (20 f0 + 1) / 21, with E by the
+    quadrature above (interpolated from 48 values of mu)."""
+    mus, E, E_avg = ggx_albedo_table(alpha)
+    F_avg = (20 * f0 + 1) / 21
+    F_ms = F_avg**2 * E_avg / (1 - F_avg * (1 - E_avg))
     h = size / 2
     g = (np.arange(n) + 0.5) / n * size - h
     X, Y = np.meshgrid(g + centre[0], g + centre[1])
@@ -679,13 +778,12 @@ def ggx_metal_radiance(p, cam, centre, size, Le, f0, alpha, n=240):
     hv /= np.linalg.norm(hv, axis=-1, keepdims=True)
     a2 = alpha**2
     D = a2 / (np.pi * (hv[..., 2] ** 2 * (a2 - 1) + 1) ** 2)
-
-    def lam(c):
-        return 0.5 * (-1 + np.sqrt(1 + a2 * (1 - c**2) / c**2))
-
-    G2 = 1 / (1 + lam(wo[2]) + lam(wi[..., 2]))
+    G2 = 1 / (1 + ggx_lambda(wo[2], alpha) + ggx_lambda(wi[..., 2], alpha))
     F = f0 + (1 - f0) * (1 - (wo * hv).sum(-1)) ** 5
     f = F * D * G2 / (4 * wo[2] * wi[..., 2])
+    e_o = np.interp(wo[2], mus, E)
+    e_i = np.interp(wi[..., 2], mus, E)
+    f = f + F_ms * (1 - e_o) * (1 - e_i) / (np.pi * (1 - E_avg))
     cos_i = wi[..., 2]
     cos_l = wi[..., 2]
     return Le * (f * cos_i * cos_l / r2).sum() * (size / n) ** 2

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import io
 import math
+import zipfile
 from dataclasses import replace
 from pathlib import Path
 
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from mgn.base.deterministic import npz_bytes
 from mgn.io.dataset import View
 from mgn.io.scene_folder import (
     ARCHIVAL_DEPTH_STEP_CM,
@@ -27,7 +29,7 @@ from mgn.io.scene_folder import (
     from_cm,
     write_view,
 )
-from mgn.render.sensor import apply_depth_sensor
+from mgn.render.sensor import apply_depth_sensor, sensor_params
 from mgn.render.views import depth_picture, depth_picture_indexed
 from mgn.scene.cameras import Intrinsics
 
@@ -188,8 +190,9 @@ def test_metagraspnet_scripts_read_the_files_unchanged(tmp_path: Path):
 
 
 def test_sensor_depth_on_its_grid_is_stored_on_the_grid_and_reads_back_in_metres(tmp_path: Path):
-    """The sensor presets report z on a 1/256 cm grid: the npz holds exact multiples of it (float32
-    cm, MetaGraspNet's dtype) and the reader's metres equal the sensor's float32 bit for bit."""
+    """The sensor presets report z on power-of-two multiples of a 1/256 cm grid: the npz holds exact
+    multiples of it (float32 cm, MetaGraspNet's dtype) and the reader's metres equal the sensor's
+    float32 bit for bit."""
     rng = np.random.default_rng(4)
     K = Intrinsics(W, H, 50.0, 50.0, W / 2, H / 2)
     ideal = (0.5 + 0.7 * rng.random((H, W))).astype(np.float32)
@@ -209,6 +212,20 @@ def test_sensor_depth_on_its_grid_is_stored_on_the_grid_and_reads_back_in_metres
         # Within half a step of the sensor's metres, and the metres come back bit for bit.
         assert np.abs(stored[ok] - sensed.depth[ok].astype(np.float64) * 100).max() < 1e-4
         assert np.array_equal(_bits(View(tmp_path, 3).depth), _bits(sensed.depth))
+        if preset == "structured-light":
+            # The grid grows with the noise (docs/cameras.md): at each pixel the coarsest
+            # 2^k * 1/256 cm not above sigma(z) / 2, sigma = 0.1 mm + 0.2 mm/m^2 z^2.
+            p = sensor_params(preset)
+            z = ideal.astype(np.float64)
+            half = 0.5 * (p.sigma_a + p.sigma_b * (z - p.sigma_z0) ** 2)
+            grid = np.full(z.shape, p.depth_step)
+            for _ in range(16):
+                grid = np.where(grid * 2.0 <= half, grid * 2.0, grid)
+            grid_cm = (grid * 100.0)[ok]
+            k = stored[ok].astype(np.float64) / grid_cm
+            assert np.array_equal(k, np.round(k))
+            assert (grid_cm >= 2.0**-7).mean() > 0.5  # coarser than 1/256 cm beyond 0.53 m
+            assert np.any(np.round(k) % 2 == 1)  # and not coarser than that
 
 
 def test_float_images_round_trip_every_bit_pattern():
@@ -238,18 +255,29 @@ def test_mgn_images_are_stored_delta_coded_and_read_back(tmp_path: Path):
     assert np.array_equal(_bits(view.com_heatmap), _bits(rec.extra_npz["com_heatmap"]))
 
 
+def rng_noise(h: int, w: int) -> np.ndarray:
+    return np.random.default_rng(11).standard_normal((h, w))
+
+
 def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: Path):
     rec = _record(np.random.default_rng(7))
     # 100 depth levels and invalid pixels: 101 colours.
     depth = np.repeat(np.linspace(0.6, 0.9, 100, dtype=np.float32), H * W // 100 + 1)[: H * W]
     depth = depth.reshape(H, W)
     depth[:3] = np.nan
-    rec = replace(rec, depth=depth, valid_depth=np.isfinite(depth))
+    # The picture is of the noise-free depth where the sensor gives a value (docs/format.md);
+    # the sensor depth differs from it by noise and has invalid pixels of its own.
+    sensor = (depth + np.float32(1e-3) * np.float32(rng_noise(H, W))).astype(np.float32)
+    sensor[5:7] = np.nan
+    rec = replace(rec, depth=sensor, depth_ideal=depth, valid_depth=np.isfinite(sensor))
     write_view(tmp_path, rec)
     with Image.open(tmp_path / "3_depth.png") as im:
         assert im.mode == "P"
         rgb = np.asarray(im.convert("RGB"))
-    assert np.array_equal(rgb, depth_picture(rec.depth))
+    # The noise-free depth where the sensor has a value, black where it has none.
+    assert np.array_equal(rgb, depth_picture(np.where(np.isfinite(sensor), depth, np.nan)))
+    assert not np.array_equal(rgb, depth_picture(rec.depth))
+    assert (rgb[:3] == 0).all() and (rgb[5:7] == 0).all() and (rgb[7:] != 0).any(axis=-1).all()
     # OpenCV, as MetaGraspNet's scripts read their PNGs, gives the same picture (BGR).
     bgr = cv2.imread(str(tmp_path / "3_depth.png"), cv2.IMREAD_COLOR)
     assert np.array_equal(bgr[..., ::-1], rgb)
@@ -292,6 +320,14 @@ def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtype
     assert np.array_equal(view.valid_depth, rec.valid_depth)
     size = {p.name: p.stat().st_size for p in arch.iterdir()}
     assert size["3_mgn.hdf5"] < (exact / "3_mgn.hdf5").stat().st_size
+    # The depth is an LZMA zip entry (np.load reads it, above), the others deflate; the RGB PNG
+    # (another zlib level) reads back the same pixels with PIL and OpenCV.
+    with zipfile.ZipFile(arch / "3.npz") as zf:
+        methods = {i.filename: i.compress_type for i in zf.infolist()}
+    assert methods.pop("depth.npy") == zipfile.ZIP_LZMA
+    assert set(methods.values()) == {zipfile.ZIP_DEFLATED}
+    assert np.array_equal(np.asarray(Image.open(arch / "3_rgb.png")), rec.rgb)
+    assert np.array_equal(cv2.imread(str(arch / "3_rgb.png"))[..., ::-1], rec.rgb)
     # Grasp poses: float32, rotations within 2^-17 and translations within 1/2048 cm of the
     # exact file; object poses and scores exact.
     with h5py.File(arch / "3_scene.hdf5", "r") as a, h5py.File(exact / "3_scene.hdf5", "r") as e:
@@ -474,6 +510,10 @@ def test_archival_mode_with_com_parameters_keeps_the_mgn_images_exact(tmp_path: 
     with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
         assert h5["com_heatmap"].attrs["mgn_encoding"] == "float32-bits-minus-com-prediction"
         assert h5["depth_ideal"].attrs["mgn_units"] == "m"
+        assert h5["depth_ideal"].compression == "gzip"  # level 6 in the archival mode
+        assert h5["depth_ideal"].compression_opts == 6
+        assert h5["depth_ideal"].compression == "gzip"  # level 6 in the archival mode
+        assert h5["depth_ideal"].compression_opts == 6
     view = View(tmp_path, 3)
     assert np.array_equal(_bits(view.com_heatmap), _bits(com))
     assert np.array_equal(_bits(view.depth_ideal), _bits(rec.depth_ideal))
@@ -481,3 +521,28 @@ def test_archival_mode_with_com_parameters_keeps_the_mgn_images_exact(tmp_path: 
     stored = view.npz_array("depth")
     finite = np.isfinite(stored)
     assert np.all(np.round(stored[finite] / step) * step == stored[finite])
+
+
+def test_npz_lzma_entries_read_back_bit_identical_and_reproducibly():
+    """An LZMA entry (the archival sensor depth) is read by np.load bit for bit, the same bytes
+    every time, and smaller than deflate on a noisy float32 image on a grid."""
+    rng = np.random.default_rng(31)
+    depth = (np.round((70.0 + 0.03 * rng.standard_normal((120, 160))) * 256) / 256).astype(
+        np.float32
+    )
+    depth[rng.random(depth.shape) < 0.05] = np.nan
+    arrays = {"depth": depth, "occlusion_objects": rng.random((2, 120, 160)) < 0.5}
+    a = npz_bytes(**arrays, lzma_entries=("depth",))
+    assert a == npz_bytes(**arrays, lzma_entries=("depth",))
+    with np.load(io.BytesIO(a)) as z:
+        assert np.array_equal(_bits(z["depth"]), _bits(depth))
+        assert np.array_equal(z["occlusion_objects"], arrays["occlusion_objects"])
+    with zipfile.ZipFile(io.BytesIO(a)) as zf:
+        info = zf.getinfo("depth.npy")
+        assert info.compress_type == zipfile.ZIP_LZMA
+        assert info.compress_size < 0.9 * _deflated_size(npz_bytes(depth=depth), "depth.npy")
+
+
+def _deflated_size(data: bytes, name: str) -> int:
+    with zipfile.ZipFile(io.BytesIO(data)) as zf:
+        return zf.getinfo(name).compress_size

@@ -5,16 +5,20 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
+import time
 
 import numpy as np
 import pytest
 from conftest import coco_ground_truth_ap
 
 from mgn.base.deterministic import npz_bytes
+from mgn.io import scene_folder
 from mgn.io.coco import coco_dict, export_coco, rle
 from mgn.io.dataset import Dataset, intrinsics_from_params
 from mgn.io.scene_folder import (
     ViewRecord,
+    com_heatmap_prediction,
     from_cm,
     hdf5_bytes,
     scene_gt_entries,
@@ -204,6 +208,17 @@ def test_files_are_reproducible(tmp_path):
             }
         )
     assert digests[0] == digests[1] and len(digests[0]) == len(view_file_names(0))
+    # Timing the parts (the benchmark's breakdown) changes no byte, and accounts for the
+    # calling thread's CPU time of the call.
+    times: dict[str, float] = {}
+    t0 = time.thread_time()
+    write_view(tmp_path / "timed", _record(0), times=times)
+    spent = time.thread_time() - t0
+    assert {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in (tmp_path / "timed").iterdir()} == digests[0]  # fmt: skip
+    assert set(times) == {"arrays", "rgb.png", "npz", "depth.png", "scene.hdf5", "mgn.hdf5",
+                          "json and csv", "files"}  # fmt: skip
+    assert all(t >= 0.0 for t in times.values()) and sum(times.values()) <= spent + 1e-6
 
 
 def test_record_checks_shapes():
@@ -396,3 +411,48 @@ def test_large_hdf5_datasets_are_compressed_and_exact():
     with h5py.File(_io.BytesIO(data), "r") as h5:
         assert h5["g/poses"].compression == "gzip" and h5["g/small"].compression is None
         assert np.array_equal(h5["g/poses"][()], big)
+
+
+def _com_pixel(u, v, z, X, K, p):
+    """One pixel of the CoM heat-map prediction, in plain Python floats (IEEE float64, the
+    documented order of operations)."""
+    fx, fy, cx, cy = K
+    x = (((u + 0.5) - cx) * z) / fx
+    y = (((v + 0.5) - cy) * z) / fy
+    d2 = 0.0
+    for r in range(3):
+        a = (((x * X[r][0] + y * X[r][1]) + z * X[r][2]) + X[r][3]) - p[r]
+        d2 += a * a
+    span = max(p[4] - p[3], 1e-12)
+    return np.float32(min(max((p[4] - math.sqrt(d2)) / span, 0.0), 1.0))
+
+
+def test_com_heatmap_prediction_matches_the_per_pixel_formula_to_the_bit(monkeypatch):
+    """The prediction runs in blocks of pixels; every pixel equals the formula computed one pixel
+    at a time in Python floats, and the block size does not change a bit."""
+    rng = np.random.default_rng(7)
+    h, w, n = 240, 310, 5  # 74,400 pixels: several blocks
+    inst = rng.integers(0, n + 1, (h, w))
+    depth = rng.uniform(0.3, 0.9, (h, w)).astype(np.float32)
+    depth[rng.random((h, w)) < 0.01] = np.nan  # no depth: prediction 0
+    X = np.eye(4)
+    X[:3, :3] = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    X[:3, 3] = rng.normal(size=3)
+    K = [301.5, 299.25, 154.7, 121.3]
+    # Centres of mass on the rays of random pixels at 0.6 m, so the scores span [0, 1].
+    u0, v0 = rng.uniform(0, w, n), rng.uniform(0, h, n)
+    p_C = np.column_stack([0.6 * (u0 - K[2]) / K[0], 0.6 * (v0 - K[3]) / K[1], np.full(n, 0.6)])
+    c_W = p_C @ X[:3, :3].T + X[:3, 3]
+    params = np.column_stack([c_W, rng.uniform(0.0, 0.05, n), rng.uniform(0.2, 0.4, n)])
+    pred = com_heatmap_prediction(depth, inst, X, K, params)
+    monkeypatch.setattr(scene_folder, "_COM_BLOCK", 997)
+    assert pred.tobytes() == com_heatmap_prediction(depth, inst, X, K, params).tobytes()
+    ok = (inst > 0) & np.isfinite(depth)
+    assert np.all(pred[~ok] == 0) and 0.05 < np.mean(pred[ok] > 0) < 1.0
+    Xl = X.tolist()
+    for v, u in zip(*np.nonzero(ok), strict=True):
+        if (u * 7 + v * 13) % 11:
+            continue  # every ~11th pixel: ~6,000 of them
+        p = params[inst[v, u] - 1].tolist()
+        want = _com_pixel(float(u), float(v), float(depth[v, u]), Xl, K, p)
+        assert pred[v, u].view(np.uint32) == want.view(np.uint32), (v, u)

@@ -11,6 +11,7 @@
 #include <mgn/core/rng.hpp>
 #include <mgn/grasp/shake_test.hpp>
 
+#include "grasp/detail/staircase_schedule.hpp"
 #include "physics/bullet.hpp"
 
 #include <btBulletDynamicsCommon.h>
@@ -18,8 +19,11 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <memory>
+#include <mutex>
 #include <string>
 
 namespace mgn {
@@ -560,7 +564,9 @@ void validate_physics_object(const PhysicsObject& object) {
   }
 }
 
-StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks) {
+namespace detail {
+
+StaircaseGrid staircase_walk(int S, const std::function<bool(int, int)>& trial, int checks) {
   if (S < 1) throw_error<InvalidArgument>("staircase_grid: S must be >= 1, got ", S);
   if (checks < 0) throw_error<InvalidArgument>("staircase_grid: checks must be >= 0, got ", checks);
   StaircaseGrid g;
@@ -646,11 +652,83 @@ StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, 
       break;
     }
   }
-  if (contradicted) {
-    g.fallback = true;
-    for (int i = 0; i < S; ++i)
-      for (int j = 0; j < S; ++j)
-        if (!g.simulated[at(i, j)]) run(i, j);
+  g.fallback = contradicted;
+  return g;
+}
+
+void staircase_schedule(std::size_t grasps, int S, int checks, int num_threads,
+                        const std::function<TrialRunner()>& make_runner,
+                        std::vector<std::uint8_t>& success, std::vector<std::uint8_t>& fallback) {
+  const std::size_t per_grasp = static_cast<std::size_t>(S) * S;
+  success.assign(grasps * per_grasp, 0);
+  fallback.assign(grasps, 0);
+  const std::size_t workers =
+      std::min<std::size_t>(static_cast<std::size_t>(resolve_num_threads(num_threads)), grasps);
+  std::size_t next = 0;            // next grasp to walk
+  std::size_t walking = 0;         // grasps whose walk is running
+  std::vector<std::size_t> cells;  // trials of fallen-back grasps still to run (LIFO)
+  std::mutex mutex;
+  std::condition_variable changed;
+  // (No grasps: no worker.)
+  parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
+    const TrialRunner trial = make_runner();
+    std::unique_lock<std::mutex> lock(mutex);
+    for (;;) {
+      if (!cells.empty()) {  // fallback cells first
+        const std::size_t t = cells.back();
+        cells.pop_back();
+        lock.unlock();
+        const bool ok = trial(t);
+        lock.lock();
+        success[t] = ok;
+        continue;
+      }
+      if (next >= grasps) {  // no grasp left: wait for fallback cells until every walk ended
+        if (walking == 0) return;
+        changed.wait(lock, [&] { return !cells.empty() || walking == 0; });
+        continue;
+      }
+      const std::size_t g = next++;
+      ++walking;
+      lock.unlock();
+      const std::size_t base = g * per_grasp;
+      StaircaseGrid sg;
+      try {
+        sg = staircase_walk(
+            S, [&](int i, int j) { return trial(base + static_cast<std::size_t>(i) * S + j); },
+            checks);
+      } catch (...) {  // let the waiting threads end, then report the error
+        lock.lock();
+        --walking;
+        next = grasps;
+        changed.notify_all();
+        throw;
+      }
+      lock.lock();
+      --walking;
+      fallback[g] = sg.fallback;
+      for (std::size_t c = per_grasp; c-- > 0;) {
+        if (sg.fallback && !sg.simulated[c])
+          cells.push_back(base + c);  // simulated by any thread, lowest index first
+        else
+          success[base + c] = sg.success[c];  // simulated or inferred
+      }
+      changed.notify_all();
+    }
+  });
+}
+
+}  // namespace detail
+
+StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks) {
+  StaircaseGrid g = detail::staircase_walk(S, trial, checks);
+  if (g.fallback) {
+    for (std::size_t c = 0; c < g.success.size(); ++c) {
+      if (g.simulated[c]) continue;
+      g.success[c] = trial(static_cast<int>(c) / S, static_cast<int>(c) % S);
+      g.simulated[c] = 1;
+      ++g.trials;
+    }
   }
   return g;
 }
@@ -689,22 +767,28 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
     r.trial_simulated[t] = 1;
     return o.success;
   };
+  // Threads take work one item at a time (a grasp costs from ~17 trials to S² with the
+  // staircase, so fixed contiguous ranges leave one thread idle while another finishes a slow
+  // range): trials of the full grid from a shared counter, staircase grasps through
+  // detail::staircase_schedule. Every trial depends only on its index, so the results do not
+  // depend on which thread runs it. One set of shapes per worker (see TrialShapes).
   if (options.staircase) {
-    parallel_for(grasps.size(), options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
-      const TrialShapes shapes(prepared, gripper, options);
-      for (std::size_t g = begin; g < end; ++g) {
-        const std::size_t base = g * per_grasp;
-        const StaircaseGrid sg = staircase_grid(
-            S, [&](int i, int j) { return run_trial(shapes, base + std::size_t(i) * S + j); },
-            options.staircase_checks);
-        for (std::size_t k = 0; k < per_grasp; ++k) r.trial_success[base + k] = sg.success[k];
-        r.fallback[g] = sg.fallback;
-      }
-    });
+    std::vector<std::uint8_t> success;
+    detail::staircase_schedule(
+        grasps.size(), S, options.staircase_checks, options.num_threads,
+        [&]() -> detail::TrialRunner {
+          auto shapes = std::make_shared<const TrialShapes>(prepared, gripper, options);
+          return [&, shapes](std::size_t t) { return run_trial(*shapes, t); };
+        },
+        success, r.fallback);
+    r.trial_success = std::move(success);
   } else {
-    parallel_for(n, options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+    const std::size_t workers = std::min<std::size_t>(
+        static_cast<std::size_t>(resolve_num_threads(options.num_threads)), n);
+    std::atomic<std::size_t> next{0};
+    parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
       const TrialShapes shapes(prepared, gripper, options);
-      for (std::size_t t = begin; t < end; ++t) run_trial(shapes, t);
+      for (std::size_t t = next.fetch_add(1); t < n; t = next.fetch_add(1)) run_trial(shapes, t);
     });
   }
   r.score.assign(grasps.size(), 0.0);

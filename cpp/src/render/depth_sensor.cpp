@@ -48,6 +48,7 @@ DepthSensorParams DepthSensorParams::preset_defaults(DepthSensorPreset preset) {
       p.baseline = 0.1;
       p.invalid_transparent = p.invalid_dark = p.invalid_mirror = true;
       p.depth_step = 0.01 / 256.0;
+      p.depth_step_noise_fraction = 0.5;
       break;
     case DepthSensorPreset::ToF:
       p.min_range = 0.5;
@@ -59,17 +60,20 @@ DepthSensorParams DepthSensorParams::preset_defaults(DepthSensorPreset preset) {
       p.flying_pixel_probability = 0.5;
       p.invalid_transparent = p.invalid_dark = p.invalid_mirror = true;
       p.depth_step = 0.01 / 64.0;
+      p.depth_step_noise_fraction = 0.5;
       break;
   }
   return p;
 }
 
 void DepthSensorParams::validate() const {
-  const double nonneg[] = {min_range,           max_range,      sigma_a,   sigma_b,
-                           shadow_tolerance_px, edge_threshold, depth_step};
-  const char* names[] = {"min_range",           "max_range",      "sigma_a",   "sigma_b",
-                         "shadow_tolerance_px", "edge_threshold", "depth_step"};
-  for (int i = 0; i < 7; ++i) {
+  const double nonneg[] = {
+      min_range,           max_range,      sigma_a,    sigma_b,
+      shadow_tolerance_px, edge_threshold, depth_step, depth_step_noise_fraction};
+  const char* names[] = {
+      "min_range",           "max_range",      "sigma_a",    "sigma_b",
+      "shadow_tolerance_px", "edge_threshold", "depth_step", "depth_step_noise_fraction"};
+  for (int i = 0; i < 8; ++i) {
     if (!(std::isfinite(nonneg[i]) && nonneg[i] >= 0.0)) {
       throw_error<InvalidArgument>("DepthSensorParams: ", names[i],
                                    " must be finite and >= 0, got ", nonneg[i]);
@@ -185,7 +189,13 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
           }
           const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
           if (sigma > 0.0) zz += sigma * rng.normal();
-          if (p.depth_step > 0.0) zz = std::round(zz / p.depth_step) * p.depth_step;
+          if (p.depth_step > 0.0) {
+            // The coarsest power-of-two multiple of the step not above the noise fraction.
+            double step = p.depth_step;
+            const double top = p.depth_step_noise_fraction * sigma;
+            while (step * 2.0 <= top) step *= 2.0;
+            zz = std::round(zz / step) * step;
+          }
           if (!(zz > 0.0)) continue;
         }
         out.depth[i] = static_cast<float>(zz);

@@ -9,7 +9,10 @@
 
 #include <atomic>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <map>
+#include <tuple>
 
 #include "raytrace/detail/ray_scene_impl.hpp"
 #include "render/detail/pt_math.hpp"
@@ -174,6 +177,7 @@ struct MaterialData {
   bool emissive;
   const std::uint8_t* tex = nullptr;  // points into `texture` of the owning PbrMaterial copy
   int tw = 0, th = 0;
+  const pt::MsTables* ms = nullptr;  // multiple-scattering compensation; owned by Geometry
 };
 
 struct GeometryData {
@@ -249,7 +253,8 @@ struct PathScene::Geometry {
   std::vector<GeometryData> geoms;
   std::vector<PbrMaterial> materials;  // owns the textures
   std::vector<MaterialData> mats;
-  std::vector<TriEmitter> emitters;  // the emissive triangles, for next-event estimation
+  std::deque<pt::MsTables> ms_tables;  // shared by the materials of equal (alpha, ior, lobes)
+  std::vector<TriEmitter> emitters;    // the emissive triangles, for next-event estimation
   std::int64_t triangles = 0;
   Eigen::Matrix<double, 2, 3, Eigen::RowMajor> bounds;
 };
@@ -373,6 +378,26 @@ std::shared_ptr<PathScene::Lighting> make_lighting(const std::vector<AreaLight>&
   return L;
 }
 
+using MsKey = std::tuple<float, float, bool, bool, bool>;
+
+/// The multiple-scattering compensation tables of a material (pt::MsTables), built once per
+/// distinct (alpha, ior, lobes) of the scene: none for a nearly smooth material (alpha at most
+/// ShadingMaterial::kRoughAlpha), whose single scattering keeps (all but ~1e-4 of) the energy.
+const pt::MsTables* ms_tables_for(PathScene::Geometry& G,
+                                  std::map<MsKey, const pt::MsTables*>& cache,
+                                  const MaterialData& d) {
+  if (!(d.alpha > pt::ShadingMaterial::kRoughAlpha)) return nullptr;
+  const bool conductor = d.metallic > 0.0f;
+  const bool coat = (1.0f - d.metallic) * (1.0f - d.transmission) > 0.0f && d.ior > 1.0f;
+  const bool dielectric = (1.0f - d.metallic) * d.transmission > 0.0f && d.ior > 1.0f;
+  if (!conductor && !coat && !dielectric) return nullptr;
+  const MsKey key{d.alpha, d.ior, conductor, coat, dielectric};
+  const auto it = cache.find(key);
+  if (it != cache.end()) return it->second;
+  G.ms_tables.push_back(pt::make_ms_tables(d.alpha, d.ior, conductor, coat, dielectric));
+  return cache[key] = &G.ms_tables.back();
+}
+
 }  // namespace
 
 PathScene::PathScene(const std::vector<PathGeometry>& geometries,
@@ -419,6 +444,7 @@ PathScene::PathScene(const std::vector<PathGeometry>& geometries,
     d.instance_id = item.instance_id;
     G->geoms.push_back(std::move(d));
   }
+  std::map<MsKey, const pt::MsTables*> ms_cache;
   for (const PbrMaterial& m : G->materials) {
     MaterialData d;
     d.base = f3(m.base_color);
@@ -433,6 +459,7 @@ PathScene::PathScene(const std::vector<PathGeometry>& geometries,
       d.tw = m.texture_width;
       d.th = m.texture_height;
     }
+    d.ms = ms_tables_for(*G, ms_cache, d);
     G->mats.push_back(d);
   }
   for (GeometryData& d : G->geoms) {
@@ -674,6 +701,13 @@ class Integrator {
   F3 trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& aov_normal,
            const RTCRayHit* first = nullptr) {
     F3 L(0.0f), beta(1.0f);
+    // Throughput for the light (area light, emissive triangle, environment) found at the next
+    // vertex: beta, except after a smooth dielectric, where both the reflected and the refracted
+    // ray are traced to the light they meet first (Fresnel splitting: each weighted by its
+    // expected share F or 1 - F instead of the random choice of one; the lamps and the sky seen
+    // in and through glass are the noisiest part of a glass object otherwise) and only the
+    // chosen ray continues the path (it carries the indirect light of both, unbiased).
+    F3 beta_e(1.0f);
     bool prev_delta = true;
     float prev_pdf = 0.0f;   // solid-angle pdf of the BSDF sample that made the current ray
     F3 prev_n(0.0f);         // shading normal at the previous vertex (for the environment pdf)
@@ -705,7 +739,7 @@ class Integrator {
           const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
           w = power_heuristic(prev_pdf, pl);
         }
-        add(L, beta * l.radiance * w, depth >= 2);
+        add(L, beta_e * l.radiance * w, depth >= 2);
         if (aov_open) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
         break;
       }
@@ -715,7 +749,7 @@ class Integrator {
           float w = 1.0f;
           if (!prev_delta && L_.env_on)
             w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
-          add(L, beta * Le * w, depth >= 2);
+          add(L, beta_e * Le * w, depth >= 2);
           if (aov_open)
             aov_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
         }
@@ -738,7 +772,7 @@ class Integrator {
             w = power_heuristic(prev_pdf, pl);
           }
         }
-        add(L, beta * m.emission * w, depth >= 2);
+        add(L, beta_e * m.emission * w, depth >= 2);
       }
       if (aov_open) {
         aov_albedo = h.base;
@@ -750,7 +784,7 @@ class Integrator {
 
       const pt::Frame frame(h.ns);
       const F3 wo = frame.to_local(wo_w);
-      pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission};
+      pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission, m.ms};
       sm.prepare(wo.z, h.front);
       const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
       // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
@@ -777,9 +811,17 @@ class Integrator {
       bool delta;
       float pdf;
       float eta2;
-      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta, eta2))
+      Split split;
+      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta, eta2,
+                       &split))
         break;
+      if (split.on) {
+        if (max_comp(split.other_weight) > 0.0f)
+          add(L, beta * split.other_weight * emitted(h, split.other_dir), depth >= 1);
+        beta_e = beta * split.weight;
+      }
       beta *= weight;
+      if (!split.on) beta_e = beta;
       eta_scale *= eta2;
       if (!all_finite(beta) || max_comp(beta) <= 0.0f) break;
       if (depth + 1 >= opt_.rr_depth) {
@@ -788,6 +830,7 @@ class Integrator {
         const float q = std::min(1.0f, max_comp(beta) * eta_scale);
         if (u_rr.x >= q) break;
         beta *= 1.0f / q;
+        beta_e *= 1.0f / q;
       }
       prev_delta = delta;
       prev_pdf = pdf;
@@ -880,12 +923,44 @@ class Integrator {
     return f * Le * (wi.z * w / pl);
   }
 
+  /// Fresnel splitting at a smooth dielectric: the expected weight of the chosen direction (F
+  /// or 1 - F times its lobe weight, instead of the weight of the random choice) and the other
+  /// direction with its expected weight.
+  struct Split {
+    bool on = false;
+    F3 weight;
+    F3 other_dir;
+    F3 other_weight;
+  };
+
+  /// Radiance arriving at h.p from direction d (world), emitted by the first thing the ray from
+  /// h.p meets: an area light, an emissive triangle's front side or the environment (0 for
+  /// anything else). Unweighted: it is the light seen through a delta lobe (no MIS).
+  F3 emitted(const Hit& h, F3 d) {
+    const F3 o = offset_origin(h, d);
+    RTCRayHit rh;
+    const bool hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
+    const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
+    float t_light;
+    const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
+    if (li >= 0) return L_.light_data[li].radiance;
+    if (!hit) return L_.env_on ? L_.env(d) : F3(0.0f);
+    const GeometryData& g = G_.geoms[rh.hit.geomID];
+    const MaterialData& m = G_.mats[g.face_material[rh.hit.primID]];
+    if (!m.emissive) return F3(0.0f);
+    const auto& fnr = G_.rays->impl().world_normals[rh.hit.geomID];
+    const F3 ng(fnr(rh.hit.primID, 0), fnr(rh.hit.primID, 1), fnr(rh.hit.primID, 2));
+    return dot(d, ng) < 0.0f ? m.emission : F3(0.0f);
+  }
+
   /// Samples the BSDF: direction, weight f*cos/pdf (including lobe choice), solid-angle pdf of
-  /// the non-delta part (for MIS) and whether a delta lobe was chosen.
+  /// the non-delta part (for MIS) and whether a delta lobe was chosen. At a smooth dielectric,
+  /// `split` (when given) receives the Fresnel split (see Split).
   bool sample_bsdf(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
                    float u_lobe, float u_fresnel, pt::Sample2 u, F3& wi_w, F3& weight, float& pdf,
-                   bool& delta, float& eta2) {
+                   bool& delta, float& eta2, Split* split = nullptr) {
     eta2 = 1.0f;
+    if (split != nullptr) split->on = false;
     if (u_lobe < sm.p_delta && sm.rough) {
       // Rough dielectric: refraction (no light is sampled below the surface, so the light this
       // ray finds is weighted 1, as after a delta lobe) or reflection (weighed by the whole
@@ -927,18 +1002,28 @@ class Integrator {
         const float ct = std::sqrt(std::max(0.0f, 1.0f - sin2_t));
         return normalize(-wo_w * (1.0f / eta) + nn * (c / eta - ct));
       };
+      auto reflected = [&] {
+        const F3 r = pt::reflect(wo_w, n);
+        return dot(r, h.ng) <= 0.0f ? pt::reflect(wo_w, h.ng) : r;
+      };
+      auto refracted = [&] {
+        const F3 t = refract(n, ci);
+        return dot(t, h.ng) >= 0.0f ? refract(h.ng, std::max(0.0f, dot(wo_w, h.ng))) : t;
+      };
+      // Tint sqrt(base) at each interface: a pass through a closed wall (in and out) is
+      // tinted by the base colour once, as in Blender's Principled BSDF. Radiance is scaled
+      // by 1/eta^2 on refraction (the solid angle compresses); it cancels on a closed shell.
+      const F3 w_refract = sm.sqrt_base() * (scale / (eta * eta));
+      const bool split_on = split != nullptr && F > 0.0f && F < 1.0f;
       if (u_fresnel < F) {
-        wi_w = pt::reflect(wo_w, n);
-        if (dot(wi_w, h.ng) <= 0.0f) wi_w = pt::reflect(wo_w, h.ng);
+        wi_w = reflected();
         weight = F3(scale);
+        if (split_on) *split = {true, F3(F * scale), refracted(), w_refract * (1.0f - F)};
       } else {
-        wi_w = refract(n, ci);
-        if (dot(wi_w, h.ng) >= 0.0f) wi_w = refract(h.ng, std::max(0.0f, dot(wo_w, h.ng)));
-        // Tint sqrt(base) at each interface: a pass through a closed wall (in and out) is
-        // tinted by the base colour once, as in Blender's Principled BSDF. Radiance is scaled
-        // by 1/eta^2 on refraction (the solid angle compresses); it cancels on a closed shell.
-        weight = sm.sqrt_base() * (scale / (eta * eta));
+        wi_w = refracted();
+        weight = w_refract;
         eta2 = eta * eta;
+        if (split_on) *split = {true, w_refract * (1.0f - F), reflected(), F3(F * scale)};
       }
       return true;
     }

@@ -18,9 +18,11 @@ library), float32 images delta-coded along rows (:func:`encode_float_image`): ``
 the pipeline's heat maps), and ``valid_depth`` only when it is not exactly ``isfinite(depth)``
 (the sensors mark invalid pixels NaN, so normally it is derived on reading). In
 ``{v}_scene.hdf5`` the tool poses that share their contact poses' rotation are HDF5 virtual
-datasets over them (:func:`hdf5_bytes`). The depth picture is a palette PNG. Every array reads
-back bit-identical; ``write_view(..., archival=True)`` is the lossy compact archival mode (sensor
-depth on :data:`ARCHIVAL_DEPTH_STEP_CM`, grasp poses rounded).
+datasets over them (:func:`hdf5_bytes`). The depth picture is a palette PNG of the noise-free
+depth where the sensor has a value. Every array reads back bit-identical;
+``write_view(..., archival=True)`` is the lossy compact archival mode (sensor depth on
+:data:`ARCHIVAL_DEPTH_STEP_CM` in an LZMA zip entry, grasp poses rounded, RGB and mgn images at
+zlib level 6).
 
 Lengths are **centimetres** in these files (MetaGraspNet's convention) and SI everywhere else in
 mgn: :class:`ViewRecord` holds metres, the writer converts, and :mod:`mgn.io.dataset` converts
@@ -35,6 +37,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import time
 import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -62,6 +65,7 @@ __all__ = [
     "COM_RESIDUAL_ENCODING",
     "COLLISION_OBSTACLES",
     "DEPTH_GRID_CM",
+    "DEPTH_PICTURE_LEVEL",
     "FLOAT_DELTA_ENCODING",
     "UNITS_ATTR",
     "UNORM16_ENCODING",
@@ -262,9 +266,9 @@ def id_image_dtype(values: npt.ArrayLike, *, instances: bool) -> np.dtype:
 
 
 #: Grid (cm) on which the writer stores the sensor depth exactly: the sensor presets report z on
-#: multiples of it (``DepthSensorParams.depth_step``: 1/256 cm structured light, 1/64 cm ToF),
-#: and float32 values on a power-of-two grid end in zero bits, which deflate compresses
-#: (docs/format.md).
+#: multiples of it (``DepthSensorParams.depth_step``: 1/256 cm structured light, 1/64 cm ToF,
+#: times a power of two that grows with the noise: ``depth_step_noise_fraction``), and float32
+#: values on a power-of-two grid end in zero bits, which deflate compresses (docs/format.md).
 DEPTH_GRID_CM = 2.0**-8
 
 #: Value of the ``mgn_encoding`` attribute of a ``{v}_mgn.hdf5`` float32 image stored as the int32
@@ -372,9 +376,40 @@ def com_heatmap_prediction(
         ok = np.isfinite(z) & (z > 0.0)
     if not ok.all():
         idx, ids, z = idx[ok], ids[ok], z[ok]
-    q = params[ids - 1]
-    vv, uu = np.divmod(idx, w)
     fx, fy, cx, cy = (float(k) for k in np.asarray(K, np.float64).reshape(4))
+    X = np.asarray(X_WC, np.float64).reshape(4, 4)
+    flat = out.ravel()
+    # Element-wise only, so blocks of pixels give the same bits as one pass; a block's ~10
+    # float64 temporaries stay in the CPU cache (3x faster than whole-image arrays).
+    for s in range(0, len(idx), _COM_BLOCK):
+        e = s + _COM_BLOCK
+        flat[idx[s:e]] = _com_block(idx[s:e], ids[s:e], z[s:e], w, params, X, fx, fy, cx, cy)
+    return out
+
+
+#: Pixels per block of :func:`com_heatmap_prediction`.
+_COM_BLOCK = 16384
+
+
+def _com_block(
+    idx: npt.NDArray[np.intp],
+    ids: npt.NDArray[np.intp],
+    z: npt.NDArray[np.float64],
+    w: int,
+    params: npt.NDArray[np.float64],
+    X: npt.NDArray[np.float64],
+    fx: float,
+    fy: float,
+    cx: float,
+    cy: float,
+) -> npt.NDArray[np.float64]:
+    """The heat map values of the flat pixel indices ``idx`` (row width ``w``) of instances
+    ``ids`` at depths ``z`` (m): see :func:`com_heatmap_prediction`."""
+    row = ids - 1
+    c = [np.take(params[:, k], row) for k in range(5)]  # contiguous per column
+    # int32 division is faster than int64 and exact while the indices fit.
+    small = len(idx) > 0 and int(idx[-1]) < 2**31
+    vv, uu = np.divmod(idx.astype(np.int32), np.int32(w)) if small else np.divmod(idx, w)
     # In place, in the order of z * (u + 0.5 - cx) / fx (products commute exactly in IEEE).
     x = uu.astype(np.float64)
     x += 0.5
@@ -386,8 +421,7 @@ def com_heatmap_prediction(
     y -= cy
     y *= z
     y /= fy
-    X = np.asarray(X_WC, np.float64).reshape(4, 4)
-    d2 = np.zeros_like(z)
+    d2 = np.empty_like(z)
     acc = np.empty_like(z)
     tmp = np.empty_like(z)
     for r in range(3):
@@ -398,17 +432,19 @@ def com_heatmap_prediction(
         np.multiply(z, X[r, 2], out=tmp)
         acc += tmp
         acc += X[r, 3]
-        acc -= q[:, r]
-        acc *= acc
-        d2 += acc
+        acc -= c[r]
+        if r == 0:
+            np.multiply(acc, acc, out=d2)  # = 0.0 + acc * acc (a square is never -0.0)
+        else:
+            acc *= acc
+            d2 += acc
     np.sqrt(d2, out=d2)
-    span = q[:, 4] - q[:, 3]
+    span = c[4] - c[3]
     np.maximum(span, 1e-12, out=span)
-    np.subtract(q[:, 4], d2, out=d2)
+    np.subtract(c[4], d2, out=d2)
     d2 /= span
     np.clip(d2, 0.0, 1.0, out=d2)
-    out.ravel()[idx] = d2
-    return out
+    return d2
 
 
 def _com_residual(com: npt.ArrayLike, prediction: npt.NDArray[np.float32]) -> npt.NDArray[np.int32]:
@@ -436,8 +472,9 @@ def mgn_hdf5_bytes(
     *,
     unorm16: tuple[str, ...] = (),
     attrs: Mapping[str, Mapping[str, Any]] | None = None,
+    level: int = 1,
 ) -> bytes:
-    """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate level 1,
+    """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate ``level``,
     without timestamps; float32 images stored with :func:`encode_float_image` (attribute
     ``mgn_encoding`` = :data:`FLOAT_DELTA_ENCODING`), those named in ``unorm16`` (values in
     [0, 1]) as uint16 ``round(x * 65535)`` (:data:`UNORM16_ENCODING`, lossy: archival mode);
@@ -454,7 +491,9 @@ def mgn_hdf5_bytes(
                 data = encode_float_image(data)
                 coded = FLOAT_DELTA_ENCODING
             chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:]) if data.size else None
-            kw: dict[str, Any] = {"chunks": chunks, **_COMPRESSION} if chunks else {}
+            kw: dict[str, Any] = (
+                {"chunks": chunks, **_COMPRESSION, "compression_opts": level} if chunks else {}
+            )
             ds = h5_create_dataset(h5, name, data, **kw)
             if coded:
                 ds.attrs["mgn_encoding"] = coded
@@ -595,29 +634,42 @@ def hdf5_bytes(
     return buf.getvalue()
 
 
-def png_bytes(image: npt.ArrayLike) -> bytes:
-    """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible;
-    zlib level 1 with the run-length strategy: rendered images come out ~16 % smaller than
-    with the default strategy at the same speed, and several times faster than level 6)."""
+def png_bytes(image: npt.ArrayLike, *, level: int | None = None) -> bytes:
+    """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible).
+    Default: zlib level 1 with the run-length strategy (rendered images come out ~16 % smaller
+    than with the default strategy at the same speed, and several times faster than level 6);
+    ``level``: that zlib level with the default strategy (the archival mode's 6: 0.87x the bytes
+    of the default for +85 ms per 1200 x 1200 view; 9 is 0.79x for +900 ms)."""
 
     buf = io.BytesIO()
-    Image.fromarray(np.asarray(image)).save(
-        buf, format="PNG", compress_level=1, compress_type=zlib.Z_RLE
+    kw: dict[str, Any] = (
+        {"compress_level": 1, "compress_type": zlib.Z_RLE}
+        if level is None
+        else {"compress_level": level}
     )
+    Image.fromarray(np.asarray(image)).save(buf, format="PNG", **kw)
     return buf.getvalue()
 
 
-def depth_picture_png(depth: npt.ArrayLike) -> bytes:
+#: zlib level of the scene writer's ``{v}_depth.png``, a picture of the noise-free depth at the
+#: pixels where the sensor gives a value (black elsewhere): bands of equal colour, which level 6
+#: stores in 0.6x the bytes of level 1 for ~8 ms more per 1200 x 1200 view (the sensor depth's
+#: noise made the picture 4x larger; docs/format.md).
+DEPTH_PICTURE_LEVEL = 6
+
+
+def depth_picture_png(depth: npt.ArrayLike, *, level: int = 1) -> bytes:
     """``{v}_depth.png`` of a depth image (m): :func:`mgn.render.views.depth_picture` as a palette
     PNG (every reader converts it to the same RGB; ~half the bytes and faster to write than the
-    RGB PNG)."""
+    RGB PNG), deflated at zlib ``level`` (the scene writer uses :data:`DEPTH_PICTURE_LEVEL` on the
+    noise-free depth)."""
     index, palette = depth_picture_indexed(depth)
     im = Image.frombytes(
         "P", (index.shape[1], index.shape[0]), np.ascontiguousarray(index).tobytes()
     )
     im.putpalette(palette.ravel().tolist())
     buf = io.BytesIO()
-    im.save(buf, format="PNG", compress_level=1)
+    im.save(buf, format="PNG", compress_level=level)
     return buf.getvalue()
 
 
@@ -633,11 +685,21 @@ def _json(data: Any) -> str:
 _NPZ_ARCHIVAL: dict[str, Any] = {
     "run_length": ("instances_objects", "occlusion_objects"),
     "levels": {"occlusion": 6},
+    "lzma_entries": ("depth",),
 }
+#: Archival mode's ``{v}_rgb.png`` zlib level (:func:`png_bytes`).
+_RGB_ARCHIVAL_LEVEL = 6
+#: Archival mode's deflate level of the ``{v}_mgn.hdf5`` images: ``depth_ideal`` in 0.89x the
+#: bytes of level 1 for ~+45 ms per 1200 x 1200 view (inflating costs the same).
+_MGN_ARCHIVAL_LEVEL = 6
 
 
 def write_view(
-    folder: str | os.PathLike[str], rec: ViewRecord, *, archival: bool = False
+    folder: str | os.PathLike[str],
+    rec: ViewRecord,
+    *,
+    archival: bool = False,
+    times: dict[str, float] | None = None,
 ) -> list[Path]:
     """Write the files of one view into ``folder`` (created); returns the paths written.
 
@@ -645,24 +707,39 @@ def write_view(
     is stored in metres (the renderer's float32) when the heat map is stored as its residual.
     Dtypes and layout: see the module doc. ``archival``: the compact archival mode (lossy: the
     sensor depth rounded to :data:`ARCHIVAL_DEPTH_STEP_CM`, grasp poses to
-    :data:`ARCHIVAL_ROTATION_STEP` / :data:`ARCHIVAL_POSE_STEP_CM`; without
+    :data:`ARCHIVAL_ROTATION_STEP` / :data:`ARCHIVAL_POSE_STEP_CM`, the depth an LZMA zip entry
+    that ``np.load`` reads; without
     ``rec.com_parameters`` also ``depth_ideal`` rounded and ``com_heatmap`` in 16 bits; same keys
     and dtypes in the files MetaGraspNet reads).
+    ``times``: when given, the CPU seconds of the calling thread (``time.thread_time``) spent on
+    each part are added to it: ``arrays`` (unit and dtype conversions, the CoM prediction), one
+    key per encoded file kind (``rgb.png``, ``npz``, ``depth.png``, ``scene.hdf5``,
+    ``mgn.hdf5``, ``json and csv``) and ``files`` (writing them to disk).
     """
+
+    t_last = time.thread_time()
+
+    def lap(part: str) -> None:
+        nonlocal t_last
+        if times is not None:
+            now = time.thread_time()
+            times[part] = times.get(part, 0.0) + now - t_last
+            t_last = now
 
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     v = rec.index
     f4 = np.float32
     depth_cm = depth_to_cm(rec.depth)
-    ideal_cm = (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4)
     com = rec.extra_npz.get("com_heatmap")
     # With the CoM parameters the heat map costs ~nothing (its residual from the prediction,
     # which needs the exact depth_ideal): exact in both modes, and smaller than rounding both.
     residual = com is not None and rec.com_parameters is not None
+    # depth_ideal in cm only when it is not stored in metres (see below).
+    ideal_cm = None if residual else (np.asarray(rec.depth_ideal, np.float64) * M_TO_CM).astype(f4)
     if archival:
         depth_cm = _snap(depth_cm, ARCHIVAL_DEPTH_STEP_CM)
-        if not residual:
+        if ideal_cm is not None:
             ideal_cm = _snap(ideal_cm, ARCHIVAL_DEPTH_STEP_CM)
     npz: dict[str, Any] = {
         "depth": depth_cm,
@@ -674,8 +751,8 @@ def write_view(
         "occlusion_objects": np.asarray(rec.amodal, bool),
     }
     image_attrs: dict[str, dict[str, Any]] = {}
-    images: dict[str, np.ndarray] = {"depth_ideal": ideal_cm}
     ideal_m = np.asarray(rec.depth_ideal, f4)
+    images: dict[str, np.ndarray] = {"depth_ideal": ideal_m if ideal_cm is None else ideal_cm}
     if residual:
         # The renderer's own float32 metres (cm in float32 would round some away); the heat map
         # prediction below needs them exactly.
@@ -714,21 +791,34 @@ def write_view(
         for path, value in h5.items():
             if path.startswith(_GRASP_GROUPS) and path.endswith("poses_relative_to_camera"):
                 h5[path] = _archival_poses(value)
-    files: dict[str, bytes] = {
-        f"{v}_rgb.png": png_bytes(np.asarray(rec.rgb, np.uint8)),
-        f"{v}.npz": npz_bytes(**npz, **(_NPZ_ARCHIVAL if archival else {})),
-        f"{v}_depth.png": depth_picture_png(rec.depth),
-        f"{v}_scene.hdf5": hdf5_bytes(h5, share_rotations=True),
-        f"{v}_mgn.hdf5": mgn_hdf5_bytes(images, unorm16=unorm16, attrs=image_attrs),
-        f"{v}_order.csv": rec.order_csv.encode(),
-        f"{v}_order.json": _json(rec.order_json).encode(),
-        f"{v}_layout.json": _json(rec.layout_json).encode(),
-        f"{v}_camera_params.json": _json(rec.intrinsics.camera_params()).encode(),
-    }
+    lap("arrays")
+    files: dict[str, bytes] = {}
+    files[f"{v}_rgb.png"] = png_bytes(
+        np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else None
+    )
+    lap("rgb.png")
+    files[f"{v}.npz"] = npz_bytes(**npz, **(_NPZ_ARCHIVAL if archival else {}))
+    lap("npz")
+    files[f"{v}_depth.png"] = depth_picture_png(
+        np.where(valid, ideal_m, np.float32(np.nan)), level=DEPTH_PICTURE_LEVEL
+    )
+    lap("depth.png")
+    files[f"{v}_scene.hdf5"] = hdf5_bytes(h5, share_rotations=True)
+    lap("scene.hdf5")
+    files[f"{v}_mgn.hdf5"] = mgn_hdf5_bytes(
+        images, unorm16=unorm16, attrs=image_attrs, level=_MGN_ARCHIVAL_LEVEL if archival else 1
+    )
+    lap("mgn.hdf5")
+    files[f"{v}_order.csv"] = rec.order_csv.encode()
+    files[f"{v}_order.json"] = _json(rec.order_json).encode()
+    files[f"{v}_layout.json"] = _json(rec.layout_json).encode()
+    files[f"{v}_camera_params.json"] = _json(rec.intrinsics.camera_params()).encode()
+    lap("json and csv")
     paths = []
     for name, data in files.items():
         atomic_write_bytes(out / name, data)
         paths.append(out / name)
+    lap("files")
     return paths
 
 

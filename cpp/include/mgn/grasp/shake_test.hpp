@@ -116,8 +116,10 @@ struct ShakeOptions {
   /// shake axis), so more checks buy agreement with trials.
   bool staircase = false;
   int staircase_checks = 6;  ///< >= 0
-  int num_threads = 0;       ///< 0 = all hardware threads; results do not depend on it
-  std::uint64_t seed = 0;    ///< seed of the per-trial random streams
+  /// 0 = all hardware threads; results do not depend on it. The threads take grasps (staircase)
+  /// or trials (full grid) one at a time, as a grasp costs ~17 to S² trials.
+  int num_threads = 0;
+  std::uint64_t seed = 0;  ///< seed of the per-trial random streams
   /// Index of the first grasp in a larger list: grasp g of this call uses the random streams of
   /// grasp first_grasp_index + g, so scoring a list in consecutive pieces gives the same scores
   /// as scoring it whole (used to report progress).

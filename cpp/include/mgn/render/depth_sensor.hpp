@@ -59,6 +59,12 @@ struct DepthSensorParams {
   /// quantise (sub-pixel disparity, phase); a grid of 1/256 cm lets the files store the depth
   /// exactly in fewer bytes (docs/format.md).
   double depth_step = 0.0;
+  /// The reported grid grows with the noise, as a triangulating sensor's does (its depth step is a
+  /// fixed fraction of a pixel of disparity, z^2 / (f b) of it, like the z^2 noise): at a pixel
+  /// whose noise is sigma the grid is the largest 2^k depth_step (k >= 0) not above
+  /// `depth_step_noise_fraction` * sigma (0 = the fixed depth_step). 0.5 adds at most
+  /// sigma^2 / 48 of variance (+1 % of sigma) and keeps every value on the depth_step grid.
+  double depth_step_noise_fraction = 0.0;
   bool invalid_transparent = false;
   bool invalid_dark = false;
   bool invalid_mirror = false;
@@ -66,11 +72,12 @@ struct DepthSensorParams {
   /// Default parameters of a preset:
   ///   Ideal: no noise, no invalidation except nothing seen.
   ///   StructuredLight: range 0.3..2.0 m, sigma = 0.1 mm + 0.2 mm/m^2 * z^2 (0.3 mm at 1 m),
-  ///     baseline 0.1 m, invalid on transparent/dark/mirror surfaces, z on a 1/256 cm grid
-  ///     (0.039 mm, an eighth of the noise at 0.3 m).
+  ///     baseline 0.1 m, invalid on transparent/dark/mirror surfaces, z on a power-of-two
+  ///     multiple of 1/256 cm (0.039 mm) not above half the noise (depth_step_noise_fraction
+  ///     0.5: 1/128 cm at 0.53..1.03 m, 1/64 cm to 1.62 m).
   ///   ToF: range 0.5..4.5 m, sigma = 1.2 mm + 1.9 mm/m^2 (z - 0.4 m)^2, edges at 2 cm jumps,
   ///     flying pixel probability 0.5, invalid on transparent/dark/mirror surfaces, z on a
-  ///     1/64 cm grid (0.156 mm).
+  ///     power-of-two multiple of 1/64 cm (0.156 mm) not above half the noise.
   static DepthSensorParams preset_defaults(DepthSensorPreset preset);
   /// Throws InvalidArgument for negative or non-finite values, min_range > max_range or a
   /// probability outside [0, 1].

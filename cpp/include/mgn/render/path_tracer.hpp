@@ -27,7 +27,12 @@
 /// refraction, total internal reflection; each refraction tints by the square root of the base
 /// colour, so light through a closed wall, in and out, is tinted by the base colour once):
 /// smooth (a delta lobe) below roughness ~0.055 (GGX alpha 0.003), above it a rough dielectric
-/// (GGX reflection and refraction after Walter et al. 2007, visible-normal sampling). Meshes
+/// (GGX reflection and refraction after Walter et al. 2007, visible-normal sampling). Every GGX
+/// lobe of roughness above ~0.055 gets the multiple-scattering energy compensation of Kulla and
+/// Conty 2017 (metals coloured by the average Fresnel; the rough dielectric from both sides,
+/// reciprocal), and the diffuse lobe is weighted by what the rough specular layer above it does
+/// not reflect: a white material in a uniform environment shows that environment at any
+/// roughness (docs/rendering.md, "Multiple scattering between microfacets"). Meshes
 /// are closed or open triangle soups; a surface whose geometric normal faces the ray is entered,
 /// otherwise left (for refraction). Shading normals are per-corner normals averaged over the
 /// faces around a vertex whose normals are within 45 degrees (sharp creases keep flat normals);
