@@ -5,8 +5,12 @@
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
 
+#include <array>
 #include <cmath>
 #include <vector>
+
+#include "grasp/detail/seal_trials.hpp"
+#include "raytrace/detail/parallel_rays.hpp"
 
 namespace {
 
@@ -186,4 +190,62 @@ TEST(CameraRays, CentrePixelLooksAlongTheOpticalAxis) {
   EXPECT_NEAR(dir.z(), -1.0f, 1e-4f);
   EXPECT_NEAR(dir.x(), -0.005f, 1e-4f);
   EXPECT_NEAR(dir.y(), 0.0f, 1e-6f);
+}
+
+// The private parallel-ray fast paths (packets, used by the suction seal trials) against one
+// plain cast per ray through the public API: same hits, distances, normals and any/all answers,
+// for bundles whose size is no multiple of the packet width and that straddle silhouettes.
+TEST(ParallelRays, PacketPathsEqualOneCastPerRay) {
+  const mgn::Mesh sphere = mgn::make_sphere(0.05, 48, 24);
+  const mgn::Mesh box = mgn::make_box({0.04, 0.03, 0.02});
+  mgn::Pose X = mgn::Pose::Identity();
+  X.translation() << 0.06, 0.0, 0.0;
+  mgn::RayScene scene(
+      {mgn::RayGeometry{&sphere, mgn::Pose::Identity(), 0}, mgn::RayGeometry{&box, X, 1}});
+  mgn::Rng rng(5, 0);
+  int bundles_with_hits_and_misses = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int count = std::array<int, 5>{1, 7, 37, 129, 1000}[trial % 5];
+    std::vector<Eigen::Vector2d> offsets(static_cast<std::size_t>(count));
+    for (auto& p : offsets) {
+      const double rho = std::sqrt(rng.uniform(0.0, 1.0)), phi = rng.uniform(0.0, 2 * M_PI);
+      p = Eigen::Vector2d(rho * std::cos(phi), rho * std::sin(phi));
+    }
+    mgn::Vec3d dir(rng.normal(), rng.normal(), rng.normal());
+    dir.normalize();
+    mgn::Vec3d u, v;
+    mgn::detail::tangent_frame(dir, u, v);
+    // Aim near the sphere's silhouette (radius 0.05) or the box, bundle radius 5-20 mm.
+    const mgn::Vec3d aim = (trial % 3 == 0) ? mgn::Vec3d(0.07, rng.uniform(-0.02, 0.02), 0.0)
+                                            : mgn::Vec3d(rng.uniform(0.03, 0.06) * u);
+    const double scale = rng.uniform(0.005, 0.02);
+    const mgn::detail::ParallelRays rays{aim - 0.3 * dir, u, v, dir, offsets.data(), count, scale};
+    mgn::Points3f o(count, 3), d(count, 3);
+    for (int i = 0; i < count; ++i) {
+      const auto& off = offsets[static_cast<std::size_t>(i)];
+      o.row(i) = (rays.base + scale * (off.x() * u + off.y() * v)).cast<float>().transpose();
+      d.row(i) = dir.cast<float>().transpose();
+    }
+    mgn::CastOptions single;
+    single.num_threads = 1;
+    const mgn::RayHits ref = scene.intersect(o, d, single);
+    const std::vector<std::uint8_t> occ = scene.occluded(o, d, single);
+    std::vector<float> t(static_cast<std::size_t>(count));
+    std::vector<mgn::Vec3f> n(static_cast<std::size_t>(count));
+    mgn::detail::parallel_first_hits(scene, rays, t.data(), n.data());
+    int hits = 0;
+    for (int i = 0; i < count; ++i) {
+      const bool hit = ref.instance_ids[static_cast<std::size_t>(i)] >= 0;
+      hits += hit;
+      ASSERT_EQ(std::isfinite(t[static_cast<std::size_t>(i)]), hit) << "trial " << trial;
+      ASSERT_EQ(occ[static_cast<std::size_t>(i)] != 0, hit) << "trial " << trial;
+      if (!hit) continue;
+      EXPECT_NEAR(t[static_cast<std::size_t>(i)], ref.distance[static_cast<std::size_t>(i)], 1e-6f);
+      EXPECT_EQ(n[static_cast<std::size_t>(i)], ref.normals.row(i).transpose()) << "ray " << i;
+    }
+    EXPECT_EQ(mgn::detail::parallel_all_hit(scene, rays), hits == count) << "trial " << trial;
+    EXPECT_EQ(mgn::detail::parallel_any_hit(scene, rays), hits > 0) << "trial " << trial;
+    bundles_with_hits_and_misses += hits > 0 && hits < count;
+  }
+  EXPECT_GE(bundles_with_hits_and_misses, 10);  // the silhouette cases are exercised
 }

@@ -247,8 +247,24 @@ struct ProbePoints {
   std::array<double, 3> r2_min{}, r2_max{}, r_min{}, r_max{};
   Vec3d c, v, w1, w2, e1, e2;
   double depth = 0;
-  std::vector<std::int32_t> stack;   // tree traversal storage (reused)
-  std::size_t next_point_block = 0;  // point blocks before this one are in the lists
+  std::vector<std::int32_t> stack;        // tree traversal storage (reused)
+  std::size_t next_point_block = 0;       // point blocks before this one are in the lists
+  std::array<std::size_t, 3> hot_next{};  // next of the kHot front slots of each list to replace
+  static constexpr std::size_t kHot = 8;
+
+  /// Moves row i of list k into one of its first kHot rows (swapping), so that the next
+  /// approaches test it early: a row inside a box at one angle is often inside at others. The
+  /// order of the rows does not change any_inside's answer (whether any row is inside).
+  void promote(int k, std::size_t i) {
+    if (i < kHot) return;
+    BoxPoints& l = lists[k];
+    const std::size_t j = hot_next[k];
+    hot_next[k] = (j + 1) % kHot;
+    std::swap(l.y0[i], l.y0[j]);
+    std::swap(l.y1[i], l.y1[j]);
+    std::swap(l.z0[i], l.z0[j]);
+    std::swap(l.z1[i], l.z1[j]);
+  }
 
   // Slack of the block tests (m): covers the rounding of the block-level distances, so a
   // skipped block never holds a row that the per-row tests would keep.
@@ -307,6 +323,7 @@ struct ProbePoints {
     v = grasp.closing;
     w1 = e1.cross(v), w2 = e2.cross(v);
     next_point_block = 0;
+    hot_next = {0, 0, 0};
   }
 
   /// Adds the rows of the next point block that may reach a box to the point lists; false when
@@ -357,18 +374,22 @@ struct ProbePoints {
   /// Whether an object point lies strictly inside a gripper box for the approach angle t. The
   /// point lists are built block by block only as far as needed: a colliding approach usually
   /// finds an inside point early, and every later call first scans the rows already built. The
-  /// answer ("any row inside") is that of a scan of every row.
+  /// answer ("any row inside") is that of a scan of every row. A row found inside is moved to
+  /// the front of its list (promote), so the probe's next approaches test it first.
   bool any_inside(double t) {
     const double ct = std::cos(t), st = std::sin(t);
     std::array<std::size_t, 3> from{};
     while (true) {
       for (int k = 0; k < 3; ++k) {
-        const BoxPoints& l = lists[k];
+        BoxPoints& l = lists[k];
         const std::size_t n = l.y0.size();
         for (std::size_t i = from[k]; i < n; ++i) {
           const double z = ct * l.z0[i] + st * l.z1[i];
           const double y = ct * l.y0[i] + st * l.y1[i];
-          if (z > l.z_lo && z < l.z_hi && std::abs(y) < l.y_half) return true;
+          if (z > l.z_lo && z < l.z_hi && std::abs(y) < l.y_half) {
+            promote(k, i);
+            return true;
+          }
         }
         from[k] = n;
       }
