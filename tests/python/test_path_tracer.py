@@ -437,6 +437,31 @@ def test_denoiser_albedo_and_normal_are_taken_through_smooth_glass():
         np.testing.assert_allclose(out.normal.reshape(-1, 3).mean(0), (0, 0, 1), atol=1e-3)
 
 
+def test_denoiser_guides_behind_glass_are_weighted_by_fresnel_not_drawn_at_random():
+    """At smooth glass both Fresnel branches give the guides, weighted by their shares, so one
+    sample per pixel already gives every pixel the expected guide: a clear pane (ior 1.5) over a
+    red floor under a black dome shows the floor's albedo times the transmitted share (the
+    reflected share sees the black dome) in EVERY pixel, between (1 - R)^2 and (1 - R) of it
+    (the second interface's choice still varies). Drawing one branch at random, as before, left
+    ~4 % of the pixels black (the reflection) at 1 spp."""
+    red = PbrMaterial(base_color=(0.8, 0.1, 0.1), ior=1.0)
+    X = np.eye(4)
+    X[:3, 3] = (0, 0, 0.3)
+    view = camera((0, 0, 1.0), (0, 0, 0), 32, 10, up=(0, 1, 0))
+    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=1.5)
+    scene = PathScene([quad(4.0), make_box([2.0, 2.0, 0.02])], np.stack([np.eye(4), X]),
+                      [1, 2], [[red], [glass]], (), BLACK)  # fmt: skip
+    out = scene.render(view, PathTraceOptions(spp=1, max_bounces=8, seed=5))
+    assert np.all(out.instance_ids == 2)
+    R = ((1.5 - 1) / (1.5 + 1)) ** 2  # 0.04 at normal incidence (the view is within 5 degrees)
+    a = out.albedo.reshape(-1, 3)[:, 0]
+    assert a.min() >= 0.8 * (1 - R) ** 2 - 2e-3, a.min()
+    assert a.max() <= 0.8 * (1 - R) + 2e-3, a.max()
+    np.testing.assert_allclose(
+        out.normal.reshape(-1, 3), np.tile((0, 0, 1), (a.size, 1)), atol=1e-3
+    )
+
+
 def test_glass_sphere_total_internal_reflection_keeps_energy():
     """A clear glass sphere in a uniform dome L reflects and refracts without absorption: every
     path eventually escapes (total internal reflection included), so the sphere shows L (the

@@ -551,6 +551,12 @@ F3 texture_lookup(const MaterialData& m, float u, float v) {
                   pt::lerp(texel(x0, y1), texel(x1, y1), ax), ay);
 }
 
+/// Smooth, mostly transmissive glass: the denoiser's guides are taken behind it (trace()).
+bool see_through(const MaterialData& m) {
+  return m.transmission * (1.0f - m.metallic) >= 0.5f &&
+         m.alpha <= pt::ShadingMaterial::kRoughAlpha;
+}
+
 void make_hit(const Geometry& G, const RTCRayHit& rh, F3 dir, Hit& h) {
   const GeometryData& g = G.geoms[rh.hit.geomID];
   const unsigned f = rh.hit.primID;
@@ -714,12 +720,18 @@ class Integrator {
     float prev_pdf = 0.0f;   // solid-angle pdf of the BSDF sample that made the current ray
     F3 prev_n(0.0f);         // shading normal at the previous vertex (for the environment pdf)
     float eta_scale = 1.0f;  // product of eta^2 over the refractions so far
-    aov_albedo = F3(0.0f);
-    aov_normal = F3(0.0f);
     // The albedo and normal for the denoiser are those of the first surface that is not smooth
     // glass: through (or in) a smooth dielectric they are taken at the next hit, so that the
     // denoiser keeps what is seen through glass instead of smoothing it into a flat surface.
+    // At a split smooth dielectric both branches contribute, weighted by their Fresnel shares:
+    // the other branch's first hit goes into aov_acc_* now, the continuing one's guide (aov_a,
+    // aov_n, what it shows so far) is weighted aov_w at the end. About the expectation of
+    // following the randomly chosen branch only (the other branch is followed through further
+    // glass by refraction alone), without its noise: a pixel no longer shows the reflection's
+    // guide or the transmission's at random.
     bool aov_open = true;
+    F3 aov_a(0.0f), aov_n(0.0f), aov_acc_a(0.0f), aov_acc_n(0.0f);
+    float aov_w = 1.0f;
     RTCRayHit rh;
     Hit h;
     for (int depth = 0;; ++depth) {
@@ -742,7 +754,7 @@ class Integrator {
           w = power_heuristic(prev_pdf, pl);
         }
         add(L, beta_e * l.radiance * w, depth >= 2);
-        if (aov_open) aov_albedo = pt::F3(std::min(1.0f, max_comp(l.radiance)));
+        if (aov_open) aov_a = pt::F3(std::min(1.0f, max_comp(l.radiance)));
         break;
       }
       if (!hit) {
@@ -753,7 +765,7 @@ class Integrator {
             w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
           add(L, beta_e * Le * w, depth >= 2);
           if (aov_open)
-            aov_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+            aov_a = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
         }
         break;
       }
@@ -777,10 +789,9 @@ class Integrator {
         add(L, beta_e * m.emission * w, depth >= 2);
       }
       if (aov_open) {
-        aov_albedo = h.base;
-        aov_normal = h.ns;
-        aov_open = m.transmission * (1.0f - m.metallic) >= 0.5f &&
-                   m.alpha <= pt::ShadingMaterial::kRoughAlpha;
+        aov_a = h.base;
+        aov_n = h.ns;
+        aov_open = see_through(m);
       }
       if (depth >= opt_.max_bounces) break;
 
@@ -818,8 +829,19 @@ class Integrator {
                        &split))
         break;
       if (split.on) {
-        if (max_comp(split.other_weight) > 0.0f)
+        if (aov_open) {
+          // The other branch's guide (followed through further smooth glass by refraction),
+          // weighted by its share; the continuing branch keeps the rest.
+          F3 oa = aov_a, on = aov_n;
+          const F3 Le = emitted(h, split.other_dir, &oa, &on);
+          if (max_comp(split.other_weight) > 0.0f)
+            add(L, beta * split.other_weight * Le, depth >= 1);
+          aov_acc_a += oa * (aov_w * split.other_share);
+          aov_acc_n += on * (aov_w * split.other_share);
+          aov_w *= 1.0f - split.other_share;
+        } else if (max_comp(split.other_weight) > 0.0f) {
           add(L, beta * split.other_weight * emitted(h, split.other_dir), depth >= 1);
+        }
         beta_e = beta * split.weight;
       }
       beta *= weight;
@@ -840,6 +862,8 @@ class Integrator {
       o = offset_origin(h, wi_w);
       d = wi_w;
     }
+    aov_albedo = aov_acc_a + aov_a * aov_w;
+    aov_normal = aov_acc_n + aov_n * aov_w;
     return L;
   }
 
@@ -933,26 +957,70 @@ class Integrator {
     F3 weight;
     F3 other_dir;
     F3 other_weight;
+    float other_share = 0.0f;  // the other direction's probability: F or 1 - F
   };
 
   /// Radiance arriving at h.p from direction d (world), emitted by the first thing the ray from
   /// h.p meets: an area light, an emissive triangle's front side or the environment (0 for
-  /// anything else). Unweighted: it is the light seen through a delta lobe (no MIS).
-  F3 emitted(const Hit& h, F3 d) {
+  /// anything else). Unweighted: it is the light seen through a delta lobe (no MIS). When given,
+  /// aux_albedo / aux_normal receive the denoiser guides of what the ray meets, as trace() takes
+  /// them (the normal is left as given for a light or the environment; see aux_behind_glass).
+  F3 emitted(const Hit& h, F3 d, F3* aux_albedo = nullptr, F3* aux_normal = nullptr) {
     const F3 o = offset_origin(h, d);
     RTCRayHit rh;
     const bool hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
     const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
     float t_light;
     const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
-    if (li >= 0) return L_.light_data[li].radiance;
-    if (!hit) return L_.env_on ? L_.env(d) : F3(0.0f);
+    if (li >= 0) {
+      if (aux_albedo) *aux_albedo = F3(std::min(1.0f, max_comp(L_.light_data[li].radiance)));
+      return L_.light_data[li].radiance;
+    }
+    if (!hit) {
+      const F3 Le = L_.env(d);
+      if (aux_albedo)
+        *aux_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+      return L_.env_on ? Le : F3(0.0f);
+    }
+    if (aux_albedo) aux_behind_glass(rh, d, *aux_albedo, *aux_normal);
     const GeometryData& g = G_.geoms[rh.hit.geomID];
     const MaterialData& m = G_.mats[g.face_material[rh.hit.primID]];
     if (!m.emissive) return F3(0.0f);
     const auto& fnr = G_.rays->impl().world_normals[rh.hit.geomID];
     const F3 ng(fnr(rh.hit.primID, 0), fnr(rh.hit.primID, 1), fnr(rh.hit.primID, 2));
     return dot(d, ng) < 0.0f ? m.emission : F3(0.0f);
+  }
+
+  /// The denoiser guides along a ray whose first hit is `rh` (direction d): the first surface that
+  /// is not see-through glass, followed through up to 8 smooth glass interfaces by refraction
+  /// (total internal reflection: reflection), as the camera sees through a bottle's walls; a
+  /// light or the environment gives its clamped radiance (normal unchanged).
+  void aux_behind_glass(RTCRayHit rh, F3 d, F3& albedo, F3& normal) {
+    Hit g;
+    for (int k = 0;; ++k) {
+      make_hit(G_, rh, d, g);
+      if (!see_through(*g.mat) || k == 8) {
+        albedo = g.base;
+        normal = g.ns;
+        return;
+      }
+      // ns faces the side d came from; eta = n_incident / n_transmitted.
+      const float eta = g.front ? 1.0f / g.mat->ior : g.mat->ior;
+      const float ci = std::min(1.0f, std::max(0.0f, -dot(d, g.ns)));
+      const float sin2_t = eta * eta * (1.0f - ci * ci);
+      d = sin2_t >= 1.0f ? normalize(d + g.ns * (2.0f * ci))
+                         : normalize(d * eta + g.ns * (eta * ci - std::sqrt(1.0f - sin2_t)));
+      const F3 o = offset_origin(g, d);
+      const bool hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
+      float t_light;
+      const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
+      const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
+      if (li >= 0 || !hit) {
+        const F3 Le = li >= 0 ? F3(max_comp(L_.light_data[li].radiance)) : L_.env(d);
+        albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+        return;
+      }
+    }
   }
 
   /// Samples the BSDF: direction, weight f*cos/pdf (including lobe choice), solid-angle pdf of
@@ -1020,12 +1088,12 @@ class Integrator {
       if (u_fresnel < F) {
         wi_w = reflected();
         weight = F3(scale);
-        if (split_on) *split = {true, F3(F * scale), refracted(), w_refract * (1.0f - F)};
+        if (split_on) *split = {true, F3(F * scale), refracted(), w_refract * (1.0f - F), 1.0f - F};
       } else {
         wi_w = refracted();
         weight = w_refract;
         eta2 = eta * eta;
-        if (split_on) *split = {true, w_refract * (1.0f - F), reflected(), F3(F * scale)};
+        if (split_on) *split = {true, w_refract * (1.0f - F), reflected(), F3(F * scale), F};
       }
       return true;
     }
