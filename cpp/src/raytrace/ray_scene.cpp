@@ -70,8 +70,9 @@ void set_ray(RTCRay& r, const float* o, const float* d, float tnear, float tfar)
   r.flags = 0;
 }
 
-/// One ray into lane k of an Embree packet of 16 (RTCRay16).
-void set_lane(RTCRay16& r, int k, const float* o, const float* d, float tnear, float tfar) {
+/// One ray into lane k of an Embree packet (RTCRay4/8/16).
+template <class Packet>
+void set_lane(Packet& r, int k, const float* o, const float* d, float tnear, float tfar) {
   r.org_x[k] = o[0];
   r.org_y[k] = o[1];
   r.org_z[k] = o[2];
@@ -462,18 +463,7 @@ void fill_packet(ParallelRay& r, int* valid, const ParallelRays& rays, int start
     const Eigen::Vector3f o =
         (rays.base + rays.scale * (off.x() * rays.u + off.y() * rays.v)).cast<float>();
     valid[k] = k < m ? -1 : 0;
-    r.org_x[k] = o[0];
-    r.org_y[k] = o[1];
-    r.org_z[k] = o[2];
-    r.dir_x[k] = d[0];
-    r.dir_y[k] = d[1];
-    r.dir_z[k] = d[2];
-    r.tnear[k] = 0.0f;
-    r.tfar[k] = rays.tfar;
-    r.time[k] = 0.0f;
-    r.mask[k] = 0xFFFFFFFFu;
-    r.id[k] = static_cast<unsigned>(k);
-    r.flags[k] = 0;
+    set_lane(r, k, o.data(), d.data(), 0.0f, rays.tfar);
   }
 }
 

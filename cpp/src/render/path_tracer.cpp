@@ -551,6 +551,13 @@ F3 texture_lookup(const MaterialData& m, float u, float v) {
                   pt::lerp(texel(x0, y1), texel(x1, y1), ax), ay);
 }
 
+/// The denoiser's albedo guide where a path sees an emitter: its radiance clamped to [0, 1]
+/// (per channel for the environment, grey for a lamp).
+F3 emitter_guide(F3 Le) {
+  return F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+}
+F3 lamp_guide(F3 Le) { return F3(std::min(1.0f, max_comp(Le))); }
+
 /// Smooth, mostly transmissive glass: the denoiser's guides are taken behind it (trace()).
 bool see_through(const MaterialData& m) {
   return m.transmission * (1.0f - m.metallic) >= 0.5f &&
@@ -754,7 +761,7 @@ class Integrator {
           w = power_heuristic(prev_pdf, pl);
         }
         add(L, beta_e * l.radiance * w, depth >= 2);
-        if (aov_open) aov_a = pt::F3(std::min(1.0f, max_comp(l.radiance)));
+        if (aov_open) aov_a = lamp_guide(l.radiance);
         break;
       }
       if (!hit) {
@@ -764,8 +771,7 @@ class Integrator {
           if (!prev_delta && L_.env_on)
             w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
           add(L, beta_e * Le * w, depth >= 2);
-          if (aov_open)
-            aov_a = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+          if (aov_open) aov_a = emitter_guide(Le);
         }
         break;
       }
@@ -903,37 +909,37 @@ class Integrator {
       if (pdf_light <= 0.0f) return F3(0.0f);
       dist = std::numeric_limits<float>::infinity();
       Le = L_.env(wi_w);
-    } else if (k >= L_.light_data.size()) {  // an emissive triangle
-      const TriEmitter& t = L_.tris[k - L_.light_data.size()];
-      const float su = std::sqrt(u.x);  // uniform point on the triangle
-      const F3 q = t.p0 + t.e1 * (1.0f - su) + t.e2 * (u.y * su);
-      const F3 v = q - h.p;
-      const float d2 = dot(v, v);
-      if (!(d2 > 0.0f)) return F3(0.0f);
-      dist = std::sqrt(d2);
-      wi_w = v / dist;
-      const float cos_l = -dot(wi_w, t.n);
-      if (cos_l <= 0.0f) return F3(0.0f);
-      pdf_light = d2 / (t.area * cos_l);
-      Le = t.radiance;
     } else {
-      const LightData& l = L_.light_data[k];
-      F3 q;
-      if (l.disc) {
-        const pt::Sample2 dd = pt::concentric_disc(u.x, u.y);
-        q = l.centre + l.ex * (dd.x * l.hx) + l.ey * (dd.y * l.hx);
+      // A point q on an emissive triangle or an area light (normal n, area), uniform in area.
+      F3 q, n;
+      float area;
+      if (k >= L_.light_data.size()) {
+        const TriEmitter& t = L_.tris[k - L_.light_data.size()];
+        const float su = std::sqrt(u.x);
+        q = t.p0 + t.e1 * (1.0f - su) + t.e2 * (u.y * su);
+        n = t.n;
+        area = t.area;
+        Le = t.radiance;
       } else {
-        q = l.centre + l.ex * ((2.0f * u.x - 1.0f) * l.hx) + l.ey * ((2.0f * u.y - 1.0f) * l.hy);
+        const LightData& l = L_.light_data[k];
+        if (l.disc) {
+          const pt::Sample2 dd = pt::concentric_disc(u.x, u.y);
+          q = l.centre + l.ex * (dd.x * l.hx) + l.ey * (dd.y * l.hx);
+        } else {
+          q = l.centre + l.ex * ((2.0f * u.x - 1.0f) * l.hx) + l.ey * ((2.0f * u.y - 1.0f) * l.hy);
+        }
+        n = l.n;
+        area = l.area;
+        Le = l.radiance;
       }
       const F3 v = q - h.p;
       const float d2 = dot(v, v);
       if (!(d2 > 0.0f)) return F3(0.0f);
       dist = std::sqrt(d2);
       wi_w = v / dist;
-      const float cos_l = -dot(wi_w, l.n);
+      const float cos_l = -dot(wi_w, n);
       if (cos_l <= 0.0f) return F3(0.0f);
-      pdf_light = d2 / (l.area * cos_l);
-      Le = l.radiance;
+      pdf_light = d2 / (area * cos_l);
     }
     if (dot(wi_w, h.ng) <= 0.0f) return F3(0.0f);
     const F3 wi = frame.to_local(wi_w);
@@ -973,13 +979,12 @@ class Integrator {
     float t_light;
     const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
     if (li >= 0) {
-      if (aux_albedo) *aux_albedo = F3(std::min(1.0f, max_comp(L_.light_data[li].radiance)));
+      if (aux_albedo) *aux_albedo = lamp_guide(L_.light_data[li].radiance);
       return L_.light_data[li].radiance;
     }
     if (!hit) {
       const F3 Le = L_.env(d);
-      if (aux_albedo)
-        *aux_albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+      if (aux_albedo) *aux_albedo = emitter_guide(Le);
       return L_.env_on ? Le : F3(0.0f);
     }
     if (aux_albedo) aux_behind_glass(rh, d, *aux_albedo, *aux_normal);
@@ -1016,8 +1021,7 @@ class Integrator {
       const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
       const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
       if (li >= 0 || !hit) {
-        const F3 Le = li >= 0 ? F3(max_comp(L_.light_data[li].radiance)) : L_.env(d);
-        albedo = F3(std::min(1.0f, Le.x), std::min(1.0f, Le.y), std::min(1.0f, Le.z));
+        albedo = li >= 0 ? lamp_guide(L_.light_data[li].radiance) : emitter_guide(L_.env(d));
         return;
       }
     }
