@@ -62,28 +62,49 @@ long argmax_sse2(const float* x, const float* y, const float* z, int n, float dx
   return reduce(b, k, 4, dot);
 }
 
-/// Eight vertices at a time (AVX, chosen at run time).
+/// Dot products of vertices i..i+7 with (vx, vy, vz), as the scalar scan rounds them.
+__attribute__((target("avx"), always_inline)) inline __m256 dots8(const float* x, const float* y,
+                                                                  const float* z, int i, __m256 vx,
+                                                                  __m256 vy, __m256 vz) {
+  return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(x + i), vx),
+                                     _mm256_mul_ps(_mm256_loadu_ps(y + i), vy)),
+                       _mm256_mul_ps(_mm256_loadu_ps(z + i), vz));
+}
+
+/// Eight vertices at a time (AVX, chosen at run time), in two passes: the largest dot product
+/// (two independent running maxima), then the first vertex whose dot product, computed again
+/// with the same operations, equals it. _mm256_max_ps(d, m) is m unless d > m, so NaNs are
+/// skipped and the maximum is the scan's; ties (+0 and -0 included) go to the first vertex.
 __attribute__((target("avx"))) long argmax_avx(const float* x, const float* y, const float* z,
                                                int n, float dx, float dy, float dz, btScalar& dot) {
   const __m256 vx = _mm256_set1_ps(dx), vy = _mm256_set1_ps(dy), vz = _mm256_set1_ps(dz);
-  const __m256 eight = _mm256_set1_ps(8.0f);
-  __m256 best = _mm256_set1_ps(-SIMD_INFINITY);
-  __m256 best_index = _mm256_set1_ps(-1.0f);
-  __m256 index = _mm256_setr_ps(0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f);
-  for (int i = 0; i < n; i += 8) {
-    const __m256 d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(x + i), vx),
-                                                 _mm256_mul_ps(_mm256_loadu_ps(y + i), vy)),
-                                   _mm256_mul_ps(_mm256_loadu_ps(z + i), vz));
-    const __m256 gt = _mm256_cmp_ps(d, best, _CMP_GT_OQ);
-    // Selects by masks (GCC turns _mm256_blendv_ps into lane-by-lane code here).
-    best = _mm256_or_ps(_mm256_and_ps(gt, d), _mm256_andnot_ps(gt, best));
-    best_index = _mm256_or_ps(_mm256_and_ps(gt, index), _mm256_andnot_ps(gt, best_index));
-    index = _mm256_add_ps(index, eight);
+  __m256 m0 = _mm256_set1_ps(-SIMD_INFINITY), m1 = m0;
+  int i = 0;
+  for (; i + 16 <= n; i += 16) {
+    m0 = _mm256_max_ps(dots8(x, y, z, i, vx, vy, vz), m0);
+    m1 = _mm256_max_ps(dots8(x, y, z, i + 8, vx, vy, vz), m1);
   }
-  alignas(32) float b[8], k[8];
-  _mm256_store_ps(b, best);
-  _mm256_store_ps(k, best_index);
-  return reduce(b, k, 8, dot);
+  if (i < n) m0 = _mm256_max_ps(dots8(x, y, z, i, vx, vy, vz), m0);
+  // NaN-free from here (the initial value and dot products that beat it).
+  __m256 m = _mm256_max_ps(m0, m1);
+  m = _mm256_max_ps(m, _mm256_permute2f128_ps(m, m, 1));
+  m = _mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+  m = _mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+  const float best = _mm256_cvtss_f32(m);
+  dot = -SIMD_INFINITY;
+  if (!(best > -SIMD_INFINITY)) return -1;  // no dot product beats the scan's start value
+  for (int j = 0; j < n; j += 8) {
+    const __m256 d = dots8(x, y, z, j, vx, vy, vz);
+    const int hit = _mm256_movemask_ps(_mm256_cmp_ps(d, m, _CMP_EQ_OQ));
+    if (hit != 0) {
+      const int k = __builtin_ctz(static_cast<unsigned>(hit));
+      alignas(32) float v[8];
+      _mm256_store_ps(v, d);
+      dot = v[k];  // the first maximum's own value (its sign, if it is a zero)
+      return j + k;
+    }
+  }
+  return -1;  // not reached: the maximum is one of the dot products
 }
 
 #endif
