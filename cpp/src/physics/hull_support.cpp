@@ -189,7 +189,7 @@ btVector3 FastHullShape::localGetSupportingVertexWithoutMargin(const btVector3& 
   btScalar dot;
   long i = support_.argmax(vec * getLocalScaling(), dot);
   if (i < 0) i = 0;
-  return getUnscaledPoints()[i] * getLocalScaling();
+  return support_.vertex(i) * getLocalScaling();  // = getUnscaledPoints()[i] * scaling
 }
 
 void FastHullShape::batchedUnitVectorGetSupportingVertexWithoutMargin(const btVector3* vectors,
@@ -203,7 +203,7 @@ void FastHullShape::batchedUnitVectorGetSupportingVertexWithoutMargin(const btVe
     btScalar dot;
     long i = support_.argmax(vectors[j] * getLocalScaling(), dot);
     if (i < 0) i = 0;
-    supportVerticesOut[j] = getScaledPoint(static_cast<int>(i));
+    supportVerticesOut[j] = support_.vertex(i) * getLocalScaling();  // = getScaledPoint(i)
     supportVerticesOut[j][3] = dot;
   }
 }

@@ -12,6 +12,7 @@
 #include <LinearMath/btVector3.h>
 #include <btBulletCollisionCommon.h>
 
+#include <cstddef>
 #include <vector>
 
 namespace mgn::physics {
@@ -28,6 +29,11 @@ class HullSupport {
   long argmax(const btVector3& d, btScalar& dot) const;
 
   int size() const { return count_; }
+  /// Vertex i (0 <= i < size()), w = 0; read from the arrays just scanned (in cache).
+  btVector3 vertex(long i) const {
+    const auto k = static_cast<std::size_t>(i);
+    return btVector3(x_[k], y_[k], z_[k]);
+  }
 
   /// Tests only: scan 8 (AVX), 4 (SSE2) or 1 vertex at a time, at most what the processor
   /// supports (any other value: the widest supported); returns the width now used. Every width
