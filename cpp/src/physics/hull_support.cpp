@@ -111,6 +111,7 @@ __attribute__((target("avx"))) long argmax_avx(const float* x, const float* y, c
 
 int best_width() {
 #ifdef MGN_HULL_SUPPORT_X86
+  __builtin_cpu_init();  // called from a static initialiser, possibly before libgcc's
   return __builtin_cpu_supports("avx") ? 8 : 4;
 #else
   return 1;
