@@ -505,6 +505,14 @@ def test_npz_entries_are_plain_deflate_at_their_level_that_zlib_reads() -> None:
             assert zlib.crc32(expected.getvalue()) == info.CRC
         assert zf.getinfo("mask.npy").compress_size < zp.getinfo("mask.npy").compress_size
     assert npz_bytes(mask=mask, occ=occ, levels={"mask": 6}) == data
+    # zlib_levels: that entry is zlib's own stream at that level (the other stays libdeflate's).
+    mixed = npz_bytes(mask=mask, occ=occ, levels={"mask": 6}, zlib_levels={"occ": 1})
+    with zipfile.ZipFile(io.BytesIO(mixed)) as zm, zipfile.ZipFile(io.BytesIO(data)) as zf:
+        c = zlib.compressobj(1, zlib.DEFLATED, -15)
+        npy = zm.read("occ.npy")
+        assert zm.getinfo("occ.npy").compress_size == len(c.compress(npy) + c.flush())
+        assert zm.getinfo("mask.npy").compress_size == zf.getinfo("mask.npy").compress_size
+        assert np.load(io.BytesIO(mixed))["occ"].tobytes() == occ.tobytes()
 
 
 def test_h5_helpers_write_without_timestamps(tmp_path: Path) -> None:

@@ -84,7 +84,12 @@ class ZipDeflate:
     itself). Keeps the parts written (a memoryview is kept, not copied) and deflates them at
     flush in one libdeflate call; leading parts of less than 64 KiB together (e.g. a ``.npy``
     header before the array's own buffer) go first as stored blocks, so the large last part
-    is deflated without being copied next to them."""
+    is deflated without being copied next to them.
+
+    On images made of long runs of equal bytes (masks, id images, a heat map's zero residual)
+    libdeflate's compact streams (~3x smaller than zlib's level 1) take zlib's inflater 2-3x
+    longer to read back (+70 ms per 1200 x 1200 view of 20 objects): where reading speed
+    matters, deflate those with zlib's level 1 (``npz_bytes(zlib_levels=...)``)."""
 
     def __init__(self, level: int) -> None:
         self._level = _check_level(level)
@@ -143,20 +148,24 @@ def h5_write_deflated(
     data: npt.ArrayLike,
     chunks: tuple[int, ...],
     level: int,
+    *,
+    zlib_level: int | None = None,
     **kwargs: Any,
 ) -> Any:
     """Create dataset ``name`` in h5py ``group`` holding ``data`` with chunk shape ``chunks`` and
     the filters shuffle + gzip, the chunks compressed here (:func:`shuffled_chunks`, then
     :func:`zlib_stream` at libdeflate ``level``) and stored with ``write_direct_chunk``: every
-    HDF5 reader decodes them with its own gzip filter. ``kwargs`` go to ``create_dataset``
-    (e.g. ``track_times=False``). Returns the dataset."""
+    HDF5 reader decodes them with its own gzip filter. ``zlib_level``: deflate with zlib at that
+    level instead (see :class:`ZipDeflate` on images of long runs). ``kwargs`` go to
+    ``create_dataset`` (e.g. ``track_times=False``). Returns the dataset."""
     a = np.ascontiguousarray(data)
     ds = group.create_dataset(
         name, shape=a.shape, dtype=a.dtype, chunks=chunks, compression="gzip",
         compression_opts=min(_check_level(level), 9), shuffle=True, **kwargs,
     )  # fmt: skip
     for offset, raw in shuffled_chunks(a, chunks):
-        ds.id.write_direct_chunk(offset, zlib_stream(raw, level), 0)
+        stream = zlib_stream(raw, level) if zlib_level is None else zlib.compress(raw, zlib_level)
+        ds.id.write_direct_chunk(offset, stream, 0)
     return ds
 
 

@@ -18,6 +18,7 @@ import io
 import lzma
 import struct
 import zipfile
+import zlib
 from collections.abc import Collection, Mapping
 from typing import Any
 
@@ -83,6 +84,7 @@ def npz_bytes(
     level: int = 1,
     levels: Mapping[str, int] | None = None,
     lzma_entries: Collection[str] = (),
+    zlib_levels: Mapping[str, int] | None = None,
     **arrays: npt.ArrayLike,
 ) -> bytes:
     """The bytes of an ``.npz`` file holding ``arrays`` (readable by ``np.load``), reproducible.
@@ -96,7 +98,9 @@ def npz_bytes(
     named in ``lzma_entries`` are zip entries of method 14 (LZMA, zip format 6.3) with the
     literal and position bits set for 4-byte values (:data:`NPZ_LZMA_FILTER`): a noisy float32
     image in ~0.6x the bytes of deflate, ~4x the CPU. ``np.load`` (``zipfile``) reads every
-    entry; the LZMA ones need a zip reader with LZMA (Python's has it).
+    entry; the LZMA ones need a zip reader with LZMA (Python's has it). Arrays named in
+    ``zlib_levels`` are deflated by zlib at the given level instead of libdeflate (images of long
+    runs, which zlib's level 1 keeps fast to inflate: :class:`mgn.base.compress.ZipDeflate`).
 
     Raises:
         ValueError: an array of dtype object.
@@ -122,6 +126,8 @@ def npz_bytes(
                 if name in lzma_entries and hasattr(fh, "_compressor"):
                     # zipfile's own LZMA compressor has fixed settings: ours, same stream layout.
                     fh._compressor = _NpzLzma()
+                elif compress and name in (zlib_levels or {}) and hasattr(fh, "_compressor"):
+                    fh._compressor = zlib.compressobj((zlib_levels or {})[name], zlib.DEFLATED, -15)
                 elif compress and hasattr(fh, "_compressor"):
                     # zipfile's raw-deflate compressor (zlib, wbits -15) -> libdeflate's.
                     fh._compressor = ZipDeflate(lvl)

@@ -80,6 +80,7 @@ __all__ = [
     "HDF5_FLOAT_KEYS",
     "HDF5_INT_LEAVES",
     "POSE_COLUMNS_GROUP",
+    "RUN_IMAGES",
     "SHARED_ROTATION_ENCODING",
     "TOOL_POSE_LEAVES",
     "MGN_HDF5_CM",
@@ -481,13 +482,16 @@ def mgn_hdf5_bytes(
     unorm16: tuple[str, ...] = (),
     attrs: Mapping[str, Mapping[str, Any]] | None = None,
     level: int = 6,
+    zlib_levels: Mapping[str, int] | None = None,
 ) -> bytes:
     """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate (libdeflate
     ``level``, :func:`mgn.base.compress.h5_write_deflated`), without timestamps; float32 images
     stored with :func:`encode_float_image` (attribute ``mgn_encoding`` =
     :data:`FLOAT_DELTA_ENCODING`), those named in ``unorm16`` (values in
     [0, 1]) as uint16 ``round(x * 65535)`` (:data:`UNORM16_ENCODING`, lossy: archival mode);
-    ``attrs``: further attributes by image name. Integer images are stored as given."""
+    ``attrs``: further attributes by image name; ``zlib_levels``: images deflated by zlib at the
+    given level instead (fast to inflate where they are long runs). Integer images are stored as
+    given."""
     buf = io.BytesIO()
     with h5py.File(buf, "w") as h5:
         for name, value in images.items():
@@ -501,7 +505,9 @@ def mgn_hdf5_bytes(
                 coded = FLOAT_DELTA_ENCODING
             if data.size:
                 chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:])
-                ds = h5_write_deflated(h5, name, data, chunks, level, **H5_DATASET_KWARGS)
+                ds = h5_write_deflated(h5, name, data, chunks, level,
+                                       zlib_level=(zlib_levels or {}).get(name),
+                                       **H5_DATASET_KWARGS)  # fmt: skip
             else:
                 ds = h5_create_dataset(h5, name, data)
             if coded:
@@ -683,6 +689,19 @@ def _json(data: Any) -> str:
     return json.dumps(data, indent=1, sort_keys=False, allow_nan=True) + "\n"
 
 
+#: Images of long runs of equal bytes (masks, ids, the occlusion rate per object region, the CoM
+#: heat map's residual and ``valid_depth``) that the default mode deflates with zlib's level 1:
+#: libdeflate's streams of them are ~3x smaller (-6.7 MB per scene) but zlib inflates them 2-3x
+#: slower (+70 ms per 1200 x 1200 view to read every array); the archival mode takes the bytes.
+RUN_IMAGES: tuple[str, ...] = (
+    "instances_objects",
+    "instances_semantic",
+    "occlusion",
+    "occlusion_objects",
+    "com_heatmap",
+    "valid_depth",
+)
+
 #: Archival mode's npz: the sensor depth an LZMA entry (:data:`NPZ_LZMA_FILTER`).
 _NPZ_ARCHIVAL: dict[str, Any] = {"lzma_entries": ("depth",)}
 #: Archival mode's libdeflate level of ``{v}_rgb.png``: 0.97x the bytes of :data:`DEFLATE_LEVEL`
@@ -794,7 +813,10 @@ def write_view(
         np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else DEFLATE_LEVEL
     )
     lap("rgb.png")
-    files[f"{v}.npz"] = npz_bytes(**npz, level=NPZ_LEVEL, **(_NPZ_ARCHIVAL if archival else {}))
+    runs = {} if archival else dict.fromkeys(RUN_IMAGES, 1)
+    files[f"{v}.npz"] = npz_bytes(
+        **npz, level=NPZ_LEVEL, zlib_levels=runs, **(_NPZ_ARCHIVAL if archival else {})
+    )
     lap("npz")
     files[f"{v}_depth.png"] = depth_picture_png(
         np.where(valid, ideal_m, np.float32(np.nan)), level=DEPTH_PICTURE_LEVEL
@@ -803,7 +825,7 @@ def write_view(
     files[f"{v}_scene.hdf5"] = hdf5_bytes(h5, share_rotations=True, level=DEFLATE_LEVEL)
     lap("scene.hdf5")
     files[f"{v}_mgn.hdf5"] = mgn_hdf5_bytes(
-        images, unorm16=unorm16, attrs=image_attrs, level=DEFLATE_LEVEL
+        images, unorm16=unorm16, attrs=image_attrs, level=DEFLATE_LEVEL, zlib_levels=runs
     )
     lap("mgn.hdf5")
     files[f"{v}_order.csv"] = rec.order_csv.encode()
