@@ -202,9 +202,18 @@ GLuint upload_texture(const Material& mat, const std::string& mesh_name) {
 }
 
 struct FullLocs {
-  GLint model, nmat, view, proj, light_vp, base, alpha, spec, shininess, has_tex, tex, eye,
-      light_pos, light_rgb, ambient, shadows, shadow_map, shadow_texel, id;
+  GLint model, nmat, view, proj, light_vp, base, alpha, spec, shininess, tex, eye, light_pos,
+      light_rgb, ambient, shadow_map, shadow_texel, id;
 };
+
+/// The full fragment shader with MGN_TEXTURED and MGN_SHADOWS defined (0 or 1) after its
+/// #version line (see detail/shaders.hpp).
+std::string full_fragment_source(bool textured, bool shadows) {
+  const std::string src = detail::kFullFs;
+  const std::size_t eol = src.find('\n') + 1;
+  return src.substr(0, eol) + "#define MGN_TEXTURED " + (textured ? "1" : "0") +
+         "\n#define MGN_SHADOWS " + (shadows ? "1" : "0") + "\n" + src.substr(eol);
+}
 struct SimpleLocs {
   GLint model, view, proj, id;
 };
@@ -235,8 +244,10 @@ struct Renderer::Impl {
   std::vector<unsigned char> dummy;  // OSMesa default framebuffer (unused: we draw to FBOs)
   GLuint fbo = 0, rb_color = 0, rb_z = 0, rb_id = 0, rb_depth = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
-  GLuint prog_full = 0, prog_simple = 0, prog_shadow = 0;
-  FullLocs lf{};
+  /// Full-pass programs by [textured][shadows] (shader variants, see detail/shaders.hpp).
+  GLuint prog_full[2][2] = {{0, 0}, {0, 0}};
+  GLuint prog_simple = 0, prog_shadow = 0;
+  FullLocs lf[2][2]{};
   SimpleLocs ls{};
   ShadowLocs lsh{};
   std::vector<GpuMesh> meshes;
@@ -280,16 +291,27 @@ Renderer::Renderer(int max_width, int max_height) : impl_(std::make_unique<Impl>
   std::lock_guard<std::mutex> lock(I.mutex);
   try {
     I.make_current();
-    I.prog_full = link_program(detail::kFullVs, detail::kFullFs, "full");
+    for (int t = 0; t < 2; ++t) {
+      for (int sh = 0; sh < 2; ++sh) {
+        const std::string fs = full_fragment_source(t == 1, sh == 1);
+        I.prog_full[t][sh] = link_program(detail::kFullVs, fs.c_str(), "full");
+      }
+    }
     I.prog_simple = link_program(detail::kSimpleVs, detail::kSimpleFs, "simple");
     I.prog_shadow = link_program(detail::kShadowVs, detail::kShadowFs, "shadow");
     auto u = [](GLuint p, const char* n) { return glGetUniformLocation(p, n); };
-    GLuint p = I.prog_full;
-    I.lf = {u(p, "u_model"),      u(p, "u_nmat"),         u(p, "u_view"),    u(p, "u_proj"),
-            u(p, "u_light_vp"),   u(p, "u_base"),         u(p, "u_alpha"),   u(p, "u_spec"),
-            u(p, "u_shininess"),  u(p, "u_has_tex"),      u(p, "u_tex"),     u(p, "u_eye"),
-            u(p, "u_light_pos"),  u(p, "u_light_rgb"),    u(p, "u_ambient"), u(p, "u_shadows"),
-            u(p, "u_shadow_map"), u(p, "u_shadow_texel"), u(p, "u_id")};
+    GLuint p = 0;
+    for (int t = 0; t < 2; ++t) {
+      for (int sh = 0; sh < 2; ++sh) {
+        p = I.prog_full[t][sh];
+        I.lf[t][sh] = {u(p, "u_model"),        u(p, "u_nmat"),     u(p, "u_view"),
+                       u(p, "u_proj"),         u(p, "u_light_vp"), u(p, "u_base"),
+                       u(p, "u_alpha"),        u(p, "u_spec"),     u(p, "u_shininess"),
+                       u(p, "u_tex"),          u(p, "u_eye"),      u(p, "u_light_pos"),
+                       u(p, "u_light_rgb"),    u(p, "u_ambient"),  u(p, "u_shadow_map"),
+                       u(p, "u_shadow_texel"), u(p, "u_id")};
+      }
+    }
     p = I.prog_simple;
     I.ls = {u(p, "u_model"), u(p, "u_view"), u(p, "u_proj"), u(p, "u_id")};
     p = I.prog_shadow;
@@ -358,7 +380,8 @@ Renderer::~Renderer() {
     glDeleteFramebuffers(1, &I.fbo);
     glDeleteFramebuffers(1, &I.shadow_fbo);
     glDeleteTextures(1, &I.shadow_tex);
-    glDeleteProgram(I.prog_full);
+    for (auto& row : I.prog_full)
+      for (GLuint prog : row) glDeleteProgram(prog);
     glDeleteProgram(I.prog_simple);
     glDeleteProgram(I.prog_shadow);
   }
@@ -678,44 +701,43 @@ struct RenderSteps {
     glUniformMatrix4fv(I.ls.view, 1, GL_FALSE, view_m.data());
     glUniformMatrix4fv(I.ls.proj, 1, GL_FALSE, proj.data());
     if (!full) return;
-    glUseProgram(I.prog_full);
-    glUniformMatrix4fv(I.lf.view, 1, GL_FALSE, view_m.data());
-    glUniformMatrix4fv(I.lf.proj, 1, GL_FALSE, proj.data());
-    glUniformMatrix4fv(I.lf.light_vp, 1, GL_FALSE, light_vp.data());
     const Vec3f eyef = frame.eye.cast<float>(), lp = light.position_W.cast<float>();
     const Vec3f lrgb =
         (color_temperature_rgb(light.color_temperature) * light.intensity).cast<float>();
     const Vec3f amb = Vec3f::Constant(static_cast<float>(light.ambient));
-    glUniform3fv(I.lf.eye, 1, eyef.data());
-    glUniform3fv(I.lf.light_pos, 1, lp.data());
-    glUniform3fv(I.lf.light_rgb, 1, lrgb.data());
-    glUniform3fv(I.lf.ambient, 1, amb.data());
-    glUniform1i(I.lf.shadows, shadows ? 1 : 0);
-    glUniform1f(I.lf.shadow_texel, 1.0f / kShadowSize);
-    glUniform1i(I.lf.tex, 0);
-    glUniform1i(I.lf.shadow_map, 1);
+    for (int t = 0; t < 2; ++t) {
+      const FullLocs& lf = I.lf[t][shadows ? 1 : 0];
+      glUseProgram(I.prog_full[t][shadows ? 1 : 0]);
+      glUniformMatrix4fv(lf.view, 1, GL_FALSE, view_m.data());
+      glUniformMatrix4fv(lf.proj, 1, GL_FALSE, proj.data());
+      glUniformMatrix4fv(lf.light_vp, 1, GL_FALSE, light_vp.data());
+      glUniform3fv(lf.eye, 1, eyef.data());
+      glUniform3fv(lf.light_pos, 1, lp.data());
+      glUniform3fv(lf.light_rgb, 1, lrgb.data());
+      glUniform3fv(lf.ambient, 1, amb.data());
+      glUniform1f(lf.shadow_texel, 1.0f / kShadowSize);
+      glUniform1i(lf.tex, 0);
+      glUniform1i(lf.shadow_map, 1);
+    }
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
     glActiveTexture(GL_TEXTURE0);
   }
 
-  /// Sets the per-instance uniforms of the current program and binds the instance's mesh.
+  /// Binds the instance's mesh; for the geometry pass (!shade) also sets the per-instance
+  /// uniforms of the simple program (the shading programs get theirs in draw_group).
   void bind_instance(std::size_t i, bool shade) const {
     const Instance& in = I.instances[i];
-    const Mat4f model = in.X_WO.matrix().cast<float>();
-    if (shade) {
-      const Mat3f nmat = in.X_WO.linear().cast<float>();  // rigid: normal matrix = rotation
-      glUniformMatrix4fv(I.lf.model, 1, GL_FALSE, model.data());
-      glUniformMatrix3fv(I.lf.nmat, 1, GL_FALSE, nmat.data());
-      glUniform1i(I.lf.id, in.instance_id);
-    } else {
+    if (!shade) {
+      const Mat4f model = in.X_WO.matrix().cast<float>();
       glUniformMatrix4fv(I.ls.model, 1, GL_FALSE, model.data());
       glUniform1i(I.ls.id, in.instance_id);
     }
     glBindVertexArray(I.meshes[in.mesh_id].vao);
   }
 
-  /// Draws one group of instance i (with its material when shading).
+  /// Draws one group of instance i (when shading: with its material, by the program variant
+  /// of its texture and of the frame's shadows).
   void draw_group(std::size_t i, const DrawGroup& dg, bool shade) const {
     const Instance& in = I.instances[i];
     const GpuMesh& m = I.meshes[in.mesh_id];
@@ -725,11 +747,18 @@ struct RenderSteps {
         mat.base = random_colors[i];
         mat.texture = 0;
       }
-      glUniform3fv(I.lf.base, 1, mat.base.data());
-      glUniform1f(I.lf.alpha, mat.alpha);
-      glUniform3fv(I.lf.spec, 1, mat.specular.data());
-      glUniform1f(I.lf.shininess, mat.shininess);
-      glUniform1i(I.lf.has_tex, mat.texture ? 1 : 0);
+      const int t = mat.texture ? 1 : 0, sh = shadows ? 1 : 0;
+      const FullLocs& lf = I.lf[t][sh];
+      glUseProgram(I.prog_full[t][sh]);
+      const Mat4f model = in.X_WO.matrix().cast<float>();
+      const Mat3f nmat = in.X_WO.linear().cast<float>();  // rigid: normal matrix = rotation
+      glUniformMatrix4fv(lf.model, 1, GL_FALSE, model.data());
+      glUniformMatrix3fv(lf.nmat, 1, GL_FALSE, nmat.data());
+      glUniform1i(lf.id, in.instance_id);
+      glUniform3fv(lf.base, 1, mat.base.data());
+      glUniform1f(lf.alpha, mat.alpha);
+      glUniform3fv(lf.spec, 1, mat.specular.data());
+      glUniform1f(lf.shininess, mat.shininess);
       glBindTexture(GL_TEXTURE_2D, mat.texture);
     }
     glDrawElements(GL_TRIANGLES, dg.count, GL_UNSIGNED_INT,
@@ -765,7 +794,6 @@ struct RenderSteps {
     glDrawBuffers(3, color_bufs);
     glDepthFunc(GL_LEQUAL);
     glDepthMask(GL_FALSE);
-    glUseProgram(I.prog_full);
     draw_opaque(true);
     glDepthMask(GL_TRUE);
     glDepthFunc(GL_LESS);

@@ -7,7 +7,10 @@
 
 namespace mgn::detail {
 
-// Full pass: colour (location 0), z-depth (1), instance id (2).
+// Full pass: colour (location 0), z-depth (1), instance id (2). The fragment shader is compiled
+// in four variants, MGN_TEXTURED and MGN_SHADOWS each 0 or 1 (defined after the #version line by
+// the renderer): llvmpipe runs both sides of a branch on a uniform with lane masks, so a
+// texture or shadow-map lookup that is not used would still cost its sampling per fragment.
 inline const char* kFullVs = R"(#version 450 core
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_nrm;
@@ -48,13 +51,11 @@ uniform vec3 u_base;
 uniform float u_alpha;
 uniform vec3 u_spec;
 uniform float u_shininess;
-uniform bool u_has_tex;
 uniform sampler2D u_tex;
 uniform vec3 u_eye;
 uniform vec3 u_light_pos;
 uniform vec3 u_light_rgb;
 uniform vec3 u_ambient;
-uniform bool u_shadows;
 uniform sampler2DShadow u_shadow_map;
 uniform float u_shadow_texel;
 uniform int u_id;
@@ -67,12 +68,15 @@ void main() {
   if (dot(n, V) < 0.0) n = -n;
   if (dot(n, nf) < 0.5) n = nf;  // smooth normal across a crease: use the facet normal
   vec3 albedo = u_base;
-  if (u_has_tex) albedo *= texture(u_tex, vec2(v_uv.x, 1.0 - v_uv.y)).rgb;
+#if MGN_TEXTURED
+  albedo *= texture(u_tex, vec2(v_uv.x, 1.0 - v_uv.y)).rgb;
+#endif
   vec3 Lv = u_light_pos - v_pw;
   vec3 L = normalize(Lv);
   float ndl = max(dot(n, L), 0.0);
   float vis = 1.0;
-  if (u_shadows && ndl > 0.0) {
+#if MGN_SHADOWS
+  if (ndl > 0.0) {
     vec3 p = v_pl.xyz / v_pl.w * 0.5 + 0.5;
     if (p.z < 1.0 && all(greaterThan(p.xy, vec2(0.0))) && all(lessThan(p.xy, vec2(1.0)))) {
       // 4 bilinear comparisons (hardware 2x2 PCF each): a 3x3-texel soft edge.
@@ -84,6 +88,7 @@ void main() {
       vis = 0.25 * s;
     }
   }
+#endif
   vec3 H = normalize(L + V);
   float spec = ndl > 0.0 ? pow(max(dot(n, H), 0.0), u_shininess) : 0.0;
   vec3 c = albedo * u_ambient + vis * u_light_rgb * (albedo * ndl + u_spec * spec);
