@@ -338,31 +338,37 @@ struct SealModel::Impl {
 
 namespace {
 
-/// Interleaves the low 16 bits of x and y (Morton / Z-order code).
-std::uint32_t morton2(std::uint32_t x, std::uint32_t y) {
-  auto spread = [](std::uint32_t v) {
-    v &= 0xFFFF;
-    v = (v | (v << 8)) & 0x00FF00FF;
-    v = (v | (v << 4)) & 0x0F0F0F0F;
-    v = (v | (v << 2)) & 0x33333333;
-    v = (v | (v << 1)) & 0x55555555;
-    return v;
-  };
-  return spread(x) | (spread(y) << 1);
+/// Position of (x, y) (16 bits each) along a Hilbert curve over the 2^16 x 2^16 grid.
+std::uint64_t hilbert2(std::uint32_t x, std::uint32_t y) {
+  std::uint64_t d = 0;
+  for (std::uint32_t s = 1u << 15; s > 0; s >>= 1) {
+    const std::uint32_t rx = (x & s) ? 1 : 0;
+    const std::uint32_t ry = (y & s) ? 1 : 0;
+    d += static_cast<std::uint64_t>(s) * s * ((3 * rx) ^ ry);
+    if (ry == 0) {  // rotate the quadrant
+      if (rx == 1) {
+        x = 0xFFFF - x;
+        y = 0xFFFF - y;
+      }
+      std::swap(x, y);
+    }
+  }
+  return d;
 }
 
 /// Vogel (sunflower) spiral: n points evenly spread over the unit disc, deterministic, ordered
-/// along a Z-curve so that every packet of 16 consecutive rays covers a small patch (coherent
-/// packets trace several times faster than packets spread over the whole disc).
+/// along a Hilbert curve so that consecutive rays are neighbours: every packet of 8 covers a
+/// small patch (coherent packets trace several times faster than packets spread over the whole
+/// disc) and the hole check's walk from ray to ray (HoleWalker) crosses few faces.
 std::vector<Eigen::Vector2d> disc_pattern(int n) {
-  std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> keyed(static_cast<std::size_t>(n));
+  std::vector<std::pair<std::uint64_t, Eigen::Vector2d>> keyed(static_cast<std::size_t>(n));
   const double golden = M_PI * (3.0 - std::sqrt(5.0));
   for (int i = 0; i < n; ++i) {
     const double rho = std::sqrt((i + 0.5) / n);
     const Eigen::Vector2d p(rho * std::cos(i * golden), rho * std::sin(i * golden));
     const auto qx = static_cast<std::uint32_t>((p.x() + 1.0) * 32767.0);
     const auto qy = static_cast<std::uint32_t>((p.y() + 1.0) * 32767.0);
-    keyed[i] = {morton2(qx, qy), p};
+    keyed[i] = {hilbert2(qx, qy), p};
   }
   std::stable_sort(keyed.begin(), keyed.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
