@@ -17,6 +17,14 @@ seed; it was 4.4 s before the part merging), 0.86 s with DropOptions(two_frictio
 The single-seed row here is one sample of a chaotic quantity: compare settings over several seeds
 (third_party_notes/bullet.md has the table and how it was measured).
 
+The second row drops the scenes of `bench_pipeline` (scene i of seed 2024: 20 objects of the
+pipeline's catalogue) and reports the CPU seconds of each drop (one thread; the C++ drop only,
+decompositions cached). Session 9 (idle, 2 cores, scenes 0-7): Bullet's own support search of the
+hulls (a scalar scan over up to 96 vertices, ~45 % of a drop in perf) 36.2 CPU-s for the 8 drops
+(11.15 s for scene 0, the pipeline benchmark's scene); with mgn's vectorised search
+(cpp/src/physics/hull_support.hpp: the same vertex, bit for bit, so the poses and scene bytes are
+unchanged) 28.3 CPU-s (8.2 s for scene 0), -22 %.
+
 Run alone: `python -m benchmarks.bench_drop [--quick]`.
 """
 
@@ -32,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import PEER_NOT_INSTALLED, Row, measure_alternating
+from .common import PEER_NOT_INSTALLED, Row, Timing, measure_alternating
 
 NUM_OBJECTS = 20
 SEED = 2024
@@ -188,6 +196,37 @@ def _quat_xyzw(R: np.ndarray) -> list[float]:
     return list(q / np.linalg.norm(q))
 
 
+def pipeline_scene_drops(seeds: list[int], log: Callable[[str], None]) -> list[dict[str, Any]]:
+    """Drops scene i of `bench_pipeline` (seed SEED) for each i in `seeds`; per scene the CPU
+    seconds of the C++ drop (time.process_time), the steps and the kept objects."""
+    from mgn.pipeline.config import load_config
+    from mgn.pipeline.runner import _catalogue
+    from mgn.pipeline.seeds import scene_seed
+    from mgn.pipeline.testset import compose_scene, resolve_split
+    from mgn.scene.drop import _simulate
+
+    from .bench_pipeline import SEED as PIPELINE_SEED
+    from .bench_pipeline import bench_config
+
+    config = load_config(bench_config(False))
+    catalogue, _ = _catalogue(config)
+    split = resolve_split(config, catalogue)
+    out = []
+    for i in seeds:
+        seed = scene_seed(PIPELINE_SEED, i)
+        picked = compose_scene(config, catalogue, seed, split)
+        # Warm-up: the decompositions of every object (cached on disk) outside the timing.
+        for spec in picked:
+            _simulate([spec], seed, config.tote, config.drop, None, None, True)
+        c0 = time.process_time()
+        r, *_ = _simulate(picked, seed, config.tote, config.drop, None, None, True)
+        cpu = time.process_time() - c0
+        kept = int((np.asarray(r.status) == 0).sum())
+        out.append({"scene": i, "cpu_s": cpu, "steps": int(r.steps), "kept": kept})
+        log(f"bench_drop: pipeline scene {i}: {cpu:.2f} CPU-s, {r.steps} steps, {kept} kept")
+    return out
+
+
 def _peak_rss_mib(side: str) -> tuple[float, float]:
     """(peak RSS after the imports, peak RSS after one drop) of a fresh process, MiB."""
     code = (
@@ -262,7 +301,24 @@ def run(
         except (subprocess.SubprocessError, ValueError, IndexError) as exc:
             row.notes.append(f"{side} peak RSS not measured ({type(exc).__name__})")
     row.agreement = "not compared (chaotic dynamics)"
-    return [row]
+    scenes = pipeline_scene_drops(list(range(2 if quick else 8)), log)
+    total = sum(d["cpu_s"] for d in scenes)
+    pipe = Row(
+        group="scene drop",
+        case=f"bench_pipeline scenes 0-{len(scenes) - 1} (20 objects each): CPU-s of the drops",
+        n=len(scenes),
+        unit="drops/s",
+        peer_name="-",
+        mgn_status=mgn_status,
+        peer_status="no peer (mgn's own scenes)",
+    )
+    pipe.mgn[1] = Timing(wall=[total], cpu=[total])  # CPU seconds (one thread per drop)
+    pipe.notes.append(
+        f"total {total:.2f} CPU-s, mean {total / len(scenes):.2f} CPU-s per drop; per scene "
+        + ", ".join(f"{d['scene']}: {d['cpu_s']:.2f} s/{d['steps']} steps" for d in scenes)
+    )
+    pipe.notes.append("session 9 idle, scenes 0-7: Bullet's support scan 36.2 CPU-s, mgn's 28.3")
+    return [row, pipe]
 
 
 if __name__ == "__main__":

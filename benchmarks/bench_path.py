@@ -58,7 +58,9 @@ def load1() -> float:
 # Children: one engine each
 
 
-def _engine_mgn(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Callable]:
+def _engine_mgn(
+    desc: ps.SceneDesc, scene_json: Path, tmp: Path, adaptive: float = 0.0
+) -> dict[str, Callable]:
     import pyoidn
 
     CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
@@ -92,6 +94,8 @@ def _engine_mgn(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Ca
         )
         if hasattr(opts, "clamp_indirect"):  # unclamped, as the peers are set up
             opts = dataclasses.replace(opts, clamp_indirect=0.0)
+        if adaptive > 0.0:  # extra samples where the first pass is noisy (adaptive sampling)
+            opts = dataclasses.replace(opts, adaptive_samples=adaptive)
         return scene.render(view, opts)
 
     def render(spp: int, denoise: bool, seed: int) -> np.ndarray:
@@ -162,6 +166,7 @@ def child_main(argv: list[str]) -> int:
     p.add_argument("--denoise", action="store_true", help="also the denoised variants")
     p.add_argument("--denoised-only", action="store_true", help="only the denoised variants")
     p.add_argument("--out", required=True)
+    p.add_argument("--adaptive", type=float, default=0.0, help="mgn: adaptive_samples")
     a = p.parse_args(argv)
     with open(a.desc, "rb") as f:
         desc: ps.SceneDesc = pickle.load(f)
@@ -171,9 +176,12 @@ def child_main(argv: list[str]) -> int:
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         t0 = time.perf_counter()
-        eng = {"mgn": _engine_mgn, "cycles": _engine_cycles, "mitsuba": _engine_mitsuba}[a.engine](
-            desc, Path(a.scene), tmp
-        )
+        if a.engine == "mgn":
+            eng = _engine_mgn(desc, Path(a.scene), tmp, a.adaptive)
+        else:
+            eng = {"cycles": _engine_cycles, "mitsuba": _engine_mitsuba}[a.engine](
+                desc, Path(a.scene), tmp
+            )
         result["setup_s"] = time.perf_counter() - t0
         result["version"] = eng.get("version", "")
         images["ids"] = eng["ids"]()
@@ -239,6 +247,7 @@ def run_child(
     out: Path,
     log: Callable[[str], None],
     denoised_only: bool = False,
+    adaptive: float = 0.0,
 ) -> tuple[dict | None, str]:
     cmd = [_python_for(engine), "-m", "benchmarks.bench_path", "--engine", engine]
     cmd += ["--desc", str(desc_path), "--scene", str(scene_json), "--out", str(out)]
@@ -248,6 +257,8 @@ def run_child(
         cmd.append("--denoise")
     if denoised_only:
         cmd.append("--denoised-only")
+    if adaptive > 0.0:
+        cmd += ["--adaptive", str(adaptive)]
     proc = subprocess.Popen(
         cmd, cwd=HERE.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )

@@ -51,6 +51,10 @@ FULL_WIDTH = 1200
 CROP = (400, 130, 320)  # x0, y0, size (px) of the scored window of the 1200 x 1200 view
 REF_SPP = 1024
 SPPS = {"mgn": (1, 2, 4), "cycles": (1, 2, 4, 8, 16)}
+#: mgn's adaptive sampling rows: extra samples per pixel on average (`render.adaptive_samples`)
+#: after a first pass at ADAPTIVE_SPPS samples per pixel.
+ADAPTIVE = (0.25, 0.5, 1.0)
+ADAPTIVE_SPPS = (1,)
 
 
 def _log(msg: str) -> None:
@@ -71,6 +75,7 @@ def _run(
     stem: Path,
     log: Callable[[str], None],
     denoised_only: bool = False,
+    adaptive: float = 0.0,
 ) -> None:
     res, status = run_child(
         engine,
@@ -82,6 +87,7 @@ def _run(
         stem.with_suffix(".npz"),
         log,
         denoised_only=denoised_only,
+        adaptive=adaptive,
     )
     if res is None:
         raise RuntimeError(f"{engine}: {status}")
@@ -254,7 +260,13 @@ def main(argv: list[str]) -> int:
     p.add_argument("--parts", default="refs,renders,report")
     p.add_argument("--engines", default="mgn,cycles")
     p.add_argument("--tag", default="", help="name of this mgn build's runs (compare variants)")
-    p.add_argument("--spps", default="", help="override the sample counts, comma-separated")
+    p.add_argument(
+        "--spps",
+        default="",
+        help="override the sample counts (comma-separated; 0: adaptive rows only)",
+    )
+    p.add_argument("--adaptive", default=",".join(map(str, ADAPTIVE)),
+                   help="mgn: adaptive_samples values of extra rows (empty: none)")  # fmt: skip
     p.add_argument("--report-tags", default="", help="runs in the report (default: all found)")
     p.add_argument("--out-dir", default=str(HERE))
     a = p.parse_args(argv)
@@ -278,9 +290,16 @@ def main(argv: list[str]) -> int:
         if "renders" in parts:
             spps = tuple(int(s) for s in a.spps.split(",") if s) or SPPS[engine]
             name = engine + (f"_{a.tag}" if a.tag else "")
-            _log(f"{name}: full views at {spps} spp (load {load1():.1f})")
-            _run(engine, full_path, scene_json, spps, 0, work / f"{name}_full", _log,
-                 denoised_only=engine == "cycles")  # fmt: skip
+            if spps != (0,):  # --spps 0: the adaptive rows only
+                _log(f"{name}: full views at {spps} spp (load {load1():.1f})")
+                _run(engine, full_path, scene_json, spps, 0, work / f"{name}_full", _log,
+                     denoised_only=engine == "cycles")  # fmt: skip
+            for b in (float(x) for x in a.adaptive.split(",") if x and engine == "mgn"):
+                run_name = f"{name}_adaptive{b:g}".replace(".", "p")  # 0.25 -> adaptive0p25
+                _log(f"{run_name}: full views at {ADAPTIVE_SPPS} spp + {b:g} adaptive samples "
+                     f"(load {load1():.1f})")  # fmt: skip
+                _run(engine, full_path, scene_json, ADAPTIVE_SPPS, 0, work / f"{run_name}_full",
+                     _log, adaptive=b)  # fmt: skip
     if "report" in parts:
         tags = [t for t in a.report_tags.split(",") if t] or sorted(
             f.name[: -len("_full.json")] for f in work.glob("*_full.json")

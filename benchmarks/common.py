@@ -160,6 +160,7 @@ class Row:
     # The machine limit the row is bound by and one item's work in its unit, e.g.
     # ("embree_coherent", 1.0) for rays; see benchmarks/limits.py.
     limit_work: tuple[str, float] | None = None
+    suite: str = ""  # the `python -m benchmarks --only` name that measured the row
 
     def ratio(self, threads: int) -> float | None:
         if self.peer is None or threads not in self.mgn:
@@ -182,7 +183,34 @@ class Row:
             "agreement_ok": self.agreement_ok,
             "notes": self.notes,
             "limit_work": list(self.limit_work) if self.limit_work else None,
+            "suite": self.suite,
         }
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any]) -> Row:
+        """The row as :meth:`to_json` wrote it (timings, agreement and notes; for the table of a
+        later ``--only`` run that keeps the rows of the suites it did not measure)."""
+
+        def timing(t: dict[str, Any]) -> Timing:
+            return Timing(list(t["wall_seconds"]), list(t["cpu_seconds"]))
+
+        lw = d.get("limit_work")
+        return cls(
+            group=d["group"],
+            case=d["case"],
+            n=int(d["n"]),
+            unit=d["unit"],
+            peer_name=d["peer_call"],
+            mgn={int(k): timing(v) for k, v in d["mgn"].items()},
+            mgn_status="" if d["mgn_status"] == "ok" else d["mgn_status"],
+            peer=timing(d["peer"]) if d.get("peer") else None,
+            peer_status="" if d["peer_status"] == "ok" else d["peer_status"],
+            agreement=d["agreement"],
+            agreement_ok=d["agreement_ok"],
+            notes=list(d["notes"]),
+            limit_work=(str(lw[0]), float(lw[1])) if lw else None,
+            suite=d.get("suite", ""),
+        )
 
 
 def fraction(mask: np.ndarray) -> float:

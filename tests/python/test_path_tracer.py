@@ -114,6 +114,33 @@ def test_interior_furnace_closed_emitting_sphere(max_bounces, rr_depth):
         assert abs(mean - expected) < max(4 * sem, 0.01 * expected), (mean, expected, sem)
 
 
+def test_no_light_enters_a_sealed_box_under_a_bright_sky():
+    """Camera inside a closed box (white Lambert walls, a Lambert sphere and a sun-lit sky
+    outside): no path can reach the sky or the sun, so every pixel is exactly black, while the
+    walls' albedo guide is seen. Long paths (no roulette, 32 bounces) cast ~10^6 bounce and
+    shadow rays through a closed mesh's edges and corners: a BVH query that let rays slip
+    between triangles would light pixels up (the bounce and shadow rays use a non-robust BVH)."""
+    wall = PbrMaterial(base_color=(0.95, 0.95, 0.95), ior=1.0, roughness=1.0)
+    box = make_box([1.0, 0.8, 0.6])
+    ball = make_sphere(0.15, 48, 24)
+    Xb = np.eye(4)
+    Xb[:3, 3] = (0.2, 0.1, -0.15)
+    sky = Environment(kind="sky", intensity=3.0, sun_strength=20.0)
+    scene = PathScene([box, ball], np.stack([np.eye(4), Xb]), [1, 2], [[wall], [wall]], (), sky)
+    view = camera((-0.3, -0.25, 0.1), (0.4, 0.3, -0.2), 48, 100)
+    out = scene.render(view, PathTraceOptions(spp=16, max_bounces=32, rr_depth=100, seed=5))
+    assert out.rays > 10**6
+    assert np.all(out.instance_ids > 0)
+    assert np.all(out.radiance == 0.0)
+    assert out.albedo.min() > 0.9
+    # The same box open to the sky (its top removed) is lit: the test can see light.
+    keep = np.abs(box.face_normals()[:, 2] - 1.0) > 1e-6
+    open_box = mesh_from_arrays(box.vertices, box.faces[keep])
+    lit = PathScene([open_box, ball], np.stack([np.eye(4), Xb]), [1, 2], [[wall], [wall]], (), sky)
+    out2 = lit.render(view, PathTraceOptions(spp=4, max_bounces=8, seed=5))
+    assert out2.radiance.mean() > 0.05
+
+
 @pytest.mark.parametrize("metallic", [0.0, 1.0])
 @pytest.mark.parametrize("roughness", [0.1, 0.3, 0.6, 1.0])
 def test_ggx_sphere_in_furnace_shows_L(metallic, roughness):

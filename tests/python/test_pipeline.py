@@ -475,9 +475,9 @@ def test_npz_bytes_are_reproducible_and_readable() -> None:
         npz_bytes(bad=np.array([None, 1], dtype=object))
 
 
-def test_npz_run_length_entries_are_plain_deflate_that_np_load_reads() -> None:
-    """Entries named in ``run_length`` hold zlib's run-length-strategy stream (checked against
-    zlib itself), are smaller for a mask, and read back equal; others keep their level."""
+def test_npz_entries_are_plain_deflate_at_their_level_that_zlib_reads() -> None:
+    """Deflated entries are raw deflate streams that zlib itself inflates to numpy's own .npy
+    bytes; a higher level (``levels``) gives a smaller mask entry, and the bytes repeat."""
     import io
     import zlib
 
@@ -487,24 +487,32 @@ def test_npz_run_length_entries_are_plain_deflate_that_np_load_reads() -> None:
         y, x = rng.integers(0, 150, 2)
         mask[i, y : y + 50, x : x + 120] = True
     occ = rng.random((200, 300)).astype(np.float32)
-    data = npz_bytes(mask=mask, occ=occ, run_length=("mask",), levels={"occ": 6})
-    plain = npz_bytes(mask=mask, occ=occ)
+    data = npz_bytes(mask=mask, occ=occ, levels={"mask": 6})
+    fast = npz_bytes(mask=mask, occ=occ)
     with np.load(io.BytesIO(data)) as z:
         assert z["mask"].dtype == bool and np.array_equal(z["mask"], mask)
         assert np.array_equal(z["occ"].view(np.uint32), occ.view(np.uint32))
-    with zipfile.ZipFile(io.BytesIO(data)) as zf, zipfile.ZipFile(io.BytesIO(plain)) as zp:
-        info = zf.getinfo("mask.npy")
-        assert info.compress_type == zipfile.ZIP_DEFLATED
-        raw = zf.read("mask.npy")
-        c = zlib.compressobj(1, zlib.DEFLATED, -15, 8, zlib.Z_RLE)
-        stream = c.compress(raw) + c.flush()
-        assert info.compress_size == len(stream)
-        assert info.compress_size < zp.getinfo("mask.npy").compress_size
-        c6 = zlib.compressobj(6, zlib.DEFLATED, -15)
-        assert zf.getinfo("occ.npy").compress_size == len(
-            c6.compress(zf.read("occ.npy")) + c6.flush()
-        )
-    assert npz_bytes(mask=mask, occ=occ, run_length=("mask",), levels={"occ": 6}) == data
+    with zipfile.ZipFile(io.BytesIO(data)) as zf, zipfile.ZipFile(io.BytesIO(fast)) as zp:
+        for name, array in (("mask.npy", mask), ("occ.npy", occ)):
+            info = zf.getinfo(name)
+            assert info.compress_type == zipfile.ZIP_DEFLATED
+            expected = io.BytesIO()
+            np.lib.format.write_array(expected, array, allow_pickle=False)
+            raw = data[info.header_offset :]  # the local header, then the raw stream
+            name_len, extra_len = np.frombuffer(raw[26:30], "<u2")
+            stream = raw[30 + name_len + extra_len :][: info.compress_size]
+            assert zlib.decompress(stream, -15) == expected.getvalue()
+            assert zlib.crc32(expected.getvalue()) == info.CRC
+        assert zf.getinfo("mask.npy").compress_size < zp.getinfo("mask.npy").compress_size
+    assert npz_bytes(mask=mask, occ=occ, levels={"mask": 6}) == data
+    # zlib_levels: that entry is zlib's own stream at that level (the other stays libdeflate's).
+    mixed = npz_bytes(mask=mask, occ=occ, levels={"mask": 6}, zlib_levels={"occ": 1})
+    with zipfile.ZipFile(io.BytesIO(mixed)) as zm, zipfile.ZipFile(io.BytesIO(data)) as zf:
+        c = zlib.compressobj(1, zlib.DEFLATED, -15)
+        npy = zm.read("occ.npy")
+        assert zm.getinfo("occ.npy").compress_size == len(c.compress(npy) + c.flush())
+        assert zm.getinfo("mask.npy").compress_size == zf.getinfo("mask.npy").compress_size
+        assert np.load(io.BytesIO(mixed))["occ"].tobytes() == occ.tobytes()
 
 
 def test_h5_helpers_write_without_timestamps(tmp_path: Path) -> None:

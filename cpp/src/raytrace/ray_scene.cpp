@@ -446,6 +446,25 @@ void camera_rays(const Mat3d& K, int width, int height, const Pose& X_WC, Points
 
 namespace mgn::detail {
 
+OwnedScene non_robust_scene(const RayScene& scene) {
+  const RayScene::Impl& impl = scene.impl();
+  FtzDazGuard guard;
+  RTCDevice device = shared_device();
+  OwnedScene out(rtcNewScene(device));
+  if (out.get() == nullptr)
+    throw_error<BackendError>("non_robust_scene: Embree could not create a scene: ", g_last_error);
+  rtcSetSceneFlags(out.get(), RTC_SCENE_FLAG_NONE);
+  rtcSetSceneBuildQuality(out.get(), RTC_BUILD_QUALITY_HIGH);
+  for (std::size_t g = 0; g < impl.instance_ids.size(); ++g) {
+    const auto id = static_cast<unsigned>(g);
+    rtcAttachGeometryByID(out.get(), rtcGetGeometry(impl.scene, id), id);
+  }
+  rtcCommitScene(out.get());
+  if (rtcGetDeviceError(device) != RTC_ERROR_NONE)
+    throw_error<BackendError>("non_robust_scene: Embree failed to build the scene: ", g_last_error);
+  return out;
+}
+
 namespace {
 
 /// Packet width of the parallel-ray fast paths. 8 (one AVX2 register of floats): on the AVX2

@@ -26,6 +26,7 @@ import h5py
 import numpy as np
 import numpy.typing as npt
 
+from mgn.base.compress import ZipDeflate
 from mgn.errors import InvalidArgumentError
 
 __all__ = [
@@ -82,23 +83,24 @@ def npz_bytes(
     compress: bool = True,
     level: int = 1,
     levels: Mapping[str, int] | None = None,
-    run_length: Collection[str] = (),
     lzma_entries: Collection[str] = (),
+    zlib_levels: Mapping[str, int] | None = None,
     **arrays: npt.ArrayLike,
 ) -> bytes:
     """The bytes of an ``.npz`` file holding ``arrays`` (readable by ``np.load``), reproducible.
 
     Like ``np.savez_compressed`` (``compress=True``) or ``np.savez``, but every zip entry carries
     the fixed date :data:`NPZ_DATE_TIME` and fixed permissions, and entries are in the order the
-    keywords are given. Object arrays are refused (no pickles). ``level`` is the deflate level
-    (1 = fastest, as the scene writer uses: depth images shrink nearly as much as at numpy's
-    level 6, several times faster); ``levels`` overrides it per array name. Arrays named in
-    ``run_length`` are deflated with zlib's run-length strategy (``Z_RLE``): masks and id
-    images, which are long runs of equal bytes, come out ~3.5x smaller than at level 1 in the
-    same time. Arrays named in ``lzma_entries`` are zip entries of method 14 (LZMA, zip format
-    6.3) with the literal and position bits set for 4-byte values (:data:`NPZ_LZMA_FILTER`):
-    a noisy float32 image in ~0.6x the bytes of deflate, ~4x the CPU. ``np.load`` (``zipfile``)
-    reads every entry; the LZMA ones need a zip reader with LZMA (Python's has it).
+    keywords are given. Object arrays are refused (no pickles). Compressed entries are plain
+    deflate (zip method 8) made by libdeflate (:class:`mgn.base.compress.ZipDeflate`) at
+    ``level`` (1..12; the scene writer's 6 takes about the time of zlib's level 1 and gives
+    depth images ~16 % and masks ~3x smaller); ``levels`` overrides it per array name. Arrays
+    named in ``lzma_entries`` are zip entries of method 14 (LZMA, zip format 6.3) with the
+    literal and position bits set for 4-byte values (:data:`NPZ_LZMA_FILTER`): a noisy float32
+    image in ~0.6x the bytes of deflate, ~4x the CPU. ``np.load`` (``zipfile``) reads every
+    entry; the LZMA ones need a zip reader with LZMA (Python's has it). Arrays named in
+    ``zlib_levels`` are deflated by zlib at the given level instead of libdeflate (images of long
+    runs, which zlib's level 1 keeps fast to inflate: :class:`mgn.base.compress.ZipDeflate`).
 
     Raises:
         ValueError: an array of dtype object.
@@ -116,19 +118,29 @@ def npz_bytes(
             info.compress_type = zipfile.ZIP_LZMA if name in lzma_entries else method
             lvl = (levels or {}).get(name, level)
             try:
-                info.compress_level = lvl  # type: ignore[attr-defined]  # Python >= 3.13
+                info.compress_level = min(lvl, 9)  # type: ignore[attr-defined]  # Python >= 3.13
             except AttributeError:
-                info._compresslevel = lvl  # type: ignore[attr-defined]  # Python <= 3.12
+                info._compresslevel = min(lvl, 9)  # type: ignore[attr-defined]  # Python <= 3.12
             info.external_attr = 0o644 << 16  # rw-r--r--, as numpy's own writer
             with zf.open(info, mode="w", force_zip64=True) as fh:
                 if name in lzma_entries and hasattr(fh, "_compressor"):
                     # zipfile's own LZMA compressor has fixed settings: ours, same stream layout.
                     fh._compressor = _NpzLzma()
-                if compress and name in run_length and hasattr(fh, "_compressor"):
-                    # zipfile has no strategy argument: the entry's raw-deflate compressor
-                    # (what zipfile makes itself: wbits -15) with the run-length strategy.
-                    fh._compressor = zlib.compressobj(lvl, zlib.DEFLATED, -15, 8, zlib.Z_RLE)
-                np.lib.format.write_array(fh, array, allow_pickle=False)
+                elif compress and name in (zlib_levels or {}) and hasattr(fh, "_compressor"):
+                    fh._compressor = zlib.compressobj((zlib_levels or {})[name], zlib.DEFLATED, -15)
+                elif compress and hasattr(fh, "_compressor"):
+                    # zipfile's raw-deflate compressor (zlib, wbits -15) -> libdeflate's.
+                    fh._compressor = ZipDeflate(lvl)
+                # The .npy bytes (what np.lib.format.write_array writes for a C-order array)
+                # in two writes, the header and the array's own buffer, not copied.
+                array = np.ascontiguousarray(array)
+                head = io.BytesIO()
+                np.lib.format.write_array_header_1_0(
+                    head, np.lib.format.header_data_from_array_1_0(array)
+                )
+                fh.write(head.getvalue())
+                if array.size:
+                    fh.write(array.reshape(-1).view(np.uint8).data)
     return out.getvalue()
 
 

@@ -9,7 +9,9 @@ images MetaGraspNet does not have) and ``{v}_camera_params.json``; and once per 
 Bytes (docs/format.md): the npz holds MetaGraspNet's keys only, with the dtypes its own scripts
 work with unchanged: ``depth`` and ``occlusion`` float32, ``instances_objects`` uint8 (at most 255
 instances), ``instances_semantic`` uint16 (float32 if a category id exceeds 65535),
-``occlusion_objects`` bool; zip deflate level 1. The sensor depth is stored on the
+``occlusion_objects`` bool; zip deflate. Every deflate stream (zip entries, HDF5 gzip chunks,
+PNG) is made by libdeflate at :data:`DEFLATE_LEVEL` (:mod:`mgn.base.compress`): standard
+streams that zlib and every reader decode. The sensor depth is stored on the
 :data:`DEPTH_GRID_CM` grid the sensor presets report (:func:`depth_to_cm`): exact, and half the
 bytes. mgn's own images go to ``{v}_mgn.hdf5`` with HDF5's shuffle filter (standard in every HDF5
 library), float32 images delta-coded along rows (:func:`encode_float_image`): ``depth_ideal``
@@ -21,8 +23,8 @@ the pipeline's heat maps), and ``valid_depth`` only when it is not exactly ``isf
 datasets over them (:func:`hdf5_bytes`). The depth picture is a palette PNG of the noise-free
 depth where the sensor has a value. Every array reads back bit-identical;
 ``write_view(..., archival=True)`` is the lossy compact archival mode (sensor depth on
-:data:`ARCHIVAL_DEPTH_STEP_CM` in an LZMA zip entry, grasp poses rounded, RGB and mgn images at
-zlib level 6).
+:data:`ARCHIVAL_DEPTH_STEP_CM` in an LZMA zip entry, grasp poses rounded, RGB at libdeflate
+level 9).
 
 Lengths are **centimetres** in these files (MetaGraspNet's convention) and SI everywhere else in
 mgn: :class:`ViewRecord` holds metres, the writer converts, and :mod:`mgn.io.dataset` converts
@@ -38,7 +40,6 @@ import io
 import json
 import os
 import time
-import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,10 +48,15 @@ from typing import Any
 import h5py
 import numpy as np
 import numpy.typing as npt
-from PIL import Image
 
 from mgn.base.atomic import atomic_write_bytes, atomic_write_text
-from mgn.base.deterministic import h5_create_dataset, h5_create_group, npz_bytes
+from mgn.base.compress import h5_write_deflated, png_encode
+from mgn.base.deterministic import (
+    H5_DATASET_KWARGS,
+    h5_create_dataset,
+    h5_create_group,
+    npz_bytes,
+)
 from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError
 from mgn.render.views import depth_picture_indexed
@@ -65,6 +71,7 @@ __all__ = [
     "COM_RESIDUAL_ENCODING",
     "COLLISION_OBSTACLES",
     "DEPTH_GRID_CM",
+    "DEFLATE_LEVEL",
     "DEPTH_PICTURE_LEVEL",
     "FLOAT_DELTA_ENCODING",
     "UNITS_ATTR",
@@ -73,10 +80,12 @@ __all__ = [
     "HDF5_FLOAT_KEYS",
     "HDF5_INT_LEAVES",
     "POSE_COLUMNS_GROUP",
+    "RUN_IMAGES",
     "SHARED_ROTATION_ENCODING",
     "TOOL_POSE_LEAVES",
     "MGN_HDF5_CM",
     "M_TO_CM",
+    "NPZ_LEVEL",
     "ViewRecord",
     "com_heatmap_prediction",
     "decode_com_residual",
@@ -472,13 +481,17 @@ def mgn_hdf5_bytes(
     *,
     unorm16: tuple[str, ...] = (),
     attrs: Mapping[str, Mapping[str, Any]] | None = None,
-    level: int = 1,
+    level: int = 6,
+    zlib_levels: Mapping[str, int] | None = None,
 ) -> bytes:
-    """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate ``level``,
-    without timestamps; float32 images stored with :func:`encode_float_image` (attribute
-    ``mgn_encoding`` = :data:`FLOAT_DELTA_ENCODING`), those named in ``unorm16`` (values in
+    """``{v}_mgn.hdf5``: (H, W) images by name, chunked by rows, shuffle + deflate (libdeflate
+    ``level``, :func:`mgn.base.compress.h5_write_deflated`), without timestamps; float32 images
+    stored with :func:`encode_float_image` (attribute ``mgn_encoding`` =
+    :data:`FLOAT_DELTA_ENCODING`), those named in ``unorm16`` (values in
     [0, 1]) as uint16 ``round(x * 65535)`` (:data:`UNORM16_ENCODING`, lossy: archival mode);
-    ``attrs``: further attributes by image name. Integer images are stored as given."""
+    ``attrs``: further attributes by image name; ``zlib_levels``: images deflated by zlib at the
+    given level instead (fast to inflate where they are long runs). Integer images are stored as
+    given."""
     buf = io.BytesIO()
     with h5py.File(buf, "w") as h5:
         for name, value in images.items():
@@ -490,11 +503,13 @@ def mgn_hdf5_bytes(
             elif data.dtype == np.float32 and data.ndim == 2 and data.size > 0:
                 data = encode_float_image(data)
                 coded = FLOAT_DELTA_ENCODING
-            chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:]) if data.size else None
-            kw: dict[str, Any] = (
-                {"chunks": chunks, **_COMPRESSION, "compression_opts": level} if chunks else {}
-            )
-            ds = h5_create_dataset(h5, name, data, **kw)
+            if data.size:
+                chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:])
+                ds = h5_write_deflated(h5, name, data, chunks, level,
+                                       zlib_level=(zlib_levels or {}).get(name),
+                                       **H5_DATASET_KWARGS)  # fmt: skip
+            else:
+                ds = h5_create_dataset(h5, name, data)
             if coded:
                 ds.attrs["mgn_encoding"] = coded
             for key, value in (attrs or {}).get(name, {}).items():
@@ -502,10 +517,10 @@ def mgn_hdf5_bytes(
     return buf.getvalue()
 
 
-#: Datasets with at least this many values are stored chunked with gzip (level 1) and the
-#: shuffle filter: grasp sets shrink ~3x; every HDF5 reader (h5py, the C library) has gzip.
+#: Datasets with at least this many values are stored chunked with gzip and the shuffle filter
+#: (deflated by libdeflate at :data:`DEFLATE_LEVEL`): grasp sets shrink ~3x; every HDF5 reader
+#: (h5py, the C library) has gzip.
 _COMPRESS_FROM = 256
-_COMPRESSION: dict[str, Any] = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 #: Rows per chunk of a compressed (M, ...) dataset of ``{v}_scene.hdf5``; a chunk holds one
 #: entry (e.g. row 0, column 3 of every pose) of up to this many rows, which shuffle + deflate
 #: compress better than whole rows; the chunks a row spans (16 of 32 KiB for poses) fit HDF5's
@@ -528,12 +543,15 @@ SHARED_ROTATION_ENCODING = "rotation-of-contact-poses"
 _CONTACT_LEAF = "contact_poses_relative_to_camera"
 
 
-def _chunked(data: np.ndarray) -> dict[str, Any]:
-    """Compression keywords of a dataset of ``{v}_scene.hdf5`` (none when it is small)."""
+def _write_dataset(group: Any, name: str, data: np.ndarray, level: int) -> None:
+    """A dataset of ``{v}_scene.hdf5`` without timestamps: chunked (one entry of up to
+    ``_CHUNK_ROWS`` rows per chunk) with shuffle + gzip at libdeflate ``level`` from
+    ``_COMPRESS_FROM`` values on, contiguous below."""
     if data.size < _COMPRESS_FROM or data.ndim == 0:
-        return {}
+        h5_create_dataset(group, name, data)
+        return
     chunks = (min(len(data), _CHUNK_ROWS), *([1] * (data.ndim - 1)))
-    return {"chunks": chunks, **_COMPRESSION}
+    h5_write_deflated(group, name, data, chunks, level, **H5_DATASET_KWARGS)
 
 
 def _shares_rotation(datasets: Mapping[str, np.ndarray], path: str) -> bool:
@@ -554,7 +572,7 @@ def _shares_rotation(datasets: Mapping[str, np.ndarray], path: str) -> bool:
     )
 
 
-def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray) -> None:
+def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray, level: int) -> None:
     """Write ``tool`` (M, 4, 4) at ``path`` as a virtual dataset: columns 0..2 from the group's
     contact poses (same file), column 3 from ``POSE_COLUMNS_GROUP/path`` (written here); no
     timestamps."""
@@ -564,7 +582,7 @@ def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray) -> None:
     column = np.ascontiguousarray(tool[:, :, 3])
     group_path, _, name = column_path.rpartition("/")
     group = h5[group_path] if group_path in h5 else h5_create_group(h5, group_path)
-    h5_create_dataset(group, name, column, **_chunked(column))
+    _write_dataset(group, name, column, level)
     m = tool.shape[0]
     dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
     dcpl.set_layout(h5py.h5d.VIRTUAL)
@@ -607,10 +625,12 @@ def hdf5_bytes(
     attrs: Mapping[str, Any] | None = None,
     *,
     share_rotations: bool = False,
+    level: int = 6,
 ) -> bytes:
     """An HDF5 file holding ``datasets`` (path -> array, written as given) without timestamps;
     ``attrs`` go on the root group (dicts and lists as JSON). Datasets of at least
-    ``_COMPRESS_FROM`` values are chunked by entry (``_CHUNK_ROWS`` rows) with shuffle + gzip.
+    ``_COMPRESS_FROM`` values are chunked by entry (``_CHUNK_ROWS`` rows) with shuffle + gzip
+    (libdeflate ``level``, :func:`mgn.base.compress.h5_write_deflated`).
     ``share_rotations``: tool poses (:data:`TOOL_POSE_LEAVES`) whose columns 0..2 equal their
     group's contact poses bit for bit are stored as virtual datasets reading those columns from
     the contact poses (every HDF5 >= 1.10 reader, h5py included, sees the same array)."""
@@ -626,72 +646,68 @@ def hdf5_bytes(
             group = h5
             if parent:
                 group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
-            h5_create_dataset(group, name, data, **_chunked(data))
+            _write_dataset(group, name, data, level)
         for path in shared:
-            _virtual_tool_poses(h5, path, np.asarray(datasets[path]))
+            _virtual_tool_poses(h5, path, np.asarray(datasets[path]), level)
         for key, value in (attrs or {}).items():
             h5.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
     return buf.getvalue()
 
 
-def png_bytes(image: npt.ArrayLike, *, level: int | None = None) -> bytes:
-    """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible).
-    Default: zlib level 1 with the run-length strategy (rendered images come out ~16 % smaller
-    than with the default strategy at the same speed, and several times faster than level 6);
-    ``level``: that zlib level with the default strategy (the archival mode's 6: 0.87x the bytes
-    of the default for +85 ms per 1200 x 1200 view; 9 is 0.79x for +900 ms)."""
-
-    buf = io.BytesIO()
-    kw: dict[str, Any] = (
-        {"compress_level": 1, "compress_type": zlib.Z_RLE}
-        if level is None
-        else {"compress_level": level}
-    )
-    Image.fromarray(np.asarray(image)).save(buf, format="PNG", **kw)
-    return buf.getvalue()
+#: libdeflate level of the deflate streams of the scene writer's images (PNG, HDF5 chunks): on a
+#: 1200 x 1200 view of 20 objects it costs less than zlib's level 1 did, for 0.88x the bytes of
+#: ``depth_ideal`` and 0.86x the RGB PNG's (benchmarks/RESULTS.md, "Dataset files").
+DEFLATE_LEVEL = 6
+#: libdeflate level of the zip entries of ``{v}.npz``: the sensor depth in 0.84x the bytes of
+#: zlib's level 1 in the same time (level 6: another -0.7 %, +30 % time), the masks in 0.3x.
+NPZ_LEVEL = 5
 
 
-#: zlib level of the scene writer's ``{v}_depth.png``, a picture of the noise-free depth at the
-#: pixels where the sensor gives a value (black elsewhere): bands of equal colour, which level 6
-#: stores in 0.6x the bytes of level 1 for ~8 ms more per 1200 x 1200 view (the sensor depth's
-#: noise made the picture 4x larger; docs/format.md).
-DEPTH_PICTURE_LEVEL = 6
+def png_bytes(image: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
+    """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible),
+    deflated by libdeflate at ``level`` (1..12; :func:`mgn.base.compress.png_encode`: no row
+    filter, which on rendered pictures gives fewer bytes than zlib level 6 with libpng's
+    filters, at ~1/4 of its time)."""
+    return png_encode(np.asarray(image), level=level)
 
 
-def depth_picture_png(depth: npt.ArrayLike, *, level: int = 1) -> bytes:
+#: libdeflate level of the scene writer's ``{v}_depth.png``, a picture of the noise-free depth at
+#: the pixels where the sensor gives a value (black elsewhere): bands of equal colour
+#: (docs/format.md).
+DEPTH_PICTURE_LEVEL = DEFLATE_LEVEL
+
+
+def depth_picture_png(depth: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
     """``{v}_depth.png`` of a depth image (m): :func:`mgn.render.views.depth_picture` as a palette
     PNG (every reader converts it to the same RGB; ~half the bytes and faster to write than the
-    RGB PNG), deflated at zlib ``level`` (the scene writer uses :data:`DEPTH_PICTURE_LEVEL` on the
-    noise-free depth)."""
+    RGB PNG), deflated by libdeflate at ``level`` (:func:`mgn.base.compress.png_encode`)."""
     index, palette = depth_picture_indexed(depth)
-    im = Image.frombytes(
-        "P", (index.shape[1], index.shape[0]), np.ascontiguousarray(index).tobytes()
-    )
-    im.putpalette(palette.ravel().tolist())
-    buf = io.BytesIO()
-    im.save(buf, format="PNG", compress_level=level)
-    return buf.getvalue()
+    return png_encode(index, level=level, palette=palette)
 
 
 def _json(data: Any) -> str:
     return json.dumps(data, indent=1, sort_keys=False, allow_nan=True) + "\n"
 
 
-#: Archival mode's npz: the masks (bool ``occlusion_objects``, uint8 ``instances_objects``: long
-#: runs of equal bytes) deflated with zlib's run-length strategy, 3.5x smaller than level 1 in the
-#: same write time, and ``occlusion`` (one value per object region) at level 6, half the bytes.
-#: Not the default: zlib inflates such streams 2.5x slower (+60 ms per 1200 x 1200 view of 20
-#: objects), for 5 MB of a 190 MB scene.
-_NPZ_ARCHIVAL: dict[str, Any] = {
-    "run_length": ("instances_objects", "occlusion_objects"),
-    "levels": {"occlusion": 6},
-    "lzma_entries": ("depth",),
-}
-#: Archival mode's ``{v}_rgb.png`` zlib level (:func:`png_bytes`).
-_RGB_ARCHIVAL_LEVEL = 6
-#: Archival mode's deflate level of the ``{v}_mgn.hdf5`` images: ``depth_ideal`` in 0.89x the
-#: bytes of level 1 for ~+45 ms per 1200 x 1200 view (inflating costs the same).
-_MGN_ARCHIVAL_LEVEL = 6
+#: Images of long runs of equal bytes (masks, ids, the occlusion rate per object region, the CoM
+#: heat map's residual and ``valid_depth``) that the default mode deflates with zlib's level 1:
+#: libdeflate's streams of them are ~3x smaller (-6.7 MB per scene) but zlib inflates them 2-3x
+#: slower (+70 ms per 1200 x 1200 view to read every array); the archival mode takes the bytes.
+RUN_IMAGES: tuple[str, ...] = (
+    "instances_objects",
+    "instances_semantic",
+    "occlusion",
+    "occlusion_objects",
+    "com_heatmap",
+    "valid_depth",
+)
+
+#: Archival mode's npz: the sensor depth an LZMA entry (:data:`NPZ_LZMA_FILTER`).
+_NPZ_ARCHIVAL: dict[str, Any] = {"lzma_entries": ("depth",)}
+#: Archival mode's libdeflate level of ``{v}_rgb.png``: 0.97x the bytes of :data:`DEFLATE_LEVEL`
+#: for ~2x its time (+25 ms per 1200 x 1200 view; the ``{v}_mgn.hdf5`` images gain 1 % at level
+#: 9 for +80 ms, so they stay at :data:`DEFLATE_LEVEL`).
+_RGB_ARCHIVAL_LEVEL = 9
 
 
 def write_view(
@@ -794,19 +810,22 @@ def write_view(
     lap("arrays")
     files: dict[str, bytes] = {}
     files[f"{v}_rgb.png"] = png_bytes(
-        np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else None
+        np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else DEFLATE_LEVEL
     )
     lap("rgb.png")
-    files[f"{v}.npz"] = npz_bytes(**npz, **(_NPZ_ARCHIVAL if archival else {}))
+    runs = {} if archival else dict.fromkeys(RUN_IMAGES, 1)
+    files[f"{v}.npz"] = npz_bytes(
+        **npz, level=NPZ_LEVEL, zlib_levels=runs, **(_NPZ_ARCHIVAL if archival else {})
+    )
     lap("npz")
     files[f"{v}_depth.png"] = depth_picture_png(
         np.where(valid, ideal_m, np.float32(np.nan)), level=DEPTH_PICTURE_LEVEL
     )
     lap("depth.png")
-    files[f"{v}_scene.hdf5"] = hdf5_bytes(h5, share_rotations=True)
+    files[f"{v}_scene.hdf5"] = hdf5_bytes(h5, share_rotations=True, level=DEFLATE_LEVEL)
     lap("scene.hdf5")
     files[f"{v}_mgn.hdf5"] = mgn_hdf5_bytes(
-        images, unorm16=unorm16, attrs=image_attrs, level=_MGN_ARCHIVAL_LEVEL if archival else 1
+        images, unorm16=unorm16, attrs=image_attrs, level=DEFLATE_LEVEL, zlib_levels=runs
     )
     lap("mgn.hdf5")
     files[f"{v}_order.csv"] = rec.order_csv.encode()

@@ -48,14 +48,15 @@ Sections:
 - ``io``: how the files are written: ``archival`` (false: every array exactly as the models make
   it; true: the compact archival mode of docs/format.md — sensor depth on a 1/64 cm grid (at
   most 0.078 mm off) in an LZMA zip entry (``np.load`` reads it), grasp poses rounded
-  (< 0.001°, 0.005 mm), RGB and mgn images at zlib level 6; MetaGraspNet's scripts still read
-  every file; ~0.7x the bytes, ~1.8x the write time).
+  (< 0.001°, 0.005 mm), the RGB PNG at libdeflate level 9; MetaGraspNet's scripts still read
+  every file; ~0.8x the bytes, ~1.6x the write time).
 - ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
   it ``spp_without_denoiser`` samples are traced and a warning names the package),
-  ``denoise_quality``,
-  ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone`` (``filmic`` | ``linear``),
+  ``denoise_quality``, ``adaptive_samples`` / ``adaptive_max`` (adaptive sampling: extra samples
+  where the first pass is noisy), ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone``
+  (``filmic`` | ``linear``),
   ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
   ``randomize`` (path engine, when ``camera.randomize`` is on: switches ``lights``,
   ``environment``, ``materials`` (tote / floor), ``exposure`` and their ranges). Labels do not

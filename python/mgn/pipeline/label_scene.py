@@ -331,8 +331,8 @@ def label_scene(
     gt: dict[int, list[dict[str, Any]]] = {}
 
     pending: deque[Future[Any]] = deque()
-    # View k + 1 renders in its own thread while view k is labelled; files are encoded (zlib,
-    # PNG; both release the GIL) by writer threads. At most one rendered view and two views
+    # View k + 1 renders in its own thread while view k is labelled; files are encoded (libdeflate,
+    # LZMA; both release the GIL) by writer threads. At most one rendered view and two views
     # being written wait, so memory stays bounded. Every view's result depends only on the
     # view (its randomisation is seeded by the view index), so the bytes do not depend on this
     # overlap.

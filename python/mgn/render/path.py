@@ -264,6 +264,11 @@ class PathTraceOptions:
             at the second path vertex or later) (0 = off). The default 10 leaves ordinary
             indirect light alone and removes the fireflies of caustics (diffuse -> glass -> sun)
             at the cost of dimming those caustics.
+        adaptive_samples: adaptive sampling, extra samples per pixel on average (>= 0; 0 =
+            off) traced after the ``spp`` samples of every pixel where that first pass looks
+            noisiest (docs/rendering.md, "Adaptive sampling"); the image stays identical for
+            any ``num_threads``.
+        adaptive_max: at most this many extra samples in one pixel (1..64).
     """
 
     spp: int = _TRACE.spp
@@ -276,9 +281,19 @@ class PathTraceOptions:
     focus_distance: float = _TRACE.focus_distance
     clamp: float = _TRACE.clamp
     clamp_indirect: float = _TRACE.clamp_indirect
+    adaptive_samples: float = _TRACE.adaptive_samples
+    adaptive_max: int = _TRACE.adaptive_max
 
     def __post_init__(self) -> None:
-        for name in ("spp", "max_bounces", "seed", "view_index", "num_threads", "rr_depth"):
+        for name in (
+            "spp",
+            "max_bounces",
+            "seed",
+            "view_index",
+            "num_threads",
+            "rr_depth",
+            "adaptive_max",
+        ):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise InvalidArgumentError(
@@ -303,6 +318,8 @@ class PathTraceOptions:
         o.focus_distance = float(self.focus_distance)
         o.clamp = float(self.clamp)
         o.clamp_indirect = float(self.clamp_indirect)
+        o.adaptive_samples = float(self.adaptive_samples)
+        o.adaptive_max = max(-(2**31), min(2**31 - 1, int(self.adaptive_max)))
         return o
 
 

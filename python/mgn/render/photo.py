@@ -168,6 +168,12 @@ class RenderSettings:
             CPU-s) and is the better use of the time: at equal CPU time, more samples with
             ``fast`` give a lower image error than fewer with ``high`` (benchmarks/
             path_results.md, "Denoiser settings"); ``balanced`` costs as much as ``high``.
+        adaptive_samples: adaptive sampling: extra path samples per pixel on average (0 = off)
+            traced after the ``spp`` samples of every pixel where that first pass looks
+            noisiest (glass, indirectly lit walls), at most ``adaptive_max`` per pixel
+            (docs/rendering.md, "Adaptive sampling"). The view then costs about
+            spp + 2 x adaptive_samples samples (the noisy pixels are the expensive ones).
+        adaptive_max: at most this many extra samples in one pixel (1..64).
         max_bounces: path segments after the camera ray.
         clamp: firefly clamp, the largest luminance of one sample (0 = off).
         exposure: EV added to the developed image.
@@ -184,6 +190,8 @@ class RenderSettings:
     denoise: bool = True
     spp_without_denoiser: int = 128
     denoise_quality: str = "fast"
+    adaptive_samples: float = 0.0
+    adaptive_max: int = 3
     max_bounces: int = 6
     clamp: float = 20.0
     exposure: float = 0.0
@@ -207,19 +215,25 @@ class RenderSettings:
             raise InvalidArgumentError(
                 f"RenderSettings.tone must be one of {', '.join(TONES)}, got {self.tone!r}"
             )
-        for key, low in (("spp", 1), ("spp_without_denoiser", 1), ("max_bounces", 0)):
+        for key, low in (("spp", 1), ("spp_without_denoiser", 1), ("max_bounces", 0),
+                         ("adaptive_max", 1)):  # fmt: skip
             v = getattr(self, key)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
                 raise InvalidArgumentError(
                     f"RenderSettings.{key} must be an integer >= {low}, got {v!r}"
                 )
+        if self.adaptive_max > 64:
+            raise InvalidArgumentError(
+                "RenderSettings.adaptive_max must be an integer in [1, 64], got "
+                f"{self.adaptive_max!r}"
+            )
         if not isinstance(self.denoise, bool):
             raise InvalidArgumentError(
                 f"RenderSettings.denoise must be true or false, got {self.denoise!r}"
             )
         bounds: tuple[tuple[str, float | None], ...] = (
             ("clamp", 0.0), ("aperture_radius", 0.0), ("shot_noise", 0.0), ("read_noise", 0.0),
-            ("exposure", None))  # fmt: skip
+            ("exposure", None), ("adaptive_samples", 0.0))  # fmt: skip
         for key, lo in bounds:
             v = getattr(self, key)
             ok = not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
@@ -657,6 +671,7 @@ class PhotoRenderer:
                 spp=self.spp, max_bounces=s.max_bounces, seed=self.seed & (2**63 - 1),
                 view_index=int(view_index), num_threads=self.num_threads,
                 aperture_radius=s.aperture_radius, clamp=s.clamp,
+                adaptive_samples=s.adaptive_samples, adaptive_max=s.adaptive_max,
             ),
         )  # fmt: skip
         radiance = out.radiance

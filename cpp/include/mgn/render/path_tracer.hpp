@@ -135,6 +135,14 @@ struct PathTraceOptions {
   /// ordinary indirect light alone (contributions of order 1) and removes the fireflies of
   /// caustic paths (diffuse -> glass -> sun), at the cost of a small bias (caustics are dimmed).
   double clamp_indirect = 10.0;
+  /// Adaptive sampling (docs/rendering.md): after the `spp` samples of every pixel, this many
+  /// extra samples per pixel on average (>= 0; 0 = off) go where the first pass looks noisiest
+  /// (9x9 neighbourhood variance weighted by a display curve), at most `adaptive_max` per pixel
+  /// (1..64). The extra samples come from their own stream of (seed, view, pixel, index), so the
+  /// image stays identical for any num_threads. Slightly biased at low spp: a pixel's own first
+  /// samples take part in the decision (clamped so that one firefly does not decide alone).
+  double adaptive_samples = 0.0;
+  int adaptive_max = 3;
 
   void validate() const;
 };

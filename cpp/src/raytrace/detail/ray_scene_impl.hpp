@@ -7,6 +7,8 @@
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
+#include <utility>
+
 namespace mgn {
 
 namespace detail {
@@ -24,6 +26,35 @@ class FtzDazGuard {
  private:
   unsigned int saved_;
 };
+
+/// An owned Embree scene (released on destruction; move-only).
+class OwnedScene {
+ public:
+  OwnedScene() = default;
+  explicit OwnedScene(RTCScene s) : scene_(s) {}
+  OwnedScene(const OwnedScene&) = delete;
+  OwnedScene& operator=(const OwnedScene&) = delete;
+  OwnedScene(OwnedScene&& o) noexcept : scene_(o.scene_) { o.scene_ = nullptr; }
+  OwnedScene& operator=(OwnedScene&& o) noexcept {
+    std::swap(scene_, o.scene_);
+    return *this;
+  }
+  ~OwnedScene() {
+    if (scene_) rtcReleaseScene(scene_);
+  }
+  RTCScene get() const { return scene_; }
+
+ private:
+  RTCScene scene_ = nullptr;
+};
+
+/// A second BVH over the geometries of `scene` (the same Embree geometries, attached under the
+/// same geometry ids: the vertex and index buffers are shared, only the BVH is new), built
+/// without RTC_SCENE_FLAG_ROBUST: Embree's faster, not watertight triangle test, whose hit
+/// distances differ from the robust scene's in the last bits and which may (rarely) let a ray
+/// through a shared edge or vertex. For queries whose answers are averaged (a path tracer's
+/// bounce and shadow rays), never for labels. Throws BackendError if Embree fails.
+OwnedScene non_robust_scene(const RayScene& scene);
 
 }  // namespace detail
 

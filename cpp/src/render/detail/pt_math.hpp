@@ -69,8 +69,7 @@ inline std::uint32_t reverse_bits(std::uint32_t x) {
   x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
   x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
   x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-  x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-  return (x >> 16) | (x << 16);
+  return __builtin_bswap32(x);  // the bytes in reverse order (one instruction)
 }
 
 /// A permutation of 32-bit words in which bit k of the result depends only on bits <= k of the
@@ -178,7 +177,7 @@ class PixelSampler {
   /// `cache`, when given, supplies the pair seeds (same values, computed once per pixel seed).
   PixelSampler(std::uint32_t pixel_seed, std::uint32_t index, PairSeeds* cache = nullptr)
       : seed_(pixel_seed), rev_index_(reverse_bits(index)), table_(&sobol_table()), cache_(cache) {}
-  Sample2 get(std::uint32_t pair) const {
+  __attribute__((always_inline)) Sample2 get(std::uint32_t pair) const {
     const PairSeed ps = cache_ != nullptr ? cache_->get(seed_, pair) : pair_seed(seed_, pair);
     const std::uint32_t i = reverse_bits(lk_permute(rev_index_, ps.order));
     const std::uint32_t a = reverse_bits(lk_permute(i, ps.dim0));

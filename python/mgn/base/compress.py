@@ -1,0 +1,228 @@
+"""Standard deflate streams made by libdeflate: zip entries, HDF5 gzip chunks and PNG images.
+
+Every stream here is plain deflate (RFC 1951), in the zlib wrapper (RFC 1950) where the format
+asks for it, so every reader decodes it unchanged: ``np.load`` (Python's ``zipfile``), the HDF5
+library's gzip filter (h5py), libpng (Pillow, OpenCV). Only the encoder differs from zlib's:
+libdeflate (through the PyPI package ``deflate``; third_party_notes/deflate.md) compresses whole
+buffers, with better block splitting than zlib, and releases the GIL while it works. On a
+1200 x 1200 view (docs/format.md) its level 6 takes about the time of zlib's level 1 and gives
+10-20 % fewer bytes for the sensor depth and the images, 3x fewer for the masks.
+
+The same bytes in give the same stream out (for one libdeflate version): nothing depends on the
+number of threads or on the machine.
+
+- :func:`deflate_raw` / :func:`zlib_stream`: one buffer, one stream;
+- :class:`ZipDeflate`: the compressor of one ``zipfile`` entry (raw deflate, wbits -15);
+- :func:`h5_write_deflated`: an HDF5 dataset written chunk by chunk, each chunk shuffled and
+  deflated here and stored with ``write_direct_chunk`` (the file is an ordinary shuffle + gzip
+  dataset);
+- :func:`png_encode`: a PNG of a grey, RGB, 16-bit grey or palette image (filter type 0, one
+  IDAT chunk).
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from typing import Any
+
+import deflate
+import numpy as np
+import numpy.typing as npt
+
+from mgn.errors import InvalidArgumentError
+
+__all__ = [
+    "MAX_LEVEL",
+    "ZipDeflate",
+    "deflate_raw",
+    "h5_write_deflated",
+    "png_encode",
+    "shuffled_chunks",
+    "zlib_stream",
+]
+
+#: Highest libdeflate level (10-12 search for the optimal parse: several times slower).
+MAX_LEVEL = 12
+
+
+def _check_level(level: int) -> int:
+    if not 1 <= int(level) <= MAX_LEVEL:
+        raise InvalidArgumentError(f"deflate level {level}: expected 1..{MAX_LEVEL}")
+    return int(level)
+
+
+def deflate_raw(data: bytes | memoryview, level: int) -> bytes:
+    """Raw deflate stream (RFC 1951, what zip entries hold) of ``data`` at libdeflate ``level``
+    (1..12)."""
+    return bytes(deflate.deflate_compress(data, _check_level(level)))
+
+
+def zlib_stream(data: bytes | memoryview, level: int) -> bytes:
+    """zlib stream (RFC 1950: header, deflate, Adler-32; what PNG IDAT and HDF5 gzip chunks hold)
+    of ``data`` at libdeflate ``level`` (1..12)."""
+    return bytes(deflate.zlib_compress(data, _check_level(level)))
+
+
+#: Largest stored deflate block (RFC 1951 3.2.4: LEN is 16 bits).
+_STORED_MAX = 0xFFFF
+
+
+def _stored_blocks(data: bytes) -> bytes:
+    """``data`` as non-final stored deflate blocks (byte-aligned: header byte 0, LEN, NLEN, the
+    bytes), which a following deflate stream continues."""
+    out = []
+    for s in range(0, len(data), _STORED_MAX):
+        part = data[s : s + _STORED_MAX]
+        out.append(struct.pack("<BHH", 0, len(part), len(part) ^ 0xFFFF) + part)
+    return b"".join(out)
+
+
+class ZipDeflate:
+    """Drop-in for the raw-deflate compressor ``zipfile`` makes for a ``ZIP_DEFLATED`` entry
+    (``compress`` / ``flush``; ``zipfile`` computes the CRC and sizes of the uncompressed bytes
+    itself). Keeps the parts written (a memoryview is kept, not copied) and deflates them at
+    flush in one libdeflate call; leading parts of less than 64 KiB together (e.g. a ``.npy``
+    header before the array's own buffer) go first as stored blocks, so the large last part
+    is deflated without being copied next to them.
+
+    On images made of long runs of equal bytes (masks, id images, a heat map's zero residual)
+    libdeflate's compact streams (~3x smaller than zlib's level 1) take zlib's inflater 2-3x
+    longer to read back (+70 ms per 1200 x 1200 view of 20 objects): where reading speed
+    matters, deflate those with zlib's level 1 (``npz_bytes(zlib_levels=...)``)."""
+
+    def __init__(self, level: int) -> None:
+        self._level = _check_level(level)
+        self._parts: list[bytes | memoryview] = []
+
+    def compress(self, data: bytes | memoryview) -> bytes:
+        self._parts.append(data)
+        return b""
+
+    def flush(self) -> bytes:
+        parts, self._parts = self._parts, []
+        if not parts:
+            return deflate_raw(b"", self._level)
+        head = b"".join(bytes(p) for p in parts[:-1])
+        if len(head) < 1 << 16:
+            return _stored_blocks(head) + deflate_raw(parts[-1], self._level)
+        return deflate_raw(head + bytes(parts[-1]), self._level)
+
+
+def shuffled_chunks(
+    data: npt.ArrayLike, chunks: tuple[int, ...]
+) -> list[tuple[tuple[int, ...], bytes]]:
+    """The chunks of ``data`` for an HDF5 chunked layout of shape ``chunks``, in row-major chunk
+    order, each as (offset, bytes after HDF5's shuffle filter): a full chunk's C-order values (the
+    parts beyond the dataset's edge zero) with byte k of every value grouped together (all bytes
+    0, then all bytes 1, ...), as the HDF5 shuffle filter arranges them."""
+    a = np.ascontiguousarray(data)
+    if a.ndim != len(chunks) or a.ndim == 0 or any(c < 1 for c in chunks):
+        raise InvalidArgumentError(
+            f"shuffled_chunks: chunk shape {chunks} does not fit an array of shape {a.shape}"
+        )
+    counts = [-(-n // c) for n, c in zip(a.shape, chunks, strict=True)]
+    padded_shape = tuple(n * c for n, c in zip(counts, chunks, strict=True))
+    if padded_shape != a.shape:
+        padded = np.zeros(padded_shape, a.dtype)
+        padded[tuple(slice(0, n) for n in a.shape)] = a
+        a = padded
+    size = a.dtype.itemsize
+    # (n0, c0, n1, c1, ..., size) -> (n0, n1, ..., size, c0, c1, ...): per chunk, byte planes.
+    split = a.view(np.uint8).reshape(
+        [x for n, c in zip(counts, chunks, strict=True) for x in (n, c)] + [size]
+    )
+    nd = a.ndim
+    order = [2 * i for i in range(nd)] + [2 * nd] + [2 * i + 1 for i in range(nd)]
+    planes = np.ascontiguousarray(split.transpose(order)).reshape(int(np.prod(counts)), -1)
+    out = []
+    for k, index in enumerate(np.ndindex(*counts)):
+        offset = tuple(i * c for i, c in zip(index, chunks, strict=True))
+        out.append((offset, planes[k].tobytes()))
+    return out
+
+
+def h5_write_deflated(
+    group: Any,
+    name: str,
+    data: npt.ArrayLike,
+    chunks: tuple[int, ...],
+    level: int,
+    *,
+    zlib_level: int | None = None,
+    **kwargs: Any,
+) -> Any:
+    """Create dataset ``name`` in h5py ``group`` holding ``data`` with chunk shape ``chunks`` and
+    the filters shuffle + gzip, the chunks compressed here (:func:`shuffled_chunks`, then
+    :func:`zlib_stream` at libdeflate ``level``) and stored with ``write_direct_chunk``: every
+    HDF5 reader decodes them with its own gzip filter. ``zlib_level``: deflate with zlib at that
+    level instead (see :class:`ZipDeflate` on images of long runs). ``kwargs`` go to
+    ``create_dataset`` (e.g. ``track_times=False``). Returns the dataset."""
+    a = np.ascontiguousarray(data)
+    ds = group.create_dataset(
+        name, shape=a.shape, dtype=a.dtype, chunks=chunks, compression="gzip",
+        compression_opts=min(_check_level(level), 9), shuffle=True, **kwargs,
+    )  # fmt: skip
+    for offset, raw in shuffled_chunks(a, chunks):
+        stream = zlib_stream(raw, level) if zlib_level is None else zlib.compress(raw, zlib_level)
+        ds.id.write_direct_chunk(offset, stream, 0)
+    return ds
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_chunk(kind: bytes, body: bytes) -> bytes:
+    return (
+        struct.pack(">I", len(body))
+        + kind
+        + body
+        + struct.pack(">I", zlib.crc32(body, zlib.crc32(kind)))
+    )
+
+
+def png_encode(image: npt.ArrayLike, *, level: int, palette: npt.ArrayLike | None = None) -> bytes:
+    """A PNG (ISO/IEC 15948) of ``image``: (H, W) uint8 grey, (H, W, 3) uint8 RGB, (H, W) uint16
+    grey, or (H, W) uint8 indices into ``palette`` ((K, 3) uint8, K <= 256). Every row has filter
+    type 0 (none: on rendered pictures with flat regions libdeflate's matches do better than the
+    Sub/Up/Paeth predictors at the same level), one IDAT chunk at libdeflate ``level``, no time
+    or text chunk (reproducible)."""
+    a = np.asarray(image)
+    if palette is not None:
+        pal = np.asarray(palette)
+        if a.ndim != 2 or a.dtype != np.uint8 or pal.ndim != 2 or pal.shape[1] != 3:
+            raise InvalidArgumentError(
+                f"png_encode: palette image must be (H, W) uint8 with a (K, 3) palette, got "
+                f"{a.shape} {a.dtype} and {pal.shape}"
+            )
+        if not 1 <= len(pal) <= 256 or int(a.max(initial=0)) >= len(pal):
+            raise InvalidArgumentError(
+                f"png_encode: palette of {len(pal)} colours for indices up to {int(a.max())}"
+            )
+        depth, colour, rows = 8, 3, a
+    elif a.ndim == 3 and a.shape[2] == 3 and a.dtype == np.uint8:
+        depth, colour, rows = 8, 2, a.reshape(a.shape[0], -1)
+    elif a.ndim == 2 and a.dtype == np.uint8:
+        depth, colour, rows = 8, 0, a
+    elif a.ndim == 2 and a.dtype == np.uint16:
+        depth, colour, rows = 16, 0, a.astype(">u2").view(np.uint8)
+    else:
+        raise InvalidArgumentError(
+            f"png_encode: image of shape {a.shape} and dtype {a.dtype}; expected (H, W) uint8, "
+            "(H, W, 3) uint8 or (H, W) uint16"
+        )
+    h, w = a.shape[:2]
+    if h < 1 or w < 1:
+        raise InvalidArgumentError(f"png_encode: empty image of shape {a.shape}")
+    raw = np.empty((h, rows.shape[1] + 1), np.uint8)
+    raw[:, 0] = 0  # filter type none
+    raw[:, 1:] = rows
+    parts = [
+        _PNG_SIGNATURE,
+        _png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, depth, colour, 0, 0, 0)),
+    ]
+    if palette is not None:
+        parts.append(_png_chunk(b"PLTE", np.ascontiguousarray(pal, np.uint8).tobytes()))
+    parts.append(_png_chunk(b"IDAT", zlib_stream(raw.data, level)))
+    parts.append(_png_chunk(b"IEND", b""))
+    return b"".join(parts)

@@ -1,0 +1,155 @@
+"""mgn.base.compress: libdeflate's streams decode with the other implementations every reader
+uses (zlib for zip entries and HDF5's gzip filter, libpng through Pillow and OpenCV), to the
+bytes put in; HDF5 files written chunk by chunk read back equal to the array through h5py's own
+filters and are byte-identical to the file HDF5 writes itself with the same chunk streams."""
+
+from __future__ import annotations
+
+import io
+import zlib
+from pathlib import Path
+
+import cv2
+import h5py
+import numpy as np
+import pytest
+from PIL import Image
+
+from mgn.base.compress import (
+    ZipDeflate,
+    deflate_raw,
+    h5_write_deflated,
+    png_encode,
+    shuffled_chunks,
+    zlib_stream,
+)
+from mgn.errors import InvalidArgumentError
+
+
+def _payload() -> bytes:
+    rng = np.random.default_rng(3)
+    smooth = np.cumsum(rng.integers(-2, 3, 50_000)).astype(np.int32).tobytes()
+    return smooth + bytes(20_000) + rng.integers(0, 256, 5_000, dtype=np.uint8).tobytes()
+
+
+@pytest.mark.parametrize("level", [1, 5, 6, 9, 12])
+def test_streams_inflate_with_zlib_to_the_input(level: int):
+    data = _payload()
+    assert zlib.decompress(deflate_raw(data, level), -15) == data
+    stream = zlib_stream(data, level)
+    assert zlib.decompress(stream) == data  # header and Adler-32 checked by zlib
+    assert len(stream) < len(data) / 2
+    assert zlib_stream(data, level) == stream  # same input, same bytes
+
+
+def test_zip_compressor_stores_a_small_head_and_deflates_the_rest():
+    data = _payload()
+    head = b"\x93NUMPY header" * 5
+    z = ZipDeflate(6)
+    assert z.compress(head) == b"" and z.compress(memoryview(data)) == b""
+    stream = z.flush()
+    assert zlib.decompress(stream, -15) == head + data
+    # The head is a stored block (byte 0: not final, type 0), then LEN and its complement.
+    assert stream[0] == 0 and int.from_bytes(stream[1:3], "little") == len(head)
+    assert int.from_bytes(stream[3:5], "little") == len(head) ^ 0xFFFF
+    # A head of 64 KiB or more is deflated with the rest.
+    z = ZipDeflate(6)
+    z.compress(data[:70_000])
+    z.compress(data[70_000:])
+    assert z.flush() == deflate_raw(data, 6)
+    empty = ZipDeflate(1)
+    assert zlib.decompress(empty.flush(), -15) == b""
+
+
+def test_levels_outside_libdeflate_range_are_refused():
+    with pytest.raises(InvalidArgumentError, match="deflate level 13"):
+        deflate_raw(b"abc", 13)
+    with pytest.raises(InvalidArgumentError, match="deflate level 0"):
+        ZipDeflate(0)
+
+
+def test_shuffled_chunks_match_a_direct_reading_of_the_hdf5_shuffle_filter():
+    rng = np.random.default_rng(4)
+    a = rng.random((5, 3, 2)).astype(np.float32)
+    chunks = shuffled_chunks(a, (2, 3, 1))
+    assert [off for off, _ in chunks] == [(r, 0, c) for r in (0, 2, 4) for c in (0, 1)]
+    for (r, _, c), raw in chunks:
+        block = np.zeros((2, 3, 1), np.float32)  # beyond the edge: zeros
+        part = a[r : r + 2, :, c : c + 1]
+        block[: part.shape[0]] = part
+        values = block.reshape(-1).view(np.uint8).reshape(-1, 4)
+        expected = b"".join(values[:, k].tobytes() for k in range(4))  # byte planes
+        assert raw == expected
+    with pytest.raises(InvalidArgumentError, match="chunk shape"):
+        shuffled_chunks(a, (2, 3))
+
+
+@pytest.mark.parametrize(
+    ("shape", "dtype", "chunks"),
+    [
+        ((1000, 4, 4), np.float32, (300, 1, 1)),
+        ((130, 77), np.int32, (64, 77)),
+        ((70, 33), np.bool_, (64, 33)),
+        ((257,), np.float64, (257,)),
+    ],  # fmt: skip
+)
+def test_hdf5_chunks_written_directly_read_back_through_the_gzip_filter(
+    tmp_path: Path, shape, dtype, chunks
+):
+    rng = np.random.default_rng(6)
+    a = (rng.random(shape) * 100).astype(dtype)
+    if dtype == np.float32:
+        a[rng.random(shape) < 0.1] = np.nan
+    with h5py.File(tmp_path / "a.h5", "w") as h5:
+        h5_write_deflated(h5, "x", a, chunks, 6, track_times=False)
+        # Second writer: HDF5 itself (its own zlib), chunk layout and filters the same.
+        h5.create_dataset("ref", data=a, chunks=chunks, compression="gzip", shuffle=True)
+    with h5py.File(tmp_path / "a.h5", "r") as h5:
+        x = h5["x"]
+        assert x.dtype == a.dtype and x.chunks == chunks
+        assert x.compression == "gzip" and x.shuffle
+        assert np.asarray(x[()]).tobytes() == a.tobytes()  # NaN bits included
+        assert np.asarray(h5["ref"][()]).tobytes() == a.tobytes()
+        # Chunk by chunk, the stored stream inflates to the shuffled bytes HDF5 wrote itself.
+        for offset, raw in shuffled_chunks(a, chunks):
+            mask, stored = x.id.read_direct_chunk(offset)
+            assert mask == 0 and zlib.decompress(stored) == raw
+            _, ref = h5["ref"].id.read_direct_chunk(offset)
+            n = np.prod([min(c, s - o) for c, s, o in zip(chunks, shape, offset, strict=True)])
+            if n == int(np.prod(chunks)):  # HDF5 pads partial chunks with whatever: full only
+                assert zlib.decompress(ref) == raw
+
+
+@pytest.mark.parametrize("kind", ["rgb", "grey", "grey16", "palette"])
+def test_png_decodes_with_pillow_and_opencv(kind: str):
+    rng = np.random.default_rng(7)
+    h, w = 37, 53
+    palette = None
+    if kind == "rgb":
+        img = rng.integers(0, 256, (h, w, 3), dtype=np.uint8)
+        img[:10] = 17  # a flat band
+    elif kind == "grey":
+        img = rng.integers(0, 256, (h, w), dtype=np.uint8)
+    elif kind == "grey16":
+        img = rng.integers(0, 65536, (h, w), dtype=np.uint16)
+    else:
+        palette = rng.integers(0, 256, (200, 3), dtype=np.uint8)
+        img = rng.integers(0, 200, (h, w), dtype=np.uint8)
+    data = png_encode(img, level=6, palette=palette)
+    with Image.open(io.BytesIO(data)) as im:
+        im.load()  # checks every CRC and the zlib stream
+        pil = np.asarray(im.convert("RGB") if palette is not None else im)
+    expected = palette[img] if palette is not None else img
+    assert pil.dtype == expected.dtype and np.array_equal(pil, expected)
+    cv = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    if kind in ("rgb", "palette"):
+        cv = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)[..., ::-1]
+    assert cv.dtype == expected.dtype and np.array_equal(cv, expected)
+    assert png_encode(img, level=6, palette=palette) == data
+
+
+def test_png_refuses_images_it_cannot_store():
+    with pytest.raises(InvalidArgumentError, match="expected"):
+        png_encode(np.zeros((4, 4), np.float32), level=6)
+    with pytest.raises(InvalidArgumentError, match="palette of 2 colours"):
+        png_encode(np.full((4, 4), 5, np.uint8), level=6, palette=np.zeros((2, 3), np.uint8))
