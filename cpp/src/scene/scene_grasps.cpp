@@ -160,7 +160,8 @@ struct SceneGraspModel::Impl {
   SceneGraspOptions options;
   ParallelJawGripper gripper;
   Cup cup;
-  std::vector<std::unique_ptr<Solid>> obstacles;  // objects 0..N-1, then the tote
+  // Objects 0..N-1, then the tote; instances of the same mesh share one Solid.
+  std::vector<std::shared_ptr<const Solid>> obstacles;
   std::vector<Pose> X_W_obstacle;
   std::vector<Pose> X_obstacle_W;
   std::vector<Box> obstacle_box;               // world
@@ -367,11 +368,38 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
   }
 
   // Obstacles and the visibility scene.
+  // A scene often holds several instances of one object: their meshes (same vertices and faces,
+  // object frame) share one Solid, so its BVHs are built once. The distinct Solids are built in
+  // parallel (each build is independent and deterministic).
+  auto mesh_of = [&](std::size_t i) -> const Mesh& { return i < N ? *objects[i].mesh : tote; };
+  auto same_mesh = [](const Mesh& a, const Mesh& b) {
+    return &a == &b ||
+           (a.vertices().rows() == b.vertices().rows() && a.faces().rows() == b.faces().rows() &&
+            a.vertices() == b.vertices() && a.faces() == b.faces());
+  };
+  std::vector<std::size_t> first_of(N + 1);  // obstacle i uses the Solid of obstacle first_of[i]
+  std::vector<std::size_t> distinct;
+  for (std::size_t i = 0; i <= N; ++i) {
+    first_of[i] = i;
+    for (const std::size_t d : distinct) {
+      if (same_mesh(mesh_of(i), mesh_of(d))) {
+        first_of[i] = d;
+        break;
+      }
+    }
+    if (first_of[i] == i) distinct.push_back(i);
+  }
+  std::vector<std::shared_ptr<const Solid>> solids(N + 1);
+  parallel_for(distinct.size(), resolve_num_threads(options.num_threads), 1,
+               [&](std::size_t begin, std::size_t end) {
+                 for (std::size_t k = begin; k < end; ++k)
+                   solids[distinct[k]] = std::make_shared<const Solid>(mesh_of(distinct[k]));
+               });
   std::vector<RayGeometry> geoms;
   for (std::size_t i = 0; i <= N; ++i) {
-    const Mesh& mesh = i < N ? *objects[i].mesh : tote;
+    const Mesh& mesh = mesh_of(i);
     const Pose X = i < N ? objects[i].X_WO : X_WT;
-    m.obstacles.push_back(std::make_unique<Solid>(mesh));
+    m.obstacles.push_back(solids[first_of[i]]);
     m.X_W_obstacle.push_back(X);
     m.X_obstacle_W.push_back(X.inverse());
     m.obstacle_box.push_back(world_box(m.obstacles.back()->box, X));
