@@ -488,7 +488,8 @@ void fill_packet(ParallelRay& r, int* valid, const ParallelRays& rays, int start
 
 }  // namespace
 
-void parallel_first_hits(const RayScene& scene, const ParallelRays& rays, float* t, Vec3f* normal) {
+void parallel_first_hits(const RayScene& scene, const ParallelRays& rays, float* t, Vec3f* normal,
+                         int* face) {
   detail::FtzDazGuard guard;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
@@ -508,9 +509,11 @@ void parallel_first_hits(const RayScene& scene, const ParallelRays& rays, float*
       if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
         t[s + k] = std::numeric_limits<float>::infinity();
         normal[s + k].setZero();
+        if (face) face[s + k] = -1;
       } else {
         t[s + k] = rh.ray.tfar[k];
         normal[s + k] = impl.world_normals[rh.hit.geomID[k]].row(rh.hit.primID[k]).transpose();
+        if (face) face[s + k] = static_cast<int>(rh.hit.primID[k]);
       }
     }
   }

@@ -1215,6 +1215,40 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
   const float inv_spp = 1.0f / static_cast<float>(options.spp);
   const int spp_log2 = pt::ceil_log2(static_cast<std::uint32_t>(options.spp));
 
+  // The camera ray of one sample of pixel (u, v): jittered in the pixel (sampler dimension 0)
+  // and, with an aperture, leaving a point of the lens (dimension 1) towards the focus plane.
+  auto camera_ray = [&](const pt::PixelSampler& s, int u, int v, F3& o, F3& d) {
+    const pt::Sample2 j = s.get(0);
+    F3 dc(((u + j.x) - cam.cx) / cam.fx, ((v + j.y) - cam.cy) / cam.fy, 1.0f);
+    o = cam.o;
+    if (aperture > 0.0f) {
+      const pt::Sample2 ls = s.get(1);
+      const pt::Sample2 dd = pt::concentric_disc(ls.x, ls.y);
+      const F3 lens(dd.x * aperture, dd.y * aperture, 0.0f);
+      dc = dc * focus - lens;
+      o = cam.o + cam.to_world(lens);
+    }
+    d = normalize(cam.to_world(dc));
+  };
+  // The path of lane l of a traced camera packet, continued from the packet's first hit; its
+  // radiance (non-finite -> 0, clamped to `clamp` luminance if set) and guides a, n.
+  auto trace_lane = [&](Integrator& it, const RTCRayHit16& rh16, int l, F3 o, F3 d,
+                        const pt::PixelSampler& s, F3& a, F3& n) {
+    RTCRayHit first;
+    first.ray.tfar = rh16.ray.tfar[l];
+    first.hit.geomID = rh16.hit.geomID[l];
+    first.hit.primID = rh16.hit.primID[l];
+    first.hit.u = rh16.hit.u[l];
+    first.hit.v = rh16.hit.v[l];
+    F3 c = it.trace(o, d, s, a, n, &first);
+    if (!all_finite(c)) c = F3(0.0f);
+    if (clamp > 0.0f) {
+      const float lum = luminance(c);
+      if (lum > clamp) c *= clamp / lum;
+    }
+    return c;
+  };
+
   auto worker = [&](std::size_t, std::size_t) {
     detail::FtzDazGuard guard;
     Integrator it(G, L, options);
@@ -1270,41 +1304,17 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
             const pt::PixelSampler s(pixel_stream[ll].seed,
                                      pixel_stream[ll].base | static_cast<std::uint32_t>(k),
                                      &pair_seeds);
-            const pt::Sample2 j = s.get(0);
-            F3 dc(((u0 + ll + j.x) - cam.cx) / cam.fx, ((v + j.y) - cam.cy) / cam.fy, 1.0f);
-            F3 o = cam.o;
-            if (aperture > 0.0f) {
-              const pt::Sample2 ls = s.get(1);
-              const pt::Sample2 dd = pt::concentric_disc(ls.x, ls.y);
-              const F3 lens(dd.x * aperture, dd.y * aperture, 0.0f);
-              dc = dc * focus - lens;
-              o = cam.o + cam.to_world(lens);
-            }
-            const F3 d = normalize(cam.to_world(dc));
-            org[l] = o;
-            dir[l] = d;
-            set_packet_lane(rh16, valid16, l, l < m, o, d);
+            camera_ray(s, u0 + ll, v, org[l], dir[l]);
+            set_packet_lane(rh16, valid16, l, l < m, org[l], dir[l]);
           }
           rtcIntersect16(valid16, scene, &coherent, &rh16);
           it.counters.rays += m;
           for (int l = 0; l < m; ++l) {
-            RTCRayHit first;
-            first.ray.tfar = rh16.ray.tfar[l];
-            first.hit.geomID = rh16.hit.geomID[l];
-            first.hit.primID = rh16.hit.primID[l];
-            first.hit.u = rh16.hit.u[l];
-            first.hit.v = rh16.hit.v[l];
             const pt::PixelSampler s(pixel_stream[l].seed,
                                      pixel_stream[l].base | static_cast<std::uint32_t>(k),
                                      &pair_seeds);
             F3 a, n;
-            F3 c = it.trace(org[l], dir[l], s, a, n, &first);
-            if (!all_finite(c)) c = F3(0.0f);
-            if (clamp > 0.0f) {
-              const float lum = luminance(c);
-              if (lum > clamp) c *= clamp / lum;
-            }
-            sum[l] += c;
+            sum[l] += trace_lane(it, rh16, l, org[l], dir[l], s, a, n);
             alb[l] += a;
             nrm[l] += n;
           }
@@ -1386,39 +1396,17 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
             const Job& jb = jobs[b0 + std::min(l, m - 1)];
             const pt::PixelSampler s(jb.ps.seed, jb.ps.base | static_cast<std::uint32_t>(jb.j),
                                      &pair_seeds);
-            const pt::Sample2 jit = s.get(0);
-            F3 dc(((jb.u + jit.x) - cam.cx) / cam.fx, ((jb.v + jit.y) - cam.cy) / cam.fy, 1.0f);
-            F3 o = cam.o;
-            if (aperture > 0.0f) {
-              const pt::Sample2 ls = s.get(1);
-              const pt::Sample2 dd = pt::concentric_disc(ls.x, ls.y);
-              const F3 lens(dd.x * aperture, dd.y * aperture, 0.0f);
-              dc = dc * focus - lens;
-              o = cam.o + cam.to_world(lens);
-            }
-            org[l] = o;
-            dir[l] = normalize(cam.to_world(dc));
+            camera_ray(s, jb.u, jb.v, org[l], dir[l]);
             set_packet_lane(rh16, valid16, l, l < m, org[l], dir[l]);
           }
           rtcIntersect16(valid16, scene, &coherent, &rh16);
           it.counters.rays += m;
           for (int l = 0; l < m; ++l) {
             const Job& jb = jobs[b0 + l];
-            RTCRayHit first;
-            first.ray.tfar = rh16.ray.tfar[l];
-            first.hit.geomID = rh16.hit.geomID[l];
-            first.hit.primID = rh16.hit.primID[l];
-            first.hit.u = rh16.hit.u[l];
-            first.hit.v = rh16.hit.v[l];
             const pt::PixelSampler s(jb.ps.seed, jb.ps.base | static_cast<std::uint32_t>(jb.j),
                                      &pair_seeds);
             F3 a, n;
-            F3 c = it.trace(org[l], dir[l], s, a, n, &first);
-            if (!all_finite(c)) c = F3(0.0f);
-            if (clamp > 0.0f) {
-              const float lum = luminance(c);
-              if (lum > clamp) c *= clamp / lum;
-            }
+            const F3 c = trace_lane(it, rh16, l, org[l], dir[l], s, a, n);
             const std::size_t t = static_cast<std::size_t>(jb.v - v0) * kTile + (jb.u - u0);
             sum[t] += c;
             alb[t] += a;

@@ -88,7 +88,7 @@ def label_object(
     seed: int = 0,
     num_threads: int = 0,
     progress: bool = False,
-    chunk: int = 250,
+    chunk: int | None = None,
     physics: PhysicsScorer | None = None,
     friction: float = _WRENCH.friction,
     grip_force: float = _WRENCH.grip_force,
@@ -105,6 +105,8 @@ def label_object(
         gripper: the gripper (default: MetaGraspNet's Franka-like hand).
         num_points: contact points sampled evenly on the surface.
         progress: show a tqdm progress bar.
+        chunk: points per native call (labels do not depend on it); None: 250 with a
+            progress bar, else all at once (every call waits for its slowest thread).
         physics: optional scorer filling ``quality_score_simulation``; None leaves it NaN.
             The metadata then records ``pj_physics_scored`` / ``pj_physics_unscored``: how
             many grasps got a score and how many kept NaN (a capped scorer).
@@ -129,6 +131,8 @@ def label_object(
         raise InvalidArgumentError(
             f"label_object: num_points must be an integer > 0, got {num_points!r}"
         )
+    if chunk is None:
+        chunk = 250 if progress else max(1, num_points)
     if chunk < 1:
         raise InvalidArgumentError(f"label_object: chunk must be >= 1, got {chunk!r}")
     gripper = gripper if gripper is not None else ParallelJawGripper()

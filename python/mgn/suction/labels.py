@@ -82,7 +82,7 @@ def label_object(
     seed: int = 0,
     num_threads: int = 0,
     progress: bool = False,
-    chunk: int = 250,
+    chunk: int | None = None,
     samples: SurfaceSamples | None = None,
 ) -> SuctionLabels:
     """Suction labels of one object: see the module docstring. Deterministic for ``seed``.
@@ -94,6 +94,8 @@ def label_object(
         model: seal model name.
         num_points: candidates sampled evenly on the surface.
         progress: show a tqdm progress bar.
+        chunk: points per native call (labels do not depend on it); None: 250 with a
+            progress bar, else all at once (every call waits for its slowest thread).
         samples: the candidates, if already drawn: they must be
             ``sample_surface(mesh, num_points, method="even", seed=seed)`` (e.g. shared with
             :func:`mgn.pj.label_object`); None draws them here.
@@ -115,6 +117,10 @@ def label_object(
     keep = ~np.asarray(hits, bool).reshape(-1)
     kept_idx = np.flatnonzero(keep)
     seal = SealModel(mesh, cup, model)
+    if chunk is None:
+        chunk = 250 if progress else max(1, len(kept_idx))
+    if chunk < 1:
+        raise InvalidArgumentError(f"label_object: chunk must be >= 1, got {chunk!r}")
     score = np.zeros(len(kept_idx), np.float32)
     reason = np.zeros(len(kept_idx), np.uint8)
     bar = tqdm(

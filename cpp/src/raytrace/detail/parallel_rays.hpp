@@ -16,8 +16,10 @@ struct ParallelRays {
   float tfar = std::numeric_limits<float>::infinity();
 };
 
-/// First hits: t[i] (inf on a miss), normal[i] (unit geometric normal of the face hit).
-void parallel_first_hits(const RayScene& scene, const ParallelRays& rays, float* t, Vec3f* normal);
+/// First hits: t[i] (inf on a miss), normal[i] (unit geometric normal of the face hit) and, when
+/// `face` is not null, face[i] (index of the face hit in its geometry; -1 on a miss).
+void parallel_first_hits(const RayScene& scene, const ParallelRays& rays, float* t, Vec3f* normal,
+                         int* face = nullptr);
 
 /// True if every ray hits something within tfar (stops at the first packet with a miss).
 bool parallel_all_hit(const RayScene& scene, const ParallelRays& rays);
