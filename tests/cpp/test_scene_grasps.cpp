@@ -283,3 +283,35 @@ TEST(SceneGrasps, BadInputIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("expected one per object (1)"), std::string::npos);
   }
 }
+
+TEST(SceneGrasps, CopiesOfOneMeshCollideEachAtItsOwnPose) {
+  // Three instances of one box: the shared mesh, a separate copy with the same vertices and
+  // faces (they share one collision model), and the copy again turned 45 degrees about z. A
+  // suction tool pushed 5 mm into the top of each hits that instance; one placed at the corner
+  // of the turned box's world bounding box (inside that box, 30 mm outside the box itself, more
+  // than the 10 mm cup radius) hits nothing.
+  const Mesh copy(box_mesh().vertices(), box_mesh().faces());
+  std::vector<SceneGraspObject> objects = {
+      box_object(at(-0.15, 0, 0.025)), box_object(at(0, 0, 0.025)), box_object(at(0.15, 0, 0.025))};
+  objects[1].mesh = &copy;
+  objects[2].mesh = &copy;
+  objects[2].X_WO.linear() = Eigen::AngleAxisd(M_PI / 4, Vec3d::UnitZ()).toRotationMatrix();
+  const SceneGraspModel m = model_of(objects);
+  Pose down = Pose::Identity();
+  down.linear() = Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix();  // z = -z_W
+  std::vector<Pose> poses;
+  for (const double x : {-0.15, 0.0, 0.15}) {
+    poses.push_back(down);
+    poses.back().translation() = Vec3d(x, 0, 0.045);
+  }
+  const double corner = 0.05 / std::sqrt(2.0);  // half the turned box's world extent in x, y
+  poses.push_back(down);
+  poses.back().translation() = Vec3d(0.15 + corner - 0.001, corner - 0.001, 0.045);
+  const ToolCollisions c = m.collides(GraspKind::Suction, poses, {}, {-1, -1, -1, -1});
+  const std::size_t K = m.options().offsets.size();
+  EXPECT_EQ(c.hit[0 * K], 1);
+  EXPECT_EQ(c.hit[1 * K], 2);
+  EXPECT_EQ(c.hit[2 * K], 3);
+  EXPECT_EQ(c.colliding[3], 0);
+  EXPECT_EQ(c.hit[3 * K], -1);
+}

@@ -96,6 +96,34 @@ Box world_box(const Box& local, const Pose& X) {
   return Box(c - h, c + h);
 }
 
+/// Whether the boxes a (local, placed at X_WA) and b (local, placed at X_WB) are disjoint: the
+/// separating-axis test of two oriented boxes (15 axes). Conservative: the extents are grown by
+/// 1 nm and |R| by 1e-6 (near-parallel edge axes), so touching or nearly touching boxes are never
+/// called disjoint. A cheap broad phase before FCL: a part whose box misses an obstacle's box
+/// cannot touch or contain it, nor lie inside it.
+bool obb_disjoint(const Box& a, const Pose& X_WA, const Box& b, const Pose& X_WB) {
+  const Mat3d R = X_WA.linear().transpose() * X_WB.linear();  // axes of b in the frame of a
+  const Vec3d t = X_WA.linear().transpose() * (X_WB * b.center() - X_WA * a.center());
+  const Vec3d ea = (0.5 * a.sizes()).array() + 1e-9;
+  const Vec3d eb = (0.5 * b.sizes()).array() + 1e-9;
+  const Mat3d AR = R.cwiseAbs().array() + 1e-6;
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(t[i]) > ea[i] + AR.row(i).dot(eb)) return true;
+  for (int j = 0; j < 3; ++j)
+    if (std::abs(R.col(j).dot(t)) > eb[j] + AR.col(j).dot(ea)) return true;
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      // Axis a_i x b_j.
+      const double ra = ea[i1] * AR(i2, j) + ea[i2] * AR(i1, j);
+      const double rb = eb[j1] * AR(i, j2) + eb[j2] * AR(i, j1);
+      if (std::abs(t[i2] * R(i1, j) - t[i1] * R(i2, j)) > ra + rb) return true;
+    }
+  }
+  return false;
+}
+
 /// Branch-free orthonormal basis with z = n (Duff et al. 2017), n unit.
 Mat3d frame_z_to(const Vec3d& n) {
   const double sign = std::copysign(1.0, n.z());
@@ -132,7 +160,8 @@ struct SceneGraspModel::Impl {
   SceneGraspOptions options;
   ParallelJawGripper gripper;
   Cup cup;
-  std::vector<std::unique_ptr<Solid>> obstacles;  // objects 0..N-1, then the tote
+  // Objects 0..N-1, then the tote; instances of the same mesh share one Solid.
+  std::vector<std::shared_ptr<const Solid>> obstacles;
   std::vector<Pose> X_W_obstacle;
   std::vector<Pose> X_obstacle_W;
   std::vector<Box> obstacle_box;               // world
@@ -177,6 +206,9 @@ struct SceneGraspModel::Impl {
     const Box& ob = obstacle_box[j];
     if (!pb.intersects(ob)) return false;
     const Solid& obs = *obstacles[j];
+    // Their oriented boxes: most pairs whose world boxes overlap are told apart here, without
+    // a call into FCL.
+    if (obb_disjoint(part.box, X_WP, obs.box, X_W_obstacle[j])) return false;
     if (collide(*part.model, X_WP, *obs.model, X_W_obstacle[j])) return true;
     // No surface contact: a part inside the obstacle or the obstacle inside the part.
     if (ob.contains(pb) && obs.contains(X_obstacle_W[j] * (X_WP * part.vertex))) return true;
@@ -336,11 +368,38 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
   }
 
   // Obstacles and the visibility scene.
+  // A scene often holds several instances of one object: their meshes (same vertices and faces,
+  // object frame) share one Solid, so its BVHs are built once. The distinct Solids are built in
+  // parallel (each build is independent and deterministic).
+  auto mesh_of = [&](std::size_t i) -> const Mesh& { return i < N ? *objects[i].mesh : tote; };
+  auto same_mesh = [](const Mesh& a, const Mesh& b) {
+    return &a == &b ||
+           (a.vertices().rows() == b.vertices().rows() && a.faces().rows() == b.faces().rows() &&
+            a.vertices() == b.vertices() && a.faces() == b.faces());
+  };
+  std::vector<std::size_t> first_of(N + 1);  // obstacle i uses the Solid of obstacle first_of[i]
+  std::vector<std::size_t> distinct;
+  for (std::size_t i = 0; i <= N; ++i) {
+    first_of[i] = i;
+    for (const std::size_t d : distinct) {
+      if (same_mesh(mesh_of(i), mesh_of(d))) {
+        first_of[i] = d;
+        break;
+      }
+    }
+    if (first_of[i] == i) distinct.push_back(i);
+  }
+  std::vector<std::shared_ptr<const Solid>> solids(N + 1);
+  parallel_for(distinct.size(), resolve_num_threads(options.num_threads), 1,
+               [&](std::size_t begin, std::size_t end) {
+                 for (std::size_t k = begin; k < end; ++k)
+                   solids[distinct[k]] = std::make_shared<const Solid>(mesh_of(distinct[k]));
+               });
   std::vector<RayGeometry> geoms;
   for (std::size_t i = 0; i <= N; ++i) {
-    const Mesh& mesh = i < N ? *objects[i].mesh : tote;
+    const Mesh& mesh = mesh_of(i);
     const Pose X = i < N ? objects[i].X_WO : X_WT;
-    m.obstacles.push_back(std::make_unique<Solid>(mesh));
+    m.obstacles.push_back(solids[first_of[i]]);
     m.X_W_obstacle.push_back(X);
     m.X_obstacle_W.push_back(X.inverse());
     m.obstacle_box.push_back(world_box(m.obstacles.back()->box, X));
