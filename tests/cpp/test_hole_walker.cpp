@@ -14,21 +14,13 @@
 #include "grasp/detail/seal_trials.hpp"
 #include "raytrace/detail/parallel_rays.hpp"
 
+#include "vogel_disc.hpp"
+
 namespace {
 
 using mgn::Vec3d;
 
-/// Vogel (sunflower) spiral of n points over the unit disc.
-std::vector<Eigen::Vector2d> vogel_disc(int n) {
-  std::vector<Eigen::Vector2d> pts(static_cast<std::size_t>(n));
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double rho = std::sqrt((i + 0.5) / n);
-    pts[static_cast<std::size_t>(i)] =
-        Eigen::Vector2d(rho * std::cos(i * golden), rho * std::sin(i * golden));
-  }
-  return pts;
-}
+using mgn_test::vogel_disc;
 
 /// Bumpy square plate z = f(x, y) over [-L, L]^2 on a cells x cells grid (two triangles per
 /// cell, upward normals). Cells in `holes` (row-major index) are left out. With `seam`, the

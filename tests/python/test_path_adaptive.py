@@ -9,28 +9,14 @@ import math
 
 import numpy as np
 import pytest
+from test_path_tracer import camera, quad
 
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import make_box, make_sphere, mesh_from_arrays
+from mgn.geometry import make_box, make_sphere
 from mgn.render.path import AreaLight, Environment, PathScene, PathTraceOptions, PbrMaterial
 from mgn.render.photo import RenderSettings
-from mgn.scene.cameras import CameraView, Intrinsics, look_at
 
 BLACK = Environment(kind="uniform", color=(0.0, 0.0, 0.0), intensity=0.0)
-
-
-def camera(eye, target, size: int, fov_deg: float, up=(0.0, 0.0, 1.0)) -> CameraView:
-    f = 0.5 * size / math.tan(math.radians(fov_deg) / 2)
-    K = Intrinsics(size, size, f, f, size / 2, size / 2)
-    return CameraView(
-        K, look_at(np.asarray(eye, float), np.asarray(target, float), np.asarray(up, float))
-    )
-
-
-def quad(size: float, z: float = 0.0):
-    h = size / 2
-    v = [[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]]
-    return mesh_from_arrays(v, [[0, 1, 2], [0, 2, 3]])
 
 
 def mixed_scene() -> PathScene:

@@ -1249,13 +1249,19 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
     return c;
   };
 
+  // The Embree context of the camera-ray packets (coherent rays from one tile row).
+  auto coherent_context = [] {
+    RTCIntersectContext c;
+    rtcInitIntersectContext(&c);
+    c.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    return c;
+  };
+
   auto worker = [&](std::size_t, std::size_t) {
     detail::FtzDazGuard guard;
     Integrator it(G, L, options);
-    RTCIntersectContext coherent;
-    rtcInitIntersectContext(&coherent);
-    coherent.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    const RTCScene scene = G.rays->impl().scene;
+    RTCIntersectContext coherent = coherent_context();
+    const RTCScene scene = G.rays->impl().scene;  // camera rays: the robust BVH, as the labels
     alignas(64) RTCRayHit16 rh16;
     alignas(64) int valid16[16];
     pt::PairSeeds pair_seeds;  // the sampler's per-pair seeds of the current pixel block
@@ -1354,9 +1360,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
     auto extra_worker = [&](std::size_t, std::size_t) {
       detail::FtzDazGuard guard;
       Integrator it(G, L, options);
-      RTCIntersectContext coherent;
-      rtcInitIntersectContext(&coherent);
-      coherent.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      RTCIntersectContext coherent = coherent_context();
       const RTCScene scene = G.rays->impl().scene;
       alignas(64) RTCRayHit16 rh16;
       alignas(64) int valid16[16];
