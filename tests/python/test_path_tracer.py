@@ -489,6 +489,38 @@ def test_denoiser_guides_behind_glass_are_weighted_by_fresnel_not_drawn_at_rando
     )
 
 
+def test_roulette_does_not_count_the_vertices_at_smooth_glass():
+    """Russian roulette starts at the rr_depth-th vertex that is not a smooth dielectric: a grey
+    floor seen through a clear pane (two glass vertices before the floor, one after it on the
+    way back up) with rr_depth = 2 and max_bounces = 4 has at most one counted vertex per
+    path, so no path is rouletted and the image equals the one without roulette byte for byte;
+    counting every vertex (roulette at the floor, behind the pane's two) would change it. The
+    same floor without the pane is rouletted at rr_depth = 1 (fewer rays), and roulette from
+    the first vertex on, glass included, keeps the mean (within Monte Carlo error)."""
+    grey = PbrMaterial(base_color=(0.5, 0.5, 0.5), ior=1.0, roughness=1.0)
+    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=1.5)
+    floor, pane = quad(6.0, z=-0.5), make_box([3.0, 3.0, 0.02])
+    with_pane = PathScene([pane, floor], np.stack([np.eye(4), np.eye(4)]), [1, 2],
+                          [[glass], [grey]], (), uniform(1.0))  # fmt: skip
+    bare = PathScene([floor], np.eye(4)[None], [2], [[grey]], (), uniform(1.0))
+    view = camera((0, 0, 1.0), (0, 0, 0), 24, 20, up=(0, 1, 0))
+
+    def render(scene, rr_depth, spp=4, max_bounces=4):
+        opts = PathTraceOptions(spp=spp, max_bounces=max_bounces, rr_depth=rr_depth, seed=7)
+        return scene.render(view, opts)
+
+    pane2, pane_off = render(with_pane, 2), render(with_pane, 100)
+    np.testing.assert_array_equal(pane2.radiance, pane_off.radiance)
+    assert pane2.rays == pane_off.rays
+    # Without the pane the floor is the first counted vertex: rouletted paths cast fewer rays.
+    assert render(bare, 1).rays < 0.9 * render(bare, 100).rays
+    spp = 64
+    ref = render(with_pane, 100, spp, 8).radiance[..., 0]
+    rr = render(with_pane, 0, spp, 8).radiance[..., 0]
+    se = math.sqrt((rr.var() + ref.var()) / rr.size)  # pixel means scatter about their mean
+    assert rr.mean() == pytest.approx(ref.mean(), abs=4 * se + 1e-4)
+
+
 def test_glass_sphere_total_internal_reflection_keeps_energy():
     """A clear glass sphere in a uniform dome L reflects and refracts without absorption: every
     path eventually escapes (total internal reflection included), so the sphere shows L (the

@@ -764,6 +764,7 @@ class Integrator {
     bool aov_open = true;
     F3 aov_a(0.0f), aov_n(0.0f), aov_acc_a(0.0f), aov_acc_n(0.0f);
     float aov_w = 1.0f;
+    int rr_vertices = 0;  // vertices so far that count for roulette (see below)
     RTCRayHit rh;
     Hit h;
     for (int depth = 0;; ++depth) {
@@ -881,7 +882,12 @@ class Integrator {
       if (!split.on) beta_e = beta;
       eta_scale *= eta2;
       if (!all_finite(beta) || max_comp(beta) <= 0.0f) break;
-      if (depth + 1 >= opt_.rr_depth) {
+      // Roulette counts the vertices where the path did not pass a smooth dielectric: behind a
+      // glass wall (two such vertices, each keeping nearly all the throughput) the first rough
+      // surface is rouletted as if seen directly. Those paths (what is seen in and through
+      // glass) carry most of a glass object's noise and few of them are long.
+      if (!(delta && !sm.rough)) ++rr_vertices;
+      if (rr_vertices >= opt_.rr_depth) {
         // Roulette on the throughput without the 1/eta^2 radiance scaling of refractions, so
         // that paths inside glass are not killed more often than outside.
         const float q = std::min(1.0f, max_comp(beta) * eta_scale);

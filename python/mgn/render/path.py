@@ -255,7 +255,8 @@ class PathTraceOptions:
             1 = direct lighting only).
         seed, view_index: the sample streams derive from (seed, view_index, pixel).
         num_threads: 0 = all hardware threads; the image is identical for any value.
-        rr_depth: Russian roulette from this bounce on (>= 0).
+        rr_depth: Russian roulette from this bounce on (>= 0); vertices at smooth glass (a
+            delta reflection or refraction) are not counted.
         aperture_radius: thin-lens aperture radius, m (0 = pinhole).
         focus_distance: distance in focus along the optical axis, m (0 = the depth at the image
             centre, or 1 m if nothing is seen there).

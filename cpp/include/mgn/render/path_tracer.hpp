@@ -19,7 +19,7 @@
 /// multiple importance sampling (power heuristic, beta = 2) between light and BSDF sampling for
 /// the area lights, the emissive triangles (faces whose material has emission > 0, sampled
 /// uniformly by area and chosen by power together with the area lights) and the environment;
-/// Russian roulette from PathTraceOptions::rr_depth on. Materials follow glTF 2.0
+/// Russian roulette from PathTraceOptions::rr_depth on (smooth glass vertices not counted). Materials follow glTF 2.0
 /// metallic-roughness: a Lambertian diffuse lobe under a GGX (Trowbridge-Reitz) specular lobe
 /// with the height-correlated Smith masking-shadowing term and visible-normal sampling; exact
 /// dielectric Fresnel (ior) for the specular layer of non-metals, Schlick's Fresnel with F0 =
@@ -124,7 +124,10 @@ struct PathTraceOptions {
   std::uint64_t seed = 0;        ///< scene seed
   std::uint64_t view_index = 0;  ///< view number; sample streams derive from (seed, view, pixel)
   int num_threads = 0;           ///< 0 = all hardware threads; image identical for any value
-  int rr_depth = 3;              ///< Russian roulette from this bounce on (>= 0)
+  /// Russian roulette from this bounce on (>= 0), not counting the vertices where the path was
+  /// reflected or refracted by a smooth dielectric (what is seen through glass is rouletted as
+  /// late as what is seen directly).
+  int rr_depth = 3;
   double aperture_radius = 0.0;  ///< thin-lens aperture radius, m (>= 0; 0 = pinhole)
   /// Distance of the plane in focus along the optical axis, m (>= 0; 0 = the depth at the image
   /// centre, or 1 m if nothing is seen there).
