@@ -19,19 +19,19 @@
 /// multiple importance sampling (power heuristic, beta = 2) between light and BSDF sampling for
 /// the area lights, the emissive triangles (faces whose material has emission > 0, sampled
 /// uniformly by area and chosen by power together with the area lights) and the environment;
-/// Russian roulette from PathTraceOptions::rr_depth on (smooth glass vertices not counted). Materials follow glTF 2.0
-/// metallic-roughness: a Lambertian diffuse lobe under a GGX (Trowbridge-Reitz) specular lobe
-/// with the height-correlated Smith masking-shadowing term and visible-normal sampling; exact
-/// dielectric Fresnel (ior) for the specular layer of non-metals, Schlick's Fresnel with F0 =
-/// base colour for metals; `transmission` blends in a dielectric (Fresnel reflection,
-/// refraction, total internal reflection; each refraction tints by the square root of the base
-/// colour, so light through a closed wall, in and out, is tinted by the base colour once):
-/// smooth (a delta lobe) below roughness ~0.055 (GGX alpha 0.003), above it a rough dielectric
-/// (GGX reflection and refraction after Walter et al. 2007, visible-normal sampling). Every GGX
-/// lobe of roughness above ~0.055 gets the multiple-scattering energy compensation of Kulla and
-/// Conty 2017 (metals coloured by the average Fresnel; the rough dielectric from both sides,
-/// reciprocal), and the diffuse lobe is weighted by what the rough specular layer above it does
-/// not reflect: a white material in a uniform environment shows that environment at any
+/// Russian roulette from PathTraceOptions::rr_depth on (smooth glass vertices not counted).
+/// Materials follow glTF 2.0 metallic-roughness: a Lambertian diffuse lobe under a GGX
+/// (Trowbridge-Reitz) specular lobe with the height-correlated Smith masking-shadowing term and
+/// visible-normal sampling; exact dielectric Fresnel (ior) for the specular layer of non-metals,
+/// Schlick's Fresnel with F0 = base colour for metals; `transmission` blends in a dielectric
+/// (Fresnel reflection, refraction, total internal reflection; each refraction tints by the square
+/// root of the base colour, so light through a closed wall, in and out, is tinted by the base
+/// colour once): smooth (a delta lobe) below roughness ~0.055 (GGX alpha 0.003), above it a rough
+/// dielectric (GGX reflection and refraction after Walter et al. 2007, visible-normal sampling).
+/// Every GGX lobe of roughness above ~0.055 gets the multiple-scattering energy compensation of
+/// Kulla and Conty 2017 (metals coloured by the average Fresnel; the rough dielectric from both
+/// sides, reciprocal), and the diffuse lobe is weighted by what the rough specular layer above it
+/// does not reflect: a white material in a uniform environment shows that environment at any
 /// roughness (docs/rendering.md, "Multiple scattering between microfacets"). Meshes
 /// are closed or open triangle soups; a surface whose geometric normal faces the ray is entered,
 /// otherwise left (for refraction). Shading normals are per-corner normals averaged over the
