@@ -361,6 +361,33 @@ def test_light_reflected_in_smooth_glass_is_split_not_sampled():
     assert var * (1 - 4 * rel) < 0.7 * p * (1 - p) * Le**2, (var, p * (1 - p) * Le**2)
 
 
+def test_first_glass_walls_are_traced_on_both_branches():
+    """At the first three smooth-dielectric vertices of a camera sample both the reflected and
+    the refracted ray are traced in full (weighted F and 1 - F), not one chosen at random. A clear
+    pane under a rect lamp (black environment), seen near normal incidence: the light reflected
+    by the top face, and by the bottom face back through the top one, reaches every sample; only
+    the light of three or more internal reflections is left to chance (the fourth face's draw:
+    at most (1 - R)^2 R^2 / (1 - R^2) Le, on average R^2 of that). So every 1-spp sample lies
+    within 1.5 R^2 Le of the slab's mean 2R / (1 + R) Le, where a random choice at each face
+    gives 0 or Le and splitting the first light only leaves the internally reflected
+    (1 - R)^2 R Le (~15 R^2 Le) to chance."""
+    ior, Le = 1.5, 2.0
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down, above the camera
+    X_WL[:3, 3] = (0.0, 0.0, 1.5)
+    light = AreaLight(X_WL, "rect", (3.0, 3.0), (1.0, 1.0, 1.0), Le)
+    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
+    scene = PathScene([make_box([2.0, 2.0, 0.02])], np.eye(4)[None], [1], [[glass]], [light],
+                      BLACK)  # fmt: skip
+    view = camera((0, 0, 1.0), (0, 0, 0), 16, 4, up=(0, 1, 0))
+    samples = np.stack(
+        [scene.render(view, PathTraceOptions(spp=1, max_bounces=40, rr_depth=100, seed=s))
+         .radiance[..., 1] for s in range(6)]
+    )  # fmt: skip
+    R = ((ior - 1) / (ior + 1)) ** 2  # within 2 degrees of normal incidence: R(theta) ~ R(0)
+    mean = Le * 2 * R / (1 + R)
+    assert np.abs(samples - mean).max() < 1.5 * R**2 * Le, np.abs(samples - mean).max()
+
+
 def test_tinted_glass_pane_tints_once_per_pass_through_the_wall():
     """A tinted pane (base colour c) transmits c (1-R)^2 in one pass and c (1-R)/(1+R) with all
     internal reflections: the tint applies to light that crosses the wall (in and out), once,

@@ -767,142 +767,199 @@ class Integrator {
     int rr_vertices = 0;  // vertices so far that count for roulette (see below)
     RTCRayHit rh;
     Hit h;
-    for (int depth = 0;; ++depth) {
-      bool hit;
-      if (depth == 0 && first != nullptr) {
-        rh = *first;
-        hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-      } else if (depth == 0) {
-        hit = intersect_primary(o, d, std::numeric_limits<float>::infinity(), rh);
-      } else {
-        hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
-      }
-      const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
-      float t_light;
-      const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
-      if (li >= 0) {
-        const LightData& l = L_.light_data[li];
-        float w = 1.0f;
-        if (!prev_delta) {
-          const float cos_l = -dot(d, l.n);
-          const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
-          w = power_heuristic(prev_pdf, pl);
+    // Branches of smooth dielectrics traced in full (see the split below), waiting their turn.
+    struct Branch {
+      F3 o, d, beta, prev_n, aov_a, aov_n;
+      float prev_pdf, eta_scale, aov_w;
+      int depth, rr_vertices;
+      bool aov_open;
+    };
+    Branch pending[kMaxBranches];
+    int n_pending = 0, branches_left = kMaxBranches;
+    int depth = 0;
+    for (;;) {
+      for (;; ++depth) {
+        bool hit;
+        if (depth == 0 && first != nullptr) {
+          rh = *first;
+          hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        } else if (depth == 0) {
+          hit = intersect_primary(o, d, std::numeric_limits<float>::infinity(), rh);
+        } else {
+          hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
         }
-        add(L, beta_e * l.radiance * w, depth >= 2);
-        if (aov_open) aov_a = lamp_guide(l.radiance);
-        break;
-      }
-      if (!hit) {
-        if (L_.env_on || aov_open) {
-          const F3 Le = L_.env(d);
+        const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
+        float t_light;
+        const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
+        if (li >= 0) {
+          const LightData& l = L_.light_data[li];
           float w = 1.0f;
-          if (!prev_delta && L_.env_on)
-            w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
-          add(L, beta_e * Le * w, depth >= 2);
-          if (aov_open) aov_a = emitter_guide(Le);
-        }
-        break;
-      }
-      make_hit(G_, rh, d, h);
-      const MaterialData& m = *h.mat;
-      const F3 wo_w = -d;
-      if (m.emissive && h.front) {
-        // An emissive triangle found by BSDF sampling: MIS against its next-event estimation.
-        float w = 1.0f;
-        if (!prev_delta) {
-          const auto& fe = G_.geoms[rh.hit.geomID].face_emitter;
-          const std::int32_t e = fe.empty() ? -1 : fe[rh.hit.primID];
-          if (e >= 0) {
-            const float cos_l = std::abs(dot(d, h.ng));
-            const float t = rh.ray.tfar;
-            const float pl = L_.pmf[L_.light_data.size() + e] * t * t /
-                             (L_.tris[e].area * std::max(cos_l, 1e-7f));
+          if (!prev_delta) {
+            const float cos_l = -dot(d, l.n);
+            const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
             w = power_heuristic(prev_pdf, pl);
           }
+          add(L, beta_e * l.radiance * w, depth >= 2);
+          if (aov_open) aov_a = lamp_guide(l.radiance);
+          break;
         }
-        add(L, beta_e * m.emission * w, depth >= 2);
-      }
-      if (aov_open) {
-        aov_a = h.base;
-        aov_n = h.ns;
-        aov_open = see_through(m);
-      }
-      if (depth >= opt_.max_bounces) break;
-
-      const pt::Frame frame(h.ns);
-      const F3 wo = frame.to_local(wo_w);
-      pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission, m.ms};
-      sm.prepare(wo.z, h.front);
-      const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
-      // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
-      // (roulette, Fresnel choice), environment direction.
-      const pt::Sample2 u_bsdf = s.get(base_pair + 1);
-      const pt::Sample2 u_sel = s.get(base_pair + 2);
-      const pt::Sample2 u_rr = s.get(base_pair + 3);
-
-      // Next-event estimation.
-      if (sm.has_nondelta) {
-        if (L_.area_on) {
-          const std::size_t n = L_.n_local;
-          const auto k = static_cast<std::size_t>(
-              std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_sel.x) - L_.cdf.begin());
-          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
+        if (!hit) {
+          if (L_.env_on || aov_open) {
+            const F3 Le = L_.env(d);
+            float w = 1.0f;
+            if (!prev_delta && L_.env_on)
+              w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
+            add(L, beta_e * Le * w, depth >= 2);
+            if (aov_open) aov_a = emitter_guide(Le);
+          }
+          break;
         }
-        if (L_.env_on)
-          add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4)), depth >= 1);
-      }
-
-      // BSDF sampling.
-      F3 wi_w;
-      F3 weight;
-      bool delta;
-      float pdf;
-      float eta2;
-      Split split;
-      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta, eta2,
-                       &split))
-        break;
-      if (split.on) {
+        make_hit(G_, rh, d, h);
+        const MaterialData& m = *h.mat;
+        const F3 wo_w = -d;
+        if (m.emissive && h.front) {
+          // An emissive triangle found by BSDF sampling: MIS against its next-event estimation.
+          float w = 1.0f;
+          if (!prev_delta) {
+            const auto& fe = G_.geoms[rh.hit.geomID].face_emitter;
+            const std::int32_t e = fe.empty() ? -1 : fe[rh.hit.primID];
+            if (e >= 0) {
+              const float cos_l = std::abs(dot(d, h.ng));
+              const float t = rh.ray.tfar;
+              const float pl = L_.pmf[L_.light_data.size() + e] * t * t /
+                               (L_.tris[e].area * std::max(cos_l, 1e-7f));
+              w = power_heuristic(prev_pdf, pl);
+            }
+          }
+          add(L, beta_e * m.emission * w, depth >= 2);
+        }
         if (aov_open) {
-          // The other branch's guide (followed through further smooth glass by refraction),
-          // weighted by its share; the continuing branch keeps the rest.
-          F3 oa = aov_a, on = aov_n;
-          const F3 Le = emitted(h, split.other_dir, &oa, &on);
-          if (max_comp(split.other_weight) > 0.0f)
-            add(L, beta * split.other_weight * Le, depth >= 1);
-          aov_acc_a += oa * (aov_w * split.other_share);
-          aov_acc_n += on * (aov_w * split.other_share);
-          aov_w *= 1.0f - split.other_share;
-        } else if (max_comp(split.other_weight) > 0.0f) {
-          add(L, beta * split.other_weight * emitted(h, split.other_dir), depth >= 1);
+          aov_a = h.base;
+          aov_n = h.ns;
+          aov_open = see_through(m);
         }
-        beta_e = beta * split.weight;
+        if (depth >= opt_.max_bounces) break;
+
+        const pt::Frame frame(h.ns);
+        const F3 wo = frame.to_local(wo_w);
+        pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission, m.ms};
+        sm.prepare(wo.z, h.front);
+        const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
+        // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
+        // (roulette, Fresnel choice), environment direction.
+        const pt::Sample2 u_bsdf = s.get(base_pair + 1);
+        const pt::Sample2 u_sel = s.get(base_pair + 2);
+        const pt::Sample2 u_rr = s.get(base_pair + 3);
+
+        // Next-event estimation.
+        if (sm.has_nondelta) {
+          if (L_.area_on) {
+            const std::size_t n = L_.n_local;
+            const auto k = static_cast<std::size_t>(
+                std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_sel.x) -
+                L_.cdf.begin());
+            add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
+          }
+          if (L_.env_on)
+            add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4)), depth >= 1);
+        }
+
+        // BSDF sampling.
+        F3 wi_w;
+        F3 weight;
+        bool delta;
+        float pdf;
+        float eta2;
+        Split split;
+        if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta, eta2,
+                         &split))
+          break;
+        bool branched = false;
+        if (split.on && branches_left > 0) {
+          branched = true;
+          // Both branches traced in full (the first kMaxBranches smooth-dielectric vertices of a
+          // camera sample): the other one waits in `pending`; each carries its expected weight
+          // (F or 1 - F times its lobe weight) instead of the random choice's, so nothing seen in
+          // or through the first walls of a glass object depends on the reflect/refract draw
+          // (a lamp reflected by the far wall of a bottle and seen through the near one was found
+          // by a path only with probability F: a bright speckle, now a clean highlight).
+          --branches_left;
+          const float eta_v = h.front ? sm.ior : 1.0f / sm.ior;
+          Branch& b = pending[n_pending++];
+          b.o = offset_origin(h, split.other_dir);
+          b.d = split.other_dir;
+          b.beta = beta * split.other_weight;
+          b.prev_pdf = 0.0f;
+          b.prev_n = h.ns;
+          b.eta_scale = eta_scale * (eta2 == 1.0f ? eta_v * eta_v : 1.0f);
+          b.aov_a = aov_a;
+          b.aov_n = aov_n;
+          b.aov_w = aov_w * split.other_share;
+          b.aov_open = aov_open;
+          b.depth = depth + 1;
+          b.rr_vertices = rr_vertices;
+          aov_w *= 1.0f - split.other_share;
+          weight = split.weight;
+          if (max_comp(b.beta) <= 0.0f || !all_finite(b.beta)) --n_pending;
+        } else if (split.on) {
+          if (aov_open) {
+            // The other branch's guide (followed through further smooth glass by refraction),
+            // weighted by its share; the continuing branch keeps the rest.
+            F3 oa = aov_a, on = aov_n;
+            const F3 Le = emitted(h, split.other_dir, &oa, &on);
+            if (max_comp(split.other_weight) > 0.0f)
+              add(L, beta * split.other_weight * Le, depth >= 1);
+            aov_acc_a += oa * (aov_w * split.other_share);
+            aov_acc_n += on * (aov_w * split.other_share);
+            aov_w *= 1.0f - split.other_share;
+          } else if (max_comp(split.other_weight) > 0.0f) {
+            add(L, beta * split.other_weight * emitted(h, split.other_dir), depth >= 1);
+          }
+          beta_e = beta * split.weight;
+        }
+        beta *= weight;
+        if (!split.on || branched) beta_e = beta;
+        eta_scale *= eta2;
+        if (!all_finite(beta) || max_comp(beta) <= 0.0f) break;
+        // Roulette counts the vertices where the path did not pass a smooth dielectric: behind a
+        // glass wall (two such vertices, each keeping nearly all the throughput) the first rough
+        // surface is rouletted as if seen directly. Those paths (what is seen in and through
+        // glass) carry most of a glass object's noise and few of them are long.
+        if (!(delta && !sm.rough)) ++rr_vertices;
+        if (rr_vertices >= opt_.rr_depth) {
+          // Roulette on the throughput without the 1/eta^2 radiance scaling of refractions, so
+          // that paths inside glass are not killed more often than outside.
+          const float q = std::min(1.0f, max_comp(beta) * eta_scale);
+          if (u_rr.x >= q) break;
+          beta *= 1.0f / q;
+          beta_e *= 1.0f / q;
+        }
+        prev_delta = delta;
+        prev_pdf = pdf;
+        prev_n = h.ns;
+        o = offset_origin(h, wi_w);
+        d = wi_w;
       }
-      beta *= weight;
-      if (!split.on) beta_e = beta;
-      eta_scale *= eta2;
-      if (!all_finite(beta) || max_comp(beta) <= 0.0f) break;
-      // Roulette counts the vertices where the path did not pass a smooth dielectric: behind a
-      // glass wall (two such vertices, each keeping nearly all the throughput) the first rough
-      // surface is rouletted as if seen directly. Those paths (what is seen in and through
-      // glass) carry most of a glass object's noise and few of them are long.
-      if (!(delta && !sm.rough)) ++rr_vertices;
-      if (rr_vertices >= opt_.rr_depth) {
-        // Roulette on the throughput without the 1/eta^2 radiance scaling of refractions, so
-        // that paths inside glass are not killed more often than outside.
-        const float q = std::min(1.0f, max_comp(beta) * eta_scale);
-        if (u_rr.x >= q) break;
-        beta *= 1.0f / q;
-        beta_e *= 1.0f / q;
-      }
-      prev_delta = delta;
-      prev_pdf = pdf;
-      prev_n = h.ns;
-      o = offset_origin(h, wi_w);
-      d = wi_w;
+      aov_acc_a += aov_a * aov_w;
+      aov_acc_n += aov_n * aov_w;
+      if (n_pending == 0) break;
+      const Branch& b = pending[--n_pending];
+      o = b.o;
+      d = b.d;
+      beta = beta_e = b.beta;
+      prev_delta = true;
+      prev_pdf = b.prev_pdf;
+      prev_n = b.prev_n;
+      eta_scale = b.eta_scale;
+      aov_a = b.aov_a;
+      aov_n = b.aov_n;
+      aov_w = b.aov_w;
+      aov_open = b.aov_open;
+      depth = b.depth;
+      rr_vertices = b.rr_vertices;
     }
-    aov_albedo = aov_acc_a + aov_a * aov_w;
-    aov_normal = aov_acc_n + aov_n * aov_w;
+    aov_albedo = aov_acc_a;
+    aov_normal = aov_acc_n;
     return L;
   }
 
@@ -1160,6 +1217,9 @@ class Integrator {
   RTCScene primary_;  // robust: camera rays
   RTCScene scene_;    // bounce and shadow rays
   float clamp_indirect_;
+  /// Smooth-dielectric vertices per camera sample whose two branches are both traced in full
+  /// (the first ones along the path, depth first); later ones are split as in `Split`.
+  static constexpr int kMaxBranches = 3;
   RTCIntersectContext ctx_;
 };
 
