@@ -86,6 +86,7 @@ class ShakeOptions:
     contact_distance: float = _CORE.contact_distance
     settle_steps: int = _CORE.settle_steps
     lost_contact_steps: int = _CORE.lost_contact_steps
+    hold_tolerance: float = _CORE.hold_tolerance
     margin: float = _CORE.margin
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
     max_hull_vertices: int = _CORE.max_hull_vertices
