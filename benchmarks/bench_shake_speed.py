@@ -12,11 +12,13 @@ grid) against the default full-grid scores. ``--confirm`` grasps per object are 
 real with ``staircase=True`` and the variant, one grasp at a time (CPU-s per grasp; their scores
 must equal the replay).
 
-Variants: ``dt150`` and ``dt100`` (time step 1/150 and 1/100 s, every step count scaled to
-keep each phase's duration), ``dt100k`` (also the force controller's gain per step scaled),
-``hold`` (``hold_tolerance`` = 3 mm: the translational cycles after the first and the last
-quarter of the rotational shake are skipped when the object stayed at rest in the hand through
-a window whose loads they repeat).
+Variants: ``default`` (today's options on the first ``--rate-grasps`` grasps: its trial
+rate, and a check that the cache still holds today's outcomes), ``dt150`` and ``dt100`` (time
+step 1/150 and 1/100 s, every step count scaled to keep each phase's duration), ``dt100k`` (also
+the force controller's gain per step scaled), ``dt400`` (a finer step), ``hold`` (``hold_tolerance`` = 3 mm: the
+translational cycles after the first and the last quarter of the rotational shake are skipped
+when the object stayed within 3 mm of its pose in the hand through a window whose loads they
+repeat).
 
     python -m benchmarks.bench_shake_speed --grid-cache /tmp/shake \
         [--objects can_soda:100,box_cereal:170] [--variants hold,dt150,dt100] [--confirm 20]
@@ -52,10 +54,12 @@ def _dt(hz: int, gain: bool = False) -> dict:
 
 
 VARIANTS = {
+    "default": {},
     "hold": {"hold_tolerance": 3e-3},
     "dt150": _dt(150),
     "dt100": _dt(100),
     "dt100k": _dt(100, gain=True),
+    "dt400": _dt(400),
 }
 
 
@@ -133,6 +137,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variants", default="hold,dt150,dt100")
     ap.add_argument("--grid-cache", type=Path, required=True)
     ap.add_argument("--confirm", type=int, default=20, help="grasps per object run for real")
+    ap.add_argument(
+        "--rate-grasps",
+        type=int,
+        default=30,
+        help="grasps per object rerun with the default options (trials per CPU-s; the cache "
+        "must reproduce)",
+    )
     args = ap.parse_args(argv)
     args.grid_cache.mkdir(parents=True, exist_ok=True)
     checks = ShakeOptions().staircase_checks
@@ -149,24 +160,32 @@ def main(argv: list[str] | None = None) -> int:
         truth = base.sum(axis=(1, 2))
         stair = np.array([replay(g, checks)[0] for g in base])
         k = min(args.confirm, len(rows))
-        real, cpu, trials = staircase_cost(parts, props, rows[:k], None)
+        real, dcpu, dtrials = staircase_cost(parts, props, rows[:k], None)
         print(
-            f"| {name} | default | {len(rows)} | - | - | 100 % | 100 % | "
-            f"{np.mean(stair == truth):.1%} | {trials / max(k, 1):.1f}, {cpu / max(k, 1):.3f} |",
+            f"| {name} | default: cache vs its staircase | {len(rows)} | - | - | 100 % | 100 % | "
+            f"{np.mean(stair == truth):.1%} | - |",
             flush=True,
         )
-        for v in args.variants.split(","):
-            succ, steps, vcpu = variant_grids(name, parts, props, rows, v, args.grid_cache)
-            vs = np.array([replay(g, checks)[0] for g in succ])
-            real, cpu, trials = staircase_cost(parts, props, rows[:k], v)
-            if not np.array_equal(np.round(real * 100), vs[:k]):
-                print(f"  {name} {v}: real staircase scores differ from the replay")
+        for v in ["default", *args.variants.split(",")]:
+            sub = slice(0, args.rate_grasps if v == "default" else len(rows))
+            succ, steps, vcpu = variant_grids(name, parts, props, rows[sub], v, args.grid_cache)
+            if v == "default" and not np.array_equal(succ, base[sub]):
+                print(f"  {name}: the default options no longer reproduce the cached grids")
                 return 1
+            vbase, vtruth = base[sub], truth[sub]
+            vs = np.array([replay(g, checks)[0] for g in succ])
+            if v == "default":
+                cost = f"{dtrials / max(k, 1):.1f}, {dcpu / max(k, 1):.3f}"
+            else:
+                real, cpu, trials = staircase_cost(parts, props, rows[:k], v)
+                if not np.array_equal(np.round(real * 100), vs[:k]):
+                    print(f"  {name} {v}: real staircase scores differ from the replay")
+                    return 1
+                cost = f"{trials / max(k, 1):.1f}, {cpu / max(k, 1):.3f}"
             print(
-                f"| {name} | {v} | {len(rows)} | {succ.size / vcpu:.0f} | {steps.mean():.0f} | "
-                f"{np.mean(succ == base):.2%} | {np.mean(succ.sum(axis=(1, 2)) == truth):.1%} | "
-                f"{np.mean(vs == truth):.1%} | {trials / max(k, 1):.1f}, "
-                f"{cpu / max(k, 1):.3f} |",
+                f"| {name} | {v} | {len(succ)} | {succ.size / vcpu:.0f} | {steps.mean():.0f} | "
+                f"{np.mean(succ == vbase):.2%} | {np.mean(succ.sum(axis=(1, 2)) == vtruth):.1%} "
+                f"| {np.mean(vs == vtruth):.1%} | {cost} |",
                 flush=True,
             )
     print(f"load average at end: {os.getloadavg()[0]:.1f}")
