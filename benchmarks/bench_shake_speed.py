@@ -15,10 +15,10 @@ must equal the replay).
 Variants: ``default`` (today's options on the first ``--rate-grasps`` grasps: its trial
 rate, and a check that the cache still holds today's outcomes), ``dt150`` and ``dt100`` (time
 step 1/150 and 1/100 s, every step count scaled to keep each phase's duration), ``dt100k`` (also
-the force controller's gain per step scaled), ``dt400`` (a finer step), ``hold`` (``hold_tolerance`` = 3 mm: the
-translational cycles after the first and the last quarter of the rotational shake are skipped
-when the object stayed within 3 mm of its pose in the hand through a window whose loads they
-repeat).
+the force controller's gain per step scaled), ``dt400`` (a finer step), ``hold``
+(``hold_tolerance`` = 3 mm: the translational cycles after the first and the last quarter of the
+rotational shake are skipped when the object stayed within 3 mm of its pose in the hand through
+a window whose loads they repeat).
 
     python -m benchmarks.bench_shake_speed --grid-cache /tmp/shake \
         [--objects can_soda:100,box_cereal:170] [--variants hold,dt150,dt100] [--confirm 20]
