@@ -16,7 +16,8 @@
 ///     a = 1.2 mm, b = 1.9 mm/m^2, z0 = 0.4 m (the model fitted by Nguyen, Izadi and Lovell, 2012),
 ///     flying pixels (depths between foreground and background) at depth edges, invalid on
 ///     transparent, dark and mirror-like surfaces.
-/// Randomness: row v draws from Rng(seed, v), so results do not depend on the thread count.
+/// Randomness: row v draws from Rng(seed, v) (its flying-pixel uniforms, then its pixels' normals
+/// from Rng::normals), so results do not depend on the thread count.
 
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/render/camera.hpp>
