@@ -13,6 +13,16 @@ namespace {
 
 float luminance(const Vec3f& c) { return 0.2126f * c.x() + 0.7152f * c.y() + 0.0722f * c.z(); }
 
+// std::round (halves away from zero) without the libm call and without a branch (the rounding
+// direction of a noisy depth is random, a branch mispredicts): exact for |x| < 2^52, where the
+// truncation and x - t are exact; larger values are integers already.
+double round_half_away(double x) {
+  if (!(std::abs(x) < 0x1p52)) return std::round(x);
+  const double t = static_cast<double>(static_cast<std::int64_t>(x));
+  const double f = x - t;
+  return t + static_cast<double>(f >= 0.5) - static_cast<double>(f <= -0.5);
+}
+
 }  // namespace
 
 std::uint8_t surface_flags(const Material& m) {
@@ -97,7 +107,7 @@ void DepthSensorParams::validate() const {
 DepthImage apply_depth_sensor(const std::vector<float>& depth,
                               const std::vector<std::int32_t>& instance_ids,
                               const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
-                              const DepthSensorParams& p, std::uint64_t seed) {
+                              const DepthSensorParams& p, std::uint64_t seed, int num_threads) {
   K.validate("apply_depth_sensor: K");
   p.validate();
   const int W = K.width, H = K.height;
@@ -126,11 +136,12 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
   out.depth.assign(n, nan);
   out.valid.assign(n, 0);
   const bool ideal = p.preset == DepthSensorPreset::Ideal;
+  const bool noisy = p.sigma_a > 0.0 || p.sigma_b > 0.0;
   auto flags_of = [&](std::int32_t id) -> std::uint8_t {
     return id >= 0 && static_cast<std::size_t>(id) < flags_by_id.size() ? flags_by_id[id] : 0;
   };
 
-  parallel_for(static_cast<std::size_t>(H), 0, 8, [&](std::size_t v0, std::size_t v1) {
+  parallel_for(static_cast<std::size_t>(H), num_threads, 8, [&](std::size_t v0, std::size_t v1) {
     std::vector<std::uint8_t> shadow(static_cast<std::size_t>(W));
     // The row's pixels that get noise: column, noise-free depth (m), sigma (m); their normals.
     std::vector<int> noisy_u(static_cast<std::size_t>(W));
@@ -172,7 +183,7 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
       // Row v draws from Rng(seed, v): first the flying-pixel uniforms (left to right, pass 1),
       // then one normal per noisy pixel in a batch (pass 2), applied with the grid (pass 3).
       Rng rng(seed, v);
-      std::size_t count = 0, with_noise = 0;
+      std::size_t count = 0;
       for (int u = 0; u < W; ++u) {
         double zz = z[u];
         if (zz <= 0.0 || zz < p.min_range || zz > p.max_range) continue;
@@ -205,23 +216,28 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
         noisy_z[count] = zz;
         noisy_sigma[count] = sigma;
         ++count;
-        with_noise += sigma > 0.0;
       }
-      rng.normals(normals.data(), with_noise);
-      std::size_t next = 0;
-      for (std::size_t k = 0; k < count; ++k) {
-        double zz = noisy_z[k];
-        const double sigma = noisy_sigma[k];
-        if (sigma > 0.0) zz += sigma * static_cast<double>(normals[next++]);
-        if (p.depth_step > 0.0) {
-          // The coarsest power-of-two multiple of the step not above the noise fraction.
+      // Pass 2: the normals (sigma >= 0; a pixel with sigma = 0 adds 0 times its normal).
+      if (noisy) {
+        rng.normals(normals.data(), count);
+      } else {
+        std::fill(normals.begin(), normals.begin() + count, 0.0f);
+      }
+      // Pass 3: noise, then the grid: the coarsest power-of-two multiple of the step not above
+      // the noise fraction; a value that ends <= 0 is invalid.
+      for (std::size_t k = 0; k < count; ++k)
+        noisy_z[k] += noisy_sigma[k] * static_cast<double>(normals[k]);
+      if (p.depth_step > 0.0) {
+        for (std::size_t k = 0; k < count; ++k) {
           double step = p.depth_step;
-          const double top = p.depth_step_noise_fraction * sigma;
+          const double top = p.depth_step_noise_fraction * noisy_sigma[k];
           while (step * 2.0 <= top) step *= 2.0;
-          zz = std::round(zz / step) * step;
+          noisy_z[k] = round_half_away(noisy_z[k] / step) * step;
         }
-        if (!(zz > 0.0)) continue;
-        out_z[noisy_u[k]] = static_cast<float>(zz);
+      }
+      for (std::size_t k = 0; k < count; ++k) {
+        if (!(noisy_z[k] > 0.0)) continue;
+        out_z[noisy_u[k]] = static_cast<float>(noisy_z[k]);
         out_valid[noisy_u[k]] = 1;
       }
     }

@@ -294,7 +294,13 @@ def iter_views(
             assert img.rgb is not None
             rgb, engine = img.rgb, {"engine": "raster"}
         sens = apply_depth_sensor(
-            img.depth, img.instance_ids, cam.K, sensor, flags_by_id=flags, seed=seed + v
+            img.depth,
+            img.instance_ids,
+            cam.K,
+            sensor,
+            flags_by_id=flags,
+            seed=seed + v,
+            num_threads=num_threads,
         )
         res = ViewImages(
             v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine

@@ -97,10 +97,12 @@ struct DepthImage {
 /// Applies a sensor model. `depth` and `instance_ids` are (H*W) row-major images of
 /// K.width x K.height; flags_by_id[id] are the SurfaceFlag bits of instance id `id` (ids beyond the
 /// vector have no flags). Throws InvalidArgument for mismatched sizes, negative or non-finite
-/// depths, or invalid intrinsics / parameters.
+/// depths, or invalid intrinsics / parameters. Rows run on up to `num_threads` threads (0 = all);
+/// the result is the same for any thread count.
 DepthImage apply_depth_sensor(const std::vector<float>& depth,
                               const std::vector<std::int32_t>& instance_ids,
                               const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
-                              const DepthSensorParams& params, std::uint64_t seed);
+                              const DepthSensorParams& params, std::uint64_t seed,
+                              int num_threads = 0);
 
 }  // namespace mgn
