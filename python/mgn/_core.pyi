@@ -2553,6 +2553,7 @@ def apply_depth_sensor(
     K: Intrinsics,
     params: DepthSensorParams,
     seed: typing.SupportsInt | typing.SupportsIndex,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> DepthSensorResult: ...
 def build_info() -> list[tuple[str, str]]:
     """
