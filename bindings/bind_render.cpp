@@ -1,6 +1,7 @@
 // Bindings of mgn/render: cameras and rigs, the OSMesa renderer, depth sensor models.
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
+#include <mgn/core/parallel.hpp>
 #include <mgn/render/camera.hpp>
 #include <mgn/render/depth_sensor.hpp>
 #include <mgn/render/renderer.hpp>
@@ -295,7 +296,7 @@ void bind_render(py::module_& m) {
                            to_image(std::move(out.valid), h, w).attr("astype")("bool")};
       },
       py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
-      py::arg("params"), py::arg("seed"), py::arg("num_threads") = 0);
+      py::arg("params"), py::arg("seed"), py::arg("num_threads") = ParallelOptions{}.num_threads);
 }
 
 }  // namespace mgn::py_bind
