@@ -215,6 +215,30 @@ def test_collisions_agree_with_python_fcl_on_a_real_scene(real_scene):
     assert num_colliding > 0  # suction points under the objects hit the floor
 
 
+def test_first_collision_only_keeps_the_labels_and_skips_the_later_offsets(real_scene):
+    scene, pj, su = real_scene
+    offsets = (0.0, 0.03, 0.1)
+    full = SceneGraspModel(scene, pj, su, offsets=offsets, num_threads=2)
+    for threads in (1, 2):
+        first = SceneGraspModel(
+            scene, pj, su, offsets=offsets, num_threads=threads, first_collision_only=True
+        )
+        for kind in ("pj", "suction"):
+            a, b = getattr(full, kind), getattr(first, kind)
+            assert np.array_equal(a.colliding, b.colliding)
+            assert np.array_equal(a.collision_part, b.collision_part)
+            assert np.array_equal(a.collision_obstacle, b.collision_obstacle)
+            skipped = 0
+            for r in range(len(a)):
+                hits = np.flatnonzero(a.hit[r] >= 0)
+                k = int(hits[0]) if len(hits) else len(offsets) - 1
+                assert np.array_equal(a.hit[r, : k + 1], b.hit[r, : k + 1]), (kind, r)
+                assert np.all(b.hit[r, k + 1 :] == -2), (kind, r)
+                skipped += len(offsets) - 1 - k
+            assert skipped > 0, kind  # some grasp collides before the last offset
+    assert not full.pj.colliding.all() or not full.suction.colliding.all()
+
+
 def test_view_grasps_of_a_real_scene_are_consistent(real_scene):
     scene, pj, su = real_scene
     m = SceneGraspModel(scene, pj, su, num_threads=2)

@@ -238,12 +238,18 @@ struct SceneGraspModel::Impl {
   /// Parallel-jaw hand at X_WH with the fingers at `opening`, at every offset: writes the first
   /// hit per offset into hit[0..K) and returns whether any offset collides. The object `own`
   /// (0-based, -1 none) is skipped at offset 0 exactly unless `check_own_at_grasp`.
+  /// With `first_only`, the offsets after the first colliding one are not checked (their hit
+  /// is kHitNotChecked).
   bool pj_hits(const Pose& X_WH, double opening, std::int64_t own, bool check_own_at_grasp,
                std::int32_t* hit, std::uint8_t* why_part = nullptr,
-               std::uint8_t* why_obstacle = nullptr) const {
+               std::uint8_t* why_obstacle = nullptr, bool first_only = false) const {
     const std::array<const Solid*, 3> parts = {hand[1].get(), hand[2].get(), hand[0].get()};
     bool any = false;
     for (std::size_t k = 0; k < options.offsets.size(); ++k) {
+      if (any && first_only) {
+        hit[k] = kHitNotChecked;
+        continue;
+      }
       hit[k] = -1;
       for (const double d : segment(k)) {
         const Pose X = back_off(X_WH, d);
@@ -267,10 +273,15 @@ struct SceneGraspModel::Impl {
   /// Suction tool (cup body and shaft) at the contact frame X_WS, at every offset, against
   /// every obstacle: as pj_hits.
   bool suction_hits(const Pose& X_WS, std::int32_t* hit, std::int64_t own = -1,
-                    std::uint8_t* why_part = nullptr, std::uint8_t* why_obstacle = nullptr) const {
+                    std::uint8_t* why_part = nullptr, std::uint8_t* why_obstacle = nullptr,
+                    bool first_only = false) const {
     const std::array<const Solid*, 2> parts = {tool[0].get(), tool[1].get()};
     bool any = false;
     for (std::size_t k = 0; k < options.offsets.size(); ++k) {
+      if (any && first_only) {
+        hit[k] = kHitNotChecked;
+        continue;
+      }
       hit[k] = -1;
       for (const double d : segment(k)) {
         const Pose X = back_off(X_WS, d);
@@ -517,19 +528,21 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
     for (std::size_t r = begin; r < end; ++r) {
       const double opening = gripper.collision_opening(pj.width[r]);
       const auto own = static_cast<std::int64_t>(pj.object_index[r]);
-      pj.colliding[r] = m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K],
-                                  &pj.collision_part[r], &pj.collision_obstacle[r])
-                            ? 1
-                            : 0;
+      pj.colliding[r] =
+          m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K], &pj.collision_part[r],
+                    &pj.collision_obstacle[r], options.first_collision_only)
+              ? 1
+              : 0;
     }
   });
   parallel_for(num_suction, threads, 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t r = begin; r < end; ++r) {
-      su.colliding[r] = m.suction_hits(su.X_W_contact[r], &su.hit[r * K],
-                                       static_cast<std::int64_t>(su.object_index[r]),
-                                       &su.collision_part[r], &su.collision_obstacle[r])
-                            ? 1
-                            : 0;
+      su.colliding[r] =
+          m.suction_hits(su.X_W_contact[r], &su.hit[r * K],
+                         static_cast<std::int64_t>(su.object_index[r]), &su.collision_part[r],
+                         &su.collision_obstacle[r], options.first_collision_only)
+              ? 1
+              : 0;
     }
   });
 }
