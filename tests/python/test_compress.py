@@ -82,6 +82,36 @@ def test_shuffled_chunks_match_a_direct_reading_of_the_hdf5_shuffle_filter():
         assert raw == expected
     with pytest.raises(InvalidArgumentError, match="chunk shape"):
         shuffled_chunks(a, (2, 3))
+    # Without the shuffle: each chunk's values in C order, as they are.
+    for (r, _, c), raw in shuffled_chunks(a, (2, 3, 1), shuffle=False):
+        block = np.zeros((2, 3, 1), np.float32)
+        part = a[r : r + 2, :, c : c + 1]
+        block[: part.shape[0]] = part
+        assert raw == block.tobytes()
+
+
+def test_hdf5_chunks_without_shuffle_read_back_through_the_gzip_filter(tmp_path: Path):
+    """``shuffle=False``: gzip-only chunks holding the values as they are; h5py reads them
+    back. A few repeated float32 values (scores) take fewer bytes unshuffled."""
+    rng = np.random.default_rng(8)
+    repeated = rng.choice(rng.random(5).astype(np.float32), size=3000)
+    with h5py.File(tmp_path / "a.h5", "w") as h5:
+        h5_write_deflated(h5, "x", repeated, (1024,), 6, shuffle=False, track_times=False)
+        h5_write_deflated(h5, "s", repeated, (1024,), 6, track_times=False)
+    with h5py.File(tmp_path / "a.h5", "r") as h5:
+        x, s = h5["x"], h5["s"]
+        assert x.compression == "gzip" and not x.shuffle and s.shuffle
+        assert np.asarray(x[()]).tobytes() == repeated.tobytes()
+        for k in (0, 1024, 2048):
+            _, stored = x.id.read_direct_chunk((k,))
+            block = np.zeros(1024, np.float32)
+            block[: len(repeated[k : k + 1024])] = repeated[k : k + 1024]
+            assert zlib.decompress(stored) == block.tobytes()
+
+        def size(d: h5py.Dataset) -> int:
+            return sum(len(d.id.read_direct_chunk((k,))[1]) for k in (0, 1024, 2048))
+
+        assert size(x) < size(s)
 
 
 @pytest.mark.parametrize(

@@ -110,12 +110,13 @@ class ZipDeflate:
 
 
 def shuffled_chunks(
-    data: npt.ArrayLike, chunks: tuple[int, ...]
+    data: npt.ArrayLike, chunks: tuple[int, ...], *, shuffle: bool = True
 ) -> list[tuple[tuple[int, ...], bytes]]:
     """The chunks of ``data`` for an HDF5 chunked layout of shape ``chunks``, in row-major chunk
     order, each as (offset, bytes after HDF5's shuffle filter): a full chunk's C-order values (the
     parts beyond the dataset's edge zero) with byte k of every value grouped together (all bytes
-    0, then all bytes 1, ...), as the HDF5 shuffle filter arranges them."""
+    0, then all bytes 1, ...), as the HDF5 shuffle filter arranges them. ``shuffle=False``: the
+    chunk's C-order values as they are (a dataset without the shuffle filter)."""
     a = np.ascontiguousarray(data)
     if a.ndim != len(chunks) or a.ndim == 0 or any(c < 1 for c in chunks):
         raise InvalidArgumentError(
@@ -128,12 +129,14 @@ def shuffled_chunks(
         padded[tuple(slice(0, n) for n in a.shape)] = a
         a = padded
     size = a.dtype.itemsize
-    # (n0, c0, n1, c1, ..., size) -> (n0, n1, ..., size, c0, c1, ...): per chunk, byte planes.
+    # (n0, c0, n1, c1, ..., size) -> (n0, n1, ..., size, c0, c1, ...): per chunk, byte planes
+    # (without the shuffle: (n0, n1, ..., c0, c1, ..., size)).
     split = a.view(np.uint8).reshape(
         [x for n, c in zip(counts, chunks, strict=True) for x in (n, c)] + [size]
     )
     nd = a.ndim
-    order = [2 * i for i in range(nd)] + [2 * nd] + [2 * i + 1 for i in range(nd)]
+    inner = [2 * i + 1 for i in range(nd)]
+    order = [2 * i for i in range(nd)] + ([2 * nd] + inner if shuffle else inner + [2 * nd])
     planes = np.ascontiguousarray(split.transpose(order)).reshape(int(np.prod(counts)), -1)
     out = []
     for k, index in enumerate(np.ndindex(*counts)):
@@ -150,20 +153,23 @@ def h5_write_deflated(
     level: int,
     *,
     zlib_level: int | None = None,
+    shuffle: bool = True,
     **kwargs: Any,
 ) -> Any:
     """Create dataset ``name`` in h5py ``group`` holding ``data`` with chunk shape ``chunks`` and
     the filters shuffle + gzip, the chunks compressed here (:func:`shuffled_chunks`, then
     :func:`zlib_stream` at libdeflate ``level``) and stored with ``write_direct_chunk``: every
     HDF5 reader decodes them with its own gzip filter. ``zlib_level``: deflate with zlib at that
-    level instead (see :class:`ZipDeflate` on images of long runs). ``kwargs`` go to
-    ``create_dataset`` (e.g. ``track_times=False``). Returns the dataset."""
+    level instead (see :class:`ZipDeflate` on images of long runs). ``shuffle=False``: gzip
+    only, no shuffle filter (values of a few repeated 4-byte patterns compress better
+    unshuffled). ``kwargs`` go to ``create_dataset`` (e.g. ``track_times=False``). Returns the
+    dataset."""
     a = np.ascontiguousarray(data)
     ds = group.create_dataset(
         name, shape=a.shape, dtype=a.dtype, chunks=chunks, compression="gzip",
-        compression_opts=min(_check_level(level), 9), shuffle=True, **kwargs,
+        compression_opts=min(_check_level(level), 9), shuffle=shuffle, **kwargs,
     )  # fmt: skip
-    for offset, raw in shuffled_chunks(a, chunks):
+    for offset, raw in shuffled_chunks(a, chunks, shuffle=shuffle):
         stream = zlib_stream(raw, level) if zlib_level is None else zlib.compress(raw, zlib_level)
         ds.id.write_direct_chunk(offset, stream, 0)
     return ds

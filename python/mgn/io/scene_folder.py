@@ -74,11 +74,15 @@ __all__ = [
     "DEFLATE_LEVEL",
     "DEPTH_PICTURE_LEVEL",
     "FLOAT_DELTA_ENCODING",
+    "FLOAT_GRADIENT_ENCODING",
     "UNITS_ATTR",
     "UNORM16_ENCODING",
     "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
     "HDF5_INT_LEAVES",
+    "H5_LIBVER",
+    "ROTATION_BLOCK_POSES",
+    "UNSHUFFLED_LEAVES",
     "POSE_COLUMNS_GROUP",
     "RUN_IMAGES",
     "SHARED_ROTATION_ENCODING",
@@ -89,9 +93,11 @@ __all__ = [
     "ViewRecord",
     "com_heatmap_prediction",
     "decode_com_residual",
+    "decode_float_gradient",
     "decode_float_image",
     "depth_picture_png",
     "depth_to_cm",
+    "encode_float_gradient",
     "encode_float_image",
     "hdf5_bytes",
     "from_cm",
@@ -322,6 +328,32 @@ def decode_float_image(coded: npt.ArrayLike) -> npt.NDArray[np.float32]:
     return np.cumsum(a, axis=1, dtype=np.int32).view(np.float32)
 
 
+#: Value of the ``mgn_encoding`` attribute of a ``{v}_mgn.hdf5`` float32 image stored by
+#: :func:`encode_float_gradient` (lossless): ``depth_ideal`` in 0.73x the bytes of
+#: :data:`FLOAT_DELTA_ENCODING` (-7 MB per 37-view scene of 1200 x 1200 views).
+FLOAT_GRADIENT_ENCODING = "float32-bits-gradient-zigzag"
+
+
+def encode_float_gradient(image: npt.ArrayLike) -> npt.NDArray[np.int32]:
+    """(H, W) float32 -> int32: each pixel's bit pattern minus the gradient prediction left + up -
+    upper-left (missing neighbours count as 0; modulo 2^32), zigzag-mapped (0, -1, 1, -2, ... ->
+    0, 1, 2, 3, ...) so that small residuals of either sign have zero high bytes, which HDF5's
+    shuffle filter groups for deflate. On a rendered depth image the residual is ~0 inside every
+    plane. :func:`decode_float_gradient` restores every bit (NaN included)."""
+    d = encode_float_image(image)  # differences along rows
+    with np.errstate(over="ignore"):
+        d[1:] -= d[:-1].copy()  # and along columns: the gradient residual
+        return (d << 1) ^ (d >> 31)
+
+
+def decode_float_gradient(coded: npt.ArrayLike) -> npt.NDArray[np.float32]:
+    """The inverse of :func:`encode_float_gradient`."""
+    z = np.asarray(coded, np.int32)
+    d = (z.view(np.uint32) >> 1).view(np.int32) ^ -(z & 1)
+    np.cumsum(d, axis=0, dtype=np.int32, out=d)
+    return np.cumsum(d, axis=1, dtype=np.int32).view(np.float32)
+
+
 #: Archival mode: grid of the rotation entries and of the translations (cm) of the grasp poses
 #: (2^-16: at most 0.0004 degrees; 1/1024 cm = 0.01 mm).
 ARCHIVAL_ROTATION_STEP = 2.0**-16
@@ -493,7 +525,7 @@ def mgn_hdf5_bytes(
     given level instead (fast to inflate where they are long runs). Integer images are stored as
     given."""
     buf = io.BytesIO()
-    with h5py.File(buf, "w") as h5:
+    with h5py.File(buf, "w", libver=H5_LIBVER) as h5:
         for name, value in images.items():
             data = np.ascontiguousarray(value)
             coded: str | None = None
@@ -501,8 +533,8 @@ def mgn_hdf5_bytes(
                 data = np.round(np.clip(data, 0.0, 1.0) * 65535.0).astype(np.uint16)
                 coded = UNORM16_ENCODING
             elif data.dtype == np.float32 and data.ndim == 2 and data.size > 0:
-                data = encode_float_image(data)
-                coded = FLOAT_DELTA_ENCODING
+                data = encode_float_gradient(data)
+                coded = FLOAT_GRADIENT_ENCODING
             if data.size:
                 chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:])
                 ds = h5_write_deflated(h5, name, data, chunks, level,
@@ -526,6 +558,29 @@ _COMPRESS_FROM = 256
 #: compress better than whole rows; the chunks a row spans (16 of 32 KiB for poses) fit HDF5's
 #: 1 MiB chunk cache, so reading row by row (``list(dataset)``) stays fast.
 _CHUNK_ROWS = 8192
+#: (M, 4, 4) poses of ``{v}_scene.hdf5`` chunked by 3 x 3 blocks of each row (the rotation in one
+#: chunk, the translation column in another, the last row in two more) instead of by entry:
+#: suction contact rotations repeat (the points of a flat face share its normal; ~40 % of the
+#: rows of a view), which deflate finds in the rotation block's 36 contiguous bytes: 0.82x the
+#: bytes of the entry chunks (-2.3 MB per 37-view scene, benchmarks/RESULTS.md). Parallel-jaw
+#: rotations are all distinct: entry chunks are smaller there (1.06x).
+ROTATION_BLOCK_POSES: tuple[str, ...] = ("suctioncup/contact_poses_relative_to_camera",)
+#: Leaf names of ``{v}_scene.hdf5`` datasets deflated without the shuffle filter: per-grasp values
+#: taken from a few levels or repeated along the rows (scores, the widths of the grasps sharing a
+#: contact point, 0/1 flags), which deflate matches as whole 4-byte values: 0.5-0.9x the bytes of
+#: the shuffled chunks (-0.5 MB per scene). The wrench scores and the integer labels stay
+#: shuffled (1.2x / 1.3x larger without).
+UNSHUFFLED_LEAVES: tuple[str, ...] = (
+    "contact_width",
+    "score_analytical",
+    "score_simulation",
+    "visible",
+)
+#: HDF5 file-format bounds of the scene writer's files: the HDF5 1.10 formats (the virtual
+#: datasets need them anyway), whose chunk indexes and object headers take ~25 kB per
+#: ``{v}_scene.hdf5`` instead of ~107 kB with the 1.8-compatible ones (-3 MB per scene).
+#: Every HDF5 >= 1.10 reader (h5py since 2.7) opens them.
+H5_LIBVER: tuple[str, str] = ("v110", "v110")
 
 #: Tool-pose datasets of ``{v}_scene.hdf5`` whose rotation block equals the one of the group's
 #: ``contact_poses_relative_to_camera`` (same axes, moved along them): stored as HDF5 virtual
@@ -543,15 +598,21 @@ SHARED_ROTATION_ENCODING = "rotation-of-contact-poses"
 _CONTACT_LEAF = "contact_poses_relative_to_camera"
 
 
-def _write_dataset(group: Any, name: str, data: np.ndarray, level: int) -> None:
-    """A dataset of ``{v}_scene.hdf5`` without timestamps: chunked (one entry of up to
-    ``_CHUNK_ROWS`` rows per chunk) with shuffle + gzip at libdeflate ``level`` from
-    ``_COMPRESS_FROM`` values on, contiguous below."""
+def _write_dataset(group: Any, name: str, data: np.ndarray, level: int, path: str = "") -> None:
+    """A dataset of ``{v}_scene.hdf5`` (at ``path``) without timestamps: chunked with gzip at
+    libdeflate ``level`` from ``_COMPRESS_FROM`` values on, contiguous below. A chunk holds one
+    entry of up to ``_CHUNK_ROWS`` rows; the poses of :data:`ROTATION_BLOCK_POSES` one 3 x 3
+    block (the rotation, or the translation column, ...) of each row; shuffled except
+    :data:`UNSHUFFLED_LEAVES`."""
     if data.size < _COMPRESS_FROM or data.ndim == 0:
         h5_create_dataset(group, name, data)
         return
-    chunks = (min(len(data), _CHUNK_ROWS), *([1] * (data.ndim - 1)))
-    h5_write_deflated(group, name, data, chunks, level, **H5_DATASET_KWARGS)
+    rows = min(len(data), _CHUNK_ROWS)
+    chunks: tuple[int, ...] = (rows, *([1] * (data.ndim - 1)))
+    if data.shape[1:] == (4, 4) and path.endswith(ROTATION_BLOCK_POSES):
+        chunks = (rows, 3, 3)
+    shuffle = name not in UNSHUFFLED_LEAVES
+    h5_write_deflated(group, name, data, chunks, level, shuffle=shuffle, **H5_DATASET_KWARGS)
 
 
 def _shares_rotation(datasets: Mapping[str, np.ndarray], path: str) -> bool:
@@ -582,7 +643,7 @@ def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray, level: int) -> Non
     column = np.ascontiguousarray(tool[:, :, 3])
     group_path, _, name = column_path.rpartition("/")
     group = h5[group_path] if group_path in h5 else h5_create_group(h5, group_path)
-    _write_dataset(group, name, column, level)
+    _write_dataset(group, name, column, level, column_path)
     m = tool.shape[0]
     dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
     dcpl.set_layout(h5py.h5d.VIRTUAL)
@@ -635,7 +696,7 @@ def hdf5_bytes(
     group's contact poses bit for bit are stored as virtual datasets reading those columns from
     the contact poses (every HDF5 >= 1.10 reader, h5py included, sees the same array)."""
     buf = io.BytesIO()
-    with h5py.File(buf, "w") as h5:
+    with h5py.File(buf, "w", libver=H5_LIBVER) as h5:
         shared = []
         for path, value in datasets.items():
             data = np.asarray(value)
@@ -646,7 +707,7 @@ def hdf5_bytes(
             group = h5
             if parent:
                 group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
-            _write_dataset(group, name, data, level)
+            _write_dataset(group, name, data, level, path)
         for path in shared:
             _virtual_tool_poses(h5, path, np.asarray(datasets[path]), level)
         for key, value in (attrs or {}).items():
