@@ -461,10 +461,10 @@ def test_tool_poses_sharing_the_contact_rotation_read_back_bit_identical(
             assert np.array_equal(_bits(np.stack(rows)), _bits(expected)), path
             # colored_pcl.py scales the translation of each row in place.
             rows[0][0, 3] /= 100
-        # The suction contact poses are chunked by 3 x 3 blocks (repeated rotations), the
-        # parallel-jaw ones by entry.
+        # The suction contact poses are chunked by their first three rows, unshuffled (repeated
+        # rotations), the parallel-jaw ones by entry.
         su = f["colliding_grasps/suctioncup/contact_poses_relative_to_camera"]
-        assert su.chunks == (300, 3, 3)
+        assert su.chunks == (300, 3, 4) and not su.shuffle
         assert f["colliding_grasps/paralleljaw/contact_poses_relative_to_camera"].chunks == (
             700,
             1,

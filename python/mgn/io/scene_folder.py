@@ -84,6 +84,7 @@ __all__ = [
     "ROTATION_BLOCK_POSES",
     "UNSHUFFLED_LEAVES",
     "POSE_COLUMNS_GROUP",
+    "RGB_LEVEL",
     "RUN_IMAGES",
     "RUN_LEVEL",
     "SHARED_ROTATION_ENCODING",
@@ -269,7 +270,7 @@ def view_file_names(v: int) -> list[str]:
 #: ``{v}_mgn.hdf5`` datasets that hold lengths in centimetres.
 MGN_HDF5_CM: tuple[str, ...] = ("depth_ideal",)
 #: Rows per HDF5 chunk of an (H, W) image in ``{v}_mgn.hdf5`` (shuffle + deflate per chunk).
-_IMAGE_CHUNK_ROWS = 64
+_IMAGE_CHUNK_ROWS = 128
 
 
 def id_image_dtype(values: npt.ArrayLike, *, instances: bool) -> np.dtype:
@@ -559,12 +560,13 @@ _COMPRESS_FROM = 256
 #: compress better than whole rows; the chunks a row spans (16 of 32 KiB for poses) fit HDF5's
 #: 1 MiB chunk cache, so reading row by row (``list(dataset)``) stays fast.
 _CHUNK_ROWS = 8192
-#: (M, 4, 4) poses of ``{v}_scene.hdf5`` chunked by 3 x 3 blocks of each row (the rotation in one
-#: chunk, the translation column in another, the last row in two more) instead of by entry:
-#: suction contact rotations repeat (the points of a flat face share its normal; ~40 % of the
-#: rows of a view), which deflate finds in the rotation block's 36 contiguous bytes: 0.82x the
-#: bytes of the entry chunks (-2.3 MB per 37-view scene, benchmarks/RESULTS.md). Parallel-jaw
-#: rotations are all distinct: entry chunks are smaller there (1.06x).
+#: (M, 4, 4) poses of ``{v}_scene.hdf5`` chunked by the first three rows of each pose (rotation
+#: and translation, 48 contiguous bytes per pose; the last row in a second chunk), unshuffled,
+#: instead of by entry: suction contact rotations repeat (the points of a flat face share its
+#: normal; ~40 % of the rows of a view), which deflate finds as three 12-byte matches: 0.85x the
+#: bytes of the shuffled entry chunks in the same time (-2 MB per 37-view scene;
+#: benchmarks/RESULTS.md). Parallel-jaw rotations are all distinct: shuffled entry chunks are
+#: smaller there (0.93x).
 ROTATION_BLOCK_POSES: tuple[str, ...] = ("suctioncup/contact_poses_relative_to_camera",)
 #: Leaf names of ``{v}_scene.hdf5`` datasets deflated without the shuffle filter: per-grasp values
 #: taken from a few levels or repeated along the rows (scores, the widths of the grasps sharing a
@@ -602,17 +604,16 @@ _CONTACT_LEAF = "contact_poses_relative_to_camera"
 def _write_dataset(group: Any, name: str, data: np.ndarray, level: int, path: str = "") -> None:
     """A dataset of ``{v}_scene.hdf5`` (at ``path``) without timestamps: chunked with gzip at
     libdeflate ``level`` from ``_COMPRESS_FROM`` values on, contiguous below. A chunk holds one
-    entry of up to ``_CHUNK_ROWS`` rows; the poses of :data:`ROTATION_BLOCK_POSES` one 3 x 3
-    block (the rotation, or the translation column, ...) of each row; shuffled except
-    :data:`UNSHUFFLED_LEAVES`."""
+    entry of up to ``_CHUNK_ROWS`` rows, shuffled (except :data:`UNSHUFFLED_LEAVES`); the poses
+    of :data:`ROTATION_BLOCK_POSES` rows 0..2 of each pose, unshuffled."""
     if data.size < _COMPRESS_FROM or data.ndim == 0:
         h5_create_dataset(group, name, data)
         return
     rows = min(len(data), _CHUNK_ROWS)
     chunks: tuple[int, ...] = (rows, *([1] * (data.ndim - 1)))
-    if data.shape[1:] == (4, 4) and path.endswith(ROTATION_BLOCK_POSES):
-        chunks = (rows, 3, 3)
     shuffle = name not in UNSHUFFLED_LEAVES
+    if data.shape[1:] == (4, 4) and path.endswith(ROTATION_BLOCK_POSES):
+        chunks, shuffle = (rows, 3, 4), False
     h5_write_deflated(group, name, data, chunks, level, shuffle=shuffle, **H5_DATASET_KWARGS)
 
 
@@ -737,6 +738,9 @@ def png_bytes(image: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
 #: the pixels where the sensor gives a value (black elsewhere): bands of equal colour
 #: (docs/format.md).
 DEPTH_PICTURE_LEVEL = DEFLATE_LEVEL
+#: libdeflate level of ``{v}_rgb.png`` in the default mode: 0.97x the bytes of level 6 for +3 ms
+#: per 1200 x 1200 view (-0.4 MB per scene; level 8: 0.95x for +17 ms).
+RGB_LEVEL = 7
 
 
 def depth_picture_png(depth: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
@@ -751,17 +755,15 @@ def _json(data: Any) -> str:
     return json.dumps(data, indent=1, sort_keys=False, allow_nan=True) + "\n"
 
 
-#: Images of long runs of equal bytes (masks, ids, the occlusion rate per object region, the CoM
-#: heat map's residual and ``valid_depth``) that the default mode deflates with zlib's level
-#: :data:`RUN_LEVEL`, its all-zero blocks from cached streams
-#: (:func:`mgn.base.compress.deflate_runs`: the amodal masks in ~11 ms instead of ~45 per
-#: 1200 x 1200 view of 20 objects): libdeflate's streams of them are ~3x smaller (-6.7 MB per
-#: scene) but zlib inflates them 2-3x slower (+70 ms per view to read every array); the archival
-#: mode takes the bytes.
+#: Images of long runs of equal bytes (the amodal masks, the CoM heat map's residual and
+#: ``valid_depth``) that the default mode deflates with zlib's level :data:`RUN_LEVEL`, the
+#: all-zero blocks from cached streams (:func:`mgn.base.compress.deflate_runs`: the amodal masks
+#: in ~11 ms instead of ~45 per 1200 x 1200 view of 20 objects): libdeflate's streams of them
+#: are 3-4x smaller (-4.3 MB per scene for the masks) but zlib inflates them 3-4x slower (+60 ms
+#: per view for the masks); the archival mode takes the bytes. The ids and ``occlusion`` are
+#: libdeflate's (0.5x the bytes of zlib's level 1, -2.3 MB per scene, for +15 ms per view to
+#: read them).
 RUN_IMAGES: tuple[str, ...] = (
-    "instances_objects",
-    "instances_semantic",
-    "occlusion",
     "occlusion_objects",
     "com_heatmap",
     "valid_depth",
@@ -879,7 +881,7 @@ def write_view(
     lap("arrays")
     files: dict[str, bytes] = {}
     files[f"{v}_rgb.png"] = png_bytes(
-        np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else DEFLATE_LEVEL
+        np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else RGB_LEVEL
     )
     lap("rgb.png")
     runs = {} if archival else dict.fromkeys(RUN_IMAGES, RUN_LEVEL)
