@@ -16,13 +16,17 @@ import pytest
 from PIL import Image
 
 from mgn.base.compress import (
+    RUN_BLOCK,
     ZipDeflate,
     deflate_raw,
+    deflate_runs,
     h5_write_deflated,
     png_encode,
     shuffled_chunks,
+    zlib_runs_stream,
     zlib_stream,
 )
+from mgn.base.deterministic import npz_bytes
 from mgn.errors import InvalidArgumentError
 
 
@@ -59,6 +63,41 @@ def test_zip_compressor_stores_a_small_head_and_deflates_the_rest():
     assert z.flush() == deflate_raw(data, 6)
     empty = ZipDeflate(1)
     assert zlib.decompress(empty.flush(), -15) == b""
+
+
+@pytest.mark.parametrize("level", [1, 3])
+def test_run_streams_inflate_with_zlib_to_the_input(level: int):
+    """deflate_runs on buffers with all-zero blocks anywhere (single ones, which are deflated,
+    and runs, which come from the cache), an unaligned tail, all zeros, nothing: zlib inflates
+    every stream to the input, inside a zip entry too, and the same input gives the same
+    stream."""
+    b = RUN_BLOCK
+    rng = np.random.default_rng(9)
+    x = np.zeros(40 * b + 123, np.uint8)
+    x[3 * b + 5] = 1  # a single non-zero byte between runs
+    x[10 * b : 11 * b] = 7  # a whole block
+    x[12 * b : 12 * b + 10] = 1  # one zero block (13*b..) then a run of zeros
+    x[25 * b + 1] = 9
+    x[-1] = 2  # in the tail
+    noisy = rng.integers(0, 3, 3 * b + 5, dtype=np.uint8)
+    cases = [b"", bytes(10), bytes(b), bytes(2 * b), bytes(5 * b + 7), x.tobytes(),
+             noisy.tobytes(), x[1:].tobytes()]  # fmt: skip
+    for data in cases:
+        stream = deflate_runs(data, level)
+        assert zlib.decompress(stream, -15) == data
+        assert deflate_runs(data, level) == stream
+        assert zlib.decompress(zlib_runs_stream(data, level)) == data
+    # A numpy array (e.g. bool masks) is read as its bytes.
+    mask = np.zeros((5, 200, 300), bool)
+    mask[2, 50:90, 100:180] = True
+    assert zlib.decompress(deflate_runs(mask, level), -15) == mask.tobytes()
+    # Long zero runs cost a few bytes per block, not the block.
+    assert len(deflate_runs(bytes(64 * b), level)) < 64 * b // 100
+    # In an npz entry.
+    with np.load(io.BytesIO(npz_bytes(mask=mask, zlib_levels={"mask": level}))) as z:
+        assert np.array_equal(z["mask"], mask)
+    with pytest.raises(InvalidArgumentError, match="zlib level 10"):
+        deflate_runs(b"abc", 10)
 
 
 def test_levels_outside_libdeflate_range_are_refused():

@@ -34,6 +34,7 @@ import numpy.typing as npt
 from mgn.errors import InvalidArgumentError
 
 __all__ = [
+    "RUN_BLOCK",
     "MAX_LEVEL",
     "ZipDeflate",
     "ZipRunDeflate",
