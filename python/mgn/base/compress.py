@@ -156,7 +156,7 @@ def deflate_runs(data: bytes | memoryview | npt.NDArray[Any], level: int) -> byt
     def deflate_part(start: int, stop: int) -> None:
         if stop > start:
             c = zlib.compressobj(level, zlib.DEFLATED, -15)
-            out.append(c.compress(a[start:stop]) + c.flush(zlib.Z_SYNC_FLUSH))
+            out.append(c.compress(a[start:stop].data) + c.flush(zlib.Z_SYNC_FLUSH))
 
     done = 0  # bytes of ``a`` in ``out``
     for first, last in zip(edges[0::2], edges[1::2], strict=True):
