@@ -37,6 +37,9 @@
 /// otherwise left (for refraction). Shading normals are per-corner normals averaged over the
 /// faces around a vertex whose normals are within 45 degrees (sharp creases keep flat normals);
 /// where the shading normal would face away from the viewer the geometric normal is used.
+/// At a smooth dielectric the reflected and the refracted ray are both followed: at the first
+/// three such vertices of a camera sample as full paths (each weighted by its Fresnel share),
+/// later only to the light they meet first, the path continuing along one chosen at random.
 /// Samples come from an Owen-scrambled (hash-based nested uniform scrambling) 2-D Sobol sequence
 /// per dimension pair, shared by the pixels of each 64 x 64 block in Morton order, so that the
 /// samples of neighbouring pixels are stratified together (blue-noise error); seeded from (seed,
