@@ -23,7 +23,10 @@ decompositions cached). Session 9 (idle, 2 cores, scenes 0-7): Bullet's own supp
 hulls (a scalar scan over up to 96 vertices, ~45 % of a drop in perf) 36.2 CPU-s for the 8 drops
 (11.15 s for scene 0, the pipeline benchmark's scene); with mgn's vectorised search
 (cpp/src/physics/hull_support.hpp: the same vertex, bit for bit, so the poses and scene bytes are
-unchanged) 28.3 CPU-s (8.2 s for scene 0), -22 %.
+unchanged) 28.3 CPU-s (8.2 s for scene 0), -22 %. Session 10 (load 9-11, scenes 0-15): friction
+along two tangent directions by default (DropOptions.two_friction_directions; with one, resting
+piles creep: in 3 of the 16 scenes 15 objects were still moving at the time limit) 51.8 -> 20.8
+CPU-s for the 16 drops, 19834 -> 9400 steps (benchmarks/RESULTS.md, "The drop's friction").
 
 Run alone: `python -m benchmarks.bench_drop [--quick]`.
 """
@@ -317,7 +320,10 @@ def run(
         f"total {total:.2f} CPU-s, mean {total / len(scenes):.2f} CPU-s per drop; per scene "
         + ", ".join(f"{d['scene']}: {d['cpu_s']:.2f} s/{d['steps']} steps" for d in scenes)
     )
-    pipe.notes.append("session 9 idle, scenes 0-7: Bullet's support scan 36.2 CPU-s, mgn's 28.3")
+    pipe.notes.append(
+        "session 9 idle, scenes 0-7: Bullet's support scan 36.2 CPU-s, mgn's 28.3; session 10 "
+        "(load 9-11), one friction direction 32.3, two (the default now) 11.3"
+    )
     return [row, pipe]
 
 
