@@ -118,6 +118,31 @@ def merge_previous_rows(json_path: Path, rows: list[Row], only: set[str]) -> tup
     return merged, kept
 
 
+def rows_out_of_sync(out: Path) -> str | None:
+    """Why an ``--only`` run into ``out`` would lose rows, or None. The table of ``out`` is
+    rebuilt from ``results.json`` beside it, so every row the table shows must be in that file;
+    a results.json written by an older ``--only`` run can hold fewer rows than the table."""
+    json_path = out.with_name("results.json")
+    if not out.exists():
+        return None
+    text = out.read_text()
+    section = re.search(r"^## Results$(.*?)^## ", text, flags=re.M | re.S)
+    if section is None:
+        return None
+    shown = sum(1 for line in section.group(1).splitlines() if line.startswith("| ")) - 1
+    try:
+        stored = len(json.loads(json_path.read_text())["rows"]) if json_path.exists() else 0
+    except (OSError, ValueError, KeyError):
+        stored = 0
+    if shown > stored:
+        return (
+            f"{out} shows {shown} benchmark rows but {json_path} holds {stored}: an --only run "
+            f"would drop {shown - stored} row(s) from the table. Run the full `python -m "
+            f"benchmarks` once to bring results.json in line, or pass --out to another file."
+        )
+    return None
+
+
 def log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
@@ -141,6 +166,11 @@ def main(argv: list[str] | None = None) -> int:
     repeats = args.repeats or (3 if args.quick else 7)
     if repeats < 1:
         parser.error("--repeats must be at least 1")
+
+    if args.only:
+        problem = rows_out_of_sync(args.out)
+        if problem:
+            parser.error(problem)
 
     mgn, mgn_status = import_mgn()
     if mgn is None:
