@@ -148,8 +148,9 @@ def stage_cpu(config: Any) -> dict[str, Any]:
         rays = timed("prepare: ray model", SceneRayModel.from_scene, scene)
         pj = [strided_subset(g.paralleljaw, 2000) for g in got]
         su = [strided_subset(g.suction, 2000) for g in got]
+        # As label_scene: the files need each grasp's first colliding pose only.
         sgm = timed("prepare: scene grasp collisions", SceneGraspModel, scene, pj, su,
-                    config.gripper, config.cup)  # fmt: skip
+                    config.gripper, config.cup, first_collision_only=True)  # fmt: skip
         views = scene_views(scene, config.camera)
         cats = np.array([i.category_id for i in scene.instances], np.int64)
         bins = [i.bin_relation for i in scene.instances]

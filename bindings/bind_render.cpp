@@ -1,6 +1,7 @@
 // Bindings of mgn/render: cameras and rigs, the OSMesa renderer, depth sensor models.
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
+#include <mgn/core/parallel.hpp>
 #include <mgn/render/camera.hpp>
 #include <mgn/render/depth_sensor.hpp>
 #include <mgn/render/renderer.hpp>
@@ -263,7 +264,7 @@ void bind_render(py::module_& m) {
       "apply_depth_sensor",
       [](const py::handle& depth, const py::handle& instance_ids,
          const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
-         const DepthSensorParams& params, std::uint64_t seed) {
+         const DepthSensorParams& params, std::uint64_t seed, int num_threads) {
         CArray<float> d;
         CArray<std::int32_t> ids;
         try {
@@ -287,7 +288,7 @@ void bind_render(py::module_& m) {
         DepthImage out;
         {
           py::gil_scoped_release release;
-          out = apply_depth_sensor(dv, iv, flags_by_id, K, params, seed);
+          out = apply_depth_sensor(dv, iv, flags_by_id, K, params, seed, num_threads);
         }
         const int h = out.height, w = out.width;
         return DepthArrays{to_image(std::move(out.depth), h, w),
@@ -295,7 +296,7 @@ void bind_render(py::module_& m) {
                            to_image(std::move(out.valid), h, w).attr("astype")("bool")};
       },
       py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
-      py::arg("params"), py::arg("seed"));
+      py::arg("params"), py::arg("seed"), py::arg("num_threads") = ParallelOptions{}.num_threads);
 }
 
 }  // namespace mgn::py_bind

@@ -198,6 +198,9 @@ void bind_options(py::module_& m) {
       .def_readwrite("visibility_tolerance", &SceneGraspOptions::visibility_tolerance, "m")
       .def_readwrite("near_plane", &SceneGraspOptions::near_plane, "m")
       .def_readwrite("num_threads", &SceneGraspOptions::num_threads, "0 = all hardware threads")
+      .def_readwrite("first_collision_only", &SceneGraspOptions::first_collision_only,
+                     "stop at each label grasp's first colliding pose (hit of the later offsets "
+                     "= -2, not checked)")
       .def("validate", &SceneGraspOptions::validate,
            "Raises InvalidArgumentError naming the first field out of its range.");
 }

@@ -1666,6 +1666,10 @@ class ShakeOptions:
     @grip_force.setter
     def grip_force(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
+    def hold_tolerance(self) -> float: ...
+    @hold_tolerance.setter
+    def hold_tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
+    @property
     def inertia_floor(self) -> float: ...
     @inertia_floor.setter
     def inertia_floor(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
@@ -2325,6 +2329,13 @@ class SceneGraspOptions:
     @approach_step.setter
     def approach_step(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
+    def first_collision_only(self) -> bool:
+        """
+        stop at each label grasp's first colliding pose (hit of the later offsets = -2, not checked)
+        """
+    @first_collision_only.setter
+    def first_collision_only(self, arg0: bool) -> None: ...
+    @property
     def gravity_world(self) -> tuple[float, float, float]:
         """
         direction of gravity in the world (tote frame), normalised by the model
@@ -2553,6 +2564,7 @@ def apply_depth_sensor(
     K: Intrinsics,
     params: DepthSensorParams,
     seed: typing.SupportsInt | typing.SupportsIndex,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> DepthSensorResult: ...
 def build_info() -> list[tuple[str, str]]:
     """

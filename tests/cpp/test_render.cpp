@@ -8,7 +8,9 @@
 #include <mgn/render/depth_sensor.hpp>
 #include <mgn/render/renderer.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace {
@@ -444,6 +446,84 @@ TEST(DepthSensor, TofFlyingPixelsLieBetweenSurfaces) {
     EXPECT_EQ(out.depth[v * 100 + 90], 1.0f);
   }
   EXPECT_GT(between, 190);
+}
+
+TEST(DepthSensor, NoiseFollowsSigmaOfDepthOnATiltedPlane) {
+  // A plane whose depth grows down the image (constant along each row) through each preset's
+  // range, on the continuous grid: the residuals divided by the analytic sigma(z) = a + b (z -
+  // z0)^2 are standard normal in every band of rows and over the whole image.
+  mgn::Intrinsics K;
+  K.width = 400;
+  K.height = 600;
+  K.fx = K.fy = 500;
+  K.cx = 200;
+  K.cy = 300;
+  const std::size_t n = 400 * 600;
+  std::vector<std::int32_t> ids(n, 1);
+  for (auto preset : {mgn::DepthSensorPreset::StructuredLight, mgn::DepthSensorPreset::ToF}) {
+    auto p = mgn::DepthSensorParams::preset_defaults(preset);
+    p.depth_step = 0.0;
+    p.flying_pixel_probability = 0.0;
+    const double z_lo = p.min_range + 0.01, z_hi = p.max_range - 0.01;
+    std::vector<float> depth(n);
+    for (int v = 0; v < K.height; ++v)
+      for (int u = 0; u < K.width; ++u)
+        depth[v * K.width + u] = static_cast<float>(z_lo + (z_hi - z_lo) * v / (K.height - 1));
+    const auto out = mgn::apply_depth_sensor(depth, ids, {}, K, p, 21);
+    std::vector<double> all;
+    for (int band = 0; band < 20; ++band) {
+      double s = 0, s2 = 0;
+      int m = 0;
+      for (int v = band * 30; v < band * 30 + 30; ++v)
+        for (int u = 0; u < K.width; ++u) {
+          const std::size_t i = v * K.width + u;
+          ASSERT_TRUE(out.valid[i]) << i;
+          const double z = depth[i];
+          const double sigma = p.sigma_a + p.sigma_b * (z - p.sigma_z0) * (z - p.sigma_z0);
+          const double r = (static_cast<double>(out.depth[i]) - z) / sigma;
+          s += r, s2 += r * r, ++m;
+          all.push_back(r);
+        }
+      EXPECT_NEAR(s / m, 0.0, 5.0 / std::sqrt(m)) << band;
+      EXPECT_NEAR(s2 / m, 1.0, 5.0 * std::sqrt(2.0 / m)) << band;
+    }
+    std::sort(all.begin(), all.end());
+    double d = 0;
+    const double m = static_cast<double>(all.size());
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      const double F = 0.5 * std::erfc(-all[i] / std::sqrt(2.0));
+      d = std::max({d, F - i / m, (i + 1) / m - F});
+    }
+    EXPECT_LT(std::sqrt(m) * d, 1.95);
+  }
+}
+
+TEST(DepthSensor, SameBytesForAnyThreadCount) {
+  // Boxes on a floor: shadows, edges and flying pixels (ToF) as well as the noise.
+  mgn::Intrinsics K;
+  K.width = 320;
+  K.height = 240;
+  K.fx = K.fy = 300;
+  K.cx = 160;
+  K.cy = 120;
+  std::vector<float> depth(320 * 240, 1.2f);
+  std::vector<std::int32_t> ids(320 * 240, 0);
+  for (int b = 0; b < 6; ++b)
+    for (int v = 20 + 30 * b; v < 60 + 30 * b; ++v)
+      for (int u = 15 + 45 * b; u < 70 + 45 * b; ++u)
+        depth[v * 320 + u] = 1.2f - 0.03f * (b + 1), ids[v * 320 + u] = b + 1;
+  for (auto preset : {mgn::DepthSensorPreset::StructuredLight, mgn::DepthSensorPreset::ToF}) {
+    const auto p = mgn::DepthSensorParams::preset_defaults(preset);
+    const auto one = mgn::apply_depth_sensor(depth, ids, {}, K, p, 8, 1);
+    for (int threads : {2, 3, 0}) {
+      const auto other = mgn::apply_depth_sensor(depth, ids, {}, K, p, 8, threads);
+      EXPECT_EQ(other.valid, one.valid) << threads;
+      EXPECT_EQ(std::memcmp(other.depth.data(), one.depth.data(), one.depth.size() * 4), 0)
+          << threads;
+    }
+    const auto reseeded = mgn::apply_depth_sensor(depth, ids, {}, K, p, 9, 1);
+    EXPECT_NE(std::memcmp(reseeded.depth.data(), one.depth.data(), one.depth.size() * 4), 0);
+  }
 }
 
 TEST(Renderer, ColorTemperatureFollowsPlanck) {

@@ -315,3 +315,35 @@ TEST(SceneGrasps, CopiesOfOneMeshCollideEachAtItsOwnPose) {
   EXPECT_EQ(c.colliding[3], 0);
   EXPECT_EQ(c.hit[3 * K], -1);
 }
+
+TEST(SceneGrasps, FirstCollisionOnlyKeepsTheLabelsAndSkipsTheLaterOffsets) {
+  // The grasp of FingerEnteringANeighbourCollidesAndNotWithoutIt (its finger in the neighbour
+  // at offset 0) and a free one (the box alone): with first_collision_only the colliding grasp
+  // is not checked at 100 mm, the free one is.
+  SceneGraspObject box = box_object(at(0, 0, 0.025));
+  box.pj = {across_x()};
+  SceneGraspObject free_box = box_object(at(0.3, 0, 0.025));
+  free_box.pj = {across_x()};
+  SceneGraspObject neighbour = box_object(at(0.032 + 0.02, 0, 0.025));
+  SceneGraspOptions first;
+  first.first_collision_only = true;
+  const SceneGraspModel a = model_of({box, free_box, neighbour});
+  const SceneGraspModel b = model_of({box, free_box, neighbour}, first);
+  ASSERT_EQ(b.pj().size(), 2u);
+  EXPECT_EQ(a.pj().colliding, b.pj().colliding);
+  EXPECT_EQ(a.pj().collision_part, b.pj().collision_part);
+  EXPECT_EQ(a.pj().collision_obstacle, b.pj().collision_obstacle);
+  EXPECT_EQ(b.pj().colliding[0], 1);
+  EXPECT_EQ(b.pj().collision_obstacle[0],
+            static_cast<std::uint8_t>(CollisionObstacle::OtherObject));
+  EXPECT_EQ(b.pj().hit[0], 3);  // the neighbour, at offset 0
+  EXPECT_EQ(b.pj().hit[1], kHitNotChecked);
+  EXPECT_GE(a.pj().hit[1], -1);
+  EXPECT_EQ(b.pj().colliding[1], 0);
+  EXPECT_EQ(b.pj().hit[2], -1);
+  EXPECT_EQ(b.pj().hit[3], -1);
+  // collides() checks every offset whatever the option.
+  const ToolCollisions c =
+      b.collides(GraspKind::ParallelJaw, {b.pj().X_W_contact[0]}, {b.pj().width[0]}, {0});
+  EXPECT_EQ(c.hit[1], a.pj().hit[1]);
+}

@@ -109,6 +109,33 @@ TEST(Shake, HeavySlipperyWideObjectIsDropped) {
   }
 }
 
+TEST(Shake, HeldLoadWindowsKeepTheCoulombLimitOfTheTranslationalShake) {
+  // A centred box hanging from two pads of F each: at the translational shake's peak
+  // acceleration a = v omega the pads must carry m (g + a) along the approach axis. Well above
+  // that limit the box is held (with hold_tolerance: skipping the second cycle and the last
+  // quarter of the rotation), well below it is dropped, with or without the windows.
+  const double m = 1.0;
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), m);
+  for (const double hold : {0.0, 5e-4}) {
+    for (const double factor : {0.5, 2.5}) {
+      ShakeOptions o = small_grid(1, 0, 0);
+      o.density_min = o.density_max = 1.0;
+      o.hold_tolerance = hold;
+      const double omega = 2 * M_PI * o.shake_cycles / (o.shake_steps * o.dt);
+      o.friction_min = o.friction_max =
+          factor * m * (o.gravity + o.shake_speed * omega) / (2 * o.grip_force);
+      const ShakeResult r = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+      ShakeOptions full = o;
+      full.hold_tolerance = 0.0;
+      const ShakeResult f = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, full);
+      EXPECT_EQ(r.trial_success[0] != 0, factor > 1.0) << hold << " " << factor;
+      EXPECT_EQ(f.trial_success[0] != 0, factor > 1.0) << factor;
+      const int skipped = hold > 0 && factor > 1.0 ? o.shake_steps / 2 + o.rotate_steps / 4 : 0;
+      EXPECT_EQ(r.trial_steps[0], f.trial_steps[0] - skipped) << hold << " " << factor;
+    }
+  }
+}
+
 TEST(Shake, StaticHoldFollowsCoulombBoundOfTheGripForce) {
   // Two fingers pressing with F each hold a weight m g iff 2 mu F >= m g.
   const double m = 1.0, F = 20.0;
@@ -313,6 +340,11 @@ TEST(Shake, BadInputIsRejectedWithAClearMessage) {
   bo = o;
   bo.grip_force = NAN;
   expect_error(box, centre_grasp(0.04), bo, "grip_force");
+  bo = o;
+  bo.hold_tolerance = -1e-3;
+  expect_error(box, centre_grasp(0.04), bo, "hold_tolerance");
+  bo.hold_tolerance = NAN;
+  expect_error(box, centre_grasp(0.04), bo, "hold_tolerance");
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, 1.0, o, 0), InvalidArgument);
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, -1.0, o, 1), InvalidArgument);
   // No grasps: an empty result, not an error.

@@ -16,13 +16,17 @@ import pytest
 from PIL import Image
 
 from mgn.base.compress import (
+    RUN_BLOCK,
     ZipDeflate,
     deflate_raw,
+    deflate_runs,
     h5_write_deflated,
     png_encode,
     shuffled_chunks,
+    zlib_runs_stream,
     zlib_stream,
 )
+from mgn.base.deterministic import npz_bytes
 from mgn.errors import InvalidArgumentError
 
 
@@ -61,6 +65,41 @@ def test_zip_compressor_stores_a_small_head_and_deflates_the_rest():
     assert zlib.decompress(empty.flush(), -15) == b""
 
 
+@pytest.mark.parametrize("level", [1, 3])
+def test_run_streams_inflate_with_zlib_to_the_input(level: int):
+    """deflate_runs on buffers with all-zero blocks anywhere (single ones, which are deflated,
+    and runs, which come from the cache), an unaligned tail, all zeros, nothing: zlib inflates
+    every stream to the input, inside a zip entry too, and the same input gives the same
+    stream."""
+    b = RUN_BLOCK
+    rng = np.random.default_rng(9)
+    x = np.zeros(40 * b + 123, np.uint8)
+    x[3 * b + 5] = 1  # a single non-zero byte between runs
+    x[10 * b : 11 * b] = 7  # a whole block
+    x[12 * b : 12 * b + 10] = 1  # one zero block (13*b..) then a run of zeros
+    x[25 * b + 1] = 9
+    x[-1] = 2  # in the tail
+    noisy = rng.integers(0, 3, 3 * b + 5, dtype=np.uint8)
+    cases = [b"", bytes(10), bytes(b), bytes(2 * b), bytes(5 * b + 7), x.tobytes(),
+             noisy.tobytes(), x[1:].tobytes()]  # fmt: skip
+    for data in cases:
+        stream = deflate_runs(data, level)
+        assert zlib.decompress(stream, -15) == data
+        assert deflate_runs(data, level) == stream
+        assert zlib.decompress(zlib_runs_stream(data, level)) == data
+    # A numpy array (e.g. bool masks) is read as its bytes.
+    mask = np.zeros((5, 200, 300), bool)
+    mask[2, 50:90, 100:180] = True
+    assert zlib.decompress(deflate_runs(mask, level), -15) == mask.tobytes()
+    # Long zero runs cost a few bytes per block, not the block.
+    assert len(deflate_runs(bytes(64 * b), level)) < 64 * b // 100
+    # In an npz entry.
+    with np.load(io.BytesIO(npz_bytes(mask=mask, zlib_levels={"mask": level}))) as z:
+        assert np.array_equal(z["mask"], mask)
+    with pytest.raises(InvalidArgumentError, match="zlib level 10"):
+        deflate_runs(b"abc", 10)
+
+
 def test_levels_outside_libdeflate_range_are_refused():
     with pytest.raises(InvalidArgumentError, match="deflate level 13"):
         deflate_raw(b"abc", 13)
@@ -82,6 +121,36 @@ def test_shuffled_chunks_match_a_direct_reading_of_the_hdf5_shuffle_filter():
         assert raw == expected
     with pytest.raises(InvalidArgumentError, match="chunk shape"):
         shuffled_chunks(a, (2, 3))
+    # Without the shuffle: each chunk's values in C order, as they are.
+    for (r, _, c), raw in shuffled_chunks(a, (2, 3, 1), shuffle=False):
+        block = np.zeros((2, 3, 1), np.float32)
+        part = a[r : r + 2, :, c : c + 1]
+        block[: part.shape[0]] = part
+        assert raw == block.tobytes()
+
+
+def test_hdf5_chunks_without_shuffle_read_back_through_the_gzip_filter(tmp_path: Path):
+    """``shuffle=False``: gzip-only chunks holding the values as they are; h5py reads them
+    back. A few repeated float32 values (scores) take fewer bytes unshuffled."""
+    rng = np.random.default_rng(8)
+    repeated = rng.choice(rng.random(5).astype(np.float32), size=3000)
+    with h5py.File(tmp_path / "a.h5", "w") as h5:
+        h5_write_deflated(h5, "x", repeated, (1024,), 6, shuffle=False, track_times=False)
+        h5_write_deflated(h5, "s", repeated, (1024,), 6, track_times=False)
+    with h5py.File(tmp_path / "a.h5", "r") as h5:
+        x, s = h5["x"], h5["s"]
+        assert x.compression == "gzip" and not x.shuffle and s.shuffle
+        assert np.asarray(x[()]).tobytes() == repeated.tobytes()
+        for k in (0, 1024, 2048):
+            _, stored = x.id.read_direct_chunk((k,))
+            block = np.zeros(1024, np.float32)
+            block[: len(repeated[k : k + 1024])] = repeated[k : k + 1024]
+            assert zlib.decompress(stored) == block.tobytes()
+
+        def size(d: h5py.Dataset) -> int:
+            return sum(len(d.id.read_direct_chunk((k,))[1]) for k in (0, 1024, 2048))
+
+        assert size(x) < size(s)
 
 
 @pytest.mark.parametrize(

@@ -505,12 +505,15 @@ def test_npz_entries_are_plain_deflate_at_their_level_that_zlib_reads() -> None:
             assert zlib.crc32(expected.getvalue()) == info.CRC
         assert zf.getinfo("mask.npy").compress_size < zp.getinfo("mask.npy").compress_size
     assert npz_bytes(mask=mask, occ=occ, levels={"mask": 6}) == data
-    # zlib_levels: that entry is zlib's own stream at that level (the other stays libdeflate's).
+    # zlib_levels: that entry is zlib's stream at that level (the .npy header a stored block
+    # before it, a sync flush and an empty final block after it: < 200 bytes more; the other
+    # entry stays libdeflate's).
     mixed = npz_bytes(mask=mask, occ=occ, levels={"mask": 6}, zlib_levels={"occ": 1})
     with zipfile.ZipFile(io.BytesIO(mixed)) as zm, zipfile.ZipFile(io.BytesIO(data)) as zf:
         c = zlib.compressobj(1, zlib.DEFLATED, -15)
         npy = zm.read("occ.npy")
-        assert zm.getinfo("occ.npy").compress_size == len(c.compress(npy) + c.flush())
+        plain = len(c.compress(npy) + c.flush())
+        assert plain <= zm.getinfo("occ.npy").compress_size <= plain + 200
         assert zm.getinfo("mask.npy").compress_size == zf.getinfo("mask.npy").compress_size
         assert np.load(io.BytesIO(mixed))["occ"].tobytes() == occ.tobytes()
 

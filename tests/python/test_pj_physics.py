@@ -60,12 +60,57 @@ def test_success_rises_with_friction_for_a_fixed_grasp():
     assert (np.diff(held_per_friction) >= 0).all()
 
 
-def test_threads_and_seed_give_identical_results():
+@pytest.mark.parametrize("hold", [0.0, 5e-4])
+def test_coulomb_limit_decides_a_centred_box_with_and_without_early_success(hold):
+    """A centred 1 kg box squeezed by two pads of F = 20 N each hangs below the hand; during the
+    translational shake the pads must carry m (g + a) along the approach axis, with the peak
+    acceleration a = v ω, ω = 2π n / T. Well below the friction limit 2 μ F = m (g + a) the box
+    is dropped, well above it the box is held; with ``hold_tolerance`` a held box skips the
+    second translational cycle (shake_steps / 2 steps) and ends the trial at the last extreme of
+    the rotational shake (rotate_steps / 4 steps early), a dropped one runs as before."""
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 1.0)
+    base = ShakeOptions(grid=1, density_range=(1.0, 1.0), num_threads=1)
+    omega = 2 * np.pi * base.shake_cycles / (base.shake_steps * base.dt)
+    mu_star = m * (base.gravity + base.shake_speed * omega) / (2 * base.grip_force)  # 0.32
+    for factor in (0.5, 2.5):
+        mu = factor * mu_star
+        full = replace(base, friction_range=(mu, mu))
+        fast = replace(full, hold_tolerance=hold)
+        a = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=full)
+        b = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=fast)
+        assert bool(a.trial_success.all()) == (factor > 1.0), factor
+        assert bool(b.trial_success.all()) == (factor > 1.0), factor
+        if factor > 1.0 and hold > 0:
+            assert b.trial_ended_early.all() and not a.trial_ended_early.any()
+            skipped = base.shake_steps // 2 + base.rotate_steps // 4
+            assert b.total_steps == a.total_steps - skipped
+        else:
+            np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
+
+
+def test_early_success_needs_the_object_at_rest_in_the_hand():
+    """A tolerance far below the pads' compliance (1 nm) never decides early: the box moves a
+    little in the hand as the tilt changes; the full schedule then runs."""
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.5)
+    opts = ShakeOptions(grid=2, friction_range=(1.0, 2.0), num_threads=1)
+    a = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
+    b = shake_scores(
+        mesh, m, com, inertia, centre_grasp(0.04)[None], options=replace(opts, hold_tolerance=1e-9)
+    )
+    assert a.trial_success.all()
+    np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
+    assert not b.trial_ended_early.any()
+
+
+@pytest.mark.parametrize("hold", [0.0, 5e-4])
+def test_threads_and_seed_give_identical_results(hold):
     mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.8)
     grasps = np.stack([centre_grasp(0.04), centre_grasp(0.04)])
     grasps[1, 6:9] = [-0.02, 0.01, 0.015]  # off-centre contact line
-    one = ShakeOptions(grid=2, friction_range=(0.2, 1.0), seed=5, num_threads=1)
-    two = ShakeOptions(grid=2, friction_range=(0.2, 1.0), seed=5, num_threads=2)
+    one = ShakeOptions(
+        grid=2, friction_range=(0.2, 1.0), seed=5, num_threads=1, hold_tolerance=hold
+    )
+    two = replace(one, num_threads=2)
     a = shake_scores(mesh, m, com, inertia, grasps, options=one)
     b = shake_scores(mesh, m, com, inertia, grasps, options=two)
     np.testing.assert_array_equal(a.trial_success, b.trial_success)
@@ -388,6 +433,8 @@ def test_show_trial_action(tmp_path, capsys):
         ({"options": ShakeOptions(grid=0)}, "grid"),
         ({"options": ShakeOptions(friction_range=(2.0, 1.0))}, "friction_max"),
         ({"options": ShakeOptions(grip_force=-1.0)}, "grip_force"),
+        ({"options": ShakeOptions(hold_tolerance=-1e-3)}, "hold_tolerance"),
+        ({"options": ShakeOptions(hold_tolerance=float("nan"))}, "hold_tolerance"),
         ({"gripper": ParallelJawGripper(max_opening=0.03)}, "max_opening"),
         ({"gripper": SimpleNamespace(name="x")}, "gripper"),
         ({"mesh": []}, "convex_parts"),

@@ -151,6 +151,12 @@ def test_transparent_object_invalid_in_structured_light_valid_in_ideal(scene) ->
         out.depth, out.instance_ids, SMALL, params, flags_by_id=flags, seed=3
     )
     np.testing.assert_array_equal(again.depth, sl.depth)
+    # The same bytes for any number of threads.
+    for threads in (1, 2):
+        other = apply_depth_sensor(out.depth, out.instance_ids, SMALL, "tof", flags_by_id=flags,
+                                   seed=3, num_threads=threads)  # fmt: skip
+        assert other.depth.tobytes() == tof.depth.tobytes()
+        np.testing.assert_array_equal(other.valid, tof.valid)
 
 
 def test_amodal_pass_of_a_subset(scene) -> None:

@@ -22,9 +22,13 @@ from mgn.io.scene_folder import (
     ARCHIVAL_DEPTH_STEP_CM,
     ARCHIVAL_ROTATION_STEP,
     FLOAT_DELTA_ENCODING,
+    FLOAT_GRADIENT_ENCODING,
+    UNITS_ATTR,
     ViewRecord,
+    decode_float_gradient,
     decode_float_image,
     depth_picture_png,
+    encode_float_gradient,
     encode_float_image,
     from_cm,
     write_view,
@@ -241,6 +245,36 @@ def test_float_images_round_trip_every_bit_pattern():
     # A smooth image gives small differences (what makes deflate effective).
     ramp = np.linspace(70.0, 71.0, 64, dtype=np.float32)[None, :].repeat(3, 0)
     assert np.abs(encode_float_image(ramp)[:, 1:]).max() < 2**16
+    # The gradient coding too (and on a single row / column).
+    for image in (a, a[:1], a[:, :1]):
+        coded = encode_float_gradient(image)
+        assert coded.dtype == np.int32 and coded.shape == image.shape
+        assert np.array_equal(_bits(decode_float_gradient(coded)), _bits(image))
+
+
+def test_gradient_coding_leaves_zigzagged_residuals_of_the_bit_patterns():
+    """The coded value of pixel (y, x) is zigzag(b[y, x] - b[y, x-1] - b[y-1, x] + b[y-1, x-1])
+    of the bit patterns b (missing neighbours 0), computed here pixel by pixel in Python ints: zero
+    on a plane of bit patterns, small non-negative numbers for small residuals of either sign."""
+    rng = np.random.default_rng(12)
+    h, w = 6, 9
+    bits = 0x42C80000 + 3 * np.arange(w)[None, :] + 7 * np.arange(h)[:, None]  # a plane
+    bits = bits + rng.integers(-2, 3, size=(h, w))  # small residuals
+    bits[2, 4] = 0x7FC00000  # NaN
+    image = bits.astype(np.uint32).view(np.float32)
+    coded = encode_float_gradient(image)
+
+    def b(y: int, x: int) -> int:
+        return int(bits[y, x]) if y >= 0 and x >= 0 else 0
+
+    for y in range(h):
+        for x in range(w):
+            r = (b(y, x) - b(y, x - 1) - b(y - 1, x) + b(y - 1, x - 1) + 2**31) % 2**32 - 2**31
+            zigzag = 2 * r if r >= 0 else -2 * r - 1  # 0 .. 2^32 - 1, stored as int32 bits
+            assert int(coded[y, x]) % 2**32 == zigzag, (y, x)
+    # Away from the NaN (rows 2-3) and the first column the residuals are four noise terms of
+    # at most 2 each: |r| <= 8, zigzagged <= 16.
+    assert 0 <= coded[4:, 1:].min() and coded[4:, 1:].max() <= 16
 
 
 def test_mgn_images_are_stored_delta_coded_and_read_back(tmp_path: Path):
@@ -249,10 +283,18 @@ def test_mgn_images_are_stored_delta_coded_and_read_back(tmp_path: Path):
     with h5py.File(tmp_path / "3_mgn.hdf5", "r") as h5:
         for name in ("depth_ideal", "com_heatmap"):
             assert h5[name].dtype == np.int32
-            assert h5[name].attrs["mgn_encoding"] == FLOAT_DELTA_ENCODING
+            assert h5[name].attrs["mgn_encoding"] == FLOAT_GRADIENT_ENCODING
     view = View(tmp_path, 3)
     assert np.array_equal(_bits(view.mgn_image("depth_ideal")), _bits(_cm(rec.depth_ideal)))
     assert np.array_equal(_bits(view.com_heatmap), _bits(rec.extra_npz["com_heatmap"]))
+    # Files written before the gradient coding (row differences) still read back.
+    (tmp_path / "3_mgn.hdf5").unlink()
+    with h5py.File(tmp_path / "3_mgn.hdf5", "w") as h5:
+        h5["depth_ideal"] = encode_float_image(rec.depth_ideal)
+        h5["depth_ideal"].attrs["mgn_encoding"] = FLOAT_DELTA_ENCODING
+        h5["depth_ideal"].attrs[UNITS_ATTR] = "m"
+    old = View(tmp_path, 3)
+    assert np.array_equal(_bits(old.depth_ideal), _bits(rec.depth_ideal))
 
 
 def rng_noise(h: int, w: int) -> np.ndarray:
@@ -419,6 +461,15 @@ def test_tool_poses_sharing_the_contact_rotation_read_back_bit_identical(
             assert np.array_equal(_bits(np.stack(rows)), _bits(expected)), path
             # colored_pcl.py scales the translation of each row in place.
             rows[0][0, 3] /= 100
+        # The suction contact poses are chunked by their first three rows, unshuffled (repeated
+        # rotations), the parallel-jaw ones by entry.
+        su = f["colliding_grasps/suctioncup/contact_poses_relative_to_camera"]
+        assert su.chunks == (300, 3, 4) and not su.shuffle
+        assert f["colliding_grasps/paralleljaw/contact_poses_relative_to_camera"].chunks == (
+            700,
+            1,
+            1,
+        )
     view = View(tmp_path, 3)
     assert not any(k.startswith("mgn_pose_columns") for k in view.hdf5)
     for path, expected in ref.items():

@@ -215,6 +215,112 @@ def test_collisions_agree_with_python_fcl_on_a_real_scene(real_scene):
     assert num_colliding > 0  # suction points under the objects hit the floor
 
 
+def test_first_collision_only_keeps_the_labels_and_skips_the_later_offsets(real_scene):
+    scene, pj, su = real_scene
+    offsets = (0.0, 0.03, 0.1)
+    full = SceneGraspModel(scene, pj, su, offsets=offsets, num_threads=2)
+    for threads in (1, 2):
+        first = SceneGraspModel(
+            scene, pj, su, offsets=offsets, num_threads=threads, first_collision_only=True
+        )
+        for kind in ("pj", "suction"):
+            a, b = getattr(full, kind), getattr(first, kind)
+            assert np.array_equal(a.colliding, b.colliding)
+            assert np.array_equal(a.collision_part, b.collision_part)
+            assert np.array_equal(a.collision_obstacle, b.collision_obstacle)
+            skipped = 0
+            for r in range(len(a)):
+                hits = np.flatnonzero(a.hit[r] >= 0)
+                k = int(hits[0]) if len(hits) else len(offsets) - 1
+                assert np.array_equal(a.hit[r, : k + 1], b.hit[r, : k + 1]), (kind, r)
+                assert np.all(b.hit[r, k + 1 :] == -2), (kind, r)
+                skipped += len(offsets) - 1 - k
+            assert skipped > 0, kind  # some grasp collides before the last offset
+    assert not full.pj.colliding.all() or not full.suction.colliding.all()
+
+
+def _contains(mesh, points) -> np.ndarray:
+    """Ray parity (Moller-Trumbore on every triangle, one skew direction): inside a closed mesh."""
+    V = np.asarray(mesh.vertices, np.float64)
+    F = np.asarray(mesh.faces)
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    d = np.array([0.5773, 0.5774, 0.5775])
+    e1, e2 = b - a, c - a
+    h = np.cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, h)
+    out = []
+    for p in np.asarray(points, np.float64).reshape(-1, 3):
+        s = p - a
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = np.einsum("ij,ij->i", s, h) / det
+            q = np.cross(s, e1)
+            v = (q @ d) / det
+            t = np.einsum("ij,ij->i", e2, q) / det
+        hits = (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+        out.append(int(hits.sum()) % 2 == 1)
+    return np.array(out, bool)
+
+
+def test_near_miss_hand_poses_agree_with_brute_force_fcl_on_every_pair(real_scene):
+    """Hands placed close around the objects (most part boxes overlap an object's box, many
+    without contact: the box, oriented-box and k-DOP pre-tests decide those) against python-fcl
+    on every part-obstacle pair, plus containment of a part vertex in an object or of an object
+    vertex in a part (trimesh)."""
+    scene, _, _ = real_scene
+    n = len(scene.instances)
+    m = SceneGraspModel(scene, [None] * n, [None] * n, offsets=(0.0,), num_threads=2)
+    from mgn.objects import tote_mesh
+
+    meshes = [scene.mesh(i) for i in range(n)]
+    poses = [scene.instances[i].X_WO for i in range(n)]
+    obstacles = [_fcl_object(meshes[i], poses[i]) for i in range(n)]
+    obstacles.append(_fcl_object(tote_mesh(scene.tote), np.eye(4)))
+    g = ParallelJawGripper()
+    rng = np.random.default_rng(7)
+    contact_poses, widths = [], []
+    for _ in range(300):
+        i = int(rng.integers(n))
+        centre = poses[i][:3, :3] @ np.asarray(meshes[i].vertices).mean(axis=0) + poses[i][:3, 3]
+        u = rng.normal(size=3)
+        u[2] = abs(u[2]) + 0.3  # from above: the hand (behind the contact) away from the floor
+        X = np.eye(4)
+        X[:3, 3] = centre + u / np.linalg.norm(u) * rng.uniform(0.04, 0.1)
+        z = centre - X[:3, 3] + rng.normal(size=3) * 0.02
+        z = z / np.linalg.norm(z) if np.linalg.norm(z) > 1e-6 else np.array([0.0, 0.0, -1.0])
+        x = np.cross(z, rng.normal(size=3))
+        x /= np.linalg.norm(x)
+        X[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+        contact_poses.append(X)
+        widths.append(float(rng.uniform(0.0, g.max_opening)))
+    got = m.collides("pj", np.array(contact_poses), np.array(widths))
+    near_misses = 0
+    for r, (X, w) in enumerate(zip(contact_poses, widths, strict=True)):
+        X_WH = X.copy()
+        X_WH[:3, 3] += X[:3, :3] @ [0.5 * w, 0.0, -g.flange_to_contact]
+        parts = gripper_meshes(g, g.collision_opening(w))
+        expected = _fcl_hits([(p, X_WH) for p in parts], obstacles)
+        for p in parts:
+            pv = np.asarray(p.vertices, np.float64) @ X_WH[:3, :3].T + X_WH[:3, 3]
+            for mesh, X_WO in zip(meshes, poses, strict=True):
+                inv = np.linalg.inv(X_WO)
+                if _contains(mesh, pv[:1] @ inv[:3, :3].T + inv[:3, 3]).any():
+                    expected = True
+                ov = np.asarray(mesh.vertices[:1], np.float64) @ X_WO[:3, :3].T + X_WO[:3, 3]
+                if _contains(p, (ov - X_WH[:3, 3]) @ X_WH[:3, :3]).any():
+                    expected = True
+        assert bool(got.colliding[r]) == expected, r
+        if not expected:
+            # Some part's world box overlaps some object's world box: a pre-test said clear.
+            for p in parts:
+                pv = np.asarray(p.vertices, np.float64) @ X_WH[:3, :3].T + X_WH[:3, 3]
+                for mesh, X_WO in zip(meshes, poses, strict=True):
+                    ov = np.asarray(mesh.vertices, np.float64) @ X_WO[:3, :3].T + X_WO[:3, 3]
+                    if np.all(pv.min(0) <= ov.max(0)) and np.all(ov.min(0) <= pv.max(0)):
+                        near_misses += 1
+    assert 0 < got.colliding.sum() < len(contact_poses)
+    assert near_misses >= 30  # pairs the pre-tests or FCL must call clear
+
+
 def test_view_grasps_of_a_real_scene_are_consistent(real_scene):
     scene, pj, su = real_scene
     m = SceneGraspModel(scene, pj, su, num_threads=2)

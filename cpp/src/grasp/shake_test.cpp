@@ -271,7 +271,8 @@ class TrialWorld {
     // Object: one hull, or a compound of hulls, in its principal frame B.
     const double m = obj.mass * s.density_factor;
     // Inertia floor (see ShakeOptions::inertia_floor): m (floor·R)² about every principal axis.
-    const double rho = o.inertia_floor * obj.geometry.bounding_radius;
+    radius_ = obj.geometry.bounding_radius;
+    const double rho = o.inertia_floor * radius_;
     const Vec3d I = (obj.principal_inertia * s.density_factor).cwiseMax(m * rho * rho);
     const Pose X_HO = hand_pose(grasp, g).inverse();
     btRigidBody::btRigidBodyConstructionInfo ci =
@@ -320,8 +321,31 @@ class TrialWorld {
 
     world_.setGravity(btVector3(0, 0, btScalar(-kUnits.length * o_.gravity)));
     int lost[2] = {0, 0};
+    // Held-load windows (ShakeOptions::hold_tolerance), in steps of each shake phase: if the
+    // object stays at rest in the hand from step `from` to step `to` (both fingers touching at
+    // `to`), the rest of the phase only repeats loads held in the window, and the phase ends
+    // there. Translation: a window over the first cycle's extremes of the acceleration
+    // [T/(4n), T/n]; the later cycles repeat it (without the initial velocity jump), so the
+    // hand skips to t = T, where it has the same pose and velocity as at T/n. Rotation: the
+    // last half swing [T − T/(2n), T − T/(4n)]; the rest mirrors it in time, so the trial ends
+    // as a success. Rounding widens the windows.
+    struct Window {
+      int from = 0, to = 0;
+      bool on = false;
+    } window[3];
+    if (o_.hold_tolerance > 0) {
+      const int ns = o_.shake_steps, cs = o_.shake_cycles, nr = o_.rotate_steps;
+      const int cycle = cs >= 2 && ns % cs == 0 ? ns / cs : 0;
+      window[1] = {cycle / 4, cycle, cycle >= 4};
+      const int from = nr - static_cast<int>(std::ceil(nr / (2.0 * o_.rotate_cycles)));
+      const int to = nr - static_cast<int>(std::floor(nr / (4.0 * o_.rotate_cycles)));
+      window[2] = {from, to, from >= 1 && to < nr};
+    }
     for (int phase = 1; phase <= 2; ++phase) {
       const int n = phase == 1 ? o_.shake_steps : o_.rotate_steps;
+      const Window& w = window[phase];
+      Pose X_HO_ref = Pose::Identity();
+      bool held = true;
       for (int k = 0; k < n; ++k) {
         const double t = (k + 1) * o_.dt;
         const Pose X_next = phase == 1 ? path_.translate(t) : path_.rotate(t);
@@ -336,6 +360,25 @@ class TrialWorld {
         if (o_.lost_contact_steps > 0 && std::max(lost[0], lost[1]) >= o_.lost_contact_steps) {
           out.ended_early = true;
           return out;
+        }
+        if (!w.on || k + 1 < w.from || k + 1 > w.to) continue;
+        const Pose X_HO = X_WH.inverse() * last.X_WO;
+        if (k + 1 == w.from) {
+          X_HO_ref = X_HO;
+          continue;
+        }
+        const Pose D = X_HO_ref.inverse() * X_HO;
+        const double turn = Eigen::AngleAxisd(D.linear()).angle();
+        held = held && D.translation().norm() + turn * radius_ <= o_.hold_tolerance;
+        if (k + 1 < w.to) continue;
+        if (held && last.touch_left && last.touch_right) {
+          out.ended_early = true;
+          if (phase == 2) {
+            out.success = true;
+            return out;
+          }
+          time += (n - w.to) * o_.dt;  // skip to the end of the translation
+          break;
         }
       }
     }
@@ -449,6 +492,7 @@ class TrialWorld {
   double finger_z_ = 0;
   double finger_half_x_ = 0;  // finger box: centre to inner face along x, m (meshes: 0)
   double d_ = 0;              // current inner-face offset of both fingers from the hand axis, m
+  double radius_ = 0;         // object: largest distance of a hull vertex from the com, m
 
   btDefaultCollisionConfiguration config_;
   btCollisionDispatcher dispatcher_;
@@ -501,6 +545,8 @@ void ShakeOptions::validate() const {
   require(std::isfinite(contact_distance) && contact_distance > 0, "contact_distance",
           "a finite distance > 0 (m)", contact_distance);
   require(settle_steps >= 0, "settle_steps", "an integer >= 0", settle_steps);
+  require(std::isfinite(hold_tolerance) && hold_tolerance >= 0 && hold_tolerance < 0.1,
+          "hold_tolerance", "a distance in [0, 0.1) m (0 = off)", hold_tolerance);
   require(lost_contact_steps >= 0, "lost_contact_steps", "an integer >= 0", lost_contact_steps);
   require(std::isfinite(margin) && margin > 0 && margin < 0.01, "margin",
           "a collision margin in (0, 0.01) m", margin);

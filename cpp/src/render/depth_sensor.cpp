@@ -13,6 +13,16 @@ namespace {
 
 float luminance(const Vec3f& c) { return 0.2126f * c.x() + 0.7152f * c.y() + 0.0722f * c.z(); }
 
+// std::round (halves away from zero) without the libm call and without a branch (the rounding
+// direction of a noisy depth is random, a branch mispredicts): exact for |x| < 2^52, where the
+// truncation and x - t are exact; larger values are integers already.
+double round_half_away(double x) {
+  if (!(std::abs(x) < 0x1p52)) return std::round(x);
+  const double t = static_cast<double>(static_cast<std::int64_t>(x));
+  const double f = x - t;
+  return t + static_cast<double>(f >= 0.5) - static_cast<double>(f <= -0.5);
+}
+
 }  // namespace
 
 std::uint8_t surface_flags(const Material& m) {
@@ -97,7 +107,7 @@ void DepthSensorParams::validate() const {
 DepthImage apply_depth_sensor(const std::vector<float>& depth,
                               const std::vector<std::int32_t>& instance_ids,
                               const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
-                              const DepthSensorParams& p, std::uint64_t seed) {
+                              const DepthSensorParams& p, std::uint64_t seed, int num_threads) {
   K.validate("apply_depth_sensor: K");
   p.validate();
   const int W = K.width, H = K.height;
@@ -126,15 +136,23 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
   out.depth.assign(n, nan);
   out.valid.assign(n, 0);
   const bool ideal = p.preset == DepthSensorPreset::Ideal;
+  const bool noisy = p.sigma_a > 0.0 || p.sigma_b > 0.0;
   auto flags_of = [&](std::int32_t id) -> std::uint8_t {
     return id >= 0 && static_cast<std::size_t>(id) < flags_by_id.size() ? flags_by_id[id] : 0;
   };
 
-  parallel_for(static_cast<std::size_t>(H), 0, 8, [&](std::size_t v0, std::size_t v1) {
+  parallel_for(static_cast<std::size_t>(H), num_threads, 8, [&](std::size_t v0, std::size_t v1) {
     std::vector<std::uint8_t> shadow(static_cast<std::size_t>(W));
+    // The row's pixels that get noise: column, noise-free depth (m), sigma (m); their normals.
+    std::vector<int> noisy_u(static_cast<std::size_t>(W));
+    std::vector<double> noisy_z(static_cast<std::size_t>(W)),
+        noisy_sigma(static_cast<std::size_t>(W));
+    std::vector<float> normals(static_cast<std::size_t>(W));
     for (std::size_t v = v0; v < v1; ++v) {
       const float* z = &depth[v * W];
       const std::int32_t* ids = &instance_ids[v * W];
+      float* out_z = &out.depth[v * W];
+      std::uint8_t* out_valid = &out.valid[v * W];
       // Projector visibility along the row (rectified: the projector is offset along x, so a
       // surface point and its occluder lie on the same row). A point at column u maps to the
       // projector column u_p = u + 0.5 - fx b / z; an occluder of it has the same u_p and lies
@@ -162,44 +180,65 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
           }
         }
       }
+      // Row v draws from Rng(seed, v): first the flying-pixel uniforms (left to right, pass 1),
+      // then one normal per noisy pixel in a batch (pass 2), applied with the grid (pass 3).
       Rng rng(seed, v);
+      std::size_t count = 0;
       for (int u = 0; u < W; ++u) {
-        const std::size_t i = v * W + u;
         double zz = z[u];
         if (zz <= 0.0 || zz < p.min_range || zz > p.max_range) continue;
-        if (!ideal) {
-          const std::uint8_t f = flags_of(ids[u]);
-          if ((p.invalid_transparent && (f & kSurfaceTransparent)) ||
-              (p.invalid_dark && (f & kSurfaceDark)) || (p.invalid_mirror && (f & kSurfaceMirror)))
-            continue;
-          if (shadow[u]) continue;
-          if (p.flying_pixel_probability > 0.0 && p.edge_threshold > 0.0) {
-            // The 4-neighbour with the largest depth jump (seen surfaces only).
-            double other = 0.0, jump = 0.0;
-            const int du[4] = {-1, 1, 0, 0}, dv[4] = {0, 0, -1, 1};
-            for (int k = 0; k < 4; ++k) {
-              const long uu = u + du[k], vv = static_cast<long>(v) + dv[k];
-              if (uu < 0 || uu >= W || vv < 0 || vv >= H) continue;
-              const double zn = depth[static_cast<std::size_t>(vv) * W + uu];
-              if (zn > 0.0 && std::abs(zn - zz) > jump) jump = std::abs(zn - zz), other = zn;
-            }
-            if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
-              zz = zz + rng.uniform() * (other - zz);
-            }
-          }
-          const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
-          if (sigma > 0.0) zz += sigma * rng.normal();
-          if (p.depth_step > 0.0) {
-            // The coarsest power-of-two multiple of the step not above the noise fraction.
-            double step = p.depth_step;
-            const double top = p.depth_step_noise_fraction * sigma;
-            while (step * 2.0 <= top) step *= 2.0;
-            zz = std::round(zz / step) * step;
-          }
-          if (!(zz > 0.0)) continue;
+        if (ideal) {
+          out_z[u] = z[u];
+          out_valid[u] = 1;
+          continue;
         }
-        out.depth[i] = static_cast<float>(zz);
-        out.valid[i] = 1;
+        const std::uint8_t f = flags_of(ids[u]);
+        if ((p.invalid_transparent && (f & kSurfaceTransparent)) ||
+            (p.invalid_dark && (f & kSurfaceDark)) || (p.invalid_mirror && (f & kSurfaceMirror)))
+          continue;
+        if (shadow[u]) continue;
+        if (p.flying_pixel_probability > 0.0 && p.edge_threshold > 0.0) {
+          // The 4-neighbour with the largest depth jump (seen surfaces only).
+          double other = 0.0, jump = 0.0;
+          const int du[4] = {-1, 1, 0, 0}, dv[4] = {0, 0, -1, 1};
+          for (int k = 0; k < 4; ++k) {
+            const long uu = u + du[k], vv = static_cast<long>(v) + dv[k];
+            if (uu < 0 || uu >= W || vv < 0 || vv >= H) continue;
+            const double zn = depth[static_cast<std::size_t>(vv) * W + uu];
+            if (zn > 0.0 && std::abs(zn - zz) > jump) jump = std::abs(zn - zz), other = zn;
+          }
+          if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
+            zz = zz + rng.uniform() * (other - zz);
+          }
+        }
+        const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
+        noisy_u[count] = u;
+        noisy_z[count] = zz;
+        noisy_sigma[count] = sigma;
+        ++count;
+      }
+      // Pass 2: the normals (sigma >= 0; a pixel with sigma = 0 adds 0 times its normal).
+      if (noisy) {
+        rng.normals(normals.data(), count);
+      } else {
+        std::fill(normals.begin(), normals.begin() + count, 0.0f);
+      }
+      // Pass 3: noise, then the grid: the coarsest power-of-two multiple of the step not above
+      // the noise fraction; a value that ends <= 0 is invalid.
+      for (std::size_t k = 0; k < count; ++k)
+        noisy_z[k] += noisy_sigma[k] * static_cast<double>(normals[k]);
+      if (p.depth_step > 0.0) {
+        for (std::size_t k = 0; k < count; ++k) {
+          double step = p.depth_step;
+          const double top = p.depth_step_noise_fraction * noisy_sigma[k];
+          while (step * 2.0 <= top) step *= 2.0;
+          noisy_z[k] = round_half_away(noisy_z[k] / step) * step;
+        }
+      }
+      for (std::size_t k = 0; k < count; ++k) {
+        if (!(noisy_z[k] > 0.0)) continue;
+        out_z[noisy_u[k]] = static_cast<float>(noisy_z[k]);
+        out_valid[noisy_u[k]] = 1;
       }
     }
   });

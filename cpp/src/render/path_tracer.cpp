@@ -1477,10 +1477,10 @@ std::vector<std::uint8_t> develop(const std::vector<float>& radiance, int width,
       }
       if (noisy) {
         Rng rng(stream, i);
+        float n[6];  // N1, N2 per channel (Rng::normals: no libm, same values everywhere)
+        rng.normals(n, 6);
         for (int c = 0; c < 3; ++c) {
-          const float n1 = static_cast<float>(rng.normal());
-          const float n2 = static_cast<float>(rng.normal());
-          x[c] = std::max(0.0f, x[c] + shot * std::sqrt(x[c]) * n1 + read * n2);
+          x[c] = std::max(0.0f, x[c] + shot * std::sqrt(x[c]) * n[2 * c] + read * n[2 * c + 1]);
         }
       }
       for (int c = 0; c < 3; ++c) {

@@ -69,12 +69,33 @@ namespace {
 
 using Box = Eigen::AlignedBox3d;
 
+/// Number of directions of the discrete-orientation polytope (k-DOP) bounding each mesh.
+constexpr int kDopDirections = 64;
+
+/// kDopDirections unit vectors spread evenly over the sphere (Fibonacci lattice; fixed).
+const std::array<Vec3d, kDopDirections>& dop_directions() {
+  static const std::array<Vec3d, kDopDirections> dirs = [] {
+    std::array<Vec3d, kDopDirections> d;
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    for (int k = 0; k < kDopDirections; ++k) {
+      const double z = 1.0 - (2.0 * k + 1.0) / kDopDirections;
+      const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+      d[static_cast<std::size_t>(k)] = Vec3d(r * std::cos(golden * k), r * std::sin(golden * k), z);
+    }
+    return d;
+  }();
+  return dirs;
+}
+
 /// A closed mesh with what the tests need: FCL model, the point-inside test, its local bounding
-/// box and one of its vertices (all in its own frame).
+/// box, its k-DOP and one of its vertices (all in its own frame).
 struct Solid {
   std::unique_ptr<CollisionModel> model;
   std::unique_ptr<PointInsideTest> inside;
   Box box;
+  /// support[k] = max over the vertices v of dop_directions()[k] . v: the mesh (the convex hull
+  /// of its vertices) lies in every half-space {x : d_k . x <= support[k]}.
+  std::array<double, kDopDirections> support{};
   Vec3d vertex = Vec3d::Zero();
 
   explicit Solid(const Mesh& mesh) {
@@ -83,6 +104,32 @@ struct Solid {
     const auto b = mesh.bounds();
     box = Box(b.row(0).transpose(), b.row(1).transpose());
     vertex = mesh.vertices().row(0).transpose().cast<double>();
+    const auto& dirs = dop_directions();
+    support.fill(-std::numeric_limits<double>::infinity());
+    for (Eigen::Index v = 0; v < mesh.vertices().rows(); ++v) {
+      const Vec3d p = mesh.vertices().row(v).transpose().cast<double>();
+      for (int k = 0; k < kDopDirections; ++k) {
+        const auto i = static_cast<std::size_t>(k);
+        support[i] = std::max(support[i], dirs[i].dot(p));
+      }
+    }
+  }
+
+  /// Whether the box `b` (a part's local box, placed at X_SB in this solid's frame) lies
+  /// entirely outside the k-DOP by more than 1 nm along one direction: then the box and the
+  /// mesh neither touch nor contain one another.
+  bool dop_separates(const Box& b, const Pose& X_SB) const {
+    const Vec3d c = X_SB * b.center();
+    const Mat3d A = X_SB.linear() * (0.5 * b.sizes()).asDiagonal();
+    const auto& dirs = dop_directions();
+    for (int k = 0; k < kDopDirections; ++k) {
+      const auto i = static_cast<std::size_t>(k);
+      const Vec3d& d = dirs[i];
+      const double reach = std::abs(d.dot(A.col(0))) + std::abs(d.dot(A.col(1))) +
+                           std::abs(d.dot(A.col(2))) + 1e-9 + 1e-9 * std::abs(d.dot(c));
+      if (d.dot(c) - reach > support[i]) return true;
+    }
+    return false;
   }
 
   /// Whether a point (own frame) is inside the closed mesh.
@@ -200,15 +247,17 @@ struct SceneGraspModel::Impl {
     return d;
   }
 
-  /// Collision of one part (at X_WP) with obstacle j.
-  bool part_hits(const Solid& part, const Pose& X_WP, std::size_t j) const {
-    const Box pb = world_box(part.box, X_WP);
+  /// Collision of one part (at X_WP, world box pb) with obstacle j.
+  bool part_hits(const Solid& part, const Pose& X_WP, const Box& pb, std::size_t j) const {
     const Box& ob = obstacle_box[j];
     if (!pb.intersects(ob)) return false;
     const Solid& obs = *obstacles[j];
     // Their oriented boxes: most pairs whose world boxes overlap are told apart here, without
     // a call into FCL.
     if (obb_disjoint(part.box, X_WP, obs.box, X_W_obstacle[j])) return false;
+    // The part's box outside the object's k-DOP (a tighter convex bound than its box; not for
+    // the tote, whose hollow lies inside its k-DOP).
+    if (j < num_objects && obs.dop_separates(part.box, X_obstacle_W[j] * X_WP)) return false;
     if (collide(*part.model, X_WP, *obs.model, X_W_obstacle[j])) return true;
     // No surface contact: a part inside the obstacle or the obstacle inside the part.
     if (ob.contains(pb) && obs.contains(X_obstacle_W[j] * (X_WP * part.vertex))) return true;
@@ -222,10 +271,12 @@ struct SceneGraspModel::Impl {
   std::int32_t first_hit(const std::array<const Solid*, P>& parts, const std::array<Pose, P>& poses,
                          std::int64_t skip, std::size_t* part = nullptr,
                          std::size_t* obstacle = nullptr) const {
+    std::array<Box, P> boxes;
+    for (std::size_t k = 0; k < P; ++k) boxes[k] = world_box(parts[k]->box, poses[k]);
     for (std::size_t j = 0; j < obstacles.size(); ++j) {
       if (static_cast<std::int64_t>(j) == skip) continue;
       for (std::size_t k = 0; k < P; ++k) {
-        if (part_hits(*parts[k], poses[k], j)) {
+        if (part_hits(*parts[k], poses[k], boxes[k], j)) {
           if (part) *part = k;
           if (obstacle) *obstacle = j;
           return j == num_objects ? 0 : static_cast<std::int32_t>(j + 1);
@@ -238,12 +289,18 @@ struct SceneGraspModel::Impl {
   /// Parallel-jaw hand at X_WH with the fingers at `opening`, at every offset: writes the first
   /// hit per offset into hit[0..K) and returns whether any offset collides. The object `own`
   /// (0-based, -1 none) is skipped at offset 0 exactly unless `check_own_at_grasp`.
+  /// With `first_only`, the offsets after the first colliding one are not checked (their hit
+  /// is kHitNotChecked).
   bool pj_hits(const Pose& X_WH, double opening, std::int64_t own, bool check_own_at_grasp,
                std::int32_t* hit, std::uint8_t* why_part = nullptr,
-               std::uint8_t* why_obstacle = nullptr) const {
+               std::uint8_t* why_obstacle = nullptr, bool first_only = false) const {
     const std::array<const Solid*, 3> parts = {hand[1].get(), hand[2].get(), hand[0].get()};
     bool any = false;
     for (std::size_t k = 0; k < options.offsets.size(); ++k) {
+      if (any && first_only) {
+        hit[k] = kHitNotChecked;
+        continue;
+      }
       hit[k] = -1;
       for (const double d : segment(k)) {
         const Pose X = back_off(X_WH, d);
@@ -267,10 +324,15 @@ struct SceneGraspModel::Impl {
   /// Suction tool (cup body and shaft) at the contact frame X_WS, at every offset, against
   /// every obstacle: as pj_hits.
   bool suction_hits(const Pose& X_WS, std::int32_t* hit, std::int64_t own = -1,
-                    std::uint8_t* why_part = nullptr, std::uint8_t* why_obstacle = nullptr) const {
+                    std::uint8_t* why_part = nullptr, std::uint8_t* why_obstacle = nullptr,
+                    bool first_only = false) const {
     const std::array<const Solid*, 2> parts = {tool[0].get(), tool[1].get()};
     bool any = false;
     for (std::size_t k = 0; k < options.offsets.size(); ++k) {
+      if (any && first_only) {
+        hit[k] = kHitNotChecked;
+        continue;
+      }
       hit[k] = -1;
       for (const double d : segment(k)) {
         const Pose X = back_off(X_WS, d);
@@ -517,19 +579,21 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
     for (std::size_t r = begin; r < end; ++r) {
       const double opening = gripper.collision_opening(pj.width[r]);
       const auto own = static_cast<std::int64_t>(pj.object_index[r]);
-      pj.colliding[r] = m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K],
-                                  &pj.collision_part[r], &pj.collision_obstacle[r])
-                            ? 1
-                            : 0;
+      pj.colliding[r] =
+          m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K], &pj.collision_part[r],
+                    &pj.collision_obstacle[r], options.first_collision_only)
+              ? 1
+              : 0;
     }
   });
   parallel_for(num_suction, threads, 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t r = begin; r < end; ++r) {
-      su.colliding[r] = m.suction_hits(su.X_W_contact[r], &su.hit[r * K],
-                                       static_cast<std::int64_t>(su.object_index[r]),
-                                       &su.collision_part[r], &su.collision_obstacle[r])
-                            ? 1
-                            : 0;
+      su.colliding[r] =
+          m.suction_hits(su.X_W_contact[r], &su.hit[r * K],
+                         static_cast<std::int64_t>(su.object_index[r]), &su.collision_part[r],
+                         &su.collision_obstacle[r], options.first_collision_only)
+              ? 1
+              : 0;
     }
   });
 }

@@ -18,7 +18,6 @@ import io
 import lzma
 import struct
 import zipfile
-import zlib
 from collections.abc import Collection, Mapping
 from typing import Any
 
@@ -26,7 +25,7 @@ import h5py
 import numpy as np
 import numpy.typing as npt
 
-from mgn.base.compress import ZipDeflate
+from mgn.base.compress import ZipDeflate, ZipRunDeflate
 from mgn.errors import InvalidArgumentError
 
 __all__ = [
@@ -127,7 +126,7 @@ def npz_bytes(
                     # zipfile's own LZMA compressor has fixed settings: ours, same stream layout.
                     fh._compressor = _NpzLzma()
                 elif compress and name in (zlib_levels or {}) and hasattr(fh, "_compressor"):
-                    fh._compressor = zlib.compressobj((zlib_levels or {})[name], zlib.DEFLATED, -15)
+                    fh._compressor = ZipRunDeflate((zlib_levels or {})[name])
                 elif compress and hasattr(fh, "_compressor"):
                     # zipfile's raw-deflate compressor (zlib, wbits -15) -> libdeflate's.
                     fh._compressor = ZipDeflate(lvl)

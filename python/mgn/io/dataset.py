@@ -41,11 +41,13 @@ from mgn.io.order_files import read_order_csv, read_order_json
 from mgn.io.scene_folder import (
     COM_RESIDUAL_ENCODING,
     FLOAT_DELTA_ENCODING,
+    FLOAT_GRADIENT_ENCODING,
     POSE_COLUMNS_GROUP,
     UNITS_ATTR,
     UNORM16_ENCODING,
     com_heatmap_prediction,
     decode_com_residual,
+    decode_float_gradient,
     decode_float_image,
     from_cm,
     ideal_metres,
@@ -193,7 +195,9 @@ class View:
                         ds = h5[name]
                         value = ds[()]
                         coding = ds.attrs.get("mgn_encoding")
-                        if coding == FLOAT_DELTA_ENCODING:
+                        if coding == FLOAT_GRADIENT_ENCODING:
+                            value = decode_float_gradient(value)
+                        elif coding == FLOAT_DELTA_ENCODING:
                             value = decode_float_image(value)
                         elif coding == UNORM16_ENCODING:
                             value = value.astype(np.float32) / np.float32(65535.0)

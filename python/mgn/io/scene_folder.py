@@ -74,13 +74,19 @@ __all__ = [
     "DEFLATE_LEVEL",
     "DEPTH_PICTURE_LEVEL",
     "FLOAT_DELTA_ENCODING",
+    "FLOAT_GRADIENT_ENCODING",
     "UNITS_ATTR",
     "UNORM16_ENCODING",
     "COLLISION_PARTS",
     "HDF5_FLOAT_KEYS",
     "HDF5_INT_LEAVES",
+    "H5_LIBVER",
+    "ROTATION_BLOCK_POSES",
+    "UNSHUFFLED_LEAVES",
     "POSE_COLUMNS_GROUP",
+    "RGB_LEVEL",
     "RUN_IMAGES",
+    "RUN_LEVEL",
     "SHARED_ROTATION_ENCODING",
     "TOOL_POSE_LEAVES",
     "MGN_HDF5_CM",
@@ -89,9 +95,11 @@ __all__ = [
     "ViewRecord",
     "com_heatmap_prediction",
     "decode_com_residual",
+    "decode_float_gradient",
     "decode_float_image",
     "depth_picture_png",
     "depth_to_cm",
+    "encode_float_gradient",
     "encode_float_image",
     "hdf5_bytes",
     "from_cm",
@@ -262,7 +270,7 @@ def view_file_names(v: int) -> list[str]:
 #: ``{v}_mgn.hdf5`` datasets that hold lengths in centimetres.
 MGN_HDF5_CM: tuple[str, ...] = ("depth_ideal",)
 #: Rows per HDF5 chunk of an (H, W) image in ``{v}_mgn.hdf5`` (shuffle + deflate per chunk).
-_IMAGE_CHUNK_ROWS = 64
+_IMAGE_CHUNK_ROWS = 128
 
 
 def id_image_dtype(values: npt.ArrayLike, *, instances: bool) -> np.dtype:
@@ -320,6 +328,32 @@ def decode_float_image(coded: npt.ArrayLike) -> npt.NDArray[np.float32]:
     """The inverse of :func:`encode_float_image`."""
     a = np.asarray(coded, np.int32)
     return np.cumsum(a, axis=1, dtype=np.int32).view(np.float32)
+
+
+#: Value of the ``mgn_encoding`` attribute of a ``{v}_mgn.hdf5`` float32 image stored by
+#: :func:`encode_float_gradient` (lossless): ``depth_ideal`` in 0.73x the bytes of
+#: :data:`FLOAT_DELTA_ENCODING` (-7 MB per 37-view scene of 1200 x 1200 views).
+FLOAT_GRADIENT_ENCODING = "float32-bits-gradient-zigzag"
+
+
+def encode_float_gradient(image: npt.ArrayLike) -> npt.NDArray[np.int32]:
+    """(H, W) float32 -> int32: each pixel's bit pattern minus the gradient prediction left + up -
+    upper-left (missing neighbours count as 0; modulo 2^32), zigzag-mapped (0, -1, 1, -2, ... ->
+    0, 1, 2, 3, ...) so that small residuals of either sign have zero high bytes, which HDF5's
+    shuffle filter groups for deflate. On a rendered depth image the residual is ~0 inside every
+    plane. :func:`decode_float_gradient` restores every bit (NaN included)."""
+    d = encode_float_image(image)  # differences along rows
+    with np.errstate(over="ignore"):
+        d[1:] -= d[:-1].copy()  # and along columns: the gradient residual
+        return (d << 1) ^ (d >> 31)
+
+
+def decode_float_gradient(coded: npt.ArrayLike) -> npt.NDArray[np.float32]:
+    """The inverse of :func:`encode_float_gradient`."""
+    z = np.asarray(coded, np.int32)
+    d = (z.view(np.uint32) >> 1).view(np.int32) ^ -(z & 1)
+    np.cumsum(d, axis=0, dtype=np.int32, out=d)
+    return np.cumsum(d, axis=1, dtype=np.int32).view(np.float32)
 
 
 #: Archival mode: grid of the rotation entries and of the translations (cm) of the grasp poses
@@ -493,7 +527,7 @@ def mgn_hdf5_bytes(
     given level instead (fast to inflate where they are long runs). Integer images are stored as
     given."""
     buf = io.BytesIO()
-    with h5py.File(buf, "w") as h5:
+    with h5py.File(buf, "w", libver=H5_LIBVER) as h5:
         for name, value in images.items():
             data = np.ascontiguousarray(value)
             coded: str | None = None
@@ -501,8 +535,8 @@ def mgn_hdf5_bytes(
                 data = np.round(np.clip(data, 0.0, 1.0) * 65535.0).astype(np.uint16)
                 coded = UNORM16_ENCODING
             elif data.dtype == np.float32 and data.ndim == 2 and data.size > 0:
-                data = encode_float_image(data)
-                coded = FLOAT_DELTA_ENCODING
+                data = encode_float_gradient(data)
+                coded = FLOAT_GRADIENT_ENCODING
             if data.size:
                 chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:])
                 ds = h5_write_deflated(h5, name, data, chunks, level,
@@ -526,6 +560,30 @@ _COMPRESS_FROM = 256
 #: compress better than whole rows; the chunks a row spans (16 of 32 KiB for poses) fit HDF5's
 #: 1 MiB chunk cache, so reading row by row (``list(dataset)``) stays fast.
 _CHUNK_ROWS = 8192
+#: (M, 4, 4) poses of ``{v}_scene.hdf5`` chunked by the first three rows of each pose (rotation
+#: and translation, 48 contiguous bytes per pose; the last row in a second chunk), unshuffled,
+#: instead of by entry: suction contact rotations repeat (the points of a flat face share its
+#: normal; ~40 % of the rows of a view), which deflate finds as three 12-byte matches: 0.85x the
+#: bytes of the shuffled entry chunks in the same time (-2 MB per 37-view scene;
+#: benchmarks/RESULTS.md). Parallel-jaw rotations are all distinct: shuffled entry chunks are
+#: smaller there (0.93x).
+ROTATION_BLOCK_POSES: tuple[str, ...] = ("suctioncup/contact_poses_relative_to_camera",)
+#: Leaf names of ``{v}_scene.hdf5`` datasets deflated without the shuffle filter: per-grasp values
+#: taken from a few levels or repeated along the rows (scores, the widths of the grasps sharing a
+#: contact point, 0/1 flags), which deflate matches as whole 4-byte values: 0.5-0.9x the bytes of
+#: the shuffled chunks (-0.5 MB per scene). The wrench scores and the integer labels stay
+#: shuffled (1.2x / 1.3x larger without).
+UNSHUFFLED_LEAVES: tuple[str, ...] = (
+    "contact_width",
+    "score_analytical",
+    "score_simulation",
+    "visible",
+)
+#: HDF5 file-format bounds of the scene writer's files: the HDF5 1.10 formats (the virtual
+#: datasets need them anyway), whose chunk indexes and object headers take ~25 kB per
+#: ``{v}_scene.hdf5`` instead of ~107 kB with the 1.8-compatible ones (-3 MB per scene).
+#: Every HDF5 >= 1.10 reader (h5py since 2.7) opens them.
+H5_LIBVER: tuple[str, str] = ("v110", "v110")
 
 #: Tool-pose datasets of ``{v}_scene.hdf5`` whose rotation block equals the one of the group's
 #: ``contact_poses_relative_to_camera`` (same axes, moved along them): stored as HDF5 virtual
@@ -543,15 +601,20 @@ SHARED_ROTATION_ENCODING = "rotation-of-contact-poses"
 _CONTACT_LEAF = "contact_poses_relative_to_camera"
 
 
-def _write_dataset(group: Any, name: str, data: np.ndarray, level: int) -> None:
-    """A dataset of ``{v}_scene.hdf5`` without timestamps: chunked (one entry of up to
-    ``_CHUNK_ROWS`` rows per chunk) with shuffle + gzip at libdeflate ``level`` from
-    ``_COMPRESS_FROM`` values on, contiguous below."""
+def _write_dataset(group: Any, name: str, data: np.ndarray, level: int, path: str = "") -> None:
+    """A dataset of ``{v}_scene.hdf5`` (at ``path``) without timestamps: chunked with gzip at
+    libdeflate ``level`` from ``_COMPRESS_FROM`` values on, contiguous below. A chunk holds one
+    entry of up to ``_CHUNK_ROWS`` rows, shuffled (except :data:`UNSHUFFLED_LEAVES`); the poses
+    of :data:`ROTATION_BLOCK_POSES` rows 0..2 of each pose, unshuffled."""
     if data.size < _COMPRESS_FROM or data.ndim == 0:
         h5_create_dataset(group, name, data)
         return
-    chunks = (min(len(data), _CHUNK_ROWS), *([1] * (data.ndim - 1)))
-    h5_write_deflated(group, name, data, chunks, level, **H5_DATASET_KWARGS)
+    rows = min(len(data), _CHUNK_ROWS)
+    chunks: tuple[int, ...] = (rows, *([1] * (data.ndim - 1)))
+    shuffle = name not in UNSHUFFLED_LEAVES
+    if data.shape[1:] == (4, 4) and path.endswith(ROTATION_BLOCK_POSES):
+        chunks, shuffle = (rows, 3, 4), False
+    h5_write_deflated(group, name, data, chunks, level, shuffle=shuffle, **H5_DATASET_KWARGS)
 
 
 def _shares_rotation(datasets: Mapping[str, np.ndarray], path: str) -> bool:
@@ -582,7 +645,7 @@ def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray, level: int) -> Non
     column = np.ascontiguousarray(tool[:, :, 3])
     group_path, _, name = column_path.rpartition("/")
     group = h5[group_path] if group_path in h5 else h5_create_group(h5, group_path)
-    _write_dataset(group, name, column, level)
+    _write_dataset(group, name, column, level, column_path)
     m = tool.shape[0]
     dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
     dcpl.set_layout(h5py.h5d.VIRTUAL)
@@ -635,7 +698,7 @@ def hdf5_bytes(
     group's contact poses bit for bit are stored as virtual datasets reading those columns from
     the contact poses (every HDF5 >= 1.10 reader, h5py included, sees the same array)."""
     buf = io.BytesIO()
-    with h5py.File(buf, "w") as h5:
+    with h5py.File(buf, "w", libver=H5_LIBVER) as h5:
         shared = []
         for path, value in datasets.items():
             data = np.asarray(value)
@@ -646,7 +709,7 @@ def hdf5_bytes(
             group = h5
             if parent:
                 group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
-            _write_dataset(group, name, data, level)
+            _write_dataset(group, name, data, level, path)
         for path in shared:
             _virtual_tool_poses(h5, path, np.asarray(datasets[path]), level)
         for key, value in (attrs or {}).items():
@@ -675,6 +738,9 @@ def png_bytes(image: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
 #: the pixels where the sensor gives a value (black elsewhere): bands of equal colour
 #: (docs/format.md).
 DEPTH_PICTURE_LEVEL = DEFLATE_LEVEL
+#: libdeflate level of ``{v}_rgb.png`` in the default mode: 0.97x the bytes of level 6 for +3 ms
+#: per 1200 x 1200 view (-0.4 MB per scene; level 8: 0.95x for +17 ms).
+RGB_LEVEL = 7
 
 
 def depth_picture_png(depth: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
@@ -689,19 +755,24 @@ def _json(data: Any) -> str:
     return json.dumps(data, indent=1, sort_keys=False, allow_nan=True) + "\n"
 
 
-#: Images of long runs of equal bytes (masks, ids, the occlusion rate per object region, the CoM
-#: heat map's residual and ``valid_depth``) that the default mode deflates with zlib's level 1:
-#: libdeflate's streams of them are ~3x smaller (-6.7 MB per scene) but zlib inflates them 2-3x
-#: slower (+70 ms per 1200 x 1200 view to read every array); the archival mode takes the bytes.
+#: Images of long runs of equal bytes (the amodal masks, the CoM heat map's residual and
+#: ``valid_depth``) that the default mode deflates with zlib's level :data:`RUN_LEVEL`, the
+#: all-zero blocks from cached streams (:func:`mgn.base.compress.deflate_runs`: the amodal masks
+#: in ~11 ms instead of ~45 per 1200 x 1200 view of 20 objects): libdeflate's streams of them
+#: are 3-4x smaller (-4.3 MB per scene for the masks) but zlib inflates them 3-4x slower (+60 ms
+#: per view for the masks); the archival mode takes the bytes. The ids and ``occlusion`` are
+#: libdeflate's (0.5x the bytes of zlib's level 1, -2.3 MB per scene, for +15 ms per view to
+#: read them).
 RUN_IMAGES: tuple[str, ...] = (
-    "instances_objects",
-    "instances_semantic",
-    "occlusion",
     "occlusion_objects",
     "com_heatmap",
     "valid_depth",
 )
 
+#: zlib level of :data:`RUN_IMAGES`: zlib's fast levels 1-3 keep long-distance matches, which zlib
+#: inflates fast; level 3 gives 0.94x the bytes of level 1 in the same time (level 4 on: 0.4x
+#: the bytes, but 2.5x the time and 10x slower to inflate).
+RUN_LEVEL = 3
 #: Archival mode's npz: the sensor depth an LZMA entry (:data:`NPZ_LZMA_FILTER`).
 _NPZ_ARCHIVAL: dict[str, Any] = {"lzma_entries": ("depth",)}
 #: Archival mode's libdeflate level of ``{v}_rgb.png``: 0.97x the bytes of :data:`DEFLATE_LEVEL`
@@ -810,10 +881,10 @@ def write_view(
     lap("arrays")
     files: dict[str, bytes] = {}
     files[f"{v}_rgb.png"] = png_bytes(
-        np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else DEFLATE_LEVEL
+        np.asarray(rec.rgb, np.uint8), level=_RGB_ARCHIVAL_LEVEL if archival else RGB_LEVEL
     )
     lap("rgb.png")
-    runs = {} if archival else dict.fromkeys(RUN_IMAGES, 1)
+    runs = {} if archival else dict.fromkeys(RUN_IMAGES, RUN_LEVEL)
     files[f"{v}.npz"] = npz_bytes(
         **npz, level=NPZ_LEVEL, zlib_levels=runs, **(_NPZ_ARCHIVAL if archival else {})
     )

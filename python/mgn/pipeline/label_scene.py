@@ -320,6 +320,9 @@ def label_scene(
             cup,
             offsets=opt.grasp_offsets,
             num_threads=opt.num_threads,
+            # The files store the flags and why at the first colliding pose, not the hits per
+            # offset: the later offsets of a colliding grasp need not be checked.
+            first_collision_only=True,
         )
         timings.add("prepare: scene grasp collisions", time.perf_counter() - t)
         return model

@@ -62,7 +62,10 @@ class ShakeOptions:
     as scored whole.
     ``polyhedral_contacts`` (on by default): whole contact patches from Bullet's polyhedral
     clipping; off, GJK contact points are 1.2–1.5× faster per trial but change some outcomes
-    (``benchmarks/bench_shake.py`` measures both). Every default is the C++ struct's.
+    (``benchmarks/bench_shake.py`` measures both). ``hold_tolerance`` (m, 0 = off) skips the
+    parts of the shake that repeat loads the object held within that distance of its pose in
+    the hand (docs/models.md, "Held-load windows"; 1.05–1.12× at 3 mm, a few outcomes change).
+    Every default is the C++ struct's.
     """
 
     grid: int = _CORE.grid
@@ -86,6 +89,7 @@ class ShakeOptions:
     contact_distance: float = _CORE.contact_distance
     settle_steps: int = _CORE.settle_steps
     lost_contact_steps: int = _CORE.lost_contact_steps
+    hold_tolerance: float = _CORE.hold_tolerance
     margin: float = _CORE.margin
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
     max_hull_vertices: int = _CORE.max_hull_vertices

@@ -94,6 +94,7 @@ def apply_depth_sensor(
     *,
     flags_by_id: npt.ArrayLike | None = None,
     seed: int = 0,
+    num_threads: int = 0,
 ) -> DepthImage:
     """Apply a depth sensor model to a rendered z-depth image.
 
@@ -105,6 +106,7 @@ def apply_depth_sensor(
         flags_by_id: per instance id, surface flag bits (``Renderer.surface_flags_by_id()``);
             None = no special surfaces.
         seed: noise stream seed.
+        num_threads: threads for the rows (0 = all); the result does not depend on it.
     """
     params = sensor_params(sensor) if isinstance(sensor, str) else sensor
     flags = [] if flags_by_id is None else [int(f) for f in np.asarray(flags_by_id).ravel()]
@@ -115,5 +117,6 @@ def apply_depth_sensor(
         K.to_core(),
         params,
         int(seed),
+        int(num_threads),
     )
     return DepthImage(out.depth, out.depth_ideal, out.valid)

@@ -122,20 +122,22 @@ def depth_picture_indexed(
     palette PNG: about half the bytes of the RGB picture)."""
     d = np.asarray(depth, np.float32)
     with np.errstate(invalid="ignore"):
-        valid = np.isfinite(d) & (d > 0)
-    key = np.zeros(d.shape, np.int32)  # 0 invalid (black), 1 + level otherwise
+        valid = np.isfinite(d)
+        valid &= d > 0
+    key = np.zeros(d.shape, np.uint8)  # 0 invalid (black), 1 + level otherwise
     if valid.any():
         inv = 1.0 / d[valid]
         lo, hi = float(inv.min()), float(inv.max())
-        level = np.round((inv - lo) * (254.0 / max(hi - lo, 1e-12))).astype(np.int32)
-        key[valid] = 1 + level
+        level = np.round((inv - lo) * (254.0 / max(hi - lo, 1e-12))).astype(np.uint8)
+        level += 1
+        key[valid] = level
     # Level l of 0..254 takes the colour map's entry round(l * 255 / 254) (both ends kept).
     lut = _DEPTH_LUT[np.round(np.arange(255) * (255.0 / 254.0)).astype(np.int64)]
     colours = np.concatenate([np.zeros((1, 3), np.uint8), lut])
     used = np.flatnonzero(np.bincount(key.ravel(), minlength=256))
-    remap = np.zeros(256, np.int32)
+    remap = np.zeros(256, np.uint8)
     remap[used] = np.arange(len(used))
-    return remap[key].astype(np.uint8), colours[used]
+    return remap[key], colours[used]
 
 
 def _checked_scene(
@@ -294,7 +296,13 @@ def iter_views(
             assert img.rgb is not None
             rgb, engine = img.rgb, {"engine": "raster"}
         sens = apply_depth_sensor(
-            img.depth, img.instance_ids, cam.K, sensor, flags_by_id=flags, seed=seed + v
+            img.depth,
+            img.instance_ids,
+            cam.K,
+            sensor,
+            flags_by_id=flags,
+            seed=seed + v,
+            num_threads=num_threads,
         )
         res = ViewImages(
             v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine

@@ -16,7 +16,8 @@
 ///     a = 1.2 mm, b = 1.9 mm/m^2, z0 = 0.4 m (the model fitted by Nguyen, Izadi and Lovell, 2012),
 ///     flying pixels (depths between foreground and background) at depth edges, invalid on
 ///     transparent, dark and mirror-like surfaces.
-/// Randomness: row v draws from Rng(seed, v), so results do not depend on the thread count.
+/// Randomness: row v draws from Rng(seed, v) (its flying-pixel uniforms, then its pixels' normals
+/// from Rng::normals), so results do not depend on the thread count.
 
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/render/camera.hpp>
@@ -96,10 +97,12 @@ struct DepthImage {
 /// Applies a sensor model. `depth` and `instance_ids` are (H*W) row-major images of
 /// K.width x K.height; flags_by_id[id] are the SurfaceFlag bits of instance id `id` (ids beyond the
 /// vector have no flags). Throws InvalidArgument for mismatched sizes, negative or non-finite
-/// depths, or invalid intrinsics / parameters.
+/// depths, or invalid intrinsics / parameters. Rows run on up to `num_threads` threads (0 = all);
+/// the result is the same for any thread count.
 DepthImage apply_depth_sensor(const std::vector<float>& depth,
                               const std::vector<std::int32_t>& instance_ids,
                               const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
-                              const DepthSensorParams& params, std::uint64_t seed);
+                              const DepthSensorParams& params, std::uint64_t seed,
+                              int num_threads = 0);
 
 }  // namespace mgn

@@ -59,6 +59,9 @@ namespace mgn {
 /// height (11.21 cm), m. Only the written pose uses it; the collision geometry is SuctionTool.
 inline constexpr double kSuctionToolOffset = 0.02 + 0.1121;
 
+/// PlacedGrasps::hit of an offset that was not checked (SceneGraspOptions::first_collision_only).
+inline constexpr std::int32_t kHitNotChecked = -2;
+
 /// Geometry of the suction tool behind the cup body, for the scene collision check (m).
 struct SuctionTool {
   /// Gap between the contact and the bottom of the cup body cylinder: the lip touches the surface
@@ -90,6 +93,13 @@ struct SceneGraspOptions {
   double visibility_tolerance = 0.002;
   double near_plane = 0.01;  ///< a contact must lie at z_C > near_plane in the camera frame, m
   int num_threads = 0;       ///< 0 = all hardware threads; results do not depend on it
+  /// Stop checking a label grasp at its first colliding pose: `colliding`, `collision_part` and
+  /// `collision_obstacle` are the same as without it, but PlacedGrasps::hit of the offsets after
+  /// the first colliding one holds kHitNotChecked instead of their first obstacle. What the
+  /// dataset files store does not depend on it (they hold no per-offset hits); about half the
+  /// collision tests of a cluttered scene, where nearly every grasp collides at the grasp pose.
+  /// collides() always checks every offset.
+  bool first_collision_only = false;
   /// Throws InvalidArgument naming the first bad field.
   void validate() const;
 };
@@ -126,7 +136,8 @@ struct PlacedGrasps {
   std::vector<std::uint8_t> colliding;     ///< (M) 1 when the tool collides at any offset
   /// (M x K) row-major, K = number of offsets: first obstacle hit at offset k: -1 none, 0 the
   /// tote, i + 1 object i (its instance id). Obstacles are tried in the order objects 0..N-1,
-  /// then the tote.
+  /// then the tote. With SceneGraspOptions::first_collision_only, kHitNotChecked at the offsets
+  /// after the first colliding one.
   std::vector<std::int32_t> hit;
   /// (M) why the grasp collides, at the first colliding pose along the approach (the grasp
   /// first): the gripper part (CollisionPart) and the obstacle (CollisionObstacle); 0 = none.

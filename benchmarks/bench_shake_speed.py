@@ -1,0 +1,196 @@
+"""Faster shake trials against today's default outcomes: the time step and held-load windows.
+
+For each object, grasps and their full 10x10 grid with the default ``ShakeOptions`` come from
+``--grid-cache`` (``full_<name>.npz`` with ``rows`` and ``success``, as bench_staircase writes
+it; its rows are used as they are, so a cache made by an older labeller still serves), or are
+computed from ``bench_staircase.real_grasps`` and stored there. Each variant's full grid is then
+simulated (1 thread, stored as ``<variant>_<name>.npz`` so a rerun only adds grasps) and compared
+with the default: trials per CPU-s and steps per trial, identical trial outcomes, identical
+full-grid scores, and the staircase search's scores (replayed on the variant's grid with the
+default checks: every cell is a deterministic trial, so the search's result is a function of the
+grid) against the default full-grid scores. ``--confirm`` grasps per object are also scored for
+real with ``staircase=True`` and the variant, one grasp at a time (CPU-s per grasp; their scores
+must equal the replay).
+
+Variants: ``default`` (today's options on the first ``--rate-grasps`` grasps: its trial
+rate, and a check that the cache still holds today's outcomes), ``dt150`` and ``dt100`` (time
+step 1/150 and 1/100 s, every step count scaled to keep each phase's duration), ``dt100k`` (also
+the force controller's gain per step scaled), ``dt400`` (a finer step), ``hold``
+(``hold_tolerance`` = 3 mm: the translational cycles after the first and the last quarter of the
+rotational shake are skipped when the object stayed within 3 mm of its pose in the hand through
+a window whose loads they repeat).
+
+    python -m benchmarks.bench_shake_speed --grid-cache /tmp/shake \
+        [--objects can_soda:100,box_cereal:170] [--variants hold,dt150,dt100] [--confirm 20]
+
+Numbers and findings: benchmarks/RESULTS.md, "Shake test: faster trials".
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .bench_staircase import real_grasps, replay
+
+
+def _dt(hz: int, gain: bool = False) -> dict:
+    f = 200 / hz  # default steps per step of this variant
+    kw = {
+        "dt": 1.0 / hz,
+        "close_steps": round(400 / f),
+        "shake_steps": round(400 / f),
+        "rotate_steps": round(300 / f),
+        "settle_steps": max(1, round(10 / f)),
+        "lost_contact_steps": max(1, round(10 / f)),
+    }
+    if gain:
+        kw["controller_stiffness"] = 1e5 / f
+    return kw
+
+
+VARIANTS = {
+    "default": {},
+    "hold": {"hold_tolerance": 3e-3},
+    "dt150": _dt(150),
+    "dt100": _dt(100),
+    "dt100k": _dt(100, gain=True),
+    "dt400": _dt(400),
+}
+
+
+def _object(name: str):
+    from mgn.geometry import mass_properties
+    from mgn.geometry.convex import cached_convex_decomposition
+    from mgn.objects import get_object
+
+    spec = get_object(name)
+    mesh = spec.to_mesh()
+    return cached_convex_decomposition(mesh), mass_properties(mesh, spec.density)
+
+
+def default_grids(name: str, n: int, cache: Path):
+    """(rows, (G, 10, 10) default outcomes) from the cache, else computed and stored."""
+    from .bench_staircase import full_grids
+
+    path = cache / f"full_{name}.npz"
+    if path.is_file():
+        d = np.load(path)
+        k = min(n, len(d["rows"]))
+        parts, props = _object(name)
+        return parts, props, d["rows"][:k], d["success"][:k]
+    parts, props, rows = real_grasps(name, n)
+    grids, _, _ = full_grids(name, parts, props, rows, 1, cache)
+    return parts, props, rows, grids
+
+
+def variant_grids(name, parts, props, rows, variant: str, cache: Path, chunk: int = 10):
+    """(success (G, 10, 10), steps (G, 10, 10), CPU s) of a variant, grown in the cache."""
+    from mgn.pj.physics import ShakeOptions, shake_scores
+
+    path = cache / f"{variant}_{name}.npz"
+    succ, steps, cpu = [], [], 0.0
+    if path.is_file():
+        d = np.load(path)
+        succ, steps, cpu = [d["success"]], [d["steps"]], float(d["cpu"])
+    start = sum(len(s) for s in succ)
+    for s in range(start, len(rows), chunk):
+        opts = ShakeOptions(num_threads=1, first_grasp_index=s, **VARIANTS[variant])
+        c0 = time.process_time()
+        r = shake_scores(parts, props.mass, props.center_of_mass, props.inertia,
+                         rows[s : s + chunk], None, opts)  # fmt: skip
+        cpu += time.process_time() - c0
+        succ.append(r.trial_success)
+        steps.append(r.trial_steps)
+        tmp = path.with_suffix(".tmp.npz")
+        np.savez(tmp, success=np.concatenate(succ), steps=np.concatenate(steps), cpu=cpu)
+        os.replace(tmp, path)
+    return np.concatenate(succ)[: len(rows)], np.concatenate(steps)[: len(rows)], cpu
+
+
+def staircase_cost(parts, props, rows, variant: str | None) -> tuple[np.ndarray, float, int]:
+    """Real staircase scores of rows, one grasp per call on 1 thread: (scores, CPU s, trials)."""
+    from mgn.pj.physics import ShakeOptions, shake_scores
+
+    kw = {} if variant is None else VARIANTS[variant]
+    scores, cpu, trials = [], 0.0, 0
+    for g in range(len(rows)):
+        opts = ShakeOptions(num_threads=1, staircase=True, first_grasp_index=g, **kw)
+        c0 = time.process_time()
+        r = shake_scores(parts, props.mass, props.center_of_mass, props.inertia,
+                         rows[g : g + 1], None, opts)  # fmt: skip
+        cpu += time.process_time() - c0
+        scores.append(r.score[0])
+        trials += r.num_trials
+    return np.asarray(scores), cpu, trials
+
+
+def main(argv: list[str] | None = None) -> int:
+    from mgn.pj.physics import ShakeOptions
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--objects", default="can_soda:100,box_cereal:170")
+    ap.add_argument("--variants", default="hold,dt150,dt100")
+    ap.add_argument("--grid-cache", type=Path, required=True)
+    ap.add_argument("--confirm", type=int, default=20, help="grasps per object run for real")
+    ap.add_argument(
+        "--rate-grasps",
+        type=int,
+        default=30,
+        help="grasps per object rerun with the default options (trials per CPU-s; the cache "
+        "must reproduce)",
+    )
+    args = ap.parse_args(argv)
+    args.grid_cache.mkdir(parents=True, exist_ok=True)
+    checks = ShakeOptions().staircase_checks
+    print(f"load average at start: {os.getloadavg()[0]:.1f}")
+    print(
+        "| object | variant | grasps | trials per CPU-s (grid) | steps/trial | identical "
+        "outcomes | identical grid scores | identical staircase scores | staircase: trials/grasp,"
+        " CPU-s/grasp |"
+    )
+    print("|---|---|---:|---:|---:|---:|---:|---:|---|")
+    for item in args.objects.split(","):
+        name, _, n = item.partition(":")
+        parts, props, rows, base = default_grids(name, int(n or 100), args.grid_cache)
+        truth = base.sum(axis=(1, 2))
+        stair = np.array([replay(g, checks)[0] for g in base])
+        k = min(args.confirm, len(rows))
+        real, dcpu, dtrials = staircase_cost(parts, props, rows[:k], None)
+        print(
+            f"| {name} | default: cache vs its staircase | {len(rows)} | - | - | 100 % | 100 % | "
+            f"{np.mean(stair == truth):.1%} | - |",
+            flush=True,
+        )
+        for v in ["default", *args.variants.split(",")]:
+            sub = slice(0, args.rate_grasps if v == "default" else len(rows))
+            succ, steps, vcpu = variant_grids(name, parts, props, rows[sub], v, args.grid_cache)
+            if v == "default" and not np.array_equal(succ, base[sub]):
+                print(f"  {name}: the default options no longer reproduce the cached grids")
+                return 1
+            vbase, vtruth = base[sub], truth[sub]
+            vs = np.array([replay(g, checks)[0] for g in succ])
+            if v == "default":
+                cost = f"{dtrials / max(k, 1):.1f}, {dcpu / max(k, 1):.3f}"
+            else:
+                real, cpu, trials = staircase_cost(parts, props, rows[:k], v)
+                if not np.array_equal(np.round(real * 100), vs[:k]):
+                    print(f"  {name} {v}: real staircase scores differ from the replay")
+                    return 1
+                cost = f"{trials / max(k, 1):.1f}, {cpu / max(k, 1):.3f}"
+            print(
+                f"| {name} | {v} | {len(succ)} | {succ.size / vcpu:.0f} | {steps.mean():.0f} | "
+                f"{np.mean(succ == vbase):.2%} | {np.mean(succ.sum(axis=(1, 2)) == vtruth):.1%} "
+                f"| {np.mean(vs == vtruth):.1%} | {cost} |",
+                flush=True,
+            )
+    print(f"load average at end: {os.getloadavg()[0]:.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
