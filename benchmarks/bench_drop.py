@@ -23,7 +23,11 @@ decompositions cached). Session 9 (idle, 2 cores, scenes 0-7): Bullet's own supp
 hulls (a scalar scan over up to 96 vertices, ~45 % of a drop in perf) 36.2 CPU-s for the 8 drops
 (11.15 s for scene 0, the pipeline benchmark's scene); with mgn's vectorised search
 (cpp/src/physics/hull_support.hpp: the same vertex, bit for bit, so the poses and scene bytes are
-unchanged) 28.3 CPU-s (8.2 s for scene 0), -22 %.
+unchanged) 28.3 CPU-s (8.2 s for scene 0), -22 %. Session 10 (load 9-11, scenes 0-15): friction
+along two tangent directions by default (DropOptions.two_friction_directions; with one, resting
+piles creep: in 3 of the 16 scenes 15 objects were still moving at the time limit) 51.2 -> 20.8
+CPU-s for the 16 drops, 19834 -> 9400 steps; scenes 0-7 at load 3: 28.6 -> 10.0 CPU-s
+(benchmarks/RESULTS.md, "The drop's friction").
 
 Run alone: `python -m benchmarks.bench_drop [--quick]`.
 """
@@ -66,7 +70,7 @@ def mgn_drop(objects: list) -> Any:
     return drop_scene(objects, seed=SEED)
 
 
-def _prepared(objects: list) -> tuple[dict[str, Any], list, list]:
+def _prepared(objects: list) -> tuple[Any, list, list]:
     """mgn's release poses and, per object, its convex parts and mass properties."""
     from mgn.geometry.convex import DROP_DECOMPOSITION, cached_convex_decomposition
     from mgn.geometry.mesh import mass_properties
@@ -128,7 +132,7 @@ def pybullet_drop(p: Any, objects: list, prepared: tuple) -> dict[str, Any]:
                 collisionFramePositions=[list(-com)] * len(files),
                 physicsClientId=cid,
             )
-            X = out["X_WO_release"][k]
+            X = np.asarray(out.X_WO_release)[k]
             q = _quat_xyzw(X[:3, :3])
             pos = X[:3, :3] @ com + X[:3, 3]  # pybullet's base frame sits at the CoM
             b = p.createMultiBody(
@@ -317,7 +321,10 @@ def run(
         f"total {total:.2f} CPU-s, mean {total / len(scenes):.2f} CPU-s per drop; per scene "
         + ", ".join(f"{d['scene']}: {d['cpu_s']:.2f} s/{d['steps']} steps" for d in scenes)
     )
-    pipe.notes.append("session 9 idle, scenes 0-7: Bullet's support scan 36.2 CPU-s, mgn's 28.3")
+    pipe.notes.append(
+        "session 9 idle, scenes 0-7: Bullet's support scan 36.2 CPU-s, mgn's 28.3; session 10 "
+        "(load 3), one friction direction 28.6, two (the default now) 10.0"
+    )
     return [row, pipe]
 
 

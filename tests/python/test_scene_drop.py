@@ -273,7 +273,7 @@ def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
         max_hull_vertices=0,
         hull_tolerance=0.001,
         polyhedral_contacts=False,
-        two_friction_directions=True,
+        two_friction_directions=False,
         resettle_time=0.5,
         solver_iterations=12,
         dt=1 / 200,

@@ -102,8 +102,10 @@ class DropOptions:
             settle sooner) instead of one GJK point per step.
         resettle_time: after objects on or over the rim are removed, the rest may take this many
             more simulated seconds (beyond max_time) to settle again (>= 0).
-        two_friction_directions: friction along two tangent directions per contact (large
-            piles settle ~1.6x sooner; a symmetric resting contact may drift to one side).
+        two_friction_directions: friction along two tangent directions per contact (default;
+            with one, resting objects creep along the other tangent and large piles settle
+            ~2x later or not at all; with two, a symmetric resting contact may drift to one
+            side).
     """
 
     window_min: tuple[float, float, float] = _CORE.window_min

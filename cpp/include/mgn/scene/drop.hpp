@@ -100,11 +100,12 @@ struct DropOptions {
   /// at once (and so is any such object at max_time); the others are then simulated again until
   /// they are at rest, with this much simulated time (s, >= 0) allowed beyond max_time.
   double resettle_time = 2.0;
-  /// Friction along two tangent directions per contact (kept from step to step) instead of
-  /// one. With one (the default), objects in a large resting pile can creep sideways and the
-  /// pile settles later (20-object drops: ~1.6x more steps); with two, a symmetric resting
-  /// contact can drift to one side (a ball centred in a 1 mm wider channel ends on one wall).
-  bool two_friction_directions = false;
+  /// Friction along two tangent directions per contact (kept from step to step; the default)
+  /// instead of one. With one, Bullet resists sliding only along the current slip direction, so
+  /// a resting object can creep along the other tangent: large piles creep for seconds and
+  /// often never pass the rest test before max_time (20-object scenes: ~2x more steps, ~2.5x
+  /// more CPU; docs/models.md §6). With two, a symmetric resting contact can drift to one side.
+  bool two_friction_directions = true;
   ToteCollision tote_collision = ToteCollision::Boxes;
   std::uint64_t seed = 0;
 };
