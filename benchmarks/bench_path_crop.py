@@ -306,6 +306,7 @@ def main(argv: list[str]) -> int:
         )
         ev = evaluate(work, crop, tags)
         out = Path(a.out_dir)
+        out.mkdir(parents=True, exist_ok=True)
         (out / "path_crop_results.json").write_text(json.dumps(ev, indent=1, default=float) + "\n")
         (out / "path_crop_results.md").write_text(markdown(ev))
         picture(work, ev, tags, work / "window.png")
