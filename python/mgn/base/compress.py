@@ -100,6 +100,10 @@ class ZipDeflate:
         self._level = _check_level(level)
         self._parts: list[bytes | memoryview] = []
 
+    def _deflate(self, data: bytes | memoryview) -> bytes:
+        """The final part of the entry's raw deflate stream (ends with a final block)."""
+        return deflate_raw(data, self._level)
+
     def compress(self, data: bytes | memoryview) -> bytes:
         self._parts.append(data)
         return b""
@@ -107,11 +111,11 @@ class ZipDeflate:
     def flush(self) -> bytes:
         parts, self._parts = self._parts, []
         if not parts:
-            return deflate_raw(b"", self._level)
+            return self._deflate(b"")
         head = b"".join(bytes(p) for p in parts[:-1])
         if len(head) < 1 << 16:
-            return _stored_blocks(head) + deflate_raw(parts[-1], self._level)
-        return deflate_raw(head + bytes(parts[-1]), self._level)
+            return _stored_blocks(head) + self._deflate(parts[-1])
+        return self._deflate(head + bytes(parts[-1]))
 
 
 #: Bytes per block of :func:`deflate_runs` (all-zero blocks come from cached streams).
@@ -179,27 +183,19 @@ def zlib_runs_stream(data: bytes | memoryview | npt.NDArray[Any], level: int) ->
     return b"\x78\x5e" + deflate_runs(data, level) + struct.pack(">I", adler)
 
 
-class ZipRunDeflate:
+class ZipRunDeflate(ZipDeflate):
     """The compressor of a ``zipfile`` entry (as :class:`ZipDeflate`) whose stream is
-    :func:`deflate_runs` of the entry at zlib ``level``: images of long runs of zeros that
-    must stay fast to inflate with zlib."""
+    :func:`deflate_runs` of the entry at zlib ``level`` (1..9): images of long runs of zeros
+    that must stay fast to inflate with zlib."""
 
     def __init__(self, level: int) -> None:
+        if not 1 <= int(level) <= 9:
+            raise InvalidArgumentError(f"zlib level {level}: expected 1..9")
         self._level = int(level)
         self._parts: list[bytes | memoryview] = []
 
-    def compress(self, data: bytes | memoryview) -> bytes:
-        self._parts.append(data)
-        return b""
-
-    def flush(self) -> bytes:
-        parts, self._parts = self._parts, []
-        if not parts:
-            return deflate_runs(b"", self._level)
-        head = b"".join(bytes(p) for p in parts[:-1])
-        if len(head) < 1 << 16:
-            return _stored_blocks(head) + deflate_runs(parts[-1], self._level)
-        return deflate_runs(head + bytes(parts[-1]), self._level)
+    def _deflate(self, data: bytes | memoryview) -> bytes:
+        return deflate_runs(data, self._level)
 
 
 def shuffled_chunks(
