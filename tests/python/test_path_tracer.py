@@ -322,6 +322,17 @@ def _fresnel(cos_i: np.ndarray, n: float) -> np.ndarray:
     return 0.5 * (rs**2 + rp**2)
 
 
+def _pane_under_lamp(ior: float, Le: float) -> PathScene:
+    """A clear 2 m x 2 m x 2 cm pane at z = 0 (index of refraction ``ior``) under a 3 m x 3 m
+    rect lamp of radiance ``Le`` facing down at z = 1.5 m, black environment."""
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down, above the camera
+    X_WL[:3, 3] = (0.0, 0.0, 1.5)
+    light = AreaLight(X_WL, "rect", (3.0, 3.0), (1.0, 1.0, 1.0), Le)
+    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
+    return PathScene([make_box([2.0, 2.0, 0.02])], np.eye(4)[None], [1], [[glass]], [light],
+                     BLACK)  # fmt: skip
+
+
 def test_light_reflected_in_smooth_glass_is_split_not_sampled():
     """Fresnel splitting: at a smooth dielectric both the reflected and the refracted ray are
     traced to the light they meet first, weighted F and 1 - F. A clear pane under a large rect
@@ -331,12 +342,7 @@ def test_light_reflected_in_smooth_glass_is_split_not_sampled():
     and the variance of one sample is well below the p (1 - p) Le^2 of the chosen-branch
     estimator (p = 2R / (1 + R)): only the internally reflected light stays random."""
     ior, Le = 1.5, 2.0
-    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down, above the camera
-    X_WL[:3, 3] = (0.0, 0.0, 1.5)
-    light = AreaLight(X_WL, "rect", (3.0, 3.0), (1.0, 1.0, 1.0), Le)
-    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
-    scene = PathScene([make_box([2.0, 2.0, 0.02])], np.eye(4)[None], [1], [[glass]], [light],
-                      BLACK)  # fmt: skip
+    scene = _pane_under_lamp(ior, Le)
     size = 64
     view = camera((0, 0, 1.0), (0, 0, 0), size, 10, up=(0, 1, 0))
     K = view.K
@@ -372,12 +378,7 @@ def test_first_glass_walls_are_traced_on_both_branches():
     gives 0 or Le and splitting the first light only leaves the internally reflected
     (1 - R)^2 R Le (~15 R^2 Le) to chance."""
     ior, Le = 1.5, 2.0
-    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down, above the camera
-    X_WL[:3, 3] = (0.0, 0.0, 1.5)
-    light = AreaLight(X_WL, "rect", (3.0, 3.0), (1.0, 1.0, 1.0), Le)
-    glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
-    scene = PathScene([make_box([2.0, 2.0, 0.02])], np.eye(4)[None], [1], [[glass]], [light],
-                      BLACK)  # fmt: skip
+    scene = _pane_under_lamp(ior, Le)
     view = camera((0, 0, 1.0), (0, 0, 0), 16, 4, up=(0, 1, 0))
     samples = np.stack(
         [scene.render(view, PathTraceOptions(spp=1, max_bounces=40, rr_depth=100, seed=s))
