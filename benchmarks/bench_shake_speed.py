@@ -60,6 +60,8 @@ VARIANTS = {
     "dt100": _dt(100),
     "dt100k": _dt(100, gain=True),
     "dt400": _dt(400),
+    "smooth": {"smooth_shake": True},
+    "smooth_dt100": {"smooth_shake": True, **_dt(100)},
 }
 
 

@@ -1600,6 +1600,7 @@ class ShakeOptions:
     """
 
     polyhedral_contacts: bool
+    smooth_shake: bool
     staircase: bool
     def __init__(self) -> None: ...
     def density_factors(self) -> list[float]: ...

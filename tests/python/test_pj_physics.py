@@ -88,6 +88,66 @@ def test_coulomb_limit_decides_a_centred_box_with_and_without_early_success(hold
             np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
 
 
+def _smooth_profile_peaks() -> tuple[float, float]:
+    """(max |f'|, max |f''|) of the smooth shake profile f(x) = sin x - sin(2x)/2, by sampling."""
+    x = np.linspace(0.0, 2 * np.pi, 200001)
+    return float(np.abs(np.cos(x) - np.cos(2 * x)).max()), float(
+        np.abs(-np.sin(x) + 2 * np.sin(2 * x)).max()
+    )
+
+
+def test_smooth_shake_keeps_the_coulomb_limit_of_its_own_peak_acceleration():
+    """With ``smooth_shake`` the hand follows z = (A/2) f(wt), f(x) = sin x - sin(2x)/2: the peak
+    speed stays v = A w (max |f'| = 2) and the peak acceleration is (A/2) w^2 max |f''|, so the
+    friction limit of the centred 1 kg box becomes 2 mu F = m (g + v w max|f''| / 2): well below
+    it the box is dropped, well above it held."""
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 1.0)
+    base = ShakeOptions(grid=1, density_range=(1.0, 1.0), num_threads=1, smooth_shake=True)
+    omega = 2 * np.pi * base.shake_cycles / (base.shake_steps * base.dt)
+    d1, d2 = _smooth_profile_peaks()
+    assert d1 == pytest.approx(2.0, abs=1e-6)
+    accel = base.shake_speed * omega * d2 / d1
+    mu_star = m * (base.gravity + accel) / (2 * base.grip_force)
+    for factor in (0.5, 2.5):
+        mu = factor * mu_star
+        r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None],
+                         options=replace(base, friction_range=(mu, mu)))  # fmt: skip
+        assert bool(r.trial_success.all()) == (factor > 1.0), factor
+
+
+def test_smooth_shake_starts_and_ends_at_rest_with_the_sines_peak_speed_and_angle():
+    """The hand's recorded trajectory: with the sine the translational shake starts at full
+    speed (one step moves the hand v dt); with ``smooth_shake`` the first and last steps of both
+    shake phases are nearly at rest (f ~ x^3 / 2 near 0), while the peak speed along the
+    approach axis and the peak rotation angle (the trial's random angle) are the sine's."""
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.3)
+    runs = {}
+    for smooth in (False, True):
+        o = ShakeOptions(grid=1, friction_range=(1.5, 1.5), density_range=(1.0, 1.0),
+                         smooth_shake=smooth)  # fmt: skip
+        t = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 1.5, 1.0, options=o,
+                             record_every=1)  # fmt: skip
+        phase, X = np.asarray(t.phase), np.asarray(t.X_WH)
+        z = X[phase == 1][:, 2, 3]
+        z0 = X[phase == 0][-1, 2, 3]
+        speed = np.abs(np.diff(np.concatenate([[z0], z]))) / o.dt
+        R0 = X[phase == 1][-1, :3, :3]
+        rot = X[phase == 2][:, :3, :3]
+        angle = np.arccos(np.clip((np.einsum("ij,nij->n", R0, rot) - 1) / 2, -1, 1))
+        runs[smooth] = (speed, angle, o)
+    (s_sine, a_sine, o), (s_smooth, a_smooth, _) = runs[False], runs[True]
+    v = o.shake_speed
+    assert s_sine[0] == pytest.approx(v, rel=0.02)
+    assert s_smooth[0] < 0.01 * v and s_smooth[-1] < 0.01 * v
+    assert s_smooth.max() == pytest.approx(v, rel=0.01)
+    assert s_sine.max() == pytest.approx(v, rel=0.01)
+    assert a_smooth[0] < 0.01 * a_sine.max() and a_smooth[-1] < 0.01 * a_sine.max()
+    assert a_smooth.max() == pytest.approx(a_sine.max(), rel=0.01)
+    # The sine's first step turns by ~theta_max w_r dt (a jump in angular velocity), the
+    # smooth profile's by ~theta_max (w_r dt)^3 / 2.
+    assert a_smooth[0] < 0.05 * a_sine[0]
+
+
 def test_early_success_needs_the_object_at_rest_in_the_hand():
     """A tolerance far below the pads' compliance (1 nm) never decides early: the box moves a
     little in the hand as the tilt changes; the full schedule then runs."""
@@ -435,6 +495,7 @@ def test_show_trial_action(tmp_path, capsys):
         ({"options": ShakeOptions(grip_force=-1.0)}, "grip_force"),
         ({"options": ShakeOptions(hold_tolerance=-1e-3)}, "hold_tolerance"),
         ({"options": ShakeOptions(hold_tolerance=float("nan"))}, "hold_tolerance"),
+        ({"options": ShakeOptions(hold_tolerance=1e-3, smooth_shake=True)}, "hold_tolerance"),
         ({"gripper": ParallelJawGripper(max_opening=0.03)}, "max_opening"),
         ({"gripper": SimpleNamespace(name="x")}, "gripper"),
         ({"mesh": []}, "convex_parts"),

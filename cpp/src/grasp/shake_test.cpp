@@ -130,6 +130,9 @@ btDefaultCollisionConstructionInfo small_world_pools() {
   return info;
 }
 
+/// Peak of ShakeOptions::smooth_shake's profile sin x − sin(2x)/2: 3√3/4.
+constexpr double kSmoothPeak = 1.299038105676658;
+
 /// Hand trajectory: X_WH as a function of the phase and the time within it.
 class HandPath {
  public:
@@ -146,13 +149,21 @@ class HandPath {
     centre_ = Vec3d(0.0, 0.0, g.grasp_depth());
   }
   const Pose& initial() const { return X_WH0_; }
+  /// ShakeOptions::smooth_shake's profile f(x) = sin x − sin(2x)/2 (f'(0) = f'(2π) = 0,
+  /// |f'| <= 2 at x = π, max f = 3√3/4 at x = 2π/3), else sin x.
+  static double smooth_profile(double x) { return std::sin(x) - 0.5 * std::sin(2.0 * x); }
   Pose translate(double t) const {
     Pose X = X_WH0_;
-    X.translate(Vec3d(0.0, 0.0, amp_s_ * std::sin(omega_s_ * t)));
+    const double x = omega_s_ * t;
+    // Smooth: half the amplitude keeps the peak speed A ω (|f'| <= 2).
+    const double z = o_.smooth_shake ? 0.5 * amp_s_ * smooth_profile(x) : amp_s_ * std::sin(x);
+    X.translate(Vec3d(0.0, 0.0, z));
     return X;
   }
   Pose rotate(double t) const {
-    const double theta = angle_ * std::sin(omega_r_ * t);
+    const double x = omega_r_ * t;
+    const double theta =
+        o_.smooth_shake ? angle_ * smooth_profile(x) / kSmoothPeak : angle_ * std::sin(x);
     Pose R = Pose::Identity();
     R.linear() = Eigen::AngleAxisd(theta, axis_).toRotationMatrix();
     R.translation() = centre_ - R.linear() * centre_;
@@ -548,6 +559,9 @@ void ShakeOptions::validate() const {
   require(std::isfinite(hold_tolerance) && hold_tolerance >= 0 && hold_tolerance < 0.1,
           "hold_tolerance", "a distance in [0, 0.1) m (0 = off)", hold_tolerance);
   require(lost_contact_steps >= 0, "lost_contact_steps", "an integer >= 0", lost_contact_steps);
+  require(!(smooth_shake && hold_tolerance > 0), "hold_tolerance",
+          "0 when smooth_shake is on (its held-load windows assume the sine profile)",
+          hold_tolerance);
   require(std::isfinite(margin) && margin > 0 && margin < 0.01, "margin",
           "a collision margin in (0, 0.01) m", margin);
   require(max_hull_vertices >= 8 && max_hull_vertices <= 100000, "max_hull_vertices",
