@@ -67,9 +67,9 @@ class ShakeOptions:
     the hand (docs/models.md, "Held-load windows"; 1.05–1.12× at 3 mm, a few outcomes change).
     ``smooth_shake`` (off by default): the hand's shake profile starts and ends every cycle at
     rest (f(x) = sin x − sin(2x)/2, same peak speed and angle) instead of the sine's velocity
-    jumps; the grids are more nearly monotone, and with ``dt`` 1/100 s (step counts halved)
-    the staircase matches the full grid more often at 1.8× fewer CPU-s per trial
-    (docs/models.md, "Smooth shake profile"; scores move by ~0.01 on average).
+    jumps; a can's grids become more nearly monotone (with ``dt`` 1/100 s and step counts
+    halved, the staircase matches its full grid more often at 1.8× fewer CPU-s per trial), a
+    mug's less (docs/models.md, "Smooth shake profile"; scores move by ~0.01 on average).
     Every default is the C++ struct's.
     """
 
