@@ -62,6 +62,17 @@ mgn::Intrinsics small_camera() {
   return K;
 }
 
+/// A pinhole camera of width x height px, focal length f px, principal point at the centre.
+mgn::Intrinsics centred_intrinsics(int width, int height, double f) {
+  mgn::Intrinsics K;
+  K.width = width;
+  K.height = height;
+  K.fx = K.fy = f;
+  K.cx = 0.5 * width;
+  K.cy = 0.5 * height;
+  return K;
+}
+
 }  // namespace
 
 TEST(Camera, IntrinsicsPresets) {
@@ -268,10 +279,7 @@ TEST(Renderer, BadInputGivesClearErrors) {
   EXPECT_THROW(mgn::Renderer(0, 10), mgn::InvalidArgument);
   mgn::Renderer r(100, 100);
   EXPECT_THROW(r.add_mesh(mgn::Mesh()), mgn::InvalidArgument);
-  mgn::Intrinsics K;
-  K.width = K.height = 100;
-  K.fx = K.fy = 100;
-  K.cx = K.cy = 50;
+  const mgn::Intrinsics K = centred_intrinsics(100, 100, 100);
   const mgn::CameraView view{K, mgn::look_at({0, 0, 1}, {0, 0, 0}, {0, 1, 0})};
   EXPECT_THROW(r.render(view), mgn::InvalidArgument);  // empty scene
   const int box = r.add_mesh(mgn::make_box({0.2, 0.2, 0.2}));
@@ -301,12 +309,7 @@ TEST(Renderer, BadInputGivesClearErrors) {
 TEST(DepthSensor, ProjectorShadowWidthMatchesTriangulation) {
   // A step: background at 1.0 m, foreground at 0.5 m on the right half. The projector 0.1 m to
   // the right cannot see fx * b * (1/0.5 - 1/1.0) = fx * 0.1 px of background left of the step.
-  mgn::Intrinsics K;
-  K.width = 300;
-  K.height = 4;
-  K.fx = K.fy = 400;
-  K.cx = 150;
-  K.cy = 2;
+  const mgn::Intrinsics K = centred_intrinsics(300, 4, 400);
   std::vector<float> depth(1200, 1.0f);
   std::vector<std::int32_t> ids(1200, 1);
   for (int v = 0; v < 4; ++v)
@@ -330,10 +333,7 @@ TEST(DepthSensor, ProjectorShadowWidthMatchesTriangulation) {
 }
 
 TEST(DepthSensor, NoiseMaterialsAndDeterminism) {
-  mgn::Intrinsics K;
-  K.width = K.height = 200;
-  K.fx = K.fy = 300;
-  K.cx = K.cy = 100;
+  const mgn::Intrinsics K = centred_intrinsics(200, 200, 300);
   std::vector<float> depth(40000, 1.0f);
   std::vector<std::int32_t> ids(40000, 1);
   for (int i = 0; i < 100; ++i) ids[i] = 2, depth[i] = 1.0f;  // first half row: transparent
@@ -421,11 +421,7 @@ TEST(DepthSensor, NoiseMaterialsAndDeterminism) {
 }
 
 TEST(DepthSensor, TofFlyingPixelsLieBetweenSurfaces) {
-  mgn::Intrinsics K;
-  K.width = 100;
-  K.height = 100;
-  K.fx = K.fy = 100;
-  K.cx = K.cy = 50;
+  const mgn::Intrinsics K = centred_intrinsics(100, 100, 100);
   std::vector<float> depth(10000, 1.5f);
   std::vector<std::int32_t> ids(10000, 1);
   for (int v = 0; v < 100; ++v)
@@ -452,12 +448,7 @@ TEST(DepthSensor, NoiseFollowsSigmaOfDepthOnATiltedPlane) {
   // A plane whose depth grows down the image (constant along each row) through each preset's
   // range, on the continuous grid: the residuals divided by the analytic sigma(z) = a + b (z -
   // z0)^2 are standard normal in every band of rows and over the whole image.
-  mgn::Intrinsics K;
-  K.width = 400;
-  K.height = 600;
-  K.fx = K.fy = 500;
-  K.cx = 200;
-  K.cy = 300;
+  const mgn::Intrinsics K = centred_intrinsics(400, 600, 500);
   const std::size_t n = 400 * 600;
   std::vector<std::int32_t> ids(n, 1);
   for (auto preset : {mgn::DepthSensorPreset::StructuredLight, mgn::DepthSensorPreset::ToF}) {
@@ -500,12 +491,7 @@ TEST(DepthSensor, NoiseFollowsSigmaOfDepthOnATiltedPlane) {
 
 TEST(DepthSensor, SameBytesForAnyThreadCount) {
   // Boxes on a floor: shadows, edges and flying pixels (ToF) as well as the noise.
-  mgn::Intrinsics K;
-  K.width = 320;
-  K.height = 240;
-  K.fx = K.fy = 300;
-  K.cx = 160;
-  K.cy = 120;
+  const mgn::Intrinsics K = centred_intrinsics(320, 240, 300);
   std::vector<float> depth(320 * 240, 1.2f);
   std::vector<std::int32_t> ids(320 * 240, 0);
   for (int b = 0; b < 6; ++b)
