@@ -188,10 +188,20 @@ struct MaterialData {
   const pt::MsTables* ms = nullptr;  // multiple-scattering compensation; owned by Geometry
 };
 
+/// What shading needs of one triangle, in one record (one or two cache lines instead of one per
+/// array: vertices, faces, normals, materials).
+struct TriShade {
+  F3 p[3];                // vertices, world
+  F3 ng;                  // unit geometric normal (front side), world
+  F3 cn[3];               // unit shading normals of the corners, world
+  std::int32_t material;  // global material index
+};
+
 struct GeometryData {
   Points3f vertices;  // world
   Faces faces;
-  std::vector<F3> corner_normals;           // (F*3) unit shading normals per face corner, world
+  std::vector<F3> corner_normals;           // (F*3) shading normals per corner (while building)
+  std::vector<TriShade> tri;                // (F) the per-face shading records
   Points2f uvs;                             // (V,2) or empty
   std::vector<std::int32_t> face_material;  // (F) global material index
   std::vector<std::int32_t> face_emitter;   // (F) index into Geometry::emitters or -1; or empty
@@ -503,6 +513,22 @@ PathScene::PathScene(const std::vector<PathGeometry>& geometries,
       G->emitters.push_back(t);
     }
   }
+  for (std::size_t g = 0; g < G->geoms.size(); ++g) {
+    GeometryData& d = G->geoms[g];
+    const Points3f& fnr = G->rays->impl().world_normals[g];
+    d.tri.resize(static_cast<std::size_t>(d.faces.rows()));
+    for (Eigen::Index f = 0; f < d.faces.rows(); ++f) {
+      TriShade& t = d.tri[f];
+      for (int k = 0; k < 3; ++k) {
+        const auto i = d.faces(f, k);
+        t.p[k] = F3(d.vertices(i, 0), d.vertices(i, 1), d.vertices(i, 2));
+        t.cn[k] = d.corner_normals[3 * static_cast<std::size_t>(f) + k];
+      }
+      t.ng = F3(fnr(f, 0), fnr(f, 1), fnr(f, 2));
+      t.material = d.face_material[f];
+    }
+    std::vector<F3>().swap(d.corner_normals);  // now in `tri`
+  }
   G->triangles = G->rays->num_triangles();
   G->bounds = G->rays->bounds();
   lighting_ = make_lighting(lights, environment, G->emitters);
@@ -584,15 +610,10 @@ void make_hit(const Geometry& G, const RTCRayHit& rh, F3 dir, Hit& h) {
   const GeometryData& g = G.geoms[rh.hit.geomID];
   const unsigned f = rh.hit.primID;
   const float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.0f - b1 - b2;
-  const std::int32_t i0 = g.faces(f, 0), i1 = g.faces(f, 1), i2 = g.faces(f, 2);
-  auto vert = [&](std::int32_t i) {
-    return F3(g.vertices(i, 0), g.vertices(i, 1), g.vertices(i, 2));
-  };
-  h.p = vert(i0) * b0 + vert(i1) * b1 + vert(i2) * b2;
-  const auto& fnr = G.rays->impl().world_normals[rh.hit.geomID];
-  F3 ng(fnr(f, 0), fnr(f, 1), fnr(f, 2));
-  const F3* cn = &g.corner_normals[3 * static_cast<std::size_t>(f)];
-  F3 ns = normalize(cn[0] * b0 + cn[1] * b1 + cn[2] * b2);
+  const TriShade& t = g.tri[f];
+  h.p = t.p[0] * b0 + t.p[1] * b1 + t.p[2] * b2;
+  F3 ng = t.ng;
+  F3 ns = normalize(t.cn[0] * b0 + t.cn[1] * b1 + t.cn[2] * b2);
   h.front = dot(dir, ng) < 0.0f;
   if (!h.front) {
     ng = -ng;
@@ -601,9 +622,10 @@ void make_hit(const Geometry& G, const RTCRayHit& rh, F3 dir, Hit& h) {
   if (dot(ns, ng) <= 0.0f || dot(ns, -dir) <= 1e-4f) ns = ng;  // fall back at flips
   h.ng = ng;
   h.ns = ns;
-  h.mat = &G.mats[g.face_material[f]];
+  h.mat = &G.mats[t.material];
   h.base = h.mat->base;
   if (h.mat->tex != nullptr && g.uvs.rows() > 0) {
+    const std::int32_t i0 = g.faces(f, 0), i1 = g.faces(f, 1), i2 = g.faces(f, 2);
     const float u = g.uvs(i0, 0) * b0 + g.uvs(i1, 0) * b1 + g.uvs(i2, 0) * b2;
     const float v = g.uvs(i0, 1) * b0 + g.uvs(i1, 1) * b1 + g.uvs(i2, 1) * b2;
     h.base = h.base * texture_lookup(*h.mat, u, v);
@@ -1078,12 +1100,10 @@ class Integrator {
       return L_.env_on ? Le : F3(0.0f);
     }
     if (aux_albedo) aux_behind_glass(rh, d, *aux_albedo, *aux_normal);
-    const GeometryData& g = G_.geoms[rh.hit.geomID];
-    const MaterialData& m = G_.mats[g.face_material[rh.hit.primID]];
+    const TriShade& t = G_.geoms[rh.hit.geomID].tri[rh.hit.primID];
+    const MaterialData& m = G_.mats[t.material];
     if (!m.emissive) return F3(0.0f);
-    const auto& fnr = G_.rays->impl().world_normals[rh.hit.geomID];
-    const F3 ng(fnr(rh.hit.primID, 0), fnr(rh.hit.primID, 1), fnr(rh.hit.primID, 2));
-    return dot(d, ng) < 0.0f ? m.emission : F3(0.0f);
+    return dot(d, t.ng) < 0.0f ? m.emission : F3(0.0f);
   }
 
   /// The denoiser guides along a ray whose first hit is `rh` (direction d): the first surface that
