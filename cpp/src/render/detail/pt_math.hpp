@@ -537,7 +537,8 @@ struct ShadingMaterial {
   F3 ms_c = F3(0.0f);             ///< conductor compensation: f_ms = ms_c (1 - E(mu_i))
   int side = 0;                   ///< side of the dielectric wo is on (0 outside, 1 inside)
   float q_ms = 0.0f;              ///< probability that sample_rough samples the compensation lobes
-  float ms_o = 0.0f;  ///< 1 - E_side(mu_o) of the rough dielectric (0 without compensation)
+  float ms_o = 0.0f;      ///< 1 - E_side(mu_o) of the rough dielectric (0 without compensation)
+  float lambda_o = 0.0f;  ///< Smith Lambda of wo (ggx_lambda depends on cos_o only)
 
   /// Transmission tint of one interface: the square root of the base colour.
   F3 sqrt_base() const { return {std::sqrt(base.x), std::sqrt(base.y), std::sqrt(base.z)}; }
@@ -546,8 +547,10 @@ struct ShadingMaterial {
   /// the alpha above which the multiple-scattering compensation tables are built.
   static constexpr float kRoughAlpha = 3e-3f;
 
-  /// `front`: wo is on the outward side of the surface (the dielectric is entered).
+  /// `front`: wo is on the outward side of the surface (the dielectric is entered). The eval and
+  /// sample functions below must be given a wo with wo.z = cos_o.
   void prepare(float cos_o, bool front = true) {
+    lambda_o = ggx_lambda(F3(0.0f, 0.0f, cos_o), alpha);
     w_trans = (1.0f - metallic) * transmission;
     eta = front ? ior : 1.0f / ior;
     rough = w_trans > 0.0f && alpha > kRoughAlpha && ior > 1.0f;
@@ -590,7 +593,7 @@ struct ShadingMaterial {
     f = F3(0.0f);
     pdf = 0.0f;
     if (wo.z <= 0.0f || wi.z == 0.0f) return;
-    const float lo = ggx_lambda(wo, alpha), li = ggx_lambda(wi, alpha);
+    const float lo = lambda_o, li = ggx_lambda(wi, alpha);
     const float g2 = 1.0f / (1.0f + lo + li), g1o = 1.0f / (1.0f + lo);
     const float p_ss = 1.0f - q_ms;
     const bool comp = ms != nullptr && ms->dielectric && q_ms > 0.0f;
@@ -640,7 +643,7 @@ struct ShadingMaterial {
     if (has_other) {
       const F3 h = normalize(wo + wi);
       const float d = ggx_d(h, alpha);
-      const float lo = ggx_lambda(wo, alpha), li = ggx_lambda(wi, alpha);
+      const float lo = lambda_o, li = ggx_lambda(wi, alpha);
       const float g2 = 1.0f / (1.0f + lo + li);
       const float g1o = 1.0f / (1.0f + lo);
       const float wh = std::max(dot(wo, h), 0.0f);
