@@ -13,16 +13,17 @@ real with ``staircase=True`` and the variant, one grasp at a time (CPU-s per gra
 must equal the replay).
 
 Variants: ``default`` (today's options on the first ``--rate-grasps`` grasps: its trial
-rate, and a check that the cache still holds today's outcomes), ``dt150`` and ``dt100`` (time
-step 1/150 and 1/100 s, every step count scaled to keep each phase's duration), ``dt100k`` (also
-the force controller's gain per step scaled), ``dt400`` (a finer step), ``hold``
-(``hold_tolerance`` = 3 mm: the translational cycles after the first and the last quarter of the
-rotational shake are skipped when the object stayed within 3 mm of its pose in the hand through
-a window whose loads they repeat), ``smooth``/``smooth_dt100`` (``smooth_shake``), ``dt100i15``,
-``dt100i20``, ``dt100i40``, ``dt75i30`` (a coarse step with 15, 20, 40 or 30 solver
-iterations). The last column
-compares the staircase search replayed on the variant's grid with that grid's own score (the
-agreement the search can reach under that physics); ``--rate-grasps 0`` skips the default rerun.
+rate, and a check that the cache still holds today's outcomes; ``--rate-grasps 0`` skips it),
+``dt150``, ``dt100`` and ``dt75`` (time step 1/150, 1/100 and 1/75 s, every step count scaled to
+keep each phase's duration), ``dt100k`` (also the force controller's gain per step scaled),
+``dt400`` (a finer step), ``hold`` (``hold_tolerance`` = 3 mm: the translational cycles after
+the first and the last quarter of the rotational shake are skipped when the object stayed within
+3 mm of its pose in the hand through a window whose loads they repeat), ``smooth`` and
+``smooth_dt100`` (``smooth_shake``), ``dt100i15``, ``dt100i20``, ``dt100i40`` and ``dt75i30``
+(a coarse step with 15, 20, 40 or 30 solver iterations). The last column compares the staircase
+search replayed on the variant's grid with that grid's own score: the agreement the search can
+reach under that physics (a different default physics is acceptable if its own grids are
+monotone enough); ``--curve`` adds it for several check budgets and search variants.
 
     python -m benchmarks.bench_shake_speed --grid-cache /tmp/shake \
         [--objects can_soda:100,box_cereal:170] [--variants hold,dt150,dt100] [--confirm 20]
@@ -65,6 +66,7 @@ VARIANTS = {
     "dt100": _dt(100),
     "dt100k": _dt(100, gain=True),
     "dt400": _dt(400),
+    "dt75": _dt(75),
     "smooth": {"smooth_shake": True},
     "smooth_dt100": {"smooth_shake": True, **_dt(100)},
     # Session 11: the coarse step's isolated failures of light objects (the solver does not
