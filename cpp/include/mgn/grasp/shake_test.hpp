@@ -131,6 +131,11 @@ struct ShakeOptions {
   /// Bullet sequential-impulse iterations, >= 1; multiplied by ceil(grip_force / (150 m g))
   /// (at most 8) for light objects, which the solver otherwise lets spin out of the grip.
   int solver_iterations = 10;
+  /// Iterations per contact point (0 = off): each step runs at least ceil(this × the number of
+  /// object–hand contact points of the previous step) iterations. An object held by many points
+  /// (a compound's child hulls) needs more iterations for the solver to converge, notably at a
+  /// coarser dt (benchmarks/RESULTS.md, "Shake test, session 11").
+  double iterations_per_contact = 0.0;
   /// Staircase search instead of the full grid: success is monotone wherever physics behaves
   /// (more friction helps, more mass hurts), so each grasp's success boundary is found by
   /// galloping and bisection row by row (see staircase_grid()), the cells on both sides of it
