@@ -151,7 +151,7 @@ TEST(Shake, StaticHoldFollowsCoulombBoundOfTheGripForce) {
 
 TEST(Shake, IterationsPerContactKeepTheCoulombBoundAtACoarseStep) {
   // The same Coulomb bound at dt = 1/100 s with twice the contact points as iterations (a box
-  // between two pads has 8 of them, so 16 iterations instead of 10: the option is active).
+  // face-to-face with two pads touches each with up to 4 points: up to 16 iterations, not 10).
   const double m = 1.0, F = 20.0;
   const double mu_star = m * 9.81 / (2.0 * F);
   const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), m);
