@@ -20,8 +20,8 @@ keep each phase's duration), ``dt100k`` (also the force controller's gain per st
 the first and the last quarter of the rotational shake are skipped when the object stayed within
 3 mm of its pose in the hand through a window whose loads they repeat), ``smooth`` and
 ``smooth_dt100`` (``smooth_shake``), ``dt100i15``, ``dt100i20``, ``dt100i40`` and ``dt75i30``
-(a coarse step with 15, 20, 40 or 30 solver iterations), ``dt100c1`` (1/100 s with
-``iterations_per_contact`` = 1). The last column compares the staircase
+(a coarse step with 15, 20, 40 or 30 solver iterations), ``dt100f5`` (1/100 s with
+``iterations_per_hull_contact`` = 5). The last column compares the staircase
 search replayed on the variant's grid with that grid's own score: the agreement the search can
 reach under that physics (a different default physics is acceptable if its own grids are
 monotone enough); ``--curve`` adds it for several check budgets and search variants.
@@ -76,7 +76,7 @@ VARIANTS = {
     "dt100i20": {**_dt(100), "solver_iterations": 20},
     "dt75i30": {**_dt(75), "solver_iterations": 30},
     "dt100i40": {**_dt(100), "solver_iterations": 40},
-    "dt100c1": {**_dt(100), "iterations_per_contact": 1.0},
+    "dt100f5": {**_dt(100), "iterations_per_hull_contact": 5.0},
 }
 
 

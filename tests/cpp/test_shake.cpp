@@ -149,9 +149,9 @@ TEST(Shake, StaticHoldFollowsCoulombBoundOfTheGripForce) {
   }
 }
 
-TEST(Shake, IterationsPerContactKeepTheCoulombBoundAtACoarseStep) {
-  // The same Coulomb bound at dt = 1/100 s with twice the contact points as iterations (a box
-  // face-to-face with two pads touches each with up to 4 points: up to 16 iterations, not 10).
+TEST(Shake, IterationsPerHullContactKeepTheCoulombBoundAtACoarseStep) {
+  // The same Coulomb bound at dt = 1/100 s with 10 iterations per (finger, hull) pair in
+  // contact: a box held by both fingers gets 20 iterations instead of 10 (the option is active).
   const double m = 1.0, F = 20.0;
   const double mu_star = m * 9.81 / (2.0 * F);
   const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), m);
@@ -162,25 +162,24 @@ TEST(Shake, IterationsPerContactKeepTheCoulombBoundAtACoarseStep) {
     o.close_steps = 200;
     o.shake_steps = 100;
     o.settle_steps = o.lost_contact_steps = 5;
-    o.iterations_per_contact = 2.0;
+    o.iterations_per_hull_contact = 10.0;
     const ShakeResult r = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
     EXPECT_EQ(r.trial_success[0] != 0, factor > 1.0) << "friction factor " << factor;
   }
 }
 
-TEST(Shake, IterationsPerContactChangeNothingBelowTheBaseIterations) {
-  // A single hull has at most one contact manifold with each of the 3 hand bodies, of at most
-  // 4 points (Bullet's manifold cache): 0.5 per point asks for at most 6 iterations, below the
-  // 10 of solver_iterations, so every trial is bit-identical to the default. 3 per point (up
-  // to 36 iterations) must still hold the box everywhere.
+TEST(Shake, IterationsPerHullContactChangeNothingOnASingleHullUpToHalfTheIterations) {
+  // A single hull makes at most 2 (finger, hull) pairs: 5 per pair asks for at most the 10 of
+  // solver_iterations, so every trial is bit-identical to the default. 15 per pair (30
+  // iterations) must still hold the box everywhere.
   const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.3);
   ShakeOptions o = small_grid(3, 0.5, 2.0);
   const ShakeResult base = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
-  o.iterations_per_contact = 0.5;
+  o.iterations_per_hull_contact = 0.5 * o.solver_iterations;
   const ShakeResult same = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
   EXPECT_EQ(same.trial_success, base.trial_success);
   EXPECT_EQ(same.trial_steps, base.trial_steps);
-  o.iterations_per_contact = 3.0;
+  o.iterations_per_hull_contact = 15.0;
   const ShakeResult more = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
   EXPECT_GE(more.score[0], 0.99);
 }
@@ -382,10 +381,10 @@ TEST(Shake, BadInputIsRejectedWithAClearMessage) {
   bo.hold_tolerance = NAN;
   expect_error(box, centre_grasp(0.04), bo, "hold_tolerance");
   bo = o;
-  bo.iterations_per_contact = -1;
-  expect_error(box, centre_grasp(0.04), bo, "iterations_per_contact");
-  bo.iterations_per_contact = NAN;
-  expect_error(box, centre_grasp(0.04), bo, "iterations_per_contact");
+  bo.iterations_per_hull_contact = -1;
+  expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
+  bo.iterations_per_hull_contact = NAN;
+  expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, 1.0, o, 0), InvalidArgument);
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, -1.0, o, 1), InvalidArgument);
   // No grasps: an empty result, not an error.
