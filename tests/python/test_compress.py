@@ -10,6 +10,7 @@ import zlib
 from pathlib import Path
 
 import cv2
+import deflate
 import h5py
 import numpy as np
 import pytest
@@ -17,7 +18,9 @@ from PIL import Image
 
 from mgn.base.compress import (
     RUN_BLOCK,
+    ZERO_RUN_DISTANCE,
     ZipDeflate,
+    _zero_blocks,
     deflate_raw,
     deflate_runs,
     h5_write_deflated,
@@ -98,6 +101,42 @@ def test_run_streams_inflate_with_zlib_to_the_input(level: int):
         assert np.array_equal(z["mask"], mask)
     with pytest.raises(InvalidArgumentError, match="zlib level 10"):
         deflate_runs(b"abc", 10)
+
+
+@pytest.mark.parametrize("count", [1, 2, 3, 7, 8, 10, 137, 256])
+def test_zero_blocks_inflate_to_zeros_after_any_data(count: int):
+    """The hand-made deflate blocks of zeros (one dynamic block + an empty stored block): zlib
+    and libdeflate (two inflaters) give exactly count * RUN_BLOCK zeros, after a preceding
+    deflated part whose last bytes are not zero (the matches reach back into the block only);
+    counts 8 and 10 are the cases where the bytes after the 258-byte matches are 0 and 1-2. The
+    distance of the matches is ZERO_RUN_DISTANCE (the first that many bytes are literals)."""
+    n = count * RUN_BLOCK
+    zeros = _zero_blocks(count)
+    head = zlib.compressobj(3, zlib.DEFLATED, -15)
+    prefix = bytes(range(1, 200)) * 3
+    stream = head.compress(prefix) + head.flush(zlib.Z_SYNC_FLUSH) + zeros + b"\x03\x00"
+    assert zlib.decompress(stream, -15) == prefix + bytes(n)
+    assert deflate.deflate_decompress(stream, len(prefix) + n) == prefix + bytes(n)
+    # A brute-force reading of the block's Huffman codes: 3 bits per 258-byte match at most.
+    assert len(zeros) <= 40 + 3 * (n // 258) // 8 + 8
+    assert zeros[-4:] == b"\x00\x00\xff\xff"  # byte-aligned end, as zlib's sync flush
+    assert _zero_blocks(count) is zeros  # cached
+    assert ZERO_RUN_DISTANCE >= 5  # distances 1-4 inflate slowly in zlib
+
+
+def test_zero_blocks_cut_anywhere_are_a_clear_error():
+    """A stream of zero blocks with a byte changed or cut short does not inflate to zeros
+    silently: zlib reports an error or gives other bytes (the zip entry's CRC catches those)."""
+    stream = deflate_runs(bytes(8 * RUN_BLOCK), 3)
+    with pytest.raises(zlib.error):
+        zlib.decompress(stream[: len(stream) // 2], -15)
+    bad = bytearray(stream)
+    bad[3] ^= 0xFF
+    try:
+        out = zlib.decompress(bytes(bad), -15)
+    except zlib.error:
+        return
+    assert out != bytes(8 * RUN_BLOCK)
 
 
 def test_levels_outside_libdeflate_range_are_refused():
