@@ -725,11 +725,12 @@ def hdf5_bytes(
 #: 1200 x 1200 view of 20 objects it costs less than zlib's level 1 did, for 0.88x the bytes of
 #: ``depth_ideal`` and 0.86x the RGB PNG's (benchmarks/RESULTS.md, "Dataset files").
 DEFLATE_LEVEL = 6
-#: libdeflate level of the images of ``{v}_mgn.hdf5`` (``depth_ideal``'s gradient residual):
-#: level 6 gives 0.99x the bytes in 1.2x the time.
+#: libdeflate level of the images of ``{v}_mgn.hdf5`` (``depth_ideal``'s gradient residual) in
+#: the default mode: level 6 (the archival mode's) gives 0.99x the bytes in 1.2x the time.
 MGN_IMAGE_LEVEL = 5
-#: libdeflate level of the chunks of ``{v}_scene.hdf5`` (grasps, keypoints): level 6 gives 0.998x
-#: the bytes (the float32 rotations are at their entropy) in 1.07x the time.
+#: libdeflate level of the chunks of ``{v}_scene.hdf5`` (grasps, keypoints) in the default mode:
+#: level 6 (the archival mode's) gives 0.998x the bytes (float32 rotations are at their entropy)
+#: in 1.07x the time.
 SCENE_HDF5_LEVEL = 5
 #: libdeflate level of the zip entries of ``{v}.npz``: the sensor depth in 0.84x the bytes of
 #: zlib's level 1 in the same time (level 6: another -0.7 %, +30 % time), the masks in 0.3x.
@@ -903,10 +904,16 @@ def write_view(
         np.where(valid, ideal_m, np.float32(np.nan)), level=DEPTH_PICTURE_LEVEL
     )
     lap("depth.png")
-    files[f"{v}_scene.hdf5"] = hdf5_bytes(h5, share_rotations=True, level=SCENE_HDF5_LEVEL)
+    files[f"{v}_scene.hdf5"] = hdf5_bytes(
+        h5, share_rotations=True, level=DEFLATE_LEVEL if archival else SCENE_HDF5_LEVEL
+    )
     lap("scene.hdf5")
     files[f"{v}_mgn.hdf5"] = mgn_hdf5_bytes(
-        images, unorm16=unorm16, attrs=image_attrs, level=MGN_IMAGE_LEVEL, zlib_levels=runs
+        images,
+        unorm16=unorm16,
+        attrs=image_attrs,
+        level=DEFLATE_LEVEL if archival else MGN_IMAGE_LEVEL,
+        zlib_levels=runs,
     )
     lap("mgn.hdf5")
     files[f"{v}_order.csv"] = rec.order_csv.encode()
