@@ -347,7 +347,7 @@ class ZipRunDeflate(ZipDeflate):
 
 def shuffled_chunks(
     data: npt.ArrayLike, chunks: tuple[int, ...], *, shuffle: bool = True
-) -> list[tuple[tuple[int, ...], bytes]]:
+) -> list[tuple[tuple[int, ...], memoryview]]:
     """The chunks of ``data`` for an HDF5 chunked layout of shape ``chunks``, in row-major chunk
     order, each as (offset, bytes after HDF5's shuffle filter): a full chunk's C-order values (the
     parts beyond the dataset's edge zero) with byte k of every value grouped together (all bytes
@@ -377,7 +377,7 @@ def shuffled_chunks(
     out = []
     for k, index in enumerate(np.ndindex(*counts)):
         offset = tuple(i * c for i, c in zip(index, chunks, strict=True))
-        out.append((offset, planes[k].tobytes()))
+        out.append((offset, planes[k].data))  # a view of the row, not a copy
     return out
 
 
