@@ -86,11 +86,12 @@ def _stored_blocks(data: bytes) -> bytes:
 
 class ZipDeflate:
     """Drop-in for the raw-deflate compressor ``zipfile`` makes for a ``ZIP_DEFLATED`` entry
-    (``compress`` / ``flush``; ``zipfile`` computes the CRC and sizes of the uncompressed bytes
-    itself). Keeps the parts written (a memoryview is kept, not copied) and deflates them at
-    flush in one libdeflate call; leading parts of less than 64 KiB together (e.g. a ``.npy``
-    header before the array's own buffer) go first as stored blocks, so the large last part
-    is deflated without being copied next to them.
+    (``compress`` / ``flush``; the zip writer computes the CRC and sizes of the uncompressed
+    bytes itself: :func:`mgn.base.deterministic.zip_bytes`). Keeps the parts written (a
+    memoryview is kept, not copied) and deflates them at flush in one libdeflate call; leading
+    parts of less than 64 KiB together (e.g. a ``.npy`` header before the array's own buffer) go
+    first as stored blocks, so the large last part is deflated without being copied next to
+    them.
 
     On images made of long runs of equal bytes (masks, id images, a heat map's zero residual)
     libdeflate's compact streams (~3x smaller than zlib's level 1) take zlib's inflater 2-3x
@@ -286,12 +287,13 @@ _FINAL_EMPTY_BLOCK = b"\x03\x00"
 def deflate_runs(data: bytes | memoryview | npt.NDArray[Any], level: int) -> bytes:
     """Raw deflate stream (RFC 1951) of ``data`` made by zlib at ``level`` (1..9), for images
     that are mostly zeros (masks, ids, the CoM residual): the data is cut into blocks of
-    :data:`RUN_BLOCK` bytes; each run of at least two all-zero blocks is a cached stream of zeros
-    (:func:`_zero_blocks`, powers of two of blocks), the bytes between them are deflated by a
-    fresh zlib compressor each (so no match reaches across a run). zlib's fast levels (1-3) keep
-    its matches long-distance, which zlib inflates several times faster than libdeflate's
-    compact streams of runs (:class:`ZipDeflate`); skipping the zeros makes it ~3x faster
-    than deflating them. The same bytes in give the same stream out (for one zlib version)."""
+    :data:`RUN_BLOCK` bytes; each run of at least two all-zero blocks is a cached deflate block of
+    zeros (:func:`_zero_blocks`, powers of two of blocks: 3 bits per 258 bytes, a quarter of
+    zlib's own stream of zeros), the bytes between them are deflated by a fresh zlib compressor
+    each (so no match reaches across a run). zlib's fast levels (1-3) keep their matches
+    long-distance, which zlib inflates several times faster than libdeflate's compact streams of
+    runs (:class:`ZipDeflate`); skipping the zeros makes it ~3x faster than deflating them. The
+    same bytes in give the same stream out (for one zlib version)."""
     if not 1 <= int(level) <= 9:
         raise InvalidArgumentError(f"zlib level {level}: expected 1..9")
     a = np.frombuffer(data, np.uint8) if not isinstance(data, np.ndarray) else data.reshape(-1)
