@@ -19,7 +19,6 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <condition_variable>
 #include <memory>
@@ -843,12 +842,9 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
         success, r.fallback);
     r.trial_success = std::move(success);
   } else {
-    const std::size_t workers = std::min<std::size_t>(
-        static_cast<std::size_t>(resolve_num_threads(options.num_threads)), n);
-    std::atomic<std::size_t> next{0};
-    parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
+    parallel_workers_dynamic(n, options.num_threads, 1, [&](BlockQueue& trials) {
       const TrialShapes shapes(prepared, gripper, options);
-      for (std::size_t t = next.fetch_add(1); t < n; t = next.fetch_add(1)) run_trial(shapes, t);
+      for (std::size_t t, end; trials.next(t, end);) run_trial(shapes, t);
     });
   }
   r.score.assign(grasps.size(), 0.0);
