@@ -438,9 +438,11 @@ TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
   // Synthetic grids (no physics): per grasp a monotone boundary, some with a flipped cell that
   // makes the search fall back. For 1, 2 and 3 threads every cell and fallback flag must equal
   // staircase_grid() run grasp by grasp, every trial must run at most once and exactly the
-  // cells staircase_grid() simulates must run. Grasp 0 falls back and its trials are slow (2 ms),
-  // the others are instant: the threads that finish the others must take over some of grasp
-  // 0's fallback cells (with contiguous ranges one thread would run all of them).
+  // cells staircase_grid() simulates must run. Grasp 0 falls back and its trials are slow
+  // (20 ms each with 2 or 3 threads, ~0.7 s in all: long enough for the other threads to be
+  // scheduled on a loaded machine; 2 ms failed once at load 9), the others are instant: the
+  // threads that finish the others must take over some of grasp 0's fallback cells (with
+  // contiguous ranges one thread would run all of them).
   const int S = 6;
   const std::size_t G = 9, per = S * S;
   std::vector<int> bound(G);
@@ -475,7 +477,7 @@ TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
     std::mutex m;
     auto make = [&]() -> detail::TrialRunner {
       return [&](std::size_t t) {
-        if (t < per) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        if (t < per && threads > 1) std::this_thread::sleep_for(std::chrono::milliseconds(20));
         ++runs[t];
         std::lock_guard<std::mutex> lock(m);
         who[t] = std::this_thread::get_id();
