@@ -121,7 +121,8 @@ def _engine_mgn(
         opts = mpath.PathTraceOptions(spp=1, max_bounces=0, num_threads=THREADS)
         return np.asarray(scene.render(view, opts).instance_ids, np.int32)
 
-    return {"render": render, "ids": ids, "keep": scene, "denoiser_study": denoiser_study}
+    return {"render": render, "ids": ids, "keep": scene, "denoiser_study": denoiser_study,
+            "trace": trace}  # fmt: skip
 
 
 def _engine_cycles(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Callable]:

@@ -113,10 +113,13 @@ def _search_previous(grid: np.ndarray, checks: int) -> tuple[int, int, bool]:
     return _verify(grid, sim, inf, near + _golden(rest), checks)
 
 
-def _search_bisect(grid: np.ndarray, checks: int, band: bool) -> tuple[int, int, bool]:
+def _search_bisect(
+    grid: np.ndarray, checks: int, band: bool, extra: tuple = ()
+) -> tuple[int, int, bool]:
     """The walk of staircase_grid (hardest cell of row 0 first, then per row gallop and bisect
     from the previous row's boundary), with or without the band of cells next to the boundary
-    before `checks` golden-ratio checks."""
+    before `checks` golden-ratio checks; the inferred cells of `extra` are verified after the
+    band."""
     S = grid.shape[0]
     sim = np.zeros_like(grid)
     inf = np.zeros_like(grid)
@@ -148,6 +151,7 @@ def _search_bisect(grid: np.ndarray, checks: int, band: bool) -> tuple[int, int,
             c += step if 0 <= c < S and sim[i, c] else 0
             if 0 <= c < S and not sim[i, c]:
                 near.append((i, c))
+    near += [c for c in extra if not sim[c] and c not in near]
     rest = [(i, jj) for i in range(S) for jj in range(S) if not sim[i, jj] and (i, jj) not in near]
     return _verify(grid, sim, inf, near, checks, _golden(rest))
 
@@ -180,6 +184,11 @@ VARIANTS = {
     "previous (walk right, checks at distance 1-2)": _search_previous,
     "gallop+bisect, no band": lambda g, c: _search_bisect(g, c, band=False),
     "gallop+bisect, band (staircase_grid)": replay,
+    # Session 11: at a coarse step the isolated failures sit in the lightest column (light
+    # objects squeezed between the pads: the solver does not converge), so verify it too.
+    "gallop+bisect, band + lightest column": lambda g, c: _search_bisect(
+        g, c, band=True, extra=tuple((i, 0) for i in range(g.shape[0]))
+    ),
 }
 
 

@@ -97,6 +97,7 @@ void bind_grasp_shake_test(py::module_& m) {
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
       .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
+      .def_readwrite("iterations_per_hull_contact", &ShakeOptions::iterations_per_hull_contact)
       .def_readwrite("staircase", &ShakeOptions::staircase)
       .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
       .def_readwrite("num_threads", &ShakeOptions::num_threads)

@@ -148,6 +148,45 @@ void bind_scene_view_labels(py::module_& m) {
           py::arg("keypoint_tolerance") = ViewLabelOptions{}.keypoint_tolerance,
           py::arg("keypoints") = ViewLabelOptions{}.keypoints,
           py::arg("num_threads") = ViewLabelOptions{}.num_threads, py::arg("depth") = py::none());
+
+  m.def(
+      "com_heatmap_prediction",
+      [](const py::handle& depth_m, const py::handle& instances, const py::handle& X_WC, double fx,
+         double fy, double cx, double cy, const py::handle& com_parameters) {
+        CArray<float> z;
+        CArray<std::int32_t> ids;
+        CArray<double> X, params;
+        try {
+          z = py::cast<CArray<float>>(depth_m);
+          ids = py::cast<CArray<std::int32_t>>(instances);
+          X = py::cast<CArray<double>>(X_WC);
+          params = py::cast<CArray<double>>(com_parameters);
+        } catch (const py::cast_error&) {
+          throw_error<InvalidArgument>(
+              "com_heatmap_prediction: expected float32 depth (H, W), int32 instances (H, W), "
+              "X_WC (4, 4) and com_parameters (N, 5)");
+        }
+        if (z.ndim() != 2 || ids.ndim() != 2 || z.shape(0) != ids.shape(0) ||
+            z.shape(1) != ids.shape(1) || X.size() != 16 || params.ndim() != 2 ||
+            params.shape(1) != 5) {
+          throw_error<InvalidArgument>(
+              "com_heatmap_prediction: expected depth and instances of one (H, W) shape, X_WC "
+              "(4, 4) and com_parameters (N, 5)");
+        }
+        const int h = static_cast<int>(z.shape(0)), w = static_cast<int>(z.shape(1));
+        py::array_t<float> out({z.shape(0), z.shape(1)});
+        float* o = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          com_heatmap_prediction(z.data(), ids.data(), w, h, X.data(), fx, fy, cx, cy,
+                                 params.data(), static_cast<int>(params.shape(0)), o);
+        }
+        return out;
+      },
+      py::arg("depth_m"), py::arg("instances"), py::arg("X_WC"), py::arg("fx"), py::arg("fy"),
+      py::arg("cx"), py::arg("cy"), py::arg("com_parameters"),
+      "(H, W) float32 CoM heat map predicted from the noise-free depth (m), see "
+      "mgn/scene/view_labels.hpp and docs/format.md.");
 }
 
 }  // namespace mgn::py_bind

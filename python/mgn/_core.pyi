@@ -84,6 +84,7 @@ __all__: list[str] = [
     "classification_metrics",
     "collide",
     "color_temperature_rgb",
+    "com_heatmap_prediction",
     "compute_layout",
     "compute_mass_properties",
     "convex_decomposition",
@@ -1675,6 +1676,12 @@ class ShakeOptions:
     @inertia_floor.setter
     def inertia_floor(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
     @property
+    def iterations_per_hull_contact(self) -> float: ...
+    @iterations_per_hull_contact.setter
+    def iterations_per_hull_contact(
+        self, arg0: typing.SupportsFloat | typing.SupportsIndex
+    ) -> None: ...
+    @property
     def lost_contact_steps(self) -> int: ...
     @lost_contact_steps.setter
     def lost_contact_steps(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
@@ -2618,6 +2625,20 @@ def collide(
 def color_temperature_rgb(
     kelvin: typing.SupportsFloat | typing.SupportsIndex,
 ) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]: ...
+def com_heatmap_prediction(
+    depth_m: typing.Any,
+    instances: typing.Any,
+    X_WC: typing.Any,
+    fx: typing.SupportsFloat | typing.SupportsIndex,
+    fy: typing.SupportsFloat | typing.SupportsIndex,
+    cx: typing.SupportsFloat | typing.SupportsIndex,
+    cy: typing.SupportsFloat | typing.SupportsIndex,
+    com_parameters: typing.Any,
+) -> numpy.typing.NDArray[numpy.float32]:
+    """
+    (H, W) float32 CoM heat map predicted from the noise-free depth (m), see mgn/scene/view_labels.hpp and docs/format.md.
+    """
+
 def compute_layout(
     visible: typing.Any,
     amodal: typing.Any,

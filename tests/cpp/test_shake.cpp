@@ -149,6 +149,41 @@ TEST(Shake, StaticHoldFollowsCoulombBoundOfTheGripForce) {
   }
 }
 
+TEST(Shake, IterationsPerHullContactKeepTheCoulombBoundAtACoarseStep) {
+  // The same Coulomb bound at dt = 1/100 s with 10 iterations per (finger, hull) pair in
+  // contact: a box held by both fingers gets 20 iterations instead of 10 (the option is active).
+  const double m = 1.0, F = 20.0;
+  const double mu_star = m * 9.81 / (2.0 * F);
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), m);
+  for (double factor : {0.7, 0.85, 1.2, 1.5}) {
+    ShakeOptions o = hold_only(factor * mu_star);
+    o.grip_force = F;
+    o.dt = 1.0 / 100.0;
+    o.close_steps = 200;
+    o.shake_steps = 100;
+    o.settle_steps = o.lost_contact_steps = 5;
+    o.iterations_per_hull_contact = 10.0;
+    const ShakeResult r = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+    EXPECT_EQ(r.trial_success[0] != 0, factor > 1.0) << "friction factor " << factor;
+  }
+}
+
+TEST(Shake, IterationsPerHullContactChangeNothingOnASingleHullUpToHalfTheIterations) {
+  // A single hull makes at most 2 (finger, hull) pairs: 5 per pair asks for at most the 10 of
+  // solver_iterations, so every trial is bit-identical to the default. 15 per pair (30
+  // iterations) must still hold the box everywhere.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.3);
+  ShakeOptions o = small_grid(3, 0.5, 2.0);
+  const ShakeResult base = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+  o.iterations_per_hull_contact = 0.5 * o.solver_iterations;
+  const ShakeResult same = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+  EXPECT_EQ(same.trial_success, base.trial_success);
+  EXPECT_EQ(same.trial_steps, base.trial_steps);
+  o.iterations_per_hull_contact = 15.0;
+  const ShakeResult more = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+  EXPECT_GE(more.score[0], 0.99);
+}
+
 TEST(Shake, ScoreRisesWithFriction) {
   const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.8);
   const ParallelJawGrasp grasp = centre_grasp(0.04);
@@ -345,6 +380,11 @@ TEST(Shake, BadInputIsRejectedWithAClearMessage) {
   expect_error(box, centre_grasp(0.04), bo, "hold_tolerance");
   bo.hold_tolerance = NAN;
   expect_error(box, centre_grasp(0.04), bo, "hold_tolerance");
+  bo = o;
+  bo.iterations_per_hull_contact = -1;
+  expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
+  bo.iterations_per_hull_contact = NAN;
+  expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, 1.0, o, 0), InvalidArgument);
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, -1.0, o, 1), InvalidArgument);
   // No grasps: an empty result, not an error.
@@ -438,9 +478,11 @@ TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
   // Synthetic grids (no physics): per grasp a monotone boundary, some with a flipped cell that
   // makes the search fall back. For 1, 2 and 3 threads every cell and fallback flag must equal
   // staircase_grid() run grasp by grasp, every trial must run at most once and exactly the
-  // cells staircase_grid() simulates must run. Grasp 0 falls back and its trials are slow (2 ms),
-  // the others are instant: the threads that finish the others must take over some of grasp
-  // 0's fallback cells (with contiguous ranges one thread would run all of them).
+  // cells staircase_grid() simulates must run. Grasp 0 falls back and its trials are slow
+  // (20 ms each with 2 or 3 threads, ~0.7 s in all: long enough for the other threads to be
+  // scheduled on a loaded machine; 2 ms failed once at load 9), the others are instant: the
+  // threads that finish the others must take over some of grasp 0's fallback cells (with
+  // contiguous ranges one thread would run all of them).
   const int S = 6;
   const std::size_t G = 9, per = S * S;
   std::vector<int> bound(G);
@@ -475,7 +517,7 @@ TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
     std::mutex m;
     auto make = [&]() -> detail::TrialRunner {
       return [&](std::size_t t) {
-        if (t < per) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        if (t < per && threads > 1) std::this_thread::sleep_for(std::chrono::milliseconds(20));
         ++runs[t];
         std::lock_guard<std::mutex> lock(m);
         who[t] = std::this_thread::get_id();

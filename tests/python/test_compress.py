@@ -6,10 +6,12 @@ filters and are byte-identical to the file HDF5 writes itself with the same chun
 from __future__ import annotations
 
 import io
+import zipfile
 import zlib
 from pathlib import Path
 
 import cv2
+import deflate
 import h5py
 import numpy as np
 import pytest
@@ -17,7 +19,10 @@ from PIL import Image
 
 from mgn.base.compress import (
     RUN_BLOCK,
+    ZERO_RUN_DISTANCE,
     ZipDeflate,
+    ZipRunDeflate,
+    _zero_blocks,
     deflate_raw,
     deflate_runs,
     h5_write_deflated,
@@ -26,8 +31,9 @@ from mgn.base.compress import (
     zlib_runs_stream,
     zlib_stream,
 )
-from mgn.base.deterministic import npz_bytes
-from mgn.errors import InvalidArgumentError
+from mgn.base.deterministic import NPZ_DATE_TIME, _NpzLzma, npz_bytes
+from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.dataset import View
 
 
 def _payload() -> bytes:
@@ -98,6 +104,42 @@ def test_run_streams_inflate_with_zlib_to_the_input(level: int):
         assert np.array_equal(z["mask"], mask)
     with pytest.raises(InvalidArgumentError, match="zlib level 10"):
         deflate_runs(b"abc", 10)
+
+
+@pytest.mark.parametrize("count", [1, 2, 3, 7, 8, 10, 137, 256])
+def test_zero_blocks_inflate_to_zeros_after_any_data(count: int):
+    """The hand-made deflate blocks of zeros (one dynamic block + an empty stored block): zlib
+    and libdeflate (two inflaters) give exactly count * RUN_BLOCK zeros, after a preceding
+    deflated part whose last bytes are not zero (the matches reach back into the block only);
+    counts 8 and 10 are the cases where the bytes after the 258-byte matches are 0 and 1-2. The
+    distance of the matches is ZERO_RUN_DISTANCE (the first that many bytes are literals)."""
+    n = count * RUN_BLOCK
+    zeros = _zero_blocks(count)
+    head = zlib.compressobj(3, zlib.DEFLATED, -15)
+    prefix = bytes(range(1, 200)) * 3
+    stream = head.compress(prefix) + head.flush(zlib.Z_SYNC_FLUSH) + zeros + b"\x03\x00"
+    assert zlib.decompress(stream, -15) == prefix + bytes(n)
+    assert deflate.deflate_decompress(stream, len(prefix) + n) == prefix + bytes(n)
+    # A brute-force reading of the block's Huffman codes: 3 bits per 258-byte match at most.
+    assert len(zeros) <= 40 + 3 * (n // 258) // 8 + 8
+    assert zeros[-4:] == b"\x00\x00\xff\xff"  # byte-aligned end, as zlib's sync flush
+    assert _zero_blocks(count) is zeros  # cached
+    assert ZERO_RUN_DISTANCE >= 5  # distances 1-4 inflate slowly in zlib
+
+
+def test_zero_blocks_cut_anywhere_are_a_clear_error():
+    """A stream of zero blocks with a byte changed or cut short does not inflate to zeros
+    silently: zlib reports an error or gives other bytes (the zip entry's CRC catches those)."""
+    stream = deflate_runs(bytes(8 * RUN_BLOCK), 3)
+    with pytest.raises(zlib.error):
+        zlib.decompress(stream[: len(stream) // 2], -15)
+    bad = bytearray(stream)
+    bad[3] ^= 0xFF
+    try:
+        out = zlib.decompress(bytes(bad), -15)
+    except zlib.error:
+        return
+    assert out != bytes(8 * RUN_BLOCK)
 
 
 def test_levels_outside_libdeflate_range_are_refused():
@@ -222,3 +264,76 @@ def test_png_refuses_images_it_cannot_store():
         png_encode(np.zeros((4, 4), np.float32), level=6)
     with pytest.raises(InvalidArgumentError, match="palette of 2 colours"):
         png_encode(np.full((4, 4), 5, np.uint8), level=6, palette=np.zeros((2, 3), np.uint8))
+
+
+def _zipfile_npz(arrays: dict, compressors: dict) -> bytes:
+    """The npz ``zipfile`` writes for ``arrays`` (the second implementation zip_bytes is checked
+    against): every entry dated 1980-01-01, rw-r--r--, zip64 headers, the entry's compressor
+    (name -> (zip method, compressor or None)) in place of zipfile's own."""
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, mode="w", allowZip64=True) as zf:
+        for name, array in arrays.items():
+            method, comp = compressors[name]
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=NPZ_DATE_TIME)
+            info.compress_type = method
+            info.external_attr = 0o644 << 16
+            with zf.open(info, mode="w", force_zip64=True) as fh:
+                if comp is not None:
+                    fh._compressor = comp
+                np.lib.format.write_array(fh, np.asarray(array), allow_pickle=False)
+    return out.getvalue()
+
+
+def test_npz_bytes_are_the_bytes_zipfile_writes():
+    """npz_bytes' own zip writer (CRC-32 by libdeflate) gives byte for byte the archive Python's
+    zipfile writes with the same compressed streams: stored, deflated, zlib run-deflated and
+    LZMA entries, empty and 0-d arrays; np.load reads every array back."""
+    rng = np.random.default_rng(5)
+    mask = np.zeros((3, 90, 1200), bool)
+    mask[1, 10:40, 100:700] = True
+    arrays = {
+        "depth": rng.random((37, 41)).astype(np.float32),
+        "mask": mask,
+        "ids": rng.integers(0, 9, (50, 60)).astype(np.uint16),
+        "empty": np.zeros((0, 3), np.float32),
+        "scalar": np.array(7.5),
+        "lz": rng.random(300).astype(np.float32),
+    }
+    data = npz_bytes(**arrays, level=5, zlib_levels={"mask": 3}, lzma_entries=("lz",))
+    reference = _zipfile_npz(arrays, {
+        "depth": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+        "mask": (zipfile.ZIP_DEFLATED, ZipRunDeflate(3)),
+        "ids": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+        "empty": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+        "scalar": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+        "lz": (zipfile.ZIP_LZMA, _NpzLzma()),
+    })  # fmt: skip
+    assert data == reference
+    stored = npz_bytes(**arrays, compress=False, lzma_entries=("lz",))
+    assert stored == _zipfile_npz(
+        arrays,
+        {k: (zipfile.ZIP_STORED, None) for k in arrays} | {"lz": (zipfile.ZIP_LZMA, _NpzLzma())},
+    )
+    with np.load(io.BytesIO(data)) as z:
+        for name, array in arrays.items():
+            assert z[name].dtype == array.dtype and z[name].shape == array.shape
+            assert np.array_equal(z[name], array)
+    # Every entry's CRC checks (zipfile recomputes it while reading).
+    with zipfile.ZipFile(io.BytesIO(data)) as zf:
+        assert zf.testzip() is None
+
+
+def test_a_corrupt_npz_entry_is_an_error_naming_the_file(tmp_path: Path):
+    """A view's npz with a byte of its run-deflated masks changed: mgn's reader raises IoError
+    naming the file (zlib's error or the entry's CRC-32), never returns other masks."""
+    mask = np.zeros((4, 300, 1200), bool)
+    mask[2, 100:200, 300:900] = True
+    data = bytearray(npz_bytes(occlusion_objects=mask, zlib_levels={"occlusion_objects": 3}))
+    path = tmp_path / "0.npz"
+    for at in (len(data) // 3, len(data) // 2):  # inside the entry's zero blocks
+        bad = bytearray(data)
+        bad[at] ^= 0x5A
+        path.write_bytes(bytes(bad))
+        view = View(tmp_path, 0)
+        with pytest.raises(IoError, match="0.npz"):
+            view.npz_array("occlusion_objects")

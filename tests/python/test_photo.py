@@ -366,6 +366,68 @@ def test_denoiser_reduces_the_error() -> None:
     assert mse_den < 0.5 * mse_raw, (mse_den, mse_raw)
 
 
+def _noisy_buffers(h: int, w: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A noisy HDR radiance image (with a NaN and an inf) and its albedo and normal guides."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    albedo = np.stack([(xx // 8 % 2) * 0.6 + 0.2, yy / h, np.full_like(xx, 0.5)], axis=-1)
+    normal = np.stack([np.sin(xx / 9), np.cos(yy / 7), np.ones_like(xx)], axis=-1)
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    radiance = albedo * rng.exponential(1.0, (h, w, 1)) * 3.0
+    radiance[1, 2] = np.nan
+    radiance[3, 1] = np.inf
+    return radiance.astype(np.float32), albedo.astype(np.float32), normal.astype(np.float32)
+
+
+def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
+    """photo.denoise keeps one OIDN device and filter per thread count; every call, whatever
+    came before (another shape, fewer guides, another thread count), gives the bytes of pyoidn's
+    own convenience API (a separate device) on the same cleaned inputs."""
+    if not photo.denoiser_available():
+        pytest.fail("pyoidn (test extra) is not installed")
+    import pyoidn
+
+    def reference(rad: np.ndarray, alb: np.ndarray | None, nrm: np.ndarray | None) -> np.ndarray:
+        c = np.nan_to_num(rad, nan=0.0, posinf=0.0)
+        out = pyoidn.denoise(c, alb, nrm, hdr=True, quality="fast")
+        return np.maximum(out, 0.0)
+
+    big, small = _noisy_buffers(48, 64, 1), _noisy_buffers(40, 24, 2)
+    want_big, want_small = reference(*big), reference(*small)
+    want_albedo_only = reference(big[0], big[1], None)
+    assert not np.array_equal(want_big, want_albedo_only)  # the normal guide is used
+    first = photo.denoise(*big)
+    assert first.dtype == np.float32 and first.shape == big[0].shape
+    assert np.isfinite(first).all() and first.min() >= 0.0
+    assert first.tobytes() == want_big.tobytes()
+    assert photo.denoise(*big).tobytes() == first.tobytes()  # the cached filter, same bytes
+    assert photo.denoise(*small).tobytes() == want_small.tobytes()  # another shape
+    assert photo.denoise(big[0], big[1]).tobytes() == want_albedo_only.tobytes()  # unbinds normal
+    assert photo.denoise(*big, num_threads=1).tobytes() == first.tobytes()  # its own device
+    assert photo.denoise(*big).tobytes() == first.tobytes()
+    assert np.isnan(big[0][1, 2]).all() and np.isinf(big[0][3, 1]).all()  # inputs untouched
+    assert np.isnan(big[0]).sum() == 3 and np.isinf(big[0]).sum() == 3
+
+
+def test_denoise_rejects_bad_inputs() -> None:
+    if not photo.denoiser_available():
+        pytest.fail("pyoidn (test extra) is not installed")
+    rad, alb, nrm = _noisy_buffers(16, 16, 3)
+    with pytest.raises(InvalidArgumentError, match="radiance must have shape"):
+        photo.denoise(rad[..., 0])
+    with pytest.raises(InvalidArgumentError, match="radiance must have shape"):
+        photo.denoise(rad[:0])
+    with pytest.raises(InvalidArgumentError, match=r"albedo must have the radiance's shape"):
+        photo.denoise(rad, alb[:8], nrm)
+    with pytest.raises(InvalidArgumentError, match=r"normal must have the radiance's shape"):
+        photo.denoise(rad, alb, nrm[..., :2])
+    with pytest.raises(InvalidArgumentError, match="num_threads"):
+        photo.denoise(rad, alb, nrm, num_threads=-1)
+    with pytest.raises(InvalidArgumentError, match="quality"):
+        photo.denoise(rad, alb, nrm, "best")
+    assert photo.denoise(rad, alb, nrm).shape == rad.shape  # still works after the errors
+
+
 def test_missing_denoiser_warns_and_traces_more_samples(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(photo, "_DENOISER", None)
     monkeypatch.setattr(photo, "_DENOISER_CHECKED", True)

@@ -495,6 +495,10 @@ def test_show_trial_action(tmp_path, capsys):
         ({"options": ShakeOptions(grip_force=-1.0)}, "grip_force"),
         ({"options": ShakeOptions(hold_tolerance=-1e-3)}, "hold_tolerance"),
         ({"options": ShakeOptions(hold_tolerance=float("nan"))}, "hold_tolerance"),
+        (
+            {"options": ShakeOptions(iterations_per_hull_contact=-1.0)},
+            "iterations_per_hull_contact",
+        ),
         ({"options": ShakeOptions(hold_tolerance=1e-3, smooth_shake=True)}, "hold_tolerance"),
         ({"gripper": ParallelJawGripper(max_opening=0.03)}, "max_opening"),
         ({"gripper": SimpleNamespace(name="x")}, "gripper"),

@@ -13,7 +13,7 @@ import pytest
 from conftest import coco_ground_truth_ap
 
 from mgn.base.deterministic import npz_bytes
-from mgn.io import scene_folder
+from mgn.errors import InvalidArgumentError
 from mgn.io.coco import coco_dict, export_coco, rle
 from mgn.io.dataset import Dataset, intrinsics_from_params
 from mgn.io.scene_folder import (
@@ -427,9 +427,36 @@ def _com_pixel(u, v, z, X, K, p):
     return np.float32(min(max((p[4] - math.sqrt(d2)) / span, 0.0), 1.0))
 
 
-def test_com_heatmap_prediction_matches_the_per_pixel_formula_to_the_bit(monkeypatch):
-    """The prediction runs in blocks of pixels; every pixel equals the formula computed one pixel
-    at a time in Python floats, and the block size does not change a bit."""
+def _com_prediction_numpy(depth, inst, X, K, params) -> np.ndarray:
+    """The prediction in numpy float64 arrays, element-wise in the documented order (mgn's
+    implementation before the C++ one): a second implementation for every pixel."""
+    fx, fy, cx, cy = (float(k) for k in K)
+    out = np.zeros(inst.shape, np.float32)
+    v, u = np.nonzero(inst > 0)
+    z = depth[v, u].astype(np.float64)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(z) & (z > 0.0)
+    v, u, z = v[ok], u[ok], z[ok]
+    c = params[inst[v, u] - 1]
+    x = (u.astype(np.float64) + 0.5 - cx) * z / fx
+    y = (v.astype(np.float64) + 0.5 - cy) * z / fy
+    d2 = np.zeros_like(z)
+    for r in range(3):
+        a = x * X[r, 0]
+        a += y * X[r, 1]
+        a += z * X[r, 2]
+        a += X[r, 3]
+        a -= c[:, r]
+        d2 = a * a if r == 0 else d2 + a * a
+    span = np.maximum(c[:, 4] - c[:, 3], 1e-12)
+    out[v, u] = np.clip((c[:, 4] - np.sqrt(d2)) / span, 0.0, 1.0)
+    return out
+
+
+def test_com_heatmap_prediction_matches_the_per_pixel_formula_to_the_bit():
+    """The prediction (C++ core) equals, bit for bit, the formula computed one pixel at a time
+    in Python floats (every ~11th pixel) and the numpy element-wise version (every pixel); an
+    instance id beyond the parameters' rows is an error naming both counts."""
     rng = np.random.default_rng(7)
     h, w, n = 240, 310, 5  # 74,400 pixels: several blocks
     inst = rng.integers(0, n + 1, (h, w))
@@ -445,8 +472,13 @@ def test_com_heatmap_prediction_matches_the_per_pixel_formula_to_the_bit(monkeyp
     c_W = p_C @ X[:3, :3].T + X[:3, 3]
     params = np.column_stack([c_W, rng.uniform(0.0, 0.05, n), rng.uniform(0.2, 0.4, n)])
     pred = com_heatmap_prediction(depth, inst, X, K, params)
-    monkeypatch.setattr(scene_folder, "_COM_BLOCK", 997)
-    assert pred.tobytes() == com_heatmap_prediction(depth, inst, X, K, params).tobytes()
+    assert pred.dtype == np.float32 and pred.shape == (h, w)
+    assert pred.tobytes() == _com_prediction_numpy(depth, inst, X, K, params).tobytes()
+    # Instance ids as the npz stores them (uint8) give the same bits.
+    assert pred.tobytes() == com_heatmap_prediction(depth, inst.astype(np.uint8), X, K,
+                                                    params).tobytes()  # fmt: skip
+    with pytest.raises(InvalidArgumentError, match="instance id 6 but only 5 rows"):
+        com_heatmap_prediction(depth, np.where(inst == 1, 6, inst), X, K, params)
     ok = (inst > 0) & np.isfinite(depth)
     assert np.all(pred[~ok] == 0) and 0.05 < np.mean(pred[ok] > 0) < 1.0
     Xl = X.tolist()

@@ -15,9 +15,12 @@ struct Moments {
   Mat3d second = Mat3d::Zero();
 };
 
-Moments solid_moments(const Mesh& mesh, const Vec3d& ref) {
-  // Divergence theorem over signed tetrahedra (ref, a, b, c). For a tetrahedron with vertices
-  // p0..p3: integral of x x^T = V/20 * (sum p_i p_i^T + s s^T), s = sum p_i (Tonon 2004).
+/// The moments summed over the triangles (a, b, c) of `mesh`, corners relative to `ref`: each
+/// adds its weight w = weight(a, b, c) to the measure, w s / k_first to the first moment and
+/// w / k_second (a aᵀ + b bᵀ + c cᵀ + s sᵀ) to the second, with s = a + b + c.
+template <typename Weight>
+Moments sum_moments(const Mesh& mesh, const Vec3d& ref, double k_first, double k_second,
+                    const Weight& weight) {
   Moments m;
   const auto& V = mesh.vertices();
   const auto& F = mesh.faces();
@@ -25,13 +28,22 @@ Moments solid_moments(const Mesh& mesh, const Vec3d& ref) {
     const Vec3d a = V.row(F(f, 0)).transpose().cast<double>() - ref;
     const Vec3d b = V.row(F(f, 1)).transpose().cast<double>() - ref;
     const Vec3d c = V.row(F(f, 2)).transpose().cast<double>() - ref;
-    const double vol = a.dot(b.cross(c)) / 6.0;
+    const double w = weight(a, b, c);
     const Vec3d s = a + b + c;
-    m.measure += vol;
-    m.first += vol * s / 4.0;
-    m.second += vol / 20.0 *
+    m.measure += w;
+    m.first += w * s / k_first;
+    m.second += w / k_second *
                 (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
   }
+  return m;
+}
+
+Moments solid_moments(const Mesh& mesh, const Vec3d& ref) {
+  // Divergence theorem over signed tetrahedra (ref, a, b, c). For a tetrahedron with vertices
+  // p0..p3: integral of x x^T = V/20 * (sum p_i p_i^T + s s^T), s = sum p_i (Tonon 2004).
+  Moments m = sum_moments(mesh, ref, 4.0, 20.0, [](const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    return a.dot(b.cross(c)) / 6.0;
+  });
   if (m.measure < 0.0) {  // wound inward: every integral flips sign
     m.measure = -m.measure;
     m.first = -m.first;
@@ -42,21 +54,9 @@ Moments solid_moments(const Mesh& mesh, const Vec3d& ref) {
 
 Moments shell_moments(const Mesh& mesh, const Vec3d& ref) {
   // Thin lamina per triangle: integral of x x^T dA = A/12 * (sum p_i p_i^T + s s^T).
-  Moments m;
-  const auto& V = mesh.vertices();
-  const auto& F = mesh.faces();
-  for (std::int64_t f = 0; f < F.rows(); ++f) {
-    const Vec3d a = V.row(F(f, 0)).transpose().cast<double>() - ref;
-    const Vec3d b = V.row(F(f, 1)).transpose().cast<double>() - ref;
-    const Vec3d c = V.row(F(f, 2)).transpose().cast<double>() - ref;
-    const double area = 0.5 * (b - a).cross(c - a).norm();
-    const Vec3d s = a + b + c;
-    m.measure += area;
-    m.first += area * s / 3.0;
-    m.second += area / 12.0 *
-                (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
-  }
-  return m;
+  return sum_moments(mesh, ref, 3.0, 12.0, [](const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    return 0.5 * (b - a).cross(c - a).norm();
+  });
 }
 
 }  // namespace

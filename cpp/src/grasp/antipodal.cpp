@@ -11,7 +11,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 
 #include "grasp/detail/seal_trials.hpp"
@@ -641,16 +640,7 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
   };
   // Dynamic scheduling over blocks of points (the cost per point varies a lot with the number of
   // colliding approaches); every point's result depends only on its index.
-  constexpr std::size_t kBlock = 32;
-  const std::size_t num_blocks = (static_cast<std::size_t>(n) + kBlock - 1) / kBlock;
-  const auto workers = std::min<std::size_t>(
-      static_cast<std::size_t>(resolve_num_threads(o.num_threads)), num_blocks);
-  std::atomic<std::size_t> next_block{0};
-  parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
-    for (std::size_t b = next_block++; b < num_blocks; b = next_block++) {
-      process(b * kBlock, std::min(static_cast<std::size_t>(n), (b + 1) * kBlock));
-    }
-  });
+  parallel_for_dynamic(static_cast<std::size_t>(n), o.num_threads, 32, process);
 
   std::size_t total = 0;
   for (const auto& v : per_point) total += v.size();

@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -503,63 +502,56 @@ SealResult SealModel::evaluate(const Points3f& points, const Points3f& normals,
 
   // Dynamic scheduling over blocks of candidates (a candidate's cost varies several-fold with
   // the checks its trials reach); every candidate's result depends only on its index.
-  constexpr std::size_t kBlock = 8;
-  const std::size_t num_blocks = (static_cast<std::size_t>(n_cand) + kBlock - 1) / kBlock;
-  const auto workers = std::min<std::size_t>(
-      static_cast<std::size_t>(resolve_num_threads(options.num_threads)), num_blocks);
-  std::atomic<std::size_t> next_block{0};
-  parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
-    for (std::size_t b = next_block++; b < num_blocks; b = next_block++) {
-      const std::size_t begin = b * kBlock;
-      const std::size_t end = std::min(static_cast<std::size_t>(n_cand), begin + kBlock);
-      for (std::size_t i = begin; i < end; ++i) {
-        Rng rng(options.seed, options.first_index + i);
-        const Vec3d c0 = points.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
-        const Vec3d n0 = unit.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
-        int sealed = 0;
-        double quality_sum = 0.0;
-        std::array<int, 8> counts{};
-        for (int t = 0; t < T; ++t) {
-          Vec3d c = c0, n = n0;
-          if (options.perturb) {
-            const double ax = rng.normal(0.0, options.angle_sigma);
-            const double ay = rng.normal(0.0, options.angle_sigma);
-            const double az = rng.normal(0.0, options.angle_sigma);
-            const Mat3d R =
-                (Eigen::AngleAxisd(az, Vec3d::UnitZ()) * Eigen::AngleAxisd(ay, Vec3d::UnitY()) *
-                 Eigen::AngleAxisd(ax, Vec3d::UnitX()))
-                    .toRotationMatrix();
-            n = (R * n0).normalized();
-            // Named draws: the order of function arguments is unspecified in C++, and the
-            // random stream must not depend on the compiler.
-            const double jx = rng.normal(0.0, pos_sigma);
-            const double jy = rng.normal(0.0, pos_sigma);
-            const double jz = rng.normal(0.0, pos_sigma);
-            c = c0 + Vec3d(jx, jy, jz);
+  parallel_for_dynamic(
+      static_cast<std::size_t>(n_cand), options.num_threads, 8,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          Rng rng(options.seed, options.first_index + i);
+          const Vec3d c0 = points.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
+          const Vec3d n0 = unit.row(static_cast<Eigen::Index>(i)).transpose().cast<double>();
+          int sealed = 0;
+          double quality_sum = 0.0;
+          std::array<int, 8> counts{};
+          for (int t = 0; t < T; ++t) {
+            Vec3d c = c0, n = n0;
+            if (options.perturb) {
+              const double ax = rng.normal(0.0, options.angle_sigma);
+              const double ay = rng.normal(0.0, options.angle_sigma);
+              const double az = rng.normal(0.0, options.angle_sigma);
+              const Mat3d R =
+                  (Eigen::AngleAxisd(az, Vec3d::UnitZ()) * Eigen::AngleAxisd(ay, Vec3d::UnitY()) *
+                   Eigen::AngleAxisd(ax, Vec3d::UnitX()))
+                      .toRotationMatrix();
+              n = (R * n0).normalized();
+              // Named draws: the order of function arguments is unspecified in C++, and the
+              // random stream must not depend on the compiler.
+              const double jx = rng.normal(0.0, pos_sigma);
+              const double jy = rng.normal(0.0, pos_sigma);
+              const double jz = rng.normal(0.0, pos_sigma);
+              c = c0 + Vec3d(jx, jy, jz);
+            }
+            float q = 0.0f;
+            const SealFailure f = run_trial(kind_, ctx, c, n, q, &c0);
+            const std::size_t slot = i * T + static_cast<std::size_t>(t);
+            out.trial_sealed[slot] = f == SealFailure::None;
+            out.trial_reason[slot] = static_cast<std::uint8_t>(f);
+            sealed += f == SealFailure::None;
+            quality_sum += q;
+            ++counts[static_cast<std::size_t>(f)];
           }
-          float q = 0.0f;
-          const SealFailure f = run_trial(kind_, ctx, c, n, q, &c0);
-          const std::size_t slot = i * T + static_cast<std::size_t>(t);
-          out.trial_sealed[slot] = f == SealFailure::None;
-          out.trial_reason[slot] = static_cast<std::uint8_t>(f);
-          sealed += f == SealFailure::None;
-          quality_sum += q;
-          ++counts[static_cast<std::size_t>(f)];
-        }
-        out.score[i] = static_cast<float>(sealed) / T;
-        out.quality[i] = static_cast<float>(quality_sum / T);
-        // Most frequent failure among the failed trials; ties go to the earlier check.
-        int best = 0, best_count = 0;
-        for (int f = 1; f < static_cast<int>(counts.size()); ++f) {
-          if (counts[f] > best_count) {
-            best = f;
-            best_count = counts[f];
+          out.score[i] = static_cast<float>(sealed) / T;
+          out.quality[i] = static_cast<float>(quality_sum / T);
+          // Most frequent failure among the failed trials; ties go to the earlier check.
+          int best = 0, best_count = 0;
+          for (int f = 1; f < static_cast<int>(counts.size()); ++f) {
+            if (counts[f] > best_count) {
+              best = f;
+              best_count = counts[f];
+            }
           }
+          out.reason[i] = static_cast<std::uint8_t>(best);
         }
-        out.reason[i] = static_cast<std::uint8_t>(best);
-      }
-    }
-  });
+      });
   return out;
 }
 

@@ -19,7 +19,6 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <condition_variable>
 #include <memory>
@@ -185,6 +184,7 @@ struct StepState {
   double left, right;
   bool touch_left, touch_right;
   double force_left, force_right;  // normal pad force of the last step, N
+  int hull_contacts;               // (finger, object hull) pairs in contact
 };
 
 /// The collision shapes of one shake_test call: the object's hulls (a compound if several) and
@@ -253,7 +253,8 @@ class TrialWorld {
     const double trial_mass = obj.mass * s.density_factor;
     const double load = o.grip_force / (150.0 * trial_mass * std::max(o.gravity, 1.0));
     const int boost = static_cast<int>(std::clamp(std::ceil(load), 1.0, 8.0));
-    info.m_numIterations = o.solver_iterations * boost;
+    base_iterations_ = o.solver_iterations * boost;
+    info.m_numIterations = base_iterations_;
     // Friction in both tangent directions (Bullet's default is one direction per contact point,
     // which lets a held object creep sideways).
     info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
@@ -455,6 +456,13 @@ class TrialWorld {
     for (int side = 0; side < 2; ++side) {
       drive(*fingers_[side], finger_pose(X_WH, side, d_), finger_pose(X_WH_next, side, d_next));
     }
+    if (o_.iterations_per_hull_contact > 0) {
+      // ShakeOptions::iterations_per_hull_contact: the (finger, hull) pairs in contact at the
+      // last step set this step's iterations (a compound held by several hulls needs more).
+      const int want =
+          static_cast<int>(std::ceil(o_.iterations_per_hull_contact * s.hull_contacts));
+      world_.getSolverInfo().m_numIterations = std::max(base_iterations_, want);
+    }
     world_.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
     d_ = d_next;
     // The hand bodies jump to their end-of-step poses (velocity unchanged until the next step).
@@ -475,6 +483,7 @@ class TrialWorld {
     s.left = s.right = d_;
     s.touch_left = s.touch_right = false;
     s.force_left = s.force_right = 0.0;
+    s.hull_contacts = 0;
     const int n = dispatcher_.getNumManifolds();
     for (int i = 0; i < n; ++i) {
       const btPersistentManifold* m = dispatcher_.getManifoldByIndexInternal(i);
@@ -484,6 +493,7 @@ class TrialWorld {
       if (other == nullptr) continue;
       const int side = other == fingers_[0].get() ? 0 : (other == fingers_[1].get() ? 1 : -1);
       if (side < 0) continue;
+      s.hull_contacts += m->getNumContacts() > 0;  // one manifold per (finger, hull)
       bool& touch = side == 0 ? s.touch_left : s.touch_right;
       double& force = side == 0 ? s.force_left : s.force_right;
       for (int c = 0; c < m->getNumContacts(); ++c) {
@@ -504,6 +514,7 @@ class TrialWorld {
   double finger_half_x_ = 0;  // finger box: centre to inner face along x, m (meshes: 0)
   double d_ = 0;              // current inner-face offset of both fingers from the hand axis, m
   double radius_ = 0;         // object: largest distance of a hull vertex from the com, m
+  int base_iterations_ = 1;   // solver iterations of this trial without per-hull ones
 
   btDefaultCollisionConfiguration config_;
   btCollisionDispatcher dispatcher_;
@@ -568,6 +579,10 @@ void ShakeOptions::validate() const {
           "an integer in [8, 100000]", max_hull_vertices);
   require(solver_iterations >= 1 && solver_iterations <= 1000, "solver_iterations",
           "an integer in [1, 1000]", solver_iterations);
+  require(std::isfinite(iterations_per_hull_contact) && iterations_per_hull_contact >= 0 &&
+              iterations_per_hull_contact <= 100,
+          "iterations_per_hull_contact", "a factor in [0, 100] (0 = off)",
+          iterations_per_hull_contact);
   require(staircase_checks >= 0, "staircase_checks", "an integer >= 0", staircase_checks);
   require(num_threads >= 0, "num_threads", "an integer >= 0 (0 = all hardware threads)",
           num_threads);
@@ -843,12 +858,9 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
         success, r.fallback);
     r.trial_success = std::move(success);
   } else {
-    const std::size_t workers = std::min<std::size_t>(
-        static_cast<std::size_t>(resolve_num_threads(options.num_threads)), n);
-    std::atomic<std::size_t> next{0};
-    parallel_for(workers, static_cast<int>(workers), 1, [&](std::size_t, std::size_t) {
+    parallel_workers_dynamic(n, options.num_threads, 1, [&](BlockQueue& trials) {
       const TrialShapes shapes(prepared, gripper, options);
-      for (std::size_t t = next.fetch_add(1); t < n; t = next.fetch_add(1)) run_trial(shapes, t);
+      for (std::size_t t, end; trials.next(t, end);) run_trial(shapes, t);
     });
   }
   r.score.assign(grasps.size(), 0.0);

@@ -87,6 +87,26 @@ void set_lane(Packet& r, int k, const float* o, const float* d, float tnear, flo
   r.flags[k] = 0;
 }
 
+/// Rays s .. s+m-1 (1 <= m <= 16) into an Embree packet; the lanes past m repeat the last ray
+/// and are switched off in `valid`.
+void set_packet(RTCRay16& r, int* valid, const Points3f& origins, const Points3f& directions,
+                std::size_t s, std::size_t m, const CastOptions& options) {
+  for (std::size_t k = 0; k < 16; ++k) {
+    const std::size_t i = s + std::min(k, m - 1);
+    valid[k] = k < m ? -1 : 0;
+    set_lane(r, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear,
+             options.tfar);
+  }
+}
+
+/// The Embree context of a query: coherent rays (packets) when options.coherent.
+RTCIntersectContext cast_context(const CastOptions& options) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  if (options.coherent) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  return ctx;
+}
+
 struct HitRecord {
   float t;
   float u, v;
@@ -218,19 +238,14 @@ void trace_first_hits(RTCScene scene, const Points3f& origins, const Points3f& d
   const Eigen::Index n = origins.rows();
   auto body = [&](std::size_t begin, std::size_t end) {
     detail::FtzDazGuard guard;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+    RTCIntersectContext ctx = cast_context(options);
     if (options.coherent) {
-      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
       alignas(64) RTCRayHit16 rh;
       alignas(64) int valid[16];
       for (std::size_t s = begin; s < end; s += 16) {
         const std::size_t m = std::min<std::size_t>(16, end - s);
+        set_packet(rh.ray, valid, origins, directions, s, m, options);
         for (std::size_t k = 0; k < 16; ++k) {
-          const std::size_t i = s + std::min(k, m - 1);  // pad with a copy of the last ray
-          valid[k] = k < m ? -1 : 0;
-          set_lane(rh.ray, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear,
-                   options.tfar);
           rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
           rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -302,20 +317,13 @@ std::vector<std::uint8_t> RayScene::occluded(const Points3f& origins, const Poin
   const Impl& impl = *impl_;
   auto body = [&](std::size_t begin, std::size_t end) {
     detail::FtzDazGuard guard;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+    RTCIntersectContext ctx = cast_context(options);
     if (options.coherent) {
-      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
       alignas(64) RTCRay16 r;
       alignas(64) int valid[16];
       for (std::size_t s = begin; s < end; s += 16) {
         const std::size_t m = std::min<std::size_t>(16, end - s);
-        for (std::size_t k = 0; k < 16; ++k) {
-          const std::size_t i = s + std::min(k, m - 1);
-          valid[k] = k < m ? -1 : 0;
-          set_lane(r, static_cast<int>(k), &origins(i, 0), &directions(i, 0), options.tnear,
-                   options.tfar);
-        }
+        set_packet(r, valid, origins, directions, s, m, options);
         rtcOccluded16(valid, impl.scene, &ctx, &r);
         for (std::size_t k = 0; k < m; ++k)
           out[s + k] = r.tfar[k] == -std::numeric_limits<float>::infinity();

@@ -1292,9 +1292,6 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
   constexpr int kTile = 16;
   const int tiles_x = (W + kTile - 1) / kTile, tiles_y = (H + kTile - 1) / kTile;
   const std::size_t n_tiles = static_cast<std::size_t>(tiles_x) * tiles_y;
-  std::atomic<std::size_t> next_tile{0};
-  const int threads =
-      std::min<int>(resolve_num_threads(options.num_threads), static_cast<int>(n_tiles));
   const std::uint64_t stream =
       mix64(options.seed ^ mix64(options.view_index + 0x5851F42D4C957F2DULL));
   const float clamp = static_cast<float>(options.clamp);
@@ -1343,7 +1340,9 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
     return c;
   };
 
-  auto worker = [&](std::size_t, std::size_t) {
+  // Threads take tiles one at a time (parallel_workers_dynamic); a tile's pixels depend only on
+  // their indices.
+  auto worker = [&](BlockQueue& tiles) {
     detail::FtzDazGuard guard;
     Integrator it(G, L, options);
     RTCIntersectContext coherent = coherent_context();
@@ -1351,9 +1350,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
     alignas(64) RTCRayHit16 rh16;
     alignas(64) int valid16[16];
     pt::PairSeeds pair_seeds;  // the sampler's per-pair seeds of the current pixel block
-    for (;;) {
-      const std::size_t tile = next_tile.fetch_add(1);
-      if (tile >= n_tiles) break;
+    for (std::size_t tile, tile_end; tiles.next(tile, tile_end);) {
       const int tx = static_cast<int>(tile % tiles_x), ty = static_cast<int>(tile / tiles_x);
       const int u1 = std::min(W, (tx + 1) * kTile), v1 = std::min(H, (ty + 1) * kTile);
       for (int v = ty * kTile; v < v1; ++v) {
@@ -1431,7 +1428,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
     }
     total_rays += it.counters.rays;
   };
-  parallel_for(static_cast<std::size_t>(threads), threads, 1, worker);
+  parallel_workers_dynamic(n_tiles, options.num_threads, 1, worker);
 
   // Adaptive sampling: extra samples where the first pass looks noisy. The decision depends on
   // the first pass only (deterministic); sample j of pixel (u, v) is index base | j of a second
@@ -1442,8 +1439,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
                                    options.adaptive_samples, options.adaptive_max);
     const std::uint64_t stream2 = mix64(stream ^ 0xA0761D6478BD642FULL);
     const int extra_log2 = pt::ceil_log2(static_cast<std::uint32_t>(options.adaptive_max));
-    std::atomic<std::size_t> next_tile2{0};
-    auto extra_worker = [&](std::size_t, std::size_t) {
+    auto extra_worker = [&](BlockQueue& tiles) {
       detail::FtzDazGuard guard;
       Integrator it(G, L, options);
       RTCIntersectContext coherent = coherent_context();
@@ -1458,9 +1454,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
       };
       std::vector<Job> jobs;
       std::vector<F3> sum, alb, nrm;  // per pixel of the tile
-      for (;;) {
-        const std::size_t tile = next_tile2.fetch_add(1);
-        if (tile >= n_tiles) break;
+      for (std::size_t tile, tile_end; tiles.next(tile, tile_end);) {
         const int tx = static_cast<int>(tile % tiles_x), ty = static_cast<int>(tile / tiles_x);
         const int u0 = tx * kTile, v0 = ty * kTile;
         const int u1 = std::min(W, u0 + kTile), v1 = std::min(H, v0 + kTile);
@@ -1528,7 +1522,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
       }
       total_rays += it.counters.rays;
     };
-    parallel_for(static_cast<std::size_t>(threads), threads, 1, extra_worker);
+    parallel_workers_dynamic(n_tiles, options.num_threads, 1, extra_worker);
   }
   out.rays = total_rays.load();
   return out;

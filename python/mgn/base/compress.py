@@ -35,6 +35,7 @@ from mgn.errors import InvalidArgumentError
 
 __all__ = [
     "RUN_BLOCK",
+    "ZERO_RUN_DISTANCE",
     "MAX_LEVEL",
     "ZipDeflate",
     "ZipRunDeflate",
@@ -85,11 +86,12 @@ def _stored_blocks(data: bytes) -> bytes:
 
 class ZipDeflate:
     """Drop-in for the raw-deflate compressor ``zipfile`` makes for a ``ZIP_DEFLATED`` entry
-    (``compress`` / ``flush``; ``zipfile`` computes the CRC and sizes of the uncompressed bytes
-    itself). Keeps the parts written (a memoryview is kept, not copied) and deflates them at
-    flush in one libdeflate call; leading parts of less than 64 KiB together (e.g. a ``.npy``
-    header before the array's own buffer) go first as stored blocks, so the large last part
-    is deflated without being copied next to them.
+    (``compress`` / ``flush``; the zip writer computes the CRC and sizes of the uncompressed
+    bytes itself: :func:`mgn.base.deterministic.zip_bytes`). Keeps the parts written (a
+    memoryview is kept, not copied) and deflates them at flush in one libdeflate call; leading
+    parts of less than 64 KiB together (e.g. a ``.npy`` header before the array's own buffer) go
+    first as stored blocks, so the large last part is deflated without being copied next to
+    them.
 
     On images made of long runs of equal bytes (masks, id images, a heat map's zero residual)
     libdeflate's compact streams (~3x smaller than zlib's level 1) take zlib's inflater 2-3x
@@ -122,13 +124,159 @@ class ZipDeflate:
 RUN_BLOCK = 1 << 14
 
 
+#: Match distance of :func:`_zero_blocks`' copies: zlib's inflater copies a match byte by byte,
+#: and at distances of 1-4 each byte waits for the one just written (the masks' zeros inflate 2-3x
+#: slower than at distance 5+); 5-8 take one extra bit per 258-byte match.
+ZERO_RUN_DISTANCE = 8
+
+#: Base lengths and extra bits of deflate's length symbols 257..285 (RFC 1951 3.2.5).
+_LENGTH_BASE = (3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 15, 17, 19, 23, 27, 31, 35, 43, 51, 59, 67, 83,
+                99, 115, 131, 163, 195, 227, 258)  # fmt: skip
+_LENGTH_EXTRA = (0,) * 8 + (1,) * 4 + (2,) * 4 + (3,) * 4 + (4,) * 4 + (5,) * 4 + (0,)
+#: Base distances and extra bits of deflate's distance symbols 0..29 (RFC 1951 3.2.5).
+_DIST_BASE = (1, 2, 3, 4, 5, 7, 9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025,
+              1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577)  # fmt: skip
+_DIST_EXTRA = (0, 0, 0, 0) + tuple(k // 2 for k in range(2, 28))
+#: Order in which a dynamic block's header lists the code-length code's lengths (RFC 1951 3.2.7).
+_CODE_LENGTH_ORDER = (16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15)
+
+
+class _Bits:
+    """Bits of a deflate stream, packed from the least significant bit of each byte on."""
+
+    def __init__(self) -> None:
+        self.value = 0
+        self.count = 0
+
+    def put(self, value: int, nbits: int) -> None:
+        """``nbits`` bits of ``value``, least significant first (header fields, extra bits)."""
+        self.value |= (value & ((1 << nbits) - 1)) << self.count
+        self.count += nbits
+
+    def code(self, code: tuple[int, int]) -> None:
+        """A Huffman code (code, length), most significant bit first (RFC 1951 3.1.1)."""
+        value, length = code
+        self.put(int(f"{value:0{length}b}"[::-1], 2), length)
+
+    def repeat(self, value: int, nbits: int, times: int) -> None:
+        """``times`` copies of the ``nbits``-bit group ``value`` (already in stream order)."""
+        if times > 0:
+            self.put(value * (((1 << (nbits * times)) - 1) // ((1 << nbits) - 1)), nbits * times)
+
+    def to_bytes(self) -> bytes:
+        return self.value.to_bytes((self.count + 7) // 8, "little")
+
+
+def _canonical(lengths: dict[int, int]) -> dict[int, tuple[int, int]]:
+    """The canonical Huffman codes (code, length) of symbols with the given code lengths."""
+    top = max(lengths.values())
+    count = [0] * (top + 1)
+    for n in lengths.values():
+        count[n] += 1
+    first, code = [0] * (top + 1), 0
+    for n in range(1, top + 1):
+        code = (code + count[n - 1]) << 1 if n > 1 else 0
+        first[n] = code
+    out = {}
+    for sym in sorted(lengths):
+        n = lengths[sym]
+        out[sym] = (first[n], n)
+        first[n] += 1
+    return out
+
+
+def _complete_lengths(symbols: set[int], spare: int) -> dict[int, int]:
+    """Code lengths of a complete prefix code over ``symbols`` (a second symbol ``spare`` is
+    added to a single one): k - 1 or k bits each, k = ceil(log2(count))."""
+    syms = sorted(symbols | ({spare} if len(symbols) == 1 else set()))
+    k = (len(syms) - 1).bit_length()
+    short = (1 << k) - len(syms)
+    return {s: k - 1 if i < short else k for i, s in enumerate(syms)}
+
+
+def _length_symbol(n: int) -> tuple[int, int, int]:
+    """(symbol, extra value, extra bits) of a match of length ``n`` (3..258)."""
+    if n == 258:
+        return 285, 0, 0
+    i = max(j for j in range(28) if _LENGTH_BASE[j] <= n)
+    return 257 + i, n - _LENGTH_BASE[i], _LENGTH_EXTRA[i]
+
+
 @functools.lru_cache(maxsize=64)
-def _zero_blocks(count: int, level: int) -> bytes:
-    """Non-final raw deflate blocks, ending byte-aligned (zlib's sync flush), made by zlib at
-    ``level`` from ``count`` * :data:`RUN_BLOCK` zero bytes: they inflate to those zeros after
-    any preceding blocks (their matches reach back into their own zeros only)."""
-    c = zlib.compressobj(level, zlib.DEFLATED, -15)
-    return c.compress(bytes(count * RUN_BLOCK)) + c.flush(zlib.Z_SYNC_FLUSH)
+def _zero_blocks(count: int) -> bytes:
+    """One non-final dynamic-Huffman deflate block holding ``count`` * :data:`RUN_BLOCK` zero bytes,
+    followed by an empty stored block (it ends byte-aligned, as zlib's sync flush): it inflates to
+    those zeros after any preceding blocks. :data:`ZERO_RUN_DISTANCE` literal zeros, then matches
+    of 258 bytes (and one of the rest) at that distance, which reach back into the block's own
+    zeros only. Its codes have the fewest bits a stream of zeros allows at that distance (the
+    literal, the 258-match, the end of block; one distance code): 3 bits per 258 bytes, a quarter
+    of what zlib's fast levels take; zlib inflates it about as fast as zlib's own stream."""
+    n, lits = count * RUN_BLOCK, ZERO_RUN_DISTANCE
+    matches, rest = divmod(n - lits, 258)
+    if 0 < rest < 3:
+        matches, rest = matches - 1, rest + 258  # as two matches: 258 + rest = x + (258 + rest - x)
+    lit = {0: 2, 285: 1, 256: 2}
+    tail: list[tuple[int, int, int]] = []
+    if rest > 258:
+        tail = [_length_symbol(rest - 129), _length_symbol(129)]
+    elif rest:
+        tail = [_length_symbol(rest)]
+    if tail:
+        # 285: 1 bit, literal 0: 2, end of block and the tail's symbols 3-4 bits.
+        extra = sorted({256} | {t[0] for t in tail})
+        lit = {0: 2, 285: 1} | ({s: 3 for s in extra} if len(extra) == 2 else
+                                 {extra[0]: 3, extra[1]: 4, extra[2]: 4})  # fmt: skip
+    dist_sym = next(i for i in range(29, -1, -1) if _DIST_BASE[i] <= lits)
+    dist_extra = (lits - _DIST_BASE[dist_sym], _DIST_EXTRA[dist_sym])
+    dist = {dist_sym: 1, (1 if dist_sym == 0 else 0): 1}  # a complete code of two
+    # The code lengths of both alphabets, zeros run-length coded (symbols 17 and 18).
+    seq = [lit.get(i, 0) for i in range(max(lit) + 1)] + [
+        dist.get(i, 0) for i in range(max(dist) + 1)
+    ]
+    ops: list[tuple[int, int, int]] = []
+    i = 0
+    while i < len(seq):
+        j = i
+        while j < len(seq) and seq[j] == 0 and j - i < 138:
+            j += 1
+        if j - i >= 11:
+            ops.append((18, j - i - 11, 7))
+        elif j - i >= 3:
+            ops.append((17, j - i - 3, 3))
+        else:
+            ops.append((seq[i], 0, 0))
+            j = i + 1
+        i = j
+    cl_lengths = _complete_lengths({op[0] for op in ops}, spare=0 if ops[0][0] else 1)
+    cl_codes = _canonical(cl_lengths)
+    hclen = max(4, 1 + max(_CODE_LENGTH_ORDER.index(s) for s in cl_lengths))
+    b = _Bits()
+    b.put(0b100, 3)  # BFINAL 0, BTYPE 2 (dynamic Huffman)
+    b.put(max(lit) + 1 - 257, 5)
+    b.put(max(dist), 5)
+    b.put(hclen - 4, 4)
+    for s in _CODE_LENGTH_ORDER[:hclen]:
+        b.put(cl_lengths.get(s, 0), 3)
+    for sym, value, nbits in ops:
+        b.code(cl_codes[sym])
+        b.put(value, nbits)
+    lit_codes, dist_codes = _canonical(lit), _canonical(dist)
+    zero = _Bits()
+    zero.code(lit_codes[0])
+    b.repeat(zero.value, zero.count, lits)
+    match = _Bits()
+    match.code(lit_codes[285])
+    match.code(dist_codes[dist_sym])
+    match.put(*dist_extra)
+    b.repeat(match.value, match.count, matches)
+    for sym, value, nbits in tail:
+        b.code(lit_codes[sym])
+        b.put(value, nbits)
+        b.code(dist_codes[dist_sym])
+        b.put(*dist_extra)
+    b.code(lit_codes[256])
+    b.put(0, 3)  # an empty stored block: BFINAL 0, BTYPE 0, then to the byte boundary
+    return b.to_bytes() + b"\x00\x00\xff\xff"
 
 
 #: The final empty block that ends a raw deflate stream after a sync flush (fixed Huffman,
@@ -139,12 +287,13 @@ _FINAL_EMPTY_BLOCK = b"\x03\x00"
 def deflate_runs(data: bytes | memoryview | npt.NDArray[Any], level: int) -> bytes:
     """Raw deflate stream (RFC 1951) of ``data`` made by zlib at ``level`` (1..9), for images
     that are mostly zeros (masks, ids, the CoM residual): the data is cut into blocks of
-    :data:`RUN_BLOCK` bytes; each run of at least two all-zero blocks is a cached stream of zeros
-    (:func:`_zero_blocks`, powers of two of blocks), the bytes between them are deflated by a
-    fresh zlib compressor each (so no match reaches across a run). zlib's fast levels (1-3) keep
-    its matches long-distance, which zlib inflates several times faster than libdeflate's
-    compact streams of runs (:class:`ZipDeflate`); skipping the zeros makes it ~3x faster
-    than deflating them. The same bytes in give the same stream out (for one zlib version)."""
+    :data:`RUN_BLOCK` bytes; each run of at least two all-zero blocks is a cached deflate block of
+    zeros (:func:`_zero_blocks`, powers of two of blocks: 3 bits per 258 bytes, a quarter of
+    zlib's own stream of zeros), the bytes between them are deflated by a fresh zlib compressor
+    each (so no match reaches across a run). zlib's fast levels (1-3) keep their matches
+    long-distance, which zlib inflates several times faster than libdeflate's compact streams of
+    runs (:class:`ZipDeflate`); skipping the zeros makes it ~3x faster than deflating them. The
+    same bytes in give the same stream out (for one zlib version)."""
     if not 1 <= int(level) <= 9:
         raise InvalidArgumentError(f"zlib level {level}: expected 1..9")
     a = np.frombuffer(data, np.uint8) if not isinstance(data, np.ndarray) else data.reshape(-1)
@@ -170,7 +319,7 @@ def deflate_runs(data: bytes | memoryview | npt.NDArray[Any], level: int) -> byt
         deflate_part(done, int(first) * RUN_BLOCK)
         for bit in range(count.bit_length()):
             if count >> bit & 1:
-                out.append(_zero_blocks(1 << bit, level))
+                out.append(_zero_blocks(1 << bit))
         done = int(last) * RUN_BLOCK
     deflate_part(done, len(a))
     out.append(_FINAL_EMPTY_BLOCK)
@@ -200,7 +349,7 @@ class ZipRunDeflate(ZipDeflate):
 
 def shuffled_chunks(
     data: npt.ArrayLike, chunks: tuple[int, ...], *, shuffle: bool = True
-) -> list[tuple[tuple[int, ...], bytes]]:
+) -> list[tuple[tuple[int, ...], memoryview]]:
     """The chunks of ``data`` for an HDF5 chunked layout of shape ``chunks``, in row-major chunk
     order, each as (offset, bytes after HDF5's shuffle filter): a full chunk's C-order values (the
     parts beyond the dataset's edge zero) with byte k of every value grouped together (all bytes
@@ -230,7 +379,7 @@ def shuffled_chunks(
     out = []
     for k, index in enumerate(np.ndindex(*counts)):
         offset = tuple(i * c for i, c in zip(index, chunks, strict=True))
-        out.append((offset, planes[k].tobytes()))
+        out.append((offset, planes[k].data))  # a view of the row, not a copy
     return out
 
 

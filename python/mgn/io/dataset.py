@@ -21,9 +21,11 @@ from __future__ import annotations
 
 import io
 import json
+import lzma
 import os
 import re
 import zipfile
+import zlib
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -54,6 +56,10 @@ from mgn.io.scene_folder import (
     read_scene_dataset,
 )
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
+
+#: What reading a damaged npz raises (zipfile's checks, a bad CRC-32 or header, zlib's or LZMA's
+#: inflater on a damaged stream, a cut file).
+_NPZ_ERRORS = (OSError, ValueError, zipfile.BadZipFile, EOFError, zlib.error, lzma.LZMAError)
 
 __all__ = ["Dataset", "SceneFolder", "View"]
 
@@ -126,7 +132,7 @@ class View:
         try:
             with np.load(io.BytesIO(data), allow_pickle=False) as z:
                 return {k: z[k] for k in z.files}
-        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+        except _NPZ_ERRORS as e:
             raise IoError(f"'{p}' is not a readable npz: {e}") from e
 
     def npz_array(self, key: str) -> np.ndarray:
@@ -147,7 +153,7 @@ class View:
                     cache[key] = z[key]
             except FileNotFoundError:
                 raise IoError(f"'{p}' does not exist") from None
-            except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+            except _NPZ_ERRORS as e:
                 if isinstance(e, IoError):
                     raise
                 raise IoError(f"'{p}' is not a readable npz: {e}") from e

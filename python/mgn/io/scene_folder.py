@@ -49,6 +49,7 @@ import h5py
 import numpy as np
 import numpy.typing as npt
 
+from mgn import _core
 from mgn.base.atomic import atomic_write_bytes, atomic_write_text
 from mgn.base.compress import h5_write_deflated, png_encode
 from mgn.base.deterministic import (
@@ -73,6 +74,8 @@ __all__ = [
     "DEPTH_GRID_CM",
     "DEFLATE_LEVEL",
     "DEPTH_PICTURE_LEVEL",
+    "MGN_IMAGE_LEVEL",
+    "SCENE_HDF5_LEVEL",
     "FLOAT_DELTA_ENCODING",
     "FLOAT_GRADIENT_ENCODING",
     "UNITS_ATTR",
@@ -269,8 +272,10 @@ def view_file_names(v: int) -> list[str]:
 
 #: ``{v}_mgn.hdf5`` datasets that hold lengths in centimetres.
 MGN_HDF5_CM: tuple[str, ...] = ("depth_ideal",)
-#: Rows per HDF5 chunk of an (H, W) image in ``{v}_mgn.hdf5`` (shuffle + deflate per chunk).
-_IMAGE_CHUNK_ROWS = 128
+#: Rows per HDF5 chunk of an (H, W) image in ``{v}_mgn.hdf5`` (shuffle + deflate per chunk): at
+#: libdeflate level :data:`MGN_IMAGE_LEVEL` chunks of 600 rows store ``depth_ideal`` of a 1200 x
+#: 1200 view in the bytes of 128-row chunks at level 6, in 0.8x the time.
+_IMAGE_CHUNK_ROWS = 600
 
 
 def id_image_dtype(values: npt.ArrayLike, *, instances: bool) -> np.dtype:
@@ -399,95 +404,26 @@ def com_heatmap_prediction(
     p_C = (z (u + 0.5 - cx) / fx, z (v + 0.5 - cy) / fy, z) moved to the world by ``X_WC``
     (4, 4, m) scores clip((d_max - |p_W - c_W|) / max(d_max - d_min, 1e-12), 0, 1) with
     [c_W, d_min, d_max] = ``com_parameters[i - 1]`` (N, 5); 0 elsewhere. ``K`` = (fx, fy, cx, cy)
-    px. Only IEEE-exact operations in a fixed order, so every machine predicts the same bits
-    (the stored residual makes the heat map exact whatever the prediction's error)."""
+    px. Computed by the C++ core (``mgn::com_heatmap_prediction``, mgn/scene/view_labels.hpp):
+    only IEEE-exact operations in the order written here, without fused multiply-adds
+    (x = ((u + 0.5) - cx) * z / fx; each world coordinate ((X_r0 x + X_r1 y) + X_r2 z) + X_r3,
+    minus c_r, squared and summed in the order r = 0, 1, 2), so every machine predicts the same
+    bits (the stored residual makes the heat map exact whatever the prediction's error)."""
     inst = np.asarray(instances)
-    params = np.asarray(com_parameters, np.float64).reshape(-1, 5)
-    out = np.zeros(inst.shape, np.float32)
-    w = inst.shape[1] if inst.ndim == 2 else 1
-    idx = np.flatnonzero(inst.ravel() > 0)
-    if len(idx) == 0:
-        return out
-    ids = inst.ravel()[idx].astype(np.intp)
-    if int(ids.max()) > len(params):
+    params = np.ascontiguousarray(np.asarray(com_parameters, np.float64).reshape(-1, 5))
+    ids = inst.reshape(inst.shape[0], -1) if inst.ndim == 2 else inst.reshape(-1, 1)
+    top = int(np.max(ids, initial=0))
+    if top > len(params):
         raise InvalidArgumentError(
-            f"com_heatmap_prediction: instance id {int(ids.max())} but only {len(params)} rows "
+            f"com_heatmap_prediction: instance id {top} but only {len(params)} rows "
             "of com_parameters; expected one row per instance"
         )
-    z = np.asarray(depth_ideal_m, np.float32).ravel()[idx].astype(np.float64)
-    with np.errstate(invalid="ignore"):
-        ok = np.isfinite(z) & (z > 0.0)
-    if not ok.all():
-        idx, ids, z = idx[ok], ids[ok], z[ok]
+    depth = np.asarray(depth_ideal_m, np.float32).reshape(ids.shape)
     fx, fy, cx, cy = (float(k) for k in np.asarray(K, np.float64).reshape(4))
     X = np.asarray(X_WC, np.float64).reshape(4, 4)
-    flat = out.ravel()
-    # Element-wise only, so blocks of pixels give the same bits as one pass; a block's ~10
-    # float64 temporaries stay in the CPU cache (3x faster than whole-image arrays).
-    for s in range(0, len(idx), _COM_BLOCK):
-        e = s + _COM_BLOCK
-        flat[idx[s:e]] = _com_block(idx[s:e], ids[s:e], z[s:e], w, params, X, fx, fy, cx, cy)
-    return out
-
-
-#: Pixels per block of :func:`com_heatmap_prediction`.
-_COM_BLOCK = 16384
-
-
-def _com_block(
-    idx: npt.NDArray[np.intp],
-    ids: npt.NDArray[np.intp],
-    z: npt.NDArray[np.float64],
-    w: int,
-    params: npt.NDArray[np.float64],
-    X: npt.NDArray[np.float64],
-    fx: float,
-    fy: float,
-    cx: float,
-    cy: float,
-) -> npt.NDArray[np.float64]:
-    """The heat map values of the flat pixel indices ``idx`` (row width ``w``) of instances
-    ``ids`` at depths ``z`` (m): see :func:`com_heatmap_prediction`."""
-    row = ids - 1
-    c = [np.take(params[:, k], row) for k in range(5)]  # contiguous per column
-    # int32 division is faster than int64 and exact while the indices fit.
-    small = len(idx) > 0 and int(idx[-1]) < 2**31
-    vv, uu = np.divmod(idx.astype(np.int32), np.int32(w)) if small else np.divmod(idx, w)
-    # In place, in the order of z * (u + 0.5 - cx) / fx (products commute exactly in IEEE).
-    x = uu.astype(np.float64)
-    x += 0.5
-    x -= cx
-    x *= z
-    x /= fx
-    y = vv.astype(np.float64)
-    y += 0.5
-    y -= cy
-    y *= z
-    y /= fy
-    d2 = np.empty_like(z)
-    acc = np.empty_like(z)
-    tmp = np.empty_like(z)
-    for r in range(3):
-        # ((X_r0 x + X_r1 y) + X_r2 z) + X_r3 - c_r
-        np.multiply(x, X[r, 0], out=acc)
-        np.multiply(y, X[r, 1], out=tmp)
-        acc += tmp
-        np.multiply(z, X[r, 2], out=tmp)
-        acc += tmp
-        acc += X[r, 3]
-        acc -= c[r]
-        if r == 0:
-            np.multiply(acc, acc, out=d2)  # = 0.0 + acc * acc (a square is never -0.0)
-        else:
-            acc *= acc
-            d2 += acc
-    np.sqrt(d2, out=d2)
-    span = c[4] - c[3]
-    np.maximum(span, 1e-12, out=span)
-    np.subtract(c[4], d2, out=d2)
-    d2 /= span
-    np.clip(d2, 0.0, 1.0, out=d2)
-    return d2
+    out = _core.com_heatmap_prediction(depth, ids.astype(np.int32, copy=False), X, fx, fy, cx, cy,
+                                       params)  # fmt: skip
+    return np.asarray(out).reshape(inst.shape)
 
 
 def _com_residual(com: npt.ArrayLike, prediction: npt.NDArray[np.float32]) -> npt.NDArray[np.int32]:
@@ -635,7 +571,17 @@ def _shares_rotation(datasets: Mapping[str, np.ndarray], path: str) -> bool:
     )
 
 
-def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray, level: int) -> None:
+def _group(h5: Any, path: str, groups: dict[str, Any]) -> Any:
+    """The group at ``path`` of file ``h5`` (created without timestamps if missing), looked up
+    once per file through ``groups`` (h5py's own lookups cost ~0.1 ms each)."""
+    if path not in groups:
+        groups[path] = h5[path] if path in h5 else h5_create_group(h5, path)
+    return groups[path]
+
+
+def _virtual_tool_poses(
+    h5: Any, path: str, tool: np.ndarray, level: int, groups: dict[str, Any]
+) -> None:
     """Write ``tool`` (M, 4, 4) at ``path`` as a virtual dataset: columns 0..2 from the group's
     contact poses (same file), column 3 from ``POSE_COLUMNS_GROUP/path`` (written here); no
     timestamps."""
@@ -644,8 +590,7 @@ def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray, level: int) -> Non
     column_path = f"{POSE_COLUMNS_GROUP}/{path}"
     column = np.ascontiguousarray(tool[:, :, 3])
     group_path, _, name = column_path.rpartition("/")
-    group = h5[group_path] if group_path in h5 else h5_create_group(h5, group_path)
-    _write_dataset(group, name, column, level, column_path)
+    _write_dataset(_group(h5, group_path, groups), name, column, level, column_path)
     m = tool.shape[0]
     dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
     dcpl.set_layout(h5py.h5d.VIRTUAL)
@@ -665,9 +610,8 @@ def _virtual_tool_poses(h5: Any, path: str, tool: np.ndarray, level: int) -> Non
         dcpl.set_virtual(vspace, b".", src_path.encode(), sspace)
     tid = h5py.h5t.py_create(tool.dtype, logical=True)
     space = h5py.h5s.create_simple(tool.shape)
-    parent_group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
-    dsid = h5py.h5d.create(parent_group.id, path.rpartition("/")[2].encode(), tid, space,
-                           dcpl=dcpl)  # fmt: skip
+    leaf = path.rpartition("/")[2].encode()
+    dsid = h5py.h5d.create(_group(h5, parent, groups).id, leaf, tid, space, dcpl=dcpl)
     h5py.Dataset(dsid).attrs["mgn_encoding"] = SHARED_ROTATION_ENCODING
 
 
@@ -700,18 +644,17 @@ def hdf5_bytes(
     buf = io.BytesIO()
     with h5py.File(buf, "w", libver=H5_LIBVER) as h5:
         shared = []
+        groups: dict[str, Any] = {}
         for path, value in datasets.items():
             data = np.asarray(value)
             if share_rotations and _shares_rotation(datasets, path):
                 shared.append(path)
                 continue
             parent, _, name = path.rpartition("/")
-            group = h5
-            if parent:
-                group = h5[parent] if parent in h5 else h5_create_group(h5, parent)
+            group = _group(h5, parent, groups) if parent else h5
             _write_dataset(group, name, data, level, path)
         for path in shared:
-            _virtual_tool_poses(h5, path, np.asarray(datasets[path]), level)
+            _virtual_tool_poses(h5, path, np.asarray(datasets[path]), level, groups)
         for key, value in (attrs or {}).items():
             h5.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
     return buf.getvalue()
@@ -721,6 +664,13 @@ def hdf5_bytes(
 #: 1200 x 1200 view of 20 objects it costs less than zlib's level 1 did, for 0.88x the bytes of
 #: ``depth_ideal`` and 0.86x the RGB PNG's (benchmarks/RESULTS.md, "Dataset files").
 DEFLATE_LEVEL = 6
+#: libdeflate level of the images of ``{v}_mgn.hdf5`` (``depth_ideal``'s gradient residual) in
+#: the default mode: level 6 (the archival mode's) gives 0.99x the bytes in 1.2x the time.
+MGN_IMAGE_LEVEL = 5
+#: libdeflate level of the chunks of ``{v}_scene.hdf5`` (grasps, keypoints) in the default mode:
+#: level 6 (the archival mode's) gives 0.998x the bytes (float32 rotations are at their entropy)
+#: in 1.07x the time.
+SCENE_HDF5_LEVEL = 5
 #: libdeflate level of the zip entries of ``{v}.npz``: the sensor depth in 0.84x the bytes of
 #: zlib's level 1 in the same time (level 6: another -0.7 %, +30 % time), the masks in 0.3x.
 NPZ_LEVEL = 5
@@ -756,11 +706,12 @@ def _json(data: Any) -> str:
 
 
 #: Images of long runs of equal bytes (the amodal masks, the CoM heat map's residual and
-#: ``valid_depth``) that the default mode deflates with zlib's level :data:`RUN_LEVEL`, the
-#: all-zero blocks from cached streams (:func:`mgn.base.compress.deflate_runs`: the amodal masks
-#: in ~11 ms instead of ~45 per 1200 x 1200 view of 20 objects): libdeflate's streams of them
-#: are 3-4x smaller (-4.3 MB per scene for the masks) but zlib inflates them 3-4x slower (+60 ms
-#: per view for the masks); the archival mode takes the bytes. The ids and ``occlusion`` are
+#: ``valid_depth``) that the default mode deflates with zlib's level :data:`RUN_LEVEL`, the runs
+#: of all-zero blocks as cached hand-made deflate blocks (:func:`mgn.base.compress.deflate_runs`:
+#: the amodal masks in ~11 ms instead of ~45 per 1200 x 1200 view of 20 objects, in 101 kB
+#: instead of zlib's 159): libdeflate's streams of them are 2x smaller still (-1.9 MB per scene
+#: for the masks) but zlib inflates them 3x slower (+50 ms per view for the masks); the archival
+#: mode takes the bytes. The ids and ``occlusion`` are
 #: libdeflate's (0.5x the bytes of zlib's level 1, -2.3 MB per scene, for +15 ms per view to
 #: read them).
 RUN_IMAGES: tuple[str, ...] = (
@@ -893,10 +844,16 @@ def write_view(
         np.where(valid, ideal_m, np.float32(np.nan)), level=DEPTH_PICTURE_LEVEL
     )
     lap("depth.png")
-    files[f"{v}_scene.hdf5"] = hdf5_bytes(h5, share_rotations=True, level=DEFLATE_LEVEL)
+    files[f"{v}_scene.hdf5"] = hdf5_bytes(
+        h5, share_rotations=True, level=DEFLATE_LEVEL if archival else SCENE_HDF5_LEVEL
+    )
     lap("scene.hdf5")
     files[f"{v}_mgn.hdf5"] = mgn_hdf5_bytes(
-        images, unorm16=unorm16, attrs=image_attrs, level=DEFLATE_LEVEL, zlib_levels=runs
+        images,
+        unorm16=unorm16,
+        attrs=image_attrs,
+        level=DEFLATE_LEVEL if archival else MGN_IMAGE_LEVEL,
+        zlib_levels=runs,
     )
     lap("mgn.hdf5")
     files[f"{v}_order.csv"] = rec.order_csv.encode()

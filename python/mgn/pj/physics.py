@@ -70,7 +70,11 @@ class ShakeOptions:
     jumps; a can's grids become more nearly monotone (with ``dt`` 1/100 s and step counts
     halved, the staircase matches its full grid more often at 1.8× fewer CPU-s per trial), a
     mug's less (docs/models.md, "Smooth shake profile"; scores move by ~0.01 on average).
-    Every default is the C++ struct's.
+    ``iterations_per_hull_contact`` (0 = off): every step runs at least this many solver
+    iterations per (finger, object hull) pair in contact at the previous step (a compound held
+    by several hulls needs more to converge at a coarser ``dt``; a single hull makes at most 2
+    pairs; docs/models.md, "A coarser step judged by its own grids"). Every default is the C++
+    struct's.
     """
 
     grid: int = _CORE.grid
@@ -100,6 +104,7 @@ class ShakeOptions:
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
     max_hull_vertices: int = _CORE.max_hull_vertices
     solver_iterations: int = _CORE.solver_iterations
+    iterations_per_hull_contact: float = _CORE.iterations_per_hull_contact
     staircase: bool = _CORE.staircase
     staircase_checks: int = _CORE.staircase_checks
     num_threads: int = _CORE.num_threads

@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.base.core_result import from_core
+from mgn.base.core_result import from_core, to_core
 from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry import Material, Mesh
 from mgn.scene.cameras import CameraView
@@ -193,13 +193,7 @@ class AreaLight:
         self.to_core().validate()
 
     def to_core(self) -> _core.AreaLight:
-        a = _core.AreaLight()
-        a.X_WL = self.X_WL
-        a.shape = self.shape
-        a.size = self.size
-        a.color = self.color
-        a.intensity = self.intensity
-        return a
+        return to_core(self, _core.AreaLight())
 
 
 @dataclass(frozen=True)
@@ -232,17 +226,7 @@ class Environment:
         self.to_core().validate()
 
     def to_core(self) -> _core.Environment:
-        e = _core.Environment()
-        e.kind = self.kind
-        e.color = self.color
-        e.zenith = self.zenith
-        e.horizon = self.horizon
-        e.ground = self.ground
-        e.sun_direction = self.sun_direction
-        e.intensity = self.intensity
-        e.sun_strength = self.sun_strength
-        e.sun_angular_radius = self.sun_angular_radius
-        return e
+        return to_core(self, _core.Environment())
 
 
 @dataclass(frozen=True)

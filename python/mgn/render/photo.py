@@ -27,9 +27,11 @@ shows E / pi); poses (4, 4) float64 ``X_AB``.
 
 from __future__ import annotations
 
+import atexit
 import colorsys
 import dataclasses
 import math
+import threading
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -39,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn import _core
-from mgn.errors import InvalidArgumentError
+from mgn.errors import BackendError, InvalidArgumentError
 from mgn.geometry import Material, Mesh
 from mgn.render.path import (
     AreaLight,
@@ -280,29 +282,146 @@ def denoiser_available() -> bool:
     return _pyoidn() is not None
 
 
+class _OidnFilter:
+    """One OIDN CPU device and ``RT`` filter, kept for the process and reused by every
+    :func:`denoise` call with the same thread count.
+
+    OIDN's first execution on a device prepares the network and allocates its scratch memory
+    (~0.46 GB for a 1200 x 1200 image, one tile): about 0.3-0.6 CPU-s once per process; later
+    calls re-bind the images (any shape) and cost the network alone (benchmarks/RESULTS.md,
+    "Denoiser cost"). The output does not depend on the thread count."""
+
+    def __init__(self, oidn: Any, num_threads: int) -> None:
+        self.oidn = oidn
+        self.device = oidn.Device()
+        self.filter: Any = None
+        try:
+            if num_threads > 0:
+                self.device.set_int("numThreads", num_threads)
+            self.device.commit()
+            self._check("device creation")
+            self.filter = oidn.Filter(self.device, "RT")
+            self._check("filter creation")
+        except BaseException:
+            self.release()
+            raise
+        self.bound: dict[str, npt.NDArray[np.float32]] = {}  # kept alive while OIDN holds them
+
+    def _check(self, step: str) -> None:
+        err = self.device.get_error()
+        if err is not None:
+            raise BackendError(f"Intel Open Image Denoise: {step} failed: {err}")
+
+    def run(self, images: dict[str, npt.NDArray[np.float32] | None], quality: str) -> None:
+        """Bind ``images`` (color, albedo, normal, output; None unbinds) and execute."""
+        oidn = self.oidn
+        for name, img in images.items():
+            if img is None:
+                if name in self.bound:
+                    self.filter.unset_image(name)
+                    del self.bound[name]
+            else:
+                self.filter.set_image(name, img, oidn.OIDN_FORMAT_FLOAT3)
+                self.bound[name] = img
+        self.filter.set_bool("hdr", True)
+        self.filter.set_bool("cleanAux", False)
+        self.filter.set_quality(_OIDN_QUALITY[quality](oidn))
+        self.filter.commit()
+        self._check("filter setup")
+        self.filter.execute()
+        self._check("denoising")
+
+    def release(self) -> None:
+        if self.filter is not None:
+            self.filter.release()
+            self.filter = None
+        if self.device is not None:
+            self.device.release()
+            self.device = None
+
+
+_OIDN_QUALITY = {
+    "fast": lambda oidn: oidn.OIDN_QUALITY_FAST,
+    "balanced": lambda oidn: oidn.OIDN_QUALITY_BALANCED,
+    "high": lambda oidn: oidn.OIDN_QUALITY_HIGH,
+}
+_OIDN_FILTERS: dict[int, _OidnFilter] = {}  # by thread count (0 = all cores)
+_OIDN_LOCK = threading.Lock()
+
+
+def _release_oidn_filters() -> None:
+    with _OIDN_LOCK:
+        for f in _OIDN_FILTERS.values():
+            f.release()
+        _OIDN_FILTERS.clear()
+
+
+atexit.register(_release_oidn_filters)
+
+
+def _guide(
+    img: npt.NDArray[np.float32] | None, name: str, shape: tuple[int, ...], lo: float
+) -> npt.NDArray[np.float32] | None:
+    if img is None:
+        return None
+    arr = np.asarray(img)
+    if arr.shape != shape:
+        raise InvalidArgumentError(
+            f"denoise: {name} must have the radiance's shape {shape}, got {arr.shape}"
+        )
+    return np.ascontiguousarray(np.clip(arr, lo, 1.0), np.float32)
+
+
 def denoise(
     radiance: npt.NDArray[np.float32],
     albedo: npt.NDArray[np.float32] | None = None,
     normal: npt.NDArray[np.float32] | None = None,
     quality: str = "fast",
+    *,
+    num_threads: int = 0,
 ) -> npt.NDArray[np.float32]:
     """Denoise linear HDR radiance (H, W, 3) with OIDN's ray-tracing filter, guided by the
     first-hit albedo and normal when given (treated as noisy: they carry the pixel's
     anti-aliasing and texture variation; OIDN's ``cleanAux`` mode measured no better and, with
     ``high``, 2.5x slower); ``quality`` fast | balanced | high (see
-    :attr:`RenderSettings.denoise_quality`). Raises ImportError when pyoidn is missing."""
+    :attr:`RenderSettings.denoise_quality`); ``num_threads`` OIDN threads (0 = all cores; the
+    result does not depend on it). Albedo (clipped to [0, 1]) and normal (clipped to [-1, 1],
+    any frame) must have the radiance's shape; NaN and +inf radiance count as 0. Returns a new
+    (H, W, 3) float32 array, clamped to >= 0. One OIDN device and filter per thread count are
+    kept for the process (the first call pays their set-up). Raises ImportError when pyoidn is
+    missing."""
     oidn = _pyoidn()
     if oidn is None:
         raise ImportError("denoising needs the 'pyoidn' package: pip install 'mgn[render]'")
-    c = np.ascontiguousarray(np.nan_to_num(radiance, nan=0.0, posinf=0.0), np.float32)
-    a = None if albedo is None else np.ascontiguousarray(np.clip(albedo, 0.0, 1.0), np.float32)
-    n = None if normal is None else np.ascontiguousarray(np.clip(normal, -1.0, 1.0), np.float32)
     if quality not in DENOISE_QUALITIES:
         raise InvalidArgumentError(
             f"denoise quality must be one of {DENOISE_QUALITIES}, got {quality!r}"
         )
-    out = oidn.denoise(c, a, n, hdr=True, quality=quality)
-    return np.maximum(np.asarray(out, np.float32), 0.0)
+    if isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 0:
+        raise InvalidArgumentError(
+            f"denoise: num_threads must be an integer >= 0 (0 = all cores), got {num_threads!r}"
+        )
+    rad = np.asarray(radiance)
+    if rad.ndim != 3 or rad.shape[2] != 3 or rad.shape[0] == 0 or rad.shape[1] == 0:
+        raise InvalidArgumentError(
+            f"denoise: radiance must have shape (H, W, 3) with H, W > 0, got {rad.shape}"
+        )
+    c = np.ascontiguousarray(np.nan_to_num(rad, nan=0.0, posinf=0.0), np.float32)
+    a = _guide(albedo, "albedo", rad.shape, 0.0)
+    n = _guide(normal, "normal", rad.shape, -1.0)
+    out = np.empty_like(c)
+    with _OIDN_LOCK:
+        flt = _OIDN_FILTERS.get(num_threads)
+        if flt is None:
+            flt = _OIDN_FILTERS[num_threads] = _OidnFilter(oidn, num_threads)
+        try:
+            flt.run({"color": c, "albedo": a, "normal": n, "output": out}, quality)
+        except BaseException:
+            flt.release()  # a failed filter is not reused
+            del _OIDN_FILTERS[num_threads]
+            raise
+    np.maximum(out, 0.0, out=out)
+    return out
 
 
 # -------------------------------------------------------------------------------- materials
@@ -566,7 +685,7 @@ class PhotoRenderer:
         tote_color: linear RGB of the tote when materials are not randomised.
         randomize: the scene's randomisation master switch (``camera.randomize``).
         seed: scene seed of the randomisation, the sampler and the sensor noise.
-        num_threads: tracer threads (0 = all cores); images do not depend on it.
+        num_threads: tracer and denoiser threads (0 = all cores); images do not depend on it.
     """
 
     def __init__(
@@ -676,7 +795,9 @@ class PhotoRenderer:
         )  # fmt: skip
         radiance = out.radiance
         if self.denoised:
-            radiance = denoise(radiance, out.albedo, out.normal, s.denoise_quality)
+            radiance = denoise(
+                radiance, out.albedo, out.normal, s.denoise_quality, num_threads=self.num_threads
+            )
         rgb = develop(
             radiance,
             FilmOptions(

@@ -131,6 +131,12 @@ struct ShakeOptions {
   /// Bullet sequential-impulse iterations, >= 1; multiplied by ceil(grip_force / (150 m g))
   /// (at most 8) for light objects, which the solver otherwise lets spin out of the grip.
   int solver_iterations = 10;
+  /// Iterations per hull contact (0 = off): each step runs at least ceil(this × the number of
+  /// (finger, object hull) pairs in contact at the previous step) iterations. A single hull
+  /// makes at most 2 pairs, so with this <= solver_iterations / 2 it is simulated as without;
+  /// an object held by several hulls of a compound gets more iterations, which its solve needs
+  /// to converge at a coarser dt (benchmarks/RESULTS.md, "Shake test, session 11").
+  double iterations_per_hull_contact = 0.0;
   /// Staircase search instead of the full grid: success is monotone wherever physics behaves
   /// (more friction helps, more mass hurts), so each grasp's success boundary is found by
   /// galloping and bisection row by row (see staircase_grid()), the cells on both sides of it
