@@ -198,12 +198,12 @@ struct TriShade {
 };
 
 struct GeometryData {
-  Points3f vertices;  // world
-  Faces faces;
+  Points3f vertices;                        // world (while building; then in `tri`)
+  Faces faces;                              // (F,3) vertex indices of the faces, for the uvs
   std::vector<F3> corner_normals;           // (F*3) shading normals per corner (while building)
   std::vector<TriShade> tri;                // (F) the per-face shading records
   Points2f uvs;                             // (V,2) or empty
-  std::vector<std::int32_t> face_material;  // (F) global material index
+  std::vector<std::int32_t> face_material;  // (F) global material index (while building)
   std::vector<std::int32_t> face_emitter;   // (F) index into Geometry::emitters or -1; or empty
   std::int32_t instance_id = 0;
 };
@@ -527,7 +527,10 @@ PathScene::PathScene(const std::vector<PathGeometry>& geometries,
       t.ng = F3(fnr(f, 0), fnr(f, 1), fnr(f, 2));
       t.material = d.face_material[f];
     }
-    std::vector<F3>().swap(d.corner_normals);  // now in `tri`
+    // Now in `tri`: nothing reads them after this.
+    std::vector<F3>().swap(d.corner_normals);
+    std::vector<std::int32_t>().swap(d.face_material);
+    d.vertices = Points3f();
   }
   G->triangles = G->rays->num_triangles();
   G->bounds = G->rays->bounds();
