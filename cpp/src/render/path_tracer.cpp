@@ -151,6 +151,14 @@ void PathTraceOptions::validate() const {
   if (!(clamp_indirect >= 0.0) || !std::isfinite(clamp_indirect))
     throw_error<InvalidArgument>(w, ".clamp_indirect must be finite and >= 0 (0 = off), got ",
                                  clamp_indirect);
+  if (!(fresnel_split_min >= 0.0) || !std::isfinite(fresnel_split_min))
+    throw_error<InvalidArgument>(
+        w, ".fresnel_split_min must be finite and >= 0 (path throughput, 0 = always split), got ",
+        fresnel_split_min);
+  if (!(guide_split_min >= 0.0) || !std::isfinite(guide_split_min))
+    throw_error<InvalidArgument>(
+        w, ".guide_split_min must be finite and >= 0 (share of a pixel's guide, 0 = always), got ",
+        guide_split_min);
   if (!(adaptive_samples >= 0.0) || !std::isfinite(adaptive_samples))
     throw_error<InvalidArgument>(
         w, ".adaptive_samples must be finite and >= 0 (extra samples per pixel, 0 = off), got ",
@@ -731,7 +739,9 @@ class Integrator {
         opt_(o),
         primary_(G.rays->impl().scene),
         scene_(G.bounce.get()),
-        clamp_indirect_(static_cast<float>(o.clamp_indirect)) {
+        clamp_indirect_(static_cast<float>(o.clamp_indirect)),
+        split_min_(static_cast<float>(o.fresnel_split_min)),
+        guide_split_min_(static_cast<float>(o.guide_split_min)) {
     rtcInitIntersectContext(&ctx_);
   }
 
@@ -896,8 +906,12 @@ class Integrator {
         float pdf;
         float eta2;
         Split split;
+        // Fresnel splitting (and the branches) only while the throughput is worth the other
+        // direction's ray: deeper, dim paths take the random direction alone (unbiased; the
+        // choice does not depend on the Fresnel draw).
+        const bool may_split = branches_left > 0 || max_comp(beta) >= split_min_;
         if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta, eta2,
-                         &split))
+                         may_split ? &split : nullptr))
           break;
         bool branched = false;
         if (split.on && branches_left > 0) {
@@ -927,7 +941,7 @@ class Integrator {
           weight = split.weight;
           if (max_comp(b.beta) <= 0.0f || !all_finite(b.beta)) --n_pending;
         } else if (split.on) {
-          if (aov_open) {
+          if (aov_open && aov_w * split.other_share >= guide_split_min_) {
             // The other branch's guide (followed through further smooth glass by refraction),
             // weighted by its share; the continuing branch keeps the rest.
             F3 oa = aov_a, on = aov_n;
@@ -1240,6 +1254,8 @@ class Integrator {
   RTCScene primary_;  // robust: camera rays
   RTCScene scene_;    // bounce and shadow rays
   float clamp_indirect_;
+  float split_min_;        // PathTraceOptions::fresnel_split_min
+  float guide_split_min_;  // PathTraceOptions::guide_split_min
   /// Smooth-dielectric vertices per camera sample whose two branches are both traced in full
   /// (the first ones along the path, depth first); later ones are split as in `Split`.
   static constexpr int kMaxBranches = 3;

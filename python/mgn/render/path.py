@@ -249,6 +249,14 @@ class PathTraceOptions:
             at the second path vertex or later) (0 = off). The default 10 leaves ordinary
             indirect light alone and removes the fireflies of caustics (diffuse -> glass -> sun)
             at the cost of dimming those caustics.
+        fresnel_split_min: after the first glass walls (whose reflected and refracted branches
+            are both traced in full), both directions of a smooth dielectric meet their first
+            light (Fresnel splitting) only while the path's throughput (largest channel) is at
+            least this (>= 0; 0 = always); dimmer paths follow their random direction alone
+            (unbiased, one ray fewer per such glass vertex).
+        guide_split_min: the denoiser guides of the other direction at a split smooth dielectric
+            are followed behind further glass only when its share of the pixel's guide is at
+            least this (>= 0; 0 = always); guides only, the radiance is unchanged.
         adaptive_samples: adaptive sampling, extra samples per pixel on average (>= 0; 0 =
             off) traced after the ``spp`` samples of every pixel where that first pass looks
             noisiest (docs/rendering.md, "Adaptive sampling"); the image stays identical for
@@ -266,6 +274,8 @@ class PathTraceOptions:
     focus_distance: float = _TRACE.focus_distance
     clamp: float = _TRACE.clamp
     clamp_indirect: float = _TRACE.clamp_indirect
+    fresnel_split_min: float = _TRACE.fresnel_split_min
+    guide_split_min: float = _TRACE.guide_split_min
     adaptive_samples: float = _TRACE.adaptive_samples
     adaptive_max: int = _TRACE.adaptive_max
 
@@ -303,6 +313,8 @@ class PathTraceOptions:
         o.focus_distance = float(self.focus_distance)
         o.clamp = float(self.clamp)
         o.clamp_indirect = float(self.clamp_indirect)
+        o.fresnel_split_min = float(self.fresnel_split_min)
+        o.guide_split_min = float(self.guide_split_min)
         o.adaptive_samples = float(self.adaptive_samples)
         o.adaptive_max = max(-(2**31), min(2**31 - 1, int(self.adaptive_max)))
         return o

@@ -141,6 +141,17 @@ struct PathTraceOptions {
   /// ordinary indirect light alone (contributions of order 1) and removes the fireflies of
   /// caustic paths (diffuse -> glass -> sun), at the cost of a small bias (caustics are dimmed).
   double clamp_indirect = 10.0;
+  /// Fresnel splitting at a smooth dielectric (both the reflected and the refracted ray meet
+  /// their first light, docs/rendering.md) after the first glass walls, whose two branches are
+  /// traced in full, only while the path's throughput (largest channel) is at least this (>= 0;
+  /// 0 = always). Below it the path follows its random direction alone: unbiased, one ray fewer
+  /// per glass vertex of dim paths (deep inside bottles, behind reflections).
+  double fresnel_split_min = 0.1;
+  /// The denoiser guides of the other direction at a split smooth dielectric are followed
+  /// behind further glass only when that direction's share of the pixel's guide is at least
+  /// this (>= 0; 0 = always); otherwise the continuing path's guide takes its share. Guides
+  /// only: the radiance is unchanged.
+  double guide_split_min = 0.1;
   /// Adaptive sampling (docs/rendering.md): after the `spp` samples of every pixel, this many
   /// extra samples per pixel on average (>= 0; 0 = off) go where the first pass looks noisiest
   /// (9x9 neighbourhood variance weighted by a display curve), at most `adaptive_max` per pixel
