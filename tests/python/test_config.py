@@ -33,7 +33,7 @@ def test_defaults_are_the_mgn_values() -> None:
     assert c.object_labels.physics_grasps is None
     assert c.object_labels.physics_search == "staircase"
     assert c.object_labels.physics_checks == _core.ShakeOptions().staircase_checks
-    assert c.object_labels.physics_calibration == 16
+    assert c.object_labels.physics_calibration == 32
     assert c.objects.copies == (2, 5)
     assert c.objects.compose_kwargs() == {"categories": None, "count": 20, "copies": (2, 5)}
     assert c.camera.rig == "mgn" and c.camera.view_indices == tuple(range(37))

@@ -107,7 +107,7 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
     rec = doc["physics_scores"]
     assert rec["cap"] == 3 and rec["search"] == "staircase" and rec["grid"] == 2
     assert rec["checks"] == load_config({}).object_labels.physics_checks
-    assert rec["calibration"] == load_config({}).object_labels.physics_calibration == 16
+    assert rec["calibration"] == load_config({}).object_labels.physics_calibration == 32
     assert set(rec["objects"]) == {"box_tea", "can_soda"}
     assert rec["capped_objects"] == ["box_tea", "can_soda"]
     assert all(o["scored"] == 3 for o in rec["objects"].values())

@@ -252,4 +252,4 @@ def test_cli_calibration_flag_reaches_the_scorer():
     args = parser.parse_args(["pj", "label", "x.obj", "--physics-calibration", "4"])
     assert _physics_scorer(args, default_gripper()).calibration_grasps == 4
     args = parser.parse_args(["pj", "label", "x.obj"])
-    assert _physics_scorer(args, default_gripper()).calibration_grasps == 16
+    assert _physics_scorer(args, default_gripper()).calibration_grasps == 32

@@ -42,7 +42,7 @@ Sections:
   more checks, more trials, closer to the full grid; benchmarks/README.md measures the trade),
   ``physics_calibration`` (staircase only: the first N scored grasps of each object are simulated
   on the full grid, and if the staircase search replayed on them differs from any, the object's
-  other grasps get the full grid too; 0 = off; default 16, docs/models.md),
+  other grasps get the full grid too; 0 = off; default 32, docs/models.md),
   ``suction_model``, ``seed``.
 - ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per

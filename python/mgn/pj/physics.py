@@ -436,7 +436,7 @@ class ShakeScorer:
     )
     max_grasps: int | None = None
     progress: bool | None = None
-    calibration_grasps: int = 16
+    calibration_grasps: int = 32
     calibration_mismatches: int = 0
     last_calibration: StaircaseCalibration | None = dataclass_field(
         default=None, init=False, compare=False
