@@ -21,6 +21,12 @@ grasps), f5's ``dt100f5``.
 
     python -m benchmarks.bench_shake_policy --grid-cache DIR \\
         [--physics today=full,f5=dt100f5] [--objects can_soda:100,...] [--k 0,8,16]
+    python -m benchmarks.bench_shake_policy --real box_cereal:2000 --real-variant dt100f5
+
+``--real name:N`` instead scores N grasps of the object (an evenly strided subset of mgn's
+labeller's grasps) for real through ``ShakeScorer`` (the policy with its default calibration,
+the staircase's default checks, ``--threads`` threads, ``--real-variant`` a bench_shake_speed
+variant or ``default``) and reports wall and CPU seconds, the verdict and the score statistics.
 
 Numbers and findings: benchmarks/RESULTS.md, "Shake test, session 12".
 """
@@ -65,16 +71,59 @@ def policy(grids: np.ndarray, k: int, checks: int, start: int = 0):
     return scores, trials, not verdict.staircase
 
 
+def real(item: str, variant: str, threads: int) -> int:
+    """Score N grasps of an object through ShakeScorer for real; print the cost."""
+    import os
+    import time
+
+    from mgn.geometry import mass_properties
+    from mgn.objects import get_object
+    from mgn.pj.labels import label_object
+    from mgn.pj.physics import ShakeOptions, ShakeScorer
+
+    from .bench_shake_speed import VARIANTS
+
+    name, _, n = item.partition(":")
+    spec = get_object(name)
+    mesh = spec.to_mesh()
+    props = mass_properties(mesh, spec.density)
+    labels = label_object(
+        mesh, mass=props.mass, com=props.center_of_mass, num_points=5000, num_threads=threads
+    )
+    kw = {} if variant == "default" else VARIANTS[variant]
+    opts = ShakeOptions(staircase=True, num_threads=threads, **kw)
+    scorer = ShakeScorer(spec.density, options=opts, max_grasps=int(n), progress=False)
+    load0 = os.getloadavg()[0]
+    t0, c0 = time.perf_counter(), time.process_time()
+    sim = scorer(mesh, labels)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    got = np.isfinite(sim)
+    print(
+        f"{name} ({variant}, {threads} thread(s)): {int(got.sum())} of {len(sim)} grasps scored in "
+        f"{wall:.1f} s wall, {cpu:.1f} CPU-s ({cpu / got.sum():.3f} CPU-s per grasp; 2,000 grasps "
+        f"on 2 busy cores ~{cpu / got.sum() * 1000:.0f} s); {scorer.__name__}; mean score "
+        f"{np.nanmean(sim):.3f}; load {load0:.1f} -> {os.getloadavg()[0]:.1f}"
+    )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     from mgn.pj.physics import ShakeOptions
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--grid-cache", type=Path, required=True)
+    ap.add_argument("--grid-cache", type=Path)
+    ap.add_argument("--real", default="", help="name:N: score N grasps for real instead")
+    ap.add_argument("--real-variant", default="default")
+    ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--physics", default="today=full,f5=dt100f5")
     ap.add_argument("--objects", default=OBJECTS, help="names, optionally name:max_grasps")
     ap.add_argument("--k", default="0,8,16", help="calibration grasps (0 = plain staircase)")
     ap.add_argument("--checks", type=int, default=ShakeOptions().staircase_checks)
     args = ap.parse_args(argv)
+    if args.real:
+        return real(args.real, args.real_variant, args.threads)
+    if args.grid_cache is None:
+        ap.error("--grid-cache is required (or --real)")
     ks = [int(k) for k in args.k.split(",")]
     print(
         "| physics | object | K | grasps | identical scores (first K) | full grid? | trials/grasp"
