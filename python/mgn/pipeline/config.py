@@ -57,9 +57,10 @@ Sections:
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
   it ``spp_without_denoiser`` samples are traced and a warning names the package),
-  ``denoise_quality``, ``adaptive_samples`` / ``adaptive_max`` (adaptive sampling: extra samples
-  where the first pass is noisy), ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone``
-  (``filmic`` | ``linear``),
+  ``denoise_quality``, ``denoise_guides`` (``smoothed`` | ``raw`` | ``albedo`` | ``none``: the
+  guide images the denoiser gets), ``adaptive_samples`` / ``adaptive_max`` (adaptive sampling:
+  extra samples where the first pass is noisy), ``max_bounces``, ``clamp``, ``exposure`` (EV),
+  ``tone`` (``filmic`` | ``linear``),
   ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
   ``randomize`` (path engine, when ``camera.randomize`` is on: switches ``lights``,
   ``environment``, ``materials`` (tote / floor), ``exposure`` and their ranges). Labels do not
