@@ -21,9 +21,11 @@ the first and the last quarter of the rotational shake are skipped when the obje
 3 mm of its pose in the hand through a window whose loads they repeat), ``smooth`` and
 ``smooth_dt100`` (``smooth_shake``), ``dt100i15``, ``dt100i20``, ``dt100i40`` and ``dt75i30``
 (a coarse step with 15, 20, 40 or 30 solver iterations), ``dt100f5`` (1/100 s with
-``iterations_per_hull_contact`` = 5). The last column compares the staircase
-search replayed on the variant's grid with that grid's own score: the agreement the search can
-reach under that physics (a different default physics is acceptable if its own grids are
+``iterations_per_hull_contact`` = 5), and on top of it ``dt100f5m1`` (margin 1 mm),
+``dt100f5m1v32`` (also 32 hull vertices) and ``dt100f2i5m1v32`` (5 solver iterations and 2.5 per
+hull contact, so a single hull held by both fingers still gets 5). The last column compares the
+staircase search replayed on the variant's grid with that grid's own score: the agreement the
+search can reach under that physics (a different default physics is acceptable if its own grids are
 monotone enough); ``--curve`` adds it for several check budgets and search variants.
 
     python -m benchmarks.bench_shake_speed --grid-cache /tmp/shake \
@@ -77,6 +79,21 @@ VARIANTS = {
     "dt75i30": {**_dt(75), "solver_iterations": 30},
     "dt100i40": {**_dt(100), "solver_iterations": 40},
     "dt100f5": {**_dt(100), "iterations_per_hull_contact": 5.0},
+    # Session 12: session 8's cheaper model knobs on top of f5, judged by their own grids.
+    "dt100f5m1": {**_dt(100), "iterations_per_hull_contact": 5.0, "margin": 1e-3},
+    "dt100f5m1v32": {
+        **_dt(100),
+        "iterations_per_hull_contact": 5.0,
+        "margin": 1e-3,
+        "max_hull_vertices": 32,
+    },
+    "dt100f2i5m1v32": {
+        **_dt(100),
+        "iterations_per_hull_contact": 2.5,
+        "solver_iterations": 5,
+        "margin": 1e-3,
+        "max_hull_vertices": 32,
+    },
 }
 
 

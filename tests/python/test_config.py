@@ -33,6 +33,7 @@ def test_defaults_are_the_mgn_values() -> None:
     assert c.object_labels.physics_grasps is None
     assert c.object_labels.physics_search == "staircase"
     assert c.object_labels.physics_checks == _core.ShakeOptions().staircase_checks
+    assert c.object_labels.physics_calibration == 32
     assert c.objects.copies == (2, 5)
     assert c.objects.compose_kwargs() == {"categories": None, "count": 20, "copies": (2, 5)}
     assert c.camera.rig == "mgn" and c.camera.view_indices == tuple(range(37))
@@ -104,6 +105,11 @@ def test_cli_dump_prints_the_defaults(capsys: pytest.CaptureFixture, tmp_path: P
         ({"object_labels": {"physics_grasps": 0}}, "'object_labels.physics_grasps'", ">= 1"),
         ({"object_labels": {"physics_search": "grid"}}, "'object_labels.physics_search'", "full"),
         ({"object_labels": {"physics_checks": -1}}, "'object_labels.physics_checks'", ">= 0"),
+        (
+            {"object_labels": {"physics_calibration": -2}},
+            "'object_labels.physics_calibration'",
+            ">= 0",
+        ),
         ({"objects": {"count": True}}, "'objects.count'", "integer"),
         ({"objects": {"copies": [3, 2]}}, "'objects.copies'", "min <= max"),
         ({"objects": {"copies": [2]}}, "'objects.copies'", "2 values"),

@@ -42,6 +42,7 @@ from mgn.viz.report import image_engines
         ({"max_bounces": -1}, "render.max_bounces"),
         ({"tone": "aces"}, "render.tone"),
         ({"denoise_quality": "best"}, "render.denoise_quality"),
+        ({"denoise_guides": "clean"}, "render.denoise_guides"),
         ({"exposure": float("nan")}, "render.exposure"),
         ({"aperture_radius": -0.001}, "render.aperture_radius"),
         ({"randomize": {"light_count": [3, 1]}}, "render.randomize.light_count"),
@@ -381,30 +382,41 @@ def _noisy_buffers(h: int, w: int, seed: int) -> tuple[np.ndarray, np.ndarray, n
 
 def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
     """photo.denoise keeps one OIDN device and filter per thread count; every call, whatever
-    came before (another shape, fewer guides, another thread count), gives the bytes of pyoidn's
-    own convenience API (a separate device) on the same cleaned inputs."""
+    came before (another shape, fewer guides, another thread count, guides declared clean or
+    noisy), gives the bytes of pyoidn's own convenience API (a separate device) on the same
+    cleaned inputs."""
     if not photo.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
     import pyoidn
 
-    def reference(rad: np.ndarray, alb: np.ndarray | None, nrm: np.ndarray | None) -> np.ndarray:
+    def reference(
+        rad: np.ndarray, alb: np.ndarray | None, nrm: np.ndarray | None, clean: bool = False
+    ) -> np.ndarray:
         c = np.nan_to_num(rad, nan=0.0, posinf=0.0)
-        out = pyoidn.denoise(c, alb, nrm, hdr=True, quality="fast")
+        out = pyoidn.denoise(c, alb, nrm, hdr=True, quality="fast", clean_aux=clean)
         return np.maximum(out, 0.0)
 
     big, small = _noisy_buffers(48, 64, 1), _noisy_buffers(40, 24, 2)
     want_big, want_small = reference(*big), reference(*small)
     want_albedo_only = reference(big[0], big[1], None)
     assert not np.array_equal(want_big, want_albedo_only)  # the normal guide is used
-    first = photo.denoise(*big)
+    first = photo.denoise(*big, guides="raw")
     assert first.dtype == np.float32 and first.shape == big[0].shape
     assert np.isfinite(first).all() and first.min() >= 0.0
     assert first.tobytes() == want_big.tobytes()
-    assert photo.denoise(*big).tobytes() == first.tobytes()  # the cached filter, same bytes
-    assert photo.denoise(*small).tobytes() == want_small.tobytes()  # another shape
-    assert photo.denoise(big[0], big[1]).tobytes() == want_albedo_only.tobytes()  # unbinds normal
-    assert photo.denoise(*big, num_threads=1).tobytes() == first.tobytes()  # its own device
-    assert photo.denoise(*big).tobytes() == first.tobytes()
+    assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()  # the cached filter
+    assert photo.denoise(*small, guides="raw").tobytes() == want_small.tobytes()  # another shape
+    # the default: both guides smoothed and declared clean (cleanAux), then back to noisy
+    smooth = reference(big[0], photo._smooth3(big[1]), photo._smooth3(big[2]), clean=True)
+    assert not np.array_equal(smooth, want_big)
+    assert photo.denoise(*big).tobytes() == smooth.tobytes()
+    assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()
+    for unbind in ("raw", "albedo"):  # a missing normal, or guides="albedo", unbinds it
+        args = (big[0], big[1]) if unbind == "raw" else big
+        assert photo.denoise(*args, guides=unbind).tobytes() == want_albedo_only.tobytes()
+    assert photo.denoise(*big, guides="none").tobytes() == reference(big[0], None, None).tobytes()
+    assert photo.denoise(*big, num_threads=1, guides="raw").tobytes() == first.tobytes()
+    assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()
     assert np.isnan(big[0][1, 2]).all() and np.isinf(big[0][3, 1]).all()  # inputs untouched
     assert np.isnan(big[0]).sum() == 3 and np.isinf(big[0]).sum() == 3
 
@@ -425,7 +437,38 @@ def test_denoise_rejects_bad_inputs() -> None:
         photo.denoise(rad, alb, nrm, num_threads=-1)
     with pytest.raises(InvalidArgumentError, match="quality"):
         photo.denoise(rad, alb, nrm, "best")
+    with pytest.raises(InvalidArgumentError, match="guides must be one of"):
+        photo.denoise(rad, alb, nrm, guides="clean")
     assert photo.denoise(rad, alb, nrm).shape == rad.shape  # still works after the errors
+
+
+def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
+    """The ``smoothed`` guides' blur is a 3 x 3 Gaussian of sigma 0.5 px with the border pixels
+    repeated: OpenCV's GaussianBlur (BORDER_REPLICATE) gives the same image; a constant image
+    stays constant and a single bright pixel spreads into exactly its 3 x 3 neighbourhood."""
+    import cv2
+
+    img = np.random.default_rng(4).random((23, 17, 3)).astype(np.float32)
+    want = cv2.GaussianBlur(img, (3, 3), 0.5, borderType=cv2.BORDER_REPLICATE)
+    got = photo._smooth3(img)
+    assert got.dtype == np.float32 and got.flags.c_contiguous and got.shape == img.shape
+    np.testing.assert_allclose(got, want, atol=1e-6)
+    for rows in (1, 2, 5, 22, 23, 100):  # the bands (rows at a time) do not change the image
+        assert photo._smooth3(img, rows).tobytes() == got.tobytes()
+    one_row = img[:1]
+    np.testing.assert_allclose(
+        photo._smooth3(one_row),
+        cv2.GaussianBlur(one_row, (3, 3), 0.5, borderType=cv2.BORDER_REPLICATE),
+        atol=1e-6,
+    )
+    flat = np.full((5, 6, 3), 0.3, np.float32)
+    np.testing.assert_allclose(photo._smooth3(flat), flat, atol=1e-7)
+    dot = np.zeros((7, 7, 3), np.float32)
+    dot[3, 3] = 1.0
+    blurred = photo._smooth3(dot)
+    assert np.count_nonzero(blurred[..., 0]) == 9 and abs(blurred.sum() / 3 - 1.0) < 1e-6
+    w = np.exp(-0.5 / 0.25)  # the side weight before normalisation, sigma 0.5
+    assert blurred[3, 4, 0] == pytest.approx(blurred[3, 3, 0] * w, rel=1e-5)
 
 
 def test_missing_denoiser_warns_and_traces_more_samples(monkeypatch: pytest.MonkeyPatch) -> None:

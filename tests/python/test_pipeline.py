@@ -107,6 +107,7 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
     rec = doc["physics_scores"]
     assert rec["cap"] == 3 and rec["search"] == "staircase" and rec["grid"] == 2
     assert rec["checks"] == load_config({}).object_labels.physics_checks
+    assert rec["calibration"] == load_config({}).object_labels.physics_calibration == 32
     assert set(rec["objects"]) == {"box_tea", "can_soda"}
     assert rec["capped_objects"] == ["box_tea", "can_soda"]
     assert all(o["scored"] == 3 for o in rec["objects"].values())
@@ -575,6 +576,11 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
         ),
     )
     assert label_keys(spec, more_checks)["paralleljaw"] != keys["paralleljaw"]
+    calibrated = dataclasses.replace(
+        config,
+        object_labels=dataclasses.replace(config.object_labels, physics_calibration=3),
+    )
+    assert label_keys(spec, calibrated)["paralleljaw"] != keys["paralleljaw"]
     assert label_keys(spec, more_checks)["suction"] == keys["suction"]
     o = shake_options(more_checks).to_core()
     assert o.staircase and o.staircase_checks == config.object_labels.physics_checks + 1

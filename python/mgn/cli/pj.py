@@ -35,6 +35,7 @@ def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> Sh
             num_threads=args.num_threads,
         ),
         max_grasps=args.physics_grasps,
+        calibration_grasps=args.physics_calibration,
     )
 
 
@@ -146,6 +147,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="staircase only: N extra inferred cells simulated to catch non-monotone grids "
         f"(default {ShakeOptions.staircase_checks}; more checks, closer to the full grid)",
+    )
+    p.add_argument(
+        "--physics-calibration",
+        type=int,
+        default=ShakeScorer.calibration_grasps,
+        metavar="N",
+        help="staircase only: the first N grasps of each object are simulated on the full grid; "
+        "if the staircase search replayed on them differs from any, the object's other grasps get "
+        f"the full grid too (default {ShakeScorer.calibration_grasps}; 0 = off)",
     )
     p.add_argument(
         "--physics-grid", type=int, default=5, help="S of the S x S friction x density grid"

@@ -40,6 +40,9 @@ Sections:
   full grid where they fail, the default; ``full``: simulate all S x S trials),
   ``physics_checks`` (extra inferred cells the staircase simulates to catch non-monotone grids:
   more checks, more trials, closer to the full grid; benchmarks/README.md measures the trade),
+  ``physics_calibration`` (staircase only: the first N scored grasps of each object are simulated
+  on the full grid, and if the staircase search replayed on them differs from any, the object's
+  other grasps get the full grid too; 0 = off; default 32, docs/models.md),
   ``suction_model``, ``seed``.
 - ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
@@ -54,9 +57,10 @@ Sections:
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
   it ``spp_without_denoiser`` samples are traced and a warning names the package),
-  ``denoise_quality``, ``adaptive_samples`` / ``adaptive_max`` (adaptive sampling: extra samples
-  where the first pass is noisy), ``max_bounces``, ``clamp``, ``exposure`` (EV), ``tone``
-  (``filmic`` | ``linear``),
+  ``denoise_quality``, ``denoise_guides`` (``smoothed`` | ``raw`` | ``albedo`` | ``none``: the
+  guide images the denoiser gets), ``adaptive_samples`` / ``adaptive_max`` (adaptive sampling:
+  extra samples where the first pass is noisy), ``max_bounces``, ``clamp``, ``exposure`` (EV),
+  ``tone`` (``filmic`` | ``linear``),
   ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
   ``randomize`` (path engine, when ``camera.randomize`` is on: switches ``lights``,
   ``environment``, ``materials`` (tote / floor), ``exposure`` and their ranges). Labels do not
@@ -85,7 +89,7 @@ from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec, make_tote
-from mgn.pj.physics import ShakeOptions
+from mgn.pj.physics import ShakeOptions, ShakeScorer
 from mgn.render.photo import RandomizeSettings, RenderSettings
 from mgn.scene.cameras import Intrinsics, look_at
 from mgn.scene.lens import lens_for
@@ -521,6 +525,7 @@ class ObjectLabelsConfig(_Section):
     physics_grid: int = 10
     physics_search: str = "staircase"
     physics_checks: int = ShakeOptions.staircase_checks
+    physics_calibration: int = ShakeScorer.calibration_grasps
     suction_model: str = "spring"
     seed: int = 0
 
@@ -531,6 +536,7 @@ class ObjectLabelsConfig(_Section):
         "physics_grid": _int(1),
         "physics_search": _choice("staircase", "full"),
         "physics_checks": _int(0),
+        "physics_calibration": _int(0),
         "suction_model": _choice(*SEAL_MODELS),
         "seed": _int(0),
     }

@@ -133,6 +133,11 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
                 if config.labels.pj_physics and ol.physics_search == "staircase"
                 else None
             ),
+            "physics_calibration": (
+                ol.physics_calibration
+                if config.labels.pj_physics and ol.physics_search == "staircase"
+                else None
+            ),
         }
         h.update(json.dumps(params, sort_keys=True).encode())
         for f in ("palm_mesh", "finger_left_mesh", "finger_right_mesh"):
@@ -190,6 +195,7 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
                 gripper=config.gripper,
                 options=shake_options(config, num_threads),
                 max_grasps=ol.physics_grasps,
+                calibration_grasps=ol.physics_calibration,
             )
         pj = pj_label_object(
             mesh,

@@ -5,6 +5,7 @@ AntipodalSampler(mesh, gripper)        antipodal robust sampler (docs/models.md 
 pj_wrench_scores(...)                  soft-finger wrench score under gravity
 label_object(mesh, mass=, com=)        object labels (written by mgn.io.grasp_file.write_pj_labels)
 shake_scores(...), ShakeScorer         Bullet shake test (physics score), label_object's scorer
+calibrate_staircase(grids, checks)     ShakeScorer's object-level staircase-or-full-grid policy
 """
 
 from mgn.pj.labels import PjLabels, label_object
@@ -13,6 +14,9 @@ from mgn.pj.physics import (
     ShakeScorer,
     ShakeScores,
     ShakeTrajectory,
+    StaircaseCalibration,
+    calibrate_staircase,
+    replay_staircase,
     shake_scores,
     shake_trajectory,
 )
@@ -33,11 +37,14 @@ __all__ = [
     "ShakeScorer",
     "ShakeScores",
     "ShakeTrajectory",
+    "StaircaseCalibration",
+    "calibrate_staircase",
     "core_gripper",
     "gripper_meshes",
     "hand_poses",
     "label_object",
     "pj_wrench_scores",
+    "replay_staircase",
     "shake_scores",
     "shake_trajectory",
 ]

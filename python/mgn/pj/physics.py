@@ -325,6 +325,85 @@ def shake_trajectory(
     return from_core(ShakeTrajectory, t)
 
 
+def replay_staircase(
+    trial_success: npt.ArrayLike, checks: int
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
+    """The staircase search's scores on grids already simulated (no physics).
+
+    Every cell of a grid is a deterministic trial (its own random stream, the same whichever
+    search simulates it), so the search's result is a function of the full grid: this runs
+    ``_core.staircase_grid`` (the search of :func:`shake_scores` with ``staircase=True``) on the
+    stored outcomes.
+
+    Args:
+        trial_success: (G, S, S) bool full-grid outcomes (``ShakeScores.trial_success``).
+        checks: ``ShakeOptions.staircase_checks`` of the search replayed, >= 0.
+
+    Returns:
+        (G,) scores the search would give (success fraction) and (G,) trials it would simulate.
+    """
+    grids = np.asarray(trial_success, dtype=bool)
+    if grids.ndim != 3 or grids.shape[1] != grids.shape[2]:
+        raise InvalidArgumentError(f"trial_success: expected shape (G, S, S), got {grids.shape}")
+    S = grids.shape[1]
+    score = np.empty(grids.shape[0], np.float64)
+    trials = np.empty(grids.shape[0], np.int64)
+    for g in range(grids.shape[0]):
+        cells: list[list[bool]] = grids[g].tolist()
+
+        def trial(i: int, j: int, cells: list[list[bool]] = cells) -> bool:
+            return cells[i][j]
+
+        r = _core.staircase_grid(S, trial, int(checks))
+        score[g] = float(np.count_nonzero(r.success)) / (S * S)
+        trials[g] = r.trials
+    return score, trials
+
+
+@dataclass(frozen=True)
+class StaircaseCalibration:
+    """Outcome of :func:`calibrate_staircase` for one object.
+
+    Attributes:
+        grasps: calibration grasps (simulated on the full grid).
+        mismatches: of them, grasps whose replayed staircase score differs from the full grid's.
+        staircase: True if the object's other grasps get the staircase search (mismatches <=
+            the allowed number), False if they get the full grid.
+    """
+
+    grasps: int
+    mismatches: int
+    staircase: bool
+
+
+def calibrate_staircase(
+    trial_success: npt.ArrayLike, checks: int, max_mismatches: int = 0
+) -> StaircaseCalibration:
+    """The object-level staircase policy: keep the staircase search for an object's grasps only
+    if it reproduces the full grid of its calibration grasps.
+
+    The search is replayed (:func:`replay_staircase`) on the full grids of the calibration
+    grasps; if its score differs from the full grid's on more than ``max_mismatches`` of them,
+    the object's physics is not monotone enough for the search's checks (isolated failing
+    cells), and its remaining grasps are to be scored on the full grid.
+
+    Args:
+        trial_success: (K, S, S) bool full-grid outcomes of the calibration grasps.
+        checks: ``ShakeOptions.staircase_checks`` of the search.  max_mismatches: >= 0.
+    """
+    if int(max_mismatches) < 0:
+        raise InvalidArgumentError(f"max_mismatches: expected >= 0, got {max_mismatches}")
+    grids = np.asarray(trial_success, dtype=bool)
+    replayed, _ = replay_staircase(grids, checks)
+    full = grids.sum(axis=(1, 2)) / float(grids.shape[1] * grids.shape[2])
+    mismatches = int(np.count_nonzero(replayed != full))
+    return StaircaseCalibration(
+        grasps=int(grids.shape[0]),
+        mismatches=mismatches,
+        staircase=mismatches <= int(max_mismatches),
+    )
+
+
 @dataclass
 class ShakeScorer:
     """The physics scorer of :func:`mgn.pj.label_object` (``physics=ShakeScorer(...)``).
@@ -337,6 +416,17 @@ class ShakeScorer:
     (:func:`mgn.geometry.convex.cached_convex_decomposition`) with uniform ``density`` (kg/m^3).
     ``progress`` shows a progress bar with an ETA on stderr (None: when stderr is a terminal);
     the scores do not depend on it.
+
+    Object-level policy (staircase only, ``calibration_grasps`` > 0): the first
+    ``calibration_grasps`` grasps to score are simulated on the full grid and keep its scores;
+    the staircase search is replayed on their grids (:func:`calibrate_staircase`), and if it
+    differs from the full grid on more than ``calibration_mismatches`` of them, the object's
+    other grasps are scored on the full grid too, else with the staircase search. The isolated
+    failing cells that the search's checks miss are a property of the object's physics, so an
+    object whose grids are not monotone is caught before its grasps are scored
+    (benchmarks/RESULTS.md, "Shake test, session 12"). Every grasp keeps its random streams, so
+    the scores do not depend on the thread count or the progress bar. The decision of the last
+    call is ``last_calibration`` (None without calibration) and is recorded in ``__name__``.
     """
 
     density: float = 1000.0
@@ -346,11 +436,23 @@ class ShakeScorer:
     )
     max_grasps: int | None = None
     progress: bool | None = None
+    calibration_grasps: int = 32
+    calibration_mismatches: int = 0
+    last_calibration: StaircaseCalibration | None = dataclass_field(
+        default=None, init=False, compare=False
+    )
 
     @property
     def __name__(self) -> str:  # recorded in the label metadata
         o = self.options
         search = "staircase search" if o.staircase else "full grid"
+        c = self.last_calibration
+        if o.staircase and c is not None:
+            verdict = "staircase kept" if c.staircase else "full grid for the rest"
+            search += (
+                f" calibrated on {c.grasps} full grids (staircase differed on "
+                f"{c.mismatches}: {verdict})"
+            )
         cap = "every grasp" if self.max_grasps is None else f"at most {self.max_grasps} grasps"
         return f"Bullet shake test, grid {o.grid}x{o.grid}, {search}, {cap}"
 
@@ -358,12 +460,19 @@ class ShakeScorer:
 
         n = len(labels)
         out = np.full(n, np.nan, np.float32)
+        self.last_calibration = None
         if n == 0:
             return out
         if self.max_grasps is not None and self.max_grasps < 1:
             raise InvalidArgumentError(
                 f"ShakeScorer.max_grasps: expected >= 1, got {self.max_grasps}"
             )
+        for name in ("calibration_grasps", "calibration_mismatches"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+                raise InvalidArgumentError(
+                    f"ShakeScorer.{name}: expected an integer >= 0, got {value!r}"
+                )
         k = n if self.max_grasps is None else min(n, self.max_grasps)
         idx = np.unique(np.linspace(0, n - 1, k).round().astype(np.int64))
         props = mass_properties(mesh, self.density)
@@ -378,29 +487,46 @@ class ShakeScorer:
         )
         parts = cached_convex_decomposition(mesh)
         progress = sys.stderr.isatty() if self.progress is None else bool(self.progress)
-        if not progress:
-            scores = shake_scores(
-                parts, props.mass, props.center_of_mass, props.inertia, rows, self.gripper,
-                self.options,
-            )  # fmt: skip
-            out[idx] = scores.score
-            return out
-        # Pieces of _PIECE_PER_THREAD grasps per thread; grasp g keeps its random streams
-        # (first_grasp_index). The threads share a piece's grasps one at a time, but a piece
-        # ends when its slowest grasp does (a grasp costs 17 to S*S trials with the staircase):
-        # pieces of 2 grasps per thread kept 2 threads 80-88 % busy on real grasps, 16 keep
-        # them ~95 % busy (benchmarks/RESULTS.md, shake test).
-        step = _PIECE_PER_THREAD * _core.resolve_num_threads(int(self.options.num_threads))
+        o = self.options
         score = np.empty(len(rows), np.float32)
         name = getattr(mesh, "name", "") or "object"
-        with tqdm(total=len(rows), desc=f"physics {name}", unit="grasp") as bar:
-            for start in range(0, len(rows), step):
-                piece = shake_scores(
-                    parts, props.mass, props.center_of_mass, props.inertia,
-                    rows[start : start + step], self.gripper,
-                    replace(self.options, first_grasp_index=self.options.first_grasp_index + start),
-                )  # fmt: skip
-                score[start : start + len(piece.score)] = piece.score
-                bar.update(len(piece.score))
+        with tqdm(
+            total=len(rows), desc=f"physics {name}", unit="grasp", disable=not progress
+        ) as bar:
+
+            def run(start: int, stop: int, options: ShakeOptions) -> list[ShakeScores]:
+                # Pieces of _PIECE_PER_THREAD grasps per thread with the progress bar (grasp g
+                # keeps its random streams through first_grasp_index). The threads share a
+                # piece's grasps one at a time, but a piece ends when its slowest grasp does
+                # (a grasp costs 17 to S*S trials with the staircase): pieces of 2 grasps per
+                # thread kept 2 threads 80-88 % busy on real grasps, 16 keep them ~95 % busy
+                # (benchmarks/RESULTS.md, shake test). Without it, one call.
+                threads = _core.resolve_num_threads(int(options.num_threads))
+                step = _PIECE_PER_THREAD * threads if progress else max(stop - start, 1)
+                pieces = []
+                for a in range(start, stop, step):
+                    b = min(a + step, stop)
+                    piece = shake_scores(
+                        parts, props.mass, props.center_of_mass, props.inertia, rows[a:b],
+                        self.gripper,
+                        replace(options, first_grasp_index=options.first_grasp_index + a),
+                    )  # fmt: skip
+                    score[a:b] = piece.score
+                    bar.update(b - a)
+                    pieces.append(piece)
+                return pieces
+
+            first = 0
+            rest = o
+            if o.staircase and self.calibration_grasps > 0:
+                first = min(self.calibration_grasps, len(rows))
+                full = replace(o, staircase=False)
+                grids = np.concatenate([p.trial_success for p in run(0, first, full)])
+                self.last_calibration = calibrate_staircase(
+                    grids, o.staircase_checks, self.calibration_mismatches
+                )
+                if not self.last_calibration.staircase:
+                    rest = full
+            run(first, len(rows), rest)
         out[idx] = score
         return out

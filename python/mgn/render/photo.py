@@ -71,6 +71,8 @@ __all__ = [
 ENGINES = ("raster", "path")
 TONES = ("filmic", "linear")
 DENOISE_QUALITIES = ("high", "balanced", "fast")
+#: Guide images of ``render.denoise_guides`` (see :func:`denoise`).
+DENOISE_GUIDES = ("smoothed", "raw", "albedo", "none")
 ENVIRONMENTS = ("uniform", "gradient", "sky")
 TEXTURES = ("plain", "noise", "checker", "stripes")
 
@@ -170,6 +172,14 @@ class RenderSettings:
             CPU-s) and is the better use of the time: at equal CPU time, more samples with
             ``fast`` give a lower image error than fewer with ``high`` (benchmarks/
             path_results.md, "Denoiser settings"); ``balanced`` costs as much as ``high``.
+        denoise_guides: the guide images OIDN gets with the radiance. ``smoothed`` (default):
+            the tracer's albedo and normal, each blurred by a 3 x 3 Gaussian (sigma 0.5 px) and
+            declared noise-free to OIDN (its ``cleanAux`` mode); ``raw``: both as traced,
+            declared noisy; ``albedo``: the albedo alone, as traced (~0.15 CPU-s less per
+            1200 x 1200 view); ``none``: the colour alone (blurs printed text). On five windows
+            of the benchmark view ``smoothed`` scores better than ``raw`` on all of them at the
+            same cost (benchmarks/RESULTS.md, "Denoiser guides on five windows";
+            docs/rendering.md).
         adaptive_samples: adaptive sampling: extra path samples per pixel on average (0 = off)
             traced after the ``spp`` samples of every pixel where that first pass looks
             noisiest (glass, indirectly lit walls), at most ``adaptive_max`` per pixel
@@ -192,6 +202,7 @@ class RenderSettings:
     denoise: bool = True
     spp_without_denoiser: int = 128
     denoise_quality: str = "fast"
+    denoise_guides: str = "smoothed"
     adaptive_samples: float = 0.0
     adaptive_max: int = 3
     max_bounces: int = 6
@@ -212,6 +223,11 @@ class RenderSettings:
             raise InvalidArgumentError(
                 "RenderSettings.denoise_quality must be one of "
                 f"{', '.join(DENOISE_QUALITIES)}, got {self.denoise_quality!r}"
+            )
+        if self.denoise_guides not in DENOISE_GUIDES:
+            raise InvalidArgumentError(
+                "RenderSettings.denoise_guides must be one of "
+                f"{', '.join(DENOISE_GUIDES)}, got {self.denoise_guides!r}"
             )
         if self.tone not in TONES:
             raise InvalidArgumentError(
@@ -312,8 +328,11 @@ class _OidnFilter:
         if err is not None:
             raise BackendError(f"Intel Open Image Denoise: {step} failed: {err}")
 
-    def run(self, images: dict[str, npt.NDArray[np.float32] | None], quality: str) -> None:
-        """Bind ``images`` (color, albedo, normal, output; None unbinds) and execute."""
+    def run(
+        self, images: dict[str, npt.NDArray[np.float32] | None], quality: str, clean_aux: bool
+    ) -> None:
+        """Bind ``images`` (color, albedo, normal, output; None unbinds) and execute;
+        ``clean_aux``: the guides are noise-free (OIDN's ``cleanAux``)."""
         oidn = self.oidn
         for name, img in images.items():
             if img is None:
@@ -324,7 +343,7 @@ class _OidnFilter:
                 self.filter.set_image(name, img, oidn.OIDN_FORMAT_FLOAT3)
                 self.bound[name] = img
         self.filter.set_bool("hdr", True)
-        self.filter.set_bool("cleanAux", False)
+        self.filter.set_bool("cleanAux", clean_aux)
         self.filter.set_quality(_OIDN_QUALITY[quality](oidn))
         self.filter.commit()
         self._check("filter setup")
@@ -359,8 +378,34 @@ def _release_oidn_filters() -> None:
 atexit.register(_release_oidn_filters)
 
 
+#: Weights of the 3 x 3 Gaussian (sigma 0.5 px, separable) of the ``smoothed`` guides.
+_GUIDE_SIGMA = 0.5
+_GUIDE_SIDE = math.exp(-0.5 / _GUIDE_SIGMA**2)
+_GUIDE_WEIGHTS = (
+    _GUIDE_SIDE / (1.0 + 2.0 * _GUIDE_SIDE),
+    1.0 / (1.0 + 2.0 * _GUIDE_SIDE),
+)
+
+
+def _smooth3(img: npt.NDArray[np.float32], rows: int = 64) -> npt.NDArray[np.float32]:
+    """3 x 3 Gaussian (``_GUIDE_SIGMA``) of an (H, W, C) float32 image: separable, the border
+    pixels repeated outwards; done in bands of ``rows`` rows that stay in the CPU's cache
+    (~2.5x faster than whole-image passes: ~0.012 CPU-s per 1200 x 1200 guide)."""
+    side, mid = (np.float32(w) for w in _GUIDE_WEIGHTS)
+    h = img.shape[0]
+    out = np.empty_like(img)
+    for r0 in range(0, h, rows):
+        r1 = min(h, r0 + rows)
+        band = img[max(0, r0 - 1) : min(h, r1 + 1)]  # with the neighbour rows, where they exist
+        p = np.pad(band, ((int(r0 == 0), int(r1 == h)), (0, 0), (0, 0)), mode="edge")
+        v = mid * p[1:-1] + side * (p[:-2] + p[2:])
+        p = np.pad(v, ((0, 0), (1, 1), (0, 0)), mode="edge")
+        out[r0:r1] = mid * p[:, 1:-1] + side * (p[:, :-2] + p[:, 2:])
+    return out
+
+
 def _guide(
-    img: npt.NDArray[np.float32] | None, name: str, shape: tuple[int, ...], lo: float
+    img: npt.NDArray[np.float32] | None, name: str, shape: tuple[int, ...], lo: float, smooth: bool
 ) -> npt.NDArray[np.float32] | None:
     if img is None:
         return None
@@ -369,7 +414,8 @@ def _guide(
         raise InvalidArgumentError(
             f"denoise: {name} must have the radiance's shape {shape}, got {arr.shape}"
         )
-    return np.ascontiguousarray(np.clip(arr, lo, 1.0), np.float32)
+    g = np.ascontiguousarray(np.clip(arr, lo, 1.0), np.float32)
+    return _smooth3(g) if smooth else g
 
 
 def denoise(
@@ -379,23 +425,31 @@ def denoise(
     quality: str = "fast",
     *,
     num_threads: int = 0,
+    guides: str = "smoothed",
 ) -> npt.NDArray[np.float32]:
     """Denoise linear HDR radiance (H, W, 3) with OIDN's ray-tracing filter, guided by the
-    first-hit albedo and normal when given (treated as noisy: they carry the pixel's
-    anti-aliasing and texture variation; OIDN's ``cleanAux`` mode measured no better and, with
-    ``high``, 2.5x slower); ``quality`` fast | balanced | high (see
-    :attr:`RenderSettings.denoise_quality`); ``num_threads`` OIDN threads (0 = all cores; the
-    result does not depend on it). Albedo (clipped to [0, 1]) and normal (clipped to [-1, 1],
-    any frame) must have the radiance's shape; NaN and +inf radiance count as 0. Returns a new
-    (H, W, 3) float32 array, clamped to >= 0. One OIDN device and filter per thread count are
-    kept for the process (the first call pays their set-up). Raises ImportError when pyoidn is
-    missing."""
+    albedo and normal when given (the tracer's guides: the first surface that is not smooth
+    glass; at 1 spp they carry the pixel's jittered position, i.e. aliased edges and texture).
+    ``guides`` (see :attr:`RenderSettings.denoise_guides`): ``smoothed`` blurs each guide by a
+    3 x 3 Gaussian (sigma 0.5 px) and declares them noise-free (OIDN's ``cleanAux``: the
+    network then keeps the guides' detail instead of denoising it); ``raw`` passes them as they
+    are, declared noisy; ``albedo`` drops the normal, ``none`` both. ``quality`` fast | balanced
+    | high (see :attr:`RenderSettings.denoise_quality`); ``num_threads`` OIDN threads (0 = all
+    cores; the result does not depend on it). Albedo (clipped to [0, 1]) and normal (clipped to
+    [-1, 1], any frame) must have the radiance's shape; NaN and +inf radiance count as 0.
+    Returns a new (H, W, 3) float32 array, clamped to >= 0. One OIDN device and filter per
+    thread count are kept for the process (the first call pays their set-up). Raises
+    ImportError when pyoidn is missing."""
     oidn = _pyoidn()
     if oidn is None:
         raise ImportError("denoising needs the 'pyoidn' package: pip install 'mgn[render]'")
     if quality not in DENOISE_QUALITIES:
         raise InvalidArgumentError(
             f"denoise quality must be one of {DENOISE_QUALITIES}, got {quality!r}"
+        )
+    if guides not in DENOISE_GUIDES:
+        raise InvalidArgumentError(
+            f"denoise: guides must be one of {DENOISE_GUIDES}, got {guides!r}"
         )
     if isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 0:
         raise InvalidArgumentError(
@@ -407,15 +461,16 @@ def denoise(
             f"denoise: radiance must have shape (H, W, 3) with H, W > 0, got {rad.shape}"
         )
     c = np.ascontiguousarray(np.nan_to_num(rad, nan=0.0, posinf=0.0), np.float32)
-    a = _guide(albedo, "albedo", rad.shape, 0.0)
-    n = _guide(normal, "normal", rad.shape, -1.0)
+    smooth = guides == "smoothed"
+    a = _guide(albedo, "albedo", rad.shape, 0.0, smooth) if guides != "none" else None
+    n = _guide(normal, "normal", rad.shape, -1.0, smooth) if guides in ("smoothed", "raw") else None
     out = np.empty_like(c)
     with _OIDN_LOCK:
         flt = _OIDN_FILTERS.get(num_threads)
         if flt is None:
             flt = _OIDN_FILTERS[num_threads] = _OidnFilter(oidn, num_threads)
         try:
-            flt.run({"color": c, "albedo": a, "normal": n, "output": out}, quality)
+            flt.run({"color": c, "albedo": a, "normal": n, "output": out}, quality, smooth)
         except BaseException:
             flt.release()  # a failed filter is not reused
             del _OIDN_FILTERS[num_threads]
@@ -796,8 +851,9 @@ class PhotoRenderer:
         radiance = out.radiance
         if self.denoised:
             radiance = denoise(
-                radiance, out.albedo, out.normal, s.denoise_quality, num_threads=self.num_threads
-            )
+                radiance, out.albedo, out.normal, s.denoise_quality,
+                num_threads=self.num_threads, guides=s.denoise_guides,
+            )  # fmt: skip
         rgb = develop(
             radiance,
             FilmOptions(

@@ -1,0 +1,255 @@
+"""ShakeScorer's object-level staircase policy (calibration on the first grasps' full grids).
+
+Most tests inject constructed outcome functions in place of the physics (the staircase search
+itself is the real ``_core.staircase_grid``), so which grids are monotone is known exactly; one
+test runs the real physics to check the replay and the determinism.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import mgn
+from mgn import _core
+from mgn.errors import InvalidArgumentError
+from mgn.pj import physics
+from mgn.pj.physics import (
+    ShakeOptions,
+    ShakeScorer,
+    calibrate_staircase,
+    replay_staircase,
+    shake_scores,
+)
+
+S = 5
+CHECKS = 2
+
+
+class Labels(SimpleNamespace):
+    def __len__(self) -> int:
+        return len(self.width)
+
+
+def labels_of(n: int) -> Labels:
+    """n distinct (but physically unused) grasp rows: the fake physics keys on the grasp index."""
+    return Labels(
+        approach=np.tile([0.0, 0.0, -1.0], (n, 1)),
+        closing=np.tile([1.0, 0.0, 0.0], (n, 1)),
+        p1=np.column_stack([np.full(n, -0.02), np.linspace(-0.01, 0.01, n), np.zeros(n)]),
+        width=np.full(n, 0.04),
+    )
+
+
+def monotone(boundary: np.ndarray) -> np.ndarray:
+    """(S, S) grid succeeding exactly where density index j < boundary[friction index i]."""
+    return np.arange(S)[None, :] < np.asarray(boundary)[:, None]
+
+
+def missed_cell_grid() -> np.ndarray:
+    """A grid that succeeds everywhere but one cell the search never simulates (with CHECKS):
+    found by brute force over the cells, so the search's score is wrong on it."""
+    for c in range(S * S):
+        g = np.ones((S, S), bool)
+        g.flat[c] = False
+        r = _core.staircase_grid(S, lambda i, j, g=g: bool(g[i, j]), CHECKS)
+        if not r.simulated.flat[c]:
+            return g
+    raise AssertionError("the search simulates every cell: no missed cell to construct")
+
+
+class FakePhysics:
+    """Stands in for shake_scores: grasp g of the scorer's list (first_grasp_index + row) has the
+    outcomes truth[g]; the staircase search is the real one. Logs every call."""
+
+    def __init__(self, truth: np.ndarray):
+        self.truth = truth
+        self.calls: list[tuple[int, int, bool]] = []
+        self.trials = 0
+
+    def __call__(self, parts, mass, com, inertia, rows, gripper, options):
+        first = options.first_grasp_index
+        self.calls.append((first, len(rows), options.staircase))
+        success = np.empty((len(rows), S, S), bool)
+        for k in range(len(rows)):
+            grid = self.truth[first + k]
+            if options.staircase:
+                r = _core.staircase_grid(
+                    S, lambda i, j, grid=grid: bool(grid[i, j]), options.staircase_checks
+                )
+                success[k], self.trials = r.success, self.trials + r.trials
+            else:
+                success[k], self.trials = grid, self.trials + S * S
+        return SimpleNamespace(score=success.sum(axis=(1, 2)) / (S * S), trial_success=success)
+
+
+def score_with(monkeypatch, truth, **kw):
+    fake = FakePhysics(truth)
+    monkeypatch.setattr(physics, "shake_scores", fake)
+    opts = ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS, num_threads=1)
+    scorer = ShakeScorer(options=opts, progress=False, **kw)
+    mesh = mgn.make_box([0.04, 0.05, 0.06])
+    scores = scorer(mesh, labels_of(len(truth)))
+    return scores, scorer, fake
+
+
+def random_monotone(rng, n):
+    return np.stack([monotone(np.sort(rng.integers(0, S + 1, S))) for _ in range(n)])
+
+
+def truth_scores(truth):
+    return (truth.sum(axis=(1, 2)) / (S * S)).astype(np.float32)
+
+
+def test_monotone_object_keeps_the_staircase_after_calibration(monkeypatch):
+    rng = np.random.default_rng(3)
+    truth = random_monotone(rng, 40)
+    scores, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=8)
+    np.testing.assert_array_equal(scores, truth_scores(truth))  # monotone: the search is exact
+    assert scorer.last_calibration == physics.StaircaseCalibration(8, 0, True)
+    assert fake.calls == [(0, 8, False), (8, 32, True)]  # calibration grids, then the search
+    assert fake.trials < 40 * S * S
+    assert "staircase kept" in scorer.__name__ and "calibrated on 8" in scorer.__name__
+
+
+def test_object_whose_calibration_disagrees_gets_the_full_grid_everywhere(monkeypatch):
+    rng = np.random.default_rng(4)
+    truth = random_monotone(rng, 30)
+    bad = missed_cell_grid()
+    truth[3] = bad  # a calibration grasp the search gets wrong ...
+    truth[20] = bad  # ... and a later one, which the full grid then gets right
+    assert replay_staircase(bad[None], CHECKS)[0][0] != bad.mean()
+    scores, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=8)
+    np.testing.assert_array_equal(scores, truth_scores(truth))
+    assert scorer.last_calibration == physics.StaircaseCalibration(8, 1, False)
+    assert fake.calls == [(0, 8, False), (8, 22, False)]
+    assert fake.trials == 30 * S * S
+    assert "full grid for the rest" in scorer.__name__
+
+
+def test_the_verdict_depends_on_the_calibration_grasps_only(monkeypatch):
+    """A non-monotone grid after the calibration grasps is scored by the search (wrongly here):
+    the policy is decided once per object; and an allowed mismatch keeps the search."""
+    rng = np.random.default_rng(5)
+    truth = random_monotone(rng, 20)
+    bad = missed_cell_grid()
+    truth[12] = bad
+    scores, scorer, _ = score_with(monkeypatch, truth, calibration_grasps=8)
+    assert scorer.last_calibration is not None and scorer.last_calibration.staircase
+    expected = truth_scores(truth)
+    expected[12] = replay_staircase(bad[None], CHECKS)[0][0]
+    np.testing.assert_array_equal(scores, expected)
+    assert scores[12] != truth_scores(truth)[12]
+
+    truth[1] = bad
+    _, one, _ = score_with(monkeypatch, truth, calibration_grasps=8, calibration_mismatches=1)
+    assert one.last_calibration == physics.StaircaseCalibration(8, 1, True)
+    truth[2] = bad
+    _, two, _ = score_with(monkeypatch, truth, calibration_grasps=8, calibration_mismatches=1)
+    assert two.last_calibration == physics.StaircaseCalibration(8, 2, False)
+
+
+def test_no_calibration_and_small_objects(monkeypatch):
+    rng = np.random.default_rng(6)
+    truth = random_monotone(rng, 5)
+    truth[1] = missed_cell_grid()
+    plain, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=0)
+    assert scorer.last_calibration is None and fake.calls == [(0, 5, True)]
+    assert plain[1] != truth_scores(truth)[1]
+    # Fewer grasps than calibration grasps: all on the full grid, nothing left.
+    few, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=16)
+    np.testing.assert_array_equal(few, truth_scores(truth))
+    assert scorer.last_calibration == physics.StaircaseCalibration(5, 1, False)
+    assert fake.calls == [(0, 5, False)]
+
+
+def test_progress_pieces_keep_every_grasps_index(monkeypatch):
+    """With the progress bar the grasps are scored in pieces (16 per thread); each must keep its
+    own index (first_grasp_index), so the scores equal the scores without it."""
+    rng = np.random.default_rng(7)
+    truth = random_monotone(rng, 45)
+    for bad in (None, 5):
+        if bad is not None:
+            truth[bad] = missed_cell_grid()
+        quiet, _, _ = score_with(monkeypatch, truth, calibration_grasps=10)
+        fake = FakePhysics(truth)
+        monkeypatch.setattr(physics, "shake_scores", fake)
+        opts = ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS, num_threads=1)
+        shown = ShakeScorer(options=opts, progress=True, calibration_grasps=10)(
+            mgn.make_box([0.04, 0.05, 0.06]), labels_of(len(truth))
+        )
+        np.testing.assert_array_equal(shown, quiet)
+        assert [c[0] for c in fake.calls] == [0, 10, 26, 42]
+
+
+def test_calibrate_staircase_against_brute_force():
+    rng = np.random.default_rng(8)
+    grids = random_monotone(rng, 12)
+    c = calibrate_staircase(grids, CHECKS)
+    assert c == physics.StaircaseCalibration(12, 0, True)
+    grids[[2, 7]] = missed_cell_grid()
+    assert calibrate_staircase(grids, CHECKS) == physics.StaircaseCalibration(12, 2, False)
+    assert calibrate_staircase(grids, CHECKS, 2).staircase
+    # With every cell checked the search is exact on any grid.
+    assert calibrate_staircase(grids, S * S).mismatches == 0
+    with pytest.raises(InvalidArgumentError, match="max_mismatches"):
+        calibrate_staircase(grids, CHECKS, -1)
+    with pytest.raises(InvalidArgumentError, match="trial_success"):
+        replay_staircase(np.ones((2, 3, 4), bool), CHECKS)
+
+
+@pytest.mark.parametrize("field", ["calibration_grasps", "calibration_mismatches"])
+def test_bad_calibration_settings_are_rejected(field):
+    scorer = ShakeScorer(**{field: -1})  # type: ignore[arg-type]
+    with pytest.raises(InvalidArgumentError, match=f"ShakeScorer.{field}"):
+        scorer(mgn.make_box([0.04, 0.05, 0.06]), labels_of(3))
+
+
+def test_real_physics_replay_and_calibration_are_deterministic():
+    """Real shake trials on a box: the staircase replayed on full grids gives the real search's
+    scores and trial counts, and the calibrated scorer gives the same scores with 1 or 2 threads
+    and with or without the progress bar, its calibration grasps the full grid's scores."""
+    mesh = mgn.make_box([0.04, 0.05, 0.05])
+    n = 6
+    labels = labels_of(n)
+    labels.p1[:, 1] = np.linspace(-0.02, 0.02, n)
+    labels.p1[:, 2] = np.linspace(0.015, -0.015, n)
+    props = mgn.geometry.mass_properties(mesh, 3000.0)
+    rows = physics.grasp_rows(
+        np.column_stack([labels.approach, labels.closing, labels.p1, labels.width])
+    )
+    base = ShakeOptions(grid=3, friction_range=(0.05, 0.8), staircase_checks=1, num_threads=2)
+    args = (mesh, props.mass, props.center_of_mass, props.inertia, rows)
+    full = shake_scores(*args, options=base)
+    stair = shake_scores(*args, options=replace(base, staircase=True))
+    replayed, trials = replay_staircase(full.trial_success, base.staircase_checks)
+    np.testing.assert_array_equal(replayed, stair.score)
+    np.testing.assert_array_equal(trials, stair.trial_simulated.sum(axis=(1, 2)))
+    assert 0 < full.score.mean() < 1  # some grids are mixed: the search has work to do
+    results = []
+    for threads in (1, 2):
+        for progress in (False, True):
+            opts = replace(base, staircase=True, num_threads=threads)
+            scorer = ShakeScorer(3000.0, options=opts, progress=progress, calibration_grasps=3)
+            results.append((scorer(mesh, labels), scorer.last_calibration))
+    for got, cal in results:
+        np.testing.assert_array_equal(got, results[0][0])
+        assert cal == results[0][1] == calibrate_staircase(full.trial_success[:3], 1)
+    np.testing.assert_array_equal(results[0][0][:3], full.score[:3].astype(np.float32))
+    rest = stair.score if results[0][1].staircase else full.score
+    np.testing.assert_array_equal(results[0][0][3:], rest[3:].astype(np.float32))
+
+
+def test_cli_calibration_flag_reaches_the_scorer():
+    from mgn.cli.main import build_parser
+    from mgn.cli.pj import _physics_scorer
+    from mgn.hardware import default_gripper
+
+    parser = build_parser()
+    args = parser.parse_args(["pj", "label", "x.obj", "--physics-calibration", "4"])
+    assert _physics_scorer(args, default_gripper()).calibration_grasps == 4
+    args = parser.parse_args(["pj", "label", "x.obj"])
+    assert _physics_scorer(args, default_gripper()).calibration_grasps == 32
