@@ -92,6 +92,8 @@ def _engine_mgn(
         opts = mpath.PathTraceOptions(
             spp=spp, max_bounces=desc.max_bounces, seed=seed, num_threads=THREADS
         )
+        if hasattr(opts, "labels"):  # the image only, as the pipeline traces it (ids: ids())
+            opts = dataclasses.replace(opts, labels=False)
         if hasattr(opts, "clamp_indirect"):  # unclamped, as the peers are set up
             opts = dataclasses.replace(opts, clamp_indirect=0.0)
         if adaptive > 0.0:  # extra samples where the first pass is noisy (adaptive sampling)

@@ -2076,6 +2076,8 @@ class PathTraceOptions:
     """
     Path tracing settings of one view.
     """
+
+    labels: bool
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
     @property

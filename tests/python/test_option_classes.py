@@ -138,5 +138,5 @@ def test_path_tracer_dataclasses_default_to_the_bound_structs():
     for f in dataclasses.fields(film):
         assert getattr(film, f.name) == getattr(core_film, f.name), f.name
     # The values mgn/render/path_tracer.hpp documents, written here again as a second source.
-    assert (trace.spp, trace.max_bounces, trace.rr_depth, trace.clamp_indirect) == (16, 6, 3, 10.0)
+    assert (trace.spp, trace.max_bounces, trace.rr_depth, trace.clamp_indirect) == (16, 6, 2, 10.0)
     assert (film.exposure, film.tone) == (0.0, "filmic")

@@ -312,7 +312,7 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
                                   floor=False)))  # fmt: skip
     s = RenderSettings(engine="path", spp=1, denoise=False, spp_without_denoiser=1)
     pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, randomize=False)
-    _, out = pr.render(view, 0)
+    rgb, out = pr.render(view, 0, labels=True)
     agree = out.instance_ids == raster.instance_ids
     assert agree.mean() >= 0.999, agree.mean()
     assert len(np.unique(raster.instance_ids)) == 5  # background and the four objects
@@ -322,6 +322,11 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
     both = agree & seen_r & seen_p
     close = np.isclose(out.depth[both], raster.depth_ideal[both], rtol=1e-3, atol=1e-4)
     assert close.mean() >= 0.999, close.mean()
+    # Without its label rays (the pipeline's way) the tracer makes the same photograph.
+    rgb_only, out_only = pr.render(view, 0)
+    assert np.array_equal(rgb_only, rgb)
+    assert not out_only.instance_ids.any() and not out_only.depth.any()
+    assert out_only.rays < out.rays
     # The path-traced views of iter_views come with exactly the raster labels.
     pv = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=True,
                               render=s)))  # fmt: skip
@@ -439,7 +444,15 @@ def test_denoise_rejects_bad_inputs() -> None:
         photo.denoise(rad, alb, nrm, "best")
     with pytest.raises(InvalidArgumentError, match="guides must be one of"):
         photo.denoise(rad, alb, nrm, guides="clean")
+    with pytest.raises(InvalidArgumentError, match=r"albedo must have"):  # the first one named
+        photo.denoise(rad, alb[:8], nrm[..., :2])
     assert photo.denoise(rad, alb, nrm).shape == rad.shape  # still works after the errors
+    # Finite radiance goes to OIDN as it is (no copy): untouched, and the same image as the
+    # radiance with its NaN and inf replaced by 0.
+    finite = np.nan_to_num(rad, nan=0.0, posinf=0.0)
+    kept = finite.copy()
+    assert np.array_equal(photo.denoise(finite, alb, nrm), photo.denoise(rad, alb, nrm))
+    assert np.array_equal(finite, kept)
 
 
 def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:

@@ -1375,7 +1375,7 @@ PathTraceOutput PathScene::render(const CameraView& view, const PathTraceOptions
       for (int v = ty * kTile; v < v1; ++v) {
         // Labels: the pinhole rays through the pixel centres of this tile row, as one coherent
         // packet (at most kTile = 16 rays).
-        {
+        if (options.labels) {
           const int u0 = tx * kTile, m = u1 - u0;
           float len[kTile];
           for (int k = 0; k < kTile; ++k) {

@@ -240,7 +240,8 @@ class PathTraceOptions:
         seed, view_index: the sample streams derive from (seed, view_index, pixel).
         num_threads: 0 = all hardware threads; the image is identical for any value.
         rr_depth: Russian roulette from this bounce on (>= 0); vertices at smooth glass (a
-            delta reflection or refraction) are not counted.
+            delta reflection or refraction) are not counted. Default 2 (docs/rendering.md,
+            "Russian roulette's depth").
         aperture_radius: thin-lens aperture radius, m (0 = pinhole).
         focus_distance: distance in focus along the optical axis, m (0 = the depth at the image
             centre, or 1 m if nothing is seen there).
@@ -257,6 +258,10 @@ class PathTraceOptions:
         guide_split_min: the denoiser guides of the other direction at a split smooth dielectric
             are followed behind further glass only when its share of the pixel's guide is at
             least this (>= 0; 0 = always); guides only, the radiance is unchanged.
+        labels: also make the label images (``depth`` and ``instance_ids`` of the output: one
+            coherent packet of pinhole rays through the pixel centres per tile row); False skips
+            those rays and leaves both images 0 (the dataset pipeline labels its views from the
+            ray-cast label pass and keeps only the photograph).
         adaptive_samples: adaptive sampling, extra samples per pixel on average (>= 0; 0 =
             off) traced after the ``spp`` samples of every pixel where that first pass looks
             noisiest (docs/rendering.md, "Adaptive sampling"); the image stays identical for
@@ -276,6 +281,7 @@ class PathTraceOptions:
     clamp_indirect: float = _TRACE.clamp_indirect
     fresnel_split_min: float = _TRACE.fresnel_split_min
     guide_split_min: float = _TRACE.guide_split_min
+    labels: bool = _TRACE.labels
     adaptive_samples: float = _TRACE.adaptive_samples
     adaptive_max: int = _TRACE.adaptive_max
 
@@ -315,6 +321,7 @@ class PathTraceOptions:
         o.clamp_indirect = float(self.clamp_indirect)
         o.fresnel_split_min = float(self.fresnel_split_min)
         o.guide_split_min = float(self.guide_split_min)
+        o.labels = bool(self.labels)
         o.adaptive_samples = float(self.adaptive_samples)
         o.adaptive_max = max(-(2**31), min(2**31 - 1, int(self.adaptive_max)))
         return o
