@@ -18,7 +18,9 @@ rate, and a check that the cache still holds today's outcomes; ``--rate-grasps 0
 keep each phase's duration), ``dt100k`` (also the force controller's gain per step scaled),
 ``dt400`` (a finer step), ``hold`` (``hold_tolerance`` = 3 mm: the translational cycles after
 the first and the last quarter of the rotational shake are skipped when the object stayed within
-3 mm of its pose in the hand through a window whose loads they repeat), ``smooth`` and
+3 mm of its pose in the hand through a window whose loads they repeat; the default since
+session 13), ``full`` (``hold_tolerance`` = 0: the full schedule, the default before),
+``hold5`` and ``hold10`` (5 mm, 1 cm), ``smooth`` and
 ``smooth_dt100`` (``smooth_shake``), ``dt100i15``, ``dt100i20``, ``dt100i40`` and ``dt75i30``
 (a coarse step with 15, 20, 40 or 30 solver iterations), ``dt100f5`` (1/100 s with
 ``iterations_per_hull_contact`` = 5), and on top of it ``dt100f5m1`` (margin 1 mm),
@@ -64,7 +66,11 @@ def _dt(hz: int, gain: bool = False) -> dict:
 
 VARIANTS = {
     "default": {},
-    "hold": {"hold_tolerance": 3e-3},
+    "hold": {"hold_tolerance": 3e-3},  # the default since session 13
+    # Session 13: the full schedule (the default before) and wider held-load windows.
+    "full": {"hold_tolerance": 0.0},
+    "hold5": {"hold_tolerance": 5e-3},
+    "hold10": {"hold_tolerance": 1e-2},
     "dt150": _dt(150),
     "dt100": _dt(100),
     "dt100k": _dt(100, gain=True),

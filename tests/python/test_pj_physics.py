@@ -32,7 +32,7 @@ def centre_grasp(width):
 
 def test_light_box_with_high_friction_is_held():
     mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.05)
-    opts = ShakeOptions(grid=2, friction_range=(1.0, 2.0), num_threads=2)
+    opts = ShakeOptions(grid=2, friction_range=(1.0, 2.0), num_threads=2, hold_tolerance=0.0)
     r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
     assert r.score.shape == (1,) and r.trial_success.shape == (1, 2, 2)
     assert r.score[0] == pytest.approx(1.0)
@@ -69,7 +69,7 @@ def test_coulomb_limit_decides_a_centred_box_with_and_without_early_success(hold
     second translational cycle (shake_steps / 2 steps) and ends the trial at the last extreme of
     the rotational shake (rotate_steps / 4 steps early), a dropped one runs as before."""
     mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 1.0)
-    base = ShakeOptions(grid=1, density_range=(1.0, 1.0), num_threads=1)
+    base = ShakeOptions(grid=1, density_range=(1.0, 1.0), num_threads=1, hold_tolerance=0.0)
     omega = 2 * np.pi * base.shake_cycles / (base.shake_steps * base.dt)
     mu_star = m * (base.gravity + base.shake_speed * omega) / (2 * base.grip_force)  # 0.32
     for factor in (0.5, 2.5):
@@ -152,7 +152,7 @@ def test_early_success_needs_the_object_at_rest_in_the_hand():
     """A tolerance far below the pads' compliance (1 nm) never decides early: the box moves a
     little in the hand as the tilt changes; the full schedule then runs."""
     mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.5)
-    opts = ShakeOptions(grid=2, friction_range=(1.0, 2.0), num_threads=1)
+    opts = ShakeOptions(grid=2, friction_range=(1.0, 2.0), num_threads=1, hold_tolerance=0.0)
     a = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
     b = shake_scores(
         mesh, m, com, inertia, centre_grasp(0.04)[None], options=replace(opts, hold_tolerance=1e-9)
@@ -160,6 +160,29 @@ def test_early_success_needs_the_object_at_rest_in_the_hand():
     assert a.trial_success.all()
     np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
     assert not b.trial_ended_early.any()
+
+
+def test_held_load_windows_are_on_by_default_and_off_with_the_smooth_profile():
+    """The default tolerance ends a firmly held box's trials early (second translational cycle
+    and last quarter of the rotation skipped, every trial still a success); with
+    ``smooth_shake`` the windows, which assume the sine profile, are off: the trials are
+    bit-identical to a zero tolerance."""
+    mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.2)
+    grasp = centre_grasp(0.04)[None]
+    opts = ShakeOptions(grid=2, friction_range=(1.5, 2.0), num_threads=1)
+    assert opts.hold_tolerance > 0
+    a = shake_scores(mesh, m, com, inertia, grasp, options=opts)
+    b = shake_scores(mesh, m, com, inertia, grasp, options=replace(opts, hold_tolerance=0.0))
+    assert a.trial_success.all() and b.trial_success.all()
+    assert a.trial_ended_early.all() and not b.trial_ended_early.any()
+    skipped = opts.shake_steps // 2 + opts.rotate_steps // 4
+    np.testing.assert_array_equal(a.trial_steps, b.trial_steps - skipped)
+    smooth = replace(opts, smooth_shake=True)
+    c = shake_scores(mesh, m, com, inertia, grasp, options=smooth)
+    d = shake_scores(mesh, m, com, inertia, grasp, options=replace(smooth, hold_tolerance=0.0))
+    assert not c.trial_ended_early.any()
+    for field in ("trial_success", "trial_steps", "trial_ended_early"):
+        np.testing.assert_array_equal(getattr(c, field), getattr(d, field))
 
 
 @pytest.mark.parametrize("hold", [0.0, 5e-4])
@@ -452,7 +475,10 @@ def test_trajectory_reproduces_the_batch_trial_and_renders():
         assert tr.success == bool(r.trial_success[0, i, j])
         assert tr.steps == int(r.trial_steps[0, i, j])
         assert tr.X_WO.shape == (len(tr.time), 4, 4) and tr.X_WH.shape == tr.X_WO.shape
-        assert tr.time[0] == 0.0 and tr.time[-1] == pytest.approx(tr.steps * opts.dt)
+        # The held-load windows may skip the later translational cycle (time, not steps).
+        skips = [0, opts.shake_steps // 2] if tr.ended_early else [0]
+        assert tr.time[0] == 0.0
+        assert any(tr.time[-1] == pytest.approx((tr.steps + k) * opts.dt) for k in skips)
     # The held trial: frames differ as the hand shakes, and the gripper is drawn in them.
     frames = render_frames(tr, [mesh], size=64)
     assert len(frames) == len(tr.time) and frames[0].size == (64, 64)
@@ -462,7 +488,9 @@ def test_trajectory_reproduces_the_batch_trial_and_renders():
 
 def test_write_trial_pictures(tmp_path):
     mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.05)
-    tr = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 1.0, 1.0, record_every=60)
+    full = ShakeOptions(hold_tolerance=0.0)  # the full schedule: frames evenly spaced in time
+    tr = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 1.0, 1.0, options=full,
+                          record_every=60)  # fmt: skip
     gif, png = write_trial_pictures(tr, [mesh], tmp_path / "trial", size=48, strip_frames=4)
     with Image.open(gif) as im:
         assert im.format == "GIF" and im.n_frames == len(tr.time)
@@ -495,11 +523,11 @@ def test_show_trial_action(tmp_path, capsys):
         ({"options": ShakeOptions(grip_force=-1.0)}, "grip_force"),
         ({"options": ShakeOptions(hold_tolerance=-1e-3)}, "hold_tolerance"),
         ({"options": ShakeOptions(hold_tolerance=float("nan"))}, "hold_tolerance"),
+        ({"options": ShakeOptions(hold_rotation_tolerance=-1e-3)}, "hold_rotation_tolerance"),
         (
             {"options": ShakeOptions(iterations_per_hull_contact=-1.0)},
             "iterations_per_hull_contact",
         ),
-        ({"options": ShakeOptions(hold_tolerance=1e-3, smooth_shake=True)}, "hold_tolerance"),
         ({"gripper": ParallelJawGripper(max_opening=0.03)}, "max_opening"),
         ({"gripper": SimpleNamespace(name="x")}, "gripper"),
         ({"mesh": []}, "convex_parts"),
