@@ -92,7 +92,6 @@ void bind_grasp_shake_test(py::module_& m) {
       .def_readwrite("settle_steps", &ShakeOptions::settle_steps)
       .def_readwrite("lost_contact_steps", &ShakeOptions::lost_contact_steps)
       .def_readwrite("hold_tolerance", &ShakeOptions::hold_tolerance)
-      .def_readwrite("hold_rotation_tolerance", &ShakeOptions::hold_rotation_tolerance)
       .def_readwrite("smooth_shake", &ShakeOptions::smooth_shake)
       .def_readwrite("margin", &ShakeOptions::margin)
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)

@@ -138,29 +138,6 @@ TEST(Shake, HeldLoadWindowsKeepTheCoulombLimitOfTheTranslationalShake) {
   }
 }
 
-TEST(Shake, HoldRotationToleranceCapsOnlyTheRotationWindow) {
-  // The firmly held centred box of the test above (2.5x the Coulomb limit): a rotation cap of 0
-  // keeps only the translational skip (shake_steps / 2 steps); a cap above hold_tolerance
-  // changes nothing; every variant succeeds.
-  const double m = 1.0;
-  const PhysicsObject box = box_object(Vec3d(0.04, 0.04, 0.04), m);
-  ShakeOptions o = small_grid(1, 0, 0);
-  o.density_min = o.density_max = 1.0;
-  const double omega = 2 * M_PI * o.shake_cycles / (o.shake_steps * o.dt);
-  o.friction_min = o.friction_max =
-      2.5 * m * (o.gravity + o.shake_speed * omega) / (2 * o.grip_force);
-  const ShakeResult full = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
-  o.hold_tolerance = 5e-4;
-  for (const double cap : {0.0, 5e-4, 0.1}) {
-    o.hold_rotation_tolerance = cap;
-    const ShakeResult r = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
-    EXPECT_EQ(r.trial_success[0], 1) << cap;
-    EXPECT_EQ(r.trial_ended_early[0], 1) << cap;
-    const int skipped = o.shake_steps / 2 + (cap > 0 ? o.rotate_steps / 4 : 0);
-    EXPECT_EQ(r.trial_steps[0], full.trial_steps[0] - skipped) << cap;
-  }
-}
-
 TEST(Shake, StaticHoldFollowsCoulombBoundOfTheGripForce) {
   // Two fingers pressing with F each hold a weight m g iff 2 mu F >= m g.
   const double m = 1.0, F = 20.0;
@@ -405,11 +382,6 @@ TEST(Shake, BadInputIsRejectedWithAClearMessage) {
   expect_error(box, centre_grasp(0.04), bo, "hold_tolerance");
   bo.hold_tolerance = NAN;
   expect_error(box, centre_grasp(0.04), bo, "hold_tolerance");
-  bo = o;
-  bo.hold_rotation_tolerance = -1e-3;
-  expect_error(box, centre_grasp(0.04), bo, "hold_rotation_tolerance");
-  bo.hold_rotation_tolerance = 0.5;
-  expect_error(box, centre_grasp(0.04), bo, "hold_rotation_tolerance");
   bo = o;
   bo.iterations_per_hull_contact = -1;
   expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");

@@ -523,7 +523,6 @@ def test_show_trial_action(tmp_path, capsys):
         ({"options": ShakeOptions(grip_force=-1.0)}, "grip_force"),
         ({"options": ShakeOptions(hold_tolerance=-1e-3)}, "hold_tolerance"),
         ({"options": ShakeOptions(hold_tolerance=float("nan"))}, "hold_tolerance"),
-        ({"options": ShakeOptions(hold_rotation_tolerance=-1e-3)}, "hold_rotation_tolerance"),
         (
             {"options": ShakeOptions(iterations_per_hull_contact=-1.0)},
             "iterations_per_hull_contact",

@@ -351,7 +351,7 @@ class TrialWorld {
       window[1] = {cycle / 4, cycle, cycle >= 4};
       const int from = nr - static_cast<int>(std::ceil(nr / (2.0 * o_.rotate_cycles)));
       const int to = nr - static_cast<int>(std::floor(nr / (4.0 * o_.rotate_cycles)));
-      window[2] = {from, to, from >= 1 && to < nr && o_.hold_rotation_tolerance > 0};
+      window[2] = {from, to, from >= 1 && to < nr};
     }
     for (int phase = 1; phase <= 2; ++phase) {
       const int n = phase == 1 ? o_.shake_steps : o_.rotate_steps;
@@ -381,10 +381,7 @@ class TrialWorld {
         }
         const Pose D = X_HO_ref.inverse() * X_HO;
         const double turn = Eigen::AngleAxisd(D.linear()).angle();
-        const double tolerance = phase == 1
-                                     ? o_.hold_tolerance
-                                     : std::min(o_.hold_tolerance, o_.hold_rotation_tolerance);
-        held = held && D.translation().norm() + turn * radius_ <= tolerance;
+        held = held && D.translation().norm() + turn * radius_ <= o_.hold_tolerance;
         if (k + 1 < w.to) continue;
         if (held && last.touch_left && last.touch_right) {
           out.ended_early = true;
@@ -572,9 +569,6 @@ void ShakeOptions::validate() const {
   require(settle_steps >= 0, "settle_steps", "an integer >= 0", settle_steps);
   require(std::isfinite(hold_tolerance) && hold_tolerance >= 0 && hold_tolerance < 0.1,
           "hold_tolerance", "a distance in [0, 0.1) m (0 = off)", hold_tolerance);
-  require(std::isfinite(hold_rotation_tolerance) && hold_rotation_tolerance >= 0 &&
-              hold_rotation_tolerance <= 0.1,
-          "hold_rotation_tolerance", "a distance in [0, 0.1] m", hold_rotation_tolerance);
   require(lost_contact_steps >= 0, "lost_contact_steps", "an integer >= 0", lost_contact_steps);
   require(std::isfinite(margin) && margin > 0 && margin < 0.01, "margin",
           "a collision margin in (0, 0.01) m", margin);

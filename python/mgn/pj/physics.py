@@ -62,10 +62,11 @@ class ShakeOptions:
     as scored whole.
     ``polyhedral_contacts`` (on by default): whole contact patches from Bullet's polyhedral
     clipping; off, GJK contact points are 1.2–1.5× faster per trial but change some outcomes
-    (``benchmarks/bench_shake.py`` measures both). ``hold_tolerance`` (m, default 3 mm, 0 = the full schedule) skips the
-    parts of the shake that repeat loads the object held within that distance of its pose in
-    the hand (docs/models.md, "Held-load windows"; 1.02–1.21× fewer CPU-s per trial, no more
-    changed outcomes than the physics' own noise; no effect with ``smooth_shake``).
+    (``benchmarks/bench_shake.py`` measures both). ``hold_tolerance`` (m, default 3 mm, 0 = the
+    full schedule) skips the parts of the shake that repeat loads the object held within that
+    distance of its pose in the hand (docs/models.md, "Held-load windows"; 1.02–1.21× fewer
+    CPU-s per trial, no more changed outcomes than the physics' own noise; no effect with
+    ``smooth_shake``).
     ``smooth_shake`` (off by default): the hand's shake profile starts and ends every cycle at
     rest (f(x) = sin x − sin(2x)/2, same peak speed and angle) instead of the sine's velocity
     jumps; a can's grids become more nearly monotone (with ``dt`` 1/100 s and step counts
@@ -100,7 +101,6 @@ class ShakeOptions:
     settle_steps: int = _CORE.settle_steps
     lost_contact_steps: int = _CORE.lost_contact_steps
     hold_tolerance: float = _CORE.hold_tolerance
-    hold_rotation_tolerance: float = _CORE.hold_rotation_tolerance
     smooth_shake: bool = _CORE.smooth_shake
     margin: float = _CORE.margin
     polyhedral_contacts: bool = _CORE.polyhedral_contacts

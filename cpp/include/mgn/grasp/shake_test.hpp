@@ -111,9 +111,6 @@ struct ShakeOptions {
   /// 1 µm does (the physics' own noise) and makes trials 1.02-1.21x cheaper. 0 = the
   /// full schedule. Has no effect with smooth_shake (its windows assume the sine profile).
   double hold_tolerance = 3e-3;
-  /// Upper limit of the rotation window's tolerance, m, >= 0: that window uses
-  /// min(hold_tolerance, hold_rotation_tolerance) (0 = only the translation window).
-  double hold_rotation_tolerance = 0.1;
   /// Shake profile. false (MetaGraspNet's schedule as mgn has always run it): the hand follows
   /// z = A sin(ωt) along its approach axis and θ = θ_max sin(ω_r t) about the trial's axis, so
   /// each phase starts and ends at full speed (a velocity jump within one step). true: both
