@@ -219,7 +219,11 @@ def main(argv: list[str] | None = None) -> int:
             sub = slice(0, args.rate_grasps if v == "default" else len(rows))
             succ, steps, vcpu = variant_grids(name, parts, props, rows[sub], v, args.grid_cache)
             if v == "default" and not np.array_equal(succ, base[sub]):
-                print(f"  {name}: the default options no longer reproduce the cached grids")
+                print(
+                    f"  {name}: the default options no longer reproduce the cached grids (made "
+                    "with other defaults? hold_tolerance is 3 mm since session 13: use a fresh "
+                    "--grid-cache)"
+                )
                 return 1
             vbase, vtruth = base[sub], truth[sub]
             vs = np.array([replay(g, checks)[0] for g in succ])
