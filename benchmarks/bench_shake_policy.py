@@ -71,7 +71,7 @@ def policy(grids: np.ndarray, k: int, checks: int, start: int = 0):
     return scores, trials, not verdict.staircase
 
 
-def real(item: str, variant: str, threads: int) -> int:
+def real(item: str, variant: str, threads: int, checks: int | None) -> int:
     """Score N grasps of an object through ShakeScorer for real; print the cost."""
     import os
     import time
@@ -79,7 +79,7 @@ def real(item: str, variant: str, threads: int) -> int:
     from mgn.geometry import mass_properties
     from mgn.objects import get_object
     from mgn.pj.labels import label_object
-    from mgn.pj.physics import ShakeOptions, ShakeScorer
+    from mgn.pj.physics import ShakeOptions, ShakeScorer, default_staircase_checks
 
     from .bench_shake_speed import VARIANTS
 
@@ -91,8 +91,11 @@ def real(item: str, variant: str, threads: int) -> int:
         mesh, mass=props.mass, com=props.center_of_mass, num_points=5000, num_threads=threads
     )
     kw = {} if variant == "default" else VARIANTS[variant]
-    opts = ShakeOptions(staircase=True, num_threads=threads, **kw)
-    scorer = ShakeScorer(spec.density, options=opts, max_grasps=int(n), progress=False)
+    scorer = ShakeScorer(spec.density, max_grasps=int(n), progress=False)
+    if checks is None:  # the default of the scorer's calibration
+        checks = default_staircase_checks(scorer.calibration_grasps)
+    opts = ShakeOptions(staircase=True, num_threads=threads, staircase_checks=checks, **kw)
+    scorer.options = opts
     load0 = os.getloadavg()[0]
     t0, c0 = time.perf_counter(), time.process_time()
     sim = scorer(mesh, labels)
@@ -101,15 +104,14 @@ def real(item: str, variant: str, threads: int) -> int:
     print(
         f"{name} ({variant}, {threads} thread(s)): {int(got.sum())} of {len(sim)} grasps scored in "
         f"{wall:.1f} s wall, {cpu:.1f} CPU-s ({cpu / got.sum():.3f} CPU-s per grasp; 2,000 grasps "
-        f"on 2 busy cores ~{cpu / got.sum() * 1000:.0f} s); {scorer.__name__}; mean score "
+        f"on 2 busy cores ~{cpu / got.sum() * 1000:.0f} s); {scorer.__name__}, {checks} checks; "
+        f"mean score "
         f"{np.nanmean(sim):.3f}; load {load0:.1f} -> {os.getloadavg()[0]:.1f}"
     )
     return 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    from mgn.pj.physics import ShakeOptions
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid-cache", type=Path)
     ap.add_argument("--real", default="", help="name:N: score N grasps for real instead")
@@ -118,23 +120,31 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--physics", default="today=full,f5=dt100f5")
     ap.add_argument("--objects", default=OBJECTS, help="names, optionally name:max_grasps")
     ap.add_argument("--k", default="0,8,16", help="calibration grasps (0 = plain staircase)")
-    ap.add_argument("--checks", type=int, default=ShakeOptions().staircase_checks)
+    ap.add_argument(
+        "--checks",
+        default=None,
+        help="staircase checks, comma-separated (default 0,6: the defaults with and without "
+        "calibration); --real takes the first (default: the scorer's own)",
+    )
     args = ap.parse_args(argv)
     if args.real:
-        return real(args.real, args.real_variant, args.threads)
+        first = None if args.checks is None else int(args.checks.split(",")[0])
+        return real(args.real, args.real_variant, args.threads, first)
     if args.grid_cache is None:
         ap.error("--grid-cache is required (or --real)")
     ks = [int(k) for k in args.k.split(",")]
+    checks_list = [int(c) for c in (args.checks or "0,6").split(",")]
     print(
-        "| physics | object | K | grasps | identical scores (first K) | full grid? | trials/grasp"
+        "| physics | object | checks | K | grasps | identical scores (first K) | full grid? "
+        "| trials/grasp"
         " | trials/grasp at 2,000 | trials per CPU-s | CPU-s/grasp at 2,000 | s per 2,000 grasps"
         " on 2 cores | windows -> full grid | identical scores (mean over windows) | identical at"
         " 2,000 (projected) |"
     )
-    print("|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-    pooled: dict[tuple[str, int], list[float]] = {}
-    pooled_w: dict[tuple[str, int], list[float]] = {}
-    pooled_p: dict[tuple[str, int], list[float]] = {}
+    print("|---|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    pooled: dict[tuple[str, int, int], list[float]] = {}
+    pooled_w: dict[tuple[str, int, int], list[float]] = {}
+    pooled_p: dict[tuple[str, int, int], list[float]] = {}
     for item in args.physics.split(","):
         label, _, prefix = item.partition("=")
         for obj in args.objects.split(","):
@@ -149,45 +159,47 @@ def main(argv: list[str] | None = None) -> int:
             G, S = grids.shape[0], grids.shape[1]
             truth = grids.sum(axis=(1, 2)) / float(S * S)
             rate = _rate(args.grid_cache, prefix, name)
-            for k in ks:
-                scores, trials, to_full = policy(grids, k, args.checks)
-                same = scores == truth
-                # At 2,000 grasps: K calibration grids, the others as the verdict says (their
-                # mean over this object's grids).
-                rest = S * S if to_full else float(policy(grids, 0, args.checks)[1].mean())
-                t2000 = (min(k, 2000) * S * S + (2000 - min(k, 2000)) * rest) / 2000
-                windows = [policy(grids, k, args.checks, s) for s in range(G)] if k else []
-                w_full = np.mean([w[2] for w in windows]) if windows else 0.0
-                w_same = (
-                    np.mean([np.mean(w[0] == truth) for w in windows])
-                    if windows
-                    else float(np.mean(same))
-                )
-                # At 2,000 grasps the K calibration grasps hardly count: the object is scored on
-                # the full grid (exact) with the windows' probability, else by the search.
-                a0 = float(np.mean(policy(grids, 0, args.checks)[0] == truth))
-                p2000 = w_full + (1 - w_full) * a0
-                cpu = f"{t2000 / rate:.3f}" if rate else "-"
-                proj = f"{t2000 / rate * 1000:.0f}" if rate else "-"
-                print(
-                    f"| {label} | {name} | {k} | {G} | {np.mean(same):.1%} | "
-                    f"{'yes' if to_full else 'no'} | {trials.mean():.1f} | {t2000:.1f} | "
-                    f"{rate:.0f} | {cpu} | {proj} | {w_full:.0%} | {w_same:.1%} | {p2000:.1%} |"
-                    if rate
-                    else f"| {label} | {name} | {k} | {G} | {np.mean(same):.1%} | "
-                    f"{'yes' if to_full else 'no'} | {trials.mean():.1f} | {t2000:.1f} | - | "
-                    f"- | - | {w_full:.0%} | {w_same:.1%} | {p2000:.1%} |",
-                    flush=True,
-                )
-                pooled.setdefault((label, k), []).extend(same.tolist())
-                pooled_w.setdefault((label, k), []).extend([w_same] * G)
-                pooled_p.setdefault((label, k), []).append(p2000)
-    for (label, k), same in pooled.items():
+            for checks in checks_list:
+                for k in ks:
+                    scores, trials, to_full = policy(grids, k, checks)
+                    same = scores == truth
+                    # At 2,000 grasps: K calibration grids, the others as the verdict says (their
+                    # mean over this object's grids).
+                    rest = S * S if to_full else float(policy(grids, 0, checks)[1].mean())
+                    t2000 = (min(k, 2000) * S * S + (2000 - min(k, 2000)) * rest) / 2000
+                    windows = [policy(grids, k, checks, s) for s in range(G)] if k else []
+                    w_full = np.mean([w[2] for w in windows]) if windows else 0.0
+                    w_same = (
+                        np.mean([np.mean(w[0] == truth) for w in windows])
+                        if windows
+                        else float(np.mean(same))
+                    )
+                    # At 2,000 grasps the K calibration grasps hardly count: the object is scored on
+                    # the full grid (exact) with the windows' probability, else by the search.
+                    a0 = float(np.mean(policy(grids, 0, checks)[0] == truth))
+                    p2000 = w_full + (1 - w_full) * a0
+                    cpu = f"{t2000 / rate:.3f}" if rate else "-"
+                    proj = f"{t2000 / rate * 1000:.0f}" if rate else "-"
+                    print(
+                        f"| {label} | {name} | {checks} | {k} | {G} | {np.mean(same):.1%} | "
+                        f"{'yes' if to_full else 'no'} | {trials.mean():.1f} | {t2000:.1f} | "
+                        f"{rate:.0f} | {cpu} | {proj} | {w_full:.0%} | {w_same:.1%} | {p2000:.1%} |"
+                        if rate
+                        else f"| {label} | {name} | {checks} | {k} | {G} | {np.mean(same):.1%} | "
+                        f"{'yes' if to_full else 'no'} | {trials.mean():.1f} | {t2000:.1f} | - | "
+                        f"- | - | {w_full:.0%} | {w_same:.1%} | {p2000:.1%} |",
+                        flush=True,
+                    )
+                    pooled.setdefault((label, checks, k), []).extend(same.tolist())
+                    pooled_w.setdefault((label, checks, k), []).extend([w_same] * G)
+                    pooled_p.setdefault((label, checks, k), []).append(p2000)
+    for (label, checks, k), same in pooled.items():
         print(
-            f"pooled {label}, K = {k}: {np.mean(same):.2%} identical scores over {len(same)} "
-            f"grasps (first K as calibration); {np.mean(pooled_w[label, k]):.2%} on average over "
-            f"the cyclic windows; {np.mean(pooled_p[label, k]):.2%} projected at 2,000 grasps of "
-            f"each of the {len(pooled_p[label, k])} objects"
+            f"pooled {label}, {checks} checks, K = {k}: {np.mean(same):.2%} identical scores over "
+            f"{len(same)} grasps (first K as calibration); "
+            f"{np.mean(pooled_w[label, checks, k]):.2%} on average over the cyclic windows; "
+            f"{np.mean(pooled_p[label, checks, k]):.2%} projected at 2,000 grasps of each of the "
+            f"{len(pooled_p[label, checks, k])} objects"
         )
     return 0
 

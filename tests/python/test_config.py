@@ -32,8 +32,13 @@ def test_defaults_are_the_mgn_values() -> None:
     # Every stored parallel-jaw grasp gets a physics score by default, with the staircase search.
     assert c.object_labels.physics_grasps is None
     assert c.object_labels.physics_search == "staircase"
-    assert c.object_labels.physics_checks == _core.ShakeOptions().staircase_checks
     assert c.object_labels.physics_calibration == 32
+    # Checks: null = 0 with the object-level calibration, the search's own default without.
+    assert c.object_labels.physics_checks is None and c.object_labels.staircase_checks == 0
+    uncalibrated = load_config({"object_labels": {"physics_calibration": 0}}).object_labels
+    assert uncalibrated.staircase_checks == _core.ShakeOptions().staircase_checks == 6
+    given = load_config({"object_labels": {"physics_checks": 4}}).object_labels
+    assert given.physics_checks == given.staircase_checks == 4
     assert c.objects.copies == (2, 5)
     assert c.objects.compose_kwargs() == {"categories": None, "count": 20, "copies": (2, 5)}
     assert c.camera.rig == "mgn" and c.camera.view_indices == tuple(range(37))

@@ -106,7 +106,7 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
     # The cap is recorded in dataset.json: every object's stored and scored grasps.
     rec = doc["physics_scores"]
     assert rec["cap"] == 3 and rec["search"] == "staircase" and rec["grid"] == 2
-    assert rec["checks"] == load_config({}).object_labels.physics_checks
+    assert rec["checks"] == load_config({}).object_labels.staircase_checks == 0
     assert rec["calibration"] == load_config({}).object_labels.physics_calibration == 32
     assert set(rec["objects"]) == {"box_tea", "can_soda"}
     assert rec["capped_objects"] == ["box_tea", "can_soda"]
@@ -572,7 +572,7 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
     more_checks = dataclasses.replace(
         config,
         object_labels=dataclasses.replace(
-            config.object_labels, physics_checks=config.object_labels.physics_checks + 1
+            config.object_labels, physics_checks=config.object_labels.staircase_checks + 1
         ),
     )
     assert label_keys(spec, more_checks)["paralleljaw"] != keys["paralleljaw"]
@@ -583,5 +583,5 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
     assert label_keys(spec, calibrated)["paralleljaw"] != keys["paralleljaw"]
     assert label_keys(spec, more_checks)["suction"] == keys["suction"]
     o = shake_options(more_checks).to_core()
-    assert o.staircase and o.staircase_checks == config.object_labels.physics_checks + 1
+    assert o.staircase and o.staircase_checks == config.object_labels.staircase_checks + 1
     assert o.grid == config.object_labels.physics_grid

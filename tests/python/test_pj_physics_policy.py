@@ -253,3 +253,53 @@ def test_cli_calibration_flag_reaches_the_scorer():
     assert _physics_scorer(args, default_gripper()).calibration_grasps == 4
     args = parser.parse_args(["pj", "label", "x.obj"])
     assert _physics_scorer(args, default_gripper()).calibration_grasps == 32
+    assert _physics_scorer(args, default_gripper()).options.staircase_checks == 0
+
+
+def test_default_checks_follow_the_calibration():
+    """Without a user's value the staircase checks are 0 with the object-level calibration (it
+    catches the objects with isolated failing cells) and the search's own 6 without it; a given
+    value is kept either way (API, pipeline config and CLI agree)."""
+    from mgn.cli.main import build_parser
+    from mgn.cli.pj import _physics_scorer
+    from mgn.hardware import default_gripper
+    from mgn.pipeline.config import load_config
+
+    assert physics.default_staircase_checks(32) == physics.CALIBRATED_STAIRCASE_CHECKS == 0
+    assert physics.default_staircase_checks(0) == ShakeOptions().staircase_checks == 6
+    assert ShakeScorer().calibration_grasps > 0 and ShakeScorer().options.staircase_checks == 0
+    parser = build_parser()
+    for argv, checks in (
+        ([], 0),
+        (["--physics-calibration", "0"], 6),
+        (["--physics-checks", "3"], 3),
+        (["--physics-calibration", "0", "--physics-checks", "2"], 2),
+    ):
+        args = parser.parse_args(["pj", "label", "x.obj", *argv])
+        assert _physics_scorer(args, default_gripper()).options.staircase_checks == checks
+        ol = {}
+        if "--physics-calibration" in argv:
+            ol["physics_calibration"] = 0
+        if "--physics-checks" in argv:
+            ol["physics_checks"] = int(argv[-1])
+        assert load_config({"object_labels": ol}).object_labels.staircase_checks == checks
+
+
+def test_zero_checks_still_verify_every_rows_boundary():
+    """With 0 checks the search still simulates the inferred cell next to every row's boundary:
+    a grid that succeeds everywhere but one such cell is scored exactly, while
+    a failing cell away from the boundaries is missed, which is what the calibration is for."""
+    caught = missed = 0
+    for c in range(S * S):
+        g = np.ones((S, S), bool)
+        g.flat[c] = False
+        r = _core.staircase_grid(S, lambda i, j, g=g: bool(g[i, j]), 0)
+        if c % S == S - 1:  # the hardest cell of a row: the boundary of an all-success row
+            # (row 0's is monotone and found by the walk; the others are caught by a check)
+            assert np.array_equal(np.asarray(r.success, bool).reshape(S, S), g)
+            assert r.fallback == (c != S - 1)
+            caught += 1
+        elif not np.asarray(r.simulated).flat[c]:
+            assert not r.fallback and np.asarray(r.success).all()
+            missed += 1
+    assert caught == S and missed > 0

@@ -18,7 +18,12 @@ from mgn.hardware import ParallelJawGripper
 from mgn.io.grasp_file import create_labels_file, write_pj_labels
 from mgn.io.model_folder import object_folders, read_model_folder
 from mgn.pj.labels import label_object
-from mgn.pj.physics import ShakeOptions, ShakeScorer
+from mgn.pj.physics import (
+    CALIBRATED_STAIRCASE_CHECKS,
+    ShakeOptions,
+    ShakeScorer,
+    default_staircase_checks,
+)
 from mgn.viz.shake_trial import register_show_trial
 
 
@@ -31,7 +36,11 @@ def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> Sh
         options=ShakeOptions(
             grid=args.physics_grid,
             staircase=args.physics_search == "staircase",
-            staircase_checks=args.physics_checks,
+            staircase_checks=(
+                default_staircase_checks(args.physics_calibration)
+                if args.physics_checks is None
+                else args.physics_checks
+            ),
             num_threads=args.num_threads,
         ),
         max_grasps=args.physics_grasps,
@@ -143,10 +152,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--physics-checks",
         type=int,
-        default=ShakeOptions.staircase_checks,
+        default=None,
         metavar="N",
         help="staircase only: N extra inferred cells simulated to catch non-monotone grids "
-        f"(default {ShakeOptions.staircase_checks}; more checks, closer to the full grid)",
+        f"(default {CALIBRATED_STAIRCASE_CHECKS} with --physics-calibration > 0, which catches "
+        f"such objects as a whole, else {ShakeOptions.staircase_checks}; more checks, closer to "
+        "the full grid)",
     )
     p.add_argument(
         "--physics-calibration",

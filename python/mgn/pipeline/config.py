@@ -39,7 +39,8 @@ Sections:
   (``staircase``: walk each grasp's monotone success boundary with checks and fall back to the
   full grid where they fail, the default; ``full``: simulate all S x S trials),
   ``physics_checks`` (extra inferred cells the staircase simulates to catch non-monotone grids:
-  more checks, more trials, closer to the full grid; benchmarks/README.md measures the trade),
+  more checks, more trials, closer to the full grid; null, the default: 0 with the calibration,
+  which catches such objects as a whole, 6 without; benchmarks/README.md measures the trade),
   ``physics_calibration`` (staircase only: the first N scored grasps of each object are simulated
   on the full grid, and if the staircase search replayed on them differs from any, the object's
   other grasps get the full grid too; 0 = off; default 32, docs/models.md),
@@ -89,7 +90,7 @@ from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec, make_tote
-from mgn.pj.physics import ShakeOptions, ShakeScorer
+from mgn.pj.physics import ShakeScorer, default_staircase_checks
 from mgn.render.photo import RandomizeSettings, RenderSettings
 from mgn.scene.cameras import Intrinsics, look_at
 from mgn.scene.lens import lens_for
@@ -524,10 +525,18 @@ class ObjectLabelsConfig(_Section):
     physics_grasps: int | None = None
     physics_grid: int = 10
     physics_search: str = "staircase"
-    physics_checks: int = ShakeOptions.staircase_checks
+    physics_checks: int | None = None
     physics_calibration: int = ShakeScorer.calibration_grasps
     suction_model: str = "spring"
     seed: int = 0
+
+    @property
+    def staircase_checks(self) -> int:
+        """``physics_checks``, or when null its default for ``physics_calibration``
+        (:func:`mgn.pj.physics.default_staircase_checks`: 0 with the calibration, 6 without)."""
+        if self.physics_checks is not None:
+            return self.physics_checks
+        return default_staircase_checks(self.physics_calibration)
 
     _CHECKS = {
         "suction_points": _int(1),
@@ -535,7 +544,7 @@ class ObjectLabelsConfig(_Section):
         "physics_grasps": _optional(_int(1)),
         "physics_grid": _int(1),
         "physics_search": _choice("staircase", "full"),
-        "physics_checks": _int(0),
+        "physics_checks": _optional(_int(0)),
         "physics_calibration": _int(0),
         "suction_model": _choice(*SEAL_MODELS),
         "seed": _int(0),

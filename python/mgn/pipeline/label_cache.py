@@ -129,7 +129,7 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
             "physics_grid": ol.physics_grid if config.labels.pj_physics else None,
             "physics_search": ol.physics_search if config.labels.pj_physics else None,
             "physics_checks": (
-                ol.physics_checks
+                ol.staircase_checks
                 if config.labels.pj_physics and ol.physics_search == "staircase"
                 else None
             ),
@@ -153,7 +153,7 @@ def shake_options(config: Config, num_threads: int = 0) -> ShakeOptions:
     return ShakeOptions(
         grid=ol.physics_grid,
         staircase=ol.physics_search == "staircase",
-        staircase_checks=ol.physics_checks,
+        staircase_checks=ol.staircase_checks,
         num_threads=num_threads,
     )
 

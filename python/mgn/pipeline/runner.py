@@ -606,7 +606,7 @@ def physics_record(config: Config, labels: Mapping[str, ObjectLabels]) -> dict[s
     return {
         "cap": ol.physics_grasps,
         "search": ol.physics_search,
-        "checks": ol.physics_checks if ol.physics_search == "staircase" else None,
+        "checks": ol.staircase_checks if ol.physics_search == "staircase" else None,
         "calibration": ol.physics_calibration if ol.physics_search == "staircase" else None,
         "grid": ol.physics_grid,
         "grasps": total,
