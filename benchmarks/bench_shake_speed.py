@@ -25,7 +25,9 @@ session 13), ``full`` (``hold_tolerance`` = 0: the full schedule, the default be
 (a coarse step with 15, 20, 40 or 30 solver iterations), ``dt100f5`` (1/100 s with
 ``iterations_per_hull_contact`` = 5), and on top of it ``dt100f5m1`` (margin 1 mm),
 ``dt100f5m1v32`` (also 32 hull vertices) and ``dt100f2i5m1v32`` (5 solver iterations and 2.5 per
-hull contact, so a single hull held by both fingers still gets 5). The last column compares the
+hull contact, so a single hull held by both fingers still gets 5); session 13: ``noskip``
+(``skip_separated_pairs`` off: the same trials, Bullet's narrow phase on every pair) and ``v32``
+(32 hull vertices at the default step). The last column compares the
 staircase search replayed on the variant's grid with that grid's own score: the agreement the
 search can reach under that physics (a different default physics is acceptable if its own grids are
 monotone enough); ``--curve`` adds it for several check budgets and search variants.
@@ -93,6 +95,11 @@ VARIANTS = {
         "margin": 1e-3,
         "max_hull_vertices": 32,
     },
+    # Session 13 (collision side): Bullet's narrow phase on every pair, as before
+    # skip_separated_pairs (its trials are the same; the rate shows the saving), and hulls of at
+    # most 32 vertices at the default step.
+    "noskip": {"skip_separated_pairs": False},
+    "v32": {"max_hull_vertices": 32},
     "dt100f2i5m1v32": {
         **_dt(100),
         "iterations_per_hull_contact": 2.5,

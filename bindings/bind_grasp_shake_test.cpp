@@ -95,6 +95,7 @@ void bind_grasp_shake_test(py::module_& m) {
       .def_readwrite("smooth_shake", &ShakeOptions::smooth_shake)
       .def_readwrite("margin", &ShakeOptions::margin)
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
+      .def_readwrite("skip_separated_pairs", &ShakeOptions::skip_separated_pairs)
       .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
       .def_readwrite("iterations_per_hull_contact", &ShakeOptions::iterations_per_hull_contact)

@@ -1601,6 +1601,7 @@ class ShakeOptions:
     """
 
     polyhedral_contacts: bool
+    skip_separated_pairs: bool
     smooth_shake: bool
     staircase: bool
     def __init__(self) -> None: ...

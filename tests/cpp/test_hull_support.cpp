@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "physics/hull_support.hpp"
+#include "physics/separated_pair_skip.hpp"
 
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>
@@ -190,3 +191,103 @@ TEST(FastHullShape, GjkAndEpaGiveBulletsClosestPointsBitForBit) {
 }
 
 }  // namespace
+
+// A box (a finger pad) and a hull moving around it in Bullet collision worlds with and without
+// SkipSeparatedConvexCreateFunc on their pair: the skipped calls must change nothing, so every
+// manifold point must be the same bit for bit at every step.
+struct PairWorld {
+  btDefaultCollisionConfiguration config;
+  mgn::physics::SkipSeparatedConvexCreateFunc skip;
+  btCollisionDispatcher dispatcher;
+  btDbvtBroadphase broadphase;
+  btCollisionWorld world;
+  btCollisionObject box, hull;
+
+  PairWorld(bool skipping, btCollisionShape* box_shape, btCollisionShape* hull_shape)
+      : skip(config.getCollisionAlgorithmCreateFunc(BOX_SHAPE_PROXYTYPE,
+                                                    CUSTOM_POLYHEDRAL_SHAPE_TYPE)),
+        dispatcher(&config),
+        world(&dispatcher, &broadphase, &config) {
+    if (skipping) {
+      for (const int t0 : {BOX_SHAPE_PROXYTYPE, CUSTOM_POLYHEDRAL_SHAPE_TYPE})
+        for (const int t1 : {BOX_SHAPE_PROXYTYPE, CUSTOM_POLYHEDRAL_SHAPE_TYPE})
+          dispatcher.registerCollisionCreateFunc(t0, t1, &skip);
+    }
+    box.setCollisionShape(box_shape);
+    hull.setCollisionShape(hull_shape);
+    hull.setCollisionFlags(0);  // moving: collides with the (static) box
+    world.addCollisionObject(&box);
+    world.addCollisionObject(&hull);
+  }
+  ~PairWorld() {
+    world.removeCollisionObject(&hull);
+    world.removeCollisionObject(&box);
+  }
+};
+
+TEST(SkipSeparatedPairs, ManifoldsAreBulletsBitForBitWhileSkippingApartSteps) {
+  btBoxShape pad(btVector3(0.05f, 0.1f, 0.2f));  // the shake test's pad size in decimetres
+  pad.setMargin(0.005f);
+  pad.initializePolyhedralFeatures();
+  std::mt19937 rng(7);
+  std::vector<btVector3> points;
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  for (int i = 0; i < 40; ++i) {
+    const btVector3 d = btVector3(g(rng), g(rng), g(rng)).normalized();
+    points.push_back(d * btVector3(0.15f, 0.1f, 0.12f));
+  }
+  FastHullShape hull(points);
+  hull.setMargin(0.005f);
+  hull.initializePolyhedralFeatures();
+
+  for (const bool polyhedral_features : {true, false}) {
+    // Without polyhedral features Bullet takes its GJK-point path (the same skip applies).
+    btBoxShape plain_pad(btVector3(0.05f, 0.1f, 0.2f));
+    plain_pad.setMargin(0.005f);
+    FastHullShape plain_hull(points);
+    plain_hull.setMargin(0.005f);
+    btCollisionShape* a = polyhedral_features ? static_cast<btCollisionShape*>(&pad) : &plain_pad;
+    btCollisionShape* b = polyhedral_features ? static_cast<btCollisionShape*>(&hull) : &plain_hull;
+    PairWorld with(true, a, b), without(false, a, b);
+    // The hull wanders around the pad: into it, along it, beside it and away, turning.
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    btVector3 x(0.3f, 0.0f, 0.0f), v(0, 0, 0);
+    btQuaternion q = btQuaternion::getIdentity();
+    int with_points = 0, without_points = 0;
+    for (int step = 0; step < 3000; ++step) {
+      v = 0.9f * v + 0.004f * btVector3(u(rng), u(rng), u(rng)) - 0.002f * x;
+      x += v;
+      q = (q * btQuaternion(btVector3(u(rng), u(rng), u(rng)).normalized(), 0.02f)).normalized();
+      const btTransform T(q, x);
+      with.hull.setWorldTransform(T);
+      without.hull.setWorldTransform(T);
+      with.world.performDiscreteCollisionDetection();
+      without.world.performDiscreteCollisionDetection();
+      const int n = without.dispatcher.getNumManifolds();
+      ASSERT_EQ(with.dispatcher.getNumManifolds(), n) << "step " << step;
+      for (int i = 0; i < n; ++i) {
+        const btPersistentManifold* m0 = without.dispatcher.getManifoldByIndexInternal(i);
+        const btPersistentManifold* m1 = with.dispatcher.getManifoldByIndexInternal(i);
+        ASSERT_EQ(m1->getNumContacts(), m0->getNumContacts()) << "step " << step;
+        for (int c = 0; c < m0->getNumContacts(); ++c) {
+          const btManifoldPoint& p0 = m0->getContactPoint(c);
+          const btManifoldPoint& p1 = m1->getContactPoint(c);
+          for (int k = 0; k < 3; ++k) {
+            ASSERT_EQ(p1.m_positionWorldOnB[k], p0.m_positionWorldOnB[k]) << "step " << step;
+            ASSERT_EQ(p1.m_positionWorldOnA[k], p0.m_positionWorldOnA[k]) << "step " << step;
+            ASSERT_EQ(p1.m_normalWorldOnB[k], p0.m_normalWorldOnB[k]) << "step " << step;
+          }
+          ASSERT_EQ(p1.m_distance1, p0.m_distance1) << "step " << step;
+          ASSERT_EQ(p1.m_lifeTime, p0.m_lifeTime) << "step " << step;
+        }
+        with_points += m1->getNumContacts() > 0;
+        without_points += m0->getNumContacts() > 0;
+      }
+    }
+    // The walk covered both cases, and the skip happened (else the test would prove nothing).
+    EXPECT_GT(without_points, 100) << polyhedral_features;
+    EXPECT_GT(with.skip.skipped, 100) << polyhedral_features;
+    EXPECT_GT(with.skip.run, 100) << polyhedral_features;
+    EXPECT_EQ(without.skip.skipped + without.skip.run, 0);
+  }
+}

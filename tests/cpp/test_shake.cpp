@@ -690,6 +690,52 @@ TEST(Shake, TrialsOfABatchEqualTrialsRunAloneWithTheirOwnShapes) {
   }
 }
 
+TEST(Shake, SkippingSeparatedPairsChangesNoTrial) {
+  // ShakeOptions::skip_separated_pairs skips Bullet's narrow phase only where it would add
+  // nothing: every trial must be the same to the step with it on and off. A compound of nine
+  // small hulls with gaps between them (most hulls near a pad do not touch it), off-centre
+  // grasps that hold and drop, both contact modes, the box and a mesh gripper.
+  PhysicsObject grid = box_object(Vec3d(0.04, 0.05, 0.05), 0.6);
+  grid.convex_parts.clear();
+  for (int iy = -1; iy <= 1; ++iy) {
+    for (int iz = -1; iz <= 1; ++iz) {
+      Pose X = Pose::Identity();
+      X.translation() = Vec3d(0.0, 0.017 * iy, 0.017 * iz);
+      X.linear() = Eigen::AngleAxisd(0.3 * (iy + 2 * iz), Vec3d::UnitX()).toRotationMatrix();
+      grid.convex_parts.push_back(make_box(Vec3d(0.036, 0.012, 0.012)).transformed(X));
+    }
+  }
+  std::vector<ParallelJawGrasp> grasps = {centre_grasp(0.04), centre_grasp(0.04),
+                                          centre_grasp(0.04)};
+  grasps[1].p1 = Vec3d(-0.02, 0.012, 0.015);
+  grasps[2].p1 = Vec3d(-0.02, -0.02, -0.01);
+  ParallelJawGripper meshes;
+  const GripperMeshes m = gripper_meshes(meshes, 0.0);
+  meshes.palm_mesh = m.palm;
+  meshes.finger_left_mesh = m.finger_left;
+  meshes.finger_right_mesh = m.finger_right;
+  int held = 0, dropped = 0;
+  for (const bool polyhedral : {true, false}) {
+    for (const ParallelJawGripper& gripper : {ParallelJawGripper{}, meshes}) {
+      ShakeOptions o = small_grid(3, 0.1, 1.5);
+      o.polyhedral_contacts = polyhedral;
+      o.skip_separated_pairs = false;
+      const ShakeResult plain = shake_test(grid, gripper, grasps, o);
+      o.skip_separated_pairs = true;
+      const ShakeResult skipping = shake_test(grid, gripper, grasps, o);
+      for (std::size_t t = 0; t < plain.trial_success.size(); ++t) {
+        EXPECT_EQ(skipping.trial_success[t], plain.trial_success[t]) << "trial " << t;
+        EXPECT_EQ(skipping.trial_ended_early[t], plain.trial_ended_early[t]) << "trial " << t;
+        EXPECT_EQ(skipping.trial_steps[t], plain.trial_steps[t]) << "trial " << t;
+        held += plain.trial_success[t];
+        dropped += !plain.trial_success[t];
+      }
+    }
+  }
+  EXPECT_GT(held, 0);  // mixed outcomes: the comparison covers held and dropped objects
+  EXPECT_GT(dropped, 0);
+}
+
 TEST(Shake, MeshGripperIsSimulatedWithItsOwnFingers) {
   // A user's mesh gripper: with the box gripper's own meshes it holds the box like the boxes do;
   // with fingers moved 60 mm sideways (they pass beside the box) it holds nothing, so the score

@@ -13,6 +13,7 @@
 
 #include "grasp/detail/staircase_schedule.hpp"
 #include "physics/bullet.hpp"
+#include "physics/separated_pair_skip.hpp"
 
 #include <btBulletDynamicsCommon.h>
 
@@ -245,9 +246,18 @@ class TrialWorld {
         o_(o),
         path_(g, o, s),
         config_(small_world_pools()),
+        skip_separated_(config_.getCollisionAlgorithmCreateFunc(BOX_SHAPE_PROXYTYPE,
+                                                                CUSTOM_POLYHEDRAL_SHAPE_TYPE)),
         dispatcher_(&config_),
         world_(&dispatcher_, &broadphase_, &solver_, &config_) {
     world_.setGravity(btVector3(0, 0, 0));
+    if (o.skip_separated_pairs) {
+      // Pairs of finger/palm boxes and hulls (FastHullShape): Bullet's narrow phase, skipped
+      // while a pair is provably apart (same simulation, see physics/separated_pair_skip.hpp).
+      for (const int t0 : {BOX_SHAPE_PROXYTYPE, CUSTOM_POLYHEDRAL_SHAPE_TYPE})
+        for (const int t1 : {BOX_SHAPE_PROXYTYPE, CUSTOM_POLYHEDRAL_SHAPE_TYPE})
+          dispatcher_.registerCollisionCreateFunc(t0, t1, &skip_separated_);
+    }
     btContactSolverInfo& info = world_.getSolverInfo();
     // Light objects squeezed hard need more sequential-impulse iterations to stay steady.
     const double trial_mass = obj.mass * s.density_factor;
@@ -517,6 +527,7 @@ class TrialWorld {
   int base_iterations_ = 1;   // solver iterations of this trial without per-hull ones
 
   btDefaultCollisionConfiguration config_;
+  physics::SkipSeparatedConvexCreateFunc skip_separated_;  // outlives the world's algorithms
   btCollisionDispatcher dispatcher_;
   btDbvtBroadphase broadphase_;
   btSequentialImpulseConstraintSolver solver_;

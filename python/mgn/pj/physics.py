@@ -75,8 +75,11 @@ class ShakeOptions:
     ``iterations_per_hull_contact`` (0 = off): every step runs at least this many solver
     iterations per (finger, object hull) pair in contact at the previous step (a compound held
     by several hulls needs more to converge at a coarser ``dt``; a single hull makes at most 2
-    pairs; docs/models.md, "A coarser step judged by its own grids"). Every default is the C++
-    struct's.
+    pairs; docs/models.md, "A coarser step judged by its own grids").
+    ``skip_separated_pairs`` (on by default): Bullet's narrow phase is skipped for a (pad or
+    palm, object hull) pair while it is provably apart (empty manifold, a separating axis with
+    a gap beyond Bullet's contact distance); the trials are the same bit for bit, only cheaper.
+    Every default is the C++ struct's.
     """
 
     grid: int = _CORE.grid
@@ -104,6 +107,7 @@ class ShakeOptions:
     smooth_shake: bool = _CORE.smooth_shake
     margin: float = _CORE.margin
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
+    skip_separated_pairs: bool = _CORE.skip_separated_pairs
     max_hull_vertices: int = _CORE.max_hull_vertices
     solver_iterations: int = _CORE.solver_iterations
     iterations_per_hull_contact: float = _CORE.iterations_per_hull_contact

@@ -131,6 +131,14 @@ struct ShakeOptions {
   /// cereal box, 81 % of 10x10 scores identical, mean |difference| 0.007, at most 0.14
   /// (benchmarks/bench_shake.py measures both).
   bool polyhedral_contacts = true;
+  /// Skip Bullet's narrow phase for a (finger or palm, object hull) pair while it is provably
+  /// apart: its contact manifold is empty and the cores' gap along a separating axis (the last
+  /// one found, the centre direction, a pad's face normal, or the axis of a GJK distance query)
+  /// exceeds the distance at which Bullet adds a contact point. Those calls would add nothing,
+  /// so every trial is the same bit for bit either way (tested); on by default. It saves the
+  /// palm's pair on every step and, on compounds, the hulls near a pad that do not touch it
+  /// (benchmarks/RESULTS.md, "Shake trial cost, session 13").
+  bool skip_separated_pairs = true;
   /// Hulls with more vertices are replaced by the hull of their support points along this many
   /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
   int max_hull_vertices = 64;
