@@ -34,6 +34,8 @@ monotone enough); ``--curve`` adds it for several check budgets and search varia
 
     python -m benchmarks.bench_shake_speed --grid-cache /tmp/shake \
         [--objects can_soda:100,box_cereal:170] [--variants hold,dt150,dt100] [--confirm 20]
+    python -m benchmarks.bench_shake_speed --grid-cache /tmp/shake --objects box_cereal,mug \
+        --noise 1e-6,1e-4 [--noise-grasps 20]   # the physics' own noise band
 
 Numbers and findings: benchmarks/RESULTS.md, "Shake test: faster trials".
 """
@@ -176,6 +178,44 @@ def staircase_cost(parts, props, rows, variant: str | None) -> tuple[np.ndarray,
     return np.asarray(scores), cpu, trials
 
 
+def _moved_grids(parts, props, rows: np.ndarray, eps: float) -> np.ndarray:
+    """(G, 10, 10) default outcomes with every grasp point moved by eps (m) along its approach."""
+    from mgn.pj.physics import ShakeOptions, shake_scores
+
+    moved = rows.copy()
+    moved[:, 6:9] += eps * moved[:, 0:3]
+    r = shake_scores(parts, props.mass, props.center_of_mass, props.inertia, moved, None,
+                     ShakeOptions(num_threads=0))  # fmt: skip
+    return np.asarray(r.trial_success, bool)
+
+
+def noise_band(objects: str, eps_list: str, grasps: int, cache: Path) -> int:
+    """The physics' own noise: default options with every grasp point moved by eps (m) along
+    its approach axis (physically nothing), full grids of the first `grasps` grasps against the
+    same grasps unmoved (both simulated here with today's defaults; the cache gives the grasps).
+    A change of the trial that moves outcomes no more than this does is within what the
+    simulation cannot tell apart."""
+    print(
+        "| object | shift | grasps | cells agree | identical scores | mean \\|d\\| | max \\|d\\| "
+        "| mean shift |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for item in objects.split(","):
+        name = item.partition(":")[0]
+        parts, props, rows, _ = default_grids(name, grasps, cache)
+        base = _moved_grids(parts, props, rows, 0.0)
+        for eps in (float(e) for e in eps_list.split(",")):
+            got = _moved_grids(parts, props, rows, eps)
+            a, b = base.mean(axis=(1, 2)), got.mean(axis=(1, 2))
+            print(
+                f"| {name} | {eps:g} m | {len(rows)} | {np.mean(got == base):.2%} | "
+                f"{np.mean(a == b):.0%} | {np.abs(a - b).mean():.4f} | {np.abs(a - b).max():.2f} "
+                f"| {np.mean(b - a):+.4f} |",
+                flush=True,
+            )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     from mgn.pj.physics import ShakeOptions
 
@@ -197,8 +237,17 @@ def main(argv: list[str] | None = None) -> int:
         help="check budgets (e.g. 0,6,20,40): per variant, identical scores and trials per grasp "
         "of bench_staircase's searches replayed on the variant's own grids",
     )
+    ap.add_argument(
+        "--noise",
+        default="",
+        help="shifts in m (e.g. 1e-6,1e-4): print the physics' own noise band on the first "
+        "--noise-grasps grasps of each object instead of the variants",
+    )
+    ap.add_argument("--noise-grasps", type=int, default=20)
     args = ap.parse_args(argv)
     args.grid_cache.mkdir(parents=True, exist_ok=True)
+    if args.noise:
+        return noise_band(args.objects, args.noise, args.noise_grasps, args.grid_cache)
     checks = ShakeOptions().staircase_checks
     print(f"load average at start: {os.getloadavg()[0]:.1f}")
     print(
