@@ -53,18 +53,19 @@ def _rate(cache: Path, prefix: str, name: str) -> float | None:
     return None
 
 
-def policy(grids: np.ndarray, k: int, checks: int, start: int = 0):
+def policy(grids: np.ndarray, k: int, checks: int, start: int = 0, rows: int = -1):
     """(scores, trials, full-grid verdict) of the policy with calibration grasps start..start+k-1
-    (cyclic), the others in their order."""
+    (cyclic), the others in their order; the search verifies the boundary in `rows` rows (-1:
+    all)."""
     from mgn.pj.physics import calibrate_staircase, replay_staircase
 
     G, S = grids.shape[0], grids.shape[1]
     full = grids.sum(axis=(1, 2)) / float(S * S)
-    stair, stair_trials = replay_staircase(grids, checks)
+    stair, stair_trials = replay_staircase(grids, checks, rows)
     if k == 0:
         return stair, stair_trials, False
     cal = (start + np.arange(min(k, G))) % G
-    verdict = calibrate_staircase(grids[cal], checks)
+    verdict = calibrate_staircase(grids[cal], checks, 0, rows)
     scores = stair.copy() if verdict.staircase else full.copy()
     trials = stair_trials.copy() if verdict.staircase else np.full(G, S * S)
     scores[cal], trials[cal] = full[cal], S * S
@@ -94,7 +95,13 @@ def real(item: str, variant: str, threads: int, checks: int | None) -> int:
     scorer = ShakeScorer(spec.density, max_grasps=int(n), progress=False)
     if checks is None:  # the default of the scorer's calibration
         checks = default_staircase_checks(scorer.calibration_grasps)
-    opts = ShakeOptions(staircase=True, num_threads=threads, staircase_checks=checks, **kw)
+    opts = ShakeOptions(
+        staircase=True,
+        num_threads=threads,
+        staircase_checks=checks,
+        staircase_verify_share=scorer.options.staircase_verify_share,
+        **kw,
+    )
     scorer.options = opts
     load0 = os.getloadavg()[0]
     t0, c0 = time.perf_counter(), time.process_time()
@@ -114,6 +121,12 @@ def real(item: str, variant: str, threads: int, checks: int | None) -> int:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid-cache", type=Path)
+    ap.add_argument(
+        "--verified-rows",
+        default="-1,5",
+        help="rows whose boundary the search verifies, comma-separated (-1: all; 5: the "
+        "default with calibration on a 10x10 grid)",
+    )
     ap.add_argument("--real", default="", help="name:N: score N grasps for real instead")
     ap.add_argument("--real-variant", default="default")
     ap.add_argument("--threads", type=int, default=1)
@@ -134,17 +147,18 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--grid-cache is required (or --real)")
     ks = [int(k) for k in args.k.split(",")]
     checks_list = [int(c) for c in (args.checks or "0,6").split(",")]
+    rows_list = [int(r) for r in args.verified_rows.split(",")]
     print(
-        "| physics | object | checks | K | grasps | identical scores (first K) | full grid? "
-        "| trials/grasp"
+        "| physics | object | checks | verified rows | K | grasps | identical scores (first K) "
+        "| full grid? | trials/grasp"
         " | trials/grasp at 2,000 | trials per CPU-s | CPU-s/grasp at 2,000 | s per 2,000 grasps"
         " on 2 cores | windows -> full grid | identical scores (mean over windows) | identical at"
         " 2,000 (projected) |"
     )
-    print("|---|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-    pooled: dict[tuple[str, int, int], list[float]] = {}
-    pooled_w: dict[tuple[str, int, int], list[float]] = {}
-    pooled_p: dict[tuple[str, int, int], list[float]] = {}
+    print("|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    pooled: dict[tuple[str, int, int, int], list[float]] = {}
+    pooled_w: dict[tuple[str, int, int, int], list[float]] = {}
+    pooled_p: dict[tuple[str, int, int, int], list[float]] = {}
     for item in args.physics.split(","):
         label, _, prefix = item.partition("=")
         for obj in args.objects.split(","):
@@ -159,15 +173,15 @@ def main(argv: list[str] | None = None) -> int:
             G, S = grids.shape[0], grids.shape[1]
             truth = grids.sum(axis=(1, 2)) / float(S * S)
             rate = _rate(args.grid_cache, prefix, name)
-            for checks in checks_list:
+            for checks, rows in [(c, r) for c in checks_list for r in rows_list]:
                 for k in ks:
-                    scores, trials, to_full = policy(grids, k, checks)
+                    scores, trials, to_full = policy(grids, k, checks, 0, rows)
                     same = scores == truth
                     # At 2,000 grasps: K calibration grids, the others as the verdict says (their
                     # mean over this object's grids).
-                    rest = S * S if to_full else float(policy(grids, 0, checks)[1].mean())
+                    rest = S * S if to_full else float(policy(grids, 0, checks, 0, rows)[1].mean())
                     t2000 = (min(k, 2000) * S * S + (2000 - min(k, 2000)) * rest) / 2000
-                    windows = [policy(grids, k, checks, s) for s in range(G)] if k else []
+                    windows = [policy(grids, k, checks, s, rows) for s in range(G)] if k else []
                     w_full = np.mean([w[2] for w in windows]) if windows else 0.0
                     w_same = (
                         np.mean([np.mean(w[0] == truth) for w in windows])
@@ -176,30 +190,27 @@ def main(argv: list[str] | None = None) -> int:
                     )
                     # At 2,000 grasps the K calibration grasps hardly count: the object is scored on
                     # the full grid (exact) with the windows' probability, else by the search.
-                    a0 = float(np.mean(policy(grids, 0, checks)[0] == truth))
+                    a0 = float(np.mean(policy(grids, 0, checks, 0, rows)[0] == truth))
                     p2000 = w_full + (1 - w_full) * a0
                     cpu = f"{t2000 / rate:.3f}" if rate else "-"
                     proj = f"{t2000 / rate * 1000:.0f}" if rate else "-"
-                    print(
-                        f"| {label} | {name} | {checks} | {k} | {G} | {np.mean(same):.1%} | "
-                        f"{'yes' if to_full else 'no'} | {trials.mean():.1f} | {t2000:.1f} | "
-                        f"{rate:.0f} | {cpu} | {proj} | {w_full:.0%} | {w_same:.1%} | {p2000:.1%} |"
-                        if rate
-                        else f"| {label} | {name} | {checks} | {k} | {G} | {np.mean(same):.1%} | "
-                        f"{'yes' if to_full else 'no'} | {trials.mean():.1f} | {t2000:.1f} | - | "
-                        f"- | - | {w_full:.0%} | {w_same:.1%} | {p2000:.1%} |",
-                        flush=True,
+                    head = (
+                        f"| {label} | {name} | {checks} | {rows} | {k} | {G} | "
+                        f"{np.mean(same):.1%} | {'yes' if to_full else 'no'} | "
+                        f"{trials.mean():.1f} | {t2000:.1f} | "
                     )
-                    pooled.setdefault((label, checks, k), []).extend(same.tolist())
-                    pooled_w.setdefault((label, checks, k), []).extend([w_same] * G)
-                    pooled_p.setdefault((label, checks, k), []).append(p2000)
-    for (label, checks, k), same in pooled.items():
+                    cost = f"{rate:.0f} | {cpu} | {proj}" if rate else "- | - | -"
+                    print(f"{head}{cost} | {w_full:.0%} | {w_same:.1%} | {p2000:.1%} |", flush=True)
+                    pooled.setdefault((label, checks, rows, k), []).extend(same.tolist())
+                    pooled_w.setdefault((label, checks, rows, k), []).extend([w_same] * G)
+                    pooled_p.setdefault((label, checks, rows, k), []).append(p2000)
+    for (label, checks, rows, k), same in pooled.items():
         print(
-            f"pooled {label}, {checks} checks, K = {k}: {np.mean(same):.2%} identical scores over "
-            f"{len(same)} grasps (first K as calibration); "
-            f"{np.mean(pooled_w[label, checks, k]):.2%} on average over the cyclic windows; "
-            f"{np.mean(pooled_p[label, checks, k]):.2%} projected at 2,000 grasps of each of the "
-            f"{len(pooled_p[label, checks, k])} objects"
+            f"pooled {label}, {checks} checks, {rows} verified rows, K = {k}: "
+            f"{np.mean(same):.2%} identical scores over {len(same)} grasps (first K as "
+            f"calibration); {np.mean(pooled_w[label, checks, rows, k]):.2%} on average over the "
+            f"cyclic windows; {np.mean(pooled_p[label, checks, rows, k]):.2%} projected at 2,000 "
+            f"grasps of each of the {len(pooled_p[label, checks, rows, k])} objects"
         )
     return 0
 

@@ -101,6 +101,9 @@ void bind_grasp_shake_test(py::module_& m) {
       .def_readwrite("iterations_per_hull_contact", &ShakeOptions::iterations_per_hull_contact)
       .def_readwrite("staircase", &ShakeOptions::staircase)
       .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
+      .def_readwrite("staircase_verify_share", &ShakeOptions::staircase_verify_share)
+      .def("staircase_verified_rows", &ShakeOptions::staircase_verified_rows,
+           "Rows whose boundary the staircase verifies: ceil(staircase_verify_share * grid).")
       .def_readwrite("num_threads", &ShakeOptions::num_threads)
       .def_readwrite("seed", &ShakeOptions::seed)
       .def_readwrite("first_grasp_index", &ShakeOptions::first_grasp_index)
@@ -182,8 +185,8 @@ void bind_grasp_shake_test(py::module_& m) {
 
   m.def(
       "staircase_grid",
-      [](int S, const std::function<bool(int, int)>& trial, int checks) {
-        const StaircaseGrid g = staircase_grid(S, trial, checks);
+      [](int S, const std::function<bool(int, int)>& trial, int checks, int verified_rows) {
+        const StaircaseGrid g = staircase_grid(S, trial, checks, verified_rows);
         StaircaseArrays out;
         out.success = to_bool_numpy(std::vector<std::uint8_t>(g.success)).attr("reshape")(S, S);
         out.simulated = to_bool_numpy(std::vector<std::uint8_t>(g.simulated)).attr("reshape")(S, S);
@@ -191,9 +194,10 @@ void bind_grasp_shake_test(py::module_& m) {
         out.trials = g.trials;
         return out;
       },
-      py::arg("S"), py::arg("trial"), py::arg("checks"),
+      py::arg("S"), py::arg("trial"), py::arg("checks"), py::arg("verified_rows") = -1,
       "The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for "
-      "the cells it simulates (friction index i, density index j); a StaircaseGridResult.");
+      "the cells it simulates (friction index i, density index j); the boundary is verified in "
+      "rows i < verified_rows (-1: every row); a StaircaseGridResult.");
 
   m.def(
       "shake_trajectory",

@@ -1607,6 +1607,10 @@ class ShakeOptions:
     def __init__(self) -> None: ...
     def density_factors(self) -> list[float]: ...
     def frictions(self) -> list[float]: ...
+    def staircase_verified_rows(self) -> int:
+        """
+        Rows whose boundary the staircase verifies: ceil(staircase_verify_share * grid).
+        """
     def validate(self) -> None: ...
     @property
     def angle_max(self) -> float: ...
@@ -1742,6 +1746,10 @@ class ShakeOptions:
     def staircase_checks(self) -> int: ...
     @staircase_checks.setter
     def staircase_checks(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def staircase_verify_share(self) -> float: ...
+    @staircase_verify_share.setter
+    def staircase_verify_share(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None: ...
 
 class ShakeResult:
     """
@@ -2826,9 +2834,10 @@ def staircase_grid(
     S: typing.SupportsInt | typing.SupportsIndex,
     trial: collections.abc.Callable[[int, int], bool],
     checks: typing.SupportsInt | typing.SupportsIndex,
+    verified_rows: typing.SupportsInt | typing.SupportsIndex = -1,
 ) -> StaircaseGridResult:
     """
-    The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for the cells it simulates (friction index i, density index j); a StaircaseGridResult.
+    The staircase search of shake_test on an S x S grid: trial(i, j) -> bool is called for the cells it simulates (friction index i, density index j); the boundary is verified in rows i < verified_rows (-1: every row); a StaircaseGridResult.
     """
 
 def suction_wrench_scores(

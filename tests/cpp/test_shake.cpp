@@ -527,7 +527,7 @@ TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
       };
     };
     std::vector<std::uint8_t> success, fallback;
-    detail::staircase_schedule(G, S, checks, threads, make, success, fallback);
+    detail::staircase_schedule(G, S, checks, -1, threads, make, success, fallback);
     EXPECT_EQ(success, want) << threads << " threads";
     EXPECT_EQ(fallback, want_fallback) << threads << " threads";
     for (std::size_t t = 0; t < G * per; ++t)
@@ -546,7 +546,7 @@ TEST(Staircase, ScheduleGivesEachGraspsStaircaseGridAndSharesFallbacks) {
     };
   };
   std::vector<std::uint8_t> success, fallback;
-  EXPECT_THROW(detail::staircase_schedule(G, S, checks, 2, failing, success, fallback),
+  EXPECT_THROW(detail::staircase_schedule(G, S, checks, -1, 2, failing, success, fallback),
                InvalidArgument);
 }
 

@@ -264,10 +264,19 @@ def test_default_checks_follow_the_calibration():
     from mgn.cli.pj import _physics_scorer
     from mgn.hardware import default_gripper
     from mgn.pipeline.config import load_config
+    from mgn.pipeline.label_cache import shake_options
 
     assert physics.default_staircase_checks(32) == physics.CALIBRATED_STAIRCASE_CHECKS == 0
     assert physics.default_staircase_checks(0) == ShakeOptions().staircase_checks == 6
     assert ShakeScorer().calibration_grasps > 0 and ShakeScorer().options.staircase_checks == 0
+    # The boundary of the lower half of the friction rows with calibration, every row without.
+    assert (
+        physics.default_staircase_verify_share(32)
+        == 0.5
+        == physics.CALIBRATED_STAIRCASE_VERIFY_SHARE
+    )
+    assert physics.default_staircase_verify_share(0) == ShakeOptions().staircase_verify_share == 1
+    assert ShakeScorer().options.staircase_verify_share == 0.5
     parser = build_parser()
     for argv, checks in (
         ([], 0),
@@ -276,13 +285,45 @@ def test_default_checks_follow_the_calibration():
         (["--physics-calibration", "0", "--physics-checks", "2"], 2),
     ):
         args = parser.parse_args(["pj", "label", "x.obj", *argv])
-        assert _physics_scorer(args, default_gripper()).options.staircase_checks == checks
+        share = 1.0 if "--physics-calibration" in argv else 0.5
+        options = _physics_scorer(args, default_gripper()).options
+        assert options.staircase_checks == checks and options.staircase_verify_share == share
         ol = {}
         if "--physics-calibration" in argv:
             ol["physics_calibration"] = 0
         if "--physics-checks" in argv:
             ol["physics_checks"] = int(argv[-1])
-        assert load_config({"object_labels": ol}).object_labels.staircase_checks == checks
+        config = load_config({"object_labels": ol})
+        assert config.object_labels.staircase_checks == checks
+        assert shake_options(config).staircase_verify_share == share
+
+
+def test_verified_rows_are_the_lowest_frictions():
+    """The boundary checks cover the rows i < ceil(share * S): a grid failing only at the
+    hardest cell of such a row is scored exactly (the check finds it), one failing only in a
+    higher row is taken for a grid that succeeds everywhere; the walk's trials drop by one per
+    row left out; -1 (and S) verify every row."""
+    for rows in (-1, 0, 2, S):
+        for i in range(1, S):
+            g = np.ones((S, S), bool)
+            g[i, S - 1] = False
+            r = _core.staircase_grid(S, lambda a, b, g=g: bool(g[a, b]), 0, rows)
+            verified = rows < 0 or i < rows
+            assert r.fallback == verified
+            assert np.asarray(r.success).all() == (not verified)
+        everywhere = np.ones((S, S), bool)
+        r = _core.staircase_grid(S, lambda a, b: True, 0, rows)
+        assert np.array_equal(np.asarray(r.success), everywhere)
+        assert r.trials == 1 + (S if rows < 0 else rows)
+    opts = ShakeOptions(grid=10, staircase_verify_share=0.5).to_core()
+    assert opts.staircase_verified_rows() == 5
+    assert ShakeOptions(grid=5, staircase_verify_share=0.5).to_core().staircase_verified_rows() == 3
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(InvalidArgumentError, match="staircase_verify_share"):
+            shake_scores(
+                mgn.make_box([0.04, 0.04, 0.04]), 0.1, np.zeros(3), np.eye(3) * 1e-4,
+                np.zeros((0, 10)), options=ShakeOptions(staircase_verify_share=bad),
+            )  # fmt: skip
 
 
 def test_zero_checks_still_verify_every_rows_boundary():

@@ -592,8 +592,15 @@ void ShakeOptions::validate() const {
           "iterations_per_hull_contact", "a factor in [0, 100] (0 = off)",
           iterations_per_hull_contact);
   require(staircase_checks >= 0, "staircase_checks", "an integer >= 0", staircase_checks);
+  require(std::isfinite(staircase_verify_share) && staircase_verify_share >= 0 &&
+              staircase_verify_share <= 1,
+          "staircase_verify_share", "a share of the rows in [0, 1]", staircase_verify_share);
   require(num_threads >= 0, "num_threads", "an integer >= 0 (0 = all hardware threads)",
           num_threads);
+}
+
+int ShakeOptions::staircase_verified_rows() const {
+  return static_cast<int>(std::ceil(staircase_verify_share * grid - 1e-9));
 }
 
 std::vector<double> ShakeOptions::frictions() const {
@@ -649,8 +656,10 @@ void validate_physics_object(const PhysicsObject& object) {
 
 namespace detail {
 
-StaircaseGrid staircase_walk(int S, const std::function<bool(int, int)>& trial, int checks) {
+StaircaseGrid staircase_walk(int S, const std::function<bool(int, int)>& trial, int checks,
+                             int verified_rows) {
   if (S < 1) throw_error<InvalidArgument>("staircase_grid: S must be >= 1, got ", S);
+  if (verified_rows < 0 || verified_rows > S) verified_rows = S;
   if (checks < 0) throw_error<InvalidArgument>("staircase_grid: checks must be >= 0, got ", checks);
   StaircaseGrid g;
   const std::size_t n = static_cast<std::size_t>(S) * S;
@@ -706,7 +715,7 @@ StaircaseGrid staircase_walk(int S, const std::function<bool(int, int)>& trial, 
   // the checks and every remaining cell is simulated.
   std::vector<std::pair<int, int>> candidates;
   std::vector<std::uint8_t> queued(n, 0);
-  for (int i = 0; i < S; ++i) {
+  for (int i = 0; i < verified_rows; ++i) {
     for (const int side : {-1, 1}) {
       int cj = side < 0 ? b[i] - 1 : b[i];
       if (cj >= 0 && cj < S && g.simulated[at(i, cj)]) cj += side;
@@ -739,7 +748,7 @@ StaircaseGrid staircase_walk(int S, const std::function<bool(int, int)>& trial, 
   return g;
 }
 
-void staircase_schedule(std::size_t grasps, int S, int checks, int num_threads,
+void staircase_schedule(std::size_t grasps, int S, int checks, int verified_rows, int num_threads,
                         const std::function<TrialRunner()>& make_runner,
                         std::vector<std::uint8_t>& success, std::vector<std::uint8_t>& fallback) {
   const std::size_t per_grasp = static_cast<std::size_t>(S) * S;
@@ -779,7 +788,7 @@ void staircase_schedule(std::size_t grasps, int S, int checks, int num_threads,
       try {
         sg = staircase_walk(
             S, [&](int i, int j) { return trial(base + static_cast<std::size_t>(i) * S + j); },
-            checks);
+            checks, verified_rows);
       } catch (...) {  // let the waiting threads end, then report the error
         lock.lock();
         --walking;
@@ -803,8 +812,9 @@ void staircase_schedule(std::size_t grasps, int S, int checks, int num_threads,
 
 }  // namespace detail
 
-StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks) {
-  StaircaseGrid g = detail::staircase_walk(S, trial, checks);
+StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks,
+                             int verified_rows) {
+  StaircaseGrid g = detail::staircase_walk(S, trial, checks, verified_rows);
   if (g.fallback) {
     for (std::size_t c = 0; c < g.success.size(); ++c) {
       if (g.simulated[c]) continue;
@@ -858,7 +868,8 @@ ShakeResult shake_test(const PhysicsObject& object, const ParallelJawGripper& gr
   if (options.staircase) {
     std::vector<std::uint8_t> success;
     detail::staircase_schedule(
-        grasps.size(), S, options.staircase_checks, options.num_threads,
+        grasps.size(), S, options.staircase_checks, options.staircase_verified_rows(),
+        options.num_threads,
         [&]() -> detail::TrialRunner {
           auto shapes = std::make_shared<const TrialShapes>(prepared, gripper, options);
           return [&, shapes](std::size_t t) { return run_trial(*shapes, t); };

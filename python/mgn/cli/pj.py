@@ -23,6 +23,7 @@ from mgn.pj.physics import (
     ShakeOptions,
     ShakeScorer,
     default_staircase_checks,
+    default_staircase_verify_share,
 )
 from mgn.viz.shake_trial import register_show_trial
 
@@ -41,6 +42,7 @@ def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> Sh
                 if args.physics_checks is None
                 else args.physics_checks
             ),
+            staircase_verify_share=default_staircase_verify_share(args.physics_calibration),
             num_threads=args.num_threads,
         ),
         max_grasps=args.physics_grasps,

@@ -162,6 +162,12 @@ struct ShakeOptions {
   /// shake axis), so more checks buy agreement with trials.
   bool staircase = false;
   int staircase_checks = 6;  ///< >= 0
+  /// Share of the grid's rows, lowest frictions first, whose boundary cells the staircase
+  /// verifies (rows i < ceil(share·S); 1 = every row, the default; 0 = none, the walk alone).
+  /// The isolated failing cells of real grasps sit where the grip is marginal, at low friction
+  /// and high mass; mgn.pj.ShakeScorer verifies the lower half (0.5) when its object-level
+  /// calibration is on (benchmarks/RESULTS.md, "Shake test, session 13"). In [0, 1].
+  double staircase_verify_share = 1.0;
   /// 0 = all hardware threads; results do not depend on it. The threads take grasps (staircase)
   /// or trials (full grid) one at a time, as a grasp costs ~17 to S² trials.
   int num_threads = 0;
@@ -173,6 +179,8 @@ struct ShakeOptions {
 
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
+  /// Rows whose boundary the staircase verifies: ceil(staircase_verify_share · grid).
+  int staircase_verified_rows() const;
   /// The S friction values, linspace(friction_min, friction_max, grid).
   std::vector<double> frictions() const;
   /// The S density factors, linspace(density_min, density_max, grid).
@@ -210,15 +218,18 @@ struct StaircaseGrid {
 /// with one trial; then each row probes the cell at its lower bound and gallops right (offsets
 /// 0, 1, 3, 7, ...) and bisects the last gap; a row whose lower bound is S costs nothing. Cells
 /// left of b[i] are inferred successes, the others inferred failures. Verification: in every row
-/// the inferred cell nearest to the boundary on each side (the last success b[i]-1, or b[i]-2
+/// i < verified_rows (the lowest frictions; -1, the default, or more than S: every row) the
+/// inferred cell nearest to the boundary on each side (the last success b[i]-1, or b[i]-2
 /// where the walk simulated b[i]-1; the first failure b[i], or b[i]+1), then the first `checks`
 /// other inferred cells in a golden-ratio (low-discrepancy) order are simulated; if any
 /// contradicts its inference, every remaining cell is simulated (fallback), so the result is
-/// then exact. With checks >= S·S every cell is verified. Trials without fallback: at most 39 +
-/// checks for S = 10 (every monotone 10×10 grid enumerated), S + 1 + checks for a grid that
-/// succeeds everywhere. `trial(i, j)` runs one trial, never twice for a cell. Deterministic.
-/// Throws InvalidArgument for S < 1 or checks < 0.
-StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks);
+/// then exact. With checks >= S·S every cell is verified. Trials without fallback, all rows
+/// verified: at most 39 + checks for S = 10 (every monotone 10×10 grid enumerated), S + 1 +
+/// checks for a grid that succeeds everywhere (verified_rows + 1 + checks with fewer rows).
+/// `trial(i, j)` runs one trial, never twice for a cell. Deterministic. Throws InvalidArgument for
+/// S < 1 or checks < 0.
+StaircaseGrid staircase_grid(int S, const std::function<bool(int, int)>& trial, int checks,
+                             int verified_rows = -1);
 
 /// Phases of a trial (ShakeTrajectory::phase).
 enum class ShakePhase : std::int8_t { Close = 0, Translate = 1, Rotate = 2 };

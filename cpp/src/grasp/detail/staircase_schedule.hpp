@@ -12,7 +12,8 @@ namespace mgn::detail {
 
 /// staircase_grid() without its fallback: when a check contradicts its inference, `fallback` is
 /// set and the cells not simulated yet keep their inferred values (the caller simulates them).
-StaircaseGrid staircase_walk(int S, const std::function<bool(int, int)>& trial, int checks);
+StaircaseGrid staircase_walk(int S, const std::function<bool(int, int)>& trial, int checks,
+                             int verified_rows = -1);
 
 /// A worker's trial function: runs trial t = g·S² + i·S + j (grasp g, cell (i, j)) and returns
 /// its success. Each worker gets its own (made on its thread), so it may hold per-thread state.
@@ -25,7 +26,7 @@ using TrialRunner = std::function<bool(std::size_t)>;
 /// thread takes from first, and threads without a grasp left wait for them while walks still
 /// run, so one slow grasp at the end is not simulated by one thread alone. `make_runner` is
 /// called once per worker thread. The first exception of a trial is re-thrown.
-void staircase_schedule(std::size_t grasps, int S, int checks, int num_threads,
+void staircase_schedule(std::size_t grasps, int S, int checks, int verified_rows, int num_threads,
                         const std::function<TrialRunner()>& make_runner,
                         std::vector<std::uint8_t>& success, std::vector<std::uint8_t>& fallback);
 
