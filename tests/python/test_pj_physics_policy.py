@@ -113,6 +113,7 @@ def test_monotone_object_keeps_the_staircase_after_calibration(monkeypatch):
     assert fake.calls == [(0, 8, False), (8, 32, True)]  # calibration grids, then the search
     assert fake.trials < 40 * S * S
     assert "staircase kept" in scorer.__name__ and "calibrated on 8" in scorer.__name__
+    assert f"{CHECKS} checks, boundary verified in {S} of {S} friction rows" in scorer.__name__
 
 
 def test_object_whose_calibration_disagrees_gets_the_full_grid_everywhere(monkeypatch):

@@ -499,7 +499,13 @@ class ShakeScorer:
     @property
     def __name__(self) -> str:  # recorded in the label metadata
         o = self.options
-        search = "staircase search" if o.staircase else "full grid"
+        search = "full grid"
+        if o.staircase:
+            rows = o.to_core().staircase_verified_rows()
+            search = (
+                f"staircase search ({o.staircase_checks} checks, boundary verified in "
+                f"{rows} of {o.grid} friction rows)"
+            )
         c = self.last_calibration
         if o.staircase and c is not None:
             verdict = "staircase kept" if c.staircase else "full grid for the rest"
