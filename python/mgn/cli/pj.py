@@ -22,8 +22,7 @@ from mgn.pj.physics import (
     CALIBRATED_STAIRCASE_CHECKS,
     ShakeOptions,
     ShakeScorer,
-    default_staircase_checks,
-    default_staircase_verify_share,
+    search_options,
 )
 from mgn.viz.shake_trial import register_show_trial
 
@@ -34,16 +33,12 @@ def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> Sh
     return ShakeScorer(
         density=args.density,
         gripper=gripper,
-        options=ShakeOptions(
-            grid=args.physics_grid,
-            staircase=args.physics_search == "staircase",
-            staircase_checks=(
-                default_staircase_checks(args.physics_calibration)
-                if args.physics_checks is None
-                else args.physics_checks
-            ),
-            staircase_verify_share=default_staircase_verify_share(args.physics_calibration),
-            num_threads=args.num_threads,
+        options=search_options(
+            args.physics_grid,
+            args.physics_search == "staircase",
+            args.physics_calibration,
+            args.physics_checks,
+            args.num_threads,
         ),
         max_grasps=args.physics_grasps,
         calibration_grasps=args.physics_calibration,

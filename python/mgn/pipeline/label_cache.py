@@ -46,7 +46,7 @@ from mgn.objects import ObjectSpec
 from mgn.pipeline.config import Config
 from mgn.pj.labels import PjLabels
 from mgn.pj.labels import label_object as pj_label_object
-from mgn.pj.physics import ShakeOptions, ShakeScorer, default_staircase_verify_share
+from mgn.pj.physics import ShakeOptions, ShakeScorer, search_options
 from mgn.suction.labels import SuctionLabels
 from mgn.suction.labels import label_object as suction_label_object
 
@@ -150,12 +150,12 @@ def shake_options(config: Config, num_threads: int = 0) -> ShakeOptions:
     """The shake-test options of ``config.object_labels`` (grid, search, checks)."""
 
     ol = config.object_labels
-    return ShakeOptions(
-        grid=ol.physics_grid,
-        staircase=ol.physics_search == "staircase",
-        staircase_checks=ol.staircase_checks,
-        staircase_verify_share=default_staircase_verify_share(ol.physics_calibration),
-        num_threads=num_threads,
+    return search_options(
+        ol.physics_grid,
+        ol.physics_search == "staircase",
+        ol.physics_calibration,
+        ol.physics_checks,
+        num_threads,
     )
 
 

@@ -408,6 +408,28 @@ def default_staircase_verify_share(calibration_grasps: int) -> float:
     return float(ShakeOptions.staircase_verify_share)
 
 
+def search_options(
+    grid: int,
+    staircase: bool,
+    calibration_grasps: int,
+    checks: int | None = None,
+    num_threads: int = 0,
+) -> ShakeOptions:
+    """The ShakeOptions of a :class:`ShakeScorer` with ``calibration_grasps``: an S = ``grid``
+    search (``staircase`` or the full grid) whose checks (None: :func:`default_staircase_checks`)
+    and verified rows (:func:`default_staircase_verify_share`) follow the calibration. One
+    place for the pipeline's config and ``mgn pj label``."""
+    return ShakeOptions(
+        grid=grid,
+        staircase=staircase,
+        staircase_checks=(
+            default_staircase_checks(calibration_grasps) if checks is None else checks
+        ),
+        staircase_verify_share=default_staircase_verify_share(calibration_grasps),
+        num_threads=num_threads,
+    )
+
+
 @dataclass(frozen=True)
 class StaircaseCalibration:
     """Outcome of :func:`calibrate_staircase` for one object.
