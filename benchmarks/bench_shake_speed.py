@@ -102,6 +102,9 @@ VARIANTS = {
     # most 32 vertices at the default step.
     "noskip": {"skip_separated_pairs": False},
     "v32": {"max_hull_vertices": 32},
+    # Session 14: closing ends after 5 (3) steps at the grip force instead of 10.
+    "settle5": {"settle_steps": 5},
+    "settle3": {"settle_steps": 3},
     "dt100f2i5m1v32": {
         **_dt(100),
         "iterations_per_hull_contact": 2.5,
