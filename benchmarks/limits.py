@@ -161,6 +161,8 @@ def plot_ratios(rows: list[Row], path: Any) -> bool:
             draw.text((x - 8, height - 24), f"{tick:g}x", fill=(90, 90, 90))
     for k, (name, ratio) in enumerate(items):
         y = top + k * row_h
+        # Pillow's built-in font has no "×": 1000×1000 is drawn as 1000x1000.
+        name = name.replace("×", "x")
         short = name if len(name) <= 84 else name[:81] + "..."
         draw.text((6, y + 3), short, fill="black")
         x = x_of(ratio)
