@@ -1602,6 +1602,7 @@ class ShakeOptions:
 
     polyhedral_contacts: bool
     skip_separated_pairs: bool
+    one_sided_rows: bool
     smooth_shake: bool
     staircase: bool
     def __init__(self) -> None: ...

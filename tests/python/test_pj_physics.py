@@ -222,6 +222,31 @@ def test_skipping_separated_pairs_changes_no_trial_of_a_compound():
         np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
 
 
+def test_one_sided_solver_rows_change_no_trial():
+    """one_sided_rows reaches the core and changes nothing but the cost: the object's pose and
+    the fingers, step by step, are the same bits with Bullet's own solver (light and heavy
+    object, a held and a dropped trial)."""
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.06)
+    grasp = centre_grasp(0.04)
+    on = ShakeOptions(seed=5)
+    off = replace(on, one_sided_rows=False)
+    assert on.to_core().one_sided_rows and not off.to_core().one_sided_rows
+    outcomes = set()
+    for friction, density in ((1.0, 1.0), (0.05, 20.0)):
+        a = shake_trajectory(
+            mesh, m, com, inertia, grasp, friction, density, options=on, record_every=1
+        )
+        b = shake_trajectory(
+            mesh, m, com, inertia, grasp, friction, density, options=off, record_every=1
+        )
+        assert a.steps == b.steps and a.success == b.success
+        np.testing.assert_array_equal(a.X_WO, b.X_WO)
+        np.testing.assert_array_equal(a.finger_left, b.finger_left)
+        np.testing.assert_array_equal(a.finger_right, b.finger_right)
+        outcomes.add(a.success)
+    assert outcomes == {True, False}  # both kinds of trial were compared
+
+
 def _shift(x, y, z):
     X = np.eye(4)
     X[:3, 3] = [x, y, z]

@@ -13,6 +13,7 @@
 
 #include "grasp/detail/staircase_schedule.hpp"
 #include "physics/bullet.hpp"
+#include "physics/one_sided_solver.hpp"
 #include "physics/separated_pair_skip.hpp"
 
 #include <btBulletDynamicsCommon.h>
@@ -258,6 +259,7 @@ class TrialWorld {
         for (const int t1 : {BOX_SHAPE_PROXYTYPE, CUSTOM_POLYHEDRAL_SHAPE_TYPE})
           dispatcher_.registerCollisionCreateFunc(t0, t1, &skip_separated_);
     }
+    solver_.enabled = o.one_sided_rows;
     btContactSolverInfo& info = world_.getSolverInfo();
     // Light objects squeezed hard need more sequential-impulse iterations to stay steady.
     const double trial_mass = obj.mass * s.density_factor;
@@ -530,7 +532,7 @@ class TrialWorld {
   physics::SkipSeparatedConvexCreateFunc skip_separated_;  // outlives the world's algorithms
   btCollisionDispatcher dispatcher_;
   btDbvtBroadphase broadphase_;
-  btSequentialImpulseConstraintSolver solver_;
+  physics::OneSidedContactSolver solver_;  // Bullet's solver, rows of the hand left out
   btDiscreteDynamicsWorld world_;
 
   std::unique_ptr<btRigidBody> palm_, object_;

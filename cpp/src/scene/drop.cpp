@@ -4,6 +4,7 @@
 #include <mgn/scene/drop.hpp>
 
 #include "physics/bullet.hpp"
+#include "physics/one_sided_solver.hpp"
 
 #include <btBulletDynamicsCommon.h>
 
@@ -135,7 +136,7 @@ struct World {
   btDefaultCollisionConfiguration config;
   btCollisionDispatcher dispatcher{&config};
   btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
+  physics::OneSidedContactSolver solver;  // Bullet's, the tote's half of its rows left out
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<physics::RigidShape>> rigid_shapes;

@@ -80,6 +80,9 @@ class ShakeOptions:
     ``skip_separated_pairs`` (on by default): Bullet's narrow phase is skipped for a (pad or
     palm, object hull) pair while it is provably apart (empty manifold, a separating axis with
     a gap beyond Bullet's contact distance); the trials are the same bit for bit, only cheaper.
+    ``one_sided_rows`` (on by default): the solver's contact rows are solved for the object
+    alone (the hand bodies are kinematic: their half of a row only reads and adds zeros); the
+    trials are the same bit for bit, only cheaper.
     Every default is the C++ struct's.
     """
 
@@ -109,6 +112,7 @@ class ShakeOptions:
     margin: float = _CORE.margin
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
     skip_separated_pairs: bool = _CORE.skip_separated_pairs
+    one_sided_rows: bool = _CORE.one_sided_rows
     max_hull_vertices: int = _CORE.max_hull_vertices
     solver_iterations: int = _CORE.solver_iterations
     iterations_per_hull_contact: float = _CORE.iterations_per_hull_contact
