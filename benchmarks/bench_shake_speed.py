@@ -27,7 +27,8 @@ session 13), ``full`` (``hold_tolerance`` = 0: the full schedule, the default be
 ``dt100f5m1v32`` (also 32 hull vertices) and ``dt100f2i5m1v32`` (5 solver iterations and 2.5 per
 hull contact, so a single hull held by both fingers still gets 5); session 13: ``noskip``
 (``skip_separated_pairs`` off: the same trials, Bullet's narrow phase on every pair) and ``v32``
-(32 hull vertices at the default step). The last column compares the
+(32 hull vertices at the default step); session 15: ``twosided`` (``one_sided_rows`` off:
+Bullet's own solver iterations, the same trials). The last column compares the
 staircase search replayed on the variant's grid with that grid's own score: the agreement the
 search can reach under that physics (a different default physics is acceptable if its own grids are
 monotone enough); ``--curve`` adds it for several check budgets and search variants.
@@ -105,6 +106,9 @@ VARIANTS = {
     # Session 14: closing ends after 5 (3) steps at the grip force instead of 10.
     "settle5": {"settle_steps": 5},
     "settle3": {"settle_steps": 3},
+    # Session 15: Bullet's own solver iterations (both halves of every contact row), as before
+    # one_sided_rows (the same trials bit for bit; the rate shows the saving).
+    "twosided": {"one_sided_rows": False},
     "dt100f2i5m1v32": {
         **_dt(100),
         "iterations_per_hull_contact": 2.5,
