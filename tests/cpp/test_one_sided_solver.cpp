@@ -113,6 +113,9 @@ struct Variant {
   bool anisotropic_friction = false;  // on dynamic body 4 (likewise)
   bool warm_start = true;             // SOLVER_USE_WARMSTARTING (Bullet's default: on)
   bool split_impulse = true;          // m_splitImpulse (Bullet's default: on)
+  // The dynamic bodies enter the world before the floor and the pusher: a manifold's first body
+  // is the one added first, so the still body is then B in every contact row (else A).
+  bool dynamic_first = false;
 };
 
 /// A tray (static), a kinematic pusher squeezing and shaking, and a pile of dynamic boxes and
@@ -187,6 +190,10 @@ struct PileWorld {
     if (variant.anisotropic_friction) {
       bodies[4]->setAnisotropicFriction(btVector3(1.0f, 0.3f, 1.0f));
     }
+    // Into the world in the variant's order (the body list keeps floor, pusher, dynamic ones).
+    if (variant.dynamic_first) std::rotate(bodies.begin(), bodies.begin() + 2, bodies.end());
+    for (auto& b : bodies) world->addRigidBody(b.get());
+    if (variant.dynamic_first) std::rotate(bodies.begin(), bodies.end() - 2, bodies.end());
     if (with_joint) {
       joint = std::make_unique<btPoint2PointConstraint>(
           *bodies[2], *bodies[3], btVector3(0, 0, 0.1f), btVector3(0, 0, -0.1f));
@@ -203,7 +210,6 @@ struct PileWorld {
     ci.m_friction = 0.6f;
     bodies.push_back(std::make_unique<btRigidBody>(ci));
     bodies.back()->setActivationState(DISABLE_DEACTIVATION);
-    world->addRigidBody(bodies.back().get());
     return bodies.back().get();
   }
 
@@ -342,7 +348,8 @@ TEST(OneSidedSolver, SetsUpRowsAsBulletForEveryCoveredOption) {
   // The pile (contacts with the static floor, the kinematic pusher and between dynamic bodies)
   // and the one-body world (the shake test's case), with the options the setup covers: plain or
   // soft pusher contacts, one or two friction directions, restitution, friction anchors, cached
-  // friction directions, warm starting and split impulse off. expect_same_worlds compares every
+  // friction directions, warm starting and split impulse off, the still body first or second
+  // in the manifolds. expect_same_worlds compares every
   // row setup field by field and the bodies after every step.
   struct Case {
     const char* name;
@@ -363,6 +370,10 @@ TEST(OneSidedSolver, SetsUpRowsAsBulletForEveryCoveredOption) {
   Variant cold;
   cold.warm_start = false;
   cold.split_impulse = false;
+  Variant dynamic_first;
+  dynamic_first.dynamic_first = true;
+  Variant dynamic_first_plain = plain;
+  dynamic_first_plain.dynamic_first = true;
   const int cached = SOLVER_ENABLE_FRICTION_DIRECTION_CACHING |
                      SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION;
   const Case cases[] = {
@@ -374,6 +385,9 @@ TEST(OneSidedSolver, SetsUpRowsAsBulletForEveryCoveredOption) {
       {"pile, cached friction directions", 8, cached, {}},
       {"pile, fixed friction directions, one", 8,
        SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION, one_direction},
+      {"pile, still bodies second", 8, 0, dynamic_first},
+      {"one body, still bodies second", 1, 0, dynamic_first},
+      {"one body, still bodies second, plain pad", 1, 0, dynamic_first_plain},
       {"one body, plain pad, one friction direction", 1, 0, plain_one_direction},
       {"one body, restitution", 1, 0, bouncy},
   };
