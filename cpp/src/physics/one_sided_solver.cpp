@@ -68,6 +68,318 @@ inline btScalar solve_row(std::uint8_t sides, btSolverBody& a, btSolverBody& b,
   }
 }
 
+// ---- Row setup (convertContacts) ----
+
+/// How a body takes part in the setup of a contact's rows.
+enum class Side {
+  kFixed,   // Bullet's fixed solver body (no original body): its half of every row is zeros
+  kStill,   // a kinematic body (no inverse mass or inertia): its velocity counts, no impulse
+  kMoving,  // a body with inverse mass: its half is computed in full
+  kOther,   // anything else (e.g. inverse inertia without inverse mass): Bullet's setup
+};
+
+Side side_of(const btSolverBody& body) {
+  const btRigidBody* rb = body.m_originalBody;
+  if (rb == nullptr) return Side::kFixed;
+  if (rb->getInvMass() > 0) return Side::kMoving;
+  const btMatrix3x3& inv_inertia = rb->getInvInertiaTensorWorld();
+  if (rb->getInvMass() == 0 && is_zero(inv_inertia[0]) && is_zero(inv_inertia[1]) &&
+      is_zero(inv_inertia[2])) {
+    return Side::kStill;
+  }
+  return Side::kOther;
+}
+
+/// What the rows of one manifold are set up from: its two solver bodies (A is the manifold's
+/// body 0, B its body 1, as in Bullet's rows) and the pools they go to.
+struct ManifoldRows {
+  btConstraintArray& contacts;
+  btConstraintArray& frictions;
+  btSolverBody& a;
+  btSolverBody& b;
+  int id_a;
+  int id_b;
+  const btContactSolverInfo& info;
+  btScalar relaxation;  // Bullet's successive over-relaxation factor, info.m_sor
+  btScalar inv_dt;      // 1 / time step
+};
+
+// Below, a still or fixed body's share of a sum is the literal 0 where Bullet adds its computed
+// terms: those are ±0 (a zero inverse mass and inertia times finite lever arms, or Bullet's own
+// zeros for the fixed body), and x + (±0) = x for every x != 0. The sums that can be zero are
+// kept as Bullet forms them (0 + x, not x), so that even a zero's sign matches where it can.
+
+/// One friction row along `axis` (a unit vector in the contact plane) of contact `contact_index`:
+/// the impulse along axis on A and against it on B drives their relative velocity along it to
+/// `target` (Bullet's desired velocity), softened by `cfm`, within ±friction × normal impulse
+/// (the bound is set per iteration). Same fields and operations as Bullet's friction rows.
+template <Side kA, Side kB>
+void add_friction_row(const ManifoldRows& m, const btVector3& axis, int contact_index,
+                      const btManifoldPoint& cp, const btVector3& arm_a, const btVector3& arm_b,
+                      btScalar target, btScalar cfm) {
+  btSolverConstraint& row = m.frictions.expandNonInitializing();
+  row.m_frictionIndex = contact_index;
+  row.m_solverBodyIdA = m.id_a;
+  row.m_solverBodyIdB = m.id_b;
+  row.m_friction = cp.m_combinedFriction;
+  row.m_originalContactPoint = nullptr;
+  row.m_appliedImpulse = 0;
+  row.m_appliedPushImpulse = 0;
+
+  btScalar mass_a = 0, mass_b = 0;    // each body's share of the row's inverse effective mass
+  btScalar speed_a = 0, speed_b = 0;  // each body's velocity along its side of the row
+  if constexpr (kA == Side::kFixed) {
+    row.m_contactNormal1.setZero();
+    row.m_relpos1CrossNormal.setZero();
+    row.m_angularComponentA.setZero();
+  } else {
+    const btRigidBody& rb = *m.a.m_originalBody;
+    row.m_contactNormal1 = axis;
+    row.m_relpos1CrossNormal = arm_a.cross(row.m_contactNormal1);
+    if constexpr (kA == Side::kMoving) {
+      row.m_angularComponentA =
+          rb.getInvInertiaTensorWorld() * row.m_relpos1CrossNormal * rb.getAngularFactor();
+      mass_a = rb.getInvMass() + axis.dot(row.m_angularComponentA.cross(arm_a));
+    } else {
+      row.m_angularComponentA.setZero();
+    }
+    speed_a = row.m_contactNormal1.dot(m.a.m_linearVelocity + m.a.m_externalForceImpulse) +
+              row.m_relpos1CrossNormal.dot(m.a.m_angularVelocity);
+  }
+  if constexpr (kB == Side::kFixed) {
+    row.m_contactNormal2.setZero();
+    row.m_relpos2CrossNormal.setZero();
+    row.m_angularComponentB.setZero();
+  } else {
+    const btRigidBody& rb = *m.b.m_originalBody;
+    row.m_contactNormal2 = -axis;
+    row.m_relpos2CrossNormal = arm_b.cross(row.m_contactNormal2);
+    if constexpr (kB == Side::kMoving) {
+      row.m_angularComponentB =
+          rb.getInvInertiaTensorWorld() * row.m_relpos2CrossNormal * rb.getAngularFactor();
+      mass_b = rb.getInvMass() + axis.dot((-row.m_angularComponentB).cross(arm_b));
+    } else {
+      row.m_angularComponentB.setZero();
+    }
+    speed_b = row.m_contactNormal2.dot(m.b.m_linearVelocity + m.b.m_externalForceImpulse) +
+              row.m_relpos2CrossNormal.dot(m.b.m_angularVelocity);
+  }
+  row.m_jacDiagABInv = m.relaxation / (mass_a + mass_b);
+
+  const btScalar relative_speed = speed_a + speed_b;
+  const btScalar velocity_impulse = (target - relative_speed) * row.m_jacDiagABInv;
+  btScalar anchor_impulse = 0;  // pulls an anchored contact back to where it started
+  if (cp.m_contactPointFlags & BT_CONTACT_FLAG_FRICTION_ANCHOR) {
+    const btScalar drift = (cp.getPositionWorldOnA() - cp.getPositionWorldOnB()).dot(axis);
+    const btScalar error = -drift * m.info.m_frictionERP / m.info.m_timeStep;
+    anchor_impulse = error * row.m_jacDiagABInv;
+  }
+  row.m_rhs = anchor_impulse + velocity_impulse;
+  row.m_rhsPenetration = 0;
+  row.m_cfm = cfm;
+  row.m_lowerLimit = -row.m_friction;
+  row.m_upperLimit = row.m_friction;
+}
+
+/// The rows of every contact point of one manifold within its processing threshold: the normal
+/// row (non-penetration, with Baumgarte or split-impulse position correction, restitution, soft
+/// contact cfm/erp, warm start) into the contact pool, then its friction rows into the friction
+/// pool. Same fields, operations, side effects and order as Bullet's convertContact without
+/// rolling friction and anisotropic friction.
+template <Side kA, Side kB>
+void convert_points(const ManifoldRows& m, btPersistentManifold& manifold) {
+  const btContactSolverInfo& info = m.info;
+  const btVector3& origin_a = manifold.getBody0()->getWorldTransform().getOrigin();
+  const btVector3& origin_b = manifold.getBody1()->getWorldTransform().getOrigin();
+  const btScalar threshold = manifold.getContactProcessingThreshold();
+  const int mode = info.m_solverMode;
+  const bool two_directions = (mode & SOLVER_USE_2_FRICTION_DIRECTIONS) != 0;
+  const btVector3 zero(0, 0, 0);
+
+  for (int j = 0; j < manifold.getNumContacts(); ++j) {
+    btManifoldPoint& cp = manifold.getContactPoint(j);
+    if (!(cp.getDistance() <= threshold)) continue;
+    const int contact_index = m.contacts.size();
+    btSolverConstraint& row = m.contacts.expandNonInitializing();
+    row.m_solverBodyIdA = m.id_a;
+    row.m_solverBodyIdB = m.id_b;
+    row.m_originalContactPoint = &cp;
+    const btVector3& normal = cp.m_normalWorldOnB;  // from B towards A
+    // Lever arms from each body's origin to its contact point (none for the fixed body: every
+    // product with it would be zeroed).
+    btVector3 arm_a = zero, arm_b = zero;
+    if constexpr (kA != Side::kFixed) arm_a = cp.getPositionWorldOnA() - origin_a;
+    if constexpr (kB != Side::kFixed) arm_b = cp.getPositionWorldOnB() - origin_b;
+
+    // Soft contact: a point's own cfm / erp, or both from its stiffness and damping.
+    btScalar cfm = info.m_globalCfm;
+    btScalar erp = info.m_erp2;
+    const int flags = cp.m_contactPointFlags;
+    if (flags & (BT_CONTACT_FLAG_HAS_CONTACT_CFM | BT_CONTACT_FLAG_HAS_CONTACT_ERP)) {
+      if (flags & BT_CONTACT_FLAG_HAS_CONTACT_CFM) cfm = cp.m_contactCFM;
+      if (flags & BT_CONTACT_FLAG_HAS_CONTACT_ERP) erp = cp.m_contactERP;
+    } else if (flags & BT_CONTACT_FLAG_CONTACT_STIFFNESS_DAMPING) {
+      btScalar denom =
+          info.m_timeStep * cp.m_combinedContactStiffness1 + cp.m_combinedContactDamping1;
+      if (denom < SIMD_EPSILON) denom = SIMD_EPSILON;
+      cfm = btScalar(1) / denom;
+      erp = (info.m_timeStep * cp.m_combinedContactStiffness1) / denom;
+    }
+    cfm *= m.inv_dt;
+
+    // The normal row: A pushed along the normal, B against it.
+    btScalar mass_a = 0, mass_b = 0;
+    btVector3 torque_a = zero, torque_b = zero;  // arm × normal
+    if constexpr (kA != Side::kFixed) torque_a = arm_a.cross(normal);
+    if constexpr (kB != Side::kFixed) torque_b = arm_b.cross(normal);
+    if constexpr (kA == Side::kMoving) {
+      const btRigidBody& rb = *m.a.m_originalBody;
+      row.m_angularComponentA = rb.getInvInertiaTensorWorld() * torque_a * rb.getAngularFactor();
+      mass_a = rb.getInvMass() + normal.dot(row.m_angularComponentA.cross(arm_a));
+    } else {
+      row.m_angularComponentA.setZero();
+    }
+    if constexpr (kB == Side::kMoving) {
+      const btRigidBody& rb = *m.b.m_originalBody;
+      row.m_angularComponentB = rb.getInvInertiaTensorWorld() * -torque_b * rb.getAngularFactor();
+      mass_b = rb.getInvMass() + normal.dot((-row.m_angularComponentB).cross(arm_b));
+    } else {
+      row.m_angularComponentB.setZero();
+    }
+    row.m_jacDiagABInv = m.relaxation / (mass_a + mass_b + cfm);
+    if constexpr (kA != Side::kFixed) {
+      row.m_contactNormal1 = normal;
+      row.m_relpos1CrossNormal = torque_a;
+    } else {
+      row.m_contactNormal1.setZero();
+      row.m_relpos1CrossNormal.setZero();
+    }
+    if constexpr (kB != Side::kFixed) {
+      row.m_contactNormal2 = -normal;
+      row.m_relpos2CrossNormal = -torque_b;
+    } else {
+      row.m_contactNormal2.setZero();
+      row.m_relpos2CrossNormal.setZero();
+    }
+    row.m_friction = cp.m_combinedFriction;
+
+    // Restitution: the approach speed (bodies' own velocities) times the restitution, if above
+    // the threshold. A zero restitution gives a zero target for any finite speed, so the speed
+    // is only computed for a bouncing contact.
+    btScalar bounce = 0;
+    if (cp.m_combinedRestitution != 0) {
+      const btVector3 velocity_a =
+          kA != Side::kFixed ? m.a.m_originalBody->getVelocityInLocalPoint(arm_a) : zero;
+      const btVector3 velocity_b =
+          kB != Side::kFixed ? m.b.m_originalBody->getVelocityInLocalPoint(arm_b) : zero;
+      const btScalar approach = normal.dot(velocity_a - velocity_b);
+      if (!(btFabs(approach) < info.m_restitutionVelocityThreshold)) {
+        bounce = cp.m_combinedRestitution * -approach;
+      }
+      if (bounce <= btScalar(0)) bounce = 0;
+    }
+
+    // Warm start: last step's impulse, scaled, applied to the moving bodies now (a still body's
+    // velocity changes would stay +0: it adds products of its zero inverse mass and inertia).
+    if (mode & SOLVER_USE_WARMSTARTING) {
+      row.m_appliedImpulse = cp.m_appliedImpulse * info.m_warmstartingFactor;
+      if constexpr (kA == Side::kMoving) {
+        m.a.internalApplyImpulse(row.m_contactNormal1 * m.a.internalGetInvMass(),
+                                 row.m_angularComponentA, row.m_appliedImpulse);
+      }
+      if constexpr (kB == Side::kMoving) {
+        m.b.internalApplyImpulse(-row.m_contactNormal2 * m.b.internalGetInvMass(),
+                                 -row.m_angularComponentB, -btScalar(row.m_appliedImpulse));
+      }
+    } else {
+      row.m_appliedImpulse = 0;
+    }
+    row.m_appliedPushImpulse = 0;
+
+    // Target: the relative normal velocity (with this step's external impulses) brought to the
+    // bounce, less the penetration; the position error either goes into the same right-hand
+    // side or, with split impulse for shallow contacts, into a separate one.
+    btScalar speed_a = 0, speed_b = 0;
+    if constexpr (kA != Side::kFixed) {
+      speed_a = row.m_contactNormal1.dot(m.a.m_linearVelocity + m.a.m_externalForceImpulse) +
+                row.m_relpos1CrossNormal.dot(m.a.m_angularVelocity + m.a.m_externalTorqueImpulse);
+    }
+    if constexpr (kB != Side::kFixed) {
+      speed_b = row.m_contactNormal2.dot(m.b.m_linearVelocity + m.b.m_externalForceImpulse) +
+                row.m_relpos2CrossNormal.dot(m.b.m_angularVelocity + m.b.m_externalTorqueImpulse);
+    }
+    const btScalar relative_speed = speed_a + speed_b;
+    btScalar position_error = 0;
+    btScalar velocity_error = bounce - relative_speed;
+    const btScalar penetration = cp.getDistance() + info.m_linearSlop;
+    if (penetration > 0) {
+      velocity_error -= penetration * m.inv_dt;  // apart (or within the slop): close the gap
+    } else {
+      position_error = -penetration * erp * m.inv_dt;
+    }
+    const btScalar position_impulse = position_error * row.m_jacDiagABInv;
+    const btScalar velocity_impulse = velocity_error * row.m_jacDiagABInv;
+    if (!info.m_splitImpulse || penetration > info.m_splitImpulsePenetrationThreshold) {
+      row.m_rhs = position_impulse + velocity_impulse;
+      row.m_rhsPenetration = 0;
+    } else {
+      row.m_rhs = velocity_impulse;
+      row.m_rhsPenetration = position_impulse;
+    }
+    row.m_cfm = cfm * row.m_jacDiagABInv;
+    row.m_lowerLimit = 0;
+    row.m_upperLimit = 1e10f;
+    row.m_frictionIndex = m.frictions.size();
+
+    // Friction directions: cached ones (with their target velocities) if the point has them
+    // and caching is on; else along the sliding velocity (its part in the contact plane) when
+    // it is not negligible, the second one across it; else any two in the plane.
+    if ((mode & SOLVER_ENABLE_FRICTION_DIRECTION_CACHING) &&
+        (flags & BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED)) {
+      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b,
+                               cp.m_contactMotion1, cp.m_frictionCFM);
+      if (two_directions) {
+        add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b,
+                                 cp.m_contactMotion2, cp.m_frictionCFM);
+      }
+      continue;
+    }
+    bool sliding = false;
+    if (!(mode & SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION)) {
+      btVector3 velocity_a = zero, velocity_b = zero;
+      if constexpr (kA != Side::kFixed) m.a.getVelocityInLocalPointNoDelta(arm_a, velocity_a);
+      if constexpr (kB != Side::kFixed) m.b.getVelocityInLocalPointNoDelta(arm_b, velocity_b);
+      const btVector3 relative = velocity_a - velocity_b;
+      const btScalar along_normal = normal.dot(relative);
+      cp.m_lateralFrictionDir1 = relative - normal * along_normal;
+      const btScalar slide2 = cp.m_lateralFrictionDir1.length2();
+      sliding = slide2 > SIMD_EPSILON;
+      if (sliding) cp.m_lateralFrictionDir1 *= 1.f / btSqrt(slide2);
+    }
+    if (sliding) {
+      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b, 0, 0);
+      if (two_directions) {
+        cp.m_lateralFrictionDir2 = cp.m_lateralFrictionDir1.cross(normal);
+        cp.m_lateralFrictionDir2.normalize();
+        add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b, 0,
+                                 0);
+      }
+    } else {
+      btPlaneSpace1(normal, cp.m_lateralFrictionDir1, cp.m_lateralFrictionDir2);
+      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b, 0, 0);
+      if (two_directions) {
+        add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b, 0,
+                                 0);
+        if (mode & SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION) {
+          cp.m_contactPointFlags |= BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED;
+        }
+      }
+    }
+    // The friction rows' impulses start at zero (Bullet zeroes them once more here; they are
+    // zero already).
+  }
+}
+
 }  // namespace
 
 bool OneSidedContactSolver::covered(int numConstraints, const btContactSolverInfo& info) {
@@ -275,6 +587,86 @@ btScalar OneSidedContactSolver::solveSingleIteration(
     }
   }
   return residual;
+}
+
+bool OneSidedContactSolver::convert_manifold(btPersistentManifold& manifold,
+                                             const btContactSolverInfo& info) {
+  btCollisionObject& object_a = *const_cast<btCollisionObject*>(manifold.getBody0());
+  btCollisionObject& object_b = *const_cast<btCollisionObject*>(manifold.getBody1());
+  // Anisotropic friction rescales the friction directions, rolling and spinning friction add
+  // rows of their own: Bullet's setup.
+  const int anisotropic = btCollisionObject::CF_ANISOTROPIC_FRICTION |
+                          btCollisionObject::CF_ANISOTROPIC_ROLLING_FRICTION;
+  if (object_a.hasAnisotropicFriction(anisotropic) ||
+      object_b.hasAnisotropicFriction(anisotropic)) {
+    return false;
+  }
+  const btScalar threshold = manifold.getContactProcessingThreshold();
+  for (int j = 0; j < manifold.getNumContacts(); ++j) {
+    const btManifoldPoint& cp = manifold.getContactPoint(j);
+    if (cp.getDistance() <= threshold && cp.m_combinedRollingFriction > 0) return false;
+  }
+
+  // The solver bodies in Bullet's order (Bullet's convertContact would create them here too;
+  // for a manifold handed to it, it finds them created).
+  const int id_a = getOrInitSolverBody(object_a, info.m_timeStep);
+  const int id_b = getOrInitSolverBody(object_b, info.m_timeStep);
+  btSolverBody& a = m_tmpSolverBodyPool[id_a];
+  btSolverBody& b = m_tmpSolverBodyPool[id_b];
+  // No rows between two bodies that cannot be pushed (Bullet's test).
+  if (a.m_invMass.fuzzyZero() && b.m_invMass.fuzzyZero()) return true;
+
+  const ManifoldRows rows{m_tmpSolverContactConstraintPool,
+                          m_tmpSolverContactFrictionConstraintPool,
+                          a,
+                          b,
+                          id_a,
+                          id_b,
+                          info,
+                          info.m_sor,
+                          btScalar(1) / info.m_timeStep};
+  const Side side_a = side_of(a);
+  const Side side_b = side_of(b);
+  if (side_a == Side::kMoving) {
+    switch (side_b) {
+      case Side::kMoving:
+        convert_points<Side::kMoving, Side::kMoving>(rows, manifold);
+        return true;
+      case Side::kStill:
+        convert_points<Side::kMoving, Side::kStill>(rows, manifold);
+        return true;
+      case Side::kFixed:
+        convert_points<Side::kMoving, Side::kFixed>(rows, manifold);
+        return true;
+      default:
+        return false;
+    }
+  }
+  if (side_b == Side::kMoving) {
+    switch (side_a) {
+      case Side::kStill:
+        convert_points<Side::kStill, Side::kMoving>(rows, manifold);
+        return true;
+      case Side::kFixed:
+        convert_points<Side::kFixed, Side::kMoving>(rows, manifold);
+        return true;
+      default:
+        return false;
+    }
+  }
+  return false;
+}
+
+void OneSidedContactSolver::convertContacts(btPersistentManifold** manifolds, int numManifolds,
+                                            const btContactSolverInfo& info) {
+  for (int i = 0; i < numManifolds; ++i) {
+    if (enabled && convert_manifold(*manifolds[i], info)) {
+      ++own_manifolds;
+    } else {
+      ++bullet_manifolds;
+      convertContact(manifolds[i], info);
+    }
+  }
 }
 
 }  // namespace mgn::physics

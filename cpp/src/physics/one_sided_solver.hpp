@@ -18,6 +18,20 @@
 // x - (±0)·k = x, which can differ from Bullet's only in the sign of a zero. Worlds the fast
 // path does not cover — joints, rolling friction, randomised or interleaved row order, SIMD row
 // solvers — are handed to Bullet's own iteration unchanged.
+//
+// The rows are set up the same way (convertContacts): Bullet's convertContact builds both halves
+// of every contact row and of its one or two friction rows, and a step of the shake test spends
+// about an eighth of its instructions there. For a contact between a body that moves and one
+// that cannot (Bullet's fixed body, or a kinematic body: no inverse mass, no inverse inertia),
+// OneSidedContactSolver skips what only the still body would contribute — its angular
+// components (the inverse inertia products), its share of the effective mass, its warm-start
+// impulse; for the fixed body also its lever arm — and computes everything else with Bullet's
+// operations in Bullet's order: the rows (every field Bullet writes), the bodies' warm-start
+// velocity changes, the points' friction directions and flags, and the pools' order are the
+// same. The still body's angular components are written as +0 where Bullet's product of a zero
+// inertia may give -0 (never read by the iterations above; Bullet's own iteration adds them to a
+// body that takes no impulse). Two moving bodies are covered too. Manifolds with rolling or
+// spinning friction or anisotropic friction are converted by Bullet's own convertContact.
 #include <btBulletDynamicsCommon.h>
 
 #include <cstdint>
@@ -33,8 +47,16 @@ class OneSidedContactSolver : public btSequentialImpulseConstraintSolver {
                                 const btContactSolverInfo& info,
                                 btIDebugDraw* debugDrawer) override;
 
-  /// false: every iteration is Bullet's own (for comparisons).
+  /// Sets up the contact and friction rows of every manifold as Bullet's convertContact does,
+  /// without the still body's half where one body cannot move (see above).
+  void convertContacts(btPersistentManifold** manifolds, int numManifolds,
+                       const btContactSolverInfo& info) override;
+
+  /// false: every iteration and every manifold's setup is Bullet's own (for comparisons).
   bool enabled = true;
+  /// Manifolds converted to rows by this solver's own setup / by Bullet's convertContact.
+  long own_manifolds = 0;
+  long bullet_manifolds = 0;
   /// Iterations run by this solver's own loop / handed to Bullet's (for tests and benchmarks).
   long own_iterations = 0;
   long bullet_iterations = 0;
@@ -47,6 +69,7 @@ class OneSidedContactSolver : public btSequentialImpulseConstraintSolver {
 
  private:
   bool covered(int numConstraints, const btContactSolverInfo& info);
+  bool convert_manifold(btPersistentManifold& manifold, const btContactSolverInfo& info);
   void classify_rows();
 
   btScalar solve_packed();
