@@ -397,7 +397,8 @@ void OneSidedContactSolver::classify_rows() {
   // component (kinematic bodies), starting from zero velocity changes. Its velocity changes then
   // stay zero through every iteration, and its half of each row only adds zeros.
   const int num_bodies = m_tmpSolverBodyPool.size();
-  std::vector<std::uint8_t> still(static_cast<std::size_t>(num_bodies));
+  std::vector<std::uint8_t>& still = still_bodies_;  // kept: no allocation per solve
+  still.assign(static_cast<std::size_t>(num_bodies), 0);
   for (int i = 0; i < num_bodies; ++i) {
     const btSolverBody& body = m_tmpSolverBodyPool[i];
     still[i] = (body.m_originalBody == nullptr || is_zero(body.m_invMass)) &&

@@ -78,6 +78,7 @@ class OneSidedContactSolver : public btSequentialImpulseConstraintSolver {
 
   // Per row of the contact and friction pools (computed at iteration 0 of every solve): which
   // of its two bodies take part (bit 0: A, bit 1: B).
+  std::vector<std::uint8_t> still_bodies_;  // per solver body: no row can move it
   std::vector<std::uint8_t> contact_sides_;
   std::vector<std::uint8_t> friction_sides_;
 
