@@ -7,9 +7,9 @@
 // changes, computes the row's impulse and applies it to both. In the shake test every contact
 // pairs the object with a hand body (palm or finger) that is kinematic: it has no inverse mass
 // and no inverse inertia, so its half of every row reads zeros and adds zeros. For the drop,
-// the tote and the floor are static (Bullet's fixed solver body). The rows are about half of a
-// shake trial's solver time, which is about half of the trial (benchmarks/RESULTS.md, "Shake
-// trial cost, session 15").
+// the tote and the floor are static (Bullet's fixed solver body). The iterations were about
+// three quarters of a shake trial's solver instructions, the solver about half of the trial
+// (benchmarks/RESULTS.md, "Shake trial cost, session 15").
 //
 // OneSidedContactSolver runs the same Projected Gauss-Seidel iterations (same rows, same order,
 // same single-precision operations in the same order, same residual for Bullet's early exit),

@@ -139,11 +139,11 @@ struct ShakeOptions {
   /// palm's pair on every step and, on compounds, the hulls near a pad that do not touch it
   /// (benchmarks/RESULTS.md, "Shake trial cost, session 13").
   bool skip_separated_pairs = true;
-  /// Solve each contact row of the sequential-impulse solver for the object only: the hand
-  /// bodies are kinematic (no inverse mass or inertia), so their half of a row reads and adds
-  /// zeros, which Bullet's solver computes anyway. The same operations in the same order
-  /// otherwise, so every trial is the same bit for bit either way (tested); on by default
-  /// (benchmarks/RESULTS.md, "Shake trial cost, session 15").
+  /// Set up and solve each contact row of the sequential-impulse solver for the object only:
+  /// the hand bodies are kinematic (no inverse mass or inertia), so their half of a row reads
+  /// and adds zeros, which Bullet's solver computes anyway. The same operations in the same
+  /// order otherwise, so every trial is the same bit for bit either way (tested); on by default,
+  /// ~1.2x fewer instructions per trial (benchmarks/RESULTS.md, "Shake trial cost, session 15").
   bool one_sided_rows = true;
   /// Hulls with more vertices are replaced by the hull of their support points along this many
   /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
