@@ -18,6 +18,23 @@ inline void apply_impulse(btSolverBody& body, const btVector3& linear, const btV
   body.m_deltaAngularVelocity += angular * (impulse * body.m_angularFactor);
 }
 
+/// The accumulated impulse of a row after a change `delta`, kept in [lower, upper] (lower only
+/// for a contact row, kUpper false): updates `applied` and returns the change actually made.
+template <bool kUpper>
+inline btScalar clamp_impulse(btScalar delta, btScalar& applied, btScalar lower, btScalar upper) {
+  const btScalar sum = applied + delta;
+  if (sum < lower) {
+    delta = lower - applied;
+    applied = lower;
+  } else if (kUpper && sum > upper) {
+    delta = upper - applied;
+    applied = upper;
+  } else {
+    applied = sum;
+  }
+  return delta;
+}
+
 /// One Projected Gauss-Seidel step on row c: the impulse change that drives the row's relative
 /// velocity change to c.m_rhs (softened by c.m_cfm), clamped so that the accumulated impulse stays
 /// in [lower, upper] (upper only for friction rows), applied to the bodies that take part
@@ -38,16 +55,7 @@ inline btScalar solve_row(btSolverBody& a, btSolverBody& b, const btSolverConstr
   }
   if (kA) delta -= va * c.m_jacDiagABInv;
   if (kB) delta -= vb * c.m_jacDiagABInv;
-  const btScalar sum = btScalar(c.m_appliedImpulse) + delta;
-  if (sum < c.m_lowerLimit) {
-    delta = c.m_lowerLimit - c.m_appliedImpulse;
-    c.m_appliedImpulse = c.m_lowerLimit;
-  } else if (kUpper && sum > c.m_upperLimit) {
-    delta = c.m_upperLimit - c.m_appliedImpulse;
-    c.m_appliedImpulse = c.m_upperLimit;
-  } else {
-    c.m_appliedImpulse = sum;
-  }
+  delta = clamp_impulse<kUpper>(delta, c.m_appliedImpulse, c.m_lowerLimit, c.m_upperLimit);
   if (kA) apply_impulse(a, c.m_contactNormal1 * a.m_invMass, c.m_angularComponentA, delta);
   if (kB) apply_impulse(b, c.m_contactNormal2 * b.m_invMass, c.m_angularComponentB, delta);
   return btScalar(delta * (1. / c.m_jacDiagABInv));
@@ -392,31 +400,20 @@ bool OneSidedContactSolver::covered(int numConstraints, const btContactSolverInf
 }
 
 void OneSidedContactSolver::classify_rows() {
-  // A body is still for this solve if no row can move it: Bullet's fixed body (no original
-  // body: impulses are not applied), or a body without inverse mass whose rows carry no angular
-  // component (kinematic bodies), starting from zero velocity changes. Its velocity changes then
-  // stay zero through every iteration, and its half of each row only adds zeros.
+  // A body is still for this solve if no row can move it: Bullet's fixed body (impulses are
+  // not applied to it) or a kinematic one (no inverse mass or inertia: every row's linear and
+  // angular component for it is zero; the setup's own classification, side_of()), starting from
+  // zero velocity changes. Its velocity changes then stay zero through every iteration, and its
+  // half of each row only adds zeros.
   const int num_bodies = m_tmpSolverBodyPool.size();
   std::vector<std::uint8_t>& still = still_bodies_;  // kept: no allocation per solve
   still.assign(static_cast<std::size_t>(num_bodies), 0);
   for (int i = 0; i < num_bodies; ++i) {
     const btSolverBody& body = m_tmpSolverBodyPool[i];
-    still[i] = (body.m_originalBody == nullptr || is_zero(body.m_invMass)) &&
+    const Side side = side_of(body);
+    still[i] = (side == Side::kFixed || side == Side::kStill) &&
                is_zero(body.m_deltaLinearVelocity) && is_zero(body.m_deltaAngularVelocity);
   }
-  auto check = [&](const btConstraintArray& pool) {
-    for (int j = 0; j < pool.size(); ++j) {
-      const btSolverConstraint& c = pool[j];
-      if (m_tmpSolverBodyPool[c.m_solverBodyIdA].m_originalBody != nullptr &&
-          !is_zero(c.m_angularComponentA))
-        still[c.m_solverBodyIdA] = 0;
-      if (m_tmpSolverBodyPool[c.m_solverBodyIdB].m_originalBody != nullptr &&
-          !is_zero(c.m_angularComponentB))
-        still[c.m_solverBodyIdB] = 0;
-    }
-  };
-  check(m_tmpSolverContactConstraintPool);
-  check(m_tmpSolverContactFrictionConstraintPool);
   auto sides = [&](const btConstraintArray& pool, std::vector<std::uint8_t>& out) {
     out.resize(static_cast<std::size_t>(pool.size()));
     for (int j = 0; j < pool.size(); ++j) {
@@ -487,16 +484,8 @@ btScalar OneSidedContactSolver::solve_packed() {
     btScalar delta = p.rhs - applied * p.cfm;
     const btScalar v = p.normal.dot(dv) + p.relpos_cross_normal.dot(dw);
     delta -= v * p.jac;
-    const btScalar sum = applied + delta;
-    if (sum < lower) {
-      delta = lower - applied;
-      applied = lower;
-    } else if (has_upper && sum > upper) {
-      delta = upper - applied;
-      applied = upper;
-    } else {
-      applied = sum;
-    }
+    delta = has_upper ? clamp_impulse<true>(delta, applied, lower, upper)
+                      : clamp_impulse<false>(delta, applied, lower, upper);
     if (kUnitFactors) {  // x·1 = x: the same bits without the factors' multiplications
       dv += p.linear * delta;
       dw += p.angular * delta;
