@@ -86,7 +86,13 @@ class FakePhysics:
         return SimpleNamespace(score=success.sum(axis=(1, 2)) / (S * S), trial_success=success)
 
 
+def verdict(c: physics.StaircaseCalibration | None) -> tuple[int, int, bool] | None:
+    """(calibration grasps, mismatches, staircase kept) of a calibration."""
+    return None if c is None else (c.grasps, c.mismatches, c.staircase)
+
+
 def score_with(monkeypatch, truth, **kw):
+    kw.setdefault("calibration_tolerance", 0.0)  # the exact policy unless a test sets one
     fake = FakePhysics(truth)
     monkeypatch.setattr(physics, "shake_scores", fake)
     opts = ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS, num_threads=1)
@@ -109,7 +115,7 @@ def test_monotone_object_keeps_the_staircase_after_calibration(monkeypatch):
     truth = random_monotone(rng, 40)
     scores, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=8)
     np.testing.assert_array_equal(scores, truth_scores(truth))  # monotone: the search is exact
-    assert scorer.last_calibration == physics.StaircaseCalibration(8, 0, True)
+    assert verdict(scorer.last_calibration) == (8, 0, True)
     assert fake.calls == [(0, 8, False), (8, 32, True)]  # calibration grids, then the search
     assert fake.trials < 40 * S * S
     assert "staircase kept" in scorer.__name__ and "calibrated on 8" in scorer.__name__
@@ -125,7 +131,7 @@ def test_object_whose_calibration_disagrees_gets_the_full_grid_everywhere(monkey
     assert replay_staircase(bad[None], CHECKS)[0][0] != bad.mean()
     scores, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=8)
     np.testing.assert_array_equal(scores, truth_scores(truth))
-    assert scorer.last_calibration == physics.StaircaseCalibration(8, 1, False)
+    assert verdict(scorer.last_calibration) == (8, 1, False)
     assert fake.calls == [(0, 8, False), (8, 22, False)]
     assert fake.trials == 30 * S * S
     assert "full grid for the rest" in scorer.__name__
@@ -147,10 +153,10 @@ def test_the_verdict_depends_on_the_calibration_grasps_only(monkeypatch):
 
     truth[1] = bad
     _, one, _ = score_with(monkeypatch, truth, calibration_grasps=8, calibration_mismatches=1)
-    assert one.last_calibration == physics.StaircaseCalibration(8, 1, True)
+    assert verdict(one.last_calibration) == (8, 1, True)
     truth[2] = bad
     _, two, _ = score_with(monkeypatch, truth, calibration_grasps=8, calibration_mismatches=1)
-    assert two.last_calibration == physics.StaircaseCalibration(8, 2, False)
+    assert verdict(two.last_calibration) == (8, 2, False)
 
 
 def test_no_calibration_and_small_objects(monkeypatch):
@@ -163,7 +169,7 @@ def test_no_calibration_and_small_objects(monkeypatch):
     # Fewer grasps than calibration grasps: all on the full grid, nothing left.
     few, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=16)
     np.testing.assert_array_equal(few, truth_scores(truth))
-    assert scorer.last_calibration == physics.StaircaseCalibration(5, 1, False)
+    assert verdict(scorer.last_calibration) == (5, 1, False)
     assert fake.calls == [(0, 5, False)]
 
 
@@ -190,9 +196,9 @@ def test_calibrate_staircase_against_brute_force():
     rng = np.random.default_rng(8)
     grids = random_monotone(rng, 12)
     c = calibrate_staircase(grids, CHECKS)
-    assert c == physics.StaircaseCalibration(12, 0, True)
+    assert verdict(c) == (12, 0, True)
     grids[[2, 7]] = missed_cell_grid()
-    assert calibrate_staircase(grids, CHECKS) == physics.StaircaseCalibration(12, 2, False)
+    assert verdict(calibrate_staircase(grids, CHECKS)) == (12, 2, False)
     assert calibrate_staircase(grids, CHECKS, 2).staircase
     # With every cell checked the search is exact on any grid.
     assert calibrate_staircase(grids, S * S).mismatches == 0
@@ -236,11 +242,19 @@ def test_real_physics_replay_and_calibration_are_deterministic():
             opts = replace(base, staircase=True, num_threads=threads)
             scorer = ShakeScorer(3000.0, options=opts, progress=progress, calibration_grasps=3)
             results.append((scorer(mesh, labels), scorer.last_calibration))
+    chosen = calibrate_staircase(
+        full.trial_success[:3], 1, 0, -1, physics.CALIBRATION_TOLERANCE
+    )
     for got, cal in results:
         np.testing.assert_array_equal(got, results[0][0])
-        assert cal == results[0][1] == calibrate_staircase(full.trial_success[:3], 1)
+        assert cal == results[0][1] == chosen
     np.testing.assert_array_equal(results[0][0][:3], full.score[:3].astype(np.float32))
-    rest = stair.score if results[0][1].staircase else full.score
+    search = physics.search_of(chosen, replace(base, staircase=True))
+    rest = full.score
+    if search.staircase:
+        rest, _ = replay_staircase(
+            full.trial_success, search.staircase_checks, search.to_core().staircase_verified_rows()
+        )
     np.testing.assert_array_equal(results[0][0][3:], rest[3:].astype(np.float32))
 
 
@@ -345,3 +359,153 @@ def test_zero_checks_still_verify_every_rows_boundary():
             assert not r.fallback and np.asarray(r.success).all()
             missed += 1
     assert caught == S and missed > 0
+
+
+# ------------------------------------------------------------- the tolerance (error bound)
+
+
+def holed(rng: np.random.Generator, n: int, p_hole: float, holes: int) -> np.ndarray:
+    """n monotone grids, each with probability p_hole given ``holes`` isolated failing cells
+    inside its success region (what real cans and bottles show)."""
+    grids = random_monotone(rng, n)
+    for g in grids:
+        if rng.random() < p_hole:
+            for _ in range(holes):
+                inside = np.argwhere(g)
+                if len(inside):
+                    g[tuple(inside[rng.integers(len(inside))])] = False
+    return grids
+
+
+def one_hole_grids():
+    """Every grid that succeeds everywhere but one cell."""
+    for c in range(S * S):
+        g = np.ones((S, S), bool)
+        g.flat[c] = False
+        yield g
+
+
+def test_binomial_upper_bound_is_clopper_pearsons():
+    from scipy.stats import beta
+
+    for m, n in ((0, 32), (1, 32), (5, 32), (3, 8), (0, 1), (31, 32)):
+        assert physics._binomial_upper(m, n) == pytest.approx(
+            beta.ppf(0.95, m + 1, n - m), abs=1e-9
+        )
+    assert physics._binomial_upper(4, 4) == 1.0
+
+
+def test_error_bound_by_hand():
+    cell = 1.0 / 100
+    # No wrong calibration grasp of 32: the rate's bound 1 - 0.05^(1/32) times one cell.
+    assert physics.error_bound(np.zeros(32), cell) == pytest.approx(
+        (1 - 0.05 ** (1 / 32)) * cell, rel=1e-9
+    )
+    # Two wrong of 32 by 0.02 and 0.06: the rate's bound times their mean size 0.04.
+    e = np.zeros(32)
+    e[[3, 9]] = (0.02, 0.06)
+    assert physics.error_bound(e, cell) == pytest.approx(
+        physics._binomial_upper(2, 32) * 0.04, rel=1e-9
+    )
+    assert physics.error_bound(np.ones(4), cell) == 1.0
+
+
+@pytest.mark.parametrize(("p_hole", "holes"), [(0.0, 1), (0.05, 1), (0.2, 1), (0.5, 3)])
+def test_the_error_bound_holds_on_the_grasps_after_the_calibration(p_hole, holes):
+    """On populations of constructed grids (monotone, rarely and often holed), the bound that
+    the calibration records for the search it chose holds for the object's other grasps in
+    >= 90 % of the draws (it is a 95 % bound), and the chosen search's error is within the
+    tolerance wherever the bound is."""
+    tol = 0.02  # a cell of the 5 x 5 test grid is 0.04
+    held, within = 0, 0
+    draws = 30
+    for seed in range(draws):
+        grids = holed(np.random.default_rng(seed), 160, p_hole, holes)
+        cal, rest = grids[:32], grids[32:]
+        c = calibrate_staircase(cal, CHECKS, 0, -1, tol)
+        search = physics.search_of(c, ShakeOptions(grid=S, staircase=True,
+                                                   staircase_checks=CHECKS))  # fmt: skip
+        truth = rest.mean(axis=(1, 2))
+        got = truth
+        if search.staircase:
+            got, _ = replay_staircase(rest, search.staircase_checks, -1)
+        err = float(np.abs(got - truth).mean())
+        held += err <= c.error_bound + 1e-12
+        within += c.error_bound <= tol or c.search == "full grid"
+    assert held >= 0.9 * draws
+    assert within == draws
+    if p_hole == 0.0:
+        assert c.search == "staircase" and c.mismatches == 0
+
+
+def test_tolerance_picks_the_cheapest_search_within_it(monkeypatch):
+    """A holed object: the plain search misses cells on several calibration grasps, the
+    checked search does not; with a tolerance the object's other grasps get the checked
+    search (fewer trials than the full grid, the holes found), without one the full grid."""
+    rng = np.random.default_rng(11)
+    truth = random_monotone(rng, 60)
+    bad = next(g for g in one_hole_grids()
+               if replay_staircase(g[None], CHECKS)[0][0] != g.mean()
+               and replay_staircase(g[None], physics.CHECKED_STAIRCASE_CHECKS)[0][0] == g.mean())  # fmt: skip
+    for g in (1, 4, 6, 30, 50):
+        truth[g] = bad
+    assert replay_staircase(bad[None], physics.CHECKED_STAIRCASE_CHECKS)[0][0] == bad.mean()
+    scores, scorer, fake = score_with(
+        monkeypatch, truth, calibration_grasps=8, calibration_tolerance=0.02
+    )
+    c = scorer.last_calibration
+    assert c is not None and c.search == "checked staircase" and c.staircase
+    assert c.mismatches == 0 and c.error_bound <= 0.02
+    np.testing.assert_array_equal(scores, truth_scores(truth))  # the checks find the holes
+    assert fake.trials < 60 * S * S
+    assert "checked staircase for the rest" in scorer.__name__
+    _, exact, fake0 = score_with(monkeypatch, truth, calibration_grasps=8)
+    assert exact.last_calibration is not None and exact.last_calibration.search == "full grid"
+    assert fake0.trials == 60 * S * S
+
+
+def test_holes_no_search_visits_get_the_full_grid():
+    """10 x 10 grids that succeed everywhere but in cells none of the searches simulates on
+    an all-success grid: every search scores them 1.0, so none is within the tolerance and
+    the object gets the full grid (on a 5 x 5 grid the thorough search visits every cell)."""
+    s10 = 10
+    unseen = np.ones((s10, s10), bool)
+    for checks in (0, physics.CHECKED_STAIRCASE_CHECKS, physics.THOROUGH_STAIRCASE_CHECKS):
+        r = _core.staircase_grid(s10, lambda i, j: True, checks, -1)
+        unseen &= ~np.asarray(r.simulated)
+    cells = np.argwhere(unseen)
+    assert len(cells) >= 3
+    grids = np.ones((32, s10, s10), bool)
+    for g in range(0, 32, 2):  # every other grasp misses three cells no search looks at
+        for i, j in cells[:3]:
+            grids[g, i, j] = False
+    c = calibrate_staircase(grids, 0, 0, -1, physics.CALIBRATION_TOLERANCE)
+    assert c.search == "full grid" and not c.staircase and c.mismatches == 16
+    assert c.trials_per_grasp == s10 * s10
+    opts = physics.search_of(c, ShakeOptions(staircase=True))
+    assert not opts.staircase
+
+
+def test_the_label_metadata_records_the_estimator(monkeypatch):
+    monkeypatch.setattr(physics, "shake_scores", FakePhysics(random_monotone(
+        np.random.default_rng(13), 400)))  # fmt: skip
+    mesh = mgn.make_box([0.03, 0.04, 0.05])
+    scorer = ShakeScorer(options=ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS),
+                         progress=False, calibration_grasps=4)  # fmt: skip
+    labels = mgn.pj.label_object(mesh, mass=0.1, com=[0, 0, 0], num_points=40, physics=scorer,
+                                 max_grasps=30)  # fmt: skip
+    est = labels.metadata["pj_physics_estimator"]
+    assert est["search"] == "staircase" and est["calibration_grasps"] == 4
+    assert est["error_bound_95"] == pytest.approx(
+        physics.error_bound(np.zeros(4), 1 / S**2), abs=1e-6
+    )
+    assert len(labels) == 30 and labels.metadata["pj_max_grasps"] == 30
+    assert labels.metadata["pj_num_found"] > 30
+    assert np.isfinite(labels.quality_score_simulation).all()
+
+
+def test_bad_tolerance_is_named():
+    with pytest.raises(InvalidArgumentError, match="ShakeScorer.calibration_tolerance"):
+        ShakeScorer(calibration_tolerance=1.5)(mgn.make_box([0.04, 0.05, 0.06]), labels_of(3))
+    with pytest.raises(InvalidArgumentError, match="tolerance"):
+        calibrate_staircase(np.ones((2, S, S), bool), CHECKS, 0, -1, -0.1)

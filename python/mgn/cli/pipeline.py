@@ -95,6 +95,9 @@ def _cmd_generate(args: argparse.Namespace) -> int:
         collect=args.collect,
     )
     print(report.format_summary())
+    if args.profile:
+        atomic_write_text(args.profile, json.dumps(report.profile(), indent=2) + "\n")
+        print(f"time profile written to {args.profile}", file=sys.stderr)
     return 0 if report.complete else 1
 
 
@@ -211,6 +214,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument("--no-cache", action="store_true", help="do not read/write the label cache")
+    p.add_argument(
+        "--profile",
+        metavar="JSON",
+        help="also write where the time went (object labels per object, scene parts: drop, "
+        "render, labels, layout, scene grasps, write) to this JSON file",
+    )
     p.add_argument(
         "--split",
         choices=("all", "train", "test"),

@@ -17,9 +17,10 @@ from mgn.geometry.mesh import load_mesh, mass_properties
 from mgn.hardware import ParallelJawGripper
 from mgn.io.grasp_file import create_labels_file, write_pj_labels
 from mgn.io.model_folder import object_folders, read_model_folder
-from mgn.pj.labels import label_object
+from mgn.pj.labels import DEFAULT_STORED_GRASPS, label_object
 from mgn.pj.physics import (
     CALIBRATED_STAIRCASE_CHECKS,
+    CALIBRATION_TOLERANCE,
     ShakeOptions,
     ShakeScorer,
     search_options,
@@ -42,6 +43,7 @@ def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> Sh
         ),
         max_grasps=args.physics_grasps,
         calibration_grasps=args.physics_calibration,
+        calibration_tolerance=args.physics_tolerance,
     )
 
 
@@ -72,6 +74,8 @@ def _targets(paths: list[str], out: str | None) -> list[tuple[Path, Path, Path |
 
 def _cmd_label(args: argparse.Namespace) -> int:
 
+    if args.grasps < 0:
+        raise InvalidArgumentError(f"--grasps must be >= 0 (0 = all), got {args.grasps}")
     gripper = ParallelJawGripper.from_yaml(args.gripper) if args.gripper else ParallelJawGripper()
     physics = _physics_scorer(args, gripper) if args.physics else None
     for mesh_path, h5_path, folder in _targets(args.paths, args.out):
@@ -95,6 +99,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
             num_threads=args.num_threads,
             progress=not args.quiet,
             physics=physics,
+            max_grasps=args.grasps or None,
         )
         if folder is None and not h5_path.exists():
             create_labels_file(h5_path)
@@ -121,6 +126,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("paths", nargs="+", metavar="PATH", help="object folder, export root or mesh")
     p.add_argument("--gripper", metavar="YAML", help="gripper YAML (default: MetaGraspNet hand)")
     p.add_argument("--points", type=int, default=5000, help="contact points per object")
+    p.add_argument(
+        "--grasps",
+        type=int,
+        default=DEFAULT_STORED_GRASPS,
+        metavar="N",
+        help="grasps stored per object: an evenly strided subset of what the sampler finds "
+        f"(default {DEFAULT_STORED_GRASPS}; 0 = all of them)",
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 for a bare mesh file")
@@ -162,8 +175,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=ShakeScorer.calibration_grasps,
         metavar="N",
         help="staircase only: the first N grasps of each object are simulated on the full grid; "
-        "if the staircase search replayed on them differs from any, the object's other grasps get "
-        f"the full grid too (default {ShakeScorer.calibration_grasps}; 0 = off)",
+        "the staircase searches replayed on them choose the cheapest one within "
+        "--physics-tolerance for the object's other grasps, else the full grid (default "
+        f"{ShakeScorer.calibration_grasps}; 0 = off)",
+    )
+    p.add_argument(
+        "--physics-tolerance",
+        type=float,
+        default=CALIBRATION_TOLERANCE,
+        metavar="E",
+        help="mean absolute score error a search may have on the calibration grasps (its 95 %% "
+        f"bound; default {CALIBRATION_TOLERANCE}, the simulation's own noise band; 0 = exact)",
     )
     p.add_argument(
         "--physics-grid", type=int, default=5, help="S of the S x S friction x density grid"

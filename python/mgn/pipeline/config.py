@@ -32,7 +32,9 @@ Sections:
 - ``labels``: which labels to make (``suction``, ``paralleljaw``, ``pj_physics``, ``layout``,
   ``scene_grasps``).
 - ``object_labels``: sizes of the per-object labels: ``suction_points``, ``pj_points`` (MGN:
-  5000 each), ``physics_grasps`` (cap on the grasps per object given a physics score, an
+  5000 each), ``pj_grasps`` (parallel-jaw grasps stored per object, an evenly strided subset of
+  what the sampler finds, default 300; null stores them all, which can be 10^5 per object),
+  ``physics_grasps`` (cap on the stored grasps per object given a physics score, an
   evenly strided subset; null, the default, scores every stored grasp; the capped count is
   recorded in each object's label metadata and in ``dataset.json`` ``physics_scores``),
   ``physics_grid`` (S of the S x S friction x mass grid, MGN 10), ``physics_search``
@@ -42,8 +44,12 @@ Sections:
   more checks, more trials, closer to the full grid; null, the default: 0 with the calibration,
   which catches such objects as a whole, 6 without; benchmarks/README.md measures the trade),
   ``physics_calibration`` (staircase only: the first N scored grasps of each object are simulated
-  on the full grid, and if the staircase search replayed on them differs from any, the object's
-  other grasps get the full grid too; 0 = off; default 32, docs/models.md),
+  on the full grid and keep its exact scores; the staircase searches replayed on them decide
+  which one scores the object's other grasps: the cheapest whose score error is within
+  ``physics_tolerance``, else the full grid; 0 = off; default 32,
+  docs/decisions/shake-estimator.md), ``physics_tolerance`` (the mean absolute score error
+  allowed, its 95 % bound on the calibration grasps; default 0.005, the simulation's own noise
+  band; 0 = exact agreement on every calibration grasp),
   ``suction_model``, ``seed``.
 - ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per
@@ -90,7 +96,8 @@ from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec, make_tote
-from mgn.pj.physics import ShakeScorer, default_staircase_checks
+from mgn.pj.labels import DEFAULT_STORED_GRASPS
+from mgn.pj.physics import CALIBRATION_TOLERANCE, ShakeScorer, default_staircase_checks
 from mgn.render.photo import RandomizeSettings, RenderSettings
 from mgn.scene.cameras import Intrinsics, look_at
 from mgn.scene.lens import lens_for
@@ -171,6 +178,13 @@ def _num(lo: float | None = None, *, strict: bool = True) -> Check:
         return float(value)
 
     return check
+
+
+def _score_error(value: Any, key: str) -> float:
+    v = _num(0.0, strict=False)(value, key)
+    if v >= 1.0:
+        raise _fail(key, value, "a score error in [0, 1)")
+    return v
 
 
 def _choice(*options: str) -> Check:
@@ -522,11 +536,13 @@ class ObjectLabelsConfig(_Section):
 
     suction_points: int = 5000
     pj_points: int = 5000
+    pj_grasps: int | None = DEFAULT_STORED_GRASPS
     physics_grasps: int | None = None
     physics_grid: int = 10
     physics_search: str = "staircase"
     physics_checks: int | None = None
     physics_calibration: int = ShakeScorer.calibration_grasps
+    physics_tolerance: float = CALIBRATION_TOLERANCE
     suction_model: str = "spring"
     seed: int = 0
 
@@ -541,11 +557,13 @@ class ObjectLabelsConfig(_Section):
     _CHECKS = {
         "suction_points": _int(1),
         "pj_points": _int(1),
+        "pj_grasps": _optional(_int(1)),
         "physics_grasps": _optional(_int(1)),
         "physics_grid": _int(1),
         "physics_search": _choice("staircase", "full"),
         "physics_checks": _optional(_int(0)),
         "physics_calibration": _int(0),
+        "physics_tolerance": _score_error,
         "suction_model": _choice(*SEAL_MODELS),
         "seed": _int(0),
     }

@@ -63,7 +63,7 @@ __all__ = [
 ]
 
 #: Bump when the label layout or algorithms change, so old cache entries are not reused.
-CACHE_VERSION = "object-labels-3"
+CACHE_VERSION = "object-labels-4"
 
 
 @dataclass(frozen=True)
@@ -123,6 +123,7 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
         params = {
             "gripper": config.gripper.to_dict(),
             "points": ol.pj_points,
+            "grasps": ol.pj_grasps,
             "seed": ol.seed,
             "physics": config.labels.pj_physics,
             "physics_grasps": ol.physics_grasps if config.labels.pj_physics else None,
@@ -136,6 +137,13 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
             "physics_calibration": (
                 ol.physics_calibration
                 if config.labels.pj_physics and ol.physics_search == "staircase"
+                else None
+            ),
+            "physics_tolerance": (
+                ol.physics_tolerance
+                if config.labels.pj_physics
+                and ol.physics_search == "staircase"
+                and ol.physics_calibration > 0
                 else None
             ),
         }
@@ -197,6 +205,7 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
                 options=shake_options(config, num_threads),
                 max_grasps=ol.physics_grasps,
                 calibration_grasps=ol.physics_calibration,
+                calibration_tolerance=ol.physics_tolerance,
             )
         pj = pj_label_object(
             mesh,
@@ -208,6 +217,7 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
             num_threads=num_threads,
             physics=physics,
             samples=shared,
+            max_grasps=ol.pj_grasps,
         )
     return ObjectLabels(spec.name, spec.category_id, suction, pj)
 

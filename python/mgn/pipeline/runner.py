@@ -284,10 +284,13 @@ def store_collected(out: Path, result: SceneResult) -> SceneResult:
     return dataclasses.replace(result, files=None)
 
 
-def _label_task(args: tuple[ObjectSpec, Config, int]) -> ObjectLabels:
+def _label_task(args: tuple[ObjectSpec, Config, int]) -> tuple[ObjectLabels, float]:
+    """The labels of one object and the wall seconds they took (in the worker)."""
 
     spec, config, num_threads = args
-    return compute_object_labels(spec, config, num_threads)
+    t0 = time.perf_counter()
+    labels = compute_object_labels(spec, config, num_threads)
+    return labels, time.perf_counter() - t0
 
 
 # --------------------------------------------------------------------------------- executors
@@ -452,6 +455,8 @@ class GenerateReport:
         skipped: scenes already complete (``--resume``).
         labels_computed, labels_cached: objects labelled now / read from the cache.
         label_seconds: wall time of the object-label step; wall_seconds: of the whole run.
+        object_seconds: wall seconds each object's labels took to compute (objects read from
+            the cache are not listed).
         output_bytes: size of the dataset folder at the end.
         not_run: scenes not attempted (stopped by a full disk).
         physics: ``dataset.json`` ``physics_scores`` (see :func:`physics_record`), None when no
@@ -466,6 +471,7 @@ class GenerateReport:
     labels_computed: int = 0
     labels_cached: int = 0
     label_seconds: float = 0.0
+    object_seconds: dict[str, float] = field(default_factory=dict)
     wall_seconds: float = 0.0
     output_bytes: int = 0
     not_run: list[int] = field(default_factory=list)
@@ -489,6 +495,45 @@ class GenerateReport:
         """Total seconds per stage over the scenes of this run."""
         return {s: sum(r.times.get(s, 0.0) for r in self.results.values()) for s in STAGES}
 
+    def scene_part_seconds(self) -> dict[str, float]:
+        """Seconds per part of the scene work, summed over the scenes of this run: ``drop``,
+        the parts of writing a scene (``render``: the render thread's busy time, overlapped
+        with the rest; ``object labels``, ``layout``, ``scene grasps``: per-view labels;
+        ``write (waiting)``: the file encoders the view loop waited for; ``prepare: ...``)
+        and ``finalize``, largest first."""
+        total: dict[str, float] = {}
+        for r in self.results.values():
+            for k, v in r.times.items():
+                if k in ("write", "cpu"):
+                    continue  # "write" is the sum of its parts; cpu is not a stage
+                name = k.removeprefix("write: ")
+                total[name] = total.get(name, 0.0) + v
+        return dict(sorted(total.items(), key=lambda kv: -kv[1]))
+
+    def profile(self) -> dict[str, Any]:
+        """Where the time of the run went, as written by ``mgn generate --profile FILE``:
+        wall seconds of the run, of the object-label step (with each computed object's
+        seconds) and of the scene parts (:meth:`scene_part_seconds`, summed over scenes and
+        workers; ``render`` overlaps the other parts), the scenes' CPU seconds, and scene
+        counts."""
+        cpu = sum(r.times.get("cpu", 0.0) for r in self.results.values())
+        return {
+            "wall_s": round(self.wall_seconds, 3),
+            "object_labels": {
+                "wall_s": round(self.label_seconds, 3),
+                "computed": self.labels_computed,
+                "cached": self.labels_cached,
+                "objects_s": {k: round(v, 3) for k, v in self.object_seconds.items()},
+            },
+            "scenes": {
+                "written": len(self.ok),
+                "failed": len(self.failed),
+                "skipped": len(self.skipped),
+                "parts_s": {k: round(v, 3) for k, v in self.scene_part_seconds().items()},
+                "cpu_s": round(cpu, 3),
+            },
+        }
+
     def format_summary(self) -> str:
         n_ok = len(self.ok) + len(self.skipped)
         lines = [
@@ -501,11 +546,19 @@ class GenerateReport:
             f"  object labels: {self.labels_computed} computed, {self.labels_cached} from the "
             f"cache ({self.label_seconds:.1f} s)"
         )
+        if self.object_seconds:
+            slow = sorted(self.object_seconds.items(), key=lambda kv: -kv[1])
+            shown = ", ".join(f"{n} {v:.1f} s" for n, v in slow[:6])
+            more = f", {len(slow) - 6} more" if len(slow) > 6 else ""
+            lines.append(f"    per object: {shown}{more}")
         if self.results:
-            st = self.stage_seconds()
             k = max(len(self.results), 1)
-            parts = ", ".join(f"{s} {v:.1f} s ({v / k:.2f} s/scene)" for s, v in st.items())
-            lines.append(f"  scene stages (summed over workers): {parts}")
+            parts = ", ".join(f"{s} {v:.1f} s ({v / k:.2f} s/scene)"
+                              for s, v in self.scene_part_seconds().items() if v >= 0.05)  # fmt: skip
+            lines.append(
+                f"  where the scene time went (summed over workers; render overlaps the rest): "
+                f"{parts}"
+            )
         rate = 3600.0 * len(self.ok) / self.wall_seconds if self.wall_seconds > 0 else 0.0
         lines.append(
             f"  wall time {self.wall_seconds:.1f} s ({rate:.0f} scenes/hour); output "
@@ -713,7 +766,7 @@ class _Run:
                     raise InvalidArgumentError(
                         f"labelling object '{spec.name}' failed: {type(exc).__name__}: {exc}"
                     ) from exc
-                self.labels[spec.name] = value
+                self.labels[spec.name], self.report.object_seconds[spec.name] = value
                 if self.use_cache:
                     save_cached_labels(spec, cfg, value)
                 bar.update(1)

@@ -73,6 +73,20 @@ class PjLabels:
         ).astype(np.float32)
 
 
+#: Parallel-jaw grasps stored per object by default (``object_labels.pj_grasps``, ``mgn pj label
+#: --grasps``): an evenly strided subset of what the sampler finds (docs/decisions/
+#: stored-grasps.md says why this many).
+DEFAULT_STORED_GRASPS = 300
+
+
+def strided_subset(n: int, k: int) -> npt.NDArray[np.int64]:
+    """Indices of an evenly strided subset of at most ``k`` of ``n`` items (all when n <= k):
+    ``round(linspace(0, n - 1, k))``, first and last included, increasing, no repeats."""
+    if n <= k:
+        return np.arange(n, dtype=np.int64)
+    return np.unique(np.linspace(0, n - 1, k).round().astype(np.int64))
+
+
 #: A physics scorer: (mesh, labels without physics) -> (M,) scores in [0, 1] (e.g. the Bullet
 #: shake test of docs/models.md §5).
 PhysicsScorer = Callable[[Mesh, PjLabels], npt.ArrayLike]
@@ -95,6 +109,7 @@ def label_object(
     contact_radius: float = _WRENCH.contact_radius,
     sampler_options: dict | None = None,
     samples: SurfaceSamples | None = None,
+    max_grasps: int | None = None,
 ) -> PjLabels:
     """Parallel-jaw labels of one object: see the module docstring. Deterministic for ``seed``.
 
@@ -109,7 +124,10 @@ def label_object(
             progress bar, else all at once (every call waits for its slowest thread).
         physics: optional scorer filling ``quality_score_simulation``; None leaves it NaN.
             The metadata then records ``pj_physics_scored`` / ``pj_physics_unscored``: how
-            many grasps got a score and how many kept NaN (a capped scorer).
+            many grasps got a score and how many kept NaN (a capped scorer), and
+            ``pj_physics_estimator``: how the scores were computed and their error bound (the
+            scorer's ``last_calibration.to_json()``, e.g. :class:`mgn.pj.ShakeScorer`'s; None
+            when it has none).
         friction, grip_force, contact_radius: wrench-score constants (see pj_wrench_scores).
         sampler_options: extra keyword arguments of :meth:`AntipodalSampler.sample`
             (probes, tilt, offset, friction_coef, approaches_tried, approaches_kept, ...).
@@ -117,6 +135,10 @@ def label_object(
             ``sample_surface(mesh, num_points, method="even", seed=seed)`` of the given mesh
             (e.g. shared with :func:`mgn.suction.label_object`); None draws them here. They are
             ignored (drawn again) when the mesh is used with its winding reversed.
+        max_grasps: grasps stored, >= 1: when the sampler finds more, an evenly strided subset
+            of at most this many is kept (the sampler lists the grasps point by point, and the
+            points cover the surface evenly, so the subset does too); None keeps them all. The
+            metadata records ``pj_num_found`` (grasps the sampler found) and ``pj_max_grasps``.
 
     Raises:
         InvalidArgumentError: non-positive mass or num_points, a mesh with no closed volume, an
@@ -130,6 +152,12 @@ def label_object(
     if not (isinstance(num_points, int) and num_points > 0):
         raise InvalidArgumentError(
             f"label_object: num_points must be an integer > 0, got {num_points!r}"
+        )
+    if max_grasps is not None and (
+        isinstance(max_grasps, bool) or not isinstance(max_grasps, int) or max_grasps < 1
+    ):
+        raise InvalidArgumentError(
+            f"label_object: max_grasps must be an integer >= 1 or None, got {max_grasps!r}"
         )
     if chunk is None:
         chunk = 250 if progress else max(1, num_points)
@@ -188,6 +216,12 @@ def label_object(
     )
     point_index = cat("point_index", np.int64) + offsets.astype(np.int64)
     p1, closing, width = cat("p1", np.float64), cat("closing", np.float64), cat("width", np.float64)
+    approach, score = cat("approach", np.float32), cat("score", np.float32)
+    found = len(width)
+    if max_grasps is not None and found > max_grasps:
+        keep = strided_subset(found, max_grasps)
+        point_index, p1, closing, width = point_index[keep], p1[keep], closing[keep], width[keep]
+        approach, score = approach[keep], score[keep]
     wrench = pj_wrench_scores(
         p1,
         closing,
@@ -215,6 +249,8 @@ def label_object(
         | {k: v for k, v in opts.items()},
         "pj_num_accepted_probes": int(sum(p.num_accepted_probes for p in parts)),
         "pj_num_colliding": int(sum(p.num_colliding for p in parts)),
+        "pj_num_found": int(found),
+        "pj_max_grasps": None if max_grasps is None else int(max_grasps),
         "pj_wrench": {
             "model": "soft finger, elliptic limit surface, gravity -z of the object frame",
             "friction": friction,
@@ -225,11 +261,11 @@ def label_object(
         "mgn_version": _core.__version__,
     }
     labels = PjLabels(
-        approach=cat("approach", np.float32),
+        approach=approach,
         closing=closing.astype(np.float32),
         p1=p1.astype(np.float32),
         width=width.astype(np.float32),
-        quality_score=cat("score", np.float32),
+        quality_score=score,
         score_wrench=np.asarray(wrench, np.float32),
         quality_score_simulation=np.full(len(width), np.nan, np.float32),
         point_index=point_index,
@@ -247,6 +283,7 @@ def label_object(
             )
         scorer = getattr(physics, "__name__", type(physics).__name__)
         scored = int(np.count_nonzero(np.isfinite(sim)))
+        estimator = getattr(physics, "last_calibration", None)
         labels = replace(
             labels,
             quality_score_simulation=sim,
@@ -255,6 +292,7 @@ def label_object(
                 "pj_physics": f"run ({scorer})",
                 "pj_physics_scored": scored,
                 "pj_physics_unscored": len(sim) - scored,
+                "pj_physics_estimator": None if estimator is None else estimator.to_json(),
             },
         )
     return labels
