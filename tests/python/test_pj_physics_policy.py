@@ -242,9 +242,7 @@ def test_real_physics_replay_and_calibration_are_deterministic():
             opts = replace(base, staircase=True, num_threads=threads)
             scorer = ShakeScorer(3000.0, options=opts, progress=progress, calibration_grasps=3)
             results.append((scorer(mesh, labels), scorer.last_calibration))
-    chosen = calibrate_staircase(
-        full.trial_success[:3], 1, 0, -1, physics.CALIBRATION_TOLERANCE
-    )
+    chosen = calibrate_staircase(full.trial_success[:3], 1, 0, -1, physics.CALIBRATION_TOLERANCE)
     for got, cal in results:
         np.testing.assert_array_equal(got, results[0][0])
         assert cal == results[0][1] == chosen
@@ -444,9 +442,13 @@ def test_tolerance_picks_the_cheapest_search_within_it(monkeypatch):
     search (fewer trials than the full grid, the holes found), without one the full grid."""
     rng = np.random.default_rng(11)
     truth = random_monotone(rng, 60)
-    bad = next(g for g in one_hole_grids()
-               if replay_staircase(g[None], CHECKS)[0][0] != g.mean()
-               and replay_staircase(g[None], physics.CHECKED_STAIRCASE_CHECKS)[0][0] == g.mean())  # fmt: skip
+    checked = physics.CHECKED_STAIRCASE_CHECKS
+    bad = next(
+        g
+        for g in one_hole_grids()
+        if replay_staircase(g[None], CHECKS)[0][0] != g.mean()
+        and replay_staircase(g[None], checked)[0][0] == g.mean()
+    )
     for g in (1, 4, 6, 30, 50):
         truth[g] = bad
     assert replay_staircase(bad[None], physics.CHECKED_STAIRCASE_CHECKS)[0][0] == bad.mean()

@@ -553,8 +553,11 @@ class GenerateReport:
             lines.append(f"    per object: {shown}{more}")
         if self.results:
             k = max(len(self.results), 1)
-            parts = ", ".join(f"{s} {v:.1f} s ({v / k:.2f} s/scene)"
-                              for s, v in self.scene_part_seconds().items() if v >= 0.05)  # fmt: skip
+            parts = ", ".join(
+                f"{s} {v:.1f} s ({v / k:.2f} s/scene)"
+                for s, v in self.scene_part_seconds().items()
+                if v >= 0.05
+            )
             lines.append(
                 f"  where the scene time went (summed over workers; render overlaps the rest): "
                 f"{parts}"

@@ -92,6 +92,24 @@ def strided_subset(n: int, k: int) -> npt.NDArray[np.int64]:
 PhysicsScorer = Callable[[Mesh, PjLabels], npt.ArrayLike]
 
 
+def _check_arguments(mass: float, num_points: int, max_grasps: int | None) -> None:
+    """label_object's checks of its sizes (InvalidArgumentError naming the argument)."""
+    if not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass > 0):
+        raise InvalidArgumentError(
+            f"label_object: mass must be a finite value > 0 kg, got {mass!r}"
+        )
+    if not (isinstance(num_points, int) and num_points > 0):
+        raise InvalidArgumentError(
+            f"label_object: num_points must be an integer > 0, got {num_points!r}"
+        )
+    if max_grasps is not None and (
+        isinstance(max_grasps, bool) or not isinstance(max_grasps, int) or max_grasps < 1
+    ):
+        raise InvalidArgumentError(
+            f"label_object: max_grasps must be an integer >= 1 or None, got {max_grasps!r}"
+        )
+
+
 def label_object(
     mesh: Mesh,
     *,
@@ -145,20 +163,7 @@ def label_object(
             invalid gripper.
     """
 
-    if not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass > 0):
-        raise InvalidArgumentError(
-            f"label_object: mass must be a finite value > 0 kg, got {mass!r}"
-        )
-    if not (isinstance(num_points, int) and num_points > 0):
-        raise InvalidArgumentError(
-            f"label_object: num_points must be an integer > 0, got {num_points!r}"
-        )
-    if max_grasps is not None and (
-        isinstance(max_grasps, bool) or not isinstance(max_grasps, int) or max_grasps < 1
-    ):
-        raise InvalidArgumentError(
-            f"label_object: max_grasps must be an integer >= 1 or None, got {max_grasps!r}"
-        )
+    _check_arguments(mass, num_points, max_grasps)
     if chunk is None:
         chunk = 250 if progress else max(1, num_points)
     if chunk < 1:
@@ -293,6 +298,7 @@ def label_object(
                 "pj_physics_scored": scored,
                 "pj_physics_unscored": len(sim) - scored,
                 "pj_physics_estimator": None if estimator is None else estimator.to_json(),
+                "pj_physics_trials": getattr(physics, "last_trials", None),
             },
         )
     return labels

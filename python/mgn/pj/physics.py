@@ -630,7 +630,8 @@ class ShakeScorer:
     of the last call is ``last_calibration`` (None without calibration), recorded in
     ``__name__`` and, by :func:`mgn.pj.label_object`, in the label metadata
     (``pj_physics_estimator``: search, calibration errors, error bound; see
-    docs/decisions/shake-estimator.md).
+    docs/decisions/shake-estimator.md); ``last_trials`` counts the shake trials it simulated
+    (``pj_physics_trials``).
     """
 
     density: float = 1000.0
@@ -651,6 +652,7 @@ class ShakeScorer:
     last_calibration: StaircaseCalibration | None = dataclass_field(
         default=None, init=False, compare=False
     )
+    last_trials: int = dataclass_field(default=0, init=False, compare=False)
 
     @property
     def __name__(self) -> str:  # recorded in the label metadata
@@ -678,6 +680,7 @@ class ShakeScorer:
         n = len(labels)
         out = np.full(n, np.nan, np.float32)
         self.last_calibration = None
+        self.last_trials = 0
         if n == 0:
             return out
         if self.max_grasps is not None and self.max_grasps < 1:
@@ -736,6 +739,7 @@ class ShakeScorer:
                     score[a:b] = piece.score
                     bar.update(b - a)
                     pieces.append(piece)
+                    self.last_trials += int(piece.num_trials)
                 return pieces
 
             first = 0
