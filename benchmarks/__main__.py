@@ -1,13 +1,25 @@
-"""Entry point: `python -m benchmarks [--quick] [--out benchmarks/RESULTS.md]`."""
+"""Entry point: ``python -m benchmarks [--quick] [--only SUITE ...] [--gate] [--out PAGE]``.
+
+Times every capability of mgn beside its peer (one suite per capability, see README.md) and
+rewrites one page, ``benchmarks/PERFORMANCE.md`` (machine, command, date, the table of current
+numbers, mgn / peer ratios, the gate, the machine's limits), and its plot
+``benchmarks/performance.png``. Every timing is also written to ``results.json`` beside the page
+(not part of the repository). ``--gate`` exits 1 when an mgn / peer ratio is below its floor
+(``benchmarks/limits.py``, ``FLOORS``); ``--from-results FILE`` rewrites the page and the plot
+from a stored results.json without measuring.
+"""
 
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import re
+import shlex
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from . import (
     bench_cluster,
@@ -27,6 +39,7 @@ from . import (
     bench_scene_grasps,
     bench_scene_labels,
     bench_seal,
+    bench_sensor,
     bench_shake,
     bench_view_labels,
 )
@@ -39,9 +52,19 @@ from .common import (
     markdown_table,
     thread_counts,
 )
-from .limits import limits_markdown, measure_limits, plot_ratios, shares, shares_markdown
+from .limits import (
+    gate,
+    gate_failures,
+    gate_markdown,
+    limits_markdown,
+    measure_limits,
+    plot_ratios,
+    shares,
+    shares_markdown,
+)
 
 HERE = Path(__file__).resolve().parent
+#: One suite per capability, in the order of the page.
 SUITES = {
     "raycast": bench_raycast,
     "collision": bench_collision,
@@ -51,6 +74,7 @@ SUITES = {
     "shake": bench_shake,
     "drop": bench_drop,
     "render": bench_render,
+    "sensor": bench_sensor,
     "path": bench_path,
     "layout": bench_layout,
     "lens": bench_lens,
@@ -63,31 +87,22 @@ SUITES = {
     "pipeline": bench_pipeline,
     "cluster": bench_cluster,
 }
+PAGE = HERE / "PERFORMANCE.md"
+PLOT_NAME = "performance.png"
+
+NOTES = [
+    "embreex bundles Embree 4; mgn links Debian's Embree 3.13: the ray-casting rows compare two "
+    "Embree versions as well as two wrappers.",
+    "Peer time includes the Python work around the library call (trimesh's hit-point "
+    "computation, python-fcl's loop): it is what a user of the peer pays.",
+]
 
 
-#: The generated part of RESULTS.md lies between these lines; the sections after it are written
-#: by hand (studies measured outside this harness) and survive a rerun.
-GENERATED_BEGIN = "<!-- generated:begin -->"
-GENERATED_END = "<!-- generated:end -->"
-
-
-def write_keeping_hand_written(out: Path, report: str) -> None:
-    """Writes ``report`` (the generated part) into ``out``, keeping what ``out`` has before and
-    after its generated part. A file from before these markers: everything from its first
-    ``<!-- name:begin -->`` line on is kept. Written to a temporary file, then renamed."""
-    head, tail = "", "\n"
-    if out.exists():
-        old = out.read_text()
-        if GENERATED_BEGIN in old and GENERATED_END in old:
-            head = old[: old.index(GENERATED_BEGIN)]
-            tail = old[old.index(GENERATED_END) + len(GENERATED_END) :]
-        else:
-            m = re.search(r"^<!-- [\w-]+:begin -->$", old, flags=re.M)
-            if m:
-                tail = "\n\n" + old[m.start() :]
-    tmp = out.with_name(out.name + ".tmp")
-    tmp.write_text(head + report + tail)
-    tmp.replace(out)
+def write_atomic(path: Path, text: str) -> None:
+    """Writes ``text`` to a temporary file beside ``path``, then renames it over ``path``."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
 
 
 def merge_previous_rows(json_path: Path, rows: list[Row], only: set[str]) -> tuple[list[Row], int]:
@@ -121,7 +136,8 @@ def merge_previous_rows(json_path: Path, rows: list[Row], only: set[str]) -> tup
 def rows_out_of_sync(out: Path) -> str | None:
     """Why an ``--only`` run into ``out`` would lose rows, or None. The table of ``out`` is
     rebuilt from ``results.json`` beside it, so every row the table shows must be in that file;
-    a results.json written by an older ``--only`` run can hold fewer rows than the table."""
+    a results.json written by an older ``--only`` run, or none (a fresh clone has the page but
+    not the file), can hold fewer rows than the table."""
     json_path = out.with_name("results.json")
     if not out.exists():
         return None
@@ -147,22 +163,143 @@ def log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
+def render_page(doc: dict[str, Any], rows: list[Row], checks: list[dict[str, Any]]) -> str:
+    """The whole of PERFORMANCE.md from a results document (what results.json holds)."""
+    threads = doc["mgn_threads"]
+    table = markdown_table(rows, threads)
+    notes = [f"- {r.case}: {'; '.join(r.notes)}" for r in rows if r.notes]
+    kept = doc.get("kept_rows", 0)
+    kept_note = (
+        f" The table keeps {kept} row(s) of other suites from the previous run's results.json."
+        if kept
+        else ""
+    )
+    failures = gate_failures(checks)
+    verdict = (
+        f"**{len(failures)} ratio(s) below their floor.**"
+        if failures
+        else "Every measured ratio is at or above its floor."
+    )
+    return "\n".join(
+        [
+            "# mgn performance",
+            "",
+            (
+                f"Generated by `{doc['command']}` on {doc['date_utc']} ({doc['mode']} mode, "
+                f"{doc['repeats']} timed repetitions per call after one warm-up, "
+                f"{doc['elapsed_seconds']:.0f} s).{kept_note} The command rewrites this page; "
+                "do not edit it. Method: [README.md](README.md)."
+            ),
+            *([f"\n{doc['provenance']}"] if doc.get("provenance") else []),
+            "",
+            "## Machine",
+            "",
+            machine_markdown(doc["machine"]),
+            "",
+            "## Results",
+            "",
+            (
+                "Rates are the median over the repetitions, with the interquartile range in "
+                "brackets. Ratios above 1 mean mgn is faster. Agreement compares the warm-up "
+                "results of both sides on every item."
+            ),
+            "",
+            table,
+            "",
+            "## Gate",
+            "",
+            (
+                "`python -m benchmarks --gate` fails when an mgn / peer ratio is below its floor "
+                "(`limits.py`, `FLOORS`). " + verdict
+            ),
+            "",
+            gate_markdown(checks),
+            "",
+            "## Machine limits",
+            "",
+            "What the stages are bound by, measured in the same run with all usable cores "
+            "(`limits.py`), and the share of it each bound stage reaches.",
+            "",
+            limits_markdown(doc.get("limits", {})),
+            "",
+            shares_markdown(doc.get("limit_shares", [])),
+            "",
+            "## Speed ratios",
+            "",
+            f"![mgn / peer speed ratios]({PLOT_NAME})",
+            "",
+            "## Notes",
+            "",
+            *notes,
+            *[f"- {n}" for n in NOTES],
+            *([f"\nmgn side: {doc['mgn_status']}"] if doc.get("mgn_status", "ok") != "ok" else []),
+            "",
+        ]
+    )
+
+
+def write_outputs(out: Path, doc: dict[str, Any], rows: list[Row]) -> list[str]:
+    """Writes results.json, the page and its plot (each atomically); returns the gate's
+    failures."""
+    checks = gate(rows)
+    doc["gate"] = checks
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(out.with_name("results.json"), json.dumps(doc, indent=2) + "\n")
+    write_atomic(out, render_page(doc, rows, checks))
+    plot = out.with_name(PLOT_NAME)
+    tmp = plot.with_name(plot.stem + ".tmp.png")
+    if plot_ratios(rows, tmp):
+        tmp.replace(plot)
+    else:
+        log("benchmarks: no mgn/peer ratio to plot")
+    return gate_failures(checks)
+
+
+def from_results(json_path: Path, out: Path, check_gate: bool) -> int:
+    """Rewrites the page and the plot from a stored results.json (no measuring)."""
+    try:
+        doc = json.loads(json_path.read_text())
+        rows = [Row.from_json(d) for d in doc["rows"]]
+    except (OSError, ValueError, KeyError) as err:
+        log(f"benchmarks: cannot read {json_path}: {err}")
+        return 2
+    if json_path.resolve() != out.with_name("results.json").resolve():
+        log(f"benchmarks: results.json beside {out} is rewritten from {json_path}")
+    failures = write_outputs(out, doc, rows)
+    log(f"benchmarks: wrote {out} from {json_path}")
+    for f in failures:
+        log(f"benchmarks: gate: {f}")
+    return 1 if check_gate and failures else 0
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(prog="python -m benchmarks", description=__doc__)
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="2e5 rays, 2,000 poses, 3 repetitions (< 2 min)",
+        help="fewer rays, poses, objects and scenes, 3 repetitions (a few minutes)",
     )
     parser.add_argument(
         "--out",
         type=Path,
-        default=HERE / "RESULTS.md",
-        help="Markdown report; results.json is written next to it (default: %(default)s)",
+        default=PAGE,
+        help="the page; results.json and performance.png go beside it (default: %(default)s)",
     )
     parser.add_argument("--only", choices=sorted(SUITES), action="append", help="run only these")
     parser.add_argument("--repeats", type=int, help="timed repetitions per call (7, quick: 3)")
+    parser.add_argument(
+        "--gate", action="store_true", help="exit 1 when an mgn / peer ratio is below its floor"
+    )
+    parser.add_argument(
+        "--from-results",
+        type=Path,
+        metavar="JSON",
+        help="rewrite the page and the plot from this results.json; measure nothing",
+    )
     args = parser.parse_args(argv)
+    if args.from_results:
+        return from_results(args.from_results, args.out, args.gate)
     repeats = args.repeats or (3 if args.quick else 7)
     if repeats < 1:
         parser.error("--repeats must be at least 1")
@@ -175,6 +312,7 @@ def main(argv: list[str] | None = None) -> int:
     mgn, mgn_status = import_mgn()
     if mgn is None:
         log(f"benchmarks: {mgn_status}; measuring the peers only")
+    date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     machine = machine_description()
     threads = thread_counts()
     started = time.perf_counter()
@@ -187,105 +325,43 @@ def main(argv: list[str] | None = None) -> int:
         for r in measured:
             r.suite = name
         rows += measured
-    json_path = args.out.with_name("results.json")
     new_rows = list(rows)
     kept = 0
     if args.only:
-        rows, kept = merge_previous_rows(json_path, rows, set(args.only))
+        rows, kept = merge_previous_rows(args.out.with_name("results.json"), rows, set(args.only))
     log("benchmarks: machine limits")
     limits = measure_limits(mgn, quick=args.quick, repeats=repeats, log=log)
-    stage_shares = shares(rows, limits)
     elapsed = time.perf_counter() - started
     machine["load_average_at_end"] = load_average()
-
-    table = markdown_table(rows, threads)
-    notes = [f"- {r.case}: {'; '.join(r.notes)}" for r in rows if r.notes]
-    mode = "quick" if args.quick else "full"
-    only = "".join(f" --only {n}" for n in args.only or [])
-    kept_note = (
-        f" The table keeps {kept} row(s) of other suites from the previous run's results.json."
-        if kept
-        else ""
-    )
-    report = "\n".join(
-        [
-            GENERATED_BEGIN,
-            "# mgn benchmark results",
-            "",
-            (
-                f"Generated by `python -m benchmarks{' --quick' if args.quick else ''}{only}` "
-                f"({mode} mode, {repeats} timed repetitions per call after one warm-up, "
-                f"{elapsed:.0f} s).{kept_note} See README.md for the method."
-            ),
-            "",
-            "## Machine",
-            "",
-            machine_markdown(machine),
-            "",
-            "## Results",
-            "",
-            (
-                "Rates are the median over the repetitions, with the interquartile range in "
-                "brackets. Ratios above 1 mean mgn is faster. Agreement compares the warm-up "
-                "results of both sides on every item."
-            ),
-            "",
-            table,
-            "",
-            "## Machine limits",
-            "",
-            "What the stages are bound by, measured in the same run with all usable cores "
-            "(benchmarks/limits.py), and the share of it each bound stage reaches.",
-            "",
-            limits_markdown(limits),
-            "",
-            shares_markdown(stage_shares),
-            "",
-            "## Speed ratios",
-            "",
-            "![mgn / peer speed ratios](ratios.png)",
-            "",
-            "## Notes",
-            "",
-            *notes,
-            "- embreex bundles Embree 4; mgn links Debian's Embree 3.13: the ray-casting rows "
-            "compare two Embree versions as well as two wrappers.",
-            "- Peer time includes the Python work around the library call (trimesh's hit-point "
-            "computation, python-fcl's loop): it is what a user of the peer pays.",
-            "",
-            *([f"mgn side: {mgn_status}", ""] if mgn is None else []),
-            GENERATED_END,
-        ]
-    )
-    print(table)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_keeping_hand_written(args.out, report)
-    json_path.write_text(
-        json.dumps(
-            {
-                "mode": mode,
-                "repeats": repeats,
-                "elapsed_seconds": elapsed,
-                "mgn_status": mgn_status or "ok",
-                "machine": machine,
-                "mgn_threads": threads,
-                "rows": [r.to_json() for r in rows],
-                "limits": limits,
-                "limit_shares": stage_shares,
-            },
-            indent=2,
-        )
-        + "\n"
-    )
-    plot_path = args.out.with_name("ratios.png")
-    if not plot_ratios(rows, plot_path):
-        log("benchmarks: no mgn/peer ratio to plot")
-    log(f"benchmarks: wrote {args.out}, {json_path} and {plot_path} in {elapsed:.0f} s")
-    failed = [r for r in new_rows if r.agreement_ok is False]
-    if failed:
-        log(f"benchmarks: {len(failed)} row(s) where mgn and the peer disagree")
-        return 1
-    return 0
+    command = "python -m benchmarks" + "".join(f" {shlex.quote(a)}" for a in argv)
+    doc = {
+        "command": command,
+        "date_utc": date,
+        "mode": "quick" if args.quick else "full",
+        "repeats": repeats,
+        "elapsed_seconds": elapsed,
+        "kept_rows": kept,
+        "mgn_status": mgn_status or "ok",
+        "machine": machine,
+        "mgn_threads": threads,
+        "rows": [r.to_json() for r in rows],
+        "limits": limits,
+        "limit_shares": shares(rows, limits),
+    }
+    print(markdown_table(rows, threads))
+    failures = write_outputs(args.out, doc, rows)
+    log(f"benchmarks: wrote {args.out}, results.json and {PLOT_NAME} in {elapsed:.0f} s")
+    status = 0
+    disagree = [r for r in new_rows if r.agreement_ok is False]
+    if disagree:
+        log(f"benchmarks: {len(disagree)} row(s) where mgn and the peer disagree")
+        status = 1
+    for f in failures:
+        log(f"benchmarks: gate: {f}")
+    if args.gate and failures:
+        log(f"benchmarks: gate failed: {len(failures)} ratio(s) below their floor")
+        status = 1
+    return status
 
 
 if __name__ == "__main__":

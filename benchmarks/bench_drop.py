@@ -12,22 +12,14 @@ pybullet keeps its own contact settings.
 Peak memory of each side is measured in a fresh subprocess (ru_maxrss), minus the same
 process's footprint after the imports.
 
-Measured (session 4, 2 shared cores, 8 seeds, median): default drop 1.9 s wall (0.3-3.7 s per
-seed; it was 4.4 s before the part merging), 0.86 s with DropOptions(two_friction_directions=True).
-The single-seed row here is one sample of a chaotic quantity: compare settings over several seeds
-(third_party_notes/bullet.md has the table and how it was measured).
+The number of steps to settle is chaotic (a bit-level change of a hull moves it by hundreds of
+steps): the single-seed row is one sample; compare settings over several seeds.
 
 The second row drops the scenes of `bench_pipeline` (scene i of seed 2024: 20 objects of the
 pipeline's catalogue) and reports the CPU seconds of each drop (one thread; the C++ drop only,
-decompositions cached). Session 9 (idle, 2 cores, scenes 0-7): Bullet's own support search of the
-hulls (a scalar scan over up to 96 vertices, ~45 % of a drop in perf) 36.2 CPU-s for the 8 drops
-(11.15 s for scene 0, the pipeline benchmark's scene); with mgn's vectorised search
-(cpp/src/physics/hull_support.hpp: the same vertex, bit for bit, so the poses and scene bytes are
-unchanged) 28.3 CPU-s (8.2 s for scene 0), -22 %. Session 10 (load 9-11, scenes 0-15): friction
-along two tangent directions by default (DropOptions.two_friction_directions; with one, resting
-piles creep: in 3 of the 16 scenes 15 objects were still moving at the time limit) 51.2 -> 20.8
-CPU-s for the 16 drops, 19834 -> 9400 steps; scenes 0-7 at load 3: 28.6 -> 10.0 CPU-s
-(benchmarks/RESULTS.md, "The drop's friction").
+decompositions cached). Why the drop is set up as it is (two friction directions, the vectorised
+hull support search): docs/decisions/0014-drop-two-friction-directions.md and
+0015-drop-hull-support-search.md.
 
 Run alone: `python -m benchmarks.bench_drop [--quick]`.
 """
@@ -320,10 +312,6 @@ def run(
     pipe.notes.append(
         f"total {total:.2f} CPU-s, mean {total / len(scenes):.2f} CPU-s per drop; per scene "
         + ", ".join(f"{d['scene']}: {d['cpu_s']:.2f} s/{d['steps']} steps" for d in scenes)
-    )
-    pipe.notes.append(
-        "session 9 idle, scenes 0-7: Bullet's support scan 36.2 CPU-s, mgn's 28.3; session 10 "
-        "(load 3), one friction direction 28.6, two (the default now) 10.0"
     )
     return [row, pipe]
 

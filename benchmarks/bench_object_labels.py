@@ -5,7 +5,7 @@ What `mgn generate` computes once per object before its first scene when the lab
 samples (drawn once, shared), the suction labels (cup-body collision filter, robust seal score,
 wrench score) and the parallel-jaw labels (antipodal probes, up to 50 collision-checked approaches
 per accepted probe, wrench score), at the MetaGraspNet sizes (5000 suction and 5000 parallel-jaw
-points). Issue-19 target: <= 3 s per object on 2 idle cores.
+points). Target: <= 3 s per object on 2 idle cores.
 
 Each object is labelled once per thread count (the labels take seconds; the warm-up would double
 the run); wall and process CPU seconds are reported per object, with the load average, since on

@@ -16,8 +16,13 @@ resident set size); the peers get the scene as plain data (a pickled SceneDesc) 
 mgn. Every engine first renders its instance ids (objects emitting their id, one sample at the
 pixel centre); agreement with mgn's raster instance ids shows the export is aligned.
 
-Renders take minutes each on a shared 2-core machine, so the engines run one after another (not
-alternated as in common.py); the 1-minute load average is recorded beside every timing.
+Renders take minutes each on a 2-core machine, so the engines run one after another (not
+alternated as in common.py); the 1-minute load average is recorded beside every timing. The
+suite's own table, error plot and timings go to a work folder outside the repository; its rows
+(mgn against each peer at 16 spp) go into benchmarks/PERFORMANCE.md.
+
+    python -m benchmarks --only path [--quick]
+    python -m benchmarks.bench_path --figures   # the pictures of docs/rendering.md
 """
 
 from __future__ import annotations
@@ -446,9 +451,6 @@ def markdown(ev: dict[str, Any], meta: dict[str, Any]) -> str:
                 f"{d['cpu'] + d['trace_cpu']:.2f} | {d['flip']:.4f} | {d['psnr']:.1f} |"
             )
         lines.append("")
-    crop = HERE / "path_crop_results.md"  # the 1200x1200 window study (bench_path_crop)
-    if crop.exists():
-        lines += ["#" + crop.read_text().rstrip(), ""]
     return "\n".join(lines)
 
 
@@ -464,8 +466,9 @@ def run(
     cfg = QUICK if quick else FULL
     width, spps, ref_spp = cfg["width"], cfg["spps"], cfg["ref_spp"]
     reps = min(repeats, 2)
-    # The committed section comes from a full run; a quick run writes beside the temp files.
-    out_dir = out_dir or (Path(tempfile.gettempdir()) / "mgn_path_quick" if quick else HERE)
+    # The suite's own table, plot and timings go to a work folder outside the repository; the
+    # rows it returns go into benchmarks/PERFORMANCE.md.
+    out_dir = out_dir or Path(tempfile.gettempdir()) / "mgn_benchmarks" / "path"
     out_dir.mkdir(parents=True, exist_ok=True)
     if mgn is None:
         log(f"  path: {mgn_status}; nothing to compare")
@@ -551,7 +554,7 @@ def raster_ids(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
 def full_size_target(
     scene_json: Path, tmp: Path, spps: tuple[int, ...], log: Callable[[str], None]
 ) -> dict[str, Any]:
-    """mgn denoised at 1200 x 1200 (the issue's target) and Cycles at 1 spp there (its cost per
+    """mgn denoised at 1200 x 1200 (the target's size) and Cycles at 1 spp there (its cost per
     sample per view at full size), each timed once after a warm-up."""
     desc = ps.describe(scene_json, 1200)
     desc_path = tmp / "desc1200.pkl"
@@ -640,7 +643,8 @@ def _flip_cell(rows: list[dict[str, Any]], seconds: float) -> str:
 
 
 def target_notes(ev: dict[str, Any]) -> list[str]:
-    """The issue's target, checked at the study's size: each denoised mgn point against the
+    """The target (a denoised view at a FLIP no worse than a peer reaches with 10x the time),
+    checked at the study's size: each denoised mgn point against the
     FLIP each peer configuration reaches in the same time and in 10x that time (log-log
     interpolation between its measured sample counts; "≤ x" = beyond its slowest point, where x
     is its FLIP at that point, an upper bound; "n/a" = even its 1 spp is slower); then the
@@ -750,47 +754,163 @@ def rows_for_runner(ev: dict[str, Any], width: int) -> list[Row]:
     return rows
 
 
-def report_main(json_path: Path) -> int:
-    """Rewrites path_results.md and path.png next to a path_results.json."""
-    ev = json.loads(json_path.read_text())
-    for row in ev["table"]:
-        if "cpu_seconds" not in row:
-            for c in ev["results"][row["engine"]]["configs"]:
-                if c["spp"] == row["spp"] and c["denoise"] == row["denoise"]:
-                    row["cpu_seconds"] = float(np.median(c["cpu"]))
-    json_path.write_text(json.dumps(ev, indent=1, default=float) + "\n")
-    cfg = ev["config"]
-    meta = describe_results(ev, cfg["width"], cfg["ref_spp"])
-    text = markdown(ev, meta)
-    json_path.with_name("path_results.md").write_text(text)
-    plot(ev, json_path.with_name("path.png"), meta["title"])
-    splice_results(json_path.with_name("RESULTS.md"), text)
+# ----------------------------------------------------------------------------------------------
+# The pictures of docs/rendering.md (--figures)
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+GLASS_NAMES = ("wine_glass", "bottle_clear", "can_soda", "box_tea", "tennis_ball", "pear", "mug")
+
+
+def save_png(rgb: np.ndarray, path: Path, max_kib: int = 400) -> None:
+    """Writes an sRGB uint8 image as PNG; quantised to a palette if the plain PNG is too big."""
+    from PIL import Image
+
+    img = Image.fromarray(np.asarray(rgb, np.uint8))
+    img.save(path, optimize=True)
+    if path.stat().st_size > max_kib * 1024:
+        img.quantize(
+            colors=256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.FLOYDSTEINBERG
+        ).save(path, optimize=True)
+    _log(f"  wrote {path} ({path.stat().st_size // 1024} KiB)")
+
+
+def raster_rgb(desc: ps.SceneDesc, scene_json: Path) -> np.ndarray:
+    return np.asarray(raster_render(desc, scene_json).rgb, np.uint8)
+
+
+def glass_camera(scene_json: Path, width: int) -> ps.Camera:
+    """An oblique camera above the tote aimed between the glass objects."""
+
+    from mgn.io.scene_json import read_scene_json
+
+    scene = read_scene_json(scene_json)
+    glass = [
+        np.asarray(i.X_WO, np.float64)[:3, 3]
+        for i in scene.instances
+        if i.name in ("wine_glass", "bottle_clear")
+    ]
+    target = np.mean(glass, axis=0) if glass else np.zeros(3)
+    eye = target + np.array([0.0, -0.14, 0.42])
+    z = target - eye
+    z /= np.linalg.norm(z)
+    x = np.cross(z, np.array([0.0, 0.0, 1.0]))
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    X = np.eye(4)
+    X[:3, 0], X[:3, 1], X[:3, 2], X[:3, 3] = x, y, z, eye
+    f = 1.5 * width
+    return ps.Camera(width, width, f, f, width / 2, width / 2, X)
+
+
+def render_set(
+    name: str,
+    desc: ps.SceneDesc,
+    scene_json: Path,
+    tmp: Path,
+    mgn_spp: int,
+    high_spp: int,
+    cycles_spp: int,
+    exposure: float,
+    out: Path,
+    closeup: tuple[str, ...] = (),
+) -> dict[str, float]:
+    from mgn.render import path as mpath
+
+    desc_path = tmp / f"{name}.pkl"
+    desc_path.write_bytes(pickle.dumps(desc))
+    times: dict[str, float] = {}
+    save_png(raster_rgb(desc, scene_json), out / f"{name}_raster.png")
+    film = mpath.FilmOptions(exposure=exposure)
+    res, status = run_child(
+        "mgn", desc_path, scene_json, (mgn_spp, high_spp), 0, 1, tmp / f"{name}_mgn.npz", _log
+    )
+    if res is None:
+        raise RuntimeError(f"mgn path failed: {status}")
+    with np.load(tmp / f"{name}_mgn.npz") as z:
+        demo, high, ids = z[f"{mgn_spp}d"], z[f"{high_spp}"], z["ids"]
+    save_png(mpath.develop(demo, film), out / f"{name}_path.png")
+    save_png(mpath.develop(high, film), out / f"{name}_path_high.png")
+    for c in res["configs"]:
+        if c["spp"] == mgn_spp and c["denoise"]:
+            times["mgn"] = c["wall"][0]
+        if c["spp"] == high_spp and not c["denoise"]:
+            times["mgn_high"] = c["wall"][0]
+    res, status = run_child(
+        "cycles", desc_path, scene_json, (), cycles_spp, 1, tmp / f"{name}_cycles.npz", _log
+    )
+    if res is None:
+        raise RuntimeError(f"Cycles failed: {status}")
+    with np.load(tmp / f"{name}_cycles.npz") as z:
+        cycles = z["ref"]
+    save_png(mpath.develop(cycles, film), out / f"{name}_cycles.png")
+    times["cycles"] = res["ref"]["wall"]
+    _log(
+        f"  {name}: mgn {mgn_spp} spp + OIDN {times['mgn']:.1f} s, {high_spp} spp "
+        f"{times['mgn_high']:.1f} s, Cycles {cycles_spp} spp {times['cycles']:.1f} s"
+    )
+    if closeup:
+        # The glass objects' bounding box (+ a margin), each image enlarged 2x, side by side.
+        sel = [it.instance_id for it in desc.items if it.name in closeup]
+        ys, xs = np.nonzero(np.isin(ids, sel))
+        if len(ys):
+            m = 6
+            y0, y1 = max(0, ys.min() - m), min(ids.shape[0], ys.max() + 1 + m)
+            x0, x1 = max(0, xs.min() - m), min(ids.shape[1], xs.max() + 1 + m)
+            tiles = [mpath.develop(np.ascontiguousarray(i[y0:y1, x0:x1]), film) for i in
+                     (demo, high, cycles)]  # fmt: skip
+            gap = np.full((y1 - y0, 4, 3), 255, np.uint8)
+            strip = np.concatenate([tiles[0], gap, tiles[1], gap, tiles[2]], 1)
+            save_png(np.repeat(np.repeat(strip, 2, 0), 2, 1), out / f"{name}_closeup.png")
+    return times
+
+
+def figures_main(argv: list[str] | None = None) -> int:
+    """``python -m benchmarks.bench_path --figures``: regenerates the pictures of
+    docs/rendering.md: one scene rendered by mgn's raster engine, by mgn's path tracer at the
+    demo's settings (1 spp + OIDN ``fast``, as scripts/demo.yaml) and at a high sample count (not
+    denoised), and by Blender Cycles; the same for a glass scene, plus a close-up of its glass
+    objects. The path-traced and Cycles images go through the same film
+    (``mgn.render.path.develop``), so they differ only by the renderer. Each engine runs in its
+    own process, as in the benchmark. PNGs are colour-quantised to stay small (< 400 KB)."""
+    p = argparse.ArgumentParser(
+        prog="python -m benchmarks.bench_path --figures", description=figures_main.__doc__
+    )
+    p.add_argument("--width", type=int, default=480)
+    p.add_argument("--mgn-spp", type=int, default=1, help="denoised (the demo's setting)")
+    p.add_argument("--high-spp", type=int, default=256, help="mgn without denoising")
+    p.add_argument("--cycles-spp", type=int, default=256)
+    p.add_argument("--exposure", type=float, default=0.5, help="EV for both path-traced images")
+    p.add_argument("--out", type=Path, default=HERE.parent / "docs" / "images")
+    a = p.parse_args(argv)
+    a.out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = Path(tmpdir)
+        scene_json = tmp / "scene.json"
+        t0 = time.perf_counter()
+        ps.drop(scene_json)
+        _log(f"scene dropped in {time.perf_counter() - t0:.0f} s")
+        desc = ps.describe(scene_json, a.width)
+        assert np.mean(raster_ids(desc, scene_json) > 0) > 0.1, "the camera sees no objects"
+        render_set(
+            "render_bin", desc, scene_json, tmp, a.mgn_spp, a.high_spp, a.cycles_spp,
+            a.exposure, a.out,
+        )  # fmt: skip
+        glass_json = tmp / "glass.json"
+        ps.drop(glass_json, GLASS_NAMES, seed=3)
+        glass = ps.describe(glass_json, a.width)
+        glass = dataclasses.replace(glass, camera=glass_camera(glass_json, a.width))
+        render_set(
+            "render_glass", glass, glass_json, tmp, a.mgn_spp, a.high_spp, a.cycles_spp,
+            a.exposure, a.out, closeup=("wine_glass", "bottle_clear"),
+        )  # fmt: skip
     return 0
 
 
-BEGIN, END = "<!-- path:begin -->", "<!-- path:end -->"
-
-
-def splice_results(results_md: Path, section: str) -> None:
-    """Puts the path-tracing section into RESULTS.md (between markers, replacing an older one),
-    leaving the rest of the full-suite report as it is."""
-    if not results_md.exists():
-        return
-    old = results_md.read_text()
-    block = f"{BEGIN}\n{section}\n![path tracing: error against CPU time](path.png)\n{END}\n"
-    if BEGIN in old and END in old:
-        head, rest = old.split(BEGIN, 1)
-        new = head + block + rest.split(END, 1)[1].lstrip("\n")
-    else:
-        new = old.rstrip("\n") + "\n\n" + block
-    results_md.write_text(new)
-
-
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--report"]:
-        sys.exit(report_main(Path(sys.argv[2])))
-    if sys.argv[1:2] == ["--study"]:
-        from . import bench_path_crop
-
-        sys.exit(bench_path_crop.main(sys.argv[2:]))
+    if sys.argv[1:2] == ["--figures"]:
+        sys.exit(figures_main(sys.argv[2:]))
     sys.exit(child_main(sys.argv[1:]))

@@ -1,7 +1,7 @@
 """Dataset generation: complete scenes per hour of `mgn generate`, time per stage, peak memory.
 
-The issue's target: scenes of 20 objects, 37 views at 1200 x 1200, all labels, at least 60 scenes
-per hour on 2 cores. The run happens in a fresh subprocess (`generate(..., workers=K)`) after a
+Target: scenes of 20 objects, 37 views at 1200 x 1200, all labels, at least 60 scenes per hour
+on 2 cores. The run happens in a fresh subprocess (`generate(..., workers=K)`) after a
 warm-up scene there (imports, convex decompositions); object labels missing from the cache are
 computed before any scene starts and their time (`GenerateReport.label_seconds`) is subtracted,
 so the rate counts the scene tasks only: drop, render, per-view object labels, layout, scene
@@ -10,8 +10,8 @@ and cached, never per scene. Their size is the README demo's (2000 suction and p
 candidates, 30 shaken grasps per object): a scene places at most 2000 grasps of each kind per
 object either way (LabelOptions.max_grasps_per_object), so it costs what it costs with the MGN
 label sizes. One timed run per worker count (4 scenes each; ~5 min in all when idle), then one
-scene with the path engine at the demo's setting (1 sample per pixel + OIDN's fast filter; issue
-15's target: <= 150 s for a 37-view scene with every label on 2 cores; ~5 min with its warm-up).
+scene with the path engine at the demo's setting (1 sample per pixel + OIDN's fast filter; target:
+<= 150 s for a 37-view scene with every label on 2 cores; ~5 min with its warm-up).
 
 CPU per scene is each worker process's CPU over its scene (all its threads: OSMesa, parallel
 loops, the writer threads), recorded by `run_scene`; the label cache is filled before the timed
@@ -250,8 +250,8 @@ def run(
     views = len(cfg["camera"]["views"] or range(37))
     size = int(1200 * cfg["camera"]["resolution_scale"])
     rows = []
-    # The raster engine at 1 and 2 workers, then one scene with the path engine (issue 15's
-    # target: a 37-view scene with path-traced pictures and every label in <= 150 s on 2 cores).
+    # The raster engine at 1 and 2 workers, then one scene with the path engine (target: a
+    # 37-view scene with path-traced pictures and every label in <= 150 s on 2 cores).
     for workers, engine, n_scenes in ((1, "raster", scenes), (2, "raster", scenes), (1, "path", 1)):
         what = "" if engine == "raster" else ", path engine (1 spp + OIDN fast)"
         row = Row(

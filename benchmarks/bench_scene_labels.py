@@ -6,7 +6,7 @@ the scene work), at most 2,000 grasps of each kind per object placed in the scen
 MetaGraspNet rig at 1200 x 1200 (quick: 600 x 600, fewer views). One timed call labels and
 writes those views; the split by stage comes from the call's own stage timings (render, object
 labels, layout, scene grasps, write), plus the once-per-scene preparation (ray model, scene grasp
-collisions along the approach). No peer does this work; the issue's target is <= 300 ms per view
+collisions along the approach). No peer does this work; the target is <= 300 ms per view
 for the labels (everything but render and write) on 2 cores.
 """
 

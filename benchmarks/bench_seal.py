@@ -40,7 +40,7 @@ OBJECTS = ("mug", "bottle_water", "box_cereal", "pear")
 SEED = 7  # trial perturbations
 SAMPLE_SEED = 1  # candidate sampling
 AGREEMENT_MIN = 0.95  # nominal seal/no-seal and reason equal on at least this share
-TARGET_EVALS_PER_S = 2000.0  # the target at 2 threads
+TARGET_EVALS_PER_S = 2000.0  # target at 2 threads
 PEER_NAME = "seal_peer.PeerSealModel.evaluate (NumPy + trimesh RayMeshIntersector/embreex)"
 
 

@@ -1,4 +1,5 @@
-"""The machine's limits that mgn's stages depend on, and what share of them each stage reaches.
+"""The machine's limits that mgn's stages depend on, the share of them each stage reaches, and the
+floors of the regression gate.
 
 Measured in the same run as the suites, with every core the process may use:
 
@@ -10,12 +11,23 @@ Measured in the same run as the suites, with every core the process may use:
 
 A result row names the limit it is bound by and the work of one of its items in the limit's unit
 (``Row.limit_work``): its share = mgn's rate at all threads x work per item / limit.
+
+The gate (``python -m benchmarks --gate``): :data:`FLOORS` states, for the rows that time mgn
+beside a peer, the lowest mgn / peer speed ratio accepted. Each floor is about 60 % of the ratio
+of the reference run (2-core AMD EPYC, 2026-11-25; benchmarks/PERFORMANCE.md's first version):
+low enough that another machine, another load or run-to-run noise stays above it (ratios move by
+10-30 % between machines, much less than absolute rates), high enough that losing a fast path
+(a packet path, a pre-test, a thread pool) falls below it. The floors apply to the 1-thread
+ratio (mgn on one core against the peer as it comes) where mgn was timed on one thread, else to
+the ratio at the most threads measured.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Callable
+import re
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -172,3 +184,112 @@ def plot_ratios(rows: list[Row], path: Any) -> bool:
     draw.line([(x1, top - 4), (x1, height - 28)], fill="black")
     img.save(path)
     return True
+
+
+# ----------------------------------------------------------------------------------------------
+# Regression gate
+
+
+@dataclasses.dataclass(frozen=True)
+class Floor:
+    """The lowest mgn / peer speed ratio accepted for the rows of ``group`` whose case matches
+    ``pattern`` (a regular expression searched in ``Row.case``)."""
+
+    group: str
+    pattern: str
+    floor: float
+    threads: int | None = 1  # 1 = the per-core ratio; None = the most threads measured
+
+
+#: Floors of the gate (reference ratio of the first PERFORMANCE.md in the comments).
+FLOORS: tuple[Floor, ...] = (
+    # Ray casting against trimesh + embreex (1 thread).
+    Floor("ray casting", r"^icosphere.*random rays, first hit with distance", 1.0),  # 1.76
+    Floor("ray casting", r"^icosphere.*random rays, first hit, triangle", 0.6),  # 1.05
+    Floor("ray casting", r"^icosphere.*random rays, any hit", 0.7),  # 1.23
+    Floor("ray casting", r"^icosphere.*camera rays, first hit with distance", 3.5),  # 5.97
+    Floor("ray casting", r"^icosphere.*camera rays, first hit, triangle", 2.5),  # 4.15
+    Floor("ray casting", r"^icosphere.*camera rays, any hit", 2.0),  # 3.50
+    Floor("ray casting", r"^scene.*random rays, first hit with distance", 0.8),  # 1.37
+    Floor("ray casting", r"^scene.*random rays, first hit, triangle", 0.6),  # 1.05
+    Floor("ray casting", r"^scene.*random rays, any hit", 1.2),  # 2.10
+    Floor("ray casting", r"^scene.*camera rays, first hit with distance", 3.0),  # 5.09
+    Floor("ray casting", r"^scene.*camera rays, first hit, triangle", 2.1),  # 3.60
+    Floor("ray casting", r"^scene.*camera rays, any hit", 6.0),  # 10.13
+    # Collision against python-fcl in a Python loop (1 thread).
+    Floor("collision", r"collide \(boolean\)$", 0.6),  # 0.98
+    Floor("collision", r"distance with nearest points$", 0.7),  # 1.12
+    # Suction seal against the same model in NumPy + trimesh (1 thread).
+    Floor("suction seal", r"^mug .*robust score", 11.0),  # 19.3
+    Floor("suction seal", r"^bottle_water .*robust score", 9.0),  # 15.8
+    Floor("suction seal", r"^box_cereal .*robust score", 15.0),  # 26.0
+    Floor("suction seal", r"^pear .*robust score", 10.0),  # 16.5
+    # Parallel-jaw probes against NumPy + trimesh (1 thread).
+    Floor("parallel-jaw", r"antipodal probe test", 2.5),  # 4.09
+    # The shake trial against the same trial with pybullet (1 thread).
+    Floor("physics", r"^box .*1 thread$", 2.5),  # 4.13
+    Floor("physics", r"^ball .*1 thread$", 2.8),  # 4.69
+    Floor("physics", r"^steel block .*1 thread$", 2.0),  # 3.38
+    # The drop against pybullet's loop (1 thread).
+    Floor("scene drop", r"built-in objects into the tote", 1.6),  # 2.67
+    # Rendering against pyrender (both on all threads).
+    Floor("rendering", r"RGB \+ z-depth \+ instance ids", 6.0, None),  # 9.98
+    # Path tracing against Cycles + OIDN and Mitsuba 3 (both on 2 threads).
+    Floor("path tracing", r"16 spp \+ OIDN$", 1.5, None),  # 2.66
+    Floor("path tracing", r"16 spp$", 1.5, None),  # 2.69
+    # Layout against NumPy / SciPy (1 thread).
+    Floor("layout", r"relations \+ layers \+ difficulty", 10.0),  # 18.1
+    # Lens against OpenCV (mgn is slower here; the floor guards against getting slower still).
+    Floor("lens", r"^undistortion map", 0.4),  # 0.69
+    Floor("lens", r"^resample RGB", 0.06),  # 0.10
+    # View labels against one render per object (1 thread).
+    Floor("view labels", r"^masks, ", 1.4),  # 2.29-2.30
+    Floor("view labels", r"^masks \+ keypoints", 1.2),  # 1.96-1.97
+    # Dataset files against the first file layout and COCO export (1 thread).
+    Floor("dataset files", r"^write one view's files", 1.1),  # 1.78
+    Floor("dataset files", r"^mgn coco of one scene", 4.0),  # 6.82
+)
+
+
+def gate(rows: Sequence[Row], floors: Sequence[Floor] = FLOORS) -> list[dict[str, Any]]:
+    """One check per (floor, matching row): the row, the threads of the ratio, the ratio, the
+    floor and the verdict: "pass", "FAIL" (ratio below the floor) or "not measured" (no row
+    matches, e.g. its suite was not run, or a side is missing)."""
+    checks: list[dict[str, Any]] = []
+    for f in floors:
+        matching = [r for r in rows if r.group == f.group and re.search(f.pattern, r.case)]
+        if not matching:
+            checks.append({"row": f"{f.group}: /{f.pattern}/", "threads": f.threads,
+                           "ratio": None, "floor": f.floor, "verdict": "not measured"})  # fmt: skip
+            continue
+        for r in matching:
+            t = f.threads if f.threads is not None else (max(r.mgn) if r.mgn else None)
+            ratio = r.ratio(t) if t is not None else None
+            if ratio is None:
+                verdict = "not measured"
+            else:
+                verdict = "pass" if ratio >= f.floor else "FAIL"
+            checks.append({"row": f"{r.group}: {r.case}", "threads": t, "ratio": ratio,
+                           "floor": f.floor, "verdict": verdict})  # fmt: skip
+    return checks
+
+
+def gate_failures(checks: Sequence[dict[str, Any]]) -> list[str]:
+    """The failed checks, in words."""
+    return [
+        f"{c['row']}: mgn / peer {c['ratio']:.2f}x at {c['threads']} thread(s), floor "
+        f"{c['floor']:.2f}x"
+        for c in checks
+        if c["verdict"] == "FAIL"
+    ]
+
+
+def gate_markdown(checks: Sequence[dict[str, Any]]) -> str:
+    """The "Gate" table."""
+    lines = ["| row | threads | mgn / peer | floor | verdict |", "|---|---|---|---|---|"]
+    for c in checks:
+        ratio = "—" if c["ratio"] is None else f"{c['ratio']:.2f}×"
+        threads = "—" if c["threads"] is None else str(c["threads"])
+        verdict = "**FAIL**" if c["verdict"] == "FAIL" else c["verdict"]
+        lines.append(f"| {c['row']} | {threads} | {ratio} | {c['floor']:.2f}× | {verdict} |")
+    return "\n".join(lines)

@@ -1,4 +1,4 @@
-"""Every document the code cites ships in the repository (issue 16, item 12)."""
+"""Every document the code cites ships in the repository."""
 
 from __future__ import annotations
 

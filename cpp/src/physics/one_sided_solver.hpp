@@ -9,7 +9,7 @@
 // and no inverse inertia, so its half of every row reads zeros and adds zeros. For the drop,
 // the tote and the floor are static (Bullet's fixed solver body). The iterations were about
 // three quarters of a shake trial's solver instructions, the solver about half of the trial
-// (benchmarks/RESULTS.md, "Shake trial cost, session 15").
+// (docs/decisions/0012-shake-one-sided-solver.md).
 //
 // OneSidedContactSolver runs the same Projected Gauss-Seidel iterations (same rows, same order,
 // same single-precision operations in the same order, same residual for Bullet's early exit),

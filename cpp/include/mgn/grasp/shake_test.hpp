@@ -106,30 +106,23 @@ struct ShakeOptions {
   /// not moved by the rest.
   /// Simulated objects are seldom exactly at rest in the hand (they slip at the velocity jump
   /// that starts the shake and creep), so the tolerance decides how often the windows apply.
-  /// Default 3 mm: on the first 20 grasps of five built-in objects (benchmarks/RESULTS.md,
-  /// "Shake trial cost, session 13") it changes no more outcomes than moving every grasp by
-  /// 1 µm does (the physics' own noise) and makes trials 1.02-1.21x cheaper. 0 = the
-  /// full schedule. Has no effect with smooth_shake (its windows assume the sine profile).
+  /// In [0, 0.1) m; default 3 mm, which changes no more outcomes than the physics' own noise
+  /// (docs/decisions/0007-shake-held-load-windows.md). Has no effect with smooth_shake (its
+  /// windows assume the sine profile).
   double hold_tolerance = 3e-3;
-  /// Shake profile. false (MetaGraspNet's schedule as mgn has always run it): the hand follows
-  /// z = A sin(ωt) along its approach axis and θ = θ_max sin(ω_r t) about the trial's axis, so
-  /// each phase starts and ends at full speed (a velocity jump within one step). true: both
-  /// follow f(x) = sin x − sin(2x)/2 (zero velocity at the start and end of every cycle), with
-  /// the translation's amplitude halved so the peak speed stays `shake_speed` and the rotation
-  /// scaled by 4/(3√3) so the peak angle stays θ_max. Measured (benchmarks/RESULTS.md, "a smooth
-  /// shake profile"): a can's grids are more nearly monotone (its staircase scores equal its
-  /// full grid on 94 % of grasps instead of 90 %, 99 % with dt = 1/100 s at 1.8x fewer CPU-s
-  /// per trial), a mug's less (96 %, 90 % at 1/100 s, against 99 %); scores move by ~0.01 on
-  /// average against the default, so it is off by default.
-  /// hold_tolerance has no effect with it (its windows assume the sine).
+  /// Shake profile. false (default, MetaGraspNet's schedule): the hand follows z = A sin(ωt)
+  /// along its approach axis and θ = θ_max sin(ω_r t) about the trial's axis, so each phase
+  /// starts and ends at full speed (a velocity jump within one step). true: both follow
+  /// f(x) = sin x − sin(2x)/2 (zero velocity at the start and end of every cycle), with the
+  /// translation's amplitude halved so the peak speed stays `shake_speed` and the rotation
+  /// scaled by 4/(3√3) so the peak angle stays θ_max; scores move by ~0.01 on average
+  /// (docs/decisions/0006-shake-smooth-profile.md). hold_tolerance has no effect with it.
   bool smooth_shake = false;
   double margin = 5e-4;  ///< Bullet collision margin of every shape, m, > 0
   /// Bullet's polyhedral clipping (a full contact patch per step) instead of GJK points
-  /// gathered over steps; on by default (the scores of mgn's datasets; the tests pass both
-  /// ways). GJK points are 1.2-1.5x faster
-  /// per trial on built-in objects but change some outcomes: on 48 grasps of a can, a mug and a
-  /// cereal box, 81 % of 10x10 scores identical, mean |difference| 0.007, at most 0.14
-  /// (benchmarks/bench_shake.py measures both).
+  /// gathered over steps; on by default (the scores of mgn's datasets). GJK points are
+  /// 1.2-1.5x faster per trial but change some scores
+  /// (docs/decisions/0002-shake-contacts-and-shapes.md; benchmarks/bench_shake.py measures both).
   bool polyhedral_contacts = true;
   /// Skip Bullet's narrow phase for a (finger or palm, object hull) pair while it is provably
   /// apart: its contact manifold is empty and the cores' gap along a separating axis (the last
@@ -137,13 +130,13 @@ struct ShakeOptions {
   /// exceeds the distance at which Bullet adds a contact point. Those calls would add nothing,
   /// so every trial is the same bit for bit either way (tested); on by default. It saves the
   /// palm's pair on every step and, on compounds, the hulls near a pad that do not touch it
-  /// (benchmarks/RESULTS.md, "Shake trial cost, session 13").
+  /// (docs/decisions/0010-shake-skip-separated-pairs.md).
   bool skip_separated_pairs = true;
   /// Set up and solve each contact row of the sequential-impulse solver for the object only:
   /// the hand bodies are kinematic (no inverse mass or inertia), so their half of a row reads
   /// and adds zeros, which Bullet's solver computes anyway. The same operations in the same
-  /// order otherwise, so every trial is the same bit for bit either way (tested); on by default,
-  /// ~1.2x fewer instructions per trial (benchmarks/RESULTS.md, "Shake trial cost, session 15").
+  /// order otherwise, so every trial is the same bit for bit either way (tested); on by default
+  /// (docs/decisions/0012-shake-one-sided-solver.md).
   bool one_sided_rows = true;
   /// Hulls with more vertices are replaced by the hull of their support points along this many
   /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
@@ -155,24 +148,23 @@ struct ShakeOptions {
   /// (finger, object hull) pairs in contact at the previous step) iterations. A single hull
   /// makes at most 2 pairs, so with this <= solver_iterations / 2 it is simulated as without;
   /// an object held by several hulls of a compound gets more iterations, which its solve needs
-  /// to converge at a coarser dt (benchmarks/RESULTS.md, "Shake test, session 11").
+  /// to converge at a coarser dt (docs/decisions/0005-shake-time-step.md). >= 0.
   double iterations_per_hull_contact = 0.0;
   /// Staircase search instead of the full grid: success is monotone wherever physics behaves
   /// (more friction helps, more mass hurts), so each grasp's success boundary is found by
   /// galloping and bisection row by row (see staircase_grid()), the cells on both sides of it
   /// are verified, plus `staircase_checks` other inferred cells spread over the grid; if one of
   /// them contradicts the inference the grasp falls back to the full grid. Every simulated cell
-  /// uses the same trial (index, random stream) as the full grid. benchmarks/bench_staircase.py
-  /// measures the agreement with the full grid on real grasps: the shake outcomes are not
-  /// exactly monotone (isolated failures anywhere in the grid, unrelated to the cell's random
-  /// shake axis), so more checks buy agreement with trials.
+  /// uses the same trial (index, random stream) as the full grid. The shake outcomes of real
+  /// grasps are not exactly monotone (isolated failures anywhere in the grid), so more checks
+  /// buy agreement with trials (docs/decisions/0003-shake-staircase-search.md). Default off.
   bool staircase = false;
   int staircase_checks = 6;  ///< >= 0
   /// Share of the grid's rows, lowest frictions first, whose boundary cells the staircase
   /// verifies (rows i < ceil(share·S); 1 = every row, the default; 0 = none, the walk alone).
   /// The isolated failing cells of real grasps sit where the grip is marginal, at low friction
   /// and high mass; mgn.pj.ShakeScorer verifies the lower half (0.5) when its object-level
-  /// calibration is on (benchmarks/RESULTS.md, "Shake test, session 13"). In [0, 1].
+  /// calibration is on (docs/decisions/0009-shake-calibrated-checks.md). In [0, 1].
   double staircase_verify_share = 1.0;
   /// 0 = all hardware threads; results do not depend on it. The threads take grasps (staircase)
   /// or trials (full grid) one at a time, as a grasp costs ~17 to S² trials.

@@ -129,8 +129,7 @@ struct PathTraceOptions {
   int num_threads = 0;           ///< 0 = all hardware threads; image identical for any value
   /// Russian roulette from this bounce on (>= 0), not counting the vertices where the path was
   /// reflected or refracted by a smooth dielectric (what is seen through glass is rouletted as
-  /// late as what is seen directly). 2 (not 3): at 1 spp + denoising the view is ~15 % cheaper to
-  /// trace for 1-4 % more image error (docs/rendering.md, "Russian roulette's depth").
+  /// late as what is seen directly). Default 2 (docs/decisions/0024-path-tracer-glass-sampling.md).
   int rr_depth = 2;
   double aperture_radius = 0.0;  ///< thin-lens aperture radius, m (>= 0; 0 = pinhole)
   /// Distance of the plane in focus along the optical axis, m (>= 0; 0 = the depth at the image
@@ -146,7 +145,8 @@ struct PathTraceOptions {
   /// their first light, docs/rendering.md) after the first glass walls, whose two branches are
   /// traced in full, only while the path's throughput (largest channel) is at least this (>= 0;
   /// 0 = always). Below it the path follows its random direction alone: unbiased, one ray fewer
-  /// per glass vertex of dim paths (deep inside bottles, behind reflections).
+  /// per glass vertex of dim paths (deep inside bottles, behind reflections). Default 0.1
+  /// (docs/decisions/0024-path-tracer-glass-sampling.md).
   double fresnel_split_min = 0.1;
   /// The denoiser guides of the other direction at a split smooth dielectric are followed
   /// behind further glass only when that direction's share of the pixel's guide is at least
@@ -163,6 +163,7 @@ struct PathTraceOptions {
   /// (1..64). The extra samples come from their own stream of (seed, view, pixel, index), so the
   /// image stays identical for any num_threads. Slightly biased at low spp: a pixel's own first
   /// samples take part in the decision (clamped so that one firefly does not decide alone).
+  /// Off by default (docs/decisions/0028-path-adaptive-sampling-off.md).
   double adaptive_samples = 0.0;
   int adaptive_max = 3;
 

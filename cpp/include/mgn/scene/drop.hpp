@@ -104,7 +104,8 @@ struct DropOptions {
   /// instead of one. With one, Bullet resists sliding only along the current slip direction, so
   /// a resting object can creep along the other tangent: large piles creep for seconds and
   /// often never pass the rest test before max_time (20-object scenes: ~2x more steps, ~2.5x
-  /// more CPU; docs/models.md §6). With two, a symmetric resting contact can drift to one side.
+  /// more CPU; docs/decisions/0014-drop-two-friction-directions.md). With two, a symmetric
+  /// resting contact can drift to one side.
   bool two_friction_directions = true;
   ToteCollision tote_collision = ToteCollision::Boxes;
   std::uint64_t seed = 0;
