@@ -59,7 +59,7 @@ def test_render_config_errors_name_the_key(section: dict, key: str) -> None:
 
 def test_switching_only_the_engine_gives_one_sample_and_the_denoiser() -> None:
     """A user who sets only ``render.engine: path`` gets the fast setting of
-    docs/decisions/path-default-spp.md: 1 spp, OIDN ``fast``, not the 16 spp of a slow
+    docs/decisions/0031-path-default-spp.md: 1 spp, OIDN ``fast``, not the 16 spp of a slow
     preview-free render."""
     r = load_config({"render": {"engine": "path"}}).render
     assert (r.spp, r.denoise, r.denoise_quality) == (1, True, "fast")

@@ -46,10 +46,10 @@ Sections:
   ``physics_calibration`` (staircase only: the first N scored grasps of each object are simulated
   on the full grid and keep its exact scores; the staircase searches replayed on them decide
   which one scores the object's other grasps: the cheapest whose score error is within
-  ``physics_tolerance``, else the full grid; 0 = off; default 32,
-  docs/decisions/shake-estimator.md), ``physics_tolerance`` (the mean absolute score error
-  allowed, its 95 % bound on the calibration grasps; default 0.005, the simulation's own noise
-  band; 0 = exact agreement on every calibration grasp),
+  ``physics_tolerance``, else the full grid; 0 = off; default 32;
+  docs/decisions/0032-object-labels-at-the-defaults.md), ``physics_tolerance`` (the mean
+  absolute score error allowed, its 95 % bound on the calibration grasps; default 0.005, the
+  simulation's own noise band; 0 = exact agreement on every calibration grasp),
   ``suction_model``, ``seed``.
 - ``split``: the unseen-object split (docs/testsets.md): ``name`` (``all``: every category;
   ``train``: the ``unseen`` categories never appear; ``test``: they appear, at least one per

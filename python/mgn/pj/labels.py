@@ -75,7 +75,7 @@ class PjLabels:
 
 #: Parallel-jaw grasps stored per object by default (``object_labels.pj_grasps``, ``mgn pj label
 #: --grasps``): an evenly strided subset of what the sampler finds (docs/decisions/
-#: stored-grasps.md says why this many).
+#: 0032-object-labels-at-the-defaults.md says why this many).
 DEFAULT_STORED_GRASPS = 300
 
 

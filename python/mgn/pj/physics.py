@@ -381,7 +381,7 @@ def replay_staircase(
 #: objects whose grids have isolated failing cells away from the success boundary, which is what
 #: the per-grasp golden-ratio checks are for; replayed on 590 stored grids of 7 objects the
 #: policy's scores equal the full grid's on 99.8 % of grasps with 0 checks as with 6, at 25-30 %
-#: fewer trials per grasp (benchmarks/RESULTS.md, "Shake test, session 13"). The cells next to
+#: fewer trials per grasp (docs/decisions/0009-shake-calibrated-checks.md). The cells next to
 #: each row's boundary are verified whatever this is.
 CALIBRATED_STAIRCASE_CHECKS = 0
 
@@ -390,8 +390,8 @@ CALIBRATED_STAIRCASE_CHECKS = 0
 #: cells of real grasps sit where the grip is marginal (low friction, high mass); replayed on
 #: the stored grids the policy's agreement with the full grid is the same as with every row
 #: verified (99.8 %, 590 grasps at 1/200 s; 99.8 %, 520 with f5; 99.6-100 % on five other
-#: physics variants) at a third fewer trials per grasp (benchmarks/RESULTS.md, "Shake test,
-#: session 13").
+#: physics variants) at a third fewer trials per grasp
+#: (docs/decisions/0009-shake-calibrated-checks.md).
 CALIBRATED_STAIRCASE_VERIFY_SHARE = 0.5
 
 
@@ -400,7 +400,8 @@ CALIBRATED_STAIRCASE_VERIFY_SHARE = 0.5
 #: own noise band. Moving every grasp by 1 um along its approach (physically nothing) changes
 #: the full-grid scores by a mean |d| of 0 (cereal box, mug), 0.001-0.002 (soda can), 0.0045
 #: (water bottle) and 0.005-0.007 (marker pen); a search whose error stays below 0.005 cannot
-#: be told from the full grid by the simulation itself (docs/decisions/shake-estimator.md).
+#: be told from the full grid by the simulation itself
+#: (docs/decisions/0032-object-labels-at-the-defaults.md).
 CALIBRATION_TOLERANCE = 0.005
 
 #: ``staircase_checks`` of the calibration's second search, the checked staircase (every
@@ -630,8 +631,8 @@ class ShakeScorer:
     of the last call is ``last_calibration`` (None without calibration), recorded in
     ``__name__`` and, by :func:`mgn.pj.label_object`, in the label metadata
     (``pj_physics_estimator``: search, calibration errors, error bound; see
-    docs/decisions/shake-estimator.md); ``last_trials`` counts the shake trials it simulated
-    (``pj_physics_trials``).
+    docs/decisions/0032-object-labels-at-the-defaults.md); ``last_trials`` counts the shake
+    trials it simulated (``pj_physics_trials``).
     """
 
     density: float = 1000.0
@@ -725,7 +726,7 @@ class ShakeScorer:
                 # piece's grasps one at a time, but a piece ends when its slowest grasp does
                 # (a grasp costs 17 to S*S trials with the staircase): pieces of 2 grasps per
                 # thread kept 2 threads 80-88 % busy on real grasps, 16 keep them ~95 % busy
-                # (benchmarks/RESULTS.md, shake test). Without it, one call.
+                # (docs/decisions/0004-shake-thread-scheduling.md). Without it, one call.
                 threads = _core.resolve_num_threads(int(options.num_threads))
                 step = _PIECE_PER_THREAD * threads if progress else max(stop - start, 1)
                 pieces = []

@@ -165,7 +165,7 @@ class RenderSettings:
         engine: ``raster`` (OpenGL preview) or ``path`` (physically based path tracer).
         spp: path samples per pixel with the denoiser (default 1: the lowest image error
             per CPU-second among 1, 2 and 4 samples with OIDN ``fast``;
-            docs/decisions/path-default-spp.md). Without the denoiser see
+            docs/decisions/0031-path-default-spp.md). Without the denoiser see
             ``spp_without_denoiser``.
         denoise: denoise with Intel Open Image Denoise (``pyoidn``). Without pyoidn installed
             a warning names the package and ``spp_without_denoiser`` samples are traced instead.
@@ -173,16 +173,15 @@ class RenderSettings:
         denoise_quality: OIDN filter quality, ``fast`` (default), ``balanced`` or ``high``.
             On the CPU ``fast`` takes about half the time of ``high`` (1200x1200: ~2.4 vs ~4.6
             CPU-s) and is the better use of the time: at equal CPU time, more samples with
-            ``fast`` give a lower image error than fewer with ``high`` (benchmarks/
-            path_results.md, "Denoiser settings"); ``balanced`` costs as much as ``high``.
+            ``fast`` give a lower image error than fewer with ``high``
+            (docs/decisions/0027-denoiser-settings.md); ``balanced`` costs as much as ``high``.
         denoise_guides: the guide images OIDN gets with the radiance. ``smoothed`` (default):
             the tracer's albedo and normal, each blurred by a 3 x 3 Gaussian (sigma 0.5 px) and
             declared noise-free to OIDN (its ``cleanAux`` mode); ``raw``: both as traced,
             declared noisy; ``albedo``: the albedo alone, as traced (~0.15 CPU-s less per
             1200 x 1200 view); ``none``: the colour alone (blurs printed text). On five windows
             of the benchmark view ``smoothed`` scores better than ``raw`` on all of them at the
-            same cost (benchmarks/RESULTS.md, "Denoiser guides on five windows";
-            docs/rendering.md).
+            same cost (docs/decisions/0027-denoiser-settings.md; docs/rendering.md).
         adaptive_samples: adaptive sampling: extra path samples per pixel on average (0 = off)
             traced after the ``spp`` samples of every pixel where that first pass looks
             noisiest (glass, indirectly lit walls), at most ``adaptive_max`` per pixel
@@ -307,8 +306,9 @@ class _OidnFilter:
 
     OIDN's first execution on a device prepares the network and allocates its scratch memory
     (~0.46 GB for a 1200 x 1200 image, one tile): about 0.3-0.6 CPU-s once per process; later
-    calls re-bind the images (any shape) and cost the network alone (benchmarks/RESULTS.md,
-    "Denoiser cost"). The output does not depend on the thread count."""
+    calls re-bind the images (any shape) and cost the network alone
+    (docs/decisions/0027-denoiser-settings.md). The output does not depend on the thread
+    count."""
 
     def __init__(self, oidn: Any, num_threads: int) -> None:
         self.oidn = oidn
