@@ -147,6 +147,58 @@ def test_every_stored_pj_grasp_gets_a_physics_score_by_default(tmp_path: Path, e
     assert "physics scores" not in report.format_summary()  # nothing capped to report
 
 
+def test_generate_says_where_the_time_went(
+    tmp_path: Path, env: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``mgn generate`` estimates the object labels before it starts, ends with where the
+    time went (per object; drop, render parts, labels, write) and ``--profile`` writes it as
+    JSON; the path engine's parts (trace, denoise, develop) are timed separately."""
+    from mgn.cli.main import main
+
+    cfg = {
+        "objects": {"names": ["box_tea"]},
+        "camera": {"views": [0], "resolution_scale": 0.1},
+        "object_labels": {"suction_points": 30, "pj_points": 8, "physics_grid": 2},
+        "labels": {"layout": False},
+        "drop": {"max_time": 2.0},
+        "render": {"engine": "path"},
+    }
+    (tmp_path / "cfg.yaml").write_text(json.dumps(cfg))
+    prof = tmp_path / "profile.json"
+    code = main(["generate", "--out", str(tmp_path / "ds"), "--scenes", "1", "--config",
+                 str(tmp_path / "cfg.yaml"), "--no-cache", "--profile", str(prof)])  # fmt: skip
+    out = capsys.readouterr()
+    assert code == 0, out.out + out.err
+    assert "object labels: 1 to compute, 0 from the cache; roughly" in out.err
+    assert "per object: box_tea" in out.out and "where the scene time went" in out.out
+    p = json.loads(prof.read_text())
+    assert p["object_labels"]["computed"] == 1 and p["object_labels"]["cached"] == 0
+    (seconds,) = p["object_labels"]["objects_s"].values()
+    assert 0 < seconds <= p["object_labels"]["wall_s"] <= p["wall_s"]
+    parts = p["scenes"]["parts_s"]
+    for part in ("drop", "render: trace", "render: denoise", "render: develop", "render: raster",
+                 "render: sensor", "object labels", "scene grasps", "finalize"):  # fmt: skip
+        assert part in parts and parts[part] >= 0.0, part
+    assert parts["render: trace"] > 0 and p["scenes"]["written"] == 1
+    # The render thread's parts add up to no more than its busy time.
+    render_parts = sum(v for k, v in parts.items() if k.startswith("render: "))
+    assert render_parts <= parts["render"] + 1e-3
+
+
+def test_label_time_estimate_brackets_the_cost_model() -> None:
+    from mgn.pipeline.label_cache import TRIAL_CPU_S, estimate_label_seconds
+
+    cfg = load_config({"object_labels": {"pj_grasps": 100, "physics_grid": 10}})
+    low, high = estimate_label_seconds(cfg, 2, 2)
+    assert 0 < low < high
+    # At least the 32 calibration grids of 100 trials each per object, on 2 cores.
+    assert low >= 2 * 32 * 100 * TRIAL_CPU_S / 2
+    # Without physics only the sampling is left; more cores, less time.
+    off = load_config({"labels": {"pj_physics": False}})
+    assert estimate_label_seconds(off, 2, 2)[1] < low
+    assert estimate_label_seconds(cfg, 2, 4)[0] == pytest.approx(low / 2)
+
+
 def test_reference_dataset_validates_reads_and_exports(
     reference: tuple[Path, dict], tmp_path: Path
 ) -> None:

@@ -154,6 +154,44 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
     return keys
 
 
+#: CPU seconds of one shake trial of a single-hull object (Bullet, 1/200 s, MetaGraspNet's
+#: schedule; 2-core x86 machines measure 0.004-0.013), and of the other object labels per 1000
+#: surface points (suction and parallel-jaw sampling); the estimate of
+#: :func:`estimate_label_seconds`.
+TRIAL_CPU_S = 0.008
+SAMPLING_CPU_S_PER_1000_POINTS = 0.6
+
+
+def estimate_label_seconds(config: Config, num_objects: int, threads: int) -> tuple[float, float]:
+    """A rough (low, high) wall-time range in seconds for computing the labels of
+    ``num_objects`` objects under ``config`` on ``threads`` cores, before anything is known of
+    their shapes: the low end assumes convex parts whose grasps the plain staircase search
+    scores, the high end non-convex parts (several hulls, ~2x the cost per trial) that need the
+    thorough search. Shown by ``mgn generate`` before it starts."""
+
+    ol = config.object_labels
+    points = (ol.suction_points if config.labels.suction else 0) + (
+        ol.pj_points if config.labels.paralleljaw else 0
+    )
+    base = SAMPLING_CPU_S_PER_1000_POINTS * points / 1000.0
+    trials_low = trials_high = 0.0
+    if config.labels.paralleljaw and config.labels.pj_physics:
+        cells = ol.physics_grid**2
+        grasps = ol.pj_grasps if ol.pj_grasps is not None else 20_000
+        if ol.physics_grasps is not None:
+            grasps = min(grasps, ol.physics_grasps)
+        if ol.physics_search == "full":
+            trials_low = trials_high = grasps * cells
+        else:
+            k = min(ol.physics_calibration, grasps)
+            trials_low = k * cells + (grasps - k) * max(6.0, 0.1 * cells)
+            trials_high = k * cells + (grasps - k) * max(12.0, 0.5 * cells)
+    per = max(1, threads)
+    low = num_objects * (base + trials_low * TRIAL_CPU_S) / per
+    high = num_objects * (base + 2.0 * trials_high * TRIAL_CPU_S) / per
+    return low, high
+
+
 def shake_options(config: Config, num_threads: int = 0) -> ShakeOptions:
     """The shake-test options of ``config.object_labels`` (grid, search, checks)."""
 
@@ -167,9 +205,12 @@ def shake_options(config: Config, num_threads: int = 0) -> ShakeOptions:
     )
 
 
-def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0) -> ObjectLabels:
+def compute_object_labels(
+    spec: ObjectSpec, config: Config, num_threads: int = 0, progress: bool | None = None
+) -> ObjectLabels:
     """Compute the labels of one object (no cache). Deterministic for the config's seed,
-    whatever ``num_threads`` (0 = all cores)."""
+    whatever ``num_threads`` (0 = all cores). ``progress``: a per-grasp progress bar with an
+    estimate of the time left for the physics scores (None: when stderr is a terminal)."""
 
     mesh = spec.to_mesh()
     props = mass_properties(mesh, spec.density)
@@ -206,6 +247,7 @@ def compute_object_labels(spec: ObjectSpec, config: Config, num_threads: int = 0
                 max_grasps=ol.physics_grasps,
                 calibration_grasps=ol.physics_calibration,
                 calibration_tolerance=ol.physics_tolerance,
+                progress=progress,
             )
         pj = pj_label_object(
             mesh,

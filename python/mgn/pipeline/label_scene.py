@@ -356,6 +356,8 @@ def label_scene(
             for k, images in enumerate(ahead):
                 t1 = time.perf_counter()
                 timings.add("render (waiting)", t1 - t0)
+                for part, dt in images.seconds.items():
+                    timings.add(f"render: {part}", dt)
                 timings.engine = dict(images.engine)
                 v, view = views[k]
                 # A camera with lens distortion: label its pinhole render, then resample the

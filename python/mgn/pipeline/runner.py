@@ -45,6 +45,7 @@ import multiprocessing
 import os
 import shutil
 import socket
+import sys
 import tempfile
 import time
 import traceback
@@ -69,6 +70,7 @@ from mgn.pipeline.config import Config, ConfigError, load_config
 from mgn.pipeline.label_cache import (
     ObjectLabels,
     compute_object_labels,
+    estimate_label_seconds,
     load_cached_labels,
     save_cached_labels,
     write_models,
@@ -284,12 +286,23 @@ def store_collected(out: Path, result: SceneResult) -> SceneResult:
     return dataclasses.replace(result, files=None)
 
 
-def _label_task(args: tuple[ObjectSpec, Config, int]) -> tuple[ObjectLabels, float]:
+def _duration(seconds: float) -> str:
+    """``45 s``, ``3 min``, ``1.5 h``: a rough duration for people."""
+    if seconds < 90:
+        return f"{max(1, round(seconds))} s"
+    if seconds < 5400:
+        return f"{round(seconds / 60)} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def _label_task(
+    args: tuple[ObjectSpec, Config, int, bool | None],
+) -> tuple[ObjectLabels, float]:
     """The labels of one object and the wall seconds they took (in the worker)."""
 
-    spec, config, num_threads = args
+    spec, config, num_threads, progress = args
     t0 = time.perf_counter()
-    labels = compute_object_labels(spec, config, num_threads)
+    labels = compute_object_labels(spec, config, num_threads, progress)
     return labels, time.perf_counter() - t0
 
 
@@ -761,17 +774,30 @@ class _Run:
             else:
                 missing.append(spec)
         if missing and (cfg.labels.suction or cfg.labels.paralleljaw):
+            if self.progress:
+                threads = os.cpu_count() or 1  # the workers share the machine's cores
+                low, high = estimate_label_seconds(cfg, len(missing), threads)
+                print(
+                    f"mgn: object labels: {len(missing)} to compute, "
+                    f"{self.report.labels_cached} from the cache; roughly "
+                    f"{_duration(low)}-{_duration(high)} on {threads} cores (computed once, "
+                    "then cached)",
+                    file=sys.stderr,
+                )
             bar = tqdm(total=len(missing), desc="object labels", unit="obj",
                        disable=not self.progress)  # fmt: skip
-            items = [(s, cfg, self.executor.threads_per_task) for s in missing]
-            for (spec, _, _), value, exc in self.executor.run(_label_task, items):
+            # Per-grasp bars (physics, with an estimate) when progress is shown (None: if stderr
+            # is a terminal).
+            shown = None if self.progress else False
+            items = [(s, cfg, self.executor.threads_per_task, shown) for s in missing]
+            for (spec, _, _, _), value, exc in self.executor.run(_label_task, items):
                 if exc is not None:
                     raise InvalidArgumentError(
                         f"labelling object '{spec.name}' failed: {type(exc).__name__}: {exc}"
                     ) from exc
                 self.labels[spec.name], self.report.object_seconds[spec.name] = value
                 if self.use_cache:
-                    save_cached_labels(spec, cfg, value)
+                    save_cached_labels(spec, cfg, self.labels[spec.name])
                 bar.update(1)
             bar.close()
             self.report.labels_computed += len(missing)

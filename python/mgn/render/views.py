@@ -9,6 +9,7 @@ list of :class:`~mgn.scene.cameras.CameraView`). It yields one :class:`ViewImage
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, cast
@@ -48,6 +49,9 @@ class ViewImages:
         pinhole: for a camera with lens distortion, the pinhole render (camera
             ``lens.render_K``, same pose) these images were resampled from; None otherwise.
         lens: the camera's :class:`~mgn.scene.lens.Lens` (None for a pinhole camera).
+        seconds: wall seconds of this view's parts: ``raster`` (the OpenGL pass: depth and
+            ids, and the RGB with the raster engine), ``trace``, ``denoise`` and ``develop``
+            (path engine), ``sensor`` (the depth sensor model).
     """
 
     index: int
@@ -61,6 +65,7 @@ class ViewImages:
     engine: dict[str, Any] = field(default_factory=lambda: {"engine": "raster"})
     pinhole: ViewImages | None = field(default=None, repr=False)
     lens: Lens | None = field(default=None, repr=False)
+    seconds: dict[str, float] = field(default_factory=dict, repr=False, compare=False)
 
 
 def _distorted(images: ViewImages, view: CameraView, lens: Lens) -> ViewImages:
@@ -87,6 +92,7 @@ def _distorted(images: ViewImages, view: CameraView, lens: Lens) -> ViewImages:
         images.engine,
         pinhole=images,
         lens=lens,
+        seconds=images.seconds,
     )
 
 
@@ -286,15 +292,19 @@ def iter_views(
         )  # fmt: skip
 
     for (v, view), lens, cam in zip(cams, lenses, shot, strict=True):
+        t0 = time.perf_counter()
         img = r.render(cam, rgb=photo is None, randomize=randomize, seed=seed, view_index=v,
                        shadows=shadows)  # fmt: skip
         assert img.depth is not None and img.instance_ids is not None
+        seconds = {"raster": time.perf_counter() - t0}
         if photo is not None:
             rgb, _ = photo.render(cam, v)
             engine = photo.describe()
+            seconds.update(photo.last_seconds)
         else:
             assert img.rgb is not None
             rgb, engine = img.rgb, {"engine": "raster"}
+        t1 = time.perf_counter()
         sens = apply_depth_sensor(
             img.depth,
             img.instance_ids,
@@ -304,7 +314,9 @@ def iter_views(
             seed=seed + v,
             num_threads=num_threads,
         )
+        seconds["sensor"] = time.perf_counter() - t1
         res = ViewImages(
-            v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine
-        )
+            v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine,
+            seconds=seconds,
+        )  # fmt: skip
         yield res if lens is None else _distorted(res, view, lens)
