@@ -5,8 +5,11 @@ Units are SI (m, kg, s, N, rad); poses are (4, 4) float64 homogeneous transforms
 their frames, e.g. ``X_WO`` is the pose of object O in the world W.
 """
 
+from typing import TYPE_CHECKING
+
 from mgn import _core
 from mgn._core import __version__
+from mgn.base.lazy import lazy_exports
 from mgn.errors import BackendError, InvalidArgumentError, IoError, MgnError, UnsupportedError
 from mgn.geometry.collision import CollisionModel, DistanceResult, collide, distance
 from mgn.geometry.convex import convex_decomposition, convex_hull
@@ -29,8 +32,34 @@ from mgn.io.view_images import render_views
 from mgn.render import Renderer
 from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 
+#: The dataset pipeline and the scene, imported on first use (``import mgn`` stays light):
+#: ``mgn.generate(out, scenes, config=...)``, ``mgn.load_config(path)``, ``mgn.Config``,
+#: ``mgn.drop_scene(objects, seed=...)``, ``mgn.Scene``.
+_EXPORTS = {
+    "generate": "pipeline.runner",
+    "GenerateReport": "pipeline.runner",
+    "Config": "pipeline.config",
+    "load_config": "pipeline.config",
+    "Scene": "scene.scene",
+    "drop_scene": "scene.drop",
+}
+
+__getattr__, __dir__ = lazy_exports("mgn", _EXPORTS, globals())
+
+if TYPE_CHECKING:
+    from mgn.pipeline.config import Config, load_config
+    from mgn.pipeline.runner import GenerateReport, generate
+    from mgn.scene.drop import drop_scene
+    from mgn.scene.scene import Scene
+
 __all__ = [
     "__version__",
+    "Config",
+    "GenerateReport",
+    "Scene",
+    "drop_scene",
+    "generate",
+    "load_config",
     "BackendError",
     "CameraView",
     "Intrinsics",
