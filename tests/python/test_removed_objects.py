@@ -14,7 +14,7 @@ from mgn.viz.report import write_report
 
 # 24 large cereal boxes cannot all lie in a 400 x 300 x 150 mm tote: some leave it.
 OVERFULL = {
-    "objects": {"names": ["box_cereal"] * 24},
+    "objects": {"names": ["box_cereal"] * 24, "refill": False},
     "camera": {"views": [0], "resolution_scale": 0.05},
     "labels": {k: False for k in ("suction", "paralleljaw", "pj_physics", "layout",
                                   "scene_grasps")},
@@ -58,3 +58,17 @@ def test_refill_drops_again(tmp_path: Path, overfull) -> None:
     assert (not scene["removed"] and attempts <= 3) or attempts == 3
     assert kept >= first.ok[0].num_objects
     assert attempts > 1  # the first drop (same seed as without refill) lost objects
+
+
+def test_scenes_refill_by_default(tmp_path: Path, overfull) -> None:
+    """Without a word about refill a scene is dropped again when objects leave the tote: a
+    scene holds the objects asked for unless the tote cannot take them."""
+    _, first = overfull
+    objects = {k: v for k, v in OVERFULL["objects"].items() if k != "refill"}
+    cfg = load_config(dict(OVERFULL, objects=objects))
+    assert cfg.objects.refill and cfg.objects.refill_attempts == 5
+    out = tmp_path / "ds"
+    generate(out, 1, config=cfg, seed=4, progress=False)
+    scene = json.loads((out / "scene0" / "scene.json").read_text())
+    assert scene["stats"]["drop_attempts"] > 1
+    assert len(scene["instances"]) >= first.ok[0].num_objects

@@ -301,8 +301,10 @@ class ObjectsConfig(_Section):
         refill: when objects leave the tote during the drop, drop the scene again (the same
             objects, a seed derived from the scene seed and the attempt) until every asked
             object stays in, at most ``refill_attempts`` drops; the scene with the most objects
-            in the tote is kept. Without it the objects that left are removed (and reported).
-        refill_attempts: drops at most per scene with ``refill`` (>= 1).
+            in the tote is kept (default true: a scene holds the objects asked for; the rare
+            shortfall left is reported per scene). Off, the objects that left are removed (and
+            reported).
+        refill_attempts: drops at most per scene with ``refill`` (>= 1, default 5).
     """
 
     names: tuple[str | int, ...] | None = None
@@ -310,7 +312,7 @@ class ObjectsConfig(_Section):
     count: int | None = None
     copies: tuple[int, int] = (2, 5)
     user_objects: tuple[str, ...] = ()
-    refill: bool = False
+    refill: bool = True
     refill_attempts: int = 5
 
     _CHECKS = {
