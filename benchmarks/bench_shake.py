@@ -33,7 +33,7 @@ from .common import (
 GRIP_FORCE = 20.0
 DT = 1.0 / 200.0
 # The peer gets mgn's inertia floor m R^2 and more solver iterations for light objects (see
-# cpp/include/mgn/grasp/shake_test.hpp). It stays in metres (L = 1): pybullet's own Bullet build
+# cpp/include/mgn/grasp/shake_trial.hpp). It stays in metres (L = 1): pybullet's own Bullet build
 # and mesh margins handle centimetre contacts there, and it misses the ball in decimetres.
 L = 1.0
 # The faster contact mode, measured beside the defaults: GJK contact points gathered over steps

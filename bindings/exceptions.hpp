@@ -14,7 +14,7 @@ void bind_grasp_calibration(pybind11::module_& m);
 void bind_render(pybind11::module_& m);
 void bind_scene_drop(pybind11::module_& m);
 void bind_grasp_antipodal(pybind11::module_& m);
-void bind_grasp_shake_test(pybind11::module_& m);
+void bind_grasp_shake_trial(pybind11::module_& m);
 void bind_scene_layout(pybind11::module_& m);
 void bind_render_path_tracer(pybind11::module_& m);
 void bind_scene_grasps(pybind11::module_& m);

@@ -16,7 +16,7 @@ PYBIND11_MODULE(_core, m) {
   mgn::py_bind::bind_render(m);
   mgn::py_bind::bind_scene_drop(m);
   mgn::py_bind::bind_grasp_antipodal(m);
-  mgn::py_bind::bind_grasp_shake_test(m);
+  mgn::py_bind::bind_grasp_shake_trial(m);
   mgn::py_bind::bind_scene_layout(m);
   mgn::py_bind::bind_render_path_tracer(m);
   mgn::py_bind::bind_scene_grasps(m);

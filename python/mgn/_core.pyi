@@ -1754,7 +1754,7 @@ class ShakeOptions:
 
 class ShakeResult:
     """
-    shake_test() result (mgn/grasp/shake_test.hpp): G grasps on an S x S friction x density grid.
+    shake_test() result (mgn/grasp/shake_trial.hpp): G grasps on an S x S friction x density grid.
     """
     @property
     def density_factors(self) -> numpy.ndarray:

@@ -3,7 +3,7 @@
 #include <mgn/core/error.hpp>
 #include <mgn/geometry/mass_properties.hpp>
 #include <mgn/geometry/primitives.hpp>
-#include <mgn/grasp/shake_test.hpp>
+#include <mgn/grasp/shake_trial.hpp>
 
 #include "grasp/detail/staircase_schedule.hpp"
 

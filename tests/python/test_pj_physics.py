@@ -368,7 +368,7 @@ def _reference_boundary(S, lo, run, first):
 
 
 def reference_staircase(S, trial, checks):
-    """A second implementation of the staircase search (docs in shake_test.hpp, staircase_grid),
+    """A second implementation of the staircase search (docs in shake_trial.hpp, staircase_grid),
     written from its description: (success, simulated, fallback, trials)."""
     success = np.zeros((S, S), bool)
     simulated = np.zeros((S, S), bool)

@@ -18,7 +18,7 @@
 #include <mgn/grasp/gripper.hpp>
 #include <mgn/grasp/pj_wrench.hpp>
 #include <mgn/grasp/seal_model.hpp>
-#include <mgn/grasp/shake_test.hpp>
+#include <mgn/grasp/shake_trial.hpp>
 #include <mgn/grasp/wrench.hpp>
 #include <mgn/raytrace/ray_scene.hpp>
 #include <mgn/render/camera.hpp>

@@ -1,6 +1,6 @@
 #pragma once
 // The one Bullet adapter of mgn (private: Bullet types do not appear in installed headers).
-// Used by the drop (scene/drop.cpp) and the shake test (grasp/shake_test.cpp): unit conversion
+// Used by the drop (scene/drop.cpp) and the shake test (grasp/shake_trial.cpp): unit conversion
 // at the Bullet boundary, poses, convex hull shapes of an object's parts (with the hull
 // reduction of rigid_object.hpp) and the rigid-body construction info in the principal frame.
 #include <mgn/physics/rigid_object.hpp>

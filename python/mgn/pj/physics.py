@@ -42,7 +42,7 @@ _PIECE_PER_THREAD = 16
 #: Phase codes of ShakeTrajectory.phase.
 PHASE_NAMES = ("close", "translate", "rotate")
 
-#: The C++ defaults (cpp/include/mgn/grasp/shake_test.hpp), the one place they are written.
+#: The C++ defaults (cpp/include/mgn/grasp/shake_trial.hpp), the one place they are written.
 _CORE = _core.ShakeOptions()
 
 
@@ -51,7 +51,7 @@ class ShakeOptions:
     """Parameters of the shake test (SI units).
 
     MetaGraspNet values: ``grid`` 10, the two ranges, ``dt`` 1/200 s, 400/400/300 steps, 0.5 m/s
-    and 0.2–0.3 rad. The others are mgn's (see ``cpp/include/mgn/grasp/shake_test.hpp``):
+    and 0.2–0.3 rad. The others are mgn's (see ``cpp/include/mgn/grasp/shake_trial.hpp``):
     ``settle_steps`` and ``lost_contact_steps`` end phases and trials early (0 disables them),
     ``inertia_floor`` stabilises light objects, the pads are soft (``pad_stiffness`` N/m per
     contact point, ``pad_damping`` N s/m). ``staircase`` finds each grasp's success boundary

@@ -1,6 +1,6 @@
 #pragma once
 /// @file rigid_object.hpp  The rigid object that mgn's Bullet simulations move (the drop into the
-/// tote, mgn/scene/drop.hpp, and the shake test of grasps, mgn/grasp/shake_test.hpp), its
+/// tote, mgn/scene/drop.hpp, and the shake test of grasps, mgn/grasp/shake_trial.hpp), its
 /// principal frame and the reduction of its convex hulls (docs/models.md §5 and §6).
 ///
 /// Frames: O = the object (mesh) frame; B = its principal (body) frame, origin at the centre of

@@ -1,7 +1,7 @@
 #pragma once
 // Private: how shake_test shares the staircase searches of many grasps between threads (see
-// staircase_grid() in mgn/grasp/shake_test.hpp for the search itself).
-#include <mgn/grasp/shake_test.hpp>
+// staircase_grid() in mgn/grasp/shake_trial.hpp for the search itself).
+#include <mgn/grasp/shake_trial.hpp>
 
 #include <cstddef>
 #include <cstdint>

@@ -1,10 +1,10 @@
-// Bindings of the Bullet shake test (mgn/grasp/shake_test.hpp). The typed façade is
+// Bindings of the Bullet shake test (mgn/grasp/shake_trial.hpp). The typed façade is
 // python/mgn/pj/physics.py. The gripper is the bound C++ ParallelJawGripper (boxes or the three
 // meshes), made by the one conversion mgn.pj.sampler.core_gripper() like every other consumer.
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
-#include <mgn/grasp/shake_test.hpp>
+#include <mgn/grasp/shake_trial.hpp>
 
 #include "exceptions.hpp"
 #include "numpy_conv.hpp"
@@ -63,7 +63,7 @@ struct TrajectoryArrays {
 
 }  // namespace
 
-void bind_grasp_shake_test(py::module_& m) {
+void bind_grasp_shake_trial(py::module_& m) {
   py::class_<ShakeOptions>(m, "ShakeOptions",
                            "Options of the Bullet shake test (SI units; see mgn.pj.physics).")
       .def(py::init<>())
@@ -113,7 +113,7 @@ void bind_grasp_shake_test(py::module_& m) {
       .def("density_factors", &ShakeOptions::density_factors);
 
   py::class_<ShakeArrays>(m, "ShakeResult",
-                          "shake_test() result (mgn/grasp/shake_test.hpp): G grasps on an S x S "
+                          "shake_test() result (mgn/grasp/shake_trial.hpp): G grasps on an S x S "
                           "friction x density grid.")
       .def_readonly("score", &ShakeArrays::score, "(G,) float64 success fraction over the grid")
       .def_readonly("trial_success", &ShakeArrays::trial_success,

@@ -1,4 +1,4 @@
-// The Bullet shake test of parallel-jaw grasps (see shake_test.hpp).
+// The Bullet shake test of parallel-jaw grasps (see shake_trial.hpp).
 //
 // One small btDiscreteDynamicsWorld per trial: a kinematic palm that follows the prescribed hand
 // trajectory, two dynamic finger boxes on slider joints whose force-limited velocity motors close
@@ -9,7 +9,7 @@
 #include <mgn/core/error.hpp>
 #include <mgn/core/parallel.hpp>
 #include <mgn/core/rng.hpp>
-#include <mgn/grasp/shake_test.hpp>
+#include <mgn/grasp/shake_trial.hpp>
 
 #include "grasp/detail/staircase_schedule.hpp"
 #include "physics/bullet.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-/// @file shake_test.hpp  Physics score of parallel-jaw grasps: the Bullet shake test
+/// @file shake_trial.hpp  Physics score of parallel-jaw grasps: the Bullet shake test
 /// (docs/models.md §5, "Physics score").
 ///
 /// One trial = one grasp × one (friction, density factor) setting: the object is placed in the
