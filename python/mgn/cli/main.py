@@ -41,7 +41,7 @@ from mgn.hardware import SuctionCup, default_cup, default_gripper
 from mgn.io.grasp_file import write_suction_labels
 from mgn.io.model_folder import object_folders, read_model_folder, write_model_folder, write_tote
 from mgn.objects import builtin_objects, default_tote, get_object, load_objects_yaml, object_names
-from mgn.objects.user import warn_implausible_size
+from mgn.objects.user import check_object_name, warn_implausible_size
 from mgn.suction import label_object
 from mgn.viz.suction_compare import compare_models, comparison_picture
 
@@ -105,6 +105,23 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _uniform_scale(text: str) -> float:
+    """The ``--scale`` of a mesh: one number > 0 (several numbers: only uniform is supported)."""
+    parts = [t for t in re.split(r"[,x\s]+", text.strip()) if t]
+    if len(parts) > 1:
+        raise argparse.ArgumentTypeError(
+            f"only a uniform scale is supported (one number that multiplies every coordinate), "
+            f"got {text!r}; scale the mesh file itself for different factors per axis"
+        )
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
 def _snake(stem: str) -> str:
 
     name = re.sub(r"[^a-z0-9]+", "_", stem.lower()).strip("_")
@@ -136,6 +153,8 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         mesh = load_mesh(path, scale=args.scale)  # IoError / InvalidArgumentError name the file
         report = mesh.validate()
         name = args.name[i] if args.name else _snake(path.stem)
+        if args.name:
+            check_object_name(name, "mgn objects add: --name")
         stem, k = name, 2
         while name in taken:
             name, k = f"{stem}_{k}", k + 1
@@ -393,8 +412,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--to", required=True, metavar="YAML", help="user-object YAML to append to")
     p.add_argument("--name", nargs="+", metavar="NAME",
                    help="object names, one per mesh (default: from the file names)")  # fmt: skip
-    p.add_argument("--scale", type=float, default=1.0,
-                   help="coordinate scale (default 1; 0.001 for files in millimetres)")  # fmt: skip
+    p.add_argument("--scale", type=_uniform_scale, default=1.0,
+                   help="uniform coordinate scale (default 1; 0.001 for a file in mm)")  # fmt: skip
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
     p.add_argument("--friction", type=float, default=0.5, help="Coulomb friction (default 0.5)")
     p.add_argument("--tags", nargs="+", metavar="TAG", help="tags (mgn.objects.ALLOWED_TAGS)")
@@ -431,7 +450,8 @@ def build_parser() -> argparse.ArgumentParser:
         "compare", help="score the same points with the three seal models; table and picture"
     )
     p.add_argument("mesh", help="mesh file, or the name/id of a built-in object")
-    p.add_argument("--scale", type=float, default=1.0, help="coordinate scale (0.001 for mm)")
+    p.add_argument("--scale", type=_uniform_scale, default=1.0,
+                   help="uniform coordinate scale (0.001 for mm)")  # fmt: skip
     p.add_argument("--cup", metavar="YAML", help="suction cup YAML (default: MetaGraspNet cup)")
     p.add_argument("--num-points", type=int, default=1000, help="candidates (default 1000)")
     p.add_argument("--seed", type=int, default=0)
@@ -448,9 +468,8 @@ def build_parser() -> argparse.ArgumentParser:
         "info", help="validation and mass properties of a mesh file (JSON, as mgn-cli info)"
     )
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
-    p.add_argument(
-        "--scale", type=float, default=1.0, help="coordinate scale (default 1; 0.001 for mm)"
-    )
+    p.add_argument("--scale", type=_uniform_scale, default=1.0,
+                   help="uniform coordinate scale (default 1; 0.001 for mm)")  # fmt: skip
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
     p.set_defaults(func=_cmd_info)
 

@@ -3,7 +3,7 @@
 Example ``my_objects.yaml`` (paths relative to the YAML file; SI units)::
 
     objects:
-      - name: bracket_a            # unique snake_case name
+      - name: bracket_a            # unique name: a letter, then letters, digits, _ or -
         mesh: meshes/bracket.stl   # any format mgn.load_mesh reads
         scale: 0.001               # file in millimetres
         density: 2700              # kg/m^3
@@ -38,6 +38,7 @@ from __future__ import annotations
 import io
 import math
 import os
+import re
 import warnings
 from pathlib import Path
 from typing import Any
@@ -50,10 +51,37 @@ from mgn.errors import InvalidArgumentError, MgnError
 from mgn.geometry.mesh import Material, load_mesh
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
 
-__all__ = ["ImplausibleSizeWarning", "load_objects_yaml", "warn_implausible_size"]
+__all__ = [
+    "OBJECT_NAME_PATTERN",
+    "ImplausibleSizeWarning",
+    "check_object_name",
+    "load_objects_yaml",
+    "warn_implausible_size",
+]
 
 #: Largest extents (m) outside which a part is reported as implausible for a tote.
 PLAUSIBLE_EXTENT_M = (1e-3, 1.0)
+#: A user object's name: a letter, then at most 63 letters, digits, ``_`` or ``-``. No spaces or
+#: commas (command lines split name lists at both), and never all digits (a number names a
+#: category id, e.g. ``12`` is the built-in ``mug``).
+OBJECT_NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,63}")
+
+
+def check_object_name(name: object, where: str) -> str:
+    """``name`` when it matches :data:`OBJECT_NAME_PATTERN`; else InvalidArgumentError naming
+    ``where``, the name and the rule."""
+    text = str(name)
+    if isinstance(name, str) and OBJECT_NAME_PATTERN.fullmatch(text):
+        return text
+    why = ""
+    if text.strip().isdigit():
+        why = " (a number names a category id: it would shadow category " + text.strip() + ")"
+    elif "," in text or any(c.isspace() for c in text):
+        why = " (name lists on the command line are split at commas and spaces)"
+    raise InvalidArgumentError(
+        f"{where}: object name {text!r} is not allowed{why}; expected a letter followed by at "
+        "most 63 letters, digits, '_' or '-', e.g. 'my_part_2'"
+    )
 
 
 class ImplausibleSizeWarning(UserWarning):
@@ -243,8 +271,14 @@ def _object_from_entry(
     for key in ("name", "mesh", "density", "friction"):
         if key not in entry:
             raise InvalidArgumentError(f"{where}: missing required key '{key}'")
-    name = str(entry["name"])
+    name = check_object_name(entry["name"], f"{where}: key 'name'")
     where = f"{where} ('{name}')"
+    if isinstance(entry.get("scale"), (list, tuple)):
+        raise InvalidArgumentError(
+            f"{where}: key 'scale': only a uniform scale is supported (one number > 0 that "
+            f"multiplies every coordinate), got {entry['scale']!r}; scale the mesh file itself "
+            "for different factors per axis"
+        )
     scale = _number(entry, "scale", where, 1.0)
     density = _number(entry, "density", where)
     friction = _number(entry, "friction", where)

@@ -658,12 +658,30 @@ def _check_resume(out: Path, config: Config, seed: int) -> dict | None:
             f"--resume: '{out}' was generated with split {recorded.get('split')}, got {split} "
             "(--split / config key 'split'); use the same split or a new output folder"
         )
-    if _comparable(recorded) != _comparable(config.to_dict()):
+    diffs = _config_differences(_comparable(recorded), _comparable(config.to_dict()))
+    if diffs:
+        shown = "; ".join(f"{k}: recorded {a!r}, now {b!r}" for k, a, b in diffs[:5])
+        more = f" (and {len(diffs) - 5} more)" if len(diffs) > 5 else ""
         raise InvalidArgumentError(
-            f"--resume: the config differs from the one recorded in '{out / 'dataset.json'}'; "
-            "use the same config (or a new output folder)"
+            f"--resume: the config differs from the one recorded in '{out / 'dataset.json'}' in "
+            f"{len(diffs)} key(s): {shown}{more}; use the same config (or a new output folder)"
         )
     return doc
+
+
+_MISSING = "<not set>"
+
+
+def _config_differences(recorded: Any, current: Any, key: str = "") -> list[tuple[str, Any, Any]]:
+    """(dotted key, recorded value, current value) of every leaf where two config dicts
+    differ, in key order; a key only one side has shows ``<not set>`` on the other."""
+    if isinstance(recorded, dict) and isinstance(current, dict):
+        out: list[tuple[str, Any, Any]] = []
+        for k in sorted(set(recorded) | set(current), key=str):
+            sub = f"{key}.{k}" if key else str(k)
+            out += _config_differences(recorded.get(k, _MISSING), current.get(k, _MISSING), sub)
+        return out
+    return [] if recorded == current else [(key or "<config>", recorded, current)]
 
 
 @dataclass
