@@ -7,19 +7,24 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
+import os
 import re
+import stat
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import h5py
 import pytest
 import yaml
 
 from mgn.cli import main
+from mgn.pipeline import scene_writer
 
 #: Every object label off, one tiny view, a short drop: a generate run of about a second.
 FAST = {
-    "camera": {"views": [0], "resolution_scale": 0.05},
+    "camera": {"views": [0], "resolution_scale": 0.06},
     "labels": {k: False for k in ("suction", "paralleljaw", "pj_physics", "layout",
                                   "scene_grasps")},
     "drop": {"max_time": 0.5},
@@ -76,7 +81,8 @@ def fast_config(tmp: Path, **sections: dict) -> Path:
 class Case:
     """One bad input. ``build`` writes the files into the folder it gets and returns the
     ``mgn`` arguments; the run must exit with ``rc`` and print text matching ``expect``
-    (stdout and stderr together); ``check`` looks at the files afterwards."""
+    (stdout and stderr together); ``check`` looks at the files afterwards. ``patch`` simulates
+    what a file cannot hold (a Ctrl-C, a full disk) for the command's run only."""
 
     id: str
     kind: str  # "error" | "warning" | "repaired"
@@ -84,6 +90,7 @@ class Case:
     rc: int
     expect: str
     check: Callable[[Path], None] | None = None
+    patch: Callable[[pytest.MonkeyPatch], None] | None = None
 
 
 # ------------------------------------------------------------------ names, keys, resume, scale
@@ -135,6 +142,60 @@ def _nonuniform_cli_scale(tmp: Path) -> list[str]:
             "--scale", "0.05,0.05,0.1"]  # fmt: skip
 
 
+# ------------------------------------------------------ permissions, interrupts, full disks
+
+
+def _tiny_generate(tmp: Path) -> list[str]:
+    cfg = fast_config(tmp)
+    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--objects", "box_tea",
+            "--config", str(cfg), "--quiet"]  # fmt: skip
+
+
+def _usual_modes(tmp: Path) -> None:
+    """models/<id>/, tote/ and their files have the modes of a new folder / file (0755 / 0644
+    under umask 022), like the scene folders: other users can read them."""
+    mask = os.umask(0)
+    os.umask(mask)
+    ds = tmp / "ds"
+    for folder in (ds / "models" / "003", ds / "tote", ds / "scene0"):
+        assert stat.S_IMODE(folder.stat().st_mode) == 0o777 & ~mask, folder
+    for f in [*(ds / "models" / "003").iterdir(), *(ds / "tote").iterdir()]:
+        assert stat.S_IMODE(f.stat().st_mode) == 0o666 & ~mask, f
+
+
+def _ctrl_c_in_scene(mp: pytest.MonkeyPatch) -> None:
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    mp.setattr(scene_writer, "write_scene", interrupted)
+
+
+def _status(expected: str) -> Callable[[Path], None]:
+    def check(tmp: Path) -> None:
+        doc = json.loads((tmp / "ds" / "dataset.json").read_text())
+        assert doc["status"] == expected, doc["status"]
+        assert not list((tmp / "ds").glob(".tmp-*"))
+
+    return check
+
+
+def _disk_full_in_models(mp: pytest.MonkeyPatch) -> None:
+    """HDF5 writes go to /dev/full: the real h5py error of a full disk (errno 28)."""
+    real = h5py.File
+
+    def full(path: object, mode: str = "r", *args: object, **kwargs: object) -> h5py.File:
+        return real("/dev/full", "w") if mode == "w" else real(path, mode, *args, **kwargs)
+
+    mp.setattr(h5py, "File", full)
+
+
+def _disk_full_reported(tmp: Path) -> None:
+    _status("failed")(tmp)
+    doc = json.loads((tmp / "ds" / "dataset.json").read_text())
+    assert doc["error"].startswith("IoError: disk full while writing"), doc["error"]
+    assert not (tmp / "ds" / "models").exists()
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -155,6 +216,13 @@ CASES = [
          r"uniform scale is supported .* got \[0\.05, 0\.05, 0\.1\]"),
     Case("nonuniform-cli-scale", "error", _nonuniform_cli_scale, 2, r"argument --scale: only a "
          "uniform scale is supported"),
+    Case("folder-modes", "repaired", _tiny_generate, 0, r"1/1 scenes complete",
+         check=_usual_modes),
+    Case("ctrl-c", "error", _tiny_generate, 130, r"mgn: interrupted", check=_status("interrupted"),
+         patch=_ctrl_c_in_scene),
+    Case("disk-full-in-models", "error", _tiny_generate, 1, r"mgn: error: disk full while "
+         r"writing '[^']*/ds/models/003': free some space and retry\n", check=_disk_full_reported,
+         patch=_disk_full_in_models),
 ]
 # fmt: on
 
@@ -171,8 +239,12 @@ def run_cli(argv: list[str]) -> tuple[int, str]:
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
-def test_bad_input_gets_its_outcome(case: Case, tmp_path: Path) -> None:
+def test_bad_input_gets_its_outcome(
+    case: Case, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     argv = case.build(tmp_path)
+    if case.patch is not None:
+        case.patch(monkeypatch)
     rc, text = run_cli(argv)
     assert re.search(case.expect, text, re.S), f"{case.kind} {case.expect!r} not in:\n{text}"
     assert rc == case.rc, text

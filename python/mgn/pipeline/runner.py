@@ -32,14 +32,16 @@ Failures: a scene that raises is reported with its index, seed and error and doe
 others. A full disk is reported as "disk full" with the path, and stops scheduling new scenes.
 Ctrl-C stops the run, removes the temporary folders and leaves the complete scenes; ``--resume``
 continues (it also removes any ``.tmp-`` folder a killed run left behind, and redoes scenes whose
-manifest is missing or inconsistent).
+manifest is missing or inconsistent). ``dataset.json`` ``status`` is ``running`` while the run
+goes on, then ``complete`` (every scene written), ``incomplete`` (scenes failed or were not
+run), ``interrupted`` (Ctrl-C) or ``failed`` (an error stopped the whole run, e.g. a full disk
+while writing ``models/``; ``error`` says which); only a killed process leaves ``running``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
-import errno
 import json
 import multiprocessing
 import os
@@ -59,7 +61,7 @@ import numpy as np
 from tqdm import tqdm
 
 from mgn._core import __version__
-from mgn.base.atomic import _io_error
+from mgn.base.atomic import _io_error, disk_full_error
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.dataset_record import read_dataset_record, removed_objects, write_dataset_record
 from mgn.io.manifest import check_manifest, write_manifest
@@ -151,18 +153,9 @@ class SceneResult:
     removed: tuple[str, ...] = ()
 
 
-def _disk_full(e: BaseException) -> OSError | None:
-    """The ENOSPC error in the chain of ``e``, if any."""
-    seen = set()
-    cur: BaseException | None = e
-    while cur is not None and id(cur) not in seen:
-        seen.add(id(cur))
-        if isinstance(cur, OSError) and (
-            cur.errno == errno.ENOSPC or str(cur).startswith("disk full")
-        ):
-            return cur
-        cur = cur.__cause__ or cur.__context__
-    return None
+def _disk_full(e: BaseException) -> BaseException | None:
+    """The disk-full error in the chain of ``e``, if any (``disk_full_error``)."""
+    return disk_full_error(e)
 
 
 def _folder_size(folder: Path) -> int:
@@ -244,7 +237,7 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
         shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         full = _disk_full(e)
         if full is not None:
-            where = full.filename or tmp
+            where = getattr(full, "filename", None) or tmp
             msg = f"disk full while writing scene{task.index} ('{where}')"
         else:
             frame = traceback.extract_tb(e.__traceback__)[-1:]
@@ -793,6 +786,15 @@ class _Run:
         )
 
 
+def _record_stop(run: _Run, status: str, error: str) -> None:
+    """Record in ``dataset.json`` that the run stopped before its end (``status``
+    ``interrupted`` or ``failed``, with the ``error``), so that it no longer says ``running``.
+    Written after the temporary folders are gone, which frees the space a full disk needs."""
+    with contextlib.suppress(OSError):
+        run.write_doc(run.report.num_scenes, status, error=error,
+                      removed_objects=removed_objects(run.out))  # fmt: skip
+
+
 def _check_generate_args(cfg: Config, num_scenes: int | None, workers: int, seed: int) -> None:
     """The argument checks of :func:`generate` (before anything is written)."""
     quota = cfg.selection.quota
@@ -918,6 +920,12 @@ def generate(
     except KeyboardInterrupt:
         executor.cancel()
         _clean_tmp(out)
+        _record_stop(run, "interrupted", "stopped by Ctrl-C (SIGINT)")
+        raise
+    except BaseException as e:
+        executor.cancel()
+        _clean_tmp(out)
+        _record_stop(run, "failed", f"{type(e).__name__}: {e}")
         raise
     finally:
         executor.close()
