@@ -81,7 +81,8 @@ def fast_config(tmp: Path, **sections: dict) -> Path:
 class Case:
     """One bad input. ``build`` writes the files into the folder it gets and returns the
     ``mgn`` arguments; the run must exit with ``rc`` and print text matching ``expect``
-    (stdout and stderr together); ``check`` looks at the files afterwards. ``patch`` simulates
+    (stdout and stderr together) once (``once``) or at least once, and nothing matching
+    ``absent``; ``check`` looks at the files afterwards. ``patch`` simulates
     what a file cannot hold (a Ctrl-C, a full disk) for the command's run only."""
 
     id: str
@@ -91,6 +92,8 @@ class Case:
     expect: str
     check: Callable[[Path], None] | None = None
     patch: Callable[[pytest.MonkeyPatch], None] | None = None
+    absent: str | None = None
+    once: bool = False
 
 
 # ------------------------------------------------------------------ names, keys, resume, scale
@@ -196,6 +199,35 @@ def _disk_full_reported(tmp: Path) -> None:
     assert not (tmp / "ds" / "models").exists()
 
 
+# ------------------------------------------------------------ warnings of the run's objects
+
+
+def _objects_replace_a_large_count(tmp: Path) -> list[str]:
+    cfg = fast_config(tmp, objects={"count": 1000})
+    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
+            "--objects", "box_tea,can_soda", "--quiet"]  # fmt: skip
+
+
+def _two_user_objects(tmp: Path) -> Path:
+    """A 5 cm cube 'small_part' and the same cube read in the wrong unit, 'speck' (0.5 mm)."""
+    write(tmp / "cube.obj", CUBE_OBJ)
+    entry = {"mesh": "cube.obj", "density": 500, "friction": 0.5}
+    return write_yaml(tmp / "objs.yaml", {"objects": [
+        {"name": "small_part", "scale": 0.05, **entry},
+        {"name": "speck", "scale": 5e-4, **entry},
+    ]})  # fmt: skip
+
+
+def _generate_with(*objects: str) -> Callable[[Path], list[str]]:
+    def build(tmp: Path) -> list[str]:
+        objs = _two_user_objects(tmp)
+        cfg = fast_config(tmp)
+        return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
+                "--add", str(objs), "--objects", *objects, "--quiet"]  # fmt: skip
+
+    return build
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -223,6 +255,13 @@ CASES = [
     Case("disk-full-in-models", "error", _tiny_generate, 1, r"mgn: error: disk full while "
          r"writing '[^']*/ds/models/003': free some space and retry\n", check=_disk_full_reported,
          patch=_disk_full_in_models),
+    Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
+         r"1/1 scenes complete", absent=r"objects per scene"),
+    Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,
+         r"1/1 scenes complete", absent=r"speck|warning"),
+    Case("used-object-warned-once", "warning", _generate_with("speck", "box_tea"), 0,
+         r"warning: [^\n]*objs\.yaml: objects\[1\] \('speck'\): mesh '[^']*cube\.obj' "
+         r"\(scale 0\.0005\) is 0\.5 mm across, too small", once=True, absent="small_part"),
 ]
 # fmt: on
 
@@ -246,7 +285,10 @@ def test_bad_input_gets_its_outcome(
     if case.patch is not None:
         case.patch(monkeypatch)
     rc, text = run_cli(argv)
-    assert re.search(case.expect, text, re.S), f"{case.kind} {case.expect!r} not in:\n{text}"
+    found = re.findall(case.expect, text, re.S)
+    assert found, f"{case.kind} {case.expect!r} not in:\n{text}"
+    assert not case.once or len(found) == 1, f"{case.expect!r} {len(found)} times in:\n{text}"
+    assert case.absent is None or not re.search(case.absent, text, re.S), text
     assert rc == case.rc, text
     if case.check is not None:
         case.check(tmp_path)

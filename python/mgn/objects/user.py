@@ -54,6 +54,7 @@ from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_obje
 __all__ = [
     "OBJECT_NAME_PATTERN",
     "ImplausibleSizeWarning",
+    "UserObjectWarning",
     "check_object_name",
     "load_objects_yaml",
     "warn_implausible_size",
@@ -84,11 +85,22 @@ def check_object_name(name: object, where: str) -> str:
     )
 
 
-class ImplausibleSizeWarning(UserWarning):
+class UserObjectWarning(UserWarning):
+    """A warning about one user object (its message names the YAML file, the object and the
+    mesh). ``object_name``: the object's name, or None for a mesh outside a YAML file."""
+
+    def __init__(self, message: str, object_name: str | None = None) -> None:
+        super().__init__(message)
+        self.object_name = object_name
+
+
+class ImplausibleSizeWarning(UserObjectWarning):
     """A part is larger than 1 m or smaller than 1 mm: probably a wrong ``scale``."""
 
 
-def warn_implausible_size(vertices: np.ndarray, source: str) -> bool:
+def warn_implausible_size(
+    vertices: np.ndarray, source: str, object_name: str | None = None
+) -> bool:
     """Warn (:class:`ImplausibleSizeWarning`, naming ``source``) when the largest extent of
     ``vertices`` (m) is outside :data:`PLAUSIBLE_EXTENT_M`. Returns True when it warned."""
     v = np.asarray(vertices, np.float64).reshape(-1, 3)
@@ -104,7 +116,7 @@ def warn_implausible_size(vertices: np.ndarray, source: str) -> bool:
                "its scale (the file's unit)")  # fmt: skip
     else:
         return False
-    warnings.warn(msg, ImplausibleSizeWarning, stacklevel=3)
+    warnings.warn(ImplausibleSizeWarning(msg, object_name), stacklevel=3)
     return True
 
 
@@ -301,7 +313,7 @@ def _object_from_entry(
             f"boundary, {report.num_nonmanifold_edges} non-manifold edges); repair it, or set "
             "allow_open: true to use the thin-shell mass model"
         )
-    warn_implausible_size(mesh.vertices, f"{where}: mesh '{mesh_path}' (scale {scale:g})")
+    warn_implausible_size(mesh.vertices, f"{where}: mesh '{mesh_path}' (scale {scale:g})", name)
     if report.signed_volume < 0:
         mesh = mesh.flipped()  # inward-wound file: make the normals point outward
     mat = mesh.materials[0] if mesh.materials else None

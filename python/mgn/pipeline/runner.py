@@ -65,7 +65,7 @@ from mgn.base.atomic import _io_error, disk_full_error
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.dataset_record import read_dataset_record, removed_objects, write_dataset_record
 from mgn.io.manifest import check_manifest, write_manifest
-from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml
+from mgn.objects import ObjectSpec
 from mgn.pipeline import scene_writer
 from mgn.pipeline.config import Config, ConfigError, load_config
 from mgn.pipeline.label_cache import (
@@ -75,6 +75,7 @@ from mgn.pipeline.label_cache import (
     save_cached_labels,
     write_models,
 )
+from mgn.pipeline.sanity import load_catalogue
 from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
 from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 from mgn.render.photo import RenderSettings
@@ -553,13 +554,8 @@ class GenerateReport:
 
 def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
 
-    catalogue = list(builtin_objects())
-    sources: dict[str, str] = {}
-    for path in config.objects.user_objects:
-        for spec in load_objects_yaml(path):
-            catalogue.append(spec)
-            sources[spec.name] = os.fspath(Path(path).resolve())
-    return catalogue, sources
+    cat = load_catalogue(config)
+    return list(cat.specs), cat.sources
 
 
 def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extra: Any) -> dict:
@@ -888,7 +884,8 @@ def generate(
         )
 
     # Compose every scene first (cheap, deterministic): the object set decides the labels.
-    catalogue, sources = _catalogue(cfg)
+    cat = load_catalogue(cfg)
+    catalogue, sources = list(cat.specs), cat.sources
     split = resolve_split(cfg, catalogue)
     extra: dict[str, Any] = {"split": split.to_json()} if split.name != "all" else {}
     per_scene: list[list[ObjectSpec]] = []
@@ -896,6 +893,9 @@ def generate(
         assert num_scenes is not None
         per_scene = [compose_scene(cfg, catalogue, scene_seed(seed, i), split)
                      for i in range(num_scenes)]  # fmt: skip
+        cat.warn({s.name for specs in per_scene for s in specs})  # the objects of this run only
+    else:
+        cat.warn(cat.used_names(cfg))
 
     try:
         out.mkdir(parents=True, exist_ok=True)

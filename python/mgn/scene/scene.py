@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,6 +37,7 @@ from mgn.base.core_result import to_core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
+from mgn.objects.user import UserObjectWarning
 
 __all__ = [
     "BUILTIN",
@@ -234,7 +236,11 @@ class RemovedInstance:
 
 @functools.lru_cache(maxsize=32)
 def _user_catalogue(path: str) -> dict[str, ObjectSpec]:
-    return {s.name: s for s in load_objects_yaml(path)}
+    # The loader's warnings about the objects (size, missing files) were given where the
+    # catalogue was read (mgn generate, mgn config check); a scene does not repeat them.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserObjectWarning)
+        return {s.name: s for s in load_objects_yaml(path)}
 
 
 def resolve_object(name: str, source: str) -> ObjectSpec:
