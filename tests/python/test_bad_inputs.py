@@ -16,8 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
+import numpy as np
 import pytest
+import trimesh
 import yaml
+from PIL import Image
 
 from mgn.cli import main
 from mgn.pipeline import scene_writer
@@ -228,6 +231,45 @@ def _generate_with(*objects: str) -> Callable[[Path], list[str]]:
     return build
 
 
+# -------------------------------------------------------------------- missing material files
+
+
+def _obj_with_missing_mtl(tmp: Path) -> list[str]:
+    write(tmp / "meshes" / "part.obj", "mtllib part.mtl\n" + CUBE_OBJ)
+    return ["objects", "add", str(tmp / "meshes" / "part.obj"), "--scale", "0.05", "--to",
+            str(tmp / "o.yaml")]  # fmt: skip
+
+
+def _obj_with_missing_map_kd(tmp: Path) -> list[str]:
+    write(tmp / "part.obj", "mtllib part.mtl\nusemtl wood\n" + CUBE_OBJ)
+    write(tmp / "part.mtl", "newmtl wood\nKd 1 1 1\nmap_Kd -s 1 1 1 tex/wood grain.png\n")
+    entry = {"name": "part", "mesh": "part.obj", "scale": 0.05, "density": 500, "friction": 0.5}
+    write_yaml(tmp / "objs.yaml", {"objects": [entry]})
+    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
+            str(fast_config(tmp)), "--add", str(tmp / "objs.yaml"), "--objects", "part",
+            "--quiet"]  # fmt: skip
+
+
+def _obj_with_unreadable_texture(tmp: Path) -> list[str]:
+    write(tmp / "part.obj", "mtllib part.mtl\nusemtl paper\n" + CUBE_OBJ)
+    write(tmp / "part.mtl", "newmtl paper\nKd 0.5 0.5 0.5\nmap_Kd label.png\n")
+    write(tmp / "label.png", "not an image\n")
+    return ["objects", "add", str(tmp / "part.obj"), "--to", str(tmp / "o.yaml")]
+
+
+def _gltf_with_missing_image(tmp: Path) -> list[str]:
+    box = trimesh.creation.box((0.05, 0.05, 0.05))
+    box.visual = trimesh.visual.TextureVisuals(
+        uv=np.zeros((len(box.vertices), 2)), image=Image.new("RGB", (4, 4))
+    )
+    for name, data in trimesh.exchange.gltf.export_gltf(trimesh.Scene(box)).items():
+        (tmp / name).write_bytes(data)
+    doc = json.loads((tmp / "model.gltf").read_text())
+    doc["images"] = [{"uri": "images/label.png"}]  # an external image that is not there
+    (tmp / "model.gltf").write_text(json.dumps(doc))
+    return ["objects", "add", str(tmp / "model.gltf"), "--to", str(tmp / "o.yaml")]
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -255,6 +297,20 @@ CASES = [
     Case("disk-full-in-models", "error", _tiny_generate, 1, r"mgn: error: disk full while "
          r"writing '[^']*/ds/models/003': free some space and retry\n", check=_disk_full_reported,
          patch=_disk_full_in_models),
+    Case("missing-mtl", "warning", _obj_with_missing_mtl, 0, r"warning: [^\n]*o\.yaml: "
+         r"objects\[0\] \('part'\): mesh '[^']*meshes/part\.obj': its material library "
+         r"\(mtllib\) '[^']*meshes/part\.mtl' is missing; the object renders in its plain base "
+         r"colour \(0\.60, 0\.60, 0\.60\)", once=True),
+    Case("missing-map-kd", "warning", _obj_with_missing_map_kd, 0, r"warning: [^\n]*objs\.yaml:"
+         r" objects\[0\] \('part'\): mesh '[^']*part\.obj': its texture of material 'wood' "
+         r"'[^']*tex/wood grain\.png' is missing; the object renders in its plain base colour "
+         r"\(1\.00, 1\.00, 1\.00\)", once=True),
+    Case("unreadable-texture", "warning", _obj_with_unreadable_texture, 0, r"its texture of "
+         r"material 'paper' \(not a readable image\) '[^']*label\.png' cannot be read; the "
+         r"object renders in its plain base colour \(0\.50, 0\.50, 0\.50\)", once=True),
+    Case("missing-gltf-image", "warning", _gltf_with_missing_image, 0, r"warning: [^\n]*"
+         r"model\.gltf': its texture of material '[^']*' '[^']*images/label\.png' is missing",
+         once=True),
     Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
          r"1/1 scenes complete", absent=r"objects per scene"),
     Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,

@@ -41,7 +41,11 @@ from mgn.hardware import SuctionCup, default_cup, default_gripper
 from mgn.io.grasp_file import write_suction_labels
 from mgn.io.model_folder import object_folders, read_model_folder, write_model_folder, write_tote
 from mgn.objects import builtin_objects, default_tote, get_object, load_objects_yaml, object_names
-from mgn.objects.user import check_object_name, warn_implausible_size
+from mgn.objects.user import (
+    check_object_name,
+    warn_implausible_size,
+    warn_missing_material_files,
+)
 from mgn.suction import label_object
 from mgn.viz.suction_compare import compare_models, comparison_picture
 
@@ -202,6 +206,7 @@ def mesh_info(path: str, scale: float = 1.0, density: float = 1000.0) -> dict:
 
     mesh = load_mesh(path, scale=scale)
     warn_implausible_size(mesh.vertices, f"'{path}' (scale {scale:g})")
+    warn_missing_material_files(path, mesh, f"'{path}'")
     r = mesh.validate()
     p = mass_properties(mesh, density)
 

@@ -30,7 +30,9 @@ Any mesh file works: a material the file does not give (an OBJ without ``.mtl``,
 the default grey plastic. Numbers may be written ``2.7e3`` or ``1.0e-3``. Every error names the
 YAML file, the object and the key; a part whose largest extent (after ``scale``) is above 1 m or
 below 1 mm gets a :class:`ImplausibleSizeWarning` (a file in millimetres read as metres is the
-usual cause). ``mgn objects add MESH... --to my_objects.yaml`` writes this file for you.
+usual cause), and a material file the mesh points to that is missing or unreadable (an OBJ's
+``.mtl``, a ``map_Kd`` or glTF image) a :class:`MissingMaterialWarning` naming the file.
+``mgn objects add MESH... --to my_objects.yaml`` writes this file for you.
 """
 
 from __future__ import annotations
@@ -48,16 +50,18 @@ from PIL import Image
 
 from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
-from mgn.geometry.mesh import Material, load_mesh
+from mgn.geometry.mesh import Material, load_mesh, missing_material_files
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
 
 __all__ = [
     "OBJECT_NAME_PATTERN",
     "ImplausibleSizeWarning",
+    "MissingMaterialWarning",
     "UserObjectWarning",
     "check_object_name",
     "load_objects_yaml",
     "warn_implausible_size",
+    "warn_missing_material_files",
 ]
 
 #: Largest extents (m) outside which a part is reported as implausible for a tote.
@@ -96,6 +100,40 @@ class UserObjectWarning(UserWarning):
 
 class ImplausibleSizeWarning(UserObjectWarning):
     """A part is larger than 1 m or smaller than 1 mm: probably a wrong ``scale``."""
+
+
+class MissingMaterialWarning(UserObjectWarning):
+    """A material file of a mesh (an OBJ's ``.mtl``, a ``map_Kd`` or glTF texture image) is not
+    where the mesh file points, or cannot be read as an image: the object renders in its plain
+    base colour."""
+
+
+def warn_missing_material_files(
+    path: str | os.PathLike[str],
+    mesh: Any,
+    source: str,
+    object_name: str | None = None,
+    unreadable: list[tuple[str, str]] | None = None,
+) -> list[str]:
+    """Warn (:class:`MissingMaterialWarning`, naming ``source`` and each file) for every
+    material file the mesh file ``path`` points to that is missing
+    (:func:`mgn.geometry.mesh.missing_material_files`), and for the (what, file) pairs of
+    ``unreadable`` (files there, but not images). Returns the files warned about."""
+    found = missing_material_files(path, mesh) + list(unreadable or ())
+    mat = mesh.materials[0] if mesh.materials else None
+    rgb = ", ".join(f"{c:.2f}" for c in (mat.base_color[:3] if mat is not None else (0.7,) * 3))
+    for what, file in found:
+        missing = "cannot be read" if "readable" in what else "is missing"
+        warnings.warn(
+            MissingMaterialWarning(
+                f"{source}: its {what} '{file}' {missing}; the object renders in its plain "
+                f"base colour ({rgb}) instead (put the file there, or set 'color' in the YAML "
+                "entry)",
+                object_name,
+            ),
+            stacklevel=3,
+        )
+    return [file for _, file in found]
 
 
 def warn_implausible_size(
@@ -176,6 +214,24 @@ def _embedded_texture(data: bytes) -> np.ndarray | None:
             return np.asarray(img.convert("RGB"), dtype=np.uint8)
     except OSError:
         return None
+
+
+def _base_color_texture(mat: Any, mesh_path: Path) -> tuple[np.ndarray | None, list]:
+    """The RGB texture of material ``mat`` (its file, else its embedded image), and the
+    (what, file) pairs of the images that are there but cannot be read."""
+    if mat is None:
+        return None, []
+    unreadable = []
+    texture = _texture(mat.texture_path)
+    if texture is None and mat.texture_path and os.path.isfile(mat.texture_path):
+        unreadable.append((f"texture of material '{mat.name}' (not a readable image)",
+                           str(mat.texture_path)))  # fmt: skip
+    if texture is None:
+        texture = _embedded_texture(bytes(mat.texture_data))
+        if texture is None and len(mat.texture_data):
+            unreadable.append((f"embedded texture of material '{mat.name}' (not a readable "
+                               "image)", os.fspath(mesh_path)))  # fmt: skip
+    return texture, unreadable
 
 
 def _number_in(entry: dict[str, Any], key: str, where: str, lo: float, hi: float) -> float | None:
@@ -314,14 +370,12 @@ def _object_from_entry(
             "allow_open: true to use the thin-shell mass model"
         )
     warn_implausible_size(mesh.vertices, f"{where}: mesh '{mesh_path}' (scale {scale:g})", name)
+    mat = mesh.materials[0] if mesh.materials else None
+    texture, unreadable = _base_color_texture(mat, mesh_path)
+    warn_missing_material_files(mesh_path, mesh, f"{where}: mesh '{mesh_path}'", name, unreadable)
     if report.signed_volume < 0:
         mesh = mesh.flipped()  # inward-wound file: make the normals point outward
-    mat = mesh.materials[0] if mesh.materials else None
-    texture = None
-    if mat is not None:
-        texture = _texture(mat.texture_path)
-        if texture is None:
-            texture = _embedded_texture(bytes(mat.texture_data))
+        mat = mesh.materials[0] if mesh.materials else None
     uvs = mesh.uvs if texture is not None else None
     if uvs is not None and (np.any(uvs < 0) or np.any(uvs > 1)):
         uvs = np.mod(uvs, 1.0)  # wrap repeating uvs into the unit square
