@@ -270,6 +270,35 @@ def _gltf_with_missing_image(tmp: Path) -> list[str]:
     return ["objects", "add", str(tmp / "model.gltf"), "--to", str(tmp / "o.yaml")]
 
 
+# ------------------------------------------------------------ implausible bins and counts
+
+
+def _bin_in_millimetres(tmp: Path) -> list[str]:
+    """A bin drawn in millimetres (outer 416 x 316 x 160 mm) read as metres: 416 m across."""
+    trimesh.creation.box(bounds=[(-208, -158, -10), (208, 158, 150)]).export(tmp / "bin.stl")
+    return ["config", "check", str(write_yaml(tmp / "cfg.yaml", {"tote": {"mesh": "bin.stl"}}))]
+
+
+def _inner_box_in_millimetres(tmp: Path) -> list[str]:
+    tote = {"inner_length": 400, "inner_width": 300, "inner_height": 150}
+    return ["config", "check", str(write_yaml(tmp / "cfg.yaml", {"tote": tote}))]
+
+
+def _million_objects(command: str) -> Callable[[Path], list[str]]:
+    def build(tmp: Path) -> list[str]:
+        cfg = fast_config(tmp, objects={"count": 1_000_000})
+        if command == "check":
+            return ["config", "check", str(cfg)]
+        return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
+                "--quiet"]  # fmt: skip
+
+    return build
+
+
+def _nothing_written(tmp: Path) -> None:
+    assert not (tmp / "ds").exists()
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -311,6 +340,18 @@ CASES = [
     Case("missing-gltf-image", "warning", _gltf_with_missing_image, 0, r"warning: [^\n]*"
          r"model\.gltf': its texture of material '[^']*' '[^']*images/label\.png' is missing",
          once=True),
+    Case("bin-in-millimetres", "warning", _bin_in_millimetres, 0, r"warning: tote\.mesh '[^']*"
+         r"bin\.stl' \(mesh_scale 1\) is 416 m across, too large for a bin around an inner box "
+         r"of 0\.4 x 0\.3 x 0\.15 m; if the file is in millimetres, use tote\.mesh_scale 0\.001",
+         once=True),
+    Case("inner-box-in-millimetres", "warning", _inner_box_in_millimetres, 0, r"warning: tote\."
+         r"inner_length / inner_width / inner_height: 400 x 300 x 150 m is too large for a bin"),
+    Case("million-objects-check", "error", _million_objects("check"), 1, r"error: objects\.count: "
+         r"1000000 objects per scene; their boxes add up to [0-9.e+]+x the tote's inner volume "
+         r"\(more than 100x\), about 24 fit; expected at most about 2400"),
+    Case("million-objects-generate", "error", _million_objects("generate"), 1, r"error: "
+         r"generate: the config fails every scene .*\n  objects\.count: 1000000 objects",
+         check=_nothing_written),
     Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
          r"1/1 scenes complete", absent=r"objects per scene"),
     Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,

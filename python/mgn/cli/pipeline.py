@@ -33,7 +33,7 @@ from mgn.io.stats import dataset_stats, format_stats
 from mgn.pipeline.config import SelectionConfig, dump_config, load_config
 from mgn.pipeline.label_cache import label_cache_dir
 from mgn.pipeline.runner import generate
-from mgn.pipeline.sanity import config_warnings, load_catalogue
+from mgn.pipeline.sanity import config_errors, config_warnings, load_catalogue
 from mgn.pipeline.testset import parse_quota
 from mgn.render.photo import add_engine_arguments, settings_from_args
 
@@ -130,10 +130,17 @@ def _cmd_config_check(args: argparse.Namespace) -> int:
 
     config = load_config(args.file)
     views = len(config.camera.view_indices)
-    found = config_warnings(config, load_catalogue(config))
+    catalogue = load_catalogue(config)
+    errors = config_errors(config, catalogue)
+    found = config_warnings(config, catalogue)
+    for e in errors:
+        print(f"mgn: error: {e}", file=sys.stderr)
     for w in found:
         print(f"mgn: warning: {w}", file=sys.stderr)
     extra = f"; {len(found)} warning(s)" if found else ""
+    if errors:
+        print(f"{args.file}: INVALID: {len(errors)} setting(s) fail every scene (above){extra}")
+        return 1
     print(f"{args.file}: valid ({config.camera.rig} rig, {views} views per scene{extra})")
     return 0
 

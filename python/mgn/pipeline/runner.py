@@ -75,7 +75,7 @@ from mgn.pipeline.label_cache import (
     save_cached_labels,
     write_models,
 )
-from mgn.pipeline.sanity import load_catalogue
+from mgn.pipeline.sanity import config_errors, load_catalogue
 from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
 from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 from mgn.render.photo import RenderSettings
@@ -885,6 +885,12 @@ def generate(
 
     # Compose every scene first (cheap, deterministic): the object set decides the labels.
     cat = load_catalogue(cfg)
+    problems = config_errors(cfg, cat)
+    if problems:
+        raise ConfigError(
+            "generate: the config fails every scene (mgn config check says the same):\n  "
+            + "\n  ".join(problems)
+        )
     catalogue, sources = list(cat.specs), cat.sources
     split = resolve_split(cfg, catalogue)
     extra: dict[str, Any] = {"split": split.to_json()} if split.name != "all" else {}

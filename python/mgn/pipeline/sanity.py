@@ -1,6 +1,11 @@
-"""Warnings about configurations that run but give degenerate datasets (``mgn config check``,
-``mgn generate``): far more objects than the tote holds, images too small to label, cameras that
-cannot see into the tote, objects too small to render or grasp. Each warning names the setting.
+"""Checks of a configuration beyond its keys and values (``mgn config check``, ``mgn generate``).
+
+:func:`config_errors`: what fails every scene or leaves every scene empty; ``mgn config check``
+exits 1 on it and :func:`mgn.pipeline.generate` refuses the config before writing anything.
+:func:`config_warnings`: what runs but gives a degenerate dataset: far more objects than the tote
+holds, images too small to label, cameras that cannot see into the tote, objects too small to
+render or grasp, a bin in the wrong unit, and the user-object loader's warnings about the objects
+the config uses. Each message names the setting.
 """
 
 from __future__ import annotations
@@ -11,16 +16,21 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml
+import numpy as np
+
+from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml, make_tote
 from mgn.objects.user import ImplausibleSizeWarning, UserObjectWarning
 from mgn.pipeline.config import Config
 from mgn.pipeline.scene_writer import scene_intrinsics
 
 __all__ = [
     "MAX_OBJECT_FILL",
+    "MAX_OBJECT_OVERFILL",
     "MIN_IMAGE_PX",
     "MIN_OBJECT_SIZE",
+    "PLAUSIBLE_TOTE_EXTENT_M",
     "Catalogue",
+    "config_errors",
     "config_warnings",
     "load_catalogue",
 ]
@@ -29,6 +39,12 @@ __all__ = [
 #: tote's inner volume (a loose pile fills about half of its boxes' volume; beyond this most
 #: objects are removed as they leave the tote).
 MAX_OBJECT_FILL = 1.0
+#: Refuse a config whose objects' boxes add up to more than this multiple of the tote's inner
+#: volume: orders of magnitude beyond what fits (the drop would only allocate and fail).
+MAX_OBJECT_OVERFILL = 100.0
+#: Largest extents (m) of a bin (its mesh, its inner box) outside which it is reported as
+#: implausible (a file in millimetres read as metres is the usual cause).
+PLAUSIBLE_TOTE_EXTENT_M = (0.05, 5.0)
 #: Warn when an image side is smaller than this, px.
 MIN_IMAGE_PX = 64
 #: Warn for objects whose largest extent is smaller than this, m.
@@ -143,9 +159,6 @@ def config_warnings(config: Config, catalogue: Catalogue | None = None) -> list[
     catalogue = load_catalogue(config) if catalogue is None else catalogue
     sizes = _sizes(catalogue)
     used = catalogue.used_names(config)
-    by_id = {str(s.category_id): s.name for s in catalogue.specs}
-    names = [by_id.get(str(n), str(n)) for n in (config.objects.names or config.objects.categories
-                                                 or ())]  # fmt: skip
     for name in sorted(used):
         extent = sizes.get(name, (1.0, 0.0))[0]
         notes = catalogue.notes.get(name, ())
@@ -160,15 +173,77 @@ def config_warnings(config: Config, catalogue: Catalogue | None = None) -> list[
                 "and get no grasp"
             )
         found.extend(str(w) for w in notes)
+    fill = _fill(config, catalogue, sizes)
+    if fill is not None and fill[2] <= MAX_OBJECT_OVERFILL:
+        key, n, ratio, fits = fill
+        found.append(
+            f"{key}: {n} objects per scene; their boxes add up to {ratio:.1f}x the tote's inner "
+            f"volume, so most will leave the tote and be removed (about {fits} fit)"
+        )
+    found += _tote_warnings(config)
+    return found
+
+
+def _fill(
+    config: Config, catalogue: Catalogue, sizes: dict[str, tuple[float, float]]
+) -> tuple[str, int, float, int] | None:
+    """(setting, objects per scene, their boxes / the tote's inner volume, about how many fit)
+    when the boxes add up to more than :data:`MAX_OBJECT_FILL` tote volumes; else None."""
+    tote = config.tote
     key, n = _asked_objects(config)
+    by_id = {str(s.category_id): s.name for s in catalogue.specs}
+    chosen = config.objects.names or config.objects.categories or ()
+    names = [by_id.get(str(c), str(c)) for c in chosen]
     pool = [sizes[s] for s in names if s in sizes] or list(sizes.values())
     mean_box = sum(v for _, v in pool) / max(len(pool), 1)
     tote_volume = tote.inner_length * tote.inner_width * tote.inner_height
-    if n * mean_box > MAX_OBJECT_FILL * tote_volume:
-        fits = int(MAX_OBJECT_FILL * tote_volume / mean_box) if mean_box > 0 else n
+    if n * mean_box <= MAX_OBJECT_FILL * tote_volume:
+        return None
+    fits = int(MAX_OBJECT_FILL * tote_volume / mean_box) if mean_box > 0 else n
+    return key, n, n * mean_box / tote_volume, fits
+
+
+def _tote_warnings(config: Config) -> list[str]:
+    """A bin (its mesh or its inner box) outside :data:`PLAUSIBLE_TOTE_EXTENT_M`: probably a
+    file or a number in the wrong unit."""
+    tote, out = config.tote, []
+    lo, hi = PLAUSIBLE_TOTE_EXTENT_M
+    inner = max(tote.inner_length, tote.inner_width, tote.inner_height)
+    if not lo <= inner <= hi:
+        out.append(
+            f"tote.inner_length / inner_width / inner_height: {tote.inner_length:g} x "
+            f"{tote.inner_width:g} x {tote.inner_height:g} m is "
+            + ("too large" if inner > hi else "too small")
+            + f" for a bin (expected {lo:g} .. {hi:g} m); the sizes are in metres"
+        )
+    if tote.mesh is not None:
+        v, _ = make_tote(tote)
+        extent = float(np.ptp(v, axis=0).max())
+        if not lo <= extent <= hi:
+            hint = ("if the file is in millimetres, use tote.mesh_scale 0.001" if extent > hi
+                    else "check tote.mesh_scale (the file's unit)")  # fmt: skip
+            out.append(
+                f"tote.mesh '{tote.mesh}' (mesh_scale {tote.mesh_scale:g}) is {extent:.3g} m "
+                f"across, too {'large' if extent > hi else 'small'} for a bin around an inner box "
+                f"of {tote.inner_length:g} x {tote.inner_width:g} x {tote.inner_height:g} m; "
+                f"{hint}"
+            )
+    return out
+
+
+def config_errors(config: Config, catalogue: Catalogue | None = None) -> list[str]:
+    """What makes every scene of ``config`` fail or come out empty, each naming the setting:
+    far more objects than the tote could ever hold (refused before anything is allocated).
+    An empty list: nothing that fails for sure. ``mgn config check`` prints these and exits 1;
+    :func:`mgn.pipeline.generate` refuses such a config before it writes anything."""
+    catalogue = load_catalogue(config) if catalogue is None else catalogue
+    found: list[str] = []
+    fill = _fill(config, catalogue, _sizes(catalogue))
+    if fill is not None and fill[2] > MAX_OBJECT_OVERFILL:
+        key, n, ratio, fits = fill
         found.append(
-            f"{key}: {n} objects per scene; their boxes add up to "
-            f"{n * mean_box / tote_volume:.1f}x the tote's inner volume, so most will leave the "
-            f"tote and be removed (about {fits} fit)"
+            f"{key}: {n} objects per scene; their boxes add up to {ratio:.3g}x the tote's inner "
+            f"volume (more than {MAX_OBJECT_OVERFILL:g}x), about {fits} fit; expected at most "
+            f"about {int(fits * MAX_OBJECT_OVERFILL / MAX_OBJECT_FILL)}"
         )
     return found
