@@ -6,6 +6,8 @@ runs the ``mgn`` command line as a user would; one parametrised test checks them
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import errno
 import io
 import json
 import os
@@ -23,7 +25,8 @@ import yaml
 from PIL import Image
 
 from mgn.cli import main
-from mgn.pipeline import scene_writer
+from mgn.pipeline import runner, scene_writer
+from mgn.scene.scene import RemovedInstance, Scene
 
 #: Every object label off, one tiny view, a short drop: a generate run of about a second.
 FAST = {
@@ -299,6 +302,70 @@ def _nothing_written(tmp: Path) -> None:
     assert not (tmp / "ds").exists()
 
 
+# ------------------------------------------------------ configs that fail (or empty) every scene
+
+
+def _check(**sections: dict) -> Callable[[Path], list[str]]:
+    def build(tmp: Path) -> list[str]:
+        return ["config", "check", str(fast_config(tmp, **sections))]
+
+    return build
+
+
+def _generate(**sections: dict) -> Callable[[Path], list[str]]:
+    def build(tmp: Path) -> list[str]:
+        return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
+                str(fast_config(tmp, **sections)), "--objects", "box_tea", "--quiet"]  # fmt: skip
+
+    return build
+
+
+def _poses(*eyes: list[float], away: bool = False) -> dict:
+    """Cameras at ``eyes`` looking at the tote centre, or (``away``) straight up."""
+    look = {"target": [0, 0, 2.0], "up": [0, 1, 0]} if away else {"target": [0, 0, 0]}
+    return {"rig": "poses", "views": None, "poses": [{"eye": e, **look} for e in eyes]}
+
+
+def _one_micron_part(tmp: Path) -> list[str]:
+    cube_objects(tmp, name="speck", scale=1e-6)
+    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
+            str(fast_config(tmp)), "--add", str(tmp / "objs.yaml"), "--objects", "speck",
+            "--quiet"]  # fmt: skip
+
+
+def _part_larger_than_tote(tmp: Path) -> list[str]:
+    cube_objects(tmp, name="big_part", scale=0.6)  # 60 cm: plausible, but not in this tote
+    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
+            str(fast_config(tmp)), "--add", str(tmp / "objs.yaml"), "--objects", "big_part",
+            "box_tea", "--quiet"]  # fmt: skip
+
+
+def _drawn_part_larger_than_tote(tmp: Path) -> list[str]:
+    cube_objects(tmp, name="big_part", scale=0.6)
+    objects = {"categories": ["box_tea", "big_part"], "count": 1, "copies": [1, 1],
+               "user_objects": [str(tmp / "objs.yaml")]}  # fmt: skip
+    return ["config", "check", str(fast_config(tmp, objects=objects))]
+
+
+def _everything_leaves(mp: pytest.MonkeyPatch) -> None:
+    """The drop ends with no object in the tote (as for a part that falls through the floor)."""
+    real = runner.drop_task_scene
+
+    def empty(task: runner.SceneTask) -> Scene:
+        scene = real(task)
+        gone = tuple(RemovedInstance(i.name, i.source, "left_tote") for i in scene.instances)
+        return dataclasses.replace(scene, instances=(), removed=gone)
+
+    mp.setattr(runner, "drop_task_scene", empty)
+
+
+def _disk_full_in_scene(mp: pytest.MonkeyPatch) -> None:
+    def full(*args: object, **kwargs: object) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device", "0_rgb.png")
+
+    mp.setattr(scene_writer, "write_scene", full)
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -352,6 +419,43 @@ CASES = [
     Case("million-objects-generate", "error", _million_objects("generate"), 1, r"error: "
          r"generate: the config fails every scene .*\n  objects\.count: 1000000 objects",
          check=_nothing_written),
+    Case("tote-smaller-than-window", "error", _check(tote={"inner_length": 0.1,
+         "inner_width": 0.05}), 1, r"error: drop\.window_min / drop\.window_max: the release "
+         r"window x \[-0\.06, 0\.06\], y \[-0\.03, 0\.03\], z >= 0\.3 m does not lie above "
+         r"the tote's cavity \(\|x\| <= 0\.05, \|y\| <= 0\.025"),
+    Case("tote-smaller-than-window-generate", "error", _generate(tote={"inner_length": 0.1,
+         "inner_width": 0.05}), 1, r"generate: the config fails every scene .*drop\.window_min",
+         check=_nothing_written),
+    Case("max-bounces", "error", _check(render={"engine": "path", "max_bounces": 2000}), 1,
+         r"config key 'render\.max_bounces': PathTraceOptions\.max_bounces must be in "
+         r"\[0, 1000\], got 2000"),
+    Case("unknown-name", "error", _check(objects={"names": ["box_tea", "box_tee"]}), 1,
+         r"error: objects\.names: unknown object\(s\) 'box_tee'; known: [^\n]*box_tea, "),
+    Case("camera-facing-away", "error", _check(camera=_poses([0, 0, 1.0], away=True)), 1, r"error: "
+         r"camera\.poses\[0\] \(eye \[0\.0, 0\.0, 1\.0\] m\): the camera looks away from "
+         r"the tote"),
+    Case("camera-below-floor", "error", _check(camera=_poses([0.3, 0, -0.5])), 1, r"error: "
+         r"camera\.poses: no camera sees into the tote .*camera\.poses\[0\] \(eye \[0\.3, "
+         r"0\.0, -0\.5\] m\): the camera is below the tote's floor \(z = -0\.5 m < 0\)"),
+    Case("one-camera-below-floor", "warning", _check(camera=_poses([0.3, 0, -0.5], [0.3, 0, 0.8])),
+         0, r"warning: camera\.poses\[0\] \(eye \[0\.3, 0\.0, -0\.5\] m\): the camera is "
+         r"below the tote's floor", once=True, absent=r"poses\[1\]"),
+    Case("one-micron-part", "error", _one_micron_part, 1, r"generate: the config fails every "
+         r"scene .*objects\.names: every object is smaller than 1 mm \('speck' 0\.001 mm\)",
+         check=_nothing_written),
+    Case("part-larger-than-tote", "error", _part_larger_than_tote, 1, r"generate: the config "
+         r"fails every scene .*objects\.names: object 'big_part' \(0\.6 x 0\.6 x 0\.6 m\) is "
+         r"larger than the tote's cavity \(0\.4 x 0\.3 m\)", check=_nothing_written),
+    Case("drawn-part-larger-than-tote", "warning", _drawn_part_larger_than_tote, 0, r"warning: "
+         r"objects\.categories: the objects of each scene are drawn at random, and 'big_part' "
+         r"cannot lie in the tote's cavity: every scene that draws one fails"),
+    Case("scene-ends-empty", "error", _tiny_generate, 1, r"FAILED scene0 \(seed \d+\): "
+         r"InvalidArgumentError: no object stayed in the tote \('box_tea' \(left_tote\)\).*"
+         r"scene0 failed the way they will fail on every run .* fix the cause above first",
+         absent=r"redo the missing", patch=_everything_leaves),
+    Case("disk-full-scene-resume", "error", _tiny_generate, 1, r"FAILED scene0 \(seed \d+\): "
+         r"disk full while writing scene0 .*rerun with --resume to redo the missing scenes",
+         absent=r"every run", patch=_disk_full_in_scene),
     Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
          r"1/1 scenes complete", absent=r"objects per scene"),
     Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,

@@ -17,11 +17,12 @@ import yaml
 from mgn.cli import main
 from mgn.io.validate import validate_dataset
 from mgn.pipeline.config import load_config
-from mgn.pipeline.sanity import config_warnings
+from mgn.pipeline.sanity import config_errors, config_warnings
 
 
 def test_default_config_has_no_warning() -> None:
     assert config_warnings(load_config(None)) == []
+    assert config_errors(load_config(None)) == []
 
 
 def test_thousand_objects_are_named() -> None:

@@ -203,6 +203,13 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
     try:
         scene = drop_task_scene(task) if dropped is None else dropped.result()
         times["drop"] = time.perf_counter() - t0
+        if len(scene) == 0:
+            left = ", ".join(f"'{r.name}' ({r.reason})" for r in scene.removed)
+            raise InvalidArgumentError(
+                f"no object stayed in the tote ({left or 'none was dropped'}): the scene would "
+                "hold nothing to see or grasp; check the objects' sizes and scales (mgn config "
+                "check)"
+            )
         t1 = time.perf_counter()
         if tmp.exists():
             shutil.rmtree(tmp)
@@ -545,8 +552,35 @@ class GenerateReport:
                 "with --resume and a larger --max-scenes to continue"
             )
         elif not self.complete:
-            lines.append("  rerun with --resume to redo the missing scenes")
+            lines.append(self._resume_advice())
         return "\n".join(lines)
+
+    def _resume_advice(self) -> str:
+        """What to do about the failed and not-run scenes: ``--resume`` redoes a scene, and
+        helps where the failure came from outside (a full disk, a worker that died, memory); a
+        scene depends only on its seed and the config, so any other failure comes back."""
+        redo = [r.index for r in self.failed if _transient(r)] + list(self.not_run)
+        same = [r.index for r in self.failed if not _transient(r)]
+        if not same:
+            return "  rerun with --resume to redo the missing scenes"
+        names = ", ".join(f"scene{i}" for i in same)
+        text = (
+            f"  {names} failed the way they will fail on every run (a scene depends only on its "
+            "seed and the config): fix the cause above first (mgn config check CONFIG checks "
+            "the config)"
+        )
+        if redo:
+            text += f"; then --resume also redoes {', '.join(f'scene{i}' for i in sorted(redo))}"
+        else:
+            text += ", then rerun with --resume"
+        return text
+
+
+def _transient(result: SceneResult) -> bool:
+    """A failure that may not come back on a rerun: a full disk, a worker process that died,
+    memory."""
+    error = result.error or ""
+    return result.disk_full or error.startswith("worker failed") or "MemoryError" in error
 
 
 # ---------------------------------------------------------------------------------- generate

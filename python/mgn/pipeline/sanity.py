@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml, make_tote
-from mgn.objects.user import ImplausibleSizeWarning, UserObjectWarning
+from mgn.objects.user import PLAUSIBLE_EXTENT_M, ImplausibleSizeWarning, UserObjectWarning
 from mgn.pipeline.config import Config
 from mgn.pipeline.scene_writer import scene_intrinsics
 
@@ -181,6 +181,18 @@ def config_warnings(config: Config, catalogue: Catalogue | None = None) -> list[
             f"volume, so most will leave the tote and be removed (about {fits} fit)"
         )
     found += _tote_warnings(config)
+    found += _camera_problems(config)[1]
+    o = config.objects
+    if o.names is None and (o.categories is None or o.count is not None):
+        used = catalogue.used_names(config)
+        large = sorted(n for n in _too_large(config, catalogue) if n in used)
+        if large:
+            key = "objects.count" if o.categories is None else "objects.categories"
+            found.append(
+                f"{key}: the objects of each scene are drawn at random, and "
+                f"{', '.join(repr(n) for n in large)} cannot lie in the tote's cavity: every "
+                "scene that draws one fails"
+            )
     return found
 
 
@@ -231,13 +243,139 @@ def _tote_warnings(config: Config) -> list[str]:
     return out
 
 
+def _unknown_names(config: Config, catalogue: Catalogue) -> list[str]:
+    """objects.names / objects.categories entries that name no object of the catalogue."""
+    known = {s.name for s in catalogue.specs} | {str(s.category_id) for s in catalogue.specs}
+    out = []
+    for key in ("names", "categories"):
+        chosen = getattr(config.objects, key) or ()
+        unknown = sorted({str(n) for n in chosen if str(n) not in known})
+        if unknown:
+            more = " (user objects: objects.user_objects or --add)" if not catalogue.sources else ""
+            out.append(
+                f"objects.{key}: unknown object(s) {', '.join(map(repr, unknown))}; known: "
+                f"{', '.join(sorted(s.name for s in catalogue.specs))}, or their category ids"
+                f"{more}"
+            )
+    return out
+
+
+def _too_large(config: Config, catalogue: Catalogue) -> dict[str, tuple[float, float, float]]:
+    """name -> sorted extents (m) of the objects that cannot lie in the tote's cavity (the
+    drop's rule: second-largest extent <= the cavity's width, largest <= its diagonal)."""
+    t = config.tote
+    width, diag = min(t.inner_length, t.inner_width), math.hypot(t.inner_length, t.inner_width)
+    out = {}
+    for s in catalogue.specs:
+        e = sorted(float(x) for x in np.ptp(np.asarray(s.vertices, np.float64), axis=0))
+        if e[1] > width or e[2] > diag:
+            out[s.name] = (e[0], e[1], e[2])
+    return out
+
+
+def _window_errors(config: Config) -> list[str]:
+    """The drop's release window must lie above the tote's cavity."""
+    t, d = config.tote, config.drop
+    lo, hi = np.asarray(d.window_min, np.float64), np.asarray(d.window_max, np.float64)
+    hx, hy = 0.5 * t.inner_length, 0.5 * t.inner_width
+    if lo[0] < -hx or hi[0] > hx or lo[1] < -hy or hi[1] > hy or lo[2] < 0:
+        return [
+            f"drop.window_min / drop.window_max: the release window x [{lo[0]:g}, {hi[0]:g}], "
+            f"y [{lo[1]:g}, {hi[1]:g}], z >= {lo[2]:g} m does not lie above the tote's cavity "
+            f"(|x| <= {hx:g}, |y| <= {hy:g}, z >= 0; tote.inner_length x inner_width = "
+            f"{t.inner_length:g} x {t.inner_width:g} m): every drop fails; make the window "
+            "smaller or the tote larger"
+        ]
+    return []
+
+
+def _camera_problems(config: Config) -> tuple[list[str], list[str]]:
+    """(errors, warnings) of the cameras of ``camera.rig: poses``: a camera with the whole tote
+    behind it fails every scene (error); one below the tote's floor, or seeing no part of the
+    cavity, gives views without any object (a warning; an error when no camera sees in)."""
+    cam = config.camera
+    if cam.rig != "poses":
+        return [], []
+    t = config.tote
+    K = scene_intrinsics(cam)
+    hx, hy, h = 0.5 * t.inner_length, 0.5 * t.inner_width, t.inner_height
+    ox, oy = t.outer_size[0] / 2, t.outer_size[1] / 2
+    outer = np.array([[x, y, z] for x in (-ox, ox) for y in (-oy, oy)
+                      for z in (-t.floor_thickness, h)])  # fmt: skip
+    g = np.linspace(-1.0, 1.0, 9)
+    cavity = np.array([[a * hx, b * hy, z] for a in g for b in g for z in (0.0, 0.5 * h)])
+    errors, warns, blind = [], [], 0
+    for i, X in enumerate(np.asarray(cam.poses, np.float64)):
+        if i not in cam.view_indices:
+            continue
+        R, c = X[:3, :3], X[:3, 3]
+        where = f"camera.poses[{i}] (eye {np.round(c, 3).tolist()} m)"
+        z_outer = (outer - c) @ R[:, 2]
+        if np.all(z_outer <= 0):
+            errors.append(
+                f"{where}: the camera looks away from the tote (all of it is behind the camera; "
+                "OpenCV frame, z forward): rendering its view fails every scene; point it at the "
+                "tote (e.g. {eye: [...], target: [0, 0, 0]})"
+            )
+            continue
+        pc = (cavity - c) @ R
+        front = pc[:, 2] > 1e-6
+        u = K.fx * pc[front, 0] / pc[front, 2] + K.cx
+        v = K.fy * pc[front, 1] / pc[front, 2] + K.cy
+        sees = bool(np.any((u >= 0) & (u <= K.width) & (v >= 0) & (v <= K.height)))
+        if c[2] < 0:
+            blind += 1
+            warns.append(
+                f"{where}: the camera is below the tote's floor (z = {c[2]:g} m < 0): it sees "
+                "the underside, and its views show no object"
+            )
+        elif not sees:
+            blind += 1
+            warns.append(f"{where}: no part of the tote's cavity is in its image; its views "
+                         "show no object")  # fmt: skip
+    if blind and blind == len(cam.view_indices) and not errors:
+        errors.append(
+            "camera.poses: no camera sees into the tote (every view would show no object): "
+            + "; ".join(warns)
+        )
+        warns = []
+    return errors, warns
+
+
 def config_errors(config: Config, catalogue: Catalogue | None = None) -> list[str]:
     """What makes every scene of ``config`` fail or come out empty, each naming the setting:
-    far more objects than the tote could ever hold (refused before anything is allocated).
-    An empty list: nothing that fails for sure. ``mgn config check`` prints these and exits 1;
-    :func:`mgn.pipeline.generate` refuses such a config before it writes anything."""
+    unknown object names, an object larger than the tote that every scene holds, a release
+    window outside the tote, objects all below 1 mm, far more objects than the tote could ever
+    hold (refused before anything is allocated), a camera facing away from the tote, cameras
+    none of which sees into it. An empty list: nothing that fails for sure. ``mgn config check``
+    prints these and exits 1; :func:`mgn.pipeline.generate` refuses such a config before it
+    writes anything. (Out-of-range values, e.g. ``render.max_bounces``, fail in
+    :func:`mgn.pipeline.load_config` already.)"""
     catalogue = load_catalogue(config) if catalogue is None else catalogue
-    found: list[str] = []
+    found: list[str] = _unknown_names(config, catalogue)
+    found += _window_errors(config)
+    o = config.objects
+    chosen = o.names if o.names is not None else o.categories
+    if chosen is not None and not found:
+        used = catalogue.used_names(config)
+        large = {n: e for n, e in _too_large(config, catalogue).items() if n in used}
+        key = "objects.names" if o.names is not None else "objects.categories"
+        every = o.names is not None or o.count is None  # else a scene draws some categories
+        for name, e in sorted(large.items()) if every else ():
+            t = config.tote
+            found.append(
+                f"{key}: object '{name}' ({e[2]:.3g} x {e[1]:.3g} x {e[0]:.3g} m) is larger than "
+                f"the tote's cavity ({t.inner_length:g} x {t.inner_width:g} m): every scene that "
+                "holds it fails (check its scale, or use a larger tote)"
+            )
+        sizes = _sizes(catalogue)
+        tiny = [n for n in sorted(used) if sizes.get(n, (1.0, 0.0))[0] < PLAUSIBLE_EXTENT_M[0]]
+        if used and len(tiny) == len(used):
+            found.append(
+                f"{key}: every object is smaller than {PLAUSIBLE_EXTENT_M[0] * 1e3:g} mm ("
+                + ", ".join(f"'{n}' {sizes[n][0] * 1e3:.3g} mm" for n in tiny)
+                + "): no scene would hold an object one can see or grasp; check their scale"
+            )
     fill = _fill(config, catalogue, _sizes(catalogue))
     if fill is not None and fill[2] > MAX_OBJECT_OVERFILL:
         key, n, ratio, fits = fill
@@ -246,4 +384,5 @@ def config_errors(config: Config, catalogue: Catalogue | None = None) -> list[st
             f"volume (more than {MAX_OBJECT_OVERFILL:g}x), about {fits} fit; expected at most "
             f"about {int(fits * MAX_OBJECT_OVERFILL / MAX_OBJECT_FILL)}"
         )
+    found += _camera_problems(config)[0]
     return found
