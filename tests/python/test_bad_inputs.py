@@ -10,9 +10,11 @@ import dataclasses
 import errno
 import io
 import json
+import math
 import os
 import re
 import stat
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +27,10 @@ import yaml
 from PIL import Image
 
 from mgn.cli import main
+from mgn.geometry.mesh import Material, mass_properties, mesh_from_arrays
+from mgn.geometry.repair import repair_mesh
+from mgn.objects import load_objects_yaml
+from mgn.objects.user import UserObjectWarning
 from mgn.pipeline import runner, scene_writer
 from mgn.scene.scene import RemovedInstance, Scene
 
@@ -366,6 +372,84 @@ def _disk_full_in_scene(mp: pytest.MonkeyPatch) -> None:
     mp.setattr(scene_writer, "write_scene", full)
 
 
+# ------------------------------------------------------------------ nearly closed meshes
+
+#: A 10 x 5 x 1.2 cm box: 60 cm^3, 60 g at 1000 kg/m^3.
+BOX = trimesh.creation.box((0.1, 0.05, 0.012))
+#: A bottle-like 48-sided prism, r 4 cm, h 12 cm: 0.5 n r^2 sin(2 pi / n) h m^3.
+BOTTLE = trimesh.creation.cylinder(radius=0.04, height=0.12, sections=48)
+BOTTLE_G = 0.5 * 48 * 0.04**2 * math.sin(2 * math.pi / 48) * 0.12 * 1e6
+
+
+def _add_mesh(name: str, vertices: np.ndarray, faces: np.ndarray) -> Callable[[Path], list[str]]:
+    def build(tmp: Path) -> list[str]:
+        trimesh.Trimesh(vertices, faces, process=False).export(tmp / f"{name}.ply")
+        return ["objects", "add", str(tmp / f"{name}.ply"), "--to", str(tmp / "o.yaml"),
+                "--density", "1000"]  # fmt: skip
+
+    return build
+
+
+def _mixed_winding() -> tuple[np.ndarray, np.ndarray]:
+    f = BOX.faces.copy()
+    f[[0, 3, 5, 8, 9, 11]] = f[[0, 3, 5, 8, 9, 11]][:, ::-1]
+    return BOX.vertices, f
+
+
+def _with_fin() -> tuple[np.ndarray, np.ndarray]:
+    """A triangle hanging off one edge: that edge has three faces, the fin two free edges."""
+    a, b = BOTTLE.faces[0][:2]
+    v = np.vstack([BOTTLE.vertices, [[0.1, 0.1, 0.1]]])
+    return v, np.vstack([BOTTLE.faces, [[a, b, len(BOTTLE.vertices)]]])
+
+
+def _without_cap() -> tuple[np.ndarray, np.ndarray]:
+    top = BOTTLE.triangles_center[:, 2] > 0.059
+    return BOTTLE.vertices, BOTTLE.faces[~top]
+
+
+def _touching_boxes() -> tuple[np.ndarray, np.ndarray]:
+    """Two cubes sharing one edge: four faces on that edge, which no face removal fixes."""
+    b = trimesh.creation.box((0.05, 0.05, 0.05))
+    both = trimesh.util.concatenate([b, b.copy().apply_translation((0.05, 0.05, 0))])
+    return both.vertices, both.faces
+
+
+def _mixed_winding_yaml(tmp: Path) -> list[str]:
+    trimesh.Trimesh(*_mixed_winding(), process=False).export(tmp / "box.ply")
+    entry = {"name": "box", "mesh": "box.ply", "density": 1000, "friction": 0.5}
+    return ["objects", "list", "--add", str(write_yaml(tmp / "o.yaml", {"objects": [entry]}))]
+
+
+def _entry_mass(expected_g: float, **keys: object) -> Callable[[Path], None]:
+    """The YAML entry has ``keys``; the object read back has the solid mass ``expected_g``."""
+
+    def check(tmp: Path) -> None:
+        (entry,) = yaml.safe_load((tmp / "o.yaml").read_text())["objects"]
+        assert {k: entry.get(k) for k in keys} == keys, entry
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserObjectWarning)
+            (spec,) = load_objects_yaml(tmp / "o.yaml")
+        props = mass_properties(spec.to_mesh(), spec.density)
+        assert props.is_exact and props.mass * 1e3 == pytest.approx(expected_g, rel=1e-5)
+
+    return check
+
+
+def _open_entry(tmp: Path) -> None:
+    (entry,) = yaml.safe_load((tmp / "o.yaml").read_text())["objects"]
+    assert entry.get("allow_open") is True, entry
+
+
+def _generate_open_object(tmp: Path) -> list[str]:
+    trimesh.Trimesh(*_without_cap(), process=False).export(tmp / "cup.ply")
+    assert main(["objects", "add", str(tmp / "cup.ply"), "--to", str(tmp / "o.yaml")]) == 0
+    cfg = fast_config(tmp, labels={"suction": True, "paralleljaw": True},
+                      object_labels={"suction_points": 40, "pj_points": 40})  # fmt: skip
+    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
+            "--add", str(tmp / "o.yaml"), "--objects", "cup", "--quiet", "--no-cache"]  # fmt: skip
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -456,6 +540,34 @@ CASES = [
     Case("disk-full-scene-resume", "error", _tiny_generate, 1, r"FAILED scene0 \(seed \d+\): "
          r"disk full while writing scene0 .*rerun with --resume to redo the missing scenes",
          absent=r"every run", patch=_disk_full_in_scene),
+    Case("mixed-winding-box", "repaired", _add_mesh("box", *_mixed_winding()), 0,
+         r"box: [^\n]* 100x50x12 mm; repaired as it is read \(turned 6 of 12 faces to the winding "
+         r"of the rest of their piece \(1 piece\(s\)\)\): closed, solid mass 60 g",
+         check=_entry_mass(60.0, repair=True, allow_open=None)),
+    Case("bottle-with-fin", "repaired", _add_mesh("bottle", *_with_fin()), 0, r"bottle: "
+         r"[^\n]* 80x80x120 mm; repaired as it is read \(removed 1 stray face\(s\) hanging off "
+         r"edges shared by more than two faces; dropped 1 vertex no face uses any more\): "
+         rf"closed, solid mass {BOTTLE_G:.4g} g",
+         check=_entry_mass(BOTTLE_G, repair=True, allow_open=None)),
+    Case("bottle-missing-triangle", "repaired", _add_mesh("bottle", BOTTLE.vertices,
+         BOTTLE.faces[1:]), 0, r"repaired as it is read \(closed 1 small hole\(s\) with 1 "
+         r"triangle\(s\)\): closed", check=_entry_mass(BOTTLE_G, repair=True)),
+    Case("duplicate-faces", "repaired", _add_mesh("bottle", BOTTLE.vertices,
+         np.vstack([BOTTLE.faces, BOTTLE.faces[:5]])), 0, r"repaired as it is read \(removed 5 "
+         r"duplicate face\(s\)\): closed", check=_entry_mass(BOTTLE_G, repair=True)),
+    Case("unrepaired-yaml-entry", "error", _mixed_winding_yaml, 1, r"o\.yaml: objects\[0\] "
+         r"\('box'\): key 'mesh': '[^']*box\.ply' is not closed \(0 boundary, 0 non-manifold, "
+         r"\d+ misoriented edges\); set repair: true to repair it as it is read"),
+    Case("open-cup", "warning", _add_mesh("cup", *_without_cap()), 0, r"warning: cup \('[^']*"
+         r"cup\.ply'\) stays open: 48 free edges \(1 hole\(s\) larger than 1 % of the surface"
+         r"\), which the repair \(winding, duplicate and stray faces, small holes\) cannot fix\. "
+         r"It is marked allow_open: its mass [0-9.]+ g is a shell mass \(2 mm walls, not a "
+         r"solid\), and it gets suction labels only, no parallel-jaw labels", check=_open_entry),
+    Case("touching-boxes", "warning", _add_mesh("pair", *_touching_boxes()), 0, r"stays open: 1 "
+         r"edge\(s\) shared by more than two faces, which the repair .* It is marked allow_open",
+         check=_open_entry),
+    Case("open-object-in-generate", "warning", _generate_open_object, 0, r"no parallel-jaw "
+         r"labels for 1 object\(s\): cup: open mesh \(48 boundary edges, allow_open\)"),
     Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
          r"1/1 scenes complete", absent=r"objects per scene"),
     Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,
@@ -465,6 +577,25 @@ CASES = [
          r"\(scale 0\.0005\) is 0\.5 mm across, too small", once=True, absent="small_part"),
 ]
 # fmt: on
+
+
+def test_repair_keeps_uvs_materials_and_the_solid() -> None:
+    """The repair changes faces only: each kept vertex keeps its position and uv, the material
+    stays, and the mass is that of the closed solid (hand-computed: 60 g)."""
+    v, f = _mixed_winding()
+    uvs = np.random.default_rng(1).random((len(v), 2)).astype(np.float32)
+    mat = Material()
+    mat.name = "paint"
+    broken = mesh_from_arrays(v, f, uvs=uvs, material=mat)
+    fixed = repair_mesh(broken)
+    assert fixed.closed and not fixed.before.is_winding_consistent
+    assert np.array_equal(fixed.mesh.vertices, broken.vertices)
+    assert np.array_equal(fixed.mesh.uvs, uvs)
+    assert [m.name for m in fixed.mesh.materials] == ["paint"]
+    assert mass_properties(fixed.mesh, 1000).mass == pytest.approx(0.060, rel=1e-6)
+    # Every face keeps its three vertices; only the order of 6 of them changed.
+    assert sorted(map(sorted, fixed.mesh.faces.tolist())) == sorted(map(sorted, f.tolist()))
+    assert repair_mesh(fixed.mesh).changes == ()  # closed: nothing to do
 
 
 def run_cli(argv: list[str]) -> tuple[int, str]:

@@ -20,11 +20,18 @@ Example ``my_objects.yaml`` (paths relative to the YAML file; SI units)::
           hole: [0.01, 0.0, 0.0]
         tags: [nonconvex]          # optional, see mgn.objects.ALLOWED_TAGS
         description: Aluminium bracket
+        repair: false              # optional: repair a nearly closed mesh as it is read
+        allow_open: false          # optional: accept an open mesh (shell mass, no pj labels)
 
-The mesh keeps its own frame. It must be watertight (mass properties are exact), unless
-``allow_open: true`` is given, in which case the documented shell model is used (2 mm walls)
-and the object gets suction labels only: its parallel-jaw label set is empty (``pj_skipped`` in
-the metadata says why), since the antipodal sampler needs a closed volume.
+The mesh keeps its own frame. It must be watertight and consistently wound (mass properties
+are exact). ``repair: true`` repairs a nearly closed mesh as it is read
+(:func:`mgn.geometry.repair.repair_mesh`: duplicate and stray faces removed, faces turned to one
+winding, holes up to 1 % of the surface closed; the file is not changed), when that closes it.
+A mesh that stays open needs ``allow_open: true``: the documented shell model is then used
+(2 mm walls: its mass is that of a shell, not of a solid) and the object gets suction labels
+only: its parallel-jaw label set is empty (``pj_skipped`` in the metadata says why), since the
+antipodal sampler needs a closed volume. ``mgn objects add`` sets either key when the mesh needs
+it and says what the repair changed.
 
 Any mesh file works: a material the file does not give (an OBJ without ``.mtl``, ``Ns 0``) gets
 the default grey plastic. Numbers may be written ``2.7e3`` or ``1.0e-3``. Every error names the
@@ -51,6 +58,7 @@ from PIL import Image
 from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.geometry.mesh import Material, load_mesh, missing_material_files
+from mgn.geometry.repair import repair_mesh
 from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
 
 __all__ = [
@@ -183,6 +191,7 @@ _KEYS = {
     "tags",
     "description",
     "allow_open",
+    "repair",
 }
 
 
@@ -328,6 +337,35 @@ def _keypoints(
     return tuple(keypoints)
 
 
+def _flag(entry: dict[str, Any], key: str, where: str) -> bool:
+    value = entry.get(key, False)
+    if not isinstance(value, bool):
+        raise InvalidArgumentError(f"{where}: key '{key}': expected true or false, got {value!r}")
+    return value
+
+
+def _closed_mesh(entry: dict[str, Any], mesh: Any, mesh_path: Path, where: str) -> tuple:
+    """(mesh, its validation): repaired with ``repair: true``; an error when it is not closed
+    and ``allow_open`` is not set."""
+    allow_open, repair = _flag(entry, "allow_open", where), _flag(entry, "repair", where)
+    report = mesh.validate()
+    if repair and not (report.is_watertight and report.is_winding_consistent):
+        fixed = repair_mesh(mesh)
+        if fixed.closed:  # a repair that leaves the mesh open is not applied
+            mesh, report = fixed.mesh, fixed.after
+    if not (report.is_watertight and report.is_winding_consistent) and not allow_open:
+        raise InvalidArgumentError(
+            f"{where}: key 'mesh': '{mesh_path}' is not closed ({report.num_boundary_edges} "
+            f"boundary, {report.num_nonmanifold_edges} non-manifold, "
+            f"{report.num_misoriented_edges} misoriented edges)"
+            + (" even after repair" if repair else "; set repair: true to repair it as it is read "
+               "(winding, duplicate and stray faces, small holes), or")
+            + (";" if repair else "")
+            + " set allow_open: true to use the thin-shell mass model (no parallel-jaw labels)"
+        )  # fmt: skip
+    return mesh, report
+
+
 def _object_from_entry(
     entry: dict[str, Any], base: Path, default_id: int, where: str
 ) -> ObjectSpec:
@@ -350,10 +388,6 @@ def _object_from_entry(
     scale = _number(entry, "scale", where, 1.0)
     density = _number(entry, "density", where)
     friction = _number(entry, "friction", where)
-    allow_open = entry.get("allow_open", False)
-    if not isinstance(allow_open, bool):
-        raise InvalidArgumentError(f"{where}: key 'allow_open': expected true or false, got "
-                                   f"{allow_open!r}")  # fmt: skip
     if not isinstance(entry["mesh"], str) or not entry["mesh"]:
         raise InvalidArgumentError(f"{where}: key 'mesh': expected a file path, got "
                                    f"{entry['mesh']!r}")  # fmt: skip
@@ -362,13 +396,7 @@ def _object_from_entry(
         mesh = load_mesh(mesh_path, scale=scale)
     except MgnError as e:
         raise type(e)(f"{where}: key 'mesh': {e}") from e
-    report = mesh.validate()
-    if not (report.is_watertight and report.is_winding_consistent) and not allow_open:
-        raise InvalidArgumentError(
-            f"{where}: key 'mesh': '{mesh_path}' is not closed ({report.num_boundary_edges} "
-            f"boundary, {report.num_nonmanifold_edges} non-manifold edges); repair it, or set "
-            "allow_open: true to use the thin-shell mass model"
-        )
+    mesh, report = _closed_mesh(entry, mesh, mesh_path, where)
     warn_implausible_size(mesh.vertices, f"{where}: mesh '{mesh_path}' (scale {scale:g})", name)
     mat = mesh.materials[0] if mesh.materials else None
     texture, unreadable = _base_color_texture(mat, mesh_path)

@@ -457,6 +457,8 @@ class GenerateReport:
         not_run: scenes not attempted (stopped by a full disk).
         physics: ``dataset.json`` ``physics_scores`` (see :func:`physics_record`), None when no
             parallel-jaw labels with physics were made.
+        no_paralleljaw: objects of the run that got no parallel-jaw labels although they were
+            asked for (an open mesh, ``allow_open``), with the reason.
     """
 
     out_dir: Path
@@ -473,6 +475,7 @@ class GenerateReport:
     selection: dict[str, Any] | None = None
     unmet: dict[int, int] = field(default_factory=dict)
     physics: dict[str, Any] | None = None
+    no_paralleljaw: dict[str, str] = field(default_factory=dict)
 
     @property
     def ok(self) -> list[SceneResult]:
@@ -529,6 +532,11 @@ class GenerateReport:
                 f"  physics scores: {p['scored']} of {p['grasps']} parallel-jaw grasps scored, "
                 f"{p['unscored']} left NaN by object_labels.physics_grasps = {p['cap']} "
                 "(null scores every grasp)"
+            )
+        if self.no_paralleljaw:
+            lines.append(
+                f"  no parallel-jaw labels for {len(self.no_paralleljaw)} object(s): "
+                + "; ".join(f"{n}: {why}" for n, why in sorted(self.no_paralleljaw.items()))
             )
         for r in self.failed:
             lines.append(f"  FAILED scene{r.index} (seed {r.seed}): {r.error}")
@@ -975,6 +983,11 @@ def generate(
     failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
     more: dict[str, Any] = {"removed_objects": removed_objects(out)}
     report.physics = physics_record(cfg, run.labels)
+    report.no_paralleljaw = {
+        name: str(lab.paralleljaw.metadata["pj_skipped"])
+        for name, lab in sorted(run.labels.items())
+        if lab.paralleljaw is not None and lab.paralleljaw.metadata.get("pj_skipped")
+    }
     if report.physics is not None:
         more["physics_scores"] = report.physics
     if failed:
