@@ -450,6 +450,29 @@ def _generate_open_object(tmp: Path) -> list[str]:
             "--add", str(tmp / "o.yaml"), "--objects", "cup", "--quiet", "--no-cache"]  # fmt: skip
 
 
+# ------------------------------------------------------------------- Phong -> PBR materials
+
+
+def _phong(kd: str, ks: str, ns: str) -> Callable[[Path], list[str]]:
+    def build(tmp: Path) -> list[str]:
+        write(tmp / "part.obj", "mtllib part.mtl\nusemtl m\n" + CUBE_OBJ)
+        write(tmp / "part.mtl", f"newmtl m\nKd {kd}\nKs {ks}\nNs {ns}\n")
+        return ["objects", "add", str(tmp / "part.obj"), "--scale", "0.05", "--to",
+                str(tmp / "o.yaml")]  # fmt: skip
+
+    return build
+
+
+def _material_is(metallic: float, roughness: float, rgb: tuple) -> Callable[[Path], None]:
+    def check(tmp: Path) -> None:
+        (spec,) = load_objects_yaml(tmp / "o.yaml")
+        m = spec.material
+        assert (m.metallic, m.roughness) == (metallic, pytest.approx(roughness, abs=1e-6))
+        assert m.base_color[:3] == pytest.approx(rgb)
+
+    return check
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -568,6 +591,17 @@ CASES = [
          check=_open_entry),
     Case("open-object-in-generate", "warning", _generate_open_object, 0, r"no parallel-jaw "
          r"labels for 1 object\(s\): cup: open mesh \(48 boundary edges, allow_open\)"),
+    Case("phong-white-high-ks-ns", "repaired", _phong("1 1 1", "1 1 1", "1000"), 0, r"material: "
+         r"dielectric, roughness 0\.30 \(derived from the file's Phong material \(luminance of Kd "
+         r"1\.00, of Ks 1\.00; Ns 1000\): not a metal, roughness at least 0\.3",
+         check=_material_is(0.0, 0.3, (1.0, 1.0, 1.0))),
+    Case("phong-dark-mirror", "repaired", _phong("0.02 0.02 0.02", "0.9 0.8 0.6", "800"), 0,
+         r"material: metal, roughness 0\.30 \(derived from the file's Phong material .*a dark "
+         r"diffuse and mirror-like specular read as a metal",
+         check=_material_is(1.0, 0.3, (0.9, 0.8, 0.6))),
+    Case("phong-matte", "repaired", _phong("0.6 0.5 0.4", "0.1 0.1 0.1", "10"), 0, r"material: "
+         r"dielectric, roughness 0\.64 ", check=_material_is(0.0, (2 / 12) ** 0.25,
+                                                              (0.6, 0.5, 0.4))),
     Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
          r"1/1 scenes complete", absent=r"objects per scene"),
     Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,

@@ -46,6 +46,7 @@ from mgn.objects import builtin_objects, default_tote, get_object, load_objects_
 from mgn.objects.user import (
     UserObjectWarning,
     check_object_name,
+    describe_material,
     warn_implausible_size,
     warn_missing_material_files,
 )
@@ -192,6 +193,7 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
     added: list[str] = []
     open_notes: list[str] = []
     new_names: set[str] = set()
+    materials: dict[str, tuple[Any, dict]] = {}
     for i, mesh_arg in enumerate(args.meshes):
         path = Path(mesh_arg)
         mesh = load_mesh(path, scale=args.scale)  # IoError / InvalidArgumentError name the file
@@ -217,6 +219,7 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         size = np.ptp(np.asarray(mesh.vertices), axis=0) * 1000
         added.append(f"  {name}: {path} {'x'.join(f'{v:.0f}' for v in size)} mm{note}")
         new_names.add(name)
+        materials[name] = (mesh.materials[0] if mesh.materials else None, entry)
     text = yaml.safe_dump(data, sort_keys=False)
     tmp = target.with_name(f".{target.name}.check.yaml")
     tmp.write_text(text, encoding="utf-8")
@@ -237,7 +240,10 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         print(f"mgn: warning: {note}", file=sys.stderr)
     atomic_write_text(target, text)
     print(f"{target}: {len(specs)} object(s); added:")
-    print("\n".join(added))
+    by_name = {s.name: s for s in specs}
+    for line, name in zip(added, materials, strict=True):
+        mat, entry = materials[name]
+        print(f"{line}\n    material: {describe_material(mat, by_name[name].material, entry)}")
     names = " ".join(s.name for s in specs)
     print(f"next: mgn generate --out DS --scenes 10 --add {target} --categories {names}")
     return 0

@@ -67,6 +67,7 @@ __all__ = [
     "MissingMaterialWarning",
     "UserObjectWarning",
     "check_object_name",
+    "describe_material",
     "load_objects_yaml",
     "warn_implausible_size",
     "warn_missing_material_files",
@@ -256,31 +257,80 @@ def _number_in(entry: dict[str, Any], key: str, where: str, lo: float, hi: float
     return float(value)
 
 
+#: Roughness range of a material derived from a Phong description. Exporters write large Phong
+#: exponents by default, so an exponent alone never makes a polished (mirror-like) surface.
+PHONG_ROUGHNESS = (0.3, 1.0)
+#: A Phong material reads as a metal only with a diffuse colour at most this bright (luminance;
+#: a metal has no diffuse part), a specular colour of luminance >= 0.8 and an exponent >= 200.
+PHONG_METAL_DIFFUSE = 0.05
+
+
+def _luminance(rgb: Any) -> float:
+    c = np.asarray(rgb, np.float64)[:3]
+    return float(0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
+
+
 def pbr_defaults(mat: Material | None, opacity: float = 1.0) -> dict[str, float]:
     """metallic, roughness, ior, transmission of a mesh file's material: its glTF/GLB factors
-    when it has them (``Material.has_pbr``), else derived from the Phong description: roughness
-    from the Phong exponent n through the Beckmann correspondence alpha = sqrt(2 / (n + 2)),
-    roughness = sqrt(alpha) (clamped to [0.05, 1]); a mirror-like specular (luminance >= 0.8,
-    n >= 200) is a metal; opacity < 0.5 a clear dielectric (transmission 1)."""
+    when it has them (``Material.has_pbr``), else derived from the Phong description,
+    conservatively: roughness from the Phong exponent n through the Beckmann correspondence
+    alpha = sqrt(2 / (n + 2)), roughness = sqrt(alpha), clamped to :data:`PHONG_ROUGHNESS`
+    ([0.3, 1]: never polished); a metal only when the diffuse colour is dark (luminance <=
+    :data:`PHONG_METAL_DIFFUSE`), the specular one mirror-like (luminance >= 0.8) and n >= 200
+    (its base colour is then the specular colour); opacity < 0.5 a clear dielectric
+    (transmission 1, roughness 0.02). :func:`describe_material` says which rule applied."""
     if mat is not None and mat.has_pbr:
         return {"metallic": float(mat.metallic), "roughness": float(mat.roughness),
                 "ior": float(mat.ior), "transmission": float(mat.transmission)}  # fmt: skip
-    n = float(mat.shininess) if mat is not None else 20.0
-    roughness = min(1.0, max(0.05, math.sqrt(math.sqrt(2.0 / (max(n, 0.0) + 2.0)))))
-    spec = np.asarray(mat.specular if mat is not None else (0.2, 0.2, 0.2), np.float64)
-    lum = float(0.2126 * spec[0] + 0.7152 * spec[1] + 0.0722 * spec[2])
-    metallic = 1.0 if lum >= 0.8 and n >= 200.0 else 0.0
+    n = max(float(mat.shininess), 0.0) if mat is not None else 20.0
+    lo, hi = PHONG_ROUGHNESS
+    roughness = min(hi, max(lo, math.sqrt(math.sqrt(2.0 / (n + 2.0)))))
+    spec = _luminance(mat.specular if mat is not None else (0.2, 0.2, 0.2))
+    diffuse = _luminance(mat.base_color) if mat is not None else 0.7
+    metal = spec >= 0.8 and n >= 200.0 and diffuse <= PHONG_METAL_DIFFUSE
     transmission = 1.0 if opacity < 0.5 else 0.0
     if transmission:
         roughness = 0.02
-    return {"metallic": metallic, "roughness": roughness, "ior": 1.5,
+    return {"metallic": 1.0 if metal else 0.0, "roughness": roughness, "ior": 1.5,
             "transmission": transmission}  # fmt: skip
+
+
+def describe_material(mat: Material | None, material: MaterialSpec, entry: dict[str, Any]) -> str:
+    """One line for people: where the physically based material of a user object came from
+    (the YAML entry, the file's glTF factors, or the Phong description and which rule of
+    :func:`pbr_defaults`) and what it is."""
+    m = material
+    kind = ("clear dielectric" if m.transmission > 0.5 else "metal" if m.metallic > 0.5
+            else "dielectric")  # fmt: skip
+    what = f"{kind}, roughness {m.roughness:.2f}"
+    given = [k for k in ("metallic", "roughness", "ior", "transmission") if k in entry]
+    if mat is None:
+        source = "no material in the file: grey plastic"
+    elif mat.has_pbr:
+        source = "the file's PBR factors"
+    else:
+        source = (
+            f"derived from the file's Phong material (luminance of Kd "
+            f"{_luminance(mat.base_color):.2f}, of Ks {_luminance(mat.specular):.2f}; Ns "
+            f"{float(mat.shininess):g})"
+        )
+        if m.metallic > 0.5 and "metallic" not in given:
+            source += ": a dark diffuse and mirror-like specular read as a metal"
+        elif "metallic" not in given:
+            source += f": not a metal, roughness at least {PHONG_ROUGHNESS[0]:g}"
+    if given:
+        source += f"; {', '.join(given)} from the YAML entry"
+    return f"{what} ({source}; set metallic / roughness in the entry to change it)"
 
 
 def _material(entry: dict[str, Any], mat: Any, texture: Any, name: str, where: str) -> MaterialSpec:
     """The material of a user object: the entry's color/opacity/PBR keys over the file's
     material (:func:`pbr_defaults`)."""
     color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
+    opacity_hint = float(mat.opacity) if mat is not None else 1.0
+    if "color" not in entry and mat is not None and not mat.has_pbr and "metallic" not in entry:
+        if pbr_defaults(mat, opacity_hint)["metallic"] == 1.0:  # a Phong metal: its Ks colour
+            color = [*(float(c) for c in mat.specular), float(mat.base_color[3])]
     if len(color) == 3:
         color = [*color, 1.0]
     if not isinstance(color, (list, tuple)) or len(color) != 4:
