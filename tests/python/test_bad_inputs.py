@@ -29,9 +29,10 @@ from PIL import Image
 from mgn.cli import main
 from mgn.geometry.mesh import Material, mass_properties, mesh_from_arrays
 from mgn.geometry.repair import repair_mesh
-from mgn.objects import load_objects_yaml
+from mgn.objects import ToteSpec, load_objects_yaml
 from mgn.objects.user import UserObjectWarning
 from mgn.pipeline import runner, scene_writer
+from mgn.scene.penetration import render_penetration
 from mgn.scene.scene import RemovedInstance, Scene
 
 #: Every object label off, one tiny view, a short drop: a generate run of about a second.
@@ -630,6 +631,29 @@ def test_repair_keeps_uvs_materials_and_the_solid() -> None:
     # Every face keeps its three vertices; only the order of 6 of them changed.
     assert sorted(map(sorted, fixed.mesh.faces.tolist())) == sorted(map(sorted, f.tolist()))
     assert repair_mesh(fixed.mesh).changes == ()  # closed: nothing to do
+
+
+def test_penetration_of_an_object_made_of_overlapping_solids() -> None:
+    """One object modelled as two overlapping boxes (faces partly coincident): a small cube in
+    the empty corner of its bounding box touches nothing (penetration 0; the parity of the
+    whole mesh counted it 18 mm deep), and a cube sunk 4 mm into one box measures 4 mm."""
+    upper = trimesh.creation.box(bounds=[(-0.05, -0.05, 0.02), (0.05, 0.05, 0.06)])
+    lower = trimesh.creation.box(bounds=[(0.0, -0.05, 0.0), (0.05, 0.05, 0.04)])
+    both = trimesh.util.concatenate([upper, lower])
+    b = mesh_from_arrays(both.vertices, both.faces)
+    cube = trimesh.creation.box((0.006, 0.006, 0.006))
+    a = mesh_from_arrays(cube.vertices, cube.faces)
+    X_b = np.eye(4)
+    X_b[2, 3] = 0.001  # the object rests 1 mm above the floor
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        X_a = np.eye(4)
+        X_a[:3, 3] = rng.uniform([-0.046, -0.046, 0.0045], [-0.004, 0.046, 0.0165])
+        assert render_penetration([a, b], [X_a, X_b], ToteSpec()) == 0.0
+    X_a = np.eye(4)
+    X_a[:3, 3] = (-0.02, 0.0, 0.022)  # top face at 0.025, the upper box's bottom at 0.021
+    depth = render_penetration([a, b], [X_a, X_b], ToteSpec())
+    assert depth == pytest.approx(0.004, abs=1e-6)
 
 
 def run_cli(argv: list[str]) -> tuple[int, str]:

@@ -4,6 +4,9 @@ The drop simulates reduced convex hulls; what is rendered and labelled are the o
 :func:`render_penetration` measures how deep those meshes sink into the tote (floor and inner
 walls, planes of the tote frame) and into each other: the largest distance of a mesh vertex
 below the floor / beyond a wall, or inside another object's closed mesh from that mesh's surface.
+An object whose mesh is several closed parts that overlap one another (a union of solids) is
+tested part by part: its parts never count as penetrating each other, and a vertex of another
+object inside one of its parts counts with its depth below that part's surface.
 Units m, tote frame W (see :mod:`mgn.scene.drop`).
 """
 
@@ -95,43 +98,81 @@ def render_penetration(
             worst = max(worst, float((np.abs(low[:, 1]) - hy).max()))
     lo = [w.min(axis=0) for w in world]
     hi = [w.max(axis=0) for w in world]
-    scenes: dict[int, RayScene] = {}
+    parts: dict[int, list[tuple[Mesh, RayScene]]] = {}
     for a in range(len(meshes)):
         for b in range(len(meshes)):
             if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
                 continue
             # Vertices of a in b's frame, inside b's bounding box, then inside b's mesh.
             Xb = poses[b]
-            p = (world[a] - Xb[:3, 3]) @ Xb[:3, :3]
+            pa = (world[a] - Xb[:3, 3]) @ Xb[:3, :3]
             blo, bhi = local[b].min(axis=0), local[b].max(axis=0)
-            p = p[np.all((p >= blo) & (p <= bhi), axis=1)]
-            if len(p) == 0:
+            pa = pa[np.all((pa >= blo) & (pa <= bhi), axis=1)]
+            if len(pa) == 0:
                 continue
-            if b not in scenes:
-                scenes[b] = RayScene(meshes[b])
-            p = p[_inside(scenes[b], p)]
-            if len(p) == 0:
-                continue
-            # A point's distance to the surface is at most its distance to the nearest vertex
-            # (`bound`): points are measured in order of decreasing bound, and once the bound
-            # is no more than the deepest penetration found, no later point can exceed it. The
-            # result is the brute-force maximum, found with fewer point-triangle distances.
-            # (Vertices of the faces only; the bound is widened by far more than the rounding
-            # of either distance.)
-            faces = np.asarray(meshes[b].faces)
-            corners = local[b][np.unique(faces)]
-            bound = np.concatenate(
-                [
-                    np.sqrt(((p[k : k + 64, None, :] - corners[None]) ** 2).sum(-1).min(1))
-                    for k in range(0, len(p), 64)
-                ]
-            )
-            bound = bound * (1.0 + 1e-9) + 1e-12
-            order = np.argsort(-bound, kind="stable")
-            p, bound = p[order], bound[order]
-            tri = local[b][faces]
-            for k in range(0, len(p), 64):
-                if bound[k] <= worst:
-                    break
-                worst = max(worst, float(point_triangle_distance(p[k : k + 64], tri).max()))
+            if b not in parts:
+                parts[b] = [(m, RayScene(m)) for m in _connected_parts(meshes[b])]
+            # A mesh of several closed parts that overlap one another (one object modelled as
+            # a union of solids) is tested part by part: the parity of the whole would count a
+            # point inside two parts as outside, and coincident faces of two parts as one
+            # crossing. A vertex inside a part sinks into b at least as deep as into that part.
+            for part, scene in parts[b]:
+                p = pa[_inside(scene, pa)]
+                if len(p):
+                    worst = _deepest(p, part, worst)
     return max(worst, 0.0)
+
+
+def _connected_parts(mesh: Mesh) -> list[Mesh]:
+    """The pieces of ``mesh`` connected through shared (welded) vertices; ``[mesh]`` when it is
+    one piece."""
+    v = np.asarray(mesh.vertices)
+    f = np.asarray(mesh.faces, np.int64)
+    _, weld = np.unique(v + np.float32(0.0), axis=0, return_inverse=True)
+    weld = weld.reshape(-1)
+    parent = np.arange(weld.max() + 1 if len(weld) else 0)
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = int(parent[i])
+        return i
+
+    for a, b, c in weld[f].tolist():
+        ra, rb, rc = root(a), root(b), root(c)
+        parent[rb] = ra
+        parent[root(rc)] = ra
+    label = np.array([root(int(w)) for w in weld[f[:, 0]]])
+    pieces = np.unique(label)
+    if len(pieces) == 1:
+        return [mesh]
+    return [Mesh(v, f[label == k].astype(np.int32)) for k in pieces]
+
+
+def _deepest(p: np.ndarray, part: Mesh, worst: float) -> float:
+    """max(``worst``, the largest distance of the points ``p`` (inside ``part``) to the
+    surface of ``part``)."""
+    # A point's distance to the surface is at most its distance to the nearest vertex
+    # (`bound`): points are measured in order of decreasing bound, and once the bound
+    # is no more than the deepest penetration found, no later point can exceed it. The
+    # result is the brute-force maximum, found with fewer point-triangle distances.
+    # (Vertices of the faces only; the bound is widened by far more than the rounding
+    # of either distance.)
+    faces = np.asarray(part.faces)
+    vertices = np.asarray(part.vertices, np.float64)
+    corners = vertices[np.unique(faces)]
+    bound = np.concatenate(
+        [
+            np.sqrt(((p[k : k + 64, None, :] - corners[None]) ** 2).sum(-1).min(1))
+            for k in range(0, len(p), 64)
+        ]
+    )
+    bound = bound * (1.0 + 1e-9) + 1e-12
+    order = np.argsort(-bound, kind="stable")
+    p, bound = p[order], bound[order]
+    tri = vertices[faces]
+    for k in range(0, len(p), 64):
+        if bound[k] <= worst:
+            break
+        worst = max(worst, float(point_triangle_distance(p[k : k + 64], tri).max()))
+    return worst
