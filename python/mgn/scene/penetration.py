@@ -99,6 +99,7 @@ def render_penetration(
     lo = [w.min(axis=0) for w in world]
     hi = [w.max(axis=0) for w in world]
     parts: dict[int, list[tuple[Mesh, RayScene]]] = {}
+    split: dict[int, list[tuple[Mesh, RayScene]]] = {}
     for a in range(len(meshes)):
         for b in range(len(meshes)):
             if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
@@ -111,7 +112,10 @@ def render_penetration(
             if len(pa) == 0:
                 continue
             if b not in parts:
-                parts[b] = [(m, RayScene(m)) for m in _connected_parts(meshes[b])]
+                key = id(meshes[b])  # copies of one object share their mesh: split it once
+                if key not in split:
+                    split[key] = [(m, RayScene(m)) for m in _connected_parts(meshes[b])]
+                parts[b] = split[key]
             # A mesh of several closed parts that overlap one another (one object modelled as
             # a union of solids) is tested part by part: the parity of the whole would count a
             # point inside two parts as outside, and coincident faces of two parts as one
@@ -128,25 +132,28 @@ def _connected_parts(mesh: Mesh) -> list[Mesh]:
     one piece."""
     v = np.asarray(mesh.vertices)
     f = np.asarray(mesh.faces, np.int64)
+    if len(f) == 0:
+        return [mesh]
     _, weld = np.unique(v + np.float32(0.0), axis=0, return_inverse=True)
-    weld = weld.reshape(-1)
-    parent = np.arange(weld.max() + 1 if len(weld) else 0)
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = int(parent[i])
-        return i
-
-    for a, b, c in weld[f].tolist():
-        ra, rb, rc = root(a), root(b), root(c)
-        parent[rb] = ra
-        parent[root(rc)] = ra
-    label = np.array([root(int(w)) for w in weld[f[:, 0]]])
-    pieces = np.unique(label)
+    wf = weld.reshape(-1)[f]
+    # Connected components by min-label propagation along the face edges with pointer jumping.
+    label = np.arange(int(wf.max()) + 1)
+    u = np.concatenate([wf[:, 0], wf[:, 1], wf[:, 2]])
+    w = np.concatenate([wf[:, 1], wf[:, 2], wf[:, 0]])
+    while True:
+        low = np.minimum(label[u], label[w])
+        new = label.copy()
+        np.minimum.at(new, u, low)
+        np.minimum.at(new, w, low)
+        new = new[new]
+        if np.array_equal(new, label):
+            break
+        label = new
+    face_label = label[wf[:, 0]]
+    pieces = np.unique(face_label)
     if len(pieces) == 1:
         return [mesh]
-    return [Mesh(v, f[label == k].astype(np.int32)) for k in pieces]
+    return [Mesh(v, f[face_label == k].astype(np.int32)) for k in pieces]
 
 
 def _deepest(p: np.ndarray, part: Mesh, worst: float) -> float:
