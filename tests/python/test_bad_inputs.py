@@ -474,6 +474,23 @@ def _material_is(metallic: float, roughness: float, rgb: tuple) -> Callable[[Pat
     return check
 
 
+# ---------------------------------------------------------------- a dataset scene's own config
+
+
+def _export_dataset_scene(tmp: Path) -> list[str]:
+    assert main(_tiny_generate(tmp)) == 0  # one camera per scene (camera.views: [0])
+    return ["scene", "export", str(tmp / "ds" / "scene0"), str(tmp / "scene.glb")]
+
+
+def _one_camera_in_glb(tmp: Path) -> None:
+    data = (tmp / "scene.glb").read_bytes()
+    n = int.from_bytes(data[12:16], "little")
+    doc = json.loads(data[20 : 20 + n])
+    assert [node["name"] for node in doc["nodes"] if node["name"].startswith("camera")] == [
+        "camera_0"
+    ]  # the dataset's one view, not the 37 of the default rig
+
+
 # fmt: off
 CASES = [
     Case("name-with-space", "error", _bad_name("My Part!"), 1, r"objs\.yaml: objects\[0\]: "
@@ -603,6 +620,9 @@ CASES = [
     Case("phong-matte", "repaired", _phong("0.6 0.5 0.4", "0.1 0.1 0.1", "10"), 0, r"material: "
          r"dielectric, roughness 0\.64 ", check=_material_is(0.0, (2 / 12) ** 0.25,
                                                               (0.6, 0.5, 0.4))),
+    Case("export-without-config", "repaired", _export_dataset_scene, 0, r"config \(cameras, "
+         r"gripper, cup\) from [^\n]*ds/dataset\.json; --config replaces it\n[^\n]*scene\.glb: "
+         r"1 objects, tote, 1 cameras", check=_one_camera_in_glb),
     Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
          r"1/1 scenes complete", absent=r"objects per scene"),
     Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,
