@@ -623,6 +623,11 @@ CASES = [
     Case("export-without-config", "repaired", _export_dataset_scene, 0, r"config \(cameras, "
          r"gripper, cup\) from [^\n]*ds/dataset\.json; --config replaces it\n[^\n]*scene\.glb: "
          r"1 objects, tote, 1 cameras", check=_one_camera_in_glb),
+    Case("tote-color-randomised", "warning", _check(tote={"color": [0.9, 0.1, 0.1, 1.0]}), 0,
+         r"warning: tote\.color = \[0\.9, 0\.1, 0\.1, 1\.0\] is not used: camera\.randomize "
+         r"draws the tote's colour per view; set camera\.randomize: false to keep it"),
+    Case("tote-color-kept", "warning", _check(tote={"color": [0.9, 0.1, 0.1, 1.0]},
+         camera={"randomize": False}), 0, r"valid", absent=r"tote\.color"),
     Case("objects-replace-count", "warning", _objects_replace_a_large_count, 0,
          r"1/1 scenes complete", absent=r"objects per scene"),
     Case("unused-object-not-warned", "warning", _generate_with("small_part"), 0,

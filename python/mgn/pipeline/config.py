@@ -790,7 +790,8 @@ class Config(_Section):
 _SECTION_DOCS = {
     "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
     "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
-    "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width)",
+    "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width); "
+    "color is used only with camera.randomize: false (else drawn per view)",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
     "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
     "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "

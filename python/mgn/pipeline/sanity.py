@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml, make_tote
+from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, load_objects_yaml, make_tote
 from mgn.objects.user import PLAUSIBLE_EXTENT_M, ImplausibleSizeWarning, UserObjectWarning
 from mgn.pipeline.config import Config
 from mgn.pipeline.scene_writer import scene_intrinsics
@@ -182,6 +182,15 @@ def config_warnings(config: Config, catalogue: Catalogue | None = None) -> list[
         )
     found += _tote_warnings(config)
     found += _camera_problems(config)[1]
+    rs = config.render
+    if (tuple(config.tote.color) != ToteSpec().color and config.camera.randomize
+            and (rs.engine == "raster" or rs.randomize.materials)):  # fmt: skip
+        found.append(
+            f"tote.color = {list(config.tote.color)} is not used: camera.randomize draws the "
+            "tote's colour per view; set camera.randomize: false"
+            + (" (or render.randomize.materials: false)" if rs.engine == "path" else "")
+            + " to keep it"
+        )
     o = config.objects
     if o.names is None and (o.categories is None or o.count is not None):
         used = catalogue.used_names(config)
