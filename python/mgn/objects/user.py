@@ -123,33 +123,47 @@ def warn_missing_material_files(
     source: str,
     object_name: str | None = None,
     unreadable: list[tuple[str, str]] | None = None,
+    notes: list[UserObjectWarning] | None = None,
 ) -> list[str]:
     """Warn (:class:`MissingMaterialWarning`, naming ``source`` and each file) for every
     material file the mesh file ``path`` points to that is missing
     (:func:`mgn.geometry.mesh.missing_material_files`), and for the (what, file) pairs of
-    ``unreadable`` (files there, but not images). Returns the files warned about."""
+    ``unreadable`` (files there, but not images); with ``notes`` the warnings are appended to it
+    instead of being given. Returns the files warned about."""
     found = missing_material_files(path, mesh) + list(unreadable or ())
     mat = mesh.materials[0] if mesh.materials else None
     rgb = ", ".join(f"{c:.2f}" for c in (mat.base_color[:3] if mat is not None else (0.7,) * 3))
     for what, file in found:
         missing = "cannot be read" if "readable" in what else "is missing"
-        warnings.warn(
+        _give(
             MissingMaterialWarning(
                 f"{source}: its {what} '{file}' {missing}; the object renders in its plain "
                 f"base colour ({rgb}) instead (put the file there, or set 'color' in the YAML "
                 "entry)",
                 object_name,
             ),
-            stacklevel=3,
+            notes,
         )
     return [file for _, file in found]
 
 
+def _give(w: UserObjectWarning, notes: list[UserObjectWarning] | None) -> None:
+    """Give warning ``w`` (to the caller of the public function), or append it to ``notes``."""
+    if notes is None:
+        warnings.warn(w, stacklevel=4)
+    else:
+        notes.append(w)
+
+
 def warn_implausible_size(
-    vertices: np.ndarray, source: str, object_name: str | None = None
+    vertices: np.ndarray,
+    source: str,
+    object_name: str | None = None,
+    notes: list[UserObjectWarning] | None = None,
 ) -> bool:
     """Warn (:class:`ImplausibleSizeWarning`, naming ``source``) when the largest extent of
-    ``vertices`` (m) is outside :data:`PLAUSIBLE_EXTENT_M`. Returns True when it warned."""
+    ``vertices`` (m) is outside :data:`PLAUSIBLE_EXTENT_M` (with ``notes``: append the warning
+    to it instead). Returns True when it warned."""
     v = np.asarray(vertices, np.float64).reshape(-1, 3)
     if len(v) == 0:
         return False
@@ -163,7 +177,7 @@ def warn_implausible_size(
                "its scale (the file's unit)")  # fmt: skip
     else:
         return False
-    warnings.warn(ImplausibleSizeWarning(msg, object_name), stacklevel=3)
+    _give(ImplausibleSizeWarning(msg, object_name), notes)
     return True
 
 
@@ -417,7 +431,11 @@ def _closed_mesh(entry: dict[str, Any], mesh: Any, mesh_path: Path, where: str) 
 
 
 def _object_from_entry(
-    entry: dict[str, Any], base: Path, default_id: int, where: str
+    entry: dict[str, Any],
+    base: Path,
+    default_id: int,
+    where: str,
+    notes: list[UserObjectWarning] | None = None,
 ) -> ObjectSpec:
     if not isinstance(entry, dict):
         raise InvalidArgumentError(f"{where}: expected a mapping, got {type(entry).__name__}")
@@ -447,10 +465,14 @@ def _object_from_entry(
     except MgnError as e:
         raise type(e)(f"{where}: key 'mesh': {e}") from e
     mesh, report = _closed_mesh(entry, mesh, mesh_path, where)
-    warn_implausible_size(mesh.vertices, f"{where}: mesh '{mesh_path}' (scale {scale:g})", name)
+    warn_implausible_size(
+        mesh.vertices, f"{where}: mesh '{mesh_path}' (scale {scale:g})", name, notes
+    )
     mat = mesh.materials[0] if mesh.materials else None
     texture, unreadable = _base_color_texture(mat, mesh_path)
-    warn_missing_material_files(mesh_path, mesh, f"{where}: mesh '{mesh_path}'", name, unreadable)
+    warn_missing_material_files(
+        mesh_path, mesh, f"{where}: mesh '{mesh_path}'", name, unreadable, notes
+    )
     if report.signed_volume < 0:
         mesh = mesh.flipped()  # inward-wound file: make the normals point outward
         mat = mesh.materials[0] if mesh.materials else None
@@ -479,11 +501,19 @@ def _object_from_entry(
         raise InvalidArgumentError(f"{where}: mesh '{mesh_path}': {e}") from e
 
 
-def load_objects_yaml(path: str | os.PathLike[str]) -> tuple[ObjectSpec, ...]:
+def load_objects_yaml(
+    path: str | os.PathLike[str], *, notes: list[UserObjectWarning] | None = None
+) -> tuple[ObjectSpec, ...]:
     """Read user objects from a YAML file (format in this module's docstring).
 
     Category ids default to consecutive numbers after the built-in objects; names and ids must
     not clash with the built-in ones or each other.
+
+    Args:
+        path: the YAML file.
+        notes: when given, the warnings about the objects (:class:`UserObjectWarning`: size,
+            missing material files) are appended to this list instead of being given as Python
+            warnings (thread-safe, and the caller decides which to show).
     """
 
     p = Path(path)
@@ -500,7 +530,7 @@ def load_objects_yaml(path: str | os.PathLike[str]) -> tuple[ObjectSpec, ...]:
     next_id = max(taken_ids) + 1
     out = []
     for i, entry in enumerate(data["objects"]):
-        spec = _object_from_entry(entry, p.parent, next_id, f"{p}: objects[{i}]")
+        spec = _object_from_entry(entry, p.parent, next_id, f"{p}: objects[{i}]", notes)
         if spec.category_id in taken_ids or spec.name in taken_names:
             raise InvalidArgumentError(
                 f"{p}: objects[{i}] ('{spec.name}', id {spec.category_id}) clashes with an "

@@ -88,19 +88,14 @@ def load_catalogue(config: Config) -> Catalogue:
     kept in :attr:`Catalogue.notes` instead of being given for every object of the files."""
     specs = list(builtin_objects())
     sources: dict[str, str] = {}
+    said: list[UserObjectWarning] = []
+    for path in config.objects.user_objects:
+        for spec in load_objects_yaml(path, notes=said):
+            specs.append(spec)
+            sources[spec.name] = os.fspath(Path(path).resolve())
     notes: dict[str, list[UserObjectWarning]] = {}
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        for path in config.objects.user_objects:
-            for spec in load_objects_yaml(path):
-                specs.append(spec)
-                sources[spec.name] = os.fspath(Path(path).resolve())
-    for w in caught:
-        msg = w.message
-        if isinstance(msg, UserObjectWarning) and msg.object_name is not None:
-            notes.setdefault(msg.object_name, []).append(msg)
-        else:
-            warnings.warn_explicit(msg, w.category, w.filename, w.lineno)
+    for w in said:
+        notes.setdefault(str(w.object_name), []).append(w)
     return Catalogue(tuple(specs), sources, {k: tuple(v) for k, v in notes.items()})
 
 

@@ -24,7 +24,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -37,7 +36,6 @@ from mgn.base.core_result import to_core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
-from mgn.objects.user import UserObjectWarning
 
 __all__ = [
     "BUILTIN",
@@ -238,9 +236,7 @@ class RemovedInstance:
 def _user_catalogue(path: str) -> dict[str, ObjectSpec]:
     # The loader's warnings about the objects (size, missing files) were given where the
     # catalogue was read (mgn generate, mgn config check); a scene does not repeat them.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserObjectWarning)
-        return {s.name: s for s in load_objects_yaml(path)}
+    return {s.name: s for s in load_objects_yaml(path, notes=[])}
 
 
 def resolve_object(name: str, source: str) -> ObjectSpec:
