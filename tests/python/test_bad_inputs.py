@@ -340,6 +340,12 @@ def _one_micron_part(tmp: Path) -> list[str]:
             "--quiet"]  # fmt: skip
 
 
+def _user_name_with_add(tmp: Path) -> list[str]:
+    cube_objects(tmp, name="my_part")
+    cfg = fast_config(tmp, objects={"names": ["my_part", "box_tea"]})
+    return ["config", "check", str(cfg), "--add", str(tmp / "objs.yaml")]
+
+
 def _part_larger_than_tote(tmp: Path) -> list[str]:
     cube_objects(tmp, name="big_part", scale=0.6)  # 60 cm: plausible, but not in this tote
     return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
@@ -556,6 +562,8 @@ CASES = [
          r"\[0, 1000\], got 2000"),
     Case("unknown-name", "error", _check(objects={"names": ["box_tea", "box_tee"]}), 1,
          r"error: objects\.names: unknown object\(s\) 'box_tee'; known: [^\n]*box_tea, "),
+    Case("user-name-with-add", "warning", _user_name_with_add, 0, r"cfg\.yaml: valid",
+         absent="unknown"),
     Case("camera-facing-away", "error", _check(camera=_poses([0, 0, 1.0], away=True)), 1, r"error: "
          r"camera\.poses\[0\] \(eye \[0\.0, 0\.0, 1\.0\] m\): the camera looks away from "
          r"the tote"),

@@ -12,7 +12,8 @@ default: the objects tagged 'novel') out of every scene; --split test puts at le
 scene. --difficulty-quota generates scenes in batches until exactly that many views of each
 difficulty level are selected (recorded in dataset.json), at most --max-scenes scenes.
 mgn config dump [--out cfg.yaml]     the default configuration (every key, MGN values)
-mgn config check cfg.yaml            validate a configuration file
+mgn config check cfg.yaml [--add YAML]   validate a configuration file (exit 1 when it fails
+                                     every scene: unknown objects, a camera facing away, ...)
 """
 
 from __future__ import annotations
@@ -129,6 +130,10 @@ def _cmd_config_dump(args: argparse.Namespace) -> int:
 def _cmd_config_check(args: argparse.Namespace) -> int:
 
     config = load_config(args.file)
+    if args.add:  # as mgn generate --add: user objects join the catalogue
+        added = tuple(os.path.abspath(a) for a in args.add)
+        config = dataclasses.replace(config, objects=dataclasses.replace(
+            config.objects, user_objects=config.objects.user_objects + added))  # fmt: skip
     views = len(config.camera.view_indices)
     catalogue = load_catalogue(config)
     errors = config_errors(config, catalogue)
@@ -278,6 +283,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="keep the convex decompositions (default: clear both)")  # fmt: skip
     p.set_defaults(func=_cmd_cache_clear)
 
-    p = csub.add_parser("check", help="validate a configuration file")
+    p = csub.add_parser(
+        "check",
+        help="validate a configuration file: its keys and values, then what would fail or empty "
+        "every scene (exit 1) and what would give a degenerate dataset (warnings)",
+    )
     p.add_argument("file", help="configuration YAML")
+    p.add_argument(
+        "--add",
+        action="append",
+        metavar="YAML",
+        help="user objects of this YAML file, as mgn generate --add (repeatable)",
+    )
     p.set_defaults(func=_cmd_config_check)
