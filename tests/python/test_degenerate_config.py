@@ -16,13 +16,13 @@ import yaml
 
 from mgn.cli import main
 from mgn.io.validate import validate_dataset
-from mgn.objects.user import ImplausibleSizeWarning
 from mgn.pipeline.config import load_config
-from mgn.pipeline.sanity import config_warnings
+from mgn.pipeline.sanity import config_errors, config_warnings
 
 
 def test_default_config_has_no_warning() -> None:
     assert config_warnings(load_config(None)) == []
+    assert config_errors(load_config(None)) == []
 
 
 def test_thousand_objects_are_named() -> None:
@@ -51,15 +51,25 @@ def test_fifty_micrometre_object_is_named(tmp_path: Path) -> None:
         })
     )  # fmt: skip
     cfg = load_config({"objects": {"user_objects": [str(tmp_path / "objs.yaml")]}})
-    with pytest.warns(ImplausibleSizeWarning):  # the loader's own warning, then the setting's
-        w = config_warnings(cfg)
-    assert any("objects.user_objects: object 'speck' is 0.05 mm across" in x for x in w), w
-    # The command line prints it, naming the setting, and still accepts the file.
+    w = config_warnings(cfg)  # the loader's warning, once, as text (no Python warning)
+    speck = [x for x in w if "speck" in x]
+    assert len(speck) == 1 and "objs.yaml: objects[0] ('speck')" in speck[0], w
+    assert "is 0.05 mm across, too small" in speck[0], w
+    # A part of 1-5 mm passes the loader but gets the setting's warning.
+    (tmp_path / "objs.yaml").write_text(
+        yaml.safe_dump({
+            "objects": [{"name": "grain", "mesh": "cube.stl", "scale": 4e-4, "density": 1000,
+                         "friction": 0.5}]
+        })
+    )  # fmt: skip
+    w = config_warnings(cfg)
+    assert any(x.startswith("objects.user_objects ('") and "object 'grain' is 2 mm across" in x
+               for x in w), w  # fmt: skip
+    # The command line prints it and still accepts the file.
     (tmp_path / "cfg.yaml").write_text(
         yaml.safe_dump({"objects": {"user_objects": [str(tmp_path / "objs.yaml")]}})
     )
-    with pytest.warns(ImplausibleSizeWarning):
-        assert main(["config", "check", str(tmp_path / "cfg.yaml")]) == 0
+    assert main(["config", "check", str(tmp_path / "cfg.yaml")]) == 0
 
 
 def test_config_check_prints_the_warning(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:

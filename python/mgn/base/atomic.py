@@ -1,7 +1,9 @@
 """Atomic writes: nothing is ever left half-written.
 
 Files are written to a temporary name in the same directory and renamed into place; folders are
-built under a temporary name and renamed when complete. A full disk is reported as such.
+built under a temporary name and renamed when complete. Both get the usual permissions of a new
+file or folder (0666 / 0777 less the umask), not the private ones of a temporary name. A full
+disk is reported as such (:func:`disk_full_error`, :func:`disk_full_message`).
 """
 
 from __future__ import annotations
@@ -17,11 +19,38 @@ from typing import IO
 
 from mgn.errors import IoError
 
+#: How HDF5 (through h5py) words a full disk inside its error text.
+_HDF5_ENOSPC = ("errno = 28,", "No space left on device")
 
-def _io_error(path: str | os.PathLike[str], e: OSError) -> IoError:
-    if e.errno == errno.ENOSPC:
-        return IoError(f"disk full while writing '{os.fspath(path)}': free some space and retry")
-    return IoError(f"cannot write '{os.fspath(path)}': {e.strerror or e}")
+
+def disk_full_error(e: BaseException) -> BaseException | None:
+    """The error in the chain of ``e`` (``__cause__`` / ``__context__``) that says the disk is
+    full, if any: an OSError with ``errno.ENOSPC``, a message starting with "disk full", or an
+    HDF5 error whose text carries errno 28 (h5py raises some of those as RuntimeError)."""
+    seen = set()
+    cur: BaseException | None = e
+    while cur is not None and id(cur) not in seen:
+        seen.add(id(cur))
+        text = str(cur)
+        if (isinstance(cur, OSError) and cur.errno == errno.ENOSPC) or text.startswith("disk full"):
+            return cur
+        if isinstance(cur, (OSError, RuntimeError)) and any(t in text for t in _HDF5_ENOSPC):
+            return cur
+        cur = cur.__cause__ or cur.__context__
+    return None
+
+
+def disk_full_message(path: str | os.PathLike[str]) -> str:
+    """The one wording of a full disk: "disk full while writing '<path>': free some space and
+    retry"."""
+    return f"disk full while writing '{os.fspath(path)}': free some space and retry"
+
+
+def _io_error(path: str | os.PathLike[str], e: BaseException) -> IoError:
+    if disk_full_error(e) is not None:
+        return IoError(disk_full_message(path))
+    detail = e.strerror if isinstance(e, OSError) and e.strerror else e
+    return IoError(f"cannot write '{os.fspath(path)}': {detail}")
 
 
 def _umask() -> int:
@@ -88,6 +117,7 @@ def atomic_dir(path: str | os.PathLike[str], *, overwrite: bool = False) -> Iter
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700 folders; use the usual permissions
     except OSError as e:
         raise _io_error(target, e) from e
     try:

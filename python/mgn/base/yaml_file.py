@@ -3,7 +3,9 @@
 :func:`read_yaml` is the one entry point: it names the file in every error (missing, a folder,
 binary or not UTF-8, not YAML) and reads numbers the way people write them. PyYAML follows
 YAML 1.1, where ``1.0e6`` and ``1e-3`` (an exponent without a sign, or a mantissa without a
-dot) are *strings*; here they are floats, as in YAML 1.2 and JSON.
+dot) are *strings*; here they are floats, as in YAML 1.2 and JSON. A key written twice in one
+mapping is an error naming the key and both lines (PyYAML would keep the last value silently);
+keys brought in by a ``<<`` merge may still be overridden.
 """
 
 from __future__ import annotations
@@ -21,7 +23,30 @@ __all__ = ["YamlLoader", "read_yaml", "parse_yaml"]
 
 
 class YamlLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` that also reads ``1e6``, ``1.0e6`` and ``-2.5E-3`` as floats."""
+    """``yaml.SafeLoader`` that also reads ``1e6``, ``1.0e6`` and ``-2.5E-3`` as floats and
+    refuses a key written twice in one mapping."""
+
+    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict:  # noqa: D102
+        if isinstance(node, yaml.MappingNode):
+            first: dict[Any, yaml.Node] = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue  # `<<: *anchor` brings keys that the mapping may override
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    earlier = first.get(key)
+                except TypeError:  # an unhashable key: the base class reports it
+                    continue
+                if earlier is not None:
+                    raise yaml.constructor.ConstructorError(
+                        "while reading a mapping",
+                        node.start_mark,
+                        f"found the key {key!r} twice (first on line {earlier.start_mark.line + 1}"
+                        f", again on line {key_node.start_mark.line + 1}); keep one",
+                        key_node.start_mark,
+                    )
+                first[key] = key_node
+        return super().construct_mapping(node, deep=deep)
 
 
 # YAML 1.2 core-schema floats (plus the YAML 1.1 forms PyYAML already knows).

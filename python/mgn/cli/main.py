@@ -23,6 +23,7 @@ import sys
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
@@ -37,11 +38,18 @@ from mgn.cli.demo import run_demo
 from mgn.cli.scene import _split
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.geometry.mesh import load_mesh, mass_properties
+from mgn.geometry.repair import repair_mesh
 from mgn.hardware import SuctionCup, default_cup, default_gripper
 from mgn.io.grasp_file import write_suction_labels
 from mgn.io.model_folder import object_folders, read_model_folder, write_model_folder, write_tote
 from mgn.objects import builtin_objects, default_tote, get_object, load_objects_yaml, object_names
-from mgn.objects.user import warn_implausible_size
+from mgn.objects.user import (
+    UserObjectWarning,
+    check_object_name,
+    describe_material,
+    warn_implausible_size,
+    warn_missing_material_files,
+)
 from mgn.suction import label_object
 from mgn.viz.suction_compare import compare_models, comparison_picture
 
@@ -105,10 +113,62 @@ def _cmd_objects_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _uniform_scale(text: str) -> float:
+    """The ``--scale`` of a mesh: one number > 0 (several numbers: only uniform is supported)."""
+    parts = [t for t in re.split(r"[,x\s]+", text.strip()) if t]
+    if len(parts) > 1:
+        raise argparse.ArgumentTypeError(
+            f"only a uniform scale is supported (one number that multiplies every coordinate), "
+            f"got {text!r}; scale the mesh file itself for different factors per axis"
+        )
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
 def _snake(stem: str) -> str:
 
     name = re.sub(r"[^a-z0-9]+", "_", stem.lower()).strip("_")
     return name if name and not name[0].isdigit() else f"part_{name}"
+
+
+def _closed_entry(mesh: Any, report: Any, entry: dict, density: float) -> tuple[str, str, Any]:
+    """Set ``repair`` / ``allow_open`` of a new user-object entry as its mesh needs: a mesh
+    that is not closed is repaired (:func:`mgn.geometry.repair.repair_mesh`): ``repair: true``
+    when that closes it, else ``allow_open: true`` (the mesh as it is). Returns (the note of
+    the "added" line, the warning of a mesh that stays open or "", the mesh as it is read)."""
+    if report.is_watertight and report.is_winding_consistent:
+        return "", "", mesh
+    fixed = repair_mesh(mesh)
+    if fixed.closed:
+        entry["repair"] = True
+        mass_g = mass_properties(fixed.mesh, density).mass * 1e3
+        note = f"; repaired as it is read ({'; '.join(fixed.changes)}): closed, solid mass "
+        return f"{note}{mass_g:.4g} g", "", fixed.mesh
+    entry["allow_open"] = True
+    mass_g = mass_properties(mesh, density).mass * 1e3
+    r = fixed.after  # what the repair cannot fix
+    why = []
+    if r.num_boundary_edges:
+        holes = f" ({fixed.holes_left} hole(s) larger than 1 % of the surface)"
+        why.append(f"{r.num_boundary_edges} free edges" + (holes if fixed.holes_left else ""))
+    if r.num_nonmanifold_edges:
+        why.append(f"{r.num_nonmanifold_edges} edge(s) shared by more than two faces")
+    if r.num_misoriented_edges:
+        why.append(f"{r.num_misoriented_edges} misoriented edge(s)")
+    note = f"; OPEN: shell mass {mass_g:.4g} g, no parallel-jaw labels"
+    warn = (
+        f" stays open: {', '.join(why)}, which the repair (winding, duplicate and stray faces, "
+        f"small holes) cannot fix. It is marked allow_open: its mass {mass_g:.4g} g is a shell "
+        "mass (2 mm walls, not a solid), and it gets suction labels only, no parallel-jaw "
+        "labels. Close the mesh (e.g. in MeshLab or Blender) for a solid mass and parallel-jaw "
+        "labels."
+    )
+    return note, warn, mesh
 
 
 def _cmd_objects_add(args: argparse.Namespace) -> int:
@@ -130,12 +190,17 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         str(e.get("name")) for e in data["objects"] if isinstance(e, dict)
     }
     base = target.resolve().parent
-    added = []
+    added: list[str] = []
+    open_notes: list[str] = []
+    new_names: set[str] = set()
+    materials: dict[str, tuple[Any, dict]] = {}
     for i, mesh_arg in enumerate(args.meshes):
         path = Path(mesh_arg)
         mesh = load_mesh(path, scale=args.scale)  # IoError / InvalidArgumentError name the file
         report = mesh.validate()
         name = args.name[i] if args.name else _snake(path.stem)
+        if args.name:
+            check_object_name(name, "mgn objects add: --name")
         stem, k = name, 2
         while name in taken:
             name, k = f"{stem}_{k}", k + 1
@@ -145,15 +210,16 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         entry["mesh"] = full.relative_to(base).as_posix() if full.is_relative_to(base) else (
             os.fspath(full))  # fmt: skip
         entry.update(scale=args.scale, density=args.density, friction=args.friction)
-        closed = report.is_watertight and report.is_winding_consistent
-        if not closed:
-            entry["allow_open"] = True
+        note, open_note, mesh = _closed_entry(mesh, report, entry, args.density)
+        if open_note:
+            open_notes.append(f"{name} ('{path}'){open_note}")
         if args.tags:
             entry["tags"] = list(args.tags)
         data["objects"].append(entry)
         size = np.ptp(np.asarray(mesh.vertices), axis=0) * 1000
-        note = "" if closed else f" (open: {report.num_boundary_edges} boundary edges; shell mass)"
         added.append(f"  {name}: {path} {'x'.join(f'{v:.0f}' for v in size)} mm{note}")
+        new_names.add(name)
+        materials[name] = (mesh.materials[0] if mesh.materials else None, entry)
     text = yaml.safe_dump(data, sort_keys=False)
     tmp = target.with_name(f".{target.name}.check.yaml")
     tmp.write_text(text, encoding="utf-8")
@@ -165,12 +231,19 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         raise type(e)(str(e).replace(os.fspath(tmp), os.fspath(target))) from None
     finally:
         tmp.unlink(missing_ok=True)
-    for w in caught:
+    for w in caught:  # about the objects added now (the others were said when they were)
+        if isinstance(w.message, UserObjectWarning) and w.message.object_name not in new_names:
+            continue
         print(f"mgn: warning: {w.message}".replace(os.fspath(tmp), os.fspath(target)),
               file=sys.stderr)  # fmt: skip
+    for note in open_notes:
+        print(f"mgn: warning: {note}", file=sys.stderr)
     atomic_write_text(target, text)
     print(f"{target}: {len(specs)} object(s); added:")
-    print("\n".join(added))
+    by_name = {s.name: s for s in specs}
+    for line, name in zip(added, materials, strict=True):
+        mat, entry = materials[name]
+        print(f"{line}\n    material: {describe_material(mat, by_name[name].material, entry)}")
     names = " ".join(s.name for s in specs)
     print(f"next: mgn generate --out DS --scenes 10 --add {target} --categories {names}")
     return 0
@@ -183,6 +256,7 @@ def mesh_info(path: str, scale: float = 1.0, density: float = 1000.0) -> dict:
 
     mesh = load_mesh(path, scale=scale)
     warn_implausible_size(mesh.vertices, f"'{path}' (scale {scale:g})")
+    warn_missing_material_files(path, mesh, f"'{path}'")
     r = mesh.validate()
     p = mass_properties(mesh, density)
 
@@ -386,15 +460,17 @@ def build_parser() -> argparse.ArgumentParser:
         "add",
         help="describe your meshes as user objects (appends to a YAML file, validating each)",
         description="Append one entry per mesh to the user-object YAML file --to (created if "
-        "missing; format: mgn.objects.user). Open meshes get allow_open: true (thin-shell "
-        "mass). Then: mgn generate --out DS --add FILE --categories NAME ...",
+        "missing; format: mgn.objects.user). A mesh that is not closed is repaired (repair: "
+        "true: winding, duplicate and stray faces, small holes; the output says what changed); "
+        "one that stays open gets allow_open: true (thin-shell mass, no parallel-jaw labels). "
+        "Then: mgn generate --out DS --add FILE --categories NAME ...",
     )
     p.add_argument("meshes", nargs="+", metavar="MESH", help="mesh files (OBJ, STL, PLY, GLB...)")
     p.add_argument("--to", required=True, metavar="YAML", help="user-object YAML to append to")
     p.add_argument("--name", nargs="+", metavar="NAME",
                    help="object names, one per mesh (default: from the file names)")  # fmt: skip
-    p.add_argument("--scale", type=float, default=1.0,
-                   help="coordinate scale (default 1; 0.001 for files in millimetres)")  # fmt: skip
+    p.add_argument("--scale", type=_uniform_scale, default=1.0,
+                   help="uniform coordinate scale (default 1; 0.001 for a file in mm)")  # fmt: skip
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
     p.add_argument("--friction", type=float, default=0.5, help="Coulomb friction (default 0.5)")
     p.add_argument("--tags", nargs="+", metavar="TAG", help="tags (mgn.objects.ALLOWED_TAGS)")
@@ -431,7 +507,8 @@ def build_parser() -> argparse.ArgumentParser:
         "compare", help="score the same points with the three seal models; table and picture"
     )
     p.add_argument("mesh", help="mesh file, or the name/id of a built-in object")
-    p.add_argument("--scale", type=float, default=1.0, help="coordinate scale (0.001 for mm)")
+    p.add_argument("--scale", type=_uniform_scale, default=1.0,
+                   help="uniform coordinate scale (0.001 for mm)")  # fmt: skip
     p.add_argument("--cup", metavar="YAML", help="suction cup YAML (default: MetaGraspNet cup)")
     p.add_argument("--num-points", type=int, default=1000, help="candidates (default 1000)")
     p.add_argument("--seed", type=int, default=0)
@@ -448,9 +525,8 @@ def build_parser() -> argparse.ArgumentParser:
         "info", help="validation and mass properties of a mesh file (JSON, as mgn-cli info)"
     )
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
-    p.add_argument(
-        "--scale", type=float, default=1.0, help="coordinate scale (default 1; 0.001 for mm)"
-    )
+    p.add_argument("--scale", type=_uniform_scale, default=1.0,
+                   help="uniform coordinate scale (default 1; 0.001 for mm)")  # fmt: skip
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
     p.set_defaults(func=_cmd_info)
 

@@ -12,7 +12,8 @@ default: the objects tagged 'novel') out of every scene; --split test puts at le
 scene. --difficulty-quota generates scenes in batches until exactly that many views of each
 difficulty level are selected (recorded in dataset.json), at most --max-scenes scenes.
 mgn config dump [--out cfg.yaml]     the default configuration (every key, MGN values)
-mgn config check cfg.yaml            validate a configuration file
+mgn config check cfg.yaml [--add YAML]   validate a configuration file (exit 1 when it fails
+                                     every scene: unknown objects, a camera facing away, ...)
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import dataclasses
 import json
 import os
 import sys
+import warnings
 from typing import Any
 
 from mgn.base.atomic import atomic_write_text
@@ -32,7 +34,7 @@ from mgn.io.stats import dataset_stats, format_stats
 from mgn.pipeline.config import SelectionConfig, dump_config, load_config
 from mgn.pipeline.label_cache import label_cache_dir
 from mgn.pipeline.runner import generate
-from mgn.pipeline.sanity import config_warnings
+from mgn.pipeline.sanity import config_errors, config_warnings, load_catalogue
 from mgn.pipeline.testset import parse_quota
 from mgn.render.photo import add_engine_arguments, settings_from_args
 
@@ -43,6 +45,9 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipel
     """The config of ``--config`` with the test-set options applied."""
 
     cfg = load_config(args.config)
+    if args.objects:
+        cfg = dataclasses.replace(cfg, objects=dataclasses.replace(
+            cfg.objects, names=tuple(args.objects), count=None, categories=None))  # fmt: skip
     if args.add:
         added = tuple(os.path.abspath(a) for a in args.add)
         cfg = dataclasses.replace(cfg, objects=dataclasses.replace(
@@ -72,28 +77,41 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipel
     return cfg
 
 
+def _warn(text: str, shown: set[str]) -> None:
+    """Print ``mgn: warning: text`` on stderr unless it was printed already."""
+    if text not in shown:
+        shown.add(text)
+        print(f"mgn: warning: {text}", file=sys.stderr)
+
+
 def _cmd_generate(args: argparse.Namespace) -> int:
 
     args.objects, args.categories = _split(args.objects), _split(args.categories)
-    cfg = _config_with_overrides(args)
-    for w in config_warnings(cfg):
-        print(f"mgn: warning: {w}", file=sys.stderr)
+    cfg = _config_with_overrides(args)  # --objects, --add, --categories, ... applied
+    shown: set[str] = set()
+    for w in config_warnings(cfg, load_catalogue(cfg)):
+        _warn(w, shown)
     scenes = args.scenes
     if scenes is None and cfg.selection.quota is None:
         scenes = 3
-    report = generate(
-        args.out,
-        scenes,
-        config=cfg,
-        seed=args.seed,
-        objects=args.objects,
-        workers=args.workers,
-        resume=args.resume,
-        scheduler=args.scheduler,
-        progress=not args.quiet,
-        use_cache=not args.no_cache,
-        collect=args.collect,
-    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        try:
+            report = generate(
+                args.out,
+                scenes,
+                config=cfg,
+                seed=args.seed,
+                workers=args.workers,
+                resume=args.resume,
+                scheduler=args.scheduler,
+                progress=not args.quiet,
+                use_cache=not args.no_cache,
+                collect=args.collect,
+            )
+        finally:
+            for caught_w in caught:
+                _warn(str(caught_w.message), shown)
     print(report.format_summary())
     if args.profile:
         atomic_write_text(args.profile, json.dumps(report.profile(), indent=2) + "\n")
@@ -115,11 +133,22 @@ def _cmd_config_dump(args: argparse.Namespace) -> int:
 def _cmd_config_check(args: argparse.Namespace) -> int:
 
     config = load_config(args.file)
+    if args.add:  # as mgn generate --add: user objects join the catalogue
+        added = tuple(os.path.abspath(a) for a in args.add)
+        config = dataclasses.replace(config, objects=dataclasses.replace(
+            config.objects, user_objects=config.objects.user_objects + added))  # fmt: skip
     views = len(config.camera.view_indices)
-    warnings = config_warnings(config)
-    for w in warnings:
+    catalogue = load_catalogue(config)
+    errors = config_errors(config, catalogue)
+    found = config_warnings(config, catalogue)
+    for e in errors:
+        print(f"mgn: error: {e}", file=sys.stderr)
+    for w in found:
         print(f"mgn: warning: {w}", file=sys.stderr)
-    extra = f"; {len(warnings)} warning(s)" if warnings else ""
+    extra = f"; {len(found)} warning(s)" if found else ""
+    if errors:
+        print(f"{args.file}: INVALID: {len(errors)} setting(s) fail every scene (above){extra}")
+        return 1
     print(f"{args.file}: valid ({config.camera.rig} rig, {views} views per scene{extra})")
     return 0
 
@@ -263,6 +292,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="keep the convex decompositions (default: clear both)")  # fmt: skip
     p.set_defaults(func=_cmd_cache_clear)
 
-    p = csub.add_parser("check", help="validate a configuration file")
+    p = csub.add_parser(
+        "check",
+        help="validate a configuration file: its keys and values, then what would fail or empty "
+        "every scene (exit 1) and what would give a degenerate dataset (warnings)",
+    )
     p.add_argument("file", help="configuration YAML")
+    p.add_argument(
+        "--add",
+        action="append",
+        metavar="YAML",
+        help="user objects of this YAML file, as mgn generate --add (repeatable)",
+    )
     p.set_defaults(func=_cmd_config_check)

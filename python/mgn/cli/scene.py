@@ -18,11 +18,12 @@ from pathlib import Path
 from tqdm import tqdm
 
 from mgn.base.atomic import atomic_dir
-from mgn.errors import InvalidArgumentError
+from mgn.errors import InvalidArgumentError, MgnError
+from mgn.io.dataset_record import DATASET_RECORD, read_dataset_record
 from mgn.io.scene_json import read_scene_json, write_scene_json
 from mgn.io.view_images import render_views
 from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
-from mgn.pipeline.config import load_config
+from mgn.pipeline.config import Config, load_config
 from mgn.pipeline.label_cache import object_labels
 from mgn.pipeline.label_scene import LabelOptions, label_scene
 from mgn.pipeline.scene_writer import scene_views
@@ -236,10 +237,32 @@ def _scene_path(arg: str) -> str:
     return arg
 
 
+def _dataset_config(scene_path: str) -> tuple[Config | None, Path | None]:
+    """The config recorded in the ``dataset.json`` of the dataset a scene folder belongs to
+    (``DS/scene<N>/scene.json`` -> ``DS/dataset.json``), and that file; (None, None) when the
+    scene is not part of a dataset."""
+    record = Path(scene_path).resolve().parent.parent / DATASET_RECORD
+    doc = read_dataset_record(record.parent)
+    if doc is None or not isinstance(doc.get("config"), dict):
+        return None, None
+    try:
+        return Config.from_dict(doc["config"]), record
+    except MgnError as e:
+        raise InvalidArgumentError(
+            f"'{record}': its config cannot be read ({e}); give --config"
+        ) from e
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
 
+    path = _scene_path(args.scene)
     config = load_config(args.config)
-    scene = read_scene_json(_scene_path(args.scene))
+    if args.config is None:  # a dataset's scene: its own cameras, gripper and cup
+        recorded, record = _dataset_config(path)
+        if recorded is not None:
+            config = recorded
+            print(f"config (cameras, gripper, cup) from {record}; --config replaces it")
+    scene = read_scene_json(path)
     views = [] if args.no_cameras else scene_views(scene, config.camera)
     counts = export_scene_glb(scene, args.out, views=views, grasps=args.grasps, top_k=args.top_k,
                               config=config, num_threads=args.num_threads)  # fmt: skip
@@ -260,7 +283,8 @@ def _register_export(ssub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("scene", help="scene JSON (mgn scene drop) or a scene folder")
     p.add_argument("out", help="output .glb file")
-    p.add_argument("--config", help="config YAML: cameras, gripper, cup (default: MGN defaults)")
+    p.add_argument("--config", help="config YAML: cameras, gripper, cup (default: the dataset.json "
+                   "config of the scene's dataset, else the MGN defaults)")  # fmt: skip
     p.add_argument("--grasps", metavar="KIND",
                    help="also draw grasps: suction or paralleljaw (default: none)")  # fmt: skip
     p.add_argument("--top-k", type=int, default=5, help="grasps per object (default 5)")

@@ -7,7 +7,9 @@ counter-clockwise seen from outside.
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -62,6 +64,48 @@ def mass_properties(
     (``is_exact`` is then False) and ``"error"`` raises InvalidArgumentError.
     """
     return _core.compute_mass_properties(mesh, density, open_mesh, shell_thickness)
+
+
+_MTLLIB = re.compile(rb"^[ \t]*mtllib[ \t]+(.+?)[ \t]*\r?$", re.M)
+
+
+def missing_material_files(
+    path: str | os.PathLike[str], mesh: Mesh | None = None
+) -> list[tuple[str, str]]:
+    """The material files a mesh file points to that are not there, as (what, file) pairs:
+    the material libraries (``mtllib``) of an OBJ file, and the base-colour texture of each of
+    the mesh's materials (``map_Kd`` of an MTL, an external glTF image, ...) when its file does
+    not exist. Without them the mesh loads, but renders in its plain base colour.
+
+    Args:
+        path: the mesh file (an OBJ's ``mtllib`` names are relative to its folder).
+        mesh: the mesh loaded from ``path`` (its materials give the texture paths); None: the
+            ``mtllib`` check only.
+    """
+    p = Path(path)
+    out: list[tuple[str, str]] = []
+    if p.suffix.lower() == ".obj":
+        try:
+            data = p.read_bytes()
+        except OSError:
+            data = b""
+        for m in _MTLLIB.finditer(data):
+            name = m.group(1).decode("utf-8", "replace").strip()
+            # One name, or (OBJ allows it) several separated by spaces; backslashes of Windows.
+            candidates = [name, *name.split()] if " " in name else [name]
+            found = [
+                (p.parent / c.replace("\\", "/")).is_file() or (p.parent / c).is_file()
+                for c in candidates
+            ]
+            if not (found[0] or (len(found) > 1 and all(found[1:]))):
+                out.append(("material library (mtllib)", os.fspath(p.parent / name)))
+    for mat in mesh.materials if mesh is not None else ():
+        tex = str(mat.texture_path)
+        if tex and not Path(tex).is_file():
+            item = (f"texture of material '{mat.name}'", tex)
+            if item not in out:
+                out.append(item)
+    return out
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ import h5py
 import numpy as np
 import numpy.typing as npt
 
+from mgn.base.atomic import disk_full_error, disk_full_message
 from mgn.base.units import M_TO_CM
 from mgn.errors import IoError
 from mgn.pj.labels import PjLabels
@@ -81,7 +82,11 @@ def replace_grasp_group(
                 meta.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
         shutil.copymode(path, tmp)
         os.replace(tmp, path)
-    except OSError as e:
+    except (OSError, RuntimeError) as e:  # h5py reports some write failures as RuntimeError
+        if disk_full_error(e) is not None:
+            raise IoError(f"{who}: {disk_full_message(path)}") from e
+        if not isinstance(e, OSError):
+            raise
         raise IoError(f"{who}: cannot update '{path}': {e}") from e
     finally:
         if tmp.exists():

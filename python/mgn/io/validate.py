@@ -206,14 +206,17 @@ def _check_completeness(ds: Dataset, info: dict[str, Any], problems: list[Proble
 
     ``num_scenes`` fixes the scene folders ``scene0 .. scene<num_scenes - 1>``; a folder may be
     absent only when a difficulty-balanced run pruned it (``selection.pruned`` and none of its
-    views selected). ``status`` must be ``complete``: ``running`` means the run was stopped (killed,
-    out of disk), ``incomplete`` that scenes failed. Every scene folder needs its manifest (it is
+    views selected). ``status`` must be ``complete``: ``running`` means the process was killed,
+    ``interrupted`` stopped by Ctrl-C, ``failed`` stopped by an error (``error`` says which, e.g.
+    a full disk), ``incomplete`` that scenes failed. Every scene folder needs its manifest (it is
     written last, so a folder without one was never finished).
     """
     status = info.get("status")
     if status != "complete":
         failed = info.get("failed_scenes")
         more = f" (failed scenes: {failed})" if failed else ""
+        if info.get("error"):
+            more += f" ({info['error']})"
         problems.append(
             Problem(
                 "dataset.json",

@@ -43,7 +43,10 @@ class ToteSpec:
         inner_height: floor top to rim, metres.
         wall_thickness: side-wall thickness, metres.
         floor_thickness: floor thickness, metres.
-        color: linear RGBA in [0, 1].
+        color: linear RGBA in [0, 1], the tote's colour in the images when ``camera.randomize``
+            is off. With ``camera.randomize`` (the default of a dataset config) every view
+            draws the tote's colour at random instead (the raster engine always, the path engine
+            while ``render.randomize.materials`` is on), and this colour is not used.
         mesh: a user bin mesh file in the tote frame, or None (the parametric box).
         mesh_scale: multiplies the mesh coordinates (0.001 for a file in millimetres).
         walls: False for a table top (a shelf board, a conveyor): no walls, the "tote" is a

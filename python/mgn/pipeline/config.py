@@ -98,6 +98,7 @@ from mgn.hardware import ParallelJawGripper, SuctionCup
 from mgn.objects import ToteSpec, make_tote
 from mgn.pj.labels import DEFAULT_STORED_GRASPS
 from mgn.pj.physics import CALIBRATION_TOLERANCE, ShakeScorer, default_staircase_checks
+from mgn.render.path import FilmOptions, PathTraceOptions
 from mgn.render.photo import RandomizeSettings, RenderSettings
 from mgn.scene.cameras import Intrinsics, look_at
 from mgn.scene.lens import lens_for
@@ -679,12 +680,33 @@ def _external(cls: type, data: Any, key: str) -> Any:
 
 
 def _render(data: Any, key: str) -> RenderSettings:
-    """The ``render`` section: RenderSettings with its nested ``randomize`` mapping."""
+    """The ``render`` section: RenderSettings with its nested ``randomize`` mapping. The values
+    are also checked against the ranges of the tracer and the film (whatever the engine), so
+    that a value the tracer refuses fails here, not in every scene."""
     d = _mapping(data, key)
     _check_keys(d, [f.name for f in dataclasses.fields(RenderSettings)], key)
     if "randomize" in d:
         d["randomize"] = _external(RandomizeSettings, d["randomize"], f"{key}.randomize")
-    return _external(RenderSettings, d, key)
+    settings = _external(RenderSettings, d, key)
+    s = settings
+    checks: tuple[tuple[str, Callable[[], Any]], ...] = (
+        ("spp", lambda: PathTraceOptions(spp=s.spp)),
+        ("spp_without_denoiser", lambda: PathTraceOptions(spp=s.spp_without_denoiser)),
+        ("max_bounces", lambda: PathTraceOptions(max_bounces=s.max_bounces)),
+        ("clamp", lambda: PathTraceOptions(clamp=s.clamp)),
+        ("aperture_radius", lambda: PathTraceOptions(aperture_radius=s.aperture_radius)),
+        ("adaptive_samples", lambda: PathTraceOptions(adaptive_samples=s.adaptive_samples)),
+        ("adaptive_max", lambda: PathTraceOptions(adaptive_max=s.adaptive_max)),
+        ("exposure", lambda: FilmOptions(exposure=s.exposure)),
+        ("shot_noise", lambda: FilmOptions(shot_noise=s.shot_noise)),
+        ("read_noise", lambda: FilmOptions(read_noise=s.read_noise)),
+    )
+    for name, build in checks:
+        try:
+            build()
+        except InvalidArgumentError as e:
+            raise ConfigError(f"config key '{key}.{name}': {e}") from e
+    return settings
 
 
 @dataclass(frozen=True)
@@ -788,7 +810,8 @@ class Config(_Section):
 _SECTION_DOCS = {
     "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
     "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
-    "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width)",
+    "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width); "
+    "color is used only with camera.randomize: false (else drawn per view)",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
     "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
     "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "

@@ -35,7 +35,7 @@ import numpy as np
 
 from mgn import _core
 from mgn._core import __version__
-from mgn.base.atomic import _io_error, atomic_write_bytes
+from mgn.base.atomic import _io_error, atomic_write_bytes, disk_full_error, disk_full_message
 from mgn.base.deterministic import npz_bytes
 from mgn.errors import IoError
 from mgn.geometry.convex import cache_dir
@@ -371,8 +371,10 @@ def write_models(
     out = Path(root)
     staging = out / f".tmp-models-{os.getpid()}"
     folders = []
+    current = out / "models"
     try:
         for spec in specs:
+            current = out / "models" / f"{spec.category_id:03d}"
             tmp = write_model_folder(spec, staging, overwrite=True)
             lab = labels.get(spec.name)
             h5 = tmp / "textured.obj.hdf5"
@@ -386,14 +388,19 @@ def write_models(
                 shutil.rmtree(target)
             os.replace(tmp, target)
             folders.append(target)
+        current = out / "tote"
         write_tote(config.tote, out)
-        config.gripper.to_yaml(out / "gripper.yaml")
-        config.cup.to_yaml(out / "suction_cup.yaml")
-    except OSError as e:
-        if isinstance(e, IoError):
+        current = out / "gripper.yaml"
+        config.gripper.to_yaml(current)
+        current = out / "suction_cup.yaml"
+        config.cup.to_yaml(current)
+    except (OSError, RuntimeError) as e:  # h5py reports some write failures as RuntimeError
+        # Named by the folder being written, not by the staging copy or the HDF5 error text.
+        if disk_full_error(e) is not None:
+            raise IoError(disk_full_message(current)) from e
+        if isinstance(e, IoError) or not isinstance(e, OSError):
             raise
-
-        raise _io_error(out / "models", e) from e
+        raise _io_error(current, e) from e
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return folders

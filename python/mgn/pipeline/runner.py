@@ -32,14 +32,16 @@ Failures: a scene that raises is reported with its index, seed and error and doe
 others. A full disk is reported as "disk full" with the path, and stops scheduling new scenes.
 Ctrl-C stops the run, removes the temporary folders and leaves the complete scenes; ``--resume``
 continues (it also removes any ``.tmp-`` folder a killed run left behind, and redoes scenes whose
-manifest is missing or inconsistent).
+manifest is missing or inconsistent). ``dataset.json`` ``status`` is ``running`` while the run
+goes on, then ``complete`` (every scene written), ``incomplete`` (scenes failed or were not
+run), ``interrupted`` (Ctrl-C) or ``failed`` (an error stopped the whole run, e.g. a full disk
+while writing ``models/``; ``error`` says which); only a killed process leaves ``running``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
-import errno
 import json
 import multiprocessing
 import os
@@ -60,11 +62,11 @@ import numpy as np
 from tqdm import tqdm
 
 from mgn._core import __version__
-from mgn.base.atomic import _io_error
+from mgn.base.atomic import _io_error, disk_full_error
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.dataset_record import read_dataset_record, removed_objects, write_dataset_record
 from mgn.io.manifest import check_manifest, write_manifest
-from mgn.objects import ObjectSpec, builtin_objects, load_objects_yaml
+from mgn.objects import ObjectSpec
 from mgn.pipeline import scene_writer
 from mgn.pipeline.config import Config, ConfigError, load_config
 from mgn.pipeline.label_cache import (
@@ -75,6 +77,7 @@ from mgn.pipeline.label_cache import (
     save_cached_labels,
     write_models,
 )
+from mgn.pipeline.sanity import config_errors, load_catalogue
 from mgn.pipeline.seeds import SCENE_SEED_RULE, scene_seed
 from mgn.pipeline.testset import compose_scene, resolve_split, run_balanced
 from mgn.render.photo import RenderSettings
@@ -153,18 +156,9 @@ class SceneResult:
     removed: tuple[str, ...] = ()
 
 
-def _disk_full(e: BaseException) -> OSError | None:
-    """The ENOSPC error in the chain of ``e``, if any."""
-    seen = set()
-    cur: BaseException | None = e
-    while cur is not None and id(cur) not in seen:
-        seen.add(id(cur))
-        if isinstance(cur, OSError) and (
-            cur.errno == errno.ENOSPC or str(cur).startswith("disk full")
-        ):
-            return cur
-        cur = cur.__cause__ or cur.__context__
-    return None
+def _disk_full(e: BaseException) -> BaseException | None:
+    """The disk-full error in the chain of ``e``, if any (``disk_full_error``)."""
+    return disk_full_error(e)
 
 
 def _folder_size(folder: Path) -> int:
@@ -211,6 +205,13 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
     try:
         scene = drop_task_scene(task) if dropped is None else dropped.result()
         times["drop"] = time.perf_counter() - t0
+        if len(scene) == 0:
+            left = ", ".join(f"'{r.name}' ({r.reason})" for r in scene.removed)
+            raise InvalidArgumentError(
+                f"no object stayed in the tote ({left or 'none was dropped'}): the scene would "
+                "hold nothing to see or grasp; check the objects' sizes and scales (mgn config "
+                "check)"
+            )
         t1 = time.perf_counter()
         if tmp.exists():
             shutil.rmtree(tmp)
@@ -246,7 +247,7 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
         shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         full = _disk_full(e)
         if full is not None:
-            where = full.filename or tmp
+            where = getattr(full, "filename", None) or tmp
             msg = f"disk full while writing scene{task.index} ('{where}')"
         else:
             frame = traceback.extract_tb(e.__traceback__)[-1:]
@@ -474,6 +475,8 @@ class GenerateReport:
         not_run: scenes not attempted (stopped by a full disk).
         physics: ``dataset.json`` ``physics_scores`` (see :func:`physics_record`), None when no
             parallel-jaw labels with physics were made.
+        no_paralleljaw: objects of the run that got no parallel-jaw labels although they were
+            asked for (an open mesh, ``allow_open``), with the reason.
     """
 
     out_dir: Path
@@ -491,6 +494,7 @@ class GenerateReport:
     selection: dict[str, Any] | None = None
     unmet: dict[int, int] = field(default_factory=dict)
     physics: dict[str, Any] | None = None
+    no_paralleljaw: dict[str, str] = field(default_factory=dict)
 
     @property
     def ok(self) -> list[SceneResult]:
@@ -599,6 +603,11 @@ class GenerateReport:
                 f"{p['unscored']} left NaN by object_labels.physics_grasps = {p['cap']} "
                 "(null scores every grasp)"
             )
+        if self.no_paralleljaw:
+            lines.append(
+                f"  no parallel-jaw labels for {len(self.no_paralleljaw)} object(s): "
+                + "; ".join(f"{n}: {why}" for n, why in sorted(self.no_paralleljaw.items()))
+            )
         for r in self.failed:
             lines.append(f"  FAILED scene{r.index} (seed {r.seed}): {r.error}")
         if self.not_run:
@@ -621,8 +630,35 @@ class GenerateReport:
                 "with --resume and a larger --max-scenes to continue"
             )
         elif not self.complete:
-            lines.append("  rerun with --resume to redo the missing scenes")
+            lines.append(self._resume_advice())
         return "\n".join(lines)
+
+    def _resume_advice(self) -> str:
+        """What to do about the failed and not-run scenes: ``--resume`` redoes a scene, and
+        helps where the failure came from outside (a full disk, a worker that died, memory); a
+        scene depends only on its seed and the config, so any other failure comes back."""
+        redo = [r.index for r in self.failed if _transient(r)] + list(self.not_run)
+        same = [r.index for r in self.failed if not _transient(r)]
+        if not same:
+            return "  rerun with --resume to redo the missing scenes"
+        names = ", ".join(f"scene{i}" for i in same)
+        text = (
+            f"  {names} failed the way they will fail on every run (a scene depends only on its "
+            "seed and the config): fix the cause above first (mgn config check CONFIG checks "
+            "the config)"
+        )
+        if redo:
+            text += f"; then --resume also redoes {', '.join(f'scene{i}' for i in sorted(redo))}"
+        else:
+            text += ", then rerun with --resume"
+        return text
+
+
+def _transient(result: SceneResult) -> bool:
+    """A failure that may not come back on a rerun: a full disk, a worker process that died,
+    memory."""
+    error = result.error or ""
+    return result.disk_full or error.startswith("worker failed") or "MemoryError" in error
 
 
 # ---------------------------------------------------------------------------------- generate
@@ -630,13 +666,8 @@ class GenerateReport:
 
 def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
 
-    catalogue = list(builtin_objects())
-    sources: dict[str, str] = {}
-    for path in config.objects.user_objects:
-        for spec in load_objects_yaml(path):
-            catalogue.append(spec)
-            sources[spec.name] = os.fspath(Path(path).resolve())
-    return catalogue, sources
+    cat = load_catalogue(config)
+    return list(cat.specs), cat.sources
 
 
 def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extra: Any) -> dict:
@@ -728,12 +759,30 @@ def _check_resume(out: Path, config: Config, seed: int) -> dict | None:
             f"--resume: '{out}' was generated with split {recorded.get('split')}, got {split} "
             "(--split / config key 'split'); use the same split or a new output folder"
         )
-    if _comparable(recorded) != _comparable(config.to_dict()):
+    diffs = _config_differences(_comparable(recorded), _comparable(config.to_dict()))
+    if diffs:
+        shown = "; ".join(f"{k}: recorded {a!r}, now {b!r}" for k, a, b in diffs[:5])
+        more = f" (and {len(diffs) - 5} more)" if len(diffs) > 5 else ""
         raise InvalidArgumentError(
-            f"--resume: the config differs from the one recorded in '{out / 'dataset.json'}'; "
-            "use the same config (or a new output folder)"
+            f"--resume: the config differs from the one recorded in '{out / 'dataset.json'}' in "
+            f"{len(diffs)} key(s): {shown}{more}; use the same config (or a new output folder)"
         )
     return doc
+
+
+_MISSING = "<not set>"
+
+
+def _config_differences(recorded: Any, current: Any, key: str = "") -> list[tuple[str, Any, Any]]:
+    """(dotted key, recorded value, current value) of every leaf where two config dicts
+    differ, in key order; a key only one side has shows ``<not set>`` on the other."""
+    if isinstance(recorded, dict) and isinstance(current, dict):
+        out: list[tuple[str, Any, Any]] = []
+        for k in sorted(set(recorded) | set(current), key=str):
+            sub = f"{key}.{k}" if key else str(k)
+            out += _config_differences(recorded.get(k, _MISSING), current.get(k, _MISSING), sub)
+        return out
+    return [] if recorded == current else [(key or "<config>", recorded, current)]
 
 
 @dataclass
@@ -858,6 +907,15 @@ class _Run:
         )
 
 
+def _record_stop(run: _Run, status: str, error: str) -> None:
+    """Record in ``dataset.json`` that the run stopped before its end (``status``
+    ``interrupted`` or ``failed``, with the ``error``), so that it no longer says ``running``.
+    Written after the temporary folders are gone, which frees the space a full disk needs."""
+    with contextlib.suppress(OSError):
+        run.write_doc(run.report.num_scenes, status, error=error,
+                      removed_objects=removed_objects(run.out))  # fmt: skip
+
+
 def _check_generate_args(cfg: Config, num_scenes: int | None, workers: int, seed: int) -> None:
     """The argument checks of :func:`generate` (before anything is written)."""
     quota = cfg.selection.quota
@@ -951,7 +1009,14 @@ def generate(
         )
 
     # Compose every scene first (cheap, deterministic): the object set decides the labels.
-    catalogue, sources = _catalogue(cfg)
+    cat = load_catalogue(cfg)
+    problems = config_errors(cfg, cat)
+    if problems:
+        raise ConfigError(
+            "generate: the config fails every scene (mgn config check says the same):\n  "
+            + "\n  ".join(problems)
+        )
+    catalogue, sources = list(cat.specs), cat.sources
     split = resolve_split(cfg, catalogue)
     extra: dict[str, Any] = {"split": split.to_json()} if split.name != "all" else {}
     per_scene: list[list[ObjectSpec]] = []
@@ -959,6 +1024,9 @@ def generate(
         assert num_scenes is not None
         per_scene = [compose_scene(cfg, catalogue, scene_seed(seed, i), split)
                      for i in range(num_scenes)]  # fmt: skip
+        cat.warn({s.name for specs in per_scene for s in specs})  # the objects of this run only
+    else:
+        cat.warn(cat.used_names(cfg))
 
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -983,6 +1051,12 @@ def generate(
     except KeyboardInterrupt:
         executor.cancel()
         _clean_tmp(out)
+        _record_stop(run, "interrupted", "stopped by Ctrl-C (SIGINT)")
+        raise
+    except BaseException as e:
+        executor.cancel()
+        _clean_tmp(out)
+        _record_stop(run, "failed", f"{type(e).__name__}: {e}")
         raise
     finally:
         executor.close()
@@ -992,6 +1066,11 @@ def generate(
     failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
     more: dict[str, Any] = {"removed_objects": removed_objects(out)}
     report.physics = physics_record(cfg, run.labels)
+    report.no_paralleljaw = {
+        name: str(lab.paralleljaw.metadata["pj_skipped"])
+        for name, lab in sorted(run.labels.items())
+        if lab.paralleljaw is not None and lab.paralleljaw.metadata.get("pj_skipped")
+    }
     if report.physics is not None:
         more["physics_scores"] = report.physics
     if failed:

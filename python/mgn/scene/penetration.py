@@ -4,6 +4,9 @@ The drop simulates reduced convex hulls; what is rendered and labelled are the o
 :func:`render_penetration` measures how deep those meshes sink into the tote (floor and inner
 walls, planes of the tote frame) and into each other: the largest distance of a mesh vertex
 below the floor / beyond a wall, or inside another object's closed mesh from that mesh's surface.
+An object whose mesh is several closed parts that overlap one another (a union of solids) is
+tested part by part: its parts never count as penetrating each other, and a vertex of another
+object inside one of its parts counts with its depth below that part's surface.
 Units m, tote frame W (see :mod:`mgn.scene.drop`).
 """
 
@@ -95,43 +98,88 @@ def render_penetration(
             worst = max(worst, float((np.abs(low[:, 1]) - hy).max()))
     lo = [w.min(axis=0) for w in world]
     hi = [w.max(axis=0) for w in world]
-    scenes: dict[int, RayScene] = {}
+    parts: dict[int, list[tuple[Mesh, RayScene]]] = {}
+    split: dict[int, list[tuple[Mesh, RayScene]]] = {}
     for a in range(len(meshes)):
         for b in range(len(meshes)):
             if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
                 continue
             # Vertices of a in b's frame, inside b's bounding box, then inside b's mesh.
             Xb = poses[b]
-            p = (world[a] - Xb[:3, 3]) @ Xb[:3, :3]
+            pa = (world[a] - Xb[:3, 3]) @ Xb[:3, :3]
             blo, bhi = local[b].min(axis=0), local[b].max(axis=0)
-            p = p[np.all((p >= blo) & (p <= bhi), axis=1)]
-            if len(p) == 0:
+            pa = pa[np.all((pa >= blo) & (pa <= bhi), axis=1)]
+            if len(pa) == 0:
                 continue
-            if b not in scenes:
-                scenes[b] = RayScene(meshes[b])
-            p = p[_inside(scenes[b], p)]
-            if len(p) == 0:
-                continue
-            # A point's distance to the surface is at most its distance to the nearest vertex
-            # (`bound`): points are measured in order of decreasing bound, and once the bound
-            # is no more than the deepest penetration found, no later point can exceed it. The
-            # result is the brute-force maximum, found with fewer point-triangle distances.
-            # (Vertices of the faces only; the bound is widened by far more than the rounding
-            # of either distance.)
-            faces = np.asarray(meshes[b].faces)
-            corners = local[b][np.unique(faces)]
-            bound = np.concatenate(
-                [
-                    np.sqrt(((p[k : k + 64, None, :] - corners[None]) ** 2).sum(-1).min(1))
-                    for k in range(0, len(p), 64)
-                ]
-            )
-            bound = bound * (1.0 + 1e-9) + 1e-12
-            order = np.argsort(-bound, kind="stable")
-            p, bound = p[order], bound[order]
-            tri = local[b][faces]
-            for k in range(0, len(p), 64):
-                if bound[k] <= worst:
-                    break
-                worst = max(worst, float(point_triangle_distance(p[k : k + 64], tri).max()))
+            if b not in parts:
+                key = id(meshes[b])  # copies of one object share their mesh: split it once
+                if key not in split:
+                    split[key] = [(m, RayScene(m)) for m in _connected_parts(meshes[b])]
+                parts[b] = split[key]
+            # A mesh of several closed parts that overlap one another (one object modelled as
+            # a union of solids) is tested part by part: the parity of the whole would count a
+            # point inside two parts as outside, and coincident faces of two parts as one
+            # crossing. A vertex inside a part sinks into b at least as deep as into that part.
+            for part, scene in parts[b]:
+                p = pa[_inside(scene, pa)]
+                if len(p):
+                    worst = _deepest(p, part, worst)
     return max(worst, 0.0)
+
+
+def _connected_parts(mesh: Mesh) -> list[Mesh]:
+    """The pieces of ``mesh`` connected through shared (welded) vertices; ``[mesh]`` when it is
+    one piece."""
+    v = np.asarray(mesh.vertices)
+    f = np.asarray(mesh.faces, np.int64)
+    if len(f) == 0:
+        return [mesh]
+    _, weld = np.unique(v + np.float32(0.0), axis=0, return_inverse=True)
+    wf = weld.reshape(-1)[f]
+    # Connected components by min-label propagation along the face edges with pointer jumping.
+    label = np.arange(int(wf.max()) + 1)
+    u = np.concatenate([wf[:, 0], wf[:, 1], wf[:, 2]])
+    w = np.concatenate([wf[:, 1], wf[:, 2], wf[:, 0]])
+    while True:
+        low = np.minimum(label[u], label[w])
+        new = label.copy()
+        np.minimum.at(new, u, low)
+        np.minimum.at(new, w, low)
+        new = new[new]
+        if np.array_equal(new, label):
+            break
+        label = new
+    face_label = label[wf[:, 0]]
+    pieces = np.unique(face_label)
+    if len(pieces) == 1:
+        return [mesh]
+    return [Mesh(v, f[face_label == k].astype(np.int32)) for k in pieces]
+
+
+def _deepest(p: np.ndarray, part: Mesh, worst: float) -> float:
+    """max(``worst``, the largest distance of the points ``p`` (inside ``part``) to the
+    surface of ``part``)."""
+    # A point's distance to the surface is at most its distance to the nearest vertex
+    # (`bound`): points are measured in order of decreasing bound, and once the bound
+    # is no more than the deepest penetration found, no later point can exceed it. The
+    # result is the brute-force maximum, found with fewer point-triangle distances.
+    # (Vertices of the faces only; the bound is widened by far more than the rounding
+    # of either distance.)
+    faces = np.asarray(part.faces)
+    vertices = np.asarray(part.vertices, np.float64)
+    corners = vertices[np.unique(faces)]
+    bound = np.concatenate(
+        [
+            np.sqrt(((p[k : k + 64, None, :] - corners[None]) ** 2).sum(-1).min(1))
+            for k in range(0, len(p), 64)
+        ]
+    )
+    bound = bound * (1.0 + 1e-9) + 1e-12
+    order = np.argsort(-bound, kind="stable")
+    p, bound = p[order], bound[order]
+    tri = vertices[faces]
+    for k in range(0, len(p), 64):
+        if bound[k] <= worst:
+            break
+        worst = max(worst, float(point_triangle_distance(p[k : k + 64], tri).max()))
+    return worst

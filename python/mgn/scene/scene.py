@@ -234,7 +234,9 @@ class RemovedInstance:
 
 @functools.lru_cache(maxsize=32)
 def _user_catalogue(path: str) -> dict[str, ObjectSpec]:
-    return {s.name: s for s in load_objects_yaml(path)}
+    # The loader's warnings about the objects (size, missing files) were given where the
+    # catalogue was read (mgn generate, mgn config check); a scene does not repeat them.
+    return {s.name: s for s in load_objects_yaml(path, notes=[])}
 
 
 def resolve_object(name: str, source: str) -> ObjectSpec:
