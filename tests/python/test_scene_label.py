@@ -148,6 +148,49 @@ def test_poses_and_keypoints_in_the_camera_frame(written):
     assert np.all(kp[:, 3] > 0)  # in front of the camera (z forward, metres)
 
 
+def test_com_keypoints_are_the_visible_ones_as_in_metagraspnet(written):
+    # MetaGraspNet's {v}_scene.hdf5 has keypts/com/{keypts_relative_to_camera, object_id} only
+    # (no occluded set, unlike keypts/byhand): the CoM points seen from the camera. A point is
+    # seen when the camera ray's first hit is it: the noise-free depth at its pixel equals its z.
+    import h5py
+
+    root, _ = written
+    view = Dataset(root).scene(0).view(0)
+    z_img = view.depth_ideal
+    K = view.intrinsics
+    with h5py.File(view.path("_scene.hdf5"), "r") as h5:
+        com = h5["keypts/com"]
+        assert "visible" not in com
+        seen = com["keypts_relative_to_camera"][()] / 100.0  # cm -> m
+        hidden = com["occluded_keypts_relative_to_camera"][()] / 100.0
+        assert len(com["object_id"]) == len(seen) and len(com["occluded_object_id"]) == len(hidden)
+    assert len(seen) + len(hidden) == 1000 * view.num_instances
+    assert 0 < len(seen) < len(hidden)  # from above: the tops are seen, the rest is not
+
+    def depth_agrees(p):
+        u = np.floor(K.fx * p[:, 1] / p[:, 3] + K.cx).astype(int)
+        v = np.floor(K.fy * p[:, 2] / p[:, 3] + K.cy).astype(int)
+        ok = (u >= 0) & (u < K.width) & (v >= 0) & (v < K.height)
+        z = np.full(len(p), np.nan)
+        z[ok] = z_img[v[ok], u[ok]]
+        return np.abs(z - p[:, 3]) < 0.005  # 5 mm: the point vs its pixel's centre ray
+
+    assert depth_agrees(seen).mean() > 0.9
+    assert depth_agrees(hidden).mean() < 0.3
+
+
+def test_occlusion_is_written_to_four_decimals_everywhere(written):
+    root, _ = written
+    for v in VIEWS:
+        view = Dataset(root).scene(0).view(v)
+        occ_h5 = view.hdf5["objects/occlusion"]
+        for key, entry in view.order.items():
+            i = int(key)
+            assert entry["occlusion"] == round(entry["occlusion"], 4)
+            assert occ_h5[i - 1] == np.float32(entry["occlusion"])
+            assert np.all(view.occlusion_map[view.instances == i] == np.float32(entry["occlusion"]))
+
+
 def test_scene_grasps_are_split_and_in_range(written):
     root, _ = written
     view = Dataset(root).scene(0).view(0)
@@ -236,8 +279,8 @@ def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_lab
     from mgn.pipeline.label_scene import strided_subset, view_record
     from mgn.render.views import iter_views
     from mgn.view_labels.grasps import SceneGraspModel
-    from mgn.view_labels.layout import compute_layout
-    from mgn.view_labels.objects import SceneRayModel, view_object_labels
+    from mgn.view_labels.layout import OCCLUSION_DECIMALS, compute_layout
+    from mgn.view_labels.objects import SceneRayModel, round_occlusion, view_object_labels
 
     scene, views = _scene(), _views(0.1)
     pj = [g.paralleljaw for g in object_labels]
@@ -261,6 +304,7 @@ def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_lab
     frames = iter_views(scene.render_items(), get_tote(scene), views, seed=opt.seed)
     for (v, view), images in zip(views, frames, strict=True):
         labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal)
+        labels = round_occlusion(labels, OCCLUSION_DECIMALS)
         layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal, cats, bins,
                                 occlusion=labels.occlusion)  # fmt: skip
         seen = labels.visible_pixels > 0

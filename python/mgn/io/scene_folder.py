@@ -506,14 +506,13 @@ _CHUNK_ROWS = 8192
 ROTATION_BLOCK_POSES: tuple[str, ...] = ("suctioncup/contact_poses_relative_to_camera",)
 #: Leaf names of ``{v}_scene.hdf5`` datasets deflated without the shuffle filter: per-grasp values
 #: taken from a few levels or repeated along the rows (scores, the widths of the grasps sharing a
-#: contact point, 0/1 flags), which deflate matches as whole 4-byte values: 0.5-0.9x the bytes of
+#: contact point), which deflate matches as whole 4-byte values: 0.5-0.9x the bytes of
 #: the shuffled chunks (-0.5 MB per scene). The wrench scores and the integer labels stay
 #: shuffled (1.2x / 1.3x larger without).
 UNSHUFFLED_LEAVES: tuple[str, ...] = (
     "contact_width",
     "score_analytical",
     "score_simulation",
-    "visible",
 )
 #: HDF5 file-format bounds of the scene writer's files: the HDF5 1.10 formats (the virtual
 #: datasets need them anyway), whose chunk indexes and object headers take ~25 kB per

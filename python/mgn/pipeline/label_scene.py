@@ -41,10 +41,11 @@ from mgn.scene.cameras import CameraView
 from mgn.scene.scene import Scene
 from mgn.suction.labels import SuctionLabels
 from mgn.view_labels.grasps import SceneGraspModel
-from mgn.view_labels.layout import compute_layout
+from mgn.view_labels.layout import OCCLUSION_DECIMALS, compute_layout
 from mgn.view_labels.objects import (
     SceneRayModel,
     distort_view_object_labels,
+    round_occlusion,
     view_object_labels,
 )
 
@@ -152,6 +153,8 @@ def view_record(
     from ``images.depth_ideal`` through ``view`` (no lens): the writer then stores it as a
     residual."""
     n = labels.num_objects
+    com = labels.com_points.reshape(-1, 4)
+    seen_com = np.asarray(labels.com_visible, bool)
     h5: dict[str, np.ndarray] = {
         "camera/pose_relative_to_world": np.asarray(view.X_WC, np.float64)[None],
         "objects/poses_relative_to_camera": labels.X_CO,
@@ -165,9 +168,12 @@ def view_record(
             -1, 4
         ),
         "keypts/byhand/occluded_object_id": labels.occluded_keypoint_object,
-        "keypts/com/keypts_relative_to_camera": labels.com_points.reshape(-1, 4),
-        "keypts/com/object_id": labels.com_object,
-        "keypts/com/visible": labels.com_visible,
+        # MetaGraspNet's keypts/com holds the visible CoM points; mgn keeps the others under
+        # the names of keypts/byhand's occluded ones.
+        "keypts/com/keypts_relative_to_camera": com[seen_com],
+        "keypts/com/object_id": labels.com_object[seen_com],
+        "keypts/com/occluded_keypts_relative_to_camera": com[~seen_com],
+        "keypts/com/occluded_object_id": labels.com_object[~seen_com],
     }
     if grasps is not None:
         h5.update(grasps.datasets())
@@ -372,6 +378,7 @@ def label_scene(
                 )
                 if images.lens is not None:
                     labels = distort_view_object_labels(labels, images.lens)
+                labels = round_occlusion(labels, OCCLUSION_DECIMALS)
                 del src
                 t2 = time.perf_counter()
                 timings.add("object labels", t2 - t1)

@@ -47,12 +47,17 @@ from mgn.errors import InvalidArgumentError
 
 __all__ = [
     "BIN_RELATIONS",
+    "OCCLUSION_DECIMALS",
     "Layout",
     "compute_layout",
 ]
 
 #: Valid per-object bin relations.
 BIN_RELATIONS: tuple[str, ...] = ("no_rel", "edge", "corner")
+
+#: Decimals of the occlusion rates in the dataset files (``{v}_order.json``, and the pipeline's
+#: ``{v}.npz`` occlusion image and ``objects/occlusion``): MetaGraspNet's files hold them to 4.
+OCCLUSION_DECIMALS = 4
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -109,7 +114,8 @@ class Layout:
         ]
 
     def order_json(self) -> dict[str, Any]:
-        """The ``{v}_order.json`` content: keys "1".."N"; depth differences in centimetres.
+        """The ``{v}_order.json`` content: keys "1".."N"; depth differences in centimetres,
+        occlusion rates to :data:`OCCLUSION_DECIMALS` decimals.
 
         A depth difference that could not be measured (NaN: no valid depth at the boundary) is
         written as 0.0; its ``edge_size`` tells whether a boundary exists.
@@ -128,7 +134,7 @@ class Layout:
             parents = [entry(*p) for p in self.parents(iid)]
             out[str(iid)] = {
                 "id": iid,
-                "occlusion": float(self.occlusion[i]),
+                "occlusion": round(float(self.occlusion[i]), OCCLUSION_DECIMALS),
                 "layer": int(self.layer[i]),
                 "parents": parents or [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
                 "children": [entry(*c) for c in self.children(iid)],

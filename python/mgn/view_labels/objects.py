@@ -15,6 +15,7 @@ seen in the view (their masks are empty, their occlusion is 1).
 from __future__ import annotations
 
 from collections.abc import Sequence
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,6 +35,7 @@ __all__ = [
     "SceneRayModel",
     "ViewObjectLabels",
     "distort_view_object_labels",
+    "round_occlusion",
     "view_object_labels",
 ]
 
@@ -421,3 +423,13 @@ def distort_view_object_labels(labels: ViewObjectLabels, lens: Lens) -> ViewObje
         com_visible=com_visible,
         com_heatmap=lens.warp_nearest(labels.com_heatmap),
     )
+
+
+def round_occlusion(labels: ViewObjectLabels, decimals: int) -> ViewObjectLabels:
+    """``labels`` with the occlusion rates rounded to ``decimals`` decimals (numpy's
+    ``round``) and the occlusion image made from the rounded rates, so that every file that holds
+    an object's occlusion holds the same number (MetaGraspNet's files: 4 decimals)."""
+    occ = np.round(np.asarray(labels.occlusion, np.float64), int(decimals))
+    vis = labels.visible
+    occ_map = np.where(vis > 0, np.concatenate([[0.0], occ])[vis], 0.0).astype(np.float32)
+    return dataclasses.replace(labels, occlusion=occ, occlusion_map=occ_map)
