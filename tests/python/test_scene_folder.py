@@ -40,18 +40,20 @@ def _pose(t: tuple[float, float, float]) -> np.ndarray:
 
 
 def _record(v: int, shift: int = 0) -> ViewRecord:
-    """Two boxes: instance 2 lies on instance 1 and hides its right part; a third instance is
-    out of view (empty masks)."""
+    """Two boxes: instance 2 lies on instance 1 and hides its right part; a third instance is a
+    3 x 3 px speck on its own."""
     K = Intrinsics(W, H, 50.0, 50.0, W / 2, H / 2)
     amodal = np.zeros((3, H, W), bool)
     amodal[0, 5:25, 5 + shift : 35 + shift] = True
     amodal[1, 10:30, 25 + shift : 50 + shift] = True
+    amodal[2, 1:4, 55:58] = True
     inst = np.zeros((H, W), np.int32)
     inst[amodal[0]] = 1
     inst[amodal[1]] = 2
-    occ = np.array([1 - (inst == 1).sum() / amodal[0].sum(), 0.0, 1.0])
+    inst[amodal[2]] = 3
+    occ = np.array([1 - (inst == 1).sum() / amodal[0].sum(), 0.0, 0.0])
     occ_map = np.zeros((H, W), np.float32)
-    for i in range(2):
+    for i in range(3):
         occ_map[inst == i + 1] = occ[i]
     sem = np.where(inst > 0, inst + 10, 0)
     depth = np.full((H, W), 0.7, np.float32)
@@ -63,7 +65,9 @@ def _record(v: int, shift: int = 0) -> ViewRecord:
         "camera/pose_relative_to_world": _pose((0.0, 0.0, 0.7))[None],
         "objects/poses_relative_to_camera": X_CO,
         "objects/categories": np.array([11, 12, 13]),
-        "objects/bbox_loose": np.array([[5 + shift, 5, 30, 20], [25 + shift, 10, 25, 20], [0] * 4]),
+        "objects/bbox_loose": np.array(
+            [[5 + shift, 5, 30, 20], [25 + shift, 10, 25, 20], [55, 1, 3, 3]]
+        ),
         "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera": hand,
         "non_colliding_grasps/paralleljaw/contact_poses_relative_to_camera": hand,
         "non_colliding_grasps/paralleljaw/contact_width": np.array([0.05, 0.031]),
@@ -77,7 +81,7 @@ def _record(v: int, shift: int = 0) -> ViewRecord:
               "edge_size": 20}], "children": []},
         "2": {"id": 2, "occlusion": 0.0, "layer": 0, "parents": [{"id": 0, "depth_diff": 0.0,
               "edge_size": 0.0}], "children": [{"id": 1, "depth_diff": 5.0, "edge_size": 20}]},
-        "3": {"id": 3, "occlusion": 1.0, "layer": 3, "parents": [{"id": 0, "depth_diff": 0.0,
+        "3": {"id": 3, "occlusion": 0.0, "layer": 0, "parents": [{"id": 0, "depth_diff": 0.0,
               "edge_size": 0.0}], "children": []},
     }  # fmt: skip
     csv = "0,-1,0\n0,0,0\n0,0,0\n"
@@ -241,7 +245,7 @@ def test_coco_ground_truth_scores_ap_one(dataset, tmp_path):
     assert len(gt.getImgIds()) == 4
     assert sorted(c["name"] for c in gt.loadCats(gt.getCatIds())) == ["box_a", "box_b", "box_c"]
     anns = gt.loadAnns(gt.getAnnIds())
-    assert len(anns) == 8  # 2 visible instances x 4 views; the out-of-view one has none
+    assert len(anns) == 12  # 3 instances x 4 views
     a0 = next(a for a in anns if a["instance_id"] == 1 and a["image_id"] == 0)
     # Instance 2 covers rows 10..24 x cols 25..34 of instance 1: its box keeps the full width.
     assert a0["bbox"] == [5.0, 5.0, 30.0, 20.0] and a0["area"] == 600 - 150
@@ -315,7 +319,7 @@ def test_validate_and_coco_commands(dataset, tmp_path, capsys):
     out = tmp_path / "coco.json"
     assert main(["coco", str(dataset), "-o", str(out), "--scenes", "1", "--class-agnostic"]) == 0
     data = json.loads(out.read_text())
-    assert {im["scene_id"] for im in data["images"]} == {1} and len(data["annotations"]) == 4
+    assert {im["scene_id"] for im in data["images"]} == {1} and len(data["annotations"]) == 6
     (dataset / "scene0" / "0_camera_params.json").unlink()
     assert main(["validate", str(dataset)]) == 1
     assert "scene0/0_camera_params.json: missing" in capsys.readouterr().out
@@ -394,8 +398,8 @@ def test_report_is_a_self_contained_page(dataset, tmp_path):
     assert "<svg" in page and "http://" not in page.replace("http://www.w3.org/2000/svg", "")
     stats = collect_stats(Dataset(dataset))
     assert stats["scenes"] == 2 and stats["views_sampled"] == 4
-    assert stats["visible_per_view"] == [2, 2, 2, 2]
-    assert stats["layers"] == {"0": 4, "1": 4} and stats["difficulty"] == {"2": 4}
+    assert stats["visible_per_view"] == [3, 3, 3, 3]
+    assert stats["layers"] == {"0": 8, "1": 4} and stats["difficulty"] == {"2": 4}
     assert stats["grasp_counts"]["non_colliding"] == {"paralleljaw": 8}
 
 

@@ -137,6 +137,7 @@ HDF5_INT_LEAVES: tuple[str, ...] = (
     "categories",
     "collision_part",
     "collision_obstacle",
+    "scene_instance_id",
 )
 
 #: Datasets every view's ``{v}_scene.hdf5`` has (empty groups have zero-length datasets).
@@ -250,6 +251,14 @@ class ViewRecord:
             )
         if n > 255:
             raise InvalidArgumentError(f"ViewRecord {v}: at most 255 instances per view, got {n}")
+        seen = np.bincount(np.asarray(self.instances, np.int64).reshape(-1), minlength=n + 1)
+        hidden = np.flatnonzero(seen[1:] == 0) + 1
+        if hidden.size:
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: instances {hidden.tolist()} have no visible pixel; a view holds "
+                f"the objects it sees, numbered 1..N without gaps (MetaGraspNet's readers count "
+                f"the ids of the instance image: mgn.view_labels.objects.seen_objects)"
+            )
         for key in HDF5_FLOAT_KEYS:
             if key not in self.scene_hdf5:
                 raise InvalidArgumentError(f"ViewRecord {v}: scene_hdf5 lacks '{key}'")
