@@ -424,3 +424,24 @@ def test_render_ahead_keeps_order_errors_and_stops():
     ahead.close()
     assert len(made) <= 3 + 2  # consumed, one queued, one in hand
     assert len(closed) == 1 and closed[0] != main
+
+
+def test_scene_label_applies_the_io_section(tmp_path):
+    # `mgn scene label --config` writes what `mgn generate` writes with the same config: here the
+    # io section's archival mode (the npz's sensor depth as an LZMA zip entry, method 14).
+    import zipfile
+
+    from mgn.cli.main import main
+
+    write_scene_json(_scene(), tmp_path / "scene.json")
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(
+        "camera: {views: [0], resolution_scale: 0.1, randomize: false}\n"
+        "labels: {scene_grasps: false}\n"
+        "io: {archival: true}\n"
+    )
+    out = tmp_path / "scene0"
+    assert main(["scene", "label", str(tmp_path / "scene.json"), "--out", str(out),
+                 "--config", str(cfg)]) == 0  # fmt: skip
+    with zipfile.ZipFile(out / "0.npz") as z:
+        assert z.getinfo("depth.npy").compress_type == zipfile.ZIP_LZMA
