@@ -205,7 +205,7 @@ class _ViewCheck:
             return None
         n = amodal.shape[0]
         try:
-            h5 = self.hdf5(n)
+            h5 = self.hdf5(n, ids.shape)
         except _Stop:
             return None
         vis_px = self.visible(ids, amodal, h5["objects/bbox_tight"])
@@ -227,8 +227,11 @@ class _ViewCheck:
             return None
         self.occlusion(npz, ids, occ, vis_px, h5, order)
         self.depth_units(npz, ids, vis_px, h5)
-        self.order(order, n, ids, amodal, h5, vis_px)
-        self.layout(layout, order, n, h5, vis_px)
+        if layout == {}:  # written without layout labels (labels.layout: false)
+            self.no_layout(order, n)
+        else:
+            self.order(order, n, ids, amodal, h5, vis_px)
+            self.layout(layout, order, n, h5, vis_px)
         return _ViewFacts(
             n,
             h5["objects/categories"],
@@ -356,9 +359,11 @@ class _ViewCheck:
             )
         return vis_px
 
-    def hdf5(self, n: int) -> dict[str, np.ndarray]:
+    def hdf5(self, n: int, hw: tuple[int, ...]) -> dict[str, np.ndarray]:
         """``_scene.hdf5``: keys, shapes, dtypes; the grasp and keypoint groups. Returns the
-        small datasets (objects, camera, ids and scores); poses are not read."""
+        small datasets (objects, camera, ids and scores); poses are not read. A missing mgn
+        addition of the objects group is reported and stood in for (the whole image as the
+        visible box, NaN occlusion, 1..N), so that the other checks still run."""
         out: dict[str, np.ndarray] = {}
         try:
             with h5py.File(self.path("_scene.hdf5"), "r") as h5:
@@ -371,6 +376,13 @@ class _ViewCheck:
                         self.bad("_scene.hdf5", f"'{key}' has shape {ds.shape}, expected {want}")
                     else:
                         out[key] = ds[()]
+                stand_in = {
+                    "objects/bbox_tight": np.tile([0, 0, hw[1], hw[0]], (n, 1)),
+                    "objects/occlusion": np.full(n, np.nan, np.float32),
+                    "objects/scene_instance_id": np.arange(1, n + 1, dtype=np.int32),
+                }
+                for key, value in stand_in.items():
+                    out.setdefault(key, value)
                 if len(out) < len(_OBJECT_KEYS):
                     raise _Stop
                 for key in ("objects/categories", "objects/scene_instance_id"):
@@ -679,6 +691,17 @@ class _ViewCheck:
                 f"{[p + 1 for p in parents[i]]} give layer {layers[i]} (0 no parent, 1 one parent "
                 "in layer 0, 2 interlock, 3 others)",
             )
+
+    def no_layout(self, order: Mapping[str, Any], n: int) -> None:
+        """``_order.json`` of a view without layout labels: one parentless entry per object."""
+        want = {
+            str(i): {"id": i, "parents": [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
+                     "children": []}
+            for i in range(1, n + 1)
+        }  # fmt: skip
+        if order != want:
+            self.bad("_order.json", "without layout labels ({v}_layout.json {}) every object has "
+                     "the single parentless entry and no children")  # fmt: skip
 
     def mask_evidence(
         self,
