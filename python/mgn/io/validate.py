@@ -417,14 +417,15 @@ class _ViewCheck:
                 leaves = dict(spec)
                 if top == "colliding_grasps":
                     leaves.update({c: () for c in _COLLISION_LEAVES})
-                members = dict(g.items())
-                missing = sorted(set(leaves) - set(members))
+                members = set(g)
+                missing = sorted(set(leaves) - members)
                 if missing:
                     self.bad("_scene.hdf5", f"group '{name}' lacks {missing}")
                     continue
                 rows: dict[str, int] = {}
                 for leaf, trailing in leaves.items():
-                    ds = members[leaf]
+                    # h5py's low-level dataset handle: its wrapper objects cost ~0.1 ms each.
+                    ds = h5py.h5d.open(g.id, leaf.encode())
                     shape, dtype = ds.shape, ds.dtype
                     if shape[1:] != trailing:
                         self.bad(
@@ -440,7 +441,10 @@ class _ViewCheck:
                         )
                     rows[leaf] = shape[0]
                     if leaf.endswith("object_id") or leaf in _SCORES or leaf == "contact_width":
-                        out[f"{name}/{leaf}"] = ds[()]
+                        a = np.empty(shape, dtype)
+                        if a.size:
+                            ds.read(h5py.h5s.ALL, h5py.h5s.ALL, a)
+                        out[f"{name}/{leaf}"] = a
                 self.group_values(top, kind, name, rows, out, n)
 
     def group_values(
