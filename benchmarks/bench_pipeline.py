@@ -114,7 +114,7 @@ def stage_cpu(config: Any) -> dict[str, Any]:
     from mgn.io.scene_folder import scene_gt_entries, write_view
     from mgn.objects import tote_mesh
     from mgn.pipeline.label_cache import object_labels
-    from mgn.pipeline.label_scene import strided_subset, view_record
+    from mgn.pipeline.label_scene import strided_subset, view_grasps, view_record
     from mgn.pipeline.runner import _catalogue
     from mgn.pipeline.scene_writer import scene_views
     from mgn.pipeline.seeds import scene_seed
@@ -122,8 +122,13 @@ def stage_cpu(config: Any) -> dict[str, Any]:
     from mgn.render.views import iter_views
     from mgn.scene.drop import drop_scene
     from mgn.view_labels.grasps import SceneGraspModel
-    from mgn.view_labels.layout import compute_layout
-    from mgn.view_labels.objects import SceneRayModel, view_object_labels
+    from mgn.view_labels.layout import OCCLUSION_DECIMALS, compute_layout
+    from mgn.view_labels.objects import (
+        SceneRayModel,
+        round_occlusion,
+        seen_objects,
+        view_object_labels,
+    )
 
     stages: dict[str, list[float]] = {}
     write_parts: dict[str, float] = {}  # CPU-s of the writer per part (write_view's ``times``)
@@ -161,12 +166,14 @@ def stage_cpu(config: Any) -> dict[str, Any]:
             images = timed("render", next, frames)
             lab = timed("object labels", view_object_labels, rays, view, images.instance_ids,
                         depth=images.depth_ideal)  # fmt: skip
+            lab, index = seen_objects(round_occlusion(lab, OCCLUSION_DECIMALS))
             lay = timed("layout", compute_layout, lab.visible, lab.amodal, images.depth_ideal,
-                        cats, bins, occlusion=lab.occlusion)  # fmt: skip
-            seen = lab.visible_pixels > 0
-            gr = timed("scene grasps", sgm.view_grasps, view, seen)
-            scene_gt_entries(lab.X_CO, cats, seen)
-            record = view_record(v, view, images, lab, lay, gr, rays.com_parameters())
+                        cats[index], [bins[i] for i in index],
+                        occlusion=lab.occlusion)  # fmt: skip
+            gr = timed("scene grasps", view_grasps, sgm, view, index, len(scene.instances))
+            scene_gt_entries(lab.X_CO, cats[index])
+            record = view_record(v, view, images, lab, lay, gr, rays.com_parameters()[index],
+                                 instance_ids=index + 1)  # fmt: skip
             timed("write", write_view, out, record, times=write_parts)
     return {"objects": len(scene.instances), "views": len(views),
             "stages": {k: {"wall_s": w, "cpu_s": c} for k, (w, c) in stages.items()},

@@ -188,7 +188,8 @@ TEST(Layout, RepeatedClassesRaiseTheLevel) {
   EXPECT_EQ(compute_layout(split.images()).difficulty, 5);
 }
 
-/// Two objects hiding each other: A over B in rows 0..4, B over A in rows 5..9 of the overlap.
+/// Two objects hiding each other: A over B in rows 0..4, B over A in rows 5..9 of the overlap,
+/// where each rises to 0.75 m (both lie at 0.8 m elsewhere).
 Synthetic interlocked(const std::vector<Rect>& extra) {
   std::vector<Rect> rects = {{10, 10, 20, 30, 0.8f, 1}, {10, 20, 20, 40, 0.8f, 2}};
   rects.insert(rects.end(), extra.begin(), extra.end());
@@ -196,7 +197,10 @@ Synthetic interlocked(const std::vector<Rect>& extra) {
   for (int r = 10; r < 20; ++r)
     for (int c = 20; c < 30; ++c) {
       const std::size_t p = static_cast<std::size_t>(r) * s.W + c;
-      if (s.visible[p] == 1 || s.visible[p] == 2) s.visible[p] = r < 15 ? 1 : 2;
+      if (s.visible[p] == 1 || s.visible[p] == 2) {
+        s.visible[p] = r < 15 ? 1 : 2;
+        s.depth[p] = 0.75f;
+      }
     }
   s.recompute_occlusion();
   return s;
@@ -209,6 +213,13 @@ TEST(Layout, TwoCycleIsInterlock) {
   EXPECT_EQ(s.M(L, 1, 0), -1);
   EXPECT_EQ(L.layer[0], 2);
   EXPECT_EQ(L.layer[1], 2);
+  // Each on its own stretch: A over B beside A's raised part (B's column 30, rows 10..14), B over
+  // A beside B's (A's column 19, rows 15..19); 0.8 - 0.75 m each.
+  for (const auto* r : {find_relation(L, 0, 1), find_relation(L, 1, 0)}) {
+    ASSERT_NE(r, nullptr);
+    EXPECT_EQ(r->edge_size, 5);
+    EXPECT_NEAR(r->depth_diff, 0.05, 1e-6);
+  }
   // Equal occlusion (25 %): the cycle is broken at the smaller id.
   EXPECT_EQ(L.order, (std::vector<std::int32_t>{1, 2}));
   Synthetic t = s;
@@ -252,11 +263,78 @@ TEST(Layout, SmallOverlapBelowThresholdIsNoRelation) {
 }
 
 TEST(Layout, InvalidDepthIsLeftOutOfTheMedian) {
+  // Without any valid depth the masks alone decide: the relation stands, unmeasured.
   Synthetic s(50, 60, {{20, 20, 40, 30, 0.8f, 1}, {10, 10, 30, 50, 0.9f, 2}});
   for (auto& d : s.depth) d = std::numeric_limits<float>::quiet_NaN();
   const Layout L = compute_layout(s.images());
+  ASSERT_EQ(L.relations.size(), 1u);
   EXPECT_TRUE(std::isnan(L.relations.at(0).depth_diff));
-  EXPECT_EQ(L.relations.at(0).edge_size, 30);
+  EXPECT_EQ(L.relations.at(0).edge_size, 0);
+  // Valid depth only across A's top edge (rows 19 and 20, cols 20..29): the stretch is B's 10
+  // pixels of row 19; the 20 pixels beside A's sides have no valid depth.
+  Synthetic t(50, 60, {{20, 20, 40, 30, 0.8f, 1}, {10, 10, 30, 50, 0.9f, 2}});
+  for (int r = 0; r < t.H; ++r)
+    for (int c = 0; c < t.W; ++c)
+      if (!((r == 19 || r == 20) && c >= 20 && c < 30))
+        t.depth[static_cast<std::size_t>(r) * t.W + c] = std::nanf("");
+  const Layout Lt = compute_layout(t.images());
+  EXPECT_EQ(Lt.relations.at(0).edge_size, 10);
+  EXPECT_NEAR(Lt.relations.at(0).depth_diff, 0.1, 1e-6);
+}
+
+/// B (index 1) a bowl: rows 10..29 x cols 10..39, its floor at 0.8 m and its front rim (rows
+/// 25..29) at `rim` m; A (index 0) inside it at 0.75 m, rows 15..24 x cols 15..34 seen, its
+/// amodal mask reaching row 29 behind the rim.
+Synthetic nested(float rim) {
+  Synthetic s(40, 50, {{15, 15, 30, 35, 0.75f, 1}, {10, 10, 30, 40, 0.8f, 2}});
+  for (int r = 10; r < 30; ++r)
+    for (int c = 10; c < 40; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * s.W + c;
+      const bool a = r >= 15 && r < 25 && c >= 15 && c < 35;
+      s.visible[p] = a ? 1 : 2;
+      s.depth[p] = a ? 0.75f : (r >= 25 ? rim : 0.8f);
+    }
+  s.recompute_occlusion();
+  return s;
+}
+
+TEST(Layout, NestedObjectsEachCoverTheOtherOnTheirOwnStretch) {
+  // A hides B's floor, B's rim hides A's lower part. The whole boundary counted for B over A
+  // would give A's top and sides (40 px at -5 cm) and the rim (20 px at +7 cm): a median of
+  // -5 cm, B behind its child. On its own stretch each is in front: A over B beside A's top
+  // and sides (40 px, +5 cm), B over A along the rim (20 px, +7 cm).
+  const Synthetic s = nested(0.68f);
+  const Layout L = compute_layout(s.images());
+  EXPECT_EQ(s.M(L, 0, 1), -1);
+  EXPECT_EQ(s.M(L, 1, 0), -1);
+  const auto* ab = find_relation(L, 0, 1);
+  const auto* ba = find_relation(L, 1, 0);
+  ASSERT_NE(ab, nullptr);
+  ASSERT_NE(ba, nullptr);
+  EXPECT_EQ(ab->edge_size, 40);
+  EXPECT_NEAR(ab->depth_diff, 0.05, 1e-6);
+  EXPECT_EQ(ba->edge_size, 20);
+  EXPECT_NEAR(ba->depth_diff, 0.07, 1e-6);
+  EXPECT_EQ(L.total_covered_edge[0], 40);
+  EXPECT_EQ(L.total_covered_edge[1], 20);
+  EXPECT_EQ(L.layer[0], 2);
+  EXPECT_EQ(L.layer[1], 2);
+}
+
+TEST(Layout, ParentBehindItsChildIsNoParent) {
+  // The rim at the floor's depth: B's mask still covers A's lower part (100 px), but wherever
+  // they meet A is in front. B is no parent of A; A lies on B (60 px: top, sides and bottom).
+  const Synthetic s = nested(0.8f);
+  const Layout L = compute_layout(s.images());
+  ASSERT_EQ(L.relations.size(), 1u);
+  EXPECT_EQ(L.relations[0].parent, 0);
+  EXPECT_EQ(L.relations[0].child, 1);
+  EXPECT_EQ(L.relations[0].edge_size, 60);
+  EXPECT_EQ(s.M(L, 0, 1), 1);
+  EXPECT_EQ(s.M(L, 1, 0), -1);
+  EXPECT_EQ(L.layer[0], 0);
+  EXPECT_EQ(L.layer[1], 1);
+  for (const auto& r : L.relations) EXPECT_GT(r.depth_diff, 0.0);
 }
 
 TEST(Layout, ZeroAndOneObject) {

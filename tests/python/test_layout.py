@@ -107,17 +107,67 @@ def test_repeated_class_levels_4_and_5():
 
 
 def test_two_cycle_is_interlock():
+    # A (rows 10..19, cols 10..29) and B (rows 10..19, cols 20..39) cross in cols 20..29: A
+    # rises over B in the top half of the crossing (rows 10..14, depth 0.75 m), B over A in the
+    # bottom half; elsewhere both lie at 0.8 m. A's own stretch over B: B's pixels in column 30
+    # beside A's raised part (rows 10..14: 5 px, 0.8 - 0.75 = 5 cm); B's over A: A's pixels in
+    # column 19, rows 15..19 (5 px, 5 cm). Where the raised parts meet (row 14 / 15) both are at
+    # 0.75 m: neither is in front, and no pixel counts for both directions.
     H, W = 40, 60
     a, b = rect(H, W, 10, 10, 20, 30), rect(H, W, 10, 20, 20, 40)
     visible, amodal, depth, _ = render([a, b], [0.8, 0.8], H, W)
     both = a & b
     visible[both] = np.where(np.arange(H)[:, None] < 15, 1, 2).repeat(W, 1)[both]
+    depth[both] = 0.75
     occ = np.array([0.3, 0.2])
     L = compute_layout(visible, amodal, depth, [1, 2], ["edge", "corner"], occlusion=occ)
     assert L.relation.tolist() == [[0, -1], [-1, 0]]
     assert L.layer.tolist() == [2, 2]
     assert L.order.tolist() == [2, 1]  # cycle broken at the smaller occlusion
     assert L.bin_relations == ("edge", "corner")
+    assert L.parents(1) == [(2, pytest.approx(0.05), 5)]
+    assert L.parents(2) == [(1, pytest.approx(0.05), 5)]
+    order = L.order_json()
+    assert order["1"]["parents"] == [{"id": 2, "depth_diff": pytest.approx(5.0), "edge_size": 5}]
+
+
+def test_mutual_pair_counts_each_boundary_once_and_drops_a_parent_behind_its_child():
+    # B (a bowl rim, rows 10..29 x cols 10..39 at 0.7 m) with A inside it (rows 15..24 x cols
+    # 15..34): A hides B's floor (B's amodal mask includes its inside) and B's front rim (rows
+    # 25..29 at 0.68 m) hides A's lower part (A's amodal reaches row 29). A at 0.75 m lies
+    # in front of B's floor (0.8 m) but behind the rim. Counting the whole boundary for both
+    # directions gives B over A the median of A's top and sides (40 px at 0.75 - 0.8 = -5 cm)
+    # and the rim (20 px at +7 cm): -5 cm, a parent behind its child. Each direction on its own
+    # stretch: A over B beside A's top and sides (+5 cm), B over A along the rim (+7 cm).
+    H, W = 40, 50
+    vis = np.zeros((H, W), np.int32)
+    depth = np.zeros((H, W), np.float32)
+    vis[10:30, 10:40] = 2
+    depth[10:30, 10:40] = 0.8
+    vis[15:25, 15:35] = 1
+    depth[15:25, 15:35] = 0.75
+    depth[25:30, 10:40] = 0.68  # the front rim
+    amodal = np.zeros((2, H, W), bool)
+    amodal[0, 15:30, 15:35] = True
+    amodal[1, 10:30, 10:40] = True
+    occ = np.array([1 - 200 / 300, 1 - (600 - 200) / 600])
+    L = compute_layout(vis, amodal, depth, [1, 2], ["no_rel"] * 2, occlusion=occ)
+    assert L.relation.tolist() == [[0, -1], [-1, 0]]  # nested: both directions hold
+    (a_over_b,) = L.parents(2)
+    (b_over_a,) = L.parents(1)
+    assert a_over_b[0] == 1 and a_over_b[1] == pytest.approx(0.05)
+    assert b_over_a[0] == 2 and b_over_a[1] == pytest.approx(0.07)
+    # A over B: B's pixels beside A's top row (20), its sides (2 x 10) -> 40; B over A: A's
+    # bottom row (20).
+    assert (a_over_b[2], b_over_a[2]) == (40, 20)
+    assert all(dd > 0 for dd in L.depth_diff)
+    # Without the rim in front (the rim at the floor's depth), A is in front everywhere it
+    # meets B: B hides A's lower part by the masks, but lies behind A on their whole contour,
+    # so B is no parent of A.
+    depth[25:30, 10:40] = 0.8
+    L = compute_layout(vis, amodal, depth, [1, 2], ["no_rel"] * 2, occlusion=occ)
+    assert L.relation.tolist() == [[0, 1], [-1, 0]]
+    assert L.layer.tolist() == [0, 1]
 
 
 def test_invisible_object_keeps_its_row():
@@ -167,7 +217,7 @@ def test_order_json_and_csv_agree_and_round_trip(tmp_path):
     assert np.array_equal(m, g.relation)
     assert np.array_equal(m, L.relation)
     assert np.array_equal(g.layer, L.layer)
-    assert np.allclose(g.occlusion, occ)
+    assert np.allclose(g.occlusion, occ, rtol=0, atol=5e-5)  # written to 4 decimals
     assert g.bin_relations == tuple(bins)
     child, parent = L.child_ids - 1, L.parent_ids - 1
     assert np.allclose(g.depth_diff[child, parent], np.nan_to_num(L.depth_diff), atol=1e-8)
@@ -230,13 +280,21 @@ def brute_force(visible, amodal, depth, occ, min_px=10, frac=0.1):
     H, W = visible.shape
     edge = {}
     for b, a in np.argwhere(parent):
-        diffs, count = [], 0
+        # a's own stretch over b: b's pixels beside a pixel of a that lies in b's amodal mask and
+        # in front (depths here are all valid where something is seen).
+        diffs, count, contour = [], 0, 0
         for r, c in np.argwhere(visible == b + 1):
             nb = [(r + dr, c + dc) for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1))]
             nb = [(y, x) for y, x in nb if 0 <= y < H and 0 <= x < W and visible[y, x] == a + 1]
-            if nb:
+            nb = [(y, x) for y, x in nb if amodal[b][y, x]]
+            contour += bool(nb)
+            front = [depth[y, x] for y, x in nb if depth[y, x] < depth[r, c]]
+            if front:
                 count += 1
-                diffs.append(depth[r, c] - np.mean([depth[y, x] for y, x in nb]))
+                diffs.append(depth[r, c] - np.mean(front))
+        if contour and not count:
+            parent[b, a] = False  # behind its child wherever they meet
+            continue
         edge[(a + 1, b + 1)] = (count, float(np.median(diffs)) if diffs else np.nan)
 
     # MetaGraspNet's total_covered_edge: the sum of the edge sizes of the object's children.

@@ -8,6 +8,7 @@ import json
 
 import h5py
 import numpy as np
+import pytest
 from test_layout import layout_of, rect
 
 from mgn.io.scene_folder import scene_gt_entries
@@ -91,3 +92,38 @@ def test_object_failure_reason_is_stored_as_integers(small_dataset):
         reason = h5["grasps/suctioncup/failure_reason"]
         assert reason.dtype.kind == "u"
         assert len(reason) == len(h5["grasps/suctioncup/quality_score"])
+
+
+def test_camera_params_in_metagraspnet_units():
+    # MetaGraspNet's dataset_sim/scene83/1_camera_params.json (its synthetic camera, 1200 px):
+    # "fx": 2004.2949249780754, "focal_length": 35.0, "horizontal_aperture": 20.954999923706055,
+    # "horizontal_fov": 0.581733823962242, "clipping_range": [1.0, 1000000.0]. By hand: the
+    # field of view is 2 atan(600 / 2004.2949) = 2 * 0.2908669 = 0.5817338 rad (33.33 deg would
+    # be degrees); the clipping range is in cm (its stage unit), 1 cm to 10 km.
+    from mgn.scene.cameras import Intrinsics
+
+    p = json.loads(json.dumps(Intrinsics.mgn_synthetic().camera_params()))
+    assert p["horizontal_fov"] == pytest.approx(0.581733823962242, abs=1e-7)
+    assert p["vertical_fov"] == pytest.approx(0.581733823962242, abs=1e-7)
+    assert p["focal_length"] == 35.0
+    assert p["horizontal_aperture"] == pytest.approx(20.954999923706055, abs=1e-6)
+    assert p["fx"] == pytest.approx(2004.2949249780754, abs=1e-4)
+    assert p["clipping_range"] == [1.0, 1000000.0]
+    assert p["resolution"] == {"height": 1200, "width": 1200}
+    # A 2:1 sensor: the vertical field from the height (2 atan(300 / 1000) = 0.5829135 rad).
+    q = Intrinsics(1200, 600, 1000.0, 1000.0, 600.0, 300.0).camera_params()
+    assert q["horizontal_fov"] == pytest.approx(2 * 0.5404195, abs=1e-6)
+    assert q["vertical_fov"] == pytest.approx(0.5829135, abs=1e-6)
+
+
+def test_order_json_occlusion_has_four_decimals():
+    # MetaGraspNet's dataset_sim/scene20/0_order.json: "occlusion": 0.01679999940097332 (the
+    # float32 of 0.0168) and 0.07540000230073929 (0.0754): rates to 4 decimals. A (a 1 x 13 px
+    # strip at 0.7 m) lies on B (20 x 30 px at 0.8 m): B's occlusion is 13 / 600 = 0.021666...,
+    # written as 0.0217.
+    H, W = 40, 80
+    L = layout_of([rect(H, W, 15, 5, 16, 18), rect(H, W, 10, 5, 30, 35)], [0.7, 0.8], H, W)
+    assert L.occlusion[1] == pytest.approx(13 / 600)
+    order = json.loads(json.dumps(L.order_json()))
+    assert order["2"]["occlusion"] == 0.0217
+    assert order["1"]["occlusion"] == 0.0

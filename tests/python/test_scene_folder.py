@@ -29,6 +29,7 @@ from mgn.io.scene_folder import (
 )
 from mgn.io.validate import validate_dataset
 from mgn.scene.cameras import Intrinsics
+from mgn.view_labels.layout import compute_layout
 
 H, W = 40, 60
 
@@ -40,47 +41,54 @@ def _pose(t: tuple[float, float, float]) -> np.ndarray:
 
 
 def _record(v: int, shift: int = 0) -> ViewRecord:
-    """Two boxes: instance 2 lies on instance 1 and hides its right part; a third instance is
-    out of view (empty masks)."""
+    """Two boxes: instance 2 (0.65 m) lies on instance 1 (0.7 m) and hides its right part; a
+    third instance is a 3 x 3 px speck on its own. The layout files are compute_layout's."""
     K = Intrinsics(W, H, 50.0, 50.0, W / 2, H / 2)
     amodal = np.zeros((3, H, W), bool)
     amodal[0, 5:25, 5 + shift : 35 + shift] = True
     amodal[1, 10:30, 25 + shift : 50 + shift] = True
+    amodal[2, 1:4, 55:58] = True
     inst = np.zeros((H, W), np.int32)
     inst[amodal[0]] = 1
     inst[amodal[1]] = 2
-    occ = np.array([1 - (inst == 1).sum() / amodal[0].sum(), 0.0, 1.0])
+    inst[amodal[2]] = 3
+    occ = np.round(np.array([1 - (inst == 1).sum() / amodal[0].sum(), 0.0, 0.0]), 4)
     occ_map = np.zeros((H, W), np.float32)
-    for i in range(2):
+    for i in range(3):
         occ_map[inst == i + 1] = occ[i]
     sem = np.where(inst > 0, inst + 10, 0)
     depth = np.full((H, W), 0.7, np.float32)
     depth[inst == 2] = 0.65
     depth[0, 0] = np.nan
-    X_CO = np.stack([_pose((0.01, 0.02, 0.7)), _pose((0.02, 0.02, 0.65)), _pose((1, 1, 1))])
+    X_CO = np.stack([_pose((0.01, 0.02, 0.7)), _pose((0.02, 0.02, 0.65)), _pose((0.1, -0.1, 0.7))])
     hand = np.tile(_pose((0.0, 0.0, 0.5)), (2, 1, 1))
+    pj = "non_colliding_grasps/paralleljaw/"
     h5 = {
         "camera/pose_relative_to_world": _pose((0.0, 0.0, 0.7))[None],
         "objects/poses_relative_to_camera": X_CO,
         "objects/categories": np.array([11, 12, 13]),
-        "objects/bbox_loose": np.array([[5 + shift, 5, 30, 20], [25 + shift, 10, 25, 20], [0] * 4]),
-        "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera": hand,
-        "non_colliding_grasps/paralleljaw/contact_poses_relative_to_camera": hand,
-        "non_colliding_grasps/paralleljaw/contact_width": np.array([0.05, 0.031]),
-        "non_colliding_grasps/paralleljaw/score_analytical": np.array([1.0, 0.5]),
-        "non_colliding_grasps/paralleljaw/object_id": np.array([0, 1]),
+        "objects/bbox_loose": np.array(
+            [[5 + shift, 5, 30, 20], [25 + shift, 10, 25, 20], [55, 1, 3, 3]]
+        ),
+        "objects/bbox_tight": np.array(
+            [[5 + shift, 5, 30, 20], [25 + shift, 10, 25, 20], [55, 1, 3, 3]]
+        ),
+        "objects/occlusion": occ,
+        "objects/scene_instance_id": np.array([1, 2, 3]),
+        pj + "franka_poses_relative_to_camera": hand,
+        pj + "contact_poses_relative_to_camera": hand,
+        pj + "contact_width": np.array([0.05, 0.031]),
+        pj + "score_analytical": np.array([1.0, 0.5]),
+        pj + "score_simulation": np.array([0.75, 0.25]),
+        pj + "score_wrench": np.array([0.5, 0.5]),
+        pj + "object_id": np.array([0, 1]),
         "keypts/byhand/keypts_relative_to_camera": np.array([[1, 0.01, 0.02, 0.6]]),
         "keypts/byhand/object_id": np.array([1]),
+        "keypts/byhand/occluded_keypts_relative_to_camera": np.zeros((0, 4)),
+        "keypts/byhand/occluded_object_id": np.zeros(0, np.int32),
     }
-    order = {
-        "1": {"id": 1, "occlusion": occ[0], "layer": 1, "parents": [{"id": 2, "depth_diff": 5.0,
-              "edge_size": 20}], "children": []},
-        "2": {"id": 2, "occlusion": 0.0, "layer": 0, "parents": [{"id": 0, "depth_diff": 0.0,
-              "edge_size": 0.0}], "children": [{"id": 1, "depth_diff": 5.0, "edge_size": 20}]},
-        "3": {"id": 3, "occlusion": 1.0, "layer": 3, "parents": [{"id": 0, "depth_diff": 0.0,
-              "edge_size": 0.0}], "children": []},
-    }  # fmt: skip
-    csv = "0,-1,0\n0,0,0\n0,0,0\n"
+    layout = compute_layout(inst, amodal, depth, [11, 12, 13], ["no_rel", "edge", "no_rel"],
+                            occlusion=occ)  # fmt: skip
     rgb = np.zeros((H, W, 3), np.uint8)
     rgb[..., 0] = inst * 100
     return ViewRecord(
@@ -95,9 +103,9 @@ def _record(v: int, shift: int = 0) -> ViewRecord:
         amodal=amodal,
         intrinsics=K,
         scene_hdf5=h5,
-        order_json=order,
-        order_csv=csv,
-        layout_json={"difficulty": {"level": 2}, "bin_rel": {"1": "no_rel"}},
+        order_json=layout.order_json(),
+        order_csv=layout.order_csv(),
+        layout_json=layout.layout_json(),
         extra_npz={"com_heatmap": np.zeros((H, W), np.float32)},
     )
 
@@ -111,16 +119,15 @@ def dataset(tmp_path):
         for r in recs:
             write_view(folder, r)
         key = "objects/poses_relative_to_camera"
-        seen = [True, True, False]
-        gt = {r.index: scene_gt_entries(r.scene_hdf5[key], [11, 12, 13], seen) for r in recs}
+        gt = {r.index: scene_gt_entries(r.scene_hdf5[key], [11, 12, 13]) for r in recs}
         write_scene_gt(folder, gt)
         (folder / "scene.json").write_text(
             json.dumps(
                 {
                     "instances": [
-                        {"name": "box_a", "category_id": 11},
-                        {"name": "box_b", "category_id": 12},
-                        {"name": "box_c", "category_id": 13},
+                        {"instance_id": 1, "name": "box_a", "category_id": 11},
+                        {"instance_id": 2, "name": "box_b", "category_id": 12},
+                        {"instance_id": 3, "name": "box_c", "category_id": 13},
                     ]
                 }
             )  # fmt: skip
@@ -165,11 +172,11 @@ def test_written_view_reads_back_in_si(dataset):
     assert view.relation_matrix[0, 1] == -1 and view.relation_matrix[1, 0] == 1
     assert np.count_nonzero(view.relation_matrix) == 2
     assert view.order["1"]["parents"][0]["id"] == 2
-    assert view.layout["difficulty"]["level"] == 2
+    assert view.layout["difficulty"] == 2
     K = view.intrinsics
     assert (K.width, K.height, K.fx) == (W, H, 50.0)
     gt = scene.scene_gt
-    assert [e["obj_id"] for e in gt["1"]] == [11, 12]
+    assert [e["obj_id"] for e in gt["1"]] == [11, 12, 13]
     assert np.allclose(gt["1"][1]["cam_t_m2c"], [2, 2, 65])
     with h5_open(view.path("_scene.hdf5")) as h5:
         assert h5["objects/bbox_loose"].dtype == np.float32
@@ -241,7 +248,7 @@ def test_coco_ground_truth_scores_ap_one(dataset, tmp_path):
     assert len(gt.getImgIds()) == 4
     assert sorted(c["name"] for c in gt.loadCats(gt.getCatIds())) == ["box_a", "box_b", "box_c"]
     anns = gt.loadAnns(gt.getAnnIds())
-    assert len(anns) == 8  # 2 visible instances x 4 views; the out-of-view one has none
+    assert len(anns) == 12  # 3 instances x 4 views
     a0 = next(a for a in anns if a["instance_id"] == 1 and a["image_id"] == 0)
     # Instance 2 covers rows 10..24 x cols 25..34 of instance 1: its box keeps the full width.
     assert a0["bbox"] == [5.0, 5.0, 30.0, 20.0] and a0["area"] == 600 - 150
@@ -315,7 +322,7 @@ def test_validate_and_coco_commands(dataset, tmp_path, capsys):
     out = tmp_path / "coco.json"
     assert main(["coco", str(dataset), "-o", str(out), "--scenes", "1", "--class-agnostic"]) == 0
     data = json.loads(out.read_text())
-    assert {im["scene_id"] for im in data["images"]} == {1} and len(data["annotations"]) == 4
+    assert {im["scene_id"] for im in data["images"]} == {1} and len(data["annotations"]) == 6
     (dataset / "scene0" / "0_camera_params.json").unlink()
     assert main(["validate", str(dataset)]) == 1
     assert "scene0/0_camera_params.json: missing" in capsys.readouterr().out
@@ -394,8 +401,8 @@ def test_report_is_a_self_contained_page(dataset, tmp_path):
     assert "<svg" in page and "http://" not in page.replace("http://www.w3.org/2000/svg", "")
     stats = collect_stats(Dataset(dataset))
     assert stats["scenes"] == 2 and stats["views_sampled"] == 4
-    assert stats["visible_per_view"] == [2, 2, 2, 2]
-    assert stats["layers"] == {"0": 4, "1": 4} and stats["difficulty"] == {"2": 4}
+    assert stats["visible_per_view"] == [3, 3, 3, 3]
+    assert stats["layers"] == {"0": 8, "1": 4} and stats["difficulty"] == {"2": 4}
     assert stats["grasp_counts"]["non_colliding"] == {"paralleljaw": 8}
 
 

@@ -148,6 +148,49 @@ def test_poses_and_keypoints_in_the_camera_frame(written):
     assert np.all(kp[:, 3] > 0)  # in front of the camera (z forward, metres)
 
 
+def test_com_keypoints_are_the_visible_ones_as_in_metagraspnet(written):
+    # MetaGraspNet's {v}_scene.hdf5 has keypts/com/{keypts_relative_to_camera, object_id} only
+    # (no occluded set, unlike keypts/byhand): the CoM points seen from the camera. A point is
+    # seen when the camera ray's first hit is it: the noise-free depth at its pixel equals its z.
+    import h5py
+
+    root, _ = written
+    view = Dataset(root).scene(0).view(0)
+    z_img = view.depth_ideal
+    K = view.intrinsics
+    with h5py.File(view.path("_scene.hdf5"), "r") as h5:
+        com = h5["keypts/com"]
+        assert "visible" not in com
+        seen = com["keypts_relative_to_camera"][()] / 100.0  # cm -> m
+        hidden = com["occluded_keypts_relative_to_camera"][()] / 100.0
+        assert len(com["object_id"]) == len(seen) and len(com["occluded_object_id"]) == len(hidden)
+    assert len(seen) + len(hidden) == 1000 * view.num_instances
+    assert 0 < len(seen) < len(hidden)  # from above: the tops are seen, the rest is not
+
+    def depth_agrees(p):
+        u = np.floor(K.fx * p[:, 1] / p[:, 3] + K.cx).astype(int)
+        v = np.floor(K.fy * p[:, 2] / p[:, 3] + K.cy).astype(int)
+        ok = (u >= 0) & (u < K.width) & (v >= 0) & (v < K.height)
+        z = np.full(len(p), np.nan)
+        z[ok] = z_img[v[ok], u[ok]]
+        return np.abs(z - p[:, 3]) < 0.005  # 5 mm: the point vs its pixel's centre ray
+
+    assert depth_agrees(seen).mean() > 0.9
+    assert depth_agrees(hidden).mean() < 0.3
+
+
+def test_occlusion_is_written_to_four_decimals_everywhere(written):
+    root, _ = written
+    for v in VIEWS:
+        view = Dataset(root).scene(0).view(v)
+        occ_h5 = view.hdf5["objects/occlusion"]
+        for key, entry in view.order.items():
+            i = int(key)
+            assert entry["occlusion"] == round(entry["occlusion"], 4)
+            assert occ_h5[i - 1] == np.float32(entry["occlusion"])
+            assert np.all(view.occlusion_map[view.instances == i] == np.float32(entry["occlusion"]))
+
+
 def test_scene_grasps_are_split_and_in_range(written):
     root, _ = written
     view = Dataset(root).scene(0).view(0)
@@ -167,6 +210,50 @@ def test_scene_grasps_are_split_and_in_range(written):
     shoe = su["object_id"] == 0
     p_W = (X_WC[:3, :3] @ su["contact_poses_relative_to_camera"][shoe, :3, 3].T).T + X_WC[:3, 3]
     assert np.all(p_W[:, 2] > 0.005)
+
+
+def test_a_hidden_object_is_left_out_of_the_view(tmp_path):
+    # A 60 mm cube inside the shoe box (scene instance 2 of 4) is hidden from every camera. As in
+    # MetaGraspNet's files, the view holds the objects it sees with ids 1..N' that all appear in
+    # the instance image: its visualize_layout.py takes num_objects = len(unique(ids)) - 1 and
+    # draws ids 1..num_objects; scene_gt.json entry k is instance k + 1.
+    import h5py
+
+    def inst(i, name, X):
+        return SceneInstance(i, name, get_object(name).category_id, BUILTIN, X, ())
+
+    scene = Scene(
+        instances=(
+            inst(1, "box_shoe", _pose(-0.02, -0.02, 0.045)),
+            inst(2, "box_cube", _pose(-0.02, -0.02, 0.045)),  # inside the shoe box
+            inst(3, "box_cube", _pose(0.0, 0.0, 0.12)),  # on top of it
+            inst(4, "box_tea", _pose(0.0, 0.1125, 0.0325)),
+        ),
+        tote=ToteSpec(),
+        seed=3,
+    )
+    label_scene(scene, tmp_path / "scene0", _views(0.1)[:2],
+                options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
+    folder = Dataset(tmp_path).scene(0)
+    for v in VIEWS[:2]:
+        view = folder.view(v)
+        ids = np.unique(view.instances)
+        n = len(ids) - 1  # visualize_layout.py's count
+        assert ids.tolist() == list(range(n + 1)) and n == 3
+        assert view.amodal.shape[0] == n and len(view.order) == n
+        assert len(folder.scene_gt[str(v)]) == n
+        with h5py.File(view.path("_scene.hdf5"), "r") as h5:
+            assert h5["objects/scene_instance_id"][()].tolist() == [1, 3, 4]
+            assert h5["objects/categories"].shape == (n,)
+            assert np.all(h5["keypts/com/object_id"][()] < n)
+        gt_t = np.array([e["cam_t_m2c"] for e in folder.scene_gt[str(v)]]) / 100.0
+        assert np.allclose(gt_t, view.X_CO[:, :3, 3], atol=1e-5)
+        for entry in view.order.values():
+            assert entry["occlusion"] < 1.0
+            if [p["id"] for p in entry["parents"]] == [0]:
+                assert entry["layer"] == 0
+        # The cube on top (scene instance 3) is view instance 2 and lies on the shoe box (1).
+        assert [p["id"] for p in view.order["1"]["parents"]] == [2]
 
 
 def test_same_input_same_bytes(tmp_path, object_labels):
@@ -233,11 +320,16 @@ def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_lab
     """label_scene renders view k + 1 and builds the grasp collisions in threads while view k is
     labelled; the files must be those of the plain serial loop over the same public steps."""
     from mgn.io.scene_folder import scene_gt_entries, write_scene_gt, write_view
-    from mgn.pipeline.label_scene import strided_subset, view_record
+    from mgn.pipeline.label_scene import strided_subset, view_grasps, view_record
     from mgn.render.views import iter_views
     from mgn.view_labels.grasps import SceneGraspModel
-    from mgn.view_labels.layout import compute_layout
-    from mgn.view_labels.objects import SceneRayModel, view_object_labels
+    from mgn.view_labels.layout import OCCLUSION_DECIMALS, compute_layout
+    from mgn.view_labels.objects import (
+        SceneRayModel,
+        round_occlusion,
+        seen_objects,
+        view_object_labels,
+    )
 
     scene, views = _scene(), _views(0.1)
     pj = [g.paralleljaw for g in object_labels]
@@ -261,13 +353,15 @@ def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_lab
     frames = iter_views(scene.render_items(), get_tote(scene), views, seed=opt.seed)
     for (v, view), images in zip(views, frames, strict=True):
         labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal)
-        layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal, cats, bins,
-                                occlusion=labels.occlusion)  # fmt: skip
-        seen = labels.visible_pixels > 0
-        grasps = sgm.view_grasps(view, seen)
-        com = rays.com_parameters()
-        write_view(serial, view_record(v, view, images, labels, layout, grasps, com))
-        gt[v] = scene_gt_entries(labels.X_CO, cats, seen)
+        labels = round_occlusion(labels, OCCLUSION_DECIMALS)
+        labels, index = seen_objects(labels)
+        layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal, cats[index],
+                                [bins[i] for i in index], occlusion=labels.occlusion)  # fmt: skip
+        grasps = view_grasps(sgm, view, index, len(scene.instances))
+        com = rays.com_parameters()[index]
+        write_view(serial, view_record(v, view, images, labels, layout, grasps, com,
+                                       instance_ids=index + 1))  # fmt: skip
+        gt[v] = scene_gt_entries(labels.X_CO, cats[index])
     write_scene_gt(serial, gt)
     write_scene_json(scene, serial / "scene.json")
 
@@ -330,3 +424,24 @@ def test_render_ahead_keeps_order_errors_and_stops():
     ahead.close()
     assert len(made) <= 3 + 2  # consumed, one queued, one in hand
     assert len(closed) == 1 and closed[0] != main
+
+
+def test_scene_label_applies_the_io_section(tmp_path):
+    # `mgn scene label --config` writes what `mgn generate` writes with the same config: here the
+    # io section's archival mode (the npz's sensor depth as an LZMA zip entry, method 14).
+    import zipfile
+
+    from mgn.cli.main import main
+
+    write_scene_json(_scene(), tmp_path / "scene.json")
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(
+        "camera: {views: [0], resolution_scale: 0.1, randomize: false}\n"
+        "labels: {scene_grasps: false}\n"
+        "io: {archival: true}\n"
+    )
+    out = tmp_path / "scene0"
+    assert main(["scene", "label", str(tmp_path / "scene.json"), "--out", str(out),
+                 "--config", str(cfg)]) == 0  # fmt: skip
+    with zipfile.ZipFile(out / "0.npz") as z:
+        assert z.getinfo("depth.npy").compress_type == zipfile.ZIP_LZMA

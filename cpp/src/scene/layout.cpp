@@ -188,44 +188,40 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
     }
   });
 
-  // 3. Relations between visible objects.
-  std::vector<std::uint8_t> is_parent(nn * nn, 0);  // [child * n + parent]
-  std::vector<std::vector<int>> parents(nn), children(nn);
-  for (std::size_t a = 0; a < nn; ++a) {
-    if (!L.visible[a]) continue;
-    for (std::size_t b = 0; b < nn; ++b) {
-      if (a == b || !L.visible[b]) continue;
+  // 3. Candidate relations between visible objects: the seen-over counts decide them.
+  struct Candidate {
+    int parent = 0, child = 0;
+    std::int64_t seen_px = 0;
+    std::int64_t stretch = 0;   // child pixels of the parent's own stretch
+    std::int64_t measured = 0;  // child pixels of the contour with valid depths on both sides
+    std::vector<float> diffs;   // per stretch pixel: depth(child) - mean depth(parent side)
+  };
+  std::vector<Candidate> cand;
+  std::vector<int> cand_index(nn * nn, -1);  // [child * n + parent]
+  std::vector<std::uint8_t> has_candidate_parent(nn, 0);
+  for (std::size_t b = 0; b < nn; ++b) {
+    if (!L.visible[b]) continue;
+    for (std::size_t a = 0; a < nn; ++a) {
+      if (a == b || !L.visible[a]) continue;
       const std::int64_t ab = S[a * nn + b], ba = S[b * nn + a];
       if (ab >= opt.min_overlap_px &&
           static_cast<double>(ab) >= opt.min_overlap_fraction * static_cast<double>(ab + ba)) {
-        is_parent[b * nn + a] = 1;
-        parents[b].push_back(static_cast<int>(a));
-        children[a].push_back(static_cast<int>(b));
+        cand_index[b * nn + a] = static_cast<int>(cand.size());
+        has_candidate_parent[b] = 1;
+        Candidate c;
+        c.parent = static_cast<int>(a);
+        c.child = static_cast<int>(b);
+        c.seen_px = ab;
+        cand.push_back(std::move(c));
       }
     }
   }
-  for (std::size_t i = 0; i < nn; ++i)
-    for (std::size_t j = 0; j < nn; ++j) {
-      if (is_parent[i * nn + j])
-        L.relation[i * nn + j] = -1;
-      else if (is_parent[j * nn + i])
-        L.relation[i * nn + j] = 1;
-    }
-  std::vector<int> rel_index(nn * nn, -1);  // [child * n + parent]
-  for (std::size_t b = 0; b < nn; ++b)
-    for (int a : parents[b]) {
-      LayoutRelation rel;
-      rel.parent = a;
-      rel.child = static_cast<int>(b);
-      rel.seen_px = S[static_cast<std::size_t>(a) * nn + b];
-      rel_index[b * nn + static_cast<std::size_t>(a)] = static_cast<int>(L.relations.size());
-      L.relations.push_back(rel);
-    }
 
-  // 4. Shared boundaries: child pixels 4-adjacent to a parent's visible pixels.
-  if (!L.relations.empty()) {
-    std::vector<std::vector<float>> diffs(L.relations.size());
-    std::vector<std::int64_t> edges(L.relations.size(), 0);
+  // 4. The parent's own stretch of boundary: child pixels p with a 4-neighbour q that shows the
+  //    parent inside the child's amodal mask (the parent covers the child at q) and lies in front
+  //    of p (depth(q) < depth(p)). A contour pixel pair is on the stretch of the one object that
+  //    is in front there, so no boundary counts for both directions of a mutual pair.
+  if (!cand.empty()) {
     const float* depth = im.depth;
     for (int r = 0; r < H; ++r) {
       for (int c = 0; c < W; ++c) {
@@ -233,16 +229,17 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
         const std::int32_t v = vis[p];
         if (v == 0) continue;
         const std::size_t b = static_cast<std::size_t>(v - 1);
-        if (parents[b].empty()) continue;
-        int nb_rel[4];
+        if (!has_candidate_parent[b]) continue;
+        const std::uint8_t* child_amodal = im.amodal + b * npx;
+        int nb_cand[4];
         float nb_depth[4];
         int k = 0;
         auto look = [&](std::size_t q) {
           const std::int32_t u = vis[q];
-          if (u == 0 || u == v) return;
-          const int ri = rel_index[b * nn + static_cast<std::size_t>(u - 1)];
-          if (ri < 0) return;
-          nb_rel[k] = ri;
+          if (u == 0 || u == v || !child_amodal[q]) return;
+          const int ci = cand_index[b * nn + static_cast<std::size_t>(u - 1)];
+          if (ci < 0) return;
+          nb_cand[k] = ci;
           nb_depth[k] = depth[q];
           ++k;
         };
@@ -252,32 +249,62 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
         if (c + 1 < W) look(p + 1);
         if (k == 0) continue;
         const float dp = depth[p];
+        if (!valid_depth(dp)) continue;
         for (int i = 0; i < k; ++i) {
-          if (nb_rel[i] < 0) continue;  // already counted for this pixel
-          const int ri = nb_rel[i];
-          double sum = 0.0;
-          int cnt = 0;
+          if (nb_cand[i] < 0) continue;  // already counted for this pixel
+          const int ci = nb_cand[i];
+          double front_sum = 0.0;
+          int front = 0;
+          bool measured = false;
           for (int j = i; j < k; ++j) {
-            if (nb_rel[j] != ri) continue;
+            if (nb_cand[j] != ci) continue;
             if (valid_depth(nb_depth[j])) {
-              sum += nb_depth[j];
-              ++cnt;
+              measured = true;
+              if (dp > nb_depth[j]) {
+                front_sum += nb_depth[j];
+                ++front;
+              }
             }
-            if (j > i) nb_rel[j] = -1;
+            if (j > i) nb_cand[j] = -1;
           }
-          ++edges[static_cast<std::size_t>(ri)];
-          if (cnt > 0 && valid_depth(dp))
-            diffs[static_cast<std::size_t>(ri)].push_back(
-                static_cast<float>(static_cast<double>(dp) - sum / cnt));
+          Candidate& cd = cand[static_cast<std::size_t>(ci)];
+          if (measured) ++cd.measured;
+          if (front > 0) {
+            ++cd.stretch;
+            cd.diffs.push_back(static_cast<float>(static_cast<double>(dp) - front_sum / front));
+          }
         }
       }
     }
-    for (std::size_t k = 0; k < L.relations.size(); ++k) {
-      L.relations[k].edge_size = static_cast<int>(edges[k]);
-      L.relations[k].depth_diff = median(diffs[k]);
-      L.total_covered_edge[static_cast<std::size_t>(L.relations[k].parent)] += edges[k];
-    }
   }
+
+  // 4b. Relations: a candidate whose parent meets its child on a measured contour but is in front
+  //     nowhere on it lies behind the child (a sign error, or the child's boundary counted for
+  //     the parent): dropped. Without a measured contour the masks alone decide.
+  std::vector<std::uint8_t> is_parent(nn * nn, 0);  // [child * n + parent]
+  std::vector<std::vector<int>> parents(nn), children(nn);
+  for (Candidate& cd : cand) {
+    if (cd.measured > 0 && cd.stretch == 0) continue;
+    const auto a = static_cast<std::size_t>(cd.parent), b = static_cast<std::size_t>(cd.child);
+    is_parent[b * nn + a] = 1;
+    parents[b].push_back(cd.parent);
+    children[a].push_back(cd.child);
+    LayoutRelation rel;
+    rel.parent = cd.parent;
+    rel.child = cd.child;
+    rel.seen_px = cd.seen_px;
+    rel.edge_size = static_cast<int>(cd.stretch);
+    rel.depth_diff = median(cd.diffs);
+    L.total_covered_edge[a] += cd.stretch;
+    L.relations.push_back(rel);
+  }
+  for (std::size_t i = 0; i < nn; ++i)
+    for (std::size_t j = 0; j < nn; ++j) {
+      if (is_parent[i * nn + j])
+        L.relation[i * nn + j] = -1;
+      else if (is_parent[j * nn + i])
+        L.relation[i * nn + j] = 1;
+    }
 
   // 5. Connected regions of each visible mask (8-connectivity, OpenCV), inside its bounding box.
   parallel_for(nn, opt.num_threads, 1, [&](std::size_t begin, std::size_t end) {

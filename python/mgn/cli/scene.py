@@ -10,6 +10,7 @@ each takes the ``scene`` subparsers object and adds its parser with ``set_defaul
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import time
 from collections.abc import Callable
@@ -25,8 +26,8 @@ from mgn.io.view_images import render_views
 from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
 from mgn.pipeline.config import Config, load_config
 from mgn.pipeline.label_cache import object_labels
-from mgn.pipeline.label_scene import LabelOptions, label_scene
-from mgn.pipeline.scene_writer import scene_views
+from mgn.pipeline.label_scene import label_scene
+from mgn.pipeline.scene_writer import label_options, scene_views
 from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.scene.compose import compose_objects
 from mgn.scene.drop import drop_scene
@@ -120,18 +121,28 @@ def _register_drop(ssub: argparse._SubParsersAction) -> None:
 
 def _cmd_render(args: argparse.Namespace) -> int:
 
-    render = settings_from_args(load_config(args.config).render, args)
+    config = load_config(args.config)
+    render = settings_from_args(config.render, args)
     scene = read_scene_json(args.scene)
     if len(scene) == 0:
         raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to render")
+    # The camera section gives the rig, the intrinsics (resolution scale, lens), the sensor and
+    # the randomisation, as for `mgn scene label`; the flags given override it.
+    camera = config.camera
+    rig = scene_views(scene, dataclasses.replace(camera, views=None), rig_seed=args.rig_seed)
+    wanted = args.view or (list(camera.views) if camera.views is not None else [0])
+    bad = sorted(set(wanted) - {v for v, _ in rig})
+    if bad:
+        raise InvalidArgumentError(
+            f"--view {bad}: the {camera.rig} rig has views 0..{len(rig) - 1}"
+        )
     views = render_views(
         scene.render_items(),
         tote_mesh(scene.tote),
-        views=args.view,
+        views=[rig[v] for v in wanted],
         out_dir=args.out,
-        rig_seed=scene.seed if args.rig_seed is None else args.rig_seed,
-        sensor=args.sensor,
-        randomize=not args.no_randomize,
+        sensor=args.sensor or camera.sensor,
+        randomize=camera.randomize and not args.no_randomize,
         seed=scene.seed,
         render=render,
         num_threads=args.num_threads,
@@ -145,15 +156,24 @@ def _register_render(ssub: argparse._SubParsersAction) -> None:
     p = ssub.add_parser("render", help="render views of a dropped scene (RGB, depth, instances)")
     p.add_argument("scene", help="scene JSON written by `mgn scene drop`")
     p.add_argument(
-        "--view", type=int, nargs="+", default=[0], help="views of the 37-view rig (default 0)"
+        "--view",
+        type=int,
+        nargs="+",
+        help="views of the rig (default: the config's camera.views, else view 0)",
     )
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--rig-seed", type=int, help="camera rig seed (default: the scene seed)")
     p.add_argument(
-        "--sensor", choices=["ideal", "structured-light", "tof"], default="structured-light"
+        "--sensor",
+        choices=["ideal", "structured-light", "tof"],
+        help="depth sensor (default: the config's camera.sensor, structured-light)",
     )
     p.add_argument("--no-randomize", action="store_true", help="fixed light and colours")
-    p.add_argument("--config", help="dataset config YAML (its render section)")
+    p.add_argument(
+        "--config",
+        help="dataset config YAML: its camera section (rig, intrinsics, resolution scale, lens, "
+        "sensor, randomisation) and render section",
+    )
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores")
     add_engine_arguments(p)
     p.set_defaults(func=_cmd_render)
@@ -191,13 +211,8 @@ def _cmd_label(args: argparse.Namespace) -> int:
         pj = [g.paralleljaw for g in got] if config.labels.paralleljaw else None
         su = [g.suction for g in got] if config.labels.suction else None
         print(f"object labels of {len(names)} objects in {time.perf_counter() - t0:.1f} s")
-    options = LabelOptions(
-        sensor=config.camera.sensor,  # type: ignore[arg-type]
-        randomize=config.camera.randomize,
-        seed=scene.seed,
-        layout=config.labels.layout,
-        scene_grasps=grasps,
-        num_threads=args.num_threads,
+    options = dataclasses.replace(
+        label_options(config, scene.seed, num_threads=args.num_threads, scene_grasps=grasps),
         render=render,
     )
     with tqdm(total=len(views), desc="views", unit="view", disable=None) as bar:

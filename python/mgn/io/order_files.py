@@ -19,7 +19,13 @@ import numpy.typing as npt
 from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError, IoError
 
-__all__ = ["OrderGraph", "read_order_csv", "read_order_json"]
+__all__ = [
+    "OrderGraph",
+    "derive_layers",
+    "read_order_csv",
+    "read_order_json",
+    "strongly_connected",
+]
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -126,3 +132,54 @@ def read_order_json(path: str | os.PathLike[str]) -> OrderGraph:
         total_covered_edge=_frozen(tce),
         bin_relations=tuple(bins),
     )
+
+
+def strongly_connected(parents: list[list[int]]) -> list[frozenset[int]]:
+    """Per object the strongly connected component of the relation graph (parent -> child) it
+    belongs to: the objects it reaches and that reach it, itself included (0-based;
+    ``parents[i]`` lists the parents of object i). A component of two or more objects is an
+    occlusion cycle."""
+    n = len(parents)
+    children: list[list[int]] = [[] for _ in range(n)]
+    for i, ps in enumerate(parents):
+        for p in ps:
+            if not 0 <= p < n or p == i:
+                raise InvalidArgumentError(
+                    f"strongly_connected: object {i} has parent {p}; expected another object "
+                    f"0..{n - 1}"
+                )
+            children[p].append(i)
+
+    def reach(start: int) -> set[int]:
+        seen, todo = {start}, [start]
+        while todo:
+            for w in children[todo.pop()]:
+                if w not in seen:
+                    seen.add(w)
+                    todo.append(w)
+        return seen
+
+    down = [reach(i) for i in range(n)]
+    return [frozenset(j for j in down[i] if i in down[j]) for i in range(n)]
+
+
+def derive_layers(parents: list[list[int]]) -> list[int]:
+    """The layer of every object from the relation graph (docs/format.md, ``{v}_order.json``):
+    ``parents[i]`` lists the 0-based parents of object i. 0: no parent; 1: exactly one parent,
+    which is in layer 0; 2: a member of a strongly connected component of two or more objects
+    whose members each have at most one parent outside it; 3: the others."""
+    comp = strongly_connected(parents)
+    interlock = {
+        c: all(sum(p not in c for p in parents[m]) <= 1 for m in c) for c in set(comp) if len(c) > 1
+    }
+    layers = []
+    for i, ps in enumerate(parents):
+        if not ps:
+            layers.append(0)
+        elif len(ps) == 1 and not parents[ps[0]] and len(comp[i]) == 1:
+            layers.append(1)
+        elif len(comp[i]) > 1 and interlock[comp[i]]:
+            layers.append(2)
+        else:
+            layers.append(3)
+    return layers

@@ -137,6 +137,7 @@ HDF5_INT_LEAVES: tuple[str, ...] = (
     "categories",
     "collision_part",
     "collision_obstacle",
+    "scene_instance_id",
 )
 
 #: Datasets every view's ``{v}_scene.hdf5`` has (empty groups have zero-length datasets).
@@ -250,6 +251,14 @@ class ViewRecord:
             )
         if n > 255:
             raise InvalidArgumentError(f"ViewRecord {v}: at most 255 instances per view, got {n}")
+        seen = np.bincount(np.asarray(self.instances, np.int64).reshape(-1), minlength=n + 1)
+        hidden = np.flatnonzero(seen[1:] == 0) + 1
+        if hidden.size:
+            raise InvalidArgumentError(
+                f"ViewRecord {v}: instances {hidden.tolist()} have no visible pixel; a view holds "
+                f"the objects it sees, numbered 1..N without gaps (MetaGraspNet's readers count "
+                f"the ids of the instance image: mgn.view_labels.objects.seen_objects)"
+            )
         for key in HDF5_FLOAT_KEYS:
             if key not in self.scene_hdf5:
                 raise InvalidArgumentError(f"ViewRecord {v}: scene_hdf5 lacks '{key}'")
@@ -506,14 +515,13 @@ _CHUNK_ROWS = 8192
 ROTATION_BLOCK_POSES: tuple[str, ...] = ("suctioncup/contact_poses_relative_to_camera",)
 #: Leaf names of ``{v}_scene.hdf5`` datasets deflated without the shuffle filter: per-grasp values
 #: taken from a few levels or repeated along the rows (scores, the widths of the grasps sharing a
-#: contact point, 0/1 flags), which deflate matches as whole 4-byte values: 0.5-0.9x the bytes of
+#: contact point), which deflate matches as whole 4-byte values: 0.5-0.9x the bytes of
 #: the shuffled chunks (-0.5 MB per scene). The wrench scores and the integer labels stay
 #: shuffled (1.2x / 1.3x larger without).
 UNSHUFFLED_LEAVES: tuple[str, ...] = (
     "contact_width",
     "score_analytical",
     "score_simulation",
-    "visible",
 )
 #: HDF5 file-format bounds of the scene writer's files: the HDF5 1.10 formats (the virtual
 #: datasets need them anyway), whose chunk indexes and object headers take ~25 kB per

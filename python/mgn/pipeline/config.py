@@ -533,6 +533,20 @@ class LabelsConfig(_Section):
     _CHECKS = {k: _bool for k in ("suction", "paralleljaw", "pj_physics", "layout", "scene_grasps")}
 
 
+def _physics_grasps(value: Any, key: str) -> int | None:
+    if value is None:
+        return None
+    ok = isinstance(value, int) and not isinstance(value, bool) and value >= 1
+    if not ok:
+        raise _fail(
+            key,
+            value,
+            "null (every grasp is shaken) or an integer >= 1 (grasps shaken per object); "
+            "labels.pj_physics: false switches the physics scores off",
+        )
+    return int(value)
+
+
 @dataclass(frozen=True)
 class ObjectLabelsConfig(_Section):
     """Sizes of the per-object labels (computed once per object and cached)."""
@@ -561,7 +575,7 @@ class ObjectLabelsConfig(_Section):
         "suction_points": _int(1),
         "pj_points": _int(1),
         "pj_grasps": _optional(_int(1)),
-        "physics_grasps": _optional(_int(1)),
+        "physics_grasps": _physics_grasps,
         "physics_grid": _int(1),
         "physics_search": _choice("staircase", "full"),
         "physics_checks": _optional(_int(0)),

@@ -41,14 +41,23 @@ from mgn.scene.cameras import CameraView
 from mgn.scene.scene import Scene
 from mgn.suction.labels import SuctionLabels
 from mgn.view_labels.grasps import SceneGraspModel
-from mgn.view_labels.layout import compute_layout
+from mgn.view_labels.layout import OCCLUSION_DECIMALS, compute_layout
 from mgn.view_labels.objects import (
     SceneRayModel,
     distort_view_object_labels,
+    round_occlusion,
+    seen_objects,
     view_object_labels,
 )
 
-__all__ = ["LabelOptions", "LabelTimings", "label_scene", "strided_subset", "view_record"]
+__all__ = [
+    "LabelOptions",
+    "LabelTimings",
+    "label_scene",
+    "strided_subset",
+    "view_grasps",
+    "view_record",
+]
 
 
 @dataclass(frozen=True)
@@ -127,6 +136,16 @@ def strided_subset(labels: Any, limit: int) -> Any:
     return dataclasses.replace(labels, **{f: getattr(labels, f)[keep] for f in fields})
 
 
+def view_grasps(model: SceneGraspModel, view: CameraView, index: np.ndarray, n: int) -> Any:
+    """The scene grasps of the ``n`` scene objects whose 0-based scene indices ``index`` the
+    view holds, with ``object_id`` numbering them as the view does (0..len(index) - 1)."""
+    seen = np.zeros(n, bool)
+    seen[index] = True
+    new_index = np.full(n, -1, np.int64)
+    new_index[index] = np.arange(len(index))
+    return model.view_grasps(view, seen).renumbered(new_index)
+
+
 def _empty_layout_files(n: int) -> tuple[dict[str, Any], str, dict[str, Any]]:
     order = {
         str(i + 1): {"id": i + 1, "parents": [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
@@ -144,14 +163,23 @@ def view_record(
     layout: Any | None,
     grasps: Any | None,
     com_parameters: np.ndarray | None = None,
+    *,
+    instance_ids: np.ndarray | None = None,
 ) -> ViewRecord:
     """The :class:`ViewRecord` of one view from its images (``ViewImages``), object labels
-    (``ViewObjectLabels``), layout (``Layout`` or None) and scene grasps (``SceneGrasps`` or
-    None). Lengths in metres; the writer converts. ``com_parameters``: the scene's
-    (:meth:`~mgn.view_labels.objects.SceneRayModel.com_parameters`) when the heat map was computed
-    from ``images.depth_ideal`` through ``view`` (no lens): the writer then stores it as a
-    residual."""
+    (``ViewObjectLabels``, the objects of the view: :func:`~mgn.view_labels.objects.seen_objects`),
+    layout (``Layout`` or None) and scene grasps (``SceneGrasps`` or None), all numbering the
+    objects of the view 1..N. Lengths in metres; the writer converts. ``com_parameters``: the
+    (N, 5) rows of the scene's (:meth:`~mgn.view_labels.objects.SceneRayModel.com_parameters`)
+    for these objects when the heat map was computed from ``images.depth_ideal`` through
+    ``view`` (no lens): the writer then stores it as a residual. ``instance_ids``: (N,) each
+    object's ``instance_id`` in the scene (``scene.json``; default 1..N), written as
+    ``objects/scene_instance_id``."""
     n = labels.num_objects
+    if instance_ids is None:
+        instance_ids = np.arange(1, n + 1)
+    com = labels.com_points.reshape(-1, 4)
+    seen_com = np.asarray(labels.com_visible, bool)
     h5: dict[str, np.ndarray] = {
         "camera/pose_relative_to_world": np.asarray(view.X_WC, np.float64)[None],
         "objects/poses_relative_to_camera": labels.X_CO,
@@ -159,15 +187,19 @@ def view_record(
         "objects/bbox_loose": labels.bbox_loose,
         "objects/bbox_tight": labels.bbox_tight,
         "objects/occlusion": labels.occlusion,
+        "objects/scene_instance_id": np.asarray(instance_ids, np.int32),
         "keypts/byhand/keypts_relative_to_camera": labels.keypoints.reshape(-1, 4),
         "keypts/byhand/object_id": labels.keypoint_object,
         "keypts/byhand/occluded_keypts_relative_to_camera": labels.occluded_keypoints.reshape(
             -1, 4
         ),
         "keypts/byhand/occluded_object_id": labels.occluded_keypoint_object,
-        "keypts/com/keypts_relative_to_camera": labels.com_points.reshape(-1, 4),
-        "keypts/com/object_id": labels.com_object,
-        "keypts/com/visible": labels.com_visible,
+        # MetaGraspNet's keypts/com holds the visible CoM points; mgn keeps the others under
+        # the names of keypts/byhand's occluded ones.
+        "keypts/com/keypts_relative_to_camera": com[seen_com],
+        "keypts/com/object_id": labels.com_object[seen_com],
+        "keypts/com/occluded_keypts_relative_to_camera": com[~seen_com],
+        "keypts/com/occluded_object_id": labels.com_object[~seen_com],
     }
     if grasps is not None:
         h5.update(grasps.datasets())
@@ -329,6 +361,7 @@ def label_scene(
 
     want_grasps = opt.scene_grasps and (pj_labels is not None or suction_labels is not None)
     categories = np.array([inst.category_id for inst in scene.instances], np.int64)
+    scene_ids = np.array([inst.instance_id for inst in scene.instances], np.int32)
     bins = [inst.bin_relation for inst in scene.instances]
     objects = scene.render_items()
     gt: dict[int, list[dict[str, Any]]] = {}
@@ -374,25 +407,29 @@ def label_scene(
                 )
                 if images.lens is not None:
                     labels = distort_view_object_labels(labels, images.lens)
+                labels = round_occlusion(labels, OCCLUSION_DECIMALS)
+                # The view holds the objects it sees, numbered 1..N' (MetaGraspNet's readers).
+                labels, index = seen_objects(labels)
                 del src
                 t2 = time.perf_counter()
                 timings.add("object labels", t2 - t1)
                 layout = None
                 if opt.layout:
                     layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal,
-                                            categories, bins, occlusion=labels.occlusion,
+                                            categories[index], [bins[i] for i in index],
+                                            occlusion=labels.occlusion,
                                             num_threads=opt.num_threads)  # fmt: skip
                 t3 = time.perf_counter()
                 timings.add("layout", t3 - t2)
-                seen = labels.visible_pixels > 0
-                gt[v] = scene_gt_entries(labels.X_CO, categories, seen)
+                gt[v] = scene_gt_entries(labels.X_CO, categories[index])
                 grasps = None
                 if sgm_future is not None:
-                    grasps = sgm_future.result().view_grasps(view, seen)
+                    grasps = view_grasps(sgm_future.result(), view, index, n)
                 t4 = time.perf_counter()
                 timings.add("scene grasps", t4 - t3)
-                com = rays.com_parameters() if images.lens is None else None
-                record = view_record(v, view, images, labels, layout, grasps, com)
+                com = rays.com_parameters()[index] if images.lens is None else None
+                record = view_record(v, view, images, labels, layout, grasps, com,
+                                     instance_ids=scene_ids[index])  # fmt: skip
                 del images, labels, layout, grasps
                 pending.append(pool.submit(write_view, out, record, archival=opt.archival))
                 del record

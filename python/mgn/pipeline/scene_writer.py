@@ -24,7 +24,7 @@ from mgn.pipeline.label_scene import LabelOptions, label_scene
 from mgn.scene.cameras import CameraView, Intrinsics, hemisphere_rig, mgn_rig
 from mgn.scene.scene import Scene
 
-__all__ = ["scene_intrinsics", "scene_views", "write_scene"]
+__all__ = ["label_options", "scene_intrinsics", "scene_views", "write_scene"]
 
 
 def scene_intrinsics(camera: CameraConfig) -> Intrinsics:
@@ -38,23 +38,44 @@ def scene_intrinsics(camera: CameraConfig) -> Intrinsics:
     return preset if camera.resolution_scale == 1.0 else preset.scaled(camera.resolution_scale)
 
 
-def scene_views(scene: Scene, camera: CameraConfig) -> list[tuple[int, CameraView]]:
+def scene_views(
+    scene: Scene, camera: CameraConfig, *, rig_seed: int | None = None
+) -> list[tuple[int, CameraView]]:
     """(view index, camera) of every view kept by ``camera.views``, in order.
 
-    The ``mgn`` rig is drawn from the scene seed (:func:`mgn.scene.cameras.mgn_rig`), looking at the
-    tote centre (the world origin); the ``hemisphere`` rig and the user ``poses`` are fixed.
-    View indices are those of the full rig, so ``views: [0, 5, 17]`` gives files ``0_*``,
-    ``5_*`` and ``17_*``.
+    The ``mgn`` rig is drawn from ``rig_seed`` (default: the scene seed;
+    :func:`mgn.scene.cameras.mgn_rig`), looking at the tote centre (the world origin); the
+    ``hemisphere`` rig and the user ``poses`` are fixed. View indices are those of the full rig,
+    so ``views: [0, 5, 17]`` gives files ``0_*``, ``5_*`` and ``17_*``.
     """
     K = scene_intrinsics(camera)
     if camera.rig == "mgn":
-        poses, _ = mgn_rig(scene.seed)
+        poses, _ = mgn_rig(scene.seed if rig_seed is None else rig_seed)
     elif camera.rig == "poses":
         poses = np.asarray(camera.poses, np.float64)
     else:
         h = camera.hemisphere
         poses = hemisphere_rig(h.radii, h.tilts, h.azimuths)
     return [(v, CameraView(K, poses[v])) for v in camera.view_indices]
+
+
+def label_options(
+    config: Config, seed: int, *, num_threads: int = 0, scene_grasps: bool | None = None
+) -> LabelOptions:
+    """The :class:`~mgn.pipeline.label_scene.LabelOptions` of a scene of ``config``: the camera
+    section's sensor and randomisation, the labels switched on (``scene_grasps``: False turns
+    the scene grasps off, None keeps ``labels.scene_grasps``), the render settings and the io
+    section's archival mode; ``seed``: the scene seed."""
+    return LabelOptions(
+        sensor=config.camera.sensor,  # type: ignore[arg-type]
+        randomize=config.camera.randomize,
+        seed=seed,
+        layout=config.labels.layout,
+        scene_grasps=config.labels.scene_grasps if scene_grasps is None else scene_grasps,
+        num_threads=num_threads,
+        render=config.render,
+        archival=config.io.archival,
+    )
 
 
 def write_scene(
@@ -93,16 +114,7 @@ def write_scene(
             pj = [g.paralleljaw if g is not None else None for g in got]
         if labels.suction:
             su = [g.suction if g is not None else None for g in got]
-    options = LabelOptions(
-        sensor=config.camera.sensor,  # type: ignore[arg-type]
-        randomize=config.camera.randomize,
-        seed=scene.seed,
-        layout=labels.layout,
-        scene_grasps=labels.scene_grasps,
-        num_threads=num_threads,
-        render=config.render,
-        archival=config.io.archival,
-    )
+    options = label_options(config, scene.seed, num_threads=num_threads)
     views = scene_views(scene, config.camera)
     timings = label_scene(scene, out, views, pj_labels=pj, suction_labels=su,
                           gripper=config.gripper, cup=config.cup, options=options)  # fmt: skip

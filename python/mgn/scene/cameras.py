@@ -44,6 +44,11 @@ SENSOR_PRESETS: dict[str, tuple[int, int, float]] = {
 #: MetaGraspNet synthetic camera: focal length and horizontal aperture, mm.
 MGN_FOCAL_LENGTH_MM = 35.0
 MGN_APERTURE_MM = 20.955
+#: ``clipping_range`` of ``{v}_camera_params.json``, [near, far] in cm: MetaGraspNet's value
+#: (1 cm to 10 km). mgn's renderers clip nothing of a scene (the raster engine fits its clip
+#: planes to the scene's depth range, the ray tracers start at the camera centre), so every
+#: surface in this range is drawn.
+MGN_CLIPPING_RANGE_CM: tuple[float, float] = (1.0, 1.0e6)
 
 
 @dataclass(frozen=True)
@@ -156,12 +161,16 @@ class Intrinsics:
                           self.cx * w / self.width, self.cy * h / self.height,
                           self.distortion)  # fmt: skip
 
-    def camera_params(self, clipping_range: tuple[float, float] = (0.01, 10.0)) -> dict[str, Any]:
-        """``{v}_camera_params.json`` content (docs/format.md): px values plus MetaGraspNet's keys.
-
-        The apertures are those of a 35 mm lens giving these focal lengths (mm). A camera with
-        distortion adds ``distortion_model: "opencv"`` and ``distortion`` (the coefficients;
-        the images are distorted by them, docs/cameras.md).
+    def camera_params(
+        self, clipping_range_cm: tuple[float, float] = MGN_CLIPPING_RANGE_CM
+    ) -> dict[str, Any]:
+        """``{v}_camera_params.json`` content (docs/format.md): px values plus MetaGraspNet's keys
+        in MetaGraspNet's units: ``focal_length`` and the apertures in mm (the apertures of a
+        35 mm lens giving these focal lengths), ``horizontal_fov`` / ``vertical_fov`` in
+        radians (2 atan(W / 2 fx), 2 atan(H / 2 fy)) and ``clipping_range`` [near, far] in cm
+        (default :data:`MGN_CLIPPING_RANGE_CM`). A camera with distortion adds
+        ``distortion_model: "opencv"`` and ``distortion`` (the coefficients; the images are
+        distorted by them, docs/cameras.md).
         """
         hfov = 2.0 * math.atan(0.5 * self.width / self.fx)
         vfov = 2.0 * math.atan(0.5 * self.height / self.fy)
@@ -177,10 +186,10 @@ class Intrinsics:
             "focal_length": MGN_FOCAL_LENGTH_MM,
             "horizontal_aperture": h_ap,
             "vertical_aperture": v_ap,
-            "horizontal_fov": math.degrees(hfov),
-            "vertical_fov": math.degrees(vfov),
+            "horizontal_fov": hfov,
+            "vertical_fov": vfov,
             "resolution": {"height": self.height, "width": self.width},
-            "clipping_range": list(clipping_range),
+            "clipping_range": [float(x) for x in clipping_range_cm],
         } | (
             {"distortion_model": "opencv", "distortion": list(self.distortion)}
             if self.distortion

@@ -29,6 +29,7 @@ Everything here is in metres; the dataset writer converts to centimetres.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -170,6 +171,25 @@ class SceneGrasps:
 
     non_colliding: GraspGroups
     colliding: GraspGroups
+
+    def renumbered(self, new_index: npt.ArrayLike) -> SceneGrasps:
+        """The same grasps with ``object_id`` mapped through ``new_index`` (old object index ->
+        new one; e.g. the view's numbering of the objects it sees,
+        :func:`mgn.view_labels.objects.seen_objects`). Every grasp's object must map to
+        an index >= 0."""
+        m = np.asarray(new_index, np.int64)
+        groups = []
+        for g in (self.non_colliding, self.colliding):
+            ids = [m[s.object_id] for s in (g.paralleljaw, g.suctioncup)]
+            if any(np.any(i < 0) for i in ids):
+                raise InvalidArgumentError(
+                    "SceneGrasps.renumbered: a grasp of an object left out of the numbering"
+                )
+            groups.append(GraspGroups(
+                paralleljaw=dataclasses.replace(g.paralleljaw, object_id=ids[0].astype(np.int32)),
+                suctioncup=dataclasses.replace(g.suctioncup, object_id=ids[1].astype(np.int32)),
+            ))  # fmt: skip
+        return SceneGrasps(non_colliding=groups[0], colliding=groups[1])
 
     def datasets(self) -> dict[str, np.ndarray]:
         """``{hdf5 path: array}`` in metres, e.g.

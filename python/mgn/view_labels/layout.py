@@ -7,16 +7,23 @@ in short:
 
 - *Relation*: A occludes (is a parent of) B when A is seen on at least ``min_overlap_px`` pixels
   of B's amodal mask and on at least ``min_overlap_fraction`` of the pixels of the two amodal
-  masks' overlap that show A or B. Both directions can hold (interlocked objects). Relation
-  matrix ``M[i, j] = -1`` if object j occludes object i, ``+1`` for the reverse, ``0`` otherwise
-  (mutual occlusion: both entries -1).
-- *Shared boundary* of a relation: pixels of B's visible mask 4-adjacent to A's visible mask;
-  ``edge_size`` = their number, ``depth_diff`` = median of depth(B) - depth(A) there (m, >= 0 when
-  A is above; NaN when no valid depth: pass the noise-free depth for clean values).
+  masks' overlap that show A or B, and A is seen above B where they meet (below). Both
+  directions can hold (interlocked or nested objects), each on its own stretch of boundary.
+  Relation matrix ``M[i, j] = -1`` if object j occludes object i, ``+1`` for the reverse, ``0``
+  otherwise (mutual occlusion: both entries -1).
+- *Own stretch of boundary* of A over B: the pixels p of B's visible mask with a 4-neighbour q
+  that shows A inside B's amodal mask (A covers B at q) and lies in front (depth(q) <
+  depth(p)). A pixel pair belongs to the stretch of whichever object is in front there, so no
+  boundary counts for both directions. ``edge_size`` = the stretch's pixel count,
+  ``depth_diff`` = median of depth(p) - depth(q) over it (m, > 0). A parent candidate that
+  meets B on a measured contour but is in front nowhere on it lies behind B: no relation. When
+  their contour has no pixel pair with valid depths, the masks alone decide (edge_size 0,
+  depth_diff NaN; pass the noise-free depth for clean values).
 - *Layers*: 0 top (no parent), 1 secondary (exactly one parent, a top object), 2 interlock (in an
   occlusion cycle -- a strongly connected component of size >= 2 -- whose members each have at
   most one parent outside it), 3 others. Objects without visible pixels get layer 3, no
-  relations, ``visible=False``, and are left out of the order and of the difficulty.
+  relations, ``visible=False``, and are left out of the order and of the difficulty (the
+  dataset files leave them out of the view: :func:`mgn.view_labels.objects.seen_objects`).
 - *Order*: instance ids of the visible objects, parents always before children (smallest id
   first; a cycle is broken at its least occluded object).
 - *Complete*: one 8-connected visible region, ignoring specks smaller than
@@ -47,12 +54,17 @@ from mgn.errors import InvalidArgumentError
 
 __all__ = [
     "BIN_RELATIONS",
+    "OCCLUSION_DECIMALS",
     "Layout",
     "compute_layout",
 ]
 
 #: Valid per-object bin relations.
 BIN_RELATIONS: tuple[str, ...] = ("no_rel", "edge", "corner")
+
+#: Decimals of the occlusion rates in the dataset files (``{v}_order.json``, and the pipeline's
+#: ``{v}.npz`` occlusion image and ``objects/occlusion``): MetaGraspNet's files hold them to 4.
+OCCLUSION_DECIMALS = 4
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -71,8 +83,8 @@ class Layout:
     relation: npt.NDArray[np.int8]  #: (N, N) matrix M (see module docstring)
     parent_ids: npt.NDArray[np.int32]  #: (R,) instance id of each relation's parent (on top)
     child_ids: npt.NDArray[np.int32]  #: (R,) instance id of each relation's child (below)
-    depth_diff: npt.NDArray[np.float64]  #: (R,) m, median depth(child) - depth(parent)
-    edge_size: npt.NDArray[np.int32]  #: (R,) px of the shared boundary
+    depth_diff: npt.NDArray[np.float64]  #: (R,) m, median depth(child) - depth(parent), > 0
+    edge_size: npt.NDArray[np.int32]  #: (R,) px of the parent's own stretch of boundary
     seen_px: npt.NDArray[np.int64]  #: (R,) px of the child's amodal mask showing the parent
     occlusion: npt.NDArray[np.float64]  #: (N,) occlusion rates (input, passed through)
     categories: npt.NDArray[np.int32]  #: (N,) category ids (input, passed through)
@@ -109,7 +121,8 @@ class Layout:
         ]
 
     def order_json(self) -> dict[str, Any]:
-        """The ``{v}_order.json`` content: keys "1".."N"; depth differences in centimetres.
+        """The ``{v}_order.json`` content: keys "1".."N"; depth differences in centimetres,
+        occlusion rates to :data:`OCCLUSION_DECIMALS` decimals.
 
         A depth difference that could not be measured (NaN: no valid depth at the boundary) is
         written as 0.0; its ``edge_size`` tells whether a boundary exists.
@@ -128,7 +141,7 @@ class Layout:
             parents = [entry(*p) for p in self.parents(iid)]
             out[str(iid)] = {
                 "id": iid,
-                "occlusion": float(self.occlusion[i]),
+                "occlusion": round(float(self.occlusion[i]), OCCLUSION_DECIMALS),
                 "layer": int(self.layer[i]),
                 "parents": parents or [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
                 "children": [entry(*c) for c in self.children(iid)],

@@ -14,6 +14,7 @@ seen in the view (their masks are empty, their occlusion is 1).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -34,6 +35,8 @@ __all__ = [
     "SceneRayModel",
     "ViewObjectLabels",
     "distort_view_object_labels",
+    "round_occlusion",
+    "seen_objects",
     "view_object_labels",
 ]
 
@@ -420,4 +423,67 @@ def distort_view_object_labels(labels: ViewObjectLabels, lens: Lens) -> ViewObje
         com_object=labels.com_object,
         com_visible=com_visible,
         com_heatmap=lens.warp_nearest(labels.com_heatmap),
+    )
+
+
+def round_occlusion(labels: ViewObjectLabels, decimals: int) -> ViewObjectLabels:
+    """``labels`` with the occlusion rates rounded to ``decimals`` decimals (numpy's
+    ``round``) and the occlusion image made from the rounded rates, so that every file that holds
+    an object's occlusion holds the same number (MetaGraspNet's files: 4 decimals)."""
+    occ = np.asarray(np.round(np.asarray(labels.occlusion, np.float64), int(decimals)), np.float64)
+    vis = labels.visible
+    occ_map = np.where(vis > 0, np.concatenate([[0.0], occ])[vis], 0.0).astype(np.float32)
+    return dataclasses.replace(labels, occlusion=occ, occlusion_map=occ_map)
+
+
+def seen_objects(
+    labels: ViewObjectLabels,
+) -> tuple[ViewObjectLabels, npt.NDArray[np.int64]]:
+    """The labels of the objects seen in the view (at least one visible pixel), numbered 1..N'
+    in scene order, and the (N',) 0-based scene index of each.
+
+    MetaGraspNet's files hold the objects of a view with instance ids 1..N' that all appear in
+    the instance image (its ``visualize_layout.py`` counts the ids it finds; ``scene_gt.json``
+    entry k is instance k + 1): an object hidden from the camera (occlusion 1) is left out of
+    the view with its masks, pose, keypoints and CoM points, and the ids above it move down.
+    """
+    keep = np.flatnonzero(np.asarray(labels.visible_pixels) > 0).astype(np.int64)
+    n = labels.num_objects
+    if keep.size == n:
+        return labels, keep
+    new_id = np.zeros(n + 1, np.int32)  # old instance id (0 = none) -> new one
+    new_id[keep + 1] = np.arange(1, keep.size + 1, dtype=np.int32)
+    new_index = new_id[1:] - 1  # old object index -> new one (-1: left out)
+
+    def rows(points: np.ndarray, owner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        ok = new_index[owner] >= 0
+        return points[ok], new_index[owner[ok]].astype(np.int32)
+
+    kp, kp_obj = rows(labels.keypoints, labels.keypoint_object)
+    okp, okp_obj = rows(labels.occluded_keypoints, labels.occluded_keypoint_object)
+    ok = new_index[labels.com_object] >= 0
+    return (
+        ViewObjectLabels(
+            instance_ids=np.arange(1, keep.size + 1, dtype=np.int32),
+            category_ids=labels.category_ids[keep],
+            visible=new_id[labels.visible],
+            semantic=labels.semantic,
+            amodal=labels.amodal[keep],
+            visible_pixels=labels.visible_pixels[keep],
+            amodal_pixels=labels.amodal_pixels[keep],
+            occlusion=labels.occlusion[keep],
+            occlusion_map=labels.occlusion_map,
+            bbox_tight=labels.bbox_tight[keep],
+            bbox_loose=labels.bbox_loose[keep],
+            X_CO=labels.X_CO[keep],
+            keypoints=kp,
+            keypoint_object=kp_obj,
+            occluded_keypoints=okp,
+            occluded_keypoint_object=okp_obj,
+            com_points=labels.com_points[ok],
+            com_object=new_index[labels.com_object[ok]].astype(np.int32),
+            com_visible=labels.com_visible[ok],
+            com_heatmap=labels.com_heatmap,
+        ),
+        keep,
     )

@@ -22,7 +22,7 @@ import numpy.typing as npt
 from PIL import Image, ImageDraw, ImageFont
 
 from mgn.base.atomic import atomic_write_bytes
-from mgn.errors import InvalidArgumentError
+from mgn.errors import InvalidArgumentError, IoError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
 from mgn.io.dataset import Dataset, SceneFolder, View
 from mgn.io.scene_folder import png_bytes
@@ -367,8 +367,16 @@ def _scene_folder(root: str | os.PathLike[str], scene: int | None):  # noqa: ANN
     ``root/scene<scene>`` of a dataset."""
 
     r = Path(root)
+    if not r.is_dir():
+        what = "is not a folder" if r.exists() else "does not exist"
+        raise IoError(f"'{r}' {what}: expected a dataset folder (with --scene N) or a scene folder")
     if any(r.glob("*_rgb.png")):
         return SceneFolder(r, scene if scene is not None else 0)
+    if not any(r.glob("scene*/*_rgb.png")):
+        raise IoError(
+            f"'{r}' holds no views ({{v}}_rgb.png) and no scene folders with views "
+            "(scene<N>/): expected a dataset folder (with --scene N) or a scene folder"
+        )
     if scene is None:
         raise InvalidArgumentError(
             f"'{r}' is a dataset folder: give --scene N (or pass a scene folder)"

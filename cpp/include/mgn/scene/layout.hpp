@@ -13,21 +13,30 @@
 /// Definitions (all pixel counts are of the given images):
 ///   - Seen-over count S[a][b] = number of pixels whose visible id is a+1 and that lie inside the
 ///     amodal mask of b (a hides b there).
+///   - Contour of a over b: the pixel pairs (p, q), 4-adjacent, p in b's visible mask, q in a's
+///     visible mask and inside b's amodal mask (a covers b at q). A pair is measured when both
+///     depths are valid; on it, a is in front when depth(q) < depth(p).
+///   - a's own stretch of boundary over b: the pixels p of b with at least one measured contour
+///     neighbour q in front. A pair lies on the stretch of whichever object is in front there, so
+///     no boundary counts for both directions of a mutual pair.
 ///   - Relation: a occludes b (a is a parent of b) iff both objects are visible (>= 1 visible
-///     pixel), S[a][b] >= min_overlap_px and S[a][b] >= min_overlap_fraction * (S[a][b] +
-///     S[b][a]). Both directions can hold (mutual occlusion, e.g. interlocked objects).
+///     pixel), S[a][b] >= min_overlap_px, S[a][b] >= min_overlap_fraction * (S[a][b] +
+///     S[b][a]), and a is seen above b where they meet: its own stretch over b is not empty, or
+///     their contour has no measured pair (then the masks alone decide: edge_size 0, depth_diff
+///     NaN). A parent that lies behind its child all along a measured contour is no parent. Both
+///     directions can hold (mutual occlusion: interlocked or nested objects), each on its own
+///     stretch.
 ///   - Relation matrix M (N x N, row-major): M[i][j] = -1 if j occludes i, else +1 if i occludes
 ///     j, else 0 (with mutual occlusion both entries are -1: the -1 convention of the files wins).
-///   - Shared boundary of a relation (parent a, child b): pixels of b's visible mask with at least
-///     one 4-neighbour in a's visible mask. edge_size = their count; depth_diff = median over
-///     them of depth(b pixel) - mean depth of its valid a 4-neighbours (m; >= 0 when a is above
-///     b); pixels without valid depths are left out of the median; NaN when none is left.
+///   - edge_size of a relation = the pixel count of the parent's own stretch; depth_diff = median
+///     over them of depth(p) - mean depth of p's in-front neighbours q (m; > 0 by construction).
 ///   - total_covered_edge of a = the sum of the edge_size of a's relations as a parent (the
 ///     boundary along which a covers its children), as in MetaGraspNet's sample scenes.
 ///   - Layers (visible objects): 0 top = no parent; 1 secondary = exactly one parent, which is a
 ///     top object; 2 interlock = member of a strongly connected component S (of the directed
 ///     parent -> child graph) of size >= 2 in which every member has at most one parent outside
-///     S; 3 others. Objects that are not visible get layer 3, no relations and visible = false.
+///     S; 3 others. Objects that are not visible get layer 3, no relations and visible = false
+///     (the dataset files leave them out of the view: mgn.view_labels.objects.seen_objects).
 ///   - Picking order: the visible objects' instance ids (1-based) such that every object comes
 ///     after all its parents (Kahn's algorithm, smallest instance id first among the ready ones).
 ///     When only objects in occlusion cycles remain, the cycle is broken by taking, among the
@@ -86,9 +95,10 @@ struct LayoutOptions {
 struct LayoutRelation {
   int parent = 0;
   int child = 0;
-  /// Median depth(child) - depth(parent) at the shared boundary, m; NaN without valid depth.
+  /// Median depth(child) - depth(parent) on the parent's own stretch of boundary, m, > 0; NaN
+  /// when their contour has no measured pixel pair (edge_size 0).
   double depth_diff = 0.0;
-  int edge_size = 0;         ///< shared boundary pixels (of the child's visible mask)
+  int edge_size = 0;         ///< pixels of the parent's own stretch (of the child's visible mask)
   std::int64_t seen_px = 0;  ///< S[parent][child]: pixels where the parent hides the child
 };
 
