@@ -12,13 +12,8 @@ ROOT = Path(__file__).resolve().parents[2]
 #: Work rounds, issue numbers and "this machine" are history, not product text.
 HISTORY = re.compile(r"session [0-9]|issue [0-9]|this machine", re.IGNORECASE)
 
-#: Files and folders (ending in "/") that other work is changing at the same time; their history
-#: references are removed when that work is merged. TEMPORARY: the integrator empties this set.
-HISTORY_ALLOWED = (
-    "python/mgn/io/scene_folder.py",
-    "python/mgn/io/validate.py",
-    "python/mgn/view_labels/",
-)
+#: Files and folders (ending in "/") allowed to name history; none.
+HISTORY_ALLOWED: tuple[str, ...] = ()
 
 
 def _allowed(rel: str) -> bool:

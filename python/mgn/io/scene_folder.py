@@ -510,8 +510,8 @@ _CHUNK_ROWS = 8192
 #: instead of by entry: suction contact rotations repeat (the points of a flat face share its
 #: normal; ~40 % of the rows of a view), which deflate finds as three 12-byte matches: 0.85x the
 #: bytes of the shuffled entry chunks in the same time (-2 MB per 37-view scene;
-#: benchmarks/RESULTS.md). Parallel-jaw rotations are all distinct: shuffled entry chunks are
-#: smaller there (0.93x).
+#: docs/decisions/0021-format-writer-encodings.md). Parallel-jaw rotations are all distinct:
+#: shuffled entry chunks are smaller there (0.93x).
 ROTATION_BLOCK_POSES: tuple[str, ...] = ("suctioncup/contact_poses_relative_to_camera",)
 #: Leaf names of ``{v}_scene.hdf5`` datasets deflated without the shuffle filter: per-grasp values
 #: taken from a few levels or repeated along the rows (scores, the widths of the grasps sharing a
@@ -670,7 +670,7 @@ def hdf5_bytes(
 
 #: libdeflate level of the deflate streams of the scene writer's images (PNG, HDF5 chunks): on a
 #: 1200 x 1200 view of 20 objects it costs less than zlib's level 1 did, for 0.88x the bytes of
-#: ``depth_ideal`` and 0.86x the RGB PNG's (benchmarks/RESULTS.md, "Dataset files").
+#: ``depth_ideal`` and 0.86x the RGB PNG's (docs/decisions/0020-format-libdeflate.md).
 DEFLATE_LEVEL = 6
 #: libdeflate level of the images of ``{v}_mgn.hdf5`` (``depth_ideal``'s gradient residual) in
 #: the default mode: level 6 (the archival mode's) gives 0.99x the bytes in 1.2x the time.
