@@ -679,3 +679,12 @@ def test_table_top_without_walls(tmp_path):
     assert len(seen[seen > 0]) >= 2
     with pytest.raises(InvalidArgumentError, match="walls"):
         ToteSpec(walls=False, mesh="bin.obj")
+
+
+def test_both_command_lines_exit_1_on_a_bad_value(tmp_path):
+    """A bad option value is an error (exit 1) in mgn and in mgn-cli alike, naming the option."""
+    cube = cube_obj(tmp_path)
+    for cmd in ([sys.executable, "-m", "mgn", "info", str(cube), "--density", "-1"],
+                [mgn_cli(), "info", str(cube), "--density", "-1"]):  # fmt: skip
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert r.returncode == 1 and "density" in r.stderr, (cmd[0], r.returncode, r.stderr)

@@ -1,6 +1,7 @@
 // mgn-cli: the standalone command-line tool of mgn for industrial integration.
 // Uses only the public headers. Output is JSON on stdout; errors are one line on stderr with a
-// non-zero exit code (2 = bad usage, 1 = the operation failed).
+// non-zero exit code, as `mgn`'s: 2 = no or an unknown command, 1 = any error (a bad option or
+// value, an unreadable file, a failed operation).
 #include <mgn/mgn.hpp>
 
 #include <cmath>
@@ -139,9 +140,6 @@ int main(int argc, char** argv) {
     if (cmd == "pj") return mgn_cli::cmd_pj(rest);
     if (cmd == "seal") return mgn_cli::cmd_seal(rest);
     std::cerr << "mgn-cli: unknown command '" << cmd << "' (see mgn-cli --help)\n";
-    return 2;
-  } catch (const mgn::InvalidArgument& e) {
-    std::cerr << "mgn-cli: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "mgn-cli: error: " << e.what() << "\n";
