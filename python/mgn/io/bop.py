@@ -139,7 +139,9 @@ def ply_text(mesh: Mesh, *, texture_file: str | None = None) -> str:
     if has_uv:
         lines += ["property float texture_u", "property float texture_v"]
     lines += [f"element face {len(f)}", "property list uchar int vertex_indices", "end_header"]
-    cols = [v, nrm] + ([np.asarray(uvs, np.float64)] if has_uv else [])
+    cols = [v, nrm]
+    if has_uv:
+        cols.append(np.asarray(uvs, np.float32).astype(str).astype(np.float64))
     data = np.hstack(cols)
     body = [" ".join(f"{x:.10g}" for x in row) for row in data]
     body += [f"3 {a} {b} {c}" for a, b, c in f]
@@ -410,29 +412,29 @@ def _image(path: Path) -> tuple[str, tuple[int, int]] | None:
         return None
 
 
-def _check_models(root: Path, problems: list[Problem]) -> set[int]:
+def _check_models(root: Path, problems: list[Problem]) -> dict[int, float]:
     models = root / "models"
     if not models.is_dir():
         problems.append(Problem("models", "missing folder"))
-        return set()
+        return {}
     info = _load_json(models / "models_info.json", root, problems)
     plys = {int(m.group(1)) for p in models.iterdir() if (m := _MODEL_RE.match(p.name))}
-    ids: set[int] = set()
+    ids: dict[int, float] = {}
     if isinstance(info, dict):
         for key, entry in info.items():
             where = f"models/models_info.json [{key}]"
             if not key.isdigit():
                 problems.append(Problem(where, "key must be an integer obj_id"))
                 continue
-            ids.add(int(key))
             if not isinstance(entry, dict) or not all(_is_num(entry.get(k)) for k in _INFO_KEYS):
                 problems.append(Problem(where, f"needs numbers {', '.join(_INFO_KEYS)} (mm)"))
                 continue
+            ids[int(key)] = float(entry["diameter"])
             if entry["diameter"] <= 0 or min(entry[k] for k in _INFO_KEYS[4:]) < 0:
                 problems.append(Problem(where, "diameter must be > 0 and sizes >= 0 (mm)"))
             elif entry["diameter"] > 10000:
                 problems.append(Problem(where, f"diameter {entry['diameter']} mm: not in mm?"))
-        for obj_id in sorted(ids - plys):
+        for obj_id in sorted(set(ids) - plys):
             problems.append(Problem(f"models/obj_{obj_id:06d}.ply", "missing"))
     elif info is not None:
         problems.append(Problem("models/models_info.json", "must be an object by obj_id"))
@@ -456,114 +458,179 @@ def _check_camera(root: Path, problems: list[Problem]) -> None:
         problems.append(Problem("camera.json", "width, height must be integers, depth_scale > 0"))
 
 
-def _check_scene_dir(folder: Path, root: Path, obj_ids: set[int], problems: list[Problem]) -> None:
+Bad = Callable[[str, str], None]
+
+
+def _check_camera_entry(key: str, cam: Any, bad: Bad) -> bool:
+    """One ``scene_camera.json`` entry; False if it cannot be used further."""
+    if not isinstance(cam, dict) or not _num_list(cam.get("cam_K"), 9):
+        bad("scene_camera.json", f"[{key}] cam_K must be 9 numbers (3 x 3, row-wise)")
+        return False
+    if not _is_num(cam.get("depth_scale")) or cam["depth_scale"] <= 0:
+        bad("scene_camera.json", f"[{key}] depth_scale must be a number > 0 (mm per unit)")
+        return False
+    if "cam_R_w2c" in cam or "cam_t_w2c" in cam:
+        if not (_num_list(cam.get("cam_R_w2c"), 9) and _num_list(cam.get("cam_t_w2c"), 3)):
+            bad("scene_camera.json", f"[{key}] cam_R_w2c / cam_t_w2c: 9 and 3 numbers")
+        elif not _is_rotation(cam["cam_R_w2c"]):
+            bad("scene_camera.json", f"[{key}] cam_R_w2c is not a rotation")
+    return True
+
+
+def _is_rotation(values: list[float]) -> bool:
+    R = np.reshape(np.asarray(values, np.float64), (3, 3))
+    return bool(np.abs(R @ R.T - np.eye(3)).max() <= 1e-3 and np.linalg.det(R) > 0)
+
+
+def _check_gt_entry(where: str, e: Any, diameters: dict[int, float], bad: Bad) -> bool:
+    """One annotation of ``scene_gt.json``; False if it cannot be used further."""
+    if not isinstance(e, dict) or not (
+        _num_list(e.get("cam_R_m2c"), 9)
+        and _num_list(e.get("cam_t_m2c"), 3)
+        and _is_int(e.get("obj_id"))
+    ):
+        bad("scene_gt.json", f"{where} needs cam_R_m2c (9), cam_t_m2c (3, mm), obj_id")
+        return False
+    if not _is_rotation(e["cam_R_m2c"]):
+        bad("scene_gt.json", f"{where} cam_R_m2c is not a rotation")
+    if diameters and e["obj_id"] not in diameters:
+        bad("scene_gt.json", f"{where} obj_id {e['obj_id']} has no model")
+    if not 0 < e["cam_t_m2c"][2] < 100000:
+        bad("scene_gt.json", f"{where} cam_t_m2c z {e['cam_t_m2c'][2]}: not mm in front?")
+    return True
+
+
+def _check_info_entry(where: str, i: Any, bad: Bad) -> bool:
+    """One annotation of ``scene_gt_info.json``; False if it cannot be used further."""
+    if not isinstance(i, dict) or not all(k in i for k in _GT_INFO_KEYS):
+        bad("scene_gt_info.json", f"{where} needs {', '.join(_GT_INFO_KEYS)}")
+        return False
+    ints = ("px_count_all", "px_count_valid", "px_count_visib")
+    if not all(_is_int(i[k]) and i[k] >= 0 for k in ints) or not all(
+        isinstance(i[k], list) and len(i[k]) == 4 and all(_is_int(x) for x in i[k])
+        for k in ("bbox_obj", "bbox_visib")
+    ):
+        bad("scene_gt_info.json", f"{where} needs integer counts >= 0 and 4-integer boxes")
+        return False
+    if not _is_num(i["visib_fract"]) or not 0 <= i["visib_fract"] <= 1:
+        bad("scene_gt_info.json", f"{where} visib_fract must be in [0, 1]")
+    return True
+
+
+def _check_masks(
+    folder: Path, name: str, i: dict[str, Any], size: tuple[int, int], bad: Bad
+) -> dict[str, np.ndarray]:
+    """The annotation's ``mask`` and ``mask_visib`` (those readable, as bool arrays)."""
+    masks: dict[str, np.ndarray] = {}
+    for sub, count in (("mask", "px_count_all"), ("mask_visib", "px_count_visib")):
+        p = folder / sub / name
+        try:
+            with Image.open(p) as mim:
+                a = np.asarray(mim)
+        except FileNotFoundError:
+            bad(f"{sub}/{name}", "missing")
+            continue
+        except OSError as err:
+            bad(f"{sub}/{name}", f"not a readable PNG: {err}")
+            continue
+        if a.ndim != 2 or a.dtype != np.uint8 or a.shape[::-1] != size:
+            bad(f"{sub}/{name}", f"must be 8-bit grey {size[0]} x {size[1]}")
+            continue
+        masks[sub] = a > 0
+        px = int(masks[sub].sum())
+        if px != i[count]:
+            bad(f"{sub}/{name}", f"{px} px, but scene_gt_info has {count} {i[count]}")
+    if len(masks) == 2 and (masks["mask_visib"] & ~masks["mask"]).any():
+        bad(f"mask_visib/{name}", "visible pixels outside the amodal mask")
+    return masks
+
+
+def _check_units(where: str, tz: float, seen_mm: np.ndarray, diameter: float, bad: Bad) -> None:
+    """The depth seen on the object (mm) lies within its diameter of its pose's z (mm)."""
+    seen = seen_mm[seen_mm > 0]
+    if len(seen) > 0 and abs(float(np.median(seen)) - tz) > diameter:
+        bad(
+            "scene_gt.json",
+            f"{where} cam_t_m2c z {tz:.1f} mm but the depth image (x depth_scale) sees the "
+            f"object at {float(np.median(seen)):.1f} mm: are both in mm?",
+        )
+
+
+def _read_depth_mm(folder: Path, im: int, scale: float, size: tuple[int, int], bad: Bad) -> Any:
+    """The depth image in mm, None if it is missing or not 16-bit grey of ``size``."""
+    path = folder / "depth" / f"{im:06d}.png"
+    d = _image(path)
+    if d is None:
+        bad(f"depth/{im:06d}.png", "missing or not a PNG")
+        return None
+    if d[0] not in ("I;16", "I;16B", "I") or d[1] != size:
+        bad(f"depth/{im:06d}.png", f"must be 16-bit grey {size[0]} x {size[1]}, is {d}")
+        return None
+    with Image.open(path) as dim:
+        return np.asarray(dim, np.float64) * scale
+
+
+def _check_image(
+    folder: Path, key: str, docs: tuple[Any, Any, Any], diameters: dict[int, float], bad: Bad
+) -> None:
+    """One image id of a scene folder: its camera, images, annotations and masks."""
+    cam, gt, info = docs
+    im = int(key)
+    if not _check_camera_entry(key, cam, bad):
+        return
+    shape = _image(folder / "rgb" / f"{im:06d}.png")
+    if shape is None or shape[0] not in ("RGB", "L"):
+        bad(f"rgb/{im:06d}.png", "missing or not an 8-bit RGB or grey PNG")
+        return
+    size = shape[1]
+    depth_mm = _read_depth_mm(folder, im, float(cam["depth_scale"]), size, bad)
+    if not isinstance(gt, list) or not isinstance(info, list) or len(gt) != len(info):
+        bad("scene_gt.json", f"[{key}] scene_gt and scene_gt_info must be lists of one length")
+        return
+    for g, (e, i) in enumerate(zip(gt, info, strict=True)):
+        where = f"[{key}][{g}]"
+        gt_ok = _check_gt_entry(where, e, diameters, bad)
+        if not _check_info_entry(where, i, bad):
+            continue
+        masks = _check_masks(folder, f"{im:06d}_{g:06d}.png", i, size, bad)
+        diameter = diameters.get(e["obj_id"]) if gt_ok else None
+        if depth_mm is not None and "mask_visib" in masks and diameter is not None:
+            _check_units(where, e["cam_t_m2c"][2], depth_mm[masks["mask_visib"]], diameter, bad)
+
+
+def _check_scene_dir(
+    folder: Path, root: Path, diameters: dict[int, float], problems: list[Problem]
+) -> None:
     rel = folder.relative_to(root).as_posix()
 
     def bad(path: str, msg: str) -> None:
         problems.append(Problem(f"{rel}/{path}", msg))
 
-    cams = _load_json(folder / "scene_camera.json", root, problems)
-    gts = _load_json(folder / "scene_gt.json", root, problems)
-    infos = _load_json(folder / "scene_gt_info.json", root, problems)
-    if not (isinstance(cams, dict) and isinstance(gts, dict) and isinstance(infos, dict)):
-        if any(isinstance(x, (list, str, int, float)) for x in (cams, gts, infos)):
+    docs = [
+        _load_json(folder / f"{name}.json", root, problems)
+        for name in ("scene_camera", "scene_gt", "scene_gt_info")
+    ]
+    if not all(isinstance(d, dict) for d in docs):
+        if not any(d is None for d in docs):
             bad(".", "scene_camera / scene_gt / scene_gt_info must be objects by image id")
         return
-    rgbs = {int(m.group(1)) for p in (folder / "rgb").glob("*.png") if (m := _IMAGE_RE.match(p.name))}
+    cams, gts, infos = docs
     if set(cams) != set(gts) or set(gts) != set(infos):
         bad("scene_gt.json", "scene_camera, scene_gt and scene_gt_info name different images")
     for key in sorted(cams, key=lambda s: int(s) if s.isdigit() else -1):
         if not key.isdigit():
             bad("scene_camera.json", f"key {key!r} is not an integer image id")
             continue
-        im = int(key)
-        cam = cams[key]
-        if not isinstance(cam, dict) or not _num_list(cam.get("cam_K"), 9):
-            bad("scene_camera.json", f"[{key}] cam_K must be 9 numbers (3 x 3, row-wise)")
-            continue
-        if not _is_num(cam.get("depth_scale")) or cam["depth_scale"] <= 0:
-            bad("scene_camera.json", f"[{key}] depth_scale must be a number > 0 (mm per unit)")
-            continue
-        if "cam_R_w2c" in cam or "cam_t_w2c" in cam:
-            if not (_num_list(cam.get("cam_R_w2c"), 9) and _num_list(cam.get("cam_t_w2c"), 3)):
-                bad("scene_camera.json", f"[{key}] cam_R_w2c / cam_t_w2c: 9 and 3 numbers")
-            elif abs(np.linalg.det(np.reshape(cam["cam_R_w2c"], (3, 3))) - 1) > 1e-3:
-                bad("scene_camera.json", f"[{key}] cam_R_w2c is not a rotation")
-        if im not in rgbs:
-            bad(f"rgb/{im:06d}.png", "missing")
-            continue
-        shape = _image(folder / "rgb" / f"{im:06d}.png")
-        if shape is None or shape[0] not in ("RGB", "L"):
-            bad(f"rgb/{im:06d}.png", "not an 8-bit RGB or grey PNG")
-            continue
-        size = shape[1]
-        d = _image(folder / "depth" / f"{im:06d}.png")
-        if d is None:
-            bad(f"depth/{im:06d}.png", "missing or not a PNG")
-        elif d[0] not in ("I;16", "I;16B", "I") or d[1] != size:
-            bad(f"depth/{im:06d}.png", f"must be 16-bit grey {size[0]} x {size[1]}, is {d}")
-        gt = gts.get(key)
-        info = infos.get(key)
-        if not isinstance(gt, list) or not isinstance(info, list) or len(gt) != len(info):
-            bad("scene_gt.json", f"[{key}] scene_gt and scene_gt_info must be lists of one length")
-            continue
-        for g, (e, i) in enumerate(zip(gt, info, strict=True)):
-            where = f"[{key}][{g}]"
-            if not isinstance(e, dict) or not (
-                _num_list(e.get("cam_R_m2c"), 9)
-                and _num_list(e.get("cam_t_m2c"), 3)
-                and _is_int(e.get("obj_id"))
-            ):
-                bad("scene_gt.json", f"{where} needs cam_R_m2c (9), cam_t_m2c (3, mm), obj_id")
-            else:
-                R = np.reshape(e["cam_R_m2c"], (3, 3))
-                if np.abs(R @ R.T - np.eye(3)).max() > 1e-3 or np.linalg.det(R) < 0:
-                    bad("scene_gt.json", f"{where} cam_R_m2c is not a rotation")
-                if obj_ids and e["obj_id"] not in obj_ids:
-                    bad("scene_gt.json", f"{where} obj_id {e['obj_id']} has no model")
-                if not 0 < e["cam_t_m2c"][2] < 100000:
-                    bad("scene_gt.json", f"{where} cam_t_m2c z {e['cam_t_m2c'][2]}: not mm?")
-            if not isinstance(i, dict) or not all(k in i for k in _GT_INFO_KEYS):
-                bad("scene_gt_info.json", f"{where} needs {', '.join(_GT_INFO_KEYS)}")
-                continue
-            ints = ("px_count_all", "px_count_valid", "px_count_visib")
-            if not all(_is_int(i[k]) and i[k] >= 0 for k in ints) or not all(
-                isinstance(i[k], list) and len(i[k]) == 4 and all(_is_int(x) for x in i[k])
-                for k in ("bbox_obj", "bbox_visib")
-            ):
-                bad("scene_gt_info.json", f"{where} integer counts >= 0 and 4-integer boxes")
-                continue
-            if not _is_num(i["visib_fract"]) or not 0 <= i["visib_fract"] <= 1:
-                bad("scene_gt_info.json", f"{where} visib_fract must be in [0, 1]")
-            masks = {}
-            for sub, count in (("mask", "px_count_all"), ("mask_visib", "px_count_visib")):
-                p = folder / sub / f"{im:06d}_{g:06d}.png"
-                try:
-                    with Image.open(p) as mim:
-                        a = np.asarray(mim)
-                except FileNotFoundError:
-                    bad(f"{sub}/{p.name}", "missing")
-                    continue
-                except OSError as err:
-                    bad(f"{sub}/{p.name}", f"not a readable PNG: {err}")
-                    continue
-                if a.ndim != 2 or a.dtype != np.uint8 or a.shape[::-1] != size:
-                    bad(f"{sub}/{p.name}", f"must be 8-bit grey {size[0]} x {size[1]}")
-                    continue
-                masks[sub] = a > 0
-                if int(masks[sub].sum()) != i[count]:
-                    bad(f"{sub}/{p.name}", f"{int(masks[sub].sum())} px, scene_gt_info {count} "
-                        f"{i[count]}")  # fmt: skip
-            if len(masks) == 2 and (masks["mask_visib"] & ~masks["mask"]).any():
-                bad(f"mask_visib/{im:06d}_{g:06d}.png", "visible pixels outside the amodal mask")
-    extra = sorted(rgbs - {int(k) for k in cams if k.isdigit()})
+        _check_image(folder, key, (cams[key], gts.get(key), infos.get(key)), diameters, bad)
+    images = {m.group(1) for p in (folder / "rgb").glob("*.png") if (m := _IMAGE_RE.match(p.name))}
+    extra = sorted(int(k) for k in images if str(int(k)) not in cams)
     if extra:
         bad("rgb", f"images {extra} have no scene_camera.json entry")
 
 
-def validate_bop(root: str | os.PathLike[str], *, splits: Sequence[str] | None = None) -> list[
-    Problem
-]:
+def validate_bop(
+    root: str | os.PathLike[str], *, splits: Sequence[str] | None = None
+) -> list[Problem]:
     """Every problem found in the BOP folder ``root`` (an empty list: valid): ``camera.json``;
     ``models/models_info.json`` (diameter and box per obj_id, mm) with a PLY per model; in every
     scene folder ``<split>/<6 digits>/`` the keys, types and units of ``scene_camera.json``,
@@ -576,7 +643,7 @@ def validate_bop(root: str | os.PathLike[str], *, splits: Sequence[str] | None =
         raise IoError(f"validate_bop: '{base}' is not a folder")
     problems: list[Problem] = []
     _check_camera(base, problems)
-    obj_ids = _check_models(base, problems)
+    diameters = _check_models(base, problems)
     if splits is None:
         names = [
             p.name
@@ -593,5 +660,5 @@ def validate_bop(root: str | os.PathLike[str], *, splits: Sequence[str] | None =
             problems.append(Problem(name, "missing split folder"))
             continue
         for scene in sorted(p for p in folder.iterdir() if _SCENE_DIR_RE.match(p.name)):
-            _check_scene_dir(scene, base, obj_ids, problems)
+            _check_scene_dir(scene, base, diameters, problems)
     return problems
