@@ -412,20 +412,21 @@ def _image(path: Path) -> tuple[str, tuple[int, int]] | None:
         return None
 
 
-def _check_models(root: Path, problems: list[Problem]) -> dict[int, float]:
+def _check_models(root: Path, problems: list[Problem]) -> dict[int, float | None]:
     models = root / "models"
     if not models.is_dir():
         problems.append(Problem("models", "missing folder"))
         return {}
     info = _load_json(models / "models_info.json", root, problems)
     plys = {int(m.group(1)) for p in models.iterdir() if (m := _MODEL_RE.match(p.name))}
-    ids: dict[int, float] = {}
+    ids: dict[int, float | None] = {}
     if isinstance(info, dict):
         for key, entry in info.items():
             where = f"models/models_info.json [{key}]"
             if not key.isdigit():
                 problems.append(Problem(where, "key must be an integer obj_id"))
                 continue
+            ids[int(key)] = None
             if not isinstance(entry, dict) or not all(_is_num(entry.get(k)) for k in _INFO_KEYS):
                 problems.append(Problem(where, f"needs numbers {', '.join(_INFO_KEYS)} (mm)"))
                 continue
@@ -482,7 +483,7 @@ def _is_rotation(values: list[float]) -> bool:
     return bool(np.abs(R @ R.T - np.eye(3)).max() <= 1e-3 and np.linalg.det(R) > 0)
 
 
-def _check_gt_entry(where: str, e: Any, diameters: dict[int, float], bad: Bad) -> bool:
+def _check_gt_entry(where: str, e: Any, diameters: dict[int, float | None], bad: Bad) -> bool:
     """One annotation of ``scene_gt.json``; False if it cannot be used further."""
     if not isinstance(e, dict) or not (
         _num_list(e.get("cam_R_m2c"), 9)
@@ -571,7 +572,7 @@ def _read_depth_mm(folder: Path, im: int, scale: float, size: tuple[int, int], b
 
 
 def _check_image(
-    folder: Path, key: str, docs: tuple[Any, Any, Any], diameters: dict[int, float], bad: Bad
+    folder: Path, key: str, docs: tuple[Any, Any, Any], diameters: dict[int, float | None], bad: Bad
 ) -> None:
     """One image id of a scene folder: its camera, images, annotations and masks."""
     cam, gt, info = docs
@@ -599,7 +600,7 @@ def _check_image(
 
 
 def _check_scene_dir(
-    folder: Path, root: Path, diameters: dict[int, float], problems: list[Problem]
+    folder: Path, root: Path, diameters: dict[int, float | None], problems: list[Problem]
 ) -> None:
     rel = folder.relative_to(root).as_posix()
 
