@@ -301,3 +301,19 @@ def test_cli_and_bad_inputs(small_dataset: Path, tmp_path: Path) -> None:
         export_bop(small_dataset, tmp_path / "d", scenes=[7])
     with pytest.raises(IoError, match="is not a folder"):
         validate_bop(tmp_path / "nowhere")
+
+
+def test_diameter_from_the_hull_candidates_is_the_brute_force_one() -> None:
+    from mgn.geometry.convex import convex_hull
+
+    rng = np.random.default_rng(3)
+    pts = rng.normal(size=(3000, 3)) * (0.05, 0.03, 0.02)  # m, an ellipsoidal cloud
+    faces = np.arange(3000, dtype=np.int32).reshape(-1, 3)
+    mesh = Mesh(pts, faces)
+    v = bop.vertices_mm(mesh)
+    cand = bop.hull_candidates(v, convex_hull(mesh))
+    assert 4 <= len(cand) < len(v) // 10
+    d = np.sqrt(((v[:, None, :] - v[None, :, :]) ** 2).sum(-1)).max()
+    info = bop.model_info(v, diameter_points=cand)
+    assert info["diameter"] == pytest.approx(d, abs=1e-9)
+    assert info["size_x"] == pytest.approx(v[:, 0].max() - v[:, 0].min())
