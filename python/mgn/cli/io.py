@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from mgn.io.bop import validate_bop
 from mgn.io.coco import export_coco
 from mgn.io.validate import validate_dataset
 from mgn.viz.overlay import show
@@ -15,7 +16,7 @@ __all__ = ["register"]
 
 def _cmd_validate(args: argparse.Namespace) -> int:
 
-    problems = validate_dataset(args.dir)
+    problems = validate_bop(args.dir) if args.format == "bop" else validate_dataset(args.dir)
     for p in problems[: args.max_problems]:
         print(p)
     if len(problems) > args.max_problems:
@@ -55,6 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``validate`` and ``coco`` to the ``mgn`` subcommands."""
     p = sub.add_parser("validate", help="check every file of a dataset against docs/format.md")
     p.add_argument("dir", help="dataset folder")
+    p.add_argument("--format", choices=("mgn", "bop"), default="mgn",
+                   help="mgn: an mgn dataset; bop: a BOP folder (mgn export bop)")  # fmt: skip
     p.add_argument("--max-problems", type=int, default=50, help="problems printed (default 50)")
     p.set_defaults(func=_cmd_validate)
 

@@ -536,6 +536,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_demo)
     __import__("mgn.cli.render", fromlist=["register"]).register(sub)
     __import__("mgn.cli.io", fromlist=["register"]).register(sub)
+    __import__("mgn.cli.export", fromlist=["register"]).register(sub)  # mgn export bop
     __import__("mgn.cli.pipeline", fromlist=["register"]).register(sub)  # generate, config
     __import__("mgn.cli.eval", fromlist=["register"]).register(sub)  # eval detections|grasps|...
     __import__("mgn.cli.pick", fromlist=["register"]).register(sub)  # mgn pick
