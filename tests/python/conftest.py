@@ -75,11 +75,17 @@ def check_difficulty(layout: dict) -> int:
 # A small labelled dataset shared by the evaluation tests: 2 scenes x 3 views at 120 x 120 px,
 # object labels (suction and parallel-jaw grasps) with tiny sizes.
 SMALL_DATASET_CONFIG = {
-    "objects": {"categories": ["box_tea", "can_soda", "box_cereal"], "copies": [1, 2]},
+    # The first drop of each scene (no refill): the scenes the evaluation tests were written for.
+    "objects": {
+        "categories": ["box_tea", "can_soda", "box_cereal"],
+        "copies": [1, 2],
+        "refill": False,
+    },  # fmt: skip
     "camera": {"views": [0, 5, 17], "resolution_scale": 0.1},
     "object_labels": {
         "suction_points": 60,
         "pj_points": 60,
+        "pj_grasps": None,  # every grasp found (~500-3,000 per object at 60 points)
         "physics_grasps": 3,
         "physics_grid": 2,
     },

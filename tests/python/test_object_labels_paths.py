@@ -54,7 +54,8 @@ def test_shared_samples_give_the_labels_of_separate_label_object_calls():
     props = mass_properties(mesh, spec.density)
     kw = dict(mass=props.mass, com=props.center_of_mass, num_points=300, seed=7, num_threads=1)
     suction = suction_label_object(mesh, cup=config.cup, model="spring", **kw)
-    pj = pj_label_object(mesh, gripper=config.gripper, **kw)
+    pj = pj_label_object(mesh, gripper=config.gripper, max_grasps=config.object_labels.pj_grasps,
+                         **kw)  # fmt: skip
     assert len(suction.score) > 50 and len(pj.width) > 100
     _assert_same(shared.suction, suction)
     _assert_same(shared.paralleljaw, pj)

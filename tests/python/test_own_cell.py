@@ -552,12 +552,14 @@ def test_cache_list_and_clear(tmp_path, monkeypatch, capsys):
 
 
 def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
-    """The README's Python block, run as is in a folder with a part.stl (mm) and a dataset DS."""
+    """The Python blocks of the README and of docs/usage.md, run as they are in a folder with a
+    part.stl (mm) and a dataset DS."""
     import re
 
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    blocks = re.findall(r"```python\n(.*?)```", readme, re.S)
-    assert blocks, "README has a Python block"
+    root = Path(__file__).resolve().parents[2]
+    blocks = [re.findall(r"```python\n(.*?)```", (root / page).read_text(), re.S)
+              for page in ("README.md", "docs/usage.md")]  # fmt: skip
+    assert all(blocks), "README and docs/usage.md each have a Python block"
     monkeypatch.chdir(tmp_path)
     cube_obj(tmp_path, "part.obj", scale=1000.0)
     import trimesh
@@ -572,8 +574,11 @@ def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
     )
     assert main(["generate", "--out", "DS", "--scenes", "1", "--config", str(cfg), "--quiet",
                  "--no-cache"]) == 0  # fmt: skip
+    readme: dict = {}
+    exec(compile(blocks[0][0], "README.md", "exec"), readme)  # noqa: S102
+    assert readme["rgb"].ndim == 3 and readme["depth"].ndim == 2
     namespace: dict = {}
-    exec(compile(blocks[0], "README.md", "exec"), namespace)  # noqa: S102
+    exec(compile(blocks[1][0], "docs/usage.md", "exec"), namespace)  # noqa: S102
     assert namespace["props"].mass == pytest.approx(2700 * 0.04**3, rel=1e-4)
     hits = namespace["hits"]  # straight down onto the top face of the 40 mm cube
     assert hits.distance[0] == pytest.approx(0.98) and hits.instance_ids[0] == 1

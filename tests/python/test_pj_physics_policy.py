@@ -72,6 +72,7 @@ class FakePhysics:
 
     def __call__(self, parts, mass, com, inertia, rows, gripper, options):
         first = options.first_grasp_index
+        before = self.trials
         self.calls.append((first, len(rows), options.staircase))
         success = np.empty((len(rows), S, S), bool)
         for k in range(len(rows)):
@@ -83,7 +84,8 @@ class FakePhysics:
                 success[k], self.trials = r.success, self.trials + r.trials
             else:
                 success[k], self.trials = grid, self.trials + S * S
-        return SimpleNamespace(score=success.sum(axis=(1, 2)) / (S * S), trial_success=success)
+        return SimpleNamespace(score=success.sum(axis=(1, 2)) / (S * S), trial_success=success,
+                               num_trials=self.trials - before)  # fmt: skip
 
 
 def verdict(c: physics.StaircaseCalibration | None) -> tuple[int, int, bool] | None:

@@ -110,6 +110,36 @@ def _check_arguments(mass: float, num_points: int, max_grasps: int | None) -> No
         )
 
 
+def _scored(labels: PjLabels, physics: PhysicsScorer, mesh: Mesh) -> PjLabels:
+    """``labels`` with the physics scores of ``physics`` and their metadata."""
+    sim = np.asarray(physics(mesh, labels), np.float32).reshape(-1)
+    if sim.shape != (len(labels),):
+        raise InvalidArgumentError(
+            f"label_object: the physics scorer returned {sim.shape[0]} scores for "
+            f"{len(labels)} grasps"
+        )
+    scorer = getattr(physics, "__name__", type(physics).__name__)
+    scored = int(np.count_nonzero(np.isfinite(sim)))
+    estimator = getattr(physics, "last_calibration", None)
+    labels = replace(
+        labels,
+        quality_score_simulation=sim,
+        metadata=labels.metadata
+        | {
+            "pj_physics": f"run ({scorer})",
+            "pj_physics_scored": scored,
+            "pj_physics_unscored": len(sim) - scored,
+        },
+    )
+    # HDF5 attributes hold no None: the keys are written only where the scorer has them.
+    if estimator is not None:
+        labels.metadata["pj_physics_estimator"] = estimator.to_json()
+    trials = getattr(physics, "last_trials", None)
+    if trials is not None:
+        labels.metadata["pj_physics_trials"] = int(trials)
+    return labels
+
+
 def label_object(
     mesh: Mesh,
     *,
@@ -144,8 +174,8 @@ def label_object(
             The metadata then records ``pj_physics_scored`` / ``pj_physics_unscored``: how
             many grasps got a score and how many kept NaN (a capped scorer), and
             ``pj_physics_estimator``: how the scores were computed and their error bound (the
-            scorer's ``last_calibration.to_json()``, e.g. :class:`mgn.pj.ShakeScorer`'s; None
-            when it has none).
+            scorer's ``last_calibration.to_json()``, e.g. :class:`mgn.pj.ShakeScorer`'s; absent
+            when it has none) and ``pj_physics_trials`` (its ``last_trials``).
         friction, grip_force, contact_radius: wrench-score constants (see pj_wrench_scores).
         sampler_options: extra keyword arguments of :meth:`AntipodalSampler.sample`
             (probes, tilt, offset, friction_coef, approaches_tried, approaches_kept, ...).
@@ -156,7 +186,8 @@ def label_object(
         max_grasps: grasps stored, >= 1: when the sampler finds more, an evenly strided subset
             of at most this many is kept (the sampler lists the grasps point by point, and the
             points cover the surface evenly, so the subset does too); None keeps them all. The
-            metadata records ``pj_num_found`` (grasps the sampler found) and ``pj_max_grasps``.
+            metadata records ``pj_num_found`` (grasps the sampler found) and, when given,
+            ``pj_max_grasps``.
 
     Raises:
         InvalidArgumentError: non-positive mass or num_points, a mesh with no closed volume, an
@@ -255,7 +286,6 @@ def label_object(
         "pj_num_accepted_probes": int(sum(p.num_accepted_probes for p in parts)),
         "pj_num_colliding": int(sum(p.num_colliding for p in parts)),
         "pj_num_found": int(found),
-        "pj_max_grasps": None if max_grasps is None else int(max_grasps),
         "pj_wrench": {
             "model": "soft finger, elliptic limit surface, gravity -z of the object frame",
             "friction": friction,
@@ -265,6 +295,8 @@ def label_object(
         "pj_physics": "not run (quality_score_simulation is NaN)",
         "mgn_version": _core.__version__,
     }
+    if max_grasps is not None:
+        metadata["pj_max_grasps"] = int(max_grasps)
     labels = PjLabels(
         approach=approach,
         closing=closing.astype(np.float32),
@@ -280,25 +312,5 @@ def label_object(
         metadata=metadata,
     )
     if physics is not None:
-        sim = np.asarray(physics(mesh, labels), np.float32).reshape(-1)
-        if sim.shape != (len(labels),):
-            raise InvalidArgumentError(
-                f"label_object: the physics scorer returned {sim.shape[0]} scores for "
-                f"{len(labels)} grasps"
-            )
-        scorer = getattr(physics, "__name__", type(physics).__name__)
-        scored = int(np.count_nonzero(np.isfinite(sim)))
-        estimator = getattr(physics, "last_calibration", None)
-        labels = replace(
-            labels,
-            quality_score_simulation=sim,
-            metadata=labels.metadata
-            | {
-                "pj_physics": f"run ({scorer})",
-                "pj_physics_scored": scored,
-                "pj_physics_unscored": len(sim) - scored,
-                "pj_physics_estimator": None if estimator is None else estimator.to_json(),
-                "pj_physics_trials": getattr(physics, "last_trials", None),
-            },
-        )
+        labels = _scored(labels, physics, mesh)
     return labels
