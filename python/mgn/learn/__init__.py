@@ -2,7 +2,7 @@
 
 - class-agnostic instance segmentation of the visible objects (amodal masks as an option) and a
   per-pixel suction quality map, from RGB, the depth sensor's depth, or both
-  (:mod:`mgn.learn.train`, ``mgn train``);
+  (:mod:`mgn.learn.training`, ``mgn train``);
 - prediction on any photographs (:mod:`mgn.learn.predict`, ``mgn predict``);
 - evaluation on real photographs with labels (:mod:`mgn.learn.real_eval`, ``mgn eval real``).
 
@@ -16,7 +16,7 @@ from mgn.learn.backend import require_torch
 from mgn.learn.config import ModelConfig, TrainConfig
 from mgn.learn.instances import InstanceMaps, instances_from_maps
 from mgn.learn.predict import Prediction, Predictor, predict_files
-from mgn.learn.train import TrainResult, train
+from mgn.learn.training import TrainResult, train
 
 __all__ = [
     "InstanceMaps",

@@ -52,11 +52,17 @@ class ModelConfig:
 
     def __post_init__(self) -> None:
         if self.modality not in MODALITIES:
-            raise InvalidArgumentError(f"modality must be one of {MODALITIES}, got {self.modality!r}")
+            raise InvalidArgumentError(
+                f"modality must be one of {MODALITIES}, got {self.modality!r}"
+            )
         if self.backbone not in BACKBONES:
-            raise InvalidArgumentError(f"backbone must be one of {BACKBONES}, got {self.backbone!r}")
+            raise InvalidArgumentError(
+                f"backbone must be one of {BACKBONES}, got {self.backbone!r}"
+            )
         if not 16 <= int(self.image_size) <= 4096:
-            raise InvalidArgumentError(f"image_size must be in [16, 4096] px, got {self.image_size}")
+            raise InvalidArgumentError(
+                f"image_size must be in [16, 4096] px, got {self.image_size}"
+            )
         if int(self.width) < 4:
             raise InvalidArgumentError(f"width must be >= 4 channels, got {self.width}")
         if not 0 < float(self.suction_radius_m) <= 0.5:
@@ -71,7 +77,7 @@ class ModelConfig:
     @property
     def outputs(self) -> list[str]:
         """Names of the output channels, in order."""
-        return ["foreground", "boundary", "suction"] + (["hidden"] if self.amodal else [])
+        return ["foreground", "core", "suction"] + (["hidden"] if self.amodal else [])
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -91,7 +97,6 @@ class TrainConfig:
         lr: Adam learning rate (default 2e-3), cosine-decayed to 5 % over the run.
         seed: weights, view order and flips (default 0).
         augment: random horizontal and vertical flips (default True).
-        boundary_weight: weight of the boundary pixels in the boundary loss (default 5).
     """
 
     epochs: int = 30
@@ -99,7 +104,6 @@ class TrainConfig:
     lr: float = 2e-3
     seed: int = 0
     augment: bool = True
-    boundary_weight: float = 5.0
 
     def __post_init__(self) -> None:
         if int(self.epochs) < 1:
@@ -108,8 +112,6 @@ class TrainConfig:
             raise InvalidArgumentError(f"batch_size must be >= 1, got {self.batch_size}")
         if not float(self.lr) > 0:
             raise InvalidArgumentError(f"lr must be > 0, got {self.lr}")
-        if not float(self.boundary_weight) > 0:
-            raise InvalidArgumentError(f"boundary_weight must be > 0, got {self.boundary_weight}")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

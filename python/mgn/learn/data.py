@@ -20,7 +20,7 @@ from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.dataset import Dataset, View
 from mgn.learn.config import ModelConfig
 from mgn.learn.targets import (
-    boundary_target,
+    core_target,
     hidden_target,
     network_input,
     network_shape,
@@ -63,10 +63,10 @@ def training_views(
 
 
 def view_targets(view: View, config: ModelConfig) -> dict[str, np.ndarray]:
-    """The targets of one view at its own resolution: ``foreground``, ``boundary``, ``hidden``
-    (amodal models) as bool, ``suction`` and ``suction_weight`` as float32."""
+    """The targets of one view at its own resolution: ``foreground`` and ``hidden`` (amodal
+    models) as bool, ``core``, ``suction`` and ``suction_weight`` as float32."""
     ids = view.instances
-    out: dict[str, np.ndarray] = {"foreground": ids > 0, "boundary": boundary_target(ids)}
+    out: dict[str, np.ndarray] = {"foreground": ids > 0, "core": core_target(ids)}
     if config.amodal:
         out["hidden"] = hidden_target(ids, view.amodal)
     grasps = view.grasps("suction")
@@ -76,8 +76,9 @@ def view_targets(view: View, config: ModelConfig) -> dict[str, np.ndarray]:
         contacts = grasps["contact_poses_relative_to_camera"][:, :3, 3]
         scores = np.nan_to_num(grasps[config.suction_score], nan=0.0)
         ids_of = grasps["object_id"].astype(np.int64) + 1  # object_id = instance id - 1
-        q, w = suction_target(contacts, scores, ids_of, ids, view.intrinsics,
-                              radius_m=config.suction_radius_m)  # fmt: skip
+        q, w = suction_target(
+            contacts, scores, ids_of, ids, view.intrinsics, radius_m=config.suction_radius_m
+        )
     else:
         q = np.zeros(ids.shape, np.float32)
         w = (ids == 0).astype(np.float32)

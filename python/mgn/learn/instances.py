@@ -3,9 +3,11 @@
 :func:`instances_from_maps` turns per-pixel probabilities into instances:
 
 1. *seeds*: the connected parts (4-neighbourhood) of ``foreground > threshold`` and
-   ``boundary <= threshold``; parts under ``min_area`` px are dropped;
-2. *growth*: every foreground pixel joins the seed nearest to it (Euclidean distance), so the
-   boundary band is given back to the objects on both sides;
+   ``core > core_threshold`` (the objects' inner parts, :mod:`mgn.learn.targets`); parts under
+   ``min_area`` px are dropped;
+2. *growth*: every foreground pixel joins the seed nearest to it (Euclidean distance) within
+   its connected foreground part, so the pixels between the seeds go back to the objects on
+   both sides; foreground parts without a seed (specks under ``min_area``) stay background;
 3. *score* of an instance: the mean foreground probability over its pixels;
 4. *amodal* masks (when a hidden map is given): each connected part (8-neighbourhood) of
    ``hidden > threshold`` is the hidden part of one object: of the instances it touches
@@ -86,30 +88,57 @@ def _hidden_owners(
     return amodal
 
 
+def _grow(seeds: np.ndarray, fgm: np.ndarray, ndimage) -> npt.NDArray[np.int32]:  # noqa: ANN001
+    """Seed labels grown over the foreground: each pixel takes its nearest seed when that seed
+    lies in the pixel's connected foreground part; the rest of a part that has seeds is filled by
+    4-neighbour growth from the labelled pixels; parts without a seed stay background."""
+    parts, _ = ndimage.label(fgm)
+    _, (iy, ix) = ndimage.distance_transform_edt(seeds == 0, return_indices=True)
+    labels = np.where(fgm & (parts == parts[iy, ix]), seeds[iy, ix], 0).astype(np.int32)
+    seeded = np.zeros(parts.max() + 1, bool)
+    seeded[parts[seeds > 0]] = True
+    todo = fgm & (labels == 0) & seeded[parts]
+    while todo.any():
+        grown = labels.copy()
+        for axis, shift in ((0, 1), (0, -1), (1, 1), (1, -1)):
+            nb = np.roll(labels, shift, axis=axis)
+            edge = [slice(None), slice(None)]
+            edge[axis] = slice(0, 1) if shift == 1 else slice(-1, None)
+            nb[tuple(edge)] = 0
+            grown = np.where(todo & (grown == 0), nb, grown)
+        if np.array_equal(grown, labels):
+            break
+        labels = grown
+        todo = fgm & (labels == 0) & seeded[parts]
+    return labels
+
+
 def instances_from_maps(
     foreground: np.ndarray,
-    boundary: np.ndarray,
+    core: np.ndarray,
     *,
     hidden: np.ndarray | None = None,
     threshold: float = 0.5,
+    core_threshold: float = 0.5,
     min_area: int = 8,
 ) -> InstanceMaps:
     """Instances of probability maps (H, W) in [0, 1] (module docstring)."""
     fg = np.asarray(foreground, np.float32)
-    bd = np.asarray(boundary, np.float32)
+    bd = np.asarray(core, np.float32)
     if fg.ndim != 2 or fg.shape != bd.shape or (hidden is not None and hidden.shape != fg.shape):
         raise InvalidArgumentError(
-            f"foreground {fg.shape}, boundary {bd.shape}"
+            f"foreground {fg.shape}, core {bd.shape}"
             + ("" if hidden is None else f", hidden {hidden.shape}")
             + ": expected equal (H, W) maps"
         )
-    if not 0.0 < threshold < 1.0:
-        raise InvalidArgumentError(f"threshold must be in (0, 1), got {threshold}")
+    for name, t in (("threshold", threshold), ("core_threshold", core_threshold)):
+        if not 0.0 < t < 1.0:
+            raise InvalidArgumentError(f"{name} must be in (0, 1), got {t}")
     if min_area < 1:
         raise InvalidArgumentError(f"min_area must be >= 1 px, got {min_area}")
     ndimage = _ndimage()
     fgm = fg > threshold
-    seeds, count = ndimage.label(fgm & (bd <= threshold))
+    seeds, count = ndimage.label(fgm & (bd > core_threshold))
     areas = np.bincount(seeds.ravel(), minlength=count + 1)
     keep = np.flatnonzero(areas >= min_area)
     keep = keep[keep > 0]
@@ -121,8 +150,7 @@ def instances_from_maps(
         empty = np.zeros(fg.shape, np.int32)
         am = None if hidden is None else np.zeros((0, *fg.shape), bool)
         return InstanceMaps(empty, np.zeros(0, np.float32), am)
-    _, (iy, ix) = ndimage.distance_transform_edt(seeds == 0, return_indices=True)
-    labels = np.where(fgm, seeds[iy, ix], 0).astype(np.int32)
+    labels = _grow(seeds, fgm, ndimage)
     sums = np.bincount(labels.ravel(), weights=fg.ravel(), minlength=n + 1)[1:]
     counts = np.bincount(labels.ravel(), minlength=n + 1)[1:]
     scores = (sums / np.maximum(counts, 1)).astype(np.float32)

@@ -33,30 +33,37 @@ from mgn.learn.targets import input_channels
 __all__ = ["build_model", "count_parameters", "load_backbone_weights"]
 
 
+def _block(cin: int, cout: int) -> Any:
+    """Two 3 x 3 convolutions, each with GroupNorm and ReLU."""
+    nn = require_torch().nn
+    return nn.Sequential(
+        nn.Conv2d(cin, cout, 3, padding=1, bias=False),
+        nn.GroupNorm(math.gcd(cout, 8), cout),
+        nn.ReLU(inplace=True),
+        nn.Conv2d(cout, cout, 3, padding=1, bias=False),
+        nn.GroupNorm(math.gcd(cout, 8), cout),
+        nn.ReLU(inplace=True),
+    )
+
+
+def _padded(x: Any, stride: int) -> tuple[Any, int, int]:
+    """``x`` replicate-padded at the bottom and right to multiples of ``stride``, and its
+    original height and width."""
+    h, w = x.shape[-2:]
+    ph, pw = (-h) % stride, (-w) % stride
+    if ph or pw:
+        x = require_torch().nn.functional.pad(x, (0, pw, 0, ph), mode="replicate")
+    return x, h, w
+
+
 @functools.cache
-def _classes() -> dict[str, Any]:
+def _small_unet() -> Any:
     torch = require_torch()
     nn = torch.nn
     F = torch.nn.functional  # noqa: N806 (the usual name)
+    block, padded = _block, _padded
 
-    def block(cin: int, cout: int) -> Any:
-        return nn.Sequential(
-            nn.Conv2d(cin, cout, 3, padding=1, bias=False),
-            nn.GroupNorm(math.gcd(cout, 8), cout),
-            nn.ReLU(inplace=True),
-            nn.Conv2d(cout, cout, 3, padding=1, bias=False),
-            nn.GroupNorm(math.gcd(cout, 8), cout),
-            nn.ReLU(inplace=True),
-        )
-
-    def padded(x: Any, stride: int) -> tuple[Any, int, int]:
-        h, w = x.shape[-2:]
-        ph, pw = (-h) % stride, (-w) % stride
-        if ph or pw:
-            x = F.pad(x, (0, pw, 0, ph), mode="replicate")
-        return x, h, w
-
-    class SmallUNet(nn.Module):  # type: ignore[name-defined,misc]
+    class SmallUNet(nn.Module):  # type: ignore[name-defined]
         stride = 8
 
         def __init__(self, cin: int, cout: int, width: int) -> None:
@@ -65,8 +72,9 @@ def _classes() -> dict[str, Any]:
             self.enc = nn.ModuleList(
                 [block(cin, w[0]), block(w[0], w[1]), block(w[1], w[2]), block(w[2], w[3])]
             )
-            self.up = nn.ModuleList([nn.ConvTranspose2d(w[k + 1], w[k], 2, stride=2)
-                                     for k in (2, 1, 0)])  # fmt: skip
+            self.up = nn.ModuleList(
+                [nn.ConvTranspose2d(w[k + 1], w[k], 2, stride=2) for k in (2, 1, 0)]
+            )
             self.dec = nn.ModuleList([block(2 * w[k], w[k]) for k in (2, 1, 0)])
             self.head = nn.Conv2d(w[0], cout, 1)
 
@@ -83,7 +91,17 @@ def _classes() -> dict[str, Any]:
                 x = dec(torch.cat([up(x), skips.pop()], 1))
             return self.head(x)[..., :h, :w]
 
-    class BasicBlock(nn.Module):  # type: ignore[name-defined,misc]
+    return SmallUNet
+
+
+@functools.cache
+def _resnet18_unet() -> Any:
+    torch = require_torch()
+    nn = torch.nn
+    F = torch.nn.functional  # noqa: N806 (the usual name)
+    block, padded = _block, _padded
+
+    class BasicBlock(nn.Module):  # type: ignore[name-defined]
         def __init__(self, cin: int, cout: int, stride: int) -> None:
             super().__init__()
             self.conv1 = nn.Conv2d(cin, cout, 3, stride, 1, bias=False)
@@ -101,7 +119,7 @@ def _classes() -> dict[str, Any]:
             y = self.bn2(self.conv2(y))
             return F.relu(y + (x if self.downsample is None else self.downsample(x)))
 
-    class ResNet18Encoder(nn.Module):  # type: ignore[name-defined,misc]
+    class ResNet18Encoder(nn.Module):  # type: ignore[name-defined]
         def __init__(self, cin: int) -> None:
             super().__init__()
             self.conv1 = nn.Conv2d(cin, 64, 7, 2, 3, bias=False)
@@ -119,7 +137,7 @@ def _classes() -> dict[str, Any]:
                 feats.append(x)
             return feats  # 64 @ /2, 64 @ /4, 128 @ /8, 256 @ /16, 512 @ /32
 
-    class ResNet18UNet(nn.Module):  # type: ignore[name-defined,misc]
+    class ResNet18UNet(nn.Module):  # type: ignore[name-defined]
         stride = 32
 
         def __init__(self, cin: int, cout: int) -> None:
@@ -141,17 +159,16 @@ def _classes() -> dict[str, Any]:
             y = self.dec_full(self.up_full(y))
             return self.head(y)[..., :h, :w]
 
-    return {"small": SmallUNet, "resnet18": ResNet18UNet}
+    return ResNet18UNet
 
 
 def build_model(config: ModelConfig) -> Any:
     """A freshly initialised network for ``config`` (a ``torch.nn.Module``; the caller seeds
     torch first for reproducible weights)."""
-    classes = _classes()
     cin, cout = input_channels(config.modality), len(config.outputs)
     if config.backbone == "small":
-        return classes["small"](cin, cout, int(config.width))
-    return classes["resnet18"](cin, cout)
+        return _small_unet()(cin, cout, int(config.width))
+    return _resnet18_unet()(cin, cout)
 
 
 def count_parameters(model: Any) -> int:
@@ -180,8 +197,10 @@ def load_backbone_weights(model: Any, path: str | os.PathLike[str]) -> int:
     if isinstance(state, dict) and "state_dict" in state:
         state = state["state_dict"]
     if not isinstance(state, dict) or "conv1.weight" not in state:
-        raise IoError(f"backbone weights '{p}': expected a ResNet-18 state dict with "
-                      "'conv1.weight', 'layer1.0.conv1.weight', ...")  # fmt: skip
+        raise IoError(
+            f"backbone weights '{p}': expected a ResNet-18 state dict with "
+            "'conv1.weight', 'layer1.0.conv1.weight', ..."
+        )
     own = encoder.state_dict()
     w = state["conv1.weight"]
     cin = own["conv1.weight"].shape[1]

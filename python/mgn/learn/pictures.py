@@ -42,8 +42,13 @@ def mask_panel(rgb: np.ndarray, masks: np.ndarray, alpha: float = 0.5) -> npt.ND
 
 def _heat(q: np.ndarray) -> npt.NDArray[np.float32]:
     q = np.clip(np.nan_to_num(q.astype(np.float32)), 0.0, 1.0)[..., None]
-    return np.concatenate([np.clip(2 * q, 0, 1), np.clip(2 * q - 1, 0, 1) * 0.9 + 0.1 * q,
-                           np.zeros_like(q)], axis=-1) * 255  # fmt: skip
+    return (
+        np.concatenate(
+            [np.clip(2 * q, 0, 1), np.clip(2 * q - 1, 0, 1) * 0.9 + 0.1 * q, np.zeros_like(q)],
+            axis=-1,
+        )
+        * 255
+    )
 
 
 def overlay(rgb: np.ndarray | None, prediction: Any) -> npt.NDArray[np.uint8]:
@@ -61,6 +66,9 @@ def overlay(rgb: np.ndarray | None, prediction: Any) -> npt.NDArray[np.uint8]:
     for k, (u, v, _) in enumerate(prediction.suction_points(10)):
         rr = r * (1.6 if k == 0 else 1.0)
         for dx in (0, w):
-            draw.ellipse([u + dx - rr, v - rr, u + dx + rr, v + rr], outline=(255, 255, 255),
-                         width=max(1, round(r / 3)))  # fmt: skip
+            draw.ellipse(
+                [u + dx - rr, v - rr, u + dx + rr, v + rr],
+                outline=(255, 255, 255),
+                width=max(1, round(r / 3)),
+            )
     return np.asarray(im)

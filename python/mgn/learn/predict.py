@@ -88,8 +88,10 @@ def read_depth(path: str | os.PathLike[str]) -> npt.NDArray[np.float32]:
             with Image.open(p) as im:
                 raw = np.asarray(im)
             if raw.ndim != 2 or raw.dtype != np.uint16:
-                raise IoError(f"'{p}': a depth PNG must be 16-bit single-channel (mm), got "
-                              f"{raw.dtype} {raw.shape}")  # fmt: skip
+                raise IoError(
+                    f"'{p}': a depth PNG must be 16-bit single-channel (mm), got "
+                    f"{raw.dtype} {raw.shape}"
+                )
             d = raw.astype(np.float32) / np.float32(1000.0)
         else:
             raise IoError(f"'{p}': depth must be .npy (m), .npz 'depth' (cm) or 16-bit .png (mm)")
@@ -209,18 +211,23 @@ class Predictor:
                 raise InvalidArgumentError(f"{name}: the model's input is depth; give a depth file")
         else:
             rgb_in = rgb
-        probs, (h, w) = self.maps(rgb_in, depth if self.config.modality != "rgb" else None,
-                                  name=name)  # fmt: skip
+        probs, (h, w) = self.maps(
+            rgb_in, depth if self.config.modality != "rgb" else None, name=name
+        )
         if self.config.modality == "depth" and rgb is None:
             h, w = np.asarray(depth).shape[:2]
         hidden = probs[3] if self.config.amodal else None
-        small = instances_from_maps(probs[0], probs[1], hidden=hidden, threshold=threshold,
-                                    min_area=min_area)  # fmt: skip
+        small = instances_from_maps(
+            probs[0], probs[1], hidden=hidden, threshold=threshold, min_area=min_area
+        )
         labels = resize_nearest(small.labels, (h, w))
         amodal = None
         if small.amodal is not None:
-            amodal = np.stack([resize_nearest(m, (h, w)) for m in small.amodal]) if len(
-                small.amodal) else np.zeros((0, h, w), bool)  # fmt: skip
+            amodal = (
+                np.stack([resize_nearest(m, (h, w)) for m in small.amodal])
+                if len(small.amodal)
+                else np.zeros((0, h, w), bool)
+            )
         inst = InstanceMaps(labels.astype(np.int32), small.scores, amodal)
         return Prediction(inst, _resize_float(probs[0], (h, w)), _resize_float(probs[2], (h, w)))
 
@@ -238,16 +245,34 @@ def prediction_record(pred: Prediction, image: str, k: int = 10) -> dict[str, An
     amodal = inst.masks(amodal=True) if inst.amodal is not None else None
     for i, mask in enumerate(inst.masks()):
         ys, xs = np.nonzero(mask)
-        box = [int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1),
-               int(ys.max() - ys.min() + 1)] if len(xs) else [0, 0, 0, 0]  # fmt: skip
-        row: dict[str, Any] = {"id": i + 1, "score": round(float(inst.scores[i]), 6),
-                               "bbox": box, "area": int(mask.sum()), "segmentation": _rle(mask)}  # fmt: skip
+        box = (
+            [
+                int(xs.min()),
+                int(ys.min()),
+                int(xs.max() - xs.min() + 1),
+                int(ys.max() - ys.min() + 1),
+            ]
+            if len(xs)
+            else [0, 0, 0, 0]
+        )
+        row: dict[str, Any] = {
+            "id": i + 1,
+            "score": round(float(inst.scores[i]), 6),
+            "bbox": box,
+            "area": int(mask.sum()),
+            "segmentation": _rle(mask),
+        }
         if amodal is not None:
             row["amodal_segmentation"] = _rle(amodal[i])
         rows.append(row)
     peaks = pred.suction_points(k)
-    return {"image": image, "width": w, "height": h, "instances": rows,
-            "suction_points": [[round(float(a), 3) for a in p] for p in peaks]}  # fmt: skip
+    return {
+        "image": image,
+        "width": w,
+        "height": h,
+        "instances": rows,
+        "suction_points": [[round(float(a), 3) for a in p] for p in peaks],
+    }
 
 
 def _png(a: np.ndarray) -> bytes:
@@ -284,11 +309,16 @@ def predict_files(
         raise InvalidArgumentError(
             f"mgn predict: {len(depths)} depth file(s) for {len(images)} image(s); give one each"
         )
-    pred_model = model if isinstance(model, Predictor) else Predictor(
-        model, device=device, num_threads=num_threads)  # fmt: skip
+    pred_model = (
+        model
+        if isinstance(model, Predictor)
+        else Predictor(model, device=device, num_threads=num_threads)
+    )
     if pred_model.config.modality != "rgb" and depths is None:
-        raise InvalidArgumentError(f"mgn predict: the model's input is {pred_model.config.modality}"
-                                   "; give --depth with one depth file per image")  # fmt: skip
+        raise InvalidArgumentError(
+            f"mgn predict: the model's input is {pred_model.config.modality}"
+            "; give --depth with one depth file per image"
+        )
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     stems: set[str] = set()
@@ -296,10 +326,13 @@ def predict_files(
     for k, image in enumerate(tqdm(images, desc="predict", unit="img", disable=not progress)):
         p = Path(image)
         rgb = read_image(p)
-        depth = read_depth(depths[k]) if depths is not None else None
+        depth_file = depths[k] if depths is not None else None
+        depth = read_depth(depth_file) if depth_file is not None else None
         if depth is not None and depth.shape != rgb.shape[:2]:
-            raise InvalidArgumentError(f"'{depths[k]}' is {depth.shape[1]} x {depth.shape[0]} px, "
-                                       f"'{p}' {rgb.shape[1]} x {rgb.shape[0]} px; they must match")  # fmt: skip
+            raise InvalidArgumentError(
+                f"'{depth_file}' is {depth.shape[1]} x {depth.shape[0]} px, "
+                f"'{p}' {rgb.shape[1]} x {rgb.shape[0]} px; they must match"
+            )
         stem = p.stem
         while stem in stems:
             stem = f"{stem}_{k}"
@@ -307,8 +340,11 @@ def predict_files(
         pred = pred_model.predict(rgb, depth, name=str(p), threshold=threshold)
         write_prediction(pred, rgb, out_dir, stem)
         records.append(prediction_record(pred, str(p), num_suction_points) | {"stem": stem})
-    doc = {"model": os.fspath(pred_model.path), "model_config": pred_model.config.to_dict(),
-           "images": records}  # fmt: skip
+    doc = {
+        "model": os.fspath(pred_model.path),
+        "model_config": pred_model.config.to_dict(),
+        "images": records,
+    }
     path = out_dir / "predictions.json"
     atomic_write_text(path, json.dumps(doc, indent=1) + "\n")
     return path

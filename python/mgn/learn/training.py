@@ -1,10 +1,10 @@
 """``mgn train``: train a baseline on the views of an mgn dataset.
 
-One network (:mod:`mgn.learn.model`) learns, per pixel, the foreground, the boundary between
-touching objects, the suction quality and, for amodal models, the hidden parts of objects
-(:mod:`mgn.learn.targets`). The loss is the sum of binary cross-entropies: foreground; boundary
-with the boundary pixels weighted by ``TrainConfig.boundary_weight``; suction weighted by the
-target's weight map (known pixels only); hidden. Adam, with the learning rate cosine-decayed
+One network (:mod:`mgn.learn.model`) learns, per pixel, the foreground, the normalised inner
+distance of the objects ("core"), the suction quality and, for amodal models, the hidden parts
+of objects (:mod:`mgn.learn.targets`). The loss is the sum of binary cross-entropies (soft
+targets for core and suction): foreground; core; suction weighted by the target's weight map
+(known pixels only); hidden. Adam, with the learning rate cosine-decayed
 from ``lr`` to 5 % of it over all steps.
 
 Reproducibility: torch is seeded with ``TrainConfig.seed`` before the weights are made and uses
@@ -52,7 +52,7 @@ class TrainResult:
     Attributes:
         out_dir: the output folder; model_path: its ``model.pt``.
         num_views: training views; parameters: trainable parameters.
-        history: per epoch {"epoch", "loss", "foreground", "boundary", "suction"[, "hidden"],
+        history: per epoch {"epoch", "loss", "foreground", "core", "suction"[, "hidden"],
             "seconds"}.
         seconds: wall time of this call, s.
         device: the torch device used.
@@ -67,20 +67,16 @@ class TrainResult:
     device: str = "cpu"
 
 
-def compute_losses(
-    logits: Any, targets: Any, weights: Any, config: ModelConfig, boundary_weight: float
-) -> dict[str, Any]:
+def compute_losses(logits: Any, targets: Any, weights: Any, config: ModelConfig) -> dict[str, Any]:
     """The loss terms (scalar tensors) of a batch: logits and targets (B, T, H, W), suction
     weights (B, H, W); ``"loss"`` is their sum."""
-    torch = require_torch()
-    bce = torch.nn.functional.binary_cross_entropy_with_logits
+    bce = require_torch().nn.functional.binary_cross_entropy_with_logits
     out = {
         "foreground": bce(logits[:, 0], targets[:, 0]),
-        "boundary": bce(logits[:, 1], targets[:, 1],
-                        pos_weight=torch.tensor(boundary_weight, device=logits.device)),
+        "core": bce(logits[:, 1], targets[:, 1]),
         "suction": (bce(logits[:, 2], targets[:, 2], reduction="none") * weights).sum()
         / weights.sum().clamp(min=1.0),
-    }  # fmt: skip
+    }
     if config.amodal:
         out["hidden"] = bce(logits[:, 3], targets[:, 3])
     out["loss"] = sum(out.values())
@@ -96,8 +92,10 @@ def _batches(n: int, tc: TrainConfig, epoch: int) -> list[tuple[np.ndarray, np.n
     rng = np.random.default_rng([tc.seed, epoch])
     order = rng.permutation(n)
     flips = rng.integers(0, 2, size=(n, 2)).astype(bool) if tc.augment else np.zeros((n, 2), bool)
-    return [(order[i : i + tc.batch_size], flips[i : i + tc.batch_size])
-            for i in range(0, n, tc.batch_size)]  # fmt: skip
+    return [
+        (order[i : i + tc.batch_size], flips[i : i + tc.batch_size])
+        for i in range(0, n, tc.batch_size)
+    ]
 
 
 def _batch_tensors(arrays: TrainingArrays, idx: np.ndarray, flips: np.ndarray, device: Any):  # noqa: ANN202
@@ -119,34 +117,53 @@ def _start(out: Path, resume: bool, mc: ModelConfig, tc: TrainConfig, names: lis
     if not ckpt_path.exists():
         return None
     if not resume:
-        raise IoError(f"'{out}' already holds a training run (checkpoint.pt): continue it with "
-                      "--resume, or train into another folder")  # fmt: skip
+        raise IoError(
+            f"'{out}' already holds a training run (checkpoint.pt): continue it with "
+            "--resume, or train into another folder"
+        )
     ckpt = read_torch_file(ckpt_path, CHECKPOINT_FORMAT)
-    if ckpt["model_config"] != mc.to_dict() or ckpt["train_config"] != tc.to_dict():
+    before = ckpt["model_config"] | ckpt["train_config"]
+    now = mc.to_dict() | tc.to_dict()
+    changed = [f"{k} {before.get(k)!r} -> {now.get(k)!r}" for k in now if before.get(k) != now[k]]
+    if changed:
         raise InvalidArgumentError(
-            f"--resume: '{ckpt_path}' was trained with model {ckpt['model_config']} and "
-            f"training {ckpt['train_config']}, not {mc.to_dict()} / {tc.to_dict()}"
+            f"--resume: '{ckpt_path}' was made with other settings ({'; '.join(changed)}); "
+            "resume with the same settings, or train into another folder"
         )
     if ckpt["views"] != names:
-        raise InvalidArgumentError(f"--resume: '{ckpt_path}' was trained on other views "
-                                   f"({len(ckpt['views'])} views, now {len(names)})")  # fmt: skip
+        raise InvalidArgumentError(
+            f"--resume: '{ckpt_path}' was trained on other views "
+            f"({len(ckpt['views'])} views, now {len(names)})"
+        )
     return ckpt
 
 
 def _model_file(model: Any, mc: ModelConfig, meta: dict[str, Any]) -> dict[str, Any]:
-    return {"format": MODEL_FORMAT, "model_config": mc.to_dict(), "training": meta,
-            "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()}}  # fmt: skip
+    return {
+        "format": MODEL_FORMAT,
+        "model_config": mc.to_dict(),
+        "training": meta,
+        "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+    }
 
 
-def _init_model(model: Any, mc: ModelConfig, init: str | os.PathLike[str] | None,
-                backbone_weights: str | os.PathLike[str] | None) -> None:  # fmt: skip
+def _init_model(
+    model: Any,
+    mc: ModelConfig,
+    init: str | os.PathLike[str] | None,
+    backbone_weights: str | os.PathLike[str] | None,
+) -> None:
     if backbone_weights is not None:
         load_backbone_weights(model, backbone_weights)
     if init is not None:
         src = read_torch_file(init, MODEL_FORMAT)
         other = ModelConfig.from_dict(src["model_config"])
         if (other.backbone, other.width, other.modality, other.amodal) != (
-            mc.backbone, mc.width, mc.modality, mc.amodal):  # fmt: skip
+            mc.backbone,
+            mc.width,
+            mc.modality,
+            mc.amodal,
+        ):
             raise InvalidArgumentError(
                 f"--init '{init}': its model ({other.backbone}, width {other.width}, "
                 f"{other.modality}, amodal {other.amodal}) differs from the one trained "
@@ -211,11 +228,22 @@ def train(
     out_dir.mkdir(parents=True, exist_ok=True)
     steps_per_epoch = math.ceil(len(arrays) / tc.batch_size)
     total = tc.epochs * steps_per_epoch
-    meta = {"dataset": os.fspath(Path(dataset.root if isinstance(dataset, Dataset) else dataset)),
-            "views": names, "train_config": tc.to_dict(), "mgn_version": __version__,
-            "torch_version": str(torch.__version__), "device": str(dev)}  # fmt: skip
-    bar = tqdm(total=total, initial=first_epoch * steps_per_epoch, desc="train", unit="step",
-               disable=not progress, dynamic_ncols=True)  # fmt: skip
+    meta: dict[str, Any] = {
+        "dataset": os.fspath(Path(dataset.root if isinstance(dataset, Dataset) else dataset)),
+        "views": names,
+        "train_config": tc.to_dict(),
+        "mgn_version": __version__,
+        "torch_version": str(torch.__version__),
+        "device": str(dev),
+    }
+    bar = tqdm(
+        total=total,
+        initial=first_epoch * steps_per_epoch,
+        desc="train",
+        unit="step",
+        disable=not progress,
+        dynamic_ncols=True,
+    )
     model.train()
     for epoch in range(first_epoch, tc.epochs):
         te = time.perf_counter()
@@ -225,7 +253,7 @@ def train(
             for group in optimizer.param_groups:
                 group["lr"] = _lr(tc, step, total)
             x, t, w = _batch_tensors(arrays, idx, flips, dev)
-            losses = compute_losses(model(x), t, w, mc, tc.boundary_weight)
+            losses = compute_losses(model(x), t, w, mc)
             optimizer.zero_grad(set_to_none=True)
             losses["loss"].backward()
             optimizer.step()
@@ -236,15 +264,30 @@ def train(
         row = {"epoch": epoch + 1, **{n: s / len(arrays) for n, s in sums.items()}}
         row["seconds"] = time.perf_counter() - te
         history.append(row)
-        write_torch_file(out_dir / "checkpoint.pt", {
-            "format": CHECKPOINT_FORMAT, "model_config": mc.to_dict(),
-            "train_config": tc.to_dict(), "views": names, "epoch": epoch + 1,
-            "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
-            "optimizer": optimizer.state_dict(), "history": history})  # fmt: skip
+        write_torch_file(
+            out_dir / "checkpoint.pt",
+            {
+                "format": CHECKPOINT_FORMAT,
+                "model_config": mc.to_dict(),
+                "train_config": tc.to_dict(),
+                "views": names,
+                "epoch": epoch + 1,
+                "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+                "optimizer": optimizer.state_dict(),
+                "history": history,
+            },
+        )
     bar.close()
     meta["history"] = history
     write_torch_file(out_dir / "model.pt", _model_file(model, mc, meta))
     log = {"model_config": mc.to_dict(), **meta, "parameters": count_parameters(model)}
     atomic_write_text(out_dir / "train_log.json", json.dumps(log, indent=1) + "\n")
-    return TrainResult(out_dir, out_dir / "model.pt", len(arrays), count_parameters(model),
-                       history, time.perf_counter() - t0, str(dev))  # fmt: skip
+    return TrainResult(
+        out_dir,
+        out_dir / "model.pt",
+        len(arrays),
+        count_parameters(model),
+        history,
+        time.perf_counter() - t0,
+        str(dev),
+    )
