@@ -21,10 +21,11 @@ from pycocotools import mask as mask_utils
 import mgn
 from mgn.cli.main import main
 from mgn.errors import InvalidArgumentError, IoError, UnsupportedError
+from mgn.io.real import read_depth
 from mgn.learn import ModelConfig, Predictor, TrainConfig, instances_from_maps, train
 from mgn.learn.backend import require_torch
 from mgn.learn.data import training_views, view_targets
-from mgn.learn.predict import read_depth, suction_peaks
+from mgn.learn.predict import suction_peaks
 from mgn.learn.targets import (
     core_target,
     hidden_target,

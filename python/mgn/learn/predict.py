@@ -14,8 +14,9 @@ image: size, instances with score, box [x, y, w, h] px, area px and COCO RLE of 
 and of the amodal mask for amodal models; the suction peaks [u, v, quality], u, v pixel
 centres).
 
-Depth files (:func:`read_depth`): ``.npy`` (float, metres), ``.npz`` with a ``depth`` array in
-centimetres (MetaGraspNet's ``{v}.npz``), or a 16-bit PNG in millimetres; 0 or NaN is no value.
+Depth files (:func:`mgn.io.real.read_depth`): ``.npy`` (float, metres), ``.npz`` with a
+``depth`` array in centimetres (MetaGraspNet's ``{v}.npz``), or a 16-bit PNG in millimetres; 0
+or NaN is no value.
 """
 
 from __future__ import annotations
@@ -35,7 +36,8 @@ from pycocotools import mask as mask_utils
 from tqdm import tqdm
 
 from mgn.base.atomic import atomic_write_bytes, atomic_write_text
-from mgn.errors import InvalidArgumentError, IoError
+from mgn.errors import InvalidArgumentError
+from mgn.io.real import IMAGE_SUFFIXES, read_depth, read_image
 from mgn.learn.backend import choose_device, require_torch
 from mgn.learn.checkpoint import MODEL_FORMAT, read_torch_file
 from mgn.learn.config import ModelConfig
@@ -53,58 +55,6 @@ __all__ = [
     "read_image",
     "suction_peaks",
 ]
-
-#: Image files ``mgn predict`` reads.
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
-
-
-def read_image(path: str | os.PathLike[str]) -> npt.NDArray[np.uint8]:
-    """(H, W, 3) uint8 RGB of a PNG or JPEG file; IoError naming the file otherwise."""
-    p = Path(path)
-    if p.suffix.lower() not in IMAGE_SUFFIXES:
-        raise IoError(f"'{p}': expected a PNG or JPEG image ({', '.join(IMAGE_SUFFIXES)})")
-    try:
-        with Image.open(p) as im:
-            return np.asarray(im.convert("RGB"))
-    except FileNotFoundError:
-        raise IoError(f"'{p}' does not exist") from None
-    except OSError as e:
-        raise IoError(f"'{p}' is not a readable image: {e}") from e
-
-
-def read_depth(path: str | os.PathLike[str]) -> npt.NDArray[np.float32]:
-    """(H, W) float32 depth in metres, NaN where there is no value (module docstring)."""
-    p = Path(path)
-    suffix = p.suffix.lower()
-    try:
-        if suffix == ".npy":
-            d = np.load(p, allow_pickle=False).astype(np.float32)
-        elif suffix == ".npz":
-            with np.load(p, allow_pickle=False) as z:
-                if "depth" not in z.files:
-                    raise IoError(f"'{p}' has no 'depth' array (it has {z.files})")
-                d = z["depth"].astype(np.float32) / np.float32(100.0)
-        elif suffix == ".png":
-            with Image.open(p) as im:
-                raw = np.asarray(im)
-            if raw.ndim != 2 or raw.dtype != np.uint16:
-                raise IoError(
-                    f"'{p}': a depth PNG must be 16-bit single-channel (mm), got "
-                    f"{raw.dtype} {raw.shape}"
-                )
-            d = raw.astype(np.float32) / np.float32(1000.0)
-        else:
-            raise IoError(f"'{p}': depth must be .npy (m), .npz 'depth' (cm) or 16-bit .png (mm)")
-    except FileNotFoundError:
-        raise IoError(f"'{p}' does not exist") from None
-    except (OSError, ValueError) as e:
-        if isinstance(e, IoError):
-            raise
-        raise IoError(f"'{p}' is not a readable depth file: {e}") from e
-    if d.ndim != 2:
-        raise IoError(f"'{p}': depth must be a 2-D array, got shape {d.shape}")
-    d[~np.isfinite(d) | (d <= 0)] = np.nan
-    return d
 
 
 def suction_peaks(
