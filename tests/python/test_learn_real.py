@@ -412,3 +412,76 @@ def test_eval_real_command(tiny_model: Path, tmp_path: Path, capsys: pytest.Capt
     (tmp_path / "empty").mkdir()
     assert main(["eval", "real", str(tmp_path / "empty"), "--model", str(tiny_model)]) == 1
     assert "no known annotation format" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# mgn transfer
+
+
+def test_transfer_table_by_hand():
+    from mgn.learn.transfer import TransferResults, _rows
+
+    scores = {
+        "base": {0: {"mask_AP50": 0.5}, 1: {"mask_AP50": 0.7}, 2: {"mask_AP50": 0.6}},
+        "new": {0: {"mask_AP50": 0.6}, 1: {"mask_AP50": 0.6}, 2: {"mask_AP50": 0.9}},
+    }
+    res = TransferResults(["base", "new"], [0, 1, 2], "mask_AP50", scores)  # type: ignore[arg-type]
+    rows = _rows(res)
+    assert rows[1]["mask_AP50 mean"] == pytest.approx(0.7)
+    assert rows[1]["mask_AP50 std"] == pytest.approx(np.sqrt((0.01 + 0.01 + 0.04) / 2))
+    assert (rows[1]["mask_AP50 min"], rows[1]["mask_AP50 max"]) == (0.6, 0.9)
+    assert rows[1]["wins"] == "2/3" and rows[0]["wins"] == "-"  # seed 1: 0.6 < 0.7
+    res.rows = rows
+    assert "| new | 0.700 ± 0.173 [0.600, 0.900] | 2/3 |" in res.table()
+
+
+def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    from conftest import SMALL_DATASET_CONFIG
+
+    root = write_mgn_real(tmp_path / "dataset_real")
+    spec = {
+        "real": str(root),
+        "scenes": 1,
+        "seeds": [0, 1],
+        "config": SMALL_DATASET_CONFIG,
+        "model": {"image_size": 32, "width": 4},
+        "train": {"epochs": 1, "batch_size": 3},
+        "variants": [
+            {"name": "given", "dataset": str(small_dataset)},
+            {"name": "wider", "dataset": str(small_dataset), "model": {"width": 8}},
+            {"name": "two-views", "config": {"camera": {"views": [0, 5]}}},
+        ],
+    }
+    (tmp_path / "spec.yaml").write_text(json.dumps(spec))  # JSON is YAML
+    out = tmp_path / "out"
+    args = [
+        "transfer",
+        str(tmp_path / "spec.yaml"),
+        "--out",
+        str(out),
+        "--quiet",
+        "--num-threads",
+        "1",
+    ]
+    assert main(args) == 0
+    table = (out / "transfer.md").read_text()
+    assert [line.split(" | ")[0] for line in table.splitlines()[2:]] == [
+        "| given",
+        "| wider",
+        "| two-views",
+    ]
+    assert "wins vs given (mask_AP50)" in table
+    doc = json.loads((out / "transfer.json").read_text())
+    res = json.loads((out / "wider" / "seed1" / "real" / "results.json").read_text())
+    assert doc["scores"]["wider"]["1"]["mask_AP50"] == res["summary"]["mask_AP50"]
+    assert mgn.Dataset(out / "two-views" / "dataset").scene(0).view_ids == [0, 5]
+    with Image.open(out / "transfer.png") as im:
+        assert im.size[0] > 400
+    stamp = (out / "given" / "seed0" / "model.pt").stat().st_mtime_ns
+    assert main(args) == 0  # finished models are kept
+    assert (out / "given" / "seed0" / "model.pt").stat().st_mtime_ns == stamp
+    capsys.readouterr()
+    spec["variants"] = [{"name": "x", "datasett": "y"}]
+    (tmp_path / "bad.yaml").write_text(json.dumps(spec))
+    assert main(["transfer", str(tmp_path / "bad.yaml"), "--out", str(out)]) == 1
+    assert "unknown key(s) ['datasett']" in capsys.readouterr().err

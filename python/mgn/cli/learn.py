@@ -1,4 +1,4 @@
-"""``mgn train`` and ``mgn predict``: the learning baselines (:mod:`mgn.learn`).
+"""``mgn train``, ``mgn predict`` and ``mgn transfer``: the learning baselines (:mod:`mgn.learn`).
 
 This module only parses the arguments; PyTorch is needed when a command runs, not to build the
 parser (``mgn --help`` works without it).
@@ -13,6 +13,7 @@ from mgn.learn.config import BACKBONES, SUCTION_SCORES, ModelConfig, TrainConfig
 from mgn.learn.predict import predict_files
 from mgn.learn.targets import MODALITIES
 from mgn.learn.training import train
+from mgn.learn.transfer import run_transfer
 
 __all__ = ["add_model_arguments", "add_train_arguments", "configs_from_args", "register"]
 
@@ -145,8 +146,23 @@ def _cmd_predict(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_transfer(args: argparse.Namespace) -> int:
+    res = run_transfer(
+        args.spec,
+        args.out,
+        real=args.real,
+        seeds=_ints(args.seeds),
+        device=args.device,
+        num_threads=args.num_threads,
+        progress=not args.quiet,
+    )
+    print(res.table())
+    print(f"wrote {args.out}/transfer.md, transfer.json, transfer.png")
+    return 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``train`` and ``predict`` to the ``mgn`` subparsers."""
+    """Add ``train``, ``predict`` and ``transfer`` to the ``mgn`` subparsers."""
     p = sub.add_parser(
         "train", help="train the segmentation + suction baseline on a dataset (needs mgn[learn])"
     )
@@ -184,3 +200,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_predict)
+
+    p = sub.add_parser(
+        "transfer",
+        help="ablation: dataset variants x training seeds, scored on one real set "
+        "(needs mgn[learn])",
+    )
+    p.add_argument("spec", help="transfer spec YAML (variants, seeds, real set; docs/learning.md)")
+    p.add_argument("--out", required=True, help="output folder (datasets, models, table, plot)")
+    p.add_argument("--real", help="labelled real set (overrides the spec's 'real')")
+    p.add_argument("--seeds", nargs="+", metavar="S", help="training seeds (overrides the spec)")
+    p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
+    p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=_cmd_transfer)
