@@ -2,9 +2,9 @@
 
 :func:`instances_from_maps` turns per-pixel probabilities into instances:
 
-1. *seeds*: the connected parts (4-neighbourhood) of ``foreground > threshold`` and
-   ``core > core_threshold`` (the objects' inner parts, :mod:`mgn.learn.targets`); parts under
-   ``min_area`` px are dropped;
+1. *seeds*: the connected parts (4-neighbourhood) of ``foreground > threshold`` (default 0.5)
+   and ``core > core_threshold`` (default 0.4; the objects' inner parts,
+   :mod:`mgn.learn.targets`); parts under ``min_area`` px are dropped;
 2. *growth*: every foreground pixel joins the seed nearest to it (Euclidean distance) within
    its connected foreground part, so the pixels between the seeds go back to the objects on
    both sides; foreground parts without a seed (specks under ``min_area``) stay background;
@@ -119,7 +119,7 @@ def instances_from_maps(
     *,
     hidden: np.ndarray | None = None,
     threshold: float = 0.5,
-    core_threshold: float = 0.5,
+    core_threshold: float = 0.4,
     min_area: int = 8,
 ) -> InstanceMaps:
     """Instances of probability maps (H, W) in [0, 1] (module docstring)."""

@@ -152,6 +152,7 @@ class Predictor:
         *,
         name: str = "image",
         threshold: float = 0.5,
+        core_threshold: float = 0.4,
         min_area: int = 8,
     ) -> Prediction:
         """Instances and suction map of one image (RGB (H, W, 3) uint8; depth (H, W) m)."""
@@ -168,7 +169,12 @@ class Predictor:
             h, w = np.asarray(depth).shape[:2]
         hidden = probs[3] if self.config.amodal else None
         small = instances_from_maps(
-            probs[0], probs[1], hidden=hidden, threshold=threshold, min_area=min_area
+            probs[0],
+            probs[1],
+            hidden=hidden,
+            threshold=threshold,
+            core_threshold=core_threshold,
+            min_area=min_area,
         )
         labels = resize_nearest(small.labels, (h, w))
         amodal = None

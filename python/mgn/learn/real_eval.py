@@ -114,7 +114,8 @@ class RealResults:
 
 
 def _safe(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "image"
+    stem = re.sub(r"\.(png|jpe?g)$", "", name, flags=re.IGNORECASE)
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", stem).strip("_") or "image"
 
 
 def _outline(mask: np.ndarray) -> np.ndarray:
