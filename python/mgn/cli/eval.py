@@ -137,6 +137,7 @@ def _cmd_real(args: argparse.Namespace) -> int:
         amodal=args.amodal,
         ks=args.k,
         threshold=args.threshold,
+        core_threshold=args.core_threshold,
         device=args.device,
         num_threads=args.num_threads,
         progress=not args.quiet,
@@ -173,7 +174,13 @@ def _register_real(eval_sub: argparse._SubParsersAction) -> None:
         metavar="K",
         help="k of suction precision@k (default 1 5 10)",
     )
-    p.add_argument("--threshold", type=float, default=0.5, help="probability threshold")
+    p.add_argument("--threshold", type=float, default=0.5, help="foreground probability threshold")
+    p.add_argument(
+        "--core-threshold",
+        type=float,
+        default=0.4,
+        help="core threshold of the instance seeds (lower: fewer, larger instances)",
+    )
     p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
     p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -136,6 +136,7 @@ def _cmd_predict(args: argparse.Namespace) -> int:
         device=args.device,
         num_threads=args.num_threads,
         threshold=args.threshold,
+        core_threshold=args.core_threshold,
         num_suction_points=args.suction_points,
         progress=not args.quiet,
     )
@@ -194,7 +195,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="FILE",
         help="one depth file per image: .npy (m), .npz 'depth' (cm), 16-bit .png (mm)",
     )
-    p.add_argument("--threshold", type=float, default=0.5, help="probability threshold")
+    p.add_argument("--threshold", type=float, default=0.5, help="foreground probability threshold")
+    p.add_argument(
+        "--core-threshold",
+        type=float,
+        default=0.4,
+        help="core threshold of the instance seeds (lower: fewer, larger instances)",
+    )
     p.add_argument("--suction-points", type=int, default=10, help="suction points per image")
     p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
     p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")

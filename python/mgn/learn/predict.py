@@ -254,6 +254,7 @@ def predict_files(
     device: str = "auto",
     num_threads: int = 0,
     threshold: float = 0.5,
+    core_threshold: float = 0.4,
     num_suction_points: int = 10,
     progress: bool = True,
 ) -> Path:
@@ -293,7 +294,9 @@ def predict_files(
         while stem in stems:
             stem = f"{stem}_{k}"
         stems.add(stem)
-        pred = pred_model.predict(rgb, depth, name=str(p), threshold=threshold)
+        pred = pred_model.predict(
+            rgb, depth, name=str(p), threshold=threshold, core_threshold=core_threshold
+        )
         write_prediction(pred, rgb, out_dir, stem)
         records.append(prediction_record(pred, str(p), num_suction_points) | {"stem": stem})
     doc = {

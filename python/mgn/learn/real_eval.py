@@ -171,6 +171,7 @@ def evaluate_real(
     amodal: bool = False,
     ks: Sequence[int] = DEFAULT_KS,
     threshold: float = 0.5,
+    core_threshold: float = 0.4,
     device: str = "auto",
     num_threads: int = 0,
     progress: bool = True,
@@ -204,7 +205,9 @@ def evaluate_real(
                 f"{img.name}: the model's input is "
                 f"{pred_model.config.modality}, but it has no depth"
             )
-        pred = pred_model.predict(img.rgb, depth, name=img.name, threshold=threshold)
+        pred = pred_model.predict(
+            img.rgb, depth, name=img.name, threshold=threshold, core_threshold=core_threshold
+        )
         gt = img.amodal if amodal and img.amodal is not None else img.masks
         gts.append(gt)
         preds.append(pred.instances.masks(amodal=amodal))
