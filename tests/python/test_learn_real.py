@@ -151,6 +151,8 @@ def test_dataset_reads_metagraspnet_real_views(tmp_path: Path):
     assert v.depth[1, 1] == pytest.approx(0.8) and np.isnan(v.depth[0, 0])
     unlabelled = ds.scene(46).view(28)
     assert unlabelled.suction_bitmap is None and unlabelled.real_amodal is None
+    with pytest.raises(IoError, match="28.npz' has no 'instances_objects'"):
+        _ = unlabelled.instances
     v418 = ds.scene(418).view(3)
     assert v418.instances.max() == 2 and v418.suction_bitmap is None
 

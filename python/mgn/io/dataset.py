@@ -286,6 +286,10 @@ class View:
                 for i in range(real.shape[0]):
                     ids[real[i, 0] & (ids == 0)] = i + 1
                 return ids
+            raise IoError(
+                f"{self}: no instance masks ('{self.path('.npz')}' has no 'instances_objects' "
+                f"and there is no '{self.path('_amodal.npz')}')"
+            )
         return self.npz["instances_objects"].astype(np.int32)
 
     @property

@@ -92,14 +92,14 @@ class TrainConfig:
     """How a model is trained.
 
     Attributes:
-        epochs: passes over the training views (default 30, >= 1).
+        epochs: passes over the training views (default 20, >= 1).
         batch_size: views per step (default 4, >= 1).
         lr: Adam learning rate (default 2e-3), cosine-decayed to 5 % over the run.
         seed: weights, view order and flips (default 0).
         augment: random horizontal and vertical flips (default True).
     """
 
-    epochs: int = 30
+    epochs: int = 20
     batch_size: int = 4
     lr: float = 2e-3
     seed: int = 0
