@@ -351,7 +351,7 @@ def test_eval_real_scores_perfect_predictions_as_perfect(
     root = write_mgn_real(tmp_path / "dataset_real")
     labels = {img.name: img for img in read_mgn_real(root)}
 
-    def perfect(self, rgb, depth=None, *, name="image", threshold=0.5, min_area=8):  # noqa: ANN001, ANN202, ARG001
+    def perfect(self, rgb, depth=None, *, name="image", **settings):  # noqa: ANN001, ANN202, ARG001
         img = labels[name]
         ids = np.zeros(img.masks.shape[1:], np.int32)
         for i, m in enumerate(img.masks):
