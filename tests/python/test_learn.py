@@ -434,6 +434,9 @@ def test_bad_input_errors(
         training_views(small_dataset, scenes=[7])
     assert main(["train", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 1
     assert "no views to train on" in capsys.readouterr().err
+    view = mgn.Dataset(small_dataset).scene(0).view(0)
+    with pytest.raises(InvalidArgumentError, match="score_simulation' is NaN"):
+        view_targets(view, ModelConfig(suction_score="score_simulation"))
     # An image and its depth of different sizes.
     Image.fromarray(np.zeros((20, 30, 3), np.uint8)).save(tmp_path / "a.png")
     np.save(tmp_path / "a_depth.npy", np.ones((20, 31), np.float32))

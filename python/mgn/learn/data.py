@@ -74,7 +74,13 @@ def view_targets(view: View, config: ModelConfig) -> dict[str, np.ndarray]:
         if config.suction_score not in grasps:
             raise IoError(f"{view}: the suction grasps have no '{config.suction_score}'")
         contacts = grasps["contact_poses_relative_to_camera"][:, :3, 3]
-        scores = np.nan_to_num(grasps[config.suction_score], nan=0.0)
+        raw = np.asarray(grasps[config.suction_score], np.float64)
+        if np.isnan(raw).all():
+            raise InvalidArgumentError(
+                f"{view}: every suction '{config.suction_score}' is NaN (not computed for this "
+                "dataset); train with another --suction-score"
+            )
+        scores = np.nan_to_num(raw, nan=0.0)
         ids_of = grasps["object_id"].astype(np.int64) + 1  # object_id = instance id - 1
         q, w = suction_target(
             contacts, scores, ids_of, ids, view.intrinsics, radius_m=config.suction_radius_m
