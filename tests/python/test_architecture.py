@@ -47,6 +47,7 @@ LAYERS: dict[str, int] = {
     "mgn.pipeline": 9,
     "mgn.calibration": 9,
     "mgn.eval": 10,
+    "mgn.learn": 10,
     "mgn.viz": 10,
     "mgn.cli": 11,
     "mgn.__main__": 12,
@@ -56,7 +57,8 @@ LAYERS: dict[str, int] = {
 # Third-party modules that may be imported inside a function: optional extras (dask, distributed,
 # scipy, trimesh, fcl are not dependencies of mgn) or heavy and used by one command only.
 LAZY_IMPORTS: frozenset[str] = frozenset(
-    {"dask", "distributed", "scipy", "trimesh", "fcl", "pyoidn"}  # pyoidn: optional denoiser
+    # pyoidn: optional denoiser; torch: the learning extra mgn[learn]
+    {"dask", "distributed", "scipy", "trimesh", "fcl", "pyoidn", "torch"}
 )
 
 

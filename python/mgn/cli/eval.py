@@ -1,7 +1,8 @@
 """``mgn eval ...``: score predictions against a dataset's labels.
 
 The ``eval`` command group: ``detections`` (:mod:`mgn.eval.detections`), ``layout``
-(:mod:`mgn.eval.layout_metrics`) and ``grasps`` (:mod:`mgn.eval.grasps`). The evaluation itself
+(:mod:`mgn.eval.layout_metrics`), ``grasps`` (:mod:`mgn.eval.grasps`) and ``real`` (a trained
+model on labelled photographs, :mod:`mgn.learn.real_eval`). The evaluation itself
 lives in :mod:`mgn.eval`; this module only parses the arguments and prints or writes the results.
 """
 
@@ -23,6 +24,9 @@ from mgn.eval.grasps import (
 from mgn.eval.layout_metrics import evaluate_layout
 from mgn.eval.results import print_and_write
 from mgn.hardware import grasp_kind_arg
+from mgn.io.real import REAL_FORMATS
+from mgn.learn.real_eval import DEFAULT_KS as REAL_KS
+from mgn.learn.real_eval import evaluate_real
 
 __all__ = ["register"]
 
@@ -36,6 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     _register_detections(eval_sub)
     _register_layout(eval_sub)
     _register_grasps(eval_sub)
+    _register_real(eval_sub)
 
 
 def _cmd_detections(args: argparse.Namespace) -> int:
@@ -121,3 +126,62 @@ def _register_grasps(eval_sub: argparse._SubParsersAction) -> None:
     p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
                    help="C++ threads (0 = all cores)")  # fmt: skip
     p.set_defaults(func=_cmd_grasps)
+
+
+def _cmd_real(args: argparse.Namespace) -> int:
+    res = evaluate_real(
+        args.model,
+        args.real,
+        args.out,
+        fmt=args.format,
+        amodal=args.amodal,
+        ks=args.k,
+        threshold=args.threshold,
+        core_threshold=args.core_threshold,
+        device=args.device,
+        num_threads=args.num_threads,
+        progress=not args.quiet,
+    )
+    print(res.table())
+    if args.out:
+        print(f"wrote {args.out}/results.json, report.html, overlays/")
+    return 0
+
+
+def _register_real(eval_sub: argparse._SubParsersAction) -> None:
+    """Add ``real`` to the ``mgn eval`` actions."""
+    p = eval_sub.add_parser(
+        "real",
+        help="a trained model (mgn train) on labelled real photographs: mask AP, foreground "
+        "IoU, suction precision@k, report (needs mgn[learn])",
+    )
+    p.add_argument(
+        "real",
+        help="MetaGraspNet real layout (dataset_real/ or one scene folder) or a COCO folder "
+        "(images + one instances JSON, or the JSON)",
+    )
+    p.add_argument("--model", required=True, help="model.pt of mgn train")
+    p.add_argument("--out", help="write results.json, report.html and overlays/ here")
+    p.add_argument(
+        "--format", choices=("auto", *REAL_FORMATS), default="auto", help="layout of REAL"
+    )
+    p.add_argument("--amodal", action="store_true", help="score amodal masks (amodal model)")
+    p.add_argument(
+        "--k",
+        type=int,
+        nargs="+",
+        default=list(REAL_KS),
+        metavar="K",
+        help="k of suction precision@k (default 1 5 10)",
+    )
+    p.add_argument("--threshold", type=float, default=0.5, help="foreground probability threshold")
+    p.add_argument(
+        "--core-threshold",
+        type=float,
+        default=0.4,
+        help="core threshold of the instance seeds (lower: fewer, larger instances)",
+    )
+    p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
+    p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_real)

@@ -540,6 +540,7 @@ def build_parser() -> argparse.ArgumentParser:
     __import__("mgn.cli.pipeline", fromlist=["register"]).register(sub)  # generate, config
     __import__("mgn.cli.eval", fromlist=["register"]).register(sub)  # eval detections|grasps|...
     __import__("mgn.cli.pick", fromlist=["register"]).register(sub)  # mgn pick
+    __import__("mgn.cli.learn", fromlist=["register"]).register(sub)  # train, predict
     _use_formatter(parser)
     return parser
 

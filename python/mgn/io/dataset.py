@@ -1,4 +1,6 @@
-"""Read a dataset back: ``mgn.Dataset(DIR)`` (lazy; SI units; also original MetaGraspNet folders).
+"""Read a dataset back: ``mgn.Dataset(DIR)`` (lazy; SI units; also original MetaGraspNet folders,
+synthetic and real: the real scenes' ``{v}_amodal.npz`` and ``{v}_grasps.npz`` are read by
+:attr:`View.real_amodal`, :attr:`View.suction_bitmap` and :attr:`View.parallel_jaw_2d`).
 
 Layout (docs/format.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` object folders and
 ``DIR/scene<N>/`` scene folders with the files of :mod:`mgn.io.scene_folder`. Nothing is read
@@ -259,9 +261,35 @@ class View:
         c = self.mgn_image("com_heatmap")
         return None if c is None else c.astype(np.float32)
 
+    def _npz_has(self, key: str) -> bool:
+        """Whether ``{v}.npz`` exists and holds ``key`` (reads only the file's index)."""
+        p = self.path(".npz")
+        if "npz" in self.__dict__:
+            return key in self.__dict__["npz"]
+        if not p.exists():
+            return False
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                return key in z.files
+        except _NPZ_ERRORS as e:
+            raise IoError(f"'{p}' is not a readable npz: {e}") from e
+
     @property
     def instances(self) -> npt.NDArray[np.int32]:
-        """(H, W) contiguous instance ids, 0 background."""
+        """(H, W) contiguous instance ids, 0 background. MetaGraspNet's real scenes: from
+        ``{v}.npz`` when it holds ``instances_objects``, else from the visible masks of
+        ``{v}_amodal.npz`` (instance i + 1 where ``[i, 0]`` is set)."""
+        if not self._npz_has("instances_objects"):
+            real = self.real_amodal
+            if real is not None:
+                ids = np.zeros(real.shape[2:], np.int32)
+                for i in range(real.shape[0]):
+                    ids[real[i, 0] & (ids == 0)] = i + 1
+                return ids
+            raise IoError(
+                f"{self}: no instance masks ('{self.path('.npz')}' has no 'instances_objects' "
+                f"and there is no '{self.path('_amodal.npz')}')"
+            )
         return self.npz["instances_objects"].astype(np.int32)
 
     @property
@@ -276,13 +304,68 @@ class View:
 
     @property
     def amodal(self) -> npt.NDArray[np.bool_]:
-        """(N, H, W) amodal masks (row i = instance i + 1)."""
+        """(N, H, W) amodal masks (row i = instance i + 1). MetaGraspNet's real scenes: the
+        visible and hidden parts of ``{v}_amodal.npz`` together."""
+        if not self._npz_has("occlusion_objects"):
+            real = self.real_amodal
+            if real is not None:
+                return real[:, 0] | real[:, 1]
         return self.npz["occlusion_objects"].astype(bool)
 
     @property
     def num_instances(self) -> int:
         """N, the number of instances of the view's scene."""
+        if not self._npz_has("occlusion_objects") and self.real_amodal is not None:
+            return int(self.real_amodal.shape[0])
         return int(self.npz["occlusion_objects"].shape[0])
+
+    def _extra_npz(self, suffix: str) -> dict[str, np.ndarray]:
+        p = self.path(suffix)
+        if not p.exists():
+            return {}
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                return {k: z[k] for k in z.files}
+        except _NPZ_ERRORS as e:
+            raise IoError(f"'{p}' is not a readable npz: {e}") from e
+
+    @cached_property
+    def real_amodal(self) -> npt.NDArray[np.bool_] | None:
+        """(N, 2, H, W) bool ``amodal_bitmaps_full_size_instances`` of ``{v}_amodal.npz``
+        (MetaGraspNet's real scenes, the annotated view: ``[:, 0]`` the visible part of each
+        object, ``[:, 1]`` its hidden part); None when the view has no such file."""
+        arrays = self._extra_npz("_amodal.npz")
+        if not arrays:
+            return None
+        key = "amodal_bitmaps_full_size_instances"
+        if key not in arrays:
+            raise IoError(f"'{self.path('_amodal.npz')}' has no '{key}' (it has {sorted(arrays)})")
+        a = np.asarray(arrays[key])
+        if a.ndim != 4 or a.shape[1] != 2:
+            raise IoError(
+                f"'{self.path('_amodal.npz')}': '{key}' must be (N, 2, H, W), got {a.shape}"
+            )
+        return a.astype(bool)
+
+    @cached_property
+    def real_grasps(self) -> dict[str, np.ndarray]:
+        """The arrays of ``{v}_grasps.npz`` (MetaGraspNet's real scenes: ``suction_bitmap``
+        and ``parallel_jaw_2d``); empty when the view has no such file."""
+        return self._extra_npz("_grasps.npz")
+
+    @property
+    def suction_bitmap(self) -> npt.NDArray[np.float32] | None:
+        """(H, W) float32 hand-labelled suction map of a real view (``suction_bitmap`` of
+        ``{v}_grasps.npz``; non-zero = a good suction point), None if absent."""
+        b = self.real_grasps.get("suction_bitmap")
+        return None if b is None else np.asarray(b, np.float32)
+
+    @property
+    def parallel_jaw_2d(self) -> npt.NDArray[np.float64] | None:
+        """(M, 2, 2) hand-labelled parallel-jaw grasps of a real view as image point pairs
+        [[x1, y1], [x2, y2]] px (``parallel_jaw_2d`` of ``{v}_grasps.npz``), None if absent."""
+        g = self.real_grasps.get("parallel_jaw_2d")
+        return None if g is None else np.asarray(g, np.float64).reshape(-1, 2, 2)
 
     @cached_property
     def hdf5(self) -> dict[str, np.ndarray]:

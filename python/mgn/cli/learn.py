@@ -1,0 +1,223 @@
+"""``mgn train``, ``mgn predict`` and ``mgn transfer``: the learning baselines (:mod:`mgn.learn`).
+
+This module only parses the arguments; PyTorch is needed when a command runs, not to build the
+parser (``mgn --help`` works without it).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from mgn.cli.scene import _split
+from mgn.learn.config import BACKBONES, SUCTION_SCORES, ModelConfig, TrainConfig
+from mgn.learn.predict import predict_files
+from mgn.learn.targets import MODALITIES
+from mgn.learn.training import train
+from mgn.learn.transfer import run_transfer
+
+__all__ = ["add_model_arguments", "add_train_arguments", "configs_from_args", "register"]
+
+
+def _ints(values: list[str] | None) -> list[int] | None:
+    items = _split(values)
+    return None if items is None else [int(v) for v in items]
+
+
+def add_model_arguments(p: argparse.ArgumentParser) -> None:
+    """The :class:`ModelConfig` options."""
+    d = ModelConfig()
+    p.add_argument(
+        "--modality",
+        choices=MODALITIES,
+        default=d.modality,
+        help="network input: rgb, depth (the sensor model's depth) or rgbd",
+    )
+    p.add_argument(
+        "--image-size",
+        type=int,
+        default=d.image_size,
+        metavar="PX",
+        help="longer image side the network sees, px",
+    )
+    p.add_argument("--amodal", action="store_true", help="also predict amodal masks")
+    p.add_argument(
+        "--backbone",
+        choices=BACKBONES,
+        default=d.backbone,
+        help="small U-Net, or ResNet-18 encoder (see --backbone-weights)",
+    )
+    p.add_argument("--width", type=int, default=d.width, help="channels of the small U-Net")
+    p.add_argument(
+        "--suction-radius",
+        type=float,
+        default=d.suction_radius_m,
+        metavar="M",
+        help="radius of the disc each suction label marks, m",
+    )
+    p.add_argument(
+        "--suction-score",
+        choices=SUCTION_SCORES,
+        default=d.suction_score,
+        help="the suction label score learned",
+    )
+
+
+def add_train_arguments(p: argparse.ArgumentParser) -> None:
+    """The :class:`TrainConfig` options and the device."""
+    d = TrainConfig()
+    p.add_argument("--epochs", type=int, default=d.epochs)
+    p.add_argument("--batch-size", type=int, default=d.batch_size, help="views per step")
+    p.add_argument("--lr", type=float, default=d.lr, help="Adam learning rate (cosine decay)")
+    p.add_argument("--seed", type=int, default=d.seed, help="weights, view order and flips")
+    p.add_argument("--no-augment", action="store_true", help="no random flips")
+    p.add_argument(
+        "--device", default="auto", help="auto (a CUDA GPU if torch finds one), cpu or cuda[:N]"
+    )
+    p.add_argument(
+        "--num-threads",
+        type=int,
+        default=0,
+        help="torch CPU threads (0 = torch's default; fix it for reproducible weights)",
+    )
+
+
+def configs_from_args(args: argparse.Namespace) -> tuple[ModelConfig, TrainConfig]:
+    """The configs of parsed :func:`add_model_arguments` / :func:`add_train_arguments`."""
+    mc = ModelConfig(
+        modality=args.modality,
+        image_size=args.image_size,
+        amodal=args.amodal,
+        backbone=args.backbone,
+        width=args.width,
+        suction_radius_m=args.suction_radius,
+        suction_score=args.suction_score,
+    )
+    tc = TrainConfig(
+        epochs=args.epochs,
+        batch_size=args.batch_size,
+        lr=args.lr,
+        seed=args.seed,
+        augment=not args.no_augment,
+    )
+    return mc, tc
+
+
+def _cmd_train(args: argparse.Namespace) -> int:
+    mc, tc = configs_from_args(args)
+    res = train(
+        args.dataset,
+        args.out,
+        model_config=mc,
+        train_config=tc,
+        scenes=_ints(args.scenes),
+        views=_ints(args.views),
+        resume=args.resume,
+        device=args.device,
+        num_threads=args.num_threads,
+        init=args.init,
+        backbone_weights=args.backbone_weights,
+        progress=not args.quiet,
+    )
+    last = res.history[-1] if res.history else {}
+    print(
+        f"trained on {res.num_views} views ({res.parameters:,} parameters, {res.device}) in "
+        f"{res.seconds:.1f} s; final loss {last.get('loss', float('nan')):.4f}"
+    )
+    print(f"model: {res.model_path}")
+    return 0
+
+
+def _cmd_predict(args: argparse.Namespace) -> int:
+    path = predict_files(
+        args.model,
+        args.images,
+        args.out,
+        depths=args.depth,
+        device=args.device,
+        num_threads=args.num_threads,
+        threshold=args.threshold,
+        core_threshold=args.core_threshold,
+        num_suction_points=args.suction_points,
+        progress=not args.quiet,
+    )
+    print(
+        f"predictions of {len(args.images)} image(s): {path} (+ *_instances.png, "
+        "*_suction.png, *_overlay.png)"
+    )
+    return 0
+
+
+def _cmd_transfer(args: argparse.Namespace) -> int:
+    res = run_transfer(
+        args.spec,
+        args.out,
+        real=args.real,
+        seeds=_ints(args.seeds),
+        device=args.device,
+        num_threads=args.num_threads,
+        progress=not args.quiet,
+    )
+    print(res.table())
+    print(f"wrote {args.out}/transfer.md, transfer.json, transfer.png")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``train``, ``predict`` and ``transfer`` to the ``mgn`` subparsers."""
+    p = sub.add_parser(
+        "train", help="train the segmentation + suction baseline on a dataset (needs mgn[learn])"
+    )
+    p.add_argument("dataset", help="mgn dataset folder")
+    p.add_argument("--out", required=True, help="output folder (model.pt, checkpoint.pt, log)")
+    p.add_argument("--scenes", nargs="+", metavar="N", help="only these scene ids")
+    p.add_argument("--views", nargs="+", metavar="V", help="only these view indices")
+    p.add_argument("--resume", action="store_true", help="continue the run in --out")
+    p.add_argument("--init", metavar="MODEL", help="start from this model.pt (fine-tuning)")
+    p.add_argument(
+        "--backbone-weights",
+        metavar="FILE",
+        help="local ResNet-18 state dict for --backbone resnet18",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_model_arguments(p)
+    add_train_arguments(p)
+    p.set_defaults(func=_cmd_train)
+
+    p = sub.add_parser(
+        "predict", help="instance masks and suction maps of images (needs mgn[learn])"
+    )
+    p.add_argument("model", help="model.pt of mgn train")
+    p.add_argument("images", nargs="+", help="PNG or JPEG images")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument(
+        "--depth",
+        nargs="+",
+        metavar="FILE",
+        help="one depth file per image: .npy (m), .npz 'depth' (cm), 16-bit .png (mm)",
+    )
+    p.add_argument("--threshold", type=float, default=0.5, help="foreground probability threshold")
+    p.add_argument(
+        "--core-threshold",
+        type=float,
+        default=0.4,
+        help="core threshold of the instance seeds (lower: fewer, larger instances)",
+    )
+    p.add_argument("--suction-points", type=int, default=10, help="suction points per image")
+    p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
+    p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_predict)
+
+    p = sub.add_parser(
+        "transfer",
+        help="ablation: dataset variants x training seeds, scored on one real set "
+        "(needs mgn[learn])",
+    )
+    p.add_argument("spec", help="transfer spec YAML (variants, seeds, real set; docs/learning.md)")
+    p.add_argument("--out", required=True, help="output folder (datasets, models, table, plot)")
+    p.add_argument("--real", help="labelled real set (overrides the spec's 'real')")
+    p.add_argument("--seeds", nargs="+", metavar="S", help="training seeds (overrides the spec)")
+    p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
+    p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=_cmd_transfer)

@@ -1,0 +1,121 @@
+"""Settings of the learning baselines: what the model is (:class:`ModelConfig`, stored in every
+checkpoint) and how it is trained (:class:`TrainConfig`)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+from mgn.errors import InvalidArgumentError
+from mgn.learn.targets import MODALITIES
+
+__all__ = ["BACKBONES", "SUCTION_SCORES", "ModelConfig", "TrainConfig"]
+
+#: Encoders: ``small`` (a 4-level U-Net of ``width``, 2 x width, 4 x width, 8 x width channels,
+#: trained from scratch) or ``resnet18`` (ResNet-18's layout and parameter names, so that a
+#: ResNet-18 state dict the user has as a local file initialises it; ``width`` is unused).
+BACKBONES = ("small", "resnet18")
+#: Scene suction scores a model can learn (datasets of ``{v}_scene.hdf5``).
+SUCTION_SCORES = ("score_analytical", "score_wrench", "score_simulation")
+
+
+def _from_dict(cls: Any, d: dict[str, Any], what: str) -> Any:
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(d) - known)
+    if unknown:
+        raise InvalidArgumentError(f"{what}: unknown key(s) {unknown}; known: {sorted(known)}")
+    return cls(**d)
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """What a model computes.
+
+    Attributes:
+        modality: input, ``rgb`` (default), ``depth`` (the depth sensor's image, m) or ``rgbd``.
+        image_size: the longer image side the network sees, px (default 256; each side rounded
+            to a multiple of 16).
+        amodal: also predict the hidden parts of objects, giving amodal masks (default False).
+        backbone: :data:`BACKBONES` (default ``small``).
+        width: channels of the first level of the ``small`` encoder (default 16, >= 4).
+        suction_radius_m: radius of the disc each suction label marks, m (default 0.01).
+        suction_score: the label score learned, :data:`SUCTION_SCORES` (default analytical).
+    """
+
+    modality: str = "rgb"
+    image_size: int = 256
+    amodal: bool = False
+    backbone: str = "small"
+    width: int = 16
+    suction_radius_m: float = 0.01
+    suction_score: str = "score_analytical"
+
+    def __post_init__(self) -> None:
+        if self.modality not in MODALITIES:
+            raise InvalidArgumentError(
+                f"modality must be one of {MODALITIES}, got {self.modality!r}"
+            )
+        if self.backbone not in BACKBONES:
+            raise InvalidArgumentError(
+                f"backbone must be one of {BACKBONES}, got {self.backbone!r}"
+            )
+        if not 16 <= int(self.image_size) <= 4096:
+            raise InvalidArgumentError(
+                f"image_size must be in [16, 4096] px, got {self.image_size}"
+            )
+        if int(self.width) < 4:
+            raise InvalidArgumentError(f"width must be >= 4 channels, got {self.width}")
+        if not 0 < float(self.suction_radius_m) <= 0.5:
+            raise InvalidArgumentError(
+                f"suction_radius_m must be in (0, 0.5] m, got {self.suction_radius_m}"
+            )
+        if self.suction_score not in SUCTION_SCORES:
+            raise InvalidArgumentError(
+                f"suction_score must be one of {SUCTION_SCORES}, got {self.suction_score!r}"
+            )
+
+    @property
+    def outputs(self) -> list[str]:
+        """Names of the output channels, in order."""
+        return ["foreground", "core", "suction"] + (["hidden"] if self.amodal else [])
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> ModelConfig:
+        return _from_dict(cls, d, "model config")
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """How a model is trained.
+
+    Attributes:
+        epochs: passes over the training views (default 20, >= 1).
+        batch_size: views per step (default 4, >= 1).
+        lr: Adam learning rate (default 2e-3), cosine-decayed to 5 % over the run.
+        seed: weights, view order and flips (default 0).
+        augment: random horizontal and vertical flips (default True).
+    """
+
+    epochs: int = 20
+    batch_size: int = 4
+    lr: float = 2e-3
+    seed: int = 0
+    augment: bool = True
+
+    def __post_init__(self) -> None:
+        if int(self.epochs) < 1:
+            raise InvalidArgumentError(f"epochs must be >= 1, got {self.epochs}")
+        if int(self.batch_size) < 1:
+            raise InvalidArgumentError(f"batch_size must be >= 1, got {self.batch_size}")
+        if not float(self.lr) > 0:
+            raise InvalidArgumentError(f"lr must be > 0, got {self.lr}")
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> TrainConfig:
+        return _from_dict(cls, d, "training config")

@@ -1,0 +1,489 @@
+"""Real photographs: MetaGraspNet's real layout (files written by hand here, with the keys of
+its public sample scenes and scripts), COCO folders, the metrics, and ``mgn eval real``."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from pycocotools import mask as mask_utils
+from pycocotools.coco import COCO
+from pycocotools.cocoeval import COCOeval
+
+import mgn
+from mgn.cli.main import main
+from mgn.errors import InvalidArgumentError, IoError
+from mgn.io.real import detect_real_format, read_coco_folder, read_mgn_real, read_real_set
+from mgn.learn import ModelConfig, Predictor, TrainConfig, train
+from mgn.learn.instances import InstanceMaps
+from mgn.learn.metrics import foreground_iou, mask_ap, suction_precision
+from mgn.learn.predict import Prediction
+from mgn.learn.real_eval import evaluate_real
+
+H, W = 40, 50
+
+
+def _rgb(seed: int) -> np.ndarray:
+    return np.random.default_rng(seed).integers(0, 256, (H, W, 3), dtype=np.uint8)
+
+
+def _boxes() -> tuple[np.ndarray, np.ndarray]:
+    """Visible and hidden parts of two objects: B (rows 10-29, cols 25-39) lies on A (rows
+    5-24, cols 5-34), so A's columns 25-34 of rows 10-24 are hidden."""
+    vis = np.zeros((2, H, W), bool)
+    hid = np.zeros((2, H, W), bool)
+    vis[0, 5:25, 5:35] = True
+    vis[1, 10:30, 25:40] = True
+    hid[0] = vis[0] & vis[1]
+    vis[0] &= ~vis[1]
+    return vis, hid
+
+
+def write_mgn_real(root: Path) -> Path:
+    """dataset_real/ with scene46 (view 3 annotated with amodal + grasps files, view 28 with
+    RGB and depth only) and scene418 (view 3 with ``instances_objects`` in its npz)."""
+    vis, hid = _boxes()
+    s46 = root / "scene46"
+    s46.mkdir(parents=True)
+    for v in (3, 28):
+        Image.fromarray(_rgb(v)).save(s46 / f"{v}_rgb.png")
+        depth = np.full((H, W), 80.0, np.float32)  # cm
+        depth[0, 0] = np.nan
+        np.savez_compressed(s46 / f"{v}.npz", depth=depth)
+    np.savez_compressed(
+        s46 / "3_amodal.npz",
+        amodal_bitmaps_full_size_instances=np.stack([vis, hid], axis=1).astype(np.uint8),
+        occlusion_bitmap_full_size=hid.any(0).astype(np.float32),
+    )
+    bitmap = np.zeros((H, W), np.uint8)
+    bitmap[12:18, 10:16] = 1  # on A
+    bitmap[20:24, 30:34] = 1  # on B
+    pj = np.array([[[6, 8], [30, 8]], [[27, 15], [38, 15]]], np.int64)
+    np.savez_compressed(s46 / "3_grasps.npz", suction_bitmap=bitmap, parallel_jaw_2d=pj)
+    s418 = root / "scene418"
+    s418.mkdir()
+    Image.fromarray(_rgb(5)).save(s418 / "3_rgb.png")
+    ids = np.zeros((H, W), np.float32)
+    ids[2:12, 2:12] = 1
+    ids[20:35, 30:45] = 2
+    np.savez_compressed(
+        s418 / "3.npz",
+        depth=np.full((H, W), 75.0, np.float32),
+        instances_objects=ids,
+        instances_semantic=ids * 7,
+    )
+    return root
+
+
+def write_coco_folder(folder: Path) -> Path:
+    """Two images: one with a polygon and a compressed-RLE object, one with an
+    uncompressed-RLE object; a depth PNG beside the first."""
+    folder.mkdir(parents=True)
+    vis, _ = _boxes()
+    for k, name in enumerate(("a.png", "b.jpg")):
+        Image.fromarray(_rgb(10 + k)).save(folder / name)
+    Image.fromarray(np.full((H, W), 800, np.uint16)).save(folder / "a_depth.png")
+    rle = mask_utils.encode(np.asfortranarray(vis[1].astype(np.uint8)))
+    runs = []  # uncompressed counts of vis[0], column-major
+    flat = vis[0].T.ravel()
+    value, count = False, 0
+    for px in flat:
+        if px == value:
+            count += 1
+        else:
+            runs.append(count)
+            value, count = px, 1
+    runs.append(count)
+    doc = {
+        "images": [
+            {"id": 1, "file_name": "a.png", "width": W, "height": H},
+            {"id": 7, "file_name": "b.jpg", "width": W, "height": H},
+        ],
+        "annotations": [
+            {
+                "id": 1,
+                "image_id": 1,
+                "category_id": 3,
+                "segmentation": [[5.0, 5.0, 25.0, 5.0, 25.0, 25.0, 5.0, 25.0]],
+            },
+            {
+                "id": 2,
+                "image_id": 1,
+                "category_id": 3,
+                "segmentation": {"size": [H, W], "counts": rle["counts"].decode()},
+            },
+            {
+                "id": 3,
+                "image_id": 7,
+                "category_id": 1,
+                "segmentation": {"size": [H, W], "counts": runs},
+            },
+        ],
+        "categories": [{"id": 1, "name": "x"}, {"id": 3, "name": "y"}],
+    }
+    (folder / "labels.json").write_text(json.dumps(doc))
+    return folder
+
+
+# ---------------------------------------------------------------------------------------------
+# Readers
+
+
+def test_dataset_reads_metagraspnet_real_views(tmp_path: Path):
+    root = write_mgn_real(tmp_path / "dataset_real")
+    vis, hid = _boxes()
+    ds = mgn.Dataset(root)
+    assert ds.scene_ids == [46, 418]
+    v = ds.scene(46).view(3)
+    expected_ids = np.zeros((H, W), np.int32)
+    expected_ids[vis[0]] = 1
+    expected_ids[vis[1]] = 2
+    np.testing.assert_array_equal(v.instances, expected_ids)
+    np.testing.assert_array_equal(v.amodal, vis | hid)
+    assert v.num_instances == 2
+    assert v.suction_bitmap is not None and v.suction_bitmap.sum() == 36 + 16
+    assert v.parallel_jaw_2d is not None and v.parallel_jaw_2d.shape == (2, 2, 2)
+    assert v.depth[1, 1] == pytest.approx(0.8) and np.isnan(v.depth[0, 0])
+    unlabelled = ds.scene(46).view(28)
+    assert unlabelled.suction_bitmap is None and unlabelled.real_amodal is None
+    with pytest.raises(IoError, match="28.npz' has no 'instances_objects'"):
+        _ = unlabelled.instances
+    v418 = ds.scene(418).view(3)
+    assert v418.instances.max() == 2 and v418.suction_bitmap is None
+
+
+def test_read_mgn_real(tmp_path: Path):
+    root = write_mgn_real(tmp_path / "dataset_real")
+    vis, hid = _boxes()
+    images = read_mgn_real(root)
+    assert [img.name for img in images] == ["scene46/3", "scene418/3"]
+    a, b = images
+    np.testing.assert_array_equal(a.masks, vis)
+    assert a.amodal is not None
+    np.testing.assert_array_equal(a.amodal, vis | hid)
+    assert a.suction_bitmap is not None and a.depth is not None
+    assert b.masks.shape == (2, H, W) and b.amodal is None and b.suction_bitmap is None
+    assert [i.name for i in read_mgn_real(root / "scene46")] == ["scene46/3"]
+    assert detect_real_format(root) == detect_real_format(root / "scene46") == "metagraspnet"
+
+
+def test_read_coco_folder(tmp_path: Path):
+    folder = write_coco_folder(tmp_path / "photos")
+    vis, _ = _boxes()
+    for path in (folder, folder / "labels.json"):
+        assert detect_real_format(path) == "coco"
+        a, b = read_coco_folder(path)
+        assert (a.name, b.name) == ("a.png", "b.jpg")
+        assert a.masks.shape == (2, H, W) and b.masks.shape == (1, H, W)
+        np.testing.assert_array_equal(a.masks[1], vis[1])
+        np.testing.assert_array_equal(b.masks[0], vis[0])
+        # The polygon's square, 20 px a side from (5, 5): inside its box, about 400 px.
+        ys, xs = np.nonzero(a.masks[0])
+        assert ys.min() >= 5 and xs.min() >= 5 and ys.max() <= 25 and xs.max() <= 25
+        assert abs(int(a.masks[0].sum()) - 400) <= 45
+        assert a.depth is not None and np.allclose(a.depth, 0.8) and b.depth is None
+
+
+def test_real_set_bad_input(tmp_path: Path):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(IoError, match="no known annotation format"):
+        read_real_set(tmp_path / "empty")
+    voc = tmp_path / "voc"
+    voc.mkdir()
+    (voc / "a.xml").write_text("<annotation/>")
+    Image.fromarray(_rgb(0)).save(voc / "a.png")
+    with pytest.raises(IoError, match="no known annotation format"):
+        read_real_set(voc)
+    (voc / "x.json").write_text(json.dumps({"shapes": []}))  # a LabelMe-like file
+    with pytest.raises(IoError, match="x.json' is in no known annotation format"):
+        read_real_set(voc)
+    folder = write_coco_folder(tmp_path / "photos")
+    doc = json.loads((folder / "labels.json").read_text())
+    doc["annotations"][1]["segmentation"]["size"] = [H + 1, W]
+    (folder / "labels.json").write_text(json.dumps(doc))
+    with pytest.raises(IoError, match="a.png.*mask is 50 x 41 px but its image is 50 x 40"):
+        read_real_set(folder)
+    root = write_mgn_real(tmp_path / "real")
+    np.savez_compressed(root / "scene46" / "3_grasps.npz", suction_bitmap=np.zeros((H, W + 2)))
+    with pytest.raises(IoError, match="suction_bitmap is 52 x 40 px but the image is 50 x 40"):
+        read_real_set(root)
+    with pytest.raises(IoError, match="does not exist"):
+        read_real_set(tmp_path / "nothing")
+
+
+# ---------------------------------------------------------------------------------------------
+# Metrics
+
+
+def _masks(*boxes: tuple[int, int, int, int]) -> np.ndarray:
+    out = np.zeros((len(boxes), 20, 20), bool)
+    for k, (r0, r1, c0, c1) in enumerate(boxes):
+        out[k, r0:r1, c0:c1] = True
+    return out
+
+
+def test_mask_ap_hand_computed_cases():
+    gt = _masks((0, 4, 0, 4), (10, 14, 10, 14))
+    assert mask_ap([gt], [gt], [np.array([0.9, 0.8])]) == (1.0, 1.0)
+    # One of two objects found (exact mask), nothing else: precision 1 up to recall 0.5 on the
+    # 101 recall points 0, 0.01, ..., 1 -> 51 / 101 at every IoU threshold.
+    ap, ap50 = mask_ap([gt], [gt[:1]], [np.array([0.9])])
+    assert ap == pytest.approx(51 / 101) and ap50 == pytest.approx(51 / 101)
+    # A prediction of IoU 10/16 = 0.625 with the one object: a match at thresholds 0.50, 0.55,
+    # 0.60 of the ten -> AP 0.3, AP50 1.
+    one = _masks((0, 4, 0, 4))
+    pred = _masks((0, 4, 0, 4))
+    pred[0, 2:4] = False
+    pred[0, 0:2, 2:4] = True
+    pred[0, 0, 0:4] = True
+    part = _masks((0, 4, 0, 4))
+    part[0, 1:4] = False  # 4 px
+    part[0, 1:3, 0:3] = True  # + 6 px = 10 px inside the 16-px object
+    ap, ap50 = mask_ap([one], [part], [np.array([0.5])])
+    assert ap == pytest.approx(0.3) and ap50 == pytest.approx(1.0)
+    # A false positive ranked above the true one: precision 1/2 at recall 1 -> AP50 0.5.
+    ap, ap50 = mask_ap(
+        [one], [np.concatenate([_masks((15, 19, 15, 19)), one])], [np.array([0.9, 0.1])]
+    )
+    assert ap50 == pytest.approx(0.5)
+    assert mask_ap([np.zeros((0, 20, 20), bool)], [one], [np.array([1.0])]) == (None, None)
+    assert mask_ap([one], [np.zeros((0, 20, 20), bool)], [np.zeros(0)]) == (0.0, 0.0)
+    with pytest.raises(InvalidArgumentError, match="one each per image"):
+        mask_ap([one], [], [])
+
+
+def test_mask_ap_agrees_with_pycocotools_on_files(tmp_path: Path):
+    """The same masks through pycocotools' documented file route (COCO(json), loadRes(json))."""
+    rng = np.random.default_rng(0)
+    gts, preds, scores = [], [], []
+    for _ in range(3):
+        boxes = [
+            (r, r + int(rng.integers(3, 8)), c, c + int(rng.integers(3, 8)))
+            for r, c in rng.integers(0, 12, (4, 2))
+        ]
+        g = _masks(*boxes)
+        p = np.roll(g, int(rng.integers(-1, 2)), axis=2)[: int(rng.integers(1, 5))]
+        gts.append(g)
+        preds.append(np.concatenate([p, _masks((0, 3, 15, 19))]))
+        scores.append(rng.uniform(0, 1, len(preds[-1])))
+    ours = mask_ap(gts, preds, scores)
+    images, anns, dets = [], [], []
+    for i, (g, p, s) in enumerate(zip(gts, preds, scores, strict=True)):
+        images.append({"id": i + 1, "width": 20, "height": 20})
+        for m in g:
+            r = mask_utils.encode(np.asfortranarray(m.astype(np.uint8)))
+            anns.append(
+                {
+                    "id": len(anns) + 1,
+                    "image_id": i + 1,
+                    "category_id": 1,
+                    "segmentation": {"size": r["size"], "counts": r["counts"].decode()},
+                    "area": int(m.sum()),
+                    "bbox": list(mask_utils.toBbox(r)),
+                    "iscrowd": 0,
+                }
+            )
+        for m, sc in zip(p, s, strict=True):
+            r = mask_utils.encode(np.asfortranarray(m.astype(np.uint8)))
+            dets.append(
+                {
+                    "image_id": i + 1,
+                    "category_id": 1,
+                    "score": float(sc),
+                    "segmentation": {"size": r["size"], "counts": r["counts"].decode()},
+                }
+            )
+    (tmp_path / "gt.json").write_text(
+        json.dumps({"images": images, "annotations": anns, "categories": [{"id": 1, "name": "o"}]})
+    )
+    (tmp_path / "dt.json").write_text(json.dumps(dets))
+    with contextlib.redirect_stdout(io.StringIO()):
+        gt = COCO(str(tmp_path / "gt.json"))
+        ev = COCOeval(gt, gt.loadRes(str(tmp_path / "dt.json")), "segm")
+        ev.evaluate()
+        ev.accumulate()
+        ev.summarize()
+    assert ours == (pytest.approx(ev.stats[0]), pytest.approx(ev.stats[1]))
+    assert 0 < ours[0] < ours[1] < 1
+
+
+def test_foreground_iou_and_suction_precision_by_hand():
+    gt = _masks((0, 4, 0, 4), (10, 12, 10, 12))  # 16 + 4 px
+    pred = np.zeros((20, 20), bool)
+    pred[0:4, 2:6] = True  # 8 px on the first object, 8 outside
+    assert foreground_iou(gt, pred) == pytest.approx(8 / 28)
+    assert foreground_iou(np.zeros((0, 20, 20), bool), np.zeros((20, 20), bool)) == 1.0
+    bitmap = np.zeros((20, 20))
+    bitmap[5, 5] = bitmap[8, 2] = 1
+    points = np.array([[5.5, 5.5, 0.9], [0.5, 0.5, 0.8], [2.9, 8.1, 0.7]])  # hit, miss, hit
+    assert suction_precision(points, bitmap, [1, 2, 3, 5]) == {1: 1.0, 2: 0.5, 3: 2 / 3, 5: 0.4}
+    assert suction_precision(np.zeros((0, 3)), bitmap, [1]) == {1: 0.0}
+
+
+# ---------------------------------------------------------------------------------------------
+# mgn eval real
+
+
+@pytest.fixture(scope="module")
+def tiny_model(small_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("tiny_real_model")
+    train(
+        small_dataset,
+        out,
+        model_config=ModelConfig(image_size=32, width=4, amodal=True, modality="rgbd"),
+        train_config=TrainConfig(epochs=1),
+        views=[0],
+        num_threads=1,
+        progress=False,
+    )
+    return out / "model.pt"
+
+
+def test_eval_real_scores_perfect_predictions_as_perfect(
+    tiny_model: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    """With a predictor that returns the labels themselves, every score is 1."""
+    root = write_mgn_real(tmp_path / "dataset_real")
+    labels = {img.name: img for img in read_mgn_real(root)}
+
+    def perfect(self, rgb, depth=None, *, name="image", **settings):  # noqa: ANN001, ANN202, ARG001
+        img = labels[name]
+        ids = np.zeros(img.masks.shape[1:], np.int32)
+        for i, m in enumerate(img.masks):
+            ids[m] = i + 1
+        suction = np.zeros(ids.shape, np.float32)
+        if img.suction_bitmap is not None:
+            suction[img.suction_bitmap != 0] = 1.0
+        inst = InstanceMaps(ids, np.ones(len(img.masks), np.float32), img.amodal)
+        return Prediction(inst, (ids > 0).astype(np.float32), suction)
+
+    monkeypatch.setattr(Predictor, "predict", perfect)
+    res = evaluate_real(tiny_model, root, tmp_path / "out", ks=(1, 2), progress=False)
+    assert (res.num_images, res.num_objects) == (2, 4)
+    assert res.mask_ap == pytest.approx(1.0) and res.mask_ap50 == pytest.approx(1.0)
+    assert res.foreground_iou == 1.0
+    assert res.suction == {1: 1.0, 2: 1.0} and res.suction_images == 1
+    am = evaluate_real(tiny_model, root / "scene46", amodal=True, progress=False)
+    assert am.mask_ap == pytest.approx(1.0)
+    with pytest.raises(InvalidArgumentError, match="no amodal masks"):
+        evaluate_real(tiny_model, root, amodal=True, progress=False)
+
+
+def test_eval_real_command(tiny_model: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    root = write_mgn_real(tmp_path / "dataset_real")
+    out = tmp_path / "out"
+    assert (
+        main(
+            [
+                "eval",
+                "real",
+                str(root),
+                "--model",
+                str(tiny_model),
+                "--out",
+                str(out),
+                "--quiet",
+                "--num-threads",
+                "1",
+            ]
+        )
+        == 0
+    )
+    text = capsys.readouterr().out
+    assert "mask_AP50" in text and "suction_P@10" in text
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["format"] == "metagraspnet" and doc["summary"]["images"] == 2
+    assert [e["name"] for e in doc["per_image"]] == ["scene46/3", "scene418/3"]
+    assert 0.0 <= doc["summary"]["fg_IoU"] <= 1.0
+    pictures = sorted((out / "overlays").iterdir())
+    assert len(pictures) == 2
+    with Image.open(pictures[0]) as im:
+        assert im.size == (3 * W, H)
+    assert "overlays/000_scene46_3.png" in (out / "report.html").read_text()
+    coco = write_coco_folder(tmp_path / "photos")
+    assert main(["eval", "real", str(coco), "--model", str(tiny_model), "--quiet"]) == 1
+    assert "b.jpg: the model's input is rgbd, but it has no depth" in capsys.readouterr().err
+    np.save(coco / "b_depth.npy", np.full((H, W), 0.8, np.float32))
+    assert main(["eval", "real", str(coco), "--model", str(tiny_model), "--quiet"]) == 0
+    assert "(no suction bitmaps" in capsys.readouterr().out
+    (tmp_path / "empty").mkdir()
+    assert main(["eval", "real", str(tmp_path / "empty"), "--model", str(tiny_model)]) == 1
+    assert "no known annotation format" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# mgn transfer
+
+
+def test_transfer_table_by_hand():
+    from mgn.learn.transfer import TransferResults, _rows
+
+    scores = {
+        "base": {0: {"mask_AP50": 0.5}, 1: {"mask_AP50": 0.7}, 2: {"mask_AP50": 0.6}},
+        "new": {0: {"mask_AP50": 0.6}, 1: {"mask_AP50": 0.6}, 2: {"mask_AP50": 0.9}},
+    }
+    res = TransferResults(["base", "new"], [0, 1, 2], "mask_AP50", scores)  # type: ignore[arg-type]
+    rows = _rows(res)
+    assert rows[1]["mask_AP50 mean"] == pytest.approx(0.7)
+    assert rows[1]["mask_AP50 std"] == pytest.approx(np.sqrt((0.01 + 0.01 + 0.04) / 2))
+    assert (rows[1]["mask_AP50 min"], rows[1]["mask_AP50 max"]) == (0.6, 0.9)
+    assert rows[1]["wins"] == "2/3" and rows[0]["wins"] == "-"  # seed 1: 0.6 < 0.7
+    res.rows = rows
+    assert "| new | 0.700 ± 0.173 [0.600, 0.900] | 2/3 |" in res.table()
+
+
+def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    from conftest import SMALL_DATASET_CONFIG
+
+    root = write_mgn_real(tmp_path / "dataset_real")
+    spec = {
+        "real": str(root),
+        "scenes": 1,
+        "seeds": [0, 1],
+        "config": SMALL_DATASET_CONFIG,
+        "model": {"image_size": 32, "width": 4},
+        "train": {"epochs": 1, "batch_size": 3},
+        "variants": [
+            {"name": "given", "dataset": str(small_dataset)},
+            {"name": "wider", "dataset": str(small_dataset), "model": {"width": 8}},
+            {"name": "two-views", "config": {"camera": {"views": [0, 5]}}},
+        ],
+    }
+    (tmp_path / "spec.yaml").write_text(json.dumps(spec))  # JSON is YAML
+    out = tmp_path / "out"
+    args = [
+        "transfer",
+        str(tmp_path / "spec.yaml"),
+        "--out",
+        str(out),
+        "--quiet",
+        "--num-threads",
+        "1",
+    ]
+    assert main(args) == 0
+    table = (out / "transfer.md").read_text()
+    assert [line.split(" | ")[0] for line in table.splitlines()[2:]] == [
+        "| given",
+        "| wider",
+        "| two-views",
+    ]
+    assert "wins vs given (mask_AP50)" in table
+    doc = json.loads((out / "transfer.json").read_text())
+    res = json.loads((out / "wider" / "seed1" / "real" / "results.json").read_text())
+    assert doc["scores"]["wider"]["1"]["mask_AP50"] == res["summary"]["mask_AP50"]
+    assert mgn.Dataset(out / "two-views" / "dataset").scene(0).view_ids == [0, 5]
+    with Image.open(out / "transfer.png") as im:
+        assert im.size[0] > 400
+    stamp = (out / "given" / "seed0" / "model.pt").stat().st_mtime_ns
+    assert main(args) == 0  # finished models are kept
+    assert (out / "given" / "seed0" / "model.pt").stat().st_mtime_ns == stamp
+    capsys.readouterr()
+    spec["variants"] = [{"name": "x", "datasett": "y"}]
+    (tmp_path / "bad.yaml").write_text(json.dumps(spec))
+    assert main(["transfer", str(tmp_path / "bad.yaml"), "--out", str(out)]) == 1
+    assert "unknown key(s) ['datasett']" in capsys.readouterr().err
