@@ -1,9 +1,9 @@
 """The BOP export of a dataset (``mgn export bop DS OUT``) and its check (``mgn validate --format
 bop``).
 
-BOP is the file layout of the Benchmark for 6D Object Pose Estimation ("BOP-scenewise", described
-in ``bop_datasets_format.md`` of the BOP toolkit, github.com/thodan/bop_toolkit). ``export_bop``
-writes::
+BOP is the file layout of the Benchmark for 6D Object Pose Estimation ("BOP-scenewise"; what
+each file holds and how mgn's export differs from BlenderProc's: docs/format.md, "BOP export").
+``export_bop`` writes::
 
     OUT/
       camera.json                 fx, fy, cx, cy, width, height (px), depth_scale (mm per unit)
