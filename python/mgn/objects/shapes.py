@@ -12,7 +12,7 @@ A mesh with texture coordinates may hold several vertices at exactly the same po
 seams, the copies of a pole). Positions that belong together are always bit-identical, so the
 mesh is watertight once vertices are welded by position (:func:`weld`).
 
-The frame of a builder's output is the one stated in its docstring; the catalogue
+The frame of a builder's output is the one stated in its docstring; the library
 (:mod:`mgn.objects.library`) re-centres every finished object on its bounding-box centre.
 
 Booleans (:func:`union`, :func:`difference`) go through ``manifold3d``, whose results are

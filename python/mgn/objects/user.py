@@ -59,7 +59,8 @@ from mgn.base.yaml_file import read_yaml
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.geometry.mesh import Material, load_mesh, missing_material_files
 from mgn.geometry.repair import repair_mesh
-from mgn.objects.library import Keypoint, MaterialSpec, ObjectSpec, builtin_objects
+from mgn.objects.library import builtin_objects
+from mgn.objects.spec import Keypoint, MaterialSpec, ObjectSpec
 
 __all__ = [
     "OBJECT_NAME_PATTERN",
