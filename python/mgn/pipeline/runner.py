@@ -787,7 +787,8 @@ def _config_differences(recorded: Any, current: Any, key: str = "") -> list[tupl
 
 @dataclass
 class _Run:
-    """What the scene loop of :func:`generate` needs (shared with the test-set builder)."""
+    """What the scene loop of :func:`generate` needs; the test-set builder drives it as a
+    :class:`mgn.pipeline.testset.BalancedRun`."""
 
     out: Path
     cfg: Config

@@ -42,7 +42,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -55,6 +55,8 @@ from mgn.scene.compose import compose_objects
 
 __all__ = [
     "NOVEL_TAG",
+    "BalancedReport",
+    "BalancedRun",
     "RECIPES",
     "SelectionState",
     "Split",
@@ -63,6 +65,7 @@ __all__ = [
     "plan_batch",
     "resolve_split",
     "run_balanced",
+    "SceneOutcome",
     "select_views",
     "view_difficulty",
 ]
@@ -385,10 +388,84 @@ def _prune(out: Path, rejected: Sequence[Mapping[str, int]]) -> None:
         prune_scene(out / f"scene{scene}", views)
 
 
-def run_balanced(run: Any, catalogue: Sequence[ObjectSpec], split: Split, recorded: Any) -> None:
+class SceneOutcome(Protocol):
+    """What :func:`run_balanced` reads of one scene's result (:class:`mgn.pipeline.SceneResult`)."""
+
+    @property
+    def ok(self) -> bool:
+        """The scene was written completely."""
+        ...
+
+
+class BalancedReport(Protocol):
+    """The run report that :func:`run_balanced` reads and fills
+    (:class:`mgn.pipeline.GenerateReport`)."""
+
+    skipped: list[int]  # scenes already complete (resumed run)
+    not_run: list[int]  # scenes not attempted (full disk)
+    num_scenes: int  # scenes attempted
+    selection: dict[str, Any] | None  # the dataset.json ``selection`` record
+    unmet: dict[int, int]  # difficulty level -> views still missing
+
+    @property
+    def results(self) -> Mapping[int, SceneOutcome]:
+        """The results of the scenes run so far, by scene index."""
+        ...
+
+
+class BalancedRun(Protocol):
+    """The run context that :func:`run_balanced` drives: the scene loop of
+    :func:`mgn.pipeline.generate`, which labels objects, runs scenes and writes
+    ``dataset.json``."""
+
+    @property
+    def cfg(self) -> Config:
+        """The run's config."""
+        ...
+
+    @property
+    def seed(self) -> int:
+        """The dataset seed (scene ``i`` uses :func:`mgn.pipeline.scene_seed` of it)."""
+        ...
+
+    @property
+    def out(self) -> Path:
+        """The dataset folder."""
+        ...
+
+    @property
+    def extra(self) -> dict[str, Any]:
+        """Extra top-level ``dataset.json`` keys, written by :meth:`write_doc`."""
+        ...
+
+    @property
+    def report(self) -> BalancedReport:
+        """The report of the run."""
+        ...
+
+    def ensure_labels(self, specs: Sequence[ObjectSpec]) -> None:
+        """Label the objects of ``specs`` not labelled yet in this run."""
+        ...
+
+    def run_scenes(self, scenes: Sequence[tuple[int, list[ObjectSpec]]], total: int) -> None:
+        """Run the scenes (index, objects); their results go to :attr:`report`."""
+        ...
+
+    def write_doc(self, num_scenes: int, status: str) -> None:
+        """Write ``dataset.json`` with ``num_scenes`` and ``status``."""
+        ...
+
+
+def run_balanced(
+    run: BalancedRun,
+    catalogue: Sequence[ObjectSpec],
+    split: Split,
+    recorded: Mapping[str, Any] | None,
+) -> None:
     """The batch loop of a difficulty-balanced run (called by :func:`mgn.pipeline.generate`
     with its run context; see the module doc). Fills ``run.report`` (``selection``,
     ``unmet``, ``num_scenes``) and records the selection in ``dataset.json`` after each batch.
+    ``recorded`` is the ``dataset.json`` of a resumed run (None: a new run).
     """
 
     cfg, report = run.cfg, run.report
