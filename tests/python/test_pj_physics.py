@@ -12,10 +12,11 @@ import pytest
 from PIL import Image
 
 import mgn
+from mgn.cli.pj import register_show_trial
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import ParallelJawGripper
 from mgn.pj.physics import ShakeOptions, grasp_rows, shake_scores, shake_trajectory
-from mgn.viz.shake_trial import register_show_trial, render_frames, write_trial_pictures
+from mgn.viz.shake_trial import render_frames, write_trial_pictures
 
 
 def box_object(size, mass):

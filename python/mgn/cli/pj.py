@@ -10,6 +10,7 @@ write and ``--density`` gives the mass).
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 from mgn.errors import InvalidArgumentError
@@ -25,7 +26,7 @@ from mgn.pj.physics import (
     ShakeScorer,
     search_options,
 )
-from mgn.viz.shake_trial import register_show_trial
+from mgn.viz.shake_trial import show_trial
 
 
 def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> ShakeScorer:
@@ -194,3 +195,50 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_label)
 
     register_show_trial(psub)
+
+
+def _cmd_show_trial(args: argparse.Namespace) -> int:
+    summary = show_trial(
+        args.object,
+        args.grasp,
+        friction=args.friction,
+        density_factor=args.density_factor,
+        grip_force=args.grip_force,
+        seed=args.seed,
+        out=args.out,
+        every=args.every,
+        strip_frames=args.strip_frames,
+        size=args.size,
+    )
+    print(json.dumps(summary))
+    return 0
+
+
+def register_show_trial(psub: argparse._SubParsersAction) -> None:
+    """Add the ``show-trial`` action (:func:`mgn.viz.shake_trial.show_trial`) to the ``mgn pj``
+    subparsers ``psub``::
+
+        mgn pj show-trial OBJECT [--grasp a a a v v v p p p w] [--friction F]
+                                 [--density-factor D] [--out PREFIX] [--every N]
+                                 [--strip-frames K] [--size PX]
+    """
+    p = psub.add_parser(
+        "show-trial", help="render one physics shake trial to a GIF and a PNG strip"
+    )
+    p.add_argument("object", help="built-in object name or id, or a mesh file (metres)")
+    p.add_argument(
+        "--grasp",
+        nargs=10,
+        type=float,
+        metavar="X",
+        help="grasp row a(3) v(3) p1(3) w in metres (default: across the CoM from above)",
+    )
+    p.add_argument("--friction", type=float, default=1.0, help="friction coefficient")
+    p.add_argument("--density-factor", type=float, default=1.0, help="mass factor")
+    p.add_argument("--grip-force", type=float, default=20.0, help="N per finger")
+    p.add_argument("--seed", type=int, default=0, help="seed of the rotation axis/angle")
+    p.add_argument("--out", default="shake_trial", help="output prefix (PREFIX.gif, ...)")
+    p.add_argument("--every", type=int, default=10, help="record every N simulation steps")
+    p.add_argument("--strip-frames", type=int, default=8, help="frames in the PNG strip")
+    p.add_argument("--size", type=int, default=320, help="frame size in pixels")
+    p.set_defaults(func=_cmd_show_trial)

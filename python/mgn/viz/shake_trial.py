@@ -4,20 +4,17 @@ The trial comes from :func:`mgn.pj.physics.shake_trajectory`; frames are drawn b
 orthographic renderer (flat-shaded triangles, painter's order, Pillow polygons), so no OpenGL
 is needed. The fingers are drawn orange while they touch the object and red when they do not.
 
-``register_show_trial(psub)`` adds ``show-trial`` to the ``mgn pj`` action group::
-
-    mgn pj show-trial OBJECT [--grasp a a a v v v p p p w] [--friction F] [--density-factor D]
-                             [--out PREFIX] [--every N] [--strip-frames K] [--size PX]
+:func:`show_trial` runs one trial of a built-in object or a mesh file and writes its pictures
+(the ``mgn pj show-trial`` action, :mod:`mgn.cli.pj`).
 """
 
 from __future__ import annotations
 
-import argparse
 import io
-import json
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -224,27 +221,44 @@ def _load_object(name: str) -> tuple[Mesh, float, np.ndarray, np.ndarray]:
     return mesh, float(mp.mass), np.asarray(mp.center_of_mass), np.asarray(mp.inertia)
 
 
-def _cmd_show_trial(args: argparse.Namespace) -> int:
-    mesh, mass, com, inertia = _load_object(args.object)
-    grasp = np.asarray(args.grasp, dtype=np.float64) if args.grasp else default_grasp(mesh, com)
-    options = ShakeOptions(grip_force=args.grip_force, seed=args.seed)
+def show_trial(
+    name: str,
+    grasp: npt.ArrayLike | None = None,
+    *,
+    friction: float = 1.0,
+    density_factor: float = 1.0,
+    grip_force: float = 20.0,
+    seed: int = 0,
+    out: str | os.PathLike[str] = "shake_trial",
+    every: int = 10,
+    strip_frames: int = 8,
+    size: int = 320,
+) -> dict[str, Any]:
+    """Run one shake trial and write its pictures ``<out>.gif`` and ``<out>_strip.png``.
+
+    Args:
+        name: built-in object name or id, or a mesh file (metres; density 500 kg/m^3).
+        grasp: grasp row a(3) v(3) p1(3) w in metres; None: across the CoM from above
+            (:func:`default_grasp`).
+        friction: friction coefficient; density_factor: mass factor.
+        grip_force: N per finger; seed: seed of the rotation axis and angle.
+        out: output prefix; every: record every N simulation steps; strip_frames: frames in
+            the PNG strip; size: frame size in pixels.
+
+    Returns:
+        The summary: object, grasp, success, ended_early, steps, frames, gif and strip paths.
+    """
+    mesh, mass, com, inertia = _load_object(name)
+    g = np.asarray(grasp, dtype=np.float64) if grasp is not None else default_grasp(mesh, com)
+    options = ShakeOptions(grip_force=grip_force, seed=seed)
     traj = shake_trajectory(
-        mesh,
-        mass,
-        com,
-        inertia,
-        grasp,
-        args.friction,
-        args.density_factor,
-        options=options,
-        record_every=args.every,
-    )
-    gif, png = write_trial_pictures(
-        traj, [mesh], args.out, size=args.size, strip_frames=args.strip_frames
-    )
-    summary = {
-        "object": args.object,
-        "grasp": [round(float(x), 6) for x in grasp],
+        mesh, mass, com, inertia, g, friction, density_factor, options=options,
+        record_every=every,
+    )  # fmt: skip
+    gif, png = write_trial_pictures(traj, [mesh], out, size=size, strip_frames=strip_frames)
+    return {
+        "object": name,
+        "grasp": [round(float(x), 6) for x in g],
         "success": bool(traj.success),
         "ended_early": bool(traj.ended_early),
         "steps": int(traj.steps),
@@ -252,29 +266,3 @@ def _cmd_show_trial(args: argparse.Namespace) -> int:
         "gif": str(gif),
         "strip": str(png),
     }
-    print(json.dumps(summary))
-    return 0
-
-
-def register_show_trial(psub: argparse._SubParsersAction) -> None:
-    """Add the ``show-trial`` action to the ``mgn pj`` subparsers ``psub``."""
-    p = psub.add_parser(
-        "show-trial", help="render one physics shake trial to a GIF and a PNG strip"
-    )
-    p.add_argument("object", help="built-in object name or id, or a mesh file (metres)")
-    p.add_argument(
-        "--grasp",
-        nargs=10,
-        type=float,
-        metavar="X",
-        help="grasp row a(3) v(3) p1(3) w in metres (default: across the CoM from above)",
-    )
-    p.add_argument("--friction", type=float, default=1.0, help="friction coefficient")
-    p.add_argument("--density-factor", type=float, default=1.0, help="mass factor")
-    p.add_argument("--grip-force", type=float, default=20.0, help="N per finger")
-    p.add_argument("--seed", type=int, default=0, help="seed of the rotation axis/angle")
-    p.add_argument("--out", default="shake_trial", help="output prefix (PREFIX.gif, ...)")
-    p.add_argument("--every", type=int, default=10, help="record every N simulation steps")
-    p.add_argument("--strip-frames", type=int, default=8, help="frames in the PNG strip")
-    p.add_argument("--size", type=int, default=320, help="frame size in pixels")
-    p.set_defaults(func=_cmd_show_trial)
