@@ -13,7 +13,6 @@ centre along -z. The cup's z axis points from the cup into the surface (approach
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
 import os
@@ -265,15 +264,6 @@ def normalize_grasp_kind(kind: str) -> str:
     accepted = ", ".join(a for v in GRASP_KINDS.values() for a in v)
     raise InvalidArgumentError(f"unknown grasp kind {kind!r}; expected suction or paralleljaw "
                                f"(also accepted: {accepted})")  # fmt: skip
-
-
-def grasp_kind_arg(text: str) -> str:
-    """argparse ``type=`` of a grasp kind: the normalised name, or a usage error listing them."""
-
-    try:
-        return normalize_grasp_kind(text)
-    except InvalidArgumentError as e:
-        raise argparse.ArgumentTypeError(str(e)) from None
 
 
 #: The MetaGraspNet folder name of each grasp kind (``grasps/<folder>/``, ``*_grasps/<folder>``).

@@ -11,6 +11,14 @@ from __future__ import annotations
 import argparse
 import math
 
+from mgn.cli.args import (
+    add_device_arguments,
+    add_instance_threshold_arguments,
+    add_quiet_argument,
+    device_kwargs,
+    grasp_kind_arg,
+    instance_threshold_kwargs,
+)
 from mgn.eval import grasps as grasps_module
 from mgn.eval.detections import evaluate_detections
 from mgn.eval.grasps import (
@@ -23,7 +31,6 @@ from mgn.eval.grasps import (
 )
 from mgn.eval.layout_metrics import evaluate_layout
 from mgn.eval.results import print_and_write
-from mgn.hardware import grasp_kind_arg
 from mgn.io.real import REAL_FORMATS
 from mgn.learn.real_eval import DEFAULT_KS as REAL_KS
 from mgn.learn.real_eval import evaluate_real
@@ -136,11 +143,8 @@ def _cmd_real(args: argparse.Namespace) -> int:
         fmt=args.format,
         amodal=args.amodal,
         ks=args.k,
-        threshold=args.threshold,
-        core_threshold=args.core_threshold,
-        device=args.device,
-        num_threads=args.num_threads,
-        progress=not args.quiet,
+        **instance_threshold_kwargs(args),
+        **device_kwargs(args),
     )
     print(res.table())
     if args.out:
@@ -174,14 +178,7 @@ def _register_real(eval_sub: argparse._SubParsersAction) -> None:
         metavar="K",
         help="k of suction precision@k (default 1 5 10)",
     )
-    p.add_argument("--threshold", type=float, default=0.5, help="foreground probability threshold")
-    p.add_argument(
-        "--core-threshold",
-        type=float,
-        default=0.4,
-        help="core threshold of the instance seeds (lower: fewer, larger instances)",
-    )
-    p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
-    p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_instance_threshold_arguments(p)
+    add_device_arguments(p)
+    add_quiet_argument(p)
     p.set_defaults(func=_cmd_real)

@@ -8,7 +8,14 @@ from __future__ import annotations
 
 import argparse
 
-from mgn.cli.scene import _split
+from mgn.cli.args import (
+    add_device_arguments,
+    add_instance_threshold_arguments,
+    add_quiet_argument,
+    device_kwargs,
+    instance_threshold_kwargs,
+    int_list,
+)
 from mgn.learn.config import BACKBONES, SUCTION_SCORES, ModelConfig, TrainConfig
 from mgn.learn.predict import predict_files
 from mgn.learn.targets import MODALITIES
@@ -16,11 +23,6 @@ from mgn.learn.training import train
 from mgn.learn.transfer import run_transfer
 
 __all__ = ["add_model_arguments", "add_train_arguments", "configs_from_args", "register"]
-
-
-def _ints(values: list[str] | None) -> list[int] | None:
-    items = _split(values)
-    return None if items is None else [int(v) for v in items]
 
 
 def add_model_arguments(p: argparse.ArgumentParser) -> None:
@@ -70,14 +72,10 @@ def add_train_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--lr", type=float, default=d.lr, help="Adam learning rate (cosine decay)")
     p.add_argument("--seed", type=int, default=d.seed, help="weights, view order and flips")
     p.add_argument("--no-augment", action="store_true", help="no random flips")
-    p.add_argument(
-        "--device", default="auto", help="auto (a CUDA GPU if torch finds one), cpu or cuda[:N]"
-    )
-    p.add_argument(
-        "--num-threads",
-        type=int,
-        default=0,
-        help="torch CPU threads (0 = torch's default; fix it for reproducible weights)",
+    add_device_arguments(
+        p,
+        device_help="auto (a CUDA GPU if torch finds one), cpu or cuda[:N]",
+        threads_help="torch CPU threads (0 = torch's default; fix it for reproducible weights)",
     )
 
 
@@ -109,14 +107,12 @@ def _cmd_train(args: argparse.Namespace) -> int:
         args.out,
         model_config=mc,
         train_config=tc,
-        scenes=_ints(args.scenes),
-        views=_ints(args.views),
+        scenes=int_list(args.scenes),
+        views=int_list(args.views),
         resume=args.resume,
-        device=args.device,
-        num_threads=args.num_threads,
         init=args.init,
         backbone_weights=args.backbone_weights,
-        progress=not args.quiet,
+        **device_kwargs(args),
     )
     last = res.history[-1] if res.history else {}
     print(
@@ -133,12 +129,9 @@ def _cmd_predict(args: argparse.Namespace) -> int:
         args.images,
         args.out,
         depths=args.depth,
-        device=args.device,
-        num_threads=args.num_threads,
-        threshold=args.threshold,
-        core_threshold=args.core_threshold,
         num_suction_points=args.suction_points,
-        progress=not args.quiet,
+        **instance_threshold_kwargs(args),
+        **device_kwargs(args),
     )
     print(
         f"predictions of {len(args.images)} image(s): {path} (+ *_instances.png, "
@@ -152,10 +145,8 @@ def _cmd_transfer(args: argparse.Namespace) -> int:
         args.spec,
         args.out,
         real=args.real,
-        seeds=_ints(args.seeds),
-        device=args.device,
-        num_threads=args.num_threads,
-        progress=not args.quiet,
+        seeds=int_list(args.seeds),
+        **device_kwargs(args),
     )
     print(res.table())
     print(f"wrote {args.out}/transfer.md, transfer.json, transfer.png")
@@ -178,7 +169,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="FILE",
         help="local ResNet-18 state dict for --backbone resnet18",
     )
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet_argument(p)
     add_model_arguments(p)
     add_train_arguments(p)
     p.set_defaults(func=_cmd_train)
@@ -195,17 +186,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="FILE",
         help="one depth file per image: .npy (m), .npz 'depth' (cm), 16-bit .png (mm)",
     )
-    p.add_argument("--threshold", type=float, default=0.5, help="foreground probability threshold")
-    p.add_argument(
-        "--core-threshold",
-        type=float,
-        default=0.4,
-        help="core threshold of the instance seeds (lower: fewer, larger instances)",
-    )
+    add_instance_threshold_arguments(p)
     p.add_argument("--suction-points", type=int, default=10, help="suction points per image")
-    p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
-    p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_device_arguments(p)
+    add_quiet_argument(p)
     p.set_defaults(func=_cmd_predict)
 
     p = sub.add_parser(
@@ -217,7 +201,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, help="output folder (datasets, models, table, plot)")
     p.add_argument("--real", help="labelled real set (overrides the spec's 'real')")
     p.add_argument("--seeds", nargs="+", metavar="S", help="training seeds (overrides the spec)")
-    p.add_argument("--device", default="auto", help="auto, cpu or cuda[:N]")
-    p.add_argument("--num-threads", type=int, default=0, help="torch CPU threads (0 = default)")
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_device_arguments(p)
+    add_quiet_argument(p, "no progress bars")
     p.set_defaults(func=_cmd_transfer)

@@ -34,8 +34,8 @@ from mgn._core import __version__
 from mgn.base.atomic import atomic_write_bytes, atomic_write_text
 from mgn.base.yaml_file import read_yaml
 from mgn.calibration import calibrate_from_csv, write_calibration_board
+from mgn.cli.args import split_list
 from mgn.cli.demo import run_demo
-from mgn.cli.scene import _split
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.geometry.mesh import load_mesh, mass_properties
 from mgn.geometry.repair import repair_mesh
@@ -94,7 +94,7 @@ def _cmd_objects_list(args: argparse.Namespace) -> int:
 def _cmd_objects_export(args: argparse.Namespace) -> int:
 
     specs = _catalogue(args.add)
-    args.only = _split(args.only)
+    args.only = split_list(args.only)
     if args.only:
         by_key = {s.name: s for s in specs} | {str(s.category_id): s for s in specs}
         missing = [n for n in args.only if n not in by_key]
@@ -326,7 +326,7 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
     root = Path(args.root)
     folders = object_folders(root)
     if args.objects:
-        wanted = set(_split(args.objects) or ())
+        wanted = set(split_list(args.objects) or ())
         folders = [
             f
             for f in folders

@@ -6,8 +6,8 @@ import argparse
 import dataclasses
 from pathlib import Path
 
+from mgn.cli.args import grasp_kind_arg
 from mgn.eval.pick import run_picking
-from mgn.hardware import grasp_kind_arg
 from mgn.io.dataset_record import read_dataset_record
 from mgn.io.scene_json import read_scene_json
 from mgn.pipeline.config import Config, default_config, load_config

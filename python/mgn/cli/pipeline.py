@@ -27,7 +27,7 @@ import warnings
 from typing import Any
 
 from mgn.base.atomic import atomic_write_text
-from mgn.cli.scene import _split
+from mgn.cli.args import split_list
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.convex import cache_dir
 from mgn.io.stats import dataset_stats, format_stats
@@ -86,7 +86,7 @@ def _warn(text: str, shown: set[str]) -> None:
 
 def _cmd_generate(args: argparse.Namespace) -> int:
 
-    args.objects, args.categories = _split(args.objects), _split(args.categories)
+    args.objects, args.categories = split_list(args.objects), split_list(args.categories)
     cfg = _config_with_overrides(args)  # --objects, --add, --categories, ... applied
     shown: set[str] = set()
     for w in config_warnings(cfg, load_catalogue(cfg)):

@@ -19,6 +19,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from mgn.base.atomic import atomic_dir
+from mgn.cli.args import split_list
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.io.dataset_record import DATASET_RECORD, read_dataset_record
 from mgn.io.scene_json import read_scene_json, write_scene_json
@@ -37,14 +38,6 @@ from mgn.viz.scene_export import export_scene_glb
 __all__ = ["ACTIONS", "register"]
 
 
-def _split(values: str | list[str] | None) -> list[str] | None:
-    """Object names or ids given as ``a b c`` or ``a,b,c`` (both forms in every command)."""
-    if values is None:
-        return None
-    items = [values] if isinstance(values, str) else values
-    return [t.strip() for v in items for t in v.split(",") if t.strip()]
-
-
 def _copies(text: str) -> tuple[int, int]:
     try:
         lo, _, hi = text.partition("-")
@@ -61,8 +54,8 @@ def _cmd_drop(args: argparse.Namespace) -> int:
         for spec in load_objects_yaml(path):
             catalogue.append(spec)
             sources[spec.name] = str(Path(path).resolve())
-    names = _split(args.objects)
-    categories = _split(args.categories)
+    names = split_list(args.objects)
+    categories = split_list(args.categories)
     if names is None and categories is None and args.count is None:
         raise InvalidArgumentError("mgn scene drop: give --objects, --categories or --count")
     objects = compose_objects(
