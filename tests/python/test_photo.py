@@ -4,7 +4,6 @@ denoising, and a tiny path-traced dataset."""
 
 from __future__ import annotations
 
-import argparse
 import base64
 import json
 import warnings
@@ -95,8 +94,8 @@ def test_cli_spp_must_be_positive() -> None:
 
     base = RenderSettings(engine="path")
     with pytest.raises(InvalidArgumentError, match="--spp"):
-        photo.settings_from_args(base, argparse.Namespace(engine=None, spp=0))
-    got = photo.settings_from_args(base, argparse.Namespace(engine="raster", spp=4))
+        photo.with_engine(base, None, 0)
+    got = photo.with_engine(base, "raster", 4)
     assert got.engine == "raster" and got.spp == 4
 
 

@@ -1,7 +1,9 @@
 """Argument types and option blocks shared by the command modules of :mod:`mgn.cli`.
 
 - Types: :func:`split_list` (``a b c`` or ``a,b,c``), :func:`int_list`, :func:`grasp_kind_arg`.
-- Blocks: :func:`add_device_arguments` (``--device``, ``--num-threads`` of a PyTorch command),
+- Blocks: :func:`add_engine_arguments` (``--engine``, ``--spp`` of a command that renders, applied
+  by :func:`engine_settings`), :func:`add_device_arguments` (``--device``, ``--num-threads`` of a
+  PyTorch command),
   :func:`add_quiet_argument`, :func:`add_instance_threshold_arguments` (``--threshold``,
   ``--core-threshold`` of a model's instance masks), with :func:`device_kwargs` and
   :func:`instance_threshold_kwargs` turning the parsed values into keyword arguments.
@@ -14,14 +16,17 @@ from typing import TypedDict
 
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import normalize_grasp_kind
+from mgn.render.photo import ENGINES, RenderSettings, with_engine
 
 __all__ = [
     "DeviceKwargs",
     "InstanceThresholdKwargs",
     "add_device_arguments",
+    "add_engine_arguments",
     "add_instance_threshold_arguments",
     "add_quiet_argument",
     "device_kwargs",
+    "engine_settings",
     "grasp_kind_arg",
     "instance_threshold_kwargs",
     "int_list",
@@ -103,3 +108,23 @@ def add_instance_threshold_arguments(p: argparse.ArgumentParser) -> None:
 def instance_threshold_kwargs(args: argparse.Namespace) -> InstanceThresholdKwargs:
     """The parsed :func:`add_instance_threshold_arguments` values."""
     return {"threshold": args.threshold, "core_threshold": args.core_threshold}
+
+
+def add_engine_arguments(parser: argparse.ArgumentParser, what: str = "the RGB images") -> None:
+    """Add ``--engine {raster,path}`` and ``--spp N`` to ``parser`` (both default to the
+    configuration's ``render`` section; :func:`engine_settings` applies them)."""
+    parser.add_argument(
+        "--engine", choices=ENGINES, default=None,
+        help=f"what makes {what}: raster (fast OpenGL preview) or path (path tracer); "
+        "default: config render.engine",
+    )  # fmt: skip
+    parser.add_argument(
+        "--spp", type=int, default=None, metavar="N",
+        help="path tracer samples per pixel (default: config render.spp)",
+    )  # fmt: skip
+
+
+def engine_settings(settings: RenderSettings, args: argparse.Namespace) -> RenderSettings:
+    """``settings`` with the parsed ``--engine`` / ``--spp`` applied
+    (:func:`mgn.render.photo.with_engine`; InvalidArgumentError naming ``--spp``)."""
+    return with_engine(settings, getattr(args, "engine", None), getattr(args, "spp", None))

@@ -6,12 +6,11 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from mgn.cli.args import grasp_kind_arg
+from mgn.cli.args import add_engine_arguments, engine_settings, grasp_kind_arg
 from mgn.eval.pick import run_picking
 from mgn.io.dataset_record import read_dataset_record
 from mgn.io.scene_json import read_scene_json
 from mgn.pipeline.config import Config, default_config, load_config
-from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.scene.scene import Scene
 
 __all__ = ["register"]
@@ -37,7 +36,7 @@ def _cmd_pick(args: argparse.Namespace) -> int:
         config = load_config(args.config)
     if args.engine is not None or args.spp is not None:
         config = config or default_config()
-        config = dataclasses.replace(config, render=settings_from_args(config.render, args))
+        config = dataclasses.replace(config, render=engine_settings(config.render, args))
     results = run_picking(
         scene,
         policy=args.policy,

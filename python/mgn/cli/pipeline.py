@@ -27,7 +27,7 @@ import warnings
 from typing import Any
 
 from mgn.base.atomic import atomic_write_text
-from mgn.cli.args import split_list
+from mgn.cli.args import add_engine_arguments, engine_settings, split_list
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.convex import cache_dir
 from mgn.io.stats import dataset_stats, format_stats
@@ -36,7 +36,6 @@ from mgn.pipeline.label_cache import label_cache_dir
 from mgn.pipeline.runner import generate
 from mgn.pipeline.sanity import config_errors, config_warnings, load_catalogue
 from mgn.pipeline.testset import parse_quota
-from mgn.render.photo import add_engine_arguments, settings_from_args
 
 __all__ = ["register"]
 
@@ -70,7 +69,7 @@ def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipel
     if args.prune_rejected:
         sel["prune_rejected"] = True
 
-    cfg = dataclasses.replace(cfg, render=settings_from_args(cfg.render, args))
+    cfg = dataclasses.replace(cfg, render=engine_settings(cfg.render, args))
     if sel:
         merged = {**cfg.selection.to_dict(), **sel}
         cfg = dataclasses.replace(cfg, selection=SelectionConfig.from_dict(merged, "selection"))

@@ -11,10 +11,11 @@ import math
 
 import numpy as np
 
+from mgn.cli.args import add_engine_arguments, engine_settings
 from mgn.errors import InvalidArgumentError
 from mgn.io.view_images import render_views
 from mgn.objects import builtin_objects, tote_mesh
-from mgn.render.photo import RenderSettings, add_engine_arguments, settings_from_args
+from mgn.render.photo import RenderSettings
 from mgn.scene.cameras import Intrinsics, mgn_rig
 
 __all__ = ["register"]
@@ -74,7 +75,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     res = render_views(
         items, tote_mesh(), args.views, args.out, rig_seed=args.seed, K=K, sensor=args.sensor,
         randomize=not args.no_randomize, seed=args.seed,
-        render=settings_from_args(RenderSettings(), args),
+        render=engine_settings(RenderSettings(), args),
     )  # fmt: skip
     for r in res:
         print(f"view {r.index}: {r.valid.mean():.1%} valid depth -> {args.out}/{r.index}_*.png")

@@ -19,7 +19,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from mgn.base.atomic import atomic_dir
-from mgn.cli.args import split_list
+from mgn.cli.args import add_engine_arguments, engine_settings, split_list
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.io.dataset_record import DATASET_RECORD, read_dataset_record
 from mgn.io.scene_json import read_scene_json, write_scene_json
@@ -29,7 +29,6 @@ from mgn.pipeline.config import Config, load_config
 from mgn.pipeline.label_cache import object_labels
 from mgn.pipeline.label_scene import label_scene
 from mgn.pipeline.scene_writer import label_options, scene_views
-from mgn.render.photo import add_engine_arguments, settings_from_args
 from mgn.scene.compose import compose_objects
 from mgn.scene.drop import drop_scene
 from mgn.scene.scene import DropOptions
@@ -115,7 +114,7 @@ def _register_drop(ssub: argparse._SubParsersAction) -> None:
 def _cmd_render(args: argparse.Namespace) -> int:
 
     config = load_config(args.config)
-    render = settings_from_args(config.render, args)
+    render = engine_settings(config.render, args)
     scene = read_scene_json(args.scene)
     if len(scene) == 0:
         raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to render")
@@ -175,7 +174,7 @@ def _register_render(ssub: argparse._SubParsersAction) -> None:
 def _cmd_label(args: argparse.Namespace) -> int:
 
     config = load_config(args.config)
-    render = settings_from_args(config.render, args)
+    render = engine_settings(config.render, args)
     scene = read_scene_json(args.scene)
     if len(scene) == 0:
         raise InvalidArgumentError(f"'{args.scene}': the scene has no objects to label")

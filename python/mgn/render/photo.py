@@ -893,27 +893,16 @@ def replace_settings(settings: RenderSettings, **changes: Any) -> RenderSettings
     return dataclasses.replace(settings, **changes)
 
 
-def add_engine_arguments(parser: Any, what: str = "the RGB images") -> None:
-    """Add ``--engine {raster,path}`` and ``--spp N`` to an argparse parser (both default to
-    the configuration's ``render`` section)."""
-    parser.add_argument(
-        "--engine", choices=ENGINES, default=None,
-        help=f"what makes {what}: raster (fast OpenGL preview) or path (path tracer); "
-        "default: config render.engine",
-    )  # fmt: skip
-    parser.add_argument(
-        "--spp", type=int, default=None, metavar="N",
-        help="path tracer samples per pixel (default: config render.spp)",
-    )  # fmt: skip
-
-
-def settings_from_args(settings: RenderSettings, args: Any) -> RenderSettings:
-    """``settings`` with ``--engine`` / ``--spp`` applied (InvalidArgumentError naming the
-    flag for a bad value)."""
+def with_engine(
+    settings: RenderSettings, engine: str | None = None, spp: int | None = None
+) -> RenderSettings:
+    """``settings`` with the engine and the samples per pixel overridden where given (the
+    ``--engine`` / ``--spp`` flags of the commands). A new ``spp`` scales
+    ``spp_without_denoiser`` alike (never below ``spp``). InvalidArgumentError naming ``--spp``
+    for a value < 1."""
     changes: dict[str, Any] = {}
-    if getattr(args, "engine", None) is not None:
-        changes["engine"] = args.engine
-    spp = getattr(args, "spp", None)
+    if engine is not None:
+        changes["engine"] = engine
     if spp is not None:
         if spp < 1:
             raise InvalidArgumentError(f"--spp must be >= 1, got {spp}")
