@@ -333,6 +333,7 @@ def _object_labels(pj: PjLabels | None, suction: SuctionLabels | None) -> _core.
         suction_points=rows(None if suction is None else suction.points, np.float32),
         suction_approach=rows(None if suction is None else suction.approach, np.float32),
         suction_score_analytical=column(None if suction is None else suction.score),
+        suction_score_simulation=column(None if suction is None else suction.simulation),
     )
 
 
