@@ -128,8 +128,8 @@ def strided_subset(labels: Any, limit: int) -> Any:
     over the label order (deterministic; keeps the score distribution); None stays None."""
     if labels is None or limit <= 0:
         return labels
-    fields = _PJ_GRASP_FIELDS if hasattr(labels, "closing") else _SUCTION_GRASP_FIELDS
-    fields = tuple(f for f in fields if getattr(labels, f) is not None)
+    kind = _PJ_GRASP_FIELDS if hasattr(labels, "closing") else _SUCTION_GRASP_FIELDS
+    fields = [f for f in kind if getattr(labels, f) is not None]  # simulation may be None
     m = len(getattr(labels, fields[0]))
     if m <= limit:
         return labels
