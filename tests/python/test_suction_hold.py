@@ -265,3 +265,13 @@ def test_object_labels_carry_the_physics_score_into_the_file_and_the_scene(tmp_p
     )  # fmt: skip
     np.testing.assert_array_equal(model.suction.score_simulation, lab.simulation)
     np.testing.assert_array_equal(model.suction.score_analytical, lab.score)
+
+
+def test_config_dump_shows_the_cups_bending_limit():
+    from mgn.pipeline.config import dump_config, load_config
+
+    text = dump_config()
+    assert "bending_k: 15.6" in text and "bending limit" in text
+    cfg = load_config({"cup": {"bending_k": 20.0}})
+    assert cfg.cup.bending_k == 20.0
+    assert bending_limit(cfg.cup) == pytest.approx(20.0 * 0.007 * math.pi * math.sqrt(2))

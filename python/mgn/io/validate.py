@@ -19,7 +19,8 @@ the files of a view (docs/format.md):
 - grasps: every stored grasp scored (analytical and wrench scores in [0, 1]; a parallel-jaw
   ``score_simulation`` NaN only where ``dataset.json`` records unscored grasps or physics off;
   suction ``score_simulation`` in [0, 1] for every grasp, or NaN for all of them in datasets
-  whose object labels have no suction physics score), object ids and contact widths in range, groups complete;
+  whose object labels have no suction physics score), object ids and contact widths in range,
+  groups complete;
 - units: camera fields of view in radians (2 atan(W / 2 fx)), apertures in mm, clipping range
   in cm; depth, object poses and ``scene_gt.json`` translations in cm and consistent with each
   other.
