@@ -652,6 +652,14 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
     )
     assert label_keys(spec, calibrated)["paralleljaw"] != keys["paralleljaw"]
     assert label_keys(spec, more_checks)["suction"] == keys["suction"]
+    # The suction physics score depends on the grid and the cup's bending limit.
+    grid3 = dataclasses.replace(
+        config, object_labels=dataclasses.replace(config.object_labels, physics_grid=3)
+    )
+    assert label_keys(spec, grid3)["suction"] != keys["suction"]
+    stiff = dataclasses.replace(config, cup=dataclasses.replace(config.cup, bending_k=20.0))
+    assert label_keys(spec, stiff)["suction"] != keys["suction"]
+    assert label_keys(spec, stiff)["paralleljaw"] == keys["paralleljaw"]
     o = shake_options(more_checks).to_core()
     assert o.staircase and o.staircase_checks == config.object_labels.staircase_checks + 1
     assert o.grid == config.object_labels.physics_grid
