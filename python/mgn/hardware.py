@@ -192,6 +192,9 @@ class SuctionCup(_YamlDataclass):
         outer_radius: outer radius of the cup body for collision checks, m.
         body_height: height of the cup body (bellows) for collision checks, m.
         hole_rays: rays of the hole check spread over the contact disc (MetaGraspNet: 1000).
+        bending_k: k of the cup's bending-torque limit tau_max = k * radius * pi * sqrt(2), N
+            (> 0; 15.6 as in SuctionNet-1Billion: 0.485 N m for the 7 mm ring); used by the
+            suction wrench score and the hold test (docs/models.md §3, §3a).
     """
 
     name: str = "bellows_14mm"
@@ -206,6 +209,7 @@ class SuctionCup(_YamlDataclass):
     outer_radius: float = 0.010
     body_height: float = 0.030
     hole_rays: int = 1000
+    bending_k: float = 15.6
 
     def __post_init__(self) -> None:
         if not isinstance(self.hole_rays, int) or self.hole_rays < 1:
@@ -222,6 +226,7 @@ class SuctionCup(_YamlDataclass):
             "c2",
             "outer_radius",
             "body_height",
+            "bending_k",
         )
         if not isinstance(self.num_points, int) or self.num_points < 6:
             raise InvalidArgumentError(

@@ -8,10 +8,12 @@ set; networks are tiny (width 4-8, 32-96 px) so the file runs in seconds on 2 CP
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 import torch
@@ -21,6 +23,7 @@ from pycocotools import mask as mask_utils
 import mgn
 from mgn.cli.main import main
 from mgn.errors import InvalidArgumentError, IoError, UnsupportedError
+from mgn.io.dataset import View
 from mgn.io.real import read_depth
 from mgn.learn import ModelConfig, Predictor, TrainConfig, instances_from_maps, train
 from mgn.learn.backend import require_torch
@@ -434,9 +437,20 @@ def test_bad_input_errors(
         training_views(small_dataset, scenes=[7])
     assert main(["train", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 1
     assert "no views to train on" in capsys.readouterr().err
+    # The suction physics score is a target like the others; a dataset whose labels have none
+    # (NaN in every grasp) is an error naming the setting.
     view = mgn.Dataset(small_dataset).scene(0).view(0)
+    sim = view_targets(view, ModelConfig(suction_score="score_simulation"))["suction"]
+    assert np.isfinite(sim).all() and sim.min() >= 0 and sim.max() <= 1
+    shutil.copytree(small_dataset / "scene0", tmp_path / "nan" / "scene0")
+    with h5py.File(tmp_path / "nan" / "scene0" / "0_scene.hdf5", "a") as h5:
+        for group in ("non_colliding_grasps", "colliding_grasps"):
+            name = f"{group}/suctioncup/score_simulation"
+            if name in h5:
+                h5[name][...] = np.nan
+    nan_view = View(tmp_path / "nan" / "scene0", 0)
     with pytest.raises(InvalidArgumentError, match="score_simulation' is NaN"):
-        view_targets(view, ModelConfig(suction_score="score_simulation"))
+        view_targets(nan_view, ModelConfig(suction_score="score_simulation"))
     # An image and its depth of different sizes.
     Image.fromarray(np.zeros((20, 30, 3), np.uint8)).save(tmp_path / "a.png")
     np.save(tmp_path / "a_depth.npy", np.ones((20, 31), np.float32))

@@ -53,7 +53,9 @@ def test_shared_samples_give_the_labels_of_separate_label_object_calls():
     mesh = spec.to_mesh()
     props = mass_properties(mesh, spec.density)
     kw = dict(mass=props.mass, com=props.center_of_mass, num_points=300, seed=7, num_threads=1)
-    suction = suction_label_object(mesh, cup=config.cup, model="spring", **kw)
+    suction = suction_label_object(
+        mesh, cup=config.cup, model="spring", inertia=props.inertia, **kw
+    )
     pj = pj_label_object(mesh, gripper=config.gripper, max_grasps=config.object_labels.pj_grasps,
                          **kw)  # fmt: skip
     assert len(suction.score) > 50 and len(pj.width) > 100

@@ -91,6 +91,17 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
                 assert f"scene{i}/{name}" in sums
         assert not any(k.startswith(f"scene{i}/1_") for k in sums)  # only the kept views
     assert not list(out.glob(".tmp-*"))
+    # The scene suction grasps carry the physics score (MetaGraspNet's colored_pcl.py colours
+    # them by it): a number in [0, 1] for every grasp.
+    n_suction = 0
+    with h5py.File(out / "scene0" / "0_scene.hdf5", "r") as h5:
+        for group in ("non_colliding_grasps", "colliding_grasps"):
+            name = f"{group}/suctioncup/score_simulation"
+            if name in h5:
+                sim = np.asarray(h5[name][()], float).reshape(-1)
+                n_suction += sim.size
+                assert np.isfinite(sim).all() and sim.min() >= 0 and sim.max() <= 1, name
+    assert n_suction > 0
     # Object folders carry the labels (rows = labels, no padding).
     for cid in ("003", "006"):
         with h5py.File(out / "models" / cid / "textured.obj.hdf5", "r") as h5:
@@ -98,6 +109,13 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
             sc = h5["grasps/suctioncup/pregrasp_transform"]
             assert pj.shape[1] == 10 and pj.shape[0] > 0
             assert sc.shape[1] == 6 and 0 < sc.shape[0] <= 30
+            # Suction physics: seal score x share of the 2 x 2 grid held, for every grasp.
+            seal = np.asarray(h5["grasps/suctioncup/quality_score"])
+            ssim = np.asarray(h5["grasps/suctioncup/quality_score_simulation"])
+            assert ssim.shape == seal.shape and np.isfinite(ssim).all()
+            assert ((ssim >= 0) & (ssim <= seal)).all()
+            held = ssim[seal > 0] / seal[seal > 0]
+            assert np.isin(np.round(held * 4), [0, 1, 2, 3, 4]).all()
             sim = np.asarray(h5["grasps/paralleljaw/quality_score_simulation"])
             assert np.isfinite(sim).sum() == 3  # physics_grasps
             meta = h5["metadata"].attrs
@@ -634,6 +652,14 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
     )
     assert label_keys(spec, calibrated)["paralleljaw"] != keys["paralleljaw"]
     assert label_keys(spec, more_checks)["suction"] == keys["suction"]
+    # The suction physics score depends on the grid and the cup's bending limit.
+    grid3 = dataclasses.replace(
+        config, object_labels=dataclasses.replace(config.object_labels, physics_grid=3)
+    )
+    assert label_keys(spec, grid3)["suction"] != keys["suction"]
+    stiff = dataclasses.replace(config, cup=dataclasses.replace(config.cup, bending_k=20.0))
+    assert label_keys(spec, stiff)["suction"] != keys["suction"]
+    assert label_keys(spec, stiff)["paralleljaw"] == keys["paralleljaw"]
     o = shake_options(more_checks).to_core()
     assert o.staircase and o.staircase_checks == config.object_labels.staircase_checks + 1
     assert o.grid == config.object_labels.physics_grid

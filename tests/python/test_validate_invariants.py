@@ -3,7 +3,8 @@ editing one file of a good generated dataset (docs/format.md): ids with a gap, a
 negative depth difference, a boundary counted for both directions of a pair, a parentless object
 outside layer 0, layers that the graph does not give, degrees and metres where the files hold
 radians and centimetres, occlusion rates beyond 4 decimals, the old keypts/com layout, grasps
-without a physics score that dataset.json does not record, scene_gt.json entries out of step."""
+without a physics score that dataset.json does not record, suction grasps with and without a
+physics score in one view, scene_gt.json entries out of step."""
 
 from __future__ import annotations
 
@@ -183,6 +184,20 @@ def test_grasps_without_a_physics_score_need_a_record(ds: Path) -> None:
     _edit_json(ds / "dataset.json", lambda d: d["physics_scores"].update(unscored=0))
     found = _messages(ds, "0_scene.hdf5")
     assert any("without a physics score" in m for m in found), found
+
+
+def test_a_suction_grasp_without_its_physics_score_is_rejected(ds: Path) -> None:
+    # Every suction grasp has a physics score (seal x hold) or, in labels without one, none has.
+    with h5py.File(ds / "scene0" / "0_scene.hdf5", "a") as h5:
+        groups = [f"{g}/suctioncup/score_simulation" for g in ("non_colliding_grasps",
+                  "colliding_grasps")]  # fmt: skip
+        name = next(n for n in groups if n in h5 and h5[n].shape[0] >= 2)
+        sim = np.asarray(h5[name][()])
+        assert np.isfinite(sim).all()
+        sim[0] = np.nan
+        h5[name][...] = sim
+    found = _messages(ds, "0_scene.hdf5")
+    assert any("suctioncup/score_simulation': 1 of" in m for m in found), found
 
 
 def test_scene_gt_entries_out_of_step_are_rejected(ds: Path) -> None:

@@ -346,6 +346,7 @@ def _cmd_suction_label(args: argparse.Namespace) -> int:
             mesh,
             mass=props.mass,
             com=props.center_of_mass,
+            inertia=props.inertia,
             cup=cup,
             model=args.model,
             num_points=args.num_points,

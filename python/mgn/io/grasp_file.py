@@ -138,22 +138,26 @@ def write_suction_labels(hdf5_path: str | os.PathLike[str], labels: SuctionLabel
     """Replace ``grasps/suctioncup/*`` of an object's ``textured.obj.hdf5`` (docs/format.md).
 
     Writes ``pregrasp_transform`` (K, 6) [approach (3, into the surface), contact (3, cm)],
-    ``quality_score`` (K,) (seal score) and the mgn extensions ``score_wrench`` (K,) and
-    ``failure_reason`` (K,) (uint8 codes of ``mgn.suction.FAILURE_REASONS``; the others
-    float32), plus the metadata attributes. The file is updated on a temporary copy that
-    replaces the original only when complete.
+    ``quality_score`` (K,) (seal score) and the mgn extensions ``quality_score_simulation``
+    (K,) (physics score: seal score x hold score, docs/models.md §3a; written when the labels
+    have it), ``score_wrench`` (K,) and ``failure_reason`` (K,) (uint8 codes of
+    ``mgn.suction.FAILURE_REASONS``; the others float32), plus the metadata attributes. The
+    file is updated on a temporary copy that replaces the original only when complete.
     """
+    datasets = {
+        "pregrasp_transform": np.concatenate(
+            [labels.approach, labels.points * M_TO_CM], axis=1
+        ).reshape(-1, 6),
+        "quality_score": labels.score,
+    }
+    if labels.simulation is not None:
+        datasets["quality_score_simulation"] = labels.simulation
+    datasets["score_wrench"] = labels.wrench
+    datasets["failure_reason"] = labels.reason
     replace_grasp_group(
         hdf5_path,
         "grasps/suctioncup",
-        {
-            "pregrasp_transform": np.concatenate(
-                [labels.approach, labels.points * M_TO_CM], axis=1
-            ).reshape(-1, 6),
-            "quality_score": labels.score,
-            "score_wrench": labels.wrench,
-            "failure_reason": labels.reason,
-        },
+        datasets,
         labels.metadata,
         who="write_suction_labels",
     )

@@ -18,7 +18,9 @@ the files of a view (docs/format.md):
   ``{v}_layout.json``'s layers, picking order and difficulty consistent with them;
 - grasps: every stored grasp scored (analytical and wrench scores in [0, 1]; a parallel-jaw
   ``score_simulation`` NaN only where ``dataset.json`` records unscored grasps or physics off;
-  suction ``score_simulation`` NaN), object ids and contact widths in range, groups complete;
+  suction ``score_simulation`` in [0, 1] for every grasp, or NaN for all of them in datasets
+  whose object labels have no suction physics score), object ids and contact widths in range,
+  groups complete;
 - units: camera fields of view in radians (2 atan(W / 2 fx)), apertures in mm, clipping range
   in cm; depth, object poses and ``scene_gt.json`` translations in cm and consistent with each
   other.
@@ -502,10 +504,12 @@ class _ViewCheck:
                     "(physics_scores) and labels.pj_physics is on",
                 )
         if kind == "suctioncup":
-            sim = out[f"{name}/score_simulation"]
-            if not np.isnan(sim).all():
+            nan = np.isnan(out[f"{name}/score_simulation"])
+            if nan.any() and not nan.all():
                 self.bad(
-                    "_scene.hdf5", f"'{name}/score_simulation' must be NaN (no suction physics)"
+                    "_scene.hdf5",
+                    f"'{name}/score_simulation': {int(nan.sum())} of {nan.size} grasps NaN; "
+                    "expected a physics score for every grasp or (labels without one) for none",
                 )
         width = out.get(f"{name}/contact_width")
         cap = self.marks.max_opening_cm

@@ -827,7 +827,8 @@ _SECTION_DOCS = {
     "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width); "
     "color is used only with camera.randomize: false (else drawn per view)",
     "gripper": "parallel-jaw gripper (m): mgn.hardware.ParallelJawGripper",
-    "cup": "suction cup (m, bar): mgn.hardware.SuctionCup",
+    "cup": "suction cup (m, bar; bending_k N, the hold and wrench scores' bending limit): "
+    "mgn.hardware.SuctionCup",
     "camera": "rig: mgn (37 views) | hemisphere | poses; views: indices to keep (null = all); "
     "intrinsics: preset or {width, height, fx, fy, cx, cy, distortion}",
     "labels": "which labels to make",

@@ -63,7 +63,7 @@ __all__ = [
 ]
 
 #: Bump when the label layout or algorithms change, so old cache entries are not reused.
-CACHE_VERSION = "object-labels-4"
+CACHE_VERSION = "object-labels-5"
 
 
 @dataclass(frozen=True)
@@ -115,6 +115,7 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
             "points": ol.suction_points,
             "model": ol.suction_model,
             "seed": ol.seed,
+            "grid": ol.physics_grid,
         }
         h.update(json.dumps(params, sort_keys=True).encode())
         keys["suction"] = h.hexdigest()
@@ -225,12 +226,14 @@ def compute_object_labels(
             mesh,
             mass=props.mass,
             com=props.center_of_mass,
+            inertia=props.inertia,
             cup=config.cup,
             model=ol.suction_model,  # type: ignore[arg-type]
             num_points=ol.suction_points,
             seed=ol.seed,
             num_threads=num_threads,
             samples=shared,
+            grid=ol.physics_grid,
         )
     pj = None
     report = mesh.validate()

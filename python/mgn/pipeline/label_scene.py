@@ -120,7 +120,7 @@ class LabelTimings:
 #: Per-grasp fields of the object label dataclasses (the others are per object or per point).
 _PJ_GRASP_FIELDS = ("approach", "closing", "p1", "width", "quality_score", "score_wrench",
                     "quality_score_simulation", "point_index")  # fmt: skip
-_SUCTION_GRASP_FIELDS = ("points", "approach", "score", "wrench", "reason")
+_SUCTION_GRASP_FIELDS = ("points", "approach", "score", "wrench", "reason", "simulation")
 
 
 def strided_subset(labels: Any, limit: int) -> Any:
@@ -128,7 +128,8 @@ def strided_subset(labels: Any, limit: int) -> Any:
     over the label order (deterministic; keeps the score distribution); None stays None."""
     if labels is None or limit <= 0:
         return labels
-    fields = _PJ_GRASP_FIELDS if hasattr(labels, "closing") else _SUCTION_GRASP_FIELDS
+    kind = _PJ_GRASP_FIELDS if hasattr(labels, "closing") else _SUCTION_GRASP_FIELDS
+    fields = [f for f in kind if getattr(labels, f) is not None]  # simulation may be None
     m = len(getattr(labels, fields[0]))
     if m <= limit:
         return labels

@@ -2,7 +2,9 @@
 
 Pipeline per object: sample candidate points evenly on the surface (MetaGraspNet: 5000), score
 each with a seal model (robust 10-trial score), drop candidates whose cup body would collide with
-the object (FCL), and compute the suction wrench score with gravity along -z of the object frame.
+the object (FCL), compute the suction wrench score with gravity along -z of the object frame, and
+the physics score: the seal score times the share of the shake test's (friction, density) grid in
+which the sealed cup holds the object (:mod:`mgn.suction.hold`, docs/models.md §3a).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from mgn.errors import InvalidArgumentError
 from mgn.geometry.collision import CollisionModel, collide
 from mgn.geometry.mesh import Mesh, SurfaceSamples, make_cylinder, sample_surface
 from mgn.hardware import SuctionCup
+from mgn.suction.hold import ShakeLoads, frames_z_to, suction_hold_scores
 from mgn.suction.seal import SealModel, SealModelName, suction_wrench_scores
 
 #: Gap between the contact and the bottom of the cup body in the collision check, m: the lip
@@ -38,6 +41,9 @@ class SuctionLabels:
         num_candidates: points sampled before the collision filter.
         num_colliding: candidates dropped because the cup body hits the object.
         metadata: cup, model, seed and counts, as written to the file.
+        simulation: (K,) physics score in [0, 1]: ``score`` times the hold score of
+            :func:`mgn.suction.hold.suction_hold_scores` (0 where the cup never seals); None:
+            not computed (NaN in the scene files).
     """
 
     points: npt.NDArray[np.float32]
@@ -48,16 +54,7 @@ class SuctionLabels:
     num_candidates: int
     num_colliding: int
     metadata: dict = field(default_factory=dict)
-
-
-def _frames_z_to(n: np.ndarray) -> np.ndarray:
-    """(N, 3, 3) rotations whose z column is the unit vector n (branch-free basis)."""
-    sign = np.where(n[:, 2] >= 0, 1.0, -1.0)
-    a = -1.0 / (sign + n[:, 2])
-    b = n[:, 0] * n[:, 1] * a
-    u = np.stack([1 + sign * n[:, 0] ** 2 * a, sign * b, -sign * n[:, 0]], axis=1)
-    v = np.stack([b, sign + n[:, 1] ** 2 * a, -n[:, 1]], axis=1)
-    return np.stack([u, v, n], axis=2)
+    simulation: npt.NDArray[np.float32] | None = None
 
 
 def cup_body_poses(points: np.ndarray, normals: np.ndarray, cup: SuctionCup) -> np.ndarray:
@@ -66,7 +63,7 @@ def cup_body_poses(points: np.ndarray, normals: np.ndarray, cup: SuctionCup) -> 
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     length = cup.body_height - CUP_BODY_CLEARANCE
     X = np.tile(np.eye(4), (len(points), 1, 1))
-    X[:, :3, :3] = _frames_z_to(n)
+    X[:, :3, :3] = frames_z_to(n)
     X[:, :3, 3] = points + n * (CUP_BODY_CLEARANCE + length / 2)
     return X
 
@@ -76,6 +73,7 @@ def label_object(
     *,
     mass: float,
     com: npt.ArrayLike,
+    inertia: npt.ArrayLike | None = None,
     cup: SuctionCup | None = None,
     model: SealModelName = "spring",
     num_points: int = 5000,
@@ -84,12 +82,15 @@ def label_object(
     progress: bool = False,
     chunk: int | None = None,
     samples: SurfaceSamples | None = None,
+    grid: int = 10,
 ) -> SuctionLabels:
     """Suction labels of one object: see the module docstring. Deterministic for ``seed``.
 
     Args:
         mesh: the object, metres, object frame.
-        mass: kg; com: centre of mass (m, object frame) — for the wrench score.
+        mass: kg; com: centre of mass (m, object frame) — for the wrench and hold scores.
+        inertia: (3, 3) inertia about the centre of mass, kg m^2, for the hold score's
+            rotational terms (None: left out).
         cup: the suction cup (default: MetaGraspNet's).
         model: seal model name.
         num_points: candidates sampled evenly on the surface.
@@ -99,6 +100,8 @@ def label_object(
         samples: the candidates, if already drawn: they must be
             ``sample_surface(mesh, num_points, method="even", seed=seed)`` (e.g. shared with
             :func:`mgn.pj.label_object`); None draws them here.
+        grid: S of the hold score's S x S (friction, density factor) grid (MetaGraspNet's
+            shake grid: 10).
     """
 
     cup = cup if cup is not None else SuctionCup()
@@ -141,15 +144,32 @@ def label_object(
     bar.close()
     approach = -normals[kept_idx]
     wrench = suction_wrench_scores(
-        points[kept_idx], approach, mass=mass, com=com, cup_radius=cup.radius
+        points[kept_idx], approach, mass=mass, com=com, cup_radius=cup.radius, k=cup.bending_k
     )
+    loads = ShakeLoads.from_shake(grid)
+    hold = suction_hold_scores(
+        points[kept_idx], approach, mass=mass, com=com, inertia=inertia, cup=cup, loads=loads
+    )
+    simulation = (score * hold.score).astype(np.float32)
     metadata = {
         "suction_model": model,
         "suction_cup": cup.to_dict(),
         "suction_seed": int(seed),
         "suction_num_candidates": int(num_points),
         "suction_num_colliding": int((~keep).sum()),
-        "suction_wrench": "gravity -z of the object frame; tau_max = 15.6 * r * pi * sqrt(2)",
+        "suction_wrench": (
+            f"gravity -z of the object frame; tau_max = {cup.bending_k:g} * r * pi * sqrt(2)"
+        ),
+        "suction_physics": {
+            "score": "seal score x share of the (friction, density) grid held",
+            "grid": int(grid),
+            "friction": [round(v, 6) for v in loads.friction],
+            "density_factor": [round(v, 6) for v in loads.density],
+            "acceleration_m_s2": round(loads.translation_acceleration, 6),
+            "rotation_rad": round(loads.rotation_angle, 6),
+            "rotation_rad_s": round(loads.rotation_frequency, 6),
+            "rotational_inertia": inertia is not None,
+        },
         "mgn_version": _core.__version__,
     }
     return SuctionLabels(
@@ -161,4 +181,5 @@ def label_object(
         int(num_points),
         int((~keep).sum()),
         metadata,
+        simulation,
     )

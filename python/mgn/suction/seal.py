@@ -31,10 +31,18 @@ _SEAL = _core.SealOptions()
 _WRENCH = _core.SuctionWrenchOptions()
 
 
+#: :class:`~mgn.hardware.SuctionCup` fields the seal models do not use (the hold test's and the
+#: wrench score's bending limit, :mod:`mgn.suction.hold`); the C++ cup has no such field.
+PYTHON_ONLY_CUP_FIELDS: tuple[str, ...] = ("bending_k",)
+
+
 def core_cup(cup: SuctionCup) -> _core.Cup:
-    """The C++ cup for a :class:`~mgn.hardware.SuctionCup` (same field names, SI units)."""
+    """The C++ cup for a :class:`~mgn.hardware.SuctionCup` (same field names, SI units; the
+    fields of :data:`PYTHON_ONLY_CUP_FIELDS` are left out)."""
     c = _core.Cup()
     for f in dataclasses.fields(cup):
+        if f.name in PYTHON_ONLY_CUP_FIELDS:
+            continue
         setattr(c, f.name, getattr(cup, f.name))
     c.validate()
     return c

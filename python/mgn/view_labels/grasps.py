@@ -17,8 +17,8 @@ documents the model). Built once per scene, reused for every view:
    object is skipped for the hand at offset 0 only (the object-level sampler checked it there);
    the suction tool is checked against it too. Colliding grasps are kept apart, not dropped.
 3. Wrench scores recomputed with the scene's gravity (0, 0, -1) in the world, i.e. R_WO^T g in
-   the object frame; analytical and simulation scores are carried over (suction simulation scores
-   are NaN: the object-level suction labels have none).
+   the object frame; analytical and simulation scores are carried over (the suction simulation
+   score, docs/models.md §3a, is NaN only for object labels made without it).
 4. Per view (:meth:`SceneGraspModel.view_grasps`): a grasp is kept when its object is seen and its
    contact is visible: in front of the camera (z > ``near_plane``), inside the image, and a ray
    from the camera centre meets nothing closer than ``distance - visibility_tolerance``
@@ -135,7 +135,8 @@ class SuctionGraspSet:
             :data:`SUCTION_TOOL_OFFSET` behind the contact (MetaGraspNet: 2 + 11.21 cm).
         contact_poses: (K, 4, 4) contact frames X_CS: z = approach into the surface, origin at
             the contact.
-        score_analytical: (K,) float32 seal score; score_simulation: (K,) NaN when not available;
+        score_analytical: (K,) float32 seal score; score_simulation: (K,) seal x hold score
+            (NaN for object labels without one);
         score_wrench: (K,) float32.
         object_id: (K,) int32 instance id - 1.
         index: (K,) int64 row in :attr:`SceneGraspModel.suction`.
@@ -333,6 +334,7 @@ def _object_labels(pj: PjLabels | None, suction: SuctionLabels | None) -> _core.
         suction_points=rows(None if suction is None else suction.points, np.float32),
         suction_approach=rows(None if suction is None else suction.approach, np.float32),
         suction_score_analytical=column(None if suction is None else suction.score),
+        suction_score_simulation=column(None if suction is None else suction.simulation),
     )
 
 
