@@ -463,6 +463,69 @@ def test_denoise_rejects_bad_inputs() -> None:
     assert np.array_equal(finite, kept)
 
 
+def test_half_resolution_blocks_and_interpolation_are_opencvs() -> None:
+    """The ``half`` denoise's 2 x 2 block means are OpenCV's INTER_AREA halving and its doubling
+    is OpenCV's INTER_LINEAR (pixel centres aligned) for even sizes; a linear ramp survives the
+    round trip exactly away from the border; odd sizes repeat the last row / column."""
+    import cv2
+
+    img = np.random.default_rng(5).random((24, 18, 3)).astype(np.float32)
+    blk = photo._blocks2(img)
+    np.testing.assert_allclose(blk, cv2.resize(img, (9, 12), interpolation=cv2.INTER_AREA),
+                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        photo._double(blk, 24, 18),
+        cv2.resize(blk, (18, 24), interpolation=cv2.INTER_LINEAR),
+        atol=1e-6,
+    )
+    yy, xx = np.mgrid[0:20, 0:30].astype(np.float32)
+    ramp = np.stack([0.1 * xx + 0.05 * yy, 0.2 * yy, np.full_like(xx, 0.7)], axis=-1)
+    back = photo._double(photo._blocks2(ramp), 20, 30)
+    np.testing.assert_allclose(back[1:-1, 1:-1], ramp[1:-1, 1:-1], atol=1e-5)
+    odd = img[:23, :17]
+    ob = photo._blocks2(odd)
+    assert ob.shape == (12, 9, 3)
+    np.testing.assert_allclose(ob[-1, -1], odd[22, 16], atol=1e-6)  # the corner block: one pixel
+    np.testing.assert_allclose(ob[-1, 0], odd[22, 0:2].mean(axis=0), atol=1e-6)
+    assert photo._double(ob, 23, 17).shape == (23, 17, 3)
+
+
+def test_half_resolution_denoise_keeps_full_size_print() -> None:
+    """A one-pixel checker printed on a surface under smooth light, traced noisily: the ``half``
+    denoise runs OIDN on 2 x 2 blocks (where the checker averages out) yet returns the checker
+    at full size and contrast, through the ratio of the exact (``raw``) albedo, with a twentieth
+    of the input's squared error; without an albedo it returns the blocks' interpolation (no
+    checker)."""
+    if not photo.denoiser_available():
+        pytest.fail("pyoidn (test extra) is not installed")
+    h, w = 64, 48
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    checker = np.where((yy + xx) % 2 == 0, 0.8, 0.2).astype(np.float32)
+    albedo = np.repeat(checker[..., None], 3, axis=2)
+    light = (1.0 + 0.3 * xx / w)[..., None].astype(np.float32)
+    clean = albedo * light
+    rng = np.random.default_rng(6)
+    noisy = (clean * rng.gamma(8.0, 1.0 / 8.0, (h, w, 1))).astype(np.float32)
+    normal = np.zeros((h, w, 3), np.float32)
+    normal[..., 2] = 1.0
+    out = photo.denoise(noisy, albedo, normal, resolution="half", guides="raw")
+    assert out.shape == noisy.shape and out.dtype == np.float32 and out.min() >= 0.0
+    err_out = float(np.mean((out - clean) ** 2))
+    err_in = float(np.mean((noisy - clean) ** 2))
+    assert err_out < 0.05 * err_in, (err_out, err_in)
+    # the checker survives: light and dark pixels alternate as in the print, at 4 : 1
+    dark, lit = out[(yy + xx) % 2 == 1].mean(), out[(yy + xx) % 2 == 0].mean()
+    assert lit / dark == pytest.approx(4.0, rel=0.02), (lit, dark)
+    flat = photo.denoise(noisy, None, None, resolution="half", guides="none")
+    assert abs(flat[(yy + xx) % 2 == 0].mean() / flat[(yy + xx) % 2 == 1].mean() - 1.0) < 0.1
+    with pytest.raises(InvalidArgumentError, match="resolution must be one of"):
+        photo.denoise(noisy, albedo, normal, resolution="quarter")
+    with pytest.raises(InvalidArgumentError, match="denoise_resolution"):
+        RenderSettings(engine="path", denoise_resolution="quarter")
+    # a one-pixel-high image is denoised at full size
+    assert photo.denoise(noisy[:1], albedo[:1], normal[:1], resolution="half").shape == (1, w, 3)
+
+
 def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
     """The ``smoothed`` guides' blur is a 3 x 3 Gaussian of sigma 0.5 px with the border pixels
     repeated: OpenCV's GaussianBlur (BORDER_REPLICATE) gives the same image; a constant image

@@ -65,7 +65,9 @@ Sections:
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
   it ``spp_without_denoiser`` samples are traced and a warning names the package),
   ``denoise_quality``, ``denoise_guides`` (``smoothed`` | ``raw`` | ``albedo`` | ``none``: the
-  guide images the denoiser gets), ``adaptive_samples`` / ``adaptive_max`` (adaptive sampling:
+  guide images the denoiser gets), ``denoise_resolution`` (``half`` | ``full``: the denoiser
+  on 2 x 2 pixel blocks, the full-size detail restored from the albedo, or on every pixel),
+  ``adaptive_samples`` / ``adaptive_max`` (adaptive sampling:
   extra samples where the first pass is noisy), ``max_bounces``, ``clamp``, ``exposure`` (EV),
   ``tone`` (``filmic`` | ``linear``),
   ``aperture_radius`` (m, defocus), ``shot_noise`` / ``read_noise`` (sensor noise) and
