@@ -186,6 +186,26 @@ def test_grasps_without_a_physics_score_need_a_record(ds: Path) -> None:
     assert any("without a physics score" in m for m in found), found
 
 
+def test_unscored_grasps_are_marked_in_the_view_file(ds: Path) -> None:
+    # The capped physics scores (physics_grasps 3) leave NaN scores; the view file's root
+    # attribute counts them per dataset, and validate checks the count.
+    with h5py.File(ds / "scene0" / "0_scene.hdf5", "r") as h5:
+        want = {}
+        for g in ("non_colliding_grasps", "colliding_grasps"):
+            name = f"{g}/paralleljaw/score_simulation"
+            if name in h5:
+                nan = int(np.isnan(h5[name][()]).sum())
+                if nan:
+                    want[name] = nan
+        assert want, "the small dataset caps the physics scores: some must be NaN"
+        assert json.loads(h5.attrs["mgn_unscored_grasps"]) == want
+        assert "physics_grasps" in h5.attrs["mgn_unscored_reason"]
+    with h5py.File(ds / "scene0" / "0_scene.hdf5", "a") as h5:
+        h5.attrs["mgn_unscored_grasps"] = json.dumps({k: v + 1 for k, v in want.items()})
+    found = _messages(ds, "0_scene.hdf5")
+    assert any("mgn_unscored_grasps" in m for m in found), found
+
+
 def test_a_suction_grasp_without_its_physics_score_is_rejected(ds: Path) -> None:
     # Every suction grasp has a physics score (seal x hold) or, in labels without one, none has.
     with h5py.File(ds / "scene0" / "0_scene.hdf5", "a") as h5:

@@ -635,6 +635,35 @@ def read_scene_dataset(h5: Any, path: str) -> np.ndarray:
     return out
 
 
+#: Root attribute of ``{v}_scene.hdf5``: per parallel-jaw ``score_simulation`` dataset that
+#: holds NaN, how many of its grasps have no physics score (JSON ``{path: count}``). Absent when
+#: every stored grasp is scored.
+UNSCORED_ATTR = "mgn_unscored_grasps"
+#: Root attribute of ``{v}_scene.hdf5`` beside :data:`UNSCORED_ATTR`: what a NaN physics score
+#: means.
+UNSCORED_REASON_ATTR = "mgn_unscored_reason"
+UNSCORED_REASON = (
+    "NaN score_simulation: the grasp has no physics score (object_labels.physics_grasps caps "
+    "the scored grasps per object, or labels.pj_physics is off); dataset.json physics_scores "
+    "counts them"
+)
+
+
+def unscored_marks(datasets: Mapping[str, npt.ArrayLike]) -> dict[str, Any]:
+    """The root attributes that mark unscored parallel-jaw grasps in ``{v}_scene.hdf5``
+    (:data:`UNSCORED_ATTR`, :data:`UNSCORED_REASON_ATTR`): empty when no parallel-jaw
+    ``score_simulation`` holds NaN."""
+    counts = {}
+    for path, value in datasets.items():
+        if path.endswith("paralleljaw/score_simulation"):
+            n = int(np.isnan(np.asarray(value, np.float32)).sum())
+            if n:
+                counts[path] = n
+    if not counts:
+        return {}
+    return {UNSCORED_ATTR: counts, UNSCORED_REASON_ATTR: UNSCORED_REASON}
+
+
 def hdf5_bytes(
     datasets: Mapping[str, np.ndarray],
     attrs: Mapping[str, Any] | None = None,
@@ -853,7 +882,10 @@ def write_view(
     )
     lap("depth.png")
     files[f"{v}_scene.hdf5"] = hdf5_bytes(
-        h5, share_rotations=True, level=DEFLATE_LEVEL if archival else SCENE_HDF5_LEVEL
+        h5,
+        unscored_marks(h5),
+        share_rotations=True,
+        level=DEFLATE_LEVEL if archival else SCENE_HDF5_LEVEL,
     )
     lap("scene.hdf5")
     files[f"{v}_mgn.hdf5"] = mgn_hdf5_bytes(

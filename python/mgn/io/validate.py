@@ -48,7 +48,7 @@ from mgn.io.dataset import Dataset, SceneFolder
 from mgn.io.manifest import MANIFEST, check_manifest
 from mgn.io.npz_reader import NpzReader
 from mgn.io.order_files import derive_layers, strongly_connected
-from mgn.io.scene_folder import HDF5_INT_LEAVES, view_file_names
+from mgn.io.scene_folder import HDF5_INT_LEAVES, UNSCORED_ATTR, unscored_marks, view_file_names
 from mgn.scene.cameras import MGN_CLIPPING_RANGE_CM, MGN_FOCAL_LENGTH_MM
 
 __all__ = ["Problem", "validate_dataset"]
@@ -391,6 +391,7 @@ class _ViewCheck:
                     if out[key].dtype.kind not in "iu":
                         self.bad("_scene.hdf5", f"'{key}' is {out[key].dtype}, expected int32")
                 self.groups(h5, n, out)
+                self.unscored_marks(h5.attrs.get(UNSCORED_ATTR), out)
         except OSError as e:
             self.bad("_scene.hdf5", f"not a readable HDF5 file: {e}")
             raise _Stop from None
@@ -475,6 +476,23 @@ class _ViewCheck:
                 self.bad("_scene.hdf5", f"'{name}/{leaf}' must lie in 0..{n - 1} (instance id - 1)")
         if top != "keypts":
             self.scores(kind, name, out)
+
+    def unscored_marks(self, mark: Any, out: Mapping[str, np.ndarray]) -> None:
+        """The root attribute ``mgn_unscored_grasps`` (when present: files of earlier builds
+        lack it) counts exactly the NaN parallel-jaw physics scores of the file."""
+        if mark is None:
+            return
+        want = unscored_marks(out).get(UNSCORED_ATTR, {})
+        try:
+            got = json.loads(mark)
+        except (TypeError, ValueError):
+            got = None
+        if got != want:
+            self.bad(
+                "_scene.hdf5",
+                f"root attribute '{UNSCORED_ATTR}' is {mark!r}; the parallel-jaw physics scores "
+                f"hold NaN as {want}",
+            )
 
     def scores(self, kind: str, name: str, out: Mapping[str, np.ndarray]) -> None:
         """Every stored grasp scored (or its missing physics score recorded) and its width."""
