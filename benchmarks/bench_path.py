@@ -79,14 +79,17 @@ def _engine_mgn(
     c = desc.camera
     view = CameraView(Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy), c.X_WC)
 
-    try:  # what `render.denoise` runs, with the default `render.denoise_quality`
+    try:  # what `render.denoise` runs, with the default quality, guides and resolution
         from mgn.render.photo import RenderSettings
         from mgn.render.photo import denoise as photo_denoise
 
-        quality = RenderSettings().denoise_quality
+        defaults = RenderSettings()
 
         def mgn_denoise(radiance: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> Any:
-            return photo_denoise(radiance, albedo, normal, quality)
+            return photo_denoise(
+                radiance, albedo, normal, defaults.denoise_quality,
+                guides=defaults.denoise_guides, resolution=defaults.denoise_resolution,
+            )  # fmt: skip
 
     except ImportError:
 
