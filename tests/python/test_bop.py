@@ -76,7 +76,9 @@ def test_top_level_files(exported: Path, small_dataset: Path) -> None:
     assert sorted(int(k) for k in info) == ids
     for obj_id in ids:
         entry = info[str(obj_id)]
-        assert set(entry) == {"diameter", "min_x", "min_y", "min_z", "size_x", "size_y", "size_z"}
+        box_keys = {"diameter", "min_x", "min_y", "min_z", "size_x", "size_y", "size_z"}
+        assert box_keys <= set(entry)
+        assert set(entry) - box_keys <= {"symmetries_discrete", "symmetries_continuous"}
         ply = exported / "models" / f"obj_{obj_id:06d}.ply"
         v, f, props = _read_ply(ply)
         assert props == ["x", "y", "z", "nx", "ny", "nz", "texture_u", "texture_v"]
@@ -317,3 +319,48 @@ def test_diameter_from_the_hull_candidates_is_the_brute_force_one() -> None:
     info = bop.model_info(v, diameter_points=cand)
     assert info["diameter"] == pytest.approx(d, abs=1e-9)
     assert info["size_x"] == pytest.approx(v[:, 0].max() - v[:, 0].min())
+
+
+def test_models_info_symmetries(exported: Path) -> None:
+    """The built-in boxes (tea, cereal) have the three half turns about their box axes through
+    the box's centre; the soda can has a continuous axis along z and no flip (its ends differ).
+    Each discrete transform maps the PLY's vertices onto the box's faces."""
+    info = _json(exported / "models" / "models_info.json")
+    for obj_id, entry in info.items():
+        v, _, _ = _read_ply(exported / "models" / f"obj_{int(obj_id):06d}.ply")
+        xyz = v[:, :3]
+        lo, hi = xyz.min(axis=0), xyz.max(axis=0)
+        disc = entry.get("symmetries_discrete", [])
+        cont = entry.get("symmetries_continuous", [])
+        if cont:
+            assert len(cont) == 1 and disc == []
+            assert np.abs(cont[0]["axis"]) == pytest.approx([0, 0, 1])
+            assert cont[0]["offset"][:2] == pytest.approx([0, 0], abs=0.05)
+            continue
+        assert len(disc) == 3
+        for flat in disc:
+            T = np.array(flat).reshape(4, 4)
+            R, t = T[:3, :3], T[:3, 3]
+            assert T[3].tolist() == [0, 0, 0, 1]
+            # a half turn about a box axis: diagonal, two entries -1
+            assert np.allclose(R, np.diag(np.diag(R)), atol=1e-9)
+            assert sorted(np.diag(R).round(9).tolist()) == [-1.0, -1.0, 1.0]
+            moved = xyz @ R.T + t
+            # every vertex stays inside the box and the box's centre is fixed
+            assert (moved >= lo - 0.01).all() and (moved <= hi + 0.01).all()
+            c = (lo + hi) / 2
+            assert R @ c + t == pytest.approx(c, abs=0.05)
+
+
+def test_validate_flags_bad_symmetries(exported: Path, tmp_path: Path) -> None:
+    out = tmp_path / "bop"
+    shutil.copytree(exported, out)
+    path = out / "models" / "models_info.json"
+    info = _json(path)
+    key = sorted(info)[0]
+    info[key]["symmetries_discrete"] = [[1.0] * 16]
+    info[key]["symmetries_continuous"] = [{"axis": [0, 0, 2], "offset": [0, 0, 0]}]
+    path.write_text(json.dumps(info))
+    found = [p.message for p in validate_bop(out)]
+    assert any("symmetries_discrete" in m for m in found)
+    assert any("symmetries_continuous" in m for m in found)

@@ -7,6 +7,7 @@ import sys
 
 from mgn.io.bop import validate_bop
 from mgn.io.coco import export_coco
+from mgn.io.graspnet import DEFAULT_MAX_TILT_DEG
 from mgn.io.validate import validate_dataset
 from mgn.viz.overlay import show
 from mgn.viz.report import write_report
@@ -40,7 +41,8 @@ def _cmd_coco(args: argparse.Namespace) -> int:
 
 def _cmd_show(args: argparse.Namespace) -> int:
     path = show(args.dir, args.scene, args.view, args.out, grasps=args.grasps, layout=args.layout,
-                keypoints=not args.no_keypoints, alpha=args.alpha, panels=args.panels)  # fmt: skip
+                keypoints=not args.no_keypoints, alpha=args.alpha, panels=args.panels,
+                max_tilt_deg=args.max_tilt)  # fmt: skip
     print(f"wrote {path}")
     return 0
 
@@ -75,8 +77,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--grasps",
         metavar="KIND",
-        help="draw scene grasps: suction or paralleljaw (aliases: suctioncup, pj)",
+        help="draw scene grasps: suction or paralleljaw (aliases: suctioncup, pj), or "
+        "rectangles (2-D grasp rectangles of the parallel-jaw grasps seen along their approach)",
     )
+    p.add_argument("--max-tilt", type=float, default=DEFAULT_MAX_TILT_DEG,
+                   help="with --grasps rectangles: largest angle between a grasp's approach and "
+                   "the optical axis, degrees (default %(default)s)")  # fmt: skip
     p.add_argument("--layout", action="store_true", help="draw the relation graph and layers")
     p.add_argument("--no-keypoints", action="store_true", help="do not draw keypoints")
     p.add_argument(

@@ -7,7 +7,7 @@ each file holds and how mgn's export differs from BlenderProc's: docs/format.md,
 
     OUT/
       camera.json                 fx, fy, cx, cy, width, height (px), depth_scale (mm per unit)
-      models/models_info.json     per obj_id: diameter, min_x .. size_z (mm)
+      models/models_info.json     per obj_id: diameter, min_x .. size_z (mm), symmetries
       models/obj_<obj_id:06d>.ply ASCII PLY, mm, vertex normals, texture coordinates
       models/obj_<obj_id:06d>.png the object's texture (when it has one)
       <split>/<scene:06d>/        one mgn scene<N> folder = one BOP scene, one view = one image
@@ -43,6 +43,7 @@ from mgn.base.atomic import atomic_dir, atomic_write_bytes, atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.geometry.convex import convex_hull
 from mgn.geometry.mesh import Mesh, load_mesh
+from mgn.geometry.symmetry import find_symmetries
 from mgn.io.dataset import Dataset, SceneFolder, View
 from mgn.io.scene_folder import png_bytes
 from mgn.io.validate import Problem
@@ -54,6 +55,7 @@ __all__ = [
     "export_bop",
     "hull_candidates",
     "model_info",
+    "model_symmetries",
     "ply_text",
     "validate_bop",
     "vertices_mm",
@@ -201,6 +203,29 @@ def model_info(
     }
 
 
+def model_symmetries(vertices_mm: npt.ArrayLike, faces: npt.ArrayLike) -> dict[str, Any]:
+    """The ``models_info.json`` symmetry keys of a model (vertices in mm) from its shape
+    (:func:`mgn.geometry.symmetry.find_symmetries`; the texture is not compared):
+    ``symmetries_discrete``, a list of 4 x 4 transforms flattened row-wise (translation in mm),
+    and ``symmetries_continuous``, a list of {``axis``, ``offset`` (mm, a point of the axis)};
+    each key only when the model has such symmetries. Numbers rounded to 1e-9."""
+    sym = find_symmetries(vertices_mm, faces)
+    out: dict[str, Any] = {}
+    if len(sym.discrete):
+        out["symmetries_discrete"] = [[_clean(x) for x in T.reshape(16)] for T in sym.discrete]
+    if len(sym.continuous):
+        offset = [_clean(x) for x in sym.center]
+        out["symmetries_continuous"] = [
+            {"axis": [_clean(x) for x in a], "offset": offset} for a in sym.continuous
+        ]
+    return out
+
+
+def _clean(x: float) -> float:
+    """``x`` rounded to 1e-9, without a negative zero."""
+    return float(round(float(x), 9)) + 0.0
+
+
 def _write_models(ds: Dataset, target: Path) -> None:
     folders = ds.model_folders()
     if not folders:
@@ -220,7 +245,9 @@ def _write_models(ds: Dataset, target: Path) -> None:
                 pts = hull_candidates(v, convex_hull(mesh))
             except InvalidArgumentError:  # a flat mesh has no hull: every vertex
                 pts = v
-            info[str(obj_id)] = model_info(v, diameter_points=pts)
+            info[str(obj_id)] = model_info(v, diameter_points=pts) | model_symmetries(
+                v, np.asarray(mesh.faces, np.int64)
+            )
         atomic_write_text(tmp / "models_info.json", _dump(info))
 
 
@@ -464,6 +491,7 @@ def _check_models(root: Path, problems: list[Problem]) -> dict[int, float | None
                 problems.append(Problem(where, f"needs numbers {', '.join(_INFO_KEYS)} (mm)"))
                 continue
             ids[int(key)] = float(entry["diameter"])
+            _check_symmetries(where, entry, problems)
             if entry["diameter"] <= 0 or min(entry[k] for k in _INFO_KEYS[4:]) < 0:
                 problems.append(Problem(where, "diameter must be > 0 and sizes >= 0 (mm)"))
             elif entry["diameter"] > 10000:
@@ -479,6 +507,32 @@ def _check_models(root: Path, problems: list[Problem]) -> dict[int, float | None
         if not head.startswith(b"ply\n") or b"element vertex" not in head:
             problems.append(Problem(path.relative_to(root).as_posix(), "not a PLY file"))
     return ids
+
+
+def _check_symmetries(where: str, entry: dict[str, Any], problems: list[Problem]) -> None:
+    """``symmetries_discrete`` (4 x 4 rigid transforms, 16 numbers each) and
+    ``symmetries_continuous`` ({axis: unit 3-vector, offset: 3 numbers}), when present."""
+    disc = entry.get("symmetries_discrete", [])
+    if not isinstance(disc, list) or not all(
+        _num_list(T, 16)
+        and _is_rotation([T[0], T[1], T[2], T[4], T[5], T[6], T[8], T[9], T[10]])
+        and T[12:16] == [0, 0, 0, 1]
+        for T in disc
+    ):
+        problems.append(
+            Problem(where, "symmetries_discrete must be 4 x 4 rigid transforms, 16 numbers each")
+        )
+    cont = entry.get("symmetries_continuous", [])
+    if not isinstance(cont, list) or not all(
+        isinstance(c, dict)
+        and _num_list(c.get("axis"), 3)
+        and _num_list(c.get("offset"), 3)
+        and abs(float(np.linalg.norm(c["axis"])) - 1.0) <= 1e-3
+        for c in cont
+    ):
+        problems.append(
+            Problem(where, "symmetries_continuous must be {axis: unit vector, offset: 3 numbers}")
+        )
 
 
 def _check_camera(root: Path, problems: list[Problem]) -> None:

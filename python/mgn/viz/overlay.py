@@ -1,8 +1,10 @@
 """``mgn show``: one view of a dataset with its labels drawn on the RGB image.
 
 Drawn (each switchable): instance colours over the visible masks, amodal contours, per object
-its id, occlusion and layer; parallel-jaw grasps as a line between the two contacts and suction
-grasps as discs, coloured by score (red 0 → green 1; :func:`mgn.viz.pictures.score_colors`);
+its id, occlusion and layer; parallel-jaw grasps as a line between the two contacts, suction
+grasps as discs, or the 2-D grasp rectangles of the parallel-jaw grasps whose approach is near
+the optical axis (``grasps="rectangles"``, :func:`mgn.io.graspnet.view_rectangles`; the jaws
+drawn thick), coloured by score (red 0 → green 1; :func:`mgn.viz.pictures.score_colors`);
 semantic keypoints (visible: white discs, occluded: grey rings); the layout graph as arrows from
 each parent (on top) to its child. ``alpha`` sets how strongly the masks tint the RGB
 (0 = outlines only); ``panels`` adds the amodal masks and the depth image beside the overlay. A
@@ -23,8 +25,14 @@ from PIL import Image, ImageDraw, ImageFont
 
 from mgn.base.atomic import atomic_write_bytes
 from mgn.errors import InvalidArgumentError, IoError
-from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
+from mgn.hardware import MGN_FOLDER, ParallelJawGripper, normalize_grasp_kind
 from mgn.io.dataset import Dataset, SceneFolder, View
+from mgn.io.graspnet import (
+    DEFAULT_MAX_TILT_DEG,
+    graspnet_gripper,
+    gripper_of,
+    view_rectangles,
+)
 from mgn.io.scene_folder import png_bytes
 from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import lens_for
@@ -72,10 +80,42 @@ def _contours(mask: np.ndarray) -> np.ndarray:
     return mask & ~inner
 
 
+def _draw_rectangles(
+    draw: ImageDraw.ImageDraw, view: View, max_grasps: int, max_tilt_deg: float
+) -> str:
+    """Draw the best ``max_grasps`` grasp rectangles (worst first, so the best lie on top);
+    returns the footer note."""
+    root = view.folder.parent
+    has_record = (root / "dataset.json").exists()
+    gripper = gripper_of(Dataset(root)) if has_record else ParallelJawGripper()
+    rects = view_rectangles(view, graspnet_gripper(gripper), max_tilt_deg=max_tilt_deg)
+    corners = rects.corners()
+    cols = score_colors(rects.score)
+    shown = min(len(rects), max_grasps)
+    for k in range(shown - 1, -1, -1):
+        c = tuple(int(x) for x in cols[k])
+        q = [tuple(float(x) for x in pt) for pt in corners[k]]
+        draw.line([q[1], q[2]], fill=c, width=1)
+        draw.line([q[3], q[0]], fill=c, width=1)
+        draw.line([q[0], q[1]], fill=c, width=3)
+        draw.line([q[2], q[3]], fill=c, width=3)
+    return (
+        f"{len(rects)} grasp rectangles (approach within {max_tilt_deg:g} deg of the "
+        f"optical axis; best {shown} drawn)"
+    )
+
+
 def _draw_grasps(
-    draw: ImageDraw.ImageDraw, view: View, grasps: str, K: Intrinsics, max_grasps: int
+    draw: ImageDraw.ImageDraw,
+    view: View,
+    grasps: str,
+    K: Intrinsics,
+    max_grasps: int,
+    max_tilt_deg: float = DEFAULT_MAX_TILT_DEG,
 ) -> str:
     """Draw the best ``max_grasps`` non-colliding grasps of a kind; returns the footer note."""
+    if grasps == "rectangles":
+        return _draw_rectangles(draw, view, max_grasps, max_tilt_deg)
     kind = MGN_FOLDER[normalize_grasp_kind(grasps)]
     g = view.grasps(kind)
     poses = g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4)))
@@ -201,13 +241,16 @@ def render_overlay(
     max_grasps: int = 300,
     alpha: float = 0.45,
     panels: bool = False,
+    max_tilt_deg: float = DEFAULT_MAX_TILT_DEG,
 ) -> npt.NDArray[np.uint8]:
     """The overlay picture of ``view`` as (H + legend, W, 3) uint8 (3 W wide with ``panels``).
 
     Args:
         grasps: None, ``"suction"`` or ``"paralleljaw"`` (also ``"pj"``, ``"suctioncup"``):
             draw the non-colliding scene grasps of that kind (at most ``max_grasps``, the
-            best-scored first).
+            best-scored first); ``"rectangles"``: the 2-D grasp rectangles of the parallel-jaw
+            grasps whose approach is within ``max_tilt_deg`` (degrees, default 20) of the
+            optical axis.
         layout: draw the relation graph (parent → child arrows) and each object's layer.
         keypoints: draw the semantic keypoints.
         alpha: weight of the instance colours over the RGB in [0, 1]; 0 draws the visible masks
@@ -253,7 +296,7 @@ def render_overlay(
 
     notes = []
     if grasps is not None:
-        notes.append(_draw_grasps(draw, view, grasps, K, max_grasps))
+        notes.append(_draw_grasps(draw, view, grasps, K, max_grasps, max_tilt_deg))
 
     if keypoints:
         _draw_keypoints(draw, view, K)
@@ -314,7 +357,9 @@ def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: floa
         lines.append(
             "grasps: "
             + (
-                "lines between the two finger contacts"
+                "rectangles seen along the approach, thick edges = the jaws, across = the opening"
+                if grasps == "rectangles"
+                else "lines between the two finger contacts"
                 if "j" in grasps.lower() or grasps == "pj"
                 else "discs at the cup contact"
             )
