@@ -490,6 +490,27 @@ def test_half_resolution_blocks_and_interpolation_are_opencvs() -> None:
     assert photo._double(ob, 23, 17).shape == (23, 17, 3)
 
 
+def test_half_resolution_albedo_ratio_fades_at_silhouettes() -> None:
+    """The albedo ratio is applied in full where a pixel's normal agrees with its blocks'
+    (cosine >= 0.97), not at all where it turns away (<= 0.85: a silhouette), linearly between;
+    the normals' lengths do not matter."""
+    ratio = np.full((1, 4, 3), 3.0, np.float32)
+    up = np.array([0.0, 0.0, 1.0], np.float32)
+
+    def tilted(deg: float) -> np.ndarray:
+        t = np.radians(deg)
+        return np.array([np.sin(t), 0.0, np.cos(t)], np.float32)
+
+    cos_mid = 0.5 * (0.85 + 0.97)
+    normal = np.stack(
+        [2.0 * up, tilted(10.0), tilted(90.0), tilted(np.degrees(np.arccos(cos_mid)))]
+    )
+    blocks = np.stack([up, 0.5 * up, up, up])
+    got = photo._edge_gated(ratio, normal[None], blocks[None])
+    assert got.dtype == np.float32
+    np.testing.assert_allclose(got[0, :, 0], [3.0, 3.0, 1.0, 2.0], atol=1e-4)
+
+
 def test_half_resolution_denoise_keeps_full_size_print() -> None:
     """A one-pixel checker printed on a surface under smooth light, traced noisily: the ``half``
     denoise runs OIDN on 2 x 2 blocks (where the checker averages out) yet returns the checker
