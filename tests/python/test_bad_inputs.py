@@ -305,6 +305,14 @@ def _million_objects(command: str) -> Callable[[Path], list[str]]:
     return build
 
 
+def _many_named_objects(tmp: Path) -> list[str]:
+    """``--objects`` naming 3000 tennis balls (~50x the tote's volume in boxes): refused before
+    any object is composed or dropped."""
+    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
+            str(fast_config(tmp)), "--objects", ",".join(["tennis_ball"] * 3000),
+            "--quiet"]  # fmt: skip
+
+
 def _nothing_written(tmp: Path) -> None:
     assert not (tmp / "ds").exists()
 
@@ -546,10 +554,13 @@ CASES = [
          r"inner_length / inner_width / inner_height: 400 x 300 x 150 m is too large for a bin"),
     Case("million-objects-check", "error", _million_objects("check"), 1, r"error: objects\.count: "
          r"1000000 objects per scene; their boxes add up to [0-9.e+]+x the tote's inner volume "
-         r"\(more than 100x\), about 24 fit; expected at most about 2400"),
+         r"\(more than 10x\), about 24 fit; expected at most about 240"),
     Case("million-objects-generate", "error", _million_objects("generate"), 1, r"error: "
          r"generate: the config fails every scene .*\n  objects\.count: 1000000 objects",
          check=_nothing_written),
+    Case("overfill-via-objects", "error", _many_named_objects, 1, r"generate: the config fails "
+         r"every scene .*\n  objects\.names: 3000 objects per scene; their boxes add up to "
+         r"[0-9.]+x the tote's inner volume \(more than 10x\)", check=_nothing_written),
     Case("tote-smaller-than-window", "error", _check(tote={"inner_length": 0.1,
          "inner_width": 0.05}), 1, r"error: drop\.window_min / drop\.window_max: the release "
          r"window x \[-0\.06, 0\.06\], y \[-0\.03, 0\.03\], z >= 0\.3 m does not lie above "

@@ -40,8 +40,9 @@ __all__ = [
 #: objects are removed as they leave the tote).
 MAX_OBJECT_FILL = 1.0
 #: Refuse a config whose objects' boxes add up to more than this multiple of the tote's inner
-#: volume: orders of magnitude beyond what fits (the drop would only allocate and fail).
-MAX_OBJECT_OVERFILL = 100.0
+#: volume: an order of magnitude beyond what fits (nine in ten objects would leave the tote, and
+#: the drop of thousands of objects would run for hours before the refills gave up).
+MAX_OBJECT_OVERFILL = 10.0
 #: Largest extents (m) of a bin (its mesh, its inner box) outside which it is reported as
 #: implausible (a file in millimetres read as metres is the usual cause).
 PLAUSIBLE_TOTE_EXTENT_M = (0.05, 5.0)
