@@ -22,7 +22,7 @@ from mgn.errors import InvalidArgumentError, IoError
 __all__ = ["YamlLoader", "read_yaml", "parse_yaml"]
 
 
-class YamlLoader(yaml.SafeLoader):
+class YamlLoader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML has no type information
     """``yaml.SafeLoader`` that also reads ``1e6``, ``1.0e6`` and ``-2.5E-3`` as floats and
     refuses a key written twice in one mapping."""
 

@@ -499,7 +499,7 @@ def _coco(data: dict[str, Any]) -> Any:
 
 def _make_eval_class() -> type:
 
-    class _SubsetEval(COCOeval):
+    class _SubsetEval(COCOeval):  # type: ignore[misc]  # pycocotools has no type information
         """COCOeval that marks the GT annotations of ``ignore_ids`` as ignored (after
         ``_prepare``, which resets the flag from iscrowd) and reuses IoUs across subsets."""
 

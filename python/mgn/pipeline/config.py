@@ -848,7 +848,7 @@ _SECTION_DOCS = {
 }
 
 
-class _Dumper(yaml.SafeDumper):
+class _Dumper(yaml.SafeDumper):  # type: ignore[misc]  # PyYAML has no type information
     """Block style, except lists of scalars on one line ([0.2, 0.35, 0.6, 1.0])."""
 
     def represent_list(self, data: list[Any]) -> yaml.Node:  # noqa: D102
