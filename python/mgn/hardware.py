@@ -65,7 +65,7 @@ class _YamlDataclass:
 
     def to_yaml(self, path: str | os.PathLike[str] | None = None) -> str:
         """YAML text of the fields; also written to ``path`` when given."""
-        text = yaml.safe_dump(self.to_dict(), sort_keys=False)
+        text: str = yaml.safe_dump(self.to_dict(), sort_keys=False)
         if path is not None:
             atomic_write_text(path, text)
         return text

@@ -15,7 +15,7 @@ import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from mgn.errors import IoError
 
@@ -60,7 +60,7 @@ def _umask() -> int:
 
 
 @contextlib.contextmanager
-def _atomic_stream(path: str | os.PathLike[str], mode: str) -> Iterator[IO]:
+def _atomic_stream(path: str | os.PathLike[str], mode: str) -> Iterator[IO[Any]]:
     """The one temp-file-and-rename mechanism: ``mode`` "wb" (bytes) or "w" (UTF-8 text)."""
     target = Path(path)
     tmp = None

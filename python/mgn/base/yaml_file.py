@@ -22,11 +22,11 @@ from mgn.errors import InvalidArgumentError, IoError
 __all__ = ["YamlLoader", "read_yaml", "parse_yaml"]
 
 
-class YamlLoader(yaml.SafeLoader):
+class YamlLoader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML has no type information
     """``yaml.SafeLoader`` that also reads ``1e6``, ``1.0e6`` and ``-2.5E-3`` as floats and
     refuses a key written twice in one mapping."""
 
-    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict:  # noqa: D102
+    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict[Any, Any]:  # noqa: D102
         if isinstance(node, yaml.MappingNode):
             first: dict[Any, yaml.Node] = {}
             for key_node, _ in node.value:
@@ -46,7 +46,8 @@ class YamlLoader(yaml.SafeLoader):
                         key_node.start_mark,
                     )
                 first[key] = key_node
-        return super().construct_mapping(node, deep=deep)
+        mapping: dict[Any, Any] = super().construct_mapping(node, deep=deep)
+        return mapping
 
 
 # YAML 1.2 core-schema floats (plus the YAML 1.1 forms PyYAML already knows).

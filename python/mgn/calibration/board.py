@@ -166,7 +166,7 @@ def _pack(
     return xs, xs[-1] + max(extents[-1][1], extents[-1][3])
 
 
-def _steps(adds: list, feats: list[_Feature]) -> float:
+def _steps(adds: list[manifold3d.Manifold], feats: list[_Feature]) -> float:
     y = _ROW_Y["A"]
     off = np.array(_STEP_OFFSETS_MM) * MM
     ext = [(0.0, _STEP_WIDTH, -off.min() + _RING_CLEAR, off.max() + _RING_CLEAR)]
@@ -194,7 +194,9 @@ def _steps(adds: list, feats: list[_Feature]) -> float:
     return end
 
 
-def _ridges_and_grooves(adds: list, cuts: list, feats: list[_Feature]) -> float:
+def _ridges_and_grooves(
+    adds: list[manifold3d.Manifold], cuts: list[manifold3d.Manifold], feats: list[_Feature]
+) -> float:
     y = _ROW_Y["B"]
     off = np.array(_ACROSS_OFFSETS_MM) * MM
     specs = [("ridge", w, h) for w, h in _RIDGES_MM] + [("groove", w, h) for w, h in _RIDGES_MM]
@@ -226,7 +228,9 @@ def _ridges_and_grooves(adds: list, cuts: list, feats: list[_Feature]) -> float:
     return end
 
 
-def _cylinder_rows(adds: list, cuts: list, feats: list[_Feature]) -> tuple[float, float]:
+def _cylinder_rows(
+    adds: list[manifold3d.Manifold], cuts: list[manifold3d.Manifold], feats: list[_Feature]
+) -> tuple[float, float]:
     ends = []
     for kind, row in (("convex_cylinder", "C"), ("concave_cylinder", "D")):
         y = _ROW_Y[row]
@@ -293,7 +297,7 @@ def _cylinder_rows(adds: list, cuts: list, feats: list[_Feature]) -> tuple[float
     return ends[0], ends[1]
 
 
-def _domes(adds: list, feats: list[_Feature]) -> float:
+def _domes(adds: list[manifold3d.Manifold], feats: list[_Feature]) -> float:
     y = _ROW_Y["E"]
     geo = []
     for r_mm in _DOME_RADII_MM:
@@ -337,7 +341,7 @@ def _domes(adds: list, feats: list[_Feature]) -> float:
     return end
 
 
-def _holes(cuts: list, feats: list[_Feature]) -> float:
+def _holes(cuts: list[manifold3d.Manifold], feats: list[_Feature]) -> float:
     y = _ROW_Y["F"]
     off = np.array(_HOLE_RIM_OFFSETS_MM) * MM
     ext = [
@@ -422,8 +426,8 @@ def _controls(feats: list[_Feature], row_ends: dict[str, float]) -> None:
 
 
 def _build() -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int32], list[dict[str, Any]]]:
-    adds: list = []
-    cuts: list = []
+    adds: list[manifold3d.Manifold] = []
+    cuts: list[manifold3d.Manifold] = []
     feats: list[_Feature] = []
     ends = {"A": _steps(adds, feats)}
     ends["B"] = _ridges_and_grooves(adds, cuts, feats)
@@ -520,7 +524,8 @@ def write_binary_stl(
     rec["normal"] = n
     rec["v"] = tri
     header = name.encode("ascii", "replace")[:80].ljust(80, b" ")
-    return header + np.uint32(len(f)).astype("<u4").tobytes() + rec.tobytes()
+    out: bytes = header + np.uint32(len(f)).astype("<u4").tobytes() + rec.tobytes()
+    return out
 
 
 POSES_COLUMNS = (

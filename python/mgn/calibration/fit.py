@@ -21,6 +21,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -353,7 +354,7 @@ class MeasuredResults:
 
 def _open_csv(
     path: str | os.PathLike[str], required: Sequence[str], what: str
-) -> tuple[list, list]:
+) -> tuple[list[str], list[tuple[int, dict[str, Any]]]]:
     """(header, rows with line numbers) of a CSV file; checks the required columns."""
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
@@ -374,7 +375,7 @@ def _open_csv(
     return header, rows
 
 
-def _blank(row: dict) -> bool:
+def _blank(row: dict[str, Any]) -> bool:
     return all((v or "").strip() == "" for k, v in row.items() if k is not None)
 
 

@@ -91,7 +91,10 @@ def _picture(
 
 def _display_color(spec: ObjectSpec) -> np.ndarray:
     if spec.material.texture is not None:
-        return np.asarray(spec.material.texture, np.float64).reshape(-1, 3).mean(0) / 255.0
+        out: np.ndarray = (
+            np.asarray(spec.material.texture, np.float64).reshape(-1, 3).mean(0) / 255.0
+        )
+        return out
     return np.asarray(spec.material.base_color[:3], np.float64)
 
 

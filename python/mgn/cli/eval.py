@@ -40,7 +40,7 @@ __all__ = ["register"]
 grasps_module_doc = grasps_module.__doc__ or ""
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``eval`` command group to the ``mgn`` subparsers."""
     p = sub.add_parser("eval", help="score predictions against a dataset's labels")
     eval_sub = p.add_subparsers(dest="eval_command", metavar="ACTION", required=True)
@@ -61,7 +61,7 @@ def _cmd_detections(args: argparse.Namespace) -> int:
     return print_and_write(res, args.out)
 
 
-def _register_detections(eval_sub: argparse._SubParsersAction) -> None:
+def _register_detections(eval_sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``detections`` to the ``mgn eval`` actions."""
     p = eval_sub.add_parser(
         "detections", help="box / mask AP of COCO-format predictions (overall and by subset)"
@@ -82,7 +82,7 @@ def _cmd_layout(args: argparse.Namespace) -> int:
     return print_and_write(res, args.out)
 
 
-def _register_layout(eval_sub: argparse._SubParsersAction) -> None:
+def _register_layout(eval_sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``layout`` to the ``mgn eval`` actions."""
     p = eval_sub.add_parser("layout", help="layer accuracy and top-object scores of predictions")
     p.add_argument("predictions", help="JSON list of {image_id, instance_id, layer}")
@@ -106,7 +106,7 @@ def _cmd_grasps(args: argparse.Namespace) -> int:
     return print_and_write(res, args.out)
 
 
-def _register_grasps(eval_sub: argparse._SubParsersAction) -> None:
+def _register_grasps(eval_sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``grasps`` to the ``mgn eval`` subparsers."""
     p = eval_sub.add_parser(
         "grasps",
@@ -152,7 +152,7 @@ def _cmd_real(args: argparse.Namespace) -> int:
     return 0
 
 
-def _register_real(eval_sub: argparse._SubParsersAction) -> None:
+def _register_real(eval_sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``real`` to the ``mgn eval`` actions."""
     p = eval_sub.add_parser(
         "real",

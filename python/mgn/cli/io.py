@@ -54,7 +54,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``validate`` and ``coco`` to the ``mgn`` subcommands."""
     p = sub.add_parser("validate", help="check every file of a dataset against docs/format.md")
     p.add_argument("dir", help="dataset folder")

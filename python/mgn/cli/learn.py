@@ -153,7 +153,7 @@ def _cmd_transfer(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``train``, ``predict`` and ``transfer`` to the ``mgn`` subparsers."""
     p = sub.add_parser(
         "train", help="train the segmentation + suction baseline on a dataset (needs mgn[learn])"

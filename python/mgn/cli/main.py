@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import yaml
 from PIL import Image
 from tqdm import tqdm
@@ -37,12 +38,19 @@ from mgn.calibration import calibrate_from_csv, write_calibration_board
 from mgn.cli.args import split_list
 from mgn.cli.demo import run_demo
 from mgn.errors import InvalidArgumentError, MgnError
-from mgn.geometry.mesh import load_mesh, mass_properties
+from mgn.geometry.mesh import Mesh, load_mesh, mass_properties
 from mgn.geometry.repair import repair_mesh
 from mgn.hardware import SuctionCup, default_cup, default_gripper
 from mgn.io.grasp_file import write_suction_labels
 from mgn.io.model_folder import object_folders, read_model_folder, write_model_folder, write_tote
-from mgn.objects import builtin_objects, default_tote, get_object, load_objects_yaml, object_names
+from mgn.objects import (
+    ObjectSpec,
+    builtin_objects,
+    default_tote,
+    get_object,
+    load_objects_yaml,
+    object_names,
+)
 from mgn.objects.user import (
     UserObjectWarning,
     check_object_name,
@@ -54,7 +62,7 @@ from mgn.suction import label_object
 from mgn.viz.suction_compare import compare_models, comparison_picture
 
 
-def _catalogue(extra_yaml: Sequence[str] | None) -> list:
+def _catalogue(extra_yaml: Sequence[str] | None) -> list[ObjectSpec]:
     """Built-in objects followed by the user objects of each ``--add`` YAML file."""
 
     specs = list(builtin_objects())
@@ -65,7 +73,7 @@ def _catalogue(extra_yaml: Sequence[str] | None) -> list:
 
 def _cmd_objects_list(args: argparse.Namespace) -> int:
 
-    rows = []
+    rows: list[dict[str, Any]] = []
     for spec in _catalogue(args.add):
         size = np.ptp(np.asarray(spec.vertices), axis=0) * 1000
         mass = mass_properties(spec.to_mesh(), spec.density).mass
@@ -136,7 +144,9 @@ def _snake(stem: str) -> str:
     return name if name and not name[0].isdigit() else f"part_{name}"
 
 
-def _closed_entry(mesh: Any, report: Any, entry: dict, density: float) -> tuple[str, str, Any]:
+def _closed_entry(
+    mesh: Any, report: Any, entry: dict[str, Any], density: float
+) -> tuple[str, str, Any]:
     """Set ``repair`` / ``allow_open`` of a new user-object entry as its mesh needs: a mesh
     that is not closed is repaired (:func:`mgn.geometry.repair.repair_mesh`): ``repair: true``
     when that closes it, else ``allow_open: true`` (the mesh as it is). Returns (the note of
@@ -193,7 +203,7 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
     added: list[str] = []
     open_notes: list[str] = []
     new_names: set[str] = set()
-    materials: dict[str, tuple[Any, dict]] = {}
+    materials: dict[str, tuple[Any, dict[str, Any]]] = {}
     for i, mesh_arg in enumerate(args.meshes):
         path = Path(mesh_arg)
         mesh = load_mesh(path, scale=args.scale)  # IoError / InvalidArgumentError name the file
@@ -205,7 +215,7 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         while name in taken:
             name, k = f"{stem}_{k}", k + 1
         taken.add(name)
-        entry: dict = {"name": name}
+        entry: dict[str, Any] = {"name": name}
         full = path.resolve()  # relative to the YAML file when below it, else absolute
         entry["mesh"] = full.relative_to(base).as_posix() if full.is_relative_to(base) else (
             os.fspath(full))  # fmt: skip
@@ -249,7 +259,7 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
     return 0
 
 
-def mesh_info(path: str, scale: float = 1.0, density: float = 1000.0) -> dict:
+def mesh_info(path: str, scale: float = 1.0, density: float = 1000.0) -> dict[str, Any]:
     """The ``mgn info`` / ``mgn-cli info`` JSON document of a mesh file (same keys and values,
     numbers to 10 significant digits): counts, bounds (m), validation, mass properties (kg, m,
     kg m^2 about the centre of mass; open meshes as a 2 mm shell)."""
@@ -263,7 +273,7 @@ def mesh_info(path: str, scale: float = 1.0, density: float = 1000.0) -> dict:
     def num(v: float) -> float | None:
         return float(f"{float(v):.10g}") if math.isfinite(float(v)) else None
 
-    def vec(v) -> list:  # noqa: ANN001
+    def vec(v: npt.ArrayLike) -> list[float | None]:
         return [num(x) for x in np.asarray(v, np.float64).ravel()]
 
     lo, hi = np.asarray(mesh.bounds, np.float64)
@@ -383,7 +393,7 @@ def _cmd_suction_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _mesh_or_builtin(arg: str, scale: float):
+def _mesh_or_builtin(arg: str, scale: float) -> Mesh:
     """A mesh file, or the name/id of a built-in object."""
 
     if os.path.exists(arg):

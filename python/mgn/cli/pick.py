@@ -55,7 +55,7 @@ def _cmd_pick(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``mgn pick`` to the ``mgn`` subparsers."""
     p = sub.add_parser(
         "pick",

@@ -24,6 +24,7 @@ import json
 import os
 import sys
 import warnings
+from pathlib import Path
 from typing import Any
 
 from mgn.base.atomic import atomic_write_text
@@ -31,7 +32,7 @@ from mgn.cli.args import add_engine_arguments, engine_settings, split_list
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.convex import cache_dir
 from mgn.io.stats import dataset_stats, format_stats
-from mgn.pipeline.config import SelectionConfig, dump_config, load_config
+from mgn.pipeline.config import Config, SelectionConfig, dump_config, load_config
 from mgn.pipeline.label_cache import label_cache_dir
 from mgn.pipeline.runner import generate
 from mgn.pipeline.sanity import config_errors, config_warnings, load_catalogue
@@ -40,7 +41,7 @@ from mgn.pipeline.testset import parse_quota
 __all__ = ["register"]
 
 
-def _config_with_overrides(args: argparse.Namespace):  # noqa: ANN202 (mgn.pipeline.config.Config)
+def _config_with_overrides(args: argparse.Namespace) -> Config:
     """The config of ``--config`` with the test-set options applied."""
 
     cfg = load_config(args.config)
@@ -152,7 +153,7 @@ def _cmd_config_check(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cache_entries() -> dict[str, list]:
+def _cache_entries() -> dict[str, list[Path]]:
     """Cache files by kind: suction labels, parallel-jaw labels, convex decompositions."""
 
     labels, convex = label_cache_dir(), cache_dir()
@@ -201,7 +202,7 @@ def _cmd_stats(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``generate`` and the ``config`` command group to the ``mgn`` subparsers."""
     p = sub.add_parser(
         "generate",

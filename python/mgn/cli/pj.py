@@ -114,7 +114,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``pj`` command group to the ``mgn`` subparsers."""
     pj = sub.add_parser("pj", help="parallel-jaw grasp labels")
     psub = pj.add_subparsers(dest="pj_command", metavar="ACTION", required=True)
@@ -214,7 +214,7 @@ def _cmd_show_trial(args: argparse.Namespace) -> int:
     return 0
 
 
-def register_show_trial(psub: argparse._SubParsersAction) -> None:
+def register_show_trial(psub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``show-trial`` action (:func:`mgn.viz.shake_trial.show_trial`) to the ``mgn pj``
     subparsers ``psub``::
 

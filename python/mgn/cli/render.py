@@ -21,7 +21,7 @@ from mgn.scene.cameras import Intrinsics, mgn_rig
 __all__ = ["register"]
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``render`` command group to the ``mgn`` subparsers."""
     render = sub.add_parser("render", help="camera rigs and off-screen rendering")
     rsub = render.add_subparsers(dest="render_command", metavar="ACTION", required=True)

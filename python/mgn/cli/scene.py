@@ -29,9 +29,11 @@ from mgn.pipeline.config import Config, load_config
 from mgn.pipeline.label_cache import object_labels
 from mgn.pipeline.label_scene import label_scene
 from mgn.pipeline.scene_writer import label_options, scene_views
+from mgn.pj.labels import PjLabels
 from mgn.scene.compose import compose_objects
 from mgn.scene.drop import drop_scene
 from mgn.scene.scene import DropOptions
+from mgn.suction.labels import SuctionLabels
 from mgn.viz.scene_export import export_scene_glb
 
 __all__ = ["ACTIONS", "register"]
@@ -91,7 +93,7 @@ def _cmd_drop(args: argparse.Namespace) -> int:
     return 0
 
 
-def _register_drop(ssub: argparse._SubParsersAction) -> None:
+def _register_drop(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = ssub.add_parser("drop", help="drop objects into the tote and write the settled scene")
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="these objects (names or ids; repeat a name for copies)")  # fmt: skip
@@ -144,7 +146,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
-def _register_render(ssub: argparse._SubParsersAction) -> None:
+def _register_render(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = ssub.add_parser("render", help="render views of a dropped scene (RGB, depth, instances)")
     p.add_argument("scene", help="scene JSON written by `mgn scene drop`")
     p.add_argument(
@@ -188,8 +190,8 @@ def _cmd_label(args: argparse.Namespace) -> int:
             )
         views = [(v, c) for v, c in views if v in set(args.view)]
     grasps = config.labels.scene_grasps and not args.no_grasps
-    pj: list | None = None
-    su: list | None = None
+    pj: list[PjLabels | None] | None = None
+    su: list[SuctionLabels | None] | None = None
     if grasps:
         t0 = time.perf_counter()
         by_name = {}
@@ -217,7 +219,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
     return 0
 
 
-def _register_label(ssub: argparse._SubParsersAction) -> None:
+def _register_label(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = ssub.add_parser(
         "label", help="render and label a dropped scene: one MetaGraspNet scene folder"
     )
@@ -279,7 +281,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def _register_export(ssub: argparse._SubParsersAction) -> None:
+def _register_export(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = ssub.add_parser(
         "export",
         help="write the scene as glTF binary (.glb): objects, tote, cameras, optional grasps",
@@ -301,7 +303,7 @@ def _register_export(ssub: argparse._SubParsersAction) -> None:
 
 
 #: Functions adding one action each to the ``scene`` subparsers.
-ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [
+ACTIONS: list[Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None]] = [
     _register_drop,
     _register_render,
     _register_label,
@@ -309,7 +311,9 @@ ACTIONS: list[Callable[[argparse._SubParsersAction], None]] = [
 ]
 
 
-def register(sub: argparse._SubParsersAction) -> argparse._SubParsersAction:
+def register(
+    sub: argparse._SubParsersAction[argparse.ArgumentParser],
+) -> argparse._SubParsersAction[argparse.ArgumentParser]:
     """Add the ``scene`` command group to the top-level subparsers; returns its subparsers."""
     scene = sub.add_parser("scene", help="compose, drop and render scenes")
     ssub = scene.add_subparsers(dest="scene_command", metavar="ACTION", required=True)

@@ -398,7 +398,8 @@ def _check_rle(seg: Any, shape: tuple[int, int], where: str) -> dict[str, Any]:
         )
     if isinstance(raw, str):
         return {"size": [h, w], "counts": raw.encode("ascii")}
-    return mask_utils.frPyObjects({"size": [h, w], "counts": counts}, h, w)
+    rle: dict[str, Any] = mask_utils.frPyObjects({"size": [h, w], "counts": counts}, h, w)
+    return rle
 
 
 def _finite(x: Any) -> bool:
@@ -498,12 +499,17 @@ def _coco(data: dict[str, Any]) -> Any:
 
 def _make_eval_class() -> type:
 
-    class _SubsetEval(COCOeval):
+    class _SubsetEval(COCOeval):  # type: ignore[misc]  # pycocotools has no type information
         """COCOeval that marks the GT annotations of ``ignore_ids`` as ignored (after
         ``_prepare``, which resets the flag from iscrowd) and reuses IoUs across subsets."""
 
         def __init__(
-            self, gt: Any, dt: Any, iou_type: str, ignore_ids: frozenset[int], iou_cache: dict
+            self,
+            gt: Any,
+            dt: Any,
+            iou_type: str,
+            ignore_ids: frozenset[int],
+            iou_cache: dict[tuple[int, int], Any],
         ) -> None:
             super().__init__(gt, dt, iou_type)
             self._ignore_ids = ignore_ids
@@ -639,7 +645,7 @@ def evaluate_detections(
         subsets.append(("occlusion", label, all_images, ignore))
 
     evaluator = _make_eval_class()
-    caches: dict[str, dict] = {"bbox": {}, "segm": {}}
+    caches: dict[str, dict[tuple[int, int], Any]] = {"bbox": {}, "segm": {}}
     rows = []
     for group, name, img_ids, ignore in subsets:
         img_set = set(img_ids)

@@ -247,7 +247,9 @@ class GraspResults:
 # Input
 
 
-def load_predictions(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> list[dict]:
+def load_predictions(
+    source: str | os.PathLike[str] | Sequence[Mapping[str, Any]],
+) -> list[dict[str, Any]]:
     """The prediction list from a JSON file path, or a list given directly (checked to be a list
     of objects)."""
     if isinstance(source, (str, os.PathLike)):
@@ -298,7 +300,7 @@ def _rigid(value: Any, what: str) -> npt.NDArray[np.float64]:
     if np.abs(X[3] - (0, 0, 0, 1)).max() > 1e-9:
         raise InvalidArgumentError(f"{what}: the last row must be [0, 0, 0, 1], got {X[3]}")
     u, _, vt = np.linalg.svd(R)
-    out = X.copy()
+    out: npt.NDArray[np.float64] = X.copy()
     out[:3, :3] = u @ vt
     out[3] = (0, 0, 0, 1)
     return out
@@ -449,7 +451,9 @@ def _backproject(K: Any, u: float, v: float, z: float) -> npt.NDArray[np.float64
     return np.array([x * z, y * z, z])
 
 
-def _pixel(ctx: _Context, data: _ViewData, g: Mapping[str, Any], what: str):
+def _pixel(
+    ctx: _Context, data: _ViewData, g: Mapping[str, Any], what: str
+) -> tuple[float, float, int, int, float, np.ndarray, np.ndarray]:
     uv = g["uv"]
     if not isinstance(uv, (list, tuple)) or len(uv) != 2:
         raise InvalidArgumentError(f"{what}.uv: expected [u, v] in pixels, got {uv!r}")
@@ -462,7 +466,9 @@ def _pixel(ctx: _Context, data: _ViewData, g: Mapping[str, Any], what: str):
     return u, v, c, r, z, depth, inst
 
 
-def _suction_pixel(ctx, data, g, what) -> npt.NDArray[np.float64] | None:
+def _suction_pixel(
+    ctx: _Context, data: _ViewData, g: Mapping[str, Any], what: str
+) -> npt.NDArray[np.float64] | None:
     u, v, c, r, z, depth, inst = _pixel(ctx, data, g, what)
     if not math.isfinite(z):
         return None
@@ -490,7 +496,9 @@ def _suction_pixel(ctx, data, g, what) -> npt.NDArray[np.float64] | None:
     return X
 
 
-def _pj_pixel(ctx, data, g, what, width: float) -> npt.NDArray[np.float64] | None:
+def _pj_pixel(
+    ctx: _Context, data: _ViewData, g: Mapping[str, Any], what: str, width: float
+) -> npt.NDArray[np.float64] | None:
     for key in ("angle",):
         if key not in g:
             raise InvalidArgumentError(f"{what}: a pixel parallel-jaw grasp needs '{key}' (rad)")
@@ -508,7 +516,11 @@ def _pj_pixel(ctx, data, g, what, width: float) -> npt.NDArray[np.float64] | Non
     return X
 
 
-def _parse_view(ctx: _Context, data: _ViewData, entry: Mapping[str, Any], what: str):
+def _parse_view(
+    ctx: _Context, data: _ViewData, entry: Mapping[str, Any], what: str
+) -> tuple[
+    npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_]
+]:
     """(contact frames (n,4,4) camera, widths (n,), scores (n,), located (n,) bool)."""
     grasps = entry.get("grasps")
     if not isinstance(grasps, (list, tuple)):
@@ -553,7 +565,8 @@ def _parse_view(ctx: _Context, data: _ViewData, entry: Mapping[str, Any], what: 
 
 
 def _angle(cos: np.ndarray) -> np.ndarray:
-    return np.arccos(np.clip(cos, -1.0, 1.0))
+    out: np.ndarray = np.arccos(np.clip(cos, -1.0, 1.0))
+    return out
 
 
 def _match(
@@ -587,7 +600,8 @@ def _match(
     else:
 
         def d(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-            return np.linalg.norm(p - q, axis=1)
+            out: np.ndarray = np.linalg.norm(p - q, axis=1)
+            return out
 
         same = np.maximum(d(p1[i], q1[j]), d(p2[i], q2[j]))
         swapped = np.maximum(d(p1[i], q2[j]), d(p2[i], q1[j]))

@@ -787,7 +787,7 @@ def _write_outputs(
     results: PickResults,
     scene: Scene,
     view: CameraView,
-    frames: list,
+    frames: list[Any],
     threads: int,
     render: Any = None,
 ) -> None:

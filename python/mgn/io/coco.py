@@ -60,7 +60,7 @@ def _counts(starts: np.ndarray, ends: np.ndarray, total: int) -> list[int]:
     edges[1:-1:2] = starts
     edges[2:-1:2] = ends
     edges[-1] = total
-    counts = np.diff(edges).tolist()
+    counts: list[int] = np.diff(edges).tolist()
     if len(counts) > 1 and counts[-1] == 0:
         counts.pop()  # ends with ones: no trailing zero run (as pycocotools writes it)
     return counts
@@ -228,7 +228,9 @@ def iter_coco_views(
             yield image, anns
 
 
-def _categories(names: dict[int, str], seen: set[int], class_agnostic: bool) -> list[dict]:
+def _categories(
+    names: dict[int, str], seen: set[int], class_agnostic: bool
+) -> list[dict[str, Any]]:
     if class_agnostic:
         return [{"id": AGNOSTIC_ID, "name": "object", "supercategory": "object"}]
     return [

@@ -142,10 +142,11 @@ class View:
         IoError if the file or the key is missing."""
         if "npz" in self.__dict__:
             try:
-                return self.__dict__["npz"][key]
+                npz: dict[str, np.ndarray] = self.__dict__["npz"]
+                return npz[key]
             except KeyError:
                 raise IoError(f"'{self.path('.npz')}' has no array '{key}'") from None
-        cache = self.__dict__.setdefault("_npz_arrays", {})
+        cache: dict[str, np.ndarray] = self.__dict__.setdefault("_npz_arrays", {})
         if key not in cache:
             p = self.path(".npz")
             try:
@@ -166,7 +167,8 @@ class View:
         IoError if the file or the dataset is missing."""
         if "hdf5" in self.__dict__:
             try:
-                return self.__dict__["hdf5"][name]
+                hdf5: dict[str, np.ndarray] = self.__dict__["hdf5"]
+                return hdf5[name]
             except KeyError:
                 raise IoError(f"'{self.path('_scene.hdf5')}' has no dataset '{name}'") from None
         p = self.path("_scene.hdf5")
@@ -185,13 +187,16 @@ class View:
     @property
     def depth(self) -> npt.NDArray[np.float32]:
         """(H, W) sensor z-depth, m, NaN invalid."""
-        return (self.npz["depth"] / np.float32(M_TO_CM)).astype(np.float32)
+        depth: npt.NDArray[np.float32] = (self.npz["depth"] / np.float32(M_TO_CM)).astype(
+            np.float32
+        )
+        return depth
 
     def mgn_image(self, name: str) -> np.ndarray | None:
         """An image of ``{v}_mgn.hdf5`` as stored (``depth_ideal`` in cm), reading only it; kept.
         Datasets written before that file existed had these images in ``{v}.npz``: read from
         there. None if the view has no such image (original MetaGraspNet folders)."""
-        cache = self.__dict__.setdefault("_mgn_images", {})
+        cache: dict[str, np.ndarray | None] = self.__dict__.setdefault("_mgn_images", {})
         if name in cache:
             return cache[name]
         p = self.path("_mgn.hdf5")
@@ -238,7 +243,7 @@ class View:
         """``depth_ideal`` in metres: as stored when the file holds metres (the renderer's
         values), else the stored cm / 100."""
         d = self.mgn_image("depth_ideal")
-        cache = self.__dict__["_mgn_images"]
+        cache: dict[str, np.ndarray | None] = self.__dict__["_mgn_images"]
         if "depth_ideal (m)" in cache:
             return cache["depth_ideal (m)"]
         return None if d is None else ideal_metres(d)
@@ -409,7 +414,8 @@ class View:
     @cached_property
     def order(self) -> dict[str, Any]:
         """``{v}_order.json`` as stored (keys "1".."N"; depth_diff in cm)."""
-        return _read_json(self.path("_order.json"))
+        order: dict[str, Any] = _read_json(self.path("_order.json"))
+        return order
 
     @cached_property
     def layout(self) -> dict[str, Any] | None:

@@ -75,7 +75,7 @@ def read_depth(path: str | os.PathLike[str]) -> npt.NDArray[np.float32]:
     suffix = p.suffix.lower()
     try:
         if suffix == ".npy":
-            d = np.load(p, allow_pickle=False).astype(np.float32)
+            d: npt.NDArray[np.float32] = np.load(p, allow_pickle=False).astype(np.float32)
         elif suffix == ".npz":
             with np.load(p, allow_pickle=False) as z:
                 if "depth" not in z.files:
@@ -243,7 +243,8 @@ def _ann_mask(ann: dict[str, Any], h: int, w: int, source: str) -> np.ndarray:
             f"{source}: annotation {ann.get('id')} mask is {m.shape[1]} x {m.shape[0]} "
             f"px but its image is {w} x {h} px"
         )
-    return m
+    mask: npt.NDArray[np.bool_] = m
+    return mask
 
 
 def _sibling_depth(image: Path) -> np.ndarray | None:

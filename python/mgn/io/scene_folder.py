@@ -332,7 +332,7 @@ def encode_float_image(image: npt.ArrayLike) -> npt.NDArray[np.int32]:
     """(H, W) float32 -> int32 differences of the bit patterns along each row (first column
     kept); wraps modulo 2^32, so :func:`decode_float_image` restores every bit (NaN included)."""
     bits = np.ascontiguousarray(image, np.float32).view(np.int32)
-    out = bits.copy()
+    out: npt.NDArray[np.int32] = bits.copy()
     with np.errstate(over="ignore"):
         out[:, 1:] = bits[:, 1:] - bits[:, :-1]
     return out
@@ -389,7 +389,10 @@ def _archival_poses(poses_cm: npt.ArrayLike) -> npt.NDArray[np.float32]:
 
 def _snap(a: npt.NDArray[np.float32], step: float) -> npt.NDArray[np.float32]:
     """float32 ``a`` rounded to multiples of ``step`` (a power of two; NaN stays NaN)."""
-    return (np.round(a / np.float32(step)) * np.float32(step)).astype(np.float32)
+    out: npt.NDArray[np.float32] = (np.round(a / np.float32(step)) * np.float32(step)).astype(
+        np.float32
+    )
+    return out
 
 
 #: ``mgn_encoding`` of a ``com_heatmap`` stored as the int32 differences (modulo 2^32) of its
@@ -452,7 +455,10 @@ def decode_com_residual(
 def ideal_metres(depth_ideal_cm: npt.ArrayLike) -> npt.NDArray[np.float32]:
     """float32 metres of a ``depth_ideal`` stored in cm (archival mode, earlier files), as
     :class:`mgn.io.dataset.View` gives them."""
-    return (np.asarray(depth_ideal_cm, np.float32) / np.float32(M_TO_CM)).astype(np.float32)
+    out: npt.NDArray[np.float32] = (
+        np.asarray(depth_ideal_cm, np.float32) / np.float32(M_TO_CM)
+    ).astype(np.float32)
+    return out
 
 
 def mgn_hdf5_bytes(
@@ -630,7 +636,7 @@ def read_scene_dataset(h5: Any, path: str) -> np.ndarray:
     ds = h5[path]
     if not ds.is_virtual or ds.attrs.get("mgn_encoding") != SHARED_ROTATION_ENCODING:
         return np.asarray(ds[()])
-    out = np.asarray(h5[f"{path.rpartition('/')[0]}/{_CONTACT_LEAF}"][()]).copy()
+    out: np.ndarray = np.asarray(h5[f"{path.rpartition('/')[0]}/{_CONTACT_LEAF}"][()]).copy()
     out[:, :, 3] = h5[f"{POSE_COLUMNS_GROUP}/{path}"][()]
     return out
 

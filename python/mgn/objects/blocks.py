@@ -55,7 +55,8 @@ def keypoints_mm(**named: Sequence[float]) -> tuple[tuple[str, tuple[float, floa
 def arc_fractions(profile: np.ndarray) -> np.ndarray:
     """Texture v of each profile point, as :func:`revolve` assigns it (open profile)."""
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(profile, axis=0), axis=1))])
-    return arc / arc[-1]
+    out: np.ndarray = arc / arc[-1]
+    return out
 
 
 def cylinder(radius: float, z0: float, z1: float, segments: int = 32, axial_steps: int = 1) -> Mesh:
@@ -120,6 +121,7 @@ def smooth_noise(seed: int, amplitude: float, terms: int = 7) -> Callable[[np.nd
     weights *= amplitude / weights.sum()
 
     def factor(d: np.ndarray) -> np.ndarray:
-        return 1.0 + np.sin(d @ dirs.T * freq + phase) @ weights
+        out: np.ndarray = 1.0 + np.sin(d @ dirs.T * freq + phase) @ weights
+        return out
 
     return factor

@@ -125,7 +125,8 @@ def rotation_matrix(axis: npt.ArrayLike, angle: float) -> np.ndarray:
     a = np.asarray(axis, dtype=np.float64)
     a = a / np.linalg.norm(a)
     k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+    out: np.ndarray = np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+    return out
 
 
 def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
@@ -383,7 +384,8 @@ def _tube_rings(path: np.ndarray, radius: np.ndarray, segments: int) -> np.ndarr
     phi = np.arange(segments) * (2.0 * np.pi / segments)
     c, s = np.cos(phi), np.sin(phi)
     offs = c[None, :, None] * nrm[:, None, :] + s[None, :, None] * bin_[:, None, :]
-    return path[:, None, :] + radius[:, None, None] * offs
+    out: np.ndarray = path[:, None, :] + radius[:, None, None] * offs
+    return out
 
 
 def sweep_circle(path: npt.ArrayLike, radius: float | Sequence[float], segments: int = 16) -> Mesh:
@@ -623,7 +625,8 @@ def rounded_box(
     def position(x: np.ndarray) -> np.ndarray:
         core = np.clip(x, -inner, inner)
         d = x - core
-        return core + radius * d / np.linalg.norm(d, axis=1, keepdims=True)
+        out: np.ndarray = core + radius * d / np.linalg.norm(d, axis=1, keepdims=True)
+        return out
 
     return _lattice_mesh(coords, position)
 
@@ -677,7 +680,8 @@ def superellipsoid(
         xy = (x ** (2.0 / e2) + y ** (2.0 / e2)) ** (e2 / e1)
         f = xy + z ** (2.0 / e1)
         r = f ** (-e1 / 2.0)
-        return r if noise is None else r * noise(d)
+        out: np.ndarray = r if noise is None else r * noise(d)
+        return out
 
     return star_blob(radius_of, steps)
 

@@ -286,7 +286,8 @@ class ObjectSpec:
     @property
     def extents(self) -> np.ndarray:
         """(3,) bounding-box edge lengths in metres."""
-        return self.vertices.max(axis=0) - self.vertices.min(axis=0)
+        out: np.ndarray = self.vertices.max(axis=0) - self.vertices.min(axis=0)
+        return out
 
     @property
     def volume(self) -> float:

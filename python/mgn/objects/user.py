@@ -241,7 +241,9 @@ def _embedded_texture(data: bytes) -> np.ndarray | None:
         return None
 
 
-def _base_color_texture(mat: Any, mesh_path: Path) -> tuple[np.ndarray | None, list]:
+def _base_color_texture(
+    mat: Any, mesh_path: Path
+) -> tuple[np.ndarray | None, list[tuple[str, str]]]:
     """The RGB texture of material ``mat`` (its file, else its embedded image), and the
     (what, file) pairs of the images that are there but cannot be read."""
     if mat is None:
@@ -409,7 +411,7 @@ def _flag(entry: dict[str, Any], key: str, where: str) -> bool:
     return value
 
 
-def _closed_mesh(entry: dict[str, Any], mesh: Any, mesh_path: Path, where: str) -> tuple:
+def _closed_mesh(entry: dict[str, Any], mesh: Any, mesh_path: Path, where: str) -> tuple[Any, Any]:
     """(mesh, its validation): repaired with ``repair: true``; an error when it is not closed
     and ``allow_open`` is not set."""
     allow_open, repair = _flag(entry, "allow_open", where), _flag(entry, "repair", where)

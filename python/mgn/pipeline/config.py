@@ -184,7 +184,7 @@ def _num(lo: float | None = None, *, strict: bool = True) -> Check:
 
 
 def _score_error(value: Any, key: str) -> float:
-    v = _num(0.0, strict=False)(value, key)
+    v: float = _num(0.0, strict=False)(value, key)
     if v >= 1.0:
         raise _fail(key, value, "a score error in [0, 1)")
     return v
@@ -219,7 +219,7 @@ def _path(value: Any, key: str) -> str:
 
 
 def _list(inner: Check, *, length: int | None = None, nonempty: bool = True) -> Check:
-    def check(value: Any, key: str) -> tuple:
+    def check(value: Any, key: str) -> tuple[Any, ...]:
         if not isinstance(value, (list, tuple)):
             raise _fail(key, value, "a list" if length is None else f"a list of {length} values")
         if length is not None and len(value) != length:
@@ -373,7 +373,7 @@ class HemisphereConfig(_Section):
 
 
 def _distortion(value: Any, key: str) -> tuple[float, ...]:
-    coeffs = _list(_num(), nonempty=False)(value, key)
+    coeffs: tuple[float, ...] = _list(_num(), nonempty=False)(value, key)
     if len(coeffs) not in (0, 4, 5, 8, 12, 14):
         raise _fail(key, value, "OpenCV distortion coefficients [k1, k2, p1, p2(, k3, ...)]: "
                     "4, 5, 8, 12 or 14 numbers")  # fmt: skip
@@ -411,7 +411,7 @@ class IntrinsicsConfig(_Section):
     }
 
     @classmethod
-    def from_dict(cls, data: Any, key: str = "") -> Any:
+    def from_dict(cls, data: Any, key: str = "") -> IntrinsicsConfig:
         d = _mapping(data, key)
         missing = [k for k in ("width", "height", "fx", "fy", "cx", "cy") if k not in d]
         if missing:
@@ -420,7 +420,7 @@ class IntrinsicsConfig(_Section):
                 f"({', '.join(INTRINSICS_PRESETS)}) or width, height, fx, fy, cx, cy (px) and "
                 "optionally distortion"
             )
-        out = super().from_dict(d, key)
+        out: IntrinsicsConfig = super().from_dict(d, key)
         if out.distortion:
             try:  # the lens must be invertible over the image (built once, cached)
                 lens_for(Intrinsics(out.width, out.height, out.fx, out.fy, out.cx, out.cy,
@@ -436,7 +436,8 @@ def _intrinsics(value: Any, key: str) -> str | IntrinsicsConfig:
     if isinstance(value, IntrinsicsConfig):
         return value
     if isinstance(value, str):
-        return _choice(*INTRINSICS_PRESETS)(value, key)
+        preset: str = _choice(*INTRINSICS_PRESETS)(value, key)
+        return preset
     raise _fail(key, value, f"a preset ({', '.join(INTRINSICS_PRESETS)}) or a mapping with width, "
                 "height, fx, fy, cx, cy")  # fmt: skip
 
@@ -593,7 +594,7 @@ def _unseen(value: Any, key: str) -> str | tuple[str | int, ...]:
         return "novel"
     if isinstance(value, str):
         raise _fail(key, value, "'novel' or a list of object names / category ids")
-    names = _list(_name)(value, key)
+    names: tuple[str | int, ...] = _list(_name)(value, key)
     if len(set(names)) != len(names):
         raise _fail(key, list(value), "distinct object names")
     return names
@@ -703,7 +704,7 @@ def _render(data: Any, key: str) -> RenderSettings:
     _check_keys(d, [f.name for f in dataclasses.fields(RenderSettings)], key)
     if "randomize" in d:
         d["randomize"] = _external(RandomizeSettings, d["randomize"], f"{key}.randomize")
-    settings = _external(RenderSettings, d, key)
+    settings: RenderSettings = _external(RenderSettings, d, key)
     s = settings
     checks: tuple[tuple[str, Callable[[], Any]], ...] = (
         ("spp", lambda: PathTraceOptions(spp=s.spp)),
@@ -774,14 +775,16 @@ class Config(_Section):
     }
 
     @classmethod
-    def from_dict(cls, data: Any, key: str = "", *, base_dir: str | os.PathLike[str] | None = None):
+    def from_dict(
+        cls, data: Any, key: str = "", *, base_dir: str | os.PathLike[str] | None = None
+    ) -> Config:
         """Build and validate from a mapping. Relative paths (user objects, gripper meshes) are
         resolved against ``base_dir`` when given.
 
         Raises:
             ConfigError: naming the key, the value and what was expected.
         """
-        config = super().from_dict(data, key)
+        config: Config = super().from_dict(data, key)
         if base_dir is not None:
             config = config.resolved(base_dir)
         if config.tote.mesh is not None and (base_dir is not None or os.path.isabs(
@@ -845,10 +848,10 @@ _SECTION_DOCS = {
 }
 
 
-class _Dumper(yaml.SafeDumper):
+class _Dumper(yaml.SafeDumper):  # type: ignore[misc]  # PyYAML has no type information
     """Block style, except lists of scalars on one line ([0.2, 0.35, 0.6, 1.0])."""
 
-    def represent_list(self, data: list) -> yaml.Node:  # noqa: D102
+    def represent_list(self, data: list[Any]) -> yaml.Node:  # noqa: D102
         flow = all(not isinstance(v, (list, dict)) for v in data)
         return self.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
 

@@ -310,13 +310,17 @@ def _label_task(
 # --------------------------------------------------------------------------------- executors
 
 
+_Outcome = tuple[Any, Any, Exception | None]
+"""(item, result, exception) of one task: result None when the task raised."""
+
+
 class _Executor(ABC):
     """Runs independent tasks; yields (item, result, exception) as they complete."""
 
     threads_per_task = 0
 
     @abstractmethod
-    def run(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[tuple]:
+    def run(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[_Outcome]:
         """Run ``fn`` on every item; yield (item, result, exception) in completion order."""
 
     def cancel(self) -> None:  # noqa: B027 (optional hook: nothing to stop by default)
@@ -335,7 +339,7 @@ class _InProcess(_Executor):
     def __init__(self) -> None:
         self._stop = False
 
-    def run(self, fn, items):  # noqa: ANN001, ANN201
+    def run(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[_Outcome]:
         self._stop = False
         if fn is run_scene:
             yield from self._run_scenes(items)
@@ -348,7 +352,7 @@ class _InProcess(_Executor):
             except Exception as e:  # noqa: BLE001
                 yield item, None, e
 
-    def _run_scenes(self, tasks: Sequence[SceneTask]) -> Iterator[tuple]:
+    def _run_scenes(self, tasks: Sequence[SceneTask]) -> Iterator[_Outcome]:
         pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mgn-drop")
         try:
             ahead = pool.submit(drop_task_scene, tasks[0]) if tasks else None
@@ -379,9 +383,9 @@ class _ProcessPool(_Executor):
         self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
         self.threads_per_task = max(1, cores // workers)
-        self._futures: list = []
+        self._futures: list[Future[Any]] = []
 
-    def run(self, fn, items):  # noqa: ANN001, ANN201
+    def run(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[_Outcome]:
 
         futures = {self.pool.submit(fn, item): item for item in items}
         self._futures = list(futures)
@@ -420,12 +424,12 @@ class _Dask(_Executor):
                 "--scheduler needs Dask distributed: pip install 'mgn[cluster]'"
             ) from e
         self.client = Client(scheduler)
-        self._futures: list = []
+        self._futures: list[Any] = []
 
-    def run(self, fn, items):  # noqa: ANN001, ANN201
+    def run(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[_Outcome]:
         from distributed import as_completed
 
-        futures = {}
+        futures: dict[Any, tuple[Any, Any]] = {}
         for item in items:
             fut = self.client.submit(fn, item, pure=False)
             futures[fut.key] = (fut, item)
@@ -670,7 +674,9 @@ def _catalogue(config: Config) -> tuple[list[ObjectSpec], dict[str, str]]:
     return list(cat.specs), cat.sources
 
 
-def _dataset_doc(config: Config, seed: int, num_scenes: int, status: str, **extra: Any) -> dict:
+def _dataset_doc(
+    config: Config, seed: int, num_scenes: int, status: str, **extra: Any
+) -> dict[str, Any]:
     return {
         "schema_version": DATASET_SCHEMA_VERSION,
         "mgn_version": __version__,
@@ -739,7 +745,7 @@ def _comparable(config_doc: Any) -> Any:
     return doc
 
 
-def _check_resume(out: Path, config: Config, seed: int) -> dict | None:
+def _check_resume(out: Path, config: Config, seed: int) -> dict[str, Any] | None:
     """The recorded ``dataset.json`` of ``out`` (None: nothing started yet), checked against
     the seed and config of the resumed run."""
     try:

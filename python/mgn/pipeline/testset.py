@@ -541,6 +541,7 @@ def parse_quota(text: str) -> tuple[int, ...]:
             )
         mapping[level.strip()] = count
     try:
-        return SelectionConfig.from_dict({"quota": mapping}, "selection").quota
+        quota: tuple[int, ...] = SelectionConfig.from_dict({"quota": mapping}, "selection").quota
+        return quota
     except ConfigError as e:
         raise ConfigError(f"--difficulty-quota {text!r}: {e}") from None

@@ -60,7 +60,7 @@ class PjLabels:
     point_score: npt.NDArray[np.float32]
     num_points: int
     num_colliding: int
-    metadata: dict = field(default_factory=dict)
+    metadata: dict[str, Any] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.width)
@@ -155,7 +155,7 @@ def label_object(
     friction: float = _WRENCH.friction,
     grip_force: float = _WRENCH.grip_force,
     contact_radius: float = _WRENCH.contact_radius,
-    sampler_options: dict | None = None,
+    sampler_options: dict[str, Any] | None = None,
     samples: SurfaceSamples | None = None,
     max_grasps: int | None = None,
 ) -> PjLabels:

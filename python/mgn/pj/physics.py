@@ -261,7 +261,9 @@ def grasp_rows(grasps: Any) -> npt.NDArray[np.float64]:
     return out
 
 
-def _inputs(mass: float, com: npt.ArrayLike, inertia: npt.ArrayLike) -> tuple:
+def _inputs(
+    mass: float, com: npt.ArrayLike, inertia: npt.ArrayLike
+) -> tuple[float, npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     c = np.asarray(com, dtype=np.float64)
     inertia_arr = np.asarray(inertia, dtype=np.float64)
     if c.shape != (3,):

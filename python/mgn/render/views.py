@@ -106,7 +106,8 @@ def _depth_lut() -> npt.NDArray[np.uint8]:
     t = np.linspace(0.0, len(_CMAP) - 1, 256)
     i0 = np.minimum(t.astype(np.int64), len(_CMAP) - 2)
     f = (t - i0)[:, None]
-    return np.round(_CMAP[i0] * (1 - f) + _CMAP[i0 + 1] * f).astype(np.uint8)
+    out: npt.NDArray[np.uint8] = np.round(_CMAP[i0] * (1 - f) + _CMAP[i0 + 1] * f).astype(np.uint8)
+    return out
 
 
 _DEPTH_LUT = _depth_lut()

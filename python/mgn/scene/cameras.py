@@ -224,7 +224,8 @@ class CameraView:
     @property
     def position(self) -> npt.NDArray[np.float64]:
         """Camera centre in the world, m."""
-        return self.X_WC[:3, 3].copy()
+        out: npt.NDArray[np.float64] = self.X_WC[:3, 3].copy()
+        return out
 
     def rays(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
         """Rays through the pixel centres (see :func:`mgn.camera_rays`)."""

@@ -27,6 +27,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -60,7 +61,8 @@ def _tilt_matrix(tau_x: float, tau_y: float) -> npt.NDArray[np.float64]:
     rot_y = np.array([[cy, 0.0, -sy], [0.0, 1.0, 0.0], [sy, 0.0, cy]])
     rot = rot_y @ rot_x
     proj = np.array([[rot[2, 2], 0.0, -rot[0, 2]], [0.0, rot[2, 2], -rot[1, 2]], [0.0, 0.0, 1.0]])
-    return proj @ rot
+    out: npt.NDArray[np.float64] = proj @ rot
+    return out
 
 
 def distort_normalized(
@@ -158,7 +160,7 @@ class Lens:
                 f"{self.render_shape}"
             )
 
-    def warp_nearest(self, image: npt.ArrayLike, *, stacked: bool = False) -> npt.NDArray:
+    def warp_nearest(self, image: npt.ArrayLike, *, stacked: bool = False) -> npt.NDArray[Any]:
         """Nearest-neighbour resampling of a pinhole image (H_r, W_r[, C]) or, with ``stacked``,
         of a stack (N, H_r, W_r) (masks of N objects) into the distorted image. Any dtype."""
         a = np.asarray(image)

@@ -306,4 +306,5 @@ def _max_mass(
     m_bend = _limit(tau_b, np.hypot(psi[..., 0], psi[..., 1]).max(axis=1))
     q = np.sqrt(phi[..., 0] ** 2 + phi[..., 1] ** 2 + (psi[..., 2] / r_cup) ** 2)
     m_fric = np.stack([_limit(m * V, (q - m * fz).max(axis=1)) for m in mu], axis=1)
-    return np.minimum(np.minimum(m_vac, m_bend)[:, None], m_fric)
+    out: np.ndarray = np.minimum(np.minimum(m_vac, m_bend)[:, None], m_fric)
+    return out

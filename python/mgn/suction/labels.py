@@ -10,6 +10,7 @@ which the sealed cup holds the object (:mod:`mgn.suction.hold`, docs/models.md Â
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -53,7 +54,7 @@ class SuctionLabels:
     reason: npt.NDArray[np.uint8]
     num_candidates: int
     num_colliding: int
-    metadata: dict = field(default_factory=dict)
+    metadata: dict[str, Any] = field(default_factory=dict)
     simulation: npt.NDArray[np.float32] | None = None
 
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -397,7 +398,7 @@ class SceneGraspModel:
         near_plane: float = DEFAULT_NEAR_PLANE,
         num_threads: int = 0,
         first_collision_only: bool = False,
-        _objects: tuple | None = None,
+        _objects: tuple[Any, ...] | None = None,
     ) -> None:
         if _objects is None:
             if scene is None:
@@ -485,7 +486,7 @@ class SceneGraspModel:
         X_WT: npt.ArrayLike | None = None,
         gripper: ParallelJawGripper | None = None,
         cup: SuctionCup | None = None,
-        **options,
+        **options: Any,
     ) -> SceneGraspModel:
         """The model for objects given directly: meshes (object frame), (N, 4, 4) poses X_WO,
         masses (kg), (N, 3) centres of mass (object frame), a closed tote mesh at ``X_WT``

@@ -238,12 +238,14 @@ class SceneRayModel:
         surface point p_W (docs/models.md §7; computed here as the C++ model does, to the last
         bits or nearly: the dataset writer predicts the heat map from them,
         :func:`mgn.io.scene_folder.com_heatmap_prediction`)."""
-        return self._com_parameters.copy()
+        out: npt.NDArray[np.float64] = self._com_parameters.copy()
+        return out
 
     @property
     def category_ids(self) -> npt.NDArray[np.int32]:
         """(N,) category ids in scene order."""
-        return self._category_ids.copy()
+        out: npt.NDArray[np.int32] = self._category_ids.copy()
+        return out
 
     def __repr__(self) -> str:
         return f"SceneRayModel(objects={self.num_objects}, tote={self.has_tote})"
