@@ -59,7 +59,8 @@ def rotation_about(axis: npt.ArrayLike, angle: float) -> npt.NDArray[np.float64]
     a = np.asarray(axis, np.float64).reshape(3)
     a = a / np.linalg.norm(a)
     K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+    R: npt.NDArray[np.float64] = np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+    return R
 
 
 def _sample(

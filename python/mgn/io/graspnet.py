@@ -251,7 +251,8 @@ def _project_px(points: np.ndarray, K: Intrinsics | npt.ArrayLike) -> np.ndarray
         if M.shape != (3, 3):
             raise InvalidArgumentError(f"grasp_rectangles: K must be (3, 3), got {M.shape}")
     q = points @ M.T
-    return q[:, :2] / q[:, 2:3]
+    uv: np.ndarray = q[:, :2] / q[:, 2:3]
+    return uv
 
 
 def grasp_rectangles(
@@ -355,14 +356,15 @@ def suction_scores(grasps: dict[str, np.ndarray], name: str) -> npt.NDArray[np.f
         raise InvalidArgumentError(f"suction score {name!r}: expected one of {SUCTION_SCORES}")
     n = len(grasps.get("object_id", ()))
 
-    def get(key: str) -> np.ndarray:
+    def get(key: str) -> npt.NDArray[np.float64]:
         return np.asarray(grasps.get(key, np.full(n, np.nan)), np.float64)
 
     if name == "seal":
         return get("score_analytical")
     if name == "wrench":
         return get("score_wrench")
-    return get("score_analytical") * get("score_wrench")
+    product: npt.NDArray[np.float64] = get("score_analytical") * get("score_wrench")
+    return product
 
 
 def gripper_of(ds: Dataset) -> ParallelJawGripper:

@@ -626,7 +626,8 @@ def _edge_gated(
     cos = dot / np.maximum(norms, np.float32(1e-12))
     lo, hi = _EDGE_COS
     g = np.clip((cos - np.float32(lo)) / np.float32(hi - lo), 0.0, 1.0).astype(np.float32)
-    return (1.0 + g[..., None] * (ratio - 1.0)).astype(np.float32)
+    gated: npt.NDArray[np.float32] = (1.0 + g[..., None] * (ratio - 1.0)).astype(np.float32)
+    return gated
 
 
 # -------------------------------------------------------------------------------- materials
