@@ -25,9 +25,13 @@ def test_default_config_has_no_warning() -> None:
     assert config_errors(load_config(None)) == []
 
 
-def test_thousand_objects_are_named() -> None:
-    (w,) = config_warnings(load_config({"objects": {"count": 1000}}))
-    assert w.startswith("objects.count: 1000 objects")
+def test_too_many_objects_are_named() -> None:
+    # ~24 of the built-in objects fill the default tote's volume: 200 warn, 1000 (40x) refuse
+    (w,) = config_warnings(load_config({"objects": {"count": 200}}))
+    assert w.startswith("objects.count: 200 objects")
+    errors = config_errors(load_config({"objects": {"count": 1000}}))
+    assert any(e.startswith("objects.count: 1000 objects") and "more than 10x" in e
+               for e in errors), errors  # fmt: skip
 
 
 def test_tiny_images_are_named() -> None:
@@ -73,10 +77,10 @@ def test_fifty_micrometre_object_is_named(tmp_path: Path) -> None:
 
 
 def test_config_check_prints_the_warning(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    (tmp_path / "cfg.yaml").write_text(yaml.safe_dump({"objects": {"count": 1000}}))
+    (tmp_path / "cfg.yaml").write_text(yaml.safe_dump({"objects": {"count": 200}}))
     assert main(["config", "check", str(tmp_path / "cfg.yaml")]) == 0
     err = capsys.readouterr().err
-    assert "warning: objects.count: 1000 objects" in err
+    assert "warning: objects.count: 200 objects" in err
 
 
 def test_validate_flags_a_view_without_visible_objects(small_dataset: Path, tmp_path: Path):
