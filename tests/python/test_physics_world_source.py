@@ -37,8 +37,10 @@ _CONSTRUCT = re.compile(
 
 
 def _code(text: str) -> str:
-    """The C++ text without comments, string literals and preprocessor lines."""
+    """The C++ text without comments, string literals, preprocessor lines and forward
+    declarations (``class T;``)."""
     text = re.sub(r"//[^\n]*", "", text)
+    text = re.sub(r"\b(?:class|struct)\s+\w+\s*;", "", text)
     text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
     text = re.sub(r'"(?:\\.|[^"\\])*"', '""', text)
     return "\n".join(line for line in text.split("\n") if not line.lstrip().startswith("#"))
@@ -106,6 +108,7 @@ def test_the_check_finds_a_world_built_by_hand(tmp_path: Path):
     planted = tmp_path / "cpp/src/scene/planted.cpp"
     planted.write_text(
         "// btDiscreteDynamicsWorld world; in a comment is no construction\n"
+        "class btDbvtBroadphase;\n"
         "void f(btCollisionDispatcher& d, btDbvtBroadphase* b) {\n"
         "  btDefaultCollisionConfiguration config;\n"
         "  auto w = std::make_unique<btDiscreteDynamicsWorld>(&d, b, nullptr, &config);\n"
@@ -113,7 +116,7 @@ def test_the_check_finds_a_world_built_by_hand(tmp_path: Path):
         "}\n"
     )
     assert world_constructions(tmp_path) == [
-        "cpp/src/scene/planted.cpp:3: btDefaultCollisionConfiguration",
-        "cpp/src/scene/planted.cpp:4: btDiscreteDynamicsWorld",
-        "cpp/src/scene/planted.cpp:5: btSequentialImpulseConstraintSolver",
+        "cpp/src/scene/planted.cpp:4: btDefaultCollisionConfiguration",
+        "cpp/src/scene/planted.cpp:5: btDiscreteDynamicsWorld",
+        "cpp/src/scene/planted.cpp:6: btSequentialImpulseConstraintSolver",
     ]
