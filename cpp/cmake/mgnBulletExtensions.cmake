@@ -45,8 +45,8 @@ elseif(MGN_BULLET_EXTENSIONS STREQUAL "AUTO")
   set(MGN_BULLET_EXT_ENABLED OFF)
   message(STATUS
     "mgn: Bullet ${_mgn_bt_found} is not 3.24: building with Bullet's own solver, narrow phase "
-    "and hull shapes (cpp/src/physics/bullet_ext off; same physics, slower, results not "
-    "bit-identical to a 3.24 build)")
+    "and hull shapes (cpp/src/physics/bullet_ext off: the same models, without mgn's faster "
+    "re-implementations; results are that release's)")
 else()
   message(FATAL_ERROR
     "MGN_BULLET_EXTENSIONS must be AUTO, ON or OFF, got '${MGN_BULLET_EXTENSIONS}'")
