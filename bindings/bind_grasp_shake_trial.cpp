@@ -95,8 +95,6 @@ void bind_grasp_shake_trial(py::module_& m) {
       .def_readwrite("smooth_shake", &ShakeOptions::smooth_shake)
       .def_readwrite("margin", &ShakeOptions::margin)
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
-      .def_readwrite("skip_separated_pairs", &ShakeOptions::skip_separated_pairs)
-      .def_readwrite("one_sided_rows", &ShakeOptions::one_sided_rows)
       .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
       .def_readwrite("iterations_per_hull_contact", &ShakeOptions::iterations_per_hull_contact)

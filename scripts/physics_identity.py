@@ -34,9 +34,9 @@ def _drop_cases(out: dict[str, np.ndarray]) -> None:
         for seed in (0, 1):
             raw, *_ = _simulate(specs, seed, ToteSpec(), opt, None, None, True)
             for key in ("X_WO", "X_WO_release", "status", "settled", "contacts"):
-                out[f"drop/{name}/{seed}/{key}"] = np.asarray(raw[key])
+                out[f"drop/{name}/{seed}/{key}"] = np.asarray(getattr(raw, key))
             for key in ("steps", "max_penetration"):
-                out[f"drop/{name}/{seed}/{key}"] = np.asarray(raw[key])
+                out[f"drop/{name}/{seed}/{key}"] = np.asarray(getattr(raw, key))
     scene = drop_scene(specs[:5], seed=3)
     X = np.array([i.X_WO for i in scene.instances])
     raw, *_ = _simulate(
@@ -49,8 +49,8 @@ def _drop_cases(out: dict[str, np.ndarray]) -> None:
         True,
         X,
     )
-    out["settle/X_WO"] = np.asarray(raw["X_WO"])
-    out["settle/steps"] = np.asarray(raw["steps"])
+    out["settle/X_WO"] = np.asarray(raw.X_WO)
+    out["settle/steps"] = np.asarray(raw.steps)
 
 
 def _shake_cases(out: dict[str, np.ndarray]) -> None:

@@ -1601,8 +1601,6 @@ class ShakeOptions:
     """
 
     polyhedral_contacts: bool
-    skip_separated_pairs: bool
-    one_sided_rows: bool
     smooth_shake: bool
     staircase: bool
     def __init__(self) -> None: ...

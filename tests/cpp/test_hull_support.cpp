@@ -1,10 +1,11 @@
-// Tests of the private vectorised hull support search (cpp/src/physics/hull_support.hpp): it
-// must give exactly Bullet's answers (btVector3::maxDot, btConvexHullShape, GJK), ties included,
-// so that the drop and the shake test are unchanged bit for bit.
+// Tests of the private vectorised hull support search
+// (cpp/src/physics/bullet_ext/hull_support.hpp): it must give exactly Bullet's answers
+// (btVector3::maxDot, btConvexHullShape, GJK), ties included, so that the drop and the shake test
+// are unchanged bit for bit.
 #include <gtest/gtest.h>
 
-#include "physics/hull_support.hpp"
-#include "physics/separated_pair_skip.hpp"
+#include "physics/bullet_ext/hull_support.hpp"
+#include "physics/bullet_ext/separated_pair_skip.hpp"
 
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>

@@ -1,12 +1,12 @@
-// Tests of the private one-sided contact solver (cpp/src/physics/one_sided_solver.hpp): a world
-// stepped with it must be the world stepped with Bullet's own sequential-impulse solver, bit for
-// bit, step by step; rows of kinematic and static bodies must be solved one-sided (else the test
-// would prove nothing about them), and worlds outside its fast path must go to Bullet's loop.
+// Tests of the private one-sided contact solver (cpp/src/physics/bullet_ext/one_sided_solver.hpp):
+// a world stepped with it must be the world stepped with Bullet's own sequential-impulse solver,
+// bit for bit, step by step; rows of kinematic and static bodies must be solved one-sided (else the
+// test would prove nothing about them), and worlds outside its fast path must go to Bullet's loop.
 // Its row setup (convertContacts) must give Bullet's rows, field by field, after every setup, and
 // manifolds outside its fast path must go to Bullet's convertContact.
 #include <gtest/gtest.h>
 
-#include "physics/one_sided_solver.hpp"
+#include "physics/bullet_ext/one_sided_solver.hpp"
 
 #include <btBulletDynamicsCommon.h>
 

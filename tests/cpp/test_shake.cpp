@@ -6,13 +6,16 @@
 #include <mgn/grasp/shake_trial.hpp>
 
 #include "grasp/detail/staircase_schedule.hpp"
+#include "physics/world.hpp"
 
 #include <Eigen/Geometry>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <set>
 #include <thread>
+#include <utility>
 
 namespace mgn {
 namespace {
@@ -37,6 +40,21 @@ ParallelJawGrasp centre_grasp(double w) {
   g.width = w;
   return g;
 }
+
+/// Sets the Bullet extension switches of the physics world for its lifetime (tests only).
+class ExtensionSwitches {
+ public:
+  explicit ExtensionSwitches(const physics::ExtensionSwitches& s)
+      : saved_(physics::extension_switches()) {
+    physics::set_extension_switches(s);
+  }
+  ~ExtensionSwitches() { physics::set_extension_switches(saved_); }
+  ExtensionSwitches(const ExtensionSwitches&) = delete;
+  ExtensionSwitches& operator=(const ExtensionSwitches&) = delete;
+
+ private:
+  physics::ExtensionSwitches saved_;
+};
 
 /// The full schedule (no held-load windows: they have their own tests) on an S x S grid.
 ShakeOptions small_grid(int S, double fmin, double fmax) {
@@ -691,8 +709,9 @@ TEST(Shake, TrialsOfABatchEqualTrialsRunAloneWithTheirOwnShapes) {
 }
 
 TEST(Shake, SkippingSeparatedPairsChangesNoTrial) {
-  // ShakeOptions::skip_separated_pairs skips Bullet's narrow phase only where it would add
-  // nothing: every trial must be the same to the step with it on and off. A compound of nine
+  // The physics world's separated-pair skip (physics/world.hpp) skips Bullet's narrow phase only
+  // where it would add nothing: every trial must be the same to the step with it on and off.
+  // A compound of nine
   // small hulls with gaps between them (most hulls near a pad do not touch it), off-centre
   // grasps that hold and drop, both contact modes, the box and a mesh gripper.
   PhysicsObject grid = box_object(Vec3d(0.04, 0.05, 0.05), 0.6);
@@ -719,9 +738,11 @@ TEST(Shake, SkippingSeparatedPairsChangesNoTrial) {
     for (const ParallelJawGripper& gripper : {ParallelJawGripper{}, meshes}) {
       ShakeOptions o = small_grid(3, 0.1, 1.5);
       o.polyhedral_contacts = polyhedral;
-      o.skip_separated_pairs = false;
-      const ShakeResult plain = shake_test(grid, gripper, grasps, o);
-      o.skip_separated_pairs = true;
+      ShakeResult plain;
+      {
+        const ExtensionSwitches off({/*one_sided_rows=*/true, /*skip_separated_pairs=*/false});
+        plain = shake_test(grid, gripper, grasps, o);
+      }
       const ShakeResult skipping = shake_test(grid, gripper, grasps, o);
       for (std::size_t t = 0; t < plain.trial_success.size(); ++t) {
         EXPECT_EQ(skipping.trial_success[t], plain.trial_success[t]) << "trial " << t;
@@ -734,6 +755,37 @@ TEST(Shake, SkippingSeparatedPairsChangesNoTrial) {
   }
   EXPECT_GT(held, 0);  // mixed outcomes: the comparison covers held and dropped objects
   EXPECT_GT(dropped, 0);
+}
+
+TEST(Shake, OneSidedSolverRowsChangeNoTrial) {
+  // The physics world's one-sided solver (physics/bullet_ext/one_sided_solver.hpp) changes
+  // nothing but the cost: the object's pose and the fingers, step by step, are the same bits as
+  // with Bullet's own solver (a light and a heavy object: a held and a dropped trial).
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.06);
+  ShakeOptions o;
+  o.seed = 5;
+  std::set<bool> outcomes;
+  for (const auto& [friction, density] : {std::pair{1.0, 1.0}, std::pair{0.05, 20.0}}) {
+    const ShakeTrajectory fast =
+        shake_trajectory(box, ParallelJawGripper{}, centre_grasp(0.04), friction, density, o, 1);
+    ShakeTrajectory plain;
+    {
+      const ExtensionSwitches off({/*one_sided_rows=*/false, /*skip_separated_pairs=*/true});
+      plain =
+          shake_trajectory(box, ParallelJawGripper{}, centre_grasp(0.04), friction, density, o, 1);
+    }
+    ASSERT_EQ(fast.steps, plain.steps);
+    EXPECT_EQ(fast.success, plain.success);
+    ASSERT_EQ(fast.X_WO.size(), plain.X_WO.size());
+    ASSERT_GT(fast.X_WO.size(), 10u);
+    for (std::size_t k = 0; k < fast.X_WO.size(); ++k) {
+      ASSERT_TRUE(fast.X_WO[k].matrix() == plain.X_WO[k].matrix()) << "record " << k;
+      ASSERT_EQ(fast.finger_left[k], plain.finger_left[k]) << "record " << k;
+      ASSERT_EQ(fast.finger_right[k], plain.finger_right[k]) << "record " << k;
+    }
+    outcomes.insert(fast.success);
+  }
+  EXPECT_EQ(outcomes.size(), 2u);  // both kinds of trial were compared
 }
 
 TEST(Shake, MeshGripperIsSimulatedWithItsOwnFingers) {

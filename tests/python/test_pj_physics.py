@@ -202,58 +202,6 @@ def test_threads_and_seed_give_identical_results(hold):
     np.testing.assert_array_equal(a.score, b.score)
 
 
-def test_skipping_separated_pairs_changes_no_trial_of_a_compound():
-    """skip_separated_pairs reaches the core and only skips narrow-phase calls that would add
-    nothing: a two-part object (the palm and the part away from the pads are skipped) gives the
-    same trials to the step either way."""
-    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.8)
-    parts = [
-        mgn.make_box([0.04, 0.05, 0.02]).transformed(_shift(0, 0, 0.015)),
-        mgn.make_box([0.04, 0.05, 0.02]).transformed(_shift(0, 0, -0.015)),
-    ]
-    grasps = np.stack([centre_grasp(0.04)] * 2)
-    grasps[0, 6:9] = [-0.02, 0.01, 0.015]  # the pads touch the upper part only
-    grasps[1, 6:9] = [-0.02, -0.01, -0.012]
-    on = ShakeOptions(grid=2, friction_range=(0.2, 1.0), seed=4, num_threads=1)
-    off = replace(on, skip_separated_pairs=False)
-    assert on.to_core().skip_separated_pairs and not off.to_core().skip_separated_pairs
-    a = shake_scores(parts, m, com, inertia, grasps, options=on)
-    b = shake_scores(parts, m, com, inertia, grasps, options=off)
-    for field in ("trial_success", "trial_steps", "trial_ended_early"):
-        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
-
-
-def test_one_sided_solver_rows_change_no_trial():
-    """one_sided_rows reaches the core and changes nothing but the cost: the object's pose and
-    the fingers, step by step, are the same bits with Bullet's own solver (light and heavy
-    object, a held and a dropped trial)."""
-    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.06)
-    grasp = centre_grasp(0.04)
-    on = ShakeOptions(seed=5)
-    off = replace(on, one_sided_rows=False)
-    assert on.to_core().one_sided_rows and not off.to_core().one_sided_rows
-    outcomes = set()
-    for friction, density in ((1.0, 1.0), (0.05, 20.0)):
-        a = shake_trajectory(
-            mesh, m, com, inertia, grasp, friction, density, options=on, record_every=1
-        )
-        b = shake_trajectory(
-            mesh, m, com, inertia, grasp, friction, density, options=off, record_every=1
-        )
-        assert a.steps == b.steps and a.success == b.success
-        np.testing.assert_array_equal(a.X_WO, b.X_WO)
-        np.testing.assert_array_equal(a.finger_left, b.finger_left)
-        np.testing.assert_array_equal(a.finger_right, b.finger_right)
-        outcomes.add(a.success)
-    assert outcomes == {True, False}  # both kinds of trial were compared
-
-
-def _shift(x, y, z):
-    X = np.eye(4)
-    X[:3, 3] = [x, y, z]
-    return X
-
-
 def test_grasps_scored_in_pieces_match_the_whole_list():
     """first_grasp_index keeps every grasp's random streams: pieces give the whole list's
     trials (the progress bar of ShakeScorer relies on it)."""

@@ -13,8 +13,7 @@
 
 #include "grasp/detail/staircase_schedule.hpp"
 #include "physics/bullet.hpp"
-#include "physics/one_sided_solver.hpp"
-#include "physics/separated_pair_skip.hpp"
+#include "physics/world.hpp"
 
 #include <btBulletDynamicsCommon.h>
 
@@ -122,13 +121,15 @@ struct TrialOutcome {
   int steps = 0;
 };
 
-/// Pool sizes for a world of four bodies (Bullet's defaults, 4096 manifolds and algorithms,
-/// cost megabytes of memory to set up per trial).
-btDefaultCollisionConstructionInfo small_world_pools() {
-  btDefaultCollisionConstructionInfo info;
-  info.m_defaultMaxPersistentManifoldPoolSize = 32;
-  info.m_defaultMaxCollisionAlgorithmPoolSize = 32;
-  return info;
+/// A trial's world: pools for four bodies (Bullet's defaults, 4096 manifolds and algorithms,
+/// cost megabytes of memory to set up per trial); the narrow phase of (finger or palm, object
+/// hull) pairs skipped while a pair is provably apart (the same simulation, see
+/// physics/world.hpp).
+physics::WorldOptions world_options() {
+  physics::WorldOptions w;
+  w.pool_size = 32;
+  w.skip_separated_pairs = true;
+  return w;
 }
 
 /// Peak of ShakeOptions::smooth_shake's profile sin x − sin(2x)/2: 3√3/4.
@@ -246,20 +247,10 @@ class TrialWorld {
       : g_(g),
         o_(o),
         path_(g, o, s),
-        config_(small_world_pools()),
-        skip_separated_(config_.getCollisionAlgorithmCreateFunc(BOX_SHAPE_PROXYTYPE,
-                                                                CUSTOM_POLYHEDRAL_SHAPE_TYPE)),
-        dispatcher_(&config_),
-        world_(&dispatcher_, &broadphase_, &solver_, &config_) {
+        physics_(world_options()),
+        world_(physics_.dynamics()),
+        dispatcher_(physics_.dispatcher()) {
     world_.setGravity(btVector3(0, 0, 0));
-    if (o.skip_separated_pairs) {
-      // Pairs of finger/palm boxes and hulls (FastHullShape): Bullet's narrow phase, skipped
-      // while a pair is provably apart (same simulation, see physics/separated_pair_skip.hpp).
-      for (const int t0 : {BOX_SHAPE_PROXYTYPE, CUSTOM_POLYHEDRAL_SHAPE_TYPE})
-        for (const int t1 : {BOX_SHAPE_PROXYTYPE, CUSTOM_POLYHEDRAL_SHAPE_TYPE})
-          dispatcher_.registerCollisionCreateFunc(t0, t1, &skip_separated_);
-    }
-    solver_.enabled = o.one_sided_rows;
     btContactSolverInfo& info = world_.getSolverInfo();
     // Light objects squeezed hard need more sequential-impulse iterations to stay steady.
     const double trial_mass = obj.mass * s.density_factor;
@@ -528,12 +519,9 @@ class TrialWorld {
   double radius_ = 0;         // object: largest distance of a hull vertex from the com, m
   int base_iterations_ = 1;   // solver iterations of this trial without per-hull ones
 
-  btDefaultCollisionConfiguration config_;
-  physics::SkipSeparatedConvexCreateFunc skip_separated_;  // outlives the world's algorithms
-  btCollisionDispatcher dispatcher_;
-  btDbvtBroadphase broadphase_;
-  physics::OneSidedContactSolver solver_;  // Bullet's solver, rows of the hand left out
-  btDiscreteDynamicsWorld world_;
+  physics::World physics_;  // Bullet's world (physics/world.hpp)
+  btDiscreteDynamicsWorld& world_;
+  btCollisionDispatcher& dispatcher_;
 
   std::unique_ptr<btRigidBody> palm_, object_;
   std::unique_ptr<btRigidBody> fingers_[2];

@@ -1,6 +1,11 @@
 #include "physics/bullet.hpp"
 
-#include "physics/hull_support.hpp"
+#ifndef MGN_BULLET_EXT
+#error "MGN_BULLET_EXT (0 or 1) is set by cpp/CMakeLists.txt"
+#endif
+#if MGN_BULLET_EXT
+#include "physics/bullet_ext/hull_support.hpp"
+#endif
 
 #include <mgn/core/error.hpp>
 #include <mgn/geometry/convex_decomposition.hpp>
@@ -98,9 +103,14 @@ HullPoints hull_points(const Mesh& part, const Pose& X_BO, const BulletUnits& u,
 
 std::unique_ptr<btConvexHullShape> hull_shape(const HullPoints& hull, const BulletUnits& units,
                                               const HullShapeOptions& o) {
+#if MGN_BULLET_EXT
   // Bullet's btConvexHullShape with a vectorised support search (same answers, see
-  // hull_support.hpp).
+  // bullet_ext/hull_support.hpp).
   auto shape = std::make_unique<FastHullShape>(hull.points);
+#else
+  auto shape = std::make_unique<btConvexHullShape>();
+  for (const btVector3& p : hull.points) shape->addPoint(p, false);
+#endif
   shape->recalcLocalAabb();
   if (o.shrink_by_margin)
     shape->setMargin(btScalar(std::max(0.0, hull.shrunk > 0 ? double(hull.shrunk) : 0.0)));

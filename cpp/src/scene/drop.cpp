@@ -4,7 +4,7 @@
 #include <mgn/scene/drop.hpp>
 
 #include "physics/bullet.hpp"
-#include "physics/one_sided_solver.hpp"
+#include "physics/world.hpp"
 
 #include <btBulletDynamicsCommon.h>
 
@@ -133,11 +133,8 @@ void validate(const std::vector<DropObject>& objects, const Mesh& tote, const To
 
 /// Owns every Bullet object of one simulation.
 struct World {
-  btDefaultCollisionConfiguration config;
-  btCollisionDispatcher dispatcher{&config};
-  btDbvtBroadphase broadphase;
-  physics::OneSidedContactSolver solver;  // Bullet's, the tote's half of its rows left out
-  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
+  physics::World physics;  // Bullet's world with Bullet's default pools (physics/world.hpp)
+  btDiscreteDynamicsWorld& world = physics.dynamics();
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<physics::RigidShape>> rigid_shapes;
   std::vector<std::unique_ptr<btRigidBody>> bodies;

@@ -79,12 +79,6 @@ class ShakeOptions:
     iterations per (finger, object hull) pair in contact at the previous step (a compound held
     by several hulls needs more to converge at a coarser ``dt``; a single hull makes at most 2
     pairs; docs/models.md, "A coarser step judged by its own grids").
-    ``skip_separated_pairs`` (on by default): Bullet's narrow phase is skipped for a (pad or
-    palm, object hull) pair while it is provably apart (empty manifold, a separating axis with
-    a gap beyond Bullet's contact distance); the trials are the same bit for bit, only cheaper.
-    ``one_sided_rows`` (on by default): the solver's contact rows are set up and solved for the
-    object alone (the hand bodies are kinematic: their half of a row only reads and adds zeros);
-    the trials are the same bit for bit, ~1.2x cheaper.
     Every default is the C++ struct's.
     """
 
@@ -113,8 +107,6 @@ class ShakeOptions:
     smooth_shake: bool = _CORE.smooth_shake
     margin: float = _CORE.margin
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
-    skip_separated_pairs: bool = _CORE.skip_separated_pairs
-    one_sided_rows: bool = _CORE.one_sided_rows
     max_hull_vertices: int = _CORE.max_hull_vertices
     solver_iterations: int = _CORE.solver_iterations
     iterations_per_hull_contact: float = _CORE.iterations_per_hull_contact

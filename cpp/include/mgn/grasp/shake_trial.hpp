@@ -124,20 +124,6 @@ struct ShakeOptions {
   /// 1.2-1.5x faster per trial but change some scores
   /// (docs/decisions/0002-shake-contacts-and-shapes.md; benchmarks/bench_shake.py measures both).
   bool polyhedral_contacts = true;
-  /// Skip Bullet's narrow phase for a (finger or palm, object hull) pair while it is provably
-  /// apart: its contact manifold is empty and the cores' gap along a separating axis (the last
-  /// one found, the centre direction, a pad's face normal, or the axis of a GJK distance query)
-  /// exceeds the distance at which Bullet adds a contact point. Those calls would add nothing,
-  /// so every trial is the same bit for bit either way (tested); on by default. It saves the
-  /// palm's pair on every step and, on compounds, the hulls near a pad that do not touch it
-  /// (docs/decisions/0010-shake-skip-separated-pairs.md).
-  bool skip_separated_pairs = true;
-  /// Set up and solve each contact row of the sequential-impulse solver for the object only:
-  /// the hand bodies are kinematic (no inverse mass or inertia), so their half of a row reads
-  /// and adds zeros, which Bullet's solver computes anyway. The same operations in the same
-  /// order otherwise, so every trial is the same bit for bit either way (tested); on by default
-  /// (docs/decisions/0012-shake-one-sided-solver.md).
-  bool one_sided_rows = true;
   /// Hulls with more vertices are replaced by the hull of their support points along this many
   /// well-spread directions (an inner approximation; V-HACD's usual cap is 64), >= 8.
   int max_hull_vertices = 64;

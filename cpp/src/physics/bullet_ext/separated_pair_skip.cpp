@@ -1,4 +1,4 @@
-#include "physics/separated_pair_skip.hpp"
+#include "physics/bullet_ext/separated_pair_skip.hpp"
 
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 

@@ -2,6 +2,10 @@
 // The support mapping of a convex hull shape, vectorised (private: Bullet types do not appear in
 // installed headers).
 //
+// Mirrors Bullet 3.24: btConvexHullShape::localGetSupportingVertexWithoutMargin,
+// btConvexHullShape::batchedUnitVectorGetSupportingVertexWithoutMargin and the scalar scan of
+// btVector3::maxDot (LinearMath/btVector3.h, built without BT_USE_SSE).
+//
 // Bullet's btConvexHullShape finds its support vertex (the vertex of largest dot product with a
 // direction) by a scalar scan of its vertices (btVector3::maxDot: Debian's Bullet is built
 // without SIMD); in a drop this scan is about half of the simulation time. HullSupport keeps the
@@ -9,6 +13,8 @@
 // single-precision operations in the same order, (x * dx + y * dy) + z * dz without fused
 // multiply-adds, and the same tie rule (the first vertex of the largest dot product), so it
 // returns exactly the vertex Bullet's scan returns: the simulation is unchanged, bit for bit.
+#include "physics/bullet_ext/version.hpp"
+
 #include <LinearMath/btVector3.h>
 #include <btBulletCollisionCommon.h>
 

@@ -1,4 +1,4 @@
-#include "physics/hull_support.hpp"
+#include "physics/bullet_ext/hull_support.hpp"
 
 #include <algorithm>
 #include <atomic>

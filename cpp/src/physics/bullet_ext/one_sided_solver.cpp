@@ -1,4 +1,4 @@
-#include "physics/one_sided_solver.hpp"
+#include "physics/bullet_ext/one_sided_solver.hpp"
 
 #include <LinearMath/btMinMax.h>
 

@@ -2,6 +2,12 @@
 // Bullet's sequential-impulse solver with the immovable half of each contact row left out
 // (private: Bullet types do not appear in installed headers).
 //
+// Mirrors Bullet 3.24: btSequentialImpulseConstraintSolver::solveSingleIteration,
+// ::convertContacts, ::convertContact, ::setupContactConstraint, ::setFrictionConstraintImpulse,
+// ::addFrictionConstraint, ::setupFrictionConstraint, the scalar row solvers behind
+// ::resolveSingleConstraintRowGeneric and ::resolveSingleConstraintRowLowerLimit, and
+// btSolverBody::internalApplyImpulse.
+//
 // Bullet's btSequentialImpulseConstraintSolver solves a contact row (one normal or one friction
 // direction of one contact point) for both of its bodies: it reads both bodies' velocity
 // changes, computes the row's impulse and applies it to both. In the shake test every contact
@@ -32,6 +38,8 @@
 // inertia may give -0 (never read by the iterations above; Bullet's own iteration adds them to a
 // body that takes no impulse). Two moving bodies are covered too. Manifolds with rolling or
 // spinning friction or anisotropic friction are converted by Bullet's own convertContact.
+#include "physics/bullet_ext/version.hpp"
+
 #include <btBulletDynamicsCommon.h>
 
 #include <cstdint>

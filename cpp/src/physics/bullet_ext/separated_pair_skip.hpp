@@ -2,6 +2,12 @@
 // A convex–convex narrow phase that skips pairs which are provably apart (private: Bullet types
 // do not appear in installed headers).
 //
+// Mirrors Bullet 3.24: wraps btConvexConvexAlgorithm::processCollision (the algorithm of
+// btDefaultCollisionConfiguration for convex pairs) and skips a call only where that function
+// would add no contact point (its distance threshold: both margins plus
+// btPersistentManifold::getContactBreakingThreshold); allocates as
+// btCollisionDispatcher::freeCollisionAlgorithm frees.
+//
 // Bullet runs its full convex–convex narrow phase (an intersection GJK, a distance GJK and, if
 // the cores overlap, EPA and polyhedral clipping) on every pair whose bounding boxes overlap. In
 // the shake test most such pairs are apart: a compound object's hulls near, but not touching, a
@@ -16,6 +22,8 @@
 // points, or before it exists) Bullet's algorithm runs as usual. The simulation is unchanged,
 // bit for bit: manifolds are created and released at the same steps, and the skipped calls
 // would have changed nothing.
+#include "physics/bullet_ext/version.hpp"
+
 #include <btBulletCollisionCommon.h>
 
 namespace mgn::physics {
