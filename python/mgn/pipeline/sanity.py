@@ -202,17 +202,26 @@ def config_warnings(config: Config, catalogue: Catalogue | None = None) -> list[
 
 
 def _fill(
-    config: Config, catalogue: Catalogue, sizes: dict[str, tuple[float, float]]
+    config: Config,
+    catalogue: Catalogue,
+    sizes: dict[str, tuple[float, float]],
+    typical: bool = False,
 ) -> tuple[str, int, float, int] | None:
     """(setting, objects per scene, their boxes / the tote's inner volume, about how many fit)
-    when the boxes add up to more than :data:`MAX_OBJECT_FILL` tote volumes; else None."""
+    when the boxes add up to more than :data:`MAX_OBJECT_FILL` tote volumes; else None. Each
+    drawn object counts with the mean box of the objects drawn from, or with ``typical`` their
+    lower median box (one huge object in the pool fails only the scenes that draw it)."""
     tote = config.tote
     key, n = _asked_objects(config)
     by_id = {str(s.category_id): s.name for s in catalogue.specs}
     chosen = config.objects.names or config.objects.categories or ()
     names = [by_id.get(str(c), str(c)) for c in chosen]
     pool = [sizes[s] for s in names if s in sizes] or list(sizes.values())
-    mean_box = sum(v for _, v in pool) / max(len(pool), 1)
+    if typical and config.objects.names is None:
+        boxes = sorted(v for _, v in pool)
+        mean_box = boxes[(len(boxes) - 1) // 2] if boxes else 0.0
+    else:
+        mean_box = sum(v for _, v in pool) / max(len(pool), 1)
     tote_volume = tote.inner_length * tote.inner_width * tote.inner_height
     if n * mean_box <= MAX_OBJECT_FILL * tote_volume:
         return None
@@ -382,7 +391,8 @@ def config_errors(config: Config, catalogue: Catalogue | None = None) -> list[st
                 + "): no scene would hold an object one can see or grasp; check their scale"
             )
     fill = _fill(config, catalogue, _sizes(catalogue))
-    if fill is not None and fill[2] > MAX_OBJECT_OVERFILL:
+    least = _fill(config, catalogue, _sizes(catalogue), typical=True)
+    if fill is not None and least is not None and least[2] > MAX_OBJECT_OVERFILL:
         key, n, ratio, fits = fill
         found.append(
             f"{key}: {n} objects per scene; their boxes add up to {ratio:.3g}x the tote's inner "
