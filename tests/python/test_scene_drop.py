@@ -268,6 +268,7 @@ def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
         "tote_collision",
         "solver_iterations",
         "two_friction_directions",
+        "guard_height",
     } <= fields
     o = DropOptions(
         max_hull_vertices=0,
@@ -297,6 +298,7 @@ def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
         ({"max_hull_vertices": 2.5}, "max_hull_vertices"),
         ({"hull_tolerance": -1e-3}, "hull_tolerance"),
         ({"resettle_time": float("inf")}, "resettle_time"),
+        ({"guard_height": -0.1}, "guard_height"),
         ({"polyhedral_contacts": "yes"}, "polyhedral_contacts"),
         ({"solver_iterations": 0}, "solver_iterations"),
         ({"dt": 0.05}, "dt"),
@@ -461,6 +463,41 @@ def test_render_penetration_ignores_overlapping_parts_of_one_object():
     X_bar[:3, :3] = _rotation_x(np.pi / 4)
     X_bar[:3, 3] = (0.0, 0.0, 0.05 + 0.005 * np.sqrt(2) - 0.002)  # edge 2 mm into the top face
     assert render_penetration([both, bar], [X, X_bar], ToteSpec()) == pytest.approx(0.002, abs=1e-4)
+
+
+def test_float_gaps_are_the_clearance_to_the_nearest_body():
+    """Analytic: a sphere (poles on z, so its lowest point is a vertex) 2 mm above the floor
+    floats 2 mm; one resting on the floor 0; a second sphere 3 mm above the resting one (pole to
+    pole) floats 3 mm, its nearest body being that sphere; overlapping objects 0."""
+    from mgn.scene.penetration import float_gaps
+
+    r = 0.03
+    ball = mgn.make_sphere(r, 48, 24)
+    X1, X2 = np.eye(4), np.eye(4)
+    X1[:3, 3] = (0.0, 0.0, r + 0.002)
+    assert float_gaps([ball], [X1], ToteSpec()) == pytest.approx([0.002], abs=1e-6)
+    X1[2, 3] = r
+    X2[:3, 3] = (0.0, 0.0, 3 * r + 0.003)
+    got = float_gaps([ball, ball], [X1, X2], ToteSpec())
+    assert got == pytest.approx([0.0, 0.003], abs=1e-6)
+    X2[:3, 3] = (0.0, 0.0, 3 * r - 0.001)  # sunk 1 mm into the lower ball
+    assert float_gaps([ball, ball], [X1, X2], ToteSpec()) == pytest.approx([0.0, 0.0], abs=1e-9)
+    X1[:3, 3] = (0.2 - r - 0.0015, 0.0, r + 0.01)  # 1.5 mm from the +x wall, 10 mm up
+    assert float_gaps([ball], [X1], ToteSpec()) == pytest.approx([0.0015], abs=1e-5)
+
+
+def test_a_ball_dropped_into_the_tote_rests_on_the_floor_not_above_it():
+    """The simulated hull of a round object contains its mesh and protrudes beyond it; it must
+    protrude so little that the ball's mesh rests within 1 mm of the floor (it floated 2.2 mm on
+    a protruding hull vertex with hulls of 96 vertices)."""
+    ball = get_object("tennis_ball")
+    v = np.asarray(ball.to_mesh().vertices, np.float64)
+    for seed in range(4):
+        scene = drop_scene([ball], seed=seed)
+        (inst,) = scene.instances
+        lowest = float((v @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3])[:, 2].min())
+        assert -3e-4 < lowest < 1e-3, (seed, lowest)
+        assert scene.stats["max_float_gap"] <= max(lowest, 0.0) + 1e-9
 
 
 def test_round_objects_rest_on_the_floor_and_do_not_overlap():

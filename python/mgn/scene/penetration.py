@@ -14,6 +14,11 @@ seen from that vertex or edge (the other direction).
 An object whose mesh is several closed parts that overlap one another (a union of solids) is
 tested part by part: its parts never count as penetrating each other, and a vertex of another
 object inside one of its parts counts with its depth below that part's surface.
+
+:func:`float_gaps` measures the opposite error, objects resting above what holds them: the
+clearance of each object's mesh to the nearest other body (the tote's floor and inner walls, or
+another object's mesh; exact, FCL mesh-mesh distance), 0 where it touches or overlaps one.
+
 Units m, tote frame W (see :mod:`mgn.scene.drop`).
 """
 
@@ -26,10 +31,17 @@ import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError
 from mgn.geometry import Mesh
+from mgn.geometry.collision import CollisionModel, distance
 from mgn.geometry.raytrace import RayScene
 from mgn.objects import ToteSpec
 
-__all__ = ["EDGE_SPACING", "edge_points", "point_triangle_distance", "render_penetration"]
+__all__ = [
+    "EDGE_SPACING",
+    "edge_points",
+    "float_gaps",
+    "point_triangle_distance",
+    "render_penetration",
+]
 
 #: Largest distance (m) between the points tested along a mesh edge (see the module doc):
 #: edge depths are found to within half of it, 0.1 mm.
@@ -178,6 +190,58 @@ def render_penetration(
                 if len(p):
                     worst = _deepest(p, part, worst)
     return max(worst, 0.0)
+
+
+def float_gaps(
+    meshes: Sequence[Mesh], X_WO: Sequence[npt.ArrayLike], tote: ToteSpec
+) -> npt.NDArray[np.float64]:
+    """(N,) clearance (m, >= 0) of each closed mesh at its pose ``X_WO`` (tote frame) to the
+    nearest other body: the floor (z = 0), an inner wall below the rim (a tote with walls), or
+    another mesh (FCL distance between the meshes); 0 where it touches or overlaps one. An
+    object at rest touches something, so a positive value is the height it floats at. A lower
+    bound on floating: an object that touches one body and floats above another it leans on
+    counts 0."""
+    if len(meshes) != len(X_WO):
+        raise InvalidArgumentError(
+            f"float_gaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
+        )
+    hx, hy, H = 0.5 * tote.inner_length, 0.5 * tote.inner_width, tote.inner_height
+    poses = [np.asarray(X, np.float64) for X in X_WO]
+    world = [
+        np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
+        for m, X in zip(meshes, poses, strict=True)
+    ]
+    gaps = np.zeros(len(meshes))
+    for a, w in enumerate(world):
+        gap = float(w[:, 2].min())  # a mesh's nearest point to a plane is a vertex
+        low = w[w[:, 2] <= H]
+        if len(low) and tote.walls:
+            gap = min(
+                gap, float((hx - np.abs(low[:, 0])).min()), float((hy - np.abs(low[:, 1])).min())
+            )
+        gaps[a] = gap
+    lo = [w.min(axis=0) for w in world]
+    hi = [w.max(axis=0) for w in world]
+    models: dict[int, CollisionModel] = {}  # copies of one object share their mesh
+    for a in range(len(meshes)):
+        # Other meshes nearest first by their bounding boxes; a box farther than the gap found
+        # so far cannot hold a nearer mesh.
+        box_gap = [
+            float(np.linalg.norm(np.maximum(np.maximum(lo[b] - hi[a], lo[a] - hi[b]), 0.0)))
+            for b in range(len(meshes))
+        ]
+        for b in sorted(range(len(meshes)), key=lambda b: (box_gap[b], b)):
+            if b == a:
+                continue
+            if box_gap[b] >= gaps[a]:
+                break
+            for m in (meshes[a], meshes[b]):
+                if id(m) not in models:
+                    models[id(m)] = CollisionModel(m)
+            d = distance(models[id(meshes[a])], poses[a], models[id(meshes[b])], poses[b],
+                         num_threads=1)  # fmt: skip
+            gaps[a] = min(gaps[a], float(d.distance[0]))
+    return np.maximum(gaps, 0.0)
 
 
 def _connected_parts(mesh: Mesh) -> list[Mesh]:
