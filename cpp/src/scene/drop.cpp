@@ -306,6 +306,7 @@ class DropSimulation {
   std::vector<Pose> release_poses() const {
     constexpr double kGap = 0.005;  // m, clearance to the walls and between bounding boxes
     std::vector<Pose> X_WO(n_);
+    std::vector<bool> fits(n_, true);  // the rotated bounding box fits between the walls
     for (std::size_t i = 0; i < n_; ++i) {
       Rng rng(o_.seed, i);
       Eigen::Quaterniond q(rng.normal(), rng.normal(), rng.normal(), rng.normal());
@@ -319,10 +320,15 @@ class DropSimulation {
       // The drawn point is the centre of the object's rotated bounding box, moved inwards where
       // that box would reach beyond a wall (kGap clear of it), if the box fits between them.
       const Aabb b = world_aabb(hull_points_[i], X_WO[i]);
+      // An object with less than 2 kGap to spare starts centred between the walls.
       Vec3d c = p;
       for (int k = 0; k < 2; ++k) {
-        const double room = (k == 0 ? hx_ : hy_) - kGap - 0.5 * (b.hi[k] - b.lo[k]);
-        if (room >= 0) c[k] = std::clamp(c[k], -room, room);
+        const double slack = (k == 0 ? hx_ : hy_) - 0.5 * (b.hi[k] - b.lo[k]);
+        const double room = std::max(slack - kGap, 0.0);
+        if (slack >= 0)
+          c[k] = std::clamp(c[k], -room, room);
+        else
+          fits[i] = false;
       }
       X_WO[i].translation() = c - 0.5 * (b.lo + b.hi);
     }
@@ -335,10 +341,8 @@ class DropSimulation {
     for (std::size_t i : order) {
       Aabb b = world_aabb(hull_points_[i], X_WO[i]);
       double lift = 0.0;
-      const bool inside = b.lo.x() > -hx_ + kGap && b.hi.x() < hx_ - kGap &&
-                          b.lo.y() > -hy_ + kGap && b.hi.y() < hy_ - kGap;
       // Not inside the walls: above them (the guard walls' top while they stand).
-      lift = std::max(lift, (inside ? 0.0 : H_ + guard_) + kGap - b.lo.z());
+      lift = std::max(lift, (fits[i] ? 0.0 : H_ + guard_) + kGap - b.lo.z());
       for (bool moved = true; moved;) {
         moved = false;
         Aabb c{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};

@@ -119,7 +119,7 @@ struct DropOptions {
   /// rests (or at max_time) they are lowered to the rim and the pile settles again with
   /// resettle_time (s) allowed. 0: no guard walls. Not used without walls (a table top) or by
   /// settle_objects().
-  double guard_height = 0.3;
+  double guard_height = 0.6;
   ToteCollision tote_collision = ToteCollision::Boxes;
   std::uint64_t seed = 0;
 };
