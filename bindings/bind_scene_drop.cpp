@@ -115,6 +115,7 @@ void bind_options(py::module_& m) {
       .def_readwrite("polyhedral_contacts", &DropOptions::polyhedral_contacts)
       .def_readwrite("resettle_time", &DropOptions::resettle_time)
       .def_readwrite("two_friction_directions", &DropOptions::two_friction_directions)
+      .def_readwrite("guard_height", &DropOptions::guard_height)
       .def_property(
           "tote_collision",
           [](const DropOptions& o) {

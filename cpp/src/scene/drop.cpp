@@ -194,6 +194,8 @@ class DropSimulation {
 
   /// X_WO_start: the settle start poses (at rest), or nullptr for random release poses.
   DropResult run(const std::vector<Pose>* X_WO_start) {
+    // Guard walls while the objects fall into the tote (not when a resting pile settles).
+    guard_ = (box_.walls && X_WO_start == nullptr) ? o_.guard_height : 0.0;
     build_tote();
     std::vector<Pose> X_WO = release_poses();
     if (X_WO_start != nullptr) X_WO = *X_WO_start;  // settle: start at rest where given
@@ -218,20 +220,44 @@ class DropSimulation {
     return P;
   }
 
-  void add_static(std::unique_ptr<btCollisionShape> shape, const btTransform& X) {
+  /// A static body of the tote (`guard`: a guard wall, lowered by lower_guards()).
+  void add_static(std::unique_ptr<btCollisionShape> shape, const btTransform& X,
+                  bool guard = false) {
     btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape.get());
     info.m_startWorldTransform = X;
     info.m_friction = btScalar(o_.tote_friction);
     info.m_restitution = btScalar(o_.tote_restitution);
     auto body = std::make_unique<btRigidBody>(info);
     w_->world.addRigidBody(body.get());
-    tote_bodies_.push_back(body.get());
+    if (guard)
+      guard_bodies_.push_back(body.get());
+    else
+      tote_bodies_.push_back(body.get());
     w_->shapes.push_back(std::move(shape));
     w_->bodies.push_back(std::move(body));
   }
 
-  /// The static tote: five boxes fitted to the cavity, or the triangle mesh.
+  /// The static tote: five boxes fitted to the cavity, or the triangle mesh; and the guard walls
+  /// (four boxes on the walls, from the rim up by guard_) if any.
   void build_tote() {
+    if (guard_ > 0) {
+      const double T = std::max(box_.wall_thickness, 0.02);
+      const double hx = hx_, hy = hy_, lo = H_, hi = H_ + guard_;
+      auto add_guard = [&](const Vec3d& a, const Vec3d& b) {
+        auto shape = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * (b - a))));
+        shape->setMargin(
+            btScalar(kUnits.length * std::min(o_.collision_margin, 0.25 * (b - a).minCoeff())));
+        if (o_.polyhedral_contacts) shape->initializePolyhedralFeatures();
+        btTransform X;
+        X.setIdentity();
+        X.setOrigin(kUnits.vector(Vec3d(0.5 * (a + b))));
+        add_static(std::move(shape), X, /*guard=*/true);
+      };
+      add_guard(Vec3d(-hx - T, -hy - T, lo), Vec3d(-hx, hy + T, hi));  // -x
+      add_guard(Vec3d(hx, -hy - T, lo), Vec3d(hx + T, hy + T, hi));    // +x
+      add_guard(Vec3d(-hx, -hy - T, lo), Vec3d(hx, -hy, hi));          // -y
+      add_guard(Vec3d(-hx, hy, lo), Vec3d(hx, hy + T, hi));            // +y
+    }
     if (o_.tote_collision == ToteCollision::Boxes) {
       const double T = std::max(box_.wall_thickness, 0.02);  // thickened outwards
       const double F = std::max(box_.floor_thickness, 0.02);
@@ -275,7 +301,9 @@ class DropSimulation {
 
   /// Random release poses (per-object random streams), de-overlapped in order of height.
   std::vector<Pose> release_poses() const {
+    constexpr double kGap = 0.005;  // m, clearance to the walls and between bounding boxes
     std::vector<Pose> X_WO(n_);
+    std::vector<bool> fits(n_, true);  // the rotated bounding box fits between the walls
     for (std::size_t i = 0; i < n_; ++i) {
       Rng rng(o_.seed, i);
       Eigen::Quaterniond q(rng.normal(), rng.normal(), rng.normal(), rng.normal());
@@ -286,23 +314,32 @@ class DropSimulation {
       const Vec3d p(rng.uniform(o_.window_min.x(), o_.window_max.x()),
                     rng.uniform(o_.window_min.y(), o_.window_max.y()),
                     rng.uniform(o_.window_min.z(), o_.window_max.z()));
-      // The drawn point is the centre of the object's rotated bounding box.
+      // The drawn point is the centre of the object's rotated bounding box, moved inwards where
+      // that box would reach beyond a wall (kGap clear of it), if the box fits between them.
       const Aabb b = world_aabb(hull_points_[i], X_WO[i]);
-      X_WO[i].translation() = p - 0.5 * (b.lo + b.hi);
+      // An object with less than 2 kGap to spare starts centred between the walls.
+      Vec3d c = p;
+      for (int k = 0; k < 2; ++k) {
+        const double slack = (k == 0 ? hx_ : hy_) - 0.5 * (b.hi[k] - b.lo[k]);
+        const double room = std::max(slack - kGap, 0.0);
+        if (slack >= 0)
+          c[k] = std::clamp(c[k], -room, room);
+        else
+          fits[i] = false;
+      }
+      X_WO[i].translation() = c - 0.5 * (b.lo + b.hi);
     }
     std::vector<std::size_t> order(n_);
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
       return X_WO[a].translation().z() < X_WO[b].translation().z();
     });
-    constexpr double kGap = 0.005;
     std::vector<Aabb> placed;
     for (std::size_t i : order) {
       Aabb b = world_aabb(hull_points_[i], X_WO[i]);
       double lift = 0.0;
-      const bool inside = b.lo.x() > -hx_ + kGap && b.hi.x() < hx_ - kGap &&
-                          b.lo.y() > -hy_ + kGap && b.hi.y() < hy_ - kGap;
-      lift = std::max(lift, (inside ? 0.0 : H_) + kGap - b.lo.z());
+      // Not inside the walls: above them (the guard walls' top while they stand).
+      lift = std::max(lift, (fits[i] ? 0.0 : H_ + guard_) + kGap - b.lo.z());
       for (bool moved = true; moved;) {
         moved = false;
         Aabb c{b.lo + Vec3d(0, 0, lift), b.hi + Vec3d(0, 0, lift)};
@@ -445,6 +482,33 @@ class DropSimulation {
     at_rest_.assign(n_, 0);
     rest_ref_.resize(n_);
     for (std::size_t i = 0; i < n_; ++i) rest_ref_[i] = body_[i]->getCenterOfMassTransform();
+    for (bool guarded = guard_ > 0;; guarded = false) {
+      settle();
+      if (!guarded) break;
+      lower_guards();
+    }
+    result_.steps = step_;
+    result_.simulated_time = double(step_) * o_.dt;
+    result_.settled = all_rest_;
+  }
+
+  /// The guard walls go: the pile settles again, with resettle_time from now to do so.
+  void lower_guards() {
+    for (btRigidBody* g : guard_bodies_) w_->world.removeRigidBody(g);
+    guard_bodies_.clear();
+    limit_ = step_ + resettle_steps_;
+    all_rest_ = false;
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!body_[i]->isInWorld()) continue;
+      at_rest_[i] = 0;
+      rest_ref_[i] = body_[i]->getCenterOfMassTransform();
+      body_[i]->activate(true);
+    }
+  }
+
+  /// Steps until every object in the tote is at rest or limit_ is reached, removing objects that
+  /// left the tote (the rest settles again, see restart()).
+  void settle() {
     while (true) {
       while (step_ < limit_) {
         const std::vector<std::size_t> on_rim = step_and_test();
@@ -466,9 +530,6 @@ class DropSimulation {
       restart();
       if (step_ >= limit_) break;
     }
-    result_.steps = step_;
-    result_.simulated_time = double(step_) * o_.dt;
-    result_.settled = all_rest_;
   }
 
   /// Tote contacts of every object and the deepest penetration, at the final state.
@@ -553,7 +614,9 @@ class DropSimulation {
   const double hx_, hy_, H_;
   std::unique_ptr<World> w_;
   std::vector<const btCollisionObject*> tote_bodies_;
-  std::vector<Points3d> hull_points_;  // every part vertex, object frame
+  std::vector<btRigidBody*> guard_bodies_;  // guard walls while they stand
+  double guard_ = 0.0;                      // m, guard wall height above the rim (0: none)
+  std::vector<Points3d> hull_points_;       // every part vertex, object frame
   std::vector<Pose> X_OB_;
   std::vector<btRigidBody*> body_;
   DropResult result_;
@@ -610,6 +673,8 @@ void validate(const DropOptions& o) {
           "max_hull_vertices", o.max_hull_vertices, "0 (keep all) or in [8, 100000]");
   require(std::isfinite(o.hull_tolerance) && o.hull_tolerance >= 0, "hull_tolerance",
           o.hull_tolerance, "finite and >= 0 (m)");
+  require(std::isfinite(o.guard_height) && o.guard_height >= 0 && o.guard_height <= 10,
+          "guard_height", o.guard_height, "in [0, 10] m");
   require(std::isfinite(o.resettle_time) && o.resettle_time >= 0 && o.resettle_time / o.dt <= 1e7,
           "resettle_time", o.resettle_time, "finite, >= 0 s and at most 1e7 steps of dt");
   require(std::isfinite(o.rolling_friction) && o.rolling_friction >= 0, "rolling_friction",

@@ -19,7 +19,7 @@ from mgn.geometry.convex import (
 )
 from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, tote_mesh
-from mgn.scene.penetration import render_penetration
+from mgn.scene.penetration import float_gaps, render_penetration
 from mgn.scene.scene import (
     BUILTIN,
     CONTACT_NAMES,
@@ -121,17 +121,20 @@ def _stats(
     tote: ToteSpec,
     num_dropped: int,
 ) -> dict[str, Any]:
-    """Scene stats; ``max_penetration`` is measured on the render meshes of the kept objects
-    (:func:`mgn.scene.penetration.render_penetration`), ``max_penetration_hulls`` is Bullet's on
-    the simulated hulls."""
+    """Scene stats; ``max_penetration`` and ``max_float_gap`` are measured on the render meshes
+    of the kept objects (:func:`mgn.scene.penetration.render_penetration`,
+    :func:`mgn.scene.penetration.float_gaps`), ``max_penetration_hulls`` is Bullet's on the
+    simulated hulls."""
+    kept = [meshes[i.name] for i in instances]
+    poses = [i.X_WO for i in instances]
+    gaps = float_gaps(kept, poses, tote)
     return {
         "steps": int(out.steps),
         "simulated_time": float(out.simulated_time),
         "settled": bool(out.settled),
-        "max_penetration": render_penetration(
-            [meshes[i.name] for i in instances], [i.X_WO for i in instances], tote
-        ),
+        "max_penetration": render_penetration(kept, poses, tote),
         "max_penetration_hulls": float(out.max_penetration),
+        "max_float_gap": float(gaps.max()) if len(gaps) else 0.0,
         "num_dropped": num_dropped,
     }
 

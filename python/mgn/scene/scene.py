@@ -106,6 +106,9 @@ class DropOptions:
             with one, resting objects creep along the other tangent and large piles settle
             ~2x later or not at all; with two, a symmetric resting contact may drift to one
             side).
+        guard_height: while the objects fall and pile up, the walls reach this far above the
+            rim (m, >= 0; collision only), so objects bouncing off the pile stay in; then they
+            are lowered to the rim and the pile settles again (resettle_time). 0: none.
     """
 
     window_min: tuple[float, float, float] = _CORE.window_min
@@ -130,6 +133,7 @@ class DropOptions:
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
     resettle_time: float = _CORE.resettle_time
     two_friction_directions: bool = _CORE.two_friction_directions
+    guard_height: float = _CORE.guard_height
 
     def __post_init__(self) -> None:
         """Python types here (the fields are plain numbers afterwards); ranges in C++
@@ -262,7 +266,10 @@ class Scene:
         drop_options: the simulation options used.
         removed: objects that were dropped but left the tote (or did not settle).
         stats: steps, simulated_time (s), settled (bool), max_penetration (m, of the render
-            meshes), max_penetration_hulls (m, of the simulated hulls).
+            meshes: deepest point of one object's surface inside another object or the tote),
+            max_penetration_hulls (m, of the simulated hulls), max_float_gap (m, of the render
+            meshes: the largest clearance of an object to its nearest body, tote or object),
+            num_dropped.
     """
 
     instances: tuple[SceneInstance, ...]

@@ -7,14 +7,21 @@
 /// world coordinates. Units: SI (m, kg, s, rad).
 ///
 /// Objects are released all at once at random orientations and random positions in the release
-/// window (MetaGraspNet: x +-60 mm, y +-30 mm, z 0.3-0.8 m above the floor). Initial overlaps are
-/// avoided deterministically: objects are placed in order of their drawn height, and an object
-/// whose bounding box would overlap one already placed is lifted just above it. The simulation
-/// runs until every object in the tote has been at rest for DropOptions::rest_time, or until
-/// DropOptions::max_time. Objects that left the tote (fell below the floor, or rest on or over the
-/// rim) are removed, and the remaining objects are simulated again until they are at rest (at most
-/// DropOptions::resettle_time more), so nothing is left leaning on a removed object. The result
-/// depends only on the inputs and DropOptions::seed (object i draws from Rng(seed, i)).
+/// window (MetaGraspNet: x +-60 mm, y +-30 mm, z 0.3-0.8 m above the floor); the drawn point is
+/// the centre of the object's rotated bounding box, moved inwards where that box would reach
+/// beyond a wall, so every object starts inside the walls (one wider than the cavity in its drawn
+/// orientation starts above the guard walls instead). Initial overlaps are avoided
+/// deterministically: objects are placed in order of their drawn height, and an object whose
+/// bounding box would overlap one already placed is lifted just above it. While the objects fall
+/// and pile up, the walls reach DropOptions::guard_height above the rim (guard walls: collision
+/// only), so objects bouncing off the pile stay in. The simulation runs until every object in
+/// the tote has been at rest for DropOptions::rest_time, or until DropOptions::max_time; then the
+/// guard walls are lowered to the rim and the pile settles again (at most
+/// DropOptions::resettle_time more), so an object piled above the rim stays only where it is
+/// stable without them. Objects that left the tote (fell below the floor, or rest on or over the
+/// rim) are removed, and the remaining objects are simulated again until they are at rest (at
+/// most DropOptions::resettle_time more), so nothing is left leaning on a removed object. The
+/// result depends only on the inputs and DropOptions::seed (object i draws from Rng(seed, i)).
 
 #include <mgn/core/types.hpp>
 #include <mgn/geometry/mesh.hpp>
@@ -87,7 +94,7 @@ struct DropOptions {
   /// dominates the drop. The reduced hull CONTAINS the part (it is cut from the part's own face
   /// planes), so resting objects do not sink into the floor or into each other; it protrudes
   /// beyond the part by at most hull_tolerance where the vertex budget allows.
-  int max_hull_vertices = 96;
+  int max_hull_vertices = 384;
   /// Stop reducing a hull once no vertex of the reduced hull lies farther than this distance
   /// (m, >= 0) outside the part.
   double hull_tolerance = 0.0002;
@@ -107,6 +114,12 @@ struct DropOptions {
   /// more CPU; docs/decisions/0014-drop-two-friction-directions.md). With two, a symmetric
   /// resting contact can drift to one side.
   bool two_friction_directions = true;
+  /// Guard walls: while the objects fall and pile up, the walls reach this far (m, >= 0) above
+  /// the rim (collision only), so objects bouncing off the pile stay in the tote; once the pile
+  /// rests (or at max_time) they are lowered to the rim and the pile settles again with
+  /// resettle_time (s) allowed. 0: no guard walls. Not used without walls (a table top) or by
+  /// settle_objects().
+  double guard_height = 0.6;
   ToteCollision tote_collision = ToteCollision::Boxes;
   std::uint64_t seed = 0;
 };
