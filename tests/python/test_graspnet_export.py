@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+import mgn
 from mgn.cli.main import main
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.hardware import ParallelJawGripper
@@ -361,7 +362,12 @@ def test_cli_export_and_show_rectangles(
     )
     assert "1 scene(s) written" in capsys.readouterr().out
     lines = (tmp_path / "gn/scenes/scene_0001/mgn/jacquard/0000_grasps.txt").read_text()
-    assert len(lines.splitlines()) == 4  # of the view's 10 grasps, 4 lean at most 45 deg
+    # one line per collision-free grasp of the view whose approach leans at most 45 deg
+    pj = mgn.Dataset(small_dataset).scene(1).view(0).grasps("paralleljaw")
+    approach_z = np.asarray(pj["contact_poses_relative_to_camera"])[:, 2, 2]
+    upright = int((approach_z >= np.cos(np.radians(45.0)) - 1e-12).sum())
+    assert 0 < upright < len(approach_z)
+    assert len(lines.splitlines()) == upright
     png = tmp_path / "rect.png"
     assert (
         main(
