@@ -96,7 +96,7 @@ class TrainConfig:
     """How a model is trained.
 
     Attributes:
-        epochs: passes over the training views (default 20, >= 1).
+        epochs: passes over the training views (default 40, >= 1).
         batch_size: views per step (default 4, >= 1).
         lr: Adam learning rate (default 2e-3), cosine-decayed to 5 % over the run.
         seed: weights, view order and augmentation (default 0).
@@ -106,7 +106,7 @@ class TrainConfig:
         foreground_loss: :data:`FOREGROUND_LOSSES` (default ``bce+dice``).
     """
 
-    epochs: int = 20
+    epochs: int = 40
     batch_size: int = 4
     lr: float = 2e-3
     seed: int = 0
