@@ -16,7 +16,8 @@ from mgn.cli.args import (
     instance_threshold_kwargs,
     int_list,
 )
-from mgn.learn.config import BACKBONES, SUCTION_SCORES, ModelConfig, TrainConfig
+from mgn.learn.augment import AUGMENTS
+from mgn.learn.config import BACKBONES, FOREGROUND_LOSSES, SUCTION_SCORES, ModelConfig, TrainConfig
 from mgn.learn.predict import predict_files
 from mgn.learn.targets import MODALITIES
 from mgn.learn.training import train
@@ -70,8 +71,20 @@ def add_train_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--epochs", type=int, default=d.epochs)
     p.add_argument("--batch-size", type=int, default=d.batch_size, help="views per step")
     p.add_argument("--lr", type=float, default=d.lr, help="Adam learning rate (cosine decay)")
-    p.add_argument("--seed", type=int, default=d.seed, help="weights, view order and flips")
-    p.add_argument("--no-augment", action="store_true", help="no random flips")
+    p.add_argument("--seed", type=int, default=d.seed, help="weights, view order and augmentation")
+    p.add_argument(
+        "--augment",
+        choices=AUGMENTS,
+        default=d.augment,
+        help="full: random zoom, 90-degree turns, flips, colour/blur/noise/JPEG; flips; none",
+    )
+    p.add_argument("--no-augment", action="store_true", help="the same as --augment none")
+    p.add_argument(
+        "--foreground-loss",
+        choices=FOREGROUND_LOSSES,
+        default=d.foreground_loss,
+        help="loss of the foreground channel",
+    )
     add_device_arguments(
         p,
         device_help="auto (a CUDA GPU if torch finds one), cpu or cuda[:N]",
@@ -95,7 +108,8 @@ def configs_from_args(args: argparse.Namespace) -> tuple[ModelConfig, TrainConfi
         batch_size=args.batch_size,
         lr=args.lr,
         seed=args.seed,
-        augment=not args.no_augment,
+        augment="none" if args.no_augment else args.augment,
+        foreground_loss=args.foreground_loss,
     )
     return mc, tc
 

@@ -7,9 +7,10 @@ from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 from mgn.errors import InvalidArgumentError
+from mgn.learn.augment import AUGMENTS
 from mgn.learn.targets import MODALITIES
 
-__all__ = ["BACKBONES", "SUCTION_SCORES", "ModelConfig", "TrainConfig"]
+__all__ = ["BACKBONES", "FOREGROUND_LOSSES", "SUCTION_SCORES", "ModelConfig", "TrainConfig"]
 
 #: Encoders: ``small`` (a 4-level U-Net of ``width``, 2 x width, 4 x width, 8 x width channels,
 #: trained from scratch) or ``resnet18`` (ResNet-18's layout and parameter names, so that a
@@ -17,6 +18,9 @@ __all__ = ["BACKBONES", "SUCTION_SCORES", "ModelConfig", "TrainConfig"]
 BACKBONES = ("small", "resnet18")
 #: Scene suction scores a model can learn (datasets of ``{v}_scene.hdf5``).
 SUCTION_SCORES = ("score_analytical", "score_wrench", "score_simulation")
+#: Losses of the foreground channel: ``bce`` (binary cross-entropy) or ``bce+dice`` (plus the
+#: soft Dice loss ``1 - 2 sum(p t) / (sum(p) + sum(t))`` over the batch, p the sigmoid).
+FOREGROUND_LOSSES = ("bce", "bce+dice")
 
 
 def _from_dict(cls: Any, d: dict[str, Any], what: str) -> Any:
@@ -92,18 +96,22 @@ class TrainConfig:
     """How a model is trained.
 
     Attributes:
-        epochs: passes over the training views (default 20, >= 1).
+        epochs: passes over the training views (default 40, >= 1).
         batch_size: views per step (default 4, >= 1).
         lr: Adam learning rate (default 2e-3), cosine-decayed to 5 % over the run.
-        seed: weights, view order and flips (default 0).
-        augment: random horizontal and vertical flips (default True).
+        seed: weights, view order and augmentation (default 0).
+        augment: :data:`mgn.learn.augment.AUGMENTS`: ``full`` (default: random zoom window,
+            90-degree rotations, flips, colour / blur / noise / JPEG changes), ``flips`` or
+            ``none``; ``True`` / ``False`` read as ``flips`` / ``none``.
+        foreground_loss: :data:`FOREGROUND_LOSSES` (default ``bce+dice``).
     """
 
-    epochs: int = 20
+    epochs: int = 40
     batch_size: int = 4
     lr: float = 2e-3
     seed: int = 0
-    augment: bool = True
+    augment: str = "full"
+    foreground_loss: str = "bce+dice"
 
     def __post_init__(self) -> None:
         if int(self.epochs) < 1:
@@ -112,6 +120,14 @@ class TrainConfig:
             raise InvalidArgumentError(f"batch_size must be >= 1, got {self.batch_size}")
         if not float(self.lr) > 0:
             raise InvalidArgumentError(f"lr must be > 0, got {self.lr}")
+        if isinstance(self.augment, bool):
+            object.__setattr__(self, "augment", "flips" if self.augment else "none")
+        if self.augment not in AUGMENTS:
+            raise InvalidArgumentError(f"augment must be one of {AUGMENTS}, got {self.augment!r}")
+        if self.foreground_loss not in FOREGROUND_LOSSES:
+            raise InvalidArgumentError(
+                f"foreground_loss must be one of {FOREGROUND_LOSSES}, got {self.foreground_loss!r}"
+            )
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

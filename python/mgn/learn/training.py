@@ -3,13 +3,16 @@
 One network (:mod:`mgn.learn.model`) learns, per pixel, the foreground, the normalised inner
 distance of the objects ("core"), the suction quality and, for amodal models, the hidden parts
 of objects (:mod:`mgn.learn.targets`). The loss is the sum of binary cross-entropies (soft
-targets for core and suction): foreground; core; suction weighted by the target's weight map
+targets for core and suction): foreground (plus the soft Dice loss with
+``foreground_loss="bce+dice"``, the default); core; suction weighted by the target's weight map
 (known pixels only); hidden. Adam, with the learning rate cosine-decayed
-from ``lr`` to 5 % of it over all steps.
+from ``lr`` to 5 % of it over all steps. Each view of a batch is augmented
+(:mod:`mgn.learn.augment`, ``TrainConfig.augment``).
 
 Reproducibility: torch is seeded with ``TrainConfig.seed`` before the weights are made and uses
-deterministic kernels (:func:`mgn.learn.backend.seed_everything`); the view order and the
-flips of epoch ``e`` come from ``numpy.random.default_rng([seed, e])``. So the same seed and
+deterministic kernels (:func:`mgn.learn.backend.seed_everything`); the view order of epoch
+``e`` comes from ``numpy.random.default_rng([seed, e])`` and the augmentation of view ``i`` in
+it from ``numpy.random.default_rng([seed, e, i + 1])``. So the same seed and
 thread count give the same weights on the CPU, and a run stopped after any epoch and continued
 with ``resume=True`` ends with the weights of an uninterrupted run.
 
@@ -36,13 +39,14 @@ from mgn._core import __version__
 from mgn.base.atomic import atomic_write_text
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.dataset import Dataset
+from mgn.learn.augment import augment_view
 from mgn.learn.backend import choose_device, require_torch, seed_everything
 from mgn.learn.checkpoint import CHECKPOINT_FORMAT, MODEL_FORMAT, read_torch_file, write_torch_file
 from mgn.learn.config import ModelConfig, TrainConfig
 from mgn.learn.data import TrainingArrays, load_views, training_views
 from mgn.learn.model import build_model, count_parameters, load_backbone_weights
 
-__all__ = ["TrainResult", "compute_losses", "train"]
+__all__ = ["TrainResult", "augmented_batch", "compute_losses", "dice_loss", "train"]
 
 
 @dataclass
@@ -67,12 +71,31 @@ class TrainResult:
     device: str = "cpu"
 
 
-def compute_losses(logits: Any, targets: Any, weights: Any, config: ModelConfig) -> dict[str, Any]:
+def dice_loss(logits: Any, targets: Any) -> Any:
+    """Soft Dice loss ``1 - 2 sum(p t) / (sum(p) + sum(t))`` over all pixels of a batch, ``p``
+    the sigmoid of ``logits`` (0 when both are empty)."""
+    p = require_torch().sigmoid(logits)
+    inter = (p * targets).sum()
+    total = p.sum() + targets.sum()
+    return 1.0 - (2.0 * inter + 1.0) / (total + 1.0)
+
+
+def compute_losses(
+    logits: Any,
+    targets: Any,
+    weights: Any,
+    config: ModelConfig,
+    foreground_loss: str = "bce",
+) -> dict[str, Any]:
     """The loss terms (scalar tensors) of a batch: logits and targets (B, T, H, W), suction
-    weights (B, H, W); ``"loss"`` is their sum."""
+    weights (B, H, W); the foreground term is ``foreground_loss``
+    (:data:`mgn.learn.config.FOREGROUND_LOSSES`); ``"loss"`` is their sum."""
     bce = require_torch().nn.functional.binary_cross_entropy_with_logits
+    fg = bce(logits[:, 0], targets[:, 0])
+    if foreground_loss == "bce+dice":
+        fg = fg + dice_loss(logits[:, 0], targets[:, 0])
     out = {
-        "foreground": bce(logits[:, 0], targets[:, 0]),
+        "foreground": fg,
         "core": bce(logits[:, 1], targets[:, 1]),
         "suction": (bce(logits[:, 2], targets[:, 2], reduction="none") * weights).sum()
         / weights.sum().clamp(min=1.0),
@@ -87,27 +110,36 @@ def _lr(tc: TrainConfig, step: int, total: int) -> float:
     return tc.lr * (0.05 + 0.95 * 0.5 * (1.0 + math.cos(math.pi * step / max(total, 1))))
 
 
-def _batches(n: int, tc: TrainConfig, epoch: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(view indices, flips (B, 2) bool) of each batch of an epoch."""
-    rng = np.random.default_rng([tc.seed, epoch])
-    order = rng.permutation(n)
-    flips = rng.integers(0, 2, size=(n, 2)).astype(bool) if tc.augment else np.zeros((n, 2), bool)
-    return [
-        (order[i : i + tc.batch_size], flips[i : i + tc.batch_size])
-        for i in range(0, n, tc.batch_size)
-    ]
+def _batches(n: int, tc: TrainConfig, epoch: int) -> list[np.ndarray]:
+    """The view indices of each batch of an epoch."""
+    order = np.random.default_rng([tc.seed, epoch]).permutation(n)
+    return [order[i : i + tc.batch_size] for i in range(0, n, tc.batch_size)]
 
 
-def _batch_tensors(arrays: TrainingArrays, idx: np.ndarray, flips: np.ndarray, device: Any):  # noqa: ANN202
+def augmented_batch(
+    arrays: TrainingArrays, idx: np.ndarray, tc: TrainConfig, modality: str, epoch: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Inputs, targets and weights of the views ``idx`` (positions in ``arrays``) as trained in
+    ``epoch``: each view augmented with ``default_rng([seed, epoch, view + 1])``."""
+    xs, ts, ws = [], [], []
+    for i in idx:
+        rng = np.random.default_rng([tc.seed, epoch, int(i) + 1])
+        x, t, w = augment_view(
+            arrays.inputs[i], arrays.targets[i], arrays.weights[i], tc.augment, modality, rng
+        )
+        xs.append(x)
+        ts.append(t)
+        ws.append(w)
+    return np.stack(xs), np.stack(ts), np.stack(ws)
+
+
+def _batch_tensors(  # noqa: ANN202
+    arrays: TrainingArrays, idx: np.ndarray, tc: TrainConfig, modality: str, epoch: int, device: Any
+):
     torch = require_torch()
-    x, t, w = arrays.inputs[idx], arrays.targets[idx], arrays.weights[idx]
-    x, t, w = x.copy(), t.copy(), w.copy()
-    for b, (fh, fv) in enumerate(flips):
-        if fh:
-            x[b], t[b], w[b] = x[b][..., ::-1], t[b][..., ::-1], w[b][..., ::-1]
-        if fv:
-            x[b], t[b], w[b] = x[b][..., ::-1, :], t[b][..., ::-1, :], w[b][..., ::-1, :]
-    return tuple(torch.from_numpy(np.ascontiguousarray(a)).to(device) for a in (x, t, w))
+    return tuple(
+        torch.from_numpy(a).to(device) for a in augmented_batch(arrays, idx, tc, modality, epoch)
+    )
 
 
 def _start(out: Path, resume: bool, mc: ModelConfig, tc: TrainConfig, names: list[str]):  # noqa: ANN202
@@ -248,12 +280,12 @@ def train(
     for epoch in range(first_epoch, tc.epochs):
         te = time.perf_counter()
         sums: dict[str, float] = {}
-        for k, (idx, flips) in enumerate(_batches(len(arrays), tc, epoch)):
+        for k, idx in enumerate(_batches(len(arrays), tc, epoch)):
             step = epoch * steps_per_epoch + k
             for group in optimizer.param_groups:
                 group["lr"] = _lr(tc, step, total)
-            x, t, w = _batch_tensors(arrays, idx, flips, dev)
-            losses = compute_losses(model(x), t, w, mc)
+            x, t, w = _batch_tensors(arrays, idx, tc, mc.modality, epoch, dev)
+            losses = compute_losses(model(x), t, w, mc, tc.foreground_loss)
             optimizer.zero_grad(set_to_none=True)
             losses["loss"].backward()
             optimizer.step()
