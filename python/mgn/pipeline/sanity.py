@@ -41,7 +41,7 @@ __all__ = [
 MAX_OBJECT_FILL = 1.0
 #: Refuse a config whose objects' boxes add up to more than this multiple of the tote's inner
 #: volume: an order of magnitude beyond what fits (nine in ten objects would leave the tote, and
-#: the drop of thousands of objects would run for hours before the refills gave up).
+#: the drop of thousands of objects runs for many minutes before the refills give up).
 MAX_OBJECT_OVERFILL = 10.0
 #: Largest extents (m) of a bin (its mesh, its inner box) outside which it is reported as
 #: implausible (a file in millimetres read as metres is the usual cause).
