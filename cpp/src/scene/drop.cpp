@@ -237,6 +237,19 @@ class DropSimulation {
     w_->bodies.push_back(std::move(body));
   }
 
+  /// A static axis-aligned box of the tote from corner `lo` to corner `hi` (m, tote frame), its
+  /// margin at most a quarter of its thinnest side (`guard`: see add_static()).
+  void add_static_box(const Vec3d& lo, const Vec3d& hi, bool guard = false) {
+    auto shape = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * (hi - lo))));
+    shape->setMargin(
+        btScalar(kUnits.length * std::min(o_.collision_margin, 0.25 * (hi - lo).minCoeff())));
+    if (o_.polyhedral_contacts) shape->initializePolyhedralFeatures();
+    btTransform X;
+    X.setIdentity();
+    X.setOrigin(kUnits.vector(Vec3d(0.5 * (hi + lo))));
+    add_static(std::move(shape), X, guard);
+  }
+
   /// The static tote: five boxes fitted to the cavity, or the triangle mesh; and the guard walls
   /// (four boxes on the walls, from the rim up by guard_) if any.
   void build_tote() {
@@ -244,14 +257,7 @@ class DropSimulation {
       const double T = std::max(box_.wall_thickness, 0.02);
       const double hx = hx_, hy = hy_, lo = H_, hi = H_ + guard_;
       auto add_guard = [&](const Vec3d& a, const Vec3d& b) {
-        auto shape = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * (b - a))));
-        shape->setMargin(
-            btScalar(kUnits.length * std::min(o_.collision_margin, 0.25 * (b - a).minCoeff())));
-        if (o_.polyhedral_contacts) shape->initializePolyhedralFeatures();
-        btTransform X;
-        X.setIdentity();
-        X.setOrigin(kUnits.vector(Vec3d(0.5 * (a + b))));
-        add_static(std::move(shape), X, /*guard=*/true);
+        add_static_box(a, b, /*guard=*/true);
       };
       add_guard(Vec3d(-hx - T, -hy - T, lo), Vec3d(-hx, hy + T, hi));  // -x
       add_guard(Vec3d(hx, -hy - T, lo), Vec3d(hx + T, hy + T, hi));    // +x
@@ -262,16 +268,7 @@ class DropSimulation {
       const double T = std::max(box_.wall_thickness, 0.02);  // thickened outwards
       const double F = std::max(box_.floor_thickness, 0.02);
       const double hx = hx_, hy = hy_, H = H_;
-      auto add_box = [&](const Vec3d& lo, const Vec3d& hi) {
-        auto shape = std::make_unique<btBoxShape>(kUnits.vector(Vec3d(0.5 * (hi - lo))));
-        shape->setMargin(
-            btScalar(kUnits.length * std::min(o_.collision_margin, 0.25 * (hi - lo).minCoeff())));
-        if (o_.polyhedral_contacts) shape->initializePolyhedralFeatures();
-        btTransform X;
-        X.setIdentity();
-        X.setOrigin(kUnits.vector(Vec3d(0.5 * (hi + lo))));
-        add_static(std::move(shape), X);
-      };
+      auto add_box = [&](const Vec3d& lo, const Vec3d& hi) { add_static_box(lo, hi); };
       if (!box_.walls) {  // a table top: the slab alone, its edges exact
         add_box(Vec3d(-hx, -hy, -F), Vec3d(hx, hy, 0));
         return;
