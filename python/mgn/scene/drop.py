@@ -19,7 +19,14 @@ from mgn.geometry.convex import (
 )
 from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, tote_mesh
-from mgn.scene.penetration import float_gaps, render_penetration
+from mgn.scene.penetration import (
+    Overlap,
+    clearance,
+    float_gaps,
+    mesh_overlaps,
+    meshes_overlap,
+    render_penetration,
+)
 from mgn.scene.scene import (
     BUILTIN,
     CONTACT_NAMES,
@@ -31,6 +38,9 @@ from mgn.scene.scene import (
 
 __all__ = [
     "RESTITUTION",
+    "SEPARATION_ROUNDS",
+    "SEPARATION_SPACING",
+    "SEPARATION_THRESHOLD",
     "drop_scene",
     "drop_scene_refilled",
     "settle",
@@ -40,6 +50,52 @@ __all__ = [
 #: Restitution of the objects (the library carries friction but not restitution).
 RESTITUTION = 0.1
 _STATUS = {0: "kept", 1: "left_tote", 2: "not_settled"}
+
+#: The final separation pass acts on resting objects whose render meshes sink deeper than this
+#: into each other (m), as found with surface points :data:`SEPARATION_SPACING` apart: see
+#: :func:`drop_scene`.
+SEPARATION_THRESHOLD = 3e-4
+#: Largest distance (m) between the points tested along a mesh edge by the separation pass (the
+#: depths it sees are short of the exact ones by at most half of it).
+SEPARATION_SPACING = 1e-3
+#: Rounds of the final separation pass at most (measure, pull the pairs apart, lower).
+SEPARATION_ROUNDS = 4
+# How far beyond the least separating distance a pair is pulled apart (m); objects then
+# floating more than _LOWER_ABOVE (m) are lowered until within _LOWER_TO (m) of what is below
+# them, _LOWER_MOVES moves each at most.
+_SEPARATION_MARGIN = 1e-4
+_LOWER_ABOVE = 1e-4
+_LOWER_TO = 2e-5
+_LOWER_MOVES = 60
+
+
+@dataclasses.dataclass
+class _Pile:
+    """The simulated pile, one row per object (the C++ result, merged over the settles of the
+    separation pass)."""
+
+    X_WO: np.ndarray  # (N, 4, 4) m
+    status: np.ndarray  # (N,) 0 kept, 1 left the tote, 2 not settled
+    settled: np.ndarray  # (N,) bool
+    contacts: np.ndarray  # (N,) uint32 tote contact bits
+    steps: int
+    simulated_time: float
+    all_settled: bool
+    max_penetration_hulls: float
+    separation_rounds: int = 0
+
+    @classmethod
+    def of(cls, out: _core.DropResult) -> _Pile:
+        return cls(
+            np.array(out.X_WO, np.float64),
+            np.array(out.status, np.int64),
+            np.array(out.object_settled, bool),
+            np.array(out.contacts, np.uint32),
+            int(out.steps),
+            float(out.simulated_time),
+            bool(out.settled),
+            float(out.max_penetration),
+        )
 
 
 def _source_of(spec: ObjectSpec, sources: dict[str, str]) -> str:
@@ -115,7 +171,7 @@ def _simulate(
 
 
 def _stats(
-    out: _core.DropResult,
+    pile: _Pile,
     instances: Sequence[SceneInstance],
     meshes: dict[str, Mesh],
     tote: ToteSpec,
@@ -124,19 +180,156 @@ def _stats(
     """Scene stats; ``max_penetration`` and ``max_float_gap`` are measured on the render meshes
     of the kept objects (:func:`mgn.scene.penetration.render_penetration`,
     :func:`mgn.scene.penetration.float_gaps`), ``max_penetration_hulls`` is Bullet's on the
-    simulated hulls."""
+    simulated hulls (of the last settle)."""
     kept = [meshes[i.name] for i in instances]
     poses = [i.X_WO for i in instances]
     gaps = float_gaps(kept, poses, tote)
     return {
-        "steps": int(out.steps),
-        "simulated_time": float(out.simulated_time),
-        "settled": bool(out.settled),
+        "steps": pile.steps,
+        "simulated_time": pile.simulated_time,
+        "settled": pile.all_settled,
         "max_penetration": render_penetration(kept, poses, tote),
-        "max_penetration_hulls": float(out.max_penetration),
+        "max_penetration_hulls": pile.max_penetration_hulls,
         "max_float_gap": float(gaps.max()) if len(gaps) else 0.0,
+        "separation_rounds": pile.separation_rounds,
         "num_dropped": num_dropped,
     }
+
+
+def _tote_depth(mesh: Mesh, X: np.ndarray, tote: ToteSpec) -> float:
+    """How deep (m, 0 if not) ``mesh`` at ``X`` sinks into the floor or an inner wall below
+    the rim (exact: planes)."""
+    w = np.asarray(mesh.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
+    depth = float(-w[:, 2].min())
+    low = w[w[:, 2] <= tote.inner_height]
+    if len(low) and tote.walls:
+        depth = max(depth, float((np.abs(low[:, 0]) - 0.5 * tote.inner_length).max()))
+        depth = max(depth, float((np.abs(low[:, 1]) - 0.5 * tote.inner_width).max()))
+    return max(depth, 0.0)
+
+
+def _pull_apart(meshes: Sequence[Mesh], poses: np.ndarray, overlap: Overlap, tote: ToteSpec) -> int:
+    """Moves one object of an overlapping pair (``poses`` in place) the least distance along a
+    direction that separates their render meshes (:func:`meshes_overlap` at
+    :data:`EDGE_SPACING`, then :data:`_SEPARATION_MARGIN` more). Directions in order, the first
+    that keeps the moved object out of the tote's floor and walls wins: the way out of the
+    deepest point (``exit - point``) for the object it lifts, the opposite way for the other,
+    straight up for the higher object (lowest vertex). Returns the index of the object moved."""
+    way = overlap.exit - overlap.point
+    way = way / max(float(np.linalg.norm(way)), 1e-12)
+    a, b = (overlap.a, overlap.b) if way[2] >= 0 else (overlap.b, overlap.a)
+    way = way if way[2] >= 0 else -way
+    lowest = [
+        float((np.asarray(meshes[k].vertices, np.float64) @ poses[k, :3, :3].T)[:, 2].min())
+        + poses[k, 2, 3]
+        for k in (overlap.a, overlap.b)
+    ]
+    high = overlap.a if lowest[0] >= lowest[1] else overlap.b
+    up = np.array([0.0, 0.0, 1.0])
+    cache: dict[int, Any] = {}
+    options = ((a, b, way), (b, a, -way), (high, overlap.a + overlap.b - high, up))
+    for mover, other, direction in options:
+        X = _separating_move(meshes[mover], poses[mover], meshes[other], poses[other],
+                             direction, overlap.depth, cache)  # fmt: skip
+        if _tote_depth(meshes[mover], X, tote) <= _SEPARATION_MARGIN or direction is up:
+            poses[mover] = X
+            return int(mover)
+    raise AssertionError("unreachable: straight up is always taken")
+
+
+def _separating_move(
+    mesh: Mesh,
+    X: np.ndarray,
+    other: Mesh,
+    Y: np.ndarray,
+    direction: np.ndarray,
+    guess: float,
+    cache: dict[int, Any],
+) -> np.ndarray:
+    """``X`` moved along the unit ``direction`` by the least distance after which ``mesh`` no
+    longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`; doubling from ``guess`` (m),
+    at most 5 cm, then 6 halvings), plus :data:`_SEPARATION_MARGIN`."""
+
+    def clear(t: float) -> bool:
+        moved = X.copy()
+        moved[:3, 3] += t * direction
+        return not meshes_overlap(mesh, moved, other, Y, cache=cache)
+
+    lo, hi = 0.0, max(guess, 1e-4)
+    while not clear(hi) and hi < 0.05:
+        lo, hi = hi, 2 * hi
+    for _ in range(6):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if clear(mid) else (mid, hi)
+    moved = X.copy()
+    moved[:3, 3] += (hi + _SEPARATION_MARGIN) * direction
+    return moved
+
+
+def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec) -> None:
+    """Lowers (``poses`` in place) every object whose render mesh floats more than
+    :data:`_LOWER_ABOVE` above what is nearest, lowest first, each by its clearance (which
+    cannot make it overlap anything) until it is within :data:`_LOWER_TO` of a body; twice
+    over, for objects that rested on a lowered one."""
+    models: dict[int, Any] = {}
+    for _ in range(2):
+        gaps = [clearance(meshes, poses, tote, k, models) for k in range(len(meshes))]
+        low = [
+            float((np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3])[:, 2].min())
+            for m, X in zip(meshes, poses, strict=True)
+        ]
+        todo = sorted((k for k in range(len(meshes)) if gaps[k] > _LOWER_ABOVE),
+                      key=lambda k: (low[k], k))  # fmt: skip
+        if not todo:
+            return
+        for k in todo:
+            for _ in range(_LOWER_MOVES):
+                gap = clearance(meshes, poses, tote, k, models)
+                if gap <= _LOWER_TO:
+                    break
+                poses[k, 2, 3] -= gap
+
+
+def _separate(
+    pile: _Pile, objects: Sequence[ObjectSpec], meshes: dict[str, Mesh], tote: ToteSpec
+) -> _Pile:
+    """The final separation pass: while kept objects' render meshes overlap deeper than
+    :data:`SEPARATION_THRESHOLD` (at most :data:`SEPARATION_ROUNDS` rounds), pull each such
+    pair apart (deepest first, :func:`_pull_apart`), then lower what floats
+    (:func:`_lower`). A pile without such overlaps is left as it is."""
+    kept = np.flatnonzero(pile.status == 0)
+    ms = [meshes[objects[k].name] for k in kept]
+    poses = pile.X_WO[kept].copy()
+    for _ in range(SEPARATION_ROUNDS):
+        found = mesh_overlaps(ms, list(poses), SEPARATION_THRESHOLD, SEPARATION_SPACING)
+        if not found:
+            break
+        pairs: dict[tuple[int, int], Overlap] = {}
+        for o in sorted(found, key=lambda o: (-o.depth, o.a, o.b)):
+            pairs.setdefault((min(o.a, o.b), max(o.a, o.b)), o)
+        for o in pairs.values():
+            _pull_apart(ms, poses, o, tote)
+        _lower(ms, poses, tote)
+        pile.separation_rounds += 1
+    pile.X_WO[kept] = poses
+    return pile
+
+
+def _settled_pile(
+    objects: Sequence[ObjectSpec],
+    seed: int,
+    tote: ToteSpec,
+    options: DropOptions,
+    sources: Mapping[str, str | os.PathLike[str]] | None,
+    decomposition: ConvexDecompositionOptions | None,
+    use_cache: bool,
+    X_WO_start: np.ndarray | None = None,
+) -> tuple[_Pile, dict[str, str], dict[str, Mesh]]:
+    """:func:`_simulate`, then the final separation pass (:func:`_separate`)."""
+    out, sources_of, meshes = _simulate(
+        objects, seed, tote, options, sources, decomposition, use_cache, X_WO_start
+    )
+    return _separate(_Pile.of(out), objects, meshes, tote), sources_of, meshes
 
 
 def drop_scene(
@@ -172,30 +365,30 @@ def drop_scene(
     """
     tote = tote or ToteSpec()
     options = options or DropOptions()
-    out, sources_of, meshes = _simulate(
+    pile, sources_of, meshes = _settled_pile(
         objects, seed, tote, options, sources, decomposition, use_cache
     )
     instances: list[SceneInstance] = []
     removed: list[RemovedInstance] = []
     for k, spec in enumerate(objects):
         source = sources_of[spec.name]
-        status = _STATUS[int(out.status[k])]
+        status = _STATUS[int(pile.status[k])]
         if status != "kept":
             removed.append(RemovedInstance(spec.name, source, status))
             continue
-        bits = int(out.contacts[k])
+        bits = int(pile.contacts[k])
         instances.append(
             SceneInstance(
                 instance_id=len(instances) + 1,
                 name=spec.name,
                 category_id=spec.category_id,
                 source=source,
-                X_WO=out.X_WO[k],
+                X_WO=pile.X_WO[k],
                 contacts=tuple(c for b, c in enumerate(CONTACT_NAMES) if bits & (1 << b)),
-                settled=bool(out.object_settled[k]),
+                settled=bool(pile.settled[k]),
             )
         )
-    stats = _stats(out, instances, meshes, tote, len(objects))
+    stats = _stats(pile, instances, meshes, tote, len(objects))
     return Scene(tuple(instances), tote, int(seed), options, tuple(removed), stats)
 
 
@@ -225,28 +418,29 @@ def settle_tracked(
     specs = [scene.object_spec(inst.instance_id - 1) for inst in keep]
     sources = {inst.name: inst.source for inst in keep if inst.source != BUILTIN}
     start = np.stack([inst.X_WO for inst in keep])
-    out, sources_of, meshes = _simulate(specs, scene.seed, scene.tote, options, sources,
-                                        decomposition, use_cache, X_WO_start=start)  # fmt: skip
+    pile, sources_of, meshes = _settled_pile(
+        specs, scene.seed, scene.tote, options, sources, decomposition, use_cache, start
+    )
     instances: list[SceneInstance] = []
     removed = list(scene.removed)
     old_ids: list[int] = []
     for k, (inst, spec) in enumerate(zip(keep, specs, strict=True)):
-        status = _STATUS[int(out.status[k])]
+        status = _STATUS[int(pile.status[k])]
         if status != "kept":
             removed.append(RemovedInstance(spec.name, sources_of[spec.name], status))
             continue
-        bits = int(out.contacts[k])
+        bits = int(pile.contacts[k])
         instances.append(
             dataclasses.replace(
                 inst,
                 instance_id=len(instances) + 1,
-                X_WO=out.X_WO[k],
+                X_WO=pile.X_WO[k],
                 contacts=tuple(c for b, c in enumerate(CONTACT_NAMES) if bits & (1 << b)),
-                settled=bool(out.object_settled[k]),
+                settled=bool(pile.settled[k]),
             )
         )
         old_ids.append(inst.instance_id)
-    stats = _stats(out, instances, meshes, scene.tote, len(keep))
+    stats = _stats(pile, instances, meshes, scene.tote, len(keep))
     new = Scene(tuple(instances), scene.tote, scene.seed, scene.drop_options, tuple(removed), stats)
     return new, tuple(old_ids)
 

@@ -25,6 +25,8 @@ Units m, tote frame W (see :mod:`mgn.scene.drop`).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -37,8 +39,12 @@ from mgn.objects import ToteSpec
 
 __all__ = [
     "EDGE_SPACING",
+    "Overlap",
+    "clearance",
     "edge_points",
     "float_gaps",
+    "mesh_overlaps",
+    "meshes_overlap",
     "point_triangle_distance",
     "render_penetration",
 ]
@@ -129,6 +135,25 @@ def _inside(scene: RayScene, points: np.ndarray) -> np.ndarray:
     return inside
 
 
+@dataclass(frozen=True)
+class Overlap:
+    """The deepest point of object ``a``'s surface inside object ``b`` (tote frame, m).
+
+    Attributes:
+        a, b: indices of the two objects in the lists measured.
+        depth: the point's distance to ``b``'s surface (m, > 0).
+        point: (3,) the point (a vertex or edge point of ``a``'s mesh).
+        exit: (3,) the nearest point of ``b``'s surface (of the closed part of ``b`` that holds
+            the point): moving ``a`` by ``exit - point`` takes this point out of ``b``.
+    """
+
+    a: int
+    b: int
+    depth: float
+    point: npt.NDArray[np.float64]
+    exit: npt.NDArray[np.float64]
+
+
 def render_penetration(
     meshes: Sequence[Mesh], X_WO: Sequence[npt.ArrayLike], tote: ToteSpec
 ) -> float:
@@ -144,24 +169,61 @@ def render_penetration(
         )
     hx, hy, H = 0.5 * tote.inner_length, 0.5 * tote.inner_width, tote.inner_height
     worst = 0.0
+    for m, X in zip(meshes, X_WO, strict=True):
+        X = np.asarray(X, np.float64)
+        w = np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
+        worst = max(worst, float(-w[:, 2].min()))
+        low = w[w[:, 2] <= H]
+        if len(low) and tote.walls:  # a table top has no walls to penetrate
+            worst = max(worst, float((np.abs(low[:, 0]) - hx).max()))
+            worst = max(worst, float((np.abs(low[:, 1]) - hy).max()))
+    found = _overlaps(meshes, X_WO, worst, running=True)
+    return max([worst, 0.0] + [o.depth for o in found])
+
+
+def mesh_overlaps(
+    meshes: Sequence[Mesh],
+    X_WO: Sequence[npt.ArrayLike],
+    above: float = 0.0,
+    spacing: float = EDGE_SPACING,
+) -> list[Overlap]:
+    """For each ordered pair of closed meshes (objects) at poses ``X_WO`` (tote frame) whose
+    surfaces sink deeper than ``above`` (m, >= 0) into each other, the deepest point of ``a``'s
+    surface inside ``b`` (:class:`Overlap`; tested as :func:`render_penetration` does: every
+    vertex and points along every edge at most ``spacing`` (m, > 0) apart, so a depth is found
+    to within ``spacing`` / 2; parts of one mesh never count). Pairs in order of (a, b); the
+    tote is not measured."""
+    if len(meshes) != len(X_WO):
+        raise InvalidArgumentError(
+            f"mesh_overlaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
+        )
+    if not above >= 0:
+        raise InvalidArgumentError(f"mesh_overlaps: above must be >= 0 m, got {above!r}")
+    return _overlaps(meshes, X_WO, float(above), running=False, spacing=spacing)
+
+
+def _overlaps(
+    meshes: Sequence[Mesh],
+    X_WO: Sequence[npt.ArrayLike],
+    above: float,
+    running: bool,
+    spacing: float = EDGE_SPACING,
+) -> list[Overlap]:
+    """The deepest point of each ordered pair deeper than ``above``; ``running``: only pairs
+    deeper than every pair before them (enough for the maximum, and faster)."""
     local = [np.asarray(m.vertices, np.float64) for m in meshes]
     poses = [np.asarray(X, np.float64) for X in X_WO]
     world = [v @ X[:3, :3].T + X[:3, 3] for v, X in zip(local, poses, strict=True)]
     samples: dict[int, np.ndarray] = {}  # copies of one object share their mesh
     for m in meshes:
         if id(m) not in samples:
-            samples[id(m)] = edge_points(m)
+            samples[id(m)] = edge_points(m, spacing)
     surface = [samples[id(m)] @ X[:3, :3].T + X[:3, 3] for m, X in zip(meshes, poses, strict=True)]
-    for w in world:
-        worst = max(worst, float(-w[:, 2].min()))
-        low = w[w[:, 2] <= H]
-        if len(low) and tote.walls:  # a table top has no walls to penetrate
-            worst = max(worst, float((np.abs(low[:, 0]) - hx).max()))
-            worst = max(worst, float((np.abs(low[:, 1]) - hy).max()))
     lo = [w.min(axis=0) for w in world]
     hi = [w.max(axis=0) for w in world]
     parts: dict[int, list[tuple[Mesh, RayScene]]] = {}
     split: dict[int, list[tuple[Mesh, RayScene]]] = {}
+    found: list[Overlap] = []
     for a in range(len(meshes)):
         for b in range(len(meshes)):
             if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
@@ -185,11 +247,53 @@ def render_penetration(
             # a union of solids) is tested part by part: the parity of the whole would count a
             # point inside two parts as outside, and coincident faces of two parts as one
             # crossing. A point inside a part sinks into b at least as deep as into that part.
+            worst = max([above] + [o.depth for o in found]) if running else above
+            best: tuple[float, np.ndarray, Mesh] | None = None
             for part, scene in parts[b]:
                 p = pa[_inside(scene, pa)]
                 if len(p):
-                    worst = _deepest(p, part, worst)
-    return max(worst, 0.0)
+                    depth, at = _deepest(p, part, worst)
+                    if at is not None:
+                        worst, best = depth, (depth, at, part)
+            if best is not None:
+                depth, at, part = best
+                tri = np.asarray(part.vertices, np.float64)[np.asarray(part.faces)]
+                q = _closest_point(at, tri)
+                R, t = Xb[:3, :3], Xb[:3, 3]
+                found.append(Overlap(a, b, depth, R @ at + t, R @ q + t))
+    return found
+
+
+def meshes_overlap(
+    mesh_a: Mesh,
+    X_a: npt.ArrayLike,
+    mesh_b: Mesh,
+    X_b: npt.ArrayLike,
+    spacing: float = EDGE_SPACING,
+    cache: dict[int, Any] | None = None,
+) -> bool:
+    """Whether a point of either closed mesh's surface (every vertex and points along every
+    edge at most ``spacing`` (m) apart) lies inside the other at poses ``X_a``, ``X_b`` (the
+    inside test of :func:`render_penetration`, part by part). ``cache``: surface points and
+    ray scenes by ``id(mesh)``, filled and reused across calls."""
+    cache = {} if cache is None else cache
+    for m in (mesh_a, mesh_b):
+        if id(m) not in cache:
+            v = np.asarray(m.vertices, np.float64)
+            parts = [(p, RayScene(p)) for p in _connected_parts(m)]
+            cache[id(m)] = (edge_points(m, spacing), parts, v.min(axis=0), v.max(axis=0))
+    Xa, Xb = np.asarray(X_a, np.float64), np.asarray(X_b, np.float64)
+    for (m, X), (n, Y) in (((mesh_a, Xa), (mesh_b, Xb)), ((mesh_b, Xb), (mesh_a, Xa))):
+        # m's surface points in n's frame (one transform), inside n's bounding box, then inside
+        # a part of n.
+        R = Y[:3, :3].T @ X[:3, :3]
+        t = Y[:3, :3].T @ (X[:3, 3] - Y[:3, 3])
+        points, parts, lo, hi = cache[id(m)][0], cache[id(n)][1], cache[id(n)][2], cache[id(n)][3]
+        p = points @ R.T + t
+        p = p[np.all((p >= lo) & (p <= hi), axis=1)]
+        if len(p) and any(_inside(scene, p).any() for _, scene in parts):
+            return True
+    return False
 
 
 def float_gaps(
@@ -205,43 +309,51 @@ def float_gaps(
         raise InvalidArgumentError(
             f"float_gaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
         )
+    models: dict[int, CollisionModel] = {}  # copies of one object share their mesh
+    return np.array([clearance(meshes, X_WO, tote, a, models) for a in range(len(meshes))])
+
+
+def clearance(
+    meshes: Sequence[Mesh],
+    X_WO: Sequence[npt.ArrayLike],
+    tote: ToteSpec,
+    index: int,
+    models: dict[int, CollisionModel] | None = None,
+) -> float:
+    """:func:`float_gaps` of the one mesh ``meshes[index]`` (m, >= 0). ``models``: collision
+    models by ``id(mesh)``, filled and reused across calls."""
     hx, hy, H = 0.5 * tote.inner_length, 0.5 * tote.inner_width, tote.inner_height
     poses = [np.asarray(X, np.float64) for X in X_WO]
     world = [
         np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
         for m, X in zip(meshes, poses, strict=True)
     ]
-    gaps = np.zeros(len(meshes))
-    for a, w in enumerate(world):
-        gap = float(w[:, 2].min())  # a mesh's nearest point to a plane is a vertex
-        low = w[w[:, 2] <= H]
-        if len(low) and tote.walls:
-            gap = min(
-                gap, float((hx - np.abs(low[:, 0])).min()), float((hy - np.abs(low[:, 1])).min())
-            )
-        gaps[a] = gap
-    lo = [w.min(axis=0) for w in world]
-    hi = [w.max(axis=0) for w in world]
-    models: dict[int, CollisionModel] = {}  # copies of one object share their mesh
-    for a in range(len(meshes)):
-        # Other meshes nearest first by their bounding boxes; a box farther than the gap found
-        # so far cannot hold a nearer mesh.
-        box_gap = [
-            float(np.linalg.norm(np.maximum(np.maximum(lo[b] - hi[a], lo[a] - hi[b]), 0.0)))
-            for b in range(len(meshes))
-        ]
-        for b in sorted(range(len(meshes)), key=lambda b: (box_gap[b], b)):
-            if b == a:
-                continue
-            if box_gap[b] >= gaps[a]:
-                break
-            for m in (meshes[a], meshes[b]):
-                if id(m) not in models:
-                    models[id(m)] = CollisionModel(m)
-            d = distance(models[id(meshes[a])], poses[a], models[id(meshes[b])], poses[b],
-                         num_threads=1)  # fmt: skip
-            gaps[a] = min(gaps[a], float(d.distance[0]))
-    return np.maximum(gaps, 0.0)
+    a, w = index, world[index]
+    gap = float(w[:, 2].min())  # a mesh's nearest point to a plane is a vertex
+    low = w[w[:, 2] <= H]
+    if len(low) and tote.walls:
+        gap = min(gap, float((hx - np.abs(low[:, 0])).min()), float((hy - np.abs(low[:, 1])).min()))
+    lo = [v.min(axis=0) for v in world]
+    hi = [v.max(axis=0) for v in world]
+    models = {} if models is None else models
+    # Other meshes nearest first by their bounding boxes; a box farther than the gap found so
+    # far cannot hold a nearer mesh.
+    box_gap = [
+        float(np.linalg.norm(np.maximum(np.maximum(lo[b] - hi[a], lo[a] - hi[b]), 0.0)))
+        for b in range(len(meshes))
+    ]
+    for b in sorted(range(len(meshes)), key=lambda b: (box_gap[b], b)):
+        if b == a:
+            continue
+        if box_gap[b] >= gap:
+            break
+        for m in (meshes[a], meshes[b]):
+            if id(m) not in models:
+                models[id(m)] = CollisionModel(m)
+        d = distance(models[id(meshes[a])], poses[a], models[id(meshes[b])], poses[b],
+                     num_threads=1)  # fmt: skip
+        gap = min(gap, float(d.distance[0]))
+    return max(gap, 0.0)
 
 
 def _connected_parts(mesh: Mesh) -> list[Mesh]:
@@ -273,9 +385,9 @@ def _connected_parts(mesh: Mesh) -> list[Mesh]:
     return [Mesh(v, f[face_label == k].astype(np.int32)) for k in pieces]
 
 
-def _deepest(p: np.ndarray, part: Mesh, worst: float) -> float:
-    """max(``worst``, the largest distance of the points ``p`` (inside ``part``) to the
-    surface of ``part``)."""
+def _deepest(p: np.ndarray, part: Mesh, worst: float) -> tuple[float, np.ndarray | None]:
+    """The largest distance of the points ``p`` (inside ``part``) to the surface of ``part``
+    and the point at that distance, when it exceeds ``worst``; else ``(worst, None)``."""
     # A point's distance to the surface is at most its distance to the nearest vertex
     # (`bound`): points are measured in order of decreasing bound, and once the bound
     # is no more than the deepest penetration found, no later point can exceed it. The
@@ -295,8 +407,35 @@ def _deepest(p: np.ndarray, part: Mesh, worst: float) -> float:
     order = np.argsort(-bound, kind="stable")
     p, bound = p[order], bound[order]
     tri = vertices[faces]
+    at: np.ndarray | None = None
     for k in range(0, len(p), 64):
         if bound[k] <= worst:
             break
-        worst = max(worst, float(point_triangle_distance(p[k : k + 64], tri).max()))
-    return worst
+        d = point_triangle_distance(p[k : k + 64], tri)
+        i = int(np.argmax(d))
+        if d[i] > worst:
+            worst, at = float(d[i]), p[k + i]
+    return worst, at
+
+
+def _closest_point(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """(3,) the nearest point to ``p`` (3,) on the (F, 3, 3) triangles (brute force)."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    ab, ac = b - a, c - a
+    n = np.cross(ab, ac)
+    nn = np.maximum(np.einsum("fk,fk->f", n, n), 1e-300)
+    q = p - (np.einsum("fk,fk->f", p - a, n) / nn)[:, None] * n
+    v2 = q - a
+    d00, d01, d11 = (np.einsum("fk,fk->f", x, y) for x, y in ((ab, ab), (ab, ac), (ac, ac)))
+    d20, d21 = np.einsum("fk,fk->f", v2, ab), np.einsum("fk,fk->f", v2, ac)
+    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+    v = (d11 * d20 - d01 * d21) / den
+    w = (d00 * d21 - d01 * d20) / den
+    candidates = [np.where(((v >= 0) & (w >= 0) & (v + w <= 1))[:, None], q, np.inf)]
+    for s, e in ((a, b), (b, c), (c, a)):
+        se = e - s
+        u = np.einsum("fk,fk->f", p - s, se) / np.maximum(np.einsum("fk,fk->f", se, se), 1e-300)
+        candidates.append(s + np.clip(u, 0.0, 1.0)[:, None] * se)
+    points = np.concatenate(candidates)
+    dist = np.linalg.norm(points - p, axis=1)
+    return np.asarray(points[int(np.argmin(np.where(np.isfinite(dist), dist, np.inf)))])
