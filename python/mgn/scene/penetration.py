@@ -32,7 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError
-from mgn.geometry import Mesh
+from mgn.geometry import Mesh, make_box
 from mgn.geometry.collision import CollisionModel, distance
 from mgn.geometry.raytrace import RayScene
 from mgn.objects import ToteSpec
@@ -186,20 +186,22 @@ def mesh_overlaps(
     X_WO: Sequence[npt.ArrayLike],
     above: float = 0.0,
     spacing: float = EDGE_SPACING,
+    exact: bool = True,
 ) -> list[Overlap]:
     """For each ordered pair of closed meshes (objects) at poses ``X_WO`` (tote frame) whose
     surfaces sink deeper than ``above`` (m, >= 0) into each other, the deepest point of ``a``'s
     surface inside ``b`` (:class:`Overlap`; tested as :func:`render_penetration` does: every
     vertex and points along every edge at most ``spacing`` (m, > 0) apart, so a depth is found
     to within ``spacing`` / 2; parts of one mesh never count). Pairs in order of (a, b); the
-    tote is not measured."""
+    tote is not measured. ``exact=False``: each inside point's depth is its FCL distance to
+    the other mesh (a 0.01 mm probe; faster, short of the exact depth by at most 0.01 mm)."""
     if len(meshes) != len(X_WO):
         raise InvalidArgumentError(
             f"mesh_overlaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
         )
     if not above >= 0:
         raise InvalidArgumentError(f"mesh_overlaps: above must be >= 0 m, got {above!r}")
-    return _overlaps(meshes, X_WO, float(above), running=False, spacing=spacing)
+    return _overlaps(meshes, X_WO, float(above), running=False, spacing=spacing, exact=exact)
 
 
 def _overlaps(
@@ -208,6 +210,7 @@ def _overlaps(
     above: float,
     running: bool,
     spacing: float = EDGE_SPACING,
+    exact: bool = True,
 ) -> list[Overlap]:
     """The deepest point of each ordered pair deeper than ``above``; ``running``: only pairs
     deeper than every pair before them (enough for the maximum, and faster)."""
@@ -224,6 +227,7 @@ def _overlaps(
     parts: dict[int, list[tuple[Mesh, RayScene]]] = {}
     split: dict[int, list[tuple[Mesh, RayScene]]] = {}
     found: list[Overlap] = []
+    models: dict[int, CollisionModel] = {}
     for a in range(len(meshes)):
         for b in range(len(meshes)):
             if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
@@ -252,7 +256,10 @@ def _overlaps(
             for part, scene in parts[b]:
                 p = pa[_inside(scene, pa)]
                 if len(p):
-                    depth, at = _deepest(p, part, worst)
+                    if exact:
+                        depth, at = _deepest(p, part, worst)
+                    else:
+                        depth, at = _deepest_fcl(p, part, worst, models)
                     if at is not None:
                         worst, best = depth, (depth, at, part)
             if best is not None:
@@ -289,7 +296,13 @@ def meshes_overlap(
         R = Y[:3, :3].T @ X[:3, :3]
         t = Y[:3, :3].T @ (X[:3, 3] - Y[:3, 3])
         points, parts, lo, hi = cache[id(m)][0], cache[id(n)][1], cache[id(n)][2], cache[id(n)][3]
-        p = points @ R.T + t
+        # First the points inside the box around n's bounding box in m's own frame (no
+        # transform of every point), then in n's frame.
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])])  # fmt: skip
+        in_m = (corners - t) @ R  # n's box corners in m's frame
+        near = np.all((points >= in_m.min(axis=0)) & (points <= in_m.max(axis=0)), axis=1)
+        p = points[near] @ R.T + t
         p = p[np.all((p >= lo) & (p <= hi), axis=1)]
         if len(p) and any(_inside(scene, p).any() for _, scene in parts):
             return True
@@ -416,6 +429,27 @@ def _deepest(p: np.ndarray, part: Mesh, worst: float) -> tuple[float, np.ndarray
         if d[i] > worst:
             worst, at = float(d[i]), p[k + i]
     return worst, at
+
+
+_PROBE = 1e-5  # m, edge of the probe cube whose FCL distance to a mesh gives a point's depth
+
+
+def _deepest_fcl(
+    p: np.ndarray, part: Mesh, worst: float, models: dict[int, CollisionModel]
+) -> tuple[float, np.ndarray | None]:
+    """:func:`_deepest` with each point's depth from FCL: the distance of a tiny probe cube at
+    the point to ``part``'s triangles (a BVH search instead of every triangle)."""
+    if id(part) not in models:
+        models[id(part)] = CollisionModel(part)
+    if -1 not in models:
+        models[-1] = CollisionModel(make_box([_PROBE, _PROBE, _PROBE]))
+    X = np.repeat(np.eye(4)[None], len(p), axis=0)
+    X[:, :3, 3] = p
+    d = distance(models[-1], X, models[id(part)], np.eye(4), num_threads=1).distance
+    i = int(np.argmax(d))
+    if d[i] + 0.5 * _PROBE <= worst:
+        return worst, None
+    return float(d[i]) + 0.5 * _PROBE, p[i]
 
 
 def _closest_point(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
