@@ -211,6 +211,18 @@ def _tote_depth(mesh: Mesh, X: np.ndarray, tote: ToteSpec) -> float:
     return max(depth, 0.0)
 
 
+def _out_of_tote(mesh: Mesh, X: np.ndarray, tote: ToteSpec) -> None:
+    """Moves ``X`` (in place) by the least that takes ``mesh`` out of the floor and the inner
+    walls below the rim (exact: planes)."""
+    w = np.asarray(mesh.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
+    X[2, 3] += max(0.0, float(-w[:, 2].min()))
+    low = w[w[:, 2] <= tote.inner_height]
+    if len(low) and tote.walls:
+        for axis, half in ((0, 0.5 * tote.inner_length), (1, 0.5 * tote.inner_width)):
+            X[axis, 3] -= max(0.0, float(low[:, axis].max()) - half)
+            X[axis, 3] += max(0.0, -half - float(low[:, axis].min()))
+
+
 def _pull_apart(
     meshes: Sequence[Mesh],
     poses: np.ndarray,
@@ -312,15 +324,17 @@ def separate_overlaps(
 ) -> tuple[npt.NDArray[np.float64], int]:
     """The drop's final separation pass on closed meshes at poses ``X_WO`` (tote frame, m).
 
-    While two meshes sink deeper than :data:`SEPARATION_THRESHOLD` into each other (found with
-    surface points :data:`SEPARATION_SPACING` apart), at most :data:`SEPARATION_ROUNDS` rounds:
-    each such pair, deepest first, is pulled apart by moving one of them the least distance
-    that separates their surfaces (tested every 0.2 mm along every edge) plus 0.1 mm, along
-    the way out of the pair's deepest point (moving the object it lifts), else the opposite way
-    (the other object), else straight up (the higher one), the first that keeps the moved
-    object out of the tote's floor and walls; then every object floating more than 0.1 mm
-    above the nearest body is lowered (lowest first) until it touches one (within 0.02 mm).
-    Poses without such overlaps are returned unchanged.
+    While a mesh sinks deeper than :data:`SEPARATION_THRESHOLD` into the tote's floor or an
+    inner wall, or two meshes into each other (found with surface points
+    :data:`SEPARATION_SPACING` apart), at most :data:`SEPARATION_ROUNDS` rounds: each mesh
+    sunk into the tote is moved out of it by the least (exact, planes); each overlapping pair,
+    deepest first, is pulled apart by moving one of them the least distance that separates
+    their surfaces (tested every 0.2 mm along every edge) plus 0.1 mm, along the way out of
+    the pair's deepest point (moving the object it lifts), else the opposite way (the other
+    object), else straight up (the higher one), the first that keeps the moved object out of
+    the tote's floor and walls; then every object floating more than 0.1 mm above the
+    nearest body is lowered (lowest first) until it touches one (within 0.02 mm). Poses
+    without such overlaps are returned unchanged. Objects are moved, never turned.
 
     Returns:
         (N, 4, 4) poses, and the number of rounds that moved objects.
@@ -333,10 +347,17 @@ def separate_overlaps(
     rounds = 0
     cache: dict[float, Any] = {}
     for _ in range(SEPARATION_ROUNDS):
+        sunk = [
+            k
+            for k in range(len(meshes))
+            if _tote_depth(meshes[k], poses[k], tote) > SEPARATION_THRESHOLD
+        ]
+        for k in sunk:
+            _out_of_tote(meshes[k], poses[k], tote)
         found = mesh_overlaps(
             meshes, list(poses), SEPARATION_THRESHOLD, SEPARATION_SPACING, exact=False
         )
-        if not found:
+        if not found and not sunk:
             break
         pairs: dict[tuple[int, int], Overlap] = {}
         for o in sorted(found, key=lambda o: (-o.depth, o.a, o.b)):
