@@ -127,3 +127,26 @@ def test_a_demo_scene_whose_meshes_interlocked_rests_without_overlap():
     assert scene.stats["max_float_gap"] < 1e-3
     meshes = [scene.mesh(k) for k in range(len(scene))]
     assert render_penetration(meshes, scene.poses, scene.tote) == scene.stats["max_penetration"]
+
+
+def test_objects_sunk_into_the_floor_or_a_wall_are_moved_out_and_what_they_held_follows():
+    """A 40 mm box 1.5 mm into the floor with a second box resting on it, and one pressed
+    1.5 mm into the +x wall (analytic: the planes z = 0 and x = inner_length / 2): after the
+    pass nothing sinks into the tote or each other by 1 mm, the boxes touch the floor and the
+    wall (exact positions), and the box on top rests on the lifted one."""
+    box = mgn.make_box((0.04, 0.04, 0.04))
+    hx = 0.5 * TOTE.inner_length
+    poses = [
+        _at(0.0, 0.0, 0.02 - 0.0015),
+        _at(0.0, 0.0, 0.06 - 0.0015),  # resting on the sunk box
+        _at(hx - 0.02 + 0.0015, 0.0, 0.02),  # into the +x wall
+    ]
+    meshes = [box, box, box]
+    assert render_penetration(meshes, poses, TOTE) == pytest.approx(0.0015, abs=1e-6)
+    out, rounds = separate_overlaps(meshes, poses, TOTE)
+    assert rounds >= 1
+    assert render_penetration(meshes, list(out), TOTE) < 1e-3
+    assert float_gaps(meshes, list(out), TOTE).max() < 1e-3
+    assert out[0, 2, 3] == pytest.approx(0.02, abs=1e-9)  # on the floor
+    assert out[2, 0, 3] == pytest.approx(hx - 0.02, abs=1e-9)  # against the wall
+    assert 0.06 - 1e-3 < out[1, 2, 3] < 0.06 + 1e-3  # on the lifted box
