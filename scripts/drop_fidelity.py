@@ -34,7 +34,7 @@ def main() -> None:
         scene = drop_scene(objects, seed=seed)
         seconds = time.perf_counter() - t
         meshes = [scene.mesh(k) for k in range(len(scene))]
-        check = render_penetration(meshes, scene.poses, scene.tote)
+        check = render_penetration(meshes, list(scene.poses), scene.tote)
         row = {
             "scene": i,
             "lost": len(scene.removed),

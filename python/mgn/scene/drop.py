@@ -302,7 +302,7 @@ def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec) -> None:
     over, for objects that rested on a lowered one."""
     models: dict[int, Any] = {}
     for _ in range(2):
-        gaps = [clearance(meshes, poses, tote, k, models) for k in range(len(meshes))]
+        gaps = [clearance(meshes, list(poses), tote, k, models) for k in range(len(meshes))]
         low = [
             float((np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3])[:, 2].min())
             for m, X in zip(meshes, poses, strict=True)
@@ -313,7 +313,7 @@ def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec) -> None:
             return
         for k in todo:
             for _ in range(_LOWER_MOVES):
-                gap = clearance(meshes, poses, tote, k, models)
+                gap = clearance(meshes, list(poses), tote, k, models)
                 if gap <= _LOWER_TO:
                     break
                 poses[k, 2, 3] -= gap
@@ -375,7 +375,7 @@ def _separate(
     """:func:`separate_overlaps` of the kept objects of ``pile``."""
     kept = np.flatnonzero(pile.status == 0)
     poses, rounds = separate_overlaps(
-        [meshes[objects[k].name] for k in kept], list(pile.X_WO[kept]), tote
+        [meshes[objects[int(k)].name] for k in kept], list(pile.X_WO[kept]), tote
     )
     pile.X_WO[kept] = poses
     pile.separation_rounds = rounds
