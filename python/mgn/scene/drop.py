@@ -414,7 +414,10 @@ def drop_scene(
     Objects are released together at random orientations in the release window (seeded per
     object), collide through their cached convex decompositions, and settle; those that left
     the tote are listed in ``Scene.removed``. Mass, centre of mass and inertia come from each
-    mesh and its density; friction from the spec.
+    mesh and its density; friction from the spec. A final pass on the render meshes
+    (:func:`separate_overlaps`) moves objects that the simulation left sunk more than
+    :data:`SEPARATION_THRESHOLD` into each other or into the tote apart, and lowers what then
+    floats onto what holds it.
 
     Args:
         objects: what to drop (see :func:`mgn.scene.compose_objects`); copies may repeat.
@@ -526,7 +529,8 @@ def settle(
     release). Returns a new :class:`Scene`: the remaining instances renumbered 1..M in their old
     order, with their settled poses, tote contacts (hence bin relations) and ``settled`` flags;
     objects that left the tote while settling are appended to ``removed``; ``stats`` describe
-    this simulation. An already resting pile stays put (sub-millimetre creep).
+    this simulation. An already resting pile stays put (sub-millimetre creep). The final
+    separation pass of :func:`drop_scene` runs here too.
 
     Args:
         scene: the current scene.

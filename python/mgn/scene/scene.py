@@ -269,7 +269,8 @@ class Scene:
             meshes: deepest point of one object's surface inside another object or the tote),
             max_penetration_hulls (m, of the simulated hulls), max_float_gap (m, of the render
             meshes: the largest clearance of an object to its nearest body, tote or object),
-            num_dropped.
+            separation_rounds (rounds of the drop's final separation pass that moved objects,
+            :func:`mgn.scene.drop.separate_overlaps`), num_dropped.
     """
 
     instances: tuple[SceneInstance, ...]
