@@ -62,11 +62,13 @@ SEPARATION_THRESHOLD = 3e-4
 #: depths it sees are short of the exact ones by at most half of it).
 SEPARATION_SPACING = 1e-3
 #: Rounds of the final separation pass at most (measure, pull the pairs apart, lower).
-SEPARATION_ROUNDS = 4
-# How far beyond the least separating distance a pair is pulled apart (m); objects then
+SEPARATION_ROUNDS = 8
+# How far beyond the least separating distance a pair is pulled apart (m), and the farthest
+# one object is moved to separate a pair (m); objects then
 # floating more than _LOWER_ABOVE (m) are lowered until within _LOWER_TO (m) of what is below
 # them, _LOWER_MOVES moves each at most.
 _SEPARATION_MARGIN = 1e-4
+_SEPARATION_REACH = 5e-3
 _LOWER_ABOVE = 1e-4
 _LOWER_TO = 2e-5
 _LOWER_MOVES = 60
@@ -229,14 +231,17 @@ def _pull_apart(
     overlap: Overlap,
     tote: ToteSpec,
     cache: dict[float, Any],
-) -> int:
+) -> int | None:
     """Moves one object of an overlapping pair (``poses`` in place) the least distance along a
     direction that separates their render meshes (:func:`meshes_overlap` at
-    :data:`EDGE_SPACING`, then :data:`_SEPARATION_MARGIN` more). Directions in order, the first
-    that keeps the moved object out of the tote's floor and walls wins: the way out of the
-    deepest point (``exit - point``) for the object it lifts, the opposite way for the other,
-    straight up for the higher object (lowest vertex). ``cache``: :func:`meshes_overlap`'s,
-    by spacing. Returns the index of the object moved."""
+    :data:`EDGE_SPACING`, then :data:`_SEPARATION_MARGIN` more). Directions in order: the way
+    out of the deepest point (``exit - point``) for the object it lifts, the opposite way for
+    the other, straight up for the higher object (lowest vertex), straight up for the lower
+    one. The first move that leaves the moved object sunk no deeper than
+    :data:`SEPARATION_THRESHOLD` into the tote and every third object wins, else the move
+    that leaves it sunk least (the first of equals). ``cache``: :func:`meshes_overlap`'s, by
+    spacing. No move farther than :data:`_SEPARATION_REACH` is made. Returns the index of the
+    object moved (None: none)."""
     way = overlap.exit - overlap.point
     way = way / max(float(np.linalg.norm(way)), 1e-12)
     a, b = (overlap.a, overlap.b) if way[2] >= 0 else (overlap.b, overlap.a)
@@ -246,16 +251,40 @@ def _pull_apart(
         + poses[k, 2, 3]
         for k in (overlap.a, overlap.b)
     ]
-    high = overlap.a if lowest[0] >= lowest[1] else overlap.b
+    high, low = (overlap.a, overlap.b) if lowest[0] >= lowest[1] else (overlap.b, overlap.a)
     up = np.array([0.0, 0.0, 1.0])
-    options = ((a, b, way), (b, a, -way), (high, overlap.a + overlap.b - high, up))
+    options = ((a, b, way), (b, a, -way), (high, low, up), (low, high, up))
+    best: tuple[float, int, np.ndarray] | None = None
     for mover, other, direction in options:
         X = _separating_move(meshes[mover], poses[mover], meshes[other], poses[other],
                              direction, overlap.depth, cache)  # fmt: skip
-        if _tote_depth(meshes[mover], X, tote) <= _SEPARATION_MARGIN or direction is up:
-            poses[mover] = X
-            return int(mover)
-    raise AssertionError("unreachable: straight up is always taken")
+        if X is None:
+            continue
+        sunk = _sunk(meshes, poses, mover, X, other, tote)
+        if best is None or sunk < best[0]:
+            best = (sunk, mover, X)
+        if sunk <= SEPARATION_THRESHOLD:
+            break
+    if best is None:
+        return None
+    poses[best[1]] = best[2]
+    return best[1]
+
+
+def _sunk(
+    meshes: Sequence[Mesh], poses: np.ndarray, k: int, X: np.ndarray, skip: int, tote: ToteSpec
+) -> float:
+    """How deep (m) object ``k`` at ``X`` sinks into the tote or any object but ``skip`` (the
+    pass's measure: surface points :data:`SEPARATION_SPACING` apart, FCL depths)."""
+    sunk = _tote_depth(meshes[k], X, tote)
+    others = [j for j in range(len(meshes)) if j not in (k, skip)]
+    found = mesh_overlaps(
+        [meshes[k]] + [meshes[j] for j in others],
+        [X] + [poses[j] for j in others],
+        spacing=SEPARATION_SPACING,
+        exact=False,
+    )
+    return max([sunk] + [o.depth for o in found if 0 in (o.a, o.b)])
 
 
 def _separating_move(
@@ -266,10 +295,11 @@ def _separating_move(
     direction: np.ndarray,
     guess: float,
     cache: dict[float, Any],
-) -> np.ndarray:
+) -> np.ndarray | None:
     """``X`` moved along the unit ``direction`` by the least distance after which ``mesh`` no
     longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`; doubling from ``guess`` (m),
-    at most 5 cm, then halvings), plus :data:`_SEPARATION_MARGIN`."""
+    then halvings), plus :data:`_SEPARATION_MARGIN`; None if that is farther than
+    :data:`_SEPARATION_REACH`."""
 
     def clear(t: float, spacing: float) -> bool:
         moved = X.copy()
@@ -279,13 +309,17 @@ def _separating_move(
     # Bisection with surface points SEPARATION_SPACING apart, then with EDGE_SPACING on the
     # last stretch (a coarse point set misses at most half its spacing).
     lo, hi = 0.0, max(guess, 1e-4)
-    while not clear(hi, SEPARATION_SPACING) and hi < 0.05:
-        lo, hi = hi, 2 * hi
+    while not clear(hi, SEPARATION_SPACING):
+        if hi >= _SEPARATION_REACH:
+            return None
+        lo, hi = hi, min(2 * hi, _SEPARATION_REACH)
     for _ in range(5):
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if clear(mid, SEPARATION_SPACING) else (mid, hi)
     lo, hi = hi, hi + 0.5 * SEPARATION_SPACING
-    while not clear(hi, EDGE_SPACING) and hi < 0.05:
+    while not clear(hi, EDGE_SPACING):
+        if hi >= _SEPARATION_REACH + SEPARATION_SPACING:
+            return None
         lo, hi = hi, hi + 0.5 * SEPARATION_SPACING
     for _ in range(2):
         mid = 0.5 * (lo + hi)
