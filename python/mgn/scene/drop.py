@@ -363,12 +363,14 @@ def separate_overlaps(
     :data:`SEPARATION_SPACING` apart), at most :data:`SEPARATION_ROUNDS` rounds: each mesh
     sunk into the tote is moved out of it by the least (exact, planes); each overlapping pair,
     deepest first, is pulled apart by moving one of them the least distance that separates
-    their surfaces (tested every 0.2 mm along every edge) plus 0.1 mm, along the way out of
-    the pair's deepest point (moving the object it lifts), else the opposite way (the other
-    object), else straight up (the higher one), the first that keeps the moved object out of
-    the tote's floor and walls; then every object floating more than 0.1 mm above the
-    nearest body is lowered (lowest first) until it touches one (within 0.02 mm). Poses
-    without such overlaps are returned unchanged. Objects are moved, never turned.
+    their surfaces (tested every 0.2 mm along every edge) plus 0.1 mm, at most 5 mm, along the
+    way out of the pair's deepest point (moving the object it lifts), else the opposite way
+    (the other object), else straight up (the higher, then the lower one): the first move that
+    sinks the moved object no deeper than the threshold into the tote or a third object, else
+    the one that sinks it least (:func:`_pull_apart`); then every object floating more than
+    0.1 mm above the nearest body is lowered (lowest first) until it touches one (within
+    0.02 mm). Poses without such overlaps are returned unchanged. Objects are moved, never
+    turned.
 
     Returns:
         (N, 4, 4) poses, and the number of rounds that moved objects.
