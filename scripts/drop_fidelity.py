@@ -42,6 +42,7 @@ def main() -> None:
             "check_penetration_mm": 1e3 * check,
             "max_float_gap_mm": 1e3 * scene.stats["max_float_gap"],
             "separation_rounds": scene.stats.get("separation_rounds", 0),
+            "max_move_mm": 1e3 * scene.stats.get("separation_max_move", 0.0),
             "steps": scene.stats["steps"],
             "seconds": seconds,
         }
@@ -53,6 +54,7 @@ def main() -> None:
         "max_penetration_mm": max(r["max_penetration_mm"] for r in rows),
         "scenes_over_1mm": sum(r["max_penetration_mm"] > 1.0 for r in rows),
         "max_float_gap_mm": max(r["max_float_gap_mm"] for r in rows),
+        "max_move_mm": max(r["max_move_mm"] for r in rows),
         "mean_seconds": sum(r["seconds"] for r in rows) / len(rows),
     }
     print(json.dumps(summary), flush=True)

@@ -64,11 +64,13 @@ SEPARATION_SPACING = 1e-3
 #: Rounds of the final separation pass at most (measure, pull the pairs apart, lower).
 SEPARATION_ROUNDS = 8
 # How far beyond the least separating distance a pair is pulled apart (m), and the farthest
-# one object is moved to separate a pair (m); objects then
+# one object is moved to separate a pair (m): sideways, and straight up (an object hooked
+# through another, two cable coils, is lifted onto the strand it hooked); objects then
 # floating more than _LOWER_ABOVE (m) are lowered until within _LOWER_TO (m) of what is below
 # them, _LOWER_MOVES moves each at most.
 _SEPARATION_MARGIN = 1e-4
 _SEPARATION_REACH = 5e-3
+_LIFT_REACH = 1.5e-2
 _LOWER_ABOVE = 1e-4
 _LOWER_TO = 2e-5
 _LOWER_MOVES = 60
@@ -88,6 +90,7 @@ class _Pile:
     all_settled: bool
     max_penetration_hulls: float
     separation_rounds: int = 0
+    separation_max_move: float = 0.0
 
     @classmethod
     def of(cls, out: _core.DropResult) -> _Pile:
@@ -197,6 +200,7 @@ def _stats(
         "max_penetration_hulls": pile.max_penetration_hulls,
         "max_float_gap": float(gaps.max()) if len(gaps) else 0.0,
         "separation_rounds": pile.separation_rounds,
+        "separation_max_move": pile.separation_max_move,
         "num_dropped": num_dropped,
     }
 
@@ -240,8 +244,8 @@ def _pull_apart(
     one. The first move that leaves the moved object sunk no deeper than
     :data:`SEPARATION_THRESHOLD` into the tote and every third object wins, else the move
     that leaves it sunk least (the first of equals). ``cache``: :func:`meshes_overlap`'s, by
-    spacing. No move farther than :data:`_SEPARATION_REACH` is made. Returns the index of the
-    object moved (None: none)."""
+    spacing. No move farther than :data:`_SEPARATION_REACH` (straight up:
+    :data:`_LIFT_REACH`) is made. Returns the index of the object moved (None: none)."""
     way = overlap.exit - overlap.point
     way = way / max(float(np.linalg.norm(way)), 1e-12)
     a, b = (overlap.a, overlap.b) if way[2] >= 0 else (overlap.b, overlap.a)
@@ -256,8 +260,9 @@ def _pull_apart(
     options = ((a, b, way), (b, a, -way), (high, low, up), (low, high, up))
     best: tuple[float, int, np.ndarray] | None = None
     for mover, other, direction in options:
+        reach = _LIFT_REACH if direction is up else _SEPARATION_REACH
         X = _separating_move(meshes[mover], poses[mover], meshes[other], poses[other],
-                             direction, overlap.depth, cache)  # fmt: skip
+                             direction, overlap.depth, reach, cache)  # fmt: skip
         if X is None:
             continue
         sunk = _sunk(meshes, poses, mover, X, other, tote)
@@ -294,12 +299,13 @@ def _separating_move(
     Y: np.ndarray,
     direction: np.ndarray,
     guess: float,
+    reach: float,
     cache: dict[float, Any],
 ) -> np.ndarray | None:
     """``X`` moved along the unit ``direction`` by the least distance after which ``mesh`` no
     longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`; doubling from ``guess`` (m),
-    then halvings), plus :data:`_SEPARATION_MARGIN`; None if that is farther than
-    :data:`_SEPARATION_REACH`."""
+    then halvings), plus :data:`_SEPARATION_MARGIN`; None if that is farther than ``reach``
+    (m)."""
 
     def clear(t: float, spacing: float) -> bool:
         moved = X.copy()
@@ -310,15 +316,15 @@ def _separating_move(
     # last stretch (a coarse point set misses at most half its spacing).
     lo, hi = 0.0, max(guess, 1e-4)
     while not clear(hi, SEPARATION_SPACING):
-        if hi >= _SEPARATION_REACH:
+        if hi >= reach:
             return None
-        lo, hi = hi, min(2 * hi, _SEPARATION_REACH)
+        lo, hi = hi, min(2 * hi, reach)
     for _ in range(5):
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if clear(mid, SEPARATION_SPACING) else (mid, hi)
     lo, hi = hi, hi + 0.5 * SEPARATION_SPACING
     while not clear(hi, EDGE_SPACING):
-        if hi >= _SEPARATION_REACH + SEPARATION_SPACING:
+        if hi >= reach + SEPARATION_SPACING:
             return None
         lo, hi = hi, hi + 0.5 * SEPARATION_SPACING
     for _ in range(2):
@@ -363,14 +369,14 @@ def separate_overlaps(
     :data:`SEPARATION_SPACING` apart), at most :data:`SEPARATION_ROUNDS` rounds: each mesh
     sunk into the tote is moved out of it by the least (exact, planes); each overlapping pair,
     deepest first, is pulled apart by moving one of them the least distance that separates
-    their surfaces (tested every 0.2 mm along every edge) plus 0.1 mm, at most 5 mm, along the
-    way out of the pair's deepest point (moving the object it lifts), else the opposite way
-    (the other object), else straight up (the higher, then the lower one): the first move that
-    sinks the moved object no deeper than the threshold into the tote or a third object, else
-    the one that sinks it least (:func:`_pull_apart`); then every object floating more than
-    0.1 mm above the nearest body is lowered (lowest first) until it touches one (within
-    0.02 mm). Poses without such overlaps are returned unchanged. Objects are moved, never
-    turned.
+    their surfaces (tested every 0.2 mm along every edge) plus 0.1 mm, along the way out of the
+    pair's deepest point (moving the object it lifts; at most 5 mm), else the opposite way (the
+    other object; 5 mm), else straight up (the higher, then the lower one; 15 mm): the first
+    move that sinks the moved object no deeper than the threshold into the tote or a third
+    object, else the one that sinks it least (:func:`_pull_apart`); then every object floating
+    more than 0.1 mm above the nearest body is lowered (lowest first) until it touches one
+    (within 0.02 mm). Poses without such overlaps are returned unchanged. Objects are moved,
+    never turned.
 
     Returns:
         (N, 4, 4) poses, and the number of rounds that moved objects.
@@ -413,6 +419,9 @@ def _separate(
     poses, rounds = separate_overlaps(
         [meshes[objects[int(k)].name] for k in kept], list(pile.X_WO[kept]), tote
     )
+    if len(kept):
+        moved = np.linalg.norm(poses[:, :3, 3] - pile.X_WO[kept][:, :3, 3], axis=1)
+        pile.separation_max_move = float(moved.max())
     pile.X_WO[kept] = poses
     pile.separation_rounds = rounds
     return pile

@@ -270,7 +270,8 @@ class Scene:
             max_penetration_hulls (m, of the simulated hulls), max_float_gap (m, of the render
             meshes: the largest clearance of an object to its nearest body, tote or object),
             separation_rounds (rounds of the drop's final separation pass that moved objects,
-            :func:`mgn.scene.drop.separate_overlaps`), num_dropped.
+            :func:`mgn.scene.drop.separate_overlaps`), separation_max_move (m, the farthest it
+            moved an object), num_dropped.
     """
 
     instances: tuple[SceneInstance, ...]
