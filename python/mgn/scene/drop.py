@@ -241,9 +241,11 @@ def _pull_apart(
     :data:`EDGE_SPACING`, then :data:`_SEPARATION_MARGIN` more). Directions in order: the way
     out of the deepest point (``exit - point``) for the object it lifts, the opposite way for
     the other, straight up for the higher object (lowest vertex), straight up for the lower
-    one. The first move that leaves the moved object sunk no deeper than
-    :data:`SEPARATION_THRESHOLD` into the tote and every third object wins, else the move
-    that leaves it sunk least (the first of equals). ``cache``: :func:`meshes_overlap`'s, by
+    one. "Sunk": how deep the moved object then lies in the tote or any third object. The
+    first move no longer than :data:`_SEPARATION_REACH` that sinks it no deeper than
+    :data:`SEPARATION_THRESHOLD` wins; else the short move that sinks it least, if less than
+    this pair's depth (progress, the next round goes on); else the first clean move (a lift up
+    to :data:`_LIFT_REACH`); else the least sinking move. ``cache``: :func:`meshes_overlap`'s, by
     spacing. No move farther than :data:`_SEPARATION_REACH` (straight up:
     :data:`_LIFT_REACH`) is made. Returns the index of the object moved (None: none)."""
     way = overlap.exit - overlap.point
@@ -258,7 +260,7 @@ def _pull_apart(
     high, low = (overlap.a, overlap.b) if lowest[0] >= lowest[1] else (overlap.b, overlap.a)
     up = np.array([0.0, 0.0, 1.0])
     options = ((a, b, way), (b, a, -way), (high, low, up), (low, high, up))
-    best: tuple[float, int, np.ndarray] | None = None
+    moves: list[tuple[float, float, int, np.ndarray]] = []  # (sunk, distance, mover, X)
     for mover, other, direction in options:
         reach = _LIFT_REACH if direction is up else _SEPARATION_REACH
         X = _separating_move(meshes[mover], poses[mover], meshes[other], poses[other],
@@ -266,12 +268,24 @@ def _pull_apart(
         if X is None:
             continue
         sunk = _sunk(meshes, poses, mover, X, other, tote)
-        if best is None or sunk < best[0]:
-            best = (sunk, mover, X)
-        if sunk <= SEPARATION_THRESHOLD:
+        distance = float(np.linalg.norm(X[:3, 3] - poses[mover, :3, 3]))
+        moves.append((sunk, distance, mover, X))
+        if sunk <= SEPARATION_THRESHOLD and distance <= _SEPARATION_REACH:
             break
-    if best is None:
+    if not moves:
         return None
+    # Clean and short; else short and making progress (sinks the mover less deep than this
+    # pair overlapped); else clean (a long lift); else the least sinking (the first of equals).
+    short = [m for m in moves if m[1] <= _SEPARATION_REACH]
+    clean = [m for m in moves if m[0] <= SEPARATION_THRESHOLD]
+    progress = [m for m in short if m[0] < overlap.depth]
+    pick = (
+        [m for m in short if m[0] <= SEPARATION_THRESHOLD]
+        or sorted(progress, key=lambda m: m[0])[:1]
+        or clean
+        or sorted(moves, key=lambda m: m[0])[:1]
+    )
+    best = (pick[0][0], pick[0][2], pick[0][3])
     poses[best[1]] = best[2]
     return best[1]
 
