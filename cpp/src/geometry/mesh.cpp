@@ -182,6 +182,8 @@ EdgeTable edge_table(const std::vector<std::int32_t>& corner_id, std::int64_t nf
   t.corner_edge.assign(static_cast<std::size_t>(nf) * 3, -1);
   std::unordered_map<std::uint64_t, std::int32_t> index;
   index.reserve(static_cast<std::size_t>(nf) * 3);
+  for (auto* v : {&t.forward, &t.backward}) v->reserve(static_cast<std::size_t>(nf) * 3 / 2 + 3);
+  for (auto* v : {&t.face0, &t.face1}) v->reserve(static_cast<std::size_t>(nf) * 3 / 2 + 3);
   for (std::int64_t f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k) {
       const std::int32_t p = corner_id[3 * f + k], q = corner_id[3 * f + (k + 1) % 3];
