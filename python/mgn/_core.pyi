@@ -256,7 +256,7 @@ class Material:
 
 class MeshReport:
     """
-    Validation report of a mesh (topology after welding by position).
+    Validation report of a mesh (topology after welding by position and splitting where closed pieces touch along an edge or at a vertex).
     """
     def __repr__(self) -> str: ...
     @property
@@ -273,13 +273,26 @@ class MeshReport:
     @property
     def num_boundary_edges(self) -> int: ...
     @property
-    def num_components(self) -> int: ...
+    def num_components(self) -> int:
+        """
+        connected components (by vertex, after splits)
+        """
     @property
     def num_faces(self) -> int: ...
     @property
     def num_misoriented_edges(self) -> int: ...
     @property
     def num_nonmanifold_edges(self) -> int: ...
+    @property
+    def num_split_edges(self) -> int:
+        """
+        welded edges of more than two faces split between closed pieces that touch there (each piece then a closed 2-manifold)
+        """
+    @property
+    def num_split_vertices(self) -> int:
+        """
+        welded vertices split between closed pieces that touch there
+        """
     @property
     def num_vertices(self) -> int: ...
     @property
