@@ -27,6 +27,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from mgn.errors import InvalidArgumentError
 from mgn.hardware import ParallelJawGripper
 from mgn.io.bop import DEFAULT_SPLIT, export_bop_scene, write_bop_models
 from mgn.io.dataset import SceneFolder
@@ -53,7 +54,7 @@ def _scene_target(out: Path, fmt: str, index: int) -> Path:
         return out / EXPORT_FOLDERS["bop"] / DEFAULT_SPLIT / f"{index:06d}"
     if fmt == "graspnet":
         return out / EXPORT_FOLDERS["graspnet"] / "scenes" / f"scene_{index:04d}" / DEFAULT_CAMERA
-    raise ValueError(f"no export layout {fmt!r}")
+    raise InvalidArgumentError(f"output.formats: no export layout {fmt!r}")
 
 
 def missing_exports(out: Path, index: int, formats: Sequence[str]) -> list[str]:
