@@ -20,6 +20,7 @@ from conftest import SMALL_DATASET_CONFIG
 from mgn.errors import IoError
 from mgn.io.bop import export_bop, validate_bop
 from mgn.io.graspnet import export_graspnet
+from mgn.io.validate import validate_dataset
 from mgn.pipeline import generate
 from mgn.pipeline.config import ConfigError, dump_config, load_config
 
@@ -69,6 +70,7 @@ def test_exports_equal_mgn_export(runs: dict[str, Path], tmp_path: Path) -> None
         assert sorted(made) == sorted(again), name
         assert all(made[k] == again[k] for k in made), name
     assert validate_bop(ds / "bop") == []
+    assert validate_dataset(ds) == []  # the export folders do not disturb the mgn check
     assert not list(ds.rglob(".*"))  # no temporary leftovers
 
 
