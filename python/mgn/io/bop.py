@@ -393,7 +393,8 @@ def _write_scene(scene: SceneFolder, target: Path, depth_scale: float) -> None:
         cams: dict[str, Any] = {}
         gts: dict[str, Any] = {}
         infos: dict[str, Any] = {}
-        for view in scene.views():
+        for v in scene.view_ids:  # one View (and its cached arrays) alive at a time
+            view = scene.view(v)
             key = str(view.index)
             if key not in gt:
                 raise IoError(f"{scene.folder / 'scene_gt.json'}: no entry for view {key}")
@@ -435,7 +436,7 @@ def export_bop_scene(
     if written:
         _write_scene(scene, target, depth_scale)
     if not (root / "camera.json").exists():
-        intr = scene.views()[0].intrinsics
+        intr = scene.view(scene.view_ids[0]).intrinsics
         cam = {"cx": intr.cx, "cy": intr.cy, "depth_scale": depth_scale, "fx": intr.fx,
                "fy": intr.fy, "height": intr.height, "width": intr.width}  # fmt: skip
         atomic_write_text(root / "camera.json", _dump(cam))

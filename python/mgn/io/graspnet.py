@@ -566,7 +566,8 @@ def export_graspnet_scene(
     tally = _new_counts()
     with atomic_dir(target) as tmp:
         cams = set()
-        for view in scene.views():
+        for v in scene.view_ids:  # one View (and its cached arrays) alive at a time
+            view = scene.view(v)
             _write_view(view, tmp, options, tally)
             cams.add(view.intrinsics.K_opencv.tobytes())
         if len(cams) == 1:
