@@ -291,11 +291,12 @@ def write_bop_models(
 def _bbox(mask: np.ndarray) -> list[int]:
     """(x, y, width, height) of a mask as the BOP toolkit computes it (width = x_max - x_min,
     so a one-pixel mask has width 0); [-1, -1, -1, -1] for an empty mask."""
-    ys, xs = np.nonzero(mask)
-    if len(xs) == 0:
+    cols = np.flatnonzero(mask.any(axis=0))
+    if len(cols) == 0:
         return [-1, -1, -1, -1]
-    x0, y0 = int(xs.min()), int(ys.min())
-    return [x0, y0, int(xs.max()) - x0, int(ys.max()) - y0]
+    rows = np.flatnonzero(mask.any(axis=1))
+    x0, y0 = int(cols[0]), int(rows[0])
+    return [x0, y0, int(cols[-1]) - x0, int(rows[-1]) - y0]
 
 
 def _K(view: View) -> list[float]:
