@@ -15,7 +15,8 @@ renderer (``renderer.create_renderer``; a canvas 3x the image, as ``calc_gt_info
 depths into distances (``misc.depth_im_to_dist_im_fast``) and estimates the visible mask from
 the export's depth image (``visibility.estimate_visib_mask_gt``, BOP19 mode, tolerance
 ``--delta`` mm). It compares the toolkit's results with mgn's files: the rendered silhouette
-with ``mask/`` (IoU), the toolkit's visible mask with ``mask_visib/`` (IoU), its
+with ``mask/`` (IoU), the toolkit's visible mask with ``mask_visib/`` (IoU, the share of
+each outside the other, and why the toolkit's extra pixels are visible to it), its
 ``visib_fract``, ``px_count_*`` and boxes with ``scene_gt_info.json``, the depth it renders
 with the export's depth on the visible pixels; and draws the first ``--vis`` images of each
 scene with ``visualization.vis_object_poses`` (the models in their annotated poses over the
@@ -93,7 +94,15 @@ def main(argv: list[str] | None = None) -> int:
         "bbox_obj_max_abs_diff_px": [],
         "px_count_valid_rel_diff": [],
         "depth_abs_diff_mm_median": [],
+        "toolkit_visib_outside_mask_visib": [],
+        "mask_visib_outside_toolkit_visib": [],
     }
+    # Why the toolkit's visible pixels outside mgn's are visible to it: no depth value there
+    # (BOP19 counts those visible), or the model lies at most delta behind the surface seen.
+    extra = {"pixels": 0, "no_depth": 0, "within_delta_behind": 0}
+    # Pixels of an image inside some toolkit visible mask, and inside two or more (mgn's
+    # visible masks never overlap: one instance id per pixel).
+    overlap = {"pixels": 0, "in_two_or_more": 0}
     truncated = 0
     counts = {"scenes": 0, "images": 0, "annotations": 0}
     for scene in sorted(q for q in (a.bop / a.split).iterdir() if q.name.isdigit()):
@@ -108,6 +117,7 @@ def main(argv: list[str] | None = None) -> int:
             depth = inout.load_depth(scene / "depth" / f"{im_id:06d}.png")
             depth *= cams[im_id]["depth_scale"]  # mm
             dist_im = misc.depth_im_to_dist_im_fast(depth, K)
+            claimed = np.zeros((h, w), np.int32)  # toolkit visible masks covering each pixel
             for gt_id, gt in enumerate(gts[im_id]):
                 counts["annotations"] += 1
                 large = ren.render_object(gt["obj_id"], gt["cam_R_m2c"], gt["cam_t_m2c"],
@@ -144,11 +154,24 @@ def main(argv: list[str] | None = None) -> int:
                     found["bbox_obj_max_abs_diff_px"].append(
                         float(np.abs(np.subtract(bb, mine["bbox_obj"])).max())
                     )
+                claimed += visib
+                out_t = visib & ~ours_visib
+                found["toolkit_visib_outside_mask_visib"].append(
+                    int(out_t.sum()) / max(int(visib.sum()), 1)
+                )
+                found["mask_visib_outside_toolkit_visib"].append(
+                    int((ours_visib & ~visib).sum()) / max(int(ours_visib.sum()), 1)
+                )
+                extra["pixels"] += int(out_t.sum())
+                extra["no_depth"] += int((out_t & (dist_im == 0)).sum())
+                extra["within_delta_behind"] += int((out_t & (dist_im > 0)).sum())
                 both = ours_visib & (depth > 0) & (depth_gt > 0)
                 if both.any():
                     found["depth_abs_diff_mm_median"].append(
                         float(np.median(np.abs(depth[both] - depth_gt[both])))
                     )
+            overlap["pixels"] += int((claimed > 0).sum())
+            overlap["in_two_or_more"] += int((claimed > 1).sum())
             if vis_ren is not None and k < a.vis:
                 rgb = inout.load_im(scene / "rgb" / f"{im_id:06d}.png")[:, :, :3]
                 poses = [{"obj_id": g["obj_id"], "R": g["cam_R_m2c"], "t": g["cam_t_m2c"],
@@ -169,6 +192,8 @@ def main(argv: list[str] | None = None) -> int:
         "delta_mm": a.delta,
         **counts,
         "truncated_annotations": truncated,
+        "toolkit_extra_visible_pixels": extra,
+        "toolkit_visible_masks_overlap": overlap,
         **{k: _stats(v) for k, v in found.items()},
         "mask_visib_iou_below_0.9": int(sum(x < 0.9 for x in found["mask_visib_iou"])),
         "mask_iou_below_0.99": int(sum(x < 0.99 for x in found["mask_iou"])),
