@@ -218,3 +218,19 @@ def test_config_dump_lists_the_formats() -> None:
     assert dataclasses.asdict(cfg.output) == {"formats": tuple(ALL)}
     assert cfg.output.exports == ("bop", "graspnet")
     assert load_config(yaml.safe_load(dump_config(cfg))) == cfg  # the dump round-trips
+
+
+def test_collected_scenes_are_exported_by_the_main_process(
+    runs: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With ``collect`` the workers return the scene files and this process writes them and the
+    exports: the same bytes as the workers' own exports."""
+    monkeypatch.setenv("MGN_CACHE_DIR", str(runs["exported"].parent / "cache"))
+    ds = tmp_path / "ds"
+    report = generate(ds, 1, config=load_config(_config(ALL)), seed=SEED, collect=True,
+                      progress=False)  # fmt: skip
+    assert report.complete
+    assert set(report.results[0].times) >= {"export: bop", "export: graspnet"}
+    ref = runs["exported"]
+    for sub in ("bop/train_pbr/000000", "graspnet/scenes/scene_0000"):
+        assert _tree(ds / sub) == _tree(ref / sub), sub
