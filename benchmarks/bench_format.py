@@ -11,8 +11,14 @@ the scene folder (views, `scene_gt.json`, `scene.json`), also split by file kind
 carry the scene's CoM parameters and the camera pose the pipeline had, so `com_heatmap` is
 stored as when the scene was generated (its residual from the prediction).
 
-Run alone: `python -m benchmarks.bench_format [--quick] [--dataset DIR]` (quick: 10 objects,
-5 views at 600 px; `--dataset`: measure scene 0 of an existing dataset instead of generating).
+The BOP and GraspNet exports of the scene (``mgn.io.bop.export_bop_scene``,
+``mgn.io.graspnet.export_graspnet_scene``: what ``output.formats`` adds per scene) are timed
+with their peak traced memory and checked against ``mgn export`` of the same scene, beside
+BlenderProc's published BOP-writer figure (not measured: no Blender here).
+
+Run alone: `python -m benchmarks.bench_format [--quick] [--dataset DIR] [--only-exports]`
+(quick: 10 objects, 5 views at 600 px; `--dataset`: measure scene 0 of an existing dataset
+instead of generating).
 """
 
 from __future__ import annotations
@@ -225,6 +231,99 @@ def _coco_row(ds_root: Path, n_views: int, size: int, objects: int) -> Row:
     return row
 
 
+#: BlenderProc's BOP writer, as its release notes publish it (not measured here).
+BLENDERPROC_BOP_WRITER = (
+    "published, not measured: BlenderProc 2.7 release notes, BOP writer for 300 objects 60 s "
+    "-> 12 s on 8 cores (its masks and scene_gt_info rendered from the models; mgn reads its "
+    "own masks)"
+)
+
+
+def _measure(fn: Callable[[], Any]) -> tuple[float, float, float]:
+    """(wall s, CPU s, peak traced memory in bytes) of one call."""
+    import tracemalloc
+
+    tracemalloc.start()
+    t, c = time.perf_counter(), time.process_time()
+    fn()
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return wall, cpu, peak
+
+
+def _export_rows(ds_root: Path, n_views: int, size: int, objects: int) -> list[Row]:
+    """Seconds and peak memory of one scene's BOP and GraspNet exports (what ``mgn generate``
+    with ``output.formats: [mgn, bop, graspnet]`` adds per scene), beside BlenderProc's
+    published BOP-writer figure; the files checked against ``mgn export`` of the dataset."""
+    from mgn.io.bop import export_bop, export_bop_scene, validate_bop, write_bop_models
+    from mgn.io.dataset import Dataset
+    from mgn.io.graspnet import (
+        export_graspnet,
+        export_graspnet_scene,
+        graspnet_gripper,
+        gripper_of,
+    )
+
+    ds = Dataset(ds_root)
+    scene = ds.scene(0)
+    gripper = graspnet_gripper(gripper_of(ds))
+    out = ds_root.parent / "exports"
+    shutil.rmtree(out, ignore_errors=True)
+    what = f"one scene ({n_views} views, {objects} objects at {size}x{size})"
+    models = _measure(lambda: write_bop_models(ds, out / "bop"))
+    n_models = len(ds.model_folders())
+    sides = {
+        "bop": lambda: export_bop_scene(scene, out / "bop"),
+        "graspnet": lambda: export_graspnet_scene(scene, out / "graspnet", gripper),
+    }
+    rows = []
+    for kind, fn in sides.items():
+        wall, cpu, peak = _measure(fn)
+        again = ds_root.parent / f"again_{kind}"
+        shutil.rmtree(again, ignore_errors=True)
+        if kind == "bop":
+            export_bop(ds_root, again, scenes=[0])
+            ok = validate_bop(out / "bop") == []
+        else:
+            export_graspnet(ds_root, again, scenes=[0])
+            ok = True
+        files = sorted(p for p in (out / kind).rglob("*") if p.is_file())
+        ok &= all(p.read_bytes() == (again / p.relative_to(out / kind)).read_bytes() for p in files)
+        nbytes = sum(p.stat().st_size for p in files)
+        row = Row(
+            group="dataset files",
+            case=f"{'BOP' if kind == 'bop' else 'GraspNet'} export of {what}",
+            n=n_views,
+            unit="views/s",
+            peer_name="BlenderProc BOP writer" if kind == "bop" else "—",
+            peer_status=BLENDERPROC_BOP_WRITER if kind == "bop" else "no peer",
+        )
+        row.mgn[1] = Timing(wall=[wall], cpu=[cpu])
+        row.agreement = (
+            ("valid BOP, " if kind == "bop" else "") + "same bytes as mgn export"
+            if ok
+            else "DIFFERENT files from mgn export"
+        )
+        row.agreement_ok = ok
+        row.notes = [
+            f"{wall:.1f} s wall, {cpu:.1f} s CPU per scene ({1e3 * wall / n_views:.0f} ms/view); "
+            f"peak traced memory {peak / 2**20:.0f} MiB; {nbytes / 1e6:.1f} MB, "
+            f"{len(files)} files",
+            f"load average {load_average()}",
+        ]
+        if kind == "bop":
+            row.notes.insert(
+                1,
+                f"models/ (once per dataset): {n_models} models in {models[0]:.1f} s wall, "
+                f"peak {models[2] / 2**20:.0f} MiB",
+            )
+        rows.append(row)
+        shutil.rmtree(again, ignore_errors=True)
+    shutil.rmtree(out, ignore_errors=True)
+    return rows
+
+
 def _kinds(folder: Path) -> dict[str, int]:
     """Bytes per file kind (the file name without its view index) of a folder."""
     out: dict[str, int] = {}
@@ -250,6 +349,7 @@ def run(
     log: Callable[[str], None],
     dataset: Path | None = None,
     coco: bool = True,
+    exports: bool = True,
 ) -> list[Row]:
     from .bench_pipeline import bench_config
 
@@ -341,6 +441,8 @@ def run(
     rows = [row]
     if coco:
         rows.append(_coco_row(ds_root, n_views, size, cfg["objects"]["count"]))
+    if exports:
+        rows += _export_rows(ds_root, n_views, size, cfg["objects"]["count"])
     shutil.rmtree(root, ignore_errors=True)
     return rows
 
@@ -352,12 +454,25 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--quick", action="store_true")
     p.add_argument("--dataset", type=Path, default=None, help="measure scene 0 of this dataset")
     p.add_argument("--no-coco", action="store_true", help="skip the COCO export row")
+    p.add_argument("--no-exports", action="store_true", help="skip the BOP / GraspNet rows")
+    p.add_argument("--only-exports", action="store_true",
+                   help="only the BOP / GraspNet rows (of --dataset's scene 0)")  # fmt: skip
     a = p.parse_args(sys.argv[1:] if argv is None else argv)
     from .common import import_mgn
 
     mgn, status = import_mgn()
-    rows = run(quick=a.quick, repeats=1, mgn=mgn, mgn_status=status, log=print, dataset=a.dataset,
-               coco=not a.no_coco)  # fmt: skip
+    if a.only_exports:
+        if a.dataset is None or mgn is None:
+            p.error("--only-exports needs --dataset and a built mgn")
+        from mgn.io.dataset import Dataset
+
+        scene = Dataset(a.dataset).scene(0)
+        objects = len((scene.scene_json or {}).get("instances", []))
+        size = int(scene.views()[0].intrinsics.width)
+        rows = _export_rows(a.dataset, len(scene.view_ids), size, objects)
+    else:
+        rows = run(quick=a.quick, repeats=1, mgn=mgn, mgn_status=status, log=print,
+                   dataset=a.dataset, coco=not a.no_coco, exports=not a.no_exports)  # fmt: skip
     for row in rows:
         print(row.case, "|", row.agreement, "|", "\n  ".join(row.notes) or row.mgn_status)
     return 0

@@ -66,13 +66,20 @@ void bind_geometry(py::module_& m) {
       });
 
   py::class_<MeshReport>(m, "MeshReport",
-                         "Validation report of a mesh (topology after welding by position).")
+                         "Validation report of a mesh (topology after welding by position and "
+                         "splitting where closed pieces touch along an edge or at a vertex).")
       .def_readonly("num_vertices", &MeshReport::num_vertices)
       .def_readonly("num_faces", &MeshReport::num_faces)
       .def_readonly("num_boundary_edges", &MeshReport::num_boundary_edges)
       .def_readonly("num_nonmanifold_edges", &MeshReport::num_nonmanifold_edges)
       .def_readonly("num_misoriented_edges", &MeshReport::num_misoriented_edges)
-      .def_readonly("num_components", &MeshReport::num_components)
+      .def_readonly("num_components", &MeshReport::num_components,
+                    "connected components (by vertex, after splits)")
+      .def_readonly("num_split_edges", &MeshReport::num_split_edges,
+                    "welded edges of more than two faces split between closed pieces that touch "
+                    "there (each piece then a closed 2-manifold)")
+      .def_readonly("num_split_vertices", &MeshReport::num_split_vertices,
+                    "welded vertices split between closed pieces that touch there")
       .def_readonly("is_watertight", &MeshReport::is_watertight)
       .def_readonly("is_winding_consistent", &MeshReport::is_winding_consistent)
       .def_readonly("is_outward", &MeshReport::is_outward)
@@ -83,7 +90,12 @@ void bind_geometry(py::module_& m) {
                ", watertight=" + (r.is_watertight ? "True" : "False") +
                ", winding_consistent=" + (r.is_winding_consistent ? "True" : "False") +
                ", outward=" + (r.is_outward ? "True" : "False") +
-               ", boundary_edges=" + std::to_string(r.num_boundary_edges) + ")";
+               ", boundary_edges=" + std::to_string(r.num_boundary_edges) +
+               (r.num_split_edges + r.num_split_vertices > 0
+                    ? ", split_edges=" + std::to_string(r.num_split_edges) +
+                          ", split_vertices=" + std::to_string(r.num_split_vertices)
+                    : std::string()) +
+               ")";
       });
 
   py::class_<MassProperties>(m, "MassProperties", "Mass properties in the mesh frame (SI units).")

@@ -4,6 +4,7 @@
 #include <mgn/core/parallel.hpp>
 #include <mgn/render/camera.hpp>
 #include <mgn/render/depth_sensor.hpp>
+#include <mgn/render/half_resolution.hpp>
 #include <mgn/render/renderer.hpp>
 
 #include <limits>
@@ -29,6 +30,29 @@ struct RenderArrays {
 struct DepthArrays {
   py::object depth, depth_ideal, valid;
 };
+
+/// An (H, W, C) float32 argument (None: an empty view). `keep` holds the converted array while
+/// the view is used.
+ImageView image_arg(const py::handle& obj, const char* name, CArray<float>& keep) {
+  if (obj.is_none()) return {};
+  try {
+    keep = py::cast<CArray<float>>(obj);
+  } catch (const py::cast_error&) {
+    throw_error<InvalidArgument>(name, ": expected a numeric (H, W, C) array");
+  }
+  if (keep.ndim() != 3 || keep.shape(0) == 0 || keep.shape(1) == 0 || keep.shape(2) == 0)
+    throw_error<InvalidArgument>(name, ": expected an (H, W, C) array with H, W, C > 0, got shape ",
+                                 shape_of(keep));
+  return {keep.data(), static_cast<int>(keep.shape(0)), static_cast<int>(keep.shape(1)),
+          static_cast<int>(keep.shape(2))};
+}
+
+/// Moves a FloatImage into an (H, W, C) float32 array (no copy).
+py::array image_array(FloatImage&& img) {
+  auto* heap = new std::vector<float>(std::move(img.data));
+  py::capsule owner(heap, [](void* p) { delete static_cast<std::vector<float>*>(p); });
+  return py::array_t<float>({img.height, img.width, img.channels}, heap->data(), owner);
+}
 
 }  // namespace
 
@@ -297,6 +321,91 @@ void bind_render(py::module_& m) {
       },
       py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
       py::arg("params"), py::arg("seed"), py::arg("num_threads") = ParallelOptions{}.num_threads);
+
+  // Half-resolution denoise arithmetic (mgn/render/half_resolution.hpp).
+  m.def(
+      "block_means_2x2",
+      [](const py::handle& image, int num_threads) {
+        CArray<float> keep;
+        const ImageView img = image_arg(image, "block_means_2x2: image", keep);
+        if (img.empty()) throw_error<InvalidArgument>("block_means_2x2: image must not be None");
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = block_means_2x2(img, num_threads);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("image"), py::arg("num_threads") = 0,
+      "Means of the 2 x 2 pixel blocks of an (H, W, C) float32 image (an odd last row or column "
+      "repeated): (ceil(H/2), ceil(W/2), C).");
+  m.def(
+      "double_blocks",
+      [](const py::handle& blocks, int height, int width, int num_threads) {
+        CArray<float> keep;
+        const ImageView img = image_arg(blocks, "double_blocks: blocks", keep);
+        if (img.empty()) throw_error<InvalidArgument>("double_blocks: blocks must not be None");
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = double_blocks(img, height, width, num_threads);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("blocks"), py::arg("height"), py::arg("width"), py::arg("num_threads") = 0,
+      "Bilinear doubling of a 2 x 2 block image to (height, width), block centres at the centres "
+      "of their pixels, border blocks repeated.");
+  m.def(
+      "gaussian_3x3",
+      [](const py::handle& image, double sigma, int num_threads) {
+        CArray<float> keep;
+        const ImageView img = image_arg(image, "gaussian_3x3: image", keep);
+        if (img.empty()) throw_error<InvalidArgument>("gaussian_3x3: image must not be None");
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = gaussian_3x3(img, sigma, num_threads);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("image"), py::arg("sigma") = 0.5, py::arg("num_threads") = 0,
+      "Separable 3 x 3 Gaussian (sigma in pixels) of an (H, W, C) float32 image, border pixels "
+      "repeated.");
+  m.def(
+      "restore_half_resolution",
+      [](const py::handle& denoised, int height, int width, const py::handle& albedo,
+         const py::handle& albedo_blocks, const py::handle& normal, const py::handle& normal_blocks,
+         float albedo_floor, double edge_cos_lo, double edge_cos_hi, int num_threads) {
+        CArray<float> k0, k1, k2, k3, k4;
+        const ImageView den = image_arg(denoised, "restore_half_resolution: denoised", k0);
+        if (den.empty())
+          throw_error<InvalidArgument>("restore_half_resolution: denoised must not be None");
+        const ImageView a = image_arg(albedo, "restore_half_resolution: albedo", k1);
+        const ImageView ab = image_arg(albedo_blocks, "restore_half_resolution: albedo_blocks", k2);
+        const ImageView n = image_arg(normal, "restore_half_resolution: normal", k3);
+        const ImageView nb = image_arg(normal_blocks, "restore_half_resolution: normal_blocks", k4);
+        HalfRestoreOptions opt;
+        opt.albedo_floor = albedo_floor;
+        opt.edge_cos_lo = edge_cos_lo;
+        opt.edge_cos_hi = edge_cos_hi;
+        opt.num_threads = num_threads;
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = restore_half_resolution(den, height, width, a, ab, n, nb, opt);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("denoised"), py::arg("height"), py::arg("width"), py::arg("albedo") = py::none(),
+      py::arg("albedo_blocks") = py::none(), py::arg("normal") = py::none(),
+      py::arg("normal_blocks") = py::none(),
+      py::arg("albedo_floor") = HalfRestoreOptions{}.albedo_floor,
+      py::arg("edge_cos_lo") = HalfRestoreOptions{}.edge_cos_lo,
+      py::arg("edge_cos_hi") = HalfRestoreOptions{}.edge_cos_hi, py::arg("num_threads") = 0,
+      "Full-size image of a half-resolution denoise: the denoised blocks doubled, times the "
+      "albedo ratio max(a, floor) / max(double(albedo_blocks), floor) faded to 1 where the "
+      "normal turns away from double(normal_blocks) (cosine edge_cos_lo..edge_cos_hi); clamped "
+      "to >= 0.");
 }
 
 }  // namespace mgn::py_bind

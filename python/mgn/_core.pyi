@@ -78,6 +78,7 @@ __all__: list[str] = [
     "ViewLabelArrays",
     "ViewLabelModel",
     "apply_depth_sensor",
+    "block_means_2x2",
     "build_info",
     "calibrate_cup",
     "camera_rays",
@@ -91,7 +92,9 @@ __all__: list[str] = [
     "convex_hull",
     "develop_radiance",
     "distance",
+    "double_blocks",
     "drop_objects",
+    "gaussian_3x3",
     "gripper_meshes",
     "hand_poses",
     "hemisphere_rig",
@@ -107,6 +110,7 @@ __all__: list[str] = [
     "pj_wrench_scores",
     "predict_experiments",
     "resolve_num_threads",
+    "restore_half_resolution",
     "sample_surface",
     "shake_test",
     "shake_trajectory",
@@ -252,7 +256,7 @@ class Material:
 
 class MeshReport:
     """
-    Validation report of a mesh (topology after welding by position).
+    Validation report of a mesh (topology after welding by position and splitting where closed pieces touch along an edge or at a vertex).
     """
     def __repr__(self) -> str: ...
     @property
@@ -269,13 +273,26 @@ class MeshReport:
     @property
     def num_boundary_edges(self) -> int: ...
     @property
-    def num_components(self) -> int: ...
+    def num_components(self) -> int:
+        """
+        connected components (by vertex, after splits)
+        """
     @property
     def num_faces(self) -> int: ...
     @property
     def num_misoriented_edges(self) -> int: ...
     @property
     def num_nonmanifold_edges(self) -> int: ...
+    @property
+    def num_split_edges(self) -> int:
+        """
+        welded edges of more than two faces split between closed pieces that touch there (each piece then a closed 2-manifold)
+        """
+    @property
+    def num_split_vertices(self) -> int:
+        """
+        welded vertices split between closed pieces that touch there
+        """
     @property
     def num_vertices(self) -> int: ...
     @property
@@ -2596,6 +2613,13 @@ def apply_depth_sensor(
     seed: typing.SupportsInt | typing.SupportsIndex,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> DepthSensorResult: ...
+def block_means_2x2(
+    image: typing.Any, num_threads: typing.SupportsInt | typing.SupportsIndex = 0
+) -> numpy.ndarray:
+    """
+    Means of the 2 x 2 pixel blocks of an (H, W, C) float32 image (an odd last row or column repeated): (ceil(H/2), ceil(W/2), C).
+    """
+
 def build_info() -> list[tuple[str, str]]:
     """
     (library, version) pairs for mgn and every library the core was built against.
@@ -2696,6 +2720,16 @@ def distance(
     abs_err: typing.SupportsFloat | typing.SupportsIndex = 0.0,
     num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
 ) -> DistanceResult: ...
+def double_blocks(
+    blocks: typing.Any,
+    height: typing.SupportsInt | typing.SupportsIndex,
+    width: typing.SupportsInt | typing.SupportsIndex,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+) -> numpy.ndarray:
+    """
+    Bilinear doubling of a 2 x 2 block image to (height, width), block centres at the centres of their pixels, border blocks repeated.
+    """
+
 def drop_objects(
     parts: collections.abc.Sequence[collections.abc.Sequence[Mesh]],
     masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
@@ -2709,6 +2743,15 @@ def drop_objects(
     options: DropOptions,
     X_WO_start: typing.Any = None,
 ) -> DropResult: ...
+def gaussian_3x3(
+    image: typing.Any,
+    sigma: typing.SupportsFloat | typing.SupportsIndex = 0.5,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+) -> numpy.ndarray:
+    """
+    Separable 3 x 3 Gaussian (sigma in pixels) of an (H, W, C) float32 image, border pixels repeated.
+    """
+
 def gripper_meshes(
     gripper: ParallelJawGripper, opening: typing.SupportsFloat | typing.SupportsIndex
 ) -> tuple[Mesh, Mesh, Mesh]:
@@ -2794,6 +2837,23 @@ def predict_experiments(
 def resolve_num_threads(requested: typing.SupportsInt | typing.SupportsIndex) -> int:
     """
     Thread count used for `requested` (0 = all hardware threads).
+    """
+
+def restore_half_resolution(
+    denoised: typing.Any,
+    height: typing.SupportsInt | typing.SupportsIndex,
+    width: typing.SupportsInt | typing.SupportsIndex,
+    albedo: typing.Any | None = None,
+    albedo_blocks: typing.Any = None,
+    normal: typing.Any = None,
+    normal_blocks: typing.Any = None,
+    albedo_floor: typing.SupportsFloat | typing.SupportsIndex = 0.019999999552965164,
+    edge_cos_lo: typing.SupportsFloat | typing.SupportsIndex = 0.85,
+    edge_cos_hi: typing.SupportsFloat | typing.SupportsIndex = 0.97,
+    num_threads: typing.SupportsInt | typing.SupportsIndex = 0,
+) -> numpy.ndarray:
+    """
+    Full-size image of a half-resolution denoise: the denoised blocks doubled, times the albedo ratio max(a, floor) / max(double(albedo_blocks), floor) faded to 1 where the normal turns away from double(normal_blocks) (cosine edge_cos_lo..edge_cos_hi); clamped to >= 0.
     """
 
 def sample_surface(

@@ -7,8 +7,10 @@
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/geometry/sampling.hpp>
 
+#include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace {
 const std::string kData = MGN_TEST_DATA_DIR;
@@ -62,6 +64,138 @@ TEST(Mesh, ValidatePrimitivesAndBrokenMeshes) {
   const auto mis = mgn::Mesh(box.vertices(), g).validate();
   EXPECT_FALSE(mis.is_winding_consistent);
   EXPECT_EQ(mis.num_misoriented_edges, 3);
+}
+
+namespace {
+
+/// Unit cube centred at (x, y, z) (make_box's faces, outward).
+mgn::Mesh unit_cube(double x, double y, double z) {
+  mgn::Pose X = mgn::Pose::Identity();
+  X.translation() << x, y, z;
+  return mgn::make_box({1, 1, 1}).transformed(X);
+}
+
+/// The faces, wound outward, of the tetrahedron on vertices (a, b, c, d) with
+/// det(b - a, c - a, d - a) > 0, appended to `f`.
+void add_tetrahedron(std::vector<std::array<int, 3>>& f, const std::array<int, 4>& id) {
+  const auto [a, b, c, d] = id;
+  f.insert(f.end(), {{a, c, b}, {a, b, d}, {a, d, c}, {b, c, d}});
+}
+
+mgn::Mesh from_rows(const std::vector<mgn::Vec3d>& v, const std::vector<std::array<int, 3>>& f) {
+  mgn::Points3f pv(static_cast<std::int64_t>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) pv.row(i) = v[i].cast<float>().transpose();
+  mgn::Faces pf(static_cast<std::int64_t>(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) pf.row(i) << f[i][0], f[i][1], f[i][2];
+  return mgn::Mesh(pv, pf);
+}
+
+}  // namespace
+
+TEST(Mesh, ClosedSolidsSharingAnEdgeAreSplitIntoClosedPieces) {
+  // Two unit cubes that share the edge x = y = 0.5: four faces on that edge.
+  const mgn::Mesh pair = mgn::Mesh::merge({unit_cube(0, 0, 0), unit_cube(1, 1, 0)});
+  const auto r = pair.validate();
+  EXPECT_TRUE(r.is_watertight);
+  EXPECT_TRUE(r.is_winding_consistent);
+  EXPECT_TRUE(r.is_outward);
+  EXPECT_EQ(r.num_nonmanifold_edges, 0);
+  EXPECT_EQ(r.num_split_edges, 1);
+  EXPECT_EQ(r.num_split_vertices, 2);  // the edge's two ends
+  EXPECT_EQ(r.num_components, 2);
+  EXPECT_EQ(r.signed_volume, 2.0);  // every coordinate a multiple of 1/2: exact
+  mgn::MassOptions o;
+  o.open_mesh = mgn::OpenMeshPolicy::Error;
+  const auto p = mgn::compute_mass_properties(pair, o);
+  EXPECT_TRUE(p.is_exact);
+  EXPECT_EQ(p.volume, 2.0);
+  EXPECT_NEAR(p.center_of_mass.x(), 0.5, 1e-12);
+  EXPECT_NEAR(p.center_of_mass.y(), 0.5, 1e-12);
+
+  // The same pair with the shared edge's two vertices as one index each (as an OBJ writes it).
+  const auto& v0 = pair.vertices();
+  mgn::Faces f = pair.faces();
+  for (std::int64_t i = 0; i < f.size(); ++i) {
+    const auto k = f.data()[i];
+    for (std::int64_t j = 0; j < k; ++j)
+      if (v0.row(j) == v0.row(k)) {
+        f.data()[i] = static_cast<std::int32_t>(j);
+        break;
+      }
+  }
+  const auto shared = mgn::Mesh(v0, f).validate();
+  EXPECT_TRUE(shared.is_watertight);
+  EXPECT_TRUE(shared.is_outward);
+  EXPECT_EQ(shared.num_split_edges, 1);
+  EXPECT_EQ(shared.num_split_vertices, 2);
+  EXPECT_EQ(shared.signed_volume, 2.0);
+
+  // A chain of three cubes, each touching the next along an edge.
+  const auto three =
+      mgn::Mesh::merge({unit_cube(0, 0, 0), unit_cube(1, 1, 0), unit_cube(2, 2, 0)}).validate();
+  EXPECT_TRUE(three.is_watertight);
+  EXPECT_EQ(three.num_components, 3);
+  EXPECT_EQ(three.num_split_edges, 2);
+  EXPECT_EQ(three.num_split_vertices, 4);
+  EXPECT_EQ(three.signed_volume, 3.0);
+}
+
+TEST(Mesh, ClosedSolidsSharingAVertexAreSplitIntoClosedPieces) {
+  // Tetrahedra (0, e_x, e_y, e_z) and (0, -e_x, -e_z, -2 e_y) share the origin (one index):
+  // volumes 1/6 and 2/6.
+  std::vector<mgn::Vec3d> v = {{0, 0, 0},  {1, 0, 0},  {0, 1, 0}, {0, 0, 1},
+                               {-1, 0, 0}, {0, 0, -1}, {0, -2, 0}};
+  std::vector<std::array<int, 3>> f;
+  add_tetrahedron(f, {0, 1, 2, 3});
+  add_tetrahedron(f, {0, 4, 5, 6});
+  const auto r = from_rows(v, f).validate();
+  EXPECT_TRUE(r.is_watertight);
+  EXPECT_TRUE(r.is_outward);
+  EXPECT_EQ(r.num_split_edges, 0);
+  EXPECT_EQ(r.num_split_vertices, 1);
+  EXPECT_EQ(r.num_components, 2);
+  EXPECT_NEAR(r.signed_volume, 1.0 / 6.0 + 2.0 / 6.0, 1e-15);
+  // Each alone: no split, one component.
+  std::vector<std::array<int, 3>> one;
+  add_tetrahedron(one, {0, 1, 2, 3});
+  const auto single = from_rows(v, one).validate();
+  EXPECT_EQ(single.num_split_vertices, 0);
+  EXPECT_EQ(single.num_components, 1);
+  EXPECT_NEAR(single.signed_volume, 1.0 / 6.0, 1e-15);
+}
+
+TEST(Mesh, OpenPiecesAndSharedWallsAreNotSplit) {
+  // A cube with one missing face (the -z face) stays open, alone ...
+  const mgn::Mesh cube = unit_cube(0, 0, 0);
+  const mgn::Mesh open(cube.vertices(), cube.faces().bottomRows(10));
+  const auto alone = open.validate();
+  EXPECT_FALSE(alone.is_watertight);
+  EXPECT_EQ(alone.num_boundary_edges, 4);
+  EXPECT_EQ(alone.num_split_edges + alone.num_split_vertices, 0);
+  // ... and touching a closed cube along its edge x = y = 0.5 (the edge keeps four faces).
+  const auto touching = mgn::Mesh::merge({open, unit_cube(1, 1, 0)}).validate();
+  EXPECT_FALSE(touching.is_watertight);
+  EXPECT_EQ(touching.num_boundary_edges, 4);
+  EXPECT_EQ(touching.num_nonmanifold_edges, 1);
+  EXPECT_EQ(touching.num_split_edges + touching.num_split_vertices, 0);
+  // A fin: a closed cube with one triangle on its edge (0, 1): three faces there.
+  mgn::Points3f fv(9, 3);
+  fv.topRows(8) = cube.vertices();
+  fv.row(8) << 0.0f, -2.0f, -2.0f;
+  mgn::Faces ff(13, 3);
+  ff.topRows(12) = cube.faces();
+  ff.row(12) << 0, 1, 8;
+  const auto fin = mgn::Mesh(fv, ff).validate();
+  EXPECT_FALSE(fin.is_watertight);
+  EXPECT_EQ(fin.num_nonmanifold_edges, 1);
+  EXPECT_EQ(fin.num_boundary_edges, 2);
+  EXPECT_EQ(fin.num_split_edges + fin.num_split_vertices, 0);
+  // Two cubes sharing a whole face (the same two triangles, wound both ways): a shared wall,
+  // not a touch; its five edges keep four faces each.
+  const auto wall = mgn::Mesh::merge({cube, unit_cube(1, 0, 0)}).validate();
+  EXPECT_FALSE(wall.is_watertight);
+  EXPECT_EQ(wall.num_nonmanifold_edges, 5);
+  EXPECT_EQ(wall.num_split_edges + wall.num_split_vertices, 0);
 }
 
 TEST(MeshIo, LoadsEveryFormatWithMaterials) {

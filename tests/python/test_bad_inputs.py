@@ -423,11 +423,29 @@ def _without_cap() -> tuple[np.ndarray, np.ndarray]:
     return BOTTLE.vertices, BOTTLE.faces[~top]
 
 
-def _touching_boxes() -> tuple[np.ndarray, np.ndarray]:
-    """Two cubes sharing one edge: four faces on that edge, which no face removal fixes."""
+def _touching_boxes(top: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Two 5 cm cubes sharing one edge (four faces on it): 250 cm^3. Without ``top`` the
+    first cube has no top face (a 25 cm^2 hole, too large to close)."""
     b = trimesh.creation.box((0.05, 0.05, 0.05))
-    both = trimesh.util.concatenate([b, b.copy().apply_translation((0.05, 0.05, 0))])
+    first = b if top else trimesh.Trimesh(b.vertices, b.faces[b.triangles_center[:, 2] < 0.02])
+    both = trimesh.util.concatenate([first, b.copy().apply_translation((0.05, 0.05, 0))])
     return both.vertices, both.faces
+
+
+#: Edge a of the tetrahedra below: 5 cm.
+TET_A = 0.05
+
+
+def _tetrahedra_sharing_a_vertex() -> tuple[np.ndarray, np.ndarray]:
+    """Tetrahedra (0, a e_x, a e_y, a e_z) and (0, -a e_x, -a e_z, -2a e_y), one vertex index
+    at the origin for both: a^3/6 + 2a^3/6 = a^3/2."""
+    a = TET_A
+    v = np.array([[0, 0, 0], [a, 0, 0], [0, a, 0], [0, 0, a], [-a, 0, 0], [0, 0, -a],
+                  [0, -2 * a, 0]])  # fmt: skip
+    faces = []
+    for p, q, r, t in ((0, 1, 2, 3), (0, 4, 5, 6)):  # det(q - p, r - p, t - p) > 0
+        faces += [[p, r, q], [p, q, t], [p, t, r], [q, r, t]]
+    return v, np.array(faces)
 
 
 def _mixed_winding_yaml(tmp: Path) -> list[str]:
@@ -623,8 +641,17 @@ CASES = [
          r"\), which the repair \(winding, duplicate and stray faces, small holes\) cannot fix\. "
          r"It is marked allow_open: its mass [0-9.]+ g is a shell mass \(2 mm walls, not a "
          r"solid\), and it gets suction labels only, no parallel-jaw labels", check=_open_entry),
-    Case("touching-boxes", "warning", _add_mesh("pair", *_touching_boxes()), 0, r"stays open: 1 "
-         r"edge\(s\) shared by more than two faces, which the repair .* It is marked allow_open",
+    Case("cubes-sharing-an-edge", "repaired", _add_mesh("pair", *_touching_boxes()), 0, r"pair: "
+         r"[^\n]* 100x100x50 mm; split 1 edge and 2 vertices where closed pieces touch \(2 "
+         r"closed pieces\): closed, solid mass 250 g", absent=r"allow_open|OPEN|repaired as",
+         check=_entry_mass(250.0, repair=None, allow_open=None)),
+    Case("tetrahedra-sharing-a-vertex", "repaired", _add_mesh("tets",
+         *_tetrahedra_sharing_a_vertex()), 0, r"tets: [^\n]* 100x150x100 mm; split 1 vertex "
+         r"where closed pieces touch \(2 closed pieces\): closed, solid mass 62\.5 g",
+         absent=r"allow_open|OPEN", check=_entry_mass(TET_A**3 / 2 * 1e6, allow_open=None)),
+    Case("open-box-touching-a-cube", "warning", _add_mesh("pair", *_touching_boxes(top=False)),
+         0, r"stays open: 4 free edges[^,]*, 1 edge\(s\) shared by more than two faces, which "
+         r"the repair .* It is marked allow_open: its mass [0-9.]+ g is a shell mass",
          check=_open_entry),
     Case("open-object-in-generate", "warning", _generate_open_object, 0, r"no parallel-jaw "
          r"labels for 1 object\(s\): cup: open mesh \(48 boundary edges, allow_open\)"),

@@ -15,6 +15,7 @@ import yaml
 from PIL import Image
 
 import mgn
+from mgn import _core
 from mgn.cli import main
 from mgn.errors import InvalidArgumentError
 from mgn.io.scene_folder import png_bytes
@@ -494,7 +495,6 @@ def test_half_resolution_albedo_ratio_fades_at_silhouettes() -> None:
     """The albedo ratio is applied in full where a pixel's normal agrees with its blocks'
     (cosine >= 0.97), not at all where it turns away (<= 0.85: a silhouette), linearly between;
     the normals' lengths do not matter."""
-    ratio = np.full((1, 4, 3), 3.0, np.float32)
     up = np.array([0.0, 0.0, 1.0], np.float32)
 
     def tilted(deg: float) -> np.ndarray:
@@ -504,11 +504,64 @@ def test_half_resolution_albedo_ratio_fades_at_silhouettes() -> None:
     cos_mid = 0.5 * (0.85 + 0.97)
     normal = np.stack(
         [2.0 * up, tilted(10.0), tilted(90.0), tilted(np.degrees(np.arccos(cos_mid)))]
+    )[None]
+    # two blocks of one row, both facing up (different lengths): every pixel's doubled normal
+    # faces up; albedo 0.3 at full size over 0.1 in the blocks: a ratio of 3
+    normal_blocks = np.stack([up, 0.5 * up])[None]
+    albedo = np.full((1, 4, 3), 0.3, np.float32)
+    albedo_blocks = np.full((1, 2, 3), 0.1, np.float32)
+    denoised = np.ones((1, 2, 3), np.float32)
+    got = _core.restore_half_resolution(
+        denoised, 1, 4, albedo, albedo_blocks, normal, normal_blocks, 0.02, 0.85, 0.97
     )
-    blocks = np.stack([up, 0.5 * up, up, up])
-    got = photo._edge_gated(ratio, normal[None], blocks[None])
-    assert got.dtype == np.float32
+    assert got.dtype == np.float32 and got.shape == (1, 4, 3)
     np.testing.assert_allclose(got[0, :, 0], [3.0, 3.0, 1.0, 2.0], atol=1e-4)
+
+
+def _restore_by_numpy(
+    den: np.ndarray, h: int, w: int, a: np.ndarray, ab: np.ndarray, n: np.ndarray, nb: np.ndarray
+) -> np.ndarray:
+    """A second implementation of the half-resolution restore with OpenCV's doubling and
+    NumPy's arithmetic in float64."""
+    import cv2
+
+    def double(x: np.ndarray) -> np.ndarray:
+        pad = cv2.resize(x, (2 * x.shape[1], 2 * x.shape[0]), interpolation=cv2.INTER_LINEAR)
+        return pad[:h, :w].astype(np.float64)
+
+    ratio = np.maximum(a, 0.02) / np.maximum(double(ab), 0.02)
+    nd = double(nb)
+    cos = (n * nd).sum(-1) / np.maximum(np.linalg.norm(n, axis=-1) * np.linalg.norm(nd, axis=-1),
+                                       1e-12)  # fmt: skip
+    g = np.clip((cos - 0.85) / 0.12, 0.0, 1.0)[..., None]
+    return np.maximum(double(den) * (1.0 + g * (ratio - 1.0)), 0.0)
+
+
+@pytest.mark.parametrize("shape", [(40, 30), (39, 31)])
+def test_half_resolution_restore_matches_a_second_implementation(shape: tuple[int, int]) -> None:
+    """The C++ restore (doubling, albedo ratio, silhouette fade, clamp) equals a NumPy/OpenCV
+    composition on random images, for even and odd sizes and any thread count."""
+    h, w = shape
+    rng = np.random.default_rng(11)
+    hb, wb = (h + 1) // 2, (w + 1) // 2
+    den = (rng.random((hb, wb, 3)) * 2 - 0.2).astype(np.float32)  # some negatives: clamped
+    a = rng.random((h, w, 3)).astype(np.float32)
+    n = rng.normal(size=(h, w, 3)).astype(np.float32)
+    n[0, 0] = 0.0  # a zero normal: no ratio there
+    ab = photo._blocks2(a)
+    nb = photo._blocks2(n)
+    want = _restore_by_numpy(den, h, w, a, ab, n, nb)
+    outs = [
+        _core.restore_half_resolution(den, h, w, a, ab, n, nb, num_threads=t) for t in (1, 2, 3)
+    ]
+    np.testing.assert_allclose(outs[0], want, rtol=2e-5, atol=2e-6)
+    assert all(o.tobytes() == outs[0].tobytes() for o in outs[1:])
+    flat = _core.restore_half_resolution(den, h, w)  # without albedo: the doubling alone
+    np.testing.assert_allclose(flat, np.maximum(photo._double(den, h, w), 0.0), atol=0)
+    with pytest.raises(InvalidArgumentError, match="albedo_blocks"):
+        _core.restore_half_resolution(den, h, w, a, ab[:-1], n, nb)
+    with pytest.raises(InvalidArgumentError, match="denoised"):
+        _core.restore_half_resolution(den, 4 * h, w)
 
 
 def test_half_resolution_denoise_keeps_full_size_print() -> None:
@@ -558,8 +611,8 @@ def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
     got = photo._smooth3(img)
     assert got.dtype == np.float32 and got.flags.c_contiguous and got.shape == img.shape
     np.testing.assert_allclose(got, want, atol=1e-6)
-    for rows in (1, 2, 5, 22, 23, 100):  # the bands (rows at a time) do not change the image
-        assert photo._smooth3(img, rows).tobytes() == got.tobytes()
+    for threads in (1, 2, 5):  # the thread count does not change the image
+        assert photo._smooth3(img, threads).tobytes() == got.tobytes()
     one_row = img[:1]
     np.testing.assert_allclose(
         photo._smooth3(one_row),

@@ -51,6 +51,28 @@ def _fcl_bvh(m: mgn.Mesh) -> fcl.BVHModel:
     return bvh
 
 
+def test_two_cubes_sharing_an_edge_are_a_closed_solid_with_grasps_on_each_cube():
+    """Two 4 cm cubes touching along one edge: validate splits the edge, the mass is that of
+    two solid cubes and the sampler grasps each cube across its own faces."""
+    cube = make_box((0.04, 0.04, 0.04))
+    X = np.eye(4)
+    X[:3, 3] = (0.04, 0.04, 0.0)
+    pair = mgn.Mesh.merge([cube, cube.transformed(X)])
+    r = pair.validate()
+    assert r.is_watertight and r.is_outward and (r.num_split_edges, r.num_split_vertices) == (1, 2)
+    props = mass_properties(pair, 500.0)
+    assert props.is_exact and props.volume == pytest.approx(2 * 0.04**3, rel=1e-6)
+    labels = label_object(pair, mass=props.mass, com=props.center_of_mass, num_points=100, seed=1)
+    assert len(labels) > 0
+    p1 = labels.p1.astype(np.float64)
+    mid = p1 + 0.5 * labels.width[:, None] * labels.closing.astype(np.float64)
+    # Every grasp closes on one cube: its centre inside the first or the second cube.
+    in_first = np.all(np.abs(mid) <= 0.02 + 1e-6, axis=1)
+    in_second = np.all(np.abs(mid - X[:3, 3]) <= 0.02 + 1e-6, axis=1)
+    assert np.all(in_first | in_second)
+    assert in_first.any() and in_second.any()
+
+
 def test_box_grasps_across_narrow_faces_score_one_and_none_across_the_long_side():
     _, labels = _box_labels(num_points=300, seed=1, sampler_options={"approaches_kept": 4})
     assert len(labels) > 0

@@ -106,7 +106,10 @@ int cmd_info(const std::vector<std::string>& args) {
             << ", \"num_boundary_edges\": " << r.num_boundary_edges
             << ", \"num_nonmanifold_edges\": " << r.num_nonmanifold_edges
             << ", \"num_misoriented_edges\": " << r.num_misoriented_edges
-            << ", \"num_components\": " << r.num_components << ", \"area\": " << json_number(r.area)
+            << ", \"num_components\": " << r.num_components
+            << ", \"num_split_edges\": " << r.num_split_edges
+            << ", \"num_split_vertices\": " << r.num_split_vertices
+            << ", \"area\": " << json_number(r.area)
             << ", \"signed_volume\": " << json_number(r.signed_volume) << "},\n"
             << "  \"mass_properties\": {\"density\": " << json_number(mass.density)
             << ", \"volume\": " << json_number(m.volume) << ", \"mass\": " << json_number(m.mass)

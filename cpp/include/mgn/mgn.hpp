@@ -23,6 +23,7 @@
 #include <mgn/raytrace/ray_scene.hpp>
 #include <mgn/render/camera.hpp>
 #include <mgn/render/depth_sensor.hpp>
+#include <mgn/render/half_resolution.hpp>
 #include <mgn/render/renderer.hpp>
 #include <mgn/scene/drop.hpp>
 #include <mgn/scene/layout.hpp>

@@ -2,6 +2,7 @@
 #include <mgn/geometry/mesh.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <numeric>
@@ -161,6 +162,133 @@ std::vector<std::int32_t> Mesh::weld_map() const {
   return weld;
 }
 
+namespace {
+
+/// Undirected edges of the faces, over a vertex id per face corner (corner 3f+k is faces(f,k)):
+/// one edge per pair of distinct ids, the edge of every corner, and per edge its uses in each
+/// direction and its first two faces.
+struct EdgeTable {
+  std::vector<std::int32_t> corner_edge;   ///< 3F: edge from corner k to corner (k+1)%3, or -1
+  std::vector<std::int32_t> forward;       ///< uses from the smaller id to the larger
+  std::vector<std::int32_t> backward;      ///< uses from the larger id to the smaller
+  std::vector<std::int64_t> face0, face1;  ///< first and second face using the edge (or -1)
+
+  std::int32_t uses(std::int32_t e) const { return forward[e] + backward[e]; }
+  std::int32_t size() const { return static_cast<std::int32_t>(forward.size()); }
+};
+
+EdgeTable edge_table(const std::vector<std::int32_t>& corner_id, std::int64_t nf) {
+  EdgeTable t;
+  t.corner_edge.assign(static_cast<std::size_t>(nf) * 3, -1);
+  std::unordered_map<std::uint64_t, std::int32_t> index;
+  index.reserve(static_cast<std::size_t>(nf) * 3);
+  for (auto* v : {&t.forward, &t.backward}) v->reserve(static_cast<std::size_t>(nf) * 3 / 2 + 3);
+  for (auto* v : {&t.face0, &t.face1}) v->reserve(static_cast<std::size_t>(nf) * 3 / 2 + 3);
+  for (std::int64_t f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t p = corner_id[3 * f + k], q = corner_id[3 * f + (k + 1) % 3];
+      if (p == q) continue;
+      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(p, q)) << 32) |
+                                static_cast<std::uint32_t>(std::max(p, q));
+      const auto [it, inserted] = index.emplace(key, t.size());
+      const std::int32_t e = it->second;
+      if (inserted) {
+        t.forward.push_back(0);
+        t.backward.push_back(0);
+        t.face0.push_back(f);
+        t.face1.push_back(-1);
+      } else if (t.face1[e] < 0) {
+        t.face1[e] = f;
+      }
+      (p < q ? t.forward[e] : t.backward[e]) += 1;
+      t.corner_edge[3 * f + k] = e;
+    }
+  }
+  return t;
+}
+
+/// Corner vertex ids after splitting where closed pieces touch (MeshReport::num_split_edges),
+/// and the number of welded vertices split. A piece is a set of faces connected through edges of
+/// exactly two faces; it is closed when it uses each of its edges exactly twice and has no face
+/// (the same three welded vertices) that another piece also has (coincident walls are not a
+/// touch). A welded vertex used by two or more pieces, all closed, gets one id per piece.
+std::pair<std::vector<std::int32_t>, std::int64_t> split_touching_pieces(
+    const std::vector<std::int32_t>& weld_id, std::int64_t nf, std::int32_t num_ids,
+    const EdgeTable& t) {
+  std::vector<std::int32_t> piece(static_cast<std::size_t>(nf));
+  std::iota(piece.begin(), piece.end(), 0);
+  for (std::int32_t e = 0; e < t.size(); ++e) {
+    if (t.uses(e) != 2) continue;
+    const auto a = find_root(piece, static_cast<std::int32_t>(t.face0[e]));
+    const auto b = find_root(piece, static_cast<std::int32_t>(t.face1[e]));
+    if (a != b) piece[std::max(a, b)] = std::min(a, b);
+  }
+  for (std::int32_t f = 0; f < nf; ++f) piece[f] = find_root(piece, f);
+
+  std::vector<char> open(static_cast<std::size_t>(nf), 0);    // by piece (its smallest face)
+  std::vector<std::pair<std::int32_t, std::int32_t>> shared;  // (over-shared edge, piece)
+  std::vector<std::pair<std::array<std::int32_t, 3>, std::int32_t>> walls;  // (face, piece)
+  for (std::int64_t f = 0; f < nf; ++f) {
+    bool on_shared = false;
+    for (int k = 0; k < 3; ++k) {
+      const auto e = t.corner_edge[3 * f + k];
+      if (e < 0) continue;
+      if (t.uses(e) == 1) open[piece[f]] = 1;
+      if (t.uses(e) > 2) {
+        shared.emplace_back(e, piece[f]);
+        on_shared = true;
+      }
+    }
+    if (on_shared) {
+      std::array<std::int32_t, 3> v = {weld_id[3 * f], weld_id[3 * f + 1], weld_id[3 * f + 2]};
+      std::sort(v.begin(), v.end());
+      walls.emplace_back(v, piece[f]);
+    }
+  }
+  std::sort(shared.begin(), shared.end());
+  for (std::size_t i = 0; i < shared.size();) {
+    std::size_t j = i;
+    while (j < shared.size() && shared[j] == shared[i]) ++j;
+    if (j - i != 2) open[shared[i].second] = 1;
+    i = j;
+  }
+  std::sort(walls.begin(), walls.end());
+  for (std::size_t i = 1; i < walls.size(); ++i) {
+    if (walls[i].first == walls[i - 1].first) {
+      open[walls[i].second] = 1;
+      open[walls[i - 1].second] = 1;
+    }
+  }
+
+  // A welded vertex of two or more pieces, all closed, is split: the piece that uses it first
+  // keeps its id, each other piece gets a new one.
+  std::vector<std::int32_t> first(static_cast<std::size_t>(num_ids), -1);
+  std::vector<char> several(static_cast<std::size_t>(num_ids), 0);
+  std::vector<char> near_open(static_cast<std::size_t>(num_ids), 0);
+  for (std::int64_t c = 0; c < 3 * nf; ++c) {
+    const auto v = weld_id[c], p = piece[c / 3];
+    if (first[v] < 0) first[v] = p;
+    if (first[v] != p) several[v] = 1;
+    if (open[p]) near_open[v] = 1;
+  }
+  std::int64_t split = 0;
+  for (std::int32_t v = 0; v < num_ids; ++v) split += several[v] && !near_open[v];
+  std::vector<std::int32_t> id = weld_id;
+  if (split == 0) return {std::move(id), 0};
+  std::unordered_map<std::uint64_t, std::int32_t> copy;  // (vertex, piece) -> new id
+  std::int32_t next = num_ids;
+  for (std::int64_t c = 0; c < 3 * nf; ++c) {
+    const auto v = weld_id[c], p = piece[c / 3];
+    if (!several[v] || near_open[v] || p == first[v]) continue;
+    const auto key = (static_cast<std::uint64_t>(v) << 32) | static_cast<std::uint32_t>(p);
+    id[c] = copy.emplace(key, next).first->second;
+    if (id[c] == next) ++next;
+  }
+  return {std::move(id), split};
+}
+
+}  // namespace
+
 MeshReport Mesh::validate() const {
   MeshReport r;
   r.num_vertices = vertices_.rows();
@@ -168,48 +296,71 @@ MeshReport Mesh::validate() const {
   r.area = area();
   if (faces_.rows() == 0) return r;
 
+  const std::int64_t nf = faces_.rows();
   const auto weld = weld_map();
-  // Undirected edge -> (uses in the min->max direction, uses in the max->min direction).
-  std::unordered_map<std::uint64_t, std::pair<int, int>> edges;
-  edges.reserve(static_cast<std::size_t>(faces_.rows()) * 3);
-  std::vector<std::int32_t> parent(vertices_.rows());
-  std::iota(parent.begin(), parent.end(), 0);
-  double volume6 = 0.0;
-  const Vec3d ref = row(vertices_, 0);
-  for (std::int64_t f = 0; f < faces_.rows(); ++f) {
-    std::int32_t v[3] = {weld[faces_(f, 0)], weld[faces_(f, 1)], weld[faces_(f, 2)]};
-    const Vec3d a = row(vertices_, faces_(f, 0)) - ref;
-    const Vec3d b = row(vertices_, faces_(f, 1)) - ref;
-    const Vec3d c = row(vertices_, faces_(f, 2)) - ref;
-    volume6 += a.dot(b.cross(c));
-    for (int k = 0; k < 3; ++k) {
-      const std::int32_t p = v[k], q = v[(k + 1) % 3];
-      if (p == q) continue;
-      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(p, q)) << 32) |
-                                static_cast<std::uint32_t>(std::max(p, q));
-      auto& e = edges[key];
-      (p < q ? e.first : e.second) += 1;
-      const auto rp = find_root(parent, p), rq = find_root(parent, q);
-      if (rp != rq) parent[rp] = rq;
+  std::vector<std::int32_t> weld_id(static_cast<std::size_t>(nf) * 3);
+  for (std::int64_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) weld_id[3 * f + k] = weld[faces_(f, k)];
+  const EdgeTable welded = edge_table(weld_id, nf);
+  const auto num_welded_ids = static_cast<std::int32_t>(vertices_.rows());
+  const auto [id, split_vertices] = split_touching_pieces(weld_id, nf, num_welded_ids, welded);
+  r.num_split_vertices = split_vertices;
+  EdgeTable refined;
+  if (split_vertices > 0) refined = edge_table(id, nf);
+  const EdgeTable& t = split_vertices > 0 ? refined : welded;
+
+  if (split_vertices > 0) {  // welded edges of more than two faces now on separate edges
+    std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+    for (std::int64_t c = 0; c < 3 * nf; ++c) {
+      const auto e = welded.corner_edge[c];
+      if (e >= 0 && welded.uses(e) > 2) pairs.emplace_back(e, t.corner_edge[c]);
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    for (std::size_t i = 0; i < pairs.size();) {
+      std::size_t j = i;
+      while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
+      if (j - i >= 2) ++r.num_split_edges;
+      i = j;
     }
   }
-  for (const auto& [key, uses] : edges) {
-    const int total = uses.first + uses.second;
+
+  for (std::int32_t e = 0; e < t.size(); ++e) {
+    const int total = t.uses(e);
     if (total == 1) {
       ++r.num_boundary_edges;
     } else if (total > 2) {
       ++r.num_nonmanifold_edges;
-    } else if (uses.first != 1) {
+    } else if (t.forward[e] != 1) {
       ++r.num_misoriented_edges;
     }
   }
-  std::vector<char> used(vertices_.rows(), 0);
-  for (std::int64_t f = 0; f < faces_.rows(); ++f)
-    for (int k = 0; k < 3; ++k) used[weld[faces_(f, k)]] = 1;
-  for (std::int64_t i = 0; i < vertices_.rows(); ++i)
-    if (used[i] && weld[i] == i && find_root(parent, static_cast<std::int32_t>(i)) == i)
-      ++r.num_components;
 
+  // Connected components over the (split) vertex ids.
+  const std::int32_t num_ids =
+      std::max(num_welded_ids, id.empty() ? 0 : *std::max_element(id.begin(), id.end()) + 1);
+  std::vector<std::int32_t> parent(static_cast<std::size_t>(num_ids));
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<char> used(static_cast<std::size_t>(num_ids), 0);
+  for (std::int64_t f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const auto p = id[3 * f + k], q = id[3 * f + (k + 1) % 3];
+      used[p] = 1;
+      const auto rp = find_root(parent, p), rq = find_root(parent, q);
+      if (rp != rq) parent[rp] = rq;
+    }
+  }
+  for (std::int32_t i = 0; i < num_ids; ++i)
+    if (used[i] && find_root(parent, i) == i) ++r.num_components;
+
+  double volume6 = 0.0;
+  const Vec3d ref = row(vertices_, 0);
+  for (std::int64_t f = 0; f < nf; ++f) {
+    const Vec3d a = row(vertices_, faces_(f, 0)) - ref;
+    const Vec3d b = row(vertices_, faces_(f, 1)) - ref;
+    const Vec3d c = row(vertices_, faces_(f, 2)) - ref;
+    volume6 += a.dot(b.cross(c));
+  }
   r.signed_volume = volume6 / 6.0;
   r.is_watertight = r.num_boundary_edges == 0 && r.num_nonmanifold_edges == 0;
   r.is_winding_consistent = r.num_misoriented_edges == 0 && r.num_nonmanifold_edges == 0;

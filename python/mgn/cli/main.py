@@ -39,7 +39,7 @@ from mgn.cli.args import split_list
 from mgn.cli.demo import run_demo
 from mgn.errors import InvalidArgumentError, MgnError
 from mgn.geometry.mesh import Mesh, load_mesh, mass_properties
-from mgn.geometry.repair import repair_mesh
+from mgn.geometry.repair import repair_mesh, split_note
 from mgn.hardware import SuctionCup, default_cup, default_gripper
 from mgn.io.grasp_file import write_suction_labels
 from mgn.io.model_folder import object_folders, read_model_folder, write_model_folder, write_tote
@@ -149,15 +149,22 @@ def _closed_entry(
 ) -> tuple[str, str, Any]:
     """Set ``repair`` / ``allow_open`` of a new user-object entry as its mesh needs: a mesh
     that is not closed is repaired (:func:`mgn.geometry.repair.repair_mesh`): ``repair: true``
-    when that closes it, else ``allow_open: true`` (the mesh as it is). Returns (the note of
-    the "added" line, the warning of a mesh that stays open or "", the mesh as it is read)."""
+    when that closes it, else ``allow_open: true`` (the mesh as it is). Closed solids that touch
+    along an edge or at a vertex are closed as read; the note says what was split. Returns (the
+    note of the "added" line, the warning of a mesh that stays open or "", the mesh as it is
+    read)."""
     if report.is_watertight and report.is_winding_consistent:
-        return "", "", mesh
+        split = split_note(report)  # closed solids that touch: closed as read
+        if not split:
+            return "", "", mesh
+        mass_g = mass_properties(mesh, density).mass * 1e3
+        return f"; {split}: closed, solid mass {mass_g:.4g} g", "", mesh
     fixed = repair_mesh(mesh)
     if fixed.closed:
         entry["repair"] = True
         mass_g = mass_properties(fixed.mesh, density).mass * 1e3
-        note = f"; repaired as it is read ({'; '.join(fixed.changes)}): closed, solid mass "
+        changes = "; ".join(c for c in (*fixed.changes, split_note(fixed.after)) if c)
+        note = f"; repaired as it is read ({changes}): closed, solid mass "
         return f"{note}{mass_g:.4g} g", "", fixed.mesh
     entry["allow_open"] = True
     mass_g = mass_properties(mesh, density).mass * 1e3
@@ -295,6 +302,8 @@ def mesh_info(path: str, scale: float = 1.0, density: float = 1000.0) -> dict[st
             "num_nonmanifold_edges": r.num_nonmanifold_edges,
             "num_misoriented_edges": r.num_misoriented_edges,
             "num_components": r.num_components,
+            "num_split_edges": r.num_split_edges,
+            "num_split_vertices": r.num_split_vertices,
             "area": num(r.area),
             "signed_volume": num(r.signed_volume),
         },

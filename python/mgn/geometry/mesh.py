@@ -22,7 +22,9 @@ from mgn import _core
 Mesh = _core.Mesh
 #: Surface appearance (base colour RGBA, specular, shininess, opacity, texture).
 Material = _core.Material
-#: Validation report: watertightness, winding, boundary/non-manifold edges, signed volume.
+#: Validation report: watertightness, winding, boundary/non-manifold edges, signed volume, and
+#: the edges and vertices split where closed pieces touch (``num_split_edges``,
+#: ``num_split_vertices``).
 MeshReport = _core.MeshReport
 #: Volume (m^3), mass (kg), centre of mass (m, mesh frame), inertia about the CoM (kg m^2).
 MassProperties = _core.MassProperties

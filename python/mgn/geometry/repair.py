@@ -16,8 +16,12 @@ as ``validate``), keeping the vertex array (positions, uvs) and the materials:
 4. small holes are closed: a loop of free edges whose filling is at most
    ``max_hole_area`` of the surface area (default 1 %) gets a fan of triangles.
 
-What cannot be repaired this way is left as it is (e.g. two solids that touch along an edge,
-a large opening); :attr:`RepairReport.closed` says whether the result is closed.
+What cannot be repaired this way is left as it is (e.g. a large opening, an edge where an open
+piece meets a closed one); :attr:`RepairReport.closed` says whether the result is closed.
+Closed solids that only touch each other along an edge or at a vertex (two cubes sharing one
+edge, parts of a multi-part export) need no repair: :meth:`mgn.Mesh.validate` splits the shared
+edges and vertices between the pieces (``MeshReport.num_split_edges``, ``num_split_vertices``),
+and the mesh is closed with the volume of all pieces; :func:`split_note` says so in words.
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import numpy.typing as npt
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh, MeshReport
 
-__all__ = ["RepairReport", "repair_mesh"]
+__all__ = ["RepairReport", "repair_mesh", "split_note"]
 
 #: Largest hole filled, as a fraction of the mesh's surface area.
 MAX_HOLE_AREA = 0.01
@@ -59,6 +63,20 @@ class RepairReport:
     def closed(self) -> bool:
         """The result is watertight and consistently wound (its mass is exact)."""
         return bool(self.after.is_watertight and self.after.is_winding_consistent)
+
+
+def split_note(report: MeshReport) -> str:
+    """What :meth:`mgn.Mesh.validate` split where closed pieces touch, for people: e.g.
+    "split 1 edge and 2 vertices where closed pieces touch (2 closed pieces)"; "" when
+    nothing was split."""
+    edges, vertices = report.num_split_edges, report.num_split_vertices
+    if not (edges or vertices):
+        return ""
+    parts = [f"{edges} edge{'' if edges == 1 else 's'}"] if edges else []
+    if vertices:
+        parts.append(f"{vertices} {'vertex' if vertices == 1 else 'vertices'}")
+    return (f"split {' and '.join(parts)} where closed pieces touch "
+            f"({report.num_components} closed pieces)")  # fmt: skip
 
 
 def _weld(vertices: npt.NDArray[np.float32]) -> npt.NDArray[np.int64]:

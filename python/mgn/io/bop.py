@@ -21,8 +21,8 @@ The image id is mgn's view index v; annotation gt of an image is mgn's instance 
 view; ``obj_id`` is the object's category id (the ``models/<id>/`` folder of the dataset).
 Lengths are millimetres. Every file is written atomically; each scene folder is built under a
 temporary name and renamed when complete, so a run that stops leaves only whole scenes, and a
-new run skips the scenes (and the ``models`` folder) already there. One scene is in memory at a
-time.
+new run skips the scenes already there (and the models already in ``models_info.json``). One
+view's images are in memory at a time, with the scene's three JSON documents.
 """
 
 from __future__ import annotations
@@ -53,12 +53,14 @@ __all__ = [
     "DEFAULT_SPLIT",
     "BopExport",
     "export_bop",
+    "export_bop_scene",
     "hull_candidates",
     "model_info",
     "model_symmetries",
     "ply_text",
     "validate_bop",
     "vertices_mm",
+    "write_bop_models",
 ]
 
 #: Millimetres per unit of the 16-bit depth PNGs (``depth_scale``): 0.1 mm, as most BOP datasets;
@@ -88,7 +90,7 @@ _GT_INFO_KEYS = (
 @dataclass(frozen=True)
 class BopExport:
     """What :func:`export_bop` did: the output folder, the scene ids written and skipped (already
-    complete), and whether the models folder was written (False: it was there)."""
+    complete), and whether models were written (False: ``models/`` held every model already)."""
 
     root: Path
     written: list[int]
@@ -226,29 +228,61 @@ def _clean(x: float) -> float:
     return float(round(float(x), 9)) + 0.0
 
 
-def _write_models(ds: Dataset, target: Path) -> None:
-    folders = ds.model_folders()
+def _model_entry(folder: Path, out: Path) -> dict[str, Any]:
+    """Write ``obj_<id>.ply`` (and its texture) of the object folder ``models/<id>/`` into
+    ``out``; its ``models_info.json`` entry."""
+    obj_id = int(folder.name)
+    mesh = load_mesh(folder / "textured.obj")
+    tex = folder / "texture.png"
+    tex_name = f"obj_{obj_id:06d}.png" if tex.exists() else None
+    atomic_write_text(out / f"obj_{obj_id:06d}.ply", ply_text(mesh, texture_file=tex_name))
+    if tex_name is not None:
+        atomic_write_bytes(out / tex_name, tex.read_bytes())
+    v = vertices_mm(mesh)
+    try:
+        pts = hull_candidates(v, convex_hull(mesh))
+    except InvalidArgumentError:  # a flat mesh has no hull: every vertex
+        pts = v
+    return model_info(v, diameter_points=pts) | model_symmetries(
+        v, np.asarray(mesh.faces, np.int64)
+    )
+
+
+def write_bop_models(
+    dataset: Dataset | str | os.PathLike[str], root: str | os.PathLike[str]
+) -> int:
+    """Bring ``root/models/`` up to date with the dataset's object folders ``models/<id>/``:
+    write the models whose obj_id is not in ``models_info.json`` yet and rewrite that file
+    (entries by ascending obj_id), the last step, so that a model is listed only once its
+    files are complete. A new folder is built under a temporary name. Returns the number of
+    models written (0: up to date). The result does not depend on the order in which the
+    models were added."""
+    ds = dataset if isinstance(dataset, Dataset) else Dataset(dataset)
+    folders = sorted(ds.model_folders(), key=lambda p: int(p.name))
     if not folders:
         raise IoError(f"{ds.root}: no models/<id>/ object folders to export")
-    with atomic_dir(target) as tmp:
-        info: dict[str, dict[str, float]] = {}
-        for folder in sorted(folders, key=lambda p: int(p.name)):
-            obj_id = int(folder.name)
-            mesh = load_mesh(folder / "textured.obj")
-            tex = folder / "texture.png"
-            tex_name = f"obj_{obj_id:06d}.png" if tex.exists() else None
-            atomic_write_text(tmp / f"obj_{obj_id:06d}.ply", ply_text(mesh, texture_file=tex_name))
-            if tex_name is not None:
-                atomic_write_bytes(tmp / tex_name, tex.read_bytes())
-            v = vertices_mm(mesh)
-            try:
-                pts = hull_candidates(v, convex_hull(mesh))
-            except InvalidArgumentError:  # a flat mesh has no hull: every vertex
-                pts = v
-            info[str(obj_id)] = model_info(v, diameter_points=pts) | model_symmetries(
-                v, np.asarray(mesh.faces, np.int64)
-            )
-        atomic_write_text(tmp / "models_info.json", _dump(info))
+    target = Path(root) / "models"
+    if not target.exists():
+        with atomic_dir(target) as tmp:
+            info = {str(int(f.name)): _model_entry(f, tmp) for f in folders}
+            atomic_write_text(tmp / "models_info.json", _dump(info))
+        return len(folders)
+    path = target / "models_info.json"
+    try:
+        old = json.loads(path.read_text()) if path.exists() else {}
+    except (OSError, ValueError) as e:
+        raise IoError(
+            f"{path}: not readable JSON ({e}); remove the models folder to rewrite it"
+        ) from e
+    new = [f for f in folders if str(int(f.name)) not in old]
+    if not new:
+        return 0
+    merged = dict(old)
+    for f in new:
+        merged[str(int(f.name))] = _model_entry(f, target)
+    info = {k: merged[k] for k in sorted(merged, key=int)}
+    atomic_write_text(path, _dump(info))
+    return len(new)
 
 
 # --- scenes --------------------------------------------------------------------------------------
@@ -257,11 +291,12 @@ def _write_models(ds: Dataset, target: Path) -> None:
 def _bbox(mask: np.ndarray) -> list[int]:
     """(x, y, width, height) of a mask as the BOP toolkit computes it (width = x_max - x_min,
     so a one-pixel mask has width 0); [-1, -1, -1, -1] for an empty mask."""
-    ys, xs = np.nonzero(mask)
-    if len(xs) == 0:
+    cols = np.flatnonzero(mask.any(axis=0))
+    if len(cols) == 0:
         return [-1, -1, -1, -1]
-    x0, y0 = int(xs.min()), int(ys.min())
-    return [x0, y0, int(xs.max()) - x0, int(ys.max()) - y0]
+    rows = np.flatnonzero(mask.any(axis=1))
+    x0, y0 = int(cols[0]), int(rows[0])
+    return [x0, y0, int(cols[-1]) - x0, int(rows[-1]) - y0]
 
 
 def _K(view: View) -> list[float]:
@@ -359,7 +394,8 @@ def _write_scene(scene: SceneFolder, target: Path, depth_scale: float) -> None:
         cams: dict[str, Any] = {}
         gts: dict[str, Any] = {}
         infos: dict[str, Any] = {}
-        for view in scene.views():
+        for v in scene.view_ids:  # one View (and its cached arrays) alive at a time
+            view = scene.view(v)
             key = str(view.index)
             if key not in gt:
                 raise IoError(f"{scene.folder / 'scene_gt.json'}: no entry for view {key}")
@@ -367,6 +403,45 @@ def _write_scene(scene: SceneFolder, target: Path, depth_scale: float) -> None:
         atomic_write_text(tmp / "scene_camera.json", _dump(cams))
         atomic_write_text(tmp / "scene_gt.json", _dump(gts))
         atomic_write_text(tmp / "scene_gt_info.json", _dump(infos))
+
+
+def _check_options(split: str, depth_scale: float) -> None:
+    if not (isinstance(split, str) and _SPLIT_RE.match(split)):
+        raise InvalidArgumentError(
+            f"export_bop: split {split!r} must be a folder name of letters, digits and '_'"
+        )
+    if not (np.isfinite(depth_scale) and depth_scale > 0):
+        raise InvalidArgumentError(f"export_bop: depth_scale {depth_scale} must be > 0 (mm)")
+
+
+def export_bop_scene(
+    scene: SceneFolder,
+    out: str | os.PathLike[str],
+    *,
+    split: str = DEFAULT_SPLIT,
+    depth_scale: float = DEFAULT_DEPTH_SCALE_MM,
+) -> bool:
+    """Write one mgn scene folder as the BOP scene ``out/<split>/<N:06d>/`` (built under a
+    temporary name, renamed when complete), and ``out/camera.json`` from its first view when
+    that file is absent; the models are :func:`write_bop_models`'s. Returns False (and writes
+    nothing) when the scene folder is already there. What :func:`export_bop` does per scene:
+    ``mgn generate`` with ``output.formats`` containing ``bop`` calls it after each scene.
+
+    Raises:
+        IoError, InvalidArgumentError: as :func:`export_bop`.
+    """
+    _check_options(split, depth_scale)
+    root = Path(out)
+    target = root / split / f"{scene.scene_id:06d}"
+    written = not target.exists()
+    if written:
+        _write_scene(scene, target, depth_scale)
+    if not (root / "camera.json").exists():
+        intr = scene.view(scene.view_ids[0]).intrinsics
+        cam = {"cx": intr.cx, "cy": intr.cy, "depth_scale": depth_scale, "fx": intr.fx,
+               "fy": intr.fy, "height": intr.height, "width": intr.width}  # fmt: skip
+        atomic_write_text(root / "camera.json", _dump(cam))
+    return written
 
 
 def export_bop(
@@ -382,7 +457,8 @@ def export_bop(
 
     Args:
         dataset: an mgn dataset folder.
-        out: the BOP folder (created; scenes already in it are kept and skipped).
+        out: the BOP folder (created; scenes already in it are kept and skipped; models of
+            the dataset missing from its ``models/`` are added, :func:`write_bop_models`).
         scenes: mgn scene ids N to export (default: every ``scene<N>``).
         split: the split folder name (letters, digits, ``_``; default ``train_pbr``).
         depth_scale: mm per unit of the depth PNGs, > 0 (default 0.1).
@@ -393,12 +469,7 @@ def export_bop(
         InvalidArgumentError: a bad ``split`` or ``depth_scale``, a depth beyond the 16-bit
             range, a view with lens distortion.
     """
-    if not _SPLIT_RE.match(split):
-        raise InvalidArgumentError(
-            f"export_bop: split {split!r} must be a folder name of letters, digits and '_'"
-        )
-    if not (np.isfinite(depth_scale) and depth_scale > 0):
-        raise InvalidArgumentError(f"export_bop: depth_scale {depth_scale} must be > 0 (mm)")
+    _check_options(split, depth_scale)
     ds = Dataset(dataset)
     ids = ds.scene_ids if scenes is None else sorted({int(s) for s in scenes})
     missing = [s for s in ids if s not in ds.scene_ids]
@@ -408,28 +479,14 @@ def export_bop(
         raise IoError(f"{ds.root}: no scene<N> folders to export")
     root = Path(out)
     root.mkdir(parents=True, exist_ok=True)
-    models = root / "models"
-    models_written = not models.exists()
-    if models_written:
-        _write_models(ds, models)
+    models_written = write_bop_models(ds, root) > 0
     written: list[int] = []
     skipped: list[int] = []
-    camera_done = (root / "camera.json").exists()
     for n in ids:
-        scene = ds.scene(n)
-        target = root / split / f"{n:06d}"
-        if target.exists():
-            skipped.append(n)
-        else:
-            _write_scene(scene, target, depth_scale)
+        if export_bop_scene(ds.scene(n), root, split=split, depth_scale=depth_scale):
             written.append(n)
-        if not camera_done:
-            view = scene.views()[0]
-            intr = view.intrinsics
-            cam = {"cx": intr.cx, "cy": intr.cy, "depth_scale": depth_scale, "fx": intr.fx,
-                   "fy": intr.fy, "height": intr.height, "width": intr.width}  # fmt: skip
-            atomic_write_text(root / "camera.json", _dump(cam))
-            camera_done = True
+        else:
+            skipped.append(n)
         if progress is not None:
             progress(n)
     return BopExport(root, written, skipped, models_written)

@@ -37,7 +37,7 @@ from mgn.base.deterministic import npz_bytes
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.geometry.mesh import load_mesh
 from mgn.hardware import ParallelJawGripper
-from mgn.io.dataset import Dataset, View
+from mgn.io.dataset import Dataset, SceneFolder, View
 from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import lens_for
 
@@ -52,6 +52,7 @@ __all__ = [
     "GraspNetExport",
     "GraspRectangles",
     "export_graspnet",
+    "export_graspnet_scene",
     "graspnet_rows",
     "grasp_rectangles",
     "GRASPNET_DEPTH_BASE",
@@ -509,6 +510,75 @@ def _write_view(view: View, tmp: Path, options: dict[str, Any], counts: dict[str
     atomic_write_text(tmp / "jacquard" / f"{v:04d}_grasps.txt", jacquard_text(rects))
 
 
+def _check_options(camera: str, pj_score: str, suction_score: str, max_tilt_deg: float) -> None:
+    if not (isinstance(camera, str) and _CAMERA_RE.match(camera)):
+        raise InvalidArgumentError(
+            f"export_graspnet: camera {camera!r} must be a folder name of letters, digits and '_'"
+        )
+    if pj_score not in PJ_SCORES:
+        raise InvalidArgumentError(f"export_graspnet: pj_score {pj_score!r}: one of {PJ_SCORES}")
+    if suction_score not in SUCTION_SCORES:
+        raise InvalidArgumentError(
+            f"export_graspnet: suction_score {suction_score!r}: one of {SUCTION_SCORES}"
+        )
+    if not (isinstance(max_tilt_deg, (int, float)) and 0 <= max_tilt_deg < 90):
+        raise InvalidArgumentError(
+            f"export_graspnet: max_tilt_deg must be in [0, 90) degrees, got {max_tilt_deg!r}"
+        )
+
+
+def _new_counts() -> dict[str, int]:
+    return dict.fromkeys(("grasp", "suction", "rect", "grasp_unscored", "suction_unscored"), 0)
+
+
+def export_graspnet_scene(
+    scene: SceneFolder,
+    out: str | os.PathLike[str],
+    gripper: GraspNetGripper,
+    *,
+    camera: str = DEFAULT_CAMERA,
+    pj_score: str = DEFAULT_PJ_SCORE,
+    suction_score: str = DEFAULT_SUCTION_SCORE,
+    max_tilt_deg: float = DEFAULT_MAX_TILT_DEG,
+    counts: dict[str, int] | None = None,
+) -> bool:
+    """Write the grasp files of one mgn scene folder into ``out/scenes/scene_<N:04d>/<camera>/``
+    (built under a temporary name, renamed when complete), one view in memory at a time;
+    ``gripper``: the dataset's gripper (``graspnet_gripper(gripper_of(dataset))``). Returns
+    False (and writes nothing) when that folder is already there. ``counts`` (the keys of
+    :attr:`GraspNetExport.counts`) is increased by the rows written. What
+    :func:`export_graspnet` does per scene: ``mgn generate`` with ``output.formats``
+    containing ``graspnet`` calls it after each scene.
+
+    Raises:
+        IoError, InvalidArgumentError: as :func:`export_graspnet`.
+    """
+    _check_options(camera, pj_score, suction_score, max_tilt_deg)
+    target = Path(out) / "scenes" / f"scene_{scene.scene_id:04d}" / camera
+    if target.exists():
+        return False
+    options = {
+        "pj_score": pj_score,
+        "suction_score": suction_score,
+        "max_tilt_deg": float(max_tilt_deg),
+        "gripper": gripper,
+    }
+    tally = _new_counts()
+    with atomic_dir(target) as tmp:
+        cams = set()
+        for v in scene.view_ids:  # one View (and its cached arrays) alive at a time
+            view = scene.view(v)
+            _write_view(view, tmp, options, tally)
+            cams.add(view.intrinsics.K_opencv.tobytes())
+        if len(cams) == 1:
+            K = np.frombuffer(cams.pop(), np.float64).reshape(3, 3)
+            atomic_write_bytes(tmp / "camK.npy", _npy_bytes(K))
+    if counts is not None:
+        for k, v in tally.items():
+            counts[k] = counts.get(k, 0) + v
+    return True
+
+
 def export_graspnet(
     dataset: str | os.PathLike[str],
     out: str | os.PathLike[str],
@@ -537,20 +607,7 @@ def export_graspnet(
         IoError: a missing dataset or scene, a view without ``objects/categories``.
         InvalidArgumentError: a bad camera name, score name or angle.
     """
-    if not _CAMERA_RE.match(camera):
-        raise InvalidArgumentError(
-            f"export_graspnet: camera {camera!r} must be a folder name of letters, digits and '_'"
-        )
-    if pj_score not in PJ_SCORES:
-        raise InvalidArgumentError(f"export_graspnet: pj_score {pj_score!r}: one of {PJ_SCORES}")
-    if suction_score not in SUCTION_SCORES:
-        raise InvalidArgumentError(
-            f"export_graspnet: suction_score {suction_score!r}: one of {SUCTION_SCORES}"
-        )
-    if not (isinstance(max_tilt_deg, (int, float)) and 0 <= max_tilt_deg < 90):
-        raise InvalidArgumentError(
-            f"export_graspnet: max_tilt_deg must be in [0, 90) degrees, got {max_tilt_deg!r}"
-        )
+    _check_options(camera, pj_score, suction_score, max_tilt_deg)
     ds = Dataset(dataset)
     ids = ds.scene_ids if scenes is None else sorted({int(s) for s in scenes})
     missing = [s for s in ids if s not in ds.scene_ids]
@@ -558,31 +615,26 @@ def export_graspnet(
         raise IoError(f"{ds.root}: no scene folder for scene ids {missing}")
     if not ids:
         raise IoError(f"{ds.root}: no scene<N> folders to export")
-    options = {
-        "pj_score": pj_score,
-        "suction_score": suction_score,
-        "max_tilt_deg": float(max_tilt_deg),
-        "gripper": graspnet_gripper(gripper_of(ds)),
-    }
+    gripper = graspnet_gripper(gripper_of(ds))
     root = Path(out)
     root.mkdir(parents=True, exist_ok=True)
-    counts = dict.fromkeys(("grasp", "suction", "rect", "grasp_unscored", "suction_unscored"), 0)
+    counts = _new_counts()
     written: list[int] = []
     skipped: list[int] = []
     for n in ids:
-        target = root / "scenes" / f"scene_{n:04d}" / camera
-        if target.exists():
-            skipped.append(n)
-        else:
-            with atomic_dir(target) as tmp:
-                cams = set()
-                for view in ds.scene(n).views():
-                    _write_view(view, tmp, options, counts)
-                    cams.add(view.intrinsics.K_opencv.tobytes())
-                if len(cams) == 1:
-                    K = np.frombuffer(cams.pop(), np.float64).reshape(3, 3)
-                    atomic_write_bytes(tmp / "camK.npy", _npy_bytes(K))
+        if export_graspnet_scene(
+            ds.scene(n),
+            root,
+            gripper,
+            camera=camera,
+            pj_score=pj_score,
+            suction_score=suction_score,
+            max_tilt_deg=max_tilt_deg,
+            counts=counts,
+        ):
             written.append(n)
+        else:
+            skipped.append(n)
         if progress is not None:
             progress(n)
     return GraspNetExport(root, written, skipped, counts)

@@ -24,9 +24,11 @@ Example ``my_objects.yaml`` (paths relative to the YAML file; SI units)::
         allow_open: false          # optional: accept an open mesh (shell mass, no pj labels)
 
 The mesh keeps its own frame. It must be watertight and consistently wound (mass properties
-are exact). ``repair: true`` repairs a nearly closed mesh as it is read
-(:func:`mgn.geometry.repair.repair_mesh`: duplicate and stray faces removed, faces turned to one
-winding, holes up to 1 % of the surface closed; the file is not changed), when that closes it.
+are exact); closed solids that touch along an edge or at a vertex are (:meth:`mgn.Mesh.validate`
+splits them into closed pieces; the volume is that of all pieces). ``repair: true`` repairs a
+nearly closed mesh as it is read (:func:`mgn.geometry.repair.repair_mesh`: duplicate and stray
+faces removed, faces turned to one winding, holes up to 1 % of the surface closed; the file is
+not changed), when that closes it.
 A mesh that stays open needs ``allow_open: true``: the documented shell model is then used
 (2 mm walls: its mass is that of a shell, not of a solid) and the object gets suction labels
 only: its parallel-jaw label set is empty (``pj_skipped`` in the metadata says why), since the

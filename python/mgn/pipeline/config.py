@@ -60,6 +60,11 @@ Sections:
   most 0.078 mm off) in an LZMA zip entry (``np.load`` reads it), grasp poses rounded
   (< 0.001°, 0.005 mm), the RGB PNG at libdeflate level 9; MetaGraspNet's scripts still read
   every file; ~0.8x the bytes, ~1.6x the write time).
+- ``output``: ``formats``, the layouts ``mgn generate`` writes, a list of ``mgn`` (the scene
+  folders, always written: the other layouts are made from them), ``bop`` (the BOP layout in
+  ``DIR/bop/``, as ``mgn export bop`` writes it) and ``graspnet`` (grasp files in
+  ``DIR/graspnet/``, as ``mgn export graspnet`` writes them); default ``[mgn]``. The exports
+  are written per scene, right after the scene (docs/format.md, "Exports while generating").
 - ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
@@ -111,6 +116,8 @@ __all__ = [
     "Config",
     "IoConfig",
     "ConfigError",
+    "OUTPUT_FORMATS",
+    "OutputConfig",
     "HemisphereConfig",
     "IntrinsicsConfig",
     "LabelsConfig",
@@ -136,6 +143,8 @@ SEAL_MODELS = ("spring", "strain", "smoothness")
 #: Views of the MetaGraspNet rig.
 MGN_NUM_VIEWS = 37
 SPLIT_NAMES = ("all", "train", "test")
+#: The layouts ``mgn generate`` can write (``output.formats``).
+OUTPUT_FORMATS = ("mgn", "bop", "graspnet")
 #: Difficulty levels of a view (paper Table IV, :mod:`mgn.view_labels.layout`).
 DIFFICULTY_LEVELS = (1, 2, 3, 4, 5)
 
@@ -742,6 +751,45 @@ class IoConfig(_Section):
     _CHECKS = {"archival": _bool}
 
 
+def _formats(value: Any, key: str) -> tuple[str, ...]:
+    expected = (
+        "a list of distinct layouts out of "
+        + ", ".join(repr(f) for f in OUTPUT_FORMATS)
+        + " that includes 'mgn' (the other layouts are made from the mgn scene folders)"
+    )
+    if not isinstance(value, (list, tuple)) or not value:
+        raise _fail(key, value, expected)
+    for i, v in enumerate(value):
+        if v not in OUTPUT_FORMATS:
+            raise _fail(f"{key}[{i}]", v, "one of " + ", ".join(repr(f) for f in OUTPUT_FORMATS))
+    if len(set(value)) != len(value) or "mgn" not in value:
+        raise _fail(key, value, expected)
+    return tuple(str(v) for v in value)
+
+
+@dataclass(frozen=True)
+class OutputConfig(_Section):
+    """Which layouts ``mgn generate`` writes (see the module doc).
+
+    Attributes:
+        formats: ``mgn`` (always) and any of ``bop`` (``DIR/bop/``, :func:`mgn.io.bop.export_bop`
+            with its defaults) and ``graspnet`` (``DIR/graspnet/``,
+            :func:`mgn.io.graspnet.export_graspnet` with its defaults), written per scene.
+    """
+
+    formats: tuple[str, ...] = ("mgn",)
+
+    _CHECKS = {"formats": _formats}
+
+    def __post_init__(self) -> None:
+        _formats(self.formats, "output.formats")
+
+    @property
+    def exports(self) -> tuple[str, ...]:
+        """The layouts besides ``mgn``, in :data:`OUTPUT_FORMATS` order."""
+        return tuple(f for f in OUTPUT_FORMATS if f != "mgn" and f in self.formats)
+
+
 @dataclass(frozen=True)
 class Config(_Section):
     """The whole dataset configuration (see the module doc for the sections)."""
@@ -758,6 +806,7 @@ class Config(_Section):
     selection: SelectionConfig = field(default_factory=SelectionConfig)
     render: RenderSettings = field(default_factory=RenderSettings)
     io: IoConfig = field(default_factory=IoConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
 
     _CHECKS = {
         "objects": lambda v, k: ObjectsConfig.from_dict(v, k),
@@ -772,6 +821,7 @@ class Config(_Section):
         "selection": lambda v, k: SelectionConfig.from_dict(v, k),
         "render": _render,
         "io": lambda v, k: IoConfig.from_dict(v, k),
+        "output": lambda v, k: OutputConfig.from_dict(v, k),
     }
 
     @classmethod
@@ -785,6 +835,17 @@ class Config(_Section):
             ConfigError: naming the key, the value and what was expected.
         """
         config: Config = super().from_dict(data, key)
+        intr = config.camera.intrinsics
+        if (
+            "bop" in config.output.formats
+            and isinstance(intr, IntrinsicsConfig)
+            and any(c != 0.0 for c in intr.distortion)
+        ):
+            raise ConfigError(
+                "config key 'output.formats': 'bop' needs pinhole views (BOP's cam_K has no "
+                "lens distortion), but 'camera.intrinsics.distortion' is "
+                f"{list(intr.distortion)}; leave 'bop' out or the distortion"
+            )
         if base_dir is not None:
             config = config.resolved(base_dir)
         if config.tote.mesh is not None and (base_dir is not None or os.path.isabs(
@@ -845,6 +906,8 @@ _SECTION_DOCS = {
     "film; randomize: per-view lights / environment / tote+floor materials / exposure",
     "io": "files: archival true = compact archival mode (sensor depth on a 1/64 cm grid as LZMA, "
     "grasp poses rounded; docs/format.md), false = every array exact",
+    "output": "layouts written per scene: formats, a list of mgn (always) | bop (DIR/bop/, as "
+    "mgn export bop) | graspnet (DIR/graspnet/, as mgn export graspnet)",
 }
 
 

@@ -12,6 +12,10 @@ Steps:
    (:func:`mgn.scene.drop_scene`), then :func:`mgn.pipeline.scene_writer.write_scene` into
    ``DIR/.tmp-scene<N>-<pid>``, then the manifest (:mod:`mgn.io.manifest`), then a rename
    to ``DIR/scene<N>``. A half-written scene therefore only ever exists under a ``.tmp-`` name.
+4. With ``output.formats`` naming other layouts (``bop``, ``graspnet``), the scene is then
+   exported into ``DIR/bop/`` and ``DIR/graspnet/`` by the worker (:mod:`mgn.pipeline.exports`;
+   by this process when the workers do not see ``DIR``, or after the views of a batch are
+   selected and pruned), each scene's export built under a temporary name too.
 
 Scene seeds: scene ``i`` (0-based, folder ``scene<i>``) of a dataset with seed ``S`` uses
 :func:`scene_seed` ``(S, i)`` = ``numpy.random.SeedSequence([S, i]).generate_state(1,
@@ -31,11 +35,12 @@ at the same path and have mgn installed; see docs/cluster.md).
 Failures: a scene that raises is reported with its index, seed and error and does not stop the
 others. A full disk is reported as "disk full" with the path, and stops scheduling new scenes.
 Ctrl-C stops the run, removes the temporary folders and leaves the complete scenes; ``--resume``
-continues (it also removes any ``.tmp-`` folder a killed run left behind, and redoes scenes whose
-manifest is missing or inconsistent). ``dataset.json`` ``status`` is ``running`` while the run
-goes on, then ``complete`` (every scene written), ``incomplete`` (scenes failed or were not
-run), ``interrupted`` (Ctrl-C) or ``failed`` (an error stopped the whole run, e.g. a full disk
-while writing ``models/``; ``error`` says which); only a killed process leaves ``running``.
+continues (it also removes any ``.tmp-`` folder a killed run left behind, redoes scenes whose
+manifest is missing or inconsistent, and writes the exports that complete scenes lack).
+``dataset.json`` ``status`` is ``running`` while the run goes on, then ``complete`` (every scene
+written), ``incomplete`` (scenes failed or were not run), ``interrupted`` (Ctrl-C) or ``failed`` (an
+error stopped the whole run, e.g. a full disk while writing ``models/``; ``error`` says which); only
+a killed process leaves ``running``.
 """
 
 from __future__ import annotations
@@ -69,6 +74,7 @@ from mgn.io.manifest import check_manifest, write_manifest
 from mgn.objects import ObjectSpec
 from mgn.pipeline import scene_writer
 from mgn.pipeline.config import Config, ConfigError, load_config
+from mgn.pipeline.exports import clean_export_tmp, export_models, export_scene, missing_exports
 from mgn.pipeline.label_cache import (
     ObjectLabels,
     compute_object_labels,
@@ -116,6 +122,8 @@ class SceneTask:
         collect: write into a temporary folder of the worker and return the files in the
             result (``SceneResult.files``) instead of writing into ``out_dir``: for workers
             that do not see the output folder; the caller writes them.
+        exports: the layouts (``bop``, ``graspnet``) the worker writes after the scene
+            (:func:`mgn.pipeline.exports.export_scene`); not with ``collect``.
     """
 
     index: int
@@ -125,6 +133,7 @@ class SceneTask:
     objects: tuple[tuple[str, str], ...]
     labels: dict[str, ObjectLabels] = field(default_factory=dict)
     collect: bool = False
+    exports: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -134,8 +143,9 @@ class SceneResult:
     Attributes:
         index, seed: the scene. ok: written completely.
         error: one-line error when not ok; disk_full: the error was a full disk.
-        times: seconds per stage (drop, write, finalize, and "write: <label stage>"); "cpu": CPU
-            seconds of the worker process over the scene, all its threads.
+        times: seconds per stage (drop, write, finalize, and "write: <label stage>"; "export:
+            bop", "export: graspnet" for the exports); "cpu": CPU seconds of the worker process
+            over the scene, all its threads.
         num_bytes: size of the scene folder; num_objects: objects in the tote.
         worker: host and process id that ran it.
         files: with ``SceneTask.collect``: the scene's files (relative path -> bytes, the
@@ -238,6 +248,8 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
             shutil.rmtree(final)
         os.rename(tmp, final)
         times["finalize"] = time.perf_counter() - t2
+        if task.exports:  # the scene is complete: a failed export leaves it, --resume redoes it
+            times.update(export_scene(out, task.index, task.exports, task.config.gripper))
         times["cpu"] = time.process_time() - c0
         return SceneResult(
             task.index, task.seed, True, None, False, times, size, len(scene), worker,
@@ -730,14 +742,17 @@ def _clean_tmp(out: Path) -> list[Path]:
         if p.is_dir():
             shutil.rmtree(p, ignore_errors=True)
             removed.append(p)
-    return removed
+    return removed + clean_export_tmp(out)
 
 
 def _comparable(config_doc: Any) -> Any:
-    """A config dict as compared by ``--resume`` (``selection.max_scenes`` may change)."""
+    """A config dict as compared by ``--resume`` (``selection.max_scenes`` and ``output`` may
+    change: the exports are made from the scene folders, which they do not change)."""
     doc = json.loads(json.dumps(config_doc))
     if isinstance(doc, dict) and isinstance(doc.get("selection"), dict):
         doc["selection"].pop("max_scenes", None)
+    if isinstance(doc, dict):
+        doc.pop("output", None)
     if isinstance(doc, dict) and "render" not in doc:
         # Recorded before the render section existed: those images came from the raster.
 
@@ -809,6 +824,9 @@ class _Run:
     labels: dict[str, ObjectLabels] = field(default_factory=dict)
     modelled: set[str] = field(default_factory=set)
     collect: bool = False  # workers return the scene files; this process writes them
+    # The exports wait until the views of a batch are selected and pruned (a test set with
+    # selection.prune_rejected): run_balanced calls export_missing then.
+    defer_exports: bool = False
 
     def ensure_labels(self, specs: Sequence[ObjectSpec]) -> None:
         """Read or compute the labels of the objects not labelled yet in this run and write
@@ -859,6 +877,7 @@ class _Run:
             bar.close()
             self.report.labels_computed += len(missing)
         write_models(self.out, new, self.labels, cfg)
+        export_models(self.out, cfg.output.exports)
         self.modelled.update(s.name for s in new)
         self.report.label_seconds += time.perf_counter() - t0
 
@@ -866,11 +885,12 @@ class _Run:
         """Run the scenes (index, objects) that are not complete yet (``--resume`` keeps the
         complete ones); results go to the report. Stops scheduling on a full disk."""
 
-        report, todo = self.report, []
+        report, todo, complete = self.report, [], []
         for i, specs in scenes:
             folder = self.out / f"scene{i}"
             if self.resume and folder.is_dir() and check_manifest(folder) is None:
                 report.skipped.append(i)
+                complete.append(i)
                 continue
             todo.append(
                 SceneTask(
@@ -881,8 +901,10 @@ class _Run:
                     objects=tuple((s.name, self.sources.get(s.name, BUILTIN)) for s in specs),
                     labels={s.name: self.labels[s.name] for s in specs if s.name in self.labels},
                     collect=self.collect,
+                    exports=() if self.collect or self.defer_exports else self.cfg.output.exports,
                 )
             )
+        self.export_missing(complete)  # stopped after their scene, before or in their export
         bar = tqdm(total=total, initial=len(report.skipped) + len(report.results),
                    desc="scenes", unit="scene", disable=not self.progress)  # fmt: skip
         t_scenes = time.perf_counter()
@@ -895,6 +917,8 @@ class _Run:
             elif result.files is not None:
                 result = store_collected(self.out, result)
             report.results[task.index] = result
+            if result.ok and task.collect and not self.defer_exports:
+                self.export_missing([task.index])
             bar.update(1)
             elapsed = time.perf_counter() - t_scenes
             done = sum(r.ok for r in report.results.values()) - n_before
@@ -907,6 +931,36 @@ class _Run:
                 break
         bar.close()
         report.not_run += sorted(t.index for t in todo if t.index not in report.results)
+
+    def export_missing(self, indices: Sequence[int]) -> None:
+        """Write the exports (``output.formats``) that the complete scenes ``indices`` lack, in
+        this process; a failure marks the scene failed in the report (``--resume`` redoes the
+        export). Stops at a full disk."""
+        formats = self.cfg.output.exports
+        if not formats:
+            return
+        for i in indices:
+            if not (self.out / f"scene{i}").is_dir() or not missing_exports(self.out, i, formats):
+                continue
+            try:
+                times = export_scene(self.out, i, formats, self.cfg.gripper)
+            except Exception as e:  # noqa: BLE001 (reported per scene, the others go on)
+                full = _disk_full(e)
+                old = self.report.results.get(i)
+                self.report.results[i] = SceneResult(
+                    i, scene_seed(self.seed, i), False,
+                    f"disk full while exporting scene{i}" if full is not None
+                    else f"export of scene{i}: {type(e).__name__}: {e}",
+                    full is not None, dict(old.times) if old else {},
+                )  # fmt: skip
+                if i in self.report.skipped:
+                    self.report.skipped.remove(i)
+                if full is not None:
+                    raise IoError(f"disk full while exporting scene{i}") from e
+                continue
+            old = self.report.results.get(i)
+            if old is not None:
+                self.report.results[i] = dataclasses.replace(old, times={**old.times, **times})
 
     def write_doc(self, num_scenes: int, status: str, **more: Any) -> None:
         write_dataset_record(
@@ -1048,7 +1102,8 @@ def generate(
 
     executor = _executor(workers, scheduler)
     run = _Run(out, cfg, seed, executor, report, sources, use_cache, progress, resume, extra,
-               collect=collect)  # fmt: skip
+               collect=collect,
+               defer_exports=quota is not None and cfg.selection.prune_rejected)  # fmt: skip
     try:
         if quota is None:
             run.ensure_labels([s for specs in per_scene for s in specs])

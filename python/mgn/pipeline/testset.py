@@ -455,6 +455,10 @@ class BalancedRun(Protocol):
         """Write ``dataset.json`` with ``num_scenes`` and ``status``."""
         ...
 
+    def export_missing(self, indices: Sequence[int]) -> None:
+        """Write the exports (``output.formats``) the complete scenes ``indices`` lack."""
+        ...
+
 
 def run_balanced(
     run: BalancedRun,
@@ -488,6 +492,7 @@ def run_balanced(
 
     if sel.prune_rejected and state.rejected:  # finish a pruning a kill interrupted
         _prune(run.out, state.rejected)
+    run.export_missing(range(attempted))  # the recorded batches' scenes (pruned first)
     record("running")
     while state.unmet:
         first = state.batches_done * batch
@@ -517,6 +522,7 @@ def run_balanced(
         record("running")
         if sel.prune_rejected and rejected:
             _prune(run.out, rejected)
+        run.export_missing(indices)  # after the pruning: the exports hold the views kept
     record("running")
 
 

@@ -407,20 +407,11 @@ _GUIDE_WEIGHTS = (
 )
 
 
-def _smooth3(img: npt.NDArray[np.float32], rows: int = 64) -> npt.NDArray[np.float32]:
+def _smooth3(img: npt.NDArray[np.float32], num_threads: int = 0) -> npt.NDArray[np.float32]:
     """3 x 3 Gaussian (``_GUIDE_SIGMA``) of an (H, W, C) float32 image: separable, the border
-    pixels repeated outwards; done in bands of ``rows`` rows that stay in the CPU's cache
-    (~2.5x faster than whole-image passes: ~0.012 CPU-s per 1200 x 1200 guide)."""
-    side, mid = (np.float32(w) for w in _GUIDE_WEIGHTS)
-    h = img.shape[0]
-    out = np.empty_like(img)
-    for r0 in range(0, h, rows):
-        r1 = min(h, r0 + rows)
-        band = img[max(0, r0 - 1) : min(h, r1 + 1)]  # with the neighbour rows, where they exist
-        p = np.pad(band, ((int(r0 == 0), int(r1 == h)), (0, 0), (0, 0)), mode="edge")
-        v = mid * p[1:-1] + side * (p[:-2] + p[2:])
-        p = np.pad(v, ((0, 0), (1, 1), (0, 0)), mode="edge")
-        out[r0:r1] = mid * p[:, 1:-1] + side * (p[:, :-2] + p[:, 2:])
+    pixels repeated outwards (C++ ``mgn::gaussian_3x3``, row-parallel on ``num_threads``, 0 =
+    all cores)."""
+    out: npt.NDArray[np.float32] = _core.gaussian_3x3(img, _GUIDE_SIGMA, num_threads)
     return out
 
 
@@ -532,77 +523,24 @@ def _run_oidn(
 
 
 #: Albedo floor of the ratio that restores full-size detail after a ``half`` denoise.
-_HALF_ALBEDO_FLOOR = np.float32(0.02)
+_HALF_ALBEDO_FLOOR = 0.02
 
 
-def _blocks2(img: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+def _blocks2(img: npt.NDArray[np.float32], num_threads: int = 0) -> npt.NDArray[np.float32]:
     """Means of the 2 x 2 pixel blocks of an (H, W, C) image, an odd last row or column
-    repeated: (ceil(H/2), ceil(W/2), C) float32."""
-    h, w = img.shape[:2]
-    if h % 2 or w % 2:
-        img = np.pad(img, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
-    hb, wb = img.shape[0] // 2, img.shape[1] // 2
-    s = img.reshape(hb, 2, wb, 2, img.shape[2]).sum(axis=(1, 3), dtype=np.float32)
-    return np.ascontiguousarray(s * np.float32(0.25))
+    repeated: (ceil(H/2), ceil(W/2), C) float32 (C++ ``mgn::block_means_2x2``)."""
+    out: npt.NDArray[np.float32] = _core.block_means_2x2(img, num_threads)
+    return out
 
 
-def _double(img: npt.NDArray[np.float32], h: int, w: int) -> npt.NDArray[np.float32]:
+def _double(
+    img: npt.NDArray[np.float32], h: int, w: int, num_threads: int = 0
+) -> npt.NDArray[np.float32]:
     """Bilinear interpolation of a block image to twice its size, cropped to (h, w): block
     centres at the centres of their 2 x 2 pixels, so pixel 2i takes 3/4 of block i and 1/4 of
     block i - 1, pixel 2i + 1 3/4 of block i and 1/4 of block i + 1 (the border blocks
-    repeated outwards)."""
-    q, t = np.float32(0.25), np.float32(0.75)
-
-    def along(x: npt.NDArray[np.float32], axis: int) -> npt.NDArray[np.float32]:
-        pad = [(0, 0)] * x.ndim
-        pad[axis] = (1, 1)
-        p = np.pad(x, pad, mode="edge")
-        n = x.shape[axis]
-        prev = np.take(p, range(0, n), axis=axis)
-        nxt = np.take(p, range(2, n + 2), axis=axis)
-        out = np.stack((t * x + q * prev, t * x + q * nxt), axis=axis + 1)
-        shape = list(x.shape)
-        shape[axis] = 2 * n
-        return out.reshape(shape)
-
-    return np.ascontiguousarray(along(along(img, 0), 1)[:h, :w])
-
-
-def _denoise_half(
-    c: npt.NDArray[np.float32],
-    albedo: npt.NDArray[np.float32] | None,
-    normal: npt.NDArray[np.float32] | None,
-    quality: str,
-    num_threads: int,
-    guides: str,
-) -> npt.NDArray[np.float32]:
-    """:func:`denoise` with ``resolution="half"`` on the checked radiance ``c``."""
-    h, w = c.shape[:2]
-    smooth = guides == "smoothed"
-    a_full = _guide(albedo, "albedo", c.shape, 0.0, False) if guides != "none" else None
-    n_full = (
-        _guide(normal, "normal", c.shape, -1.0, False) if guides in ("smoothed", "raw") else None
-    )
-    a_blk = None if a_full is None else _blocks2(a_full)
-    n_blk = None if n_full is None else _blocks2(n_full)
-    den = _run_oidn(
-        _blocks2(c),
-        None if a_blk is None else (_smooth3(a_blk) if smooth else a_blk),
-        None if n_blk is None else (_smooth3(n_blk) if smooth else n_blk),
-        quality,
-        num_threads,
-        smooth,
-    )
-    out = _double(den, h, w)
-    if a_full is not None and a_blk is not None:
-        floor = _HALF_ALBEDO_FLOOR
-        a_ratio = _smooth3(a_full) if smooth else a_full
-        ratio = np.maximum(a_ratio, floor) / np.maximum(_double(a_blk, h, w), floor)
-        if n_full is not None and n_blk is not None:
-            ratio = _edge_gated(ratio, _smooth3(n_full) if smooth else n_full,
-                                _double(n_blk, h, w))  # fmt: skip
-        out *= ratio
-    np.maximum(out, 0.0, out=out)
+    repeated outwards; C++ ``mgn::double_blocks``)."""
+    out: npt.NDArray[np.float32] = _core.double_blocks(img, h, w, num_threads)
     return out
 
 
@@ -613,21 +551,51 @@ def _denoise_half(
 _EDGE_COS = (0.85, 0.97)
 
 
-def _edge_gated(
-    ratio: npt.NDArray[np.float32],
-    normal: npt.NDArray[np.float32],
-    normal_blocks: npt.NDArray[np.float32],
+def _denoise_half(
+    c: npt.NDArray[np.float32],
+    albedo: npt.NDArray[np.float32] | None,
+    normal: npt.NDArray[np.float32] | None,
+    quality: str,
+    num_threads: int,
+    guides: str,
 ) -> npt.NDArray[np.float32]:
-    """``1 + g (ratio - 1)`` with ``g`` in [0, 1] from the cosine between ``normal`` and
-    ``normal_blocks`` (:data:`_EDGE_COS`); normals of any length (a zero normal: ``g`` = 0)."""
-    dot = np.einsum("ijk,ijk->ij", normal, normal_blocks)
-    norms = np.sqrt(np.einsum("ijk,ijk->ij", normal, normal) *
-                    np.einsum("ijk,ijk->ij", normal_blocks, normal_blocks))  # fmt: skip
-    cos = dot / np.maximum(norms, np.float32(1e-12))
+    """:func:`denoise` with ``resolution="half"`` on the checked radiance ``c``: the block
+    means, OIDN on them, then C++ ``mgn::restore_half_resolution`` (doubling, albedo ratio,
+    silhouette fade) on ``num_threads`` threads."""
+    h, w = c.shape[:2]
+    smooth = guides == "smoothed"
+    a_full = _guide(albedo, "albedo", c.shape, 0.0, False) if guides != "none" else None
+    n_full = (
+        _guide(normal, "normal", c.shape, -1.0, False) if guides in ("smoothed", "raw") else None
+    )
+    a_blk = None if a_full is None else _blocks2(a_full, num_threads)
+    n_blk = None if n_full is None else _blocks2(n_full, num_threads)
+    den = _run_oidn(
+        _blocks2(c, num_threads),
+        None if a_blk is None else (_smooth3(a_blk, num_threads) if smooth else a_blk),
+        None if n_blk is None else (_smooth3(n_blk, num_threads) if smooth else n_blk),
+        quality,
+        num_threads,
+        smooth,
+    )
+    if smooth:
+        a_full = None if a_full is None else _smooth3(a_full, num_threads)
+        n_full = None if n_full is None else _smooth3(n_full, num_threads)
     lo, hi = _EDGE_COS
-    g = np.clip((cos - np.float32(lo)) / np.float32(hi - lo), 0.0, 1.0).astype(np.float32)
-    gated: npt.NDArray[np.float32] = (1.0 + g[..., None] * (ratio - 1.0)).astype(np.float32)
-    return gated
+    out: npt.NDArray[np.float32] = _core.restore_half_resolution(
+        den,
+        h,
+        w,
+        albedo=a_full,
+        albedo_blocks=a_blk,
+        normal=n_full,
+        normal_blocks=n_blk,
+        albedo_floor=_HALF_ALBEDO_FLOOR,
+        edge_cos_lo=lo,
+        edge_cos_hi=hi,
+        num_threads=num_threads,
+    )
+    return out
 
 
 # -------------------------------------------------------------------------------- materials

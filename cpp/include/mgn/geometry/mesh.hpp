@@ -39,14 +39,23 @@ struct Material {
 };
 
 /// Result of Mesh::validate(). Topology is computed after welding vertices with identical
-/// positions, so texture seams (duplicated vertices) do not break watertightness.
+/// positions, so texture seams (duplicated vertices) do not break watertightness, and after
+/// splitting where closed pieces touch: a piece is a set of faces connected through edges of
+/// exactly two faces; a welded vertex used only by closed pieces (each uses every one of its
+/// edges exactly twice and shares no whole face with another piece), two or more of them, counts
+/// once per piece. So two closed solids that share one edge or one vertex (two cubes along an
+/// edge, two tetrahedra at a vertex) are two closed 2-manifolds, and the mesh is watertight with
+/// the volume of both. An edge of more than two faces where an open piece (a hole, a stray fin)
+/// meets stays non-manifold.
 struct MeshReport {
   std::int64_t num_vertices = 0;
   std::int64_t num_faces = 0;
   std::int64_t num_boundary_edges = 0;     ///< edges used by exactly one face
-  std::int64_t num_nonmanifold_edges = 0;  ///< edges used by more than two faces
+  std::int64_t num_nonmanifold_edges = 0;  ///< edges used by more than two faces (after splits)
   std::int64_t num_misoriented_edges = 0;  ///< interior edges traversed twice the same way
-  std::int64_t num_components = 0;         ///< connected components (by welded vertices)
+  std::int64_t num_components = 0;         ///< connected components (by vertex, after splits)
+  std::int64_t num_split_edges = 0;     ///< welded edges of > 2 faces split between closed pieces
+  std::int64_t num_split_vertices = 0;  ///< welded vertices split between closed pieces
   bool is_watertight = false;  ///< closed 2-manifold: every edge shared by exactly two faces
   bool is_winding_consistent = false;  ///< neighbouring faces agree on orientation
   bool is_outward = false;             ///< watertight, consistent and positive signed volume
