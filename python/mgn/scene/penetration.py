@@ -257,7 +257,7 @@ def _overlaps(
                 p = pa[_inside(scene, pa)]
                 if len(p):
                     if exact:
-                        depth, at = _deepest(p, part, worst)
+                        depth, at = _deepest(p, part, worst, models)
                     else:
                         depth, at = _deepest_fcl(p, part, worst, models)
                     if at is not None:
@@ -398,37 +398,47 @@ def _connected_parts(mesh: Mesh) -> list[Mesh]:
     return [Mesh(v, f[face_label == k].astype(np.int32)) for k in pieces]
 
 
-def _deepest(p: np.ndarray, part: Mesh, worst: float) -> tuple[float, np.ndarray | None]:
+def _deepest(
+    p: np.ndarray, part: Mesh, worst: float, models: dict[int, CollisionModel]
+) -> tuple[float, np.ndarray | None]:
     """The largest distance of the points ``p`` (inside ``part``) to the surface of ``part``
     and the point at that distance, when it exceeds ``worst``; else ``(worst, None)``."""
-    # A point's distance to the surface is at most its distance to the nearest vertex
-    # (`bound`): points are measured in order of decreasing bound, and once the bound
-    # is no more than the deepest penetration found, no later point can exceed it. The
-    # result is the brute-force maximum, found with fewer point-triangle distances.
-    # (Vertices of the faces only; the bound is widened by far more than the rounding
-    # of either distance.)
+    # Every point's depth is first bracketed by FCL (a BVH search): the distance d of a probe
+    # cube of edge _PROBE centred at the point to the part's triangles is at most the point's
+    # distance, and short of it by at most the cube's half diagonal. Only points whose upper
+    # end d + half diagonal reaches the largest lower end (and ``worst``) can be the deepest;
+    # their exact distances (brute force over the triangles) decide. The result is the
+    # brute-force maximum.
+    if len(p) == 0:
+        return worst, None
+    if id(part) not in models:
+        models[id(part)] = CollisionModel(part)
+    if -1 not in models:
+        models[-1] = CollisionModel(make_box([_PROBE, _PROBE, _PROBE]))
+    X = np.repeat(np.eye(4)[None], len(p), axis=0)
+    X[:, :3, 3] = p
+    found = distance(models[-1], X, models[id(part)], np.eye(4), num_threads=1).distance
+    lower = np.maximum(np.asarray(found, np.float64), 0.0)
+    reach = 0.5 * np.sqrt(3.0) * _PROBE * (1.0 + 1e-6) + 1e-12  # half diagonal, widened
+    candidates = np.flatnonzero(lower + reach > max(worst, float(lower.max())))
+    if len(candidates) == 0:
+        return worst, None
     faces = np.asarray(part.faces)
-    vertices = np.asarray(part.vertices, np.float64)
-    corners = vertices[np.unique(faces)]
-    bound = np.concatenate(
-        [
-            np.sqrt(((p[k : k + 64, None, :] - corners[None]) ** 2).sum(-1).min(1))
-            for k in range(0, len(p), 64)
-        ]
-    )
-    bound = bound * (1.0 + 1e-9) + 1e-12
-    order = np.argsort(-bound, kind="stable")
-    p, bound = p[order], bound[order]
-    tri = vertices[faces]
-    at: np.ndarray | None = None
-    for k in range(0, len(p), 64):
-        if bound[k] <= worst:
-            break
-        d = point_triangle_distance(p[k : k + 64], tri)
-        i = int(np.argmax(d))
-        if d[i] > worst:
-            worst, at = float(d[i]), p[k + i]
-    return worst, at
+    tri = np.asarray(part.vertices, np.float64)[faces]
+    chunk = max(1, 200_000 // max(1, len(faces)))  # points per brute-force block
+    exact = np.concatenate(
+        [point_triangle_distance(p[candidates[k : k + chunk]], tri)
+         for k in range(0, len(candidates), chunk)]
+    )  # fmt: skip
+    best = float(exact.max())
+    if not best > worst:
+        return worst, None
+    # Of the points at the deepest distance, the one farthest from the part's vertices (then
+    # the first in input order): a deterministic choice among equally deep points.
+    tied = p[candidates[exact == best]]
+    corners = np.asarray(part.vertices, np.float64)[np.unique(faces)]
+    bound = np.sqrt(((tied[:, None, :] - corners[None]) ** 2).sum(-1).min(1))
+    return best, tied[int(np.argsort(-bound, kind="stable")[0])]
 
 
 _PROBE = 1e-5  # m, edge of the probe cube whose FCL distance to a mesh gives a point's depth
