@@ -93,9 +93,13 @@ def time_stages(spec: Any, config: Any, threads: int) -> tuple[dict[str, Timing]
     shared = timed(
         "samples", lambda: sample_surface(mesh, ol.suction_points, method="even", seed=ol.seed)
     )
-    common = dict(
-        mass=props.mass, com=props.center_of_mass, seed=ol.seed, num_threads=threads, samples=shared
-    )
+    common = {
+        "mass": props.mass,
+        "com": props.center_of_mass,
+        "seed": ol.seed,
+        "num_threads": threads,
+        "samples": shared,
+    }
     suction = timed(
         "suction",
         lambda: suction_label_object(

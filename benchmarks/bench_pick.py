@@ -65,7 +65,7 @@ def run(
     config = _config(quick)
     scene = drop_scene(compose_objects(count=num_objects, seed=SEED), seed=SEED)
     threads = thread_counts()[-1]
-    kw = dict(config=config, resolution=RESOLUTION, num_threads=threads)
+    kw = {"config": config, "resolution": RESOLUTION, "num_threads": threads}
     t0 = time.perf_counter()
     first = run_picking(scene, **kw)  # warm-up: object labels, decompositions
     log(f"bench_pick: first run (with object labels) {time.perf_counter() - t0:.2f} s")

@@ -38,10 +38,11 @@ from mgn.scene.scene import RemovedInstance, Scene
 #: Every object label off, one tiny view, a short drop: a generate run of about a second.
 FAST = {
     "camera": {"views": [0], "resolution_scale": 0.06},
-    "labels": {k: False for k in ("suction", "paralleljaw", "pj_physics", "layout",
-                                  "scene_grasps")},
+    "labels": dict.fromkeys(
+        ("suction", "paralleljaw", "pj_physics", "layout", "scene_grasps"), False
+    ),
     "drop": {"max_time": 0.5},
-}  # fmt: skip
+}
 
 CUBE_OBJ = """v -0.5 -0.5 -0.5
 v 0.5 -0.5 -0.5

@@ -312,7 +312,7 @@ def test_npz_bytes_are_the_bytes_zipfile_writes():
     stored = npz_bytes(**arrays, compress=False, lzma_entries=("lz",))
     assert stored == _zipfile_npz(
         arrays,
-        {k: (zipfile.ZIP_STORED, None) for k in arrays} | {"lz": (zipfile.ZIP_LZMA, _NpzLzma())},
+        dict.fromkeys(arrays, (zipfile.ZIP_STORED, None)) | {"lz": (zipfile.ZIP_LZMA, _NpzLzma())},
     )
     with np.load(io.BytesIO(data)) as z:
         for name, array in arrays.items():

@@ -103,10 +103,11 @@ def test_generate_prints_the_warning(tmp_path: Path, capsys: pytest.CaptureFixtu
     cfg = {
         "objects": {"names": ["box_tea", "can_soda"]},
         "camera": {"views": [0], "resolution_scale": 0.02},  # 24 x 24 px
-        "labels": {k: False for k in ("suction", "paralleljaw", "pj_physics", "layout",
-                                      "scene_grasps")},
+        "labels": dict.fromkeys(
+            ("suction", "paralleljaw", "pj_physics", "layout", "scene_grasps"), False
+        ),
         "drop": {"max_time": 1.0},
-    }  # fmt: skip
+    }
     (tmp_path / "cfg.yaml").write_text(yaml.safe_dump(cfg))
     args = ["generate", "--out", str(tmp_path / "ds"), "--scenes", "1"]
     assert main([*args, "--config", str(tmp_path / "cfg.yaml"), "--quiet"]) == 0

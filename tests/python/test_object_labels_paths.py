@@ -52,7 +52,13 @@ def test_shared_samples_give_the_labels_of_separate_label_object_calls():
     shared = compute_object_labels(spec, config, num_threads=2)
     mesh = spec.to_mesh()
     props = mass_properties(mesh, spec.density)
-    kw = dict(mass=props.mass, com=props.center_of_mass, num_points=300, seed=7, num_threads=1)
+    kw = {
+        "mass": props.mass,
+        "com": props.center_of_mass,
+        "num_points": 300,
+        "seed": 7,
+        "num_threads": 1,
+    }
     suction = suction_label_object(
         mesh, cup=config.cup, model="spring", inertia=props.inertia, **kw
     )

@@ -274,18 +274,18 @@ def test_material_and_spec_validation(objects: tuple[ObjectSpec, ...]) -> None:
     assert a == b and hash(a) == hash(b)
     mug = get_object("mug")
     kps = (Keypoint(1, "a", (0.0, 0.0, 0.0)), Keypoint(2, "b", (0.0, 0.0, 0.01)))
-    common = dict(
-        category_id=99,
-        name="t",
-        description="",
-        vertices=mug.vertices,
-        faces=mug.faces,
-        uvs=None,
-        material=mug.material,
-        friction=0.5,
-        keypoints=kps,
-        tags=frozenset(),
-    )
+    common = {
+        "category_id": 99,
+        "name": "t",
+        "description": "",
+        "vertices": mug.vertices,
+        "faces": mug.faces,
+        "uvs": None,
+        "material": mug.material,
+        "friction": 0.5,
+        "keypoints": kps,
+        "tags": frozenset(),
+    }
     with pytest.raises(ValueError, match="density"):
         ObjectSpec(density=-1.0, **common)
     with pytest.raises(ValueError, match="tags"):

@@ -39,7 +39,7 @@ def mixed_scene() -> PathScene:
 def test_adaptive_same_bytes_for_one_and_two_threads_and_labels_unchanged():
     scene = mixed_scene()
     view = camera((0, -2.0, 1.0), (0, 0, 0), 48, 50)
-    opts = dict(spp=2, seed=9, view_index=2, adaptive_samples=1.0, adaptive_max=4)
+    opts = {"spp": 2, "seed": 9, "view_index": 2, "adaptive_samples": 1.0, "adaptive_max": 4}
     outs = [scene.render(view, PathTraceOptions(**opts, num_threads=t, aperture_radius=0.01))
             for t in (1, 2)]  # fmt: skip
     for name in ("radiance", "albedo", "normal", "depth", "instance_ids"):

@@ -813,9 +813,12 @@ def test_sky_dome_colours_and_sun_irradiance():
     below the horizon; the sky's sun disc adds an irradiance of sun_strength * pi * lum(zenith)
     at normal incidence, i.e. a * sun_strength * lum(zenith) in the radiance of a Lambertian
     plane of albedo a facing the sun (sky minus gradient with the same colours)."""
-    kw = dict(
-        zenith=(0.2, 0.3, 0.6), horizon=(0.7, 0.7, 0.7), ground=(0.1, 0.2, 0.1), intensity=2.0
-    )
+    kw = {
+        "zenith": (0.2, 0.3, 0.6),
+        "horizon": (0.7, 0.7, 0.7),
+        "ground": (0.1, 0.2, 0.1),
+        "intensity": 2.0,
+    }
     grad = Environment(kind="gradient", **kw)
     sky = Environment(kind="sky", sun_direction=(0, 0, 1), sun_strength=4.0, **kw)
     dummy = quad(0.01, z=-50.0)
@@ -956,7 +959,7 @@ def test_clamp_indirect_clamps_only_light_found_after_the_first_bounce():
         [make_sphere(1.0, 256, 128).flipped()], np.eye(4)[None], [1], [[mat]], (), BLACK
     )
     view = camera((0, 0, 0), (1, 0.2, 0.1), 8, 90)
-    base = dict(spp=16, max_bounces=2, rr_depth=100)
+    base = {"spp": 16, "max_bounces": 2, "rr_depth": 100}
     clamped = scene.render(view, PathTraceOptions(**base, clamp_indirect=1e-6)).radiance
     default = scene.render(view, PathTraceOptions(**base)).radiance
     off = scene.render(view, PathTraceOptions(**base, clamp_indirect=0.0)).radiance

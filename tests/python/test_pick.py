@@ -203,7 +203,7 @@ def test_colliding_grasps_fail_twice_per_object_and_the_run_stops(stack, pick_co
 def test_same_seed_same_records(stack, pick_config):
     from mgn.eval.pick import run_picking
 
-    kw = dict(policy="random", config=pick_config, stochastic=True, max_attempts=3)
+    kw = {"policy": "random", "config": pick_config, "stochastic": True, "max_attempts": 3}
     a = run_picking(stack, seed=4, **kw)
     b = run_picking(stack, seed=4, **kw)
     assert a == b and len(a.attempts) >= 1

@@ -128,7 +128,7 @@ def test_no_reported_grasp_collides_by_an_independent_fcl_query():
     g = ParallelJawGripper()
     sampler = AntipodalSampler(mesh, g)
     s = mgn.sample_surface(mesh, 150, method="even", seed=4)
-    kw = dict(seed=4, approaches_kept=3)
+    kw = {"seed": 4, "approaches_kept": 3}
     free = sampler.sample(s.points, s.normals, **kw)
     unchecked = sampler.sample(s.points, s.normals, check_collision=False, **kw)
     obj = fcl.CollisionObject(_fcl_bvh(mesh), fcl.Transform())
@@ -321,7 +321,7 @@ def test_collision_filter_keeps_exactly_the_approaches_fcl_finds_free(name):
     g = ParallelJawGripper()
     sampler = AntipodalSampler(mesh, g)
     s = mgn.sample_surface(mesh, 60, method="even", seed=11)
-    kw = dict(seed=11, approaches_tried=30, approaches_kept=30, num_threads=1)
+    kw = {"seed": 11, "approaches_tried": 30, "approaches_kept": 30, "num_threads": 1}
     every = sampler.sample(s.points, s.normals, check_collision=False, **kw)
     kept = sampler.sample(s.points, s.normals, **kw)
     X = hand_poses(every.p1, every.closing, every.approach, every.width, g)

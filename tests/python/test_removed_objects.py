@@ -16,10 +16,11 @@ from mgn.viz.report import write_report
 OVERFULL = {
     "objects": {"names": ["box_cereal"] * 24, "refill": False},
     "camera": {"views": [0], "resolution_scale": 0.05},
-    "labels": {k: False for k in ("suction", "paralleljaw", "pj_physics", "layout",
-                                  "scene_grasps")},
+    "labels": dict.fromkeys(
+        ("suction", "paralleljaw", "pj_physics", "layout", "scene_grasps"), False
+    ),
     "drop": {"max_time": 2.0},
-}  # fmt: skip
+}
 
 
 @pytest.fixture(scope="module")

@@ -372,7 +372,7 @@ def _holes(cuts: list[manifold3d.Manifold], feats: list[_Feature]) -> float:
 def _controls(feats: list[_Feature], row_ends: dict[str, float]) -> None:
     sx, sy, _ = PLATE_SIZE
     # Rows must leave room for the pose rings of the outer edge (row E) and the corner (row F).
-    limits = {row: sx - _X_MARGIN for row in row_ends}
+    limits = dict.fromkeys(row_ends, sx - _X_MARGIN)
     limits["E"] = sx - _EDGE_INSETS_MM[-1] * MM - _RING_CLEAR - _GAP
     limits["F"] = sx - _CORNER_INSETS_MM[-1] * MM - _RING_CLEAR - _GAP
     for row, end in row_ends.items():

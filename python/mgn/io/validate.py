@@ -78,13 +78,13 @@ _GROUP_LEAVES: dict[str, dict[str, tuple[int, ...]]] = {
         "franka_poses_relative_to_camera": (4, 4),
         "contact_poses_relative_to_camera": (4, 4),
         "contact_width": (),
-        **{s: () for s in _SCORES},
+        **dict.fromkeys(_SCORES, ()),
         "object_id": (),
     },
     "suctioncup": {
         "suction_poses_relative_to_camera": (4, 4),
         "contact_poses_relative_to_camera": (4, 4),
-        **{s: () for s in _SCORES},
+        **dict.fromkeys(_SCORES, ()),
         "object_id": (),
     },
     "keypts": {
@@ -419,7 +419,7 @@ class _ViewCheck:
                     continue
                 leaves = dict(spec)
                 if top == "colliding_grasps":
-                    leaves.update({c: () for c in _COLLISION_LEAVES})
+                    leaves.update(dict.fromkeys(_COLLISION_LEAVES, ()))
                 members = set(g)
                 missing = sorted(set(leaves) - members)
                 if missing:

@@ -542,7 +542,9 @@ class LabelsConfig(_Section):
     layout: bool = True
     scene_grasps: bool = True
 
-    _CHECKS = {k: _bool for k in ("suction", "paralleljaw", "pj_physics", "layout", "scene_grasps")}
+    _CHECKS = dict.fromkeys(
+        ("suction", "paralleljaw", "pj_physics", "layout", "scene_grasps"), _bool
+    )
 
 
 def _physics_grasps(value: Any, key: str) -> int | None:

@@ -630,7 +630,7 @@ class GenerateReport:
             lines.append(f"  not run: {', '.join(f'scene{i}' for i in self.not_run)}")
         if self.selection is not None:
             q = self.selection["quota"]
-            got = {k: 0 for k in q}
+            got = dict.fromkeys(q, 0)
             for e in self.selection["views"]:
                 got[str(e["difficulty"])] += 1
             per = ", ".join(f"{k}: {got[k]}/{n}" for k, n in q.items())

@@ -247,9 +247,7 @@ def label_object(
     def cat(name: str, dtype: type) -> np.ndarray:
         return np.concatenate([np.asarray(getattr(p, name)) for p in parts]).astype(dtype)
 
-    offsets = np.repeat(
-        [start for start in range(0, len(points), chunk)], [len(p.width) for p in parts]
-    )
+    offsets = np.repeat(list(range(0, len(points), chunk)), [len(p.width) for p in parts])
     point_index = cat("point_index", np.int64) + offsets.astype(np.int64)
     p1, closing, width = cat("p1", np.float64), cat("closing", np.float64), cat("width", np.float64)
     approach, score = cat("approach", np.float32), cat("score", np.float32)
@@ -282,7 +280,7 @@ def label_object(
             "approaches_tried": _SAMPLER.approaches_tried,
             "approaches_kept": _SAMPLER.approaches_kept,
         }
-        | {k: v for k, v in opts.items()},
+        | dict(opts),
         "pj_num_accepted_probes": int(sum(p.num_accepted_probes for p in parts)),
         "pj_num_colliding": int(sum(p.num_colliding for p in parts)),
         "pj_num_found": int(found),
