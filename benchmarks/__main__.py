@@ -144,7 +144,7 @@ def rows_out_of_sync(out: Path) -> str | None:
     if not out.exists():
         return None
     text = out.read_text()
-    section = re.search(r"^## Results$(.*?)^## ", text, flags=re.M | re.S)
+    section = re.search(r"^## Results$(.*?)^## ", text, flags=re.MULTILINE | re.DOTALL)
     if section is None:
         return None
     shown = sum(1 for line in section.group(1).splitlines() if line.startswith("| ")) - 1

@@ -265,10 +265,7 @@ def gate(rows: Sequence[Row], floors: Sequence[Floor] = FLOORS) -> list[dict[str
         for r in matching:
             t = f.threads if f.threads is not None else (max(r.mgn) if r.mgn else None)
             ratio = r.ratio(t) if t is not None else None
-            if ratio is None:
-                verdict = "not measured"
-            else:
-                verdict = "pass" if ratio >= f.floor else "FAIL"
+            verdict = "not measured" if ratio is None else "pass" if ratio >= f.floor else "FAIL"
             checks.append({"row": f"{r.group}: {r.case}", "threads": t, "ratio": ratio,
                            "floor": f.floor, "verdict": verdict})  # fmt: skip
     return checks

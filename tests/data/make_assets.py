@@ -36,7 +36,7 @@ def write_obj_with_texture() -> None:
             # order is kept; flip for the negative side.
             idx = [vid, vid + 1, vid + 2, vid + 3]
             if (sign > 0) != ((u_ax, v_ax) in ((0, 1), (1, 2), (2, 0))):
-                idx = idx[::-1]
+                idx.reverse()
             faces.append(idx)
             vid += 4
     for a, b in corners:

@@ -747,10 +747,10 @@ def test_bad_input_gets_its_outcome(
     if case.patch is not None:
         case.patch(monkeypatch)
     rc, text = run_cli(argv)
-    found = re.findall(case.expect, text, re.S)
+    found = re.findall(case.expect, text, re.DOTALL)
     assert found, f"{case.kind} {case.expect!r} not in:\n{text}"
     assert not case.once or len(found) == 1, f"{case.expect!r} {len(found)} times in:\n{text}"
-    assert case.absent is None or not re.search(case.absent, text, re.S), text
+    assert case.absent is None or not re.search(case.absent, text, re.DOTALL), text
     assert rc == case.rc, text
     if case.check is not None:
         case.check(tmp_path)

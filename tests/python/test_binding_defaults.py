@@ -27,9 +27,9 @@ LITERAL_DEFAULTS: dict[tuple[str, str], str] = {
     ),
 }
 
-_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
+_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.DOTALL)
 _STRUCT = re.compile(r"\bstruct\s+(\w+)\s*(?::[^{;]*)?\{")
-_FIELD = re.compile(r"^[\w:<>,\s*&]*?\b(\w+)\s*(?:=\s*(.+)|\{(.*)\})$", re.S)
+_FIELD = re.compile(r"^[\w:<>,\s*&]*?\b(\w+)\s*(?:=\s*(.+)|\{(.*)\})$", re.DOTALL)
 _FUNCTION_BODY = re.compile(r"\)[\w\s]*\{")
 _NOT_FIELDS = ("using ", "friend ", "static ", "struct ", "enum ", "class ", "template")
 _ARG = re.compile(r'py::arg\("(\w+)"\)\s*=\s*')

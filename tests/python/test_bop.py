@@ -357,7 +357,7 @@ def test_validate_flags_bad_symmetries(exported: Path, tmp_path: Path) -> None:
     shutil.copytree(exported, out)
     path = out / "models" / "models_info.json"
     info = _json(path)
-    key = sorted(info)[0]
+    key = min(info)
     info[key]["symmetries_discrete"] = [[1.0] * 16]
     info[key]["symmetries_continuous"] = [{"axis": [0, 0, 2], "offset": [0, 0, 0]}]
     path.write_text(json.dumps(info))

@@ -87,7 +87,7 @@ def test_validate_flags_a_view_without_visible_objects(small_dataset: Path, tmp_
     ds = tmp_path / "ds"
     shutil.copytree(small_dataset, ds)
     assert validate_dataset(ds) == []
-    npz = sorted((ds / "scene0").glob("*.npz"))[0]
+    npz = min((ds / "scene0").glob("*.npz"))
     with np.load(npz) as z:
         arrays = {k: z[k] for k in z.files}
     arrays["instances_objects"] = np.zeros_like(arrays["instances_objects"])

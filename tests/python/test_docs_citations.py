@@ -42,6 +42,6 @@ def test_every_cited_doc_exists_and_cited_sections_exist() -> None:
         if name == "architecture.md" and not doc.exists():
             pytest.fail("docs/architecture.md is cited but missing (written by another helper)")
         assert doc.is_file(), f"docs/{name} is cited but not in the repository"
-        headings = re.findall(r"^#+ §(\d+)", doc.read_text(encoding="utf-8"), flags=re.M)
+        headings = re.findall(r"^#+ §(\d+)", doc.read_text(encoding="utf-8"), flags=re.MULTILINE)
         missing = sections - set(headings)
         assert not missing, f"docs/{name}: cited sections {sorted(missing)} have no heading"

@@ -557,7 +557,7 @@ def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
     import re
 
     root = Path(__file__).resolve().parents[2]
-    blocks = [re.findall(r"```python\n(.*?)```", (root / page).read_text(), re.S)
+    blocks = [re.findall(r"```python\n(.*?)```", (root / page).read_text(), re.DOTALL)
               for page in ("README.md", "docs/usage.md")]  # fmt: skip
     assert all(blocks), "README and docs/usage.md each have a Python block"
     monkeypatch.chdir(tmp_path)
@@ -616,7 +616,7 @@ def test_report_opens_in_headless_chromium(tmp_path, capsys):
                         page.as_uri()], capture_output=True, text=True, timeout=120)  # fmt: skip
     dom = r.stdout
     assert r.returncode == 0 and "<svg" in dom, r.stderr[-2000:]
-    svgs = re.findall(r"<svg.*?</svg>", dom, re.S)
+    svgs = re.findall(r"<svg.*?</svg>", dom, re.DOTALL)
     assert len(svgs) >= 5
     titles = [re.search(r'font-weight="bold">(.*?)</text>', s).group(1) for s in svgs]
     assert "difficulty level of views" in titles and "suction score (non-colliding)" in titles

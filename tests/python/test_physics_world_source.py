@@ -41,7 +41,7 @@ def _code(text: str) -> str:
     declarations (``class T;``)."""
     text = re.sub(r"//[^\n]*", "", text)
     text = re.sub(r"\b(?:class|struct)\s+\w+\s*;", "", text)
-    text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    text = re.sub(r"/\*.*?\*/", "", text, flags=re.DOTALL)
     text = re.sub(r'"(?:\\.|[^"\\])*"', '""', text)
     return "\n".join(line for line in text.split("\n") if not line.lstrip().startswith("#"))
 

@@ -209,11 +209,13 @@ def _cmd_label(args: argparse.Namespace) -> int:
         label_options(config, scene.seed, num_threads=args.num_threads, scene_grasps=grasps),
         render=render,
     )
-    with tqdm(total=len(views), desc="views", unit="view", disable=None) as bar:
-        with atomic_dir(args.out, overwrite=args.overwrite) as tmp:
-            timings = label_scene(scene, tmp, views, pj_labels=pj, suction_labels=su,
-                                  gripper=config.gripper, cup=config.cup, options=options,
-                                  progress=lambda done, total: bar.update(1))  # fmt: skip
+    with (
+        tqdm(total=len(views), desc="views", unit="view", disable=None) as bar,
+        atomic_dir(args.out, overwrite=args.overwrite) as tmp,
+    ):
+        timings = label_scene(scene, tmp, views, pj_labels=pj, suction_labels=su,
+                              gripper=config.gripper, cup=config.cup, options=options,
+                              progress=lambda done, total: bar.update(1))  # fmt: skip
     split = ", ".join(f"{k} {v:.0f}" for k, v in timings.per_view_ms().items())
     print(f"{len(views)} views of {len(scene)} objects in {args.out} (ms per view: {split})")
     return 0

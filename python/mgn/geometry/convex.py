@@ -10,6 +10,7 @@ the vertices, faces and options, so a changed mesh or option never reads a stale
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import io
@@ -168,8 +169,7 @@ def cached_convex_decomposition(
         if parts is not None:
             return parts
     parts = convex_decomposition(mesh, o)
-    try:
+    # A read-only home or a full disk: the cache is an optimisation only.
+    with contextlib.suppress(OSError):
         atomic_write_bytes(path, _pack(parts))
-    except OSError:
-        pass  # read-only home or full disk: the cache is an optimisation only
     return parts

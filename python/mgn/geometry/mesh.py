@@ -68,7 +68,7 @@ def mass_properties(
     return _core.compute_mass_properties(mesh, density, open_mesh, shell_thickness)
 
 
-_MTLLIB = re.compile(rb"^[ \t]*mtllib[ \t]+(.+?)[ \t]*\r?$", re.M)
+_MTLLIB = re.compile(rb"^[ \t]*mtllib[ \t]+(.+?)[ \t]*\r?$", re.MULTILINE)
 
 
 def missing_material_files(

@@ -347,9 +347,14 @@ def _material(entry: dict[str, Any], mat: Any, texture: Any, name: str, where: s
     material (:func:`pbr_defaults`)."""
     color = entry.get("color", list(mat.base_color) if mat is not None else [0.7, 0.7, 0.7, 1.0])
     opacity_hint = float(mat.opacity) if mat is not None else 1.0
-    if "color" not in entry and mat is not None and not mat.has_pbr and "metallic" not in entry:
-        if pbr_defaults(mat, opacity_hint)["metallic"] == 1.0:  # a Phong metal: its Ks colour
-            color = [*(float(c) for c in mat.specular), float(mat.base_color[3])]
+    if (
+        "color" not in entry
+        and mat is not None
+        and not mat.has_pbr
+        and "metallic" not in entry
+        and pbr_defaults(mat, opacity_hint)["metallic"] == 1.0  # a Phong metal: its Ks colour
+    ):
+        color = [*(float(c) for c in mat.specular), float(mat.base_color[3])]
     if len(color) == 3:
         color = [*color, 1.0]
     if not isinstance(color, (list, tuple)) or len(color) != 4:

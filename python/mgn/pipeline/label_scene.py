@@ -15,6 +15,7 @@ number of views.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import queue
@@ -291,10 +292,8 @@ class _RenderAhead:
         """Stops the thread (after the item it is producing) and waits for it."""
         self._stop.set()
         while self._thread.is_alive():
-            try:
+            with contextlib.suppress(queue.Empty):
                 self._queue.get(timeout=0.1)
-            except queue.Empty:
-                pass
         self._thread.join()
 
 

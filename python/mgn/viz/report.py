@@ -10,6 +10,7 @@ For large datasets the statistics are computed on an even sample of views (``max
 from __future__ import annotations
 
 import base64
+import contextlib
 import html
 import json
 import os
@@ -283,10 +284,8 @@ def image_engines(ds: Dataset) -> str:
     counts: Counter[str] = Counter()
     for scene in ds.scenes():
         rec = None
-        try:
+        with contextlib.suppress(OSError, ValueError):
             rec = json.loads((scene.folder / "manifest.json").read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            pass
         d = rec.get("render") if isinstance(rec, dict) else None
         if not isinstance(d, dict):
             cfg = (ds.info or {}).get("config", {})
