@@ -179,7 +179,7 @@ def child_main(argv: list[str]) -> int:
     p.add_argument("--out", required=True)
     p.add_argument("--adaptive", type=float, default=0.0, help="mgn: adaptive_samples")
     a = p.parse_args(argv)
-    with open(a.desc, "rb") as f:
+    with Path(a.desc).open("rb") as f:
         desc: ps.SceneDesc = pickle.load(f)
     spps = [int(s) for s in a.spps.split(",") if s]
     result: dict[str, Any] = {"configs": []}

@@ -691,7 +691,7 @@ def _write_ply(
     faces = np.zeros(len(F), dtype=[("n", "u1"), ("i", "<i4", (3,))])
     faces["n"] = 3
     faces["i"] = F
-    with open(path, "wb") as f:
+    with Path(path).open("wb") as f:
         f.write(("\n".join(head) + "\n").encode())
         f.write(np.ascontiguousarray(vert, "<f4").tobytes())
         f.write(faces.tobytes())

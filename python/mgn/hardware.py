@@ -17,6 +17,7 @@ import dataclasses
 import math
 import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
@@ -150,12 +151,12 @@ class ParallelJawGripper(_YamlDataclass):
     def from_yaml(cls, path: str | os.PathLike[str]) -> ParallelJawGripper:
         """Read from a YAML file; relative mesh paths are taken relative to the file's folder."""
         g = super().from_yaml(path)
-        base = os.path.dirname(os.path.abspath(path))
+        base = Path(os.path.abspath(path)).parent
         fields = ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
         resolved: dict[str, Any] = {
-            f: os.path.join(base, getattr(g, f))
+            f: os.path.join(base, getattr(g, f))  # noqa: PTH118 -- keeps the spelling of the path
             for f in fields
-            if getattr(g, f) is not None and not os.path.isabs(getattr(g, f))
+            if getattr(g, f) is not None and not Path(getattr(g, f)).is_absolute()
         }
         return dataclasses.replace(g, **resolved) if resolved else g
 

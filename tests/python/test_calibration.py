@@ -3,6 +3,7 @@
 import csv
 import math
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -110,7 +111,7 @@ def test_write_calibration_board_files(board, board_dir, tmp_path):
     assert loaded.validate().is_watertight
     assert "MILLIMETRES" in (board_dir / "README.txt").read_text()
 
-    with open(board_dir / "poses.csv", newline="") as fh:
+    with (board_dir / "poses.csv").open(newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert list(rows[0])[:9] == [
         "pose_id", "feature", "parameter_m", "x_m", "y_m", "z_m", "nx", "ny", "nz",
@@ -118,7 +119,7 @@ def test_write_calibration_board_files(board, board_dir, tmp_path):
     assert len(rows) == len(board["ids"])
     xyz = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows])
     np.testing.assert_allclose(xyz, board["points"], atol=1e-6)  # metres
-    with open(board_dir / "results_template.csv", newline="") as fh:
+    with (board_dir / "results_template.csv").open(newline="") as fh:
         tmpl = list(csv.DictReader(fh))
     assert list(tmpl[0]) == ["pose_id", "sealed", "tear_off_force_N"]
     assert [int(r["pose_id"]) for r in tmpl] == board["ids"].tolist()
@@ -277,7 +278,7 @@ def test_calibrate_rejects_bad_experiments(board):
 
 
 def _write_results(path, rows, header=("pose_id", "sealed", "tear_off_force_N")):
-    with open(path, "w", newline="") as fh:
+    with Path(path).open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
         w.writerows(rows)

@@ -357,7 +357,7 @@ def _open_csv(
 ) -> tuple[list[str], list[tuple[int, dict[str, Any]]]]:
     """(header, rows with line numbers) of a CSV file; checks the required columns."""
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
+        with Path(path).open(newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
             header = [h.strip() for h in (reader.fieldnames or [])]
             reader.fieldnames = header

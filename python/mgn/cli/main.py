@@ -405,7 +405,7 @@ def _cmd_suction_calibrate(args: argparse.Namespace) -> int:
 def _mesh_or_builtin(arg: str, scale: float) -> Mesh:
     """A mesh file, or the name/id of a built-in object."""
 
-    if os.path.exists(arg):
+    if arg and Path(arg).exists():  # Path("") is the working folder
         return load_mesh(arg, scale=scale)
 
     try:

@@ -239,12 +239,13 @@ def _register_label(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) -
 def _scene_path(arg: str) -> str:
     """A scene JSON, or a scene folder (``mgn scene label`` / ``mgn generate``) holding one."""
 
-    if os.path.isdir(arg):
-        p = os.path.join(arg, "scene.json")
-        if not os.path.exists(p):
+    folder = Path(arg)
+    if arg and folder.is_dir():  # Path("") is the working folder
+        p = folder / "scene.json"
+        if not p.exists():
             raise FileNotFoundError(f"'{arg}' is a folder without scene.json; expected a scene "
                                     "JSON (mgn scene drop) or a scene folder")  # fmt: skip
-        return p
+        return os.fspath(p)
     return arg
 
 

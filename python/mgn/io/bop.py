@@ -559,7 +559,7 @@ def _check_models(root: Path, problems: list[Problem]) -> dict[int, float | None
         problems.append(Problem("models/models_info.json", "must be an object by obj_id"))
     for obj_id in sorted(plys):
         path = models / f"obj_{obj_id:06d}.ply"
-        with open(path, "rb") as fh:
+        with path.open("rb") as fh:
             head = fh.read(4096)
         if not head.startswith(b"ply\n") or b"element vertex" not in head:
             problems.append(Problem(path.relative_to(root).as_posix(), "not a PLY file"))

@@ -81,7 +81,7 @@ def replace_grasp_group(
             for key, value in metadata.items():
                 meta.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
         shutil.copymode(path, tmp)
-        os.replace(tmp, path)
+        tmp.replace(path)
     except (OSError, RuntimeError) as e:  # h5py reports some write failures as RuntimeError
         if disk_full_error(e) is not None:
             raise IoError(f"{who}: {disk_full_message(path)}") from e

@@ -34,7 +34,7 @@ _CHUNK = 1 << 20
 def file_sha256(path: str | os.PathLike[str]) -> str:
     """Hex SHA-256 of a file's bytes."""
     h = hashlib.sha256()
-    with open(path, "rb") as fh:
+    with Path(path).open("rb") as fh:
         while block := fh.read(_CHUNK):
             h.update(block)
     return h.hexdigest()
@@ -113,7 +113,7 @@ def prune_scene(folder: str | os.PathLike[str], views: Sequence[int]) -> bool:
     left = [v for v in scene_view_ids(root) if v not in drop]
     if not left:
         tmp = root.parent / f".tmp-pruned-{root.name}-{os.getpid()}"
-        os.rename(root, tmp)
+        root.rename(tmp)
         shutil.rmtree(tmp, ignore_errors=True)
         return True
     gt_path = root / "scene_gt.json"

@@ -15,6 +15,7 @@ import os
 import struct
 import zipfile
 import zlib
+from pathlib import Path
 from typing import Any
 
 import deflate
@@ -38,7 +39,7 @@ class NpzReader:
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = os.fspath(path)
         try:
-            with open(self.path, "rb") as f:
+            with Path(self.path).open("rb") as f:
                 self._data = f.read()
             self._zip = zipfile.ZipFile(io.BytesIO(self._data))
         except FileNotFoundError:

@@ -23,6 +23,7 @@ import functools
 import math
 import os
 from dataclasses import dataclass, fields
+from pathlib import Path
 
 import numpy as np
 
@@ -201,7 +202,7 @@ def _user_tote(s: ToteSpec) -> tuple[np.ndarray, np.ndarray]:
     assert s.mesh is not None  # make_tote calls this for a user bin only
     path = os.path.abspath(s.mesh)
     try:
-        stamp = os.stat(path).st_mtime_ns
+        stamp = Path(path).stat().st_mtime_ns
     except OSError:
         stamp = -1  # load_mesh names the missing file
     v, f = _load_user_tote(path, s.mesh_scale, stamp)

@@ -252,7 +252,7 @@ def _base_color_texture(
         return None, []
     unreadable = []
     texture = _texture(mat.texture_path)
-    if texture is None and mat.texture_path and os.path.isfile(mat.texture_path):
+    if texture is None and mat.texture_path and Path(mat.texture_path).is_file():
         unreadable.append((f"texture of material '{mat.name}' (not a readable image)",
                            str(mat.texture_path)))  # fmt: skip
     if texture is None:

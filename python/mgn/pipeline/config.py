@@ -850,8 +850,8 @@ class Config(_Section):
             )
         if base_dir is not None:
             config = config.resolved(base_dir)
-        if config.tote.mesh is not None and (base_dir is not None or os.path.isabs(
-                config.tote.mesh)):  # fmt: skip
+        if config.tote.mesh is not None and (base_dir is not None or Path(
+                config.tote.mesh).is_absolute()):  # fmt: skip
             try:
                 make_tote(config.tote)  # the file reads and fits the inner box
             except MgnError as e:
@@ -863,13 +863,13 @@ class Config(_Section):
         base = Path(base_dir).resolve()
 
         def absolute(p: str | None) -> str | None:
-            return None if p is None or os.path.isabs(p) else os.fspath(base / p)
+            return None if p is None or Path(p).is_absolute() else os.fspath(base / p)
 
         objects = dataclasses.replace(
             self.objects, user_objects=tuple(absolute(p) or p for p in self.objects.user_objects)
         )
         tote = self.tote
-        if tote.mesh is not None and not os.path.isabs(tote.mesh):
+        if tote.mesh is not None and not Path(tote.mesh).is_absolute():
             tote = dataclasses.replace(tote, mesh=absolute(tote.mesh))
         g = self.gripper
         meshes: dict[str, Any] = {

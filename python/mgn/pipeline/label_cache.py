@@ -389,7 +389,7 @@ def write_models(
             target.parent.mkdir(parents=True, exist_ok=True)
             if target.exists():
                 shutil.rmtree(target)
-            os.replace(tmp, target)
+            tmp.replace(target)
             folders.append(target)
         current = out / "tote"
         write_tote(config.tote, out)

@@ -246,7 +246,7 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
                                removed=tuple(r.name for r in scene.removed))  # fmt: skip
         if final.exists():  # an inconsistent leftover the caller decided to redo
             shutil.rmtree(final)
-        os.rename(tmp, final)
+        tmp.rename(final)
         times["finalize"] = time.perf_counter() - t2
         if task.exports:  # the scene is complete: a failed export leaves it, --resume redoes it
             times.update(export_scene(out, task.index, task.exports, task.config.gripper))
@@ -288,7 +288,7 @@ def store_collected(out: Path, result: SceneResult) -> SceneResult:
             path.write_bytes(data)
         if final.exists():
             shutil.rmtree(final)
-        os.rename(tmp, final)
+        tmp.rename(final)
     except OSError as e:
         shutil.rmtree(tmp, ignore_errors=True)
         full = _disk_full(e)
