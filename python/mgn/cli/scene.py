@@ -215,7 +215,7 @@ def _cmd_label(args: argparse.Namespace) -> int:
     ):
         timings = label_scene(scene, tmp, views, pj_labels=pj, suction_labels=su,
                               gripper=config.gripper, cup=config.cup, options=options,
-                              progress=lambda done, total: bar.update(1))  # fmt: skip
+                              progress=lambda *_: bar.update(1))  # fmt: skip
     split = ", ".join(f"{k} {v:.0f}" for k, v in timings.per_view_ms().items())
     print(f"{len(views)} views of {len(scene)} objects in {args.out} (ms per view: {split})")
     return 0

@@ -222,7 +222,8 @@ def _user_tote(s: ToteSpec) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=8)
-def _load_user_tote(path: str, scale: float, stamp: int) -> tuple[np.ndarray, np.ndarray]:
+def _load_user_tote(path: str, scale: float, stamp: int) -> tuple[np.ndarray, np.ndarray]:  # noqa: ARG001
+    # ``stamp`` (the file's modification time) is part of the cache key only.
 
     mesh = load_mesh(path, scale=scale)
     if mesh.validate().signed_volume < 0:

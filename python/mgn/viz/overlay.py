@@ -270,7 +270,7 @@ def render_overlay(
     font = _font(max(11, w // 70))
     legend_lines = [
         part
-        for line in _legend_lines(grasps, layout, keypoints, alpha, panels)
+        for line in _legend_lines(grasps, layout, keypoints, alpha)
         for part in _wrap(line, font, w * (3 if panels else 1) - 8)
     ]
     line_h = font.size + 6 if hasattr(font, "size") else 18
@@ -345,8 +345,7 @@ def _thick(edge: np.ndarray) -> np.ndarray:
     return out
 
 
-def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: float,
-                  panels: bool) -> list[str]:  # fmt: skip
+def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: float) -> list[str]:
     lines = [
         "label '4 14%" + (" L0" if layout else "") + "' = instance 4, 14% of it occluded"
         + (", layer 0 (0 = top of the pile)" if layout else "")
