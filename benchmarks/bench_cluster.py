@@ -109,7 +109,9 @@ def _run_child(scenes: int, workers: int, out: Path) -> tuple[dict | None, str]:
     cmd = [sys.executable, "-m", "benchmarks.bench_cluster", "--child", "--scenes", str(scenes),
            "--workers", str(workers), "--out", str(out)]  # fmt: skip
     env = dict(os.environ)
-    proc = subprocess.run(cmd, cwd=HERE.parent, capture_output=True, text=True, env=env)
+    proc = subprocess.run(
+        cmd, cwd=HERE.parent, check=False, capture_output=True, text=True, env=env
+    )
     if proc.returncode != 0:
         last = (proc.stderr.strip().splitlines() or ["?"])[-1]
         return None, f"failed ({last})"

@@ -236,7 +236,9 @@ def _run_child(
     cmd = [sys.executable, "-m", "benchmarks.bench_pipeline", "--child"]
     cmd += ["--scenes", str(scenes), "--workers", str(workers)] + (["--quick"] if quick else [])
     cmd += (["--stages"] if stages else []) + ["--engine", engine]
-    proc = subprocess.run(cmd, cwd=HERE.parent, capture_output=True, text=True, env=os.environ)
+    proc = subprocess.run(
+        cmd, cwd=HERE.parent, check=False, capture_output=True, text=True, env=os.environ
+    )
     if proc.returncode != 0:
         last = (proc.stderr.strip().splitlines() or ["?"])[-1]
         return None, f"failed ({last})"

@@ -177,7 +177,9 @@ def _run_child(side: str, width: int, repeats: int, out: Path) -> tuple[dict | N
     env = dict(os.environ, PYOPENGL_PLATFORM="osmesa")
     cmd = [sys.executable, "-m", "benchmarks.bench_render", "--side", side]
     cmd += ["--width", str(width), "--repeats", str(repeats), "--out", str(out)]
-    proc = subprocess.run(cmd, cwd=HERE.parent, env=env, capture_output=True, text=True)
+    proc = subprocess.run(
+        cmd, cwd=HERE.parent, env=env, check=False, capture_output=True, text=True
+    )
     if proc.returncode != 0:
         last = (proc.stderr.strip().splitlines() or ["?"])[-1]
         status = PEER_NOT_INSTALLED if "ModuleNotFoundError" in proc.stderr else "failed"

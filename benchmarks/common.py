@@ -234,7 +234,7 @@ def fmt_rate(x: float) -> str:
 
 def fmt_timing(t: Timing | None, n: int, status: str) -> str:
     if t is None:
-        return status.split(" (")[0] if status else "—"
+        return status.split(" (", maxsplit=1)[0] if status else "—"
     lo, hi = t.rate_iqr(n)
     return f"{fmt_rate(t.rate(n))} [{fmt_rate(lo)}–{fmt_rate(hi)}]"
 

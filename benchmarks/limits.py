@@ -159,8 +159,8 @@ def plot_ratios(rows: list[Row], path: Any) -> bool:
     draw = ImageDraw.Draw(img)
     title = f"mgn speed / peer speed at {t} threads (log scale; right of 1x: mgn faster)"
     draw.text((10, 10), title, fill="black")
-    lo = min(0.5, min(r for _, r in items))
-    hi = max(20.0, max(r for _, r in items))
+    lo = min(0.5, *(r for _, r in items))
+    hi = max(20.0, *(r for _, r in items))
 
     def x_of(ratio: float) -> float:
         return label_w + bar_w * (math.log(ratio) - math.log(lo)) / (math.log(hi) - math.log(lo))

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from PIL import Image
 
-import mgn.io.bop as bop
 from mgn.cli.main import main
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.geometry.mesh import Mesh
 from mgn.geometry.raytrace import RayScene, camera_rays
+from mgn.io import bop
 from mgn.io.bop import export_bop, validate_bop
 
 

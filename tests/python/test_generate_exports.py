@@ -158,7 +158,7 @@ def test_resume_adds_formats_to_a_finished_dataset(
 def test_failed_export_fails_the_scene_and_resume_redoes_it(
     runs: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import mgn.pipeline.exports as exports
+    from mgn.pipeline import exports
 
     ds = tmp_path / "ds"
     shutil.copytree(runs["plain"], ds)

@@ -75,6 +75,7 @@ def test_cpp_cli_labels_an_inward_mesh(tmp_path: Path) -> None:
         r = subprocess.run(
             [exe, "pj", "--mesh", str(tmp_path / f"{name}.stl"), "--out", str(out)]
             + ["--points", "30", "--seed", "2"],
+            check=False,
             capture_output=True,
             text=True,
         )

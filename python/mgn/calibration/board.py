@@ -477,7 +477,7 @@ def make_calibration_board() -> tuple[
     The mesh is a single closed, manifold solid. The result is computed once per process; the
     returned arrays and dicts are copies.
     """
-    global _CACHE
+    global _CACHE  # noqa: PLW0603 -- a module-level cache, filled once
     if _CACHE is None:
         _CACHE = _build()
     v, f, feats = _CACHE

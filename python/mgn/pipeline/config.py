@@ -499,7 +499,7 @@ class CameraConfig(_Section):
     _CHECKS = {
         "rig": _choice(*RIGS),
         "views": _optional(_list(_int(0))),
-        "hemisphere": lambda v, k: HemisphereConfig.from_dict(v, k),
+        "hemisphere": HemisphereConfig.from_dict,
         "poses": _list(_camera_pose, nonempty=False),
         "intrinsics": _intrinsics,
         "resolution_scale": _num(0.0),
@@ -811,19 +811,19 @@ class Config(_Section):
     output: OutputConfig = field(default_factory=OutputConfig)
 
     _CHECKS = {
-        "objects": lambda v, k: ObjectsConfig.from_dict(v, k),
+        "objects": ObjectsConfig.from_dict,
         "tote": lambda v, k: _external(ToteSpec, v, k),
         "gripper": lambda v, k: _external(ParallelJawGripper, v, k),
         "cup": lambda v, k: _external(SuctionCup, v, k),
-        "camera": lambda v, k: CameraConfig.from_dict(v, k),
-        "labels": lambda v, k: LabelsConfig.from_dict(v, k),
-        "object_labels": lambda v, k: ObjectLabelsConfig.from_dict(v, k),
+        "camera": CameraConfig.from_dict,
+        "labels": LabelsConfig.from_dict,
+        "object_labels": ObjectLabelsConfig.from_dict,
         "drop": lambda v, k: _external(DropOptions, v, k),
-        "split": lambda v, k: SplitConfig.from_dict(v, k),
-        "selection": lambda v, k: SelectionConfig.from_dict(v, k),
+        "split": SplitConfig.from_dict,
+        "selection": SelectionConfig.from_dict,
         "render": _render,
-        "io": lambda v, k: IoConfig.from_dict(v, k),
-        "output": lambda v, k: OutputConfig.from_dict(v, k),
+        "io": IoConfig.from_dict,
+        "output": OutputConfig.from_dict,
     }
 
     @classmethod

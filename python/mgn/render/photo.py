@@ -300,7 +300,7 @@ _DENOISER_CHECKED = False
 
 
 def _pyoidn() -> Any:
-    global _DENOISER, _DENOISER_CHECKED
+    global _DENOISER, _DENOISER_CHECKED  # noqa: PLW0603 -- the optional denoiser, looked up once
     if not _DENOISER_CHECKED:
         _DENOISER_CHECKED = True
         try:
@@ -875,7 +875,7 @@ class PhotoRenderer:
         seed: int = 0,
         num_threads: int = 0,
     ) -> None:
-        global _WARNED_NO_DENOISER
+        global _WARNED_NO_DENOISER  # noqa: PLW0603 -- warn once per process
         self.settings = settings
         self.randomize = randomize
         self.seed = int(seed)
