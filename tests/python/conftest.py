@@ -58,7 +58,8 @@ def check_difficulty(layout: dict) -> int:
     unique = len(cats) == len(set(cats))
     complete = all(o["complete"] for o in seen)
     layers = len({o["layer"] for o in seen})
-    assert layout["classes_unique"] == unique and layout["all_complete"] == complete
+    assert layout["classes_unique"] == unique
+    assert layout["all_complete"] == complete
     assert layout["num_layers"] == layers
     if complete and unique:
         level = 1 if layers <= 2 and layout["max_occlusion"] <= 0.05 else 2

@@ -310,7 +310,8 @@ def test_the_checks_find_a_function_level_import(package_copy: Path):
         "    import scipy.spatial\n\n    return json, IoError, scipy\n"
     )
     found = problems(package_copy)
-    assert found["upward"] == [] and found["cycles"] == []
+    assert found["upward"] == []
+    assert found["cycles"] == []
     assert [e.split(" (")[0] for e in found["function_level"]] == [
         "mgn.objects.tote -> mgn.errors",
         "mgn.objects.tote -> json",

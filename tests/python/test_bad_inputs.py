@@ -465,7 +465,8 @@ def _entry_mass(expected_g: float, **keys: object) -> Callable[[Path], None]:
             warnings.simplefilter("ignore", UserObjectWarning)
             (spec,) = load_objects_yaml(tmp / "o.yaml")
         props = mass_properties(spec.to_mesh(), spec.density)
-        assert props.is_exact and props.mass * 1e3 == pytest.approx(expected_g, rel=1e-5)
+        assert props.is_exact
+        assert props.mass * 1e3 == pytest.approx(expected_g, rel=1e-5)
 
     return check
 
@@ -695,7 +696,8 @@ def test_repair_keeps_uvs_materials_and_the_solid() -> None:
     mat.name = "paint"
     broken = mesh_from_arrays(v, f, uvs=uvs, material=mat)
     fixed = repair_mesh(broken)
-    assert fixed.closed and not fixed.before.is_winding_consistent
+    assert fixed.closed
+    assert not fixed.before.is_winding_consistent
     assert np.array_equal(fixed.mesh.vertices, broken.vertices)
     assert np.array_equal(fixed.mesh.uvs, uvs)
     assert [m.name for m in fixed.mesh.materials] == ["paint"]

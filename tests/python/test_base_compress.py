@@ -56,11 +56,13 @@ def test_zip_compressor_stores_a_small_head_and_deflates_the_rest():
     data = _payload()
     head = b"\x93NUMPY header" * 5
     z = ZipDeflate(6)
-    assert z.compress(head) == b"" and z.compress(memoryview(data)) == b""
+    assert z.compress(head) == b""
+    assert z.compress(memoryview(data)) == b""
     stream = z.flush()
     assert zlib.decompress(stream, -15) == head + data
     # The head is a stored block (byte 0: not final, type 0), then LEN and its complement.
-    assert stream[0] == 0 and int.from_bytes(stream[1:3], "little") == len(head)
+    assert stream[0] == 0
+    assert int.from_bytes(stream[1:3], "little") == len(head)
     assert int.from_bytes(stream[3:5], "little") == len(head) ^ 0xFFFF
     # A head of 64 KiB or more is deflated with the rest.
     z = ZipDeflate(6)
@@ -181,7 +183,9 @@ def test_hdf5_chunks_without_shuffle_read_back_through_the_gzip_filter(tmp_path:
         h5_write_deflated(h5, "s", repeated, (1024,), 6, track_times=False)
     with h5py.File(tmp_path / "a.h5", "r") as h5:
         x, s = h5["x"], h5["s"]
-        assert x.compression == "gzip" and not x.shuffle and s.shuffle
+        assert x.compression == "gzip"
+        assert not x.shuffle
+        assert s.shuffle
         assert np.asarray(x[()]).tobytes() == repeated.tobytes()
         for k in (0, 1024, 2048):
             _, stored = x.id.read_direct_chunk((k,))
@@ -217,14 +221,17 @@ def test_hdf5_chunks_written_directly_read_back_through_the_gzip_filter(
         h5.create_dataset("ref", data=a, chunks=chunks, compression="gzip", shuffle=True)
     with h5py.File(tmp_path / "a.h5", "r") as h5:
         x = h5["x"]
-        assert x.dtype == a.dtype and x.chunks == chunks
-        assert x.compression == "gzip" and x.shuffle
+        assert x.dtype == a.dtype
+        assert x.chunks == chunks
+        assert x.compression == "gzip"
+        assert x.shuffle
         assert np.asarray(x[()]).tobytes() == a.tobytes()  # NaN bits included
         assert np.asarray(h5["ref"][()]).tobytes() == a.tobytes()
         # Chunk by chunk, the stored stream inflates to the shuffled bytes HDF5 wrote itself.
         for offset, raw in shuffled_chunks(a, chunks):
             mask, stored = x.id.read_direct_chunk(offset)
-            assert mask == 0 and zlib.decompress(stored) == raw
+            assert mask == 0
+            assert zlib.decompress(stored) == raw
             _, ref = h5["ref"].id.read_direct_chunk(offset)
             n = np.prod([min(c, s - o) for c, s, o in zip(chunks, shape, offset, strict=True)])
             if n == int(np.prod(chunks)):  # HDF5 pads partial chunks with whatever: full only
@@ -251,11 +258,13 @@ def test_png_decodes_with_pillow_and_opencv(kind: str):
         im.load()  # checks every CRC and the zlib stream
         pil = np.asarray(im.convert("RGB") if palette is not None else im)
     expected = palette[img] if palette is not None else img
-    assert pil.dtype == expected.dtype and np.array_equal(pil, expected)
+    assert pil.dtype == expected.dtype
+    assert np.array_equal(pil, expected)
     cv = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if kind in ("rgb", "palette"):
         cv = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)[..., ::-1]
-    assert cv.dtype == expected.dtype and np.array_equal(cv, expected)
+    assert cv.dtype == expected.dtype
+    assert np.array_equal(cv, expected)
     assert png_encode(img, level=6, palette=palette) == data
 
 
@@ -316,7 +325,8 @@ def test_npz_bytes_are_the_bytes_zipfile_writes():
     )
     with np.load(io.BytesIO(data)) as z:
         for name, array in arrays.items():
-            assert z[name].dtype == array.dtype and z[name].shape == array.shape
+            assert z[name].dtype == array.dtype
+            assert z[name].shape == array.shape
             assert np.array_equal(z[name], array)
     # Every entry's CRC checks (zipfile recomputes it while reading).
     with zipfile.ZipFile(io.BytesIO(data)) as zf:

@@ -26,7 +26,9 @@ from mgn.io.bop import export_bop, validate_bop
 def exported(small_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("bop") / "out"
     result = export_bop(small_dataset, out)
-    assert result.written == [0, 1] and result.skipped == [] and result.models_written
+    assert result.written == [0, 1]
+    assert result.skipped == []
+    assert result.models_written
     return out
 
 
@@ -49,7 +51,8 @@ def _read_ply(path: Path) -> tuple[np.ndarray, np.ndarray, list[str]]:
     lines = path.read_text().splitlines()
     end = lines.index("end_header")
     header = lines[:end]
-    assert header[0] == "ply" and header[1] == "format ascii 1.0"
+    assert header[0] == "ply"
+    assert header[1] == "format ascii 1.0"
     nv = int(next(h.split()[2] for h in header if h.startswith("element vertex")))
     nf = int(next(h.split()[2] for h in header if h.startswith("element face")))
     props = [h.split()[2] for h in header if h.startswith("property float")]
@@ -70,7 +73,8 @@ def test_top_level_files(exported: Path, small_dataset: Path) -> None:
     params = _json(small_dataset / "scene0" / "0_camera_params.json")
     for k in ("cx", "cy", "fx", "fy", "width", "height"):
         assert cam[k] == params[k]
-    assert cam["depth_scale"] == 0.1 and isinstance(cam["width"], int)
+    assert cam["depth_scale"] == 0.1
+    assert isinstance(cam["width"], int)
     info = _json(exported / "models" / "models_info.json")
     ids = sorted(int(p.name) for p in (small_dataset / "models").iterdir())
     assert sorted(int(k) for k in info) == ids
@@ -83,7 +87,8 @@ def test_top_level_files(exported: Path, small_dataset: Path) -> None:
         v, f, props = _read_ply(ply)
         assert props == ["x", "y", "z", "nx", "ny", "nz", "texture_u", "texture_v"]
         assert np.allclose(np.linalg.norm(v[:, 3:6], axis=1), 1.0, atol=1e-6)
-        assert f.min() >= 0 and f.max() < len(v)
+        assert f.min() >= 0
+        assert f.max() < len(v)
         assert (exported / "models" / f"obj_{obj_id:06d}.png").is_file()
         assert f"comment TextureFile obj_{obj_id:06d}.png" in ply.read_text()[:500]
         # mm: the OBJ's vertices (m) x 1000, and the box of models_info is theirs.
@@ -139,8 +144,10 @@ def test_scene_files_field_by_field(exported: Path, small_dataset: Path) -> None
             assert len(gt) == len(X_CO) == len(mgn_gt[str(v)]) == len(infos[str(v)])
             for k, e in enumerate(gt):
                 assert set(e) == {"cam_R_m2c", "cam_t_m2c", "obj_id"}
-                assert isinstance(e["obj_id"], int) and e["obj_id"] == int(cats[k])
-                assert len(e["cam_R_m2c"]) == 9 and len(e["cam_t_m2c"]) == 3
+                assert isinstance(e["obj_id"], int)
+                assert e["obj_id"] == int(cats[k])
+                assert len(e["cam_R_m2c"]) == 9
+                assert len(e["cam_t_m2c"]) == 3
                 R = np.reshape(e["cam_R_m2c"], (3, 3))
                 assert np.allclose(R, X_CO[k, :3, :3], atol=1e-5)
                 assert np.allclose(e["cam_t_m2c"], X_CO[k, :3, 3] * 10.0, atol=1e-3)  # mm
@@ -167,10 +174,12 @@ def test_depth_masks_and_gt_info(exported: Path, small_dataset: Path) -> None:
                 ids = z["instances_objects"]
                 amodal = z["occlusion_objects"]
             with Image.open(folder / "depth" / f"{v:06d}.png") as im:
-                assert im.mode in ("I;16", "I;16B") and im.size == depth_cm.shape[::-1]
+                assert im.mode in ("I;16", "I;16B")
+                assert im.size == depth_cm.shape[::-1]
                 depth = np.asarray(im, np.float64)
             valid = np.isfinite(depth_cm)
-            assert (depth[~valid] == 0).all() and (depth[valid] > 0).all()
+            assert (depth[~valid] == 0).all()
+            assert (depth[valid] > 0).all()
             err = np.abs(depth[valid] * 0.1 - depth_cm[valid].astype(np.float64) * 10.0)
             assert err.max() <= 0.05 + 1e-6  # half a depth_scale step, mm
             visible = np.zeros(ids.shape, np.int32)
@@ -178,13 +187,16 @@ def test_depth_masks_and_gt_info(exported: Path, small_dataset: Path) -> None:
                 name = f"{v:06d}_{k:06d}.png"
                 mask = _png(folder / "mask" / name)
                 visib = _png(folder / "mask_visib" / name)
-                assert mask.dtype == visib.dtype == np.uint8 and mask.shape == ids.shape
-                assert set(np.unique(mask)) <= {0, 255} and set(np.unique(visib)) <= {0, 255}
+                assert mask.dtype == visib.dtype == np.uint8
+                assert mask.shape == ids.shape
+                assert set(np.unique(mask)) <= {0, 255}
+                assert set(np.unique(visib)) <= {0, 255}
                 assert np.array_equal(visib > 0, ids == k + 1)
                 assert np.array_equal(mask > 0, amodal[k])
                 visible += visib > 0
                 n_all, n_vis = int(amodal[k].sum()), int((ids == k + 1).sum())
-                assert info["px_count_all"] == n_all and info["px_count_visib"] == n_vis
+                assert info["px_count_all"] == n_all
+                assert info["px_count_visib"] == n_vis
                 assert info["px_count_valid"] == int((amodal[k] & valid).sum())
                 assert info["visib_fract"] == pytest.approx(n_vis / n_all, rel=1e-12)
                 assert info["bbox_obj"] == _bbox(amodal[k])
@@ -219,7 +231,8 @@ def test_poses_reproject_onto_the_amodal_masks(exported: Path, small_dataset: Pa
                 o, d = camera_rays(K, w, h, np.eye(4))
                 hit = scene.intersect(o, d, coherent=True).hit.reshape(h, w)
                 ious.append((hit & mask).sum() / (hit | mask).sum())
-    assert len(ious) >= 6 and min(ious) >= 0.99, ious
+    assert len(ious) >= 6, ious
+    assert min(ious) >= 0.99, ious
 
 
 def test_validate_accepts_the_export_and_names_each_fault(exported: Path, tmp_path: Path) -> None:
@@ -260,7 +273,8 @@ def test_resume_and_atomic_scenes(
 ) -> None:
     out = tmp_path / "out"
     first = export_bop(small_dataset, out, scenes=[1])
-    assert first.written == [1] and first.skipped == []
+    assert first.written == [1]
+    assert first.skipped == []
     # A run that fails inside scene 0 leaves no part of it.
     calls = {"n": 0}
     real = bop.png_bytes
@@ -277,7 +291,9 @@ def test_resume_and_atomic_scenes(
     monkeypatch.undo()
     assert sorted(p.name for p in (out / "train_pbr").iterdir()) == ["000001"]
     again = export_bop(small_dataset, out)
-    assert again.written == [0] and again.skipped == [1] and not again.models_written
+    assert again.written == [0]
+    assert again.skipped == [1]
+    assert not again.models_written
     # Byte for byte the files of one uninterrupted run.
     files = sorted(p.relative_to(exported) for p in exported.rglob("*") if p.is_file())
     assert files == sorted(p.relative_to(out) for p in out.rglob("*") if p.is_file())
@@ -333,7 +349,8 @@ def test_models_info_symmetries(exported: Path) -> None:
         disc = entry.get("symmetries_discrete", [])
         cont = entry.get("symmetries_continuous", [])
         if cont:
-            assert len(cont) == 1 and disc == []
+            assert len(cont) == 1
+            assert disc == []
             assert np.abs(cont[0]["axis"]) == pytest.approx([0, 0, 1])
             assert cont[0]["offset"][:2] == pytest.approx([0, 0], abs=0.05)
             continue
@@ -347,7 +364,8 @@ def test_models_info_symmetries(exported: Path) -> None:
             assert sorted(np.diag(R).round(9).tolist()) == [-1.0, -1.0, 1.0]
             moved = xyz @ R.T + t
             # every vertex stays inside the box and the box's centre is fixed
-            assert (moved >= lo - 0.01).all() and (moved <= hi + 0.01).all()
+            assert (moved >= lo - 0.01).all()
+            assert (moved <= hi + 0.01).all()
             c = (lo + hi) / 2
             assert R @ c + t == pytest.approx(c, abs=0.05)
 

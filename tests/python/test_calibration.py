@@ -48,15 +48,20 @@ def board_dir(tmp_path_factory):
 
 def test_board_is_one_watertight_outward_solid(board):
     report = board["mesh"].validate()
-    assert report.is_watertight and report.is_winding_consistent and report.is_outward
-    assert report.num_boundary_edges == 0 and report.num_components == 1
+    assert report.is_watertight
+    assert report.is_winding_consistent
+    assert report.is_outward
+    assert report.num_boundary_edges == 0
+    assert report.num_components == 1
     lo, hi = np.asarray(board["mesh"].bounds)
     np.testing.assert_allclose(lo, 0.0, atol=1e-9)
     np.testing.assert_allclose(hi[:2], PLATE_SIZE[:2], atol=1e-9)
     assert hi[2] == pytest.approx(TOP_Z + 0.012)  # the 12 mm step is the tallest feature
     trimesh = pytest.importorskip("trimesh")
     tm = trimesh.Trimesh(board["mesh"].vertices, board["mesh"].faces, process=True)
-    assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
+    assert tm.is_watertight
+    assert tm.is_winding_consistent
+    assert tm.volume > 0
     assert tm.euler_number == 2 - 2 * 6  # six through-holes: genus 6
 
 
@@ -70,7 +75,9 @@ def test_board_has_the_graded_features(board):
     assert params("hole") == [2, 4, 6, 8, 10, 12]
     for kind in ("convex_cylinder", "concave_cylinder", "dome"):
         radii = params(kind)
-        assert radii[0] == 5 and radii[-1] == 40 and len(radii) >= 6
+        assert radii[0] == 5
+        assert radii[-1] == 40
+        assert len(radii) >= 6
     assert {"ridge", "groove", "flat", "edge", "corner", "tilt"} <= {f["kind"] for f in feats}
     for f in feats:
         assert {"name", "kind", "parameter", "parameter_m", "poses"} <= set(f)
@@ -105,7 +112,8 @@ def test_write_calibration_board_files(board, board_dir, tmp_path):
     data = (board_dir / "board.stl").read_bytes()
     assert not data.startswith(b"solid")  # binary, not ASCII
     (count,) = struct.unpack("<I", data[80:84])
-    assert count == n_faces and len(data) == 84 + 50 * count
+    assert count == n_faces
+    assert len(data) == 84 + 50 * count
     loaded = mgn.load_mesh(board_dir / "board.stl", scale=1e-3)  # the STL is in millimetres
     np.testing.assert_allclose(np.asarray(loaded.bounds)[1, :2], PLATE_SIZE[:2], atol=1e-6)
     assert loaded.validate().is_watertight
@@ -179,9 +187,13 @@ def test_recovers_known_cup_constants_from_noisy_simulated_outcomes(board):
     tr = report.train_indices
     assert report.train["accuracy"] >= np.mean(y_sim[tr] == measured[tr]) - 1e-12
     # Every other cup field is kept.
-    assert report.cup.radius == default.radius and report.cup.num_points == default.num_points
+    assert report.cup.radius == default.radius
+    assert report.cup.num_points == default.num_points
     text = report.format_report()
-    assert "c1" in text and "held-out" in text and "specificity" in text and "tilt" in text
+    assert "c1" in text
+    assert "held-out" in text
+    assert "specificity" in text
+    assert "tilt" in text
 
 
 def test_split_is_stratified_and_reproducible(board):
@@ -224,11 +236,14 @@ def test_ties_keep_the_initial_constants(board):
 def test_classification_metrics_counts_and_nan():
     m = classification_metrics([1, 1, 0, 0, 1], [1, 0, 0, 1, 1])
     assert (m["tp"], m["fp"], m["tn"], m["fn"]) == (2, 1, 1, 1)
-    assert m["ppv"] == pytest.approx(2 / 3) and m["npv"] == pytest.approx(0.5)
-    assert m["sensitivity"] == pytest.approx(2 / 3) and m["specificity"] == pytest.approx(0.5)
+    assert m["ppv"] == pytest.approx(2 / 3)
+    assert m["npv"] == pytest.approx(0.5)
+    assert m["sensitivity"] == pytest.approx(2 / 3)
+    assert m["specificity"] == pytest.approx(0.5)
     assert m["accuracy"] == pytest.approx(0.6)
     none_predicted = classification_metrics([0, 0], [1, 0])
-    assert math.isnan(none_predicted["ppv"]) and none_predicted["npv"] == 0.5
+    assert math.isnan(none_predicted["ppv"])
+    assert none_predicted["npv"] == 0.5
     with pytest.raises(mgn.InvalidArgumentError, match="equal lengths"):
         classification_metrics([1], [1, 0])
 
@@ -294,8 +309,10 @@ def test_calibrate_from_csv_round_trip(board, board_dir, tmp_path):
     budget = {"global_evaluations": 30, "local_evaluations": 10}
     report = calibrate_from_csv(results, board_dir, **budget)
     assert len(report.measured) == len(board["ids"]) + 1
-    assert report.train["accuracy"] == 1.0 and report.test["accuracy"] == 1.0
-    assert report.pose_ids is not None and report.pose_ids[-1] == 3
+    assert report.train["accuracy"] == 1.0
+    assert report.test["accuracy"] == 1.0
+    assert report.pose_ids is not None
+    assert report.pose_ids[-1] == 3
     assert "accuracy" in report.format_report()
     # Without board_dir: the results' own folder if it holds the board, else the built-in board.
     inside = _write_results(board_dir / "results.csv", rows)
@@ -310,7 +327,8 @@ def test_read_results_csv_forces_and_blanks(tmp_path):
     r = read_results_csv(path, [0, 1, 2])
     np.testing.assert_array_equal(r.pose_ids, [0, 2])
     np.testing.assert_array_equal(r.sealed, [True, False])
-    assert r.tear_off_force[0] == 3.5 and math.isnan(r.tear_off_force[1])
+    assert r.tear_off_force[0] == 3.5
+    assert math.isnan(r.tear_off_force[1])
     np.testing.assert_array_equal(r.rows, [2, 4])
 
 

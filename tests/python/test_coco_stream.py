@@ -105,7 +105,8 @@ def test_run_length_helpers_match_pycocotools_on_border_cases():
     for k, m in enumerate(masks):
         st, en, box, area = _runs_of_mask(m)
         assert _compress([_counts(st, en, h * w)], h, w)[0] == _rle(m)
-        assert list(box) == _bbox(m) and area == int(m.sum())
+        assert list(box) == _bbox(m)
+        assert area == int(m.sum())
         if k < 3:
             vs, ve = runs[k + 1]
             assert _compress([_counts(vs, ve, h * w)], h, w)[0] == _rle(m)

@@ -25,30 +25,37 @@ from mgn.scene import DropOptions
 
 def test_defaults_are_the_mgn_values() -> None:
     c = default_config()
-    assert c.gripper == ParallelJawGripper() and c.cup == SuctionCup()
-    assert c.tote == ToteSpec() and c.drop == DropOptions()
-    assert c.object_labels.suction_points == 5000 and c.object_labels.pj_points == 5000
+    assert c.gripper == ParallelJawGripper()
+    assert c.cup == SuctionCup()
+    assert c.tote == ToteSpec()
+    assert c.drop == DropOptions()
+    assert c.object_labels.suction_points == 5000
+    assert c.object_labels.pj_points == 5000
     assert c.object_labels.physics_grid == 10
     # Every stored parallel-jaw grasp gets a physics score by default, with the staircase search.
     assert c.object_labels.physics_grasps is None
     assert c.object_labels.physics_search == "staircase"
     assert c.object_labels.physics_calibration == 32
     # Checks: null = 0 with the object-level calibration, the search's own default without.
-    assert c.object_labels.physics_checks is None and c.object_labels.staircase_checks == 0
+    assert c.object_labels.physics_checks is None
+    assert c.object_labels.staircase_checks == 0
     uncalibrated = load_config({"object_labels": {"physics_calibration": 0}}).object_labels
     assert uncalibrated.staircase_checks == _core.ShakeOptions().staircase_checks == 6
     given = load_config({"object_labels": {"physics_checks": 4}}).object_labels
     assert given.physics_checks == given.staircase_checks == 4
     assert c.objects.copies == (2, 5)
     assert c.objects.compose_kwargs() == {"categories": None, "count": 20, "copies": (2, 5)}
-    assert c.camera.rig == "mgn" and c.camera.view_indices == tuple(range(37))
-    assert c.camera.intrinsics == "mgn_synthetic" and c.camera.resolution_scale == 1.0
+    assert c.camera.rig == "mgn"
+    assert c.camera.view_indices == tuple(range(37))
+    assert c.camera.intrinsics == "mgn_synthetic"
+    assert c.camera.resolution_scale == 1.0
     assert all(dataclasses.asdict(c.labels).values())
 
 
 def test_dump_then_load_gives_the_same_config(tmp_path: Path) -> None:
     text = dump_config()
-    assert "unknown" not in text and text.startswith("#")
+    assert "unknown" not in text
+    assert text.startswith("#")
     path = tmp_path / "cfg.yaml"
     path.write_text(text)
     assert load_config(path) == Config()
@@ -74,8 +81,10 @@ def test_dump_then_load_gives_the_same_config(tmp_path: Path) -> None:
     )
     path.write_text(dump_config(custom))
     again = load_config(path)
-    assert again == custom and again != Config()
-    assert again.camera.view_indices == (3, 0) and again.tote.inner_length == 0.5
+    assert again == custom
+    assert again != Config()
+    assert again.camera.view_indices == (3, 0)
+    assert again.tote.inner_length == 0.5
 
 
 def test_cli_dump_prints_the_defaults(capsys: pytest.CaptureFixture, tmp_path: Path) -> None:
@@ -133,8 +142,10 @@ def test_errors_name_the_key(data: dict, key: str, detail: str) -> None:
     with pytest.raises(ConfigError) as info:
         load_config(data)
     message = str(info.value)
-    assert key in message and detail in message, message
-    assert isinstance(info.value, ValueError) and isinstance(info.value, InvalidArgumentError)
+    assert key in message, message
+    assert detail in message, message
+    assert isinstance(info.value, ValueError)
+    assert isinstance(info.value, InvalidArgumentError)
 
 
 def test_files_invalid_yaml_missing_file_and_relative_paths(tmp_path: Path) -> None:
@@ -153,7 +164,8 @@ def test_files_invalid_yaml_missing_file_and_relative_paths(tmp_path: Path) -> N
     path.write_text("tote: {inner_width: 0}\n")
     with pytest.raises(ConfigError) as info:
         load_config(path)
-    assert str(path) in str(info.value) and "'tote.inner_width'" in str(info.value)
+    assert str(path) in str(info.value)
+    assert "'tote.inner_width'" in str(info.value)
 
 
 def test_hemisphere_view_count() -> None:

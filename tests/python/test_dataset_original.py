@@ -38,12 +38,14 @@ def original_like(small_dataset: Path, tmp_path: Path) -> Path:
 
 def test_original_folder_reads_like_the_full_dataset(small_dataset: Path, original_like: Path):
     full, orig = Dataset(small_dataset), Dataset(original_like)
-    assert orig.info is None and full.info is not None
+    assert orig.info is None
+    assert full.info is not None
     assert orig.scene_ids == full.scene_ids
     relations = 0
     for sid in full.scene_ids:
         fs, os_ = full.scene(sid), orig.scene(sid)
-        assert os_.scene_json is None and os_.view_ids == fs.view_ids
+        assert os_.scene_json is None
+        assert os_.view_ids == fs.view_ids
         for v in fs.view_ids:
             a, b = fs.view(v), os_.view(v)
             assert b.layout is None
@@ -63,7 +65,8 @@ def test_original_folder_reads_like_the_full_dataset(small_dataset: Path, origin
 
 def test_coco_export_of_an_original_folder(original_like: Path) -> None:
     doc = coco_dict(Dataset(original_like))
-    assert doc["images"] and doc["annotations"]
+    assert doc["images"]
+    assert doc["annotations"]
     # No layout files: no difficulty on the images, the rest of the export is there.
     assert all("difficulty" not in im for im in doc["images"])
     assert all(a["segmentation"]["counts"] for a in doc["annotations"])

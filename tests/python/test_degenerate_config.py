@@ -36,7 +36,8 @@ def test_too_many_objects_are_named() -> None:
 
 def test_tiny_images_are_named() -> None:
     (w,) = config_warnings(load_config({"camera": {"resolution_scale": 0.0005}}))
-    assert w.startswith("camera.resolution_scale = 0.0005") and "1x1 px" in w
+    assert w.startswith("camera.resolution_scale = 0.0005")
+    assert "1x1 px" in w
 
 
 def test_cameras_that_cannot_see_into_the_tote_are_named() -> None:
@@ -57,7 +58,8 @@ def test_fifty_micrometre_object_is_named(tmp_path: Path) -> None:
     cfg = load_config({"objects": {"user_objects": [str(tmp_path / "objs.yaml")]}})
     w = config_warnings(cfg)  # the loader's warning, once, as text (no Python warning)
     speck = [x for x in w if "speck" in x]
-    assert len(speck) == 1 and "objs.yaml: objects[0] ('speck')" in speck[0], w
+    assert len(speck) == 1, w
+    assert "objs.yaml: objects[0] ('speck')" in speck[0], w
     assert "is 0.05 mm across, too small" in speck[0], w
     # A part of 1-5 mm passes the loader but gets the setting's warning.
     (tmp_path / "objs.yaml").write_text(

@@ -141,7 +141,8 @@ def test_missing_detection_gives_hand_computed_ap(tiny: Path) -> None:
     only_view(tiny, 0)
     preds = [det(0, 1, VIEW0[0]["visible"], 0.9)]
     r = evaluate_detections(tiny, preds).overall
-    assert r.num_images == 1 and r.num_gt == 2
+    assert r.num_images == 1
+    assert r.num_gt == 2
     expected = interpolated_ap([True], 2)
     assert expected == pytest.approx(51 / 101)
     for value in (r.box_ap, r.box_ap50, r.box_ap75, r.seg_ap, r.seg_ap50, r.seg_ap75):
@@ -154,10 +155,12 @@ def test_false_positive_ranking(tiny: Path) -> None:
     fp_mask = rect(14, 20, 2, 10)  # overlaps no object
     above = evaluate_detections(tiny, [det(0, 1, fp_mask, 0.9), *tps]).overall
     below = evaluate_detections(tiny, [det(0, 1, fp_mask, 0.1), *tps]).overall
-    assert below.box_ap == pytest.approx(1.0) and below.seg_ap == pytest.approx(1.0)
+    assert below.box_ap == pytest.approx(1.0)
+    assert below.seg_ap == pytest.approx(1.0)
     expected = interpolated_ap([False, True, True], 2)
     assert expected == pytest.approx(2 / 3)
-    assert above.box_ap == pytest.approx(expected) and above.seg_ap == pytest.approx(expected)
+    assert above.box_ap == pytest.approx(expected)
+    assert above.seg_ap == pytest.approx(expected)
     # a wrong category is a false positive too
     wrong = evaluate_detections(tiny, [{**tps[0], "category_id": 2}, tps[1]]).overall
     assert wrong.box_ap == pytest.approx(interpolated_ap([True], 2))
@@ -185,7 +188,8 @@ def test_seen_unseen_split(tiny: Path) -> None:
     assert res.unseen_categories == (3,)
     assert res.row("split", "unseen").box_ap == pytest.approx(1.0)
     assert res.row("split", "seen").box_ap == pytest.approx(0.0)
-    assert res.row("split", "seen").num_gt == 2 and res.row("split", "unseen").num_gt == 1
+    assert res.row("split", "seen").num_gt == 2
+    assert res.row("split", "unseen").num_gt == 1
     # class-agnostic: the detection of the unseen object is ignored when scoring "seen"
     res = evaluate_detections(tiny, unseen_only, class_agnostic=True)
     assert res.row("split", "unseen").seg_ap == pytest.approx(1.0)
@@ -207,7 +211,8 @@ def test_seen_unseen_split(tiny: Path) -> None:
     assert res.row("split", "unseen").box_ap == pytest.approx(interpolated_ap([False, True], 1))
     # the unseen set can be given explicitly; with none, "unseen" is empty
     res = evaluate_detections(tiny, unseen_only, unseen_categories=[])
-    assert res.row("split", "unseen").box_ap is None and res.row("split", "unseen").num_gt == 0
+    assert res.row("split", "unseen").box_ap is None
+    assert res.row("split", "unseen").num_gt == 0
     # every object seen now: per-category AP 0, 0, 1 (categories 1, 2, 3), averaged
     per_category = [0.0, 0.0, interpolated_ap([True], 1)]
     assert res.row("split", "seen").box_ap == pytest.approx(np.mean(per_category))
@@ -222,35 +227,44 @@ def test_occlusion_bins(tiny: Path) -> None:
     assert bins["[0.1, 0.3)"].box_ap == pytest.approx(1.0)  # 0.1 is in the upper bin
     assert bins["[0, 0.1)"].box_ap == pytest.approx(0.0)
     assert bins["[0.7, 1]"].seg_ap == pytest.approx(0.0)
-    assert bins["[0.3, 0.5)"].box_ap is None and bins["[0.5, 0.7)"].seg_ap is None
+    assert bins["[0.3, 0.5)"].box_ap is None
+    assert bins["[0.5, 0.7)"].seg_ap is None
     table = res.table()
-    assert "occlusion [0.3, 0.5)" in table and " -" in table
+    assert "occlusion [0.3, 0.5)" in table
+    assert " -" in table
     # custom bins; the last bin includes its upper edge
     res = evaluate_detections(
         tiny, [det(1, 3, VIEW1[2]["visible"], 0.9)], occlusion_bins=(0.0, 0.5, 0.8)
     )
     bins = {r.subset: r for r in res.rows if r.group == "occlusion"}
-    assert bins["[0.5, 0.8]"].num_gt == 1 and bins["[0.5, 0.8]"].box_ap == pytest.approx(1.0)
+    assert bins["[0.5, 0.8]"].num_gt == 1
+    assert bins["[0.5, 0.8]"].box_ap == pytest.approx(1.0)
 
 
 def test_difficulty_rows_and_empty_cells(tiny: Path, tmp_path: Path) -> None:
     res = evaluate_detections(tiny, [det(1, c + 1, o["visible"], 0.9) for c, o in enumerate(VIEW1)])
     d = {r.subset: r for r in res.rows if r.group == "difficulty"}
-    assert d["2"].box_ap == pytest.approx(1.0) and d["2"].num_images == 1
-    assert d["4"].box_ap == pytest.approx(0.0) and d["4"].num_gt == 2
-    assert d["1"].box_ap is None and d["1"].num_images == 0
+    assert d["2"].box_ap == pytest.approx(1.0)
+    assert d["2"].num_images == 1
+    assert d["4"].box_ap == pytest.approx(0.0)
+    assert d["4"].num_gt == 2
+    assert d["1"].box_ap is None
+    assert d["1"].num_images == 0
     doc = res.to_dict()
     row1 = next(r for r in doc["rows"] if r["group"] == "difficulty" and r["subset"] == "1")
-    assert row1["box_ap"] is None and row1["seg_ap"] is None
+    assert row1["box_ap"] is None
+    assert row1["seg_ap"] is None
     # no predictions at all: AP 0 where there is GT
     empty = evaluate_detections(tiny, []).overall
-    assert empty.box_ap == 0.0 and empty.seg_ap == 0.0
+    assert empty.box_ap == 0.0
+    assert empty.seg_ap == 0.0
     # box-only predictions: mask AP cells are empty
     boxes = [
         {k: v for k, v in p.items() if k != "segmentation"} for p in ground_truth_detections(tiny)
     ]
     r = evaluate_detections(tiny, boxes).overall
-    assert r.box_ap == pytest.approx(1.0) and r.seg_ap is None
+    assert r.box_ap == pytest.approx(1.0)
+    assert r.seg_ap is None
 
 
 def test_selection_restricts_images(tiny: Path) -> None:
@@ -259,7 +273,8 @@ def test_selection_restricts_images(tiny: Path) -> None:
     with pytest.raises(InvalidArgumentError, match=r"not evaluated.*\[0\]"):
         evaluate_detections(tiny, gt)
     res = evaluate_detections(tiny, gt, strict=False)
-    assert res.num_dropped == 2 and res.num_images == 1
+    assert res.num_dropped == 2
+    assert res.num_images == 1
     assert res.overall.box_ap == pytest.approx(1.0)
 
 
@@ -301,7 +316,8 @@ def test_bad_inputs(tiny: Path, tmp_path: Path) -> None:
     m = VIEW0[0]["visible"]
     runs = [int(x) for x in _runs(m)]
     ok = evaluate_detections(tiny, [{**gt[0], "segmentation": {"size": [H, W], "counts": runs}}])
-    assert ok.overall.seg_ap is not None and ok.overall.seg_ap > 0
+    assert ok.overall.seg_ap is not None
+    assert ok.overall.seg_ap > 0
 
 
 def _runs(mask: np.ndarray) -> list[int]:
@@ -322,12 +338,14 @@ def test_small_dataset_ground_truth(small_dataset: Path) -> None:
         gt = ground_truth_detections(small_dataset, amodal=amodal)
         assert gt
         res = evaluate_detections(small_dataset, gt, amodal=amodal)
-        assert res.overall.box_ap == 1.0 and res.overall.seg_ap == 1.0
+        assert res.overall.box_ap == 1.0
+        assert res.overall.seg_ap == 1.0
         assert res.num_images == 6
     res = evaluate_detections(
         small_dataset, ground_truth_detections(small_dataset), class_agnostic=True
     )
-    assert res.overall.box_ap == 1.0 and res.overall.seg_ap == 1.0
+    assert res.overall.box_ap == 1.0
+    assert res.overall.seg_ap == 1.0
 
 
 def _perturbed(gt: list[dict], seed: int) -> list[dict]:
@@ -418,9 +436,12 @@ def test_cli_detections(small_dataset: Path, tmp_path: Path, capsys) -> None:
     )
     assert code == 0
     text = capsys.readouterr().out
-    assert "box AP" in text and "difficulty" in text and "unseen" in text
+    assert "box AP" in text
+    assert "difficulty" in text
+    assert "unseen" in text
     doc = json.loads(out.read_text())
-    assert doc["class_agnostic"] is True and doc["rows"][0]["box_ap"] == 1.0
+    assert doc["class_agnostic"] is True
+    assert doc["rows"][0]["box_ap"] == 1.0
     assert (
         main(
             ["eval", "detections", str(tmp_path / "missing.json"), "--dataset", str(small_dataset)]

@@ -71,7 +71,8 @@ def test_rebuilt_model_reproduces_the_stored_collision_groups(small_dataset, kin
             r = model.collides(core, X_W, w, g["object_id"].astype(int))
             assert (r.colliding == colliding).all(), (scene, view, colliding)
             counts[colliding] += len(X)
-    assert counts[0] > 20 and counts[1] > 20, counts  # both groups are exercised
+    assert counts[0] > 20, counts  # both groups are exercised
+    assert counts[1] > 20, counts
 
 
 def test_collides_matches_the_placed_labels_and_finds_a_pose_inside_an_object(small_dataset):
@@ -123,7 +124,8 @@ def test_collides_matches_the_placed_labels_and_finds_a_pose_inside_an_object(sm
     X = np.diag([1.0, -1.0, -1.0, 1.0])
     X[:3, 3] = centre[:3]
     r = model.collides("suction", X[None])
-    assert r.colliding[0] and r.hit[0, 0] == 2
+    assert r.colliding[0]
+    assert r.hit[0, 0] == 2
     # The same tool 0.5 m above the tote collides with nothing.
     X[:3, 3] = (0.0, 0.0, 0.7)
     assert not model.collides("suction", X[None]).colliding[0]
@@ -241,8 +243,10 @@ def test_known_errors_give_the_hand_computed_precision(small_dataset):
     assert (res.matched, res.rejected_by_collision, res.precision[0.0][1]) == (1, 1, 0.0)
     # JSON and table.
     d = res.to_dict()
-    assert d["precision"]["0.0"]["P@1"] == 0.0 and d["rejected_by_collision"] == 1
-    assert "P@1" in res.table() and "suction" in res.table()
+    assert d["precision"]["0.0"]["P@1"] == 0.0
+    assert d["rejected_by_collision"] == 1
+    assert "P@1" in res.table()
+    assert "suction" in res.table()
 
 
 def test_tolerances_decide_the_match(small_dataset):
@@ -316,7 +320,8 @@ def test_suction_pixel_predictions_at_label_contacts_match(small_dataset):
            for r, c in zip(rr[:5], cc[:5], strict=True)]  # fmt: skip
     res = evaluate_grasps(small_dataset, [{"image_id": scene.scene_id * 1000 + view.index,
                                            "kind": "suction", "grasps": far}], ks=(1,))  # fmt: skip
-    assert res.matched == 0 and res.rejected_by_matching == len(far)
+    assert res.matched == 0
+    assert res.rejected_by_matching == len(far)
 
 
 def test_paralleljaw_pixel_predictions_at_label_centres_match(small_dataset):
@@ -446,7 +451,9 @@ def test_cli_prints_the_table_and_writes_json(small_dataset, tmp_path, capsys):
                  "--out", str(out), "--k", "1", "5"])  # fmt: skip
     assert code == 0
     text = capsys.readouterr().out
-    assert "P@1" in text and "P@5" in text and "0.4" in text
+    assert "P@1" in text
+    assert "P@5" in text
+    assert "0.4" in text
     doc = json.loads(out.read_text())
     assert doc["precision"]["0.4"] == {"P@1": 1.0, "P@5": 1.0}
     assert doc["num_predictions"] == sum(len(e["grasps"]) for e in preds)

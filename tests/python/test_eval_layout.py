@@ -42,7 +42,8 @@ def test_ground_truth_is_perfect(tiny: Path) -> None:
     gt = ground_truth_layout(tiny)
     assert {(p["image_id"], p["instance_id"]) for p in gt} == set(PX)  # the hidden one is left out
     res = evaluate_layout(tiny, gt)
-    assert res.accuracy == 1.0 and res.weighted_accuracy == 1.0
+    assert res.accuracy == 1.0
+    assert res.weighted_accuracy == 1.0
     assert (res.top_precision, res.top_recall, res.top_f1) == (1.0, 1.0, 1.0)
     assert res.confusion == ((3, 0, 0, 0, 0), (0, 1, 0, 0, 0), (0, 0, 2, 0, 0), (0, 0, 0, 0, 0))
     assert res.per_layer_accuracy == (1.0, 1.0, 1.0, None)
@@ -75,14 +76,17 @@ def test_missing_predictions_count_as_wrong(tiny: Path) -> None:
     assert res.num_missing == 4
     assert res.accuracy == pytest.approx(2 / 6)
     assert res.weighted_accuracy == pytest.approx((60 + 72) / sum(PX.values()))
-    assert res.confusion[0] == (1, 0, 0, 0, 2) and res.confusion[2] == (0, 0, 0, 0, 2)
+    assert res.confusion[0] == (1, 0, 0, 0, 2)
+    assert res.confusion[2] == (0, 0, 0, 0, 2)
     # view 0: T = {1, 3}, P = {1}: precision 1, recall 1/2, F1 2/3; view 1: P empty, T = {1}:
     # precision 0, recall 0, F1 0
     assert res.top_precision == pytest.approx(0.5)
     assert res.top_recall == pytest.approx(0.25)
     assert res.top_f1 == pytest.approx(1 / 3)
     empty = evaluate_layout(tiny, [])
-    assert empty.accuracy == 0.0 and empty.top_f1 == 0.0 and empty.num_missing == 6
+    assert empty.accuracy == 0.0
+    assert empty.top_f1 == 0.0
+    assert empty.num_missing == 6
 
 
 def test_selection_and_bad_inputs(tiny: Path, tmp_path: Path) -> None:
@@ -92,7 +96,9 @@ def test_selection_and_bad_inputs(tiny: Path, tmp_path: Path) -> None:
         evaluate_layout(tiny, gt)
     sel = [p for p in gt if p["image_id"] == 1]
     res = evaluate_layout(tiny, sel)
-    assert res.num_views == 1 and res.num_objects == 3 and res.accuracy == 1.0
+    assert res.num_views == 1
+    assert res.num_objects == 3
+    assert res.accuracy == 1.0
     with pytest.raises(InvalidArgumentError, match="instance ids 1..3, got 7"):
         evaluate_layout(tiny, [{"image_id": 1, "instance_id": 7, "layer": 0}])
     with pytest.raises(InvalidArgumentError, match="layer must be 0..3, got 4"):
@@ -117,8 +123,11 @@ def test_small_dataset_ground_truth(small_dataset: Path) -> None:
     ds = Dataset(small_dataset)
     gt = ground_truth_layout(ds)
     res = evaluate_layout(ds, gt)
-    assert res.accuracy == 1.0 and res.weighted_accuracy == 1.0 and res.top_f1 == 1.0
-    assert res.num_views == 6 and res.num_objects == len(gt) > 0
+    assert res.accuracy == 1.0
+    assert res.weighted_accuracy == 1.0
+    assert res.top_f1 == 1.0
+    assert res.num_views == 6
+    assert res.num_objects == len(gt) > 0
     # independent count of the visible objects from the instance maps
     visible = sum(
         len(np.setdiff1d(np.unique(v.instances), [0])) for s in ds.scenes() for v in s.views()
@@ -142,7 +151,8 @@ def test_cli_layout(small_dataset: Path, tmp_path: Path, capsys) -> None:
     )
     assert "layer accuracy" in capsys.readouterr().out
     doc = json.loads(out.read_text())
-    assert doc["accuracy"] == 1.0 and len(doc["confusion"]) == 4
+    assert doc["accuracy"] == 1.0
+    assert len(doc["confusion"]) == 4
     pred.write_text(json.dumps([{"image_id": 99999, "instance_id": 1, "layer": 0}]))
     assert main(["eval", "layout", str(pred), "--dataset", str(small_dataset)]) == 1
     assert "99999" in capsys.readouterr().err

@@ -95,7 +95,8 @@ def test_every_key_of_the_json_files_and_the_npz_is_documented(small_dataset):
     row = next(line for line in doc.splitlines() if line.startswith("| `scene.json` |"))
     data = json.loads((scene / "scene.json").read_text())
     named = _ticked(row)
-    assert set(data) <= named and set(data["instances"][0]) <= named
+    assert set(data) <= named
+    assert set(data["instances"][0]) <= named
 
     def keys(x: object) -> set[str]:
         if isinstance(x, dict):

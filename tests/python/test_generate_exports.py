@@ -81,7 +81,8 @@ def test_exports_leave_the_mgn_files_unchanged(runs: dict[str, Path]) -> None:
     docs = {k: json.loads((v / "dataset.json").read_text()) for k, v in runs.items()}
     assert docs["plain"]["config"]["output"] == {"formats": ["mgn"]}
     assert docs["exported"]["config"]["output"] == {"formats": ALL}
-    assert not (runs["plain"] / "bop").exists() and not (runs["plain"] / "graspnet").exists()
+    assert not (runs["plain"] / "bop").exists()
+    assert not (runs["plain"] / "graspnet").exists()
 
 
 def test_object_ids_are_category_ids_in_every_format(runs: dict[str, Path]) -> None:
@@ -132,7 +133,9 @@ def test_resume_redoes_missing_and_half_written_exports(
     monkeypatch.setenv("MGN_CACHE_DIR", str(runs["exported"].parent / "cache"))
     report = generate(ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True,
                       progress=False)  # fmt: skip
-    assert report.complete and report.skipped == [0, 1] and not report.failed
+    assert report.complete
+    assert report.skipped == [0, 1]
+    assert not report.failed
     for name in ("bop", "graspnet"):
         assert _tree(ds / name) == before[name], name
     assert not half.exists()
@@ -149,7 +152,8 @@ def test_resume_adds_formats_to_a_finished_dataset(
     monkeypatch.setenv("MGN_CACHE_DIR", str(runs["exported"].parent / "cache"))
     report = generate(ds, 2, config=load_config(_config(["mgn", "bop"])), seed=SEED,
                       resume=True, progress=False)  # fmt: skip
-    assert report.complete and report.skipped == [0, 1]
+    assert report.complete
+    assert report.skipped == [0, 1]
     assert _tree(ds / "bop") == _tree(runs["exported"] / "bop")
     assert not (ds / "graspnet").exists()
     assert _tree(ds / "scene0") == _tree(runs["plain"] / "scene0")
@@ -172,13 +176,15 @@ def test_failed_export_fails_the_scene_and_resume_redoes_it(
     monkeypatch.setattr(exports, "export_graspnet_scene", broken)
     report = generate(ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True,
                       progress=False)  # fmt: skip
-    assert not report.complete and [r.index for r in report.failed] == [0, 1]
+    assert not report.complete
+    assert [r.index for r in report.failed] == [0, 1]
     assert all("simulated" in (r.error or "") for r in report.failed)
     assert (ds / "scene1").is_dir()  # the scene itself is complete
     monkeypatch.setattr(exports, "export_graspnet_scene", real)
     report = generate(ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True,
                       progress=False)  # fmt: skip
-    assert report.complete and report.skipped == [0, 1]
+    assert report.complete
+    assert report.skipped == [0, 1]
     for name in ("bop", "graspnet"):
         assert _tree(ds / name) == _tree(runs["exported"] / name), name
 

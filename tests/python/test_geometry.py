@@ -10,7 +10,8 @@ import mgn
 def test_every_format_loads_as_a_closed_2cm_cube(data_dir, name):
     mesh = mgn.load_mesh(data_dir / name)
     report = mesh.validate()
-    assert report.is_watertight and report.is_outward
+    assert report.is_watertight
+    assert report.is_outward
     np.testing.assert_allclose(mesh.bounds, [[-0.01] * 3, [0.01] * 3], atol=1e-7)
     assert mgn.mass_properties(mesh).volume == pytest.approx(8e-6, rel=1e-5)
 
@@ -21,7 +22,8 @@ def test_obj_material_texture_and_uvs(data_dir):
     np.testing.assert_allclose(mat.base_color[:3], [0.8, 0.2, 0.1], atol=1e-6)
     assert mat.opacity == pytest.approx(0.5)
     assert mat.texture_path.endswith("cube_texture.png")
-    assert mesh.uvs is not None and mesh.uvs.shape == (mesh.num_vertices, 2)
+    assert mesh.uvs is not None
+    assert mesh.uvs.shape == (mesh.num_vertices, 2)
     assert mesh.num_vertices > 8  # uv seams split corners; welding by position still closes it
 
 
@@ -33,7 +35,8 @@ def test_scale_option_converts_millimetres(data_dir):
 def test_mesh_arrays_are_read_only_views_owned_by_the_mesh():
     mesh = mgn.make_box([0.1, 0.2, 0.3])
     v = mesh.vertices
-    assert v.dtype == np.float32 and v.shape == (8, 3)
+    assert v.dtype == np.float32
+    assert v.shape == (8, 3)
     with pytest.raises(ValueError):
         v[0, 0] = 1.0
     del mesh  # the view keeps the mesh alive
@@ -74,7 +77,9 @@ def test_cylinder_and_sphere_mass_properties_match_analytic():
 def test_flipped_mesh_is_not_outward_but_mass_is_still_positive():
     box = mgn.make_box([0.1, 0.1, 0.1]).flipped()
     r = box.validate()
-    assert r.is_watertight and r.is_winding_consistent and not r.is_outward
+    assert r.is_watertight
+    assert r.is_winding_consistent
+    assert not r.is_outward
     assert r.signed_volume == pytest.approx(-1e-3, rel=1e-5)
     assert mgn.mass_properties(box).volume == pytest.approx(1e-3, rel=1e-5)
 

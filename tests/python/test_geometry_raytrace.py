@@ -59,7 +59,8 @@ def test_first_hits_agree_with_brute_force(two_object_scene, rng):
     t_min = t[np.arange(len(o)), first]
     hits = scene.intersect(o, d)
     expect_hit = np.isfinite(t_min)
-    assert expect_hit.sum() > 150 and (~expect_hit).sum() > 50
+    assert expect_hit.sum() > 150
+    assert (~expect_hit).sum() > 50
     # Rays grazing an edge may legitimately differ by one ulp-decision; allow none here.
     np.testing.assert_array_equal(hits.hit, expect_hit)
     np.testing.assert_allclose(hits.distance[expect_hit], t_min[expect_hit], atol=1e-5)
@@ -81,7 +82,8 @@ def test_intersect_ids_agree_with_brute_force_and_intersect(two_object_scene, rn
     first = t.argmin(axis=1)
     expect_hit = np.isfinite(t[np.arange(len(o)), first])
     instance_ids, face_ids = scene.intersect_ids(o, d)
-    assert instance_ids.dtype == np.int32 and face_ids.dtype == np.int32
+    assert instance_ids.dtype == np.int32
+    assert face_ids.dtype == np.int32
     np.testing.assert_array_equal(instance_ids >= 0, expect_hit)
     np.testing.assert_array_equal(face_ids[~expect_hit], -1)
     np.testing.assert_array_equal(instance_ids[expect_hit], inst[first[expect_hit]])

@@ -70,7 +70,8 @@ def test_rectangle_of_a_grasp_along_the_optical_axis() -> None:
     assert r.width[0] == pytest.approx(w * 600.0 / z, rel=1e-12)
     assert r.height[0] == pytest.approx(h * 600.0 / z, rel=1e-12)
     assert r.angle[0] == pytest.approx(0.0, abs=1e-12)
-    assert r.score[0] == 0.7 and r.object_id[0] == 3
+    assert r.score[0] == 0.7
+    assert r.object_id[0] == 3
     # the jaws open wider than the contacts: the same centre, width opening * fx / z
     r = grasp_rectangles(T[None], [w], [0.7], [3], K, jaw_height=h, opening=[0.08])
     assert r.center[0] == pytest.approx([u, v], abs=1e-9)
@@ -153,7 +154,8 @@ def test_jacquard_and_rect_rows_round_trip() -> None:
         assert err < 0.01  # 2 decimals in the file
         assert -90 < float(line.split(";")[2]) <= 90
     rows = rect_rows(r)
-    assert rows.shape == (20, 7) and rows.dtype == np.float32
+    assert rows.shape == (20, 7)
+    assert rows.dtype == np.float32
     half = np.linalg.norm(rows[:, 2:4] - rows[:, 0:2], axis=1)
     assert half == pytest.approx(r.width / 2, rel=1e-5)
     assert rows[:, 4] == pytest.approx(r.height, rel=1e-6)
@@ -169,7 +171,8 @@ def test_graspnet_rows_layout() -> None:
     # the default gripper: fingers 5 cm long, 2 cm wide, pads 8 mm above the tips, margin 3 cm
     gripper = graspnet_gripper(ParallelJawGripper())
     rows = graspnet_rows(T[None].repeat(2, 0), [0.04, 0.06], [0.8, 0.5], [7, 7], gripper)
-    assert rows.shape == (2, 17) and rows.dtype == np.float32
+    assert rows.shape == (2, 17)
+    assert rows.dtype == np.float32
     score, width, height, depth = rows[0, :4]
     R = rows[0, 4:13].reshape(3, 3).astype(np.float64)  # row-major
     t = rows[0, 13:16].astype(np.float64)
@@ -178,7 +181,8 @@ def test_graspnet_rows_layout() -> None:
     a = a / np.linalg.norm(a)
     assert R[:, 0] == pytest.approx(a, abs=1e-6)  # x = approach
     assert R[:, 1] == pytest.approx(T[:3, 0], abs=1e-6)  # y = closing
-    assert R.T @ R == pytest.approx(np.eye(3), abs=1e-6) and np.linalg.det(R) == pytest.approx(1)
+    assert R.T @ R == pytest.approx(np.eye(3), abs=1e-6)
+    assert np.linalg.det(R) == pytest.approx(1)
     # graspnetAPI's fingers run from 2 cm behind t (its palm) to depth beyond t: mgn's fingers
     centre = T[:3, 3] + 0.02 * T[:3, 0]  # between the contacts
     tips = centre + 0.008 * a
@@ -191,7 +195,8 @@ def test_suctionnet_rows_layout() -> None:
     a = np.array([0.0, 0.6, 0.8])
     T = _frame(a, np.array([1.0, 0, 0]), np.array([0.01, 0.02, 0.7]))
     rows = suctionnet_rows(T[None], [0.9], [4])
-    assert rows.shape == (1, 8) and rows.dtype == np.float32
+    assert rows.shape == (1, 8)
+    assert rows.dtype == np.float32
     assert rows[0, 0] == pytest.approx(0.9)
     assert rows[0, 1:4] == pytest.approx(-a, abs=1e-7)  # outward normal: the cup lies along it
     assert rows[0, 4:7] == pytest.approx(T[:3, 3])
@@ -205,7 +210,8 @@ def test_suctionnet_rows_layout() -> None:
 def exported(small_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("graspnet") / "out"
     result = export_graspnet(small_dataset, out, max_tilt_deg=80.0)
-    assert result.written == [0, 1] and result.skipped == []
+    assert result.written == [0, 1]
+    assert result.skipped == []
     assert min(result.counts[k] for k in ("grasp", "suction", "rect")) > 0
     return out
 
@@ -248,7 +254,8 @@ def test_export_files_match_the_scene_files(small_dataset: Path, exported: Path)
             flange = h[pre + "franka_poses_relative_to_camera"].astype(np.float64)
             s = h[pre + "score_analytical"].astype(np.float64)
             g = np.load(folder / "grasp" / f"{v:04d}.npy")
-            assert g.dtype == np.float32 and g.shape == (len(T), 17)
+            assert g.dtype == np.float32
+            assert g.shape == (len(T), 17)
             assert (np.diff(g[:, 0]) <= 0).all()  # best first
             order = np.argsort(-s, kind="stable")
             assert g[:, 0] == pytest.approx(s[order])
@@ -272,7 +279,8 @@ def test_export_files_match_the_scene_files(small_dataset: Path, exported: Path)
             with np.load(folder / "suction" / f"{v:04d}.npz") as z:
                 assert list(z.keys()) == ["arr_0"]
                 su = z["arr_0"]
-            assert su.dtype == np.float32 and su.shape == (len(S), 8)
+            assert su.dtype == np.float32
+            assert su.shape == (len(S), 8)
             order = np.argsort(-ss, kind="stable")
             assert su[:, 0] == pytest.approx(ss[order], abs=1e-6)
             assert su[:, 1:4] == pytest.approx(-S[order, :3, 2], abs=1e-6)
@@ -298,7 +306,8 @@ def test_export_skips_scenes_and_takes_options(
 ) -> None:
     before = {p: p.read_bytes() for p in exported.rglob("*") if p.is_file()}
     again = export_graspnet(small_dataset, exported, max_tilt_deg=80.0)
-    assert again.written == [] and again.skipped == [0, 1]
+    assert again.written == []
+    assert again.skipped == [0, 1]
     assert {p: p.read_bytes() for p in exported.rglob("*") if p.is_file()} == before
     # the same scenes again: the same bytes
     out = tmp_path / "again"

@@ -13,15 +13,19 @@ from mgn.objects import NUM_COM_KEYPOINTS, builtin_objects, get_object
 def test_builtin_object_is_a_valid_solid_in_mgn(spec):
     mesh = spec.to_mesh()
     report = mesh.validate()
-    assert report.is_watertight and report.is_outward, report
+    assert report.is_watertight, report
+    assert report.is_outward, report
     props = mgn.mass_properties(mesh, spec.density)
-    assert props.is_exact and props.volume > 0
+    assert props.is_exact
+    assert props.volume > 0
     lo, hi = mesh.bounds
-    assert np.all(props.center_of_mass > lo) and np.all(props.center_of_mass < hi)
+    assert np.all(props.center_of_mass > lo)
+    assert np.all(props.center_of_mass < hi)
     assert props.mass == pytest.approx(spec.density * props.volume)
     # principal moments of a real body obey the triangle inequality
     moments = np.linalg.eigvalsh(props.inertia)
-    assert moments.min() > 0 and moments[2] <= moments[0] + moments[1] + 1e-12
+    assert moments.min() > 0
+    assert moments[2] <= moments[0] + moments[1] + 1e-12
 
 
 @pytest.fixture(scope="module")
@@ -81,7 +85,8 @@ def test_com_keypoint_scores_follow_distance_to_the_centre_of_mass(exported):
     com = np.array(mf.metadata["center_of_mass_m"])
     score, pts = mf.keypoints_com[:, 0], mf.keypoints_com[:, 1:]
     d = np.linalg.norm(pts - com, axis=1)
-    assert score.min() == pytest.approx(0.0, abs=1e-6) and score.max() == pytest.approx(1.0)
+    assert score.min() == pytest.approx(0.0, abs=1e-6)
+    assert score.max() == pytest.approx(1.0)
     np.testing.assert_allclose(score, (d.max() - d) / (d.max() - d.min()), atol=1e-5)
 
 

@@ -68,7 +68,8 @@ def test_rectangle_on_rectangle():
     H, W = 50, 60
     # A (id 1) at 0.8 m over B (id 2) at 0.9 m on 10 x 10 px.
     L = layout_of([rect(H, W, 20, 20, 40, 30), rect(H, W, 10, 10, 30, 50)], [0.8, 0.9], H, W)
-    assert L.relation[1, 0] == -1 and L.relation[0, 1] == 1
+    assert L.relation[1, 0] == -1
+    assert L.relation[0, 1] == 1
     assert L.layer.tolist() == [0, 1]
     assert L.parents(2) == [(1, pytest.approx(0.1, abs=1e-6), 30)]
     assert L.children(1) == [(2, pytest.approx(0.1, abs=1e-6), 30)]
@@ -101,7 +102,8 @@ def test_repeated_class_levels_4_and_5():
     H, W = 40, 60
     side = [rect(H, W, 5, 5, 25, 25), rect(H, W, 5, 30, 25, 55)]
     L = layout_of(side, [0.8, 0.8], H, W, categories=[3, 3])
-    assert not L.classes_unique and L.difficulty == 4
+    assert not L.classes_unique
+    assert L.difficulty == 4
     cross = [rect(H, W, 0, 25, 40, 35), rect(H, W, 15, 5, 25, 55)]
     assert layout_of(cross, [0.7, 0.8], H, W, categories=[3, 3]).difficulty == 5
 
@@ -155,8 +157,10 @@ def test_mutual_pair_counts_each_boundary_once_and_drops_a_parent_behind_its_chi
     assert L.relation.tolist() == [[0, -1], [-1, 0]]  # nested: both directions hold
     (a_over_b,) = L.parents(2)
     (b_over_a,) = L.parents(1)
-    assert a_over_b[0] == 1 and a_over_b[1] == pytest.approx(0.05)
-    assert b_over_a[0] == 2 and b_over_a[1] == pytest.approx(0.07)
+    assert a_over_b[0] == 1
+    assert a_over_b[1] == pytest.approx(0.05)
+    assert b_over_a[0] == 2
+    assert b_over_a[1] == pytest.approx(0.07)
     # A over B: B's pixels beside A's top row (20), its sides (2 x 10) -> 40; B over A: A's
     # bottom row (20).
     assert (a_over_b[2], b_over_a[2]) == (40, 20)
@@ -176,7 +180,8 @@ def test_invisible_object_keeps_its_row():
     assert L.visible.tolist() == [True, False]
     assert L.layer.tolist() == [0, 3]
     assert L.order.tolist() == [1]
-    assert L.relation.shape == (2, 2) and not L.relation.any()
+    assert L.relation.shape == (2, 2)
+    assert not L.relation.any()
     j = L.order_json()
     assert j["2"]["parents"] == [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}]
     assert L.layout_json()["objects"]["2"]["visible"] is False
@@ -227,7 +232,8 @@ def test_order_json_and_csv_agree_and_round_trip(tmp_path):
     assert set(np.unique(stored)) <= {-1.0, 0.0}
     assert np.array_equal(stored == -1, L.relation == -1)
     lj = L.layout_json()
-    assert lj["difficulty"] == L.difficulty and lj["order"] == L.order.tolist()
+    assert lj["difficulty"] == L.difficulty
+    assert lj["order"] == L.order.tolist()
     json.dumps(lj)  # serialisable
 
 
@@ -354,7 +360,8 @@ def test_random_stacks_match_brute_force_and_order_respects_parents(seed):
         min_region_fraction=0,
         num_threads=1,
     )
-    assert np.array_equal(L1.relation, L.relation) and np.array_equal(L1.order, L.order)
+    assert np.array_equal(L1.relation, L.relation)
+    assert np.array_equal(L1.order, L.order)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -370,10 +377,15 @@ def test_zero_and_single_object():
         [],
         occlusion=[],
     )
-    assert L0.num_objects == 0 and L0.order.size == 0 and L0.difficulty == 1
-    assert L0.order_json() == {} and L0.order_csv() == ""
+    assert L0.num_objects == 0
+    assert L0.order.size == 0
+    assert L0.difficulty == 1
+    assert L0.order_json() == {}
+    assert L0.order_csv() == ""
     L1 = layout_of([rect(10, 10, 2, 2, 8, 8)], [0.8], 10, 10)
-    assert L1.layer.tolist() == [0] and L1.order.tolist() == [1] and L1.difficulty == 1
+    assert L1.layer.tolist() == [0]
+    assert L1.order.tolist() == [1]
+    assert L1.difficulty == 1
 
 
 def test_float_ids_as_in_npz_files_are_accepted():
@@ -388,7 +400,7 @@ def test_float_ids_as_in_npz_files_are_accepted():
 
 
 @pytest.mark.parametrize(
-    "change, match",
+    ("change", "match"),
     [
         (lambda a: {**a, "visible": a["visible"][:, :-1]}, "amodal: expected shape"),
         (lambda a: {**a, "depth": a["depth"][:-1]}, "depth: expected shape"),

@@ -22,7 +22,8 @@ def test_scene_gt_rotation_is_a_nested_3x3_list_as_metagraspnet_writes_it():
     (entry,) = json.loads(json.dumps(scene_gt_entries(X[None], [7])))
     assert entry["cam_R_m2c"] == [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
     assert entry["cam_t_m2c"] == [10.0, 20.0, 70.0]
-    assert entry["obj_id"] == 7 and isinstance(entry["obj_id"], int)
+    assert entry["obj_id"] == 7
+    assert isinstance(entry["obj_id"], int)
     # MetaGraspNet's colored_pcl.py --visualize_pose builds the pose as R[i][j], t[i] / 100.
     R, t = entry["cam_R_m2c"], entry["cam_t_m2c"]
     T = np.array([[R[i][0], R[i][1], R[i][2], t[i] / 100.0] for i in range(3)] + [[0, 0, 0, 1]])
@@ -45,7 +46,8 @@ def test_order_json_total_covered_edge_is_the_sum_of_the_childrens_edge_sizes():
     order = json.loads(json.dumps(L.order_json()))
     assert [(c["id"], c["edge_size"]) for c in order["1"]["children"]] == [(2, 60), (3, 60)]
     assert order["1"]["total_covered_edge"] == 120
-    assert order["2"]["total_covered_edge"] == 0 and order["3"]["total_covered_edge"] == 0
+    assert order["2"]["total_covered_edge"] == 0
+    assert order["3"]["total_covered_edge"] == 0
     assert [(p["id"], p["edge_size"]) for p in order["2"]["parents"]] == [(1, 60)]
     assert order["1"]["parents"] == [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}]
     for obj in order.values():
@@ -69,7 +71,8 @@ def test_generated_files_follow_metagraspnet(small_dataset):
             su["contact_poses_relative_to_camera"][:],
         )
         # Stored as a virtual dataset over the contact poses' rotation; h5py reads the array.
-        assert len(tool) > 0 and su["suction_poses_relative_to_camera"].is_virtual
+        assert len(tool) > 0
+        assert su["suction_poses_relative_to_camera"].is_virtual
         assert np.array_equal(tool[:, :3, :3], contact[:, :3, :3])
         # MetaGraspNet: tool origin 2 cm (cup) + 11.21 cm (tool) behind the contact (cm files).
         back = contact[:, :3, 3] - tool[:, :3, 3]

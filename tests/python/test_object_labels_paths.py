@@ -64,7 +64,8 @@ def test_shared_samples_give_the_labels_of_separate_label_object_calls():
     )
     pj = pj_label_object(mesh, gripper=config.gripper, max_grasps=config.object_labels.pj_grasps,
                          **kw)  # fmt: skip
-    assert len(suction.score) > 50 and len(pj.width) > 100
+    assert len(suction.score) > 50
+    assert len(pj.width) > 100
     _assert_same(shared.suction, suction)
     _assert_same(shared.paralleljaw, pj)
 
@@ -77,7 +78,8 @@ def test_samples_of_the_wrong_size_are_rejected():
         try:
             label_object(mesh, mass=0.1, com=(0, 0, 0), num_points=30, samples=samples)
         except InvalidArgumentError as e:
-            assert "samples holds 20 points" in str(e) and "30" in str(e)
+            assert "samples holds 20 points" in str(e)
+            assert "30" in str(e)
         else:
             raise AssertionError("samples of the wrong size were accepted")
 
@@ -100,5 +102,6 @@ def test_box_gripper_prefilters_decide_as_the_fcl_only_mesh_gripper(tmp_path):
         s = mgn.sample_surface(mesh, n, method="even", seed=3)
         fast = AntipodalSampler(mesh, g).sample(s.points, s.normals, seed=5, num_threads=2)
         fcl_only = AntipodalSampler(mesh, mesh_g).sample(s.points, s.normals, seed=5, num_threads=1)
-        assert fast.num_colliding > 100 and len(fast.width) > 100, name
+        assert fast.num_colliding > 100, name
+        assert len(fast.width) > 100, name
         _assert_same(fast, fcl_only)

@@ -242,7 +242,8 @@ def test_get_object_lookup(objects: tuple[ObjectSpec, ...]) -> None:
     assert get_object(np.int64(mug.category_id)) is mug
     with pytest.raises(KeyError, match="no_such_thing") as err:
         get_object("no_such_thing")
-    assert "mug" in str(err.value) and "box_cereal" in str(err.value)
+    assert "mug" in str(err.value)
+    assert "box_cereal" in str(err.value)
     for bad_id in (0, len(objects) + 1, -3):
         with pytest.raises(KeyError, match=str(bad_id)):
             get_object(bad_id)
@@ -271,7 +272,8 @@ def test_material_and_spec_validation(objects: tuple[ObjectSpec, ...]) -> None:
     # texture is excluded from equality and hashing
     a = MaterialSpec("m", (1.0, 1.0, 1.0, 1.0), texture=np.zeros((2, 2, 3), dtype=np.uint8))
     b = MaterialSpec("m", (1.0, 1.0, 1.0, 1.0), texture=np.full((2, 2, 3), 9, dtype=np.uint8))
-    assert a == b and hash(a) == hash(b)
+    assert a == b
+    assert hash(a) == hash(b)
     mug = get_object("mug")
     kps = (Keypoint(1, "a", (0.0, 0.0, 0.0)), Keypoint(2, "b", (0.0, 0.0, 0.01)))
     common = {
@@ -304,8 +306,10 @@ def test_material_and_spec_validation(objects: tuple[ObjectSpec, ...]) -> None:
 @pytest.mark.parametrize("name", NAMES)
 def test_mesh_closed_outward_single_body(name: str, welded: dict[str, trimesh.Trimesh]) -> None:
     o = get_object(name)
-    assert o.vertices.dtype == np.float64 and o.vertices.shape[1] == 3
-    assert o.faces.dtype == np.int32 and o.faces.shape[1] == 3
+    assert o.vertices.dtype == np.float64
+    assert o.vertices.shape[1] == 3
+    assert o.faces.dtype == np.int32
+    assert o.faces.shape[1] == 3
     assert 300 <= len(o.faces) <= 20000, len(o.faces)
     assert np.all(np.isfinite(o.vertices))
     assert len(np.unique(o.faces)) == len(o.vertices), "unreferenced vertices"
@@ -359,8 +363,10 @@ def test_keypoints(name: str) -> None:
     lo, hi = o.vertices.min(axis=0) - 0.005, o.vertices.max(axis=0) + 0.005
     for k in o.keypoints:
         p = np.asarray(k.position, dtype=np.float64)
-        assert p.shape == (3,) and np.all(np.isfinite(p)), k
-        assert np.all(p >= lo) and np.all(p <= hi), k
+        assert p.shape == (3,), k
+        assert np.all(np.isfinite(p)), k
+        assert np.all(p >= lo), k
+        assert np.all(p <= hi), k
         assert re.fullmatch(r"[a-z][a-z0-9_]*", k.name)
 
 
@@ -372,11 +378,16 @@ def test_texture_and_uvs(name: str) -> None:
     assert ("textured" in o.tags) == (tex is not None)
     if tex is None:
         return
-    assert tex.dtype == np.uint8 and tex.ndim == 3 and tex.shape[2] == 3
-    assert 16 <= tex.shape[0] <= 1024 and 16 <= tex.shape[1] <= 1024
+    assert tex.dtype == np.uint8
+    assert tex.ndim == 3
+    assert tex.shape[2] == 3
+    assert 16 <= tex.shape[0] <= 1024
+    assert 16 <= tex.shape[1] <= 1024
     assert tex.std() > 5.0, "texture is a flat colour"
-    assert o.uvs.dtype == np.float32 and o.uvs.shape == (len(o.vertices), 2)
-    assert np.all(o.uvs >= 0.0) and np.all(o.uvs <= 1.0)
+    assert o.uvs.dtype == np.float32
+    assert o.uvs.shape == (len(o.vertices), 2)
+    assert np.all(o.uvs >= 0.0)
+    assert np.all(o.uvs <= 1.0)
     # the UV layout is used: no triangle is degenerate in texture space for a printed box
     if "box" in o.tags:
         uv = o.uvs[o.faces].astype(np.float64)
@@ -439,10 +450,13 @@ def _tote_volume(s: ToteSpec) -> float:
 )
 def test_tote_mesh(spec: ToteSpec) -> None:
     v, f = make_tote(spec)
-    assert v.dtype == np.float64 and v.shape == (16, 3)
-    assert f.dtype == np.int32 and f.shape[1] == 3
+    assert v.dtype == np.float64
+    assert v.shape == (16, 3)
+    assert f.dtype == np.int32
+    assert f.shape[1] == 3
     m = trimesh.Trimesh(vertices=v, faces=f, process=False)
-    assert m.is_watertight and m.is_winding_consistent
+    assert m.is_watertight
+    assert m.is_winding_consistent
     assert math.isclose(m.volume, _tote_volume(spec), rel_tol=1e-9)
     assert _count_self_intersections(v, f) == 0
     # extents in the tote frame
@@ -492,7 +506,8 @@ def test_tote_defaults() -> None:
     assert (s.inner_length, s.inner_width, s.inner_height) == TOTE_INNER
     v, f = make_tote()
     v2, f2 = make_tote(s)
-    assert np.array_equal(v, v2) and np.array_equal(f, f2)
+    assert np.array_equal(v, v2)
+    assert np.array_equal(f, f2)
 
 
 @pytest.mark.parametrize(
@@ -525,7 +540,9 @@ def test_objects_fit_the_default_tote_footprint(objects: tuple[ObjectSpec, ...])
 
 def _check_closed(v: np.ndarray, f: np.ndarray) -> trimesh.Trimesh:
     m = _welded(v, f)
-    assert m.is_watertight and m.is_winding_consistent and m.volume > 0
+    assert m.is_watertight
+    assert m.is_winding_consistent
+    assert m.volume > 0
     return m
 
 
@@ -582,7 +599,8 @@ def test_grid_and_rounded_box_volumes() -> None:
     )
     rb = shapes.rounded_box((a, b, c), r, round_steps=8)
     m = _check_closed(rb.vertices, rb.faces)
-    assert m.volume < exact and math.isclose(m.volume, exact, rel_tol=5e-3)
+    assert m.volume < exact
+    assert math.isclose(m.volume, exact, rel_tol=5e-3)
     np.testing.assert_allclose(m.extents, (a, b, c), rtol=1e-12)
     with pytest.raises(ValueError):
         shapes.rounded_box((a, b, c), 0.03)

@@ -37,7 +37,8 @@ objects:
     red, big = load_objects_yaml(path)
     n = len(builtin_objects())
     assert (red.category_id, big.category_id) == (n + 1, n + 2)
-    assert red.material.texture is not None and red.uvs is not None  # from cube.mtl
+    assert red.material.texture is not None
+    assert red.uvs is not None
     assert red.material.opacity == pytest.approx(0.5)
     assert [k.name for k in red.keypoints] == ["top", "bottom"]
     assert big.keypoints[0].position == (0.05, 0.05, 0.05)

@@ -40,7 +40,8 @@ def test_facade_defaults_are_the_bound_structs():
     seal, anti = _core.SealOptions(), _core.AntipodalOptions()
     assert (seal.num_trials, seal.angle_sigma, seal.position_sigma) == (10, 0.1, -1.0)
     assert (anti.probes, anti.approaches_tried, anti.approaches_kept) == (5, 50, 20)
-    assert anti.tilt == math.pi / 16 and anti.friction_coef == pytest.approx(math.tan(math.pi / 8))
+    assert anti.tilt == math.pi / 16
+    assert anti.friction_coef == pytest.approx(math.tan(math.pi / 8))
     d = _keyword_defaults(SealModel.evaluate)
     for name in ("num_trials", "angle_sigma", "perturb", "seed", "first_index", "num_threads"):
         assert d[name] == getattr(seal, name), name
@@ -59,10 +60,12 @@ def test_facade_defaults_are_the_bound_structs():
         light.ambient,
     )
     scene = _core.SceneGraspOptions()
-    assert list(scene.offsets) == [0.0, 0.1] and scene.gravity_world == (0.0, 0.0, -1.0)
+    assert list(scene.offsets) == [0.0, 0.1]
+    assert scene.gravity_world == (0.0, 0.0, -1.0)
     assert grasps.DEFAULT_SHAFT_RADIUS == scene.tool.shaft_radius == 0.015
     assert grasps.DEFAULT_APPROACH_STEP == scene.approach_step == 0.005
-    assert scene.suction_wrench.k == 15.6 and scene.pj_wrench.grip_force == 70.0
+    assert scene.suction_wrench.k == 15.6
+    assert scene.pj_wrench.grip_force == 70.0
 
 
 def test_ranges_are_checked_by_the_structs_validate():
@@ -112,14 +115,18 @@ def test_object_grasp_labels_are_typed_and_checked():
         suction_points=pts,
         suction_approach=-pts,
     )
-    assert labels.pj_p1.dtype == np.float64 and np.array_equal(labels.pj_p1, p1)
-    assert np.array_equal(labels.pj_closing, v) and np.array_equal(labels.pj_approach, a)
-    assert labels.pj_width.dtype == np.float32 and np.array_equal(labels.pj_width, w)
+    assert labels.pj_p1.dtype == np.float64
+    assert np.array_equal(labels.pj_p1, p1)
+    assert np.array_equal(labels.pj_closing, v)
+    assert np.array_equal(labels.pj_approach, a)
+    assert labels.pj_width.dtype == np.float32
+    assert np.array_equal(labels.pj_width, w)
     assert labels.pj_score_simulation.shape == (0,)  # not given: NaN in the model
     assert np.array_equal(labels.suction_points, pts)
     assert np.array_equal(labels.suction_approach, -pts)
     empty = _core.ObjectGraspLabels()
-    assert empty.pj_p1.shape == (0, 3) and empty.suction_points.shape == (0, 3)
+    assert empty.pj_p1.shape == (0, 3)
+    assert empty.suction_points.shape == (0, 3)
     with pytest.raises(mgn.InvalidArgumentError, match=r"ObjectGraspLabels\.pj_closing"):
         _core.ObjectGraspLabels(pj_p1=p1, pj_closing=v[:3], pj_approach=a, pj_width=w)
     with pytest.raises(mgn.InvalidArgumentError, match=r"ObjectGraspLabels\.pj_approach"):

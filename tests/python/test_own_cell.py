@@ -84,7 +84,8 @@ def test_obj_without_mtl_and_with_ns_0_are_valid_objects(tmp_path):
         f"  - {{name: ns0, mesh: {ns0.name}, density: 2.7e3, friction: 5e-1}}\n"
     )
     bare_spec, ns0_spec = load_objects_yaml(yaml_path)
-    assert bare_spec.material.shininess > 0 and ns0_spec.material.shininess > 0
+    assert bare_spec.material.shininess > 0
+    assert ns0_spec.material.shininess > 0
     assert ns0_spec.material.base_color[:3] == pytest.approx((0.8, 0.2, 0.2))
     assert (bare_spec.density, ns0_spec.density, ns0_spec.friction) == (1000.0, 2700.0, 0.5)
 
@@ -108,7 +109,9 @@ def test_bad_user_object_errors_name_file_object_and_key(tmp_path, entry, key):
     with pytest.raises((InvalidArgumentError, IoError)) as info:
         load_objects_yaml(path)
     msg = str(info.value)
-    assert str(path) in msg and "objects[0] ('a')" in msg and f"'{key}'" in msg, msg
+    assert str(path) in msg, msg
+    assert "objects[0] ('a')" in msg, msg
+    assert f"'{key}'" in msg, msg
 
 
 def test_binary_file_folder_and_numbers_in_yaml(tmp_path):
@@ -120,7 +123,8 @@ def test_binary_file_folder_and_numbers_in_yaml(tmp_path):
         assert str(junk) in str(info.value)
         with pytest.raises(IoError) as info:
             load(tmp_path)
-        assert str(tmp_path) in str(info.value) and "folder" in str(info.value)
+        assert str(tmp_path) in str(info.value)
+        assert "folder" in str(info.value)
     cube = cube_obj(tmp_path)
     for bad, what in ((junk, "binary file"), (tmp_path, "is a folder")):  # mgn-cli's reader too
         r = subprocess.run(
@@ -138,7 +142,9 @@ def test_binary_file_folder_and_numbers_in_yaml(tmp_path):
             capture_output=True,
             text=True,
         )
-        assert r.returncode != 0 and str(bad) in r.stderr and what in r.stderr, r.stderr
+        assert r.returncode != 0, r.stderr
+        assert str(bad) in r.stderr, r.stderr
+        assert what in r.stderr, r.stderr
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text("cup: {radius: 7.0e-3, pressure_difference: 7e-1}\ndrop: {max_time: 1E1}\n")
     c = load_config(cfg)
@@ -166,7 +172,9 @@ def test_mgn_cli_pj_scale_and_size_warning(tmp_path):
     out = tmp_path / "pj.json"
     base = [mgn_cli(), "pj", "--mesh", str(mm), "--out", str(out), "--points", "200"]
     r = subprocess.run(base, capture_output=True, text=True, check=True)
-    assert "warning" in r.stderr and str(mm) in r.stderr and "--scale 0.001" in r.stderr
+    assert "warning" in r.stderr
+    assert str(mm) in r.stderr
+    assert "--scale 0.001" in r.stderr
     assert json.loads(out.read_text())["mass"] == pytest.approx(1000 * 40.0**3, rel=1e-4)
     r = subprocess.run([*base, "--scale", "0.001"], capture_output=True, text=True, check=True)
     assert "warning" not in r.stderr
@@ -174,7 +182,8 @@ def test_mgn_cli_pj_scale_and_size_warning(tmp_path):
     assert doc["mass"] == pytest.approx(1000 * 0.04**3, rel=1e-4)  # 64 g
     assert len(doc["quality_score"]) > 0  # a 40 mm cube fits the default hand
     bad = subprocess.run([*base, "--scale", "0"], check=False, capture_output=True, text=True)
-    assert bad.returncode != 0 and "--scale" in bad.stderr
+    assert bad.returncode != 0
+    assert "--scale" in bad.stderr
 
 
 def test_info_json_is_the_same_from_python_and_cpp(tmp_path, data_dir, capsys):
@@ -233,7 +242,8 @@ def test_foreign_meshes_load_as_objects(tmp_path, capsys):
     # and the YAML file it was to be added to.
     for i, f in enumerate(files):
         if f.name in failed:
-            assert f"{f.name}': " in err and f"objs{i}.yaml" in err, err
+            assert f"{f.name}': " in err, err
+            assert f"objs{i}.yaml" in err, err
     assert ok >= 0.8 * len(files), f"{len(failed)} of {len(files)} failed: {failed}\n{err}"
 
 
@@ -244,7 +254,8 @@ def test_foreign_meshes_through_add_generate_validate(tmp_path, capsys):
         assert main([*args, "--density", "800"]) == 0
     out = capsys.readouterr().out
     names = [s.name for s in load_objects_yaml(objs)]  # no size warning: scales are right
-    assert len(names) == 3 and f"--categories {' '.join(names)}" in out
+    assert len(names) == 3
+    assert f"--categories {' '.join(names)}" in out
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(
         "objects: {copies: [1, 2]}\n"
@@ -259,13 +270,15 @@ def test_foreign_meshes_through_add_generate_validate(tmp_path, capsys):
     assert code == 0, capsys.readouterr()
     scene = json.loads((ds / "scene0" / "scene.json").read_text())
     used = {i["name"] for i in scene["instances"]} | {r["name"] for r in scene["removed"]}
-    assert used <= set(names) and used
+    assert used <= set(names)
+    assert used
     assert main(["validate", str(ds)]) == 0
     capsys.readouterr()
     assert main(["stats", str(ds), "--json"]) == 0
     st = json.loads(capsys.readouterr().out)
     kept = [i["name"] for i in scene["instances"]]
-    assert st["scenes"] == 1 and st["views"] == 1
+    assert st["scenes"] == 1
+    assert st["views"] == 1
     assert st["objects"] == {n: kept.count(n) for n in set(kept)}
     assert sum(st["difficulty"].values()) == 1
     for kind in ("suction", "paralleljaw"):
@@ -421,7 +434,8 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
     nodes = set(loaded.graph.nodes_geometry)
     objects = {f"{i.instance_id}_{i.name}" for i in scene.instances}
     grasps = {n for n in nodes if n.startswith("grasp_suction_")}
-    assert objects <= nodes and {"tote", "camera_0", "camera_5"} <= nodes
+    assert objects <= nodes
+    assert {"tote", "camera_0", "camera_5"} <= nodes
     assert 1 <= len(grasps) <= 3 * len(scene.instances)  # collision-free ones only
     assert len(nodes) == len(objects) + 1 + 2 + len(grasps)
     # Nodes hang under tote_frame, which turns z up into glTF's y up: the tote's floor normal
@@ -496,7 +510,8 @@ def test_user_bin_mesh_objects_drop_inside(tmp_path):
     for i, inst in enumerate(scene.instances):
         w = np.asarray(scene.world_mesh(i).vertices, np.float64)
         r = np.hypot(w[:, 0], w[:, 1])
-        assert r.max() < 0.18 + 0.004 and w[:, 2].min() > -0.004, inst.name  # inside the bin
+        assert r.max() < 0.18 + 0.004, inst.name  # inside the bin
+        assert w[:, 2].min() > -0.004, inst.name
     assert any("floor" in inst.contacts for inst in scene.instances)
     # The scene file keeps the bin; a bin that does not hold the inner box is an error.
     again = mgn.scene.Scene.from_dict(scene.to_dict())
@@ -559,7 +574,8 @@ def test_cache_list_and_clear(tmp_path, monkeypatch, capsys):
     assert doc["convex decompositions"]["entries"] == 1
     assert main(["cache", "clear", "--labels-only"]) == 0
     assert "removed 3 cache entries" in capsys.readouterr().out
-    assert not list(labels.iterdir()) and (convex / "part.npz").exists()
+    assert not list(labels.iterdir())
+    assert (convex / "part.npz").exists()
     assert main(["cache", "clear"]) == 0
     assert not (convex / "part.npz").exists()
 
@@ -589,12 +605,14 @@ def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
                  "--no-cache"]) == 0  # fmt: skip
     readme: dict = {}
     exec(compile(blocks[0][0], "README.md", "exec"), readme)  # noqa: S102
-    assert readme["rgb"].ndim == 3 and readme["depth"].ndim == 2
+    assert readme["rgb"].ndim == 3
+    assert readme["depth"].ndim == 2
     namespace: dict = {}
     exec(compile(blocks[1][0], "docs/usage.md", "exec"), namespace)  # noqa: S102
     assert namespace["props"].mass == pytest.approx(2700 * 0.04**3, rel=1e-4)
     hits = namespace["hits"]  # straight down onto the top face of the 40 mm cube
-    assert hits.distance[0] == pytest.approx(0.98) and hits.instance_ids[0] == 1
+    assert hits.distance[0] == pytest.approx(0.98)
+    assert hits.instance_ids[0] == 1
     assert namespace["rgb"].ndim == 3
     assert "True" in capsys.readouterr().out  # the two identical cubes collide
 
@@ -624,7 +642,8 @@ def test_report_opens_in_headless_chromium(tmp_path, capsys):
     page = tmp_path / "r.html"
     assert main(["report", str(ds), "-o", str(page)]) == 0
     err = capsys.readouterr().err
-    assert "mgn report: statistics" in err and "writing the page" in err  # progress
+    assert "mgn report: statistics" in err
+    assert "writing the page" in err
     r = subprocess.run(
         [exe, "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom", page.as_uri()],
         check=False,
@@ -633,15 +652,19 @@ def test_report_opens_in_headless_chromium(tmp_path, capsys):
         timeout=120,
     )
     dom = r.stdout
-    assert r.returncode == 0 and "<svg" in dom, r.stderr[-2000:]
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "<svg" in dom, r.stderr[-2000:]
     svgs = re.findall(r"<svg.*?</svg>", dom, re.DOTALL)
     assert len(svgs) >= 5
     titles = [re.search(r'font-weight="bold">(.*?)</text>', s).group(1) for s in svgs]
-    assert "difficulty level of views" in titles and "suction score (non-colliding)" in titles
+    assert "difficulty level of views" in titles
+    assert "suction score (non-colliding)" in titles
     for s in svgs:  # every plot has a y-axis label and an x-axis label
-        assert 'transform="rotate(-90' in s and s.count("<rect") >= 1
+        assert 'transform="rotate(-90' in s
+        assert s.count("<rect") >= 1
     assert dom.index("Warnings") < dom.index("Sample views") or "No warnings" in dom
-    assert "<details><summary>Configuration" in dom and "<details open" not in dom
+    assert "<details><summary>Configuration" in dom
+    assert "<details open" not in dom
     shot = tmp_path / "r.png"
     r = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
                         f"--screenshot={shot}", "--window-size=1200,1800", page.as_uri()],
@@ -667,7 +690,8 @@ def test_table_top_without_walls(tmp_path):
     table = load_config({"tote": {"inner_length": 0.30, "inner_width": 0.22, "walls": False}}).tote
     assert table == ToteSpec(inner_length=0.30, inner_width=0.22, walls=False)
     v, f = make_tote(table)
-    assert v[:, 2].max() == 0.0 and v[:, 2].min() == pytest.approx(-table.floor_thickness)
+    assert v[:, 2].max() == 0.0
+    assert v[:, 2].min() == pytest.approx(-table.floor_thickness)
     assert np.abs(v[:, :2]).max(axis=0) == pytest.approx([0.15, 0.11])
     names = ["box_cube", "box_tea", "tennis_ball", "box_cube", "box_tea", "tennis_ball",
              "box_cube", "box_tea"]  # fmt: skip
@@ -683,7 +707,8 @@ def test_table_top_without_walls(tmp_path):
         lowest = (np.asarray(scene.mesh(i).vertices, np.float64) @ inst.X_WO[:3, :3].T
                   + inst.X_WO[:3, 3])[:, 2].min()  # fmt: skip
         assert lowest > -0.003, (inst.name, lowest)  # on the board, not below it
-        assert inst.bin_relation == "no_rel" and set(inst.contacts) <= {"floor"}
+        assert inst.bin_relation == "no_rel"
+        assert set(inst.contacts) <= {"floor"}
     # The JSON says it is a table; a tote's JSON is unchanged (no "walls" key).
     again = read_scene_json(write_scene_json(scene, tmp_path / "scene.json"))
     assert again.tote == table
@@ -710,4 +735,5 @@ def test_both_command_lines_exit_1_on_a_bad_value(tmp_path):
     for cmd in ([sys.executable, "-m", "mgn", "info", str(cube), "--density", "-1"],
                 [mgn_cli(), "info", str(cube), "--density", "-1"]):  # fmt: skip
         r = subprocess.run(cmd, check=False, capture_output=True, text=True, timeout=120)
-        assert r.returncode == 1 and "density" in r.stderr, (cmd[0], r.returncode, r.stderr)
+        assert r.returncode == 1, (cmd[0], r.returncode, r.stderr)
+        assert "density" in r.stderr, (cmd[0], r.returncode, r.stderr)

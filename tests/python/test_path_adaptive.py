@@ -135,7 +135,7 @@ def test_adaptive_sampling_keeps_the_analytic_irradiance():
 
 
 @pytest.mark.parametrize(
-    "kw, name",
+    ("kw", "name"),
     [({"adaptive_samples": -0.5}, "adaptive_samples"),
      ({"adaptive_samples": float("inf")}, "adaptive_samples"),
      ({"adaptive_max": 0}, "adaptive_max"),

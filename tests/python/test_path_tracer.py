@@ -77,7 +77,8 @@ def test_exterior_furnace_lambert_sphere_shows_albedo_times_L(albedo):
     out = scene.render(camera((0, -3, 0.5), (0, 0, 0), 24, 25), PathTraceOptions(spp=8, seed=3))
     on = interior(out.instance_ids == 1)
     off = interior(out.instance_ids == 0)
-    assert on.sum() > 150 and off.sum() > 50
+    assert on.sum() > 150
+    assert off.sum() > 50
     np.testing.assert_allclose(out.radiance[on], albedo * L, rtol=3e-3)
     np.testing.assert_allclose(out.radiance[off], L, rtol=1e-6)
     # No bounce allowed: the sphere is black, the dome still seen directly.
@@ -682,7 +683,8 @@ def test_develop_tone_curves_and_exposure():
     film = develop(rad, FilmOptions(tone="filmic", exposure=1.0))
     expected = np.round(srgb(1 - np.exp(-2 * np.nan_to_num(rad))) * 255)
     np.testing.assert_array_equal(film, expected)
-    assert film.dtype == np.uint8 and film.shape == (1, 2, 3)
+    assert film.dtype == np.uint8
+    assert film.shape == (1, 2, 3)
 
 
 def test_develop_sensor_noise_statistics_and_seed():
@@ -691,7 +693,8 @@ def test_develop_sensor_noise_statistics_and_seed():
     noisy = develop(rad, FilmOptions(tone="linear", read_noise=0.02, seed=1))
     again = develop(rad, FilmOptions(tone="linear", read_noise=0.02, seed=1))
     other = develop(rad, FilmOptions(tone="linear", read_noise=0.02, seed=2))
-    assert noisy.tobytes() == again.tobytes() and noisy.tobytes() != other.tobytes()
+    assert noisy.tobytes() == again.tobytes()
+    assert noisy.tobytes() != other.tobytes()
     assert np.all(clean == clean[0, 0, 0])
     # Read noise of std 0.02 around 0.25 in linear -> sRGB slope there * 0.02 * 255 counts.
     slope = (srgb(0.26) - srgb(0.24)) / 0.02
@@ -771,7 +774,8 @@ def test_thin_lens_blur_circle_and_autofocus():
     radius = f * A * abs(1 / s - 1 / d)  # 5 px
     v, u = np.nonzero(blur > 0)
     r = np.hypot(u + 0.5 - 16.5, v + 0.5 - 16.5)
-    assert r.max() <= radius + 1.5 and r.max() >= radius - 1.0
+    assert r.max() <= radius + 1.5
+    assert r.max() >= radius - 1.0
     assert blur.sum() == pytest.approx(pin.sum(), rel=0.05)
     assert (pin > 0).sum() <= 4
     v, u = np.nonzero(auto > 0)

@@ -69,12 +69,15 @@ def test_switching_only_the_engine_gives_one_sample_and_the_denoiser() -> None:
 def test_render_config_round_trip() -> None:
     rnd = {"lights": False, "light_count": [2, 4]}
     cfg = load_config({"render": {"engine": "path", "spp": 8, "randomize": rnd}})
-    assert cfg.render.engine == "path" and cfg.render.spp == 8
-    assert cfg.render.randomize.light_count == (2, 4) and not cfg.render.randomize.lights
+    assert cfg.render.engine == "path"
+    assert cfg.render.spp == 8
+    assert cfg.render.randomize.light_count == (2, 4)
+    assert not cfg.render.randomize.lights
 
     again = load_config(yaml.safe_load(dump_config(cfg)))
     assert again.render == cfg.render
-    assert "render:" in dump_config() and "engine: raster" in dump_config()
+    assert "render:" in dump_config()
+    assert "engine: raster" in dump_config()
 
 
 @pytest.mark.parametrize("command", [
@@ -97,7 +100,8 @@ def test_cli_spp_must_be_positive() -> None:
     with pytest.raises(InvalidArgumentError, match="--spp"):
         photo.with_engine(base, None, 0)
     got = photo.with_engine(base, "raster", 4)
-    assert got.engine == "raster" and got.spp == 4
+    assert got.engine == "raster"
+    assert got.spp == 4
 
 
 # ------------------------------------------------------------------------------ materials
@@ -106,12 +110,17 @@ def test_cli_spp_must_be_positive() -> None:
 def test_builtin_materials_are_plausible() -> None:
     by_name = {o.name: o.material for o in builtin_objects()}
     for name, m in by_name.items():
-        assert 0.0 <= m.roughness <= 1.0 and 0.0 <= m.metallic <= 1.0, name
+        assert 0.0 <= m.roughness <= 1.0, name
+        assert 0.0 <= m.metallic <= 1.0, name
     for name in ("wine_glass", "bottle_clear"):
-        assert by_name[name].transmission == 1.0 and by_name[name].ior == 1.5
-    assert by_name["hex_nut"].metallic == 1.0 and by_name["hex_nut"].roughness < 0.25  # polished
-    assert by_name["l_bracket"].metallic == 1.0 and by_name["l_bracket"].roughness >= 0.3
-    assert by_name["box_cereal"].roughness >= 0.6 and by_name["box_cereal"].metallic == 0.0
+        assert by_name[name].transmission == 1.0
+        assert by_name[name].ior == 1.5
+    assert by_name["hex_nut"].metallic == 1.0
+    assert by_name["hex_nut"].roughness < 0.25
+    assert by_name["l_bracket"].metallic == 1.0
+    assert by_name["l_bracket"].roughness >= 0.3
+    assert by_name["box_cereal"].roughness >= 0.6
+    assert by_name["box_cereal"].metallic == 0.0
     assert by_name["cable_coil"].roughness >= 0.8  # rubber
     # Transparent-tagged objects are exactly the transmissive ones.
     for o in builtin_objects():
@@ -121,7 +130,9 @@ def test_builtin_materials_are_plausible() -> None:
 def test_builtin_mesh_carries_pbr_and_sensor_flags() -> None:
 
     glass = mgn.objects.get_object("bottle_clear").to_mesh().materials[0]
-    assert glass.has_pbr and glass.transmission == 1.0 and glass.ior == pytest.approx(1.5)
+    assert glass.has_pbr
+    assert glass.transmission == 1.0
+    assert glass.ior == pytest.approx(1.5)
     assert surface_flags(glass) & SURFACE_TRANSPARENT
     m = mgn.geometry.Material()
     m.has_pbr, m.metallic, m.roughness = True, 1.0, 0.1
@@ -182,8 +193,10 @@ def test_glb_pbr_factors_read_back(tmp_path: Path) -> None:
                           "KHR_materials_ior": {"ior": 1.45}}}  # fmt: skip
     _write_gltf(tmp_path / "pane.gltf", mat, ["KHR_materials_transmission", "KHR_materials_ior"])
     g = mgn.load_mesh(tmp_path / "pane.gltf").materials[0]
-    assert g.has_pbr and g.transmission == pytest.approx(1.0)
-    assert g.roughness == pytest.approx(0.05, abs=1e-6) and g.metallic == 0.0
+    assert g.has_pbr
+    assert g.transmission == pytest.approx(1.0)
+    assert g.roughness == pytest.approx(0.05, abs=1e-6)
+    assert g.metallic == 0.0
     # A plain OBJ/STL has no PBR description: the tracer derives one.
     stl = mgn.load_mesh(Path(__file__).resolve().parents[1] / "data" / "cube.stl")
     assert not any(mm.has_pbr for mm in stl.materials)
@@ -229,7 +242,8 @@ def test_user_object_pbr_values_reach_the_tracer(tmp_path: Path) -> None:
 def test_blackbody_tints() -> None:
     warm, white, cool = (np.array(photo.blackbody_rgb(t)) for t in (3000.0, 6500.0, 10000.0))
     assert np.allclose(white, 1.0, atol=1e-9)
-    assert warm[0] > warm[1] > warm[2] and cool[2] > cool[1] > cool[0]
+    assert warm[0] > warm[1] > warm[2]
+    assert cool[2] > cool[1] > cool[0]
     for c in (warm, cool):
         assert 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2] == pytest.approx(1.0)
 
@@ -261,7 +275,8 @@ def test_randomisation_is_drawn_from_seed_and_view() -> None:
             assert s.randomize.light_height[0] <= h <= s.randomize.light_height[1]
             # Every light faces the tote (its +z axis points down at the target).
             assert light.X_WL[2, 2] < 0
-    assert counts == {1, 2, 3} and kinds == set(photo.ENVIRONMENTS)
+    assert counts == {1, 2, 3}
+    assert kinds == set(photo.ENVIRONMENTS)
     assert textures == set(photo.TEXTURES)
 
 
@@ -269,18 +284,21 @@ def test_randomisation_switches_are_independent() -> None:
     on = RenderSettings(engine="path")
     off_lights = RenderSettings(engine="path", randomize=RandomizeSettings(lights=False))
     a, b = draw_lighting(on, 5, 2), draw_lighting(off_lights, 5, 2)
-    assert len(b.lights) == 1 and b.lights[0].size == (1.0, 1.0)  # the fixed default light
+    assert len(b.lights) == 1
+    assert b.lights[0].size == (1.0, 1.0)
     assert (a.environment, a.tote, a.floor, a.exposure) == (b.environment, b.tote, b.floor,
                                                             b.exposure)  # fmt: skip
     fixed = draw_lighting(on, 5, 2, randomize=False)
-    assert fixed.exposure == on.exposure and fixed.tote.base_color_texture is None
+    assert fixed.exposure == on.exposure
+    assert fixed.tote.base_color_texture is None
 
 
 def test_procedural_textures() -> None:
     g = np.random.default_rng(0)
     for kind in ("noise", "checker", "stripes"):
         t = photo.procedural_texture(kind, g, size=64)
-        assert t.shape == (64, 64, 3) and t.dtype == np.uint8
+        assert t.shape == (64, 64, 3)
+        assert t.dtype == np.uint8
         assert t.max() == 255 or kind == "noise"
         assert t.min() < t.max()
         # Tileable: the first and last rows / columns are neighbours of similar level.
@@ -334,14 +352,16 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
     # Without its label rays (the pipeline's way) the tracer makes the same photograph.
     rgb_only, out_only = pr.render(view, 0)
     assert np.array_equal(rgb_only, rgb)
-    assert not out_only.instance_ids.any() and not out_only.depth.any()
+    assert not out_only.instance_ids.any()
+    assert not out_only.depth.any()
     assert out_only.rays < out.rays
     # The path-traced views of iter_views come with exactly the raster labels.
     pv = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=True,
                               render=s)))  # fmt: skip
     assert np.array_equal(pv.instance_ids, raster.instance_ids)
     assert pv.engine == {"engine": "path", "spp": 1, "denoised": False, "max_bounces": 6}
-    assert pv.rgb.shape == raster.rgb.shape and pv.rgb.dtype == np.uint8
+    assert pv.rgb.shape == raster.rgb.shape
+    assert pv.rgb.dtype == np.uint8
 
 
 @pytest.mark.parametrize("denoise", [True, False])
@@ -415,8 +435,10 @@ def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
     want_albedo_only = reference(big[0], big[1], None)
     assert not np.array_equal(want_big, want_albedo_only)  # the normal guide is used
     first = photo.denoise(*big, guides="raw")
-    assert first.dtype == np.float32 and first.shape == big[0].shape
-    assert np.isfinite(first).all() and first.min() >= 0.0
+    assert first.dtype == np.float32
+    assert first.shape == big[0].shape
+    assert np.isfinite(first).all()
+    assert first.min() >= 0.0
     assert first.tobytes() == want_big.tobytes()
     assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()  # the cached filter
     assert photo.denoise(*small, guides="raw").tobytes() == want_small.tobytes()  # another shape
@@ -431,8 +453,10 @@ def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
     assert photo.denoise(*big, guides="none").tobytes() == reference(big[0], None, None).tobytes()
     assert photo.denoise(*big, num_threads=1, guides="raw").tobytes() == first.tobytes()
     assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()
-    assert np.isnan(big[0][1, 2]).all() and np.isinf(big[0][3, 1]).all()  # inputs untouched
-    assert np.isnan(big[0]).sum() == 3 and np.isinf(big[0]).sum() == 3
+    assert np.isnan(big[0][1, 2]).all()
+    assert np.isinf(big[0][3, 1]).all()
+    assert np.isnan(big[0]).sum() == 3
+    assert np.isinf(big[0]).sum() == 3
 
 
 def test_denoise_rejects_bad_inputs() -> None:
@@ -514,7 +538,8 @@ def test_half_resolution_albedo_ratio_fades_at_silhouettes() -> None:
     got = _core.restore_half_resolution(
         denoised, 1, 4, albedo, albedo_blocks, normal, normal_blocks, 0.02, 0.85, 0.97
     )
-    assert got.dtype == np.float32 and got.shape == (1, 4, 3)
+    assert got.dtype == np.float32
+    assert got.shape == (1, 4, 3)
     np.testing.assert_allclose(got[0, :, 0], [3.0, 3.0, 1.0, 2.0], atol=1e-4)
 
 
@@ -583,7 +608,9 @@ def test_half_resolution_denoise_keeps_full_size_print() -> None:
     normal = np.zeros((h, w, 3), np.float32)
     normal[..., 2] = 1.0
     out = photo.denoise(noisy, albedo, normal, resolution="half", guides="raw")
-    assert out.shape == noisy.shape and out.dtype == np.float32 and out.min() >= 0.0
+    assert out.shape == noisy.shape
+    assert out.dtype == np.float32
+    assert out.min() >= 0.0
     err_out = float(np.mean((out - clean) ** 2))
     err_in = float(np.mean((noisy - clean) ** 2))
     assert err_out < 0.05 * err_in, (err_out, err_in)
@@ -609,7 +636,9 @@ def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
     img = np.random.default_rng(4).random((23, 17, 3)).astype(np.float32)
     want = cv2.GaussianBlur(img, (3, 3), 0.5, borderType=cv2.BORDER_REPLICATE)
     got = photo._smooth3(img)
-    assert got.dtype == np.float32 and got.flags.c_contiguous and got.shape == img.shape
+    assert got.dtype == np.float32
+    assert got.flags.c_contiguous
+    assert got.shape == img.shape
     np.testing.assert_allclose(got, want, atol=1e-6)
     for threads in (1, 2, 5):  # the thread count does not change the image
         assert photo._smooth3(img, threads).tobytes() == got.tobytes()
@@ -624,7 +653,8 @@ def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
     dot = np.zeros((7, 7, 3), np.float32)
     dot[3, 3] = 1.0
     blurred = photo._smooth3(dot)
-    assert np.count_nonzero(blurred[..., 0]) == 9 and abs(blurred.sum() / 3 - 1.0) < 1e-6
+    assert np.count_nonzero(blurred[..., 0]) == 9
+    assert abs(blurred.sum() / 3 - 1.0) < 1e-6
     w = np.exp(-0.5 / 0.25)  # the side weight before normalisation, sigma 0.5
     assert blurred[3, 4, 0] == pytest.approx(blurred[3, 3, 0] * w, rel=1e-5)
 
@@ -637,8 +667,8 @@ def test_missing_denoiser_warns_and_traces_more_samples(monkeypatch: pytest.Monk
     s = RenderSettings(engine="path", spp=2, spp_without_denoiser=6)
     with pytest.warns(RuntimeWarning, match="pyoidn"):
         pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s)
-    assert pr.spp == 6 and pr.describe() == {"engine": "path", "spp": 6, "denoised": False,
-                                             "max_bounces": 6}  # fmt: skip
+    assert pr.spp == 6
+    assert pr.describe() == {"engine": "path", "spp": 6, "denoised": False, "max_bounces": 6}
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # warned once per process
         photo.PhotoRenderer(items, tote, np.eye(4), None, s)
@@ -671,4 +701,5 @@ def test_tiny_path_traced_dataset_validates(
     assert image_engines(mgn.Dataset(out)).startswith("path tracer, ")
 
     rgb = np.asarray(Image.open(out / "scene0" / "0_rgb.png"))
-    assert rgb.shape == (60, 60, 3) and rgb.std() > 5  # a picture, not a flat fill
+    assert rgb.shape == (60, 60, 3)
+    assert rgb.std() > 5

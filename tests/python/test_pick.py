@@ -102,15 +102,19 @@ def test_settle_keeps_a_resting_stack_and_drops_the_upper_box_when_the_lower_is_
     assert len(same) == 2
     for a, b in zip(same.instances, stack.instances, strict=True):
         assert np.linalg.norm(a.X_WO[:3, 3] - b.X_WO[:3, 3]) < 0.001
-    assert "floor" in same.instances[0].contacts and "floor" not in same.instances[1].contacts
+    assert "floor" in same.instances[0].contacts
+    assert "floor" not in same.instances[1].contacts
 
     fallen, old = settle_tracked(stack, remove=(1,))
-    assert old == (2,) and len(fallen) == 1 and fallen.instances[0].instance_id == 1
+    assert old == (2,)
+    assert len(fallen) == 1
+    assert fallen.instances[0].instance_id == 1
     drop = stack.instances[1].X_WO[2, 3] - fallen.instances[0].X_WO[2, 3]
     assert drop == pytest.approx(_height(LOWER), abs=0.003)
     assert "floor" in fallen.instances[0].contacts
     # Only the lower box removed and nothing else changed in the scene record.
-    assert fallen.tote == stack.tote and fallen.seed == stack.seed
+    assert fallen.tote == stack.tote
+    assert fallen.seed == stack.seed
 
     empty = settle(stack, remove=(1, 2))
     assert len(empty) == 0
@@ -142,17 +146,25 @@ def test_single_box_is_cleared_at_the_first_attempt(single_box, pick_config, tmp
     from mgn.eval.pick import run_picking
 
     r = run_picking(single_box, policy="label", config=pick_config, out=tmp_path)
-    assert r.R_object == 1.0 and r.R_mixture == 1.0 and r.R_grasp == 1.0
-    assert len(r.attempts) == 1 and r.stop_reason == "empty"
+    assert r.R_object == 1.0
+    assert r.R_mixture == 1.0
+    assert r.R_grasp == 1.0
+    assert len(r.attempts) == 1
+    assert r.stop_reason == "empty"
     a = r.attempts[0]
-    assert a.success and a.reason == "ok" and a.score >= 0.5 and a.instance_id == 1
+    assert a.success
+    assert a.reason == "ok"
+    assert a.score >= 0.5
+    assert a.instance_id == 1
     # The chosen suction grasp approaches from above (tool z points down into the box top).
     assert np.asarray(a.X_W_tool)[2, 2] < -0.9
-    assert a.disturbance_max_translation == 0.0 and a.remaining == 0
+    assert a.disturbance_max_translation == 0.0
+    assert a.remaining == 0
     for f in ("step_000.png", "final.png", "picking.gif", "results.json"):
         assert (tmp_path / f).is_file(), f
     doc = json.loads((tmp_path / "results.json").read_text())
-    assert doc["R_object"] == 1.0 and doc["attempts"][0]["success"] is True
+    assert doc["R_object"] == 1.0
+    assert doc["attempts"][0]["success"] is True
     assert "R_grasp 1.000" in r.table()
 
 
@@ -163,14 +175,16 @@ def test_picking_the_lower_box_first_disturbs_the_upper_one_and_not_the_reverse(
     bottom = run_picking(stack, policy=_best_visible_grasp_of(LOWER), config=pick_config,
                          max_attempts=1)  # fmt: skip
     a = bottom.attempts[0]
-    assert a.success and a.instance_id == 1
+    assert a.success
+    assert a.instance_id == 1
     assert a.disturbance_max_translation > 0.5 * fall  # the tea box fell onto the floor
     assert a.disturbance_max_translation > 0.02
 
     top = run_picking(stack, policy=_best_visible_grasp_of(UPPER), config=pick_config,
                       max_attempts=1)  # fmt: skip
     a = top.attempts[0]
-    assert a.success and a.instance_id == 2
+    assert a.success
+    assert a.instance_id == 2
     assert a.disturbance_max_translation < 0.002
     assert a.disturbance_max_rotation < 0.02
 
@@ -180,7 +194,8 @@ def test_label_policy_clears_the_stack_top_first(stack, pick_config):
 
     r = run_picking(stack, policy="label", config=pick_config)
     assert r.cleared == (2, 1)  # the top layer first: no object was disturbed
-    assert r.R_object == 1.0 and r.R_mixture == 1.0
+    assert r.R_object == 1.0
+    assert r.R_mixture == 1.0
     assert all(a.disturbance_max_translation < 0.002 for a in r.attempts)
 
 
@@ -194,10 +209,13 @@ def test_colliding_grasps_fail_twice_per_object_and_the_run_stops(stack, pick_co
         return int(obj[rows[0]]) + 1, int(rows[0])
 
     r = run_picking(stack, policy=colliding, config=pick_config)
-    assert len(r.attempts) == 4 and r.stop_reason == "failures"
+    assert len(r.attempts) == 4
+    assert r.stop_reason == "failures"
     assert all(not a.success and a.reason == "collision" for a in r.attempts)
     assert sorted(a.instance_id for a in r.attempts) == [1, 1, 2, 2]
-    assert r.R_grasp == 0.0 and r.R_object == 0.0 and r.R_mixture == 0.0
+    assert r.R_grasp == 0.0
+    assert r.R_object == 0.0
+    assert r.R_mixture == 0.0
 
 
 def test_same_seed_same_records(stack, pick_config):
@@ -206,7 +224,8 @@ def test_same_seed_same_records(stack, pick_config):
     kw = {"policy": "random", "config": pick_config, "stochastic": True, "max_attempts": 3}
     a = run_picking(stack, seed=4, **kw)
     b = run_picking(stack, seed=4, **kw)
-    assert a == b and len(a.attempts) >= 1
+    assert a == b
+    assert len(a.attempts) >= 1
     assert a.to_dict() == b.to_dict()
     assert run_picking(stack, seed=4, num_threads=1, **kw) == a  # whatever the thread count
 
@@ -241,11 +260,15 @@ def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_pa
                      "--max-attempts", "2", "--resolution", "96"])  # fmt: skip
     assert code == 0
     printed = capsys.readouterr().out
-    assert "R_grasp" in printed and "R_object" in printed
+    assert "R_grasp" in printed
+    assert "R_object" in printed
     doc = json.loads((out / "results.json").read_text())
-    assert doc["num_objects"] == n and 1 <= doc["num_attempts"] <= 2
-    assert doc["policy"] == "label" and doc["gripper"] == "suction"
-    assert (out / "picking.gif").is_file() and (out / "step_000.png").is_file()
+    assert doc["num_objects"] == n
+    assert 1 <= doc["num_attempts"] <= 2
+    assert doc["policy"] == "label"
+    assert doc["gripper"] == "suction"
+    assert (out / "picking.gif").is_file()
+    assert (out / "step_000.png").is_file()
     # The dataset's config was used: the labels cached are those of its object-label settings.
     from mgn.pipeline.config import load_config
     from mgn.pipeline.label_cache import label_keys

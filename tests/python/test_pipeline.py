@@ -67,15 +67,19 @@ def reference(tmp_path_factory: pytest.TempPathFactory, cache_dir: Path) -> tupl
         mp.setenv("MGN_CACHE_DIR", str(cache_dir))
         report = generate(out, 2, config=load_config(SMALL), seed=SEED, progress=False)
     assert report.complete, report.format_summary()
-    assert report.labels_computed == 2 and report.labels_cached == 0
+    assert report.labels_computed == 2
+    assert report.labels_cached == 0
     return out, checksums(out)
 
 
 def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
     out, sums = reference
     doc = json.loads((out / "dataset.json").read_text())
-    assert doc["schema_version"] == 1 and doc["seed"] == SEED and doc["num_scenes"] == 2
-    assert doc["status"] == "complete" and set(doc["splits"]) == {"train", "val", "test"}
+    assert doc["schema_version"] == 1
+    assert doc["seed"] == SEED
+    assert doc["num_scenes"] == 2
+    assert doc["status"] == "complete"
+    assert set(doc["splits"]) == {"train", "val", "test"}
     assert Config.from_dict(doc["config"]) == load_config(SMALL)
     for i in range(2):
         folder = out / f"scene{i}"
@@ -100,19 +104,24 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
             if name in h5:
                 sim = np.asarray(h5[name][()], float).reshape(-1)
                 n_suction += sim.size
-                assert np.isfinite(sim).all() and sim.min() >= 0 and sim.max() <= 1, name
+                assert np.isfinite(sim).all(), name
+                assert sim.min() >= 0, name
+                assert sim.max() <= 1, name
     assert n_suction > 0
     # Object folders carry the labels (rows = labels, no padding).
     for cid in ("003", "006"):
         with h5py.File(out / "models" / cid / "textured.obj.hdf5", "r") as h5:
             pj = h5["grasps/paralleljaw/pregrasp_transform"]
             sc = h5["grasps/suctioncup/pregrasp_transform"]
-            assert pj.shape[1] == 10 and pj.shape[0] > 0
-            assert sc.shape[1] == 6 and 0 < sc.shape[0] <= 30
+            assert pj.shape[1] == 10
+            assert pj.shape[0] > 0
+            assert sc.shape[1] == 6
+            assert 0 < sc.shape[0] <= 30
             # Suction physics: seal score x share of the 2 x 2 grid held, for every grasp.
             seal = np.asarray(h5["grasps/suctioncup/quality_score"])
             ssim = np.asarray(h5["grasps/suctioncup/quality_score_simulation"])
-            assert ssim.shape == seal.shape and np.isfinite(ssim).all()
+            assert ssim.shape == seal.shape
+            assert np.isfinite(ssim).all()
             assert ((ssim >= 0) & (ssim <= seal)).all()
             held = ssim[seal > 0] / seal[seal > 0]
             assert np.isin(np.round(held * 4), [0, 1, 2, 3, 4]).all()
@@ -123,7 +132,9 @@ def test_reference_dataset_layout(reference: tuple[Path, dict]) -> None:
             assert int(meta["pj_physics_unscored"]) == sim.shape[0] - 3
     # The cap is recorded in dataset.json: every object's stored and scored grasps.
     rec = doc["physics_scores"]
-    assert rec["cap"] == 3 and rec["search"] == "staircase" and rec["grid"] == 2
+    assert rec["cap"] == 3
+    assert rec["search"] == "staircase"
+    assert rec["grid"] == 2
     assert rec["checks"] == load_config({}).object_labels.staircase_checks == 0
     assert rec["calibration"] == load_config({}).object_labels.physics_calibration == 32
     assert set(rec["objects"]) == {"box_tea", "can_soda"}
@@ -147,12 +158,15 @@ def test_every_stored_pj_grasp_gets_a_physics_score_by_default(tmp_path: Path, e
     assert report.complete, report.format_summary()
     doc = json.loads((tmp_path / "ds" / "dataset.json").read_text())
     rec = doc["physics_scores"]
-    assert rec["cap"] is None and rec["unscored"] == 0 and rec["capped_objects"] == []
+    assert rec["cap"] is None
+    assert rec["unscored"] == 0
+    assert rec["capped_objects"] == []
     assert rec["grasps"] == rec["scored"] == rec["objects"]["box_tea"]["grasps"] > 0
     (model,) = (tmp_path / "ds" / "models").iterdir()
     with h5py.File(model / "textured.obj.hdf5", "r") as h5:
         sim = np.asarray(h5["grasps/paralleljaw/quality_score_simulation"])
-    assert sim.shape == (rec["grasps"],) and np.isfinite(sim).all()
+    assert sim.shape == (rec["grasps"],)
+    assert np.isfinite(sim).all()
     n_scene = 0
     with h5py.File(tmp_path / "ds" / "scene0" / "0_scene.hdf5", "r") as h5:
         for group in ("non_colliding_grasps", "colliding_grasps"):
@@ -188,16 +202,20 @@ def test_generate_says_where_the_time_went(
     out = capsys.readouterr()
     assert code == 0, out.out + out.err
     assert "object labels: 1 to compute, 0 from the cache; roughly" in out.err
-    assert "per object: box_tea" in out.out and "where the scene time went" in out.out
+    assert "per object: box_tea" in out.out
+    assert "where the scene time went" in out.out
     p = json.loads(prof.read_text())
-    assert p["object_labels"]["computed"] == 1 and p["object_labels"]["cached"] == 0
+    assert p["object_labels"]["computed"] == 1
+    assert p["object_labels"]["cached"] == 0
     (seconds,) = p["object_labels"]["objects_s"].values()
     assert 0 < seconds <= p["object_labels"]["wall_s"] <= p["wall_s"]
     parts = p["scenes"]["parts_s"]
     for part in ("drop", "render: trace", "render: denoise", "render: develop", "render: raster",
                  "render: sensor", "object labels", "scene grasps", "finalize"):  # fmt: skip
-        assert part in parts and parts[part] >= 0.0, part
-    assert parts["render: trace"] > 0 and p["scenes"]["written"] == 1
+        assert part in parts, part
+        assert parts[part] >= 0.0, part
+    assert parts["render: trace"] > 0
+    assert p["scenes"]["written"] == 1
     # The render thread's parts add up to no more than its busy time.
     render_parts = sum(v for k, v in parts.items() if k.startswith("render: "))
     assert render_parts <= parts["render"] + 1e-3
@@ -233,23 +251,28 @@ def test_reference_dataset_validates_reads_and_exports(
     out, _ = reference
     assert validate_dataset(out) == []
     ds = Dataset(out)
-    assert ds.scene_ids == [0, 1] and ds.info["seed"] == SEED
+    assert ds.scene_ids == [0, 1]
+    assert ds.info["seed"] == SEED
     view = ds.scene(1).view(5)
     n = len(ds.scene(1).scene_json["instances"])
-    assert view.amodal.shape[0] == n and view.instances.max() <= n
-    assert view.rgb.shape == (*view.depth.shape, 3) and np.nanmax(view.depth) < 2.0  # metres
+    assert view.amodal.shape[0] == n
+    assert view.instances.max() <= n
+    assert view.rgb.shape == (*view.depth.shape, 3)
+    assert np.nanmax(view.depth) < 2.0
     check_difficulty(view.layout)  # asserts the stored level is Table IV of its entries
     ann = coco.export_coco(ds, tmp_path / "annotations.json")
     gt = COCO(str(ann))
     anns = gt.loadAnns(gt.getAnnIds())
-    assert len(gt.getImgIds()) == 6 and anns
+    assert len(gt.getImgIds()) == 6
+    assert anns
     assert coco_ground_truth_ap(gt) == (pytest.approx(1.0), pytest.approx(1.0))
     png = tmp_path / "show.png"
     args = ["show", str(out), "--scene", "0", "--view", "17", "--grasps", "pj", "--layout"]
     assert main([*args, "-o", str(png)]) == 0
     with Image.open(png) as im:
         # The view with its legend below (what the colours and labels mean).
-        assert im.size[0] == view.intrinsics.width and im.size[1] > view.intrinsics.height + 20
+        assert im.size[0] == view.intrinsics.width
+        assert im.size[1] > view.intrinsics.height + 20
         assert np.asarray(im).std() > 0
 
 
@@ -258,7 +281,8 @@ def test_two_workers_give_the_same_bytes(
 ) -> None:
     out = tmp_path / "ds"
     report = generate(out, 2, config=load_config(SMALL), seed=SEED, workers=2, progress=False)
-    assert report.complete and report.labels_cached == 2
+    assert report.complete
+    assert report.labels_cached == 2
     assert checksums(out) == reference[1]
 
 
@@ -270,7 +294,8 @@ def test_four_workers_collecting_give_the_same_bytes(
     out = tmp_path / "ds"
     report = generate(out, 2, config=load_config(SMALL), seed=SEED, workers=4, collect=True,
                       progress=False)  # fmt: skip
-    assert report.complete and all(r.files is None for r in report.results.values())
+    assert report.complete
+    assert all(r.files is None for r in report.results.values())
     assert checksums(out) == reference[1]
     assert not list(out.glob(".tmp-*"))
 
@@ -294,7 +319,8 @@ def test_dask_local_cluster_gives_the_same_bytes(
             scheduler=cluster.scheduler_address,
             progress=False,
         )
-    assert report.complete and report.labels_computed == 2
+    assert report.complete
+    assert report.labels_computed == 2
     assert checksums(out) == reference[1]
 
 
@@ -333,7 +359,8 @@ def test_killed_run_resumes_to_the_same_dataset(
     with pytest.raises(IoError, match="--resume"):
         generate(out, 2, config=load_config(SMALL), seed=SEED, progress=False)
     report = generate(out, 2, config=load_config(SMALL), seed=SEED, resume=True, progress=False)
-    assert report.skipped == [0] and [r.index for r in report.ok] == [1]
+    assert report.skipped == [0]
+    assert [r.index for r in report.ok] == [1]
     assert checksums(out) == reference[1]
 
 
@@ -354,13 +381,15 @@ def test_interrupt_leaves_no_half_scene_and_resume_redoes_bad_scenes(
     monkeypatch.setattr(sw, "write_scene", interrupted)
     with pytest.raises(KeyboardInterrupt):
         generate(out, 2, config=load_config(SMALL), seed=SEED, progress=False)
-    assert not list(out.glob(".tmp-*")) and not (out / "scene1").exists()
+    assert not list(out.glob(".tmp-*"))
+    assert not (out / "scene1").exists()
     monkeypatch.setattr(sw, "write_scene", real)
     # A complete-looking scene whose file no longer matches its manifest is redone.
     shutil.copytree(reference[0] / "scene1", out / "scene1")
     (out / "scene1" / "0_rgb.png").write_bytes(b"corrupt")
     report = generate(out, 2, config=load_config(SMALL), seed=SEED, resume=True, progress=False)
-    assert report.skipped == [0] and [r.index for r in report.ok] == [1]
+    assert report.skipped == [0]
+    assert [r.index for r in report.ok] == [1]
     assert checksums(out) == reference[1]
 
 
@@ -431,7 +460,8 @@ def test_failing_scene_is_reported_and_the_others_finish(tmp_path: Path, env: Pa
     assert [r.index for r in report.failed] == bad
     assert sorted(r.index for r in report.ok) == sorted(set(range(n)) - set(bad))
     for r in report.failed:
-        assert r.seed == scene_seed(SEED, r.index) and "huge_cube" in r.error
+        assert r.seed == scene_seed(SEED, r.index)
+        assert "huge_cube" in r.error
         assert f"scene{r.index} (seed {r.seed})" in report.format_summary()
         assert not (out / f"scene{r.index}").exists()
     doc = json.loads((out / "dataset.json").read_text())
@@ -457,14 +487,17 @@ def test_disk_full_is_reported_with_the_path(
     argv = ["generate", "--scenes", "3", "--out", str(out), "--config", str(cfg), "--quiet"]
     assert main(argv) == 1
     text = capsys.readouterr().out
-    assert "disk full while writing scene0" in text and "0_rgb.png" in text
+    assert "disk full while writing scene0" in text
+    assert "0_rgb.png" in text
     assert "not run: scene1, scene2" in text  # no new scene is started on a full disk
-    assert not list(out.glob("scene*")) and not list(out.glob(".tmp-*"))
+    assert not list(out.glob("scene*"))
+    assert not list(out.glob(".tmp-*"))
 
 
 def test_scene_seed_rule() -> None:
     seeds = [scene_seed(3, i) for i in range(100)]
-    assert len(set(seeds)) == 100 and all(0 <= s < 2**31 for s in seeds)
+    assert len(set(seeds)) == 100
+    assert all(0 <= s < 2**31 for s in seeds)
     assert scene_seed(3, 5) != scene_seed(5, 3)
     with pytest.raises(InvalidArgumentError, match="seed"):
         scene_seed(-1, 0)
@@ -563,7 +596,8 @@ def test_npz_entries_are_plain_deflate_at_their_level_that_zlib_reads() -> None:
     data = npz_bytes(mask=mask, occ=occ, levels={"mask": 6})
     fast = npz_bytes(mask=mask, occ=occ)
     with np.load(io.BytesIO(data)) as z:
-        assert z["mask"].dtype == bool and np.array_equal(z["mask"], mask)
+        assert z["mask"].dtype == bool
+        assert np.array_equal(z["mask"], mask)
         assert np.array_equal(z["occ"].view(np.uint32), occ.view(np.uint32))
     with zipfile.ZipFile(io.BytesIO(data)) as zf, zipfile.ZipFile(io.BytesIO(fast)) as zp:
         for name, array in (("mask.npy", mask), ("occ.npy", occ)):
@@ -663,5 +697,6 @@ def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
     assert label_keys(spec, stiff)["suction"] != keys["suction"]
     assert label_keys(spec, stiff)["paralleljaw"] == keys["paralleljaw"]
     o = shake_options(more_checks).to_core()
-    assert o.staircase and o.staircase_checks == config.object_labels.staircase_checks + 1
+    assert o.staircase
+    assert o.staircase_checks == config.object_labels.staircase_checks + 1
     assert o.grid == config.object_labels.physics_grid

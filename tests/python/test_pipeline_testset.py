@@ -75,7 +75,8 @@ def test_config_round_trip_and_errors_name_the_key() -> None:
     )
     assert cfg.selection.quota == (0, 3, 0, 0, 0)
     assert Config.from_dict(json.loads(json.dumps(cfg.to_dict()))) == cfg
-    assert load_config(None).split.name == "all" and load_config(None).selection.quota is None
+    assert load_config(None).split.name == "all"
+    assert load_config(None).selection.quota is None
     bad = [
         ({"selection": {"quota": {3: -1}}}, "selection.quota.3"),
         ({"selection": {"quota": {6: 1}}}, "selection.quota.6"),
@@ -114,14 +115,16 @@ def test_plan_batch_steers_towards_the_missing_levels() -> None:
     for remaining in ([3, 0, 7, 1, 0], [20] * 5, [0, 1, 0, 0, 50]):
         for b in (1, 2, 5, 8):
             plan = plan_batch(remaining, b)
-            assert len(plan) == b and plan == sorted(plan)
+            assert len(plan) == b
+            assert plan == sorted(plan)
             assert all(remaining[lv - 1] > 0 for lv in plan)
             missing = [lv for lv in range(1, 6) if remaining[lv - 1] > 0]
             assert set(missing[:b]) <= set(plan)
     # Selection: first come first served in the given order, exactly the quota.
     views = [(0, v, d) for v, d in enumerate([1, 1, 4, 1, 5, 4])]
     chosen, rejected, left = select_views(views, [2, 0, 0, 1, 0])
-    assert [e["view"] for e in chosen] == [0, 1, 2] and left == [0, 0, 0, 0, 0]
+    assert [e["view"] for e in chosen] == [0, 1, 2]
+    assert left == [0, 0, 0, 0, 0]
     assert [e["view"] for e in rejected] == [3, 4, 5]
 
 
@@ -138,9 +141,11 @@ def test_split_compositions() -> None:
     for i in range(40):
         seed = scene_seed(1, i)
         names = [s.name for s in compose_scene(train, catalogue, seed, s_train)]
-        assert len(names) == 20 and not set(names) & novel
+        assert len(names) == 20
+        assert not set(names) & novel
         t = [s.name for s in compose_scene(test, catalogue, seed, s_test)]
-        assert len(t) == 20 and set(t) & novel
+        assert len(t) == 20
+        assert set(t) & novel
         # Without the split the same seed gives the plain composition (MGN: 20 objects).
         plain = compose_scene(
             load_config(None), catalogue, seed, resolve_split(Config(), catalogue)
@@ -149,9 +154,12 @@ def test_split_compositions() -> None:
         for level in (1, 2, 3):
             lo, hi, _ = RECIPES[level]  # type: ignore[misc]
             objs = [s.name for s in compose_scene(test, catalogue, seed, s_test, level)]
-            assert lo <= len(objs) <= hi and len(set(objs)) == len(objs) and set(objs) & novel
+            assert lo <= len(objs) <= hi
+            assert len(set(objs)) == len(objs)
+            assert set(objs) & novel
         objs = [s.name for s in compose_scene(train, catalogue, seed, s_train, 4)]
-        assert len(set(objs)) < len(objs) and not set(objs) & novel
+        assert len(set(objs)) < len(objs)
+        assert not set(objs) & novel
     assert 0 < seen_any < 40  # the plain composition does not always hold a novel object
 
 
@@ -186,12 +194,14 @@ def test_train_and_test_split_datasets(tmp_path: Path) -> None:
         report = generate(out, 3, config=cfg, seed=SEED, progress=False)
         assert report.complete, report.format_summary()
         recorded = json.loads((out / "dataset.json").read_text())["split"]
-        assert recorded["name"] == name and set(recorded["unseen_names"]) == set(unseen)
+        assert recorded["name"] == name
+        assert set(recorded["unseen_names"]) == set(unseen)
         assert recorded["unseen_categories"] == sorted(ids[n] for n in unseen)
         for i in range(3):
             inside, removed = scene_names(out, i)
             if name == "train":
-                assert not (inside | removed) & set(unseen) and inside <= set(cheap)
+                assert not (inside | removed) & set(unseen)
+                assert inside <= set(cheap)
             else:
                 assert "box_cube" in inside | removed
     unseen = {"box_cube"}
@@ -217,7 +227,8 @@ def test_quotas_met_exactly_and_recorded(balanced: tuple[Path, dict]) -> None:
 
     out, doc = balanced
     sel = doc["selection"]
-    assert sel["quota"] == {"1": 2, "2": 1, "3": 0, "4": 1, "5": 0} and sel["complete"]
+    assert sel["quota"] == {"1": 2, "2": 1, "3": 0, "4": 1, "5": 0}
+    assert sel["complete"]
     views = sel["views"]
     assert views == sorted(views, key=lambda e: (e["scene"], e["view"]))
     counts = {lv: sum(e["difficulty"] == lv for e in views) for lv in range(1, 6)}
@@ -253,13 +264,16 @@ def test_same_selection_in_process_and_resumed_past_max_scenes(
     )
     doc = json.loads((out / "dataset.json").read_text())
     if ref["selection"]["batches_done"] > 1:
-        assert not report.complete and report.unmet
-        assert "QUOTA NOT MET" in report.format_summary() and doc["status"] == "incomplete"
+        assert not report.complete
+        assert report.unmet
+        assert "QUOTA NOT MET" in report.format_summary()
+        assert doc["status"] == "incomplete"
         assert doc["selection"]["unmet"] == {str(k): v for k, v in report.unmet.items()}
     report = generate(out, config=selection_config(), seed=SEED, resume=True, progress=False)
     assert report.complete, report.format_summary()
     doc = json.loads((out / "dataset.json").read_text())
-    assert doc["selection"] == ref["selection"] and doc["status"] == "complete"
+    assert doc["selection"] == ref["selection"]
+    assert doc["status"] == "complete"
 
 
 def test_pruned_balanced_dataset_validates(balanced: tuple[Path, dict], tmp_path: Path) -> None:
@@ -277,7 +291,8 @@ def test_pruned_balanced_dataset_validates(balanced: tuple[Path, dict], tmp_path
     assert main([*args, "--max-scenes", "12"]) == 0
     doc = json.loads((out / "dataset.json").read_text())
     sel = doc["selection"]
-    assert sel["views"] == ref["selection"]["views"] and sel["pruned"]
+    assert sel["views"] == ref["selection"]["views"]
+    assert sel["pruned"]
     assert validate_dataset(out) == []
     ds = Dataset(out)
     kept = {(s, v) for s in ds.scene_ids for v in ds.scene(s).view_ids}
@@ -289,7 +304,8 @@ def test_pruned_balanced_dataset_validates(balanced: tuple[Path, dict], tmp_path
     before = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
     assert main([*args, "--max-scenes", "12", "--resume"]) == 0
     after = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
-    assert before == after and validate_dataset(out) == []
+    assert before == after
+    assert validate_dataset(out) == []
     with pytest.raises(InvalidArgumentError, match="--scenes"):
         generate(out, 3, config=selection_config(), seed=SEED, progress=False)
     with pytest.raises(ConfigError, match="'labels.layout'"):

@@ -59,9 +59,12 @@ def test_two_cubes_sharing_an_edge_are_a_closed_solid_with_grasps_on_each_cube()
     X[:3, 3] = (0.04, 0.04, 0.0)
     pair = mgn.Mesh.merge([cube, cube.transformed(X)])
     r = pair.validate()
-    assert r.is_watertight and r.is_outward and (r.num_split_edges, r.num_split_vertices) == (1, 2)
+    assert r.is_watertight
+    assert r.is_outward
+    assert (r.num_split_edges, r.num_split_vertices) == (1, 2)
     props = mass_properties(pair, 500.0)
-    assert props.is_exact and props.volume == pytest.approx(2 * 0.04**3, rel=1e-6)
+    assert props.is_exact
+    assert props.volume == pytest.approx(2 * 0.04**3, rel=1e-6)
     labels = label_object(pair, mass=props.mass, com=props.center_of_mass, num_points=100, seed=1)
     assert len(labels) > 0
     p1 = labels.p1.astype(np.float64)
@@ -70,7 +73,8 @@ def test_two_cubes_sharing_an_edge_are_a_closed_solid_with_grasps_on_each_cube()
     in_first = np.all(np.abs(mid) <= 0.02 + 1e-6, axis=1)
     in_second = np.all(np.abs(mid - X[:3, 3]) <= 0.02 + 1e-6, axis=1)
     assert np.all(in_first | in_second)
-    assert in_first.any() and in_second.any()
+    assert in_first.any()
+    assert in_second.any()
 
 
 def test_box_grasps_across_narrow_faces_score_one_and_none_across_the_long_side():
@@ -103,7 +107,8 @@ def test_sphere_grasps_pass_near_the_centre_within_the_friction_cone():
     samples = mgn.sample_surface(sphere, 60, method="even", seed=2)
     p = np.asarray(samples.points, np.float64)
     exact = sampler.sample(p, p / np.linalg.norm(p, axis=1, keepdims=True), tilt=0, offset=0)
-    assert len(exact.width) > 0 and np.all(exact.point_score == 1.0)
+    assert len(exact.width) > 0
+    assert np.all(exact.point_score == 1.0)
     centres = exact.p1 + 0.5 * exact.width[:, None] * exact.closing
     np.testing.assert_allclose(centres, 0.0, atol=1e-4)
     res = sampler.sample(p, np.asarray(samples.normals), seed=5)
@@ -155,7 +160,8 @@ def test_no_reported_grasp_collides_by_an_independent_fcl_query():
         collides(unchecked.p1[i], unchecked.closing[i], unchecked.approach[i], unchecked.width[i])
         for i in range(len(unchecked.width))
     ]
-    assert free.num_colliding > 0 and any(hits)
+    assert free.num_colliding > 0
+    assert any(hits)
 
 
 def test_one_or_two_threads_and_any_chunking_give_identical_labels():
@@ -183,7 +189,8 @@ def test_wrench_score_matches_a_numpy_soft_finger_model():
     tn = 0.5 * np.abs(np.einsum("ij,ij->i", tau, v))
     u = np.hypot(ft / (mu * f), tn / (2 / 3 * mu * r * f))
     np.testing.assert_allclose(got, np.minimum(1.0, 1.0 / u), rtol=1e-5)
-    assert 0 < got.min() < 1 and got.max() == 1.0
+    assert 0 < got.min() < 1
+    assert got.max() == 1.0
 
 
 def test_bad_input_is_rejected_with_a_clear_error():
@@ -215,7 +222,8 @@ def test_mesh_gripper_from_yaml_matches_the_box_gripper(tmp_path):
     )
     mesh_g.to_yaml(tmp_path / "hand.yaml")
     back = ParallelJawGripper.from_yaml(tmp_path / "hand.yaml")
-    assert back.has_meshes and Path(back.palm_mesh) == tmp_path / "palm.stl"
+    assert back.has_meshes
+    assert Path(back.palm_mesh) == tmp_path / "palm.stl"
     for a, b in zip(gripper_meshes(g, 0.05), gripper_meshes(back, 0.05), strict=True):
         va = np.unique(np.round(np.asarray(a.vertices, np.float64), 6), axis=0)
         vb = np.unique(np.round(np.asarray(b.vertices, np.float64), 6), axis=0)  # STL: unwelded
@@ -243,11 +251,13 @@ def test_labels_round_trip_through_hdf5_in_centimetres(tmp_path):
     write_pj_labels(h5_path, labels)
     with h5py.File(h5_path) as h5:
         pre = h5["grasps/paralleljaw/pregrasp_transform"]
-        assert pre.dtype == np.float32 and pre.shape == (len(labels), 10)
+        assert pre.dtype == np.float32
+        assert pre.shape == (len(labels), 10)
         np.testing.assert_allclose(pre[:, 6:9], labels.p1 * 100, rtol=1e-6)
         np.testing.assert_allclose(pre[:, 9], labels.width * 100, rtol=1e-6)
         assert "grasps/suctioncup/pregrasp_transform" in h5  # other groups kept
-        assert "pj_gripper" in h5["metadata"].attrs and h5["metadata"].attrs["pj_seed"] == 0
+        assert "pj_gripper" in h5["metadata"].attrs
+        assert h5["metadata"].attrs["pj_seed"] == 0
         assert "fake_physics" in h5["metadata"].attrs["pj_physics"]
     back = read_pj_labels(h5_path)
     np.testing.assert_allclose(back["p1"], labels.p1, atol=1e-7)
@@ -264,7 +274,8 @@ def test_cli_labels_an_object_folder_without_physics(tmp_path, capsys):
     assert main(args) == 0
     assert "parallel-jaw grasps from 40 points" in capsys.readouterr().out
     back = read_pj_labels(folder / "textured.obj.hdf5")
-    assert len(back["width"]) > 0 and np.isnan(back["quality_score_simulation"]).all()
+    assert len(back["width"]) > 0
+    assert np.isnan(back["quality_score_simulation"]).all()
 
 
 def test_cli_physics_scores_a_strided_subset(tmp_path):
@@ -275,7 +286,9 @@ def test_cli_physics_scores_a_strided_subset(tmp_path):
     back = read_pj_labels(folder / "textured.obj.hdf5")
     sim = back["quality_score_simulation"]
     done = ~np.isnan(sim)
-    assert done.sum() == 3 and done[0] and done[-1]  # evenly strided, ends included
+    assert done.sum() == 3
+    assert done[0]
+    assert done[-1]
     assert np.all((sim[done] >= 0) & (sim[done] <= 1))
     # A light tea box held across its faces with friction 0.5-2: the shake test holds it.
     assert sim[done].mean() > 0.5
@@ -297,7 +310,9 @@ def test_cpp_cli_reads_the_python_gripper_yaml(tmp_path):
     assert r.returncode == 0, r.stderr
     data = json.loads(out.read_text())
     rows = np.asarray(data["pregrasp_transform"])
-    assert data["gripper"] == "yaml_hand" and rows.shape[1] == 10 and len(rows) > 0
+    assert data["gripper"] == "yaml_hand"
+    assert rows.shape[1] == 10
+    assert len(rows) > 0
     assert rows[:, 9].max() < 0.05  # the YAML's max_opening was applied: only the 40 mm side
     np.testing.assert_allclose(rows[:, 9].min(), 0.04, atol=1e-3)
     # The same labels as the Python API (same sampling, sampler and wrench score).

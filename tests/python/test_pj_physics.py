@@ -35,7 +35,8 @@ def test_light_box_with_high_friction_is_held():
     mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.05)
     opts = ShakeOptions(grid=2, friction_range=(1.0, 2.0), num_threads=2, hold_tolerance=0.0)
     r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
-    assert r.score.shape == (1,) and r.trial_success.shape == (1, 2, 2)
+    assert r.score.shape == (1,)
+    assert r.trial_success.shape == (1, 2, 2)
     assert r.score[0] == pytest.approx(1.0)
     assert not r.trial_ended_early.any()
     assert r.total_steps == int(r.trial_steps.sum())
@@ -57,7 +58,8 @@ def test_success_rises_with_friction_for_a_fixed_grasp():
     opts = ShakeOptions(grid=4, friction_range=(0.05, 1.2), num_threads=2)
     r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None], options=opts)
     held_per_friction = r.trial_success[0].sum(axis=1)
-    assert held_per_friction[0] == 0 and held_per_friction[-1] == 4
+    assert held_per_friction[0] == 0
+    assert held_per_friction[-1] == 4
     assert (np.diff(held_per_friction) >= 0).all()
 
 
@@ -82,7 +84,8 @@ def test_coulomb_limit_decides_a_centred_box_with_and_without_early_success(hold
         assert bool(a.trial_success.all()) == (factor > 1.0), factor
         assert bool(b.trial_success.all()) == (factor > 1.0), factor
         if factor > 1.0 and hold > 0:
-            assert b.trial_ended_early.all() and not a.trial_ended_early.any()
+            assert b.trial_ended_early.all()
+            assert not a.trial_ended_early.any()
             skipped = base.shake_steps // 2 + base.rotate_steps // 4
             assert b.total_steps == a.total_steps - skipped
         else:
@@ -139,10 +142,12 @@ def test_smooth_shake_starts_and_ends_at_rest_with_the_sines_peak_speed_and_angl
     (s_sine, a_sine, o), (s_smooth, a_smooth, _) = runs[False], runs[True]
     v = o.shake_speed
     assert s_sine[0] == pytest.approx(v, rel=0.02)
-    assert s_smooth[0] < 0.01 * v and s_smooth[-1] < 0.01 * v
+    assert s_smooth[0] < 0.01 * v
+    assert s_smooth[-1] < 0.01 * v
     assert s_smooth.max() == pytest.approx(v, rel=0.01)
     assert s_sine.max() == pytest.approx(v, rel=0.01)
-    assert a_smooth[0] < 0.01 * a_sine.max() and a_smooth[-1] < 0.01 * a_sine.max()
+    assert a_smooth[0] < 0.01 * a_sine.max()
+    assert a_smooth[-1] < 0.01 * a_sine.max()
     assert a_smooth.max() == pytest.approx(a_sine.max(), rel=0.01)
     # The sine's first step turns by ~theta_max w_r dt (a jump in angular velocity), the
     # smooth profile's by ~theta_max (w_r dt)^3 / 2.
@@ -174,8 +179,10 @@ def test_held_load_windows_are_on_by_default_and_off_with_the_smooth_profile():
     assert opts.hold_tolerance > 0
     a = shake_scores(mesh, m, com, inertia, grasp, options=opts)
     b = shake_scores(mesh, m, com, inertia, grasp, options=replace(opts, hold_tolerance=0.0))
-    assert a.trial_success.all() and b.trial_success.all()
-    assert a.trial_ended_early.all() and not b.trial_ended_early.any()
+    assert a.trial_success.all()
+    assert b.trial_success.all()
+    assert a.trial_ended_early.all()
+    assert not b.trial_ended_early.any()
     skipped = opts.shake_steps // 2 + opts.rotate_steps // 4
     np.testing.assert_array_equal(a.trial_steps, b.trial_steps - skipped)
     smooth = replace(opts, smooth_shake=True)
@@ -416,10 +423,12 @@ def test_staircase_grid_equals_the_python_reference(checks):
         g8 = truth.astype(np.int8)
         monotone = (np.diff(g8, axis=0) >= 0).all() and (np.diff(g8, axis=1) <= 0).all()
         if monotone:
-            assert not r.fallback and r.success.sum() == truth.sum(), msg
+            assert not r.fallback, msg
+            assert r.success.sum() == truth.sum(), msg
             assert r.trials <= 39 + checks, msg
         if r.fallback:
-            assert r.trials == 100 and r.success.sum() == truth.sum(), msg
+            assert r.trials == 100, msg
+            assert r.success.sum() == truth.sum(), msg
         if checks >= 100:
             np.testing.assert_array_equal(r.success, truth, err_msg=msg)
 
@@ -436,7 +445,8 @@ def test_shake_scorer_scores_every_grasp_unless_capped_and_records_it():
     n = len(full)
     assert n > 3
     assert np.isfinite(full.quality_score_simulation).all()
-    assert full.metadata["pj_physics_scored"] == n and full.metadata["pj_physics_unscored"] == 0
+    assert full.metadata["pj_physics_scored"] == n
+    assert full.metadata["pj_physics_unscored"] == 0
     assert "every grasp" in full.metadata["pj_physics"]
     cap = ShakeScorer(400.0, options=opts, max_grasps=3)
     capped = label_object(mesh, mass=m, com=com, num_points=10, seed=1, sampler_options=few,
@@ -475,14 +485,16 @@ def test_trajectory_reproduces_the_batch_trial_and_renders():
         )
         assert tr.success == bool(r.trial_success[0, i, j])
         assert tr.steps == int(r.trial_steps[0, i, j])
-        assert tr.X_WO.shape == (len(tr.time), 4, 4) and tr.X_WH.shape == tr.X_WO.shape
+        assert tr.X_WO.shape == (len(tr.time), 4, 4)
+        assert tr.X_WH.shape == tr.X_WO.shape
         # The held-load windows may skip the later translational cycle (time, not steps).
         skips = [0, opts.shake_steps // 2] if tr.ended_early else [0]
         assert tr.time[0] == 0.0
         assert any(tr.time[-1] == pytest.approx((tr.steps + k) * opts.dt) for k in skips)
     # The held trial: frames differ as the hand shakes, and the gripper is drawn in them.
     frames = render_frames(tr, [mesh], size=64)
-    assert len(frames) == len(tr.time) and frames[0].size == (64, 64)
+    assert len(frames) == len(tr.time)
+    assert frames[0].size == (64, 64)
     a, b = np.asarray(frames[0]), np.asarray(frames[len(frames) // 2])
     assert np.abs(a.astype(int) - b.astype(int)).sum() > 0
 
@@ -494,7 +506,8 @@ def test_write_trial_pictures(tmp_path):
                           record_every=60)  # fmt: skip
     gif, png = write_trial_pictures(tr, [mesh], tmp_path / "trial", size=48, strip_frames=4)
     with Image.open(gif) as im:
-        assert im.format == "GIF" and im.n_frames == len(tr.time)
+        assert im.format == "GIF"
+        assert im.n_frames == len(tr.time)
     with Image.open(png) as im:
         assert im.size == (4 * 48, 48)
 
@@ -507,7 +520,8 @@ def test_show_trial_action(tmp_path, capsys):
     assert args.func(args) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["success"] is True
-    assert (tmp_path / "cube.gif").exists() and (tmp_path / "cube_strip.png").exists()
+    assert (tmp_path / "cube.gif").exists()
+    assert (tmp_path / "cube_strip.png").exists()
 
 
 @pytest.mark.parametrize(

@@ -120,7 +120,8 @@ def test_monotone_object_keeps_the_staircase_after_calibration(monkeypatch):
     assert verdict(scorer.last_calibration) == (8, 0, True)
     assert fake.calls == [(0, 8, False), (8, 32, True)]  # calibration grids, then the search
     assert fake.trials < 40 * S * S
-    assert "staircase kept" in scorer.__name__ and "calibrated on 8" in scorer.__name__
+    assert "staircase kept" in scorer.__name__
+    assert "calibrated on 8" in scorer.__name__
     assert f"{CHECKS} checks, boundary verified in {S} of {S} friction rows" in scorer.__name__
 
 
@@ -147,7 +148,8 @@ def test_the_verdict_depends_on_the_calibration_grasps_only(monkeypatch):
     bad = missed_cell_grid()
     truth[12] = bad
     scores, scorer, _ = score_with(monkeypatch, truth, calibration_grasps=8)
-    assert scorer.last_calibration is not None and scorer.last_calibration.staircase
+    assert scorer.last_calibration is not None
+    assert scorer.last_calibration.staircase
     expected = truth_scores(truth)
     expected[12] = replay_staircase(bad[None], CHECKS)[0][0]
     np.testing.assert_array_equal(scores, expected)
@@ -166,7 +168,8 @@ def test_no_calibration_and_small_objects(monkeypatch):
     truth = random_monotone(rng, 5)
     truth[1] = missed_cell_grid()
     plain, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=0)
-    assert scorer.last_calibration is None and fake.calls == [(0, 5, True)]
+    assert scorer.last_calibration is None
+    assert fake.calls == [(0, 5, True)]
     assert plain[1] != truth_scores(truth)[1]
     # Fewer grasps than calibration grasps: all on the full grid, nothing left.
     few, scorer, fake = score_with(monkeypatch, truth, calibration_grasps=16)
@@ -283,7 +286,8 @@ def test_default_checks_follow_the_calibration():
 
     assert physics.default_staircase_checks(32) == physics.CALIBRATED_STAIRCASE_CHECKS == 0
     assert physics.default_staircase_checks(0) == ShakeOptions().staircase_checks == 6
-    assert ShakeScorer().calibration_grasps > 0 and ShakeScorer().options.staircase_checks == 0
+    assert ShakeScorer().calibration_grasps > 0
+    assert ShakeScorer().options.staircase_checks == 0
     # The boundary of the lower half of the friction rows with calibration, every row without.
     assert (
         physics.default_staircase_verify_share(32)
@@ -302,7 +306,8 @@ def test_default_checks_follow_the_calibration():
         args = parser.parse_args(["pj", "label", "x.obj", *argv])
         share = 1.0 if "--physics-calibration" in argv else 0.5
         options = _physics_scorer(args, default_gripper()).options
-        assert options.staircase_checks == checks and options.staircase_verify_share == share
+        assert options.staircase_checks == checks
+        assert options.staircase_verify_share == share
         ol = {}
         if "--physics-calibration" in argv:
             ol["physics_calibration"] = 0
@@ -356,9 +361,11 @@ def test_zero_checks_still_verify_every_rows_boundary():
             assert r.fallback == (c != S - 1)
             caught += 1
         elif not np.asarray(r.simulated).flat[c]:
-            assert not r.fallback and np.asarray(r.success).all()
+            assert not r.fallback
+            assert np.asarray(r.success).all()
             missed += 1
-    assert caught == S and missed > 0
+    assert caught == S
+    assert missed > 0
 
 
 # ------------------------------------------------------------- the tolerance (error bound)
@@ -435,7 +442,8 @@ def test_the_error_bound_holds_on_the_grasps_after_the_calibration(p_hole, holes
     assert held >= 0.9 * draws
     assert within == draws
     if p_hole == 0.0:
-        assert c.search == "staircase" and c.mismatches == 0
+        assert c.search == "staircase"
+        assert c.mismatches == 0
 
 
 def test_tolerance_picks_the_cheapest_search_within_it(monkeypatch):
@@ -458,13 +466,17 @@ def test_tolerance_picks_the_cheapest_search_within_it(monkeypatch):
         monkeypatch, truth, calibration_grasps=8, calibration_tolerance=0.02
     )
     c = scorer.last_calibration
-    assert c is not None and c.search == "checked staircase" and c.staircase
-    assert c.mismatches == 0 and c.error_bound <= 0.02
+    assert c is not None
+    assert c.search == "checked staircase"
+    assert c.staircase
+    assert c.mismatches == 0
+    assert c.error_bound <= 0.02
     np.testing.assert_array_equal(scores, truth_scores(truth))  # the checks find the holes
     assert fake.trials < 60 * S * S
     assert "checked staircase for the rest" in scorer.__name__
     _, exact, fake0 = score_with(monkeypatch, truth, calibration_grasps=8)
-    assert exact.last_calibration is not None and exact.last_calibration.search == "full grid"
+    assert exact.last_calibration is not None
+    assert exact.last_calibration.search == "full grid"
     assert fake0.trials == 60 * S * S
 
 
@@ -484,7 +496,9 @@ def test_holes_no_search_visits_get_the_full_grid():
         for i, j in cells[:3]:
             grids[g, i, j] = False
     c = calibrate_staircase(grids, 0, 0, -1, physics.CALIBRATION_TOLERANCE)
-    assert c.search == "full grid" and not c.staircase and c.mismatches == 16
+    assert c.search == "full grid"
+    assert not c.staircase
+    assert c.mismatches == 16
     assert c.trials_per_grasp == s10 * s10
     opts = physics.search_of(c, ShakeOptions(staircase=True))
     assert not opts.staircase
@@ -499,11 +513,13 @@ def test_the_label_metadata_records_the_estimator(monkeypatch):
     labels = mgn.pj.label_object(mesh, mass=0.1, com=[0, 0, 0], num_points=40, physics=scorer,
                                  max_grasps=30)  # fmt: skip
     est = labels.metadata["pj_physics_estimator"]
-    assert est["search"] == "staircase" and est["calibration_grasps"] == 4
+    assert est["search"] == "staircase"
+    assert est["calibration_grasps"] == 4
     assert est["error_bound_95"] == pytest.approx(
         physics.error_bound(np.zeros(4), 1 / S**2), abs=1e-6
     )
-    assert len(labels) == 30 and labels.metadata["pj_max_grasps"] == 30
+    assert len(labels) == 30
+    assert labels.metadata["pj_max_grasps"] == 30
     assert labels.metadata["pj_num_found"] > 30
     assert np.isfinite(labels.quality_score_simulation).all()
 

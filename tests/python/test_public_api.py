@@ -22,7 +22,8 @@ def test_the_product_is_in_the_facade() -> None:
     assert mgn.generate is mgn.pipeline.generate
     assert mgn.Config is mgn.pipeline.config.Config
     assert mgn.load_config is mgn.pipeline.config.load_config
-    assert mgn.Scene is mgn.scene.Scene and mgn.drop_scene is mgn.scene.drop_scene
+    assert mgn.Scene is mgn.scene.Scene
+    assert mgn.drop_scene is mgn.scene.drop_scene
     assert isinstance(mgn.load_config(None), mgn.Config)
 
 

@@ -67,7 +67,8 @@ def test_scenes_refill_by_default(tmp_path: Path, overfull) -> None:
     _, first = overfull
     objects = {k: v for k, v in OVERFULL["objects"].items() if k != "refill"}
     cfg = load_config(dict(OVERFULL, objects=objects))
-    assert cfg.objects.refill and cfg.objects.refill_attempts == 5
+    assert cfg.objects.refill
+    assert cfg.objects.refill_attempts == 5
     out = tmp_path / "ds"
     generate(out, 1, config=cfg, seed=4, progress=False)
     scene = json.loads((out / "scene0" / "scene.json").read_text())

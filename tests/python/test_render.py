@@ -57,8 +57,10 @@ def test_mgn_rig_views_look_at_the_tote_centre() -> None:
     target = np.array([0.2, -0.1, 0.3])
     poses, p = mgn_rig(123, target)
     assert poses.shape == (37, 4, 4)
-    assert 0.7 <= p.R_start < 0.8 and 1.0 <= p.R_end < 1.4
-    assert 0.3 <= p.theta_start < 0.8 and 0.1 <= p.theta_end < 0.3
+    assert 0.7 <= p.R_start < 0.8
+    assert 1.0 <= p.R_end < 1.4
+    assert 0.3 <= p.theta_start < 0.8
+    assert 0.1 <= p.theta_end < 0.3
     assert math.pi <= p.phi_end < 2 * math.pi
     # View 0 straight down from R_start.
     np.testing.assert_allclose(poses[0][:3, 2], [0, 0, -1], atol=1e-12)
@@ -103,8 +105,10 @@ def test_rendered_depth_and_ids_agree_with_embree(scene) -> None:
     for v in (0, 14, 36):
         view = CameraView(SMALL, poses[v])
         out = r.render(view, randomize=True, seed=1, view_index=v)
-        assert out.rgb.shape == (300, 300, 3) and out.rgb.dtype == np.uint8
-        assert out.depth.dtype == np.float32 and out.instance_ids.dtype == np.int32
+        assert out.rgb.shape == (300, 300, 3)
+        assert out.rgb.dtype == np.uint8
+        assert out.depth.dtype == np.float32
+        assert out.instance_ids.dtype == np.int32
         o, d = view.rays()
         hits = rays_scene.intersect(o, d, coherent=True)
         truth_ids = np.where(hits.hit, hits.instance_ids, 0).reshape(300, 300)
@@ -134,7 +138,8 @@ def test_transparent_object_invalid_in_structured_light_valid_in_ideal(scene) ->
                             flags_by_id=flags, seed=3)  # fmt: skip
     ideal = apply_depth_sensor(out.depth, out.instance_ids, SMALL, "ideal", flags_by_id=flags)
     tof = apply_depth_sensor(out.depth, out.instance_ids, SMALL, "tof", flags_by_id=flags, seed=3)
-    assert not sl.valid[glass].any() and np.isnan(sl.depth[glass]).all()
+    assert not sl.valid[glass].any()
+    assert np.isnan(sl.depth[glass]).all()
     assert not tof.valid[glass].any()
     assert ideal.valid[glass].all()
     np.testing.assert_array_equal(ideal.depth[glass], out.depth[glass])
@@ -164,7 +169,8 @@ def test_amodal_pass_of_a_subset(scene) -> None:
     r.set_instances([Instance(r.add_mesh(m), X, i) for m, X, i in scene])
     view = CameraView(SMALL, mgn_rig(4, (0, 0, 0))[0][20])
     full = r.render(view, rgb=False, depth=False)
-    assert full.rgb is None and full.depth is None
+    assert full.rgb is None
+    assert full.depth is None
     for inst in (1, 3):
         alone = r.render(view, rgb=False, depth=False, visible_instances=[inst])
         assert set(np.unique(alone.instance_ids)) <= {0, inst}
@@ -212,7 +218,8 @@ def test_render_views_writes_images(scene, tmp_path) -> None:
         np.testing.assert_array_equal(rgb, r.rgb)
         ids = np.asarray(Image.open(tmp_path / f"{v}_instances.png"))
         np.testing.assert_array_equal(ids, r.instance_ids)
-        assert set(np.unique(ids)) <= {0, 1, 2, 3} and len(np.unique(ids)) >= 3
+        assert set(np.unique(ids)) <= {0, 1, 2, 3}
+        assert len(np.unique(ids)) >= 3
         with np.load(tmp_path / f"{v}_depth.npz") as z:
             np.testing.assert_array_equal(z["valid_depth"], r.valid)
             np.testing.assert_allclose(z["depth"], r.depth * 100, rtol=1e-6)  # cm

@@ -134,7 +134,8 @@ def test_category_ids_beyond_uint16_stay_float32(tmp_path: Path):
     write_view(tmp_path, rec)
     with np.load(tmp_path / "3.npz") as z:
         sem = z["instances_semantic"]
-    assert sem.dtype == np.float32 and np.array_equal(sem, rec.semantic)
+    assert sem.dtype == np.float32
+    assert np.array_equal(sem, rec.semantic)
 
 
 def test_metagraspnet_scripts_read_the_files_unchanged(tmp_path: Path):
@@ -163,9 +164,11 @@ def test_metagraspnet_scripts_read_the_files_unchanged(tmp_path: Path):
     assert (occlusion * 100).dtype == np.float32
     assert np.array_equal(np.asarray(instances_semantic, np.float32), rec.semantic)
     # The amodal masks keep MetaGraspNet's bool (N, H, W) (contoured at level 0.8 there).
-    assert occlusion_masks.dtype == bool and np.array_equal(occlusion_masks, rec.amodal)
+    assert occlusion_masks.dtype == bool
+    assert np.array_equal(occlusion_masks, rec.amodal)
     # colored_pcl.py: NaN -> 0 in a float32 depth (Open3D wants float32), cm -> m by 100.
-    assert depth.dtype == np.float32 and depth.flags.c_contiguous
+    assert depth.dtype == np.float32
+    assert depth.flags.c_contiguous
     depth[np.isnan(depth)] = 0.0
     f = h5py.File(str(tmp_path / "3_scene.hdf5"), "r")
     try:
@@ -248,7 +251,8 @@ def test_float_images_round_trip_every_bit_pattern():
     # The gradient coding too (and on a single row / column).
     for image in (a, a[:1], a[:, :1]):
         coded = encode_float_gradient(image)
-        assert coded.dtype == np.int32 and coded.shape == image.shape
+        assert coded.dtype == np.int32
+        assert coded.shape == image.shape
         assert np.array_equal(_bits(decode_float_gradient(coded)), _bits(image))
 
 
@@ -274,7 +278,8 @@ def test_gradient_coding_leaves_zigzagged_residuals_of_the_bit_patterns():
             assert int(coded[y, x]) % 2**32 == zigzag, (y, x)
     # Away from the NaN (rows 2-3) and the first column the residuals are four noise terms of
     # at most 2 each: |r| <= 8, zigzagged <= 16.
-    assert 0 <= coded[4:, 1:].min() and coded[4:, 1:].max() <= 16
+    assert 0 <= coded[4:, 1:].min()
+    assert coded[4:, 1:].max() <= 16
 
 
 def test_mgn_images_are_stored_delta_coded_and_read_back(tmp_path: Path):
@@ -319,7 +324,9 @@ def test_depth_picture_is_a_palette_png_that_reads_as_the_rgb_picture(tmp_path: 
     # The noise-free depth where the sensor has a value, black where it has none.
     assert np.array_equal(rgb, depth_picture(np.where(np.isfinite(sensor), depth, np.nan)))
     assert not np.array_equal(rgb, depth_picture(rec.depth))
-    assert (rgb[:3] == 0).all() and (rgb[5:7] == 0).all() and (rgb[7:] != 0).any(axis=-1).all()
+    assert (rgb[:3] == 0).all()
+    assert (rgb[5:7] == 0).all()
+    assert (rgb[7:] != 0).any(axis=-1).all()
     # OpenCV, as MetaGraspNet's scripts read their PNGs, gives the same picture (BGR).
     bgr = cv2.imread(str(tmp_path / "3_depth.png"), cv2.IMREAD_COLOR)
     assert np.array_equal(bgr[..., ::-1], rgb)
@@ -374,7 +381,8 @@ def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtype
     # exact file; object poses and scores exact.
     with h5py.File(arch / "3_scene.hdf5", "r") as a, h5py.File(exact / "3_scene.hdf5", "r") as e:
         g = "non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera"
-        assert a[g].dtype == np.float32 and a[g].shape == e[g].shape
+        assert a[g].dtype == np.float32
+        assert a[g].shape == e[g].shape
         pa, pe = a[g][()], e[g][()]
         assert np.abs(pa[:, :3, :3] - pe[:, :3, :3]).max() <= 2.0**-17 + 1e-7
         assert np.abs(pa[:, :3, 3] - pe[:, :3, 3]).max() <= 2.0**-11 + 1e-5
@@ -454,7 +462,8 @@ def test_tool_poses_sharing_the_contact_rotation_read_back_bit_identical(
         for path, expected in ref.items():
             ds = f[path]
             assert ds.is_virtual == (path in virtual), path
-            assert ds.dtype == np.float32 and ds.shape == expected.shape
+            assert ds.dtype == np.float32
+            assert ds.shape == expected.shape
             assert np.array_equal(_bits(ds[()]), _bits(expected)), path
             rows = list(ds)
             assert len(rows) == len(expected)
@@ -464,7 +473,8 @@ def test_tool_poses_sharing_the_contact_rotation_read_back_bit_identical(
         # The suction contact poses are chunked by their first three rows, unshuffled (repeated
         # rotations), the parallel-jaw ones by entry.
         su = f["colliding_grasps/suctioncup/contact_poses_relative_to_camera"]
-        assert su.chunks == (300, 3, 4) and not su.shuffle
+        assert su.chunks == (300, 3, 4)
+        assert not su.shuffle
         assert f["colliding_grasps/paralleljaw/contact_poses_relative_to_camera"].chunks == (
             700,
             1,

@@ -55,7 +55,8 @@ def test_decomposition_covers_the_object_and_matches_its_volume(name):
     assert total < v_hull  # ... much more tightly than the single hull
     for p in parts:
         r = p.validate()
-        assert r.is_watertight and r.is_outward
+        assert r.is_watertight
+        assert r.is_outward
     verts = np.unique(np.asarray(mesh.vertices, np.float64), axis=0)
     inside_some = np.min(np.stack([_outside(p, verts) for p in parts]), axis=0)
     assert inside_some.max() <= 2e-5  # hulls merge near-coplanar facets (float32)
@@ -143,8 +144,10 @@ def test_settled_objects_lie_inside_the_tote_without_interpenetrating(dropped):
     for i, inst in enumerate(scene.instances):
         lo, hi = scene.world_mesh(i).bounds
         assert lo[2] >= -TOL, inst.name
-        assert lo[0] >= -tote.inner_length / 2 - TOL and hi[0] <= tote.inner_length / 2 + TOL
-        assert lo[1] >= -tote.inner_width / 2 - TOL and hi[1] <= tote.inner_width / 2 + TOL
+        assert lo[0] >= -tote.inner_length / 2 - TOL
+        assert hi[0] <= tote.inner_length / 2 + TOL
+        assert lo[1] >= -tote.inner_width / 2 - TOL
+        assert hi[1] <= tote.inner_width / 2 + TOL
         if lo[2] < 0.002:
             assert "floor" in inst.contacts
         assert inst.bin_relation in ("no_rel", "edge", "corner")
@@ -173,7 +176,8 @@ def test_json_round_trip_and_meshes_come_back(dropped, tmp_path):
     spec = get_object(back.instances[0].name)
     assert back.mesh(0).num_faces == len(spec.faces)
     data = json.loads(path.read_text())
-    assert data["schema_version"] == 1 and data["seed"] == 5
+    assert data["schema_version"] == 1
+    assert data["seed"] == 5
     data["schema_version"] = 99
     (tmp_path / "bad.json").write_text(json.dumps(data))
     with pytest.raises(mgn.InvalidArgumentError, match="schema_version"):
@@ -185,7 +189,8 @@ def test_json_round_trip_and_meshes_come_back(dropped, tmp_path):
 def test_compose_by_categories_and_count_is_seeded():
     objs = compose_objects(categories=["mug", "pear"], seed=3)
     names = [o.name for o in objs]
-    assert 2 <= names.count("mug") <= 5 and 2 <= names.count("pear") <= 5
+    assert 2 <= names.count("mug") <= 5
+    assert 2 <= names.count("pear") <= 5
     assert [o.name for o in compose_objects(categories=["mug", "pear"], seed=3)] == names
     twelve = compose_objects(count=12, seed=1)
     assert len(twelve) == 12
@@ -247,8 +252,10 @@ def test_twelve_builtin_objects_come_to_rest_inside_the_tote(seed):
     for i in range(len(scene)):
         lo, hi = scene.world_mesh(i).bounds
         assert lo[2] >= -TOL
-        assert lo[0] >= -tote.inner_length / 2 - TOL and hi[0] <= tote.inner_length / 2 + TOL
-        assert lo[1] >= -tote.inner_width / 2 - TOL and hi[1] <= tote.inner_width / 2 + TOL
+        assert lo[0] >= -tote.inner_length / 2 - TOL
+        assert hi[0] <= tote.inner_length / 2 + TOL
+        assert lo[1] >= -tote.inner_width / 2 - TOL
+        assert hi[1] <= tote.inner_width / 2 + TOL
 
 
 # ------------------------------------------------------------------ options from Python (issue 5)
@@ -516,7 +523,8 @@ def test_twelve_object_scenes_keep_their_objects_in_the_tote():
         scene = drop_scene(objects, seed=seed)
         assert len(scene.instances) + len(scene.removed) == 12
         lost.append(len(scene.removed))
-    assert max(lost) <= 3 and sum(lost) <= 8, lost
+    assert max(lost) <= 3, lost
+    assert sum(lost) <= 8, lost
 
 
 def test_round_objects_rest_on_the_floor_and_do_not_overlap():
@@ -588,11 +596,14 @@ def test_drop_options_ranges_are_checked_by_the_core():
 def test_drop_result_is_a_typed_object_with_one_row_per_object():
     objects = [get_object("box_cube"), get_object("pear")]
     scene = drop_scene(objects, seed=3)
-    assert scene.stats["steps"] > 0 and scene.stats["settled"] is True
+    assert scene.stats["steps"] > 0
+    assert scene.stats["settled"] is True
     # Same drop straight through the core, checked field by field.
     out, _, _ = _simulate(objects, 3, ToteSpec(), DropOptions(), None, None, True)
     assert isinstance(out, mgn._core.DropResult)
-    assert out.X_WO.shape == (2, 4, 4) and out.X_WO_release.shape == (2, 4, 4)
-    assert out.status.dtype == np.int32 and out.object_settled.dtype == bool
+    assert out.X_WO.shape == (2, 4, 4)
+    assert out.X_WO_release.shape == (2, 4, 4)
+    assert out.status.dtype == np.int32
+    assert out.object_settled.dtype == bool
     assert out.steps == scene.stats["steps"]
     np.testing.assert_array_equal(out.X_WO[out.status == 0][0], scene.instances[0].X_WO)

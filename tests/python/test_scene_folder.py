@@ -138,7 +138,8 @@ def dataset(tmp_path):
 def test_cm_rules_round_trip():
     X = np.tile(_pose((0.1, -0.2, 0.3)), (3, 1, 1))
     cm = to_cm("a/franka_poses_relative_to_camera", X)
-    assert np.allclose(cm[:, :3, 3], [10, -20, 30]) and np.allclose(cm[:, :3, :3], np.eye(3))
+    assert np.allclose(cm[:, :3, 3], [10, -20, 30])
+    assert np.allclose(cm[:, :3, :3], np.eye(3))
     kp = np.array([[7.0, 0.01, 0.02, 0.03]])
     assert np.allclose(to_cm("keypts/com/keypts_relative_to_camera", kp), [[7, 1, 2, 3]])
     assert np.allclose(to_cm("x/contact_width", [0.05]), [5.0])
@@ -148,14 +149,16 @@ def test_cm_rules_round_trip():
 
 def test_written_view_reads_back_in_si(dataset):
     ds = Dataset(dataset)
-    assert ds.scene_ids == [0, 1] and len(ds) == 2
+    assert ds.scene_ids == [0, 1]
+    assert len(ds) == 2
     scene = ds.scene(1)
     assert scene.view_ids == [0, 1]
     rec = _record(1, shift=4)
     view = scene.view(1)
     assert np.array_equal(view.rgb, rec.rgb)
     d = view.depth
-    assert np.isnan(d[0, 0]) and np.allclose(d[1:, :], rec.depth[1:, :], atol=1e-6)
+    assert np.isnan(d[0, 0])
+    assert np.allclose(d[1:, :], rec.depth[1:, :], atol=1e-6)
     # The file itself is in cm.
     assert np.isclose(np.nanmax(view.npz["depth"]), 70.0)
     assert np.array_equal(view.instances, rec.instances)
@@ -169,7 +172,8 @@ def test_written_view_reads_back_in_si(dataset):
     assert view.grasps("suctioncup") == {}
     kp = view.hdf5["keypts/byhand/keypts_relative_to_camera"]
     assert np.allclose(kp, [[1, 0.01, 0.02, 0.6]], atol=1e-6)
-    assert view.relation_matrix[0, 1] == -1 and view.relation_matrix[1, 0] == 1
+    assert view.relation_matrix[0, 1] == -1
+    assert view.relation_matrix[1, 0] == 1
     assert np.count_nonzero(view.relation_matrix) == 2
     assert view.order["1"]["parents"][0]["id"] == 2
     assert view.layout["difficulty"] == 2
@@ -196,14 +200,16 @@ def test_intrinsics_from_metagraspnet_keys():
         del p[k]
     K2 = intrinsics_from_params(p)
     assert (K2.width, K2.height) == (K.width, K.height)
-    assert np.isclose(K2.fx, K.fx, rtol=1e-9) and np.isclose(K2.cx, K.cx)
+    assert np.isclose(K2.fx, K.fx, rtol=1e-9)
+    assert np.isclose(K2.cx, K.cx)
 
 
 def test_files_are_reproducible(tmp_path):
     arrays = {"a": np.arange(6, dtype=np.float32).reshape(2, 3), "b": np.ones(3, bool)}
     assert npz_bytes(**arrays) == npz_bytes(**arrays)
     with np.load(__import__("io").BytesIO(npz_bytes(**arrays))) as z:
-        assert np.array_equal(z["a"], arrays["a"]) and z["b"].dtype == bool
+        assert np.array_equal(z["a"], arrays["a"])
+        assert z["b"].dtype == bool
     assert hdf5_bytes({"g/x": np.ones(3)}) == hdf5_bytes({"g/x": np.ones(3)})
     digests = []
     for k in range(2):
@@ -214,7 +220,8 @@ def test_files_are_reproducible(tmp_path):
                 for p in (tmp_path / str(k)).iterdir()
             }
         )
-    assert digests[0] == digests[1] and len(digests[0]) == len(view_file_names(0))
+    assert digests[0] == digests[1]
+    assert len(digests[0]) == len(view_file_names(0))
     # Timing the parts (the benchmark's breakdown) changes no byte, and accounts for the
     # calling thread's CPU time of the call.
     times: dict[str, float] = {}
@@ -225,7 +232,8 @@ def test_files_are_reproducible(tmp_path):
             for p in (tmp_path / "timed").iterdir()} == digests[0]  # fmt: skip
     assert set(times) == {"arrays", "rgb.png", "npz", "depth.png", "scene.hdf5", "mgn.hdf5",
                           "json and csv", "files"}  # fmt: skip
-    assert all(t >= 0.0 for t in times.values()) and sum(times.values()) <= spent + 1e-6
+    assert all(t >= 0.0 for t in times.values())
+    assert sum(times.values()) <= spent + 1e-6
 
 
 def test_record_checks_shapes():
@@ -251,9 +259,11 @@ def test_coco_ground_truth_scores_ap_one(dataset, tmp_path):
     assert len(anns) == 12  # 3 instances x 4 views
     a0 = next(a for a in anns if a["instance_id"] == 1 and a["image_id"] == 0)
     # Instance 2 covers rows 10..24 x cols 25..34 of instance 1: its box keeps the full width.
-    assert a0["bbox"] == [5.0, 5.0, 30.0, 20.0] and a0["area"] == 600 - 150
+    assert a0["bbox"] == [5.0, 5.0, 30.0, 20.0]
+    assert a0["area"] == 600 - 150
     assert a0["amodal_bbox"] == [5.0, 5.0, 30.0, 20.0]
-    assert np.isclose(a0["occlusion"], 150 / 600) and a0["layer"] == 1
+    assert np.isclose(a0["occlusion"], 150 / 600)
+    assert a0["layer"] == 1
     assert gt.loadImgs([0])[0]["difficulty"] == 2
     assert coco_ground_truth_ap(gt) == (pytest.approx(1.0), pytest.approx(1.0))
     agnostic = coco_dict(Dataset(dataset), class_agnostic=True)
@@ -322,7 +332,8 @@ def test_validate_and_coco_commands(dataset, tmp_path, capsys):
     out = tmp_path / "coco.json"
     assert main(["coco", str(dataset), "-o", str(out), "--scenes", "1", "--class-agnostic"]) == 0
     data = json.loads(out.read_text())
-    assert {im["scene_id"] for im in data["images"]} == {1} and len(data["annotations"]) == 6
+    assert {im["scene_id"] for im in data["images"]} == {1}
+    assert len(data["annotations"]) == 6
     (dataset / "scene0" / "0_camera_params.json").unlink()
     assert main(["validate", str(dataset)]) == 1
     assert "scene0/0_camera_params.json: missing" in capsys.readouterr().out
@@ -338,19 +349,23 @@ def test_show_draws_the_view(dataset, tmp_path):
     assert main(["show", str(dataset), "--scene", "0", "--view", "1", "--grasps", "pj",
                  "--layout", "-o", str(out)]) == 0  # fmt: skip
     with Image.open(out) as im:
-        assert im.size[0] == W and im.size[1] > H  # the legend below the view
+        assert im.size[0] == W
+        assert im.size[1] > H
     view = Dataset(dataset).scene(0).view(1)
     img = render_overlay(view, keypoints=False)
     # Instance colours are blended over the visible pixels only; the background below the
     # objects (rows 32.., clear of their id labels too) is unchanged.
     inst = view.instances
-    assert np.array_equal(img[32:H], view.rgb[32:]) and not inst[32:].any()
+    assert np.array_equal(img[32:H], view.rgb[32:])
+    assert not inst[32:].any()
     assert not np.array_equal(img[:H][inst == 2], view.rgb[inst == 2])
     cols = instance_colors(5)
-    assert len({tuple(c) for c in cols[1:]}) == 5 and tuple(cols[0]) == (0, 0, 0)
+    assert len({tuple(c) for c in cols[1:]}) == 5
+    assert tuple(cols[0]) == (0, 0, 0)
     uv, front = project([[0.0, 0.0, 1.0], [0.1, 0.0, -1.0]], np.array([[50, 0, 30], [0, 50, 20],
                                                                        [0, 0, 1.0]]))  # fmt: skip
-    assert np.allclose(uv[0], [30, 20]) and list(front) == [True, False]
+    assert np.allclose(uv[0], [30, 20])
+    assert list(front) == [True, False]
     with pytest.raises(ValueError, match="unknown grasp kind 'magnetic'"):
         render_overlay(view, grasps="magnetic")
 
@@ -377,7 +392,8 @@ def test_show_outline_mode_panels_and_a_single_scene_folder(dataset, tmp_path):
     assert panels.shape[1] == 3 * W
     amodal_panel = panels[24:H, W : 2 * W]  # below the panel's title
     any_amodal = view.amodal.any(axis=0)[24:]
-    assert any_amodal.any() and (amodal_panel.sum(axis=-1) > 0)[any_amodal].all()
+    assert any_amodal.any()
+    assert (amodal_panel.sum(axis=-1) > 0)[any_amodal].all()
     assert (amodal_panel.sum(axis=-1) == 0)[~any_amodal].all()
     with pytest.raises(ValueError, match="alpha"):
         render_overlay(view, alpha=1.5)
@@ -397,12 +413,16 @@ def test_report_is_a_self_contained_page(dataset, tmp_path):
     out = tmp_path / "r.html"
     assert main(["report", str(dataset), "-o", str(out)]) == 0
     page = out.read_text()
-    assert page.startswith("<!DOCTYPE html>") and "data:image/png;base64," in page
-    assert "<svg" in page and "http://" not in page.replace("http://www.w3.org/2000/svg", "")
+    assert page.startswith("<!DOCTYPE html>")
+    assert "data:image/png;base64," in page
+    assert "<svg" in page
+    assert "http://" not in page.replace("http://www.w3.org/2000/svg", "")
     stats = collect_stats(Dataset(dataset))
-    assert stats["scenes"] == 2 and stats["views_sampled"] == 4
+    assert stats["scenes"] == 2
+    assert stats["views_sampled"] == 4
     assert stats["visible_per_view"] == [3, 3, 3, 3]
-    assert stats["layers"] == {"0": 8, "1": 4} and stats["difficulty"] == {"2": 4}
+    assert stats["layers"] == {"0": 8, "1": 4}
+    assert stats["difficulty"] == {"2": 4}
     assert stats["grasp_counts"]["non_colliding"] == {"paralleljaw": 8}
 
 
@@ -416,7 +436,8 @@ def test_large_hdf5_datasets_are_compressed_and_exact():
     data = hdf5_bytes({"g/poses": big, "g/small": np.arange(3, dtype=np.float32)})
     assert len(data) < big.nbytes / 4
     with h5py.File(_io.BytesIO(data), "r") as h5:
-        assert h5["g/poses"].compression == "gzip" and h5["g/small"].compression is None
+        assert h5["g/poses"].compression == "gzip"
+        assert h5["g/small"].compression is None
         assert np.array_equal(h5["g/poses"][()], big)
 
 
@@ -479,7 +500,8 @@ def test_com_heatmap_prediction_matches_the_per_pixel_formula_to_the_bit():
     c_W = p_C @ X[:3, :3].T + X[:3, 3]
     params = np.column_stack([c_W, rng.uniform(0.0, 0.05, n), rng.uniform(0.2, 0.4, n)])
     pred = com_heatmap_prediction(depth, inst, X, K, params)
-    assert pred.dtype == np.float32 and pred.shape == (h, w)
+    assert pred.dtype == np.float32
+    assert pred.shape == (h, w)
     assert pred.tobytes() == _com_prediction_numpy(depth, inst, X, K, params).tobytes()
     # Instance ids as the npz stores them (uint8) give the same bits.
     assert pred.tobytes() == com_heatmap_prediction(depth, inst.astype(np.uint8), X, K,
@@ -487,7 +509,8 @@ def test_com_heatmap_prediction_matches_the_per_pixel_formula_to_the_bit():
     with pytest.raises(InvalidArgumentError, match="instance id 6 but only 5 rows"):
         com_heatmap_prediction(depth, np.where(inst == 1, 6, inst), X, K, params)
     ok = (inst > 0) & np.isfinite(depth)
-    assert np.all(pred[~ok] == 0) and 0.05 < np.mean(pred[ok] > 0) < 1.0
+    assert np.all(pred[~ok] == 0)
+    assert 0.05 < np.mean(pred[ok] > 0) < 1.0
     Xl = X.tolist()
     for v, u in zip(*np.nonzero(ok), strict=True):
         if (u * 7 + v * 13) % 11:

@@ -112,14 +112,19 @@ def test_top_view_layout(written):
         assert not np.any(vis & ~amodal[i]), "a visible mask leaves its amodal mask"
     # The cube lies on the shoe box: the relation matrix, the graph and the layers say so.
     m = view.relation_matrix
-    assert m[0, 1] == -1 and m[1, 0] == 1 and m[2].tolist() == [0, 0, 0]
+    assert m[0, 1] == -1
+    assert m[1, 0] == 1
+    assert m[2].tolist() == [0, 0, 0]
     order = view.order
     assert [p["id"] for p in order["1"]["parents"]] == [2]
-    assert order["1"]["layer"] == 1 and order["2"]["layer"] == 0 and order["3"]["layer"] == 0
+    assert order["1"]["layer"] == 1
+    assert order["2"]["layer"] == 0
+    assert order["3"]["layer"] == 0
     assert order["1"]["parents"][0]["edge_size"] > 0
     # The depth step from the cube's top to the shoe box's top is 60 mm (written in cm).
     assert order["1"]["parents"][0]["depth_diff"] == pytest.approx(6.0, abs=0.8)
-    assert order["3"]["bin_rel"] == "edge" and order["1"]["bin_rel"] == "no_rel"
+    assert order["3"]["bin_rel"] == "edge"
+    assert order["1"]["bin_rel"] == "no_rel"
     # Occlusion: the shoe box is partly covered, the others are not.
     assert 0.02 < order["1"]["occlusion"] < 0.5
     assert order["2"]["occlusion"] == pytest.approx(0.0, abs=1e-6)
@@ -128,7 +133,10 @@ def test_top_view_layout(written):
     # Boxes: the loose (amodal) box of the shoe contains its visible pixels.
     x, y, w, h = view.hdf5["objects/bbox_loose"][0]
     ys, xs = np.nonzero(inst == 1)
-    assert x <= xs.min() and xs.max() < x + w and y <= ys.min() and ys.max() < y + h
+    assert x <= xs.min()
+    assert xs.max() < x + w
+    assert y <= ys.min()
+    assert ys.max() < y + h
     # Three distinct classes, all complete, two layers, small occlusion above 5 %: level 2.
     assert check_difficulty(view.layout) in (1, 2)
     assert view.layout["order"][:2] != [1, 2]  # the shoe box is never picked before the cube
@@ -144,7 +152,8 @@ def test_poses_and_keypoints_in_the_camera_frame(written):
     kp = view.hdf5["keypts/byhand/keypts_relative_to_camera"]
     occl = view.hdf5["keypts/byhand/occluded_keypts_relative_to_camera"]
     total = sum(len(get_object(inst.name).keypoints) for inst in scene.instances)
-    assert len(kp) + len(occl) <= total and len(kp) > 0
+    assert len(kp) + len(occl) <= total
+    assert len(kp) > 0
     assert np.all(kp[:, 3] > 0)  # in front of the camera (z forward, metres)
 
 
@@ -163,7 +172,8 @@ def test_com_keypoints_are_the_visible_ones_as_in_metagraspnet(written):
         assert "visible" not in com
         seen = com["keypts_relative_to_camera"][()] / 100.0  # cm -> m
         hidden = com["occluded_keypts_relative_to_camera"][()] / 100.0
-        assert len(com["object_id"]) == len(seen) and len(com["occluded_object_id"]) == len(hidden)
+        assert len(com["object_id"]) == len(seen)
+        assert len(com["occluded_object_id"]) == len(hidden)
     assert len(seen) + len(hidden) == 1000 * view.num_instances
     assert 0 < len(seen) < len(hidden)  # from above: the tops are seen, the rest is not
 
@@ -239,8 +249,10 @@ def test_a_hidden_object_is_left_out_of_the_view(tmp_path):
         view = folder.view(v)
         ids = np.unique(view.instances)
         n = len(ids) - 1  # visualize_layout.py's count
-        assert ids.tolist() == list(range(n + 1)) and n == 3
-        assert view.amodal.shape[0] == n and len(view.order) == n
+        assert ids.tolist() == list(range(n + 1))
+        assert n == 3
+        assert view.amodal.shape[0] == n
+        assert len(view.order) == n
         assert len(folder.scene_gt[str(v)]) == n
         with h5py.File(view.path("_scene.hdf5"), "r") as h5:
             assert h5["objects/scene_instance_id"][()].tolist() == [1, 3, 4]
@@ -307,10 +319,14 @@ def test_strided_subset_keeps_grasps_evenly(object_labels):
     m = len(pj.width)
     assert m > 50
     sub = strided_subset(pj, 50)
-    assert len(sub.width) == 50 and len(sub.approach) == 50 and len(sub.point_index) == 50
-    assert np.array_equal(sub.p1[0], pj.p1[0]) and np.array_equal(sub.p1[-1], pj.p1[-1])
+    assert len(sub.width) == 50
+    assert len(sub.approach) == 50
+    assert len(sub.point_index) == 50
+    assert np.array_equal(sub.p1[0], pj.p1[0])
+    assert np.array_equal(sub.p1[-1], pj.p1[-1])
     assert len(sub.point_score) == len(pj.point_score)  # per-point data untouched
-    assert strided_subset(pj, 0) is pj and strided_subset(pj, m) is pj
+    assert strided_subset(pj, 0) is pj
+    assert strided_subset(pj, m) is pj
     su = strided_subset(object_labels[0].suction, 7)
     assert len(su.points) == len(su.score) == len(su.reason) == 7
     assert strided_subset(None, 5) is None
@@ -404,7 +420,9 @@ def test_render_ahead_keeps_order_errors_and_stops():
     ahead = _RenderAhead(lambda: gen(50))
     assert list(ahead) == [i * i for i in range(50)]
     ahead.close()
-    assert all(t != main for _, t in made) and closed and closed[0] != main
+    assert all(t != main for _, t in made)
+    assert closed
+    assert closed[0] != main
     assert ahead.busy >= 0.0
 
     made.clear(), closed.clear()
@@ -423,7 +441,8 @@ def test_render_ahead_keeps_order_errors_and_stops():
     time.sleep(0.3)  # the producer fills the queue and blocks
     ahead.close()
     assert len(made) <= 3 + 2  # consumed, one queued, one in hand
-    assert len(closed) == 1 and closed[0] != main
+    assert len(closed) == 1
+    assert closed[0] != main
 
 
 def test_scene_label_applies_the_io_section(tmp_path):

@@ -77,8 +77,10 @@ def test_model_and_map_agree_with_opencv(dist):
     got = np.stack([lens.map_u[vs, us], lens.map_v[vs, us]], 1)
     np.testing.assert_allclose(got, und, atol=2e-3)
     # The render covers every pixel with its bilinear neighbours.
-    assert lens.map_u.min() >= 1 and lens.map_u.max() <= R.width - 2
-    assert lens.map_v.min() >= 1 and lens.map_v.max() <= R.height - 2
+    assert lens.map_u.min() >= 1
+    assert lens.map_u.max() <= R.width - 2
+    assert lens.map_v.min() >= 1
+    assert lens.map_v.max() <= R.height - 2
 
 
 def test_in_image_matches_opencv_bounds_and_rejects_folded_points():
@@ -90,7 +92,8 @@ def test_in_image_matches_opencv_bounds_and_rejects_folded_points():
     r = np.hypot(p_C[:, 0] / p_C[:, 2], p_C[:, 1] / p_C[:, 2])
     by_cv = (uv[:, 0] >= 0) & (uv[:, 0] < K.width) & (uv[:, 1] >= 0) & (uv[:, 1] < K.height)
     got = lens.in_image(p_C)
-    assert got.sum() > 500 and (~got).sum() > 500
+    assert got.sum() > 500
+    assert (~got).sum() > 500
     # Far outside the field of view the polynomial folds back into the image: those points
     # are not seen, whatever OpenCV's formula gives.
     folded = by_cv & (r > lens.max_radius)
@@ -121,7 +124,8 @@ def test_zero_distortion_is_the_pinhole_byte_for_byte(tmp_path):
                     options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
         digests.append({p.name: hashlib.sha256(p.read_bytes()).hexdigest()
                         for p in sorted(folder.iterdir())})  # fmt: skip
-    assert len(digests[0]) > 10 and digests[0] == digests[1]
+    assert len(digests[0]) > 10
+    assert digests[0] == digests[1]
 
 
 def test_known_point_lands_where_opencv_projects_it():
@@ -145,7 +149,8 @@ def test_known_point_lands_where_opencv_projects_it():
     # The labels: computed on the pinhole render, resampled through the lens.
     kp = np.array([[1.0, 0.0, 0.0, 0.0]])  # the ball's centre, object frame (hidden inside it)
     model = SceneRayModel([ball], X[None], [1], keypoints=[kp], com_points=None)
-    assert img.pinhole is not None and img.lens is not None
+    assert img.pinhole is not None
+    assert img.lens is not None
     pin = view_object_labels(model, img.pinhole.view, img.pinhole.instance_ids,
                              depth=img.pinhole.depth_ideal, num_threads=1)  # fmt: skip
     with pytest.raises(InvalidArgumentError, match="distort_view_object_labels"):
@@ -195,7 +200,8 @@ def test_a_straight_bar_bends_as_the_model_says():
     order = np.argsort(uv[:, 0])
     truth_v = np.interp(cols + 0.5, uv[order, 0], uv[order, 1])
     err = centre_v - truth_v
-    assert np.abs(err).mean() < 0.25 and np.abs(err).max() < 0.8
+    assert np.abs(err).mean() < 0.25
+    assert np.abs(err).max() < 0.8
     # Barrel distortion (k1 < 0): the line bows away from the image centre; its middle lies
     # further from the centre than the chord through its ends, by many pixels.
     chord = np.interp(cols, [cols[0], cols[-1]], [centre_v[0], centre_v[-1]])
@@ -232,7 +238,8 @@ def test_undistorting_reproduces_the_pinhole_render():
     z = cv2.remap(img.depth_ideal, mx, my, cv2.INTER_NEAREST)
     same = inside & (ids.astype(np.int32) == ref.instance_ids) & (ref.depth_ideal > 0)
     rel = np.abs(z[same] - ref.depth_ideal[same]) / ref.depth_ideal[same]
-    assert np.median(rel) < 1e-3 and np.percentile(rel, 99) < 0.02
+    assert np.median(rel) < 1e-3
+    assert np.percentile(rel, 99) < 0.02
 
 
 def test_sensor_depth_is_invalid_at_edges_and_errors_name_the_lens():
@@ -248,7 +255,8 @@ def test_sensor_depth_is_invalid_at_edges_and_errors_name_the_lens():
     edge[1:, :] |= ids[1:, :] != ids[:-1, :]
     # Interpolating across the box's outline would invent depths between box and floor.
     assert not img.valid[edge].all()
-    assert np.isnan(img.depth[~img.valid]).all() and np.isfinite(img.depth[img.valid]).all()
+    assert np.isnan(img.depth[~img.valid]).all()
+    assert np.isfinite(img.depth[img.valid]).all()
     assert (img.depth_ideal > 0).all()  # the ideal depth takes the nearest pixel at edges
     assert img.valid.mean() > 0.95
     with pytest.raises(InvalidArgumentError, match="distortion"):
@@ -276,7 +284,8 @@ def test_a_distorted_dataset_records_its_lens(tmp_path):
     assert view.intrinsics == K
     assert view.intrinsics.distortion == dist
     params = json.loads((tmp_path / "ds" / "scene0" / "0_camera_params.json").read_text())
-    assert params["distortion_model"] == "opencv" and params["distortion"] == list(dist)
+    assert params["distortion_model"] == "opencv"
+    assert params["distortion"] == list(dist)
 
 
 def test_grasps_are_kept_where_the_lens_sees_their_contacts():
@@ -318,7 +327,8 @@ def test_grasps_are_kept_where_the_lens_sees_their_contacts():
         top = pts.astype(np.float64) + [0.0, 0.0, 0.01]
         want_su = np.flatnonzero(seen(top))
         want_pj = np.flatnonzero(seen(top) | seen(top + [0.06, 0.0, 0.0]))
-        assert 0 < len(want_su) < n and len(want_pj) > len(want_su)
+        assert 0 < len(want_su) < n
+        assert len(want_pj) > len(want_su)
         su_idx = np.sort(np.concatenate([got.non_colliding.suctioncup.index,
                                          got.colliding.suctioncup.index]))  # fmt: skip
         pj_idx = np.sort(np.concatenate([got.non_colliding.paralleljaw.index,
@@ -355,7 +365,8 @@ def test_the_path_tracer_goes_through_the_same_lens():
     path = next(iter(iter_views(objs, None, [view], sensor="ideal", randomize=False,
                                 render=settings)))  # fmt: skip
     raster = _render(objs, view)
-    assert path.engine["engine"] == "path" and path.rgb.shape == raster.rgb.shape
+    assert path.engine["engine"] == "path"
+    assert path.rgb.shape == raster.rgb.shape
     np.testing.assert_array_equal(path.instance_ids, raster.instance_ids)
     # The box's colour edge in the traced picture follows the lens: the box is where its ids are.
     grey = path.rgb.astype(np.float32).mean(axis=2)

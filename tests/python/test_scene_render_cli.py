@@ -28,7 +28,8 @@ def test_render_writes_the_views_and_sees_the_object(tmp_path, capsys):
     # View 0 looks straight down at the tote centre: the cube is in the middle of the image.
     with Image.open(out / "0_instances.png") as im:
         ids = np.asarray(im)
-    assert ids[600, 600] == 1 and ids[5, 5] == 0
+    assert ids[600, 600] == 1
+    assert ids[5, 5] == 0
 
 
 def test_render_rejects_an_empty_scene(tmp_path, capsys):
@@ -60,7 +61,8 @@ def test_render_applies_the_config_camera_section(tmp_path):
     with Image.open(out / "0_rgb.png") as im:
         assert im.size == (96, 72)
     with np.load(out / "0_depth.npz") as z:
-        assert z["depth"].shape == (72, 96) and bool(z["valid_depth"][36, 48])
+        assert z["depth"].shape == (72, 96)
+        assert bool(z["valid_depth"][36, 48])
     with Image.open(out / "0_instances.png") as im:
         assert np.asarray(im)[36, 48] == 1  # the cube below the centre of the top view
     # Flags override the config: one view, 0.5 x the resolution of the config's camera.
@@ -77,7 +79,8 @@ def test_show_says_when_the_folder_does_not_exist(tmp_path, capsys):
     missing = tmp_path / "nonexistent"
     assert main(["show", str(missing), "--view", "3", "-o", str(tmp_path / "v.png")]) == 1
     err = capsys.readouterr().err
-    assert f"'{missing}' does not exist" in err and "--scene" not in err.split("exist")[0]
+    assert f"'{missing}' does not exist" in err
+    assert "--scene" not in err.split("exist")[0]
     (tmp_path / "empty").mkdir()
     assert main(["show", str(tmp_path / "empty"), "-o", str(tmp_path / "v.png")]) == 1
     assert "holds no views" in capsys.readouterr().err

@@ -109,7 +109,9 @@ def test_cli_writes_suction_labels_in_the_metagraspnet_layout(tmp_path):
     with h5py.File(tmp_path / "models" / "006" / "textured.obj.hdf5") as h5:
         pre = h5["grasps/suctioncup/pregrasp_transform"][:]
         score = h5["grasps/suctioncup/quality_score"][:]
-        assert pre.dtype == np.float32 and pre.shape[1] == 6 and len(pre) == len(score) > 0
+        assert pre.dtype == np.float32
+        assert pre.shape[1] == 6
+        assert len(pre) == len(score) > 0
         np.testing.assert_allclose(np.linalg.norm(pre[:, :3], axis=1), 1.0, atol=1e-5)
         assert np.abs(pre[:, 3:]).max() > 1.0  # centimetres: a soda can is ~12 cm tall
         assert h5["grasps/paralleljaw/pregrasp_transform"].shape == (0, 10)

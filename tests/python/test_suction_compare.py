@@ -64,7 +64,8 @@ def test_picture_shows_green_points_on_a_sealing_sphere():
     sphere = mgn.make_sphere(0.08, 64, 32)
     comp = compare_models(sphere, num_points=60, seed=1)
     img = comparison_picture(sphere, comp, size=160)
-    assert img.dtype == np.uint8 and img.shape[1] == 4 * 160
+    assert img.dtype == np.uint8
+    assert img.shape[1] == 4 * 160
     green = (img[..., 1] > 180) & (img[..., 0] < 80) & (img[..., 2] < 80)
     assert green[:, :160].sum() > 50  # spring panel: scored points drawn in green
     magenta = (img[..., 0] > 180) & (img[..., 2] > 180) & (img[..., 1] < 80)
@@ -88,7 +89,8 @@ def test_cli_writes_table_picture_and_json(tmp_path, capsys):
     args = ["suction", "compare", str(stl), "--scale", "0.001", "--num-points", "50"]
     assert main([*args, "--png", str(png), "--json", str(js)]) == 0
     out = capsys.readouterr().out
-    assert "agree %" in out and "controversial points" in out
+    assert "agree %" in out
+    assert "controversial points" in out
     with Image.open(png) as im:
         assert im.size[0] == 4 * 360
     doc = json.loads(js.read_text())
@@ -101,4 +103,5 @@ def test_cli_writes_table_picture_and_json(tmp_path, capsys):
 def test_cli_unknown_mesh_names_the_built_in_objects(capsys):
     assert main(["suction", "compare", "no_such_thing"]) != 0
     err = capsys.readouterr().err
-    assert "'no_such_thing' is neither a mesh file nor a built-in object" in err and "mug" in err
+    assert "'no_such_thing' is neither a mesh file nor a built-in object" in err
+    assert "mug" in err

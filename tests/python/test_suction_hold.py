@@ -114,7 +114,8 @@ def test_off_centre_the_bending_torque_exceeds_the_limit():
     r = suction_hold_scores(ends[1:2], [[0, 0, -1]], mass=mass, com=[0, 0, 0], loads=still)
     np.testing.assert_allclose(r.max_mass[0], tb / (pull * 0.10), rtol=1e-12)
     want = np.mean([d * mass <= tb / (pull * 0.10) for d in LOADS.density])
-    assert r.score[0] == pytest.approx(want) and 0 < want < 1
+    assert r.score[0] == pytest.approx(want)
+    assert 0 < want < 1
 
 
 def test_the_score_falls_with_density_and_rises_with_friction():
@@ -134,7 +135,8 @@ def test_the_score_falls_with_density_and_rises_with_friction():
         if previous is not None:
             assert (r.score <= previous).all()
         previous = r.score
-    assert previous is not None and previous.mean() < 0.2  # 4x the mass: mostly dropped
+    assert previous is not None
+    assert previous.mean() < 0.2
 
 
 def brute_force_held(point, approach, mass, com, inertia, loads, axes, phases):
@@ -242,7 +244,8 @@ def test_object_labels_carry_the_physics_score_into_the_file_and_the_scene(tmp_p
     np.testing.assert_array_equal(lab.simulation, lab.score * hold.score)
     assert ((lab.simulation >= 0) & (lab.simulation <= 1)).all()
     assert (lab.simulation[lab.score == 0] == 0).all()  # never sealed: never held
-    assert (lab.simulation < lab.score).any() and (lab.simulation == lab.score).any()
+    assert (lab.simulation < lab.score).any()
+    assert (lab.simulation == lab.score).any()
     assert lab.metadata["suction_physics"]["grid"] == 10
     # The object file: MetaGraspNet's keys unchanged (its visualize_labels.py reads the seal
     # score, quality_score, for suction), the physics score next to it.
@@ -253,8 +256,11 @@ def test_object_labels_carry_the_physics_score_into_the_file_and_the_scene(tmp_p
         g = h5["grasps/suctioncup"]
         np.testing.assert_array_equal(g["quality_score"][:], lab.score)
         sim = g["quality_score_simulation"][:]
-        assert sim.dtype == np.float32 and len(sim) == len(lab.score)
-        assert np.isfinite(sim).all() and sim.min() >= 0 and sim.max() <= 1
+        assert sim.dtype == np.float32
+        assert len(sim) == len(lab.score)
+        assert np.isfinite(sim).all()
+        assert sim.min() >= 0
+        assert sim.max() <= 1
     # The scene: the object's score is carried to its scene grasps, in the label order.
     X = np.eye(4)
     X[2, 3] = 0.2
@@ -271,7 +277,8 @@ def test_config_dump_shows_the_cups_bending_limit():
     from mgn.pipeline.config import dump_config, load_config
 
     text = dump_config()
-    assert "bending_k: 15.6" in text and "bending limit" in text
+    assert "bending_k: 15.6" in text
+    assert "bending limit" in text
     cfg = load_config({"cup": {"bending_k": 20.0}})
     assert cfg.cup.bending_k == 20.0
     assert bending_limit(cfg.cup) == pytest.approx(20.0 * 0.007 * math.pi * math.sqrt(2))

@@ -75,11 +75,13 @@ def test_cylinder_continuous_axis_and_one_flip() -> None:
 def test_cone_has_no_flip_and_a_scalene_tetrahedron_no_symmetry() -> None:
     v, f = _mm(revolve(np.array([[0, -0.06], [0.033, -0.06], [0.0, 0.06]]), 64))
     s = find_symmetries(v, f)
-    assert len(s.continuous) == 1 and len(s.discrete) == 0
+    assert len(s.continuous) == 1
+    assert len(s.discrete) == 0
     tet = np.array([[0, 0, 0], [60, 0, 0], [10, 45, 0], [20, 15, 70]], np.float64)
     faces = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
     s = find_symmetries(tet, faces)
-    assert len(s.continuous) == 0 and len(s.discrete) == 0
+    assert len(s.continuous) == 0
+    assert len(s.discrete) == 0
 
 
 def test_bad_input() -> None:

@@ -72,19 +72,22 @@ def test_boxes_side_by_side_have_no_occlusion() -> None:
     ids = render_ids(top_down(), [(a, Xa, 1), (b, Xb, 2)])
     model = SceneRayModel([a, b], np.stack([Xa, Xb]), [4, 5])
     L = view_object_labels(model, top_down(), ids)
-    assert isinstance(L, ViewObjectLabels) and L.num_objects == 2
+    assert isinstance(L, ViewObjectLabels)
+    assert L.num_objects == 2
     np.testing.assert_array_equal(L.instance_ids, [1, 2])
     np.testing.assert_array_equal(L.category_ids, [4, 5])
     sa = silhouette([0.1, 0.1, 0.05], Xa, top_down())
     sb = silhouette([0.08, 0.12, 0.04], Xb, top_down())
-    assert near_equal(L.amodal[0], sa, 2) and near_equal(L.amodal[1], sb, 2)
+    assert near_equal(L.amodal[0], sa, 2)
+    assert near_equal(L.amodal[1], sb, 2)
     np.testing.assert_array_equal(L.amodal_pixels, L.visible_pixels)
     np.testing.assert_array_equal(L.occlusion, [0.0, 0.0])
     np.testing.assert_array_equal(L.bbox_loose[0], box_of(sa))
     np.testing.assert_array_equal(L.bbox_tight, L.bbox_loose)
     np.testing.assert_array_equal(L.semantic, np.choose(ids, [0, 4, 5]))
     np.testing.assert_array_equal(L.visible, ids)
-    assert L.amodal.shape == (2, 200, 200) and L.amodal.dtype == np.bool_
+    assert L.amodal.shape == (2, 200, 200)
+    assert L.amodal.dtype == np.bool_
     # X_CO = X_WC^-1 X_WO.
     np.testing.assert_allclose(L.X_CO[1], np.linalg.inv(top_down().X_WC) @ Xb, atol=1e-12)
 
@@ -128,9 +131,11 @@ def test_box_on_larger_box_occlusion_is_the_covered_fraction() -> None:
     np.testing.assert_array_equal(L.occluded_keypoint_object, [1])
     np.testing.assert_allclose(L.keypoints[1, 1:], [0.13, 0.0, 0.95], atol=1e-12)
     # Without CoM points: the CoM lists are empty, the heat map still lives in [0, 1].
-    assert L.com_points.shape == (0, 4) and L.com_visible.shape == (0,)
+    assert L.com_points.shape == (0, 4)
+    assert L.com_visible.shape == (0,)
     assert L.com_heatmap.dtype == np.float32
-    assert 0.0 <= L.com_heatmap.min() and L.com_heatmap.max() <= 1.0
+    assert 0.0 <= L.com_heatmap.min()
+    assert L.com_heatmap.max() <= 1.0
     assert np.all(L.com_heatmap[L.visible == 0] == 0)
 
 
@@ -245,14 +250,16 @@ def test_amodal_matches_the_renderer_alone_on_99_percent(library_scene, library_
         d = np.linalg.norm(q_C[sel] - com_C, axis=1)
         expected[sel] = np.clip((d_pts.max() - d) / (d_pts.max() - d_pts.min()), 0, 1)
     err = np.abs(L.com_heatmap[vv, uu] - expected)
-    assert np.median(err) < 0.01 and np.mean(err < 0.05) > 0.95
+    assert np.median(err) < 0.01
+    assert np.mean(err < 0.05) > 0.95
     # Given the depth image, the heat map is that formula on the rendered surface (no rays).
     Ld = view_object_labels(library_model, view, ids, depth=full.depth)
     np.testing.assert_allclose(Ld.com_heatmap[vv, uu], expected, atol=1e-5)
     assert np.all(Ld.com_heatmap[ids == 0] == 0)
     for name in ("amodal", "occlusion", "bbox_loose", "com_visible", "keypoints"):
         np.testing.assert_array_equal(getattr(Ld, name), getattr(L, name), err_msg=name)
-    assert L.com_heatmap.max() <= 1.0 and L.com_heatmap.min() >= 0.0
+    assert L.com_heatmap.max() <= 1.0
+    assert L.com_heatmap.min() >= 0.0
     assert np.all(L.com_heatmap[L.visible == 0] == 0)
     assert L.com_heatmap[L.visible > 0].mean() > 0.2
 

@@ -315,7 +315,8 @@ def revolve(
         uvs.append(np.stack([u, np.ones(n)], axis=1))
         tris.append(_band(idx[k - 1], np.arange(last, last + n), False))
     else:
-        assert pole0 is not None and pole1 is not None  # an open profile has both poles
+        assert pole0 is not None
+        assert pole1 is not None
         uc = (np.arange(segments) + 0.5) / segments
         base = k * n
         poles0 = np.arange(base, base + segments)

@@ -296,7 +296,8 @@ def iter_views(
         t0 = time.perf_counter()
         img = r.render(cam, rgb=photo is None, randomize=randomize, seed=seed, view_index=v,
                        shadows=shadows)  # fmt: skip
-        assert img.depth is not None and img.instance_ids is not None
+        assert img.depth is not None
+        assert img.instance_ids is not None
         seconds = {"raster": time.perf_counter() - t0}
         if photo is not None:
             rgb, _ = photo.render(cam, v)
