@@ -94,7 +94,7 @@ def child_main(argv: list[str]) -> int:
             with Client(cluster.scheduler_address) as client:
                 info = client.scheduler_info()["workers"]
                 peak = max(w.get("metrics", {}).get("memory", 0) for w in info.values()) / 2**20
-        except Exception:  # noqa: BLE001 (the memory figure is informative only)
+        except Exception:  # the memory figure is informative only
             pass
     print(json.dumps({
         "scenes": a.scenes, "ok": len(report.ok), "workers": a.workers, "wall_s": wall,

@@ -78,7 +78,7 @@ def peer_layout(ndimage: Any, view: dict[str, np.ndarray]) -> dict[str, np.ndarr
         edge[b, a] = int(np.count_nonzero(child & touch))
     regions = np.zeros(n, np.int64)
     for i in np.flatnonzero(vis_px):
-        labels, count = ndimage.label(visible == i + 1, structure=np.ones((3, 3)))
+        labels, _count = ndimage.label(visible == i + 1, structure=np.ones((3, 3)))
         sizes = np.bincount(labels.ravel())[1:]
         regions[i] = np.count_nonzero(sizes >= max(10, 0.005 * vis_px[i]))
     return {"parent": parent, "edge": edge, "regions": regions}

@@ -84,7 +84,7 @@ def run(
             lens.warp_rgb(img["rgb"]),
             lens.warp_nearest(img["ids"]),
             lens.warp_depth(img["depth"], img["ids"]),
-        )  # fmt: skip
+        )
     }
     if cv2 is not None:
         uu, vv = np.meshgrid(np.arange(size, dtype=np.float64), np.arange(size, dtype=np.float64))

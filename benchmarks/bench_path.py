@@ -68,7 +68,7 @@ def _engine_mgn(
 ) -> dict[str, Callable]:
     import pyoidn
 
-    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
+    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics
     from mgn.render import path as mpath
 
     inp = ps.mgn_inputs(scene_json)
@@ -530,11 +530,11 @@ def run(
     return rows_for_runner(ev, width)
 
 
-def raster_render(desc: ps.SceneDesc, scene_json: Path):  # noqa: ANN201 (mgn RenderOutput)
+def raster_render(desc: ps.SceneDesc, scene_json: Path):  # mgn RenderOutput
     """mgn's raster render (RGB, depth, instance ids) of the benchmark view."""
     from mgn.render import Instance, Renderer
 
-    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics  # noqa: N806
+    CameraView, Intrinsics = ps.cameras().CameraView, ps.cameras().Intrinsics
 
     c = desc.camera
     inp = ps.mgn_inputs(scene_json)

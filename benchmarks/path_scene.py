@@ -244,7 +244,7 @@ def look_at_light(position: np.ndarray, target: np.ndarray) -> np.ndarray:
 def camera(width: int, view: int = VIEW) -> tuple[Any, np.ndarray]:
     """mgn Intrinsics (MetaGraspNet synthetic camera scaled to ``width``) and X_WC of ``view``."""
     cams = cameras()
-    Intrinsics, mgn_rig = cams.Intrinsics, cams.mgn_rig  # noqa: N806
+    Intrinsics, mgn_rig = cams.Intrinsics, cams.mgn_rig
 
     K = Intrinsics.mgn_synthetic().scaled(width / 1200)
     poses, _ = mgn_rig(RIG_SEED, (0.0, 0.0, 0.0))
@@ -667,7 +667,7 @@ def mitsuba_variant() -> str:
             try:
                 mi.set_variant(v)
                 return v
-            except Exception:  # noqa: BLE001 (libLLVM not loadable: next variant)
+            except Exception:  # libLLVM not loadable: next variant
                 continue
     raise RuntimeError(f"no CPU variant of Mitsuba loads (have {mi.variants()})")
 

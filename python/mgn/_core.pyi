@@ -11,6 +11,11 @@ import numpy
 import numpy.typing
 
 __all__: list[str] = [
+    "SEAL_FAILURE_NAMES",
+    "SUCTION_TOOL_OFFSET",
+    "SURFACE_DARK",
+    "SURFACE_MIRROR",
+    "SURFACE_TRANSPARENT",
     "AntipodalOptions",
     "AntipodalResult",
     "AntipodalSampler",
@@ -54,11 +59,6 @@ __all__: list[str] = [
     "RenderOptions",
     "RenderResult",
     "Renderer",
-    "SEAL_FAILURE_NAMES",
-    "SUCTION_TOOL_OFFSET",
-    "SURFACE_DARK",
-    "SURFACE_MIRROR",
-    "SURFACE_TRANSPARENT",
     "SceneGraspModel",
     "SceneGraspOptions",
     "SealModel",

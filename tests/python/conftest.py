@@ -81,7 +81,7 @@ SMALL_DATASET_CONFIG = {
         "categories": ["box_tea", "can_soda", "box_cereal"],
         "copies": [1, 2],
         "refill": False,
-    },  # fmt: skip
+    },
     "camera": {"views": [0, 5, 17], "resolution_scale": 0.1},
     "object_labels": {
         "suction_points": 60,

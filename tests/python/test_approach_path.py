@@ -60,7 +60,7 @@ def test_default_check_matches_a_dense_brute_force_and_catches_path_collisions()
     ends = _model(objects, [pj], [su], offsets=(0.0, 0.1), approach_step=1.0)
     default = _model(objects, [pj], [su])
     for kind in ("pj", "suction"):
-        d, e, m = (getattr(x, kind) for x in (dense, ends, default))
+        d, _e, m = (getattr(x, kind) for x in (dense, ends, default))
         # The default poses are a subset of the dense ones: nothing extra.
         assert not np.any(m.colliding & ~d.colliding), kind
         # Every collision that lasts 3 mm or more along the path is found (shorter ones are

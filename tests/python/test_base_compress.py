@@ -206,7 +206,7 @@ def test_hdf5_chunks_without_shuffle_read_back_through_the_gzip_filter(tmp_path:
         ((130, 77), np.int32, (64, 77)),
         ((70, 33), np.bool_, (64, 33)),
         ((257,), np.float64, (257,)),
-    ],  # fmt: skip
+    ],
 )
 def test_hdf5_chunks_written_directly_read_back_through_the_gzip_filter(
     tmp_path: Path, shape, dtype, chunks
@@ -345,5 +345,5 @@ def test_a_corrupt_npz_entry_is_an_error_naming_the_file(tmp_path: Path):
         bad[at] ^= 0x5A
         path.write_bytes(bytes(bad))
         view = View(tmp_path, 0)
-        with pytest.raises(IoError, match="0.npz"):
+        with pytest.raises(IoError, match=r"0.npz"):
             view.npz_array("occlusion_objects")

@@ -310,7 +310,7 @@ def test_cli_and_bad_inputs(small_dataset: Path, tmp_path: Path) -> None:
     assert validate_bop(out) == []
     with pytest.raises(InvalidArgumentError, match="depth_scale"):
         export_bop(small_dataset, tmp_path / "a", depth_scale=0.0)
-    with pytest.raises(InvalidArgumentError, match="depth_scale 0.001 mm"):
+    with pytest.raises(InvalidArgumentError, match=r"depth_scale 0.001 mm"):
         export_bop(small_dataset, tmp_path / "b", depth_scale=0.001)  # 65.5 mm at most
     assert not (tmp_path / "b" / "train_pbr" / "000000").exists()
     with pytest.raises(InvalidArgumentError, match="split 'a/b'"):

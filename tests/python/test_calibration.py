@@ -23,7 +23,7 @@ from mgn.hardware import SuctionCup
 @pytest.fixture(scope="module")
 def board():
     v, f, feats = make_calibration_board()
-    ids, names, params, pts, nrm = board_poses(feats)
+    ids, names, _params, pts, nrm = board_poses(feats)
     return {
         "mesh": mgn.Mesh(v, f),
         "features": feats,

@@ -182,7 +182,7 @@ def test_io_archival_switch() -> None:
     c = load_config({"io": {"archival": True}})
     assert c.io.archival is True
     assert Config.from_dict(c.to_dict()).io.archival is True  # round trip (dataset.json)
-    with pytest.raises(ConfigError, match="io.archival"):
+    with pytest.raises(ConfigError, match=r"io.archival"):
         load_config({"io": {"archival": "yes"}})
     with pytest.raises(ConfigError, match="io"):
         load_config({"io": {"compact": True}})

@@ -16,17 +16,17 @@ def test_exception_hierarchy_maps_to_builtins():
 
 def test_missing_file(data_dir):
     path = data_dir / "no_such_mesh.obj"
-    with pytest.raises(mgn.IoError, match="no_such_mesh.obj"):
+    with pytest.raises(mgn.IoError, match=r"no_such_mesh.obj"):
         mgn.load_mesh(path)
 
 
 def test_text_file_named_obj(data_dir):
-    with pytest.raises(mgn.IoError, match="not_a_mesh.obj"):
+    with pytest.raises(mgn.IoError, match=r"not_a_mesh.obj"):
         mgn.load_mesh(data_dir / "not_a_mesh.obj")
 
 
 def test_empty_mesh_file(data_dir):
-    with pytest.raises(mgn.MgnError, match="empty.stl"):
+    with pytest.raises(mgn.MgnError, match=r"empty.stl"):
         mgn.load_mesh(data_dir / "empty.stl")
 
 
@@ -43,7 +43,7 @@ def test_empty_mesh_arrays_are_refused_by_every_consumer():
 
 
 def test_nan_vertices(data_dir):
-    with pytest.raises(mgn.InvalidArgumentError, match="nan_vertex.obj.*not finite"):
+    with pytest.raises(mgn.InvalidArgumentError, match=r"nan_vertex.obj.*not finite"):
         mgn.load_mesh(data_dir / "nan_vertex.obj")
     v = np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0]], np.float32)
     with pytest.raises(mgn.InvalidArgumentError, match="vertex 2 is not finite"):
@@ -52,9 +52,9 @@ def test_nan_vertices(data_dir):
 
 def test_zero_area_faces(data_dir):
     v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], np.float32)
-    with pytest.raises(mgn.InvalidArgumentError, match="'flat'.*zero area"):
+    with pytest.raises(mgn.InvalidArgumentError, match=r"'flat'.*zero area"):
         mgn.Mesh(v, np.array([[0, 1, 2]]), name="flat")
-    with pytest.raises(mgn.InvalidArgumentError, match="zero_area.obj.*zero area"):
+    with pytest.raises(mgn.InvalidArgumentError, match=r"zero_area.obj.*zero area"):
         mgn.load_mesh(data_dir / "zero_area.obj", drop_degenerate=False)
     assert mgn.load_mesh(data_dir / "zero_area.obj").num_faces == 4  # dropped by default
 
@@ -69,7 +69,7 @@ def test_out_of_range_index_and_bad_shapes():
 
 def test_negative_density_and_bad_thickness():
     box = mgn.make_box([0.1, 0.1, 0.1])
-    with pytest.raises(mgn.InvalidArgumentError, match="density.*-5"):
+    with pytest.raises(mgn.InvalidArgumentError, match=r"density.*-5"):
         mgn.mass_properties(box, -5.0)
     with pytest.raises(mgn.InvalidArgumentError, match="density"):
         mgn.mass_properties(box, float("nan"))

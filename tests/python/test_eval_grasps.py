@@ -199,7 +199,7 @@ def _view_with_suction(root, need: int = 2):
 
 
 def test_known_errors_give_the_hand_computed_precision(small_dataset):
-    scene, view, g, X, s, Xc = _view_with_suction(small_dataset)
+    scene, view, _g, X, s, Xc = _view_with_suction(small_dataset)
     image_id = scene.scene_id * 1000 + view.index
     # Two labels with different scores: a (higher), b (lower).
     order = np.argsort(-s, kind="stable")
@@ -250,7 +250,7 @@ def test_known_errors_give_the_hand_computed_precision(small_dataset):
 
 
 def test_tolerances_decide_the_match(small_dataset):
-    scene, view, g, X, s, _ = _view_with_suction(small_dataset)
+    scene, view, _g, X, s, _ = _view_with_suction(small_dataset)
     image_id = scene.scene_id * 1000 + view.index
     _, Xall = _labels(view, "suction")
     # Tilt a label's approach by 20 deg about its x axis: matches at 30 deg, not at 15 deg

@@ -99,9 +99,9 @@ def test_selection_and_bad_inputs(tiny: Path, tmp_path: Path) -> None:
     assert res.num_views == 1
     assert res.num_objects == 3
     assert res.accuracy == 1.0
-    with pytest.raises(InvalidArgumentError, match="instance ids 1..3, got 7"):
+    with pytest.raises(InvalidArgumentError, match=r"instance ids 1..3, got 7"):
         evaluate_layout(tiny, [{"image_id": 1, "instance_id": 7, "layer": 0}])
-    with pytest.raises(InvalidArgumentError, match="layer must be 0..3, got 4"):
+    with pytest.raises(InvalidArgumentError, match=r"layer must be 0..3, got 4"):
         evaluate_layout(tiny, [{"image_id": 1, "instance_id": 1, "layer": 4}])
     with pytest.raises(InvalidArgumentError, match="second prediction"):
         evaluate_layout(tiny, [sel[0], sel[0]])

@@ -211,7 +211,7 @@ def test_bop_with_lens_distortion_is_refused_up_front() -> None:
             "distortion": [0.01, 0.0, 0.0, 0.0]}  # fmt: skip
     cfg = {"camera": {"intrinsics": intr}}
     load_config(cfg)  # fine without the BOP export
-    with pytest.raises(ConfigError, match="output.formats.*distortion"):
+    with pytest.raises(ConfigError, match=r"output.formats.*distortion"):
         load_config({**cfg, "output": {"formats": ["mgn", "bop"]}})
     load_config({**cfg, "output": {"formats": ["mgn", "graspnet"]}})
 

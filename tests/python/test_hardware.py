@@ -37,5 +37,5 @@ def test_bad_hardware_is_rejected_with_the_field_named(tmp_path):
     (tmp_path / "x.yaml").write_text("radius: 0.01\nlip_colour: red\n")
     with pytest.raises(mgn.InvalidArgumentError, match="lip_colour"):
         SuctionCup.from_yaml(tmp_path / "x.yaml")
-    with pytest.raises(mgn.IoError, match="nope.yaml"):
+    with pytest.raises(mgn.IoError, match=r"nope.yaml"):
         SuctionCup.from_yaml(tmp_path / "nope.yaml")

@@ -80,7 +80,7 @@ def test_round_trip_keeps_geometry_material_and_mass(exported):
 
 
 def test_com_keypoint_scores_follow_distance_to_the_centre_of_mass(exported):
-    _, specs, folders = exported
+    _, _specs, folders = exported
     mf = read_model_folder(folders[0])
     com = np.array(mf.metadata["center_of_mass_m"])
     score, pts = mf.keypoints_com[:, 0], mf.keypoints_com[:, 1:]

@@ -604,11 +604,11 @@ def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
     assert main(["generate", "--out", "DS", "--scenes", "1", "--config", str(cfg), "--quiet",
                  "--no-cache"]) == 0  # fmt: skip
     readme: dict = {}
-    exec(compile(blocks[0][0], "README.md", "exec"), readme)  # noqa: S102
+    exec(compile(blocks[0][0], "README.md", "exec"), readme)
     assert readme["rgb"].ndim == 3
     assert readme["depth"].ndim == 2
     namespace: dict = {}
-    exec(compile(blocks[1][0], "docs/usage.md", "exec"), namespace)  # noqa: S102
+    exec(compile(blocks[1][0], "docs/usage.md", "exec"), namespace)
     assert namespace["props"].mass == pytest.approx(2700 * 0.04**3, rel=1e-4)
     hits = namespace["hits"]  # straight down onto the top face of the 40 mm cube
     assert hits.distance[0] == pytest.approx(0.98)
@@ -689,7 +689,7 @@ def test_table_top_without_walls(tmp_path):
 
     table = load_config({"tote": {"inner_length": 0.30, "inner_width": 0.22, "walls": False}}).tote
     assert table == ToteSpec(inner_length=0.30, inner_width=0.22, walls=False)
-    v, f = make_tote(table)
+    v, _f = make_tote(table)
     assert v[:, 2].max() == 0.0
     assert v[:, 2].min() == pytest.approx(-table.floor_thickness)
     assert np.abs(v[:, :2]).max(axis=0) == pytest.approx([0.15, 0.11])

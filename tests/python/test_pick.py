@@ -237,7 +237,7 @@ def test_bad_input_is_rejected_clearly(stack, pick_config):
         run_picking(stack, policy="greedy", config=pick_config)
     with pytest.raises(InvalidArgumentError, match="gripper"):
         run_picking(stack, gripper="magnet", config=pick_config)
-    with pytest.raises(InvalidArgumentError, match="instances 1..2"):
+    with pytest.raises(InvalidArgumentError, match=r"instances 1..2"):
         run_picking(stack, policy=lambda s: (7, 0), config=pick_config)
     with pytest.raises(InvalidArgumentError, match="must return"):
         run_picking(stack, policy=lambda s: "box", config=pick_config)

@@ -371,7 +371,7 @@ def test_interrupt_leaves_no_half_scene_and_resume_redoes_bad_scenes(
 
     real = sw.write_scene
 
-    def interrupted(scene, folder, config, labels):  # noqa: ANN001
+    def interrupted(scene, folder, config, labels):
         stages = real(scene, folder, config, labels)
         if Path(folder).name.startswith(".tmp-scene1-"):
             raise KeyboardInterrupt
@@ -476,7 +476,7 @@ def test_disk_full_is_reported_with_the_path(
     import mgn.pipeline.scene_writer as sw
     from mgn.cli.main import main
 
-    def full(scene, folder, config, labels):  # noqa: ANN001
+    def full(scene, folder, config, labels):
         path = Path(folder) / "0_rgb.png"
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
 

@@ -308,7 +308,7 @@ def test_pruned_balanced_dataset_validates(balanced: tuple[Path, dict], tmp_path
     assert validate_dataset(out) == []
     with pytest.raises(InvalidArgumentError, match="--scenes"):
         generate(out, 3, config=selection_config(), seed=SEED, progress=False)
-    with pytest.raises(ConfigError, match="'labels.layout'"):
+    with pytest.raises(ConfigError, match=r"'labels.layout'"):
         generate(
             tmp_path / "x",
             config=selection_config().__class__.from_dict(

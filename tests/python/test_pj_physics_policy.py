@@ -525,7 +525,7 @@ def test_the_label_metadata_records_the_estimator(monkeypatch):
 
 
 def test_bad_tolerance_is_named():
-    with pytest.raises(InvalidArgumentError, match="ShakeScorer.calibration_tolerance"):
+    with pytest.raises(InvalidArgumentError, match=r"ShakeScorer.calibration_tolerance"):
         ShakeScorer(calibration_tolerance=1.5)(mgn.make_box([0.04, 0.05, 0.06]), labels_of(3))
     with pytest.raises(InvalidArgumentError, match="tolerance"):
         calibrate_staircase(np.ones((2, S, S), bool), CHECKS, 0, -1, -0.1)

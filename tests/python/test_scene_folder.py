@@ -130,7 +130,7 @@ def dataset(tmp_path):
                         {"instance_id": 3, "name": "box_c", "category_id": 13},
                     ]
                 }
-            )  # fmt: skip
+            )
         )
     return root
 
@@ -240,7 +240,7 @@ def test_record_checks_shapes():
     rec = _record(0)
     with pytest.raises(ValueError, match="depth must be"):
         ViewRecord(**{**rec.__dict__, "depth": np.zeros((3, 3), np.float32)})
-    with pytest.raises(ValueError, match="instance ids must be in 0..3"):
+    with pytest.raises(ValueError, match=r"instance ids must be in 0..3"):
         ViewRecord(**{**rec.__dict__, "instances": np.full((H, W), 4)})
     with pytest.raises(ValueError, match="lacks 'objects/categories'"):
         h5 = dict(rec.scene_hdf5)

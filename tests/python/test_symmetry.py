@@ -12,7 +12,7 @@ from mgn.geometry.symmetry import find_symmetries, rotation_about
 from mgn.objects.shapes import grid_box, revolve
 
 
-def _mm(mesh) -> tuple[np.ndarray, np.ndarray]:  # noqa: ANN001
+def _mm(mesh) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(mesh.vertices, np.float64) * 1000.0, np.asarray(mesh.faces, np.int64)
 
 

@@ -34,7 +34,7 @@ def _messages(root: Path, name: str) -> list[str]:
     return [p.message for p in validate_dataset(root) if p.path == f"scene0/{name}"]
 
 
-def _edit_json(path: Path, edit) -> None:  # noqa: ANN001
+def _edit_json(path: Path, edit) -> None:
     doc = json.loads(path.read_text())
     edit(doc)
     path.write_text(json.dumps(doc))

@@ -34,17 +34,17 @@ import numpy.typing as npt
 from mgn.errors import InvalidArgumentError
 
 __all__ = [
+    "MAX_LEVEL",
     "RUN_BLOCK",
     "ZERO_RUN_DISTANCE",
-    "MAX_LEVEL",
     "ZipDeflate",
     "ZipRunDeflate",
-    "deflate_runs",
-    "zlib_runs_stream",
     "deflate_raw",
+    "deflate_runs",
     "h5_write_deflated",
     "png_encode",
     "shuffled_chunks",
+    "zlib_runs_stream",
     "zlib_stream",
 ]
 

@@ -19,14 +19,14 @@ import yaml
 
 from mgn.errors import InvalidArgumentError, IoError
 
-__all__ = ["YamlLoader", "read_yaml", "parse_yaml"]
+__all__ = ["YamlLoader", "parse_yaml", "read_yaml"]
 
 
 class YamlLoader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML has no type information
     """``yaml.SafeLoader`` that also reads ``1e6``, ``1.0e6`` and ``-2.5E-3`` as floats and
     refuses a key written twice in one mapping."""
 
-    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict[Any, Any]:  # noqa: D102
+    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict[Any, Any]:
         if isinstance(node, yaml.MappingNode):
             first: dict[Any, yaml.Node] = {}
             for key_node, _ in node.value:
@@ -69,7 +69,7 @@ YamlLoader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123
 def parse_yaml(text: str, source: str = "<string>") -> Any:
     """The data of YAML ``text``; InvalidArgumentError naming ``source`` when it is not YAML."""
     try:
-        return yaml.load(text, Loader=YamlLoader)  # noqa: S506 (a SafeLoader subclass)
+        return yaml.load(text, Loader=YamlLoader)  # a SafeLoader subclass
     except yaml.YAMLError as e:
         raise InvalidArgumentError(f"'{source}' is not valid YAML: {e}") from e
 
@@ -103,6 +103,6 @@ def read_yaml(path: str | os.PathLike[str], what: str = "YAML file") -> Any:
             f"{what} '{p}' is not UTF-8 text (byte {e.start}); expected a YAML file"
         ) from e
     try:
-        return yaml.load(text, Loader=YamlLoader)  # noqa: S506 (a SafeLoader subclass)
+        return yaml.load(text, Loader=YamlLoader)
     except yaml.YAMLError as e:
         raise InvalidArgumentError(f"{what} '{p}' is not valid YAML: {e}") from e

@@ -61,8 +61,8 @@ __all__ = [
     "TOP_Z",
     "board_poses",
     "make_calibration_board",
-    "write_calibration_board",
     "write_binary_stl",
+    "write_calibration_board",
 ]
 
 MM = 1e-3

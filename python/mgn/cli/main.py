@@ -587,10 +587,10 @@ class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
 
 def _use_formatter(parser: argparse.ArgumentParser) -> None:
     parser.formatter_class = _HelpFormatter
-    for action in parser._actions:  # noqa: SLF001 (argparse has no public walk)
+    for action in parser._actions:  # argparse has no public walk
         if action.help is None and action.option_strings and _shows_default(action):
             action.help = "default: %(default)s"
-        if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
+        if isinstance(action, argparse._SubParsersAction):
             for sub in action.choices.values():
                 _use_formatter(sub)
 

@@ -46,6 +46,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import io
+import itertools
 import json
 import math
 import os
@@ -522,7 +523,7 @@ def _make_eval_class() -> type:
                     if g["id"] in self._ignore_ids:
                         g["ignore"] = 1
 
-        def computeIoU(self, imgId: int, catId: int) -> Any:  # noqa: N802, N803 (pycocotools)
+        def computeIoU(self, imgId: int, catId: int) -> Any:  # pycocotools
             key = (imgId, catId)
             if key not in self._iou_cache:
                 self._iou_cache[key] = super().computeIoU(imgId, catId)
@@ -556,7 +557,7 @@ def _check_bins(bins: Sequence[float]) -> tuple[float, ...]:
     if (
         len(edges) < 2
         or not all(math.isfinite(e) for e in edges)
-        or any(b <= a for a, b in zip(edges, edges[1:], strict=False))
+        or any(b <= a for a, b in itertools.pairwise(edges))
     ):
         raise InvalidArgumentError(
             f"evaluate_detections: occlusion_bins must be >= 2 finite, strictly increasing edges, "
@@ -635,7 +636,7 @@ def evaluate_detections(
     subsets.append(
         ("split", "unseen", all_images, frozenset(i for i, u in is_unseen.items() if not u))
     )
-    for k, (lo, hi) in enumerate(zip(bins, bins[1:], strict=False)):
+    for k, (lo, hi) in enumerate(itertools.pairwise(bins)):
         last = k == len(bins) - 2
         inside = {
             a["id"] for a in anns if lo <= a["occlusion"] < hi or (last and a["occlusion"] == hi)

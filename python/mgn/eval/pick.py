@@ -202,17 +202,17 @@ class PickResults:
     success_threshold: float
 
     @property
-    def R_grasp(self) -> float:  # noqa: N802 (the paper's symbol)
+    def R_grasp(self) -> float:  # the paper's symbol
         """Successful grasps / attempts (0 without attempts)."""
         return len(self.cleared) / len(self.attempts) if self.attempts else 0.0
 
     @property
-    def R_object(self) -> float:  # noqa: N802
+    def R_object(self) -> float:
         """Objects cleared / objects at the start."""
         return len(self.cleared) / self.num_objects if self.num_objects else 0.0
 
     @property
-    def R_mixture(self) -> float:  # noqa: N802
+    def R_mixture(self) -> float:
         """Objects cleared at the first attempt / objects cleared (0 when none)."""
         return len(self.cleared_first_attempt) / len(self.cleared) if self.cleared else 0.0
 
@@ -263,7 +263,7 @@ class PickResults:
 # ---------------------------------------------------------------------------- helpers
 
 
-def _rotation_angle(Ra: np.ndarray, Rb: np.ndarray) -> float:  # noqa: N803
+def _rotation_angle(Ra: np.ndarray, Rb: np.ndarray) -> float:
     c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
     return float(math.acos(min(1.0, max(-1.0, c))))
 

@@ -69,7 +69,7 @@ def _counts(starts: np.ndarray, ends: np.ndarray, total: int) -> list[int]:
 def _runs_of_mask(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[float, ...], int]:
     """Column-major runs of ones of an (H, W) bool mask, read only inside its bounding box:
     (starts, ends, COCO box, area)."""
-    h, w = mask.shape
+    h, _w = mask.shape
     cols = np.flatnonzero(mask.any(axis=0))
     if len(cols) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), (0.0, 0.0, 0.0, 0.0), 0

@@ -199,7 +199,7 @@ class _ViewCheck:
         hw = self.camera()
         try:
             npz = NpzReader(self.path(".npz"))
-        except Exception as e:  # noqa: BLE001 (report any failure as a finding)
+        except Exception as e:  # report any failure as a finding
             self.bad(".npz", str(e))
             return None
         ids, amodal = self.masks(npz, hw)
@@ -314,7 +314,7 @@ class _ViewCheck:
             if "instances_objects" not in npz or "occlusion_objects" not in npz:
                 return None, None
             ids, amodal = npz["instances_objects"], npz["occlusion_objects"]
-        except Exception as e:  # noqa: BLE001
+        except Exception as e:
             self.bad(".npz", str(e))
             return None, None
         n = amodal.shape[0]
@@ -570,7 +570,7 @@ class _ViewCheck:
             )
         try:
             image = npz["occlusion"]
-        except Exception as e:  # noqa: BLE001
+        except Exception as e:
             self.bad(".npz", str(e))
             return
         # Each object's pixels hold its rate, and nothing else is non-zero.
@@ -593,7 +593,7 @@ class _ViewCheck:
         visible pixels lies within :data:`_DEPTH_POSE_CM` of its origin's z."""
         try:
             depth = npz["depth"]
-        except Exception as e:  # noqa: BLE001
+        except Exception as e:
             self.bad(".npz", str(e))
             return
         # Every 4th pixel of every 4th row: 1/16 of the image.
@@ -1051,7 +1051,7 @@ def validate_dataset(root: str | os.PathLike[str], *, checksums: bool = True) ->
     info: dict[str, Any] | None = None
     try:
         info = ds.info
-    except Exception as e:  # noqa: BLE001
+    except Exception as e:
         problems.append(Problem("dataset.json", str(e)))
     if not ds.scene_ids:
         problems.append(Problem(".", "no scene<N> folders"))

@@ -35,7 +35,7 @@ __all__ = [
     "get_object",
     "load_objects_yaml",
     "make_tote",
-    "tote_mesh",
     "object_names",
+    "tote_mesh",
     "tote_volume",
 ]

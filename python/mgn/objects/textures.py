@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Palette", "box_atlas", "wrap_label", "FONT_5X7", "draw_text"]
+__all__ = ["FONT_5X7", "Palette", "box_atlas", "draw_text", "wrap_label"]
 
 Color = tuple[int, int, int]
 
@@ -230,7 +230,7 @@ def box_atlas(
         (2 * cell, 3 * cell, 3) uint8 RGB image.
     """
     rng = np.random.default_rng(seed)
-    sx, sy, sz = (float(s) for s in size)
+    sx, sy, _sz = (float(s) for s in size)
     img = np.zeros((2 * cell, 3 * cell, 3), dtype=np.uint8)
     # faces +x, -x have extent sy x sz; +y, -y: sx x sz
     x_faces_are_front = sy >= sx

@@ -31,7 +31,7 @@ from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry import load_mesh
 from mgn.geometry import mesh as geo
 
-__all__ = ["ToteSpec", "make_tote", "default_tote", "tote_mesh", "tote_volume"]
+__all__ = ["ToteSpec", "default_tote", "make_tote", "tote_mesh", "tote_volume"]
 
 
 @dataclass(frozen=True)

@@ -112,17 +112,17 @@ from mgn.scene.lens import lens_for
 from mgn.scene.scene import DropOptions
 
 __all__ = [
+    "OUTPUT_FORMATS",
     "CameraConfig",
     "Config",
-    "IoConfig",
     "ConfigError",
-    "OUTPUT_FORMATS",
-    "OutputConfig",
     "HemisphereConfig",
     "IntrinsicsConfig",
+    "IoConfig",
     "LabelsConfig",
     "ObjectLabelsConfig",
     "ObjectsConfig",
+    "OutputConfig",
     "SelectionConfig",
     "SplitConfig",
     "default_config",
@@ -916,7 +916,7 @@ _SECTION_DOCS = {
 class _Dumper(yaml.SafeDumper):  # type: ignore[misc]  # PyYAML has no type information
     """Block style, except lists of scalars on one line ([0.2, 0.35, 0.6, 1.0])."""
 
-    def represent_list(self, data: list[Any]) -> yaml.Node:  # noqa: D102
+    def represent_list(self, data: list[Any]) -> yaml.Node:
         flow = all(not isinstance(v, (list, dict)) for v in data)
         return self.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
 

@@ -271,7 +271,7 @@ class _RenderAhead:
                 if not self._put(("item", item)):
                     break
             self._put(("end", None))
-        except BaseException as e:  # noqa: BLE001 (handed to the consumer, which raises it)
+        except BaseException as e:  # handed to the consumer, which raises it
             self._put(("error", e))
         finally:
             close = getattr(it, "close", None)

@@ -255,7 +255,7 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
             task.index, task.seed, True, None, False, times, size, len(scene), worker,
             removed=tuple(r.name for r in scene.removed),
         )  # fmt: skip
-    except Exception as e:  # noqa: BLE001 (reported per scene, the others go on)
+    except Exception as e:  # reported per scene, the others go on
         shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         full = _disk_full(e)
         if full is not None:
@@ -361,7 +361,7 @@ class _InProcess(_Executor):
                 return
             try:
                 yield item, fn(item), None
-            except Exception as e:  # noqa: BLE001
+            except Exception as e:  # reported per scene, the others go on
                 yield item, None, e
 
     def _run_scenes(self, tasks: Sequence[SceneTask]) -> Iterator[_Outcome]:
@@ -377,13 +377,13 @@ class _InProcess(_Executor):
                     ahead = pool.submit(drop_task_scene, tasks[k + 1])
                 try:
                     yield task, run_scene(task, current), None
-                except Exception as e:  # noqa: BLE001
+                except Exception as e:
                     yield task, None, e
         finally:
             # A cancelled run does not wait for a drop nobody will use (it finishes alone).
             pool.shutdown(wait=False, cancel_futures=True)
 
-    def cancel(self) -> None:
+    def cancel(self) -> None:  # optional hook: nothing to stop by default
         self._stop = True
 
 
@@ -406,7 +406,7 @@ class _ProcessPool(_Executor):
                 continue
             try:
                 yield futures[fut], fut.result(), None
-            except Exception as e:  # noqa: BLE001 (BrokenProcessPool: a worker died)
+            except Exception as e:
                 yield futures[fut], None, e
 
     def cancel(self) -> None:
@@ -421,7 +421,7 @@ class _ProcessPool(_Executor):
             with contextlib.suppress(Exception):
                 p.join(timeout=10)
 
-    def close(self) -> None:
+    def close(self) -> None:  # optional hook: nothing to release by default
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -452,7 +452,7 @@ class _Dask(_Executor):
                 continue
             try:
                 yield item, fut.result(), None
-            except Exception as e:  # noqa: BLE001
+            except Exception as e:
                 yield item, None, e
 
     def cancel(self) -> None:
@@ -944,7 +944,7 @@ class _Run:
                 continue
             try:
                 times = export_scene(self.out, i, formats, self.cfg.gripper)
-            except Exception as e:  # noqa: BLE001 (reported per scene, the others go on)
+            except Exception as e:
                 full = _disk_full(e)
                 old = self.report.results.get(i)
                 self.report.results[i] = SceneResult(

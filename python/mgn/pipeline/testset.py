@@ -55,9 +55,10 @@ from mgn.scene.compose import compose_objects
 
 __all__ = [
     "NOVEL_TAG",
+    "RECIPES",
     "BalancedReport",
     "BalancedRun",
-    "RECIPES",
+    "SceneOutcome",
     "SelectionState",
     "Split",
     "compose_scene",
@@ -65,7 +66,6 @@ __all__ = [
     "plan_batch",
     "resolve_split",
     "run_balanced",
-    "SceneOutcome",
     "select_views",
     "view_difficulty",
 ]

@@ -791,7 +791,7 @@ def draw_lighting(
                 (1.0, 1.0),
                 (1.0, 1.0, 1.0),
                 20.0,
-            )  # fmt: skip
+            )
         )
     if randomize and r.environment:
         kind = ENVIRONMENTS[int(g_env.integers(len(ENVIRONMENTS)))]

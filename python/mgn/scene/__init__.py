@@ -47,11 +47,11 @@ _EXPORTS = {
 __all__ = [
     "BUILTIN",
     "CONTACT_NAMES",
+    "MGN_COPIES",
     "CameraView",
     "DropOptions",
-    "Lens",
     "Intrinsics",
-    "MGN_COPIES",
+    "Lens",
     "MgnRigParams",
     "RemovedInstance",
     "Scene",

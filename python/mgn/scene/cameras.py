@@ -136,12 +136,12 @@ class Intrinsics:
         return _core.Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
 
     @property
-    def K(self) -> npt.NDArray[np.float64]:  # noqa: N802 (the usual symbol)
+    def K(self) -> npt.NDArray[np.float64]:  # the usual symbol
         """(3, 3) matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]."""
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
 
     @property
-    def K_opencv(self) -> npt.NDArray[np.float64]:  # noqa: N802 (the usual symbol)
+    def K_opencv(self) -> npt.NDArray[np.float64]:  # the usual symbol
         """(3, 3) camera matrix in OpenCV's pixel convention (pixel centres on integers):
         ``K`` with cx - 0.5, cy - 0.5. With :attr:`distortion` it is what ``cv2.projectPoints``,
         ``cv2.undistort`` and ``cv2.initUndistortRectifyMap`` take for mgn's images."""

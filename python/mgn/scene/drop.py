@@ -44,8 +44,8 @@ __all__ = [
     "SEPARATION_SPACING",
     "SEPARATION_THRESHOLD",
     "drop_scene",
-    "separate_overlaps",
     "drop_scene_refilled",
+    "separate_overlaps",
     "settle",
     "settle_tracked",
 ]

@@ -48,8 +48,8 @@ __all__ = [
     "SuctionGraspSet",
     "ViewObjectLabels",
     "compute_layout",
-    "view_object_labels",
     "distort_view_object_labels",
+    "view_object_labels",
 ]
 
 

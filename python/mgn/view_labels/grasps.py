@@ -63,12 +63,12 @@ COLLISION_OBSTACLES: dict[int, str] = {
 }
 
 __all__ = [
-    "DEFAULT_APPROACH_STEP",
     "COLLISION_OBSTACLES",
     "COLLISION_PARTS",
-    "SUCTION_TOOL_OFFSET",
+    "DEFAULT_APPROACH_STEP",
     "DEFAULT_SHAFT_LENGTH",
     "DEFAULT_SHAFT_RADIUS",
+    "SUCTION_TOOL_OFFSET",
     "GraspCollisions",
     "GraspGroups",
     "PjGraspSet",

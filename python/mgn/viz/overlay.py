@@ -317,7 +317,7 @@ def render_overlay(
     return np.asarray(canvas)
 
 
-def _font(size: int):  # noqa: ANN202 (a PIL font)
+def _font(size: int):  # a PIL font
 
     try:
         return ImageFont.load_default(size=size)
@@ -325,7 +325,7 @@ def _font(size: int):  # noqa: ANN202 (a PIL font)
         return ImageFont.load_default()
 
 
-def _wrap(text: str, font, width: float) -> list[str]:  # noqa: ANN001
+def _wrap(text: str, font, width: float) -> list[str]:
     """``text`` broken at spaces into lines no wider than ``width`` px in ``font``."""
     if text == "<scorebar>":
         return [text]
@@ -372,7 +372,7 @@ def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: floa
     return lines
 
 
-def _score_bar(draw, x: int, y: int, font, height: int) -> None:  # noqa: ANN001
+def _score_bar(draw, x: int, y: int, font, height: int) -> None:
     draw.text((x, y), "score 0", fill=(60, 60, 60), font=font)
     x0 = x + int(draw.textlength("score 0 ", font=font))
     cols = score_colors(np.linspace(0.0, 1.0, 200))
@@ -406,7 +406,7 @@ def _depth_panel(view: View) -> np.ndarray:
     return out
 
 
-def _scene_folder(root: str | os.PathLike[str], scene: int | None):  # noqa: ANN202
+def _scene_folder(root: str | os.PathLike[str], scene: int | None):
     """The scene folder: ``root`` itself when it is one (``mgn scene label``), else
     ``root/scene<scene>`` of a dataset."""
 

@@ -172,7 +172,7 @@ def collect_stats(ds: Dataset, *, max_views: int = 400) -> dict[str, Any]:
         visible_per_view.append(len(vis_ids))
         try:
             order = view.order
-        except Exception:  # noqa: BLE001 (a view without layout labels)
+        except Exception:  # a view without layout labels
             order = {}
         for i in vis_ids:
             entry = order.get(str(int(i)), {})
