@@ -147,8 +147,7 @@ def stage_cpu(config: Any) -> dict[str, Any]:
         seed = scene_seed(SEED, 0)
         picked = compose_scene(config, catalogue, seed, resolve_split(config, catalogue))
         labels = {s.name: object_labels(s, config) for s in picked}
-        scene = timed("drop", drop_scene, picked, seed=seed, tote=config.tote,
-                      options=config.drop)  # fmt: skip
+        scene = timed("drop", drop_scene, picked, seed=seed, tote=config.tote, options=config.drop)
         got = [labels[inst.name] for inst in scene.instances]
         rays = timed("prepare: ray model", SceneRayModel.from_scene, scene)
         pj = [strided_subset(g.paralleljaw, 2000) for g in got]

@@ -251,13 +251,13 @@ def _object_rows(
             peer.ring_length_unit = unit
         ring_unit_note = (
             "mgn's ring-spring stiffness takes the rest length in "
-            + {0.01: "cm (c2 as MetaGraspNet fitted it; MODELS.md §1 states pure SI)",
-               1.0: "m (pure SI, as MODELS.md §1)",
-               None: "an unknown unit (no ring force seen; the peer assumes cm)"}.get(
-                unit, f"units of {unit:.4g} m (neither cm nor m: check Cup::ring_stiffness)"
-            )
+            + {
+                0.01: "cm (c2 as MetaGraspNet fitted it; MODELS.md §1 states pure SI)",
+                1.0: "m (pure SI, as MODELS.md §1)",
+                None: "an unknown unit (no ring force seen; the peer assumes cm)",
+            }.get(unit, f"units of {unit:.4g} m (neither cm nor m: check Cup::ring_stiffness)")
             + "; the peer uses the same"
-        )  # fmt: skip
+        )
     peer_idx = np.linspace(0, n_cand - 1, n_peer).round().astype(int)
     nominal_idx = np.linspace(0, n_cand - 1, n_nominal).round().astype(int)
 

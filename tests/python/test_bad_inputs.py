@@ -123,8 +123,7 @@ def _bad_name(name: object) -> Callable[[Path], list[str]]:
 
 def _bad_cli_name(tmp: Path) -> list[str]:
     write(tmp / "cube.obj", CUBE_OBJ)
-    return ["objects", "add", str(tmp / "cube.obj"), "--to", str(tmp / "o.yaml"),
-            "--name", "a,b"]  # fmt: skip
+    return ["objects", "add", str(tmp / "cube.obj"), "--to", str(tmp / "o.yaml"), "--name", "a,b"]
 
 
 def _duplicate_config_key(tmp: Path) -> list[str]:

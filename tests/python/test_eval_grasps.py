@@ -386,8 +386,7 @@ def test_paralleljaw_with_swapped_jaws_matches_the_same_label(small_dataset):
 
 def _one(small_dataset, **grasp):
     scene, view = _views(small_dataset)[0]
-    return [{"image_id": scene.scene_id * 1000 + view.index, "kind": "suction",
-             "grasps": [grasp]}]  # fmt: skip
+    return [{"image_id": scene.scene_id * 1000 + view.index, "kind": "suction", "grasps": [grasp]}]
 
 
 def test_bad_input_gives_clear_errors(small_dataset, tmp_path):
@@ -442,8 +441,7 @@ def test_bad_input_gives_clear_errors(small_dataset, tmp_path):
 def test_cli_prints_the_table_and_writes_json(small_dataset, tmp_path, capsys):
     from mgn.cli.main import main
 
-    preds = [e for e in ground_truth_grasps(small_dataset, "suction", min_score=0.4)
-             if e["grasps"]]  # fmt: skip
+    preds = [e for e in ground_truth_grasps(small_dataset, "suction", min_score=0.4) if e["grasps"]]
     pred_path = tmp_path / "pred.json"
     pred_path.write_text(json.dumps(preds))
     out = tmp_path / "res.json"

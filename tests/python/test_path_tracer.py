@@ -330,8 +330,7 @@ def _pane_under_lamp(ior: float, Le: float) -> PathScene:
     X_WL[:3, 3] = (0.0, 0.0, 1.5)
     light = AreaLight(X_WL, "rect", (3.0, 3.0), (1.0, 1.0, 1.0), Le)
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
-    return PathScene([make_box([2.0, 2.0, 0.02])], np.eye(4)[None], [1], [[glass]], [light],
-                     BLACK)  # fmt: skip
+    return PathScene([make_box([2.0, 2.0, 0.02])], np.eye(4)[None], [1], [[glass]], [light], BLACK)
 
 
 def test_light_reflected_in_smooth_glass_is_split_not_sampled():

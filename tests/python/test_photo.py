@@ -356,8 +356,7 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
     assert not out_only.depth.any()
     assert out_only.rays < out.rays
     # The path-traced views of iter_views come with exactly the raster labels.
-    pv = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=True,
-                              render=s)))  # fmt: skip
+    pv = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=True, render=s)))
     assert np.array_equal(pv.instance_ids, raster.instance_ids)
     assert pv.engine == {"engine": "path", "spp": 1, "denoised": False, "max_bounces": 6}
     assert pv.rgb.shape == raster.rgb.shape

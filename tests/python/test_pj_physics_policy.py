@@ -430,8 +430,7 @@ def test_the_error_bound_holds_on_the_grasps_after_the_calibration(p_hole, holes
         grids = holed(np.random.default_rng(seed), 160, p_hole, holes)
         cal, rest = grids[:32], grids[32:]
         c = calibrate_staircase(cal, CHECKS, 0, -1, tol)
-        search = physics.search_of(c, ShakeOptions(grid=S, staircase=True,
-                                                   staircase_checks=CHECKS))  # fmt: skip
+        search = physics.search_of(c, ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS))
         truth = rest.mean(axis=(1, 2))
         got = truth
         if search.staircase:

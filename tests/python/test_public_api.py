@@ -11,8 +11,7 @@ import mgn.pipeline
 import mgn.pipeline.config
 import mgn.scene
 
-PRODUCT = ("generate", "GenerateReport", "Config", "load_config", "Scene", "drop_scene",
-           "Dataset")  # fmt: skip
+PRODUCT = ("generate", "GenerateReport", "Config", "load_config", "Scene", "drop_scene", "Dataset")
 
 
 def test_the_product_is_in_the_facade() -> None:

@@ -111,8 +111,7 @@ def test_a_parentless_object_outside_layer_0_is_rejected(ds: Path) -> None:
     top = next(k for k, e in order.items() if [p["id"] for p in e["parents"]] == [0])
     order[top]["layer"] = 3
     path.write_text(json.dumps(order))
-    _edit_json(ds / "scene0" / "0_layout.json",
-               lambda d: d["objects"][top].update(layer=3))  # fmt: skip
+    _edit_json(ds / "scene0" / "0_layout.json", lambda d: d["objects"][top].update(layer=3))
     found = _messages(ds, "0_order.json")
     assert any(f"object {top} has layer 3" in m and "give layer 0" in m for m in found), found
 

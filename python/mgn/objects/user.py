@@ -531,9 +531,9 @@ def load_objects_yaml(
     if not isinstance(data, dict) or not isinstance(data.get("objects"), list):
         raise InvalidArgumentError(
             f"user-object YAML '{p}': expected a top-level 'objects:' list (see "
-            "mgn.objects.user), got " + (f"keys {sorted(map(str, data))}" if isinstance(data, dict)
-                                         else type(data).__name__)
-        )  # fmt: skip
+            "mgn.objects.user), got "
+            + (f"keys {sorted(map(str, data))}" if isinstance(data, dict) else type(data).__name__)
+        )
     builtin = builtin_objects()
     taken_ids = {s.category_id for s in builtin}
     taken_names = {s.name for s in builtin}

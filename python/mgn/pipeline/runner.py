@@ -232,8 +232,7 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
         times.update({f"write: {k}": v for k, v in (stages or {}).items()})
         t2 = time.perf_counter()
         # What made the RGB images (engine, samples, denoiser), for `mgn report`.
-        write_manifest(tmp, scene=task.index, seed=task.seed,
-                       render=task.config.render.describe())  # fmt: skip
+        write_manifest(tmp, scene=task.index, seed=task.seed, render=task.config.render.describe())
         size = _folder_size(tmp)
         if task.collect:
             files = {p.relative_to(tmp).as_posix(): p.read_bytes()

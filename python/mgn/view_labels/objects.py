@@ -399,8 +399,7 @@ def distort_view_object_labels(labels: ViewObjectLabels, lens: Lens) -> ViewObje
     kp, kp_obj, okp, okp_obj = labels.keypoints, labels.keypoint_object, \
         labels.occluded_keypoints, labels.occluded_keypoint_object  # fmt: skip
     if kp.shape[0]:
-        kp, kp_obj, okp, okp_obj = _move_outside(kp, kp_obj, okp, okp_obj,
-                                                 lens.in_image(kp[:, 1:]))  # fmt: skip
+        kp, kp_obj, okp, okp_obj = _move_outside(kp, kp_obj, okp, okp_obj, lens.in_image(kp[:, 1:]))
     com_visible = labels.com_visible
     if labels.com_points.shape[0]:
         com_visible = com_visible & lens.in_image(labels.com_points[:, 1:])

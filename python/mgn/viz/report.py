@@ -60,8 +60,7 @@ def svg_bars(
     ]
     for frac in (0.0, 0.5, 1.0):
         y = y0 - plot_h * frac
-        parts.append(f'<line x1="{left - 4}" y1="{y:.1f}" x2="{left}" y2="{y:.1f}" '
-                     'stroke="#444"/>')  # fmt: skip
+        parts.append(f'<line x1="{left - 4}" y1="{y:.1f}" x2="{left}" y2="{y:.1f}" stroke="#444"/>')
         parts.append(f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">'
                      f"{_tick(top * frac)}</text>")  # fmt: skip
     if ylabel:
