@@ -301,8 +301,8 @@ def test_bad_inputs(tiny: Path, tmp_path: Path) -> None:
     seg = dict(gt[0]["segmentation"])
     with pytest.raises(InvalidArgumentError, match="size"):
         evaluate_detections(tiny, [{**gt[0], "segmentation": {**seg, "size": [5, 5]}}])
+    short = {**seg, "counts": seg["counts"][:-1]}
     with pytest.raises(InvalidArgumentError, match="not a valid RLE"):  # runs don't fill H x W
-        short = {**seg, "counts": seg["counts"][:-1]}
         evaluate_detections(tiny, [{**gt[0], "segmentation": short}])
     with pytest.raises(InvalidArgumentError, match="not a valid RLE"):
         evaluate_detections(tiny, [{**gt[0], "segmentation": {"size": [H, W], "counts": [5, 3]}}])

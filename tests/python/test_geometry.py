@@ -37,7 +37,7 @@ def test_mesh_arrays_are_read_only_views_owned_by_the_mesh():
     v = mesh.vertices
     assert v.dtype == np.float32
     assert v.shape == (8, 3)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         v[0, 0] = 1.0
     del mesh  # the view keeps the mesh alive
     assert np.ptp(v, axis=0) == pytest.approx([0.1, 0.2, 0.3])

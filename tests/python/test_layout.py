@@ -266,7 +266,7 @@ def test_readers_reject_bad_files(tmp_path):
     q.write_text(json.dumps({"1": {"id": 1}}))
     with pytest.raises(InvalidArgumentError, match="occlusion"):
         read_order_json(q)
-    with pytest.raises(OSError):
+    with pytest.raises(OSError, match=r"missing\.json"):
         read_order_json(tmp_path / "missing.json")
 
 
@@ -437,5 +437,5 @@ def test_bad_input_fails_clearly(change, match):
 
 def test_result_is_read_only():
     L = layout_of([rect(10, 10, 2, 2, 8, 8)], [0.8], 10, 10)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         L.layer[0] = 2

@@ -254,11 +254,11 @@ def test_get_object_lookup(objects: tuple[ObjectSpec, ...]) -> None:
 
 def test_arrays_are_read_only(objects: tuple[ObjectSpec, ...]) -> None:
     o = objects[0]
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         o.vertices[0, 0] = 1.0
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         o.faces[0, 0] = 0
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         o.material.texture[0, 0, 0] = 0
 
 
@@ -567,7 +567,7 @@ def test_revolve_cylinder_volume_and_uv_seams() -> None:
     for mesh in (ring, ring_uv):
         m = _check_closed(mesh.vertices, mesh.faces)
         assert math.isclose(m.volume, ring_exact, rel_tol=1e-12)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="open profile"):
         shapes.revolve([(0.01, 0.0), (0.02, 0.0), (0.0, 0.01)], n)  # open profile off the axis
 
 
@@ -602,7 +602,7 @@ def test_grid_and_rounded_box_volumes() -> None:
     assert m.volume < exact
     assert math.isclose(m.volume, exact, rel_tol=5e-3)
     np.testing.assert_allclose(m.extents, (a, b, c), rtol=1e-12)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="radius"):
         shapes.rounded_box((a, b, c), 0.03)
 
 
@@ -627,7 +627,7 @@ def test_sweeps_and_subdivision() -> None:
     assert math.isclose(
         _check_closed(finer.vertices, finer.faces).volume, hollow.signed_volume, rel_tol=1e-12
     )
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="inner_radius < outer_radius"):
         shapes.sweep_hollow(path, 0.01, 0.02, n)
 
 

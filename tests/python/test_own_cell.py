@@ -464,9 +464,9 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
             rgba.append(np.asarray(loaded.geometry[geom].visual.face_colors[0], int))
         greenness = [c[1] - c[0] for c in rgba]
         assert greenness == sorted(greenness, reverse=True)
-    with pytest.raises(InvalidArgumentError, match="unknown grasp kind 'vacuum'"):
-        from mgn.viz.scene_export import export_scene_glb
+    from mgn.viz.scene_export import export_scene_glb
 
+    with pytest.raises(InvalidArgumentError, match="unknown grasp kind 'vacuum'"):
         export_scene_glb(scene, tmp_path / "x.glb", grasps="vacuum")
 
 

@@ -49,7 +49,7 @@ def test_intrinsics_presets_and_validation() -> None:
     assert params["resolution"] == {"height": 1200, "width": 1200}
     with pytest.raises(ValueError, match="focal"):
         Intrinsics(100, 100, 0.0, 100.0, 50.0, 50.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="image size"):
         Intrinsics(0, 100, 100.0, 100.0, 50.0, 50.0)
 
 
@@ -198,7 +198,7 @@ def test_bad_input_gives_clear_errors(scene) -> None:
         r.render(CameraView(Intrinsics(128, 128, 80.0, 80.0, 64.0, 64.0), view.X_WC))
     with pytest.raises(ValueError, match="sensor preset"):
         sensor_params("lidar")  # type: ignore[arg-type]
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="empty scene"):
         render_views([], None, [0])
     with pytest.raises(ValueError, match="view index"):
         render_views(scene[:1], tote_mesh(), [37])

@@ -320,7 +320,7 @@ def test_every_cpp_drop_option_round_trips_and_reaches_the_simulation(tmp_path):
 def test_bad_drop_options_are_rejected_when_made(kwargs, match):
     with pytest.raises(mgn.InvalidArgumentError, match=rf"DropOptions\.{match}"):
         DropOptions(**kwargs)
-    with pytest.raises(ValueError):  # InvalidArgumentError is a ValueError
+    with pytest.raises(ValueError, match=match):  # InvalidArgumentError is a ValueError
         DropOptions(**kwargs)
 
 

@@ -242,9 +242,9 @@ def test_record_checks_shapes():
         ViewRecord(**{**rec.__dict__, "depth": np.zeros((3, 3), np.float32)})
     with pytest.raises(ValueError, match=r"instance ids must be in 0..3"):
         ViewRecord(**{**rec.__dict__, "instances": np.full((H, W), 4)})
+    h5 = dict(rec.scene_hdf5)
+    del h5["objects/categories"]
     with pytest.raises(ValueError, match="lacks 'objects/categories'"):
-        h5 = dict(rec.scene_hdf5)
-        del h5["objects/categories"]
         ViewRecord(**{**rec.__dict__, "scene_hdf5": h5})
 
 

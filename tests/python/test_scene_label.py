@@ -428,7 +428,7 @@ def test_render_ahead_keeps_order_errors_and_stops():
     made.clear(), closed.clear()
     ahead = _RenderAhead(lambda: gen(10, fail_at=4))
     got = []
-    with pytest.raises(OSError, match="item 4 failed"):
+    with pytest.raises(OSError, match="item 4 failed"):  # noqa: PT012 -- the loop is the statement
         for x in ahead:
             got.append(x)  # noqa: PERF402 -- element by element, up to the item that fails
     ahead.close()
