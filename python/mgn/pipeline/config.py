@@ -94,7 +94,7 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import yaml
@@ -262,7 +262,7 @@ def _check_keys(data: Mapping[str, Any], valid: list[str], key: str) -> None:
 class _Section:
     """A config section: fields validated by ``_CHECKS`` (field name -> validator)."""
 
-    _CHECKS: dict[str, Check] = {}
+    _CHECKS: ClassVar[dict[str, Check]] = {}
 
     @classmethod
     def from_dict(cls, data: Any, key: str = "") -> Any:
@@ -327,7 +327,7 @@ class ObjectsConfig(_Section):
     refill: bool = True
     refill_attempts: int = 5
 
-    _CHECKS = {
+    _CHECKS: ClassVar[dict[str, Check]] = {
         "names": _optional(_list(_name)),
         "categories": _optional(_list(_name)),
         "count": _optional(_int(1)),
@@ -370,7 +370,7 @@ class HemisphereConfig(_Section):
     tilts: tuple[float, ...] = (0.3, 0.6)
     azimuths: tuple[float, ...] = (0.0, math.pi / 2, math.pi, 3 * math.pi / 2)
 
-    _CHECKS = {
+    _CHECKS: ClassVar[dict[str, Check]] = {
         "radii": _list(_num(0.0)),
         "tilts": _list(_num(0.0, strict=False)),
         "azimuths": _list(_num()),
@@ -409,7 +409,7 @@ class IntrinsicsConfig(_Section):
     cy: float = 0.0
     distortion: tuple[float, ...] = ()
 
-    _CHECKS = {
+    _CHECKS: ClassVar[dict[str, Check]] = {
         "width": _int(1),
         "height": _int(1),
         "fx": _num(0.0),
@@ -496,7 +496,7 @@ class CameraConfig(_Section):
     sensor: str = "structured-light"
     randomize: bool = True
 
-    _CHECKS = {
+    _CHECKS: ClassVar[dict[str, Check]] = {
         "rig": _choice(*RIGS),
         "views": _optional(_list(_int(0))),
         "hemisphere": HemisphereConfig.from_dict,
@@ -585,7 +585,7 @@ class ObjectLabelsConfig(_Section):
             return self.physics_checks
         return default_staircase_checks(self.physics_calibration)
 
-    _CHECKS = {
+    _CHECKS: ClassVar[dict[str, Check]] = {
         "suction_points": _int(1),
         "pj_points": _int(1),
         "pj_grasps": _optional(_int(1)),
@@ -624,7 +624,7 @@ class SplitConfig(_Section):
     name: str = "all"
     unseen: str | tuple[str | int, ...] = "novel"
 
-    _CHECKS = {"name": _choice(*SPLIT_NAMES), "unseen": _unseen}
+    _CHECKS: ClassVar[dict[str, Check]] = {"name": _choice(*SPLIT_NAMES), "unseen": _unseen}
 
 
 def _quota(value: Any, key: str) -> tuple[int, ...] | None:
@@ -665,7 +665,7 @@ class SelectionConfig(_Section):
     max_scenes: int = 100
     prune_rejected: bool = False
 
-    _CHECKS = {
+    _CHECKS: ClassVar[dict[str, Check]] = {
         "quota": _quota,
         "batch_scenes": _int(1),
         "max_scenes": _int(1),
@@ -750,7 +750,7 @@ class IoConfig(_Section):
 
     archival: bool = False
 
-    _CHECKS = {"archival": _bool}
+    _CHECKS: ClassVar[dict[str, Check]] = {"archival": _bool}
 
 
 def _formats(value: Any, key: str) -> tuple[str, ...]:
@@ -781,7 +781,7 @@ class OutputConfig(_Section):
 
     formats: tuple[str, ...] = ("mgn",)
 
-    _CHECKS = {"formats": _formats}
+    _CHECKS: ClassVar[dict[str, Check]] = {"formats": _formats}
 
     def __post_init__(self) -> None:
         _formats(self.formats, "output.formats")
@@ -810,7 +810,7 @@ class Config(_Section):
     io: IoConfig = field(default_factory=IoConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
 
-    _CHECKS = {
+    _CHECKS: ClassVar[dict[str, Check]] = {
         "objects": ObjectsConfig.from_dict,
         "tote": lambda v, k: _external(ToteSpec, v, k),
         "gripper": lambda v, k: _external(ParallelJawGripper, v, k),
