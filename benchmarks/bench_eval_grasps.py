@@ -70,8 +70,9 @@ def run(
     Lw = p.width.astype(np.float64)
 
     def match() -> np.ndarray:
-        return _match("paralleljaw", X, w, p.contact_poses, Lw, DEFAULT_MATCH_DISTANCE,
-                      DEFAULT_MATCH_ANGLE)  # fmt: skip
+        return _match(
+            "paralleljaw", X, w, p.contact_poses, Lw, DEFAULT_MATCH_DISTANCE, DEFAULT_MATCH_ANGLE
+        )
 
     found = match()
     timing = measure_alternating({1: match}, repeats)

@@ -92,8 +92,9 @@ def run(
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
 
         def peer_map() -> np.ndarray:
-            return cv2.undistortPoints(pts, K.K_opencv, np.asarray(DIST), R=None,
-                                       P=lens.render_K.K_opencv, criteria=crit)  # fmt: skip
+            return cv2.undistortPoints(
+                pts, K.K_opencv, np.asarray(DIST), R=None, P=lens.render_K.K_opencv, criteria=crit
+            )
 
         map_cases["peer"] = peer_map
         m = peer_map().reshape(size, size, 2).astype(np.float32)

@@ -363,8 +363,9 @@ def evaluate(
     if res_mgn is not None and "ref" in frames.get("mgn", {}):
         e = exposure_of(frames["mgn"]["ref"])
         ref_t = tonemap(frames["mgn"]["ref"], e)
-        raw_cpu = {c["spp"]: float(np.median(c["cpu"])) for c in res_mgn["configs"]
-                   if not c["denoise"]}  # fmt: skip
+        raw_cpu = {
+            c["spp"]: float(np.median(c["cpu"])) for c in res_mgn["configs"] if not c["denoise"]
+        }
         for d in res_mgn.get("denoiser_study", []):
             test = tonemap(frames["mgn"][d["key"]], e)
             study.append(

@@ -171,8 +171,9 @@ def stage_cpu(config: Any) -> dict[str, Any]:
                         occlusion=lab.occlusion)  # fmt: skip
             gr = timed("scene grasps", view_grasps, sgm, view, index, len(scene.instances))
             scene_gt_entries(lab.X_CO, cats[index])
-            record = view_record(v, view, images, lab, lay, gr, rays.com_parameters()[index],
-                                 instance_ids=index + 1)  # fmt: skip
+            record = view_record(
+                v, view, images, lab, lay, gr, rays.com_parameters()[index], instance_ids=index + 1
+            )
             timed("write", write_view, out, record, times=write_parts)
     return {"objects": len(scene.instances), "views": len(views),
             "stages": {k: {"wall_s": w, "cpu_s": c} for k, (w, c) in stages.items()},

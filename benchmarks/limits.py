@@ -46,8 +46,9 @@ def _icosphere(mgn: Any) -> Any:
     import trimesh
 
     s = trimesh.creation.icosphere(subdivisions=6, radius=0.1)
-    return mgn.Mesh(np.ascontiguousarray(s.vertices, np.float32),
-                    np.ascontiguousarray(s.faces, np.int32))  # fmt: skip
+    return mgn.Mesh(
+        np.ascontiguousarray(s.vertices, np.float32), np.ascontiguousarray(s.faces, np.int32)
+    )
 
 
 def measure_limits(

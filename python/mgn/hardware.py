@@ -268,8 +268,9 @@ def normalize_grasp_kind(kind: str) -> str:
         if k in aliases:
             return name
     accepted = ", ".join(a for v in GRASP_KINDS.values() for a in v)
-    raise InvalidArgumentError(f"unknown grasp kind {kind!r}; expected suction or paralleljaw "
-                               f"(also accepted: {accepted})")  # fmt: skip
+    raise InvalidArgumentError(
+        f"unknown grasp kind {kind!r}; expected suction or paralleljaw (also accepted: {accepted})"
+    )
 
 
 #: The MetaGraspNet folder name of each grasp kind (``grasps/<folder>/``, ``*_grasps/<folder>``).

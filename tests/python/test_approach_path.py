@@ -55,8 +55,9 @@ def test_default_check_matches_a_dense_brute_force_and_catches_path_collisions()
     su = suction_label_object(box, mass=props.mass, com=props.center_of_mass, num_points=120)
     # The box stands 1 cm from the +x wall of the tote (inner wall at x = 0.2 m).
     objects = [(box, translation(0.17, 0.0, 0.025))]
-    dense = _model(objects, [pj], [su], offsets=tuple(np.linspace(0.0, 0.1, 101)),
-                   approach_step=1.0)  # fmt: skip
+    dense = _model(
+        objects, [pj], [su], offsets=tuple(np.linspace(0.0, 0.1, 101)), approach_step=1.0
+    )
     ends = _model(objects, [pj], [su], offsets=(0.0, 0.1), approach_step=1.0)
     default = _model(objects, [pj], [su])
     for kind in ("pj", "suction"):

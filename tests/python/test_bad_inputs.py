@@ -440,8 +440,9 @@ def _tetrahedra_sharing_a_vertex() -> tuple[np.ndarray, np.ndarray]:
     """Tetrahedra (0, a e_x, a e_y, a e_z) and (0, -a e_x, -a e_z, -2a e_y), one vertex index
     at the origin for both: a^3/6 + 2a^3/6 = a^3/2."""
     a = TET_A
-    v = np.array([[0, 0, 0], [a, 0, 0], [0, a, 0], [0, 0, a], [-a, 0, 0], [0, 0, -a],
-                  [0, -2 * a, 0]])  # fmt: skip
+    v = np.array(
+        [[0, 0, 0], [a, 0, 0], [0, a, 0], [0, 0, a], [-a, 0, 0], [0, 0, -a], [0, -2 * a, 0]]
+    )
     faces = []
     for p, q, r, t in ((0, 1, 2, 3), (0, 4, 5, 6)):  # det(q - p, r - p, t - p) > 0
         faces += [[p, r, q], [p, q, t], [p, t, r], [q, r, t]]

@@ -30,8 +30,9 @@ def test_too_many_objects_are_named() -> None:
     (w,) = config_warnings(load_config({"objects": {"count": 200}}))
     assert w.startswith("objects.count: 200 objects")
     errors = config_errors(load_config({"objects": {"count": 1000}}))
-    assert any(e.startswith("objects.count: 1000 objects") and "more than 10x" in e
-               for e in errors), errors  # fmt: skip
+    assert any(
+        e.startswith("objects.count: 1000 objects") and "more than 10x" in e for e in errors
+    ), errors
 
 
 def test_tiny_images_are_named() -> None:
@@ -69,8 +70,9 @@ def test_fifty_micrometre_object_is_named(tmp_path: Path) -> None:
         })
     )  # fmt: skip
     w = config_warnings(cfg)
-    assert any(x.startswith("objects.user_objects ('") and "object 'grain' is 2 mm across" in x
-               for x in w), w  # fmt: skip
+    assert any(
+        x.startswith("objects.user_objects ('") and "object 'grain' is 2 mm across" in x for x in w
+    ), w
     # The command line prints it and still accepts the file.
     (tmp_path / "cfg.yaml").write_text(
         yaml.safe_dump({"objects": {"user_objects": [str(tmp_path / "objs.yaml")]}})

@@ -30,8 +30,9 @@ def _model(root, scene_id: int) -> SceneGraspModel:
     cfg = Config.from_dict(ds.info["config"])
     scene = read_scene_json(ds.scene(scene_id).folder / "scene.json")
     n = len(scene.instances)
-    return SceneGraspModel(scene, [None] * n, [None] * n, cfg.gripper, cfg.cup,
-                           offsets=LabelOptions().grasp_offsets)  # fmt: skip
+    return SceneGraspModel(
+        scene, [None] * n, [None] * n, cfg.gripper, cfg.cup, offsets=LabelOptions().grasp_offsets
+    )
 
 
 def _labels(view, kind: str, colliding: bool = False):
@@ -227,8 +228,9 @@ def test_known_errors_give_the_hand_computed_precision(small_dataset):
         {"pose": inside.tolist(), "score": 0.95},     # matched, colliding
     ]}]  # fmt: skip
     t_mid = float(0.5 * (s[ia] + s[ib]))
-    res = evaluate_grasps(small_dataset, preds, kind="suction", ks=(1, 2, 3, 4, 10),
-                          thresholds=(0.0, t_mid))  # fmt: skip
+    res = evaluate_grasps(
+        small_dataset, preds, kind="suction", ks=(1, 2, 3, 4, 10), thresholds=(0.0, t_mid)
+    )
     # Ranked by score: inside (fail), a (ok), far (fail), b (ok at 0 only).
     assert res.precision[0.0] == pytest.approx({1: 0.0, 2: 0.5, 3: 1 / 3, 4: 0.5, 10: 0.5})
     assert res.precision[t_mid] == pytest.approx({1: 0.0, 2: 0.5, 3: 1 / 3, 4: 0.25, 10: 0.25})
@@ -259,14 +261,16 @@ def test_tolerances_decide_the_match(small_dataset):
     c, sn = math.cos(math.radians(20)), math.sin(math.radians(20))
     Y = X[i].copy()
     Y[:3, :3] = Y[:3, :3] @ np.array([[1, 0, 0], [0, c, -sn], [0, sn, c]])
-    pred = [{"image_id": image_id, "kind": "suction", "grasps": [{"pose": Y.tolist(),
-                                                                  "score": 1.0}]}]  # fmt: skip
+    pred = [
+        {"image_id": image_id, "kind": "suction", "grasps": [{"pose": Y.tolist(), "score": 1.0}]}
+    ]
     assert evaluate_grasps(small_dataset, pred, thresholds=(0.0,), ks=(1,)).matched == 1
     ang = np.degrees(np.arccos(np.clip(Xall[:, :3, 2] @ Y[:3, 2], -1, 1)))
     dist = np.linalg.norm(Xall[:, :3, 3] - Y[:3, 3], axis=1)
     expect = int(((ang <= 15) & (dist <= 0.01)).any())
-    r = evaluate_grasps(small_dataset, pred, thresholds=(0.0,), ks=(1,),
-                        match_angle=math.radians(15))  # fmt: skip
+    r = evaluate_grasps(
+        small_dataset, pred, thresholds=(0.0,), ks=(1,), match_angle=math.radians(15)
+    )
     assert r.matched == expect
 
 
@@ -353,8 +357,9 @@ def test_paralleljaw_pixel_predictions_at_label_centres_match(small_dataset):
 
 
 def test_paralleljaw_with_swapped_jaws_matches_the_same_label(small_dataset):
-    preds = [e for e in ground_truth_grasps(small_dataset, "paralleljaw", min_score=0.2)
-             if e["grasps"]]  # fmt: skip
+    preds = [
+        e for e in ground_truth_grasps(small_dataset, "paralleljaw", min_score=0.2) if e["grasps"]
+    ]
     swapped = []
     for e in preds:
         gs = []
@@ -455,6 +460,7 @@ def test_cli_prints_the_table_and_writes_json(small_dataset, tmp_path, capsys):
     doc = json.loads(out.read_text())
     assert doc["precision"]["0.4"] == {"P@1": 1.0, "P@5": 1.0}
     assert doc["num_predictions"] == sum(len(e["grasps"]) for e in preds)
-    assert main(["eval", "grasps", str(tmp_path / "none.json"), "--dataset",
-                 str(small_dataset)]) == 1  # fmt: skip
+    assert (
+        main(["eval", "grasps", str(tmp_path / "none.json"), "--dataset", str(small_dataset)]) == 1
+    )
     assert "does not exist" in capsys.readouterr().err

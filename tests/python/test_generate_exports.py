@@ -54,8 +54,9 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("MGN_CACHE_DIR", str(base / "cache"))
         for name, formats in (("plain", None), ("exported", ALL)):
-            report = generate(out[name], 2, config=load_config(_config(formats)), seed=SEED,
-                              progress=False)  # fmt: skip
+            report = generate(
+                out[name], 2, config=load_config(_config(formats)), seed=SEED, progress=False
+            )
             assert report.complete, report.format_summary()
     return out
 
@@ -131,8 +132,9 @@ def test_resume_redoes_missing_and_half_written_exports(
         "models": _mtimes(ds / "bop" / "models" / "obj_000003.ply"),
     }
     monkeypatch.setenv("MGN_CACHE_DIR", str(runs["exported"].parent / "cache"))
-    report = generate(ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True,
-                      progress=False)  # fmt: skip
+    report = generate(
+        ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True, progress=False
+    )
     assert report.complete
     assert report.skipped == [0, 1]
     assert not report.failed
@@ -150,8 +152,9 @@ def test_resume_adds_formats_to_a_finished_dataset(
     ds = tmp_path / "ds"
     shutil.copytree(runs["plain"], ds)
     monkeypatch.setenv("MGN_CACHE_DIR", str(runs["exported"].parent / "cache"))
-    report = generate(ds, 2, config=load_config(_config(["mgn", "bop"])), seed=SEED,
-                      resume=True, progress=False)  # fmt: skip
+    report = generate(
+        ds, 2, config=load_config(_config(["mgn", "bop"])), seed=SEED, resume=True, progress=False
+    )
     assert report.complete
     assert report.skipped == [0, 1]
     assert _tree(ds / "bop") == _tree(runs["exported"] / "bop")
@@ -174,15 +177,17 @@ def test_failed_export_fails_the_scene_and_resume_redoes_it(
 
     monkeypatch.setenv("MGN_CACHE_DIR", str(runs["exported"].parent / "cache"))
     monkeypatch.setattr(exports, "export_graspnet_scene", broken)
-    report = generate(ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True,
-                      progress=False)  # fmt: skip
+    report = generate(
+        ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True, progress=False
+    )
     assert not report.complete
     assert [r.index for r in report.failed] == [0, 1]
     assert all("simulated" in (r.error or "") for r in report.failed)
     assert (ds / "scene1").is_dir()  # the scene itself is complete
     monkeypatch.setattr(exports, "export_graspnet_scene", real)
-    report = generate(ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True,
-                      progress=False)  # fmt: skip
+    report = generate(
+        ds, 2, config=load_config(_config(ALL)), seed=SEED, resume=True, progress=False
+    )
     assert report.complete
     assert report.skipped == [0, 1]
     for name in ("bop", "graspnet"):
@@ -233,8 +238,9 @@ def test_collected_scenes_are_exported_by_the_main_process(
     exports: the same bytes as the workers' own exports."""
     monkeypatch.setenv("MGN_CACHE_DIR", str(runs["exported"].parent / "cache"))
     ds = tmp_path / "ds"
-    report = generate(ds, 1, config=load_config(_config(ALL)), seed=SEED, collect=True,
-                      progress=False)  # fmt: skip
+    report = generate(
+        ds, 1, config=load_config(_config(ALL)), seed=SEED, collect=True, progress=False
+    )
     assert report.complete
     assert set(report.results[0].times) >= {"export: bop", "export: graspnet"}
     ref = runs["exported"]

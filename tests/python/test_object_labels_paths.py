@@ -63,8 +63,9 @@ def test_shared_samples_give_the_labels_of_separate_label_object_calls():
     suction = suction_label_object(
         mesh, cup=config.cup, model="spring", inertia=props.inertia, **kw
     )
-    pj = pj_label_object(mesh, gripper=config.gripper, max_grasps=config.object_labels.pj_grasps,
-                         **kw)  # fmt: skip
+    pj = pj_label_object(
+        mesh, gripper=config.gripper, max_grasps=config.object_labels.pj_grasps, **kw
+    )
     assert len(suction.score) > 50
     assert len(pj.width) > 100
     _assert_same(shared.suction, suction)

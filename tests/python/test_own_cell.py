@@ -157,12 +157,14 @@ def test_implausible_sizes_warn_naming_the_object(tmp_path):
     path.write_text("objects:\n  - {name: big, mesh: mm.obj, density: 1000, friction: 0.5}\n")
     with pytest.warns(ImplausibleSizeWarning, match=r"'big'.*40 m across.*scale 0.001"):
         load_objects_yaml(path)
-    path.write_text("objects:\n  - {name: ok, mesh: mm.obj, density: 1000, friction: 0.5, "
-                    "scale: 1.0e-3}\n")  # fmt: skip
+    path.write_text(
+        "objects:\n  - {name: ok, mesh: mm.obj, density: 1000, friction: 0.5, scale: 1.0e-3}\n"
+    )
     (spec,) = load_objects_yaml(path)  # no warning (warnings are errors in this suite)
     assert np.ptp(spec.vertices, axis=0) == pytest.approx([0.04] * 3)
-    path.write_text("objects:\n  - {name: speck, mesh: mm.obj, density: 1000, friction: 0.5, "
-                    "scale: 1.0e-6}\n")  # fmt: skip
+    path.write_text(
+        "objects:\n  - {name: speck, mesh: mm.obj, density: 1000, friction: 0.5, scale: 1.0e-6}\n"
+    )
     with pytest.warns(ImplausibleSizeWarning, match=r"'speck'.*too small"):
         load_objects_yaml(path)
 
@@ -363,8 +365,9 @@ def test_user_intrinsics_and_poses_project_a_point_to_the_expected_pixel(tmp_pat
     # (i + 0.5, j + 0.5).
     r = Renderer(320, 240)
     r.set_instances([Instance(r.add_mesh(mesh), np.eye(4), 7)])
-    out = r.render(CameraView(views[0][1].K.pinhole(), X_hand), rgb=False, depth=False,
-                   shadows=False)  # fmt: skip
+    out = r.render(
+        CameraView(views[0][1].K.pinhole(), X_hand), rgb=False, depth=False, shadows=False
+    )
     vs, us = np.nonzero(out.instance_ids == 7)
     assert len(us) > 10
     assert us.mean() + 0.5 == pytest.approx(300.0 * x + 150.5, abs=0.3)
@@ -503,8 +506,9 @@ def test_user_bin_mesh_objects_drop_inside(tmp_path):
     assert cfg.tote.mesh == str(tmp_path / "round_bin.stl")  # resolved against the config
     v, _ = mgn.objects.make_tote(cfg.tote)
     assert np.ptp(v, axis=0) == pytest.approx([0.4, 0.4, 0.17], abs=1e-3)
-    objects = compose_objects(names=["box_tea", "spray_can", "mug", "tennis_ball", "pear",
-                                     "box_tea"])  # fmt: skip
+    objects = compose_objects(
+        names=["box_tea", "spray_can", "mug", "tennis_ball", "pear", "box_tea"]
+    )
     scene = drop_scene(objects, seed=2, tote=cfg.tote, options=cfg.drop)
     assert len(scene) >= 4, scene.removed
     for i, inst in enumerate(scene.instances):
@@ -704,8 +708,9 @@ def test_table_top_without_walls(tmp_path):
     assert {r.reason for r in scene.removed} == {"left_tote"}
     assert scene.stats["max_penetration"] < 1e-3  # overhanging an edge is not a penetration
     for i, inst in enumerate(scene.instances):
-        lowest = (np.asarray(scene.mesh(i).vertices, np.float64) @ inst.X_WO[:3, :3].T
-                  + inst.X_WO[:3, 3])[:, 2].min()  # fmt: skip
+        lowest = (
+            np.asarray(scene.mesh(i).vertices, np.float64) @ inst.X_WO[:3, :3].T + inst.X_WO[:3, 3]
+        )[:, 2].min()
         assert lowest > -0.003, (inst.name, lowest)  # on the board, not below it
         assert inst.bin_relation == "no_rel"
         assert set(inst.contacts) <= {"floor"}

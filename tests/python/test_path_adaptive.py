@@ -105,8 +105,9 @@ def test_adaptive_sampling_keeps_the_analytic_irradiance():
     blocker = make_box([0.1, 0.1, 0.1])
     Xb = np.eye(4)
     Xb[:3, 3] = (0.35, 0.25, 0.05)
-    scene = PathScene([quad(4.0), blocker], np.stack([np.eye(4), Xb]), [1, 2],
-                      [[mat], [mat]], [light], BLACK)  # fmt: skip
+    scene = PathScene(
+        [quad(4.0), blocker], np.stack([np.eye(4), Xb]), [1, 2], [[mat], [mat]], [light], BLACK
+    )
     view = camera((0.0, 0.0, 1.5), (0.0, 0.0, 0.0), 32, 50, up=(0, 1, 0))
     K = view.K
     u, v = np.meshgrid(np.arange(K.width) + 0.5, np.arange(K.height) + 0.5)

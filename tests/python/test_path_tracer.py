@@ -229,8 +229,9 @@ def test_emissive_quad_is_sampled_like_the_area_light_of_its_shape():
     X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down (+z_L = -z_W)
     X_WL[:3, 3] = (0.0, 0.0, height)
     emitter = PbrMaterial(base_color=(0.0,) * 3, ior=1.0, emission=(Le,) * 3)
-    meshed = PathScene([quad(4.0), quad(size)], np.stack([np.eye(4), X_WL]), [1, 2],
-                       [[mat], [emitter]], (), BLACK)  # fmt: skip
+    meshed = PathScene(
+        [quad(4.0), quad(size)], np.stack([np.eye(4), X_WL]), [1, 2], [[mat], [emitter]], (), BLACK
+    )
     light = AreaLight(X_WL, "rect", (size, size), (1.0, 1.0, 1.0), Le)
     analytic = PathScene([quad(4.0)], np.eye(4)[None], [1], [[mat]], [light], BLACK)
     view = camera((0.35, 0.0, 1.5), (0.35, 0.0, 0.0), 32, 60, up=(0, 1, 0))
@@ -528,8 +529,9 @@ def test_roulette_does_not_count_the_vertices_at_smooth_glass():
     grey = PbrMaterial(base_color=(0.5, 0.5, 0.5), ior=1.0, roughness=1.0)
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=1.5)
     floor, pane = quad(6.0, z=-0.5), make_box([3.0, 3.0, 0.02])
-    with_pane = PathScene([pane, floor], np.stack([np.eye(4), np.eye(4)]), [1, 2],
-                          [[glass], [grey]], (), uniform(1.0))  # fmt: skip
+    with_pane = PathScene(
+        [pane, floor], np.stack([np.eye(4), np.eye(4)]), [1, 2], [[glass], [grey]], (), uniform(1.0)
+    )
     bare = PathScene([floor], np.eye(4)[None], [2], [[grey]], (), uniform(1.0))
     view = camera((0, 0, 1.0), (0, 0, 0), 24, 20, up=(0, 1, 0))
 
@@ -589,8 +591,9 @@ def path_scene(items, lights=(), env=None):
     meshes = [m for m, _, _ in items]
     mats = [[PbrMaterial.from_material(x) for x in (m.materials or [None])] if m.materials
             else [PbrMaterial()] for m in meshes]  # fmt: skip
-    return PathScene(meshes, np.stack([X for _, X, _ in items]), [i for _, _, i in items], mats,
-                     lights, env)  # fmt: skip
+    return PathScene(
+        meshes, np.stack([X for _, X, _ in items]), [i for _, _, i in items], mats, lights, env
+    )
 
 
 def test_primary_ids_and_depth_agree_with_raster_renderer():
@@ -1005,8 +1008,9 @@ def test_fresnel_split_min_keeps_the_mean_of_a_pane_stack():
     truth = Le * Ra
     rays = {}
     for split_min in (0.0, 0.1, 1e9):
-        opts = PathTraceOptions(spp=64, max_bounces=40, rr_depth=100, seed=3,
-                                fresnel_split_min=split_min)  # fmt: skip
+        opts = PathTraceOptions(
+            spp=64, max_bounces=40, rr_depth=100, seed=3, fresnel_split_min=split_min
+        )
         out = scene.render(view, opts)
         px = out.radiance[..., 1].ravel()  # per-pixel means of 64 samples
         se = px.std(ddof=1) / math.sqrt(px.size)

@@ -335,8 +335,9 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
 
     items, tote = _small_scene()
     view = _view(96)
-    raster = next(iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=False,
-                                  floor=False)))  # fmt: skip
+    raster = next(
+        iter(iter_views(items, tote, [(0, view)], sensor="ideal", randomize=False, floor=False))
+    )
     s = RenderSettings(engine="path", spp=1, denoise=False, spp_without_denoiser=1)
     pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, randomize=False)
     rgb, out = pr.render(view, 0, labels=True)
@@ -495,8 +496,9 @@ def test_half_resolution_blocks_and_interpolation_are_opencvs() -> None:
 
     img = np.random.default_rng(5).random((24, 18, 3)).astype(np.float32)
     blk = photo._blocks2(img)
-    np.testing.assert_allclose(blk, cv2.resize(img, (9, 12), interpolation=cv2.INTER_AREA),
-                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        blk, cv2.resize(img, (9, 12), interpolation=cv2.INTER_AREA), atol=1e-6
+    )
     np.testing.assert_allclose(
         photo._double(blk, 24, 18),
         cv2.resize(blk, (18, 24), interpolation=cv2.INTER_LINEAR),
@@ -555,8 +557,9 @@ def _restore_by_numpy(
 
     ratio = np.maximum(a, 0.02) / np.maximum(double(ab), 0.02)
     nd = double(nb)
-    cos = (n * nd).sum(-1) / np.maximum(np.linalg.norm(n, axis=-1) * np.linalg.norm(nd, axis=-1),
-                                       1e-12)  # fmt: skip
+    cos = (n * nd).sum(-1) / np.maximum(
+        np.linalg.norm(n, axis=-1) * np.linalg.norm(nd, axis=-1), 1e-12
+    )
     g = np.clip((cos - 0.85) / 0.12, 0.0, 1.0)[..., None]
     return np.maximum(double(den) * (1.0 + g * (ratio - 1.0)), 0.0)
 

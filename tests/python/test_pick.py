@@ -172,16 +172,18 @@ def test_picking_the_lower_box_first_disturbs_the_upper_one_and_not_the_reverse(
     from mgn.eval.pick import run_picking
 
     fall = _height(LOWER)
-    bottom = run_picking(stack, policy=_best_visible_grasp_of(LOWER), config=pick_config,
-                         max_attempts=1)  # fmt: skip
+    bottom = run_picking(
+        stack, policy=_best_visible_grasp_of(LOWER), config=pick_config, max_attempts=1
+    )
     a = bottom.attempts[0]
     assert a.success
     assert a.instance_id == 1
     assert a.disturbance_max_translation > 0.5 * fall  # the tea box fell onto the floor
     assert a.disturbance_max_translation > 0.02
 
-    top = run_picking(stack, policy=_best_visible_grasp_of(UPPER), config=pick_config,
-                      max_attempts=1)  # fmt: skip
+    top = run_picking(
+        stack, policy=_best_visible_grasp_of(UPPER), config=pick_config, max_attempts=1
+    )
     a = top.attempts[0]
     assert a.success
     assert a.instance_id == 2

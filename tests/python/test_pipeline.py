@@ -292,8 +292,9 @@ def test_four_workers_collecting_give_the_same_bytes(
     """Workers that write into folders of their own and send the files back (--collect, for
     cluster workers without a shared disk) give the same dataset, byte for byte."""
     out = tmp_path / "ds"
-    report = generate(out, 2, config=load_config(SMALL), seed=SEED, workers=4, collect=True,
-                      progress=False)  # fmt: skip
+    report = generate(
+        out, 2, config=load_config(SMALL), seed=SEED, workers=4, collect=True, progress=False
+    )
     assert report.complete
     assert all(r.files is None for r in report.results.values())
     assert checksums(out) == reference[1]
@@ -449,10 +450,11 @@ def test_failing_scene_is_reported_and_the_others_finish(tmp_path: Path, env: Pa
     catalogue = [*builtin_objects(), *load_objects_yaml(tmp_path / "objects.yaml")]
     n = 6
     drawn = [
-        compose_objects(**config.objects.compose_kwargs(), seed=scene_seed(SEED, i),
-                        catalogue=catalogue)[0].name
+        compose_objects(
+            **config.objects.compose_kwargs(), seed=scene_seed(SEED, i), catalogue=catalogue
+        )[0].name
         for i in range(n)
-    ]  # fmt: skip
+    ]
     bad = [i for i, name in enumerate(drawn) if name == "huge_cube"]
     assert 0 < len(bad) < n  # the seed draws both kinds of scene
     out = tmp_path / "ds"

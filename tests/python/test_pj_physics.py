@@ -127,10 +127,12 @@ def test_smooth_shake_starts_and_ends_at_rest_with_the_sines_peak_speed_and_angl
     mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.3)
     runs = {}
     for smooth in (False, True):
-        o = ShakeOptions(grid=1, friction_range=(1.5, 1.5), density_range=(1.0, 1.0),
-                         smooth_shake=smooth)  # fmt: skip
-        t = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 1.5, 1.0, options=o,
-                             record_every=1)  # fmt: skip
+        o = ShakeOptions(
+            grid=1, friction_range=(1.5, 1.5), density_range=(1.0, 1.0), smooth_shake=smooth
+        )
+        t = shake_trajectory(
+            mesh, m, com, inertia, centre_grasp(0.04), 1.5, 1.0, options=o, record_every=1
+        )
         phase, X = np.asarray(t.phase), np.asarray(t.X_WH)
         z = X[phase == 1][:, 2, 3]
         z0 = X[phase == 0][-1, 2, 3]
@@ -449,8 +451,9 @@ def test_shake_scorer_scores_every_grasp_unless_capped_and_records_it():
     assert full.metadata["pj_physics_unscored"] == 0
     assert "every grasp" in full.metadata["pj_physics"]
     cap = ShakeScorer(400.0, options=opts, max_grasps=3)
-    capped = label_object(mesh, mass=m, com=com, num_points=10, seed=1, sampler_options=few,
-                          physics=cap)  # fmt: skip
+    capped = label_object(
+        mesh, mass=m, com=com, num_points=10, seed=1, sampler_options=few, physics=cap
+    )
     sim = capped.quality_score_simulation
     assert np.isfinite(sim).sum() == 3
     assert capped.metadata["pj_physics_scored"] == 3
@@ -502,8 +505,9 @@ def test_trajectory_reproduces_the_batch_trial_and_renders():
 def test_write_trial_pictures(tmp_path):
     mesh, m, com, inertia = box_object([0.04, 0.04, 0.04], 0.05)
     full = ShakeOptions(hold_tolerance=0.0)  # the full schedule: frames evenly spaced in time
-    tr = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 1.0, 1.0, options=full,
-                          record_every=60)  # fmt: skip
+    tr = shake_trajectory(
+        mesh, m, com, inertia, centre_grasp(0.04), 1.0, 1.0, options=full, record_every=60
+    )
     gif, png = write_trial_pictures(tr, [mesh], tmp_path / "trial", size=48, strip_frames=4)
     with Image.open(gif) as im:
         assert im.format == "GIF"

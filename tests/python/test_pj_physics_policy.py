@@ -504,13 +504,15 @@ def test_holes_no_search_visits_get_the_full_grid():
 
 
 def test_the_label_metadata_records_the_estimator(monkeypatch):
-    monkeypatch.setattr(physics, "shake_scores", FakePhysics(random_monotone(
-        np.random.default_rng(13), 400)))  # fmt: skip
+    monkeypatch.setattr(
+        physics, "shake_scores", FakePhysics(random_monotone(np.random.default_rng(13), 400))
+    )
     mesh = mgn.make_box([0.03, 0.04, 0.05])
     scorer = ShakeScorer(options=ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS),
                          progress=False, calibration_grasps=4)  # fmt: skip
-    labels = mgn.pj.label_object(mesh, mass=0.1, com=[0, 0, 0], num_points=40, physics=scorer,
-                                 max_grasps=30)  # fmt: skip
+    labels = mgn.pj.label_object(
+        mesh, mass=0.1, com=[0, 0, 0], num_points=40, physics=scorer, max_grasps=30
+    )
     est = labels.metadata["pj_physics_estimator"]
     assert est["search"] == "staircase"
     assert est["calibration_grasps"] == 4

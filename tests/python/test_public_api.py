@@ -36,6 +36,7 @@ def test_import_mgn_does_not_import_the_pipeline() -> None:
         "import sys, mgn; "
         "print(any(m.startswith(('mgn.pipeline', 'mgn.scene.drop')) for m in sys.modules))"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, timeout=120)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
     assert out.stdout.strip() == "False"

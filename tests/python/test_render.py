@@ -134,8 +134,9 @@ def test_transparent_object_invalid_in_structured_light_valid_in_ideal(scene) ->
     glass = out.instance_ids == glass_id
     assert glass.sum() > 200
     flags = r.surface_flags_by_id()
-    sl = apply_depth_sensor(out.depth, out.instance_ids, SMALL, "structured-light",
-                            flags_by_id=flags, seed=3)  # fmt: skip
+    sl = apply_depth_sensor(
+        out.depth, out.instance_ids, SMALL, "structured-light", flags_by_id=flags, seed=3
+    )
     ideal = apply_depth_sensor(out.depth, out.instance_ids, SMALL, "ideal", flags_by_id=flags)
     tof = apply_depth_sensor(out.depth, out.instance_ids, SMALL, "tof", flags_by_id=flags, seed=3)
     assert not sl.valid[glass].any()

@@ -87,8 +87,9 @@ def _record(v: int, shift: int = 0) -> ViewRecord:
         "keypts/byhand/occluded_keypts_relative_to_camera": np.zeros((0, 4)),
         "keypts/byhand/occluded_object_id": np.zeros(0, np.int32),
     }
-    layout = compute_layout(inst, amodal, depth, [11, 12, 13], ["no_rel", "edge", "no_rel"],
-                            occlusion=occ)  # fmt: skip
+    layout = compute_layout(
+        inst, amodal, depth, [11, 12, 13], ["no_rel", "edge", "no_rel"], occlusion=occ
+    )
     rgb = np.zeros((H, W, 3), np.uint8)
     rgb[..., 0] = inst * 100
     return ViewRecord(
@@ -228,8 +229,9 @@ def test_files_are_reproducible(tmp_path):
     t0 = time.thread_time()
     write_view(tmp_path / "timed", _record(0), times=times)
     spent = time.thread_time() - t0
-    assert {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in (tmp_path / "timed").iterdir()} == digests[0]  # fmt: skip
+    assert {
+        p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in (tmp_path / "timed").iterdir()
+    } == digests[0]
     assert set(times) == {"arrays", "rgb.png", "npz", "depth.png", "scene.hdf5", "mgn.hdf5",
                           "json and csv", "files"}  # fmt: skip
     assert all(t >= 0.0 for t in times.values())
@@ -299,9 +301,10 @@ def test_validate_finds_corruption(dataset):
 
 def test_validate_checks_the_manifest(dataset):
     folder = dataset / "scene0"
-    files = {p.name: {"size": p.stat().st_size,
-                      "sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
-             for p in folder.iterdir()}  # fmt: skip
+    files = {
+        p.name: {"size": p.stat().st_size, "sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
+        for p in folder.iterdir()
+    }
     (folder / "manifest.json").write_text(json.dumps({"files": files}))
     assert validate_dataset(dataset) == []
     rgb = folder / "0_rgb.png"
@@ -362,8 +365,9 @@ def test_show_draws_the_view(dataset, tmp_path):
     cols = instance_colors(5)
     assert len({tuple(c) for c in cols[1:]}) == 5
     assert tuple(cols[0]) == (0, 0, 0)
-    uv, front = project([[0.0, 0.0, 1.0], [0.1, 0.0, -1.0]], np.array([[50, 0, 30], [0, 50, 20],
-                                                                       [0, 0, 1.0]]))  # fmt: skip
+    uv, front = project(
+        [[0.0, 0.0, 1.0], [0.1, 0.0, -1.0]], np.array([[50, 0, 30], [0, 50, 20], [0, 0, 1.0]])
+    )
     assert np.allclose(uv[0], [30, 20])
     assert list(front) == [True, False]
     with pytest.raises(ValueError, match="unknown grasp kind 'magnetic'"):

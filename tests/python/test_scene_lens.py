@@ -122,8 +122,9 @@ def test_zero_distortion_is_the_pinhole_byte_for_byte(tmp_path):
         folder = tmp_path / f"d{len(dist)}"
         label_scene(scene, folder, [(v, CameraView(K, poses[v])) for v in (0, 20)],
                     options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
-        digests.append({p.name: hashlib.sha256(p.read_bytes()).hexdigest()
-                        for p in sorted(folder.iterdir())})  # fmt: skip
+        digests.append(
+            {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+        )
     assert len(digests[0]) > 10
     assert digests[0] == digests[1]
 
@@ -224,8 +225,9 @@ def test_undistorting_reproduces_the_pinhole_render():
         objs.append((make_box((s, 0.7 * s, s)), X, i + 1))
     img = _render(objs, view)
     ref = _render(objs, view0)
-    mx, my = cv2.initUndistortRectifyMap(K.K_opencv, np.asarray(dist), None, K0.K_opencv,
-                                         (K.width, K.height), cv2.CV_32FC1)  # fmt: skip
+    mx, my = cv2.initUndistortRectifyMap(
+        K.K_opencv, np.asarray(dist), None, K0.K_opencv, (K.width, K.height), cv2.CV_32FC1
+    )
     inside = (mx >= 0) & (mx <= K.width - 1) & (my >= 0) & (my <= K.height - 1)
     ids = cv2.remap(img.instance_ids.astype(np.float32), mx, my, cv2.INTER_NEAREST)
     agree = (ids.astype(np.int32) == ref.instance_ids)[inside]
@@ -329,16 +331,19 @@ def test_grasps_are_kept_where_the_lens_sees_their_contacts():
         want_pj = np.flatnonzero(seen(top) | seen(top + [0.06, 0.0, 0.0]))
         assert 0 < len(want_su) < n
         assert len(want_pj) > len(want_su)
-        su_idx = np.sort(np.concatenate([got.non_colliding.suctioncup.index,
-                                         got.colliding.suctioncup.index]))  # fmt: skip
-        pj_idx = np.sort(np.concatenate([got.non_colliding.paralleljaw.index,
-                                         got.colliding.paralleljaw.index]))  # fmt: skip
+        su_idx = np.sort(
+            np.concatenate([got.non_colliding.suctioncup.index, got.colliding.suctioncup.index])
+        )
+        pj_idx = np.sort(
+            np.concatenate([got.non_colliding.paralleljaw.index, got.colliding.paralleljaw.index])
+        )
         np.testing.assert_array_equal(su_idx, want_su)
         np.testing.assert_array_equal(pj_idx, want_pj)
         # The pinhole with the same K keeps a different set: the lens matters here.
         pin = sgm.view_grasps(_cam_down(K.pinhole(), 0.45), np.array([True]))
-        pin_su = np.concatenate([pin.non_colliding.suctioncup.index,
-                                 pin.colliding.suctioncup.index])  # fmt: skip
+        pin_su = np.concatenate(
+            [pin.non_colliding.suctioncup.index, pin.colliding.suctioncup.index]
+        )
         assert len(pin_su) != len(want_su)
 
 
@@ -360,10 +365,12 @@ def test_the_path_tracer_goes_through_the_same_lens():
     X = np.eye(4)
     X[:3, 3] = (0.2, -0.14, 0.03)  # near the corner, where the lens moves it most
     objs = [(make_box((0.06, 0.06, 0.06)), X, 1)]
-    settings = RenderSettings(engine="path", spp=4, denoise=False, spp_without_denoiser=4,
-                              max_bounces=1)  # fmt: skip
-    path = next(iter(iter_views(objs, None, [view], sensor="ideal", randomize=False,
-                                render=settings)))  # fmt: skip
+    settings = RenderSettings(
+        engine="path", spp=4, denoise=False, spp_without_denoiser=4, max_bounces=1
+    )
+    path = next(
+        iter(iter_views(objs, None, [view], sensor="ideal", randomize=False, render=settings))
+    )
     raster = _render(objs, view)
     assert path.engine["engine"] == "path"
     assert path.rgb.shape == raster.rgb.shape

@@ -46,8 +46,9 @@ def test_square_prism_and_cube_groups() -> None:
     s = find_symmetries(v, f)
     assert len(s.discrete) == 7  # the dihedral group of the square, less the identity
     assert all(_maps_vertices(T, v, 1e-6) for T in s.discrete)
-    assert any(np.allclose(T[:3, :3], rotation_about([0, 0, 1], np.pi / 2), atol=1e-9)
-               for T in s.discrete)  # fmt: skip
+    assert any(
+        np.allclose(T[:3, :3], rotation_about([0, 0, 1], np.pi / 2), atol=1e-9) for T in s.discrete
+    )
     v, f = _mm(grid_box((0.1, 0.1, 0.1)))
     s = find_symmetries(v, f)
     assert len(s.discrete) == 23  # the rotations of the cube, less the identity

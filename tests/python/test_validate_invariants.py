@@ -208,8 +208,9 @@ def test_unscored_grasps_are_marked_in_the_view_file(ds: Path) -> None:
 def test_a_suction_grasp_without_its_physics_score_is_rejected(ds: Path) -> None:
     # Every suction grasp has a physics score (seal x hold) or, in labels without one, none has.
     with h5py.File(ds / "scene0" / "0_scene.hdf5", "a") as h5:
-        groups = [f"{g}/suctioncup/score_simulation" for g in ("non_colliding_grasps",
-                  "colliding_grasps")]  # fmt: skip
+        groups = [
+            f"{g}/suctioncup/score_simulation" for g in ("non_colliding_grasps", "colliding_grasps")
+        ]
         name = next(n for n in groups if n in h5 and h5[n].shape[0] >= 2)
         sim = np.asarray(h5[name][()])
         assert np.isfinite(sim).all()

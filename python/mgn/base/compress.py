@@ -224,8 +224,9 @@ def _zero_blocks(count: int) -> bytes:
     if tail:
         # 285: 1 bit, literal 0: 2, end of block and the tail's symbols 3-4 bits.
         extra = sorted({256} | {t[0] for t in tail})
-        lit = {0: 2, 285: 1} | (dict.fromkeys(extra, 3) if len(extra) == 2 else
-                                 {extra[0]: 3, extra[1]: 4, extra[2]: 4})  # fmt: skip
+        lit = {0: 2, 285: 1} | (
+            dict.fromkeys(extra, 3) if len(extra) == 2 else {extra[0]: 3, extra[1]: 4, extra[2]: 4}
+        )
     dist_sym = next(i for i in range(29, -1, -1) if _DIST_BASE[i] <= lits)
     dist_extra = (lits - _DIST_BASE[dist_sym], _DIST_EXTRA[dist_sym])
     dist = {dist_sym: 1, (1 if dist_sym == 0 else 0): 1}  # a complete code of two

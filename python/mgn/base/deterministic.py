@@ -191,8 +191,9 @@ def zip_bytes(entries: Sequence[tuple[str, int, Any, Sequence[bytes | memoryview
         out.extend(body)
         offset += len(out[-len(body) - 1]) + packed
     directory = b"".join(central)
-    end = _END_RECORD.pack(b"PK\x05\x06", 0, 0, len(entries), len(entries), len(directory),
-                           offset, 0)  # fmt: skip
+    end = _END_RECORD.pack(
+        b"PK\x05\x06", 0, 0, len(entries), len(entries), len(directory), offset, 0
+    )
     return b"".join([*out, directory, end])
 
 

@@ -98,8 +98,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("dir", help="mgn dataset folder")
     p.add_argument("out", help="output folder (created)")
     p.add_argument("--scenes", help="comma-separated scene ids (default: all)")
-    p.add_argument("--camera", default=DEFAULT_CAMERA,
-                   help=f"camera folder name (default {DEFAULT_CAMERA})")  # fmt: skip
+    p.add_argument(
+        "--camera", default=DEFAULT_CAMERA, help=f"camera folder name (default {DEFAULT_CAMERA})"
+    )
     p.add_argument("--pj-score", choices=PJ_SCORES, default=DEFAULT_PJ_SCORE,
                    help="parallel-jaw score written (default %(default)s)")  # fmt: skip
     p.add_argument("--suction-score", choices=SUCTION_SCORES, default=DEFAULT_SUCTION_SCORE,

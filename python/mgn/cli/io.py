@@ -48,8 +48,9 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    path = write_report(args.dir, args.out, samples=args.samples, max_views=args.max_views,
-                        progress=not args.quiet)  # fmt: skip
+    path = write_report(
+        args.dir, args.out, samples=args.samples, max_views=args.max_views, progress=not args.quiet
+    )
     print(f"wrote {path}")
     return 0
 
@@ -101,7 +102,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("dir", help="dataset folder")
     p.add_argument("-o", "--out", required=True, help="output HTML file")
     p.add_argument("--samples", type=int, default=6, help="sample views shown (default 6)")
-    p.add_argument("--max-views", type=int, default=400,
-                   help="views used for the statistics (default 400)")  # fmt: skip
+    p.add_argument(
+        "--max-views", type=int, default=400, help="views used for the statistics (default 400)"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     p.set_defaults(func=_cmd_report)

@@ -196,8 +196,9 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
     if data is None:
         data = {"objects": []}
     if not isinstance(data, dict) or not isinstance(data.get("objects"), list):
-        raise InvalidArgumentError(f"user-object YAML '{target}': expected a top-level "
-                                   "'objects:' list")  # fmt: skip
+        raise InvalidArgumentError(
+            f"user-object YAML '{target}': expected a top-level 'objects:' list"
+        )
     if args.name and len(args.name) != len(args.meshes):
         raise InvalidArgumentError(
             f"mgn objects add: --name gives {len(args.name)} name(s) for {len(args.meshes)} "
@@ -224,8 +225,9 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
         taken.add(name)
         entry: dict[str, Any] = {"name": name}
         full = path.resolve()  # relative to the YAML file when below it, else absolute
-        entry["mesh"] = full.relative_to(base).as_posix() if full.is_relative_to(base) else (
-            os.fspath(full))  # fmt: skip
+        entry["mesh"] = (
+            full.relative_to(base).as_posix() if full.is_relative_to(base) else os.fspath(full)
+        )
         entry.update(scale=args.scale, density=args.density, friction=args.friction)
         note, open_note, mesh = _closed_entry(mesh, report, entry, args.density)
         if open_note:
@@ -251,8 +253,9 @@ def _cmd_objects_add(args: argparse.Namespace) -> int:
     for w in caught:  # about the objects added now (the others were said when they were)
         if isinstance(w.message, UserObjectWarning) and w.message.object_name not in new_names:
             continue
-        print(f"mgn: warning: {w.message}".replace(os.fspath(tmp), os.fspath(target)),
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"mgn: warning: {w.message}".replace(os.fspath(tmp), os.fspath(target)), file=sys.stderr
+        )
     for note in open_notes:
         print(f"mgn: warning: {note}", file=sys.stderr)
     atomic_write_text(target, text)
@@ -527,8 +530,9 @@ def build_parser() -> argparse.ArgumentParser:
         "compare", help="score the same points with the three seal models; table and picture"
     )
     p.add_argument("mesh", help="mesh file, or the name/id of a built-in object")
-    p.add_argument("--scale", type=_uniform_scale, default=1.0,
-                   help="uniform coordinate scale (0.001 for mm)")  # fmt: skip
+    p.add_argument(
+        "--scale", type=_uniform_scale, default=1.0, help="uniform coordinate scale (0.001 for mm)"
+    )
     p.add_argument("--cup", metavar="YAML", help="suction cup YAML (default: MetaGraspNet cup)")
     p.add_argument("--num-points", type=int, default=1000, help="candidates (default 1000)")
     p.add_argument("--seed", type=int, default=0)

@@ -169,8 +169,9 @@ def _cache_entries() -> dict[str, list[Path]]:
 def _cmd_cache_list(args: argparse.Namespace) -> int:
 
     files = _cache_entries()
-    rows = {k: {"entries": len(v), "bytes": sum(p.stat().st_size for p in v)}
-            for k, v in files.items()}  # fmt: skip
+    rows = {
+        k: {"entries": len(v), "bytes": sum(p.stat().st_size for p in v)} for k, v in files.items()
+    }
     if args.json:
         doc = {"label_dir": str(label_cache_dir()), "convex_dir": str(cache_dir()), **rows}
         print(json.dumps(doc, indent=2))

@@ -199,8 +199,9 @@ def _cmd_label(args: argparse.Namespace) -> int:
         for name, source in tqdm(names, desc="object labels", unit="object", disable=None):
             idx = next(i for i, inst in enumerate(scene.instances)
                        if (inst.name, inst.source) == (name, source))  # fmt: skip
-            by_name[name] = object_labels(scene.object_spec(idx), config,
-                                          num_threads=args.num_threads)  # fmt: skip
+            by_name[name] = object_labels(
+                scene.object_spec(idx), config, num_threads=args.num_threads
+            )
         got = [by_name[inst.name] for inst in scene.instances]
         pj = [g.paralleljaw for g in got] if config.labels.paralleljaw else None
         su = [g.suction for g in got] if config.labels.suction else None
@@ -297,8 +298,9 @@ def _register_export(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) 
     p.add_argument("out", help="output .glb file")
     p.add_argument("--config", help="config YAML: cameras, gripper, cup (default: the dataset.json "
                    "config of the scene's dataset, else the MGN defaults)")  # fmt: skip
-    p.add_argument("--grasps", metavar="KIND",
-                   help="also draw grasps: suction or paralleljaw (default: none)")  # fmt: skip
+    p.add_argument(
+        "--grasps", metavar="KIND", help="also draw grasps: suction or paralleljaw (default: none)"
+    )
     p.add_argument("--top-k", type=int, default=5, help="grasps per object (default 5)")
     p.add_argument("--no-cameras", action="store_true", help="leave the camera frustums out")
     p.add_argument("--num-threads", type=int, default=0, help="0 = all cores (default)")

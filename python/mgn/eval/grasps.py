@@ -677,12 +677,14 @@ def evaluate_grasps(
     kind = _check_kind(kind, "evaluate_grasps")
     score_name = _default_label_score(kind, label_score)
     ks_in, th_in = list(ks), list(thresholds)
-    if not ks_in or any(isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1
-                        for k in ks_in):  # fmt: skip
+    if not ks_in or any(
+        isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1 for k in ks_in
+    ):
         raise InvalidArgumentError(f"evaluate_grasps: ks must be integers >= 1, got {ks_in}")
     ks_t = tuple(int(k) for k in ks_in)
-    if not th_in or any(not isinstance(t, (int, float, np.number)) or not (0.0 <= t <= 1.0)
-                        for t in th_in):  # fmt: skip
+    if not th_in or any(
+        not isinstance(t, (int, float, np.number)) or not (0.0 <= t <= 1.0) for t in th_in
+    ):
         raise InvalidArgumentError(
             f"evaluate_grasps: thresholds must be numbers in [0, 1], got {th_in}"
         )
@@ -737,8 +739,9 @@ def evaluate_grasps(
         if ok.any():
             model = ctx.model(data.scene_id)
             X_W = data.X_WC[None] @ X[ok]
-            c = model.collides(core_kind, X_W, width[ok], data.object_id[match[ok]],
-                               check_target_at_grasp=True)  # fmt: skip
+            c = model.collides(
+                core_kind, X_W, width[ok], data.object_id[match[ok]], check_target_at_grasp=True
+            )
             free[ok] = ~c.colliding
         lab = np.where(ok, data.score[np.maximum(match, 0)] if len(data.score) else 0.0, np.nan)
         order = np.argsort(-score, kind="stable")
@@ -797,8 +800,9 @@ def ground_truth_grasps(
         for view in scene.views():
             g = view.grasps(_GROUP[kind])
             n = len(g.get("object_id", ()))
-            poses = np.asarray(g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4))),
-                               np.float64).reshape(n, 4, 4)  # fmt: skip
+            poses = np.asarray(
+                g.get("contact_poses_relative_to_camera", np.zeros((0, 4, 4))), np.float64
+            ).reshape(n, 4, 4)
             s = np.asarray(g.get(f"score_{score_name}", np.full(n, np.nan)), np.float64)
             s = np.where(np.isfinite(s), s, 0.0)
             keep = np.ones(n, bool) if min_score is None else s >= min_score

@@ -796,6 +796,7 @@ def _write_outputs(
     img = _draw(final.rgb, view, None, None)
     img.save(folder / "final.png")
     frames = [*frames, img]
-    frames[0].save(folder / "picking.gif", save_all=True, append_images=frames[1:], duration=600,
-                   loop=0)  # fmt: skip
+    frames[0].save(
+        folder / "picking.gif", save_all=True, append_images=frames[1:], duration=600, loop=0
+    )
     write_results_json(folder / "results.json", results)

@@ -265,12 +265,14 @@ def repair_mesh(mesh: Mesh, *, max_hole_area: float = MAX_HOLE_AREA) -> RepairRe
     if dup:
         changes.append(f"removed {dup} duplicate face(s)")
     if opposite:
-        changes.append(f"removed {opposite} face(s) of double-sided sheets (a face and its "
-                       "reverse)")  # fmt: skip
+        changes.append(
+            f"removed {opposite} face(s) of double-sided sheets (a face and its reverse)"
+        )
     fins = _remove_fins(wf, keep)
     if fins:
-        changes.append(f"removed {fins} stray face(s) hanging off edges shared by more than two "
-                       "faces")  # fmt: skip
+        changes.append(
+            f"removed {fins} stray face(s) hanging off edges shared by more than two faces"
+        )
     idx = np.flatnonzero(keep)
     faces, wf = faces[idx], wf[idx]
     face_mats = np.asarray(mesh.face_materials, np.int64)

@@ -67,8 +67,9 @@ class ToteSpec:
     walls: bool = True
 
     def __post_init__(self) -> None:
-        if self.mesh is not None and (not isinstance(self.mesh, (str, os.PathLike)) or not
-                                      os.fspath(self.mesh)):  # fmt: skip
+        if self.mesh is not None and (
+            not isinstance(self.mesh, (str, os.PathLike)) or not os.fspath(self.mesh)
+        ):
             raise InvalidArgumentError(
                 f"ToteSpec.mesh must be a mesh file path or None, got {self.mesh!r}"
             )

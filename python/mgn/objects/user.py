@@ -253,8 +253,9 @@ def _base_color_texture(
     unreadable = []
     texture = _texture(mat.texture_path)
     if texture is None and mat.texture_path and Path(mat.texture_path).is_file():
-        unreadable.append((f"texture of material '{mat.name}' (not a readable image)",
-                           str(mat.texture_path)))  # fmt: skip
+        unreadable.append(
+            (f"texture of material '{mat.name}' (not a readable image)", str(mat.texture_path))
+        )
     if texture is None:
         texture = _embedded_texture(bytes(mat.texture_data))
         if texture is None and len(mat.texture_data):
@@ -467,8 +468,9 @@ def _object_from_entry(
     density = _number(entry, "density", where)
     friction = _number(entry, "friction", where)
     if not isinstance(entry["mesh"], str) or not entry["mesh"]:
-        raise InvalidArgumentError(f"{where}: key 'mesh': expected a file path, got "
-                                   f"{entry['mesh']!r}")  # fmt: skip
+        raise InvalidArgumentError(
+            f"{where}: key 'mesh': expected a file path, got {entry['mesh']!r}"
+        )
     mesh_path = base / entry["mesh"]
     try:
         mesh = load_mesh(mesh_path, scale=scale)

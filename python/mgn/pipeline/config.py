@@ -850,8 +850,9 @@ class Config(_Section):
             )
         if base_dir is not None:
             config = config.resolved(base_dir)
-        if config.tote.mesh is not None and (base_dir is not None or Path(
-                config.tote.mesh).is_absolute()):  # fmt: skip
+        if config.tote.mesh is not None and (
+            base_dir is not None or Path(config.tote.mesh).is_absolute()
+        ):
             try:
                 make_tote(config.tote)  # the file reads and fits the inner box
             except MgnError as e:

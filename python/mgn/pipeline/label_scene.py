@@ -244,8 +244,9 @@ class _RenderAhead:
         self.busy = 0.0
         self._queue: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=depth)
         self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, args=(make,), name="mgn-render",
-                                        daemon=True)  # fmt: skip
+        self._thread = threading.Thread(
+            target=self._run, args=(make,), name="mgn-render", daemon=True
+        )
         self._thread.start()
 
     def _put(self, message: tuple[str, Any]) -> bool:
@@ -428,8 +429,9 @@ def label_scene(
                 t4 = time.perf_counter()
                 timings.add("scene grasps", t4 - t3)
                 com = rays.com_parameters()[index] if images.lens is None else None
-                record = view_record(v, view, images, labels, layout, grasps, com,
-                                     instance_ids=scene_ids[index])  # fmt: skip
+                record = view_record(
+                    v, view, images, labels, layout, grasps, com, instance_ids=scene_ids[index]
+                )
                 del images, labels, layout, grasps
                 pending.append(pool.submit(write_view, out, record, archival=opt.archival))
                 del record

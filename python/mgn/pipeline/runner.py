@@ -293,8 +293,9 @@ def store_collected(out: Path, result: SceneResult) -> SceneResult:
         full = _disk_full(e)
         msg = (f"disk full while writing scene{result.index}" if full is not None
                else f"cannot write scene{result.index}: {e}")  # fmt: skip
-        return dataclasses.replace(result, ok=False, error=msg, disk_full=full is not None,
-                                   files=None)  # fmt: skip
+        return dataclasses.replace(
+            result, ok=False, error=msg, disk_full=full is not None, files=None
+        )
     return dataclasses.replace(result, files=None)
 
 
@@ -858,8 +859,9 @@ class _Run:
                     "then cached)",
                     file=sys.stderr,
                 )
-            bar = tqdm(total=len(missing), desc="object labels", unit="obj",
-                       disable=not self.progress)  # fmt: skip
+            bar = tqdm(
+                total=len(missing), desc="object labels", unit="obj", disable=not self.progress
+            )
             # Per-grasp bars (physics, with an estimate) when progress is shown (None: if stderr
             # is a terminal).
             shown = None if self.progress else False
@@ -972,8 +974,9 @@ def _record_stop(run: _Run, status: str, error: str) -> None:
     ``interrupted`` or ``failed``, with the ``error``), so that it no longer says ``running``.
     Written after the temporary folders are gone, which frees the space a full disk needs."""
     with contextlib.suppress(OSError):
-        run.write_doc(run.report.num_scenes, status, error=error,
-                      removed_objects=removed_objects(run.out))  # fmt: skip
+        run.write_doc(
+            run.report.num_scenes, status, error=error, removed_objects=removed_objects(run.out)
+        )
 
 
 def _check_generate_args(cfg: Config, num_scenes: int | None, workers: int, seed: int) -> None:
@@ -1082,8 +1085,9 @@ def generate(
     per_scene: list[list[ObjectSpec]] = []
     if quota is None:
         assert num_scenes is not None
-        per_scene = [compose_scene(cfg, catalogue, scene_seed(seed, i), split)
-                     for i in range(num_scenes)]  # fmt: skip
+        per_scene = [
+            compose_scene(cfg, catalogue, scene_seed(seed, i), split) for i in range(num_scenes)
+        ]
         cat.warn({s.name for specs in per_scene for s in specs})  # the objects of this run only
     else:
         cat.warn(cat.used_names(cfg))

@@ -314,8 +314,9 @@ def _camera_problems(config: Config) -> tuple[list[str], list[str]]:
     K = scene_intrinsics(cam)
     hx, hy, h = 0.5 * t.inner_length, 0.5 * t.inner_width, t.inner_height
     ox, oy = t.outer_size[0] / 2, t.outer_size[1] / 2
-    outer = np.array([[x, y, z] for x in (-ox, ox) for y in (-oy, oy)
-                      for z in (-t.floor_thickness, h)])  # fmt: skip
+    outer = np.array(
+        [[x, y, z] for x in (-ox, ox) for y in (-oy, oy) for z in (-t.floor_thickness, h)]
+    )
     g = np.linspace(-1.0, 1.0, 9)
     cavity = np.array([[a * hx, b * hy, z] for a in g for b in g for z in (0.0, 0.5 * h)])
     errors, warns, blind = [], [], 0
@@ -345,8 +346,9 @@ def _camera_problems(config: Config) -> tuple[list[str], list[str]]:
             )
         elif not sees:
             blind += 1
-            warns.append(f"{where}: no part of the tote's cavity is in its image; its views "
-                         "show no object")  # fmt: skip
+            warns.append(
+                f"{where}: no part of the tote's cavity is in its image; its views show no object"
+            )
     if blind and blind == len(cam.view_indices) and not errors:
         errors.append(
             "camera.poses: no camera sees into the tote (every view would show no object): "

@@ -591,11 +591,13 @@ def search_of(calibration: StaircaseCalibration, options: ShakeOptions) -> Shake
     if calibration.search == "full grid":
         return replace(options, staircase=False)
     if calibration.search == "checked staircase":
-        return replace(options, staircase_checks=CHECKED_STAIRCASE_CHECKS,
-                       staircase_verify_share=1.0)  # fmt: skip
+        return replace(
+            options, staircase_checks=CHECKED_STAIRCASE_CHECKS, staircase_verify_share=1.0
+        )
     if calibration.search == "thorough staircase":
-        return replace(options, staircase_checks=THOROUGH_STAIRCASE_CHECKS,
-                       staircase_verify_share=1.0)  # fmt: skip
+        return replace(
+            options, staircase_checks=THOROUGH_STAIRCASE_CHECKS, staircase_verify_share=1.0
+        )
     return options
 
 

@@ -721,8 +721,9 @@ class ViewLighting:
     summary: dict[str, Any] = field(default_factory=dict, compare=False)
 
 
-def _look_down_pose(position: npt.NDArray[np.float64], target: npt.NDArray[np.float64],
-                    yaw: float) -> npt.NDArray[np.float64]:  # fmt: skip
+def _look_down_pose(
+    position: npt.NDArray[np.float64], target: npt.NDArray[np.float64], yaw: float
+) -> npt.NDArray[np.float64]:
     """X_WL of a light at ``position`` whose +z axis points at ``target``."""
     z = target - position
     z /= np.linalg.norm(z)
@@ -815,16 +816,19 @@ def draw_lighting(
         val = g_mat.uniform(0.15, 0.75)
         tote_rgb = _srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
         tote = PbrMaterial(
-            base_color=tuple(tote_rgb), roughness=float(g_mat.uniform(0.35, 0.75)),
+            base_color=tuple(tote_rgb),
+            roughness=float(g_mat.uniform(0.35, 0.75)),
             base_color_texture=procedural_texture("noise", g_mat, contrast=0.15),
-        )  # fmt: skip
+        )
         kind = TEXTURES[int(g_mat.integers(len(TEXTURES)))]
-        floor_rgb = _srgb_to_linear(np.array(_hsv_to_rgb(g_mat.random(), g_mat.uniform(0, 0.4),
-                                                        g_mat.uniform(0.25, 0.8))))  # fmt: skip
+        floor_rgb = _srgb_to_linear(
+            np.array(_hsv_to_rgb(g_mat.random(), g_mat.uniform(0, 0.4), g_mat.uniform(0.25, 0.8)))
+        )
         floor = PbrMaterial(
-            base_color=tuple(floor_rgb), roughness=float(g_mat.uniform(0.3, 0.95)),
+            base_color=tuple(floor_rgb),
+            roughness=float(g_mat.uniform(0.3, 0.95)),
             base_color_texture=procedural_texture(kind, g_mat, contrast=0.35),
-        )  # fmt: skip
+        )
         summary["floor_texture"] = kind
     else:
         rgb = (float(tote_color[0]), float(tote_color[1]), float(tote_color[2]))
@@ -1020,6 +1024,7 @@ def with_engine(
         if spp < 1:
             raise InvalidArgumentError(f"--spp must be >= 1, got {spp}")
         changes["spp"] = spp
-        changes["spp_without_denoiser"] = max(spp, settings.spp_without_denoiser * spp
-                                              // max(settings.spp, 1))  # fmt: skip
+        changes["spp_without_denoiser"] = max(
+            spp, settings.spp_without_denoiser * spp // max(settings.spp, 1)
+        )
     return dataclasses.replace(settings, **changes) if changes else settings

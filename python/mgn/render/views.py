@@ -294,8 +294,9 @@ def iter_views(
 
     for (v, view), lens, cam in zip(cams, lenses, shot, strict=True):
         t0 = time.perf_counter()
-        img = r.render(cam, rgb=photo is None, randomize=randomize, seed=seed, view_index=v,
-                       shadows=shadows)  # fmt: skip
+        img = r.render(
+            cam, rgb=photo is None, randomize=randomize, seed=seed, view_index=v, shadows=shadows
+        )
         assert img.depth is not None
         assert img.instance_ids is not None
         seconds = {"raster": time.perf_counter() - t0}

@@ -361,8 +361,9 @@ def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec) -> None:
             float((np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3])[:, 2].min())
             for m, X in zip(meshes, poses, strict=True)
         ]
-        todo = sorted((k for k in range(len(meshes)) if gaps[k] > _LOWER_ABOVE),
-                      key=lambda k: (low[k], k))  # fmt: skip
+        todo = sorted(
+            (k for k in range(len(meshes)) if gaps[k] > _LOWER_ABOVE), key=lambda k: (low[k], k)
+        )
         if not todo:
             return
         for k in todo:

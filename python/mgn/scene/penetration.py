@@ -298,8 +298,9 @@ def meshes_overlap(
         points, parts, lo, hi = cache[id(m)][0], cache[id(n)][1], cache[id(n)][2], cache[id(n)][3]
         # First the points inside the box around n's bounding box in m's own frame (no
         # transform of every point), then in n's frame.
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])  # fmt: skip
+        corners = np.array(
+            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        )
         in_m = (corners - t) @ R  # n's box corners in m's frame
         near = np.all((points >= in_m.min(axis=0)) & (points <= in_m.max(axis=0)), axis=1)
         p = points[near] @ R.T + t
@@ -363,8 +364,9 @@ def clearance(
         for m in (meshes[a], meshes[b]):
             if id(m) not in models:
                 models[id(m)] = CollisionModel(m)
-        d = distance(models[id(meshes[a])], poses[a], models[id(meshes[b])], poses[b],
-                     num_threads=1)  # fmt: skip
+        d = distance(
+            models[id(meshes[a])], poses[a], models[id(meshes[b])], poses[b], num_threads=1
+        )
         gap = min(gap, float(d.distance[0]))
     return max(gap, 0.0)
 

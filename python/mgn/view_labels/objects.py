@@ -369,8 +369,9 @@ def _move_outside(
     other: npt.NDArray[np.float64],
     other_obj: npt.NDArray[np.int32],
     inside: npt.NDArray[np.bool_],
-) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int32], npt.NDArray[np.float64],
-           npt.NDArray[np.int32]]:  # fmt: skip
+) -> tuple[
+    npt.NDArray[np.float64], npt.NDArray[np.int32], npt.NDArray[np.float64], npt.NDArray[np.int32]
+]:
     """Moves the rows of ``kept`` not ``inside`` to ``other`` (object by object, stable)."""
     rows = np.concatenate([other.reshape(-1, 4), kept[~inside].reshape(-1, 4)])
     objs = np.concatenate([other_obj, kept_obj[~inside]]).astype(np.int32)

@@ -215,8 +215,9 @@ def _draw_object_labels(
             text += f" {100 * float(entry['occlusion']):.0f}%"
         if layout and "layer" in entry:
             text += f" L{entry['layer']}"
-        draw.text((x - 8, y - 6), text, fill="black", stroke_width=2, stroke_fill="white",
-                  font=font)  # fmt: skip
+        draw.text(
+            (x - 8, y - 6), text, fill="black", stroke_width=2, stroke_fill="white", font=font
+        )
 
 
 def _summary(view: View, num_visible: int, notes: list[str]) -> str:
@@ -283,8 +284,9 @@ def render_overlay(
     draw = ImageDraw.Draw(canvas)
     if panels:
         for k, title in ((1, "amodal masks (whole objects)"), (2, "depth (near = bright)")):
-            draw.text((k * w + 6, 4), title, fill="white", font=font, stroke_width=2,
-                      stroke_fill="black")  # fmt: skip
+            draw.text(
+                (k * w + 6, 4), title, fill="white", font=font, stroke_width=2, stroke_fill="black"
+            )
     K = view.intrinsics
     order = view.order if view.path("_order.json").exists() else {}
 

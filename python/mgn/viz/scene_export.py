@@ -70,8 +70,9 @@ def _tm(vertices: npt.ArrayLike, faces: npt.ArrayLike, rgba: Sequence[float]) ->
     color = np.asarray(rgba)
     if color.dtype != np.uint8:
         color = np.round(np.clip(color.astype(np.float64), 0, 1) * 255).astype(np.uint8)
-    t = trimesh.Trimesh(np.asarray(vertices, np.float64), np.asarray(faces, np.int64),
-                        process=False)  # fmt: skip
+    t = trimesh.Trimesh(
+        np.asarray(vertices, np.float64), np.asarray(faces, np.int64), process=False
+    )
     t.visual = trimesh_colors(t, color)
     return t
 
@@ -166,8 +167,9 @@ def export_scene_glb(
     }
 
 
-def _add_grasps(tm_scene: Any, scene: Any, kind: str, top_k: int, config: Any,
-                num_threads: int) -> int:  # fmt: skip
+def _add_grasps(
+    tm_scene: Any, scene: Any, kind: str, top_k: int, config: Any, num_threads: int
+) -> int:
 
     cfg = config if config is not None else Config()
     labels_cfg = dataclasses.replace(
@@ -199,8 +201,9 @@ def _add_grasps(tm_scene: Any, scene: Any, kind: str, top_k: int, config: Any,
                 g.visual = trimesh_colors(g, color)
                 X = placed.contact_poses[k]  # z into the surface; the body lies along -z
             else:
-                opening = min(float(placed.width[k]) + cfg.gripper.collision_margin,
-                              cfg.gripper.max_opening)  # fmt: skip
+                opening = min(
+                    float(placed.width[k]) + cfg.gripper.collision_margin, cfg.gripper.max_opening
+                )
                 parts = gripper_meshes(cfg.gripper, opening)
                 v = np.concatenate([_arrays(p)[0] for p in parts])
                 offs = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
@@ -209,8 +212,9 @@ def _add_grasps(tm_scene: Any, scene: Any, kind: str, top_k: int, config: Any,
                 )
                 g = _tm(v, f, color)
                 X = placed.tool_poses[k]  # the hand (flange) pose X_WH
-            tm_scene.add_geometry(g, node_name=name, transform=np.asarray(X),
-                                  parent_node_name="tote_frame")  # fmt: skip
+            tm_scene.add_geometry(
+                g, node_name=name, transform=np.asarray(X), parent_node_name="tote_frame"
+            )
             count += 1
     return count
 
