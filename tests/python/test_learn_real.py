@@ -172,6 +172,34 @@ def test_read_mgn_real(tmp_path: Path):
     assert detect_real_format(root) == detect_real_format(root / "scene46") == "metagraspnet"
 
 
+def test_read_mgn_real_as_published_without_view_npz(tmp_path: Path):
+    """The sample scenes in MetaGraspNet's repository have no ``{v}.npz``: per view
+    ``{v}_rgb.png``, ``{v}_depth.png`` (and hdf5/json files), the annotated view also
+    ``{v}_amodal.npz`` and ``{v}_grasps.npz``. They read with their masks and suction bitmap and
+    without depth."""
+    vis, hid = _boxes()
+    scene = tmp_path / "dataset_real" / "scene46"
+    scene.mkdir(parents=True)
+    for v in (3, 28):
+        Image.fromarray(_rgb(v)).save(scene / f"{v}_rgb.png")
+        Image.fromarray(np.full((H, W), 800, np.uint16)).save(scene / f"{v}_depth.png")
+        (scene / f"{v}_scene.hdf5").write_bytes(b"")
+    (scene / "scene_gt.json").write_text("{}")
+    np.savez_compressed(
+        scene / "3_amodal.npz",
+        amodal_bitmaps_full_size_instances=np.stack([vis, hid], axis=1).astype(np.uint8),
+    )
+    bitmap = np.zeros((H, W), np.uint8)
+    bitmap[12:18, 10:16] = 1
+    np.savez_compressed(scene / "3_grasps.npz", suction_bitmap=bitmap)
+    (img,) = read_real_set(tmp_path / "dataset_real")
+    assert img.name == "scene46/3" and img.depth is None and img.crowd is None
+    np.testing.assert_array_equal(img.masks, vis)
+    assert img.amodal is not None
+    np.testing.assert_array_equal(img.amodal, vis | hid)
+    assert img.suction_bitmap is not None and int(img.suction_bitmap.sum()) == 36
+
+
 def test_read_coco_folder(tmp_path: Path):
     folder = write_coco_folder(tmp_path / "photos")
     vis, _ = _boxes()
