@@ -336,7 +336,7 @@ void bind_render(py::module_& m) {
         }
         return image_array(std::move(out));
       },
-      py::arg("image"), py::arg("num_threads") = 0,
+      py::arg("image"), py::arg("num_threads") = ParallelOptions{}.num_threads,
       "Means of the 2 x 2 pixel blocks of an (H, W, C) float32 image (an odd last row or column "
       "repeated): (ceil(H/2), ceil(W/2), C).");
   m.def(
@@ -352,7 +352,8 @@ void bind_render(py::module_& m) {
         }
         return image_array(std::move(out));
       },
-      py::arg("blocks"), py::arg("height"), py::arg("width"), py::arg("num_threads") = 0,
+      py::arg("blocks"), py::arg("height"), py::arg("width"),
+      py::arg("num_threads") = ParallelOptions{}.num_threads,
       "Bilinear doubling of a 2 x 2 block image to (height, width), block centres at the centres "
       "of their pixels, border blocks repeated.");
   m.def(
@@ -368,7 +369,8 @@ void bind_render(py::module_& m) {
         }
         return image_array(std::move(out));
       },
-      py::arg("image"), py::arg("sigma") = 0.5, py::arg("num_threads") = 0,
+      py::arg("image"), py::arg("sigma") = 0.5,
+      py::arg("num_threads") = ParallelOptions{}.num_threads,
       "Separable 3 x 3 Gaussian (sigma in pixels) of an (H, W, C) float32 image, border pixels "
       "repeated.");
   m.def(
@@ -401,7 +403,8 @@ void bind_render(py::module_& m) {
       py::arg("normal_blocks") = py::none(),
       py::arg("albedo_floor") = HalfRestoreOptions{}.albedo_floor,
       py::arg("edge_cos_lo") = HalfRestoreOptions{}.edge_cos_lo,
-      py::arg("edge_cos_hi") = HalfRestoreOptions{}.edge_cos_hi, py::arg("num_threads") = 0,
+      py::arg("edge_cos_hi") = HalfRestoreOptions{}.edge_cos_hi,
+      py::arg("num_threads") = HalfRestoreOptions{}.num_threads,
       "Full-size image of a half-resolution denoise: the denoised blocks doubled, times the "
       "albedo ratio max(a, floor) / max(double(albedo_blocks), floor) faded to 1 where the "
       "normal turns away from double(normal_blocks) (cosine edge_cos_lo..edge_cos_hi); clamped "

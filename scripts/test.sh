@@ -7,6 +7,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-system-deps.sh
+# The wheel (pip, build/<wheel tag>) and the C++ tests (build/cpp) compile the same core sources:
+# ccache lets the second build reuse the first one's objects (third_party_notes/ccache.md).
+if command -v ccache >/dev/null; then
+  export CMAKE_CXX_COMPILER_LAUNCHER=ccache CXX=g++ CCACHE_BASEDIR="$PWD"
+fi
 bash scripts/setup-python.sh
 . .venv/bin/activate
 # Static checks. Tools: the dev extra (pinned ruff, mypy; scripts/setup-python.sh) and Debian's

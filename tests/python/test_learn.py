@@ -200,6 +200,23 @@ def test_instances_from_maps_by_hand():
     np.testing.assert_array_equal(am[1], masks[1])
     empty = instances_from_maps(np.zeros((5, 5)), np.zeros((5, 5)))
     assert empty.num_instances == 0 and empty.labels.max() == 0
+    # A foreground part the core map missed (no seed; rows 0..3, columns 18..19: 8 px >=
+    # min_area, apart from B by the empty column 17) is one instance of its own, numbered after
+    # the seeded ones; with no core anywhere every part of min_area px or more is one.
+    lone_fg = fg.copy()
+    lone_fg[0:4, 18:20] = 0.6
+    lone = instances_from_maps(lone_fg, core, min_area=4)
+    assert lone.num_instances == 3
+    expected = np.zeros((12, 20), bool)
+    expected[0:4, 18:20] = True
+    np.testing.assert_array_equal(lone.masks()[2], expected)
+    np.testing.assert_array_equal(lone.masks()[0], masks[0])
+    np.testing.assert_array_equal(lone.masks()[1], masks[1])
+    assert lone.scores[2] == pytest.approx(0.6)
+    no_core = instances_from_maps(lone_fg, np.zeros_like(fg), min_area=4)
+    assert no_core.num_instances == 2  # A and B touch: one part; the lone part: another
+    np.testing.assert_array_equal(no_core.labels > 0, lone_fg > 0.5)
+    assert instances_from_maps(lone_fg, np.zeros_like(fg), min_area=9).num_instances == 1
 
 
 def test_suction_peaks_by_hand():

@@ -23,7 +23,7 @@ from mgn.learn import ModelConfig, Predictor, TrainConfig, train
 from mgn.learn.instances import InstanceMaps
 from mgn.learn.metrics import foreground_iou, mask_ap, suction_precision
 from mgn.learn.predict import Prediction
-from mgn.learn.real_eval import evaluate_real
+from mgn.learn.real_eval import brightness_foreground, evaluate_real
 
 H, W = 40, 50
 
@@ -172,6 +172,34 @@ def test_read_mgn_real(tmp_path: Path):
     assert detect_real_format(root) == detect_real_format(root / "scene46") == "metagraspnet"
 
 
+def test_read_mgn_real_as_published_without_view_npz(tmp_path: Path):
+    """The sample scenes in MetaGraspNet's repository have no ``{v}.npz``: per view
+    ``{v}_rgb.png``, ``{v}_depth.png`` (and hdf5/json files), the annotated view also
+    ``{v}_amodal.npz`` and ``{v}_grasps.npz``. They read with their masks and suction bitmap and
+    without depth."""
+    vis, hid = _boxes()
+    scene = tmp_path / "dataset_real" / "scene46"
+    scene.mkdir(parents=True)
+    for v in (3, 28):
+        Image.fromarray(_rgb(v)).save(scene / f"{v}_rgb.png")
+        Image.fromarray(np.full((H, W), 800, np.uint16)).save(scene / f"{v}_depth.png")
+        (scene / f"{v}_scene.hdf5").write_bytes(b"")
+    (scene / "scene_gt.json").write_text("{}")
+    np.savez_compressed(
+        scene / "3_amodal.npz",
+        amodal_bitmaps_full_size_instances=np.stack([vis, hid], axis=1).astype(np.uint8),
+    )
+    bitmap = np.zeros((H, W), np.uint8)
+    bitmap[12:18, 10:16] = 1
+    np.savez_compressed(scene / "3_grasps.npz", suction_bitmap=bitmap)
+    (img,) = read_real_set(tmp_path / "dataset_real")
+    assert img.name == "scene46/3" and img.depth is None and img.crowd is None
+    np.testing.assert_array_equal(img.masks, vis)
+    assert img.amodal is not None
+    np.testing.assert_array_equal(img.amodal, vis | hid)
+    assert img.suction_bitmap is not None and int(img.suction_bitmap.sum()) == 36
+
+
 def test_read_coco_folder(tmp_path: Path):
     folder = write_coco_folder(tmp_path / "photos")
     vis, _ = _boxes()
@@ -187,6 +215,32 @@ def test_read_coco_folder(tmp_path: Path):
         assert ys.min() >= 5 and xs.min() >= 5 and ys.max() <= 25 and xs.max() <= 25
         assert abs(int(a.masks[0].sum()) - 400) <= 45
         assert a.depth is not None and np.allclose(a.depth, 0.8) and b.depth is None
+
+
+def test_coco_crowd_annotations_are_foreground_only(tmp_path: Path):
+    """An ``iscrowd: 1`` annotation (objects not outlined one by one) becomes the image's crowd
+    region: part of the labelled foreground, not an object."""
+    vis, _ = _boxes()
+    folder = tmp_path / "fg"
+    folder.mkdir()
+    Image.fromarray(_rgb(3)).save(folder / "a.png")
+    crowd = np.zeros((H, W), bool)
+    crowd[30:38, 2:20] = True
+    crowd[0:3, 40:50] = True  # two blobs in one crowd annotation
+    anns = []
+    for k, (m, is_crowd) in enumerate([(vis[1], 0), (crowd, 1)]):
+        r = mask_utils.encode(np.asfortranarray(m.astype(np.uint8)))
+        seg = {"size": [H, W], "counts": r["counts"].decode()}
+        anns.append({"id": k + 1, "image_id": 7, "segmentation": seg, "iscrowd": is_crowd})
+    doc = {"images": [{"id": 7, "file_name": "a.png"}], "annotations": anns}
+    (folder / "labels.json").write_text(json.dumps(doc))
+    (img,) = read_real_set(folder)
+    assert img.masks.shape == (1, H, W)
+    np.testing.assert_array_equal(img.masks[0], vis[1])
+    assert img.crowd is not None
+    np.testing.assert_array_equal(img.crowd, crowd)
+    np.testing.assert_array_equal(img.foreground, vis[1] | crowd)
+    assert int(img.foreground.sum()) == 15 * 20 + 8 * 18 + 3 * 10
 
 
 def test_real_set_bad_input(tmp_path: Path):
@@ -255,6 +309,52 @@ def test_mask_ap_hand_computed_cases():
     assert mask_ap([one], [np.zeros((0, 20, 20), bool)], [np.zeros(0)]) == (0.0, 0.0)
     with pytest.raises(InvalidArgumentError, match="one each per image"):
         mask_ap([one], [], [])
+
+
+def test_mask_ap_ignores_predictions_on_crowd_regions():
+    one = _masks((0, 4, 0, 4))
+    crowd = _masks((10, 20, 10, 20))[0]
+    stray = _masks((12, 16, 12, 16))  # inside the crowd region, ranked first
+    preds = np.concatenate([stray, one])
+    sc = np.array([0.9, 0.1])
+    # Without the crowd region the stray mask is a false positive ranked first: AP50 0.5.
+    assert mask_ap([one], [preds], [sc])[1] == pytest.approx(0.5)
+    # On a crowd region it is ignored (COCO's iscrowd rule): the one object is found exactly.
+    assert mask_ap([one], [preds], [sc], [crowd]) == (pytest.approx(1.0), pytest.approx(1.0))
+    # A stray mask outside the crowd region is still a false positive.
+    outside = np.concatenate([_masks((5, 9, 0, 4)), one])
+    assert mask_ap([one], [outside], [sc], [crowd])[1] == pytest.approx(0.5)
+    # Crowd regions only: no object to find, no AP.
+    empty = np.zeros((0, 20, 20), bool)
+    assert mask_ap([empty], [stray], [np.array([0.9])], [crowd]) == (None, None)
+    with pytest.raises(InvalidArgumentError, match="crowd region"):
+        mask_ap([one], [one], [np.array([1.0])], [crowd[:5]])
+
+
+def test_brightness_foreground_is_otsu_by_brute_force():
+    # Two grey levels: the bright one is the foreground.
+    img = np.full((10, 12, 3), 40, np.uint8)
+    img[2:6, 3:9] = 200
+    expected = np.zeros((10, 12), bool)
+    expected[2:6, 3:9] = True
+    np.testing.assert_array_equal(brightness_foreground(img), expected)
+    assert not brightness_foreground(np.full((5, 5, 3), 90, np.uint8)).any()
+    # Random images: the threshold maximises the between-class variance, searched directly.
+    rng = np.random.default_rng(4)
+    for _ in range(3):
+        rgb = rng.integers(0, 256, (30, 40, 3), dtype=np.uint8)
+        rgb[:10] //= 3
+        y = np.rint(rgb @ np.array([0.299, 0.587, 0.114])).ravel()
+        best, best_t = -1.0, 0
+        for t in range(256):
+            lo, hi = y[y <= t], y[y > t]
+            if len(lo) == 0 or len(hi) == 0:
+                continue
+            v = len(lo) * len(hi) * (lo.mean() - hi.mean()) ** 2
+            if v > best:
+                best, best_t = v, t
+        fg = brightness_foreground(rgb).ravel()
+        np.testing.assert_array_equal(fg, y > best_t)
 
 
 def test_mask_ap_agrees_with_pycocotools_on_files(tmp_path: Path):
@@ -487,3 +587,62 @@ def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.Ca
     (tmp_path / "bad.yaml").write_text(json.dumps(spec))
     assert main(["transfer", str(tmp_path / "bad.yaml"), "--out", str(out)]) == 1
     assert "unknown key(s) ['datasett']" in capsys.readouterr().err
+
+
+def _load_script(name: str):  # noqa: ANN202
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[2] / "scripts" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_get_real_photos_on_a_hand_written_gqcnn_layout(
+    tiny_model: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    """scripts/get_real_photos.py on files written in gqcnn's data/examples/clutter layout (PhoXi
+    colour at twice the mask's size): COCO folders whose foreground is the mask; scored by
+    ``mgn eval real`` as foreground IoU only (no mask AP)."""
+    src = tmp_path / "gqcnn" / "data" / "examples" / "clutter"
+    h, w = 6, 8
+    masks = {}
+    for sub, n, scale in (
+        ("phoxi/dex-net_4.0", 5, 2),
+        ("phoxi/fcgqcnn", 5, 2),
+        ("primesense", 5, 1),
+    ):
+        (src / sub).mkdir(parents=True)
+        for i in range(n):
+            seg = np.zeros((h, w), np.uint8)
+            seg[1 : 2 + i % 4, 2:6] = 255
+            masks[f"{sub.replace('/', '_').replace('.', '')}_{i}.png"] = seg > 0
+            big = np.kron(seg > 0, np.ones((scale, scale), bool))
+            rgb = np.where(big[..., None], 220, 20).astype(np.uint8).repeat(3, axis=2)
+            rgb[0, 0] = 24 if scale == 2 else 20  # a 2 x 2 block of 24, 20, 20, 20 -> 21
+            Image.fromarray(rgb).save(src / sub / f"color_{i}.png")
+            Image.fromarray(seg).save(src / sub / f"segmask_{i}.png")
+            np.save(src / sub / f"depth_{i}.npy", np.full((h, w, 1), 0.7, np.float32))
+    out = tmp_path / "real"
+    assert _load_script("get_real_photos").main([str(tmp_path / "gqcnn"), str(out)]) == 0
+    phoxi = read_real_set(out / "gqcnn_phoxi")
+    assert len(phoxi) == 10 and len(read_real_set(out / "gqcnn_primesense")) == 5
+    first = phoxi[0]
+    assert first.rgb.shape == (h, w, 3) and first.rgb[0, 0, 0] == 21
+    assert first.masks.shape == (0, h, w) and first.depth is not None
+    assert np.allclose(first.depth, 0.7)
+    for img in phoxi:
+        np.testing.assert_array_equal(img.foreground, masks[img.name])
+
+    def perfect(self, rgb, depth=None, *, name="image", **settings):  # noqa: ANN001, ANN202, ARG001
+        ids = masks[name].astype(np.int32)
+        inst = InstanceMaps(ids, np.ones(1, np.float32), None)
+        return Prediction(inst, ids.astype(np.float32), np.zeros(ids.shape, np.float32))
+
+    monkeypatch.setattr(Predictor, "predict", perfect)
+    res = evaluate_real(tiny_model, out / "gqcnn_phoxi", progress=False)
+    assert res.foreground_iou == 1.0 and res.brightness_iou == 1.0
+    assert (res.num_objects, res.mask_ap, res.mask_ap50) == (0, None, None)
+    assert res.summary()["fg_IoU_brightness"] == 1.0

@@ -12,9 +12,11 @@ masks (``{v}_amodal.npz`` or ``instances_objects``). ``PATH`` is the folder hold
 **A COCO folder**: images (PNG/JPEG) and one COCO instances JSON (``images`` with ``id``,
 ``file_name`` relative to the JSON's folder, ``width``, ``height``; ``annotations`` with
 ``image_id`` and ``segmentation`` as polygons or RLE; categories are ignored: the evaluation is
-class-agnostic). Optional depth per image: ``<stem>_depth.npy`` (m) or ``<stem>_depth.png``
-(16-bit, mm) beside the image. ``PATH`` is the JSON file, or the folder when it holds exactly
-one ``.json`` file.
+class-agnostic). An annotation with ``iscrowd: 1`` marks object pixels whose objects are not
+outlined one by one (a foreground label): it counts for the foreground IoU and is an ignored
+region for the mask AP (COCO's crowd rule). Optional depth per image: ``<stem>_depth.npy`` (m)
+or ``<stem>_depth.png`` (16-bit, mm) beside the image. ``PATH`` is the JSON file, or the folder
+when it holds exactly one ``.json`` file.
 
 Depth files elsewhere (``mgn predict --depth``): :func:`read_depth`.
 """
@@ -116,6 +118,8 @@ class RealImage:
         amodal: (N, H, W) bool amodal masks, or None when the labels have none.
         suction_bitmap: (H, W) float32 (non-zero = good suction point), or None.
         parallel_jaw_2d: (M, 2, 2) image point pairs px, or None.
+        crowd: (H, W) bool object pixels labelled without separating the objects (COCO
+            ``iscrowd: 1``), or None. The labelled foreground is ``masks`` and ``crowd``.
     """
 
     name: str
@@ -125,6 +129,17 @@ class RealImage:
     amodal: npt.NDArray[np.bool_] | None = None
     suction_bitmap: npt.NDArray[np.float32] | None = None
     parallel_jaw_2d: npt.NDArray[np.float64] | None = None
+    crowd: npt.NDArray[np.bool_] | None = None
+
+    @property
+    def foreground(self) -> npt.NDArray[np.bool_]:
+        """(H, W) bool: every labelled object pixel (the visible masks and ``crowd``)."""
+        fg = np.zeros(self.rgb.shape[:2], bool)
+        for m in self.masks:
+            fg |= m
+        if self.crowd is not None:
+            fg |= self.crowd
+        return fg
 
     def check(self, source: str) -> None:
         """IoError naming ``source`` when an array's size differs from the image's."""
@@ -134,6 +149,7 @@ class RealImage:
             "amodal": self.amodal,
             "depth": self.depth,
             "suction_bitmap": self.suction_bitmap,
+            "crowd": self.crowd,
         }
         for key, a in arrays.items():
             if a is not None and tuple(a.shape[-2:]) != (h, w):
@@ -289,9 +305,12 @@ def read_coco_folder(path: str | os.PathLike[str]) -> list[RealImage]:
                 f"{entry.get('height')} px in the JSON, '{file}' is {w} x {h} px"
             )
         source = f"'{js}' image {image_id} ('{entry['file_name']}')"
-        masks = [_ann_mask(a, h, w, source) for a in by_image.get(image_id, [])]
+        anns = by_image.get(image_id, [])
+        masks = [_ann_mask(a, h, w, source) for a in anns if not a.get("iscrowd")]
+        crowds = [_ann_mask(a, h, w, source) for a in anns if a.get("iscrowd")]
         stack = np.stack(masks) if masks else np.zeros((0, h, w), bool)
-        img = RealImage(str(entry["file_name"]), rgb, _sibling_depth(file), stack)
+        crowd = np.logical_or.reduce(crowds) if crowds else None
+        img = RealImage(str(entry["file_name"]), rgb, _sibling_depth(file), stack, crowd=crowd)
         img.check(source)
         images.append(img)
     if not images:

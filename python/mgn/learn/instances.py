@@ -7,7 +7,10 @@
    :mod:`mgn.learn.targets`); parts under ``min_area`` px are dropped;
 2. *growth*: every foreground pixel joins the seed nearest to it (Euclidean distance) within
    its connected foreground part, so the pixels between the seeds go back to the objects on
-   both sides; foreground parts without a seed (specks under ``min_area``) stay background;
+   both sides; a connected foreground part (4-neighbourhood) that holds no seed is one
+   instance when it has at least ``min_area`` px (the core map missed it: on photos unlike the
+   training images the core map can stay below its threshold where the foreground does not)
+   and background otherwise (a speck);
 3. *score* of an instance: the mean foreground probability over its pixels;
 4. *amodal* masks (when a hidden map is given): each connected part (8-neighbourhood) of
    ``hidden > threshold`` is the hidden part of one object: of the instances it touches
@@ -146,6 +149,17 @@ def instances_from_maps(
     remap[keep] = np.arange(1, len(keep) + 1, dtype=np.int32)
     seeds = remap[seeds]
     n = len(keep)
+    parts, n_parts = ndimage.label(fgm)
+    seeded = np.zeros(n_parts + 1, bool)
+    seeded[parts[seeds > 0]] = True
+    part_areas = np.bincount(parts.ravel(), minlength=n_parts + 1)
+    lone = np.flatnonzero(~seeded & (part_areas >= min_area))
+    lone = lone[lone > 0]
+    if len(lone):
+        extra = np.zeros(n_parts + 1, np.int32)
+        extra[lone] = np.arange(n + 1, n + 1 + len(lone), dtype=np.int32)
+        seeds = np.where(seeds > 0, seeds, extra[parts])
+        n += len(lone)
     if n == 0:
         empty = np.zeros(fg.shape, np.int32)
         am = None if hidden is None else np.zeros((0, *fg.shape), bool)

@@ -3,7 +3,9 @@
 - **mask AP, AP50** (:func:`mask_ap`): pycocotools' ``COCOeval`` with ``iouType="segm"``,
   class-agnostic (every mask one category), area range "all", at most 100 detections per
   image: AP is the mean over IoU thresholds 0.50:0.05:0.95, AP50 at IoU 0.5 (101-point
-  interpolated precision). None when no image has a ground-truth object.
+  interpolated precision). None when no image has a ground-truth object. Crowd regions
+  (object pixels labelled without separating the objects) are COCO ``iscrowd`` annotations:
+  predictions on them count neither as hits nor as false positives.
 - **foreground IoU** (:func:`foreground_iou`): |P and G| / |P or G| of the union of the predicted
   masks P and of the ground-truth masks G (1 when both are empty).
 - **suction precision@k** (:func:`suction_precision`): of the k best predicted suction points,
@@ -37,9 +39,16 @@ def mask_ap(
     ground_truth: Sequence[np.ndarray],
     predictions: Sequence[np.ndarray],
     scores: Sequence[np.ndarray],
+    crowds: Sequence[np.ndarray | None] | None = None,
 ) -> tuple[float | None, float | None]:
     """(AP, AP50) of predicted masks against ground-truth masks, image by image: ``ground_truth[i]``
-    and ``predictions[i]`` (N_i, H, W) / (M_i, H, W) bool, ``scores[i]`` (M_i,)."""
+    and ``predictions[i]`` (N_i, H, W) / (M_i, H, W) bool, ``scores[i]`` (M_i,); ``crowds[i]``
+    an (H, W) bool crowd region of image i or None."""
+    crowd_list = list(crowds) if crowds is not None else [None] * len(ground_truth)
+    if len(crowd_list) != len(ground_truth):
+        raise InvalidArgumentError(
+            f"mask_ap: {len(ground_truth)} ground truths, {len(crowd_list)} crowd regions"
+        )
     if not len(ground_truth) == len(predictions) == len(scores):
         raise InvalidArgumentError(
             f"mask_ap: {len(ground_truth)} ground truths, {len(predictions)} predictions, "
@@ -48,6 +57,7 @@ def mask_ap(
     images: list[dict] = []
     anns: list[dict] = []
     dets: list[dict] = []
+    n_objects = 0
     for i, (gt, pred, sc) in enumerate(zip(ground_truth, predictions, scores, strict=True)):
         h, w = gt.shape[-2:]
         if pred.shape[-2:] != (h, w) or len(sc) != len(pred):
@@ -56,7 +66,14 @@ def mask_ap(
                 f"{len(sc)} scores"
             )
         images.append({"id": i + 1, "width": int(w), "height": int(h)})
-        for m in gt:
+        crowd = crowd_list[i]
+        if crowd is not None and crowd.shape != (h, w):
+            raise InvalidArgumentError(
+                f"mask_ap: image {i}: ground truth {gt.shape}, crowd region {crowd.shape}"
+            )
+        n_objects += len(gt)
+        regions = [(m, 0) for m in gt] + ([(crowd, 1)] if crowd is not None and crowd.any() else [])
+        for m, is_crowd in regions:
             r = _rle(m)
             anns.append(
                 {
@@ -66,14 +83,14 @@ def mask_ap(
                     "segmentation": r,
                     "area": float(mask_utils.area(r)),
                     "bbox": [float(v) for v in mask_utils.toBbox(r)],
-                    "iscrowd": 0,
+                    "iscrowd": is_crowd,
                 }
             )
         for m, s in zip(pred, sc, strict=True):
             dets.append(
                 {"image_id": i + 1, "category_id": 1, "segmentation": _rle(m), "score": float(s)}
             )
-    if not anns:
+    if not n_objects:
         return None, None
     gt_coco = COCO()
     gt_coco.dataset = {

@@ -5,7 +5,10 @@ COCO folder), predicted one by one (:class:`mgn.learn.predict.Predictor`) and sc
 (:mod:`mgn.learn.metrics`): mask AP and AP50 over all images (visible masks, or amodal masks
 with ``amodal=True``), foreground IoU (mean over images), and suction precision@k (mean over
 the images that have a suction bitmap; the predicted points are the k best of the suction map
-on predicted objects, 2 % of the image diagonal apart).
+on predicted objects, 2 % of the image diagonal apart). Beside the model, the trivial
+reference :func:`brightness_foreground` (every pixel brighter than Otsu's threshold of the
+image's luminance is an object) is scored by the same foreground IoU (``fg_IoU_brightness``):
+a model that does not beat it has learned nothing about objects that brightness does not say.
 
 Files in ``out`` (when given): ``results.json`` (:meth:`RealResults.to_dict`), ``overlays/``
 with one PNG per image (labels | predicted instances and suction points | suction map; the
@@ -36,7 +39,7 @@ from mgn.learn.metrics import foreground_iou, mask_ap, suction_precision
 from mgn.learn.pictures import mask_panel, overlay
 from mgn.learn.predict import Prediction, Predictor
 
-__all__ = ["DEFAULT_KS", "RealResults", "evaluate_real"]
+__all__ = ["DEFAULT_KS", "RealResults", "brightness_foreground", "evaluate_real"]
 
 #: k of the suction precision@k.
 DEFAULT_KS = (1, 5, 10)
@@ -44,6 +47,29 @@ DEFAULT_KS = (1, 5, 10)
 
 def _mean(values: Sequence[float]) -> float | None:
     return float(np.mean(values)) if len(values) else None
+
+
+def brightness_foreground(rgb: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the pixels of an (H, W, 3) uint8 image whose luminance (0.299 R + 0.587 G +
+    0.114 B, rounded to 0-255) is above Otsu's threshold (the level that maximises the
+    between-class variance of the image's histogram); all False for a uniform image."""
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3:
+        raise InvalidArgumentError(f"brightness_foreground: expected (H, W, 3), got {rgb.shape}")
+    y = np.rint(rgb.astype(np.float64) @ np.array([0.299, 0.587, 0.114])).astype(np.int64)
+    hist = np.bincount(y.ravel(), minlength=256)[:256].astype(np.float64)
+    levels = np.arange(256, dtype=np.float64)
+    w0 = np.cumsum(hist)  # pixels at or below each level
+    w1 = w0[-1] - w0
+    m0 = np.cumsum(hist * levels)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        between = w0 * w1 * (m0 / w0 - (m0[-1] - m0) / w1) ** 2
+    between[~np.isfinite(between)] = -1.0
+    if between.max() <= 0:
+        return np.zeros(y.shape, bool)
+    t = int(np.argmax(between))
+    fg: np.ndarray = y > t
+    return fg
 
 
 @dataclass
@@ -56,6 +82,7 @@ class RealResults:
         num_images, num_objects: images and labelled objects.
         mask_ap, mask_ap50: COCO mask AP / AP50 (None without objects).
         foreground_iou: mean over images.
+        brightness_iou: mean foreground IoU of :func:`brightness_foreground` over the images.
         suction: {k: mean precision@k} over the images with a suction bitmap (empty if none).
         suction_images: how many images have one.
         per_image: one dict per image (name, objects, predicted, foreground_iou, p@k).
@@ -70,6 +97,7 @@ class RealResults:
     mask_ap: float | None
     mask_ap50: float | None
     foreground_iou: float | None
+    brightness_iou: float | None = None
     suction: dict[int, float | None] = field(default_factory=dict)
     suction_images: int = 0
     per_image: list[dict[str, Any]] = field(default_factory=list)
@@ -82,6 +110,7 @@ class RealResults:
             "mask_AP": self.mask_ap,
             "mask_AP50": self.mask_ap50,
             "fg_IoU": self.foreground_iou,
+            "fg_IoU_brightness": self.brightness_iou,
         }
         row.update({f"suction_P@{k}": v for k, v in self.suction.items()})
         return row
@@ -124,7 +153,8 @@ def _outline(mask: np.ndarray) -> np.ndarray:
 
 
 def _picture(img: RealImage, gt: np.ndarray, pred: Prediction) -> bytes:
-    left = mask_panel(img.rgb, gt)
+    shown = gt if img.crowd is None else np.concatenate([gt, img.crowd[None]])
+    left = mask_panel(img.rgb, shown)
     if img.suction_bitmap is not None:
         left[_outline(img.suction_bitmap != 0)] = (255, 255, 255)
     right = overlay(img.rgb, pred)
@@ -192,6 +222,7 @@ def evaluate_real(
         missing = [img.name for img in images if img.amodal is None][:5]
         raise InvalidArgumentError(f"--amodal: '{real}' has no amodal masks for {missing}")
     gts: list[np.ndarray] = []
+    crowds: list[np.ndarray | None] = []
     preds: list[np.ndarray] = []
     scores: list[np.ndarray] = []
     per_image: list[dict[str, Any]] = []
@@ -210,13 +241,15 @@ def evaluate_real(
         )
         gt = img.amodal if amodal and img.amodal is not None else img.masks
         gts.append(gt)
+        crowds.append(img.crowd)
         preds.append(pred.instances.masks(amodal=amodal))
         scores.append(pred.instances.scores)
         entry: dict[str, Any] = {
             "name": img.name,
             "objects": len(gt),
             "predicted": pred.instances.num_instances,
-            "foreground_iou": foreground_iou(img.masks, pred.instances.labels > 0),
+            "foreground_iou": foreground_iou(img.foreground, pred.instances.labels > 0),
+            "brightness_iou": foreground_iou(img.foreground, brightness_foreground(img.rgb)),
         }
         if img.suction_bitmap is not None:
             pk = suction_precision(pred.suction_points(max(ks)), img.suction_bitmap, ks)
@@ -228,7 +261,7 @@ def evaluate_real(
             name = f"overlays/{len(pictures):03d}_{_safe(img.name)}.png"
             atomic_write_bytes(out_dir / name, _picture(img, gt, pred))
             pictures.append(name)
-    ap, ap50 = mask_ap(gts, preds, scores)
+    ap, ap50 = mask_ap(gts, preds, scores, crowds)
     n_suction = len(next(iter(suction.values()))) if suction else 0
     res = RealResults(
         model=os.fspath(pred_model.path),
@@ -240,6 +273,7 @@ def evaluate_real(
         mask_ap=ap,
         mask_ap50=ap50,
         foreground_iou=_mean([e["foreground_iou"] for e in per_image]),
+        brightness_iou=_mean([e["brightness_iou"] for e in per_image]),
         suction={k: _mean(v) for k, v in suction.items()} if n_suction else {},
         suction_images=n_suction,
         per_image=per_image,

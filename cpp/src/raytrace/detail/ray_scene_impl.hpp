@@ -1,6 +1,6 @@
 #pragma once
 // Private: the state of a RayScene (its Embree scene and per-geometry data), shared with the
-// path tracer (render/path_tracer.cpp) so that both use one Embree loader and one BVH.
+// path tracer (render/detail/pt_scene.hpp) so that both use one Embree loader and one BVH.
 #include <mgn/raytrace/ray_scene.hpp>
 
 #include <embree3/rtcore.h>

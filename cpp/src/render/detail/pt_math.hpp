@@ -1,5 +1,5 @@
 #pragma once
-// Private building blocks of the path tracer (path_tracer.cpp): a small float vector type, the
+// Private building blocks of the path tracer (pt_*.cpp): a small float vector type, the
 // per-pixel low-discrepancy sampler, and the glTF metallic-roughness BSDF (GGX + Lambert +
 // smooth dielectric). Everything here is inline and in float; only PairSeeds allocates (as it
 // grows, once per thread).

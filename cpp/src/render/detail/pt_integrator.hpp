@@ -1,0 +1,159 @@
+#pragma once
+// Private: the path integrator (pt_integrator.cpp): the path of one camera sample through a
+// PathScene, with BSDF sampling, next-event estimation of the lights and the environment
+// (multiple importance sampling), Fresnel splitting at smooth glass, Russian roulette, and the
+// denoiser's albedo and normal guides.
+#include <mgn/render/path_tracer.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+#include "render/detail/pt_math.hpp"
+#include "render/detail/pt_scene.hpp"
+
+namespace mgn::pt {
+
+using Geometry = PathScene::Geometry;
+using Lighting = PathScene::Lighting;
+
+/// Surface interaction at a ray hit.
+struct Hit {
+  F3 p;        // world position
+  F3 ng;       // geometric normal, towards the side the ray came from
+  F3 ns;       // shading normal, same side as ng and facing wo
+  bool front;  // the ray hit the outward (CCW) side
+  const MaterialData* mat;
+  F3 base;  // textured base colour
+  std::int32_t instance_id;
+};
+
+inline void set_ray(RTCRay& r, F3 o, F3 d, float tfar) {
+  r.org_x = o.x;
+  r.org_y = o.y;
+  r.org_z = o.z;
+  r.dir_x = d.x;
+  r.dir_y = d.y;
+  r.dir_z = d.z;
+  r.tnear = 0.0f;
+  r.tfar = tfar;
+  r.time = 0.0f;
+  r.mask = 0xFFFFFFFFu;
+  r.id = 0;
+  r.flags = 0;
+}
+
+struct Counters {
+  std::int64_t rays = 0;
+};
+
+/// The path integrator of one thread (its Embree context and ray counter).
+class Integrator {
+ public:
+  Integrator(const Geometry& G, const Lighting& L, const PathTraceOptions& o)
+      : G_(G),
+        L_(L),
+        opt_(o),
+        primary_(G.rays->impl().scene),
+        scene_(G.bounce.get()),
+        clamp_indirect_(static_cast<float>(o.clamp_indirect)),
+        split_min_(static_cast<float>(o.fresnel_split_min)),
+        guide_split_min_(static_cast<float>(o.guide_split_min)) {
+    rtcInitIntersectContext(&ctx_);
+  }
+
+  /// First hit of a bounce ray (the non-robust BVH).
+  bool intersect(F3 o, F3 d, float tfar, RTCRayHit& rh) {
+    return intersect(scene_, o, d, tfar, rh);
+  }
+  /// First hit of a camera ray (the robust BVH, as the labels).
+  bool intersect_primary(F3 o, F3 d, float tfar, RTCRayHit& rh) {
+    return intersect(primary_, o, d, tfar, rh);
+  }
+  bool intersect(RTCScene scene, F3 o, F3 d, float tfar, RTCRayHit& rh) {
+    set_ray(rh.ray, o, d, tfar);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene, &ctx_, &rh);
+    ++counters.rays;
+    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+  }
+
+  bool occluded(F3 o, F3 d, float tfar) {
+    RTCRay r;
+    set_ray(r, o, d, tfar);
+    rtcOccluded1(scene_, &ctx_, &r);
+    ++counters.rays;
+    return r.tfar == -std::numeric_limits<float>::infinity();
+  }
+
+  /// Radiance along a camera ray; first-hit albedo and normal are written to aov_*. `first`,
+  /// when given, is the camera ray's hit already found (a packet of camera rays): its tfar,
+  /// geomID, primID, u and v are used instead of tracing the ray again.
+  F3 trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& aov_normal,
+           const RTCRayHit* first = nullptr);
+
+  Counters counters;
+
+ private:
+  /// Adds a contribution; indirect ones (light that has bounced at least twice: found at the
+  /// second path vertex or later) are clamped to clamp_indirect in luminance.
+  void add(F3& L, F3 c, bool indirect) const {
+    if (indirect && clamp_indirect_ > 0.0f) {
+      const float lum = luminance(c);
+      if (lum > clamp_indirect_) c *= clamp_indirect_ / lum;
+    }
+    L += c;
+  }
+
+  /// One sample of light k (k = number of area lights: the environment) with MIS; returns the
+  /// contribution (without beta).
+  F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
+            std::size_t k, pt::Sample2 u);
+
+  /// Fresnel splitting at a smooth dielectric: the expected weight of the chosen direction (F
+  /// or 1 - F times its lobe weight, instead of the weight of the random choice) and the other
+  /// direction with its expected weight.
+  struct Split {
+    bool on = false;
+    F3 weight;
+    F3 other_dir;
+    F3 other_weight;
+    float other_share = 0.0f;  // the other direction's probability: F or 1 - F
+  };
+
+  /// Radiance arriving at h.p from direction d (world), emitted by the first thing the ray from
+  /// h.p meets: an area light, an emissive triangle's front side or the environment (0 for
+  /// anything else). Unweighted: it is the light seen through a delta lobe (no MIS). When given,
+  /// aux_albedo / aux_normal receive the denoiser guides of what the ray meets, as trace() takes
+  /// them (the normal is left as given for a light or the environment; see aux_behind_glass).
+  F3 emitted(const Hit& h, F3 d, F3* aux_albedo = nullptr, F3* aux_normal = nullptr);
+
+  /// The denoiser guides along a ray whose first hit is `rh` (direction d): the first surface that
+  /// is not see-through glass, followed through up to 8 smooth glass interfaces by refraction
+  /// (total internal reflection: reflection), as the camera sees through a bottle's walls; a
+  /// light or the environment gives its clamped radiance (normal unchanged).
+  void aux_behind_glass(RTCRayHit rh, F3 d, F3& albedo, F3& normal);
+
+  /// Samples the BSDF: direction, weight f*cos/pdf (including lobe choice), solid-angle pdf of
+  /// the non-delta part (for MIS) and whether a delta lobe was chosen. At a smooth dielectric,
+  /// `split` (when given) receives the Fresnel split (see Split).
+  bool sample_bsdf(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
+                   float u_lobe, float u_fresnel, pt::Sample2 u, F3& wi_w, F3& weight, float& pdf,
+                   bool& delta, float& eta2, Split* split = nullptr);
+
+  const Geometry& G_;
+  const Lighting& L_;
+  const PathTraceOptions& opt_;
+  RTCScene primary_;  // robust: camera rays
+  RTCScene scene_;    // bounce and shadow rays
+  float clamp_indirect_;
+  float split_min_;        // PathTraceOptions::fresnel_split_min
+  float guide_split_min_;  // PathTraceOptions::guide_split_min
+  /// Smooth-dielectric vertices per camera sample whose two branches are both traced in full
+  /// (the first ones along the path, depth first); later ones are split as in `Split`.
+  static constexpr int kMaxBranches = 3;
+  RTCIntersectContext ctx_;
+};
+
+}  // namespace mgn::pt
