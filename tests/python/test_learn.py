@@ -89,7 +89,9 @@ def test_suction_target_is_the_projection_of_the_labels():
         (11, 10),
     ]
     assert np.all(q[q > 0] == np.float32(0.7))
-    assert w[10, 10] == 1 and w[0, 0] == 1 and w[15, 15] == 0  # background known, object not
+    assert w[10, 10] == 1
+    assert w[0, 0] == 1
+    assert w[15, 15] == 0
     # Several labels: one straddling the two objects (only its own object's pixels), two
     # overlapping (the larger score wins), one behind the camera, one outside the image.
     rng = np.random.default_rng(3)
@@ -110,7 +112,8 @@ def test_suction_target_is_the_projection_of_the_labels():
     q_ref, w_ref = _brute_suction(contacts, scores, oids, ids, K, 0.02)
     np.testing.assert_allclose(q, q_ref, atol=1e-7)
     np.testing.assert_array_equal(w, w_ref)
-    assert q[12, 24] == 0 and q[12, 25] == np.float32(0.9)  # the straddling label: object 2 only
+    assert q[12, 24] == 0
+    assert q[12, 25] == np.float32(0.9)
 
 
 def test_suction_target_of_a_dataset_view(small_dataset: Path):
@@ -190,7 +193,8 @@ def test_instances_from_maps_by_hand():
     np.testing.assert_array_equal(masks[0], np.pad(np.ones((8, 7), bool), ((2, 2), (2, 11))))
     np.testing.assert_array_equal(masks[1], np.pad(np.ones((8, 8), bool), ((2, 2), (9, 3))))
     np.testing.assert_allclose(inst.scores, [0.9, 0.8], rtol=1e-6)
-    assert inst.amodal is None and np.array_equal(inst.masks(amodal=True), masks)
+    assert inst.amodal is None
+    assert np.array_equal(inst.masks(amodal=True), masks)
     # Hidden: A continues for 3 columns under B -> A's amodal mask, not B's (the occluder).
     hid = np.zeros_like(fg)
     hid[3:9, 9:12] = 0.9
@@ -199,7 +203,8 @@ def test_instances_from_maps_by_hand():
     np.testing.assert_array_equal(am[0], masks[0] | (hid > 0.5))
     np.testing.assert_array_equal(am[1], masks[1])
     empty = instances_from_maps(np.zeros((5, 5)), np.zeros((5, 5)))
-    assert empty.num_instances == 0 and empty.labels.max() == 0
+    assert empty.num_instances == 0
+    assert empty.labels.max() == 0
     # A foreground part the core map missed (no seed; rows 0..3, columns 18..19: 8 px >=
     # min_area, apart from B by the empty column 17) is one instance of its own, numbered after
     # the seeded ones; with no core anywhere every part of min_area px or more is one.
@@ -249,7 +254,8 @@ def test_overfits_the_training_views(small_dataset: Path, tmp_path: Path):
         num_threads=1,
         progress=False,
     )
-    assert res.num_views == 3 and res.history[-1]["loss"] < 0.5 * res.history[0]["loss"]
+    assert res.num_views == 3
+    assert res.history[-1]["loss"] < 0.5 * res.history[0]["loss"]
     pred = Predictor(res.model_path, num_threads=1)
     for view in mgn.Dataset(small_dataset).scene(1).views():
         p = pred.predict(view.rgb)
@@ -280,7 +286,7 @@ def test_same_seed_same_weights_and_resume(
     real_write = train_module.write_torch_file
     calls = []
 
-    def stop_after_first(path, obj):  # noqa: ANN001, ANN202
+    def stop_after_first(path, obj):
         real_write(path, obj)
         calls.append(path)
         if len(calls) == 1:
@@ -421,7 +427,8 @@ def test_train_and_predict_commands(
     assert [e["stem"] for e in doc["images"]] == ["0_rgb", "photo"]
     for entry in doc["images"]:
         ids = _png(out / f"{entry['stem']}_instances.png")
-        assert ids.shape == (120, 120) and ids.max() == len(entry["instances"])
+        assert ids.shape == (120, 120)
+        assert ids.max() == len(entry["instances"])
         for inst in entry["instances"]:
             rle = dict(inst["segmentation"], counts=inst["segmentation"]["counts"].encode())
             np.testing.assert_array_equal(mask_utils.decode(rle).astype(bool), ids == inst["id"])
@@ -438,7 +445,7 @@ def test_depth_files(tmp_path: Path):
         got = read_depth(tmp_path / name)
         np.testing.assert_allclose(got, [[0.5, np.nan], [np.nan, 1.25]], rtol=1e-6)
     (tmp_path / "d.tiff").write_bytes(b"x")
-    with pytest.raises(IoError, match="d.tiff"):
+    with pytest.raises(IoError, match=r"d\.tiff"):
         read_depth(tmp_path / "d.tiff")
     Image.fromarray(np.zeros((2, 2, 3), np.uint8)).save(tmp_path / "rgb.png")
     with pytest.raises(IoError, match="16-bit"):
@@ -459,7 +466,9 @@ def test_bad_input_errors(
     # (NaN in every grasp) is an error naming the setting.
     view = mgn.Dataset(small_dataset).scene(0).view(0)
     sim = view_targets(view, ModelConfig(suction_score="score_simulation"))["suction"]
-    assert np.isfinite(sim).all() and sim.min() >= 0 and sim.max() <= 1
+    assert np.isfinite(sim).all()
+    assert sim.min() >= 0
+    assert sim.max() <= 1
     shutil.copytree(small_dataset / "scene0", tmp_path / "nan" / "scene0")
     with h5py.File(tmp_path / "nan" / "scene0" / "0_scene.hdf5", "a") as h5:
         for group in ("non_colliding_grasps", "colliding_grasps"):
@@ -482,7 +491,7 @@ def test_bad_input_errors(
         num_threads=1,
         progress=False,
     )
-    with pytest.raises(InvalidArgumentError, match="a_depth.npy.*they must match"):
+    with pytest.raises(InvalidArgumentError, match=r"a_depth\.npy.*they must match"):
         mgn.learn.predict_files(
             depth_model / "model.pt",
             [tmp_path / "a.png"],
@@ -525,4 +534,5 @@ def test_without_torch_the_error_names_the_extra(
         "print('ok')"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
-    assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "ok", run.stderr

@@ -42,10 +42,13 @@ def test_geometric_augmentation_keeps_input_and_labels_aligned(shape: tuple[int,
     zoomed = turned = 0
     for seed in range(40):
         x, t, w = geometric(x0, t0, w0, np.random.default_rng(seed))
-        assert x.shape == x0.shape and t.shape == t0.shape and w.shape == w0.shape
+        assert x.shape == x0.shape
+        assert t.shape == t0.shape
+        assert w.shape == w0.shape
         # nearest picks floor(s), bilinear gives s - 0.5: they differ by at most 0.5 px, or
         # 1 px where the bilinear coordinate is clamped to the first or last pixel centre.
-        assert np.abs(x[0] - t[0]).max() <= 1.0 + 1e-4 and np.abs(x[1] - t[1]).max() <= 1.0 + 1e-4
+        assert np.abs(x[0] - t[0]).max() <= 1.0 + 1e-4
+        assert np.abs(x[1] - t[1]).max() <= 1.0 + 1e-4
         interior = (t[0] > 0) & (t[0] < shape[0] - 1) & (t[1] > 0) & (t[1] < shape[1] - 1)
         assert np.abs(x[0] - t[0])[interior].max() <= 0.5 + 1e-4
         np.testing.assert_array_equal(w, t[1])
@@ -54,7 +57,8 @@ def test_geometric_augmentation_keeps_input_and_labels_aligned(shape: tuple[int,
         src_rows = np.unique(t[0])
         zoomed += len(src_rows) < shape[0] or len(np.unique(t[1])) < shape[1]
         turned += bool(np.any(np.diff(t[0], axis=1)))
-    assert zoomed >= 10 and (turned >= 10 if shape[0] == shape[1] else turned == 0)
+    assert zoomed >= 10
+    assert turned >= 10 if shape[0] == shape[1] else turned == 0
 
 
 def test_geometric_augmentation_of_a_known_mask():
@@ -112,7 +116,9 @@ def test_photometric_augmentation_leaves_the_labels_unchanged():
         xg, tg, wg = geometric(x0, t0, w0, np.random.default_rng(seed))
         np.testing.assert_array_equal(t, tg)
         np.testing.assert_array_equal(w, wg)
-        assert x.dtype == np.float32 and x.min() >= 0 and x.max() <= 1
+        assert x.dtype == np.float32
+        assert x.min() >= 0
+        assert x.max() <= 1
         changed += not np.allclose(x, xg, atol=1e-3)
         xd, td, _ = augment_view(
             np.concatenate([x0, depth]), t0, w0, "full", "rgbd", np.random.default_rng(seed)
@@ -137,7 +143,9 @@ def test_photometric_keeps_grey_grey_without_a_gain_and_is_deterministic():
 def test_augment_modes_and_errors():
     x0, t0, w0 = _disc_view(32)
     x, t, w = augment_view(x0, t0, w0, "none", "rgb", np.random.default_rng(0))
-    assert np.array_equal(x, x0) and np.array_equal(t, t0) and np.array_equal(w, w0)
+    assert np.array_equal(x, x0)
+    assert np.array_equal(t, t0)
+    assert np.array_equal(w, w0)
     seen = set()
     for seed in range(12):
         x, t, w = augment_view(x0, t0, w0, "flips", "rgb", np.random.default_rng(seed))
@@ -156,7 +164,8 @@ def test_augment_modes_and_errors():
         augment_view(x0, t0[:, :10], w0, "full", "rgb", np.random.default_rng(0))
     assert TrainConfig(augment=True).augment == "flips"
     assert TrainConfig(augment=False).augment == "none"
-    assert TrainConfig().augment == "full" and TrainConfig().foreground_loss == "bce+dice"
+    assert TrainConfig().augment == "full"
+    assert TrainConfig().foreground_loss == "bce+dice"
     with pytest.raises(InvalidArgumentError, match="augment must be one of"):
         TrainConfig(augment="lots")
     with pytest.raises(InvalidArgumentError, match="foreground_loss"):

@@ -146,15 +146,20 @@ def test_dataset_reads_metagraspnet_real_views(tmp_path: Path):
     np.testing.assert_array_equal(v.instances, expected_ids)
     np.testing.assert_array_equal(v.amodal, vis | hid)
     assert v.num_instances == 2
-    assert v.suction_bitmap is not None and v.suction_bitmap.sum() == 36 + 16
-    assert v.parallel_jaw_2d is not None and v.parallel_jaw_2d.shape == (2, 2, 2)
-    assert v.depth[1, 1] == pytest.approx(0.8) and np.isnan(v.depth[0, 0])
+    assert v.suction_bitmap is not None
+    assert v.suction_bitmap.sum() == 36 + 16
+    assert v.parallel_jaw_2d is not None
+    assert v.parallel_jaw_2d.shape == (2, 2, 2)
+    assert v.depth[1, 1] == pytest.approx(0.8)
+    assert np.isnan(v.depth[0, 0])
     unlabelled = ds.scene(46).view(28)
-    assert unlabelled.suction_bitmap is None and unlabelled.real_amodal is None
-    with pytest.raises(IoError, match="28.npz' has no 'instances_objects'"):
+    assert unlabelled.suction_bitmap is None
+    assert unlabelled.real_amodal is None
+    with pytest.raises(IoError, match=r"28\.npz' has no 'instances_objects'"):
         _ = unlabelled.instances
     v418 = ds.scene(418).view(3)
-    assert v418.instances.max() == 2 and v418.suction_bitmap is None
+    assert v418.instances.max() == 2
+    assert v418.suction_bitmap is None
 
 
 def test_read_mgn_real(tmp_path: Path):
@@ -166,8 +171,11 @@ def test_read_mgn_real(tmp_path: Path):
     np.testing.assert_array_equal(a.masks, vis)
     assert a.amodal is not None
     np.testing.assert_array_equal(a.amodal, vis | hid)
-    assert a.suction_bitmap is not None and a.depth is not None
-    assert b.masks.shape == (2, H, W) and b.amodal is None and b.suction_bitmap is None
+    assert a.suction_bitmap is not None
+    assert a.depth is not None
+    assert b.masks.shape == (2, H, W)
+    assert b.amodal is None
+    assert b.suction_bitmap is None
     assert [i.name for i in read_mgn_real(root / "scene46")] == ["scene46/3"]
     assert detect_real_format(root) == detect_real_format(root / "scene46") == "metagraspnet"
 
@@ -193,11 +201,14 @@ def test_read_mgn_real_as_published_without_view_npz(tmp_path: Path):
     bitmap[12:18, 10:16] = 1
     np.savez_compressed(scene / "3_grasps.npz", suction_bitmap=bitmap)
     (img,) = read_real_set(tmp_path / "dataset_real")
-    assert img.name == "scene46/3" and img.depth is None and img.crowd is None
+    assert img.name == "scene46/3"
+    assert img.depth is None
+    assert img.crowd is None
     np.testing.assert_array_equal(img.masks, vis)
     assert img.amodal is not None
     np.testing.assert_array_equal(img.amodal, vis | hid)
-    assert img.suction_bitmap is not None and int(img.suction_bitmap.sum()) == 36
+    assert img.suction_bitmap is not None
+    assert int(img.suction_bitmap.sum()) == 36
 
 
 def test_read_coco_folder(tmp_path: Path):
@@ -207,14 +218,20 @@ def test_read_coco_folder(tmp_path: Path):
         assert detect_real_format(path) == "coco"
         a, b = read_coco_folder(path)
         assert (a.name, b.name) == ("a.png", "b.jpg")
-        assert a.masks.shape == (2, H, W) and b.masks.shape == (1, H, W)
+        assert a.masks.shape == (2, H, W)
+        assert b.masks.shape == (1, H, W)
         np.testing.assert_array_equal(a.masks[1], vis[1])
         np.testing.assert_array_equal(b.masks[0], vis[0])
         # The polygon's square, 20 px a side from (5, 5): inside its box, about 400 px.
         ys, xs = np.nonzero(a.masks[0])
-        assert ys.min() >= 5 and xs.min() >= 5 and ys.max() <= 25 and xs.max() <= 25
+        assert ys.min() >= 5
+        assert xs.min() >= 5
+        assert ys.max() <= 25
+        assert xs.max() <= 25
         assert abs(int(a.masks[0].sum()) - 400) <= 45
-        assert a.depth is not None and np.allclose(a.depth, 0.8) and b.depth is None
+        assert a.depth is not None
+        assert np.allclose(a.depth, 0.8)
+        assert b.depth is None
 
 
 def test_coco_crowd_annotations_are_foreground_only(tmp_path: Path):
@@ -254,13 +271,13 @@ def test_real_set_bad_input(tmp_path: Path):
     with pytest.raises(IoError, match="no known annotation format"):
         read_real_set(voc)
     (voc / "x.json").write_text(json.dumps({"shapes": []}))  # a LabelMe-like file
-    with pytest.raises(IoError, match="x.json' is in no known annotation format"):
+    with pytest.raises(IoError, match=r"x\.json' is in no known annotation format"):
         read_real_set(voc)
     folder = write_coco_folder(tmp_path / "photos")
     doc = json.loads((folder / "labels.json").read_text())
     doc["annotations"][1]["segmentation"]["size"] = [H + 1, W]
     (folder / "labels.json").write_text(json.dumps(doc))
-    with pytest.raises(IoError, match="a.png.*mask is 50 x 41 px but its image is 50 x 40"):
+    with pytest.raises(IoError, match=r"a\.png.*mask is 50 x 41 px but its image is 50 x 40"):
         read_real_set(folder)
     root = write_mgn_real(tmp_path / "real")
     np.savez_compressed(root / "scene46" / "3_grasps.npz", suction_bitmap=np.zeros((H, W + 2)))
@@ -287,7 +304,8 @@ def test_mask_ap_hand_computed_cases():
     # One of two objects found (exact mask), nothing else: precision 1 up to recall 0.5 on the
     # 101 recall points 0, 0.01, ..., 1 -> 51 / 101 at every IoU threshold.
     ap, ap50 = mask_ap([gt], [gt[:1]], [np.array([0.9])])
-    assert ap == pytest.approx(51 / 101) and ap50 == pytest.approx(51 / 101)
+    assert ap == pytest.approx(51 / 101)
+    assert ap50 == pytest.approx(51 / 101)
     # A prediction of IoU 10/16 = 0.625 with the one object: a match at thresholds 0.50, 0.55,
     # 0.60 of the ten -> AP 0.3, AP50 1.
     one = _masks((0, 4, 0, 4))
@@ -299,7 +317,8 @@ def test_mask_ap_hand_computed_cases():
     part[0, 1:4] = False  # 4 px
     part[0, 1:3, 0:3] = True  # + 6 px = 10 px inside the 16-px object
     ap, ap50 = mask_ap([one], [part], [np.array([0.5])])
-    assert ap == pytest.approx(0.3) and ap50 == pytest.approx(1.0)
+    assert ap == pytest.approx(0.3)
+    assert ap50 == pytest.approx(1.0)
     # A false positive ranked above the true one: precision 1/2 at recall 1 -> AP50 0.5.
     ap, ap50 = mask_ap(
         [one], [np.concatenate([_masks((15, 19, 15, 19)), one])], [np.array([0.9, 0.1])]
@@ -451,7 +470,7 @@ def test_eval_real_scores_perfect_predictions_as_perfect(
     root = write_mgn_real(tmp_path / "dataset_real")
     labels = {img.name: img for img in read_mgn_real(root)}
 
-    def perfect(self, rgb, depth=None, *, name="image", **settings):  # noqa: ANN001, ANN202, ARG001
+    def perfect(self, rgb, depth=None, *, name="image", **settings):
         img = labels[name]
         ids = np.zeros(img.masks.shape[1:], np.int32)
         for i, m in enumerate(img.masks):
@@ -465,9 +484,11 @@ def test_eval_real_scores_perfect_predictions_as_perfect(
     monkeypatch.setattr(Predictor, "predict", perfect)
     res = evaluate_real(tiny_model, root, tmp_path / "out", ks=(1, 2), progress=False)
     assert (res.num_images, res.num_objects) == (2, 4)
-    assert res.mask_ap == pytest.approx(1.0) and res.mask_ap50 == pytest.approx(1.0)
+    assert res.mask_ap == pytest.approx(1.0)
+    assert res.mask_ap50 == pytest.approx(1.0)
     assert res.foreground_iou == 1.0
-    assert res.suction == {1: 1.0, 2: 1.0} and res.suction_images == 1
+    assert res.suction == {1: 1.0, 2: 1.0}
+    assert res.suction_images == 1
     am = evaluate_real(tiny_model, root / "scene46", amodal=True, progress=False)
     assert am.mask_ap == pytest.approx(1.0)
     with pytest.raises(InvalidArgumentError, match="no amodal masks"):
@@ -495,9 +516,11 @@ def test_eval_real_command(tiny_model: Path, tmp_path: Path, capsys: pytest.Capt
         == 0
     )
     text = capsys.readouterr().out
-    assert "mask_AP50" in text and "suction_P@10" in text
+    assert "mask_AP50" in text
+    assert "suction_P@10" in text
     doc = json.loads((out / "results.json").read_text())
-    assert doc["format"] == "metagraspnet" and doc["summary"]["images"] == 2
+    assert doc["format"] == "metagraspnet"
+    assert doc["summary"]["images"] == 2
     assert [e["name"] for e in doc["per_image"]] == ["scene46/3", "scene418/3"]
     assert 0.0 <= doc["summary"]["fg_IoU"] <= 1.0
     pictures = sorted((out / "overlays").iterdir())
@@ -532,7 +555,8 @@ def test_transfer_table_by_hand():
     assert rows[1]["mask_AP50 mean"] == pytest.approx(0.7)
     assert rows[1]["mask_AP50 std"] == pytest.approx(np.sqrt((0.01 + 0.01 + 0.04) / 2))
     assert (rows[1]["mask_AP50 min"], rows[1]["mask_AP50 max"]) == (0.6, 0.9)
-    assert rows[1]["wins"] == "2/3" and rows[0]["wins"] == "-"  # seed 1: 0.6 < 0.7
+    assert rows[1]["wins"] == "2/3"
+    assert rows[0]["wins"] == "-"
     res.rows = rows
     assert "| new | 0.700 ± 0.173 [0.600, 0.900] | 2/3 |" in res.table()
 
@@ -589,12 +613,13 @@ def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.Ca
     assert "unknown key(s) ['datasett']" in capsys.readouterr().err
 
 
-def _load_script(name: str):  # noqa: ANN202
+def _load_script(name: str):
     import importlib.util
 
     path = Path(__file__).resolve().parents[2] / "scripts" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
+    assert spec is not None
+    assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -628,21 +653,25 @@ def test_get_real_photos_on_a_hand_written_gqcnn_layout(
     out = tmp_path / "real"
     assert _load_script("get_real_photos").main([str(tmp_path / "gqcnn"), str(out)]) == 0
     phoxi = read_real_set(out / "gqcnn_phoxi")
-    assert len(phoxi) == 10 and len(read_real_set(out / "gqcnn_primesense")) == 5
+    assert len(phoxi) == 10
+    assert len(read_real_set(out / "gqcnn_primesense")) == 5
     first = phoxi[0]
-    assert first.rgb.shape == (h, w, 3) and first.rgb[0, 0, 0] == 21
-    assert first.masks.shape == (0, h, w) and first.depth is not None
+    assert first.rgb.shape == (h, w, 3)
+    assert first.rgb[0, 0, 0] == 21
+    assert first.masks.shape == (0, h, w)
+    assert first.depth is not None
     assert np.allclose(first.depth, 0.7)
     for img in phoxi:
         np.testing.assert_array_equal(img.foreground, masks[img.name])
 
-    def perfect(self, rgb, depth=None, *, name="image", **settings):  # noqa: ANN001, ANN202, ARG001
+    def perfect(self, rgb, depth=None, *, name="image", **settings):
         ids = masks[name].astype(np.int32)
         inst = InstanceMaps(ids, np.ones(1, np.float32), None)
         return Prediction(inst, ids.astype(np.float32), np.zeros(ids.shape, np.float32))
 
     monkeypatch.setattr(Predictor, "predict", perfect)
     res = evaluate_real(tiny_model, out / "gqcnn_phoxi", progress=False)
-    assert res.foreground_iou == 1.0 and res.brightness_iou == 1.0
+    assert res.foreground_iou == 1.0
+    assert res.brightness_iou == 1.0
     assert (res.num_objects, res.mask_ap, res.mask_ap50) == (0, None, None)
     assert res.summary()["fg_IoU_brightness"] == 1.0

@@ -90,7 +90,7 @@ def resample_window(
     to (H, W): output pixel centre ``i + 0.5`` samples the source at ``r0 + (i + 0.5) * h / H``
     (bilinear between pixel centres, edges clamped; or the pixel containing it when
     ``nearest``). Outside the image the source is mirrored at its borders."""
-    H, W = a.shape[-2:]  # noqa: N806 (image size)
+    H, W = a.shape[-2:]  # image size
     ys = _mirror(r0 + (np.arange(H) + 0.5) * (h / H), H)
     xs = _mirror(c0 + (np.arange(W) + 0.5) * (w / W), W)
     if nearest:
@@ -111,7 +111,7 @@ def geometric(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The random zoom window, rotation and flips of ``full`` (module docstring), alike on
     input, targets and weight."""
-    H, W = x.shape[-2:]  # noqa: N806 (image size)
+    H, W = x.shape[-2:]  # image size
     zoom_draw = rng.random()
     z = float(np.exp(rng.uniform(np.log(ZOOM_RANGE[0]), np.log(ZOOM_RANGE[1]))))
     fr, fc = rng.random(), rng.random()

@@ -61,7 +61,7 @@ class InstanceMaps:
         return self.labels[None] == np.arange(1, n + 1, dtype=np.int32)[:, None, None]
 
 
-def _ndimage():  # noqa: ANN202 (the scipy.ndimage module)
+def _ndimage():  # the scipy.ndimage module
     try:
         from scipy import ndimage
     except ImportError as e:
@@ -73,7 +73,7 @@ def _ndimage():  # noqa: ANN202 (the scipy.ndimage module)
 
 def _hidden_owners(
     labels: np.ndarray, hidden: np.ndarray, n: int, ndimage
-) -> npt.NDArray[np.bool_]:  # noqa: ANN001
+) -> npt.NDArray[np.bool_]:
     amodal = labels[None] == np.arange(1, n + 1)[:, None, None]
     parts, count = ndimage.label(hidden, structure=np.ones((3, 3), bool))
     for k in range(1, count + 1):
@@ -91,7 +91,7 @@ def _hidden_owners(
     return amodal
 
 
-def _grow(seeds: np.ndarray, fgm: np.ndarray, ndimage) -> npt.NDArray[np.int32]:  # noqa: ANN001
+def _grow(seeds: np.ndarray, fgm: np.ndarray, ndimage) -> npt.NDArray[np.int32]:
     """Seed labels grown over the foreground: each pixel takes its nearest seed when that seed
     lies in the pixel's connected foreground part; the rest of a part that has seeds is filled by
     4-neighbour growth from the labelled pixels; parts without a seed stay background."""

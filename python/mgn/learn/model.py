@@ -62,7 +62,7 @@ def _padded(x: Any, stride: int) -> tuple[Any, int, int]:
 def _small_unet() -> Any:
     torch = require_torch()
     nn = torch.nn
-    F = torch.nn.functional  # noqa: N806 (the usual name)
+    F = torch.nn.functional  # the usual name
     block, padded = _block, _padded
 
     class SmallUNet(nn.Module):  # type: ignore[name-defined]
@@ -108,7 +108,7 @@ def _small_unet() -> Any:
 def _resnet18_unet() -> Any:
     torch = require_torch()
     nn = torch.nn
-    F = torch.nn.functional  # noqa: N806 (the usual name)
+    F = torch.nn.functional  # the usual name
     block, padded = _block, _padded
 
     class BasicBlock(nn.Module):  # type: ignore[name-defined]

@@ -133,7 +133,7 @@ def augmented_batch(
     return np.stack(xs), np.stack(ts), np.stack(ws)
 
 
-def _batch_tensors(  # noqa: ANN202
+def _batch_tensors(
     arrays: TrainingArrays, idx: np.ndarray, tc: TrainConfig, modality: str, epoch: int, device: Any
 ):
     torch = require_torch()
@@ -142,7 +142,7 @@ def _batch_tensors(  # noqa: ANN202
     )
 
 
-def _start(out: Path, resume: bool, mc: ModelConfig, tc: TrainConfig, names: list[str]):  # noqa: ANN202
+def _start(out: Path, resume: bool, mc: ModelConfig, tc: TrainConfig, names: list[str]):
     """The checkpoint to continue from (None for a fresh run); errors when ``out`` holds
     another run."""
     ckpt_path = out / "checkpoint.pt"
