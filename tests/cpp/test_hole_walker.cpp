@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "grasp/detail/seal_trials.hpp"
-#include "raytrace/detail/parallel_rays.hpp"
+#include "raytrace/parallel_rays.hpp"
 
 #include "vogel_disc.hpp"
 

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "grasp/detail/seal_trials.hpp"
-#include "raytrace/detail/parallel_rays.hpp"
-#include "raytrace/detail/ray_scene_impl.hpp"
+#include "raytrace/parallel_rays.hpp"
+#include "raytrace/ray_scene_impl.hpp"
 
 namespace {
 

@@ -20,6 +20,7 @@ and one function-level import, and checks that each is reported.
 from __future__ import annotations
 
 import ast
+import re
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -316,3 +317,38 @@ def test_the_checks_find_a_function_level_import(package_copy: Path):
         "mgn.objects.tote -> mgn.errors",
         "mgn.objects.tote -> json",
     ]
+
+
+# ----------------------------------------------------------------------------- C++ detail headers
+
+CPP_SRC = PACKAGE.parents[1] / "cpp" / "src"
+_DETAIL_INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/detail/[^"]+"', re.MULTILINE)
+
+
+def _foreign_detail_includes(root: Path) -> list[str]:
+    """``file: include`` for every include of ``<module>/detail/...`` from outside ``<module>``
+    (a file's module is its first folder under ``root``)."""
+    found = []
+    for path in sorted(root.rglob("*")):
+        if path.suffix not in {".cpp", ".hpp", ".h"}:
+            continue
+        own = path.relative_to(root).parts[0]
+        for match in _DETAIL_INCLUDE.finditer(path.read_text()):
+            if match.group(1) != own:
+                found.append(f"{path.relative_to(root)}: {match.group(0).strip()}")
+    return found
+
+
+def test_no_cpp_module_includes_another_modules_detail_header() -> None:
+    """A header in ``cpp/src/<module>/detail/`` is that module's own; what a module offers the
+    library's other modules sits directly in ``cpp/src/<module>/`` (docs/architecture.md)."""
+    assert CPP_SRC.is_dir()
+    assert _foreign_detail_includes(CPP_SRC) == []
+
+
+def test_the_detail_check_finds_a_foreign_include(tmp_path: Path) -> None:
+    (tmp_path / "render").mkdir()
+    (tmp_path / "render" / "a.cpp").write_text(
+        '#include "render/detail/own.hpp"\n#include "raytrace/detail/x.hpp"\n'
+    )
+    assert _foreign_detail_includes(tmp_path) == ['render/a.cpp: #include "raytrace/detail/x.hpp"']

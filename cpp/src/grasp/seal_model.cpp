@@ -15,7 +15,7 @@
 #include <utility>
 
 #include "grasp/detail/seal_trials.hpp"
-#include "raytrace/detail/parallel_rays.hpp"
+#include "raytrace/parallel_rays.hpp"
 
 namespace mgn {
 

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <mutex>
 
-#include "raytrace/detail/parallel_rays.hpp"
-#include "raytrace/detail/ray_scene_impl.hpp"
+#include "raytrace/parallel_rays.hpp"
+#include "raytrace/ray_scene_impl.hpp"
 
 namespace mgn {
 
@@ -450,7 +450,7 @@ void camera_rays(const Mat3d& K, int width, int height, const Pose& X_WC, Points
 }  // namespace mgn
 
 // ---------------------------------------------------------------------------------------------
-// Private fast paths for bundles of parallel rays (see detail/parallel_rays.hpp).
+// Private fast paths for bundles of parallel rays (see parallel_rays.hpp).
 
 namespace mgn::detail {
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "raytrace/detail/parallel_rays.hpp"
+#include "raytrace/parallel_rays.hpp"
 
 namespace mgn::detail {
 

@@ -9,7 +9,7 @@
 #include <memory>
 #include <vector>
 
-#include "raytrace/detail/ray_scene_impl.hpp"
+#include "raytrace/ray_scene_impl.hpp"
 #include "render/detail/pt_math.hpp"
 
 namespace mgn {
