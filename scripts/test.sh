@@ -36,7 +36,8 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DMGN_INSTALL_CPP=OFF -DMGN_WARNINGS_AS_ERRORS=ON -DMGN_SANITIZE=address,undefined >/dev/null
 export ASAN_OPTIONS=detect_leaks=1:strict_init_order=1:detect_stack_use_after_return=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizers/lsan.supp"
 cmake --build build/asan
 ctest --test-dir build/asan --output-on-failure
-unset ASAN_OPTIONS UBSAN_OPTIONS
+unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
 python -m pytest
