@@ -110,11 +110,15 @@ TEST(Drop, SettledObjectsLieInTheToteWithoutInterpenetrating) {
     // Released above the floor, at rest below where it was released.
     EXPECT_LT(d.X_WO.translation().z(), d.X_WO_release.translation().z());
     // Something holds it up: the floor, or (for a stacked object) not the floor.
-    if (b(0, 2) < 0.002) EXPECT_TRUE(d.contacts & mgn::ContactFloor) << i;
+    if (b(0, 2) < 0.002) {
+      EXPECT_TRUE(d.contacts & mgn::ContactFloor) << i;
+    }
   }
   for (std::size_t i = 0; i < world.size(); ++i)
     for (std::size_t j = 0; j < world.size(); ++j)
-      if (i != j) EXPECT_LT(penetration(world[i], world[j]), 0.003) << i << " in " << j;
+      if (i != j) {
+        EXPECT_LT(penetration(world[i], world[j]), 0.003) << i << " in " << j;
+      }
 }
 
 TEST(Drop, SameSeedSamePosesOtherSeedOtherPoses) {
@@ -161,10 +165,11 @@ TEST(Drop, BallInANarrowChannelTouchesBothSideWallsAndTheFloor) {
     // triangle mesh, Bullet reports only the wall it leans on, 0.8 mm from the other.)
     const std::uint32_t c = r.objects[0].contacts;
     EXPECT_TRUE(c & mgn::ContactFloor) << "mode " << int(mode);
-    if (mode == mgn::ToteCollision::Boxes)
+    if (mode == mgn::ToteCollision::Boxes) {
       EXPECT_TRUE((c & mgn::ContactWallMinusY) && (c & mgn::ContactWallPlusY));
-    else
+    } else {
       EXPECT_TRUE((c & mgn::ContactWallMinusY) || (c & mgn::ContactWallPlusY));
+    }
     EXPECT_NEAR(r.objects[0].X_WO.translation().z(), 0.04, 0.002);
   }
 }
@@ -367,11 +372,12 @@ TEST(Drop, FullAndReducedHullsBothSettleTheSamePile) {
     }
     for (std::size_t i = 0; i < meshes.size(); ++i)
       for (std::size_t j = 0; j < meshes.size(); ++j)
-        if (i != j)
+        if (i != j) {
           EXPECT_LT(penetration(meshes[i].transformed(r.objects[i].X_WO),
                                 meshes[j].transformed(r.objects[j].X_WO)),
                     0.003)
               << i << " in " << j << " full " << full;
+        }
   }
 }
 

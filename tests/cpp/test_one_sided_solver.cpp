@@ -320,8 +320,12 @@ TEST(OneSidedSolver, StepsOneBodyAsBulletsSolverBitForBit) {
     expect_same_worlds(bullet, ours, 900);
     const auto& solver = static_cast<const OneSidedContactSolver&>(*ours.solver);
     EXPECT_EQ(solver.bullet_iterations, 0) << n;
-    if (n != 2) EXPECT_GT(solver.packed_iterations, 5000);
-    if (n == 2) EXPECT_LT(solver.packed_iterations, solver.own_iterations / 2);
+    if (n != 2) {
+      EXPECT_GT(solver.packed_iterations, 5000);
+    }
+    if (n == 2) {
+      EXPECT_LT(solver.packed_iterations, solver.own_iterations / 2);
+    }
     EXPECT_GT(solver.own_manifolds, 900) << n;
     EXPECT_EQ(solver.bullet_manifolds, 0) << n;
     // The body was pushed along (else equal poses would be trivial).

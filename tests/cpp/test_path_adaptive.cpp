@@ -54,9 +54,13 @@ TEST(PathAdaptive, AllocationMatchesBruteForceAndKeepsTheBudget) {
       total += got[i];
       diff += std::abs(static_cast<int>(got[i]) - want[i]);
       EXPECT_LE(got[i], max_e);
-      if (est[i] == 0.0f) EXPECT_EQ(got[i], 0);
+      if (est[i] == 0.0f) {
+        EXPECT_EQ(got[i], 0);
+      }
       for (std::size_t k = 0; k < est.size(); ++k)  // more noise, never fewer samples
-        if (est[k] > est[i]) EXPECT_GE(got[k], got[i]);
+        if (est[k] > est[i]) {
+          EXPECT_GE(got[k], got[i]);
+        }
     }
     EXPECT_LE(total, std::round(mean * 400));
     EXPECT_LE(diff, 1) << "trial " << trial;  // at most a rounding tie at the threshold

@@ -130,7 +130,9 @@ TEST(RayScene, ThreadsAndPacketsGiveIdenticalResults) {
   EXPECT_EQ(a.instance_ids, c.instance_ids);
   EXPECT_EQ(a.face_ids, c.face_ids);
   for (std::size_t i = 0; i < a.distance.size(); ++i) {
-    if (a.instance_ids[i] >= 0) EXPECT_NEAR(a.distance[i], c.distance[i], 1e-6f);
+    if (a.instance_ids[i] >= 0) {
+      EXPECT_NEAR(a.distance[i], c.distance[i], 1e-6f);
+    }
   }
   EXPECT_EQ(scene.occluded(o, d, one), scene.occluded(o, d, packets));
   const auto all1 = scene.intersect_all(o, d, 64, one), all2 = scene.intersect_all(o, d, 64, two);

@@ -355,7 +355,9 @@ TEST(DepthSensor, NoiseMaterialsAndDeterminism) {
     const auto b = mgn::apply_depth_sensor(depth, ids, flags, K, p, 5);
     EXPECT_EQ(a.valid, b.valid);
     for (std::size_t i = 0; i < a.depth.size(); ++i)
-      if (a.valid[i]) ASSERT_EQ(a.depth[i], b.depth[i]);
+      if (a.valid[i]) {
+        ASSERT_EQ(a.depth[i], b.depth[i]);
+      }
     for (int i = 0; i < 100; ++i) EXPECT_FALSE(a.valid[i]);
     double s = 0, s2 = 0;
     int n = 0;

@@ -60,7 +60,9 @@ TEST(SpringSeal, SpheresSealWhenLargeAndMissWhenSmallerThanTheCup) {
   const mgn::SealTrial t =
       mgn::SealModel(mgn::make_sphere(4 * cup.radius, 256, 128), cup)
           .trial({0, 0, 4 * cup.radius}, mgn::Vec3d(0.1, 0.0, 1.0).normalized());
-  if (t.elastic_force.size() > 0) EXPECT_NEAR(t.total_elastic_force, cup.pressure_force(), 1e-9);
+  if (t.elastic_force.size() > 0) {
+    EXPECT_NEAR(t.total_elastic_force, cup.pressure_force(), 1e-9);
+  }
 }
 
 TEST(SpringSeal, CylinderSealsAlongItsSideOnlyAboveARadiusThreshold) {

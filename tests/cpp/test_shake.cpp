@@ -436,8 +436,12 @@ TEST(Staircase, EqualsTheFullGridOnEveryMonotoneGridWithFewTrials) {
       ASSERT_EQ(g.success[k], truth(k / S, k % S) ? 1 : 0) << "S " << S << " cell " << k;
     }
     EXPECT_EQ(g.trials, simulated);
-    if (S == 10) EXPECT_LE(g.trials, 39 + checks);
-    if (b[0] == S) EXPECT_LE(g.trials, S + 1 + checks);
+    if (S == 10) {
+      EXPECT_LE(g.trials, 39 + checks);
+    }
+    if (b[0] == S) {
+      EXPECT_LE(g.trials, S + 1 + checks);
+    }
   };
   for (int S = 1; S <= 6; ++S) {
     std::vector<int> b(static_cast<std::size_t>(S), 0);
@@ -624,7 +628,9 @@ TEST(Staircase, ShakeTestScoresEqualTheFullGridOnABox) {
   for (std::size_t g = 0; g < grasps.size(); ++g)
     EXPECT_EQ(stair.score[g], full.score[g]) << "grasp " << g;
   for (std::size_t t = 0; t < full.trial_success.size(); ++t)
-    if (stair.trial_simulated[t]) EXPECT_EQ(stair.trial_success[t], full.trial_success[t]);
+    if (stair.trial_simulated[t]) {
+      EXPECT_EQ(stair.trial_success[t], full.trial_success[t]);
+    }
 }
 
 TEST(Staircase, ResultsDoNotDependOnThreadCountWithUnevenGrasps) {

@@ -545,11 +545,11 @@ struct RenderSteps {
   Renderer::Impl& I;
   const CameraView& view;
   const RenderOptions& opt;
-  Frame frame;
-  LightSample light;
-  std::vector<Vec3f> random_colors;  // per instance, used when opt.randomize
-  bool full = false;                 // colour requested: the shading program runs
-  bool shadows = false;              // shadow map in use
+  Frame frame{};
+  LightSample light{};
+  std::vector<Vec3f> random_colors{};  // per instance, used when opt.randomize
+  bool full = false;                   // colour requested: the shading program runs
+  bool shadows = false;                // shadow map in use
   Mat4f light_vp = Mat4f::Identity();
 
   /// Checks the view size and the requested passes.
