@@ -2,9 +2,9 @@
 # The one test command: on a fresh Debian 12 machine it installs the system packages (apt, as
 # root or via sudo), creates .venv with mgn installed, runs the static checks (ruff, ruff format,
 # mypy, clang-format), builds the C++ tests with warnings as errors, and runs them all: ctest
-# (GoogleTest, mgn-cli, the find_package(mgn) consumer), most GoogleTest binaries built again
-# with AddressSanitizer (leaks included) and UndefinedBehaviorSanitizer, then pytest (which also
-# checks the import layers and the error classes: tests/python/test_architecture.py).
+# (GoogleTest, mgn-cli, the find_package(mgn) consumer), then pytest (which also checks the
+# import layers and the error classes: tests/python/test_architecture.py), then most GoogleTest
+# binaries built again with AddressSanitizer (leaks included) and UndefinedBehaviorSanitizer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-system-deps.sh
@@ -31,9 +31,11 @@ cmake --build build/cpp
 ctest --test-dir build/cpp --output-on-failure
 # The core under ASan + UBSan (MGN_SANITIZE: mgn's own code only; -O1, line tables for the
 # reports), exercised by the GoogleTest binaries that build and run fastest under the sanitizers
-# (all of them would add about 4 more minutes on 2 cores; left out: the drop, shake, path tracer
-# BSDF, hole walker, scene grasp, view label and Bullet-extension tests). Any report fails the
-# command; tests/sanitizers/ holds the suppressions of third-party code.
+# (the whole C++ suite would add about 12 minutes on 2 cores; left out: the drop, shake, path
+# tracer BSDF, scene grasp, view label and Bullet-extension tests). Any report fails the command;
+# tests/sanitizers/ holds the suppressions of third-party code. The sanitized build compiles at a
+# lower priority while pytest runs (pytest leaves part of the two cores idle); its binaries run
+# after pytest.
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DMGN_BUILD_TESTS=ON -DMGN_BUILD_PYTHON=OFF \
   -DMGN_BUILD_CLI=OFF -DMGN_INSTALL_CPP=OFF -DMGN_WARNINGS_AS_ERRORS=ON \
@@ -41,12 +43,18 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 asan_tests=(test_core test_geometry test_raytrace test_collision test_seal_model test_gripper
   test_render test_convex_decomposition test_convex_merge test_settle test_antipodal
   test_layout test_seal_baselines test_path_sampler test_path_adaptive)
+nice -n 10 cmake --build build/asan --target "${asan_tests[@]}" >build/asan-build.log 2>&1 &
+asan_build=$!
+python -m pytest
+if ! wait "$asan_build"; then
+  cat build/asan-build.log
+  echo "test.sh: the sanitized build failed (build/asan-build.log)" >&2
+  exit 1
+fi
 export ASAN_OPTIONS=detect_leaks=1:strict_init_order=1:detect_stack_use_after_return=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizers/lsan.supp"
-cmake --build build/asan --target "${asan_tests[@]}"
 for t in "${asan_tests[@]}"; do
   (cd build/asan/tests/cpp && "./$t" --gtest_brief=1)
 done
-unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
-python -m pytest
+echo "test.sh: every check passed"
