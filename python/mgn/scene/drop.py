@@ -28,6 +28,7 @@ from mgn.scene.penetration import (
     mesh_overlaps,
     meshes_overlap,
     render_penetration,
+    tote_depth,
 )
 from mgn.scene.scene import (
     BUILTIN,
@@ -205,18 +206,6 @@ def _stats(
     }
 
 
-def _tote_depth(mesh: Mesh, X: np.ndarray, tote: ToteSpec) -> float:
-    """How deep (m, 0 if not) ``mesh`` at ``X`` sinks into the floor or an inner wall below
-    the rim (exact: planes)."""
-    w = np.asarray(mesh.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
-    depth = float(-w[:, 2].min())
-    low = w[w[:, 2] <= tote.inner_height]
-    if len(low) and tote.walls:
-        depth = max(depth, float((np.abs(low[:, 0]) - 0.5 * tote.inner_length).max()))
-        depth = max(depth, float((np.abs(low[:, 1]) - 0.5 * tote.inner_width).max()))
-    return max(depth, 0.0)
-
-
 def _out_of_tote(mesh: Mesh, X: np.ndarray, tote: ToteSpec) -> None:
     """Moves ``X`` (in place) by the least that takes ``mesh`` out of the floor and the inner
     walls below the rim (exact: planes)."""
@@ -295,7 +284,7 @@ def _sunk(
 ) -> float:
     """How deep (m) object ``k`` at ``X`` sinks into the tote or any object but ``skip`` (the
     pass's measure: surface points :data:`SEPARATION_SPACING` apart, FCL depths)."""
-    sunk = _tote_depth(meshes[k], X, tote)
+    sunk = tote_depth(meshes[k], X, tote)
     others = [j for j in range(len(meshes)) if j not in (k, skip)]
     found = mesh_overlaps(
         [meshes[k]] + [meshes[j] for j in others],
@@ -407,7 +396,7 @@ def separate_overlaps(
         sunk = [
             k
             for k in range(len(meshes))
-            if _tote_depth(meshes[k], poses[k], tote) > SEPARATION_THRESHOLD
+            if tote_depth(meshes[k], poses[k], tote) > SEPARATION_THRESHOLD
         ]
         for k in sunk:
             _out_of_tote(meshes[k], poses[k], tote)

@@ -47,6 +47,7 @@ __all__ = [
     "meshes_overlap",
     "point_triangle_distance",
     "render_penetration",
+    "tote_depth",
 ]
 
 #: Largest distance (m) between the points tested along a mesh edge (see the module doc):
@@ -167,18 +168,24 @@ def render_penetration(
         raise InvalidArgumentError(
             f"render_penetration: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
         )
-    hx, hy, H = 0.5 * tote.inner_length, 0.5 * tote.inner_width, tote.inner_height
     worst = 0.0
     for m, X in zip(meshes, X_WO, strict=True):
-        X = np.asarray(X, np.float64)
-        w = np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
-        worst = max(worst, float(-w[:, 2].min()))
-        low = w[w[:, 2] <= H]
-        if len(low) and tote.walls:  # a table top has no walls to penetrate
-            worst = max(worst, float((np.abs(low[:, 0]) - hx).max()))
-            worst = max(worst, float((np.abs(low[:, 1]) - hy).max()))
+        worst = max(worst, tote_depth(m, np.asarray(X, np.float64), tote))
     found = _overlaps(meshes, X_WO, worst, running=True)
     return max([worst, 0.0] + [o.depth for o in found])
+
+
+def tote_depth(mesh: Mesh, X: npt.NDArray[np.float64], tote: ToteSpec) -> float:
+    """How deep (m, >= 0) ``mesh`` at pose ``X`` (tote frame) sinks into the floor (z < 0) or an
+    inner wall below the rim (a tote with walls; a table top has none): exact, a mesh's deepest
+    point against a plane is a vertex."""
+    w = np.asarray(mesh.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
+    depth = float(-w[:, 2].min())
+    low = w[w[:, 2] <= tote.inner_height]
+    if len(low) and tote.walls:
+        depth = max(depth, float((np.abs(low[:, 0]) - 0.5 * tote.inner_length).max()))
+        depth = max(depth, float((np.abs(low[:, 1]) - 0.5 * tote.inner_width).max()))
+    return max(depth, 0.0)
 
 
 def mesh_overlaps(
@@ -413,14 +420,7 @@ def _deepest(
     # brute-force maximum.
     if len(p) == 0:
         return worst, None
-    if id(part) not in models:
-        models[id(part)] = CollisionModel(part)
-    if -1 not in models:
-        models[-1] = CollisionModel(make_box([_PROBE, _PROBE, _PROBE]))
-    X = np.repeat(np.eye(4)[None], len(p), axis=0)
-    X[:, :3, 3] = p
-    found = distance(models[-1], X, models[id(part)], np.eye(4), num_threads=1).distance
-    lower = np.maximum(np.asarray(found, np.float64), 0.0)
+    lower = np.maximum(_probe_distances(p, part, models), 0.0)
     reach = 0.5 * np.sqrt(3.0) * _PROBE * (1.0 + 1e-6) + 1e-12  # half diagonal, widened
     candidates = np.flatnonzero(lower + reach > max(worst, float(lower.max())))
     if len(candidates) == 0:
@@ -446,18 +446,27 @@ def _deepest(
 _PROBE = 1e-5  # m, edge of the probe cube whose FCL distance to a mesh gives a point's depth
 
 
-def _deepest_fcl(
-    p: np.ndarray, part: Mesh, worst: float, models: dict[int, CollisionModel]
-) -> tuple[float, np.ndarray | None]:
-    """:func:`_deepest` with each point's depth from FCL: the distance of a tiny probe cube at
-    the point to ``part``'s triangles (a BVH search instead of every triangle)."""
+def _probe_distances(
+    p: np.ndarray, part: Mesh, models: dict[int, CollisionModel]
+) -> npt.NDArray[np.float64]:
+    """(N,) FCL distance (m) of a probe cube (edge :data:`_PROBE`) centred at each point ``p``
+    to ``part``'s triangles; ``models`` caches the collision models (the probe under -1)."""
     if id(part) not in models:
         models[id(part)] = CollisionModel(part)
     if -1 not in models:
         models[-1] = CollisionModel(make_box([_PROBE, _PROBE, _PROBE]))
     X = np.repeat(np.eye(4)[None], len(p), axis=0)
     X[:, :3, 3] = p
-    d = distance(models[-1], X, models[id(part)], np.eye(4), num_threads=1).distance
+    found = distance(models[-1], X, models[id(part)], np.eye(4), num_threads=1).distance
+    return np.asarray(found, np.float64)
+
+
+def _deepest_fcl(
+    p: np.ndarray, part: Mesh, worst: float, models: dict[int, CollisionModel]
+) -> tuple[float, np.ndarray | None]:
+    """:func:`_deepest` with each point's depth from FCL: the distance of a tiny probe cube at
+    the point to ``part``'s triangles (a BVH search instead of every triangle)."""
+    d = _probe_distances(p, part, models)
     i = int(np.argmax(d))
     if d[i] + 0.5 * _PROBE <= worst:
         return worst, None
