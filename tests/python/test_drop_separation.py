@@ -13,7 +13,14 @@ import pytest
 import mgn
 from mgn.objects import ToteSpec
 from mgn.scene.drop import SEPARATION_THRESHOLD, separate_overlaps
-from mgn.scene.penetration import float_gaps, mesh_overlaps, meshes_overlap, render_penetration
+from mgn.scene.penetration import (
+    MeshCache,
+    edge_points,
+    float_gaps,
+    mesh_overlaps,
+    meshes_overlap,
+    render_penetration,
+)
 
 TOTE = ToteSpec()
 
@@ -150,3 +157,45 @@ def test_objects_sunk_into_the_floor_or_a_wall_are_moved_out_and_what_they_held_
     assert out[0, 2, 3] == pytest.approx(0.02, abs=1e-9)  # on the floor
     assert out[2, 0, 3] == pytest.approx(hx - 0.02, abs=1e-9)  # against the wall
     assert 0.06 - 1e-3 < out[1, 2, 3] < 0.06 + 1e-3  # on the lifted box
+
+
+def test_mesh_cache_box_query_equals_brute_force():
+    """MeshCache.points_in_box (an x-sorted slab, then y and z) keeps exactly the surface
+    points a full scan keeps, in the same order, for random boxes (some empty, some holding
+    every point)."""
+    mesh = mgn.make_box([0.05, 0.03, 0.02])
+    cache = MeshCache()
+    points = edge_points(mesh, 1e-3)
+    rng = np.random.default_rng(7)
+    sizes = []
+    for _ in range(200):
+        a, b = rng.uniform(-0.04, 0.04, (2, 3))
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        want = points[np.all((points >= lo) & (points <= hi), axis=1)]
+        got = cache.points_in_box(mesh, 1e-3, lo, hi)
+        np.testing.assert_array_equal(got, want)
+        sizes.append(len(want))
+    whole = cache.points_in_box(mesh, 1e-3, [-1, -1, -1], [1, 1, 1])
+    np.testing.assert_array_equal(whole, points)
+    assert min(sizes) == 0
+    assert max(sizes) > 0
+
+
+def test_a_shared_cache_changes_no_overlap():
+    """The separation pass reuses one MeshCache over many calls on moving poses: every
+    overlap found with the shared cache equals the one found with a fresh cache per call."""
+    ball = mgn.make_sphere(0.03, 32)
+    box = mgn.make_box([0.06, 0.04, 0.03])
+    cache = MeshCache()
+    for shift in (0.055, 0.05, 0.045, 0.07):
+        poses = [_at(0, 0, 0.03), _at(shift, 0.0, 0.03), _at(0.0, shift, 0.03)]
+        meshes = [ball, box, ball]
+        fresh = mesh_overlaps(meshes, poses, exact=False)
+        shared = mesh_overlaps(meshes, poses, exact=False, cache=cache)
+        assert [(o.a, o.b, o.depth) for o in shared] == [(o.a, o.b, o.depth) for o in fresh]
+        for o, p in zip(shared, fresh, strict=True):
+            np.testing.assert_array_equal(o.point, p.point)
+        for m, n in ((0, 1), (0, 2), (1, 2)):
+            assert meshes_overlap(meshes[m], poses[m], meshes[n], poses[n], cache=cache) == (
+                meshes_overlap(meshes[m], poses[m], meshes[n], poses[n])
+            )

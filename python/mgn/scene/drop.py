@@ -22,6 +22,7 @@ from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, tote_mesh
 from mgn.scene.penetration import (
     EDGE_SPACING,
+    MeshCache,
     Overlap,
     clearance,
     float_gaps,
@@ -223,7 +224,7 @@ def _pull_apart(
     poses: np.ndarray,
     overlap: Overlap,
     tote: ToteSpec,
-    cache: dict[float, Any],
+    cache: MeshCache,
 ) -> int | None:
     """Moves one object of an overlapping pair (``poses`` in place) the least distance along a
     direction that separates their render meshes (:func:`meshes_overlap` at
@@ -234,9 +235,9 @@ def _pull_apart(
     first move no longer than :data:`_SEPARATION_REACH` that sinks it no deeper than
     :data:`SEPARATION_THRESHOLD` wins; else the short move that sinks it least, if less than
     this pair's depth (progress, the next round goes on); else the first clean move (a lift up
-    to :data:`_LIFT_REACH`); else the least sinking move. ``cache``: :func:`meshes_overlap`'s, by
-    spacing. No move farther than :data:`_SEPARATION_REACH` (straight up:
-    :data:`_LIFT_REACH`) is made. Returns the index of the object moved (None: none)."""
+    to :data:`_LIFT_REACH`); else the least sinking move. ``cache``: the pass's per-mesh data.
+    No move farther than :data:`_SEPARATION_REACH` (straight up: :data:`_LIFT_REACH`) is made.
+    Returns the index of the object moved (None: none)."""
     way = overlap.exit - overlap.point
     way = way / max(float(np.linalg.norm(way)), 1e-12)
     a, b = (overlap.a, overlap.b) if way[2] >= 0 else (overlap.b, overlap.a)
@@ -256,7 +257,7 @@ def _pull_apart(
                              direction, overlap.depth, reach, cache)  # fmt: skip
         if X is None:
             continue
-        sunk = _sunk(meshes, poses, mover, X, other, tote)
+        sunk = _sunk(meshes, poses, mover, X, other, tote, cache)
         distance = float(np.linalg.norm(X[:3, 3] - poses[mover, :3, 3]))
         moves.append((sunk, distance, mover, X))
         if sunk <= SEPARATION_THRESHOLD and distance <= _SEPARATION_REACH:
@@ -280,7 +281,13 @@ def _pull_apart(
 
 
 def _sunk(
-    meshes: Sequence[Mesh], poses: np.ndarray, k: int, X: np.ndarray, skip: int, tote: ToteSpec
+    meshes: Sequence[Mesh],
+    poses: np.ndarray,
+    k: int,
+    X: np.ndarray,
+    skip: int,
+    tote: ToteSpec,
+    cache: MeshCache,
 ) -> float:
     """How deep (m) object ``k`` at ``X`` sinks into the tote or any object but ``skip`` (the
     pass's measure: surface points :data:`SEPARATION_SPACING` apart, FCL depths)."""
@@ -291,6 +298,7 @@ def _sunk(
         [X] + [poses[j] for j in others],
         spacing=SEPARATION_SPACING,
         exact=False,
+        cache=cache,
     )
     return max([sunk] + [o.depth for o in found if 0 in (o.a, o.b)])
 
@@ -303,7 +311,7 @@ def _separating_move(
     direction: np.ndarray,
     guess: float,
     reach: float,
-    cache: dict[float, Any],
+    cache: MeshCache,
 ) -> np.ndarray | None:
     """``X`` moved along the unit ``direction`` by the least distance after which ``mesh`` no
     longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`; doubling from ``guess`` (m),
@@ -313,7 +321,7 @@ def _separating_move(
     def clear(t: float, spacing: float) -> bool:
         moved = X.copy()
         moved[:3, 3] += t * direction
-        return not meshes_overlap(mesh, moved, other, Y, spacing, cache.setdefault(spacing, {}))
+        return not meshes_overlap(mesh, moved, other, Y, spacing, cache)
 
     # Bisection with surface points SEPARATION_SPACING apart, then with EDGE_SPACING on the
     # last stretch (a coarse point set misses at most half its spacing).
@@ -338,12 +346,12 @@ def _separating_move(
     return moved
 
 
-def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec) -> None:
+def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec, cache: MeshCache) -> None:
     """Lowers (``poses`` in place) every object whose render mesh floats more than
     :data:`_LOWER_ABOVE` above what is nearest, lowest first, each by its clearance (which
     cannot make it overlap anything) until it is within :data:`_LOWER_TO` of a body; twice
     over, for objects that rested on a lowered one."""
-    models: dict[int, Any] = {}
+    models = cache.models
     for _ in range(2):
         gaps = [clearance(meshes, list(poses), tote, k, models) for k in range(len(meshes))]
         low = [
@@ -391,7 +399,7 @@ def separate_overlaps(
         )
     poses = np.array([np.asarray(X, np.float64) for X in X_WO]).reshape(len(meshes), 4, 4)
     rounds = 0
-    cache: dict[float, Any] = {}
+    cache = MeshCache()  # the meshes do not change during the pass; their poses do
     for _ in range(SEPARATION_ROUNDS):
         sunk = [
             k
@@ -401,7 +409,7 @@ def separate_overlaps(
         for k in sunk:
             _out_of_tote(meshes[k], poses[k], tote)
         found = mesh_overlaps(
-            meshes, list(poses), SEPARATION_THRESHOLD, SEPARATION_SPACING, exact=False
+            meshes, list(poses), SEPARATION_THRESHOLD, SEPARATION_SPACING, exact=False, cache=cache
         )
         if not found and not sunk:
             break
@@ -410,7 +418,7 @@ def separate_overlaps(
             pairs.setdefault((min(o.a, o.b), max(o.a, o.b)), o)
         for o in pairs.values():
             _pull_apart(meshes, poses, o, tote, cache)
-        _lower(meshes, poses, tote)
+        _lower(meshes, poses, tote, cache)
         rounds += 1
     return poses, rounds
 

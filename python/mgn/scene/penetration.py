@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -39,6 +38,7 @@ from mgn.objects import ToteSpec
 
 __all__ = [
     "EDGE_SPACING",
+    "MeshCache",
     "Overlap",
     "clearance",
     "edge_points",
@@ -61,6 +61,112 @@ _PARITY = tuple(
     np.array(d) / np.linalg.norm(d)
     for d in ((0.5773, 0.6213, 0.5297), (-0.6917, 0.3164, 0.6491), (0.2261, -0.8423, 0.4893))
 )
+
+
+_GRID = 16  # cells per axis of a point grid (:class:`_PointGrid`)
+
+
+class _PointGrid:
+    """Points binned into a uniform grid of :data:`_GRID` ^ 3 cells over their bounding box:
+    the point indices sorted by cell (x-major, then y, then z) with each cell's first index."""
+
+    def __init__(self, points: npt.NDArray[np.float64]) -> None:
+        self.lo = points.min(axis=0) if len(points) else np.zeros(3)
+        hi = points.max(axis=0) if len(points) else np.zeros(3)
+        self.size = np.maximum(hi - self.lo, 1e-12) / _GRID
+        cell = self._cell(points)
+        linear = (cell[:, 0] * _GRID + cell[:, 1]) * _GRID + cell[:, 2]
+        self.order = np.argsort(linear, kind="stable")
+        self.start = np.searchsorted(linear[self.order], np.arange(_GRID**3 + 1))
+
+    def _cell(self, p: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
+        return np.clip(np.floor((p - self.lo) / self.size), 0, _GRID - 1).astype(np.int64)
+
+    def candidates(
+        self, lo: npt.NDArray[np.float64], hi: npt.NDArray[np.float64]
+    ) -> npt.NDArray[np.intp]:
+        """Indices of the points in the cells that the box ``lo``, ``hi`` touches (a superset
+        of the points inside the box), unordered."""
+        if np.any(hi < lo):
+            return np.zeros(0, np.intp)
+        c0, c1 = self._cell(lo[None])[0], self._cell(hi[None])[0]
+        x, y = np.meshgrid(np.arange(c0[0], c1[0] + 1), np.arange(c0[1], c1[1] + 1), indexing="ij")
+        first = ((x * _GRID + y) * _GRID + c0[2]).ravel()  # each (x, y) column's z run of cells
+        begin, end = self.start[first], self.start[first + (c1[2] - c0[2] + 1)]
+        count = end - begin
+        offset = np.repeat(begin - (np.cumsum(count) - count), count)
+        return self.order[np.arange(int(count.sum())) + offset]
+
+
+class MeshCache:
+    """What the overlap tests derive from a mesh, computed once and reused across calls: its
+    surface points (:func:`edge_points`) per spacing, its closed parts with their ray scenes,
+    its bounding box (mesh frame, m) and FCL collision models. Keyed by the mesh object; the
+    cache holds a reference to every mesh it has seen, so a key stays valid while the cache
+    lives. Use one cache for a set of meshes that do not change (their poses may)."""
+
+    def __init__(self) -> None:
+        self._meshes: dict[int, Mesh] = {}
+        self._points: dict[tuple[int, float], npt.NDArray[np.float64]] = {}
+        self._grids: dict[tuple[int, float], _PointGrid] = {}
+        self._parts: dict[int, list[tuple[Mesh, RayScene]]] = {}
+        self._bounds: dict[int, tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]] = {}
+        #: FCL collision models by ``id`` of a mesh or part held here (the probe under -1).
+        self.models: dict[int, CollisionModel] = {}
+
+    def _hold(self, mesh: Mesh) -> int:
+        self._meshes.setdefault(id(mesh), mesh)
+        return id(mesh)
+
+    def points(self, mesh: Mesh, spacing: float) -> npt.NDArray[np.float64]:
+        """:func:`edge_points` of ``mesh`` at ``spacing`` (m), mesh frame."""
+        key = (self._hold(mesh), float(spacing))
+        if key not in self._points:
+            self._points[key] = edge_points(mesh, spacing)
+        return self._points[key]
+
+    def points_in_box(
+        self, mesh: Mesh, spacing: float, lo: npt.ArrayLike, hi: npt.ArrayLike
+    ) -> npt.NDArray[np.float64]:
+        """The points of :meth:`points` inside the axis-aligned box ``lo`` <= p <= ``hi`` (mesh
+        frame, m), in the order of :meth:`points`. The points are binned once into a
+        :data:`_GRID` ^ 3 grid over their bounding box; a query tests only the points of the
+        cells the box touches."""
+        key = (self._hold(mesh), float(spacing))
+        points = self.points(mesh, spacing)
+        if key not in self._grids:
+            self._grids[key] = _PointGrid(points)
+        lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+        found = self._grids[key].candidates(lo, hi)
+        keep = np.zeros(len(points), bool)
+        keep[found] = True
+        keep[keep] = np.all((points[keep] >= lo) & (points[keep] <= hi), axis=1)
+        return points[keep]
+
+    def parts(self, mesh: Mesh) -> list[tuple[Mesh, RayScene]]:
+        """The connected parts of ``mesh`` (:func:`_connected_parts`), each with its ray scene."""
+        key = self._hold(mesh)
+        if key not in self._parts:
+            parts = [(m, RayScene(m)) for m in _connected_parts(mesh)]
+            for m, _ in parts:
+                self._hold(m)
+            self._parts[key] = parts
+        return self._parts[key]
+
+    def bounds(self, mesh: Mesh) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """(lo, hi): the corners (3,) of ``mesh``'s bounding box in its frame (m)."""
+        key = self._hold(mesh)
+        if key not in self._bounds:
+            v = np.asarray(mesh.vertices, np.float64)
+            self._bounds[key] = (v.min(axis=0), v.max(axis=0))
+        return self._bounds[key]
+
+    def model(self, mesh: Mesh) -> CollisionModel:
+        """The FCL collision model of ``mesh``."""
+        key = self._hold(mesh)
+        if key not in self.models:
+            self.models[key] = CollisionModel(mesh)
+        return self.models[key]
 
 
 def point_triangle_distance(
@@ -194,6 +300,7 @@ def mesh_overlaps(
     above: float = 0.0,
     spacing: float = EDGE_SPACING,
     exact: bool = True,
+    cache: MeshCache | None = None,
 ) -> list[Overlap]:
     """For each ordered pair of closed meshes (objects) at poses ``X_WO`` (tote frame) whose
     surfaces sink deeper than ``above`` (m, >= 0) into each other, the deepest point of ``a``'s
@@ -201,14 +308,17 @@ def mesh_overlaps(
     vertex and points along every edge at most ``spacing`` (m, > 0) apart, so a depth is found
     to within ``spacing`` / 2; parts of one mesh never count). Pairs in order of (a, b); the
     tote is not measured. ``exact=False``: each inside point's depth is its FCL distance to
-    the other mesh (a 0.01 mm probe; faster, short of the exact depth by at most 0.01 mm)."""
+    the other mesh (a 0.01 mm probe; faster, short of the exact depth by at most 0.01 mm).
+    ``cache``: per-mesh data reused across calls on the same meshes (:class:`MeshCache`)."""
     if len(meshes) != len(X_WO):
         raise InvalidArgumentError(
             f"mesh_overlaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
         )
     if not above >= 0:
         raise InvalidArgumentError(f"mesh_overlaps: above must be >= 0 m, got {above!r}")
-    return _overlaps(meshes, X_WO, float(above), running=False, spacing=spacing, exact=exact)
+    return _overlaps(
+        meshes, X_WO, float(above), running=False, spacing=spacing, exact=exact, cache=cache
+    )
 
 
 def _overlaps(
@@ -218,55 +328,50 @@ def _overlaps(
     running: bool,
     spacing: float = EDGE_SPACING,
     exact: bool = True,
+    cache: MeshCache | None = None,
 ) -> list[Overlap]:
     """The deepest point of each ordered pair deeper than ``above``; ``running``: only pairs
     deeper than every pair before them (enough for the maximum, and faster)."""
+    cache = MeshCache() if cache is None else cache  # copies of one object share their mesh
     local = [np.asarray(m.vertices, np.float64) for m in meshes]
     poses = [np.asarray(X, np.float64) for X in X_WO]
     world = [v @ X[:3, :3].T + X[:3, 3] for v, X in zip(local, poses, strict=True)]
-    samples: dict[int, np.ndarray] = {}  # copies of one object share their mesh
-    for m in meshes:
-        if id(m) not in samples:
-            samples[id(m)] = edge_points(m, spacing)
-    surface = [samples[id(m)] @ X[:3, :3].T + X[:3, 3] for m, X in zip(meshes, poses, strict=True)]
     lo = [w.min(axis=0) for w in world]
     hi = [w.max(axis=0) for w in world]
-    parts: dict[int, list[tuple[Mesh, RayScene]]] = {}
-    split: dict[int, list[tuple[Mesh, RayScene]]] = {}
     found: list[Overlap] = []
-    models: dict[int, CollisionModel] = {}
     for a in range(len(meshes)):
         for b in range(len(meshes)):
             if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
                 continue
             # Surface points of a inside b's world bounding box, in b's frame, inside b's local
             # bounding box, then inside b's mesh.
-            pa = surface[a]
+            Xa = poses[a]
+            corners = _box_corners(lo[b], hi[b])
+            in_a = (corners - Xa[:3, 3]) @ Xa[:3, :3]  # b's world box in a's frame
+            pa = cache.points_in_box(
+                meshes[a], spacing, in_a.min(axis=0) - _BOX_SLACK, in_a.max(axis=0) + _BOX_SLACK
+            )
+            pa = pa @ Xa[:3, :3].T + Xa[:3, 3]
             pa = pa[np.all((pa >= lo[b]) & (pa <= hi[b]), axis=1)]
             Xb = poses[b]
             pa = (pa - Xb[:3, 3]) @ Xb[:3, :3]
-            blo, bhi = local[b].min(axis=0), local[b].max(axis=0)
+            blo, bhi = cache.bounds(meshes[b])
             pa = pa[np.all((pa >= blo) & (pa <= bhi), axis=1)]
             if len(pa) == 0:
                 continue
-            if b not in parts:
-                key = id(meshes[b])  # copies of one object share their mesh: split it once
-                if key not in split:
-                    split[key] = [(m, RayScene(m)) for m in _connected_parts(meshes[b])]
-                parts[b] = split[key]
             # A mesh of several closed parts that overlap one another (one object modelled as
             # a union of solids) is tested part by part: the parity of the whole would count a
             # point inside two parts as outside, and coincident faces of two parts as one
             # crossing. A point inside a part sinks into b at least as deep as into that part.
             worst = max([above] + [o.depth for o in found]) if running else above
             best: tuple[float, np.ndarray, Mesh] | None = None
-            for part, scene in parts[b]:
+            for part, scene in cache.parts(meshes[b]):
                 p = pa[_inside(scene, pa)]
                 if len(p):
                     if exact:
-                        depth, at = _deepest(p, part, worst, models)
+                        depth, at = _deepest(p, part, worst, cache.models)
                     else:
-                        depth, at = _deepest_fcl(p, part, worst, models)
+                        depth, at = _deepest_fcl(p, part, worst, cache.models)
                     if at is not None:
                         worst, best = depth, (depth, at, part)
             if best is not None:
@@ -284,37 +389,42 @@ def meshes_overlap(
     mesh_b: Mesh,
     X_b: npt.ArrayLike,
     spacing: float = EDGE_SPACING,
-    cache: dict[int, Any] | None = None,
+    cache: MeshCache | None = None,
 ) -> bool:
     """Whether a point of either closed mesh's surface (every vertex and points along every
     edge at most ``spacing`` (m) apart) lies inside the other at poses ``X_a``, ``X_b`` (the
-    inside test of :func:`render_penetration`, part by part). ``cache``: surface points and
-    ray scenes by ``id(mesh)``, filled and reused across calls."""
-    cache = {} if cache is None else cache
-    for m in (mesh_a, mesh_b):
-        if id(m) not in cache:
-            v = np.asarray(m.vertices, np.float64)
-            parts = [(p, RayScene(p)) for p in _connected_parts(m)]
-            cache[id(m)] = (edge_points(m, spacing), parts, v.min(axis=0), v.max(axis=0))
+    inside test of :func:`render_penetration`, part by part). ``cache``: per-mesh data reused
+    across calls (:class:`MeshCache`)."""
+    cache = MeshCache() if cache is None else cache
     Xa, Xb = np.asarray(X_a, np.float64), np.asarray(X_b, np.float64)
     for (m, X), (n, Y) in (((mesh_a, Xa), (mesh_b, Xb)), ((mesh_b, Xb), (mesh_a, Xa))):
         # m's surface points in n's frame (one transform), inside n's bounding box, then inside
         # a part of n.
         R = Y[:3, :3].T @ X[:3, :3]
         t = Y[:3, :3].T @ (X[:3, 3] - Y[:3, 3])
-        points, parts, lo, hi = cache[id(m)][0], cache[id(n)][1], cache[id(n)][2], cache[id(n)][3]
+        parts = cache.parts(n)
+        lo, hi = cache.bounds(n)
         # First the points inside the box around n's bounding box in m's own frame (no
         # transform of every point), then in n's frame.
-        corners = np.array(
-            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
-        )
-        in_m = (corners - t) @ R  # n's box corners in m's frame
-        near = np.all((points >= in_m.min(axis=0)) & (points <= in_m.max(axis=0)), axis=1)
-        p = points[near] @ R.T + t
+        in_m = (_box_corners(lo, hi) - t) @ R  # n's box corners in m's frame
+        p = cache.points_in_box(m, spacing, in_m.min(axis=0), in_m.max(axis=0)) @ R.T + t
         p = p[np.all((p >= lo) & (p <= hi), axis=1)]
         if len(p) and any(_inside(scene, p).any() for _, scene in parts):
             return True
     return False
+
+
+# m: a box carried into another frame is widened by this before it selects points there, so that
+# rounding cannot drop a point that the exact test in the first frame keeps.
+_BOX_SLACK = 1e-9
+
+
+def _box_corners(lo: npt.ArrayLike, hi: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """(8, 3) corners of the axis-aligned box ``lo``, ``hi``."""
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    return np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )
 
 
 def float_gaps(
