@@ -94,7 +94,10 @@ def files(paths: list[str]) -> list[Path]:
         found += [
             f
             for f in candidates
-            if f.is_file() and f.suffix in SUFFIXES and STUBS not in f.parents and f != Path(__file__).resolve()
+            if f.is_file()
+            and f.suffix in SUFFIXES
+            and STUBS not in f.parents
+            and f != Path(__file__).resolve()
         ]
     return found
 
@@ -109,7 +112,9 @@ def main(argv: list[str]) -> int:
             path.write_text(new)
             print(path.relative_to(ROOT))
     if unknown:
-        print("not in any submodule stub (regenerate the stubs?):", sorted(unknown), file=sys.stderr)
+        print(
+            "not in any submodule stub (regenerate the stubs?):", sorted(unknown), file=sys.stderr
+        )
         return 1
     return 0
 
