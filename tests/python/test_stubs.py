@@ -3,14 +3,20 @@
 public name and method with the parameters the compiled core reports."""
 
 import ast
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 from types import ModuleType
+
+import pytest
 
 import mgn
 from mgn import _core
 
 STUBS = Path(mgn.__file__).with_name("_core")
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _submodules() -> dict[str, ModuleType]:
@@ -56,6 +62,28 @@ def test_stub_declares_every_public_name_and_method():
             }
             real = {m for m in vars(getattr(sub, cls.name)) if not m.startswith("_")}
             assert real - members == set(), f"{sub_name}.{cls.name}: run scripts/gen-stubs.sh"
+
+
+def test_committed_stubs_equal_regenerated_ones(tmp_path):
+    """scripts/gen-stubs.sh run on the compiled core writes exactly the committed files (the
+    generator and ruff are pinned in the dev extra)."""
+    pytest.importorskip("pybind11_stubgen")
+    pytest.importorskip("ruff")
+    out = tmp_path / "_core"
+    env = {**os.environ, "PYTHON": sys.executable}
+    env["PYTHONPATH"] = os.pathsep.join([str(STUBS.parents[1]), env.get("PYTHONPATH", "")])
+    subprocess.run(
+        ["bash", str(ROOT / "scripts" / "gen-stubs.sh"), str(out)],
+        env=env,
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
+    committed = {p.name: p.read_text() for p in STUBS.glob("*.pyi")}
+    regenerated = {p.name: p.read_text() for p in out.glob("*.pyi")}
+    assert sorted(regenerated) == sorted(committed), "run scripts/gen-stubs.sh"
+    stale = [name for name, text in committed.items() if regenerated[name] != text]
+    assert not stale, f"stale stubs {stale}: run scripts/gen-stubs.sh"
 
 
 def test_package_is_marked_typed():
