@@ -9,7 +9,6 @@ namespace py = pybind11;
 namespace mgn::py_bind {
 
 void bind_core(py::module_& m) {
-  m.attr("__version__") = mgn::version();
   m.def("build_info", &mgn::build_info,
         "(library, version) pairs for mgn and every library the core was built against.");
   m.def("resolve_num_threads", &mgn::resolve_num_threads, py::arg("requested"),

@@ -1,5 +1,6 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
+#include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/geometry/mass_properties.hpp>
 #include <mgn/geometry/mesh.hpp>
 #include <mgn/geometry/mesh_io.hpp>
@@ -228,6 +229,41 @@ void bind_geometry(py::module_& m) {
         py::arg("rings") = 32);
   m.def("make_cylinder", &make_cylinder, py::arg("radius"), py::arg("height"),
         py::arg("segments") = 64);
+
+  m.def(
+      "convex_hull",
+      [](const Mesh& mesh) {
+        py::gil_scoped_release release;
+        return convex_hull(mesh);
+      },
+      py::arg("mesh"));
+
+  py::class_<ConvexDecompositionOptions>(
+      m, "ConvexDecompositionOptions",
+      "Options of convex_decomposition (mgn/geometry/convex_decomposition.hpp); the defaults "
+      "are the C++ struct's.")
+      .def(py::init<>())
+      .def_readwrite("convex_volume_tolerance",
+                     &ConvexDecompositionOptions::convex_volume_tolerance)
+      .def_readwrite("max_concavity", &ConvexDecompositionOptions::max_concavity)
+      .def_readwrite("min_parts", &ConvexDecompositionOptions::min_parts)
+      .def_readwrite("max_parts", &ConvexDecompositionOptions::max_parts)
+      .def_readwrite("compactness_weight", &ConvexDecompositionOptions::compactness_weight)
+      .def_readwrite("volume_weight", &ConvexDecompositionOptions::volume_weight)
+      .def_readwrite("extra_concavity_points", &ConvexDecompositionOptions::extra_concavity_points)
+      .def_readwrite("max_hacd_faces", &ConvexDecompositionOptions::max_hacd_faces)
+      .def_readwrite("grid_resolution", &ConvexDecompositionOptions::grid_resolution)
+      .def_readwrite("merge_volume_tolerance", &ConvexDecompositionOptions::merge_volume_tolerance)
+      .def_readwrite("merge_max_parts", &ConvexDecompositionOptions::merge_max_parts);
+
+  m.def(
+      "convex_decomposition",
+      [](const Mesh& mesh, const ConvexDecompositionOptions& options) {
+        py::gil_scoped_release release;
+        return convex_decomposition(mesh, options);
+      },
+      py::arg("mesh"),
+      py::arg_v("options", ConvexDecompositionOptions{}, "ConvexDecompositionOptions()"));
 }
 
 }  // namespace mgn::py_bind

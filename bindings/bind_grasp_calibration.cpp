@@ -1,6 +1,6 @@
 // Cup calibration (mgn/grasp/calibration.hpp): calibrate_cup, predict_experiments,
 // classification_metrics. Experiments cross the boundary as parallel arrays; cups as
-// mgn._core.Cup (bound in bind_grasp_seal.cpp; mgn.suction.core_cup converts a SuctionCup).
+// mgn._core.grasp.Cup (bound in bind_grasp_seal.cpp; mgn.suction.core_cup converts a SuctionCup).
 #include <pybind11/stl.h>
 #include <mgn/grasp/calibration.hpp>
 

@@ -1,8 +1,6 @@
-// Bindings of mgn/scene/drop and of the convex decomposition it uses (geometry/
-// convex_decomposition): numpy in/out, GIL released during the work.
+// Bindings of mgn/scene/drop (mgn._core.scene): numpy in/out, GIL released during the work.
 #include <pybind11/stl.h>
 
-#include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/scene/drop.hpp>
 #include <tuple>
 
@@ -62,24 +60,6 @@ DropArrays to_arrays(const DropResult& r) {
 }
 
 void bind_options(py::module_& m) {
-  py::class_<ConvexDecompositionOptions>(
-      m, "ConvexDecompositionOptions",
-      "Options of convex_decomposition (mgn/geometry/convex_decomposition.hpp); the defaults "
-      "are the C++ struct's.")
-      .def(py::init<>())
-      .def_readwrite("convex_volume_tolerance",
-                     &ConvexDecompositionOptions::convex_volume_tolerance)
-      .def_readwrite("max_concavity", &ConvexDecompositionOptions::max_concavity)
-      .def_readwrite("min_parts", &ConvexDecompositionOptions::min_parts)
-      .def_readwrite("max_parts", &ConvexDecompositionOptions::max_parts)
-      .def_readwrite("compactness_weight", &ConvexDecompositionOptions::compactness_weight)
-      .def_readwrite("volume_weight", &ConvexDecompositionOptions::volume_weight)
-      .def_readwrite("extra_concavity_points", &ConvexDecompositionOptions::extra_concavity_points)
-      .def_readwrite("max_hacd_faces", &ConvexDecompositionOptions::max_hacd_faces)
-      .def_readwrite("grid_resolution", &ConvexDecompositionOptions::grid_resolution)
-      .def_readwrite("merge_volume_tolerance", &ConvexDecompositionOptions::merge_volume_tolerance)
-      .def_readwrite("merge_max_parts", &ConvexDecompositionOptions::merge_max_parts);
-
   using Window = std::tuple<double, double, double>;
   auto window_get = [](const Vec3d& v) { return Window{v.x(), v.y(), v.z()}; };
   py::class_<DropOptions>(m, "DropOptions",
@@ -157,24 +137,7 @@ void bind_options(py::module_& m) {
 }  // namespace
 
 void bind_scene_drop(py::module_& m) {
-  m.def(
-      "convex_hull",
-      [](const Mesh& mesh) {
-        py::gil_scoped_release release;
-        return convex_hull(mesh);
-      },
-      py::arg("mesh"));
-
   bind_options(m);
-
-  m.def(
-      "convex_decomposition",
-      [](const Mesh& mesh, const ConvexDecompositionOptions& options) {
-        py::gil_scoped_release release;
-        return convex_decomposition(mesh, options);
-      },
-      py::arg("mesh"),
-      py::arg_v("options", ConvexDecompositionOptions{}, "ConvexDecompositionOptions()"));
 
   m.def(
       "drop_objects",

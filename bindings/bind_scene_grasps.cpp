@@ -1,4 +1,4 @@
-// Scene grasp labels (mgn/scene/scene_grasps.hpp): mgn._core.SceneGraspModel.
+// Scene grasp labels (mgn/scene/scene_grasps.hpp): mgn._core.scene.SceneGraspModel.
 // The typed façade is mgn.view_labels.grasps.SceneGraspModel.
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>

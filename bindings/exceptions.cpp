@@ -17,7 +17,7 @@ PyObject* g_backend = nullptr;
 
 PyObject* make_type(py::module_& m, const char* name, const char* doc, PyObject* builtin) {
   PyObject* bases = PyTuple_Pack(2, g_base, builtin);
-  const std::string qualified = std::string("mgn._core.") + name;
+  const std::string qualified = m.attr("__name__").cast<std::string>() + "." + name;
   PyObject* type = PyErr_NewExceptionWithDoc(qualified.c_str(), doc, bases, nullptr);
   Py_DECREF(bases);
   if (type == nullptr) throw py::error_already_set();
@@ -27,8 +27,9 @@ PyObject* make_type(py::module_& m, const char* name, const char* doc, PyObject*
 }  // namespace
 
 void register_exceptions(py::module_& m) {
-  g_base = PyErr_NewExceptionWithDoc(
-      "mgn._core.MgnError", "Base class of every error raised by mgn.", PyExc_Exception, nullptr);
+  const std::string base_name = m.attr("__name__").cast<std::string>() + ".MgnError";
+  g_base = PyErr_NewExceptionWithDoc(base_name.c_str(), "Base class of every error raised by mgn.",
+                                     PyExc_Exception, nullptr);
   if (g_base == nullptr) throw py::error_already_set();
   m.attr("MgnError") = py::handle(g_base);
   g_invalid = make_type(m, "InvalidArgumentError",

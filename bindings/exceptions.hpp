@@ -2,7 +2,7 @@
 #include <pybind11/pybind11.h>
 
 namespace mgn::py_bind {
-/// Creates mgn._core.MgnError and its subclasses (each also derived from the matching builtin)
+/// Creates mgn._core.core.MgnError and its subclasses (each also derived from the matching builtin)
 /// and installs the translator from the C++ hierarchy.
 void register_exceptions(pybind11::module_& m);
 void bind_core(pybind11::module_& m);

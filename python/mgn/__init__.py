@@ -99,4 +99,4 @@ __all__ = [
 def build_info() -> dict[str, str]:
     """Versions of mgn and of every C++ library the core was built against."""
 
-    return dict(_core.build_info())
+    return dict(_core.core.build_info())

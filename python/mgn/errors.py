@@ -15,7 +15,7 @@ The classes are created by the compiled core so that C++ exceptions map onto the
 classes, never a plain ``ValueError`` or ``TypeError`` (tests/python/test_architecture.py).
 """
 
-from mgn._core import BackendError, InvalidArgumentError, IoError, MgnError, UnsupportedError
+from mgn._core.core import BackendError, InvalidArgumentError, IoError, MgnError, UnsupportedError
 
 __all__ = [
     "BackendError",

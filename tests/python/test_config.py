@@ -40,7 +40,7 @@ def test_defaults_are_the_mgn_values() -> None:
     assert c.object_labels.physics_checks is None
     assert c.object_labels.staircase_checks == 0
     uncalibrated = load_config({"object_labels": {"physics_calibration": 0}}).object_labels
-    assert uncalibrated.staircase_checks == _core.ShakeOptions().staircase_checks == 6
+    assert uncalibrated.staircase_checks == _core.grasp.ShakeOptions().staircase_checks == 6
     given = load_config({"object_labels": {"physics_checks": 4}}).object_labels
     assert given.physics_checks == given.staircase_checks == 4
     assert c.objects.copies == (2, 5)

@@ -37,7 +37,7 @@ def _keyword_defaults(fn) -> dict[str, object]:
 def test_facade_defaults_are_the_bound_structs():
     """Each keyword default of a façade equals the field of a default-constructed C++ struct
     (MetaGraspNet's values, written here independently as a second source)."""
-    seal, anti = _core.SealOptions(), _core.AntipodalOptions()
+    seal, anti = _core.grasp.SealOptions(), _core.grasp.AntipodalOptions()
     assert (seal.num_trials, seal.angle_sigma, seal.position_sigma) == (10, 0.1, -1.0)
     assert (anti.probes, anti.approaches_tried, anti.approaches_kept) == (5, 50, 20)
     assert anti.tilt == math.pi / 16
@@ -48,18 +48,22 @@ def test_facade_defaults_are_the_bound_structs():
     d = _keyword_defaults(AntipodalSampler.sample)
     for name in ("probes", "tilt", "offset", "start_offset", "friction_coef", "approaches_tried"):
         assert d[name] == getattr(anti, name), name
-    wrench = _core.PjWrenchOptions()
+    wrench = _core.grasp.PjWrenchOptions()
     assert (wrench.friction, wrench.grip_force, wrench.contact_radius) == (0.5, 70.0, 0.005)
     d = _keyword_defaults(pj_wrench_scores)
     assert (d["friction"], d["grip_force"], d["contact_radius"]) == (0.5, 70.0, 0.005)
-    assert _keyword_defaults(suction_wrench_scores)["k"] == _core.SuctionWrenchOptions().k == 15.6
-    light = _core.LightSample()
+    assert (
+        _keyword_defaults(suction_wrench_scores)["k"]
+        == _core.grasp.SuctionWrenchOptions().k
+        == 15.6
+    )
+    light = _core.render.LightSample()
     assert (LightSample().intensity, LightSample().color_temperature, LightSample().ambient) == (
         light.intensity,
         light.color_temperature,
         light.ambient,
     )
-    scene = _core.SceneGraspOptions()
+    scene = _core.scene.SceneGraspOptions()
     assert list(scene.offsets) == [0.0, 0.1]
     assert scene.gravity_world == (0.0, 0.0, -1.0)
     assert grasps.DEFAULT_SHAFT_RADIUS == scene.tool.shaft_radius == 0.015
@@ -80,7 +84,7 @@ def test_ranges_are_checked_by_the_structs_validate():
         pj_wrench_scores([[0, 0, 0]], [[1, 0, 0]], [0.04], mass=1.0, com=(0, 0, 0), grip_force=0)
     with pytest.raises(mgn.InvalidArgumentError, match=r"SuctionWrenchOptions\.k must be"):
         suction_wrench_scores([[0, 0, 0]], [[0, 0, -1]], mass=1.0, com=(0, 0, 0), k=-1.0)
-    opts = _core.RenderOptions()
+    opts = _core.render.RenderOptions()
     opts.light.ambient = -0.5  # the nested struct is the options' own (reference semantics)
     with pytest.raises(mgn.InvalidArgumentError, match=r"RenderOptions\.light\.ambient must be"):
         opts.validate()
@@ -95,7 +99,7 @@ def test_ranges_are_checked_by_the_structs_validate():
         r.render(view, rgb=False, depth=False, instances=False)
     with pytest.raises(mgn.InvalidArgumentError, match=r"RenderOptions\.light\.intensity must"):
         r.render(view, light=LightSample(intensity=-1.0))
-    bad = _core.SceneGraspOptions()
+    bad = _core.scene.SceneGraspOptions()
     bad.tool.shaft_radius = 0.0
     with pytest.raises(mgn.InvalidArgumentError, match=r"SuctionTool\.shaft_radius"):
         bad.validate()
@@ -106,7 +110,7 @@ def test_object_grasp_labels_are_typed_and_checked():
     p1, v, a = (rng.normal(size=(4, 3)) for _ in range(3))
     w = rng.uniform(0.01, 0.05, 4).astype(np.float32)
     pts = rng.normal(size=(2, 3)).astype(np.float32)
-    labels = _core.ObjectGraspLabels(
+    labels = _core.scene.ObjectGraspLabels(
         pj_p1=p1,
         pj_closing=v,
         pj_approach=a,
@@ -124,22 +128,22 @@ def test_object_grasp_labels_are_typed_and_checked():
     assert labels.pj_score_simulation.shape == (0,)  # not given: NaN in the model
     assert np.array_equal(labels.suction_points, pts)
     assert np.array_equal(labels.suction_approach, -pts)
-    empty = _core.ObjectGraspLabels()
+    empty = _core.scene.ObjectGraspLabels()
     assert empty.pj_p1.shape == (0, 3)
     assert empty.suction_points.shape == (0, 3)
     with pytest.raises(mgn.InvalidArgumentError, match=r"ObjectGraspLabels\.pj_closing"):
-        _core.ObjectGraspLabels(pj_p1=p1, pj_closing=v[:3], pj_approach=a, pj_width=w)
+        _core.scene.ObjectGraspLabels(pj_p1=p1, pj_closing=v[:3], pj_approach=a, pj_width=w)
     with pytest.raises(mgn.InvalidArgumentError, match=r"ObjectGraspLabels\.pj_approach"):
-        _core.ObjectGraspLabels(pj_p1=p1, pj_closing=v, pj_approach=a[:, :2], pj_width=w)
+        _core.scene.ObjectGraspLabels(pj_p1=p1, pj_closing=v, pj_approach=a[:, :2], pj_width=w)
     with pytest.raises(mgn.InvalidArgumentError, match=r"ObjectGraspLabels\.suction_approach"):
-        _core.ObjectGraspLabels(suction_points=pts, suction_approach=pts[:1])
+        _core.scene.ObjectGraspLabels(suction_points=pts, suction_approach=pts[:1])
     with pytest.raises(mgn.InvalidArgumentError, match=r"ObjectGraspLabels\.pj_width"):
-        _core.ObjectGraspLabels(pj_p1=p1, pj_closing=v, pj_approach=a, pj_width=w[:, None])
+        _core.scene.ObjectGraspLabels(pj_p1=p1, pj_closing=v, pj_approach=a, pj_width=w[:, None])
 
 
 def test_path_tracer_dataclasses_default_to_the_bound_structs():
     trace, film = PathTraceOptions(), FilmOptions()
-    core_trace, core_film = _core.PathTraceOptions(), _core.FilmOptions()
+    core_trace, core_film = _core.render.PathTraceOptions(), _core.render.FilmOptions()
     for f in dataclasses.fields(trace):
         assert getattr(trace, f.name) == getattr(core_trace, f.name), f.name
     for f in dataclasses.fields(film):

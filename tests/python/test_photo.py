@@ -536,7 +536,7 @@ def test_half_resolution_albedo_ratio_fades_at_silhouettes() -> None:
     albedo = np.full((1, 4, 3), 0.3, np.float32)
     albedo_blocks = np.full((1, 2, 3), 0.1, np.float32)
     denoised = np.ones((1, 2, 3), np.float32)
-    got = _core.restore_half_resolution(
+    got = _core.render.restore_half_resolution(
         denoised, 1, 4, albedo, albedo_blocks, normal, normal_blocks, 0.02, 0.85, 0.97
     )
     assert got.dtype == np.float32
@@ -579,16 +579,17 @@ def test_half_resolution_restore_matches_a_second_implementation(shape: tuple[in
     nb = photo._blocks2(n)
     want = _restore_by_numpy(den, h, w, a, ab, n, nb)
     outs = [
-        _core.restore_half_resolution(den, h, w, a, ab, n, nb, num_threads=t) for t in (1, 2, 3)
+        _core.render.restore_half_resolution(den, h, w, a, ab, n, nb, num_threads=t)
+        for t in (1, 2, 3)
     ]
     np.testing.assert_allclose(outs[0], want, rtol=2e-5, atol=2e-6)
     assert all(o.tobytes() == outs[0].tobytes() for o in outs[1:])
-    flat = _core.restore_half_resolution(den, h, w)  # without albedo: the doubling alone
+    flat = _core.render.restore_half_resolution(den, h, w)  # without albedo: the doubling alone
     np.testing.assert_allclose(flat, np.maximum(photo._double(den, h, w), 0.0), atol=0)
     with pytest.raises(InvalidArgumentError, match="albedo_blocks"):
-        _core.restore_half_resolution(den, h, w, a, ab[:-1], n, nb)
+        _core.render.restore_half_resolution(den, h, w, a, ab[:-1], n, nb)
     with pytest.raises(InvalidArgumentError, match="denoised"):
-        _core.restore_half_resolution(den, 4 * h, w)
+        _core.render.restore_half_resolution(den, 4 * h, w)
 
 
 def test_half_resolution_denoise_keeps_full_size_print() -> None:

@@ -278,8 +278,8 @@ def test_staircase_scores_in_pieces_match_the_whole_list():
 
 
 def test_staircase_grid_binding_against_brute_force():
-    """_core.staircase_grid calls the trial only for the cells it reports simulated, never twice,
-    and with a budget of S*S checks returns every cell of any grid (monotone or not)."""
+    """_core.grasp.staircase_grid calls the trial only for the cells it reports simulated, never
+    twice, and with a budget of S*S checks returns every cell of any grid (monotone or not)."""
     rng = np.random.default_rng(4)
     S = 6
     for _ in range(60):
@@ -294,7 +294,7 @@ def test_staircase_grid_binding_against_brute_force():
             calls.append((i, j))
             return bool(truth[i, j])
 
-        r = mgn._core.staircase_grid(S, trial, S * S)
+        r = mgn._core.grasp.staircase_grid(S, trial, S * S)
         np.testing.assert_array_equal(r.success, truth)
         assert len(calls) == len(set(calls)) == r.trials == int(r.simulated.sum())
         assert all(r.simulated[i, j] for i, j in calls)
@@ -401,8 +401,8 @@ def staircase_cases():
 
 @pytest.mark.parametrize("checks", [0, 3, 10, 100])
 def test_staircase_grid_equals_the_python_reference(checks):
-    """_core.staircase_grid against the Python reference on random and constructed monotone and
-    non-monotone 10x10 grids: the same cells simulated (each once), the same outcome grid,
+    """_core.grasp.staircase_grid against the Python reference on random and constructed monotone
+    and non-monotone 10x10 grids: the same cells simulated (each once), the same outcome grid,
     fallback and trial count; against brute force (the full grid's count): exact on every
     monotone grid and wherever it fell back, and every simulated cell is the truth."""
     for n, truth in enumerate(staircase_cases()):
@@ -412,7 +412,7 @@ def test_staircase_grid_equals_the_python_reference(checks):
             calls.append((i, j))
             return bool(truth[i, j])
 
-        r = mgn._core.staircase_grid(10, trial, checks)
+        r = mgn._core.grasp.staircase_grid(10, trial, checks)
         success, simulated, fallback, trials = reference_staircase(
             10, lambda i, j, t=truth: t[i, j], checks
         )

@@ -1,8 +1,8 @@
 """ShakeScorer's object-level staircase policy (calibration on the first grasps' full grids).
 
 Most tests inject constructed outcome functions in place of the physics (the staircase search
-itself is the real ``_core.staircase_grid``), so which grids are monotone is known exactly; one
-test runs the real physics to check the replay and the determinism.
+itself is the real ``_core.grasp.staircase_grid``), so which grids are monotone is known exactly;
+one test runs the real physics to check the replay and the determinism.
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def missed_cell_grid() -> np.ndarray:
     for c in range(S * S):
         g = np.ones((S, S), bool)
         g.flat[c] = False
-        r = _core.staircase_grid(S, lambda i, j, g=g: bool(g[i, j]), CHECKS)
+        r = _core.grasp.staircase_grid(S, lambda i, j, g=g: bool(g[i, j]), CHECKS)
         if not r.simulated.flat[c]:
             return g
     raise AssertionError("the search simulates every cell: no missed cell to construct")
@@ -78,7 +78,7 @@ class FakePhysics:
         for k in range(len(rows)):
             grid = self.truth[first + k]
             if options.staircase:
-                r = _core.staircase_grid(
+                r = _core.grasp.staircase_grid(
                     S, lambda i, j, grid=grid: bool(grid[i, j]), options.staircase_checks
                 )
                 success[k], self.trials = r.success, self.trials + r.trials
@@ -327,12 +327,12 @@ def test_verified_rows_are_the_lowest_frictions():
         for i in range(1, S):
             g = np.ones((S, S), bool)
             g[i, S - 1] = False
-            r = _core.staircase_grid(S, lambda a, b, g=g: bool(g[a, b]), 0, rows)
+            r = _core.grasp.staircase_grid(S, lambda a, b, g=g: bool(g[a, b]), 0, rows)
             verified = rows < 0 or i < rows
             assert r.fallback == verified
             assert np.asarray(r.success).all() == (not verified)
         everywhere = np.ones((S, S), bool)
-        r = _core.staircase_grid(S, lambda a, b: True, 0, rows)
+        r = _core.grasp.staircase_grid(S, lambda a, b: True, 0, rows)
         assert np.array_equal(np.asarray(r.success), everywhere)
         assert r.trials == 1 + (S if rows < 0 else rows)
     opts = ShakeOptions(grid=10, staircase_verify_share=0.5).to_core()
@@ -354,7 +354,7 @@ def test_zero_checks_still_verify_every_rows_boundary():
     for c in range(S * S):
         g = np.ones((S, S), bool)
         g.flat[c] = False
-        r = _core.staircase_grid(S, lambda i, j, g=g: bool(g[i, j]), 0)
+        r = _core.grasp.staircase_grid(S, lambda i, j, g=g: bool(g[i, j]), 0)
         if c % S == S - 1:  # the hardest cell of a row: the boundary of an all-success row
             # (row 0's is monotone and found by the walk; the others are caught by a check)
             assert np.array_equal(np.asarray(r.success, bool).reshape(S, S), g)
@@ -486,7 +486,7 @@ def test_holes_no_search_visits_get_the_full_grid():
     s10 = 10
     unseen = np.ones((s10, s10), bool)
     for checks in (0, physics.CHECKED_STAIRCASE_CHECKS, physics.THOROUGH_STAIRCASE_CHECKS):
-        r = _core.staircase_grid(s10, lambda i, j: True, checks, -1)
+        r = _core.grasp.staircase_grid(s10, lambda i, j: True, checks, -1)
         unseen &= ~np.asarray(r.simulated)
     cells = np.argwhere(unseen)
     assert len(cells) >= 3

@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import mgn
+import mgn.io.dataset
 import mgn.pipeline
 import mgn.pipeline.config
 import mgn.scene
@@ -23,6 +24,7 @@ def test_the_product_is_in_the_facade() -> None:
     assert mgn.load_config is mgn.pipeline.config.load_config
     assert mgn.Scene is mgn.scene.Scene
     assert mgn.drop_scene is mgn.scene.drop_scene
+    assert mgn.Dataset is mgn.io.dataset.Dataset
     assert isinstance(mgn.load_config(None), mgn.Config)
 
 

@@ -550,8 +550,8 @@ def test_round_objects_rest_on_the_floor_and_do_not_overlap():
 @pytest.mark.parametrize(
     ("python_cls", "core_cls", "own_args"),
     [
-        (DropOptions, mgn._core.DropOptions, {"seed"}),
-        (ConvexDecompositionOptions, mgn._core.ConvexDecompositionOptions, set()),
+        (DropOptions, mgn._core.scene.DropOptions, {"seed"}),
+        (ConvexDecompositionOptions, mgn._core.geometry.ConvexDecompositionOptions, set()),
     ],
 )
 def test_python_options_mirror_the_bound_cpp_struct_and_its_defaults(
@@ -578,12 +578,12 @@ def test_python_options_mirror_the_bound_cpp_struct_and_its_defaults(
 
 
 def test_drop_options_ranges_are_checked_by_the_core():
-    o = mgn._core.DropOptions()
+    o = mgn._core.scene.DropOptions()
     o.validate()  # the defaults are valid
     o.angular_damping = 1.0
     with pytest.raises(mgn.InvalidArgumentError, match=r"DropOptions\.angular_damping"):
         o.validate()
-    o = mgn._core.DropOptions()
+    o = mgn._core.scene.DropOptions()
     o.window_min = (0.0, 0.0, 0.9)
     with pytest.raises(mgn.InvalidArgumentError, match=r"window_min must be <= window_max"):
         o.validate()
@@ -600,7 +600,7 @@ def test_drop_result_is_a_typed_object_with_one_row_per_object():
     assert scene.stats["settled"] is True
     # Same drop straight through the core, checked field by field.
     out, _, _ = _simulate(objects, 3, ToteSpec(), DropOptions(), None, None, True)
-    assert isinstance(out, mgn._core.DropResult)
+    assert isinstance(out, mgn._core.scene.DropResult)
     assert out.X_WO.shape == (2, 4, 4)
     assert out.X_WO_release.shape == (2, 4, 4)
     assert out.status.dtype == np.int32

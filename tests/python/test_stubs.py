@@ -1,32 +1,93 @@
-"""The committed type stubs of the compiled core cover every public name (scripts/gen-stubs.sh)."""
+"""The committed type stubs of the compiled core, the package python/mgn/_core/ with one
+``<module>.pyi`` per submodule ``mgn._core.<module>`` (scripts/gen-stubs.sh), declare every
+public name and method with the parameters the compiled core reports."""
 
 import ast
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
+from types import ModuleType
+
+import pytest
 
 import mgn
 from mgn import _core
 
-STUB = Path(mgn.__file__).with_name("_core.pyi")
+STUBS = Path(mgn.__file__).with_name("_core")
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _submodules() -> dict[str, ModuleType]:
+    return {n: m for n, m in vars(_core).items() if isinstance(m, ModuleType)}
+
+
+def _stub(name: str) -> ast.Module:
+    return ast.parse((STUBS / f"{name}.pyi").read_text())
+
+
+def _declared(body: list[ast.stmt]) -> set[str]:
+    return {n.name for n in body if isinstance(n, (ast.ClassDef, ast.FunctionDef))} | {
+        n.target.id for n in body if isinstance(n, ast.AnnAssign) and isinstance(n.target, ast.Name)
+    }
+
+
+def test_one_stub_per_submodule():
+    assert len(_submodules()) >= 7
+    assert {p.name for p in STUBS.glob("*.pyi")} == {"__init__.pyi"} | {
+        f"{n}.pyi" for n in _submodules()
+    }, "run scripts/gen-stubs.sh"
+
+
+def test_package_stub_declares_the_submodules_and_the_version():
+    tree = _stub("__init__")
+    imported = {
+        a.asname or a.name for n in tree.body if isinstance(n, ast.ImportFrom) for a in n.names
+    }
+    public = {n for n in dir(_core) if not n.startswith("_")} | {"__version__"}
+    assert public - (imported | _declared(tree.body)) == set(), "run scripts/gen-stubs.sh"
 
 
 def test_stub_declares_every_public_name_and_method():
-    tree = ast.parse(STUB.read_text())
-    declared = {n.name for n in tree.body if isinstance(n, (ast.ClassDef, ast.FunctionDef))} | {
-        n.target.id for n in tree.body if isinstance(n, ast.AnnAssign)
-    }
-    public = {n for n in dir(_core) if not n.startswith("_")}
-    assert public - declared == set(), "run scripts/gen-stubs.sh"
-    for cls in (n for n in tree.body if isinstance(n, ast.ClassDef)):
-        members = {m.name for m in cls.body if isinstance(m, ast.FunctionDef)} | {
-            m.target.id for m in cls.body if isinstance(m, ast.AnnAssign)
-        }
-        real = {m for m in vars(getattr(_core, cls.name)) if not m.startswith("_")}
-        assert real - members == set(), f"{cls.name}: run scripts/gen-stubs.sh"
+    for sub_name, sub in _submodules().items():
+        tree = _stub(sub_name)
+        public = {n for n in dir(sub) if not n.startswith("_")}
+        assert public - _declared(tree.body) == set(), f"{sub_name}: run scripts/gen-stubs.sh"
+        for cls in (n for n in tree.body if isinstance(n, ast.ClassDef)):
+            members = {m.name for m in cls.body if isinstance(m, ast.FunctionDef)} | {
+                m.target.id
+                for m in cls.body
+                if isinstance(m, ast.AnnAssign) and isinstance(m.target, ast.Name)
+            }
+            real = {m for m in vars(getattr(sub, cls.name)) if not m.startswith("_")}
+            assert real - members == set(), f"{sub_name}.{cls.name}: run scripts/gen-stubs.sh"
+
+
+def test_committed_stubs_equal_regenerated_ones(tmp_path):
+    """scripts/gen-stubs.sh run on the compiled core writes exactly the committed files (the
+    generator and ruff are pinned in the dev extra)."""
+    pytest.importorskip("pybind11_stubgen")
+    pytest.importorskip("ruff")
+    out = tmp_path / "_core"
+    env = {**os.environ, "PYTHON": sys.executable}
+    env["PYTHONPATH"] = os.pathsep.join([str(STUBS.parents[1]), env.get("PYTHONPATH", "")])
+    subprocess.run(
+        ["bash", str(ROOT / "scripts" / "gen-stubs.sh"), str(out)],
+        env=env,
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
+    committed = {p.name: p.read_text() for p in STUBS.glob("*.pyi")}
+    regenerated = {p.name: p.read_text() for p in out.glob("*.pyi")}
+    assert sorted(regenerated) == sorted(committed), "run scripts/gen-stubs.sh"
+    stale = [name for name, text in committed.items() if regenerated[name] != text]
+    assert not stale, f"stale stubs {stale}: run scripts/gen-stubs.sh"
 
 
 def test_package_is_marked_typed():
-    assert STUB.with_name("py.typed").is_file()
+    assert STUBS.with_name("py.typed").is_file()
 
 
 def _split_params(text: str) -> list[str]:
@@ -92,31 +153,32 @@ def _stub_functions(body: list[ast.stmt]) -> dict[str, set[tuple[tuple[str, bool
 
 
 def test_stub_signatures_match_the_compiled_core():
-    """Every function and method of the stub has the parameters (names, order, which have a
+    """Every function and method of the stubs has the parameters (names, order, which have a
     default) that the compiled core reports, overload by overload."""
-    tree = ast.parse(STUB.read_text())
     checked = 0
     mismatches = []
-    targets = [(_core, tree.body, "")]
-    targets += [
-        (getattr(_core, n.name), n.body, n.name + ".")
-        for n in tree.body
-        if isinstance(n, ast.ClassDef) and hasattr(_core, n.name)
-    ]
-    for owner, body, prefix in targets:
-        for name, stub_sigs in _stub_functions(body).items():
-            runtime = _runtime_signatures(getattr(owner, name, None), name)
-            checked += 1
-            if runtime != stub_sigs:
-                mismatches.append(
-                    f"{prefix}{name}: stub {sorted(stub_sigs)}, core {sorted(runtime)}"
-                )
+    for sub_name, sub in _submodules().items():
+        tree = _stub(sub_name)
+        targets = [(sub, tree.body, f"{sub_name}.")]
+        targets += [
+            (getattr(sub, n.name), n.body, f"{sub_name}.{n.name}.")
+            for n in tree.body
+            if isinstance(n, ast.ClassDef) and hasattr(sub, n.name)
+        ]
+        for owner, body, prefix in targets:
+            for name, stub_sigs in _stub_functions(body).items():
+                runtime = _runtime_signatures(getattr(owner, name, None), name)
+                checked += 1
+                if runtime != stub_sigs:
+                    mismatches.append(
+                        f"{prefix}{name}: stub {sorted(stub_sigs)}, core {sorted(runtime)}"
+                    )
     assert checked >= 90, f"only {checked} functions and methods were compared"
     assert not mismatches, "run scripts/gen-stubs.sh:\n" + "\n".join(mismatches)
 
 
 def test_the_signature_check_finds_a_renamed_parameter():
-    sigs = _runtime_signatures(_core.make_box, "make_box")
+    sigs = _runtime_signatures(_core.geometry.make_box, "make_box")
     assert sigs == {(("extents", False),)}
     fn = ast.parse("def make_box(size: int) -> None: ...").body[0]
     assert isinstance(fn, ast.FunctionDef)
@@ -143,7 +205,9 @@ def _dict_returning(body: list[ast.stmt], prefix: str = "") -> set[str]:
 
 
 def test_results_cross_the_boundary_as_classes_not_dicts():
-    found = _dict_returning(ast.parse(STUB.read_text()).body)
+    found: set[str] = set()
+    for sub_name in _submodules():
+        found |= _dict_returning(_stub(sub_name).body)
     assert found - set(DICT_RETURNS) == set(), "bind a result class instead of returning a dict"
     assert set(DICT_RETURNS) - found == set(), "converted: remove it from DICT_RETURNS"
 

@@ -150,7 +150,7 @@ def _kind_of(feature: str) -> str:
     return "_".join(words) or feature
 
 
-def _core_cup(cup: SuctionCup) -> _core.Cup:
+def _core_cup(cup: SuctionCup) -> _core.grasp.Cup:
     if not isinstance(cup, SuctionCup):
         raise InvalidArgumentError(
             f"cup: expected a mgn.hardware.SuctionCup, got {type(cup).__name__}"
@@ -158,7 +158,7 @@ def _core_cup(cup: SuctionCup) -> _core.Cup:
     return core_cup(cup)
 
 
-def _metrics(m: _core.ClassificationMetrics) -> dict[str, float]:
+def _metrics(m: _core.grasp.ClassificationMetrics) -> dict[str, float]:
     """The JSON form of the core's metrics: counts as int, rates as float."""
     d = m.to_dict()
     return {k: (int(v) if k in ("tp", "fp", "tn", "fn") else float(v)) for k, v in d.items()}
@@ -171,7 +171,7 @@ def classification_metrics(predicted: npt.ArrayLike, measured: npt.ArrayLike) ->
     """
     p = np.asarray(predicted, dtype=bool).ravel()
     y = np.asarray(measured, dtype=bool).ravel()
-    return _metrics(_core.classification_metrics(p.tolist(), y.tolist()))
+    return _metrics(_core.grasp.classification_metrics(p.tolist(), y.tolist()))
 
 
 def _experiment_arrays(
@@ -215,7 +215,7 @@ def predict_seals(
     """
     meshes, idx, pts, nrm = _experiment_arrays(surfaces, surface_index, points, normals)
     c = _core_cup(cup if cup is not None else SuctionCup())
-    return _core.predict_experiments(meshes, idx, pts, nrm, c, int(num_threads))
+    return _core.grasp.predict_experiments(meshes, idx, pts, nrm, c, int(num_threads))
 
 
 def calibrate(
@@ -265,7 +265,7 @@ def calibrate(
     if y.dtype != bool and not np.all(np.isin(y, (0, 1))):
         raise InvalidArgumentError("sealed: expected booleans or 0/1 values")
     y = y.astype(bool).ravel()
-    out = _core.calibrate_cup(
+    out = _core.grasp.calibrate_cup(
         meshes,
         idx,
         pts,
@@ -285,7 +285,9 @@ def calibrate(
     fitted = dataclasses.replace(initial, c1=float(out.cup.c1), c2=float(out.cup.c2))
     train_idx = np.asarray(out.train_indices, dtype=np.int64)
     test_idx = np.asarray(out.test_indices, dtype=np.int64)
-    before = _core.predict_experiments(meshes, idx, pts, nrm, _core_cup(initial), int(num_threads))
+    before = _core.grasp.predict_experiments(
+        meshes, idx, pts, nrm, _core_cup(initial), int(num_threads)
+    )
     return CalibrationReport(
         cup=fitted,
         initial_cup=initial,

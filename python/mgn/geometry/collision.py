@@ -16,7 +16,7 @@ from mgn import _core
 from mgn.base.core_result import from_core
 
 #: Immutable FCL bounding-volume hierarchy (OBBRSS) of a mesh; share it freely across threads.
-CollisionModel = _core.CollisionModel
+CollisionModel = _core.collision.CollisionModel
 
 
 def _is_single(X_WA: np.ndarray, X_WB: np.ndarray) -> bool:
@@ -38,7 +38,7 @@ def collide(
     """
     xa = np.asarray(X_WA, dtype=np.float64)
     xb = np.asarray(X_WB, dtype=np.float64)
-    out = _core.collide(a, xa, b, xb, num_threads)
+    out = _core.collision.collide(a, xa, b, xb, num_threads)
     return bool(out[0]) if _is_single(xa, xb) else out
 
 
@@ -72,4 +72,6 @@ def distance(
     """Minimum distance between A and B with the closest points (always batched arrays)."""
     xa = np.asarray(X_WA, dtype=np.float64)
     xb = np.asarray(X_WB, dtype=np.float64)
-    return from_core(DistanceResult, _core.distance(a, xa, b, xb, rel_err, abs_err, num_threads))
+    return from_core(
+        DistanceResult, _core.collision.distance(a, xa, b, xb, rel_err, abs_err, num_threads)
+    )

@@ -39,7 +39,7 @@ _CACHE_VERSION = "hacd-4"
 
 
 #: The C++ defaults (mgn/geometry/convex_decomposition.hpp), the one place they are written.
-_CORE = _core.ConvexDecompositionOptions()
+_CORE = _core.geometry.ConvexDecompositionOptions()
 
 
 @dataclass(frozen=True)
@@ -79,9 +79,9 @@ class ConvexDecompositionOptions:
     merge_volume_tolerance: float = _CORE.merge_volume_tolerance
     merge_max_parts: int = _CORE.merge_max_parts
 
-    def to_core(self) -> _core.ConvexDecompositionOptions:
+    def to_core(self) -> _core.geometry.ConvexDecompositionOptions:
         """The C++ options (the core checks the ranges when it decomposes)."""
-        return to_core(self, _core.ConvexDecompositionOptions())
+        return to_core(self, _core.geometry.ConvexDecompositionOptions())
 
 
 #: The decomposition the scene drop uses by default: HACD parts merged while they add at most 10 %
@@ -94,7 +94,7 @@ DROP_DECOMPOSITION = ConvexDecompositionOptions(merge_volume_tolerance=0.10)
 def convex_hull(mesh: Mesh) -> Mesh:
     """Closed, outward-wound convex hull of ``mesh`` (same frame). Raises InvalidArgumentError
     for an empty mesh or coplanar vertices."""
-    return _core.convex_hull(mesh)
+    return _core.geometry.convex_hull(mesh)
 
 
 def convex_decomposition(
@@ -106,7 +106,7 @@ def convex_decomposition(
     :func:`cached_convex_decomposition`.
     """
     o = options or ConvexDecompositionOptions()
-    return list(_core.convex_decomposition(mesh, o.to_core()))
+    return list(_core.geometry.convex_decomposition(mesh, o.to_core()))
 
 
 def cache_dir() -> Path:

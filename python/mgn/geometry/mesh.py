@@ -19,15 +19,15 @@ from mgn import _core
 
 #: Indexed triangle mesh (vertices (V,3) float32 m, faces (F,3) int32, optional uvs (V,2)).
 #: Invariants checked on construction: finite vertices, in-range indices, no zero-area face.
-Mesh = _core.Mesh
+Mesh = _core.geometry.Mesh
 #: Surface appearance (base colour RGBA, specular, shininess, opacity, texture).
-Material = _core.Material
+Material = _core.geometry.Material
 #: Validation report: watertightness, winding, boundary/non-manifold edges, signed volume, and
 #: the edges and vertices split where closed pieces touch (``num_split_edges``,
 #: ``num_split_vertices``).
-MeshReport = _core.MeshReport
+MeshReport = _core.geometry.MeshReport
 #: Volume (m^3), mass (kg), centre of mass (m, mesh frame), inertia about the CoM (kg m^2).
-MassProperties = _core.MassProperties
+MassProperties = _core.geometry.MassProperties
 
 
 def load_mesh(
@@ -49,7 +49,7 @@ def load_mesh(
         IoError: missing, unreadable or non-mesh file.
         InvalidArgumentError: no triangles, non-finite vertices, bad scale.
     """
-    return _core.load_mesh(os.fspath(path), scale, merge, drop_degenerate)
+    return _core.geometry.load_mesh(os.fspath(path), scale, merge, drop_degenerate)
 
 
 def mass_properties(
@@ -65,7 +65,7 @@ def mass_properties(
     mesh, ``open_mesh="shell"`` treats the surface as a shell ``shell_thickness`` metres thick
     (``is_exact`` is then False) and ``"error"`` raises InvalidArgumentError.
     """
-    return _core.compute_mass_properties(mesh, density, open_mesh, shell_thickness)
+    return _core.geometry.compute_mass_properties(mesh, density, open_mesh, shell_thickness)
 
 
 _MTLLIB = re.compile(rb"^[ \t]*mtllib[ \t]+(.+?)[ \t]*\r?$", re.MULTILINE)
@@ -141,23 +141,23 @@ def sample_surface(
     ``"random"`` is area-weighted uniform; ``"even"`` is blue-noise (farthest-point selection
     from ``oversampling * count`` area-weighted candidates), as used for grasp candidates.
     """
-    out = _core.sample_surface(mesh, int(count), method, int(seed), int(oversampling))
+    out = _core.geometry.sample_surface(mesh, int(count), method, int(seed), int(oversampling))
     return SurfaceSamples(out.points, out.normals, out.face_ids)
 
 
 def make_box(extents: npt.ArrayLike) -> Mesh:
     """Closed box centred at the origin with edge lengths ``extents`` (x, y, z) in metres."""
-    return _core.make_box(np.asarray(extents, dtype=np.float64).reshape(3))
+    return _core.geometry.make_box(np.asarray(extents, dtype=np.float64).reshape(3))
 
 
 def make_sphere(radius: float, segments: int = 64, rings: int = 32) -> Mesh:
     """Closed UV sphere of ``radius`` metres centred at the origin."""
-    return _core.make_sphere(radius, segments, rings)
+    return _core.geometry.make_sphere(radius, segments, rings)
 
 
 def make_cylinder(radius: float, height: float, segments: int = 64) -> Mesh:
     """Closed cylinder along z, centred at the origin (``radius``, ``height`` in metres)."""
-    return _core.make_cylinder(radius, height, segments)
+    return _core.geometry.make_cylinder(radius, height, segments)
 
 
 def mesh_from_arrays(

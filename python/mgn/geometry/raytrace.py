@@ -88,7 +88,7 @@ class RayScene:
             if poses.ndim == 2:
                 poses = poses[None]
         self._meshes = mesh_list  # keeps the Python objects alive for repr/introspection
-        self._scene = _core.RayScene(
+        self._scene = _core.raytrace.RayScene(
             mesh_list, poses, None if instance_ids is None else [int(i) for i in instance_ids]
         )
 
@@ -180,6 +180,6 @@ def camera_rays(
     pixels, ``X_WC`` the (4, 4) camera pose in the world. Returns (origins, unit directions), both
     (width*height, 3) float32 in the world frame.
     """
-    return _core.camera_rays(
+    return _core.raytrace.camera_rays(
         np.asarray(K, dtype=np.float64), int(width), int(height), np.asarray(X_WC, np.float64)
     )

@@ -433,7 +433,7 @@ def com_heatmap_prediction(
     depth = np.asarray(depth_ideal_m, np.float32).reshape(ids.shape)
     fx, fy, cx, cy = (float(k) for k in np.asarray(K, np.float64).reshape(4))
     X = np.asarray(X_WC, np.float64).reshape(4, 4)
-    out = _core.com_heatmap_prediction(
+    out = _core.scene.com_heatmap_prediction(
         depth, ids.astype(np.int32, copy=False), X, fx, fy, cx, cy, params
     )
     return np.asarray(out).reshape(inst.shape)

@@ -26,8 +26,8 @@ from mgn.hardware import ParallelJawGripper
 from mgn.pj.sampler import AntipodalSampler, pj_wrench_scores
 
 #: The C++ defaults of the sampler and the wrench score (the one place they are written).
-_SAMPLER = _core.AntipodalOptions()
-_WRENCH = _core.PjWrenchOptions()
+_SAMPLER = _core.grasp.AntipodalOptions()
+_WRENCH = _core.grasp.PjWrenchOptions()
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ Per grasp, S×S trials (friction ``linspace(*friction_range, S)`` × density fac
 ``linspace(*density_range, S)``): the object sits in the open gripper with gravity off, the
 fingers close and squeeze with ``grip_force``, then the hand shakes along its approach axis and
 rotates about an axis perpendicular to it. A trial succeeds if both fingers still touch the
-object at the end; the score is the success fraction. All in C++ (``mgn._core.shake_test``),
+object at the end; the score is the success fraction. All in C++ (``mgn._core.grasp.shake_test``),
 trials in parallel, identical results for any thread count.
 
 Grasps are (N, 10) rows ``[a (3), v (3), p1 (3), w]`` in metres (MetaGraspNet's order, SI
@@ -34,7 +34,7 @@ from mgn.hardware import ParallelJawGripper, default_gripper
 from mgn.pj.labels import strided_subset
 from mgn.pj.sampler import core_gripper
 
-Mesh = _core.Mesh
+Mesh = _core.geometry.Mesh
 
 #: Grasps per thread in one shake_scores call of ShakeScorer's progress bar.
 _PIECE_PER_THREAD = 16
@@ -43,7 +43,7 @@ _PIECE_PER_THREAD = 16
 PHASE_NAMES = ("close", "translate", "rotate")
 
 #: The C++ defaults (cpp/include/mgn/grasp/shake_trial.hpp), the one place they are written.
-_CORE = _core.ShakeOptions()
+_CORE = _core.grasp.ShakeOptions()
 
 
 @dataclass(frozen=True)
@@ -117,10 +117,10 @@ class ShakeOptions:
     seed: int = _CORE.seed
     first_grasp_index: int = _CORE.first_grasp_index
 
-    def to_core(self) -> _core.ShakeOptions:
+    def to_core(self) -> _core.grasp.ShakeOptions:
         """The C++ options (validated there; errors name the field)."""
         pairs = {"friction_range": "friction", "density_range": "density", "angle_range": "angle"}
-        o = to_core(self, _core.ShakeOptions(), skip=pairs)
+        o = to_core(self, _core.grasp.ShakeOptions(), skip=pairs)
         for name, prefix in pairs.items():
             lo, hi = _pair(name, getattr(self, name))
             setattr(o, prefix + "_min", lo)
@@ -205,7 +205,7 @@ class ShakeTrajectory:
     density_factor: float
 
 
-def _gripper(gripper: ParallelJawGripper | None) -> _core.ParallelJawGripper:
+def _gripper(gripper: ParallelJawGripper | None) -> _core.grasp.ParallelJawGripper:
     """The C++ gripper (boxes or meshes) through the one conversion, core_gripper()."""
     if gripper is None:
         gripper = default_gripper()
@@ -287,7 +287,7 @@ def shake_scores(
     rows = grasp_rows(grasps)
     g = _gripper(gripper)
     o = (options if options is not None else ShakeOptions()).to_core()
-    r = _core.shake_test(_parts(mesh_or_parts), m, c, inertia_arr, rows, g, o)
+    r = _core.grasp.shake_test(_parts(mesh_or_parts), m, c, inertia_arr, rows, g, o)
     return from_core(ShakeScores, r, total_steps=int(r.total_steps))
 
 
@@ -317,7 +317,7 @@ def shake_trajectory(
         raise InvalidArgumentError(f"grasp: expected one grasp, got {row.shape[0]}")
     g = _gripper(gripper)
     o = (options if options is not None else ShakeOptions()).to_core()
-    t = _core.shake_trajectory(
+    t = _core.grasp.shake_trajectory(
         _parts(mesh_or_parts),
         m,
         c,
@@ -340,8 +340,8 @@ def replay_staircase(
 
     Every cell of a grid is a deterministic trial (its own random stream, the same whichever
     search simulates it), so the search's result is a function of the full grid: this runs
-    ``_core.staircase_grid`` (the search of :func:`shake_scores` with ``staircase=True``) on the
-    stored outcomes.
+    ``_core.grasp.staircase_grid`` (the search of :func:`shake_scores` with
+    ``staircase=True``) on the stored outcomes.
 
     Args:
         trial_success: (G, S, S) bool full-grid outcomes (``ShakeScores.trial_success``).
@@ -364,7 +364,7 @@ def replay_staircase(
         def trial(i: int, j: int, cells: list[list[bool]] = cells) -> bool:
             return cells[i][j]
 
-        r = _core.staircase_grid(S, trial, int(checks), int(verified_rows))
+        r = _core.grasp.staircase_grid(S, trial, int(checks), int(verified_rows))
         score[g] = float(np.count_nonzero(r.success)) / (S * S)
         trials[g] = r.trials
     return score, trials
@@ -723,7 +723,7 @@ class ShakeScorer:
                 # (a grasp costs 17 to S*S trials with the staircase): pieces of 2 grasps per
                 # thread kept 2 threads 80-88 % busy on real grasps, 16 keep them ~95 % busy
                 # (docs/decisions/0004-shake-thread-scheduling.md). Without it, one call.
-                threads = _core.resolve_num_threads(int(options.num_threads))
+                threads = _core.core.resolve_num_threads(int(options.num_threads))
                 step = _PIECE_PER_THREAD * threads if progress else max(stop - start, 1)
                 pieces = []
                 for a in range(start, stop, step):

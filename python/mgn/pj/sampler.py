@@ -22,14 +22,14 @@ from mgn.hardware import ParallelJawGripper
 _MESH_FIELDS = ("palm_mesh", "finger_left_mesh", "finger_right_mesh")
 #: The C++ defaults (mgn/grasp/antipodal.hpp, mgn/grasp/pj_wrench.hpp): the one place they are
 #: written; the keyword defaults below read them.
-_ANTIPODAL = _core.AntipodalOptions()
-_PJ_WRENCH = _core.PjWrenchOptions()
+_ANTIPODAL = _core.grasp.AntipodalOptions()
+_PJ_WRENCH = _core.grasp.PjWrenchOptions()
 
 
-def core_gripper(gripper: ParallelJawGripper) -> _core.ParallelJawGripper:
+def core_gripper(gripper: ParallelJawGripper) -> _core.grasp.ParallelJawGripper:
     """The C++ gripper for a :class:`~mgn.hardware.ParallelJawGripper` (same field names, SI);
     mesh files of a user gripper are loaded (scaled by ``mesh_scale``)."""
-    g = _core.ParallelJawGripper()
+    g = _core.grasp.ParallelJawGripper()
     for f in dataclasses.fields(gripper):
         value = getattr(gripper, f.name)
         if f.name == "mesh_scale":
@@ -45,7 +45,7 @@ def core_gripper(gripper: ParallelJawGripper) -> _core.ParallelJawGripper:
 
 def gripper_meshes(gripper: ParallelJawGripper, opening: float) -> tuple[Mesh, Mesh, Mesh]:
     """(palm, finger_left, finger_right) closed meshes in the hand frame at ``opening`` (m)."""
-    return _core.gripper_meshes(core_gripper(gripper), float(opening))
+    return _core.grasp.gripper_meshes(core_gripper(gripper), float(opening))
 
 
 def hand_poses(
@@ -57,7 +57,7 @@ def hand_poses(
 ) -> npt.NDArray[np.float64]:
     """(N, 4, 4) hand (flange) poses X_OH of N grasps given as (N, 3), (N, 3), (N, 3), (N,)."""
     g = core_gripper(gripper if gripper is not None else ParallelJawGripper())
-    return _core.hand_poses(
+    return _core.grasp.hand_poses(
         np.asarray(p1, np.float64).reshape(-1, 3),
         np.asarray(closing, np.float64).reshape(-1, 3),
         np.asarray(approach, np.float64).reshape(-1, 3),
@@ -107,7 +107,7 @@ class AntipodalSampler:
 
     def __init__(self, mesh: Mesh, gripper: ParallelJawGripper | None = None) -> None:
         self.gripper = gripper if gripper is not None else ParallelJawGripper()
-        self._core = _core.AntipodalSampler(mesh, core_gripper(self.gripper))
+        self._core = _core.grasp.AntipodalSampler(mesh, core_gripper(self.gripper))
 
     def sample(
         self,
@@ -136,7 +136,7 @@ class AntipodalSampler:
         first ``approaches_kept`` collision-free ones are kept. Point i draws from the random
         stream (``seed``, ``first_index`` + i): any thread count or batching gives the same result.
         """
-        o = _core.AntipodalOptions()
+        o = _core.grasp.AntipodalOptions()
         o.probes = int(probes)
         o.tilt = float(tilt)
         o.offset = float(offset)
@@ -176,7 +176,7 @@ def pj_wrench_scores(
     gamma = (2/3) mu r; the gravity load (``mass`` kg at ``com``) is shared by the two fingers;
     score = min(1, 1/u) with u the utilisation. All vectors in one frame.
     """
-    return _core.pj_wrench_scores(
+    return _core.grasp.pj_wrench_scores(
         np.asarray(p1, np.float64).reshape(-1, 3),
         np.asarray(closing, np.float64).reshape(-1, 3),
         np.asarray(width, np.float64).reshape(-1),
@@ -192,9 +192,9 @@ def _wrench_options(
     grip_force: float = _PJ_WRENCH.grip_force,
     contact_radius: float = _PJ_WRENCH.contact_radius,
     gravity: float = _PJ_WRENCH.gravity,
-) -> _core.PjWrenchOptions:
+) -> _core.grasp.PjWrenchOptions:
     """The C++ constants of the parallel-jaw wrench score (mu, N, m, m/s^2), range-checked."""
-    o = _core.PjWrenchOptions()
+    o = _core.grasp.PjWrenchOptions()
     o.friction = float(friction)
     o.grip_force = float(grip_force)
     o.contact_radius = float(contact_radius)

@@ -63,8 +63,8 @@ def _color(value: Sequence[float], name: str) -> Color:
 
 #: The C++ defaults of the tracer and the film (mgn/render/path_tracer.hpp): the one place they
 #: are written.
-_TRACE = _core.PathTraceOptions()
-_FILM = _core.FilmOptions()
+_TRACE = _core.render.PathTraceOptions()
+_FILM = _core.render.FilmOptions()
 
 
 @dataclass(frozen=True)
@@ -112,8 +112,8 @@ class PbrMaterial:
             object.__setattr__(self, "base_color_texture", tex)
         self.to_core().validate()  # InvalidArgumentError naming the setting
 
-    def to_core(self) -> _core.PbrMaterial:
-        m = _core.PbrMaterial()
+    def to_core(self) -> _core.render.PbrMaterial:
+        m = _core.render.PbrMaterial()
         m.base_color = self.base_color
         m.metallic = self.metallic
         m.roughness = self.roughness
@@ -150,7 +150,7 @@ class PbrMaterial:
             transmission = min(1.0, 2.0 * (1.0 - opacity))
             base = base + 0.7 * (1.0 - base)
             roughness = 0.05
-        texture = _core.material_texture_rgb(m)
+        texture = _core.render.material_texture_rgb(m)
         return PbrMaterial(
             base_color=(float(base[0]), float(base[1]), float(base[2])),
             metallic=metallic,
@@ -192,8 +192,8 @@ class AreaLight:
         object.__setattr__(self, "intensity", float(self.intensity))
         self.to_core().validate()
 
-    def to_core(self) -> _core.AreaLight:
-        return to_core(self, _core.AreaLight())
+    def to_core(self) -> _core.render.AreaLight:
+        return to_core(self, _core.render.AreaLight())
 
 
 @dataclass(frozen=True)
@@ -225,8 +225,8 @@ class Environment:
             object.__setattr__(self, name, float(getattr(self, name)))
         self.to_core().validate()
 
-    def to_core(self) -> _core.Environment:
-        return to_core(self, _core.Environment())
+    def to_core(self) -> _core.render.Environment:
+        return to_core(self, _core.render.Environment())
 
 
 @dataclass(frozen=True)
@@ -307,8 +307,8 @@ class PathTraceOptions:
                 )
         self.to_core().validate()
 
-    def to_core(self) -> _core.PathTraceOptions:
-        o = _core.PathTraceOptions()
+    def to_core(self) -> _core.render.PathTraceOptions:
+        o = _core.render.PathTraceOptions()
         o.spp = max(-(2**31), min(2**31 - 1, int(self.spp)))
         o.max_bounces = max(-(2**31), min(2**31 - 1, int(self.max_bounces)))
         o.seed = int(self.seed) & (2**64 - 1)
@@ -354,8 +354,8 @@ class FilmOptions:
                 )
         self.to_core().validate()
 
-    def to_core(self) -> _core.FilmOptions:
-        f = _core.FilmOptions()
+    def to_core(self) -> _core.render.FilmOptions:
+        f = _core.render.FilmOptions()
         f.exposure = float(self.exposure)
         f.tone = self.tone
         f.shot_noise = float(self.shot_noise)
@@ -424,7 +424,7 @@ class PathScene:
         mats = [[_as_material(m, i, k) for k, m in enumerate(ms)] for i, ms in enumerate(materials)]
         self._lights = tuple(lights)
         self._environment = env
-        self._scene = _core.PathScene(
+        self._scene = _core.render.PathScene(
             mesh_list,
             P,
             [int(i) for i in instance_ids],
@@ -435,7 +435,7 @@ class PathScene:
 
     @classmethod
     def _wrap(
-        cls, scene: _core.PathScene, lights: tuple[AreaLight, ...], env: Environment
+        cls, scene: _core.render.PathScene, lights: tuple[AreaLight, ...], env: Environment
     ) -> PathScene:
         self = cls.__new__(cls)
         self._scene = scene
@@ -505,4 +505,4 @@ def develop(radiance: npt.ArrayLike, film: FilmOptions | None = None) -> npt.NDA
     """
     f = film if film is not None else FilmOptions()
     a = np.ascontiguousarray(radiance, dtype=np.float32)
-    return _core.develop_radiance(a, f.to_core())
+    return _core.render.develop_radiance(a, f.to_core())

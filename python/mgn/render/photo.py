@@ -411,7 +411,7 @@ def _smooth3(img: npt.NDArray[np.float32], num_threads: int = 0) -> npt.NDArray[
     """3 x 3 Gaussian (``_GUIDE_SIGMA``) of an (H, W, C) float32 image: separable, the border
     pixels repeated outwards (C++ ``mgn::gaussian_3x3``, row-parallel on ``num_threads``, 0 =
     all cores)."""
-    out: npt.NDArray[np.float32] = _core.gaussian_3x3(img, _GUIDE_SIGMA, num_threads)
+    out: npt.NDArray[np.float32] = _core.render.gaussian_3x3(img, _GUIDE_SIGMA, num_threads)
     return out
 
 
@@ -529,7 +529,7 @@ _HALF_ALBEDO_FLOOR = 0.02
 def _blocks2(img: npt.NDArray[np.float32], num_threads: int = 0) -> npt.NDArray[np.float32]:
     """Means of the 2 x 2 pixel blocks of an (H, W, C) image, an odd last row or column
     repeated: (ceil(H/2), ceil(W/2), C) float32 (C++ ``mgn::block_means_2x2``)."""
-    out: npt.NDArray[np.float32] = _core.block_means_2x2(img, num_threads)
+    out: npt.NDArray[np.float32] = _core.render.block_means_2x2(img, num_threads)
     return out
 
 
@@ -540,7 +540,7 @@ def _double(
     centres at the centres of their 2 x 2 pixels, so pixel 2i takes 3/4 of block i and 1/4 of
     block i - 1, pixel 2i + 1 3/4 of block i and 1/4 of block i + 1 (the border blocks
     repeated outwards; C++ ``mgn::double_blocks``)."""
-    out: npt.NDArray[np.float32] = _core.double_blocks(img, h, w, num_threads)
+    out: npt.NDArray[np.float32] = _core.render.double_blocks(img, h, w, num_threads)
     return out
 
 
@@ -582,7 +582,7 @@ def _denoise_half(
         a_full = None if a_full is None else _smooth3(a_full, num_threads)
         n_full = None if n_full is None else _smooth3(n_full, num_threads)
     lo, hi = _EDGE_COS
-    out: npt.NDArray[np.float32] = _core.restore_half_resolution(
+    out: npt.NDArray[np.float32] = _core.render.restore_half_resolution(
         den,
         h,
         w,
@@ -609,7 +609,7 @@ def pbr_material(m: Material, texture: npt.NDArray[np.uint8] | None = None) -> A
     if not m.has_pbr:
         return PbrMaterial.from_material(m)
     base = np.clip(np.asarray(m.base_color, np.float64)[:3], 0.0, 1.0)
-    tex = texture if texture is not None else _core.material_texture_rgb(m)
+    tex = texture if texture is not None else _core.render.material_texture_rgb(m)
     transmission = float(m.transmission)
     return PbrMaterial(
         base_color=(float(base[0]), float(base[1]), float(base[2])),

@@ -25,7 +25,7 @@ from mgn.scene.cameras import CameraView
 __all__ = ["Instance", "LightSample", "RenderOutput", "Renderer"]
 
 #: The C++ defaults (mgn/render/renderer.hpp): the one place they are written.
-_LIGHT = _core.LightSample()
+_LIGHT = _core.render.LightSample()
 
 
 @dataclass(frozen=True)
@@ -56,9 +56,9 @@ class LightSample:
     color_temperature: float = _LIGHT.color_temperature
     ambient: float = _LIGHT.ambient
 
-    def to_core(self) -> _core.LightSample:
+    def to_core(self) -> _core.render.LightSample:
         """The C++ light (``position_W=None``: NaN, the default position)."""
-        light = _core.LightSample()
+        light = _core.render.LightSample()
         if self.position_W is not None:
             x, y, z = (float(v) for v in self.position_W)
             light.position_W = (x, y, z)
@@ -82,7 +82,7 @@ class Renderer:
     """OSMesa renderer with framebuffers of at most ``max_width`` x ``max_height`` px."""
 
     def __init__(self, max_width: int = 1200, max_height: int = 1200) -> None:
-        self._r = _core.Renderer(int(max_width), int(max_height))
+        self._r = _core.render.Renderer(int(max_width), int(max_height))
         self._mesh_flags: list[int] = []
         self._instances: list[Instance] = []
 
@@ -98,7 +98,7 @@ class Renderer:
     def add_mesh(self, mesh: Mesh) -> int:
         """Upload a mesh (with its materials and textures) once; returns its id."""
         mesh_id = int(self._r.add_mesh(mesh))
-        self._mesh_flags.append(int(_core.mesh_surface_flags(mesh)))
+        self._mesh_flags.append(int(_core.render.mesh_surface_flags(mesh)))
         return mesh_id
 
     def set_instances(self, instances: Sequence[Instance]) -> None:
@@ -166,7 +166,7 @@ class Renderer:
                 f"{list(view.K.distortion)}: render it with mgn.render.iter_views (which resamples "
                 "through the lens) or render lens_for(K).render_K (mgn.scene.lens)"
             )
-        o = _core.RenderOptions()
+        o = _core.render.RenderOptions()
         o.rgb = bool(rgb)
         o.depth = bool(depth)
         o.instances = bool(instances)

@@ -39,25 +39,25 @@ __all__ = [
 
 SensorName = Literal["ideal", "structured-light", "tof"]
 #: Surface flag bits (see :func:`surface_flags`).
-SURFACE_TRANSPARENT: int = _core.SURFACE_TRANSPARENT
-SURFACE_DARK: int = _core.SURFACE_DARK
-SURFACE_MIRROR: int = _core.SURFACE_MIRROR
+SURFACE_TRANSPARENT: int = _core.render.SURFACE_TRANSPARENT
+SURFACE_DARK: int = _core.render.SURFACE_DARK
+SURFACE_MIRROR: int = _core.render.SURFACE_MIRROR
 
 _PRESETS = {
-    "ideal": _core.DepthSensorPreset.Ideal,
-    "structured-light": _core.DepthSensorPreset.StructuredLight,
-    "tof": _core.DepthSensorPreset.ToF,
+    "ideal": _core.render.DepthSensorPreset.Ideal,
+    "structured-light": _core.render.DepthSensorPreset.StructuredLight,
+    "tof": _core.render.DepthSensorPreset.ToF,
 }
 
 
-def sensor_params(preset: SensorName, **overrides: float | bool) -> _core.DepthSensorParams:
+def sensor_params(preset: SensorName, **overrides: float | bool) -> _core.render.DepthSensorParams:
     """Default parameters of a preset, with fields overridden by keyword (SI units), e.g.
     ``sensor_params("structured-light", baseline=0.05)``."""
     if preset not in _PRESETS:
         raise InvalidArgumentError(
             f"sensor preset must be one of {sorted(_PRESETS)}, got {preset!r}"
         )
-    p = _core.DepthSensorParams.preset_defaults(_PRESETS[preset])
+    p = _core.render.DepthSensorParams.preset_defaults(_PRESETS[preset])
     for key, value in overrides.items():
         if key == "preset" or not hasattr(p, key):
             raise InvalidArgumentError(f"unknown depth sensor parameter {key!r}")
@@ -72,8 +72,8 @@ def surface_flags(item: Material | Mesh) -> int:
     mirror if specular luminance >= 0.8 and shininess >= 200 or (PBR) metallic >= 0.5 with
     roughness <= 0.25 (polished metal)."""
     if isinstance(item, Mesh):
-        return int(_core.mesh_surface_flags(item))
-    return int(_core.surface_flags(item))
+        return int(_core.render.mesh_surface_flags(item))
+    return int(_core.render.surface_flags(item))
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ def apply_depth_sensor(
     depth: npt.ArrayLike,
     instance_ids: npt.ArrayLike,
     K: Intrinsics,
-    sensor: SensorName | _core.DepthSensorParams = "structured-light",
+    sensor: SensorName | _core.render.DepthSensorParams = "structured-light",
     *,
     flags_by_id: npt.ArrayLike | None = None,
     seed: int = 0,
@@ -110,7 +110,7 @@ def apply_depth_sensor(
     """
     params = sensor_params(sensor) if isinstance(sensor, str) else sensor
     flags = [] if flags_by_id is None else [int(f) for f in np.asarray(flags_by_id).ravel()]
-    out = _core.apply_depth_sensor(
+    out = _core.render.apply_depth_sensor(
         np.asarray(depth, np.float32),
         np.asarray(instance_ids, np.int32),
         flags,

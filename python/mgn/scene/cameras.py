@@ -101,12 +101,12 @@ class Intrinsics:
     @classmethod
     def mgn_synthetic(cls) -> Intrinsics:
         """1200 x 1200, 35 mm focal length on a 20.955 mm aperture (fx = fy ~= 2004.3 px)."""
-        return cls._from_core(_core.Intrinsics.mgn_synthetic())
+        return cls._from_core(_core.render.Intrinsics.mgn_synthetic())
 
     @classmethod
     def zivid_two_like(cls) -> Intrinsics:
         """1944 x 1200, fx = fy = 1780 px: an industrial camera like a Zivid Two (approximate)."""
-        return cls._from_core(_core.Intrinsics.zivid_two_like())
+        return cls._from_core(_core.render.Intrinsics.zivid_two_like())
 
     @classmethod
     def preset(cls, name: str) -> Intrinsics:
@@ -128,12 +128,12 @@ class Intrinsics:
         raise InvalidArgumentError(f"unknown intrinsics preset {name!r}; presets: {names}")
 
     @classmethod
-    def _from_core(cls, k: _core.Intrinsics) -> Intrinsics:
+    def _from_core(cls, k: _core.render.Intrinsics) -> Intrinsics:
         return cls(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
 
-    def to_core(self) -> _core.Intrinsics:
+    def to_core(self) -> _core.render.Intrinsics:
         """The C++ pinhole intrinsics (the distortion is not part of them)."""
-        return _core.Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
+        return _core.render.Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
 
     @property
     def K(self) -> npt.NDArray[np.float64]:  # the usual symbol
@@ -264,7 +264,7 @@ def mgn_rig(
     Returns:
         ((37, 4, 4) float64 poses X_WC, MgnRigParams).
     """
-    poses, params = _core.mgn_rig(int(seed), _vec3(target, "target"))
+    poses, params = _core.render.mgn_rig(int(seed), _vec3(target, "target"))
     return poses, MgnRigParams(
         params.R_start, params.R_end, params.theta_start, params.theta_end, params.phi_end
     )
@@ -274,7 +274,7 @@ def mgn_rig_from_params(
     params: MgnRigParams, target: npt.ArrayLike = (0.0, 0.0, 0.0)
 ) -> npt.NDArray[np.float64]:
     """(37, 4, 4) poses of given rig parameters."""
-    return _core.mgn_rig_from_params(
+    return _core.render.mgn_rig_from_params(
         params.R_start,
         params.R_end,
         params.theta_start,
@@ -292,7 +292,7 @@ def hemisphere_rig(
 ) -> npt.NDArray[np.float64]:
     """(N, 4, 4) poses on a hemisphere: every (radius m, tilt from vertical rad, azimuth rad),
     radius-major, then tilt, then azimuth."""
-    return _core.hemisphere_rig(
+    return _core.render.hemisphere_rig(
         [float(r) for r in np.atleast_1d(radii)],
         [float(t) for t in np.atleast_1d(tilts)],
         [float(a) for a in np.atleast_1d(azimuths)],
@@ -305,7 +305,7 @@ def look_at(
 ) -> npt.NDArray[np.float64]:
     """(4, 4) camera pose at ``eye`` looking at ``target``, image up as close to ``up`` as
     possible."""
-    return _core.look_at(_vec3(eye, "eye"), _vec3(target, "target"), _vec3(up, "up"))
+    return _core.render.look_at(_vec3(eye, "eye"), _vec3(target, "target"), _vec3(up, "up"))
 
 
 def mgn_views(

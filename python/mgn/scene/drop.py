@@ -95,7 +95,7 @@ class _Pile:
     separation_max_move: float = 0.0
 
     @classmethod
-    def of(cls, out: _core.DropResult) -> _Pile:
+    def of(cls, out: _core.scene.DropResult) -> _Pile:
         return cls(
             np.array(out.X_WO, np.float64),
             np.array(out.status, np.int64),
@@ -131,7 +131,7 @@ def _simulate(
     decomposition: ConvexDecompositionOptions | None,
     use_cache: bool,
     X_WO_start: np.ndarray | None = None,
-) -> tuple[_core.DropResult, dict[str, str], dict[str, Mesh]]:
+) -> tuple[_core.scene.DropResult, dict[str, str], dict[str, Mesh]]:
     """Validates, prepares the per-object physics and runs the C++ drop. Returns the C++ result
     (X_WO, X_WO_release, status, object_settled, contacts, steps, ...), each name's source and
     mesh."""
@@ -157,7 +157,7 @@ def _simulate(
 
     all_parts = [per_name[s.name][0] for s in objects]
     all_props = [per_name[s.name][1] for s in objects]
-    out = _core.drop_objects(
+    out = _core.scene.drop_objects(
         all_parts,
         [p.mass for p in all_props],
         np.array([np.asarray(p.center_of_mass) for p in all_props], np.float64),

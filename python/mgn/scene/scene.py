@@ -56,7 +56,7 @@ _WALLS = frozenset(CONTACT_NAMES[:4])
 
 
 #: The C++ defaults (mgn/scene/drop.hpp): the one place DropOptions' defaults are written.
-_CORE = _core.DropOptions()
+_CORE = _core.scene.DropOptions()
 
 
 def _checked_type(name: str, kind: type, value: Any) -> Any:
@@ -160,9 +160,9 @@ class DropOptions:
                 object.__setattr__(self, f.name, _checked_type(f.name, kind, getattr(self, f.name)))
         self.to_core().validate()
 
-    def to_core(self, seed: int = 0) -> _core.DropOptions:
+    def to_core(self, seed: int = 0) -> _core.scene.DropOptions:
         """The C++ options (``seed`` is :func:`mgn.scene.drop_scene`'s own argument)."""
-        o = to_core(self, _core.DropOptions())
+        o = to_core(self, _core.scene.DropOptions())
         o.seed = int(seed)
         return o
 

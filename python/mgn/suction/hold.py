@@ -41,7 +41,7 @@ from mgn import _core
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import SuctionCup
 
-_SHAKE = _core.ShakeOptions()
+_SHAKE = _core.grasp.ShakeOptions()
 
 #: Load cases of the rotational shake: axis directions (in the plane normal to the approach) and
 #: phases of the rotation's period; together with the two extremes of the translation.
@@ -76,11 +76,11 @@ class ShakeLoads:
 
     @classmethod
     def from_shake(
-        cls, grid: int = _SHAKE.grid, options: _core.ShakeOptions | None = None
+        cls, grid: int = _SHAKE.grid, options: _core.grasp.ShakeOptions | None = None
     ) -> ShakeLoads:
         """The loads of the shake test's schedule (``options``: default the shake test's
         defaults) on a ``grid`` x ``grid`` (friction, density) grid (MetaGraspNet: 10)."""
-        o = options if options is not None else _core.ShakeOptions()
+        o = options if options is not None else _core.grasp.ShakeOptions()
         if not isinstance(grid, int) or isinstance(grid, bool) or grid < 1:
             raise InvalidArgumentError(f"ShakeLoads: grid must be an integer >= 1, got {grid!r}")
         w_t = 2.0 * math.pi * o.shake_cycles / (o.shake_steps * o.dt)

@@ -23,12 +23,12 @@ from mgn.hardware import SuctionCup
 SealModelName = Literal["spring", "strain", "smoothness"]
 SEAL_MODELS: tuple[str, ...] = ("spring", "strain", "smoothness")
 #: Failure reason names, indexed by the codes in :attr:`SealResult.reason`.
-FAILURE_REASONS: tuple[str, ...] = tuple(_core.SEAL_FAILURE_NAMES)
+FAILURE_REASONS: tuple[str, ...] = tuple(_core.grasp.SEAL_FAILURE_NAMES)
 
 #: The C++ defaults (mgn/grasp/seal_model.hpp, mgn/grasp/wrench.hpp): the one place they are
 #: written; the keyword defaults below read them.
-_SEAL = _core.SealOptions()
-_WRENCH = _core.SuctionWrenchOptions()
+_SEAL = _core.grasp.SealOptions()
+_WRENCH = _core.grasp.SuctionWrenchOptions()
 
 
 #: :class:`~mgn.hardware.SuctionCup` fields the seal models do not use (the hold test's and the
@@ -36,10 +36,10 @@ _WRENCH = _core.SuctionWrenchOptions()
 PYTHON_ONLY_CUP_FIELDS: tuple[str, ...] = ("bending_k",)
 
 
-def core_cup(cup: SuctionCup) -> _core.Cup:
+def core_cup(cup: SuctionCup) -> _core.grasp.Cup:
     """The C++ cup for a :class:`~mgn.hardware.SuctionCup` (same field names, SI units; the
     fields of :data:`PYTHON_ONLY_CUP_FIELDS` are left out)."""
-    c = _core.Cup()
+    c = _core.grasp.Cup()
     for f in dataclasses.fields(cup):
         if f.name in PYTHON_ONLY_CUP_FIELDS:
             continue
@@ -87,7 +87,7 @@ class SealModel:
     ) -> None:
         self.cup = cup if cup is not None else SuctionCup()
         self.model = model
-        self._core = _core.SealModel(mesh, core_cup(self.cup), model)
+        self._core = _core.grasp.SealModel(mesh, core_cup(self.cup), model)
 
     def evaluate(
         self,
@@ -113,7 +113,7 @@ class SealModel:
             InvalidArgumentError: shapes differ, NaN or zero normals, or a point is not on the
                 mesh surface (within 1 mm along its normal).
         """
-        o = _core.SealOptions()
+        o = _core.grasp.SealOptions()
         o.num_trials = int(num_trials)
         o.angle_sigma = float(angle_sigma)
         if position_sigma is not None:
@@ -124,7 +124,7 @@ class SealModel:
         o.num_threads = int(num_threads)
         return from_core(SealResult, self._core.evaluate(points, normals, o))
 
-    def trial(self, point: Sequence[float], normal: Sequence[float]) -> _core.SealTrial:
+    def trial(self, point: Sequence[float], normal: Sequence[float]) -> _core.grasp.SealTrial:
         """One deterministic trial with its intermediate quantities (failure name, projected
         ring points and normals, elastic and ring-spring forces in N) for plots and debugging."""
         return self._core.trial(np.asarray(point, np.float64), np.asarray(normal, np.float64))
@@ -146,9 +146,9 @@ def suction_wrench_scores(
     object (``mass`` kg at ``com``, m) about the contact; tau_max = k * cup_radius * pi * sqrt(2).
     ``approach`` points into the surface. All vectors in one frame (object or world).
     """
-    o = _core.SuctionWrenchOptions()
+    o = _core.grasp.SuctionWrenchOptions()
     o.k = float(k)
-    return _core.suction_wrench_scores(
+    return _core.grasp.suction_wrench_scores(
         contacts,
         approach,
         float(mass),

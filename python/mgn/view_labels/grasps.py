@@ -81,9 +81,9 @@ __all__ = [
 
 #: MetaGraspNet's suction tool pose: the contact frame moved back along the approach by 2 cm
 #: (cup) + 11.21 cm (tool) = 0.1321 m (the one constant, defined in the C++ core).
-SUCTION_TOOL_OFFSET: float = float(_core.SUCTION_TOOL_OFFSET)
+SUCTION_TOOL_OFFSET: float = float(_core.scene.SUCTION_TOOL_OFFSET)
 #: The C++ defaults (mgn/scene/scene_grasps.hpp): the one place they are written.
-_CORE_OPTIONS = _core.SceneGraspOptions()
+_CORE_OPTIONS = _core.scene.SceneGraspOptions()
 #: Largest spacing of the tool poses checked along the approach between two offsets, m.
 DEFAULT_APPROACH_STEP: float = _CORE_OPTIONS.approach_step
 #: Radius of the suction tool shaft behind the cup body, m (a vacuum tube / tool body).
@@ -316,7 +316,9 @@ def _wrench_option(labels: Sequence[PjLabels | None], key: str, default: float) 
     return values.pop() if values else default
 
 
-def _object_labels(pj: PjLabels | None, suction: SuctionLabels | None) -> _core.ObjectGraspLabels:
+def _object_labels(
+    pj: PjLabels | None, suction: SuctionLabels | None
+) -> _core.scene.ObjectGraspLabels:
     """The C++ input of one object: its object-level labels (object frame, m; None: none)."""
 
     def rows(a: npt.ArrayLike | None, dtype: type) -> np.ndarray | None:
@@ -325,7 +327,7 @@ def _object_labels(pj: PjLabels | None, suction: SuctionLabels | None) -> _core.
     def column(a: npt.ArrayLike | None) -> np.ndarray | None:
         return None if a is None else np.asarray(a, np.float32).reshape(-1)
 
-    return _core.ObjectGraspLabels(
+    return _core.scene.ObjectGraspLabels(
         pj_p1=rows(None if pj is None else pj.p1, np.float64),
         pj_closing=rows(None if pj is None else pj.closing, np.float64),
         pj_approach=rows(None if pj is None else pj.approach, np.float64),
@@ -427,7 +429,7 @@ class SceneGraspModel:
             )
         self.gripper = gripper if gripper is not None else ParallelJawGripper()
         self.cup = cup if cup is not None else SuctionCup()
-        wrench = _core.PjWrenchOptions()
+        wrench = _core.grasp.PjWrenchOptions()
         for name, key, given in (
             ("friction", "friction", friction),
             ("grip_force", "grip_force_N", grip_force),
@@ -444,7 +446,7 @@ class SceneGraspModel:
                 f"SceneGraspModel: offsets must be distances in m and gravity_world 3 numbers, "
                 f"got {offsets!r} and {gravity_world!r}"
             ) from e
-        opts = _core.SceneGraspOptions()
+        opts = _core.scene.SceneGraspOptions()
         opts.offsets = offs
         opts.approach_step = float(approach_step)
         opts.tool.clearance = CUP_BODY_CLEARANCE
@@ -457,7 +459,7 @@ class SceneGraspModel:
         opts.num_threads = int(num_threads)
         opts.first_collision_only = bool(first_collision_only)
         opts.validate()
-        self._core = _core.SceneGraspModel(
+        self._core = _core.scene.SceneGraspModel(
             list(meshes),
             np.asarray(poses, np.float64).reshape(-1, 4, 4),
             [float(m) for m in masses],
@@ -496,7 +498,7 @@ class SceneGraspModel:
         return cls(None, pj_labels, suction_labels, gripper, cup, _objects=objects, **options)
 
     @staticmethod
-    def _placed(d: _core.PlacedGraspArrays) -> PlacedGrasps:
+    def _placed(d: _core.scene.PlacedGraspArrays) -> PlacedGrasps:
         return PlacedGrasps(
             tool_poses=_pose_array(d.tool_poses),
             contact_poses=_pose_array(d.contact_poses),

@@ -283,7 +283,7 @@ def compute_layout(
         raise InvalidArgumentError(
             f"compute_layout: bin_relations: unknown values {bad}; valid: {list(BIN_RELATIONS)}"
         )
-    r = _core.compute_layout(
+    r = _core.scene.compute_layout(
         vis,
         masks,
         d,

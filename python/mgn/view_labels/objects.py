@@ -172,7 +172,7 @@ class SceneRayModel:
         self._tote = tote
         self._category_ids = cats.astype(np.int32)
         self._com_parameters = _com_parameters(P, c, cp, meshes)
-        self._model = _core.ViewLabelModel(
+        self._model = _core.scene.ViewLabelModel(
             meshes,
             P,
             [int(x) for x in cats],

@@ -29,7 +29,7 @@ from mgn.hardware import ParallelJawGripper, default_gripper
 from mgn.objects import get_object
 from mgn.pj.physics import PHASE_NAMES, ShakeOptions, ShakeTrajectory, shake_trajectory
 
-Mesh = _core.Mesh
+Mesh = _core.geometry.Mesh
 
 _BACKGROUND = (248, 248, 245)
 _OBJECT = np.array([90.0, 130.0, 190.0])
@@ -52,7 +52,7 @@ def _view_rotation() -> npt.NDArray[np.float64]:
 
 
 def _box(size: npt.ArrayLike, centre: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    m = _core.make_box(np.asarray(size, dtype=np.float64))
+    m = _core.geometry.make_box(np.asarray(size, dtype=np.float64))
     return np.asarray(m.vertices, dtype=np.float64) + np.asarray(centre), np.asarray(m.faces)
 
 
