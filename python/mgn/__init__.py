@@ -8,6 +8,13 @@ their frames, e.g. ``X_WO`` is the pose of object O in the world W.
 from typing import TYPE_CHECKING
 
 from mgn import _core
+
+if getattr(_core, "__file__", None) is None:  # only the stub folder python/mgn/_core/ was found
+    raise ImportError(
+        f"mgn's compiled core (mgn/_core*.so) is missing beside {__file__}: install mgn with "
+        "`pip install .` or copy the built bindings/_core*.so into python/mgn/"
+    )
+
 from mgn._core import __version__
 from mgn.base.lazy import lazy_exports
 from mgn.errors import BackendError, InvalidArgumentError, IoError, MgnError, UnsupportedError

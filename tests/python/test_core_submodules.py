@@ -109,3 +109,22 @@ def test_submodules_import_by_name_in_a_fresh_interpreter():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     )
     assert out.stdout.split() == ["True", "mgn._core.scene"]
+
+
+def test_a_package_without_its_compiled_core_says_so(tmp_path):
+    """A source tree without the built extension (only the stub folder ``mgn/_core/``) fails
+    on import with a message naming the missing core, not an obscure name error."""
+    import shutil
+
+    package = Path(__file__).resolve().parents[2] / "python" / "mgn"  # the source tree
+    shutil.copytree(package, tmp_path / "mgn", ignore=shutil.ignore_patterns("_core*.so", "*.pyc"))
+    out = subprocess.run(
+        [sys.executable, "-c", "import mgn"],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=tmp_path,
+        env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"},
+    )
+    assert out.returncode != 0
+    assert "compiled core (mgn/_core*.so) is missing" in out.stderr
