@@ -35,7 +35,7 @@ from mgn.io.scene_folder import ViewRecord, scene_gt_entries, write_scene_gt, wr
 from mgn.io.scene_json import write_scene_json
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
-from mgn.render.photo import RenderSettings
+from mgn.render.settings import RenderSettings
 from mgn.render.sensor import SensorName
 from mgn.render.views import iter_views
 from mgn.scene.cameras import CameraView
@@ -78,7 +78,7 @@ class LabelOptions:
             Object labels often hold tens of thousands of parallel-jaw grasps; MetaGraspNet's
             scenes carry a few thousand per object.
         num_threads: C++ threads (0 = all cores); results do not depend on it.
-        render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
+        render: how the RGB images are made (:class:`mgn.render.settings.RenderSettings`;
             None = the raster engine). Labels do not depend on it.
         archival: write the compact archival files (docs/format.md; lossy depth).
     """

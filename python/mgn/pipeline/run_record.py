@@ -28,7 +28,7 @@ from mgn.pipeline.exports import clean_export_tmp
 from mgn.pipeline.label_cache import ObjectLabels
 from mgn.pipeline.scene_task import TMP_PREFIX
 from mgn.pipeline.seeds import SCENE_SEED_RULE
-from mgn.render.photo import RenderSettings
+from mgn.render.settings import RenderSettings
 
 __all__ = [
     "DATASET_SCHEMA_VERSION",
