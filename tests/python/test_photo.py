@@ -19,7 +19,7 @@ import mgn
 from mgn import _core
 from mgn.cli import main
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_folder import png_bytes
+from mgn.io.image_codecs import png_bytes
 from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
 from mgn.pipeline.config import ConfigError, dump_config, load_config
 from mgn.render import denoiser, lighting, materials, photo, settings

@@ -31,7 +31,8 @@ from typing import Any
 import numpy as np
 
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_folder import ViewRecord, scene_gt_entries, write_scene_gt, write_view
+from mgn.io.scene_folder import scene_gt_entries, write_scene_gt, write_view
+from mgn.io.scene_schema import ViewRecord
 from mgn.io.scene_json import write_scene_json
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
