@@ -452,7 +452,9 @@ def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
     for unbind in ("raw", "albedo"):  # a missing normal, or guides="albedo", unbinds it
         args = (big[0], big[1]) if unbind == "raw" else big
         assert denoiser.denoise(*args, guides=unbind).tobytes() == want_albedo_only.tobytes()
-    assert denoiser.denoise(*big, guides="none").tobytes() == reference(big[0], None, None).tobytes()
+    assert (
+        denoiser.denoise(*big, guides="none").tobytes() == reference(big[0], None, None).tobytes()
+    )
     assert denoiser.denoise(*big, num_threads=1, guides="raw").tobytes() == first.tobytes()
     assert denoiser.denoise(*big, guides="raw").tobytes() == first.tobytes()
     assert np.isnan(big[0][1, 2]).all()

@@ -40,9 +40,18 @@ from PIL import Image
 from mgn.base.units import M_TO_CM
 from mgn.errors import IoError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
+from mgn.io.image_codecs import (
+    COM_RESIDUAL_ENCODING,
+    FLOAT_DELTA_ENCODING,
+    FLOAT_GRADIENT_ENCODING,
+    UNORM16_ENCODING,
+    com_heatmap_prediction,
+    decode_com_residual,
+    decode_float_gradient,
+    decode_float_image,
+)
 from mgn.io.model_folder import object_folders
 from mgn.io.order_files import read_order_csv, read_order_json
-from mgn.io.image_codecs import COM_RESIDUAL_ENCODING, FLOAT_DELTA_ENCODING, FLOAT_GRADIENT_ENCODING, UNORM16_ENCODING, com_heatmap_prediction, decode_com_residual, decode_float_gradient, decode_float_image
 from mgn.io.scene_hdf5 import POSE_COLUMNS_GROUP, read_scene_dataset
 from mgn.io.scene_schema import UNITS_ATTR, from_cm, ideal_metres
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics

@@ -95,7 +95,6 @@ def decode_float_gradient(coded: npt.ArrayLike) -> npt.NDArray[np.float32]:
     return np.cumsum(d, axis=1, dtype=np.int32).view(np.float32)
 
 
-
 #: ``mgn_encoding`` of a ``com_heatmap`` stored as the int32 differences (modulo 2^32) of its
 #: float32 bit patterns from :func:`com_heatmap_prediction`, whose inputs the dataset's
 #: attributes hold (``com_parameters``, ``X_WC``, ``K``) with ``depth_ideal`` (m) of the same
@@ -152,7 +151,6 @@ def decode_com_residual(
         return (np.asarray(residual, np.int32) + prediction.view(np.int32)).view(np.float32)
 
 
-
 def png_bytes(image: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
     """PNG of an (H, W) or (H, W, 3) uint8 / (H, W) uint16 image (no time chunk: reproducible),
     deflated by libdeflate at ``level`` (1..12; :func:`mgn.base.compress.png_encode`: no row
@@ -161,11 +159,9 @@ def png_bytes(image: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
     return png_encode(np.asarray(image), level=level)
 
 
-
 def depth_picture_png(depth: npt.ArrayLike, *, level: int = DEFLATE_LEVEL) -> bytes:
     """``{v}_depth.png`` of a depth image (m): :func:`mgn.render.views.depth_picture` as a palette
     PNG (every reader converts it to the same RGB; ~half the bytes and faster to write than the
     RGB PNG), deflated by libdeflate at ``level`` (:func:`mgn.base.compress.png_encode`)."""
     index, palette = depth_picture_indexed(depth)
     return png_encode(index, level=level, palette=palette)
-

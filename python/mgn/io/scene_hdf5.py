@@ -291,4 +291,3 @@ def hdf5_bytes(
         for key, value in (attrs or {}).items():
             h5.attrs[key] = json.dumps(value) if isinstance(value, (dict, list)) else value
     return buf.getvalue()
-

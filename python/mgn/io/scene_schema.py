@@ -235,7 +235,6 @@ def depth_to_cm(depth_m: npt.ArrayLike) -> npt.NDArray[np.float32]:
     return np.where(exact, snapped, plain)
 
 
-
 def ideal_metres(depth_ideal_cm: npt.ArrayLike) -> npt.NDArray[np.float32]:
     """float32 metres of a ``depth_ideal`` stored in cm (archival mode, earlier files), as
     :class:`mgn.io.dataset.View` gives them."""
@@ -243,4 +242,3 @@ def ideal_metres(depth_ideal_cm: npt.ArrayLike) -> npt.NDArray[np.float32]:
         np.asarray(depth_ideal_cm, np.float32) / np.float32(M_TO_CM)
     ).astype(np.float32)
     return out
-

@@ -180,4 +180,3 @@ def make_executor(workers: int, scheduler: str | None) -> Executor:
     if workers == 1:
         return _InProcess()
     return _ProcessPool(workers)
-

@@ -32,12 +32,12 @@ import numpy as np
 
 from mgn.errors import InvalidArgumentError
 from mgn.io.scene_folder import scene_gt_entries, write_scene_gt, write_view
-from mgn.io.scene_schema import ViewRecord
 from mgn.io.scene_json import write_scene_json
+from mgn.io.scene_schema import ViewRecord
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
-from mgn.render.settings import RenderSettings
 from mgn.render.sensor import SensorName
+from mgn.render.settings import RenderSettings
 from mgn.render.views import iter_views
 from mgn.scene.cameras import CameraView
 from mgn.scene.scene import Scene

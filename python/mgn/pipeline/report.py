@@ -227,4 +227,3 @@ def _transient(result: SceneResult) -> bool:
     memory."""
     error = result.error or ""
     return result.disk_full or error.startswith("worker failed") or "MemoryError" in error
-

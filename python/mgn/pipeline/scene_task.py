@@ -52,7 +52,6 @@ __all__ = [
 TMP_PREFIX = ".tmp-"
 
 
-
 @dataclass(frozen=True)
 class SceneTask:
     """Everything a worker needs for one scene (picklable).
@@ -110,7 +109,6 @@ class SceneResult:
     worker: str = ""
     files: dict[str, bytes] | None = field(default=None, repr=False, compare=False)
     removed: tuple[str, ...] = ()
-
 
 
 def folder_size(folder: Path) -> int:
@@ -240,4 +238,3 @@ def store_collected(out: Path, result: SceneResult) -> SceneResult:
             result, ok=False, error=msg, disk_full=full is not None, files=None
         )
     return dataclasses.replace(result, files=None)
-

@@ -184,12 +184,12 @@ def denoise(
     they carry the pixel's jittered position, i.e. aliased edges and texture). ``guides`` (see
     :attr:`mgn.render.settings.RenderSettings.denoise_guides`): ``smoothed`` blurs each guide by a
     3 x 3 Gaussian (sigma 0.5 px) and declares them noise-free (OIDN's ``cleanAux``: the network
-    then keeps the guides' detail instead of denoising it); ``raw`` passes them as they are, declared
-    noisy; ``albedo`` drops the normal, ``none`` both. ``quality`` fast | balanced | high (see
-    :attr:`mgn.render.settings.RenderSettings.denoise_quality`); ``num_threads`` OIDN threads (0 =
-    all cores; the result does not depend on it). Albedo (clipped to [0, 1]) and normal (clipped to
-    [-1, 1], any frame) must have the radiance's shape; NaN and +inf radiance count as 0.
-    ``resolution`` (see :attr:`mgn.render.settings.RenderSettings.denoise_resolution`): ``full``
+    then keeps the guides' detail instead of denoising it); ``raw`` passes them as they are,
+    declared noisy; ``albedo`` drops the normal, ``none`` both. ``quality`` fast | balanced | high
+    (see :attr:`mgn.render.settings.RenderSettings.denoise_quality`); ``num_threads`` OIDN threads
+    (0 = all cores; the result does not depend on it). Albedo (clipped to [0, 1]) and normal
+    (clipped to [-1, 1], any frame) must have the radiance's shape; NaN and +inf radiance count as
+    0. ``resolution`` (see :attr:`mgn.render.settings.RenderSettings.denoise_resolution`): ``full``
     denoises every pixel; ``half`` denoises the 2 x 2 block means (an odd last row or column
     repeated) and returns full size: the denoised blocks interpolated bilinearly (pixel centres
     aligned) and multiplied by ``max(a, 0.02) / max(a_blocks, 0.02)`` per channel, ``a`` the

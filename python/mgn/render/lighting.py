@@ -196,4 +196,3 @@ def draw_lighting(
 def _hsv_to_rgb(h: float, s: float, v: float) -> tuple[float, float, float]:
 
     return colorsys.hsv_to_rgb(h, s, v)
-

@@ -130,9 +130,7 @@ def box_uv_mesh(mesh: Mesh, tile: float, name: str) -> Mesh:
     )
 
 
-
 def pbr_default() -> Any:
     """The path tracer's default material (a mesh without materials)."""
 
     return PbrMaterial()
-

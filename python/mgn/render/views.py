@@ -20,9 +20,9 @@ import numpy.typing as npt
 from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry.mesh import Mesh, make_box
 from mgn.render.photo import PhotoRenderer
-from mgn.render.settings import RenderSettings
 from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
+from mgn.render.settings import RenderSettings
 from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 from mgn.scene.lens import Lens, lens_for
 
