@@ -13,7 +13,7 @@ config section ``render``):
 
 Labels never depend on the engine: depth, instance ids and every mask come from the raster's
 geometry passes, which the path tracer matches pixel for pixel (same meshes, camera model and
-pixel centres; ``tests/python/test_photo.py`` checks >= 99.9 % agreement).
+pixel centres; ``tests/python/render/test_photo.py`` checks >= 99.9 % agreement).
 
 Each view's lights, environment, tote / floor materials and exposure are drawn by the domain
 randomisation of :mod:`mgn.render.lighting` from the stream (seed, view index) only, so a view

@@ -200,12 +200,12 @@ def test_glb_pbr_factors_read_back(tmp_path: Path) -> None:
     assert g.roughness == pytest.approx(0.05, abs=1e-6)
     assert g.metallic == 0.0
     # A plain OBJ/STL has no PBR description: the tracer derives one.
-    stl = mgn.load_mesh(Path(__file__).resolve().parents[1] / "data" / "cube.stl")
+    stl = mgn.load_mesh(Path(__file__).resolve().parents[2] / "data" / "cube.stl")
     assert not any(mm.has_pbr for mm in stl.materials)
 
 
 def _user_yaml(tmp_path: Path, extra: str) -> Path:
-    src = Path(__file__).resolve().parents[1] / "data" / "cube.stl"
+    src = Path(__file__).resolve().parents[2] / "data" / "cube.stl"
     p = tmp_path / "objs.yaml"
     p.write_text(
         "objects:\n  - name: part_a\n    mesh: " + str(src) + "\n    scale: 1.0\n"
