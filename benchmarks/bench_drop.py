@@ -196,7 +196,7 @@ def pipeline_scene_drops(seeds: list[int], log: Callable[[str], None]) -> list[d
     """Drops scene i of `bench_pipeline` (seed SEED) for each i in `seeds`; per scene the CPU
     seconds of the C++ drop (time.process_time), the steps and the kept objects."""
     from mgn.pipeline.config import load_config
-    from mgn.pipeline.runner import _catalogue
+    from mgn.pipeline.sanity import load_catalogue
     from mgn.pipeline.seeds import scene_seed
     from mgn.pipeline.testset import compose_scene, resolve_split
     from mgn.scene.drop import _simulate
@@ -205,7 +205,7 @@ def pipeline_scene_drops(seeds: list[int], log: Callable[[str], None]) -> list[d
     from .bench_pipeline import bench_config
 
     config = load_config(bench_config(False))
-    catalogue, _ = _catalogue(config)
+    catalogue = list(load_catalogue(config).specs)
     split = resolve_split(config, catalogue)
     out = []
     for i in seeds:

@@ -41,7 +41,10 @@ SEED = 2024
 def _legacy_files(rec: Any) -> dict[str, bytes]:
     """The files of one view in the layout mgn wrote before (for the comparison)."""
     from mgn.base.deterministic import npz_bytes
-    from mgn.io.scene_folder import M_TO_CM, hdf5_bytes, png_bytes, to_cm
+    from mgn.base.units import M_TO_CM
+    from mgn.io.image_codecs import png_bytes
+    from mgn.io.scene_hdf5 import hdf5_bytes
+    from mgn.io.scene_schema import to_cm
     from mgn.render.views import depth_picture
 
     f4 = np.float32
@@ -105,7 +108,7 @@ def _exact_camera(view: Any, hdf5: dict[str, Any]) -> dict[str, Any]:
 
 def _record(view: Any, com_parameters: Any = None) -> Any:
     """A ViewRecord holding the arrays of a written view (SI units)."""
-    from mgn.io.scene_folder import ViewRecord
+    from mgn.io.scene_schema import ViewRecord
 
     return ViewRecord(
         index=view.index,

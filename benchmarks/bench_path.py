@@ -80,8 +80,8 @@ def _engine_mgn(
     view = CameraView(Intrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy), c.X_WC)
 
     try:  # what `render.denoise` runs, with the default quality, guides and resolution
-        from mgn.render.photo import RenderSettings
-        from mgn.render.photo import denoise as photo_denoise
+        from mgn.render.denoiser import denoise as photo_denoise
+        from mgn.render.settings import RenderSettings
 
         defaults = RenderSettings()
 

@@ -91,11 +91,11 @@ def _cache_labels(config: Any, scenes: int) -> None:
     """Puts the object labels of scenes 0..scenes-1 (seed SEED) in the cache, so the timed run
     spends its CPU on scenes only."""
     from mgn.pipeline.label_cache import object_labels
-    from mgn.pipeline.runner import _catalogue
+    from mgn.pipeline.sanity import load_catalogue
     from mgn.pipeline.seeds import scene_seed
     from mgn.pipeline.testset import compose_scene, resolve_split
 
-    catalogue, _ = _catalogue(config)
+    catalogue = list(load_catalogue(config).specs)
     split = resolve_split(config, catalogue)
     for i in range(scenes):
         for spec in compose_scene(config, catalogue, scene_seed(SEED, i), split):
@@ -115,7 +115,7 @@ def stage_cpu(config: Any) -> dict[str, Any]:
     from mgn.objects import tote_mesh
     from mgn.pipeline.label_cache import object_labels
     from mgn.pipeline.label_scene import strided_subset, view_grasps, view_record
-    from mgn.pipeline.runner import _catalogue
+    from mgn.pipeline.sanity import load_catalogue
     from mgn.pipeline.scene_writer import scene_views
     from mgn.pipeline.seeds import scene_seed
     from mgn.pipeline.testset import compose_scene, resolve_split
@@ -143,7 +143,7 @@ def stage_cpu(config: Any) -> dict[str, Any]:
 
     with tempfile.TemporaryDirectory() as tmp:
         # The objects of scene 0 of `generate(..., seed=SEED)`.
-        catalogue, _ = _catalogue(config)
+        catalogue = list(load_catalogue(config).specs)
         seed = scene_seed(SEED, 0)
         picked = compose_scene(config, catalogue, seed, resolve_split(config, catalogue))
         labels = {s.name: object_labels(s, config) for s in picked}

@@ -153,7 +153,7 @@ def drop(path: Path, names: tuple[str, ...] = OBJECT_NAMES, seed: int = DROP_SEE
 
 def pbr_materials(mesh: Any) -> list[Any]:
     """mgn's PBR materials of a mesh, one per material slot, as mgn's ``path`` engine uses them
-    (``mgn.render.photo.pbr_material``: the built-in objects' own PBR parameters), else
+    (``mgn.render.materials.pbr_material``: the built-in objects' own PBR parameters), else
     ``PbrMaterial.from_material`` of the legacy material."""
     slots = list(mesh.materials) or [None]
     try:
@@ -161,7 +161,7 @@ def pbr_materials(mesh: Any) -> list[Any]:
     except ImportError:  # the tracer is not built: the legacy material, mapped here
         return [_fallback_pbr(m) for m in slots]
     try:
-        from mgn.render.photo import pbr_material  # the built-in objects' own PBR parameters
+        from mgn.render.materials import pbr_material  # the built-in objects' own PBR parameters
     except ImportError:
         pbr_material = mpath.PbrMaterial.from_material
     return [mpath.PbrMaterial() if m is None else pbr_material(m) for m in slots]

@@ -44,7 +44,7 @@ from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 #: ``mgn.drop_scene(objects, seed=...)``, ``mgn.Scene``.
 _EXPORTS = {
     "generate": "pipeline.runner",
-    "GenerateReport": "pipeline.runner",
+    "GenerateReport": "pipeline.report",
     "Config": "pipeline.config",
     "load_config": "pipeline.config",
     "Scene": "scene.scene",
@@ -55,7 +55,8 @@ __getattr__, __dir__ = lazy_exports("mgn", _EXPORTS, globals())
 
 if TYPE_CHECKING:
     from mgn.pipeline.config import Config, load_config
-    from mgn.pipeline.runner import GenerateReport, generate
+    from mgn.pipeline.report import GenerateReport
+    from mgn.pipeline.runner import generate
     from mgn.scene.drop import drop_scene
     from mgn.scene.scene import Scene
 

@@ -31,7 +31,7 @@ from mgn.geometry.mesh import Material, mass_properties, mesh_from_arrays
 from mgn.geometry.repair import repair_mesh
 from mgn.objects import ToteSpec, load_objects_yaml
 from mgn.objects.user import UserObjectWarning
-from mgn.pipeline import runner, scene_writer
+from mgn.pipeline import scene_task, scene_writer
 from mgn.scene.penetration import render_penetration
 from mgn.scene.scene import RemovedInstance, Scene
 
@@ -370,14 +370,14 @@ def _drawn_part_larger_than_tote(tmp: Path) -> list[str]:
 
 def _everything_leaves(mp: pytest.MonkeyPatch) -> None:
     """The drop ends with no object in the tote (as for a part that falls through the floor)."""
-    real = runner.drop_task_scene
+    real = scene_task.drop_task_scene
 
-    def empty(task: runner.SceneTask) -> Scene:
+    def empty(task: scene_task.SceneTask) -> Scene:
         scene = real(task)
         gone = tuple(RemovedInstance(i.name, i.source, "left_tote") for i in scene.instances)
         return dataclasses.replace(scene, instances=(), removed=gone)
 
-    mp.setattr(runner, "drop_task_scene", empty)
+    mp.setattr(scene_task, "drop_task_scene", empty)
 
 
 def _disk_full_in_scene(mp: pytest.MonkeyPatch) -> None:

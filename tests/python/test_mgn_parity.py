@@ -9,7 +9,7 @@ import json
 import h5py
 import numpy as np
 import pytest
-from test_layout import layout_of, rect
+from view_labels.test_layout import layout_of, rect
 
 from mgn.io.scene_folder import scene_gt_entries
 

@@ -16,7 +16,7 @@ from typing import TypedDict
 
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import normalize_grasp_kind
-from mgn.render.photo import ENGINES, RenderSettings, with_engine
+from mgn.render.settings import ENGINES, RenderSettings, with_engine
 
 __all__ = [
     "DeviceKwargs",
@@ -126,5 +126,5 @@ def add_engine_arguments(parser: argparse.ArgumentParser, what: str = "the RGB i
 
 def engine_settings(settings: RenderSettings, args: argparse.Namespace) -> RenderSettings:
     """``settings`` with the parsed ``--engine`` / ``--spp`` applied
-    (:func:`mgn.render.photo.with_engine`; InvalidArgumentError naming ``--spp``)."""
+    (:func:`mgn.render.settings.with_engine`; InvalidArgumentError naming ``--spp``)."""
     return with_engine(settings, getattr(args, "engine", None), getattr(args, "spp", None))

@@ -15,7 +15,7 @@ from mgn.cli.args import add_engine_arguments, engine_settings
 from mgn.errors import InvalidArgumentError
 from mgn.io.view_images import render_views
 from mgn.objects import builtin_objects, tote_mesh
-from mgn.render.photo import RenderSettings
+from mgn.render.settings import RenderSettings
 from mgn.scene.cameras import Intrinsics, mgn_rig
 
 __all__ = ["register"]

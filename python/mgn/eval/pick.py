@@ -322,7 +322,7 @@ def _top_view(scene: Scene, config: Config, resolution: int) -> CameraView:
 
 def _render(scene: Scene, view: CameraView, render: Any = None, num_threads: int = 0) -> ViewImages:
     """The top view without noise or randomisation; the picture by ``render``
-    (:class:`mgn.render.photo.RenderSettings`, default the raster engine)."""
+    (:class:`mgn.render.settings.RenderSettings`, default the raster engine)."""
 
     frames = iter_views(scene.render_items(), tote_mesh(scene.tote), [(0, view)], sensor="ideal",
                         randomize=False, seed=scene.seed, render=render,

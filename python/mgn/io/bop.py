@@ -45,7 +45,7 @@ from mgn.geometry.convex import convex_hull
 from mgn.geometry.mesh import Mesh, load_mesh
 from mgn.geometry.symmetry import find_symmetries
 from mgn.io.dataset import Dataset, SceneFolder, View
-from mgn.io.scene_folder import png_bytes
+from mgn.io.image_codecs import png_bytes
 from mgn.io.validate import Problem
 
 __all__ = [

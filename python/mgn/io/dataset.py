@@ -7,7 +7,7 @@ Layout (docs/format.md): ``DIR/dataset.json`` (mgn only), ``DIR/models/<id>/`` o
 before it is asked for, and what is read is kept (a :class:`View` caches its arrays).
 
 Units: the files store centimetres; everything returned here is in metres (the conversion table
-is :data:`mgn.io.scene_folder.CM_RULES`), except the ``{v}_order.json`` content, which is
+is :data:`mgn.io.scene_schema.CM_RULES`), except the ``{v}_order.json`` content, which is
 returned as stored (its ``depth_diff`` in cm).
 
 Example::
@@ -40,23 +40,20 @@ from PIL import Image
 from mgn.base.units import M_TO_CM
 from mgn.errors import IoError
 from mgn.hardware import MGN_FOLDER, normalize_grasp_kind
-from mgn.io.model_folder import object_folders
-from mgn.io.order_files import read_order_csv, read_order_json
-from mgn.io.scene_folder import (
+from mgn.io.image_codecs import (
     COM_RESIDUAL_ENCODING,
     FLOAT_DELTA_ENCODING,
     FLOAT_GRADIENT_ENCODING,
-    POSE_COLUMNS_GROUP,
-    UNITS_ATTR,
     UNORM16_ENCODING,
     com_heatmap_prediction,
     decode_com_residual,
     decode_float_gradient,
     decode_float_image,
-    from_cm,
-    ideal_metres,
-    read_scene_dataset,
 )
+from mgn.io.model_folder import object_folders
+from mgn.io.order_files import read_order_csv, read_order_json
+from mgn.io.scene_hdf5 import POSE_COLUMNS_GROUP, read_scene_dataset
+from mgn.io.scene_schema import UNITS_ATTR, from_cm, ideal_metres
 from mgn.scene.cameras import MGN_APERTURE_MM, MGN_FOCAL_LENGTH_MM, Intrinsics
 
 #: What reading a damaged npz raises (zipfile's checks, a bad CRC-32 or header, zlib's or LZMA's

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from mgn.base.atomic import atomic_write_text
-from mgn.io.scene_folder import view_file_names
+from mgn.io.scene_schema import view_file_names
 
 __all__ = [
     "MANIFEST",

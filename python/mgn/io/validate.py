@@ -48,7 +48,8 @@ from mgn.io.dataset import Dataset, SceneFolder
 from mgn.io.manifest import MANIFEST, check_manifest
 from mgn.io.npz_reader import NpzReader
 from mgn.io.order_files import derive_layers, strongly_connected
-from mgn.io.scene_folder import HDF5_INT_LEAVES, UNSCORED_ATTR, unscored_marks, view_file_names
+from mgn.io.scene_hdf5 import UNSCORED_ATTR, unscored_marks
+from mgn.io.scene_schema import HDF5_INT_LEAVES, view_file_names
 from mgn.scene.cameras import MGN_CLIPPING_RANGE_CM, MGN_FOCAL_LENGTH_MM
 
 __all__ = ["Problem", "validate_dataset"]

@@ -27,7 +27,7 @@ from mgn.base.deterministic import npz_bytes
 from mgn.base.units import M_TO_CM
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
-from mgn.io.scene_folder import depth_picture_png, png_bytes
+from mgn.io.image_codecs import depth_picture_png, png_bytes
 from mgn.render.views import ViewImages, iter_views
 from mgn.scene.cameras import CameraView
 

@@ -17,11 +17,11 @@ from typing import TYPE_CHECKING
 from mgn.base.lazy import lazy_exports
 
 _EXPORTS = {
-    "GenerateReport": "runner",
-    "SceneResult": "runner",
-    "SceneTask": "runner",
+    "GenerateReport": "report",
+    "SceneResult": "scene_task",
+    "SceneTask": "scene_task",
     "generate": "runner",
-    "run_scene": "runner",
+    "run_scene": "scene_task",
     "scene_seed": "seeds",
     "ObjectLabels": "label_cache",
     "label_cache_dir": "label_cache",
@@ -57,12 +57,8 @@ if TYPE_CHECKING:
         object_labels,
         write_models,
     )
-    from mgn.pipeline.runner import (
-        GenerateReport,
-        SceneResult,
-        SceneTask,
-        generate,
-        run_scene,
-    )
+    from mgn.pipeline.report import GenerateReport
+    from mgn.pipeline.runner import generate
+    from mgn.pipeline.scene_task import SceneResult, SceneTask, run_scene
     from mgn.pipeline.scene_writer import scene_views, write_scene
     from mgn.pipeline.seeds import scene_seed

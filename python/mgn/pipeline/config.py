@@ -65,7 +65,7 @@ Sections:
   ``DIR/bop/``, as ``mgn export bop`` writes it) and ``graspnet`` (grasp files in
   ``DIR/graspnet/``, as ``mgn export graspnet`` writes them); default ``[mgn]``. The exports
   are written per scene, right after the scene (docs/format.md, "Exports while generating").
-- ``render``: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`):
+- ``render``: how the RGB images are made (:class:`mgn.render.settings.RenderSettings`):
   ``engine`` (``raster``: the fast OpenGL preview; ``path``: the physically based path tracer),
   ``spp``, ``denoise`` (Intel Open Image Denoise through the optional ``pyoidn`` package; without
   it ``spp_without_denoiser`` samples are traced and a warning names the package),
@@ -106,7 +106,7 @@ from mgn.objects import ToteSpec, make_tote
 from mgn.pj.labels import DEFAULT_STORED_GRASPS
 from mgn.pj.physics import CALIBRATION_TOLERANCE, ShakeScorer, default_staircase_checks
 from mgn.render.path import FilmOptions, PathTraceOptions
-from mgn.render.photo import RandomizeSettings, RenderSettings
+from mgn.render.settings import RandomizeSettings, RenderSettings
 from mgn.scene.cameras import Intrinsics, look_at
 from mgn.scene.lens import lens_for
 from mgn.scene.scene import DropOptions

@@ -31,12 +31,13 @@ from typing import Any
 import numpy as np
 
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_folder import ViewRecord, scene_gt_entries, write_scene_gt, write_view
+from mgn.io.scene_folder import scene_gt_entries, write_scene_gt, write_view
 from mgn.io.scene_json import write_scene_json
+from mgn.io.scene_schema import ViewRecord
 from mgn.objects import tote_mesh
 from mgn.pj.labels import PjLabels
-from mgn.render.photo import RenderSettings
 from mgn.render.sensor import SensorName
+from mgn.render.settings import RenderSettings
 from mgn.render.views import iter_views
 from mgn.scene.cameras import CameraView
 from mgn.scene.scene import Scene
@@ -78,7 +79,7 @@ class LabelOptions:
             Object labels often hold tens of thousands of parallel-jaw grasps; MetaGraspNet's
             scenes carry a few thousand per object.
         num_threads: C++ threads (0 = all cores); results do not depend on it.
-        render: how the RGB images are made (:class:`mgn.render.photo.RenderSettings`;
+        render: how the RGB images are made (:class:`mgn.render.settings.RenderSettings`;
             None = the raster engine). Labels do not depend on it.
         archival: write the compact archival files (docs/format.md; lossy depth).
     """

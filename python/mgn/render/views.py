@@ -19,9 +19,10 @@ import numpy.typing as npt
 
 from mgn.errors import InvalidArgumentError, InvalidTypeError
 from mgn.geometry.mesh import Mesh, make_box
-from mgn.render.photo import PhotoRenderer, RenderSettings
+from mgn.render.photo import PhotoRenderer
 from mgn.render.renderer import Instance, LightSample, Renderer
 from mgn.render.sensor import SensorName, apply_depth_sensor
+from mgn.render.settings import RenderSettings
 from mgn.scene.cameras import CameraView, Intrinsics, mgn_rig
 from mgn.scene.lens import Lens, lens_for
 
@@ -45,7 +46,7 @@ class ViewImages:
         instance_ids: (H, W) int32, 0 = background.
         light: the light used (raster engine; the path engine's lights are in ``engine``).
         engine: what made ``rgb``: ``{"engine": "raster"}`` or ``{"engine": "path", "spp",
-            "denoised", "max_bounces"}`` (:meth:`mgn.render.photo.RenderSettings.describe`).
+            "denoised", "max_bounces"}`` (:meth:`mgn.render.settings.RenderSettings.describe`).
         pinhole: for a camera with lens distortion, the pinhole render (camera
             ``lens.render_K``, same pose) these images were resampled from; None otherwise.
         lens: the camera's :class:`~mgn.scene.lens.Lens` (None for a pinhole camera).

@@ -237,7 +237,7 @@ class SceneRayModel:
         ``com_heatmap`` = clip((d_max - |p_W - c_W|) / (d_max - d_min), 0, 1) at each visible
         surface point p_W (docs/models.md §7; computed here as the C++ model does, to the last
         bits or nearly: the dataset writer predicts the heat map from them,
-        :func:`mgn.io.scene_folder.com_heatmap_prediction`)."""
+        :func:`mgn.io.image_codecs.com_heatmap_prediction`)."""
         out: npt.NDArray[np.float64] = self._com_parameters.copy()
         return out
 

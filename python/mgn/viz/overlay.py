@@ -33,7 +33,7 @@ from mgn.io.graspnet import (
     gripper_of,
     view_rectangles,
 )
-from mgn.io.scene_folder import png_bytes
+from mgn.io.image_codecs import png_bytes
 from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import lens_for
 from mgn.viz.pictures import score_colors

@@ -25,7 +25,8 @@ from PIL import Image
 
 from mgn.base.atomic import atomic_write_text
 from mgn.io.dataset import Dataset, View
-from mgn.io.scene_folder import COLLISION_OBSTACLES, COLLISION_PARTS, png_bytes
+from mgn.io.image_codecs import png_bytes
+from mgn.view_labels.grasps import COLLISION_OBSTACLES, COLLISION_PARTS
 from mgn.viz.overlay import render_overlay
 
 __all__ = ["collect_stats", "svg_bars", "write_report"]

@@ -616,7 +616,7 @@ def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.Ca
 def _load_script(name: str):
     import importlib.util
 
-    path = Path(__file__).resolve().parents[2] / "scripts" / f"{name}.py"
+    path = Path(__file__).resolve().parents[3] / "scripts" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None
     assert spec.loader is not None

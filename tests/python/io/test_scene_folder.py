@@ -16,17 +16,10 @@ from mgn.base.deterministic import npz_bytes
 from mgn.errors import InvalidArgumentError
 from mgn.io.coco import coco_dict, export_coco, rle
 from mgn.io.dataset import Dataset, intrinsics_from_params
-from mgn.io.scene_folder import (
-    ViewRecord,
-    com_heatmap_prediction,
-    from_cm,
-    hdf5_bytes,
-    scene_gt_entries,
-    to_cm,
-    view_file_names,
-    write_scene_gt,
-    write_view,
-)
+from mgn.io.image_codecs import com_heatmap_prediction
+from mgn.io.scene_folder import scene_gt_entries, write_scene_gt, write_view
+from mgn.io.scene_hdf5 import hdf5_bytes
+from mgn.io.scene_schema import ViewRecord, from_cm, to_cm, view_file_names
 from mgn.io.validate import validate_dataset
 from mgn.scene.cameras import Intrinsics
 from mgn.view_labels.layout import compute_layout

@@ -18,21 +18,17 @@ from PIL import Image
 
 from mgn.base.deterministic import npz_bytes
 from mgn.io.dataset import View
-from mgn.io.scene_folder import (
-    ARCHIVAL_DEPTH_STEP_CM,
-    ARCHIVAL_ROTATION_STEP,
+from mgn.io.image_codecs import (
     FLOAT_DELTA_ENCODING,
     FLOAT_GRADIENT_ENCODING,
-    UNITS_ATTR,
-    ViewRecord,
     decode_float_gradient,
     decode_float_image,
     depth_picture_png,
     encode_float_gradient,
     encode_float_image,
-    from_cm,
-    write_view,
 )
+from mgn.io.scene_folder import ARCHIVAL_DEPTH_STEP_CM, ARCHIVAL_ROTATION_STEP, write_view
+from mgn.io.scene_schema import UNITS_ATTR, ViewRecord, from_cm
 from mgn.render.sensor import apply_depth_sensor, sensor_params
 from mgn.render.views import depth_picture, depth_picture_indexed
 from mgn.scene.cameras import Intrinsics

@@ -12,7 +12,7 @@ from conftest import translation
 import mgn
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import make_box
-from mgn.io.scene_folder import com_heatmap_prediction
+from mgn.io.image_codecs import com_heatmap_prediction
 from mgn.objects import ToteSpec, com_keypoints, get_object, tote_mesh
 from mgn.render import Instance, Renderer
 from mgn.scene import BUILTIN, Scene, SceneInstance

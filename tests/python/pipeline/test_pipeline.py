@@ -20,7 +20,7 @@ from conftest import check_difficulty, coco_ground_truth_ap
 from mgn.base.deterministic import NPZ_DATE_TIME, h5_create_dataset, h5_create_group, npz_bytes
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.manifest import check_manifest, write_manifest
-from mgn.io.scene_folder import view_file_names
+from mgn.io.scene_schema import view_file_names
 from mgn.pipeline import generate, scene_seed, scene_views
 from mgn.pipeline.config import Config, load_config
 

@@ -8,6 +8,7 @@ import base64
 import json
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -18,13 +19,14 @@ import mgn
 from mgn import _core
 from mgn.cli import main
 from mgn.errors import InvalidArgumentError
-from mgn.io.scene_folder import png_bytes
+from mgn.io.image_codecs import png_bytes
 from mgn.objects import builtin_objects, load_objects_yaml, tote_mesh
 from mgn.pipeline.config import ConfigError, dump_config, load_config
-from mgn.render import photo
+from mgn.render import denoiser, lighting, materials, photo, settings
+from mgn.render.lighting import draw_lighting
 from mgn.render.path import PathTraceOptions
-from mgn.render.photo import RandomizeSettings, RenderSettings, draw_lighting
 from mgn.render.sensor import SURFACE_MIRROR, SURFACE_TRANSPARENT, surface_flags
+from mgn.render.settings import RandomizeSettings, RenderSettings
 from mgn.render.views import iter_views
 from mgn.scene.cameras import CameraView, Intrinsics, look_at
 from mgn.viz.report import image_engines
@@ -98,8 +100,8 @@ def test_cli_spp_must_be_positive() -> None:
 
     base = RenderSettings(engine="path")
     with pytest.raises(InvalidArgumentError, match="--spp"):
-        photo.with_engine(base, None, 0)
-    got = photo.with_engine(base, "raster", 4)
+        settings.with_engine(base, None, 0)
+    got = settings.with_engine(base, "raster", 4)
     assert got.engine == "raster"
     assert got.spp == 4
 
@@ -198,12 +200,12 @@ def test_glb_pbr_factors_read_back(tmp_path: Path) -> None:
     assert g.roughness == pytest.approx(0.05, abs=1e-6)
     assert g.metallic == 0.0
     # A plain OBJ/STL has no PBR description: the tracer derives one.
-    stl = mgn.load_mesh(Path(__file__).resolve().parents[1] / "data" / "cube.stl")
+    stl = mgn.load_mesh(Path(__file__).resolve().parents[2] / "data" / "cube.stl")
     assert not any(mm.has_pbr for mm in stl.materials)
 
 
 def _user_yaml(tmp_path: Path, extra: str) -> Path:
-    src = Path(__file__).resolve().parents[1] / "data" / "cube.stl"
+    src = Path(__file__).resolve().parents[2] / "data" / "cube.stl"
     p = tmp_path / "objs.yaml"
     p.write_text(
         "objects:\n  - name: part_a\n    mesh: " + str(src) + "\n    scale: 1.0\n"
@@ -231,7 +233,7 @@ def test_user_object_pbr_values_reach_the_tracer(tmp_path: Path) -> None:
     extra = "    metallic: 1.0\n    roughness: 0.2\n    ior: 1.4\n    transmission: 0.0\n"
     (spec,) = load_objects_yaml(_user_yaml(tmp_path, extra))
     assert (spec.material.metallic, spec.material.roughness, spec.material.ior) == (1.0, 0.2, 1.4)
-    pbr = photo.pbr_material(spec.to_mesh().materials[0])
+    pbr = materials.pbr_material(spec.to_mesh().materials[0])
     assert (pbr.metallic, pbr.roughness, pbr.transmission) == (1.0, pytest.approx(0.2), 0.0)
     assert pbr.ior == pytest.approx(1.4)
 
@@ -240,7 +242,7 @@ def test_user_object_pbr_values_reach_the_tracer(tmp_path: Path) -> None:
 
 
 def test_blackbody_tints() -> None:
-    warm, white, cool = (np.array(photo.blackbody_rgb(t)) for t in (3000.0, 6500.0, 10000.0))
+    warm, white, cool = (np.array(lighting.blackbody_rgb(t)) for t in (3000.0, 6500.0, 10000.0))
     assert np.allclose(white, 1.0, atol=1e-9)
     assert warm[0] > warm[1] > warm[2]
     assert cool[2] > cool[1] > cool[0]
@@ -248,7 +250,7 @@ def test_blackbody_tints() -> None:
         assert 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2] == pytest.approx(1.0)
 
 
-def _lighting_key(lit: photo.ViewLighting) -> tuple:
+def _lighting_key(lit: lighting.ViewLighting) -> tuple:
     lights = tuple((a.X_WL.tobytes(), a.size, a.color, a.intensity) for a in lit.lights)
     tex = tuple(None if m.base_color_texture is None else m.base_color_texture.tobytes()
                 for m in (lit.tote, lit.floor))  # fmt: skip
@@ -276,8 +278,8 @@ def test_randomisation_is_drawn_from_seed_and_view() -> None:
             # Every light faces the tote (its +z axis points down at the target).
             assert light.X_WL[2, 2] < 0
     assert counts == {1, 2, 3}
-    assert kinds == set(photo.ENVIRONMENTS)
-    assert textures == set(photo.TEXTURES)
+    assert kinds == set(lighting.ENVIRONMENTS)
+    assert textures == set(materials.TEXTURES)
 
 
 def test_randomisation_switches_are_independent() -> None:
@@ -296,16 +298,16 @@ def test_randomisation_switches_are_independent() -> None:
 def test_procedural_textures() -> None:
     g = np.random.default_rng(0)
     for kind in ("noise", "checker", "stripes"):
-        t = photo.procedural_texture(kind, g, size=64)
+        t = materials.procedural_texture(kind, g, size=64)
         assert t.shape == (64, 64, 3)
         assert t.dtype == np.uint8
         assert t.max() == 255 or kind == "noise"
         assert t.min() < t.max()
         # Tileable: the first and last rows / columns are neighbours of similar level.
         assert abs(int(t[0, :, 0].mean()) - int(t[-1, :, 0].mean())) < 60
-    assert photo.procedural_texture("plain", g) is None
+    assert materials.procedural_texture("plain", g) is None
     with pytest.raises(InvalidArgumentError, match="texture kind"):
-        photo.procedural_texture("marble", g)
+        materials.procedural_texture("marble", g)
 
 
 # ------------------------------------------------------------------------------ tracer
@@ -367,7 +369,7 @@ def test_path_ids_and_depth_align_with_the_raster() -> None:
 @pytest.mark.parametrize("denoise", [True, False])
 def test_same_png_for_one_and_two_threads(denoise: bool) -> None:
 
-    if denoise and not photo.denoiser_available():
+    if denoise and not denoiser.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
     items, tote = _small_scene()
     s = RenderSettings(engine="path", spp=2, spp_without_denoiser=2, denoise=denoise,
@@ -381,12 +383,12 @@ def test_same_png_for_one_and_two_threads(denoise: bool) -> None:
 
 
 def test_denoiser_reduces_the_error() -> None:
-    if not photo.denoiser_available():
+    if not denoiser.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
     items, tote = _small_scene()
     view = _view(64)
 
-    def radiance(spp: int) -> photo.Any:
+    def radiance(spp: int) -> Any:
         s = RenderSettings(engine="path", spp=spp, denoise=False, spp_without_denoiser=spp)
         pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, randomize=False, seed=1)
         lit = pr.lighting(0)
@@ -395,7 +397,7 @@ def test_denoiser_reduces_the_error() -> None:
 
     ref = radiance(256).radiance
     noisy = radiance(4)
-    den = photo.denoise(noisy.radiance, noisy.albedo, noisy.normal)
+    den = denoiser.denoise(noisy.radiance, noisy.albedo, noisy.normal)
     mse_raw = float(np.mean((noisy.radiance - ref) ** 2))
     mse_den = float(np.mean((den - ref) ** 2))
     assert mse_den < 0.5 * mse_raw, (mse_den, mse_raw)
@@ -415,11 +417,11 @@ def _noisy_buffers(h: int, w: int, seed: int) -> tuple[np.ndarray, np.ndarray, n
 
 
 def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
-    """photo.denoise keeps one OIDN device and filter per thread count; every call, whatever
+    """denoiser.denoise keeps one OIDN device and filter per thread count; every call, whatever
     came before (another shape, fewer guides, another thread count, guides declared clean or
     noisy), gives the bytes of pyoidn's own convenience API (a separate device) on the same
     cleaned inputs."""
-    if not photo.denoiser_available():
+    if not denoiser.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
     import pyoidn
 
@@ -434,25 +436,27 @@ def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
     want_big, want_small = reference(*big), reference(*small)
     want_albedo_only = reference(big[0], big[1], None)
     assert not np.array_equal(want_big, want_albedo_only)  # the normal guide is used
-    first = photo.denoise(*big, guides="raw")
+    first = denoiser.denoise(*big, guides="raw")
     assert first.dtype == np.float32
     assert first.shape == big[0].shape
     assert np.isfinite(first).all()
     assert first.min() >= 0.0
     assert first.tobytes() == want_big.tobytes()
-    assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()  # the cached filter
-    assert photo.denoise(*small, guides="raw").tobytes() == want_small.tobytes()  # another shape
+    assert denoiser.denoise(*big, guides="raw").tobytes() == first.tobytes()  # the cached filter
+    assert denoiser.denoise(*small, guides="raw").tobytes() == want_small.tobytes()  # another shape
     # the default: both guides smoothed and declared clean (cleanAux), then back to noisy
-    smooth = reference(big[0], photo._smooth3(big[1]), photo._smooth3(big[2]), clean=True)
+    smooth = reference(big[0], denoiser._smooth3(big[1]), denoiser._smooth3(big[2]), clean=True)
     assert not np.array_equal(smooth, want_big)
-    assert photo.denoise(*big).tobytes() == smooth.tobytes()
-    assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()
+    assert denoiser.denoise(*big).tobytes() == smooth.tobytes()
+    assert denoiser.denoise(*big, guides="raw").tobytes() == first.tobytes()
     for unbind in ("raw", "albedo"):  # a missing normal, or guides="albedo", unbinds it
         args = (big[0], big[1]) if unbind == "raw" else big
-        assert photo.denoise(*args, guides=unbind).tobytes() == want_albedo_only.tobytes()
-    assert photo.denoise(*big, guides="none").tobytes() == reference(big[0], None, None).tobytes()
-    assert photo.denoise(*big, num_threads=1, guides="raw").tobytes() == first.tobytes()
-    assert photo.denoise(*big, guides="raw").tobytes() == first.tobytes()
+        assert denoiser.denoise(*args, guides=unbind).tobytes() == want_albedo_only.tobytes()
+    assert (
+        denoiser.denoise(*big, guides="none").tobytes() == reference(big[0], None, None).tobytes()
+    )
+    assert denoiser.denoise(*big, num_threads=1, guides="raw").tobytes() == first.tobytes()
+    assert denoiser.denoise(*big, guides="raw").tobytes() == first.tobytes()
     assert np.isnan(big[0][1, 2]).all()
     assert np.isinf(big[0][3, 1]).all()
     assert np.isnan(big[0]).sum() == 3
@@ -460,31 +464,31 @@ def test_denoise_reuses_its_filter_and_matches_pyoidn() -> None:
 
 
 def test_denoise_rejects_bad_inputs() -> None:
-    if not photo.denoiser_available():
+    if not denoiser.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
     rad, alb, nrm = _noisy_buffers(16, 16, 3)
     with pytest.raises(InvalidArgumentError, match="radiance must have shape"):
-        photo.denoise(rad[..., 0])
+        denoiser.denoise(rad[..., 0])
     with pytest.raises(InvalidArgumentError, match="radiance must have shape"):
-        photo.denoise(rad[:0])
+        denoiser.denoise(rad[:0])
     with pytest.raises(InvalidArgumentError, match=r"albedo must have the radiance's shape"):
-        photo.denoise(rad, alb[:8], nrm)
+        denoiser.denoise(rad, alb[:8], nrm)
     with pytest.raises(InvalidArgumentError, match=r"normal must have the radiance's shape"):
-        photo.denoise(rad, alb, nrm[..., :2])
+        denoiser.denoise(rad, alb, nrm[..., :2])
     with pytest.raises(InvalidArgumentError, match="num_threads"):
-        photo.denoise(rad, alb, nrm, num_threads=-1)
+        denoiser.denoise(rad, alb, nrm, num_threads=-1)
     with pytest.raises(InvalidArgumentError, match="quality"):
-        photo.denoise(rad, alb, nrm, "best")
+        denoiser.denoise(rad, alb, nrm, "best")
     with pytest.raises(InvalidArgumentError, match="guides must be one of"):
-        photo.denoise(rad, alb, nrm, guides="clean")
+        denoiser.denoise(rad, alb, nrm, guides="clean")
     with pytest.raises(InvalidArgumentError, match=r"albedo must have"):  # the first one named
-        photo.denoise(rad, alb[:8], nrm[..., :2])
-    assert photo.denoise(rad, alb, nrm).shape == rad.shape  # still works after the errors
+        denoiser.denoise(rad, alb[:8], nrm[..., :2])
+    assert denoiser.denoise(rad, alb, nrm).shape == rad.shape  # still works after the errors
     # Finite radiance goes to OIDN as it is (no copy): untouched, and the same image as the
     # radiance with its NaN and inf replaced by 0.
     finite = np.nan_to_num(rad, nan=0.0, posinf=0.0)
     kept = finite.copy()
-    assert np.array_equal(photo.denoise(finite, alb, nrm), photo.denoise(rad, alb, nrm))
+    assert np.array_equal(denoiser.denoise(finite, alb, nrm), denoiser.denoise(rad, alb, nrm))
     assert np.array_equal(finite, kept)
 
 
@@ -495,25 +499,25 @@ def test_half_resolution_blocks_and_interpolation_are_opencvs() -> None:
     import cv2
 
     img = np.random.default_rng(5).random((24, 18, 3)).astype(np.float32)
-    blk = photo._blocks2(img)
+    blk = denoiser._blocks2(img)
     np.testing.assert_allclose(
         blk, cv2.resize(img, (9, 12), interpolation=cv2.INTER_AREA), atol=1e-6
     )
     np.testing.assert_allclose(
-        photo._double(blk, 24, 18),
+        denoiser._double(blk, 24, 18),
         cv2.resize(blk, (18, 24), interpolation=cv2.INTER_LINEAR),
         atol=1e-6,
     )
     yy, xx = np.mgrid[0:20, 0:30].astype(np.float32)
     ramp = np.stack([0.1 * xx + 0.05 * yy, 0.2 * yy, np.full_like(xx, 0.7)], axis=-1)
-    back = photo._double(photo._blocks2(ramp), 20, 30)
+    back = denoiser._double(denoiser._blocks2(ramp), 20, 30)
     np.testing.assert_allclose(back[1:-1, 1:-1], ramp[1:-1, 1:-1], atol=1e-5)
     odd = img[:23, :17]
-    ob = photo._blocks2(odd)
+    ob = denoiser._blocks2(odd)
     assert ob.shape == (12, 9, 3)
     np.testing.assert_allclose(ob[-1, -1], odd[22, 16], atol=1e-6)  # the corner block: one pixel
     np.testing.assert_allclose(ob[-1, 0], odd[22, 0:2].mean(axis=0), atol=1e-6)
-    assert photo._double(ob, 23, 17).shape == (23, 17, 3)
+    assert denoiser._double(ob, 23, 17).shape == (23, 17, 3)
 
 
 def test_half_resolution_albedo_ratio_fades_at_silhouettes() -> None:
@@ -575,8 +579,8 @@ def test_half_resolution_restore_matches_a_second_implementation(shape: tuple[in
     a = rng.random((h, w, 3)).astype(np.float32)
     n = rng.normal(size=(h, w, 3)).astype(np.float32)
     n[0, 0] = 0.0  # a zero normal: no ratio there
-    ab = photo._blocks2(a)
-    nb = photo._blocks2(n)
+    ab = denoiser._blocks2(a)
+    nb = denoiser._blocks2(n)
     want = _restore_by_numpy(den, h, w, a, ab, n, nb)
     outs = [
         _core.render.restore_half_resolution(den, h, w, a, ab, n, nb, num_threads=t)
@@ -585,7 +589,7 @@ def test_half_resolution_restore_matches_a_second_implementation(shape: tuple[in
     np.testing.assert_allclose(outs[0], want, rtol=2e-5, atol=2e-6)
     assert all(o.tobytes() == outs[0].tobytes() for o in outs[1:])
     flat = _core.render.restore_half_resolution(den, h, w)  # without albedo: the doubling alone
-    np.testing.assert_allclose(flat, np.maximum(photo._double(den, h, w), 0.0), atol=0)
+    np.testing.assert_allclose(flat, np.maximum(denoiser._double(den, h, w), 0.0), atol=0)
     with pytest.raises(InvalidArgumentError, match="albedo_blocks"):
         _core.render.restore_half_resolution(den, h, w, a, ab[:-1], n, nb)
     with pytest.raises(InvalidArgumentError, match="denoised"):
@@ -598,7 +602,7 @@ def test_half_resolution_denoise_keeps_full_size_print() -> None:
     at full size and contrast, through the ratio of the exact (``raw``) albedo, with a twentieth
     of the input's squared error; without an albedo it returns the blocks' interpolation (no
     checker)."""
-    if not photo.denoiser_available():
+    if not denoiser.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
     h, w = 64, 48
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
@@ -610,7 +614,7 @@ def test_half_resolution_denoise_keeps_full_size_print() -> None:
     noisy = (clean * rng.gamma(8.0, 1.0 / 8.0, (h, w, 1))).astype(np.float32)
     normal = np.zeros((h, w, 3), np.float32)
     normal[..., 2] = 1.0
-    out = photo.denoise(noisy, albedo, normal, resolution="half", guides="raw")
+    out = denoiser.denoise(noisy, albedo, normal, resolution="half", guides="raw")
     assert out.shape == noisy.shape
     assert out.dtype == np.float32
     assert out.min() >= 0.0
@@ -620,14 +624,14 @@ def test_half_resolution_denoise_keeps_full_size_print() -> None:
     # the checker survives: light and dark pixels alternate as in the print, at 4 : 1
     dark, lit = out[(yy + xx) % 2 == 1].mean(), out[(yy + xx) % 2 == 0].mean()
     assert lit / dark == pytest.approx(4.0, rel=0.02), (lit, dark)
-    flat = photo.denoise(noisy, None, None, resolution="half", guides="none")
+    flat = denoiser.denoise(noisy, None, None, resolution="half", guides="none")
     assert abs(flat[(yy + xx) % 2 == 0].mean() / flat[(yy + xx) % 2 == 1].mean() - 1.0) < 0.1
     with pytest.raises(InvalidArgumentError, match="resolution must be one of"):
-        photo.denoise(noisy, albedo, normal, resolution="quarter")
+        denoiser.denoise(noisy, albedo, normal, resolution="quarter")
     with pytest.raises(InvalidArgumentError, match="denoise_resolution"):
         RenderSettings(engine="path", denoise_resolution="quarter")
     # a one-pixel-high image is denoised at full size
-    assert photo.denoise(noisy[:1], albedo[:1], normal[:1], resolution="half").shape == (1, w, 3)
+    assert denoiser.denoise(noisy[:1], albedo[:1], normal[:1], resolution="half").shape == (1, w, 3)
 
 
 def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
@@ -638,24 +642,24 @@ def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
 
     img = np.random.default_rng(4).random((23, 17, 3)).astype(np.float32)
     want = cv2.GaussianBlur(img, (3, 3), 0.5, borderType=cv2.BORDER_REPLICATE)
-    got = photo._smooth3(img)
+    got = denoiser._smooth3(img)
     assert got.dtype == np.float32
     assert got.flags.c_contiguous
     assert got.shape == img.shape
     np.testing.assert_allclose(got, want, atol=1e-6)
     for threads in (1, 2, 5):  # the thread count does not change the image
-        assert photo._smooth3(img, threads).tobytes() == got.tobytes()
+        assert denoiser._smooth3(img, threads).tobytes() == got.tobytes()
     one_row = img[:1]
     np.testing.assert_allclose(
-        photo._smooth3(one_row),
+        denoiser._smooth3(one_row),
         cv2.GaussianBlur(one_row, (3, 3), 0.5, borderType=cv2.BORDER_REPLICATE),
         atol=1e-6,
     )
     flat = np.full((5, 6, 3), 0.3, np.float32)
-    np.testing.assert_allclose(photo._smooth3(flat), flat, atol=1e-7)
+    np.testing.assert_allclose(denoiser._smooth3(flat), flat, atol=1e-7)
     dot = np.zeros((7, 7, 3), np.float32)
     dot[3, 3] = 1.0
-    blurred = photo._smooth3(dot)
+    blurred = denoiser._smooth3(dot)
     assert np.count_nonzero(blurred[..., 0]) == 9
     assert abs(blurred.sum() / 3 - 1.0) < 1e-6
     w = np.exp(-0.5 / 0.25)  # the side weight before normalisation, sigma 0.5
@@ -663,8 +667,8 @@ def test_smoothed_guides_are_opencvs_3x3_gaussian() -> None:
 
 
 def test_missing_denoiser_warns_and_traces_more_samples(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(photo, "_DENOISER", None)
-    monkeypatch.setattr(photo, "_DENOISER_CHECKED", True)
+    monkeypatch.setattr(denoiser, "_DENOISER", None)
+    monkeypatch.setattr(denoiser, "_DENOISER_CHECKED", True)
     monkeypatch.setattr(photo, "_WARNED_NO_DENOISER", False)
     items, tote = _small_scene()
     s = RenderSettings(engine="path", spp=2, spp_without_denoiser=6)
@@ -676,7 +680,7 @@ def test_missing_denoiser_warns_and_traces_more_samples(monkeypatch: pytest.Monk
         warnings.simplefilter("error")  # warned once per process
         photo.PhotoRenderer(items, tote, np.eye(4), None, s)
     with pytest.raises(ImportError, match="pyoidn"):
-        photo.denoise(np.zeros((4, 4, 3), np.float32))
+        denoiser.denoise(np.zeros((4, 4, 3), np.float32))
 
 
 def test_tiny_path_traced_dataset_validates(

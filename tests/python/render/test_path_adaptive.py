@@ -14,7 +14,7 @@ from test_path_tracer import camera, quad
 from mgn.errors import InvalidArgumentError
 from mgn.geometry import make_box, make_sphere
 from mgn.render.path import AreaLight, Environment, PathScene, PathTraceOptions, PbrMaterial
-from mgn.render.photo import RenderSettings
+from mgn.render.settings import RenderSettings
 
 BLACK = Environment(kind="uniform", color=(0.0, 0.0, 0.0), intensity=0.0)
 

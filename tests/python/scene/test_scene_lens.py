@@ -357,7 +357,7 @@ def test_config_rejects_a_lens_that_folds_over():
 
 
 def test_the_path_tracer_goes_through_the_same_lens():
-    from mgn.render.photo import RenderSettings
+    from mgn.render.settings import RenderSettings
 
     K = _K((-0.3, 0.12, 0.001, -0.002, -0.02), 320, 240)
     K = Intrinsics(320, 240, 250.0, 250.0, 161.0, 118.0, K.distortion)

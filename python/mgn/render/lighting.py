@@ -1,0 +1,198 @@
+"""The per-view domain randomisation of the path-traced photographs: the area lights, the
+environment, the tote and floor materials and the exposure of one view (:func:`draw_lighting`,
+:class:`ViewLighting`), each part switchable (:class:`mgn.render.settings.RandomizeSettings`).
+
+Everything is drawn from the stream (seed, view index) only, one independent stream per part, so
+a view looks the same whatever the number of threads or workers and whichever other views are
+rendered: 1-3 rectangular area lights above the tote (size, position, colour temperature
+(:func:`blackbody_rgb`), intensity), the environment (uniform / gradient / sky, intensity), the
+tote and floor materials (colour, roughness and a procedural texture,
+:func:`mgn.render.materials.procedural_texture`) and the exposure. No distractor objects are
+added.
+
+Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
+shows E / pi); poses (4, 4) float64 ``X_AB``.
+"""
+
+from __future__ import annotations
+
+import colorsys
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from mgn.errors import InvalidArgumentError
+from mgn.render.materials import (
+    FLOOR_COLOR,
+    FLOOR_ROUGHNESS,
+    TEXTURES,
+    TOTE_ROUGHNESS,
+    procedural_texture,
+    srgb_to_linear,
+)
+from mgn.render.path import AreaLight, Environment, PbrMaterial
+from mgn.render.settings import RenderSettings
+
+__all__ = ["ENVIRONMENTS", "ViewLighting", "blackbody_rgb", "draw_lighting"]
+
+#: Environment kinds the randomisation draws from.
+ENVIRONMENTS = ("uniform", "gradient", "sky")
+
+
+def blackbody_rgb(temperature: float) -> tuple[float, float, float]:
+    """Linear RGB tint of a black body at ``temperature`` K, white (1, 1, 1) at 6500 K and unit
+    luminance: Planck's law sampled at the dominant wavelengths of the sRGB primaries (611, 549,
+    464 nm), divided by the same at 6500 K. Accurate to a few percent in tint for 2500-10000 K,
+    which is all lighting randomisation needs."""
+    if not (math.isfinite(temperature) and temperature > 0):
+        raise InvalidArgumentError(f"colour temperature must be > 0 K, got {temperature!r}")
+    lam = np.array([611e-9, 549e-9, 464e-9])
+    c2 = 1.4387769e-2  # m K, second radiation constant
+
+    def planck(t: float) -> npt.NDArray[np.float64]:
+        return 1.0 / (lam**5 * np.expm1(c2 / (lam * t)))
+
+    rgb = planck(temperature) / planck(6500.0)
+    rgb /= float(0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2])
+    return (float(rgb[0]), float(rgb[1]), float(rgb[2]))
+
+
+@dataclass(frozen=True)
+class ViewLighting:
+    """Everything drawn for one view: the lights, the environment, tote / floor materials and
+    the exposure (EV, including the configured base)."""
+
+    lights: tuple[Any, ...]
+    environment: Any
+    tote: Any
+    floor: Any
+    exposure: float
+    summary: dict[str, Any] = field(default_factory=dict, compare=False)
+
+
+def _look_down_pose(
+    position: npt.NDArray[np.float64], target: npt.NDArray[np.float64], yaw: float
+) -> npt.NDArray[np.float64]:
+    """X_WL of a light at ``position`` whose +z axis points at ``target``."""
+    z = target - position
+    z /= np.linalg.norm(z)
+    a = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    x = a - z * float(a @ z)
+    if np.linalg.norm(x) < 1e-6:
+        x = np.array([1.0, 0.0, 0.0]) - z * z[0]
+    x /= np.linalg.norm(x)
+    X = np.eye(4)
+    X[:3, 0], X[:3, 1], X[:3, 2], X[:3, 3] = x, np.cross(z, x), z, position
+    return X
+
+
+def draw_lighting(
+    settings: RenderSettings,
+    seed: int,
+    view_index: int,
+    *,
+    target_W: npt.ArrayLike = (0.0, 0.0, 0.0),
+    tote_color: Sequence[float] = (0.2, 0.35, 0.6),
+    randomize: bool = True,
+) -> ViewLighting:
+    """The lights, environment, tote / floor materials and exposure of view ``view_index``,
+    drawn from (seed, view_index) by the switches of ``settings.randomize`` (all off when
+    ``randomize`` is false: one 1 m x 1 m light 1.6 m above ``target_W``, a soft gradient
+    environment, the tote in ``tote_color``, a grey floor, the configured exposure)."""
+
+    r = settings.randomize
+    target = np.asarray(target_W, np.float64)
+    ss = np.random.SeedSequence([int(seed) & (2**63 - 1), int(view_index), 0x50484F54])
+    # One independent stream per part: switching one part off does not change the others.
+    g_light, g_env, g_mat, g_exp = (np.random.Generator(np.random.PCG64(s)) for s in ss.spawn(4))
+    summary: dict[str, Any] = {}
+
+    lights = []
+    if randomize and r.lights:
+        n = int(g_light.integers(r.light_count[0], r.light_count[1] + 1))
+        for _ in range(n):
+            side = g_light.uniform(*r.light_size)
+            aspect = g_light.uniform(0.5, 1.0)
+            h = g_light.uniform(*r.light_height)
+            rad = r.light_offset * math.sqrt(g_light.random())
+            phi = g_light.uniform(0.0, 2 * math.pi)
+            pos = target + np.array([rad * math.cos(phi), rad * math.sin(phi), h])
+            temp = g_light.uniform(*r.light_temperature)
+            # Each light casts 1/n of the drawn irradiance on the target: a small light facing
+            # the target at distance d and height h gives E = L A h / d^3 (A cos0 cos(theta)/d^2).
+            e = g_light.uniform(*r.light_irradiance) / n
+            area = side * side * aspect
+            d = float(np.linalg.norm(pos - target))
+            lights.append(
+                AreaLight(
+                    _look_down_pose(pos, target, g_light.uniform(0.0, math.pi)),
+                    "rect",
+                    (side, side * aspect),
+                    blackbody_rgb(temp),
+                    e * d**3 / (area * h),
+                )
+            )
+        summary["lights"] = n
+    else:
+        lights.append(
+            AreaLight(
+                _look_down_pose(target + np.array([0.25, -0.2, 1.6]), target, 0.0),
+                "rect",
+                (1.0, 1.0),
+                (1.0, 1.0, 1.0),
+                20.0,
+            )
+        )
+    if randomize and r.environment:
+        kind = ENVIRONMENTS[int(g_env.integers(len(ENVIRONMENTS)))]
+        inten = float(g_env.uniform(*r.environment_intensity))
+        tint = blackbody_rgb(float(g_env.uniform(5000.0, 9000.0)))
+        sun = g_env.normal(size=3)
+        sun[2] = abs(sun[2]) + 0.5
+        sun /= np.linalg.norm(sun)
+        env = Environment(
+            kind=kind, color=tint, zenith=tuple(0.8 * np.asarray(tint) * (0.75, 0.85, 1.0)),
+            horizon=(0.9, 0.9, 0.9), ground=(0.25, 0.24, 0.22),
+            sun_direction=tuple(sun), intensity=inten,
+        )  # fmt: skip
+        summary["environment"] = kind
+    else:
+        env = Environment(kind="gradient", zenith=(0.55, 0.6, 0.7), horizon=(0.8, 0.8, 0.8),
+                          ground=(0.25, 0.24, 0.22), intensity=0.4)  # fmt: skip
+    if randomize and r.materials:
+        hue = g_mat.random()
+        sat = g_mat.uniform(0.2, 0.8)
+        val = g_mat.uniform(0.15, 0.75)
+        tote_rgb = srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
+        tote = PbrMaterial(
+            base_color=tuple(tote_rgb),
+            roughness=float(g_mat.uniform(0.35, 0.75)),
+            base_color_texture=procedural_texture("noise", g_mat, contrast=0.15),
+        )
+        kind = TEXTURES[int(g_mat.integers(len(TEXTURES)))]
+        floor_rgb = srgb_to_linear(
+            np.array(_hsv_to_rgb(g_mat.random(), g_mat.uniform(0, 0.4), g_mat.uniform(0.25, 0.8)))
+        )
+        floor = PbrMaterial(
+            base_color=tuple(floor_rgb),
+            roughness=float(g_mat.uniform(0.3, 0.95)),
+            base_color_texture=procedural_texture(kind, g_mat, contrast=0.35),
+        )
+        summary["floor_texture"] = kind
+    else:
+        rgb = (float(tote_color[0]), float(tote_color[1]), float(tote_color[2]))
+        tote = PbrMaterial(base_color=rgb, roughness=TOTE_ROUGHNESS)
+        floor = PbrMaterial(base_color=FLOOR_COLOR, roughness=FLOOR_ROUGHNESS)
+    exposure = settings.exposure
+    if randomize and r.exposure and r.exposure_range > 0:
+        exposure += float(g_exp.uniform(-r.exposure_range, r.exposure_range))
+    return ViewLighting(tuple(lights), env, tote, floor, exposure, summary)
+
+
+def _hsv_to_rgb(h: float, s: float, v: float) -> tuple[float, float, float]:
+
+    return colorsys.hsv_to_rgb(h, s, v)
