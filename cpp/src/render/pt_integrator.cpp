@@ -117,11 +117,12 @@ int hit_light(const Lighting& L, F3 o, F3 d, float tmax, float& t_out) {
   return best;
 }
 
-/// Pdf (solid angle, at the shading point with normal n) of environment sampling.
-float env_pdf(const Lighting& L, F3 n, F3 w) {
-  float p = (1.0f - L.p_sun) * std::max(0.0f, dot(n, w)) * pt::kInvPi;
-  if (L.p_sun > 0.0f && dot(w, L.sun_dir) >= L.sun_cos)
-    p += L.p_sun / (2.0f * pt::kPi * (1.0f - L.sun_cos));
+/// Pdf (solid angle, at the shading point with normal n) of environment sampling: the sun's
+/// cone with probability p_sun, the dome (cosine-weighted) with probability p_dome.
+float env_pdf(const Lighting& L, float p_sun, float p_dome, F3 n, F3 w) {
+  float p = p_dome * std::max(0.0f, dot(n, w)) * pt::kInvPi;
+  if (p_sun > 0.0f && dot(w, L.sun_dir) >= L.sun_cos)
+    p += p_sun / (2.0f * pt::kPi * (1.0f - L.sun_cos));
   return p;
 }
 
@@ -190,7 +191,7 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
         float w = 1.0f;
         if (!prev_delta) {
           const float cos_l = -dot(d, l.n);
-          const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
+          const float pl = L_.pmf[li] * area_sel_ * t_light * t_light / (l.area * cos_l);
           w = power_heuristic(prev_pdf, pl);
         }
         add(L, beta_e * l.radiance * w, depth >= 2);
@@ -202,7 +203,8 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
           const F3 Le = L_.env(d);
           float w = 1.0f;
           if (!prev_delta && L_.env_on)
-            w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
+            w = power_heuristic(prev_pdf,
+                                L_.pmf.back() * env_sel_ * env_pdf(L_, p_sun_, p_dome_, prev_n, d));
           add(L, beta_e * Le * w, depth >= 2);
           if (aov_open) aov_a = emitter_guide(Le);
         }
@@ -220,7 +222,7 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
           if (e >= 0) {
             const float cos_l = std::abs(dot(d, h.ng));
             const float t = rh.ray.tfar;
-            const float pl = L_.pmf[L_.light_data.size() + e] * t * t /
+            const float pl = L_.pmf[L_.light_data.size() + e] * area_sel_ * t * t /
                              (L_.tris[e].area * std::max(cos_l, 1e-7f));
             w = power_heuristic(prev_pdf, pl);
           }
@@ -245,15 +247,27 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
       const pt::Sample2 u_sel = s.get(base_pair + 2);
       const pt::Sample2 u_rr = s.get(base_pair + 3);
 
-      // Next-event estimation.
+      // Next-event estimation: a light (area light or emissive triangle) and the environment,
+      // each with its own shadow ray, or (one_shadow_) one of the two, the environment with
+      // probability env_sel_.
       if (sm.has_nondelta) {
-        if (L_.area_on) {
+        float u_light = u_sel.x;
+        bool do_area = L_.area_on, do_env = env_nee_;
+        if (one_shadow_) {
+          if (u_light < env_sel_) {
+            do_area = false;
+          } else {
+            do_env = false;
+            u_light = std::min((u_light - env_sel_) / (1.0f - env_sel_), 0.99999994f);
+          }
+        }
+        if (do_area) {
           const std::size_t n = L_.n_local;
           const auto k = static_cast<std::size_t>(
-              std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_sel.x) - L_.cdf.begin());
+              std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_light) - L_.cdf.begin());
           add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
         }
-        if (L_.env_on)
+        if (do_env)
           add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4)), depth >= 1);
       }
 
@@ -363,21 +377,21 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
 F3 Integrator::direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
                       std::size_t k, pt::Sample2 u) {
   const std::size_t n = L_.pmf.size();
-  const float p_sel = L_.pmf[k];
+  const float p_sel = L_.pmf[k] * (k + 1 == n ? env_sel_ : area_sel_);
   if (p_sel <= 0.0f) return F3(0.0f);
   F3 wi_w, Le;
   float pdf_light, dist;
   if (k + 1 == n) {  // environment
     float pu = u.x;
-    if (L_.p_sun > 0.0f && pu < L_.p_sun) {
-      pu /= L_.p_sun;
+    if (p_sun_ > 0.0f && pu < p_sun_) {
+      pu /= p_sun_;
       const pt::Frame sf(L_.sun_dir);
       wi_w = sf.to_world(pt::uniform_cone(pu, u.y, L_.sun_cos));
     } else {
-      if (L_.p_sun > 0.0f) pu = (pu - L_.p_sun) / (1.0f - L_.p_sun);
+      if (p_sun_ > 0.0f) pu = (pu - p_sun_) / (1.0f - p_sun_);
       wi_w = frame.to_world(pt::cosine_hemisphere(std::min(pu, 0.99999994f), u.y));
     }
-    pdf_light = env_pdf(L_, h.ns, wi_w);
+    pdf_light = env_pdf(L_, p_sun_, p_dome_, h.ns, wi_w);
     if (pdf_light <= 0.0f) return F3(0.0f);
     dist = std::numeric_limits<float>::infinity();
     Le = L_.env(wi_w);

@@ -60,6 +60,18 @@ class Integrator {
         split_min_(static_cast<float>(o.fresnel_split_min)),
         guide_split_min_(static_cast<float>(o.guide_split_min)) {
     rtcInitIntersectContext(&ctx_);
+    if (!o.sample_sky_dome) {
+      // The dome is found by the BSDF-sampled rays alone; next-event estimation aims at the
+      // sun only (none without a sun).
+      p_dome_ = 0.0f;
+      p_sun_ = L.p_sun > 0.0f ? 1.0f : 0.0f;
+      env_nee_ = L.env_on && p_sun_ > 0.0f;
+    }
+    if (o.shadow_rays == 1 && L.area_on && env_nee_) {
+      one_shadow_ = true;
+      env_sel_ = kEnvShadowShare;
+      area_sel_ = 1.0f - kEnvShadowShare;
+    }
   }
 
   /// First hit of a bounce ray (the non-robust BVH).
@@ -153,6 +165,17 @@ class Integrator {
   /// Smooth-dielectric vertices per camera sample whose two branches are both traced in full
   /// (the first ones along the path, depth first); later ones are split as in `Split`.
   static constexpr int kMaxBranches = 3;
+  /// PathTraceOptions::shadow_rays == 1 with both a light and the environment: one shadow ray
+  /// per vertex, to the environment with probability env_sel_, else to a light (area_sel_).
+  static constexpr float kEnvShadowShare = 0.5f;
+  /// Environment sampling: the sun's cone with probability p_sun_, the dome with p_dome_
+  /// (Lighting::p_sun and 1 - p_sun; PathTraceOptions::sample_sky_dome false: 1 or 0, and 0).
+  float p_sun_ = L_.p_sun;
+  float p_dome_ = 1.0f - L_.p_sun;
+  bool env_nee_ = L_.env_on;  // a shadow ray towards the environment at each vertex
+  bool one_shadow_ = false;
+  float env_sel_ = 1.0f;   // probability that the environment is sampled at a vertex
+  float area_sel_ = 1.0f;  // probability that a light (area or emissive triangle) is sampled
   RTCIntersectContext ctx_;
 };
 
