@@ -144,7 +144,9 @@ def views(work: Path, tag: str, changes: dict[str, Any]) -> None:
 
 def report(work: Path) -> None:
     names = list(WINDOWS)
-    print("| tag | trace CPU-s | rays/px | denoise CPU-s | " + " | ".join(names) + " | mean | load |")
+    print(
+        "| tag | trace CPU-s | rays/px | denoise CPU-s | " + " | ".join(names) + " | mean | load |"
+    )
     print("|---|---:|---:|---:|" + "---:|" * (len(names) + 2))
     for f in sorted(work.glob("views_*.json"), key=lambda p: p.stat().st_mtime):
         r = json.loads(f.read_text())

@@ -149,6 +149,7 @@ void bind_render_path_tracer(py::module_& m) {
       .def_readwrite("guide_split_min", &PathTraceOptions::guide_split_min)
       .def_readwrite("shadow_rays", &PathTraceOptions::shadow_rays)
       .def_readwrite("sample_sky_dome", &PathTraceOptions::sample_sky_dome)
+      .def_readwrite("reduced_nee_depth", &PathTraceOptions::reduced_nee_depth)
       .def_readwrite("labels", &PathTraceOptions::labels)
       .def_readwrite("adaptive_samples", &PathTraceOptions::adaptive_samples)
       .def_readwrite("adaptive_max", &PathTraceOptions::adaptive_max)

@@ -90,22 +90,30 @@ def test_exterior_furnace_lambert_sphere_shows_albedo_times_L(albedo):
 
 
 @pytest.mark.parametrize("albedo", [1.0, 0.5])
-def test_exterior_furnace_without_dome_shadow_rays_shows_albedo_times_L(albedo):
+@pytest.mark.parametrize("reduced_nee_depth", [0, 1])
+def test_exterior_furnace_without_dome_shadow_rays_shows_albedo_times_L(albedo, reduced_nee_depth):
     """The furnace of the test above with the dome left to the BSDF-sampled rays
-    (sample_sky_dome False): every cosine-weighted bounce ray of the convex sphere escapes to
-    the dome, so each sample is exactly a * L (no shadow ray is cast)."""
+    (sample_sky_dome False) at every vertex, or from the first bounce's hit on (the camera
+    ray's hit keeps its shadow ray to the dome, weighed against its bounce ray by MIS): the
+    sphere still shows a * L."""
     L = 0.8
     mat = PbrMaterial(base_color=(albedo,) * 3, ior=1.0)
     scene = PathScene([make_sphere(0.5, 128, 64)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
     view = camera((0, -3, 0.5), (0, 0, 0), 24, 25)
-    out = scene.render(view, PathTraceOptions(spp=8, seed=3, sample_sky_dome=False))
+    opts = PathTraceOptions(
+        spp=8, seed=3, sample_sky_dome=False, reduced_nee_depth=reduced_nee_depth
+    )
+    out = scene.render(view, opts)
     on = interior(out.instance_ids == 1)
     assert on.sum() > 150
     np.testing.assert_allclose(out.radiance[on], albedo * L, rtol=3e-3)
     np.testing.assert_allclose(out.radiance[interior(out.instance_ids == 0)], L, rtol=1e-6)
-    # Camera and label rays, plus one bounce ray per sample that hits the sphere.
+    # Label and camera rays, one bounce ray per sample that hits the sphere (and there one
+    # shadow ray if the camera ray's hit samples the dome).
     n_hit = int((out.instance_ids == 1).sum())
-    assert out.rays < 24 * 24 * (8 + 1) + n_hit * 8 * 1.1
+    per_hit = 1 + (reduced_nee_depth > 0)
+    assert out.rays < 24 * 24 * (8 + 1) + n_hit * 8 * per_hit * 1.1
+    assert out.rays > 24 * 24 * (8 + 1) + n_hit * 8 * per_hit * 0.9
 
 
 @pytest.mark.parametrize(
@@ -237,8 +245,10 @@ def test_lambert_plane_under_rect_light_matches_analytic_irradiance():
     assert abs(P[16, col, 0]) < 0.06
 
 
-@pytest.mark.parametrize("shadow_rays", [2, 1])
-def test_lambert_plane_under_rect_light_and_sky_with_one_or_two_shadow_rays(shadow_rays):
+@pytest.mark.parametrize(("shadow_rays", "reduced_nee_depth"), [(2, 0), (1, 0), (1, 1)])
+def test_lambert_plane_under_rect_light_and_sky_with_one_or_two_shadow_rays(
+    shadow_rays, reduced_nee_depth
+):
     """A Lambertian plane of albedo a under a small rect light of radiance Le and a uniform sky
     L shows a / pi * E(p) + a * L (direct lighting only; the light hides 1.3 % of the sky's
     projected solid angle), whether each vertex casts a shadow ray to the light and one to the
@@ -250,7 +260,10 @@ def test_lambert_plane_under_rect_light_and_sky_with_one_or_two_shadow_rays(shad
     light = AreaLight(X_WL, "rect", (size, size), (1.0, 1.0, 1.0), Le)
     scene = PathScene([quad(4.0)], np.eye(4)[None], [1], [[mat]], [light], uniform(L))
     view = camera((0.2, 0.0, 1.5), (0.2, 0.0, 0.0), 16, 60, up=(0, 1, 0))
-    opts = PathTraceOptions(spp=256, max_bounces=1, seed=2, shadow_rays=shadow_rays)
+    opts = PathTraceOptions(
+        spp=256, max_bounces=1, seed=2, shadow_rays=shadow_rays,
+        reduced_nee_depth=reduced_nee_depth,
+    )  # fmt: skip
     out = scene.render(view, opts)
     K = view.K
     u, v = np.meshgrid(np.arange(K.width) + 0.5, np.arange(K.height) + 0.5)
@@ -269,7 +282,9 @@ def test_lambert_plane_under_rect_light_and_sky_with_one_or_two_shadow_rays(shad
     assert np.all(np.abs(blocks) < 0.03 * ref), blocks / ref
     # Per sample: the camera ray, the shadow rays, the bounce ray (and per pixel one label ray).
     rays_per_sample = out.rays / (K.width * K.height * opts.spp)
-    assert rays_per_sample == pytest.approx(2 + shadow_rays + 1 / opts.spp, abs=1e-3)
+    # (reduced_nee_depth 1: the camera ray's hit, the only vertex here, casts both.)
+    shadow = 2 if reduced_nee_depth > 0 else shadow_rays
+    assert rays_per_sample == pytest.approx(2 + shadow + 1 / opts.spp, abs=1e-3)
 
 
 def test_emissive_quad_is_sampled_like_the_area_light_of_its_shape():
@@ -767,6 +782,10 @@ def test_bad_parameters_name_the_setting():
         PathTraceOptions(spp=0)
     with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.max_bounces"):
         PathTraceOptions(max_bounces=-1)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.shadow_rays must be 1 or 2"):
+        PathTraceOptions(shadow_rays=3)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.reduced_nee_depth must be"):
+        PathTraceOptions(reduced_nee_depth=-1)
     with pytest.raises(
         InvalidArgumentError, match=r"PbrMaterial.roughness must be in \[0, 1\], got -0.1"
     ):

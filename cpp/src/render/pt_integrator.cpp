@@ -191,7 +191,8 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
         float w = 1.0f;
         if (!prev_delta) {
           const float cos_l = -dot(d, l.n);
-          const float pl = L_.pmf[li] * area_sel_ * t_light * t_light / (l.area * cos_l);
+          const float pl =
+              L_.pmf[li] * nee(depth - 1).area_sel * t_light * t_light / (l.area * cos_l);
           w = power_heuristic(prev_pdf, pl);
         }
         add(L, beta_e * l.radiance * w, depth >= 2);
@@ -202,9 +203,11 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
         if (L_.env_on || aov_open) {
           const F3 Le = L_.env(d);
           float w = 1.0f;
-          if (!prev_delta && L_.env_on)
-            w = power_heuristic(prev_pdf,
-                                L_.pmf.back() * env_sel_ * env_pdf(L_, p_sun_, p_dome_, prev_n, d));
+          if (!prev_delta && L_.env_on) {
+            const NeeMode& m = nee(depth - 1);
+            w = power_heuristic(
+                prev_pdf, L_.pmf.back() * m.env_sel * env_pdf(L_, m.p_sun, m.p_dome, prev_n, d));
+          }
           add(L, beta_e * Le * w, depth >= 2);
           if (aov_open) aov_a = emitter_guide(Le);
         }
@@ -222,7 +225,7 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
           if (e >= 0) {
             const float cos_l = std::abs(dot(d, h.ng));
             const float t = rh.ray.tfar;
-            const float pl = L_.pmf[L_.light_data.size() + e] * area_sel_ * t * t /
+            const float pl = L_.pmf[L_.light_data.size() + e] * nee(depth - 1).area_sel * t * t /
                              (L_.tris[e].area * std::max(cos_l, 1e-7f));
             w = power_heuristic(prev_pdf, pl);
           }
@@ -248,27 +251,28 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
       const pt::Sample2 u_rr = s.get(base_pair + 3);
 
       // Next-event estimation: a light (area light or emissive triangle) and the environment,
-      // each with its own shadow ray, or (one_shadow_) one of the two, the environment with
-      // probability env_sel_.
+      // each with its own shadow ray, or (NeeMode::one_shadow) one of the two, the environment
+      // with probability env_sel.
       if (sm.has_nondelta) {
+        const NeeMode& m = nee(depth);
         float u_light = u_sel.x;
-        bool do_area = L_.area_on, do_env = env_nee_;
-        if (one_shadow_) {
-          if (u_light < env_sel_) {
+        bool do_area = L_.area_on, do_env = m.env_nee;
+        if (m.one_shadow) {
+          if (u_light < m.env_sel) {
             do_area = false;
           } else {
             do_env = false;
-            u_light = std::min((u_light - env_sel_) / (1.0f - env_sel_), 0.99999994f);
+            u_light = std::min((u_light - m.env_sel) / (1.0f - m.env_sel), 0.99999994f);
           }
         }
         if (do_area) {
           const std::size_t n = L_.n_local;
           const auto k = static_cast<std::size_t>(
               std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_light) - L_.cdf.begin());
-          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
+          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair), m), depth >= 1);
         }
         if (do_env)
-          add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4)), depth >= 1);
+          add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4), m), depth >= 1);
       }
 
       // BSDF sampling.
@@ -375,23 +379,23 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
 }
 
 F3 Integrator::direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
-                      std::size_t k, pt::Sample2 u) {
+                      std::size_t k, pt::Sample2 u, const NeeMode& mode) {
   const std::size_t n = L_.pmf.size();
-  const float p_sel = L_.pmf[k] * (k + 1 == n ? env_sel_ : area_sel_);
+  const float p_sel = L_.pmf[k] * (k + 1 == n ? mode.env_sel : mode.area_sel);
   if (p_sel <= 0.0f) return F3(0.0f);
   F3 wi_w, Le;
   float pdf_light, dist;
   if (k + 1 == n) {  // environment
     float pu = u.x;
-    if (p_sun_ > 0.0f && pu < p_sun_) {
-      pu /= p_sun_;
+    if (mode.p_sun > 0.0f && pu < mode.p_sun) {
+      pu /= mode.p_sun;
       const pt::Frame sf(L_.sun_dir);
       wi_w = sf.to_world(pt::uniform_cone(pu, u.y, L_.sun_cos));
     } else {
-      if (p_sun_ > 0.0f) pu = (pu - p_sun_) / (1.0f - p_sun_);
+      if (mode.p_sun > 0.0f) pu = (pu - mode.p_sun) / (1.0f - mode.p_sun);
       wi_w = frame.to_world(pt::cosine_hemisphere(std::min(pu, 0.99999994f), u.y));
     }
-    pdf_light = env_pdf(L_, p_sun_, p_dome_, h.ns, wi_w);
+    pdf_light = env_pdf(L_, mode.p_sun, mode.p_dome, h.ns, wi_w);
     if (pdf_light <= 0.0f) return F3(0.0f);
     dist = std::numeric_limits<float>::infinity();
     Le = L_.env(wi_w);

@@ -163,6 +163,10 @@ struct PathTraceOptions {
   /// same cosine-weighted distribution at a diffuse surface), and shadow rays aim at the sun
   /// only (none without a sun).
   bool sample_sky_dome = true;
+  /// Path vertices from this depth on (0 = the camera ray's hit, 1 = the first bounce's hit,
+  /// ...; >= 0) follow shadow_rays and sample_sky_dome; the vertices before it cast both shadow
+  /// rays.
+  int reduced_nee_depth = 0;
   /// Label images (PathTraceOutput::depth and instance_ids): one coherent packet of pinhole rays
   /// through the pixel centres per tile row. false skips those rays (both images stay 0): the
   /// dataset pipeline takes its labels from the ray-cast label pass and keeps only the image.
