@@ -723,6 +723,31 @@ def test_same_seed_same_bytes_for_one_and_two_threads():
     np.testing.assert_allclose(
         np.linalg.norm(outs[0].normal[outs[0].instance_ids > 0], axis=-1), 1, atol=1e-4
     )
+    # The shadow-ray settings: the same bytes for any thread count too; the sky here has a
+    # sun, so even without the dome's shadow rays the environment is sampled; the radiance
+    # changes, the labels and the first hit's guides do not.
+    fewer = [
+        scene.render(
+            view,
+            PathTraceOptions(
+                spp=4,
+                seed=9,
+                view_index=2,
+                num_threads=t,
+                aperture_radius=0.01,
+                shadow_rays=1,
+                sample_sky_dome=False,
+                reduced_nee_depth=1,
+            ),
+        )
+        for t in (1, 2)
+    ]
+    for name in ("radiance", "albedo", "normal", "depth", "instance_ids"):
+        assert getattr(fewer[0], name).tobytes() == getattr(fewer[1], name).tobytes(), name
+    assert fewer[0].rays < outs[0].rays
+    assert fewer[0].radiance.tobytes() != outs[0].radiance.tobytes()
+    for name in ("albedo", "normal", "depth", "instance_ids"):
+        assert getattr(fewer[0], name).tobytes() == getattr(outs[0], name).tobytes(), name
 
 
 def test_with_lighting_shares_geometry_and_changes_light():
