@@ -52,6 +52,10 @@ void PathTraceOptions::validate() const {
     throw_error<InvalidArgument>(
         w, ".adaptive_samples must be finite and >= 0 (extra samples per pixel, 0 = off), got ",
         adaptive_samples);
+  if (shadow_rays < 1 || shadow_rays > 2)
+    throw_error<InvalidArgument>(w, ".shadow_rays must be 1 or 2, got ", shadow_rays);
+  if (reduced_nee_depth < 0)
+    throw_error<InvalidArgument>(w, ".reduced_nee_depth must be >= 0, got ", reduced_nee_depth);
   if (adaptive_max < 1 || adaptive_max > 64)
     throw_error<InvalidArgument>(
         w, ".adaptive_max must be in [1, 64] (extra samples of one pixel), got ", adaptive_max);

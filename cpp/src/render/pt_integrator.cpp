@@ -117,11 +117,12 @@ int hit_light(const Lighting& L, F3 o, F3 d, float tmax, float& t_out) {
   return best;
 }
 
-/// Pdf (solid angle, at the shading point with normal n) of environment sampling.
-float env_pdf(const Lighting& L, F3 n, F3 w) {
-  float p = (1.0f - L.p_sun) * std::max(0.0f, dot(n, w)) * pt::kInvPi;
-  if (L.p_sun > 0.0f && dot(w, L.sun_dir) >= L.sun_cos)
-    p += L.p_sun / (2.0f * pt::kPi * (1.0f - L.sun_cos));
+/// Pdf (solid angle, at the shading point with normal n) of environment sampling: the sun's
+/// cone with probability p_sun, the dome (cosine-weighted) with probability p_dome.
+float env_pdf(const Lighting& L, float p_sun, float p_dome, F3 n, F3 w) {
+  float p = p_dome * std::max(0.0f, dot(n, w)) * pt::kInvPi;
+  if (p_sun > 0.0f && dot(w, L.sun_dir) >= L.sun_cos)
+    p += p_sun / (2.0f * pt::kPi * (1.0f - L.sun_cos));
   return p;
 }
 
@@ -190,7 +191,8 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
         float w = 1.0f;
         if (!prev_delta) {
           const float cos_l = -dot(d, l.n);
-          const float pl = L_.pmf[li] * t_light * t_light / (l.area * cos_l);
+          const float pl =
+              L_.pmf[li] * nee(depth - 1).area_sel * t_light * t_light / (l.area * cos_l);
           w = power_heuristic(prev_pdf, pl);
         }
         add(L, beta_e * l.radiance * w, depth >= 2);
@@ -201,8 +203,11 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
         if (L_.env_on || aov_open) {
           const F3 Le = L_.env(d);
           float w = 1.0f;
-          if (!prev_delta && L_.env_on)
-            w = power_heuristic(prev_pdf, L_.pmf.back() * env_pdf(L_, prev_n, d));
+          if (!prev_delta && L_.env_on) {
+            const NeeMode& m = nee(depth - 1);
+            w = power_heuristic(
+                prev_pdf, L_.pmf.back() * m.env_sel * env_pdf(L_, m.p_sun, m.p_dome, prev_n, d));
+          }
           add(L, beta_e * Le * w, depth >= 2);
           if (aov_open) aov_a = emitter_guide(Le);
         }
@@ -220,7 +225,7 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
           if (e >= 0) {
             const float cos_l = std::abs(dot(d, h.ng));
             const float t = rh.ray.tfar;
-            const float pl = L_.pmf[L_.light_data.size() + e] * t * t /
+            const float pl = L_.pmf[L_.light_data.size() + e] * nee(depth - 1).area_sel * t * t /
                              (L_.tris[e].area * std::max(cos_l, 1e-7f));
             w = power_heuristic(prev_pdf, pl);
           }
@@ -245,16 +250,29 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
       const pt::Sample2 u_sel = s.get(base_pair + 2);
       const pt::Sample2 u_rr = s.get(base_pair + 3);
 
-      // Next-event estimation.
+      // Next-event estimation: a light (area light or emissive triangle) and the environment,
+      // each with its own shadow ray, or (NeeMode::one_shadow) one of the two, the environment
+      // with probability env_sel.
       if (sm.has_nondelta) {
-        if (L_.area_on) {
+        const NeeMode& m = nee(depth);
+        float u_light = u_sel.x;
+        bool do_area = L_.area_on, do_env = m.env_nee;
+        if (m.one_shadow) {
+          if (u_light < m.env_sel) {
+            do_area = false;
+          } else {
+            do_env = false;
+            u_light = std::min((u_light - m.env_sel) / (1.0f - m.env_sel), 0.99999994f);
+          }
+        }
+        if (do_area) {
           const std::size_t n = L_.n_local;
           const auto k = static_cast<std::size_t>(
-              std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_sel.x) - L_.cdf.begin());
-          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair)), depth >= 1);
+              std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_light) - L_.cdf.begin());
+          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair), m), depth >= 1);
         }
-        if (L_.env_on)
-          add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4)), depth >= 1);
+        if (do_env)
+          add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4), m), depth >= 1);
       }
 
       // BSDF sampling.
@@ -361,23 +379,23 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
 }
 
 F3 Integrator::direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
-                      std::size_t k, pt::Sample2 u) {
+                      std::size_t k, pt::Sample2 u, const NeeMode& mode) {
   const std::size_t n = L_.pmf.size();
-  const float p_sel = L_.pmf[k];
+  const float p_sel = L_.pmf[k] * (k + 1 == n ? mode.env_sel : mode.area_sel);
   if (p_sel <= 0.0f) return F3(0.0f);
   F3 wi_w, Le;
   float pdf_light, dist;
   if (k + 1 == n) {  // environment
     float pu = u.x;
-    if (L_.p_sun > 0.0f && pu < L_.p_sun) {
-      pu /= L_.p_sun;
+    if (mode.p_sun > 0.0f && pu < mode.p_sun) {
+      pu /= mode.p_sun;
       const pt::Frame sf(L_.sun_dir);
       wi_w = sf.to_world(pt::uniform_cone(pu, u.y, L_.sun_cos));
     } else {
-      if (L_.p_sun > 0.0f) pu = (pu - L_.p_sun) / (1.0f - L_.p_sun);
+      if (mode.p_sun > 0.0f) pu = (pu - mode.p_sun) / (1.0f - mode.p_sun);
       wi_w = frame.to_world(pt::cosine_hemisphere(std::min(pu, 0.99999994f), u.y));
     }
-    pdf_light = env_pdf(L_, h.ns, wi_w);
+    pdf_light = env_pdf(L_, mode.p_sun, mode.p_dome, h.ns, wi_w);
     if (pdf_light <= 0.0f) return F3(0.0f);
     dist = std::numeric_limits<float>::infinity();
     Le = L_.env(wi_w);

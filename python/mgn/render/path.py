@@ -258,6 +258,15 @@ class PathTraceOptions:
         guide_split_min: the denoiser guides of the other direction at a split smooth dielectric
             are followed behind further glass only when its share of the pixel's guide is at
             least this (>= 0; 0 = always); guides only, the radiance is unchanged.
+        shadow_rays: shadow rays per path vertex (1 or 2). 2: one to a light (area light or
+            emissive triangle) and one to the environment; 1: one, to either of the two (each
+            with probability 1/2 when the scene has both).
+        sample_sky_dome: next-event estimation of the environment's dome (all of it but the
+            sun): True, a shadow ray per vertex towards it; False, the dome is found by the
+            BSDF-sampled ray that continues the path, and shadow rays aim at the sun only.
+        reduced_nee_depth: path vertices from this depth on (0 = the camera ray's hit, 1 = the
+            first bounce's hit, ...) follow ``shadow_rays`` and ``sample_sky_dome``; the
+            vertices before it cast both shadow rays.
         labels: also make the label images (``depth`` and ``instance_ids`` of the output: one
             coherent packet of pinhole rays through the pixel centres per tile row); False skips
             those rays and leaves both images 0 (the dataset pipeline labels its views from the
@@ -281,6 +290,9 @@ class PathTraceOptions:
     clamp_indirect: float = _TRACE.clamp_indirect
     fresnel_split_min: float = _TRACE.fresnel_split_min
     guide_split_min: float = _TRACE.guide_split_min
+    shadow_rays: int = _TRACE.shadow_rays
+    sample_sky_dome: bool = _TRACE.sample_sky_dome
+    reduced_nee_depth: int = _TRACE.reduced_nee_depth
     labels: bool = _TRACE.labels
     adaptive_samples: float = _TRACE.adaptive_samples
     adaptive_max: int = _TRACE.adaptive_max
@@ -293,6 +305,8 @@ class PathTraceOptions:
             "view_index",
             "num_threads",
             "rr_depth",
+            "shadow_rays",
+            "reduced_nee_depth",
             "adaptive_max",
         ):
             value = getattr(self, name)
@@ -321,6 +335,9 @@ class PathTraceOptions:
         o.clamp_indirect = float(self.clamp_indirect)
         o.fresnel_split_min = float(self.fresnel_split_min)
         o.guide_split_min = float(self.guide_split_min)
+        o.shadow_rays = max(-(2**31), min(2**31 - 1, int(self.shadow_rays)))
+        o.sample_sky_dome = bool(self.sample_sky_dome)
+        o.reduced_nee_depth = max(-(2**31), min(2**31 - 1, int(self.reduced_nee_depth)))
         o.labels = bool(self.labels)
         o.adaptive_samples = float(self.adaptive_samples)
         o.adaptive_max = max(-(2**31), min(2**31 - 1, int(self.adaptive_max)))

@@ -89,6 +89,33 @@ def test_exterior_furnace_lambert_sphere_shows_albedo_times_L(albedo):
     np.testing.assert_allclose(out0.radiance[interior(out0.instance_ids == 0)], L, rtol=1e-6)
 
 
+@pytest.mark.parametrize("albedo", [1.0, 0.5])
+@pytest.mark.parametrize("reduced_nee_depth", [0, 1])
+def test_exterior_furnace_without_dome_shadow_rays_shows_albedo_times_L(albedo, reduced_nee_depth):
+    """The furnace of the test above with the dome left to the BSDF-sampled rays
+    (sample_sky_dome False) at every vertex, or from the first bounce's hit on (the camera
+    ray's hit keeps its shadow ray to the dome, weighed against its bounce ray by MIS): the
+    sphere still shows a * L."""
+    L = 0.8
+    mat = PbrMaterial(base_color=(albedo,) * 3, ior=1.0)
+    scene = PathScene([make_sphere(0.5, 128, 64)], np.eye(4)[None], [1], [[mat]], (), uniform(L))
+    view = camera((0, -3, 0.5), (0, 0, 0), 24, 25)
+    opts = PathTraceOptions(
+        spp=8, seed=3, sample_sky_dome=False, reduced_nee_depth=reduced_nee_depth
+    )
+    out = scene.render(view, opts)
+    on = interior(out.instance_ids == 1)
+    assert on.sum() > 150
+    np.testing.assert_allclose(out.radiance[on], albedo * L, rtol=3e-3)
+    np.testing.assert_allclose(out.radiance[interior(out.instance_ids == 0)], L, rtol=1e-6)
+    # Label and camera rays, one bounce ray per sample that hits the sphere (and there one
+    # shadow ray if the camera ray's hit samples the dome).
+    n_hit = int((out.instance_ids == 1).sum())
+    per_hit = 1 + (reduced_nee_depth > 0)
+    assert out.rays < 24 * 24 * (8 + 1) + n_hit * 8 * per_hit * 1.1
+    assert out.rays > 24 * 24 * (8 + 1) + n_hit * 8 * per_hit * 0.9
+
+
 @pytest.mark.parametrize(
     ("max_bounces", "rr_depth"), [(0, 100), (1, 100), (2, 100), (3, 100), (200, 1)]
 )
@@ -216,6 +243,48 @@ def test_lambert_plane_under_rect_light_matches_analytic_irradiance():
     # Falloff sanity: the brightest pixel is the one under the light (x = 0).
     col = np.argmax(out.radiance[16, :, 1])
     assert abs(P[16, col, 0]) < 0.06
+
+
+@pytest.mark.parametrize(("shadow_rays", "reduced_nee_depth"), [(2, 0), (1, 0), (1, 1)])
+def test_lambert_plane_under_rect_light_and_sky_with_one_or_two_shadow_rays(
+    shadow_rays, reduced_nee_depth
+):
+    """A Lambertian plane of albedo a under a small rect light of radiance Le and a uniform sky
+    L shows a / pi * E(p) + a * L (direct lighting only; the light hides 1.3 % of the sky's
+    projected solid angle), whether each vertex casts a shadow ray to the light and one to the
+    sky or one ray to either of them."""
+    a, Le, L, size, height = 0.5, 20.0, 0.5, 0.1, 0.5
+    mat = PbrMaterial(base_color=(a,) * 3, ior=1.0)
+    X_WL = np.diag([1.0, -1.0, -1.0, 1.0])  # facing down (+z_L = -z_W)
+    X_WL[:3, 3] = (0.0, 0.0, height)
+    light = AreaLight(X_WL, "rect", (size, size), (1.0, 1.0, 1.0), Le)
+    scene = PathScene([quad(4.0)], np.eye(4)[None], [1], [[mat]], [light], uniform(L))
+    view = camera((0.2, 0.0, 1.5), (0.2, 0.0, 0.0), 16, 60, up=(0, 1, 0))
+    opts = PathTraceOptions(
+        spp=256, max_bounces=1, seed=2, shadow_rays=shadow_rays,
+        reduced_nee_depth=reduced_nee_depth,
+    )  # fmt: skip
+    out = scene.render(view, opts)
+    K = view.K
+    u, v = np.meshgrid(np.arange(K.width) + 0.5, np.arange(K.height) + 0.5)
+    d_C = np.stack([(u - K.cx) / K.fx, (v - K.cy) / K.fy, np.ones_like(u)], -1)
+    d_W = d_C @ view.X_WC[:3, :3].T
+    t = -view.X_WC[2, 3] / d_W[..., 2]
+    P = view.X_WC[:3, 3] + t[..., None] * d_W
+    E = np.array([[rect_irradiance(p, (0.0, 0.0, height), size, Le, n=100) for p in row]
+                  for row in P])  # fmt: skip
+    expected = a / math.pi * E + a * L
+    got = out.radiance.mean(-1)
+    assert got.mean() == pytest.approx(expected.mean(), rel=0.01)
+    # Within 4 x 4 blocks (4096 samples each): the light's pattern, not only its total.
+    blocks = (got - expected).reshape(4, 4, 4, 4).mean((1, 3))
+    ref = expected.reshape(4, 4, 4, 4).mean((1, 3))
+    assert np.all(np.abs(blocks) < 0.03 * ref), blocks / ref
+    # Per sample: the camera ray, the shadow rays, the bounce ray (and per pixel one label ray).
+    rays_per_sample = out.rays / (K.width * K.height * opts.spp)
+    # (reduced_nee_depth 1: the camera ray's hit, the only vertex here, casts both.)
+    shadow = 2 if reduced_nee_depth > 0 else shadow_rays
+    assert rays_per_sample == pytest.approx(2 + shadow + 1 / opts.spp, abs=1e-3)
 
 
 def test_emissive_quad_is_sampled_like_the_area_light_of_its_shape():
@@ -654,6 +723,31 @@ def test_same_seed_same_bytes_for_one_and_two_threads():
     np.testing.assert_allclose(
         np.linalg.norm(outs[0].normal[outs[0].instance_ids > 0], axis=-1), 1, atol=1e-4
     )
+    # The shadow-ray settings: the same bytes for any thread count too; the sky here has a
+    # sun, so even without the dome's shadow rays the environment is sampled; the radiance
+    # changes, the labels and the first hit's guides do not.
+    fewer = [
+        scene.render(
+            view,
+            PathTraceOptions(
+                spp=4,
+                seed=9,
+                view_index=2,
+                num_threads=t,
+                aperture_radius=0.01,
+                shadow_rays=1,
+                sample_sky_dome=False,
+                reduced_nee_depth=1,
+            ),
+        )
+        for t in (1, 2)
+    ]
+    for name in ("radiance", "albedo", "normal", "depth", "instance_ids"):
+        assert getattr(fewer[0], name).tobytes() == getattr(fewer[1], name).tobytes(), name
+    assert fewer[0].rays < outs[0].rays
+    assert fewer[0].radiance.tobytes() != outs[0].radiance.tobytes()
+    for name in ("albedo", "normal", "depth", "instance_ids"):
+        assert getattr(fewer[0], name).tobytes() == getattr(outs[0], name).tobytes(), name
 
 
 def test_with_lighting_shares_geometry_and_changes_light():
@@ -713,6 +807,10 @@ def test_bad_parameters_name_the_setting():
         PathTraceOptions(spp=0)
     with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.max_bounces"):
         PathTraceOptions(max_bounces=-1)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.shadow_rays must be 1 or 2"):
+        PathTraceOptions(shadow_rays=3)
+    with pytest.raises(InvalidArgumentError, match=r"PathTraceOptions.reduced_nee_depth must be"):
+        PathTraceOptions(reduced_nee_depth=-1)
     with pytest.raises(
         InvalidArgumentError, match=r"PbrMaterial.roughness must be in \[0, 1\], got -0.1"
     ):
@@ -814,7 +912,8 @@ def srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def test_sky_dome_colours_and_sun_irradiance():
+@pytest.mark.parametrize("sample_sky_dome", [True, False])
+def test_sky_dome_colours_and_sun_irradiance(sample_sky_dome):
     """Directly seen, the gradient dome shows the zenith colour straight up and the ground colour
     below the horizon; the sky's sun disc adds an irradiance of sun_strength * pi * lum(zenith)
     at normal incidence, i.e. a * sun_strength * lum(zenith) in the radiance of a Lambertian
@@ -839,12 +938,21 @@ def test_sky_dome_colours_and_sun_irradiance():
     plane = quad(40.0)
     mat = PbrMaterial(base_color=(a,) * 3, ior=1.0)
     view = camera((0.3, 0.2, 1.0), (0.3, 0.2, 0.0), 16, 30, up=(0, 1, 0))
-    opts = PathTraceOptions(spp=64, max_bounces=1)
+    opts = PathTraceOptions(spp=64, max_bounces=1, sample_sky_dome=sample_sky_dome)
     s_grad = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), grad).render(view, opts)
     s_sky = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), sky).render(view, opts)
     lum_zenith = 2.0 * (0.2126 * 0.2 + 0.7152 * 0.3 + 0.0722 * 0.6)
     diff = (s_sky.radiance - s_grad.radiance).mean()
     assert diff == pytest.approx(a * 4.0 * lum_zenith, rel=0.02)
+    if not sample_sky_dome:
+        # The dome found by the BSDF-sampled rays alone: the same mean as with its shadow rays
+        # (the plane sees the whole upper dome: one ray per sample after the camera ray).
+        with_dome = PathScene([plane], np.eye(4)[None], [1], [[mat]], (), grad).render(
+            view, PathTraceOptions(spp=64, max_bounces=1)
+        )
+        assert s_grad.radiance.mean() == pytest.approx(with_dome.radiance.mean(), rel=0.01)
+        n = view.K.width * view.K.height
+        assert s_grad.rays == n * (64 * 2 + 1)  # label, camera and bounce rays
 
 
 def ggx_lambda(c, alpha):

@@ -153,6 +153,20 @@ struct PathTraceOptions {
   /// this (>= 0; 0 = always); otherwise the continuing path's guide takes its share. Guides
   /// only: the radiance is unchanged.
   double guide_split_min = 0.1;
+  /// Shadow rays per path vertex for next-event estimation (1 or 2). 2: one to a light (area
+  /// light or emissive triangle, chosen by power) and one to the environment. 1: one ray, to
+  /// the environment or to a light, each chosen with probability 1/2 (when the scene has both).
+  int shadow_rays = 2;
+  /// Next-event estimation of the environment's dome (all of it but the sun). true: a shadow
+  /// ray per path vertex towards a cosine-weighted direction of the dome (with the sun's cone,
+  /// if any); false: the dome is found by the BSDF-sampled ray that continues the path (the
+  /// same cosine-weighted distribution at a diffuse surface), and shadow rays aim at the sun
+  /// only (none without a sun).
+  bool sample_sky_dome = true;
+  /// Path vertices from this depth on (0 = the camera ray's hit, 1 = the first bounce's hit,
+  /// ...; >= 0) follow shadow_rays and sample_sky_dome; the vertices before it cast both shadow
+  /// rays.
+  int reduced_nee_depth = 0;
   /// Label images (PathTraceOutput::depth and instance_ids): one coherent packet of pinhole rays
   /// through the pixel centres per tile row. false skips those rays (both images stay 0): the
   /// dataset pipeline takes its labels from the ray-cast label pass and keeps only the image.

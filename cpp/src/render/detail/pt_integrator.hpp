@@ -60,6 +60,8 @@ class Integrator {
         split_min_(static_cast<float>(o.fresnel_split_min)),
         guide_split_min_(static_cast<float>(o.guide_split_min)) {
     rtcInitIntersectContext(&ctx_);
+    full_.set(L, 2, true);
+    reduced_.set(L, o.shadow_rays, o.sample_sky_dome);
   }
 
   /// First hit of a bounce ray (the non-robust BVH).
@@ -96,6 +98,31 @@ class Integrator {
   Counters counters;
 
  private:
+  /// How next-event estimation samples the lights at a path vertex.
+  struct NeeMode {
+    /// Environment sampling: the sun's cone with probability p_sun, the dome (cosine-weighted)
+    /// with p_dome (Lighting::p_sun and 1 - p_sun; without the dome: 1 or 0, and 0).
+    float p_sun = 0.0f, p_dome = 1.0f;
+    bool env_nee = false;     // a shadow ray towards the environment
+    bool one_shadow = false;  // one shadow ray: the environment (env_sel) or a light (area_sel)
+    float env_sel = 1.0f;     // probability that the environment is sampled
+    float area_sel = 1.0f;    // probability that a light (area or emissive triangle) is sampled
+    void set(const Lighting& L, int shadow_rays, bool sky_dome) {
+      p_sun = L.p_sun;
+      p_dome = 1.0f - L.p_sun;
+      env_nee = L.env_on;
+      if (!sky_dome) {
+        p_dome = 0.0f;
+        p_sun = L.p_sun > 0.0f ? 1.0f : 0.0f;
+        env_nee = L.env_on && p_sun > 0.0f;
+      }
+      if (shadow_rays == 1 && L.area_on && env_nee) {
+        one_shadow = true;
+        env_sel = 0.5f;
+        area_sel = 0.5f;
+      }
+    }
+  };
   /// Adds a contribution; indirect ones (light that has bounced at least twice: found at the
   /// second path vertex or later) are clamped to clamp_indirect in luminance.
   void add(F3& L, F3 c, bool indirect) const {
@@ -109,7 +136,7 @@ class Integrator {
   /// One sample of light k (k = number of area lights: the environment) with MIS; returns the
   /// contribution (without beta).
   F3 direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
-            std::size_t k, pt::Sample2 u);
+            std::size_t k, pt::Sample2 u, const NeeMode& mode);
 
   /// Fresnel splitting at a smooth dielectric: the expected weight of the chosen direction (F
   /// or 1 - F times its lobe weight, instead of the weight of the random choice) and the other
@@ -153,6 +180,12 @@ class Integrator {
   /// Smooth-dielectric vertices per camera sample whose two branches are both traced in full
   /// (the first ones along the path, depth first); later ones are split as in `Split`.
   static constexpr int kMaxBranches = 3;
+  /// The mode of the vertex at `depth` (0 = the camera ray's hit): both shadow rays before
+  /// PathTraceOptions::reduced_nee_depth, then PathTraceOptions::shadow_rays and
+  /// sample_sky_dome.
+  const NeeMode& nee(int depth) const { return depth >= reduce_from_ ? reduced_ : full_; }
+  NeeMode full_, reduced_;
+  int reduce_from_ = opt_.reduced_nee_depth;
   RTCIntersectContext ctx_;
 };
 
