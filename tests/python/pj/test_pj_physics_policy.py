@@ -485,8 +485,13 @@ def test_holes_no_search_visits_get_the_full_grid():
     the object gets the full grid (on a 5 x 5 grid the thorough search visits every cell)."""
     s10 = 10
     unseen = np.ones((s10, s10), bool)
-    for checks in (0, physics.CHECKED_STAIRCASE_CHECKS, physics.THOROUGH_STAIRCASE_CHECKS):
-        r = _core.grasp.staircase_grid(s10, lambda i, j: True, checks, -1)
+    for checks, rows in (
+        (0, -1),
+        (physics.CHECKED_STAIRCASE_CHECKS, -1),
+        (physics.SAMPLED_STAIRCASE_CHECKS, 0),
+        (physics.THOROUGH_STAIRCASE_CHECKS, -1),
+    ):
+        r = _core.grasp.staircase_grid(s10, lambda i, j: True, checks, rows)
         unseen &= ~np.asarray(r.simulated)
     cells = np.argwhere(unseen)
     assert len(cells) >= 3
@@ -501,6 +506,43 @@ def test_holes_no_search_visits_get_the_full_grid():
     assert c.trials_per_grasp == s10 * s10
     opts = physics.search_of(c, ShakeOptions(staircase=True))
     assert not opts.staircase
+
+
+def test_sampled_staircase_finds_holes_away_from_the_boundary_at_fewer_trials():
+    """10 x 10 grids that succeed everywhere but one isolated cell in every other grasp, at a
+    cell the sampled search's golden-ratio checks visit and the checked search does not: the
+    plain and checked searches miss it on 16 of 32 calibration grasps (bound above the
+    tolerance), the sampled search finds it (a contradiction: the full grid) and is chosen.
+    On a grid that succeeds everywhere it simulates 1 + 24 cells, the thorough search also
+    the cell next to every row's boundary: 1 + 10 + 24."""
+    s10 = 10
+    sampled = physics.SAMPLED_STAIRCASE_CHECKS
+
+    def visited(checks: int, rows: int) -> tuple[np.ndarray, int]:
+        r = _core.grasp.staircase_grid(s10, lambda i, j: True, checks, rows)
+        return np.asarray(r.simulated, bool).reshape(s10, s10), r.trials
+
+    seen_sampled, trials_sampled = visited(sampled, 0)
+    seen_checked, _ = visited(physics.CHECKED_STAIRCASE_CHECKS, -1)
+    _, trials_thorough = visited(physics.THOROUGH_STAIRCASE_CHECKS, -1)
+    assert trials_sampled == 1 + sampled
+    assert trials_thorough == 1 + s10 + physics.THOROUGH_STAIRCASE_CHECKS
+    cells = np.argwhere(seen_sampled & ~seen_checked)
+    assert len(cells) >= 1
+    i, j = cells[0]
+    grids = np.ones((32, s10, s10), bool)
+    grids[::2, i, j] = False
+    c = calibrate_staircase(grids, 0, 0, 5, physics.CALIBRATION_TOLERANCE)
+    assert c.search == "sampled staircase"
+    assert c.mismatches == 0
+    assert c.error_bound <= physics.CALIBRATION_TOLERANCE
+    opts = physics.search_of(c, ShakeOptions(grid=s10, staircase=True))
+    assert opts.staircase_checks == sampled
+    assert opts.to_core().staircase_verified_rows() == 0
+    scores, _ = replay_staircase(grids, sampled, opts.to_core().staircase_verified_rows())
+    np.testing.assert_array_equal(scores, grids.mean(axis=(1, 2)))
+    checked_scores, _ = replay_staircase(grids, physics.CHECKED_STAIRCASE_CHECKS, -1)
+    assert np.count_nonzero(checked_scores != grids.mean(axis=(1, 2))) == 16
 
 
 def test_the_label_metadata_records_the_estimator(monkeypatch):
