@@ -67,6 +67,19 @@ std::pair<double, double> largest_depth_jump(const std::vector<float>& depth, in
   return {other, jump};
 }
 
+// The depth (m) reported at pixel (u, v) of true depth zz at a depth edge: where the seen
+// 4-neighbour with the largest depth jump from zz jumps by more than p.edge_threshold, with
+// probability p.flying_pixel_probability a uniform fraction of the way to that neighbour's depth
+// (one draw from rng at an edge, a second where the pixel moves); zz otherwise.
+double flying_pixel_depth(const std::vector<float>& depth, int W, int H, int u, std::size_t v,
+                          double zz, const DepthSensorParams& p, Rng& rng) {
+  const auto [other, jump] = largest_depth_jump(depth, W, H, u, v, zz);
+  if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
+    return zz + rng.uniform() * (other - zz);
+  }
+  return zz;
+}
+
 // Checks the sizes of the depth and id images (K.width x K.height) and that every depth is
 // finite and >= 0.
 void check_depth_inputs(const std::vector<float>& depth,
@@ -229,11 +242,7 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
           continue;
         if (shadow[u]) continue;
         if (p.flying_pixel_probability > 0.0 && p.edge_threshold > 0.0) {
-          // The 4-neighbour with the largest depth jump (seen surfaces only).
-          const auto [other, jump] = largest_depth_jump(depth, W, H, u, v, zz);
-          if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
-            zz = zz + rng.uniform() * (other - zz);
-          }
+          zz = flying_pixel_depth(depth, W, H, u, v, zz, p, rng);
         }
         const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
         noisy_u[count] = u;
