@@ -475,7 +475,7 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     const Eigen::RowVector3d c = pts.cast<double>().colwise().mean();
     const Eigen::MatrixXd centred = pts.cast<double>().rowwise() - c;
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred);
-    const auto sv = svd.singularValues();
+    const auto& sv = svd.singularValues();
     return sv(2) <= 1e-6 * sv(0);
   };
   std::vector<bool> flat(clusters.size());

@@ -80,6 +80,23 @@ double flying_pixel_depth(const std::vector<float>& depth, int W, int H, int u, 
   return zz;
 }
 
+// Adds sigma[k] times normals[k] to each of the first count depths z (m), then puts each on its
+// grid (for p.depth_step > 0): the coarsest power-of-two multiple of p.depth_step not above
+// p.depth_step_noise_fraction times sigma[k], rounding halves away from zero.
+void add_noise_on_grid(std::size_t count, const std::vector<double>& sigma,
+                       const std::vector<float>& normals, const DepthSensorParams& p,
+                       std::vector<double>& z) {
+  for (std::size_t k = 0; k < count; ++k) z[k] += sigma[k] * static_cast<double>(normals[k]);
+  if (p.depth_step > 0.0) {
+    for (std::size_t k = 0; k < count; ++k) {
+      double step = p.depth_step;
+      const double top = p.depth_step_noise_fraction * sigma[k];
+      while (step * 2.0 <= top) step *= 2.0;
+      z[k] = round_half_away(z[k] / step) * step;
+    }
+  }
+}
+
 // Checks the sizes of the depth and id images (K.width x K.height) and that every depth is
 // finite and >= 0.
 void check_depth_inputs(const std::vector<float>& depth,
@@ -256,18 +273,8 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
       } else {
         std::fill(normals.begin(), normals.begin() + count, 0.0f);
       }
-      // Pass 3: noise, then the grid: the coarsest power-of-two multiple of the step not above
-      // the noise fraction; a value that ends <= 0 is invalid.
-      for (std::size_t k = 0; k < count; ++k)
-        noisy_z[k] += noisy_sigma[k] * static_cast<double>(normals[k]);
-      if (p.depth_step > 0.0) {
-        for (std::size_t k = 0; k < count; ++k) {
-          double step = p.depth_step;
-          const double top = p.depth_step_noise_fraction * noisy_sigma[k];
-          while (step * 2.0 <= top) step *= 2.0;
-          noisy_z[k] = round_half_away(noisy_z[k] / step) * step;
-        }
-      }
+      // Pass 3: noise, then the grid (add_noise_on_grid); a value that ends <= 0 is invalid.
+      add_noise_on_grid(count, noisy_sigma, normals, p, noisy_z);
       for (std::size_t k = 0; k < count; ++k) {
         if (!(noisy_z[k] > 0.0)) continue;
         out_z[noisy_u[k]] = static_cast<float>(noisy_z[k]);

@@ -282,7 +282,8 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
     cast_box[i] = b;
     if (b.empty()) continue;
     auto& rows = spans[i];
-    rows.assign(static_cast<std::size_t>(b.v1 - b.v0 + 1), {b.u0, b.u1});
+    const int num_rows = b.v1 - b.v0 + 1;
+    rows.assign(static_cast<std::size_t>(num_rows), {b.u0, b.u1});
     if (hull.size() < 3) continue;
     for (int v = b.v0; v <= b.v1; ++v) {
       double xl = std::numeric_limits<double>::infinity(), xr = -xl;
