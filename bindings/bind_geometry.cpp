@@ -123,11 +123,12 @@ void bind_geometry(py::module_& m) {
            py::arg("face_materials") = std::vector<std::int32_t>{}, py::arg("name") = "")
       .def_property_readonly(
           "vertices",
-          [](py::object self) { return view_of(self.cast<const Mesh&>().vertices(), self); })
+          [](const py::object& self) { return view_of(self.cast<const Mesh&>().vertices(), self); })
       .def_property_readonly(
-          "faces", [](py::object self) { return view_of(self.cast<const Mesh&>().faces(), self); })
+          "faces",
+          [](const py::object& self) { return view_of(self.cast<const Mesh&>().faces(), self); })
       .def_property_readonly("uvs",
-                             [](py::object self) -> py::object {
+                             [](const py::object& self) -> py::object {
                                const Mesh& mesh = self.cast<const Mesh&>();
                                if (mesh.uvs().rows() == 0) return py::none();
                                return view_of(mesh.uvs(), self);

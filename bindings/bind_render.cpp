@@ -54,6 +54,174 @@ py::array image_array(FloatImage&& img) {
   return py::array_t<float>({img.height, img.width, img.channels}, heap->data(), owner);
 }
 
+// The depth sensor model (mgn/render/depth_sensor.hpp).
+void bind_depth_sensor(py::module_& m) {
+  py::enum_<DepthSensorPreset>(m, "DepthSensorPreset")
+      .value("Ideal", DepthSensorPreset::Ideal)
+      .value("StructuredLight", DepthSensorPreset::StructuredLight)
+      .value("ToF", DepthSensorPreset::ToF);
+
+  py::class_<DepthSensorParams>(m, "DepthSensorParams", "Depth sensor model parameters (SI).")
+      .def(py::init<>())
+      .def_static("preset_defaults", &DepthSensorParams::preset_defaults, py::arg("preset"))
+      .def_readwrite("preset", &DepthSensorParams::preset)
+      .def_readwrite("min_range", &DepthSensorParams::min_range, "m")
+      .def_readwrite("max_range", &DepthSensorParams::max_range, "m")
+      .def_readwrite("sigma_a", &DepthSensorParams::sigma_a, "m")
+      .def_readwrite("sigma_b", &DepthSensorParams::sigma_b, "1/m")
+      .def_readwrite("sigma_z0", &DepthSensorParams::sigma_z0, "m")
+      .def_readwrite("baseline", &DepthSensorParams::baseline, "m, projector along camera +x")
+      .def_readwrite("shadow_tolerance_px", &DepthSensorParams::shadow_tolerance_px, "px")
+      .def_readwrite("edge_threshold", &DepthSensorParams::edge_threshold, "m")
+      .def_readwrite("flying_pixel_probability", &DepthSensorParams::flying_pixel_probability)
+      .def_readwrite("depth_step", &DepthSensorParams::depth_step,
+                     "m, grid of the reported z (0 = continuous)")
+      .def_readwrite("depth_step_noise_fraction", &DepthSensorParams::depth_step_noise_fraction,
+                     "the grid at a pixel: the largest 2^k depth_step not above this times the "
+                     "noise sigma (0 = fixed depth_step)")
+      .def_readwrite("invalid_transparent", &DepthSensorParams::invalid_transparent)
+      .def_readwrite("invalid_dark", &DepthSensorParams::invalid_dark)
+      .def_readwrite("invalid_mirror", &DepthSensorParams::invalid_mirror)
+      .def("validate", &DepthSensorParams::validate);
+
+  m.attr("SURFACE_TRANSPARENT") = static_cast<int>(kSurfaceTransparent);
+  m.attr("SURFACE_DARK") = static_cast<int>(kSurfaceDark);
+  m.attr("SURFACE_MIRROR") = static_cast<int>(kSurfaceMirror);
+  m.def(
+      "surface_flags", [](const Material& mat) { return static_cast<int>(surface_flags(mat)); },
+      py::arg("material"));
+  m.def(
+      "mesh_surface_flags", [](const Mesh& mesh) { return static_cast<int>(surface_flags(mesh)); },
+      py::arg("mesh"));
+  m.def(
+      "apply_depth_sensor",
+      [](const py::handle& depth, const py::handle& instance_ids,
+         const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
+         const DepthSensorParams& params, std::uint64_t seed, int num_threads) {
+        CArray<float> d;
+        CArray<std::int32_t> ids;
+        try {
+          d = py::cast<CArray<float>>(depth);
+          ids = py::cast<CArray<std::int32_t>>(instance_ids);
+        } catch (const py::cast_error&) {
+          throw_error<InvalidArgument>(
+              "apply_depth_sensor: depth and instance_ids must be "
+              "numeric (H, W) arrays");
+        }
+        for (const auto* a : {static_cast<py::array*>(&d), static_cast<py::array*>(&ids)}) {
+          if (a->ndim() != 2 || a->shape(0) != K.height || a->shape(1) != K.width) {
+            throw_error<InvalidArgument>(
+                "apply_depth_sensor: depth and instance_ids must have "
+                "shape (",
+                K.height, ", ", K.width, ") of K");
+          }
+        }
+        std::vector<float> dv(d.data(), d.data() + d.size());
+        std::vector<std::int32_t> iv(ids.data(), ids.data() + ids.size());
+        DepthImage out;
+        {
+          py::gil_scoped_release release;
+          out = apply_depth_sensor(dv, iv, flags_by_id, K, params, seed, num_threads);
+        }
+        const int h = out.height, w = out.width;
+        return DepthArrays{to_image(std::move(out.depth), h, w),
+                           to_image(std::move(out.depth_ideal), h, w),
+                           to_image(std::move(out.valid), h, w).attr("astype")("bool")};
+      },
+      py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
+      py::arg("params"), py::arg("seed"), py::arg("num_threads") = ParallelOptions{}.num_threads);
+}
+
+// Half-resolution denoise arithmetic (mgn/render/half_resolution.hpp).
+void bind_half_resolution(py::module_& m) {
+  m.def(
+      "block_means_2x2",
+      [](const py::handle& image, int num_threads) {
+        CArray<float> keep;
+        const ImageView img = image_arg(image, "block_means_2x2: image", keep);
+        if (img.empty()) throw_error<InvalidArgument>("block_means_2x2: image must not be None");
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = block_means_2x2(img, num_threads);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("image"), py::arg("num_threads") = ParallelOptions{}.num_threads,
+      "Means of the 2 x 2 pixel blocks of an (H, W, C) float32 image (an odd last row or column "
+      "repeated): (ceil(H/2), ceil(W/2), C).");
+  m.def(
+      "double_blocks",
+      [](const py::handle& blocks, int height, int width, int num_threads) {
+        CArray<float> keep;
+        const ImageView img = image_arg(blocks, "double_blocks: blocks", keep);
+        if (img.empty()) throw_error<InvalidArgument>("double_blocks: blocks must not be None");
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = double_blocks(img, height, width, num_threads);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("blocks"), py::arg("height"), py::arg("width"),
+      py::arg("num_threads") = ParallelOptions{}.num_threads,
+      "Bilinear doubling of a 2 x 2 block image to (height, width), block centres at the centres "
+      "of their pixels, border blocks repeated.");
+  m.def(
+      "gaussian_3x3",
+      [](const py::handle& image, double sigma, int num_threads) {
+        CArray<float> keep;
+        const ImageView img = image_arg(image, "gaussian_3x3: image", keep);
+        if (img.empty()) throw_error<InvalidArgument>("gaussian_3x3: image must not be None");
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = gaussian_3x3(img, sigma, num_threads);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("image"), py::arg("sigma") = 0.5,
+      py::arg("num_threads") = ParallelOptions{}.num_threads,
+      "Separable 3 x 3 Gaussian (sigma in pixels) of an (H, W, C) float32 image, border pixels "
+      "repeated.");
+  m.def(
+      "restore_half_resolution",
+      [](const py::handle& denoised, int height, int width, const py::handle& albedo,
+         const py::handle& albedo_blocks, const py::handle& normal, const py::handle& normal_blocks,
+         float albedo_floor, double edge_cos_lo, double edge_cos_hi, int num_threads) {
+        CArray<float> k0, k1, k2, k3, k4;
+        const ImageView den = image_arg(denoised, "restore_half_resolution: denoised", k0);
+        if (den.empty())
+          throw_error<InvalidArgument>("restore_half_resolution: denoised must not be None");
+        const ImageView a = image_arg(albedo, "restore_half_resolution: albedo", k1);
+        const ImageView ab = image_arg(albedo_blocks, "restore_half_resolution: albedo_blocks", k2);
+        const ImageView n = image_arg(normal, "restore_half_resolution: normal", k3);
+        const ImageView nb = image_arg(normal_blocks, "restore_half_resolution: normal_blocks", k4);
+        HalfRestoreOptions opt;
+        opt.albedo_floor = albedo_floor;
+        opt.edge_cos_lo = edge_cos_lo;
+        opt.edge_cos_hi = edge_cos_hi;
+        opt.num_threads = num_threads;
+        FloatImage out;
+        {
+          py::gil_scoped_release release;
+          out = restore_half_resolution(den, height, width, a, ab, n, nb, opt);
+        }
+        return image_array(std::move(out));
+      },
+      py::arg("denoised"), py::arg("height"), py::arg("width"), py::arg("albedo") = py::none(),
+      py::arg("albedo_blocks") = py::none(), py::arg("normal") = py::none(),
+      py::arg("normal_blocks") = py::none(),
+      py::arg("albedo_floor") = HalfRestoreOptions{}.albedo_floor,
+      py::arg("edge_cos_lo") = HalfRestoreOptions{}.edge_cos_lo,
+      py::arg("edge_cos_hi") = HalfRestoreOptions{}.edge_cos_hi,
+      py::arg("num_threads") = HalfRestoreOptions{}.num_threads,
+      "Full-size image of a half-resolution denoise: the denoised blocks doubled, times the "
+      "albedo ratio max(a, floor) / max(double(albedo_blocks), floor) faded to 1 where the "
+      "normal turns away from double(normal_blocks) (cosine edge_cos_lo..edge_cos_hi); clamped "
+      "to >= 0.");
+}
+
 }  // namespace
 
 void bind_render(py::module_& m) {
@@ -247,168 +415,8 @@ void bind_render(py::module_& m) {
           "Renders one view (camera frame OpenCV, X_WC in m): rgb, depth, instance_ids and the "
           "light used.");
 
-  py::enum_<DepthSensorPreset>(m, "DepthSensorPreset")
-      .value("Ideal", DepthSensorPreset::Ideal)
-      .value("StructuredLight", DepthSensorPreset::StructuredLight)
-      .value("ToF", DepthSensorPreset::ToF);
-
-  py::class_<DepthSensorParams>(m, "DepthSensorParams", "Depth sensor model parameters (SI).")
-      .def(py::init<>())
-      .def_static("preset_defaults", &DepthSensorParams::preset_defaults, py::arg("preset"))
-      .def_readwrite("preset", &DepthSensorParams::preset)
-      .def_readwrite("min_range", &DepthSensorParams::min_range, "m")
-      .def_readwrite("max_range", &DepthSensorParams::max_range, "m")
-      .def_readwrite("sigma_a", &DepthSensorParams::sigma_a, "m")
-      .def_readwrite("sigma_b", &DepthSensorParams::sigma_b, "1/m")
-      .def_readwrite("sigma_z0", &DepthSensorParams::sigma_z0, "m")
-      .def_readwrite("baseline", &DepthSensorParams::baseline, "m, projector along camera +x")
-      .def_readwrite("shadow_tolerance_px", &DepthSensorParams::shadow_tolerance_px, "px")
-      .def_readwrite("edge_threshold", &DepthSensorParams::edge_threshold, "m")
-      .def_readwrite("flying_pixel_probability", &DepthSensorParams::flying_pixel_probability)
-      .def_readwrite("depth_step", &DepthSensorParams::depth_step,
-                     "m, grid of the reported z (0 = continuous)")
-      .def_readwrite("depth_step_noise_fraction", &DepthSensorParams::depth_step_noise_fraction,
-                     "the grid at a pixel: the largest 2^k depth_step not above this times the "
-                     "noise sigma (0 = fixed depth_step)")
-      .def_readwrite("invalid_transparent", &DepthSensorParams::invalid_transparent)
-      .def_readwrite("invalid_dark", &DepthSensorParams::invalid_dark)
-      .def_readwrite("invalid_mirror", &DepthSensorParams::invalid_mirror)
-      .def("validate", &DepthSensorParams::validate);
-
-  m.attr("SURFACE_TRANSPARENT") = static_cast<int>(kSurfaceTransparent);
-  m.attr("SURFACE_DARK") = static_cast<int>(kSurfaceDark);
-  m.attr("SURFACE_MIRROR") = static_cast<int>(kSurfaceMirror);
-  m.def(
-      "surface_flags", [](const Material& mat) { return static_cast<int>(surface_flags(mat)); },
-      py::arg("material"));
-  m.def(
-      "mesh_surface_flags", [](const Mesh& mesh) { return static_cast<int>(surface_flags(mesh)); },
-      py::arg("mesh"));
-  m.def(
-      "apply_depth_sensor",
-      [](const py::handle& depth, const py::handle& instance_ids,
-         const std::vector<std::uint8_t>& flags_by_id, const Intrinsics& K,
-         const DepthSensorParams& params, std::uint64_t seed, int num_threads) {
-        CArray<float> d;
-        CArray<std::int32_t> ids;
-        try {
-          d = py::cast<CArray<float>>(depth);
-          ids = py::cast<CArray<std::int32_t>>(instance_ids);
-        } catch (const py::cast_error&) {
-          throw_error<InvalidArgument>(
-              "apply_depth_sensor: depth and instance_ids must be "
-              "numeric (H, W) arrays");
-        }
-        for (const auto* a : {static_cast<py::array*>(&d), static_cast<py::array*>(&ids)}) {
-          if (a->ndim() != 2 || a->shape(0) != K.height || a->shape(1) != K.width) {
-            throw_error<InvalidArgument>(
-                "apply_depth_sensor: depth and instance_ids must have "
-                "shape (",
-                K.height, ", ", K.width, ") of K");
-          }
-        }
-        std::vector<float> dv(d.data(), d.data() + d.size());
-        std::vector<std::int32_t> iv(ids.data(), ids.data() + ids.size());
-        DepthImage out;
-        {
-          py::gil_scoped_release release;
-          out = apply_depth_sensor(dv, iv, flags_by_id, K, params, seed, num_threads);
-        }
-        const int h = out.height, w = out.width;
-        return DepthArrays{to_image(std::move(out.depth), h, w),
-                           to_image(std::move(out.depth_ideal), h, w),
-                           to_image(std::move(out.valid), h, w).attr("astype")("bool")};
-      },
-      py::arg("depth"), py::arg("instance_ids"), py::arg("flags_by_id"), py::arg("K"),
-      py::arg("params"), py::arg("seed"), py::arg("num_threads") = ParallelOptions{}.num_threads);
-
-  // Half-resolution denoise arithmetic (mgn/render/half_resolution.hpp).
-  m.def(
-      "block_means_2x2",
-      [](const py::handle& image, int num_threads) {
-        CArray<float> keep;
-        const ImageView img = image_arg(image, "block_means_2x2: image", keep);
-        if (img.empty()) throw_error<InvalidArgument>("block_means_2x2: image must not be None");
-        FloatImage out;
-        {
-          py::gil_scoped_release release;
-          out = block_means_2x2(img, num_threads);
-        }
-        return image_array(std::move(out));
-      },
-      py::arg("image"), py::arg("num_threads") = ParallelOptions{}.num_threads,
-      "Means of the 2 x 2 pixel blocks of an (H, W, C) float32 image (an odd last row or column "
-      "repeated): (ceil(H/2), ceil(W/2), C).");
-  m.def(
-      "double_blocks",
-      [](const py::handle& blocks, int height, int width, int num_threads) {
-        CArray<float> keep;
-        const ImageView img = image_arg(blocks, "double_blocks: blocks", keep);
-        if (img.empty()) throw_error<InvalidArgument>("double_blocks: blocks must not be None");
-        FloatImage out;
-        {
-          py::gil_scoped_release release;
-          out = double_blocks(img, height, width, num_threads);
-        }
-        return image_array(std::move(out));
-      },
-      py::arg("blocks"), py::arg("height"), py::arg("width"),
-      py::arg("num_threads") = ParallelOptions{}.num_threads,
-      "Bilinear doubling of a 2 x 2 block image to (height, width), block centres at the centres "
-      "of their pixels, border blocks repeated.");
-  m.def(
-      "gaussian_3x3",
-      [](const py::handle& image, double sigma, int num_threads) {
-        CArray<float> keep;
-        const ImageView img = image_arg(image, "gaussian_3x3: image", keep);
-        if (img.empty()) throw_error<InvalidArgument>("gaussian_3x3: image must not be None");
-        FloatImage out;
-        {
-          py::gil_scoped_release release;
-          out = gaussian_3x3(img, sigma, num_threads);
-        }
-        return image_array(std::move(out));
-      },
-      py::arg("image"), py::arg("sigma") = 0.5,
-      py::arg("num_threads") = ParallelOptions{}.num_threads,
-      "Separable 3 x 3 Gaussian (sigma in pixels) of an (H, W, C) float32 image, border pixels "
-      "repeated.");
-  m.def(
-      "restore_half_resolution",
-      [](const py::handle& denoised, int height, int width, const py::handle& albedo,
-         const py::handle& albedo_blocks, const py::handle& normal, const py::handle& normal_blocks,
-         float albedo_floor, double edge_cos_lo, double edge_cos_hi, int num_threads) {
-        CArray<float> k0, k1, k2, k3, k4;
-        const ImageView den = image_arg(denoised, "restore_half_resolution: denoised", k0);
-        if (den.empty())
-          throw_error<InvalidArgument>("restore_half_resolution: denoised must not be None");
-        const ImageView a = image_arg(albedo, "restore_half_resolution: albedo", k1);
-        const ImageView ab = image_arg(albedo_blocks, "restore_half_resolution: albedo_blocks", k2);
-        const ImageView n = image_arg(normal, "restore_half_resolution: normal", k3);
-        const ImageView nb = image_arg(normal_blocks, "restore_half_resolution: normal_blocks", k4);
-        HalfRestoreOptions opt;
-        opt.albedo_floor = albedo_floor;
-        opt.edge_cos_lo = edge_cos_lo;
-        opt.edge_cos_hi = edge_cos_hi;
-        opt.num_threads = num_threads;
-        FloatImage out;
-        {
-          py::gil_scoped_release release;
-          out = restore_half_resolution(den, height, width, a, ab, n, nb, opt);
-        }
-        return image_array(std::move(out));
-      },
-      py::arg("denoised"), py::arg("height"), py::arg("width"), py::arg("albedo") = py::none(),
-      py::arg("albedo_blocks") = py::none(), py::arg("normal") = py::none(),
-      py::arg("normal_blocks") = py::none(),
-      py::arg("albedo_floor") = HalfRestoreOptions{}.albedo_floor,
-      py::arg("edge_cos_lo") = HalfRestoreOptions{}.edge_cos_lo,
-      py::arg("edge_cos_hi") = HalfRestoreOptions{}.edge_cos_hi,
-      py::arg("num_threads") = HalfRestoreOptions{}.num_threads,
-      "Full-size image of a half-resolution denoise: the denoised blocks doubled, times the "
-      "albedo ratio max(a, floor) / max(double(albedo_blocks), floor) faded to 1 where the "
-      "normal turns away from double(normal_blocks) (cosine edge_cos_lo..edge_cos_hi); clamped "
-      "to >= 0.");
+  bind_depth_sensor(m);
+  bind_half_resolution(m);
 }
 
 }  // namespace mgn::py_bind

@@ -45,6 +45,8 @@ void register_exceptions(py::module_& m) {
                         "A third-party backend reported a failure (also a RuntimeError).",
                         PyExc_RuntimeError);
 
+  // pybind11's translator type takes the std::exception_ptr by value.
+  // NOLINTNEXTLINE(performance-unnecessary-value-param)
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

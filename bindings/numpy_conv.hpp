@@ -8,6 +8,7 @@
 #include <mgn/core/types.hpp>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mgn::py_conv {
@@ -44,7 +45,7 @@ Eigen::Matrix<Scalar, Eigen::Dynamic, Cols, Eigen::RowMajor> to_rows(const py::h
 template <typename Derived>
 py::array to_numpy(Derived&& m) {
   using M = std::decay_t<Derived>;
-  auto* heap = new M(std::move(m));
+  auto* heap = new M(std::forward<Derived>(m));
   py::capsule owner(heap, [](void* p) { delete static_cast<M*>(p); });
   using Scalar = typename M::Scalar;
   if (M::ColsAtCompileTime == 1) {

@@ -16,6 +16,7 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libgtest-dev libgmock-dev
   clang-format
+  clang-tidy  # function size, complexity and bug-pattern checks of the C++ code (scripts/test.sh)
   ccache    # the test command's two builds of the core share objects (scripts/test.sh)
   chromium  # headless, only for the test that opens `mgn report` pages (tests/python)
 )

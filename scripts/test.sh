@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The one test command: on a fresh Debian 12 machine it installs the system packages (apt, as
 # root or via sudo), creates .venv with mgn installed, runs the static checks (ruff, ruff format,
-# mypy, clang-format), builds the C++ tests with warnings as errors, and runs them all: ctest
-# (GoogleTest, mgn-cli, the find_package(mgn) consumer), then pytest (which also checks the
-# import layers and the error classes: tests/python/test_architecture.py), then most GoogleTest
-# binaries built again with AddressSanitizer (leaks included) and UndefinedBehaviorSanitizer.
+# mypy, clang-format, clang-tidy), builds the C++ tests with warnings as errors, and runs them
+# all: ctest (GoogleTest, mgn-cli, the find_package(mgn) consumer), then pytest (which also
+# checks the import layers and the error classes: tests/python/test_architecture.py), then most
+# GoogleTest binaries built again with AddressSanitizer (leaks included) and
+# UndefinedBehaviorSanitizer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-system-deps.sh
@@ -25,6 +26,21 @@ ruff format --check python tests benchmarks
 mypy
 find cpp bindings tests/cpp -name '*.cpp' -o -name '*.hpp' -o -name '*.h' | sort |
   xargs clang-format --dry-run -Werror
+# clang-tidy (Debian's, with its run-clang-tidy; settings: .clang-tidy) on mgn's own sources:
+# cpp/ and bindings/, and the headers of cpp/include and cpp/src through its HeaderFilterRegex.
+# Function size and cognitive complexity ceilings, bugprone-* and performance-* checks; any
+# warning is an error. The compile commands come from build/tidy, configured (never built) with
+# the same flags as build/cpp plus the Python extension (pybind11 from the dev extra); only the
+# generated headers are needed, so it runs before the build.
+cmake -S . -B build/tidy -G Ninja -DCMAKE_BUILD_TYPE=Release -DMGN_BUILD_PYTHON=ON \
+  -DMGN_INSTALL_CPP=OFF -DMGN_WARNINGS_AS_ERRORS=ON -DCMAKE_EXPORT_COMPILE_COMMANDS=ON \
+  -Dpybind11_DIR="$(python -m pybind11 --cmakedir)" >/dev/null
+if ! run-clang-tidy -p build/tidy -j 2 -quiet "^$PWD/(cpp|bindings)/" >build/clang-tidy.log 2>&1
+then
+  grep -E -A4 'warning:|error:' build/clang-tidy.log || cat build/clang-tidy.log
+  echo "test.sh: clang-tidy failed (build/clang-tidy.log)" >&2
+  exit 1
+fi
 cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DMGN_BUILD_TESTS=ON \
   -DMGN_WARNINGS_AS_ERRORS=ON >/dev/null
 cmake --build build/cpp

@@ -76,8 +76,9 @@ void read_points(const std::string& path, double scale, mgn::Points3f& points,
     }
     if (!numeric && rows.empty() && line_no == 1) continue;  // header line
     if (!numeric || k != 6) {
-      throw mgn::InvalidArgument("mgn-cli seal: " + path + ":" + std::to_string(line_no) +
-                                 ": expected 6 numbers x,y,z,nx,ny,nz, got '" + line + "'");
+      mgn::throw_error<mgn::InvalidArgument>("mgn-cli seal: ", path, ":", line_no,
+                                             ": expected 6 numbers x,y,z,nx,ny,nz, got '", line,
+                                             "'");
     }
     rows.push_back(r);
   }

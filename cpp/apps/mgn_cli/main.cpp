@@ -81,8 +81,8 @@ int cmd_info(const std::vector<std::string>& args) {
     } else if (path.empty()) {
       path = a;
     } else {
-      throw mgn::InvalidArgument("mgn-cli info: expected one MESH, got '" + path + "' and '" + a +
-                                 "'");
+      mgn::throw_error<mgn::InvalidArgument>("mgn-cli info: expected one MESH, got '", path,
+                                             "' and '", a, "'");
     }
   }
   if (path.empty()) throw mgn::InvalidArgument("mgn-cli info: missing MESH argument");

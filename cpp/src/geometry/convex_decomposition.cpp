@@ -184,6 +184,48 @@ Mesh convex_hull_of_points(const Points3f& points) {
   return hull;
 }
 
+namespace {
+
+// The outward unit normals and offsets (n . x = offset, m) of the faces of the convex hull of
+// the chosen rows of points, by Bullet's btConvexHullComputer; faces of zero area are left out.
+// coords: scratch space.
+void hull_face_planes(const Points3d& points, const std::vector<Eigen::Index>& chosen,
+                      std::vector<double>& coords, std::vector<Vec3d>& normals,
+                      std::vector<double>& offsets) {
+  coords.clear();
+  for (Eigen::Index i : chosen)
+    coords.insert(coords.end(), {points(i, 0), points(i, 1), points(i, 2)});
+  btConvexHullComputer hc;
+  hc.compute(coords.data(), static_cast<int>(3 * sizeof(double)), static_cast<int>(chosen.size()),
+             0.0, 0.0);
+  normals.clear();
+  offsets.clear();
+  for (int f = 0; f < hc.faces.size(); ++f) {
+    // Newell normal of the face polygon (outward: counter-clockwise seen from outside).
+    const btConvexHullComputer::Edge* first = &hc.edges[hc.faces[f]];
+    const btConvexHullComputer::Edge* e = first;
+    Vec3d nn = Vec3d::Zero(), centre = Vec3d::Zero();
+    int count = 0;
+    do {
+      const btVector3& u = hc.vertices[e->getSourceVertex()];
+      const btVector3& v = hc.vertices[e->getTargetVertex()];
+      nn.x() += (double(u.y()) - double(v.y())) * (double(u.z()) + double(v.z()));
+      nn.y() += (double(u.z()) - double(v.z())) * (double(u.x()) + double(v.x()));
+      nn.z() += (double(u.x()) - double(v.x())) * (double(u.y()) + double(v.y()));
+      centre += Vec3d(double(u.x()), double(u.y()), double(u.z()));
+      ++count;
+      e = e->getNextEdgeOfFace();
+    } while (e != first && count < 100000);
+    const double len = nn.norm();
+    if (!(len > 0)) continue;
+    nn /= len;
+    normals.push_back(nn);
+    offsets.push_back(nn.dot(centre / count));
+  }
+}
+
+}  // namespace
+
 std::vector<Eigen::Index> reduce_convex_points(const Points3d& points, int max_vertices,
                                                double tolerance, double* max_deviation) {
   constexpr const char* fn = "reduce_convex_points";
@@ -230,37 +272,7 @@ std::vector<Eigen::Index> reduce_convex_points(const Points3d& points, int max_v
   std::vector<double> offsets;
   double deviation = 0.0;
   while (true) {
-    // Face planes of the hull of the chosen points.
-    coords.clear();
-    for (Eigen::Index i : chosen)
-      coords.insert(coords.end(), {points(i, 0), points(i, 1), points(i, 2)});
-    btConvexHullComputer hc;
-    hc.compute(coords.data(), static_cast<int>(3 * sizeof(double)), static_cast<int>(chosen.size()),
-               0.0, 0.0);
-    normals.clear();
-    offsets.clear();
-    for (int f = 0; f < hc.faces.size(); ++f) {
-      // Newell normal of the face polygon (outward: counter-clockwise seen from outside).
-      const btConvexHullComputer::Edge* first = &hc.edges[hc.faces[f]];
-      const btConvexHullComputer::Edge* e = first;
-      Vec3d nn = Vec3d::Zero(), centre = Vec3d::Zero();
-      int count = 0;
-      do {
-        const btVector3& u = hc.vertices[e->getSourceVertex()];
-        const btVector3& v = hc.vertices[e->getTargetVertex()];
-        nn.x() += (double(u.y()) - double(v.y())) * (double(u.z()) + double(v.z()));
-        nn.y() += (double(u.z()) - double(v.z())) * (double(u.x()) + double(v.x()));
-        nn.z() += (double(u.x()) - double(v.x())) * (double(u.y()) + double(v.y()));
-        centre += Vec3d(double(u.x()), double(u.y()), double(u.z()));
-        ++count;
-        e = e->getNextEdgeOfFace();
-      } while (e != first && count < 100000);
-      const double len = nn.norm();
-      if (!(len > 0)) continue;
-      nn /= len;
-      normals.push_back(nn);
-      offsets.push_back(nn.dot(centre / count));
-    }
+    hull_face_planes(points, chosen, coords, normals, offsets);
     // Each point's distance outside the hull; per face, its farthest point beyond tolerance.
     std::vector<std::pair<double, Eigen::Index>> per_face(normals.size(), {0.0, -1});
     deviation = 0.0;
@@ -306,8 +318,10 @@ Mesh convex_hull(const Mesh& mesh) {
   return h;
 }
 
-std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositionOptions& o) {
-  check_finite(mesh, "convex_decomposition");
+namespace {
+
+// Fails with InvalidArgument naming the first option of o out of its range.
+void check_options(const ConvexDecompositionOptions& o) {
   auto bad_option = [](const char* name, double v, const char* expected) {
     throw_error<InvalidArgument>("convex_decomposition: options.", name, " must be ", expected,
                                  ", got ", v);
@@ -327,6 +341,13 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
   if (!(std::isfinite(o.merge_volume_tolerance) && o.merge_volume_tolerance >= 0))
     bad_option("merge_volume_tolerance", o.merge_volume_tolerance, "finite and >= 0");
   if (o.merge_max_parts < 0) bad_option("merge_max_parts", o.merge_max_parts, "0 (no cap) or >= 1");
+}
+
+}  // namespace
+
+std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositionOptions& o) {
+  check_finite(mesh, "convex_decomposition");
+  check_options(o);
 
   Mesh hull = convex_hull(mesh);
   const double hull_volume = closed_mesh_volume(hull);
@@ -454,7 +475,7 @@ std::vector<Mesh> convex_decomposition(const Mesh& mesh, const ConvexDecompositi
     const Eigen::RowVector3d c = pts.cast<double>().colwise().mean();
     const Eigen::MatrixXd centred = pts.cast<double>().rowwise() - c;
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred);
-    const auto sv = svd.singularValues();
+    const auto& sv = svd.singularValues();
     return sv(2) <= 1e-6 * sv(0);
   };
   std::vector<bool> flat(clusters.size());

@@ -99,13 +99,8 @@ Mesh clean_part(Points3f v, Faces f, Points2f uv, std::vector<Material> mats, bo
   return Mesh(std::move(v), std::move(f), std::move(uv), std::move(mats), {}, "");
 }
 
-}  // namespace
-
-Mesh load_mesh(const std::string& path, const LoadOptions& options) {
-  if (!(options.scale > 0.0) || !std::isfinite(options.scale)) {
-    throw_error<InvalidArgument>("load_mesh('", path, "'): scale must be finite and > 0, got ",
-                                 options.scale);
-  }
+// Fails with IoError unless path names an existing, readable file (not a directory).
+void check_mesh_file(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw_error<IoError>("load_mesh: file not found: '", path, "'");
   if (fs::is_directory(path, ec)) {
@@ -115,6 +110,59 @@ Mesh load_mesh(const std::string& path, const LoadOptions& options) {
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw_error<IoError>("load_mesh: cannot open '", path, "' for reading");
   }
+}
+
+// One assimp sub-mesh as raw arrays, before cleaning: vertices (m, transformed by X and scaled),
+// its triangles (wound outward for a mirroring X), texture coordinates (empty where absent or
+// not finite) and its material.
+struct Raw {
+  Points3f v;
+  Faces f;
+  Points2f uv;
+  std::vector<Material> mats;
+};
+
+Raw read_sub_mesh(const aiMesh* m, const aiMatrix4x4& X, const std::vector<Material>& materials,
+                  double scale, const std::string& path) {
+  Raw r;
+  r.v.resize(m->mNumVertices, 3);
+  for (unsigned k = 0; k < m->mNumVertices; ++k) {
+    const aiVector3D p = X * m->mVertices[k];
+    r.v.row(k) << static_cast<float>(p.x * scale), static_cast<float>(p.y * scale),
+        static_cast<float>(p.z * scale);
+    if (!r.v.row(k).allFinite()) {
+      throw_error<InvalidArgument>("load_mesh('", path, "'): vertex ", k, " of sub-mesh '",
+                                   m->mName.C_Str(),
+                                   "' is not finite; expected finite coordinates");
+    }
+  }
+  r.f.resize(m->mNumFaces, 3);
+  Eigen::Index nf = 0;
+  for (unsigned k = 0; k < m->mNumFaces; ++k) {
+    if (m->mFaces[k].mNumIndices != 3) continue;
+    for (int j = 0; j < 3; ++j) r.f(nf, j) = static_cast<std::int32_t>(m->mFaces[k].mIndices[j]);
+    ++nf;
+  }
+  r.f.conservativeResize(nf, 3);
+  if (X.Determinant() < 0) r.f.col(1).swap(r.f.col(2));  // mirroring node: keep outward winding
+  if (m->HasTextureCoords(0)) {
+    r.uv.resize(m->mNumVertices, 2);
+    for (unsigned k = 0; k < m->mNumVertices; ++k)
+      r.uv.row(k) << m->mTextureCoords[0][k].x, m->mTextureCoords[0][k].y;
+    if (!r.uv.allFinite()) r.uv = Points2f();
+  }
+  if (m->mMaterialIndex < materials.size()) r.mats.push_back(materials[m->mMaterialIndex]);
+  return r;
+}
+
+}  // namespace
+
+Mesh load_mesh(const std::string& path, const LoadOptions& options) {
+  if (!(options.scale > 0.0) || !std::isfinite(options.scale)) {
+    throw_error<InvalidArgument>("load_mesh('", path, "'): scale must be finite and > 0, got ",
+                                 options.scale);
+  }
+  check_mesh_file(path);
 
   Assimp::Importer importer;
   // Points and lines are dropped; the rest is triangulated. Vertices are joined only where every
@@ -139,12 +187,6 @@ Mesh load_mesh(const std::string& path, const LoadOptions& options) {
     materials.push_back(read_material(scene, scene->mMaterials[i], dir));
   // Raw sub-meshes may hold degenerate faces, which the Mesh constructor rejects: collect raw
   // arrays first, then clean.
-  struct Raw {
-    Points3f v;
-    Faces f;
-    Points2f uv;
-    std::vector<Material> mats;
-  };
   std::vector<Raw> raws;
   std::function<void(const aiNode*, const aiMatrix4x4&)> visit = [&](const aiNode* node,
                                                                      const aiMatrix4x4& parent) {
@@ -152,36 +194,7 @@ Mesh load_mesh(const std::string& path, const LoadOptions& options) {
     for (unsigned i = 0; i < node->mNumMeshes; ++i) {
       const aiMesh* m = scene->mMeshes[node->mMeshes[i]];
       if (!(m->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || m->mNumFaces == 0) continue;
-      Raw r;
-      r.v.resize(m->mNumVertices, 3);
-      for (unsigned k = 0; k < m->mNumVertices; ++k) {
-        const aiVector3D p = X * m->mVertices[k];
-        r.v.row(k) << static_cast<float>(p.x * options.scale),
-            static_cast<float>(p.y * options.scale), static_cast<float>(p.z * options.scale);
-        if (!r.v.row(k).allFinite()) {
-          throw_error<InvalidArgument>("load_mesh('", path, "'): vertex ", k, " of sub-mesh '",
-                                       m->mName.C_Str(),
-                                       "' is not finite; expected finite coordinates");
-        }
-      }
-      r.f.resize(m->mNumFaces, 3);
-      Eigen::Index nf = 0;
-      for (unsigned k = 0; k < m->mNumFaces; ++k) {
-        if (m->mFaces[k].mNumIndices != 3) continue;
-        for (int j = 0; j < 3; ++j)
-          r.f(nf, j) = static_cast<std::int32_t>(m->mFaces[k].mIndices[j]);
-        ++nf;
-      }
-      r.f.conservativeResize(nf, 3);
-      if (X.Determinant() < 0) r.f.col(1).swap(r.f.col(2));  // mirroring node: keep outward winding
-      if (m->HasTextureCoords(0)) {
-        r.uv.resize(m->mNumVertices, 2);
-        for (unsigned k = 0; k < m->mNumVertices; ++k)
-          r.uv.row(k) << m->mTextureCoords[0][k].x, m->mTextureCoords[0][k].y;
-        if (!r.uv.allFinite()) r.uv = Points2f();
-      }
-      if (m->mMaterialIndex < materials.size()) r.mats.push_back(materials[m->mMaterialIndex]);
-      raws.push_back(std::move(r));
+      raws.push_back(read_sub_mesh(m, X, materials, options.scale, path));
     }
     for (unsigned c = 0; c < node->mNumChildren; ++c) visit(node->mChildren[c], X);
   };

@@ -502,6 +502,10 @@ bool AntipodalSampler::part_inside_object(const Impl& m, const Pose& X_OH, doubl
   return m.inside->contains_any(points);
 }
 
+// Nesting and complexity ceilings of .clang-tidy exceeded on purpose: per chunk of points, the
+// batched probes, then per point the antipodal test, approaches and collision pre-filters, whose
+// order fixes the random streams and so the output.
+// NOLINTNEXTLINE(readability-function-size,readability-function-cognitive-complexity)
 AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d& normals,
                                          const AntipodalOptions& o) const {
   o.validate();
@@ -531,6 +535,8 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
   std::vector<std::int32_t> accepted_count(static_cast<std::size_t>(n), 0);
   std::vector<std::int64_t> colliding(static_cast<std::size_t>(n), 0);
 
+  // The per-point work of this function, under the same exception as the function.
+  // NOLINTNEXTLINE(readability-function-cognitive-complexity)
   const auto process = [&](std::size_t begin, std::size_t end) {
     ProbePoints near;  // the pre-filter lists of the current probe (storage reused)
     const auto count = static_cast<Eigen::Index>(end - begin);

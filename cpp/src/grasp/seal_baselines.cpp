@@ -208,7 +208,7 @@ SealFailure smoothness_trial(const SealContext& ctx, const Vec3d& c, const Vec3d
     double sum = 0.0;
     int count = 0;
     for (int s = 0; s < per_bin; ++s) {
-      const auto i = static_cast<std::size_t>(b * per_bin + s);
+      const auto i = static_cast<std::size_t>(b) * per_bin + s;
       if (hits.instance_ids[i] < 0) continue;
       sum += a - static_cast<double>(hits.distance[i]);
       ++count;

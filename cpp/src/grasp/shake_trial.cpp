@@ -615,7 +615,7 @@ void validate_physics_object(const PhysicsObject& object) {
     const Eigen::MatrixXd P = V.cast<double>();
     const Eigen::MatrixXd C = P.rowwise() - P.colwise().mean();
     Eigen::SelfAdjointEigenSolver<Mat3d> eig(C.transpose() * C / double(V.rows()));
-    const Vec3d ev = eig.eigenvalues();
+    const Vec3d& ev = eig.eigenvalues();
     if (!(ev[0] > 1e-12 * ev[2]) || !(ev[2] > 0)) {
       throw_error<InvalidArgument>("PhysicsObject.convex_parts[", i,
                                    "]: expected a solid part, got points that are (nearly) ",

@@ -156,6 +156,26 @@ void check_rays(const char* fn, const Points3f& origins, const Points3f& directi
   }
 }
 
+// Appends hits (sorted by t) to kept, one per surface crossing: a ray through a shared edge or
+// vertex hits every adjacent face at (almost) the same t, and a primitive may be reported from
+// several BVH leaves, so a hit within 1e-5 (1 + |t|) of a kept hit on the same geometry is left
+// out. Stops when kept holds max_hits hits.
+void keep_one_hit_per_crossing(const std::vector<HitRecord>& hits, int max_hits,
+                               std::vector<HitRecord>& kept) {
+  for (const HitRecord& h : hits) {
+    bool duplicate = false;
+    for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
+      if (h.t - it->t > 1e-5f * (1.0f + std::abs(h.t))) break;
+      if (it->geom == h.geom) {
+        duplicate = true;
+        break;
+      }
+    }
+    if (!duplicate) kept.push_back(h);
+    if (static_cast<int>(kept.size()) >= max_hits) break;
+  }
+}
+
 }  // namespace
 
 RayScene::RayScene(const std::vector<RayGeometry>& geometries, bool all_hits)
@@ -374,21 +394,7 @@ RayAllHits RayScene::intersect_all(const Points3f& origins, const Points3f& dire
         return a.t < b.t ||
                (a.t == b.t && (a.geom < b.geom || (a.geom == b.geom && a.prim < b.prim)));
       });
-      // A ray through a shared edge or vertex hits every adjacent face at (almost) the same t,
-      // and a primitive may be reported from several BVH leaves: keep one hit per surface crossing.
-      auto& kept = per_ray[i];
-      for (const HitRecord& h : hits) {
-        bool duplicate = false;
-        for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
-          if (h.t - it->t > 1e-5f * (1.0f + std::abs(h.t))) break;
-          if (it->geom == h.geom) {
-            duplicate = true;
-            break;
-          }
-        }
-        if (!duplicate) kept.push_back(h);
-        if (static_cast<int>(kept.size()) >= max_hits_per_ray) break;
-      }
+      keep_one_hit_per_crossing(hits, max_hits_per_ray, per_ray[i]);
     }
   };
   parallel_for(static_cast<std::size_t>(n), options.num_threads, 1024, body);

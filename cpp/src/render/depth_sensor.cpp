@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace mgn {
 
@@ -21,6 +22,103 @@ double round_half_away(double x) {
   const double t = static_cast<double>(static_cast<std::int64_t>(x));
   const double f = x - t;
   return t + static_cast<double>(f >= 0.5) - static_cast<double>(f <= -0.5);
+}
+
+// Marks the pixels of one image row that the projector does not light (rectified: the projector
+// is offset along x, so a surface point and its occluder lie on the same row). A point at column
+// u maps to the projector column u_p = u + 0.5 - fx b / z; an occluder of it has the same u_p and
+// lies towards the projector (u' > u for b > 0). Sweeps from the projector side keeping the
+// extreme u_p seen so far. z: the row's W depths (m, 0 = nothing seen); fx: focal length (px);
+// baseline: b (m, != 0); tol: shadow tolerance (px); shadow: W flags, set to 1 where shadowed.
+void mark_projector_shadow(const float* z, int W, double fx, double baseline, double tol,
+                           std::uint8_t* shadow) {
+  const double fb = fx * baseline;
+  if (baseline > 0.0) {
+    double min_up = std::numeric_limits<double>::infinity();
+    for (int u = W - 1; u >= 0; --u) {
+      if (z[u] <= 0.0f) continue;
+      const double up = u + 0.5 - fb / z[u];
+      if (up > min_up + tol) shadow[u] = 1;
+      min_up = std::min(min_up, up);
+    }
+  } else {
+    double max_up = -std::numeric_limits<double>::infinity();
+    for (int u = 0; u < W; ++u) {
+      if (z[u] <= 0.0f) continue;
+      const double up = u + 0.5 - fb / z[u];
+      if (up < max_up - tol) shadow[u] = 1;
+      max_up = std::max(max_up, up);
+    }
+  }
+}
+
+// The depth (m) of the seen 4-neighbour of pixel (u, v) with the largest depth jump from zz, and
+// that jump (m); {0, 0} where no seen neighbour differs. depth: the W x H image, row-major.
+std::pair<double, double> largest_depth_jump(const std::vector<float>& depth, int W, int H, int u,
+                                             std::size_t v, double zz) {
+  double other = 0.0, jump = 0.0;
+  const int du[4] = {-1, 1, 0, 0}, dv[4] = {0, 0, -1, 1};
+  for (int k = 0; k < 4; ++k) {
+    const long uu = u + du[k], vv = static_cast<long>(v) + dv[k];
+    if (uu < 0 || uu >= W || vv < 0 || vv >= H) continue;
+    const double zn = depth[static_cast<std::size_t>(vv) * W + uu];
+    if (zn > 0.0 && std::abs(zn - zz) > jump) jump = std::abs(zn - zz), other = zn;
+  }
+  return {other, jump};
+}
+
+// The depth (m) reported at pixel (u, v) of true depth zz at a depth edge: where the seen
+// 4-neighbour with the largest depth jump from zz jumps by more than p.edge_threshold, with
+// probability p.flying_pixel_probability a uniform fraction of the way to that neighbour's depth
+// (one draw from rng at an edge, a second where the pixel moves); zz otherwise.
+double flying_pixel_depth(const std::vector<float>& depth, int W, int H, int u, std::size_t v,
+                          double zz, const DepthSensorParams& p, Rng& rng) {
+  const auto [other, jump] = largest_depth_jump(depth, W, H, u, v, zz);
+  if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
+    return zz + rng.uniform() * (other - zz);
+  }
+  return zz;
+}
+
+// Adds sigma[k] times normals[k] to each of the first count depths z (m), then puts each on its
+// grid (for p.depth_step > 0): the coarsest power-of-two multiple of p.depth_step not above
+// p.depth_step_noise_fraction times sigma[k], rounding halves away from zero.
+void add_noise_on_grid(std::size_t count, const std::vector<double>& sigma,
+                       const std::vector<float>& normals, const DepthSensorParams& p,
+                       std::vector<double>& z) {
+  for (std::size_t k = 0; k < count; ++k) z[k] += sigma[k] * static_cast<double>(normals[k]);
+  if (p.depth_step > 0.0) {
+    for (std::size_t k = 0; k < count; ++k) {
+      double step = p.depth_step;
+      const double top = p.depth_step_noise_fraction * sigma[k];
+      while (step * 2.0 <= top) step *= 2.0;
+      z[k] = round_half_away(z[k] / step) * step;
+    }
+  }
+}
+
+// Checks the sizes of the depth and id images (K.width x K.height) and that every depth is
+// finite and >= 0.
+void check_depth_inputs(const std::vector<float>& depth,
+                        const std::vector<std::int32_t>& instance_ids, const Intrinsics& K) {
+  const int W = K.width, H = K.height;
+  const std::size_t n = static_cast<std::size_t>(W) * H;
+  if (depth.size() != n) {
+    throw_error<InvalidArgument>("apply_depth_sensor: depth has ", depth.size(),
+                                 " pixels; expected ", W, "x", H, " = ", n);
+  }
+  if (instance_ids.size() != n) {
+    throw_error<InvalidArgument>("apply_depth_sensor: instance_ids has ", instance_ids.size(),
+                                 " pixels; expected ", n);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(std::isfinite(depth[i]) && depth[i] >= 0.0f)) {
+      throw_error<InvalidArgument>(
+          "apply_depth_sensor: depth must be finite and >= 0 m (0 = "
+          "nothing seen), got ",
+          depth[i], " at pixel ", i);
+    }
+  }
 }
 
 }  // namespace
@@ -111,23 +209,8 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
   K.validate("apply_depth_sensor: K");
   p.validate();
   const int W = K.width, H = K.height;
+  check_depth_inputs(depth, instance_ids, K);
   const std::size_t n = static_cast<std::size_t>(W) * H;
-  if (depth.size() != n) {
-    throw_error<InvalidArgument>("apply_depth_sensor: depth has ", depth.size(),
-                                 " pixels; expected ", W, "x", H, " = ", n);
-  }
-  if (instance_ids.size() != n) {
-    throw_error<InvalidArgument>("apply_depth_sensor: instance_ids has ", instance_ids.size(),
-                                 " pixels; expected ", n);
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(std::isfinite(depth[i]) && depth[i] >= 0.0f)) {
-      throw_error<InvalidArgument>(
-          "apply_depth_sensor: depth must be finite and >= 0 m (0 = "
-          "nothing seen), got ",
-          depth[i], " at pixel ", i);
-    }
-  }
   const float nan = std::numeric_limits<float>::quiet_NaN();
   DepthImage out;
   out.width = W;
@@ -153,32 +236,10 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
       const std::int32_t* ids = &instance_ids[v * W];
       float* out_z = &out.depth[v * W];
       std::uint8_t* out_valid = &out.valid[v * W];
-      // Projector visibility along the row (rectified: the projector is offset along x, so a
-      // surface point and its occluder lie on the same row). A point at column u maps to the
-      // projector column u_p = u + 0.5 - fx b / z; an occluder of it has the same u_p and lies
-      // towards the projector (u' > u for b > 0). Sweep from the projector side keeping the
-      // extreme u_p seen so far.
+      // Projector visibility along the row (mark_projector_shadow).
       std::fill(shadow.begin(), shadow.end(), 0);
       if (!ideal && p.baseline != 0.0) {
-        const double fb = K.fx * p.baseline;
-        const double tol = p.shadow_tolerance_px;
-        if (p.baseline > 0.0) {
-          double min_up = std::numeric_limits<double>::infinity();
-          for (int u = W - 1; u >= 0; --u) {
-            if (z[u] <= 0.0f) continue;
-            const double up = u + 0.5 - fb / z[u];
-            if (up > min_up + tol) shadow[u] = 1;
-            min_up = std::min(min_up, up);
-          }
-        } else {
-          double max_up = -std::numeric_limits<double>::infinity();
-          for (int u = 0; u < W; ++u) {
-            if (z[u] <= 0.0f) continue;
-            const double up = u + 0.5 - fb / z[u];
-            if (up < max_up - tol) shadow[u] = 1;
-            max_up = std::max(max_up, up);
-          }
-        }
+        mark_projector_shadow(z, W, K.fx, p.baseline, p.shadow_tolerance_px, shadow.data());
       }
       // Row v draws from Rng(seed, v): first the flying-pixel uniforms (left to right, pass 1),
       // then one normal per noisy pixel in a batch (pass 2), applied with the grid (pass 3).
@@ -198,18 +259,7 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
           continue;
         if (shadow[u]) continue;
         if (p.flying_pixel_probability > 0.0 && p.edge_threshold > 0.0) {
-          // The 4-neighbour with the largest depth jump (seen surfaces only).
-          double other = 0.0, jump = 0.0;
-          const int du[4] = {-1, 1, 0, 0}, dv[4] = {0, 0, -1, 1};
-          for (int k = 0; k < 4; ++k) {
-            const long uu = u + du[k], vv = static_cast<long>(v) + dv[k];
-            if (uu < 0 || uu >= W || vv < 0 || vv >= H) continue;
-            const double zn = depth[static_cast<std::size_t>(vv) * W + uu];
-            if (zn > 0.0 && std::abs(zn - zz) > jump) jump = std::abs(zn - zz), other = zn;
-          }
-          if (jump > p.edge_threshold && rng.uniform() < p.flying_pixel_probability) {
-            zz = zz + rng.uniform() * (other - zz);
-          }
+          zz = flying_pixel_depth(depth, W, H, u, v, zz, p, rng);
         }
         const double sigma = p.sigma_a + p.sigma_b * (zz - p.sigma_z0) * (zz - p.sigma_z0);
         noisy_u[count] = u;
@@ -223,18 +273,8 @@ DepthImage apply_depth_sensor(const std::vector<float>& depth,
       } else {
         std::fill(normals.begin(), normals.begin() + count, 0.0f);
       }
-      // Pass 3: noise, then the grid: the coarsest power-of-two multiple of the step not above
-      // the noise fraction; a value that ends <= 0 is invalid.
-      for (std::size_t k = 0; k < count; ++k)
-        noisy_z[k] += noisy_sigma[k] * static_cast<double>(normals[k]);
-      if (p.depth_step > 0.0) {
-        for (std::size_t k = 0; k < count; ++k) {
-          double step = p.depth_step;
-          const double top = p.depth_step_noise_fraction * noisy_sigma[k];
-          while (step * 2.0 <= top) step *= 2.0;
-          noisy_z[k] = round_half_away(noisy_z[k] / step) * step;
-        }
-      }
+      // Pass 3: noise, then the grid (add_noise_on_grid); a value that ends <= 0 is invalid.
+      add_noise_on_grid(count, noisy_sigma, normals, p, noisy_z);
       for (std::size_t k = 0; k < count; ++k) {
         if (!(noisy_z[k] > 0.0)) continue;
         out_z[noisy_u[k]] = static_cast<float>(noisy_z[k]);

@@ -352,6 +352,10 @@ struct SceneGraspModel::Impl {
   }
 };
 
+// Complexity ceiling of .clang-tidy exceeded on purpose: input checks, the obstacles and
+// visibility scene, the shared solids, the placement and wrench scores and the parallel
+// collision tests of every grasp, in the order the results are defined.
+// NOLINTNEXTLINE(readability-function-cognitive-complexity)
 SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, const Mesh& tote,
                                  const Pose& X_WT, const ParallelJawGripper& gripper,
                                  const Cup& cup, const SceneGraspOptions& options)

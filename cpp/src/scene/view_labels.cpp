@@ -183,6 +183,9 @@ ViewLabelModel& ViewLabelModel::operator=(ViewLabelModel&&) noexcept = default;
 int ViewLabelModel::num_objects() const { return static_cast<int>(impl_->objects.size()); }
 bool ViewLabelModel::has_tote() const { return impl_->tote; }
 
+// Size and complexity ceilings of .clang-tidy exceeded on purpose: one pass over the cast
+// tiles, masks, keypoints and heat maps of a view, which share the per-object spans and images.
+// NOLINTNEXTLINE(readability-function-size,readability-function-cognitive-complexity)
 ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
                                       const std::int32_t* instance_image, int image_width,
                                       int image_height, const ViewLabelOptions& options) const {
@@ -279,7 +282,8 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
     cast_box[i] = b;
     if (b.empty()) continue;
     auto& rows = spans[i];
-    rows.assign(static_cast<std::size_t>(b.v1 - b.v0 + 1), {b.u0, b.u1});
+    const int num_rows = b.v1 - b.v0 + 1;
+    rows.assign(static_cast<std::size_t>(num_rows), {b.u0, b.u1});
     if (hull.size() < 3) continue;
     for (int v = b.v0; v <= b.v1; ++v) {
       double xl = std::numeric_limits<double>::infinity(), xr = -xl;

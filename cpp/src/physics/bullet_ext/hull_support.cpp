@@ -140,7 +140,7 @@ long argmax_scalar(const float* x, const float* y, const float* z, int n, float 
 
 HullSupport::HullSupport(const btVector3* points, int count) : count_(count) {
   if (count <= 0) return;
-  const std::size_t padded = static_cast<std::size_t>((count + kPad - 1) / kPad * kPad);
+  const std::size_t padded = (static_cast<std::size_t>(count) + kPad - 1) / kPad * kPad;
   // Padding repeats vertex 0: its dot products tie with vertex 0's, which comes first.
   x_.assign(padded, points[0].x());
   y_.assign(padded, points[0].y());

@@ -195,6 +195,9 @@ void add_friction_row(const ManifoldRows& m, const btVector3& axis, int contact_
 /// pool. Same fields, operations, side effects and order as Bullet's convertContact without
 /// rolling friction and anisotropic friction.
 template <Side kA, Side kB>
+// Complexity ceiling of .clang-tidy exceeded on purpose: mirrors Bullet's convertContact
+// statement by statement (see above), which keeps the two comparable.
+// NOLINTNEXTLINE(readability-function-cognitive-complexity)
 void convert_points(const ManifoldRows& m, btPersistentManifold& manifold) {
   const btContactSolverInfo& info = m.info;
   const btVector3& origin_a = manifold.getBody0()->getWorldTransform().getOrigin();
