@@ -67,8 +67,9 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         "--rgb-norm",
         choices=RGB_NORMS,
         default=d.rgb_norm,
-        help="per-image normalisation of the RGB input: image (each channel standardised over "
-        "its image; exposure and white balance do not matter) or none (RGB as read)",
+        help="per-image normalisation of the RGB input: image (the default: each channel "
+        "standardised over its image; exposure and white balance do not matter) or none (RGB "
+        "as read)",
     )
 
 

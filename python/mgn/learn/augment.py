@@ -16,8 +16,9 @@ the :data:`AUGMENTS` modes:
   photometric changes of the RGB channels only, in this order: a gain per colour channel
   (white balance), an exposure change (a factor ``2 ** ev``, reaching photographs several
   times darker or brighter than the rendered views), brightness, contrast, saturation, a hue
-  rotation, a gamma curve, a Gaussian blur, Gaussian sensor noise and a JPEG round trip (ranges and probabilities in
-  :data:`PHOTOMETRIC`). The targets of a photometric change are those of the unchanged view.
+  rotation, a gamma curve, a Gaussian blur, Gaussian sensor noise and a JPEG round trip
+  (ranges and probabilities in :data:`PHOTOMETRIC`). The targets of a photometric change are
+  those of the unchanged view.
 
 Every random number comes from the ``numpy.random.Generator`` passed in, so the same generator
 state gives the same bytes on any machine and thread count.

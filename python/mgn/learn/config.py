@@ -46,8 +46,8 @@ class ModelConfig:
         suction_score: the label score learned, :data:`SUCTION_SCORES` (default analytical).
         rgb_norm: per-image normalisation of the RGB channels at training and prediction,
             :data:`mgn.learn.targets.RGB_NORMS`: ``image`` (each channel standardised over its
-            image: a photograph's exposure and white balance do not matter) or ``none`` (RGB
-            in [0, 1] as read; default ``RGB_NORM_DEFAULT``).
+            image: a photograph's exposure and white balance do not matter; the default) or
+            ``none`` (RGB in [0, 1] as read).
     """
 
     modality: str = "rgb"
@@ -57,11 +57,13 @@ class ModelConfig:
     width: int = 16
     suction_radius_m: float = 0.01
     suction_score: str = "score_analytical"
-    rgb_norm: str = "none"
+    rgb_norm: str = "image"
 
     def __post_init__(self) -> None:
         if self.rgb_norm not in RGB_NORMS:
-            raise InvalidArgumentError(f"rgb_norm must be one of {RGB_NORMS}, got {self.rgb_norm!r}")
+            raise InvalidArgumentError(
+                f"rgb_norm must be one of {RGB_NORMS}, got {self.rgb_norm!r}"
+            )
         if self.modality not in MODALITIES:
             raise InvalidArgumentError(
                 f"modality must be one of {MODALITIES}, got {self.modality!r}"

@@ -141,7 +141,12 @@ def augmented_batch(
 
 
 def _batch_tensors(
-    arrays: TrainingArrays, idx: np.ndarray, tc: TrainConfig, mc: ModelConfig, epoch: int, device: Any
+    arrays: TrainingArrays,
+    idx: np.ndarray,
+    tc: TrainConfig,
+    mc: ModelConfig,
+    epoch: int,
+    device: Any,
 ):
     torch = require_torch()
     return tuple(
