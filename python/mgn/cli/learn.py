@@ -19,7 +19,7 @@ from mgn.cli.args import (
 from mgn.learn.augment import AUGMENTS
 from mgn.learn.config import BACKBONES, FOREGROUND_LOSSES, SUCTION_SCORES, ModelConfig, TrainConfig
 from mgn.learn.predict import predict_files
-from mgn.learn.targets import MODALITIES
+from mgn.learn.targets import MODALITIES, RGB_NORMS
 from mgn.learn.training import train
 from mgn.learn.transfer import run_transfer
 
@@ -63,6 +63,14 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         default=d.suction_score,
         help="the suction label score learned",
     )
+    p.add_argument(
+        "--rgb-norm",
+        choices=RGB_NORMS,
+        default=d.rgb_norm,
+        help="per-image normalisation of the RGB input: image (the default: each channel "
+        "standardised over its image; exposure and white balance do not matter) or none (RGB "
+        "as read)",
+    )
 
 
 def add_train_arguments(p: argparse.ArgumentParser) -> None:
@@ -102,6 +110,7 @@ def configs_from_args(args: argparse.Namespace) -> tuple[ModelConfig, TrainConfi
         width=args.width,
         suction_radius_m=args.suction_radius,
         suction_score=args.suction_score,
+        rgb_norm=args.rgb_norm,
     )
     tc = TrainConfig(
         epochs=args.epochs,

@@ -14,9 +14,11 @@ the :data:`AUGMENTS` modes:
   bilinear, targets and weight nearest-neighbour), a rotation by a multiple of 90 degrees
   (any multiple for square views, 0 or 180 degrees otherwise) and the two flips -- then
   photometric changes of the RGB channels only, in this order: a gain per colour channel
-  (white balance), brightness, contrast, saturation, a hue rotation, a gamma curve, a Gaussian
-  blur, Gaussian sensor noise and a JPEG round trip (ranges and probabilities in
-  :data:`PHOTOMETRIC`). The targets of a photometric change are those of the unchanged view.
+  (white balance), an exposure change (a factor ``2 ** ev``, reaching photographs several
+  times darker or brighter than the rendered views), brightness, contrast, saturation, a hue
+  rotation, a gamma curve, a Gaussian blur, Gaussian sensor noise and a JPEG round trip
+  (ranges and probabilities in :data:`PHOTOMETRIC`). The targets of a photometric change are
+  those of the unchanged view.
 
 Every random number comes from the ``numpy.random.Generator`` passed in, so the same generator
 state gives the same bytes on any machine and thread count.
@@ -51,9 +53,10 @@ ZOOM_RANGE = (0.7, 1.5)
 #: Photometric changes of the RGB channels: (range, probability) of each; factors multiply,
 #: ``hue`` is a rotation of the chroma plane in turns, ``blur`` a Gaussian sigma in px,
 #: ``noise`` the standard deviation of additive Gaussian noise (RGB in [0, 1]), ``jpeg`` the
-#: JPEG quality.
+#: JPEG quality, ``exposure`` an exposure value ``ev`` in stops (the values times ``2 ** ev``).
 PHOTOMETRIC: dict[str, tuple[tuple[float, float], float]] = {
     "gain": ((0.85, 1.15), 1.0),
+    "exposure": ((-3.0, 1.0), 0.5),
     "brightness": ((0.6, 1.4), 1.0),
     "contrast": ((0.6, 1.4), 1.0),
     "saturation": ((0.4, 1.5), 1.0),
@@ -142,6 +145,7 @@ def photometric(rgb: np.ndarray, rng: np.random.Generator) -> npt.NDArray[np.flo
     x = np.asarray(rgb, np.float64)
     gains = rng.uniform(*PHOTOMETRIC["gain"][0], size=3)
     x = x * gains[:, None, None]
+    ev = _uniform(rng, "exposure")
     b = _uniform(rng, "brightness")
     c = _uniform(rng, "contrast")
     s = _uniform(rng, "saturation")
@@ -151,6 +155,8 @@ def photometric(rgb: np.ndarray, rng: np.random.Generator) -> npt.NDArray[np.flo
     noise = _uniform(rng, "noise")
     quality = _uniform(rng, "jpeg")
     noise_seed = int(rng.integers(0, 2**31))
+    if ev is not None:
+        x = x * 2.0**ev
     if b is not None:
         x = x * b
     if c is not None:

@@ -8,7 +8,7 @@ from typing import Any
 
 from mgn.errors import InvalidArgumentError
 from mgn.learn.augment import AUGMENTS
-from mgn.learn.targets import MODALITIES
+from mgn.learn.targets import MODALITIES, RGB_NORMS
 
 __all__ = ["BACKBONES", "FOREGROUND_LOSSES", "SUCTION_SCORES", "ModelConfig", "TrainConfig"]
 
@@ -44,6 +44,10 @@ class ModelConfig:
         width: channels of the first level of the ``small`` encoder (default 16, >= 4).
         suction_radius_m: radius of the disc each suction label marks, m (default 0.01).
         suction_score: the label score learned, :data:`SUCTION_SCORES` (default analytical).
+        rgb_norm: per-image normalisation of the RGB channels at training and prediction,
+            :data:`mgn.learn.targets.RGB_NORMS`: ``image`` (each channel standardised over its
+            image: a photograph's exposure and white balance do not matter; the default) or
+            ``none`` (RGB in [0, 1] as read).
     """
 
     modality: str = "rgb"
@@ -53,8 +57,13 @@ class ModelConfig:
     width: int = 16
     suction_radius_m: float = 0.01
     suction_score: str = "score_analytical"
+    rgb_norm: str = "image"
 
     def __post_init__(self) -> None:
+        if self.rgb_norm not in RGB_NORMS:
+            raise InvalidArgumentError(
+                f"rgb_norm must be one of {RGB_NORMS}, got {self.rgb_norm!r}"
+            )
         if self.modality not in MODALITIES:
             raise InvalidArgumentError(
                 f"modality must be one of {MODALITIES}, got {self.modality!r}"
@@ -89,6 +98,12 @@ class ModelConfig:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> ModelConfig:
         return _from_dict(cls, d, "model config")
+
+    @classmethod
+    def from_saved(cls, d: dict[str, Any]) -> ModelConfig:
+        """The config stored in a model or checkpoint file: a file without ``rgb_norm``
+        (written before that setting existed) was trained on RGB as read (``none``)."""
+        return _from_dict(cls, {"rgb_norm": "none"} | dict(d), "model config")
 
 
 @dataclass(frozen=True)

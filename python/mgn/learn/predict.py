@@ -44,7 +44,7 @@ from mgn.learn.config import ModelConfig
 from mgn.learn.instances import InstanceMaps, instances_from_maps
 from mgn.learn.model import build_model
 from mgn.learn.pictures import overlay
-from mgn.learn.targets import network_input, network_shape, resize_nearest
+from mgn.learn.targets import model_input, network_input, network_shape, resize_nearest
 
 __all__ = [
     "IMAGE_SUFFIXES",
@@ -122,7 +122,7 @@ class Predictor:
             torch.set_num_threads(num_threads)
         self.path = Path(model_path)
         data = read_torch_file(self.path, MODEL_FORMAT)
-        self.config = ModelConfig.from_dict(data["model_config"])
+        self.config = ModelConfig.from_saved(data["model_config"])
         self.training: dict[str, Any] = data.get("training", {})
         self.device = choose_device(device)
         self.model = build_model(self.config)
@@ -139,7 +139,11 @@ class Predictor:
             raise InvalidArgumentError(f"{name}: no image given")
         h, w = np.asarray(ref).shape[:2]
         shape = network_shape(h, w, self.config.image_size)
-        x = network_input(rgb, depth, self.config.modality, shape, name=name)
+        x = model_input(
+            network_input(rgb, depth, self.config.modality, shape, name=name),
+            self.config.modality,
+            self.config.rgb_norm,
+        )
         with torch.no_grad():
             logits = self.model(torch.from_numpy(x[None]).to(self.device))
             probs = torch.sigmoid(logits)[0].cpu().numpy().astype(np.float32)

@@ -18,7 +18,10 @@ Per view of a dataset the network learns four maps, all at the network's resolut
 
 The same input normalisation is used for training and prediction (:func:`network_input`):
 RGB as [0, 1] floats, depth as ``(depth - median) / DEPTH_SCALE_M`` clipped to
-[-DEPTH_CLIP, DEPTH_CLIP], 0 where the sensor has no value.
+[-DEPTH_CLIP, DEPTH_CLIP], 0 where the sensor has no value. Models with
+``ModelConfig.rgb_norm="image"`` then see each RGB channel standardised over its image
+(:func:`normalize_rgb`, after the training's augmentation), so that a photograph several times
+darker or of another white balance than the training views gives the same network input.
 """
 
 from __future__ import annotations
@@ -35,12 +38,16 @@ __all__ = [
     "DEPTH_CLIP",
     "DEPTH_SCALE_M",
     "MODALITIES",
+    "RGB_NORMS",
+    "RGB_NORM_MIN_STD",
     "core_target",
     "depth_channel",
     "hidden_target",
     "input_channels",
+    "model_input",
     "network_input",
     "network_shape",
+    "normalize_rgb",
     "project_points",
     "resize_nearest",
     "resize_rgb",
@@ -53,6 +60,12 @@ MODALITIES = ("rgb", "depth", "rgbd")
 DEPTH_SCALE_M = 0.1
 #: Depth channel range after normalisation (units of DEPTH_SCALE_M).
 DEPTH_CLIP = 5.0
+#: Per-image normalisations of the RGB channels (:func:`normalize_rgb`): ``none`` (RGB in
+#: [0, 1] as read) or ``image`` (each channel standardised over its image).
+RGB_NORMS = ("none", "image")
+#: Smallest standard deviation (of RGB in [0, 1]) the ``image`` normalisation divides by, so
+#: that a nearly uniform channel is not blown up into noise.
+RGB_NORM_MIN_STD = 0.02
 
 
 def input_channels(modality: str) -> int:
@@ -132,6 +145,46 @@ def network_input(
             )
         planes.append(depth_channel(resize_nearest(depth_m, shape)))
     return np.stack(planes).astype(np.float32)
+
+
+def normalize_rgb(x: np.ndarray, mode: str) -> npt.NDArray[np.float32]:
+    """The RGB channels ``x`` (3, H, W) or (N, 3, H, W), values in [0, 1], normalised by
+    ``mode`` (:data:`RGB_NORMS`): ``none`` returns them unchanged; ``image`` maps each channel
+    of each image to ``(x - mean) / max(std, RGB_NORM_MIN_STD)``, mean and standard deviation
+    over the image's pixels, so that an image times any gain ``a`` (with ``a * std >=
+    RGB_NORM_MIN_STD``) plus any offset per channel, unclipped, gives the same result."""
+    if mode not in RGB_NORMS:
+        raise InvalidArgumentError(f"rgb_norm must be one of {RGB_NORMS}, got {mode!r}")
+    a = np.asarray(x, np.float32)
+    if a.ndim not in (3, 4) or a.shape[-3] != 3 or a.shape[-1] < 1 or a.shape[-2] < 1:
+        raise InvalidArgumentError(
+            f"normalize_rgb: expected RGB channels (3, H, W) or (N, 3, H, W), got {a.shape}"
+        )
+    if mode == "none":
+        return a
+    d = a.astype(np.float64)
+    mean = d.mean(axis=(-2, -1), keepdims=True)
+    std = np.maximum(d.std(axis=(-2, -1), keepdims=True), RGB_NORM_MIN_STD)
+    return ((d - mean) / std).astype(np.float32)
+
+
+def model_input(x: np.ndarray, modality: str, rgb_norm: str) -> npt.NDArray[np.float32]:
+    """What the network is given for inputs ``x`` (C, H, W) or (N, C, H, W) of
+    :func:`network_input` (after any augmentation): the RGB channels of ``rgb`` and ``rgbd``
+    inputs normalised by ``rgb_norm`` (:func:`normalize_rgb`), the depth channel unchanged."""
+    a = np.asarray(x, np.float32)
+    c = input_channels(modality)
+    if a.ndim not in (3, 4) or a.shape[-3] != c:
+        raise InvalidArgumentError(
+            f"model input: a {modality} input has {c} channel(s), (C, H, W) or (N, C, H, W); "
+            f"got {a.shape}"
+        )
+    if modality == "depth" or rgb_norm == "none":
+        if rgb_norm not in RGB_NORMS:
+            raise InvalidArgumentError(f"rgb_norm must be one of {RGB_NORMS}, got {rgb_norm!r}")
+        return a
+    rgb = normalize_rgb(a[..., :3, :, :], rgb_norm)
+    return np.ascontiguousarray(np.concatenate([rgb, a[..., 3:, :, :]], axis=-3))
 
 
 def core_target(instances: np.ndarray) -> npt.NDArray[np.float32]:

@@ -45,6 +45,7 @@ from mgn.learn.checkpoint import CHECKPOINT_FORMAT, MODEL_FORMAT, read_torch_fil
 from mgn.learn.config import ModelConfig, TrainConfig
 from mgn.learn.data import TrainingArrays, load_views, training_views
 from mgn.learn.model import build_model, count_parameters, load_backbone_weights
+from mgn.learn.targets import model_input
 
 __all__ = ["TrainResult", "augmented_batch", "compute_losses", "dice_loss", "train"]
 
@@ -117,28 +118,40 @@ def _batches(n: int, tc: TrainConfig, epoch: int) -> list[np.ndarray]:
 
 
 def augmented_batch(
-    arrays: TrainingArrays, idx: np.ndarray, tc: TrainConfig, modality: str, epoch: int
+    arrays: TrainingArrays,
+    idx: np.ndarray,
+    tc: TrainConfig,
+    modality: str,
+    epoch: int,
+    rgb_norm: str = "none",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Inputs, targets and weights of the views ``idx`` (positions in ``arrays``) as trained in
-    ``epoch``: each view augmented with ``default_rng([seed, epoch, view + 1])``."""
+    ``epoch``: each view augmented with ``default_rng([seed, epoch, view + 1])``, then its RGB
+    channels normalised by ``rgb_norm`` (:func:`mgn.learn.targets.model_input`)."""
     xs, ts, ws = [], [], []
     for i in idx:
         rng = np.random.default_rng([tc.seed, epoch, int(i) + 1])
         x, t, w = augment_view(
             arrays.inputs[i], arrays.targets[i], arrays.weights[i], tc.augment, modality, rng
         )
-        xs.append(x)
+        xs.append(model_input(x, modality, rgb_norm))
         ts.append(t)
         ws.append(w)
     return np.stack(xs), np.stack(ts), np.stack(ws)
 
 
 def _batch_tensors(
-    arrays: TrainingArrays, idx: np.ndarray, tc: TrainConfig, modality: str, epoch: int, device: Any
+    arrays: TrainingArrays,
+    idx: np.ndarray,
+    tc: TrainConfig,
+    mc: ModelConfig,
+    epoch: int,
+    device: Any,
 ):
     torch = require_torch()
     return tuple(
-        torch.from_numpy(a).to(device) for a in augmented_batch(arrays, idx, tc, modality, epoch)
+        torch.from_numpy(a).to(device)
+        for a in augmented_batch(arrays, idx, tc, mc.modality, epoch, mc.rgb_norm)
     )
 
 
@@ -154,7 +167,7 @@ def _start(out: Path, resume: bool, mc: ModelConfig, tc: TrainConfig, names: lis
             "--resume, or train into another folder"
         )
     ckpt = read_torch_file(ckpt_path, CHECKPOINT_FORMAT)
-    before = ckpt["model_config"] | ckpt["train_config"]
+    before = ModelConfig.from_saved(ckpt["model_config"]).to_dict() | ckpt["train_config"]
     now = mc.to_dict() | tc.to_dict()
     changed = [f"{k} {before.get(k)!r} -> {now.get(k)!r}" for k in now if before.get(k) != now[k]]
     if changed:
@@ -189,7 +202,7 @@ def _init_model(
         load_backbone_weights(model, backbone_weights)
     if init is not None:
         src = read_torch_file(init, MODEL_FORMAT)
-        other = ModelConfig.from_dict(src["model_config"])
+        other = ModelConfig.from_saved(src["model_config"])
         if (other.backbone, other.width, other.modality, other.amodal) != (
             mc.backbone,
             mc.width,
@@ -284,7 +297,7 @@ def train(
             step = epoch * steps_per_epoch + k
             for group in optimizer.param_groups:
                 group["lr"] = _lr(tc, step, total)
-            x, t, w = _batch_tensors(arrays, idx, tc, mc.modality, epoch, dev)
+            x, t, w = _batch_tensors(arrays, idx, tc, mc, epoch, dev)
             losses = compute_losses(model(x), t, w, mc, tc.foreground_loss)
             optimizer.zero_grad(set_to_none=True)
             losses["loss"].backward()
