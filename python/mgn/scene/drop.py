@@ -299,6 +299,7 @@ def _sunk(
         spacing=SEPARATION_SPACING,
         exact=False,
         cache=cache,
+        involving=0,
     )
     return max([sunk] + [o.depth for o in found if 0 in (o.a, o.b)])
 

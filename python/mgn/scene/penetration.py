@@ -301,6 +301,7 @@ def mesh_overlaps(
     spacing: float = EDGE_SPACING,
     exact: bool = True,
     cache: MeshCache | None = None,
+    involving: int | None = None,
 ) -> list[Overlap]:
     """For each ordered pair of closed meshes (objects) at poses ``X_WO`` (tote frame) whose
     surfaces sink deeper than ``above`` (m, >= 0) into each other, the deepest point of ``a``'s
@@ -309,15 +310,28 @@ def mesh_overlaps(
     to within ``spacing`` / 2; parts of one mesh never count). Pairs in order of (a, b); the
     tote is not measured. ``exact=False``: each inside point's depth is its FCL distance to
     the other mesh (a 0.01 mm probe; faster, short of the exact depth by at most 0.01 mm).
-    ``cache``: per-mesh data reused across calls on the same meshes (:class:`MeshCache`)."""
+    ``cache``: per-mesh data reused across calls on the same meshes (:class:`MeshCache`).
+    ``involving``: only the pairs that include the mesh at this index (None: every pair)."""
     if len(meshes) != len(X_WO):
         raise InvalidArgumentError(
             f"mesh_overlaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
         )
     if not above >= 0:
         raise InvalidArgumentError(f"mesh_overlaps: above must be >= 0 m, got {above!r}")
+    if involving is not None and not 0 <= involving < len(meshes):
+        raise InvalidArgumentError(
+            f"mesh_overlaps: involving must index one of the {len(meshes)} meshes, "
+            f"got {involving!r}"
+        )
     return _overlaps(
-        meshes, X_WO, float(above), running=False, spacing=spacing, exact=exact, cache=cache
+        meshes,
+        X_WO,
+        float(above),
+        running=False,
+        spacing=spacing,
+        exact=exact,
+        cache=cache,
+        involving=involving,
     )
 
 
@@ -329,9 +343,11 @@ def _overlaps(
     spacing: float = EDGE_SPACING,
     exact: bool = True,
     cache: MeshCache | None = None,
+    involving: int | None = None,
 ) -> list[Overlap]:
     """The deepest point of each ordered pair deeper than ``above``; ``running``: only pairs
-    deeper than every pair before them (enough for the maximum, and faster)."""
+    deeper than every pair before them (enough for the maximum, and faster); ``involving``:
+    only the pairs that include this index."""
     cache = MeshCache() if cache is None else cache  # copies of one object share their mesh
     local = [np.asarray(m.vertices, np.float64) for m in meshes]
     poses = [np.asarray(X, np.float64) for X in X_WO]
@@ -341,7 +357,9 @@ def _overlaps(
     found: list[Overlap] = []
     for a in range(len(meshes)):
         for b in range(len(meshes)):
-            if a == b or np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
+            if a == b or (involving is not None and involving not in (a, b)):
+                continue
+            if np.any(lo[a] > hi[b]) or np.any(lo[b] > hi[a]):
                 continue
             # Surface points of a inside b's world bounding box, in b's frame, inside b's local
             # bounding box, then inside b's mesh.

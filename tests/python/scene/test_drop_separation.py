@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import mgn
+from mgn.errors import InvalidArgumentError
 from mgn.objects import ToteSpec
 from mgn.scene.drop import SEPARATION_THRESHOLD, separate_overlaps
 from mgn.scene.penetration import (
@@ -199,3 +200,21 @@ def test_a_shared_cache_changes_no_overlap():
             assert meshes_overlap(meshes[m], poses[m], meshes[n], poses[n], cache=cache) == (
                 meshes_overlap(meshes[m], poses[m], meshes[n], poses[n])
             )
+
+
+def test_overlaps_involving_one_mesh_are_those_of_every_pair_that_include_it():
+    """``mesh_overlaps(..., involving=k)`` (the separation pass's test of one moved object)
+    returns exactly the overlaps of the full search whose pair includes mesh k; a bad index
+    names the setting."""
+    ball = mgn.make_sphere(0.03, 32)
+    box = mgn.make_box([0.06, 0.04, 0.03])
+    meshes = [ball, box, ball, box]
+    poses = [_at(0, 0, 0.03), _at(0.045, 0.0, 0.03), _at(0.0, 0.05, 0.03), _at(0.05, 0.05, 0.03)]
+    every = mesh_overlaps(meshes, poses, exact=False)
+    for k in range(len(meshes)):
+        mine = mesh_overlaps(meshes, poses, exact=False, involving=k)
+        want = [o for o in every if k in (o.a, o.b)]
+        assert [(o.a, o.b, o.depth) for o in mine] == [(o.a, o.b, o.depth) for o in want]
+    assert len({(o.a, o.b) for o in every}) > 2
+    with pytest.raises(InvalidArgumentError, match="involving"):
+        mesh_overlaps(meshes, poses, involving=4)
