@@ -24,10 +24,10 @@ from mgn.scene.penetration import (
     EDGE_SPACING,
     MeshCache,
     Overlap,
+    OverlapSweep,
     clearance,
     float_gaps,
     mesh_overlaps,
-    meshes_overlap,
     render_penetration,
     tote_depth,
 )
@@ -315,14 +315,14 @@ def _separating_move(
     cache: MeshCache,
 ) -> np.ndarray | None:
     """``X`` moved along the unit ``direction`` by the least distance after which ``mesh`` no
-    longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`; doubling from ``guess`` (m),
+    longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`, evaluated by an :class:`OverlapSweep`; doubling from ``guess`` (m),
     then halvings), plus :data:`_SEPARATION_MARGIN`; None if that is farther than ``reach``
     (m)."""
 
+    sweep = OverlapSweep(mesh, X, other, Y, direction, cache)
+
     def clear(t: float, spacing: float) -> bool:
-        moved = X.copy()
-        moved[:3, 3] += t * direction
-        return not meshes_overlap(mesh, moved, other, Y, spacing, cache)
+        return not sweep.overlap(t, spacing)
 
     # Bisection with surface points SEPARATION_SPACING apart, then with EDGE_SPACING on the
     # last stretch (a coarse point set misses at most half its spacing).

@@ -40,6 +40,7 @@ __all__ = [
     "EDGE_SPACING",
     "MeshCache",
     "Overlap",
+    "OverlapSweep",
     "clearance",
     "edge_points",
     "float_gaps",
@@ -132,16 +133,29 @@ class MeshCache:
         frame, m), in the order of :meth:`points`. The points are binned once into a
         :data:`_GRID` ^ 3 grid over their bounding box; a query tests only the points of the
         cells the box touches."""
+        return self.points(mesh, spacing)[self.indices_in_box(mesh, spacing, lo, hi)]
+
+    def cells_in_box(
+        self, mesh: Mesh, spacing: float, lo: npt.ArrayLike, hi: npt.ArrayLike
+    ) -> npt.NDArray[np.intp]:
+        """Indices into :meth:`points` of the points in the grid cells that the box ``lo``,
+        ``hi`` (mesh frame, m) touches: a superset of the points inside it, unordered."""
         key = (self._hold(mesh), float(spacing))
-        points = self.points(mesh, spacing)
         if key not in self._grids:
-            self._grids[key] = _PointGrid(points)
+            self._grids[key] = _PointGrid(self.points(mesh, spacing))
+        return self._grids[key].candidates(np.asarray(lo, np.float64), np.asarray(hi, np.float64))
+
+    def indices_in_box(
+        self, mesh: Mesh, spacing: float, lo: npt.ArrayLike, hi: npt.ArrayLike
+    ) -> npt.NDArray[np.intp]:
+        """Ascending indices into :meth:`points` of the points inside the axis-aligned box
+        ``lo`` <= p <= ``hi`` (mesh frame, m): :meth:`points_in_box` is ``points[indices]``.
+        Costs the cells the box touches and their points, not the whole point set."""
+        points = self.points(mesh, spacing)
         lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
-        found = self._grids[key].candidates(lo, hi)
-        keep = np.zeros(len(points), bool)
-        keep[found] = True
-        keep[keep] = np.all((points[keep] >= lo) & (points[keep] <= hi), axis=1)
-        return points[keep]
+        found = np.sort(self.cells_in_box(mesh, spacing, lo, hi), kind="stable")
+        near = points[found]
+        return found[np.all((near >= lo) & (near <= hi), axis=1)]
 
     def parts(self, mesh: Mesh) -> list[tuple[Mesh, RayScene]]:
         """The connected parts of ``mesh`` (:func:`_connected_parts`), each with its ray scene."""
@@ -435,6 +449,124 @@ def meshes_overlap(
 # m: a box carried into another frame is widened by this before it selects points there, so that
 # rounding cannot drop a point that the exact test in the first frame keeps.
 _BOX_SLACK = 1e-9
+
+
+class OverlapSweep:
+    """:func:`meshes_overlap` of ``mesh_a`` moved along a line, for many distances: ``overlap(t,
+    spacing)`` is ``meshes_overlap(mesh_a, X_a moved by t * direction, mesh_b, X_b, spacing,
+    cache)``, bit for bit, for any ``t`` (m).
+
+    A translation leaves the rotation between the two frames unchanged, so each mesh's surface
+    points near the other's bounding box over a stretch of ``t`` (:data:`_SWEEP_STRETCH` at
+    least) are rotated into the other's frame once (the rows of the same product
+    :func:`meshes_overlap` forms, which do not depend on which other rows it holds) and binned
+    into a grid; each ``t`` then adds its translation to the points of the cells that the
+    other's box touches, keeps those inside both boxes that :func:`meshes_overlap` tests (the
+    other's box in its frame, and the box around it in the points' own frame), and runs the
+    same inside test on them. A selection of one point is formed as :func:`meshes_overlap`
+    forms it (a one-row product rounds differently)."""
+
+    def __init__(
+        self,
+        mesh_a: Mesh,
+        X_a: npt.ArrayLike,
+        mesh_b: Mesh,
+        X_b: npt.ArrayLike,
+        direction: npt.ArrayLike,
+        cache: MeshCache | None = None,
+    ) -> None:
+        self.mesh_a, self.mesh_b = mesh_a, mesh_b
+        self.X_a = np.asarray(X_a, np.float64)
+        self.X_b = np.asarray(X_b, np.float64)
+        self.direction = np.asarray(direction, np.float64)
+        self.cache = MeshCache() if cache is None else cache
+        # Per (spacing, side): the stretch (t0, t1) covered, the rotation, the point indices,
+        # their points in their own frame, rotated into the other's, and the grid of those.
+        self._blocks: dict[tuple[float, int], _SweepBlock] = {}
+
+    def moved(self, t: float) -> npt.NDArray[np.float64]:
+        """``X_a`` moved by ``t`` (m) along the direction (as the caller of
+        :func:`meshes_overlap` forms it)."""
+        moved = self.X_a.copy()
+        moved[:3, 3] += t * self.direction
+        return moved
+
+    def overlap(self, t: float, spacing: float = EDGE_SPACING) -> bool:
+        """:func:`meshes_overlap` with ``mesh_a`` at :meth:`moved` (``t``)."""
+        Xa = self.moved(t)
+        sides = ((self.mesh_a, Xa, self.mesh_b, self.X_b), (self.mesh_b, self.X_b, self.mesh_a, Xa))
+        for side, (m, X, n, Y) in enumerate(sides):
+            R = Y[:3, :3].T @ X[:3, :3]
+            tv = Y[:3, :3].T @ (X[:3, 3] - Y[:3, 3])
+            lo, hi = self.cache.bounds(n)
+            in_m = (_box_corners(lo, hi) - tv) @ R
+            m_lo, m_hi = in_m.min(axis=0), in_m.max(axis=0)
+            block = self._block(float(spacing), side, t, R)
+            if block is None:  # the rotation differs (cannot happen for a translation)
+                p = self.cache.points_in_box(m, spacing, m_lo, m_hi) @ R.T + tv
+            else:
+                q = block.rotated + tv
+                own = block.points
+                keep = np.all((q >= lo) & (q <= hi), axis=1)
+                keep &= np.all((own >= m_lo) & (own <= m_hi), axis=1)
+                p = q[keep]
+                if len(p) <= 1:
+                    # meshes_overlap's selection in m's frame may be this one point alone: a
+                    # one-row product, formed (and rounded) as there.
+                    sel = self.cache.points_in_box(m, spacing, m_lo, m_hi)
+                    if len(sel) == 1:
+                        p = sel @ R.T + tv
+            p = p[np.all((p >= lo) & (p <= hi), axis=1)]
+            if len(p) and any(_inside(scene, p).any() for _, scene in self.cache.parts(n)):
+                return True
+        return False
+
+    def _block(self, spacing: float, side: int, t: float, R: np.ndarray) -> _SweepBlock | None:
+        block = self._blocks.get((spacing, side))
+        if block is None or not block.t0 <= t <= block.t1:
+            t0 = t - _SWEEP_STRETCH if block is None else min(t, block.t0)
+            t1 = t + _SWEEP_STRETCH if block is None else max(t, block.t1) + _SWEEP_STRETCH
+            block = self._build(spacing, side, t0, t1, R)
+            self._blocks[(spacing, side)] = block
+        return block if np.array_equal(block.R, R) else None
+
+    def _build(self, spacing: float, side: int, t0: float, t1: float, R: np.ndarray) -> _SweepBlock:
+        """The points of one side that lie, at some t in [t0, t1], in the box around the other's
+        bounding box (own frame) and in that bounding box (the other's frame): both boxes move
+        linearly with t, so the boxes at the ends bound them (widened by :data:`_BOX_SLACK`)."""
+        m, n = (self.mesh_a, self.mesh_b) if side == 0 else (self.mesh_b, self.mesh_a)
+        lo, hi = self.cache.bounds(n)
+        corners, shifts = [], []
+        for t in (t0, t1):
+            Xa = self.moved(t)
+            X, Y = (Xa, self.X_b) if side == 0 else (self.X_b, Xa)
+            tv = Y[:3, :3].T @ (X[:3, 3] - Y[:3, 3])
+            corners.append((_box_corners(lo, hi) - tv) @ R)
+            shifts.append(tv)
+        box = np.concatenate(corners)
+        idx = self.cache.cells_in_box(
+            m, spacing, box.min(axis=0) - _BOX_SLACK, box.max(axis=0) + _BOX_SLACK
+        )
+        points = self.cache.points(m, spacing)[idx]
+        rotated = points @ R.T
+        reach_lo = lo - np.maximum(shifts[0], shifts[1]) - _BOX_SLACK
+        reach_hi = hi - np.minimum(shifts[0], shifts[1]) + _BOX_SLACK
+        keep = np.all((rotated >= reach_lo) & (rotated <= reach_hi), axis=1)
+        return _SweepBlock(t0, t1, R.copy(), points[keep], rotated[keep])
+
+
+@dataclass
+class _SweepBlock:
+    t0: float
+    t1: float
+    R: npt.NDArray[np.float64]
+    points: npt.NDArray[np.float64]  # (K, 3) own frame
+    rotated: npt.NDArray[np.float64]  # (K, 3) points @ R.T: the other's frame, less translation
+
+
+# m: the stretch of distances along an OverlapSweep that one block of points covers beyond the
+# first distance asked for (a longer one is built when a distance falls outside).
+_SWEEP_STRETCH = 2e-3
 
 
 def _box_corners(lo: npt.ArrayLike, hi: npt.ArrayLike) -> npt.NDArray[np.float64]:
