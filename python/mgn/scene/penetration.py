@@ -98,6 +98,33 @@ class _PointGrid:
         offset = np.repeat(begin - (np.cumsum(count) - count), count)
         return self.order[np.arange(int(count.sum())) + offset]
 
+    def candidates_rotated(
+        self,
+        lo: npt.NDArray[np.float64],
+        hi: npt.NDArray[np.float64],
+        R: npt.NDArray[np.float64],
+        rlo: npt.NDArray[np.float64],
+        rhi: npt.NDArray[np.float64],
+    ) -> npt.NDArray[np.intp]:
+        """:meth:`candidates` of the box ``lo``, ``hi``, less the cells whose image under the
+        rotation ``R`` (a point p goes to R p) lies outside the box ``rlo``, ``rhi``: a
+        superset of the points p inside ``lo``, ``hi`` with R p inside ``rlo``, ``rhi``."""
+        if np.any(hi < lo) or np.any(rhi < rlo):
+            return np.zeros(0, np.intp)
+        c0, c1 = self._cell(lo[None])[0], self._cell(hi[None])[0]
+        axes = [np.arange(c0[k], c1[k] + 1) for k in range(3)]
+        cells = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        centre = (self.lo + (cells + 0.5) * self.size) @ R.T
+        # Half extent of a cell's image, widened for rounding (and for the points that the
+        # clip of _cell puts into a border cell from its outer face).
+        half = np.abs(R) @ (0.5 * self.size * (1.0 + 1e-6) + _BOX_SLACK)
+        near = np.all((centre + half >= rlo) & (centre - half <= rhi), axis=1)
+        first = (cells[near] @ np.array([_GRID * _GRID, _GRID, 1])).astype(np.intp)
+        begin, end = self.start[first], self.start[first + 1]
+        count = end - begin
+        offset = np.repeat(begin - (np.cumsum(count) - count), count)
+        return self.order[np.arange(int(count.sum())) + offset]
+
 
 class MeshCache:
     """What the overlap tests derive from a mesh, computed once and reused across calls: its
@@ -135,15 +162,19 @@ class MeshCache:
         cells the box touches."""
         return self.points(mesh, spacing)[self.indices_in_box(mesh, spacing, lo, hi)]
 
+    def _grid(self, mesh: Mesh, spacing: float) -> _PointGrid:
+        key = (self._hold(mesh), float(spacing))
+        if key not in self._grids:
+            self._grids[key] = _PointGrid(self.points(mesh, spacing))
+        return self._grids[key]
+
     def cells_in_box(
         self, mesh: Mesh, spacing: float, lo: npt.ArrayLike, hi: npt.ArrayLike
     ) -> npt.NDArray[np.intp]:
         """Indices into :meth:`points` of the points in the grid cells that the box ``lo``,
         ``hi`` (mesh frame, m) touches: a superset of the points inside it, unordered."""
-        key = (self._hold(mesh), float(spacing))
-        if key not in self._grids:
-            self._grids[key] = _PointGrid(self.points(mesh, spacing))
-        return self._grids[key].candidates(np.asarray(lo, np.float64), np.asarray(hi, np.float64))
+        lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+        return self._grid(mesh, spacing).candidates(lo, hi)
 
     def indices_in_box(
         self, mesh: Mesh, spacing: float, lo: npt.ArrayLike, hi: npt.ArrayLike
@@ -544,13 +575,13 @@ class OverlapSweep:
             corners.append((_box_corners(lo, hi) - tv) @ R)
             shifts.append(tv)
         box = np.concatenate(corners)
-        idx = self.cache.cells_in_box(
-            m, spacing, box.min(axis=0) - _BOX_SLACK, box.max(axis=0) + _BOX_SLACK
+        reach_lo = lo - np.maximum(shifts[0], shifts[1]) - _BOX_SLACK
+        reach_hi = hi - np.minimum(shifts[0], shifts[1]) + _BOX_SLACK
+        idx = self.cache._grid(m, spacing).candidates_rotated(
+            box.min(axis=0) - _BOX_SLACK, box.max(axis=0) + _BOX_SLACK, R, reach_lo, reach_hi
         )
         points = self.cache.points(m, spacing)[idx]
         rotated = points @ R.T
-        reach_lo = lo - np.maximum(shifts[0], shifts[1]) - _BOX_SLACK
-        reach_hi = hi - np.minimum(shifts[0], shifts[1]) + _BOX_SLACK
         keep = np.all((rotated >= reach_lo) & (rotated <= reach_hi), axis=1)
         return _SweepBlock(t0, t1, R.copy(), points[keep], rotated[keep])
 
