@@ -26,6 +26,7 @@ from mgn.scene.penetration import (
     Overlap,
     OverlapSweep,
     clearance,
+    deepest_overlap,
     float_gaps,
     mesh_overlaps,
     render_penetration,
@@ -293,7 +294,7 @@ def _sunk(
     pass's measure: surface points :data:`SEPARATION_SPACING` apart, FCL depths)."""
     sunk = tote_depth(meshes[k], X, tote)
     others = [j for j in range(len(meshes)) if j not in (k, skip)]
-    found = mesh_overlaps(
+    deepest = deepest_overlap(
         [meshes[k]] + [meshes[j] for j in others],
         [X] + [poses[j] for j in others],
         spacing=SEPARATION_SPACING,
@@ -301,7 +302,7 @@ def _sunk(
         cache=cache,
         involving=0,
     )
-    return max([sunk] + [o.depth for o in found if 0 in (o.a, o.b)])
+    return max(sunk, deepest)
 
 
 def _separating_move(

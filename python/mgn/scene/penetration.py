@@ -42,6 +42,7 @@ __all__ = [
     "Overlap",
     "OverlapSweep",
     "clearance",
+    "deepest_overlap",
     "edge_points",
     "float_gaps",
     "mesh_overlaps",
@@ -347,6 +348,8 @@ def mesh_overlaps(
     exact: bool = True,
     cache: MeshCache | None = None,
     involving: int | None = None,
+    *,
+    _exits: bool = True,
 ) -> list[Overlap]:
     """For each ordered pair of closed meshes (objects) at poses ``X_WO`` (tote frame) whose
     surfaces sink deeper than ``above`` (m, >= 0) into each other, the deepest point of ``a``'s
@@ -377,7 +380,23 @@ def mesh_overlaps(
         exact=exact,
         cache=cache,
         involving=involving,
+        exits=_exits,
     )
+
+
+def deepest_overlap(
+    meshes: Sequence[Mesh],
+    X_WO: Sequence[npt.ArrayLike],
+    spacing: float = EDGE_SPACING,
+    exact: bool = True,
+    cache: MeshCache | None = None,
+    involving: int | None = None,
+) -> float:
+    """The largest depth (m, >= 0; 0 without overlaps) of the :func:`mesh_overlaps` of
+    ``meshes`` at ``X_WO`` with ``above`` 0 (same ``spacing``, ``exact``, ``cache`` and
+    ``involving``), without searching each overlap's exit."""
+    found = mesh_overlaps(meshes, X_WO, 0.0, spacing, exact, cache, involving, _exits=False)
+    return max([0.0] + [o.depth for o in found])
 
 
 def _overlaps(
@@ -389,10 +408,12 @@ def _overlaps(
     exact: bool = True,
     cache: MeshCache | None = None,
     involving: int | None = None,
+    exits: bool = True,
 ) -> list[Overlap]:
     """The deepest point of each ordered pair deeper than ``above``; ``running``: only pairs
     deeper than every pair before them (enough for the maximum, and faster); ``involving``:
-    only the pairs that include this index."""
+    only the pairs that include this index; ``exits=False``: each Overlap's ``exit`` is its
+    ``point`` (not searched; for callers that want depths only)."""
     cache = MeshCache() if cache is None else cache  # copies of one object share their mesh
     local = [np.asarray(m.vertices, np.float64) for m in meshes]
     poses = [np.asarray(X, np.float64) for X in X_WO]
@@ -408,18 +429,8 @@ def _overlaps(
                 continue
             # Surface points of a inside b's world bounding box, in b's frame, inside b's local
             # bounding box, then inside b's mesh.
-            Xa = poses[a]
-            corners = _box_corners(lo[b], hi[b])
-            in_a = (corners - Xa[:3, 3]) @ Xa[:3, :3]  # b's world box in a's frame
-            pa = cache.points_in_box(
-                meshes[a], spacing, in_a.min(axis=0) - _BOX_SLACK, in_a.max(axis=0) + _BOX_SLACK
-            )
-            pa = pa @ Xa[:3, :3].T + Xa[:3, 3]
-            pa = pa[np.all((pa >= lo[b]) & (pa <= hi[b]), axis=1)]
             Xb = poses[b]
-            pa = (pa - Xb[:3, 3]) @ Xb[:3, :3]
-            blo, bhi = cache.bounds(meshes[b])
-            pa = pa[np.all((pa >= blo) & (pa <= bhi), axis=1)]
+            pa = _points_inside_box(cache, meshes[a], poses[a], meshes[b], Xb, lo[b], hi[b], spacing)
             if len(pa) == 0:
                 continue
             # A mesh of several closed parts that overlap one another (one object modelled as
@@ -439,11 +450,68 @@ def _overlaps(
                         worst, best = depth, (depth, at, part)
             if best is not None:
                 depth, at, part = best
-                tri = np.asarray(part.vertices, np.float64)[np.asarray(part.faces)]
-                q = _closest_point(at, tri)
                 R, t = Xb[:3, :3], Xb[:3, 3]
-                found.append(Overlap(a, b, depth, R @ at + t, R @ q + t))
+                if exits:
+                    tri = np.asarray(part.vertices, np.float64)[np.asarray(part.faces)]
+                    q = _closest_point(at, tri)
+                    found.append(Overlap(a, b, depth, R @ at + t, R @ q + t))
+                else:
+                    found.append(Overlap(a, b, depth, R @ at + t, R @ at + t))
     return found
+
+
+def _points_inside_box(
+    cache: MeshCache,
+    mesh_a: Mesh,
+    Xa: npt.NDArray[np.float64],
+    mesh_b: Mesh,
+    Xb: npt.NDArray[np.float64],
+    lo_b: npt.NDArray[np.float64],
+    hi_b: npt.NDArray[np.float64],
+    spacing: float,
+) -> npt.NDArray[np.float64]:
+    """The surface points of ``mesh_a`` (at ``Xa``) inside the world bounding box ``lo_b``,
+    ``hi_b`` of ``mesh_b`` (at ``Xb``), in ``mesh_b``'s frame, inside its local bounding box; in
+    the order of :meth:`MeshCache.points`.
+
+    Defined by these steps: the points of ``a`` in the box around b's world box in a's frame,
+    carried into the world, those inside b's world box carried into b's frame, those inside b's
+    local box. Computed from the grid cells of ``a`` whose image in b's frame reaches b's local
+    box (:meth:`_PointGrid.candidates_rotated`), with the same products on rows of the same
+    points (a product's row does not depend on the other rows, except that a one-row product
+    rounds differently: a step that would meet one row where the definition meets several is
+    taken as defined)."""
+    corners = _box_corners(lo_b, hi_b)
+    in_a = (corners - Xa[:3, 3]) @ Xa[:3, :3]  # b's world box in a's frame
+    a_lo, a_hi = in_a.min(axis=0) - _BOX_SLACK, in_a.max(axis=0) + _BOX_SLACK
+    blo, bhi = cache.bounds(mesh_b)
+
+    def steps(pa: npt.NDArray[np.float64]) -> tuple[int, npt.NDArray[np.float64]]:
+        pa = pa @ Xa[:3, :3].T + Xa[:3, 3]
+        pa = pa[np.all((pa >= lo_b) & (pa <= hi_b), axis=1)]
+        rows = len(pa)
+        pa = (pa - Xb[:3, 3]) @ Xb[:3, :3]
+        return rows, pa[np.all((pa >= blo) & (pa <= bhi), axis=1)]
+
+    # Rotation and translation from a's frame to b's (image p -> R p + t); cells whose image
+    # misses b's local box (widened) hold no point that reaches the end.
+    R = Xb[:3, :3].T @ Xa[:3, :3]
+    t = Xb[:3, :3].T @ (Xa[:3, 3] - Xb[:3, 3])
+    cand = np.sort(
+        cache._grid(mesh_a, spacing).candidates_rotated(
+            a_lo, a_hi, R, blo - t - _BOX_SLACK, bhi - t + _BOX_SLACK
+        ),
+        kind="stable",
+    )
+    points = cache.points(mesh_a, spacing)
+    near = points[cand]
+    near = near[np.all((near >= a_lo) & (near <= a_hi), axis=1)]
+    if len(near) == 0:
+        return near
+    rows, pa = steps(near)
+    if len(near) == 1 or rows == 1:  # the definition may meet more rows there
+        rows, pa = steps(cache.points_in_box(mesh_a, spacing, a_lo, a_hi))
+    return pa
 
 
 def meshes_overlap(
