@@ -614,23 +614,41 @@ class OverlapSweep:
             in_m = (_box_corners(lo, hi) - tv) @ R
             m_lo, m_hi = in_m.min(axis=0), in_m.max(axis=0)
             block = self._block(float(spacing), side, t, R)
+            rows: npt.NDArray[np.intp] | None = None  # p's rows of the block
             if block is None:  # the rotation differs (cannot happen for a translation)
                 p = self.cache.points_in_box(m, spacing, m_lo, m_hi) @ R.T + tv
             else:
                 q = block.rotated + tv
-                own = block.points
                 keep = _in_box(q, lo, hi)
-                keep &= _in_box(own, m_lo, m_hi)
-                p = q[keep]
+                keep &= _in_box(block.points, m_lo, m_hi)
+                rows = np.flatnonzero(keep)
+                p = q[rows]
                 if len(p) <= 1:
                     # meshes_overlap's selection in m's frame may be this one point alone: a
                     # one-row product, formed (and rounded) as there.
                     sel = self.cache.points_in_box(m, spacing, m_lo, m_hi)
                     if len(sel) == 1:
-                        p = sel @ R.T + tv
-            p = p[_in_box(p, lo, hi)]
-            if len(p) and any(_inside(scene, p).any() for _, scene in self.cache.parts(n)):
-                return True
+                        p, rows = sel @ R.T + tv, None
+            inside = _in_box(p, lo, hi)
+            p = p[inside]
+            if len(p) == 0:
+                continue
+            # The inside test of meshes_overlap; the points found inside at this block's last
+            # overlap go first (the answer is whether any point is inside: an early yes).
+            groups = [np.ones(len(p), bool)]
+            if block is not None and rows is not None:
+                rows = rows[inside]
+                groups = [block.hit[rows], ~block.hit[rows]]
+            for group in groups:
+                if not group.any():
+                    continue
+                for _, scene in self.cache.parts(n):
+                    found = _inside(scene, p[group])
+                    if found.any():
+                        if block is not None and rows is not None:
+                            block.hit[:] = False
+                            block.hit[rows[group][found]] = True
+                        return True
         return False
 
     def _block(self, spacing: float, side: int, t: float, R: np.ndarray) -> _SweepBlock | None:
@@ -664,7 +682,9 @@ class OverlapSweep:
         points = self.cache.points(m, spacing)[idx]
         rotated = points @ R.T
         keep = _in_box(rotated, reach_lo, reach_hi)
-        return _SweepBlock(t0, t1, R.copy(), points[keep], rotated[keep])
+        return _SweepBlock(
+            t0, t1, R.copy(), points[keep], rotated[keep], np.zeros(int(keep.sum()), bool)
+        )
 
 
 @dataclass
@@ -674,6 +694,7 @@ class _SweepBlock:
     R: npt.NDArray[np.float64]
     points: npt.NDArray[np.float64]  # (K, 3) own frame
     rotated: npt.NDArray[np.float64]  # (K, 3) points @ R.T: the other's frame, less translation
+    hit: npt.NDArray[np.bool_]  # (K,) found inside the other at the last overlap
 
 
 # m: the stretch of distances along an OverlapSweep that one block of points covers beyond the
