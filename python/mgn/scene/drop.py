@@ -354,8 +354,11 @@ def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec, cache: Mes
     cannot make it overlap anything) until it is within :data:`_LOWER_TO` of a body; twice
     over, for objects that rested on a lowered one."""
     models = cache.models
+    for m in meshes:  # world boxes are kept by id(mesh): the cache holds the meshes
+        cache.bounds(m)
+    boxes = cache.boxes
     for _ in range(2):
-        gaps = [clearance(meshes, list(poses), tote, k, models) for k in range(len(meshes))]
+        gaps = [clearance(meshes, list(poses), tote, k, models, boxes) for k in range(len(meshes))]
         low = [
             float((np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3])[:, 2].min())
             for m, X in zip(meshes, poses, strict=True)
@@ -367,7 +370,7 @@ def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec, cache: Mes
             return
         for k in todo:
             for _ in range(_LOWER_MOVES):
-                gap = clearance(meshes, list(poses), tote, k, models)
+                gap = clearance(meshes, list(poses), tote, k, models, boxes)
                 if gap <= _LOWER_TO:
                     break
                 poses[k, 2, 3] -= gap

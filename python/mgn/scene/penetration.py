@@ -142,6 +142,8 @@ class MeshCache:
         self._bounds: dict[int, tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]] = {}
         #: FCL collision models by ``id`` of a mesh or part held here (the probe under -1).
         self.models: dict[int, CollisionModel] = {}
+        #: World bounding boxes by (``id`` of a mesh held here, pose bytes) (:func:`clearance`).
+        self.boxes: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]] = {}
 
     def _hold(self, mesh: Mesh) -> int:
         self._meshes.setdefault(id(mesh), mesh)
@@ -724,7 +726,10 @@ def float_gaps(
             f"float_gaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
         )
     models: dict[int, CollisionModel] = {}  # copies of one object share their mesh
-    return np.array([clearance(meshes, X_WO, tote, a, models) for a in range(len(meshes))])
+    boxes: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]] = {}
+    return np.array(
+        [clearance(meshes, X_WO, tote, a, models, boxes) for a in range(len(meshes))]
+    )
 
 
 def clearance(
@@ -733,22 +738,23 @@ def clearance(
     tote: ToteSpec,
     index: int,
     models: dict[int, CollisionModel] | None = None,
+    boxes: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> float:
     """:func:`float_gaps` of the one mesh ``meshes[index]`` (m, >= 0). ``models``: collision
-    models by ``id(mesh)``, filled and reused across calls."""
+    models by ``id(mesh)``, filled and reused across calls. ``boxes``: world bounding boxes by
+    ``(id(mesh), pose bytes)``, filled and reused across calls (the meshes must not change)."""
     hx, hy, H = 0.5 * tote.inner_length, 0.5 * tote.inner_width, tote.inner_height
     poses = [np.asarray(X, np.float64) for X in X_WO]
-    world = [
-        np.asarray(m.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
-        for m, X in zip(meshes, poses, strict=True)
-    ]
-    a, w = index, world[index]
+    a = index
+    w = np.asarray(meshes[a].vertices, np.float64) @ poses[a][:3, :3].T + poses[a][:3, 3]
     gap = float(w[:, 2].min())  # a mesh's nearest point to a plane is a vertex
     low = w[w[:, 2] <= H]
     if len(low) and tote.walls:
         gap = min(gap, float((hx - np.abs(low[:, 0])).min()), float((hy - np.abs(low[:, 1])).min()))
-    lo = [v.min(axis=0) for v in world]
-    hi = [v.max(axis=0) for v in world]
+    boxes = {} if boxes is None else boxes
+    world_boxes = [_world_box(m, X, boxes) for m, X in zip(meshes, poses, strict=True)]
+    lo = [b[0] for b in world_boxes]
+    hi = [b[1] for b in world_boxes]
     models = {} if models is None else models
     # Other meshes nearest first by their bounding boxes; a box farther than the gap found so
     # far cannot hold a nearer mesh.
@@ -769,6 +775,17 @@ def clearance(
         )
         gap = min(gap, float(d.distance[0]))
     return max(gap, 0.0)
+
+
+def _world_box(
+    mesh: Mesh, X: np.ndarray, boxes: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]]
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) of ``mesh``'s vertices at pose ``X`` (world), kept in ``boxes``."""
+    key = (id(mesh), np.ascontiguousarray(X, np.float64).tobytes())
+    if key not in boxes:
+        w = np.asarray(mesh.vertices, np.float64) @ X[:3, :3].T + X[:3, 3]
+        boxes[key] = (w.min(axis=0), w.max(axis=0))
+    return boxes[key]
 
 
 def _connected_parts(mesh: Mesh) -> list[Mesh]:
