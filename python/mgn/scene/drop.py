@@ -316,9 +316,9 @@ def _separating_move(
     cache: MeshCache,
 ) -> np.ndarray | None:
     """``X`` moved along the unit ``direction`` by the least distance after which ``mesh`` no
-    longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`, evaluated by an :class:`OverlapSweep`; doubling from ``guess`` (m),
-    then halvings), plus :data:`_SEPARATION_MARGIN`; None if that is farther than ``reach``
-    (m)."""
+    longer overlaps ``other`` at ``Y`` (:func:`meshes_overlap`, evaluated by one
+    :class:`OverlapSweep`; doubling from ``guess`` (m), then halvings), plus
+    :data:`_SEPARATION_MARGIN`; None if that is farther than ``reach`` (m)."""
 
     sweep = OverlapSweep(mesh, X, other, Y, direction, cache)
 

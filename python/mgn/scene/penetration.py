@@ -432,7 +432,9 @@ def _overlaps(
             # Surface points of a inside b's world bounding box, in b's frame, inside b's local
             # bounding box, then inside b's mesh.
             Xb = poses[b]
-            pa = _points_inside_box(cache, meshes[a], poses[a], meshes[b], Xb, lo[b], hi[b], spacing)
+            pa = _points_inside_box(
+                cache, meshes[a], poses[a], meshes[b], Xb, lo[b], hi[b], spacing
+            )
             if len(pa) == 0:
                 continue
             # A mesh of several closed parts that overlap one another (one object modelled as
@@ -727,9 +729,7 @@ def float_gaps(
         )
     models: dict[int, CollisionModel] = {}  # copies of one object share their mesh
     boxes: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]] = {}
-    return np.array(
-        [clearance(meshes, X_WO, tote, a, models, boxes) for a in range(len(meshes))]
-    )
+    return np.array([clearance(meshes, X_WO, tote, a, models, boxes) for a in range(len(meshes))])
 
 
 def clearance(

@@ -17,8 +17,8 @@ from mgn.scene.penetration import (
     _BOX_SLACK,
     MeshCache,
     OverlapSweep,
-    _points_inside_box,
     _PointGrid,
+    _points_inside_box,
     clearance,
     deepest_overlap,
     edge_points,
@@ -119,9 +119,7 @@ def test_the_pruned_selection_of_a_pair_is_the_definition_bit_for_bit():
             at = Xa[:3, :3] @ surface[rng.integers(len(surface))] + Xa[:3, 3]
             other, Xb = tiny, _pose(rng, at + rng.uniform(-5e-4, 5e-4, 3))
         wb = np.asarray(other.vertices, np.float64) @ Xb[:3, :3].T + Xb[:3, 3]
-        got = _points_inside_box(
-            cache, big, Xa, other, Xb, wb.min(axis=0), wb.max(axis=0), 1e-3
-        )
+        got = _points_inside_box(cache, big, Xa, other, Xb, wb.min(axis=0), wb.max(axis=0), 1e-3)
         want = _selection_by_definition(big, Xa, other, Xb, 1e-3)
         np.testing.assert_array_equal(got, want)
         counts.append(len(want))
