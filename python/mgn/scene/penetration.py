@@ -483,7 +483,7 @@ def _points_inside_box(
     local box. Computed from the grid cells of ``a`` whose image in b's frame reaches b's local
     box (:meth:`_PointGrid.candidates_rotated`), with the same products on rows of the same
     points (a product's row does not depend on the other rows, except that a one-row product
-    rounds differently: a step that would meet one row where the definition meets several is
+    rounds differently: a step that meets one row, where the definition may meet several, is
     taken as defined)."""
     corners = _box_corners(lo_b, hi_b)
     in_a = (corners - Xa[:3, 3]) @ Xa[:3, :3]  # b's world box in a's frame
@@ -573,14 +573,15 @@ class OverlapSweep:
     cache)``, bit for bit, for any ``t`` (m).
 
     A translation leaves the rotation between the two frames unchanged, so each mesh's surface
-    points near the other's bounding box over a stretch of ``t`` (:data:`_SWEEP_STRETCH` at
-    least) are rotated into the other's frame once (the rows of the same product
-    :func:`meshes_overlap` forms, which do not depend on which other rows it holds) and binned
-    into a grid; each ``t`` then adds its translation to the points of the cells that the
-    other's box touches, keeps those inside both boxes that :func:`meshes_overlap` tests (the
-    other's box in its frame, and the box around it in the points' own frame), and runs the
-    same inside test on them. A selection of one point is formed as :func:`meshes_overlap`
-    forms it (a one-row product rounds differently)."""
+    points that can reach the other's bounding box over a stretch of ``t``
+    (:data:`_SWEEP_STRETCH` beyond the first ``t`` asked for; a new stretch is taken when a
+    ``t`` falls outside) are rotated into the other's frame once: the rows of the same product
+    :func:`meshes_overlap` forms, which do not depend on which other rows it holds. Each ``t``
+    then adds its translation, keeps the points inside both boxes that :func:`meshes_overlap`
+    tests (the other's box in its frame, and the box around it in the points' own frame) and
+    runs the same inside test on them, the points found inside at the last overlap first. A
+    selection of one point is formed as :func:`meshes_overlap` forms it (a one-row product
+    rounds differently)."""
 
     def __init__(
         self,
@@ -596,8 +597,8 @@ class OverlapSweep:
         self.X_b = np.asarray(X_b, np.float64)
         self.direction = np.asarray(direction, np.float64)
         self.cache = MeshCache() if cache is None else cache
-        # Per (spacing, side): the stretch (t0, t1) covered, the rotation, the point indices,
-        # their points in their own frame, rotated into the other's, and the grid of those.
+        # Per (spacing, side; side 0: a's points against b): the stretch (t0, t1) covered, the
+        # rotation, the points in their own frame and rotated into the other's.
         self._blocks: dict[tuple[float, int], _SweepBlock] = {}
 
     def moved(self, t: float) -> npt.NDArray[np.float64]:
