@@ -350,8 +350,6 @@ def mesh_overlaps(
     exact: bool = True,
     cache: MeshCache | None = None,
     involving: int | None = None,
-    *,
-    _exits: bool = True,
 ) -> list[Overlap]:
     """For each ordered pair of closed meshes (objects) at poses ``X_WO`` (tote frame) whose
     surfaces sink deeper than ``above`` (m, >= 0) into each other, the deepest point of ``a``'s
@@ -362,17 +360,7 @@ def mesh_overlaps(
     the other mesh (a 0.01 mm probe; faster, short of the exact depth by at most 0.01 mm).
     ``cache``: per-mesh data reused across calls on the same meshes (:class:`MeshCache`).
     ``involving``: only the pairs that include the mesh at this index (None: every pair)."""
-    if len(meshes) != len(X_WO):
-        raise InvalidArgumentError(
-            f"mesh_overlaps: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
-        )
-    if not above >= 0:
-        raise InvalidArgumentError(f"mesh_overlaps: above must be >= 0 m, got {above!r}")
-    if involving is not None and not 0 <= involving < len(meshes):
-        raise InvalidArgumentError(
-            f"mesh_overlaps: involving must index one of the {len(meshes)} meshes, "
-            f"got {involving!r}"
-        )
+    _check_overlap_args("mesh_overlaps", meshes, X_WO, above, involving)
     return _overlaps(
         meshes,
         X_WO,
@@ -382,7 +370,6 @@ def mesh_overlaps(
         exact=exact,
         cache=cache,
         involving=involving,
-        exits=_exits,
     )
 
 
@@ -397,8 +384,38 @@ def deepest_overlap(
     """The largest depth (m, >= 0; 0 without overlaps) of the :func:`mesh_overlaps` of
     ``meshes`` at ``X_WO`` with ``above`` 0 (same ``spacing``, ``exact``, ``cache`` and
     ``involving``), without searching each overlap's exit."""
-    found = mesh_overlaps(meshes, X_WO, 0.0, spacing, exact, cache, involving, _exits=False)
+    _check_overlap_args("deepest_overlap", meshes, X_WO, 0.0, involving)
+    found = _overlaps(
+        meshes,
+        X_WO,
+        0.0,
+        running=False,
+        spacing=spacing,
+        exact=exact,
+        cache=cache,
+        involving=involving,
+        exits=False,
+    )
     return max([0.0] + [o.depth for o in found])
+
+
+def _check_overlap_args(
+    name: str,
+    meshes: Sequence[Mesh],
+    X_WO: Sequence[npt.ArrayLike],
+    above: float,
+    involving: int | None,
+) -> None:
+    if len(meshes) != len(X_WO):
+        raise InvalidArgumentError(
+            f"{name}: {len(meshes)} meshes but {len(X_WO)} poses; expected one each"
+        )
+    if not above >= 0:
+        raise InvalidArgumentError(f"{name}: above must be >= 0 m, got {above!r}")
+    if involving is not None and not 0 <= involving < len(meshes):
+        raise InvalidArgumentError(
+            f"{name}: involving must index one of the {len(meshes)} meshes, got {involving!r}"
+        )
 
 
 def _overlaps(

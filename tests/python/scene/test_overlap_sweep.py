@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import mgn
+from mgn.errors import InvalidArgumentError
 from mgn.geometry import Mesh
 from mgn.objects import ToteSpec
 from mgn.scene.penetration import (
@@ -182,6 +183,10 @@ def test_deepest_overlap_is_the_largest_depth_of_mesh_overlaps():
     assert want > 0
     apart = [poses[0], poses[0] + np.pad(np.array([[0.2]]), ((0, 3), (3, 0)))[:4, :4]]
     assert deepest_overlap([ball, ball], apart, 1e-3, False) == 0.0
+    with pytest.raises(InvalidArgumentError, match="deepest_overlap: involving"):
+        deepest_overlap(meshes, poses, involving=3)
+    with pytest.raises(InvalidArgumentError, match="deepest_overlap: 3 meshes but 2 poses"):
+        deepest_overlap(meshes, poses[:2])
 
 
 def test_clearance_with_kept_boxes_equals_a_fresh_one():
