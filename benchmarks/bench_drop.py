@@ -12,6 +12,11 @@ pybullet keeps its own contact settings.
 Peak memory of each side is measured in a fresh subprocess (ru_maxrss), minus the same
 process's footprint after the imports.
 
+Two rows: the C++ simulation alone (release, settle, re-settle) against pybullet's loop, the same
+work on both sides; and `drop_scene` as `mgn generate` runs it (the simulation, the final
+separation of the render meshes, the scene statistics), which has no peer (pybullet leaves the
+render meshes as the hulls put them): docs/decisions/0049-drop-benchmark-rows.md.
+
 The number of steps to settle is chaotic (a bit-level change of a hull moves it by hundreds of
 steps): the single-seed row is one sample; compare settings over several seeds.
 
@@ -60,6 +65,17 @@ def mgn_drop(objects: list) -> Any:
     from mgn.scene import drop_scene
 
     return drop_scene(objects, seed=SEED)
+
+
+def mgn_simulation(objects: list) -> Any:
+    """The C++ drop only (release, settle, re-settle): the work pybullet's loop does; without
+    the final separation pass of the render meshes and the scene statistics."""
+    from mgn.objects import ToteSpec
+    from mgn.scene import DropOptions
+    from mgn.scene.drop import _simulate
+
+    out, *_ = _simulate(objects, SEED, ToteSpec(), DropOptions(), None, None, True)
+    return out
 
 
 def _prepared(objects: list) -> tuple[Any, list, list]:
@@ -252,22 +268,36 @@ def run(
     log: Callable[[str], None],
 ) -> list[Row]:
     p, peer_status = load_peer()
+    case = f"{NUM_OBJECTS} built-in objects into the tote, settle (dt 1/240 s, max 7 s)"
     row = Row(
         group="scene drop",
-        case=f"{NUM_OBJECTS} built-in objects into the tote, settle (dt 1/240 s, max 7 s)",
+        case=f"{case}: the simulation",
         n=1,
         unit="drops/s",
         peer_name="pybullet stepSimulation loop",
         mgn_status=mgn_status,
         peer_status=peer_status,
     )
+    whole = Row(
+        group="scene drop",
+        case=f"{case}: drop_scene (simulation, separation of the render meshes, statistics)",
+        n=1,
+        unit="drops/s",
+        peer_name="-",
+        mgn_status=mgn_status,
+        peer_status="no peer (pybullet has no separation pass)",
+    )
     if mgn is None:
-        return [row]
+        return [row, whole]
     objects = scene_objects()
     t0 = time.perf_counter()
     scene = mgn_drop(objects)  # warm-up: fills the decomposition cache
     log(f"bench_drop: first drop (with decompositions) {time.perf_counter() - t0:.2f} s")
-    cases: dict[str, Callable[[], object]] = {"mgn": lambda: mgn_drop(objects)}
+    sim = mgn_simulation(objects)
+    cases: dict[str, Callable[[], object]] = {
+        "mgn": lambda: mgn_simulation(objects),
+        "whole": lambda: mgn_drop(objects),
+    }
     peer_result = None
     if p is not None:
         prepared = _prepared(objects)
@@ -275,12 +305,18 @@ def run(
         cases["peer"] = lambda: pybullet_drop(p, objects, prepared)
     timings = measure_alternating(cases, repeats)
     row.mgn[1] = timings["mgn"]  # one drop runs on one thread (Bullet's discrete world)
+    whole.mgn[1] = timings["whole"]
     row.peer = timings.get("peer")
     st = scene.stats
     row.notes.append(
-        f"mgn: {st['steps']} steps, {st['simulated_time']:.2f} s simulated, "
+        f"mgn: {int(sim.steps)} steps, {st['simulated_time']:.2f} s simulated, "
         f"{len(scene)} kept / {len(scene.removed)} removed, median wall "
-        f"{timings['mgn'].median:.2f} s ({st['steps'] / timings['mgn'].median:,.0f} steps/s)"
+        f"{timings['mgn'].median:.2f} s ({int(sim.steps) / timings['mgn'].median:,.0f} steps/s)"
+    )
+    whole.notes.append(
+        f"median wall {timings['whole'].median:.2f} s: the simulation "
+        f"{timings['mgn'].median:.2f} s, the rest (separation pass, statistics) "
+        f"{timings['whole'].median - timings['mgn'].median:.2f} s"
     )
     if peer_result is not None and row.peer is not None:
         row.notes.append(
@@ -313,7 +349,7 @@ def run(
         f"total {total:.2f} CPU-s, mean {total / len(scenes):.2f} CPU-s per drop; per scene "
         + ", ".join(f"{d['scene']}: {d['cpu_s']:.2f} s/{d['steps']} steps" for d in scenes)
     )
-    return [row, pipe]
+    return [row, whole, pipe]
 
 
 if __name__ == "__main__":
