@@ -28,7 +28,7 @@ from tqdm import tqdm
 from mgn import _core
 from mgn.base.core_result import from_core, to_core
 from mgn.errors import InvalidArgumentError
-from mgn.geometry.convex import cached_convex_decomposition
+from mgn.geometry.convex import cached_convex_decomposition, drop_contained_parts
 from mgn.geometry.mesh import mass_properties
 from mgn.hardware import ParallelJawGripper, default_gripper
 from mgn.pj.labels import strided_subset
@@ -415,6 +415,26 @@ SAMPLED_STAIRCASE_CHECKS = 24
 THOROUGH_STAIRCASE_CHECKS = 24
 
 
+#: Shake shape (m): a convex part of the object's decomposition that lies inside another part
+#: within this distance (every vertex of it at most this far from the other part) is left out
+#: of :class:`ShakeScorer`'s compound (:func:`shake_parts`). The union of the parts moves by at
+#: most this much (Hausdorff distance), a fifth of the collision margin that already rounds every
+#: hull (``ShakeOptions.margin``, 0.5 mm); a contained part adds its own contact manifolds and
+#: solver rows against a pad without adding to the shape. At the default decomposition it drops
+#: the marker pen's two small cap hulls (inside the cap's largest within 0.036 mm) and one of the
+#: duck's (0.070 mm); the next nearest containment is 1.15 mm away
+#: (docs/decisions/0048-shake-shape-without-contained-hulls.md).
+CONTAINED_PART_TOLERANCE = 1e-4
+
+
+def shake_parts(mesh: Mesh, tolerance: float = CONTAINED_PART_TOLERANCE) -> list[Mesh]:
+    """The convex parts :class:`ShakeScorer` simulates ``mesh`` as: its cached convex
+    decomposition (:func:`mgn.geometry.convex.cached_convex_decomposition`, default options)
+    without the parts that lie inside another within ``tolerance`` (m, >= 0; 0 drops only
+    exact containment; :func:`mgn.geometry.convex.drop_contained_parts`)."""
+    return drop_contained_parts(cached_convex_decomposition(mesh), tolerance)
+
+
 def default_staircase_checks(calibration_grasps: int) -> int:
     """The staircase checks to use when the user gave none: :data:`CALIBRATED_STAIRCASE_CHECKS`
     (0) with the object-level calibration (``calibration_grasps`` > 0), else
@@ -625,7 +645,9 @@ class ShakeScorer:
     only an evenly strided subset of at most that many grasps is simulated and the others keep
     NaN in ``quality_score_simulation`` (:func:`mgn.pj.label_object` records how many were
     scored in the label metadata). The object is simulated as its cached convex decomposition
-    (:func:`mgn.geometry.convex.cached_convex_decomposition`) with uniform ``density`` (kg/m^3).
+    without the parts that lie inside another part within ``contained_part_tolerance`` (m,
+    default :data:`CONTAINED_PART_TOLERANCE`, 0.1 mm; :func:`shake_parts`), with uniform
+    ``density`` (kg/m^3) over the whole mesh.
     ``progress`` shows a progress bar with an ETA on stderr (None: when stderr is a terminal);
     the scores do not depend on it.
 
@@ -662,6 +684,7 @@ class ShakeScorer:
     calibration_grasps: int = 32
     calibration_mismatches: int = 0
     calibration_tolerance: float = CALIBRATION_TOLERANCE
+    contained_part_tolerance: float = CONTAINED_PART_TOLERANCE
     last_calibration: StaircaseCalibration | None = dataclass_field(
         default=None, init=False, compare=False
     )
@@ -711,6 +734,12 @@ class ShakeScorer:
             raise InvalidArgumentError(
                 f"ShakeScorer.calibration_tolerance: expected a score error in [0, 1), got {tol!r}"
             )
+        ctol = self.contained_part_tolerance
+        if isinstance(ctol, bool) or not isinstance(ctol, (int, float)) or not 0 <= ctol < 1:
+            raise InvalidArgumentError(
+                "ShakeScorer.contained_part_tolerance: expected a distance in [0, 1) m, "
+                f"got {ctol!r}"
+            )
         k = n if self.max_grasps is None else min(n, self.max_grasps)
         idx = strided_subset(n, k)
         props = mass_properties(mesh, self.density)
@@ -723,7 +752,7 @@ class ShakeScorer:
             ],
             axis=1,
         )
-        parts = cached_convex_decomposition(mesh)
+        parts = shake_parts(mesh, float(ctol))
         progress = sys.stderr.isatty() if self.progress is None else bool(self.progress)
         o = self.options
         score = np.empty(len(rows), np.float32)
