@@ -140,7 +140,8 @@ def _line(r: dict[str, Any]) -> str:
     ok = "ok" if r["wall_s"] <= TARGET_S else "OVER"
     return (
         f"{r['object']:18s} found {r['found']:7d} stored {r['stored']:4d} scored {r['scored']:4d} "
-        f"| {r['hulls']:2d} hulls | {r['search']:18s} bound {bound} | trials {r['trials']} | {r['wall_s']:6.1f} s wall "
+        f"| {r['hulls']:2d} hulls | {r['search']:18s} bound {bound} | trials {r['trials']} "
+        f"| {r['wall_s']:6.1f} s wall "
         f"{r['cpu_s']:6.1f} CPU-s {ok}{agree}"
     )
 

@@ -415,24 +415,15 @@ SAMPLED_STAIRCASE_CHECKS = 24
 THOROUGH_STAIRCASE_CHECKS = 24
 
 
-#: Shake shape (m): a convex part of the object's decomposition that lies inside another part
-#: within this distance (every vertex of it at most this far from the other part) is left out
-#: of :class:`ShakeScorer`'s compound (:func:`shake_parts`). The union of the parts moves by at
-#: most this much (Hausdorff distance), a fifth of the collision margin that already rounds every
-#: hull (``ShakeOptions.margin``, 0.5 mm); a contained part adds its own contact manifolds and
-#: solver rows against a pad without adding to the shape. At the default decomposition it drops
-#: the marker pen's two small cap hulls (inside the cap's largest within 0.036 mm) and one of the
-#: duck's (0.070 mm); the next nearest containment is 1.15 mm away
-#: (docs/decisions/0048-shake-shape-without-contained-hulls.md).
-CONTAINED_PART_TOLERANCE = 1e-4
-
-
-def shake_parts(mesh: Mesh, tolerance: float = CONTAINED_PART_TOLERANCE) -> list[Mesh]:
+def shake_parts(mesh: Mesh, contained_part_tolerance: float | None = None) -> list[Mesh]:
     """The convex parts :class:`ShakeScorer` simulates ``mesh`` as: its cached convex
-    decomposition (:func:`mgn.geometry.convex.cached_convex_decomposition`, default options)
-    without the parts that lie inside another within ``tolerance`` (m, >= 0; 0 drops only
-    exact containment; :func:`mgn.geometry.convex.drop_contained_parts`)."""
-    return drop_contained_parts(cached_convex_decomposition(mesh), tolerance)
+    decomposition (:func:`mgn.geometry.convex.cached_convex_decomposition`, default options),
+    without the parts that lie inside another part within ``contained_part_tolerance`` (m,
+    >= 0; :func:`mgn.geometry.convex.drop_contained_parts`; None, the default: every part)."""
+    parts = cached_convex_decomposition(mesh)
+    if contained_part_tolerance is None:
+        return parts
+    return drop_contained_parts(parts, contained_part_tolerance)
 
 
 def default_staircase_checks(calibration_grasps: int) -> int:
@@ -645,9 +636,12 @@ class ShakeScorer:
     only an evenly strided subset of at most that many grasps is simulated and the others keep
     NaN in ``quality_score_simulation`` (:func:`mgn.pj.label_object` records how many were
     scored in the label metadata). The object is simulated as its cached convex decomposition
-    without the parts that lie inside another part within ``contained_part_tolerance`` (m,
-    default :data:`CONTAINED_PART_TOLERANCE`, 0.1 mm; :func:`shake_parts`), with uniform
-    ``density`` (kg/m^3) over the whole mesh.
+    (:func:`mgn.geometry.convex.cached_convex_decomposition`) with uniform ``density``
+    (kg/m^3); ``contained_part_tolerance`` (m, >= 0; None, the default: off) leaves out the
+    parts that lie inside another part within that distance (:func:`shake_parts`; the union
+    moves by at most that much; at 1e-4 the marker pen keeps 5 of its 7 hulls and the duck of
+    pybullet_data 11 of 12, at no measured saving:
+    docs/decisions/0048-shake-shape-without-contained-hulls.md).
     ``progress`` shows a progress bar with an ETA on stderr (None: when stderr is a terminal);
     the scores do not depend on it.
 
@@ -684,7 +678,7 @@ class ShakeScorer:
     calibration_grasps: int = 32
     calibration_mismatches: int = 0
     calibration_tolerance: float = CALIBRATION_TOLERANCE
-    contained_part_tolerance: float = CONTAINED_PART_TOLERANCE
+    contained_part_tolerance: float | None = None
     last_calibration: StaircaseCalibration | None = dataclass_field(
         default=None, init=False, compare=False
     )
@@ -735,7 +729,9 @@ class ShakeScorer:
                 f"ShakeScorer.calibration_tolerance: expected a score error in [0, 1), got {tol!r}"
             )
         ctol = self.contained_part_tolerance
-        if isinstance(ctol, bool) or not isinstance(ctol, (int, float)) or not 0 <= ctol < 1:
+        if ctol is not None and (
+            isinstance(ctol, bool) or not isinstance(ctol, (int, float)) or not 0 <= ctol < 1
+        ):
             raise InvalidArgumentError(
                 "ShakeScorer.contained_part_tolerance: expected a distance in [0, 1) m, "
                 f"got {ctol!r}"
@@ -752,7 +748,7 @@ class ShakeScorer:
             ],
             axis=1,
         )
-        parts = shake_parts(mesh, float(ctol))
+        parts = shake_parts(mesh, None if ctol is None else float(ctol))
         progress = sys.stderr.isatty() if self.progress is None else bool(self.progress)
         o = self.options
         score = np.empty(len(rows), np.float32)
