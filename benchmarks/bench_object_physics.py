@@ -16,7 +16,7 @@ calibration grasps are exact by construction). Foreign meshes: public meshes shi
 ``pybullet`` package (its ``pybullet_data``), at the scales below.
 
     python -m benchmarks.bench_object_physics [--objects can_soda,duck] [--threads 2]
-        [--agreement 20] [--json out.json]
+        [--agreement 20] [--json out.json] [--scores scores.npz]
 """
 
 from __future__ import annotations
@@ -63,9 +63,8 @@ def _spec(name: str, folder: Path) -> Any:
 def _agreement(spec: Any, pj: Any, config: Any, n: int, threads: int) -> dict[str, Any]:
     """Full grids of n stored grasps after the calibration grasps against their stored scores."""
     from mgn.geometry import mass_properties
-    from mgn.geometry.convex import cached_convex_decomposition
     from mgn.pj.labels import strided_subset
-    from mgn.pj.physics import ShakeOptions, grasp_rows, shake_scores
+    from mgn.pj.physics import ShakeOptions, grasp_rows, shake_parts, shake_scores
 
     k = config.object_labels.physics_calibration
     rest = np.arange(k, len(pj))
@@ -77,8 +76,9 @@ def _agreement(spec: Any, pj: Any, config: Any, n: int, threads: int) -> dict[st
     rows = grasp_rows(np.column_stack([pj.approach, pj.closing, pj.p1, pj.width[:, None]])[idx])
     # Each grasp keeps its own random streams (first_grasp_index = its index in the list).
     full = np.empty(len(idx))
+    parts = shake_parts(mesh)  # the shape ShakeScorer simulates
     for j, g in enumerate(idx):
-        one = shake_scores(cached_convex_decomposition(mesh), props.mass, props.center_of_mass,
+        one = shake_scores(parts, props.mass, props.center_of_mass,
                            props.inertia, rows[j : j + 1], None,
                            ShakeOptions(grid=config.object_labels.physics_grid,
                                         num_threads=threads, first_grasp_index=int(g)))  # fmt: skip
@@ -89,9 +89,12 @@ def _agreement(spec: Any, pj: Any, config: Any, n: int, threads: int) -> dict[st
             "max_abs_error": float(d.max()), "identical": float(np.mean(d < 1e-6))}  # fmt: skip
 
 
-def run(objects: list[str], threads: int, agreement: int) -> list[dict[str, Any]]:
+def run(
+    objects: list[str], threads: int, agreement: int, scores: dict[str, Any] | None = None
+) -> list[dict[str, Any]]:
     from mgn.pipeline.config import Config
     from mgn.pipeline.label_cache import compute_object_labels
+    from mgn.pj.physics import shake_parts
 
     config = Config()
     rows = []
@@ -109,6 +112,7 @@ def run(objects: list[str], threads: int, agreement: int) -> list[dict[str, Any]
                 "object": name,
                 "found": meta.get("pj_num_found", 0),
                 "stored": len(pj) if pj is not None else 0,
+                "hulls": len(shake_parts(spec.to_mesh())),
                 "scored": meta.get("pj_physics_scored", 0),
                 "search": est.get("search", meta.get("pj_skipped", "-")),
                 "error_bound": est.get("error_bound_95"),
@@ -116,6 +120,8 @@ def run(objects: list[str], threads: int, agreement: int) -> list[dict[str, Any]
                 "wall_s": round(wall, 1),
                 "cpu_s": round(cpu, 1),
             }
+            if scores is not None and pj is not None:
+                scores[name] = np.asarray(pj.quality_score_simulation, np.float32)
             if pj is not None and len(pj):
                 row.update(_agreement(spec, pj, config, agreement, threads))
             rows.append(row)
@@ -134,7 +140,8 @@ def _line(r: dict[str, Any]) -> str:
     ok = "ok" if r["wall_s"] <= TARGET_S else "OVER"
     return (
         f"{r['object']:18s} found {r['found']:7d} stored {r['stored']:4d} scored {r['scored']:4d} "
-        f"| {r['search']:18s} bound {bound} | trials {r['trials']} | {r['wall_s']:6.1f} s wall "
+        f"| {r['hulls']:2d} hulls | {r['search']:18s} bound {bound} | trials {r['trials']} "
+        f"| {r['wall_s']:6.1f} s wall "
         f"{r['cpu_s']:6.1f} CPU-s {ok}{agree}"
     )
 
@@ -147,10 +154,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--agreement", type=int, default=0, metavar="N")
     ap.add_argument("--json", metavar="FILE")
+    ap.add_argument("--scores", metavar="FILE.npz", help="save every object's physics scores")
     args = ap.parse_args(argv)
     names = (args.objects.split(",") if args.objects
              else [o.name for o in builtin_objects()] + list(FOREIGN))  # fmt: skip
-    rows = run(names, args.threads, args.agreement)
+    scores: dict[str, Any] = {}
+    rows = run(names, args.threads, args.agreement, scores)
+    if args.scores:
+        np.savez(args.scores, **scores)
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     over = [r["object"] for r in rows if r["wall_s"] > TARGET_S]

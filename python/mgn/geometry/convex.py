@@ -14,15 +14,20 @@ import contextlib
 import dataclasses
 import hashlib
 import io
+import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from mgn import _core
 from mgn.base.atomic import atomic_write_bytes
 from mgn.base.core_result import to_core
+from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 
 __all__ = [
@@ -32,6 +37,8 @@ __all__ = [
     "cached_convex_decomposition",
     "convex_decomposition",
     "convex_hull",
+    "drop_contained_parts",
+    "hull_distance",
 ]
 
 #: Bump when the decomposition algorithm changes, so old cache entries are not reused.
@@ -107,6 +114,86 @@ def convex_decomposition(
     """
     o = options or ConvexDecompositionOptions()
     return list(_core.geometry.convex_decomposition(mesh, o.to_core()))
+
+
+def hull_distance(points: npt.ArrayLike, hull: Mesh) -> npt.NDArray[np.float64]:
+    """Euclidean distance (m) from each of the (N, 3) ``points`` to the solid convex ``hull``.
+
+    ``hull`` is a closed convex mesh with outward-wound faces (a part of
+    :func:`convex_decomposition`, the output of :func:`convex_hull`); a point inside it or on
+    its surface is at distance 0. Outside, the distance is the smallest distance to one of its
+    triangles (exact for a convex solid). Raises InvalidArgumentError for points that are not
+    (N, 3) or a hull without a face of positive area.
+    """
+    p = np.asarray(points, np.float64)
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise InvalidArgumentError(f"points: expected shape (N, 3), got {p.shape}")
+    v = np.asarray(hull.vertices, np.float64)
+    f = np.asarray(hull.faces, np.int64)
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    n = np.cross(b - a, c - a)
+    area2 = np.linalg.norm(n, axis=1)
+    keep = area2 > 1e-12 * max(float(np.max(area2, initial=0.0)), 1e-300)
+    if not np.any(keep):
+        raise InvalidArgumentError(f"hull {hull.name!r}: expected a face of positive area")
+    a, b, c, n = a[keep], b[keep], c[keep], n[keep] / area2[keep, None]
+    # Signed distances to the face planes (P, F): all <= 0 means inside the solid.
+    plane = p @ n.T - np.einsum("fk,fk->f", n, a)[None, :]
+    out = np.zeros(len(p))
+    outside = np.max(plane, axis=1, initial=-np.inf) > 0.0
+    if not np.any(outside):
+        return out
+    q = p[outside][:, None, :]  # (Q, 1, 3)
+
+    def segment(s0: npt.NDArray[np.float64], s1: npt.NDArray[np.float64]) -> Any:
+        d = s1 - s0
+        t = np.einsum("qfk,fk->qf", q - s0, d) / np.maximum(np.einsum("fk,fk->f", d, d), 1e-300)
+        t = np.clip(t, 0.0, 1.0)
+        return np.linalg.norm(q - (s0 + t[..., None] * d), axis=2)
+
+    best = np.minimum(np.minimum(segment(a, b), segment(b, c)), segment(c, a))
+    # The projection onto a face's plane, where it falls inside the triangle.
+    h = plane[outside]
+    proj = q - h[..., None] * n
+    inside = np.ones(h.shape, bool)
+    for s0, s1 in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("qfk,fk->qf", np.cross(s1 - s0, proj - s0), n) >= 0.0
+    best = np.where(inside, np.minimum(best, np.abs(h)), best)
+    out[outside] = np.min(best, axis=1)
+    return out
+
+
+def _volume(part: Mesh) -> float:
+    v = np.asarray(part.vertices, np.float64)
+    f = np.asarray(part.faces, np.int64)
+    return float(np.einsum("fk,fk->", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]]))) / 6.0
+
+
+def drop_contained_parts(parts: Sequence[Mesh], tolerance: float) -> list[Mesh]:
+    """The convex ``parts`` without those that lie inside another within ``tolerance`` (m).
+
+    Parts are visited from the largest volume down (ties: list order); one is dropped when
+    every vertex of it is within ``tolerance`` of a part already kept (:func:`hull_distance`),
+    which then contains it up to ``tolerance`` (the kept part grown by ``tolerance`` is convex
+    and holds its vertices). Kept parts are never dropped later, so the union of the result is
+    within ``tolerance`` (Hausdorff distance) of the union of ``parts``, and inside it. Of two
+    identical parts the first is kept. The kept parts keep their order. ``tolerance`` >= 0;
+    raises InvalidArgumentError otherwise.
+    """
+    if isinstance(tolerance, bool) or not (
+        isinstance(tolerance, (int, float)) and math.isfinite(tolerance) and tolerance >= 0
+    ):
+        raise InvalidArgumentError(
+            f"tolerance: expected a distance >= 0 in metres, got {tolerance!r}"
+        )
+    parts = list(parts)
+    order = sorted(range(len(parts)), key=lambda k: -_volume(parts[k]))
+    kept: list[int] = []
+    for k in order:
+        pts = np.asarray(parts[k].vertices, np.float64)
+        if not any(np.all(hull_distance(pts, parts[j]) <= tolerance) for j in kept):
+            kept.append(k)
+    return [parts[k] for k in sorted(kept)]
 
 
 def cache_dir() -> Path:
