@@ -178,8 +178,9 @@ void bind_scene_view_labels(py::module_& m) {
         float* o = out.mutable_data();
         {
           py::gil_scoped_release release;
-          com_heatmap_prediction(z.data(), ids.data(), w, h, X.data(), fx, fy, cx, cy,
-                                 params.data(), static_cast<int>(params.shape(0)), o);
+          const double intrinsics[4] = {fx, fy, cx, cy};
+          com_heatmap_prediction(z.data(), ids.data(), w, h, X.data(), intrinsics, params.data(),
+                                 static_cast<int>(params.shape(0)), o);
         }
         return out;
       },

@@ -327,13 +327,13 @@ TEST(ViewLabels, ComHeatmapPredictionScoresPointsPlacedByHand) {
   const std::vector<float> depth = {2.0f, 2.0f, 2.0f, 2.0f, 2.0f, nan};
   const std::vector<std::int32_t> ids = {1, 1, 1, 2, 0, 2};
   double X[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  const double K4[4] = {1.0, 1.0, 0.0, 0.0};  // fx, fy, cx, cy
   // Pixel (0, 0) is (1, 1, 2): instance 1's centre there (d = 0 -> 1.5 / 1, clamped to 1);
   // (1, 0) is (3, 1, 2): d = 2 -> (1.5 - 2) / 1 < 0 -> 0; (2, 0) is (5, 1, 2): d = 4 -> 0.
   // Instance 2's centre 1 m from (1, 3, 2) along x: d = 1 -> (1.5 - 1) / (1.5 - 0.5) = 0.5.
   const std::vector<double> params = {1, 1, 2, 0.5, 1.5, 0, 3, 2, 0.5, 1.5};
   std::vector<float> out(W * H, -1.0f);
-  mgn::com_heatmap_prediction(depth.data(), ids.data(), W, H, X, 1.0, 1.0, 0.0, 0.0, params.data(),
-                              2, out.data());
+  mgn::com_heatmap_prediction(depth.data(), ids.data(), W, H, X, K4, params.data(), 2, out.data());
   EXPECT_EQ(out[0], 1.0f);
   EXPECT_EQ(out[1], 0.0f);
   EXPECT_EQ(out[2], 0.0f);
@@ -343,12 +343,11 @@ TEST(ViewLabels, ComHeatmapPredictionScoresPointsPlacedByHand) {
   // Moving the camera 1 m along x moves every world point: pixel (1, 0) is then (4, 1, 2).
   X[3] = 1.0;
   const std::vector<double> far = {4, 1, 2, 0.5, 1.5, 0, 3, 2, 0.5, 1.5};
-  mgn::com_heatmap_prediction(depth.data(), ids.data(), W, H, X, 1.0, 1.0, 0.0, 0.0, far.data(), 2,
-                              out.data());
+  mgn::com_heatmap_prediction(depth.data(), ids.data(), W, H, X, K4, far.data(), 2, out.data());
   EXPECT_EQ(out[1], 1.0f);
   EXPECT_EQ(out[3], 0.0f);  // (2, 3, 2) is 2 m from (0, 3, 2)
   // An instance id above the rows of com_parameters is refused.
-  EXPECT_THROW(mgn::com_heatmap_prediction(depth.data(), ids.data(), W, H, X, 1.0, 1.0, 0.0, 0.0,
-                                           params.data(), 1, out.data()),
+  EXPECT_THROW(mgn::com_heatmap_prediction(depth.data(), ids.data(), W, H, X, K4, params.data(), 1,
+                                           out.data()),
                mgn::InvalidArgument);
 }

@@ -473,6 +473,159 @@ Mat3d euler_xyz(double ax, double ay, double az) {
       .toRotationMatrix();
 }
 
+/// Whether a gripper part at hand pose X_OH (fingers at `opening`) lies inside the closed
+/// object. Without surface contact a part is either fully outside or fully inside it.
+bool parts_inside(const AntipodalSampler::Impl& m, const Pose& X_OH, double opening) {
+  const std::array<Pose, 3> X = {X_OH, X_OH * finger_offset(0, opening),
+                                 X_OH * finger_offset(1, opening)};
+  Points3d points(3, 3);
+  for (int k = 0; k < 3; ++k) points.row(k) = (X[k] * m.part_vertex[k]).transpose();
+  return m.inside->contains_any(points);
+}
+
+void check_sample_input(const Points3d& points, const Points3d& normals) {
+  const Eigen::Index n = points.rows();
+  if (normals.rows() != n) {
+    throw_error<InvalidArgument>("sample_antipodal_grasps: points has ", n,
+                                 " rows but normals has ", normals.rows(),
+                                 "; expected the same count");
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!points.row(i).allFinite() || !normals.row(i).allFinite() ||
+        !(normals.row(i).norm() > 1e-12)) {
+      throw_error<InvalidArgument>("sample_antipodal_grasps: point/normal ", i,
+                                   " is not finite or the normal is zero; expected finite points "
+                                   "and non-zero normals");
+    }
+  }
+}
+
+/// The probes of a chunk of points: row (i - begin) * probes + k is probe k of point i.
+struct ChunkProbes {
+  Points3f origins, directions;
+  RayAllHits hits;  // the first two surface crossings of each probe
+};
+
+/// Draws the probes of points [begin, end), each point from its own stream (appended to rngs,
+/// left after its probes), and casts them in one batch.
+ChunkProbes cast_probes(const AntipodalSampler::Impl& m, const AntipodalOptions& o,
+                        const Points3d& points, const Points3d& normals, std::size_t begin,
+                        std::size_t end, std::vector<Rng>& rngs) {
+  const int P = o.probes;
+  const auto count = static_cast<Eigen::Index>(end - begin);
+  rngs.reserve(end - begin);
+  ChunkProbes c;
+  c.origins.resize(count * P, 3);
+  c.directions.resize(count * P, 3);
+  Points3d origins_d(count * P, 3), directions_d(count * P, 3);
+  for (std::size_t i = begin; i < end; ++i) {
+    rngs.emplace_back(o.seed, o.first_index + i);
+    Rng& rng = rngs.back();
+    const Vec3d p = points.row(i).transpose();
+    const Vec3d nrm = normals.row(i).transpose().normalized();
+    for (int k = 0; k < P; ++k) {
+      const double ax = rng.uniform(-o.tilt, o.tilt);
+      const double ay = rng.uniform(-o.tilt, o.tilt);
+      const double az = rng.uniform(-o.tilt, o.tilt);
+      Vec3d shift;
+      for (int axis = 0; axis < 3; ++axis) shift[axis] = rng.uniform(-o.offset, o.offset);
+      const Vec3d d = (euler_xyz(ax, ay, az) * -nrm).normalized();
+      const Vec3d start = p + shift - o.start_offset * d;
+      const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
+      origins_d.row(r) = start.transpose();
+      directions_d.row(r) = d.transpose();
+    }
+  }
+  c.origins = origins_d.cast<float>();
+  c.directions = directions_d.cast<float>();
+  CastOptions cast;
+  cast.num_threads = 1;
+  c.hits = m.scene->intersect_all(c.origins, c.directions, 2, cast);
+  return c;
+}
+
+/// The antipodal test of the P probes from row r0 on: the grasps of the probes whose two
+/// crossings lie within the opening and inside each other's friction cone, with their probe
+/// indices.
+void accept_probes(const ChunkProbes& c, Eigen::Index r0, int P, const ParallelJawGripper& g,
+                   double cos_cone, std::vector<ParallelJawGrasp>& accepted,
+                   std::vector<int>& accepted_probe) {
+  const RayAllHits& hits = c.hits;
+  for (int k = 0; k < P; ++k) {
+    const Eigen::Index r = r0 + k;
+    const std::int64_t h0 = hits.offsets[r];
+    if (hits.offsets[r + 1] - h0 < 2) continue;
+    const Vec3d start = c.origins.row(r).transpose().cast<double>();
+    const Vec3d d = c.directions.row(r).transpose().cast<double>();
+    const Vec3d q1 = start + static_cast<double>(hits.distance[h0]) * d;
+    const Vec3d q2 = start + static_cast<double>(hits.distance[h0 + 1]) * d;
+    const double w = (q2 - q1).norm();
+    if (!(w > 1e-9) || !(w < g.max_opening)) continue;
+    const Vec3d v = (q2 - q1) / w;
+    const Vec3d n1 = hits.normals.row(h0).transpose().cast<double>().normalized();
+    const Vec3d n2 = hits.normals.row(h0 + 1).transpose().cast<double>().normalized();
+    if (-n1.dot(v) < cos_cone || n2.dot(v) < cos_cone) continue;
+    ParallelJawGrasp grasp;
+    grasp.p1 = q1;
+    grasp.closing = v;
+    grasp.width = w;
+    accepted.push_back(grasp);
+    accepted_probe.push_back(k);
+  }
+}
+
+/// Whether the hand of `grasp` (fingers at `opening`) collides with the object: FCL per part
+/// (fingers first), unless the pre-filter's spheres prove the surfaces apart; then the parity
+/// test for a part lying entirely inside the object.
+bool hand_collides(const AntipodalSampler::Impl& m, const ParallelJawGrasp& grasp, double opening,
+                   bool prefilter, ProbePoints& near) {
+  const Pose X_OH = hand_pose(grasp, m.gripper);
+  bool hit = false;
+  if (!(prefilter && near.surely_clear(grasp.approach))) {
+    for (int k : {1, 2, 0}) {
+      const Pose X = k == 0 ? X_OH : X_OH * finger_offset(k - 1, opening);
+      if ((hit = collide(*m.parts[k], X, *m.object, Pose::Identity()))) break;
+    }
+  }
+  return hit || parts_inside(m, X_OH, opening);
+}
+
+/// The approaches of one accepted grasp `cand` (its approach is drawn here): appends the
+/// collision-free ones to `kept` (at most approaches_kept) and counts the colliding ones.
+void try_approaches(const AntipodalSampler::Impl& m, const AntipodalOptions& o, AntipodalGrasp cand,
+                    Rng& rng, ProbePoints& near, std::vector<AntipodalGrasp>& kept,
+                    std::int64_t& colliding) {
+  const ParallelJawGripper& g = m.gripper;
+  ParallelJawGrasp& grasp = cand.grasp;
+  Vec3d e1, e2;
+  detail::tangent_frame(grasp.closing, e1, e2);
+  const double opening = g.collision_opening(grasp.width);
+  // Box grippers: certain-collision (object point inside a box) and certain-free (every
+  // triangle more than 1 um from every box) pre-filters; FCL decides the rest.
+  const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
+                         o.approaches_tried > 0 && o.approaches_kept > 0;
+  if (prefilter) near.build(m, g, grasp, e1, e2, opening);
+  int num_kept = 0;
+  // All angles are drawn even when the loop stops early, so the stream of the next probe
+  // does not depend on collision outcomes.
+  std::vector<double> angles(static_cast<std::size_t>(o.approaches_tried));
+  for (double& t : angles) t = rng.uniform(0.0, 2.0 * M_PI);
+  for (double t : angles) {
+    if (num_kept >= o.approaches_kept) break;
+    grasp.approach = (std::cos(t) * e1 + std::sin(t) * e2).normalized();
+    if (prefilter && near.any_inside(t)) {
+      ++colliding;
+      continue;
+    }
+    if (o.check_collision && hand_collides(m, grasp, opening, prefilter, near)) {
+      ++colliding;
+      continue;
+    }
+    kept.push_back(cand);
+    ++num_kept;
+  }
+}
+
 }  // namespace
 
 bool AntipodalSampler::collides(const Pose& X_OH, double opening) const {
@@ -494,37 +647,15 @@ bool AntipodalSampler::collides(const Pose& X_OH, double opening) const {
 }
 
 bool AntipodalSampler::part_inside_object(const Impl& m, const Pose& X_OH, double opening) {
-  // No surface contact: a part is either fully outside or fully inside the closed object.
-  const std::array<Pose, 3> X = {X_OH, X_OH * finger_offset(0, opening),
-                                 X_OH * finger_offset(1, opening)};
-  Points3d points(3, 3);
-  for (int k = 0; k < 3; ++k) points.row(k) = (X[k] * m.part_vertex[k]).transpose();
-  return m.inside->contains_any(points);
+  return parts_inside(m, X_OH, opening);
 }
 
-// Nesting and complexity ceilings of .clang-tidy exceeded on purpose: per chunk of points, the
-// batched probes, then per point the antipodal test, approaches and collision pre-filters, whose
-// order fixes the random streams and so the output.
-// NOLINTNEXTLINE(readability-function-size,readability-function-cognitive-complexity)
 AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d& normals,
                                          const AntipodalOptions& o) const {
   o.validate();
   const Impl& m = *impl_;
   const Eigen::Index n = points.rows();
-  if (normals.rows() != n) {
-    throw_error<InvalidArgument>("sample_antipodal_grasps: points has ", n,
-                                 " rows but normals has ", normals.rows(),
-                                 "; expected the same count");
-  }
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (!points.row(i).allFinite() || !normals.row(i).allFinite() ||
-        !(normals.row(i).norm() > 1e-12)) {
-      throw_error<InvalidArgument>("sample_antipodal_grasps: point/normal ", i,
-                                   " is not finite or the normal is zero; expected finite points "
-                                   "and non-zero normals");
-    }
-  }
-  const ParallelJawGripper& g = m.gripper;
+  check_sample_input(points, normals);
   const double cos_cone = std::cos(std::atan(o.friction_coef));
   const int P = o.probes;
 
@@ -535,111 +666,24 @@ AntipodalResult AntipodalSampler::sample(const Points3d& points, const Points3d&
   std::vector<std::int32_t> accepted_count(static_cast<std::size_t>(n), 0);
   std::vector<std::int64_t> colliding(static_cast<std::size_t>(n), 0);
 
-  // The per-point work of this function, under the same exception as the function.
-  // NOLINTNEXTLINE(readability-function-cognitive-complexity)
   const auto process = [&](std::size_t begin, std::size_t end) {
     ProbePoints near;  // the pre-filter lists of the current probe (storage reused)
-    const auto count = static_cast<Eigen::Index>(end - begin);
     // 1. Probes of the whole chunk, drawn per point from its own stream, cast in one batch.
     std::vector<Rng> rngs;
-    rngs.reserve(end - begin);
-    Points3f origins(count * P, 3), directions(count * P, 3);
-    Points3d origins_d(count * P, 3), directions_d(count * P, 3);
-    for (std::size_t i = begin; i < end; ++i) {
-      rngs.emplace_back(o.seed, o.first_index + i);
-      Rng& rng = rngs.back();
-      const Vec3d p = points.row(i).transpose();
-      const Vec3d nrm = normals.row(i).transpose().normalized();
-      for (int k = 0; k < P; ++k) {
-        const double ax = rng.uniform(-o.tilt, o.tilt);
-        const double ay = rng.uniform(-o.tilt, o.tilt);
-        const double az = rng.uniform(-o.tilt, o.tilt);
-        Vec3d shift;
-        for (int c = 0; c < 3; ++c) shift[c] = rng.uniform(-o.offset, o.offset);
-        const Vec3d d = (euler_xyz(ax, ay, az) * -nrm).normalized();
-        const Vec3d start = p + shift - o.start_offset * d;
-        const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
-        origins_d.row(r) = start.transpose();
-        directions_d.row(r) = d.transpose();
-      }
-    }
-    origins = origins_d.cast<float>();
-    directions = directions_d.cast<float>();
-    CastOptions cast;
-    cast.num_threads = 1;
-    const RayAllHits hits = m.scene->intersect_all(origins, directions, 2, cast);
-
+    const ChunkProbes probes = cast_probes(m, o, points, normals, begin, end, rngs);
     // 2. Per point: antipodal test of each probe, then approaches and collision.
     for (std::size_t i = begin; i < end; ++i) {
-      Rng& rng = rngs[i - begin];
       std::vector<ParallelJawGrasp> accepted;
       std::vector<int> accepted_probe;
-      for (int k = 0; k < P; ++k) {
-        const Eigen::Index r = static_cast<Eigen::Index>(i - begin) * P + k;
-        const std::int64_t h0 = hits.offsets[r];
-        if (hits.offsets[r + 1] - h0 < 2) continue;
-        const Vec3d start = origins.row(r).transpose().cast<double>();
-        const Vec3d d = directions.row(r).transpose().cast<double>();
-        const Vec3d q1 = start + static_cast<double>(hits.distance[h0]) * d;
-        const Vec3d q2 = start + static_cast<double>(hits.distance[h0 + 1]) * d;
-        const double w = (q2 - q1).norm();
-        if (!(w > 1e-9) || !(w < g.max_opening)) continue;
-        const Vec3d v = (q2 - q1) / w;
-        const Vec3d n1 = hits.normals.row(h0).transpose().cast<double>().normalized();
-        const Vec3d n2 = hits.normals.row(h0 + 1).transpose().cast<double>().normalized();
-        if (-n1.dot(v) < cos_cone || n2.dot(v) < cos_cone) continue;
-        ParallelJawGrasp grasp;
-        grasp.p1 = q1;
-        grasp.closing = v;
-        grasp.width = w;
-        accepted.push_back(grasp);
-        accepted_probe.push_back(k);
-      }
+      accept_probes(probes, static_cast<Eigen::Index>(i - begin) * P, P, m.gripper, cos_cone,
+                    accepted, accepted_probe);
       const float score = static_cast<float>(accepted.size()) / static_cast<float>(P);
       out.point_score[i] = score;
       accepted_count[i] = static_cast<std::int32_t>(accepted.size());
       std::vector<AntipodalGrasp>& kept = per_point[i];
       for (std::size_t j = 0; j < accepted.size(); ++j) {
-        ParallelJawGrasp grasp = accepted[j];
-        Vec3d e1, e2;
-        detail::tangent_frame(grasp.closing, e1, e2);
-        const double opening = g.collision_opening(grasp.width);
-        // Box grippers: certain-collision (object point inside a box) and certain-free (every
-        // triangle more than 1 um from every box) pre-filters; FCL decides the rest.
-        const bool prefilter = o.check_collision && m.surface_points.rows() > 0 &&
-                               o.approaches_tried > 0 && o.approaches_kept > 0;
-        if (prefilter) near.build(m, g, grasp, e1, e2, opening);
-        int num_kept = 0;
-        // All angles are drawn even when the loop stops early, so the stream of the next probe
-        // does not depend on collision outcomes.
-        std::vector<double> angles(static_cast<std::size_t>(o.approaches_tried));
-        for (double& t : angles) t = rng.uniform(0.0, 2.0 * M_PI);
-        for (double t : angles) {
-          if (num_kept >= o.approaches_kept) break;
-          grasp.approach = (std::cos(t) * e1 + std::sin(t) * e2).normalized();
-          if (prefilter && near.any_inside(t)) {
-            ++colliding[i];
-            continue;
-          }
-          if (o.check_collision) {
-            // FCL per part (fingers first), unless the spheres prove the surfaces apart; then
-            // the parity test for a part lying entirely inside the object.
-            const Pose X_OH = hand_pose(grasp, g);
-            bool hit = false;
-            if (!(prefilter && near.surely_clear(grasp.approach))) {
-              for (int k : {1, 2, 0}) {
-                const Pose X = k == 0 ? X_OH : X_OH * finger_offset(k - 1, opening);
-                if ((hit = collide(*m.parts[k], X, *m.object, Pose::Identity()))) break;
-              }
-            }
-            if (hit || part_inside_object(m, X_OH, opening)) {
-              ++colliding[i];
-              continue;
-            }
-          }
-          kept.push_back({grasp, static_cast<std::int64_t>(i), accepted_probe[j], score});
-          ++num_kept;
-        }
+        try_approaches(m, o, {accepted[j], static_cast<std::int64_t>(i), accepted_probe[j], score},
+                       rngs[i - begin], near, kept, colliding[i]);
       }
       out.num_kept[i] = static_cast<std::int32_t>(kept.size());
     }

@@ -279,19 +279,19 @@ F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& 
       }
 
       // BSDF sampling.
-      F3 wi_w;
-      F3 weight;
-      bool delta;
-      float pdf;
-      float eta2;
+      BsdfSample bs;
       Split split;
       // Fresnel splitting (and the branches) only while the throughput is worth the other
       // direction's ray: deeper, dim paths take the random direction alone (unbiased; the
       // choice does not depend on the Fresnel draw).
       const bool may_split = branches_left > 0 || max_comp(beta) >= split_min_;
-      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, wi_w, weight, pdf, delta, eta2,
-                       may_split ? &split : nullptr))
+      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, bs, may_split ? &split : nullptr))
         break;
+      const F3 wi_w = bs.wi_w;
+      F3 weight = bs.weight;
+      const bool delta = bs.delta;
+      const float pdf = bs.pdf;
+      const float eta2 = bs.eta2;
       bool branched = false;
       if (split.on && branches_left > 0) {
         branched = true;
@@ -498,13 +498,14 @@ void Integrator::aux_behind_glass(RTCRayHit rh, F3 d, F3& albedo, F3& normal) {
   }
 }
 
-// Parameter ceiling of .clang-tidy exceeded on purpose: the sample's inputs and its five
-// outputs are separate arguments on the path tracer's hot path.
-// NOLINTNEXTLINE(readability-function-size)
 bool Integrator::sample_bsdf(const Hit& h, const pt::Frame& frame, F3 wo,
                              const pt::ShadingMaterial& sm, float u_lobe, float u_fresnel,
-                             pt::Sample2 u, F3& wi_w, F3& weight, float& pdf, bool& delta,
-                             float& eta2, Split* split) {
+                             pt::Sample2 u, BsdfSample& out, Split* split) {
+  F3& wi_w = out.wi_w;
+  F3& weight = out.weight;
+  float& pdf = out.pdf;
+  bool& delta = out.delta;
+  float& eta2 = out.eta2;
   eta2 = 1.0f;
   if (split != nullptr) split->on = false;
   if (u_lobe < sm.p_delta && sm.rough) {

@@ -12,12 +12,10 @@
 
 namespace mgn {
 
-// Parameter ceiling of .clang-tidy exceeded on purpose: flat arrays and scalars (image, pose,
-// intrinsics, per-object parameters), as the NumPy binding passes them.
-// NOLINTNEXTLINE(readability-function-size)
 void com_heatmap_prediction(const float* depth_m, const std::int32_t* instances, int width,
-                            int height, const double X_WC[16], double fx, double fy, double cx,
-                            double cy, const double* com_parameters, int num_objects, float* out) {
+                            int height, const double X_WC[16], const double intrinsics[4],
+                            const double* com_parameters, int num_objects, float* out) {
+  const double fx = intrinsics[0], fy = intrinsics[1], cx = intrinsics[2], cy = intrinsics[3];
   if (width < 0 || height < 0 || num_objects < 0) {
     throw_error<InvalidArgument>("com_heatmap_prediction: image ", width, " x ", height, " and ",
                                  num_objects, " objects; expected sizes >= 0");

@@ -49,8 +49,9 @@ void check_images(const LayoutImages& im) {
     throw_error<InvalidArgument>("compute_layout: the visible and depth images must be given");
   if (im.num_objects > 0 && (!im.amodal || !im.categories || !im.occlusion))
     throw_error<InvalidArgument>(
-        "compute_layout: amodal masks, categories and occlusion must be given for ", im.num_objects,
-        " objects");
+        "compute_layout: amodal masks, categories and "
+        "occlusion must be given for ",
+        im.num_objects, " objects");
   for (int i = 0; i < im.num_objects; ++i) {
     const double o = im.occlusion[i];
     if (!(o >= 0.0 && o <= 1.0))
@@ -59,8 +60,9 @@ void check_images(const LayoutImages& im) {
   }
 }
 
-/// Tarjan's strongly connected components of the graph parent -> child over the given nodes.
-/// Returns the component index of every node (-1 for nodes not in `nodes`).
+/// Tarjan's strongly connected components of the graph parent -> child over the
+/// given nodes. Returns the component index of every node (-1 for nodes not in
+/// `nodes`).
 std::vector<int> strongly_connected(int n, const std::vector<std::vector<int>>& children,
                                     const std::vector<int>& nodes) {
   std::vector<int> index(n, -1), low(n, 0), comp(n, -1);
@@ -120,32 +122,19 @@ double median(std::vector<float>& v) {
   return 0.5 * (lo + hi);
 }
 
-}  // namespace
+/// Bounding boxes of the visible masks (inclusive; empty when r1 < r0).
+struct Boxes {
+  std::vector<int> r0, r1, c0, c1;
+};
 
-// Size and complexity ceilings of .clang-tidy exceeded on purpose: the eight numbered stages
-// share the per-object counts, boxes, masks and relations built along the way.
-// NOLINTNEXTLINE(readability-function-size,readability-function-cognitive-complexity)
-Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
-  check_options(opt);
-  check_images(im);
+/// Stage 1: visible pixel counts and bounding boxes; checks the id range.
+Boxes count_visible(const LayoutImages& im, Layout& L) {
   const int n = im.num_objects;
   const int H = im.height, W = im.width;
-  const std::size_t npx = static_cast<std::size_t>(H) * static_cast<std::size_t>(W);
-  const std::int32_t* vis = im.visible;
-
-  Layout L;
-  L.num_objects = n;
   const std::size_t nn = static_cast<std::size_t>(n);
-  L.relation.assign(nn * nn, 0);
-  L.visible_px.assign(nn, 0);
-  L.visible.assign(nn, 0);
-  L.layer.assign(nn, 3);
-  L.num_regions.assign(nn, 0);
-  L.complete.assign(nn, 0);
-  L.total_covered_edge.assign(nn, 0);
-
-  // 1. Visible pixel counts and bounding boxes; id range check.
-  std::vector<int> r0(nn, H), r1(nn, -1), c0(nn, W), c1(nn, -1);
+  const std::int32_t* vis = im.visible;
+  Boxes bx{std::vector<int>(nn, H), std::vector<int>(nn, -1), std::vector<int>(nn, W),
+           std::vector<int>(nn, -1)};
   for (int r = 0; r < H; ++r) {
     const std::int32_t* row = vis + static_cast<std::size_t>(r) * W;
     for (int c = 0; c < W; ++c) {
@@ -157,17 +146,24 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
                                      v);
       const std::size_t i = static_cast<std::size_t>(v - 1);
       ++L.visible_px[i];
-      r0[i] = std::min(r0[i], r);
-      r1[i] = std::max(r1[i], r);
-      c0[i] = std::min(c0[i], c);
-      c1[i] = std::max(c1[i], c);
+      bx.r0[i] = std::min(bx.r0[i], r);
+      bx.r1[i] = std::max(bx.r1[i], r);
+      bx.c0[i] = std::min(bx.c0[i], c);
+      bx.c1[i] = std::max(bx.c1[i], c);
     }
   }
   for (std::size_t i = 0; i < nn; ++i) L.visible[i] = L.visible_px[i] > 0 ? 1 : 0;
+  return bx;
+}
 
-  // 2. Seen-over counts S[a][b] (row-major a * n + b), one amodal mask (column b) per task.
+/// Stage 2: seen-over counts S[a][b] (row-major a * n + b), one amodal mask
+/// (column b) per task.
+std::vector<std::int64_t> seen_over_counts(const LayoutImages& im, int num_threads) {
+  const std::size_t nn = static_cast<std::size_t>(im.num_objects);
+  const std::size_t npx = static_cast<std::size_t>(im.height) * static_cast<std::size_t>(im.width);
+  const std::int32_t* vis = im.visible;
   std::vector<std::int64_t> S(nn * nn, 0);
-  parallel_for(nn, opt.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+  parallel_for(nn, num_threads, 1, [&](std::size_t begin, std::size_t end) {
     std::vector<std::int64_t> col(nn);
     for (std::size_t b = begin; b < end; ++b) {
       std::fill(col.begin(), col.end(), 0);
@@ -190,108 +186,156 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
       for (std::size_t a = 0; a < nn; ++a) S[a * nn + b] = col[a];
     }
   });
+  return S;
+}
 
-  // 3. Candidate relations between visible objects: the seen-over counts decide them.
-  struct Candidate {
-    int parent = 0, child = 0;
-    std::int64_t seen_px = 0;
-    std::int64_t stretch = 0;   // child pixels of the parent's own stretch
-    std::int64_t measured = 0;  // child pixels of the contour with valid depths on both sides
-    std::vector<float> diffs;   // per stretch pixel: depth(child) - mean depth(parent side)
-  };
-  std::vector<Candidate> cand;
-  std::vector<int> cand_index(nn * nn, -1);  // [child * n + parent]
-  std::vector<std::uint8_t> has_candidate_parent(nn, 0);
+/// A candidate relation parent -> child and what its contour measured.
+struct Candidate {
+  int parent = 0, child = 0;
+  std::int64_t seen_px = 0;
+  std::int64_t stretch = 0;   // child pixels of the parent's own stretch
+  std::int64_t measured = 0;  // child pixels of the contour with valid depths on both sides
+  std::vector<float> diffs;   // per stretch pixel: depth(child) - mean depth(parent side)
+};
+
+struct Candidates {
+  std::vector<Candidate> list;
+  std::vector<int> index;                          // [child * n + parent] -> list index, or -1
+  std::vector<std::uint8_t> has_candidate_parent;  // [child]
+};
+
+/// Stage 3: candidate relations between visible objects: the seen-over counts
+/// decide them.
+Candidates candidate_relations(const std::vector<std::int64_t>& S,
+                               const std::vector<std::uint8_t>& visible, const LayoutOptions& opt) {
+  const std::size_t nn = visible.size();
+  Candidates cs;
+  cs.index.assign(nn * nn, -1);
+  cs.has_candidate_parent.assign(nn, 0);
   for (std::size_t b = 0; b < nn; ++b) {
-    if (!L.visible[b]) continue;
+    if (!visible[b]) continue;
     for (std::size_t a = 0; a < nn; ++a) {
-      if (a == b || !L.visible[a]) continue;
+      if (a == b || !visible[a]) continue;
       const std::int64_t ab = S[a * nn + b], ba = S[b * nn + a];
       if (ab >= opt.min_overlap_px &&
           static_cast<double>(ab) >= opt.min_overlap_fraction * static_cast<double>(ab + ba)) {
-        cand_index[b * nn + a] = static_cast<int>(cand.size());
-        has_candidate_parent[b] = 1;
+        cs.index[b * nn + a] = static_cast<int>(cs.list.size());
+        cs.has_candidate_parent[b] = 1;
         Candidate c;
         c.parent = static_cast<int>(a);
         c.child = static_cast<int>(b);
         c.seen_px = ab;
-        cand.push_back(std::move(c));
+        cs.list.push_back(std::move(c));
       }
     }
   }
+  return cs;
+}
 
-  // 4. The parent's own stretch of boundary: child pixels p with a 4-neighbour q that shows the
-  //    parent inside the child's amodal mask (the parent covers the child at q) and lies in front
-  //    of p (depth(q) < depth(p)). A contour pixel pair is on the stretch of the one object that
-  //    is in front there, so no boundary counts for both directions of a mutual pair.
-  if (!cand.empty()) {
-    const float* depth = im.depth;
-    for (int r = 0; r < H; ++r) {
-      for (int c = 0; c < W; ++c) {
-        const std::size_t p = static_cast<std::size_t>(r) * W + c;
-        const std::int32_t v = vis[p];
-        if (v == 0) continue;
-        const std::size_t b = static_cast<std::size_t>(v - 1);
-        if (!has_candidate_parent[b]) continue;
-        const std::uint8_t* child_amodal = im.amodal + b * npx;
-        int nb_cand[4];
-        float nb_depth[4];
-        int k = 0;
-        auto look = [&](std::size_t q) {
-          const std::int32_t u = vis[q];
-          if (u == 0 || u == v || !child_amodal[q]) return;
-          const int ci = cand_index[b * nn + static_cast<std::size_t>(u - 1)];
-          if (ci < 0) return;
-          nb_cand[k] = ci;
-          nb_depth[k] = depth[q];
-          ++k;
-        };
-        if (r > 0) look(p - W);
-        if (r + 1 < H) look(p + W);
-        if (c > 0) look(p - 1);
-        if (c + 1 < W) look(p + 1);
-        if (k == 0) continue;
-        const float dp = depth[p];
-        if (!valid_depth(dp)) continue;
-        for (int i = 0; i < k; ++i) {
-          if (nb_cand[i] < 0) continue;  // already counted for this pixel
-          const int ci = nb_cand[i];
-          double front_sum = 0.0;
-          int front = 0;
-          bool measured = false;
-          for (int j = i; j < k; ++j) {
-            if (nb_cand[j] != ci) continue;
-            if (valid_depth(nb_depth[j])) {
-              measured = true;
-              if (dp > nb_depth[j]) {
-                front_sum += nb_depth[j];
-                ++front;
-              }
-            }
-            if (j > i) nb_cand[j] = -1;
-          }
-          Candidate& cd = cand[static_cast<std::size_t>(ci)];
-          if (measured) ++cd.measured;
-          if (front > 0) {
-            ++cd.stretch;
-            cd.diffs.push_back(static_cast<float>(static_cast<double>(dp) - front_sum / front));
-          }
+/// The contour neighbours of one child pixel: candidate index and depth of each
+/// 4-neighbour that shows a candidate parent inside the child's amodal mask.
+struct ContourNeighbours {
+  int cand[4] = {};
+  float depth[4] = {};
+  int count = 0;
+};
+
+ContourNeighbours contour_neighbours(const LayoutImages& im, const Candidates& cs, int r, int c) {
+  const int H = im.height, W = im.width;
+  const std::size_t nn = static_cast<std::size_t>(im.num_objects);
+  const std::size_t npx = static_cast<std::size_t>(H) * static_cast<std::size_t>(W);
+  const std::size_t p = static_cast<std::size_t>(r) * W + c;
+  const std::int32_t v = im.visible[p];
+  const std::size_t b = static_cast<std::size_t>(v - 1);
+  const std::uint8_t* child_amodal = im.amodal + b * npx;
+  ContourNeighbours nb;
+  auto look = [&](std::size_t q) {
+    const std::int32_t u = im.visible[q];
+    if (u == 0 || u == v || !child_amodal[q]) return;
+    const int ci = cs.index[b * nn + static_cast<std::size_t>(u - 1)];
+    if (ci < 0) return;
+    nb.cand[nb.count] = ci;
+    nb.depth[nb.count] = im.depth[q];
+    ++nb.count;
+  };
+  if (r > 0) look(p - W);
+  if (r + 1 < H) look(p + W);
+  if (c > 0) look(p - 1);
+  if (c + 1 < W) look(p + 1);
+  return nb;
+}
+
+/// Adds child pixel p (depth dp, valid) to the contour of every candidate among
+/// its neighbours: once per candidate, on its stretch when at least one of its
+/// neighbours lies in front.
+void measure_contour_pixel(ContourNeighbours& nb, float dp, Candidates& cs) {
+  for (int i = 0; i < nb.count; ++i) {
+    if (nb.cand[i] < 0) continue;  // already counted for this pixel
+    const int ci = nb.cand[i];
+    double front_sum = 0.0;
+    int front = 0;
+    bool measured = false;
+    for (int j = i; j < nb.count; ++j) {
+      if (nb.cand[j] != ci) continue;
+      if (valid_depth(nb.depth[j])) {
+        measured = true;
+        if (dp > nb.depth[j]) {
+          front_sum += nb.depth[j];
+          ++front;
         }
       }
+      if (j > i) nb.cand[j] = -1;
+    }
+    Candidate& cd = cs.list[static_cast<std::size_t>(ci)];
+    if (measured) ++cd.measured;
+    if (front > 0) {
+      ++cd.stretch;
+      cd.diffs.push_back(static_cast<float>(static_cast<double>(dp) - front_sum / front));
     }
   }
+}
 
-  // 4b. Relations: a candidate whose parent meets its child on a measured contour but is in front
-  //     nowhere on it lies behind the child (a sign error, or the child's boundary counted for
-  //     the parent): dropped. Without a measured contour the masks alone decide.
+/// Stage 4: the parent's own stretch of boundary: child pixels p with a
+/// 4-neighbour q that shows the parent inside the child's amodal mask (the
+/// parent covers the child at q) and lies in front of p (depth(q) < depth(p)).
+/// A contour pixel pair is on the stretch of the one object that is in front
+/// there, so no boundary counts for both directions of a mutual pair.
+void measure_stretches(const LayoutImages& im, Candidates& cs) {
+  if (cs.list.empty()) return;
+  for (int r = 0; r < im.height; ++r) {
+    for (int c = 0; c < im.width; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * im.width + c;
+      const std::int32_t v = im.visible[p];
+      if (v == 0) continue;
+      if (!cs.has_candidate_parent[static_cast<std::size_t>(v - 1)]) continue;
+      ContourNeighbours nb = contour_neighbours(im, cs, r, c);
+      if (nb.count == 0) continue;
+      const float dp = im.depth[p];
+      if (!valid_depth(dp)) continue;
+      measure_contour_pixel(nb, dp, cs);
+    }
+  }
+}
+
+/// The parent -> child graph of the relations.
+struct Graph {
+  std::vector<std::vector<int>> parents, children;
+};
+
+/// Stage 4b: relations. A candidate whose parent meets its child on a measured
+/// contour but is in front nowhere on it lies behind the child (a sign error,
+/// or the child's boundary counted for the parent): dropped. Without a measured
+/// contour the masks alone decide.
+Graph keep_relations(Candidates& cs, Layout& L) {
+  const std::size_t nn = static_cast<std::size_t>(L.num_objects);
   std::vector<std::uint8_t> is_parent(nn * nn, 0);  // [child * n + parent]
-  std::vector<std::vector<int>> parents(nn), children(nn);
-  for (Candidate& cd : cand) {
+  Graph g{std::vector<std::vector<int>>(nn), std::vector<std::vector<int>>(nn)};
+  for (Candidate& cd : cs.list) {
     if (cd.measured > 0 && cd.stretch == 0) continue;
     const auto a = static_cast<std::size_t>(cd.parent), b = static_cast<std::size_t>(cd.child);
     is_parent[b * nn + a] = 1;
-    parents[b].push_back(cd.parent);
-    children[a].push_back(cd.child);
+    g.parents[b].push_back(cd.parent);
+    g.children[a].push_back(cd.child);
     LayoutRelation rel;
     rel.parent = cd.parent;
     rel.child = cd.child;
@@ -308,14 +352,19 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
       else if (is_parent[j * nn + i])
         L.relation[i * nn + j] = 1;
     }
+  return g;
+}
 
-  // 5. Connected regions of each visible mask (8-connectivity, OpenCV), inside its bounding box.
-  parallel_for(nn, opt.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+/// Stage 5: connected regions of each visible mask (8-connectivity, OpenCV),
+/// inside its box.
+void count_regions(const LayoutImages& im, const Boxes& bx, const LayoutOptions& opt, Layout& L) {
+  const int H = im.height, W = im.width;
+  parallel_for(L.visible.size(), opt.num_threads, 1, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       if (!L.visible[i]) continue;
-      const cv::Mat ids(H, W, CV_32S, const_cast<std::int32_t*>(vis),
+      const cv::Mat ids(H, W, CV_32S, const_cast<std::int32_t*>(im.visible),
                         static_cast<std::size_t>(W) * sizeof(std::int32_t));
-      const cv::Rect box(c0[i], r0[i], c1[i] - c0[i] + 1, r1[i] - r0[i] + 1);
+      const cv::Rect box(bx.c0[i], bx.r0[i], bx.c1[i] - bx.c0[i] + 1, bx.r1[i] - bx.r0[i] + 1);
       cv::Mat mask;
       cv::compare(ids(box), cv::Scalar(static_cast<double>(i + 1)), mask, cv::CMP_EQ);
       cv::Mat labels, stats, centroids;
@@ -330,68 +379,77 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
       L.complete[i] = regions <= 1 ? 1 : 0;
     }
   });
+}
 
-  // 6. Layers.
-  std::vector<int> visible_nodes;
-  for (std::size_t i = 0; i < nn; ++i)
-    if (L.visible[i]) visible_nodes.push_back(static_cast<int>(i));
-  const std::vector<int> comp = strongly_connected(n, children, visible_nodes);
+/// Stage 6: layers of the visible objects (comp: their strongly connected
+/// components).
+void assign_layers(const Graph& g, const std::vector<int>& visible_nodes,
+                   const std::vector<int>& comp, Layout& L) {
+  const std::size_t nn = static_cast<std::size_t>(L.num_objects);
   std::vector<int> comp_size(nn, 0);
   for (int v : visible_nodes) ++comp_size[static_cast<std::size_t>(comp[v])];
   std::vector<std::uint8_t> comp_interlock(nn, 1);
   for (int v : visible_nodes) {
     int outside = 0;
-    for (int a : parents[v])
+    for (int a : g.parents[v])
       if (comp[a] != comp[v]) ++outside;
     if (outside > 1) comp_interlock[static_cast<std::size_t>(comp[v])] = 0;
   }
   for (int v : visible_nodes)
-    if (parents[v].empty()) L.layer[v] = 0;
+    if (g.parents[v].empty()) L.layer[v] = 0;
   for (int v : visible_nodes) {
     const auto cv_ = static_cast<std::size_t>(comp[v]);
-    if (parents[v].size() == 1 && L.layer[parents[v][0]] == 0 && comp_size[cv_] == 1)
+    if (g.parents[v].size() == 1 && L.layer[g.parents[v][0]] == 0 && comp_size[cv_] == 1)
       L.layer[v] = 1;
     else if (comp_size[cv_] >= 2 && comp_interlock[cv_])
       L.layer[v] = 2;
   }
+}
 
-  // 7. Picking order (Kahn, smallest id first; cycles broken by the smallest occlusion).
-  {
-    std::vector<int> remaining_parents(nn, 0);
-    std::vector<std::uint8_t> taken(nn, 0);
-    std::priority_queue<int, std::vector<int>, std::greater<int>> ready;
-    for (int v : visible_nodes) {
-      remaining_parents[v] = static_cast<int>(parents[v].size());
-      if (remaining_parents[v] == 0) ready.push(v);
-    }
-    auto take = [&](int v) {
-      taken[v] = 1;
-      L.order.push_back(v + 1);
-      for (int w : children[v])
-        if (!taken[w] && --remaining_parents[w] == 0) ready.push(w);
-    };
-    while (L.order.size() < visible_nodes.size()) {
-      if (!ready.empty()) {
-        const int v = ready.top();
-        ready.pop();
-        if (!taken[v]) take(v);
-        continue;
-      }
-      // Only cycles remain: candidates are objects whose remaining parents share their SCC.
-      int best = -1;
-      for (int v : visible_nodes) {
-        if (taken[v]) continue;
-        bool source = true;
-        for (int a : parents[v])
-          if (!taken[a] && comp[a] != comp[v]) source = false;
-        if (!source) continue;
-        if (best < 0 || im.occlusion[v] < im.occlusion[best]) best = v;
-      }
-      take(best);  // non-empty: the condensation of the remaining graph has a source
-    }
+/// Stage 7: picking order (Kahn, smallest id first; cycles broken by the
+/// smallest occlusion).
+void picking_order(const Graph& g, const std::vector<int>& visible_nodes,
+                   const std::vector<int>& comp, const double* occlusion, Layout& L) {
+  const std::size_t nn = static_cast<std::size_t>(L.num_objects);
+  std::vector<int> remaining_parents(nn, 0);
+  std::vector<std::uint8_t> taken(nn, 0);
+  std::priority_queue<int, std::vector<int>, std::greater<int>> ready;
+  for (int v : visible_nodes) {
+    remaining_parents[v] = static_cast<int>(g.parents[v].size());
+    if (remaining_parents[v] == 0) ready.push(v);
   }
+  auto take = [&](int v) {
+    taken[v] = 1;
+    L.order.push_back(v + 1);
+    for (int w : g.children[v])
+      if (!taken[w] && --remaining_parents[w] == 0) ready.push(w);
+  };
+  while (L.order.size() < visible_nodes.size()) {
+    if (!ready.empty()) {
+      const int v = ready.top();
+      ready.pop();
+      if (!taken[v]) take(v);
+      continue;
+    }
+    // Only cycles remain: candidates are objects whose remaining parents share
+    // their SCC.
+    int best = -1;
+    for (int v : visible_nodes) {
+      if (taken[v]) continue;
+      bool source = true;
+      for (int a : g.parents[v])
+        if (!taken[a] && comp[a] != comp[v]) source = false;
+      if (!source) continue;
+      if (best < 0 || occlusion[v] < occlusion[best]) best = v;
+    }
+    take(best);  // non-empty: the condensation of the remaining graph has a
+                 // source
+  }
+}
 
-  // 8. Difficulty.
+/// Stage 8: difficulty level of the view.
+void assign_difficulty(const LayoutImages& im, const std::vector<int>& visible_nodes,
+                       const LayoutOptions& opt, Layout& L) {
   std::set<int> layers_present;
   std::set<std::int32_t> categories;
   bool all_complete = true;
@@ -412,6 +470,39 @@ Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
   } else {
     L.difficulty = all_complete ? 4 : 5;
   }
+}
+
+}  // namespace
+
+Layout compute_layout(const LayoutImages& im, const LayoutOptions& opt) {
+  check_options(opt);
+  check_images(im);
+  const int n = im.num_objects;
+  const std::size_t nn = static_cast<std::size_t>(n);
+
+  Layout L;
+  L.num_objects = n;
+  L.relation.assign(nn * nn, 0);
+  L.visible_px.assign(nn, 0);
+  L.visible.assign(nn, 0);
+  L.layer.assign(nn, 3);
+  L.num_regions.assign(nn, 0);
+  L.complete.assign(nn, 0);
+  L.total_covered_edge.assign(nn, 0);
+
+  const Boxes boxes = count_visible(im, L);                                   // 1
+  const std::vector<std::int64_t> S = seen_over_counts(im, opt.num_threads);  // 2
+  Candidates cand = candidate_relations(S, L.visible, opt);                   // 3
+  measure_stretches(im, cand);                                                // 4
+  const Graph graph = keep_relations(cand, L);                                // 4b
+  count_regions(im, boxes, opt, L);                                           // 5
+  std::vector<int> visible_nodes;
+  for (std::size_t i = 0; i < nn; ++i)
+    if (L.visible[i]) visible_nodes.push_back(static_cast<int>(i));
+  const std::vector<int> comp = strongly_connected(n, graph.children, visible_nodes);
+  assign_layers(graph, visible_nodes, comp, L);                // 6
+  picking_order(graph, visible_nodes, comp, im.occlusion, L);  // 7
+  assign_difficulty(im, visible_nodes, opt, L);                // 8
   return L;
 }
 

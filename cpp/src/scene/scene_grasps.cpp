@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace mgn {
 
@@ -350,34 +351,193 @@ struct SceneGraspModel::Impl {
     }
     return any;
   }
+
+  /// The obstacles (objects 0..N-1, then the tote) and the visibility scene. A scene often
+  /// holds several instances of one object: their meshes (same vertices and faces, object
+  /// frame) share one Solid, so its BVHs are built once. The distinct Solids are built in
+  /// parallel (each build is independent and deterministic).
+  void build_obstacles(const std::vector<SceneGraspObject>& objects, const Mesh& tote,
+                       const Pose& X_WT) {
+    const std::size_t N = objects.size();
+    auto mesh_of = [&](std::size_t i) -> const Mesh& { return i < N ? *objects[i].mesh : tote; };
+    auto same_mesh = [](const Mesh& a, const Mesh& b) {
+      return &a == &b ||
+             (a.vertices().rows() == b.vertices().rows() && a.faces().rows() == b.faces().rows() &&
+              a.vertices() == b.vertices() && a.faces() == b.faces());
+    };
+    std::vector<std::size_t> first_of(N + 1);  // obstacle i uses the Solid of obstacle first_of[i]
+    std::vector<std::size_t> distinct;
+    for (std::size_t i = 0; i <= N; ++i) {
+      first_of[i] = i;
+      for (const std::size_t d : distinct) {
+        if (same_mesh(mesh_of(i), mesh_of(d))) {
+          first_of[i] = d;
+          break;
+        }
+      }
+      if (first_of[i] == i) distinct.push_back(i);
+    }
+    std::vector<std::shared_ptr<const Solid>> solids(N + 1);
+    parallel_for(distinct.size(), resolve_num_threads(options.num_threads), 1,
+                 [&](std::size_t begin, std::size_t end) {
+                   for (std::size_t k = begin; k < end; ++k)
+                     solids[distinct[k]] = std::make_shared<const Solid>(mesh_of(distinct[k]));
+                 });
+    std::vector<RayGeometry> geoms;
+    for (std::size_t i = 0; i <= N; ++i) {
+      const Mesh& mesh = mesh_of(i);
+      const Pose X = i < N ? objects[i].X_WO : X_WT;
+      obstacles.push_back(solids[first_of[i]]);
+      X_W_obstacle.push_back(X);
+      X_obstacle_W.push_back(X.inverse());
+      obstacle_box.push_back(world_box(obstacles.back()->box, X));
+      obstacle_vertex.push_back(X * obstacles.back()->vertex);
+      geoms.push_back({&mesh, X, static_cast<std::int32_t>(i < N ? i + 1 : 0)});
+    }
+    scene = std::make_unique<RayScene>(geoms);
+  }
+
+  /// The floor slab: the tote's footprint below its inner floor surface (z < 0, tote frame).
+  void build_floor(const Mesh& tote, const Pose& X_WT) {
+    const auto b = tote.bounds();
+    const double depth = std::max(0.01, -b(0, 2) + 0.01);
+    const Vec3d size(b(1, 0) - b(0, 0) + 0.02, b(1, 1) - b(0, 1) + 0.02, depth);
+    Pose X = Pose::Identity();
+    X.translation() = Vec3d(0.5 * (b(0, 0) + b(1, 0)), 0.5 * (b(0, 1) + b(1, 1)), -0.5 * depth);
+    floor = std::make_unique<Solid>(make_box(size).transformed(X));
+    X_W_floor = X_WT;
+  }
+
+  /// The parallel-jaw hand (opening 0) and the suction tool (contact frame).
+  void build_tools() {
+    const GripperMeshes gm = gripper_meshes(gripper, 0.0);
+    hand[0] = std::make_unique<Solid>(gm.palm);
+    hand[1] = std::make_unique<Solid>(gm.finger_left);
+    hand[2] = std::make_unique<Solid>(gm.finger_right);
+    const SuctionTool& t = options.tool;
+    const double body = cup.body_height - t.clearance;
+    if (!(body > 0.0)) {
+      throw_error<InvalidArgument>("SceneGraspModel: cup.body_height (", cup.body_height,
+                                   " m) must exceed tool.clearance (", t.clearance, " m)");
+    }
+    // Contact frame: z into the surface, so the tool lies at z < 0.
+    Pose X = Pose::Identity();
+    X.translation() = Vec3d(0, 0, -(t.clearance + 0.5 * body));
+    tool[0] = std::make_unique<Solid>(make_cylinder(cup.outer_radius, body, 32).transformed(X));
+    X.translation() = Vec3d(0, 0, -(cup.body_height + 0.5 * t.shaft_length));
+    tool[1] =
+        std::make_unique<Solid>(make_cylinder(t.shaft_radius, t.shaft_length, 32).transformed(X));
+  }
+
+  /// Rows for n grasps, every score NaN, no collision.
+  void allocate(PlacedGrasps& p, std::size_t n) const {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const std::size_t K = options.offsets.size();
+    p.X_W_tool.resize(n);
+    p.X_W_contact.resize(n);
+    p.contacts.resize(static_cast<Eigen::Index>(n), 3);
+    p.second_contacts.resize(static_cast<Eigen::Index>(n), 3);
+    p.width.assign(n, 0.0f);
+    p.score_analytical.assign(n, nan);
+    p.score_simulation.assign(n, nan);
+    p.score_wrench.assign(n, nan);
+    p.object_index.assign(n, 0);
+    p.colliding.assign(n, 0);
+    p.hit.assign(n * K, -1);
+    p.collision_part.assign(n, 0);
+    p.collision_obstacle.assign(n, 0);
+  }
+
+  /// The parallel-jaw grasps of object i (gravity g_O in its frame) from row `row` on.
+  void place_pj(const SceneGraspObject& o, std::size_t i, const Vec3d& g_O, std::size_t& row) {
+    if (o.pj.empty()) return;
+    const std::vector<float> wrench = pj_wrench_scores(o.pj, o.mass, o.com, g_O, options.pj_wrench);
+    for (std::size_t g = 0; g < o.pj.size(); ++g, ++row) {
+      const ParallelJawGrasp& gr = o.pj[g];
+      const auto r = static_cast<Eigen::Index>(row);
+      pj.X_W_tool[row] = o.X_WO * hand_pose(gr, gripper);
+      Pose X_OG = Pose::Identity();
+      X_OG.linear() = grasp_rotation(gr);
+      X_OG.translation() = gr.p1;
+      pj.X_W_contact[row] = o.X_WO * X_OG;
+      pj.contacts.row(r) = (o.X_WO * gr.p1).transpose();
+      pj.second_contacts.row(r) = (o.X_WO * (gr.p1 + gr.width * gr.closing)).transpose();
+      pj.width[row] = static_cast<float>(gr.width);
+      if (!o.pj_score_analytical.empty()) pj.score_analytical[row] = o.pj_score_analytical[g];
+      if (!o.pj_score_simulation.empty()) pj.score_simulation[row] = o.pj_score_simulation[g];
+      pj.score_wrench[row] = wrench[g];
+      pj.object_index[row] = static_cast<std::int32_t>(i);
+    }
+  }
+
+  /// The suction grasps of object i (gravity g_O in its frame) from row `row` on.
+  void place_suction(const SceneGraspObject& o, std::size_t i, const Vec3d& g_O, std::size_t& row) {
+    const auto Ks = static_cast<std::size_t>(o.suction_points.rows());
+    if (Ks == 0) return;
+    PlacedGrasps& su = suction;
+    const std::vector<float> wrench =
+        suction_wrench_scores(o.suction_points, o.suction_approach, o.mass, o.com, g_O, cup.radius,
+                              options.suction_wrench);
+    for (std::size_t g = 0; g < Ks; ++g, ++row) {
+      const auto s = static_cast<Eigen::Index>(g);
+      const auto r = static_cast<Eigen::Index>(row);
+      const Vec3d c_W = o.X_WO * o.suction_points.row(s).transpose().cast<double>();
+      const Vec3d a_W =
+          (o.X_WO.linear() * o.suction_approach.row(s).transpose().cast<double>()).normalized();
+      Pose X_WS = Pose::Identity();
+      X_WS.linear() = frame_z_to(a_W);
+      X_WS.translation() = c_W;
+      su.X_W_contact[row] = X_WS;
+      su.X_W_tool[row] = back_off(X_WS, kSuctionToolOffset);
+      su.contacts.row(r) = c_W.transpose();
+      su.second_contacts.row(r) = c_W.transpose();
+      if (!o.suction_score_analytical.empty())
+        su.score_analytical[row] = o.suction_score_analytical[g];
+      if (!o.suction_score_simulation.empty())
+        su.score_simulation[row] = o.suction_score_simulation[g];
+      su.score_wrench[row] = wrench[g];
+      su.object_index[row] = static_cast<std::int32_t>(i);
+    }
+  }
+
+  /// Collisions of every placed grasp (parallel over grasps; each result depends only on its
+  /// row).
+  void test_collisions() {
+    const std::size_t K = options.offsets.size();
+    const int threads = resolve_num_threads(options.num_threads);
+    PlacedGrasps& su = suction;
+    parallel_for(pj.width.size(), threads, 64, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t r = begin; r < end; ++r) {
+        const double opening = gripper.collision_opening(pj.width[r]);
+        const auto own = static_cast<std::int64_t>(pj.object_index[r]);
+        pj.colliding[r] =
+            pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K], &pj.collision_part[r],
+                    &pj.collision_obstacle[r], options.first_collision_only)
+                ? 1
+                : 0;
+      }
+    });
+    parallel_for(su.width.size(), threads, 64, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t r = begin; r < end; ++r) {
+        su.colliding[r] =
+            suction_hits(su.X_W_contact[r], &su.hit[r * K],
+                         static_cast<std::int64_t>(su.object_index[r]), &su.collision_part[r],
+                         &su.collision_obstacle[r], options.first_collision_only)
+                ? 1
+                : 0;
+      }
+    });
+  }
 };
 
-// Complexity ceiling of .clang-tidy exceeded on purpose: input checks, the obstacles and
-// visibility scene, the shared solids, the placement and wrench scores and the parallel
-// collision tests of every grasp, in the order the results are defined.
-// NOLINTNEXTLINE(readability-function-cognitive-complexity)
-SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, const Mesh& tote,
-                                 const Pose& X_WT, const ParallelJawGripper& gripper,
-                                 const Cup& cup, const SceneGraspOptions& options)
-    : impl_(std::make_unique<Impl>()) {
-  Impl& m = *impl_;
-  options.validate();
-  gripper.validate();
-  cup.validate();
-  if (objects.empty()) {
-    throw_error<InvalidArgument>(
-        "SceneGraspModel: the scene has no objects; expected at least one");
-  }
-  require_non_empty(tote, "SceneGraspModel tote");
-  check_pose(X_WT, "X_WT (tote)", 0);
-  m.options = options;
-  m.gripper = gripper;
-  m.cup = cup;
-  m.num_objects = objects.size();
-  const std::size_t N = objects.size();
-  // Validate every object and grasp before the parallel work.
+namespace {
+
+/// Checks every object and grasp of the scene (before the parallel work); returns the numbers
+/// of parallel-jaw and suction grasps.
+std::pair<std::size_t, std::size_t> check_objects(const std::vector<SceneGraspObject>& objects,
+                                                  const ParallelJawGripper& gripper) {
   std::size_t num_pj = 0, num_suction = 0;
-  for (std::size_t i = 0; i < N; ++i) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
     const SceneGraspObject& o = objects[i];
     if (o.mesh == nullptr)
       throw_error<InvalidArgument>("SceneGraspModel: object ", i, " has no mesh");
@@ -432,174 +592,45 @@ SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, c
     num_pj += M;
     num_suction += K;
   }
+  return {num_pj, num_suction};
+}
 
-  // Obstacles and the visibility scene.
-  // A scene often holds several instances of one object: their meshes (same vertices and faces,
-  // object frame) share one Solid, so its BVHs are built once. The distinct Solids are built in
-  // parallel (each build is independent and deterministic).
-  auto mesh_of = [&](std::size_t i) -> const Mesh& { return i < N ? *objects[i].mesh : tote; };
-  auto same_mesh = [](const Mesh& a, const Mesh& b) {
-    return &a == &b ||
-           (a.vertices().rows() == b.vertices().rows() && a.faces().rows() == b.faces().rows() &&
-            a.vertices() == b.vertices() && a.faces() == b.faces());
-  };
-  std::vector<std::size_t> first_of(N + 1);  // obstacle i uses the Solid of obstacle first_of[i]
-  std::vector<std::size_t> distinct;
-  for (std::size_t i = 0; i <= N; ++i) {
-    first_of[i] = i;
-    for (const std::size_t d : distinct) {
-      if (same_mesh(mesh_of(i), mesh_of(d))) {
-        first_of[i] = d;
-        break;
-      }
-    }
-    if (first_of[i] == i) distinct.push_back(i);
-  }
-  std::vector<std::shared_ptr<const Solid>> solids(N + 1);
-  parallel_for(distinct.size(), resolve_num_threads(options.num_threads), 1,
-               [&](std::size_t begin, std::size_t end) {
-                 for (std::size_t k = begin; k < end; ++k)
-                   solids[distinct[k]] = std::make_shared<const Solid>(mesh_of(distinct[k]));
-               });
-  std::vector<RayGeometry> geoms;
-  for (std::size_t i = 0; i <= N; ++i) {
-    const Mesh& mesh = mesh_of(i);
-    const Pose X = i < N ? objects[i].X_WO : X_WT;
-    m.obstacles.push_back(solids[first_of[i]]);
-    m.X_W_obstacle.push_back(X);
-    m.X_obstacle_W.push_back(X.inverse());
-    m.obstacle_box.push_back(world_box(m.obstacles.back()->box, X));
-    m.obstacle_vertex.push_back(X * m.obstacles.back()->vertex);
-    geoms.push_back({&mesh, X, static_cast<std::int32_t>(i < N ? i + 1 : 0)});
-  }
-  m.scene = std::make_unique<RayScene>(geoms);
-  {
-    // The floor slab: the tote's footprint below its inner floor surface (z < 0, tote frame).
-    const auto b = tote.bounds();
-    const double depth = std::max(0.01, -b(0, 2) + 0.01);
-    const Vec3d size(b(1, 0) - b(0, 0) + 0.02, b(1, 1) - b(0, 1) + 0.02, depth);
-    Pose X = Pose::Identity();
-    X.translation() = Vec3d(0.5 * (b(0, 0) + b(1, 0)), 0.5 * (b(0, 1) + b(1, 1)), -0.5 * depth);
-    m.floor = std::make_unique<Solid>(make_box(size).transformed(X));
-    m.X_W_floor = X_WT;
-  }
-  {
-    const GripperMeshes gm = gripper_meshes(gripper, 0.0);
-    m.hand[0] = std::make_unique<Solid>(gm.palm);
-    m.hand[1] = std::make_unique<Solid>(gm.finger_left);
-    m.hand[2] = std::make_unique<Solid>(gm.finger_right);
-    const SuctionTool& t = options.tool;
-    const double body = cup.body_height - t.clearance;
-    if (!(body > 0.0)) {
-      throw_error<InvalidArgument>("SceneGraspModel: cup.body_height (", cup.body_height,
-                                   " m) must exceed tool.clearance (", t.clearance, " m)");
-    }
-    // Contact frame: z into the surface, so the tool lies at z < 0.
-    Pose X = Pose::Identity();
-    X.translation() = Vec3d(0, 0, -(t.clearance + 0.5 * body));
-    m.tool[0] = std::make_unique<Solid>(make_cylinder(cup.outer_radius, body, 32).transformed(X));
-    X.translation() = Vec3d(0, 0, -(cup.body_height + 0.5 * t.shaft_length));
-    m.tool[1] =
-        std::make_unique<Solid>(make_cylinder(t.shaft_radius, t.shaft_length, 32).transformed(X));
-  }
+}  // namespace
 
-  // Placement and wrench scores (serial: cheap).
-  const float nan = std::numeric_limits<float>::quiet_NaN();
+SceneGraspModel::SceneGraspModel(const std::vector<SceneGraspObject>& objects, const Mesh& tote,
+                                 const Pose& X_WT, const ParallelJawGripper& gripper,
+                                 const Cup& cup, const SceneGraspOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  options.validate();
+  gripper.validate();
+  cup.validate();
+  if (objects.empty()) {
+    throw_error<InvalidArgument>(
+        "SceneGraspModel: the scene has no objects; expected at least one");
+  }
+  require_non_empty(tote, "SceneGraspModel tote");
+  check_pose(X_WT, "X_WT (tote)", 0);
+  m.options = options;
+  m.gripper = gripper;
+  m.cup = cup;
+  m.num_objects = objects.size();
+  const auto [num_pj, num_suction] = check_objects(objects, gripper);
+  m.build_obstacles(objects, tote, X_WT);
+  m.build_floor(tote, X_WT);
+  m.build_tools();
+  // Placement and wrench scores (serial: cheap), object by object.
+  m.allocate(m.pj, num_pj);
+  m.allocate(m.suction, num_suction);
   const Vec3d g_W = options.gravity_world.normalized();
-  const std::size_t K = options.offsets.size();
-  PlacedGrasps& pj = m.pj;
-  PlacedGrasps& su = m.suction;
-  for (PlacedGrasps* p : {&pj, &su}) {
-    const std::size_t n = p == &pj ? num_pj : num_suction;
-    p->X_W_tool.resize(n);
-    p->X_W_contact.resize(n);
-    p->contacts.resize(static_cast<Eigen::Index>(n), 3);
-    p->second_contacts.resize(static_cast<Eigen::Index>(n), 3);
-    p->width.assign(n, 0.0f);
-    p->score_analytical.assign(n, nan);
-    p->score_simulation.assign(n, nan);
-    p->score_wrench.assign(n, nan);
-    p->object_index.assign(n, 0);
-    p->colliding.assign(n, 0);
-    p->hit.assign(n * K, -1);
-    p->collision_part.assign(n, 0);
-    p->collision_obstacle.assign(n, 0);
-  }
   std::size_t row_pj = 0, row_su = 0;
-  for (std::size_t i = 0; i < N; ++i) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
     const SceneGraspObject& o = objects[i];
     const Vec3d g_O = o.X_WO.linear().transpose() * g_W;
-    if (!o.pj.empty()) {
-      const std::vector<float> wrench =
-          pj_wrench_scores(o.pj, o.mass, o.com, g_O, options.pj_wrench);
-      for (std::size_t g = 0; g < o.pj.size(); ++g, ++row_pj) {
-        const ParallelJawGrasp& gr = o.pj[g];
-        const auto r = static_cast<Eigen::Index>(row_pj);
-        pj.X_W_tool[row_pj] = o.X_WO * hand_pose(gr, gripper);
-        Pose X_OG = Pose::Identity();
-        X_OG.linear() = grasp_rotation(gr);
-        X_OG.translation() = gr.p1;
-        pj.X_W_contact[row_pj] = o.X_WO * X_OG;
-        pj.contacts.row(r) = (o.X_WO * gr.p1).transpose();
-        pj.second_contacts.row(r) = (o.X_WO * (gr.p1 + gr.width * gr.closing)).transpose();
-        pj.width[row_pj] = static_cast<float>(gr.width);
-        if (!o.pj_score_analytical.empty()) pj.score_analytical[row_pj] = o.pj_score_analytical[g];
-        if (!o.pj_score_simulation.empty()) pj.score_simulation[row_pj] = o.pj_score_simulation[g];
-        pj.score_wrench[row_pj] = wrench[g];
-        pj.object_index[row_pj] = static_cast<std::int32_t>(i);
-      }
-    }
-    const auto Ks = static_cast<std::size_t>(o.suction_points.rows());
-    if (Ks > 0) {
-      const std::vector<float> wrench =
-          suction_wrench_scores(o.suction_points, o.suction_approach, o.mass, o.com, g_O,
-                                cup.radius, options.suction_wrench);
-      for (std::size_t g = 0; g < Ks; ++g, ++row_su) {
-        const auto s = static_cast<Eigen::Index>(g);
-        const auto r = static_cast<Eigen::Index>(row_su);
-        const Vec3d c_W = o.X_WO * o.suction_points.row(s).transpose().cast<double>();
-        const Vec3d a_W =
-            (o.X_WO.linear() * o.suction_approach.row(s).transpose().cast<double>()).normalized();
-        Pose X_WS = Pose::Identity();
-        X_WS.linear() = frame_z_to(a_W);
-        X_WS.translation() = c_W;
-        su.X_W_contact[row_su] = X_WS;
-        su.X_W_tool[row_su] = back_off(X_WS, kSuctionToolOffset);
-        su.contacts.row(r) = c_W.transpose();
-        su.second_contacts.row(r) = c_W.transpose();
-        if (!o.suction_score_analytical.empty())
-          su.score_analytical[row_su] = o.suction_score_analytical[g];
-        if (!o.suction_score_simulation.empty())
-          su.score_simulation[row_su] = o.suction_score_simulation[g];
-        su.score_wrench[row_su] = wrench[g];
-        su.object_index[row_su] = static_cast<std::int32_t>(i);
-      }
-    }
+    m.place_pj(o, i, g_O, row_pj);
+    m.place_suction(o, i, g_O, row_su);
   }
-
-  // Collisions (parallel over grasps; each result depends only on its row).
-  const int threads = resolve_num_threads(options.num_threads);
-  parallel_for(num_pj, threads, 64, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t r = begin; r < end; ++r) {
-      const double opening = gripper.collision_opening(pj.width[r]);
-      const auto own = static_cast<std::int64_t>(pj.object_index[r]);
-      pj.colliding[r] =
-          m.pj_hits(pj.X_W_tool[r], opening, own, false, &pj.hit[r * K], &pj.collision_part[r],
-                    &pj.collision_obstacle[r], options.first_collision_only)
-              ? 1
-              : 0;
-    }
-  });
-  parallel_for(num_suction, threads, 64, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t r = begin; r < end; ++r) {
-      su.colliding[r] =
-          m.suction_hits(su.X_W_contact[r], &su.hit[r * K],
-                         static_cast<std::int64_t>(su.object_index[r]), &su.collision_part[r],
-                         &su.collision_obstacle[r], options.first_collision_only)
-              ? 1
-              : 0;
-    }
-  });
+  m.test_collisions();
 }
 
 SceneGraspModel::~SceneGraspModel() = default;

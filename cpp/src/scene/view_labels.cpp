@@ -183,12 +183,50 @@ ViewLabelModel& ViewLabelModel::operator=(ViewLabelModel&&) noexcept = default;
 int ViewLabelModel::num_objects() const { return static_cast<int>(impl_->objects.size()); }
 bool ViewLabelModel::has_tote() const { return impl_->tote; }
 
-// Size and complexity ceilings of .clang-tidy exceeded on purpose: one pass over the cast
-// tiles, masks, keypoints and heat maps of a view, which share the per-object spans and images.
-// NOLINTNEXTLINE(readability-function-size,readability-function-cognitive-complexity)
-ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
-                                      const std::int32_t* instance_image, int image_width,
-                                      int image_height, const ViewLabelOptions& options) const {
+namespace {
+
+using Object = ViewLabelModel::Impl::Object;
+
+/// What the stages of label_view share: the camera, the instance image and the options.
+struct ViewInput {
+  ViewInput(const Intrinsics& K_, const Pose& X_WC_, const std::int32_t* ids_,
+            const ViewLabelOptions& options_, int num_objects)
+      : K(K_),
+        X_WC(X_WC_),
+        ids(ids_),
+        options(options_),
+        W(K_.width),
+        H(K_.height),
+        N(num_objects),
+        P(static_cast<std::size_t>(W) * static_cast<std::size_t>(H)),
+        X_CW(X_WC_.inverse()),
+        R_WC(X_WC_.linear()),
+        origin(X_WC_.translation().cast<float>().transpose()) {}
+  const Intrinsics& K;
+  const Pose& X_WC;
+  const std::int32_t* ids;  // instance image, row-major (H, W)
+  const ViewLabelOptions& options;
+  int W, H, N;
+  std::size_t P;  // pixels
+  Pose X_CW;
+  Mat3d R_WC;
+  Eigen::RowVector3f origin;  // camera centre, world frame
+};
+
+/// The pixels to cast for one object: a span of columns [u_lo, u_hi] per row of its box.
+struct CastRegion {
+  PixelBox box;
+  std::vector<std::pair<int, int>> spans;
+};
+
+/// One tile of the amodal pass: rows [v0, v1) of an object's cast region.
+struct Tile {
+  int object, v0, v1;
+};
+
+void check_view_input(const Intrinsics& K, const Pose& X_WC, const std::int32_t* instance_image,
+                      int image_width, int image_height, const ViewLabelOptions& options,
+                      int num_objects) {
   CameraView cam;
   cam.K = K;
   cam.X_WC = X_WC;
@@ -206,32 +244,32 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
     throw_error<InvalidArgument>(kLabel, ": keypoint_tolerance must be finite and >= 0, got ",
                                  options.keypoint_tolerance);
   }
-  const int W = K.width, H = K.height;
-  const int N = num_objects();
-  const std::size_t P = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  const int W = K.width;
+  const std::size_t P = static_cast<std::size_t>(W) * static_cast<std::size_t>(K.height);
   for (std::size_t p = 0; p < P; ++p) {
     const std::int32_t id = instance_image[p];
-    if (id < 0 || id > N) {
+    if (id < 0 || id > num_objects) {
       throw_error<InvalidArgument>(kLabel, ": instance image pixel (u=", p % W, ", v=", p / W,
-                                   ") has id ", id, "; expected 0 (background) .. ", N,
+                                   ") has id ", id, "; expected 0 (background) .. ", num_objects,
                                    " (the number of objects)");
     }
   }
+}
 
-  ViewLabels out;
-  out.width = W;
-  out.height = H;
-  out.num_objects = N;
-  out.visible.assign(instance_image, instance_image + P);
-  out.semantic.assign(P, 0);
+/// The semantic image and the visible pixel counts of `out`; returns the tight (visible) boxes.
+std::vector<PixelBox> visible_pass(const ViewInput& in, const std::vector<Object>& objects,
+                                   ViewLabels& out) {
+  const int W = in.W, H = in.H, N = in.N;
+  out.visible.assign(in.ids, in.ids + in.P);
+  out.semantic.assign(in.P, 0);
   out.visible_pixels.assign(N, 0);
   std::vector<PixelBox> tight(N, PixelBox{W, H, -1, -1});
   std::vector<std::int32_t> category(N + 1, 0);
-  for (int i = 0; i < N; ++i) category[i + 1] = impl_->objects[i].category_id;
+  for (int i = 0; i < N; ++i) category[i + 1] = objects[i].category_id;
   for (int v = 0; v < H; ++v) {
     const std::size_t row = static_cast<std::size_t>(v) * W;
     for (int u = 0; u < W; ++u) {
-      const std::int32_t id = instance_image[row + u];
+      const std::int32_t id = in.ids[row + u];
       out.semantic[row + u] = category[id];
       if (id == 0) continue;
       const int i = id - 1;
@@ -243,190 +281,209 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
       b.v1 = std::max(b.v1, v);
     }
   }
+  return tight;
+}
 
-  // Pixels to cast per object: a span of columns per row of its projected box. The silhouette
-  // of a mesh lies inside the convex hull of its projected vertices, so a row's span is where
-  // the row's centre line crosses that hull (widened by a pixel for rounding). If a vertex is
-  // not in front of the camera, every pixel is cast.
-  const Pose X_CW = X_WC.inverse();
-  const Mat3d R_WC = X_WC.linear();
-  std::vector<PixelBox> cast_box(N);
-  std::vector<std::vector<std::pair<int, int>>> spans(N);  // per row of cast_box: [u_lo, u_hi]
-  for (int i = 0; i < N; ++i) {
-    const Points3d& V = impl_->objects[i].vertices_W;
-    const Points3d p_C = (V * X_CW.linear().transpose()).rowwise() + X_CW.translation().transpose();
-    PixelBox b{0, 0, W - 1, H - 1};
-    std::vector<Eigen::Vector2d> hull;
-    if (p_C.col(2).minCoeff() > 1e-9) {
-      std::vector<Eigen::Vector2d> pts(static_cast<std::size_t>(p_C.rows()));
-      for (Eigen::Index k = 0; k < p_C.rows(); ++k) {
-        pts[k] = {K.fx * p_C(k, 0) / p_C(k, 2) + K.cx, K.fy * p_C(k, 1) / p_C(k, 2) + K.cy};
-      }
-      hull = convex_hull(std::move(pts));
-      double x0 = hull[0].x(), x1 = x0, y0 = hull[0].y(), y1 = y0;
-      for (const auto& q : hull) {
-        x0 = std::min(x0, q.x());
-        x1 = std::max(x1, q.x());
-        y0 = std::min(y0, q.y());
-        y1 = std::max(y1, q.y());
-      }
-      // Pixel u's centre is u + 0.5: u in [ceil(xmin - 0.5), floor(xmax - 0.5)], plus 1 px slack.
-      auto lo = [](double m, int size) {
-        return static_cast<int>(std::clamp(std::ceil(m - 0.5) - 1.0, 0.0, double(size)));
-      };
-      auto hi = [](double m, int size) {
-        return static_cast<int>(std::clamp(std::floor(m - 0.5) + 1.0, -1.0, double(size - 1)));
-      };
-      b = PixelBox{lo(x0, W), lo(y0, H), hi(x1, W), hi(y1, H)};
+/// The pixels to cast for an object with world vertices V: a span of columns per row of its
+/// projected box. The silhouette of a mesh lies inside the convex hull of its projected
+/// vertices, so a row's span is where the row's centre line crosses that hull (widened by a
+/// pixel for rounding). If a vertex is not in front of the camera, every pixel is cast.
+CastRegion cast_region(const ViewInput& in, const Points3d& V) {
+  const Intrinsics& K = in.K;
+  const int W = in.W, H = in.H;
+  const Points3d p_C =
+      (V * in.X_CW.linear().transpose()).rowwise() + in.X_CW.translation().transpose();
+  PixelBox b{0, 0, W - 1, H - 1};
+  std::vector<Eigen::Vector2d> hull;
+  if (p_C.col(2).minCoeff() > 1e-9) {
+    std::vector<Eigen::Vector2d> pts(static_cast<std::size_t>(p_C.rows()));
+    for (Eigen::Index k = 0; k < p_C.rows(); ++k) {
+      pts[k] = {K.fx * p_C(k, 0) / p_C(k, 2) + K.cx, K.fy * p_C(k, 1) / p_C(k, 2) + K.cy};
     }
-    cast_box[i] = b;
-    if (b.empty()) continue;
-    auto& rows = spans[i];
-    const int num_rows = b.v1 - b.v0 + 1;
-    rows.assign(static_cast<std::size_t>(num_rows), {b.u0, b.u1});
-    if (hull.size() < 3) continue;
-    for (int v = b.v0; v <= b.v1; ++v) {
-      double xl = std::numeric_limits<double>::infinity(), xr = -xl;
-      for (const double dy : {-0.05, 0.0, 0.05}) hull_row(hull, v + 0.5 + dy, xl, xr);
-      auto& span = rows[static_cast<std::size_t>(v - b.v0)];
-      if (xl > xr) {
-        span = {b.u0, b.u0 - 1};
-      } else {
-        span = {std::max(b.u0, static_cast<int>(std::ceil(xl - 0.5)) - 1),
-                std::min(b.u1, static_cast<int>(std::floor(xr - 0.5)) + 1)};
-      }
+    hull = convex_hull(std::move(pts));
+    double x0 = hull[0].x(), x1 = x0, y0 = hull[0].y(), y1 = y0;
+    for (const auto& q : hull) {
+      x0 = std::min(x0, q.x());
+      x1 = std::max(x1, q.x());
+      y0 = std::min(y0, q.y());
+      y1 = std::max(y1, q.y());
+    }
+    // Pixel u's centre is u + 0.5: u in [ceil(xmin - 0.5), floor(xmax - 0.5)], plus 1 px slack.
+    auto lo = [](double m, int size) {
+      return static_cast<int>(std::clamp(std::ceil(m - 0.5) - 1.0, 0.0, double(size)));
+    };
+    auto hi = [](double m, int size) {
+      return static_cast<int>(std::clamp(std::floor(m - 0.5) + 1.0, -1.0, double(size - 1)));
+    };
+    b = PixelBox{lo(x0, W), lo(y0, H), hi(x1, W), hi(y1, H)};
+  }
+  CastRegion region;
+  region.box = b;
+  if (b.empty()) return region;
+  auto& rows = region.spans;
+  const int num_rows = b.v1 - b.v0 + 1;
+  rows.assign(static_cast<std::size_t>(num_rows), {b.u0, b.u1});
+  if (hull.size() < 3) return region;
+  for (int v = b.v0; v <= b.v1; ++v) {
+    double xl = std::numeric_limits<double>::infinity(), xr = -xl;
+    for (const double dy : {-0.05, 0.0, 0.05}) hull_row(hull, v + 0.5 + dy, xl, xr);
+    auto& span = rows[static_cast<std::size_t>(v - b.v0)];
+    if (xl > xr) {
+      span = {b.u0, b.u0 - 1};
+    } else {
+      span = {std::max(b.u0, static_cast<int>(std::ceil(xl - 0.5)) - 1),
+              std::min(b.u1, static_cast<int>(std::floor(xr - 0.5)) + 1)};
     }
   }
+  return region;
+}
 
-  // Tiles: (object, band of rows), about kTileRays rays each, in a fixed order.
-  struct Tile {
-    int object, v0, v1;  // rows [v0, v1)
-  };
+/// Tiles: (object, band of rows), about kTileRays rays each, in a fixed order.
+std::vector<Tile> make_tiles(const std::vector<CastRegion>& regions) {
   std::vector<Tile> tiles;
-  for (int i = 0; i < N; ++i) {
-    const PixelBox& b = cast_box[i];
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const PixelBox& b = regions[i].box;
     if (b.empty()) continue;
     long rays = 0;
     int start = b.v0;
     for (int v = b.v0; v <= b.v1; ++v) {
-      const auto& span = spans[i][static_cast<std::size_t>(v - b.v0)];
+      const auto& span = regions[i].spans[static_cast<std::size_t>(v - b.v0)];
       rays += std::max(0, span.second - span.first + 1);
       if (rays >= kTileRays || v == b.v1) {
-        tiles.push_back({i, start, v + 1});
+        tiles.push_back({static_cast<int>(i), start, v + 1});
         start = v + 1;
         rays = 0;
       }
     }
   }
+  return tiles;
+}
 
-  out.amodal.assign(static_cast<std::size_t>(N) * P, 0);
-  out.com_heatmap.assign(P, 0.0f);
-  const Eigen::RowVector3f origin = X_WC.translation().cast<float>().transpose();
-  auto body = [&](std::size_t begin, std::size_t end) {
-    Points3f o_vis, d_vis, o_hid, d_hid;
-    std::vector<std::size_t> p_vis, p_hid;
-    CastOptions co;
-    co.coherent = true;
-    co.num_threads = 1;
-    for (std::size_t t = begin; t < end; ++t) {
-      const Tile& tile = tiles[t];
-      const int i = tile.object;
-      const Impl::Object& obj = impl_->objects[i];
-      const PixelBox& b = cast_box[i];
-      const std::int32_t id = i + 1;
-      p_vis.clear();
-      p_hid.clear();
-      for (int v = tile.v0; v < tile.v1; ++v) {
-        const auto& span = spans[i][static_cast<std::size_t>(v - b.v0)];
-        for (int u = span.first; u <= span.second; ++u) {
-          const std::size_t p = static_cast<std::size_t>(v) * W + u;
-          if (instance_image[p] != id) {
-            p_hid.push_back(p);
-          } else if (options.depth == nullptr) {
-            p_vis.push_back(p);
-          }
-        }
-      }
-      auto fill = [&](const std::vector<std::size_t>& ps, Points3f& o, Points3f& d) {
-        const auto n = static_cast<Eigen::Index>(ps.size());
-        o.resize(n, 3);
-        d.resize(n, 3);
-        for (Eigen::Index k = 0; k < n; ++k) {
-          o.row(k) = origin;
-          d.row(k) =
-              pixel_direction(R_WC, K, static_cast<int>(ps[k] % W), static_cast<int>(ps[k] / W));
-        }
-      };
-      std::uint8_t* mask = out.amodal.data() + static_cast<std::size_t>(i) * P;
-      if (!p_hid.empty()) {
-        fill(p_hid, o_hid, d_hid);
-        const std::vector<std::uint8_t> hit = obj.alone->occluded(o_hid, d_hid, co);
-        for (std::size_t k = 0; k < p_hid.size(); ++k) mask[p_hid[k]] = hit[k];
-      }
-      if (!p_vis.empty()) {
-        fill(p_vis, o_vis, d_vis);
-        const RayHits hits = obj.alone->intersect(o_vis, d_vis, co);
-        const double span = std::max(obj.d_max - obj.d_min, 1e-12);
-        for (std::size_t k = 0; k < p_vis.size(); ++k) {
-          mask[p_vis[k]] = 1;  // visible => amodal, even if the ray grazes past the edge
-          if (hits.instance_ids[k] < 0) continue;
-          const double d = (hits.points.row(k).cast<double>().transpose() - obj.com_W).norm();
-          out.com_heatmap[p_vis[k]] =
-              static_cast<float>(std::clamp((obj.d_max - d) / span, 0.0, 1.0));
-        }
+/// Heat of a point at distance d from the centre of mass of `obj`, in [0, 1].
+float com_heat(const Object& obj, double d) {
+  const double span = std::max(obj.d_max - obj.d_min, 1e-12);
+  return static_cast<float>(std::clamp((obj.d_max - d) / span, 0.0, 1.0));
+}
+
+/// Rays of the pixels `ps` (origin: the camera centre, direction: through each pixel centre).
+void pixel_rays(const ViewInput& in, const std::vector<std::size_t>& ps, Points3f& o, Points3f& d) {
+  const auto n = static_cast<Eigen::Index>(ps.size());
+  const auto W = static_cast<std::size_t>(in.W);
+  o.resize(n, 3);
+  d.resize(n, 3);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    o.row(k) = in.origin;
+    d.row(k) =
+        pixel_direction(in.R_WC, in.K, static_cast<int>(ps[k] % W), static_cast<int>(ps[k] / W));
+  }
+}
+
+/// Per-thread buffers of the amodal pass.
+struct TileScratch {
+  Points3f o_vis, d_vis, o_hid, d_hid;
+  std::vector<std::size_t> p_vis, p_hid;
+};
+
+/// Casts one tile against its object alone: the hidden pixels' rays set the amodal mask; the
+/// visible ones (without a depth image) also give the heat map at their first hit.
+void cast_tile(const ViewInput& in, const Object& obj, const CastRegion& region, const Tile& tile,
+               TileScratch& s, ViewLabels& out) {
+  CastOptions co;
+  co.coherent = true;
+  co.num_threads = 1;
+  const int i = tile.object;
+  const std::int32_t id = i + 1;
+  s.p_vis.clear();
+  s.p_hid.clear();
+  for (int v = tile.v0; v < tile.v1; ++v) {
+    const auto& span = region.spans[static_cast<std::size_t>(v - region.box.v0)];
+    for (int u = span.first; u <= span.second; ++u) {
+      const std::size_t p = static_cast<std::size_t>(v) * in.W + u;
+      if (in.ids[p] != id) {
+        s.p_hid.push_back(p);
+      } else if (in.options.depth == nullptr) {
+        s.p_vis.push_back(p);
       }
     }
-  };
-  parallel_for(tiles.size(), options.num_threads, 1, body);
-  // Every visible pixel is amodal (also outside the cast box, should rasteriser and box
-  // disagree); with a depth image the heat map comes from the back-projected pixels.
-  auto visible_rows = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v) {
-      for (int u = 0; u < W; ++u) {
-        const std::size_t p = v * static_cast<std::size_t>(W) + u;
-        const std::int32_t id = instance_image[p];
-        if (id <= 0) continue;
-        out.amodal[static_cast<std::size_t>(id - 1) * P + p] = 1;
-        if (options.depth == nullptr) continue;
-        const double z = options.depth[p];
-        if (!(z > 0.0) || !std::isfinite(z)) continue;
-        const Impl::Object& obj = impl_->objects[id - 1];
-        const Vec3d p_C(z * (u + 0.5 - K.cx) / K.fx, z * (v + 0.5 - K.cy) / K.fy, z);
-        const double d = (X_WC * p_C - obj.com_W).norm();
-        const double span = std::max(obj.d_max - obj.d_min, 1e-12);
-        out.com_heatmap[p] = static_cast<float>(std::clamp((obj.d_max - d) / span, 0.0, 1.0));
-      }
+  }
+  std::uint8_t* mask = out.amodal.data() + static_cast<std::size_t>(i) * in.P;
+  if (!s.p_hid.empty()) {
+    pixel_rays(in, s.p_hid, s.o_hid, s.d_hid);
+    const std::vector<std::uint8_t> hit = obj.alone->occluded(s.o_hid, s.d_hid, co);
+    for (std::size_t k = 0; k < s.p_hid.size(); ++k) mask[s.p_hid[k]] = hit[k];
+  }
+  if (!s.p_vis.empty()) {
+    pixel_rays(in, s.p_vis, s.o_vis, s.d_vis);
+    const RayHits hits = obj.alone->intersect(s.o_vis, s.d_vis, co);
+    for (std::size_t k = 0; k < s.p_vis.size(); ++k) {
+      mask[s.p_vis[k]] = 1;  // visible => amodal, even if the ray grazes past the edge
+      if (hits.instance_ids[k] < 0) continue;
+      const double d = (hits.points.row(k).cast<double>().transpose() - obj.com_W).norm();
+      out.com_heatmap[s.p_vis[k]] = com_heat(obj, d);
     }
-  };
-  parallel_for(static_cast<std::size_t>(H), options.num_threads, 64, visible_rows);
+  }
+}
 
+/// Every visible pixel is amodal (also outside the cast box, should rasteriser and box
+/// disagree); with a depth image the heat map comes from the back-projected pixels.
+void visible_amodal_rows(const ViewInput& in, const std::vector<Object>& objects, std::size_t begin,
+                         std::size_t end, ViewLabels& out) {
+  const Intrinsics& K = in.K;
+  for (std::size_t v = begin; v < end; ++v) {
+    for (int u = 0; u < in.W; ++u) {
+      const std::size_t p = v * static_cast<std::size_t>(in.W) + u;
+      const std::int32_t id = in.ids[p];
+      if (id <= 0) continue;
+      out.amodal[static_cast<std::size_t>(id - 1) * in.P + p] = 1;
+      if (in.options.depth == nullptr) continue;
+      const double z = in.options.depth[p];
+      if (!(z > 0.0) || !std::isfinite(z)) continue;
+      const Object& obj = objects[id - 1];
+      const Vec3d p_C(z * (u + 0.5 - K.cx) / K.fx, z * (v + 0.5 - K.cy) / K.fy, z);
+      const double d = (in.X_WC * p_C - obj.com_W).norm();
+      out.com_heatmap[p] = com_heat(obj, d);
+    }
+  }
+}
+
+/// The box of an amodal mask (searched in the cast box united with the tight box) and its pixel
+/// count.
+PixelBox amodal_box(const ViewInput& in, const std::uint8_t* mask, const PixelBox& b,
+                    const PixelBox& tight, std::int64_t& count) {
+  PixelBox loose{in.W, in.H, -1, -1};
+  count = 0;
+  if (b.empty() && tight.empty()) return loose;
+  const int u0 = tight.empty() ? b.u0 : std::min(b.u0, tight.u0);
+  const int u1 = tight.empty() ? b.u1 : std::max(b.u1, tight.u1);
+  const int v0 = tight.empty() ? b.v0 : std::min(b.v0, tight.v0);
+  const int v1 = tight.empty() ? b.v1 : std::max(b.v1, tight.v1);
+  for (int v = std::max(v0, 0); v <= std::min(v1, in.H - 1); ++v) {
+    for (int u = std::max(u0, 0); u <= std::min(u1, in.W - 1); ++u) {
+      if (!mask[static_cast<std::size_t>(v) * in.W + u]) continue;
+      ++count;
+      loose.u0 = std::min(loose.u0, u);
+      loose.u1 = std::max(loose.u1, u);
+      loose.v0 = std::min(loose.v0, v);
+      loose.v1 = std::max(loose.v1, v);
+    }
+  }
+  return loose;
+}
+
+/// Amodal pixel counts, occlusion rates, boxes and camera-frame poses of the objects.
+void object_summaries(const ViewInput& in, const std::vector<Object>& objects,
+                      const std::vector<CastRegion>& regions, const std::vector<PixelBox>& tight,
+                      ViewLabels& out) {
+  const int N = in.N;
   out.amodal_pixels.assign(N, 0);
   out.occlusion.assign(N, 1.0);
   out.bbox_tight.resize(N, 4);
   out.bbox_loose.resize(N, 4);
   out.X_CO.resize(N);
   for (int i = 0; i < N; ++i) {
-    const std::uint8_t* mask = out.amodal.data() + static_cast<std::size_t>(i) * P;
-    PixelBox loose{W, H, -1, -1};
-    const PixelBox& b = cast_box[i];
+    const std::uint8_t* mask = out.amodal.data() + static_cast<std::size_t>(i) * in.P;
     std::int64_t count = 0;
-    if (!b.empty() || !tight[i].empty()) {
-      // Search the cast box united with the tight box.
-      const int u0 = tight[i].empty() ? b.u0 : std::min(b.u0, tight[i].u0);
-      const int u1 = tight[i].empty() ? b.u1 : std::max(b.u1, tight[i].u1);
-      const int v0 = tight[i].empty() ? b.v0 : std::min(b.v0, tight[i].v0);
-      const int v1 = tight[i].empty() ? b.v1 : std::max(b.v1, tight[i].v1);
-      for (int v = std::max(v0, 0); v <= std::min(v1, H - 1); ++v) {
-        for (int u = std::max(u0, 0); u <= std::min(u1, W - 1); ++u) {
-          if (!mask[static_cast<std::size_t>(v) * W + u]) continue;
-          ++count;
-          loose.u0 = std::min(loose.u0, u);
-          loose.u1 = std::max(loose.u1, u);
-          loose.v0 = std::min(loose.v0, v);
-          loose.v1 = std::max(loose.v1, v);
-        }
-      }
-    }
+    const PixelBox loose = amodal_box(in, mask, regions[i].box, tight[i], count);
     out.amodal_pixels[i] = count;
     if (count > 0) {
       out.occlusion[i] =
@@ -434,94 +491,153 @@ ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
     }
     out.bbox_tight.row(i) = coco_box(tight[i]);
     out.bbox_loose.row(i) = coco_box(loose);
-    out.X_CO[i] = X_CW * impl_->objects[i].X_WO;
+    out.X_CO[i] = in.X_CW * objects[i].X_WO;
   }
-  out.occlusion_map.assign(P, 0.0f);
-  for (std::size_t p = 0; p < P; ++p) {
-    const std::int32_t id = instance_image[p];
+  out.occlusion_map.assign(in.P, 0.0f);
+  for (std::size_t p = 0; p < in.P; ++p) {
+    const std::int32_t id = in.ids[p];
     if (id > 0) out.occlusion_map[p] = static_cast<float>(out.occlusion[id - 1]);
   }
+}
 
-  // Keypoints: one ray from the camera centre towards every point, through the whole scene.
-  if (options.keypoints) {
-    Eigen::Index n_kp = 0, n_com = 0;
-    for (const auto& o : impl_->objects) {
-      n_kp += o.keypoints_W.rows();
-      n_com += o.com_points_W.rows();
-    }
-    const Eigen::Index n = n_kp + n_com;
-    Keypoints4d all_C(n, 4);  // [a, x, y, z] camera frame
-    std::vector<std::int32_t> owner(static_cast<std::size_t>(n));
-    Points3d p_W(n, 3);
-    {
-      Eigen::Index r = 0;
-      for (int pass = 0; pass < 2; ++pass) {
-        for (int i = 0; i < N; ++i) {
-          const Keypoints4d& k =
-              pass == 0 ? impl_->objects[i].keypoints_W : impl_->objects[i].com_points_W;
-          for (Eigen::Index j = 0; j < k.rows(); ++j, ++r) {
-            p_W.row(r) = k.row(j).rightCols<3>();
-            all_C(r, 0) = k(j, 0);
-            all_C.row(r).rightCols<3>() = (X_CW * p_W.row(r).transpose()).transpose();
-            owner[r] = i;
-          }
-        }
-      }
-    }
-    // Candidates: in front of the camera and projecting inside the image.
-    std::vector<Eigen::Index> cand;
-    std::vector<float> tfar;
-    for (Eigen::Index r = 0; r < n; ++r) {
-      const double z = all_C(r, 3);
-      if (!(z > 1e-9)) continue;
-      const double x = K.fx * all_C(r, 1) / z + K.cx, y = K.fy * all_C(r, 2) / z + K.cy;
-      if (!(x >= 0.0 && x < W && y >= 0.0 && y < H)) continue;
-      cand.push_back(r);
-    }
-    Points3f o(static_cast<Eigen::Index>(cand.size()), 3), d(o.rows(), 3);
-    tfar.resize(cand.size());
-    const Vec3d c = X_WC.translation();
-    for (std::size_t k = 0; k < cand.size(); ++k) {
-      const Vec3d dir = p_W.row(cand[k]).transpose() - c;
-      const double dist = dir.norm();
-      o.row(k) = origin;
-      d.row(k) = (dir / dist).cast<float>().transpose();
-      tfar[k] = static_cast<float>(std::max(dist - options.keypoint_tolerance, 0.0));
-    }
-    // Visible when the first hit along the ray is the point's own object, within the tolerance
-    // of the point (|hit - distance| <= tolerance): nothing in front of it, and the point lies on
-    // the surface the camera sees (a keypoint floating in a hole or above the object is not
-    // visible, even if whatever lies behind it is).
-    std::vector<std::uint8_t> visible(static_cast<std::size_t>(n), 0);
-    if (!cand.empty()) {
-      CastOptions co;
-      co.num_threads = options.num_threads;
-      const RayHits hits = impl_->all->intersect(o, d, co);
-      const float tol2 = 2.0f * static_cast<float>(options.keypoint_tolerance);
-      for (std::size_t k = 0; k < cand.size(); ++k) {
-        const float t = hits.distance[k];
-        visible[cand[k]] = std::isfinite(t) && t >= tfar[k] && t <= tfar[k] + tol2 &&
-                           hits.instance_ids[k] == owner[cand[k]] + 1;
-      }
-    }
+/// Every keypoint and CoM point of every object: camera-frame rows [a, x, y, z], world points
+/// and owners, keypoints of all objects first, then CoM points.
+struct ScenePoints {
+  Keypoints4d all_C;
+  Points3d p_W;
+  std::vector<std::int32_t> owner;
+  Eigen::Index n_kp = 0, n_com = 0;
+};
 
-    Eigen::Index nv = 0;
-    for (Eigen::Index r = 0; r < n_kp; ++r) nv += visible[r];
-    out.keypoints.resize(nv, 4);
-    out.occluded_keypoints.resize(n_kp - nv, 4);
-    for (Eigen::Index r = 0, a = 0, b = 0; r < n_kp; ++r) {
-      if (visible[r]) {
-        out.keypoints.row(a++) = all_C.row(r);
-        out.keypoint_object.push_back(owner[r]);
-      } else {
-        out.occluded_keypoints.row(b++) = all_C.row(r);
-        out.occluded_keypoint_object.push_back(owner[r]);
-      }
-    }
-    out.com_points = all_C.bottomRows(n_com);
-    out.com_object.assign(owner.begin() + n_kp, owner.end());
-    out.com_visible.assign(visible.begin() + n_kp, visible.end());
+ScenePoints scene_points(const ViewInput& in, const std::vector<Object>& objects) {
+  ScenePoints sp;
+  for (const auto& o : objects) {
+    sp.n_kp += o.keypoints_W.rows();
+    sp.n_com += o.com_points_W.rows();
   }
+  const Eigen::Index n = sp.n_kp + sp.n_com;
+  sp.all_C.resize(n, 4);
+  sp.owner.resize(static_cast<std::size_t>(n));
+  sp.p_W.resize(n, 3);
+  Eigen::Index r = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int i = 0; i < in.N; ++i) {
+      const Keypoints4d& k = pass == 0 ? objects[i].keypoints_W : objects[i].com_points_W;
+      for (Eigen::Index j = 0; j < k.rows(); ++j, ++r) {
+        sp.p_W.row(r) = k.row(j).rightCols<3>();
+        sp.all_C(r, 0) = k(j, 0);
+        sp.all_C.row(r).rightCols<3>() = (in.X_CW * sp.p_W.row(r).transpose()).transpose();
+        sp.owner[r] = i;
+      }
+    }
+  }
+  return sp;
+}
+
+/// Which points are visible: the first hit along the ray from the camera centre towards the
+/// point, through the whole scene, is the point's own object, within the tolerance of the point
+/// (|hit - distance| <= tolerance): nothing in front of it, and the point lies on the surface
+/// the camera sees (a keypoint floating in a hole or above the object is not visible, even if
+/// whatever lies behind it is). Points behind the camera or outside the image are not visible.
+std::vector<std::uint8_t> visible_points(const ViewInput& in, const RayScene& scene,
+                                         const ScenePoints& sp) {
+  const Intrinsics& K = in.K;
+  const Eigen::Index n = sp.all_C.rows();
+  // Candidates: in front of the camera and projecting inside the image.
+  std::vector<Eigen::Index> cand;
+  std::vector<float> tfar;
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const double z = sp.all_C(r, 3);
+    if (!(z > 1e-9)) continue;
+    const double x = K.fx * sp.all_C(r, 1) / z + K.cx, y = K.fy * sp.all_C(r, 2) / z + K.cy;
+    if (!(x >= 0.0 && x < in.W && y >= 0.0 && y < in.H)) continue;
+    cand.push_back(r);
+  }
+  Points3f o(static_cast<Eigen::Index>(cand.size()), 3), d(o.rows(), 3);
+  tfar.resize(cand.size());
+  const Vec3d c = in.X_WC.translation();
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    const Vec3d dir = sp.p_W.row(cand[k]).transpose() - c;
+    const double dist = dir.norm();
+    o.row(k) = in.origin;
+    d.row(k) = (dir / dist).cast<float>().transpose();
+    tfar[k] = static_cast<float>(std::max(dist - in.options.keypoint_tolerance, 0.0));
+  }
+  std::vector<std::uint8_t> visible(static_cast<std::size_t>(n), 0);
+  if (cand.empty()) return visible;
+  CastOptions co;
+  co.num_threads = in.options.num_threads;
+  const RayHits hits = scene.intersect(o, d, co);
+  const float tol2 = 2.0f * static_cast<float>(in.options.keypoint_tolerance);
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    const float t = hits.distance[k];
+    visible[cand[k]] = std::isfinite(t) && t >= tfar[k] && t <= tfar[k] + tol2 &&
+                       hits.instance_ids[k] == sp.owner[cand[k]] + 1;
+  }
+  return visible;
+}
+
+/// Keypoints: visible and occluded semantic keypoints, CoM points with their visibility.
+void label_keypoints(const ViewInput& in, const std::vector<Object>& objects, const RayScene& scene,
+                     ViewLabels& out) {
+  const ScenePoints sp = scene_points(in, objects);
+  const std::vector<std::uint8_t> visible = visible_points(in, scene, sp);
+  const Eigen::Index n_kp = sp.n_kp;
+  Eigen::Index nv = 0;
+  for (Eigen::Index r = 0; r < n_kp; ++r) nv += visible[r];
+  out.keypoints.resize(nv, 4);
+  out.occluded_keypoints.resize(n_kp - nv, 4);
+  for (Eigen::Index r = 0, a = 0, b = 0; r < n_kp; ++r) {
+    if (visible[r]) {
+      out.keypoints.row(a++) = sp.all_C.row(r);
+      out.keypoint_object.push_back(sp.owner[r]);
+    } else {
+      out.occluded_keypoints.row(b++) = sp.all_C.row(r);
+      out.occluded_keypoint_object.push_back(sp.owner[r]);
+    }
+  }
+  out.com_points = sp.all_C.bottomRows(sp.n_com);
+  out.com_object.assign(sp.owner.begin() + n_kp, sp.owner.end());
+  out.com_visible.assign(visible.begin() + n_kp, visible.end());
+}
+
+}  // namespace
+
+ViewLabels ViewLabelModel::label_view(const Intrinsics& K, const Pose& X_WC,
+                                      const std::int32_t* instance_image, int image_width,
+                                      int image_height, const ViewLabelOptions& options) const {
+  const int N = num_objects();
+  check_view_input(K, X_WC, instance_image, image_width, image_height, options, N);
+  const ViewInput in(K, X_WC, instance_image, options, N);
+  const std::vector<Object>& objects = impl_->objects;
+
+  ViewLabels out;
+  out.width = in.W;
+  out.height = in.H;
+  out.num_objects = N;
+  const std::vector<PixelBox> tight = visible_pass(in, objects, out);
+
+  // Amodal masks and the heat map: each tile cast against its object alone, then every visible
+  // pixel.
+  std::vector<CastRegion> regions(N);
+  for (int i = 0; i < N; ++i) regions[i] = cast_region(in, objects[i].vertices_W);
+  const std::vector<Tile> tiles = make_tiles(regions);
+  out.amodal.assign(static_cast<std::size_t>(N) * in.P, 0);
+  out.com_heatmap.assign(in.P, 0.0f);
+  parallel_for(tiles.size(), options.num_threads, 1, [&](std::size_t begin, std::size_t end) {
+    TileScratch scratch;
+    for (std::size_t t = begin; t < end; ++t) {
+      const Tile& tile = tiles[t];
+      cast_tile(in, objects[tile.object], regions[tile.object], tile, scratch, out);
+    }
+  });
+  parallel_for(static_cast<std::size_t>(in.H), options.num_threads, 64,
+               [&](std::size_t begin, std::size_t end) {
+                 visible_amodal_rows(in, objects, begin, end, out);
+               });
+
+  object_summaries(in, objects, regions, tight, out);
+  if (options.keypoints) label_keypoints(in, objects, *impl_->all, out);
   return out;
 }
 

@@ -139,14 +139,16 @@ class ViewLabelModel {
 /// computes it (docs/format.md, "`{v}_mgn.hdf5`": the scene writer stores the heat map as its
 /// difference from this prediction). At each pixel (u, v) of instance id i >= 1 whose depth
 /// z = depth_m (metres) is finite and > 0, the point p_C = (z (u + 0.5 - cx) / fx,
-/// z (v + 0.5 - cy) / fy, z) (camera frame, OpenCV) moved to the world by X_WC scores
+/// z (v + 0.5 - cy) / fy, z) (camera frame, OpenCV; [fx, fy, cx, cy] = intrinsics) moved to the
+/// world by X_WC scores
 /// clamp((d_max - |p_W - c_W|) / max(d_max - d_min, 1e-12), 0, 1), where [c_W (3, world frame, m),
 /// d_min, d_max (m)] is row i - 1 of com_parameters (num_objects x 5, row-major); 0 elsewhere.
 /// Only IEEE-exact operations in a fixed order and no fused multiply-adds, so every machine gives
 /// the same bits. depth_m, instances and out: width x height, row-major; X_WC: 4 x 4 row-major,
-/// m; fx, fy, cx, cy: px. Throws InvalidArgument for an instance id above num_objects.
+/// m; intrinsics: fx, fy, cx, cy, px. Throws InvalidArgument for an instance id above
+/// num_objects.
 void com_heatmap_prediction(const float* depth_m, const std::int32_t* instances, int width,
-                            int height, const double X_WC[16], double fx, double fy, double cx,
-                            double cy, const double* com_parameters, int num_objects, float* out);
+                            int height, const double X_WC[16], const double intrinsics[4],
+                            const double* com_parameters, int num_objects, float* out);
 
 }  // namespace mgn

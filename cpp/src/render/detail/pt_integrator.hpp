@@ -162,12 +162,20 @@ class Integrator {
   /// light or the environment gives its clamped radiance (normal unchanged).
   void aux_behind_glass(RTCRayHit rh, F3 d, F3& albedo, F3& normal);
 
-  /// Samples the BSDF: direction, weight f*cos/pdf (including lobe choice), solid-angle pdf of
-  /// the non-delta part (for MIS) and whether a delta lobe was chosen. At a smooth dielectric,
-  /// `split` (when given) receives the Fresnel split (see Split).
+  /// A BSDF sample (sample_bsdf).
+  struct BsdfSample {
+    F3 wi_w;             // direction, world frame
+    F3 weight;           // f*cos/pdf, including the lobe choice
+    float pdf = 0.0f;    // solid-angle pdf of the non-delta part (for MIS)
+    bool delta = false;  // a delta lobe was chosen
+    float eta2 = 1.0f;   // eta^2 of a refraction, else 1
+  };
+
+  /// Samples the BSDF into `out`; false when the sample is lost (below the surface, zero pdf).
+  /// At a smooth dielectric, `split` (when given) receives the Fresnel split (see Split).
   bool sample_bsdf(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,
-                   float u_lobe, float u_fresnel, pt::Sample2 u, F3& wi_w, F3& weight, float& pdf,
-                   bool& delta, float& eta2, Split* split = nullptr);
+                   float u_lobe, float u_fresnel, pt::Sample2 u, BsdfSample& out,
+                   Split* split = nullptr);
 
   const Geometry& G_;
   const Lighting& L_;
