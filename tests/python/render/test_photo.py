@@ -316,13 +316,15 @@ def test_tote_colour_includes_black_and_dark_grey_totes() -> None:
     in_dark &= sat <= dark_cfg["saturation"][1] + 1e-6
     lo, hi = lighting.TOTE_HSV["value"]
     in_base = (val >= lo - 1e-6) & (val <= hi + 1e-6)
-    in_base &= (sat >= lighting.TOTE_HSV["saturation"][0] - 1e-6)
+    in_base &= sat >= lighting.TOTE_HSV["saturation"][0] - 1e-6
     in_base &= sat <= lighting.TOTE_HSV["saturation"][1] + 1e-6
     assert np.all(in_dark | in_base)
     # About a third are dark: the share of draws in the dark range only (value below the other
     # range) is p * (0.15 - 0.08) / (0.3 - 0.08) of n, binomial, 5 standard deviations.
-    p = dark_cfg["probability"] * (lo - dark_cfg["value"][0]) / (
-        dark_cfg["value"][1] - dark_cfg["value"][0]
+    p = (
+        dark_cfg["probability"]
+        * (lo - dark_cfg["value"][0])
+        / (dark_cfg["value"][1] - dark_cfg["value"][0])
     )
     assert abs(dark.sum() - p * n) < 5 * np.sqrt(n * p * (1 - p))
     # Reflectance of the darkest totes: a few per cent, as black plastic.
