@@ -37,10 +37,25 @@ from mgn.render.materials import (
 from mgn.render.path import AreaLight, Environment, PbrMaterial
 from mgn.render.settings import RenderSettings
 
-__all__ = ["ENVIRONMENTS", "ViewLighting", "blackbody_rgb", "draw_lighting"]
+__all__ = [
+    "DARK_TOTE",
+    "ENVIRONMENTS",
+    "TOTE_HSV",
+    "ViewLighting",
+    "blackbody_rgb",
+    "draw_lighting",
+]
 
 #: Environment kinds the randomisation draws from.
 ENVIRONMENTS = ("uniform", "gradient", "sky")
+#: The randomised tote's colour (sRGB, HSV): hue uniform in [0, 1), saturation and value
+#: uniform in these ranges.
+TOTE_HSV = {"saturation": (0.2, 0.8), "value": (0.15, 0.75)}
+#: With this probability a view's tote is black or dark grey plastic instead (the common
+#: industrial tote): saturation and value uniform in these ranges (value 0.08-0.3 of sRGB is
+#: a reflectance of about 1-7 %).
+DARK_TOTE: dict[str, Any] = {"probability": 1.0 / 3.0, "saturation": (0.0, 0.15),
+                             "value": (0.08, 0.3)}  # fmt: skip
 
 
 def blackbody_rgb(temperature: float) -> tuple[float, float, float]:
@@ -165,14 +180,10 @@ def draw_lighting(
                           ground=(0.25, 0.24, 0.22), intensity=0.4)  # fmt: skip
     if randomize and r.materials:
         hue = g_mat.random()
-        sat = g_mat.uniform(0.2, 0.8)
-        val = g_mat.uniform(0.15, 0.75)
-        tote_rgb = srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
-        tote = PbrMaterial(
-            base_color=tuple(tote_rgb),
-            roughness=float(g_mat.uniform(0.35, 0.75)),
-            base_color_texture=procedural_texture("noise", g_mat, contrast=0.15),
-        )
+        sat = g_mat.uniform(*TOTE_HSV["saturation"])
+        val = g_mat.uniform(*TOTE_HSV["value"])
+        tote_roughness = float(g_mat.uniform(0.35, 0.75))
+        tote_texture = procedural_texture("noise", g_mat, contrast=0.15)
         kind = TEXTURES[int(g_mat.integers(len(TEXTURES)))]
         floor_rgb = srgb_to_linear(
             np.array(_hsv_to_rgb(g_mat.random(), g_mat.uniform(0, 0.4), g_mat.uniform(0.25, 0.8)))
@@ -182,7 +193,18 @@ def draw_lighting(
             roughness=float(g_mat.uniform(0.3, 0.95)),
             base_color_texture=procedural_texture(kind, g_mat, contrast=0.35),
         )
+        # Drawn last, so that the other draws of the stream do not depend on it.
+        if g_mat.random() < DARK_TOTE["probability"]:
+            sat = g_mat.uniform(*DARK_TOTE["saturation"])
+            val = g_mat.uniform(*DARK_TOTE["value"])
+        tote_rgb = srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
+        tote = PbrMaterial(
+            base_color=tuple(tote_rgb),
+            roughness=tote_roughness,
+            base_color_texture=tote_texture,
+        )
         summary["floor_texture"] = kind
+        summary["tote_hsv"] = (float(hue), float(sat), float(val))
     else:
         rgb = (float(tote_color[0]), float(tote_color[1]), float(tote_color[2]))
         tote = PbrMaterial(base_color=rgb, roughness=TOTE_ROUGHNESS)

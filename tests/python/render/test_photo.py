@@ -5,6 +5,7 @@ denoising, and a tiny path-traced dataset."""
 from __future__ import annotations
 
 import base64
+import colorsys
 import json
 import warnings
 from pathlib import Path
@@ -293,6 +294,62 @@ def test_randomisation_switches_are_independent() -> None:
     fixed = draw_lighting(on, 5, 2, randomize=False)
     assert fixed.exposure == on.exposure
     assert fixed.tote.base_color_texture is None
+
+
+def _tote_hsv(lit: lighting.ViewLighting) -> tuple[float, float, float]:
+    # Back from the tracer's linear RGB to sRGB HSV (the inverse of srgb_to_linear).
+    c = np.asarray(lit.tote.base_color[:3], np.float64)
+    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
+    return colorsys.rgb_to_hsv(*(float(x) for x in s))
+
+
+def test_tote_colour_includes_black_and_dark_grey_totes() -> None:
+    s = RenderSettings(engine="path")
+    n = 300
+    hsv = [_tote_hsv(draw_lighting(s, 11, v)) for v in range(n)]
+    sat = np.array([h[1] for h in hsv])
+    val = np.array([h[2] for h in hsv])
+    dark_cfg = lighting.DARK_TOTE
+    dark = val < lighting.TOTE_HSV["value"][0] - 1e-9
+    # Every colour lies in one of the two ranges; the dark ones are (nearly) grey.
+    in_dark = (val >= dark_cfg["value"][0] - 1e-6) & (val <= dark_cfg["value"][1] + 1e-6)
+    in_dark &= sat <= dark_cfg["saturation"][1] + 1e-6
+    lo, hi = lighting.TOTE_HSV["value"]
+    in_base = (val >= lo - 1e-6) & (val <= hi + 1e-6)
+    in_base &= sat >= lighting.TOTE_HSV["saturation"][0] - 1e-6
+    in_base &= sat <= lighting.TOTE_HSV["saturation"][1] + 1e-6
+    assert np.all(in_dark | in_base)
+    # About a third are dark: the share of draws in the dark range only (value below the other
+    # range) is p * (0.15 - 0.08) / (0.3 - 0.08) of n, binomial, 5 standard deviations.
+    p = (
+        dark_cfg["probability"]
+        * (lo - dark_cfg["value"][0])
+        / (dark_cfg["value"][1] - dark_cfg["value"][0])
+    )
+    assert abs(dark.sum() - p * n) < 5 * np.sqrt(n * p * (1 - p))
+    # Reflectance of the darkest totes: a few per cent, as black plastic.
+    assert np.max(np.asarray([draw_lighting(s, 11, v).tote.base_color[0] for v in
+                              np.flatnonzero(dark)[:20]])) < 0.08  # fmt: skip
+
+
+def test_dark_tote_draw_leaves_the_other_draws_unchanged(monkeypatch: pytest.MonkeyPatch) -> None:
+    s = RenderSettings(engine="path")
+    monkeypatch.setitem(lighting.DARK_TOTE, "probability", 0.0)
+    never = [draw_lighting(s, 3, v) for v in range(8)]
+    monkeypatch.setitem(lighting.DARK_TOTE, "probability", 1.0)
+    always = [draw_lighting(s, 3, v) for v in range(8)]
+    for a, b in zip(never, always, strict=True):
+        assert repr((a.lights, a.environment, a.exposure)) == repr((b.lights, b.environment,
+                                                                    b.exposure))  # fmt: skip
+        assert a.floor.base_color == b.floor.base_color
+        assert a.floor.roughness == b.floor.roughness
+        assert np.array_equal(a.floor.base_color_texture, b.floor.base_color_texture)
+        assert a.tote.roughness == b.tote.roughness
+        assert np.array_equal(a.tote.base_color_texture, b.tote.base_color_texture)
+        ha, hb = _tote_hsv(a), _tote_hsv(b)
+        assert ha[2] >= lighting.TOTE_HSV["value"][0] - 1e-6
+        assert hb[2] <= lighting.DARK_TOTE["value"][1] + 1e-6
+        assert hb[1] <= lighting.DARK_TOTE["saturation"][1] + 1e-6
 
 
 def test_procedural_textures() -> None:
