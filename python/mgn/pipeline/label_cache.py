@@ -63,7 +63,7 @@ __all__ = [
 ]
 
 #: Bump when the label layout or algorithms change, so old cache entries are not reused.
-CACHE_VERSION = "object-labels-7"
+CACHE_VERSION = "object-labels-8"
 
 
 @dataclass(frozen=True)
@@ -155,11 +155,12 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
     return keys
 
 
-#: CPU seconds of one shake trial of a single-hull object (Bullet, 1/200 s, MetaGraspNet's
-#: schedule; 2-core x86 machines measure 0.004-0.013), and of the other object labels per 1000
+#: CPU seconds of one shake trial of a single-hull object (Bullet, 1/400 s, MetaGraspNet's
+#: schedule; a 2-core x86 machine measures 0.017-0.019 per trial with the sampling included,
+#: docs/decisions/0055-shake-time-step-1-400.md), and of the other object labels per 1000
 #: surface points (suction and parallel-jaw sampling); the estimate of
 #: :func:`estimate_label_seconds`.
-TRIAL_CPU_S = 0.008
+TRIAL_CPU_S = 0.017
 SAMPLING_CPU_S_PER_1000_POINTS = 0.6
 
 

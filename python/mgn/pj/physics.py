@@ -50,8 +50,11 @@ _CORE = _core.grasp.ShakeOptions()
 class ShakeOptions:
     """Parameters of the shake test (SI units).
 
-    MetaGraspNet values: ``grid`` 10, the two ranges, ``dt`` 1/200 s, 400/400/300 steps, 0.5 m/s
-    and 0.2–0.3 rad. The others are mgn's (see ``cpp/include/mgn/grasp/shake_trial.hpp``):
+    MetaGraspNet values: ``grid`` 10, the two ranges, the phases' durations (2 s, 2 s, 1.5 s),
+    0.5 m/s and 0.2–0.3 rad. ``dt`` is 1/400 s, half MetaGraspNet's (800/800/600 steps): at
+    1/200 s the solver drops light objects and lets round ones slip that a finer step holds
+    (docs/decisions/0055-shake-time-step-1-400.md). The others are mgn's (see
+    ``cpp/include/mgn/grasp/shake_trial.hpp``):
     ``settle_steps`` and ``lost_contact_steps`` end phases and trials early (0 disables them),
     ``inertia_floor`` stabilises light objects, the pads are soft (``pad_stiffness`` N/m per
     contact point, ``pad_damping`` N s/m). ``staircase`` finds each grasp's success boundary
@@ -72,8 +75,9 @@ class ShakeOptions:
     ``smooth_shake``).
     ``smooth_shake`` (off by default): the hand's shake profile starts and ends every cycle at
     rest (f(x) = sin x − sin(2x)/2, same peak speed and angle) instead of the sine's velocity
-    jumps; a can's grids become more nearly monotone (with ``dt`` 1/100 s and step counts
-    halved, the staircase matches its full grid more often at 1.8× fewer CPU-s per trial), a
+    jumps; a can's grids become more nearly monotone (with ``dt`` 1/100 s and 200/200/150
+    steps, the staircase matches its full grid more often at 1.8× fewer CPU-s per trial than at
+    1/200 s), a
     mug's less (docs/models.md, "Smooth shake profile"; scores move by ~0.01 on average).
     ``iterations_per_hull_contact`` (0 = off): every step runs at least this many solver
     iterations per (finger, object hull) pair in contact at the previous step (a compound held

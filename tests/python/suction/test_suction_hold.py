@@ -28,9 +28,9 @@ G = 9.81
 
 
 def test_the_loads_are_the_shake_schedules():
-    # Translation: 2 cycles in 400 steps of 1/200 s at a peak speed of 0.5 m/s: 0.5 * 2 pi.
+    # Translation: 2 cycles in 800 steps of 1/400 s at a peak speed of 0.5 m/s: 0.5 * 2 pi.
     assert LOADS.translation_acceleration == pytest.approx(0.5 * 2 * math.pi)
-    # Rotation: one cycle in 300 steps of 1/200 s, up to 0.3 rad.
+    # Rotation: one cycle in 600 steps of 1/400 s, up to 0.3 rad.
     assert LOADS.rotation_frequency == pytest.approx(2 * math.pi / 1.5)
     assert LOADS.rotation_angle == 0.3
     assert LOADS.friction == pytest.approx(tuple(np.linspace(0.5, 2.0, 10)))
