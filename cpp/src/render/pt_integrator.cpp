@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <new>
 
 #include "render/detail/pt_integrator.hpp"
 #include "render/detail/pt_math.hpp"
@@ -150,7 +151,14 @@ inline float power_heuristic(float a, float b) {
 // reflection's guide or the transmission's at random.
 F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& aov_normal,
                      const RTCRayHit* first) {
+  // The stack of waiting branches, left uninitialised (a camera sample rarely uses it):
+  // take_split constructs each entry it pushes.
+  union Stack {
+    Stack() {}  // no initialisation of the items
+    PathState items[kMaxBranches];
+  } stack;
   SampleSum sum;
+  sum.pending = stack.items;
   PathState p;
   p.o = o;
   p.d = d;
@@ -321,7 +329,7 @@ inline F3 Integrator::take_split(PathState& p, const Hit& h, const pt::ShadingMa
     // by a path only with probability F: a bright speckle, now a clean highlight).
     --sum.branches_left;
     const float eta_v = h.front ? sm.ior : 1.0f / sm.ior;
-    PathState& b = sum.pending[sum.n_pending++];
+    PathState& b = *::new (static_cast<void*>(&sum.pending[sum.n_pending++])) PathState;
     b.o = offset_origin(h, split.other_dir);
     b.d = split.other_dir;
     b.beta = p.beta * split.other_weight;

@@ -204,10 +204,11 @@ class Integrator {
   };
 
   /// What a camera sample gathers over its paths: radiance, the denoiser guides of the paths
-  /// done, and the branches waiting their turn.
+  /// done, and the branches waiting their turn (a stack of kMaxBranches in trace(), apart from the
+  /// sums so that these stay in registers).
   struct SampleSum {
     F3 L, aov_a, aov_n;
-    PathState pending[kMaxBranches];
+    PathState* pending;
     int n_pending = 0;
     int branches_left = kMaxBranches;
   };
