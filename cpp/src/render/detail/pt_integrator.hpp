@@ -204,11 +204,11 @@ class Integrator {
   };
 
   /// What a camera sample gathers over its paths: radiance, the denoiser guides of the paths
-  /// done, and the branches waiting their turn (a stack of kMaxBranches in trace(), apart from the
-  /// sums so that these stay in registers).
+  /// done, and the branches waiting their turn: `pending`, a stack of kMaxBranches entries that
+  /// trace() owns (kept apart from the sums, so that these can stay in registers).
   struct SampleSum {
     F3 L, aov_a, aov_n;
-    PathState* pending;
+    PathState* pending = nullptr;
     int n_pending = 0;
     int branches_left = kMaxBranches;
   };
