@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <new>
 
 #include "render/detail/pt_integrator.hpp"
 #include "render/detail/pt_math.hpp"
@@ -133,252 +134,252 @@ inline float power_heuristic(float a, float b) {
 
 }  // namespace
 
-// Complexity ceiling of .clang-tidy exceeded on purpose: the bounce loop of the path tracer
-// (light hits, next-event estimation, BSDF sampling, splits, Russian roulette) on its hot path.
-// NOLINTNEXTLINE(readability-function-cognitive-complexity)
+// The path of one camera sample. At a smooth dielectric both the reflected and the refracted
+// ray are traced to the light they meet first (Fresnel splitting: each weighted by its expected
+// share F or 1 - F instead of the random choice of one; the lamps and the sky seen in and
+// through glass are the noisiest part of a glass object otherwise) and only the chosen ray
+// continues the path (it carries the indirect light of both, unbiased); at the first
+// kMaxBranches such vertices the other ray is traced in full as a branch (take_split).
+// The albedo and normal for the denoiser are those of the first surface that is not smooth
+// glass: through (or in) a smooth dielectric they are taken at the next hit, so that the
+// denoiser keeps what is seen through glass instead of smoothing it into a flat surface.
+// At a split smooth dielectric both branches contribute, weighted by their Fresnel shares:
+// the other branch's first hit goes into the sample's guides now, the continuing one's guide
+// (PathState::aov_a, aov_n, what it shows so far) is weighted aov_w at the end. About the
+// expectation of following the randomly chosen branch only (the other branch is followed
+// through further glass by refraction alone), without its noise: a pixel no longer shows the
+// reflection's guide or the transmission's at random.
 F3 Integrator::trace(F3 o, F3 d, const pt::PixelSampler& s, F3& aov_albedo, F3& aov_normal,
                      const RTCRayHit* first) {
-  F3 L(0.0f), beta(1.0f);
-  // Throughput for the light (area light, emissive triangle, environment) found at the next
-  // vertex: beta, except after a smooth dielectric, where both the reflected and the refracted
-  // ray are traced to the light they meet first (Fresnel splitting: each weighted by its
-  // expected share F or 1 - F instead of the random choice of one; the lamps and the sky seen
-  // in and through glass are the noisiest part of a glass object otherwise) and only the
-  // chosen ray continues the path (it carries the indirect light of both, unbiased).
-  F3 beta_e(1.0f);
-  bool prev_delta = true;
-  float prev_pdf = 0.0f;   // solid-angle pdf of the BSDF sample that made the current ray
-  F3 prev_n(0.0f);         // shading normal at the previous vertex (for the environment pdf)
-  float eta_scale = 1.0f;  // product of eta^2 over the refractions so far
-  // The albedo and normal for the denoiser are those of the first surface that is not smooth
-  // glass: through (or in) a smooth dielectric they are taken at the next hit, so that the
-  // denoiser keeps what is seen through glass instead of smoothing it into a flat surface.
-  // At a split smooth dielectric both branches contribute, weighted by their Fresnel shares:
-  // the other branch's first hit goes into aov_acc_* now, the continuing one's guide (aov_a,
-  // aov_n, what it shows so far) is weighted aov_w at the end. About the expectation of
-  // following the randomly chosen branch only (the other branch is followed through further
-  // glass by refraction alone), without its noise: a pixel no longer shows the reflection's
-  // guide or the transmission's at random.
-  bool aov_open = true;
-  F3 aov_a(0.0f), aov_n(0.0f), aov_acc_a(0.0f), aov_acc_n(0.0f);
-  float aov_w = 1.0f;
-  int rr_vertices = 0;  // vertices so far that count for roulette (see below)
+  // The stack of waiting branches, left uninitialised (a camera sample rarely uses it):
+  // take_split constructs each entry it pushes.
+  union Stack {
+    Stack() {}  // no initialisation of the items
+    PathState items[kMaxBranches];
+  } stack;
+  SampleSum sum;
+  sum.pending = stack.items;
+  PathState p;
+  p.o = o;
+  p.d = d;
+  for (;;) {
+    trace_path(p, s, first, sum);
+    sum.aov_a += p.aov_a * p.aov_w;
+    sum.aov_n += p.aov_n * p.aov_w;
+    if (sum.n_pending == 0) break;
+    p = sum.pending[--sum.n_pending];
+  }
+  aov_albedo = sum.aov_a;
+  aov_normal = sum.aov_n;
+  return sum.L;
+}
+
+inline void Integrator::trace_path(PathState& p, const pt::PixelSampler& s, const RTCRayHit* first,
+                                   SampleSum& sum) {
   RTCRayHit rh;
   Hit h;
-  // Branches of smooth dielectrics traced in full (see the split below), waiting their turn.
-  struct Branch {
-    F3 o, d, beta, prev_n, aov_a, aov_n;
-    float prev_pdf, eta_scale, aov_w;
-    int depth, rr_vertices;
-    bool aov_open;
-  };
-  Branch pending[kMaxBranches];
-  int n_pending = 0, branches_left = kMaxBranches;
-  int depth = 0;
-  for (;;) {
-    for (;; ++depth) {
-      bool hit;
-      if (depth == 0 && first != nullptr) {
-        rh = *first;
-        hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-      } else if (depth == 0) {
-        hit = intersect_primary(o, d, std::numeric_limits<float>::infinity(), rh);
-      } else {
-        hit = intersect(o, d, std::numeric_limits<float>::infinity(), rh);
-      }
-      const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
-      float t_light;
-      const int li = L_.light_data.empty() ? -1 : hit_light(L_, o, d, t_geom, t_light);
-      if (li >= 0) {
-        const LightData& l = L_.light_data[li];
-        float w = 1.0f;
-        if (!prev_delta) {
-          const float cos_l = -dot(d, l.n);
-          const float pl =
-              L_.pmf[li] * nee(depth - 1).area_sel * t_light * t_light / (l.area * cos_l);
-          w = power_heuristic(prev_pdf, pl);
-        }
-        add(L, beta_e * l.radiance * w, depth >= 2);
-        if (aov_open) aov_a = lamp_guide(l.radiance);
-        break;
-      }
-      if (!hit) {
-        if (L_.env_on || aov_open) {
-          const F3 Le = L_.env(d);
-          float w = 1.0f;
-          if (!prev_delta && L_.env_on) {
-            const NeeMode& m = nee(depth - 1);
-            w = power_heuristic(
-                prev_pdf, L_.pmf.back() * m.env_sel * env_pdf(L_, m.p_sun, m.p_dome, prev_n, d));
-          }
-          add(L, beta_e * Le * w, depth >= 2);
-          if (aov_open) aov_a = emitter_guide(Le);
-        }
-        break;
-      }
-      make_hit(G_, rh, d, h);
-      const MaterialData& m = *h.mat;
-      const F3 wo_w = -d;
-      if (m.emissive && h.front) {
-        // An emissive triangle found by BSDF sampling: MIS against its next-event estimation.
-        float w = 1.0f;
-        if (!prev_delta) {
-          const auto& fe = G_.geoms[rh.hit.geomID].face_emitter;
-          const std::int32_t e = fe.empty() ? -1 : fe[rh.hit.primID];
-          if (e >= 0) {
-            const float cos_l = std::abs(dot(d, h.ng));
-            const float t = rh.ray.tfar;
-            const float pl = L_.pmf[L_.light_data.size() + e] * nee(depth - 1).area_sel * t * t /
-                             (L_.tris[e].area * std::max(cos_l, 1e-7f));
-            w = power_heuristic(prev_pdf, pl);
-          }
-        }
-        add(L, beta_e * m.emission * w, depth >= 2);
-      }
-      if (aov_open) {
-        aov_a = h.base;
-        aov_n = h.ns;
-        aov_open = see_through(m);
-      }
-      if (depth >= opt_.max_bounces) break;
-
-      const pt::Frame frame(h.ns);
-      const F3 wo = frame.to_local(wo_w);
-      pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission, m.ms};
-      sm.prepare(wo.z, h.front);
-      const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(depth);
-      // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
-      // (roulette, Fresnel choice), environment direction.
-      const pt::Sample2 u_bsdf = s.get(base_pair + 1);
-      const pt::Sample2 u_sel = s.get(base_pair + 2);
-      const pt::Sample2 u_rr = s.get(base_pair + 3);
-
-      // Next-event estimation: a light (area light or emissive triangle) and the environment,
-      // each with its own shadow ray, or (NeeMode::one_shadow) one of the two, the environment
-      // with probability env_sel.
-      if (sm.has_nondelta) {
-        const NeeMode& m = nee(depth);
-        float u_light = u_sel.x;
-        bool do_area = L_.area_on, do_env = m.env_nee;
-        if (m.one_shadow) {
-          if (u_light < m.env_sel) {
-            do_area = false;
-          } else {
-            do_env = false;
-            u_light = std::min((u_light - m.env_sel) / (1.0f - m.env_sel), 0.99999994f);
-          }
-        }
-        if (do_area) {
-          const std::size_t n = L_.n_local;
-          const auto k = static_cast<std::size_t>(
-              std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_light) - L_.cdf.begin());
-          add(L, beta * direct(h, frame, wo, sm, k, s.get(base_pair), m), depth >= 1);
-        }
-        if (do_env)
-          add(L, beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4), m), depth >= 1);
-      }
-
-      // BSDF sampling.
-      BsdfSample bs;
-      Split split;
-      // Fresnel splitting (and the branches) only while the throughput is worth the other
-      // direction's ray: deeper, dim paths take the random direction alone (unbiased; the
-      // choice does not depend on the Fresnel draw).
-      const bool may_split = branches_left > 0 || max_comp(beta) >= split_min_;
-      if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, bs, may_split ? &split : nullptr))
-        break;
-      const F3 wi_w = bs.wi_w;
-      F3 weight = bs.weight;
-      const bool delta = bs.delta;
-      const float pdf = bs.pdf;
-      const float eta2 = bs.eta2;
-      bool branched = false;
-      if (split.on && branches_left > 0) {
-        branched = true;
-        // Both branches traced in full (the first kMaxBranches smooth-dielectric vertices of a
-        // camera sample): the other one waits in `pending`; each carries its expected weight
-        // (F or 1 - F times its lobe weight) instead of the random choice's, so nothing seen in
-        // or through the first walls of a glass object depends on the reflect/refract draw
-        // (a lamp reflected by the far wall of a bottle and seen through the near one was found
-        // by a path only with probability F: a bright speckle, now a clean highlight).
-        --branches_left;
-        const float eta_v = h.front ? sm.ior : 1.0f / sm.ior;
-        Branch& b = pending[n_pending++];
-        b.o = offset_origin(h, split.other_dir);
-        b.d = split.other_dir;
-        b.beta = beta * split.other_weight;
-        b.prev_pdf = 0.0f;
-        b.prev_n = h.ns;
-        b.eta_scale = eta_scale * (eta2 == 1.0f ? eta_v * eta_v : 1.0f);
-        b.aov_a = aov_a;
-        b.aov_n = aov_n;
-        b.aov_w = aov_w * split.other_share;
-        b.aov_open = aov_open;
-        b.depth = depth + 1;
-        b.rr_vertices = rr_vertices;
-        aov_w *= 1.0f - split.other_share;
-        weight = split.weight;
-        if (max_comp(b.beta) <= 0.0f || !all_finite(b.beta)) --n_pending;
-      } else if (split.on) {
-        if (aov_open && aov_w * split.other_share >= guide_split_min_) {
-          // The other branch's guide (followed through further smooth glass by refraction),
-          // weighted by its share; the continuing branch keeps the rest.
-          F3 oa = aov_a, on = aov_n;
-          const F3 Le = emitted(h, split.other_dir, &oa, &on);
-          if (max_comp(split.other_weight) > 0.0f)
-            add(L, beta * split.other_weight * Le, depth >= 1);
-          aov_acc_a += oa * (aov_w * split.other_share);
-          aov_acc_n += on * (aov_w * split.other_share);
-          aov_w *= 1.0f - split.other_share;
-        } else if (max_comp(split.other_weight) > 0.0f) {
-          add(L, beta * split.other_weight * emitted(h, split.other_dir), depth >= 1);
-        }
-        beta_e = beta * split.weight;
-      }
-      beta *= weight;
-      if (!split.on || branched) beta_e = beta;
-      eta_scale *= eta2;
-      if (!all_finite(beta) || max_comp(beta) <= 0.0f) break;
-      // Roulette counts the vertices where the path did not pass a smooth dielectric: behind a
-      // glass wall (two such vertices, each keeping nearly all the throughput) the first rough
-      // surface is rouletted as if seen directly. Those paths (what is seen in and through
-      // glass) carry most of a glass object's noise and few of them are long.
-      if (!(delta && !sm.rough)) ++rr_vertices;
-      if (rr_vertices >= opt_.rr_depth) {
-        // Roulette on the throughput without the 1/eta^2 radiance scaling of refractions, so
-        // that paths inside glass are not killed more often than outside.
-        const float q = std::min(1.0f, max_comp(beta) * eta_scale);
-        if (u_rr.x >= q) break;
-        beta *= 1.0f / q;
-        beta_e *= 1.0f / q;
-      }
-      prev_delta = delta;
-      prev_pdf = pdf;
-      prev_n = h.ns;
-      o = offset_origin(h, wi_w);
-      d = wi_w;
-    }
-    aov_acc_a += aov_a * aov_w;
-    aov_acc_n += aov_n * aov_w;
-    if (n_pending == 0) break;
-    const Branch& b = pending[--n_pending];
-    o = b.o;
-    d = b.d;
-    beta = beta_e = b.beta;
-    prev_delta = true;
-    prev_pdf = b.prev_pdf;
-    prev_n = b.prev_n;
-    eta_scale = b.eta_scale;
-    aov_a = b.aov_a;
-    aov_n = b.aov_n;
-    aov_w = b.aov_w;
-    aov_open = b.aov_open;
-    depth = b.depth;
-    rr_vertices = b.rr_vertices;
+  for (;; ++p.depth) {
+    if (!find_surface(p, first, rh, sum.L)) return;
+    make_hit(G_, rh, p.d, h);
+    add_surface_emission(p, rh, h, sum.L);
+    if (p.depth >= opt_.max_bounces) return;
+    if (!scatter(p, h, s, sum)) return;
   }
-  aov_albedo = aov_acc_a;
-  aov_normal = aov_acc_n;
-  return L;
+}
+
+inline bool Integrator::find_surface(PathState& p, const RTCRayHit* first, RTCRayHit& rh, F3& L) {
+  bool hit;
+  if (p.depth == 0 && first != nullptr) {
+    rh = *first;
+    hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+  } else if (p.depth == 0) {
+    hit = intersect_primary(p.o, p.d, std::numeric_limits<float>::infinity(), rh);
+  } else {
+    hit = intersect(p.o, p.d, std::numeric_limits<float>::infinity(), rh);
+  }
+  const float t_geom = hit ? rh.ray.tfar : std::numeric_limits<float>::infinity();
+  float t_light;
+  const int li = L_.light_data.empty() ? -1 : hit_light(L_, p.o, p.d, t_geom, t_light);
+  if (li >= 0) {
+    const LightData& l = L_.light_data[li];
+    float w = 1.0f;
+    if (!p.prev_delta) {
+      const float cos_l = -dot(p.d, l.n);
+      const float pl =
+          L_.pmf[li] * nee(p.depth - 1).area_sel * t_light * t_light / (l.area * cos_l);
+      w = power_heuristic(p.prev_pdf, pl);
+    }
+    add(L, p.beta_e * l.radiance * w, p.depth >= 2);
+    if (p.aov_open) p.aov_a = lamp_guide(l.radiance);
+    return false;
+  }
+  if (hit) return true;
+  if (L_.env_on || p.aov_open) {
+    const F3 Le = L_.env(p.d);
+    float w = 1.0f;
+    if (!p.prev_delta && L_.env_on) {
+      const NeeMode& m = nee(p.depth - 1);
+      w = power_heuristic(
+          p.prev_pdf, L_.pmf.back() * m.env_sel * env_pdf(L_, m.p_sun, m.p_dome, p.prev_n, p.d));
+    }
+    add(L, p.beta_e * Le * w, p.depth >= 2);
+    if (p.aov_open) p.aov_a = emitter_guide(Le);
+  }
+  return false;
+}
+
+inline void Integrator::add_surface_emission(PathState& p, const RTCRayHit& rh, const Hit& h,
+                                             F3& L) {
+  const MaterialData& m = *h.mat;
+  if (m.emissive && h.front) {
+    // An emissive triangle found by BSDF sampling: MIS against its next-event estimation.
+    float w = 1.0f;
+    if (!p.prev_delta) {
+      const auto& fe = G_.geoms[rh.hit.geomID].face_emitter;
+      const std::int32_t e = fe.empty() ? -1 : fe[rh.hit.primID];
+      if (e >= 0) {
+        const float cos_l = std::abs(dot(p.d, h.ng));
+        const float t = rh.ray.tfar;
+        const float pl = L_.pmf[L_.light_data.size() + e] * nee(p.depth - 1).area_sel * t * t /
+                         (L_.tris[e].area * std::max(cos_l, 1e-7f));
+        w = power_heuristic(p.prev_pdf, pl);
+      }
+    }
+    add(L, p.beta_e * m.emission * w, p.depth >= 2);
+  }
+  if (p.aov_open) {
+    p.aov_a = h.base;
+    p.aov_n = h.ns;
+    p.aov_open = see_through(m);
+  }
+}
+
+inline bool Integrator::scatter(PathState& p, const Hit& h, const pt::PixelSampler& s,
+                                SampleSum& sum) {
+  const MaterialData& m = *h.mat;
+  const pt::Frame frame(h.ns);
+  const F3 wo = frame.to_local(-p.d);
+  pt::ShadingMaterial sm{h.base, m.metallic, m.alpha, m.ior, m.transmission, m.ms};
+  sm.prepare(wo.z, h.front);
+  const std::uint32_t base_pair = 2 + 5 * static_cast<std::uint32_t>(p.depth);
+  // Dimension pairs of this vertex: light point, BSDF direction, (light choice, lobe),
+  // (roulette, Fresnel choice), environment direction.
+  const pt::Sample2 u_bsdf = s.get(base_pair + 1);
+  const pt::Sample2 u_sel = s.get(base_pair + 2);
+  const pt::Sample2 u_rr = s.get(base_pair + 3);
+  if (sm.has_nondelta) next_event(p, h, frame, wo, sm, s, base_pair, u_sel.x, sum.L);
+
+  BsdfSample bs;
+  Split split;
+  // Fresnel splitting (and the branches) only while the throughput is worth the other
+  // direction's ray: deeper, dim paths take the random direction alone (unbiased; the
+  // choice does not depend on the Fresnel draw).
+  const bool may_split = sum.branches_left > 0 || max_comp(p.beta) >= split_min_;
+  if (!sample_bsdf(h, frame, wo, sm, u_sel.y, u_rr.y, u_bsdf, bs, may_split ? &split : nullptr))
+    return false;
+  if (split.on) {
+    p.beta *= take_split(p, h, sm, bs, split, sum);
+  } else {
+    p.beta *= bs.weight;
+    p.beta_e = p.beta;
+  }
+  p.eta_scale *= bs.eta2;
+  if (!all_finite(p.beta) || max_comp(p.beta) <= 0.0f) return false;
+  if (!roulette(p, bs.delta && !sm.rough, u_rr.x)) return false;
+  p.prev_delta = bs.delta;
+  p.prev_pdf = bs.pdf;
+  p.prev_n = h.ns;
+  p.o = offset_origin(h, bs.wi_w);
+  p.d = bs.wi_w;
+  return true;
+}
+
+inline void Integrator::next_event(const PathState& p, const Hit& h, const pt::Frame& frame, F3 wo,
+                                   const pt::ShadingMaterial& sm, const pt::PixelSampler& s,
+                                   std::uint32_t base_pair, float u_light, F3& L) {
+  const NeeMode& m = nee(p.depth);
+  bool do_area = L_.area_on, do_env = m.env_nee;
+  if (m.one_shadow) {
+    // One shadow ray: the environment with probability env_sel, else a light.
+    if (u_light < m.env_sel) {
+      do_area = false;
+    } else {
+      do_env = false;
+      u_light = std::min((u_light - m.env_sel) / (1.0f - m.env_sel), 0.99999994f);
+    }
+  }
+  if (do_area) {
+    const std::size_t n = L_.n_local;
+    const auto k = static_cast<std::size_t>(
+        std::upper_bound(L_.cdf.begin(), L_.cdf.begin() + (n - 1), u_light) - L_.cdf.begin());
+    add(L, p.beta * direct(h, frame, wo, sm, k, s.get(base_pair), m), p.depth >= 1);
+  }
+  if (do_env)
+    add(L, p.beta * direct(h, frame, wo, sm, L_.n_local, s.get(base_pair + 4), m), p.depth >= 1);
+}
+
+inline F3 Integrator::take_split(PathState& p, const Hit& h, const pt::ShadingMaterial& sm,
+                                 const BsdfSample& bs, const Split& split, SampleSum& sum) {
+  if (sum.branches_left > 0) {
+    // Both branches traced in full (the first kMaxBranches smooth-dielectric vertices of a
+    // camera sample): the other one waits in `pending`; each carries its expected weight
+    // (F or 1 - F times its lobe weight) instead of the random choice's, so nothing seen in
+    // or through the first walls of a glass object depends on the reflect/refract draw
+    // (a lamp reflected by the far wall of a bottle and seen through the near one was found
+    // by a path only with probability F: a bright speckle, now a clean highlight).
+    --sum.branches_left;
+    const float eta_v = h.front ? sm.ior : 1.0f / sm.ior;
+    PathState& b = *::new (static_cast<void*>(&sum.pending[sum.n_pending++])) PathState;
+    b.o = offset_origin(h, split.other_dir);
+    b.d = split.other_dir;
+    b.beta = p.beta * split.other_weight;
+    b.beta_e = b.beta;
+    b.prev_delta = true;
+    b.prev_pdf = 0.0f;
+    b.prev_n = h.ns;
+    b.eta_scale = p.eta_scale * (bs.eta2 == 1.0f ? eta_v * eta_v : 1.0f);
+    b.aov_a = p.aov_a;
+    b.aov_n = p.aov_n;
+    b.aov_w = p.aov_w * split.other_share;
+    b.aov_open = p.aov_open;
+    b.depth = p.depth + 1;
+    b.rr_vertices = p.rr_vertices;
+    p.aov_w *= 1.0f - split.other_share;
+    if (max_comp(b.beta) <= 0.0f || !all_finite(b.beta)) --sum.n_pending;
+    p.beta_e = p.beta * split.weight;
+    return split.weight;
+  }
+  if (p.aov_open && p.aov_w * split.other_share >= guide_split_min_) {
+    // The other branch's guide (followed through further smooth glass by refraction),
+    // weighted by its share; the continuing branch keeps the rest.
+    F3 oa = p.aov_a, on = p.aov_n;
+    const F3 Le = emitted(h, split.other_dir, &oa, &on);
+    if (max_comp(split.other_weight) > 0.0f)
+      add(sum.L, p.beta * split.other_weight * Le, p.depth >= 1);
+    sum.aov_a += oa * (p.aov_w * split.other_share);
+    sum.aov_n += on * (p.aov_w * split.other_share);
+    p.aov_w *= 1.0f - split.other_share;
+  } else if (max_comp(split.other_weight) > 0.0f) {
+    add(sum.L, p.beta * split.other_weight * emitted(h, split.other_dir), p.depth >= 1);
+  }
+  p.beta_e = p.beta * split.weight;
+  return bs.weight;
+}
+
+inline bool Integrator::roulette(PathState& p, bool smooth, float u) {
+  // Roulette counts the vertices where the path did not pass a smooth dielectric: behind a
+  // glass wall (two such vertices, each keeping nearly all the throughput) the first rough
+  // surface is rouletted as if seen directly. Those paths (what is seen in and through
+  // glass) carry most of a glass object's noise and few of them are long.
+  if (!smooth) ++p.rr_vertices;
+  if (p.rr_vertices < opt_.rr_depth) return true;
+  // Roulette on the throughput without the 1/eta^2 radiance scaling of refractions, so
+  // that paths inside glass are not killed more often than outside.
+  const float q = std::min(1.0f, max_comp(p.beta) * p.eta_scale);
+  if (u >= q) return false;
+  p.beta *= 1.0f / q;
+  p.beta_e *= 1.0f / q;
+  return true;
 }
 
 F3 Integrator::direct(const Hit& h, const pt::Frame& frame, F3 wo, const pt::ShadingMaterial& sm,

@@ -189,22 +189,213 @@ void add_friction_row(const ManifoldRows& m, const btVector3& axis, int contact_
   row.m_upperLimit = row.m_friction;
 }
 
+/// A contact point's soft-contact constraint force mixing and error reduction: its own cfm / erp,
+/// or both from its stiffness and damping; else the solver's (Bullet's convertContact).
+void soft_contact(const btContactSolverInfo& info, const btManifoldPoint& cp, btScalar& cfm,
+                  btScalar& erp) {
+  cfm = info.m_globalCfm;
+  erp = info.m_erp2;
+  const int flags = cp.m_contactPointFlags;
+  if (flags & (BT_CONTACT_FLAG_HAS_CONTACT_CFM | BT_CONTACT_FLAG_HAS_CONTACT_ERP)) {
+    if (flags & BT_CONTACT_FLAG_HAS_CONTACT_CFM) cfm = cp.m_contactCFM;
+    if (flags & BT_CONTACT_FLAG_HAS_CONTACT_ERP) erp = cp.m_contactERP;
+  } else if (flags & BT_CONTACT_FLAG_CONTACT_STIFFNESS_DAMPING) {
+    btScalar denom =
+        info.m_timeStep * cp.m_combinedContactStiffness1 + cp.m_combinedContactDamping1;
+    if (denom < SIMD_EPSILON) denom = SIMD_EPSILON;
+    cfm = btScalar(1) / denom;
+    erp = (info.m_timeStep * cp.m_combinedContactStiffness1) / denom;
+  }
+}
+
+/// The Jacobian of a contact's normal row: A pushed along the normal, B against it (lever arms
+/// arm_a, arm_b; cfm already divided by the time step): the angular components, the inverse
+/// effective mass (with Bullet's relaxation) and the contact normals and torque arms.
+template <Side kA, Side kB>
+void set_normal_jacobian(const ManifoldRows& m, btSolverConstraint& row, const btVector3& normal,
+                         const btVector3& arm_a, const btVector3& arm_b, btScalar cfm) {
+  const btVector3 zero(0, 0, 0);
+  btScalar mass_a = 0, mass_b = 0;
+  btVector3 torque_a = zero, torque_b = zero;  // arm × normal
+  if constexpr (kA != Side::kFixed) torque_a = arm_a.cross(normal);
+  if constexpr (kB != Side::kFixed) torque_b = arm_b.cross(normal);
+  if constexpr (kA == Side::kMoving) {
+    const btRigidBody& rb = *m.a.m_originalBody;
+    row.m_angularComponentA = rb.getInvInertiaTensorWorld() * torque_a * rb.getAngularFactor();
+    mass_a = rb.getInvMass() + normal.dot(row.m_angularComponentA.cross(arm_a));
+  } else {
+    row.m_angularComponentA.setZero();
+  }
+  if constexpr (kB == Side::kMoving) {
+    const btRigidBody& rb = *m.b.m_originalBody;
+    row.m_angularComponentB = rb.getInvInertiaTensorWorld() * -torque_b * rb.getAngularFactor();
+    mass_b = rb.getInvMass() + normal.dot((-row.m_angularComponentB).cross(arm_b));
+  } else {
+    row.m_angularComponentB.setZero();
+  }
+  row.m_jacDiagABInv = m.relaxation / (mass_a + mass_b + cfm);
+  if constexpr (kA != Side::kFixed) {
+    row.m_contactNormal1 = normal;
+    row.m_relpos1CrossNormal = torque_a;
+  } else {
+    row.m_contactNormal1.setZero();
+    row.m_relpos1CrossNormal.setZero();
+  }
+  if constexpr (kB != Side::kFixed) {
+    row.m_contactNormal2 = -normal;
+    row.m_relpos2CrossNormal = -torque_b;
+  } else {
+    row.m_contactNormal2.setZero();
+    row.m_relpos2CrossNormal.setZero();
+  }
+}
+
+/// Restitution: the approach speed (bodies' own velocities) times the restitution, if above the
+/// threshold; 0 otherwise. A zero restitution gives a zero target for any finite speed, so the
+/// speed is only computed for a bouncing contact.
+template <Side kA, Side kB>
+btScalar bounce_speed(const ManifoldRows& m, const btManifoldPoint& cp, const btVector3& arm_a,
+                      const btVector3& arm_b) {
+  if (cp.m_combinedRestitution == 0) return 0;
+  const btVector3 zero(0, 0, 0);
+  const btVector3& normal = cp.m_normalWorldOnB;
+  const btVector3 velocity_a =
+      kA != Side::kFixed ? m.a.m_originalBody->getVelocityInLocalPoint(arm_a) : zero;
+  const btVector3 velocity_b =
+      kB != Side::kFixed ? m.b.m_originalBody->getVelocityInLocalPoint(arm_b) : zero;
+  const btScalar approach = normal.dot(velocity_a - velocity_b);
+  btScalar bounce = 0;
+  if (!(btFabs(approach) < m.info.m_restitutionVelocityThreshold)) {
+    bounce = cp.m_combinedRestitution * -approach;
+  }
+  if (bounce <= btScalar(0)) bounce = 0;
+  return bounce;
+}
+
+/// Warm start: last step's impulse, scaled, applied to the moving bodies now (a still body's
+/// velocity changes would stay +0: it adds products of its zero inverse mass and inertia).
+template <Side kA, Side kB>
+void warm_start(const ManifoldRows& m, const btManifoldPoint& cp, btSolverConstraint& row) {
+  if (m.info.m_solverMode & SOLVER_USE_WARMSTARTING) {
+    row.m_appliedImpulse = cp.m_appliedImpulse * m.info.m_warmstartingFactor;
+    if constexpr (kA == Side::kMoving) {
+      m.a.internalApplyImpulse(row.m_contactNormal1 * m.a.internalGetInvMass(),
+                               row.m_angularComponentA, row.m_appliedImpulse);
+    }
+    if constexpr (kB == Side::kMoving) {
+      m.b.internalApplyImpulse(-row.m_contactNormal2 * m.b.internalGetInvMass(),
+                               -row.m_angularComponentB, -btScalar(row.m_appliedImpulse));
+    }
+  } else {
+    row.m_appliedImpulse = 0;
+  }
+  row.m_appliedPushImpulse = 0;
+}
+
+/// Target of a normal row: the relative normal velocity (with this step's external impulses)
+/// brought to `bounce`, less the penetration; the position error (erp: error reduction) either
+/// goes into the same right-hand side or, with split impulse for shallow contacts, into a
+/// separate one. Also the row's cfm and impulse bounds.
+template <Side kA, Side kB>
+void set_normal_target(const ManifoldRows& m, const btManifoldPoint& cp, btSolverConstraint& row,
+                       btScalar bounce, btScalar cfm, btScalar erp) {
+  const btContactSolverInfo& info = m.info;
+  btScalar speed_a = 0, speed_b = 0;
+  if constexpr (kA != Side::kFixed) {
+    speed_a = row.m_contactNormal1.dot(m.a.m_linearVelocity + m.a.m_externalForceImpulse) +
+              row.m_relpos1CrossNormal.dot(m.a.m_angularVelocity + m.a.m_externalTorqueImpulse);
+  }
+  if constexpr (kB != Side::kFixed) {
+    speed_b = row.m_contactNormal2.dot(m.b.m_linearVelocity + m.b.m_externalForceImpulse) +
+              row.m_relpos2CrossNormal.dot(m.b.m_angularVelocity + m.b.m_externalTorqueImpulse);
+  }
+  const btScalar relative_speed = speed_a + speed_b;
+  btScalar position_error = 0;
+  btScalar velocity_error = bounce - relative_speed;
+  const btScalar penetration = cp.getDistance() + info.m_linearSlop;
+  if (penetration > 0) {
+    velocity_error -= penetration * m.inv_dt;  // apart (or within the slop): close the gap
+  } else {
+    position_error = -penetration * erp * m.inv_dt;
+  }
+  const btScalar position_impulse = position_error * row.m_jacDiagABInv;
+  const btScalar velocity_impulse = velocity_error * row.m_jacDiagABInv;
+  if (!info.m_splitImpulse || penetration > info.m_splitImpulsePenetrationThreshold) {
+    row.m_rhs = position_impulse + velocity_impulse;
+    row.m_rhsPenetration = 0;
+  } else {
+    row.m_rhs = velocity_impulse;
+    row.m_rhsPenetration = position_impulse;
+  }
+  row.m_cfm = cfm * row.m_jacDiagABInv;
+  row.m_lowerLimit = 0;
+  row.m_upperLimit = 1e10f;
+}
+
+/// The friction rows of contact point cp (row contact_index of the contact pool): along cached
+/// directions (with their target velocities) if the point has them and caching is on; else
+/// along the sliding velocity (its part in the contact plane) when it is not negligible, the
+/// second one across it; else any two in the plane. Updates the point's friction directions and
+/// flags as Bullet's convertContact does. The rows' impulses start at zero (add_friction_row;
+/// Bullet's convertContact zeroes them once more).
+template <Side kA, Side kB>
+void add_friction_rows(const ManifoldRows& m, btManifoldPoint& cp, int contact_index,
+                       const btVector3& arm_a, const btVector3& arm_b) {
+  const int mode = m.info.m_solverMode;
+  const bool two_directions = (mode & SOLVER_USE_2_FRICTION_DIRECTIONS) != 0;
+  const btVector3& normal = cp.m_normalWorldOnB;
+  if ((mode & SOLVER_ENABLE_FRICTION_DIRECTION_CACHING) &&
+      (cp.m_contactPointFlags & BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED)) {
+    add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b,
+                             cp.m_contactMotion1, cp.m_frictionCFM);
+    if (two_directions) {
+      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b,
+                               cp.m_contactMotion2, cp.m_frictionCFM);
+    }
+    return;
+  }
+  bool sliding = false;
+  if (!(mode & SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION)) {
+    const btVector3 zero(0, 0, 0);
+    btVector3 velocity_a = zero, velocity_b = zero;
+    if constexpr (kA != Side::kFixed) m.a.getVelocityInLocalPointNoDelta(arm_a, velocity_a);
+    if constexpr (kB != Side::kFixed) m.b.getVelocityInLocalPointNoDelta(arm_b, velocity_b);
+    const btVector3 relative = velocity_a - velocity_b;
+    const btScalar along_normal = normal.dot(relative);
+    cp.m_lateralFrictionDir1 = relative - normal * along_normal;
+    const btScalar slide2 = cp.m_lateralFrictionDir1.length2();
+    sliding = slide2 > SIMD_EPSILON;
+    if (sliding) cp.m_lateralFrictionDir1 *= 1.f / btSqrt(slide2);
+  }
+  if (sliding) {
+    add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b, 0, 0);
+    if (two_directions) {
+      cp.m_lateralFrictionDir2 = cp.m_lateralFrictionDir1.cross(normal);
+      cp.m_lateralFrictionDir2.normalize();
+      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b, 0, 0);
+    }
+    return;
+  }
+  btPlaneSpace1(normal, cp.m_lateralFrictionDir1, cp.m_lateralFrictionDir2);
+  add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b, 0, 0);
+  if (two_directions) {
+    add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b, 0, 0);
+    if (mode & SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION) {
+      cp.m_contactPointFlags |= BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED;
+    }
+  }
+}
+
 /// The rows of every contact point of one manifold within its processing threshold: the normal
 /// row (non-penetration, with Baumgarte or split-impulse position correction, restitution, soft
 /// contact cfm/erp, warm start) into the contact pool, then its friction rows into the friction
 /// pool. Same fields, operations, side effects and order as Bullet's convertContact without
-/// rolling friction and anisotropic friction.
+/// rolling friction and anisotropic friction (its stages in the functions above, in its order).
 template <Side kA, Side kB>
-// Complexity ceiling of .clang-tidy exceeded on purpose: mirrors Bullet's convertContact
-// statement by statement (see above), which keeps the two comparable.
-// NOLINTNEXTLINE(readability-function-cognitive-complexity)
 void convert_points(const ManifoldRows& m, btPersistentManifold& manifold) {
-  const btContactSolverInfo& info = m.info;
   const btVector3& origin_a = manifold.getBody0()->getWorldTransform().getOrigin();
   const btVector3& origin_b = manifold.getBody1()->getWorldTransform().getOrigin();
   const btScalar threshold = manifold.getContactProcessingThreshold();
-  const int mode = info.m_solverMode;
-  const bool two_directions = (mode & SOLVER_USE_2_FRICTION_DIRECTIONS) != 0;
   const btVector3 zero(0, 0, 0);
 
   for (int j = 0; j < manifold.getNumContacts(); ++j) {
@@ -215,179 +406,22 @@ void convert_points(const ManifoldRows& m, btPersistentManifold& manifold) {
     row.m_solverBodyIdA = m.id_a;
     row.m_solverBodyIdB = m.id_b;
     row.m_originalContactPoint = &cp;
-    const btVector3& normal = cp.m_normalWorldOnB;  // from B towards A
     // Lever arms from each body's origin to its contact point (none for the fixed body: every
     // product with it would be zeroed).
     btVector3 arm_a = zero, arm_b = zero;
     if constexpr (kA != Side::kFixed) arm_a = cp.getPositionWorldOnA() - origin_a;
     if constexpr (kB != Side::kFixed) arm_b = cp.getPositionWorldOnB() - origin_b;
 
-    // Soft contact: a point's own cfm / erp, or both from its stiffness and damping.
-    btScalar cfm = info.m_globalCfm;
-    btScalar erp = info.m_erp2;
-    const int flags = cp.m_contactPointFlags;
-    if (flags & (BT_CONTACT_FLAG_HAS_CONTACT_CFM | BT_CONTACT_FLAG_HAS_CONTACT_ERP)) {
-      if (flags & BT_CONTACT_FLAG_HAS_CONTACT_CFM) cfm = cp.m_contactCFM;
-      if (flags & BT_CONTACT_FLAG_HAS_CONTACT_ERP) erp = cp.m_contactERP;
-    } else if (flags & BT_CONTACT_FLAG_CONTACT_STIFFNESS_DAMPING) {
-      btScalar denom =
-          info.m_timeStep * cp.m_combinedContactStiffness1 + cp.m_combinedContactDamping1;
-      if (denom < SIMD_EPSILON) denom = SIMD_EPSILON;
-      cfm = btScalar(1) / denom;
-      erp = (info.m_timeStep * cp.m_combinedContactStiffness1) / denom;
-    }
+    btScalar cfm, erp;
+    soft_contact(m.info, cp, cfm, erp);
     cfm *= m.inv_dt;
-
-    // The normal row: A pushed along the normal, B against it.
-    btScalar mass_a = 0, mass_b = 0;
-    btVector3 torque_a = zero, torque_b = zero;  // arm × normal
-    if constexpr (kA != Side::kFixed) torque_a = arm_a.cross(normal);
-    if constexpr (kB != Side::kFixed) torque_b = arm_b.cross(normal);
-    if constexpr (kA == Side::kMoving) {
-      const btRigidBody& rb = *m.a.m_originalBody;
-      row.m_angularComponentA = rb.getInvInertiaTensorWorld() * torque_a * rb.getAngularFactor();
-      mass_a = rb.getInvMass() + normal.dot(row.m_angularComponentA.cross(arm_a));
-    } else {
-      row.m_angularComponentA.setZero();
-    }
-    if constexpr (kB == Side::kMoving) {
-      const btRigidBody& rb = *m.b.m_originalBody;
-      row.m_angularComponentB = rb.getInvInertiaTensorWorld() * -torque_b * rb.getAngularFactor();
-      mass_b = rb.getInvMass() + normal.dot((-row.m_angularComponentB).cross(arm_b));
-    } else {
-      row.m_angularComponentB.setZero();
-    }
-    row.m_jacDiagABInv = m.relaxation / (mass_a + mass_b + cfm);
-    if constexpr (kA != Side::kFixed) {
-      row.m_contactNormal1 = normal;
-      row.m_relpos1CrossNormal = torque_a;
-    } else {
-      row.m_contactNormal1.setZero();
-      row.m_relpos1CrossNormal.setZero();
-    }
-    if constexpr (kB != Side::kFixed) {
-      row.m_contactNormal2 = -normal;
-      row.m_relpos2CrossNormal = -torque_b;
-    } else {
-      row.m_contactNormal2.setZero();
-      row.m_relpos2CrossNormal.setZero();
-    }
+    set_normal_jacobian<kA, kB>(m, row, cp.m_normalWorldOnB, arm_a, arm_b, cfm);
     row.m_friction = cp.m_combinedFriction;
-
-    // Restitution: the approach speed (bodies' own velocities) times the restitution, if above
-    // the threshold. A zero restitution gives a zero target for any finite speed, so the speed
-    // is only computed for a bouncing contact.
-    btScalar bounce = 0;
-    if (cp.m_combinedRestitution != 0) {
-      const btVector3 velocity_a =
-          kA != Side::kFixed ? m.a.m_originalBody->getVelocityInLocalPoint(arm_a) : zero;
-      const btVector3 velocity_b =
-          kB != Side::kFixed ? m.b.m_originalBody->getVelocityInLocalPoint(arm_b) : zero;
-      const btScalar approach = normal.dot(velocity_a - velocity_b);
-      if (!(btFabs(approach) < info.m_restitutionVelocityThreshold)) {
-        bounce = cp.m_combinedRestitution * -approach;
-      }
-      if (bounce <= btScalar(0)) bounce = 0;
-    }
-
-    // Warm start: last step's impulse, scaled, applied to the moving bodies now (a still body's
-    // velocity changes would stay +0: it adds products of its zero inverse mass and inertia).
-    if (mode & SOLVER_USE_WARMSTARTING) {
-      row.m_appliedImpulse = cp.m_appliedImpulse * info.m_warmstartingFactor;
-      if constexpr (kA == Side::kMoving) {
-        m.a.internalApplyImpulse(row.m_contactNormal1 * m.a.internalGetInvMass(),
-                                 row.m_angularComponentA, row.m_appliedImpulse);
-      }
-      if constexpr (kB == Side::kMoving) {
-        m.b.internalApplyImpulse(-row.m_contactNormal2 * m.b.internalGetInvMass(),
-                                 -row.m_angularComponentB, -btScalar(row.m_appliedImpulse));
-      }
-    } else {
-      row.m_appliedImpulse = 0;
-    }
-    row.m_appliedPushImpulse = 0;
-
-    // Target: the relative normal velocity (with this step's external impulses) brought to the
-    // bounce, less the penetration; the position error either goes into the same right-hand
-    // side or, with split impulse for shallow contacts, into a separate one.
-    btScalar speed_a = 0, speed_b = 0;
-    if constexpr (kA != Side::kFixed) {
-      speed_a = row.m_contactNormal1.dot(m.a.m_linearVelocity + m.a.m_externalForceImpulse) +
-                row.m_relpos1CrossNormal.dot(m.a.m_angularVelocity + m.a.m_externalTorqueImpulse);
-    }
-    if constexpr (kB != Side::kFixed) {
-      speed_b = row.m_contactNormal2.dot(m.b.m_linearVelocity + m.b.m_externalForceImpulse) +
-                row.m_relpos2CrossNormal.dot(m.b.m_angularVelocity + m.b.m_externalTorqueImpulse);
-    }
-    const btScalar relative_speed = speed_a + speed_b;
-    btScalar position_error = 0;
-    btScalar velocity_error = bounce - relative_speed;
-    const btScalar penetration = cp.getDistance() + info.m_linearSlop;
-    if (penetration > 0) {
-      velocity_error -= penetration * m.inv_dt;  // apart (or within the slop): close the gap
-    } else {
-      position_error = -penetration * erp * m.inv_dt;
-    }
-    const btScalar position_impulse = position_error * row.m_jacDiagABInv;
-    const btScalar velocity_impulse = velocity_error * row.m_jacDiagABInv;
-    if (!info.m_splitImpulse || penetration > info.m_splitImpulsePenetrationThreshold) {
-      row.m_rhs = position_impulse + velocity_impulse;
-      row.m_rhsPenetration = 0;
-    } else {
-      row.m_rhs = velocity_impulse;
-      row.m_rhsPenetration = position_impulse;
-    }
-    row.m_cfm = cfm * row.m_jacDiagABInv;
-    row.m_lowerLimit = 0;
-    row.m_upperLimit = 1e10f;
+    const btScalar bounce = bounce_speed<kA, kB>(m, cp, arm_a, arm_b);
+    warm_start<kA, kB>(m, cp, row);
+    set_normal_target<kA, kB>(m, cp, row, bounce, cfm, erp);
     row.m_frictionIndex = m.frictions.size();
-
-    // Friction directions: cached ones (with their target velocities) if the point has them
-    // and caching is on; else along the sliding velocity (its part in the contact plane) when
-    // it is not negligible, the second one across it; else any two in the plane.
-    if ((mode & SOLVER_ENABLE_FRICTION_DIRECTION_CACHING) &&
-        (flags & BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED)) {
-      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b,
-                               cp.m_contactMotion1, cp.m_frictionCFM);
-      if (two_directions) {
-        add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b,
-                                 cp.m_contactMotion2, cp.m_frictionCFM);
-      }
-      continue;
-    }
-    bool sliding = false;
-    if (!(mode & SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION)) {
-      btVector3 velocity_a = zero, velocity_b = zero;
-      if constexpr (kA != Side::kFixed) m.a.getVelocityInLocalPointNoDelta(arm_a, velocity_a);
-      if constexpr (kB != Side::kFixed) m.b.getVelocityInLocalPointNoDelta(arm_b, velocity_b);
-      const btVector3 relative = velocity_a - velocity_b;
-      const btScalar along_normal = normal.dot(relative);
-      cp.m_lateralFrictionDir1 = relative - normal * along_normal;
-      const btScalar slide2 = cp.m_lateralFrictionDir1.length2();
-      sliding = slide2 > SIMD_EPSILON;
-      if (sliding) cp.m_lateralFrictionDir1 *= 1.f / btSqrt(slide2);
-    }
-    if (sliding) {
-      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b, 0, 0);
-      if (two_directions) {
-        cp.m_lateralFrictionDir2 = cp.m_lateralFrictionDir1.cross(normal);
-        cp.m_lateralFrictionDir2.normalize();
-        add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b, 0,
-                                 0);
-      }
-    } else {
-      btPlaneSpace1(normal, cp.m_lateralFrictionDir1, cp.m_lateralFrictionDir2);
-      add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir1, contact_index, cp, arm_a, arm_b, 0, 0);
-      if (two_directions) {
-        add_friction_row<kA, kB>(m, cp.m_lateralFrictionDir2, contact_index, cp, arm_a, arm_b, 0,
-                                 0);
-        if (mode & SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION) {
-          cp.m_contactPointFlags |= BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED;
-        }
-      }
-    }
-    // The friction rows' impulses start at zero (Bullet zeroes them once more here; they are
-    // zero already).
+    add_friction_rows<kA, kB>(m, cp, contact_index, arm_a, arm_b);
   }
 }
 

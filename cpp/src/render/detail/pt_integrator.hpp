@@ -177,6 +177,80 @@ class Integrator {
                    float u_lobe, float u_fresnel, pt::Sample2 u, BsdfSample& out,
                    Split* split = nullptr);
 
+  /// Smooth-dielectric vertices per camera sample whose two branches are both traced in full
+  /// (the first ones along the path, depth first); later ones are split as in `Split`.
+  static constexpr int kMaxBranches = 3;
+
+  /// One path of a camera sample: the ray it follows next and what it carries along. A branch of
+  /// a smooth dielectric waiting its turn is a PathState too (trace()).
+  struct PathState {
+    F3 o, d;             // the ray to the next vertex (world)
+    F3 beta = F3(1.0f);  // throughput
+    /// Throughput for the light (area light, emissive triangle, environment) found at the next
+    /// vertex: beta, except after a smooth dielectric whose other direction was followed to its
+    /// first light only (Fresnel splitting, see Split): the chosen direction's expected share.
+    F3 beta_e = F3(1.0f);
+    bool prev_delta = true;  // the ray was sampled from a delta lobe (or is a camera ray)
+    float prev_pdf = 0.0f;   // solid-angle pdf of the BSDF sample that made the ray
+    F3 prev_n;               // shading normal at the previous vertex (environment pdf)
+    float eta_scale = 1.0f;  // product of eta^2 over the refractions so far
+    /// The denoiser guides (albedo, normal) of this path so far, weighted aov_w in the pixel's
+    /// guides; still open (aov_open) while the path has met only see-through glass.
+    F3 aov_a, aov_n;
+    float aov_w = 1.0f;
+    bool aov_open = true;
+    int depth = 0;        // vertex index of the next hit (0 = the camera ray's)
+    int rr_vertices = 0;  // vertices so far that count for Russian roulette
+  };
+
+  /// What a camera sample gathers over its paths: radiance, the denoiser guides of the paths
+  /// done, and the branches waiting their turn: `pending`, a stack of kMaxBranches entries that
+  /// trace() owns (kept apart from the sums, so that these can stay in registers).
+  struct SampleSum {
+    F3 L, aov_a, aov_n;
+    PathState* pending = nullptr;
+    int n_pending = 0;
+    int branches_left = kMaxBranches;
+  };
+
+  // The stages of trace()'s bounce loop. Defined in pt_integrator.cpp and used there only;
+  // always inlined into trace(), so that the hot loop compiles as the one function it is.
+
+  /// Follows path p to its end (an emitter or the environment, max_bounces, a lost sample or
+  /// Russian roulette), adding to sum; `first` as in trace().
+  __attribute__((always_inline)) inline void trace_path(PathState& p, const pt::PixelSampler& s,
+                                                        const RTCRayHit* first, SampleSum& sum);
+  /// Traces p's ray into rh. Where it meets an area light or leaves to the environment, adds their
+  /// light (MIS against next-event estimation) and guide and returns false; true at a surface.
+  __attribute__((always_inline)) inline bool find_surface(PathState& p, const RTCRayHit* first,
+                                                          RTCRayHit& rh, F3& L);
+  /// At surface h (hit rh of p's ray): the emission of an emissive triangle's front side (MIS
+  /// against its next-event estimation) and the denoiser guides.
+  __attribute__((always_inline)) inline void add_surface_emission(PathState& p, const RTCRayHit& rh,
+                                                                  const Hit& h, F3& L);
+  /// Continues p at surface h: next-event estimation, BSDF sampling (with the Fresnel split of a
+  /// smooth dielectric), Russian roulette; false when the path ends there.
+  __attribute__((always_inline)) inline bool scatter(PathState& p, const Hit& h,
+                                                     const pt::PixelSampler& s, SampleSum& sum);
+  /// Next-event estimation at h: a light (area light or emissive triangle) and the environment,
+  /// each with its own shadow ray, or (NeeMode::one_shadow) one of the two.
+  __attribute__((always_inline)) inline void next_event(const PathState& p, const Hit& h,
+                                                        const pt::Frame& frame, F3 wo,
+                                                        const pt::ShadingMaterial& sm,
+                                                        const pt::PixelSampler& s,
+                                                        std::uint32_t base_pair, float u_light,
+                                                        F3& L);
+  /// The Fresnel split of BSDF sample bs at a smooth dielectric (split.on): the other direction
+  /// waits in sum.pending as a branch, or is followed to its first light. Sets p.beta_e and the
+  /// guide weights; returns the weight of the chosen direction.
+  __attribute__((always_inline)) inline F3 take_split(PathState& p, const Hit& h,
+                                                      const pt::ShadingMaterial& sm,
+                                                      const BsdfSample& bs, const Split& split,
+                                                      SampleSum& sum);
+  /// Russian roulette at a vertex (smooth: at a smooth dielectric, not counted); false when the
+  /// path is ended, else p's throughputs are rescaled.
+  __attribute__((always_inline)) inline bool roulette(PathState& p, bool smooth, float u);
+
   const Geometry& G_;
   const Lighting& L_;
   const PathTraceOptions& opt_;
@@ -185,9 +259,6 @@ class Integrator {
   float clamp_indirect_;
   float split_min_;        // PathTraceOptions::fresnel_split_min
   float guide_split_min_;  // PathTraceOptions::guide_split_min
-  /// Smooth-dielectric vertices per camera sample whose two branches are both traced in full
-  /// (the first ones along the path, depth first); later ones are split as in `Split`.
-  static constexpr int kMaxBranches = 3;
   /// The mode of the vertex at `depth` (0 = the camera ray's hit): both shadow rays before
   /// PathTraceOptions::reduced_nee_depth, then PathTraceOptions::shadow_rays and
   /// sample_sky_dome.
