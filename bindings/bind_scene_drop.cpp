@@ -198,6 +198,36 @@ void bind_scene_drop(py::module_& m) {
       py::arg("parts"), py::arg("masses"), py::arg("coms"), py::arg("inertias"),
       py::arg("frictions"), py::arg("restitutions"), py::arg("names"), py::arg("tote"),
       py::arg("tote_box"), py::arg("options"), py::arg("X_WO_start") = py::none());
+
+  m.def(
+      "drop_hull_cache_info",
+      [] {
+        const DropHullCacheInfo i = drop_hull_cache_info();
+        py::dict d;
+        d["entries"] = i.entries;
+        d["bytes"] = i.bytes;
+        d["capacity"] = i.capacity;
+        d["hits"] = i.hits;
+        d["misses"] = i.misses;
+        d["evictions"] = i.evictions;
+        return d;
+      },
+      "The drop's cache of prepared object hulls (mgn/scene/drop.hpp): entries, bytes "
+      "(estimated), capacity (bytes; 0: nothing is cached), hits, misses and evictions since the "
+      "last clear.");
+  m.def("clear_drop_hull_cache", &clear_drop_hull_cache,
+        "Drops every entry of the drop's hull cache and resets its counters.");
+  m.def(
+      "set_drop_hull_cache_capacity",
+      [](std::int64_t bytes) {
+        if (bytes < 0)
+          throw_error<InvalidArgument>(
+              "set_drop_hull_cache_capacity: bytes must be >= 0 (0: cache nothing), got ", bytes);
+        set_drop_hull_cache_capacity(static_cast<std::size_t>(bytes));
+      },
+      py::arg("bytes"),
+      "Sets the capacity of the drop's hull cache (estimated bytes; 0: cache nothing) and evicts "
+      "the least recently used entries down to it.");
 }
 
 }  // namespace mgn::py_bind
