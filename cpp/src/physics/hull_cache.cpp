@@ -25,7 +25,8 @@ std::string key_of(const RigidObject& object, const PrincipalFrame& principal,
                    const BulletUnits& units, const HullShapeOptions& o) {
   std::size_t size = 64 + 16 * sizeof(double);
   for (const Mesh& part : object.convex_parts)
-    size += sizeof(std::int64_t) + 3 * sizeof(float) * static_cast<std::size_t>(part.num_vertices());
+    size +=
+        sizeof(std::int64_t) + 3 * sizeof(float) * static_cast<std::size_t>(part.num_vertices());
   std::string key;
   key.reserve(size);
   append(key, units.length);
@@ -47,16 +48,22 @@ std::string key_of(const RigidObject& object, const PrincipalFrame& principal,
   return key;
 }
 
-/// Estimated memory of one hull shape (its object, vertex arrays, support-search arrays and
-/// polyhedral features).
+/// Estimated memory of one hull shape: its object, vertex arrays (Bullet grows an array to
+/// the next power of two), support-search arrays and polyhedral features, and about kAlloc bytes
+/// of allocator overhead per allocation.
 std::size_t shape_bytes(const btConvexHullShape& s) {
+  constexpr std::size_t kAlloc = 48;
   const auto n = static_cast<std::size_t>(s.getNumPoints());
-  std::size_t bytes = sizeof(btConvexHullShape) + 16 * n + 12 * ((n + 7) / 8 * 8);
+  std::size_t grown = 1;
+  while (grown < n) grown *= 2;
+  std::size_t bytes =
+      sizeof(btConvexHullShape) + 64 + 16 * grown + 12 * ((n + 7) / 8 * 8) + 4 * kAlloc;
   if (const btConvexPolyhedron* p = s.getConvexPolyhedron()) {
-    bytes += sizeof(btConvexPolyhedron) + 16 * static_cast<std::size_t>(p->m_vertices.size()) +
-             16 * static_cast<std::size_t>(p->m_uniqueEdges.size());
+    bytes += sizeof(btConvexPolyhedron) + 16 * static_cast<std::size_t>(p->m_vertices.capacity()) +
+             16 * static_cast<std::size_t>(p->m_uniqueEdges.capacity()) +
+             sizeof(btFace) * static_cast<std::size_t>(p->m_faces.capacity()) + 4 * kAlloc;
     for (int f = 0; f < p->m_faces.size(); ++f)
-      bytes += sizeof(btFace) + sizeof(int) * static_cast<std::size_t>(p->m_faces[f].m_indices.size());
+      bytes += sizeof(int) * static_cast<std::size_t>(p->m_faces[f].m_indices.capacity()) + kAlloc;
   }
   return bytes;
 }
@@ -68,7 +75,7 @@ std::shared_ptr<const PreparedHulls> prepare(const RigidObject& object,
                                              std::size_t key_bytes) {
   auto out = std::make_shared<PreparedHulls>();
   const RigidGeometry geometry = rigid_geometry(object, principal, units, options);
-  out->bytes = sizeof(PreparedHulls) + key_bytes;
+  out->bytes = sizeof(PreparedHulls) + 256 + key_bytes;  // 256: the cache's list and index nodes
   for (const HullPoints& h : geometry.hulls) {
     out->hulls.push_back(hull_shape(h, units, options));
     out->bytes += shape_bytes(*out->hulls.back());

@@ -44,8 +44,9 @@ std::shared_ptr<const PreparedHulls> prepared_hulls(const RigidObject& object,
                                                     const BulletUnits& units,
                                                     const HullShapeOptions& options);
 
-/// Default capacity of the hull cache, bytes (256 MiB).
-inline constexpr std::size_t kDefaultHullCacheCapacity = std::size_t(256) << 20;
+/// Default capacity of the hull cache, bytes (64 MiB; the 30 built-in objects at the drop's
+/// defaults take about 5 MB).
+inline constexpr std::size_t kDefaultHullCacheCapacity = std::size_t(64) << 20;
 
 /// State of the hull cache.
 struct HullCacheInfo {

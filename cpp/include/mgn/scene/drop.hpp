@@ -205,7 +205,7 @@ const char* to_string(DropStatus status);
 /// and polyhedral_contacts; a changed mesh, scale or option is a new entry. Results are the same
 /// bit for bit with or without the cache. Entries are read-only and shared by concurrent drops
 /// (thread-safe); the least recently used are evicted beyond the capacity (estimated bytes,
-/// default 256 MiB).
+/// default 64 MiB; the 30 built-in objects at the default options take about 5 MB).
 struct DropHullCacheInfo {
   std::size_t entries = 0;
   std::size_t bytes = 0;       ///< estimated memory of the entries
