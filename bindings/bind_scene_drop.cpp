@@ -199,22 +199,20 @@ void bind_scene_drop(py::module_& m) {
       py::arg("frictions"), py::arg("restitutions"), py::arg("names"), py::arg("tote"),
       py::arg("tote_box"), py::arg("options"), py::arg("X_WO_start") = py::none());
 
-  m.def(
-      "drop_hull_cache_info",
-      [] {
-        const DropHullCacheInfo i = drop_hull_cache_info();
-        py::dict d;
-        d["entries"] = i.entries;
-        d["bytes"] = i.bytes;
-        d["capacity"] = i.capacity;
-        d["hits"] = i.hits;
-        d["misses"] = i.misses;
-        d["evictions"] = i.evictions;
-        return d;
-      },
-      "The drop's cache of prepared object hulls (mgn/scene/drop.hpp): entries, bytes "
-      "(estimated), capacity (bytes; 0: nothing is cached), hits, misses and evictions since the "
-      "last clear.");
+  py::class_<DropHullCacheInfo>(m, "DropHullCacheInfo",
+                                "State of the drop's cache of prepared object hulls "
+                                "(mgn/scene/drop.hpp).")
+      .def_readonly("entries", &DropHullCacheInfo::entries)
+      .def_readonly("bytes", &DropHullCacheInfo::bytes, "estimated memory of the entries")
+      .def_readonly("capacity", &DropHullCacheInfo::capacity, "bytes; 0: nothing is cached")
+      .def_readonly("hits", &DropHullCacheInfo::hits,
+                    "objects whose hulls came from the cache (since the last clear)")
+      .def_readonly("misses", &DropHullCacheInfo::misses,
+                    "objects whose hulls were prepared (since the last clear)")
+      .def_readonly("evictions", &DropHullCacheInfo::evictions,
+                    "entries evicted for the capacity (since the last clear)");
+  m.def("drop_hull_cache_info", &drop_hull_cache_info,
+        "The state of the drop's cache of prepared object hulls (mgn/scene/drop.hpp).");
   m.def("clear_drop_hull_cache", &clear_drop_hull_cache,
         "Drops every entry of the drop's hull cache and resets its counters.");
   m.def(

@@ -16,6 +16,7 @@ import mgn._core.render
 
 __all__: list[str] = [
     "SUCTION_TOOL_OFFSET",
+    "DropHullCacheInfo",
     "DropOptions",
     "DropResult",
     "LayoutArrays",
@@ -193,6 +194,38 @@ class DropResult:
         """
     @property
     def steps(self) -> int: ...
+
+class DropHullCacheInfo:
+    """
+    State of the drop's cache of prepared object hulls (mgn/scene/drop.hpp).
+    """
+    @property
+    def bytes(self) -> int:
+        """
+        estimated memory of the entries
+        """
+    @property
+    def capacity(self) -> int:
+        """
+        bytes; 0: nothing is cached
+        """
+    @property
+    def entries(self) -> int: ...
+    @property
+    def evictions(self) -> int:
+        """
+        entries evicted for the capacity (since the last clear)
+        """
+    @property
+    def hits(self) -> int:
+        """
+        objects whose hulls came from the cache (since the last clear)
+        """
+    @property
+    def misses(self) -> int:
+        """
+        objects whose hulls were prepared (since the last clear)
+        """
 
 class LayoutArrays:
     """
@@ -663,9 +696,9 @@ def compute_layout(
     Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.
     """
 
-def drop_hull_cache_info() -> dict:
+def drop_hull_cache_info() -> DropHullCacheInfo:
     """
-    The drop's cache of prepared object hulls (mgn/scene/drop.hpp): entries, bytes (estimated), capacity (bytes; 0: nothing is cached), hits, misses and evictions since the last clear.
+    The state of the drop's cache of prepared object hulls (mgn/scene/drop.hpp).
     """
 
 def drop_objects(

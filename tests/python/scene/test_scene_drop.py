@@ -624,11 +624,11 @@ def test_drop_scene_is_the_same_with_and_without_the_hull_cache():
         core.clear_drop_hull_cache()
         first = drop_scene(objects, seed=11).to_dict()
         info = core.drop_hull_cache_info()
-        assert info["entries"] == 3
-        assert info["misses"] == 3
-        assert info["hits"] >= 3  # the repeated objects (more if the scene is settled again)
+        assert info.entries == 3
+        assert info.misses == 3
+        assert info.hits >= 3  # the repeated objects (more if the scene is settled again)
         second = drop_scene(objects, seed=11).to_dict()
-        assert core.drop_hull_cache_info()["misses"] == 3
+        assert core.drop_hull_cache_info().misses == 3
         assert json.dumps(first, sort_keys=True) == json.dumps(off, sort_keys=True)
         assert json.dumps(second, sort_keys=True) == json.dumps(off, sort_keys=True)
         mug = get_object("mug")
@@ -636,7 +636,7 @@ def test_drop_scene_is_the_same_with_and_without_the_hull_cache():
         big = [big_mug, get_object("l_bracket")]
         sources = {"mug_big": "mug_big.yaml"}
         cached = drop_scene(big, seed=2, sources=sources).to_dict()
-        assert core.drop_hull_cache_info()["misses"] == 4  # the scaled mug only
+        assert core.drop_hull_cache_info().misses == 4  # the scaled mug only
         core.set_drop_hull_cache_capacity(0)
         fresh = drop_scene(big, seed=2, sources=sources).to_dict()
         assert json.dumps(cached, sort_keys=True) == json.dumps(fresh, sort_keys=True)
