@@ -198,6 +198,34 @@ void bind_scene_drop(py::module_& m) {
       py::arg("parts"), py::arg("masses"), py::arg("coms"), py::arg("inertias"),
       py::arg("frictions"), py::arg("restitutions"), py::arg("names"), py::arg("tote"),
       py::arg("tote_box"), py::arg("options"), py::arg("X_WO_start") = py::none());
+
+  py::class_<DropHullCacheInfo>(m, "DropHullCacheInfo",
+                                "State of the drop's cache of prepared object hulls "
+                                "(mgn/scene/drop.hpp).")
+      .def_readonly("entries", &DropHullCacheInfo::entries)
+      .def_readonly("bytes", &DropHullCacheInfo::bytes, "estimated memory of the entries")
+      .def_readonly("capacity", &DropHullCacheInfo::capacity, "bytes; 0: nothing is cached")
+      .def_readonly("hits", &DropHullCacheInfo::hits,
+                    "objects whose hulls came from the cache (since the last clear)")
+      .def_readonly("misses", &DropHullCacheInfo::misses,
+                    "objects whose hulls were prepared (since the last clear)")
+      .def_readonly("evictions", &DropHullCacheInfo::evictions,
+                    "entries evicted for the capacity (since the last clear)");
+  m.def("drop_hull_cache_info", &drop_hull_cache_info,
+        "The state of the drop's cache of prepared object hulls (mgn/scene/drop.hpp).");
+  m.def("clear_drop_hull_cache", &clear_drop_hull_cache,
+        "Drops every entry of the drop's hull cache and resets its counters.");
+  m.def(
+      "set_drop_hull_cache_capacity",
+      [](std::int64_t bytes) {
+        if (bytes < 0)
+          throw_error<InvalidArgument>(
+              "set_drop_hull_cache_capacity: bytes must be >= 0 (0: cache nothing), got ", bytes);
+        set_drop_hull_cache_capacity(static_cast<std::size_t>(bytes));
+      },
+      py::arg("bytes"),
+      "Sets the capacity of the drop's hull cache (estimated bytes; 0: cache nothing) and evicts "
+      "the least recently used entries down to it.");
 }
 
 }  // namespace mgn::py_bind

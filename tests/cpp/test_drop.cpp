@@ -11,6 +11,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <string>
+#include <thread>
 
 namespace {
 
@@ -456,4 +459,133 @@ TEST(Drop, TableTopKeepsOverhangsAndLosesWhatFallsOff) {
   // The same board with walls is rejected as a tote (its mesh has no rim at inner_height).
   box.walls = true;
   EXPECT_THROW(mgn::settle_objects(objects, start, board, box, o), mgn::InvalidArgument);
+}
+
+namespace {
+
+/// Every output of two drops, compared bit for bit.
+void expect_same_drop(const mgn::DropResult& a, const mgn::DropResult& b, const char* what) {
+  ASSERT_EQ(a.objects.size(), b.objects.size()) << what;
+  for (std::size_t i = 0; i < a.objects.size(); ++i) {
+    const auto& p = a.objects[i];
+    const auto& q = b.objects[i];
+    EXPECT_EQ(std::memcmp(p.X_WO.matrix().data(), q.X_WO.matrix().data(), 16 * sizeof(double)), 0)
+        << what << " object " << i;
+    EXPECT_EQ(std::memcmp(p.X_WO_release.matrix().data(), q.X_WO_release.matrix().data(),
+                          16 * sizeof(double)),
+              0)
+        << what << " object " << i;
+    EXPECT_EQ(p.status, q.status) << what << " object " << i;
+    EXPECT_EQ(p.settled, q.settled) << what << " object " << i;
+    EXPECT_EQ(p.contacts, q.contacts) << what << " object " << i;
+  }
+  EXPECT_EQ(a.steps, b.steps) << what;
+  EXPECT_EQ(a.settled, b.settled) << what;
+  EXPECT_EQ(a.resettle_rounds, b.resettle_rounds) << what;
+  EXPECT_EQ(std::memcmp(&a.max_penetration, &b.max_penetration, sizeof(double)), 0) << what;
+}
+
+}  // namespace
+
+TEST(Drop, TheHullCacheGivesTheSameDropsBitForBit) {
+  // Objects repeated within a drop and from drop to drop, the way a dataset drops them.
+  const mgn::ToteBox box;
+  const mgn::Mesh tote = tote_mesh(box);
+  const auto meshes = mixed_meshes();
+  std::vector<mgn::DropObject> objects;
+  for (int k : {0, 1, 2, 0, 3, 1, 2, 0}) objects.push_back(object_of(meshes[k], 600, "o"));
+  mgn::DropOptions o;
+  o.seed = 5;
+  o.max_time = 2.0;
+  o.resettle_time = 0.5;
+  o.max_hull_vertices = 48;
+  // Without the cache: every drop prepares every object.
+  mgn::set_drop_hull_cache_capacity(0);
+  const auto fresh = mgn::drop_objects(objects, tote, box, o);
+  EXPECT_EQ(mgn::drop_hull_cache_info().entries, 0u);
+  // With it: the first drop prepares the four distinct objects once, the second none.
+  mgn::set_drop_hull_cache_capacity(std::size_t(64) << 20);
+  mgn::clear_drop_hull_cache();
+  const auto first = mgn::drop_objects(objects, tote, box, o);
+  auto info = mgn::drop_hull_cache_info();
+  EXPECT_EQ(info.misses, 4);
+  EXPECT_EQ(info.hits, 4);
+  EXPECT_EQ(info.entries, 4u);
+  const auto second = mgn::drop_objects(objects, tote, box, o);
+  info = mgn::drop_hull_cache_info();
+  EXPECT_EQ(info.misses, 4);
+  EXPECT_EQ(info.hits, 12);
+  expect_same_drop(fresh, first, "first drop with the cache");
+  expect_same_drop(fresh, second, "second drop with the cache");
+  // A settle from the dropped poses, with and without the cache.
+  std::vector<mgn::Pose> start;
+  for (const auto& r : fresh.objects) start.push_back(r.X_WO);
+  const auto settled_cached = mgn::settle_objects(objects, start, tote, box, o);
+  mgn::set_drop_hull_cache_capacity(0);
+  expect_same_drop(mgn::settle_objects(objects, start, tote, box, o), settled_cached, "settle");
+
+  // Scaled objects (the same vertex count, other coordinates, mass properties) and another
+  // hull budget are new entries: each drop equals its drop without the cache.
+  std::vector<mgn::DropObject> scaled;
+  for (int k : {0, 1, 2, 0}) scaled.push_back(object_of(meshes[k].scaled(1.2), 600, "o"));
+  const auto scaled_fresh = mgn::drop_objects(scaled, tote, box, o);
+  mgn::DropOptions fewer = o;
+  fewer.max_hull_vertices = 16;
+  const auto fewer_fresh = mgn::drop_objects(objects, tote, box, fewer);
+  mgn::set_drop_hull_cache_capacity(std::size_t(64) << 20);
+  const auto before = mgn::drop_hull_cache_info();
+  expect_same_drop(scaled_fresh, mgn::drop_objects(scaled, tote, box, o), "scaled");
+  expect_same_drop(fewer_fresh, mgn::drop_objects(objects, tote, box, fewer), "max_hull_vertices");
+  info = mgn::drop_hull_cache_info();
+  EXPECT_EQ(info.misses - before.misses, 3 + 4);  // 3 scaled objects, 4 with the other budget
+  EXPECT_EQ(info.hits - before.hits, 1 + 4);
+  EXPECT_FALSE(std::memcmp(scaled_fresh.objects[0].X_WO.matrix().data(),
+                           fresh.objects[0].X_WO.matrix().data(), 16 * sizeof(double)) == 0);
+
+  // Errors are those without the cache: an object whose vertices have an entry but whose
+  // inertia is invalid is rejected, naming it.
+  auto bad = objects;
+  bad[3].inertia = -bad[3].inertia;
+  bad[3].name = "negative";
+  try {
+    mgn::drop_objects(bad, tote, box, o);
+    ADD_FAILURE() << "expected InvalidArgument";
+  } catch (const mgn::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("objects[3] ('negative')"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("positive definite"), std::string::npos) << e.what();
+  }
+  mgn::clear_drop_hull_cache();
+}
+
+TEST(Drop, TwoThreadsDroppingTheSameObjectsGetTheSerialResults) {
+  const mgn::ToteBox box;
+  const mgn::Mesh tote = tote_mesh(box);
+  const auto meshes = mixed_meshes();
+  std::vector<mgn::DropObject> objects;
+  for (int k : {4, 5, 6, 4, 5}) objects.push_back(object_of(meshes[k], 600, "o"));
+  mgn::DropOptions o;
+  o.max_time = 1.5;
+  o.resettle_time = 0.5;
+  o.max_hull_vertices = 48;
+  mgn::set_drop_hull_cache_capacity(0);
+  std::vector<mgn::DropResult> serial;
+  for (std::uint64_t seed : {1, 2}) {
+    o.seed = seed;
+    serial.push_back(mgn::drop_objects(objects, tote, box, o));
+  }
+  mgn::set_drop_hull_cache_capacity(std::size_t(64) << 20);
+  mgn::clear_drop_hull_cache();
+  std::vector<mgn::DropResult> parallel(2);
+  auto work = [&](std::size_t t) {
+    mgn::DropOptions mine = o;
+    mine.seed = t + 1;
+    parallel[t] = mgn::drop_objects(objects, tote, box, mine);
+  };
+  std::thread other(work, std::size_t(1));
+  work(0);
+  other.join();
+  expect_same_drop(serial[0], parallel[0], "thread 0");
+  expect_same_drop(serial[1], parallel[1], "thread 1");
+  EXPECT_EQ(mgn::drop_hull_cache_info().entries, 3u);
+  mgn::clear_drop_hull_cache();
 }

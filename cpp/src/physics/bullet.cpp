@@ -136,11 +136,15 @@ RigidShape rigid_shape(const RigidGeometry& geometry, const BulletUnits& units,
                        const HullShapeOptions& options, bool always_compound) {
   RigidShape s;
   for (const HullPoints& h : geometry.hulls) s.hulls.push_back(hull_shape(h, units, options));
-  if (always_compound || s.hulls.size() > 1) {
-    s.compound = std::make_unique<btCompoundShape>(true, static_cast<int>(s.hulls.size()));
-    for (auto& h : s.hulls) s.compound->addChildShape(btTransform::getIdentity(), h.get());
-  }
+  if (always_compound || s.hulls.size() > 1) s.compound = compound_of(s.hulls);
   return s;
+}
+
+std::unique_ptr<btCompoundShape> compound_of(
+    const std::vector<std::unique_ptr<btConvexHullShape>>& hulls) {
+  auto compound = std::make_unique<btCompoundShape>(true, static_cast<int>(hulls.size()));
+  for (const auto& h : hulls) compound->addChildShape(btTransform::getIdentity(), h.get());
+  return compound;
 }
 
 btRigidBody::btRigidBodyConstructionInfo body_info(double mass, const Vec3d& moments,

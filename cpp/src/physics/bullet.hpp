@@ -91,6 +91,11 @@ struct RigidShape {
 RigidShape rigid_shape(const RigidGeometry& geometry, const BulletUnits& units,
                        const HullShapeOptions& options, bool always_compound);
 
+/// A compound shape of `hulls` (identity child transforms, Bullet's dynamic AABB tree of the
+/// children), as rigid_shape() builds it. The compound only reads its children.
+std::unique_ptr<btCompoundShape> compound_of(
+    const std::vector<std::unique_ptr<btConvexHullShape>>& hulls);
+
 /// Construction info of the body of a rigid object with principal `moments` (kg m^2, already
 /// scaled as wanted), its frame B starting at X_WB (m).
 btRigidBody::btRigidBodyConstructionInfo body_info(double mass, const Vec3d& moments,

@@ -4,6 +4,7 @@
 #include <mgn/scene/drop.hpp>
 
 #include "physics/bullet.hpp"
+#include "physics/hull_cache.hpp"
 #include "physics/world.hpp"
 
 #include <btBulletDynamicsCommon.h>
@@ -15,6 +16,22 @@
 #include <numeric>
 
 namespace mgn {
+
+DropHullCacheInfo drop_hull_cache_info() {
+  const physics::HullCacheInfo c = physics::hull_cache_info();
+  DropHullCacheInfo i;
+  i.entries = c.entries;
+  i.bytes = c.bytes;
+  i.capacity = c.capacity;
+  i.hits = c.hits;
+  i.misses = c.misses;
+  i.evictions = c.evictions;
+  return i;
+}
+
+void clear_drop_hull_cache() { physics::clear_hull_cache(); }
+
+void set_drop_hull_cache_capacity(std::size_t bytes) { physics::set_hull_cache_capacity(bytes); }
 
 const char* to_string(DropStatus status) {
   switch (status) {
@@ -136,7 +153,9 @@ struct World {
   physics::World physics;  // Bullet's world with Bullet's default pools (physics/world.hpp)
   btDiscreteDynamicsWorld& world = physics.dynamics();
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
-  std::vector<std::unique_ptr<physics::RigidShape>> rigid_shapes;
+  // Per object: its hull shapes (shared, read-only: physics/hull_cache.hpp) and its compound.
+  std::vector<std::shared_ptr<const physics::PreparedHulls>> hulls;
+  std::vector<std::unique_ptr<btCompoundShape>> compounds;
   std::vector<std::unique_ptr<btRigidBody>> bodies;
   std::unique_ptr<btTriangleMesh> tote_triangles;
   ~World() {
@@ -361,11 +380,12 @@ class DropSimulation {
       const PrincipalFrame pr =
           principal_frame(ob, detail::concat(kFn, ": objects[", i, "] ('", ob.name, "')"));
       X_OB_[i] = pr.X_OB;
-      const physics::RigidGeometry geometry = physics::rigid_geometry(ob, pr, kUnits, hulls);
-      auto shape = std::make_unique<physics::RigidShape>(
-          physics::rigid_shape(geometry, kUnits, hulls, /*always_compound=*/true));
+      // The hull shapes of this object, prepared once per process (physics/hull_cache.hpp).
+      std::shared_ptr<const physics::PreparedHulls> prepared =
+          physics::prepared_hulls(ob, pr, kUnits, hulls);
+      std::unique_ptr<btCompoundShape> shape = physics::compound_of(prepared->hulls);
       btRigidBody::btRigidBodyConstructionInfo info =
-          physics::body_info(ob.mass, pr.moments, shape->shape(), X_WO[i] * pr.X_OB, kUnits);
+          physics::body_info(ob.mass, pr.moments, shape.get(), X_WO[i] * pr.X_OB, kUnits);
       info.m_friction = btScalar(ob.friction);
       info.m_restitution = btScalar(ob.restitution);
       info.m_rollingFriction = btScalar(o_.rolling_friction);
@@ -388,7 +408,8 @@ class DropSimulation {
       w_->world.addRigidBody(rb.get());
       body_[i] = rb.get();
       result_.objects[i].X_WO_release = X_WO[i];
-      w_->rigid_shapes.push_back(std::move(shape));
+      w_->hulls.push_back(std::move(prepared));
+      w_->compounds.push_back(std::move(shape));
       w_->bodies.push_back(std::move(rb));
     }
   }

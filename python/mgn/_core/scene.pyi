@@ -16,6 +16,7 @@ import mgn._core.render
 
 __all__: list[str] = [
     "SUCTION_TOOL_OFFSET",
+    "DropHullCacheInfo",
     "DropOptions",
     "DropResult",
     "LayoutArrays",
@@ -28,9 +29,12 @@ __all__: list[str] = [
     "ViewGraspArrays",
     "ViewLabelArrays",
     "ViewLabelModel",
+    "clear_drop_hull_cache",
     "com_heatmap_prediction",
     "compute_layout",
+    "drop_hull_cache_info",
     "drop_objects",
+    "set_drop_hull_cache_capacity",
 ]
 
 class DropOptions:
@@ -190,6 +194,38 @@ class DropResult:
         """
     @property
     def steps(self) -> int: ...
+
+class DropHullCacheInfo:
+    """
+    State of the drop's cache of prepared object hulls (mgn/scene/drop.hpp).
+    """
+    @property
+    def bytes(self) -> int:
+        """
+        estimated memory of the entries
+        """
+    @property
+    def capacity(self) -> int:
+        """
+        bytes; 0: nothing is cached
+        """
+    @property
+    def entries(self) -> int: ...
+    @property
+    def evictions(self) -> int:
+        """
+        entries evicted for the capacity (since the last clear)
+        """
+    @property
+    def hits(self) -> int:
+        """
+        objects whose hulls came from the cache (since the last clear)
+        """
+    @property
+    def misses(self) -> int:
+        """
+        objects whose hulls were prepared (since the last clear)
+        """
 
 class LayoutArrays:
     """
@@ -624,6 +660,11 @@ class ViewLabelModel:
     @property
     def num_objects(self) -> int: ...
 
+def clear_drop_hull_cache() -> None:
+    """
+    Drops every entry of the drop's hull cache and resets its counters.
+    """
+
 def com_heatmap_prediction(
     depth_m: typing.Any,
     instances: typing.Any,
@@ -655,6 +696,11 @@ def compute_layout(
     Layout labels of one view (see mgn/scene/layout.hpp); use mgn.view_labels.layout.compute_layout.
     """
 
+def drop_hull_cache_info() -> DropHullCacheInfo:
+    """
+    The state of the drop's cache of prepared object hulls (mgn/scene/drop.hpp).
+    """
+
 def drop_objects(
     parts: collections.abc.Sequence[collections.abc.Sequence[mgn._core.geometry.Mesh]],
     masses: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex],
@@ -668,5 +714,9 @@ def drop_objects(
     options: DropOptions,
     X_WO_start: typing.Any = None,
 ) -> DropResult: ...
+def set_drop_hull_cache_capacity(bytes: typing.SupportsInt | typing.SupportsIndex) -> None:
+    """
+    Sets the capacity of the drop's hull cache (estimated bytes; 0: cache nothing) and evicts the least recently used entries down to it.
+    """
 
 SUCTION_TOOL_OFFSET: float = 0.1321
