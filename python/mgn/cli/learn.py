@@ -33,7 +33,8 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         "--modality",
         choices=MODALITIES,
         default=d.modality,
-        help="network input: rgb, depth (the sensor model's depth) or rgbd",
+        help="network input: rgb, depth (the sensor model's depth), rgbd, height (height above "
+        "the depth's fitted floor plane) or rgb-height",
     )
     p.add_argument(
         "--image-size",

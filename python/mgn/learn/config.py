@@ -36,7 +36,9 @@ class ModelConfig:
     """What a model computes.
 
     Attributes:
-        modality: input, ``rgb`` (default), ``depth`` (the depth sensor's image, m) or ``rgbd``.
+        modality: input, :data:`mgn.learn.targets.MODALITIES`: ``rgb`` (default), ``depth``
+            (the depth sensor's image, m), ``rgbd``, ``height`` (the height above the floor
+            plane fitted to the depth image, :mod:`mgn.learn.floor`) or ``rgb-height``.
         image_size: the longer image side the network sees, px (default 256; each side rounded
             to a multiple of 16).
         amodal: also predict the hidden parts of objects, giving amodal masks (default False).
