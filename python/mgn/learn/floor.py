@@ -14,9 +14,14 @@ that faces it. :func:`fit_floor` finds that plane in a z-depth image:
    within :data:`FLOOR_PATCH` of the image's side of it: a floor seen in small patches
    between objects is still found);
    planes whose normal is more than :data:`FLOOR_MAX_TILT_DEG` from the optical axis (walls
-   seen from above) are skipped; the plane with the largest score wins: the number of points
-   within :data:`FLOOR_TOLERANCE_M` of it less the number more than :data:`FLOOR_BELOW_M`
-   below it (the floor is the lowest large plane; a box top or a shelf has points below it);
+   seen from above) are skipped. Each candidate's score is the number of points within
+   :data:`FLOOR_TOLERANCE_M` of it ("on") less the number more than :data:`FLOOR_BELOW_M`
+   below it; the best-scoring one is chosen. Then, while some candidate is parallel to the
+   chosen one (within :data:`FLOOR_PARALLEL_DEG`), has at least :data:`FLOOR_MIN_SHARE` of
+   its points on it and lies below it (its points on average more than
+   :data:`FLOOR_BELOW_M` below the chosen plane), the best-scoring such candidate is chosen
+   instead: the floor is the lowest large plane, and the top of a large flat object that
+   covers more of the image than the floor does is not taken for it;
 3. least-squares refinement: the plane through the centroid of the points within the
    tolerance, normal the direction of least variance (SVD), repeated
    :data:`FLOOR_REFINE_STEPS` times on all the image's points.
@@ -47,6 +52,8 @@ __all__ = [
     "FLOOR_ITERATIONS",
     "FLOOR_MAX_TILT_DEG",
     "FLOOR_MIN_POINTS",
+    "FLOOR_MIN_SHARE",
+    "FLOOR_PARALLEL_DEG",
     "FLOOR_PATCH",
     "FLOOR_REFINE_STEPS",
     "FLOOR_SAMPLES",
@@ -69,9 +76,13 @@ FLOOR_PATCH = 0.1
 FLOOR_SAMPLES = 4096
 #: Largest angle between a floor's normal and the optical axis, degrees.
 FLOOR_MAX_TILT_DEG = 60.0
-#: Points further than this below a candidate plane count against it, m: the floor is the
-#: plane with the most points on it and the fewest below it.
+#: Points further than this below a candidate plane count as below it, m.
 FLOOR_BELOW_M = 0.01
+#: A plane parallel to the chosen one and below it replaces it when it has at least this
+#: share of the chosen one's points on it.
+FLOOR_MIN_SHARE = 0.2
+#: Largest angle between two planes taken as parallel, degrees.
+FLOOR_PARALLEL_DEG = 10.0
 #: Least-squares refinements of the RANSAC plane.
 FLOOR_REFINE_STEPS = 3
 #: Fewest pixels with a depth a floor is fitted to.
@@ -191,9 +202,18 @@ def fit_floor(
     flip = offsets > 0  # normals towards the camera: heights positive on its side
     n[flip], offsets[flip] = -n[flip], -offsets[flip]
     h = sample @ n.T - offsets
-    score = (np.abs(h) <= FLOOR_TOLERANCE_M).sum(axis=0) - (h < -FLOOR_BELOW_M).sum(axis=0)
-    score[~ok] = np.iinfo(score.dtype).min
+    near = np.abs(h) <= FLOOR_TOLERANCE_M
+    on = np.where(ok, near.sum(axis=0), 0)
+    score = np.where(ok, on - (h < -FLOOR_BELOW_M).sum(axis=0), np.iinfo(np.int64).min)
     best = int(np.argmax(score))
+    cos_parallel = math.cos(math.radians(FLOOR_PARALLEL_DEG))
+    for _ in range(FLOOR_ITERATIONS):  # down to the lowest large parallel plane
+        lower = ok & (np.abs(n @ n[best]) >= cos_parallel) & (on >= FLOOR_MIN_SHARE * on[best])
+        level = (h[:, best] @ near) / np.maximum(on, 1)  # mean height of each one's points
+        lower &= level < -FLOOR_BELOW_M
+        if not lower.any():
+            break
+        best = int(np.argmax(np.where(lower, score, np.iinfo(np.int64).min)))
     normal, offset = n[best], float(offsets[best])
     for _ in range(FLOOR_REFINE_STEPS):
         on = np.abs(p @ normal - offset) <= FLOOR_TOLERANCE_M
