@@ -201,7 +201,8 @@ def augment_view(
 ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32]]:
     """One view's input (C, H, W), targets (T, H, W) and weight (H, W) augmented in ``mode``
     (module docstring; ``flips`` draws its two flips from ``rng``); the RGB channels of
-    ``rgb`` / ``rgbd`` / ``rgb-height`` inputs get the photometric changes. Returns new contiguous arrays."""
+    ``rgb`` / ``rgbd`` / ``rgb-height`` inputs get the photometric changes. Returns new
+    contiguous arrays."""
     if mode not in AUGMENTS:
         raise InvalidArgumentError(f"augment must be one of {AUGMENTS}, got {mode!r}")
     if not (x.shape[-2:] == t.shape[-2:] == w.shape[-2:]):

@@ -3,8 +3,9 @@
 :func:`training_views` picks the views (the dataset's ``"selection"`` when ``dataset.json`` has
 one, else every view, optionally narrowed to some scenes and view indices); :func:`load_views`
 reads each view through :class:`mgn.Dataset` -- RGB, the sensor model's depth (as a real
-camera gives it; with the view's intrinsics for the height modalities' floor fit), the visible instance ids, the amodal masks (amodal models) and the
-non-colliding scene suction grasps -- and builds the targets of :mod:`mgn.learn.targets`.
+camera gives it; with the view's intrinsics for the height modalities' floor fit), the visible
+instance ids, the amodal masks (amodal models) and the non-colliding scene suction grasps --
+and builds the targets of :mod:`mgn.learn.targets`.
 """
 
 from __future__ import annotations

@@ -9,12 +9,12 @@ that faces it. :func:`fit_floor` finds that plane in a z-depth image:
    (lens distortion included); without intrinsics a nominal pinhole is used
    (:func:`nominal_intrinsics`: principal point at the image centre, focal length the longer
    image side in px, a 53-degree field of view across it);
-2. RANSAC on up to :data:`FLOOR_SAMPLES` of these points (a fixed-seed draw, so the result is a
-   function of the image alone): :data:`FLOOR_ITERATIONS` planes through three points each (a random pixel and two
-   within :data:`FLOOR_PATCH` of the image's side of it: a floor seen in small patches
-   between objects is still found);
-   planes whose normal is more than :data:`FLOOR_MAX_TILT_DEG` from the optical axis (walls
-   seen from above) are skipped. Each candidate's score is the number of points within
+2. RANSAC, scored on up to :data:`FLOOR_SAMPLES` of these points (fixed-seed draws, so the
+   result is a function of the image alone): :data:`FLOOR_ITERATIONS` candidate planes through
+   three points each (a random pixel and two within :data:`FLOOR_PATCH` of the image's longer
+   side of it: a floor seen in small patches between objects is still found); planes whose
+   normal is more than :data:`FLOOR_MAX_TILT_DEG` from the optical axis (walls seen from
+   above) are skipped. Each candidate's score is the number of points within
    :data:`FLOOR_TOLERANCE_M` of it ("on") less the number more than :data:`FLOOR_BELOW_M`
    below it; the best-scoring one is chosen. Then, while some candidate is parallel to the
    chosen one (within :data:`FLOOR_PARALLEL_DEG`), has at least :data:`FLOOR_MIN_SHARE` of

@@ -90,7 +90,8 @@ def test_the_floor_fit_recovers_a_tilted_plane_under_noise_and_outliers(tilt_deg
     h = height_above_floor(noisy, K, floor=plane)
     clean = k >= 0.12
     valid = np.isfinite(noisy) & (noisy > 0)
-    assert np.isnan(h[~valid]).all() and np.isfinite(h[valid]).all()
+    assert np.isnan(h[~valid]).all()
+    assert np.isfinite(h[valid]).all()
     for (*_, hb), top in zip(BOXES, tops, strict=True):
         assert abs(float(np.median(h[top & clean])) - hb) < 0.001, hb
     assert abs(float(np.median(h[floor & clean]))) < 0.001
@@ -147,8 +148,9 @@ def test_the_height_channel_is_the_clipped_scaled_height():
     ("call", "match"),
     [
         (
-            lambda: network_input(np.zeros((H, W, 3), np.uint8), None, "rgb-height", (32, 32),
-                                  name="photo_3.png"),  # fmt: skip
+            lambda: network_input(
+                np.zeros((H, W, 3), np.uint8), None, "rgb-height", (32, 32), name="photo_3.png"
+            ),
             r"photo_3\.png: the model's input is rgb-height, but no depth",
         ),
         (
@@ -173,7 +175,7 @@ def test_bad_input_gives_clear_errors(call, match):
 def test_a_wall_is_not_taken_for_the_floor():
     """A plane seen edge-on (more than 60 degrees from facing the camera) is never the floor,
     however many pixels it has."""
-    uu, vv = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    uu, _ = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
     x = (uu - K.cx) / K.fx
     # a wall x = 0.05 + 0.5 (z - 0.5) filling the right part, a floor at z = 0.9 on the left
     z_wall = (0.05 - 0.25) / (x - 0.5)
