@@ -72,6 +72,13 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         "standardised over its image; exposure and white balance do not matter) or none (RGB "
         "as read)",
     )
+    p.add_argument(
+        "--floor-footprint",
+        action="store_true",
+        default=d.floor_footprint,
+        help="height and rgb-height: the height is 0 outside the floor's footprint (the convex "
+        "hull of the floor's pixels: a bin's walls and rim read as floor)",
+    )
 
 
 def add_train_arguments(p: argparse.ArgumentParser) -> None:
@@ -112,6 +119,7 @@ def configs_from_args(args: argparse.Namespace) -> tuple[ModelConfig, TrainConfi
         suction_radius_m=args.suction_radius,
         suction_score=args.suction_score,
         rgb_norm=args.rgb_norm,
+        floor_footprint=args.floor_footprint,
     )
     tc = TrainConfig(
         epochs=args.epochs,

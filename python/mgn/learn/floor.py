@@ -60,6 +60,7 @@ __all__ = [
     "FLOOR_TOLERANCE_M",
     "FloorPlane",
     "fit_floor",
+    "floor_footprint",
     "height_above_floor",
     "nominal_intrinsics",
     "pixel_rays",
@@ -241,3 +242,39 @@ def height_above_floor(
     plane = floor if floor is not None else fit_floor(depth_m, intrinsics, name=name)
     h = pts @ np.asarray(plane.normal, np.float64) - plane.offset
     return np.where(valid, h, np.nan).astype(np.float32)
+
+
+def floor_footprint(
+    depth_m: np.ndarray,
+    intrinsics: Intrinsics | None = None,
+    *,
+    floor: FloorPlane | None = None,
+    name: str = "image",
+) -> npt.NDArray[np.bool_]:
+    """(H, W) bool: the pixels inside the convex hull (in the image) of the floor's pixels --
+    those within :data:`FLOOR_TOLERANCE_M` of the plane (:func:`fit_floor`, or ``floor``),
+    after a 3 x 3 binary opening that drops specks. In a bin this is the bin's floor with the
+    objects on it, without the bin's walls and rim; all True when the floor's pixels span no
+    area."""
+    from scipy import ndimage
+    from scipy.spatial import ConvexHull, QhullError
+
+    h = height_above_floor(depth_m, intrinsics, floor=floor, name=name)
+    near = np.abs(np.nan_to_num(h, nan=1.0)) <= FLOOR_TOLERANCE_M
+    # opening whose erosion does not eat the image border
+    on = ndimage.binary_dilation(ndimage.binary_erosion(near, border_value=1)) & near
+    rows, cols = np.nonzero(on)
+    full = np.ones(h.shape, bool)
+    if len(rows) < 3:
+        return full
+    pts = np.stack([cols + 0.5, rows + 0.5], axis=1)
+    try:
+        hull = ConvexHull(pts)
+    except QhullError:
+        return full
+    corners = pts[hull.vertices]  # counter-clockwise
+    uu, vv = np.meshgrid(np.arange(h.shape[1]) + 0.5, np.arange(h.shape[0]) + 0.5)
+    inside = full
+    for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True):
+        inside &= (b[0] - a[0]) * (vv - a[1]) - (b[1] - a[1]) * (uu - a[0]) >= -0.5
+    return inside

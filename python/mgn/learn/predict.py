@@ -157,7 +157,13 @@ class Predictor:
         shape = network_shape(h, w, self.config.image_size)
         x = model_input(
             network_input(
-                rgb, depth, self.config.modality, shape, name=name, intrinsics=intrinsics
+                rgb,
+                depth,
+                self.config.modality,
+                shape,
+                name=name,
+                intrinsics=intrinsics,
+                floor_footprint=self.config.floor_footprint,
             ),
             self.config.modality,
             self.config.rgb_norm,

@@ -140,19 +140,26 @@ def depth_channel(depth_m: np.ndarray) -> npt.NDArray[np.float32]:
 
 
 def height_channel(
-    depth_m: np.ndarray, intrinsics: Intrinsics | None = None, *, name: str = "image"
+    depth_m: np.ndarray,
+    intrinsics: Intrinsics | None = None,
+    *,
+    footprint: bool = False,
+    name: str = "image",
 ) -> npt.NDArray[np.float32]:
     """The normalised height channel of an (H, W) depth in metres (NaN or <= 0: no value) at
     its own resolution: the height above the fitted floor plane
     (:func:`mgn.learn.floor.height_above_floor`; ``intrinsics`` of the depth image, or a
     nominal pinhole when None) clipped to :data:`HEIGHT_RANGE_M`, divided by
-    :data:`HEIGHT_SCALE_M`; 0 where there is no value."""
-    from mgn.learn.floor import height_above_floor
+    :data:`HEIGHT_SCALE_M`; 0 where there is no value and, with ``footprint``, outside the
+    floor's footprint (:func:`mgn.learn.floor.floor_footprint`)."""
+    from mgn.learn.floor import fit_floor, floor_footprint, height_above_floor
 
-    h = height_above_floor(depth_m, intrinsics, name=name)
+    plane = fit_floor(depth_m, intrinsics, name=name)
+    h = np.nan_to_num(height_above_floor(depth_m, intrinsics, floor=plane, name=name), nan=0.0)
+    if footprint:
+        h[~floor_footprint(depth_m, intrinsics, floor=plane, name=name)] = 0.0
     lo, hi = HEIGHT_RANGE_M
-    out = np.clip(np.nan_to_num(h, nan=0.0), lo, hi) / np.float32(HEIGHT_SCALE_M)
-    return out.astype(np.float32)
+    return (np.clip(h, lo, hi) / np.float32(HEIGHT_SCALE_M)).astype(np.float32)
 
 
 def network_input(
@@ -163,11 +170,13 @@ def network_input(
     *,
     name: str = "image",
     intrinsics: Intrinsics | None = None,
+    floor_footprint: bool = False,
 ) -> npt.NDArray[np.float32]:
     """(C, H', W') float32 network input of one image at ``shape``. ``name`` (a file or view)
     is named in the error when the modality needs an array that is missing or mis-sized.
     ``intrinsics`` (of the depth image) serve the height modalities' floor fit; without them a
-    nominal pinhole is assumed (:func:`mgn.learn.floor.nominal_intrinsics`)."""
+    nominal pinhole is assumed (:func:`mgn.learn.floor.nominal_intrinsics`); with
+    ``floor_footprint`` the height is 0 outside the floor's footprint (:func:`height_channel`)."""
     input_channels(modality)
     planes: list[np.ndarray] = []
     if uses_rgb(modality):
@@ -190,7 +199,8 @@ def network_input(
                 f"{rgb.shape[1]} x {rgb.shape[0]} px; they must match"
             )
         if modality in ("height", "rgb-height"):
-            planes.append(resize_nearest(height_channel(depth_m, intrinsics, name=name), shape))
+            hc = height_channel(depth_m, intrinsics, footprint=floor_footprint, name=name)
+            planes.append(resize_nearest(hc, shape))
         else:
             planes.append(depth_channel(resize_nearest(depth_m, shape)))
     return np.stack(planes).astype(np.float32)

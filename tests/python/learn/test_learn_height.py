@@ -4,18 +4,21 @@ the model file and prediction."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from PIL import Image
 
 import mgn
 from mgn.errors import InvalidArgumentError
 from mgn.learn import ModelConfig, Predictor, TrainConfig, train
 from mgn.learn.checkpoint import MODEL_FORMAT, read_torch_file
-from mgn.learn.floor import fit_floor, height_above_floor, nominal_intrinsics
+from mgn.learn.floor import fit_floor, floor_footprint, height_above_floor, nominal_intrinsics
+from mgn.learn.real_eval import evaluate_real
 from mgn.learn.targets import (
     HEIGHT_RANGE_M,
     HEIGHT_SCALE_M,
@@ -23,6 +26,7 @@ from mgn.learn.targets import (
     height_channel,
     input_channels,
     network_input,
+    resize_nearest,
 )
 from mgn.scene.cameras import Intrinsics
 
@@ -192,7 +196,9 @@ def test_the_height_modality_round_trips_through_the_model_file(
     assert {"height", "rgb-height"} <= set(MODALITIES)
     assert (input_channels("height"), input_channels("rgb-height")) == (1, 4)
     for modality in ("height", "rgb-height"):
-        mc = ModelConfig(modality=modality, image_size=32, width=4)
+        mc = ModelConfig(
+            modality=modality, image_size=32, width=4, floor_footprint=modality == "rgb-height"
+        )
         assert ModelConfig.from_dict(mc.to_dict()) == mc
         res = train(
             small_dataset,
@@ -205,6 +211,7 @@ def test_the_height_modality_round_trips_through_the_model_file(
         )
         data = read_torch_file(res.model_path, MODEL_FORMAT)
         assert data["model_config"]["modality"] == modality
+        assert data["model_config"]["floor_footprint"] == (modality == "rgb-height")
         pred = Predictor(res.model_path, num_threads=1)
         assert pred.config == mc
         first = next(p for p in pred.model.parameters() if p.ndim == 4)
@@ -215,11 +222,69 @@ def test_the_height_modality_round_trips_through_the_model_file(
         assert p.instances.labels.shape == depth.shape
         # the network sees the height channel of the depth, not the depth
         shape = (32, 32)
-        x = network_input(rgb, depth, modality, shape, intrinsics=view.intrinsics)
-        np.testing.assert_array_equal(
-            x[-1], network_input(None, depth, "height", shape, intrinsics=view.intrinsics)[0]
+        fp = mc.floor_footprint
+        x = network_input(
+            rgb, depth, modality, shape, intrinsics=view.intrinsics, floor_footprint=fp
         )
+        hc = height_channel(depth, view.intrinsics, footprint=fp)
+        np.testing.assert_array_equal(x[-1], resize_nearest(hc, shape))
         maps = pred.maps(rgb if modality == "rgb-height" else None, depth)[0]
         assert torch.isfinite(torch.from_numpy(maps)).all()
         with pytest.raises(InvalidArgumentError, match=r"v5: the model's input is .*depth"):
             pred.predict(rgb, None, name="v5")
+        # a photograph without a depth file beside it
+        photos = tmp_path / f"photos_{modality}"
+        photos.mkdir()
+        Image.fromarray(rgb).save(photos / "a.png")
+        h, w = depth.shape
+        coco = {
+            "images": [{"id": 1, "file_name": "a.png", "width": w, "height": h}],
+            "annotations": [],
+            "categories": [{"id": 1, "name": "object"}],
+        }
+        (photos / "annotations.json").write_text(json.dumps(coco))
+        with pytest.raises(
+            InvalidArgumentError,
+            match=rf"a.png: the model's input is {modality}, but it has no depth",
+        ):
+            evaluate_real(res.model_path, photos, None, num_threads=1, progress=False)
+
+
+def test_the_footprint_keeps_the_bin_floor_and_its_objects_and_drops_the_walls():
+    """A bin: a tilted floor, a box on it, and walls sloping up (1 m per 1.25 m) beyond a
+    0.36 x 0.26 m rectangle, ray-cast by fixed-point iteration."""
+    depth, normal, tops = _tilted_scene(10.0, 0.8, [(0.02, 0.1, -0.05, 0.03, 0.06)])
+    offset = -0.8
+    a = math.radians(10.0)
+    axis = np.array([1.0, 0.6, 0.0]) / math.hypot(1.0, 0.6)
+    kx = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    rot = np.eye(3) + math.sin(a) * kx + (1 - math.cos(a)) * kx @ kx
+    e1, e2 = rot @ np.array([1.0, 0.0, 0.0]), rot @ np.array([0.0, 1.0, 0.0])
+    uu, vv = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    rays = np.stack([(uu - K.cx) / K.fx, (vv - K.cy) / K.fy, np.ones_like(uu)], axis=-1)
+    denom = rays @ normal
+    origin = np.array([0.0, 0.0, offset / normal[2]])
+
+    def wall_height(z: np.ndarray) -> np.ndarray:
+        p = rays * z[..., None] - origin
+        out = np.maximum(np.abs(p @ e1) - 0.18, np.abs(p @ e2) - 0.13)
+        return 0.8 * np.maximum(out, 0.0)
+
+    z = depth.copy()
+    for _ in range(60):
+        z = np.minimum(depth, (offset + wall_height(z)) / denom)
+    wall = wall_height(z) > 0.01
+    assert 0.3 < wall.mean() < 0.7
+    inner = ~wall & (wall_height(z) == 0)
+    plane = fit_floor(z, K)
+    assert plane.camera_height_m == pytest.approx(0.8, abs=1e-3)
+    fp = floor_footprint(z, K, floor=plane)
+    assert fp[tops[0]].all()  # the box on the floor is inside
+    assert fp[inner].mean() > 0.97  # the floor (up to the hull's pixel rounding at its edge)
+    assert not fp[wall].any()
+    ch = height_channel(z, K, footprint=True)
+    assert (ch[wall] == 0).all()
+    assert float(np.median(ch[tops[0]])) == pytest.approx(0.06 / HEIGHT_SCALE_M, abs=0.01)
+    assert (height_channel(z, K)[wall] > 0.09).all()  # walls more than 1 cm high
+    # a view of the floor only: all of it inside (the image border does not erode it)
+    assert floor_footprint(np.full((H, W), 0.7), K).all()
