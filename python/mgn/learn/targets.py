@@ -33,6 +33,7 @@ import numpy.typing as npt
 from PIL import Image
 
 from mgn.errors import InvalidArgumentError
+from mgn.learn.floor import fit_floor, floor_footprint, height_above_floor
 from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import distort_normalized
 
@@ -152,8 +153,6 @@ def height_channel(
     nominal pinhole when None) clipped to :data:`HEIGHT_RANGE_M`, divided by
     :data:`HEIGHT_SCALE_M`; 0 where there is no value and, with ``footprint``, outside the
     floor's footprint (:func:`mgn.learn.floor.floor_footprint`)."""
-    from mgn.learn.floor import fit_floor, floor_footprint, height_above_floor
-
     plane = fit_floor(depth_m, intrinsics, name=name)
     h = np.nan_to_num(height_above_floor(depth_m, intrinsics, floor=plane, name=name), nan=0.0)
     if footprint:
