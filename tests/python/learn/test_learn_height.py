@@ -4,6 +4,7 @@ the model file and prediction."""
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 from pathlib import Path
@@ -14,6 +15,7 @@ import torch
 from PIL import Image
 
 import mgn
+from mgn.cli.learn import add_model_arguments, add_train_arguments, configs_from_args
 from mgn.errors import InvalidArgumentError
 from mgn.learn import ModelConfig, Predictor, TrainConfig, train
 from mgn.learn.checkpoint import MODEL_FORMAT, read_torch_file
@@ -288,3 +290,15 @@ def test_the_footprint_keeps_the_bin_floor_and_its_objects_and_drops_the_walls()
     assert (height_channel(z, K)[wall] > 0.09).all()  # walls more than 1 cm high
     # a view of the floor only: all of it inside (the image border does not erode it)
     assert floor_footprint(np.full((H, W), 0.7), K).all()
+
+
+def test_the_command_line_sets_the_height_options():
+    p = argparse.ArgumentParser()
+    add_model_arguments(p)
+    add_train_arguments(p)
+    mc, _ = configs_from_args(p.parse_args(["--modality", "rgb-height", "--floor-footprint"]))
+    assert (mc.modality, mc.floor_footprint) == ("rgb-height", True)
+    mc, _ = configs_from_args(p.parse_args([]))
+    assert (mc.modality, mc.floor_footprint) == ("rgb", False)
+    with pytest.raises(InvalidArgumentError, match="floor_footprint must be true or false"):
+        ModelConfig(floor_footprint="yes")  # type: ignore[arg-type]
