@@ -31,8 +31,9 @@ the floor, an object's top at its height above the floor, the walls of a bin up 
 height. The height does not depend on the camera's distance to the floor or on its tilt.
 
 With nominal intrinsics the fitted plane is the same set of pixels (a plane's inverse depth is
-affine in the pixel coordinates for any pinhole), and the heights are scaled by at most the
-cosine error of the tilt: within a few per cent for tilts below 20 degrees.
+affine in the pixel coordinates for any pinhole), and the heights are scaled by a factor that
+grows with the camera's tilt and the focal length's error: 1.00-1.21 (median 1.04) on mgn's
+synthetic views, whose focal length the nominal pinhole misses by 40 %.
 """
 
 from __future__ import annotations
