@@ -33,7 +33,8 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         "--modality",
         choices=MODALITIES,
         default=d.modality,
-        help="network input: rgb, depth (the sensor model's depth) or rgbd",
+        help="network input: rgb, depth (the sensor model's depth), rgbd, height (height above "
+        "the depth's fitted floor plane) or rgb-height",
     )
     p.add_argument(
         "--image-size",
@@ -70,6 +71,13 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         help="per-image normalisation of the RGB input: image (the default: each channel "
         "standardised over its image; exposure and white balance do not matter) or none (RGB "
         "as read)",
+    )
+    p.add_argument(
+        "--floor-footprint",
+        action="store_true",
+        default=d.floor_footprint,
+        help="height and rgb-height: the height is 0 outside the floor's footprint (the convex "
+        "hull of the floor's pixels: a bin's walls and rim read as floor)",
     )
 
 
@@ -111,6 +119,7 @@ def configs_from_args(args: argparse.Namespace) -> tuple[ModelConfig, TrainConfi
         suction_radius_m=args.suction_radius,
         suction_score=args.suction_score,
         rgb_norm=args.rgb_norm,
+        floor_footprint=args.floor_footprint,
     )
     tc = TrainConfig(
         epochs=args.epochs,

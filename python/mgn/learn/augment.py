@@ -1,7 +1,8 @@
 """Training-time augmentation of the baselines' views (numpy and Pillow, no PyTorch).
 
 A view at the network's resolution is its input ``x`` (C, H, W) float32 (RGB in [0, 1] first,
-then the depth channel for ``rgbd``; ``depth`` models have the depth channel only), its targets
+then the depth or height channel for ``rgbd`` and ``rgb-height``; ``depth`` and ``height``
+models have that channel only), its targets
 ``t`` (T, H, W) and its suction weight ``w`` (H, W). :func:`augment_view` changes them in one of
 the :data:`AUGMENTS` modes:
 
@@ -33,6 +34,7 @@ import numpy.typing as npt
 from PIL import Image
 
 from mgn.errors import InvalidArgumentError
+from mgn.learn.targets import uses_rgb
 
 __all__ = [
     "AUGMENTS",
@@ -199,7 +201,8 @@ def augment_view(
 ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32]]:
     """One view's input (C, H, W), targets (T, H, W) and weight (H, W) augmented in ``mode``
     (module docstring; ``flips`` draws its two flips from ``rng``); the RGB channels of
-    ``rgb`` / ``rgbd`` inputs get the photometric changes. Returns new contiguous arrays."""
+    ``rgb`` / ``rgbd`` / ``rgb-height`` inputs get the photometric changes. Returns new
+    contiguous arrays."""
     if mode not in AUGMENTS:
         raise InvalidArgumentError(f"augment must be one of {AUGMENTS}, got {mode!r}")
     if not (x.shape[-2:] == t.shape[-2:] == w.shape[-2:]):
@@ -214,6 +217,6 @@ def augment_view(
             x, t, w = x[..., ::-1, :], t[..., ::-1, :], w[..., ::-1, :]
     elif mode == "full":
         x, t, w = geometric(x, t, w, rng)
-        if modality in ("rgb", "rgbd"):
+        if uses_rgb(modality):
             x = np.concatenate([photometric(x[:3], rng), x[3:]])
     return tuple(np.ascontiguousarray(a, dtype=np.float32) for a in (x, t, w))  # type: ignore[return-value]

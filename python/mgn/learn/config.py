@@ -36,7 +36,12 @@ class ModelConfig:
     """What a model computes.
 
     Attributes:
-        modality: input, ``rgb`` (default), ``depth`` (the depth sensor's image, m) or ``rgbd``.
+        modality: input, :data:`mgn.learn.targets.MODALITIES`: ``rgb`` (default), ``depth``
+            (the depth sensor's image, m), ``rgbd``, ``height`` (the height above the floor
+            plane fitted to the depth image, :mod:`mgn.learn.floor`) or ``rgb-height``.
+        floor_footprint: height modalities only: the height is 0 outside the floor's
+            footprint (:func:`mgn.learn.floor.floor_footprint`: a bin's walls and rim, and
+            anything beyond, read as floor; default False).
         image_size: the longer image side the network sees, px (default 256; each side rounded
             to a multiple of 16).
         amodal: also predict the hidden parts of objects, giving amodal masks (default False).
@@ -58,6 +63,7 @@ class ModelConfig:
     suction_radius_m: float = 0.01
     suction_score: str = "score_analytical"
     rgb_norm: str = "image"
+    floor_footprint: bool = False
 
     def __post_init__(self) -> None:
         if self.rgb_norm not in RGB_NORMS:
@@ -67,6 +73,10 @@ class ModelConfig:
         if self.modality not in MODALITIES:
             raise InvalidArgumentError(
                 f"modality must be one of {MODALITIES}, got {self.modality!r}"
+            )
+        if not isinstance(self.floor_footprint, bool):
+            raise InvalidArgumentError(
+                f"floor_footprint must be true or false, got {self.floor_footprint!r}"
             )
         if self.backbone not in BACKBONES:
             raise InvalidArgumentError(

@@ -3,8 +3,9 @@
 :func:`training_views` picks the views (the dataset's ``"selection"`` when ``dataset.json`` has
 one, else every view, optionally narrowed to some scenes and view indices); :func:`load_views`
 reads each view through :class:`mgn.Dataset` -- RGB, the sensor model's depth (as a real
-camera gives it), the visible instance ids, the amodal masks (amodal models) and the
-non-colliding scene suction grasps -- and builds the targets of :mod:`mgn.learn.targets`.
+camera gives it; with the view's intrinsics for the height modalities' floor fit), the visible
+instance ids, the amodal masks (amodal models) and the non-colliding scene suction grasps --
+and builds the targets of :mod:`mgn.learn.targets`.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from mgn.learn.targets import (
     network_shape,
     resize_nearest,
     suction_target,
+    uses_depth,
+    uses_rgb,
 )
 
 __all__ = ["TrainingArrays", "load_views", "training_views", "view_targets"]
@@ -122,9 +125,15 @@ def load_views(views: Sequence[View], config: ModelConfig) -> TrainingArrays:
     inputs, targets, weights, names = [], [], [], []
     for view in views:
         name = f"{view.folder.name}/{view.index}"
-        rgb = view.rgb if config.modality != "depth" else None
-        depth = view.depth if config.modality != "rgb" else None
-        inputs.append(network_input(rgb, depth, config.modality, shape, name=name))
+        rgb = view.rgb if uses_rgb(config.modality) else None
+        depth = view.depth if uses_depth(config.modality) else None
+        k = view.intrinsics if config.modality in ("height", "rgb-height") else None
+        inputs.append(
+            network_input(
+                rgb, depth, config.modality, shape, name=name, intrinsics=k,
+                floor_footprint=config.floor_footprint,
+            )
+        )  # fmt: skip
         t = view_targets(view, config)
         targets.append(
             np.stack([resize_nearest(t[k], shape).astype(np.float32) for k in config.outputs])

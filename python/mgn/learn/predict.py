@@ -1,7 +1,8 @@
 """``mgn predict``: instance masks and suction maps of a trained model on any images.
 
 :class:`Predictor` loads a ``model.pt`` (:mod:`mgn.learn.checkpoint`) and runs it on one image
-at a time: the image (and depth, for depth and RGB-D models) is resized to the network's
+at a time: the image (and depth, for the depth, RGB-D and height models; the height models fit
+the floor plane at the depth's own resolution, :mod:`mgn.learn.floor`) is resized to the network's
 resolution (:func:`mgn.learn.targets.network_input`), the output maps are turned into
 instances there (:func:`mgn.learn.instances.instances_from_maps`) and brought back to the
 image's size (instance ids nearest-neighbour, probabilities bilinear).
@@ -44,7 +45,15 @@ from mgn.learn.config import ModelConfig
 from mgn.learn.instances import InstanceMaps, instances_from_maps
 from mgn.learn.model import build_model
 from mgn.learn.pictures import overlay
-from mgn.learn.targets import model_input, network_input, network_shape, resize_nearest
+from mgn.learn.targets import (
+    model_input,
+    network_input,
+    network_shape,
+    resize_nearest,
+    uses_depth,
+    uses_rgb,
+)
+from mgn.scene.cameras import Intrinsics
 
 __all__ = [
     "IMAGE_SUFFIXES",
@@ -130,9 +139,16 @@ class Predictor:
         self.model.to(self.device).eval()
 
     def maps(
-        self, rgb: np.ndarray | None, depth: np.ndarray | None, *, name: str = "image"
+        self,
+        rgb: np.ndarray | None,
+        depth: np.ndarray | None,
+        *,
+        name: str = "image",
+        intrinsics: Intrinsics | None = None,
     ) -> tuple[npt.NDArray[np.float32], tuple[int, int]]:
-        """(T, H', W') output probabilities at the network's resolution, and the image size."""
+        """(T, H', W') output probabilities at the network's resolution, and the image size.
+        ``intrinsics`` of the depth image serve the height models' floor fit (a nominal pinhole
+        when None)."""
         torch = require_torch()
         ref = rgb if rgb is not None else depth
         if ref is None:
@@ -140,7 +156,15 @@ class Predictor:
         h, w = np.asarray(ref).shape[:2]
         shape = network_shape(h, w, self.config.image_size)
         x = model_input(
-            network_input(rgb, depth, self.config.modality, shape, name=name),
+            network_input(
+                rgb,
+                depth,
+                self.config.modality,
+                shape,
+                name=name,
+                intrinsics=intrinsics,
+                floor_footprint=self.config.floor_footprint,
+            ),
             self.config.modality,
             self.config.rgb_norm,
         )
@@ -158,18 +182,23 @@ class Predictor:
         threshold: float = 0.5,
         core_threshold: float = 0.4,
         min_area: int = 8,
+        intrinsics: Intrinsics | None = None,
     ) -> Prediction:
-        """Instances and suction map of one image (RGB (H, W, 3) uint8; depth (H, W) m)."""
-        if self.config.modality == "depth":
+        """Instances and suction map of one image (RGB (H, W, 3) uint8; depth (H, W) m;
+        ``intrinsics`` of the depth image for the height models, else a nominal pinhole)."""
+        modality = self.config.modality
+        if not uses_rgb(modality):
             rgb_in = None
             if depth is None:
-                raise InvalidArgumentError(f"{name}: the model's input is depth; give a depth file")
+                raise InvalidArgumentError(
+                    f"{name}: the model's input is {modality}; give a depth file"
+                )
         else:
             rgb_in = rgb
         probs, (h, w) = self.maps(
-            rgb_in, depth if self.config.modality != "rgb" else None, name=name
+            rgb_in, depth if uses_depth(modality) else None, name=name, intrinsics=intrinsics
         )
-        if self.config.modality == "depth" and rgb is None:
+        if not uses_rgb(modality) and rgb is None:
             h, w = np.asarray(depth).shape[:2]
         hidden = probs[3] if self.config.amodal else None
         small = instances_from_maps(
@@ -263,7 +292,7 @@ def predict_files(
     progress: bool = True,
 ) -> Path:
     """Predict every image file (module docstring); ``depths`` gives one depth file per image
-    (needed by depth and RGB-D models). Returns the path of ``predictions.json``."""
+    (needed by the depth, RGB-D and height models). Returns the path of ``predictions.json``."""
     if not images:
         raise InvalidArgumentError("mgn predict: no images given")
     if depths is not None and len(depths) != len(images):
@@ -275,7 +304,7 @@ def predict_files(
         if isinstance(model, Predictor)
         else Predictor(model, device=device, num_threads=num_threads)
     )
-    if pred_model.config.modality != "rgb" and depths is None:
+    if uses_depth(pred_model.config.modality) and depths is None:
         raise InvalidArgumentError(
             f"mgn predict: the model's input is {pred_model.config.modality}"
             "; give --depth with one depth file per image"

@@ -38,6 +38,7 @@ from mgn.io.real import RealImage, detect_real_format, read_real_set
 from mgn.learn.metrics import foreground_iou, mask_ap, suction_precision
 from mgn.learn.pictures import mask_panel, overlay
 from mgn.learn.predict import Prediction, Predictor
+from mgn.learn.targets import uses_depth
 
 __all__ = ["DEFAULT_KS", "RealResults", "brightness_foreground", "evaluate_real"]
 
@@ -230,8 +231,8 @@ def evaluate_real(
     suction: dict[int, list[float]] = {int(k): [] for k in ks}
     out_dir = Path(out) if out is not None else None
     for img in tqdm(images, desc="eval real", unit="img", disable=not progress):
-        depth = img.depth if pred_model.config.modality != "rgb" else None
-        if pred_model.config.modality != "rgb" and depth is None:
+        depth = img.depth if uses_depth(pred_model.config.modality) else None
+        if uses_depth(pred_model.config.modality) and depth is None:
             raise InvalidArgumentError(
                 f"{img.name}: the model's input is "
                 f"{pred_model.config.modality}, but it has no depth"

@@ -18,7 +18,9 @@ Per view of a dataset the network learns four maps, all at the network's resolut
 
 The same input normalisation is used for training and prediction (:func:`network_input`):
 RGB as [0, 1] floats, depth as ``(depth - median) / DEPTH_SCALE_M`` clipped to
-[-DEPTH_CLIP, DEPTH_CLIP], 0 where the sensor has no value. Models with
+[-DEPTH_CLIP, DEPTH_CLIP], 0 where the sensor has no value; the height above the fitted floor
+plane (:mod:`mgn.learn.floor`) as ``height / HEIGHT_SCALE_M`` with the height clipped to
+:data:`HEIGHT_RANGE_M`, 0 (the floor) where the sensor has no value. Models with
 ``ModelConfig.rgb_norm="image"`` then see each RGB channel standardised over its image
 (:func:`normalize_rgb`, after the training's augmentation), so that a photograph several times
 darker or of another white balance than the training views gives the same network input.
@@ -31,17 +33,21 @@ import numpy.typing as npt
 from PIL import Image
 
 from mgn.errors import InvalidArgumentError
+from mgn.learn.floor import fit_floor, floor_footprint, height_above_floor
 from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import distort_normalized
 
 __all__ = [
     "DEPTH_CLIP",
     "DEPTH_SCALE_M",
+    "HEIGHT_RANGE_M",
+    "HEIGHT_SCALE_M",
     "MODALITIES",
     "RGB_NORMS",
     "RGB_NORM_MIN_STD",
     "core_target",
     "depth_channel",
+    "height_channel",
     "hidden_target",
     "input_channels",
     "model_input",
@@ -52,14 +58,23 @@ __all__ = [
     "resize_nearest",
     "resize_rgb",
     "suction_target",
+    "uses_depth",
+    "uses_rgb",
 ]
 
-#: Input settings: RGB (3 channels), depth (1) or both (4).
-MODALITIES = ("rgb", "depth", "rgbd")
+#: Input settings: RGB (3 channels), depth (1), both (4), the height above the fitted floor
+#: plane (1) or RGB and that height (4).
+MODALITIES = ("rgb", "depth", "rgbd", "height", "rgb-height")
+_CHANNELS = {"rgb": 3, "depth": 1, "rgbd": 4, "height": 1, "rgb-height": 4}
 #: Depth normalisation: metres per unit of the depth channel.
 DEPTH_SCALE_M = 0.1
 #: Depth channel range after normalisation (units of DEPTH_SCALE_M).
 DEPTH_CLIP = 5.0
+#: Heights above the floor the height channel distinguishes, m (lower and higher are clipped:
+#: the floor's noise below, the bin's walls and rim above).
+HEIGHT_RANGE_M = (-0.05, 0.3)
+#: Height normalisation: metres per unit of the height channel.
+HEIGHT_SCALE_M = 0.1
 #: Per-image normalisations of the RGB channels (:func:`normalize_rgb`): ``none`` (RGB in
 #: [0, 1] as read) or ``image`` (each channel standardised over its image).
 RGB_NORMS = ("none", "image")
@@ -69,10 +84,23 @@ RGB_NORM_MIN_STD = 0.02
 
 
 def input_channels(modality: str) -> int:
-    """Number of input channels of a modality (``rgb`` 3, ``depth`` 1, ``rgbd`` 4)."""
+    """Number of input channels of a modality (``rgb`` 3, ``depth`` 1, ``rgbd`` 4, ``height``
+    1, ``rgb-height`` 4)."""
     if modality not in MODALITIES:
         raise InvalidArgumentError(f"modality must be one of {MODALITIES}, got {modality!r}")
-    return {"rgb": 3, "depth": 1, "rgbd": 4}[modality]
+    return _CHANNELS[modality]
+
+
+def uses_rgb(modality: str) -> bool:
+    """Whether a modality's input has the RGB channels (first)."""
+    input_channels(modality)
+    return modality in ("rgb", "rgbd", "rgb-height")
+
+
+def uses_depth(modality: str) -> bool:
+    """Whether a modality's input is computed from a depth image (depth or height channel)."""
+    input_channels(modality)
+    return modality != "rgb"
 
 
 def network_shape(height: int, width: int, image_size: int) -> tuple[int, int]:
@@ -112,6 +140,27 @@ def depth_channel(depth_m: np.ndarray) -> npt.NDArray[np.float32]:
     return out
 
 
+def height_channel(
+    depth_m: np.ndarray,
+    intrinsics: Intrinsics | None = None,
+    *,
+    footprint: bool = False,
+    name: str = "image",
+) -> npt.NDArray[np.float32]:
+    """The normalised height channel of an (H, W) depth in metres (NaN or <= 0: no value) at
+    its own resolution: the height above the fitted floor plane
+    (:func:`mgn.learn.floor.height_above_floor`; ``intrinsics`` of the depth image, or a
+    nominal pinhole when None) clipped to :data:`HEIGHT_RANGE_M`, divided by
+    :data:`HEIGHT_SCALE_M`; 0 where there is no value and, with ``footprint``, outside the
+    floor's footprint (:func:`mgn.learn.floor.floor_footprint`)."""
+    plane = fit_floor(depth_m, intrinsics, name=name)
+    h = np.nan_to_num(height_above_floor(depth_m, intrinsics, floor=plane, name=name), nan=0.0)
+    if footprint:
+        h[~floor_footprint(depth_m, intrinsics, floor=plane, name=name)] = 0.0
+    lo, hi = HEIGHT_RANGE_M
+    return (np.clip(h, lo, hi) / np.float32(HEIGHT_SCALE_M)).astype(np.float32)
+
+
 def network_input(
     rgb: npt.NDArray[np.uint8] | None,
     depth_m: np.ndarray | None,
@@ -119,12 +168,17 @@ def network_input(
     shape: tuple[int, int],
     *,
     name: str = "image",
+    intrinsics: Intrinsics | None = None,
+    floor_footprint: bool = False,
 ) -> npt.NDArray[np.float32]:
     """(C, H', W') float32 network input of one image at ``shape``. ``name`` (a file or view)
-    is named in the error when the modality needs an array that is missing or mis-sized."""
+    is named in the error when the modality needs an array that is missing or mis-sized.
+    ``intrinsics`` (of the depth image) serve the height modalities' floor fit; without them a
+    nominal pinhole is assumed (:func:`mgn.learn.floor.nominal_intrinsics`); with
+    ``floor_footprint`` the height is 0 outside the floor's footprint (:func:`height_channel`)."""
     input_channels(modality)
     planes: list[np.ndarray] = []
-    if modality in ("rgb", "rgbd"):
+    if uses_rgb(modality):
         if rgb is None:
             raise InvalidArgumentError(f"{name}: the model's input is {modality}, but no RGB")
         rgb = np.asarray(rgb)
@@ -132,7 +186,7 @@ def network_input(
             raise InvalidArgumentError(f"{name}: RGB must be (H, W, 3), got {rgb.shape}")
         small = resize_rgb(rgb.astype(np.uint8), shape).astype(np.float32) / np.float32(255.0)
         planes.extend(np.moveaxis(small, 2, 0))
-    if modality in ("depth", "rgbd"):
+    if uses_depth(modality):
         if depth_m is None:
             raise InvalidArgumentError(
                 f"{name}: the model's input is {modality}, but no depth was given"
@@ -143,7 +197,11 @@ def network_input(
                 f"{name}: depth is {depth_m.shape[1]} x {depth_m.shape[0]} px but the image is "
                 f"{rgb.shape[1]} x {rgb.shape[0]} px; they must match"
             )
-        planes.append(depth_channel(resize_nearest(depth_m, shape)))
+        if modality in ("height", "rgb-height"):
+            hc = height_channel(depth_m, intrinsics, footprint=floor_footprint, name=name)
+            planes.append(resize_nearest(hc, shape))
+        else:
+            planes.append(depth_channel(resize_nearest(depth_m, shape)))
     return np.stack(planes).astype(np.float32)
 
 
@@ -170,8 +228,9 @@ def normalize_rgb(x: np.ndarray, mode: str) -> npt.NDArray[np.float32]:
 
 def model_input(x: np.ndarray, modality: str, rgb_norm: str) -> npt.NDArray[np.float32]:
     """What the network is given for inputs ``x`` (C, H, W) or (N, C, H, W) of
-    :func:`network_input` (after any augmentation): the RGB channels of ``rgb`` and ``rgbd``
-    inputs normalised by ``rgb_norm`` (:func:`normalize_rgb`), the depth channel unchanged."""
+    :func:`network_input` (after any augmentation): the RGB channels of ``rgb``, ``rgbd`` and
+    ``rgb-height`` inputs normalised by ``rgb_norm`` (:func:`normalize_rgb`), the depth or
+    height channel unchanged."""
     a = np.asarray(x, np.float32)
     c = input_channels(modality)
     if a.ndim not in (3, 4) or a.shape[-3] != c:
@@ -179,7 +238,7 @@ def model_input(x: np.ndarray, modality: str, rgb_norm: str) -> npt.NDArray[np.f
             f"model input: a {modality} input has {c} channel(s), (C, H, W) or (N, C, H, W); "
             f"got {a.shape}"
         )
-    if modality == "depth" or rgb_norm == "none":
+    if not uses_rgb(modality) or rgb_norm == "none":
         if rgb_norm not in RGB_NORMS:
             raise InvalidArgumentError(f"rgb_norm must be one of {RGB_NORMS}, got {rgb_norm!r}")
         return a
