@@ -93,15 +93,13 @@ class HullCache {
     std::string key = key_of(object, principal, units, options);
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (capacity_ == 0) {
-        ++misses_;
-      } else if (const auto it = index_.find(key); it != index_.end()) {
+      const auto it = capacity_ == 0 ? index_.end() : index_.find(key);
+      if (it != index_.end()) {
         ++hits_;
         lru_.splice(lru_.begin(), lru_, it->second);  // most recently used
         return it->second->value;
-      } else {
-        ++misses_;
       }
+      ++misses_;  // not cached, or nothing is (capacity 0)
     }
     // Prepared outside the lock: other threads' simulations do not wait for it.
     std::shared_ptr<const PreparedHulls> value =
