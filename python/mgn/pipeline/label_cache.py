@@ -156,7 +156,7 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
 
 
 #: CPU seconds of one shake trial of a single-hull object (Bullet, 1/400 s, MetaGraspNet's
-#: schedule; a 2-core x86 machine measures 0.017-0.019 per trial with the sampling included,
+#: schedule; a 2-core x86 machine measures 0.014-0.021 per trial with the sampling included,
 #: docs/decisions/0055-shake-time-step-1-400.md), and of the other object labels per 1000
 #: surface points (suction and parallel-jaw sampling); the estimate of
 #: :func:`estimate_label_seconds`.
