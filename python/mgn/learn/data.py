@@ -127,13 +127,18 @@ def load_views(views: Sequence[View], config: ModelConfig) -> TrainingArrays:
         name = f"{view.folder.name}/{view.index}"
         rgb = view.rgb if uses_rgb(config.modality) else None
         depth = view.depth if uses_depth(config.modality) else None
-        k = view.intrinsics if config.modality in ("height", "rgb-height") else None
+        intrinsics = view.intrinsics if config.modality in ("height", "rgb-height") else None
         inputs.append(
             network_input(
-                rgb, depth, config.modality, shape, name=name, intrinsics=k,
+                rgb,
+                depth,
+                config.modality,
+                shape,
+                name=name,
+                intrinsics=intrinsics,
                 floor_footprint=config.floor_footprint,
             )
-        )  # fmt: skip
+        )
         t = view_targets(view, config)
         targets.append(
             np.stack([resize_nearest(t[k], shape).astype(np.float32) for k in config.outputs])

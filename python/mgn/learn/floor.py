@@ -183,10 +183,12 @@ def fit_floor(
     rows, cols = np.nonzero(valid)
     first = rng.integers(0, len(rows), size=FLOOR_ITERATIONS)
     reach = max(2, round(FLOOR_PATCH * max(hgt, wid)))
-    r = np.clip(rows[first][:, None] + rng.integers(-reach, reach + 1, (FLOOR_ITERATIONS, 2)),
-                0, hgt - 1)  # fmt: skip
-    c = np.clip(cols[first][:, None] + rng.integers(-reach, reach + 1, (FLOOR_ITERATIONS, 2)),
-                0, wid - 1)  # fmt: skip
+    r = np.clip(
+        rows[first][:, None] + rng.integers(-reach, reach + 1, (FLOOR_ITERATIONS, 2)), 0, hgt - 1
+    )
+    c = np.clip(
+        cols[first][:, None] + rng.integers(-reach, reach + 1, (FLOOR_ITERATIONS, 2)), 0, wid - 1
+    )
     rr = np.concatenate([rows[first][:, None], r], axis=1)
     cc = np.concatenate([cols[first][:, None], c], axis=1)
     tri = pts[rr, cc]
