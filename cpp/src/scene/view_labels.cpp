@@ -144,7 +144,7 @@ ViewLabelModel::ViewLabelModel(const std::vector<ViewLabelObject>& objects, cons
     g.mesh = in.mesh;
     g.X_WO = in.X_WO;
     g.instance_id = static_cast<std::int32_t>(i + 1);
-    o.alone = std::make_unique<RayScene>(std::vector<RayGeometry>{g});
+    o.alone = std::make_unique<RayScene>(std::vector<RayGeometry>{g}, false);
     all.push_back(g);
     const Mat3d R = in.X_WO.linear();
     const Vec3d t = in.X_WO.translation();
@@ -177,7 +177,7 @@ ViewLabelModel::ViewLabelModel(const std::vector<ViewLabelObject>& objects, cons
     all.push_back(g);
     impl_->tote = true;
   }
-  impl_->all = std::make_unique<RayScene>(all);
+  impl_->all = std::make_unique<RayScene>(all, false);
 }
 
 ViewLabelModel::~ViewLabelModel() = default;
@@ -538,19 +538,6 @@ ScenePoints scene_points(const ViewInput& in, const std::vector<Object>& objects
   return sp;
 }
 
-/// Position of pixel (x, y) (each < 2^16) along the Z-order (Morton) curve.
-std::uint32_t z_order(std::uint32_t x, std::uint32_t y) {
-  auto spread = [](std::uint32_t v) {
-    v &= 0xffffu;
-    v = (v | (v << 8u)) & 0x00ff00ffu;
-    v = (v | (v << 4u)) & 0x0f0f0f0fu;
-    v = (v | (v << 2u)) & 0x33333333u;
-    v = (v | (v << 1u)) & 0x55555555u;
-    return v;
-  };
-  return spread(x) | (spread(y) << 1u);
-}
-
 /// For each ray k (origin o, unit direction d_k): whether its first hit in the scene lies at a
 /// distance t with lo_k <= t <= lo_k + width (the float sum) and belongs to instance
 /// owner_id[k]. The same answer as testing RayScene::intersect's first hit (tnear 0, tfar +inf),
@@ -619,20 +606,15 @@ std::vector<std::uint8_t> visible_points(const ViewInput& in, const RayScene& sc
                                          const ScenePoints& sp) {
   const Intrinsics& K = in.K;
   const Eigen::Index n = sp.all_C.rows();
-  // Candidates: in front of the camera and projecting inside the image, cast in the order of
-  // their pixels along a Z-order curve, so that consecutive rays traverse the same BVH nodes
-  // (each ray's hit does not depend on the order; only the memory traffic does).
-  std::vector<std::pair<std::uint32_t, Eigen::Index>> order;
+  // Candidates: in front of the camera and projecting inside the image.
+  std::vector<Eigen::Index> cand;
   for (Eigen::Index r = 0; r < n; ++r) {
     const double z = sp.all_C(r, 3);
     if (!(z > 1e-9)) continue;
     const double x = K.fx * sp.all_C(r, 1) / z + K.cx, y = K.fy * sp.all_C(r, 2) / z + K.cy;
     if (!(x >= 0.0 && x < in.W && y >= 0.0 && y < in.H)) continue;
-    order.emplace_back(z_order(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y)), r);
+    cand.push_back(r);
   }
-  std::sort(order.begin(), order.end());
-  std::vector<Eigen::Index> cand(order.size());
-  for (std::size_t k = 0; k < order.size(); ++k) cand[k] = order[k].second;
   std::vector<float> tfar(cand.size());
   std::vector<std::int32_t> owner_id(cand.size());
   const Vec3d c = in.X_WC.translation();
