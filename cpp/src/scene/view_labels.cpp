@@ -541,18 +541,15 @@ ScenePoints scene_points(const ViewInput& in, const std::vector<Object>& objects
 /// For each ray k (origin o, unit direction d_k): whether its first hit in the scene lies at a
 /// distance t with lo_k <= t <= lo_k + width (the float sum) and belongs to instance
 /// owner_id[k]. The same answer as testing RayScene::intersect's first hit (tnear 0, tfar +inf),
-/// from cheaper queries: any-hit queries over [0, lo_k (1 - 1e-4)], first against own[k] (the
-/// owner alone, whose far side its near side hides) and then against the scene (a hit there is
-/// closer than lo_k: the test fails), then, where nothing is there, a first-hit query over
+/// from two cheaper queries: an any-hit query over [0, lo_k (1 - 1e-4)] (a hit there is closer
+/// than lo_k: the test fails), then, where nothing is there, a first-hit query over
 /// [lo_k (1 - 2e-4), (lo_k + width) (1 + 1e-4)], whose first hit is the ray's first hit
-/// whenever that one can pass the test. A triangle's t does not depend on the query's bounds or
-/// on the BVH that holds it (own[k] holds the same world-frame triangles as the scene), and the
-/// overlaps (1e-4 of the distance) are far wider than Embree's rounding of its bound tests, so
-/// the answers are the same bits.
-std::vector<std::uint8_t> first_hit_in_window(const RayScene& scene,
-                                              const std::vector<const RayScene*>& own,
-                                              const Eigen::RowVector3f& o, const Points3f& d,
-                                              const std::vector<float>& lo, float width,
+/// whenever that one can pass the test. A triangle's t does not depend on the query's bounds,
+/// and the overlaps (1e-4 of the distance) are far wider than Embree's rounding of its bound
+/// tests, so the answers are the same bits.
+std::vector<std::uint8_t> first_hit_in_window(const RayScene& scene, const Eigen::RowVector3f& o,
+                                              const Points3f& d, const std::vector<float>& lo,
+                                              float width,
                                               const std::vector<std::int32_t>& owner_id,
                                               int num_threads) {
   constexpr float kGap = 1e-4f;
@@ -581,8 +578,6 @@ std::vector<std::uint8_t> first_hit_in_window(const RayScene& scene,
       if (front > 0.0f) {
         r.tnear = 0.0f;
         r.tfar = front;
-        rtcOccluded1(own[k]->impl().scene, &ctx, &r);
-        if (r.tfar == -std::numeric_limits<float>::infinity()) continue;
         rtcOccluded1(impl.scene, &ctx, &r);
         if (r.tfar == -std::numeric_limits<float>::infinity()) continue;
         tnear = lo[k] * (1.0f - 2.0f * kGap);
@@ -607,8 +602,8 @@ std::vector<std::uint8_t> first_hit_in_window(const RayScene& scene,
 /// (|hit - distance| <= tolerance): nothing in front of it, and the point lies on the surface
 /// the camera sees (a keypoint floating in a hole or above the object is not visible, even if
 /// whatever lies behind it is). Points behind the camera or outside the image are not visible.
-std::vector<std::uint8_t> visible_points(const ViewInput& in, const std::vector<Object>& objects,
-                                         const RayScene& scene, const ScenePoints& sp) {
+std::vector<std::uint8_t> visible_points(const ViewInput& in, const RayScene& scene,
+                                         const ScenePoints& sp) {
   const Intrinsics& K = in.K;
   const Eigen::Index n = sp.all_C.rows();
   // Candidates: in front of the camera and projecting inside the image.
@@ -622,7 +617,6 @@ std::vector<std::uint8_t> visible_points(const ViewInput& in, const std::vector<
   }
   std::vector<float> tfar(cand.size());
   std::vector<std::int32_t> owner_id(cand.size());
-  std::vector<const RayScene*> own(cand.size());
   const Vec3d c = in.X_WC.translation();
   Points3f d(static_cast<Eigen::Index>(cand.size()), 3);
   for (std::size_t k = 0; k < cand.size(); ++k) {
@@ -631,13 +625,12 @@ std::vector<std::uint8_t> visible_points(const ViewInput& in, const std::vector<
     d.row(static_cast<Eigen::Index>(k)) = (dir / dist).cast<float>().transpose();
     tfar[k] = static_cast<float>(std::max(dist - in.options.keypoint_tolerance, 0.0));
     owner_id[k] = sp.owner[cand[k]] + 1;
-    own[k] = objects[static_cast<std::size_t>(sp.owner[cand[k]])].alone.get();
   }
   std::vector<std::uint8_t> visible(static_cast<std::size_t>(n), 0);
   if (cand.empty()) return visible;
   const float tol2 = 2.0f * static_cast<float>(in.options.keypoint_tolerance);
   const std::vector<std::uint8_t> seen =
-      first_hit_in_window(scene, own, in.origin, d, tfar, tol2, owner_id, in.options.num_threads);
+      first_hit_in_window(scene, in.origin, d, tfar, tol2, owner_id, in.options.num_threads);
   for (std::size_t k = 0; k < cand.size(); ++k) visible[cand[k]] = seen[k];
   return visible;
 }
@@ -646,7 +639,7 @@ std::vector<std::uint8_t> visible_points(const ViewInput& in, const std::vector<
 void label_keypoints(const ViewInput& in, const std::vector<Object>& objects, const RayScene& scene,
                      ViewLabels& out) {
   const ScenePoints sp = scene_points(in, objects);
-  const std::vector<std::uint8_t> visible = visible_points(in, objects, scene, sp);
+  const std::vector<std::uint8_t> visible = visible_points(in, scene, sp);
   const Eigen::Index n_kp = sp.n_kp;
   Eigen::Index nv = 0;
   for (Eigen::Index r = 0; r < n_kp; ++r) nv += visible[r];
