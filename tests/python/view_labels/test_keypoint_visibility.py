@@ -64,20 +64,23 @@ def brute_force(scene: Scene, view: CameraView, tolerance: float) -> tuple[list,
                 v = K.fy * p_C[:, 1] / z + K.cy
             cand = (z > 1e-9) & (u >= 0) & (u < K.width) & (v >= 0) & (v < K.height)
             seen = np.zeros(len(p_W), bool)
-            for k in np.nonzero(cand)[0]:  # one ray per point
-                d = p_W[k] - centre
-                dist = float(np.linalg.norm(d))
-                hit = rays.intersect(
-                    centre[None].astype(np.float32), (d / dist)[None].astype(np.float32)
-                )
-                lo = np.float32(max(dist - tolerance, 0.0))
-                h = float(hit.distance[0])
-                seen[k] = (
-                    math.isfinite(h)
-                    and h >= lo
-                    and h <= np.float32(lo + tol2)
-                    and int(hit.instance_ids[0]) == i + 1
-                )
+            k = np.nonzero(cand)[0]
+            d = p_W[k] - centre
+            dist = np.linalg.norm(d, axis=1)
+            # One unbounded first-hit ray per point (each ray's hit is its own; one batch).
+            hit = rays.intersect(
+                np.tile(centre.astype(np.float32), (len(k), 1)),
+                (d / dist[:, None]).astype(np.float32),
+                num_threads=1,
+            )
+            lo = np.maximum(dist - tolerance, 0.0).astype(np.float32)
+            h = np.asarray(hit.distance, np.float32)
+            seen[k] = (
+                np.isfinite(h)
+                & (h >= lo)
+                & (h <= lo + tol2)
+                & (np.asarray(hit.instance_ids) == i + 1)
+            )
             result.append(seen)
         out_kp.append(result[0])
         out_com.append(result[1])
