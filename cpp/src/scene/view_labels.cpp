@@ -3,11 +3,15 @@
 #include <mgn/raytrace/ray_scene.hpp>
 #include <mgn/scene/view_labels.hpp>
 
+#include "raytrace/ray_scene_impl.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace mgn {
 
@@ -534,6 +538,65 @@ ScenePoints scene_points(const ViewInput& in, const std::vector<Object>& objects
   return sp;
 }
 
+/// For each ray k (origin o, unit direction d_k): whether its first hit in the scene lies at a
+/// distance t with lo_k <= t <= lo_k + width (the float sum) and belongs to instance
+/// owner_id[k]. The same answer as testing RayScene::intersect's first hit (tnear 0, tfar +inf),
+/// from two cheaper queries: an any-hit query over [0, lo_k (1 - 1e-4)] (a hit there is closer
+/// than lo_k: the test fails), then, where nothing is there, a first-hit query over
+/// [lo_k (1 - 2e-4), (lo_k + width) (1 + 1e-4)], whose first hit is the ray's first hit
+/// whenever that one can pass the test. A triangle's t does not depend on the query's bounds,
+/// and the overlaps (1e-4 of the distance) are far wider than Embree's rounding of its bound
+/// tests, so the answers are the same bits.
+std::vector<std::uint8_t> first_hit_in_window(const RayScene& scene, const Eigen::RowVector3f& o,
+                                              const Points3f& d, const std::vector<float>& lo,
+                                              float width,
+                                              const std::vector<std::int32_t>& owner_id,
+                                              int num_threads) {
+  constexpr float kGap = 1e-4f;
+  const RayScene::Impl& impl = scene.impl();
+  std::vector<std::uint8_t> out(lo.size(), 0);
+  parallel_for(lo.size(), num_threads, 1024, [&](std::size_t begin, std::size_t end) {
+    detail::FtzDazGuard guard;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (std::size_t k = begin; k < end; ++k) {
+      const float* dk = &d(static_cast<Eigen::Index>(k), 0);
+      RTCRayHit rh;
+      RTCRay& r = rh.ray;
+      r.org_x = o[0];
+      r.org_y = o[1];
+      r.org_z = o[2];
+      r.dir_x = dk[0];
+      r.dir_y = dk[1];
+      r.dir_z = dk[2];
+      r.time = 0.0f;
+      r.mask = 0xFFFFFFFFu;
+      r.id = 0;
+      r.flags = 0;
+      float tnear = 0.0f;
+      const float front = lo[k] * (1.0f - kGap);
+      if (front > 0.0f) {
+        r.tnear = 0.0f;
+        r.tfar = front;
+        rtcOccluded1(impl.scene, &ctx, &r);
+        if (r.tfar == -std::numeric_limits<float>::infinity()) continue;
+        tnear = lo[k] * (1.0f - 2.0f * kGap);
+      }
+      const float hi = lo[k] + width;
+      r.tnear = tnear;
+      r.tfar = hi * (1.0f + kGap);
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(impl.scene, &ctx, &rh);
+      if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+      const float t = r.tfar;
+      out[k] = static_cast<std::uint8_t>(std::isfinite(t) && t >= lo[k] && t <= hi &&
+                                         impl.instance_ids[rh.hit.geomID] == owner_id[k]);
+    }
+  });
+  return out;
+}
+
 /// Which points are visible: the first hit along the ray from the camera centre towards the
 /// point, through the whole scene, is the point's own object, within the tolerance of the point
 /// (|hit - distance| <= tolerance): nothing in front of it, and the point lies on the surface
@@ -545,7 +608,6 @@ std::vector<std::uint8_t> visible_points(const ViewInput& in, const RayScene& sc
   const Eigen::Index n = sp.all_C.rows();
   // Candidates: in front of the camera and projecting inside the image.
   std::vector<Eigen::Index> cand;
-  std::vector<float> tfar;
   for (Eigen::Index r = 0; r < n; ++r) {
     const double z = sp.all_C(r, 3);
     if (!(z > 1e-9)) continue;
@@ -553,27 +615,23 @@ std::vector<std::uint8_t> visible_points(const ViewInput& in, const RayScene& sc
     if (!(x >= 0.0 && x < in.W && y >= 0.0 && y < in.H)) continue;
     cand.push_back(r);
   }
-  Points3f o(static_cast<Eigen::Index>(cand.size()), 3), d(o.rows(), 3);
-  tfar.resize(cand.size());
+  std::vector<float> tfar(cand.size());
+  std::vector<std::int32_t> owner_id(cand.size());
   const Vec3d c = in.X_WC.translation();
+  Points3f d(static_cast<Eigen::Index>(cand.size()), 3);
   for (std::size_t k = 0; k < cand.size(); ++k) {
     const Vec3d dir = sp.p_W.row(cand[k]).transpose() - c;
     const double dist = dir.norm();
-    o.row(k) = in.origin;
-    d.row(k) = (dir / dist).cast<float>().transpose();
+    d.row(static_cast<Eigen::Index>(k)) = (dir / dist).cast<float>().transpose();
     tfar[k] = static_cast<float>(std::max(dist - in.options.keypoint_tolerance, 0.0));
+    owner_id[k] = sp.owner[cand[k]] + 1;
   }
   std::vector<std::uint8_t> visible(static_cast<std::size_t>(n), 0);
   if (cand.empty()) return visible;
-  CastOptions co;
-  co.num_threads = in.options.num_threads;
-  const RayHits hits = scene.intersect(o, d, co);
   const float tol2 = 2.0f * static_cast<float>(in.options.keypoint_tolerance);
-  for (std::size_t k = 0; k < cand.size(); ++k) {
-    const float t = hits.distance[k];
-    visible[cand[k]] = std::isfinite(t) && t >= tfar[k] && t <= tfar[k] + tol2 &&
-                       hits.instance_ids[k] == sp.owner[cand[k]] + 1;
-  }
+  const std::vector<std::uint8_t> seen =
+      first_hit_in_window(scene, in.origin, d, tfar, tol2, owner_id, in.options.num_threads);
+  for (std::size_t k = 0; k < cand.size(); ++k) visible[cand[k]] = seen[k];
   return visible;
 }
 
