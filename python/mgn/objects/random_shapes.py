@@ -14,11 +14,12 @@ Every shape is one of these kinds, each with random proportions:
 - ``block``: a box with rounded edges, or a superellipsoid with smooth bumps.
 
 The size of a shape is its largest bounding-box extent, drawn uniformly within the asked
-range (metres). The material is a plain colour (one in four black or dark grey, a reflectance
-below 5 %), matte to glossy, plastic, rubber or metal; the density is that of the material for a
-solid part (500-1500 kg/m^3 for plastics and rubber, 2700-7800 kg/m^3 for metal) and is lowered
-where the part would weigh more than :data:`MAX_MASS_KG`. Everything is a function of the seed,
-the shape's index and the size range: the same arguments give the same bytes.
+range (metres). The material is a plain colour (black or dark grey, a reflectance below 5 %,
+with probability ``dark``, default one in four), matte to glossy, plastic, rubber or metal; the
+density is that of the material for a solid part (500-1500 kg/m^3 for plastics and rubber,
+2700-7800 kg/m^3 for metal) and is lowered where the part would weigh more than
+:data:`MAX_MASS_KG`. Everything is a function of the seed, the shape's index, the size range and
+``dark``: the same arguments give the same bytes, and ``dark`` changes colours only.
 
 Random shapes carry the ``random`` tag; their parallel-jaw grasp labels are not computed (the
 dataset says so, ``pj_skipped``); every other label is.
@@ -46,6 +47,7 @@ from .shapes import (
 from .spec import Keypoint, MaterialSpec, ObjectSpec, size_tags
 
 __all__ = [
+    "DEFAULT_DARK",
     "KINDS",
     "MAX_MASS_KG",
     "RANDOM_SOURCE_PREFIX",
@@ -64,6 +66,9 @@ MAX_MASS_KG = 3.0
 #: ``source`` of random shapes in a scene file: this prefix, then the pool's parameters
 #: (:func:`random_shape_source`).
 RANDOM_SOURCE_PREFIX = "random-shapes:"
+
+#: Default probability that a random shape is black or dark grey.
+DEFAULT_DARK = 0.25
 
 #: Thinnest wall, bar or plate of a random shape, metres.
 MIN_THICKNESS = 0.002
@@ -276,10 +281,13 @@ _BUILDERS = {
 # ------------------------------------------------------------------------------------------------
 
 
-def _material(rng: np.random.Generator, index: int) -> tuple[MaterialSpec, float, float]:
-    """(material, density kg/m^3, friction) of one random shape."""
+def _material(
+    rng: np.random.Generator, index: int, dark: float
+) -> tuple[MaterialSpec, float, float]:
+    """(material, density kg/m^3, friction) of one random shape; black or dark grey with
+    probability ``dark`` (the same draws either way, so ``dark`` changes colours only)."""
     kind = str(rng.choice(["plastic", "plastic", "rubber", "metal"]))
-    if rng.random() < 0.25:  # black or dark grey
+    if rng.random() < dark:  # black or dark grey
         hsv = (rng.uniform(0, 1), rng.uniform(0.0, 0.2), rng.uniform(0.03, 0.2))
     else:
         hsv = (rng.uniform(0, 1), rng.uniform(0.0, 0.9), rng.uniform(0.25, 0.95))
@@ -310,13 +318,27 @@ def _material(rng: np.random.Generator, index: int) -> tuple[MaterialSpec, float
 # ------------------------------------------------------------------------------------------------
 
 
+def _check_dark(dark: float) -> float:
+    if isinstance(dark, bool) or not (0.0 <= float(dark) <= 1.0):
+        raise InvalidArgumentError(
+            f"objects.random_shape_dark: expected a probability in [0, 1], got {dark!r}"
+        )
+    return float(dark)
+
+
 def random_shape(
-    seed: int, index: int, size: Sequence[float] = (0.02, 0.25), category_id: int = 1
+    seed: int,
+    index: int,
+    size: Sequence[float] = (0.02, 0.25),
+    category_id: int = 1,
+    dark: float = DEFAULT_DARK,
 ) -> ObjectSpec:
     """Random shape number ``index`` of the pool of ``seed`` (module doc): a closed,
     outward-wound mesh in its object frame (bounding-box centre at the origin), largest extent
-    within ``size`` = (min, max) metres, named ``random_shape_<index:04d>``."""
+    within ``size`` = (min, max) metres, named ``random_shape_<index:04d>``; black or dark grey
+    with probability ``dark`` (the shape, density and friction do not depend on it)."""
     lo, hi = _check_size(size)
+    dark = _check_dark(dark)
     if isinstance(seed, bool) or int(seed) < 0 or isinstance(index, bool) or int(index) < 0:
         raise InvalidArgumentError(
             f"random_shape: seed and index must be integers >= 0, got {seed!r}, {index!r}"
@@ -332,7 +354,7 @@ def random_shape(
     scale = extent / float(np.ptp(v, axis=0).max())
     v = v * scale
     mesh = Mesh(v, mesh.faces).oriented_outward()
-    material, density, friction = _material(rng, index)
+    material, density, friction = _material(rng, index, dark)
     volume = mesh.signed_volume
     density = float(min(density, max(100.0, MAX_MASS_KG / volume)))
     ext = np.ptp(mesh.vertices, axis=0)
@@ -359,25 +381,34 @@ def random_shape(
     )
 
 
-def random_shape_source(count: int, size: Sequence[float], seed: int, first_id: int) -> str:
-    """The ``source`` string that names a pool of random shapes in a scene file."""
+def random_shape_source(
+    count: int, size: Sequence[float], seed: int, first_id: int, dark: float = DEFAULT_DARK
+) -> str:
+    """The ``source`` string that names a pool of random shapes in a scene file (``dark`` is
+    written only when it is not the default)."""
     lo, hi = _check_size(size)
     fields = f"count={int(count)};seed={int(seed)};size={lo!r},{hi!r};first_id={int(first_id)}"
+    if _check_dark(dark) != DEFAULT_DARK:
+        fields += f";dark={float(dark)!r}"
     return RANDOM_SOURCE_PREFIX + fields
 
 
 @functools.lru_cache(maxsize=8)
 def random_shapes(
-    count: int, size: tuple[float, float] = (0.02, 0.25), seed: int = 0, first_id: int = 1
+    count: int,
+    size: tuple[float, float] = (0.02, 0.25),
+    seed: int = 0,
+    first_id: int = 1,
+    dark: float = DEFAULT_DARK,
 ) -> tuple[ObjectSpec, ...]:
     """The pool of ``count`` random shapes of ``seed`` (indices 0..count-1), category ids
-    ``first_id``.. in order. Each shape depends only on (seed, its index, size), so a larger
-    pool starts with the same shapes."""
+    ``first_id``.. in order. Each shape depends only on (seed, its index, size, dark), so a
+    larger pool starts with the same shapes."""
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 0:
         raise InvalidArgumentError(
             f"objects.random_shapes: expected an integer >= 0, got {count!r}"
         )
-    return tuple(random_shape(seed, k, size, first_id + k) for k in range(int(count)))
+    return tuple(random_shape(seed, k, size, first_id + k, dark) for k in range(int(count)))
 
 
 def random_shapes_from_source(source: str) -> tuple[ObjectSpec, ...]:
@@ -387,7 +418,8 @@ def random_shapes_from_source(source: str) -> tuple[ObjectSpec, ...]:
     try:
         fields = dict(kv.split("=", 1) for kv in source[len(RANDOM_SOURCE_PREFIX) :].split(";"))
         lo, hi = (float(x) for x in fields["size"].split(","))
+        dark = float(fields.get("dark", DEFAULT_DARK))
         return random_shapes(int(fields["count"]), (lo, hi), int(fields["seed"]),
-                             int(fields["first_id"]))  # fmt: skip
+                             int(fields["first_id"]), dark)  # fmt: skip
     except (KeyError, ValueError) as e:
         raise InvalidArgumentError(f"malformed random-shapes source {source!r}: {e}") from e

@@ -329,6 +329,8 @@ class ObjectsConfig(_Section):
             uniformly (0.01 <= min <= max <= 1; default 0.02-0.25).
         random_shape_seed: seed of the random shapes (>= 0, default 0); the same seed, count
             and size range give the same shapes, whatever the dataset seed.
+        random_shape_dark: probability that a random shape is black or dark grey (0-1,
+            default 0.25); it changes colours only, never shapes, densities or piles.
     """
 
     names: tuple[str | int, ...] | None = None
@@ -341,6 +343,7 @@ class ObjectsConfig(_Section):
     random_shapes: int = 0
     random_shape_size: tuple[float, float] = (0.02, 0.25)
     random_shape_seed: int = 0
+    random_shape_dark: float = 0.25
 
     _CHECKS: ClassVar[dict[str, Check]] = {
         "names": _optional(_list(_name)),
@@ -353,6 +356,7 @@ class ObjectsConfig(_Section):
         "random_shapes": _int(0),
         "random_shape_size": _list(_num(0.0), length=2),
         "random_shape_seed": _int(0),
+        "random_shape_dark": _num(0.0, strict=False),
     }
 
     #: Objects per scene when nothing is chosen.
@@ -374,6 +378,8 @@ class ObjectsConfig(_Section):
                         "[min, max] in metres with 0.01 <= min <= max <= 1")  # fmt: skip
         if isinstance(self.random_shapes, bool) or int(self.random_shapes) < 0:
             raise _fail("objects.random_shapes", self.random_shapes, "an integer >= 0")
+        if not 0.0 <= float(self.random_shape_dark) <= 1.0:
+            raise _fail("objects.random_shape_dark", self.random_shape_dark, "a number in [0, 1]")
 
     def compose_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :func:`mgn.scene.compose_objects` (without seed/catalogue)."""

@@ -99,8 +99,9 @@ def load_catalogue(config: Config) -> Catalogue:
     if o.random_shapes:
         size = (float(o.random_shape_size[0]), float(o.random_shape_size[1]))
         first = len(specs) + 1
-        source = random_shape_source(o.random_shapes, size, o.random_shape_seed, first)
-        for spec in random_shapes(o.random_shapes, size, o.random_shape_seed, first):
+        dark = float(o.random_shape_dark)
+        source = random_shape_source(o.random_shapes, size, o.random_shape_seed, first, dark)
+        for spec in random_shapes(o.random_shapes, size, o.random_shape_seed, first, dark):
             specs.append(spec)
             sources[spec.name] = source
     notes: dict[str, list[UserObjectWarning]] = {}
