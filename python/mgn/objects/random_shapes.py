@@ -1,6 +1,6 @@
 """Seeded random procedural objects: closed meshes of random shape, size, material and density,
 built from the mesh builders of :mod:`mgn.objects.shapes`, for piles of many different shapes
-(``objects.random_shapes`` of the dataset config, docs/configuration.md).
+(``objects.random_shapes`` of the dataset config, docs/models.md §6).
 
 Every shape is one of these kinds, each with random proportions:
 
