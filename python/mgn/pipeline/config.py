@@ -372,8 +372,8 @@ class ObjectsConfig(_Section):
         lo, hi = self.copies
         if not 1 <= lo <= hi:
             raise _fail("objects.copies", list(self.copies), "[min, max] with 1 <= min <= max")
-        lo, hi = (float(x) for x in self.random_shape_size)
-        if not 0.01 <= lo <= hi <= 1.0:
+        smin, smax = (float(x) for x in self.random_shape_size)
+        if not 0.01 <= smin <= smax <= 1.0:
             raise _fail("objects.random_shape_size", list(self.random_shape_size),
                         "[min, max] in metres with 0.01 <= min <= max <= 1")  # fmt: skip
         if isinstance(self.random_shapes, bool) or int(self.random_shapes) < 0:

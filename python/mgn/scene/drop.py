@@ -142,9 +142,10 @@ def _simulate(
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidArgumentError(f"drop_scene: seed must be an integer >= 0, got {seed!r}")
     src = {
-        k: v if v.startswith(RANDOM_SOURCE_PREFIX) else os.fspath(Path(v).resolve())
+        k: os.fspath(v) if os.fspath(v).startswith(RANDOM_SOURCE_PREFIX)
+        else os.fspath(Path(v).resolve())
         for k, v in (sources or {}).items()
-    }
+    }  # fmt: skip
     per_name: dict[str, tuple] = {}
     for spec in objects:
         if not isinstance(spec, ObjectSpec):
