@@ -15,6 +15,7 @@ Tags (a subset of :data:`ALLOWED_TAGS`) describe the object for dataset splits:
 - ``deformable`` soft in reality (the mesh is one static shape); ``textured`` has a texture;
 - ``novel`` held out of training sets by default (the unseen split of ``mgn generate --split``):
   the paper's novel set of non-convex, black, shape-varying and transparent objects;
+- ``random`` a seeded random procedural shape (:mod:`mgn.objects.random_shapes`);
 - ``small`` largest extent <= 70 mm; ``large`` largest extent >= 180 mm; ``thin`` smallest
   extent <= 25 mm. The three size tags are derived from the mesh (:func:`size_tags`), never
   declared by hand.
@@ -53,6 +54,7 @@ ALLOWED_TAGS: frozenset[str] = frozenset(
         "small",
         "large",
         "thin",
+        "random",
     }
 )
 

@@ -17,7 +17,9 @@ Sections:
   copies), or ``categories`` (each with ``copies`` = (min, max) copies, MGN 2-5) and/or a total
   ``count``; with none of them, ``count`` defaults to 20 objects from categories drawn at random
   (MGN). ``user_objects``: YAML files of user objects (see :func:`mgn.objects.load_objects_yaml`)
-  added to the catalogue; relative paths are relative to the config file.
+  added to the catalogue; relative paths are relative to the config file. ``random_shapes``:
+  seeded random procedural objects added to the catalogue (``random_shape_size``,
+  ``random_shape_seed``; :mod:`mgn.objects.random_shapes`).
 - ``tote``: :class:`mgn.objects.ToteSpec` fields. ``gripper``:
   :class:`mgn.hardware.ParallelJawGripper` fields. ``cup``: :class:`mgn.hardware.SuctionCup`
   fields. ``drop``: :class:`mgn.scene.DropOptions` fields.
@@ -317,6 +319,18 @@ class ObjectsConfig(_Section):
             shortfall left is reported per scene). Off, the objects that left are removed (and
             reported).
         refill_attempts: drops at most per scene with ``refill`` (>= 1, default 5).
+        random_shapes: seeded random procedural objects added to the catalogue as categories
+            of their own (:mod:`mgn.objects.random_shapes`; >= 0, default 0 = none). A scene
+            draws its categories from the whole catalogue, so with the 30 built-in objects,
+            ``random_shapes: 30`` makes about half of a pile random shapes. Their
+            parallel-jaw labels are not computed (``pj_skipped`` in their labels); every other
+            label is.
+        random_shape_size: (min, max) largest extent of a random shape, metres, drawn
+            uniformly (0.01 <= min <= max <= 1; default 0.02-0.25).
+        random_shape_seed: seed of the random shapes (>= 0, default 0); the same seed, count
+            and size range give the same shapes, whatever the dataset seed.
+        random_shape_dark: probability that a random shape is black or dark grey (0-1,
+            default 0.25); it changes colours only, never shapes, densities or piles.
     """
 
     names: tuple[str | int, ...] | None = None
@@ -326,6 +340,10 @@ class ObjectsConfig(_Section):
     user_objects: tuple[str, ...] = ()
     refill: bool = True
     refill_attempts: int = 5
+    random_shapes: int = 0
+    random_shape_size: tuple[float, float] = (0.02, 0.25)
+    random_shape_seed: int = 0
+    random_shape_dark: float = 0.25
 
     _CHECKS: ClassVar[dict[str, Check]] = {
         "names": _optional(_list(_name)),
@@ -335,6 +353,10 @@ class ObjectsConfig(_Section):
         "user_objects": _list(_path, nonempty=False),
         "refill": _bool,
         "refill_attempts": _int(1),
+        "random_shapes": _int(0),
+        "random_shape_size": _list(_num(0.0), length=2),
+        "random_shape_seed": _int(0),
+        "random_shape_dark": _num(0.0, strict=False),
     }
 
     #: Objects per scene when nothing is chosen.
@@ -350,6 +372,14 @@ class ObjectsConfig(_Section):
         lo, hi = self.copies
         if not 1 <= lo <= hi:
             raise _fail("objects.copies", list(self.copies), "[min, max] with 1 <= min <= max")
+        smin, smax = (float(x) for x in self.random_shape_size)
+        if not 0.01 <= smin <= smax <= 1.0:
+            raise _fail("objects.random_shape_size", list(self.random_shape_size),
+                        "[min, max] in metres with 0.01 <= min <= max <= 1")  # fmt: skip
+        if isinstance(self.random_shapes, bool) or int(self.random_shapes) < 0:
+            raise _fail("objects.random_shapes", self.random_shapes, "an integer >= 0")
+        if not 0.0 <= float(self.random_shape_dark) <= 1.0:
+            raise _fail("objects.random_shape_dark", self.random_shape_dark, "a number in [0, 1]")
 
     def compose_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :func:`mgn.scene.compose_objects` (without seed/catalogue)."""

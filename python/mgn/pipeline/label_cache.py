@@ -238,7 +238,10 @@ def compute_object_labels(
         )
     pj = None
     report = mesh.validate()
-    if config.labels.paralleljaw and not report.is_watertight:
+    if config.labels.paralleljaw and "random" in spec.tags:
+        pj = _no_pj_labels(config, "random shape (objects.random_shapes): parallel-jaw labels "
+                           "are not computed for random shapes")  # fmt: skip
+    elif config.labels.paralleljaw and not report.is_watertight:
         pj = _no_pj_labels(config, f"open mesh ({report.num_boundary_edges} boundary edges, "
                            "allow_open): the antipodal sampler needs a closed volume")  # fmt: skip
     elif config.labels.paralleljaw:

@@ -267,6 +267,28 @@ class _Run:
         )
 
 
+def _closing_record(run: _Run) -> dict[str, Any]:
+    """The entries of ``dataset.json`` written at the end of a run (``removed_objects``,
+    ``no_paralleljaw_labels``, ``physics_scores``, ``failed_scenes``); fills the report's
+    ``physics`` and ``no_paralleljaw``."""
+    report = run.report
+    more: dict[str, Any] = {"removed_objects": removed_objects(run.out)}
+    report.physics = physics_record(run.cfg, run.labels)
+    report.no_paralleljaw = {
+        name: str(lab.paralleljaw.metadata["pj_skipped"])
+        for name, lab in sorted(run.labels.items())
+        if lab.paralleljaw is not None and lab.paralleljaw.metadata.get("pj_skipped")
+    }
+    if report.no_paralleljaw:
+        more["no_paralleljaw_labels"] = report.no_paralleljaw
+    if report.physics is not None:
+        more["physics_scores"] = report.physics
+    failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
+    if failed:
+        more["failed_scenes"] = failed
+    return more
+
+
 def _record_stop(run: _Run, status: str, error: str) -> None:
     """Record in ``dataset.json`` that the run stopped before its end (``status``
     ``interrupted`` or ``failed``, with the ``error``), so that it no longer says ``running``.
@@ -426,20 +448,8 @@ def generate(
 
     report.wall_seconds = time.perf_counter() - t_start
     status = "complete" if report.complete else "incomplete"
-    failed = [{"scene": r.index, "seed": r.seed, "error": r.error} for r in report.failed]
-    more: dict[str, Any] = {"removed_objects": removed_objects(out)}
-    report.physics = physics_record(cfg, run.labels)
-    report.no_paralleljaw = {
-        name: str(lab.paralleljaw.metadata["pj_skipped"])
-        for name, lab in sorted(run.labels.items())
-        if lab.paralleljaw is not None and lab.paralleljaw.metadata.get("pj_skipped")
-    }
-    if report.physics is not None:
-        more["physics_scores"] = report.physics
-    if failed:
-        more["failed_scenes"] = failed
     with contextlib.suppress(OSError):
-        run.write_doc(report.num_scenes, status, **more)
+        run.write_doc(report.num_scenes, status, **_closing_record(run))
     clean_tmp(out)
     report.output_bytes = folder_size(out)
     return report

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, load_objects_yaml, make_tote
+from mgn.objects.random_shapes import random_shape_source, random_shapes
 from mgn.objects.user import PLAUSIBLE_EXTENT_M, ImplausibleSizeWarning, UserObjectWarning
 from mgn.pipeline.config import Config
 from mgn.pipeline.scene_writer import scene_intrinsics
@@ -94,6 +95,15 @@ def load_catalogue(config: Config) -> Catalogue:
         for spec in load_objects_yaml(path, notes=said):
             specs.append(spec)
             sources[spec.name] = os.fspath(Path(path).resolve())
+    o = config.objects
+    if o.random_shapes:
+        size = (float(o.random_shape_size[0]), float(o.random_shape_size[1]))
+        first = len(specs) + 1
+        dark = float(o.random_shape_dark)
+        source = random_shape_source(o.random_shapes, size, o.random_shape_seed, first, dark)
+        for spec in random_shapes(o.random_shapes, size, o.random_shape_seed, first, dark):
+            specs.append(spec)
+            sources[spec.name] = source
     notes: dict[str, list[UserObjectWarning]] = {}
     for w in said:
         notes.setdefault(str(w.object_name), []).append(w)

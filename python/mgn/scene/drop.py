@@ -20,6 +20,7 @@ from mgn.geometry.convex import (
 )
 from mgn.geometry.mesh import Mesh, mass_properties
 from mgn.objects import ObjectSpec, ToteSpec, builtin_objects, tote_mesh
+from mgn.objects.random_shapes import RANDOM_SOURCE_PREFIX
 from mgn.scene.penetration import (
     EDGE_SPACING,
     MeshCache,
@@ -140,7 +141,11 @@ def _simulate(
         raise InvalidArgumentError("drop_scene: expected at least one object, got none")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidArgumentError(f"drop_scene: seed must be an integer >= 0, got {seed!r}")
-    src = {k: os.fspath(Path(v).resolve()) for k, v in (sources or {}).items()}
+    src = {
+        k: os.fspath(v) if os.fspath(v).startswith(RANDOM_SOURCE_PREFIX)
+        else os.fspath(Path(v).resolve())
+        for k, v in (sources or {}).items()
+    }  # fmt: skip
     per_name: dict[str, tuple] = {}
     for spec in objects:
         if not isinstance(spec, ObjectSpec):

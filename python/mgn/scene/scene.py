@@ -15,8 +15,9 @@ JSON layout (``schema_version`` 1; the file is written and read by :mod:`mgn.io.
      "removed": [{"name": "pear", "source": "builtin", "reason": "left_tote"}],
      "stats": {"steps": 412, "simulated_time": 1.716, "settled": true, "max_penetration": 1e-4}}
 
-``source`` is ``"builtin"`` for the built-in library, else the path of the user-objects YAML
-file the object was read from (see :func:`mgn.objects.load_objects_yaml`).
+``source`` is ``"builtin"`` for the built-in library, ``random-shapes:...`` for a pool of
+random shapes (:func:`mgn.objects.random_shapes.random_shape_source`), else the path of the
+user-objects YAML file the object was read from (see :func:`mgn.objects.load_objects_yaml`).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from mgn.base.core_result import to_core
 from mgn.errors import InvalidArgumentError
 from mgn.geometry.mesh import Mesh
 from mgn.objects import ObjectSpec, ToteSpec, get_object, load_objects_yaml
+from mgn.objects.random_shapes import RANDOM_SOURCE_PREFIX, random_shapes_from_source
 
 __all__ = [
     "BUILTIN",
@@ -244,9 +246,15 @@ def _user_catalogue(path: str) -> dict[str, ObjectSpec]:
 
 
 def resolve_object(name: str, source: str) -> ObjectSpec:
-    """The :class:`ObjectSpec` named ``name`` from ``source`` (``"builtin"`` or a YAML path)."""
+    """The :class:`ObjectSpec` named ``name`` from ``source`` (``"builtin"``, a YAML path, or
+    a pool of random shapes: :func:`mgn.objects.random_shapes.random_shape_source`)."""
     if source == BUILTIN:
         return get_object(name)
+    if source.startswith(RANDOM_SOURCE_PREFIX):
+        pool = {s.name: s for s in random_shapes_from_source(source)}
+        if name not in pool:
+            raise InvalidArgumentError(f"object '{name}' not found in '{source}'")
+        return pool[name]
     catalogue = _user_catalogue(os.fspath(Path(source).resolve()))
     if name not in catalogue:
         raise InvalidArgumentError(
