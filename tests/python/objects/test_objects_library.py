@@ -10,7 +10,6 @@ from __future__ import annotations
 import hashlib
 import math
 import re
-import time
 
 import numpy as np
 import pytest
@@ -218,20 +217,17 @@ def _digest(objs: tuple[ObjectSpec, ...]) -> str:
     return h.hexdigest()
 
 
-def test_build_is_deterministic_and_fast() -> None:
+def test_build_is_deterministic() -> None:
     first = builtin_objects()
     digest = _digest(first)
     builtin_objects.cache_clear()
-    t0 = time.perf_counter()
     second = builtin_objects()
-    elapsed = time.perf_counter() - t0
     assert second is not first
     assert _digest(second) == digest
     for a, b in zip(first, second, strict=True):
         assert a == b
         assert np.array_equal(a.vertices, b.vertices)
         assert np.array_equal(a.faces, b.faces)
-    assert elapsed < 3.0, f"builtin_objects() took {elapsed:.2f} s"
 
 
 def test_get_object_lookup(objects: tuple[ObjectSpec, ...]) -> None:
