@@ -228,7 +228,8 @@ class _ViewCheck:
             layout = _json(self.path("_layout.json"), "_layout.json", self.bad)
         except _Stop:
             return None
-        self.occlusion(npz, ids, occ, vis_px, h5, order)
+        # Without layout labels ({v}_layout.json is {}), _order.json holds no rates.
+        self.occlusion(npz, ids, occ, vis_px, h5, order if layout != {} else None)
         self.depth_units(npz, ids, vis_px, h5)
         if layout == {}:  # written without layout labels (labels.layout: false)
             self.no_layout(order, n)
@@ -551,20 +552,22 @@ class _ViewCheck:
         occ: np.ndarray,
         vis_px: np.ndarray,
         h5: Mapping[str, np.ndarray],
-        order: Mapping[str, Any],
+        order: Mapping[str, Any] | None,
     ) -> None:
-        """The 4-decimal occlusion rates: masks, ``objects/occlusion``, order.json, the image."""
-        stored = np.array(
-            [_num(order.get(str(i + 1), {}).get("occlusion")) for i in range(len(occ))]
-        )
-        off = np.flatnonzero(~(np.abs(stored - occ) <= 1e-12))
-        if off.size:
-            i = int(off[0])
-            self.bad(
-                "_order.json",
-                f"occlusion of {i + 1} is {stored[i]}, its masks give "
-                f"{occ[i]} (1 - visible / amodal px, 4 decimals)",
+        """The 4-decimal occlusion rates: masks, ``objects/occlusion``, order.json (None: a
+        view without layout labels, whose order.json holds no rates), the image."""
+        if order is not None:
+            stored = np.array(
+                [_num(order.get(str(i + 1), {}).get("occlusion")) for i in range(len(occ))]
             )
+            off = np.flatnonzero(~(np.abs(stored - occ) <= 1e-12))
+            if off.size:
+                i = int(off[0])
+                self.bad(
+                    "_order.json",
+                    f"occlusion of {i + 1} is {stored[i]}, its masks give "
+                    f"{occ[i]} (1 - visible / amodal px, 4 decimals)",
+                )
         if not np.array_equal(h5["objects/occlusion"], occ.astype(np.float32)):
             self.bad(
                 "_scene.hdf5", "'objects/occlusion' differs from the 4-decimal rates of the masks"

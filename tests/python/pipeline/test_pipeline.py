@@ -177,6 +177,12 @@ def test_every_stored_pj_grasp_gets_a_physics_score_by_default(tmp_path: Path, e
                 assert np.isfinite(scene_sim).all(), name
     assert n_scene > 0
     assert "physics scores" not in report.format_summary()  # nothing capped to report
+    # Written without layout labels: _order.json holds no occlusion rates, and the dataset is
+    # still valid (the rates are checked in the masks, the HDF5 file and the image).
+    from mgn.io.validate import validate_dataset
+
+    assert json.loads((tmp_path / "ds" / "scene0" / "0_layout.json").read_text()) == {}
+    assert validate_dataset(tmp_path / "ds") == []
 
 
 def test_generate_says_where_the_time_went(
