@@ -91,6 +91,7 @@ class ShakeOptions:
     density_range: tuple[float, float] = (_CORE.density_min, _CORE.density_max)
     dt: float = _CORE.dt
     close_steps: int = _CORE.close_steps
+    close_dt: float = _CORE.close_dt
     shake_steps: int = _CORE.shake_steps
     rotate_steps: int = _CORE.rotate_steps
     gravity: float = _CORE.gravity
@@ -103,6 +104,7 @@ class ShakeOptions:
     pad_stiffness: float = _CORE.pad_stiffness
     pad_damping: float = _CORE.pad_damping
     controller_stiffness: float = _CORE.controller_stiffness
+    limit_controller_gain: bool = _CORE.limit_controller_gain
     inertia_floor: float = _CORE.inertia_floor
     contact_distance: float = _CORE.contact_distance
     settle_steps: int = _CORE.settle_steps
