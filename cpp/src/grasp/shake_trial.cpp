@@ -179,27 +179,6 @@ class HandPath {
   Vec3d axis_, centre_;
 };
 
-/// The closing phase's step and step counts (ShakeOptions::close_dt): close_steps and
-/// settle_steps are counts at dt; at another closing step they become the counts of the same
-/// durations, rounded to the nearest step (at least one where the option is on).
-struct ClosingSchedule {
-  double dt = 0;
-  int steps = 0;
-  int settle_steps = 0;
-};
-
-ClosingSchedule closing_schedule(const ShakeOptions& o) {
-  ClosingSchedule c;
-  c.dt = o.close_dt > 0 ? o.close_dt : o.dt;
-  const double ratio = o.dt / c.dt;
-  auto convert = [ratio](int n) {
-    return n > 0 ? std::max(1, static_cast<int>(std::lround(n * ratio))) : 0;
-  };
-  c.steps = convert(o.close_steps);
-  c.settle_steps = convert(o.settle_steps);
-  return c;
-}
-
 /// What a trial reports after every step (for recording).
 struct StepState {
   double time;
@@ -335,31 +314,27 @@ class TrialWorld {
     TrialOutcome out;
     double time = 0.0;
     Pose X_WH = path_.initial();
-    // Closing, gravity off, with the closing step (ShakeOptions::close_dt): its step counts
-    // are the options' (at dt) converted so that the durations stay.
-    const ClosingSchedule closing = closing_schedule(o_);
-    h_ = closing.dt;
     StepState last = state(time, ShakePhase::Close, X_WH);
     record(last);
 
+    // Closing, gravity off.
     int settled = 0;
-    for (int k = 0; k < closing.steps; ++k) {
+    for (int k = 0; k < o_.close_steps; ++k) {
       step(X_WH, X_WH, last);
-      time += h_;
+      time += o_.dt;
       ++out.steps;
       last = state(time, ShakePhase::Close, X_WH);
       record(last);
       const bool at_force = std::abs(0.5 * (last.force_left + last.force_right) - o_.grip_force) <
                             0.05 * o_.grip_force;
       settled = (last.touch_left && last.touch_right && at_force) ? settled + 1 : 0;
-      if (closing.settle_steps > 0 && settled >= closing.settle_steps) break;
+      if (o_.settle_steps > 0 && settled >= o_.settle_steps) break;
       if (o_.lost_contact_steps > 0 && !last.touch_left && !last.touch_right && d_ <= 0.0) {
         out.ended_early = true;  // closed on nothing
         return out;
       }
     }
 
-    if (h_ != o_.dt) set_step(o_.dt);
     world_.setGravity(btVector3(0, 0, btScalar(-kUnits.length * o_.gravity)));
     int lost[2] = {0, 0};
     // Held-load windows (ShakeOptions::hold_tolerance), in steps of each shake phase: if the
@@ -472,17 +447,17 @@ class TrialWorld {
   /// touches, then move by (mean pad force − grip force) / controller stiffness per step,
   /// limited to close_speed.
   double next_offset(const StepState& s) const {
-    const double vmax = o_.close_speed * h_;
+    const double vmax = o_.close_speed * o_.dt;
     if (!s.touch_left && !s.touch_right) return std::max(0.0, d_ - vmax);
     const double error = 0.5 * (s.force_left + s.force_right) - o_.grip_force;
     double stiffness = o_.controller_stiffness;
     if (o_.limit_controller_gain) {
-      // A move of the fingers by x changes the mean pad force by about n (k + c/h) x: n
-      // touching points per pad, each a spring k and a damper c moved at x/h. The controller
-      // moves by at most the error over that stiffness (loop gain <= 1), else it overshoots
-      // and, above 2, oscillates with a growing or period-2 force.
+      // A move of the fingers by x within one step changes the mean pad force by about
+      // n (k + c/dt) x: n touching points per pad, each a spring k and a damper c moved at
+      // x/dt. Moving by at most the error over that stiffness keeps the loop stable (see
+      // ShakeOptions::limit_controller_gain).
       const double points = 0.5 * (s.points_left + s.points_right);
-      stiffness = std::max(stiffness, points * (o_.pad_stiffness + o_.pad_damping / h_));
+      stiffness = std::max(stiffness, points * (o_.pad_stiffness + o_.pad_damping / o_.dt));
     }
     const double delta = std::clamp(error / stiffness, -vmax, vmax);
     return std::clamp(d_ + delta, 0.0, 0.5 * g_.max_opening);
@@ -501,7 +476,7 @@ class TrialWorld {
           static_cast<int>(std::ceil(o_.iterations_per_hull_contact * s.hull_contacts));
       world_.getSolverInfo().m_numIterations = std::max(base_iterations_, want);
     }
-    world_.stepSimulation(btScalar(h_), 0, btScalar(h_));
+    world_.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
     d_ = d_next;
     // The hand bodies jump to their end-of-step poses (velocity unchanged until the next step).
     palm_->setWorldTransform(kUnits.pose(palm_pose(X_WH_next)));
@@ -510,23 +485,6 @@ class TrialWorld {
       fingers_[side]->setWorldTransform(kUnits.pose(finger_pose(X_WH_next, side, d_)));
       fingers_[side]->setInterpolationWorldTransform(fingers_[side]->getWorldTransform());
     }
-  }
-
-  /// Switches the step to `h` (s). The contact impulses kept for warm starting are rescaled to
-  /// the new step (the same forces), and the last step's pad forces are read with the old one.
-  void set_step(double h) {
-    const btScalar scale = btScalar(h / h_);
-    const int n = dispatcher_.getNumManifolds();
-    for (int i = 0; i < n; ++i) {
-      btPersistentManifold* m = dispatcher_.getManifoldByIndexInternal(i);
-      for (int c = 0; c < m->getNumContacts(); ++c) {
-        btManifoldPoint& p = m->getContactPoint(c);
-        p.m_appliedImpulse *= scale;
-        p.m_appliedImpulseLateral1 *= scale;
-        p.m_appliedImpulseLateral2 *= scale;
-      }
-    }
-    h_ = h;
   }
 
   StepState state(double time, ShakePhase phase, const Pose& X_WH) {
@@ -559,7 +517,7 @@ class TrialWorld {
           touch = true;
           ++points;
         }
-        force += kUnits.force(p.getAppliedImpulse(), h_);
+        force += kUnits.force(p.getAppliedImpulse(), o_.dt);
       }
     }
     return s;
@@ -575,7 +533,6 @@ class TrialWorld {
   double d_ = 0;              // current inner-face offset of both fingers from the hand axis, m
   double radius_ = 0;         // object: largest distance of a hull vertex from the com, m
   int base_iterations_ = 1;   // solver iterations of this trial without per-hull ones
-  double h_ = 0;              // the current step, s (ShakeOptions::close_dt, then dt)
 
   physics::World physics_;  // Bullet's world (physics/world.hpp)
   btDiscreteDynamicsWorld& world_;
@@ -598,8 +555,6 @@ void ShakeOptions::validate() const {
   require(std::isfinite(density_max) && density_max >= density_min, "density_max",
           "a finite value >= density_min", density_max);
   require(std::isfinite(dt) && dt > 0 && dt <= 0.1, "dt", "a time step in (0, 0.1] s", dt);
-  require(std::isfinite(close_dt) && close_dt >= 0 && close_dt <= 0.1, "close_dt",
-          "0 (= dt) or a time step in (0, 0.1] s", close_dt);
   require(close_steps >= 1, "close_steps", "an integer >= 1", close_steps);
   require(shake_steps >= 0, "shake_steps", "an integer >= 0", shake_steps);
   require(rotate_steps >= 0, "rotate_steps", "an integer >= 0", rotate_steps);

@@ -91,7 +91,6 @@ class ShakeOptions:
     density_range: tuple[float, float] = (_CORE.density_min, _CORE.density_max)
     dt: float = _CORE.dt
     close_steps: int = _CORE.close_steps
-    close_dt: float = _CORE.close_dt
     shake_steps: int = _CORE.shake_steps
     rotate_steps: int = _CORE.rotate_steps
     gravity: float = _CORE.gravity

@@ -63,13 +63,7 @@ struct ShakeOptions {
   double density_min = 0.25;  ///< density (mass) factor, > 0
   double density_max = 1.0;   ///< factors = linspace(min, max, S)
   double dt = 1.0 / 400.0;    ///< simulation step, s
-  int close_steps = 800;      ///< maximum steps of the closing phase (gravity off), at dt
-  /// Step of the closing phase, s (0 = dt). The closing phase's step counts (close_steps,
-  /// settle_steps) are counts at dt: at another closing step they become the counts of the
-  /// same durations (rounded to the nearest step, at least 1). The shake phases run at dt from
-  /// the first step after the closing; the contact impulses that warm-start the solver are
-  /// rescaled to it. 0 or in (0, 0.1].
-  double close_dt = 0.0;
+  int close_steps = 800;      ///< maximum steps of the closing phase (gravity off)
   int shake_steps = 800;      ///< translational shake steps
   int rotate_steps = 600;     ///< rotational shake steps
   double gravity = 9.81;      ///< m/s², along −z of W (on during the shake phases)
@@ -92,14 +86,16 @@ struct ShakeOptions {
   /// Force controller: the fingers move by (mean pad force − grip_force)/controller_stiffness
   /// per step (N/m; larger = gentler), limited to close_speed.
   double controller_stiffness = 1e5;
-  /// Limit the force controller's gain to one: the stiffness above is raised to at least
-  /// n·(pad_stiffness + pad_damping/dt) for n = the mean number of contact points closer than
-  /// contact_distance per pad (what a move of the fingers does to the mean pad force in one
-  /// step), so that the controller does not overshoot. Without it a pad held by more than
-  /// controller_stiffness / (2 (pad_stiffness + pad_damping/dt)) points (about 5.5 at the
-  /// defaults: compounds held by several hulls) makes the force oscillate by tens of N from
-  /// step to step and the closing never settles. Changes nothing with fewer points.
-  bool limit_controller_gain = false;
+  /// Keep the force controller stable on many contact points: controller_stiffness is raised
+  /// to at least n·(pad_stiffness + pad_damping/dt), n = the mean number of contact points
+  /// closer than contact_distance per pad (how much the mean pad force changes in one step
+  /// when the fingers move). Without it the controller's force error e obeys
+  /// e' = (1 − α − β) e − β e'' (α = n·pad_stiffness/controller_stiffness, β = n·pad_damping/
+  /// (dt·controller_stiffness)), which diverges into a period-2 force oscillation of tens of N
+  /// once α + 2β > 2 (n > 7.7 at the defaults: compounds held by several hulls), and the
+  /// closing then never settles. Changes nothing while n <= 5.5 (one hull touches a pad with
+  /// at most 4 points).
+  bool limit_controller_gain = true;
   /// Inertia floor: every principal moment is raised to at least m·(inertia_floor·R)², R = the
   /// largest distance of a hull vertex from the centre of mass (0 = exact inertia). Bullet's
   /// sequential-impulse solver spins up small, light objects squeezed by a large grip force
