@@ -60,7 +60,8 @@ class ShakeOptions:
     contact point, ``pad_damping`` N s/m). ``limit_controller_gain`` (on by default) keeps the
     grip-force controller stable when a pad touches a compound at many points (its stiffness is
     raised to at least n (``pad_stiffness`` + ``pad_damping``/``dt``) for n points per pad;
-    nothing changes with at most 5 points, so never for one hull). ``staircase`` finds each grasp's success boundary
+    nothing changes with at most 5 points, so never for one hull; docs/models.md, "Grip-force
+    controller"). ``staircase`` finds each grasp's success boundary
     (success is monotone: more friction helps, more mass hurts) by galloping and bisection row
     by row, verifies the cells on both sides of it (in the lowest ``staircase_verify_share`` of
     the friction rows; 1 = all) and ``staircase_checks`` other inferred cells, and falls back

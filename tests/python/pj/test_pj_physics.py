@@ -83,7 +83,7 @@ def test_a_light_box_squeezed_far_beyond_its_weight_holds_in_every_cell():
 
 def slab_box(size, mass, n):
     """A box cut into n equal slabs along y (n convex parts), analytic mass properties."""
-    mesh, m, com, inertia = box_object(size, mass)
+    _, m, com, inertia = box_object(size, mass)
     parts = []
     for k in range(n):
         slab = mgn.make_box([size[0], size[1] / n, size[2]])
@@ -130,8 +130,12 @@ def test_limited_controller_gain_changes_nothing_on_one_hull():
     k, c = opts.pad_stiffness, opts.pad_damping / opts.dt
     assert 4 * (k + c) < opts.controller_stiffness
     grasp = centre_grasp(0.04)[None]
-    a = shake_scores(mesh, m, com, inertia, grasp, options=replace(opts, limit_controller_gain=False))
-    b = shake_scores(mesh, m, com, inertia, grasp, options=replace(opts, limit_controller_gain=True))
+    a = shake_scores(
+        mesh, m, com, inertia, grasp, options=replace(opts, limit_controller_gain=False)
+    )
+    b = shake_scores(
+        mesh, m, com, inertia, grasp, options=replace(opts, limit_controller_gain=True)
+    )
     np.testing.assert_array_equal(a.trial_success, b.trial_success)
     np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
 
