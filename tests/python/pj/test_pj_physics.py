@@ -96,7 +96,7 @@ def slab_box(size, mass, n):
 @pytest.mark.parametrize("slabs", [2, 4])
 def test_limited_controller_gain_settles_a_pad_on_many_points(slabs):
     """Each slab touches a pad with up to 4 points: 8-16 points per pad. The controller's force
-    error e_k+1 = (1 - a - b) e_k - b e_k-1 (a = n k / K, b = n c / (dt K) for n points of
+    error e[k+1] = (1 - a - b) e[k] + b e[k-1] (a = n k / K, b = n c / (dt K) for n points of
     stiffness k and damping c, controller stiffness K) diverges once a + 2b > 2, i.e. beyond
     ~7.7 points at the defaults. With the gain limited every closing settles at the grip force
     before close_steps; a 50 g box squeezed by 20 N with friction >= 0.5 is then held in every
