@@ -90,6 +90,7 @@ void bind_grasp_shake_trial(py::module_& m) {
       .def_readwrite("inertia_floor", &ShakeOptions::inertia_floor)
       .def_readwrite("contact_distance", &ShakeOptions::contact_distance)
       .def_readwrite("settle_steps", &ShakeOptions::settle_steps)
+      .def_readwrite("limit_controller_gain", &ShakeOptions::limit_controller_gain)
       .def_readwrite("lost_contact_steps", &ShakeOptions::lost_contact_steps)
       .def_readwrite("hold_tolerance", &ShakeOptions::hold_tolerance)
       .def_readwrite("smooth_shake", &ShakeOptions::smooth_shake)

@@ -188,6 +188,7 @@ struct StepState {
   bool touch_left, touch_right;
   double force_left, force_right;  // normal pad force of the last step, N
   int hull_contacts;               // (finger, object hull) pairs in contact
+  int points_left, points_right;   // contact points closer than contact_distance, per finger
 };
 
 /// The collision shapes of one shake_test call: the object's hulls (a compound if several) and
@@ -449,7 +450,16 @@ class TrialWorld {
     const double vmax = o_.close_speed * o_.dt;
     if (!s.touch_left && !s.touch_right) return std::max(0.0, d_ - vmax);
     const double error = 0.5 * (s.force_left + s.force_right) - o_.grip_force;
-    const double delta = std::clamp(error / (o_.controller_stiffness), -vmax, vmax);
+    double stiffness = o_.controller_stiffness;
+    if (o_.limit_controller_gain) {
+      // A move of the fingers by x within one step changes the mean pad force by about
+      // n (k + c/dt) x: n touching points per pad, each a spring k and a damper c moved at
+      // x/dt. Moving by at most the error over that stiffness keeps the loop stable (see
+      // ShakeOptions::limit_controller_gain).
+      const double points = 0.5 * (s.points_left + s.points_right);
+      stiffness = std::max(stiffness, points * (o_.pad_stiffness + o_.pad_damping / o_.dt));
+    }
+    const double delta = std::clamp(error / stiffness, -vmax, vmax);
     return std::clamp(d_ + delta, 0.0, 0.5 * g_.max_opening);
   }
 
@@ -487,6 +497,7 @@ class TrialWorld {
     s.touch_left = s.touch_right = false;
     s.force_left = s.force_right = 0.0;
     s.hull_contacts = 0;
+    s.points_left = s.points_right = 0;
     const int n = dispatcher_.getNumManifolds();
     for (int i = 0; i < n; ++i) {
       const btPersistentManifold* m = dispatcher_.getManifoldByIndexInternal(i);
@@ -499,9 +510,13 @@ class TrialWorld {
       s.hull_contacts += m->getNumContacts() > 0;  // one manifold per (finger, hull)
       bool& touch = side == 0 ? s.touch_left : s.touch_right;
       double& force = side == 0 ? s.force_left : s.force_right;
+      int& points = side == 0 ? s.points_left : s.points_right;
       for (int c = 0; c < m->getNumContacts(); ++c) {
         const btManifoldPoint& p = m->getContactPoint(c);
-        if (p.getDistance() < kUnits.length * o_.contact_distance) touch = true;
+        if (p.getDistance() < kUnits.length * o_.contact_distance) {
+          touch = true;
+          ++points;
+        }
         force += kUnits.force(p.getAppliedImpulse(), o_.dt);
       }
     }

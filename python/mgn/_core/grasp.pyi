@@ -555,6 +555,7 @@ class ShakeOptions:
     Options of the Bullet shake test (SI units; see mgn.pj.physics).
     """
 
+    limit_controller_gain: bool
     polyhedral_contacts: bool
     smooth_shake: bool
     staircase: bool

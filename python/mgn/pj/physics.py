@@ -57,7 +57,11 @@ class ShakeOptions:
     ``cpp/include/mgn/grasp/shake_trial.hpp``):
     ``settle_steps`` and ``lost_contact_steps`` end phases and trials early (0 disables them),
     ``inertia_floor`` stabilises light objects, the pads are soft (``pad_stiffness`` N/m per
-    contact point, ``pad_damping`` N s/m). ``staircase`` finds each grasp's success boundary
+    contact point, ``pad_damping`` N s/m). ``limit_controller_gain`` (on by default) keeps the
+    grip-force controller stable when a pad touches a compound at many points (its stiffness is
+    raised to at least n (``pad_stiffness`` + ``pad_damping``/``dt``) for n points per pad;
+    nothing changes with at most 5 points, so never for one hull; docs/models.md, "Grip-force
+    controller"). ``staircase`` finds each grasp's success boundary
     (success is monotone: more friction helps, more mass hurts) by galloping and bisection row
     by row, verifies the cells on both sides of it (in the lowest ``staircase_verify_share`` of
     the friction rows; 1 = all) and ``staircase_checks`` other inferred cells, and falls back
@@ -103,6 +107,7 @@ class ShakeOptions:
     pad_stiffness: float = _CORE.pad_stiffness
     pad_damping: float = _CORE.pad_damping
     controller_stiffness: float = _CORE.controller_stiffness
+    limit_controller_gain: bool = _CORE.limit_controller_gain
     inertia_floor: float = _CORE.inertia_floor
     contact_distance: float = _CORE.contact_distance
     settle_steps: int = _CORE.settle_steps

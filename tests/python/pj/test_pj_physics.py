@@ -81,6 +81,65 @@ def test_a_light_box_squeezed_far_beyond_its_weight_holds_in_every_cell():
     assert r.trial_success.all(), r.score
 
 
+def slab_box(size, mass, n):
+    """A box cut into n equal slabs along y (n convex parts), analytic mass properties."""
+    _, m, com, inertia = box_object(size, mass)
+    parts = []
+    for k in range(n):
+        slab = mgn.make_box([size[0], size[1] / n, size[2]])
+        v = np.asarray(slab.vertices).copy()
+        v[:, 1] += -size[1] / 2 + (k + 0.5) * size[1] / n
+        parts.append(mgn.Mesh(v, np.asarray(slab.faces)))
+    return parts, m, com, inertia
+
+
+@pytest.mark.parametrize("slabs", [2, 4])
+def test_limited_controller_gain_settles_a_pad_on_many_points(slabs):
+    """Each slab touches a pad with up to 4 points: 8-16 points per pad. The controller's force
+    error e[k+1] = (1 - a - b) e[k] + b e[k-1] (a = n k / K, b = n c / (dt K) for n points of
+    stiffness k and damping c, controller stiffness K) diverges once a + 2b > 2, i.e. beyond
+    ~7.7 points at the defaults. With the gain limited every closing settles at the grip force
+    before close_steps; a 50 g box squeezed by 20 N with friction >= 0.5 is then held in every
+    cell (statics)."""
+    parts, m, com, inertia = slab_box([0.04, 0.06, 0.03], 0.05, slabs)
+    base = ShakeOptions(grid=3, num_threads=1, limit_controller_gain=True)
+    k, c, big_k = base.pad_stiffness, base.pad_damping / base.dt, base.controller_stiffness
+    points_unstable = 2 * big_k / (k + 2 * c)
+    assert 4 < points_unstable < 2 * 4
+    closing = replace(base, shake_steps=0, rotate_steps=0)
+    r = shake_scores(parts, m, com, inertia, centre_grasp(0.04)[None], options=closing)
+    assert (r.trial_steps < base.close_steps).all(), r.trial_steps
+    held = shake_scores(parts, m, com, inertia, centre_grasp(0.04)[None], options=base)
+    assert held.trial_success.all(), held.score
+
+
+def test_the_controller_without_the_gain_limit_oscillates_on_two_slabs():
+    # The case the limit is for: at least one closing of the 2-slab box never settles.
+    parts, m, com, inertia = slab_box([0.04, 0.06, 0.03], 0.05, 2)
+    opts = ShakeOptions(grid=3, num_threads=1, shake_steps=0, rotate_steps=0)
+    opts = replace(opts, limit_controller_gain=False)
+    r = shake_scores(parts, m, com, inertia, centre_grasp(0.04)[None], options=opts)
+    assert (r.trial_steps == opts.close_steps).any(), r.trial_steps
+
+
+def test_limited_controller_gain_changes_nothing_on_one_hull():
+    """One hull touches a pad with at most 4 points (one manifold): 4 (k + c/dt) = 7.2e4 N/m,
+    below controller_stiffness, so the limit never applies."""
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.3)
+    opts = ShakeOptions(grid=3, friction_range=(0.2, 1.0), num_threads=1)
+    k, c = opts.pad_stiffness, opts.pad_damping / opts.dt
+    assert 4 * (k + c) < opts.controller_stiffness
+    grasp = centre_grasp(0.04)[None]
+    a = shake_scores(
+        mesh, m, com, inertia, grasp, options=replace(opts, limit_controller_gain=False)
+    )
+    b = shake_scores(
+        mesh, m, com, inertia, grasp, options=replace(opts, limit_controller_gain=True)
+    )
+    np.testing.assert_array_equal(a.trial_success, b.trial_success)
+    np.testing.assert_array_equal(a.trial_steps, b.trial_steps)
+
+
 def test_heavy_slippery_wide_object_is_dropped_early():
     mesh, m, com, inertia = box_object([0.07, 0.06, 0.06], 3.0)
     opts = ShakeOptions(grid=2, friction_range=(0.05, 0.15), num_threads=2)

@@ -86,6 +86,16 @@ struct ShakeOptions {
   /// Force controller: the fingers move by (mean pad force − grip_force)/controller_stiffness
   /// per step (N/m; larger = gentler), limited to close_speed.
   double controller_stiffness = 1e5;
+  /// Keep the force controller stable on many contact points: controller_stiffness is raised
+  /// to at least n·(pad_stiffness + pad_damping/dt), n = the mean number of contact points
+  /// closer than contact_distance per pad (how much the mean pad force changes in one step
+  /// when the fingers move). Without it the controller's force error e obeys
+  /// e[k+1] = (1 − α − β) e[k] + β e[k−1] (α = n·pad_stiffness/controller_stiffness,
+  /// β = n·pad_damping/(dt·controller_stiffness)), which diverges into a period-2 force
+  /// oscillation of tens of N once α + 2β > 2 (n > 7.7 at the defaults: compounds held by
+  /// several hulls), and the closing then never settles. Changes nothing while n <= 5.5 (one
+  /// hull touches a pad with at most 4 points).
+  bool limit_controller_gain = true;
   /// Inertia floor: every principal moment is raised to at least m·(inertia_floor·R)², R = the
   /// largest distance of a hull vertex from the centre of mass (0 = exact inertia). Bullet's
   /// sequential-impulse solver spins up small, light objects squeezed by a large grip force
