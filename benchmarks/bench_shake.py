@@ -1,17 +1,19 @@
 """Physics shake test: mgn.pj.physics.shake_scores against the same trial driven from pybullet.
 
 One trial = one grasp × one (friction, density factor) setting, the full close – translational
-shake – rotational shake sequence (MetaGraspNet: dt 1/200 s, up to 400 + 400 + 300 steps). mgn
-runs every trial in C++ (one small Bullet world each, trials on threads); the peer is the same
-trial written with pybullet as a user would: the object as a convex mesh, the two fingers as
-boxes held by fixed constraints that follow the hand path, soft pads (contact stiffness and
-damping), the same grip-force controller and the same early-exit rules (settling, lost contact;
-not the held-load windows, so the peer row runs mgn with ``hold_tolerance=0``), in a Python loop.
+shake – rotational shake sequence on mgn's default schedule (``ShakeOptions``: dt 1/400 s, up to
+800 + 800 + 600 steps; MetaGraspNet's phases last as long at 1/200 s). mgn runs every trial in
+C++ (one small Bullet world each, trials on threads); the peer is the same trial written with
+pybullet as a user would: the object as a convex mesh, the two fingers as boxes held by fixed
+constraints that follow the hand path, soft pads (contact stiffness and damping), the same
+grip-force controller, time step and step counts (read from ``ShakeOptions``) and the same
+early-exit rules (settling, lost contact; not the held-load windows, so the peer row runs mgn
+with ``hold_tolerance=0``), in a Python loop.
 
 Besides trials/s (mgn's defaults, held-load windows on), the rows report simulated steps/s, the
-share of trials that ended early, how many outcomes change when mgn runs MetaGraspNet's full
-step counts (no settle shortcut, no early exit, no held-load window), and trials/s and outcome
-agreement of the faster GJK contact mode.
+share of trials that ended early, how many outcomes change when mgn runs the full step counts
+(no settle shortcut, no early exit, no held-load window), and trials/s and outcome agreement of
+the faster GJK contact mode.
 """
 
 from __future__ import annotations
@@ -31,7 +33,6 @@ from .common import (
 )
 
 GRIP_FORCE = 20.0
-DT = 1.0 / 200.0
 # The peer gets mgn's inertia floor m R^2 and more solver iterations for light objects (see
 # cpp/include/mgn/grasp/shake_trial.hpp). It stays in metres (L = 1): pybullet's own Bullet build
 # and mesh margins handle centimetre contacts there, and it misses the ball in decimetres.
@@ -109,10 +110,14 @@ def _quat(R: np.ndarray) -> list[float]:
 
 
 class PeerTrial:
-    """One shake trial in a fresh pybullet world (DIRECT)."""
+    """One shake trial in a fresh pybullet world (DIRECT), on the schedule of ``opts`` (mgn's
+    ``ShakeOptions``: time step, step counts of each phase, settle and lost-contact counts,
+    finger speed limit and the force controller's gain)."""
 
-    def __init__(self, pb: Any, gripper: Any, mesh: Any, mass: float, inertia: np.ndarray):
-        self.pb, self.g = pb, gripper
+    def __init__(
+        self, pb: Any, gripper: Any, mesh: Any, mass: float, inertia: np.ndarray, opts: Any
+    ):
+        self.pb, self.g, self.o = pb, gripper, opts
         self.vertices = np.asarray(mesh.vertices, dtype=np.float64)
         radius = float(np.linalg.norm(self.vertices, axis=1).max())
         self.mass = mass
@@ -127,8 +132,9 @@ class PeerTrial:
             pb.disconnect(cid)
 
     def _run(self, cid, grasp, friction, density, angle, phi):
-        pb, g = self.pb, self.g
-        pb.setTimeStep(DT, physicsClientId=cid)
+        pb, g, o = self.pb, self.g, self.o
+        dt = o.dt
+        pb.setTimeStep(dt, physicsClientId=cid)
         boost = int(np.clip(np.ceil(GRIP_FORCE / (150 * self.mass * density * 9.81)), 1, 8))
         pb.setPhysicsEngineParameter(numSolverIterations=10 * boost, physicsClientId=cid)
         pb.setGravity(0, 0, 0, physicsClientId=cid)
@@ -212,52 +218,54 @@ class PeerTrial:
                 pos, orn = finger_pose(R_WH, t_WH, side, dd)
                 pb.changeConstraint(cons[side], pos, orn, maxForce=MAX_FORCE, physicsClientId=cid)
 
-        steps, vmax = 0, 0.1 * DT
+        steps, vmax = 0, o.close_speed * dt
         touch, force = [False, False], [0.0, 0.0]
         settled = 0
-        for _ in range(400):  # close, gravity off
+        gain = o.controller_stiffness
+        for _ in range(o.close_steps):  # close, gravity off
             if not any(touch):
                 d = max(0.0, d - vmax)
             else:
-                d += float(np.clip((0.5 * sum(force) - GRIP_FORCE) / 1e5, -vmax, vmax))
+                d += float(np.clip((0.5 * sum(force) - GRIP_FORCE) / gain, -vmax, vmax))
             move(R_WH0, np.zeros(3), d)
             pb.stepSimulation(physicsClientId=cid)
             steps += 1
             touch, force = sense()
             ok = all(touch) and abs(0.5 * sum(force) - GRIP_FORCE) < 0.05 * GRIP_FORCE
             settled = settled + 1 if ok else 0
-            if settled >= 10:
+            if settled >= o.settle_steps:
                 break
             if not any(touch) and d <= 0.0:
                 return False, True, steps
         pb.setGravity(0, 0, -9.81 * L, physicsClientId=cid)
-        omega_s, omega_r = 2 * np.pi * 2 / (400 * DT), 2 * np.pi / (300 * DT)
-        amp = 0.5 / omega_s
+        omega_s = 2 * np.pi * o.shake_cycles / (o.shake_steps * dt)
+        omega_r = 2 * np.pi * o.rotate_cycles / (o.rotate_steps * dt)
+        amp = o.shake_speed / omega_s
         axis = np.array([np.cos(phi), np.sin(phi), 0.0])
         centre = np.array([0.0, 0.0, depth])
         lost = [0, 0]
-        for phase, n in ((1, 400), (2, 300)):
+        for phase, n in ((1, o.shake_steps), (2, o.rotate_steps)):
             for k in range(n):
-                t = (k + 1) * DT
+                t = (k + 1) * dt
                 if phase == 1:
                     R_WH, t_WH = R_WH0, R_WH0 @ np.array([0, 0, amp * np.sin(omega_s * t)])
                 else:
                     R_HH = _axis_angle(axis, angle * np.sin(omega_r * t))
                     R_WH, t_WH = R_WH0 @ R_HH, R_WH0 @ (centre - R_HH @ centre)
                 if any(touch):
-                    d += float(np.clip((0.5 * sum(force) - GRIP_FORCE) / 1e5, -vmax, vmax))
+                    d += float(np.clip((0.5 * sum(force) - GRIP_FORCE) / gain, -vmax, vmax))
                 move(R_WH, t_WH, d)
                 pb.stepSimulation(physicsClientId=cid)
                 steps += 1
                 touch, force = sense()
                 lost = [0 if touch[i] else lost[i] + 1 for i in (0, 1)]
-                if max(lost) >= 10:
+                if max(lost) >= o.lost_contact_steps:
                     return False, True, steps
         return all(touch), False, steps
 
 
-def peer_scores(pb, gripper, mesh, mass, inertia, grasps, frictions, densities, seed_angles):
-    trial = PeerTrial(pb, gripper, mesh, mass, inertia)
+def peer_scores(pb, gripper, mesh, mass, inertia, grasps, frictions, densities, seed_angles, opts):
+    trial = PeerTrial(pb, gripper, mesh, mass, inertia, opts)
     out = []
     k = 0
     for grasp in grasps:
@@ -363,6 +371,8 @@ def _object_rows(
         peer_status="not run on the full grid (see the next row)",
     )
     steps_rate = r.total_steps / timings[f"mgn/{threads[-1]}"].median
+    d = ShakeOptions()
+    full_steps = d.close_steps + d.shake_steps + d.rotate_steps
     same = float(np.mean(r.trial_success == full.trial_success))
     t1 = timings["mgn/1"]
     per_cpu_s = r.num_trials / float(np.median(t1.cpu))
@@ -370,9 +380,9 @@ def _object_rows(
         f"{per_cpu_s:,.0f} trials per CPU-second with 1 thread (what a free core gives; "
         f"the machine was shared: load average {load_average()})",
         f"{steps_rate:,.0f} simulated steps/s with {threads[-1]} threads; "
-        f"{r.total_steps / r.num_trials:.0f} steps per trial (full sequence: 1,100)",
+        f"{r.total_steps / r.num_trials:.0f} steps per trial (full sequence: {full_steps:,})",
         f"{percent(r.early_fraction)} of trials ended early; scores {np.round(r.score, 2)}",
-        f"outcomes equal to MetaGraspNet's full step counts (no shortcuts): {percent(same)}",
+        f"outcomes equal to the full step counts (no shortcuts): {percent(same)}",
     ]
     gjk = results["gjk/1"]
     gjk_cpu = float(np.median(timings["gjk/1"].cpu))
@@ -400,7 +410,9 @@ def _object_rows(
         "mgn/1": lambda: shake_scores(mesh, mass, np.zeros(3), inertia, g2, gripper, opts)
     }
     if pb is not None:
-        cases2["peer"] = lambda: peer_scores(pb, gripper, mesh, mass, inertia, g2, fr, de, angles)
+        cases2["peer"] = lambda: peer_scores(
+            pb, gripper, mesh, mass, inertia, g2, fr, de, angles, opts
+        )
     res2 = {k: fn() for k, fn in cases2.items()}
     t2 = measure_alternating(cases2, max(1, min(repeats, 3)))
     row2 = Row(
