@@ -107,6 +107,25 @@ def write_atomic(path: Path, text: str) -> None:
     tmp.replace(path)
 
 
+def previous_runs(json_path: Path) -> list[dict[str, str]]:
+    """Command, date, mode and load averages of the run that wrote ``json_path`` and of the runs
+    whose rows it kept in turn (newest first): where an ``--only`` run's kept rows come from."""
+    try:
+        doc = json.loads(json_path.read_text())
+        machine = doc.get("machine", {})
+        run = {
+            "command": str(doc["command"]),
+            "date_utc": str(doc["date_utc"]),
+            "mode": str(doc["mode"]),
+            "load_average_at_start": str(machine.get("load_average_at_start", "?")),
+            "load_average_at_end": str(machine.get("load_average_at_end", "?")),
+        }
+    except (OSError, ValueError, KeyError, AttributeError):
+        return []
+    older = doc.get("kept_from", []) if doc.get("kept_rows") else []
+    return [run] + [r for r in older if isinstance(r, dict)]
+
+
 def merge_previous_rows(json_path: Path, rows: list[Row], only: set[str]) -> tuple[list[Row], int]:
     """The rows of an ``--only`` run merged into the previous run's table: rows of the suites not
     run now are kept in their places; a previous row is replaced if its suite was run now or (rows
@@ -171,8 +190,15 @@ def render_page(doc: dict[str, Any], rows: list[Row], checks: list[dict[str, Any
     table = markdown_table(rows, threads)
     notes = [f"- {r.case}: {'; '.join(r.notes)}" for r in rows if r.notes]
     kept = doc.get("kept_rows", 0)
+    runs = [
+        f"`{r['command']}` on {r['date_utc']}, {r['mode']} mode, load average "
+        f"{r['load_average_at_start']} at start and {r['load_average_at_end']} at end"
+        for r in doc.get("kept_from") or []
+    ]
+    origin = f", measured by {'; and by '.join(reversed(runs))}" if runs else ""
     kept_note = (
-        f" The table keeps {kept} row(s) of other suites from the previous run's results.json."
+        f" The table keeps {kept} row(s) of other suites from the previous run's results.json"
+        f"{origin}."
         if kept
         else ""
     )
@@ -329,8 +355,11 @@ def main(argv: list[str] | None = None) -> int:
         rows += measured
     new_rows = list(rows)
     kept = 0
+    kept_from = None
     if args.only:
-        rows, kept = merge_previous_rows(args.out.with_name("results.json"), rows, set(args.only))
+        previous_json = args.out.with_name("results.json")
+        rows, kept = merge_previous_rows(previous_json, rows, set(args.only))
+        kept_from = previous_runs(previous_json) if kept else None
     log("benchmarks: machine limits")
     limits = measure_limits(mgn, quick=args.quick, repeats=repeats, log=log)
     elapsed = time.perf_counter() - started
@@ -343,6 +372,7 @@ def main(argv: list[str] | None = None) -> int:
         "repeats": repeats,
         "elapsed_seconds": elapsed,
         "kept_rows": kept,
+        **({"kept_from": kept_from} if kept_from else {}),
         "mgn_status": mgn_status or "ok",
         "machine": machine,
         "mgn_threads": threads,

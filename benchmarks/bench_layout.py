@@ -66,15 +66,22 @@ def peer_layout(ndimage: Any, view: dict[str, np.ndarray]) -> dict[str, np.ndarr
     occludes = both & (S >= MIN_PX) & (S >= FRACTION * (S + S.T))  # [a, b]: a occludes b
     np.fill_diagonal(occludes, False)
     parent = occludes.T  # [b, a]
-    # Shared boundaries: child pixels with a parent among their 4 neighbours.
-    pad = np.pad(visible, 1)
-    neighbours = [pad[:-2, 1:-1], pad[2:, 1:-1], pad[1:-1, :-2], pad[1:-1, 2:]]
+
+    # The parent's own stretch of boundary (cpp/include/mgn/scene/layout.hpp): child pixels p
+    # with a 4-neighbour q that shows the parent, lies inside the child's amodal mask and is in
+    # front of p (depth(q) < depth(p)).
+    def shifted(img: np.ndarray, fill: Any) -> list[np.ndarray]:
+        pad = np.pad(img, 1, constant_values=fill)
+        return [pad[:-2, 1:-1], pad[2:, 1:-1], pad[1:-1, :-2], pad[1:-1, 2:]]
+
+    depth = view["depth"]
+    vis_nb, depth_nb = shifted(visible, 0), shifted(depth, np.inf)
     edge = np.zeros((n, n), np.int64)
     for b, a in np.argwhere(parent):
         child = visible == b + 1
         touch = np.zeros_like(child)
-        for nb in neighbours:
-            touch |= nb == a + 1
+        for nv, nd, na in zip(vis_nb, depth_nb, shifted(amodal[b], False), strict=True):
+            touch |= (nv == a + 1) & na & (nd < depth)
         edge[b, a] = int(np.count_nonzero(child & touch))
     regions = np.zeros(n, np.int64)
     for i in np.flatnonzero(vis_px):

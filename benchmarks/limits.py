@@ -237,7 +237,9 @@ FLOORS: tuple[Floor, ...] = (
     Floor("rendering", r"RGB \+ z-depth \+ instance ids", 6.0, None),  # 9.98
     # Path tracing against Cycles + OIDN and Mitsuba 3 (both on 2 threads).
     Floor("path tracing", r"16 spp \+ OIDN$", 1.5, None),  # 2.66
-    Floor("path tracing", r"16 spp$", 1.5, None),  # 2.69
+    # Mitsuba 3 JIT-compiles for the machine's widest vector unit: its ratio moved 2.69 -> 1.18
+    # between two 2-core EPYC machines with mgn unchanged; floor from the second (decision 0063).
+    Floor("path tracing", r"16 spp$", 0.7, None),  # 1.18
     # Layout against NumPy / SciPy (1 thread).
     Floor("layout", r"relations \+ layers \+ difficulty", 10.0),  # 18.1
     # Lens against OpenCV (mgn is slower here; the floor guards against getting slower still).

@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from benchmarks.__main__ import main, rows_out_of_sync
+from benchmarks.__main__ import main, previous_runs, render_page, rows_out_of_sync
 from benchmarks.common import Row, Timing
 from benchmarks.limits import FLOORS, Floor, gate, gate_failures
 
@@ -137,3 +137,34 @@ def test_the_page_is_rewritten_from_stored_results_and_the_gate_fails(tmp_path: 
     assert rows_out_of_sync(out) is None  # results.json beside the page holds every row
     # Without --gate the page is written and the run succeeds.
     assert main(["--from-results", str(stored), "--out", str(out)]) == 0
+
+
+def test_an_only_run_names_the_runs_whose_rows_it_keeps(tmp_path: Path) -> None:
+    rows = [_row("lens", "undistortion map, 100×100", {1: 0.1}, 0.2)]
+    machine = {"load_average_at_start": "0.1 0.2 0.3", "load_average_at_end": "1.0 1.1 1.2"}
+    older = {"command": "python -m benchmarks", "date_utc": "2026-12-06 10:00 UTC",
+             "mode": "full", "machine": machine, "kept_rows": 0, "rows": []}  # fmt: skip
+    (tmp_path / "results.json").write_text(json.dumps(older))
+    assert previous_runs(tmp_path / "results.json") == [
+        {"command": "python -m benchmarks", "date_utc": "2026-12-06 10:00 UTC", "mode": "full",
+         "load_average_at_start": "0.1 0.2 0.3", "load_average_at_end": "1.0 1.1 1.2"}
+    ]  # fmt: skip
+    # A run that itself kept rows passes on where they came from, newest first.
+    newer = dict(older, command="python -m benchmarks --only lens", kept_rows=3,
+                 kept_from=previous_runs(tmp_path / "results.json"))  # fmt: skip
+    (tmp_path / "results.json").write_text(json.dumps(newer))
+    runs = previous_runs(tmp_path / "results.json")
+    assert [r["command"] for r in runs] == ["python -m benchmarks --only lens",
+                                            "python -m benchmarks"]  # fmt: skip
+    assert previous_runs(tmp_path / "missing.json") == []
+    doc = dict(newer, repeats=3, elapsed_seconds=1.0, mgn_status="ok", mgn_threads=[1],
+               rows=[r.to_json() for r in rows], limits={}, limit_shares=[], kept_from=runs,
+               machine=dict(machine, cpu_model="c", logical_cpus=2, physical_cores=2,
+                            usable_cpus=2, ram_gib=1.0, os="o", kernel="k", python="3",
+                            mgn_revision="r", versions={}))  # fmt: skip
+    page = render_page(doc, rows, gate(rows))
+    assert "keeps 3 row(s) of other suites" in page
+    assert (
+        "measured by `python -m benchmarks` on 2026-12-06 10:00 UTC, full mode, load average "
+        "0.1 0.2 0.3 at start and 1.0 1.1 1.2 at end; and by `python -m benchmarks --only lens`"
+    ) in page
