@@ -19,7 +19,9 @@ low enough that another machine, another load or run-to-run noise stays above it
 10-30 % between machines, much less than absolute rates), high enough that losing a fast path
 (a packet path, a pre-test, a thread pool) falls below it. The floors apply to the 1-thread
 ratio (mgn on one core against the peer as it comes) where mgn was timed on one thread, else to
-the ratio at the most threads measured.
+the ratio at the most threads measured. The Mitsuba 3 floor is the exception: that peer compiles
+itself for the machine's vector unit, its ratio moved 2.3x between two such machines, and its floor
+is about 60 % of the ratio of the current page's machine (docs/decisions/0063).
 """
 
 from __future__ import annotations
