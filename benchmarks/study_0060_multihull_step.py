@@ -101,29 +101,37 @@ def options(setting: str) -> Any:
     return ShakeOptions(**kw)
 
 
-def pick(n: int, every: int) -> np.ndarray:
-    return np.arange(0, 32, every)[:n]
+def pick(n: int, every: int, offset: int = 0) -> np.ndarray:
+    return np.arange(offset, 32, every)[:n]
 
 
-def run(name: str, setting: str, n: int, every: int) -> None:
+def run(name: str, setting: str, n: int, every: int, offset: int, div: int, tag: str) -> None:
+    """Grasp k of the 32 draws the random streams of grasp k // div (div = every: its position
+    in the list), so a subset (offset) repeats the trials of the full list."""
+    from dataclasses import replace
+
     from mgn.pj.physics import shake_scores
 
     inp = load(name)
-    idx = pick(n, every)
+    idx = pick(n, every, offset)
     o = options(setting)
     c0 = time.process_time()
-    r = shake_scores(inp["parts"], inp["mass"], inp["com"], inp["inertia"], inp["rows"][idx],
-                     None, o)  # fmt: skip
+    res = [
+        shake_scores(inp["parts"], inp["mass"], inp["com"], inp["inertia"], inp["rows"][[k]],
+                     None, replace(o, first_grasp_index=int(k) // div))  # fmt: skip
+        for k in idx
+    ]
     cpu = time.process_time() - c0
+    succ = np.concatenate([np.asarray(r.trial_success) for r in res])
+    steps = np.concatenate([np.asarray(r.trial_steps) for r in res])
+    score = np.concatenate([np.asarray(r.score) for r in res])
     out = {
         "object": name, "setting": setting, "grasps": idx.tolist(), "cpu_s": cpu,
-        "success": np.asarray(r.trial_success).astype(int).tolist(),
-        "steps": np.asarray(r.trial_steps).astype(int).tolist(),
-        "score": np.asarray(r.score).tolist(), "load": os.getloadavg()[0],
+        "success": succ.astype(int).tolist(), "steps": steps.astype(int).tolist(),
+        "score": score.tolist(), "load": os.getloadavg()[0],
     }  # fmt: skip
-    (DATA / f"grid_{name}_{setting}_{n}x{every}.json").write_text(json.dumps(out))
-    steps = np.asarray(r.trial_steps)
-    print(f"{name} {setting} {len(idx)} grasps: mean score {np.mean(r.score):.3f} CPU-s {cpu:.1f} "
+    (DATA / f"grid_{name}_{setting}_{tag}.json").write_text(json.dumps(out))
+    print(f"{name} {setting} {len(idx)} grasps: mean score {np.mean(score):.3f} CPU-s {cpu:.1f} "
           f"({cpu / steps.size:.4f}/trial, {steps.mean():.0f} steps/trial) load {out['load']:.1f}")  # fmt: skip
 
 
@@ -197,13 +205,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--grasps", type=int, default=16)
     p.add_argument("--every", type=int, default=2)
     p.add_argument("--limit", type=int, default=12)
+    p.add_argument("--offset", type=int, default=0)
+    p.add_argument("--div", type=int, default=0)
     a = p.parse_args(argv)
-    tag = f"{a.grasps}x{a.every}"
+    tag = f"{a.grasps}x{a.every}" + (f"o{a.offset}" if a.offset else "")
     if a.cmd == "capture":
         capture(a.object)
     elif a.cmd == "run":
         for s in a.settings:
-            run(a.object, s, a.grasps, a.every)
+            run(a.object, s, a.grasps, a.every, a.offset, a.div or a.every, tag)
     elif a.cmd == "compare":
         compare(a.object, a.settings[0], a.settings[1:], tag)
     elif a.cmd == "phase":
