@@ -72,7 +72,7 @@ def _cmd_graspnet(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``export`` (with ``export bop`` and ``export graspnet``) to the ``mgn`` subcommands."""
     export = sub.add_parser("export", help="write a dataset in another layout (BOP, GraspNet)")
     esub = export.add_subparsers(dest="export_cmd", required=True)

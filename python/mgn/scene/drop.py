@@ -146,7 +146,7 @@ def _simulate(
         else os.fspath(Path(v).resolve())
         for k, v in (sources or {}).items()
     }  # fmt: skip
-    per_name: dict[str, tuple] = {}
+    per_name: dict[str, tuple[Any, ...]] = {}
     for spec in objects:
         if not isinstance(spec, ObjectSpec):
             raise InvalidArgumentError(
@@ -350,7 +350,7 @@ def _separating_move(
         lo, hi = (lo, mid) if clear(mid, EDGE_SPACING) else (mid, hi)
     moved = X.copy()
     moved[:3, 3] += (hi + _SEPARATION_MARGIN) * direction
-    return moved
+    return np.asarray(moved)
 
 
 def _lower(meshes: Sequence[Mesh], poses: np.ndarray, tote: ToteSpec, cache: MeshCache) -> None:

@@ -97,7 +97,7 @@ class _PointGrid:
         begin, end = self.start[first], self.start[first + (c1[2] - c0[2] + 1)]
         count = end - begin
         offset = np.repeat(begin - (np.cumsum(count) - count), count)
-        return self.order[np.arange(int(count.sum())) + offset]
+        return np.asarray(self.order[np.arange(int(count.sum())) + offset])
 
     def candidates_rotated(
         self,
@@ -124,7 +124,7 @@ class _PointGrid:
         begin, end = self.start[first], self.start[first + 1]
         count = end - begin
         offset = np.repeat(begin - (np.cumsum(count) - count), count)
-        return self.order[np.arange(int(count.sum())) + offset]
+        return np.asarray(self.order[np.arange(int(count.sum())) + offset])
 
 
 class MeshCache:
@@ -251,7 +251,7 @@ def point_triangle_distance(
             1.0,
         )
         best = np.minimum(best, np.linalg.norm(p - (s + u[..., None] * se), axis=-1))
-    return best.min(axis=1)
+    return np.asarray(best.min(axis=1))
 
 
 def edge_points(mesh: Mesh, spacing: float = EDGE_SPACING) -> npt.NDArray[np.float64]:
@@ -281,13 +281,13 @@ def _inside(scene: RayScene, points: np.ndarray) -> np.ndarray:
 
     def parity(p: np.ndarray, direction: np.ndarray) -> np.ndarray:
         d = np.broadcast_to(direction, p.shape)
-        return scene.intersect_all(p, d, num_threads=1).counts() % 2 == 1
+        return np.asarray(scene.intersect_all(p, d, num_threads=1).counts() % 2 == 1)
 
     first, second = parity(points, _PARITY[0]), parity(points, _PARITY[1])
     inside = first & second
     split = np.flatnonzero(first != second)  # the third ray decides
     inside[split] = parity(points[split], _PARITY[2])
-    return inside
+    return np.asarray(inside)
 
 
 @dataclass(frozen=True)
@@ -576,7 +576,7 @@ def _in_box(
     for k in (1, 2):
         inside &= p[:, k] >= lo[k]
         inside &= p[:, k] <= hi[k]
-    return inside
+    return np.asarray(inside)
 
 
 # m: a box carried into another frame is widened by this before it selects points there, so that
@@ -623,7 +623,7 @@ class OverlapSweep:
         :func:`meshes_overlap` forms it)."""
         moved = self.X_a.copy()
         moved[:3, 3] += t * self.direction
-        return moved
+        return np.asarray(moved)
 
     def overlap(self, t: float, spacing: float = EDGE_SPACING) -> bool:
         """:func:`meshes_overlap` with ``mesh_a`` at :meth:`moved` (``t``)."""

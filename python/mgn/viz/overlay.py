@@ -77,7 +77,7 @@ def _contours(mask: np.ndarray) -> np.ndarray:
     inner[:-1, :] &= mask[1:, :]
     inner[:, 1:] &= mask[:, :-1]
     inner[:, :-1] &= mask[:, 1:]
-    return mask & ~inner
+    return np.asarray(mask & ~inner)
 
 
 def _draw_rectangles(
@@ -197,7 +197,7 @@ def _tinted(
         out[edge] = colors[i + 1] * 0.6
         if alpha == 0:
             out[_thick(_contours(inst == i + 1))] = colors[i + 1]
-    return out
+    return np.asarray(out)
 
 
 def _draw_object_labels(
@@ -319,7 +319,7 @@ def render_overlay(
     return np.asarray(canvas)
 
 
-def _font(size: int):  # a PIL font
+def _font(size: int) -> Any:  # a PIL font
 
     try:
         return ImageFont.load_default(size=size)
@@ -327,7 +327,7 @@ def _font(size: int):  # a PIL font
         return ImageFont.load_default()
 
 
-def _wrap(text: str, font, width: float) -> list[str]:
+def _wrap(text: str, font: Any, width: float) -> list[str]:
     """``text`` broken at spaces into lines no wider than ``width`` px in ``font``."""
     if text == "<scorebar>":
         return [text]
@@ -344,7 +344,7 @@ def _thick(edge: np.ndarray) -> np.ndarray:
     out = edge.copy()
     out[1:, :] |= edge[:-1, :]
     out[:, 1:] |= edge[:, :-1]
-    return out
+    return np.asarray(out)
 
 
 def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: float) -> list[str]:
@@ -374,7 +374,7 @@ def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: floa
     return lines
 
 
-def _score_bar(draw, x: int, y: int, font, height: int) -> None:
+def _score_bar(draw: Any, x: int, y: int, font: Any, height: int) -> None:
     draw.text((x, y), "score 0", fill=(60, 60, 60), font=font)
     x0 = x + int(draw.textlength("score 0 ", font=font))
     cols = score_colors(np.linspace(0.0, 1.0, 200))
@@ -408,7 +408,7 @@ def _depth_panel(view: View) -> np.ndarray:
     return out
 
 
-def _scene_folder(root: str | os.PathLike[str], scene: int | None):
+def _scene_folder(root: str | os.PathLike[str], scene: int | None) -> SceneFolder:
     """The scene folder: ``root`` itself when it is one (``mgn scene label``), else
     ``root/scene<scene>`` of a dataset."""
 

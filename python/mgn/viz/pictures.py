@@ -112,7 +112,7 @@ def draw_points(
         uu = np.clip(ui[order] + dx, 0, w - 1)
         vv = np.clip(vi[order] + dy, 0, h - 1)
         img[vv, uu] = cols[order]
-    return img
+    return np.asarray(img)
 
 
 def panels(

@@ -129,10 +129,10 @@ def _grasp_scores(view: View) -> dict[tuple[str, str], np.ndarray]:
     return out
 
 
-def _collision_reasons(view: View) -> Counter:
+def _collision_reasons(view: View) -> Counter[tuple[str, str, str]]:
     """(kind, gripper part, obstacle) -> number of colliding grasps of the view
     (``colliding_grasps/<kind>/collision_part`` and ``collision_obstacle``)."""
-    out: Counter = Counter()
+    out: Counter[tuple[str, str, str]] = Counter()
     with h5py.File(view.path("_scene.hdf5"), "r") as h5:
         for kind in ("paralleljaw", "suctioncup"):
             g = f"colliding_grasps/{kind}/"
@@ -385,7 +385,7 @@ def write_report(
     info = ds.info or {}
     gc = stats["grasp_counts"]
 
-    def kinds(counter: dict) -> str:
+    def kinds(counter: dict[str, int]) -> str:
         names = {"suctioncup": "suction"}
         return ", ".join(f"{names.get(k, k)} {v}" for k, v in counter.items()) or "none"
 

@@ -72,7 +72,7 @@ def _hand_parts(
 
 
 def _transform(X: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return v @ X[:3, :3].T + X[:3, 3]
+    return np.asarray(v @ X[:3, :3].T + X[:3, 3])
 
 
 def render_frames(
