@@ -7,8 +7,10 @@ a view looks the same whatever the number of threads or workers and whichever ot
 rendered: 1-3 rectangular area lights above the tote (size, position, colour temperature
 (:func:`blackbody_rgb`), intensity), the environment (uniform / gradient / sky, intensity), the
 tote and floor materials (colour, roughness and a procedural texture,
-:func:`mgn.render.materials.procedural_texture`) and the exposure. No distractor objects are
-added.
+:func:`mgn.render.materials.procedural_texture`) and the exposure. The objects' own materials
+(:func:`draw_object_materials`, off by default) are drawn from one further stream per object,
+(seed, view index, object id), so they change nothing else in the view. No distractor objects
+are added.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
 shows E / pi); poses (4, 4) float64 ``X_AB``.
@@ -44,6 +46,7 @@ __all__ = [
     "ViewLighting",
     "blackbody_rgb",
     "draw_lighting",
+    "draw_object_materials",
 ]
 
 #: Environment kinds the randomisation draws from.
@@ -213,6 +216,66 @@ def draw_lighting(
     if randomize and r.exposure and r.exposure_range > 0:
         exposure += float(g_exp.uniform(-r.exposure_range, r.exposure_range))
     return ViewLighting(tuple(lights), env, tote, floor, exposure, summary)
+
+
+#: Tag of the object-appearance streams (seed, view index, tag, object id), apart from the
+#: lighting streams (seed, view index, 0x50484F54).
+_APPEARANCE_TAG = 0x4F424A41
+
+
+def draw_object_materials(
+    settings: RenderSettings,
+    seed: int,
+    view_index: int,
+    object_id: int,
+    materials: Sequence[PbrMaterial],
+    *,
+    randomize: bool = True,
+) -> tuple[PbrMaterial, ...]:
+    """The materials of object ``object_id`` (>= 0) in view ``view_index``: ``materials``
+    (one per material slot) unchanged, or, when ``settings.randomize.object_appearance`` and
+    ``randomize`` are on and the object's draw (probability ``object_probability``) says so, a
+    new material per slot (:class:`mgn.render.settings.RandomizeSettings`): a random base
+    colour, roughness and procedural texture, metallic 0; slots with transmission > 0 are
+    kept. Drawn from the stream (seed, view index, object id) only."""
+    mats = tuple(materials)
+    r = settings.randomize
+    if not (randomize and r.object_appearance):
+        return mats
+    if isinstance(object_id, bool) or not isinstance(object_id, (int, np.integer)) or object_id < 0:
+        raise InvalidArgumentError(f"object_id must be an integer >= 0, got {object_id!r}")
+    ss = np.random.SeedSequence(
+        [int(seed) & (2**63 - 1), int(view_index), _APPEARANCE_TAG, int(object_id)]
+    )
+    g = np.random.Generator(np.random.PCG64(ss))
+    if not g.random() < r.object_probability:
+        return mats
+    out = []
+    for m in mats:
+        # Every slot draws the same numbers, kept or not: a slot's draw does not depend on
+        # the materials of the slots before it.
+        hue = float(g.random())
+        sat = float(g.uniform(*r.object_saturation))
+        val = float(g.uniform(*r.object_value))
+        roughness = float(g.uniform(*r.object_roughness))
+        contrast = float(g.uniform(*r.object_texture_contrast))
+        kind = TEXTURES[int(g.integers(len(TEXTURES)))]
+        texture = procedural_texture(kind, g, contrast=contrast)
+        if m.transmission > 0.0:
+            out.append(m)
+            continue
+        rgb = srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
+        out.append(
+            PbrMaterial(
+                base_color=(float(rgb[0]), float(rgb[1]), float(rgb[2])),
+                metallic=0.0,
+                roughness=roughness,
+                ior=m.ior,
+                emission=m.emission,
+                base_color_texture=texture,
+            )
+        )
+    return tuple(out)
 
 
 def _hsv_to_rgb(h: float, s: float, v: float) -> tuple[float, float, float]:

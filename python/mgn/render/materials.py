@@ -21,6 +21,7 @@ from mgn.render.path import PbrMaterial
 __all__ = [
     "FLOOR_COLOR",
     "FLOOR_ROUGHNESS",
+    "OBJECT_TEXTURE_TILE",
     "TEXTURES",
     "TEXTURE_TILE",
     "TOTE_ROUGHNESS",
@@ -42,6 +43,8 @@ FLOOR_COLOR = (0.32, 0.31, 0.29)
 FLOOR_ROUGHNESS = 0.75
 #: Side of one repetition of a procedural texture on the tote and floor, m.
 TEXTURE_TILE = 0.25
+#: Side of one repetition of a procedural texture on an object without its own uvs, m.
+OBJECT_TEXTURE_TILE = 0.06
 
 
 def pbr_material(m: Material, texture: npt.NDArray[np.uint8] | None = None) -> Any:
@@ -109,10 +112,14 @@ def procedural_texture(
     return np.repeat(grey[:, :, None], 3, axis=2)
 
 
-def box_uv_mesh(mesh: Mesh, tile: float, name: str) -> Mesh:
+def box_uv_mesh(
+    mesh: Mesh, tile: float, name: str, *, keep_face_materials: bool = False
+) -> Mesh:
     """``mesh`` with every face given its own vertices and uvs from a box projection (the two
-    world axes across the face's dominant normal axis, divided by ``tile`` m): same triangles,
-    texturable."""
+    axes of the mesh frame across the face's dominant normal axis, divided by ``tile`` m): same
+    triangles, texturable; the faces keep their material slots with ``keep_face_materials``
+    (else all use slot 0). The tracer's shading normals weld vertices by position, so shading
+    is unchanged."""
     V = np.asarray(mesh.vertices, np.float64)
     F = np.asarray(mesh.faces, np.int64)
     P = V[F]  # (F, 3, 3)
@@ -125,7 +132,7 @@ def box_uv_mesh(mesh: Mesh, tile: float, name: str) -> Mesh:
         np.arange(3 * len(F), dtype=np.int32).reshape(-1, 3),
         uv.reshape(-1, 2).astype(np.float32),
         list(mesh.materials),
-        [],
+        list(mesh.face_materials) if keep_face_materials else [],
         name,
     )
 

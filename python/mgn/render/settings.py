@@ -72,6 +72,27 @@ class RandomizeSettings:
         light_temperature: (min, max) colour temperature, K.
         environment_intensity: (min, max) radiance scale of the environment.
         exposure_range: EV, the half width of the exposure jitter.
+        object_appearance: object appearance (default off): in each view each object, with
+            probability ``object_probability``, gets new materials, drawn per material slot:
+            a base colour of any hue (sRGB HSV: hue uniform in [0, 1), saturation and value
+            uniform in ``object_saturation`` and ``object_value``, so black, dark grey and
+            white occur), a roughness uniform in ``object_roughness``, metallic 0 (painted or
+            coated metal is a dielectric) and a procedural texture (plain, noise, checker or
+            stripes, equally likely; :func:`mgn.render.materials.procedural_texture`, its
+            darkest texels ``object_texture_contrast`` below the base colour) in place of the
+            slot's own texture. Slots with transmission > 0 (glass, clear plastic) are kept as
+            they are. Objects drawn from their own stream (seed, view, object id): the
+            lights, environment, tote, floor and exposure of the view are unchanged.
+        object_probability: [0, 1], the probability that an object's materials are replaced
+            in a view (default 0.5).
+        object_saturation: (min, max) within [0, 1], sRGB HSV saturation of a replaced colour
+            (default (0, 1)).
+        object_value: (min, max) within [0, 1], sRGB HSV value of a replaced colour (default
+            (0.05, 0.95): 0.05 is a reflectance of 0.4 %, 0.95 of 89 %).
+        object_roughness: (min, max) within [0, 1], perceptual roughness of a replaced
+            material (default (0.15, 0.9)).
+        object_texture_contrast: (min, max) within [0, 1], darkening of the darkest texels of
+            the procedural texture of a replaced material (linear; default (0.15, 0.6)).
     """
 
     lights: bool = True
@@ -86,9 +107,15 @@ class RandomizeSettings:
     light_temperature: tuple[float, float] = (3500.0, 7500.0)
     environment_intensity: tuple[float, float] = (0.2, 0.8)
     exposure_range: float = 0.5
+    object_appearance: bool = False
+    object_probability: float = 0.5
+    object_saturation: tuple[float, float] = (0.0, 1.0)
+    object_value: tuple[float, float] = (0.05, 0.95)
+    object_roughness: tuple[float, float] = (0.15, 0.9)
+    object_texture_contrast: tuple[float, float] = (0.15, 0.6)
 
     def __post_init__(self) -> None:
-        for key in ("lights", "environment", "materials", "exposure"):
+        for key in ("lights", "environment", "materials", "exposure", "object_appearance"):
             if not isinstance(getattr(self, key), bool):
                 raise InvalidArgumentError(
                     f"RandomizeSettings.{key} must be true or false, got {getattr(self, key)!r}"
@@ -102,7 +129,9 @@ class RandomizeSettings:
         object.__setattr__(self, "light_count", (int(c[0]), int(c[1])))
         for key, lo, hi in (("light_size", 1e-3, None), ("light_height", 0.1, None),
                             ("light_irradiance", 0.0, None), ("light_temperature", 1000.0, 40000.0),
-                            ("environment_intensity", 0.0, None)):  # fmt: skip
+                            ("environment_intensity", 0.0, None), ("object_saturation", 0.0, 1.0),
+                            ("object_value", 0.0, 1.0), ("object_roughness", 0.0, 1.0),
+                            ("object_texture_contrast", 0.0, 1.0)):  # fmt: skip
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
             object.__setattr__(self, key, rng)
         for key in ("light_offset", "exposure_range"):
@@ -110,6 +139,12 @@ class RandomizeSettings:
             if isinstance(v, bool) or not (math.isfinite(float(v)) and float(v) >= 0):
                 raise InvalidArgumentError(f"RandomizeSettings.{key} must be >= 0, got {v!r}")
             object.__setattr__(self, key, float(v))
+        p = self.object_probability
+        if isinstance(p, bool) or not (isinstance(p, (int, float)) and 0.0 <= float(p) <= 1.0):
+            raise InvalidArgumentError(
+                f"RandomizeSettings.object_probability must be a number in [0, 1], got {p!r}"
+            )
+        object.__setattr__(self, "object_probability", float(p))
 
 
 @dataclass(frozen=True)
