@@ -9,8 +9,9 @@ rendered: 1-3 rectangular area lights above the tote (size, position, colour tem
 tote and floor materials (colour, roughness and a procedural texture,
 :func:`mgn.render.materials.procedural_texture`) and the exposure. The objects' own materials
 (:func:`draw_object_materials`, off by default) are drawn from one further stream per object,
-(seed, view index, object id), so they change nothing else in the view. No distractor objects
-are added.
+(seed, view index, object id), and a light at the camera (:func:`draw_camera_light`, off by
+default) from a stream of its own, so they change nothing else in the view. No distractor
+objects are added.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
 shows E / pi); poses (4, 4) float64 ``X_AB``.
@@ -45,6 +46,7 @@ __all__ = [
     "TOTE_HSV",
     "ViewLighting",
     "blackbody_rgb",
+    "draw_camera_light",
     "draw_lighting",
     "draw_object_materials",
 ]
@@ -276,6 +278,53 @@ def draw_object_materials(
             )
         )
     return tuple(out)
+
+
+#: Tag of the camera-light stream (seed, view index, tag).
+_CAMERA_LIGHT_TAG = 0x43414D4C
+
+
+def draw_camera_light(
+    settings: RenderSettings,
+    seed: int,
+    view_index: int,
+    X_WC: npt.ArrayLike,
+    *,
+    target_W: npt.ArrayLike = (0.0, 0.0, 0.0),
+    randomize: bool = True,
+) -> AreaLight | None:
+    """The light at the camera of view ``view_index`` (camera pose ``X_WC``, OpenCV frame:
+    +z along the viewing direction), or None: drawn, when
+    ``settings.randomize.camera_light`` and ``randomize`` are on, with probability
+    ``camera_light_probability`` from the stream (seed, view index) of its own. A white
+    square light in the camera's image plane, ``camera_light_offset`` from the optical centre,
+    emitting along +z of the camera, its radiance set so that it casts the drawn
+    ``camera_light_irradiance`` on ``target_W`` (E = L A cos(a) cos(b) / d^2)."""
+    r = settings.randomize
+    if not (randomize and r.camera_light):
+        return None
+    X = np.asarray(X_WC, np.float64)
+    if X.shape != (4, 4) or not np.all(np.isfinite(X)):
+        raise InvalidArgumentError(f"X_WC must be a finite (4, 4) pose, got shape {X.shape}")
+    ss = np.random.SeedSequence([int(seed) & (2**63 - 1), int(view_index), _CAMERA_LIGHT_TAG])
+    g = np.random.Generator(np.random.PCG64(ss))
+    if not g.random() < r.camera_light_probability:
+        return None
+    side = float(g.uniform(*r.camera_light_size))
+    offset = float(g.uniform(*r.camera_light_offset))
+    phi = float(g.uniform(0.0, 2.0 * math.pi))
+    e = float(g.uniform(*r.camera_light_irradiance))
+    X_CL = np.eye(4)
+    X_CL[:2, :2] = [[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]]
+    X_CL[:2, 3] = (offset * math.cos(phi), offset * math.sin(phi))
+    X_WL = X @ X_CL
+    to_target = np.asarray(target_W, np.float64) - X_WL[:3, 3]
+    d = float(np.linalg.norm(to_target))
+    # The light's normal and the target's (world +z, the tote floor) against the ray.
+    cos_l = max(float(X_WL[:3, 2] @ to_target) / d, 1e-3)
+    cos_t = max(float(-to_target[2]) / d, 1e-3)
+    radiance = e * d * d / (side * side * cos_l * cos_t)
+    return AreaLight(X_WL, "rect", (side, side), (1.0, 1.0, 1.0), radiance)
 
 
 def _hsv_to_rgb(h: float, s: float, v: float) -> tuple[float, float, float]:

@@ -16,9 +16,10 @@ geometry passes, which the path tracer matches pixel for pixel (same meshes, cam
 pixel centres; ``tests/python/render/test_photo.py`` checks >= 99.9 % agreement).
 
 Each view's lights, environment, tote / floor materials and exposure are drawn by the domain
-randomisation of :mod:`mgn.render.lighting` from the stream (seed, view index) only, and the
+randomisation of :mod:`mgn.render.lighting` from the stream (seed, view index) only, the
 objects' materials, when ``render.randomize.object_appearance`` is on, from the stream (seed,
-view index, object id), so a view looks the same whatever the number of threads or workers and
+view index, object id), and the light at the camera (``render.randomize.camera_light``) from a
+stream (seed, view index) of its own, so a view looks the same whatever the number of threads or workers and
 whichever other views are rendered.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
@@ -27,6 +28,7 @@ shows E / pi); poses (4, 4) float64 ``X_AB``.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from collections.abc import Sequence
@@ -37,7 +39,12 @@ import numpy.typing as npt
 
 from mgn.geometry import Mesh
 from mgn.render.denoiser import denoise, denoiser_available
-from mgn.render.lighting import ViewLighting, draw_lighting, draw_object_materials
+from mgn.render.lighting import (
+    ViewLighting,
+    draw_camera_light,
+    draw_lighting,
+    draw_object_materials,
+)
 from mgn.render.materials import (
     OBJECT_TEXTURE_TILE,
     TEXTURE_TILE,
@@ -195,6 +202,12 @@ class PhotoRenderer:
         s = self.settings
         t0 = time.perf_counter()
         lit = self.lighting(view_index)
+        cam_light = draw_camera_light(
+            s, self.seed, view_index, view.X_WC, target_W=self._X_tote[:3, 3],
+            randomize=self.randomize,
+        )  # fmt: skip
+        if cam_light is not None:
+            lit = dataclasses.replace(lit, lights=(*lit.lights, cam_light))
         scene = self._scene_for(lit, view_index)
         out = scene.render(
             view,

@@ -93,6 +93,20 @@ class RandomizeSettings:
             material (default (0.15, 0.9)).
         object_texture_contrast: (min, max) within [0, 1], darkening of the darkest texels of
             the procedural texture of a replaced material (linear; default (0.15, 0.6)).
+        camera_light: a light at the camera (default off), as a 3D camera's projector or a
+            ring light gives: in a view, with probability ``camera_light_probability``, one
+            more square area light of side ``camera_light_size`` in the camera's image plane,
+            ``camera_light_offset`` from the optical centre in a random direction, facing
+            along the viewing direction, white (6500 K), casting ``camera_light_irradiance``
+            on the tote floor's centre. Drawn from its own stream (seed, view): the other
+            lights, environment, materials and exposure are unchanged.
+        camera_light_probability: [0, 1], the probability of the camera light in a view
+            (default 0.5).
+        camera_light_size: (min, max) side of the camera light, m (default (0.02, 0.1)).
+        camera_light_offset: (min, max) distance of the camera light from the optical
+            centre, m (default (0.03, 0.15)).
+        camera_light_irradiance: (min, max) irradiance the camera light casts on the tote
+            floor's centre, in the units of ``light_irradiance`` (default (1, 6)).
     """
 
     lights: bool = True
@@ -113,9 +127,15 @@ class RandomizeSettings:
     object_value: tuple[float, float] = (0.05, 0.95)
     object_roughness: tuple[float, float] = (0.15, 0.9)
     object_texture_contrast: tuple[float, float] = (0.15, 0.6)
+    camera_light: bool = False
+    camera_light_probability: float = 0.5
+    camera_light_size: tuple[float, float] = (0.02, 0.1)
+    camera_light_offset: tuple[float, float] = (0.03, 0.15)
+    camera_light_irradiance: tuple[float, float] = (1.0, 6.0)
 
     def __post_init__(self) -> None:
-        for key in ("lights", "environment", "materials", "exposure", "object_appearance"):
+        for key in ("lights", "environment", "materials", "exposure", "object_appearance",
+                    "camera_light"):  # fmt: skip
             if not isinstance(getattr(self, key), bool):
                 raise InvalidArgumentError(
                     f"RandomizeSettings.{key} must be true or false, got {getattr(self, key)!r}"
@@ -131,7 +151,9 @@ class RandomizeSettings:
                             ("light_irradiance", 0.0, None), ("light_temperature", 1000.0, 40000.0),
                             ("environment_intensity", 0.0, None), ("object_saturation", 0.0, 1.0),
                             ("object_value", 0.0, 1.0), ("object_roughness", 0.0, 1.0),
-                            ("object_texture_contrast", 0.0, 1.0)):  # fmt: skip
+                            ("object_texture_contrast", 0.0, 1.0),
+                            ("camera_light_size", 1e-3, None), ("camera_light_offset", 0.0, None),
+                            ("camera_light_irradiance", 0.0, None)):  # fmt: skip
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
             object.__setattr__(self, key, rng)
         for key in ("light_offset", "exposure_range"):
@@ -139,12 +161,14 @@ class RandomizeSettings:
             if isinstance(v, bool) or not (math.isfinite(float(v)) and float(v) >= 0):
                 raise InvalidArgumentError(f"RandomizeSettings.{key} must be >= 0, got {v!r}")
             object.__setattr__(self, key, float(v))
-        p = self.object_probability
-        if isinstance(p, bool) or not (isinstance(p, (int, float)) and 0.0 <= float(p) <= 1.0):
-            raise InvalidArgumentError(
-                f"RandomizeSettings.object_probability must be a number in [0, 1], got {p!r}"
-            )
-        object.__setattr__(self, "object_probability", float(p))
+        for key in ("object_probability", "camera_light_probability"):
+            p = getattr(self, key)
+            ok = not isinstance(p, bool) and isinstance(p, (int, float)) and 0.0 <= p <= 1.0
+            if not ok:
+                raise InvalidArgumentError(
+                    f"RandomizeSettings.{key} must be a number in [0, 1], got {p!r}"
+                )
+            object.__setattr__(self, key, float(p))
 
 
 @dataclass(frozen=True)
