@@ -34,8 +34,10 @@ from mgn.render.materials import (
     FLOOR_ROUGHNESS,
     TEXTURES,
     TOTE_ROUGHNESS,
+    procedural_pattern,
     procedural_texture,
     srgb_to_linear,
+    two_colour_texture,
 )
 from mgn.render.path import AreaLight, Environment, PbrMaterial
 from mgn.render.settings import RenderSettings
@@ -237,9 +239,9 @@ def draw_object_materials(
     """The materials of object ``object_id`` (>= 0) in view ``view_index``: ``materials``
     (one per material slot) unchanged, or, when ``settings.randomize.object_appearance`` and
     ``randomize`` are on and the object's draw (probability ``object_probability``) says so, a
-    new material per slot (:class:`mgn.render.settings.RandomizeSettings`): a random base
-    colour, roughness and procedural texture, metallic 0; slots with transmission > 0 are
-    kept. Drawn from the stream (seed, view index, object id) only."""
+    new material per slot (:class:`mgn.render.settings.RandomizeSettings`): a random colour,
+    or a procedural pattern between two random colours, a random roughness, metallic 0; slots
+    with transmission > 0 are kept. Drawn from the stream (seed, view index, object id) only."""
     mats = tuple(materials)
     r = settings.randomize
     if not (randomize and r.object_appearance):
@@ -256,20 +258,21 @@ def draw_object_materials(
     for m in mats:
         # Every slot draws the same numbers, kept or not: a slot's draw does not depend on
         # the materials of the slots before it.
-        hue = float(g.random())
-        sat = float(g.uniform(*r.object_saturation))
-        val = float(g.uniform(*r.object_value))
+        first = _draw_object_colour(g, r.object_saturation, r.object_value)
         roughness = float(g.uniform(*r.object_roughness))
-        contrast = float(g.uniform(*r.object_texture_contrast))
-        kind = TEXTURES[int(g.integers(len(TEXTURES)))]
-        texture = procedural_texture(kind, g, contrast=contrast)
+        pattern = procedural_pattern(TEXTURES[int(g.integers(len(TEXTURES)))], g)
+        texture = None
+        base = first
+        if pattern is not None:
+            second = _draw_object_colour(g, r.object_saturation, r.object_value)
+            texture = two_colour_texture(pattern, first, second)
+            base = (1.0, 1.0, 1.0)
         if m.transmission > 0.0:
             out.append(m)
             continue
-        rgb = srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
         out.append(
             PbrMaterial(
-                base_color=(float(rgb[0]), float(rgb[1]), float(rgb[2])),
+                base_color=base,
                 metallic=0.0,
                 roughness=roughness,
                 ior=m.ior,
@@ -325,6 +328,18 @@ def draw_camera_light(
     cos_t = max(float(-to_target[2]) / d, 1e-3)
     radiance = e * d * d / (side * side * cos_l * cos_t)
     return AreaLight(X_WL, "rect", (side, side), (1.0, 1.0, 1.0), radiance)
+
+
+def _draw_object_colour(
+    g: np.random.Generator, saturation: tuple[float, float], value: tuple[float, float]
+) -> tuple[float, float, float]:
+    """Linear RGB of an sRGB HSV colour: hue uniform in [0, 1), saturation and value uniform
+    in the given ranges."""
+    hue = float(g.random())
+    sat = float(g.uniform(*saturation))
+    val = float(g.uniform(*value))
+    rgb = srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
+    return (float(rgb[0]), float(rgb[1]), float(rgb[2]))
 
 
 def _hsv_to_rgb(h: float, s: float, v: float) -> tuple[float, float, float]:

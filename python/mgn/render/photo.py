@@ -19,8 +19,8 @@ Each view's lights, environment, tote / floor materials and exposure are drawn b
 randomisation of :mod:`mgn.render.lighting` from the stream (seed, view index) only, the
 objects' materials, when ``render.randomize.object_appearance`` is on, from the stream (seed,
 view index, object id), and the light at the camera (``render.randomize.camera_light``) from a
-stream (seed, view index) of its own, so a view looks the same whatever the number of threads or workers and
-whichever other views are rendered.
+stream (seed, view index) of its own, so a view looks the same whatever the number of threads
+or workers and whichever other views are rendered.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
 shows E / pi); poses (4, 4) float64 ``X_AB``.

@@ -74,15 +74,17 @@ class RandomizeSettings:
         exposure_range: EV, the half width of the exposure jitter.
         object_appearance: object appearance (default off): in each view each object, with
             probability ``object_probability``, gets new materials, drawn per material slot:
-            a base colour of any hue (sRGB HSV: hue uniform in [0, 1), saturation and value
+            a colour of any hue (sRGB HSV: hue uniform in [0, 1), saturation and value
             uniform in ``object_saturation`` and ``object_value``, so black, dark grey and
             white occur), a roughness uniform in ``object_roughness``, metallic 0 (painted or
-            coated metal is a dielectric) and a procedural texture (plain, noise, checker or
-            stripes, equally likely; :func:`mgn.render.materials.procedural_texture`, its
-            darkest texels ``object_texture_contrast`` below the base colour) in place of the
-            slot's own texture. Slots with transmission > 0 (glass, clear plastic) are kept as
-            they are. Objects drawn from their own stream (seed, view, object id): the
-            lights, environment, tote, floor and exposure of the view are unchanged.
+            coated metal is a dielectric), and a pattern in place of the slot's own texture:
+            plain (the one colour), value noise, checker or stripes (equally likely;
+            :func:`mgn.render.materials.procedural_pattern`) between that colour and a
+            second one drawn alike (:func:`mgn.render.materials.two_colour_texture`; repeated
+            every 6 cm on an object without its own uvs). Slots with transmission > 0 (glass,
+            clear plastic) are kept as they are. Drawn from a stream per object (seed, view,
+            object id): the lights, environment, tote, floor and exposure of the view are
+            unchanged.
         object_probability: [0, 1], the probability that an object's materials are replaced
             in a view (default 0.5).
         object_saturation: (min, max) within [0, 1], sRGB HSV saturation of a replaced colour
@@ -91,8 +93,6 @@ class RandomizeSettings:
             (0.05, 0.95): 0.05 is a reflectance of 0.4 %, 0.95 of 89 %).
         object_roughness: (min, max) within [0, 1], perceptual roughness of a replaced
             material (default (0.15, 0.9)).
-        object_texture_contrast: (min, max) within [0, 1], darkening of the darkest texels of
-            the procedural texture of a replaced material (linear; default (0.15, 0.6)).
         camera_light: a light at the camera (default off), as a 3D camera's projector or a
             ring light gives: in a view, with probability ``camera_light_probability``, one
             more square area light of side ``camera_light_size`` in the camera's image plane,
@@ -126,7 +126,6 @@ class RandomizeSettings:
     object_saturation: tuple[float, float] = (0.0, 1.0)
     object_value: tuple[float, float] = (0.05, 0.95)
     object_roughness: tuple[float, float] = (0.15, 0.9)
-    object_texture_contrast: tuple[float, float] = (0.15, 0.6)
     camera_light: bool = False
     camera_light_probability: float = 0.5
     camera_light_size: tuple[float, float] = (0.02, 0.1)
@@ -151,7 +150,6 @@ class RandomizeSettings:
                             ("light_irradiance", 0.0, None), ("light_temperature", 1000.0, 40000.0),
                             ("environment_intensity", 0.0, None), ("object_saturation", 0.0, 1.0),
                             ("object_value", 0.0, 1.0), ("object_roughness", 0.0, 1.0),
-                            ("object_texture_contrast", 0.0, 1.0),
                             ("camera_light_size", 1e-3, None), ("camera_light_offset", 0.0, None),
                             ("camera_light_irradiance", 0.0, None)):  # fmt: skip
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
