@@ -104,11 +104,14 @@ def procedural_pattern(
             bot = g[j1, i0] * (1 - tx) + g[j1, i1] * tx
             v += weight * (top * (1 - ty) + bot * ty)
         return v
+    pattern: npt.NDArray[np.float64]
     if kind == "checker":
         n = int(rng.integers(2, 5))
-        return ((np.floor(x * 2 * n) + np.floor(y * 2 * n)) % 2).astype(np.float64)
-    n = int(rng.integers(2, 7))  # stripes
-    return (np.floor((x if rng.random() < 0.5 else y) * 2 * n) % 2).astype(np.float64)
+        pattern = ((np.floor(x * 2 * n) + np.floor(y * 2 * n)) % 2).astype(np.float64)
+    else:  # stripes
+        n = int(rng.integers(2, 7))
+        pattern = (np.floor((x if rng.random() < 0.5 else y) * 2 * n) % 2).astype(np.float64)
+    return pattern
 
 
 def procedural_texture(

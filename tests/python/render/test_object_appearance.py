@@ -239,9 +239,10 @@ def test_camera_light_drawn_from_seed_and_view_beside_the_camera() -> None:
     r = s.randomize
     a = lighting.draw_camera_light(s, 3, 4, view.X_WC, target_W=target)
     assert a is not None
-    assert repr(a) == repr(lighting.draw_camera_light(s, 3, 4, view.X_WC, target_W=target))
-    assert np.array_equal(a.X_WL, lighting.draw_camera_light(s, 3, 4, view.X_WC,
-                                                             target_W=target).X_WL)  # fmt: skip
+    again = lighting.draw_camera_light(s, 3, 4, view.X_WC, target_W=target)
+    assert again is not None
+    assert repr(a) == repr(again)
+    assert np.array_equal(a.X_WL, again.X_WL)
     for v in range(40):
         light = lighting.draw_camera_light(s, 3, v, view.X_WC, target_W=target)
         assert light is not None
