@@ -172,7 +172,7 @@ class PhotoRenderer:
             for inst, m in zip(self._ids[: self._n_objects], mats, strict=True)
         ]
 
-    def _scene_for(self, lit: ViewLighting, view_index: int) -> Any:
+    def _scene_for(self, lit: ViewLighting, view_index: int = 0) -> Any:
         key = (lit.tote, lit.floor, id(lit.tote.base_color_texture),
                id(lit.floor.base_color_texture))  # fmt: skip
         if self._appearance or self._scene is None or self._scene_materials != key:
