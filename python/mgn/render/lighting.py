@@ -7,8 +7,11 @@ a view looks the same whatever the number of threads or workers and whichever ot
 rendered: 1-3 rectangular area lights above the tote (size, position, colour temperature
 (:func:`blackbody_rgb`), intensity), the environment (uniform / gradient / sky, intensity), the
 tote and floor materials (colour, roughness and a procedural texture,
-:func:`mgn.render.materials.procedural_texture`) and the exposure. No distractor objects are
-added.
+:func:`mgn.render.materials.procedural_texture`) and the exposure. The objects' own materials
+(:func:`draw_object_materials`, off by default) are drawn from one further stream per object,
+(seed, view index, object id), and a light at the camera (:func:`draw_camera_light`, off by
+default) from a stream of its own, so they change nothing else in the view. No distractor
+objects are added.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
 shows E / pi); poses (4, 4) float64 ``X_AB``.
@@ -31,8 +34,10 @@ from mgn.render.materials import (
     FLOOR_ROUGHNESS,
     TEXTURES,
     TOTE_ROUGHNESS,
+    procedural_pattern,
     procedural_texture,
     srgb_to_linear,
+    two_colour_texture,
 )
 from mgn.render.path import AreaLight, Environment, PbrMaterial
 from mgn.render.settings import RenderSettings
@@ -43,7 +48,9 @@ __all__ = [
     "TOTE_HSV",
     "ViewLighting",
     "blackbody_rgb",
+    "draw_camera_light",
     "draw_lighting",
+    "draw_object_materials",
 ]
 
 #: Environment kinds the randomisation draws from.
@@ -213,6 +220,126 @@ def draw_lighting(
     if randomize and r.exposure and r.exposure_range > 0:
         exposure += float(g_exp.uniform(-r.exposure_range, r.exposure_range))
     return ViewLighting(tuple(lights), env, tote, floor, exposure, summary)
+
+
+#: Tag of the object-appearance streams (seed, view index, tag, object id), apart from the
+#: lighting streams (seed, view index, 0x50484F54).
+_APPEARANCE_TAG = 0x4F424A41
+
+
+def draw_object_materials(
+    settings: RenderSettings,
+    seed: int,
+    view_index: int,
+    object_id: int,
+    materials: Sequence[PbrMaterial],
+    *,
+    randomize: bool = True,
+) -> tuple[PbrMaterial, ...]:
+    """The materials of object ``object_id`` (>= 0) in view ``view_index``: ``materials``
+    (one per material slot) unchanged, or, when ``settings.randomize.object_appearance`` and
+    ``randomize`` are on and the object's draw (probability ``object_probability``) says so, a
+    new material per slot (:class:`mgn.render.settings.RandomizeSettings`): a random colour,
+    or a procedural pattern between two random colours, a random roughness, metallic 0; slots
+    with transmission > 0 are kept. Drawn from the stream (seed, view index, object id) only."""
+    mats = tuple(materials)
+    r = settings.randomize
+    if not (randomize and r.object_appearance):
+        return mats
+    if isinstance(object_id, bool) or not isinstance(object_id, (int, np.integer)) or object_id < 0:
+        raise InvalidArgumentError(f"object_id must be an integer >= 0, got {object_id!r}")
+    ss = np.random.SeedSequence(
+        [int(seed) & (2**63 - 1), int(view_index), _APPEARANCE_TAG, int(object_id)]
+    )
+    g = np.random.Generator(np.random.PCG64(ss))
+    if not g.random() < r.object_probability:
+        return mats
+    out = []
+    for m in mats:
+        # Every slot draws the same numbers, kept or not: a slot's draw does not depend on
+        # the materials of the slots before it.
+        first = _draw_object_colour(g, r.object_saturation, r.object_value)
+        roughness = float(g.uniform(*r.object_roughness))
+        pattern = procedural_pattern(TEXTURES[int(g.integers(len(TEXTURES)))], g)
+        texture = None
+        base = first
+        if pattern is not None:
+            second = _draw_object_colour(g, r.object_saturation, r.object_value)
+            texture = two_colour_texture(pattern, first, second)
+            base = (1.0, 1.0, 1.0)
+        if m.transmission > 0.0:
+            out.append(m)
+            continue
+        out.append(
+            PbrMaterial(
+                base_color=base,
+                metallic=0.0,
+                roughness=roughness,
+                ior=m.ior,
+                emission=m.emission,
+                base_color_texture=texture,
+            )
+        )
+    return tuple(out)
+
+
+#: Tag of the camera-light stream (seed, view index, tag).
+_CAMERA_LIGHT_TAG = 0x43414D4C
+
+
+def draw_camera_light(
+    settings: RenderSettings,
+    seed: int,
+    view_index: int,
+    X_WC: npt.ArrayLike,
+    *,
+    target_W: npt.ArrayLike = (0.0, 0.0, 0.0),
+    randomize: bool = True,
+) -> AreaLight | None:
+    """The light at the camera of view ``view_index`` (camera pose ``X_WC``, OpenCV frame:
+    +z along the viewing direction), or None: drawn, when
+    ``settings.randomize.camera_light`` and ``randomize`` are on, with probability
+    ``camera_light_probability`` from the stream (seed, view index) of its own. A white
+    square light in the camera's image plane, ``camera_light_offset`` from the optical centre,
+    emitting along +z of the camera, its radiance set so that it casts the drawn
+    ``camera_light_irradiance`` on ``target_W`` (E = L A cos(a) cos(b) / d^2)."""
+    r = settings.randomize
+    if not (randomize and r.camera_light):
+        return None
+    X = np.asarray(X_WC, np.float64)
+    if X.shape != (4, 4) or not np.all(np.isfinite(X)):
+        raise InvalidArgumentError(f"X_WC must be a finite (4, 4) pose, got shape {X.shape}")
+    ss = np.random.SeedSequence([int(seed) & (2**63 - 1), int(view_index), _CAMERA_LIGHT_TAG])
+    g = np.random.Generator(np.random.PCG64(ss))
+    if not g.random() < r.camera_light_probability:
+        return None
+    side = float(g.uniform(*r.camera_light_size))
+    offset = float(g.uniform(*r.camera_light_offset))
+    phi = float(g.uniform(0.0, 2.0 * math.pi))
+    e = float(g.uniform(*r.camera_light_irradiance))
+    X_CL = np.eye(4)
+    X_CL[:2, :2] = [[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]]
+    X_CL[:2, 3] = (offset * math.cos(phi), offset * math.sin(phi))
+    X_WL = X @ X_CL
+    to_target = np.asarray(target_W, np.float64) - X_WL[:3, 3]
+    d = float(np.linalg.norm(to_target))
+    # The light's normal and the target's (world +z, the tote floor) against the ray.
+    cos_l = max(float(X_WL[:3, 2] @ to_target) / d, 1e-3)
+    cos_t = max(float(-to_target[2]) / d, 1e-3)
+    radiance = e * d * d / (side * side * cos_l * cos_t)
+    return AreaLight(X_WL, "rect", (side, side), (1.0, 1.0, 1.0), radiance)
+
+
+def _draw_object_colour(
+    g: np.random.Generator, saturation: tuple[float, float], value: tuple[float, float]
+) -> tuple[float, float, float]:
+    """Linear RGB of an sRGB HSV colour: hue uniform in [0, 1), saturation and value uniform
+    in the given ranges."""
+    hue = float(g.random())
+    sat = float(g.uniform(*saturation))
+    val = float(g.uniform(*value))
+    rgb = srgb_to_linear(np.array(_hsv_to_rgb(hue, sat, val)))
+    return (float(rgb[0]), float(rgb[1]), float(rgb[2]))
 
 
 def _hsv_to_rgb(h: float, s: float, v: float) -> tuple[float, float, float]:

@@ -21,6 +21,7 @@ from mgn.render.path import PbrMaterial
 __all__ = [
     "FLOOR_COLOR",
     "FLOOR_ROUGHNESS",
+    "OBJECT_TEXTURE_TILE",
     "TEXTURES",
     "TEXTURE_TILE",
     "TOTE_ROUGHNESS",
@@ -28,8 +29,10 @@ __all__ = [
     "linear_to_srgb8",
     "pbr_default",
     "pbr_material",
+    "procedural_pattern",
     "procedural_texture",
     "srgb_to_linear",
+    "two_colour_texture",
 ]
 
 #: Kinds of :func:`procedural_texture`.
@@ -42,6 +45,8 @@ FLOOR_COLOR = (0.32, 0.31, 0.29)
 FLOOR_ROUGHNESS = 0.75
 #: Side of one repetition of a procedural texture on the tote and floor, m.
 TEXTURE_TILE = 0.25
+#: Side of one repetition of a procedural texture on an object without its own uvs, m.
+OBJECT_TEXTURE_TILE = 0.06
 
 
 def pbr_material(m: Material, texture: npt.NDArray[np.uint8] | None = None) -> Any:
@@ -74,12 +79,12 @@ def linear_to_srgb8(c: npt.NDArray[np.float64]) -> npt.NDArray[np.uint8]:
     return np.round(s * 255.0).astype(np.uint8)
 
 
-def procedural_texture(
-    kind: str, rng: np.random.Generator, size: int = 128, contrast: float = 0.3
-) -> npt.NDArray[np.uint8] | None:
-    """A tileable grey (H, W, 3) uint8 sRGB texture around white that multiplies a base colour:
-    ``noise`` (smooth value noise, two octaves), ``checker``, ``stripes`` (random period and
-    direction), ``plain`` (None). ``contrast`` is the darkening of the darkest texels (linear)."""
+def procedural_pattern(
+    kind: str, rng: np.random.Generator, size: int = 128
+) -> npt.NDArray[np.float64] | None:
+    """A tileable (H, W) pattern in [0, 1]: ``noise`` (smooth value noise, two octaves, about
+    0.1-0.9), ``checker`` and ``stripes`` (0 / 1; random period, and direction for stripes);
+    ``plain``: None."""
     if kind == "plain":
         return None
     if kind not in TEXTURES:
@@ -98,21 +103,48 @@ def procedural_texture(
             top = g[j0, i0] * (1 - tx) + g[j0, i1] * tx
             bot = g[j1, i0] * (1 - tx) + g[j1, i1] * tx
             v += weight * (top * (1 - ty) + bot * ty)
-    elif kind == "checker":
+        return v
+    pattern: npt.NDArray[np.float64]
+    if kind == "checker":
         n = int(rng.integers(2, 5))
-        v = ((np.floor(x * 2 * n) + np.floor(y * 2 * n)) % 2).astype(np.float64)
+        pattern = ((np.floor(x * 2 * n) + np.floor(y * 2 * n)) % 2).astype(np.float64)
     else:  # stripes
         n = int(rng.integers(2, 7))
-        v = (np.floor((x if rng.random() < 0.5 else y) * 2 * n) % 2).astype(np.float64)
-    lin = 1.0 - contrast * v
-    grey = linear_to_srgb8(lin)
+        pattern = (np.floor((x if rng.random() < 0.5 else y) * 2 * n) % 2).astype(np.float64)
+    return pattern
+
+
+def procedural_texture(
+    kind: str, rng: np.random.Generator, size: int = 128, contrast: float = 0.3
+) -> npt.NDArray[np.uint8] | None:
+    """A tileable grey (H, W, 3) uint8 sRGB texture around white that multiplies a base colour:
+    ``noise`` (smooth value noise, two octaves), ``checker``, ``stripes`` (random period and
+    direction), ``plain`` (None); :func:`procedural_pattern`. ``contrast`` is the darkening of
+    the darkest texels (linear)."""
+    v = procedural_pattern(kind, rng, size)
+    if v is None:
+        return None
+    grey = linear_to_srgb8(1.0 - contrast * v)
     return np.repeat(grey[:, :, None], 3, axis=2)
 
 
-def box_uv_mesh(mesh: Mesh, tile: float, name: str) -> Mesh:
+def two_colour_texture(
+    pattern: npt.NDArray[np.float64], first: npt.ArrayLike, second: npt.ArrayLike
+) -> npt.NDArray[np.uint8]:
+    """(H, W, 3) uint8 sRGB texture blending two linear RGB colours by ``pattern`` (H, W) in
+    [0, 1]: ``first`` where it is 0, ``second`` where it is 1 (linear blend)."""
+    v = np.clip(np.asarray(pattern, np.float64), 0.0, 1.0)[:, :, None]
+    a = np.asarray(first, np.float64).reshape(1, 1, 3)
+    b = np.asarray(second, np.float64).reshape(1, 1, 3)
+    return linear_to_srgb8(a * (1.0 - v) + b * v)
+
+
+def box_uv_mesh(mesh: Mesh, tile: float, name: str, *, keep_face_materials: bool = False) -> Mesh:
     """``mesh`` with every face given its own vertices and uvs from a box projection (the two
-    world axes across the face's dominant normal axis, divided by ``tile`` m): same triangles,
-    texturable."""
+    axes of the mesh frame across the face's dominant normal axis, divided by ``tile`` m): same
+    triangles, texturable; the faces keep their material slots with ``keep_face_materials``
+    (else all use slot 0). The tracer's shading normals weld vertices by position, so shading
+    is unchanged."""
     V = np.asarray(mesh.vertices, np.float64)
     F = np.asarray(mesh.faces, np.int64)
     P = V[F]  # (F, 3, 3)
@@ -125,7 +157,7 @@ def box_uv_mesh(mesh: Mesh, tile: float, name: str) -> Mesh:
         np.arange(3 * len(F), dtype=np.int32).reshape(-1, 3),
         uv.reshape(-1, 2).astype(np.float32),
         list(mesh.materials),
-        [],
+        list(mesh.face_materials) if keep_face_materials else [],
         name,
     )
 

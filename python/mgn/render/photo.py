@@ -16,8 +16,11 @@ geometry passes, which the path tracer matches pixel for pixel (same meshes, cam
 pixel centres; ``tests/python/render/test_photo.py`` checks >= 99.9 % agreement).
 
 Each view's lights, environment, tote / floor materials and exposure are drawn by the domain
-randomisation of :mod:`mgn.render.lighting` from the stream (seed, view index) only, so a view
-looks the same whatever the number of threads or workers and whichever other views are rendered.
+randomisation of :mod:`mgn.render.lighting` from the stream (seed, view index) only, the
+objects' materials, when ``render.randomize.object_appearance`` is on, from the stream (seed,
+view index, object id), and the light at the camera (``render.randomize.camera_light``) from a
+stream (seed, view index) of its own, so a view looks the same whatever the number of threads
+or workers and whichever other views are rendered.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
 shows E / pi); poses (4, 4) float64 ``X_AB``.
@@ -25,6 +28,7 @@ shows E / pi); poses (4, 4) float64 ``X_AB``.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from collections.abc import Sequence
@@ -35,8 +39,19 @@ import numpy.typing as npt
 
 from mgn.geometry import Mesh
 from mgn.render.denoiser import denoise, denoiser_available
-from mgn.render.lighting import ViewLighting, draw_lighting
-from mgn.render.materials import TEXTURE_TILE, box_uv_mesh, pbr_default, pbr_material
+from mgn.render.lighting import (
+    ViewLighting,
+    draw_camera_light,
+    draw_lighting,
+    draw_object_materials,
+)
+from mgn.render.materials import (
+    OBJECT_TEXTURE_TILE,
+    TEXTURE_TILE,
+    box_uv_mesh,
+    pbr_default,
+    pbr_material,
+)
 from mgn.render.path import FilmOptions, PathScene, PathTraceOptions, develop
 from mgn.render.settings import RenderSettings
 from mgn.scene.cameras import CameraView
@@ -94,16 +109,27 @@ class PhotoRenderer:
                 stacklevel=2,
             )
         self.spp = settings.spp if self.denoised else settings.spp_without_denoiser
-        # Object geometry and materials (fixed); tote and floor materials are per view.
+        # Object geometry and materials (fixed, or drawn per view with the object appearance
+        # part; a mesh without uvs then gets box-projected ones for the procedural textures);
+        # tote and floor materials are per view.
+        self._appearance = randomize and settings.randomize.object_appearance
         meshes: list[Mesh] = []
         poses: list[npt.NDArray[np.float64]] = []
         ids: list[int] = []
         mats: list[list[Any]] = []
         cache: dict[int, list[Any]] = {}
+        uv_meshes: dict[int, Mesh] = {}
         for mesh, X_WO, inst in objects:
             if id(mesh) not in cache:
                 cache[id(mesh)] = [pbr_material(m) for m in mesh.materials] or [pbr_default()]
-            meshes.append(mesh)
+                uvs = mesh.uvs
+                has_uvs = uvs is not None and len(np.asarray(uvs)) == mesh.num_vertices
+                uv_meshes[id(mesh)] = (
+                    mesh
+                    if has_uvs or not self._appearance
+                    else box_uv_mesh(mesh, OBJECT_TEXTURE_TILE, mesh.name, keep_face_materials=True)
+                )
+            meshes.append(uv_meshes[id(mesh)])
             poses.append(np.asarray(X_WO, np.float64))
             ids.append(int(inst))
             mats.append(cache[id(mesh)])
@@ -135,11 +161,23 @@ class PhotoRenderer:
             tote_color=self._tote_color, randomize=self.randomize,
         )  # fmt: skip
 
-    def _scene_for(self, lit: ViewLighting) -> Any:
+    def object_materials(self, view_index: int) -> list[list[Any]]:
+        """The objects' materials in view ``view_index`` (per object, one per material slot):
+        fixed, or drawn by :func:`mgn.render.lighting.draw_object_materials`."""
+        mats = [list(m) for m in self._mats[: self._n_objects]]
+        if not self._appearance:
+            return mats
+        return [
+            list(draw_object_materials(self.settings, self.seed, view_index, inst, m))
+            for inst, m in zip(self._ids[: self._n_objects], mats, strict=True)
+        ]
+
+    def _scene_for(self, lit: ViewLighting, view_index: int = 0) -> Any:
         key = (lit.tote, lit.floor, id(lit.tote.base_color_texture),
                id(lit.floor.base_color_texture))  # fmt: skip
-        if self._scene is None or self._scene_materials != key:
-            mats = [list(m) for m in self._mats]
+        if self._appearance or self._scene is None or self._scene_materials != key:
+            mats = self.object_materials(view_index) + [list(m) for m in
+                                                        self._mats[self._n_objects :]]  # fmt: skip
             k = self._n_objects
             if self._has_tote:
                 mats[k] = [lit.tote] * len(mats[k])
@@ -149,7 +187,7 @@ class PhotoRenderer:
             self._scene = PathScene(self._meshes, np.stack(self._poses) if self._poses
                                     else np.zeros((0, 4, 4)), self._ids, mats,
                                     lit.lights, lit.environment)  # fmt: skip
-            self._scene_materials = key
+            self._scene_materials = None if self._appearance else key
             return self._scene
         return self._scene.with_lighting(lit.lights, lit.environment)
 
@@ -164,7 +202,13 @@ class PhotoRenderer:
         s = self.settings
         t0 = time.perf_counter()
         lit = self.lighting(view_index)
-        scene = self._scene_for(lit)
+        cam_light = draw_camera_light(
+            s, self.seed, view_index, view.X_WC, target_W=self._X_tote[:3, 3],
+            randomize=self.randomize,
+        )  # fmt: skip
+        if cam_light is not None:
+            lit = dataclasses.replace(lit, lights=(*lit.lights, cam_light))
+        scene = self._scene_for(lit, view_index)
         out = scene.render(
             view,
             PathTraceOptions(

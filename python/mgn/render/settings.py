@@ -72,6 +72,41 @@ class RandomizeSettings:
         light_temperature: (min, max) colour temperature, K.
         environment_intensity: (min, max) radiance scale of the environment.
         exposure_range: EV, the half width of the exposure jitter.
+        object_appearance: object appearance (default off): in each view each object, with
+            probability ``object_probability``, gets new materials, drawn per material slot:
+            a colour of any hue (sRGB HSV: hue uniform in [0, 1), saturation and value
+            uniform in ``object_saturation`` and ``object_value``, so black, dark grey and
+            white occur), a roughness uniform in ``object_roughness``, metallic 0 (painted or
+            coated metal is a dielectric), and a pattern in place of the slot's own texture:
+            plain (the one colour), value noise, checker or stripes (equally likely;
+            :func:`mgn.render.materials.procedural_pattern`) between that colour and a
+            second one drawn alike (:func:`mgn.render.materials.two_colour_texture`; repeated
+            every 6 cm on an object without its own uvs). Slots with transmission > 0 (glass,
+            clear plastic) are kept as they are. Drawn from a stream per object (seed, view,
+            object id): the lights, environment, tote, floor and exposure of the view are
+            unchanged.
+        object_probability: [0, 1], the probability that an object's materials are replaced
+            in a view (default 0.5).
+        object_saturation: (min, max) within [0, 1], sRGB HSV saturation of a replaced colour
+            (default (0, 1)).
+        object_value: (min, max) within [0, 1], sRGB HSV value of a replaced colour (default
+            (0.05, 0.95): 0.05 is a reflectance of 0.4 %, 0.95 of 89 %).
+        object_roughness: (min, max) within [0, 1], perceptual roughness of a replaced
+            material (default (0.15, 0.9)).
+        camera_light: a light at the camera (default off), as a 3D camera's projector or a
+            ring light gives: in a view, with probability ``camera_light_probability``, one
+            more square area light of side ``camera_light_size`` in the camera's image plane,
+            ``camera_light_offset`` from the optical centre in a random direction, facing
+            along the viewing direction, white (6500 K), casting ``camera_light_irradiance``
+            on the tote floor's centre. Drawn from its own stream (seed, view): the other
+            lights, environment, materials and exposure are unchanged.
+        camera_light_probability: [0, 1], the probability of the camera light in a view
+            (default 0.5).
+        camera_light_size: (min, max) side of the camera light, m (default (0.02, 0.1)).
+        camera_light_offset: (min, max) distance of the camera light from the optical
+            centre, m (default (0.03, 0.15)).
+        camera_light_irradiance: (min, max) irradiance the camera light casts on the tote
+            floor's centre, in the units of ``light_irradiance`` (default (1, 6)).
     """
 
     lights: bool = True
@@ -86,9 +121,20 @@ class RandomizeSettings:
     light_temperature: tuple[float, float] = (3500.0, 7500.0)
     environment_intensity: tuple[float, float] = (0.2, 0.8)
     exposure_range: float = 0.5
+    object_appearance: bool = False
+    object_probability: float = 0.5
+    object_saturation: tuple[float, float] = (0.0, 1.0)
+    object_value: tuple[float, float] = (0.05, 0.95)
+    object_roughness: tuple[float, float] = (0.15, 0.9)
+    camera_light: bool = False
+    camera_light_probability: float = 0.5
+    camera_light_size: tuple[float, float] = (0.02, 0.1)
+    camera_light_offset: tuple[float, float] = (0.03, 0.15)
+    camera_light_irradiance: tuple[float, float] = (1.0, 6.0)
 
     def __post_init__(self) -> None:
-        for key in ("lights", "environment", "materials", "exposure"):
+        for key in ("lights", "environment", "materials", "exposure", "object_appearance",
+                    "camera_light"):  # fmt: skip
             if not isinstance(getattr(self, key), bool):
                 raise InvalidArgumentError(
                     f"RandomizeSettings.{key} must be true or false, got {getattr(self, key)!r}"
@@ -102,7 +148,10 @@ class RandomizeSettings:
         object.__setattr__(self, "light_count", (int(c[0]), int(c[1])))
         for key, lo, hi in (("light_size", 1e-3, None), ("light_height", 0.1, None),
                             ("light_irradiance", 0.0, None), ("light_temperature", 1000.0, 40000.0),
-                            ("environment_intensity", 0.0, None)):  # fmt: skip
+                            ("environment_intensity", 0.0, None), ("object_saturation", 0.0, 1.0),
+                            ("object_value", 0.0, 1.0), ("object_roughness", 0.0, 1.0),
+                            ("camera_light_size", 1e-3, None), ("camera_light_offset", 0.0, None),
+                            ("camera_light_irradiance", 0.0, None)):  # fmt: skip
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
             object.__setattr__(self, key, rng)
         for key in ("light_offset", "exposure_range"):
@@ -110,6 +159,14 @@ class RandomizeSettings:
             if isinstance(v, bool) or not (math.isfinite(float(v)) and float(v) >= 0):
                 raise InvalidArgumentError(f"RandomizeSettings.{key} must be >= 0, got {v!r}")
             object.__setattr__(self, key, float(v))
+        for key in ("object_probability", "camera_light_probability"):
+            p = getattr(self, key)
+            ok = not isinstance(p, bool) and isinstance(p, (int, float)) and 0.0 <= p <= 1.0
+            if not ok:
+                raise InvalidArgumentError(
+                    f"RandomizeSettings.{key} must be a number in [0, 1], got {p!r}"
+                )
+            object.__setattr__(self, key, float(p))
 
 
 @dataclass(frozen=True)
