@@ -85,7 +85,7 @@ def _uniform(rng: np.random.Generator, key: str) -> float | None:
 def _mirror(s: np.ndarray, n: int) -> np.ndarray:
     """Coordinates ``s`` (px, edges at 0 and n) mirrored into [0, n]."""
     m = np.mod(s, 2 * n)
-    return np.where(m <= n, m, 2 * n - m)
+    return np.asarray(np.where(m <= n, m, 2 * n - m))
 
 
 def resample_window(
@@ -108,7 +108,7 @@ def resample_window(
     fy, fx = (ys - y0)[:, None].astype(a.dtype), (xs - x0)[None, :].astype(a.dtype)
     top = a[..., y0[:, None], x0[None, :]] * (1 - fx) + a[..., y0[:, None], x1[None, :]] * fx
     bot = a[..., y1[:, None], x0[None, :]] * (1 - fx) + a[..., y1[:, None], x1[None, :]] * fx
-    return (top * (1 - fy) + bot * fy).astype(a.dtype)
+    return np.asarray((top * (1 - fy) + bot * fy).astype(a.dtype))
 
 
 def geometric(

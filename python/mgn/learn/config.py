@@ -4,7 +4,7 @@ checkpoint) and how it is trained (:class:`TrainConfig`)."""
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
-from typing import Any
+from typing import Any, TypeVar
 
 from mgn.errors import InvalidArgumentError
 from mgn.learn.augment import AUGMENTS
@@ -22,8 +22,11 @@ SUCTION_SCORES = ("score_analytical", "score_wrench", "score_simulation")
 #: soft Dice loss ``1 - 2 sum(p t) / (sum(p) + sum(t))`` over the batch, p the sigmoid).
 FOREGROUND_LOSSES = ("bce", "bce+dice")
 
+#: A config dataclass (ModelConfig, TrainConfig).
+_C = TypeVar("_C", bound="ModelConfig | TrainConfig")
 
-def _from_dict(cls: Any, d: dict[str, Any], what: str) -> Any:
+
+def _from_dict(cls: type[_C], d: dict[str, Any], what: str) -> _C:
     known = {f.name for f in fields(cls)}
     unknown = sorted(set(d) - known)
     if unknown:

@@ -24,6 +24,7 @@ Connected parts, dilation and the nearest-seed transform are ``scipy.ndimage``'s
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -58,10 +59,10 @@ class InstanceMaps:
         if amodal and self.amodal is not None:
             return self.amodal
         n = self.num_instances
-        return self.labels[None] == np.arange(1, n + 1, dtype=np.int32)[:, None, None]
+        return np.asarray(self.labels[None] == np.arange(1, n + 1, dtype=np.int32)[:, None, None])
 
 
-def _ndimage():  # the scipy.ndimage module
+def _ndimage() -> Any:  # the scipy.ndimage module
     try:
         from scipy import ndimage
     except ImportError as e:
@@ -72,7 +73,7 @@ def _ndimage():  # the scipy.ndimage module
 
 
 def _hidden_owners(
-    labels: np.ndarray, hidden: np.ndarray, n: int, ndimage
+    labels: np.ndarray, hidden: np.ndarray, n: int, ndimage: Any
 ) -> npt.NDArray[np.bool_]:
     amodal = labels[None] == np.arange(1, n + 1)[:, None, None]
     parts, count = ndimage.label(hidden, structure=np.ones((3, 3), bool))
@@ -88,10 +89,10 @@ def _hidden_owners(
         if touching.max() == 0:
             continue
         amodal[int(touching.argmax()) - 1] |= part
-    return amodal
+    return np.asarray(amodal)
 
 
-def _grow(seeds: np.ndarray, fgm: np.ndarray, ndimage) -> npt.NDArray[np.int32]:
+def _grow(seeds: np.ndarray, fgm: np.ndarray, ndimage: Any) -> npt.NDArray[np.int32]:
     """Seed labels grown over the foreground: each pixel takes its nearest seed when that seed
     lies in the pixel's connected foreground part; the rest of a part that has seeds is filled by
     4-neighbour growth from the labelled pixels; parts without a seed stay background."""

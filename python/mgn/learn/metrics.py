@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import io
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from pycocotools import mask as mask_utils
@@ -29,8 +30,8 @@ from mgn.errors import InvalidArgumentError
 __all__ = ["foreground_iou", "mask_ap", "suction_precision"]
 
 
-def _rle(mask: np.ndarray) -> dict:
-    r = mask_utils.encode(np.asfortranarray(mask.astype(np.uint8)))
+def _rle(mask: np.ndarray) -> dict[str, Any]:
+    r: dict[str, Any] = mask_utils.encode(np.asfortranarray(mask.astype(np.uint8)))
     r["counts"] = r["counts"].decode("ascii")
     return r
 
@@ -54,9 +55,9 @@ def mask_ap(
             f"mask_ap: {len(ground_truth)} ground truths, {len(predictions)} predictions, "
             f"{len(scores)} score lists; expected one each per image"
         )
-    images: list[dict] = []
-    anns: list[dict] = []
-    dets: list[dict] = []
+    images: list[dict[str, Any]] = []
+    anns: list[dict[str, Any]] = []
+    dets: list[dict[str, Any]] = []
     n_objects = 0
     for i, (gt, pred, sc) in enumerate(zip(ground_truth, predictions, scores, strict=True)):
         h, w = gt.shape[-2:]

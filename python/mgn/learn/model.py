@@ -65,7 +65,7 @@ def _small_unet() -> Any:
     F = torch.nn.functional  # the usual name
     block, padded = _block, _padded
 
-    class SmallUNet(nn.Module):  # type: ignore[name-defined]
+    class SmallUNet(nn.Module):  # type: ignore[name-defined,misc]
         stride = 16
 
         def __init__(self, cin: int, cout: int, width: int) -> None:
@@ -111,7 +111,7 @@ def _resnet18_unet() -> Any:
     F = torch.nn.functional  # the usual name
     block, padded = _block, _padded
 
-    class BasicBlock(nn.Module):  # type: ignore[name-defined]
+    class BasicBlock(nn.Module):  # type: ignore[name-defined,misc]
         def __init__(self, cin: int, cout: int, stride: int) -> None:
             super().__init__()
             self.conv1 = nn.Conv2d(cin, cout, 3, stride, 1, bias=False)
@@ -129,7 +129,7 @@ def _resnet18_unet() -> Any:
             y = self.bn2(self.conv2(y))
             return F.relu(y + (x if self.downsample is None else self.downsample(x)))
 
-    class ResNet18Encoder(nn.Module):  # type: ignore[name-defined]
+    class ResNet18Encoder(nn.Module):  # type: ignore[name-defined,misc]
         def __init__(self, cin: int) -> None:
             super().__init__()
             self.conv1 = nn.Conv2d(cin, 64, 7, 2, 3, bias=False)
@@ -147,7 +147,7 @@ def _resnet18_unet() -> Any:
                 feats.append(x)
             return feats  # 64 @ /2, 64 @ /4, 128 @ /8, 256 @ /16, 512 @ /32
 
-    class ResNet18UNet(nn.Module):  # type: ignore[name-defined]
+    class ResNet18UNet(nn.Module):  # type: ignore[name-defined,misc]
         stride = 32
 
         def __init__(self, cin: int, cout: int) -> None:

@@ -21,13 +21,13 @@ __all__ = ["instance_palette", "mask_panel", "overlay"]
 def instance_palette(n: int) -> npt.NDArray[np.uint8]:
     """(n, 3) uint8 distinct colours (hues a golden angle apart)."""
     cols = [colorsys.hsv_to_rgb((0.61803398875 * i) % 1.0, 0.75, 0.95) for i in range(n)]
-    return (np.array(cols, np.float64).reshape(-1, 3) * 255).round().astype(np.uint8)
+    return np.asarray((np.array(cols, np.float64).reshape(-1, 3) * 255).round().astype(np.uint8))
 
 
 def _outline(mask: np.ndarray) -> np.ndarray:
     m = np.pad(mask, 1)
     inner = m[:-2, 1:-1] & m[2:, 1:-1] & m[1:-1, :-2] & m[1:-1, 2:]
-    return mask & ~inner
+    return np.asarray(mask & ~inner)
 
 
 def mask_panel(rgb: np.ndarray, masks: np.ndarray, alpha: float = 0.5) -> npt.NDArray[np.uint8]:
@@ -37,7 +37,7 @@ def mask_panel(rgb: np.ndarray, masks: np.ndarray, alpha: float = 0.5) -> npt.ND
     for i, m in enumerate(np.asarray(masks, bool)):
         img[m] = (1 - alpha) * img[m] + alpha * colors[i]
         img[_outline(m)] = colors[i]
-    return img.round().astype(np.uint8)
+    return np.asarray(img.round().astype(np.uint8))
 
 
 def _heat(q: np.ndarray) -> npt.NDArray[np.float32]:

@@ -150,7 +150,7 @@ def _safe(name: str) -> str:
 
 def _outline(mask: np.ndarray) -> np.ndarray:
     m = np.pad(mask, 1)
-    return mask & ~(m[:-2, 1:-1] & m[2:, 1:-1] & m[1:-1, :-2] & m[1:-1, 2:])
+    return np.asarray(mask & ~(m[:-2, 1:-1] & m[2:, 1:-1] & m[1:-1, :-2] & m[1:-1, 2:]))
 
 
 def _picture(img: RealImage, gt: np.ndarray, pred: Prediction) -> bytes:

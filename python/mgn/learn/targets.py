@@ -118,7 +118,7 @@ def resize_nearest(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     h, w = a.shape[:2]
     rows = np.minimum(((np.arange(shape[0]) + 0.5) * h / shape[0]).astype(np.int64), h - 1)
     cols = np.minimum(((np.arange(shape[1]) + 0.5) * w / shape[1]).astype(np.int64), w - 1)
-    return a[rows][:, cols]
+    return np.asarray(a[rows][:, cols])
 
 
 def resize_rgb(rgb: npt.NDArray[np.uint8], shape: tuple[int, int]) -> npt.NDArray[np.uint8]:
@@ -158,7 +158,7 @@ def height_channel(
     if footprint:
         h[~floor_footprint(depth_m, intrinsics, floor=plane, name=name)] = 0.0
     lo, hi = HEIGHT_RANGE_M
-    return (np.clip(h, lo, hi) / np.float32(HEIGHT_SCALE_M)).astype(np.float32)
+    return np.asarray((np.clip(h, lo, hi) / np.float32(HEIGHT_SCALE_M)).astype(np.float32))
 
 
 def network_input(
@@ -223,7 +223,7 @@ def normalize_rgb(x: np.ndarray, mode: str) -> npt.NDArray[np.float32]:
     d = a.astype(np.float64)
     mean = d.mean(axis=(-2, -1), keepdims=True)
     std = np.maximum(d.std(axis=(-2, -1), keepdims=True), RGB_NORM_MIN_STD)
-    return ((d - mean) / std).astype(np.float32)
+    return np.asarray(((d - mean) / std).astype(np.float32))
 
 
 def model_input(x: np.ndarray, modality: str, rgb_norm: str) -> npt.NDArray[np.float32]:

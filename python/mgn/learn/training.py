@@ -147,7 +147,7 @@ def _batch_tensors(
     mc: ModelConfig,
     epoch: int,
     device: Any,
-):
+) -> tuple[Any, ...]:
     torch = require_torch()
     return tuple(
         torch.from_numpy(a).to(device)
@@ -155,7 +155,9 @@ def _batch_tensors(
     )
 
 
-def _start(out: Path, resume: bool, mc: ModelConfig, tc: TrainConfig, names: list[str]):
+def _start(
+    out: Path, resume: bool, mc: ModelConfig, tc: TrainConfig, names: list[str]
+) -> dict[str, Any] | None:
     """The checkpoint to continue from (None for a fresh run); errors when ``out`` holds
     another run."""
     ckpt_path = out / "checkpoint.pt"

@@ -211,11 +211,11 @@ def _variant_dataset(
     progress: bool,
 ) -> Path:
     if "dataset" in v:
-        return here / v["dataset"]
+        return here / str(v["dataset"])
     config = Config.from_dict(
         _merge(base, _mapping(v.get("config"), "a variant's config")), base_dir=here
     )
-    ds = out / v["name"] / "dataset"
+    ds = out / str(v["name"]) / "dataset"
     report = generate(
         ds,
         int(spec.get("scenes", 12)),
