@@ -84,8 +84,14 @@ def child_main(argv: list[str]) -> int:
         dashboard_address=None,
     ) as cluster:
         t_up = time.perf_counter() - t0
-        report = generate(a.out, a.scenes, config=config, seed=SEED,
-                          scheduler=cluster.scheduler_address, progress=False)  # fmt: skip
+        report = generate(
+            a.out,
+            a.scenes,
+            config=config,
+            seed=SEED,
+            scheduler=cluster.scheduler_address,
+            progress=False,
+        )
         wall = time.perf_counter() - t0 - report.label_seconds
         peak = 0.0
         try:
@@ -96,18 +102,37 @@ def child_main(argv: list[str]) -> int:
                 peak = max(w.get("metrics", {}).get("memory", 0) for w in info.values()) / 2**20
         except Exception:  # the memory figure is informative only
             pass
-    print(json.dumps({
-        "scenes": a.scenes, "ok": len(report.ok), "workers": a.workers, "wall_s": wall,
-        "cluster_start_s": t_up, "label_s": report.label_seconds,
-        "worker_memory_mib_at_end": peak, "load": os.getloadavg(),
-        "failed": [r.error for r in report.failed],
-    }))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "scenes": a.scenes,
+                "ok": len(report.ok),
+                "workers": a.workers,
+                "wall_s": wall,
+                "cluster_start_s": t_up,
+                "label_s": report.label_seconds,
+                "worker_memory_mib_at_end": peak,
+                "load": os.getloadavg(),
+                "failed": [r.error for r in report.failed],
+            }
+        )
+    )
     return 0
 
 
 def _run_child(scenes: int, workers: int, out: Path) -> tuple[dict | None, str]:
-    cmd = [sys.executable, "-m", "benchmarks.bench_cluster", "--child", "--scenes", str(scenes),
-           "--workers", str(workers), "--out", str(out)]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "benchmarks.bench_cluster",
+        "--child",
+        "--scenes",
+        str(scenes),
+        "--workers",
+        str(workers),
+        "--out",
+        str(out),
+    ]
     env = dict(os.environ)
     proc = subprocess.run(
         cmd, cwd=HERE.parent, check=False, capture_output=True, text=True, env=env
@@ -207,8 +232,15 @@ def main(argv: list[str] | None = None) -> int:
     from .common import import_mgn
 
     mgn, status = import_mgn()
-    rows = run(quick=False, repeats=1, mgn=mgn, mgn_status=status, log=print,
-               scenes=a.scenes, workers=tuple(a.workers))  # fmt: skip
+    rows = run(
+        quick=False,
+        repeats=1,
+        mgn=mgn,
+        mgn_status=status,
+        log=print,
+        scenes=a.scenes,
+        workers=tuple(a.workers),
+    )
     for row in rows:
         print(row.case, "|", row.agreement, "|", "; ".join(row.notes) or row.mgn_status)
     return 0

@@ -126,9 +126,12 @@ def pybullet_drop(p: Any, objects: list, prepared: tuple) -> dict[str, Any]:
             )
             b = p.createMultiBody(0, shape, basePosition=list((hi_ + lo_) / 2), physicsClientId=cid)
             p.changeDynamics(
-                b, -1, lateralFriction=o.tote_friction, restitution=o.tote_restitution,
+                b,
+                -1,
+                lateralFriction=o.tote_friction,
+                restitution=o.tote_restitution,
                 physicsClientId=cid,
-            )  # fmt: skip
+            )
         bodies = []
         for k, spec in enumerate(objects):
             com = np.asarray(props[k].center_of_mass)
@@ -144,14 +147,23 @@ def pybullet_drop(p: Any, objects: list, prepared: tuple) -> dict[str, Any]:
             q = _quat_xyzw(X[:3, :3])
             pos = X[:3, :3] @ com + X[:3, 3]  # pybullet's base frame sits at the CoM
             b = p.createMultiBody(
-                props[k].mass, shape, basePosition=list(pos), baseOrientation=q,
+                props[k].mass,
+                shape,
+                basePosition=list(pos),
+                baseOrientation=q,
                 physicsClientId=cid,
-            )  # fmt: skip
+            )
             p.changeDynamics(
-                b, -1, lateralFriction=spec.friction, restitution=RESTITUTION,
-                rollingFriction=o.rolling_friction, spinningFriction=o.rolling_friction,
-                angularDamping=o.angular_damping, linearDamping=0.0, physicsClientId=cid,
-            )  # fmt: skip
+                b,
+                -1,
+                lateralFriction=spec.friction,
+                restitution=RESTITUTION,
+                rollingFriction=o.rolling_friction,
+                spinningFriction=o.rolling_friction,
+                angularDamping=o.angular_damping,
+                linearDamping=0.0,
+                physicsClientId=cid,
+            )
             bodies.append(b)
         rest_steps = int(np.ceil(o.rest_time / o.dt - 1e-9))
         max_steps = int(np.ceil(o.max_time / o.dt - 1e-9))

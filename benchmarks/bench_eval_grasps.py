@@ -29,13 +29,31 @@ def run(
 ) -> list[Row]:
     per_object = GRASPS_PER_OBJECT // 4 if quick else GRASPS_PER_OBJECT
     rows = [
-        Row("grasp eval", "collides: parallel-jaw label poses, 0 and 100 mm", 0, "grasps/s", "—",
-            peer_status="no peer"),
-        Row("grasp eval", "collides: suction label poses, 0 and 100 mm", 0, "grasps/s", "—",
-            peer_status="no peer"),
-        Row("grasp eval", f"matching: {NUM_PREDICTIONS} parallel-jaw predictions vs all labels",
-            NUM_PREDICTIONS, "predictions/s", "—", peer_status="no peer"),
-    ]  # fmt: skip
+        Row(
+            "grasp eval",
+            "collides: parallel-jaw label poses, 0 and 100 mm",
+            0,
+            "grasps/s",
+            "—",
+            peer_status="no peer",
+        ),
+        Row(
+            "grasp eval",
+            "collides: suction label poses, 0 and 100 mm",
+            0,
+            "grasps/s",
+            "—",
+            peer_status="no peer",
+        ),
+        Row(
+            "grasp eval",
+            f"matching: {NUM_PREDICTIONS} parallel-jaw predictions vs all labels",
+            NUM_PREDICTIONS,
+            "predictions/s",
+            "—",
+            peer_status="no peer",
+        ),
+    ]
     if mgn is None:
         for r in rows:
             r.mgn_status = mgn_status

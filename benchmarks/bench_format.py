@@ -169,8 +169,12 @@ def _coco_previous(ds: Any) -> dict[str, Any]:
         ys, xs = np.nonzero(m)
         if len(xs) == 0:
             return [0.0] * 4
-        return [float(xs.min()), float(ys.min()), float(xs.max() - xs.min() + 1),
-                float(ys.max() - ys.min() + 1)]  # fmt: skip
+        return [
+            float(xs.min()),
+            float(ys.min()),
+            float(xs.max() - xs.min() + 1),
+            float(ys.max() - ys.min() + 1),
+        ]
 
     images, anns = [], []
     for sid in ds.scene_ids:
@@ -182,9 +186,15 @@ def _coco_previous(ds: Any) -> dict[str, Any]:
             for i in range(amodal.shape[0]):
                 vis = inst == i + 1
                 if vis.any():
-                    anns.append({"category_id": int(cats[i]), "segmentation": rle(vis),
-                                 "bbox": bbox(vis), "amodal_segmentation": rle(amodal[i]),
-                                 "amodal_bbox": bbox(amodal[i])})  # fmt: skip
+                    anns.append(
+                        {
+                            "category_id": int(cats[i]),
+                            "segmentation": rle(vis),
+                            "bbox": bbox(vis),
+                            "amodal_segmentation": rle(amodal[i]),
+                            "amodal_bbox": bbox(amodal[i]),
+                        }
+                    )
     return {"images": images, "annotations": anns}
 
 
@@ -203,8 +213,10 @@ def _coco_row(ds_root: Path, n_views: int, size: int, objects: int) -> Row:
     )
     out = ds_root.parent / "coco.json"
     res: dict[str, tuple[float, float, float]] = {}
-    sides = [("mgn", lambda: export_coco(ds_root, out)),
-             ("peer", lambda: _coco_previous(Dataset(ds_root)))]  # fmt: skip
+    sides = [
+        ("mgn", lambda: export_coco(ds_root, out)),
+        ("peer", lambda: _coco_previous(Dataset(ds_root))),
+    ]
     for name, fn in sides:
         tracemalloc.start()
         t, c = time.perf_counter(), time.process_time()
@@ -396,9 +408,11 @@ def run(
     com_parameters = _com_parameters(scene.folder)
     for k, v in enumerate(scene.view_ids):
         rec = _record(scene.view(v), com_parameters)
-        sides = [("new", lambda r=rec: write_view(dirs["new"], r)),
-                 ("archival", lambda r=rec: write_view(dirs["archival"], r, archival=True)),
-                 ("old", lambda r=rec: _write_legacy(dirs["old"], r))]  # fmt: skip
+        sides = [
+            ("new", lambda r=rec: write_view(dirs["new"], r)),
+            ("archival", lambda r=rec: write_view(dirs["archival"], r, archival=True)),
+            ("old", lambda r=rec: _write_legacy(dirs["old"], r)),
+        ]
         for name, fn in sides if k % 2 == 0 else sides[::-1]:
             t, c = time.perf_counter(), time.process_time()
             fn()
@@ -458,8 +472,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--dataset", type=Path, default=None, help="measure scene 0 of this dataset")
     p.add_argument("--no-coco", action="store_true", help="skip the COCO export row")
     p.add_argument("--no-exports", action="store_true", help="skip the BOP / GraspNet rows")
-    p.add_argument("--only-exports", action="store_true",
-                   help="only the BOP / GraspNet rows (of --dataset's scene 0)")  # fmt: skip
+    p.add_argument(
+        "--only-exports",
+        action="store_true",
+        help="only the BOP / GraspNet rows (of --dataset's scene 0)",
+    )
     a = p.parse_args(sys.argv[1:] if argv is None else argv)
     from .common import import_mgn
 
@@ -474,8 +491,16 @@ def main(argv: list[str] | None = None) -> int:
         size = int(scene.views()[0].intrinsics.width)
         rows = _export_rows(a.dataset, len(scene.view_ids), size, objects)
     else:
-        rows = run(quick=a.quick, repeats=1, mgn=mgn, mgn_status=status, log=print,
-                   dataset=a.dataset, coco=not a.no_coco, exports=not a.no_exports)  # fmt: skip
+        rows = run(
+            quick=a.quick,
+            repeats=1,
+            mgn=mgn,
+            mgn_status=status,
+            log=print,
+            dataset=a.dataset,
+            coco=not a.no_coco,
+            exports=not a.no_exports,
+        )
     for row in rows:
         print(row.case, "|", row.agreement, "|", "\n  ".join(row.notes) or row.mgn_status)
     return 0

@@ -63,12 +63,24 @@ def run(
     size = 600 if quick else 1200
     log(f"  lens: {size}x{size}, k1 = {DIST[0]}")
     cv2, peer_status = load_peer()
-    map_row = Row(group="lens", case=f"undistortion map, {size}×{size}, barrel k1 = -0.3", n=1,
-                  unit="cameras/s", peer_name="cv2.undistortPoints (every pixel centre)",
-                  mgn_status=mgn_status, peer_status=peer_status)  # fmt: skip
-    view_row = Row(group="lens", case=f"resample RGB + ids + depth, {size}×{size}", n=1,
-                   unit="views/s", peer_name="cv2.remap ×3 (linear, nearest, linear)",
-                   mgn_status=mgn_status, peer_status=peer_status)  # fmt: skip
+    map_row = Row(
+        group="lens",
+        case=f"undistortion map, {size}×{size}, barrel k1 = -0.3",
+        n=1,
+        unit="cameras/s",
+        peer_name="cv2.undistortPoints (every pixel centre)",
+        mgn_status=mgn_status,
+        peer_status=peer_status,
+    )
+    view_row = Row(
+        group="lens",
+        case=f"resample RGB + ids + depth, {size}×{size}",
+        n=1,
+        unit="views/s",
+        peer_name="cv2.remap ×3 (linear, nearest, linear)",
+        mgn_status=mgn_status,
+        peer_status=peer_status,
+    )
     if mgn is None:
         return [map_row, view_row]
     from mgn.scene.cameras import Intrinsics
@@ -109,8 +121,10 @@ def run(
         results = {k: fn() for k, fn in cases.items()}
         timings = measure_alternating(cases, repeats)
         row.mgn = {1: timings["mgn/1"]}
-        row.notes.append(f"mgn: {1000 * timings['mgn/1'].median:.0f} ms wall, "
-                         f"{1000 * float(np.median(timings['mgn/1'].cpu)):.0f} ms CPU")  # fmt: skip
+        row.notes.append(
+            f"mgn: {1000 * timings['mgn/1'].median:.0f} ms wall, "
+            f"{1000 * float(np.median(timings['mgn/1'].cpu)):.0f} ms CPU"
+        )
         if "peer" in cases:
             row.peer = timings["peer"]
             row.notes.append(f"peer: {1000 * timings['peer'].median:.0f} ms wall")

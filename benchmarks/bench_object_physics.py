@@ -78,15 +78,28 @@ def _agreement(spec: Any, pj: Any, config: Any, n: int, threads: int) -> dict[st
     full = np.empty(len(idx))
     parts = shake_parts(mesh)  # the shape ShakeScorer simulates
     for j, g in enumerate(idx):
-        one = shake_scores(parts, props.mass, props.center_of_mass,
-                           props.inertia, rows[j : j + 1], None,
-                           ShakeOptions(grid=config.object_labels.physics_grid,
-                                        num_threads=threads, first_grasp_index=int(g)))  # fmt: skip
+        one = shake_scores(
+            parts,
+            props.mass,
+            props.center_of_mass,
+            props.inertia,
+            rows[j : j + 1],
+            None,
+            ShakeOptions(
+                grid=config.object_labels.physics_grid,
+                num_threads=threads,
+                first_grasp_index=int(g),
+            ),
+        )
         full[j] = one.score[0]
     got = np.asarray(pj.quality_score_simulation, np.float64)[idx]
     d = np.abs(got - full)
-    return {"agreement_grasps": len(idx), "mean_abs_error": float(d.mean()),
-            "max_abs_error": float(d.max()), "identical": float(np.mean(d < 1e-6))}  # fmt: skip
+    return {
+        "agreement_grasps": len(idx),
+        "mean_abs_error": float(d.mean()),
+        "max_abs_error": float(d.max()),
+        "identical": float(np.mean(d < 1e-6)),
+    }
 
 
 def run(
@@ -156,8 +169,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", metavar="FILE")
     ap.add_argument("--scores", metavar="FILE.npz", help="save every object's physics scores")
     args = ap.parse_args(argv)
-    names = (args.objects.split(",") if args.objects
-             else [o.name for o in builtin_objects()] + list(FOREIGN))  # fmt: skip
+    names = (
+        args.objects.split(",")
+        if args.objects
+        else [o.name for o in builtin_objects()] + list(FOREIGN)
+    )
     scores: dict[str, Any] = {}
     rows = run(names, args.threads, args.agreement, scores)
     if args.scores:
@@ -165,8 +181,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     over = [r["object"] for r in rows if r["wall_s"] > TARGET_S]
-    print(f"{len(rows) - len(over)} of {len(rows)} objects <= {TARGET_S:.0f} s"
-          + (f"; over: {', '.join(over)}" if over else ""))  # fmt: skip
+    print(
+        f"{len(rows) - len(over)} of {len(rows)} objects <= {TARGET_S:.0f} s"
+        + (f"; over: {', '.join(over)}" if over else "")
+    )
     return 0
 
 

@@ -87,9 +87,13 @@ def _engine_mgn(
 
         def mgn_denoise(radiance: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> Any:
             return photo_denoise(
-                radiance, albedo, normal, defaults.denoise_quality,
-                guides=defaults.denoise_guides, resolution=defaults.denoise_resolution,
-            )  # fmt: skip
+                radiance,
+                albedo,
+                normal,
+                defaults.denoise_quality,
+                guides=defaults.denoise_guides,
+                resolution=defaults.denoise_resolution,
+            )
 
     except ImportError:
 
@@ -131,8 +135,13 @@ def _engine_mgn(
         opts = mpath.PathTraceOptions(spp=1, max_bounces=0, num_threads=THREADS)
         return np.asarray(scene.render(view, opts).instance_ids, np.int32)
 
-    return {"render": render, "ids": ids, "keep": scene, "denoiser_study": denoiser_study,
-            "trace": trace}  # fmt: skip
+    return {
+        "render": render,
+        "ids": ids,
+        "keep": scene,
+        "denoiser_study": denoiser_study,
+        "trace": trace,
+    }
 
 
 def _engine_cycles(desc: ps.SceneDesc, scene_json: Path, tmp: Path) -> dict[str, Callable]:
@@ -369,9 +378,13 @@ def evaluate(
         for d in res_mgn.get("denoiser_study", []):
             test = tonemap(frames["mgn"][d["key"]], e)
             study.append(
-                {**d, "trace_cpu": raw_cpu.get(d["spp"], float("nan")),
-                 "flip": flip_error(ref_t, test), "psnr": psnr(ref_t, test)}
-            )  # fmt: skip
+                {
+                    **d,
+                    "trace_cpu": raw_cpu.get(d["spp"], float("nan")),
+                    "flip": flip_error(ref_t, test),
+                    "psnr": psnr(ref_t, test),
+                }
+            )
     # Faithfulness of the exports: the engines' references against each other, each with the
     # mgn reference's exposure (same radiometry expected).
     cross = {}
@@ -864,8 +877,10 @@ def render_set(
             m = 6
             y0, y1 = max(0, ys.min() - m), min(ids.shape[0], ys.max() + 1 + m)
             x0, x1 = max(0, xs.min() - m), min(ids.shape[1], xs.max() + 1 + m)
-            tiles = [mpath.develop(np.ascontiguousarray(i[y0:y1, x0:x1]), film) for i in
-                     (demo, high, cycles)]  # fmt: skip
+            tiles = [
+                mpath.develop(np.ascontiguousarray(i[y0:y1, x0:x1]), film)
+                for i in (demo, high, cycles)
+            ]
             gap = np.full((y1 - y0, 4, 3), 255, np.uint8)
             strip = np.concatenate([tiles[0], gap, tiles[1], gap, tiles[2]], 1)
             save_png(np.repeat(np.repeat(strip, 2, 0), 2, 1), out / f"{name}_closeup.png")
@@ -900,17 +915,32 @@ def figures_main(argv: list[str] | None = None) -> int:
         desc = ps.describe(scene_json, a.width)
         assert np.mean(raster_ids(desc, scene_json) > 0) > 0.1, "the camera sees no objects"
         render_set(
-            "render_bin", desc, scene_json, tmp, a.mgn_spp, a.high_spp, a.cycles_spp,
-            a.exposure, a.out,
-        )  # fmt: skip
+            "render_bin",
+            desc,
+            scene_json,
+            tmp,
+            a.mgn_spp,
+            a.high_spp,
+            a.cycles_spp,
+            a.exposure,
+            a.out,
+        )
         glass_json = tmp / "glass.json"
         ps.drop(glass_json, GLASS_NAMES, seed=3)
         glass = ps.describe(glass_json, a.width)
         glass = dataclasses.replace(glass, camera=glass_camera(glass_json, a.width))
         render_set(
-            "render_glass", glass, glass_json, tmp, a.mgn_spp, a.high_spp, a.cycles_spp,
-            a.exposure, a.out, closeup=("wine_glass", "bottle_clear"),
-        )  # fmt: skip
+            "render_glass",
+            glass,
+            glass_json,
+            tmp,
+            a.mgn_spp,
+            a.high_spp,
+            a.cycles_spp,
+            a.exposure,
+            a.out,
+            closeup=("wine_glass", "bottle_clear"),
+        )
     return 0
 
 

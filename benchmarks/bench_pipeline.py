@@ -153,31 +153,60 @@ def stage_cpu(config: Any) -> dict[str, Any]:
         pj = [strided_subset(g.paralleljaw, 2000) for g in got]
         su = [strided_subset(g.suction, 2000) for g in got]
         # As label_scene: the files need each grasp's first colliding pose only.
-        sgm = timed("prepare: scene grasp collisions", SceneGraspModel, scene, pj, su,
-                    config.gripper, config.cup, first_collision_only=True)  # fmt: skip
+        sgm = timed(
+            "prepare: scene grasp collisions",
+            SceneGraspModel,
+            scene,
+            pj,
+            su,
+            config.gripper,
+            config.cup,
+            first_collision_only=True,
+        )
         views = scene_views(scene, config.camera)
         cats = np.array([i.category_id for i in scene.instances], np.int64)
         bins = [i.bin_relation for i in scene.instances]
-        frames = iter_views(scene.render_items(), tote_mesh(scene.tote), views,
-                            sensor=config.camera.sensor, seed=seed)  # fmt: skip
+        frames = iter_views(
+            scene.render_items(),
+            tote_mesh(scene.tote),
+            views,
+            sensor=config.camera.sensor,
+            seed=seed,
+        )
         out = Path(tmp)
         for v, view in views:
             images = timed("render", next, frames)
-            lab = timed("object labels", view_object_labels, rays, view, images.instance_ids,
-                        depth=images.depth_ideal)  # fmt: skip
+            lab = timed(
+                "object labels",
+                view_object_labels,
+                rays,
+                view,
+                images.instance_ids,
+                depth=images.depth_ideal,
+            )
             lab, index = seen_objects(round_occlusion(lab, OCCLUSION_DECIMALS))
-            lay = timed("layout", compute_layout, lab.visible, lab.amodal, images.depth_ideal,
-                        cats[index], [bins[i] for i in index],
-                        occlusion=lab.occlusion)  # fmt: skip
+            lay = timed(
+                "layout",
+                compute_layout,
+                lab.visible,
+                lab.amodal,
+                images.depth_ideal,
+                cats[index],
+                [bins[i] for i in index],
+                occlusion=lab.occlusion,
+            )
             gr = timed("scene grasps", view_grasps, sgm, view, index, len(scene.instances))
             scene_gt_entries(lab.X_CO, cats[index])
             record = view_record(
                 v, view, images, lab, lay, gr, rays.com_parameters()[index], instance_ids=index + 1
             )
             timed("write", write_view, out, record, times=write_parts)
-    return {"objects": len(scene.instances), "views": len(views),
-            "stages": {k: {"wall_s": w, "cpu_s": c} for k, (w, c) in stages.items()},
-            "write_parts_cpu_s": write_parts}  # fmt: skip
+    return {
+        "objects": len(scene.instances),
+        "views": len(views),
+        "stages": {k: {"wall_s": w, "cpu_s": c} for k, (w, c) in stages.items()},
+        "write_parts_cpu_s": write_parts,
+    }
 
 
 def child_main(argv: list[str]) -> int:

@@ -324,11 +324,15 @@ def run(
                 if mgn_scene is not None
             }
             specs = [
-                ("first hit with distance and point", "intersect", "location",
-                 "intersects_location(multiple_hits=False)"),
+                (
+                    "first hit with distance and point",
+                    "intersect",
+                    "location",
+                    "intersects_location(multiple_hits=False)",
+                ),
                 ("first hit, triangle index", "intersect_ids", "first", "intersects_first"),
                 ("any hit (hit/miss only)", "occluded", "any", "intersects_any"),
-            ]  # fmt: skip
+            ]
             for query, mgn_call, peer_key, peer_call in specs:
                 row = Row(
                     group="ray casting",

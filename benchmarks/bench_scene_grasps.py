@@ -102,11 +102,23 @@ def run(
 ) -> list[Row]:
     per_object = GRASPS_PER_OBJECT // 4 if quick else GRASPS_PER_OBJECT
     rows = [
-        Row("scene grasps", f"collision pass, {NUM_OBJECTS} objects, 0 and 100 mm", 0,
-            "grasps/s", "—", peer_status="no peer"),
-        Row("scene grasps", "per-view selection (37 views, every object seen)", 37, "views/s",
-            "—", peer_status="no peer"),
-    ]  # fmt: skip
+        Row(
+            "scene grasps",
+            f"collision pass, {NUM_OBJECTS} objects, 0 and 100 mm",
+            0,
+            "grasps/s",
+            "—",
+            peer_status="no peer",
+        ),
+        Row(
+            "scene grasps",
+            "per-view selection (37 views, every object seen)",
+            37,
+            "views/s",
+            "—",
+            peer_status="no peer",
+        ),
+    ]
     if mgn is None:
         for r in rows:
             r.mgn_status = mgn_status

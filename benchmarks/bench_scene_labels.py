@@ -43,8 +43,12 @@ def _scene_and_labels() -> tuple[Any, list[Any]]:
         tote=ToteSpec(),
         seed=2024,
     )
-    config = load_config({"labels": {"pj_physics": False},
-                          "object_labels": {"suction_points": 2000, "pj_points": 300}})  # fmt: skip
+    config = load_config(
+        {
+            "labels": {"pj_physics": False},
+            "object_labels": {"suction_points": 2000, "pj_points": 300},
+        }
+    )
     labels = [object_labels(s, config) for s in specs]
     return scene, labels
 
@@ -79,10 +83,14 @@ def run(
         for rep in range(repeats + 1):
             out = root / f"r{rep}"
             c0, t0 = time.process_time(), time.perf_counter()
-            timings = label_scene(scene, out, views,
-                                  pj_labels=[g.paralleljaw for g in labels],
-                                  suction_labels=[g.suction for g in labels],
-                                  options=LabelOptions(num_threads=tmax))  # fmt: skip
+            timings = label_scene(
+                scene,
+                out,
+                views,
+                pj_labels=[g.paralleljaw for g in labels],
+                suction_labels=[g.suction for g in labels],
+                options=LabelOptions(num_threads=tmax),
+            )
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
             shutil.rmtree(out)
             if rep == 0:
@@ -102,8 +110,10 @@ def run(
     n = len(views_idx)
     row.agreement = f"labels {labels_ms:.0f} ms/view (target ≤ 300)"
     row.notes.append(
-        "ms per view: " + ", ".join(f"{k} {v:.0f}" for k, v in stages.items())
-        + "; once per scene: " + ", ".join(f"{k[9:]} {v * n:.0f} ms" for k, v in prep.items())
-    )  # fmt: skip
+        "ms per view: "
+        + ", ".join(f"{k} {v:.0f}" for k, v in stages.items())
+        + "; once per scene: "
+        + ", ".join(f"{k[9:]} {v * n:.0f} ms" for k, v in prep.items())
+    )
     log(f"    {row.agreement}; {row.notes[-1]}")
     return [row]

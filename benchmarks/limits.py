@@ -126,12 +126,14 @@ def shares(rows: list[Row], limits: dict[str, float]) -> list[dict[str, Any]]:
         if key not in limits:
             continue
         rate = r.mgn[t].rate(r.n) * work
-        out.append({
-            "row": f"{r.group}: {r.case}",
-            "limit": key,
-            "rate": rate,
-            "share": rate / limits[key],
-        })  # fmt: skip
+        out.append(
+            {
+                "row": f"{r.group}: {r.case}",
+                "limit": key,
+                "rate": rate,
+                "share": rate / limits[key],
+            }
+        )
     return out
 
 
@@ -264,15 +266,29 @@ def gate(rows: Sequence[Row], floors: Sequence[Floor] = FLOORS) -> list[dict[str
     for f in floors:
         matching = [r for r in rows if r.group == f.group and re.search(f.pattern, r.case)]
         if not matching:
-            checks.append({"row": f"{f.group}: /{f.pattern}/", "threads": f.threads,
-                           "ratio": None, "floor": f.floor, "verdict": "not measured"})  # fmt: skip
+            checks.append(
+                {
+                    "row": f"{f.group}: /{f.pattern}/",
+                    "threads": f.threads,
+                    "ratio": None,
+                    "floor": f.floor,
+                    "verdict": "not measured",
+                }
+            )
             continue
         for r in matching:
             t = f.threads if f.threads is not None else (max(r.mgn) if r.mgn else None)
             ratio = r.ratio(t) if t is not None else None
             verdict = "not measured" if ratio is None else "pass" if ratio >= f.floor else "FAIL"
-            checks.append({"row": f"{r.group}: {r.case}", "threads": t, "ratio": ratio,
-                           "floor": f.floor, "verdict": verdict})  # fmt: skip
+            checks.append(
+                {
+                    "row": f"{r.group}: {r.case}",
+                    "threads": t,
+                    "ratio": ratio,
+                    "floor": f.floor,
+                    "verdict": verdict,
+                }
+            )
     return checks
 
 

@@ -38,8 +38,16 @@ def coco_ground_truth_ap(gt: object) -> tuple[float, float]:
     from pycocotools.cocoeval import COCOeval
 
     anns = gt.loadAnns(gt.getAnnIds())  # type: ignore[attr-defined]
-    dets = [{"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"],
-             "segmentation": a["segmentation"], "score": 1.0} for a in anns]  # fmt: skip
+    dets = [
+        {
+            "image_id": a["image_id"],
+            "category_id": a["category_id"],
+            "bbox": a["bbox"],
+            "segmentation": a["segmentation"],
+            "score": 1.0,
+        }
+        for a in anns
+    ]
     out = []
     for iou in ("bbox", "segm"):
         ev = COCOeval(gt, gt.loadRes(dets), iou)  # type: ignore[attr-defined]
@@ -107,8 +115,11 @@ def small_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("MGN_CACHE_DIR", str(cache))
         report = generate(
-            out, 2, config=load_config(SMALL_DATASET_CONFIG), seed=SMALL_DATASET_SEED,
+            out,
+            2,
+            config=load_config(SMALL_DATASET_CONFIG),
+            seed=SMALL_DATASET_SEED,
             progress=False,
-        )  # fmt: skip
+        )
     assert report.complete, report.format_summary()
     return out

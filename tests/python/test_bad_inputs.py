@@ -133,15 +133,26 @@ def _duplicate_config_key(tmp: Path) -> list[str]:
 
 def _duplicate_object_key(tmp: Path) -> list[str]:
     write(tmp / "cube.obj", CUBE_OBJ)
-    write(tmp / "objs.yaml", "objects:\n  - name: part\n    mesh: cube.obj\n    density: 500\n"
-          "    friction: 0.5\n    density: 5000\n")  # fmt: skip
+    write(
+        tmp / "objs.yaml",
+        "objects:\n  - name: part\n    mesh: cube.obj\n    density: 500\n"
+        "    friction: 0.5\n    density: 5000\n",
+    )
     return ["objects", "list", "--add", str(tmp / "objs.yaml")]
 
 
 def _resume_other_config(tmp: Path) -> list[str]:
     cfg = fast_config(tmp)
-    args = ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--objects", "box_tea",
-            "--quiet"]  # fmt: skip
+    args = [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--objects",
+        "box_tea",
+        "--quiet",
+    ]
     assert main([*args, "--config", str(cfg)]) == 0
     fast_config(tmp, drop={"max_time": 0.6})
     return [*args, "--config", str(cfg), "--resume"]
@@ -154,8 +165,15 @@ def _nonuniform_yaml_scale(tmp: Path) -> list[str]:
 
 def _nonuniform_cli_scale(tmp: Path) -> list[str]:
     write(tmp / "cube.obj", CUBE_OBJ)
-    return ["objects", "add", str(tmp / "cube.obj"), "--to", str(tmp / "o.yaml"),
-            "--scale", "0.05,0.05,0.1"]  # fmt: skip
+    return [
+        "objects",
+        "add",
+        str(tmp / "cube.obj"),
+        "--to",
+        str(tmp / "o.yaml"),
+        "--scale",
+        "0.05,0.05,0.1",
+    ]
 
 
 # ------------------------------------------------------ permissions, interrupts, full disks
@@ -163,8 +181,18 @@ def _nonuniform_cli_scale(tmp: Path) -> list[str]:
 
 def _tiny_generate(tmp: Path) -> list[str]:
     cfg = fast_config(tmp)
-    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--objects", "box_tea",
-            "--config", str(cfg), "--quiet"]  # fmt: skip
+    return [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--objects",
+        "box_tea",
+        "--config",
+        str(cfg),
+        "--quiet",
+    ]
 
 
 def _usual_modes(tmp: Path) -> None:
@@ -217,26 +245,53 @@ def _disk_full_reported(tmp: Path) -> None:
 
 def _objects_replace_a_large_count(tmp: Path) -> list[str]:
     cfg = fast_config(tmp, objects={"count": 1000})
-    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
-            "--objects", "box_tea,can_soda", "--quiet"]  # fmt: skip
+    return [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--config",
+        str(cfg),
+        "--objects",
+        "box_tea,can_soda",
+        "--quiet",
+    ]
 
 
 def _two_user_objects(tmp: Path) -> Path:
     """A 5 cm cube 'small_part' and the same cube read in the wrong unit, 'speck' (0.5 mm)."""
     write(tmp / "cube.obj", CUBE_OBJ)
     entry = {"mesh": "cube.obj", "density": 500, "friction": 0.5}
-    return write_yaml(tmp / "objs.yaml", {"objects": [
-        {"name": "small_part", "scale": 0.05, **entry},
-        {"name": "speck", "scale": 5e-4, **entry},
-    ]})  # fmt: skip
+    return write_yaml(
+        tmp / "objs.yaml",
+        {
+            "objects": [
+                {"name": "small_part", "scale": 0.05, **entry},
+                {"name": "speck", "scale": 5e-4, **entry},
+            ]
+        },
+    )
 
 
 def _generate_with(*objects: str) -> Callable[[Path], list[str]]:
     def build(tmp: Path) -> list[str]:
         objs = _two_user_objects(tmp)
         cfg = fast_config(tmp)
-        return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
-                "--add", str(objs), "--objects", *objects, "--quiet"]  # fmt: skip
+        return [
+            "generate",
+            "--out",
+            str(tmp / "ds"),
+            "--scenes",
+            "1",
+            "--config",
+            str(cfg),
+            "--add",
+            str(objs),
+            "--objects",
+            *objects,
+            "--quiet",
+        ]
 
     return build
 
@@ -246,8 +301,15 @@ def _generate_with(*objects: str) -> Callable[[Path], list[str]]:
 
 def _obj_with_missing_mtl(tmp: Path) -> list[str]:
     write(tmp / "meshes" / "part.obj", "mtllib part.mtl\n" + CUBE_OBJ)
-    return ["objects", "add", str(tmp / "meshes" / "part.obj"), "--scale", "0.05", "--to",
-            str(tmp / "o.yaml")]  # fmt: skip
+    return [
+        "objects",
+        "add",
+        str(tmp / "meshes" / "part.obj"),
+        "--scale",
+        "0.05",
+        "--to",
+        str(tmp / "o.yaml"),
+    ]
 
 
 def _obj_with_missing_map_kd(tmp: Path) -> list[str]:
@@ -255,9 +317,20 @@ def _obj_with_missing_map_kd(tmp: Path) -> list[str]:
     write(tmp / "part.mtl", "newmtl wood\nKd 1 1 1\nmap_Kd -s 1 1 1 tex/wood grain.png\n")
     entry = {"name": "part", "mesh": "part.obj", "scale": 0.05, "density": 500, "friction": 0.5}
     write_yaml(tmp / "objs.yaml", {"objects": [entry]})
-    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
-            str(fast_config(tmp)), "--add", str(tmp / "objs.yaml"), "--objects", "part",
-            "--quiet"]  # fmt: skip
+    return [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--config",
+        str(fast_config(tmp)),
+        "--add",
+        str(tmp / "objs.yaml"),
+        "--objects",
+        "part",
+        "--quiet",
+    ]
 
 
 def _obj_with_unreadable_texture(tmp: Path) -> list[str]:
@@ -299,8 +372,16 @@ def _million_objects(command: str) -> Callable[[Path], list[str]]:
         cfg = fast_config(tmp, objects={"count": 1_000_000})
         if command == "check":
             return ["config", "check", str(cfg)]
-        return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
-                "--quiet"]  # fmt: skip
+        return [
+            "generate",
+            "--out",
+            str(tmp / "ds"),
+            "--scenes",
+            "1",
+            "--config",
+            str(cfg),
+            "--quiet",
+        ]
 
     return build
 
@@ -308,9 +389,18 @@ def _million_objects(command: str) -> Callable[[Path], list[str]]:
 def _many_named_objects(tmp: Path) -> list[str]:
     """``--objects`` naming 3000 tennis balls (~50x the tote's volume in boxes): refused before
     any object is composed or dropped."""
-    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
-            str(fast_config(tmp)), "--objects", ",".join(["tennis_ball"] * 3000),
-            "--quiet"]  # fmt: skip
+    return [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--config",
+        str(fast_config(tmp)),
+        "--objects",
+        ",".join(["tennis_ball"] * 3000),
+        "--quiet",
+    ]
 
 
 def _nothing_written(tmp: Path) -> None:
@@ -329,8 +419,18 @@ def _check(**sections: dict) -> Callable[[Path], list[str]]:
 
 def _generate(**sections: dict) -> Callable[[Path], list[str]]:
     def build(tmp: Path) -> list[str]:
-        return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
-                str(fast_config(tmp, **sections)), "--objects", "box_tea", "--quiet"]  # fmt: skip
+        return [
+            "generate",
+            "--out",
+            str(tmp / "ds"),
+            "--scenes",
+            "1",
+            "--config",
+            str(fast_config(tmp, **sections)),
+            "--objects",
+            "box_tea",
+            "--quiet",
+        ]
 
     return build
 
@@ -343,9 +443,20 @@ def _poses(*eyes: list[float], away: bool = False) -> dict:
 
 def _one_micron_part(tmp: Path) -> list[str]:
     cube_objects(tmp, name="speck", scale=1e-6)
-    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
-            str(fast_config(tmp)), "--add", str(tmp / "objs.yaml"), "--objects", "speck",
-            "--quiet"]  # fmt: skip
+    return [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--config",
+        str(fast_config(tmp)),
+        "--add",
+        str(tmp / "objs.yaml"),
+        "--objects",
+        "speck",
+        "--quiet",
+    ]
 
 
 def _user_name_with_add(tmp: Path) -> list[str]:
@@ -356,15 +467,31 @@ def _user_name_with_add(tmp: Path) -> list[str]:
 
 def _part_larger_than_tote(tmp: Path) -> list[str]:
     cube_objects(tmp, name="big_part", scale=0.6)  # 60 cm: plausible, but not in this tote
-    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config",
-            str(fast_config(tmp)), "--add", str(tmp / "objs.yaml"), "--objects", "big_part",
-            "box_tea", "--quiet"]  # fmt: skip
+    return [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--config",
+        str(fast_config(tmp)),
+        "--add",
+        str(tmp / "objs.yaml"),
+        "--objects",
+        "big_part",
+        "box_tea",
+        "--quiet",
+    ]
 
 
 def _drawn_part_larger_than_tote(tmp: Path) -> list[str]:
     cube_objects(tmp, name="big_part", scale=0.6)
-    objects = {"categories": ["box_tea", "big_part"], "count": 1, "copies": [1, 1],
-               "user_objects": [str(tmp / "objs.yaml")]}  # fmt: skip
+    objects = {
+        "categories": ["box_tea", "big_part"],
+        "count": 1,
+        "copies": [1, 1],
+        "user_objects": [str(tmp / "objs.yaml")],
+    }
     return ["config", "check", str(fast_config(tmp, objects=objects))]
 
 
@@ -399,8 +526,15 @@ BOTTLE_G = 0.5 * 48 * 0.04**2 * math.sin(2 * math.pi / 48) * 0.12 * 1e6
 def _add_mesh(name: str, vertices: np.ndarray, faces: np.ndarray) -> Callable[[Path], list[str]]:
     def build(tmp: Path) -> list[str]:
         trimesh.Trimesh(vertices, faces, process=False).export(tmp / f"{name}.ply")
-        return ["objects", "add", str(tmp / f"{name}.ply"), "--to", str(tmp / "o.yaml"),
-                "--density", "1000"]  # fmt: skip
+        return [
+            "objects",
+            "add",
+            str(tmp / f"{name}.ply"),
+            "--to",
+            str(tmp / "o.yaml"),
+            "--density",
+            "1000",
+        ]
 
     return build
 
@@ -479,10 +613,26 @@ def _open_entry(tmp: Path) -> None:
 def _generate_open_object(tmp: Path) -> list[str]:
     trimesh.Trimesh(*_without_cap(), process=False).export(tmp / "cup.ply")
     assert main(["objects", "add", str(tmp / "cup.ply"), "--to", str(tmp / "o.yaml")]) == 0
-    cfg = fast_config(tmp, labels={"suction": True, "paralleljaw": True},
-                      object_labels={"suction_points": 40, "pj_points": 40})  # fmt: skip
-    return ["generate", "--out", str(tmp / "ds"), "--scenes", "1", "--config", str(cfg),
-            "--add", str(tmp / "o.yaml"), "--objects", "cup", "--quiet", "--no-cache"]  # fmt: skip
+    cfg = fast_config(
+        tmp,
+        labels={"suction": True, "paralleljaw": True},
+        object_labels={"suction_points": 40, "pj_points": 40},
+    )
+    return [
+        "generate",
+        "--out",
+        str(tmp / "ds"),
+        "--scenes",
+        "1",
+        "--config",
+        str(cfg),
+        "--add",
+        str(tmp / "o.yaml"),
+        "--objects",
+        "cup",
+        "--quiet",
+        "--no-cache",
+    ]
 
 
 # ------------------------------------------------------------------- Phong -> PBR materials
@@ -492,8 +642,15 @@ def _phong(kd: str, ks: str, ns: str) -> Callable[[Path], list[str]]:
     def build(tmp: Path) -> list[str]:
         write(tmp / "part.obj", "mtllib part.mtl\nusemtl m\n" + CUBE_OBJ)
         write(tmp / "part.mtl", f"newmtl m\nKd {kd}\nKs {ks}\nNs {ns}\n")
-        return ["objects", "add", str(tmp / "part.obj"), "--scale", "0.05", "--to",
-                str(tmp / "o.yaml")]  # fmt: skip
+        return [
+            "objects",
+            "add",
+            str(tmp / "part.obj"),
+            "--scale",
+            "0.05",
+            "--to",
+            str(tmp / "o.yaml"),
+        ]
 
     return build
 

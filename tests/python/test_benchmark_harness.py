@@ -81,9 +81,19 @@ def test_the_gate_compares_the_stated_ratio_with_its_floor() -> None:
 
 def test_every_floor_is_positive_and_names_a_suite_group() -> None:
     groups = {
-        "ray casting", "collision", "suction seal", "parallel-jaw", "physics", "scene drop",
-        "rendering", "path tracing", "layout", "lens", "view labels", "dataset files",
-    }  # fmt: skip
+        "ray casting",
+        "collision",
+        "suction seal",
+        "parallel-jaw",
+        "physics",
+        "scene drop",
+        "rendering",
+        "path tracing",
+        "layout",
+        "lens",
+        "view labels",
+        "dataset files",
+    }
     for f in FLOORS:
         assert f.floor > 0, f
         assert f.group in groups, f
@@ -142,26 +152,62 @@ def test_the_page_is_rewritten_from_stored_results_and_the_gate_fails(tmp_path: 
 def test_an_only_run_names_the_runs_whose_rows_it_keeps(tmp_path: Path) -> None:
     rows = [_row("lens", "undistortion map, 100×100", {1: 0.1}, 0.2)]
     machine = {"load_average_at_start": "0.1 0.2 0.3", "load_average_at_end": "1.0 1.1 1.2"}
-    older = {"command": "python -m benchmarks", "date_utc": "2026-12-06 10:00 UTC",
-             "mode": "full", "machine": machine, "kept_rows": 0, "rows": []}  # fmt: skip
+    older = {
+        "command": "python -m benchmarks",
+        "date_utc": "2026-12-06 10:00 UTC",
+        "mode": "full",
+        "machine": machine,
+        "kept_rows": 0,
+        "rows": [],
+    }
     (tmp_path / "results.json").write_text(json.dumps(older))
     assert previous_runs(tmp_path / "results.json") == [
-        {"command": "python -m benchmarks", "date_utc": "2026-12-06 10:00 UTC", "mode": "full",
-         "load_average_at_start": "0.1 0.2 0.3", "load_average_at_end": "1.0 1.1 1.2"}
-    ]  # fmt: skip
+        {
+            "command": "python -m benchmarks",
+            "date_utc": "2026-12-06 10:00 UTC",
+            "mode": "full",
+            "load_average_at_start": "0.1 0.2 0.3",
+            "load_average_at_end": "1.0 1.1 1.2",
+        }
+    ]
     # A run that itself kept rows passes on where they came from, newest first.
-    newer = dict(older, command="python -m benchmarks --only lens", kept_rows=3,
-                 kept_from=previous_runs(tmp_path / "results.json"))  # fmt: skip
+    newer = dict(
+        older,
+        command="python -m benchmarks --only lens",
+        kept_rows=3,
+        kept_from=previous_runs(tmp_path / "results.json"),
+    )
     (tmp_path / "results.json").write_text(json.dumps(newer))
     runs = previous_runs(tmp_path / "results.json")
-    assert [r["command"] for r in runs] == ["python -m benchmarks --only lens",
-                                            "python -m benchmarks"]  # fmt: skip
+    assert [r["command"] for r in runs] == [
+        "python -m benchmarks --only lens",
+        "python -m benchmarks",
+    ]
     assert previous_runs(tmp_path / "missing.json") == []
-    doc = dict(newer, repeats=3, elapsed_seconds=1.0, mgn_status="ok", mgn_threads=[1],
-               rows=[r.to_json() for r in rows], limits={}, limit_shares=[], kept_from=runs,
-               machine=dict(machine, cpu_model="c", logical_cpus=2, physical_cores=2,
-                            usable_cpus=2, ram_gib=1.0, os="o", kernel="k", python="3",
-                            mgn_revision="r", versions={}))  # fmt: skip
+    doc = dict(
+        newer,
+        repeats=3,
+        elapsed_seconds=1.0,
+        mgn_status="ok",
+        mgn_threads=[1],
+        rows=[r.to_json() for r in rows],
+        limits={},
+        limit_shares=[],
+        kept_from=runs,
+        machine=dict(
+            machine,
+            cpu_model="c",
+            logical_cpus=2,
+            physical_cores=2,
+            usable_cpus=2,
+            ram_gib=1.0,
+            os="o",
+            kernel="k",
+            python="3",
+            mgn_revision="r",
+            versions={},
+        ),
+    )
     page = render_page(doc, rows, gate(rows))
     assert "keeps 3 row(s) of other suites" in page
     assert (

@@ -98,10 +98,12 @@ def test_obj_without_mtl_and_with_ns_0_are_valid_objects(tmp_path):
         ("{name: a, mesh: cube.obj, density: 1000, friction: 0.5, scale: 0}", "scale"),
         ("{name: a, mesh: missing.obj, density: 1000, friction: 0.5}", "mesh"),
         ("{name: a, mesh: cube.obj, density: 1000, friction: 0.5, color: [2, 0, 0]}", "color"),
-        ("{name: a, mesh: cube.obj, density: 1000, friction: 0.5, keypoints: {t: [1]}}",
-         "keypoints.t"),
+        (
+            "{name: a, mesh: cube.obj, density: 1000, friction: 0.5, keypoints: {t: [1]}}",
+            "keypoints.t",
+        ),
     ],
-)  # fmt: skip
+)
 def test_bad_user_object_errors_name_file_object_and_key(tmp_path, entry, key):
     cube_obj(tmp_path)
     path = tmp_path / "bad.yaml"
@@ -192,8 +194,12 @@ def test_info_json_is_the_same_from_python_and_cpp(tmp_path, data_dir, capsys):
     for mesh, extra in [(data_dir / "cube.obj", []), (data_dir / "cube.stl", ["--scale", "2"])]:
         assert main(["info", str(mesh), *extra, "--density", "2700"]) == 0
         py = json.loads(capsys.readouterr().out)
-        r = subprocess.run([mgn_cli(), "info", str(mesh), *extra, "--density", "2700"],
-                           capture_output=True, text=True, check=True)  # fmt: skip
+        r = subprocess.run(
+            [mgn_cli(), "info", str(mesh), *extra, "--density", "2700"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         assert py == json.loads(r.stdout)
 
 
@@ -205,8 +211,11 @@ def pybullet_meshes() -> list[tuple[Path, float]]:
     import pybullet_data
 
     root = Path(pybullet_data.getDataPath())
-    picks = [("duck_vhacd.obj", 0.05), ("racecar/meshes/cone.dae", 0.5),
-             ("laikago/hip_motor.stl", 1.0)]  # fmt: skip
+    picks = [
+        ("duck_vhacd.obj", 0.05),
+        ("racecar/meshes/cone.dae", 0.5),
+        ("laikago/hip_motor.stl", 1.0),
+    ]
     found = [(root / p, s) for p, s in picks if (root / p).is_file()]
     assert len(found) == 3, f"pybullet_data under {root} lacks {picks}"
     return found
@@ -217,12 +226,20 @@ def test_foreign_meshes_load_as_objects(tmp_path, capsys):
     import pybullet_data
 
     root = Path(pybullet_data.getDataPath())
-    folders = [root, root / "racecar" / "meshes", root / "laikago", root / "lego",
-               root / "quadruped" / "microtaur"]  # fmt: skip
+    folders = [
+        root,
+        root / "racecar" / "meshes",
+        root / "laikago",
+        root / "lego",
+        root / "quadruped" / "microtaur",
+    ]
     files = sorted(
-        p for d in folders for ext in ("obj", "stl", "dae") for p in d.glob(f"*.{ext}")
+        p
+        for d in folders
+        for ext in ("obj", "stl", "dae")
+        for p in d.glob(f"*.{ext}")
         if p.stat().st_size < 1_000_000
-    )  # fmt: skip
+    )
     assert len(files) >= 10
     ok, failed = 0, []
     for i, f in enumerate(files):
@@ -267,8 +284,23 @@ def test_foreign_meshes_through_add_generate_validate(tmp_path, capsys):
         "labels: {pj_physics: false}\n"
     )
     ds = tmp_path / "DS"
-    code = main(["generate", "--out", str(ds), "--scenes", "1", "--config", str(cfg), "--add",
-                 str(objs), "--categories", *names, "--quiet", "--no-cache"])  # fmt: skip
+    code = main(
+        [
+            "generate",
+            "--out",
+            str(ds),
+            "--scenes",
+            "1",
+            "--config",
+            str(cfg),
+            "--add",
+            str(objs),
+            "--categories",
+            *names,
+            "--quiet",
+            "--no-cache",
+        ]
+    )
     assert code == 0, capsys.readouterr()
     scene = json.loads((ds / "scene0" / "scene.json").read_text())
     used = {i["name"] for i in scene["instances"]} | {r["name"] for r in scene["removed"]}
@@ -307,8 +339,21 @@ def test_open_mesh_object_in_generate(tmp_path, capsys):
         "labels: {pj_physics: false}\n"
     )
     ds = tmp_path / "DS"
-    code = main(["generate", "--out", str(ds), "--scenes", "1", "--config", str(cfg), "--add",
-                 str(objs), "--quiet", "--no-cache"])  # fmt: skip
+    code = main(
+        [
+            "generate",
+            "--out",
+            str(ds),
+            "--scenes",
+            "1",
+            "--config",
+            str(cfg),
+            "--add",
+            str(objs),
+            "--quiet",
+            "--no-cache",
+        ]
+    )
     assert code == 0, capsys.readouterr()
     scene = json.loads((ds / "scene0" / "scene.json").read_text())
     assert "cup" in {i["name"] for i in scene["instances"]} | {r["name"] for r in scene["removed"]}
@@ -376,8 +421,18 @@ def test_user_intrinsics_and_poses_project_a_point_to_the_expected_pixel(tmp_pat
     # on a ball far enough from the axis to move by 3.4 px.
     X_ball = np.eye(4)
     X_ball[:3, 3] = np.array([0.26, 0.16, 0.02]) - P_W
-    img = next(iter(iter_views([(mesh, X_ball, 7)], None, [views[0][1]], sensor="ideal",
-                               randomize=False, shadows=False)))  # fmt: skip
+    img = next(
+        iter(
+            iter_views(
+                [(mesh, X_ball, 7)],
+                None,
+                [views[0][1]],
+                sensor="ideal",
+                randomize=False,
+                shadows=False,
+            )
+        )
+    )
     vs, us = np.nonzero(img.instance_ids == 7)
     p_C = np.linalg.inv(X_hand) @ np.array([0.26, 0.16, 0.02, 1.0])
     x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
@@ -390,9 +445,11 @@ def test_user_intrinsics_and_poses_project_a_point_to_the_expected_pixel(tmp_pat
 def test_sensor_presets_and_camera_errors(tmp_path):
     from mgn.pipeline.scene_writer import scene_intrinsics
 
-    for name, (w, h, hfov) in {"zivid2_plus_m130": (2448, 2048, None),
-                               "photoneo_phoxi_m": (2064, 1544, 47.5),
-                               "realsense_d435": (1280, 720, 87.0)}.items():  # fmt: skip
+    for name, (w, h, hfov) in {
+        "zivid2_plus_m130": (2448, 2048, None),
+        "photoneo_phoxi_m": (2064, 1544, 47.5),
+        "realsense_d435": (1280, 720, 87.0),
+    }.items():
         K = scene_intrinsics(load_config({"camera": {"intrinsics": name}}).camera)
         assert (K.width, K.height, K.cx, K.cy) == (w, h, w / 2, h / 2)
         if hfov is not None:
@@ -403,14 +460,27 @@ def test_sensor_presets_and_camera_errors(tmp_path):
             assert abs(np.degrees(2 * np.arctan(h / 2 / K.fy)) - 36.0) < 2.0
     bad = [
         ({"intrinsics": {"width": 640, "fx": 500}}, "camera.intrinsics"),
-        ({"intrinsics": {"width": 640, "height": 480, "fx": 500, "fy": 500, "cx": 320,
-                         "cy": 240, "distortion": [0.1, 0.2, 0.3]}},
-         "camera.intrinsics.distortion"),
+        (
+            {
+                "intrinsics": {
+                    "width": 640,
+                    "height": 480,
+                    "fx": 500,
+                    "fy": 500,
+                    "cx": 320,
+                    "cy": 240,
+                    "distortion": [0.1, 0.2, 0.3],
+                }
+            },
+            "camera.intrinsics.distortion",
+        ),
         ({"rig": "poses"}, "camera.poses"),
-        ({"rig": "poses", "poses": [[[1, 0, 0, 0], [0, 2, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]]},
-         "camera.poses[0]"),
+        (
+            {"rig": "poses", "poses": [[[1, 0, 0, 0], [0, 2, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]]},
+            "camera.poses[0]",
+        ),
         ({"rig": "poses", "poses": [{"eye": [0, 0, 1], "targt": [0, 0, 0]}]}, "camera.poses[0]"),
-    ]  # fmt: skip
+    ]
     for camera, key in bad:
         with pytest.raises(ConfigError, match=key.replace("[", r"\[").replace(".", r"\.")):
             load_config({"camera": camera})
@@ -427,8 +497,23 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
     glb = tmp_path / "scene.glb"
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text("camera: {views: [0, 5]}\nobject_labels: {suction_points: 200}\n")
-    assert main(["scene", "export", str(scene_json), str(glb), "--config", str(cfg),
-                 "--grasps", "suctioncup", "--top-k", "3"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "scene",
+                "export",
+                str(scene_json),
+                str(glb),
+                "--config",
+                str(cfg),
+                "--grasps",
+                "suctioncup",
+                "--top-k",
+                "3",
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     scene = read_scene_json(scene_json)
     from mgn.pipeline.scene_writer import scene_views
@@ -459,8 +544,11 @@ def test_scene_export_glb_reads_back_with_poses(tmp_path, capsys):
     assert tuple(score_colors([1.0])[0][:3]) == (0, 255, 26)
     for inst in scene.instances:
         rgba = []
-        ranks = sorted(int(n.rsplit("_", 1)[1]) for n in grasps
-                       if n.startswith(f"grasp_suction_{inst.instance_id}_"))  # fmt: skip
+        ranks = sorted(
+            int(n.rsplit("_", 1)[1])
+            for n in grasps
+            if n.startswith(f"grasp_suction_{inst.instance_id}_")
+        )
         assert ranks == list(range(len(ranks)))
         for rank in ranks:
             _, geom = loaded.graph[f"grasp_suction_{inst.instance_id}_{rank}"]
@@ -536,9 +624,14 @@ def test_grasp_kinds_have_one_name_and_aliases(capsys):
     from mgn.cli.main import build_parser
     from mgn.hardware import normalize_grasp_kind
 
-    for alias, name in [("suction", "suction"), ("suctioncup", "suction"), ("Suction-Cup",
-                        "suction"), ("paralleljaw", "paralleljaw"), ("pj", "paralleljaw"),
-                        ("parallel_jaw", "paralleljaw")]:  # fmt: skip
+    for alias, name in [
+        ("suction", "suction"),
+        ("suctioncup", "suction"),
+        ("Suction-Cup", "suction"),
+        ("paralleljaw", "paralleljaw"),
+        ("pj", "paralleljaw"),
+        ("parallel_jaw", "paralleljaw"),
+    ]:
         assert normalize_grasp_kind(alias) == name
     parser = build_parser()
     args = parser.parse_args(["eval", "grasps", "p.json", "--dataset", "D", "--kind", "pj"])
@@ -590,8 +683,10 @@ def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
     import re
 
     root = Path(__file__).resolve().parents[2]
-    blocks = [re.findall(r"```python\n(.*?)```", (root / page).read_text(), re.DOTALL)
-              for page in ("README.md", "docs/usage.md")]  # fmt: skip
+    blocks = [
+        re.findall(r"```python\n(.*?)```", (root / page).read_text(), re.DOTALL)
+        for page in ("README.md", "docs/usage.md")
+    ]
     assert all(blocks), "README and docs/usage.md each have a Python block"
     monkeypatch.chdir(tmp_path)
     cube_obj(tmp_path, "part.obj", scale=1000.0)
@@ -605,8 +700,22 @@ def test_readme_python_snippet_runs_as_pasted(tmp_path, monkeypatch, capsys):
         "object_labels: {suction_points: 100, pj_points: 100}\n"
         "labels: {pj_physics: false}\n"
     )
-    assert main(["generate", "--out", "DS", "--scenes", "1", "--config", str(cfg), "--quiet",
-                 "--no-cache"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "generate",
+                "--out",
+                "DS",
+                "--scenes",
+                "1",
+                "--config",
+                str(cfg),
+                "--quiet",
+                "--no-cache",
+            ]
+        )
+        == 0
+    )
     readme: dict = {}
     exec(compile(blocks[0][0], "README.md", "exec"), readme)
     assert readme["rgb"].ndim == 3
@@ -641,8 +750,24 @@ def test_report_opens_in_headless_chromium(tmp_path, capsys):
         "labels: {pj_physics: false}\n"
     )
     ds = tmp_path / "DS"
-    assert main(["generate", "--out", str(ds), "--scenes", "1", "--config", str(cfg), "--add",
-                 str(objs), "--quiet", "--no-cache"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "generate",
+                "--out",
+                str(ds),
+                "--scenes",
+                "1",
+                "--config",
+                str(cfg),
+                "--add",
+                str(objs),
+                "--quiet",
+                "--no-cache",
+            ]
+        )
+        == 0
+    )
     page = tmp_path / "r.html"
     assert main(["report", str(ds), "-o", str(page)]) == 0
     err = capsys.readouterr().err
@@ -670,9 +795,22 @@ def test_report_opens_in_headless_chromium(tmp_path, capsys):
     assert "<details><summary>Configuration" in dom
     assert "<details open" not in dom
     shot = tmp_path / "r.png"
-    r = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-                        f"--screenshot={shot}", "--window-size=1200,1800", page.as_uri()],
-                       check=False, capture_output=True, text=True, timeout=120)  # fmt: skip
+    r = subprocess.run(
+        [
+            exe,
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            f"--screenshot={shot}",
+            "--window-size=1200,1800",
+            page.as_uri(),
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert shot.is_file(), r.stderr[-2000:]
     img = np.asarray(Image.open(shot).convert("RGB"), np.int32)
     bar_blue = np.all(np.abs(img - [0x3B, 0x75, 0xAF]) <= 3, axis=-1)
@@ -697,8 +835,16 @@ def test_table_top_without_walls(tmp_path):
     assert v[:, 2].max() == 0.0
     assert v[:, 2].min() == pytest.approx(-table.floor_thickness)
     assert np.abs(v[:, :2]).max(axis=0) == pytest.approx([0.15, 0.11])
-    names = ["box_cube", "box_tea", "tennis_ball", "box_cube", "box_tea", "tennis_ball",
-             "box_cube", "box_tea"]  # fmt: skip
+    names = [
+        "box_cube",
+        "box_tea",
+        "tennis_ball",
+        "box_cube",
+        "box_tea",
+        "tennis_ball",
+        "box_cube",
+        "box_tea",
+    ]
     options = DropOptions(window_min=(-0.12, -0.09, 0.05), window_max=(0.12, 0.09, 0.35))
     # How many stay is chaotic (1-7 of the 8 over seeds 1-12); seed 5 keeps 6.
     scene = drop_scene([get_object(n) for n in names], seed=5, tote=table, options=options)
@@ -720,10 +866,16 @@ def test_table_top_without_walls(tmp_path):
     assert "walls" not in type(scene)(scene.instances, ToteSpec(), 0).to_dict()["tote"]
     # Labels: written and valid, every bin relation no_rel.
     K = Intrinsics(240, 200, 260.0, 260.0, 120.0, 100.0)
-    views = [(0, CameraView(K, look_at([0.0, 0.0, 0.6], [0, 0, 0], [0, 1, 0]))),
-             (1, CameraView(K, look_at([0.35, -0.2, 0.4], [0, 0, 0], [0, 0, 1])))]  # fmt: skip
-    label_scene(scene, tmp_path / "ds" / "scene0", views,
-                options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
+    views = [
+        (0, CameraView(K, look_at([0.0, 0.0, 0.6], [0, 0, 0], [0, 1, 0]))),
+        (1, CameraView(K, look_at([0.35, -0.2, 0.4], [0, 0, 0], [0, 0, 1]))),
+    ]
+    label_scene(
+        scene,
+        tmp_path / "ds" / "scene0",
+        views,
+        options=LabelOptions(randomize=False, num_threads=2),
+    )
     assert validate_dataset(tmp_path / "ds") == []
     order = json.loads((tmp_path / "ds" / "scene0" / "0_order.json").read_text())
     assert {o["bin_rel"] for o in order.values()} == {"no_rel"}
@@ -737,8 +889,10 @@ def test_table_top_without_walls(tmp_path):
 def test_both_command_lines_exit_1_on_a_bad_value(tmp_path):
     """A bad option value is an error (exit 1) in mgn and in mgn-cli alike, naming the option."""
     cube = cube_obj(tmp_path)
-    for cmd in ([sys.executable, "-m", "mgn", "info", str(cube), "--density", "-1"],
-                [mgn_cli(), "info", str(cube), "--density", "-1"]):  # fmt: skip
+    for cmd in (
+        [sys.executable, "-m", "mgn", "info", str(cube), "--density", "-1"],
+        [mgn_cli(), "info", str(cube), "--density", "-1"],
+    ):
         r = subprocess.run(cmd, check=False, capture_output=True, text=True, timeout=120)
         assert r.returncode == 1, (cmd[0], r.returncode, r.stderr)
         assert "density" in r.stderr, (cmd[0], r.returncode, r.stderr)

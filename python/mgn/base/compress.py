@@ -130,12 +130,71 @@ RUN_BLOCK = 1 << 14
 ZERO_RUN_DISTANCE = 8
 
 #: Base lengths and extra bits of deflate's length symbols 257..285 (RFC 1951 3.2.5).
-_LENGTH_BASE = (3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 15, 17, 19, 23, 27, 31, 35, 43, 51, 59, 67, 83,
-                99, 115, 131, 163, 195, 227, 258)  # fmt: skip
+_LENGTH_BASE = (
+    3,
+    4,
+    5,
+    6,
+    7,
+    8,
+    9,
+    10,
+    11,
+    13,
+    15,
+    17,
+    19,
+    23,
+    27,
+    31,
+    35,
+    43,
+    51,
+    59,
+    67,
+    83,
+    99,
+    115,
+    131,
+    163,
+    195,
+    227,
+    258,
+)
 _LENGTH_EXTRA = (0,) * 8 + (1,) * 4 + (2,) * 4 + (3,) * 4 + (4,) * 4 + (5,) * 4 + (0,)
 #: Base distances and extra bits of deflate's distance symbols 0..29 (RFC 1951 3.2.5).
-_DIST_BASE = (1, 2, 3, 4, 5, 7, 9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025,
-              1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577)  # fmt: skip
+_DIST_BASE = (
+    1,
+    2,
+    3,
+    4,
+    5,
+    7,
+    9,
+    13,
+    17,
+    25,
+    33,
+    49,
+    65,
+    97,
+    129,
+    193,
+    257,
+    385,
+    513,
+    769,
+    1025,
+    1537,
+    2049,
+    3073,
+    4097,
+    6145,
+    8193,
+    12289,
+    16385,
+    24577,
+)
 _DIST_EXTRA = (0, 0, 0, 0) + tuple(k // 2 for k in range(2, 28))
 #: Order in which a dynamic block's header lists the code-length code's lengths (RFC 1951 3.2.7).
 _CODE_LENGTH_ORDER = (16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15)
@@ -405,9 +464,15 @@ def h5_write_deflated(
     ``track_times=False``). Returns the dataset."""
     a = np.ascontiguousarray(data)
     ds = group.create_dataset(
-        name, shape=a.shape, dtype=a.dtype, chunks=chunks, compression="gzip",
-        compression_opts=min(_check_level(level), 9), shuffle=shuffle, **kwargs,
-    )  # fmt: skip
+        name,
+        shape=a.shape,
+        dtype=a.dtype,
+        chunks=chunks,
+        compression="gzip",
+        compression_opts=min(_check_level(level), 9),
+        shuffle=shuffle,
+        **kwargs,
+    )
     for offset, raw in shuffled_chunks(a, chunks, shuffle=shuffle):
         stream = (
             zlib_stream(raw, level) if zlib_level is None else zlib_runs_stream(raw, zlib_level)

@@ -178,16 +178,47 @@ def zip_bytes(entries: Sequence[tuple[str, int, Any, Sequence[bytes | memoryview
         if size > _ZIP64_LIMIT or packed > _ZIP64_LIMIT or offset > _ZIP64_LIMIT:
             raise InvalidArgumentError(f"zip_bytes: entry '{name}' beyond 2 GiB")
         out.append(
-            _LOCAL_HEADER.pack(b"PK\x03\x04", version, 0, flags, method, dostime, dosdate,
-                               crc, 0xFFFFFFFF, 0xFFFFFFFF, len(fname), len(extra))
-            + fname + extra
-        )  # fmt: skip
-        central.append(
-            _CENTRAL_HEADER.pack(b"PK\x01\x02", version, _CREATE_SYSTEM, version, 0, flags,
-                                 method, dostime, dosdate, crc, packed, size, len(fname), 0, 0,
-                                 0, 0, _EXTERNAL_ATTR, offset)
+            _LOCAL_HEADER.pack(
+                b"PK\x03\x04",
+                version,
+                0,
+                flags,
+                method,
+                dostime,
+                dosdate,
+                crc,
+                0xFFFFFFFF,
+                0xFFFFFFFF,
+                len(fname),
+                len(extra),
+            )
             + fname
-        )  # fmt: skip
+            + extra
+        )
+        central.append(
+            _CENTRAL_HEADER.pack(
+                b"PK\x01\x02",
+                version,
+                _CREATE_SYSTEM,
+                version,
+                0,
+                flags,
+                method,
+                dostime,
+                dosdate,
+                crc,
+                packed,
+                size,
+                len(fname),
+                0,
+                0,
+                0,
+                0,
+                _EXTERNAL_ATTR,
+                offset,
+            )
+            + fname
+        )
         out.extend(body)
         offset += len(out[-len(body) - 1]) + packed
     directory = b"".join(central)

@@ -114,14 +114,19 @@ def add_engine_arguments(parser: argparse.ArgumentParser, what: str = "the RGB i
     """Add ``--engine {raster,path}`` and ``--spp N`` to ``parser`` (both default to the
     configuration's ``render`` section; :func:`engine_settings` applies them)."""
     parser.add_argument(
-        "--engine", choices=ENGINES, default=None,
+        "--engine",
+        choices=ENGINES,
+        default=None,
         help=f"what makes {what}: raster (fast OpenGL preview) or path (path tracer); "
         "default: config render.engine",
-    )  # fmt: skip
+    )
     parser.add_argument(
-        "--spp", type=int, default=None, metavar="N",
+        "--spp",
+        type=int,
+        default=None,
+        metavar="N",
         help="path tracer samples per pixel (default: config render.spp)",
-    )  # fmt: skip
+    )
 
 
 def engine_settings(settings: RenderSettings, args: argparse.Namespace) -> RenderSettings:

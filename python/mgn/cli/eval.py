@@ -116,22 +116,57 @@ def _register_grasps(eval_sub: argparse._SubParsersAction[argparse.ArgumentParse
     p.add_argument("predictions", metavar="PRED.json", help="prediction list (see the docs)")
     p.add_argument("--dataset", required=True, metavar="DIR", help="dataset folder")
 
-    p.add_argument("--kind", type=grasp_kind_arg, default="suction",
-                   help="grasp kind: suction or paralleljaw (default suction; aliases "
-                        "suctioncup, pj)")  # fmt: skip
+    p.add_argument(
+        "--kind",
+        type=grasp_kind_arg,
+        default="suction",
+        help="grasp kind: suction or paralleljaw (default suction; aliases suctioncup, pj)",
+    )
     p.add_argument("--out", metavar="JSON", help="write the results here")
-    p.add_argument("--k", type=int, nargs="+", default=list(DEFAULT_KS), metavar="K",
-                   help="k of precision@k (default 1 5 10 25 50)")  # fmt: skip
-    p.add_argument("--thresholds", type=float, nargs="+", default=list(DEFAULT_THRESHOLDS),
-                   metavar="T", help="label-score thresholds (default 0.2 ... 0.8)")  # fmt: skip
-    p.add_argument("--match-distance", type=float, default=DEFAULT_MATCH_DISTANCE, metavar="M",
-                   help="contact tolerance, m (default 0.01)")  # fmt: skip
-    p.add_argument("--match-angle-deg", type=float, default=math.degrees(DEFAULT_MATCH_ANGLE),
-                   metavar="DEG", help="axis tolerance, degrees (default 30)")  # fmt: skip
-    p.add_argument("--label-score", choices=LABEL_SCORES, default=None,
-                   help="label score held against the thresholds (default analytical)")  # fmt: skip
-    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
-                   help="C++ threads (0 = all cores)")  # fmt: skip
+    p.add_argument(
+        "--k",
+        type=int,
+        nargs="+",
+        default=list(DEFAULT_KS),
+        metavar="K",
+        help="k of precision@k (default 1 5 10 25 50)",
+    )
+    p.add_argument(
+        "--thresholds",
+        type=float,
+        nargs="+",
+        default=list(DEFAULT_THRESHOLDS),
+        metavar="T",
+        help="label-score thresholds (default 0.2 ... 0.8)",
+    )
+    p.add_argument(
+        "--match-distance",
+        type=float,
+        default=DEFAULT_MATCH_DISTANCE,
+        metavar="M",
+        help="contact tolerance, m (default 0.01)",
+    )
+    p.add_argument(
+        "--match-angle-deg",
+        type=float,
+        default=math.degrees(DEFAULT_MATCH_ANGLE),
+        metavar="DEG",
+        help="axis tolerance, degrees (default 30)",
+    )
+    p.add_argument(
+        "--label-score",
+        choices=LABEL_SCORES,
+        default=None,
+        help="label score held against the thresholds (default analytical)",
+    )
+    p.add_argument(
+        "--num-threads",
+        "--threads",
+        dest="threads",
+        type=int,
+        default=0,
+        help="C++ threads (0 = all cores)",
+    )
     p.set_defaults(func=_cmd_grasps)
 
 

@@ -85,8 +85,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("out", help="BOP output folder (created)")
     p.add_argument("--scenes", help="comma-separated scene ids (default: all)")
     p.add_argument("--split", default=DEFAULT_SPLIT, help="split folder name")
-    p.add_argument("--depth-scale", type=float, default=DEFAULT_DEPTH_SCALE_MM,
-                   help="mm per unit of the 16-bit depth PNGs")  # fmt: skip
+    p.add_argument(
+        "--depth-scale",
+        type=float,
+        default=DEFAULT_DEPTH_SCALE_MM,
+        help="mm per unit of the 16-bit depth PNGs",
+    )
     p.set_defaults(func=_cmd_bop)
 
     p = esub.add_parser(
@@ -101,12 +105,23 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--camera", default=DEFAULT_CAMERA, help=f"camera folder name (default {DEFAULT_CAMERA})"
     )
-    p.add_argument("--pj-score", choices=PJ_SCORES, default=DEFAULT_PJ_SCORE,
-                   help="parallel-jaw score written (default %(default)s)")  # fmt: skip
-    p.add_argument("--suction-score", choices=SUCTION_SCORES, default=DEFAULT_SUCTION_SCORE,
-                   help="suction score written: seal, wrench or their product "
-                   "(default %(default)s)")  # fmt: skip
-    p.add_argument("--max-tilt", type=float, default=DEFAULT_MAX_TILT_DEG,
-                   help="largest angle between a grasp's approach and the optical axis for a "
-                   "2-D rectangle, degrees (default %(default)s)")  # fmt: skip
+    p.add_argument(
+        "--pj-score",
+        choices=PJ_SCORES,
+        default=DEFAULT_PJ_SCORE,
+        help="parallel-jaw score written (default %(default)s)",
+    )
+    p.add_argument(
+        "--suction-score",
+        choices=SUCTION_SCORES,
+        default=DEFAULT_SUCTION_SCORE,
+        help="suction score written: seal, wrench or their product (default %(default)s)",
+    )
+    p.add_argument(
+        "--max-tilt",
+        type=float,
+        default=DEFAULT_MAX_TILT_DEG,
+        help="largest angle between a grasp's approach and the optical axis for a "
+        "2-D rectangle, degrees (default %(default)s)",
+    )
     p.set_defaults(func=_cmd_graspnet)

@@ -40,9 +40,18 @@ def _cmd_coco(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    path = show(args.dir, args.scene, args.view, args.out, grasps=args.grasps, layout=args.layout,
-                keypoints=not args.no_keypoints, alpha=args.alpha, panels=args.panels,
-                max_tilt_deg=args.max_tilt)  # fmt: skip
+    path = show(
+        args.dir,
+        args.scene,
+        args.view,
+        args.out,
+        grasps=args.grasps,
+        layout=args.layout,
+        keypoints=not args.no_keypoints,
+        alpha=args.alpha,
+        panels=args.panels,
+        max_tilt_deg=args.max_tilt,
+    )
     print(f"wrote {path}")
     return 0
 
@@ -59,8 +68,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``validate`` and ``coco`` to the ``mgn`` subcommands."""
     p = sub.add_parser("validate", help="check every file of a dataset against docs/format.md")
     p.add_argument("dir", help="dataset folder")
-    p.add_argument("--format", choices=("mgn", "bop"), default="mgn",
-                   help="mgn: an mgn dataset; bop: a BOP folder (mgn export bop)")  # fmt: skip
+    p.add_argument(
+        "--format",
+        choices=("mgn", "bop"),
+        default="mgn",
+        help="mgn: an mgn dataset; bop: a BOP folder (mgn export bop)",
+    )
     p.add_argument("--max-problems", type=int, default=50, help="problems printed (default 50)")
     p.set_defaults(func=_cmd_validate)
 
@@ -81,9 +94,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="draw scene grasps: suction or paralleljaw (aliases: suctioncup, pj), or "
         "rectangles (2-D grasp rectangles of the parallel-jaw grasps seen along their approach)",
     )
-    p.add_argument("--max-tilt", type=float, default=DEFAULT_MAX_TILT_DEG,
-                   help="with --grasps rectangles: largest angle between a grasp's approach and "
-                   "the optical axis, degrees (default %(default)s)")  # fmt: skip
+    p.add_argument(
+        "--max-tilt",
+        type=float,
+        default=DEFAULT_MAX_TILT_DEG,
+        help="with --grasps rectangles: largest angle between a grasp's approach and "
+        "the optical axis, degrees (default %(default)s)",
+    )
     p.add_argument("--layout", action="store_true", help="draw the relation graph and layers")
     p.add_argument("--no-keypoints", action="store_true", help="do not draw keypoints")
     p.add_argument(

@@ -474,8 +474,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_objects_list)
     p = osub.add_parser("export", help="write the objects as MetaGraspNet model folders")
     p.add_argument("dir", help="output root; objects go to DIR/models/<id>/")
-    p.add_argument("--objects", "--only", dest="only", nargs="+", metavar="NAME",
-                   help="export only these (names or ids)")  # fmt: skip
+    p.add_argument(
+        "--objects",
+        "--only",
+        dest="only",
+        nargs="+",
+        metavar="NAME",
+        help="export only these (names or ids)",
+    )
     p.add_argument("--add", action="append", metavar="YAML", help=add_help)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_objects_export)
@@ -490,10 +496,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("meshes", nargs="+", metavar="MESH", help="mesh files (OBJ, STL, PLY, GLB...)")
     p.add_argument("--to", required=True, metavar="YAML", help="user-object YAML to append to")
-    p.add_argument("--name", nargs="+", metavar="NAME",
-                   help="object names, one per mesh (default: from the file names)")  # fmt: skip
-    p.add_argument("--scale", type=_uniform_scale, default=1.0,
-                   help="uniform coordinate scale (default 1; 0.001 for a file in mm)")  # fmt: skip
+    p.add_argument(
+        "--name",
+        nargs="+",
+        metavar="NAME",
+        help="object names, one per mesh (default: from the file names)",
+    )
+    p.add_argument(
+        "--scale",
+        type=_uniform_scale,
+        default=1.0,
+        help="uniform coordinate scale (default 1; 0.001 for a file in mm)",
+    )
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
     p.add_argument("--friction", type=float, default=0.5, help="Coulomb friction (default 0.5)")
     p.add_argument("--tags", nargs="+", metavar="TAG", help="tags (mgn.objects.ALLOWED_TAGS)")
@@ -549,8 +563,12 @@ def build_parser() -> argparse.ArgumentParser:
         "info", help="validation and mass properties of a mesh file (JSON, as mgn-cli info)"
     )
     p.add_argument("mesh", help="mesh file (OBJ, STL, PLY, GLB/GLTF, DAE, ...)")
-    p.add_argument("--scale", type=_uniform_scale, default=1.0,
-                   help="uniform coordinate scale (default 1; 0.001 for mm)")  # fmt: skip
+    p.add_argument(
+        "--scale",
+        type=_uniform_scale,
+        default=1.0,
+        help="uniform coordinate scale (default 1; 0.001 for mm)",
+    )
     p.add_argument("--density", type=float, default=1000.0, help="kg/m^3 (default 1000)")
     p.set_defaults(func=_cmd_info)
 

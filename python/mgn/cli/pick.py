@@ -62,9 +62,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="closed-loop picking in simulation (R_grasp, R_object, R_mixture, disturbance)",
     )
     p.add_argument("scene", help="a scene folder of a dataset (scene<N>/) or a scene.json")
-    p.add_argument("--policy", default="label",
-                   help="'label', 'random' or 'module:function' (policy(state) -> "
-                        "(instance_id, grasp index or X_W_tool) or None)")  # fmt: skip
+    p.add_argument(
+        "--policy",
+        default="label",
+        help="'label', 'random' or 'module:function' (policy(state) -> "
+        "(instance_id, grasp index or X_W_tool) or None)",
+    )
 
     p.add_argument(
         "--gripper",
@@ -72,17 +75,29 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default="suction",
         help="suction or paralleljaw (default suction; aliases suctioncup, pj)",
     )
-    p.add_argument("--config", default=None,
-                   help="config YAML (object labels, gripper, cup, camera); default: the "
-                        "dataset's config, else the defaults")  # fmt: skip
+    p.add_argument(
+        "--config",
+        default=None,
+        help="config YAML (object labels, gripper, cup, camera); default: the "
+        "dataset's config, else the defaults",
+    )
     p.add_argument("--max-attempts", type=int, default=None)
     p.add_argument("--max-failures", type=int, default=2, help="failed attempts per object")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--stochastic", action="store_true",
-                   help="success with probability = score (else score >= 0.5)")  # fmt: skip
+    p.add_argument(
+        "--stochastic",
+        action="store_true",
+        help="success with probability = score (else score >= 0.5)",
+    )
     p.add_argument("--resolution", type=int, default=160, help="top-view image size, px")
-    p.add_argument("--num-threads", "--threads", dest="threads", type=int, default=0,
-                   help="C++ threads (0 = all cores)")  # fmt: skip
+    p.add_argument(
+        "--num-threads",
+        "--threads",
+        dest="threads",
+        type=int,
+        default=0,
+        help="C++ threads (0 = all cores)",
+    )
     p.add_argument("--out", required=True, help="output folder")
 
     add_engine_arguments(p, what="the step pictures")

@@ -46,17 +46,25 @@ def _config_with_overrides(args: argparse.Namespace) -> Config:
 
     cfg = load_config(args.config)
     if args.objects:
-        cfg = dataclasses.replace(cfg, objects=dataclasses.replace(
-            cfg.objects, names=tuple(args.objects), count=None, categories=None))  # fmt: skip
+        cfg = dataclasses.replace(
+            cfg,
+            objects=dataclasses.replace(
+                cfg.objects, names=tuple(args.objects), count=None, categories=None
+            ),
+        )
     if args.add:
         added = tuple(os.path.abspath(a) for a in args.add)
-        cfg = dataclasses.replace(cfg, objects=dataclasses.replace(
-            cfg.objects, user_objects=cfg.objects.user_objects + added))  # fmt: skip
+        cfg = dataclasses.replace(
+            cfg,
+            objects=dataclasses.replace(cfg.objects, user_objects=cfg.objects.user_objects + added),
+        )
     if args.categories:
         if args.objects:
             raise InvalidArgumentError("mgn generate: give --objects or --categories, not both")
-        cfg = dataclasses.replace(cfg, objects=dataclasses.replace(
-            cfg.objects, names=None, categories=tuple(args.categories)))  # fmt: skip
+        cfg = dataclasses.replace(
+            cfg,
+            objects=dataclasses.replace(cfg.objects, names=None, categories=tuple(args.categories)),
+        )
     if args.split is not None:
         cfg = dataclasses.replace(cfg, split=dataclasses.replace(cfg.split, name=args.split))
     sel: dict[str, Any] = {}
@@ -135,8 +143,12 @@ def _cmd_config_check(args: argparse.Namespace) -> int:
     config = load_config(args.file)
     if args.add:  # as mgn generate --add: user objects join the catalogue
         added = tuple(os.path.abspath(a) for a in args.add)
-        config = dataclasses.replace(config, objects=dataclasses.replace(
-            config.objects, user_objects=config.objects.user_objects + added))  # fmt: skip
+        config = dataclasses.replace(
+            config,
+            objects=dataclasses.replace(
+                config.objects, user_objects=config.objects.user_objects + added
+            ),
+        )
     views = len(config.camera.view_indices)
     catalogue = load_catalogue(config)
     errors = config_errors(config, catalogue)
@@ -161,8 +173,9 @@ def _cache_entries() -> dict[str, list[Path]]:
         "suction labels": sorted(labels.glob("suction-*")) if labels.is_dir() else [],
         "parallel-jaw labels": sorted(labels.glob("pj-*")) if labels.is_dir() else [],
         "convex decompositions": sorted(p for p in convex.rglob("*") if p.is_file())
-        if convex.is_dir() else [],
-    }  # fmt: skip
+        if convex.is_dir()
+        else [],
+    }
     return files
 
 
@@ -289,8 +302,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(func=_cmd_cache_list)
     p = ksub.add_parser("clear", help="delete the cached entries (recomputed when needed)")
-    p.add_argument("--labels-only", action="store_true",
-                   help="keep the convex decompositions (default: clear both)")  # fmt: skip
+    p.add_argument(
+        "--labels-only",
+        action="store_true",
+        help="keep the convex decompositions (default: clear both)",
+    )
     p.set_defaults(func=_cmd_cache_clear)
 
     p = csub.add_parser(

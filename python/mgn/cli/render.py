@@ -73,10 +73,17 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         items.append((mesh, X, k + 1))
     K = Intrinsics.mgn_synthetic().scaled(args.scale)
     res = render_views(
-        items, tote_mesh(), args.views, args.out, rig_seed=args.seed, K=K, sensor=args.sensor,
-        randomize=not args.no_randomize, seed=args.seed,
+        items,
+        tote_mesh(),
+        args.views,
+        args.out,
+        rig_seed=args.seed,
+        K=K,
+        sensor=args.sensor,
+        randomize=not args.no_randomize,
+        seed=args.seed,
         render=engine_settings(RenderSettings(), args),
-    )  # fmt: skip
+    )
     for r in res:
         print(f"view {r.index}: {r.valid.mean():.1%} valid depth -> {args.out}/{r.index}_*.png")
     return 0

@@ -95,8 +95,12 @@ def _cmd_drop(args: argparse.Namespace) -> int:
 
 def _register_drop(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = ssub.add_parser("drop", help="drop objects into the tote and write the settled scene")
-    p.add_argument("--objects", nargs="+", metavar="NAME",
-                   help="these objects (names or ids; repeat a name for copies)")  # fmt: skip
+    p.add_argument(
+        "--objects",
+        nargs="+",
+        metavar="NAME",
+        help="these objects (names or ids; repeat a name for copies)",
+    )
     p.add_argument(
         "--categories",
         nargs="+",
@@ -197,8 +201,11 @@ def _cmd_label(args: argparse.Namespace) -> int:
         by_name = {}
         names = sorted({(inst.name, inst.source) for inst in scene.instances})
         for name, source in tqdm(names, desc="object labels", unit="object", disable=None):
-            idx = next(i for i, inst in enumerate(scene.instances)
-                       if (inst.name, inst.source) == (name, source))  # fmt: skip
+            idx = next(
+                i
+                for i, inst in enumerate(scene.instances)
+                if (inst.name, inst.source) == (name, source)
+            )
             by_name[name] = object_labels(
                 scene.object_spec(idx), config, num_threads=args.num_threads
             )
@@ -214,9 +221,17 @@ def _cmd_label(args: argparse.Namespace) -> int:
         tqdm(total=len(views), desc="views", unit="view", disable=None) as bar,
         atomic_dir(args.out, overwrite=args.overwrite) as tmp,
     ):
-        timings = label_scene(scene, tmp, views, pj_labels=pj, suction_labels=su,
-                              gripper=config.gripper, cup=config.cup, options=options,
-                              progress=lambda *_: bar.update(1))  # fmt: skip
+        timings = label_scene(
+            scene,
+            tmp,
+            views,
+            pj_labels=pj,
+            suction_labels=su,
+            gripper=config.gripper,
+            cup=config.cup,
+            options=options,
+            progress=lambda *_: bar.update(1),
+        )
     split = ", ".join(f"{k} {v:.0f}" for k, v in timings.per_view_ms().items())
     print(f"{len(views)} views of {len(scene)} objects in {args.out} (ms per view: {split})")
     return 0
@@ -244,8 +259,10 @@ def _scene_path(arg: str) -> str:
     if arg and folder.is_dir():  # Path("") is the working folder
         p = folder / "scene.json"
         if not p.exists():
-            raise FileNotFoundError(f"'{arg}' is a folder without scene.json; expected a scene "
-                                    "JSON (mgn scene drop) or a scene folder")  # fmt: skip
+            raise FileNotFoundError(
+                f"'{arg}' is a folder without scene.json; expected a scene "
+                "JSON (mgn scene drop) or a scene folder"
+            )
         return os.fspath(p)
     return arg
 
@@ -277,11 +294,20 @@ def _cmd_export(args: argparse.Namespace) -> int:
             print(f"config (cameras, gripper, cup) from {record}; --config replaces it")
     scene = read_scene_json(path)
     views = [] if args.no_cameras else scene_views(scene, config.camera)
-    counts = export_scene_glb(scene, args.out, views=views, grasps=args.grasps, top_k=args.top_k,
-                              config=config, num_threads=args.num_threads)  # fmt: skip
-    print(f"{args.out}: {counts['objects']} objects, tote, {counts['cameras']} cameras, "
-          f"{counts['grasps']} collision-free grasps ({counts['nodes']} nodes, metres; node "
-          "tote_frame turns the tote's z up into glTF's y up)")  # fmt: skip
+    counts = export_scene_glb(
+        scene,
+        args.out,
+        views=views,
+        grasps=args.grasps,
+        top_k=args.top_k,
+        config=config,
+        num_threads=args.num_threads,
+    )
+    print(
+        f"{args.out}: {counts['objects']} objects, tote, {counts['cameras']} cameras, "
+        f"{counts['grasps']} collision-free grasps ({counts['nodes']} nodes, metres; node "
+        "tote_frame turns the tote's z up into glTF's y up)"
+    )
     return 0
 
 
@@ -296,8 +322,11 @@ def _register_export(ssub: argparse._SubParsersAction[argparse.ArgumentParser]) 
     )
     p.add_argument("scene", help="scene JSON (mgn scene drop) or a scene folder")
     p.add_argument("out", help="output .glb file")
-    p.add_argument("--config", help="config YAML: cameras, gripper, cup (default: the dataset.json "
-                   "config of the scene's dataset, else the MGN defaults)")  # fmt: skip
+    p.add_argument(
+        "--config",
+        help="config YAML: cameras, gripper, cup (default: the dataset.json "
+        "config of the scene's dataset, else the MGN defaults)",
+    )
     p.add_argument(
         "--grasps", metavar="KIND", help="also draw grasps: suction or paralleljaw (default: none)"
     )

@@ -231,10 +231,13 @@ class GraspResults:
         """Rows: label-score thresholds; columns: P@k for each k, then the success rate."""
         cols = ["threshold"] + [f"P@{k}" for k in self.ks] + ["success"]
         rows = [
-            {"threshold": f"{t:g}", **{f"P@{k}": self.precision[t][k] for k in self.ks},
-             "success": self.success_rate[t]}
+            {
+                "threshold": f"{t:g}",
+                **{f"P@{k}": self.precision[t][k] for k in self.ks},
+                "success": self.success_rate[t],
+            }
             for t in self.thresholds
-        ]  # fmt: skip
+        ]
         title = (
             f"{self.kind} grasps: {self.num_views} views, {self.num_predictions} predictions "
             f"({self.rejected_by_matching} unmatched, {self.rejected_by_collision} colliding); "
@@ -426,9 +429,14 @@ class _Context:
             gripper, cup = self.hardware()
             n = len(scene.instances)
             self._models[scene_id] = SceneGraspModel(
-                scene, [None] * n, [None] * n, gripper, cup,
-                offsets=LabelOptions().grasp_offsets, num_threads=self.num_threads,
-            )  # fmt: skip
+                scene,
+                [None] * n,
+                [None] * n,
+                gripper,
+                cup,
+                offsets=LabelOptions().grasp_offsets,
+                num_threads=self.num_threads,
+            )
         return self._models[scene_id]
 
 
@@ -551,8 +559,11 @@ def _parse_view(
         if has_pose:
             X[i] = _rigid(g["pose"], f"{w_i}.pose")
             continue
-        Xi = (_pj_pixel(ctx, data, g, w_i, width[i]) if ctx.kind == "paralleljaw"
-              else _suction_pixel(ctx, data, g, w_i))  # fmt: skip
+        Xi = (
+            _pj_pixel(ctx, data, g, w_i, width[i])
+            if ctx.kind == "paralleljaw"
+            else _suction_pixel(ctx, data, g, w_i)
+        )
         if Xi is None:
             located[i] = False
         else:

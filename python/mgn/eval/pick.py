@@ -172,8 +172,19 @@ class PickAttempt:
         return d
 
 
-_TABLE_COLUMNS = ("step", "instance_id", "name", "grasp_index", "score", "success", "reason",
-                  "dist_max_mm", "dist_mean_mm", "rot_max_deg", "remaining")  # fmt: skip
+_TABLE_COLUMNS = (
+    "step",
+    "instance_id",
+    "name",
+    "grasp_index",
+    "score",
+    "success",
+    "reason",
+    "dist_max_mm",
+    "dist_mean_mm",
+    "rot_max_deg",
+    "remaining",
+)
 
 
 @dataclass(frozen=True)
@@ -324,9 +335,16 @@ def _render(scene: Scene, view: CameraView, render: Any = None, num_threads: int
     """The top view without noise or randomisation; the picture by ``render``
     (:class:`mgn.render.settings.RenderSettings`, default the raster engine)."""
 
-    frames = iter_views(scene.render_items(), tote_mesh(scene.tote), [(0, view)], sensor="ideal",
-                        randomize=False, seed=scene.seed, render=render,
-                        num_threads=num_threads)  # fmt: skip
+    frames = iter_views(
+        scene.render_items(),
+        tote_mesh(scene.tote),
+        [(0, view)],
+        sensor="ideal",
+        randomize=False,
+        seed=scene.seed,
+        render=render,
+        num_threads=num_threads,
+    )
     return next(iter(frames))
 
 
@@ -336,8 +354,14 @@ def _observe(
 
     images = _render(scene, view, render, num_threads)
     rays = SceneRayModel.from_scene(scene)
-    labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal,
-                                keypoints=False, num_threads=num_threads)  # fmt: skip
+    labels = view_object_labels(
+        rays,
+        view,
+        images.instance_ids,
+        depth=images.depth_ideal,
+        keypoints=False,
+        num_threads=num_threads,
+    )
     layout = compute_layout(
         labels.visible,
         labels.amodal,
@@ -713,8 +737,21 @@ def run_picking(
         start_row = np.searchsorted(obj, np.arange(n))  # rows are grouped by object in order
         eligible = np.array([failures[ids[k]] < max_failures_per_object for k in range(n)])
         tried_mask = _tried_mask(len(g), start_row, [tried[i] for i in ids])
-        state = PickState(step, cur, ids, view, images, vlabels, layout, g, model, visible,
-                          score, eligible, tried_mask)  # fmt: skip
+        state = PickState(
+            step,
+            cur,
+            ids,
+            view,
+            images,
+            vlabels,
+            layout,
+            g,
+            model,
+            visible,
+            score,
+            eligible,
+            tried_mask,
+        )
         choice = _choose(policy_name, policy_fn, state, seed)
         if choice is None:
             stop = "no_grasp"

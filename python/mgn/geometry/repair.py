@@ -75,8 +75,10 @@ def split_note(report: MeshReport) -> str:
     parts = [f"{edges} edge{'' if edges == 1 else 's'}"] if edges else []
     if vertices:
         parts.append(f"{vertices} {'vertex' if vertices == 1 else 'vertices'}")
-    return (f"split {' and '.join(parts)} where closed pieces touch "
-            f"({report.num_components} closed pieces)")  # fmt: skip
+    return (
+        f"split {' and '.join(parts)} where closed pieces touch "
+        f"({report.num_components} closed pieces)"
+    )
 
 
 def _weld(vertices: npt.NDArray[np.float32]) -> npt.NDArray[np.int64]:
@@ -282,8 +284,10 @@ def repair_mesh(mesh: Mesh, *, max_hole_area: float = MAX_HOLE_AREA) -> RepairRe
     if flip.any():
         faces[flip] = faces[flip][:, [0, 2, 1]]
         wf[flip] = wf[flip][:, [0, 2, 1]]
-        changes.append(f"turned {int(flip.sum())} of {len(faces)} faces to the winding of the "
-                       f"rest of their piece ({pieces} piece(s))")  # fmt: skip
+        changes.append(
+            f"turned {int(flip.sum())} of {len(faces)} faces to the winding of the "
+            f"rest of their piece ({pieces} piece(s))"
+        )
 
     v64 = vertices.astype(np.float64)
     area = float(mesh.area)

@@ -438,8 +438,15 @@ def export_bop_scene(
         _write_scene(scene, target, depth_scale)
     if not (root / "camera.json").exists():
         intr = scene.view(scene.view_ids[0]).intrinsics
-        cam = {"cx": intr.cx, "cy": intr.cy, "depth_scale": depth_scale, "fx": intr.fx,
-               "fy": intr.fy, "height": intr.height, "width": intr.width}  # fmt: skip
+        cam = {
+            "cx": intr.cx,
+            "cy": intr.cy,
+            "depth_scale": depth_scale,
+            "fx": intr.fx,
+            "fy": intr.fy,
+            "height": intr.height,
+            "width": intr.width,
+        }
         atomic_write_text(root / "camera.json", _dump(cam))
     return written
 

@@ -191,23 +191,25 @@ def _view_entries(
         a_area = int(am_area[j])
         cat = AGNOSTIC_ID if class_agnostic else int(categories[iid - 1])
         entry = order.get(str(iid), {})
-        anns.append({
-            "id": 0,
-            "image_id": image_id,
-            "category_id": cat,
-            "segmentation": vis_rle[j],
-            "bbox": _box(vis_box[j]),
-            "area": float(area),
-            "iscrowd": 0,
-            "amodal_segmentation": am_rle[j],
-            "amodal_bbox": _box(am_box[j]),
-            "amodal_area": float(a_area),
-            "occlusion": float(entry.get("occlusion", 1.0 - area / max(a_area, 1))),
-            "layer": int(entry["layer"]) if "layer" in entry else None,
-            "instance_id": iid,
-            "scene_id": sid,
-            "view_id": view.index,
-        })  # fmt: skip
+        anns.append(
+            {
+                "id": 0,
+                "image_id": image_id,
+                "category_id": cat,
+                "segmentation": vis_rle[j],
+                "bbox": _box(vis_box[j]),
+                "area": float(area),
+                "iscrowd": 0,
+                "amodal_segmentation": am_rle[j],
+                "amodal_bbox": _box(am_box[j]),
+                "amodal_area": float(a_area),
+                "occlusion": float(entry.get("occlusion", 1.0 - area / max(a_area, 1))),
+                "layer": int(entry["layer"]) if "layer" in entry else None,
+                "instance_id": iid,
+                "scene_id": sid,
+                "view_id": view.index,
+            }
+        )
     return image, anns
 
 

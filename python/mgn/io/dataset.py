@@ -80,9 +80,15 @@ def intrinsics_from_params(p: dict[str, Any]) -> Intrinsics:
     ``distortion`` when the images are distorted, or MetaGraspNet's focal length and apertures
     in mm with the principal point at the image centre)."""
     if all(k in p for k in ("fx", "fy", "cx", "cy", "width", "height")):
-        return Intrinsics(int(p["width"]), int(p["height"]), float(p["fx"]), float(p["fy"]),
-                          float(p["cx"]), float(p["cy"]),
-                          tuple(float(c) for c in p.get("distortion", ())))  # fmt: skip
+        return Intrinsics(
+            int(p["width"]),
+            int(p["height"]),
+            float(p["fx"]),
+            float(p["fy"]),
+            float(p["cx"]),
+            float(p["cy"]),
+            tuple(float(c) for c in p.get("distortion", ())),
+        )
     try:
         w = int(p["resolution"]["width"])
         h = int(p["resolution"]["height"])

@@ -324,11 +324,13 @@ def scene_gt_entries(
     for i, oid in enumerate(ids):
         if not keep[i]:
             continue
-        out.append({
-            "cam_R_m2c": [[float(x) for x in row] for row in X[i, :3, :3]],
-            "cam_t_m2c": [float(x) for x in X[i, :3, 3] * M_TO_CM],
-            "obj_id": int(oid),
-        })  # fmt: skip
+        out.append(
+            {
+                "cam_R_m2c": [[float(x) for x in row] for row in X[i, :3, :3]],
+                "cam_t_m2c": [float(x) for x in X[i, :3, 3] * M_TO_CM],
+                "obj_id": int(oid),
+            }
+        )
     return out
 
 

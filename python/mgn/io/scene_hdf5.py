@@ -80,9 +80,15 @@ def mgn_hdf5_bytes(
                 coded = FLOAT_GRADIENT_ENCODING
             if data.size:
                 chunks = (min(_IMAGE_CHUNK_ROWS, data.shape[0]), *data.shape[1:])
-                ds = h5_write_deflated(h5, name, data, chunks, level,
-                                       zlib_level=(zlib_levels or {}).get(name),
-                                       **H5_DATASET_KWARGS)  # fmt: skip
+                ds = h5_write_deflated(
+                    h5,
+                    name,
+                    data,
+                    chunks,
+                    level,
+                    zlib_level=(zlib_levels or {}).get(name),
+                    **H5_DATASET_KWARGS,
+                )
             else:
                 ds = h5_create_dataset(h5, name, data)
             if coded:

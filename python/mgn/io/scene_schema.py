@@ -147,8 +147,14 @@ class ViewRecord:
     def __post_init__(self) -> None:
         h, w = self.intrinsics.height, self.intrinsics.width
         v = self.index
-        for name in ("depth", "depth_ideal", "valid_depth", "instances", "semantic",
-                     "occlusion_map"):  # fmt: skip
+        for name in (
+            "depth",
+            "depth_ideal",
+            "valid_depth",
+            "instances",
+            "semantic",
+            "occlusion_map",
+        ):
             shape = np.shape(getattr(self, name))
             if shape != (h, w):
                 raise InvalidArgumentError(

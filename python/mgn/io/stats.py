@@ -31,8 +31,11 @@ def _hist(values: list[float] | np.ndarray) -> dict[str, Any]:
 def _spread(values: list[int]) -> dict[str, float]:
     if not values:
         return {"min": 0, "mean": 0.0, "max": 0}
-    return {"min": int(min(values)), "mean": round(float(np.mean(values)), 3),
-            "max": int(max(values))}  # fmt: skip
+    return {
+        "min": int(min(values)),
+        "mean": round(float(np.mean(values)), 3),
+        "max": int(max(values)),
+    }
 
 
 def dataset_stats(root: str | os.PathLike[str], *, max_views: int | None = None) -> dict[str, Any]:
@@ -68,8 +71,11 @@ def dataset_stats(root: str | os.PathLike[str], *, max_views: int | None = None)
             if len(ids) == 0:
                 empty.append(f"scene{s.scene_id}/{v}")
             order = view.order if view.path("_order.json").exists() else {}
-            occlusion += [float(order[str(int(i))]["occlusion"]) for i in ids
-                          if "occlusion" in order.get(str(int(i)), {})]  # fmt: skip
+            occlusion += [
+                float(order[str(int(i))]["occlusion"])
+                for i in ids
+                if "occlusion" in order.get(str(int(i)), {})
+            ]
             layout = view.layout if view.path("_layout.json").exists() else None
             level = (layout or {}).get("difficulty")
             if isinstance(level, dict):
@@ -118,6 +124,8 @@ def format_stats(st: dict[str, Any]) -> str:
     ]
     for kind, c in st["grasp_labels"].items():
         h = st["grasp_score_histograms"][kind]["counts"]
-        lines.append(f"{kind} grasps: {c['non_colliding']} collision-free, {c['colliding']} "
-                     f"colliding; scores (0-1, 10 bins): {' '.join(map(str, h))}")  # fmt: skip
+        lines.append(
+            f"{kind} grasps: {c['non_colliding']} collision-free, {c['colliding']} "
+            f"colliding; scores (0-1, 10 bins): {' '.join(map(str, h))}"
+        )
     return "\n".join(lines)

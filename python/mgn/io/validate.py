@@ -725,13 +725,19 @@ class _ViewCheck:
     def no_layout(self, order: Mapping[str, Any], n: int) -> None:
         """``_order.json`` of a view without layout labels: one parentless entry per object."""
         want = {
-            str(i): {"id": i, "parents": [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
-                     "children": []}
+            str(i): {
+                "id": i,
+                "parents": [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
+                "children": [],
+            }
             for i in range(1, n + 1)
-        }  # fmt: skip
+        }
         if order != want:
-            self.bad("_order.json", "without layout labels ({v}_layout.json {}) every object has "
-                     "the single parentless entry and no children")  # fmt: skip
+            self.bad(
+                "_order.json",
+                "without layout labels ({v}_layout.json {}) every object has "
+                "the single parentless entry and no children",
+            )
 
     def mask_evidence(
         self,

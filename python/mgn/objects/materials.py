@@ -45,9 +45,17 @@ def make_material(
     """Material with a grey specular colour of level ``specular`` (raster preview) and its
     physically based parameters (path tracer)."""
     return MaterialSpec(
-        name, color, (specular, specular, specular), shininess, opacity, None,
-        metallic=metallic, roughness=roughness, ior=ior, transmission=transmission,
-    )  # fmt: skip
+        name,
+        color,
+        (specular, specular, specular),
+        shininess,
+        opacity,
+        None,
+        metallic=metallic,
+        roughness=roughness,
+        ior=ior,
+        transmission=transmission,
+    )
 
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
@@ -57,5 +65,13 @@ CARDBOARD_PRINT = make_material("cardboard_print", WHITE, 0.1, 10.0, roughness=0
 # Printed tinplate: lacquered print over steel, the metal showing through.
 PRINTED_METAL = make_material("printed_metal", WHITE, 0.6, 60.0, roughness=0.28, metallic=0.45)
 # Clear soda-lime glass / PET: a smooth dielectric that transmits (n = 1.5).
-CLEAR_GLASS = make_material("clear_glass", (0.85, 0.92, 0.9, 0.15), 0.9, 120.0, 0.15,
-              roughness=0.02, transmission=1.0, ior=1.5)  # fmt: skip
+CLEAR_GLASS = make_material(
+    "clear_glass",
+    (0.85, 0.92, 0.9, 0.15),
+    0.9,
+    120.0,
+    0.15,
+    roughness=0.02,
+    transmission=1.0,
+    ior=1.5,
+)

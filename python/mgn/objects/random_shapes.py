@@ -98,8 +98,9 @@ def _smooth_curve(rng: np.random.Generator, n_ctrl: int, steps: int, bend: float
     t = np.linspace(0.0, n_ctrl - 1, steps)
     heading = np.cumsum(np.interp(t, np.arange(n_ctrl), turns)) / steps * n_ctrl
     pitch = np.interp(t, np.arange(n_ctrl), climb)
-    d = np.stack([np.cos(heading) * np.cos(pitch), np.sin(heading) * np.cos(pitch),
-                  np.sin(pitch)], axis=1)  # fmt: skip
+    d = np.stack(
+        [np.cos(heading) * np.cos(pitch), np.sin(heading) * np.cos(pitch), np.sin(pitch)], axis=1
+    )
     pts = np.concatenate([[np.zeros(3)], np.cumsum(d, axis=0)]) / steps
     return pts
 
@@ -225,7 +226,7 @@ def _holes(rng: np.random.Generator, outer: np.ndarray, size: float) -> list[np.
                 np.linalg.norm(centre - h.mean(axis=0)) < radius + _hr + 0.05
                 for h, _hr in ((h, np.linalg.norm(h[0] - h.mean(axis=0))) for h in holes)
             ):
-                continue  # fmt: skip
+                continue
             a = np.arange(16) * (2 * np.pi / 16)
             holes.append(centre + radius * np.stack([np.cos(a), np.sin(a)], 1))
             break
@@ -419,7 +420,8 @@ def random_shapes_from_source(source: str) -> tuple[ObjectSpec, ...]:
         fields = dict(kv.split("=", 1) for kv in source[len(RANDOM_SOURCE_PREFIX) :].split(";"))
         lo, hi = (float(x) for x in fields["size"].split(","))
         dark = float(fields.get("dark", DEFAULT_DARK))
-        return random_shapes(int(fields["count"]), (lo, hi), int(fields["seed"]),
-                             int(fields["first_id"]), dark)  # fmt: skip
+        return random_shapes(
+            int(fields["count"]), (lo, hi), int(fields["seed"]), int(fields["first_id"]), dark
+        )
     except (KeyError, ValueError) as e:
         raise InvalidArgumentError(f"malformed random-shapes source {source!r}: {e}") from e

@@ -151,8 +151,10 @@ def make_tote(spec: ToteSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
         return _user_tote(s)
     hx, hy = 0.5 * s.inner_length, 0.5 * s.inner_width
     if not s.walls:  # a table top: the slab, top face at z = 0
-        v = np.array([[x, y, z] for z in (-s.floor_thickness, 0.0) for y in (-hy, hy)
-                      for x in (-hx, hx)], np.float64)  # fmt: skip
+        v = np.array(
+            [[x, y, z] for z in (-s.floor_thickness, 0.0) for y in (-hy, hy) for x in (-hx, hx)],
+            np.float64,
+        )
         # Vertex k: x = k & 1, y = k & 2, z = k & 4 (bits set: +).
         quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
         tri = [(a, b, c) for a, b, c, d in quads] + [(a, c, d) for a, b, c, d in quads]

@@ -173,11 +173,15 @@ def warn_implausible_size(
     extent = float(np.ptp(v, axis=0).max())
     lo, hi = PLAUSIBLE_EXTENT_M
     if extent > hi:
-        msg = (f"{source} is {extent:.3g} m across, too large for a part in a tote; if the file "
-               "is in millimetres, use scale 0.001")  # fmt: skip
+        msg = (
+            f"{source} is {extent:.3g} m across, too large for a part in a tote; if the file "
+            "is in millimetres, use scale 0.001"
+        )
     elif extent < lo:
-        msg = (f"{source} is {extent * 1e3:.3g} mm across, too small for a picked part; check "
-               "its scale (the file's unit)")  # fmt: skip
+        msg = (
+            f"{source} is {extent * 1e3:.3g} mm across, too small for a picked part; check "
+            "its scale (the file's unit)"
+        )
     else:
         return False
     _give(ImplausibleSizeWarning(msg, object_name), notes)
@@ -259,8 +263,12 @@ def _base_color_texture(
     if texture is None:
         texture = _embedded_texture(bytes(mat.texture_data))
         if texture is None and len(mat.texture_data):
-            unreadable.append((f"embedded texture of material '{mat.name}' (not a readable "
-                               "image)", os.fspath(mesh_path)))  # fmt: skip
+            unreadable.append(
+                (
+                    f"embedded texture of material '{mat.name}' (not a readable image)",
+                    os.fspath(mesh_path),
+                )
+            )
     return texture, unreadable
 
 
@@ -300,8 +308,12 @@ def pbr_defaults(mat: Material | None, opacity: float = 1.0) -> dict[str, float]
     (its base colour is then the specular colour); opacity < 0.5 a clear dielectric
     (transmission 1, roughness 0.02). :func:`describe_material` says which rule applied."""
     if mat is not None and mat.has_pbr:
-        return {"metallic": float(mat.metallic), "roughness": float(mat.roughness),
-                "ior": float(mat.ior), "transmission": float(mat.transmission)}  # fmt: skip
+        return {
+            "metallic": float(mat.metallic),
+            "roughness": float(mat.roughness),
+            "ior": float(mat.ior),
+            "transmission": float(mat.transmission),
+        }
     n = max(float(mat.shininess), 0.0) if mat is not None else 20.0
     lo, hi = PHONG_ROUGHNESS
     roughness = min(hi, max(lo, math.sqrt(math.sqrt(2.0 / (n + 2.0)))))
@@ -311,8 +323,12 @@ def pbr_defaults(mat: Material | None, opacity: float = 1.0) -> dict[str, float]
     transmission = 1.0 if opacity < 0.5 else 0.0
     if transmission:
         roughness = 0.02
-    return {"metallic": 1.0 if metal else 0.0, "roughness": roughness, "ior": 1.5,
-            "transmission": transmission}  # fmt: skip
+    return {
+        "metallic": 1.0 if metal else 0.0,
+        "roughness": roughness,
+        "ior": 1.5,
+        "transmission": transmission,
+    }
 
 
 def describe_material(mat: Material | None, material: MaterialSpec, entry: dict[str, Any]) -> str:
@@ -320,8 +336,13 @@ def describe_material(mat: Material | None, material: MaterialSpec, entry: dict[
     (the YAML entry, the file's glTF factors, or the Phong description and which rule of
     :func:`pbr_defaults`) and what it is."""
     m = material
-    kind = ("clear dielectric" if m.transmission > 0.5 else "metal" if m.metallic > 0.5
-            else "dielectric")  # fmt: skip
+    kind = (
+        "clear dielectric"
+        if m.transmission > 0.5
+        else "metal"
+        if m.metallic > 0.5
+        else "dielectric"
+    )
     what = f"{kind}, roughness {m.roughness:.2f}"
     given = [k for k in ("metallic", "roughness", "ior", "transmission") if k in entry]
     if mat is None:
@@ -359,13 +380,19 @@ def _material(entry: dict[str, Any], mat: Any, texture: Any, name: str, where: s
     if len(color) == 3:
         color = [*color, 1.0]
     if not isinstance(color, (list, tuple)) or len(color) != 4:
-        raise InvalidArgumentError(f"{where}: key 'color': expected [r, g, b] or [r, g, b, a] in "
-                                   f"[0, 1], got {entry.get('color')!r}")  # fmt: skip
+        raise InvalidArgumentError(
+            f"{where}: key 'color': expected [r, g, b] or [r, g, b, a] in "
+            f"[0, 1], got {entry.get('color')!r}"
+        )
     opacity = _number_in(entry, "opacity", where, 1e-6, 1.0)
     opacity = opacity if opacity is not None else (float(mat.opacity) if mat is not None else 1.0)
     pbr = pbr_defaults(mat, opacity)
-    for key, lo, hi in (("metallic", 0.0, 1.0), ("roughness", 0.0, 1.0), ("ior", 1.0, 4.0),
-                        ("transmission", 0.0, 1.0)):  # fmt: skip
+    for key, lo, hi in (
+        ("metallic", 0.0, 1.0),
+        ("roughness", 0.0, 1.0),
+        ("ior", 1.0, 4.0),
+        ("transmission", 0.0, 1.0),
+    ):
         value = _number_in(entry, key, where, lo, hi)
         if value is not None:
             pbr[key] = value
@@ -433,11 +460,15 @@ def _closed_mesh(entry: dict[str, Any], mesh: Any, mesh_path: Path, where: str) 
             f"{where}: key 'mesh': '{mesh_path}' is not closed ({report.num_boundary_edges} "
             f"boundary, {report.num_nonmanifold_edges} non-manifold, "
             f"{report.num_misoriented_edges} misoriented edges)"
-            + (" even after repair" if repair else "; set repair: true to repair it as it is read "
-               "(winding, duplicate and stray faces, small holes), or")
+            + (
+                " even after repair"
+                if repair
+                else "; set repair: true to repair it as it is read "
+                "(winding, duplicate and stray faces, small holes), or"
+            )
             + (";" if repair else "")
             + " set allow_open: true to use the thin-shell mass model (no parallel-jaw labels)"
-        )  # fmt: skip
+        )
     return mesh, report
 
 

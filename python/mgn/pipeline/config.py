@@ -374,8 +374,11 @@ class ObjectsConfig(_Section):
             raise _fail("objects.copies", list(self.copies), "[min, max] with 1 <= min <= max")
         smin, smax = (float(x) for x in self.random_shape_size)
         if not 0.01 <= smin <= smax <= 1.0:
-            raise _fail("objects.random_shape_size", list(self.random_shape_size),
-                        "[min, max] in metres with 0.01 <= min <= max <= 1")  # fmt: skip
+            raise _fail(
+                "objects.random_shape_size",
+                list(self.random_shape_size),
+                "[min, max] in metres with 0.01 <= min <= max <= 1",
+            )
         if isinstance(self.random_shapes, bool) or int(self.random_shapes) < 0:
             raise _fail("objects.random_shapes", self.random_shapes, "an integer >= 0")
         if not 0.0 <= float(self.random_shape_dark) <= 1.0:
@@ -414,8 +417,11 @@ class HemisphereConfig(_Section):
 def _distortion(value: Any, key: str) -> tuple[float, ...]:
     coeffs: tuple[float, ...] = _list(_num(), nonempty=False)(value, key)
     if len(coeffs) not in (0, 4, 5, 8, 12, 14):
-        raise _fail(key, value, "OpenCV distortion coefficients [k1, k2, p1, p2(, k3, ...)]: "
-                    "4, 5, 8, 12 or 14 numbers")  # fmt: skip
+        raise _fail(
+            key,
+            value,
+            "OpenCV distortion coefficients [k1, k2, p1, p2(, k3, ...)]: 4, 5, 8, 12 or 14 numbers",
+        )
     return coeffs
 
 
@@ -462,8 +468,11 @@ class IntrinsicsConfig(_Section):
         out: IntrinsicsConfig = super().from_dict(d, key)
         if out.distortion:
             try:  # the lens must be invertible over the image (built once, cached)
-                lens_for(Intrinsics(out.width, out.height, out.fx, out.fy, out.cx, out.cy,
-                                    out.distortion))  # fmt: skip
+                lens_for(
+                    Intrinsics(
+                        out.width, out.height, out.fx, out.fy, out.cx, out.cy, out.distortion
+                    )
+                )
             except InvalidArgumentError as e:
                 raise ConfigError(f"config key '{key}.distortion': {e}") from e
         return out
@@ -477,8 +486,12 @@ def _intrinsics(value: Any, key: str) -> str | IntrinsicsConfig:
     if isinstance(value, str):
         preset: str = _choice(*INTRINSICS_PRESETS)(value, key)
         return preset
-    raise _fail(key, value, f"a preset ({', '.join(INTRINSICS_PRESETS)}) or a mapping with width, "
-                "height, fx, fy, cx, cy")  # fmt: skip
+    raise _fail(
+        key,
+        value,
+        f"a preset ({', '.join(INTRINSICS_PRESETS)}) or a mapping with width, "
+        "height, fx, fy, cx, cy",
+    )
 
 
 def _camera_pose(value: Any, key: str) -> tuple[tuple[float, ...], ...]:
@@ -500,10 +513,16 @@ def _camera_pose(value: Any, key: str) -> tuple[tuple[float, ...], ...]:
         rows = _list(_list(_num(), length=4), length=4)(value, key)
         X = np.asarray(rows, np.float64)
         R = X[:3, :3]
-        if not (np.allclose(R.T @ R, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0
-                and np.allclose(X[3], [0, 0, 0, 1])):  # fmt: skip
-            raise _fail(key, value, "a rigid 4x4 pose (rotation block orthonormal, det +1, last "
-                        "row [0, 0, 0, 1])")  # fmt: skip
+        if not (
+            np.allclose(R.T @ R, np.eye(3), atol=1e-6)
+            and np.linalg.det(R) > 0
+            and np.allclose(X[3], [0, 0, 0, 1])
+        ):
+            raise _fail(
+                key,
+                value,
+                "a rigid 4x4 pose (rotation block orthonormal, det +1, last row [0, 0, 0, 1])",
+            )
     return tuple(tuple(float(x) for x in row) for row in np.asarray(X))
 
 

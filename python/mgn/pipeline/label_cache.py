@@ -239,11 +239,17 @@ def compute_object_labels(
     pj = None
     report = mesh.validate()
     if config.labels.paralleljaw and "random" in spec.tags:
-        pj = _no_pj_labels(config, "random shape (objects.random_shapes): parallel-jaw labels "
-                           "are not computed for random shapes")  # fmt: skip
+        pj = _no_pj_labels(
+            config,
+            "random shape (objects.random_shapes): parallel-jaw labels "
+            "are not computed for random shapes",
+        )
     elif config.labels.paralleljaw and not report.is_watertight:
-        pj = _no_pj_labels(config, f"open mesh ({report.num_boundary_edges} boundary edges, "
-                           "allow_open): the antipodal sampler needs a closed volume")  # fmt: skip
+        pj = _no_pj_labels(
+            config,
+            f"open mesh ({report.num_boundary_edges} boundary edges, "
+            "allow_open): the antipodal sampler needs a closed volume",
+        )
     elif config.labels.paralleljaw:
         physics = None
         if config.labels.pj_physics:
@@ -286,11 +292,20 @@ def _no_pj_labels(config: Config, reason: str) -> PjLabels:
         "pj_skipped": reason,
         "mgn_version": _core.__version__,
     }
-    return PjLabels(approach=f3, closing=f3.copy(), p1=f3.copy(), width=f1,
-                    quality_score=f1.copy(), score_wrench=f1.copy(),
-                    quality_score_simulation=f1.copy(), point_index=np.zeros(0, np.int64),
-                    point_score=f1.copy(), num_points=0, num_colliding=0,
-                    metadata=metadata)  # fmt: skip
+    return PjLabels(
+        approach=f3,
+        closing=f3.copy(),
+        p1=f3.copy(),
+        width=f1,
+        quality_score=f1.copy(),
+        score_wrench=f1.copy(),
+        quality_score_simulation=f1.copy(),
+        point_index=np.zeros(0, np.int64),
+        point_score=f1.copy(),
+        num_points=0,
+        num_colliding=0,
+        metadata=metadata,
+    )
 
 
 def _pack(labels: SuctionLabels | PjLabels) -> bytes:

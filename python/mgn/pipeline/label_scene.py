@@ -120,8 +120,16 @@ class LabelTimings:
 
 
 #: Per-grasp fields of the object label dataclasses (the others are per object or per point).
-_PJ_GRASP_FIELDS = ("approach", "closing", "p1", "width", "quality_score", "score_wrench",
-                    "quality_score_simulation", "point_index")  # fmt: skip
+_PJ_GRASP_FIELDS = (
+    "approach",
+    "closing",
+    "p1",
+    "width",
+    "quality_score",
+    "score_wrench",
+    "quality_score_simulation",
+    "point_index",
+)
 _SUCTION_GRASP_FIELDS = ("points", "approach", "score", "wrench", "reason", "simulation")
 
 
@@ -151,10 +159,13 @@ def view_grasps(model: SceneGraspModel, view: CameraView, index: np.ndarray, n: 
 
 def _empty_layout_files(n: int) -> tuple[dict[str, Any], str, dict[str, Any]]:
     order = {
-        str(i + 1): {"id": i + 1, "parents": [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
-                     "children": []}
+        str(i + 1): {
+            "id": i + 1,
+            "parents": [{"id": 0, "depth_diff": 0.0, "edge_size": 0.0}],
+            "children": [],
+        }
         for i in range(n)
-    }  # fmt: skip
+    }
     return order, "".join(",".join("0" for _ in range(n)) + "\n" for _ in range(n)), {}
 
 
@@ -376,9 +387,17 @@ def label_scene(
     # overlap.
     tote = tote_mesh(scene.tote)
     ahead = _RenderAhead(
-        lambda: iter_views(objects, tote, views, sensor=opt.sensor, randomize=opt.randomize,
-                           seed=opt.seed, render=opt.render, num_threads=opt.num_threads)
-    )  # fmt: skip
+        lambda: iter_views(
+            objects,
+            tote,
+            views,
+            sensor=opt.sensor,
+            randomize=opt.randomize,
+            seed=opt.seed,
+            render=opt.render,
+            num_threads=opt.num_threads,
+        )
+    )
     try:
         with (
             ThreadPoolExecutor(max_workers=2, thread_name_prefix="mgn-write") as pool,
@@ -417,10 +436,15 @@ def label_scene(
                 timings.add("object labels", t2 - t1)
                 layout = None
                 if opt.layout:
-                    layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal,
-                                            categories[index], [bins[i] for i in index],
-                                            occlusion=labels.occlusion,
-                                            num_threads=opt.num_threads)  # fmt: skip
+                    layout = compute_layout(
+                        labels.visible,
+                        labels.amodal,
+                        images.depth_ideal,
+                        categories[index],
+                        [bins[i] for i in index],
+                        occlusion=labels.occlusion,
+                        num_threads=opt.num_threads,
+                    )
                 t3 = time.perf_counter()
                 timings.add("layout", t3 - t2)
                 gt[v] = scene_gt_entries(labels.X_CO, categories[index])

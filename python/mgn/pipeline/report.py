@@ -159,11 +159,14 @@ class GenerateReport:
             lines.append(
                 f"  {n_lost} objects left the tote and were removed ({kept} kept) in "
                 f"{len(lost)} of {len(self.ok)} scenes"
-                + ("" if len(lost) > 5 else ": " + "; ".join(
-                    f"scene{r.index}: {', '.join(r.removed)}" for r in lost))
+                + (
+                    ""
+                    if len(lost) > 5
+                    else ": " + "; ".join(f"scene{r.index}: {', '.join(r.removed)}" for r in lost)
+                )
                 + " (objects.refill drops a scene again, at most objects.refill_attempts times, "
                 "until its objects stay in; fewer or smaller objects per scene help)"
-            )  # fmt: skip
+            )
         if self.physics is not None and self.physics["unscored"]:
             p = self.physics
             lines.append(

@@ -204,8 +204,13 @@ class _Run:
                 )
             )
         self.export_missing(complete)  # stopped after their scene, before or in their export
-        bar = tqdm(total=total, initial=len(report.skipped) + len(report.results),
-                   desc="scenes", unit="scene", disable=not self.progress)  # fmt: skip
+        bar = tqdm(
+            total=total,
+            initial=len(report.skipped) + len(report.results),
+            desc="scenes",
+            unit="scene",
+            disable=not self.progress,
+        )
         t_scenes = time.perf_counter()
         n_before = sum(r.ok for r in report.results.values())
         for task, result, exc in self.executor.run(run_scene, todo):
@@ -222,9 +227,11 @@ class _Run:
             elapsed = time.perf_counter() - t_scenes
             done = sum(r.ok for r in report.results.values()) - n_before
             bar.set_postfix(
-                {"scenes/h": f"{3600 * done / max(elapsed, 1e-9):.0f}",
-                 "failed": len(report.failed)}
-            )  # fmt: skip
+                {
+                    "scenes/h": f"{3600 * done / max(elapsed, 1e-9):.0f}",
+                    "failed": len(report.failed),
+                }
+            )
             if result.disk_full:
                 self.executor.cancel()
                 break
@@ -247,11 +254,15 @@ class _Run:
                 full = disk_full_error(e)
                 old = self.report.results.get(i)
                 self.report.results[i] = SceneResult(
-                    i, scene_seed(self.seed, i), False,
-                    f"disk full while exporting scene{i}" if full is not None
+                    i,
+                    scene_seed(self.seed, i),
+                    False,
+                    f"disk full while exporting scene{i}"
+                    if full is not None
                     else f"export of scene{i}: {type(e).__name__}: {e}",
-                    full is not None, dict(old.times) if old else {},
-                )  # fmt: skip
+                    full is not None,
+                    dict(old.times) if old else {},
+                )
                 if i in self.report.skipped:
                     self.report.skipped.remove(i)
                 if full is not None:
@@ -374,9 +385,11 @@ def generate(
     cfg = config if isinstance(config, Config) else load_config(config)
     if objects:
         cfg = dataclasses.replace(
-            cfg, objects=dataclasses.replace(cfg.objects, names=tuple(objects), count=None,
-                                             categories=None)
-        )  # fmt: skip
+            cfg,
+            objects=dataclasses.replace(
+                cfg.objects, names=tuple(objects), count=None, categories=None
+            ),
+        )
     quota = cfg.selection.quota
     _check_generate_args(cfg, num_scenes, workers, seed)
     out = Path(out_dir).resolve()
@@ -424,9 +437,20 @@ def generate(
         raise (e if isinstance(e, IoError) else _io_error(out, e)) from e
 
     executor = make_executor(workers, scheduler)
-    run = _Run(out, cfg, seed, executor, report, sources, use_cache, progress, resume, extra,
-               collect=collect,
-               defer_exports=quota is not None and cfg.selection.prune_rejected)  # fmt: skip
+    run = _Run(
+        out,
+        cfg,
+        seed,
+        executor,
+        report,
+        sources,
+        use_cache,
+        progress,
+        resume,
+        extra,
+        collect=collect,
+        defer_exports=quota is not None and cfg.selection.prune_rejected,
+    )
     try:
         if quota is None:
             run.ensure_labels([s for specs in per_scene for s in specs])

@@ -189,8 +189,11 @@ def config_warnings(config: Config, catalogue: Catalogue | None = None) -> list[
     found += _tote_warnings(config)
     found += _camera_problems(config)[1]
     rs = config.render
-    if (tuple(config.tote.color) != ToteSpec().color and config.camera.randomize
-            and (rs.engine == "raster" or rs.randomize.materials)):  # fmt: skip
+    if (
+        tuple(config.tote.color) != ToteSpec().color
+        and config.camera.randomize
+        and (rs.engine == "raster" or rs.randomize.materials)
+    ):
         found.append(
             f"tote.color = {list(config.tote.color)} is not used: camera.randomize draws the "
             "tote's colour per view; set camera.randomize: false"
@@ -256,8 +259,11 @@ def _tote_warnings(config: Config) -> list[str]:
         v, _ = make_tote(tote)
         extent = float(np.ptp(v, axis=0).max())
         if not lo <= extent <= hi:
-            hint = ("if the file is in millimetres, use tote.mesh_scale 0.001" if extent > hi
-                    else "check tote.mesh_scale (the file's unit)")  # fmt: skip
+            hint = (
+                "if the file is in millimetres, use tote.mesh_scale 0.001"
+                if extent > hi
+                else "check tote.mesh_scale (the file's unit)"
+            )
             out.append(
                 f"tote.mesh '{tote.mesh}' (mesh_scale {tote.mesh_scale:g}) is {extent:.3g} m "
                 f"across, too {'large' if extent > hi else 'small'} for a bin around an inner box "

@@ -176,14 +176,27 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
         write_manifest(tmp, scene=task.index, seed=task.seed, render=task.config.render.describe())
         size = folder_size(tmp)
         if task.collect:
-            files = {p.relative_to(tmp).as_posix(): p.read_bytes()
-                     for p in sorted(tmp.rglob("*")) if p.is_file()}  # fmt: skip
+            files = {
+                p.relative_to(tmp).as_posix(): p.read_bytes()
+                for p in sorted(tmp.rglob("*"))
+                if p.is_file()
+            }
             shutil.rmtree(tmp.parent, ignore_errors=True)
             times["finalize"] = time.perf_counter() - t2
             times["cpu"] = time.process_time() - c0
-            return SceneResult(task.index, task.seed, True, None, False, times, size,
-                               len(scene), worker, files,
-                               removed=tuple(r.name for r in scene.removed))  # fmt: skip
+            return SceneResult(
+                task.index,
+                task.seed,
+                True,
+                None,
+                False,
+                times,
+                size,
+                len(scene),
+                worker,
+                files,
+                removed=tuple(r.name for r in scene.removed),
+            )
         if final.exists():  # an inconsistent leftover the caller decided to redo
             shutil.rmtree(final)
         tmp.rename(final)
@@ -192,9 +205,17 @@ def run_scene(task: SceneTask, dropped: Future[Scene] | None = None) -> SceneRes
             times.update(export_scene(out, task.index, task.exports, task.config.gripper))
         times["cpu"] = time.process_time() - c0
         return SceneResult(
-            task.index, task.seed, True, None, False, times, size, len(scene), worker,
+            task.index,
+            task.seed,
+            True,
+            None,
+            False,
+            times,
+            size,
+            len(scene),
+            worker,
             removed=tuple(r.name for r in scene.removed),
-        )  # fmt: skip
+        )
     except Exception as e:  # reported per scene, the others go on
         shutil.rmtree(tmp.parent if task.collect else tmp, ignore_errors=True)
         full = disk_full_error(e)
@@ -232,8 +253,11 @@ def store_collected(out: Path, result: SceneResult) -> SceneResult:
     except OSError as e:
         shutil.rmtree(tmp, ignore_errors=True)
         full = disk_full_error(e)
-        msg = (f"disk full while writing scene{result.index}" if full is not None
-               else f"cannot write scene{result.index}: {e}")  # fmt: skip
+        msg = (
+            f"disk full while writing scene{result.index}"
+            if full is not None
+            else f"cannot write scene{result.index}: {e}"
+        )
         return dataclasses.replace(
             result, ok=False, error=msg, disk_full=full is not None, files=None
         )

@@ -116,6 +116,14 @@ def write_scene(
             su = [g.suction if g is not None else None for g in got]
     options = label_options(config, scene.seed, num_threads=num_threads)
     views = scene_views(scene, config.camera)
-    timings = label_scene(scene, out, views, pj_labels=pj, suction_labels=su,
-                          gripper=config.gripper, cup=config.cup, options=options)  # fmt: skip
+    timings = label_scene(
+        scene,
+        out,
+        views,
+        pj_labels=pj,
+        suction_labels=su,
+        gripper=config.gripper,
+        cup=config.cup,
+        options=options,
+    )
     return timings.seconds

@@ -230,8 +230,13 @@ def compose_scene(
             count = int(rng.integers(lo, hi + 1))
             if copies == (1, 1):
                 count = min(count, len(pool))
-            out = compose_objects(categories=[s.name for s in pool], count=count, copies=copies,
-                                  seed=seed, catalogue=pool)  # fmt: skip
+            out = compose_objects(
+                categories=[s.name for s in pool],
+                count=count,
+                copies=copies,
+                seed=seed,
+                catalogue=pool,
+            )
         else:
             cat = [s for s in catalogue if s.name not in split.unseen_names]
             cat = cat if split.name == "train" else list(catalogue)

@@ -606,15 +606,22 @@ def calibrate_staircase(
         bound = error_bound(errors, 1.0 / (grids.shape[1] * grids.shape[2]))
         if mismatches <= int(max_mismatches) or bound <= tolerance:
             return StaircaseCalibration(
-                grasps=int(grids.shape[0]), mismatches=mismatches, staircase=True, search=name,
-                mean_abs_error=float(errors.mean()), max_abs_error=float(errors.max()),
-                error_bound=bound, trials_per_grasp=float(trials.mean()),
-            )  # fmt: skip
+                grasps=int(grids.shape[0]),
+                mismatches=mismatches,
+                staircase=True,
+                search=name,
+                mean_abs_error=float(errors.mean()),
+                max_abs_error=float(errors.max()),
+                error_bound=bound,
+                trials_per_grasp=float(trials.mean()),
+            )
     return StaircaseCalibration(
-        grasps=int(grids.shape[0]), mismatches=first_mismatches, staircase=False,
+        grasps=int(grids.shape[0]),
+        mismatches=first_mismatches,
+        staircase=False,
         search="full grid",
         trials_per_grasp=float(grids.shape[1] * grids.shape[2]),
-    )  # fmt: skip
+    )
 
 
 def search_of(calibration: StaircaseCalibration, options: ShakeOptions) -> ShakeOptions:
@@ -779,10 +786,14 @@ class ShakeScorer:
                 for a in range(start, stop, step):
                     b = min(a + step, stop)
                     piece = shake_scores(
-                        parts, props.mass, props.center_of_mass, props.inertia, rows[a:b],
+                        parts,
+                        props.mass,
+                        props.center_of_mass,
+                        props.inertia,
+                        rows[a:b],
                         self.gripper,
                         replace(options, first_grasp_index=options.first_grasp_index + a),
-                    )  # fmt: skip
+                    )
                     score[a:b] = piece.score
                     bar.update(b - a)
                     pieces.append(piece)

@@ -61,8 +61,11 @@ TOTE_HSV = {"saturation": (0.2, 0.8), "value": (0.15, 0.75)}
 #: With this probability a view's tote is black or dark grey plastic instead (the common
 #: industrial tote): saturation and value uniform in these ranges (value 0.08-0.3 of sRGB is
 #: a reflectance of about 1-7 %).
-DARK_TOTE: dict[str, Any] = {"probability": 1.0 / 3.0, "saturation": (0.0, 0.15),
-                             "value": (0.08, 0.3)}  # fmt: skip
+DARK_TOTE: dict[str, Any] = {
+    "probability": 1.0 / 3.0,
+    "saturation": (0.0, 0.15),
+    "value": (0.08, 0.3),
+}
 
 
 def blackbody_rgb(temperature: float) -> tuple[float, float, float]:
@@ -177,14 +180,23 @@ def draw_lighting(
         sun[2] = abs(sun[2]) + 0.5
         sun /= np.linalg.norm(sun)
         env = Environment(
-            kind=kind, color=tint, zenith=tuple(0.8 * np.asarray(tint) * (0.75, 0.85, 1.0)),
-            horizon=(0.9, 0.9, 0.9), ground=(0.25, 0.24, 0.22),
-            sun_direction=tuple(sun), intensity=inten,
-        )  # fmt: skip
+            kind=kind,
+            color=tint,
+            zenith=tuple(0.8 * np.asarray(tint) * (0.75, 0.85, 1.0)),
+            horizon=(0.9, 0.9, 0.9),
+            ground=(0.25, 0.24, 0.22),
+            sun_direction=tuple(sun),
+            intensity=inten,
+        )
         summary["environment"] = kind
     else:
-        env = Environment(kind="gradient", zenith=(0.55, 0.6, 0.7), horizon=(0.8, 0.8, 0.8),
-                          ground=(0.25, 0.24, 0.22), intensity=0.4)  # fmt: skip
+        env = Environment(
+            kind="gradient",
+            zenith=(0.55, 0.6, 0.7),
+            horizon=(0.8, 0.8, 0.8),
+            ground=(0.25, 0.24, 0.22),
+            intensity=0.4,
+        )
     if randomize and r.materials:
         hue = g_mat.random()
         sat = g_mat.uniform(*TOTE_HSV["saturation"])

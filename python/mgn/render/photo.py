@@ -157,9 +157,13 @@ class PhotoRenderer:
 
     def lighting(self, view_index: int) -> ViewLighting:
         return draw_lighting(
-            self.settings, self.seed, view_index, target_W=self._X_tote[:3, 3],
-            tote_color=self._tote_color, randomize=self.randomize,
-        )  # fmt: skip
+            self.settings,
+            self.seed,
+            view_index,
+            target_W=self._X_tote[:3, 3],
+            tote_color=self._tote_color,
+            randomize=self.randomize,
+        )
 
     def object_materials(self, view_index: int) -> list[list[Any]]:
         """The objects' materials in view ``view_index`` (per object, one per material slot):
@@ -173,20 +177,30 @@ class PhotoRenderer:
         ]
 
     def _scene_for(self, lit: ViewLighting, view_index: int = 0) -> Any:
-        key = (lit.tote, lit.floor, id(lit.tote.base_color_texture),
-               id(lit.floor.base_color_texture))  # fmt: skip
+        key = (
+            lit.tote,
+            lit.floor,
+            id(lit.tote.base_color_texture),
+            id(lit.floor.base_color_texture),
+        )
         if self._appearance or self._scene is None or self._scene_materials != key:
-            mats = self.object_materials(view_index) + [list(m) for m in
-                                                        self._mats[self._n_objects :]]  # fmt: skip
+            mats = self.object_materials(view_index) + [
+                list(m) for m in self._mats[self._n_objects :]
+            ]
             k = self._n_objects
             if self._has_tote:
                 mats[k] = [lit.tote] * len(mats[k])
                 k += 1
             if self._has_floor:
                 mats[k] = [lit.floor] * len(mats[k])
-            self._scene = PathScene(self._meshes, np.stack(self._poses) if self._poses
-                                    else np.zeros((0, 4, 4)), self._ids, mats,
-                                    lit.lights, lit.environment)  # fmt: skip
+            self._scene = PathScene(
+                self._meshes,
+                np.stack(self._poses) if self._poses else np.zeros((0, 4, 4)),
+                self._ids,
+                mats,
+                lit.lights,
+                lit.environment,
+            )
             self._scene_materials = None if self._appearance else key
             return self._scene
         return self._scene.with_lighting(lit.lights, lit.environment)
@@ -203,38 +217,59 @@ class PhotoRenderer:
         t0 = time.perf_counter()
         lit = self.lighting(view_index)
         cam_light = draw_camera_light(
-            s, self.seed, view_index, view.X_WC, target_W=self._X_tote[:3, 3],
+            s,
+            self.seed,
+            view_index,
+            view.X_WC,
+            target_W=self._X_tote[:3, 3],
             randomize=self.randomize,
-        )  # fmt: skip
+        )
         if cam_light is not None:
             lit = dataclasses.replace(lit, lights=(*lit.lights, cam_light))
         scene = self._scene_for(lit, view_index)
         out = scene.render(
             view,
             PathTraceOptions(
-                spp=self.spp, max_bounces=s.max_bounces, seed=self.seed & (2**63 - 1),
-                view_index=int(view_index), num_threads=self.num_threads,
-                aperture_radius=s.aperture_radius, clamp=s.clamp,
-                adaptive_samples=s.adaptive_samples, adaptive_max=s.adaptive_max, labels=labels,
+                spp=self.spp,
+                max_bounces=s.max_bounces,
+                seed=self.seed & (2**63 - 1),
+                view_index=int(view_index),
+                num_threads=self.num_threads,
+                aperture_radius=s.aperture_radius,
+                clamp=s.clamp,
+                adaptive_samples=s.adaptive_samples,
+                adaptive_max=s.adaptive_max,
+                labels=labels,
             ),
-        )  # fmt: skip
+        )
         radiance = out.radiance
         t1 = time.perf_counter()
         if self.denoised:
             radiance = denoise(
-                radiance, out.albedo, out.normal, s.denoise_quality,
-                num_threads=self.num_threads, guides=s.denoise_guides,
+                radiance,
+                out.albedo,
+                out.normal,
+                s.denoise_quality,
+                num_threads=self.num_threads,
+                guides=s.denoise_guides,
                 resolution=s.denoise_resolution,
-            )  # fmt: skip
+            )
         t2 = time.perf_counter()
         rgb = develop(
             radiance,
             FilmOptions(
-                exposure=lit.exposure, tone=s.tone, shot_noise=s.shot_noise,
-                read_noise=s.read_noise, seed=self.seed & (2**63 - 1),
-                view_index=int(view_index), num_threads=self.num_threads,
+                exposure=lit.exposure,
+                tone=s.tone,
+                shot_noise=s.shot_noise,
+                read_noise=s.read_noise,
+                seed=self.seed & (2**63 - 1),
+                view_index=int(view_index),
+                num_threads=self.num_threads,
             ),
-        )  # fmt: skip
-        self.last_seconds = {"trace": t1 - t0, "denoise": t2 - t1,
-                             "develop": time.perf_counter() - t2}  # fmt: skip
+        )
+        self.last_seconds = {
+            "trace": t1 - t0,
+            "denoise": t2 - t1,
+            "develop": time.perf_counter() - t2,
+        }
         return rgb, out

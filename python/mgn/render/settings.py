@@ -133,8 +133,14 @@ class RandomizeSettings:
     camera_light_irradiance: tuple[float, float] = (1.0, 6.0)
 
     def __post_init__(self) -> None:
-        for key in ("lights", "environment", "materials", "exposure", "object_appearance",
-                    "camera_light"):  # fmt: skip
+        for key in (
+            "lights",
+            "environment",
+            "materials",
+            "exposure",
+            "object_appearance",
+            "camera_light",
+        ):
             if not isinstance(getattr(self, key), bool):
                 raise InvalidArgumentError(
                     f"RandomizeSettings.{key} must be true or false, got {getattr(self, key)!r}"
@@ -146,12 +152,19 @@ class RandomizeSettings:
                 f"1 <= min <= max, got {self.light_count!r}"
             )
         object.__setattr__(self, "light_count", (int(c[0]), int(c[1])))
-        for key, lo, hi in (("light_size", 1e-3, None), ("light_height", 0.1, None),
-                            ("light_irradiance", 0.0, None), ("light_temperature", 1000.0, 40000.0),
-                            ("environment_intensity", 0.0, None), ("object_saturation", 0.0, 1.0),
-                            ("object_value", 0.0, 1.0), ("object_roughness", 0.0, 1.0),
-                            ("camera_light_size", 1e-3, None), ("camera_light_offset", 0.0, None),
-                            ("camera_light_irradiance", 0.0, None)):  # fmt: skip
+        for key, lo, hi in (
+            ("light_size", 1e-3, None),
+            ("light_height", 0.1, None),
+            ("light_irradiance", 0.0, None),
+            ("light_temperature", 1000.0, 40000.0),
+            ("environment_intensity", 0.0, None),
+            ("object_saturation", 0.0, 1.0),
+            ("object_value", 0.0, 1.0),
+            ("object_roughness", 0.0, 1.0),
+            ("camera_light_size", 1e-3, None),
+            ("camera_light_offset", 0.0, None),
+            ("camera_light_irradiance", 0.0, None),
+        ):
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
             object.__setattr__(self, key, rng)
         for key in ("light_offset", "exposure_range"):
@@ -261,8 +274,12 @@ class RenderSettings:
             raise InvalidArgumentError(
                 f"RenderSettings.tone must be one of {', '.join(TONES)}, got {self.tone!r}"
             )
-        for key, low in (("spp", 1), ("spp_without_denoiser", 1), ("max_bounces", 0),
-                         ("adaptive_max", 1)):  # fmt: skip
+        for key, low in (
+            ("spp", 1),
+            ("spp_without_denoiser", 1),
+            ("max_bounces", 0),
+            ("adaptive_max", 1),
+        ):
             v = getattr(self, key)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
                 raise InvalidArgumentError(
@@ -278,8 +295,13 @@ class RenderSettings:
                 f"RenderSettings.denoise must be true or false, got {self.denoise!r}"
             )
         bounds: tuple[tuple[str, float | None], ...] = (
-            ("clamp", 0.0), ("aperture_radius", 0.0), ("shot_noise", 0.0), ("read_noise", 0.0),
-            ("exposure", None), ("adaptive_samples", 0.0))  # fmt: skip
+            ("clamp", 0.0),
+            ("aperture_radius", 0.0),
+            ("shot_noise", 0.0),
+            ("read_noise", 0.0),
+            ("exposure", None),
+            ("adaptive_samples", 0.0),
+        )
         for key, lo in bounds:
             v = getattr(self, key)
             ok = not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
@@ -298,8 +320,12 @@ class RenderSettings:
         if self.engine == "raster":
             return {"engine": "raster"}
         d = self.denoise and denoiser_available() if denoised is None else denoised
-        return {"engine": "path", "spp": self.spp if d else self.spp_without_denoiser,
-                "denoised": bool(d), "max_bounces": self.max_bounces}  # fmt: skip
+        return {
+            "engine": "path",
+            "spp": self.spp if d else self.spp_without_denoiser,
+            "denoised": bool(d),
+            "max_bounces": self.max_bounces,
+        }
 
 
 def replace_settings(settings: RenderSettings, **changes: Any) -> RenderSettings:

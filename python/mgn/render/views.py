@@ -274,9 +274,13 @@ def iter_views(
         if tote is not None:
             corners = np.asarray(tote.bounds)
             z_floor = float(
-                min((X_tote[:3, :3] @ np.array([x, y, z]) + X_tote[:3, 3])[2]
-                    for x in corners[:, 0] for y in corners[:, 1] for z in corners[:, 2])
-            )  # fmt: skip
+                min(
+                    (X_tote[:3, :3] @ np.array([x, y, z]) + X_tote[:3, 3])[2]
+                    for x in corners[:, 0]
+                    for y in corners[:, 1]
+                    for z in corners[:, 2]
+                )
+            )
         X_floor = np.eye(4)
         X_floor[:2, 3] = X_tote[:2, 3]
         X_floor[2, 3] = z_floor - 0.005
@@ -289,9 +293,16 @@ def iter_views(
         if tote is not None and tote.materials:
             tote_color = tuple(float(c) for c in np.asarray(tote.materials[0].base_color)[:3])
         photo = PhotoRenderer(
-            objects, tote, X_tote, (slab, X_floor) if floor else None, settings,
-            tote_color=tote_color, randomize=randomize, seed=seed, num_threads=num_threads,
-        )  # fmt: skip
+            objects,
+            tote,
+            X_tote,
+            (slab, X_floor) if floor else None,
+            settings,
+            tote_color=tote_color,
+            randomize=randomize,
+            seed=seed,
+            num_threads=num_threads,
+        )
 
     for (v, view), lens, cam in zip(cams, lenses, shot, strict=True):
         t0 = time.perf_counter()
@@ -320,7 +331,15 @@ def iter_views(
         )
         seconds["sensor"] = time.perf_counter() - t1
         res = ViewImages(
-            v, cam, rgb, sens.depth, img.depth, sens.valid, img.instance_ids, img.light, engine,
+            v,
+            cam,
+            rgb,
+            sens.depth,
+            img.depth,
+            sens.valid,
+            img.instance_ids,
+            img.light,
+            engine,
             seconds=seconds,
-        )  # fmt: skip
+        )
         yield res if lens is None else _distorted(res, view, lens)

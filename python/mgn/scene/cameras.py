@@ -157,9 +157,15 @@ class Intrinsics:
         """The same field of view at ``factor`` times the resolution (rounded). The distortion
         coefficients act on normalised coordinates and are kept."""
         w, h = round(self.width * factor), round(self.height * factor)
-        return Intrinsics(w, h, self.fx * w / self.width, self.fy * h / self.height,
-                          self.cx * w / self.width, self.cy * h / self.height,
-                          self.distortion)  # fmt: skip
+        return Intrinsics(
+            w,
+            h,
+            self.fx * w / self.width,
+            self.fy * h / self.height,
+            self.cx * w / self.width,
+            self.cy * h / self.height,
+            self.distortion,
+        )
 
     def camera_params(
         self, clipping_range_cm: tuple[float, float] = MGN_CLIPPING_RANGE_CM

@@ -142,10 +142,11 @@ def _simulate(
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidArgumentError(f"drop_scene: seed must be an integer >= 0, got {seed!r}")
     src = {
-        k: os.fspath(v) if os.fspath(v).startswith(RANDOM_SOURCE_PREFIX)
+        k: os.fspath(v)
+        if os.fspath(v).startswith(RANDOM_SOURCE_PREFIX)
         else os.fspath(Path(v).resolve())
         for k, v in (sources or {}).items()
-    }  # fmt: skip
+    }
     per_name: dict[str, tuple[Any, ...]] = {}
     for spec in objects:
         if not isinstance(spec, ObjectSpec):
@@ -259,8 +260,16 @@ def _pull_apart(
     moves: list[tuple[float, float, int, np.ndarray]] = []  # (sunk, distance, mover, X)
     for mover, other, direction in options:
         reach = _LIFT_REACH if direction is up else _SEPARATION_REACH
-        X = _separating_move(meshes[mover], poses[mover], meshes[other], poses[other],
-                             direction, overlap.depth, reach, cache)  # fmt: skip
+        X = _separating_move(
+            meshes[mover],
+            poses[mover],
+            meshes[other],
+            poses[other],
+            direction,
+            overlap.depth,
+            reach,
+            cache,
+        )
         if X is None:
             continue
         sunk = _sunk(meshes, poses, mover, X, other, tote, cache)

@@ -274,8 +274,13 @@ def _build(k: Intrinsics) -> Lens:
     x, y, det = _undistort(xd, yd, dist)
     fx_back, fy_back = distort_normalized(x, y, dist)
     err = np.hypot((fx_back - xd) * fx, (fy_back - yd) * fy)
-    bad = ~(np.isfinite(err) & (err < 1e-3) & (det > 0) & (np.abs(x) < _MAX_TAN)
-            & (np.abs(y) < _MAX_TAN))  # fmt: skip
+    bad = ~(
+        np.isfinite(err)
+        & (err < 1e-3)
+        & (det > 0)
+        & (np.abs(x) < _MAX_TAN)
+        & (np.abs(y) < _MAX_TAN)
+    )
     if bad.any():
         j = int(np.flatnonzero(bad.reshape(-1))[0])
         raise InvalidArgumentError(
@@ -311,9 +316,16 @@ def _build(k: Intrinsics) -> Lens:
     )
     for a in (map_u, map_v):
         a.setflags(write=False)
-    return Lens(K=k, render_K=render_K, map_u=map_u, map_v=map_v,
-                max_radius=float(np.max(np.hypot(x, y))), _nearest=nearest, _corner=corner,
-                _weights=weights)  # fmt: skip
+    return Lens(
+        K=k,
+        render_K=render_K,
+        map_u=map_u,
+        map_v=map_v,
+        max_radius=float(np.max(np.hypot(x, y))),
+        _nearest=nearest,
+        _corner=corner,
+        _weights=weights,
+    )
 
 
 @functools.lru_cache(maxsize=4)

@@ -857,9 +857,11 @@ def _deepest(
     tri = np.asarray(part.vertices, np.float64)[faces]
     chunk = max(1, 200_000 // max(1, len(faces)))  # points per brute-force block
     exact = np.concatenate(
-        [point_triangle_distance(p[candidates[k : k + chunk]], tri)
-         for k in range(0, len(candidates), chunk)]
-    )  # fmt: skip
+        [
+            point_triangle_distance(p[candidates[k : k + chunk]], tri)
+            for k in range(0, len(candidates), chunk)
+        ]
+    )
     best = float(exact.max())
     if not best > worst:
         return worst, None

@@ -187,10 +187,14 @@ class SceneGrasps:
                 raise InvalidArgumentError(
                     "SceneGrasps.renumbered: a grasp of an object left out of the numbering"
                 )
-            groups.append(GraspGroups(
-                paralleljaw=dataclasses.replace(g.paralleljaw, object_id=ids[0].astype(np.int32)),
-                suctioncup=dataclasses.replace(g.suctioncup, object_id=ids[1].astype(np.int32)),
-            ))  # fmt: skip
+            groups.append(
+                GraspGroups(
+                    paralleljaw=dataclasses.replace(
+                        g.paralleljaw, object_id=ids[0].astype(np.int32)
+                    ),
+                    suctioncup=dataclasses.replace(g.suctioncup, object_id=ids[1].astype(np.int32)),
+                )
+            )
         return SceneGrasps(non_colliding=groups[0], colliding=groups[1])
 
     def datasets(self) -> dict[str, np.ndarray]:
@@ -198,8 +202,10 @@ class SceneGrasps:
         ``non_colliding_grasps/paralleljaw/franka_poses_relative_to_camera`` (the writer converts
         lengths to cm and casts to float32). The ``index`` arrays are not included."""
         out: dict[str, np.ndarray] = {}
-        for group, g in (("non_colliding_grasps", self.non_colliding),
-                         ("colliding_grasps", self.colliding)):  # fmt: skip
+        for group, g in (
+            ("non_colliding_grasps", self.non_colliding),
+            ("colliding_grasps", self.colliding),
+        ):
             pj, su = g.paralleljaw, g.suctioncup
             base = f"{group}/paralleljaw/"
             out[base + "franka_poses_relative_to_camera"] = pj.franka_poses

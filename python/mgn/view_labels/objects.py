@@ -397,8 +397,12 @@ def distort_view_object_labels(labels: ViewObjectLabels, lens: Lens) -> ViewObje
     occ = np.where(am_px > 0, 1.0 - vis_px / np.maximum(am_px, 1), 1.0)
     occ_map = np.where(vis > 0, np.concatenate([[0.0], occ])[vis], 0.0).astype(np.float32)
     tight = _coco_boxes(np.stack([vis == i + 1 for i in range(n)]) if n else amodal)
-    kp, kp_obj, okp, okp_obj = labels.keypoints, labels.keypoint_object, \
-        labels.occluded_keypoints, labels.occluded_keypoint_object  # fmt: skip
+    kp, kp_obj, okp, okp_obj = (
+        labels.keypoints,
+        labels.keypoint_object,
+        labels.occluded_keypoints,
+        labels.occluded_keypoint_object,
+    )
     if kp.shape[0]:
         kp, kp_obj, okp, okp_obj = _move_outside(kp, kp_obj, okp, okp_obj, lens.in_image(kp[:, 1:]))
     com_visible = labels.com_visible

@@ -145,8 +145,10 @@ def _draw_grasps(
 
 def _draw_keypoints(draw: ImageDraw.ImageDraw, view: View, K: Intrinsics) -> None:
     """Semantic keypoints: visible as white discs, occluded as grey rings."""
-    for key, visible in (("keypts_relative_to_camera", True),
-                         ("occluded_keypts_relative_to_camera", False)):  # fmt: skip
+    for key, visible in (
+        ("keypts_relative_to_camera", True),
+        ("occluded_keypts_relative_to_camera", False),
+    ):
         kp = view.hdf5.get(f"keypts/byhand/{key}")
         if kp is None or len(kp) == 0:
             continue
@@ -349,11 +351,15 @@ def _thick(edge: np.ndarray) -> np.ndarray:
 
 def _legend_lines(grasps: str | None, layout: bool, keypoints: bool, alpha: float) -> list[str]:
     lines = [
-        "label '4 14%" + (" L0" if layout else "") + "' = instance 4, 14% of it occluded"
+        "label '4 14%"
+        + (" L0" if layout else "")
+        + "' = instance 4, 14% of it occluded"
         + (", layer 0 (0 = top of the pile)" if layout else "")
-        + "; " + ("tint" if alpha > 0 else "thick outline") + " = visible mask, thin dark "
+        + "; "
+        + ("tint" if alpha > 0 else "thick outline")
+        + " = visible mask, thin dark "
         "outline = amodal mask (the whole object)",
-    ]  # fmt: skip
+    ]
     if grasps is not None:
         lines.append(
             "grasps: "

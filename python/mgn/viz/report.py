@@ -62,15 +62,21 @@ def svg_bars(
     for frac in (0.0, 0.5, 1.0):
         y = y0 - plot_h * frac
         parts.append(f'<line x1="{left - 4}" y1="{y:.1f}" x2="{left}" y2="{y:.1f}" stroke="#444"/>')
-        parts.append(f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">'
-                     f"{_tick(top * frac)}</text>")  # fmt: skip
+        parts.append(
+            f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">'
+            f"{_tick(top * frac)}</text>"
+        )
     if ylabel:
-        parts.append(f'<text x="12" y="{head + plot_h / 2:.1f}" text-anchor="middle" '
-                     f'font-size="12" transform="rotate(-90 12 {head + plot_h / 2:.1f})">'
-                     f"{html.escape(ylabel)}</text>")  # fmt: skip
+        parts.append(
+            f'<text x="12" y="{head + plot_h / 2:.1f}" text-anchor="middle" '
+            f'font-size="12" transform="rotate(-90 12 {head + plot_h / 2:.1f})">'
+            f"{html.escape(ylabel)}</text>"
+        )
     if xlabel:
-        parts.append(f'<text x="{left + plot_w / 2:.1f}" y="{height - 6}" text-anchor="middle" '
-                     f'font-size="12">{html.escape(xlabel)}</text>')  # fmt: skip
+        parts.append(
+            f'<text x="{left + plot_w / 2:.1f}" y="{height - 6}" text-anchor="middle" '
+            f'font-size="12">{html.escape(xlabel)}</text>'
+        )
     for k, (label, value) in enumerate(zip(labels, values, strict=True)):
         h = plot_h * value / top
         x = left + k * bw
@@ -79,8 +85,10 @@ def svg_bars(
             f'height="{h:.1f}" fill="#3b75af"><title>{html.escape(label)}: {value:g}</title></rect>'
         )
         if n <= 12:
-            parts.append(f'<text x="{x + bw / 2:.1f}" y="{y0 - h - 3:.1f}" text-anchor="middle" '
-                         f'font-size="10" fill="#333">{value:g}</text>')  # fmt: skip
+            parts.append(
+                f'<text x="{x + bw / 2:.1f}" y="{y0 - h - 3:.1f}" text-anchor="middle" '
+                f'font-size="10" fill="#333">{value:g}</text>'
+            )
         if n <= 12 or k % max(n // 10, 1) == 0:
             parts.append(
                 f'<text x="{x + bw / 2:.1f}" y="{y0 + 15}" text-anchor="middle" '
@@ -221,9 +229,12 @@ def _warnings(ds: Dataset, stats: dict[str, Any]) -> list[str]:
         for r in (s.scene_json or {}).get("removed", []):
             lost[r.get("reason", "removed")] += 1
     if lost:
-        out.append(f"{sum(lost.values())} object(s) did not stay in the tote while dropping ("
-                   + ", ".join(f"{v} {k}" for k, v in lost.items()) + "): the scenes hold fewer "
-                   "objects than asked")  # fmt: skip
+        out.append(
+            f"{sum(lost.values())} object(s) did not stay in the tote while dropping ("
+            + ", ".join(f"{v} {k}" for k, v in lost.items())
+            + "): the scenes hold fewer "
+            "objects than asked"
+        )
     empty = sum(1 for n in stats["visible_per_view"] if n == 0)
     if empty:
         out.append(f"{empty} of {stats['views_sampled']} sampled views show no object")
@@ -233,16 +244,20 @@ def _warnings(ds: Dataset, stats: dict[str, Any]) -> list[str]:
             out.append(f"{bad} {kind} grasp score(s) are NaN")
     rec = (ds.info or {}).get("physics_scores")
     if isinstance(rec, dict) and rec.get("unscored"):
-        out.append(f"{rec['unscored']} of {rec.get('grasps', '?')} parallel-jaw grasps have no "
-                   f"physics score (object_labels.physics_grasps = {rec.get('cap')}): "
-                   "quality_score_simulation is NaN for them")  # fmt: skip
+        out.append(
+            f"{rec['unscored']} of {rec.get('grasps', '?')} parallel-jaw grasps have no "
+            f"physics score (object_labels.physics_grasps = {rec.get('cap')}): "
+            "quality_score_simulation is NaN for them"
+        )
     for kind in stats["grasp_counts"]["non_colliding"]:
         free = stats["grasp_counts"]["non_colliding"].get(kind, 0)
         hit = stats["grasp_counts"]["colliding"].get(kind, 0)
         if free + hit and free / (free + hit) < 0.05:
             share = 100 * free / (free + hit)
-            out.append(f"only {share:.1f}% of the {kind} grasps are collision-free in the "
-                       "scenes (gripper too large for the clutter?)")  # fmt: skip
+            out.append(
+                f"only {share:.1f}% of the {kind} grasps are collision-free in the "
+                "scenes (gripper too large for the clutter?)"
+            )
     return out
 
 
@@ -305,43 +320,77 @@ def _charts(stats: dict[str, Any]) -> list[str]:
     ops = Counter(stats["objects_per_scene"])
     if ops:
         keys = list(range(min(ops), max(ops) + 1))
-        charts.append(svg_bars([str(k) for k in keys], [ops[k] for k in keys],
-                               title="objects per scene", xlabel="objects in the tote",
-                               ylabel="scenes"))  # fmt: skip
+        charts.append(
+            svg_bars(
+                [str(k) for k in keys],
+                [ops[k] for k in keys],
+                title="objects per scene",
+                xlabel="objects in the tote",
+                ylabel="scenes",
+            )
+        )
     vpv = Counter(stats["visible_per_view"])
     if vpv:
         keys = list(range(0, max(vpv) + 1))
-        charts.append(svg_bars([str(k) for k in keys], [vpv[k] for k in keys],
-                               title="visible objects per view", xlabel="objects visible",
-                               ylabel="views"))  # fmt: skip
+        charts.append(
+            svg_bars(
+                [str(k) for k in keys],
+                [vpv[k] for k in keys],
+                title="visible objects per view",
+                xlabel="objects visible",
+                ylabel="views",
+            )
+        )
     if stats["occlusion"]:
-        charts.append(svg_bars(*_hist(np.array(stats["occlusion"]), 10, 0, 1),
-                               title="occlusion rate of visible objects",
-                               xlabel="occluded share of the object (bin start)",
-                               ylabel="objects"))  # fmt: skip
+        charts.append(
+            svg_bars(
+                *_hist(np.array(stats["occlusion"]), 10, 0, 1),
+                title="occlusion rate of visible objects",
+                xlabel="occluded share of the object (bin start)",
+                ylabel="objects",
+            )
+        )
     names = {"0": "top", "1": "secondary", "2": "interlock", "3": "others"}
     if stats["layers"]:
-        charts.append(svg_bars([names.get(k, k) for k in stats["layers"]],
-                               list(stats["layers"].values()), title="layers",
-                               xlabel="layer (top = nothing lies on it)",
-                               ylabel="objects"))  # fmt: skip
+        charts.append(
+            svg_bars(
+                [names.get(k, k) for k in stats["layers"]],
+                list(stats["layers"].values()),
+                title="layers",
+                xlabel="layer (top = nothing lies on it)",
+                ylabel="objects",
+            )
+        )
     if stats["difficulty"]:
         lv = [str(k) for k in range(1, 6)]
-        charts.append(svg_bars(lv, [stats["difficulty"].get(k, 0) for k in lv],
-                               title="difficulty level of views",
-                               xlabel="level (1 easy - 5 hard)", ylabel="views"))  # fmt: skip
+        charts.append(
+            svg_bars(
+                lv,
+                [stats["difficulty"].get(k, 0) for k in lv],
+                title="difficulty level of views",
+                xlabel="level (1 easy - 5 hard)",
+                ylabel="views",
+            )
+        )
     for kind, s in stats["grasp_scores"].items():
         if s:
-            charts.append(svg_bars(*_hist(np.array(s), 10, 0, 1),
-                                   title=f"{kind.replace('suctioncup', 'suction')} score "
-                                   "(non-colliding)",
-                                   xlabel="analytic score (bin start)",
-                                   ylabel="grasps"))  # fmt: skip
+            charts.append(
+                svg_bars(
+                    *_hist(np.array(s), 10, 0, 1),
+                    title=f"{kind.replace('suctioncup', 'suction')} score (non-colliding)",
+                    xlabel="analytic score (bin start)",
+                    ylabel="grasps",
+                )
+            )
     if stats["invalid_depth_share"]:
-        charts.append(svg_bars(*_hist(np.array(stats["invalid_depth_share"]), 10, 0, 1),
-                               title="invalid depth share per view",
-                               xlabel="share of pixels without depth (bin start)",
-                               ylabel="views"))  # fmt: skip
+        charts.append(
+            svg_bars(
+                *_hist(np.array(stats["invalid_depth_share"]), 10, 0, 1),
+                title="invalid depth share per view",
+                xlabel="share of pixels without depth (bin start)",
+                ylabel="views",
+            )
+        )
     return charts
 
 

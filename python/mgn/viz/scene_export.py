@@ -139,21 +139,33 @@ def export_scene_glb(
         raise InvalidArgumentError(f"export_scene_glb: top_k must be >= 1, got {top_k!r}")
     tm_scene = trimesh.Scene(base_frame="world")
     tm_scene.graph.update(frame_from="world", frame_to="tote_frame", matrix=X_GLTF_TOTE)
-    tm_scene.add_geometry(_tm(*_arrays(tote_mesh(scene.tote)), scene.tote.color), node_name="tote",
-                          geom_name="tote", parent_node_name="tote_frame")  # fmt: skip
+    tm_scene.add_geometry(
+        _tm(*_arrays(tote_mesh(scene.tote)), scene.tote.color),
+        node_name="tote",
+        geom_name="tote",
+        parent_node_name="tote_frame",
+    )
     geoms: dict[tuple[str, str], Any] = {}
     for i, inst in enumerate(scene.instances):
         key = (inst.name, inst.source)
         if key not in geoms:
             spec = scene.object_spec(i)
             geoms[key] = _tm(spec.vertices, spec.faces, spec.material.base_color)
-        tm_scene.add_geometry(geoms[key], node_name=f"{inst.instance_id}_{inst.name}",
-                              geom_name=inst.name, transform=np.asarray(inst.X_WO),
-                              parent_node_name="tote_frame")  # fmt: skip
+        tm_scene.add_geometry(
+            geoms[key],
+            node_name=f"{inst.instance_id}_{inst.name}",
+            geom_name=inst.name,
+            transform=np.asarray(inst.X_WO),
+            parent_node_name="tote_frame",
+        )
     for v, cam in views:
-        tm_scene.add_geometry(_tm(*_frustum(cam.K), (0.1, 0.1, 0.1, 1.0)), node_name=f"camera_{v}",
-                              geom_name=f"camera_{v}", transform=np.asarray(cam.X_WC),
-                              parent_node_name="tote_frame")  # fmt: skip
+        tm_scene.add_geometry(
+            _tm(*_frustum(cam.K), (0.1, 0.1, 0.1, 1.0)),
+            node_name=f"camera_{v}",
+            geom_name=f"camera_{v}",
+            transform=np.asarray(cam.X_WC),
+            parent_node_name="tote_frame",
+        )
     num_grasps = 0
     if kind is not None and len(scene):
         num_grasps = _add_grasps(tm_scene, scene, kind, int(top_k), config, num_threads)

@@ -252,9 +252,16 @@ def show_trial(
     g = np.asarray(grasp, dtype=np.float64) if grasp is not None else default_grasp(mesh, com)
     options = ShakeOptions(grip_force=grip_force, seed=seed)
     traj = shake_trajectory(
-        mesh, mass, com, inertia, g, friction, density_factor, options=options,
+        mesh,
+        mass,
+        com,
+        inertia,
+        g,
+        friction,
+        density_factor,
+        options=options,
         record_every=every,
-    )  # fmt: skip
+    )
     gif, png = write_trial_pictures(traj, [mesh], out, size=size, strip_frames=strip_frames)
     return {
         "object": name,

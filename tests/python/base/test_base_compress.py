@@ -88,8 +88,16 @@ def test_run_streams_inflate_with_zlib_to_the_input(level: int):
     x[25 * b + 1] = 9
     x[-1] = 2  # in the tail
     noisy = rng.integers(0, 3, 3 * b + 5, dtype=np.uint8)
-    cases = [b"", bytes(10), bytes(b), bytes(2 * b), bytes(5 * b + 7), x.tobytes(),
-             noisy.tobytes(), x[1:].tobytes()]  # fmt: skip
+    cases = [
+        b"",
+        bytes(10),
+        bytes(b),
+        bytes(2 * b),
+        bytes(5 * b + 7),
+        x.tobytes(),
+        noisy.tobytes(),
+        x[1:].tobytes(),
+    ]
     for data in cases:
         stream = deflate_runs(data, level)
         assert zlib.decompress(stream, -15) == data
@@ -309,14 +317,17 @@ def test_npz_bytes_are_the_bytes_zipfile_writes():
         "lz": rng.random(300).astype(np.float32),
     }
     data = npz_bytes(**arrays, level=5, zlib_levels={"mask": 3}, lzma_entries=("lz",))
-    reference = _zipfile_npz(arrays, {
-        "depth": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
-        "mask": (zipfile.ZIP_DEFLATED, ZipRunDeflate(3)),
-        "ids": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
-        "empty": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
-        "scalar": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
-        "lz": (zipfile.ZIP_LZMA, _NpzLzma()),
-    })  # fmt: skip
+    reference = _zipfile_npz(
+        arrays,
+        {
+            "depth": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+            "mask": (zipfile.ZIP_DEFLATED, ZipRunDeflate(3)),
+            "ids": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+            "empty": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+            "scalar": (zipfile.ZIP_DEFLATED, ZipDeflate(5)),
+            "lz": (zipfile.ZIP_LZMA, _NpzLzma()),
+        },
+    )
     assert data == reference
     stored = npz_bytes(**arrays, compress=False, lzma_entries=("lz",))
     assert stored == _zipfile_npz(

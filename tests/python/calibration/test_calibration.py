@@ -122,8 +122,16 @@ def test_write_calibration_board_files(board, board_dir, tmp_path):
     with (board_dir / "poses.csv").open(newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert list(rows[0])[:9] == [
-        "pose_id", "feature", "parameter_m", "x_m", "y_m", "z_m", "nx", "ny", "nz",
-    ]  # fmt: skip
+        "pose_id",
+        "feature",
+        "parameter_m",
+        "x_m",
+        "y_m",
+        "z_m",
+        "nx",
+        "ny",
+        "nz",
+    ]
     assert len(rows) == len(board["ids"])
     xyz = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows])
     np.testing.assert_allclose(xyz, board["points"], atol=1e-6)  # metres

@@ -55,8 +55,20 @@ def test_render_applies_the_config_camera_section(tmp_path):
         "  views: [0, 4]\n"
     )
     out = tmp_path / "views"
-    assert main(["scene", "render", str(tmp_path / "scene.json"), "--config", str(cfg),
-                 "--out", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "scene",
+                "render",
+                str(tmp_path / "scene.json"),
+                "--config",
+                str(cfg),
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert sorted(p.name for p in out.glob("*_rgb.png")) == ["0_rgb.png", "4_rgb.png"]
     with Image.open(out / "0_rgb.png") as im:
         assert im.size == (96, 72)
@@ -67,12 +79,38 @@ def test_render_applies_the_config_camera_section(tmp_path):
         assert np.asarray(im)[36, 48] == 1  # the cube below the centre of the top view
     # Flags override the config: one view, 0.5 x the resolution of the config's camera.
     cfg.write_text(cfg.read_text() + "  resolution_scale: 0.5\n")
-    assert main(["scene", "render", str(tmp_path / "scene.json"), "--config", str(cfg),
-                 "--view", "2", "--out", str(tmp_path / "v2")]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "scene",
+                "render",
+                str(tmp_path / "scene.json"),
+                "--config",
+                str(cfg),
+                "--view",
+                "2",
+                "--out",
+                str(tmp_path / "v2"),
+            ]
+        )
+        == 0
+    )
     with Image.open(tmp_path / "v2" / "2_rgb.png") as im:
         assert im.size == (48, 36)
-    assert main(["scene", "render", str(tmp_path / "scene.json"), "--view", "37",
-                 "--out", str(tmp_path / "bad")]) == 1  # fmt: skip
+    assert (
+        main(
+            [
+                "scene",
+                "render",
+                str(tmp_path / "scene.json"),
+                "--view",
+                "37",
+                "--out",
+                str(tmp_path / "bad"),
+            ]
+        )
+        == 1
+    )
 
 
 def test_show_says_when_the_folder_does_not_exist(tmp_path, capsys):

@@ -97,23 +97,45 @@ def test_collides_matches_the_placed_labels_and_finds_a_pose_inside_an_object(sm
         a /= np.linalg.norm(a, axis=1, keepdims=True)
         w = rng.uniform(0, 0.07, m).astype(np.float32)
         p1 = rng.uniform(-0.05, 0.05, (m, 3))
-        pj.append(PjLabels(approach=a.astype(np.float32), closing=v.astype(np.float32),
-                           p1=p1.astype(np.float32), width=w,
-                           quality_score=np.ones(m, np.float32),
-                           score_wrench=np.zeros(m, np.float32),
-                           quality_score_simulation=np.ones(m, np.float32),
-                           point_index=np.arange(m), point_score=np.ones(m, np.float32),
-                           num_points=m, num_colliding=0))  # fmt: skip
+        pj.append(
+            PjLabels(
+                approach=a.astype(np.float32),
+                closing=v.astype(np.float32),
+                p1=p1.astype(np.float32),
+                width=w,
+                quality_score=np.ones(m, np.float32),
+                score_wrench=np.zeros(m, np.float32),
+                quality_score_simulation=np.ones(m, np.float32),
+                point_index=np.arange(m),
+                point_score=np.ones(m, np.float32),
+                num_points=m,
+                num_colliding=0,
+            )
+        )
         pts = rng.uniform(-0.05, 0.05, (m, 3)).astype(np.float32)
-        su.append(SuctionLabels(points=pts, approach=a.astype(np.float32),
-                                score=np.ones(m, np.float32), wrench=np.zeros(m, np.float32),
-                                reason=np.zeros(m, np.uint8), num_candidates=m,
-                                num_colliding=0))  # fmt: skip
+        su.append(
+            SuctionLabels(
+                points=pts,
+                approach=a.astype(np.float32),
+                score=np.ones(m, np.float32),
+                wrench=np.zeros(m, np.float32),
+                reason=np.zeros(m, np.uint8),
+                num_candidates=m,
+                num_colliding=0,
+            )
+        )
     # approach_step=1.0: only the listed offsets, so that random grasps through the objects'
     # centres leave some collision-free (the whole-approach sweep blocks them all).
-    labelled = SceneGraspModel(scene, pj, su, model.gripper, model.cup,
-                               offsets=LabelOptions().grasp_offsets, approach_step=1.0,
-                               num_threads=2)  # fmt: skip
+    labelled = SceneGraspModel(
+        scene,
+        pj,
+        su,
+        model.gripper,
+        model.cup,
+        offsets=LabelOptions().grasp_offsets,
+        approach_step=1.0,
+        num_threads=2,
+    )
     for core, p in (("pj", labelled.pj), ("suction", labelled.suction)):
         r = labelled.collides(core, p.contact_poses, p.width, p.object_id)
         np.testing.assert_array_equal(r.colliding, p.colliding)
@@ -221,12 +243,18 @@ def test_known_errors_give_the_hand_computed_precision(small_dataset):
     # but the cup body (3 mm behind the lip) is now inside the object.
     inside = X[ib].copy()
     inside[:3, 3] += 0.008 * inside[:3, 2]
-    preds = [{"image_id": image_id, "kind": "suction", "grasps": [
-        {"pose": X[ia].tolist(), "score": 0.9},       # success
-        {"pose": far.tolist(), "score": 0.8},         # unmatched
-        {"pose": X[ib].tolist(), "score": 0.3},       # success
-        {"pose": inside.tolist(), "score": 0.95},     # matched, colliding
-    ]}]  # fmt: skip
+    preds = [
+        {
+            "image_id": image_id,
+            "kind": "suction",
+            "grasps": [
+                {"pose": X[ia].tolist(), "score": 0.9},  # success
+                {"pose": far.tolist(), "score": 0.8},  # unmatched
+                {"pose": X[ib].tolist(), "score": 0.3},  # success
+                {"pose": inside.tolist(), "score": 0.95},  # matched, colliding
+            ],
+        }
+    ]
     t_mid = float(0.5 * (s[ia] + s[ib]))
     res = evaluate_grasps(
         small_dataset, preds, kind="suction", ks=(1, 2, 3, 4, 10), thresholds=(0.0, t_mid)
@@ -239,9 +267,18 @@ def test_known_errors_give_the_hand_computed_precision(small_dataset):
     assert (res.rejected_by_matching, res.rejected_by_collision) == (1, 1)
     assert res.below_threshold == {0.0: 0, t_mid: 1}
     # A label of the colliding group matches itself and is rejected by collision.
-    res = evaluate_grasps(small_dataset, [{"image_id": image_id, "kind": "suction",
-                                           "grasps": [{"pose": Xc[0].tolist(), "score": 1.0}]}],
-                          thresholds=(0.0,), ks=(1,))  # fmt: skip
+    res = evaluate_grasps(
+        small_dataset,
+        [
+            {
+                "image_id": image_id,
+                "kind": "suction",
+                "grasps": [{"pose": Xc[0].tolist(), "score": 1.0}],
+            }
+        ],
+        thresholds=(0.0,),
+        ks=(1,),
+    )
     assert (res.matched, res.rejected_by_collision, res.precision[0.0][1]) == (1, 1, 0.0)
     # JSON and table.
     d = res.to_dict()
@@ -311,8 +348,13 @@ def test_suction_pixel_predictions_at_label_contacts_match(small_dataset):
             grasps.append({"uv": [u, v], "score": 1.0})
         expected += len(grasps)
         if grasps:
-            preds.append({"image_id": scene.scene_id * 1000 + view.index, "kind": "suction",
-                          "grasps": grasps})  # fmt: skip
+            preds.append(
+                {
+                    "image_id": scene.scene_id * 1000 + view.index,
+                    "kind": "suction",
+                    "grasps": grasps,
+                }
+            )
     assert expected >= 10
     res = evaluate_grasps(small_dataset, preds, thresholds=(0.0,), ks=(1,))
     assert res.num_predictions == expected
@@ -320,10 +362,15 @@ def test_suction_pixel_predictions_at_label_contacts_match(small_dataset):
     # Background pixels (instance 0: nothing but the tote) match no object label.
     scene, view = _views(small_dataset)[0]
     rr, cc = np.nonzero(view.instances == 0)
-    far = [{"uv": [float(c) + 0.5, float(r) + 0.5], "score": 1.0}
-           for r, c in zip(rr[:5], cc[:5], strict=True)]  # fmt: skip
-    res = evaluate_grasps(small_dataset, [{"image_id": scene.scene_id * 1000 + view.index,
-                                           "kind": "suction", "grasps": far}], ks=(1,))  # fmt: skip
+    far = [
+        {"uv": [float(c) + 0.5, float(r) + 0.5], "score": 1.0}
+        for r, c in zip(rr[:5], cc[:5], strict=True)
+    ]
+    res = evaluate_grasps(
+        small_dataset,
+        [{"image_id": scene.scene_id * 1000 + view.index, "kind": "suction", "grasps": far}],
+        ks=(1,),
+    )
     assert res.matched == 0
     assert res.rejected_by_matching == len(far)
 
@@ -344,13 +391,24 @@ def test_paralleljaw_pixel_predictions_at_label_centres_match(small_dataset):
                 c, r = int(u), int(vv)
                 if not (0 <= c < K.width and 0 <= r < K.height) or not np.isfinite(depth[r, c]):
                     continue
-                grasps.append({"uv": [u, vv], "angle": math.atan2(v[1], v[0]), "width": w,
-                               "depth": float(centre[2] - depth[r, c]),
-                               "score": 1.0})  # fmt: skip
+                grasps.append(
+                    {
+                        "uv": [u, vv],
+                        "angle": math.atan2(v[1], v[0]),
+                        "width": w,
+                        "depth": float(centre[2] - depth[r, c]),
+                        "score": 1.0,
+                    }
+                )
         expected += len(grasps)
         if grasps:
-            preds.append({"image_id": scene.scene_id * 1000 + view.index,
-                          "kind": "paralleljaw", "grasps": grasps})  # fmt: skip
+            preds.append(
+                {
+                    "image_id": scene.scene_id * 1000 + view.index,
+                    "kind": "paralleljaw",
+                    "grasps": grasps,
+                }
+            )
     assert expected >= 5
     res = evaluate_grasps(small_dataset, preds, kind="paralleljaw", thresholds=(0.0,), ks=(1,))
     assert res.matched == expected
@@ -377,9 +435,24 @@ def test_paralleljaw_with_swapped_jaws_matches_the_same_label(small_dataset):
     # whenever the width exceeds the tolerance.
     wide = [{**e, "grasps": [g for g in e["grasps"] if g["width"] > 0.025]} for e in preds]
     wide = [e for e in wide if e["grasps"]]
-    shifted = [{**e, "grasps": [{**g, "pose": (np.asarray(g["pose"]) @ np.array(
-        [[1, 0, 0, g["width"]], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])).tolist()}
-        for g in e["grasps"]]} for e in wide]  # fmt: skip
+    shifted = [
+        {
+            **e,
+            "grasps": [
+                {
+                    **g,
+                    "pose": (
+                        np.asarray(g["pose"])
+                        @ np.array(
+                            [[1, 0, 0, g["width"]], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]
+                        )
+                    ).tolist(),
+                }
+                for g in e["grasps"]
+            ],
+        }
+        for e in wide
+    ]
     if wide:
         r = evaluate_grasps(small_dataset, shifted, kind="paralleljaw", ks=(1,))
         assert r.matched == 0
@@ -450,8 +523,20 @@ def test_cli_prints_the_table_and_writes_json(small_dataset, tmp_path, capsys):
     pred_path = tmp_path / "pred.json"
     pred_path.write_text(json.dumps(preds))
     out = tmp_path / "res.json"
-    code = main(["eval", "grasps", str(pred_path), "--dataset", str(small_dataset),
-                 "--out", str(out), "--k", "1", "5"])  # fmt: skip
+    code = main(
+        [
+            "eval",
+            "grasps",
+            str(pred_path),
+            "--dataset",
+            str(small_dataset),
+            "--out",
+            str(out),
+            "--k",
+            "1",
+            "5",
+        ]
+    )
     assert code == 0
     text = capsys.readouterr().out
     assert "P@1" in text

@@ -258,8 +258,20 @@ def test_cli_picks_a_dataset_scene_with_the_dataset_config(small_dataset, tmp_pa
     out = tmp_path / "run"
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("MGN_CACHE_DIR", str(tmp_path / "cache"))
-        code = main(["pick", str(scene.folder), "--policy", "label", "--out", str(out),
-                     "--max-attempts", "2", "--resolution", "96"])  # fmt: skip
+        code = main(
+            [
+                "pick",
+                str(scene.folder),
+                "--policy",
+                "label",
+                "--out",
+                str(out),
+                "--max-attempts",
+                "2",
+                "--resolution",
+                "96",
+            ]
+        )
     assert code == 0
     printed = capsys.readouterr().out
     assert "R_grasp" in printed

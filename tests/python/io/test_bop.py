@@ -63,8 +63,13 @@ def _read_ply(path: Path) -> tuple[np.ndarray, np.ndarray, list[str]]:
 
 
 def _obj_vertices_m(path: Path) -> np.ndarray:
-    return np.array([[float(x) for x in ln.split()[1:4]] for ln in path.read_text().splitlines()
-                     if ln.startswith("v ")])  # fmt: skip
+    return np.array(
+        [
+            [float(x) for x in ln.split()[1:4]]
+            for ln in path.read_text().splitlines()
+            if ln.startswith("v ")
+        ]
+    )
 
 
 def test_top_level_files(exported: Path, small_dataset: Path) -> None:
@@ -303,8 +308,23 @@ def test_resume_and_atomic_scenes(
 
 def test_cli_and_bad_inputs(small_dataset: Path, tmp_path: Path) -> None:
     out = tmp_path / "cli"
-    assert main(["export", "bop", str(small_dataset), str(out), "--scenes", "1",
-                 "--split", "val", "--depth-scale", "1.0"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "export",
+                "bop",
+                str(small_dataset),
+                str(out),
+                "--scenes",
+                "1",
+                "--split",
+                "val",
+                "--depth-scale",
+                "1.0",
+            ]
+        )
+        == 0
+    )
     assert [p.name for p in (out / "val").iterdir()] == ["000001"]
     assert _json(out / "camera.json")["depth_scale"] == 1.0
     assert validate_bop(out) == []

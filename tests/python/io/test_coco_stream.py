@@ -40,8 +40,14 @@ def reference_coco(ds: Dataset, class_agnostic: bool = False) -> dict[str, Any]:
         for view in ds.scene(sid).views():
             inst, amodal = view.instances, view.amodal
             h, w = inst.shape
-            image = {"id": sid * 1000 + view.index, "file_name": f"scene{sid}/{view.index}_rgb.png",
-                     "width": w, "height": h, "scene_id": sid, "view_id": view.index}  # fmt: skip
+            image = {
+                "id": sid * 1000 + view.index,
+                "file_name": f"scene{sid}/{view.index}_rgb.png",
+                "width": w,
+                "height": h,
+                "scene_id": sid,
+                "view_id": view.index,
+            }
             d = (view.layout or {}).get("difficulty")
             d = d.get("level") if isinstance(d, dict) else d
             if d is not None:
@@ -56,20 +62,32 @@ def reference_coco(ds: Dataset, class_agnostic: bool = False) -> dict[str, Any]:
                 seen.add(cat)
                 entry = view.order.get(str(i + 1), {})
                 a = amodal[i]
-                anns.append({
-                    "id": len(anns) + 1, "image_id": image["id"], "category_id": cat,
-                    "segmentation": _rle(vis), "bbox": _bbox(vis), "area": float(vis.sum()),
-                    "iscrowd": 0, "amodal_segmentation": _rle(a), "amodal_bbox": _bbox(a),
-                    "amodal_area": float(a.sum()),
-                    "occlusion": float(entry.get("occlusion", 1 - vis.sum() / max(a.sum(), 1))),
-                    "layer": int(entry["layer"]) if "layer" in entry else None,
-                    "instance_id": i + 1, "scene_id": sid, "view_id": view.index,
-                })  # fmt: skip
+                anns.append(
+                    {
+                        "id": len(anns) + 1,
+                        "image_id": image["id"],
+                        "category_id": cat,
+                        "segmentation": _rle(vis),
+                        "bbox": _bbox(vis),
+                        "area": float(vis.sum()),
+                        "iscrowd": 0,
+                        "amodal_segmentation": _rle(a),
+                        "amodal_bbox": _bbox(a),
+                        "amodal_area": float(a.sum()),
+                        "occlusion": float(entry.get("occlusion", 1 - vis.sum() / max(a.sum(), 1))),
+                        "layer": int(entry["layer"]) if "layer" in entry else None,
+                        "instance_id": i + 1,
+                        "scene_id": sid,
+                        "view_id": view.index,
+                    }
+                )
     if class_agnostic:
         categories = [{"id": 1, "name": "object", "supercategory": "object"}]
     else:
-        categories = [{"id": c, "name": names.get(c, f"category_{c}"), "supercategory": "object"}
-                      for c in sorted(seen | set(names))]  # fmt: skip
+        categories = [
+            {"id": c, "name": names.get(c, f"category_{c}"), "supercategory": "object"}
+            for c in sorted(seen | set(names))
+        ]
     info = {"description": "mgn dataset", "version": str((ds.info or {}).get("mgn_version"))}
     return {"info": info, "images": images, "annotations": anns, "categories": categories}
 

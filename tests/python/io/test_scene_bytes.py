@@ -105,8 +105,13 @@ def test_view_arrays_read_back_bit_identical(tmp_path: Path, valid_is_finite: bo
     write_view(tmp_path, rec)
     with np.load(tmp_path / "3.npz") as z:
         stored = {k: z[k] for k in z.files}
-    assert set(stored) == {"depth", "instances_objects", "instances_semantic", "occlusion",
-                           "occlusion_objects"}  # fmt: skip
+    assert set(stored) == {
+        "depth",
+        "instances_objects",
+        "instances_semantic",
+        "occlusion",
+        "occlusion_objects",
+    }
     assert np.array_equal(_bits(stored["depth"]), _bits(_cm(rec.depth)))  # NaNs included
     assert np.array_equal(stored["instances_objects"], rec.instances)
     assert np.array_equal(stored["instances_semantic"], rec.semantic)
@@ -385,8 +390,10 @@ def test_archival_mode_rounds_depth_to_its_grid_and_keeps_the_metagraspnet_dtype
         assert np.array_equal(pa[:, 3], pe[:, 3])
         k = pa[:, :3, :3].astype(np.float64) / ARCHIVAL_ROTATION_STEP
         assert np.array_equal(k, np.round(k))
-        for key in ("objects/poses_relative_to_camera", "non_colliding_grasps/paralleljaw/"
-                    "score_analytical"):  # fmt: skip
+        for key in (
+            "objects/poses_relative_to_camera",
+            "non_colliding_grasps/paralleljaw/score_analytical",
+        ):
             assert np.array_equal(a[key][()], e[key][()])
 
 

@@ -225,8 +225,16 @@ def test_files_are_reproducible(tmp_path):
     assert {
         p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in (tmp_path / "timed").iterdir()
     } == digests[0]
-    assert set(times) == {"arrays", "rgb.png", "npz", "depth.png", "scene.hdf5", "mgn.hdf5",
-                          "json and csv", "files"}  # fmt: skip
+    assert set(times) == {
+        "arrays",
+        "rgb.png",
+        "npz",
+        "depth.png",
+        "scene.hdf5",
+        "mgn.hdf5",
+        "json and csv",
+        "files",
+    }
     assert all(t >= 0.0 for t in times.values())
     assert sum(times.values()) <= spent + 1e-6
 
@@ -342,8 +350,24 @@ def test_show_draws_the_view(dataset, tmp_path):
     from mgn.viz.overlay import instance_colors, project, render_overlay
 
     out = tmp_path / "v.png"
-    assert main(["show", str(dataset), "--scene", "0", "--view", "1", "--grasps", "pj",
-                 "--layout", "-o", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "show",
+                str(dataset),
+                "--scene",
+                "0",
+                "--view",
+                "1",
+                "--grasps",
+                "pj",
+                "--layout",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     with Image.open(out) as im:
         assert im.size[0] == W
         assert im.size[1] > H
@@ -396,8 +420,24 @@ def test_show_outline_mode_panels_and_a_single_scene_folder(dataset, tmp_path):
         render_overlay(view, alpha=1.5)
     # A single scene folder (as `mgn scene label` writes it) works without --scene.
     out = tmp_path / "s.png"
-    assert main(["show", str(dataset / "scene0"), "--view", "1", "--alpha", "0", "--panels",
-                 "--grasps", "paralleljaw", "-o", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "show",
+                str(dataset / "scene0"),
+                "--view",
+                "1",
+                "--alpha",
+                "0",
+                "--panels",
+                "--grasps",
+                "paralleljaw",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     with Image.open(out) as im:
         assert im.size[0] == 3 * W
     assert main(["show", str(dataset), "--view", "1", "-o", str(out)]) == 1  # which scene?
@@ -501,8 +541,10 @@ def test_com_heatmap_prediction_matches_the_per_pixel_formula_to_the_bit():
     assert pred.shape == (h, w)
     assert pred.tobytes() == _com_prediction_numpy(depth, inst, X, K, params).tobytes()
     # Instance ids as the npz stores them (uint8) give the same bits.
-    assert pred.tobytes() == com_heatmap_prediction(depth, inst.astype(np.uint8), X, K,
-                                                    params).tobytes()  # fmt: skip
+    assert (
+        pred.tobytes()
+        == com_heatmap_prediction(depth, inst.astype(np.uint8), X, K, params).tobytes()
+    )
     with pytest.raises(InvalidArgumentError, match="instance id 6 but only 5 rows"):
         com_heatmap_prediction(depth, np.where(inst == 1, 6, inst), X, K, params)
     ok = (inst > 0) & np.isfinite(depth)

@@ -51,11 +51,20 @@ def test_cameras_that_cannot_see_into_the_tote_are_named() -> None:
 def test_fifty_micrometre_object_is_named(tmp_path: Path) -> None:
     trimesh.creation.box((5.0, 5.0, 5.0)).export(tmp_path / "cube.stl")  # 5 units
     (tmp_path / "objs.yaml").write_text(
-        yaml.safe_dump({
-            "objects": [{"name": "speck", "mesh": "cube.stl", "scale": 1e-5, "density": 1000,
-                         "friction": 0.5}]
-        })
-    )  # fmt: skip
+        yaml.safe_dump(
+            {
+                "objects": [
+                    {
+                        "name": "speck",
+                        "mesh": "cube.stl",
+                        "scale": 1e-5,
+                        "density": 1000,
+                        "friction": 0.5,
+                    }
+                ]
+            }
+        )
+    )
     cfg = load_config({"objects": {"user_objects": [str(tmp_path / "objs.yaml")]}})
     w = config_warnings(cfg)  # the loader's warning, once, as text (no Python warning)
     speck = [x for x in w if "speck" in x]
@@ -64,11 +73,20 @@ def test_fifty_micrometre_object_is_named(tmp_path: Path) -> None:
     assert "is 0.05 mm across, too small" in speck[0], w
     # A part of 1-5 mm passes the loader but gets the setting's warning.
     (tmp_path / "objs.yaml").write_text(
-        yaml.safe_dump({
-            "objects": [{"name": "grain", "mesh": "cube.stl", "scale": 4e-4, "density": 1000,
-                         "friction": 0.5}]
-        })
-    )  # fmt: skip
+        yaml.safe_dump(
+            {
+                "objects": [
+                    {
+                        "name": "grain",
+                        "mesh": "cube.stl",
+                        "scale": 4e-4,
+                        "density": 1000,
+                        "friction": 0.5,
+                    }
+                ]
+            }
+        )
+    )
     w = config_warnings(cfg)
     assert any(
         x.startswith("objects.user_objects ('") and "object 'grain' is 2 mm across" in x for x in w

@@ -212,8 +212,15 @@ def test_bad_formats_name_the_key(formats: object, names: list[str]) -> None:
 
 
 def test_bop_with_lens_distortion_is_refused_up_front() -> None:
-    intr = {"width": 64, "height": 48, "fx": 60.0, "fy": 60.0, "cx": 32.0, "cy": 24.0,
-            "distortion": [0.01, 0.0, 0.0, 0.0]}  # fmt: skip
+    intr = {
+        "width": 64,
+        "height": 48,
+        "fx": 60.0,
+        "fy": 60.0,
+        "cx": 32.0,
+        "cy": 24.0,
+        "distortion": [0.01, 0.0, 0.0, 0.0],
+    }
     cfg = {"camera": {"intrinsics": intr}}
     load_config(cfg)  # fine without the BOP export
     with pytest.raises(ConfigError, match=r"output.formats.*distortion"):

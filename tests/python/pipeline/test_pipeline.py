@@ -203,8 +203,20 @@ def test_generate_says_where_the_time_went(
     }
     (tmp_path / "cfg.yaml").write_text(json.dumps(cfg))
     prof = tmp_path / "profile.json"
-    code = main(["generate", "--out", str(tmp_path / "ds"), "--scenes", "1", "--config",
-                 str(tmp_path / "cfg.yaml"), "--no-cache", "--profile", str(prof)])  # fmt: skip
+    code = main(
+        [
+            "generate",
+            "--out",
+            str(tmp_path / "ds"),
+            "--scenes",
+            "1",
+            "--config",
+            str(tmp_path / "cfg.yaml"),
+            "--no-cache",
+            "--profile",
+            str(prof),
+        ]
+    )
     out = capsys.readouterr()
     assert code == 0, out.out + out.err
     assert "object labels: 1 to compute, 0 from the cache; roughly" in out.err
@@ -216,8 +228,17 @@ def test_generate_says_where_the_time_went(
     (seconds,) = p["object_labels"]["objects_s"].values()
     assert 0 < seconds <= p["object_labels"]["wall_s"] <= p["wall_s"]
     parts = p["scenes"]["parts_s"]
-    for part in ("drop", "render: trace", "render: denoise", "render: develop", "render: raster",
-                 "render: sensor", "object labels", "scene grasps", "finalize"):  # fmt: skip
+    for part in (
+        "drop",
+        "render: trace",
+        "render: denoise",
+        "render: develop",
+        "render: raster",
+        "render: sensor",
+        "object labels",
+        "scene grasps",
+        "finalize",
+    ):
         assert part in parts, part
         assert parts[part] >= 0.0, part
     assert parts["render: trace"] > 0

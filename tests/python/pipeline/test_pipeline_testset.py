@@ -312,8 +312,10 @@ def test_pruned_balanced_dataset_validates(balanced: tuple[Path, dict], tmp_path
         generate(
             tmp_path / "x",
             config=selection_config().__class__.from_dict(
-                {**json.loads(json.dumps(selection_config().to_dict())),
-                 "labels": {"layout": False}}
+                {
+                    **json.loads(json.dumps(selection_config().to_dict())),
+                    "labels": {"layout": False},
+                }
             ),
             progress=False,
-        )  # fmt: skip
+        )

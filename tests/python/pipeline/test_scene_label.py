@@ -55,10 +55,12 @@ def object_labels(tmp_path_factory):
     from mgn.pipeline.config import load_config
     from mgn.pipeline.label_cache import object_labels as labels_of
 
-    config = load_config({
-        "labels": {"pj_physics": False},
-        "object_labels": {"suction_points": 300, "pj_points": 300},
-    })  # fmt: skip
+    config = load_config(
+        {
+            "labels": {"pj_physics": False},
+            "object_labels": {"suction_points": 300, "pj_points": 300},
+        }
+    )
     mp = pytest.MonkeyPatch()
     mp.setenv("MGN_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
     try:
@@ -242,8 +244,12 @@ def test_a_hidden_object_is_left_out_of_the_view(tmp_path):
         tote=ToteSpec(),
         seed=3,
     )
-    label_scene(scene, tmp_path / "scene0", _views(0.1)[:2],
-                options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
+    label_scene(
+        scene,
+        tmp_path / "scene0",
+        _views(0.1)[:2],
+        options=LabelOptions(randomize=False, num_threads=2),
+    )
     folder = Dataset(tmp_path).scene(0)
     for v in VIEWS[:2]:
         view = folder.view(v)
@@ -274,9 +280,14 @@ def test_same_input_same_bytes(tmp_path, object_labels):
 
     runs = []
     for k, threads in enumerate((1, 2)):
-        label_scene(_scene(), tmp_path / f"r{k}", _views(0.1)[:2],
-                    pj_labels=[g.paralleljaw for g in object_labels], suction_labels=None,
-                    options=LabelOptions(num_threads=threads))  # fmt: skip
+        label_scene(
+            _scene(),
+            tmp_path / f"r{k}",
+            _views(0.1)[:2],
+            pj_labels=[g.paralleljaw for g in object_labels],
+            suction_labels=None,
+            options=LabelOptions(num_threads=threads),
+        )
         runs.append(digest(tmp_path / f"r{k}"))
     assert runs[0] == runs[1]
 
@@ -371,12 +382,20 @@ def test_overlapped_views_write_what_the_serial_steps_write(tmp_path, object_lab
         labels = view_object_labels(rays, view, images.instance_ids, depth=images.depth_ideal)
         labels = round_occlusion(labels, OCCLUSION_DECIMALS)
         labels, index = seen_objects(labels)
-        layout = compute_layout(labels.visible, labels.amodal, images.depth_ideal, cats[index],
-                                [bins[i] for i in index], occlusion=labels.occlusion)  # fmt: skip
+        layout = compute_layout(
+            labels.visible,
+            labels.amodal,
+            images.depth_ideal,
+            cats[index],
+            [bins[i] for i in index],
+            occlusion=labels.occlusion,
+        )
         grasps = view_grasps(sgm, view, index, len(scene.instances))
         com = rays.com_parameters()[index]
-        write_view(serial, view_record(v, view, images, labels, layout, grasps, com,
-                                       instance_ids=index + 1))  # fmt: skip
+        write_view(
+            serial,
+            view_record(v, view, images, labels, layout, grasps, com, instance_ids=index + 1),
+        )
         gt[v] = scene_gt_entries(labels.X_CO, cats[index])
     write_scene_gt(serial, gt)
     write_scene_json(scene, serial / "scene.json")
@@ -460,7 +479,19 @@ def test_scene_label_applies_the_io_section(tmp_path):
         "io: {archival: true}\n"
     )
     out = tmp_path / "scene0"
-    assert main(["scene", "label", str(tmp_path / "scene.json"), "--out", str(out),
-                 "--config", str(cfg)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "scene",
+                "label",
+                str(tmp_path / "scene.json"),
+                "--out",
+                str(out),
+                "--config",
+                str(cfg),
+            ]
+        )
+        == 0
+    )
     with zipfile.ZipFile(out / "0.npz") as z:
         assert z.getinfo("depth.npy").compress_type == zipfile.ZIP_LZMA

@@ -210,8 +210,14 @@ def test_smooth_shake_keeps_the_coulomb_limit_of_its_own_peak_acceleration():
     mu_star = m * (base.gravity + accel) / (2 * base.grip_force)
     for factor in (0.5, 2.5):
         mu = factor * mu_star
-        r = shake_scores(mesh, m, com, inertia, centre_grasp(0.04)[None],
-                         options=replace(base, friction_range=(mu, mu)))  # fmt: skip
+        r = shake_scores(
+            mesh,
+            m,
+            com,
+            inertia,
+            centre_grasp(0.04)[None],
+            options=replace(base, friction_range=(mu, mu)),
+        )
         assert bool(r.trial_success.all()) == (factor > 1.0), factor
 
 
@@ -538,8 +544,15 @@ def test_shake_scorer_scores_every_grasp_unless_capped_and_records_it():
     mesh, m, com, _ = box_object([0.04, 0.05, 0.06], 0.1)
     opts = ShakeOptions(grid=2, friction_range=(0.5, 1.0), staircase=True, num_threads=2)
     few = {"approaches_kept": 1}  # ~30 grasps: a short test
-    full = label_object(mesh, mass=m, com=com, num_points=10, seed=1, sampler_options=few,
-                        physics=ShakeScorer(400.0, options=opts))  # fmt: skip
+    full = label_object(
+        mesh,
+        mass=m,
+        com=com,
+        num_points=10,
+        seed=1,
+        sampler_options=few,
+        physics=ShakeScorer(400.0, options=opts),
+    )
     n = len(full)
     assert n > 3
     assert np.isfinite(full.quality_score_simulation).all()

@@ -84,8 +84,11 @@ class FakePhysics:
                 success[k], self.trials = r.success, self.trials + r.trials
             else:
                 success[k], self.trials = grid, self.trials + S * S
-        return SimpleNamespace(score=success.sum(axis=(1, 2)) / (S * S), trial_success=success,
-                               num_trials=self.trials - before)  # fmt: skip
+        return SimpleNamespace(
+            score=success.sum(axis=(1, 2)) / (S * S),
+            trial_success=success,
+            num_trials=self.trials - before,
+        )
 
 
 def verdict(c: physics.StaircaseCalibration | None) -> tuple[int, int, bool] | None:
@@ -341,9 +344,13 @@ def test_verified_rows_are_the_lowest_frictions():
     for bad in (-0.1, 1.5, float("nan")):
         with pytest.raises(InvalidArgumentError, match="staircase_verify_share"):
             shake_scores(
-                mgn.make_box([0.04, 0.04, 0.04]), 0.1, np.zeros(3), np.eye(3) * 1e-4,
-                np.zeros((0, 10)), options=ShakeOptions(staircase_verify_share=bad),
-            )  # fmt: skip
+                mgn.make_box([0.04, 0.04, 0.04]),
+                0.1,
+                np.zeros(3),
+                np.eye(3) * 1e-4,
+                np.zeros((0, 10)),
+                options=ShakeOptions(staircase_verify_share=bad),
+            )
 
 
 def test_zero_checks_still_verify_every_rows_boundary():
@@ -550,8 +557,11 @@ def test_the_label_metadata_records_the_estimator(monkeypatch):
         physics, "shake_scores", FakePhysics(random_monotone(np.random.default_rng(13), 400))
     )
     mesh = mgn.make_box([0.03, 0.04, 0.05])
-    scorer = ShakeScorer(options=ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS),
-                         progress=False, calibration_grasps=4)  # fmt: skip
+    scorer = ShakeScorer(
+        options=ShakeOptions(grid=S, staircase=True, staircase_checks=CHECKS),
+        progress=False,
+        calibration_grasps=4,
+    )
     labels = mgn.pj.label_object(
         mesh, mass=0.1, com=[0, 0, 0], num_points=40, physics=scorer, max_grasps=30
     )

@@ -23,8 +23,7 @@ from mgn.render.settings import RandomizeSettings, RenderSettings
 from mgn.scene.cameras import CameraView, Intrinsics, look_at
 
 # Undenoised, 2 samples: cheap, and the image is the tracer's alone.
-_TRACE: dict[str, Any] = {"engine": "path", "spp": 2, "spp_without_denoiser": 2,
-                          "denoise": False}  # fmt: skip
+_TRACE: dict[str, Any] = {"engine": "path", "spp": 2, "spp_without_denoiser": 2, "denoise": False}
 
 
 def _settings(on: bool, **randomize: Any) -> RenderSettings:
@@ -34,8 +33,12 @@ def _settings(on: bool, **randomize: Any) -> RenderSettings:
 def _scene() -> tuple[list[tuple[mgn.Mesh, np.ndarray, int]], mgn.Mesh]:
     # A printed box (own uvs and texture), a can, clear glass and a metal nut.
     items = []
-    placed = [("box_tea", (-0.08, -0.04)), ("can_soda", (0.07, 0.05)),
-              ("bottle_clear", (0.05, -0.08)), ("hex_nut", (-0.06, 0.08))]  # fmt: skip
+    placed = [
+        ("box_tea", (-0.08, -0.04)),
+        ("can_soda", (0.07, 0.05)),
+        ("bottle_clear", (0.05, -0.08)),
+        ("hex_nut", (-0.06, 0.08)),
+    ]
     for k, (name, xy) in enumerate(placed):
         mesh = mgn.objects.get_object(name).to_mesh()
         X = np.eye(4)
@@ -79,11 +82,15 @@ def test_off_by_default_and_then_the_photograph_is_unchanged() -> None:
         lit.lights,
         lit.environment,
     )
-    out = scene.render(view, PathTraceOptions(spp=2, max_bounces=s.max_bounces, seed=seed,
-                                              view_index=v, clamp=s.clamp,
-                                              labels=False))  # fmt: skip
-    want = develop(out.radiance, FilmOptions(exposure=lit.exposure, tone=s.tone, seed=seed,
-                                             view_index=v))  # fmt: skip
+    out = scene.render(
+        view,
+        PathTraceOptions(
+            spp=2, max_bounces=s.max_bounces, seed=seed, view_index=v, clamp=s.clamp, labels=False
+        ),
+    )
+    want = develop(
+        out.radiance, FilmOptions(exposure=lit.exposure, tone=s.tone, seed=seed, view_index=v)
+    )
     assert png_bytes(got) == png_bytes(want)
     # Switched on with probability 0, only the objects' uv layout differs (box-projected uvs
     # for meshes without their own, unused): the same photograph.
@@ -95,8 +102,9 @@ def test_off_by_default_and_then_the_photograph_is_unchanged() -> None:
     one_s = _settings(True, object_probability=1.0)
     one = photo.PhotoRenderer(items, tote, np.eye(4), None, one_s, seed=seed)
     assert png_bytes(one.render(view, v)[0]) != png_bytes(got)
-    assert repr(one.lighting(v)) == repr(photo.PhotoRenderer(items, tote, np.eye(4), None, s,
-                                                            seed=seed).lighting(v))  # fmt: skip
+    assert repr(one.lighting(v)) == repr(
+        photo.PhotoRenderer(items, tote, np.eye(4), None, s, seed=seed).lighting(v)
+    )
 
 
 def test_drawn_from_seed_view_and_object_only() -> None:
@@ -167,11 +175,14 @@ def test_probability_ranges_and_glass() -> None:
         assert abs(changed - n * p) < 5 * np.sqrt(n * p * (1 - p)), (p, changed)
         h = np.asarray(hsv)
         r = s.randomize
-        assert np.all((h[:, 1] >= r.object_saturation[0] - 1e-6)
-                      & (h[:, 1] <= r.object_saturation[1] + 1e-6))  # fmt: skip
+        assert np.all(
+            (h[:, 1] >= r.object_saturation[0] - 1e-6) & (h[:, 1] <= r.object_saturation[1] + 1e-6)
+        )
         assert np.all((h[:, 2] >= r.object_value[0] - 1e-6) & (h[:, 2] <= r.object_value[1] + 1e-6))
-        assert np.all((np.asarray(rough) >= r.object_roughness[0])
-                      & (np.asarray(rough) <= r.object_roughness[1]))  # fmt: skip
+        assert np.all(
+            (np.asarray(rough) >= r.object_roughness[0])
+            & (np.asarray(rough) <= r.object_roughness[1])
+        )
         assert kinds == {"plain", "pattern"}
     # Black / dark grey, white and saturated colours of every hue occur among the ~520 plain
     # colours (black / dark grey: value < 0.15 and saturation < 0.2, 2.2 % of the draws).
@@ -181,8 +192,11 @@ def test_probability_ranges_and_glass() -> None:
     assert len(np.unique(np.floor(h[h[:, 1] > 0.5, 0] * 6))) == 6
     # A narrower value range is honoured.
     s = _settings(True, object_probability=1.0, object_value=(0.1, 0.2))
-    plain = [m for k in range(80) if (m := draw_object_materials(s, 2, 0, k + 1, base)[0])
-             .base_color_texture is None]  # fmt: skip
+    plain = [
+        m
+        for k in range(80)
+        if (m := draw_object_materials(s, 2, 0, k + 1, base)[0]).base_color_texture is None
+    ]
     assert len(plain) > 5
     for m in plain:
         assert 0.1 - 1e-6 <= _srgb_hsv(m)[2] <= 0.2 + 1e-6
@@ -217,8 +231,9 @@ def test_bad_object_id() -> None:
 
 
 def test_config_round_trip() -> None:
-    cfg = load_config({"render": {"randomize": {"object_appearance": True,
-                                                "object_probability": 0.25}}})  # fmt: skip
+    cfg = load_config(
+        {"render": {"randomize": {"object_appearance": True, "object_probability": 0.25}}}
+    )
     assert cfg.render.randomize.object_appearance
     assert cfg.render.randomize.object_probability == 0.25
     assert "draw_object_materials" in lighting.__all__
@@ -276,12 +291,12 @@ def test_camera_light_changes_nothing_else() -> None:
     items, tote = _scene()
     view, seed, v = _view(), 2, 1
     off = photo.PhotoRenderer(items, tote, np.eye(4), None, _cam_settings(False), seed=seed)
-    zero = photo.PhotoRenderer(items, tote, np.eye(4), None,
-                               _cam_settings(True, camera_light_probability=0.0),
-                               seed=seed)  # fmt: skip
-    one = photo.PhotoRenderer(items, tote, np.eye(4), None,
-                              _cam_settings(True, camera_light_probability=1.0),
-                              seed=seed)  # fmt: skip
+    zero = photo.PhotoRenderer(
+        items, tote, np.eye(4), None, _cam_settings(True, camera_light_probability=0.0), seed=seed
+    )
+    one = photo.PhotoRenderer(
+        items, tote, np.eye(4), None, _cam_settings(True, camera_light_probability=1.0), seed=seed
+    )
     a, b, c = (png_bytes(pr.render(view, v)[0]) for pr in (off, zero, one))
     assert a == b
     assert a != c

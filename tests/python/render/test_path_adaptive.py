@@ -26,22 +26,31 @@ def mixed_scene() -> PathScene:
     Xs, Xb = np.eye(4), np.eye(4)
     Xs[:3, 3] = (-0.35, 0, 0)
     Xb[:3, 3] = (0.35, 0, -0.15)
-    mats = [[PbrMaterial(transmission=1.0, roughness=0.0)],
-            [PbrMaterial(base_color=(0.9, 0.6, 0.2), metallic=1.0, roughness=0.3)],
-            [PbrMaterial(base_color=(0.5, 0.5, 0.5))]]  # fmt: skip
+    mats = [
+        [PbrMaterial(transmission=1.0, roughness=0.0)],
+        [PbrMaterial(base_color=(0.9, 0.6, 0.2), metallic=1.0, roughness=0.3)],
+        [PbrMaterial(base_color=(0.5, 0.5, 0.5))],
+    ]
     X_WL = np.diag([1.0, -1.0, -1.0, 1.0])
     X_WL[:3, 3] = (0, 0, 1.2)
-    return PathScene([sphere, box, floor], np.stack([Xs, Xb, np.eye(4)]), [1, 2, 3], mats,
-                     [AreaLight(X_WL, "rect", (0.4, 0.4), intensity=15)],
-                     Environment(kind="sky", intensity=0.5))  # fmt: skip
+    return PathScene(
+        [sphere, box, floor],
+        np.stack([Xs, Xb, np.eye(4)]),
+        [1, 2, 3],
+        mats,
+        [AreaLight(X_WL, "rect", (0.4, 0.4), intensity=15)],
+        Environment(kind="sky", intensity=0.5),
+    )
 
 
 def test_adaptive_same_bytes_for_one_and_two_threads_and_labels_unchanged():
     scene = mixed_scene()
     view = camera((0, -2.0, 1.0), (0, 0, 0), 48, 50)
     opts = {"spp": 2, "seed": 9, "view_index": 2, "adaptive_samples": 1.0, "adaptive_max": 4}
-    outs = [scene.render(view, PathTraceOptions(**opts, num_threads=t, aperture_radius=0.01))
-            for t in (1, 2)]  # fmt: skip
+    outs = [
+        scene.render(view, PathTraceOptions(**opts, num_threads=t, aperture_radius=0.01))
+        for t in (1, 2)
+    ]
     for name in ("radiance", "albedo", "normal", "depth", "instance_ids"):
         assert getattr(outs[0], name).tobytes() == getattr(outs[1], name).tobytes(), name
     plain = scene.render(view, PathTraceOptions(spp=2, seed=9, view_index=2, aperture_radius=0.01))
@@ -67,9 +76,12 @@ def test_extra_samples_go_where_the_variance_is():
     view = camera((0, -2.0, 1.0), (0, 0, 0), 40, 50)
 
     def var(adaptive: float) -> np.ndarray:
-        imgs = [scene.render(view, PathTraceOptions(spp=1, seed=s, adaptive_samples=adaptive,
-                                                    clamp_indirect=0.0)).radiance.mean(-1)
-                for s in range(12)]  # fmt: skip
+        imgs = [
+            scene.render(
+                view, PathTraceOptions(spp=1, seed=s, adaptive_samples=adaptive, clamp_indirect=0.0)
+            ).radiance.mean(-1)
+            for s in range(12)
+        ]
         return np.var(np.stack(imgs), axis=0, ddof=1)
 
     v0, v1 = var(0.0), var(1.0)
@@ -118,13 +130,26 @@ def test_adaptive_sampling_keeps_the_analytic_irradiance():
     # Pixels whose footprint sees the light unoccluded (the box and its shadow are far enough).
     far = (np.hypot(P[..., 0] - 0.35, P[..., 1] - 0.25) > 0.3) & (np.abs(P[..., 0]) < 0.45)
     far &= np.abs(P[..., 1]) < 0.45
-    expected = np.array([[a / math.pi * rect_irradiance(P[i, j], (0, 0, height), size, Le)
-                          for j in range(K.width)] for i in range(K.height)])  # fmt: skip
+    expected = np.array(
+        [
+            [
+                a / math.pi * rect_irradiance(P[i, j], (0, 0, height), size, Le)
+                for j in range(K.width)
+            ]
+            for i in range(K.height)
+        ]
+    )
     means = {}
     for adaptive in (0.0, 4.0):
-        imgs = [scene.render(view, PathTraceOptions(spp=4, max_bounces=1, seed=s,
-                                                    adaptive_samples=adaptive, adaptive_max=12))
-                .radiance.mean(-1) for s in range(6)]  # fmt: skip
+        imgs = [
+            scene.render(
+                view,
+                PathTraceOptions(
+                    spp=4, max_bounces=1, seed=s, adaptive_samples=adaptive, adaptive_max=12
+                ),
+            ).radiance.mean(-1)
+            for s in range(6)
+        ]
         img = np.mean(imgs, axis=0)
         blocks = far.reshape(8, 4, 8, 4).all(axis=(1, 3))
         got_b, exp_b = (x.reshape(8, 4, 8, 4).mean(axis=(1, 3))[blocks] for x in (img, expected))
@@ -137,11 +162,13 @@ def test_adaptive_sampling_keeps_the_analytic_irradiance():
 
 @pytest.mark.parametrize(
     ("kw", "name"),
-    [({"adaptive_samples": -0.5}, "adaptive_samples"),
-     ({"adaptive_samples": float("inf")}, "adaptive_samples"),
-     ({"adaptive_max": 0}, "adaptive_max"),
-     ({"adaptive_max": 65}, "adaptive_max")],
-)  # fmt: skip
+    [
+        ({"adaptive_samples": -0.5}, "adaptive_samples"),
+        ({"adaptive_samples": float("inf")}, "adaptive_samples"),
+        ({"adaptive_max": 0}, "adaptive_max"),
+        ({"adaptive_max": 65}, "adaptive_max"),
+    ],
+)
 def test_bad_adaptive_settings_name_the_setting(kw, name):
     with pytest.raises(InvalidArgumentError, match=f"PathTraceOptions.{name}"):
         PathTraceOptions(**kw)

@@ -261,9 +261,12 @@ def test_lambert_plane_under_rect_light_and_sky_with_one_or_two_shadow_rays(
     scene = PathScene([quad(4.0)], np.eye(4)[None], [1], [[mat]], [light], uniform(L))
     view = camera((0.2, 0.0, 1.5), (0.2, 0.0, 0.0), 16, 60, up=(0, 1, 0))
     opts = PathTraceOptions(
-        spp=256, max_bounces=1, seed=2, shadow_rays=shadow_rays,
+        spp=256,
+        max_bounces=1,
+        seed=2,
+        shadow_rays=shadow_rays,
         reduced_nee_depth=reduced_nee_depth,
-    )  # fmt: skip
+    )
     out = scene.render(view, opts)
     K = view.K
     u, v = np.meshgrid(np.arange(K.width) + 0.5, np.arange(K.height) + 0.5)
@@ -271,8 +274,9 @@ def test_lambert_plane_under_rect_light_and_sky_with_one_or_two_shadow_rays(
     d_W = d_C @ view.X_WC[:3, :3].T
     t = -view.X_WC[2, 3] / d_W[..., 2]
     P = view.X_WC[:3, 3] + t[..., None] * d_W
-    E = np.array([[rect_irradiance(p, (0.0, 0.0, height), size, Le, n=100) for p in row]
-                  for row in P])  # fmt: skip
+    E = np.array(
+        [[rect_irradiance(p, (0.0, 0.0, height), size, Le, n=100) for p in row] for row in P]
+    )
     expected = a / math.pi * E + a * L
     got = out.radiance.mean(-1)
     assert got.mean() == pytest.approx(expected.mean(), rel=0.01)
@@ -373,8 +377,14 @@ def test_glass_pane_at_normal_incidence_transmits_fresnel_loss(ior):
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
     emitter = quad(4.0, z=-0.5)
     black_emitter = PbrMaterial(base_color=(0, 0, 0), ior=1.0, emission=(Le,) * 3)
-    scene = PathScene([pane, emitter], np.stack([np.eye(4), np.eye(4)]), [1, 2],
-                      [[glass], [black_emitter]], (), BLACK)  # fmt: skip
+    scene = PathScene(
+        [pane, emitter],
+        np.stack([np.eye(4), np.eye(4)]),
+        [1, 2],
+        [[glass], [black_emitter]],
+        (),
+        BLACK,
+    )
     view = camera((0, 0, 1.0), (0, 0, 0), 32, 10, up=(0, 1, 0))
     one_pass = scene.render(view, PathTraceOptions(spp=64, max_bounces=2, rr_depth=100)).radiance
     full = scene.render(view, PathTraceOptions(spp=64, max_bounces=40, rr_depth=100)).radiance
@@ -423,9 +433,13 @@ def test_light_reflected_in_smooth_glass_is_split_not_sampled():
     R = ((ior - 1) / (ior + 1)) ** 2
     p = 2 * R / (1 + R)
     samples = np.stack(
-        [scene.render(view, PathTraceOptions(spp=1, max_bounces=40, rr_depth=100, seed=s))
-         .radiance[..., 1] for s in range(4)]
-    )  # fmt: skip
+        [
+            scene.render(
+                view, PathTraceOptions(spp=1, max_bounces=40, rr_depth=100, seed=s)
+            ).radiance[..., 1]
+            for s in range(4)
+        ]
+    )
     n = samples.size
     mean, var = samples.mean(), samples.var(ddof=1)
     # Mean: within 4 standard errors of the analytic slab reflectance.
@@ -451,9 +465,13 @@ def test_first_glass_walls_are_traced_on_both_branches():
     scene = _pane_under_lamp(ior, Le)
     view = camera((0, 0, 1.0), (0, 0, 0), 16, 4, up=(0, 1, 0))
     samples = np.stack(
-        [scene.render(view, PathTraceOptions(spp=1, max_bounces=40, rr_depth=100, seed=s))
-         .radiance[..., 1] for s in range(6)]
-    )  # fmt: skip
+        [
+            scene.render(
+                view, PathTraceOptions(spp=1, max_bounces=40, rr_depth=100, seed=s)
+            ).radiance[..., 1]
+            for s in range(6)
+        ]
+    )
     R = ((ior - 1) / (ior + 1)) ** 2  # within 2 degrees of normal incidence: R(theta) ~ R(0)
     mean = Le * 2 * R / (1 + R)
     assert np.abs(samples - mean).max() < 1.5 * R**2 * Le, np.abs(samples - mean).max()
@@ -468,9 +486,14 @@ def test_tinted_glass_pane_tints_once_per_pass_through_the_wall():
     R = ((ior - 1) / (ior + 1)) ** 2
     glass = PbrMaterial(base_color=tuple(c), transmission=1.0, roughness=0.0, ior=ior)
     black_emitter = PbrMaterial(base_color=(0, 0, 0), ior=1.0, emission=(1.0,) * 3)
-    scene = PathScene([make_box([2.0, 2.0, 0.02]), quad(4.0, z=-0.5)],
-                      np.stack([np.eye(4), np.eye(4)]), [1, 2], [[glass], [black_emitter]], (),
-                      BLACK)  # fmt: skip
+    scene = PathScene(
+        [make_box([2.0, 2.0, 0.02]), quad(4.0, z=-0.5)],
+        np.stack([np.eye(4), np.eye(4)]),
+        [1, 2],
+        [[glass], [black_emitter]],
+        (),
+        BLACK,
+    )
     view = camera((0, 0, 1.0), (0, 0, 0), 32, 10, up=(0, 1, 0))
     one = scene.render(view, PathTraceOptions(spp=64, max_bounces=2, rr_depth=100)).radiance
     full = scene.render(view, PathTraceOptions(spp=64, max_bounces=40, rr_depth=100)).radiance
@@ -492,8 +515,14 @@ def test_closed_thin_glass_shell_in_the_furnace_shows_L():
     inner_src = make_sphere(0.4985, 64, 32)
     inner = mesh_from_arrays(np.asarray(inner_src.vertices), np.asarray(inner_src.faces)[:, ::-1])
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=1.5)
-    scene = PathScene([outer, inner], np.stack([np.eye(4), np.eye(4)]), [1, 1],
-                      [[glass], [glass]], (), uniform(0.7))  # fmt: skip
+    scene = PathScene(
+        [outer, inner],
+        np.stack([np.eye(4), np.eye(4)]),
+        [1, 1],
+        [[glass], [glass]],
+        (),
+        uniform(0.7),
+    )
     out = scene.render(
         camera((0, -3, 0), (0, 0, 0), 24, 22), PathTraceOptions(spp=64, max_bounces=64, rr_depth=3)
     )
@@ -530,9 +559,14 @@ def test_slightly_rough_pane_transmits_like_the_smooth_one(roughness):
     R = ((ior - 1) / (ior + 1)) ** 2
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=roughness, ior=ior)
     black_emitter = PbrMaterial(base_color=(0, 0, 0), ior=1.0, emission=(1.0,) * 3)
-    scene = PathScene([make_box([2.0, 2.0, 0.02]), quad(40.0, z=-0.5)],
-                      np.stack([np.eye(4), np.eye(4)]), [1, 2], [[glass], [black_emitter]], (),
-                      BLACK)  # fmt: skip
+    scene = PathScene(
+        [make_box([2.0, 2.0, 0.02]), quad(40.0, z=-0.5)],
+        np.stack([np.eye(4), np.eye(4)]),
+        [1, 2],
+        [[glass], [black_emitter]],
+        (),
+        BLACK,
+    )
     view = camera((0, 0, 1.0), (0, 0, 0), 32, 10, up=(0, 1, 0))
     full = scene.render(view, PathTraceOptions(spp=64, max_bounces=40, rr_depth=100)).radiance
     assert full.mean() == pytest.approx((1 - R) / (1 + R), rel=2e-3)
@@ -549,8 +583,14 @@ def test_denoiser_albedo_and_normal_are_taken_through_smooth_glass():
     view = camera((0, 0, 1.0), (0, 0, 0), 16, 10, up=(0, 1, 0))
     for roughness, expect in ((0.0, (0.8, 0.1, 0.1)), (0.5, (0.9, 0.9, 0.9))):
         glass = PbrMaterial(base_color=(0.9, 0.9, 0.9), transmission=1.0, roughness=roughness)
-        scene = PathScene([quad(4.0), make_box([2.0, 2.0, 0.02])], np.stack([np.eye(4), X]),
-                          [1, 2], [[red], [glass]], (), BLACK)  # fmt: skip
+        scene = PathScene(
+            [quad(4.0), make_box([2.0, 2.0, 0.02])],
+            np.stack([np.eye(4), X]),
+            [1, 2],
+            [[red], [glass]],
+            (),
+            BLACK,
+        )
         out = scene.render(view, PathTraceOptions(spp=64, max_bounces=8))
         assert np.all(out.instance_ids == 2)
         albedo = out.albedo.reshape(-1, 3).mean(0)
@@ -574,8 +614,14 @@ def test_denoiser_guides_behind_glass_are_weighted_by_fresnel_not_drawn_at_rando
     X[:3, 3] = (0, 0, 0.3)
     view = camera((0, 0, 1.0), (0, 0, 0), 32, 10, up=(0, 1, 0))
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=1.5)
-    scene = PathScene([quad(4.0), make_box([2.0, 2.0, 0.02])], np.stack([np.eye(4), X]),
-                      [1, 2], [[red], [glass]], (), BLACK)  # fmt: skip
+    scene = PathScene(
+        [quad(4.0), make_box([2.0, 2.0, 0.02])],
+        np.stack([np.eye(4), X]),
+        [1, 2],
+        [[red], [glass]],
+        (),
+        BLACK,
+    )
     out = scene.render(view, PathTraceOptions(spp=1, max_bounces=8, seed=5))
     assert np.all(out.instance_ids == 2)
     R = ((1.5 - 1) / (1.5 + 1)) ** 2  # 0.04 at normal incidence (the view is within 5 degrees)
@@ -658,8 +704,12 @@ def tote_scene_items(n_objects: int = 6):
 
 def path_scene(items, lights=(), env=None):
     meshes = [m for m, _, _ in items]
-    mats = [[PbrMaterial.from_material(x) for x in (m.materials or [None])] if m.materials
-            else [PbrMaterial()] for m in meshes]  # fmt: skip
+    mats = [
+        [PbrMaterial.from_material(x) for x in (m.materials or [None])]
+        if m.materials
+        else [PbrMaterial()]
+        for m in meshes
+    ]
     return PathScene(
         meshes, np.stack([X for _, X, _ in items]), [i for _, _, i in items], mats, lights, env
     )
@@ -695,14 +745,21 @@ def test_same_seed_same_bytes_for_one_and_two_threads():
     Xs, Xb = np.eye(4), np.eye(4)
     Xs[:3, 3] = (-0.35, 0, 0)
     Xb[:3, 3] = (0.35, 0, -0.15)
-    mats = [[PbrMaterial(transmission=1.0, roughness=0.0)],
-            [PbrMaterial(base_color=(0.9, 0.6, 0.2), metallic=1.0, roughness=0.3)],
-            [PbrMaterial(base_color=(0.5, 0.5, 0.5))]]  # fmt: skip
+    mats = [
+        [PbrMaterial(transmission=1.0, roughness=0.0)],
+        [PbrMaterial(base_color=(0.9, 0.6, 0.2), metallic=1.0, roughness=0.3)],
+        [PbrMaterial(base_color=(0.5, 0.5, 0.5))],
+    ]
     X_WL = np.diag([1.0, -1.0, -1.0, 1.0])
     X_WL[:3, 3] = (0, 0, 1.2)
-    scene = PathScene([sphere, box, floor], np.stack([Xs, Xb, np.eye(4)]), [1, 2, 3], mats,
-                      [AreaLight(X_WL, "rect", (0.4, 0.4), intensity=15)],
-                      Environment(kind="sky", intensity=0.5))  # fmt: skip
+    scene = PathScene(
+        [sphere, box, floor],
+        np.stack([Xs, Xb, np.eye(4)]),
+        [1, 2, 3],
+        mats,
+        [AreaLight(X_WL, "rect", (0.4, 0.4), intensity=15)],
+        Environment(kind="sky", intensity=0.5),
+    )
     view = camera((0, -2.0, 1.0), (0, 0, 0), 40, 50)
     outs = [
         scene.render(
@@ -899,8 +956,12 @@ def test_base_color_texture_is_looked_up_at_the_mesh_uvs():
     # Texel centres are at uv 0.25 / 0.75, i.e. world +-0.25: find their pixels.
     K = view.K
     lin = srgb_to_linear(tex.astype(float) / 255)
-    for (x, y), texel in [((-0.25, 0.25), lin[0, 0]), ((0.25, 0.25), lin[0, 1]),
-                          ((-0.25, -0.25), lin[1, 0]), ((0.25, -0.25), lin[1, 1])]:  # fmt: skip
+    for (x, y), texel in [
+        ((-0.25, 0.25), lin[0, 0]),
+        ((0.25, 0.25), lin[0, 1]),
+        ((-0.25, -0.25), lin[1, 0]),
+        ((0.25, -0.25), lin[1, 1]),
+    ]:
         p_C = np.linalg.inv(view.X_WC) @ np.array([x, y, 0.0, 1.0])
         u = int(K.fx * p_C[0] / p_C[2] + K.cx)
         w = int(K.fy * p_C[1] / p_C[2] + K.cy)
@@ -1093,8 +1154,14 @@ def _pane_stack_under_lamp(ior: float, Le: float, n: int) -> PathScene:
     glass = PbrMaterial(base_color=(1, 1, 1), transmission=1.0, roughness=0.0, ior=ior)
     poses = np.stack([np.eye(4)] * n)
     poses[:, 2, 3] = 0.1 * np.arange(n)
-    return PathScene([make_box([2.0, 2.0, 0.02])] * n, poses, list(range(1, n + 1)),
-                     [[glass]] * n, [light], BLACK)  # fmt: skip
+    return PathScene(
+        [make_box([2.0, 2.0, 0.02])] * n,
+        poses,
+        list(range(1, n + 1)),
+        [[glass]] * n,
+        [light],
+        BLACK,
+    )
 
 
 def test_fresnel_split_min_keeps_the_mean_of_a_pane_stack():
@@ -1133,8 +1200,10 @@ def test_guide_split_min_changes_guides_not_radiance():
     for 0 and 1, and 1 casts fewer rays (no guide rays)."""
     scene = _pane_stack_under_lamp(1.5, 2.0, 3)
     view = camera((0, 0, 1.0), (0, 0, 0.1), 16, 4, up=(0, 1, 0))
-    outs = [scene.render(view, PathTraceOptions(spp=4, max_bounces=40, seed=1, guide_split_min=g))
-            for g in (0.0, 1.0)]  # fmt: skip
+    outs = [
+        scene.render(view, PathTraceOptions(spp=4, max_bounces=40, seed=1, guide_split_min=g))
+        for g in (0.0, 1.0)
+    ]
     np.testing.assert_array_equal(outs[0].radiance, outs[1].radiance)
     assert outs[1].rays < outs[0].rays, (outs[0].rays, outs[1].rays)
 

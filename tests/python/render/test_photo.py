@@ -83,12 +83,15 @@ def test_render_config_round_trip() -> None:
     assert "engine: raster" in dump_config()
 
 
-@pytest.mark.parametrize("command", [
-    ["generate", "--out", "X", "--engine", "cycles"],
-    ["scene", "render", "s.json", "--out", "X", "--engine", "cycles"],
-    ["scene", "label", "s.json", "--out", "X", "--engine", "cycles"],
-    ["pick", "s.json", "--out", "X", "--engine", "cycles"],
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["generate", "--out", "X", "--engine", "cycles"],
+        ["scene", "render", "s.json", "--out", "X", "--engine", "cycles"],
+        ["scene", "label", "s.json", "--out", "X", "--engine", "cycles"],
+        ["pick", "s.json", "--out", "X", "--engine", "cycles"],
+    ],
+)
 def test_cli_engine_choices(command: list[str], capsys: pytest.CaptureFixture[str]) -> None:
 
     with pytest.raises(SystemExit) as e:
@@ -159,19 +162,30 @@ def _write_gltf(path: Path, material: dict, extensions: list[str]) -> None:
         "scenes": [{"nodes": [0]}],
         "scene": 0,
         "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1,
-                                    "material": 0}]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
         "materials": [material],
-        "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
-                     + base64.b64encode(data).decode()}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                        {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+        "buffers": [
+            {
+                "byteLength": len(data),
+                "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode(),
+            }
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 12},
+        ],
         "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 4,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            },
             {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
         ],
-    }  # fmt: skip
+    }
     path.write_text(json.dumps(doc))
 
 
@@ -190,10 +204,17 @@ def test_glb_pbr_factors_read_back(tmp_path: Path) -> None:
     assert m.roughness == pytest.approx(0.3, abs=1e-6)
     assert np.allclose(np.asarray(m.base_color)[:3], np.array([51, 102, 204]) / 255, atol=1e-3)
     # KHR_materials_transmission and KHR_materials_ior from a hand-written glTF.
-    mat = {"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.95, 1.0, 1.0],
-                                    "metallicFactor": 0.0, "roughnessFactor": 0.05},
-           "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
-                          "KHR_materials_ior": {"ior": 1.45}}}  # fmt: skip
+    mat = {
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [0.9, 0.95, 1.0, 1.0],
+            "metallicFactor": 0.0,
+            "roughnessFactor": 0.05,
+        },
+        "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_ior": {"ior": 1.45},
+        },
+    }
     _write_gltf(tmp_path / "pane.gltf", mat, ["KHR_materials_transmission", "KHR_materials_ior"])
     g = mgn.load_mesh(tmp_path / "pane.gltf").materials[0]
     assert g.has_pbr
@@ -215,12 +236,15 @@ def _user_yaml(tmp_path: Path, extra: str) -> Path:
     return p
 
 
-@pytest.mark.parametrize(("extra", "field"), [
-    ("    metallic: 1.5\n", "metallic"),
-    ("    roughness: -0.1\n", "roughness"),
-    ("    ior: 0.9\n", "ior"),
-    ("    transmission: yes\n", "transmission"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("extra", "field"),
+    [
+        ("    metallic: 1.5\n", "metallic"),
+        ("    roughness: -0.1\n", "roughness"),
+        ("    ior: 0.9\n", "ior"),
+        ("    transmission: yes\n", "transmission"),
+    ],
+)
 def test_user_object_pbr_errors_name_file_object_field(
     tmp_path: Path, extra: str, field: str
 ) -> None:
@@ -253,8 +277,10 @@ def test_blackbody_tints() -> None:
 
 def _lighting_key(lit: lighting.ViewLighting) -> tuple:
     lights = tuple((a.X_WL.tobytes(), a.size, a.color, a.intensity) for a in lit.lights)
-    tex = tuple(None if m.base_color_texture is None else m.base_color_texture.tobytes()
-                for m in (lit.tote, lit.floor))  # fmt: skip
+    tex = tuple(
+        None if m.base_color_texture is None else m.base_color_texture.tobytes()
+        for m in (lit.tote, lit.floor)
+    )
     return (lights, lit.environment, lit.tote, lit.floor, tex, lit.exposure)
 
 
@@ -289,8 +315,12 @@ def test_randomisation_switches_are_independent() -> None:
     a, b = draw_lighting(on, 5, 2), draw_lighting(off_lights, 5, 2)
     assert len(b.lights) == 1
     assert b.lights[0].size == (1.0, 1.0)
-    assert (a.environment, a.tote, a.floor, a.exposure) == (b.environment, b.tote, b.floor,
-                                                            b.exposure)  # fmt: skip
+    assert (a.environment, a.tote, a.floor, a.exposure) == (
+        b.environment,
+        b.tote,
+        b.floor,
+        b.exposure,
+    )
     fixed = draw_lighting(on, 5, 2, randomize=False)
     assert fixed.exposure == on.exposure
     assert fixed.tote.base_color_texture is None
@@ -328,8 +358,14 @@ def test_tote_colour_includes_black_and_dark_grey_totes() -> None:
     )
     assert abs(dark.sum() - p * n) < 5 * np.sqrt(n * p * (1 - p))
     # Reflectance of the darkest totes: a few per cent, as black plastic.
-    assert np.max(np.asarray([draw_lighting(s, 11, v).tote.base_color[0] for v in
-                              np.flatnonzero(dark)[:20]])) < 0.08  # fmt: skip
+    assert (
+        np.max(
+            np.asarray(
+                [draw_lighting(s, 11, v).tote.base_color[0] for v in np.flatnonzero(dark)[:20]]
+            )
+        )
+        < 0.08
+    )
 
 
 def test_dark_tote_draw_leaves_the_other_draws_unchanged(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -339,8 +375,9 @@ def test_dark_tote_draw_leaves_the_other_draws_unchanged(monkeypatch: pytest.Mon
     monkeypatch.setitem(lighting.DARK_TOTE, "probability", 1.0)
     always = [draw_lighting(s, 3, v) for v in range(8)]
     for a, b in zip(never, always, strict=True):
-        assert repr((a.lights, a.environment, a.exposure)) == repr((b.lights, b.environment,
-                                                                    b.exposure))  # fmt: skip
+        assert repr((a.lights, a.environment, a.exposure)) == repr(
+            (b.lights, b.environment, b.exposure)
+        )
         assert a.floor.base_color == b.floor.base_color
         assert a.floor.roughness == b.floor.roughness
         assert np.array_equal(a.floor.base_color_texture, b.floor.base_color_texture)
@@ -373,8 +410,12 @@ def test_procedural_textures() -> None:
 def _small_scene() -> tuple[list, mgn.Mesh]:
 
     items = []
-    placed = [("box_tea", (-0.08, -0.04)), ("can_soda", (0.07, 0.05)),
-              ("bottle_clear", (0.05, -0.08)), ("hex_nut", (-0.06, 0.08))]  # fmt: skip
+    placed = [
+        ("box_tea", (-0.08, -0.04)),
+        ("can_soda", (0.07, 0.05)),
+        ("bottle_clear", (0.05, -0.08)),
+        ("hex_nut", (-0.06, 0.08)),
+    ]
     for k, (name, xy) in enumerate(placed):
         mesh = mgn.objects.get_object(name).to_mesh()
         X = np.eye(4)
@@ -429,8 +470,14 @@ def test_same_png_for_one_and_two_threads(denoise: bool) -> None:
     if denoise and not denoiser.denoiser_available():
         pytest.fail("pyoidn (test extra) is not installed")
     items, tote = _small_scene()
-    s = RenderSettings(engine="path", spp=2, spp_without_denoiser=2, denoise=denoise,
-                       shot_noise=0.02, read_noise=0.002)  # fmt: skip
+    s = RenderSettings(
+        engine="path",
+        spp=2,
+        spp_without_denoiser=2,
+        denoise=denoise,
+        shot_noise=0.02,
+        read_noise=0.002,
+    )
     pngs = []
     for threads in (1, 2):
         pr = photo.PhotoRenderer(items, tote, np.eye(4), None, s, seed=3, num_threads=threads)
@@ -748,15 +795,34 @@ def test_tiny_path_traced_dataset_validates(
     cfg = {
         "objects": {"names": ["box_tea", "can_soda", "bottle_clear"]},
         "camera": {"views": [0, 9], "resolution_scale": 0.05},
-        "labels": {"suction": False, "paralleljaw": False, "pj_physics": False,
-                   "scene_grasps": False},
+        "labels": {
+            "suction": False,
+            "paralleljaw": False,
+            "pj_physics": False,
+            "scene_grasps": False,
+        },
         "drop": {"max_time": 1.0},
         "render": {"spp": 2},
-    }  # fmt: skip
+    }
     (tmp_path / "cfg.yaml").write_text(json.dumps(cfg))
     out = tmp_path / "ds"
-    assert main(["generate", "--out", str(out), "--scenes", "1", "--config",
-                 str(tmp_path / "cfg.yaml"), "--engine", "path", "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "generate",
+                "--out",
+                str(out),
+                "--scenes",
+                "1",
+                "--config",
+                str(tmp_path / "cfg.yaml"),
+                "--engine",
+                "path",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     assert main(["validate", str(out)]) == 0
     info = json.loads((out / "dataset.json").read_text())
     assert info["config"]["render"]["engine"] == "path"

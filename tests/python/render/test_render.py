@@ -74,9 +74,12 @@ def test_mgn_rig_views_look_at_the_tote_centre() -> None:
                 theta = p.theta_start + i_t * (p.theta_end - p.theta_start) / 2
                 phi = i_p * p.phi_end / 4
                 expected = R * np.array(
-                    [math.cos(phi) * math.sin(theta), math.sin(phi) * math.sin(theta),
-                     math.cos(theta)]
-                )  # fmt: skip
+                    [
+                        math.cos(phi) * math.sin(theta),
+                        math.sin(phi) * math.sin(theta),
+                        math.cos(theta),
+                    ]
+                )
                 np.testing.assert_allclose(d, expected, atol=1e-12)
                 # The optical axis (camera z) passes through the target.
                 np.testing.assert_allclose(X[:3, 2], -d / np.linalg.norm(d), atol=1e-12)
@@ -159,8 +162,15 @@ def test_transparent_object_invalid_in_structured_light_valid_in_ideal(scene) ->
     np.testing.assert_array_equal(again.depth, sl.depth)
     # The same bytes for any number of threads.
     for threads in (1, 2):
-        other = apply_depth_sensor(out.depth, out.instance_ids, SMALL, "tof", flags_by_id=flags,
-                                   seed=3, num_threads=threads)  # fmt: skip
+        other = apply_depth_sensor(
+            out.depth,
+            out.instance_ids,
+            SMALL,
+            "tof",
+            flags_by_id=flags,
+            seed=3,
+            num_threads=threads,
+        )
         assert other.depth.tobytes() == tof.depth.tobytes()
         np.testing.assert_array_equal(other.valid, tof.valid)
 

@@ -44,8 +44,13 @@ def _K(dist=(), w=640, h=480) -> Intrinsics:
 
 def _opencv_uv(K: Intrinsics, p_C: np.ndarray) -> np.ndarray:
     """cv2.projectPoints in mgn's continuous image coordinates (pixel centres at +0.5)."""
-    uv, _ = cv2.projectPoints(np.asarray(p_C, np.float64).reshape(-1, 1, 3), np.zeros(3),
-                              np.zeros(3), K.K_opencv, np.asarray(K.distortion))  # fmt: skip
+    uv, _ = cv2.projectPoints(
+        np.asarray(p_C, np.float64).reshape(-1, 1, 3),
+        np.zeros(3),
+        np.zeros(3),
+        K.K_opencv,
+        np.asarray(K.distortion),
+    )
     return uv.reshape(-1, 2) + 0.5
 
 
@@ -54,8 +59,13 @@ def _cam_down(K: Intrinsics, height: float = 0.5) -> CameraView:
 
 
 def _render(objects, view, floor=True):
-    return next(iter(iter_views(objects, None, [view], sensor="ideal", randomize=False,
-                                floor=floor, shadows=False)))  # fmt: skip
+    return next(
+        iter(
+            iter_views(
+                objects, None, [view], sensor="ideal", randomize=False, floor=floor, shadows=False
+            )
+        )
+    )
 
 
 @pytest.mark.parametrize("dist", COEFFS, ids=[f"{len(c)}coeffs" for c in COEFFS])
@@ -71,9 +81,13 @@ def test_model_and_map_agree_with_opencv(dist):
     vs, us = rng.integers(0, K.height, 300), rng.integers(0, K.width, 300)
     R = lens.render_K
     und = cv2.undistortPoints(
-        np.stack([us, vs], 1).astype(np.float64).reshape(-1, 1, 2), K.K_opencv,
-        np.asarray(dist), R=None, P=R.K_opencv, criteria=CRITERIA,
-    ).reshape(-1, 2)  # fmt: skip
+        np.stack([us, vs], 1).astype(np.float64).reshape(-1, 1, 2),
+        K.K_opencv,
+        np.asarray(dist),
+        R=None,
+        P=R.K_opencv,
+        criteria=CRITERIA,
+    ).reshape(-1, 2)
     got = np.stack([lens.map_u[vs, us], lens.map_v[vs, us]], 1)
     np.testing.assert_allclose(got, und, atol=2e-3)
     # The render covers every pixel with its bilinear neighbours.
@@ -120,8 +134,12 @@ def test_zero_distortion_is_the_pinhole_byte_for_byte(tmp_path):
     for dist in ((), (0.0, 0.0, 0.0, 0.0, 0.0)):
         K = Intrinsics(240, 240, 400.0, 400.0, 120.0, 120.0, dist)
         folder = tmp_path / f"d{len(dist)}"
-        label_scene(scene, folder, [(v, CameraView(K, poses[v])) for v in (0, 20)],
-                    options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
+        label_scene(
+            scene,
+            folder,
+            [(v, CameraView(K, poses[v])) for v in (0, 20)],
+            options=LabelOptions(randomize=False, num_threads=2),
+        )
         digests.append(
             {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
         )
@@ -152,8 +170,13 @@ def test_known_point_lands_where_opencv_projects_it():
     model = SceneRayModel([ball], X[None], [1], keypoints=[kp], com_points=None)
     assert img.pinhole is not None
     assert img.lens is not None
-    pin = view_object_labels(model, img.pinhole.view, img.pinhole.instance_ids,
-                             depth=img.pinhole.depth_ideal, num_threads=1)  # fmt: skip
+    pin = view_object_labels(
+        model,
+        img.pinhole.view,
+        img.pinhole.instance_ids,
+        depth=img.pinhole.depth_ideal,
+        num_threads=1,
+    )
     with pytest.raises(InvalidArgumentError, match="distort_view_object_labels"):
         view_object_labels(model, view, img.instance_ids)
     labels = distort_view_object_labels(pin, img.lens)
@@ -167,9 +190,11 @@ def test_known_point_lands_where_opencv_projects_it():
     pick = np.random.default_rng(0).choice(len(fu), 2000, replace=False)
     fu, fv = fu[pick], fv[pick]
     rays = cv2.undistortPoints(
-        np.stack([fu, fv], 1).astype(np.float64).reshape(-1, 1, 2), K.K_opencv,
-        np.asarray(K.distortion), criteria=CRITERIA,
-    ).reshape(-1, 2)  # fmt: skip
+        np.stack([fu, fv], 1).astype(np.float64).reshape(-1, 1, 2),
+        K.K_opencv,
+        np.asarray(K.distortion),
+        criteria=CRITERIA,
+    ).reshape(-1, 2)
     d_C = np.column_stack([rays, np.ones(len(rays))])
     d_W = d_C @ view.X_WC[:3, :3].T
     t = -view.X_WC[2, 3] / d_W[:, 2]  # camera height 0.5 m above the floor z = 0
@@ -217,8 +242,15 @@ def test_undistorting_reproduces_the_pinhole_render():
     K, K0 = _K(dist), _K()
     view, view0 = _cam_down(K, 0.6), _cam_down(K0, 0.6)
     objs = []
-    for i, (x, y, s) in enumerate([(0.0, 0.0, 0.1), (0.17, 0.1, 0.08), (-0.2, -0.12, 0.09),
-                                   (0.22, -0.14, 0.06), (-0.15, 0.15, 0.07)]):  # fmt: skip
+    for i, (x, y, s) in enumerate(
+        [
+            (0.0, 0.0, 0.1),
+            (0.17, 0.1, 0.08),
+            (-0.2, -0.12, 0.09),
+            (0.22, -0.14, 0.06),
+            (-0.15, 0.15, 0.07),
+        ]
+    ):
         X = np.eye(4)
         X[:3, :3] = cv2.Rodrigues(np.array([0.0, 0.0, 0.4 * i]))[0]
         X[:3, 3] = (x, y, s / 2)
@@ -249,8 +281,18 @@ def test_sensor_depth_is_invalid_at_edges_and_errors_name_the_lens():
     view = _cam_down(K)
     X = np.eye(4)
     X[:3, 3] = (0.05, 0.0, 0.05)
-    img = next(iter(iter_views([(make_box((0.1, 0.1, 0.1)), X, 1)], None, [view],
-                               sensor="ideal", randomize=False, shadows=False)))  # fmt: skip
+    img = next(
+        iter(
+            iter_views(
+                [(make_box((0.1, 0.1, 0.1)), X, 1)],
+                None,
+                [view],
+                sensor="ideal",
+                randomize=False,
+                shadows=False,
+            )
+        )
+    )
     ids = img.instance_ids
     edge = np.zeros_like(ids, bool)
     edge[:, 1:] |= ids[:, 1:] != ids[:, :-1]
@@ -274,13 +316,20 @@ def test_a_distorted_dataset_records_its_lens(tmp_path):
 
     X = np.eye(4)
     X[:3, 3] = (0.0, 0.0, 0.045)
-    scene = Scene((SceneInstance(1, "box_shoe", get_object("box_shoe").category_id, BUILTIN, X,
-                                 ("floor",)),), ToteSpec(), seed=1)  # fmt: skip
+    scene = Scene(
+        (SceneInstance(1, "box_shoe", get_object("box_shoe").category_id, BUILTIN, X, ("floor",)),),
+        ToteSpec(),
+        seed=1,
+    )
     dist = (-0.2, 0.05, 0.001, 0.0005, 0.0)
     K = Intrinsics(240, 200, 250.0, 250.0, 120.0, 100.0, dist)
     poses, _ = mgn_rig(1)
-    label_scene(scene, tmp_path / "ds" / "scene0", [(0, CameraView(K, poses[0]))],
-                options=LabelOptions(randomize=False, num_threads=2))  # fmt: skip
+    label_scene(
+        scene,
+        tmp_path / "ds" / "scene0",
+        [(0, CameraView(K, poses[0]))],
+        options=LabelOptions(randomize=False, num_threads=2),
+    )
     assert validate_dataset(tmp_path / "ds") == []
     view = Dataset(tmp_path / "ds").scenes()[0].views()[0]
     assert view.intrinsics == K
@@ -300,22 +349,45 @@ def test_grasps_are_kept_where_the_lens_sees_their_contacts():
     pts = np.array([[x, y, 0.01] for x in g for y in g], np.float32)
     n = len(pts)
     down = np.tile(np.float32([0, 0, 1]), (n, 1))  # object frame: approach into the face
-    su = SuctionLabels(points=pts, approach=-down, score=np.ones(n, np.float32),
-                       wrench=np.zeros(n, np.float32), reason=np.zeros(n, np.uint8),
-                       num_candidates=n, num_colliding=0)  # fmt: skip
+    su = SuctionLabels(
+        points=pts,
+        approach=-down,
+        score=np.ones(n, np.float32),
+        wrench=np.zeros(n, np.float32),
+        reason=np.zeros(n, np.uint8),
+        num_candidates=n,
+        num_colliding=0,
+    )
     closing = np.tile(np.float32([1, 0, 0]), (n, 1))
-    pj = PjLabels(approach=-down, closing=closing, p1=pts, width=np.full(n, 0.06, np.float32),
-                  quality_score=np.ones(n, np.float32), score_wrench=np.zeros(n, np.float32),
-                  quality_score_simulation=np.ones(n, np.float32), point_index=np.arange(n),
-                  point_score=np.ones(n, np.float32), num_points=n, num_colliding=0)  # fmt: skip
+    pj = PjLabels(
+        approach=-down,
+        closing=closing,
+        p1=pts,
+        width=np.full(n, 0.06, np.float32),
+        quality_score=np.ones(n, np.float32),
+        score_wrench=np.zeros(n, np.float32),
+        quality_score_simulation=np.ones(n, np.float32),
+        point_index=np.arange(n),
+        point_score=np.ones(n, np.float32),
+        num_points=n,
+        num_colliding=0,
+    )
     X = np.eye(4)
     X[2, 3] = 0.01
     floor = make_box((1.0, 1.0, 0.01))
     X_floor = np.eye(4)
     X_floor[2, 3] = -0.005
-    sgm = SceneGraspModel.from_meshes([make_box((0.8, 0.8, 0.02))], X[None], [1.0],
-                                      np.zeros((1, 3)), [pj], [su], floor, X_floor,
-                                      num_threads=1)  # fmt: skip
+    sgm = SceneGraspModel.from_meshes(
+        [make_box((0.8, 0.8, 0.02))],
+        X[None],
+        [1.0],
+        np.zeros((1, 3)),
+        [pj],
+        [su],
+        floor,
+        X_floor,
+        num_threads=1,
+    )
     for dist in [(0.25, 0.05, 0.002, 0.001, 0.0), (-0.3, 0.12, 0.001, -0.002, -0.02)]:
         K = Intrinsics(320, 240, 300.0, 300.0, 161.0, 118.0, dist)
         view = _cam_down(K, 0.45)
@@ -351,9 +423,21 @@ def test_config_rejects_a_lens_that_folds_over():
     from mgn.pipeline.config import ConfigError, load_config
 
     with pytest.raises(ConfigError, match=r"camera\.intrinsics\.distortion.*cannot be inverted"):
-        load_config({"camera": {"intrinsics": {"width": 320, "height": 240, "fx": 300, "fy": 300,
-                                               "cx": 160, "cy": 120,
-                                               "distortion": [-2.0, 0, 0, 0, 0]}}})  # fmt: skip
+        load_config(
+            {
+                "camera": {
+                    "intrinsics": {
+                        "width": 320,
+                        "height": 240,
+                        "fx": 300,
+                        "fy": 300,
+                        "cx": 160,
+                        "cy": 120,
+                        "distortion": [-2.0, 0, 0, 0, 0],
+                    }
+                }
+            }
+        )
 
 
 def test_the_path_tracer_goes_through_the_same_lens():

@@ -126,9 +126,12 @@ def test_the_score_falls_with_density_and_rises_with_friction():
     previous = None
     for factor in (0.5, 1.0, 2.0, 4.0):
         r = suction_hold_scores(
-            s.points, -s.normals, mass=p.mass * factor, com=p.center_of_mass,
+            s.points,
+            -s.normals,
+            mass=p.mass * factor,
+            com=p.center_of_mass,
             inertia=np.asarray(p.inertia) * factor,
-        )  # fmt: skip
+        )
         # Within the grid: fewer held cells at higher density, more at higher friction.
         assert (np.diff(r.held.astype(int), axis=2) <= 0).all()
         assert (np.diff(r.held.astype(int), axis=1) >= 0).all()
@@ -233,13 +236,20 @@ def test_object_labels_carry_the_physics_score_into_the_file_and_the_scene(tmp_p
     p = mgn.mass_properties(mesh, spec.density)
     heavy = p.mass * 8  # a tea box of lead-like density: the cup drops some of it
     lab = label_object(
-        mesh, mass=heavy, com=p.center_of_mass, inertia=np.asarray(p.inertia) * 8,
-        num_points=300, seed=1,
-    )  # fmt: skip
-    hold = suction_hold_scores(
-        lab.points, lab.approach, mass=heavy, com=p.center_of_mass,
+        mesh,
+        mass=heavy,
+        com=p.center_of_mass,
         inertia=np.asarray(p.inertia) * 8,
-    )  # fmt: skip
+        num_points=300,
+        seed=1,
+    )
+    hold = suction_hold_scores(
+        lab.points,
+        lab.approach,
+        mass=heavy,
+        com=p.center_of_mass,
+        inertia=np.asarray(p.inertia) * 8,
+    )
     assert lab.simulation is not None
     np.testing.assert_array_equal(lab.simulation, lab.score * hold.score)
     assert ((lab.simulation >= 0) & (lab.simulation <= 1)).all()
@@ -266,9 +276,16 @@ def test_object_labels_carry_the_physics_score_into_the_file_and_the_scene(tmp_p
     X[2, 3] = 0.2
     floor = mgn.make_box([0.8, 0.8, 0.01])
     model = SceneGraspModel.from_meshes(
-        [mesh], X[None], [heavy], [p.center_of_mass], [None], [lab], floor, np.eye(4),
+        [mesh],
+        X[None],
+        [heavy],
+        [p.center_of_mass],
+        [None],
+        [lab],
+        floor,
+        np.eye(4),
         num_threads=1,
-    )  # fmt: skip
+    )
     np.testing.assert_array_equal(model.suction.score_simulation, lab.simulation)
     np.testing.assert_array_equal(model.suction.score_analytical, lab.score)
 

@@ -24,8 +24,14 @@ K = Intrinsics(160, 120, 150.0, 150.0, 80.0, 60.0)
 def scene() -> Scene:
     """Library objects in the tote, close enough that they hide one another's points."""
     names = ["mug", "box_cereal", "pear", "can_soda", "bottle_clear", "tennis_ball"]
-    spots = [(-0.06, -0.04, 0.3), (0.05, 0.03, 1.0), (-0.08, 0.07, 0.0), (0.08, -0.07, 2.0),
-             (0.0, 0.0, 0.7), (-0.02, 0.09, 0.4)]  # fmt: skip
+    spots = [
+        (-0.06, -0.04, 0.3),
+        (0.05, 0.03, 1.0),
+        (-0.08, 0.07, 0.0),
+        (0.08, -0.07, 2.0),
+        (0.0, 0.0, 0.7),
+        (-0.02, 0.09, 0.4),
+    ]
     inst = []
     for k, (name, (x, y, yaw)) in enumerate(zip(names, spots, strict=True)):
         spec = get_object(name)
@@ -102,10 +108,12 @@ def test_visibility_equals_one_first_hit_ray_per_point(scene, view_index, tolera
     model = SceneRayModel.from_scene(scene)
     r = Renderer(K.width, K.height)
     r.set_instances(
-        [Instance(r.add_mesh(scene.mesh(i)), inst.X_WO, inst.instance_id)
-         for i, inst in enumerate(scene.instances)]
+        [
+            Instance(r.add_mesh(scene.mesh(i)), inst.X_WO, inst.instance_id)
+            for i, inst in enumerate(scene.instances)
+        ]
         + [Instance(r.add_mesh(tote_mesh(scene.tote)), np.eye(4), 0)]
-    )  # fmt: skip
+    )
     ids = r.render(view, rgb=False, depth=False).instance_ids
     L = view_object_labels(model, view, ids, keypoint_tolerance=tolerance, num_threads=1)
     kp_seen, com_seen = brute_force(scene, view, tolerance)

@@ -144,8 +144,13 @@ def library_scene() -> Scene:
     """Library objects standing in the tote, one of them hidden in part by a tote wall."""
     tote = ToteSpec()
     names = ["mug", "box_cereal", "pear", "can_soda", "bottle_clear"]
-    spots = [(-0.08, -0.05, 0.3), (0.06, 0.04, 1.0), (-0.1, 0.08, 0.0), (0.1, -0.08, 2.0),
-             (0.0, 0.02, 0.7)]  # fmt: skip
+    spots = [
+        (-0.08, -0.05, 0.3),
+        (0.06, 0.04, 1.0),
+        (-0.1, 0.08, 0.0),
+        (0.1, -0.08, 2.0),
+        (0.0, 0.02, 0.7),
+    ]
     inst = []
     for k, (name, (x, y, yaw)) in enumerate(zip(names, spots, strict=True)):
         spec = get_object(name)
@@ -304,10 +309,12 @@ def test_tote_wall_counts_as_an_occluder(library_scene, library_model) -> None:
     view = CameraView(K200, look_at([0.0, -0.9, 0.12], [0.0, 0.0, 0.05]))
     r = Renderer(200, 200)
     r.set_instances(
-        [Instance(r.add_mesh(library_scene.mesh(i)), inst.X_WO, inst.instance_id)
-         for i, inst in enumerate(library_scene.instances)]
+        [
+            Instance(r.add_mesh(library_scene.mesh(i)), inst.X_WO, inst.instance_id)
+            for i, inst in enumerate(library_scene.instances)
+        ]
         + [Instance(r.add_mesh(tote_mesh(library_scene.tote)), np.eye(4), 0)]
-    )  # fmt: skip
+    )
     ids = r.render(view, rgb=False, depth=False).instance_ids
     L = view_object_labels(library_model, view, ids)
     seen = L.visible_pixels > 0
@@ -321,9 +328,11 @@ def test_one_and_two_threads_are_identical(library_scene, library_model) -> None
     view = CameraView(K200, look_at([-0.3, 0.25, 0.6], [0.0, 0.0, 0.0]))
     ids = render_ids(
         view,
-        [(library_scene.mesh(i), inst.X_WO, inst.instance_id)
-         for i, inst in enumerate(library_scene.instances)],
-    )  # fmt: skip
+        [
+            (library_scene.mesh(i), inst.X_WO, inst.instance_id)
+            for i, inst in enumerate(library_scene.instances)
+        ],
+    )
     a = view_object_labels(library_model, view, ids, num_threads=1)
     b = view_object_labels(library_model, view, ids, num_threads=2)
     for name in ViewObjectLabels.__dataclass_fields__:
@@ -336,8 +345,10 @@ def test_amodal_masks_are_exact_for_objects_cut_by_the_image_border(
     # Close to the objects: several run off the image; amodal = every pixel whose centre ray
     # hits the object alone (brute force over the whole image), plus its visible pixels.
     view = CameraView(K200, look_at([0.05, -0.12, 0.22], [0.0, 0.0, 0.03]))
-    items = [(library_scene.mesh(i), inst.X_WO, inst.instance_id)
-             for i, inst in enumerate(library_scene.instances)]  # fmt: skip
+    items = [
+        (library_scene.mesh(i), inst.X_WO, inst.instance_id)
+        for i, inst in enumerate(library_scene.instances)
+    ]
     ids = render_ids(view, items)
     L = view_object_labels(library_model, view, ids)
     origins, directions = view.rays()
