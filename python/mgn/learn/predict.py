@@ -20,9 +20,9 @@ are averaged before the instances are formed. It costs one forward pass per copy
 ``<stem>_instances.png`` (16-bit, 0 background, instance ``i`` has id ``i + 1``),
 ``<stem>_suction.png`` (8-bit, suction quality x 255), ``<stem>_overlay.png`` (the picture
 of :func:`mgn.learn.pictures.overlay`), plus one ``predictions.json`` for all images (the
-model file, its config and the test-time augmentation ``tta``; per image: size, instances with score, box [x, y, w, h] px, area px and COCO RLE of the visible mask,
-and of the amodal mask for amodal models; the suction peaks [u, v, quality], u, v pixel
-centres).
+model file, its config and the test-time augmentation ``tta``; per image: size, instances
+with score, box [x, y, w, h] px, area px and COCO RLE of the visible mask, and of the amodal
+mask for amodal models; the suction peaks [u, v, quality], u, v pixel centres).
 
 Depth files (:func:`mgn.io.real.read_depth`): ``.npy`` (float, metres), ``.npz`` with a
 ``depth`` array in centimetres (MetaGraspNet's ``{v}.npz``), or a 16-bit PNG in millimetres; 0

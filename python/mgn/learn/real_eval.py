@@ -191,7 +191,8 @@ def _report_html(res: RealResults, pictures: list[str]) -> str:
         "<style>body{font-family:sans-serif;margin:2em}td,th{padding:4px 10px;"
         "border:1px solid #ccc}</style>"
         f"<h1>mgn eval real</h1><p>{html.escape(res.source)} ({res.format}), model "
-        f"{html.escape(res.model)}, test-time augmentation {html.escape(res.tta)}</p><table><tr>{head}</tr><tr>{cells}</tr></table>"
+        f"{html.escape(res.model)}, test-time augmentation {html.escape(res.tta)}</p>"
+        f"<table><tr>{head}</tr><tr>{cells}</tr></table>"
         "<p>Pictures: labels (white outline: labelled suction pixels) | predicted instances "
         "and the 10 best suction points | predicted suction quality (black 0, yellow 1).</p>"
         + "".join(rows)

@@ -156,7 +156,12 @@ def _coco(folder: Path) -> Path:
     doc = {
         "images": [{"id": 1, "file_name": "a.png", "width": W, "height": H}],
         "annotations": [
-            {"id": 1, "image_id": 1, "category_id": 1, "segmentation": [[8, 5, 30, 5, 30, 20, 8, 20]]}
+            {
+                "id": 1,
+                "image_id": 1,
+                "category_id": 1,
+                "segmentation": [[8, 5, 30, 5, 30, 20, 8, 20]],
+            }
         ],
         "categories": [{"id": 1, "name": "object"}],
     }
