@@ -17,6 +17,7 @@ from typing import TypedDict
 
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import normalize_grasp_kind
+from mgn.learn.predict import DEFAULT_TTA, TTA_MODES
 from mgn.render.settings import ENGINES, RenderSettings, with_engine
 
 __all__ = [
@@ -115,8 +116,6 @@ def instance_threshold_kwargs(args: argparse.Namespace) -> InstanceThresholdKwar
 def add_tta_argument(p: argparse.ArgumentParser) -> None:
     """``--tta`` (test-time augmentation, :data:`mgn.learn.predict.TTA_MODES`, default
     :data:`mgn.learn.predict.DEFAULT_TTA`)."""
-    from mgn.learn.predict import DEFAULT_TTA, TTA_MODES
-
     p.add_argument(
         "--tta",
         choices=tuple(TTA_MODES),
