@@ -6,7 +6,8 @@
   PyTorch command),
   :func:`add_quiet_argument`, :func:`add_instance_threshold_arguments` (``--threshold``,
   ``--core-threshold`` of a model's instance masks), with :func:`device_kwargs` and
-  :func:`instance_threshold_kwargs` turning the parsed values into keyword arguments.
+  :func:`instance_threshold_kwargs` turning the parsed values into keyword arguments;
+  :func:`add_tta_argument` (``--tta``, the test-time augmentation of a model's predictions).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import TypedDict
 
 from mgn.errors import InvalidArgumentError
 from mgn.hardware import normalize_grasp_kind
+from mgn.learn.predict import DEFAULT_TTA, TTA_MODES
 from mgn.render.settings import ENGINES, RenderSettings, with_engine
 
 __all__ = [
@@ -25,6 +27,7 @@ __all__ = [
     "add_engine_arguments",
     "add_instance_threshold_arguments",
     "add_quiet_argument",
+    "add_tta_argument",
     "device_kwargs",
     "engine_settings",
     "grasp_kind_arg",
@@ -108,6 +111,19 @@ def add_instance_threshold_arguments(p: argparse.ArgumentParser) -> None:
 def instance_threshold_kwargs(args: argparse.Namespace) -> InstanceThresholdKwargs:
     """The parsed :func:`add_instance_threshold_arguments` values."""
     return {"threshold": args.threshold, "core_threshold": args.core_threshold}
+
+
+def add_tta_argument(p: argparse.ArgumentParser) -> None:
+    """``--tta`` (test-time augmentation, :data:`mgn.learn.predict.TTA_MODES`, default
+    :data:`mgn.learn.predict.DEFAULT_TTA`)."""
+    p.add_argument(
+        "--tta",
+        choices=tuple(TTA_MODES),
+        default=DEFAULT_TTA,
+        help="test-time augmentation: average the maps of the image and its mirrored / turned "
+        "copies; costs one forward pass per copy: none 1, flips 3 (left-right and upside-down "
+        f"mirrors), flips+rot180 4, dihedral 8 (default {DEFAULT_TTA})",
+    )
 
 
 def add_engine_arguments(parser: argparse.ArgumentParser, what: str = "the RGB images") -> None:

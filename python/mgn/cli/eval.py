@@ -15,6 +15,7 @@ from mgn.cli.args import (
     add_device_arguments,
     add_instance_threshold_arguments,
     add_quiet_argument,
+    add_tta_argument,
     device_kwargs,
     grasp_kind_arg,
     instance_threshold_kwargs,
@@ -178,6 +179,7 @@ def _cmd_real(args: argparse.Namespace) -> int:
         fmt=args.format,
         amodal=args.amodal,
         ks=args.k,
+        tta=args.tta,
         **instance_threshold_kwargs(args),
         **device_kwargs(args),
     )
@@ -214,6 +216,7 @@ def _register_real(eval_sub: argparse._SubParsersAction[argparse.ArgumentParser]
         help="k of suction precision@k (default 1 5 10)",
     )
     add_instance_threshold_arguments(p)
+    add_tta_argument(p)
     add_device_arguments(p)
     add_quiet_argument(p)
     p.set_defaults(func=_cmd_real)

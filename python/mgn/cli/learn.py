@@ -12,6 +12,7 @@ from mgn.cli.args import (
     add_device_arguments,
     add_instance_threshold_arguments,
     add_quiet_argument,
+    add_tta_argument,
     device_kwargs,
     instance_threshold_kwargs,
     int_list,
@@ -162,6 +163,7 @@ def _cmd_predict(args: argparse.Namespace) -> int:
         args.out,
         depths=args.depth,
         num_suction_points=args.suction_points,
+        tta=args.tta,
         **instance_threshold_kwargs(args),
         **device_kwargs(args),
     )
@@ -220,6 +222,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     add_instance_threshold_arguments(p)
     p.add_argument("--suction-points", type=int, default=10, help="suction points per image")
+    add_tta_argument(p)
     add_device_arguments(p)
     add_quiet_argument(p)
     p.set_defaults(func=_cmd_predict)

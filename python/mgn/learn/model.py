@@ -7,8 +7,8 @@ output of :attr:`ModelConfig.outputs` at the input resolution.
 - ``small``: a stride-2 3 x 3 convolution, then four levels of two 3 x 3 convolutions with
   GroupNorm and ReLU each (``width``, 2, 4 and 8 x ``width`` channels) at 1/2 to 1/16 of the
   input resolution, 2 x 2 max-pooling between them; the logits are upsampled bilinearly to the
-  input size. About 0.49 M parameters at width 16; trains from scratch in minutes on two CPU
-  cores.
+  input size. About 0.49 M parameters at width 16 (1.94 M at width 32); trains from scratch in
+  minutes on two CPU cores (width 32: two to three times the CPU time of width 16).
 - ``resnet18``: ResNet-18's stem and four stages (BatchNorm; parameter names as in the
   common ResNet-18 state dict: ``conv1``, ``bn1``, ``layer1.0.conv1``, ...), so
   :func:`load_backbone_weights` can initialise it from a local file of ImageNet weights;

@@ -7,13 +7,22 @@ resolution (:func:`mgn.learn.targets.network_input`), the output maps are turned
 instances there (:func:`mgn.learn.instances.instances_from_maps`) and brought back to the
 image's size (instance ids nearest-neighbour, probabilities bilinear).
 
+Test-time augmentation (``tta``, :data:`TTA_MODES`): the network also sees mirrored and turned
+copies of the image, each output is turned back, and the probability maps (after the sigmoid)
+are averaged before the instances are formed. It costs one forward pass per copy:
+
+- ``none`` (the default): the image as it is, 1 pass;
+- ``flips``: the image, its left-right mirror and its upside-down mirror, 3 passes;
+- ``flips+rot180``: those and the 180-degree rotation, 4 passes;
+- ``dihedral``: the four 90-degree rotations, each also mirrored left-right, 8 passes.
+
 :func:`predict_files` does this for image files and writes, per image ``<stem>``:
 ``<stem>_instances.png`` (16-bit, 0 background, instance ``i`` has id ``i + 1``),
 ``<stem>_suction.png`` (8-bit, suction quality x 255), ``<stem>_overlay.png`` (the picture
-of :func:`mgn.learn.pictures.overlay`), plus one ``predictions.json`` for all images (per
-image: size, instances with score, box [x, y, w, h] px, area px and COCO RLE of the visible mask,
-and of the amodal mask for amodal models; the suction peaks [u, v, quality], u, v pixel
-centres).
+of :func:`mgn.learn.pictures.overlay`), plus one ``predictions.json`` for all images (the
+model file, its config and the test-time augmentation ``tta``; per image: size, instances
+with score, box [x, y, w, h] px, area px and COCO RLE of the visible mask, and of the amodal
+mask for amodal models; the suction peaks [u, v, quality], u, v pixel centres).
 
 Depth files (:func:`mgn.io.real.read_depth`): ``.npy`` (float, metres), ``.npz`` with a
 ``depth`` array in centimetres (MetaGraspNet's ``{v}.npz``), or a 16-bit PNG in millimetres; 0
@@ -22,6 +31,7 @@ or NaN is no value.
 
 from __future__ import annotations
 
+import copy
 import io
 import json
 import os
@@ -56,14 +66,51 @@ from mgn.learn.targets import (
 from mgn.scene.cameras import Intrinsics
 
 __all__ = [
+    "DEFAULT_TTA",
     "IMAGE_SUFFIXES",
+    "TTA_MODES",
     "Prediction",
     "Predictor",
+    "as_predictor",
+    "check_tta",
     "predict_files",
     "read_depth",
     "read_image",
     "suction_peaks",
 ]
+
+
+#: Test-time augmentations (module docstring): for each mode, its copies of the image as
+#: (quarter turns counter-clockwise, then a left-right mirror); ``len`` is the forward passes.
+TTA_MODES: dict[str, tuple[tuple[int, bool], ...]] = {
+    "none": ((0, False),),
+    "flips": ((0, False), (0, True), (2, True)),
+    "flips+rot180": ((0, False), (0, True), (2, True), (2, False)),
+    "dihedral": tuple((k, m) for k in range(4) for m in (False, True)),
+}
+#: The test-time augmentation of :class:`Predictor`, ``mgn predict`` and ``mgn eval real``.
+DEFAULT_TTA = "none"
+
+
+def check_tta(tta: str) -> str:
+    """``tta`` if it is one of :data:`TTA_MODES`; else InvalidArgumentError naming ``tta``."""
+    if not isinstance(tta, str) or tta not in TTA_MODES:
+        raise InvalidArgumentError(
+            f"tta (test-time augmentation) must be one of {tuple(TTA_MODES)}, got {tta!r}"
+        )
+    return tta
+
+
+def _turned(a: np.ndarray, k: int, mirror: bool) -> np.ndarray:
+    """(C, H, W) ``a`` turned ``k`` quarter turns counter-clockwise, then mirrored left-right."""
+    b = np.rot90(a, k, axes=(1, 2))
+    return np.ascontiguousarray(b[:, :, ::-1] if mirror else b)
+
+
+def _unturned(a: np.ndarray, k: int, mirror: bool) -> np.ndarray:
+    """The inverse of :func:`_turned`."""
+    b = a[:, :, ::-1] if mirror else a
+    return np.rot90(b, -k, axes=(1, 2))
 
 
 def suction_peaks(
@@ -121,11 +168,19 @@ class Prediction:
 
 class Predictor:
     """A loaded model (``model.pt``) ready to predict; ``device`` as in
-    :func:`mgn.learn.backend.choose_device`, ``num_threads`` torch CPU threads (0 = default)."""
+    :func:`mgn.learn.backend.choose_device`, ``num_threads`` torch CPU threads (0 = default),
+    ``tta`` the test-time augmentation (:data:`TTA_MODES`, default :data:`DEFAULT_TTA`; each
+    image costs ``len(TTA_MODES[tta])`` forward passes)."""
 
     def __init__(
-        self, model_path: str | os.PathLike[str], *, device: str = "auto", num_threads: int = 0
+        self,
+        model_path: str | os.PathLike[str],
+        *,
+        device: str = "auto",
+        num_threads: int = 0,
+        tta: str = DEFAULT_TTA,
     ) -> None:
+        self.tta = check_tta(tta)
         torch = require_torch()
         if num_threads:
             torch.set_num_threads(num_threads)
@@ -138,6 +193,12 @@ class Predictor:
         self.model.load_state_dict(data["state_dict"])
         self.model.to(self.device).eval()
 
+    def with_tta(self, tta: str) -> Predictor:
+        """This predictor (the same loaded network) with test-time augmentation ``tta``."""
+        other = copy.copy(self)
+        other.tta = check_tta(tta)
+        return other
+
     def maps(
         self,
         rgb: np.ndarray | None,
@@ -146,10 +207,10 @@ class Predictor:
         name: str = "image",
         intrinsics: Intrinsics | None = None,
     ) -> tuple[npt.NDArray[np.float32], tuple[int, int]]:
-        """(T, H', W') output probabilities at the network's resolution, and the image size.
-        ``intrinsics`` of the depth image serve the height models' floor fit (a nominal pinhole
-        when None)."""
-        torch = require_torch()
+        """(T, H', W') output probabilities at the network's resolution, and the image size;
+        with test-time augmentation (:attr:`tta`) the mean of the probabilities of the image's
+        copies, each turned back. ``intrinsics`` of the depth image serve the height models'
+        floor fit (a nominal pinhole when None)."""
         ref = rgb if rgb is not None else depth
         if ref is None:
             raise InvalidArgumentError(f"{name}: no image given")
@@ -168,10 +229,21 @@ class Predictor:
             self.config.modality,
             self.config.rgb_norm,
         )
+        if self.tta == "none":
+            return self._probs(x), (h, w)
+        total = np.zeros((len(self.config.outputs), *x.shape[1:]), np.float64)
+        copies = TTA_MODES[self.tta]
+        for k, mirror in copies:
+            total += _unturned(self._probs(_turned(x, k, mirror)), k, mirror)
+        return (total / len(copies)).astype(np.float32), (h, w)
+
+    def _probs(self, x: np.ndarray) -> npt.NDArray[np.float32]:
+        """(T, H', W') sigmoid of the network's logits for one (C, H', W') input."""
+        torch = require_torch()
         with torch.no_grad():
             logits = self.model(torch.from_numpy(x[None]).to(self.device))
-            probs = torch.sigmoid(logits)[0].cpu().numpy().astype(np.float32)
-        return probs, (h, w)
+            probs: npt.NDArray[np.float32] = torch.sigmoid(logits)[0].cpu().numpy()
+        return probs.astype(np.float32)
 
     def predict(
         self,
@@ -219,6 +291,22 @@ class Predictor:
             )
         inst = InstanceMaps(labels.astype(np.int32), small.scores, amodal)
         return Prediction(inst, _resize_float(probs[0], (h, w)), _resize_float(probs[2], (h, w)))
+
+
+def as_predictor(
+    model: Predictor | str | os.PathLike[str],
+    *,
+    device: str = "auto",
+    num_threads: int = 0,
+    tta: str | None = None,
+) -> Predictor:
+    """``model`` if it is a :class:`Predictor` (with test-time augmentation ``tta`` unless
+    None), else the model file loaded (``tta`` None: :data:`DEFAULT_TTA`)."""
+    if isinstance(model, Predictor):
+        return model if tta is None else model.with_tta(tta)
+    return Predictor(
+        model, device=device, num_threads=num_threads, tta=DEFAULT_TTA if tta is None else tta
+    )
 
 
 def _rle(mask: np.ndarray) -> dict[str, Any]:
@@ -290,20 +378,19 @@ def predict_files(
     core_threshold: float = 0.4,
     num_suction_points: int = 10,
     progress: bool = True,
+    tta: str | None = None,
 ) -> Path:
     """Predict every image file (module docstring); ``depths`` gives one depth file per image
-    (needed by the depth, RGB-D and height models). Returns the path of ``predictions.json``."""
+    (needed by the depth, RGB-D and height models); ``tta`` the test-time augmentation
+    (:data:`TTA_MODES`; None: the ``Predictor``'s own, or :data:`DEFAULT_TTA` for a model file).
+    Returns the path of ``predictions.json``."""
     if not images:
         raise InvalidArgumentError("mgn predict: no images given")
     if depths is not None and len(depths) != len(images):
         raise InvalidArgumentError(
             f"mgn predict: {len(depths)} depth file(s) for {len(images)} image(s); give one each"
         )
-    pred_model = (
-        model
-        if isinstance(model, Predictor)
-        else Predictor(model, device=device, num_threads=num_threads)
-    )
+    pred_model = as_predictor(model, device=device, num_threads=num_threads, tta=tta)
     if uses_depth(pred_model.config.modality) and depths is None:
         raise InvalidArgumentError(
             f"mgn predict: the model's input is {pred_model.config.modality}"
@@ -335,6 +422,7 @@ def predict_files(
     doc = {
         "model": os.fspath(pred_model.path),
         "model_config": pred_model.config.to_dict(),
+        "tta": pred_model.tta,
         "images": records,
     }
     path = out_dir / "predictions.json"

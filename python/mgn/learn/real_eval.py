@@ -37,7 +37,7 @@ from mgn.errors import InvalidArgumentError
 from mgn.io.real import RealImage, detect_real_format, read_real_set
 from mgn.learn.metrics import foreground_iou, mask_ap, suction_precision
 from mgn.learn.pictures import mask_panel, overlay
-from mgn.learn.predict import Prediction, Predictor
+from mgn.learn.predict import Prediction, Predictor, as_predictor
 from mgn.learn.targets import uses_depth
 
 __all__ = ["DEFAULT_KS", "RealResults", "brightness_foreground", "evaluate_real"]
@@ -87,6 +87,8 @@ class RealResults:
         suction: {k: mean precision@k} over the images with a suction bitmap (empty if none).
         suction_images: how many images have one.
         per_image: one dict per image (name, objects, predicted, foreground_iou, p@k).
+        tta: the test-time augmentation of the predictions
+            (:data:`mgn.learn.predict.TTA_MODES`).
     """
 
     model: str
@@ -102,6 +104,7 @@ class RealResults:
     suction: dict[int, float | None] = field(default_factory=dict)
     suction_images: int = 0
     per_image: list[dict[str, Any]] = field(default_factory=list)
+    tta: str = "none"
 
     def summary(self) -> dict[str, Any]:
         """The one-row summary: images, objects, mask AP, AP50, foreground IoU, P@k."""
@@ -127,7 +130,8 @@ class RealResults:
         head = "  ".join(k.rjust(w) for k, w in zip(row, widths, strict=True))
         body = "  ".join(c.rjust(w) for c, w in zip(cells, widths, strict=True))
         kind = "amodal" if self.amodal else "visible"
-        title = f"{self.source} ({self.format}, {kind} masks), model {self.model}"
+        aug = "" if self.tta == "none" else f", test-time augmentation {self.tta}"
+        title = f"{self.source} ({self.format}, {kind} masks), model {self.model}{aug}"
         note = "" if self.suction_images else "\n(no suction bitmaps: no suction precision)"
         return f"{title}\n{head}\n{body}{note}"
 
@@ -137,6 +141,7 @@ class RealResults:
             "source": self.source,
             "format": self.format,
             "amodal": self.amodal,
+            "tta": self.tta,
             "summary": self.summary(),
             "suction_images": self.suction_images,
             "per_image": self.per_image,
@@ -186,7 +191,8 @@ def _report_html(res: RealResults, pictures: list[str]) -> str:
         "<style>body{font-family:sans-serif;margin:2em}td,th{padding:4px 10px;"
         "border:1px solid #ccc}</style>"
         f"<h1>mgn eval real</h1><p>{html.escape(res.source)} ({res.format}), model "
-        f"{html.escape(res.model)}</p><table><tr>{head}</tr><tr>{cells}</tr></table>"
+        f"{html.escape(res.model)}, test-time augmentation {html.escape(res.tta)}</p>"
+        f"<table><tr>{head}</tr><tr>{cells}</tr></table>"
         "<p>Pictures: labels (white outline: labelled suction pixels) | predicted instances "
         "and the 10 best suction points | predicted suction quality (black 0, yellow 1).</p>"
         + "".join(rows)
@@ -206,13 +212,12 @@ def evaluate_real(
     device: str = "auto",
     num_threads: int = 0,
     progress: bool = True,
+    tta: str | None = None,
 ) -> RealResults:
-    """Score ``model`` on the labelled photographs at ``real`` (module docstring)."""
-    pred_model = (
-        model
-        if isinstance(model, Predictor)
-        else Predictor(model, device=device, num_threads=num_threads)
-    )
+    """Score ``model`` on the labelled photographs at ``real`` (module docstring); ``tta`` the
+    test-time augmentation (:data:`mgn.learn.predict.TTA_MODES`; None: the ``Predictor``'s own,
+    or :data:`mgn.learn.predict.DEFAULT_TTA` for a model file)."""
+    pred_model = as_predictor(model, device=device, num_threads=num_threads, tta=tta)
     if amodal and not pred_model.config.amodal:
         raise InvalidArgumentError(
             f"--amodal: '{pred_model.path}' predicts visible masks only (train it with --amodal)"
@@ -278,6 +283,7 @@ def evaluate_real(
         suction={k: _mean(v) for k, v in suction.items()} if n_suction else {},
         suction_images=n_suction,
         per_image=per_image,
+        tta=pred_model.tta,
     )
     if out_dir is not None:
         atomic_write_text(out_dir / "results.json", json.dumps(res.to_dict(), indent=1) + "\n")
