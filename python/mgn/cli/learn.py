@@ -85,7 +85,13 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
 def add_train_arguments(p: argparse.ArgumentParser) -> None:
     """The :class:`TrainConfig` options and the device."""
     d = TrainConfig()
-    p.add_argument("--epochs", type=int, default=d.epochs)
+    p.add_argument(
+        "--epochs",
+        type=int,
+        default=d.epochs,
+        help="passes over the training views (default: 40, more for datasets under 120 views "
+        "so that a run makes 4,800 view passes, at most 80)",
+    )
     p.add_argument("--batch-size", type=int, default=d.batch_size, help="views per step")
     p.add_argument("--lr", type=float, default=d.lr, help="Adam learning rate (cosine decay)")
     p.add_argument("--seed", type=int, default=d.seed, help="weights, view order and augmentation")

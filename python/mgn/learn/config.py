@@ -10,7 +10,16 @@ from mgn.errors import InvalidArgumentError
 from mgn.learn.augment import AUGMENTS
 from mgn.learn.targets import MODALITIES, RGB_NORMS
 
-__all__ = ["BACKBONES", "FOREGROUND_LOSSES", "SUCTION_SCORES", "ModelConfig", "TrainConfig"]
+__all__ = [
+    "AUTO_EPOCHS",
+    "AUTO_VIEW_PASSES",
+    "BACKBONES",
+    "FOREGROUND_LOSSES",
+    "SUCTION_SCORES",
+    "ModelConfig",
+    "TrainConfig",
+    "auto_epochs",
+]
 
 #: Encoders: ``small`` (a 4-level U-Net of ``width``, 2 x width, 4 x width, 8 x width channels,
 #: trained from scratch) or ``resnet18`` (ResNet-18's layout and parameter names, so that a
@@ -119,12 +128,32 @@ class ModelConfig:
         return _from_dict(cls, {"rgb_norm": "none"} | dict(d), "model config")
 
 
+#: ``TrainConfig(epochs=None)`` (the default) trains :data:`AUTO_EPOCHS` [0] epochs, raised for
+#: small datasets so that a run makes at least :data:`AUTO_VIEW_PASSES` view passes (epochs x
+#: training views), at most :data:`AUTO_EPOCHS` [1] epochs: 40 epochs from 120 views up, 80 for
+#: 60 views or fewer. A run never makes more view passes than the 40 epochs of a 192-view
+#: dataset (12 scenes x 16 views). Why:
+#: docs/decisions/0062-network-width-epochs-and-test-time-augmentation.md.
+AUTO_EPOCHS = (40, 80)
+AUTO_VIEW_PASSES = 4800
+
+
+def auto_epochs(num_views: int) -> int:
+    """Epochs of a run with ``TrainConfig(epochs=None)`` on ``num_views`` training views (>= 1):
+    ``clip(ceil(AUTO_VIEW_PASSES / num_views), *AUTO_EPOCHS)``."""
+    if num_views < 1:
+        raise InvalidArgumentError(f"num_views must be >= 1, got {num_views}")
+    lo, hi = AUTO_EPOCHS
+    return min(hi, max(lo, -(-AUTO_VIEW_PASSES // num_views)))
+
+
 @dataclass(frozen=True)
 class TrainConfig:
     """How a model is trained.
 
     Attributes:
-        epochs: passes over the training views (default 40, >= 1).
+        epochs: passes over the training views (>= 1); None (default): :func:`auto_epochs` of
+            the number of training views (40, up to 80 for datasets under 120 views).
         batch_size: views per step (default 4, >= 1).
         lr: Adam learning rate (default 2e-3), cosine-decayed to 5 % over the run.
         seed: weights, view order and augmentation (default 0).
@@ -134,7 +163,7 @@ class TrainConfig:
         foreground_loss: :data:`FOREGROUND_LOSSES` (default ``bce+dice``).
     """
 
-    epochs: int = 40
+    epochs: int | None = None
     batch_size: int = 4
     lr: float = 2e-3
     seed: int = 0
@@ -142,7 +171,7 @@ class TrainConfig:
     foreground_loss: str = "bce+dice"
 
     def __post_init__(self) -> None:
-        if int(self.epochs) < 1:
+        if self.epochs is not None and int(self.epochs) < 1:
             raise InvalidArgumentError(f"epochs must be >= 1, got {self.epochs}")
         if int(self.batch_size) < 1:
             raise InvalidArgumentError(f"batch_size must be >= 1, got {self.batch_size}")

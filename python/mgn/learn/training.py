@@ -28,7 +28,7 @@ import math
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +42,7 @@ from mgn.io.dataset import Dataset
 from mgn.learn.augment import augment_view
 from mgn.learn.backend import choose_device, require_torch, seed_everything
 from mgn.learn.checkpoint import CHECKPOINT_FORMAT, MODEL_FORMAT, read_torch_file, write_torch_file
-from mgn.learn.config import ModelConfig, TrainConfig
+from mgn.learn.config import ModelConfig, TrainConfig, auto_epochs
 from mgn.learn.data import TrainingArrays, load_views, training_views
 from mgn.learn.model import build_model, count_parameters, load_backbone_weights
 from mgn.learn.targets import model_input
@@ -256,6 +256,8 @@ def train(
     out_dir = Path(out)
     selected = training_views(dataset, scenes=scenes, views=views)
     names = [f"{v.folder.name}/{v.index}" for v in selected]
+    epochs = auto_epochs(len(names)) if tc.epochs is None else int(tc.epochs)
+    tc = replace(tc, epochs=epochs)  # the files record the epochs run
     ckpt = _start(out_dir, resume, mc, tc, names)
     dev = choose_device(device)
     seed_everything(tc.seed, num_threads, dev)
@@ -274,7 +276,7 @@ def train(
         first_epoch = int(ckpt["epoch"])
     out_dir.mkdir(parents=True, exist_ok=True)
     steps_per_epoch = math.ceil(len(arrays) / tc.batch_size)
-    total = tc.epochs * steps_per_epoch
+    total = epochs * steps_per_epoch
     meta: dict[str, Any] = {
         "dataset": os.fspath(Path(dataset.root if isinstance(dataset, Dataset) else dataset)),
         "views": names,
@@ -292,7 +294,7 @@ def train(
         dynamic_ncols=True,
     )
     model.train()
-    for epoch in range(first_epoch, tc.epochs):
+    for epoch in range(first_epoch, epochs):
         te = time.perf_counter()
         sums: dict[str, float] = {}
         for k, idx in enumerate(_batches(len(arrays), tc, epoch)):

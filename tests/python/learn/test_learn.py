@@ -536,3 +536,37 @@ def test_without_torch_the_error_names_the_extra(
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "ok", run.stderr
+
+
+def test_auto_epochs_give_small_datasets_more_passes() -> None:
+    """epochs=None: ceil(AUTO_VIEW_PASSES / views) clipped to AUTO_EPOCHS (4,800 passes, 40-80)."""
+    from mgn.learn.config import AUTO_EPOCHS, AUTO_VIEW_PASSES, auto_epochs
+
+    assert (AUTO_EPOCHS, AUTO_VIEW_PASSES) == ((40, 80), 4800)
+    cases = {1: 80, 60: 80, 61: 79, 96: 50, 119: 41, 120: 40, 192: 40, 10_000: 40}
+    for views, epochs in cases.items():
+        assert auto_epochs(views) == epochs, views
+        brute = min(80, max(40, next(e for e in range(1, 10_000) if e * views >= 4800)))
+        assert auto_epochs(views) == brute, views
+    # Never more view passes than the 40 epochs of 12 scenes x 16 views.
+    assert max(v * auto_epochs(v) for v in range(1, 1000) if v <= 192) <= 40 * 192
+    with pytest.raises(InvalidArgumentError, match="num_views"):
+        auto_epochs(0)
+    assert TrainConfig().epochs is None
+    with pytest.raises(InvalidArgumentError, match="epochs"):
+        TrainConfig(epochs=0)
+
+
+def test_a_run_with_auto_epochs_records_the_epochs_it_ran(
+    small_dataset: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import mgn.learn.config as config_module
+
+    monkeypatch.setattr(config_module, "AUTO_EPOCHS", (2, 5))
+    monkeypatch.setattr(config_module, "AUTO_VIEW_PASSES", 9)  # 3 views -> 3 epochs
+    kw = {"model_config": TINY, "scenes": [0], "num_threads": 1, "progress": False}
+    res = train(small_dataset, tmp_path / "m", train_config=TrainConfig(batch_size=2), **kw)
+    assert res.num_views == 3
+    assert [h["epoch"] for h in res.history] == [1, 2, 3]
+    log = json.loads((tmp_path / "m" / "train_log.json").read_text())
+    assert log["train_config"]["epochs"] == 3
