@@ -78,8 +78,10 @@ class _PointGrid:
         self.size = np.maximum(hi - self.lo, 1e-12) / _GRID
         cell = self._cell(points)
         linear = (cell[:, 0] * _GRID + cell[:, 1]) * _GRID + cell[:, 2]
-        self.order = np.argsort(linear, kind="stable")
-        self.start = np.searchsorted(linear[self.order], np.arange(_GRID**3 + 1))
+        self.order: npt.NDArray[np.intp] = np.argsort(linear, kind="stable")
+        self.start: npt.NDArray[np.intp] = np.searchsorted(
+            linear[self.order], np.arange(_GRID**3 + 1)
+        )
 
     def _cell(self, p: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
         return np.clip(np.floor((p - self.lo) / self.size), 0, _GRID - 1).astype(np.int64)
@@ -94,10 +96,7 @@ class _PointGrid:
         c0, c1 = self._cell(lo[None])[0], self._cell(hi[None])[0]
         x, y = np.meshgrid(np.arange(c0[0], c1[0] + 1), np.arange(c0[1], c1[1] + 1), indexing="ij")
         first = ((x * _GRID + y) * _GRID + c0[2]).ravel()  # each (x, y) column's z run of cells
-        begin, end = self.start[first], self.start[first + (c1[2] - c0[2] + 1)]
-        count = end - begin
-        offset = np.repeat(begin - (np.cumsum(count) - count), count)
-        return np.asarray(self.order[np.arange(int(count.sum())) + offset])
+        return self._points_of_runs(first, c1[2] - c0[2] + 1)
 
     def candidates_rotated(
         self,
@@ -121,10 +120,16 @@ class _PointGrid:
         half = np.abs(R) @ (0.5 * self.size * (1.0 + 1e-6) + _BOX_SLACK)
         near = np.all((centre + half >= rlo) & (centre - half <= rhi), axis=1)
         first = (cells[near] @ np.array([_GRID * _GRID, _GRID, 1])).astype(np.intp)
-        begin, end = self.start[first], self.start[first + 1]
+        return self._points_of_runs(first, 1)
+
+    def _points_of_runs(self, first: npt.NDArray[np.intp], length: int) -> npt.NDArray[np.intp]:
+        """Indices of the points in the runs of ``length`` consecutive cells (linear index)
+        starting at each of ``first``, run after run."""
+        begin, end = self.start[first], self.start[first + length]
         count = end - begin
         offset = np.repeat(begin - (np.cumsum(count) - count), count)
-        return np.asarray(self.order[np.arange(int(count.sum())) + offset])
+        points: npt.NDArray[np.intp] = self.order[np.arange(int(count.sum())) + offset]
+        return points
 
 
 class MeshCache:
@@ -251,7 +256,8 @@ def point_triangle_distance(
             1.0,
         )
         best = np.minimum(best, np.linalg.norm(p - (s + u[..., None] * se), axis=-1))
-    return np.asarray(best.min(axis=1))
+    nearest: npt.NDArray[np.float64] = best.min(axis=1)
+    return nearest
 
 
 def edge_points(mesh: Mesh, spacing: float = EDGE_SPACING) -> npt.NDArray[np.float64]:
@@ -281,13 +287,14 @@ def _inside(scene: RayScene, points: np.ndarray) -> np.ndarray:
 
     def parity(p: np.ndarray, direction: np.ndarray) -> np.ndarray:
         d = np.broadcast_to(direction, p.shape)
-        return np.asarray(scene.intersect_all(p, d, num_threads=1).counts() % 2 == 1)
+        odd: np.ndarray = scene.intersect_all(p, d, num_threads=1).counts() % 2 == 1
+        return odd
 
     first, second = parity(points, _PARITY[0]), parity(points, _PARITY[1])
-    inside = first & second
+    inside: np.ndarray = first & second
     split = np.flatnonzero(first != second)  # the third ray decides
     inside[split] = parity(points[split], _PARITY[2])
-    return np.asarray(inside)
+    return inside
 
 
 @dataclass(frozen=True)
@@ -571,12 +578,12 @@ def _in_box(
 ) -> npt.NDArray[np.bool_]:
     """(N,) whether each row of ``p`` (N, 3) lies in the box ``lo`` <= p <= ``hi``: ``np.all((p
     >= lo) & (p <= hi), axis=1)``, one column at a time (faster)."""
-    inside = p[:, 0] >= lo[0]
+    inside: npt.NDArray[np.bool_] = p[:, 0] >= lo[0]
     inside &= p[:, 0] <= hi[0]
     for k in (1, 2):
         inside &= p[:, k] >= lo[k]
         inside &= p[:, k] <= hi[k]
-    return np.asarray(inside)
+    return inside
 
 
 # m: a box carried into another frame is widened by this before it selects points there, so that
@@ -621,9 +628,9 @@ class OverlapSweep:
     def moved(self, t: float) -> npt.NDArray[np.float64]:
         """``X_a`` moved by ``t`` (m) along the direction (as the caller of
         :func:`meshes_overlap` forms it)."""
-        moved = self.X_a.copy()
+        moved: npt.NDArray[np.float64] = self.X_a.copy()
         moved[:3, 3] += t * self.direction
-        return np.asarray(moved)
+        return moved
 
     def overlap(self, t: float, spacing: float = EDGE_SPACING) -> bool:
         """:func:`meshes_overlap` with ``mesh_a`` at :meth:`moved` (``t``)."""
