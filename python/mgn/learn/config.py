@@ -131,8 +131,8 @@ class ModelConfig:
 #: ``TrainConfig(epochs=None)`` (the default) trains :data:`AUTO_EPOCHS` [0] epochs, raised for
 #: small datasets so that a run makes at least :data:`AUTO_VIEW_PASSES` view passes (epochs x
 #: training views), at most :data:`AUTO_EPOCHS` [1] epochs: 40 epochs from 120 views up, 80 for
-#: 60 views or fewer. A run never makes more view passes than the 40 epochs of a 192-view
-#: dataset (12 scenes x 16 views). Why:
+#: 60 views or fewer. A dataset of up to 192 views (12 scenes x 16 views, the training-time
+#: budget's case) never gets more view passes than the 40 epochs of 192 views. Why:
 #: docs/decisions/0062-network-width-epochs-and-test-time-augmentation.md.
 AUTO_EPOCHS = (40, 80)
 AUTO_VIEW_PASSES = 4800
