@@ -188,7 +188,7 @@ def _cmd_transfer(args: argparse.Namespace) -> int:
         seeds=int_list(args.seeds),
         **device_kwargs(args),
     )
-    print(res.table())
+    print(res.markdown(), end="")
     print(f"wrote {args.out}/transfer.md, transfer.json, transfer.png")
     return 0
 
@@ -235,11 +235,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
     p = sub.add_parser(
         "transfer",
-        help="ablation: dataset variants x training seeds, scored on one real set "
-        "(needs mgn[learn])",
+        help="ablation: dataset variants x replicates (training and dataset seeds), scored on "
+        "one real set and on every variant's held-out synthetic views (needs mgn[learn])",
     )
     p.add_argument("spec", help="transfer spec YAML (variants, seeds, real set; docs/learning.md)")
-    p.add_argument("--out", required=True, help="output folder (datasets, models, table, plot)")
+    p.add_argument(
+        "--out", required=True, help="output folder (datasets, held-out sets, models, table, plot)"
+    )
     p.add_argument("--real", help="labelled real set (overrides the spec's 'real')")
     p.add_argument("--seeds", nargs="+", metavar="S", help="training seeds (overrides the spec)")
     add_device_arguments(p)

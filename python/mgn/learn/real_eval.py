@@ -3,12 +3,13 @@
 The photographs are read by :func:`mgn.io.real.read_real_set` (MetaGraspNet's real layout or a
 COCO folder), predicted one by one (:class:`mgn.learn.predict.Predictor`) and scored
 (:mod:`mgn.learn.metrics`): mask AP and AP50 over all images (visible masks, or amodal masks
-with ``amodal=True``), foreground IoU (mean over images), and suction precision@k (mean over
-the images that have a suction bitmap; the predicted points are the k best of the suction map
-on predicted objects, 2 % of the image diagonal apart). Beside the model, the trivial
-reference :func:`brightness_foreground` (every pixel brighter than Otsu's threshold of the
-image's luminance is an object) is scored by the same foreground IoU (``fg_IoU_brightness``):
-a model that does not beat it has learned nothing about objects that brightness does not say.
+with ``amodal=True``; each image's own AP and AP50 are kept per image), foreground IoU (mean
+over images), and suction precision@k (mean over the images that have a suction bitmap; the
+predicted points are the k best of the suction map on predicted objects, 2 % of the image
+diagonal apart). Beside the model, the trivial reference :func:`brightness_foreground` (every
+pixel brighter than Otsu's threshold of the image's luminance is an object) is scored by the
+same foreground IoU (``fg_IoU_brightness``): a model that does not beat it has learned nothing
+about objects that brightness does not say.
 
 Files in ``out`` (when given): ``results.json`` (:meth:`RealResults.to_dict`), ``overlays/``
 with one PNG per image (labels | predicted instances and suction points | suction map; the
@@ -86,7 +87,8 @@ class RealResults:
         brightness_iou: mean foreground IoU of :func:`brightness_foreground` over the images.
         suction: {k: mean precision@k} over the images with a suction bitmap (empty if none).
         suction_images: how many images have one.
-        per_image: one dict per image (name, objects, predicted, foreground_iou, p@k).
+        per_image: one dict per image (name, objects, predicted, foreground_iou, the image's
+            own mask_AP and mask_AP50 (None for an image without outlined objects), p@k).
         tta: the test-time augmentation of the predictions
             (:data:`mgn.learn.predict.TTA_MODES`).
     """
@@ -257,6 +259,9 @@ def evaluate_real(
             "foreground_iou": foreground_iou(img.foreground, pred.instances.labels > 0),
             "brightness_iou": foreground_iou(img.foreground, brightness_foreground(img.rgb)),
         }
+        entry["mask_AP"], entry["mask_AP50"] = mask_ap(
+            [gt], [preds[-1]], [scores[-1]], [crowds[-1]]
+        )
         if img.suction_bitmap is not None:
             pk = suction_precision(pred.suction_points(max(ks)), img.suction_bitmap, ks)
             for k, v in pk.items():

@@ -495,6 +495,33 @@ def test_eval_real_scores_perfect_predictions_as_perfect(
         evaluate_real(tiny_model, root, amodal=True, progress=False)
 
 
+def test_eval_real_per_image_ap_is_each_images_own(
+    tiny_model: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    """Both objects of scene46/3 predicted, one of the two of scene418/3: per image AP50 1 and
+    51/101 (COCO's 101 recall points: precision 1 up to recall 0.5, then nothing); over both
+    images 76/101 (3 of 4 objects, all found before any miss)."""
+    root = write_mgn_real(tmp_path / "dataset_real")
+    labels = {img.name: img for img in read_mgn_real(root)}
+
+    def partial(self, rgb, depth=None, *, name="image", **settings):
+        img = labels[name]
+        keep = img.masks if name == "scene46/3" else img.masks[:1]
+        ids = np.zeros(img.masks.shape[1:], np.int32)
+        for i, m in enumerate(keep):
+            ids[m] = i + 1
+        inst = InstanceMaps(ids, np.ones(len(keep), np.float32), None)
+        return Prediction(inst, (ids > 0).astype(np.float32), np.zeros(ids.shape, np.float32))
+
+    monkeypatch.setattr(Predictor, "predict", partial)
+    res = evaluate_real(tiny_model, root, tmp_path / "out", progress=False)
+    assert [e["mask_AP50"] for e in res.per_image] == pytest.approx([1.0, 51 / 101])
+    assert [e["mask_AP"] for e in res.per_image] == pytest.approx([1.0, 51 / 101])
+    assert res.mask_ap50 == pytest.approx(76 / 101)
+    doc = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert doc["per_image"][1]["mask_AP50"] == pytest.approx(51 / 101)
+
+
 def test_eval_real_command(tiny_model: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]):
     root = write_mgn_real(tmp_path / "dataset_real")
     out = tmp_path / "out"
@@ -559,6 +586,55 @@ def test_transfer_table_by_hand():
     assert rows[0]["wins"] == "-"
     res.rows = rows
     assert "| new | 0.700 ± 0.173 [0.600, 0.900] | 2/3 |" in res.table()
+    assert "image wins" not in res.table()  # no per-image scores: no such column
+
+
+def test_transfer_image_wins_and_heldout_matrix_by_hand():
+    from mgn.learn.transfer import TransferResults, _heldout_rows, _rows
+
+    def imgs(*fg: float | None) -> list[dict[str, float | None]]:
+        return [{"fg_IoU": v, "mask_AP50": None} for v in fg]
+
+    scores = {v: {s: {"fg_IoU": 0.5} for s in (3, 4)} for v in ("base", "new")}
+    per_image = {  # replicate 3: 2 wins, 1 tie; replicate 4: 1 win, 1 loss, one image unscored
+        "base": {3: imgs(0.5, 0.6, 0.7), 4: imgs(0.2, 0.9, 0.4)},
+        "new": {3: imgs(0.6, 0.6, 0.8), 4: imgs(0.3, 0.8, None)},
+    }
+    res = TransferResults(["base", "new"], [3, 4], "fg_IoU", scores)  # type: ignore[arg-type]
+    res.per_image = per_image  # type: ignore[assignment]
+    res.rows = _rows(res)
+    w = res.rows[1]["image fg_IoU"]
+    # sign test of 3 wins, 1 loss: 2 * P(X <= 1), X ~ Binomial(4, 1/2) = 2 * 5/16
+    assert w == {"wins": 3, "losses": 1, "ties": 1, "pairs": 5, "p": pytest.approx(0.625)}
+    assert res.rows[1]["image mask_AP50"] is None  # no image has one
+    assert "| new | 0.500 ± 0.000 [0.500, 0.500] | 0/2 | 3/5, 1 tied, p 0.62 |" in res.table()
+    res.heldout = {
+        "base": {"base": {3: {"fg_IoU": 0.8, "mask_AP50": 0.1}, 4: {"fg_IoU": 0.6}}},
+        "new": {"base": {3: {"fg_IoU": 0.7, "mask_AP50": 0.3}, 4: {"fg_IoU": 0.7}}},
+    }  # type: ignore[dict-item]
+    res.heldout_rows = _heldout_rows(res)
+    assert res.heldout_rows[0]["fg_IoU mean"] == pytest.approx(0.7)
+    assert res.heldout_rows[0]["fg_IoU std"] == pytest.approx(np.sqrt(0.02))
+    assert res.heldout_rows[1]["mask_AP50 mean"] == pytest.approx(0.3)
+    md = res.markdown()
+    assert "| trained on \\ held-out views of | base |" in md
+    assert "| base | 0.700 ± 0.141 |" in md
+    assert "| new | 0.300 ± 0.000 |" in md  # mask_AP50 of one replicate
+
+
+@pytest.mark.parametrize(("wins", "losses"), [(0, 0), (1, 0), (3, 1), (9, 1), (5, 5), (2, 11)])
+def test_sign_test_is_the_two_sided_binomial_tail(wins: int, losses: int):
+    from math import comb
+
+    from mgn.learn.transfer import sign_test
+
+    n = wins + losses
+    if n == 0:
+        assert sign_test(wins, losses) is None
+        return
+    k = min(wins, losses)
+    p = min(1.0, 2 * sum(comb(n, i) for i in range(k + 1)) / 2**n)
+    assert sign_test(wins, losses) == pytest.approx(p)
 
 
 def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]):
@@ -590,13 +666,14 @@ def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.Ca
         "1",
     ]
     assert main(args) == 0
-    table = (out / "transfer.md").read_text()
+    table = (out / "transfer.md").read_text().split("\n\n")[1]
     assert [line.split(" | ")[0] for line in table.splitlines()[2:]] == [
         "| given",
         "| wider",
         "| two-views",
     ]
     assert "wins vs given (mask_AP50)" in table
+    assert "image wins vs given (fg_IoU)" in table
     doc = json.loads((out / "transfer.json").read_text())
     res = json.loads((out / "wider" / "seed1" / "real" / "results.json").read_text())
     assert doc["scores"]["wider"]["1"]["mask_AP50"] == res["summary"]["mask_AP50"]
@@ -611,6 +688,251 @@ def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.Ca
     (tmp_path / "bad.yaml").write_text(json.dumps(spec))
     assert main(["transfer", str(tmp_path / "bad.yaml"), "--out", str(out)]) == 1
     assert "unknown key(s) ['datasett']" in capsys.readouterr().err
+
+
+class _FakeTransfer:
+    """Stand-ins for ``generate`` (a copy of the small dataset) and ``train`` (the tiny model
+    with its weights scaled by random factors drawn from the training seed and the call
+    count, so that the models differ), recording their calls; ``evaluate_real`` is the real
+    one, counted."""
+
+    def __init__(self, small_dataset: Path, tiny_model: Path, monkeypatch: pytest.MonkeyPatch):
+        from mgn.learn import transfer
+
+        self.generated: list[tuple[Path, int, int]] = []
+        self.trained: list[tuple[Path, Path, int]] = []
+        self.evaluated = 0
+        real_evaluate = transfer.evaluate_real
+
+        def generate(out, scenes, *, config, seed, resume, progress):
+            import shutil
+            from types import SimpleNamespace
+
+            self.generated.append((Path(out), scenes, seed))
+            if not Path(out).exists():
+                shutil.copytree(small_dataset, out)
+            return SimpleNamespace(complete=True)
+
+        def train(ds, run, *, model_config, train_config, **kwargs):
+            import torch
+
+            from mgn.learn.checkpoint import MODEL_FORMAT, read_torch_file, write_torch_file
+
+            self.trained.append((Path(ds), Path(run), train_config.seed))
+            obj = read_torch_file(tiny_model, MODEL_FORMAT)
+            g = torch.Generator().manual_seed(1000 * train_config.seed + len(self.trained))
+            for v in obj["state_dict"].values():
+                if v.is_floating_point():
+                    v.mul_(torch.exp(0.5 * torch.randn(v.shape, generator=g)))
+            write_torch_file(Path(run) / "model.pt", obj)
+
+        def evaluate(*args, **kwargs):
+            self.evaluated += 1
+            return real_evaluate(*args, **kwargs)
+
+        monkeypatch.setattr(transfer, "generate", generate)
+        monkeypatch.setattr(transfer, "train", train)
+        monkeypatch.setattr(transfer, "evaluate_real", evaluate)
+
+
+def test_transfer_replicates_over_dataset_seeds_and_heldout_matrix(
+    small_dataset: Path, tiny_model: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    from mgn.learn.transfer import run_transfer, sign_test
+
+    fake = _FakeTransfer(small_dataset, tiny_model, monkeypatch)
+    real = write_mgn_real(tmp_path / "dataset_real")
+    spec = {
+        "real": str(real),
+        "scenes": 3,
+        "seeds": [0, 1],
+        "generate_seeds": [5, 7],
+        "metric": "fg_IoU",
+        "variants": [
+            {"name": "a"},
+            {"name": "b", "config": {"camera": {"views": [0]}}},
+            {
+                "name": "given",
+                "dataset": [str(small_dataset), str(small_dataset)],
+                "heldout": str(small_dataset),
+            },
+        ],
+    }
+    out = tmp_path / "out"
+    res = run_transfer(spec, out, num_threads=1, progress=False)
+    # datasets: one per (generated variant, dataset seed); held-out: 2 scenes, seed 7 + 1000
+    assert sorted(fake.generated) == sorted(
+        [(out / v / f"dataset_g{g}", 3, g) for v in ("a", "b") for g in (5, 7)]
+        + [(out / v / "heldout", 2, 1007) for v in ("a", "b")]
+    )
+    # replicate k: dataset seed generate_seeds[k], training seed seeds[k]
+    assert sorted(fake.trained) == sorted(
+        [
+            (out / v / f"dataset_g{g}", out / v / f"g{g}_seed{s}", s)
+            for v in ("a", "b")
+            for g, s in ((5, 0), (7, 1))
+        ]
+        + [(small_dataset, out / "given" / f"g{g}_seed{s}", s) for g, s in ((5, 0), (7, 1))]
+    )
+    assert not (out / "a" / "seed0").exists()
+    assert not (out / "a" / "dataset").exists()
+    # the held-out COCO folder: the class-agnostic export with the sensor's depth beside
+    coco = json.loads((out / "a" / "heldout_coco" / "annotations.json").read_text())
+    assert [c["id"] for c in coco["categories"]] == [1]
+    ds = mgn.Dataset(small_dataset)
+    images = read_coco_folder(out / "given" / "heldout_coco")
+    views = [(s, v) for s in ds.scene_ids for v in ds.scene(s).view_ids]
+    assert len(images) == len(views) == 6
+    for img, (s, v) in zip(images, views, strict=True):
+        view = ds.scene(s).view(v)
+        ids = view.instances
+        present = [i for i in range(1, int(ids.max()) + 1) if (ids == i).any()]
+        assert np.array_equal(img.masks, np.stack([ids == i for i in present]))
+        np.testing.assert_array_equal(img.depth, view.depth)
+        assert np.array_equal(img.rgb, view.rgb)
+    # every model on every held-out set; the matrix holds each results.json's numbers
+    doc = json.loads((out / "transfer.json").read_text())
+    assert doc["generate_seeds"] == [5, 7]
+    reps = ["g5_seed0", "g7_seed1"]
+    assert sorted(doc["scores"]["b"]) == reps
+    for t in ("a", "b", "given"):
+        assert sorted(doc["heldout"][t]) == ["a", "b", "given"]
+        for h in ("a", "b", "given"):
+            for rep in reps:
+                js = out / t / rep / f"heldout_{h}" / "results.json"
+                summary = json.loads(js.read_text())["summary"]
+                assert doc["heldout"][t][h][rep] == {m: summary[m] for m in ("fg_IoU", "mask_AP50")}
+    row = next(r for r in doc["heldout_rows"] if (r["train"], r["heldout"]) == ("b", "a"))
+    vals = [doc["heldout"]["b"]["a"][rep]["fg_IoU"] for rep in reps]
+    assert row["fg_IoU mean"] == pytest.approx(np.mean(vals))
+    assert row["fg_IoU std"] == pytest.approx(np.std(vals, ddof=1))
+    # image wins: brute force over the per-image results of replicate k against replicate k
+    for name, r in zip(("b", "given"), doc["rows"][1:], strict=True):
+        counts = [0, 0, 0]
+        for rep in reps:
+            mine = json.loads((out / name / rep / "real" / "results.json").read_text())
+            ref = json.loads((out / "a" / rep / "real" / "results.json").read_text())
+            for x, y in zip(mine["per_image"], ref["per_image"], strict=True):
+                assert x["name"] == y["name"]
+                a, b = x["foreground_iou"], y["foreground_iou"]
+                counts[0 if a > b else 1 if a < b else 2] += 1
+        w = r["image fg_IoU"]
+        assert [w["wins"], w["losses"], w["ties"]] == counts
+        assert w["pairs"] == 4  # 2 replicates x 2 photos
+        assert w["p"] == sign_test(counts[0], counts[1])
+    assert len({doc["scores"][v][rep]["fg_IoU"] for v in ("a", "b") for rep in reps}) > 1
+    md = (out / "transfer.md").read_text()
+    assert "image wins vs a (fg_IoU)" in md
+    assert "Held-out synthetic views, fg_IoU" in md
+    assert "Held-out synthetic views, mask_AP50" in md
+    with Image.open(out / "transfer.png") as im:
+        assert im.size == (140 * 3 + 80, 720)  # the real set and the own held-out views
+    # resumed: nothing is generated anew, trained or evaluated again; the same numbers
+    fake.trained.clear()
+    fake.evaluated = 0
+    again = run_transfer(spec, out, num_threads=1, progress=False)
+    assert (fake.trained, fake.evaluated) == ([], 0)
+    assert again.to_dict() == res.to_dict()
+    # a rebuilt model is evaluated again
+    (out / "b" / "g7_seed1" / "model.pt").unlink()
+    run_transfer(spec, out, num_threads=1, progress=False)
+    assert [t[1] for t in fake.trained] == [out / "b" / "g7_seed1"]
+    assert fake.evaluated == 1 + 3  # the real set and the three held-out sets
+
+
+def test_transfer_without_generate_seeds_keeps_the_one_dataset_layout(
+    small_dataset: Path, tiny_model: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    from mgn.learn.transfer import run_transfer
+
+    fake = _FakeTransfer(small_dataset, tiny_model, monkeypatch)
+    real = write_mgn_real(tmp_path / "dataset_real")
+    spec = {
+        "real": str(real),
+        "scenes": 3,
+        "generate_seed": 4,
+        "seeds": [2, 0],
+        "variants": [{"name": "a"}, {"name": "given", "dataset": str(small_dataset)}],
+    }
+    out = tmp_path / "out"
+    run_transfer(spec, out, num_threads=1, progress=False)
+    assert sorted(fake.generated) == [
+        (out / "a" / "dataset", 3, 4),
+        (out / "a" / "heldout", 2, 1004),
+    ]
+    assert sorted(p.name for p in (out / "a").iterdir()) == [
+        "dataset",
+        "heldout",
+        "heldout_coco",
+        "seed0",
+        "seed2",
+    ]
+    assert sorted(p.name for p in (out / "given").iterdir()) == ["seed0", "seed2"]
+    assert sorted(p.name for p in (out / "a" / "seed2").iterdir() if p.is_dir()) == [
+        "heldout_a",
+        "real",
+    ]
+    doc = json.loads((out / "transfer.json").read_text())
+    assert doc["seeds"] == [2, 0]
+    assert "generate_seeds" not in doc
+    assert list(doc["scores"]["given"]) == ["2", "0"]
+    res = json.loads((out / "given" / "seed0" / "real" / "results.json").read_text())
+    assert doc["scores"]["given"]["0"]["mask_AP50"] == res["summary"]["mask_AP50"]
+    assert sorted(doc["heldout"]["given"]) == ["a"]  # the given variant has no held-out set
+    # heldout_scenes 0: no held-out set, no held-out section
+    fake.generated.clear()
+    out2 = tmp_path / "out2"
+    run_transfer(spec | {"heldout_scenes": 0}, out2, num_threads=1, progress=False)
+    assert fake.generated == [(out2 / "a" / "dataset", 3, 4)]
+    assert not (out2 / "a" / "heldout").exists()
+    assert not (out2 / "a" / "seed0" / "heldout_a").exists()
+    md = (out2 / "transfer.md").read_text()
+    assert "Held-out" not in md
+    with Image.open(out2 / "transfer.png") as im:
+        assert im.size == (140 * 2 + 80, 360)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"heldout_scenes": -1}, "'heldout_scenes' must be >= 0, got -1"),
+        ({"heldout_scenes": 1.5}, "'heldout_scenes' must be a whole number"),
+        ({"seeds": [0, 1.5]}, r"'seeds\[1\]' must be a whole number, got 1.5"),
+        ({"seeds": "0 1"}, "'seeds' must be a non-empty list"),
+        ({"generate_seeds": [0, 1]}, "'generate_seeds' has 2 entries but 'seeds' has 3"),
+        ({"generate_seeds": [0, 1, "x"]}, r"'generate_seeds\[2\]' must be a whole number"),
+        ({"generate_seed": True}, "'generate_seed' must be a whole number"),
+        ({"scenes": 0}, "'scenes' must be >= 1"),
+        ({"heldout_seed": 0}, "'heldout_seed' 0 is a training dataset seed"),
+        ({"seeds": [1, 1, 2]}, r"replicates repeat: 'seeds' \[1, 1, 2\]"),
+        (
+            {"generate_seeds": [0, 1, 2], "variants": [{"name": "m", "dataset": "d"}]},
+            "variant m: with 'generate_seeds' its 'dataset' must be a list of 3",
+        ),
+        (
+            {"generate_seeds": [0, 1, 2], "variants": [{"name": "m", "dataset": ["d", "e"]}]},
+            "variant m: with 'generate_seeds' its 'dataset' must be a list of 3",
+        ),
+        (
+            {"variants": [{"name": "m", "dataset": ["d", "e", "f"]}]},
+            "variant m: 'dataset' must be one dataset folder",
+        ),
+        ({"variants": [{"name": "m", "heldout": "h"}]}, "variant m: 'heldout' names the held-out"),
+    ],
+)
+def test_transfer_spec_errors_name_the_key(
+    change: dict, message: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    from mgn.learn import transfer
+
+    def nothing(*args, **kwargs):
+        raise AssertionError("nothing is generated or trained from a bad spec")
+
+    monkeypatch.setattr(transfer, "generate", nothing)
+    monkeypatch.setattr(transfer, "train", nothing)
+    spec = {"real": "photos", "seeds": [0, 1, 2], "variants": [{"name": "a"}]} | change
+    with pytest.raises(InvalidArgumentError, match=message):
+        transfer.run_transfer(spec, tmp_path / "out", progress=False)
 
 
 def _load_script(name: str):
