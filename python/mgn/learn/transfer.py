@@ -316,14 +316,13 @@ def _image_wins(res: TransferResults, name: str, metric: str) -> dict[str, Any] 
     """Per-image paired comparison of ``name`` with the reference on ``metric``."""
     ref = res.per_image.get(res.variants[0], {})
     mine = res.per_image.get(name, {})
-    key = _PER_IMAGE[metric]
     wins = losses = ties = 0
     for rep in res.replicates:
         a_imgs, b_imgs = mine.get(rep), ref.get(rep)
         if a_imgs is None or b_imgs is None:
             continue
         for a_img, b_img in zip(a_imgs, b_imgs, strict=True):
-            a, b = a_img.get(key), b_img.get(key)
+            a, b = a_img.get(metric), b_img.get(metric)
             if a is None or b is None:
                 continue
             wins += a > b
@@ -401,6 +400,8 @@ def _panel(
         if vals:
             mean = float(np.mean(vals))
             draw.line([(cx - 35, y(mean)), (cx + 35, y(mean))], fill=col, width=3)
+        else:
+            draw.text((cx - 12, y(0.5)), "none", fill=(150, 150, 150))
         for j, v in enumerate(vals):
             dx = (j - (len(vals) - 1) / 2) * 10
             draw.ellipse([cx + dx - 4, y(v) - 4, cx + dx + 4, y(v) + 4], fill=col)
@@ -420,16 +421,17 @@ def _plot(res: TransferResults) -> bytes:
         for n in res.variants
     ]
     hm = _heldout_metric(res.metric)
+    own = {n: res.heldout.get(n, {}).get(n, {}) for n in res.variants}
     diag = [
-        (n, [float(x) for v in res.heldout[n][n].values() if (x := v.get(hm)) is not None])
+        (n, [float(x) for v in own[n].values() if (x := v.get(hm)) is not None])
         for n in res.variants
-        if n in res.heldout.get(n, {})
     ]
     w = 140 * len(res.variants) + 80
-    im = Image.new("RGB", (w, h * (2 if diag else 1)), (255, 255, 255))
+    with_heldout = any(vals for _, vals in diag)
+    im = Image.new("RGB", (w, h * (2 if with_heldout else 1)), (255, 255, 255))
     draw = ImageDraw.Draw(im)
     _panel(draw, real, f"real set: {res.metric} per replicate (dots) and mean (bar)", 0, h)
-    if diag:
+    if with_heldout:
         _panel(draw, diag, f"own held-out synthetic views: {hm}", h, h)
     buf = io.BytesIO()
     im.save(buf, format="PNG")
@@ -455,10 +457,10 @@ def _generate(config: Config, ds: Path, scenes: int, seed: int, name: str, progr
 
 def _heldout_coco(ds: Path, out: Path) -> Path:
     """The class-agnostic COCO folder of dataset ``ds`` in ``out`` (images copied, sensor depth
-    ``<stem>_depth.npy`` beside them); kept when present."""
+    ``<stem>_depth.npy`` beside them; kept when present); returns its ``annotations.json``."""
     js = out / "annotations.json"
     if js.exists():
-        return out
+        return js
     d = Dataset(ds)
     doc = coco_dict(d, class_agnostic=True)
     out.mkdir(parents=True, exist_ok=True)
@@ -472,7 +474,7 @@ def _heldout_coco(ds: Path, out: Path) -> Path:
         atomic_write_bytes(out / f"scene{sid}_{vid}_rgb_depth.npy", buf.getvalue())
         image["file_name"] = name
     atomic_write_text(js, json.dumps(doc) + "\n")
-    return out
+    return js
 
 
 def _evaluate(

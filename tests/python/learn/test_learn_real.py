@@ -644,6 +644,7 @@ def test_transfer_command(small_dataset: Path, tmp_path: Path, capsys: pytest.Ca
     spec = {
         "real": str(root),
         "scenes": 1,
+        "heldout_scenes": 1,
         "seeds": [0, 1],
         "config": SMALL_DATASET_CONFIG,
         "model": {"image_size": 32, "width": 4},
@@ -802,6 +803,8 @@ def test_transfer_replicates_over_dataset_seeds_and_heldout_matrix(
                 js = out / t / rep / f"heldout_{h}" / "results.json"
                 summary = json.loads(js.read_text())["summary"]
                 assert doc["heldout"][t][h][rep] == {m: summary[m] for m in ("fg_IoU", "mask_AP50")}
+        # the held-out sets are copies of one dataset: one model scores the same on each
+        assert len({json.dumps(doc["heldout"][t][h]) for h in ("a", "b", "given")}) == 1
     row = next(r for r in doc["heldout_rows"] if (r["train"], r["heldout"]) == ("b", "a"))
     vals = [doc["heldout"]["b"]["a"][rep]["fg_IoU"] for rep in reps]
     assert row["fg_IoU mean"] == pytest.approx(np.mean(vals))
