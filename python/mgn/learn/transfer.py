@@ -466,12 +466,12 @@ def _heldout_coco(ds: Path, out: Path) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     for image in doc["images"]:
         sid, vid = int(image["scene_id"]), int(image["view_id"])
-        name = f"scene{sid}_{vid}_rgb.png"
+        name = f"scene{sid}_view{vid}.png"  # no "_rgb.png": read as COCO, not as MGN scenes
         view = View(d.scene(sid).folder, vid)
         shutil.copyfile(ds / image["file_name"], out / name)
         buf = io.BytesIO()
         np.save(buf, view.depth)
-        atomic_write_bytes(out / f"scene{sid}_{vid}_rgb_depth.npy", buf.getvalue())
+        atomic_write_bytes(out / f"scene{sid}_view{vid}_depth.npy", buf.getvalue())
         image["file_name"] = name
     atomic_write_text(js, json.dumps(doc) + "\n")
     return js

@@ -780,6 +780,7 @@ def test_transfer_replicates_over_dataset_seeds_and_heldout_matrix(
     # the held-out COCO folder: the class-agnostic export with the sensor's depth beside
     coco = json.loads((out / "a" / "heldout_coco" / "annotations.json").read_text())
     assert [c["id"] for c in coco["categories"]] == [1]
+    assert detect_real_format(out / "a" / "heldout_coco") == "coco"  # mgn eval real reads it
     ds = mgn.Dataset(small_dataset)
     images = read_coco_folder(out / "given" / "heldout_coco")
     views = [(s, v) for s in ds.scene_ids for v in ds.scene(s).view_ids]
