@@ -92,7 +92,10 @@ class ShakeOptions:
     (docs/models.md, "Solver iterations").
     ``controller_stiffness`` is per 1/400 s of simulated time: a step ``dt`` moves the fingers
     ``dt`` x 400/s times (mean pad force − ``grip_force``)/``controller_stiffness``, so the
-    closing settles alike at any ``dt``.
+    closing settles alike at any ``dt``. ``controller_net_force`` (off by default): the controller
+    reads each pad's net normal force along its opening direction instead of the sum of the
+    normal forces on every face of the finger, so a finger wedged in a concavity (inside a
+    pipe's or a cup's bore) does not read as gripping (docs/models.md, "Grip-force controller").
     Every default is the C++ struct's.
     """
 
