@@ -221,7 +221,9 @@ class PeerTrial:
         steps, vmax = 0, o.close_speed * dt
         touch, force = [False, False], [0.0, 0.0]
         settled = 0
-        gain = o.controller_stiffness
+        gain = o.controller_stiffness  # per 1/400 s: a step dt moves dt * 400/s times as far
+        if dt != 1.0 / 400.0:
+            gain *= (1.0 / 400.0) / dt
         for _ in range(o.close_steps):  # close, gravity off
             if not any(touch):
                 d = max(0.0, d - vmax)

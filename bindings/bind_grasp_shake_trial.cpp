@@ -55,7 +55,8 @@ struct StaircaseArrays {
 
 /// ShakeTrajectory as numpy arrays, one row per recorded step.
 struct TrajectoryArrays {
-  py::array time, phase, X_WO, X_WH, finger_left, finger_right, contact_left, contact_right;
+  py::array time, phase, X_WO, X_WH, finger_left, finger_right, contact_left, contact_right,
+      force_left, force_right;
   bool success = false, ended_early = false;
   int steps = 0;
   double friction = 0.0, density_factor = 0.0;
@@ -91,6 +92,7 @@ void bind_grasp_shake_trial(py::module_& m) {
       .def_readwrite("contact_distance", &ShakeOptions::contact_distance)
       .def_readwrite("settle_steps", &ShakeOptions::settle_steps)
       .def_readwrite("limit_controller_gain", &ShakeOptions::limit_controller_gain)
+      .def_readwrite("controller_net_force", &ShakeOptions::controller_net_force)
       .def_readwrite("lost_contact_steps", &ShakeOptions::lost_contact_steps)
       .def_readwrite("hold_tolerance", &ShakeOptions::hold_tolerance)
       .def_readwrite("smooth_shake", &ShakeOptions::smooth_shake)
@@ -98,6 +100,7 @@ void bind_grasp_shake_trial(py::module_& m) {
       .def_readwrite("polyhedral_contacts", &ShakeOptions::polyhedral_contacts)
       .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
+      .def_readwrite("compound_solver_iterations", &ShakeOptions::compound_solver_iterations)
       .def_readwrite("iterations_per_hull_contact", &ShakeOptions::iterations_per_hull_contact)
       .def_readwrite("staircase", &ShakeOptions::staircase)
       .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)
@@ -147,6 +150,10 @@ void bind_grasp_shake_trial(py::module_& m) {
       .def_readonly("finger_right", &TrajectoryArrays::finger_right, "(K,) finger opening, m")
       .def_readonly("contact_left", &TrajectoryArrays::contact_left, "(K,) bool")
       .def_readonly("contact_right", &TrajectoryArrays::contact_right, "(K,) bool")
+      .def_readonly("force_left", &TrajectoryArrays::force_left,
+                    "(K,) normal force of the -x pad over the last step, N")
+      .def_readonly("force_right", &TrajectoryArrays::force_right,
+                    "(K,) normal force of the +x pad over the last step, N")
       .def_readonly("success", &TrajectoryArrays::success)
       .def_readonly("ended_early", &TrajectoryArrays::ended_early)
       .def_readonly("steps", &TrajectoryArrays::steps)
@@ -227,6 +234,8 @@ void bind_grasp_shake_trial(py::module_& m) {
         out.finger_right = to_numpy(std::move(t.finger_right));
         out.contact_left = to_bool_numpy(std::move(t.contact_left));
         out.contact_right = to_bool_numpy(std::move(t.contact_right));
+        out.force_left = to_numpy(std::move(t.force_left));
+        out.force_right = to_numpy(std::move(t.force_right));
         out.success = t.success;
         out.ended_early = t.ended_early;
         out.steps = t.steps;

@@ -1,6 +1,7 @@
 // The Bullet shake test of parallel-jaw grasps (MODELS.md §5, physics score).
 #include <gtest/gtest.h>
 #include <mgn/core/error.hpp>
+#include <mgn/geometry/convex_decomposition.hpp>
 #include <mgn/geometry/mass_properties.hpp>
 #include <mgn/geometry/primitives.hpp>
 #include <mgn/grasp/shake_trial.hpp>
@@ -202,6 +203,174 @@ TEST(Shake, IterationsPerHullContactChangeNothingOnASingleHullUpToHalfTheIterati
   o.iterations_per_hull_contact = 15.0;
   const ShakeResult more = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
   EXPECT_GE(more.score[0], 0.99);
+}
+
+/// The box of box_object() cut into `slabs` equal slabs along y: a compound of that many hulls
+/// with the box's mass properties.
+PhysicsObject slab_box(const Vec3d& size, double mass, int slabs) {
+  PhysicsObject o = box_object(size, mass);
+  o.convex_parts.clear();
+  for (int k = 0; k < slabs; ++k) {
+    Pose X = Pose::Identity();
+    X.translation() = Vec3d(0.0, -0.5 * size.y() + (k + 0.5) * size.y() / slabs, 0.0);
+    o.convex_parts.push_back(make_box(Vec3d(size.x(), size.y() / slabs, size.z())).transformed(X));
+  }
+  return o;
+}
+
+/// Every recorded pose and finger offset of two trajectories are the same bits.
+bool same_trajectory(const ShakeTrajectory& a, const ShakeTrajectory& b) {
+  if (a.steps != b.steps || a.success != b.success || a.X_WO.size() != b.X_WO.size()) return false;
+  for (std::size_t k = 0; k < a.X_WO.size(); ++k) {
+    if (a.X_WO[k].matrix() != b.X_WO[k].matrix()) return false;
+    if (a.finger_left[k] != b.finger_left[k] || a.force_left[k] != b.force_left[k]) return false;
+  }
+  return true;
+}
+
+TEST(Shake, CompoundSolverIterationsChangeNothingOnASingleHull) {
+  // One hull is not a compound: whatever compound_solver_iterations is, every trial is
+  // bit-identical to the default, to the pose of every step.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.3);
+  const ParallelJawGripper g;
+  ShakeOptions o = small_grid(3, 0.3, 1.5);
+  const ShakeResult base = shake_test(box, g, {centre_grasp(0.04)}, o);
+  const ShakeTrajectory base_tr = shake_trajectory(box, g, centre_grasp(0.04), 0.3, 1.0, o, 1, 2);
+  for (const int it : {1, 10, 40, 1000}) {
+    o.compound_solver_iterations = it;
+    const ShakeResult r = shake_test(box, g, {centre_grasp(0.04)}, o);
+    EXPECT_EQ(r.trial_success, base.trial_success) << it;
+    EXPECT_EQ(r.trial_steps, base.trial_steps) << it;
+    EXPECT_TRUE(
+        same_trajectory(shake_trajectory(box, g, centre_grasp(0.04), 0.3, 1.0, o, 1, 2), base_tr))
+        << it;
+  }
+}
+
+TEST(Shake, CompoundSolverIterationsReplaceTheSolverIterationsOfACompound) {
+  // A 2-slab box is a compound: compound_solver_iterations = 40 simulates it exactly as
+  // solver_iterations = 40 does (same bits every step), differently from the default 10, and
+  // 0 or the value of solver_iterations change nothing.
+  const PhysicsObject slabs = slab_box(Vec3d(0.04, 0.06, 0.03), 0.05, 2);
+  const ParallelJawGripper g;
+  const ParallelJawGrasp grasp = centre_grasp(0.04);
+  ShakeOptions o = small_grid(1, 0.5, 0.5);
+  const ShakeTrajectory base = shake_trajectory(slabs, g, grasp, 0.5, 1.0, o, 1, 0);
+  o.compound_solver_iterations = o.solver_iterations;
+  EXPECT_TRUE(same_trajectory(shake_trajectory(slabs, g, grasp, 0.5, 1.0, o, 1, 0), base));
+  o.compound_solver_iterations = 40;
+  const ShakeTrajectory compound40 = shake_trajectory(slabs, g, grasp, 0.5, 1.0, o, 1, 0);
+  EXPECT_FALSE(same_trajectory(compound40, base));
+  ShakeOptions all40 = small_grid(1, 0.5, 0.5);
+  all40.solver_iterations = 40;
+  EXPECT_TRUE(
+      same_trajectory(shake_trajectory(slabs, g, grasp, 0.5, 1.0, all40, 1, 0), compound40));
+  // It replaces solver_iterations whatever that is.
+  all40.compound_solver_iterations = 40;
+  all40.solver_iterations = 3;
+  EXPECT_TRUE(
+      same_trajectory(shake_trajectory(slabs, g, grasp, 0.5, 1.0, all40, 1, 0), compound40));
+}
+
+TEST(Shake, ClosingSettlesAtTheGripForceAtAnyTimeStep) {
+  // The force controller's move is given per 1/400 s, so a closing on a box settles at the grip
+  // force in about the same simulated time at dt = 1/400, 1/800 and 1/1600 s (every step count
+  // scaled): the mean pad force of the last settled step within 5 % of grip_force (the settle
+  // criterion) and within 2 % of the 1/400 s closing's, the settle time within 25 % of it.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.3);
+  const ParallelJawGripper g;
+  double force400 = 0.0, time400 = 0.0;
+  for (const int f : {1, 2, 4}) {
+    ShakeOptions o = small_grid(1, 1.0, 1.0);
+    o.dt = 1.0 / (400.0 * f);
+    o.close_steps *= f;
+    o.settle_steps *= f;
+    o.shake_steps = o.rotate_steps = 0;
+    const ShakeTrajectory tr = shake_trajectory(box, g, centre_grasp(0.04), 1.0, 1.0, o, 1, 0);
+    ASSERT_LT(tr.steps, o.close_steps) << "dt 1/" << 400 * f << " s: the closing never settled";
+    const double force = 0.5 * (tr.force_left.back() + tr.force_right.back());
+    const double time = tr.time.back();
+    EXPECT_NEAR(force, o.grip_force, 0.05 * o.grip_force) << "dt 1/" << 400 * f;
+    if (f == 1) {
+      force400 = force;
+      time400 = time;
+      continue;
+    }
+    EXPECT_NEAR(force, force400, 0.02 * o.grip_force) << "dt 1/" << 400 * f;
+    EXPECT_NEAR(time, time400, 0.25 * time400) << "dt 1/" << 400 * f;
+  }
+}
+
+/// A 50 g block x in [-w/2 - 10 mm, w/2], |y| <= 30 mm, |z| <= 15 mm with a 90-degree V-groove
+/// along z in its −x face (apex at x = -w/2 + 10 mm): two convex hulls. A 20 mm wide pad closing
+/// along +x touches the groove's walls with its two edges (y = ±10 mm, at x = −w/2), where the
+/// contact normals are ±45 degrees from x; the +x face is flat.
+PhysicsObject grooved_block(double w) {
+  const double x0 = -0.5 * w, xr = 0.5 * w;
+  PhysicsObject o = box_object(Vec3d(xr - x0 + 0.01, 0.06, 0.03), 0.05);
+  o.convex_parts.clear();
+  for (const double sy : {1.0, -1.0}) {
+    Points3f P(10, 3);
+    const double xy[5][2] = {
+        {x0 - 0.01, 0.02}, {x0 + 0.01, 0.0}, {xr, 0.0}, {xr, 0.03}, {x0 - 0.01, 0.03}};
+    for (int k = 0; k < 5; ++k) {
+      for (int h = 0; h < 2; ++h) {
+        P.row(2 * k + h) << float(xy[k][0]), float(sy * xy[k][1]), h == 0 ? -0.015f : 0.015f;
+      }
+    }
+    o.convex_parts.push_back(convex_hull_of_points(P));
+  }
+  return o;
+}
+
+TEST(Shake, NetPadForceCountsOnlyTheForceAlongTheClosingDirection) {
+  // Frictionless closing on the grooved block: the −x pad's two contacts push it at 45 degrees,
+  // the +x pad's flat contact straight back, and the object at rest needs the same force along
+  // x on both pads, F. Summed normal forces read √2 F on the grooved pad, so the controller
+  // holds (√2 F + F)/2 = grip: F = 2 grip/(1 + √2) = 0.83 grip. The net force along the
+  // opening direction reads F on both pads: F = grip. The +x pad's force (one flat face: the
+  // same in both readings) shows which; mean over 0.15 s from 0.05 s after both pads touch,
+  // the closing run to its end (settle_steps 0: without friction the block rocks in the
+  // groove, and the net reading does not stay within the 5 % that ends a closing).
+  const double w = 0.04;
+  const PhysicsObject block = grooved_block(w);
+  const ParallelJawGripper g;
+  for (const bool net : {false, true}) {
+    ShakeOptions o = small_grid(1, 0.0, 0.0);
+    o.shake_steps = o.rotate_steps = 0;
+    o.controller_net_force = net;
+    o.settle_steps = 0;
+    const ShakeTrajectory tr = shake_trajectory(block, g, centre_grasp(w), 0.0, 1.0, o, 1, 0);
+    std::size_t first = 0;
+    while (first < tr.time.size() && !(tr.contact_left[first] && tr.contact_right[first])) ++first;
+    const std::size_t from = first + 20, to = first + 80;
+    ASSERT_LT(to, tr.time.size()) << "net " << net;
+    double left = 0.0, right = 0.0;
+    for (std::size_t k = from; k < to; ++k) {
+      ASSERT_TRUE(tr.contact_left[k] && tr.contact_right[k]) << "net " << net << " step " << k;
+      left += tr.force_left[k] / double(to - from);  // as the controller read it
+      right += tr.force_right[k] / double(to - from);
+    }
+    const double expected = net ? o.grip_force : 2.0 * o.grip_force / (1.0 + std::sqrt(2.0));
+    EXPECT_NEAR(right, expected, 0.04 * o.grip_force) << "net " << net;
+    EXPECT_NEAR(left, net ? expected : std::sqrt(2.0) * expected, 0.06 * o.grip_force)
+        << "net " << net;
+  }
+}
+
+TEST(Shake, NetPadForceChangesNoOutcomeOnAFaceOnGrasp) {
+  // A box squeezed face-on: every contact normal is along x, so both readings are the same force
+  // and every trial of a grid the same outcome.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.8);
+  ShakeOptions o = small_grid(3, 0.2, 1.0);
+  const ShakeResult sum = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+  o.controller_net_force = true;
+  const ShakeResult net = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
+  EXPECT_EQ(net.trial_success, sum.trial_success);
+  int held = 0;
+  for (const std::uint8_t s : sum.trial_success) held += s;
+  EXPECT_GT(held, 0);
+  EXPECT_LT(held, 9);
 }
 
 TEST(Shake, ScoreRisesWithFriction) {
@@ -406,6 +575,11 @@ TEST(Shake, BadInputIsRejectedWithAClearMessage) {
   expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
   bo.iterations_per_hull_contact = NAN;
   expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
+  bo = o;
+  bo.compound_solver_iterations = -1;
+  expect_error(box, centre_grasp(0.04), bo, "compound_solver_iterations");
+  bo.compound_solver_iterations = 1001;
+  expect_error(box, centre_grasp(0.04), bo, "compound_solver_iterations");
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, 1.0, o, 0), InvalidArgument);
   EXPECT_THROW(shake_trajectory(box, g, centre_grasp(0.04), 1.0, -1.0, o, 1), InvalidArgument);
   // No grasps: an empty result, not an error.

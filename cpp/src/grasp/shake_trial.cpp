@@ -132,6 +132,9 @@ physics::WorldOptions world_options() {
   return w;
 }
 
+/// The step per which ShakeOptions::controller_stiffness gives the force controller's move, s.
+constexpr double kControllerStep = 1.0 / 400.0;
+
 /// Peak of ShakeOptions::smooth_shake's profile sin x − sin(2x)/2: 3√3/4.
 constexpr double kSmoothPeak = 1.299038105676658;
 
@@ -257,7 +260,12 @@ class TrialWorld {
     const double trial_mass = obj.mass * s.density_factor;
     const double load = o.grip_force / (150.0 * trial_mass * std::max(o.gravity, 1.0));
     const int boost = static_cast<int>(std::clamp(std::ceil(load), 1.0, 8.0));
-    base_iterations_ = o.solver_iterations * boost;
+    // ShakeOptions::compound_solver_iterations: a shape of several hulls may use others.
+    const bool compound = obj.geometry.hulls.size() > 1;
+    const int iterations = compound && o.compound_solver_iterations > 0
+                               ? o.compound_solver_iterations
+                               : o.solver_iterations;
+    base_iterations_ = iterations * boost;
     info.m_numIterations = base_iterations_;
     // Friction in both tangent directions (Bullet's default is one direction per contact point,
     // which lets a held object creep sideways).
@@ -450,7 +458,10 @@ class TrialWorld {
     const double vmax = o_.close_speed * o_.dt;
     if (!s.touch_left && !s.touch_right) return std::max(0.0, d_ - vmax);
     const double error = 0.5 * (s.force_left + s.force_right) - o_.grip_force;
+    // ShakeOptions::controller_stiffness is per 1/400 s: a step dt moves the fingers dt·400
+    // times as far for the same error (exactly controller_stiffness at dt = 1/400 s).
     double stiffness = o_.controller_stiffness;
+    if (o_.dt != kControllerStep) stiffness *= kControllerStep / o_.dt;
     if (o_.limit_controller_gain) {
       // A move of the fingers by x within one step changes the mean pad force by about
       // n (k + c/dt) x: n touching points per pad, each a spring k and a damper c moved at
@@ -498,6 +509,8 @@ class TrialWorld {
     s.force_left = s.force_right = 0.0;
     s.hull_contacts = 0;
     s.points_left = s.points_right = 0;
+    // The fingers' opening directions in W (ShakeOptions::controller_net_force): −x_H, +x_H.
+    const Vec3d x_H = X_WH.linear().col(0);
     const int n = dispatcher_.getNumManifolds();
     for (int i = 0; i < n; ++i) {
       const btPersistentManifold* m = dispatcher_.getManifoldByIndexInternal(i);
@@ -517,7 +530,15 @@ class TrialWorld {
           touch = true;
           ++points;
         }
-        force += kUnits.force(p.getAppliedImpulse(), o_.dt);
+        const double f = kUnits.force(p.getAppliedImpulse(), o_.dt);
+        if (!o_.controller_net_force) {
+          force += f;
+          continue;
+        }
+        // The normal on B points towards A: the contact pushes A along it, B against it.
+        const btVector3& nB = p.m_normalWorldOnB;
+        const Vec3d on_finger = (a == object_.get() ? -1.0 : 1.0) * Vec3d(nB.x(), nB.y(), nB.z());
+        force += f * on_finger.dot(side == 0 ? -x_H : x_H);
       }
     }
     return s;
@@ -592,6 +613,9 @@ void ShakeOptions::validate() const {
           "an integer in [8, 100000]", max_hull_vertices);
   require(solver_iterations >= 1 && solver_iterations <= 1000, "solver_iterations",
           "an integer in [1, 1000]", solver_iterations);
+  require(compound_solver_iterations >= 0 && compound_solver_iterations <= 1000,
+          "compound_solver_iterations", "an integer in [0, 1000] (0 = solver_iterations)",
+          compound_solver_iterations);
   require(std::isfinite(iterations_per_hull_contact) && iterations_per_hull_contact >= 0 &&
               iterations_per_hull_contact <= 100,
           "iterations_per_hull_contact", "a factor in [0, 100] (0 = off)",
@@ -931,6 +955,8 @@ ShakeTrajectory shake_trajectory(const PhysicsObject& object, const ParallelJawG
     tr.finger_right.push_back(st.right);
     tr.contact_left.push_back(st.touch_left);
     tr.contact_right.push_back(st.touch_right);
+    tr.force_left.push_back(st.force_left);
+    tr.force_right.push_back(st.force_right);
   };
   const TrialShapes shapes(prepared, gripper, options);
   TrialWorld world(prepared, shapes, gripper, grasp, s, options);

@@ -555,6 +555,7 @@ class ShakeOptions:
     Options of the Bullet shake test (SI units; see mgn.pj.physics).
     """
 
+    controller_net_force: bool
     limit_controller_gain: bool
     polyhedral_contacts: bool
     smooth_shake: bool
@@ -583,6 +584,12 @@ class ShakeOptions:
     def close_steps(self) -> int: ...
     @close_steps.setter
     def close_steps(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    @property
+    def compound_solver_iterations(self) -> int: ...
+    @compound_solver_iterations.setter
+    def compound_solver_iterations(
+        self, arg0: typing.SupportsInt | typing.SupportsIndex
+    ) -> None: ...
     @property
     def contact_distance(self) -> float: ...
     @contact_distance.setter
@@ -818,6 +825,16 @@ class ShakeTrajectoryResult:
     def finger_right(self) -> numpy.ndarray:
         """
         (K,) finger opening, m
+        """
+    @property
+    def force_left(self) -> numpy.ndarray:
+        """
+        (K,) normal force of the -x pad over the last step, N
+        """
+    @property
+    def force_right(self) -> numpy.ndarray:
+        """
+        (K,) normal force of the +x pad over the last step, N
         """
     @property
     def friction(self) -> float: ...

@@ -87,6 +87,15 @@ class ShakeOptions:
     iterations per (finger, object hull) pair in contact at the previous step (a compound held
     by several hulls needs more to converge at a coarser ``dt``; a single hull makes at most 2
     pairs; docs/models.md, "A coarser step judged by its own grids").
+    ``compound_solver_iterations`` (0 = the same as ``solver_iterations``, in [0, 1000]): the
+    solver iterations of an object whose shake shape has more than one convex part
+    (docs/models.md, "Solver iterations").
+    ``controller_stiffness`` is per 1/400 s of simulated time: a step ``dt`` moves the fingers
+    ``dt`` x 400/s times (mean pad force − ``grip_force``)/``controller_stiffness``, so the
+    closing settles alike at any ``dt``. ``controller_net_force`` (off by default): the controller
+    reads each pad's net normal force along its opening direction instead of the sum of the
+    normal forces on every face of the finger, so a finger wedged in a concavity (inside a
+    pipe's or a cup's bore) does not read as gripping (docs/models.md, "Grip-force controller").
     Every default is the C++ struct's.
     """
 
@@ -108,6 +117,7 @@ class ShakeOptions:
     pad_damping: float = _CORE.pad_damping
     controller_stiffness: float = _CORE.controller_stiffness
     limit_controller_gain: bool = _CORE.limit_controller_gain
+    controller_net_force: bool = _CORE.controller_net_force
     inertia_floor: float = _CORE.inertia_floor
     contact_distance: float = _CORE.contact_distance
     settle_steps: int = _CORE.settle_steps
@@ -118,6 +128,7 @@ class ShakeOptions:
     polyhedral_contacts: bool = _CORE.polyhedral_contacts
     max_hull_vertices: int = _CORE.max_hull_vertices
     solver_iterations: int = _CORE.solver_iterations
+    compound_solver_iterations: int = _CORE.compound_solver_iterations
     iterations_per_hull_contact: float = _CORE.iterations_per_hull_contact
     staircase: bool = _CORE.staircase
     staircase_checks: int = _CORE.staircase_checks
@@ -196,6 +207,8 @@ class ShakeTrajectory:
         finger_left, finger_right: (K,) inner-face offsets of the fingers from the hand axis, m
             (the −x finger's face is at x = −finger_left in the hand frame).
         contact_left, contact_right: (K,) bool, the finger touches the object.
+        force_left, force_right: (K,) normal force of each pad on the object over the step just
+            run, N (0 at the initial state).
         success, ended_early, steps, friction, density_factor: the trial's outcome and setting.
     """
 
@@ -207,6 +220,8 @@ class ShakeTrajectory:
     finger_right: npt.NDArray[np.float64]
     contact_left: npt.NDArray[np.bool_]
     contact_right: npt.NDArray[np.bool_]
+    force_left: npt.NDArray[np.float64]
+    force_right: npt.NDArray[np.float64]
     success: bool
     ended_early: bool
     steps: int

@@ -113,6 +113,35 @@ def test_limited_controller_gain_settles_a_pad_on_many_points(slabs):
     assert held.trial_success.all(), held.score
 
 
+def test_compound_solver_iterations_apply_to_compounds_only():
+    """A 2-slab box (a compound) with compound_solver_iterations 40 is the trial of
+    solver_iterations 40; the single-hull box is the default's whatever the setting."""
+    parts, m, com, inertia = slab_box([0.04, 0.06, 0.03], 0.05, 2)
+    box = box_object([0.04, 0.06, 0.03], 0.05)[0]
+    base = ShakeOptions(grid=1, friction_range=(0.5, 0.5), num_threads=1)
+
+    def closing(mesh, opts):
+        t = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 0.5, 1.0, options=opts)
+        return np.concatenate([t.X_WO.ravel(), t.force_left, t.force_right])
+
+    compound40 = closing(parts, replace(base, compound_solver_iterations=40))
+    np.testing.assert_array_equal(compound40, closing(parts, replace(base, solver_iterations=40)))
+    assert not np.array_equal(compound40, closing(parts, base))
+    np.testing.assert_array_equal(
+        closing(box, replace(base, compound_solver_iterations=40)), closing(box, base)
+    )
+
+
+def test_trajectory_records_the_pad_forces_the_controller_settles_on():
+    mesh, m, com, inertia = box_object([0.04, 0.05, 0.05], 0.3)
+    opts = ShakeOptions(grid=1, num_threads=1, shake_steps=0, rotate_steps=0)
+    t = shake_trajectory(mesh, m, com, inertia, centre_grasp(0.04), 1.0, 1.0, options=opts)
+    assert t.force_left.shape == t.force_right.shape == t.time.shape
+    assert t.force_left[0] == t.force_right[0] == 0.0
+    assert t.steps < opts.close_steps  # settled: the last mean force within 5 % of the grip
+    assert 0.5 * (t.force_left[-1] + t.force_right[-1]) == pytest.approx(opts.grip_force, rel=0.05)
+
+
 def test_the_controller_without_the_gain_limit_oscillates_on_two_slabs():
     # The case the limit is for: at least one closing of the 2-slab box never settles.
     parts, m, com, inertia = slab_box([0.04, 0.06, 0.03], 0.05, 2)
@@ -654,6 +683,14 @@ def test_show_trial_action(tmp_path, capsys):
         (
             {"options": ShakeOptions(iterations_per_hull_contact=-1.0)},
             "iterations_per_hull_contact",
+        ),
+        (
+            {"options": ShakeOptions(compound_solver_iterations=-1)},
+            "compound_solver_iterations",
+        ),
+        (
+            {"options": ShakeOptions(compound_solver_iterations=1001)},
+            "compound_solver_iterations",
         ),
         ({"gripper": ParallelJawGripper(max_opening=0.03)}, "max_opening"),
         ({"gripper": SimpleNamespace(name="x")}, "gripper"),

@@ -84,18 +84,28 @@ struct ShakeOptions {
   double pad_stiffness = 1e4;
   double pad_damping = 20.0;
   /// Force controller: the fingers move by (mean pad force − grip_force)/controller_stiffness
-  /// per step (N/m; larger = gentler), limited to close_speed.
+  /// per 1/400 s of simulated time (N/m, > 0; larger = gentler), limited to close_speed: a step
+  /// dt moves them by (dt · 400 s⁻¹) times that, so the closing's dynamics in time do not depend
+  /// on dt (at dt = 1/400 s, one step moves them by the error over controller_stiffness).
   double controller_stiffness = 1e5;
-  /// Keep the force controller stable on many contact points: controller_stiffness is raised
-  /// to at least n·(pad_stiffness + pad_damping/dt), n = the mean number of contact points
-  /// closer than contact_distance per pad (how much the mean pad force changes in one step
-  /// when the fingers move). Without it the controller's force error e obeys
-  /// e[k+1] = (1 − α − β) e[k] + β e[k−1] (α = n·pad_stiffness/controller_stiffness,
-  /// β = n·pad_damping/(dt·controller_stiffness)), which diverges into a period-2 force
-  /// oscillation of tens of N once α + 2β > 2 (n > 7.7 at the defaults: compounds held by
-  /// several hulls), and the closing then never settles. Changes nothing while n <= 5.5 (one
-  /// hull touches a pad with at most 4 points).
+  /// Keep the force controller stable on many contact points: the per-step stiffness
+  /// K = controller_stiffness / (dt · 400 s⁻¹) is raised to at least
+  /// n·(pad_stiffness + pad_damping/dt), n = the mean number of contact points closer than
+  /// contact_distance per pad (how much the mean pad force changes in one step when the fingers
+  /// move). Without it the controller's force error e obeys
+  /// e[k+1] = (1 − α − β) e[k] + β e[k−1] (α = n·pad_stiffness/K, β = n·pad_damping/(dt·K)),
+  /// which diverges into a period-2 force oscillation of tens of N once α + 2β > 2 (n > 7.7 at
+  /// the defaults: compounds held by several hulls), and the closing then never settles.
+  /// Changes nothing while n <= 5.5 at dt = 1/400 s (one hull touches a pad with at most 4
+  /// points).
   bool limit_controller_gain = true;
+  /// The pad force the controller and the closing's settle test read. false (default): the sum
+  /// of the normal forces of every contact point of the finger, whatever face of it touches.
+  /// true: the net contact force on the finger along its opening direction (the force that
+  /// resists closing), so the forces on a finger wedged in a concavity (a finger inside a pipe's
+  /// bore, touching the wall on both faces) cancel as they do for a real gripper's motor,
+  /// instead of reading as grip force while the other finger has not reached the object.
+  bool controller_net_force = false;
   /// Inertia floor: every principal moment is raised to at least m·(inertia_floor·R)², R = the
   /// largest distance of a hull vertex from the centre of mass (0 = exact inertia). Bullet's
   /// sequential-impulse solver spins up small, light objects squeezed by a large grip force
@@ -145,6 +155,13 @@ struct ShakeOptions {
   /// Bullet sequential-impulse iterations, >= 1; multiplied by ceil(grip_force / (150 m g))
   /// (at most 8) for light objects, which the solver otherwise lets spin out of the grip.
   int solver_iterations = 10;
+  /// Solver iterations of an object whose shake shape has more than one convex part (a
+  /// compound), used instead of solver_iterations (and multiplied alike for light objects);
+  /// 0 = the same as solver_iterations. In [0, 1000]. The sequential-impulse solver leaves the
+  /// friction of a pad touching several hulls unconverged at 10 iterations, which lets some
+  /// compounds creep out of a grip that holds them
+  /// (docs/decisions/0064-compound-solver-iterations.md).
+  int compound_solver_iterations = 0;
   /// Iterations per hull contact (0 = off): each step runs at least ceil(this × the number of
   /// (finger, object hull) pairs in contact at the previous step) iterations. A single hull
   /// makes at most 2 pairs, so with this <= solver_iterations / 2 it is simulated as without;
@@ -246,6 +263,10 @@ struct ShakeTrajectory {
   std::vector<double> finger_right;
   std::vector<std::uint8_t> contact_left;   ///< finger at −x of H touches the object
   std::vector<std::uint8_t> contact_right;  ///< finger at +x of H touches the object
+  /// Normal force of the −x and +x finger pads on the object over the step just run, N (0 at
+  /// the initial state).
+  std::vector<double> force_left;
+  std::vector<double> force_right;
   bool success = false;
   bool ended_early = false;
   int steps = 0;  ///< simulation steps run
