@@ -161,7 +161,12 @@ def _cmd_config_check(args: argparse.Namespace) -> int:
     if errors:
         print(f"{args.file}: INVALID: {len(errors)} setting(s) fail every scene (above){extra}")
         return 1
-    print(f"{args.file}: valid ({config.camera.rig} rig, {views} views per scene{extra})")
+    per_scene = config.objects.count_range
+    objs = ""
+    if per_scene is not None:
+        lo, hi = per_scene
+        objs = f", {lo} objects per scene" if lo == hi else f", {lo}-{hi} objects per scene"
+    print(f"{args.file}: valid ({config.camera.rig} rig, {views} views per scene{objs}{extra})")
     return 0
 
 

@@ -15,11 +15,12 @@ Sections:
 
 - ``objects``: which objects fall into each scene: ``names`` (explicit list, repeat a name for
   copies), or ``categories`` (each with ``copies`` = (min, max) copies, MGN 2-5) and/or a total
-  ``count``; with none of them, ``count`` defaults to 20 objects from categories drawn at random
-  (MGN). ``user_objects``: YAML files of user objects (see :func:`mgn.objects.load_objects_yaml`)
-  added to the catalogue; relative paths are relative to the config file. ``random_shapes``:
-  seeded random procedural objects added to the catalogue (``random_shape_size``,
-  ``random_shape_seed``; :mod:`mgn.objects.random_shapes`).
+  ``count`` (a whole number, or ``[min, max]``: each scene draws its own count uniformly in
+  min..max from its scene seed); with none of them, ``count`` defaults to 20 objects from
+  categories drawn at random (MGN). ``user_objects``: YAML files of user objects (see
+  :func:`mgn.objects.load_objects_yaml`) added to the catalogue; relative paths are relative to
+  the config file. ``random_shapes``: seeded random procedural objects added to the catalogue
+  (``random_shape_size``, ``random_shape_seed``; :mod:`mgn.objects.random_shapes`).
 - ``tote``: :class:`mgn.objects.ToteSpec` fields. ``gripper``:
   :class:`mgn.hardware.ParallelJawGripper` fields. ``cup``: :class:`mgn.hardware.SuctionCup`
   fields. ``drop``: :class:`mgn.scene.DropOptions` fields.
@@ -151,6 +152,10 @@ OUTPUT_FORMATS = ("mgn", "bop", "graspnet")
 DIFFICULTY_LEVELS = (1, 2, 3, 4, 5)
 
 
+#: The random stream of a scene's object count drawn from an ``objects.count`` range ("coun").
+_COUNT_STREAM = 0x636F756E
+
+
 class ConfigError(InvalidArgumentError):
     """A configuration value or key is invalid (a ValueError); the message names the key."""
 
@@ -178,6 +183,24 @@ def _int(lo: int | None = None) -> Check:
         return int(value)
 
     return check
+
+
+_COUNT_EXPECTED = "a whole number >= 1, or [min, max] with whole numbers 1 <= min <= max"
+
+
+def _count(value: Any, key: str) -> int | tuple[int, int]:
+    """``objects.count``: a whole number >= 1, or a [min, max] range of them."""
+
+    def whole(v: Any) -> bool:
+        return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+
+    if whole(value) and int(value) >= 1:
+        return int(value)
+    if isinstance(value, (list, tuple)) and len(value) == 2 and all(whole(v) for v in value):
+        lo, hi = int(value[0]), int(value[1])
+        if 1 <= lo <= hi:
+            return (lo, hi)
+    raise _fail(key, list(value) if isinstance(value, tuple) else value, _COUNT_EXPECTED)
 
 
 def _num(lo: float | None = None, *, strict: bool = True) -> Check:
@@ -308,8 +331,16 @@ class ObjectsConfig(_Section):
     Attributes:
         names: explicit objects (names or ids; repeat for copies), or None.
         categories: categories to use, each with ``copies`` copies, or None.
-        count: total objects per scene, or None. With neither ``names`` nor ``categories`` it
-            defaults to 20 objects from randomly drawn categories with ``copies`` copies each.
+        count: total objects per scene: a whole number >= 1, or ``(min, max)`` (whole numbers,
+            1 <= min <= max) for bins at several fill levels: each scene draws its count
+            uniformly in min..max (both included) from a random stream of its own, derived
+            from the scene seed (:meth:`scene_count`); or None. With neither ``names`` nor
+            ``categories`` it defaults to 20 objects from randomly drawn categories with
+            ``copies`` copies each. With ``categories`` the categories are cycled with their
+            drawn copies until the scene's count is reached; ``refill`` drops the same objects
+            again, so a scene keeps its drawn count; ``random_shapes`` join the catalogue the
+            objects are drawn from and do not change the count. The count a scene drew is
+            ``stats.num_dropped`` of its ``scene.json``.
         copies: (min, max) copies per chosen category (MGN: 2-5).
         user_objects: user-object YAML files added to the catalogue.
         refill: when objects leave the tote during the drop, drop the scene again (the same
@@ -335,7 +366,7 @@ class ObjectsConfig(_Section):
 
     names: tuple[str | int, ...] | None = None
     categories: tuple[str | int, ...] | None = None
-    count: int | None = None
+    count: int | tuple[int, int] | None = None
     copies: tuple[int, int] = (2, 5)
     user_objects: tuple[str, ...] = ()
     refill: bool = True
@@ -348,7 +379,7 @@ class ObjectsConfig(_Section):
     _CHECKS: ClassVar[dict[str, Check]] = {
         "names": _optional(_list(_name)),
         "categories": _optional(_list(_name)),
-        "count": _optional(_int(1)),
+        "count": _optional(_count),
         "copies": _list(_int(1), length=2),
         "user_objects": _list(_path, nonempty=False),
         "refill": _bool,
@@ -363,6 +394,8 @@ class ObjectsConfig(_Section):
     DEFAULT_COUNT = 20
 
     def __post_init__(self) -> None:
+        if self.count is not None:
+            object.__setattr__(self, "count", _count(self.count, "objects.count"))
         if self.names is not None and (self.categories is not None or self.count is not None):
             raise ConfigError(
                 "config key 'objects': give 'names', or 'categories' and/or 'count', not both "
@@ -384,13 +417,47 @@ class ObjectsConfig(_Section):
         if not 0.0 <= float(self.random_shape_dark) <= 1.0:
             raise _fail("objects.random_shape_dark", self.random_shape_dark, "a number in [0, 1]")
 
-    def compose_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`mgn.scene.compose_objects` (without seed/catalogue)."""
+    @property
+    def count_range(self) -> tuple[int, int] | None:
+        """(min, max) objects per scene of ``count`` ((n, n) for a whole number; the default
+        count when nothing is chosen); None when ``names`` or ``categories`` alone decide."""
+        if self.names is not None:
+            return None
+        if self.count is None:
+            return None if self.categories is not None else (self.DEFAULT_COUNT,) * 2
+        if isinstance(self.count, tuple):
+            return (int(self.count[0]), int(self.count[1]))
+        return (int(self.count), int(self.count))
+
+    def scene_count(self, seed: int) -> int | None:
+        """The object count of the scene with scene seed ``seed``: ``count`` itself when it is a
+        whole number (the default count when nothing is chosen), else drawn uniformly in
+        [min, max] from a random stream of its own derived from ``seed`` (the other draws of
+        the scene do not change); None when ``names`` or ``categories`` alone decide."""
+        if self.names is not None or (self.count is None and self.categories is not None):
+            return None
+        if not isinstance(self.count, tuple):
+            return self.DEFAULT_COUNT if self.count is None else int(self.count)
+        lo, hi = self.count
+        rng = np.random.default_rng([int(seed), _COUNT_STREAM])
+        return int(rng.integers(int(lo), int(hi) + 1))
+
+    def compose_kwargs(self, seed: int | None = None) -> dict[str, Any]:
+        """Keyword arguments of :func:`mgn.scene.compose_objects` (without seed/catalogue) for
+        the scene with scene seed ``seed`` (needed with a ``count`` range; see
+        :meth:`scene_count`).
+
+        Raises:
+            InvalidArgumentError: ``count`` is a range and ``seed`` is None.
+        """
         if self.names is not None:
             return {"names": list(self.names)}
-        count = self.count
-        if self.categories is None and count is None:
-            count = self.DEFAULT_COUNT
+        if isinstance(self.count, tuple) and seed is None:
+            raise InvalidArgumentError(
+                f"ObjectsConfig.compose_kwargs: objects.count is the range {list(self.count)}; "
+                "give the scene seed it is drawn from"
+            )
+        count = self.scene_count(0 if seed is None else seed)
         cats = None if self.categories is None else list(self.categories)
         return {"categories": cats, "count": count, "copies": tuple(self.copies)}
 
@@ -940,7 +1007,8 @@ class Config(_Section):
 
 
 _SECTION_DOCS = {
-    "objects": "objects per scene: names | categories (copies each) and/or count; user YAMLs",
+    "objects": "objects per scene: names | categories (copies each) and/or count (int, or "
+    "[min, max]: each scene draws its own); user YAMLs",
     "tote": "the bin (m): mgn.objects.ToteSpec; mesh: your bin file (tote frame), the inner_* "
     "box inside its cavity; walls: false for a table top (a board of inner_length x inner_width); "
     "color is used only with camera.randomize: false (else drawn per view)",

@@ -111,15 +111,21 @@ def load_catalogue(config: Config) -> Catalogue:
 
 
 def _asked_objects(config: Config) -> tuple[str, int]:
-    """(setting, how many objects each scene drops at most)."""
+    """(setting, how many objects each scene drops at most: the max of an ``objects.count``
+    range)."""
     o = config.objects
     if o.names is not None:
         return "objects.names", len(o.names)
     if o.count is not None:
-        return "objects.count", int(o.count)
+        return "objects.count", int(o.count[1] if isinstance(o.count, tuple) else o.count)
     if o.categories is not None:
         return "objects.categories", len(o.categories) * int(o.copies[1])
     return "objects.count", o.DEFAULT_COUNT
+
+
+def _up_to(config: Config) -> str:
+    """``"up to "`` when ``objects.count`` is a range (the messages give its max)."""
+    return "up to " if isinstance(config.objects.count, tuple) else ""
 
 
 def _sizes(catalogue: Catalogue) -> dict[str, tuple[float, float]]:
@@ -183,7 +189,8 @@ def config_warnings(config: Config, catalogue: Catalogue | None = None) -> list[
     if fill is not None and fill[2] <= MAX_OBJECT_OVERFILL:
         key, n, ratio, fits = fill
         found.append(
-            f"{key}: {n} objects per scene; their boxes add up to {ratio:.1f}x the tote's inner "
+            f"{key}: {_up_to(config)}{n} objects per scene; their boxes add up to "
+            f"{ratio:.1f}x the tote's inner "
             f"volume, so most will leave the tote and be removed (about {fits} fit)"
         )
     found += _tote_warnings(config)
@@ -413,7 +420,8 @@ def config_errors(config: Config, catalogue: Catalogue | None = None) -> list[st
     if fill is not None and least is not None and least[2] > MAX_OBJECT_OVERFILL:
         key, n, ratio, fits = fill
         found.append(
-            f"{key}: {n} objects per scene; their boxes add up to {ratio:.3g}x the tote's inner "
+            f"{key}: {_up_to(config)}{n} objects per scene; their boxes add up to "
+            f"{ratio:.3g}x the tote's inner "
             f"volume (more than {MAX_OBJECT_OVERFILL:g}x), about {fits} fit; expected at most "
             f"about {int(fits * MAX_OBJECT_OVERFILL / MAX_OBJECT_FILL)}"
         )

@@ -200,7 +200,8 @@ def compose_scene(
     """The objects of one scene (drop order), given the split and an optional target level.
 
     Without a target level this is the config's composition (:func:`mgn.scene.compose_objects`,
-    seeded by the scene seed) over the split's pool. A target level 1-4 replaces the config's
+    seeded by the scene seed; an ``objects.count`` range draws the scene's count from the scene
+    seed too) over the split's pool. A target level 1-4 replaces the config's
     ``count``/``copies`` by :data:`RECIPES` ``[level]`` (object count drawn from the scene seed,
     capped for unique classes at the pool size); level 5 keeps the config's composition. An
     explicit ``objects.names`` list is used as given. A ``test`` split then makes sure an
@@ -240,7 +241,7 @@ def compose_scene(
         else:
             cat = [s for s in catalogue if s.name not in split.unseen_names]
             cat = cat if split.name == "train" else list(catalogue)
-            out = compose_objects(**obj.compose_kwargs(), seed=seed, catalogue=cat)
+            out = compose_objects(**obj.compose_kwargs(seed), seed=seed, catalogue=cat)
     except InvalidArgumentError as e:
         raise ConfigError(f"config key 'objects': {e}") from e
     if split.name == "test":
