@@ -185,7 +185,7 @@ def _int(lo: int | None = None) -> Check:
     return check
 
 
-_COUNT_EXPECTED = "a whole number >= 1, or [min, max] with whole numbers 1 <= min <= max"
+_COUNT_EXPECTED = "an integer >= 1, or [min, max]: integers with 1 <= min <= max"
 
 
 def _count(value: Any, key: str) -> int | tuple[int, int]:
