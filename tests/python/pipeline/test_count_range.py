@@ -94,9 +94,10 @@ def test_bad_counts_name_the_key_and_what_is_expected(value: object) -> None:
         load_config({"objects": {"count": value}})
     message = str(info.value)
     assert "'objects.count'" in message, message
-    assert "[min, max]" in message and "1 <= min <= max" in message, message
+    assert "[min, max]" in message, message
+    assert "1 <= min <= max" in message, message
     assert repr(value) in message, message
-    with pytest.raises(ConfigError, match="objects.count"):
+    with pytest.raises(ConfigError, match=r"'objects\.count'"):
         ObjectsConfig(count=value)  # type: ignore[arg-type]
 
 
