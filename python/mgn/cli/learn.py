@@ -49,7 +49,8 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         "--backbone",
         choices=BACKBONES,
         default=d.backbone,
-        help="small U-Net, or ResNet-18 encoder (see --backbone-weights)",
+        help="small U-Net (trained from scratch), ResNet-18 or EfficientNet-Lite0 encoder "
+        "(ImageNet weights: see --backbone-weights)",
     )
     p.add_argument("--width", type=int, default=d.width, help="channels of the small U-Net")
     p.add_argument(
@@ -108,6 +109,13 @@ def add_train_arguments(p: argparse.ArgumentParser) -> None:
         default=d.foreground_loss,
         help="loss of the foreground channel",
     )
+    p.add_argument(
+        "--encoder-lr-scale",
+        type=float,
+        default=d.encoder_lr_scale,
+        metavar="F",
+        help="the encoder's learning rate as a fraction of --lr, in (0, 1]",
+    )
     add_device_arguments(
         p,
         device_help="auto (a CUDA GPU if torch finds one), cpu or cuda[:N]",
@@ -135,6 +143,7 @@ def configs_from_args(args: argparse.Namespace) -> tuple[ModelConfig, TrainConfi
         seed=args.seed,
         augment="none" if args.no_augment else args.augment,
         foreground_loss=args.foreground_loss,
+        encoder_lr_scale=args.encoder_lr_scale,
     )
     return mc, tc
 
@@ -207,7 +216,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--backbone-weights",
         metavar="FILE",
-        help="local ResNet-18 state dict for --backbone resnet18",
+        help="local ImageNet state dict of the encoder (ResNet-18 for --backbone resnet18, "
+        "EfficientNet-Lite0 for efficientnet_lite0)",
     )
     add_quiet_argument(p)
     add_model_arguments(p)

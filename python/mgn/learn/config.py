@@ -24,7 +24,7 @@ __all__ = [
 #: Encoders: ``small`` (a 4-level U-Net of ``width``, 2 x width, 4 x width, 8 x width channels,
 #: trained from scratch) or ``resnet18`` (ResNet-18's layout and parameter names, so that a
 #: ResNet-18 state dict the user has as a local file initialises it; ``width`` is unused).
-BACKBONES = ("small", "resnet18")
+BACKBONES = ("small", "resnet18", "efficientnet_lite0")
 #: Scene suction scores a model can learn (datasets of ``{v}_scene.hdf5``).
 SUCTION_SCORES = ("score_analytical", "score_wrench", "score_simulation")
 #: Losses of the foreground channel: ``bce`` (binary cross-entropy) or ``bce+dice`` (plus the
@@ -161,6 +161,8 @@ class TrainConfig:
             90-degree rotations, flips, colour / blur / noise / JPEG changes), ``flips`` or
             ``none``; ``True`` / ``False`` read as ``flips`` / ``none``.
         foreground_loss: :data:`FOREGROUND_LOSSES` (default ``bce+dice``).
+        encoder_lr_scale: the encoder's learning rate as a fraction of ``lr`` (default 1.0,
+            in (0, 1]); below 1 fine-tunes ImageNet weights more gently than the decoder.
     """
 
     epochs: int | None = None
@@ -169,6 +171,7 @@ class TrainConfig:
     seed: int = 0
     augment: str = "full"
     foreground_loss: str = "bce+dice"
+    encoder_lr_scale: float = 1.0
 
     def __post_init__(self) -> None:
         if self.epochs is not None and int(self.epochs) < 1:
@@ -177,6 +180,10 @@ class TrainConfig:
             raise InvalidArgumentError(f"batch_size must be >= 1, got {self.batch_size}")
         if not float(self.lr) > 0:
             raise InvalidArgumentError(f"lr must be > 0, got {self.lr}")
+        if not 0.0 < float(self.encoder_lr_scale) <= 1.0:
+            raise InvalidArgumentError(
+                f"encoder_lr_scale must be in (0, 1], got {self.encoder_lr_scale}"
+            )
         if isinstance(self.augment, bool):
             object.__setattr__(self, "augment", "flips" if self.augment else "none")
         if self.augment not in AUGMENTS:

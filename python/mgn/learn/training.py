@@ -44,7 +44,12 @@ from mgn.learn.backend import choose_device, require_torch, seed_everything
 from mgn.learn.checkpoint import CHECKPOINT_FORMAT, MODEL_FORMAT, read_torch_file, write_torch_file
 from mgn.learn.config import ModelConfig, TrainConfig, auto_epochs
 from mgn.learn.data import TrainingArrays, load_views, training_views
-from mgn.learn.model import build_model, count_parameters, load_backbone_weights
+from mgn.learn.model import (
+    build_model,
+    count_parameters,
+    default_backbone_weights,
+    load_backbone_weights,
+)
 from mgn.learn.targets import model_input
 
 __all__ = ["TrainResult", "augmented_batch", "compute_losses", "dice_loss", "train"]
@@ -105,6 +110,18 @@ def compute_losses(
         out["hidden"] = bce(logits[:, 3], targets[:, 3])
     out["loss"] = sum(out.values())
     return out
+
+
+def _param_groups(model: Any, tc: TrainConfig) -> list[dict[str, Any]]:
+    """The encoder's parameters at ``encoder_lr_scale`` x the learning rate, the rest at 1 x."""
+    encoder = getattr(model, "encoder", None)
+    enc = list(encoder.parameters()) if encoder is not None else []
+    ids = {id(p) for p in enc}
+    rest = [p for p in model.parameters() if id(p) not in ids]
+    groups = [{"params": rest, "lr_scale": 1.0}]
+    if enc:
+        groups.append({"params": enc, "lr_scale": float(tc.encoder_lr_scale)})
+    return groups
 
 
 def _lr(tc: TrainConfig, step: int, total: int) -> float:
@@ -200,6 +217,8 @@ def _init_model(
     init: str | os.PathLike[str] | None,
     backbone_weights: str | os.PathLike[str] | None,
 ) -> None:
+    if backbone_weights is None and init is None:
+        backbone_weights = default_backbone_weights(mc.backbone)
     if backbone_weights is not None:
         load_backbone_weights(model, backbone_weights)
     if init is not None:
@@ -246,7 +265,9 @@ def train(
         device: ``auto`` (a CUDA GPU when torch finds one), ``cpu`` or ``cuda[:N]``.
         num_threads: torch CPU threads (0 = torch's default).
         init: an mgn ``model.pt`` to start from (same backbone, width, input and outputs).
-        backbone_weights: a local ResNet-18 state-dict file for the ``resnet18`` encoder.
+        backbone_weights: a local ImageNet state-dict file for the ``resnet18`` or
+            ``efficientnet_lite0`` encoder (default: none for ``resnet18``, the installed
+            package's file for ``efficientnet_lite0``, :func:`default_backbone_weights`).
         progress: show a progress bar with the running loss.
     """
     t0 = time.perf_counter()
@@ -266,7 +287,7 @@ def train(
     if ckpt is None:
         _init_model(model, mc, init, backbone_weights)
     model.to(dev)
-    optimizer = torch.optim.Adam(model.parameters(), lr=tc.lr)
+    optimizer = torch.optim.Adam(_param_groups(model, tc), lr=tc.lr)
     history: list[dict[str, float]] = []
     first_epoch = 0
     if ckpt is not None:
@@ -300,7 +321,7 @@ def train(
         for k, idx in enumerate(_batches(len(arrays), tc, epoch)):
             step = epoch * steps_per_epoch + k
             for group in optimizer.param_groups:
-                group["lr"] = _lr(tc, step, total)
+                group["lr"] = _lr(tc, step, total) * group["lr_scale"]
             x, t, w = _batch_tensors(arrays, idx, tc, mc, epoch, dev)
             losses = compute_losses(model(x), t, w, mc, tc.foreground_loss)
             optimizer.zero_grad(set_to_none=True)
