@@ -358,11 +358,37 @@ TEST(Shake, NetPadForceCountsOnlyTheForceAlongTheClosingDirection) {
   }
 }
 
+TEST(Shake, DefaultControllerReadsTheNetPadForce) {
+  // At the default options the controller reads the net force along the opening direction: on
+  // the grooved block (see above) the flat +x pad then settles at the grip force, not at the
+  // summed reading's 2/(1 + sqrt 2) = 0.83 of it, and the grooved pad reads the same force.
+  const double w = 0.04;
+  const PhysicsObject block = grooved_block(w);
+  ShakeOptions o = small_grid(1, 0.0, 0.0);
+  ASSERT_TRUE(o.controller_net_force);
+  o.shake_steps = o.rotate_steps = 0;
+  o.settle_steps = 0;
+  const ShakeTrajectory tr =
+      shake_trajectory(block, ParallelJawGripper{}, centre_grasp(w), 0.0, 1.0, o, 1, 0);
+  std::size_t first = 0;
+  while (first < tr.time.size() && !(tr.contact_left[first] && tr.contact_right[first])) ++first;
+  const std::size_t from = first + 20, to = first + 80;
+  ASSERT_LT(to, tr.time.size());
+  double left = 0.0, right = 0.0;
+  for (std::size_t k = from; k < to; ++k) {
+    left += tr.force_left[k] / double(to - from);
+    right += tr.force_right[k] / double(to - from);
+  }
+  EXPECT_NEAR(right, o.grip_force, 0.04 * o.grip_force);
+  EXPECT_NEAR(left, o.grip_force, 0.06 * o.grip_force);
+}
+
 TEST(Shake, NetPadForceChangesNoOutcomeOnAFaceOnGrasp) {
   // A box squeezed face-on: every contact normal is along x, so both readings are the same force
   // and every trial of a grid the same outcome.
   const PhysicsObject box = box_object(Vec3d(0.04, 0.05, 0.05), 0.8);
   ShakeOptions o = small_grid(3, 0.2, 1.0);
+  o.controller_net_force = false;
   const ShakeResult sum = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);
   o.controller_net_force = true;
   const ShakeResult net = shake_test(box, ParallelJawGripper{}, {centre_grasp(0.04)}, o);

@@ -92,10 +92,11 @@ class ShakeOptions:
     (docs/models.md, "Solver iterations").
     ``controller_stiffness`` is per 1/400 s of simulated time: a step ``dt`` moves the fingers
     ``dt`` x 400/s times (mean pad force − ``grip_force``)/``controller_stiffness``, so the
-    closing settles alike at any ``dt``. ``controller_net_force`` (off by default): the controller
-    reads each pad's net normal force along its opening direction instead of the sum of the
-    normal forces on every face of the finger, so a finger wedged in a concavity (inside a
-    pipe's or a cup's bore) does not read as gripping (docs/models.md, "Grip-force controller").
+    closing settles alike at any ``dt``. ``controller_net_force`` (on by default): the controller
+    reads each pad's net normal force along its opening direction, so a finger wedged in a
+    concavity (inside a pipe's or a cup's bore) does not read as gripping; off, it reads the sum
+    of the normal forces on every face of the finger (the same force on a face-on contact;
+    docs/models.md, "Grip-force controller").
     Every default is the C++ struct's.
     """
 
@@ -207,8 +208,9 @@ class ShakeTrajectory:
         finger_left, finger_right: (K,) inner-face offsets of the fingers from the hand axis, m
             (the −x finger's face is at x = −finger_left in the hand frame).
         contact_left, contact_right: (K,) bool, the finger touches the object.
-        force_left, force_right: (K,) normal force of each pad on the object over the step just
-            run, N (0 at the initial state).
+        force_left, force_right: (K,) force of each pad on the object over the step just run
+            as the grip-force controller reads it (``ShakeOptions.controller_net_force``), N (0
+            at the initial state).
         success, ended_early, steps, friction, density_factor: the trial's outcome and setting.
     """
 

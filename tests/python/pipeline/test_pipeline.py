@@ -667,6 +667,24 @@ def test_h5_helpers_write_without_timestamps(tmp_path: Path) -> None:
         np.testing.assert_array_equal(h5["grasps/paralleljaw/quality_score"], np.arange(4))
 
 
+def test_label_cache_key_is_bumped_for_the_net_force_controller(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Parallel-jaw physics scores of compounds changed when the shake test's grip controller
+    started reading the net pad force (object-labels-10): entries written under the previous
+    version's keys must not be found."""
+    from mgn.objects import get_object
+    from mgn.pipeline import label_cache
+
+    assert label_cache.CACHE_VERSION == "object-labels-10"
+    spec, config = get_object("pipe_elbow"), Config()
+    keys = label_cache.label_keys(spec, config)
+    assert set(keys) == {"suction", "paralleljaw"}
+    monkeypatch.setattr(label_cache, "CACHE_VERSION", "object-labels-9")
+    old = label_cache.label_keys(spec, config)
+    assert all(old[kind] != keys[kind] for kind in keys)
+
+
 def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:
     import dataclasses
 

@@ -14,6 +14,7 @@ from PIL import Image
 import mgn
 from mgn.cli.pj import register_show_trial
 from mgn.errors import InvalidArgumentError
+from mgn.geometry.convex import convex_hull
 from mgn.hardware import ParallelJawGripper
 from mgn.pj.physics import ShakeOptions, grasp_rows, shake_scores, shake_trajectory
 from mgn.viz.shake_trial import render_frames, write_trial_pictures
@@ -130,6 +131,64 @@ def test_compound_solver_iterations_apply_to_compounds_only():
     np.testing.assert_array_equal(
         closing(box, replace(base, compound_solver_iterations=40)), closing(box, base)
     )
+
+
+def grooved_block(w):
+    """A 50 g block x in [-w/2 - 10 mm, w/2], |y| <= 30 mm, |z| <= 15 mm with a 90-degree
+    V-groove along z in its -x face (apex at x = -w/2 + 10 mm): two convex prisms. A 20 mm pad
+    closing along +x touches the groove's walls with its edges (y = +-10 mm), where the contact
+    normals are 45 degrees from x; the +x face is flat."""
+    _, m, com, inertia = box_object([w + 0.01, 0.06, 0.03], 0.05)
+    x0, xr = -w / 2, w / 2
+    parts = []
+    for sy in (1.0, -1.0):
+        xy = [(x0 - 0.01, 0.02), (x0 + 0.01, 0.0), (xr, 0.0), (xr, 0.03), (x0 - 0.01, 0.03)]
+        pts = np.array([[x, sy * y, z] for x, y in xy for z in (-0.015, 0.015)])
+        parts.append(convex_hull(mgn.Mesh(pts, np.array([[0, 2, 4]]))))
+    return parts, m, com, inertia
+
+
+@pytest.mark.parametrize("net", [None, True, False])
+def test_the_default_controller_reads_the_net_pad_force(net):
+    """Frictionless closing on the grooved block. Statics: the grooved pad's two contacts push
+    at 45 degrees, the flat pad straight back, and the block at rest needs the same force F
+    along x on both pads. The net reading (the default) holds F = grip force on both; the summed
+    normal forces read sqrt(2) F on the grooved pad, so the controller holds (sqrt(2) F + F)/2 =
+    grip: F = 0.83 grip on the flat pad."""
+    w = 0.04
+    parts, m, com, inertia = grooved_block(w)
+    opts = ShakeOptions(
+        grid=1,
+        friction_range=(0.0, 0.0),
+        shake_steps=0,
+        rotate_steps=0,
+        settle_steps=0,
+        hold_tolerance=0.0,
+        num_threads=1,
+    )
+    if net is not None:
+        opts = replace(opts, controller_net_force=net)
+    t = shake_trajectory(
+        parts, m, com, inertia, centre_grasp(w), 0.0, 1.0, options=opts, record_every=1
+    )
+    both = np.flatnonzero(t.contact_left & t.contact_right)
+    assert both.size, "the pads never both touched"
+    window = slice(both[0] + 20, both[0] + 80)
+    assert window.stop < len(t.time)
+    assert (t.contact_left[window] & t.contact_right[window]).all()
+    left, right = t.force_left[window].mean(), t.force_right[window].mean()
+    grip = opts.grip_force
+    flat = grip if net in (None, True) else 2 * grip / (1 + np.sqrt(2))
+    assert right == pytest.approx(flat, abs=0.04 * grip)
+    grooved = flat if net in (None, True) else np.sqrt(2) * flat
+    assert left == pytest.approx(grooved, abs=0.06 * grip)
+
+
+def test_the_net_reading_is_the_default_of_both_layers():
+    assert ShakeOptions().controller_net_force is True
+    assert mgn._core.grasp.ShakeOptions().controller_net_force is True
+    assert ShakeOptions().to_core().controller_net_force is True
+    assert ShakeOptions(controller_net_force=False).to_core().controller_net_force is False
 
 
 def test_trajectory_records_the_pad_forces_the_controller_settles_on():

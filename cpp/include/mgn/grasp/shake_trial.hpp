@@ -99,13 +99,14 @@ struct ShakeOptions {
   /// Changes nothing while n <= 5.5 at dt = 1/400 s (one hull touches a pad with at most 4
   /// points).
   bool limit_controller_gain = true;
-  /// The pad force the controller and the closing's settle test read. false (default): the sum
-  /// of the normal forces of every contact point of the finger, whatever face of it touches.
-  /// true: the net contact force on the finger along its opening direction (the force that
-  /// resists closing), so the forces on a finger wedged in a concavity (a finger inside a pipe's
-  /// bore, touching the wall on both faces) cancel as they do for a real gripper's motor,
-  /// instead of reading as grip force while the other finger has not reached the object.
-  bool controller_net_force = false;
+  /// The pad force the controller and the closing's settle test read. true (default): the net
+  /// contact force on the finger along its opening direction (the force that resists closing),
+  /// so the forces on a finger wedged in a concavity (a finger inside a pipe's bore, touching
+  /// the wall on both faces) cancel as they do for a real gripper's motor, instead of reading
+  /// as grip force while the other finger has not reached the object. false: the sum of the
+  /// normal forces of every contact point of the finger, whatever face of it touches (the same
+  /// reading on a pad pressed face-on against the object).
+  bool controller_net_force = true;
   /// Inertia floor: every principal moment is raised to at least m·(inertia_floor·R)², R = the
   /// largest distance of a hull vertex from the centre of mass (0 = exact inertia). Bullet's
   /// sequential-impulse solver spins up small, light objects squeezed by a large grip force
@@ -263,8 +264,9 @@ struct ShakeTrajectory {
   std::vector<double> finger_right;
   std::vector<std::uint8_t> contact_left;   ///< finger at −x of H touches the object
   std::vector<std::uint8_t> contact_right;  ///< finger at +x of H touches the object
-  /// Normal force of the −x and +x finger pads on the object over the step just run, N (0 at
-  /// the initial state).
+  /// Force of the −x and +x finger pads on the object over the step just run as the grip-force
+  /// controller reads it (ShakeOptions::controller_net_force: by default the net normal force
+  /// along the finger's opening direction), N (0 at the initial state).
   std::vector<double> force_left;
   std::vector<double> force_right;
   bool success = false;
