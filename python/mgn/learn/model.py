@@ -13,9 +13,15 @@ output of :attr:`ModelConfig.outputs` at the input resolution.
   common ResNet-18 state dict: ``conv1``, ``bn1``, ``layer1.0.conv1``, ...), so
   :func:`load_backbone_weights` can initialise it from a local file of ImageNet weights;
   about 14 M parameters.
+- ``efficientnet_lite0``: EfficientNet-Lite0's stem and 16 inverted-residual blocks (BatchNorm,
+  ReLU6, TensorFlow ``SAME`` padding; parameter names as in its common state dict:
+  ``_conv_stem``, ``_bn0``, ``_blocks.N``), the decoder joining the blocks' outputs at 1/2 to
+  1/32; about 3.5 M parameters. It starts from ImageNet weights
+  (:func:`default_backbone_weights`), and its encoder's BatchNorm layers keep their statistics
+  in training mode.
 
 Inputs whose sides are not multiples of the network's stride (16 for ``small``, 32 for
-``resnet18``) are padded by replication and the outputs cropped back.
+``resnet18`` and ``efficientnet_lite0``) are padded by replication and the outputs cropped back.
 """
 
 from __future__ import annotations
