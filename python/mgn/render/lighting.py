@@ -10,7 +10,9 @@ tote and floor materials (colour, roughness and a procedural texture,
 :func:`mgn.render.materials.procedural_texture`) and the exposure. The objects' own materials
 (:func:`draw_object_materials`, off by default) are drawn from one further stream per object,
 (seed, view index, object id), and a light at the camera (:func:`draw_camera_light`, off by
-default) from a stream of its own, so they change nothing else in the view. No distractor
+default) from a stream of its own, so they change nothing else in the view, except that a view
+with the camera light may dim its other lights and environment (:func:`with_camera_light`; the
+look of a 3D camera's projector in a dark cell). No distractor
 objects are added.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
@@ -20,6 +22,7 @@ shows E / pi); poses (4, 4) float64 ``X_AB``.
 from __future__ import annotations
 
 import colorsys
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -51,6 +54,7 @@ __all__ = [
     "draw_camera_light",
     "draw_lighting",
     "draw_object_materials",
+    "with_camera_light",
 ]
 
 #: Environment kinds the randomisation draws from.
@@ -315,6 +319,48 @@ def draw_camera_light(
     square light in the camera's image plane, ``camera_light_offset`` from the optical centre,
     emitting along +z of the camera, its radiance set so that it casts the drawn
     ``camera_light_irradiance`` on ``target_W`` (E = L A cos(a) cos(b) / d^2)."""
+    drawn = _draw_camera_light(settings, seed, view_index, X_WC, target_W, randomize)
+    return None if drawn is None else drawn[0]
+
+
+def with_camera_light(
+    lit: ViewLighting,
+    settings: RenderSettings,
+    seed: int,
+    view_index: int,
+    X_WC: npt.ArrayLike,
+    *,
+    target_W: npt.ArrayLike = (0.0, 0.0, 0.0),
+    randomize: bool = True,
+) -> ViewLighting:
+    """``lit`` with the light at the camera of :func:`draw_camera_light` added, and the other
+    lights and the environment scaled by the factor drawn from ``camera_light_ambient`` (the
+    same stream, drawn after the light, so the light does not depend on the range); ``lit``
+    itself when the view has no camera light. The summary gains ``camera_light``: the light's
+    offset from the optical centre (m), its side (m), its irradiance on ``target_W`` and the
+    ambient factor."""
+    drawn = _draw_camera_light(settings, seed, view_index, X_WC, target_W, randomize)
+    if drawn is None:
+        return lit
+    light, ambient, info = drawn
+    lights = lit.lights
+    env = lit.environment
+    if ambient != 1.0:
+        lights = tuple(dataclasses.replace(x, intensity=x.intensity * ambient) for x in lit.lights)
+        env = dataclasses.replace(env, intensity=env.intensity * ambient)
+    summary = {**lit.summary, "camera_light": {**info, "ambient": ambient}}
+    return dataclasses.replace(lit, lights=(*lights, light), environment=env, summary=summary)
+
+
+def _draw_camera_light(
+    settings: RenderSettings,
+    seed: int,
+    view_index: int,
+    X_WC: npt.ArrayLike,
+    target_W: npt.ArrayLike,
+    randomize: bool,
+) -> tuple[AreaLight, float, dict[str, float]] | None:
+    """(light, ambient factor, summary) of the camera light of a view, or None."""
     r = settings.randomize
     if not (randomize and r.camera_light):
         return None
@@ -329,6 +375,7 @@ def draw_camera_light(
     offset = float(g.uniform(*r.camera_light_offset))
     phi = float(g.uniform(0.0, 2.0 * math.pi))
     e = float(g.uniform(*r.camera_light_irradiance))
+    ambient = float(g.uniform(*r.camera_light_ambient))
     X_CL = np.eye(4)
     X_CL[:2, :2] = [[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]]
     X_CL[:2, 3] = (offset * math.cos(phi), offset * math.sin(phi))
@@ -339,7 +386,8 @@ def draw_camera_light(
     cos_l = max(float(X_WL[:3, 2] @ to_target) / d, 1e-3)
     cos_t = max(float(-to_target[2]) / d, 1e-3)
     radiance = e * d * d / (side * side * cos_l * cos_t)
-    return AreaLight(X_WL, "rect", (side, side), (1.0, 1.0, 1.0), radiance)
+    light = AreaLight(X_WL, "rect", (side, side), (1.0, 1.0, 1.0), radiance)
+    return light, ambient, {"offset": offset, "size": side, "irradiance": e}
 
 
 def _draw_object_colour(

@@ -28,7 +28,6 @@ shows E / pi); poses (4, 4) float64 ``X_AB``.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 import warnings
 from collections.abc import Sequence
@@ -41,9 +40,9 @@ from mgn.geometry import Mesh
 from mgn.render.denoiser import denoise, denoiser_available
 from mgn.render.lighting import (
     ViewLighting,
-    draw_camera_light,
     draw_lighting,
     draw_object_materials,
+    with_camera_light,
 )
 from mgn.render.materials import (
     OBJECT_TEXTURE_TILE,
@@ -216,7 +215,8 @@ class PhotoRenderer:
         s = self.settings
         t0 = time.perf_counter()
         lit = self.lighting(view_index)
-        cam_light = draw_camera_light(
+        lit = with_camera_light(
+            lit,
             s,
             self.seed,
             view_index,
@@ -224,8 +224,6 @@ class PhotoRenderer:
             target_W=self._X_tote[:3, 3],
             randomize=self.randomize,
         )
-        if cam_light is not None:
-            lit = dataclasses.replace(lit, lights=(*lit.lights, cam_light))
         scene = self._scene_for(lit, view_index)
         out = scene.render(
             view,

@@ -107,6 +107,12 @@ class RandomizeSettings:
             centre, m (default (0.03, 0.15)).
         camera_light_irradiance: (min, max) irradiance the camera light casts on the tote
             floor's centre, in the units of ``light_irradiance`` (default (1, 6)).
+        camera_light_ambient: (min, max) within [0, 1], the factor the other lights and the
+            environment are scaled by in a view that has the camera light (default (1, 1):
+            unchanged). Near 0 gives the colour image of a structured-light 3D camera in a
+            dark cell, lit by its own projector only: every object casts a sharp black
+            shadow on the side away from the projector (with a small ``camera_light_size``
+            and the projector's baseline as ``camera_light_offset``).
     """
 
     lights: bool = True
@@ -131,6 +137,7 @@ class RandomizeSettings:
     camera_light_size: tuple[float, float] = (0.02, 0.1)
     camera_light_offset: tuple[float, float] = (0.03, 0.15)
     camera_light_irradiance: tuple[float, float] = (1.0, 6.0)
+    camera_light_ambient: tuple[float, float] = (1.0, 1.0)
 
     def __post_init__(self) -> None:
         for key in (
@@ -164,6 +171,7 @@ class RandomizeSettings:
             ("camera_light_size", 1e-3, None),
             ("camera_light_offset", 0.0, None),
             ("camera_light_irradiance", 0.0, None),
+            ("camera_light_ambient", 0.0, 1.0),
         ):
             rng = _range(getattr(self, key), f"RandomizeSettings.{key}", lo, hi)
             object.__setattr__(self, key, rng)

@@ -312,8 +312,117 @@ def test_camera_light_changes_nothing_else() -> None:
         ("camera_light_size", (0.0, 0.1)),
         ("camera_light_offset", (0.2, 0.1)),
         ("camera_light_irradiance", (-1.0, 2.0)),
+        ("camera_light_ambient", (0.5, 1.5)),
+        ("camera_light_ambient", (-0.1, 0.5)),
     ],
 )
 def test_camera_light_bad_settings_name_the_setting(field: str, value: Any) -> None:
     with pytest.raises(InvalidArgumentError, match=f"RandomizeSettings.{field}"):
         RandomizeSettings(**{field: value})
+
+
+def test_camera_light_ambient_scales_the_other_lights_and_the_environment() -> None:
+    """``camera_light_ambient`` scales every other light and the environment by one factor
+    drawn in its range, only in views with the camera light; the camera light itself is the
+    one :func:`draw_camera_light` draws whatever the range; the default (1, 1) changes nothing
+    else."""
+    view, seed = _view(), 6
+    dim = _cam_settings(True, camera_light_probability=0.5, camera_light_ambient=(0.05, 0.3))
+    plain = _cam_settings(True, camera_light_probability=0.5)
+    assert RandomizeSettings().camera_light_ambient == (1.0, 1.0)
+    factors = []
+    for v in range(30):
+        base = draw_lighting(dim, seed, v)
+        got = lighting.with_camera_light(base, dim, seed, v, view.X_WC)
+        light = lighting.draw_camera_light(dim, seed, v, view.X_WC)
+        assert repr(light) == repr(lighting.draw_camera_light(plain, seed, v, view.X_WC))
+        if light is None:
+            assert got is base
+            continue
+        assert repr(got.lights[-1]) == repr(light)
+        assert len(got.lights) == len(base.lights) + 1
+        f = got.environment.intensity / base.environment.intensity
+        assert 0.05 - 1e-12 <= f <= 0.3 + 1e-12
+        assert got.summary["camera_light"]["ambient"] == pytest.approx(f, rel=1e-12)
+        for a, b in zip(got.lights[:-1], base.lights, strict=True):
+            assert a.intensity == pytest.approx(f * b.intensity, rel=1e-12)
+            assert np.array_equal(a.X_WL, b.X_WL)
+            assert (a.size, a.color) == (b.size, b.color)
+        assert (got.tote, got.floor, got.exposure) == (base.tote, base.floor, base.exposure)
+        unchanged = lighting.with_camera_light(base, plain, seed, v, view.X_WC)
+        assert unchanged.lights[:-1] == base.lights
+        assert unchanged.environment == base.environment
+        factors.append(f)
+    # Drawn per view: some views with the light, different factors.
+    assert len(factors) >= 5
+    assert np.ptp(factors) > 0.05
+
+
+def test_projector_light_alone_leaves_black_shadows() -> None:
+    """With the other lights and the environment off (ambient 0), a small light beside the
+    camera leaves the floor behind a box, seen from the light, black: the floor points whose
+    segments to all four corners of the light cross the box (computed here by a slab test,
+    independent of the tracer) get under 5 % of the radiance of the floor points that see the
+    whole light (what is left is light the box reflects), while with the ambient left on they
+    keep more than 15 %."""
+    box = mgn.geometry.make_box((0.08, 0.08, 0.12))
+    X_box = np.eye(4)
+    X_box[2, 3] = 0.06
+    floor = mgn.geometry.make_box((1.2, 1.2, 0.02))
+    X_floor = np.eye(4)
+    X_floor[2, 3] = -0.01
+    K = Intrinsics.mgn_synthetic().scaled(64 / 1200.0)
+    view = CameraView(K, look_at((0.0, 0.0, 0.6), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)))
+    origins, dirs = view.rays()
+    o, d = origins.reshape(-1, 3).astype(np.float64), dirs.reshape(-1, 3).astype(np.float64)
+    t = -o[:, 2] / d[:, 2]
+    P = o + t[:, None] * d  # the floor point (z = 0) of each pixel
+
+    def blocked(P: np.ndarray, q: np.ndarray) -> np.ndarray:
+        # Does the segment P -> q cross the box |x|, |y| <= 0.04, 0 <= z <= 0.12?
+        lo, hi = np.array([-0.04, -0.04, 0.0]), np.array([0.04, 0.04, 0.12])
+        seg = q - P
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t0, t1 = (lo - P) / seg, (hi - P) / seg
+        near = np.nanmax(np.minimum(t0, t1), axis=1)
+        far = np.nanmin(np.maximum(t0, t1), axis=1)
+        return (near < far) & (far > 1e-6) & (near < 1.0 - 1e-6)
+
+    results = {}
+    for ambient in (0.0, 1.0):
+        s = RenderSettings(
+            engine="path",
+            spp=64,
+            spp_without_denoiser=64,
+            denoise=False,
+            randomize=RandomizeSettings(
+                camera_light=True,
+                camera_light_probability=1.0,
+                camera_light_size=(0.01, 0.01),
+                camera_light_offset=(0.15, 0.15),
+                camera_light_irradiance=(6.0, 6.0),
+                camera_light_ambient=(ambient, ambient),
+                materials=False,
+            ),
+        )
+        pr = photo.PhotoRenderer([(box, X_box, 1)], None, np.eye(4), (floor, X_floor), s, seed=1)
+        _, out = pr.render(view, 0)
+        lum = np.asarray(out.radiance, np.float64).reshape(-1, 3).mean(axis=1)
+        light = lighting.draw_camera_light(s, 1, 0, view.X_WC)
+        assert light is not None
+        X, (a, b) = light.X_WL, light.size
+        corners = [
+            X[:3, :3] @ (sx * a / 2, sy * b / 2, 0) + X[:3, 3] for sx in (-1, 1) for sy in (-1, 1)
+        ]
+        hits = np.stack([blocked(P, q) for q in corners])
+        on_floor = np.hypot(P[:, 0], P[:, 1]) < 0.3
+        # Floor pixels not covered by the box in the image (the box's footprint seen from the
+        # camera: the segment from the camera to the floor point crosses the box).
+        visible = on_floor & ~blocked(P, view.position)
+        umbra = visible & hits.all(axis=0)
+        lit = visible & ~hits.any(axis=0)
+        assert umbra.sum() >= 20, umbra.sum()
+        assert lit.sum() >= 200, lit.sum()
+        results[ambient] = lum[umbra].mean() / lum[lit].mean()
+    assert results[0.0] < 0.05, results
+    assert results[1.0] > 0.15, results
