@@ -125,11 +125,54 @@ def _small_unet() -> Any:
 
 
 @functools.cache
+def _encoder_unet() -> Any:
+    """The U-Net around a pretrained-style encoder, shared by the ``resnet18`` and
+    ``efficientnet_lite0`` backbones: the encoder returns five feature maps at 1/2 ... 1/32 of
+    the (padded) input; per level, deepest first, a 2 x 2 transposed convolution brings the
+    deeper map up and a conv block fuses it with the skip; a last up-sampling stage restores
+    the full resolution before a 1 x 1 head."""
+    torch = require_torch()
+    nn = torch.nn
+    block, padded = _block, _padded
+
+    class EncoderUNet(nn.Module):  # type: ignore[name-defined,misc]
+        stride = 32
+
+        def __init__(
+            self,
+            encoder: Any,
+            levels: list[tuple[int, int, int]],
+            full: tuple[int, int],
+            cout: int,
+        ) -> None:
+            """``levels``: (channels coming up, skip channels, decoder channels) per level,
+            deepest first; ``full``: (channels in, channels out) of the full-resolution
+            stage; ``cout``: output channels."""
+            super().__init__()
+            self.encoder = encoder
+            self.up = nn.ModuleList([nn.ConvTranspose2d(a, c, 2, stride=2) for a, _, c in levels])
+            self.dec = nn.ModuleList([block(c + s, c) for _, s, c in levels])
+            self.up_full = nn.ConvTranspose2d(full[0], full[1], 2, stride=2)
+            self.dec_full = block(full[1], full[1])
+            self.head = nn.Conv2d(full[1], cout, 1)
+
+        def forward(self, x: Any) -> Any:
+            x, h, w = padded(x, self.stride)
+            feats = self.encoder(x)
+            y = feats.pop()
+            for up, dec in zip(self.up, self.dec, strict=True):
+                y = dec(torch.cat([up(y), feats.pop()], 1))
+            y = self.dec_full(self.up_full(y))
+            return self.head(y)[..., :h, :w]
+
+    return EncoderUNet
+
+
+@functools.cache
 def _resnet18_unet() -> Any:
     torch = require_torch()
     nn = torch.nn
     F = torch.nn.functional  # the usual name
-    block, padded = _block, _padded
 
     class BasicBlock(nn.Module):  # type: ignore[name-defined,misc]
         def __init__(self, cin: int, cout: int, stride: int) -> None:
@@ -167,27 +210,10 @@ def _resnet18_unet() -> Any:
                 feats.append(x)
             return feats  # 64 @ /2, 64 @ /4, 128 @ /8, 256 @ /16, 512 @ /32
 
-    class ResNet18UNet(nn.Module):  # type: ignore[name-defined,misc]
-        stride = 32
-
+    class ResNet18UNet(_encoder_unet()):  # type: ignore[misc]
         def __init__(self, cin: int, cout: int) -> None:
-            super().__init__()
-            self.encoder = ResNet18Encoder(cin)
-            pairs = [(512, 256), (256, 128), (128, 64), (64, 64)]
-            self.up = nn.ModuleList([nn.ConvTranspose2d(a, b, 2, stride=2) for a, b in pairs])
-            self.dec = nn.ModuleList([block(2 * b, b) for _, b in pairs])
-            self.up_full = nn.ConvTranspose2d(64, 32, 2, stride=2)
-            self.dec_full = block(32, 32)
-            self.head = nn.Conv2d(32, cout, 1)
-
-        def forward(self, x: Any) -> Any:
-            x, h, w = padded(x, self.stride)
-            feats = self.encoder(x)
-            y = feats.pop()
-            for up, dec in zip(self.up, self.dec, strict=True):
-                y = dec(torch.cat([up(y), feats.pop()], 1))
-            y = self.dec_full(self.up_full(y))
-            return self.head(y)[..., :h, :w]
+            levels = [(512, 256, 256), (256, 128, 128), (128, 64, 64), (64, 64, 64)]
+            super().__init__(ResNet18Encoder(cin), levels, (64, 32), cout)
 
     return ResNet18UNet
 
@@ -259,7 +285,6 @@ def _efficientnet_lite0_unet() -> Any:
     torch = require_torch()
     nn = torch.nn
     F = torch.nn.functional  # the usual name
-    block, padded = _block, _padded
     SameConv, MBConv = _lite0_layers()
 
     class Lite0Encoder(nn.Module):  # type: ignore[name-defined,misc]
@@ -283,19 +308,10 @@ def _efficientnet_lite0_unet() -> Any:
                     feats.append(x)
             return feats  # 16 @ /2, 24 @ /4, 40 @ /8, 112 @ /16, 320 @ /32
 
-    class Lite0UNet(nn.Module):  # type: ignore[name-defined,misc]
-        stride = 32
-
+    class Lite0UNet(_encoder_unet()):  # type: ignore[misc]
         def __init__(self, cin: int, cout: int) -> None:
-            super().__init__()
-            self.encoder = Lite0Encoder(cin)
-            # (channels coming up, skip channels, decoder channels) per level, deepest first
             levels = [(320, 112, 96), (96, 40, 48), (48, 24, 32), (32, 16, 24)]
-            self.up = nn.ModuleList([nn.ConvTranspose2d(a, c, 2, stride=2) for a, _, c in levels])
-            self.dec = nn.ModuleList([block(c + s, c) for _, s, c in levels])
-            self.up_full = nn.ConvTranspose2d(24, 16, 2, stride=2)
-            self.dec_full = block(16, 16)
-            self.head = nn.Conv2d(16, cout, 1)
+            super().__init__(Lite0Encoder(cin), levels, (24, 16), cout)
 
         def train(self, mode: bool = True) -> Any:
             """Training mode everywhere but the encoder's BatchNorm layers, which keep the
@@ -306,15 +322,6 @@ def _efficientnet_lite0_unet() -> Any:
                 if isinstance(m, nn.BatchNorm2d):
                     m.eval()
             return self
-
-        def forward(self, x: Any) -> Any:
-            x, h, w = padded(x, self.stride)
-            feats = self.encoder(x)
-            y = feats.pop()
-            for up, dec in zip(self.up, self.dec, strict=True):
-                y = dec(torch.cat([up(y), feats.pop()], 1))
-            y = self.dec_full(self.up_full(y))
-            return self.head(y)[..., :h, :w]
 
     return Lite0UNet
 
