@@ -91,9 +91,9 @@ class ShakeOptions:
     iterations per (finger, object hull) pair in contact at the previous step (a compound held
     by several hulls needs more to converge at a coarser ``dt``; a single hull makes at most 2
     pairs; docs/models.md, "A coarser step judged by its own grids").
-    ``compound_solver_iterations`` (0 = the same as ``solver_iterations``, in [0, 1000]): the
-    solver iterations of an object whose shake shape has more than one convex part
-    (docs/models.md, "Solver iterations").
+    ``compound_solver_iterations`` (default 40; 0 = the same as ``solver_iterations``, in
+    [0, 1000]): the solver iterations of an object whose shake shape has more than one convex
+    part (docs/models.md, "Solver iterations").
     ``controller_stiffness`` is per 1/400 s of simulated time: a step ``dt`` moves the fingers
     ``dt`` x 400/s times (mean pad force − ``grip_force``)/``controller_stiffness``, so the
     closing settles alike at any ``dt``. ``controller_net_force`` (on by default): the controller

@@ -170,11 +170,12 @@ struct ShakeOptions {
   int solver_iterations = 10;
   /// Solver iterations of an object whose shake shape has more than one convex part (a
   /// compound), used instead of solver_iterations (and multiplied alike for light objects);
-  /// 0 = the same as solver_iterations. In [0, 1000]. The sequential-impulse solver leaves the
-  /// friction of a pad touching several hulls unconverged at 10 iterations, which lets some
-  /// compounds creep out of a grip that holds them
-  /// (docs/decisions/0064-compound-solver-iterations.md).
-  int compound_solver_iterations = 0;
+  /// 0 = the same as solver_iterations. In [0, 1000], default 40. The sequential-impulse solver
+  /// leaves the friction of a pad touching several hulls unconverged at 10 iterations, which
+  /// lets some compounds creep out of a grip that holds them; 40 cost 1.1-1.9x the CPU per
+  /// trial (docs/decisions/0064-compound-solver-iterations.md,
+  /// docs/decisions/0068-adaptive-controller-gain.md).
+  int compound_solver_iterations = 40;
   /// Iterations per hull contact (0 = off): each step runs at least ceil(this × the number of
   /// (finger, object hull) pairs in contact at the previous step) iterations. A single hull
   /// makes at most 2 pairs, so with this <= solver_iterations / 2 it is simulated as without;
