@@ -162,11 +162,11 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
 #: :func:`estimate_label_seconds`.
 TRIAL_CPU_S = 0.017
 SAMPLING_CPU_S_PER_1000_POINTS = 0.6
-#: CPU per trial of a compound (several hulls, 40 solver iterations) over :data:`TRIAL_CPU_S`:
-#: measured 2.6-3.0x on cable_coil, pipe_elbow and mug against six single-hull objects in the
-#: same run (docs/decisions/0068-adaptive-controller-gain.md); the high end of
+#: CPU per trial of a compound (several hulls, 40 solver iterations) over a single hull's: the
+#: mean over 7 built-in compounds against 6 single-hull objects in one run, 1.3-2.9x per object
+#: (docs/decisions/0068-adaptive-controller-gain.md); the high end of
 #: :func:`estimate_label_seconds`.
-COMPOUND_TRIAL_FACTOR = 2.7
+COMPOUND_TRIAL_FACTOR = 2.4
 
 
 def estimate_label_seconds(config: Config, num_objects: int, threads: int) -> tuple[float, float]:
