@@ -105,11 +105,11 @@ struct ShakeOptions {
   /// (|e[k]| >= |e[k−1]|/2) and at least grip_force/4 on both steps, the controller's stiffness
   /// is doubled for the rest of the trial (at most 64x). That is a sustained period-2
   /// oscillation, a loop gain at or above 2, which limit_controller_gain's model
-  /// n·(pad_stiffness + pad_damping/dt) does not foresee: at some iteration counts (20-40 per
-  /// step on light compounds pressed face-on at 8 points per pad) Bullet's sequential-impulse
-  /// solver answers a finger move up to ~2x as stiffly, and the closing then oscillates by tens
-  /// of N and never settles. Changes nothing in a trial whose errors never flip like that
-  /// (docs/decisions/0068-adaptive-controller-gain.md).
+  /// n·(pad_stiffness + pad_damping/dt) does not foresee: at some iteration counts
+  /// (compound_solver_iterations 20-40 on light compounds pressed face-on at 8 points per pad)
+  /// Bullet's sequential-impulse solver answers a finger move up to ~2x as stiffly, and the
+  /// closing then oscillates by tens of N and never settles. Changes nothing in a trial whose
+  /// errors never flip like that (docs/decisions/0068-adaptive-controller-gain.md).
   bool adapt_controller_gain = true;
   /// The pad force the controller and the closing's settle test read. true (default): the net
   /// contact force on the finger along its opening direction (the force that resists closing),
