@@ -92,6 +92,7 @@ void bind_grasp_shake_trial(py::module_& m) {
       .def_readwrite("contact_distance", &ShakeOptions::contact_distance)
       .def_readwrite("settle_steps", &ShakeOptions::settle_steps)
       .def_readwrite("limit_controller_gain", &ShakeOptions::limit_controller_gain)
+      .def_readwrite("adapt_controller_gain", &ShakeOptions::adapt_controller_gain)
       .def_readwrite("controller_net_force", &ShakeOptions::controller_net_force)
       .def_readwrite("lost_contact_steps", &ShakeOptions::lost_contact_steps)
       .def_readwrite("hold_tolerance", &ShakeOptions::hold_tolerance)

@@ -132,6 +132,14 @@ physics::WorldOptions world_options() {
   return w;
 }
 
+/// ShakeOptions::adapt_controller_gain: the most the controller's stiffness is raised (2^6).
+constexpr double kMaxGainBackoff = 64.0;
+/// ShakeOptions::adapt_controller_gain: consecutive flips of the force error that halve the gain.
+constexpr int kFlipsToBackOff = 4;
+/// ShakeOptions::adapt_controller_gain: a flip counts once both errors are at least this share of
+/// the grip force.
+constexpr double kFlipBand = 0.25;
+
 /// The step per which ShakeOptions::controller_stiffness gives the force controller's move, s.
 constexpr double kControllerStep = 1.0 / 400.0;
 
@@ -454,10 +462,33 @@ class TrialWorld {
   /// Force controller of the common finger offset d: close at close_speed until a finger
   /// touches, then move by (mean pad force − grip force) / controller stiffness per step,
   /// limited to close_speed.
-  double next_offset(const StepState& s) const {
+  double next_offset(const StepState& s) {
     const double vmax = o_.close_speed * o_.dt;
-    if (!s.touch_left && !s.touch_right) return std::max(0.0, d_ - vmax);
+    if (!s.touch_left && !s.touch_right) {
+      flips_ = -1;
+      return std::max(0.0, d_ - vmax);
+    }
     const double error = 0.5 * (s.force_left + s.force_right) - o_.grip_force;
+    if (o_.adapt_controller_gain) {
+      // ShakeOptions::adapt_controller_gain: an error that flips sign on 4 consecutive steps
+      // without shrinking to half, beyond a quarter of the grip force throughout, is a
+      // sustained period-2 oscillation, a loop gain at or above 2 (the solver's contact stiffer
+      // than the model below), not the ringing of a finger arriving at close_speed: halve the
+      // gain for the rest of the trial.
+      if (flips_ >= 0) {
+        const double a = std::abs(last_error_), b = std::abs(error);
+        const bool flip =
+            last_error_ * error < 0 && b >= 0.5 * a && std::min(a, b) >= kFlipBand * o_.grip_force;
+        flips_ = flip ? flips_ + 1 : 0;
+      } else {
+        flips_ = 0;
+      }
+      if (flips_ >= kFlipsToBackOff && gain_backoff_ < kMaxGainBackoff) {
+        gain_backoff_ *= 2.0;
+        flips_ = 0;
+      }
+      last_error_ = error;
+    }
     // ShakeOptions::controller_stiffness is per 1/400 s: a step dt moves the fingers dt·400
     // times as far for the same error (exactly controller_stiffness at dt = 1/400 s).
     double stiffness = o_.controller_stiffness;
@@ -470,7 +501,7 @@ class TrialWorld {
       const double points = 0.5 * (s.points_left + s.points_right);
       stiffness = std::max(stiffness, points * (o_.pad_stiffness + o_.pad_damping / o_.dt));
     }
-    const double delta = std::clamp(error / stiffness, -vmax, vmax);
+    const double delta = std::clamp(error / (gain_backoff_ * stiffness), -vmax, vmax);
     return std::clamp(d_ + delta, 0.0, 0.5 * g_.max_opening);
   }
 
@@ -554,6 +585,9 @@ class TrialWorld {
   double d_ = 0;              // current inner-face offset of both fingers from the hand axis, m
   double radius_ = 0;         // object: largest distance of a hull vertex from the com, m
   int base_iterations_ = 1;   // solver iterations of this trial without per-hull ones
+  double gain_backoff_ = 1;   // controller stiffness multiplier (adapt_controller_gain), >= 1
+  double last_error_ = 0;     // the controller's force error at the previous step, N
+  int flips_ = -1;            // consecutive flips of that error (-1: no previous touching step)
 
   physics::World physics_;  // Bullet's world (physics/world.hpp)
   btDiscreteDynamicsWorld& world_;

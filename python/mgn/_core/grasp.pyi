@@ -555,6 +555,7 @@ class ShakeOptions:
     Options of the Bullet shake test (SI units; see mgn.pj.physics).
     """
 
+    adapt_controller_gain: bool
     controller_net_force: bool
     limit_controller_gain: bool
     polyhedral_contacts: bool

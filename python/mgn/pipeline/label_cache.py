@@ -63,7 +63,7 @@ __all__ = [
 ]
 
 #: Bump when the label layout or algorithms change, so old cache entries are not reused.
-CACHE_VERSION = "object-labels-10"
+CACHE_VERSION = "object-labels-11"
 
 
 @dataclass(frozen=True)
@@ -162,14 +162,20 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
 #: :func:`estimate_label_seconds`.
 TRIAL_CPU_S = 0.017
 SAMPLING_CPU_S_PER_1000_POINTS = 0.6
+#: CPU per trial of a compound (several hulls, 40 solver iterations) over a single hull's: the
+#: mean over 7 built-in compounds against 6 single-hull objects in one run, 1.3-2.9x per object
+#: (docs/decisions/0068-adaptive-controller-gain.md); the high end of
+#: :func:`estimate_label_seconds`.
+COMPOUND_TRIAL_FACTOR = 2.4
 
 
 def estimate_label_seconds(config: Config, num_objects: int, threads: int) -> tuple[float, float]:
     """A rough (low, high) wall-time range in seconds for computing the labels of
     ``num_objects`` objects under ``config`` on ``threads`` cores, before anything is known of
     their shapes: the low end assumes convex parts whose grasps the plain staircase search
-    scores, the high end non-convex parts (several hulls, ~2x the cost per trial) that need the
-    thorough search. Shown by ``mgn generate`` before it starts."""
+    scores, the high end non-convex parts (several hulls, :data:`COMPOUND_TRIAL_FACTOR` times
+    the cost per trial) that need the thorough search. Shown by ``mgn generate`` before it
+    starts."""
 
     ol = config.object_labels
     points = (ol.suction_points if config.labels.suction else 0) + (
@@ -190,7 +196,7 @@ def estimate_label_seconds(config: Config, num_objects: int, threads: int) -> tu
             trials_high = k * cells + (grasps - k) * max(12.0, 0.5 * cells)
     per = max(1, threads)
     low = num_objects * (base + trials_low * TRIAL_CPU_S) / per
-    high = num_objects * (base + 2.0 * trials_high * TRIAL_CPU_S) / per
+    high = num_objects * (base + COMPOUND_TRIAL_FACTOR * trials_high * TRIAL_CPU_S) / per
     return low, high
 
 

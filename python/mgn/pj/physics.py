@@ -61,7 +61,11 @@ class ShakeOptions:
     grip-force controller stable when a pad touches a compound at many points (its stiffness is
     raised to at least n (``pad_stiffness`` + ``pad_damping``/``dt``) for n points per pad;
     nothing changes with at most 5 points, so never for one hull; docs/models.md, "Grip-force
-    controller"). ``staircase`` finds each grasp's success boundary
+    controller"). ``adapt_controller_gain`` (on by default) doubles that stiffness for the rest
+    of a trial, up to 64x, each time the force error flips sign without halving while at least a
+    quarter of ``grip_force`` (a period-2 oscillation: the solver's contacts respond more stiffly
+    than the model at some iteration counts); it changes nothing in a trial without such a flip.
+    ``staircase`` finds each grasp's success boundary
     (success is monotone: more friction helps, more mass hurts) by galloping and bisection row
     by row, verifies the cells on both sides of it (in the lowest ``staircase_verify_share`` of
     the friction rows; 1 = all) and ``staircase_checks`` other inferred cells, and falls back
@@ -87,9 +91,9 @@ class ShakeOptions:
     iterations per (finger, object hull) pair in contact at the previous step (a compound held
     by several hulls needs more to converge at a coarser ``dt``; a single hull makes at most 2
     pairs; docs/models.md, "A coarser step judged by its own grids").
-    ``compound_solver_iterations`` (0 = the same as ``solver_iterations``, in [0, 1000]): the
-    solver iterations of an object whose shake shape has more than one convex part
-    (docs/models.md, "Solver iterations").
+    ``compound_solver_iterations`` (default 40; 0 = the same as ``solver_iterations``, in
+    [0, 1000]): the solver iterations of an object whose shake shape has more than one convex
+    part (docs/models.md, "Solver iterations").
     ``controller_stiffness`` is per 1/400 s of simulated time: a step ``dt`` moves the fingers
     ``dt`` x 400/s times (mean pad force − ``grip_force``)/``controller_stiffness``, so the
     closing settles alike at any ``dt``. ``controller_net_force`` (on by default): the controller
@@ -118,6 +122,7 @@ class ShakeOptions:
     pad_damping: float = _CORE.pad_damping
     controller_stiffness: float = _CORE.controller_stiffness
     limit_controller_gain: bool = _CORE.limit_controller_gain
+    adapt_controller_gain: bool = _CORE.adapt_controller_gain
     controller_net_force: bool = _CORE.controller_net_force
     inertia_floor: float = _CORE.inertia_floor
     contact_distance: float = _CORE.contact_distance

@@ -249,13 +249,19 @@ def test_generate_says_where_the_time_went(
 
 
 def test_label_time_estimate_brackets_the_cost_model() -> None:
-    from mgn.pipeline.label_cache import TRIAL_CPU_S, estimate_label_seconds
+    from mgn.pipeline.label_cache import (
+        COMPOUND_TRIAL_FACTOR,
+        TRIAL_CPU_S,
+        estimate_label_seconds,
+    )
 
     cfg = load_config({"object_labels": {"pj_grasps": 100, "physics_grid": 10}})
     low, high = estimate_label_seconds(cfg, 2, 2)
     assert 0 < low < high
-    # At least the 32 calibration grids of 100 trials each per object, on 2 cores.
+    # At least the 32 calibration grids of 100 trials each per object, on 2 cores; the high end
+    # at a compound's cost per trial (40 solver iterations).
     assert low >= 2 * 32 * 100 * TRIAL_CPU_S / 2
+    assert high >= 2 * 32 * 100 * COMPOUND_TRIAL_FACTOR * TRIAL_CPU_S / 2
     # Without physics only the sampling is left; more cores, less time.
     off = load_config({"labels": {"pj_physics": False}})
     assert estimate_label_seconds(off, 2, 2)[1] < low
@@ -667,22 +673,24 @@ def test_h5_helpers_write_without_timestamps(tmp_path: Path) -> None:
         np.testing.assert_array_equal(h5["grasps/paralleljaw/quality_score"], np.arange(4))
 
 
-def test_label_cache_key_is_bumped_for_the_net_force_controller(
+def test_label_cache_key_is_bumped_for_compound_solver_iterations(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Parallel-jaw physics scores of compounds changed when the shake test's grip controller
-    started reading the net pad force (object-labels-10): entries written under the previous
-    version's keys must not be found."""
+    started reading the net pad force (object-labels-10) and again when compounds got 40 solver
+    iterations (object-labels-11): entries written under a previous version's keys must not be
+    found."""
     from mgn.objects import get_object
     from mgn.pipeline import label_cache
 
-    assert label_cache.CACHE_VERSION == "object-labels-10"
+    assert label_cache.CACHE_VERSION == "object-labels-11"
     spec, config = get_object("pipe_elbow"), Config()
     keys = label_cache.label_keys(spec, config)
     assert set(keys) == {"suction", "paralleljaw"}
-    monkeypatch.setattr(label_cache, "CACHE_VERSION", "object-labels-9")
-    old = label_cache.label_keys(spec, config)
-    assert all(old[kind] != keys[kind] for kind in keys)
+    for previous in ("object-labels-9", "object-labels-10"):
+        monkeypatch.setattr(label_cache, "CACHE_VERSION", previous)
+        old = label_cache.label_keys(spec, config)
+        assert all(old[kind] != keys[kind] for kind in keys)
 
 
 def test_label_cache_round_trip_and_keys(tmp_path: Path, env: Path) -> None:

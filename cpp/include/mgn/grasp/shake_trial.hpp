@@ -99,6 +99,18 @@ struct ShakeOptions {
   /// Changes nothing while n <= 5.5 at dt = 1/400 s (one hull touches a pad with at most 4
   /// points).
   bool limit_controller_gain = true;
+  /// Keep the force controller stable whatever stiffness the solver's contacts present: when
+  /// the controller's force error e (mean pad force − grip_force, at steps where a finger
+  /// touches) has flipped sign on 4 consecutive steps, each time without shrinking to half
+  /// (|e[k]| >= |e[k−1]|/2) and at least grip_force/4 on both steps, the controller's stiffness
+  /// is doubled for the rest of the trial (at most 64x). That is a sustained period-2
+  /// oscillation, a loop gain at or above 2, which limit_controller_gain's model
+  /// n·(pad_stiffness + pad_damping/dt) does not foresee: at some iteration counts
+  /// (compound_solver_iterations 20-40 on light compounds pressed face-on at 8 points per pad)
+  /// Bullet's sequential-impulse solver answers a finger move up to ~2x as stiffly, and the
+  /// closing then oscillates by tens of N and never settles. Changes nothing in a trial whose
+  /// errors never flip like that (docs/decisions/0068-adaptive-controller-gain.md).
+  bool adapt_controller_gain = true;
   /// The pad force the controller and the closing's settle test read. true (default): the net
   /// contact force on the finger along its opening direction (the force that resists closing),
   /// so the forces on a finger wedged in a concavity (a finger inside a pipe's bore, touching
@@ -158,11 +170,12 @@ struct ShakeOptions {
   int solver_iterations = 10;
   /// Solver iterations of an object whose shake shape has more than one convex part (a
   /// compound), used instead of solver_iterations (and multiplied alike for light objects);
-  /// 0 = the same as solver_iterations. In [0, 1000]. The sequential-impulse solver leaves the
-  /// friction of a pad touching several hulls unconverged at 10 iterations, which lets some
-  /// compounds creep out of a grip that holds them
-  /// (docs/decisions/0064-compound-solver-iterations.md).
-  int compound_solver_iterations = 0;
+  /// 0 = the same as solver_iterations. In [0, 1000], default 40. The sequential-impulse solver
+  /// leaves the friction of a pad touching several hulls unconverged at 10 iterations, which
+  /// lets some compounds creep out of a grip that holds them; 40 cost 1.1-1.9x the CPU per
+  /// trial (docs/decisions/0064-compound-solver-iterations.md,
+  /// docs/decisions/0068-adaptive-controller-gain.md).
+  int compound_solver_iterations = 40;
   /// Iterations per hull contact (0 = off): each step runs at least ceil(this × the number of
   /// (finger, object hull) pairs in contact at the previous step) iterations. A single hull
   /// makes at most 2 pairs, so with this <= solver_iterations / 2 it is simulated as without;
