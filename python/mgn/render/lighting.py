@@ -12,8 +12,7 @@ tote and floor materials (colour, roughness and a procedural texture,
 (seed, view index, object id), and a light at the camera (:func:`draw_camera_light`, off by
 default) from a stream of its own, so they change nothing else in the view, except that a view
 with the camera light may dim its other lights and environment (:func:`with_camera_light`; the
-look of a 3D camera's projector in a dark cell). No distractor
-objects are added.
+look of a 3D camera's projector in a dark cell). No distractor objects are added.
 
 Units: metres, radiance in the tracer's units (a white Lambertian surface under irradiance E
 shows E / pi); poses (4, 4) float64 ``X_AB``.

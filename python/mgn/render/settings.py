@@ -99,7 +99,8 @@ class RandomizeSettings:
             ``camera_light_offset`` from the optical centre in a random direction, facing
             along the viewing direction, white (6500 K), casting ``camera_light_irradiance``
             on the tote floor's centre. Drawn from its own stream (seed, view): the other
-            lights, environment, materials and exposure are unchanged.
+            lights, environment, materials and exposure are unchanged (the lights and the
+            environment scaled by ``camera_light_ambient`` only).
         camera_light_probability: [0, 1], the probability of the camera light in a view
             (default 0.5).
         camera_light_size: (min, max) side of the camera light, m (default (0.02, 0.1)).
