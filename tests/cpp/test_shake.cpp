@@ -296,7 +296,9 @@ TEST(Shake, AdaptedControllerGainSettlesALightCompoundAtEveryIterationCountTeste
     EXPECT_NEAR(f, o.grip_force, 0.05 * o.grip_force) << it;
     o.adapt_controller_gain = false;
     const ShakeTrajectory fixed = shake_trajectory(slabs, g, grasp, 0.5, 0.25, o, 1, 0);
-    if (it == 0) EXPECT_TRUE(same_trajectory(fixed, tr));
+    if (it == 0) {
+      EXPECT_TRUE(same_trajectory(fixed, tr));
+    }
     if (it != 30 && it != 40) continue;
     EXPECT_EQ(fixed.steps, o.close_steps) << it;
     double jump = 0.0;  // the smallest step-to-step change of the mean pad force, last 100 steps
