@@ -16,7 +16,7 @@ calibration grasps are exact by construction). Foreign meshes: public meshes shi
 ``pybullet`` package (its ``pybullet_data``), at the scales below.
 
     python -m benchmarks.bench_object_physics [--objects can_soda,duck] [--threads 2]
-        [--agreement 20] [--json out.json] [--scores scores.npz]
+        [--agreement 20] [--json out.json] [--scores scores.npz] [--calibration-min N]
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ import json
 import os
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -60,14 +61,16 @@ def _spec(name: str, folder: Path) -> Any:
     return load_objects_yaml(yaml)[0]
 
 
-def _agreement(spec: Any, pj: Any, config: Any, n: int, threads: int) -> dict[str, Any]:
-    """Full grids of n stored grasps after the calibration grasps against their stored scores."""
+def _agreement(
+    spec: Any, pj: Any, config: Any, n: int, threads: int, calibrated: int
+) -> dict[str, Any]:
+    """Full grids of n stored grasps after the ``calibrated`` calibration grasps against their
+    stored scores."""
     from mgn.geometry import mass_properties
     from mgn.pj.labels import strided_subset
     from mgn.pj.physics import ShakeOptions, grasp_rows, shake_parts, shake_scores
 
-    k = config.object_labels.physics_calibration
-    rest = np.arange(k, len(pj))
+    rest = np.arange(calibrated, len(pj))
     if n <= 0 or len(rest) == 0:
         return {}
     idx = rest[strided_subset(len(rest), n)]
@@ -103,13 +106,22 @@ def _agreement(spec: Any, pj: Any, config: Any, n: int, threads: int) -> dict[st
 
 
 def run(
-    objects: list[str], threads: int, agreement: int, scores: dict[str, Any] | None = None
+    objects: list[str],
+    threads: int,
+    agreement: int,
+    scores: dict[str, Any] | None = None,
+    calibration_min: int | None = None,
 ) -> list[dict[str, Any]]:
     from mgn.pipeline.config import Config
     from mgn.pipeline.label_cache import compute_object_labels
     from mgn.pj.physics import shake_parts
 
     config = Config()
+    if calibration_min is not None:  # the calibration's first stage (0 = one stage of 32)
+        config = replace(
+            config,
+            object_labels=replace(config.object_labels, physics_calibration_min=calibration_min),
+        )
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         os.environ.setdefault("MGN_CACHE_DIR", tmp)  # the convex decompositions, not the labels
@@ -130,13 +142,15 @@ def run(
                 "search": est.get("search", meta.get("pj_skipped", "-")),
                 "error_bound": est.get("error_bound_95"),
                 "trials": meta.get("pj_physics_trials"),
+                "calibration_grasps": est.get("calibration_grasps"),
                 "wall_s": round(wall, 1),
                 "cpu_s": round(cpu, 1),
             }
             if scores is not None and pj is not None:
                 scores[name] = np.asarray(pj.quality_score_simulation, np.float32)
             if pj is not None and len(pj):
-                row.update(_agreement(spec, pj, config, agreement, threads))
+                calibrated = int(est.get("calibration_grasps") or 0)
+                row.update(_agreement(spec, pj, config, agreement, threads, calibrated))
             rows.append(row)
             print(_line(row), flush=True)
     return rows
@@ -153,7 +167,8 @@ def _line(r: dict[str, Any]) -> str:
     ok = "ok" if r["wall_s"] <= TARGET_S else "OVER"
     return (
         f"{r['object']:18s} found {r['found']:7d} stored {r['stored']:4d} scored {r['scored']:4d} "
-        f"| {r['hulls']:2d} hulls | {r['search']:18s} bound {bound} | trials {r['trials']} "
+        f"| {r['hulls']:2d} hulls | {r['search']:18s} on {r['calibration_grasps']} "
+        f"bound {bound} | trials {r['trials']} "
         f"| {r['wall_s']:6.1f} s wall "
         f"{r['cpu_s']:6.1f} CPU-s {ok}{agree}"
     )
@@ -168,6 +183,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--agreement", type=int, default=0, metavar="N")
     ap.add_argument("--json", metavar="FILE")
     ap.add_argument("--scores", metavar="FILE.npz", help="save every object's physics scores")
+    ap.add_argument(
+        "--calibration-min",
+        type=int,
+        metavar="N",
+        help="object_labels.physics_calibration_min (default: its default; 0 = one stage)",
+    )
     args = ap.parse_args(argv)
     names = (
         args.objects.split(",")
@@ -175,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
         else [o.name for o in builtin_objects()] + list(FOREIGN)
     )
     scores: dict[str, Any] = {}
-    rows = run(names, args.threads, args.agreement, scores)
+    rows = run(names, args.threads, args.agreement, scores, args.calibration_min)
     if args.scores:
         np.savez(args.scores, **scores)
     if args.json:

@@ -44,6 +44,7 @@ def _physics_scorer(args: argparse.Namespace, gripper: ParallelJawGripper) -> Sh
         ),
         max_grasps=args.physics_grasps,
         calibration_grasps=args.physics_calibration,
+        calibration_min_grasps=args.physics_calibration_min,
         calibration_tolerance=args.physics_tolerance,
     )
 
@@ -179,6 +180,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "the staircase searches replayed on them choose the cheapest one within "
         "--physics-tolerance for the object's other grasps, else the full grid (default "
         f"{ShakeScorer.calibration_grasps}; 0 = off)",
+    )
+    p.add_argument(
+        "--physics-calibration-min",
+        type=int,
+        default=ShakeScorer.calibration_min_grasps,
+        metavar="N",
+        help="the calibration stops after N grasps when the plain staircase is within "
+        "--physics-tolerance on them, else it goes on to --physics-calibration (default "
+        f"{ShakeScorer.calibration_min_grasps}; 0 = one stage)",
     )
     p.add_argument(
         "--physics-tolerance",

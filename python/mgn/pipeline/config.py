@@ -50,7 +50,10 @@ Sections:
   on the full grid and keep its exact scores; the staircase searches replayed on them decide
   which one scores the object's other grasps: the cheapest whose score error is within
   ``physics_tolerance``, else the full grid; 0 = off; default 32;
-  docs/decisions/0032-object-labels-at-the-defaults.md), ``physics_tolerance`` (the mean
+  docs/decisions/0032-object-labels-at-the-defaults.md), ``physics_calibration_min`` (the
+  calibration's first stage: it stops after this many grasps when the plain staircase is within
+  ``physics_tolerance`` on them, else goes on to ``physics_calibration``; default 12; 0 = one
+  stage; docs/decisions/0071-two-stage-calibration.md), ``physics_tolerance`` (the mean
   absolute score error allowed, its 95 % bound on the calibration grasps; default 0.005, the
   simulation's own noise band; 0 = exact agreement on every calibration grasp),
   ``suction_model``, ``seed``.
@@ -689,6 +692,7 @@ class ObjectLabelsConfig(_Section):
     physics_search: str = "staircase"
     physics_checks: int | None = None
     physics_calibration: int = ShakeScorer.calibration_grasps
+    physics_calibration_min: int = ShakeScorer.calibration_min_grasps
     physics_tolerance: float = CALIBRATION_TOLERANCE
     suction_model: str = "spring"
     seed: int = 0
@@ -710,6 +714,7 @@ class ObjectLabelsConfig(_Section):
         "physics_search": _choice("staircase", "full"),
         "physics_checks": _optional(_int(0)),
         "physics_calibration": _int(0),
+        "physics_calibration_min": _int(0),
         "physics_tolerance": _score_error,
         "suction_model": _choice(*SEAL_MODELS),
         "seed": _int(0),

@@ -140,6 +140,13 @@ def label_keys(spec: ObjectSpec, config: Config) -> dict[str, str]:
                 if config.labels.pj_physics and ol.physics_search == "staircase"
                 else None
             ),
+            "physics_calibration_min": (
+                ol.physics_calibration_min
+                if config.labels.pj_physics
+                and ol.physics_search == "staircase"
+                and 0 < ol.physics_calibration_min < ol.physics_calibration
+                else None
+            ),
             "physics_tolerance": (
                 ol.physics_tolerance
                 if config.labels.pj_physics
@@ -192,7 +199,8 @@ def estimate_label_seconds(config: Config, num_objects: int, threads: int) -> tu
             trials_low = trials_high = grasps * cells
         else:
             k = min(ol.physics_calibration, grasps)
-            trials_low = k * cells + (grasps - k) * max(6.0, 0.1 * cells)
+            k_low = min(ol.physics_calibration_min, k) if ol.physics_calibration_min > 0 else k
+            trials_low = k_low * cells + (grasps - k_low) * max(6.0, 0.1 * cells)
             trials_high = k * cells + (grasps - k) * max(12.0, 0.5 * cells)
     per = max(1, threads)
     low = num_objects * (base + trials_low * TRIAL_CPU_S) / per
@@ -265,6 +273,7 @@ def compute_object_labels(
                 options=shake_options(config, num_threads),
                 max_grasps=ol.physics_grasps,
                 calibration_grasps=ol.physics_calibration,
+                calibration_min_grasps=ol.physics_calibration_min,
                 calibration_tolerance=ol.physics_tolerance,
                 progress=progress,
             )

@@ -85,6 +85,9 @@ def physics_record(config: Config, labels: Mapping[str, ObjectLabels]) -> dict[s
         "search": ol.physics_search,
         "checks": ol.staircase_checks if ol.physics_search == "staircase" else None,
         "calibration": ol.physics_calibration if ol.physics_search == "staircase" else None,
+        "calibration_min": (
+            ol.physics_calibration_min if ol.physics_search == "staircase" else None
+        ),
         "grid": ol.physics_grid,
         "grasps": total,
         "scored": scored,

@@ -429,6 +429,15 @@ CALIBRATED_STAIRCASE_VERIFY_SHARE = 0.5
 #: (docs/decisions/0032-object-labels-at-the-defaults.md).
 CALIBRATION_TOLERANCE = 0.005
 
+#: Calibration grasps of the object-level calibration's first stage (:class:`ShakeScorer`
+#: ``calibration_min_grasps``): when the cheapest search (the options' own staircase) is within
+#: the tolerance on the full grids of this many grasps, the calibration stops there; otherwise
+#: it goes on to ``calibration_grasps`` and chooses on all of them. With no wrong grasp of 12
+#: the error bound is 0.0022 (one cell of a 10 x 10 grid times the rate's 95 % bound, 0.22),
+#: within the 0.005 tolerance, and an object whose grids the search reproduces saves 20 of the
+#: 32 full grids (docs/decisions/0071-two-stage-calibration.md).
+CALIBRATION_MIN_GRASPS = 12
+
 #: ``staircase_checks`` of the calibration's second search, the checked staircase (every
 #: row's boundary verified as well). On the calibration grids of a soda can its mean error is
 #: 0.002 against the plain search's 0.009, at ~30 instead of ~16 trials per grasp.
@@ -683,15 +692,19 @@ class ShakeScorer:
     ``progress`` shows a progress bar with an ETA on stderr (None: when stderr is a terminal);
     the scores do not depend on it.
 
-    Object-level policy (staircase only, ``calibration_grasps`` > 0): the first
-    ``calibration_grasps`` grasps to score are simulated on the full grid and keep its exact
-    scores; :func:`calibrate_staircase` then replays the staircase searches on their grids and
-    picks the cheapest whose score error is within the physics' own noise band: the options'
-    search if it reproduces every calibration grid (up to ``calibration_mismatches``) or its
-    95 % error bound is at most ``calibration_tolerance``, else the checked, the sampled or
-    the thorough staircase (more cells verified), else the full grid. The outcomes that a
-    search misses (the isolated failing cells of cans and bottles) are a property of the
-    object's physics, so the choice is made once per object, before its grasps are scored.
+    Object-level policy (staircase only, ``calibration_grasps`` > 0): the first grasps to
+    score are simulated on the full grid and keep its exact scores; :func:`calibrate_staircase`
+    then replays the staircase searches on their grids and picks the cheapest whose score error
+    is within the physics' own noise band: the options' search if it reproduces every
+    calibration grid (up to ``calibration_mismatches``) or its 95 % error bound is at most
+    ``calibration_tolerance``, else the checked, the sampled or the thorough staircase (more
+    cells verified), else the full grid. The calibration runs in two stages: the first
+    ``calibration_min_grasps`` grasps (default :data:`CALIBRATION_MIN_GRASPS`; 0 = one stage),
+    and only if the options' own search is not chosen on them, the rest of the first
+    ``calibration_grasps`` (default 32), after which the choice is made on all of them. The
+    outcomes that a search misses (the isolated failing cells of cans and bottles) are a
+    property of the object's physics, so the choice is made once per object, before its
+    grasps are scored.
     Every grasp keeps its random streams, so the scores do not depend on the thread count or
     the progress bar. The choice of the last call is ``last_calibration`` (None without
     calibration), recorded in ``__name__`` and, by :func:`mgn.pj.label_object`, in the label
@@ -714,6 +727,7 @@ class ShakeScorer:
     max_grasps: int | None = None
     progress: bool | None = None
     calibration_grasps: int = 32
+    calibration_min_grasps: int = CALIBRATION_MIN_GRASPS
     calibration_mismatches: int = 0
     calibration_tolerance: float = CALIBRATION_TOLERANCE
     contained_part_tolerance: float | None = None
@@ -755,7 +769,7 @@ class ShakeScorer:
             raise InvalidArgumentError(
                 f"ShakeScorer.max_grasps: expected >= 1, got {self.max_grasps}"
             )
-        for name in ("calibration_grasps", "calibration_mismatches"):
+        for name in ("calibration_grasps", "calibration_min_grasps", "calibration_mismatches"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
                 raise InvalidArgumentError(
@@ -827,14 +841,29 @@ class ShakeScorer:
             if o.staircase and self.calibration_grasps > 0:
                 first = min(self.calibration_grasps, len(rows))
                 full = replace(o, staircase=False)
-                grids = np.concatenate([p.trial_success for p in run(0, first, full)])
-                self.last_calibration = calibrate_staircase(
-                    grids,
-                    o.staircase_checks,
-                    self.calibration_mismatches,
-                    o.to_core().staircase_verified_rows(),
-                    self.calibration_tolerance,
-                )
+
+                def calibrate(grids: npt.NDArray[np.bool_]) -> StaircaseCalibration:
+                    return calibrate_staircase(
+                        grids,
+                        o.staircase_checks,
+                        self.calibration_mismatches,
+                        o.to_core().staircase_verified_rows(),
+                        self.calibration_tolerance,
+                    )
+
+                # Two stages: the first calibration_min_grasps full grids, and the rest of the
+                # calibration grasps only when the cheapest search is not within the tolerance
+                # on those.
+                early = first
+                if 0 < self.calibration_min_grasps < first:
+                    early = self.calibration_min_grasps
+                grids = np.concatenate([p.trial_success for p in run(0, early, full)])
+                self.last_calibration = calibrate(grids)
+                if self.last_calibration.search == "staircase":
+                    first = early
+                elif early < first:
+                    more = [p.trial_success for p in run(early, first, full)]
+                    self.last_calibration = calibrate(np.concatenate([grids, *more]))
                 rest = search_of(self.last_calibration, o)
             run(first, len(rows), rest)
         out[idx] = score

@@ -258,10 +258,16 @@ def test_label_time_estimate_brackets_the_cost_model() -> None:
     cfg = load_config({"object_labels": {"pj_grasps": 100, "physics_grid": 10}})
     low, high = estimate_label_seconds(cfg, 2, 2)
     assert 0 < low < high
-    # At least the 32 calibration grids of 100 trials each per object, on 2 cores; the high end
-    # at a compound's cost per trial (40 solver iterations).
-    assert low >= 2 * 32 * 100 * TRIAL_CPU_S / 2
+    # At least the first stage's 12 calibration grids of 100 trials each per object, on 2
+    # cores, and the plain staircase's 6 trials for each of the other 88 grasps; the high end
+    # all 32 calibration grids at a compound's cost per trial (40 solver iterations).
+    assert low >= 2 * (12 * 100 + 88 * 6) * TRIAL_CPU_S / 2
+    assert low < 2 * 32 * 100 * TRIAL_CPU_S / 2
     assert high >= 2 * 32 * 100 * COMPOUND_TRIAL_FACTOR * TRIAL_CPU_S / 2
+    one_stage = load_config(
+        {"object_labels": {"pj_grasps": 100, "physics_grid": 10, "physics_calibration_min": 0}}
+    )
+    assert estimate_label_seconds(one_stage, 2, 2)[0] >= 2 * 32 * 100 * TRIAL_CPU_S / 2
     # Without physics only the sampling is left; more cores, less time.
     off = load_config({"labels": {"pj_physics": False}})
     assert estimate_label_seconds(off, 2, 2)[1] < low

@@ -582,3 +582,89 @@ def test_bad_tolerance_is_named():
         ShakeScorer(calibration_tolerance=1.5)(mgn.make_box([0.04, 0.05, 0.06]), labels_of(3))
     with pytest.raises(InvalidArgumentError, match="tolerance"):
         calibrate_staircase(np.ones((2, S, S), bool), CHECKS, 0, -1, -0.1)
+
+
+def test_two_stage_calibration_stops_after_the_first_stage(monkeypatch):
+    """Monotone grids: the plain search reproduces the first stage's grids, so the calibration
+    stops there and the object's other grasps (from the 13th) get the search."""
+    rng = np.random.default_rng(21)
+    truth = random_monotone(rng, 60)
+    scores, scorer, fake = score_with(
+        monkeypatch, truth, calibration_grasps=32, calibration_min_grasps=12
+    )
+    np.testing.assert_array_equal(scores, truth_scores(truth))
+    assert verdict(scorer.last_calibration) == (12, 0, True)
+    assert fake.calls == [(0, 12, False), (12, 48, True)]
+    assert "calibrated on 12 full grids" in scorer.__name__
+    # One stage (0) simulates all 32 calibration grids, as does a first stage of 32 or more.
+    for first_stage in (0, 32, 40):
+        _, one, fake1 = score_with(
+            monkeypatch, truth, calibration_grasps=32, calibration_min_grasps=first_stage
+        )
+        assert verdict(one.last_calibration) == (32, 0, True)
+        assert fake1.calls == [(0, 32, False), (32, 28, True)]
+        assert fake1.trials > fake.trials
+
+
+def test_two_stage_calibration_goes_on_when_the_plain_search_fails(monkeypatch):
+    """A grid the plain search gets wrong among the first 12: the calibration simulates the
+    other 20 calibration grids and chooses on all 32. With the exact policy that is the full
+    grid; with a tolerance whose bound one wrong grasp of 12 exceeds (CP(1, 12) x one cell =
+    0.0136 > 0.01) but one of 32 does not (0.0056), the plain search on all 32."""
+    rng = np.random.default_rng(22)
+    truth = random_monotone(rng, 60)
+    truth[3] = missed_cell_grid()
+    scores, scorer, fake = score_with(
+        monkeypatch, truth, calibration_grasps=32, calibration_min_grasps=12
+    )
+    np.testing.assert_array_equal(scores, truth_scores(truth))
+    assert verdict(scorer.last_calibration) == (32, 1, False)
+    assert fake.calls == [(0, 12, False), (12, 20, False), (32, 28, False)]
+    assert fake.trials == 60 * S * S
+
+    cell = 1.0 / (S * S)
+    assert physics._binomial_upper(1, 12) * cell > 0.01 >= physics._binomial_upper(1, 32) * cell
+    _, tol, fake_tol = score_with(
+        monkeypatch,
+        truth,
+        calibration_grasps=32,
+        calibration_min_grasps=12,
+        calibration_tolerance=0.01,
+    )
+    c = tol.last_calibration
+    assert c is not None
+    assert (c.grasps, c.search, c.mismatches) == (32, "staircase", 1)
+    assert c.error_bound == pytest.approx(physics._binomial_upper(1, 32) * cell)
+    assert fake_tol.calls == [(0, 12, False), (12, 20, False), (32, 28, True)]
+
+
+@pytest.mark.parametrize(("p_hole", "holes"), [(0.0, 1), (0.05, 1), (0.2, 1), (0.5, 3)])
+def test_the_two_stage_bound_holds_on_the_grasps_after_the_calibration(monkeypatch, p_hole, holes):
+    """As the one-stage test above, through the scorer with the two-stage calibration (12,
+    then 32): the bound it records holds for the scores of the grasps after its calibration
+    grasps in >= 90 % of the draws, and is within the tolerance unless the full grid was
+    chosen."""
+    tol = 0.02
+    held, within, early = 0, 0, 0
+    draws = 30
+    for seed in range(draws):
+        truth = holed(np.random.default_rng(100 + seed), 160, p_hole, holes)
+        scores, scorer, _ = score_with(
+            monkeypatch,
+            truth,
+            calibration_grasps=32,
+            calibration_min_grasps=12,
+            calibration_tolerance=tol,
+        )
+        c = scorer.last_calibration
+        assert c is not None
+        k = c.grasps
+        assert k in (12, 32)
+        early += k == 12
+        err = float(np.abs(scores[k:] - truth_scores(truth)[k:]).mean())
+        held += err <= c.error_bound + 1e-6
+        within += c.error_bound <= tol or c.search == "full grid"
+    assert held >= 0.9 * draws
+    assert within == draws
+    if p_hole == 0.0:
+        assert early == draws  # monotone grids: always the first stage alone
