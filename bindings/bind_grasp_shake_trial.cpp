@@ -102,6 +102,7 @@ void bind_grasp_shake_trial(py::module_& m) {
       .def_readwrite("max_hull_vertices", &ShakeOptions::max_hull_vertices)
       .def_readwrite("solver_iterations", &ShakeOptions::solver_iterations)
       .def_readwrite("compound_solver_iterations", &ShakeOptions::compound_solver_iterations)
+      .def_readwrite("compound_iteration_points", &ShakeOptions::compound_iteration_points)
       .def_readwrite("iterations_per_hull_contact", &ShakeOptions::iterations_per_hull_contact)
       .def_readwrite("staircase", &ShakeOptions::staircase)
       .def_readwrite("staircase_checks", &ShakeOptions::staircase_checks)

@@ -274,6 +274,64 @@ TEST(Shake, CompoundSolverIterationsReplaceTheSolverIterationsOfACompound) {
       same_trajectory(shake_trajectory(slabs, g, grasp, 0.5, 1.0, all40, 1, 0), compound40));
 }
 
+TEST(Shake, CompoundIterationPointsScaleACompoundsIterationsByItsContactPoints) {
+  // The rule, step by step: a compound's step runs compound_solver_iterations (40) when the
+  // fingers touched it at no more than compound_iteration_points P points at the step before,
+  // else ceil(40 P / n), at least solver_iterations (10); both times the light-object
+  // multiplier ceil(grip_force / (150 m g)). A 4-slab box gripped through its centre is pressed
+  // face-on at 16 points (8 per pad) while held: 40 iterations at the default P = 24 and at
+  // P = 16, 30 at P = 12, 20 at P = 8, 10 at P = 1; a 12.5 g one runs 2x that.
+  const PhysicsObject slabs = slab_box(Vec3d(0.04, 0.06, 0.03), 0.05, 4);
+  const ParallelJawGripper g;
+  const ParallelJawGrasp grasp = centre_grasp(0.04);
+  ShakeOptions o = small_grid(1, 0.5, 0.5);
+  o.shake_steps = 200;
+  o.rotate_steps = 100;
+  EXPECT_EQ(o.compound_solver_iterations, 40);
+  EXPECT_EQ(o.compound_iteration_points, 24.0);
+  for (const double density : {1.0, 0.25}) {
+    const double m = slabs.mass * density;
+    const int boost = static_cast<int>(std::ceil(o.grip_force / (150.0 * m * o.gravity)));
+    EXPECT_EQ(boost, density == 1.0 ? 1 : 2);
+    for (const auto& [points, held] :
+         {std::pair{24.0, 40}, std::pair{16.0, 40}, std::pair{12.0, 30}, std::pair{8.0, 20},
+          std::pair{1.0, 10}}) {
+      ShakeOptions p = o;
+      p.compound_iteration_points = points;
+      const ShakeTrajectory tr = shake_trajectory(slabs, g, grasp, 0.5, density, p, 1, 0);
+      ASSERT_EQ(tr.solver_iterations.size(), tr.contact_points.size());
+      ASSERT_GT(tr.solver_iterations.size(), 300u);
+      EXPECT_EQ(tr.solver_iterations[0], 0);  // the initial state: no step run
+      int at16 = 0;
+      for (size_t k = 1; k < tr.solver_iterations.size(); ++k) {
+        const int n = tr.contact_points[k - 1];
+        const int per =
+            n > points ? std::max(10, static_cast<int>(std::ceil(40.0 * points / n))) : 40;
+        EXPECT_EQ(tr.solver_iterations[k], per * boost) << k << " " << n << " " << points;
+        at16 += n == 16 && tr.solver_iterations[k] == held * boost;
+      }
+      EXPECT_GT(at16, 250) << density << " " << points;  // held at 16 points most of the trial
+    }
+  }
+  // Off: every step of the compound runs 40 (x2).
+  ShakeOptions off = o;
+  off.compound_iteration_points = 0;
+  const ShakeTrajectory all = shake_trajectory(slabs, g, grasp, 0.5, 0.25, off, 1, 0);
+  for (size_t k = 1; k < all.solver_iterations.size(); ++k) {
+    EXPECT_EQ(all.solver_iterations[k], 80) << k;
+  }
+  // One hull is not a compound: solver_iterations every step, and the same trial bits whatever
+  // the budget.
+  const PhysicsObject box = box_object(Vec3d(0.04, 0.06, 0.03), 0.05);
+  ShakeOptions one_point = o;
+  one_point.compound_iteration_points = 1;
+  const ShakeTrajectory one = shake_trajectory(box, g, grasp, 0.5, 1.0, one_point, 1, 0);
+  for (size_t k = 1; k < one.solver_iterations.size(); ++k) {
+    EXPECT_EQ(one.solver_iterations[k], 10) << k;
+  }
+  EXPECT_TRUE(same_trajectory(shake_trajectory(box, g, grasp, 0.5, 1.0, off, 1, 0), one));
+}
+
 TEST(Shake, AdaptedControllerGainSettlesALightCompoundAtEveryIterationCountTested) {
   // A 12.5 g two-slab box pressed face-on by each pad at 8 points: with 30 or 40 compound
   // solver iterations (x2 for the light object) the solver answers a finger move more stiffly
@@ -641,6 +699,11 @@ TEST(Shake, BadInputIsRejectedWithAClearMessage) {
   expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
   bo.iterations_per_hull_contact = NAN;
   expect_error(box, centre_grasp(0.04), bo, "iterations_per_hull_contact");
+  bo = o;
+  bo.compound_iteration_points = -1;
+  expect_error(box, centre_grasp(0.04), bo, "compound_iteration_points");
+  bo.compound_iteration_points = NAN;
+  expect_error(box, centre_grasp(0.04), bo, "compound_iteration_points");
   bo = o;
   bo.compound_solver_iterations = -1;
   expect_error(box, centre_grasp(0.04), bo, "compound_solver_iterations");

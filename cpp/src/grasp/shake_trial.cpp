@@ -200,6 +200,7 @@ struct StepState {
   double force_left, force_right;  // normal pad force of the last step, N
   int hull_contacts;               // (finger, object hull) pairs in contact
   int points_left, points_right;   // contact points closer than contact_distance, per finger
+  int iterations;                  // solver iterations of the step just run (0: none run yet)
 };
 
 /// The collision shapes of one shake_test call: the object's hulls (a compound if several) and
@@ -270,11 +271,12 @@ class TrialWorld {
     const int boost = static_cast<int>(std::clamp(std::ceil(load), 1.0, 8.0));
     // ShakeOptions::compound_solver_iterations: a shape of several hulls may use others.
     const bool compound = obj.geometry.hulls.size() > 1;
-    const int iterations = compound && o.compound_solver_iterations > 0
-                               ? o.compound_solver_iterations
-                               : o.solver_iterations;
+    const bool own = compound && o.compound_solver_iterations > 0;
+    const int iterations = own ? o.compound_solver_iterations : o.solver_iterations;
     base_iterations_ = iterations * boost;
     info.m_numIterations = base_iterations_;
+    boost_ = boost;
+    point_budget_ = own ? o.compound_iteration_points : 0.0;
     // Friction in both tangent directions (Bullet's default is one direction per contact point,
     // which lets a held object creep sideways).
     info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
@@ -511,14 +513,27 @@ class TrialWorld {
     for (int side = 0; side < 2; ++side) {
       drive(*fingers_[side], finger_pose(X_WH, side, d_), finger_pose(X_WH_next, side, d_next));
     }
+    int iterations = base_iterations_;
+    const int points = s.points_left + s.points_right;
+    if (point_budget_ > 0 && points > point_budget_) {
+      // ShakeOptions::compound_iteration_points: the fingers touched the compound at more points
+      // than the budget at the last step; its iterations shrink in proportion, down to
+      // solver_iterations.
+      const int floor = std::min(o_.solver_iterations, o_.compound_solver_iterations);
+      const int budget =
+          static_cast<int>(std::ceil(o_.compound_solver_iterations * point_budget_ / points));
+      iterations = std::max(floor, budget) * boost_;
+    }
     if (o_.iterations_per_hull_contact > 0) {
       // ShakeOptions::iterations_per_hull_contact: the (finger, hull) pairs in contact at the
       // last step set this step's iterations (a compound held by several hulls needs more).
       const int want =
           static_cast<int>(std::ceil(o_.iterations_per_hull_contact * s.hull_contacts));
-      world_.getSolverInfo().m_numIterations = std::max(base_iterations_, want);
+      iterations = std::max(iterations, want);
     }
+    world_.getSolverInfo().m_numIterations = iterations;
     world_.stepSimulation(btScalar(o_.dt), 0, btScalar(o_.dt));
+    last_iterations_ = iterations;
     d_ = d_next;
     // The hand bodies jump to their end-of-step poses (velocity unchanged until the next step).
     palm_->setWorldTransform(kUnits.pose(palm_pose(X_WH_next)));
@@ -540,6 +555,7 @@ class TrialWorld {
     s.force_left = s.force_right = 0.0;
     s.hull_contacts = 0;
     s.points_left = s.points_right = 0;
+    s.iterations = last_iterations_;
     // The fingers' opening directions in W (ShakeOptions::controller_net_force): −x_H, +x_H.
     const Vec3d x_H = X_WH.linear().col(0);
     const int n = dispatcher_.getNumManifolds();
@@ -585,6 +601,9 @@ class TrialWorld {
   double d_ = 0;              // current inner-face offset of both fingers from the hand axis, m
   double radius_ = 0;         // object: largest distance of a hull vertex from the com, m
   int base_iterations_ = 1;   // solver iterations of this trial without per-hull ones
+  int boost_ = 1;             // the light-object multiplier of the solver iterations, 1..8
+  double point_budget_ = 0;   // ShakeOptions::compound_iteration_points (a compound), else 0
+  int last_iterations_ = 0;   // solver iterations of the last step run (0: none yet)
   double gain_backoff_ = 1;   // controller stiffness multiplier (adapt_controller_gain), >= 1
   double last_error_ = 0;     // the controller's force error at the previous step, N
   int flips_ = -1;            // consecutive flips of that error (-1: no previous touching step)
@@ -650,6 +669,10 @@ void ShakeOptions::validate() const {
   require(compound_solver_iterations >= 0 && compound_solver_iterations <= 1000,
           "compound_solver_iterations", "an integer in [0, 1000] (0 = solver_iterations)",
           compound_solver_iterations);
+  require(std::isfinite(compound_iteration_points) && compound_iteration_points >= 0 &&
+              compound_iteration_points <= 10000,
+          "compound_iteration_points", "a number of contact points in [0, 10000] (0 = off)",
+          compound_iteration_points);
   require(std::isfinite(iterations_per_hull_contact) && iterations_per_hull_contact >= 0 &&
               iterations_per_hull_contact <= 100,
           "iterations_per_hull_contact", "a factor in [0, 100] (0 = off)",
@@ -991,6 +1014,8 @@ ShakeTrajectory shake_trajectory(const PhysicsObject& object, const ParallelJawG
     tr.contact_right.push_back(st.touch_right);
     tr.force_left.push_back(st.force_left);
     tr.force_right.push_back(st.force_right);
+    tr.contact_points.push_back(st.points_left + st.points_right);
+    tr.solver_iterations.push_back(st.iterations);
   };
   const TrialShapes shapes(prepared, gripper, options);
   TrialWorld world(prepared, shapes, gripper, grasp, s, options);

@@ -63,7 +63,7 @@ __all__ = [
 ]
 
 #: Bump when the label layout or algorithms change, so old cache entries are not reused.
-CACHE_VERSION = "object-labels-11"
+CACHE_VERSION = "object-labels-12"
 
 
 @dataclass(frozen=True)

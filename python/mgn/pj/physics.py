@@ -93,7 +93,10 @@ class ShakeOptions:
     pairs; docs/models.md, "A coarser step judged by its own grids").
     ``compound_solver_iterations`` (default 40; 0 = the same as ``solver_iterations``, in
     [0, 1000]): the solver iterations of an object whose shake shape has more than one convex
-    part (docs/models.md, "Solver iterations").
+    part (docs/models.md, "Solver iterations"). ``compound_iteration_points`` (default 24, in
+    [0, 10000]; 0 = off): a compound's step after one where the fingers touched it at n > this
+    many points runs ceil(``compound_solver_iterations`` x this / n) iterations instead, at least
+    ``solver_iterations`` (a hex nut pressed face-on across many hulls holds as well with 10).
     ``controller_stiffness`` is per 1/400 s of simulated time: a step ``dt`` moves the fingers
     ``dt`` x 400/s times (mean pad force − ``grip_force``)/``controller_stiffness``, so the
     closing settles alike at any ``dt``. ``controller_net_force`` (on by default): the controller
@@ -135,6 +138,7 @@ class ShakeOptions:
     max_hull_vertices: int = _CORE.max_hull_vertices
     solver_iterations: int = _CORE.solver_iterations
     compound_solver_iterations: int = _CORE.compound_solver_iterations
+    compound_iteration_points: float = _CORE.compound_iteration_points
     iterations_per_hull_contact: float = _CORE.iterations_per_hull_contact
     staircase: bool = _CORE.staircase
     staircase_checks: int = _CORE.staircase_checks

@@ -683,17 +683,17 @@ def test_label_cache_key_is_bumped_for_compound_solver_iterations(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Parallel-jaw physics scores of compounds changed when the shake test's grip controller
-    started reading the net pad force (object-labels-10) and again when compounds got 40 solver
-    iterations (object-labels-11): entries written under a previous version's keys must not be
-    found."""
+    started reading the net pad force (object-labels-10), when compounds got 40 solver
+    iterations (object-labels-11) and when a compound touched at many points got fewer
+    (object-labels-12): entries written under a previous version's keys must not be found."""
     from mgn.objects import get_object
     from mgn.pipeline import label_cache
 
-    assert label_cache.CACHE_VERSION == "object-labels-11"
+    assert label_cache.CACHE_VERSION == "object-labels-12"
     spec, config = get_object("pipe_elbow"), Config()
     keys = label_cache.label_keys(spec, config)
     assert set(keys) == {"suction", "paralleljaw"}
-    for previous in ("object-labels-9", "object-labels-10"):
+    for previous in ("object-labels-9", "object-labels-10", "object-labels-11"):
         monkeypatch.setattr(label_cache, "CACHE_VERSION", previous)
         old = label_cache.label_keys(spec, config)
         assert all(old[kind] != keys[kind] for kind in keys)

@@ -790,6 +790,10 @@ def test_show_trial_action(tmp_path, capsys):
             {"options": ShakeOptions(compound_solver_iterations=1001)},
             "compound_solver_iterations",
         ),
+        (
+            {"options": ShakeOptions(compound_iteration_points=-1.0)},
+            "compound_iteration_points",
+        ),
         ({"gripper": ParallelJawGripper(max_opening=0.03)}, "max_opening"),
         ({"gripper": SimpleNamespace(name="x")}, "gripper"),
         ({"mesh": []}, "convex_parts"),

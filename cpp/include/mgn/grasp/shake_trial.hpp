@@ -172,10 +172,22 @@ struct ShakeOptions {
   /// compound), used instead of solver_iterations (and multiplied alike for light objects);
   /// 0 = the same as solver_iterations. In [0, 1000], default 40. The sequential-impulse solver
   /// leaves the friction of a pad touching several hulls unconverged at 10 iterations, which
-  /// lets some compounds creep out of a grip that holds them; 40 cost 1.1-1.9x the CPU per
-  /// trial (docs/decisions/0064-compound-solver-iterations.md,
-  /// docs/decisions/0068-adaptive-controller-gain.md).
+  /// lets some compounds creep out of a grip that holds them
+  /// (docs/decisions/0064-compound-solver-iterations.md,
+  /// docs/decisions/0068-adaptive-controller-gain.md). compound_iteration_points bounds what
+  /// they cost.
   int compound_solver_iterations = 40;
+  /// Contact points of a compound's iteration budget (0 = off): a step of a compound whose
+  /// fingers touched it at n > this many points at the previous step (points closer than
+  /// contact_distance, both fingers together) runs ceil(compound_solver_iterations × this / n)
+  /// iterations instead of compound_solver_iterations, at least solver_iterations (both times
+  /// the light-object multiplier), so a step's solver work stays about that of
+  /// compound_solver_iterations on this many points (each point is three solver rows). A hex nut
+  /// pressed face-on across 7 hulls per pad touches at ~50 points; it holds with 10 iterations as
+  /// with 40, which cost it 1.9x the CPU per trial. The compounds whose scores 40 iterations move
+  /// touch at 10-14 points on average. In [0, 10000], default 24
+  /// (docs/decisions/0070-compound-iteration-budget.md).
+  double compound_iteration_points = 24.0;
   /// Iterations per hull contact (0 = off): each step runs at least ceil(this × the number of
   /// (finger, object hull) pairs in contact at the previous step) iterations. A single hull
   /// makes at most 2 pairs, so with this <= solver_iterations / 2 it is simulated as without;
@@ -282,6 +294,10 @@ struct ShakeTrajectory {
   /// along the finger's opening direction), N (0 at the initial state).
   std::vector<double> force_left;
   std::vector<double> force_right;
+  /// Contact points of both fingers on the object closer than contact_distance (C++ only).
+  std::vector<int> contact_points;
+  /// Bullet solver iterations of the step just run (0 at the initial state; C++ only).
+  std::vector<int> solver_iterations;
   bool success = false;
   bool ended_early = false;
   int steps = 0;  ///< simulation steps run
