@@ -18,7 +18,14 @@ from mgn.cli.args import (
     int_list,
 )
 from mgn.learn.augment import AUGMENTS
-from mgn.learn.config import BACKBONES, FOREGROUND_LOSSES, SUCTION_SCORES, ModelConfig, TrainConfig
+from mgn.learn.config import (
+    BACKBONES,
+    FOREGROUND_LOSSES,
+    SUCTION_SCORES,
+    TRAINING_FLOORS,
+    ModelConfig,
+    TrainConfig,
+)
 from mgn.learn.predict import predict_files
 from mgn.learn.targets import MODALITIES, RGB_NORMS
 from mgn.learn.training import train
@@ -81,6 +88,15 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
         help="height and rgb-height: the height is 0 outside the floor's footprint (the convex "
         "hull of the floor's pixels: a bin's walls and rim read as floor)",
     )
+    p.add_argument(
+        "--training-floor",
+        choices=TRAINING_FLOORS,
+        default=d.training_floor,
+        help="height and rgb-height: the training views' floor from the scene's own geometry "
+        "(the bin's inner floor) with the footprint of its visible pixels (scene, the default) "
+        "or the inside of the bin's walls (interior), or fitted to their depth as for a "
+        "photograph (fit)",
+    )
 
 
 def add_train_arguments(p: argparse.ArgumentParser) -> None:
@@ -135,6 +151,7 @@ def configs_from_args(args: argparse.Namespace) -> tuple[ModelConfig, TrainConfi
         suction_score=args.suction_score,
         rgb_norm=args.rgb_norm,
         floor_footprint=args.floor_footprint,
+        training_floor=args.training_floor,
     )
     tc = TrainConfig(
         epochs=args.epochs,

@@ -16,6 +16,7 @@ __all__ = [
     "BACKBONES",
     "FOREGROUND_LOSSES",
     "SUCTION_SCORES",
+    "TRAINING_FLOORS",
     "ModelConfig",
     "TrainConfig",
     "auto_epochs",
@@ -32,6 +33,13 @@ SUCTION_SCORES = ("score_analytical", "score_wrench", "score_simulation")
 #: Losses of the foreground channel: ``bce`` (binary cross-entropy) or ``bce+dice`` (plus the
 #: soft Dice loss ``1 - 2 sum(p t) / (sum(p) + sum(t))`` over the batch, p the sigmoid).
 FOREGROUND_LOSSES = ("bce", "bce+dice")
+#: Where the height modalities' training views get their floor and footprint from: ``scene``
+#: (the bin's inner floor from the view's own geometry, :func:`mgn.learn.floor.scene_floor`,
+#: and the footprint of its visible pixels, :func:`mgn.learn.floor.floor_footprint`, as for a
+#: photograph), ``interior`` (the same floor, and the inside of the bin's walls as the
+#: footprint, :func:`mgn.learn.floor.bin_interior`) or ``fit`` (the plane fitted to the depth
+#: and its footprint, exactly as for a photograph).
+TRAINING_FLOORS = ("scene", "interior", "fit")
 
 #: A config dataclass (ModelConfig, TrainConfig).
 _C = TypeVar("_C", bound="ModelConfig | TrainConfig")
@@ -56,6 +64,12 @@ class ModelConfig:
         floor_footprint: height modalities only: the height is 0 outside the floor's
             footprint (:func:`mgn.learn.floor.floor_footprint`: a bin's walls and rim, and
             anything beyond, read as floor; default False).
+        training_floor: height modalities only, :data:`TRAINING_FLOORS`: the training views'
+            floor from the scene's own geometry with the footprint of its visible pixels
+            (``scene``, the default), with the bin's interior as the footprint
+            (``interior``), or the plane fitted to their depth (``fit``). Views without a
+            camera pose or bin size fall back to the fit; photographs, at prediction and
+            evaluation, always get it.
         image_size: the longer image side the network sees, px (default 256; each side rounded
             to a multiple of 16).
         amodal: also predict the hidden parts of objects, giving amodal masks (default False).
@@ -78,6 +92,7 @@ class ModelConfig:
     suction_score: str = "score_analytical"
     rgb_norm: str = "image"
     floor_footprint: bool = False
+    training_floor: str = "scene"
 
     def __post_init__(self) -> None:
         if self.rgb_norm not in RGB_NORMS:
@@ -91,6 +106,10 @@ class ModelConfig:
         if not isinstance(self.floor_footprint, bool):
             raise InvalidArgumentError(
                 f"floor_footprint must be true or false, got {self.floor_footprint!r}"
+            )
+        if self.training_floor not in TRAINING_FLOORS:
+            raise InvalidArgumentError(
+                f"training_floor must be one of {TRAINING_FLOORS}, got {self.training_floor!r}"
             )
         if self.backbone not in BACKBONES:
             raise InvalidArgumentError(

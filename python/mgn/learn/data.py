@@ -3,7 +3,8 @@
 :func:`training_views` picks the views (the dataset's ``"selection"`` when ``dataset.json`` has
 one, else every view, optionally narrowed to some scenes and view indices); :func:`load_views`
 reads each view through :class:`mgn.Dataset` -- RGB, the sensor model's depth (as a real
-camera gives it; with the view's intrinsics for the height modalities' floor fit), the visible
+camera gives it; for the height modalities with the view's intrinsics and, by default, the
+scene's own floor and bin interior: :func:`scene_geometry`), the visible
 instance ids, the amodal masks (amodal models) and the non-colliding scene suction grasps --
 and builds the targets of :mod:`mgn.learn.targets`.
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
@@ -20,6 +22,7 @@ import numpy.typing as npt
 from mgn.errors import InvalidArgumentError, IoError
 from mgn.io.dataset import Dataset, View
 from mgn.learn.config import ModelConfig
+from mgn.learn.floor import FloorPlane, bin_interior, scene_floor
 from mgn.learn.targets import (
     core_target,
     hidden_target,
@@ -31,7 +34,7 @@ from mgn.learn.targets import (
     uses_rgb,
 )
 
-__all__ = ["TrainingArrays", "load_views", "training_views", "view_targets"]
+__all__ = ["TrainingArrays", "load_views", "scene_geometry", "training_views", "view_targets"]
 
 
 def training_views(
@@ -115,6 +118,37 @@ class TrainingArrays:
         return len(self.names)
 
 
+def _bin_size(folder: Path) -> tuple[float, float] | None:
+    """(inner_length, inner_width) m of the bin of the dataset holding scene ``folder``, from its
+    ``dataset.json`` config; None when the file or the sizes are missing."""
+    info = Dataset(folder.parent).info or {}
+    tote = (info.get("config") or {}).get("tote") or {}
+    try:
+        return float(tote["inner_length"]), float(tote["inner_width"])
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def scene_geometry(
+    view: View, bin_size: tuple[float, float] | None, *, interior: bool = True
+) -> tuple[FloorPlane | None, np.ndarray | None]:
+    """(floor, inside) of a synthetic view for the height modalities: the bin's inner floor in
+    the camera frame (:func:`mgn.learn.floor.scene_floor`) and, with ``interior``, the bin's
+    interior (:func:`mgn.learn.floor.bin_interior`, ``bin_size`` (inner length, width) m;
+    without it None: the footprint of the floor's pixels is used); (None, None) when the view
+    has no camera pose or ``bin_size`` is None, so that the fit is used."""
+    if bin_size is None:
+        return None, None
+    try:
+        X_WC = view.X_WC
+    except (IoError, KeyError):
+        return None, None
+    if not interior:
+        return scene_floor(X_WC), None
+    inside = bin_interior(view.depth, view.intrinsics, X_WC, *bin_size, name=str(view))
+    return scene_floor(X_WC), inside
+
+
 def load_views(views: Sequence[View], config: ModelConfig) -> TrainingArrays:
     """Inputs and targets of ``views`` at the network resolution of the first view (the
     others are resized to it)."""
@@ -122,12 +156,23 @@ def load_views(views: Sequence[View], config: ModelConfig) -> TrainingArrays:
         raise InvalidArgumentError("load_views: no views")
     first = views[0].rgb
     shape = network_shape(first.shape[0], first.shape[1], config.image_size)
+    height = config.modality in ("height", "rgb-height")
+    scene = height and config.training_floor in ("scene", "interior")
+    bin_sizes: dict[str, tuple[float, float] | None] = {}
     inputs, targets, weights, names = [], [], [], []
     for view in views:
         name = f"{view.folder.name}/{view.index}"
         rgb = view.rgb if uses_rgb(config.modality) else None
         depth = view.depth if uses_depth(config.modality) else None
-        intrinsics = view.intrinsics if config.modality in ("height", "rgb-height") else None
+        intrinsics = view.intrinsics if height else None
+        floor, inside = None, None
+        if scene:
+            root = os.fspath(view.folder.parent)
+            if root not in bin_sizes:
+                bin_sizes[root] = _bin_size(view.folder)
+            floor, inside = scene_geometry(
+                view, bin_sizes[root], interior=config.training_floor == "interior"
+            )
         inputs.append(
             network_input(
                 rgb,
@@ -137,6 +182,8 @@ def load_views(views: Sequence[View], config: ModelConfig) -> TrainingArrays:
                 name=name,
                 intrinsics=intrinsics,
                 floor_footprint=config.floor_footprint,
+                floor=floor,
+                inside=inside,
             )
         )
         t = view_targets(view, config)

@@ -49,6 +49,7 @@ from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import lens_for
 
 __all__ = [
+    "BIN_INTERIOR_MARGIN_M",
     "FLOOR_BELOW_M",
     "FLOOR_ITERATIONS",
     "FLOOR_MAX_TILT_DEG",
@@ -60,11 +61,13 @@ __all__ = [
     "FLOOR_SAMPLES",
     "FLOOR_TOLERANCE_M",
     "FloorPlane",
+    "bin_interior",
     "fit_floor",
     "floor_footprint",
     "height_above_floor",
     "nominal_intrinsics",
     "pixel_rays",
+    "scene_floor",
 ]
 
 #: Points within this distance of a candidate plane count as on it, m.
@@ -89,6 +92,9 @@ FLOOR_PARALLEL_DEG = 10.0
 FLOOR_REFINE_STEPS = 3
 #: Fewest pixels with a depth a floor is fitted to.
 FLOOR_MIN_POINTS = 16
+#: :func:`bin_interior` keeps the points this far inside the bin's inner walls, m: the walls'
+#: own pixels (their depth noise included) stay out.
+BIN_INTERIOR_MARGIN_M = 0.005
 
 
 @dataclass(frozen=True)
@@ -281,3 +287,43 @@ def floor_footprint(
     for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True):
         inside &= (b[0] - a[0]) * (vv - a[1]) - (b[1] - a[1]) * (uu - a[0]) >= -0.5
     return inside
+
+
+def scene_floor(X_WC: npt.ArrayLike) -> FloorPlane:
+    """The floor of an mgn scene seen by a camera at pose ``X_WC`` ((4, 4), camera frame in the
+    tote frame, m): the tote frame's z = 0 plane, the bin's inner floor (docs/cameras.md), in
+    the camera frame. ``inlier_fraction`` is 0 (no image was fitted)."""
+    X = np.asarray(X_WC, np.float64)
+    if X.shape != (4, 4) or not np.isfinite(X).all():
+        raise InvalidArgumentError(f"scene_floor: X_WC must be a finite (4, 4) pose, got {X.shape}")
+    normal = X[2, :3]
+    return FloorPlane((float(normal[0]), float(normal[1]), float(normal[2])), -float(X[2, 3]), 0.0)
+
+
+def bin_interior(
+    depth_m: np.ndarray,
+    intrinsics: Intrinsics | None,
+    X_WC: npt.ArrayLike,
+    inner_length: float,
+    inner_width: float,
+    *,
+    margin: float = BIN_INTERIOR_MARGIN_M,
+    name: str = "image",
+) -> npt.NDArray[np.bool_]:
+    """(H, W) bool: the depth pixels whose point lies inside an mgn bin's inner walls -- in the
+    tote frame (camera pose ``X_WC``, m), ``|x| <= inner_length / 2 - margin`` and
+    ``|y| <= inner_width / 2 - margin`` (m) at any height; False without a depth value. The
+    exact counterpart, for a synthetic view, of :func:`floor_footprint` on a photograph: the
+    bin's floor with the objects on it, without its walls, rim and what lies outside."""
+    if not (inner_length > 2 * margin >= 0 and inner_width > 2 * margin):
+        raise InvalidArgumentError(
+            f"bin_interior: inner size {inner_length} x {inner_width} m must exceed twice the "
+            f"margin {margin} m"
+        )
+    pts, valid = _points(depth_m, intrinsics, name)
+    X = np.asarray(X_WC, np.float64)
+    world = pts.reshape(-1, 3) @ X[:3, :3].T + X[:3, 3]
+    inside = (np.abs(world[:, 0]) <= inner_length / 2 - margin) & (
+        np.abs(world[:, 1]) <= inner_width / 2 - margin
+    )
+    return np.asarray(inside.reshape(valid.shape) & valid)

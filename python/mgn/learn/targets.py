@@ -33,7 +33,7 @@ import numpy.typing as npt
 from PIL import Image
 
 from mgn.errors import InvalidArgumentError
-from mgn.learn.floor import fit_floor, floor_footprint, height_above_floor
+from mgn.learn.floor import FloorPlane, fit_floor, floor_footprint, height_above_floor
 from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import distort_normalized
 
@@ -145,18 +145,28 @@ def height_channel(
     intrinsics: Intrinsics | None = None,
     *,
     footprint: bool = False,
+    floor: FloorPlane | None = None,
+    inside: np.ndarray | None = None,
     name: str = "image",
 ) -> npt.NDArray[np.float32]:
     """The normalised height channel of an (H, W) depth in metres (NaN or <= 0: no value) at
-    its own resolution: the height above the fitted floor plane
-    (:func:`mgn.learn.floor.height_above_floor`; ``intrinsics`` of the depth image, or a
-    nominal pinhole when None) clipped to :data:`HEIGHT_RANGE_M`, divided by
+    its own resolution: the height above the floor plane -- ``floor`` when given (a synthetic
+    view's own, :func:`mgn.learn.floor.scene_floor`), else the one fitted to the depth
+    (:func:`mgn.learn.floor.fit_floor`); ``intrinsics`` of the depth image, or a nominal
+    pinhole when None -- clipped to :data:`HEIGHT_RANGE_M`, divided by
     :data:`HEIGHT_SCALE_M`; 0 where there is no value and, with ``footprint``, outside the
-    floor's footprint (:func:`mgn.learn.floor.floor_footprint`)."""
-    plane = fit_floor(depth_m, intrinsics, name=name)
+    floor's footprint: ``inside`` ((H, W) bool) when given (a synthetic view's bin interior,
+    :func:`mgn.learn.floor.bin_interior`), else :func:`mgn.learn.floor.floor_footprint`."""
+    plane = floor if floor is not None else fit_floor(depth_m, intrinsics, name=name)
     h = np.nan_to_num(height_above_floor(depth_m, intrinsics, floor=plane, name=name), nan=0.0)
     if footprint:
-        h[~floor_footprint(depth_m, intrinsics, floor=plane, name=name)] = 0.0
+        if inside is None:
+            inside = floor_footprint(depth_m, intrinsics, floor=plane, name=name)
+        elif inside.shape != h.shape:
+            raise InvalidArgumentError(
+                f"{name}: the footprint is {inside.shape} but the depth is {h.shape}"
+            )
+        h[~np.asarray(inside, bool)] = 0.0
     lo, hi = HEIGHT_RANGE_M
     return np.asarray((np.clip(h, lo, hi) / np.float32(HEIGHT_SCALE_M)).astype(np.float32))
 
@@ -170,12 +180,16 @@ def network_input(
     name: str = "image",
     intrinsics: Intrinsics | None = None,
     floor_footprint: bool = False,
+    floor: FloorPlane | None = None,
+    inside: np.ndarray | None = None,
 ) -> npt.NDArray[np.float32]:
     """(C, H', W') float32 network input of one image at ``shape``. ``name`` (a file or view)
     is named in the error when the modality needs an array that is missing or mis-sized.
     ``intrinsics`` (of the depth image) serve the height modalities' floor fit; without them a
     nominal pinhole is assumed (:func:`mgn.learn.floor.nominal_intrinsics`); with
-    ``floor_footprint`` the height is 0 outside the floor's footprint (:func:`height_channel`)."""
+    ``floor_footprint`` the height is 0 outside the floor's footprint; ``floor`` and ``inside``
+    replace the fitted plane and footprint where the scene's own are known
+    (:func:`height_channel`)."""
     input_channels(modality)
     planes: list[np.ndarray] = []
     if uses_rgb(modality):
@@ -198,7 +212,14 @@ def network_input(
                 f"{rgb.shape[1]} x {rgb.shape[0]} px; they must match"
             )
         if modality in ("height", "rgb-height"):
-            hc = height_channel(depth_m, intrinsics, footprint=floor_footprint, name=name)
+            hc = height_channel(
+                depth_m,
+                intrinsics,
+                footprint=floor_footprint,
+                floor=floor,
+                inside=inside,
+                name=name,
+            )
             planes.append(resize_nearest(hc, shape))
         else:
             planes.append(depth_channel(resize_nearest(depth_m, shape)))
