@@ -24,7 +24,16 @@ that faces it. :func:`fit_floor` finds that plane in a z-depth image:
    covers more of the image than the floor does is not taken for it;
 3. least-squares refinement: the plane through the centroid of the points within the
    tolerance, normal the direction of least variance (SVD), repeated
-   :data:`FLOOR_REFINE_STEPS` times on all the image's points.
+   :data:`FLOOR_REFINE_STEPS` times on all the image's points;
+4. a bin standing on the ground: a camera that sees the ground around a bin finds the ground
+   (larger, and a floor's thickness lower) as the lowest large plane. The most populated
+   height, in 1 mm steps, :data:`BIN_FLOOR_RISE_M` above that plane, is taken as the bin's
+   floor instead when at least :data:`BIN_FLOOR_MIN_SHARE` of the image's depth pixels lie
+   within the tolerance of it and it is enclosed by walls: of the pixels in a ring
+   (:data:`BIN_RING` of the longer image side wide) around its footprint
+   (:func:`floor_footprint`), at least :data:`BIN_ENCLOSED_SHARE` lie more than
+   :data:`BIN_WALL_M` above it. The top of a flat object on a table has the table around it,
+   below it, and is not taken.
 
 The height of a point is its signed distance to the plane, positive on the camera's side: 0 on
 the floor, an object's top at its height above the floor, the walls of a bin up to the bin's
@@ -49,7 +58,12 @@ from mgn.scene.cameras import Intrinsics
 from mgn.scene.lens import lens_for
 
 __all__ = [
+    "BIN_ENCLOSED_SHARE",
+    "BIN_FLOOR_MIN_SHARE",
+    "BIN_FLOOR_RISE_M",
     "BIN_INTERIOR_MARGIN_M",
+    "BIN_RING",
+    "BIN_WALL_M",
     "FLOOR_BELOW_M",
     "FLOOR_ITERATIONS",
     "FLOOR_MAX_TILT_DEG",
@@ -92,6 +106,17 @@ FLOOR_PARALLEL_DEG = 10.0
 FLOOR_REFINE_STEPS = 3
 #: Fewest pixels with a depth a floor is fitted to.
 FLOOR_MIN_POINTS = 16
+#: Heights above the lowest large plane where a bin's floor is looked for, m (min, max).
+BIN_FLOOR_RISE_M = (0.005, 0.05)
+#: Least share of the image's depth pixels on a bin's floor.
+BIN_FLOOR_MIN_SHARE = 0.01
+#: Width of the ring around a bin floor's footprint that must show its walls, as a fraction of
+#: the longer image side.
+BIN_RING = 0.03
+#: Points of the ring more than this above the bin's floor count as walls, m.
+BIN_WALL_M = 0.03
+#: Least share of the ring's points that must be walls.
+BIN_ENCLOSED_SHARE = 0.5
 #: :func:`bin_interior` keeps the points this far inside the bin's inner walls, m: the walls'
 #: own pixels (their depth noise included) stay out.
 BIN_INTERIOR_MARGIN_M = 0.005
@@ -233,9 +258,45 @@ def fit_floor(
     if offset > 0:
         normal, offset = -normal, -offset
     on = np.abs(p @ normal - offset) <= FLOOR_TOLERANCE_M
-    return FloorPlane(
+    ground = FloorPlane(
         (float(normal[0]), float(normal[1]), float(normal[2])), offset, float(on.mean())
     )
+    return _bin_floor_above(depth_m, intrinsics, ground, name) or ground
+
+
+def _bin_floor_above(
+    depth_m: np.ndarray, intrinsics: Intrinsics | None, ground: FloorPlane, name: str
+) -> FloorPlane | None:
+    """Step 4 of the module docstring: the floor of a bin standing on ``ground``, or None."""
+    from scipy import ndimage
+
+    pts, valid = _points(depth_m, intrinsics, name)
+    h = pts @ np.asarray(ground.normal, np.float64) - ground.offset
+    lo, hi = BIN_FLOOR_RISE_M
+    edges = np.arange(lo, hi + 0.0005, 0.001)
+    counts, _ = np.histogram(h[valid], edges)
+    if counts.max(initial=0) == 0:
+        return None
+    k = int(np.argmax(counts))
+    level = 0.5 * (edges[k] + edges[k + 1])
+    on = valid & (np.abs(h - level) <= FLOOR_TOLERANCE_M)
+    if on.sum() < max(FLOOR_MIN_POINTS, BIN_FLOOR_MIN_SHARE * valid.sum()):
+        return None
+    normal, offset = _refine(pts[on])
+    if offset > 0:
+        normal, offset = -normal, -offset
+    if float(np.asarray(ground.normal) @ normal) < math.cos(math.radians(FLOOR_PARALLEL_DEG)):
+        return None
+    plane = FloorPlane(
+        (float(normal[0]), float(normal[1]), float(normal[2])), offset, float(on[valid].mean())
+    )
+    hull = floor_footprint(depth_m, intrinsics, floor=plane, name=name)
+    width = max(2, round(BIN_RING * max(depth_m.shape)))
+    ring = ndimage.binary_dilation(hull, iterations=width) & ~hull & valid
+    if not ring.any():
+        return None
+    walls = float(((pts[ring] @ normal - offset) > BIN_WALL_M).mean())
+    return plane if walls >= BIN_ENCLOSED_SHARE else None
 
 
 def height_above_floor(

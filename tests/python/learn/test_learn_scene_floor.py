@@ -13,13 +13,16 @@ import numpy as np
 import pytest
 
 import mgn
+import mgn.learn.floor as floor_module
 from mgn.cli.learn import add_model_arguments, add_train_arguments, configs_from_args
 from mgn.errors import InvalidArgumentError
 from mgn.learn import ModelConfig
 from mgn.learn.data import load_views, scene_geometry, training_views
 from mgn.learn.floor import (
     BIN_INTERIOR_MARGIN_M,
+    FloorPlane,
     bin_interior,
+    fit_floor,
     floor_footprint,
     height_above_floor,
     scene_floor,
@@ -116,16 +119,49 @@ def test_the_scene_floor_and_bin_interior_match_a_ray_cast_bin(tilt_deg: float):
     np.testing.assert_allclose(hc[kind == 1], BOX[4] / HEIGHT_SCALE_M, rtol=1e-5)
 
 
-def test_a_camera_that_sees_the_ground_around_the_bin_fits_the_ground(tmp_path: Path):
-    """Why the training views take the scene's floor: seen from 0.8 m at 20 degrees the floor fit
-    takes the ground around the tote (1 cm lower, larger) for the floor, and its footprint
-    takes in the walls, which the scene's interior leaves out."""
-    X = _camera(20.0, 0.8)
+@pytest.mark.parametrize("tilt_deg", [0.0, 20.0])
+def test_a_bin_on_the_ground_is_fitted_by_its_own_floor(
+    tilt_deg: float, monkeypatch: pytest.MonkeyPatch
+):
+    """A camera that sees the ground around the tote (68 % of the pixels, the tote's floor
+    15-19 %): the lowest large plane is the ground, 1 cm below the tote's floor; the bin-floor
+    step (walls around it) takes the tote's floor instead, the scene's own plane to 0.1 mm."""
+    X = _camera(tilt_deg, 0.8)
     depth, kind, _ = _ray_cast(X)
-    fitted = height_above_floor(depth, K)
-    assert np.median(np.abs(fitted[kind == 3])) < 1e-3  # the ground is the fitted floor
-    assert floor_footprint(depth, K)[kind == 2].mean() > 0.5
-    assert not bin_interior(depth, K, X, LENGTH, WIDTH)[kind == 2].any()
+    assert (kind == 3).mean() > 0.6
+    ground = FloorPlane(scene_floor(X).normal, scene_floor(X).offset + GROUND, 0.0)
+    assert np.abs(height_above_floor(depth, K, floor=ground)[kind == 3]).max() < 1e-9
+    plane = fit_floor(depth, K)
+    # without the bin-floor step the fit is the ground
+    with monkeypatch.context() as m:
+        m.setattr(floor_module, "_bin_floor_above", lambda *a: None)
+        lowest = fit_floor(depth, K)
+    assert lowest.camera_height_m == pytest.approx(ground.camera_height_m, abs=1e-4)
+    assert plane.camera_height_m == pytest.approx(scene_floor(X).camera_height_m, abs=1e-4)
+    assert np.dot(plane.normal, scene_floor(X).normal) > math.cos(math.radians(0.1))
+    # the footprint of the fitted floor leaves the walls and the ground out
+    fp = floor_footprint(depth, K)
+    assert fp[kind == 2].mean() < 0.2
+    assert not fp[kind == 3].any()
+
+
+def test_the_bin_floor_step_leaves_a_flat_object_on_a_table_alone():
+    """A 3 cm flat box covering a quarter of the view on a table, with the table all around it
+    (below it): the box top is no bin floor, the table stays the floor."""
+    X = _camera(0.0, 0.8)
+    # the whole image a table at z = 0 with one flat box top at 3 cm
+    R, c = X[:3, :3], X[:3, 3]
+    uu, vv = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    d = np.stack([(uu - K.cx) / K.fx, (vv - K.cy) / K.fy, np.ones_like(uu)], axis=-1) @ R.T
+    table = (0.0 - c[2]) / d[..., 2]
+    top = (0.03 - c[2]) / d[..., 2]
+    p = c + top[..., None] * d
+    box = (np.abs(p[..., 0]) <= 0.2) & (np.abs(p[..., 1]) <= 0.15)
+    depth = np.where(box, top, table)
+    assert 0.2 < box.mean() < 0.5
+    plane = fit_floor(depth, K)
+    assert plane.camera_height_m == pytest.approx(0.8, abs=1e-4)
+    np.testing.assert_allclose(height_above_floor(depth, K, floor=plane)[box], 0.03, atol=1e-4)
 
 
 @pytest.mark.parametrize(
