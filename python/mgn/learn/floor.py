@@ -261,16 +261,21 @@ def fit_floor(
     ground = FloorPlane(
         (float(normal[0]), float(normal[1]), float(normal[2])), offset, float(on.mean())
     )
-    return _bin_floor_above(depth_m, intrinsics, ground, name) or ground
+    return _bin_floor_above(depth_m, intrinsics, pts, valid, ground, name) or ground
 
 
 def _bin_floor_above(
-    depth_m: np.ndarray, intrinsics: Intrinsics | None, ground: FloorPlane, name: str
+    depth_m: np.ndarray,
+    intrinsics: Intrinsics | None,
+    pts: npt.NDArray[np.float64],
+    valid: npt.NDArray[np.bool_],
+    ground: FloorPlane,
+    name: str,
 ) -> FloorPlane | None:
-    """Step 4 of the module docstring: the floor of a bin standing on ``ground``, or None."""
+    """Step 4 of the module docstring: the floor of a bin standing on ``ground``, or None.
+    ``pts``, ``valid``: the depth's camera-frame points and their mask (:func:`_points`)."""
     from scipy import ndimage
 
-    pts, valid = _points(depth_m, intrinsics, name)
     h = pts @ np.asarray(ground.normal, np.float64) - ground.offset
     lo, hi = BIN_FLOOR_RISE_M
     edges = np.arange(lo, hi + 0.0005, 0.001)
